@@ -1,0 +1,136 @@
+//! The pinhole camera: intrinsics, projection, pixel ↔ normalised coordinates.
+//!
+//! Conventions used throughout pluecker:
+//! - a world point `X_world` maps to the camera frame by `x_cam = R X_world + t`;
+//! - the camera looks down its +z axis; a point is in front of the camera when `z > 0`;
+//! - pixels are `u = K x_cam / z` with
+//!   `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`;
+//! - normalised image coordinates are `(x, y) = (X/Z, Y/Z)`, i.e. `K⁻¹ (u, v, 1)`.
+//!
+//! The paper's own camera (Phong & Horaud 1995, section 2 and Table 1) has `α_u = fx < 0`: a mirrored
+//! image axis. Nothing here assumes positive focal lengths; only a zero (singular) one is rejected.
+
+use crate::error::{Error, Result};
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+/// Pinhole intrinsics in pixels. `fx` and `fy` may be negative (mirrored axes), never zero.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Focal length along u, pixels (the paper's α_u).
+    pub fx: f64,
+    /// Focal length along v, pixels (the paper's α_v).
+    pub fy: f64,
+    /// Principal point u, pixels (u_0).
+    pub cx: f64,
+    /// Principal point v, pixels (v_0).
+    pub cy: f64,
+    /// Skew, pixels (0 for square-pixel sensors).
+    pub skew: f64,
+}
+
+/// Smallest |fx|, |fy| accepted: below this the camera is treated as singular.
+const MIN_FOCAL: f64 = 1e-9;
+
+impl Camera {
+    /// Intrinsics from the five parameters; fails if any is non-finite or a focal length is zero.
+    pub fn new(fx: f64, fy: f64, cx: f64, cy: f64, skew: f64) -> Result<Self> {
+        let c = Camera { fx, fy, cx, cy, skew };
+        c.validate()?;
+        Ok(c)
+    }
+
+    /// Intrinsics from a 3x3 calibration matrix `K`; its last row must be `(0, 0, 1)` up to scale
+    /// (the matrix is divided by `K[2,2]`) and `K[1,0]` must be 0.
+    pub fn from_matrix(k: &Matrix3<f64>) -> Result<Self> {
+        if k.iter().any(|v| !v.is_finite()) {
+            return Err(Error::SingularCamera { what: "K has a non-finite entry".into() });
+        }
+        let w = k[(2, 2)];
+        if w.abs() < 1e-300 {
+            return Err(Error::SingularCamera { what: "K[2,2] is zero".into() });
+        }
+        let k = k / w;
+        let tol = 1e-9 * k.abs().max();
+        if k[(2, 0)].abs() > tol || k[(2, 1)].abs() > tol || k[(1, 0)].abs() > tol {
+            return Err(Error::SingularCamera {
+                what: format!(
+                    "K must be upper triangular with last row (0, 0, 1); got K[1,0]={}, K[2,0]={}, K[2,1]={}",
+                    k[(1, 0)],
+                    k[(2, 0)],
+                    k[(2, 1)]
+                ),
+            });
+        }
+        Camera::new(k[(0, 0)], k[(1, 1)], k[(0, 2)], k[(1, 2)], k[(0, 1)])
+    }
+
+    /// Checks that the intrinsics are finite and invertible.
+    pub fn validate(&self) -> Result<()> {
+        let p = [self.fx, self.fy, self.cx, self.cy, self.skew];
+        if p.iter().any(|v| !v.is_finite()) {
+            return Err(Error::SingularCamera { what: format!("non-finite intrinsics {p:?}") });
+        }
+        if self.fx.abs() < MIN_FOCAL || self.fy.abs() < MIN_FOCAL {
+            return Err(Error::SingularCamera {
+                what: format!("focal lengths must be non-zero, got fx={}, fy={}", self.fx, self.fy),
+            });
+        }
+        Ok(())
+    }
+
+    /// The calibration matrix `K`.
+    pub fn matrix(&self) -> Matrix3<f64> {
+        Matrix3::new(self.fx, self.skew, self.cx, 0.0, self.fy, self.cy, 0.0, 0.0, 1.0)
+    }
+
+    /// Pixel `(u, v)` → normalised `(x, y)` with `(x, y, 1) ∝ K⁻¹ (u, v, 1)`.
+    pub fn pixel_to_normalized(&self, u: &Vector2<f64>) -> Vector2<f64> {
+        let y = (u.y - self.cy) / self.fy;
+        let x = (u.x - self.cx - self.skew * y) / self.fx;
+        Vector2::new(x, y)
+    }
+
+    /// Normalised `(x, y)` → pixel `(u, v)`.
+    pub fn normalized_to_pixel(&self, x: &Vector2<f64>) -> Vector2<f64> {
+        Vector2::new(self.fx * x.x + self.skew * x.y + self.cx, self.fy * x.y + self.cy)
+    }
+
+    /// Pixel of a camera-frame point, `u = K x_cam / z`. The caller checks `z > 0` when it matters.
+    pub fn project(&self, x_cam: &Vector3<f64>) -> Vector2<f64> {
+        self.normalized_to_pixel(&Vector2::new(x_cam.x / x_cam.z, x_cam.y / x_cam.z))
+    }
+
+    /// The 2x2 Jacobian of [`Camera::normalized_to_pixel`] (constant: the upper-left block of `K`).
+    pub fn pixel_jacobian(&self) -> nalgebra::Matrix2<f64> {
+        nalgebra::Matrix2::new(self.fx, self.skew, 0.0, self.fy)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_normalized_round_trip_with_negative_focal_and_skew() {
+        // The paper's camera (Table 1, last row) plus a skew term.
+        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 3.5).unwrap();
+        for &(u, v) in &[(0.0, 0.0), (511.0, 17.5), (243.8, 241.2), (-40.0, 900.0)] {
+            let px = Vector2::new(u, v);
+            let back = cam.normalized_to_pixel(&cam.pixel_to_normalized(&px));
+            assert!((back - px).norm() < 1e-9);
+        }
+        let x_cam = Vector3::new(0.3, -0.2, 2.0);
+        let k = cam.matrix() * x_cam;
+        assert!((cam.project(&x_cam) - Vector2::new(k.x / k.z, k.y / k.z)).norm() < 1e-9);
+        assert_eq!(Camera::from_matrix(&cam.matrix()).unwrap(), cam);
+    }
+
+    #[test]
+    fn singular_cameras_are_rejected() {
+        assert!(matches!(Camera::new(0.0, 1.0, 0.0, 0.0, 0.0), Err(Error::SingularCamera { .. })));
+        assert!(Camera::new(f64::NAN, 1.0, 0.0, 0.0, 0.0).is_err());
+        let mut k = Matrix3::identity();
+        k[(2, 0)] = 1.0;
+        assert!(Camera::from_matrix(&k).is_err());
+    }
+}

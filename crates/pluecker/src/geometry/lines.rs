@@ -1,0 +1,93 @@
+//! Image and object lines for pose estimation (Phong & Horaud 1995, section 2, eq. 3 and Figure 2).
+//!
+//! An image line seen by a calibrated camera defines its *interpretation plane*: the plane through the
+//! centre of projection and the line. With normalised homogeneous endpoints `m₁ = (x₁, y₁, 1)`,
+//! `m₂ = (x₂, y₂, 1)` its normal is `n = m₁ × m₂` (eq. 3: `aX + bY + cZ = n · FM = 0`). An object line
+//! is a point `p` and a unit direction `v` in the world frame.
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use nalgebra::{Vector2, Vector3};
+
+/// Endpoints closer than this (in normalised image units, or in world units for 3-D segments,
+/// relative to their size) make a zero-length segment.
+const MIN_SEGMENT: f64 = 1e-12;
+
+/// Unit normal of the interpretation plane of the image segment `a`–`b` (pixels), in the camera frame.
+///
+/// Fails with [`Error::Degenerate`] when the endpoints coincide.
+pub fn interpretation_plane_normal(camera: &Camera, a: &Vector2<f64>, b: &Vector2<f64>) -> Result<Vector3<f64>> {
+    let xa = camera.pixel_to_normalized(a);
+    let xb = camera.pixel_to_normalized(b);
+    let n = Vector3::new(xa.x, xa.y, 1.0).cross(&Vector3::new(xb.x, xb.y, 1.0));
+    let norm = n.norm();
+    if norm <= MIN_SEGMENT * (1.0 + xa.norm() + xb.norm()) {
+        return Err(Error::Degenerate { what: "zero-length image segment".into() });
+    }
+    Ok(n / norm)
+}
+
+/// A 3-D line as a point and a unit direction (world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectLine {
+    /// A point on the line: the midpoint of the segment it was built from.
+    pub point: Vector3<f64>,
+    /// Unit direction.
+    pub direction: Vector3<f64>,
+}
+
+impl ObjectLine {
+    /// The line through two distinct 3-D points; fails on a zero-length segment.
+    pub fn from_endpoints(a: &Vector3<f64>, b: &Vector3<f64>) -> Result<Self> {
+        let d = b - a;
+        let len = d.norm();
+        if len <= MIN_SEGMENT * (1.0 + a.norm() + b.norm()) {
+            return Err(Error::Degenerate { what: "zero-length 3-D segment".into() });
+        }
+        Ok(ObjectLine { point: 0.5 * (a + b), direction: d / len })
+    }
+}
+
+/// Figure 2: `N` line correspondences from `2N` point correspondences, pairing points `(0,1), (2,3), …`.
+///
+/// Returns image segments (pixel endpoints) and 3-D segments (world endpoints); an odd last point is
+/// dropped. Any three non-collinear points of the pairs give a well-posed line problem.
+pub fn lines_from_point_pairs(
+    points2d: &[Vector2<f64>],
+    points3d: &[Vector3<f64>],
+) -> (Vec<[Vector2<f64>; 2]>, Vec<[Vector3<f64>; 2]>) {
+    let n = points2d.len().min(points3d.len()) / 2;
+    let segs2d = (0..n).map(|i| [points2d[2 * i], points2d[2 * i + 1]]).collect();
+    let segs3d = (0..n).map(|i| [points3d[2 * i], points3d[2 * i + 1]]).collect();
+    (segs2d, segs3d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpretation_plane_contains_the_3d_line_and_the_centre() {
+        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 0.0).unwrap();
+        let (pa, pb) = (Vector3::new(1.0, -2.0, 60.0), Vector3::new(-3.0, 4.0, 80.0));
+        let n = interpretation_plane_normal(&cam, &cam.project(&pa), &cam.project(&pb)).unwrap();
+        assert!((n.norm() - 1.0).abs() < 1e-12);
+        // Eq. 3: n · FM = 0 for every point M of the line (F is the origin of the camera frame).
+        for s in [-1.0, 0.0, 0.3, 2.0] {
+            let m = pa + s * (pb - pa);
+            assert!(n.dot(&m).abs() < 1e-9 * m.norm());
+        }
+        let px = cam.project(&pa);
+        assert!(interpretation_plane_normal(&cam, &px, &px).is_err());
+        assert!(ObjectLine::from_endpoints(&pa, &pa).is_err());
+    }
+
+    #[test]
+    fn point_pairs_make_lines() {
+        let p2: Vec<_> = (0..5).map(|i| Vector2::new(i as f64, 0.0)).collect();
+        let p3: Vec<_> = (0..5).map(|i| Vector3::new(i as f64, 1.0, 2.0)).collect();
+        let (l2, l3) = lines_from_point_pairs(&p2, &p3);
+        assert_eq!(l2.len(), 2);
+        assert_eq!(l3[1], [p3[2], p3[3]]);
+    }
+}

@@ -1,0 +1,36 @@
+//! # pluecker
+//!
+//! Geometric vision from points, lines and conics: the camera pose from known 3-D structure and the
+//! 3-D structure from known cameras, with statistically optimal answers.
+//!
+//! ## Conventions (used everywhere)
+//! - World to camera: `x_cam = R X_world + t`; the camera looks down `+z`.
+//! - Pixels: `u = K x_cam / z` with `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`; `fx`, `fy` may be
+//!   negative (a mirrored axis, as in Phong & Horaud's camera), never zero.
+//! - Angles in radians; lengths in the unit of the 3-D data; image quantities in pixels.
+//! - Image segments are pairs of pixel endpoints; 3-D segments pairs of world endpoints.
+//!
+//! ## Example
+//! ```
+//! use pluecker::{camera::Camera, pose::{estimate_pose, PoseOptions}, synthetic};
+//! let scene = synthetic::random_scene(synthetic::SceneKind::General, 20, 5, 42);
+//! let result = estimate_pose(&scene.camera, &scene.correspondences, &PoseOptions::default()).unwrap();
+//! assert!((result.rotation - scene.rotation).norm() < 1e-6);
+//! assert!((result.translation - scene.translation).norm() < 1e-6);
+//! ```
+//!
+//! ## References
+//! - T. Q. Phong, R. Horaud, A. Yassine, P. D. Tao, *Object pose from 2-D to 3-D point and line
+//!   correspondences*, IJCV 15(3), 1995. Equation numbers in doc comments refer to this paper.
+
+pub mod camera;
+pub mod error;
+pub mod geometry;
+pub mod optim;
+pub mod pose;
+pub mod rng;
+pub mod synthetic;
+
+pub use camera::Camera;
+pub use error::{Error, Result};
+pub use pose::{estimate_pose, Correspondences, Method, PoseOptions, PoseResult, Status};

@@ -1,0 +1,232 @@
+//! Camera pose from 2-D/3-D point and line correspondences (exterior orientation, PnP / PnL / PnPL).
+//!
+//! [`estimate_pose`] runs one of the estimators of Phong & Horaud 1995 and its baselines on points,
+//! lines, or both, and by default refines the answer on the reprojection error so that it is the
+//! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`.
+
+pub mod algebraic;
+pub mod correspondences;
+mod estimate;
+pub mod linear;
+pub mod reprojection;
+
+pub use correspondences::{Conditioning, Correspondences};
+pub use estimate::{algebraic_stage, estimate_pose, refine_pose};
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::geometry::dual_quaternion::DualQuaternion;
+use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
+use crate::optim::{StoppingCriteria, Termination, TrustRegionOptions};
+use nalgebra::{Matrix3, Vector3};
+
+/// The estimators. All of them accept points, lines, or both (the linear one uses points only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Rotation and translation together: eqs. 13 + 22 by the trust region with Hebden's step
+    /// (section 4.1). The default.
+    TrustRegion,
+    /// Rotation from eq. 14 by the same trust region, then translation from eq. 15 by linear least
+    /// squares. Points are paired into lines for the rotation (Figure 2) and used as they are for
+    /// the translation.
+    RotationThenTranslation,
+    /// Eqs. 13 + 22 with the exact Hessian and the Moré-Sorensen step (section 4.2).
+    TrustRegionExact,
+    /// Plain Newton on eqs. 13 + 22 (the paper's baseline; may diverge).
+    Newton,
+    /// Levenberg-Marquardt on eqs. 13 + 22 (the paper's baseline).
+    LevenbergMarquardt,
+    /// Faugeras-Toscani linear calibration from ≥ 6 non-coplanar points; also estimates intrinsics.
+    Linear,
+}
+
+impl Method {
+    /// Every method, in the order above.
+    pub const ALL: [Method; 6] = [
+        Method::TrustRegion,
+        Method::RotationThenTranslation,
+        Method::TrustRegionExact,
+        Method::Newton,
+        Method::LevenbergMarquardt,
+        Method::Linear,
+    ];
+
+    /// The kebab-case name used by Python and the command line.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Method::TrustRegion => "trust-region",
+            Method::RotationThenTranslation => "rotation-then-translation",
+            Method::TrustRegionExact => "trust-region-exact",
+            Method::Newton => "newton",
+            Method::LevenbergMarquardt => "levenberg-marquardt",
+            Method::Linear => "linear",
+        }
+    }
+
+    /// Parses [`Method::as_str`] names.
+    pub fn parse(name: &str) -> Result<Method> {
+        Method::ALL.into_iter().find(|m| m.as_str() == name).ok_or_else(|| Error::InvalidOption {
+            name: "method".into(),
+            reason: format!(
+                "unknown method '{name}'; expected one of {}",
+                Method::ALL.map(|m| m.as_str()).join(", ")
+            ),
+        })
+    }
+}
+
+/// Options of [`estimate_pose`]; every field has a documented default.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseOptions {
+    /// Estimator. Default [`Method::TrustRegion`].
+    pub method: Method,
+    /// Penalty λ on `r·r = 1` and `r·s = 0` (eqs. 13-15, 22). Paper: 50. Default `50.0`.
+    pub lambda: f64,
+    /// Solve the algebraic stage in a centred, unit-scale object frame ([`Conditioning`]). Default true.
+    pub normalize: bool,
+    /// Follow the estimator with a minimisation of the reprojection error (pixel distances for points,
+    /// endpoint-to-projected-line distances for lines). Default true.
+    pub refine: bool,
+    /// Starting pose `(R, t)` of the iterative methods, world frame. Default `None`: the identity
+    /// rotation with the object centroid at the camera centre — no guess from the user.
+    pub initial_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
+    /// Trust-region settings of the algebraic stage (paper defaults; `subproblem` is set by `method`).
+    pub trust_region: TrustRegionOptions,
+    /// Levenberg-Marquardt settings (method `levenberg-marquardt`).
+    pub levenberg_marquardt: LevenbergMarquardtOptions,
+    /// Stopping tests of plain Newton (method `newton`). Default: 50 iterations.
+    pub newton: StoppingCriteria,
+    /// Trust-region settings of the reprojection refinement. Default: Hebden steps, 50 iterations,
+    /// gradient tolerance 1e-10.
+    pub refinement: TrustRegionOptions,
+}
+
+impl Default for PoseOptions {
+    fn default() -> Self {
+        let mut refinement = TrustRegionOptions::default();
+        refinement.stopping.max_iterations = 50;
+        refinement.stopping.gradient_tolerance = 1e-10;
+        refinement.hessian_shift = 0.0;
+        refinement.initial_radius = 0.1;
+        PoseOptions {
+            method: Method::TrustRegion,
+            lambda: 50.0,
+            normalize: true,
+            refine: true,
+            initial_pose: None,
+            trust_region: TrustRegionOptions::default(),
+            levenberg_marquardt: LevenbergMarquardtOptions::default(),
+            newton: StoppingCriteria { max_iterations: 50, ..StoppingCriteria::default() },
+            refinement,
+        }
+    }
+}
+
+impl PoseOptions {
+    /// Checks the numeric options.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: &str| Err(Error::InvalidOption { name: name.into(), reason: reason.into() });
+        if !(self.lambda.is_finite() && self.lambda > 0.0) {
+            return bad("lambda", "must be a positive finite number");
+        }
+        for (name, tr) in [("trust_region", &self.trust_region), ("refinement", &self.refinement)] {
+            if !(tr.initial_radius.is_finite() && tr.initial_radius > 0.0) {
+                return bad(name, "initial_radius must be positive");
+            }
+            if !(0.0 < tr.accept_ratio && tr.accept_ratio < tr.expand_ratio && tr.expand_ratio < 1.0) {
+                return bad(name, "need 0 < accept_ratio < expand_ratio < 1");
+            }
+            if !(tr.hessian_shift >= 0.0) {
+                return bad(name, "hessian_shift must be ≥ 0");
+            }
+        }
+        if let Some((r, t)) = &self.initial_pose {
+            if r.iter().chain(t.iter()).any(|v| !v.is_finite()) || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6 {
+                return bad("initial_pose", "R must be a finite rotation matrix and t finite");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether the answer can be used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Every stage converged and every object point is in front of the camera.
+    Success,
+    /// A stage stopped on its iteration cap; the pose is the last iterate.
+    NotConverged,
+    /// The solver failed numerically (singular Hessian, non-finite cost); the pose is the last iterate.
+    NumericalFailure,
+    /// Some object points or line endpoints are behind the camera at the returned pose.
+    PointsBehindCamera,
+}
+
+impl Status {
+    /// snake_case name for reports, JSON and Python.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Status::Success => "success",
+            Status::NotConverged => "not_converged",
+            Status::NumericalFailure => "numerical_failure",
+            Status::PointsBehindCamera => "points_behind_camera",
+        }
+    }
+}
+
+/// What one stage of the pipeline did and where it ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageReport {
+    /// `"trust-region"`, `"rotation"`, `"translation"`, `"linear"`, `"refinement"`, ...
+    pub name: String,
+    /// What its cost measures: `"algebraic"` (eqs. 13-15, 22 as `½ΣΦ²`, normalised units) or
+    /// `"reprojection"` (`½ Σ` squared pixel residuals).
+    pub cost_kind: &'static str,
+    /// Rotation at the end of the stage (world → camera).
+    pub rotation: Matrix3<f64>,
+    /// Translation at the end of the stage (world units).
+    pub translation: Vector3<f64>,
+    /// Accepted iterations.
+    pub iterations: usize,
+    /// Cost at the start.
+    pub initial_cost: f64,
+    /// Cost at the end.
+    pub final_cost: f64,
+    /// Why the stage stopped.
+    pub termination: Termination,
+    /// Wall time, seconds.
+    pub time_seconds: f64,
+}
+
+/// The result of [`estimate_pose`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseResult {
+    /// `R` with `x_cam = R X_world + t`.
+    pub rotation: Matrix3<f64>,
+    /// `t`, world units.
+    pub translation: Vector3<f64>,
+    /// The same motion as a unit dual quaternion (eqs. 6-7), `r₀ ≥ 0`.
+    pub dual_quaternion: DualQuaternion,
+    /// Unit rotation axis.
+    pub axis: Vector3<f64>,
+    /// Rotation angle about `axis`, radians in `[0, π]`.
+    pub angle: f64,
+    /// The estimator that ran.
+    pub method: Method,
+    /// Iterations summed over stages.
+    pub iterations: usize,
+    /// Cost of the last stage at the returned pose (see [`StageReport::cost_kind`]).
+    pub final_cost: f64,
+    /// Why the last iterative stage stopped.
+    pub termination: Termination,
+    /// Whether the answer can be used, and if not why.
+    pub status: Status,
+    /// Root-mean-square reprojection error over all correspondences, pixels.
+    pub rms_error_px: f64,
+    /// Total wall time, seconds.
+    pub time_seconds: f64,
+    /// Every stage in order; the last one gave the returned pose.
+    pub stages: Vec<StageReport>,
+    /// Intrinsics estimated by the linear method (`None` for the others).
+    pub estimated_camera: Option<Camera>,
+}
