@@ -85,7 +85,7 @@ pub enum SceneKind {
     General,
     /// Points on one plane, tilted 30-60° to the image plane.
     Planar,
-    /// Points 1 unit across at depth ~100 (weak perspective).
+    /// Points in a box 10 units across at depth ~50 (weak perspective: ±80 px, depth range ±10%).
     Far,
 }
 
@@ -107,7 +107,7 @@ pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64)
     let camera = Camera { fx: 800.0, fy: 800.0, cx: 320.0, cy: 240.0, skew: 0.0 };
     let rotation = rng.rotation();
     let (depth, half_width) = match kind {
-        SceneKind::Far => (100.0, 0.5),
+        SceneKind::Far => (50.0, 5.0),
         _ => (6.0, 1.5),
     };
     let tilt = to_rotation_matrix(&from_axis_angle(&rng.unit_vector3(), rng.uniform_in(0.5, 1.0)));

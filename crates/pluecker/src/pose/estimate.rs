@@ -2,13 +2,14 @@
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, Conditioning, Correspondences};
+use super::initialization::{joint_start, least_spread_axis, mirrored, rotation_start};
 use super::linear::faugeras_toscani;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{Method, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
-use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, to_rotation_matrix};
+use crate::geometry::quaternion::{axis_angle, from_rotation_matrix};
 use crate::optim::{levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination};
 use nalgebra::{Matrix3, SVector, Vector3, Vector4};
 use std::time::Instant;
@@ -33,11 +34,53 @@ fn to_world(x: &SVector<f64, 8>, cond: &Conditioning) -> Pose {
     (rot, cond.pose_to_world(&rot, &t))
 }
 
-/// The starting iterate in the conditioned frame: the user's pose, or the identity motion.
-fn start(opts: &PoseOptions, cond: &Conditioning) -> DualQuaternion {
-    match &opts.initial_pose {
-        Some((rot, t)) => DualQuaternion::from_rotation_translation(rot, &cond.pose_from_world(rot, t)),
-        None => DualQuaternion::identity(),
+/// The user's starting pose in the conditioned frame, if any.
+fn user_start(opts: &PoseOptions, cond: &Conditioning) -> Option<DualQuaternion> {
+    opts.initial_pose
+        .as_ref()
+        .map(|(rot, t)| DualQuaternion::from_rotation_translation(rot, &cond.pose_from_world(rot, t)))
+}
+
+/// The object's centroid and axis of least spread in the (conditioned) frame of `c`.
+fn object_shape(c: &Correspondences) -> (Vector3<f64>, Vector3<f64>) {
+    let all: Vec<Vector3<f64>> = c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
+    let centroid = all.iter().sum::<Vector3<f64>>() / all.len().max(1) as f64;
+    (centroid, least_spread_axis(&all))
+}
+
+fn centroid_depth(x: &SVector<f64, 8>, centroid: &Vector3<f64>) -> f64 {
+    let (rot, t) = DualQuaternion::from_vector(x).to_rotation_translation();
+    (rot * centroid + t).z
+}
+
+/// Two runs of one solver as one: iterations and evaluations add up, the kept run gives the end.
+fn merged(first: &Summary, kept: &Summary, second: &Summary) -> Summary {
+    Summary {
+        iterations: first.iterations + second.iterations,
+        evaluations: first.evaluations + second.evaluations,
+        initial_cost: first.initial_cost,
+        final_cost: kept.final_cost,
+        termination: kept.termination,
+    }
+}
+
+/// Runs `solve` from `x0`; if the object ends behind the camera, once more from the mirrored pose
+/// (see [`super::initialization`]), keeping the run that ends in front (or else the cheaper one).
+fn with_cheirality_restart(
+    x0: SVector<f64, 8>,
+    shape: &(Vector3<f64>, Vector3<f64>),
+    solve: impl Fn(SVector<f64, 8>) -> (SVector<f64, 8>, Summary),
+) -> (SVector<f64, 8>, Summary) {
+    let (x, summary) = solve(x0);
+    if !(centroid_depth(&x, &shape.0) < 0.0) {
+        return (x, summary);
+    }
+    let (rot, t) = DualQuaternion::from_vector(&x).to_rotation_translation();
+    let (x2, summary2) = solve(mirrored(&rot, &t, &shape.1).to_vector());
+    if centroid_depth(&x2, &shape.0) > 0.0 || summary2.final_cost < summary.final_cost {
+        (x2, merged(&summary, &summary2, &summary2))
+    } else {
+        (x, merged(&summary, &summary, &summary2))
     }
 }
 
@@ -58,47 +101,59 @@ pub fn algebraic_stage(
     }
     let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
     let cc = cond.correspondences(corr);
-    let x0 = start(opts, &cond);
+    let shape = object_shape(&cc);
     let mut tr = opts.trust_region;
     if opts.method == Method::RotationThenTranslation {
         let (points, lines) = constraints(camera, &cc, true)?;
         let rotation_cost = RotationCost::new(&lines, opts.lambda);
+        let translation_gram = gram(&points, &lines[..cc.n_lines()], false);
         tr.subproblem = Subproblem::Hebden;
-        let (r, summary) = trust_region::minimize(&rotation_cost, x0.r, &tr);
-        let r = normalized_or_identity(&r);
-        let rot_pose = (to_rotation_matrix(&r), Vector3::zeros());
-        let rotation_report = stage("rotation", "algebraic", &rot_pose, &summary, started);
-        let t_started = Instant::now();
-        let g = gram(&points, &lines[..cc.n_lines()], false);
-        let s = solve_translation(&g, &r, opts.lambda).unwrap_or_else(Vector4::zeros);
-        let mut x = SVector::<f64, 8>::zeros();
-        x.fixed_rows_mut::<4>(0).copy_from(&r);
-        x.fixed_rows_mut::<4>(4).copy_from(&s);
-        let translation_cost = JointCost { gram: g, lambda: opts.lambda }.cost(&x);
+        // Eq. 14 by the trust region, then eq. 15; both together form one solve of the restart logic.
+        let solve = |x0: SVector<f64, 8>| {
+            let r0: Vector4<f64> = x0.fixed_rows::<4>(0).into_owned();
+            let (r, summary) = trust_region::minimize(&rotation_cost, r0, &tr);
+            let r = normalized_or_identity(&r);
+            let s = solve_translation(&translation_gram, &r, opts.lambda).unwrap_or_else(Vector4::zeros);
+            let mut x = SVector::<f64, 8>::zeros();
+            x.fixed_rows_mut::<4>(0).copy_from(&r);
+            x.fixed_rows_mut::<4>(4).copy_from(&s);
+            (x, summary)
+        };
+        let r0 = match user_start(opts, &cond) {
+            Some(q) => q.r,
+            None => rotation_start(&rotation_cost.gram),
+        };
+        let x0 = DualQuaternion { r: r0, s: Vector4::zeros() }.to_vector();
+        let (x, summary) = with_cheirality_restart(x0, &shape, solve);
         let pose = to_world(&x, &cond);
-        let summary = Summary {
+        let rotation_report = stage("rotation", "algebraic", &pose, &summary, started);
+        let t_started = Instant::now();
+        let translation_cost = JointCost { gram: translation_gram, lambda: opts.lambda }.cost(&x);
+        let closed = Summary {
             iterations: 0,
             evaluations: 1,
             initial_cost: translation_cost,
             final_cost: translation_cost,
             termination: Termination::ClosedForm,
         };
-        let translation_report = stage("translation", "algebraic", &pose, &summary, t_started);
+        let translation_report = stage("translation", "algebraic", &pose, &closed, t_started);
         return Ok((pose, vec![rotation_report, translation_report], None));
     }
     let (points, lines) = constraints(camera, &cc, false)?;
     let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
-    let x0 = x0.to_vector();
-    let (x, summary) = match opts.method {
-        Method::TrustRegion => trust_region::minimize(&cost, x0, &tr),
-        Method::TrustRegionExact => {
-            tr.subproblem = Subproblem::MoreSorensen;
-            trust_region::minimize(&cost, x0, &tr)
-        }
+    let x0 = user_start(opts, &cond)
+        .or_else(|| joint_start(&cost.gram, &shape.0))
+        .unwrap_or_else(DualQuaternion::identity)
+        .to_vector();
+    if opts.method == Method::TrustRegionExact {
+        tr.subproblem = Subproblem::MoreSorensen;
+    }
+    let solve = |x0: SVector<f64, 8>| match opts.method {
         Method::Newton => newton::minimize(&cost, x0, &opts.newton),
         Method::LevenbergMarquardt => levenberg_marquardt::minimize(&cost, x0, &opts.levenberg_marquardt),
-        Method::RotationThenTranslation | Method::Linear => unreachable!("handled above"),
+        _ => trust_region::minimize(&cost, x0, &tr),
     };
+    let (x, summary) = with_cheirality_restart(x0, &shape, solve);
     let pose = if x.iter().all(|v| v.is_finite()) && x.fixed_rows::<4>(0).norm() > 0.0 {
         to_world(&x, &cond)
     } else {

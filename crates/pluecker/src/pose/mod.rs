@@ -7,6 +7,7 @@
 pub mod algebraic;
 pub mod correspondences;
 mod estimate;
+pub mod initialization;
 pub mod linear;
 pub mod reprojection;
 

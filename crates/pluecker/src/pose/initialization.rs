@@ -1,0 +1,145 @@
+//! The default start of the iterative estimators: no guess from the user.
+//!
+//! The paper starts its trust region anywhere (section 6: "the final result is independent of the
+//! initialisation"). Measured on its own cost that is not quite so: eqs. 13/22 have a second local
+//! minimum, the *mirror* pose that puts the object behind the camera (`x_cam ≈ −x_cam_true`; exact
+//! for planar objects, where it has the same cost), and far starts can wander for hundreds of
+//! iterations. Two cheap devices remove both problems without asking the user for anything:
+//!
+//! 1. **Start from the best of 60 rotations.** For a fixed rotation the translation part of the cost is
+//!    linear least squares, so it can be minimised out exactly: with `G = [[A, B], [Bᵀ, C]]` split
+//!    after the 9 rotation entries of `y = [vec R̃; t̃]`, the best `t̃` is `−C⁻¹Bᵀ vec R` and the cost is
+//!    `vec Rᵀ (A − B C⁻¹ Bᵀ) vec R`. That is evaluated at the 60 rotations of the 600-cell (every
+//!    rotation is within 36° of one of them) and the trust region starts at the cheapest one whose
+//!    translation puts the object in front of the camera, with that translation.
+//! 2. **Cheirality restart.** If the estimator converges with the object centroid behind the camera, it
+//!    is restarted once from the mirrored pose `(R Rπ(n), −t)`, `n` the object's axis of least spread
+//!    (for which `Rπ(n)` reverses the object's other two axes), and the answer in front is kept.
+
+use super::algebraic::Gram;
+use crate::geometry::dual_quaternion::DualQuaternion;
+use crate::geometry::quaternion::{from_axis_angle, to_rotation_matrix};
+use nalgebra::{Matrix3, SMatrix, Vector3, Vector4};
+use std::sync::OnceLock;
+
+/// The 60 rotations of the 600-cell (its 120 unit quaternions up to sign), as rotation matrices
+/// flattened row-major, with their quaternions.
+fn rotation_grid() -> &'static [(Vector4<f64>, SMatrix<f64, 9, 1>)] {
+    static GRID: OnceLock<Vec<(Vector4<f64>, SMatrix<f64, 9, 1>)>> = OnceLock::new();
+    GRID.get_or_init(|| {
+        let phi = 0.5 * (1.0 + 5f64.sqrt());
+        let mut quats: Vec<Vector4<f64>> = Vec::with_capacity(120);
+        for i in 0..4 {
+            for s in [-1.0, 1.0] {
+                quats.push(Vector4::from_fn(|k, _| if k == i { s } else { 0.0 }));
+            }
+        }
+        for m in 0..16 {
+            quats.push(Vector4::from_fn(|k, _| if m >> k & 1 == 1 { -0.5 } else { 0.5 }));
+        }
+        // Even permutations of ½(±φ, ±1, ±1/φ, 0).
+        let even_perms = [
+            [0, 1, 2, 3], [0, 2, 3, 1], [0, 3, 1, 2], [1, 0, 3, 2], [1, 2, 0, 3], [1, 3, 2, 0],
+            [2, 0, 1, 3], [2, 1, 3, 0], [2, 3, 0, 1], [3, 0, 2, 1], [3, 1, 0, 2], [3, 2, 1, 0],
+        ];
+        let base = [phi, 1.0, 1.0 / phi, 0.0];
+        for perm in even_perms {
+            for signs in 0..8 {
+                let mut q = Vector4::zeros();
+                for (j, &slot) in perm.iter().enumerate() {
+                    let sign = if j < 3 && signs >> j & 1 == 1 { -1.0 } else { 1.0 };
+                    q[slot] = 0.5 * sign * base[j];
+                }
+                quats.push(q);
+            }
+        }
+        quats
+            .into_iter()
+            .filter(|q| q[0] > 1e-12 || (q[0].abs() <= 1e-12 && first_nonzero_positive(q)))
+            .map(|q| {
+                let r = to_rotation_matrix(&q);
+                (q, SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]))
+            })
+            .collect()
+    })
+}
+
+fn first_nonzero_positive(q: &Vector4<f64>) -> bool {
+    q.iter().find(|v| v.abs() > 1e-12).is_some_and(|v| *v > 0.0)
+}
+
+/// The rotation of the grid minimising `vec Rᵀ M vec R`.
+fn best_grid_rotation(m: &SMatrix<f64, 9, 9>) -> Vector4<f64> {
+    rotation_grid()
+        .iter()
+        .map(|(q, v)| (v.dot(&(m * v)), q))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, q)| *q)
+        .unwrap_or_else(|| Vector4::new(1.0, 0.0, 0.0, 0.0))
+}
+
+/// Start of the joint estimators (eqs. 13, 22): the grid rotation of least translation-eliminated
+/// cost among those whose optimal translation puts `centroid` (object frame of the cost) in front of the
+/// camera, with that translation. `None` if the translation block `C` of `G` is singular.
+pub fn joint_start(gram: &Gram, centroid: &Vector3<f64>) -> Option<DualQuaternion> {
+    let a = gram.fixed_view::<9, 9>(0, 0);
+    let b = gram.fixed_view::<9, 3>(0, 9);
+    let c_inv = gram.fixed_view::<3, 3>(9, 9).into_owned().try_inverse()?;
+    let to_t: SMatrix<f64, 3, 9> = -(c_inv * b.transpose());
+    let reduced = a + b * to_t;
+    let scored = rotation_grid().iter().map(|(q, v)| {
+        let rot = to_rotation_matrix(q);
+        let t: Vector3<f64> = to_t * v;
+        (v.dot(&(reduced * v)), (rot * centroid + t).z > 0.0, rot, t)
+    });
+    // Prefer poses in front of the camera; among them (or else among all) the cheapest.
+    let best = scored.min_by(|x, y| (!x.1).cmp(&!y.1).then(x.0.total_cmp(&y.0)))?;
+    Some(DualQuaternion::from_rotation_translation(&best.2, &best.3))
+}
+
+/// Start of the rotation-only estimator (eq. 14): the best grid rotation of its 9x9 Gram matrix.
+pub fn rotation_start(gram9: &SMatrix<f64, 9, 9>) -> Vector4<f64> {
+    best_grid_rotation(gram9)
+}
+
+/// The axis of least spread of a point set (unit vector), for the mirror restart.
+pub fn least_spread_axis(points: &[Vector3<f64>]) -> Vector3<f64> {
+    let n = points.len().max(1) as f64;
+    let c = points.iter().sum::<Vector3<f64>>() / n;
+    let scatter: Matrix3<f64> = points.iter().map(|p| (p - c) * (p - c).transpose()).sum();
+    let eig = scatter.symmetric_eigen();
+    let imin = eig.eigenvalues.imin();
+    eig.eigenvectors.column(imin).into_owned()
+}
+
+/// The mirror pose `(R Rπ(n), −t)` of a pose that puts the object behind the camera.
+pub fn mirrored(rotation: &Matrix3<f64>, translation: &Vector3<f64>, axis: &Vector3<f64>) -> DualQuaternion {
+    let flip = to_rotation_matrix(&from_axis_angle(axis, std::f64::consts::PI));
+    DualQuaternion::from_rotation_translation(&(rotation * flip), &-translation)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::quaternion::rotation_distance;
+    use crate::rng::Rng;
+
+    #[test]
+    fn grid_has_60_distinct_rotations_covering_so3_within_36_degrees() {
+        let grid = rotation_grid();
+        assert_eq!(grid.len(), 60);
+        let mats: Vec<Matrix3<f64>> = grid.iter().map(|(q, _)| to_rotation_matrix(q)).collect();
+        for i in 0..60 {
+            for j in 0..i {
+                assert!(rotation_distance(&mats[i], &mats[j]) > 0.5);
+            }
+        }
+        // Covering radius of the 600-cell: 36° (π/5) in rotation angle.
+        let mut rng = Rng::new(600);
+        for _ in 0..2000 {
+            let r = rng.rotation();
+            let nearest = mats.iter().map(|m| rotation_distance(m, &r)).fold(f64::INFINITY, f64::min);
+            assert!(nearest <= std::f64::consts::PI / 5.0 + 1e-9, "{nearest}");
+        }
+    }
+}
