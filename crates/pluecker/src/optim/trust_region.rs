@@ -94,23 +94,34 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &T
             let Some(step) = step else {
                 return finish(x, lin.cost, iterations, evaluations, Termination::SingularHessian);
             };
+            // A negligible interior step is the last one: take it after checking only its cost (the
+            // model is exact to second order at that scale), sparing a full linearisation.
+            if step.mu == 0.0 && opts.stopping.step_is_negligible(&step.d, 1.0) {
+                let trial = obj.retract(&x, &step.d);
+                let trial_cost = obj.cost(&trial);
+                evaluations += 1;
+                if trial_cost <= lin.cost {
+                    return finish(trial, trial_cost, iterations + 1, evaluations, Termination::StepTolerance);
+                }
+                return finish(x, lin.cost, iterations, evaluations, Termination::StepTolerance);
+            }
+            // The trial point is linearised at once: near a solution almost every step is accepted,
+            // so this saves a separate cost evaluation per iteration.
             let trial = obj.retract(&x, &step.d);
-            let trial_cost = obj.cost(&trial);
+            let trial_lin = obj.linearize(&trial);
             evaluations += 1;
-            let actual = lin.cost - trial_cost;
+            let actual = lin.cost - trial_lin.cost;
             // eq. 28; a zero predicted decrease means the model is flat: treat as a failed step.
             let ratio = if step.predicted_decrease > 0.0 { actual / step.predicted_decrease } else { -1.0 };
-            if trial_cost.is_finite() && ratio >= opts.accept_ratio {
+            if trial_lin.cost.is_finite() && ratio >= opts.accept_ratio {
                 // k.5
                 if ratio >= opts.expand_ratio {
                     delta *= 2.0;
                 }
-                let negligible = opts.stopping.step_is_negligible(&step.d, 1.0);
                 x = trial;
+                lin = trial_lin;
                 iterations += 1;
-                lin = obj.linearize(&x);
-                evaluations += 1;
-                if negligible {
+                if opts.stopping.step_is_negligible(&step.d, 1.0) {
                     return finish(x, lin.cost, iterations, evaluations, Termination::StepTolerance);
                 }
                 break;

@@ -49,17 +49,28 @@ impl<'a> ReprojectionCost<'a> {
         2 * (self.points2d.len() + self.lines2d.len())
     }
 
+    #[inline(always)]
     fn point_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
-        let rx = pose.0 * self.points3d[i];
-        let c = rx + pose.1;
-        let residual = self.camera.project(&c) - self.points2d[i];
+        let p = pose.0 * self.points3d[i];
+        let c = p + pose.1;
+        let iz = 1.0 / c.z;
+        let (xn, yn) = (c.x * iz, c.y * iz);
+        let cam = &self.camera;
+        let residual = Vector2::new(cam.fx * xn + cam.skew * yn + cam.cx, cam.fy * yn + cam.cy) - self.points2d[i];
         let mut jac = SMatrix::<f64, 2, 6>::zeros();
         if with_jacobian {
-            let iz = 1.0 / c.z;
-            let dproj = SMatrix::<f64, 2, 3>::new(iz, 0.0, -c.x * iz * iz, 0.0, iz, -c.y * iz * iz);
-            let d = self.camera.pixel_jacobian() * dproj;
-            jac.fixed_view_mut::<2, 3>(0, 0).copy_from(&(d * -skew(&rx)));
-            jac.fixed_view_mut::<2, 3>(0, 3).copy_from(&d);
+            // Rows of ∂u/∂x_cam; the rotation part is a [p]ₓ ω·(−1) = (p × a)·ω for each row a.
+            let du = Vector3::new(cam.fx * iz, cam.skew * iz, -(cam.fx * xn + cam.skew * yn) * iz);
+            let dv = Vector3::new(0.0, cam.fy * iz, -cam.fy * yn * iz);
+            for (row, a) in [du, dv].iter().enumerate() {
+                let w = p.cross(a);
+                jac[(row, 0)] = w.x;
+                jac[(row, 1)] = w.y;
+                jac[(row, 2)] = w.z;
+                jac[(row, 3)] = a.x;
+                jac[(row, 4)] = a.y;
+                jac[(row, 5)] = a.z;
+            }
         }
         (residual, jac)
     }
@@ -129,13 +140,38 @@ impl Objective<6> for ReprojectionCost<'_> {
     }
 
     fn linearize(&self, pose: &Pose) -> Linearization<6> {
-        let mut lin = Linearization { cost: 0.0, gradient: SVector::zeros(), gauss_newton: SMatrix::zeros() };
-        for (r, j) in self.blocks(pose, true) {
-            lin.cost += 0.5 * r.norm_squared();
-            lin.gradient += j.transpose() * r;
-            lin.gauss_newton += j.transpose() * j;
+        // Accumulated in plain arrays (upper triangle of JᵀJ, 21 entries): this loop is the hot path
+        // of the refinement, and fixed-size arrays let the compiler unroll it without bounds checks.
+        let mut cost = 0.0;
+        let mut grad = [0.0; 6];
+        let mut upper = [0.0; 21];
+        let points = (0..self.points2d.len()).map(|i| self.point_block(pose, i, true));
+        let lines = (0..self.lines2d.len()).map(|i| self.line_block(pose, i, true));
+        let mut add = |(r, j): Block| {
+            cost += 0.5 * (r.x * r.x + r.y * r.y);
+            let (j0, j1) = (j.row(0), j.row(1));
+            let (j0, j1): ([f64; 6], [f64; 6]) = (std::array::from_fn(|a| j0[a]), std::array::from_fn(|a| j1[a]));
+            let mut k = 0;
+            for a in 0..6 {
+                grad[a] += j0[a] * r.x + j1[a] * r.y;
+                for b in a..6 {
+                    upper[k] += j0[a] * j0[b] + j1[a] * j1[b];
+                    k += 1;
+                }
+            }
+        };
+        points.for_each(&mut add);
+        lines.for_each(&mut add);
+        let mut gauss_newton = SMatrix::<f64, 6, 6>::zeros();
+        let mut k = 0;
+        for a in 0..6 {
+            for b in a..6 {
+                gauss_newton[(a, b)] = upper[k];
+                gauss_newton[(b, a)] = upper[k];
+                k += 1;
+            }
         }
-        lin
+        Linearization { cost, gradient: SVector::from(grad), gauss_newton }
     }
 
     fn retract(&self, pose: &Pose, d: &SVector<f64, 6>) -> Pose {
