@@ -41,20 +41,41 @@ fn user_start(opts: &PoseOptions, cond: &Conditioning) -> Option<DualQuaternion>
         .map(|(rot, t)| DualQuaternion::from_rotation_translation(rot, &cond.pose_from_world(rot, t)))
 }
 
-/// The object's centroid and axis of least spread in the (conditioned) frame of `c`.
-fn object_shape(c: &Correspondences) -> (Vector3<f64>, Vector3<f64>) {
-    let all: Vec<Vector3<f64>> = c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
-    let centroid = all.iter().sum::<Vector3<f64>>() / all.len().max(1) as f64;
-    (centroid, least_spread_axis(&all))
+/// What the restart logic needs to know about the object (in the frame of the cost).
+struct Shape {
+    /// Every 3-D point and segment endpoint.
+    points: Vec<Vector3<f64>>,
+    /// Axis of least spread, for the mirror pose.
+    axis: Vector3<f64>,
+    /// Centroid.
+    centroid: Vector3<f64>,
 }
 
-fn centroid_depth(x: &SVector<f64, 8>, centroid: &Vector3<f64>) -> f64 {
-    let (rot, t) = DualQuaternion::from_vector(x).to_rotation_translation();
-    (rot * centroid + t).z
+impl Shape {
+    fn of(c: &Correspondences) -> Shape {
+        let points: Vec<Vector3<f64>> =
+            c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
+        let centroid = points.iter().sum::<Vector3<f64>>() / points.len().max(1) as f64;
+        let axis = least_spread_axis(&points);
+        Shape { points, axis, centroid }
+    }
+
+    /// True when the iterate `x` is a plausible answer: close to a rigid motion (`|r·r − 1| < ½`; the
+    /// penalty is soft, and the collapsed stationary point `r → 0` of eqs. 13/22 has cost λ/2) with every
+    /// object point in front of the camera.
+    fn in_front(&self, x: &SVector<f64, 8>) -> bool {
+        let r_norm2 = x.fixed_rows::<4>(0).norm_squared();
+        if !x.iter().all(|v| v.is_finite()) || (r_norm2 - 1.0).abs() >= 0.5 {
+            return false;
+        }
+        let (rot, t) = DualQuaternion::from_vector(x).to_rotation_translation();
+        self.points.iter().all(|p| (rot * p + t).z > 0.0)
+    }
 }
 
 /// Two runs of one solver as one: iterations and evaluations add up, the kept run gives the end.
-fn merged(first: &Summary, kept: &Summary, second: &Summary) -> Summary {
+fn merged(first: &Summary, second: &Summary, keep_second: bool) -> Summary {
+    let kept = if keep_second { second } else { first };
     Summary {
         iterations: first.iterations + second.iterations,
         evaluations: first.evaluations + second.evaluations,
@@ -64,24 +85,38 @@ fn merged(first: &Summary, kept: &Summary, second: &Summary) -> Summary {
     }
 }
 
-/// Runs `solve` from `x0`; if the object ends behind the camera, once more from the mirrored pose
-/// (see [`super::initialization`]), keeping the run that ends in front (or else the cheaper one).
-fn with_cheirality_restart(
+/// Runs `solve` from `x0`. If it ends with object points behind the camera (or far from a rigid
+/// motion), runs it again from the
+/// mirrored pose and then from `fallback` (the default start; see [`super::initialization`]) until an
+/// answer has the whole object in front, keeping the cheapest answer in front (or else the cheapest).
+fn with_cheirality_restarts(
     x0: SVector<f64, 8>,
-    shape: &(Vector3<f64>, Vector3<f64>),
+    fallback: Option<SVector<f64, 8>>,
+    shape: &Shape,
     solve: impl Fn(SVector<f64, 8>) -> (SVector<f64, 8>, Summary),
 ) -> (SVector<f64, 8>, Summary) {
-    let (x, summary) = solve(x0);
-    if !(centroid_depth(&x, &shape.0) < 0.0) {
-        return (x, summary);
+    let (mut best, mut summary) = solve(x0);
+    let mut best_in_front = shape.in_front(&best);
+    let mut restarts = 0;
+    while !best_in_front && restarts < 2 {
+        let next = if restarts == 0 {
+            let (rot, t) = DualQuaternion::from_vector(&best).to_rotation_translation();
+            Some(mirrored(&rot, &t, &shape.axis).to_vector())
+        } else {
+            fallback
+        };
+        restarts += 1;
+        let Some(next) = next else { continue };
+        let (x, s) = solve(next);
+        let in_front = shape.in_front(&x);
+        let better = in_front || s.final_cost < summary.final_cost;
+        summary = merged(&summary, &s, better);
+        if better {
+            best = x;
+            best_in_front = in_front;
+        }
     }
-    let (rot, t) = DualQuaternion::from_vector(&x).to_rotation_translation();
-    let (x2, summary2) = solve(mirrored(&rot, &t, &shape.1).to_vector());
-    if centroid_depth(&x2, &shape.0) > 0.0 || summary2.final_cost < summary.final_cost {
-        (x2, merged(&summary, &summary2, &summary2))
-    } else {
-        (x, merged(&summary, &summary, &summary2))
-    }
+    (best, summary)
 }
 
 /// Runs the estimator named by `opts.method` without refinement. Returns the pose (world frame), the
@@ -101,7 +136,7 @@ pub fn algebraic_stage(
     }
     let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
     let cc = cond.correspondences(corr);
-    let shape = object_shape(&cc);
+    let shape = Shape::of(&cc);
     let mut tr = opts.trust_region;
     if opts.method == Method::RotationThenTranslation {
         let (points, lines) = constraints(camera, &cc, true)?;
@@ -119,12 +154,12 @@ pub fn algebraic_stage(
             x.fixed_rows_mut::<4>(4).copy_from(&s);
             (x, summary)
         };
-        let r0 = match user_start(opts, &cond) {
-            Some(q) => q.r,
-            None => rotation_start(&rotation_cost.gram),
+        let default_start = DualQuaternion { r: rotation_start(&rotation_cost.gram), s: Vector4::zeros() }.to_vector();
+        let (x0, fallback) = match user_start(opts, &cond) {
+            Some(q) => (DualQuaternion { r: q.r, s: Vector4::zeros() }.to_vector(), Some(default_start)),
+            None => (default_start, None),
         };
-        let x0 = DualQuaternion { r: r0, s: Vector4::zeros() }.to_vector();
-        let (x, summary) = with_cheirality_restart(x0, &shape, solve);
+        let (x, summary) = with_cheirality_restarts(x0, fallback, &shape, solve);
         let pose = to_world(&x, &cond);
         let rotation_report = stage("rotation", "algebraic", &pose, &summary, started);
         let t_started = Instant::now();
@@ -141,10 +176,11 @@ pub fn algebraic_stage(
     }
     let (points, lines) = constraints(camera, &cc, false)?;
     let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
-    let x0 = user_start(opts, &cond)
-        .or_else(|| joint_start(&cost.gram, &shape.0))
-        .unwrap_or_else(DualQuaternion::identity)
-        .to_vector();
+    let default_start = joint_start(&cost.gram, &shape.centroid).unwrap_or_else(DualQuaternion::identity).to_vector();
+    let (x0, fallback) = match user_start(opts, &cond) {
+        Some(q) => (q.to_vector(), Some(default_start)),
+        None => (default_start, None),
+    };
     if opts.method == Method::TrustRegionExact {
         tr.subproblem = Subproblem::MoreSorensen;
     }
@@ -153,7 +189,7 @@ pub fn algebraic_stage(
         Method::LevenbergMarquardt => levenberg_marquardt::minimize(&cost, x0, &opts.levenberg_marquardt),
         _ => trust_region::minimize(&cost, x0, &tr),
     };
-    let (x, summary) = with_cheirality_restart(x0, &shape, solve);
+    let (x, summary) = with_cheirality_restarts(x0, fallback, &shape, solve);
     let pose = if x.iter().all(|v| v.is_finite()) && x.fixed_rows::<4>(0).norm() > 0.0 {
         to_world(&x, &cond)
     } else {
