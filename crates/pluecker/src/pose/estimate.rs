@@ -2,14 +2,14 @@
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, Conditioning, Correspondences};
-use super::initialization::{joint_start, least_spread_axis, mirrored, rotation_start};
+use super::initialization::{joint_starts, least_spread_axis, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{Method, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
-use crate::geometry::quaternion::{axis_angle, from_rotation_matrix};
+use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, rotation_distance};
 use crate::optim::{levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination};
 use nalgebra::{Matrix3, SVector, Vector3, Vector4};
 use std::time::Instant;
@@ -85,54 +85,85 @@ fn merged(first: &Summary, second: &Summary, keep_second: bool) -> Summary {
     }
 }
 
-/// Runs `solve` from `x0`. If it ends with object points behind the camera (or far from a rigid
-/// motion), runs it again from the
-/// mirrored pose and then from `fallback` (the default start; see [`super::initialization`]) until an
-/// answer has the whole object in front, keeping the cheapest answer in front (or else the cheapest).
-fn with_cheirality_restarts(
+/// Runs `solve` from `x0`; if it ends with object points behind the camera (or far from a rigid
+/// motion), runs it once more from the mirrored pose (see [`super::initialization`]). Returns the
+/// answer in front if there is one (else the cheaper), the summed work, and whether it is in front.
+fn with_cheirality_restart(
     x0: SVector<f64, 8>,
-    fallback: Option<SVector<f64, 8>>,
     shape: &Shape,
-    solve: impl Fn(SVector<f64, 8>) -> (SVector<f64, 8>, Summary),
-) -> (SVector<f64, 8>, Summary) {
-    let (mut best, mut summary) = solve(x0);
-    let mut best_in_front = shape.in_front(&best);
-    let mut restarts = 0;
-    while !best_in_front && restarts < 2 {
-        let next = if restarts == 0 {
-            let (rot, t) = DualQuaternion::from_vector(&best).to_rotation_translation();
-            Some(mirrored(&rot, &t, &shape.axis).to_vector())
-        } else {
-            fallback
-        };
-        restarts += 1;
-        let Some(next) = next else { continue };
-        let (x, s) = solve(next);
-        let in_front = shape.in_front(&x);
-        let better = in_front || s.final_cost < summary.final_cost;
-        summary = merged(&summary, &s, better);
-        if better {
-            best = x;
-            best_in_front = in_front;
-        }
+    solve: &impl Fn(SVector<f64, 8>) -> (SVector<f64, 8>, Summary),
+) -> (SVector<f64, 8>, Summary, bool) {
+    let (x, summary) = solve(x0);
+    if shape.in_front(&x) {
+        return (x, summary, true);
     }
-    (best, summary)
+    let (rot, t) = DualQuaternion::from_vector(&x).to_rotation_translation();
+    let (x2, summary2) = solve(mirrored(&rot, &t, &shape.axis).to_vector());
+    let in_front = shape.in_front(&x2);
+    if in_front || summary2.final_cost < summary.final_cost {
+        (x2, merged(&summary, &summary2, true), in_front)
+    } else {
+        (x, merged(&summary, &summary2, false), false)
+    }
 }
 
-/// Runs the estimator named by `opts.method` without refinement. Returns the pose (world frame), the
-/// stage reports, and the intrinsics the linear method estimates. Inputs are assumed validated.
-pub fn algebraic_stage(
-    camera: &Camera,
-    corr: &Correspondences,
-    opts: &PoseOptions,
-) -> Result<(Pose, Vec<StageReport>, Option<Camera>)> {
+/// The starts of one estimate: the user's (if any) and the default ones. All are tried and the
+/// cheapest valid answer wins, so a poor user guess cannot make the result worse than no guess.
+fn starts(user: Option<SVector<f64, 8>>, defaults: Vec<SVector<f64, 8>>) -> Vec<SVector<f64, 8>> {
+    user.into_iter().chain(defaults).collect()
+}
+
+/// Number of default starts (see [`super::initialization`]).
+const DEFAULT_STARTS: usize = 3;
+/// Answers from other starts whose algebraic cost is within this factor of the best are refined too,
+/// and the reprojection error decides (planar scenes have two minima of similar algebraic cost).
+const ALTERNATIVE_COST_FACTOR: f64 = 4.0;
+
+/// What the estimator (before refinement) found.
+#[derive(Debug, Clone)]
+pub struct Estimate {
+    /// The best pose, world frame.
+    pub pose: Pose,
+    /// Stage reports.
+    pub stages: Vec<StageReport>,
+    /// Intrinsics estimated by the linear method.
+    pub camera: Option<Camera>,
+    /// Other distinct answers worth refining (world frame), cheapest first.
+    pub alternatives: Vec<Pose>,
+}
+
+/// Keeps the cheapest valid run, sums the work of all, and lists the near-best distinct others.
+fn select(runs: Vec<(SVector<f64, 8>, Summary, bool)>, score: impl Fn(&SVector<f64, 8>, &Summary) -> f64) -> (SVector<f64, 8>, Summary, Vec<SVector<f64, 8>>) {
+    let mut ranked: Vec<(f64, bool, SVector<f64, 8>, Summary)> =
+        runs.into_iter().map(|(x, s, valid)| (score(&x, &s), valid, x, s)).collect();
+    ranked.sort_by(|a, b| (!a.1).cmp(&!b.1).then(a.0.total_cmp(&b.0)));
+    let total_iterations = ranked.iter().map(|r| r.3.iterations).sum();
+    let total_evaluations = ranked.iter().map(|r| r.3.evaluations).sum();
+    let (best_score, _, best, mut summary) = ranked[0].clone();
+    summary.iterations = total_iterations;
+    summary.evaluations = total_evaluations;
+    let best_rot = DualQuaternion::from_vector(&best).to_rotation_translation().0;
+    let mut alternatives: Vec<SVector<f64, 8>> = Vec::new();
+    for (cost, valid, x, _) in ranked.iter().skip(1) {
+        let rot = DualQuaternion::from_vector(x).to_rotation_translation().0;
+        let distinct = rotation_distance(&rot, &best_rot) > 1e-3
+            && alternatives.iter().all(|a| rotation_distance(&DualQuaternion::from_vector(a).to_rotation_translation().0, &rot) > 1e-3);
+        if *valid && distinct && *cost <= ALTERNATIVE_COST_FACTOR * best_score + 1e-300 {
+            alternatives.push(*x);
+        }
+    }
+    (best, summary, alternatives)
+}
+
+/// Runs the estimator named by `opts.method` without refinement. Inputs are assumed validated.
+pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<Estimate> {
     let started = Instant::now();
     if opts.method == Method::Linear {
         let cal = faugeras_toscani(&corr.points2d, &corr.points3d)?;
         let pose = (cal.rotation, cal.translation);
         let cost = ReprojectionCost::new(cal.camera, &corr.points2d, &corr.points3d, &[], &[]).cost(&pose);
         let summary = Summary { iterations: 0, evaluations: 1, initial_cost: cost, final_cost: cost, termination: Termination::ClosedForm };
-        return Ok((pose, vec![stage("linear", "reprojection", &pose, &summary, started)], Some(cal.camera)));
+        return Ok(Estimate { pose, stages: vec![stage("linear", "reprojection", &pose, &summary, started)], camera: Some(cal.camera), alternatives: vec![] });
     }
     let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
     let cc = cond.correspondences(corr);
@@ -154,12 +185,16 @@ pub fn algebraic_stage(
             x.fixed_rows_mut::<4>(4).copy_from(&s);
             (x, summary)
         };
-        let default_start = DualQuaternion { r: rotation_start(&rotation_cost.gram), s: Vector4::zeros() }.to_vector();
-        let (x0, fallback) = match user_start(opts, &cond) {
-            Some(q) => (DualQuaternion { r: q.r, s: Vector4::zeros() }.to_vector(), Some(default_start)),
-            None => (default_start, None),
-        };
-        let (x, summary) = with_cheirality_restarts(x0, fallback, &shape, solve);
+        let default_starts: Vec<SVector<f64, 8>> = rotation_starts(&rotation_cost.gram, DEFAULT_STARTS)
+            .into_iter()
+            .map(|r| DualQuaternion { r, s: Vector4::zeros() }.to_vector())
+            .collect();
+        let user = user_start(opts, &cond).map(|q| DualQuaternion { r: q.r, s: Vector4::zeros() }.to_vector());
+        let runs = starts(user, default_starts).into_iter().map(|x0| with_cheirality_restart(x0, &shape, &solve)).collect();
+        // Candidates are ranked by the joint cost (eqs. 13 + 22), which sees rotation and translation.
+        let (point_cons, line_cons) = constraints(camera, &cc, false)?;
+        let joint = JointCost { gram: gram(&point_cons, &line_cons, true), lambda: opts.lambda };
+        let (x, summary, others) = select(runs, |x, _| joint.cost(x));
         let pose = to_world(&x, &cond);
         let rotation_report = stage("rotation", "algebraic", &pose, &summary, started);
         let t_started = Instant::now();
@@ -172,15 +207,16 @@ pub fn algebraic_stage(
             termination: Termination::ClosedForm,
         };
         let translation_report = stage("translation", "algebraic", &pose, &closed, t_started);
-        return Ok((pose, vec![rotation_report, translation_report], None));
+        let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
+        return Ok(Estimate { pose, stages: vec![rotation_report, translation_report], camera: None, alternatives });
     }
     let (points, lines) = constraints(camera, &cc, false)?;
     let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
-    let default_start = joint_start(&cost.gram, &shape.centroid).unwrap_or_else(DualQuaternion::identity).to_vector();
-    let (x0, fallback) = match user_start(opts, &cond) {
-        Some(q) => (q.to_vector(), Some(default_start)),
-        None => (default_start, None),
-    };
+    let mut default_starts: Vec<SVector<f64, 8>> =
+        joint_starts(&cost.gram, &shape.centroid, DEFAULT_STARTS).iter().map(|q| q.to_vector()).collect();
+    if default_starts.is_empty() {
+        default_starts.push(DualQuaternion::identity().to_vector());
+    }
     if opts.method == Method::TrustRegionExact {
         tr.subproblem = Subproblem::MoreSorensen;
     }
@@ -189,13 +225,16 @@ pub fn algebraic_stage(
         Method::LevenbergMarquardt => levenberg_marquardt::minimize(&cost, x0, &opts.levenberg_marquardt),
         _ => trust_region::minimize(&cost, x0, &tr),
     };
-    let (x, summary) = with_cheirality_restarts(x0, fallback, &shape, solve);
+    let user = user_start(opts, &cond).map(|q| q.to_vector());
+    let runs = starts(user, default_starts).into_iter().map(|x0| with_cheirality_restart(x0, &shape, &solve)).collect();
+    let (x, summary, others) = select(runs, |_, s| s.final_cost);
     let pose = if x.iter().all(|v| v.is_finite()) && x.fixed_rows::<4>(0).norm() > 0.0 {
         to_world(&x, &cond)
     } else {
         (Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN))
     };
-    Ok((pose, vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)], None))
+    let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
+    Ok(Estimate { pose, stages: vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)], camera: None, alternatives })
 }
 
 fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
@@ -233,10 +272,18 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     camera.validate()?;
     opts.validate()?;
     corr.validate(opts.method)?;
-    let (mut pose, mut stages, estimated_camera) = algebraic_stage(camera, corr, opts)?;
+    let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives } = algebraic_stage(camera, corr, opts)?;
     let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     if opts.refine && finite {
-        let (refined, report) = refine_pose(camera, corr, &pose, opts);
+        let (mut refined, mut report) = refine_pose(camera, corr, &pose, opts);
+        for alternative in &alternatives {
+            let (other, other_report) = refine_pose(camera, corr, alternative, opts);
+            report.iterations += other_report.iterations;
+            report.time_seconds += other_report.time_seconds;
+            if other_report.final_cost < report.final_cost {
+                (refined, report) = (other, StageReport { iterations: report.iterations, time_seconds: report.time_seconds, ..other_report });
+            }
+        }
         pose = refined;
         stages.push(report);
     }

@@ -10,15 +10,18 @@
 //!    linear least squares, so it can be minimised out exactly: with `G = [[A, B], [Bᵀ, C]]` split
 //!    after the 9 rotation entries of `y = [vec R̃; t̃]`, the best `t̃` is `−C⁻¹Bᵀ vec R` and the cost is
 //!    `vec Rᵀ (A − B C⁻¹ Bᵀ) vec R`. That is evaluated at the 60 rotations of the 600-cell (every
-//!    rotation is within about 45° of one of them) and the trust region starts at the cheapest one whose
-//!    translation puts the object in front of the camera, with that translation.
+//!    rotation is within about 45° of one of them). The estimator runs from the three cheapest grid
+//!    rotations at least 72° apart (those whose translation puts the object in front of the camera
+//!    first), each with its translation; the distinct answers are ranked by cost, and any within a
+//!    factor of the best are refined on the reprojection error, which decides. This catches the
+//!    second minimum of planar scenes, whose algebraic cost can be the lower one.
 //! 2. **Cheirality restart.** If the estimator converges with the object centroid behind the camera, it
 //!    is restarted once from the mirrored pose `(R Rπ(n), −t)`, `n` the object's axis of least spread
 //!    (for which `Rπ(n)` reverses the object's other two axes), and the answer in front is kept.
 
 use super::algebraic::Gram;
 use crate::geometry::dual_quaternion::DualQuaternion;
-use crate::geometry::quaternion::{from_axis_angle, to_rotation_matrix};
+use crate::geometry::quaternion::{from_axis_angle, rotation_distance, to_rotation_matrix};
 use nalgebra::{Matrix3, SMatrix, Vector3, Vector4};
 use std::sync::OnceLock;
 
@@ -68,38 +71,55 @@ fn first_nonzero_positive(q: &Vector4<f64>) -> bool {
     q.iter().find(|v| v.abs() > 1e-12).is_some_and(|v| *v > 0.0)
 }
 
-/// The rotation of the grid minimising `vec Rᵀ M vec R`.
-fn best_grid_rotation(m: &SMatrix<f64, 9, 9>) -> Vector4<f64> {
-    rotation_grid()
-        .iter()
-        .map(|(q, v)| (v.dot(&(m * v)), q))
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, q)| *q)
-        .unwrap_or_else(|| Vector4::new(1.0, 0.0, 0.0, 0.0))
+/// Minimum angle between two starts of [`joint_starts`] and [`rotation_starts`]: one grid step (72°).
+const DISTINCT_STARTS: f64 = 1.25;
+
+/// Up to `k` grid rotations in increasing order of score, each at least one grid step from the
+/// ones before it.
+fn diverse_best<T: Copy>(scored: &mut [(f64, Matrix3<f64>, T)], k: usize) -> Vec<(Matrix3<f64>, T)> {
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut picked: Vec<(Matrix3<f64>, T)> = Vec::with_capacity(k);
+    for (_, rot, extra) in scored.iter() {
+        if picked.len() == k {
+            break;
+        }
+        if picked.iter().all(|(p, _)| rotation_distance(p, rot) > DISTINCT_STARTS) {
+            picked.push((*rot, *extra));
+        }
+    }
+    picked
 }
 
-/// Start of the joint estimators (eqs. 13, 22): the grid rotation of least translation-eliminated
-/// cost among those whose optimal translation puts `centroid` (object frame of the cost) in front of the
-/// camera, with that translation. `None` if the translation block `C` of `G` is singular.
-pub fn joint_start(gram: &Gram, centroid: &Vector3<f64>) -> Option<DualQuaternion> {
+/// Starts of the joint estimators (eqs. 13, 22): up to `k` distinct grid rotations of least
+/// translation-eliminated cost, those whose optimal translation puts `centroid` (object frame of the
+/// cost) in front of the camera first, each with that translation. Empty if the translation block `C`
+/// of `G` is singular.
+pub fn joint_starts(gram: &Gram, centroid: &Vector3<f64>, k: usize) -> Vec<DualQuaternion> {
     let a = gram.fixed_view::<9, 9>(0, 0);
     let b = gram.fixed_view::<9, 3>(0, 9);
-    let c_inv = gram.fixed_view::<3, 3>(9, 9).into_owned().try_inverse()?;
+    let Some(c_inv) = gram.fixed_view::<3, 3>(9, 9).into_owned().try_inverse() else {
+        return vec![];
+    };
     let to_t: SMatrix<f64, 3, 9> = -(c_inv * b.transpose());
     let reduced = a + b * to_t;
-    let scored = rotation_grid().iter().map(|(q, v)| {
-        let rot = to_rotation_matrix(q);
-        let t: Vector3<f64> = to_t * v;
-        (v.dot(&(reduced * v)), (rot * centroid + t).z > 0.0, rot, t)
-    });
-    // Prefer poses in front of the camera; among them (or else among all) the cheapest.
-    let best = scored.min_by(|x, y| (!x.1).cmp(&!y.1).then(x.0.total_cmp(&y.0)))?;
-    Some(DualQuaternion::from_rotation_translation(&best.2, &best.3))
+    let mut scored: Vec<(f64, Matrix3<f64>, Vector3<f64>)> = rotation_grid()
+        .iter()
+        .map(|(q, v)| {
+            let rot = to_rotation_matrix(q);
+            let t: Vector3<f64> = to_t * v;
+            let behind = if (rot * centroid + t).z > 0.0 { 0.0 } else { f64::MAX / 4.0 };
+            (behind + v.dot(&(reduced * v)), rot, t)
+        })
+        .collect();
+    diverse_best(&mut scored, k).into_iter().map(|(rot, t)| DualQuaternion::from_rotation_translation(&rot, &t)).collect()
 }
 
-/// Start of the rotation-only estimator (eq. 14): the best grid rotation of its 9x9 Gram matrix.
-pub fn rotation_start(gram9: &SMatrix<f64, 9, 9>) -> Vector4<f64> {
-    best_grid_rotation(gram9)
+/// Starts of the rotation-only estimator (eq. 14): up to `k` distinct grid rotations of least cost
+/// under its 9x9 Gram matrix.
+pub fn rotation_starts(gram9: &SMatrix<f64, 9, 9>, k: usize) -> Vec<Vector4<f64>> {
+    let mut scored: Vec<(f64, Matrix3<f64>, Vector4<f64>)> =
+        rotation_grid().iter().map(|(q, v)| (v.dot(&(gram9 * v)), to_rotation_matrix(q), *q)).collect();
+    diverse_best(&mut scored, k).into_iter().map(|(_, q)| q).collect()
 }
 
 /// The axis of least spread of a point set (unit vector), for the mirror restart.
@@ -121,7 +141,6 @@ pub fn mirrored(rotation: &Matrix3<f64>, translation: &Vector3<f64>, axis: &Vect
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::quaternion::rotation_distance;
     use crate::rng::Rng;
 
     #[test]

@@ -12,7 +12,7 @@ pub mod linear;
 pub mod reprojection;
 
 pub use correspondences::{Conditioning, Correspondences};
-pub use estimate::{algebraic_stage, estimate_pose, refine_pose};
+pub use estimate::{algebraic_stage, estimate_pose, refine_pose, Estimate};
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -88,8 +88,9 @@ pub struct PoseOptions {
     /// Follow the estimator with a minimisation of the reprojection error (pixel distances for points,
     /// endpoint-to-projected-line distances for lines). Default true.
     pub refine: bool,
-    /// Starting pose `(R, t)` of the iterative methods, world frame. Default `None`: the identity
-    /// rotation with the object centroid at the camera centre — no guess from the user.
+    /// An extra starting pose `(R, t)` for the iterative methods, world frame. It is tried first, and
+    /// the default starts too (see [`initialization`]); the cheapest valid answer wins. Default `None`:
+    /// no guess from the user is needed.
     pub initial_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
     /// Trust-region settings of the algebraic stage: the paper's values (section 4.1), and a step
     /// tolerance of 1e-10 on top of its k.2 tests. `subproblem` is set by `method`.
