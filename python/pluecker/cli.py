@@ -1,0 +1,323 @@
+"""The ``pluecker`` command line.
+
+``pluecker pose INPUT.json``
+    Estimates a camera pose from the correspondences in a JSON file (``-`` reads standard input) and
+    prints ``PoseResult.to_dict()`` as JSON. The schema is documented in ``docs/cli.md``.
+``pluecker reproduce phong-horaud-1995``
+    Re-runs the experiments of Phong, Horaud, Yassine & Tao 1995 (section 5) in simulation and writes
+    tables, figures and a JSON summary.
+
+Exit status: 0 on success, 2 on a usage or input error (one line on standard error, no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any, NoReturn, Sequence
+
+import numpy as np
+
+import pluecker
+
+__all__ = ["main"]
+
+METHODS = tuple(pluecker.METHODS)
+
+INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "method", "options"}
+#: ``options`` key → (keyword of ``estimate_pose``, accepted Python types).
+OPTIONS = {
+    "penalty": ("penalty", (int, float)),
+    "normalize": ("normalize", (bool,)),
+    "refine": ("refine", (bool,)),
+    "max_iterations": ("max_iterations", (int,)),
+    "refine_max_iterations": ("refine_max_iterations", (int,)),
+    "initial_pose": ("initial_pose", (dict,)),
+}
+#: Array key → trailing shape of one row.
+ARRAYS = {"points2d": (2,), "points3d": (3,), "lines2d": (2, 2), "lines3d": (2, 3)}
+
+
+class InputError(Exception):
+    """Bad input, reported as one line and exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (the subcommand parsers inherit it)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got '{text}'") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got '{text}'") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a non-negative integer, got {value}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got '{text}'") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from pluecker.experiments import EXPERIMENTS
+
+    parser = _Parser(prog="pluecker", description="Camera pose from 2-D/3-D point and line correspondences "
+                     "(Phong, Horaud, Yassine & Tao 1995).")
+    parser.add_argument("--version", action="version",
+                        version=f"pluecker {getattr(pluecker, '__version__', 'unknown')}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    pose = commands.add_parser("pose", help="estimate a pose from a JSON file of correspondences",
+                               description="Estimate a camera pose; prints PoseResult.to_dict() as JSON. "
+                               "Input schema: docs/cli.md.")
+    pose.add_argument("input", metavar="INPUT", help="JSON file of correspondences, or '-' for standard input")
+    pose.add_argument("-o", "--output", metavar="OUT", help="write the result here instead of standard output")
+    pose.add_argument("--method", choices=METHODS, help="estimator (overrides the file's \"method\"; "
+                      "default trust-region)")
+    pose.add_argument("--no-refine", dest="refine", action="store_false", default=None,
+                      help="skip the reprojection refinement: the paper's estimator alone")
+    pose.add_argument("--penalty", type=_positive_float, metavar="L",
+                      help="penalty λ on the unit and orthogonality constraints (default 50)")
+    pose.set_defaults(handler=_pose)
+
+    rep = commands.add_parser("reproduce", help="re-run a paper's experiments",
+                              description="Re-run a paper's experiments in simulation; writes tables.md, "
+                              "summary.json and figures to --out.")
+    rep.add_argument("name", choices=sorted(EXPERIMENTS), help="experiment")
+    rep.add_argument("--out", metavar="DIR", type=Path, help="output directory (default results/NAME)")
+    rep.add_argument("--trials", type=_positive_int, metavar="N", help="random draws per table cell "
+                     "(default 100; 10 with --quick)")
+    rep.add_argument("--seed", type=_non_negative_int, default=0, metavar="S", help="random seed (default 0)")
+    rep.add_argument("--quick", action="store_true", help="a reduced run: fewer sizes, noise levels and trials")
+    rep.add_argument("--quiet", action="store_true", help="no progress bar (the final lines are still printed)")
+    rep.set_defaults(handler=_reproduce)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Runs the command line with ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # usage errors (2) and --help / --version (0)
+        return exit_.code if isinstance(exit_.code, int) else 2
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return 2
+    return args.handler(args)
+
+
+def _fail(command: str, message: str) -> int:
+    print(f"pluecker {command}: error: {message}", file=sys.stderr)
+    return 2
+
+
+# --------------------------------------------------------------------------------------------------
+# pose
+
+
+def _read_document(source: str) -> dict[str, Any]:
+    name = "standard input" if source == "-" else source
+    try:
+        text = sys.stdin.read() if source == "-" else Path(source).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read {name}: {exc}") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{name} is not valid JSON: {exc}") from None
+    if not isinstance(doc, dict):
+        raise InputError(f"{name}: expected a JSON object at the top level, got {type(doc).__name__}")
+    unknown = sorted(set(doc) - INPUT_KEYS)
+    if unknown:
+        raise InputError(f"{name}: unknown key(s) {', '.join(map(repr, unknown))}; "
+                         f"expected {', '.join(sorted(INPUT_KEYS))}")
+    return doc
+
+
+def _number_array(value: Any, what: str) -> np.ndarray:
+    try:
+        array = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"'{what}' must be a (nested) list of numbers of equal lengths") from None
+    return array
+
+
+def _camera(doc: dict[str, Any]) -> pluecker.Camera:
+    spec = doc.get("camera")
+    if not isinstance(spec, dict):
+        raise InputError("'camera' is required: {\"fx\", \"fy\", \"cx\", \"cy\", \"skew\"?} or {\"K\": 3x3}")
+    if "K" in spec:
+        if set(spec) != {"K"}:
+            raise InputError("'camera' has 'K' and other keys; give either K or fx, fy, cx, cy, skew")
+        K = _number_array(spec["K"], "camera.K")
+        if K.shape != (3, 3):
+            raise InputError(f"'camera.K' must be 3x3, got shape {K.shape}")
+        return pluecker.Camera.from_matrix(K)
+    required, allowed = {"fx", "fy", "cx", "cy"}, {"fx", "fy", "cx", "cy", "skew"}
+    if missing := sorted(required - set(spec)):
+        raise InputError(f"'camera' lacks {', '.join(missing)} (or give \"K\")")
+    if unknown := sorted(set(spec) - allowed):
+        raise InputError(f"'camera' has unknown key(s) {', '.join(unknown)}")
+    values = {}
+    for key, value in spec.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"'camera.{key}' must be a number, got {json.dumps(value)}")
+        values[key] = float(value)
+    return pluecker.Camera(values["fx"], values["fy"], values["cx"], values["cy"], skew=values.get("skew", 0.0))
+
+
+def _correspondences(doc: dict[str, Any]) -> dict[str, np.ndarray]:
+    arrays = {}
+    for key, row_shape in ARRAYS.items():
+        value = doc.get(key)
+        if value is None or (isinstance(value, list) and not value):
+            continue
+        array = _number_array(value, key)
+        if array.ndim != 1 + len(row_shape) or array.shape[1:] != row_shape:
+            expected = "(N, " + ", ".join(map(str, row_shape)) + ")"
+            raise InputError(f"'{key}' must have shape {expected}, got {array.shape}")
+        arrays[key] = array
+    if not arrays:
+        raise InputError("no correspondences: give points2d + points3d and/or lines2d + lines3d")
+    return arrays
+
+
+def _initial_pose(value: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    if set(value) != {"R", "t"}:
+        raise InputError("option 'initial_pose' must be {\"R\": 3x3, \"t\": [x, y, z]}")
+    R, t = _number_array(value["R"], "initial_pose.R"), _number_array(value["t"], "initial_pose.t")
+    if R.shape != (3, 3) or t.shape != (3,):
+        raise InputError(f"option 'initial_pose': R must be 3x3 and t of length 3, got {R.shape} and {t.shape}")
+    return R, t
+
+
+def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
+    options = doc.get("options") or {}
+    if not isinstance(options, dict):
+        raise InputError("'options' must be a JSON object")
+    kwargs: dict[str, Any] = {}
+    for key, value in options.items():
+        if key not in OPTIONS:
+            raise InputError(f"unknown option '{key}'; expected {', '.join(OPTIONS)}")
+        keyword, types = OPTIONS[key]
+        if (isinstance(value, bool) and bool not in types) or not isinstance(value, types):
+            raise InputError(f"option '{key}' must be {' or '.join(t.__name__ for t in types)}, "
+                             f"got {json.dumps(value)}")
+        kwargs[keyword] = _initial_pose(value) if key == "initial_pose" else value
+    method = args.method or doc.get("method")
+    if method is not None:
+        if method not in METHODS:
+            raise InputError(f"unknown method {json.dumps(method)}; expected one of {', '.join(METHODS)}")
+        kwargs["method"] = method
+    if args.refine is not None:
+        kwargs["refine"] = args.refine
+    if args.penalty is not None:
+        kwargs["penalty"] = args.penalty
+    return kwargs
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy arrays and scalars as lists and numbers, and NaN / inf as ``null``."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return jsonable(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if hasattr(value, "to_dict"):
+        return jsonable(value.to_dict())
+    return value
+
+
+def dumps(value: Any, indent: int = 0) -> str:
+    """JSON with one key per line but every array of numbers (a vector, a matrix) on one line."""
+    pad = "  " * (indent + 1)
+    if isinstance(value, dict) and value:
+        items = [f"{pad}{json.dumps(k)}: {dumps(v, indent + 1)}" for k, v in value.items()]
+        return "{\n" + ",\n".join(items) + "\n" + "  " * indent + "}"
+    if isinstance(value, list) and any(isinstance(v, dict) for v in value):
+        return "[\n" + ",\n".join(pad + dumps(v, indent + 1) for v in value) + "\n" + "  " * indent + "]"
+    return json.dumps(value, allow_nan=False)
+
+
+def _pose(args: argparse.Namespace) -> int:
+    try:
+        doc = _read_document(args.input)
+        camera = _camera(doc)
+        arrays = _correspondences(doc)
+        kwargs = _options(doc, args)
+        result = pluecker.estimate_pose(camera, **arrays, **kwargs)
+    except (InputError, pluecker.PlueckerError) as exc:
+        return _fail("pose", str(exc))
+    text = dumps(jsonable(result.to_dict())) + "\n"
+    if args.output:
+        try:
+            Path(args.output).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            return _fail("pose", f"cannot write {args.output}: {exc.strerror or exc}")
+    else:
+        sys.stdout.write(text)
+    if result.status != "success":
+        print(f"pluecker pose: warning: status {result.status} (termination {result.termination}); "
+              "the pose may be unusable", file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------------------------------
+# reproduce
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    from pluecker import experiments
+
+    module = experiments.load(args.name)
+    try:
+        import matplotlib  # noqa: F401
+        plots = True
+    except ImportError:
+        plots = False
+        print("pluecker reproduce: warning: matplotlib is not installed; writing tables without figures",
+              file=sys.stderr)
+    out = args.out if args.out is not None else module.DEFAULT_OUT
+    try:
+        report = module.reproduce(out, trials=args.trials, seed=args.seed, quick=args.quick,
+                                  show_progress=False if args.quiet else None, plots=plots)
+    except OSError as exc:
+        return _fail("reproduce", f"cannot write to {out}: {exc.strerror or exc}")
+    print("\n".join(report.lines))
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

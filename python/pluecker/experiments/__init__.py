@@ -1,0 +1,23 @@
+"""Reproductions of published experiments, run by ``pluecker reproduce NAME``.
+
+Each experiment is a module with a ``reproduce(out, *, trials, seed, quick, show_progress, plots)``
+function returning a report (``files``, ``summary``, the ``lines`` to print). Modules are imported
+only when run, so ``import pluecker`` stays light.
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+__all__ = ["EXPERIMENTS", "load"]
+
+#: Experiment name → module (relative to this package).
+EXPERIMENTS = {
+    "phong-horaud-1995": "phong_horaud_1995",
+}
+
+
+def load(name: str) -> ModuleType:
+    """The module of experiment ``name``; ``KeyError`` for an unknown name."""
+    return importlib.import_module(f"{__name__}.{EXPERIMENTS[name]}")

@@ -1,0 +1,143 @@
+"""``pluecker reproduce phong-horaud-1995 --quick``: the files it writes and the paper's claims on them."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import re
+
+import numpy as np
+import pytest
+
+from pluecker.cli import main
+from pluecker.experiments import phong_horaud_1995 as ph
+
+FIGURES = ("figure5_axis.png", "figure6_angle.png", "figure7_translation.png", "figure9_mismatches.png")
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    """One ``reproduce --quick`` for the whole module: (exit status, out dir, printed text, summary)."""
+    out = tmp_path_factory.mktemp("phong-horaud-1995")
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout):
+        status = main(["reproduce", "phong-horaud-1995", "--quick", "--quiet", "--out", str(out), "--seed", "0"])
+    summary = json.loads((out / "summary.json").read_text())
+    return status, out, stdout.getvalue(), summary
+
+
+def tables(markdown: str, heading: str) -> list[list[list[str]]]:
+    """The body rows of every table in the section whose level-2 heading starts with ``heading``."""
+    section = markdown.split(f"\n## {heading}", 1)[1].split("\n## ", 1)[0]
+    found = []
+    for block in section.split("\n\n"):
+        lines = [ln for ln in block.strip().splitlines() if ln.startswith("|")]
+        if lines:
+            found.append([[c.strip() for c in ln.strip("|").split("|")] for ln in lines[2:]])
+    return found
+
+
+def table_rows(markdown: str, heading: str) -> list[list[str]]:
+    """The body rows of the first table of a section."""
+    return tables(markdown, heading)[0]
+
+
+def test_writes_tables_figures_and_summary(quick_run):
+    status, out, printed, summary = quick_run
+    assert status == 0
+    for name in ("tables.md", "summary.json", *FIGURES):
+        path = out / name
+        assert path.is_file() and path.stat().st_size > 0, name
+    assert (out / FIGURES[0]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert summary["settings"]["quick"] is True and summary["settings"]["trials"] == 10
+    assert "holds" in printed and "median errors at 1 px" in printed
+
+
+def test_tables_have_the_papers_rows(quick_run):
+    _, out, _, _ = quick_run
+    md = (out / "tables.md").read_text()
+    for number in range(1, 9):
+        assert f"## Table {number}:" in md
+    # Count tables: points for the point methods, half as many lines for the line methods.
+    assert [r[0] for r in table_rows(md, "Table 1:")] == ["20", "100", "460"]
+    assert [r[0] for r in table_rows(md, "Table 3:")] == ["10", "50", "230"]
+    assert [r[0] for r in table_rows(md, "Table 8:")] == ["0.00", "1.00", "3.00"]
+    # The non-linear tables also show the default pipeline (refine=True): two tables per section.
+    assert len(tables(md, "Table 1:")) == 1
+    for number in range(3, 9):
+        paper, refined = tables(md, f"Table {number}:")
+        assert len(paper) == len(refined) == 3
+    assert "refine=True" in md
+    # Linear tables report intrinsics; at 460 points and 0.1 px they are close to the truth.
+    u0, v0, au, av = (float(x) for x in table_rows(md, "Table 1:")[-1][7:11])
+    assert (u0, v0, au, av) == pytest.approx((243.8, 241.2, -1730.3, 1220.7), rel=0.02)
+    solvers = table_rows(md, "Extra table")
+    assert {r[0] for r in solvers} == {e.label for e in ph.SOLVER_COMPARISON}
+    assert [r[1] for r in table_rows(md, "Figure 9 data")][:3] == ["0", "5", "10"]
+
+
+def cell(summary: dict, sweep: str, est: ph.Estimator, value: str) -> dict:
+    return summary["sweeps"][sweep][est.key][value]
+
+
+def test_nonlinear_translation_beats_linear_at_one_pixel(quick_run):
+    """Paper, Table 2 vs Tables 4 and 8: at 1 px the linear translation is off by centimetres, the
+    non-linear estimators by far less. Checked on the median over trials, with a margin."""
+    _, _, _, summary = quick_run
+    linear = cell(summary, "noise", ph.LINEAR, "1")["median"]["translation"]
+    for est in (ph.RTT_LINES, ph.TR_POINTS):
+        nonlinear = cell(summary, "noise", est, "1")["median"]["translation"]
+        assert nonlinear < 0.2 * linear, (est.label, nonlinear, linear)
+    assert summary["summary"]["nonlinear_beats_linear_translation"] is True
+
+
+def test_noise_free_points_give_the_exact_pose(quick_run):
+    """Without noise every estimator of the paper recovers the ground truth (Tables 4, 6, 8, first row)."""
+    _, _, _, summary = quick_run
+    for est in (ph.LINEAR, ph.RTT_LINES, ph.TR_LINES, ph.TR_POINTS):
+        c = cell(summary, "noise", est, "0")
+        assert c["failures"] == 0, est.label
+        assert c["mean"]["translation"] < 1e-3 and c["mean"]["axis"] < 1e-5, est.label
+
+
+def test_mismatches_hurt_the_linear_method_more(quick_run):
+    """Section 5.1 / Figure 9: with 10 mismatched pairs among 400 points the rotation-then-translation
+    estimate stays closer to the truth than the linear one."""
+    _, _, _, summary = quick_run
+    linear = cell(summary, "mismatch", ph.LINEAR, "10")["median"]["translation"]
+    nonlinear = cell(summary, "mismatch", ph.RTT_LINES, "10")["median"]["translation"]
+    assert nonlinear < 0.5 * linear
+
+
+def test_draws_are_deterministic_and_shared_between_estimators():
+    truth = ph.Truth.load()
+    a = ph.draw_observation(truth, ph.rng_for(7, "noise", 1.0, 2), 100, 1.0)
+    b = ph.draw_observation(truth, ph.rng_for(7, "noise", 1.0, 2), 100, 1.0)
+    c = ph.draw_observation(truth, ph.rng_for(8, "noise", 1.0, 2), 100, 1.0)
+    np.testing.assert_array_equal(a.points2d, b.points2d)
+    assert not np.array_equal(a.points2d, c.points2d)
+    assert a.lines2d.shape == (50, 2, 2) and a.lines3d.shape == (50, 2, 3)
+    np.testing.assert_array_equal(a.lines3d[3], a.points3d[6:8])
+
+
+@pytest.mark.parametrize("k", [1, 4, 10])
+def test_mismatched_pairs_swap_image_points_across_lines(k):
+    truth = ph.Truth.load()
+    clean = ph.draw_observation(truth, ph.rng_for(0, "mismatch", k, 0), 400, 0.0)
+    swapped = ph.draw_observation(truth, ph.rng_for(0, "mismatch", k, 0), 400, 0.0, mismatched_pairs=k)
+    np.testing.assert_array_equal(clean.points3d, swapped.points3d)
+    moved = np.flatnonzero(np.any(clean.points2d != swapped.points2d, axis=1))
+    assert len(moved) == 2 * k
+    # Every moved image point now belongs to another moved point, on another line.
+    for i in moved:
+        j = np.flatnonzero(np.all(clean.points2d == swapped.points2d[i], axis=1))
+        assert len(j) == 1 and j[0] in moved and j[0] // 2 != i // 2
+        assert np.all(swapped.points2d[j[0]] == clean.points2d[i])
+
+
+def test_summary_lines_are_short(quick_run):
+    _, _, printed, _ = quick_run
+    lines = printed.strip().splitlines()
+    assert 4 <= len(lines) <= 12
+    assert re.search(r"estimates \(10 trials per cell, seed 0, quick\)", lines[0])
