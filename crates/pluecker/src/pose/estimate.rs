@@ -49,6 +49,8 @@ struct Shape {
     axis: Vector3<f64>,
     /// Centroid.
     centroid: Vector3<f64>,
+    /// Standard deviations along the principal axes, smallest first.
+    spread: Vector3<f64>,
 }
 
 impl Shape {
@@ -57,7 +59,19 @@ impl Shape {
             c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
         let centroid = points.iter().sum::<Vector3<f64>>() / points.len().max(1) as f64;
         let axis = least_spread_axis(&points);
-        Shape { points, axis, centroid }
+        let scatter: Matrix3<f64> = points.iter().map(|p| (p - centroid) * (p - centroid).transpose()).sum();
+        let mut spread = scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
+        spread.as_mut_slice().sort_by(f64::total_cmp);
+        Shape { points, axis, centroid, spread }
+    }
+
+    /// How many default starts this object gets.
+    fn default_starts(&self) -> usize {
+        if self.spread[0] < PLANARITY * self.spread[2] {
+            MULTI_STARTS
+        } else {
+            1
+        }
     }
 
     /// True when the iterate `x` is a plausible answer: close to a rigid motion (`|r·r − 1| < ½`; the
@@ -113,8 +127,12 @@ fn starts(user: Option<SVector<f64, 8>>, defaults: Vec<SVector<f64, 8>>) -> Vec<
     user.into_iter().chain(defaults).collect()
 }
 
-/// Number of default starts (see [`super::initialization`]).
-const DEFAULT_STARTS: usize = 3;
+/// Number of default starts for a near-planar object and for the rotation cost of eq. 14 (see
+/// [`super::initialization`]); the joint costs of other objects get one. Planar targets have a second
+/// local minimum whose algebraic cost can be the lower one; eq. 14 from few lines has local minima.
+const MULTI_STARTS: usize = 3;
+/// An object is near-planar when its least spread is below this fraction of its largest spread.
+const PLANARITY: f64 = 0.1;
 /// Answers from other starts whose algebraic cost is within this factor of the best are refined too,
 /// and the reprojection error decides (planar scenes have two minima of similar algebraic cost).
 const ALTERNATIVE_COST_FACTOR: f64 = 4.0;
@@ -185,7 +203,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
             x.fixed_rows_mut::<4>(4).copy_from(&s);
             (x, summary)
         };
-        let default_starts: Vec<SVector<f64, 8>> = rotation_starts(&rotation_cost.gram, DEFAULT_STARTS)
+        let default_starts: Vec<SVector<f64, 8>> = rotation_starts(&rotation_cost.gram, MULTI_STARTS)
             .into_iter()
             .map(|r| DualQuaternion { r, s: Vector4::zeros() }.to_vector())
             .collect();
@@ -213,7 +231,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
     let (points, lines) = constraints(camera, &cc, false)?;
     let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
     let mut default_starts: Vec<SVector<f64, 8>> =
-        joint_starts(&cost.gram, &shape.centroid, DEFAULT_STARTS).iter().map(|q| q.to_vector()).collect();
+        joint_starts(&cost.gram, &shape.centroid, shape.default_starts()).iter().map(|q| q.to_vector()).collect();
     if default_starts.is_empty() {
         default_starts.push(DualQuaternion::identity().to_vector());
     }

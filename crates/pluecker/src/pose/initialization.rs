@@ -10,14 +10,18 @@
 //!    linear least squares, so it can be minimised out exactly: with `G = [[A, B], [Bᵀ, C]]` split
 //!    after the 9 rotation entries of `y = [vec R̃; t̃]`, the best `t̃` is `−C⁻¹Bᵀ vec R` and the cost is
 //!    `vec Rᵀ (A − B C⁻¹ Bᵀ) vec R`. That is evaluated at the 60 rotations of the 600-cell (every
-//!    rotation is within about 45° of one of them). The estimator runs from the three cheapest grid
-//!    rotations at least 72° apart (those whose translation puts the object in front of the camera
-//!    first), each with its translation; the distinct answers are ranked by cost, and any within a
-//!    factor of the best are refined on the reprojection error, which decides. This catches the
-//!    second minimum of planar scenes, whose algebraic cost can be the lower one.
-//! 2. **Cheirality restart.** If the estimator converges with the object centroid behind the camera, it
-//!    is restarted once from the mirrored pose `(R Rπ(n), −t)`, `n` the object's axis of least spread
-//!    (for which `Rπ(n)` reverses the object's other two axes), and the answer in front is kept.
+//!    rotation is within about 45° of one of them). The estimator runs from the cheapest grid rotation
+//!    whose translation puts the object in front of the camera, with that translation. For a
+//!    near-planar object it runs from the three cheapest at least 72° apart; the distinct answers are
+//!    ranked by cost, and any within a factor of the best are refined on the reprojection error, which
+//!    decides. This catches the second minimum of planar scenes, whose algebraic cost can be the lower
+//!    one.
+//! 2. **Cheirality restart.** If the estimator converges with object points behind the camera (or far
+//!    from a rigid motion: the collapsed stationary point `r → 0`), it is restarted once from the
+//!    mirrored pose `(R Rπ(n), −t)`, `n` the object's axis of least spread (for which `Rπ(n)` reverses
+//!    the object's other two axes), and the answer in front is kept.
+//!
+//! A start given by the user is tried in addition to these, and the cheapest valid answer wins.
 
 use super::algebraic::Gram;
 use crate::geometry::dual_quaternion::DualQuaternion;
