@@ -148,16 +148,22 @@ pub struct Estimate {
     pub camera: Option<Camera>,
     /// Other distinct answers worth refining (world frame), cheapest first.
     pub alternatives: Vec<Pose>,
+    /// False when the best answer is not a plausible pose: object points behind the camera, or an
+    /// iterate far from a rigid motion (`|r·r − 1| ≥ ½`, e.g. plain Newton's stop at `r = 0`).
+    pub valid: bool,
 }
 
 /// Keeps the cheapest valid run, sums the work of all, and lists the near-best distinct others.
-fn select(runs: Vec<(SVector<f64, 8>, Summary, bool)>, score: impl Fn(&SVector<f64, 8>, &Summary) -> f64) -> (SVector<f64, 8>, Summary, Vec<SVector<f64, 8>>) {
+fn select(
+    runs: Vec<(SVector<f64, 8>, Summary, bool)>,
+    score: impl Fn(&SVector<f64, 8>, &Summary) -> f64,
+) -> (SVector<f64, 8>, Summary, Vec<SVector<f64, 8>>, bool) {
     let mut ranked: Vec<(f64, bool, SVector<f64, 8>, Summary)> =
         runs.into_iter().map(|(x, s, valid)| (score(&x, &s), valid, x, s)).collect();
     ranked.sort_by(|a, b| (!a.1).cmp(&!b.1).then(a.0.total_cmp(&b.0)));
     let total_iterations = ranked.iter().map(|r| r.3.iterations).sum();
     let total_evaluations = ranked.iter().map(|r| r.3.evaluations).sum();
-    let (best_score, _, best, mut summary) = ranked[0].clone();
+    let (best_score, best_valid, best, mut summary) = ranked[0].clone();
     summary.iterations = total_iterations;
     summary.evaluations = total_evaluations;
     let best_rot = DualQuaternion::from_vector(&best).to_rotation_translation().0;
@@ -170,7 +176,7 @@ fn select(runs: Vec<(SVector<f64, 8>, Summary, bool)>, score: impl Fn(&SVector<f
             alternatives.push(*x);
         }
     }
-    (best, summary, alternatives)
+    (best, summary, alternatives, best_valid)
 }
 
 /// Runs the estimator named by `opts.method` without refinement. Inputs are assumed validated.
@@ -181,7 +187,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
         let pose = (cal.rotation, cal.translation);
         let cost = ReprojectionCost::new(cal.camera, &corr.points2d, &corr.points3d, &[], &[]).cost(&pose);
         let summary = Summary { iterations: 0, evaluations: 1, initial_cost: cost, final_cost: cost, termination: Termination::ClosedForm };
-        return Ok(Estimate { pose, stages: vec![stage("linear", "reprojection", &pose, &summary, started)], camera: Some(cal.camera), alternatives: vec![] });
+        return Ok(Estimate { pose, stages: vec![stage("linear", "reprojection", &pose, &summary, started)], camera: Some(cal.camera), alternatives: vec![], valid: true });
     }
     let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
     let cc = cond.correspondences(corr);
@@ -212,7 +218,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
         // Candidates are ranked by the joint cost (eqs. 13 + 22), which sees rotation and translation.
         let (point_cons, line_cons) = constraints(camera, &cc, false)?;
         let joint = JointCost { gram: gram(&point_cons, &line_cons, true), lambda: opts.lambda };
-        let (x, summary, others) = select(runs, |x, _| joint.cost(x));
+        let (x, summary, others, valid) = select(runs, |x, _| joint.cost(x));
         let pose = to_world(&x, &cond);
         let rotation_report = stage("rotation", "algebraic", &pose, &summary, started);
         let t_started = Instant::now();
@@ -226,7 +232,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
         };
         let translation_report = stage("translation", "algebraic", &pose, &closed, t_started);
         let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
-        return Ok(Estimate { pose, stages: vec![rotation_report, translation_report], camera: None, alternatives });
+        return Ok(Estimate { pose, stages: vec![rotation_report, translation_report], camera: None, alternatives, valid });
     }
     let (points, lines) = constraints(camera, &cc, false)?;
     let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
@@ -245,14 +251,14 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
     };
     let user = user_start(opts, &cond).map(|q| q.to_vector());
     let runs = starts(user, default_starts).into_iter().map(|x0| with_cheirality_restart(x0, &shape, &solve)).collect();
-    let (x, summary, others) = select(runs, |_, s| s.final_cost);
+    let (x, summary, others, valid) = select(runs, |_, s| s.final_cost);
     let pose = if x.iter().all(|v| v.is_finite()) && x.fixed_rows::<4>(0).norm() > 0.0 {
         to_world(&x, &cond)
     } else {
         (Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN))
     };
     let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
-    Ok(Estimate { pose, stages: vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)], camera: None, alternatives })
+    Ok(Estimate { pose, stages: vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)], camera: None, alternatives, valid })
 }
 
 fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
@@ -290,7 +296,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     camera.validate()?;
     opts.validate()?;
     corr.validate(opts.method)?;
-    let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives } = algebraic_stage(camera, corr, opts)?;
+    let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives, valid } = algebraic_stage(camera, corr, opts)?;
     let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     if opts.refine && finite {
         let (mut refined, mut report) = refine_pose(camera, corr, &pose, opts);
@@ -309,6 +315,9 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let scoring_camera = if opts.refine { *camera } else { estimated_camera.unwrap_or(*camera) };
     let reprojection = ReprojectionCost::new(scoring_camera, &corr.points2d, &corr.points3d, &corr.lines2d, &corr.lines3d);
     let status = if !finite || stages.iter().any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost)) {
+        Status::NumericalFailure
+    } else if !opts.refine && !valid && reprojection.points_behind(&pose) == 0 {
+        // The algebraic answer is far from a rigid motion (e.g. a stop at r = 0).
         Status::NumericalFailure
     } else if stages.iter().any(|s| !s.termination.converged()) {
         Status::NotConverged

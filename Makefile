@@ -1,0 +1,56 @@
+# pluecker developer entry points. Everything goes into ./.venv; nothing is installed globally.
+#   make test    build the extension, run the Rust and Python tests
+#   make demo    reproduce the paper's experiments into results/phong-horaud-1995
+#   make bench   compare against OpenCV and PoseLib, then run the criterion benchmarks
+# Idempotent: the virtualenv is made once, the extension rebuilt only when a Rust source changes.
+
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+DEPS_STAMP := $(VENV)/.deps-stamp
+DEVELOP_STAMP := $(VENV)/.develop-stamp
+RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml $(wildcard Cargo.lock)
+
+# Cargo and maturin configure PyO3 for the same interpreter, so neither invalidates the other's build.
+export PYO3_PYTHON := $(CURDIR)/$(BIN)/python
+
+.PHONY: setup develop test test-rust test-python demo bench clean
+
+setup: develop
+
+.venv: $(DEPS_STAMP)
+
+$(DEPS_STAMP): Makefile
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "matplotlib>=3.5" "pytest>=7"
+	touch $@
+
+# Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
+# or when the built module is missing from python/pluecker/.
+develop: $(DEPS_STAMP)
+	@ls python/pluecker/_core*.so >/dev/null 2>&1 || rm -f $(DEVELOP_STAMP)
+	@$(MAKE) --no-print-directory $(DEVELOP_STAMP)
+
+$(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
+	VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
+	touch $@
+
+test: test-rust test-python
+
+test-rust: develop
+	cargo test --workspace --release
+
+test-python: develop
+	$(BIN)/python -m pytest -q tests
+
+demo: develop
+	$(BIN)/pluecker reproduce phong-horaud-1995 --out results/phong-horaud-1995
+
+bench: develop
+	$(BIN)/python -m pip install --quiet opencv-python-headless poselib
+	$(BIN)/python bench/compare_pose.py
+	cargo bench -p pluecker --bench pose
+
+clean:
+	rm -rf $(VENV) python/pluecker/_core*.so

@@ -1,0 +1,128 @@
+//! `pluecker.Camera`: pinhole intrinsics, projection and normalisation.
+
+use crate::convert::{matrix3_allow_non_finite, matrix3_to_py, points, points_to_py};
+use crate::errors::guarded;
+use nalgebra::{Vector2, Vector3};
+use numpy::PyArray2;
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+
+/// Pinhole intrinsics in pixels, `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`. Immutable.
+#[pyclass(frozen, eq, name = "Camera", module = "pluecker")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PyCamera {
+    pub inner: pluecker::Camera,
+}
+
+impl PyCamera {
+    pub fn wrap(inner: pluecker::Camera) -> Self {
+        PyCamera { inner }
+    }
+}
+
+#[pymethods]
+impl PyCamera {
+    #[new]
+    #[pyo3(signature = (fx, fy, cx, cy, skew = 0.0))]
+    fn new(fx: f64, fy: f64, cx: f64, cy: f64, skew: f64) -> PyResult<Self> {
+        guarded(|| pluecker::Camera::new(fx, fy, cx, cy, skew)).map(PyCamera::wrap)
+    }
+
+    /// From a (3, 3) calibration matrix.
+    #[staticmethod]
+    #[pyo3(name = "from_matrix", signature = (K))]
+    #[allow(non_snake_case)]
+    fn from_matrix(K: &Bound<'_, PyAny>) -> PyResult<Self> {
+        // Non-finite entries are the core's to report, as a singular camera.
+        let k = matrix3_allow_non_finite("K", K)?;
+        guarded(|| pluecker::Camera::from_matrix(&k)).map(PyCamera::wrap)
+    }
+
+    #[getter]
+    fn fx(&self) -> f64 {
+        self.inner.fx
+    }
+
+    #[getter]
+    fn fy(&self) -> f64 {
+        self.inner.fy
+    }
+
+    #[getter]
+    fn cx(&self) -> f64 {
+        self.inner.cx
+    }
+
+    #[getter]
+    fn cy(&self) -> f64 {
+        self.inner.cy
+    }
+
+    #[getter]
+    fn skew(&self) -> f64 {
+        self.inner.skew
+    }
+
+    #[getter(K)]
+    fn k<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        matrix3_to_py(py, &self.inner.matrix())
+    }
+
+    /// Pixels `u = K x_cam / z` of camera-frame points (N, 3).
+    fn project<'py>(&self, py: Python<'py>, points_cam: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let xs = points::<3>("points_cam", Some(points_cam))?;
+        let cam = self.inner;
+        let us: Vec<Vector2<f64>> = guarded(|| Ok(xs.iter().map(|x: &Vector3<f64>| cam.project(x)).collect()))?;
+        Ok(points_to_py(py, &us))
+    }
+
+    /// Normalised coordinates `(x, y)` with `(x, y, 1) ∝ K⁻¹ (u, v, 1)` of pixels (N, 2).
+    fn pixel_to_normalized<'py>(
+        &self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let us = points::<2>("pixels", Some(pixels))?;
+        let cam = self.inner;
+        let xs: Vec<Vector2<f64>> = guarded(|| Ok(us.iter().map(|u| cam.pixel_to_normalized(u)).collect()))?;
+        Ok(points_to_py(py, &xs))
+    }
+
+    /// Pixels of normalised coordinates (N, 2).
+    fn normalized_to_pixel<'py>(
+        &self,
+        py: Python<'py>,
+        normalized: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let xs = points::<2>("normalized", Some(normalized))?;
+        let cam = self.inner;
+        let us: Vec<Vector2<f64>> = guarded(|| Ok(xs.iter().map(|x| cam.normalized_to_pixel(x)).collect()))?;
+        Ok(points_to_py(py, &us))
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        format!(
+            "Camera(fx={:?}, fy={:?}, cx={:?}, cy={:?}, skew={:?})",
+            c.fx, c.fy, c.cx, c.cy, c.skew
+        )
+    }
+
+    fn __hash__(&self) -> u64 {
+        let c = &self.inner;
+        let mut h = DefaultHasher::new();
+        // `+ 0.0` maps -0.0 to 0.0, so that equal cameras hash equally.
+        for v in [c.fx, c.fy, c.cx, c.cy, c.skew] {
+            (v + 0.0).to_bits().hash(&mut h);
+        }
+        h.finish()
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let c = slf.get().inner;
+        let args = PyTuple::new(slf.py(), [c.fx, c.fy, c.cx, c.cy, c.skew])?;
+        Ok((slf.get_type().into_any(), args))
+    }
+}

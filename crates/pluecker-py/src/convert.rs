@@ -1,0 +1,189 @@
+//! numpy ↔ nalgebra. Inputs: any real array-like, converted to float64, its shape checked against
+//! the expected one and every row checked for NaN/inf, each failure naming the argument (and row).
+//! Outputs: fresh row-major float64 arrays the caller owns.
+
+use crate::errors::{invalid_argument, non_finite, shape_error};
+use nalgebra::{Matrix3, SVector};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+
+/// One axis of an expected shape: a free length (`N` rows) or a fixed one.
+#[derive(Clone, Copy)]
+enum Axis {
+    Rows(&'static str),
+    Fixed(usize),
+}
+
+fn describe(spec: &[Axis]) -> String {
+    let parts: Vec<String> = spec
+        .iter()
+        .map(|a| match a {
+            Axis::Rows(name) => (*name).to_string(),
+            Axis::Fixed(n) => n.to_string(),
+        })
+        .collect();
+    format!("shape {}", python_tuple(&parts))
+}
+
+fn python_tuple(parts: &[String]) -> String {
+    match parts.len() {
+        1 => format!("({},)", parts[0]),
+        _ => format!("({})", parts.join(", ")),
+    }
+}
+
+fn shape_string(shape: &[usize]) -> String {
+    python_tuple(&shape.iter().map(|n| n.to_string()).collect::<Vec<_>>())
+}
+
+/// `obj` as a float64 ndarray; a `TypeError` naming `name` if it is not an array of real numbers.
+fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    if let Ok(array) = obj.downcast::<PyArrayDyn<f64>>() {
+        return Ok(array.clone());
+    }
+    let np = obj.py().import("numpy")?;
+    let array = np.call_method1("asarray", (obj,)).map_err(|e| {
+        PyTypeError::new_err(format!(
+            "{name}: expected an array of real numbers; numpy could not convert the input: {e}"
+        ))
+    })?;
+    let dtype = array.getattr("dtype")?;
+    let kind: String = dtype.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected an array of real numbers, got dtype {dtype}"
+        )));
+    }
+    Ok(array
+        .call_method1("astype", ("float64",))?
+        .downcast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// The values of `obj` in row-major order and the number of rows, after checking that its shape is
+/// `spec` and that it is finite. A free-length array may also be given as an empty 1-D array.
+fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult<(Vec<f64>, usize)> {
+    let (values, rows) = read_unchecked(name, obj, spec)?;
+    let row_len: usize = spec[1..]
+        .iter()
+        .map(|a| if let Axis::Fixed(n) = a { *n } else { 1 })
+        .product();
+    if let Some(row) = values
+        .chunks(row_len.max(1))
+        .position(|r| r.iter().any(|v| !v.is_finite()))
+    {
+        return Err(non_finite(name, row));
+    }
+    Ok((values, rows))
+}
+
+/// [`read`] without the finiteness check.
+fn read_unchecked(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult<(Vec<f64>, usize)> {
+    let array = float_array(name, obj)?;
+    let shape = array.shape().to_vec();
+    if matches!(spec[0], Axis::Rows(_)) && shape == [0] {
+        return Ok((Vec::new(), 0));
+    }
+    let fits = shape.len() == spec.len()
+        && shape.iter().zip(spec).all(|(n, axis)| match axis {
+            Axis::Rows(_) => true,
+            Axis::Fixed(m) => n == m,
+        });
+    if !fits {
+        return Err(shape_error(name, &describe(spec), shape_string(&shape)));
+    }
+    let readonly = array
+        .try_readonly()
+        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+    let values: Vec<f64> = readonly.as_array().iter().copied().collect();
+    Ok((values, shape[0]))
+}
+
+/// An `(N, D)` array of points, `None` meaning zero rows.
+pub fn points<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<SVector<f64, D>>> {
+    let Some(obj) = obj else { return Ok(Vec::new()) };
+    let (values, _) = read(name, obj, &[Axis::Rows("N"), Axis::Fixed(D)])?;
+    Ok(values.chunks(D).map(SVector::<f64, D>::from_row_slice).collect())
+}
+
+/// An `(M, 2, D)` array of segments (two endpoints each), `None` meaning zero rows.
+pub fn segments<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<[SVector<f64, D>; 2]>> {
+    let Some(obj) = obj else { return Ok(Vec::new()) };
+    let (values, _) = read(name, obj, &[Axis::Rows("M"), Axis::Fixed(2), Axis::Fixed(D)])?;
+    Ok(values
+        .chunks(2 * D)
+        .map(|s| {
+            [
+                SVector::<f64, D>::from_row_slice(&s[..D]),
+                SVector::<f64, D>::from_row_slice(&s[D..]),
+            ]
+        })
+        .collect())
+}
+
+/// A `(3, 3)` matrix.
+pub fn matrix3(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
+    let (values, _) = read(name, obj, &[Axis::Fixed(3), Axis::Fixed(3)])?;
+    Ok(Matrix3::from_row_slice(&values))
+}
+
+/// A `(3, 3)` matrix that may hold NaN or inf (for arguments whose validation reports them itself).
+pub fn matrix3_allow_non_finite(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
+    let (values, _) = read_unchecked(name, obj, &[Axis::Fixed(3), Axis::Fixed(3)])?;
+    Ok(Matrix3::from_row_slice(&values))
+}
+
+/// A `(D,)` vector.
+pub fn vector<const D: usize>(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SVector<f64, D>> {
+    let (values, _) = read(name, obj, &[Axis::Fixed(D)])?;
+    Ok(SVector::<f64, D>::from_row_slice(&values))
+}
+
+/// A matrix as a `(3, 3)` array.
+pub fn matrix3_to_py<'py>(py: Python<'py>, m: &Matrix3<f64>) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((3, 3), |(i, j)| m[(i, j)]).into_pyarray(py)
+}
+
+/// A vector as a `(D,)` array.
+pub fn vector_to_py<'py, const D: usize>(py: Python<'py>, v: &SVector<f64, D>) -> Bound<'py, PyArray1<f64>> {
+    PyArray1::from_slice(py, v.as_slice())
+}
+
+/// Points as an `(N, D)` array.
+pub fn points_to_py<'py, const D: usize>(py: Python<'py>, rows: &[SVector<f64, D>]) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((rows.len(), D), |(i, j)| rows[i][j]).into_pyarray(py)
+}
+
+/// Segments as an `(M, 2, D)` array.
+pub fn segments_to_py<'py, const D: usize>(
+    py: Python<'py>,
+    segs: &[[SVector<f64, D>; 2]],
+) -> Bound<'py, PyArray3<f64>> {
+    Array3::from_shape_fn((segs.len(), 2, D), |(i, k, j)| segs[i][k][j]).into_pyarray(py)
+}
+
+/// Rows of a matrix as nested lists, for `to_dict`.
+pub fn matrix3_rows(m: &Matrix3<f64>) -> Vec<[f64; 3]> {
+    (0..3).map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]).collect()
+}
+
+/// A `(3, 3)` rotation matrix: finite, `R Rᵀ = I` to 1e-6 and `det R = +1`, else `InvalidOptionError`.
+pub fn rotation(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
+    let r = matrix3(name, obj)?;
+    let orthogonality = (r * r.transpose() - Matrix3::identity()).amax();
+    // `matrix3` rejected NaN/inf, so the comparisons below are total.
+    if orthogonality > ROTATION_TOLERANCE || r.determinant() <= 0.0 {
+        return Err(invalid_argument(
+            name,
+            format!(
+                "expected a rotation matrix (R Rᵀ = I within {ROTATION_TOLERANCE:e}, det R = +1), got max |R Rᵀ − I| = {orthogonality:.3e}, det R = {:.6}",
+                r.determinant()
+            ),
+        ));
+    }
+    Ok(r)
+}
+
+/// How far from orthonormal a rotation argument may be (the core's tolerance for `initial_pose`).
+const ROTATION_TOLERANCE: f64 = 1e-6;

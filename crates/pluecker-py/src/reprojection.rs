@@ -1,0 +1,83 @@
+//! Reprojection errors and the pose covariance (Cramér-Rao bound) at a given pose.
+
+use crate::camera::PyCamera;
+use crate::errors::{degenerate, invalid_argument, solve};
+use crate::pose::{correspondences, pose_arg};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pluecker::pose::reprojection::{pose_covariance as covariance, ReprojectionCost};
+use pyo3::prelude::*;
+
+/// `JᵀJ` counts as singular when its smallest eigenvalue is below this fraction of its largest.
+const RELATIVE_RANK_TOLERANCE: f64 = 1e-12;
+
+/// The 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose `(R, t)`.
+#[pyfunction]
+#[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, sigma_px = 1.0))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn pose_covariance<'py>(
+    py: Python<'py>,
+    camera: &Bound<'py, PyCamera>,
+    R: &Bound<'py, PyAny>,
+    t: &Bound<'py, PyAny>,
+    points2d: Option<&Bound<'py, PyAny>>,
+    points3d: Option<&Bound<'py, PyAny>>,
+    lines2d: Option<&Bound<'py, PyAny>>,
+    lines3d: Option<&Bound<'py, PyAny>>,
+    sigma_px: f64,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let camera = camera.get().inner;
+    let pose = pose_arg("R", R, "t", t)?;
+    if !(sigma_px.is_finite() && sigma_px > 0.0) {
+        return Err(invalid_argument(
+            "sigma_px",
+            format!("must be a positive finite number, got {sigma_px}"),
+        ));
+    }
+    let c = correspondences(points2d, points3d, lines2d, lines3d)?;
+    let (information, cov) = solve(py, move || {
+        let cost = ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
+        Ok((cost.information(&pose), covariance(&cost, &pose, sigma_px)))
+    })?;
+    if information.iter().any(|v| !v.is_finite()) {
+        return Err(degenerate(
+            "the information matrix JᵀJ is not finite at this pose (a 3-D point or endpoint on the camera plane z = 0?)",
+        ));
+    }
+    let eig = information.symmetric_eigenvalues();
+    let (lo, hi) = (eig.min(), eig.max());
+    let cov = match cov {
+        Some(cov) if hi > 0.0 && lo > RELATIVE_RANK_TOLERANCE * hi && cov.iter().all(|v| v.is_finite()) => cov,
+        _ => {
+            return Err(degenerate(format!(
+                "the information matrix JᵀJ is singular (eigenvalues from {lo:.3e} to {hi:.3e}): the correspondences do not determine the pose"
+            )))
+        }
+    };
+    // Symmetrise away the round-off of the inversion.
+    let cov = 0.5 * (cov + cov.transpose());
+    Ok(Array2::from_shape_fn((6, 6), |(i, j)| cov[(i, j)]).into_pyarray(py))
+}
+
+/// Per-correspondence reprojection errors in pixels at the pose `(R, t)`: points first, then lines.
+#[pyfunction]
+#[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn reprojection_errors<'py>(
+    py: Python<'py>,
+    camera: &Bound<'py, PyCamera>,
+    R: &Bound<'py, PyAny>,
+    t: &Bound<'py, PyAny>,
+    points2d: Option<&Bound<'py, PyAny>>,
+    points3d: Option<&Bound<'py, PyAny>>,
+    lines2d: Option<&Bound<'py, PyAny>>,
+    lines3d: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let camera = camera.get().inner;
+    let pose = pose_arg("R", R, "t", t)?;
+    let c = correspondences(points2d, points3d, lines2d, lines3d)?;
+    let errors = solve(py, move || {
+        Ok(ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d).errors(&pose))
+    })?;
+    Ok(PyArray1::from_vec(py, errors))
+}

@@ -1,0 +1,256 @@
+//! `pluecker.PoseResult` and `pluecker.PoseStage`: immutable reports owning their data. Every array
+//! getter returns a fresh array, so changing it cannot change the result.
+
+use crate::camera::PyCamera;
+use crate::convert::{matrix3_rows, matrix3_to_py, vector_to_py};
+use nalgebra::{Vector3, Vector4};
+use numpy::{PyArray1, PyArray2};
+use pluecker::pose::StageReport;
+use pluecker::{PoseResult, Status};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// One stage of the pose pipeline (algebraic estimator, linear solve, reprojection refinement).
+#[pyclass(frozen, name = "PoseStage", module = "pluecker")]
+#[derive(Debug, Clone)]
+pub struct PyPoseStage {
+    inner: StageReport,
+}
+
+#[pymethods]
+impl PyPoseStage {
+    #[getter]
+    fn name(&self) -> &str {
+        &self.inner.name
+    }
+
+    #[getter]
+    fn cost_kind(&self) -> &str {
+        self.inner.cost_kind
+    }
+
+    #[getter(R)]
+    fn rotation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        matrix3_to_py(py, &self.inner.rotation)
+    }
+
+    #[getter(t)]
+    fn translation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_to_py(py, &self.inner.translation)
+    }
+
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+
+    #[getter]
+    fn initial_cost(&self) -> f64 {
+        self.inner.initial_cost
+    }
+
+    #[getter]
+    fn final_cost(&self) -> f64 {
+        self.inner.final_cost
+    }
+
+    #[getter]
+    fn termination(&self) -> &'static str {
+        self.inner.termination.as_str()
+    }
+
+    #[getter]
+    fn time_seconds(&self) -> f64 {
+        self.inner.time_seconds
+    }
+
+    /// Plain-Python (JSON-serialisable) form.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.inner;
+        let d = PyDict::new(py);
+        d.set_item("name", &s.name)?;
+        d.set_item("cost_kind", s.cost_kind)?;
+        d.set_item("R", matrix3_rows(&s.rotation))?;
+        d.set_item("t", s.translation.as_slice())?;
+        d.set_item("iterations", s.iterations)?;
+        d.set_item("initial_cost", s.initial_cost)?;
+        d.set_item("final_cost", s.final_cost)?;
+        d.set_item("termination", s.termination.as_str())?;
+        d.set_item("time_seconds", s.time_seconds)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "PoseStage(name='{}', cost_kind='{}', iterations={}, initial_cost={:e}, final_cost={:e}, termination='{}')",
+            s.name,
+            s.cost_kind,
+            s.iterations,
+            s.initial_cost,
+            s.final_cost,
+            s.termination.as_str()
+        )
+    }
+}
+
+/// The answer of `estimate_pose`: the pose, how it was found, and whether it can be used.
+#[pyclass(frozen, name = "PoseResult", module = "pluecker")]
+#[derive(Debug, Clone)]
+pub struct PyPoseResult {
+    inner: PoseResult,
+}
+
+impl PyPoseResult {
+    pub fn wrap(inner: PoseResult) -> Self {
+        PyPoseResult { inner }
+    }
+
+    fn dual_quaternion_values(&self) -> [f64; 8] {
+        let q = &self.inner.dual_quaternion;
+        [q.r[0], q.r[1], q.r[2], q.r[3], q.s[0], q.s[1], q.s[2], q.s[3]]
+    }
+}
+
+fn camera_dict<'py>(py: Python<'py>, c: &pluecker::Camera) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("fx", c.fx)?;
+    d.set_item("fy", c.fy)?;
+    d.set_item("cx", c.cx)?;
+    d.set_item("cy", c.cy)?;
+    d.set_item("skew", c.skew)?;
+    Ok(d)
+}
+
+#[pymethods]
+impl PyPoseResult {
+    #[getter(R)]
+    fn rotation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        matrix3_to_py(py, &self.inner.rotation)
+    }
+
+    #[getter(t)]
+    fn translation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_to_py(py, &self.inner.translation)
+    }
+
+    #[getter]
+    fn dual_quaternion<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.dual_quaternion_values())
+    }
+
+    #[getter]
+    fn axis<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vector_to_py::<3>(py, &self.inner.axis)
+    }
+
+    #[getter]
+    fn angle(&self) -> f64 {
+        self.inner.angle
+    }
+
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method.as_str()
+    }
+
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+
+    #[getter]
+    fn final_cost(&self) -> f64 {
+        self.inner.final_cost
+    }
+
+    #[getter]
+    fn termination(&self) -> &'static str {
+        self.inner.termination.as_str()
+    }
+
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.inner.status.as_str()
+    }
+
+    #[getter]
+    fn success(&self) -> bool {
+        self.inner.status == Status::Success
+    }
+
+    #[getter]
+    fn rms_error_px(&self) -> f64 {
+        self.inner.rms_error_px
+    }
+
+    #[getter]
+    fn time_seconds(&self) -> f64 {
+        self.inner.time_seconds
+    }
+
+    #[getter]
+    fn stages(&self) -> Vec<PyPoseStage> {
+        self.inner
+            .stages
+            .iter()
+            .map(|s| PyPoseStage { inner: s.clone() })
+            .collect()
+    }
+
+    #[getter]
+    fn estimated_camera(&self) -> Option<PyCamera> {
+        self.inner.estimated_camera.map(PyCamera::wrap)
+    }
+
+    /// Plain-Python (JSON-serialisable) form.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = &self.inner;
+        let d = PyDict::new(py);
+        d.set_item("R", matrix3_rows(&r.rotation))?;
+        d.set_item("t", r.translation.as_slice())?;
+        d.set_item("dual_quaternion", self.dual_quaternion_values())?;
+        d.set_item("axis", r.axis.as_slice())?;
+        d.set_item("angle", r.angle)?;
+        d.set_item("method", r.method.as_str())?;
+        d.set_item("iterations", r.iterations)?;
+        d.set_item("final_cost", r.final_cost)?;
+        d.set_item("termination", r.termination.as_str())?;
+        d.set_item("status", r.status.as_str())?;
+        d.set_item("success", r.status == Status::Success)?;
+        d.set_item("rms_error_px", r.rms_error_px)?;
+        d.set_item("time_seconds", r.time_seconds)?;
+        let stages = self
+            .stages()
+            .iter()
+            .map(|s| s.to_dict(py))
+            .collect::<PyResult<Vec<_>>>()?;
+        d.set_item("stages", stages)?;
+        match &r.estimated_camera {
+            Some(c) => d.set_item("estimated_camera", camera_dict(py, c)?)?,
+            None => d.set_item("estimated_camera", py.None())?,
+        }
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        let r = &self.inner;
+        let t: &Vector3<f64> = &r.translation;
+        let q: &Vector4<f64> = &r.dual_quaternion.r;
+        format!(
+            "PoseResult(method='{}', status='{}', iterations={}, rms_error_px={:.3e}, angle={:.6}, t=[{:.6}, {:.6}, {:.6}], r=[{:.6}, {:.6}, {:.6}, {:.6}])",
+            r.method.as_str(),
+            r.status.as_str(),
+            r.iterations,
+            r.rms_error_px,
+            r.angle,
+            t.x,
+            t.y,
+            t.z,
+            q[0],
+            q[1],
+            q[2],
+            q[3]
+        )
+    }
+}

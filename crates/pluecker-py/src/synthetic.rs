@@ -1,0 +1,59 @@
+//! Seeded synthetic scenes (the paper's calibration object, random scenes) as dicts of arrays.
+
+use crate::camera::PyCamera;
+use crate::convert::{matrix3_to_py, points_to_py, segments_to_py, vector_to_py};
+use crate::errors::{guarded, invalid_argument};
+use pluecker::synthetic::{paper_calibration_object, random_scene as core_random_scene, Scene, SceneKind};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+const KINDS: [SceneKind; 3] = [SceneKind::General, SceneKind::Planar, SceneKind::Far];
+
+fn scene_dict<'py>(py: Python<'py>, scene: &Scene, with_lines: bool) -> PyResult<Bound<'py, PyDict>> {
+    let c = &scene.correspondences;
+    let d = PyDict::new(py);
+    d.set_item("camera", PyCamera::wrap(scene.camera))?;
+    d.set_item("R", matrix3_to_py(py, &scene.rotation))?;
+    d.set_item("t", vector_to_py(py, &scene.translation))?;
+    d.set_item("points2d", points_to_py(py, &c.points2d))?;
+    d.set_item("points3d", points_to_py(py, &c.points3d))?;
+    if with_lines {
+        d.set_item("lines2d", segments_to_py(py, &c.lines2d))?;
+        d.set_item("lines3d", segments_to_py(py, &c.lines3d))?;
+    }
+    Ok(d)
+}
+
+/// The calibration object of Phong & Horaud 1995, section 5, at the paper's pose, noise-free.
+#[pyfunction]
+pub fn paper_scene(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let scene = guarded(|| Ok(paper_calibration_object()))?;
+    scene_dict(py, &scene, false)
+}
+
+/// A seeded random scene, noise-free.
+#[pyfunction]
+#[pyo3(signature = (kind, n_points, n_lines = 0, seed = 0))]
+pub fn random_scene<'py>(
+    py: Python<'py>,
+    kind: &str,
+    n_points: i64,
+    n_lines: i64,
+    seed: i64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let Some(kind) = KINDS.into_iter().find(|k| k.as_str() == kind) else {
+        let names: Vec<&str> = KINDS.iter().map(|k| k.as_str()).collect();
+        return Err(invalid_argument(
+            "kind",
+            format!("unknown scene kind '{kind}'; expected one of {}", names.join(", ")),
+        ));
+    };
+    for (name, value) in [("n_points", n_points), ("n_lines", n_lines), ("seed", seed)] {
+        if value < 0 {
+            return Err(invalid_argument(name, format!("must be non-negative, got {value}")));
+        }
+    }
+    let (n_points, n_lines, seed) = (n_points as usize, n_lines as usize, seed as u64);
+    let scene = py.allow_threads(|| guarded(|| Ok(core_random_scene(kind, n_points, n_lines, seed))))?;
+    scene_dict(py, &scene, true)
+}

@@ -1,0 +1,444 @@
+"""Bad input raises the documented PlueckerError subclass (a ValueError) with a message that says
+what and where; nothing crashes the interpreter."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+from conftest import assert_pose_close
+
+import pluecker
+from pluecker import (
+    DegenerateConfigurationError,
+    InvalidOptionError,
+    NonFiniteError,
+    PlueckerError,
+    ShapeError,
+    SingularCameraError,
+    TooFewCorrespondencesError,
+)
+
+SUBCLASSES = [
+    ShapeError,
+    NonFiniteError,
+    TooFewCorrespondencesError,
+    DegenerateConfigurationError,
+    SingularCameraError,
+    InvalidOptionError,
+]
+
+
+@pytest.fixture
+def scene():
+    return pluecker.random_scene("general", 8, 4, seed=1)
+
+
+def raises(cls, match=None):
+    """pytest.raises that also checks the exception is a PlueckerError and a ValueError."""
+    return _Raises(cls, match)
+
+
+class _Raises:
+    def __init__(self, cls, match):
+        self.ctx = pytest.raises(cls, match=match)
+
+    def __enter__(self):
+        self.info = self.ctx.__enter__()
+        return self.info
+
+    def __exit__(self, *exc):
+        suppressed = self.ctx.__exit__(*exc)
+        assert isinstance(self.info.value, PlueckerError)
+        assert isinstance(self.info.value, ValueError)
+        return suppressed
+
+
+def test_exception_hierarchy():
+    assert issubclass(PlueckerError, ValueError)
+    for cls in SUBCLASSES:
+        assert issubclass(cls, PlueckerError) and cls is not PlueckerError
+        assert cls.__module__ == "pluecker" and cls.__doc__
+
+
+# --- shapes --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "argument,bad,message",
+    [
+        ("points2d", np.zeros((8, 3)), "points2d: expected shape (N, 2), got (8, 3)"),
+        ("points2d", np.zeros(16), "points2d: expected shape (N, 2), got (16,)"),
+        ("points2d", np.zeros((8, 2, 1)), "points2d: expected shape (N, 2), got (8, 2, 1)"),
+        ("points3d", np.zeros((8, 2)), "points3d: expected shape (N, 3), got (8, 2)"),
+        ("points3d", np.float64(3.0), "points3d: expected shape (N, 3), got ()"),
+        ("lines2d", np.zeros((4, 2, 3)), "lines2d: expected shape (M, 2, 2), got (4, 2, 3)"),
+        ("lines2d", np.zeros((4, 4)), "lines2d: expected shape (M, 2, 2), got (4, 4)"),
+        ("lines3d", np.zeros((4, 3, 3)), "lines3d: expected shape (M, 2, 3), got (4, 3, 3)"),
+        ("lines3d", np.zeros((4, 6)), "lines3d: expected shape (M, 2, 3), got (4, 6)"),
+    ],
+)
+def test_wrong_shape_names_the_argument_and_the_shapes(scene, argument, bad, message):
+    kwargs = {k: scene[k] for k in ("points2d", "points3d", "lines2d", "lines3d")}
+    kwargs[argument] = bad
+    with raises(ShapeError, match=re.escape(message)):
+        pluecker.estimate_pose(scene["camera"], **kwargs)
+
+
+def test_mismatched_counts(scene):
+    with raises(ShapeError, match=r"points2d / points3d: expected the same number of rows, got 8 and 7"):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"][:7])
+    with raises(ShapeError, match=r"lines2d / lines3d"):
+        pluecker.estimate_pose(scene["camera"], lines2d=scene["lines2d"], lines3d=scene["lines3d"][:3])
+    with raises(ShapeError, match=r"points2d / points3d"):
+        pluecker.estimate_pose(scene["camera"], points2d=scene["points2d"])  # points3d=None is zero rows
+
+
+def test_wrong_shapes_in_the_helpers(scene):
+    cam, r, t = scene["camera"], scene["R"], scene["t"]
+    with raises(ShapeError, match=re.escape("R: expected shape (3, 3), got (3, 4)")):
+        pluecker.pose_covariance(cam, np.zeros((3, 4)), t, scene["points2d"], scene["points3d"])
+    with raises(ShapeError, match=re.escape("t: expected shape (3,), got (3, 1)")):
+        pluecker.reprojection_errors(cam, r, t.reshape(3, 1), scene["points2d"], scene["points3d"])
+    with raises(ShapeError, match=re.escape("q: expected shape (8,), got (7,)")):
+        pluecker.dual_quaternion_to_pose(np.zeros(7))
+    with raises(ShapeError, match=re.escape("K: expected shape (3, 3), got (2, 2)")):
+        pluecker.Camera.from_matrix(np.eye(2))
+    with raises(ShapeError, match=re.escape("points_cam: expected shape (N, 3), got (5, 2)")):
+        cam.project(np.ones((5, 2)))
+    with raises(ShapeError, match="initial_pose"):
+        pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], initial_pose=(r,))
+    with raises(ShapeError, match=re.escape("initial_pose t: expected shape (3,), got (4,)")):
+        pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], initial_pose=(r, np.zeros(4)))
+
+
+# --- NaN and inf ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("argument", ["points2d", "points3d", "lines2d", "lines3d"])
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_non_finite_values_name_the_argument_and_row(scene, argument, value):
+    kwargs = {k: scene[k].copy() for k in ("points2d", "points3d", "lines2d", "lines3d")}
+    row = 3
+    kwargs[argument][row].flat[-1] = value
+    message = f"{argument}: non-finite value (NaN or inf) in row {row}"
+    with raises(NonFiniteError, match=re.escape(message)):
+        pluecker.estimate_pose(scene["camera"], **kwargs)
+    with raises(NonFiniteError, match=re.escape(message)):
+        pluecker.reprojection_errors(scene["camera"], scene["R"], scene["t"], **kwargs)
+    with raises(NonFiniteError, match=re.escape(message)):
+        pluecker.pose_covariance(scene["camera"], scene["R"], scene["t"], **kwargs)
+
+
+def test_non_finite_pose_arguments(scene):
+    r = scene["R"].copy()
+    r[1, 2] = np.nan
+    with raises(NonFiniteError, match=re.escape("R: non-finite value (NaN or inf) in row 1")):
+        pluecker.pose_to_dual_quaternion(r, scene["t"])
+    with raises(NonFiniteError, match=re.escape("initial_pose t: non-finite value (NaN or inf) in row 2")):
+        pluecker.estimate_pose(
+            scene["camera"], scene["points2d"], scene["points3d"], initial_pose=(scene["R"], [0.0, 0.0, np.inf])
+        )
+
+
+# --- too few, degenerate -------------------------------------------------------------------------
+
+
+def test_too_few_correspondences(scene):
+    cam = scene["camera"]
+    with raises(TooFewCorrespondencesError, match=r"at least 3 correspondences.*got 2 points and 0 lines"):
+        pluecker.estimate_pose(cam, scene["points2d"][:2], scene["points3d"][:2])
+    with raises(TooFewCorrespondencesError, match=r"method 'linear' needs at least 6 points.*got 5 points"):
+        pluecker.estimate_pose(cam, scene["points2d"][:5], scene["points3d"][:5], method="linear")
+    with raises(TooFewCorrespondencesError):
+        pluecker.estimate_pose(cam)
+    with raises(TooFewCorrespondencesError, match="rotation-then-translation"):
+        pluecker.estimate_pose(
+            cam, scene["points2d"][:2], scene["points3d"][:2], scene["lines2d"][:1], scene["lines3d"][:1],
+            method="rotation-then-translation",
+        )
+
+
+@pytest.mark.parametrize("method", pluecker.METHODS)
+def test_collinear_points(method):
+    cam = pluecker.Camera(800, 800, 320, 240)
+    s = np.linspace(-1, 1, 10)[:, None]
+    points3d = np.array([0.0, 0.0, 5.0]) + s * np.array([1.0, 0.5, 0.2])
+    points2d = cam.project(points3d)
+    with raises(DegenerateConfigurationError, match="collinear|coplanar"):
+        pluecker.estimate_pose(cam, points2d, points3d, method=method)
+
+
+def _segments_through(cam, starts, directions):
+    lines3d = np.stack([starts, starts + directions], axis=1)
+    lines2d = cam.project(lines3d.reshape(-1, 3)).reshape(-1, 2, 2)
+    return lines2d, lines3d
+
+
+def test_all_parallel_lines():
+    cam = pluecker.Camera(800, 800, 320, 240)
+    rng = np.random.default_rng(2)
+    starts = np.c_[rng.uniform(-1, 1, (6, 2)), rng.uniform(5, 6, 6)]
+    lines2d, lines3d = _segments_through(cam, starts, np.tile([0.3, 0.2, 0.5], (6, 1)))
+    with raises(DegenerateConfigurationError, match="parallel"):
+        pluecker.estimate_pose(cam, lines2d=lines2d, lines3d=lines3d)
+
+
+def test_all_concurrent_lines():
+    cam = pluecker.Camera(800, 800, 320, 240)
+    rng = np.random.default_rng(3)
+    apex = np.array([0.2, -0.1, 6.0])
+    directions = rng.standard_normal((6, 3))
+    directions[:, 2] = np.abs(directions[:, 2]) * 0.2
+    lines2d, lines3d = _segments_through(cam, np.tile(apex, (6, 1)) + 0.5 * directions, directions)
+    with raises(DegenerateConfigurationError, match="one point"):
+        pluecker.estimate_pose(cam, lines2d=lines2d, lines3d=lines3d)
+
+
+@pytest.mark.parametrize("argument", ["lines2d", "lines3d"])
+def test_zero_length_segment(scene, argument):
+    kwargs = {k: scene[k].copy() for k in ("points2d", "points3d", "lines2d", "lines3d")}
+    kwargs[argument][2, 1] = kwargs[argument][2, 0]
+    with raises(DegenerateConfigurationError, match=re.escape(f"{argument}[2] is a zero-length segment")):
+        pluecker.estimate_pose(scene["camera"], **kwargs)
+
+
+def test_coplanar_points_for_the_linear_method():
+    scene = pluecker.random_scene("planar", 10, 0, seed=4)
+    with raises(DegenerateConfigurationError, match="coplanar"):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="linear")
+
+
+def test_singular_covariance(scene):
+    with raises(DegenerateConfigurationError, match="singular"):
+        pluecker.pose_covariance(scene["camera"], scene["R"], scene["t"], scene["points2d"][:2], scene["points3d"][:2])
+    with raises(DegenerateConfigurationError, match="singular"):
+        pluecker.pose_covariance(scene["camera"], scene["R"], scene["t"])
+
+
+def test_zero_dual_quaternion():
+    with raises(DegenerateConfigurationError, match="real part"):
+        pluecker.dual_quaternion_to_pose(np.r_[np.zeros(4), 1.0, 0.0, 0.0, 0.0])
+
+
+# --- camera ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "args",
+    [(0.0, 800.0, 320.0, 240.0), (800.0, 0.0, 320.0, 240.0), (np.nan, 800.0, 320.0, 240.0), (800.0, 800.0, np.inf, 240.0)],
+)
+def test_singular_camera(args):
+    with raises(SingularCameraError, match="singular camera"):
+        pluecker.Camera(*args)
+
+
+def test_singular_calibration_matrix():
+    k = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
+    for bad, match in [
+        (np.where(np.eye(3, dtype=bool), np.nan, k), "non-finite"),
+        (np.diag([800.0, 800.0, 0.0]), r"K\[2,2\] is zero"),
+        (k + np.array([[0, 0, 0], [5.0, 0, 0], [0, 0, 0]]), "upper triangular"),
+        (np.diag([0.0, 800.0, 1.0]), "non-zero"),
+    ]:
+        with raises(SingularCameraError, match=match):
+            pluecker.Camera.from_matrix(bad)
+
+
+# --- options ----------------------------------------------------------------------------------------
+
+
+def test_unknown_method_lists_the_valid_names(scene):
+    with raises(InvalidOptionError, match="unknown method 'ransac'") as info:
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="ransac")
+    for name in pluecker.METHODS:
+        assert name in str(info.value)
+
+
+@pytest.mark.parametrize("penalty", [0.0, -1.0, np.nan, np.inf])
+def test_bad_penalty(scene, penalty):
+    with raises(InvalidOptionError, match="penalty"):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], penalty=penalty)
+
+
+@pytest.mark.parametrize("option", ["max_iterations", "refine_max_iterations"])
+@pytest.mark.parametrize("value", [0, -3])
+def test_bad_iteration_caps(scene, option, value):
+    with raises(InvalidOptionError, match=f"{option}: must be at least 1, got {value}"):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], **{option: value})
+
+
+def test_rotation_arguments_must_be_rotations(scene):
+    reflection = np.diag([1.0, 1.0, -1.0])
+    for bad in (2.0 * np.eye(3), reflection, np.ones((3, 3))):
+        with raises(InvalidOptionError, match="R: expected a rotation matrix"):
+            pluecker.reprojection_errors(scene["camera"], bad, scene["t"], scene["points2d"], scene["points3d"])
+        with raises(InvalidOptionError, match="R: expected a rotation matrix"):
+            pluecker.pose_to_screw(bad, scene["t"])
+        with raises(InvalidOptionError, match="initial_pose R: expected a rotation matrix"):
+            pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], initial_pose=(bad, scene["t"]))
+
+
+@pytest.mark.parametrize("sigma", [0.0, -1.0, np.nan])
+def test_bad_sigma(scene, sigma):
+    with raises(InvalidOptionError, match="sigma_px"):
+        pluecker.pose_covariance(scene["camera"], scene["R"], scene["t"], scene["points2d"], scene["points3d"], sigma_px=sigma)
+
+
+def test_bad_scene_requests():
+    with raises(InvalidOptionError, match="unknown scene kind 'spherical'; expected one of general, planar, far"):
+        pluecker.random_scene("spherical", 10)
+    with raises(InvalidOptionError, match="n_points: must be non-negative"):
+        pluecker.random_scene("general", -1)
+
+
+# --- types ------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "bad",
+    ["not an array", [["a", "b"], ["c", "d"]], [[1.0, None], [2.0, 3.0]], {"x": 1}, np.array([[1 + 2j, 0]]), [[1, 2], [3]]],
+)
+def test_non_numeric_arrays_raise_type_error_naming_the_argument(scene, bad):
+    with pytest.raises(TypeError, match="points2d"):
+        pluecker.estimate_pose(scene["camera"], bad, scene["points3d"])
+
+
+def test_wrong_python_types(scene):
+    with pytest.raises(TypeError):
+        pluecker.estimate_pose("camera", scene["points2d"], scene["points3d"])
+    with pytest.raises(TypeError):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], penalty="big")
+    with pytest.raises(TypeError):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], initial_pose=[scene["R"], scene["t"]])
+    with pytest.raises(TypeError):
+        pluecker.Camera("800", 800, 320, 240)
+
+
+# --- points behind the camera ------------------------------------------------------------------------
+
+
+def _reflected_scene(seed: int):
+    """A scene whose first three object points are reflected through the camera centre
+    (x_cam -> -x_cam). Their images are unchanged (-x/-z = x/z), so the true pose still explains
+    every observation exactly, but it puts those points behind the camera."""
+    scene = pluecker.random_scene("general", 20, 0, seed=seed)
+    r, t = scene["R"], scene["t"]
+    points3d = scene["points3d"].copy()
+    x_cam = points3d @ r.T + t
+    points3d[:3] = (-x_cam[:3] - t) @ r  # R^T (-x_cam - t), row by row
+    assert np.all((points3d[:3] @ r.T + t)[:, 2] < 0)
+    return scene, points3d
+
+
+@pytest.mark.parametrize("method", pluecker.METHODS)
+def test_points_behind_the_camera_at_the_solution_are_reported(method):
+    scene, points3d = _reflected_scene(seed=5)
+    start = (scene["R"], scene["t"])
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], points3d, method=method, initial_pose=start)
+    assert_pose_close(result, scene["R"], scene["t"], 1e-8)
+    assert result.rms_error_px < 1e-6
+    assert result.status == "points_behind_camera"
+    assert result.success is False
+
+
+def test_points_behind_the_camera_from_the_default_start():
+    """From its own starts the default method finds the exact pose on almost every such scene (19 of
+    20 when written), and then says the points are behind the camera. Otherwise it has preferred an
+    answer with every point in front, which it reports as 'success' although it does not fit the
+    data: the known limitation pinned here is that only ``rms_error_px`` then tells (it is large)."""
+    found = 0
+    for seed in range(20):
+        scene, points3d = _reflected_scene(seed)
+        result = pluecker.estimate_pose(scene["camera"], scene["points2d"], points3d)
+        if np.max(np.abs(result.R - scene["R"])) < 1e-8:
+            found += 1
+            assert result.status == "points_behind_camera", f"seed={seed}"
+        elif result.status == "success":
+            assert result.rms_error_px > 1.0, f"seed={seed}: {result}"
+    assert found >= 16
+
+
+# --- fuzz -------------------------------------------------------------------------------------------
+
+
+def _garbage(rng: np.random.Generator):
+    kind = int(rng.integers(0, 12))
+    if kind == 0:
+        return None
+    if kind == 1:
+        junk = ["text", b"bytes", {"a": 1}, [[1, 2], [3]], object(), 3.5, [[None]], [[1.0, 2.0], [3.0, "4"]]]
+        return junk[int(rng.integers(len(junk)))]
+    shape = tuple(int(n) for n in rng.integers(0, 6, int(rng.integers(0, 4))))
+    with np.errstate(over="ignore"):
+        values = rng.standard_normal(shape) * 10.0 ** float(rng.integers(-300, 300))
+    if values.size and rng.random() < 0.3:
+        values.flat[int(rng.integers(values.size))] = rng.choice([np.nan, np.inf, -np.inf])
+    if rng.random() < 0.2:
+        values = np.round(values).clip(-1e6, 1e6).astype(np.int64) if np.all(np.isfinite(values)) else values
+    return values
+
+
+def _plausible(rng: np.random.Generator):
+    """Right shapes, wild values: the inputs that reach the solvers."""
+    n, m = int(rng.integers(0, 9)), int(rng.integers(0, 5))
+
+    def scale():
+        return 10.0 ** float(rng.integers(-200, 200))
+
+    args = [
+        rng.standard_normal((n, 2)) * scale(),
+        rng.standard_normal((n, 3)) * scale(),
+        rng.standard_normal((m, 2, 2)) * scale(),
+        rng.standard_normal((m, 2, 3)) * scale(),
+    ]
+    if rng.random() < 0.3:
+        args[1][:, 2] = 0.0  # coplanar
+    if rng.random() < 0.2 and n:
+        args[1] = np.repeat(args[1][:1], n, axis=0)  # coincident
+    return args
+
+
+def test_a_rust_panic_becomes_a_python_exception():
+    import pluecker._core as core
+
+    with raises(PlueckerError, match="internal error: boom"):
+        core._panic_for_tests("boom")
+    # The interpreter and the module still work afterwards.
+    assert pluecker.random_scene("general", 3)["points2d"].shape == (3, 2)
+
+
+def test_fuzz_never_crashes_and_raises_only_documented_errors():
+    rng = np.random.default_rng(20240601)
+    cameras = [pluecker.Camera(800, 800, 320, 240), pluecker.Camera(-1730.3, 1220.7, 243.8, 241.2, 3.0)]
+    outcomes: dict = {}
+    internal = []
+    for i in range(1500):
+        args = _plausible(rng) if i % 2 else [_garbage(rng) for _ in range(4)]
+        method = str(rng.choice(pluecker.METHODS))
+        camera = cameras[i % 2]
+        try:
+            with np.errstate(all="ignore"):
+                if i % 3 == 0:
+                    pose = pluecker.random_scene("general", 0, seed=i)
+                    out = pluecker.reprojection_errors(camera, pose["R"], pose["t"], *args)
+                    assert out.shape == (len(out),)
+                    key = "errors"
+                else:
+                    result = pluecker.estimate_pose(camera, *args, method=method)
+                    assert result.status in {"success", "not_converged", "numerical_failure", "points_behind_camera"}
+                    key = "status:" + result.status
+        except PlueckerError as e:
+            key = type(e).__name__
+            if "internal error" in str(e):
+                internal.append(str(e))
+        except TypeError:
+            key = "TypeError"
+        outcomes[key] = outcomes.get(key, 0) + 1
+    # Every documented outcome class showed up, so the fuzz reached the solvers.
+    assert outcomes.get("ShapeError", 0) and outcomes.get("TypeError", 0) and outcomes.get("NonFiniteError", 0)
+    assert any(k.startswith("status:") for k in outcomes), outcomes
+    print(outcomes)
+    # A Rust panic would come out as PlueckerError('internal error ...'): none may.
+    assert internal == [], internal[:3]
