@@ -11,8 +11,10 @@ DEPS_STAMP := $(VENV)/.deps-stamp
 DEVELOP_STAMP := $(VENV)/.develop-stamp
 RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml $(wildcard Cargo.lock)
 
-# Cargo and maturin configure PyO3 for the same interpreter, so neither invalidates the other's build.
+# Cargo and maturin configure PyO3 for the same interpreter, with the environment signature maturin
+# sets (cpython-3.11-64bit), so `cargo test` and `maturin develop` do not rebuild each other's PyO3.
 export PYO3_PYTHON := $(CURDIR)/$(BIN)/python
+export PYO3_ENVIRONMENT_SIGNATURE := $(shell $(PYTHON) -c 'import struct, sys; print(f"{sys.implementation.name}-{sys.version_info[0]}.{sys.version_info[1]}-{struct.calcsize(chr(80)) * 8}bit")')
 
 .PHONY: setup develop test test-rust test-python demo bench clean
 
