@@ -172,6 +172,9 @@ fn bad_input_gets_a_clear_error() {
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
     let bad = PoseOptions { initial_pose: Some((Matrix3::zeros(), Vector3::zeros())), ..PoseOptions::default() };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
+    let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+    let bad = PoseOptions { initial_pose: Some((reflection, Vector3::zeros())), ..PoseOptions::default() };
+    assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
 }
 
 /// Observations of points that are behind the camera at the only consistent pose: the answer comes

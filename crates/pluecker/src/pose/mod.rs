@@ -147,8 +147,11 @@ impl PoseOptions {
             }
         }
         if let Some((r, t)) = &self.initial_pose {
-            if r.iter().chain(t.iter()).any(|v| !v.is_finite()) || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6 {
-                return bad("initial_pose", "R must be a finite rotation matrix and t finite");
+            if r.iter().chain(t.iter()).any(|v| !v.is_finite())
+                || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
+                || r.determinant() <= 0.0
+            {
+                return bad("initial_pose", "R must be a finite rotation matrix (orthonormal, det +1) and t finite");
             }
         }
         Ok(())
