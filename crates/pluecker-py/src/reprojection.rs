@@ -8,9 +8,6 @@ use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::pose::reprojection::{pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;
 
-/// `JᵀJ` counts as singular when its smallest eigenvalue is below this fraction of its largest.
-const RELATIVE_RANK_TOLERANCE: f64 = 1e-12;
-
 /// The 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose `(R, t)`.
 #[pyfunction]
 #[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, sigma_px = 1.0))]
@@ -35,27 +32,24 @@ pub fn pose_covariance<'py>(
         ));
     }
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
-    let (information, cov) = solve(py, move || {
+    // The information matrix is computed again only to explain a failure.
+    let cov = solve(py, move || {
         let cost = ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
-        Ok((cost.information(&pose), covariance(&cost, &pose, sigma_px)))
+        Ok(covariance(&cost, &pose, sigma_px).ok_or_else(|| cost.information(&pose)))
     })?;
-    if information.iter().any(|v| !v.is_finite()) {
-        return Err(degenerate(
-            "the information matrix JᵀJ is not finite at this pose (a 3-D point or endpoint on the camera plane z = 0?)",
-        ));
-    }
-    let eig = information.symmetric_eigenvalues();
-    let (lo, hi) = (eig.min(), eig.max());
-    let cov = match cov {
-        Some(cov) if hi > 0.0 && lo > RELATIVE_RANK_TOLERANCE * hi && cov.iter().all(|v| v.is_finite()) => cov,
-        _ => {
-            return Err(degenerate(format!(
-                "the information matrix JᵀJ is singular (eigenvalues from {lo:.3e} to {hi:.3e}): the correspondences do not determine the pose"
-            )))
+    let cov = cov.map_err(|information| {
+        if information.iter().any(|v| !v.is_finite()) {
+            return degenerate(
+                "the information matrix JᵀJ is not finite at this pose (a 3-D point or endpoint on the camera plane z = 0?)",
+            );
         }
-    };
-    // Symmetrise away the round-off of the inversion.
-    let cov = 0.5 * (cov + cov.transpose());
+        let eig = information.symmetric_eigenvalues();
+        degenerate(format!(
+            "the information matrix JᵀJ is singular (eigenvalues from {:.3e} to {:.3e}): the correspondences do not determine the pose",
+            eig.min(),
+            eig.max()
+        ))
+    })?;
     Ok(Array2::from_shape_fn((6, 6), |(i, j)| cov[(i, j)]).into_pyarray(py))
 }
 

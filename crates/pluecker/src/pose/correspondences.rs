@@ -34,14 +34,22 @@ fn check_finite<'a, I: IntoIterator<Item = &'a f64>>(what: &str, rows: impl Iter
     Ok(())
 }
 
-/// Singular values of the scatter of `points` about their centroid, largest first.
-fn spread(points: &[Vector3<f64>]) -> Vector3<f64> {
+/// The principal axes of a point set: its centroid, the standard deviations along the axes (largest
+/// first) and the unit axis of least spread.
+pub(crate) fn principal_axes(points: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
     let n = points.len().max(1) as f64;
     let c = points.iter().sum::<Vector3<f64>>() / n;
     let scatter: Matrix3<f64> = points.iter().map(|p| (p - c) * (p - c).transpose()).sum();
-    let mut s = scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
-    s.as_mut_slice().sort_by(|a, b| b.partial_cmp(a).unwrap());
-    s
+    let eig = scatter.symmetric_eigen();
+    let least_axis = eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned();
+    let mut s = eig.eigenvalues.map(|v| v.max(0.0).sqrt());
+    s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+    (c, s, least_axis)
+}
+
+/// Standard deviations of `points` along their principal axes, largest first.
+fn spread(points: &[Vector3<f64>]) -> Vector3<f64> {
+    principal_axes(points).1
 }
 
 impl Correspondences {
@@ -97,7 +105,8 @@ impl Correspondences {
                 if np < 6 {
                     return Err(too_few("at least 6 points (lines are not used)"));
                 }
-                if spread(&self.points3d)[2] <= DEGENERACY_TOLERANCE * spread(&self.points3d)[0] {
+                let s = spread(&self.points3d);
+                if s[2] <= DEGENERACY_TOLERANCE * s[0] {
                     return Err(Error::Degenerate {
                         what: "points3d are coplanar; the linear (Faugeras-Toscani) method needs non-coplanar points"
                             .into(),

@@ -1,8 +1,8 @@
 //! The pose pipeline: validation → algebraic estimator (or linear baseline) → reprojection refinement.
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
-use super::correspondences::{constraints, Conditioning, Correspondences};
-use super::initialization::{joint_starts, least_spread_axis, mirrored, rotation_starts};
+use super::correspondences::{constraints, principal_axes, Conditioning, Correspondences};
+use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{Method, PoseOptions, PoseResult, StageReport, Status};
@@ -49,7 +49,7 @@ struct Shape {
     axis: Vector3<f64>,
     /// Centroid.
     centroid: Vector3<f64>,
-    /// Standard deviations along the principal axes, smallest first.
+    /// Standard deviations along the principal axes, largest first.
     spread: Vector3<f64>,
 }
 
@@ -57,17 +57,13 @@ impl Shape {
     fn of(c: &Correspondences) -> Shape {
         let points: Vec<Vector3<f64>> =
             c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
-        let centroid = points.iter().sum::<Vector3<f64>>() / points.len().max(1) as f64;
-        let axis = least_spread_axis(&points);
-        let scatter: Matrix3<f64> = points.iter().map(|p| (p - centroid) * (p - centroid).transpose()).sum();
-        let mut spread = scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
-        spread.as_mut_slice().sort_by(f64::total_cmp);
+        let (centroid, spread, axis) = principal_axes(&points);
         Shape { points, axis, centroid, spread }
     }
 
     /// How many default starts this object gets.
     fn default_starts(&self) -> usize {
-        if self.spread[0] < PLANARITY * self.spread[2] {
+        if self.spread[2] < PLANARITY * self.spread[0] {
             MULTI_STARTS
         } else {
             1
@@ -273,9 +269,19 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
 /// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
 pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
-    let started = Instant::now();
     let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
-    let cc = cond.correspondences(corr);
+    refine_conditioned(camera, &cond, &cond.correspondences(corr), initial, opts)
+}
+
+/// [`refine_pose`] on correspondences already conditioned by `cond`.
+fn refine_conditioned(
+    camera: &Camera,
+    cond: &Conditioning,
+    cc: &Correspondences,
+    initial: &Pose,
+    opts: &PoseOptions,
+) -> (Pose, StageReport) {
+    let started = Instant::now();
     let cost = ReprojectionCost::new(*camera, &cc.points2d, &cc.points3d, &cc.lines2d, &cc.lines3d);
     let x0 = (initial.0, cond.pose_from_world(&initial.0, &initial.1));
     let mut tr = opts.refinement;
@@ -299,9 +305,11 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives, valid } = algebraic_stage(camera, corr, opts)?;
     let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     if opts.refine && finite {
-        let (mut refined, mut report) = refine_pose(camera, corr, &pose, opts);
+        let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
+        let cc = cond.correspondences(corr);
+        let (mut refined, mut report) = refine_conditioned(camera, &cond, &cc, &pose, opts);
         for alternative in &alternatives {
-            let (other, other_report) = refine_pose(camera, corr, alternative, opts);
+            let (other, other_report) = refine_conditioned(camera, &cond, &cc, alternative, opts);
             report.iterations += other_report.iterations;
             report.time_seconds += other_report.time_seconds;
             if other_report.final_cost < report.final_cost {

@@ -126,16 +126,6 @@ pub fn rotation_starts(gram9: &SMatrix<f64, 9, 9>, k: usize) -> Vec<Vector4<f64>
     diverse_best(&mut scored, k).into_iter().map(|(_, q)| q).collect()
 }
 
-/// The axis of least spread of a point set (unit vector), for the mirror restart.
-pub fn least_spread_axis(points: &[Vector3<f64>]) -> Vector3<f64> {
-    let n = points.len().max(1) as f64;
-    let c = points.iter().sum::<Vector3<f64>>() / n;
-    let scatter: Matrix3<f64> = points.iter().map(|p| (p - c) * (p - c).transpose()).sum();
-    let eig = scatter.symmetric_eigen();
-    let imin = eig.eigenvalues.imin();
-    eig.eigenvectors.column(imin).into_owned()
-}
-
 /// The mirror pose `(R Rπ(n), −t)` of a pose that puts the object behind the camera.
 pub fn mirrored(rotation: &Matrix3<f64>, translation: &Vector3<f64>, axis: &Vector3<f64>) -> DualQuaternion {
     let flip = to_rotation_matrix(&from_axis_angle(axis, std::f64::consts::PI));

@@ -180,11 +180,24 @@ impl Objective<6> for ReprojectionCost<'_> {
     }
 }
 
+/// `JᵀJ` counts as singular when its smallest eigenvalue is below this fraction of its largest.
+pub const RELATIVE_RANK_TOLERANCE: f64 = 1e-12;
+
 /// The 6x6 covariance of `(ω, t)` (rotation as a tangent vector in radians, translation in world
-/// units) at `pose` for isotropic pixel noise of standard deviation `sigma_px`: `σ² (JᵀJ)⁻¹`. At the true
-/// pose this is the Cramér-Rao bound for unbiased estimators. `None` if `JᵀJ` is singular.
+/// units) at `pose` for isotropic pixel noise of standard deviation `sigma_px`: `σ² (JᵀJ)⁻¹`,
+/// symmetrised. At the true pose this is the Cramér-Rao bound for unbiased estimators. `None` if `JᵀJ`
+/// is not finite or is singular (smallest eigenvalue ≤ [`RELATIVE_RANK_TOLERANCE`] × largest).
 pub fn pose_covariance(cost: &ReprojectionCost<'_>, pose: &Pose, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
-    cost.information(pose).try_inverse().map(|inv| inv * (sigma_px * sigma_px))
+    let information = cost.information(pose);
+    if information.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let eig = information.symmetric_eigenvalues();
+    if !(eig.max() > 0.0 && eig.min() > RELATIVE_RANK_TOLERANCE * eig.max()) {
+        return None;
+    }
+    let cov = information.try_inverse()? * (sigma_px * sigma_px);
+    cov.iter().all(|v| v.is_finite()).then(|| 0.5 * (cov + cov.transpose()))
 }
 
 #[cfg(test)]
