@@ -26,10 +26,12 @@
 pub mod camera;
 pub mod error;
 pub mod geometry;
+pub mod global;
 pub mod optim;
 pub mod pose;
 pub mod rng;
 pub mod synthetic;
+pub mod triangulation;
 
 pub use camera::Camera;
 pub use error::{Error, Result};

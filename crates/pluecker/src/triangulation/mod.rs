@@ -1,0 +1,201 @@
+//! Triangulation: the 3-D point, line or quadric seen by several known cameras (Josephson & Kahl 2008).
+//!
+//! Every primitive is estimated by minimising the covariance-weighted reprojection cost of eq. 19,
+//! `Σᵢ ‖Lᵢ rᵢ‖²`, with `rᵢ` the residual of eq. 17 in view `i` (2 entries for points and lines, 5 for
+//! conics) and `Lᵢ` the Cholesky factor of the inverse covariance of that observation (eq. 18; the
+//! identity when no covariance is given, so that the cost of a point is its squared pixel error).
+//! Three methods ([`Method`]): a linear (DLT-style) solution, a local minimisation from it, and the
+//! globally optimal answer of branch and bound (section 4) whose [`Certificate`] carries a lower
+//! bound on the cost of every 3-D primitive.
+//!
+//! Conventions: cameras are 3x4 matrices `P` that map world points straight to pixels,
+//! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1); costs are in squared
+//! (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
+
+pub mod covariance;
+pub mod fitting;
+pub mod line;
+pub mod point;
+pub mod quadric;
+
+use crate::error::{Error, Result};
+use crate::optim::{Termination, TrustRegionOptions};
+
+/// The three estimators of every primitive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Algebraic least squares on the projection equations (DLT), with Hartley normalisation.
+    Linear,
+    /// Minimisation of the weighted cost of eq. 19 from the linear solution. Not certified.
+    Local,
+    /// Certified global minimum of eq. 19: a cheap sufficient test first, branch and bound
+    /// (section 4) when the test cannot decide. The default.
+    Optimal,
+}
+
+impl Method {
+    /// Every method, in the order above.
+    pub const ALL: [Method; 3] = [Method::Linear, Method::Local, Method::Optimal];
+
+    /// The name used by Python and the command line.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Method::Linear => "linear",
+            Method::Local => "local",
+            Method::Optimal => "optimal",
+        }
+    }
+
+    /// Parses [`Method::as_str`] names.
+    pub fn parse(name: &str) -> Result<Method> {
+        Method::ALL.into_iter().find(|m| m.as_str() == name).ok_or_else(|| Error::InvalidOption {
+            name: "method".into(),
+            reason: format!("unknown triangulation method '{name}'; expected one of linear, local, optimal"),
+        })
+    }
+}
+
+/// Options of every triangulation function; each field has a documented default.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriangulationOptions {
+    /// Estimator. Default [`Method::Optimal`].
+    pub method: Method,
+    /// Branch and bound stops when `(upper − lower) / upper ≤ max_relative_gap`. Default `1e-3`
+    /// (the paper stopped at 10 %).
+    pub max_relative_gap: f64,
+    /// The paper's γ (sections 4.3.1-4.3.2): the search is restricted to primitives whose whitened
+    /// reprojection error is at most γ in every view. `None` (the default) uses the square root of the
+    /// cost of the local solution, which every better primitive satisfies, so the restriction loses
+    /// nothing and the certificate is a certificate over all primitives in front of the cameras.
+    pub max_reprojection_error: Option<f64>,
+    /// Branch and bound gives up (status [`Status::GapNotClosed`]) after this many nodes. Default 2000.
+    pub max_nodes: usize,
+    /// Settings of the local minimisation (method `local`, and the upper bounds of `optimal`).
+    /// Default: the trust region of section 4.1 with 100 iterations and a step tolerance of 1e-10.
+    pub local: TrustRegionOptions,
+}
+
+impl Default for TriangulationOptions {
+    fn default() -> Self {
+        let mut local = TrustRegionOptions::default();
+        local.stopping.max_iterations = 100;
+        local.stopping.step_tolerance = 1e-10;
+        TriangulationOptions { method: Method::Optimal, max_relative_gap: 1e-3, max_reprojection_error: None, max_nodes: 2000, local }
+    }
+}
+
+impl TriangulationOptions {
+    /// Checks the numeric options.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: &str| Err(Error::InvalidOption { name: name.into(), reason: reason.into() });
+        if !(self.max_relative_gap.is_finite() && self.max_relative_gap > 0.0) {
+            return bad("max_relative_gap", "must be a positive finite number");
+        }
+        if let Some(gamma) = self.max_reprojection_error {
+            if !(gamma.is_finite() && gamma > 0.0) {
+                return bad("max_reprojection_error", "must be a positive finite number of (whitened) pixels");
+            }
+        }
+        if self.max_nodes == 0 {
+            return bad("max_nodes", "must be at least 1");
+        }
+        Ok(())
+    }
+}
+
+/// Whether a triangulated primitive can be used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// The method finished: linear solved, local converged, optimal certified within the gap.
+    Success,
+    /// Branch and bound hit `max_nodes` before the gap closed; the estimate is the best found and
+    /// the certificate holds the lower bound reached.
+    GapNotClosed,
+    /// The local minimisation stopped on its iteration cap.
+    NotConverged,
+    /// The estimate lies behind (or on the principal plane of) at least one camera.
+    BehindCamera,
+    /// No primitive has every reprojection error below the user's γ.
+    Infeasible,
+    /// The solver failed numerically (a singular system, a conic solver failure).
+    NumericalFailure,
+}
+
+impl Status {
+    /// snake_case name for reports, JSON and Python.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            Status::Success => "success",
+            Status::GapNotClosed => "gap_not_closed",
+            Status::NotConverged => "not_converged",
+            Status::BehindCamera => "behind_camera",
+            Status::Infeasible => "infeasible",
+            Status::NumericalFailure => "numerical_failure",
+        }
+    }
+}
+
+/// How global optimality was established.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CertificateKind {
+    /// Not attempted (methods `linear` and `local`).
+    None,
+    /// A sufficient condition proved the local minimum global without branching.
+    ConvexityTest,
+    /// Branch and bound closed the gap.
+    BranchAndBound,
+}
+
+impl CertificateKind {
+    /// snake_case name for reports, JSON and Python.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            CertificateKind::None => "none",
+            CertificateKind::ConvexityTest => "convexity_test",
+            CertificateKind::BranchAndBound => "branch_and_bound",
+        }
+    }
+}
+
+/// The global-optimality evidence of an estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Certificate {
+    /// A lower bound on the cost of eq. 19 over every admissible primitive (`0` when not computed).
+    pub lower_bound: f64,
+    /// `(cost − lower_bound) / cost` (`1` when not computed; `0` when the cost is 0).
+    pub relative_gap: f64,
+    /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
+    pub certified: bool,
+    /// How the bound was obtained.
+    pub kind: CertificateKind,
+    /// Branch-and-bound nodes whose bound was computed (0 for the convexity test).
+    pub nodes: usize,
+    /// Interior-point iterations of the conic solver, summed over nodes.
+    pub solver_iterations: usize,
+}
+
+impl Certificate {
+    /// The certificate of a method that does not look for one.
+    pub fn none() -> Certificate {
+        Certificate { lower_bound: 0.0, relative_gap: 1.0, certified: false, kind: CertificateKind::None, nodes: 0, solver_iterations: 0 }
+    }
+}
+
+/// What one triangulation did: shared by every primitive's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    /// The method that ran.
+    pub method: Method,
+    /// Whether the estimate can be used.
+    pub status: Status,
+    /// The cost of eq. 19 at the estimate, squared whitened pixels.
+    pub cost: f64,
+    /// Optimality evidence.
+    pub certificate: Certificate,
+    /// Accepted iterations of the local minimisation (0 for `linear`).
+    pub iterations: usize,
+    /// Why the last iterative stage stopped ([`Termination::ClosedForm`] for `linear`).
+    pub termination: Termination,
+    /// Wall time of the call, seconds.
+    pub time_seconds: f64,
+}
