@@ -12,11 +12,14 @@
 //! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1); costs are in squared
 //! (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
 
+pub mod batch;
 pub mod covariance;
 pub mod fitting;
 pub mod line;
 pub mod point;
+
 pub mod quadric;
+pub mod views;
 
 use crate::error::{Error, Result};
 use crate::optim::{Termination, TrustRegionOptions};
