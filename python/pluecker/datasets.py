@@ -1,0 +1,174 @@
+"""Readers for real multi-view data: the Oxford VGG multi-view sequences (Model House, Corridor, Merton).
+
+A folder in the VGG format holds, per view ``k``, a camera ``<prefix>k.P`` (3x4, world to pixels),
+corners ``<prefix>k.corners`` (``x y`` rows) and segments ``<prefix>k.lines`` (``x0 y0 x1 y1`` rows, extra
+columns ignored), and for the whole sequence the 3-D points ``p3d``, 3-D segments ``l3d`` and the tracks
+``nview-corners`` / ``nview-lines`` (row r = 3-D feature r; one column per view holding a 0-based row of that
+view's file, ``*`` when not seen). The prefix (``house.``, ``bt.`` or none) is found from the file names.
+
+Two sequences (Model House, Corridor) use a mirrored, left-handed world frame: every camera has
+``det(P[:, :3]) * (P [X; 1])[2] < 0`` for the reconstructed points. :func:`load_vgg` detects this from the
+data and, when it holds, negates X, Y, Z of every 3-D point and segment and right-multiplies every camera by
+``diag(-1, -1, -1, 1)``: the projections are unchanged, ``det`` of the left 3x3 block becomes positive and
+depths in front of the cameras are positive, as pluecker's conventions require.
+
+Conventions: pixels with (0, 0) the top-left pixel, x right, y down; arrays row-major float64.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["VggSequence", "load_vgg", "vgg_root", "VGG_SEQUENCES"]
+
+#: The five sequences of ``../shared/data/vgg``.
+VGG_SEQUENCES = ("model_house", "corridor", "merton_college_1", "merton_college_2", "merton_college_3")
+
+
+def vgg_root() -> Path:
+    """Where the VGG data live: ``$PLUECKER_VGG_DATA`` if set, else ``shared/data/vgg`` beside the checkout
+    (``<repo>/../shared/data/vgg``). The project ships no copy of the data."""
+    env = os.environ.get("PLUECKER_VGG_DATA")
+    if env:
+        return Path(env)
+    return Path(__file__).resolve().parents[3] / "shared" / "data" / "vgg"
+
+
+@dataclass(frozen=True)
+class VggSequence:
+    """One VGG multi-view sequence, in a right-handed world frame (see the module docs).
+
+    Attributes:
+        name: folder name.
+        cameras: (v, 3, 4) camera matrices, world to pixels.
+        points3d: (n, 3) reconstructed 3-D points shipped with the data.
+        lines3d: (m, 2, 3) reconstructed 3-D segment endpoints shipped with the data.
+        corners: per view, a (k_i, 2) array of detected corners (pixels).
+        segments: per view, a (j_i, 2, 2) array of detected segment endpoints (pixels).
+        point_tracks: (n, v) int, the corner row seen in each view, -1 when not seen.
+        line_tracks: (m, v) int, the segment row seen in each view, -1 when not seen.
+        mirrored: True when the shipped frame was left-handed and has been flipped.
+    """
+
+    name: str
+    cameras: np.ndarray
+    points3d: np.ndarray
+    lines3d: np.ndarray
+    corners: list[np.ndarray]
+    segments: list[np.ndarray]
+    point_tracks: np.ndarray
+    line_tracks: np.ndarray
+    mirrored: bool
+
+    @property
+    def n_views(self) -> int:
+        """Number of views."""
+        return self.cameras.shape[0]
+
+    def point_observations(self, views: list[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Observations of every 3-D point in the chosen views (default: all).
+
+        Returns ``(x, visible)``: ``x`` (n, len(views), 2) pixels (NaN where not seen) and ``visible``
+        (n, len(views)) bool; the layout ``pluecker.triangulate_points`` takes.
+        """
+        return _observations(self.point_tracks, self.corners, views, (2,))
+
+    def line_observations(self, views: list[int] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Observed segments of every 3-D line in the chosen views (default: all).
+
+        Returns ``(segments, visible)``: (m, len(views), 2, 2) pixel endpoints (NaN where not seen) and
+        (m, len(views)) bool.
+        """
+        return _observations(self.line_tracks, self.segments, views, (2, 2))
+
+
+def _observations(tracks, per_view, views, shape):
+    views = list(range(tracks.shape[1])) if views is None else list(views)
+    out = np.full((tracks.shape[0], len(views), *shape), np.nan)
+    visible = np.zeros((tracks.shape[0], len(views)), dtype=bool)
+    for j, view in enumerate(views):
+        rows = tracks[:, view]
+        seen = rows >= 0
+        out[seen, j] = per_view[view][rows[seen]]
+        visible[:, j] = seen
+    return out, visible
+
+
+def _read_rows(path: Path, columns: int) -> np.ndarray:
+    """Whitespace-separated numbers, the first ``columns`` of every non-empty row."""
+    rows = [line.split()[:columns] for line in path.read_text().splitlines() if line.strip()]
+    if not rows:
+        return np.zeros((0, columns))
+    if any(len(r) < columns for r in rows):
+        raise ValueError(f"{path}: every row needs at least {columns} numbers")
+    return np.array(rows, dtype=float)
+
+
+def _read_tracks(path: Path, n_views: int) -> np.ndarray:
+    if not path.exists():
+        return np.zeros((0, n_views), dtype=np.int64)
+    rows = [line.split() for line in path.read_text().splitlines() if line.strip()]
+    if any(len(r) != n_views for r in rows):
+        raise ValueError(f"{path}: expected {n_views} columns (one per view) in every row")
+    return np.array([[-1 if v == "*" else int(v) for v in r] for r in rows], dtype=np.int64).reshape(-1, n_views)
+
+
+def _find(folder: Path, suffix: str) -> Path:
+    """The sequence file ``<prefix>suffix`` (e.g. ``house.p3d`` or ``p3d``)."""
+    for candidate in sorted(folder.iterdir()):
+        if candidate.name == suffix or candidate.name.endswith("." + suffix):
+            return candidate
+    return folder / suffix
+
+
+def load_vgg(folder: str | Path) -> VggSequence:
+    """Reads a VGG multi-view folder (see the module docs) into a right-handed :class:`VggSequence`.
+
+    Raises:
+        FileNotFoundError: no camera files (``*.P``) in the folder.
+        ValueError: a malformed file (the message names it).
+    """
+    folder = Path(folder)
+    camera_files = sorted(p for p in folder.iterdir() if re.fullmatch(r"(.*\.)?\d+\.P", p.name))
+    if not camera_files:
+        raise FileNotFoundError(f"{folder}: no camera files '<prefix>NNN.P'")
+    cameras = np.stack([_read_rows(p, 4).reshape(3, 4) for p in camera_files])
+    stems = [p.name[: -len(".P")] for p in camera_files]
+    corners = [_read_rows(folder / f"{s}.corners", 2) for s in stems]
+    segments = [_read_rows(folder / f"{s}.lines", 4).reshape(-1, 2, 2) for s in stems]
+    points3d = _read_rows(_find(folder, "p3d"), 3)
+    lines3d = _read_rows(_find(folder, "l3d"), 6).reshape(-1, 2, 3)
+    n_views = len(camera_files)
+    point_tracks = _read_tracks(_find(folder, "nview-corners"), n_views)
+    line_tracks = _read_tracks(_find(folder, "nview-lines"), n_views)
+    mirrored = _is_mirrored(cameras, points3d)
+    if mirrored:
+        flip = np.diag([-1.0, -1.0, -1.0, 1.0])
+        cameras = cameras @ flip
+        points3d = -points3d
+        lines3d = -lines3d
+    return VggSequence(
+        name=folder.name,
+        cameras=cameras,
+        points3d=points3d,
+        lines3d=lines3d,
+        corners=corners,
+        segments=segments,
+        point_tracks=point_tracks,
+        line_tracks=line_tracks,
+        mirrored=mirrored,
+    )
+
+
+def _is_mirrored(cameras: np.ndarray, points3d: np.ndarray) -> bool:
+    """True when most points have negative depth ``det(M) (P X̃)₃`` in most cameras (a left-handed frame)."""
+    if points3d.shape[0] == 0:
+        return False
+    homogeneous = np.hstack([points3d, np.ones((points3d.shape[0], 1))])
+    signs = [np.sign(np.linalg.det(p[:, :3])) * (homogeneous @ p[2]) for p in cameras]
+    return float(np.median(np.concatenate(signs))) < 0.0
