@@ -1,0 +1,304 @@
+//! Plücker coordinates of 3-D lines (Josephson & Kahl 2008, section 2.2, eqs. 2-7).
+//!
+//! A line through the homogeneous points `A`, `B` has the Plücker matrix `L = A Bᵀ − B Aᵀ` (eq. 2), a
+//! skew-symmetric 4x4 matrix of rank 2, and the six Plücker coordinates (eq. 3, indices 1-based)
+//! `𝓛 = (l₁₂, l₁₃, l₁₄, l₂₃, l₄₂, l₃₄)`, defined up to a non-zero scale. They satisfy the Plücker
+//! constraint `l₁₂l₃₄ + l₁₃l₄₂ + l₁₄l₂₃ = 0` (eq. 4) and transform as `L' = H L Hᵀ` when points
+//! transform as `X' = H X` (eq. 5).
+//!
+//! For finite points `A = (a, 1)`, `B = (b, 1)` (world frame) the coordinates split into
+//! - the **direction** `d = (l₁₄, −l₄₂, l₃₄) = a − b` (from `B` towards `A`), and
+//! - the **moment** `m = (−l₂₃, l₁₃, −l₁₂) = p × d` for any point `p` of the line,
+//!
+//! so that eq. 4 reads `d · m = 0`. A line is *at infinity* when `d = 0`.
+//!
+//! The Plücker camera of eq. 7, `P_𝓛 = (p₂∧p₃; p₃∧p₁; p₁∧p₂)` with `pᵢᵀ` the rows of a 3x4 camera `P`
+//! and `p∧q` the coordinates of eq. 3 computed from the 4-vectors `p`, `q`, maps `𝓛` to the image line
+//! by a plain matrix product (eq. 6): `P_𝓛 𝓛(A, B) = (P A) × (P B)`, the homogeneous line through the
+//! two image points, with this sign (see the test `plucker_camera_maps_to_the_image_line`).
+
+use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, SMatrix, Vector3, Vector4, Vector6};
+
+/// The 3x6 Plücker camera of eq. 7.
+pub type PluckerCamera = SMatrix<f64, 3, 6>;
+
+/// Relative size of the direction (against the moment) below which a line is treated as lying at
+/// infinity.
+const MIN_RELATIVE_DIRECTION: f64 = 1e-12;
+
+/// Eqs. 2-3: the Plücker coordinates of the line through the homogeneous points `a`, `b`.
+pub fn from_homogeneous_points(a: &Vector4<f64>, b: &Vector4<f64>) -> Vector6<f64> {
+    let l = |i: usize, j: usize| a[i] * b[j] - b[i] * a[j];
+    Vector6::new(l(0, 1), l(0, 2), l(0, 3), l(1, 2), l(3, 1), l(2, 3))
+}
+
+/// The Plücker coordinates of the line through the world points `a`, `b`; its direction is `a − b`.
+pub fn from_points(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector6<f64> {
+    from_homogeneous_points(&a.push(1.0), &b.push(1.0))
+}
+
+/// The skew-symmetric Plücker matrix `L` of eq. 2 from the coordinates of eq. 3.
+pub fn to_matrix(l: &Vector6<f64>) -> Matrix4<f64> {
+    let (l12, l13, l14, l23, l42, l34) = (l[0], l[1], l[2], l[3], l[4], l[5]);
+    Matrix4::new(
+        0.0, l12, l13, l14, //
+        -l12, 0.0, l23, -l42, //
+        -l13, -l23, 0.0, l34, //
+        -l14, l42, -l34, 0.0,
+    )
+}
+
+/// The coordinates of eq. 3 read from a Plücker matrix (its strictly upper part; `l₄₂ = −L[1,3]`).
+pub fn from_matrix(m: &Matrix4<f64>) -> Vector6<f64> {
+    Vector6::new(m[(0, 1)], m[(0, 2)], m[(0, 3)], m[(1, 2)], m[(3, 1)], m[(2, 3)])
+}
+
+/// The left side of the Plücker constraint, eq. 4: `l₁₂l₃₄ + l₁₃l₄₂ + l₁₄l₂₃` (zero for every line).
+pub fn constraint(l: &Vector6<f64>) -> f64 {
+    l[0] * l[5] + l[1] * l[4] + l[2] * l[3]
+}
+
+/// Eq. 5: the coordinates of the line after the point transformation `X' = H X`, from `L' = H L Hᵀ`.
+pub fn transform(h: &Matrix4<f64>, l: &Vector6<f64>) -> Vector6<f64> {
+    from_matrix(&(h * to_matrix(l) * h.transpose()))
+}
+
+/// The direction `d = (l₁₄, −l₄₂, l₃₄)` and moment `m = (−l₂₃, l₁₃, −l₁₂)` (see the module docs).
+pub fn direction_moment(l: &Vector6<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    (Vector3::new(l[2], -l[4], l[5]), Vector3::new(-l[3], l[1], -l[0]))
+}
+
+/// The inverse of [`direction_moment`].
+pub fn from_direction_moment(d: &Vector3<f64>, m: &Vector3<f64>) -> Vector6<f64> {
+    Vector6::new(-m.z, m.y, d.x, -m.x, -d.y, d.z)
+}
+
+/// The line through the world point `p` with direction `d` (any length, non-zero).
+pub fn from_point_direction(p: &Vector3<f64>, d: &Vector3<f64>) -> Vector6<f64> {
+    from_direction_moment(d, &p.cross(d))
+}
+
+/// The point of the line closest to the world origin and the unit direction of the line (the sign
+/// of `d`, see the module docs). `None` for a line at infinity or a zero vector.
+pub fn to_point_direction(l: &Vector6<f64>) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    let (d, m) = direction_moment(l);
+    let dn = d.norm();
+    if !(dn > MIN_RELATIVE_DIRECTION * m.norm()) || !dn.is_finite() {
+        return None;
+    }
+    Some((d.cross(&m) / (dn * dn), d / dn))
+}
+
+/// Two world points `A`, `B` of the line, one unit apart, with `from_points(A, B)` a positive multiple
+/// of `l` when `l` satisfies eq. 4: `B` is the point closest to the origin and `A = B + d/‖d‖`.
+pub fn to_points(l: &Vector6<f64>) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    to_point_direction(l).map(|(p, d)| (p + d, p))
+}
+
+/// The Plücker camera of eq. 7 for a 3x4 point camera `P`: rows `p₂∧p₃`, `p₃∧p₁`, `p₁∧p₂`, so that
+/// `P_𝓛 𝓛(A, B) = (P A) × (P B)` (eq. 6 with `λ = 1`). Its entries are quadratic in `P`.
+pub fn camera(p: &Matrix3x4<f64>) -> PluckerCamera {
+    let row = |i: usize| -> Vector4<f64> { p.row(i).transpose() };
+    let (p1, p2, p3) = (row(0), row(1), row(2));
+    let mut out = PluckerCamera::zeros();
+    out.set_row(0, &from_homogeneous_points(&p2, &p3).transpose());
+    out.set_row(1, &from_homogeneous_points(&p3, &p1).transpose());
+    out.set_row(2, &from_homogeneous_points(&p1, &p2).transpose());
+    out
+}
+
+/// Eq. 6: the homogeneous image line `P_𝓛 𝓛` of the 3-D line `l` seen by camera `p`.
+pub fn project(p: &Matrix3x4<f64>, l: &Vector6<f64>) -> Vector3<f64> {
+    camera(p) * l
+}
+
+/// The vector satisfying eq. 4 nearest to `l` in the Euclidean norm of ℝ⁶.
+///
+/// In terms of `(d, m)` (an isometry of ℝ⁶) the stationarity conditions of
+/// `min ‖d' − d‖² + ‖m' − m‖²` s.t. `d'·m' = 0` give `d' = d − μ m'`, `m' = m − μ d'`, i.e.
+/// `d' = (d − μ m)/(1 − μ²)`, `m' = (m − μ d)/(1 − μ²)`, and `d'·m' = 0` is the quadratic
+/// `c μ² − s μ + c = 0` with `c = d·m`, `s = ‖d‖² + ‖m‖²`, whose root of modulus < 1 is taken.
+pub fn nearest_line(l: &Vector6<f64>) -> Vector6<f64> {
+    let (d, m) = direction_moment(l);
+    let c = d.dot(&m);
+    let s = d.norm_squared() + m.norm_squared();
+    if c == 0.0 || s == 0.0 {
+        return *l;
+    }
+    // Stable root: μ = 2c / (s + sqrt(s² − 4c²)); |2c| ≤ s by Cauchy-Schwarz, so |μ| ≤ 1.
+    let mu = 2.0 * c / (s + (s * s - 4.0 * c * c).max(0.0).sqrt());
+    let k = 1.0 / (1.0 - mu * mu).max(f64::MIN_POSITIVE);
+    from_direction_moment(&((d - mu * m) * k), &((m - mu * d) * k))
+}
+
+/// The orthonormal representation of a 3-D line (Bartoli & Sturm 2005): a rotation `U` and an angle
+/// `φ ∈ [0, π/2)` with `d = cos φ · U e₁`, `m = sin φ · U e₂` (up to the common scale of `(d, m)`).
+/// The distance of the line from the origin is `tan φ`. [`Self::retract`] moves it by a 4-vector
+/// `(ω, δφ)`: `U ← U exp([ω]ₓ)`, `φ ← φ + δφ`, a minimal update that keeps eq. 4 exactly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrthonormalLine {
+    /// Columns: the unit direction, the unit moment, and their cross product.
+    pub u: Matrix3<f64>,
+    /// `atan(‖m‖ / ‖d‖)`.
+    pub phi: f64,
+}
+
+impl OrthonormalLine {
+    /// The representation of a line given by Plücker coordinates; `None` for a line at infinity.
+    /// A line through the origin (`m = 0`) gets an arbitrary unit moment direction orthogonal to `d`.
+    pub fn from_plucker(l: &Vector6<f64>) -> Option<OrthonormalLine> {
+        let l = nearest_line(l);
+        let (d, m) = direction_moment(&l);
+        let (dn, mn) = (d.norm(), m.norm());
+        if !(dn > MIN_RELATIVE_DIRECTION * mn) || !dn.is_finite() {
+            return None;
+        }
+        let e1 = d / dn;
+        let e2 = if mn > 0.0 { m / mn } else { any_orthogonal(&e1) };
+        // Re-orthogonalise e2 against e1 (eq. 4 holds to rounding only).
+        let e2 = (e2 - e1 * e1.dot(&e2)).normalize();
+        let u = Matrix3::from_columns(&[e1, e2, e1.cross(&e2)]);
+        Some(OrthonormalLine { u, phi: mn.atan2(dn) })
+    }
+
+    /// Plücker coordinates `(d, m) = (cos φ U e₁, sin φ U e₂)` (unit norm in ℝ⁶).
+    pub fn to_plucker(&self) -> Vector6<f64> {
+        let (c, s) = (self.phi.cos(), self.phi.sin());
+        from_direction_moment(&(self.u.column(0) * c), &(self.u.column(1) * s))
+    }
+
+    /// The line moved by the tangent step `δ = (ω₁, ω₂, ω₃, δφ)`.
+    pub fn retract(&self, delta: &Vector4<f64>) -> OrthonormalLine {
+        let r = Rotation3::new(Vector3::new(delta[0], delta[1], delta[2]));
+        OrthonormalLine {
+            u: self.u * r.matrix(),
+            phi: self.phi + delta[3],
+        }
+    }
+}
+
+/// A unit vector orthogonal to the unit vector `v`.
+fn any_orthogonal(v: &Vector3<f64>) -> Vector3<f64> {
+    let axis = if v.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    v.cross(&axis).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    fn random_camera(rng: &mut Rng) -> Matrix3x4<f64> {
+        let k = Matrix3::new(800.0, 3.0, 320.0, 0.0, 780.0, 240.0, 0.0, 0.0, 1.0);
+        let r = rng.rotation();
+        let t = Vector3::new(rng.normal(), rng.normal(), 6.0 + rng.normal());
+        let mut rt = Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+        rt.set_column(3, &t);
+        k * rt * rng.uniform_in(-2.0, 2.0)
+    }
+
+    fn random_point(rng: &mut Rng) -> Vector3<f64> {
+        Vector3::new(rng.normal(), rng.normal(), rng.normal())
+    }
+
+    #[test]
+    fn coordinates_satisfy_the_constraint_and_do_not_depend_on_the_points() {
+        let mut rng = Rng::new(11);
+        for _ in 0..50 {
+            let (a, b) = (random_point(&mut rng), random_point(&mut rng));
+            let l = from_points(&a, &b);
+            assert!(constraint(&l).abs() < 1e-12 * l.norm_squared());
+            // Eq. 2: L = A Bᵀ − B Aᵀ, read back through eq. 3.
+            let (ah, bh) = (a.push(1.0), b.push(1.0));
+            assert!((to_matrix(&l) - (ah * bh.transpose() - bh * ah.transpose())).norm() < 1e-12 * l.norm());
+            // Any two other points of the line give the same coordinates up to scale: here s − t.
+            let (s, t) = (rng.normal(), rng.normal());
+            let l2 = from_points(&(a + s * (a - b)), &(a + t * (a - b)));
+            assert!((l2 - l * (s - t)).norm() < 1e-10 * l.norm() * (1.0 + (s - t).abs()));
+            let (d, m) = direction_moment(&l);
+            assert!((d - (a - b)).norm() < 1e-12 && (m - a.cross(&d)).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn transformation_matches_transforming_the_points() {
+        let mut rng = Rng::new(12);
+        let h = Matrix4::from_fn(|_, _| rng.normal());
+        let (a, b) = (random_point(&mut rng).push(1.0), random_point(&mut rng).push(1.0));
+        let direct = from_homogeneous_points(&(h * a), &(h * b));
+        assert!((transform(&h, &from_homogeneous_points(&a, &b)) - direct).norm() < 1e-12 * direct.norm());
+    }
+
+    #[test]
+    fn plucker_camera_maps_to_the_image_line() {
+        let mut rng = Rng::new(13);
+        for _ in 0..50 {
+            let p = random_camera(&mut rng);
+            let (a, b) = (random_point(&mut rng), random_point(&mut rng));
+            let (pa, pb) = (p * a.push(1.0), p * b.push(1.0));
+            let expected = pa.cross(&pb);
+            let got = project(&p, &from_points(&a, &b));
+            assert!((got - expected).norm() < 1e-10 * expected.norm(), "{got} vs {expected}");
+            // Every point of the 3-D line projects onto the image line.
+            for s in [-3.0, 0.5, 7.0] {
+                let x = p * (a + s * (b - a)).push(1.0);
+                assert!(got.dot(&x).abs() < 1e-10 * got.norm() * x.norm());
+            }
+        }
+    }
+
+    #[test]
+    fn point_direction_and_two_point_forms_round_trip() {
+        let mut rng = Rng::new(14);
+        for _ in 0..50 {
+            let (a, b) = (random_point(&mut rng), random_point(&mut rng));
+            let l = from_points(&a, &b) * rng.uniform_in(0.1, 3.0);
+            let (p, d) = to_point_direction(&l).unwrap();
+            assert!((d - (a - b).normalize()).norm() < 1e-12);
+            // p is on the line and orthogonal to it (closest to the origin).
+            assert!((p - a).cross(&d).norm() < 1e-12 && p.dot(&d).abs() < 1e-12);
+            let back = from_point_direction(&p, &d);
+            assert!((back.normalize() - l.normalize()).norm() < 1e-12);
+            let (pa, pb) = to_points(&l).unwrap();
+            assert!((from_points(&pa, &pb).normalize() - l.normalize()).norm() < 1e-12);
+        }
+        let at_infinity = from_homogeneous_points(&Vector4::new(1.0, 0.0, 0.0, 0.0), &Vector4::new(0.0, 1.0, 0.0, 0.0));
+        assert!(to_point_direction(&at_infinity).is_none());
+    }
+
+    #[test]
+    fn nearest_line_is_a_line_and_the_nearest_one() {
+        let mut rng = Rng::new(15);
+        for _ in 0..100 {
+            let v = Vector6::from_fn(|_, _| rng.normal());
+            let n = nearest_line(&v);
+            assert!(constraint(&n).abs() < 1e-12 * n.norm_squared());
+            // No random line near n is closer to v (sampled check of optimality).
+            for _ in 0..20 {
+                let o = OrthonormalLine::from_plucker(&n).unwrap();
+                let delta = Vector4::from_fn(|_, _| 0.05 * rng.normal());
+                let other = o.retract(&delta).to_plucker() * n.norm() * rng.uniform_in(0.9, 1.1);
+                assert!((other - v).norm() >= (n - v).norm() - 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn orthonormal_representation_round_trips_and_keeps_the_constraint() {
+        let mut rng = Rng::new(16);
+        for _ in 0..50 {
+            let l = from_points(&random_point(&mut rng), &random_point(&mut rng));
+            let o = OrthonormalLine::from_plucker(&l).unwrap();
+            assert!((o.to_plucker() - l.normalize()).norm() < 1e-12);
+            let moved = o.retract(&Vector4::from_fn(|_, _| rng.normal())).to_plucker();
+            assert!(constraint(&moved).abs() < 1e-14);
+            let (p, _) = to_point_direction(&l).unwrap();
+            assert!((o.phi.tan() - p.norm()).abs() < 1e-10 * (1.0 + p.norm()));
+        }
+        // A line through the origin.
+        let o = OrthonormalLine::from_plucker(&from_points(&Vector3::zeros(), &Vector3::new(1.0, 2.0, 3.0))).unwrap();
+        assert_eq!(o.phi, 0.0);
+        assert!((o.u.transpose() * o.u - Matrix3::identity()).norm() < 1e-12);
+    }
+}
