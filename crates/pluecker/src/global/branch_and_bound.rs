@@ -1,0 +1,374 @@
+//! Best-first branch and bound over an axis-aligned box (Josephson & Kahl 2008, section 4).
+//!
+//! The problem supplies a [`BoundingOracle`]: for a sub-box ([`Region`]) of the search space it returns
+//! a lower bound of the objective over the admissible points of that region (a convex relaxation,
+//! section 4.1), the relaxation's minimiser, and optionally a candidate solution whose cost is an
+//! upper bound (the paper's local step, section 5). The box coordinates are the problem's choice —
+//! the denominators of the fractions, line parameters (section 4.2), coordinates of a point — and
+//! their number need not be the number of views.
+//!
+//! The search always expands the open region with the least lower bound; its bound is the global
+//! lower bound (every admissible point lies in an open region, in a pruned one whose bound is
+//! recorded, or in a region proved empty). It stops when `(upper − lower) ≤ max_relative_gap · upper`
+//! or after `max_nodes` bound computations. Splitting (section 4.2): the oracle picks the axis and
+//! the position ([`BoundingOracle::split`]; by default the widest axis at the relaxed minimiser,
+//! kept inside the middle half of the interval so that every split shrinks the region).
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// An axis-aligned box `[lower, upper]` in `ℝᵈ`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Region {
+    /// Lower corner.
+    pub lower: Vec<f64>,
+    /// Upper corner.
+    pub upper: Vec<f64>,
+}
+
+impl Region {
+    /// The box `[lower, upper]`.
+    pub fn new(lower: Vec<f64>, upper: Vec<f64>) -> Region {
+        Region { lower, upper }
+    }
+
+    /// The dimension `d`.
+    pub fn dim(&self) -> usize {
+        self.lower.len()
+    }
+
+    /// The width along axis `k`.
+    pub fn width(&self, k: usize) -> f64 {
+        self.upper[k] - self.lower[k]
+    }
+
+    /// The centre.
+    pub fn centre(&self) -> Vec<f64> {
+        self.lower.iter().zip(&self.upper).map(|(a, b)| 0.5 * (a + b)).collect()
+    }
+
+    /// The two halves of the box cut at `x_axis = at`.
+    pub fn split(&self, axis: usize, at: f64) -> (Region, Region) {
+        let mut left = self.clone();
+        let mut right = self.clone();
+        left.upper[axis] = at;
+        right.lower[axis] = at;
+        (left, right)
+    }
+
+    /// `at` moved into the middle half `[lo + w/4, hi − w/4]` of axis `k`.
+    pub fn central(&self, k: usize, at: f64) -> f64 {
+        let quarter = 0.25 * self.width(k);
+        at.clamp(self.lower[k] + quarter, self.upper[k] - quarter)
+    }
+}
+
+/// What the oracle learnt about one region.
+#[derive(Debug, Clone)]
+pub enum Bound<C> {
+    /// The region holds no admissible point (proved): it is discarded.
+    Empty {
+        /// Conic-solver iterations spent.
+        solver_iterations: usize,
+    },
+    /// A lower bound over the region's admissible points.
+    Bounded {
+        /// The bound (valid, not merely approximate: see [`crate::global::socp`]).
+        lower: f64,
+        /// The minimiser of the relaxation, a point of the region (a splitting hint).
+        relaxed_minimizer: Vec<f64>,
+        /// A solution found from the relaxed minimiser, with its true cost (an upper bound).
+        candidate: Option<(f64, C)>,
+        /// Conic-solver iterations spent.
+        solver_iterations: usize,
+    },
+    /// The bound could not be computed (a solver failure): the region keeps its parent's bound and
+    /// is split further.
+    Failed {
+        /// Conic-solver iterations spent.
+        solver_iterations: usize,
+    },
+}
+
+/// The problem side of branch and bound.
+pub trait BoundingOracle {
+    /// A solution of the problem (e.g. a 3-D point).
+    type Candidate: Clone;
+
+    /// A lower bound of the objective over `region` (and a candidate when one is cheap to find).
+    fn bound(&mut self, region: &Region) -> Bound<Self::Candidate>;
+
+    /// The axis to split and the position. Default: the widest axis, at the relaxed minimiser
+    /// moved into the middle half of the interval (or the midpoint without a minimiser).
+    fn split(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
+        let axis = (0..region.dim())
+            .max_by(|&a, &b| region.width(a).total_cmp(&region.width(b)))
+            .unwrap_or(0);
+        let at = relaxed_minimizer.map_or(0.5 * (region.lower[axis] + region.upper[axis]), |m| m[axis]);
+        (axis, region.central(axis, at))
+    }
+}
+
+/// Options of [`branch_and_bound`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchAndBoundOptions {
+    /// Stop when `upper − lower ≤ max_relative_gap · upper`. Default `1e-3`.
+    pub max_relative_gap: f64,
+    /// Stop after this many bound computations (the root included). Default 2000.
+    pub max_nodes: usize,
+    /// A bound known a priori for every point (e.g. `0` for a sum of squares); it replaces the
+    /// bound of regions whose relaxation failed. Default `−∞`.
+    pub trivial_lower_bound: f64,
+}
+
+impl Default for BranchAndBoundOptions {
+    fn default() -> Self {
+        BranchAndBoundOptions {
+            max_relative_gap: 1e-3,
+            max_nodes: 2000,
+            trivial_lower_bound: f64::NEG_INFINITY,
+        }
+    }
+}
+
+/// What [`branch_and_bound`] found.
+#[derive(Debug, Clone)]
+pub struct BranchAndBoundResult<C> {
+    /// The best solution and its cost (the incumbent passed in, or a better candidate).
+    pub best: Option<(f64, C)>,
+    /// A valid lower bound of the objective over the whole box (`+∞` when the box was proved empty).
+    pub lower_bound: f64,
+    /// True when the gap closed.
+    pub converged: bool,
+    /// Bound computations (root included).
+    pub nodes: usize,
+    /// Regions whose bound computation failed.
+    pub failed_nodes: usize,
+    /// Conic-solver iterations, summed.
+    pub solver_iterations: usize,
+}
+
+struct Open {
+    lower: f64,
+    region: Region,
+    hint: Option<Vec<f64>>,
+}
+
+impl PartialEq for Open {
+    fn eq(&self, other: &Self) -> bool {
+        self.lower.total_cmp(&other.lower) == Ordering::Equal
+    }
+}
+impl Eq for Open {}
+impl PartialOrd for Open {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Open {
+    // A max-heap on the reversed order: the least lower bound first.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.lower.total_cmp(&self.lower)
+    }
+}
+
+fn gap_closed(upper: f64, lower: f64, gap: f64) -> bool {
+    upper - lower <= gap * upper.abs()
+}
+
+/// The state of one search.
+struct Search<C> {
+    heap: BinaryHeap<Open>,
+    best: Option<(f64, C)>,
+    /// Least bound of the regions discarded because they could not improve the incumbent by more
+    /// than the gap: they still count in the global lower bound.
+    pruned_floor: f64,
+    nodes: usize,
+    failed_nodes: usize,
+    solver_iterations: usize,
+    gap: f64,
+}
+
+impl<C> Search<C> {
+    fn upper(&self) -> f64 {
+        self.best.as_ref().map_or(f64::INFINITY, |b| b.0)
+    }
+
+    /// Bounds `region` and queues it unless it is empty or cannot improve on the incumbent.
+    fn evaluate<O: BoundingOracle<Candidate = C>>(&mut self, oracle: &mut O, region: Region, parent_lower: f64) {
+        self.nodes += 1;
+        let (lower, hint) = match oracle.bound(&region) {
+            Bound::Empty { solver_iterations } => {
+                self.solver_iterations += solver_iterations;
+                return;
+            }
+            Bound::Failed { solver_iterations } => {
+                self.solver_iterations += solver_iterations;
+                self.failed_nodes += 1;
+                (parent_lower, None)
+            }
+            Bound::Bounded {
+                lower,
+                relaxed_minimizer,
+                candidate,
+                solver_iterations,
+            } => {
+                self.solver_iterations += solver_iterations;
+                if let Some((cost, c)) = candidate {
+                    if cost < self.upper() {
+                        self.best = Some((cost, c));
+                    }
+                }
+                // The region lies inside its parent, whose bound holds for it too.
+                (lower.max(parent_lower), Some(relaxed_minimizer))
+            }
+        };
+        let upper = self.upper();
+        if lower >= upper {
+            return;
+        }
+        if gap_closed(upper, lower, self.gap) {
+            self.pruned_floor = self.pruned_floor.min(lower);
+            return;
+        }
+        self.heap.push(Open { lower, region, hint });
+    }
+
+    fn finish(self, lower_bound: f64, converged: bool) -> BranchAndBoundResult<C> {
+        BranchAndBoundResult {
+            best: self.best,
+            lower_bound,
+            converged,
+            nodes: self.nodes,
+            failed_nodes: self.failed_nodes,
+            solver_iterations: self.solver_iterations,
+        }
+    }
+}
+
+/// Minimises over `root` by best-first branch and bound, starting from the optional `incumbent`.
+pub fn branch_and_bound<O: BoundingOracle>(
+    oracle: &mut O,
+    root: Region,
+    incumbent: Option<(f64, O::Candidate)>,
+    opts: &BranchAndBoundOptions,
+) -> BranchAndBoundResult<O::Candidate> {
+    let mut search = Search {
+        heap: BinaryHeap::new(),
+        best: incumbent,
+        pruned_floor: f64::INFINITY,
+        nodes: 0,
+        failed_nodes: 0,
+        solver_iterations: 0,
+        gap: opts.max_relative_gap,
+    };
+    search.evaluate(oracle, root, opts.trivial_lower_bound);
+    loop {
+        let upper = search.upper();
+        // Drop regions the incumbent has overtaken since they were queued.
+        while search.heap.peek().is_some_and(|top| top.lower >= upper) {
+            search.heap.pop();
+        }
+        let open_lower = search.heap.peek().map_or(f64::INFINITY, |top| top.lower);
+        let lower = open_lower.min(search.pruned_floor).min(upper);
+        if search.heap.is_empty() || gap_closed(upper, lower, opts.max_relative_gap) {
+            return search.finish(lower, true);
+        }
+        if search.nodes >= opts.max_nodes {
+            return search.finish(lower, false);
+        }
+        let open = search.heap.pop().expect("the heap is not empty");
+        let (axis, at) = oracle.split(&open.region, open.hint.as_deref());
+        let (left, right) = open.region.split(axis, at);
+        search.evaluate(oracle, left, open.lower);
+        search.evaluate(oracle, right, open.lower);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `f(x) = Σ (x_k² − 1)² + τ_k x_k` with `τ = (0.1, 0.2, 0.3)`: eight local minima near the sign
+    /// patterns of ±1, the global one near `(−1, −1, −1)`; bounded by interval arithmetic.
+    struct DoubleWell {
+        calls: usize,
+    }
+
+    const TILT: [f64; 3] = [0.1, 0.2, 0.3];
+
+    fn double_well(x: &[f64]) -> f64 {
+        x.iter().zip(TILT).map(|(v, t)| (v * v - 1.0).powi(2) + t * v).sum()
+    }
+
+    impl BoundingOracle for DoubleWell {
+        type Candidate = Vec<f64>;
+        fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
+            self.calls += 1;
+            let mut lower = 0.0;
+            for k in 0..region.dim() {
+                let (a, b) = (region.lower[k], region.upper[k]);
+                let sq_lo = if a <= 0.0 && b >= 0.0 { 0.0 } else { (a * a).min(b * b) };
+                let sq_hi = (a * a).max(b * b);
+                let (g_lo, g_hi) = (sq_lo - 1.0, sq_hi - 1.0);
+                lower += if g_lo <= 0.0 && g_hi >= 0.0 {
+                    0.0
+                } else {
+                    (g_lo * g_lo).min(g_hi * g_hi)
+                };
+                lower += TILT[k] * a;
+            }
+            let centre = region.centre();
+            let cost = double_well(&centre);
+            Bound::Bounded {
+                lower,
+                relaxed_minimizer: centre.clone(),
+                candidate: Some((cost, centre)),
+                solver_iterations: 1,
+            }
+        }
+    }
+
+    #[test]
+    fn finds_the_global_minimum_of_a_tilted_double_well_with_a_valid_bound() {
+        let mut oracle = DoubleWell { calls: 0 };
+        let root = Region::new(vec![-2.0, -2.0, -2.0], vec![2.5, 2.5, 2.5]);
+        let opts = BranchAndBoundOptions {
+            max_relative_gap: 1e-3,
+            max_nodes: 200_000,
+            trivial_lower_bound: f64::NEG_INFINITY,
+        };
+        let result = branch_and_bound(&mut oracle, root, None, &opts);
+        let (cost, x) = result.best.clone().unwrap();
+        assert!(result.converged, "{} nodes", result.nodes);
+        // The true minimum: each x_k solves 4x(x²−1) + τ_k = 0 near −1 (Newton's method).
+        let truth: f64 = TILT
+            .iter()
+            .map(|&t| {
+                let mut v: f64 = -1.0;
+                for _ in 0..50 {
+                    v -= (4.0 * v * (v * v - 1.0) + t) / (12.0 * v * v - 4.0);
+                }
+                (v * v - 1.0).powi(2) + t * v
+            })
+            .sum();
+        assert!(result.lower_bound <= truth + 1e-12, "{} > {truth}", result.lower_bound);
+        assert!(cost >= truth && cost - result.lower_bound <= 1e-3 * cost.abs() + 1e-12);
+        assert!(x.iter().all(|v| (v + 1.0).abs() < 0.1), "{x:?}");
+        assert_eq!(result.nodes, oracle.calls);
+    }
+
+    #[test]
+    fn node_cap_returns_an_honest_bound() {
+        let mut oracle = DoubleWell { calls: 0 };
+        let root = Region::new(vec![-2.0; 3], vec![2.5; 3]);
+        let opts = BranchAndBoundOptions {
+            max_relative_gap: 1e-9,
+            max_nodes: 15,
+            trivial_lower_bound: f64::NEG_INFINITY,
+        };
+        let result = branch_and_bound(&mut oracle, root, None, &opts);
+        assert!(!result.converged && result.nodes <= 16);
+        assert!(result.lower_bound <= result.best.unwrap().0);
+    }
+}
