@@ -39,9 +39,19 @@ fn problem(kind: SceneKind, seed: u64, lines: bool) -> (Scene, Correspondences) 
     (scene, corr)
 }
 
+fn options() -> PoseOptions {
+    let mut o = PoseOptions::default();
+    let env = |n: &str| std::env::var(n).ok().map(|v| v.parse::<f64>().unwrap());
+    if let Some(v) = env("R0") { o.trust_region.initial_radius = v; }
+    if let Some(v) = env("STEP") { o.trust_region.stopping.step_tolerance = v; }
+    if let Some(v) = env("RR0") { o.refinement.initial_radius = v; }
+    if let Some(v) = env("RSTEP") { o.refinement.stopping.step_tolerance = v; }
+    o
+}
+
 fn time(kind: SceneKind, calls: usize, lines: bool) {
     let problems: Vec<_> = (0..200).map(|i| problem(kind, i, lines)).collect();
-    let opts = PoseOptions::default();
+    let opts = options();
     let started = std::time::Instant::now();
     let mut iterations = [0usize; 2];
     for k in 0..calls {
@@ -84,7 +94,7 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
     let mut iterations = [0usize; 2];
     for seed in 0..scenes {
         let (scene, corr) = problem(kind, seed, lines);
-        let r = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
+        let r = estimate_pose(&scene.camera, &corr, &options()).unwrap();
         let c = &scene.correspondences;
         let cost = ReprojectionCost::new(scene.camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
         let cov = pose_covariance(&cost, &(scene.rotation, scene.translation), 1.0).unwrap();

@@ -33,33 +33,90 @@ fn step_with_decrease<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f64, N
     Step { d, mu, predicted_decrease }
 }
 
+/// The Cholesky factor `L` (lower triangular, `L Lᵀ = H + μI`) of a small dense matrix, in plain arrays:
+/// the subproblem factorises an `N ≤ 8` matrix several times per iteration, where nalgebra's general
+/// decomposition spends more on bookkeeping than on arithmetic. Reads the lower triangle of `H`.
+struct Cholesky<const N: usize> {
+    l: [[f64; N]; N],
+}
+
+impl<const N: usize> Cholesky<N> {
+    /// `None` unless `H + μI` is positive definite (every pivot positive and finite).
+    fn of(h: &SMatrix<f64, N, N>, mu: f64) -> Option<Self> {
+        let mut l = [[0.0; N]; N];
+        for j in 0..N {
+            let mut pivot = h[(j, j)] + mu;
+            for k in 0..j {
+                pivot -= l[j][k] * l[j][k];
+            }
+            if !(pivot > 0.0 && pivot.is_finite()) {
+                return None;
+            }
+            let ljj = pivot.sqrt();
+            l[j][j] = ljj;
+            let inv = 1.0 / ljj;
+            for i in j + 1..N {
+                let mut v = h[(i, j)];
+                for k in 0..j {
+                    v -= l[i][k] * l[j][k];
+                }
+                l[i][j] = v * inv;
+            }
+        }
+        Some(Cholesky { l })
+    }
+
+    /// `L⁻¹ b` (forward substitution).
+    fn solve_lower(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut y = *b;
+        for i in 0..N {
+            let mut v = y[i];
+            for k in 0..i {
+                v -= self.l[i][k] * y[k];
+            }
+            y[i] = v / self.l[i][i];
+        }
+        y
+    }
+
+    /// `(L Lᵀ)⁻¹ b`.
+    fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut x = self.solve_lower(b);
+        for i in (0..N).rev() {
+            let mut v = x[i];
+            for k in i + 1..N {
+                v -= self.l[k][i] * x[k];
+            }
+            x[i] = v / self.l[i][i];
+        }
+        x
+    }
+}
+
 /// Hebden's algorithm (Appendix A, steps 1.1-1.6) for a symmetric positive-definite `H`.
 ///
 /// First tries the unconstrained step `H d = −g` (section 4, `μ* = 0`); if `‖d‖ ≥ δ` iterates
 /// `μ ← μ + (‖p‖/‖q‖)² (‖p‖ − δ)/δ` (eq. 34) with `RᵀR = H + μI`, `RᵀR p = −g`, `Rᵀ q = p`.
 /// Returns `None` when `H + μI` is not positive definite (the caller should not pass such an `H`).
 pub fn hebden_step<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f64, N>, delta: f64) -> Option<Step<N>> {
-    let chol = h.cholesky()?;
+    let mut chol = Cholesky::of(h, 0.0)?;
     let d = -chol.solve(g);
     if d.norm() <= delta {
         return Some(step_with_decrease(h, g, d, 0.0));
     }
     let mut mu = 0.0;
     let mut p = d;
-    let mut l = chol.l();
     for _ in 0..MAX_SECULAR_ITERATIONS {
         let pn = p.norm();
         if (pn - delta).abs() <= BOUNDARY_TOLERANCE * delta {
             break;
         }
         // Rᵀ q = p with R = Lᵀ, i.e. L q = p.
-        let q = l.solve_lower_triangular(&p)?;
+        let q = chol.solve_lower(&p);
         mu += (pn / q.norm()).powi(2) * (pn - delta) / delta;
         mu = mu.max(0.0);
-        let shifted = h + SMatrix::<f64, N, N>::identity() * mu;
-        let c = shifted.cholesky()?;
-        p = -c.solve(g);
-        l = c.l();
+        chol = Cholesky::of(h, mu)?;
+        p = -chol.solve(g);
     }
     Some(step_with_decrease(h, g, p, mu))
 }

@@ -34,22 +34,41 @@ fn check_finite<'a, I: IntoIterator<Item = &'a f64>>(what: &str, rows: impl Iter
     Ok(())
 }
 
-/// The principal axes of a point set: its centroid, the standard deviations along the axes (largest
-/// first) and the unit axis of least spread.
-pub(crate) fn principal_axes(points: &[Vector3<f64>]) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
-    let n = points.len().max(1) as f64;
-    let c = points.iter().sum::<Vector3<f64>>() / n;
-    let scatter: Matrix3<f64> = points.iter().map(|p| (p - c) * (p - c).transpose()).sum();
-    let eig = scatter.symmetric_eigen();
-    let least_axis = eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned();
-    let mut s = eig.eigenvalues.map(|v| v.max(0.0).sqrt());
-    s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
-    (c, s, least_axis)
+/// The shape of a point set: centroid, RMS distance to it, and principal axes.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PointSpread {
+    /// Mean of the points.
+    pub centroid: Vector3<f64>,
+    /// Root-mean-square distance to the centroid.
+    pub rms_radius: f64,
+    /// Standard deviations along the principal axes, largest first.
+    pub spread: Vector3<f64>,
+    /// Unit axis of least spread.
+    pub least_axis: Vector3<f64>,
 }
 
-/// Standard deviations of `points` along their principal axes, largest first.
-fn spread(points: &[Vector3<f64>]) -> Vector3<f64> {
-    principal_axes(points).1
+/// The centroid, RMS radius and principal axes of a (non-empty) point set.
+pub(crate) fn principal_axes<'p>(points: impl Iterator<Item = &'p Vector3<f64>> + Clone) -> PointSpread {
+    let n = points.clone().count().max(1) as f64;
+    let centroid = points.clone().fold(Vector3::zeros(), |a, p| a + p) / n;
+    let mut m = [0.0; 6]; // xx, xy, xz, yy, yz, zz
+    for p in points {
+        let d = p - centroid;
+        for (k, (i, j)) in [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)].into_iter().enumerate() {
+            m[k] += d[i] * d[j];
+        }
+    }
+    let scatter = Matrix3::new(m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]);
+    let eig = scatter.symmetric_eigen();
+    let least_axis = eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned();
+    let mut spread = eig.eigenvalues.map(|v| v.max(0.0).sqrt());
+    spread.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+    PointSpread { centroid, rms_radius: ((m[0] + m[3] + m[5]) / n).sqrt(), spread, least_axis }
+}
+
+/// Every object point of `c`: the points, then both endpoints of every segment.
+pub(crate) fn object_points(c: &Correspondences) -> impl Iterator<Item = &Vector3<f64>> + Clone {
+    c.points3d.iter().chain(c.lines3d.iter().flat_map(|s| s.iter()))
 }
 
 impl Correspondences {
@@ -66,6 +85,12 @@ impl Correspondences {
     /// Checks shapes, finiteness, zero-length segments, counts for `method`, and the degenerate
     /// configurations no method can solve (all points collinear; all lines parallel or concurrent).
     pub fn validate(&self, method: Method) -> Result<()> {
+        self.validated(method).map(|_| ())
+    }
+
+    /// [`Correspondences::validate`], returning the shape of all object points (points and segment
+    /// endpoints), which the checks need and the estimators use again.
+    pub(crate) fn validated(&self, method: Method) -> Result<PointSpread> {
         if self.points2d.len() != self.points3d.len() {
             return Err(Error::Shape {
                 what: "points2d / points3d".into(),
@@ -105,7 +130,7 @@ impl Correspondences {
                 if np < 6 {
                     return Err(too_few("at least 6 points (lines are not used)"));
                 }
-                let s = spread(&self.points3d);
+                let s = principal_axes(self.points3d.iter()).spread;
                 if s[2] <= DEGENERACY_TOLERANCE * s[0] {
                     return Err(Error::Degenerate {
                         what: "points3d are coplanar; the linear (Faugeras-Toscani) method needs non-coplanar points"
@@ -124,16 +149,14 @@ impl Correspondences {
                 }
             }
         }
-        if nl == 0 {
-            let s = spread(&self.points3d);
-            if s[1] <= DEGENERACY_TOLERANCE * s[0] {
-                return Err(Error::Degenerate { what: "all points3d are collinear".into() });
-            }
+        let shape = principal_axes(object_points(self));
+        if nl == 0 && shape.spread[1] <= DEGENERACY_TOLERANCE * shape.spread[0] {
+            return Err(Error::Degenerate { what: "all points3d are collinear".into() });
         }
         if np == 0 {
             self.check_line_configuration()?;
         }
-        Ok(())
+        Ok(shape)
     }
 
     fn check_line_configuration(&self) -> Result<()> {
@@ -182,11 +205,17 @@ impl Conditioning {
 
     /// Centroid and RMS radius of every 3-D point and segment endpoint.
     pub fn of(c: &Correspondences) -> Self {
-        let all: Vec<Vector3<f64>> = c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
-        let n = all.len().max(1) as f64;
-        let centre = all.iter().sum::<Vector3<f64>>() / n;
-        let rms = (all.iter().map(|p| (p - centre).norm_squared()).sum::<f64>() / n).sqrt();
+        let all = object_points(c);
+        let n = all.clone().count().max(1) as f64;
+        let centre = all.clone().fold(Vector3::zeros(), |a, p| a + p) / n;
+        let rms = (all.map(|p| (p - centre).norm_squared()).sum::<f64>() / n).sqrt();
         Conditioning { centre, scale: if rms > 0.0 { rms } else { 1.0 } }
+    }
+
+    /// The conditioning of a point set whose shape is known.
+    pub(crate) fn of_shape(shape: &PointSpread) -> Self {
+        let rms = shape.rms_radius;
+        Conditioning { centre: shape.centroid, scale: if rms > 0.0 { rms } else { 1.0 } }
     }
 
     /// World → conditioned.
@@ -206,11 +235,14 @@ impl Conditioning {
 
     /// The correspondences with their 3-D side conditioned.
     pub fn correspondences(&self, c: &Correspondences) -> Correspondences {
+        // One division, then products: the same map as `apply` to within an ulp.
+        let inv = 1.0 / self.scale;
+        let apply = |x: &Vector3<f64>| (x - self.centre) * inv;
         Correspondences {
             points2d: c.points2d.clone(),
-            points3d: c.points3d.iter().map(|p| self.apply(p)).collect(),
+            points3d: c.points3d.iter().map(apply).collect(),
             lines2d: c.lines2d.clone(),
-            lines3d: c.lines3d.iter().map(|s| [self.apply(&s[0]), self.apply(&s[1])]).collect(),
+            lines3d: c.lines3d.iter().map(|s| [apply(&s[0]), apply(&s[1])]).collect(),
         }
     }
 }
@@ -222,11 +254,16 @@ pub fn constraints(
     c: &Correspondences,
     points_as_lines: bool,
 ) -> Result<(Vec<PointConstraint>, Vec<LineConstraint>)> {
+    // `Camera::pixel_to_normalized` with the two divisions replaced by products (hot with many points).
+    let (inv_fx, inv_fy) = (1.0 / camera.fx, 1.0 / camera.fy);
     let points = c
         .points2d
         .iter()
         .zip(&c.points3d)
-        .map(|(u, x)| PointConstraint { image: camera.pixel_to_normalized(u), object: *x })
+        .map(|(u, x)| {
+            let y = (u.y - camera.cy) * inv_fy;
+            PointConstraint { image: Vector2::new((u.x - camera.cx - camera.skew * y) * inv_fx, y), object: *x }
+        })
         .collect();
     let (extra2d, extra3d) = if points_as_lines { lines_from_point_pairs(&c.points2d, &c.points3d) } else { (vec![], vec![]) };
     let lines = c

@@ -1,10 +1,10 @@
 //! The pose pipeline: validation → algebraic estimator (or linear baseline) → reprojection refinement.
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
-use super::correspondences::{constraints, principal_axes, Conditioning, Correspondences};
+use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::reprojection::{Pose, ReprojectionCost};
+use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::{Method, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
 use crate::error::Result;
@@ -42,9 +42,9 @@ fn user_start(opts: &PoseOptions, cond: &Conditioning) -> Option<DualQuaternion>
 }
 
 /// What the restart logic needs to know about the object (in the frame of the cost).
-struct Shape {
-    /// Every 3-D point and segment endpoint.
-    points: Vec<Vector3<f64>>,
+struct Shape<'c> {
+    /// The correspondences in that frame: every 3-D point and segment endpoint is checked.
+    corr: &'c Correspondences,
     /// Axis of least spread, for the mirror pose.
     axis: Vector3<f64>,
     /// Centroid.
@@ -53,12 +53,10 @@ struct Shape {
     spread: Vector3<f64>,
 }
 
-impl Shape {
-    fn of(c: &Correspondences) -> Shape {
-        let points: Vec<Vector3<f64>> =
-            c.points3d.iter().copied().chain(c.lines3d.iter().flat_map(|s| s.iter().copied())).collect();
-        let (centroid, spread, axis) = principal_axes(&points);
-        Shape { points, axis, centroid, spread }
+impl<'c> Shape<'c> {
+    /// The shape of `corr`, the correspondences conditioned by `cond`, from that of the world points.
+    fn of(corr: &'c Correspondences, world: &PointSpread, cond: &Conditioning) -> Shape<'c> {
+        Shape { corr, axis: world.least_axis, centroid: cond.apply(&world.centroid), spread: world.spread / cond.scale }
     }
 
     /// How many default starts this object gets.
@@ -78,8 +76,8 @@ impl Shape {
         if !x.iter().all(|v| v.is_finite()) || (r_norm2 - 1.0).abs() >= 0.5 {
             return false;
         }
-        let (rot, t) = DualQuaternion::from_vector(x).to_rotation_translation();
-        self.points.iter().all(|p| (rot * p + t).z > 0.0)
+        let pose = DualQuaternion::from_vector(x).to_rotation_translation();
+        count_behind(object_points(self.corr).copied(), &pose) == 0
     }
 }
 
@@ -178,6 +176,27 @@ fn select(
 /// Runs the estimator named by `opts.method` without refinement. Inputs are assumed validated.
 pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<Estimate> {
     let started = Instant::now();
+    let prepared = Prepared::new(corr, principal_axes(object_points(corr)), opts);
+    estimator(camera, corr, &prepared, opts, started)
+}
+
+/// The data every stage shares, computed once per call: the world points' shape, the conditioning
+/// and the conditioned correspondences.
+struct Prepared {
+    shape: PointSpread,
+    cond: Conditioning,
+    conditioned: Correspondences,
+}
+
+impl Prepared {
+    fn new(corr: &Correspondences, shape: PointSpread, opts: &PoseOptions) -> Prepared {
+        let cond = if opts.normalize { Conditioning::of_shape(&shape) } else { Conditioning::identity() };
+        Prepared { shape, cond, conditioned: cond.correspondences(corr) }
+    }
+}
+
+/// [`algebraic_stage`] on prepared data; `started` is when the caller's clock started.
+fn estimator(camera: &Camera, corr: &Correspondences, prepared: &Prepared, opts: &PoseOptions, started: Instant) -> Result<Estimate> {
     if opts.method == Method::Linear {
         let cal = faugeras_toscani(&corr.points2d, &corr.points3d)?;
         let pose = (cal.rotation, cal.translation);
@@ -185,12 +204,11 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
         let summary = Summary { iterations: 0, evaluations: 1, initial_cost: cost, final_cost: cost, termination: Termination::ClosedForm };
         return Ok(Estimate { pose, stages: vec![stage("linear", "reprojection", &pose, &summary, started)], camera: Some(cal.camera), alternatives: vec![], valid: true });
     }
-    let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
-    let cc = cond.correspondences(corr);
-    let shape = Shape::of(&cc);
+    let (cond, cc) = (prepared.cond, &prepared.conditioned);
+    let shape = Shape::of(cc, &prepared.shape, &cond);
     let mut tr = opts.trust_region;
     if opts.method == Method::RotationThenTranslation {
-        let (points, lines) = constraints(camera, &cc, true)?;
+        let (points, lines) = constraints(camera, cc, true)?;
         let rotation_cost = RotationCost::new(&lines, opts.lambda);
         let translation_gram = gram(&points, &lines[..cc.n_lines()], false);
         tr.subproblem = Subproblem::Hebden;
@@ -212,7 +230,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
         let user = user_start(opts, &cond).map(|q| DualQuaternion { r: q.r, s: Vector4::zeros() }.to_vector());
         let runs = starts(user, default_starts).into_iter().map(|x0| with_cheirality_restart(x0, &shape, &solve)).collect();
         // Candidates are ranked by the joint cost (eqs. 13 + 22), which sees rotation and translation.
-        let (point_cons, line_cons) = constraints(camera, &cc, false)?;
+        let (point_cons, line_cons) = constraints(camera, cc, false)?;
         let joint = JointCost { gram: gram(&point_cons, &line_cons, true), lambda: opts.lambda };
         let (x, summary, others, valid) = select(runs, |x, _| joint.cost(x));
         let pose = to_world(&x, &cond);
@@ -230,7 +248,7 @@ pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptio
         let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
         return Ok(Estimate { pose, stages: vec![rotation_report, translation_report], camera: None, alternatives, valid });
     }
-    let (points, lines) = constraints(camera, &cc, false)?;
+    let (points, lines) = constraints(camera, cc, false)?;
     let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
     let mut default_starts: Vec<SVector<f64, 8>> =
         joint_starts(&cost.gram, &shape.centroid, shape.default_starts()).iter().map(|q| q.to_vector()).collect();
@@ -270,23 +288,21 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
 pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
     let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
-    refine_conditioned(camera, &cond, &cond.correspondences(corr), initial, opts)
+    refine_conditioned(&cond, &ReprojectionCost::of(camera, &cond.correspondences(corr)), initial, opts)
 }
 
 /// [`refine_pose`] on correspondences already conditioned by `cond`.
 fn refine_conditioned(
-    camera: &Camera,
     cond: &Conditioning,
-    cc: &Correspondences,
+    cost: &ReprojectionCost<'_>,
     initial: &Pose,
     opts: &PoseOptions,
 ) -> (Pose, StageReport) {
     let started = Instant::now();
-    let cost = ReprojectionCost::new(*camera, &cc.points2d, &cc.points3d, &cc.lines2d, &cc.lines3d);
     let x0 = (initial.0, cond.pose_from_world(&initial.0, &initial.1));
     let mut tr = opts.refinement;
     tr.subproblem = Subproblem::Hebden;
-    let (x, summary) = trust_region::minimize(&cost, x0, &tr);
+    let (x, summary) = trust_region::minimize(cost, x0, &tr);
     let pose = (x.0, cond.pose_to_world(&x.0, &x.1));
     let report = stage("refinement", "reprojection", &pose, &summary, started);
     (pose, report)
@@ -301,15 +317,15 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let started = Instant::now();
     camera.validate()?;
     opts.validate()?;
-    corr.validate(opts.method)?;
-    let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives, valid } = algebraic_stage(camera, corr, opts)?;
+    let prepared = Prepared::new(corr, corr.validated(opts.method)?, opts);
+    let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives, valid } =
+        estimator(camera, corr, &prepared, opts, started)?;
     let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     if opts.refine && finite {
-        let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
-        let cc = cond.correspondences(corr);
-        let (mut refined, mut report) = refine_conditioned(camera, &cond, &cc, &pose, opts);
+        let cost = ReprojectionCost::of(camera, &prepared.conditioned);
+        let (mut refined, mut report) = refine_conditioned(&prepared.cond, &cost, &pose, opts);
         for alternative in &alternatives {
-            let (other, other_report) = refine_conditioned(camera, &cond, &cc, alternative, opts);
+            let (other, other_report) = refine_conditioned(&prepared.cond, &cost, alternative, opts);
             report.iterations += other_report.iterations;
             report.time_seconds += other_report.time_seconds;
             if other_report.final_cost < report.final_cost {
@@ -320,25 +336,30 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         stages.push(report);
     }
     let last = stages.last().expect("at least one stage").clone();
-    let scoring_camera = if opts.refine { *camera } else { estimated_camera.unwrap_or(*camera) };
-    let reprojection = ReprojectionCost::new(scoring_camera, &corr.points2d, &corr.points3d, &corr.lines2d, &corr.lines3d);
+    let behind = if finite { count_behind(object_points(corr).copied(), &pose) } else { 0 };
     let status = if !finite || stages.iter().any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost)) {
         Status::NumericalFailure
-    } else if !opts.refine && !valid && reprojection.points_behind(&pose) == 0 {
+    } else if !opts.refine && !valid && behind == 0 {
         // The algebraic answer is far from a rigid motion (e.g. a stop at r = 0).
         Status::NumericalFailure
     } else if stages.iter().any(|s| !s.termination.converged()) {
         Status::NotConverged
-    } else if reprojection.points_behind(&pose) > 0 {
+    } else if behind > 0 {
         Status::PointsBehindCamera
     } else {
         Status::Success
     };
-    let rms_error_px = if finite {
-        (2.0 * reprojection.cost(&pose) / reprojection.residual_count().max(1) as f64).sqrt()
-    } else {
+    let residual_count = 2 * (corr.n_points() + corr.n_lines());
+    let reprojection_cost = if !finite {
         f64::NAN
+    } else if opts.refine {
+        // The refinement's cost is the reprojection error at the returned pose (in the conditioned
+        // frame, which leaves pixel residuals unchanged).
+        last.final_cost
+    } else {
+        ReprojectionCost::of(&estimated_camera.unwrap_or(*camera), corr).cost(&pose)
     };
+    let rms_error_px = (2.0 * reprojection_cost / residual_count.max(1) as f64).sqrt();
     let (dual_quaternion, axis, angle) = if finite {
         let q = DualQuaternion::from_rotation_translation(&pose.0, &pose.1);
         let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.0));

@@ -78,17 +78,24 @@ fn first_nonzero_positive(q: &Vector4<f64>) -> bool {
 /// Minimum angle between two starts of [`joint_starts`] and [`rotation_starts`]: one grid step (72°).
 const DISTINCT_STARTS: f64 = 1.25;
 
-/// Up to `k` grid rotations in increasing order of score, each at least one grid step from the
-/// ones before it.
-fn diverse_best<T: Copy>(scored: &mut [(f64, Matrix3<f64>, T)], k: usize) -> Vec<(Matrix3<f64>, T)> {
-    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut picked: Vec<(Matrix3<f64>, T)> = Vec::with_capacity(k);
-    for (_, rot, extra) in scored.iter() {
+/// Up to `k` grid indices in increasing order of score, each at least one grid step from the ones
+/// before it. Ties keep grid order. One start (the common case) needs only the minimum, not a sort.
+fn diverse_best(scores: &[f64], k: usize) -> Vec<usize> {
+    if k == 1 {
+        let best = (1..scores.len()).fold(0, |best, i| if scores[i] < scores[best] { i } else { best });
+        return if scores.is_empty() { vec![] } else { vec![best] };
+    }
+    let grid = rotation_grid();
+    let mut order: Vec<usize> = (0..scores.len()).collect();
+    order.sort_by(|&a, &b| scores[a].total_cmp(&scores[b]));
+    let rotation = |i: usize| Matrix3::from_row_slice(grid[i].1.as_slice());
+    let mut picked: Vec<usize> = Vec::with_capacity(k);
+    for i in order {
         if picked.len() == k {
             break;
         }
-        if picked.iter().all(|(p, _)| rotation_distance(p, rot) > DISTINCT_STARTS) {
-            picked.push((*rot, *extra));
+        if picked.iter().all(|&p| rotation_distance(&rotation(p), &rotation(i)) > DISTINCT_STARTS) {
+            picked.push(i);
         }
     }
     picked
@@ -106,24 +113,31 @@ pub fn joint_starts(gram: &Gram, centroid: &Vector3<f64>, k: usize) -> Vec<DualQ
     };
     let to_t: SMatrix<f64, 3, 9> = -(c_inv * b.transpose());
     let reduced = a + b * to_t;
-    let mut scored: Vec<(f64, Matrix3<f64>, Vector3<f64>)> = rotation_grid()
+    // Depth of the centroid at grid rotation v (row-major R) with its best translation:
+    // (R c)_z + t_z = (v₆..₈ + to_t row 2) · (c, …) — only the third row of R and of to_t are needed.
+    let depth_row = SMatrix::<f64, 1, 9>::from_fn(|_, j| to_t[(2, j)] + if j >= 6 { centroid[j - 6] } else { 0.0 });
+    let scores: Vec<f64> = rotation_grid()
         .iter()
-        .map(|(q, v)| {
-            let rot = to_rotation_matrix(q);
-            let t: Vector3<f64> = to_t * v;
-            let behind = if (rot * centroid + t).z > 0.0 { 0.0 } else { f64::MAX / 4.0 };
-            (behind + v.dot(&(reduced * v)), rot, t)
+        .map(|(_, v)| {
+            let behind = if depth_row.dot(&v.transpose()) > 0.0 { 0.0 } else { f64::MAX / 4.0 };
+            behind + v.dot(&(reduced * v))
         })
         .collect();
-    diverse_best(&mut scored, k).into_iter().map(|(rot, t)| DualQuaternion::from_rotation_translation(&rot, &t)).collect()
+    diverse_best(&scores, k)
+        .into_iter()
+        .map(|i| {
+            let v = &rotation_grid()[i].1;
+            DualQuaternion::from_rotation_translation(&Matrix3::from_row_slice(v.as_slice()), &(to_t * v))
+        })
+        .collect()
 }
 
 /// Starts of the rotation-only estimator (eq. 14): up to `k` distinct grid rotations of least cost
 /// under its 9x9 Gram matrix.
 pub fn rotation_starts(gram9: &SMatrix<f64, 9, 9>, k: usize) -> Vec<Vector4<f64>> {
-    let mut scored: Vec<(f64, Matrix3<f64>, Vector4<f64>)> =
-        rotation_grid().iter().map(|(q, v)| (v.dot(&(gram9 * v)), to_rotation_matrix(q), *q)).collect();
-    diverse_best(&mut scored, k).into_iter().map(|(_, q)| q).collect()
+    let grid = rotation_grid();
+    let scores: Vec<f64> = grid.iter().map(|(_, v)| v.dot(&(gram9 * v))).collect();
+    diverse_best(&scores, k).into_iter().map(|i| grid[i].0).collect()
 }
 
 /// The mirror pose `(R Rπ(n), −t)` of a pose that puts the object behind the camera.
