@@ -5,12 +5,12 @@ use super::correspondences::{constraints, object_points, principal_axes, Conditi
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
-use super::{Method, PoseOptions, PoseResult, StageReport, Status};
+use super::{Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, rotation_distance};
-use crate::optim::{levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination};
+use crate::optim::{levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions};
 use nalgebra::{Matrix3, SVector, Vector3, Vector4};
 use std::time::Instant;
 
@@ -177,7 +177,7 @@ fn select(
 pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<Estimate> {
     let started = Instant::now();
     let prepared = Prepared::new(corr, principal_axes(object_points(corr)), opts);
-    estimator(camera, corr, &prepared, opts, started)
+    estimator(camera, corr, &prepared, opts, &opts.trust_region, started)
 }
 
 /// The data every stage shares, computed once per call: the world points' shape, the conditioning
@@ -195,8 +195,16 @@ impl Prepared {
     }
 }
 
-/// [`algebraic_stage`] on prepared data; `started` is when the caller's clock started.
-fn estimator(camera: &Camera, corr: &Correspondences, prepared: &Prepared, opts: &PoseOptions, started: Instant) -> Result<Estimate> {
+/// [`algebraic_stage`] on prepared data with the trust-region settings `tr` (`opts.trust_region`, or
+/// looser before a refinement); `started` is when the caller's clock started.
+fn estimator(
+    camera: &Camera,
+    corr: &Correspondences,
+    prepared: &Prepared,
+    opts: &PoseOptions,
+    tr: &TrustRegionOptions,
+    started: Instant,
+) -> Result<Estimate> {
     if opts.method == Method::Linear {
         let cal = faugeras_toscani(&corr.points2d, &corr.points3d)?;
         let pose = (cal.rotation, cal.translation);
@@ -206,7 +214,7 @@ fn estimator(camera: &Camera, corr: &Correspondences, prepared: &Prepared, opts:
     }
     let (cond, cc) = (prepared.cond, &prepared.conditioned);
     let shape = Shape::of(cc, &prepared.shape, &cond);
-    let mut tr = opts.trust_region;
+    let mut tr = *tr;
     if opts.method == Method::RotationThenTranslation {
         let (points, lines) = constraints(camera, cc, true)?;
         let rotation_cost = RotationCost::new(&lines, opts.lambda);
@@ -318,8 +326,12 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     camera.validate()?;
     opts.validate()?;
     let prepared = Prepared::new(corr, corr.validated(opts.method)?, opts);
+    let mut tr = opts.trust_region;
+    if opts.refine {
+        tr.stopping.step_tolerance = tr.stopping.step_tolerance.max(STEP_TOLERANCE_BEFORE_REFINEMENT);
+    }
     let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives, valid } =
-        estimator(camera, corr, &prepared, opts, started)?;
+        estimator(camera, corr, &prepared, opts, &tr, started)?;
     let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     if opts.refine && finite {
         let cost = ReprojectionCost::of(camera, &prepared.conditioned);
