@@ -96,7 +96,11 @@ fn read_unchecked(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult
     let readonly = array
         .try_readonly()
         .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
-    let values: Vec<f64> = readonly.as_array().iter().copied().collect();
+    // Row-major order: a C-contiguous array (the common case) is copied as one slice.
+    let values: Vec<f64> = match readonly.as_slice() {
+        Ok(slice) if readonly.is_c_contiguous() => slice.to_vec(),
+        _ => readonly.as_array().iter().copied().collect(),
+    };
     Ok((values, shape[0]))
 }
 
