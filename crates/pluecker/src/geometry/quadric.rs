@@ -223,13 +223,14 @@ impl Ellipse {
             c[(1, 1)],
         );
         let b = Vector2::new(0.5 * (c[(0, 2)] + c[(2, 0)]), 0.5 * (c[(1, 2)] + c[(2, 1)]));
-        let scale = c.amax();
-        if !(a.determinant() > EIGEN_TOLERANCE * scale * scale) {
+        // Definite 2x2 part (relative to its own size), and a value at the centre that does not
+        // vanish by cancellation (a point or a line pair).
+        if !(a.determinant() > EIGEN_TOLERANCE * a.norm_squared()) {
             return None;
         }
         let centre = -(a.try_inverse()? * b);
         let k = c[(2, 2)] + b.dot(&centre);
-        if !(k.abs() > EIGEN_TOLERANCE * scale * (1.0 + centre.norm_squared())) {
+        if !(k.abs() > EIGEN_TOLERANCE * (c[(2, 2)].abs() + b.dot(&centre).abs())) {
             return None;
         }
         let m = a / -k;

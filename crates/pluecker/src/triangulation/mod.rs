@@ -15,10 +15,17 @@
 pub mod batch;
 pub mod covariance;
 pub mod fitting;
+pub mod fraction;
 pub mod line;
+pub mod line_residual;
 pub mod point;
+pub mod point_certificate;
+pub mod point_cost;
+pub mod point_global;
+pub mod point_linear;
 
 pub mod quadric;
+pub mod quadric_residual;
 pub mod views;
 
 use crate::error::{Error, Result};
@@ -118,6 +125,8 @@ pub enum Status {
     NotConverged,
     /// The estimate lies behind (or on the principal plane of) at least one camera.
     BehindCamera,
+    /// The estimate is a point at infinity (parallel rays): no finite point can be returned.
+    AtInfinity,
     /// No primitive has every reprojection error below the user's γ.
     Infeasible,
     /// The solver failed numerically (a singular system, a conic solver failure).
@@ -132,6 +141,7 @@ impl Status {
             Status::GapNotClosed => "gap_not_closed",
             Status::NotConverged => "not_converged",
             Status::BehindCamera => "behind_camera",
+            Status::AtInfinity => "at_infinity",
             Status::Infeasible => "infeasible",
             Status::NumericalFailure => "numerical_failure",
         }
