@@ -15,7 +15,7 @@
 //! All costs follow eq. 23's convention `f = ½ Σ Φ²`.
 
 use crate::geometry::lines::ObjectLine;
-use crate::geometry::quaternion::{q_matrix, scaled_rotation, w_matrix};
+use crate::geometry::quaternion::{scaled_rotation, w_matrix};
 use crate::optim::{Linearization, Objective};
 use nalgebra::{Matrix4, SMatrix, SVector, Vector2, Vector3, Vector4};
 
@@ -74,8 +74,11 @@ fn symmetrize(mut g: Gram) -> Gram {
 /// `c_y = [h at (3,4,5,10); −y h at (6,7,8,11)]`, so `G` needs only the moments `Σ h hᵀ`,
 /// `Σ x h hᵀ`, `Σ y h hᵀ` and `Σ (x² + y²) h hᵀ`: 40 products per point instead of two rank-one updates.
 fn add_points(g: &mut Gram, points: &[PointConstraint]) {
-    let mut moments = [[0.0f64; 10]; 4];
-    for p in points {
+    // Accumulated in LANES interleaved partial sums (lane l takes points l, l + LANES, …) so that the
+    // compiler can process several points per vector instruction.
+    const LANES: usize = 4;
+    let mut lanes = [[[0.0f64; LANES]; 10]; 4];
+    let mut add = |lane: usize, p: &PointConstraint| {
         let h = [p.object.x, p.object.y, p.object.z, 1.0];
         let (x, y) = (p.image.x, p.image.y);
         let weights = [1.0, x, y, x * x + y * y];
@@ -83,13 +86,23 @@ fn add_points(g: &mut Gram, points: &[PointConstraint]) {
         for i in 0..4 {
             for j in i..4 {
                 let hh = h[i] * h[j];
-                for (m, w) in moments.iter_mut().zip(weights) {
-                    m[k] += w * hh;
+                for (m, w) in lanes.iter_mut().zip(weights) {
+                    m[k][lane] += w * hh;
                 }
                 k += 1;
             }
         }
+    };
+    let mut batches = points.chunks_exact(LANES);
+    for batch in &mut batches {
+        for (lane, p) in batch.iter().enumerate() {
+            add(lane, p);
+        }
     }
+    for p in batches.remainder() {
+        add(0, p);
+    }
+    let moments: [[f64; 10]; 4] = std::array::from_fn(|w| std::array::from_fn(|k| lanes[w][k].iter().sum()));
     const A: [usize; 4] = [0, 1, 2, 9];
     const B: [usize; 4] = [3, 4, 5, 10];
     const C: [usize; 4] = [6, 7, 8, 11];
@@ -165,15 +178,20 @@ pub fn scaled_rotation_jacobian(r: &Vector4<f64>) -> SMatrix<f64, 9, 4> {
 /// `Y = ∂y/∂x` (12x8). Linear in `x`, so `Y(x) = Σₖ xₖ Y(eₖ)`.
 pub fn lift_jacobian(x: &SVector<f64, 8>) -> SMatrix<f64, 12, 8> {
     let r: Vector4<f64> = x.fixed_rows::<4>(0).into_owned();
-    let s: Vector4<f64> = x.fixed_rows::<4>(4).into_owned();
     let mut jac = SMatrix::<f64, 12, 8>::zeros();
     jac.fixed_view_mut::<9, 4>(0, 0).copy_from(&scaled_rotation_jacobian(&r));
-    // t̃ = 2 (s r̄) = 2 Q(s) C r with C = diag(1, −1, −1, −1), and = 2 W(r)ᵀ s.
-    let conj = Matrix4::from_diagonal(&Vector4::new(1.0, -1.0, -1.0, -1.0));
-    let dt_dr = 2.0 * q_matrix(&s) * conj;
-    let dt_ds = 2.0 * w_matrix(&r).transpose();
-    jac.fixed_view_mut::<3, 4>(9, 0).copy_from(&dt_dr.fixed_view::<3, 4>(1, 0));
-    jac.fixed_view_mut::<3, 4>(9, 4).copy_from(&dt_ds.fixed_view::<3, 4>(1, 0));
+    // t̃ = 2 (s r̄) = 2 Q(s) C r with C = diag(1, −1, −1, −1), and = 2 W(r)ᵀ s: rows 1-3 of
+    // 2 Q(s) C and of 2 W(r)ᵀ (eqs. 8-9), written out.
+    let (s0, s1, s2, s3) = (2.0 * x[4], 2.0 * x[5], 2.0 * x[6], 2.0 * x[7]);
+    let (r0, r1, r2, r3) = (2.0 * r[0], 2.0 * r[1], 2.0 * r[2], 2.0 * r[3]);
+    let dt_dr = [[s1, -s0, s3, -s2], [s2, -s3, -s0, s1], [s3, s2, -s1, -s0]];
+    let dt_ds = [[-r1, r0, -r3, r2], [-r2, r3, r0, -r1], [-r3, -r2, r1, r0]];
+    for i in 0..3 {
+        for j in 0..4 {
+            jac[(9 + i, j)] = dt_dr[i][j];
+            jac[(9 + i, 4 + j)] = dt_ds[i][j];
+        }
+    }
     jac
 }
 
@@ -210,13 +228,27 @@ impl Objective<8> for JointCost {
     }
 
     fn linearize(&self, x: &Self::Point) -> Linearization<8> {
+        // Y = ∂y/∂x = [[Yr, 0], [Tr, Ts]] (9 + 3 rows, 4 + 4 columns): the rotation entries of y do not
+        // depend on s. So G Y = [G Y₀, G₉ Ts] with Y₀ its first four columns and G₉ the last three
+        // columns of G, and JᵀJ = Yᵀ G Y is assembled from the blocks, about half the products of the
+        // dense 12x8 form.
         let y = lift(x);
         let jy = lift_jacobian(x);
+        let y0 = jy.fixed_view::<12, 4>(0, 0);
+        let ts = jy.fixed_view::<3, 4>(9, 4);
         let gy = self.gram * y;
-        let gjy = self.gram * jy;
+        let gy0 = self.gram * y0;
+        let gts = self.gram.fixed_view::<12, 3>(0, 9) * ts;
+        let mut gradient = SVector::<f64, 8>::zeros();
+        gradient.fixed_rows_mut::<4>(0).copy_from(&(y0.transpose() * gy));
+        gradient.fixed_rows_mut::<4>(4).copy_from(&(ts.transpose() * gy.fixed_rows::<3>(9)));
+        let rs = y0.transpose() * gts;
+        let mut gauss_newton = SMatrix::<f64, 8, 8>::zeros();
+        gauss_newton.fixed_view_mut::<4, 4>(0, 0).copy_from(&(y0.transpose() * gy0));
+        gauss_newton.fixed_view_mut::<4, 4>(0, 4).copy_from(&rs);
+        gauss_newton.fixed_view_mut::<4, 4>(4, 0).copy_from(&rs.transpose());
+        gauss_newton.fixed_view_mut::<4, 4>(4, 4).copy_from(&(ts.transpose() * gts.fixed_rows::<3>(9)));
         let mut cost = y.dot(&gy);
-        let mut gradient = jy.transpose() * gy;
-        let mut gauss_newton = jy.transpose() * gjy;
         for (phi, grad) in self.penalties(x) {
             cost += phi * phi;
             gradient += phi * grad;
@@ -338,7 +370,7 @@ pub fn solve_translation(gram: &Gram, r: &Vector4<f64>, lambda: f64) -> Option<V
 mod tests {
     use super::*;
     use crate::geometry::dual_quaternion::DualQuaternion;
-    use crate::geometry::quaternion::{pure, vector_part};
+    use crate::geometry::quaternion::{pure, q_matrix, vector_part};
     use crate::optim::problem::testing::{gradient_error, hessian_error};
     use crate::rng::Rng;
 
@@ -380,6 +412,22 @@ mod tests {
             // Eq. 10 for a direction.
             let paper_dir = r.dot(&(q_matrix(&pure(&m)).transpose() * w_matrix(&pure(&big_m)) * r));
             assert!((paper_dir - coefficients(&m, &big_m, 0.0).dot(&lift(&x))).abs() < 1e-10 * (1.0 + paper_dir.abs()));
+        }
+    }
+
+    #[test]
+    fn lift_jacobian_matches_central_differences() {
+        // y(x) is quadratic, so central differences are exact up to round-off.
+        let mut rng = Rng::new(12);
+        for _ in 0..20 {
+            let x = SVector::<f64, 8>::from_fn(|_, _| rng.normal());
+            let jac = lift_jacobian(&x);
+            for k in 0..8 {
+                let mut e = SVector::<f64, 8>::zeros();
+                e[k] = 1e-3;
+                let column = (lift(&(x + e)) - lift(&(x - e))) / 2e-3;
+                assert!((column - jac.column(k)).amax() < 1e-10, "column {k}");
+            }
         }
     }
 

@@ -41,10 +41,53 @@ pub(crate) struct PointSpread {
     pub centroid: Vector3<f64>,
     /// Root-mean-square distance to the centroid.
     pub rms_radius: f64,
-    /// Standard deviations along the principal axes, largest first.
+    /// Standard deviations along the principal axes, largest first, from the closed-form eigenvalues
+    /// of the scatter matrix (absolute error a few ulps of the largest eigenvalue).
     pub spread: Vector3<f64>,
-    /// Unit axis of least spread.
-    pub least_axis: Vector3<f64>,
+    /// `Σ (p − c)(p − c)ᵀ`.
+    scatter: Matrix3<f64>,
+}
+
+/// Above this ratio of closed-form standard deviations a spread is certainly not degenerate (the
+/// closed form's error in the ratio is below 1e-7); at or below it the eigen-decomposition decides.
+const CLEARLY_SPREAD: f64 = 1e-6;
+
+impl PointSpread {
+    /// Unit axis of least spread (an eigen-decomposition: only the restarts need it).
+    pub fn least_axis(&self) -> Vector3<f64> {
+        let eig = self.scatter.symmetric_eigen();
+        eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned()
+    }
+
+    /// Whether the `k`-th standard deviation is at most `tolerance` (≤ [`DEGENERACY_TOLERANCE`]) times
+    /// the largest, decided on the eigen-decomposition's values when the closed form cannot settle it.
+    fn degenerate(&self, k: usize, tolerance: f64) -> bool {
+        if self.spread[k] > CLEARLY_SPREAD * self.spread[0] {
+            return false;
+        }
+        let mut s = self.scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
+        s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+        s[k] <= tolerance * s[0]
+    }
+}
+
+/// Eigenvalues of a symmetric 3x3 matrix, largest first, in closed form (the trigonometric solution
+/// of the characteristic cubic).
+fn symmetric_eigenvalues(m: &Matrix3<f64>) -> Vector3<f64> {
+    let off = m[(0, 1)].powi(2) + m[(0, 2)].powi(2) + m[(1, 2)].powi(2);
+    let q = m.trace() / 3.0;
+    let diagonal = m.diagonal().map(|v| v - q);
+    let p = ((diagonal.norm_squared() + 2.0 * off) / 6.0).sqrt();
+    if !(p > 0.0) {
+        let mut d = m.diagonal();
+        d.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+        return d;
+    }
+    let b = (m - Matrix3::from_diagonal_element(q)) / p;
+    let phi = (0.5 * b.determinant()).clamp(-1.0, 1.0).acos() / 3.0;
+    let largest = q + 2.0 * p * phi.cos();
+    let smallest = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    Vector3::new(largest, 3.0 * q - largest - smallest, smallest)
 }
 
 /// The centroid, RMS radius and principal axes of a (non-empty) point set.
@@ -59,11 +102,8 @@ pub(crate) fn principal_axes<'p>(points: impl Iterator<Item = &'p Vector3<f64>> 
         }
     }
     let scatter = Matrix3::new(m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]);
-    let eig = scatter.symmetric_eigen();
-    let least_axis = eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned();
-    let mut spread = eig.eigenvalues.map(|v| v.max(0.0).sqrt());
-    spread.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
-    PointSpread { centroid, rms_radius: ((m[0] + m[3] + m[5]) / n).sqrt(), spread, least_axis }
+    let spread = symmetric_eigenvalues(&scatter).map(|v| v.max(0.0).sqrt());
+    PointSpread { centroid, rms_radius: ((m[0] + m[3] + m[5]) / n).sqrt(), spread, scatter }
 }
 
 /// Every object point of `c`: the points, then both endpoints of every segment.
@@ -130,8 +170,7 @@ impl Correspondences {
                 if np < 6 {
                     return Err(too_few("at least 6 points (lines are not used)"));
                 }
-                let s = principal_axes(self.points3d.iter()).spread;
-                if s[2] <= DEGENERACY_TOLERANCE * s[0] {
+                if principal_axes(self.points3d.iter()).degenerate(2, DEGENERACY_TOLERANCE) {
                     return Err(Error::Degenerate {
                         what: "points3d are coplanar; the linear (Faugeras-Toscani) method needs non-coplanar points"
                             .into(),
@@ -150,7 +189,7 @@ impl Correspondences {
             }
         }
         let shape = principal_axes(object_points(self));
-        if nl == 0 && shape.spread[1] <= DEGENERACY_TOLERANCE * shape.spread[0] {
+        if nl == 0 && shape.degenerate(1, DEGENERACY_TOLERANCE) {
             return Err(Error::Degenerate { what: "all points3d are collinear".into() });
         }
         if np == 0 {

@@ -45,8 +45,8 @@ fn user_start(opts: &PoseOptions, cond: &Conditioning) -> Option<DualQuaternion>
 struct Shape<'c> {
     /// The correspondences in that frame: every 3-D point and segment endpoint is checked.
     corr: &'c Correspondences,
-    /// Axis of least spread, for the mirror pose.
-    axis: Vector3<f64>,
+    /// The shape of the world points (the conditioning only shifts and scales it).
+    world: &'c PointSpread,
     /// Centroid.
     centroid: Vector3<f64>,
     /// Standard deviations along the principal axes, largest first.
@@ -55,8 +55,13 @@ struct Shape<'c> {
 
 impl<'c> Shape<'c> {
     /// The shape of `corr`, the correspondences conditioned by `cond`, from that of the world points.
-    fn of(corr: &'c Correspondences, world: &PointSpread, cond: &Conditioning) -> Shape<'c> {
-        Shape { corr, axis: world.least_axis, centroid: cond.apply(&world.centroid), spread: world.spread / cond.scale }
+    fn of(corr: &'c Correspondences, world: &'c PointSpread, cond: &Conditioning) -> Shape<'c> {
+        Shape { corr, world, centroid: cond.apply(&world.centroid), spread: world.spread / cond.scale }
+    }
+
+    /// Axis of least spread, for the mirror pose.
+    fn axis(&self) -> Vector3<f64> {
+        self.world.least_axis()
     }
 
     /// How many default starts this object gets.
@@ -106,7 +111,7 @@ fn with_cheirality_restart(
         return (x, summary, true);
     }
     let (rot, t) = DualQuaternion::from_vector(&x).to_rotation_translation();
-    let (x2, summary2) = solve(mirrored(&rot, &t, &shape.axis).to_vector());
+    let (x2, summary2) = solve(mirrored(&rot, &t, &shape.axis()).to_vector());
     let in_front = shape.in_front(&x2);
     if in_front || summary2.final_cost < summary.final_cost {
         (x2, merged(&summary, &summary2, true), in_front)

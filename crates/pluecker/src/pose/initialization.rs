@@ -29,10 +29,58 @@ use crate::geometry::quaternion::{from_axis_angle, rotation_distance, to_rotatio
 use nalgebra::{Matrix3, SMatrix, Vector3, Vector4};
 use std::sync::OnceLock;
 
-/// The 60 rotations of the 600-cell (its 120 unit quaternions up to sign), as rotation matrices
-/// flattened row-major, with their quaternions.
-fn rotation_grid() -> &'static [(Vector4<f64>, SMatrix<f64, 9, 1>)] {
-    static GRID: OnceLock<Vec<(Vector4<f64>, SMatrix<f64, 9, 1>)>> = OnceLock::new();
+/// Number of rotations in the grid.
+const GRID_SIZE: usize = 60;
+/// Number of distinct products `vᵢvⱼ` (`i ≤ j`) of the 9 entries of a rotation matrix.
+const PRODUCTS: usize = 45;
+
+/// The grid of start rotations, with what scoring them needs laid out for batch evaluation: every
+/// quadratic form `vᵀ A v` (`v` = a rotation flattened row-major) is `Σₖ aₖ pₖ(v)` over the 45
+/// products `pₖ = vᵢvⱼ` (`i ≤ j`, `aₖ = Aᵢⱼ` doubled off the diagonal), and the products are stored
+/// product-major, so all 60 forms are 45 vectorisable passes over 60 numbers.
+struct Grid {
+    /// Unit quaternions.
+    quaternions: Vec<Vector4<f64>>,
+    /// Rotation matrices flattened row-major.
+    rotations: Vec<SMatrix<f64, 9, 1>>,
+    /// `entries[i][g]`: entry `i` of rotation `g`.
+    entries: [[f64; GRID_SIZE]; 9],
+    /// `products[k][g]`: product `k` of rotation `g`.
+    products: [[f64; GRID_SIZE]; PRODUCTS],
+}
+
+impl Grid {
+    /// `vᵀ A v` for every grid rotation `v`, `A` symmetric 9x9.
+    fn quadratic_forms(&self, a: &SMatrix<f64, 9, 9>) -> [f64; GRID_SIZE] {
+        let mut scores = [0.0; GRID_SIZE];
+        let mut k = 0;
+        for i in 0..9 {
+            for j in i..9 {
+                let c = if i == j { a[(i, i)] } else { a[(i, j)] + a[(j, i)] };
+                for (score, p) in scores.iter_mut().zip(&self.products[k]) {
+                    *score += c * p;
+                }
+                k += 1;
+            }
+        }
+        scores
+    }
+
+    /// `w · v` for every grid rotation `v`.
+    fn linear_forms(&self, w: &SMatrix<f64, 1, 9>) -> [f64; GRID_SIZE] {
+        let mut values = [0.0; GRID_SIZE];
+        for i in 0..9 {
+            for (value, e) in values.iter_mut().zip(&self.entries[i]) {
+                *value += w[i] * e;
+            }
+        }
+        values
+    }
+}
+
+/// The 60 rotations of the 600-cell (its 120 unit quaternions up to sign).
+fn rotation_grid() -> &'static Grid {
+    static GRID: OnceLock<Grid> = OnceLock::new();
     GRID.get_or_init(|| {
         let phi = 0.5 * (1.0 + 5f64.sqrt());
         let mut quats: Vec<Vector4<f64>> = Vec::with_capacity(120);
@@ -60,14 +108,30 @@ fn rotation_grid() -> &'static [(Vector4<f64>, SMatrix<f64, 9, 1>)] {
                 quats.push(q);
             }
         }
-        quats
+        let quaternions: Vec<Vector4<f64>> = quats
             .into_iter()
             .filter(|q| q[0] > 1e-12 || (q[0].abs() <= 1e-12 && first_nonzero_positive(q)))
+            .collect();
+        let rotations: Vec<SMatrix<f64, 9, 1>> = quaternions
+            .iter()
             .map(|q| {
-                let r = to_rotation_matrix(&q);
-                (q, SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]))
+                let r = to_rotation_matrix(q);
+                SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)])
             })
-            .collect()
+            .collect();
+        let mut entries = [[0.0; GRID_SIZE]; 9];
+        let mut products = [[0.0; GRID_SIZE]; PRODUCTS];
+        for (g, v) in rotations.iter().enumerate() {
+            let mut k = 0;
+            for i in 0..9 {
+                entries[i][g] = v[i];
+                for j in i..9 {
+                    products[k][g] = v[i] * v[j];
+                    k += 1;
+                }
+            }
+        }
+        Grid { quaternions, rotations, entries, products }
     })
 }
 
@@ -88,7 +152,7 @@ fn diverse_best(scores: &[f64], k: usize) -> Vec<usize> {
     let grid = rotation_grid();
     let mut order: Vec<usize> = (0..scores.len()).collect();
     order.sort_by(|&a, &b| scores[a].total_cmp(&scores[b]));
-    let rotation = |i: usize| Matrix3::from_row_slice(grid[i].1.as_slice());
+    let rotation = |i: usize| Matrix3::from_row_slice(grid.rotations[i].as_slice());
     let mut picked: Vec<usize> = Vec::with_capacity(k);
     for i in order {
         if picked.len() == k {
@@ -113,20 +177,21 @@ pub fn joint_starts(gram: &Gram, centroid: &Vector3<f64>, k: usize) -> Vec<DualQ
     };
     let to_t: SMatrix<f64, 3, 9> = -(c_inv * b.transpose());
     let reduced = a + b * to_t;
-    // Depth of the centroid at grid rotation v (row-major R) with its best translation:
-    // (R c)_z + t_z = (v₆..₈ + to_t row 2) · (c, …) — only the third row of R and of to_t are needed.
-    let depth_row = SMatrix::<f64, 1, 9>::from_fn(|_, j| to_t[(2, j)] + if j >= 6 { centroid[j - 6] } else { 0.0 });
-    let scores: Vec<f64> = rotation_grid()
-        .iter()
-        .map(|(_, v)| {
-            let behind = if depth_row.dot(&v.transpose()) > 0.0 { 0.0 } else { f64::MAX / 4.0 };
-            behind + v.dot(&(reduced * v))
-        })
-        .collect();
+    let grid = rotation_grid();
+    // Depth of the centroid at rotation v with its best translation: (R c)_z + t_z = w · v, where
+    // w = (third row of to_t) + (0, …, 0, c) since the third row of R is v₆..₈.
+    let w = SMatrix::<f64, 1, 9>::from_fn(|_, j| to_t[(2, j)] + if j >= 6 { centroid[j - 6] } else { 0.0 });
+    let depths = grid.linear_forms(&w);
+    let mut scores = grid.quadratic_forms(&reduced);
+    for (score, depth) in scores.iter_mut().zip(depths) {
+        if !(depth > 0.0) {
+            *score += f64::MAX / 4.0;
+        }
+    }
     diverse_best(&scores, k)
         .into_iter()
         .map(|i| {
-            let v = &rotation_grid()[i].1;
+            let v = &grid.rotations[i];
             DualQuaternion::from_rotation_translation(&Matrix3::from_row_slice(v.as_slice()), &(to_t * v))
         })
         .collect()
@@ -136,8 +201,7 @@ pub fn joint_starts(gram: &Gram, centroid: &Vector3<f64>, k: usize) -> Vec<DualQ
 /// under its 9x9 Gram matrix.
 pub fn rotation_starts(gram9: &SMatrix<f64, 9, 9>, k: usize) -> Vec<Vector4<f64>> {
     let grid = rotation_grid();
-    let scores: Vec<f64> = grid.iter().map(|(_, v)| v.dot(&(gram9 * v))).collect();
-    diverse_best(&scores, k).into_iter().map(|i| grid[i].0).collect()
+    diverse_best(&grid.quadratic_forms(gram9), k).into_iter().map(|i| grid.quaternions[i]).collect()
 }
 
 /// The mirror pose `(R Rπ(n), −t)` of a pose that puts the object behind the camera.
@@ -154,8 +218,8 @@ mod tests {
     #[test]
     fn grid_has_60_distinct_rotations_covering_so3_within_45_degrees() {
         let grid = rotation_grid();
-        assert_eq!(grid.len(), 60);
-        let mats: Vec<Matrix3<f64>> = grid.iter().map(|(q, _)| to_rotation_matrix(q)).collect();
+        assert_eq!(grid.quaternions.len(), GRID_SIZE);
+        let mats: Vec<Matrix3<f64>> = grid.quaternions.iter().map(to_rotation_matrix).collect();
         for i in 0..60 {
             for j in 0..i {
                 // Neighbouring vertices are 36° apart on S³: 72° apart as rotations.
@@ -169,6 +233,22 @@ mod tests {
             let r = rng.rotation();
             let nearest = mats.iter().map(|m| rotation_distance(m, &r)).fold(f64::INFINITY, f64::min);
             assert!(nearest <= 0.777, "{nearest}");
+        }
+    }
+
+    #[test]
+    fn batched_forms_equal_the_direct_ones() {
+        let mut rng = Rng::new(45);
+        let m = SMatrix::<f64, 9, 9>::from_fn(|_, _| rng.normal());
+        let a = m * m.transpose();
+        let w = SMatrix::<f64, 1, 9>::from_fn(|_, _| rng.normal());
+        let grid = rotation_grid();
+        let (quadratic, linear) = (grid.quadratic_forms(&a), grid.linear_forms(&w));
+        for (g, v) in grid.rotations.iter().enumerate() {
+            let direct = v.dot(&(a * v));
+            // Sums of ~81 terms of size ≤ max|A| (|v| = 3): round-off of a few ulps of that.
+            assert!((quadratic[g] - direct).abs() <= 1e-13 * a.amax() * 81.0, "{g}");
+            assert!((linear[g] - (w * v)[0]).abs() <= 1e-14 * w.amax() * 9.0, "{g}");
         }
     }
 }
