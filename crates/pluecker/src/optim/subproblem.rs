@@ -33,61 +33,73 @@ fn step_with_decrease<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f64, N
     Step { d, mu, predicted_decrease }
 }
 
-/// The Cholesky factor `L` (lower triangular, `L Lᵀ = H + μI`) of a small dense matrix, in plain arrays:
-/// the subproblem factorises an `N ≤ 8` matrix several times per iteration, where nalgebra's general
-/// decomposition spends more on bookkeeping than on arithmetic. Reads the lower triangle of `H`.
+/// The factorisation `H + μI = L D Lᵀ` (`L` unit lower triangular, `D` diagonal) of a small dense
+/// matrix, in plain arrays: the subproblem factorises an `N ≤ 8` matrix once or more per iteration,
+/// where nalgebra's general decomposition spends more on bookkeeping than on arithmetic. Free of square
+/// roots, and of divisions after one per column: they are the long-latency steps. The Cholesky factor
+/// of Appendix A is `R = D^½ Lᵀ`. Reads the lower triangle of `H`.
 struct Cholesky<const N: usize> {
+    /// `L` below the diagonal (the unit diagonal is implicit).
     l: [[f64; N]; N],
+    /// `1 / Dᵢᵢ`.
+    inv_d: [f64; N],
 }
 
 impl<const N: usize> Cholesky<N> {
     /// `None` unless `H + μI` is positive definite (every pivot positive and finite).
     fn of(h: &SMatrix<f64, N, N>, mu: f64) -> Option<Self> {
         let mut l = [[0.0; N]; N];
+        let mut inv_d = [0.0; N];
+        // w[i][j] = L[i][j] D[j]: the products the next pivots need, before the division.
+        let mut w = [[0.0; N]; N];
         for j in 0..N {
             let mut pivot = h[(j, j)] + mu;
             for k in 0..j {
-                pivot -= l[j][k] * l[j][k];
+                pivot -= w[j][k] * l[j][k];
             }
-            if !(pivot > 0.0 && pivot.is_finite()) {
+            if !(pivot > 0.0 && pivot < f64::INFINITY) {
                 return None;
             }
-            let ljj = pivot.sqrt();
-            l[j][j] = ljj;
-            let inv = 1.0 / ljj;
+            inv_d[j] = 1.0 / pivot;
             for i in j + 1..N {
                 let mut v = h[(i, j)];
                 for k in 0..j {
-                    v -= l[i][k] * l[j][k];
+                    v -= w[i][k] * l[j][k];
                 }
-                l[i][j] = v * inv;
+                w[i][j] = v;
+                l[i][j] = v * inv_d[j];
             }
         }
-        Some(Cholesky { l })
+        Some(Cholesky { l, inv_d })
     }
 
-    /// `L⁻¹ b` (forward substitution).
-    fn solve_lower(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+    /// `L⁻¹ b` (forward substitution, unit diagonal).
+    fn solve_unit_lower(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
         let mut y = *b;
         for i in 0..N {
-            let mut v = y[i];
             for k in 0..i {
-                v -= self.l[i][k] * y[k];
+                y[i] -= self.l[i][k] * y[k];
             }
-            y[i] = v / self.l[i][i];
         }
         y
     }
 
-    /// `(L Lᵀ)⁻¹ b`.
+    /// `‖R⁻ᵀ p‖` with `R = D^½ Lᵀ`: `‖D^-½ L⁻¹ p‖`.
+    fn lower_solve_norm(&self, p: &SVector<f64, N>) -> f64 {
+        let y = self.solve_unit_lower(p);
+        (0..N).map(|i| y[i] * y[i] * self.inv_d[i]).sum::<f64>().sqrt()
+    }
+
+    /// `(L D Lᵀ)⁻¹ b`.
     fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
-        let mut x = self.solve_lower(b);
+        let mut x = self.solve_unit_lower(b);
+        for i in 0..N {
+            x[i] *= self.inv_d[i];
+        }
         for i in (0..N).rev() {
-            let mut v = x[i];
             for k in i + 1..N {
-                v -= self.l[k][i] * x[k];
+                x[i] -= self.l[k][i] * x[k];
             }
-            x[i] = v / self.l[i][i];
         }
         x
     }
@@ -111,9 +123,9 @@ pub fn hebden_step<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f64, N>, 
         if (pn - delta).abs() <= BOUNDARY_TOLERANCE * delta {
             break;
         }
-        // Rᵀ q = p with R = Lᵀ, i.e. L q = p.
-        let q = chol.solve_lower(&p);
-        mu += (pn / q.norm()).powi(2) * (pn - delta) / delta;
+        // Rᵀ q = p with R the Cholesky factor of H + μI.
+        let qn = chol.lower_solve_norm(&p);
+        mu += (pn / qn).powi(2) * (pn - delta) / delta;
         mu = mu.max(0.0);
         chol = Cholesky::of(h, mu)?;
         p = -chol.solve(g);
