@@ -19,10 +19,6 @@ pub mod fraction;
 pub mod line;
 pub mod line_residual;
 pub mod point;
-pub mod point_certificate;
-pub mod point_cost;
-pub mod point_global;
-pub mod point_linear;
 
 pub mod quadric;
 pub mod quadric_residual;
