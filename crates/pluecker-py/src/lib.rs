@@ -13,6 +13,11 @@ mod pose;
 mod reprojection;
 mod result;
 mod synthetic;
+mod triangulation;
+mod triangulation_arrays;
+mod triangulation_fitting;
+mod triangulation_line;
+mod triangulation_point;
 
 use pyo3::prelude::*;
 
@@ -33,6 +38,16 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(geometry::pose_to_screw, m)?)?;
     m.add_function(wrap_pyfunction!(synthetic::paper_scene, m)?)?;
     m.add_function(wrap_pyfunction!(synthetic::random_scene, m)?)?;
+    m.add_class::<triangulation::PyTriangulationReport>()?;
+    m.add_class::<triangulation_point::PyPointTriangulation>()?;
+    m.add_function(wrap_pyfunction!(triangulation_point::triangulate_point, m)?)?;
+    m.add_class::<triangulation_line::PyLineTriangulation>()?;
+    m.add_function(wrap_pyfunction!(triangulation_line::triangulate_line, m)?)?;
+    m.add_class::<triangulation_fitting::PyFittedLine>()?;
+    m.add_class::<triangulation_fitting::PyFittedConic>()?;
+    m.add_function(wrap_pyfunction!(triangulation_fitting::fit_line, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation_fitting::fit_conic, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation_fitting::fitting_residual_samples, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
 }
