@@ -69,10 +69,12 @@ fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult<(Vec<f64>
         .iter()
         .map(|a| if let Axis::Fixed(n) = a { *n } else { 1 })
         .product();
-    if let Some(row) = values
-        .chunks(row_len.max(1))
-        .position(|r| r.iter().any(|v| !v.is_finite()))
-    {
+    // One branch-free pass over all values (the common, finite case); the offending row only on failure.
+    if !values.iter().fold(true, |finite, v| finite & v.is_finite()) {
+        let row = values
+            .chunks(row_len.max(1))
+            .position(|r| r.iter().any(|v| !v.is_finite()))
+            .unwrap_or(0);
         return Err(non_finite(name, row));
     }
     Ok((values, rows))
