@@ -4,7 +4,7 @@ use crate::camera::Camera;
 use crate::geometry::quaternion::{from_axis_angle, to_rotation_matrix};
 use crate::pose::Correspondences;
 use crate::rng::Rng;
-use nalgebra::{Matrix3, Vector2, Vector3};
+use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 
 /// A scene with its true pose and noise-free observations.
 #[derive(Debug, Clone)]
@@ -146,6 +146,87 @@ pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64)
     Scene { camera, rotation, translation, correspondences }
 }
 
+/// One 3-D point seen by several cameras: the input of point triangulation, with its truth.
+#[derive(Debug, Clone)]
+pub struct TriangulationScene {
+    /// 3x4 cameras `K [R | t]` mapping world points to pixels (`K`: f = 800, 640 x 480).
+    pub cameras: Vec<Matrix3x4<f64>>,
+    /// The true point (world units).
+    pub point: Vector3<f64>,
+    /// Its noise-free projections, one per camera (pixels, inside the image).
+    pub observations: Vec<Vector2<f64>>,
+}
+
+impl TriangulationScene {
+    /// The observations with i.i.d. Gaussian pixel noise of standard deviation `sigma` per coordinate.
+    pub fn noisy(&self, sigma: f64, rng: &mut Rng) -> Vec<Vector2<f64>> {
+        self.observations
+            .iter()
+            .map(|x| x + Vector2::new(sigma * rng.normal(), sigma * rng.normal()))
+            .collect()
+    }
+}
+
+/// A seeded scene of `views ≥ 2` cameras looking at one point with a given parallax: the largest
+/// angle between two rays from the point to the camera centres is exactly `parallax` (radians; two
+/// centres sit on opposite sides of a cone of half-angle `parallax/2` around a random mean direction,
+/// the others inside it). The point is near the world origin, the cameras 4-6 units away, each with
+/// a random roll and the point at a random pixel at least 40 px inside the 640 x 480 image.
+pub fn triangulation_scene(views: usize, parallax: f64, seed: u64) -> TriangulationScene {
+    let mut rng = Rng::new(seed);
+    let camera = Camera {
+        fx: 800.0,
+        fy: 800.0,
+        cx: 320.0,
+        cy: 240.0,
+        skew: 0.0,
+    };
+    let k = camera.matrix();
+    let point = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.5;
+    let mean = rng.unit_vector3();
+    let helper = if mean.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let e1 = mean.cross(&helper).normalize();
+    let e2 = mean.cross(&e1);
+    let half = 0.5 * parallax;
+    let mut cameras = Vec::with_capacity(views);
+    let mut observations = Vec::with_capacity(views);
+    for j in 0..views.max(2) {
+        let (theta, phi) = match j {
+            0 => (half, 0.0),
+            1 => (half, std::f64::consts::PI),
+            _ => (half * rng.uniform().sqrt(), rng.uniform_in(0.0, std::f64::consts::TAU)),
+        };
+        let direction = mean * theta.cos() + (e1 * phi.cos() + e2 * phi.sin()) * theta.sin();
+        let centre = point + direction * rng.uniform_in(4.0, 6.0);
+        // The ray to the point, in the camera frame, through a random pixel.
+        let pixel = Vector2::new(rng.uniform_in(40.0, 600.0), rng.uniform_in(40.0, 440.0));
+        let ray_cam = Vector3::new(
+            (pixel.x - camera.cx) / camera.fx,
+            (pixel.y - camera.cy) / camera.fy,
+            1.0,
+        )
+        .normalize();
+        let ray_world = (point - centre).normalize();
+        // R maps ray_world to ray_cam, after a random roll about ray_world.
+        let roll = to_rotation_matrix(&from_axis_angle(&ray_world, rng.uniform_in(0.0, std::f64::consts::TAU)));
+        let align = nalgebra::Rotation3::rotation_between(&ray_world, &ray_cam)
+            .unwrap_or_else(|| nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), std::f64::consts::PI))
+            .into_inner();
+        let rotation = align * roll;
+        let translation = -(rotation * centre);
+        let mut rt = Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&rotation);
+        rt.set_column(3, &translation);
+        cameras.push(k * rt);
+        observations.push(camera.project(&(rotation * point + translation)));
+    }
+    TriangulationScene {
+        cameras,
+        point,
+        observations,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -157,6 +238,27 @@ mod tests {
         for (x, u) in scene.correspondences.points3d.iter().zip(&scene.correspondences.points2d) {
             assert!(scene.to_camera(x).z > 0.0);
             assert!((0.0..512.0).contains(&u.x) && (0.0..512.0).contains(&u.y), "{u}");
+        }
+    }
+
+    #[test]
+    fn triangulation_scene_has_the_requested_parallax_and_projections() {
+        for (views, parallax, seed) in [(2, 0.2f64.to_radians(), 1), (7, 0.3, 2), (20, 1.0f64.to_radians(), 3)] {
+            let scene = triangulation_scene(views, parallax, seed);
+            assert_eq!(scene.cameras.len(), views);
+            let centres: Vec<Vector3<f64>> = scene.cameras.iter().map(crate::triangulation::views::centre).collect();
+            let mut widest: f64 = 0.0;
+            for a in &centres {
+                for b in &centres {
+                    widest = widest.max((a - scene.point).angle(&(b - scene.point)));
+                }
+            }
+            assert!((widest - parallax).abs() < 1e-9, "{widest} vs {parallax}");
+            for (p, u) in scene.cameras.iter().zip(&scene.observations) {
+                let h = p * scene.point.push(1.0);
+                assert!(h.z > 0.0 && (Vector2::new(h.x / h.z, h.y / h.z) - u).norm() < 1e-9);
+                assert!((40.0..600.0).contains(&u.x) && (40.0..440.0).contains(&u.y));
+            }
         }
     }
 }

@@ -128,6 +128,8 @@ pub struct SocpSolution {
     /// A valid lower bound of the program on the declared variable bounds (see the module docs);
     /// `−∞` unless `status` is `Solved`.
     pub lower_bound: f64,
+    /// The dual vector (clarabel's `z`, one entry per constraint row), for [`Socp::lower_bound`].
+    pub z: Vec<f64>,
     /// Interior-point iterations.
     pub iterations: usize,
 }
@@ -155,6 +157,12 @@ impl Socp {
         self.lower.push(lo);
         self.upper.push(hi);
         self.lower.len() - 1
+    }
+
+    /// Replaces the declared bounds of variable `j` (see [`Socp::add_variable`]).
+    pub fn set_variable_bounds(&mut self, j: usize, lo: f64, hi: f64) {
+        self.lower[j] = lo;
+        self.upper[j] = hi;
     }
 
     /// The number of variables.
@@ -213,13 +221,26 @@ impl Socp {
         self.second_order(u.clone().plus(v), &rows);
     }
 
-    /// Solves with clarabel's default settings (tolerances 1e-8), silently.
+    /// Solves with clarabel's default tolerances (1e-8), silently, without presolve (no infinite
+    /// bounds arise here) and without iterative refinement of the KKT solves (measured 30 % faster on
+    /// the branch-and-bound nodes; the bound below does not rely on the solver's accuracy).
     pub fn solve(&self) -> SocpSolution {
+        self.solve_with(DefaultSettings::<f64> {
+            verbose: false,
+            presolve_enable: false,
+            iterative_refinement_enable: false,
+            ..DefaultSettings::default()
+        })
+    }
+
+    /// Solves with the given clarabel settings.
+    pub fn solve_with(&self, settings: DefaultSettings<f64>) -> SocpSolution {
         let failed = |iterations| SocpSolution {
             status: SocpStatus::Failed,
             x: vec![f64::NAN; self.variables()],
             primal_objective: f64::NAN,
             lower_bound: f64::NEG_INFINITY,
+            z: Vec::new(),
             iterations,
         };
         let n = self.variables();
@@ -238,10 +259,6 @@ impl Socp {
                 Cone::SecondOrder => SupportedConeT::SecondOrderConeT(k),
             })
             .collect();
-        let settings = DefaultSettings::<f64> {
-            verbose: false,
-            ..DefaultSettings::default()
-        };
         let Ok(mut solver) = DefaultSolver::new(&p, &q, &a, &b, &cones, settings) else {
             return failed(0);
         };
@@ -254,23 +271,26 @@ impl Socp {
             SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => SocpStatus::Unbounded,
             _ => return failed(iterations),
         };
-        let x = sol.x.clone();
+        let (x, z) = (sol.x.clone(), sol.z.clone());
         if status != SocpStatus::Solved {
+            let lower_bound = f64::NEG_INFINITY;
             return SocpSolution {
                 status,
                 x,
                 primal_objective: f64::NAN,
-                lower_bound: f64::NEG_INFINITY,
+                lower_bound,
+                z,
                 iterations,
             };
         }
         let primal_objective = self.objective.eval(&x);
-        let lower_bound = self.dual_bound(&sol.z, &q);
+        let lower_bound = self.lower_bound(&z);
         SocpSolution {
             status,
             x,
             primal_objective,
             lower_bound,
+            z,
             iterations,
         }
     }
@@ -302,11 +322,19 @@ impl Socp {
         (CscMatrix::new(m, n, colptr, rowval, nzval), b)
     }
 
-    /// The weak-duality bound of the module docs for the dual vector `z` (projected onto `K*`).
-    fn dual_bound(&self, z: &[f64], q: &[f64]) -> f64 {
+    /// The weak-duality bound of the module docs for a dual vector `z` (projected onto `K*`) and the
+    /// current declared variable bounds: a lower bound of the objective over the feasible points
+    /// that satisfy the declared bounds (`−∞` if a needed bound is infinite).
+    pub fn lower_bound(&self, z: &[f64]) -> f64 {
+        if z.len() != self.rows.len() {
+            return f64::NEG_INFINITY;
+        }
         let z = self.project_dual(z);
         // ρ = c + Aᵀz with A = −(row coefficients); −bᵀz = −Σ constantᵢ zᵢ.
-        let mut rho = q.to_vec();
+        let mut rho = vec![0.0; self.variables()];
+        for &(j, c) in &self.objective.terms {
+            rho[j] += c;
+        }
         let mut bound = self.objective.constant;
         let mut magnitude = self.objective.constant.abs();
         for (row, &zi) in self.rows.iter().zip(&z) {

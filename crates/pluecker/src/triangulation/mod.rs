@@ -19,6 +19,11 @@ pub mod fraction;
 pub mod line;
 pub mod line_residual;
 pub mod point;
+pub mod point_certificate;
+pub mod point_chart;
+pub mod point_cost;
+pub mod point_global;
+pub mod point_linear;
 
 pub mod quadric;
 pub mod quadric_residual;
@@ -123,6 +128,8 @@ pub enum Status {
     BehindCamera,
     /// The estimate is a point at infinity (parallel rays): no finite point can be returned.
     AtInfinity,
+    /// The estimate is a point at infinity (parallel rays): no finite point can be returned.
+    AtInfinity,
     /// No primitive has every reprojection error below the user's γ.
     Infeasible,
     /// The solver failed numerically (a singular system, a conic solver failure).
@@ -137,6 +144,7 @@ impl Status {
             Status::GapNotClosed => "gap_not_closed",
             Status::NotConverged => "not_converged",
             Status::BehindCamera => "behind_camera",
+            Status::AtInfinity => "at_infinity",
             Status::AtInfinity => "at_infinity",
             Status::Infeasible => "infeasible",
             Status::NumericalFailure => "numerical_failure",

@@ -1,1 +1,302 @@
-//! (being written)
+//! Triangulation of a point from two or more views (Josephson & Kahl 2008, sections 2.1, 3, 4).
+//!
+//! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(X)‖²`, the reprojection error of eq. 15 whitened by the
+//! observation covariances (eq. 18; squared pixels without covariances), over points in front of
+//! every camera (`λ > 0` in eq. 1). The three [`Method`]s:
+//! - `linear`: the DLT with conditioning ([`super::point_linear`]);
+//! - `local`: the trust region of [`crate::optim`] on eq. 19 from the linear point
+//!   ([`super::point_cost`]); when that start is behind a camera (or at infinity), from the best point
+//!   in front of every camera on one of the back-projected rays instead;
+//! - `optimal`: the local solution, certified by the convexity test of
+//!   [`super::point_certificate`] when it passes, else by branch and bound over the SOCP relaxation
+//!   of eqs. 21-22 ([`super::point_global`]).
+//!
+//! Degenerate input is an error: fewer than two views, mismatched lengths, NaN/inf, a singular
+//! camera, a covariance that is not positive definite, or cameras sharing one centre (no parallax).
+//! A solve that runs but fails reports it in [`Report::status`].
+
+use super::covariance::whitenings;
+use super::point_certificate::convexity_test;
+use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
+use super::point_global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
+use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
+use super::views::{baseline, centre, depth_normalized, validate_cameras};
+use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use crate::error::{Error, Result};
+use crate::optim::{trust_region, Termination};
+use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
+use std::time::Instant;
+
+/// Centres closer than this, relative to their distance from the origin (at least 1), coincide.
+const SAME_CENTRE: f64 = 1e-10;
+/// Depths tried along each back-projected ray for a start in front of the cameras: log-spaced from
+/// `10^-2` camera spreads to the given maximum.
+const RAY_DEPTHS: usize = 33;
+/// The farthest start of the local method, in camera spreads (parallax ~ 1e-6 rad).
+const FARTHEST_START: f64 = 1e6;
+/// The farthest chart origin of branch and bound, in camera spreads (parallax ~ 1e-3 rad), where
+/// the Gauss-Newton Hessian is still well conditioned.
+const FARTHEST_ORIGIN: f64 = 1e3;
+
+/// A triangulated point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointTriangulation {
+    /// The point, world coordinates (NaN when the status is [`Status::AtInfinity`]).
+    pub point: Vector3<f64>,
+    /// What the method did: status, cost of eq. 19, certificate, iterations, time.
+    pub report: Report,
+}
+
+/// Triangulates one point seen by `cameras` (3x4, world → pixels, any scale and sign) at the pixels
+/// `observations`, with optional 2x2 pixel covariances (one per view; identity when `None`).
+///
+/// Errors: [`Error::TooFewCorrespondences`] for fewer than 2 views, [`Error::Shape`] for mismatched
+/// lengths, [`Error::NonFinite`] naming the argument and row, [`Error::SingularCamera`],
+/// [`Error::Degenerate`] for a covariance that is not positive definite or cameras with one common
+/// centre, [`Error::InvalidOption`] for bad options.
+pub fn triangulate_point(
+    cameras: &[Matrix3x4<f64>],
+    observations: &[Vector2<f64>],
+    covariances: Option<&[Matrix2<f64>]>,
+    opts: &TriangulationOptions,
+) -> Result<PointTriangulation> {
+    let started = Instant::now();
+    opts.validate()?;
+    check_track(cameras, observations, opts.method)?;
+    validate_cameras(cameras, "cameras")?;
+    if let Some(row) = observations.iter().position(|x| !(x.x.is_finite() && x.y.is_finite())) {
+        return Err(Error::NonFinite {
+            what: "observations".into(),
+            index: row,
+        });
+    }
+    let whitening = whitenings(covariances, cameras.len(), "covariances")?;
+    check_parallax(cameras, "cameras")?;
+    let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
+    let views = point_views(&normalized, observations, &whitening);
+    Ok(solve_views(&views, &frame_of_cameras(cameras), opts, started))
+}
+
+/// At least two views and one observation per camera.
+pub(crate) fn check_track(cameras: &[Matrix3x4<f64>], observations: &[Vector2<f64>], method: Method) -> Result<()> {
+    if cameras.len() < 2 {
+        return Err(Error::TooFewCorrespondences {
+            method: method.as_str().into(),
+            required: "2 views of the point".into(),
+            actual: format!("{} view(s)", cameras.len()),
+        });
+    }
+    if observations.len() != cameras.len() {
+        return Err(Error::Shape {
+            what: "observations".into(),
+            expected: format!("{} points (one per camera)", cameras.len()),
+            actual: format!("{}", observations.len()),
+        });
+    }
+    Ok(())
+}
+
+/// [`Error::Degenerate`] when every camera has the same centre (no parallax).
+pub(crate) fn check_parallax(cameras: &[Matrix3x4<f64>], what: &str) -> Result<()> {
+    let scale = cameras.iter().map(|p| centre(p).norm()).fold(1.0, f64::max);
+    if baseline(cameras) <= SAME_CENTRE * scale {
+        return Err(Error::Degenerate {
+            what: format!("{what}: all camera centres coincide (no parallax)"),
+        });
+    }
+    Ok(())
+}
+
+/// The chosen method on prepared views (checked input); `started` times the whole call.
+pub(crate) fn solve_views(
+    views: &[PointView],
+    frame: &WorldFrame,
+    opts: &TriangulationOptions,
+    started: Instant,
+) -> PointTriangulation {
+    let linear = linear_point(views, frame);
+    let mut report = Report {
+        method: opts.method,
+        status: Status::Success,
+        cost: f64::NAN,
+        certificate: Certificate::none(),
+        iterations: 0,
+        termination: Termination::ClosedForm,
+        time_seconds: 0.0,
+    };
+    let finish = |point: Vector3<f64>, mut report: Report| {
+        report.time_seconds = started.elapsed().as_secs_f64();
+        PointTriangulation { point, report }
+    };
+    if opts.method == Method::Linear {
+        return match linear {
+            LinearPoint::Finite(x) => {
+                report.cost = point_cost(views, &x);
+                report.status = if in_front(views, &x) {
+                    Status::Success
+                } else {
+                    Status::BehindCamera
+                };
+                finish(x, report)
+            }
+            LinearPoint::AtInfinity(_) => {
+                report.status = Status::AtInfinity;
+                finish(Vector3::repeat(f64::NAN), report)
+            }
+        };
+    }
+    let Some((x, termination, iterations)) = local_solution(views, frame, linear, opts) else {
+        report.status = Status::AtInfinity;
+        return finish(Vector3::repeat(f64::NAN), report);
+    };
+    report.cost = point_cost(views, &x);
+    report.iterations = iterations;
+    report.termination = termination;
+    report.status = match termination {
+        Termination::NonFiniteCost | Termination::SingularHessian => Status::NumericalFailure,
+        _ if !in_front(views, &x) => Status::BehindCamera,
+        Termination::MaxIterations => Status::NotConverged,
+        _ => Status::Success,
+    };
+    if opts.method == Method::Local || matches!(report.status, Status::NumericalFailure | Status::BehindCamera) {
+        return finish(x, report);
+    }
+    let (x, status, certificate, cost) = certify(views, frame, x, report.cost, linear, opts);
+    report.status = status;
+    report.certificate = certificate;
+    report.cost = cost;
+    finish(x, report)
+}
+
+/// The local minimum of eq. 19 from the linear point, or from a start in front of the cameras when
+/// that one is behind a camera, at infinity, or ends behind one. `None` when no start exists.
+fn local_solution(
+    views: &[PointView],
+    frame: &WorldFrame,
+    linear: LinearPoint,
+    opts: &TriangulationOptions,
+) -> Option<(Vector3<f64>, Termination, usize)> {
+    let objective = PointObjective { views };
+    let run = |x0: Vector3<f64>| {
+        let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
+        (x, summary.termination, summary.iterations)
+    };
+    let from_linear = match linear {
+        LinearPoint::Finite(x) => Some(run(x)),
+        LinearPoint::AtInfinity(_) => None,
+    };
+    if from_linear.as_ref().is_some_and(|r| in_front(views, &r.0)) {
+        return from_linear;
+    }
+    match ray_start(views, frame, FARTHEST_START).map(run) {
+        Some(r) if in_front(views, &r.0) => Some(r),
+        other => from_linear.or(other),
+    }
+}
+
+/// The cheapest point in front of every camera among log-spaced depths along each view's
+/// back-projected ray (the ray of view `i` solves `Aᵢ X = −Wᵢ[:, 3]`), up to `farthest` camera spreads.
+fn ray_start(views: &[PointView], frame: &WorldFrame, farthest: f64) -> Option<Vector3<f64>> {
+    let mut best: Option<(f64, Vector3<f64>)> = None;
+    for v in views {
+        let a = v.a();
+        let direction = a.row(0).transpose().cross(&a.row(1).transpose());
+        let c = v.c();
+        if !(c.dot(&direction).abs() > 1e-12 * direction.norm()) {
+            continue;
+        }
+        // A point on the ray (least norm), then the point at depth z: x0 + (z − z(x0))/(c·d) d.
+        let Some(x0) = (a * a.transpose())
+            .try_inverse()
+            .map(|g| -(a.transpose() * (g * v.w.column(3))))
+        else {
+            continue;
+        };
+        let z0 = v.depth(&x0);
+        for k in 0..RAY_DEPTHS {
+            let span = farthest.log10() + 2.0;
+            let z = frame.scale * 10f64.powf(-2.0 + span * k as f64 / (RAY_DEPTHS - 1) as f64);
+            let x = x0 + direction * ((z - z0) / c.dot(&direction));
+            if in_front(views, &x) {
+                let cost = point_cost(views, &x);
+                if best.map_or(true, |b| cost < b.0) {
+                    best = Some((cost, x));
+                }
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// The certificate of a local solution in front of every camera: the convexity test, then branch
+/// and bound. Returns the (possibly improved) point, its status, the certificate and its cost.
+fn certify(
+    views: &[PointView],
+    frame: &WorldFrame,
+    x: Vector3<f64>,
+    cost: f64,
+    linear: LinearPoint,
+    opts: &TriangulationOptions,
+) -> (Vector3<f64>, Status, Certificate, f64) {
+    let relative_gap = |cost: f64, lower: f64| {
+        if cost > 0.0 {
+            ((cost - lower) / cost).max(0.0)
+        } else {
+            0.0
+        }
+    };
+    let test = convexity_test(views, &x);
+    if test.passed {
+        let gap = relative_gap(cost, test.lower_bound);
+        if gap <= opts.max_relative_gap {
+            let certificate = Certificate {
+                lower_bound: test.lower_bound,
+                relative_gap: gap,
+                certified: true,
+                kind: CertificateKind::ConvexityTest,
+                nodes: 0,
+                solver_iterations: 0,
+            };
+            return (x, Status::Success, certificate, cost);
+        }
+    }
+    // Chart origins when the local solution itself cannot be one (it ran off towards infinity).
+    let mut origins: Vec<Vector3<f64>> = Vec::new();
+    if let LinearPoint::Finite(p) = linear {
+        if in_front(views, &p) {
+            origins.push(p);
+        }
+    }
+    origins.extend(ray_start(views, frame, FARTHEST_ORIGIN));
+    let settings = GlobalSettings {
+        gamma: opts.max_reprojection_error.unwrap_or_else(|| cost.sqrt()),
+        max_relative_gap: opts.max_relative_gap,
+        max_nodes: opts.max_nodes,
+        local: opts.local,
+        relaxation: DEFAULT_RELAXATION,
+    };
+    let g = global_point(views, &x, cost, &origins, &settings);
+    let lower_bound = if test.passed {
+        g.lower_bound.max(test.lower_bound)
+    } else {
+        g.lower_bound
+    }
+    .min(g.cost);
+    let gap = relative_gap(g.cost, lower_bound);
+    let status = match g.status {
+        GlobalStatus::Converged => Status::Success,
+        GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
+        GlobalStatus::Infeasible => Status::Infeasible,
+        GlobalStatus::Failed => Status::NumericalFailure,
+    };
+    let certified = g.status == GlobalStatus::Converged && gap <= opts.max_relative_gap;
+    let certificate = Certificate {
+        lower_bound,
+        relative_gap: gap,
+        certified,
+        kind: CertificateKind::BranchAndBound,
+        nodes: g.nodes,
+        solver_iterations: g.solver_iterations,
+    };
+    (g.point, status, certificate, g.cost)
+}

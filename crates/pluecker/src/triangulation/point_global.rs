@@ -1,0 +1,465 @@
+//! Branch and bound for a point (Josephson & Kahl 2008, section 4), when the convexity test of
+//! [`super::point_certificate`] cannot decide.
+//!
+//! **Coordinates.** The box is over the whitened coordinates `y` of the mean-depth chart around the
+//! local solution `X̂` ([`super::point_chart`]): per view the numerator `aᵢ(y)` and the denominator
+//! `ζᵢ(y)` of the fraction `‖rᵢ‖² = ‖aᵢ‖²/ζᵢ²` are affine, points at infinity are finite (`w = 0`),
+//! and the denominators' intervals over a box follow exactly from it (interval arithmetic on affine
+//! functions). Branching on three coordinates therefore refines every view's denominator — the
+//! paper's remark that three branching dimensions suffice for a point (section 4.2). The axis to
+//! split is the one contributing most to the widest relative denominator interval `(Uᵢ − Lᵢ)/Lᵢ`;
+//! the split is at the relaxed minimiser kept inside the middle half of the interval.
+//!
+//! **Search set.** Every point at least as good as `X̂` lies in `S_{ε₀}` (each view's error is at
+//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of [`super::point_certificate::enclosure`]
+//! (`S_{ε₀}` cut by an ellipsoid); points outside cost more than `f(X̂)`. The search runs over
+//! `K ∩ S_γ ∩ {w ≥ 0}` (`γ` the user's `max_reprojection_error`, by default `ε₀`), so a lower bound
+//! below `f(X̂)` is a lower bound over every point in front of the cameras within `γ`.
+//!
+//! **Initial box (sections 4.3.1, eq. 26).** The bounding box of `K` and its depth bounds
+//! `ζᵢ ∈ [1 − κ_d, 1 + κ_d]` when the enclosure exists; otherwise six SOCPs give the extent of the
+//! search set along each axis: their primal values suggest a box `B` (enlarged by 5 %), their dual
+//! bounds over the set `∩ B` prove the extent, and when that lies strictly inside `B` the convex set
+//! lies in `B` (leaving `B` it would cross its boundary inside the proved extent). Views whose
+//! denominator interval reaches below `½` get their own eq. 26 solve `min ζᵢ`.
+//!
+//! **Bound (section 4.1).** One SOCP per node over `y` and per view a variable `rᵢ ≥ ‖rᵢ(y)‖²`'s
+//! relaxation, minimising `Σ rᵢ` under the search-set constraints, with [`Relaxation`] choosing
+//! the relaxation of each fraction: the paper's eqs. 21-22 (`‖aᵢ‖² ≤ tᵢζᵢ`, `rᵢ ≥ convenv(tᵢ/ζᵢ)` over
+//! `tᵢ ∈ [0, uᵢ]`, `ζᵢ ∈ [Lᵢ, Uᵢ]`, `uᵢ = min(γ'²Uᵢ, max over the box corners of ‖aᵢ‖²/ζᵢ)`), or the
+//! secant `‖aᵢ‖² ≤ rᵢ((Uᵢ + Lᵢ)ζᵢ − UᵢLᵢ)`, which is the convex envelope of `‖a‖²/ζ²` over the slab
+//! `ζ ∈ [L, U]` (`ζ² ≤ (U + L)ζ − UL` there, with equality at both ends; its relative gap is
+//! `(ζ − L)(U − ζ)/ζ²`, quadratic in the interval), or both. The bound is the dual bound of
+//! [`crate::global::socp`], valid despite the solver's tolerance. The upper bound comes from a
+//! local minimisation started at the relaxed minimiser.
+
+use super::point_certificate::{enclosure, Enclosure};
+use super::point_chart::{Chart, ChartKind, ChartView};
+use super::point_cost::{in_front, point_cost, PointObjective, PointView};
+use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
+use crate::global::socp::{Affine, Socp, SocpStatus};
+use crate::optim::{trust_region, TrustRegionOptions};
+use nalgebra::Vector3;
+
+/// Views whose denominator can fall below this value get an eq. 26 solve.
+const WEAK_DEPTH: f64 = 0.5;
+/// Relative enlargement of the suggested initial box.
+const BOX_MARGIN: f64 = 0.05;
+
+/// The relaxation of each fraction in the node SOCP (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Relaxation {
+    /// Eqs. 21-22: the envelope of `t/s` over the box of `(t, s)`.
+    Fractional,
+    /// The secant (convex envelope of `‖a‖²/ζ²` over the slab).
+    Secant,
+    /// Both constraints on the same `rᵢ`.
+    Both,
+}
+
+/// The relaxation used by [`global_point`] (the measured choice, see the crate README).
+pub const DEFAULT_RELAXATION: Relaxation = Relaxation::Secant;
+
+/// How the search ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GlobalStatus {
+    /// The gap closed.
+    Converged,
+    /// The node cap was reached first.
+    NodeLimit,
+    /// The search set is empty (the conic solver's infeasibility certificate): no point within γ.
+    Infeasible,
+    /// The search set is unbounded or reaches a camera's principal plane: no box, no certificate.
+    Unbounded,
+    /// A conic solve of the initial box failed, or the chart is singular.
+    Failed,
+}
+
+/// The outcome of [`global_point`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct GlobalPoint {
+    /// The best point found (the local solution unless a node improved on it).
+    pub point: Vector3<f64>,
+    /// Its cost (eq. 19).
+    pub cost: f64,
+    /// A valid lower bound of the cost over the search set (0 when none was proved).
+    pub lower_bound: f64,
+    /// How it ended.
+    pub status: GlobalStatus,
+    /// Nodes whose bound was computed.
+    pub nodes: usize,
+    /// Interior-point iterations, summed (initial box included).
+    pub solver_iterations: usize,
+}
+
+/// The affine rows of one view over the variables `y`.
+fn numerator(v: &ChartView, y: &[usize; 3]) -> [Affine; 2] {
+    let row = |k: usize| Affine {
+        terms: (0..3).map(|j| (y[j], v.g[(k, j)])).collect(),
+        constant: v.a0[k],
+    };
+    [row(0), row(1)]
+}
+
+fn denominator(v: &ChartView, y: &[usize; 3]) -> Affine {
+    Affine {
+        terms: (0..3).map(|j| (y[j], v.d[j])).collect(),
+        constant: 1.0,
+    }
+}
+
+/// The exact range of `ζ` over a box.
+fn denominator_range(v: &ChartView, region: &Region) -> (f64, f64) {
+    let (mut lo, mut hi) = (1.0, 1.0);
+    for k in 0..3 {
+        let (a, b) = (v.d[k] * region.lower[k], v.d[k] * region.upper[k]);
+        lo += a.min(b);
+        hi += a.max(b);
+    }
+    (lo, hi)
+}
+
+/// `max ‖a‖²/ζ` over the corners of a box on which `ζ > 0` (a convex function peaks at a corner).
+fn numerator_peak(v: &ChartView, region: &Region) -> f64 {
+    (0..8)
+        .map(|corner| {
+            let y = Vector3::from_fn(|k, _| {
+                if corner & (1 << k) == 0 {
+                    region.lower[k]
+                } else {
+                    region.upper[k]
+                }
+            });
+            v.numerator(&y).norm_squared() / v.denominator(&y)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The constraints of the search set (module docs) on the variables `y`.
+fn add_search_set(p: &mut Socp, chart: &Chart, y: &[usize; 3], gamma: f64, enclosure: Option<&Enclosure>) {
+    let w = Affine {
+        terms: (0..3).map(|j| (y[j], -chart.w_gradient[j])).collect(),
+        constant: 1.0,
+    };
+    p.nonneg(w);
+    for v in &chart.views {
+        p.second_order(denominator(v, y).scaled(gamma), &numerator(v, y));
+    }
+    if let Some(k) = enclosure {
+        let rows: Vec<Affine> = chart.views.iter().flat_map(|v| numerator(v, y)).collect();
+        p.second_order(Affine::constant(k.q_bound()), &rows);
+    }
+}
+
+/// The bounding oracle of the module docs.
+struct PointOracle<'a> {
+    views: &'a [PointView],
+    chart: Chart,
+    enclosure: Option<Enclosure>,
+    /// Denominator bounds valid on the whole search set.
+    root_depths: Vec<(f64, f64)>,
+    gamma: f64,
+    relaxation: Relaxation,
+    local: TrustRegionOptions,
+}
+
+impl PointOracle<'_> {
+    /// Per view `(L, U, ζ > 0 on the whole box)`, or `None` if an interval is empty.
+    fn depth_intervals(&self, region: &Region) -> Option<Vec<(f64, f64, bool)>> {
+        let mut out = Vec::with_capacity(self.chart.views.len());
+        for (v, &(root_lo, root_hi)) in self.chart.views.iter().zip(&self.root_depths) {
+            let (lo, hi) = denominator_range(v, region);
+            let (l, u) = (lo.max(root_lo), hi.min(root_hi));
+            if l > u {
+                return None;
+            }
+            out.push((l, u, lo > 0.0));
+        }
+        Some(out)
+    }
+
+    /// The local minimisation from the chart point `y`, kept if it ends in front of every camera.
+    fn polish(&self, y: &[f64]) -> Option<(f64, Vector3<f64>)> {
+        let x0 = self.chart.point(&Vector3::new(y[0], y[1], y[2]))?;
+        let (x, _) = trust_region::minimize(&PointObjective { views: self.views }, x0, &self.local);
+        in_front(self.views, &x).then(|| (point_cost(self.views, &x), x))
+    }
+}
+
+impl BoundingOracle for PointOracle<'_> {
+    type Candidate = Vector3<f64>;
+
+    fn bound(&mut self, region: &Region) -> Bound<Vector3<f64>> {
+        let Some(intervals) = self.depth_intervals(region) else {
+            return Bound::Empty { solver_iterations: 0 };
+        };
+        let mut p = Socp::new();
+        let y = [0, 1, 2].map(|k| p.add_variable(region.lower[k], region.upper[k]));
+        for k in 0..3 {
+            p.nonneg(Affine::var(y[k]).shifted(-region.lower[k]));
+            p.nonneg(Affine::term(y[k], -1.0).shifted(region.upper[k]));
+        }
+        add_search_set(&mut p, &self.chart, &y, self.gamma, self.enclosure.as_ref());
+        // Every view's error is at most γ' on the search set.
+        let gamma = self
+            .enclosure
+            .as_ref()
+            .map_or(self.gamma, |k| self.gamma.min(k.q_bound()));
+        let mut objective = Affine::default();
+        for (v, &(lo, hi, positive)) in self.chart.views.iter().zip(&intervals) {
+            let a = numerator(v, &y);
+            let zeta = denominator(v, &y);
+            let r_max = gamma * gamma * hi * hi / (lo * lo);
+            let r = p.add_variable(0.0, r_max);
+            p.less_eq(&Affine::var(r), &Affine::constant(r_max));
+            if self.relaxation != Relaxation::Fractional {
+                let secant = zeta.clone().scaled(hi + lo).shifted(-hi * lo);
+                add_quadratic_over_linear(&mut p, &a, &secant, &Affine::var(r));
+            }
+            if self.relaxation != Relaxation::Secant {
+                let mut t_upper = gamma * gamma * hi;
+                if positive {
+                    t_upper = t_upper.min(numerator_peak(v, region));
+                }
+                let t = p.add_variable(0.0, t_upper);
+                add_quadratic_over_linear(&mut p, &a, &zeta, &Affine::var(t));
+                let b = FractionBox {
+                    t_lower: 0.0,
+                    t_upper,
+                    s_lower: lo,
+                    s_upper: hi,
+                };
+                let envelope = add_fraction_envelope(&mut p, &Affine::var(t), &zeta, &b);
+                p.less_eq(&Affine::var(envelope), &Affine::var(r));
+            }
+            objective = objective.plus(&Affine::var(r));
+        }
+        p.minimize(objective);
+        let sol = p.solve();
+        let solver_iterations = sol.iterations;
+        match sol.status {
+            SocpStatus::Infeasible => Bound::Empty { solver_iterations },
+            SocpStatus::Solved if sol.lower_bound.is_finite() => {
+                let relaxed: Vec<f64> = (0..3)
+                    .map(|k| sol.x[y[k]].clamp(region.lower[k], region.upper[k]))
+                    .collect();
+                let candidate = self.polish(&relaxed);
+                Bound::Bounded {
+                    lower: sol.lower_bound.max(0.0),
+                    relaxed_minimizer: relaxed,
+                    candidate,
+                    solver_iterations,
+                }
+            }
+            _ => Bound::Failed { solver_iterations },
+        }
+    }
+
+    fn split(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
+        // The view with the widest relative denominator interval, then the axis that widens it most.
+        let widest = self
+            .chart
+            .views
+            .iter()
+            .zip(&self.root_depths)
+            .map(|(v, &(root_lo, root_hi))| {
+                let (lo, hi) = denominator_range(v, region);
+                let (l, u) = (lo.max(root_lo), hi.min(root_hi));
+                ((u - l) / l, v)
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, v)| v);
+        let contribution = |k: usize| widest.map_or(1.0, |v| v.d[k].abs()) * region.width(k);
+        let mut axis = (0..3)
+            .max_by(|&a, &b| contribution(a).total_cmp(&contribution(b)))
+            .unwrap_or(0);
+        if contribution(axis) <= 0.0 {
+            axis = (0..3)
+                .max_by(|&a, &b| region.width(a).total_cmp(&region.width(b)))
+                .unwrap_or(0);
+        }
+        let at = relaxed_minimizer.map_or(0.5 * (region.lower[axis] + region.upper[axis]), |m| m[axis]);
+        (axis, region.central(axis, at))
+    }
+}
+
+/// The initial box and the denominator bounds on the search set.
+struct Root {
+    region: Region,
+    depths: Vec<(f64, f64)>,
+    solver_iterations: usize,
+}
+
+/// The initial box by conic solves (module docs).
+fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure>) -> Result<Root, GlobalStatus> {
+    let mut base = Socp::new();
+    let y = [0, 1, 2].map(|_| base.add_variable(f64::NEG_INFINITY, f64::INFINITY));
+    add_search_set(&mut base, chart, &y, gamma, enclosure);
+    let mut iterations = 0;
+    let mut solves = Vec::with_capacity(6);
+    for k in 0..3 {
+        for sign in [1.0, -1.0] {
+            let mut p = base.clone();
+            p.minimize(Affine::term(y[k], sign));
+            let sol = p.solve();
+            iterations += sol.iterations;
+            match sol.status {
+                SocpStatus::Solved => solves.push((p, sol)),
+                SocpStatus::Infeasible => return Err(GlobalStatus::Infeasible),
+                SocpStatus::Unbounded => return Err(GlobalStatus::Unbounded),
+                SocpStatus::Failed => return Err(GlobalStatus::Failed),
+            }
+        }
+    }
+    // The suggested box from the primal values, then the proof that the set lies inside it.
+    let (mut lower, mut upper) = ([0.0; 3], [0.0; 3]);
+    for k in 0..3 {
+        let (lo, hi) = (solves[2 * k].1.x[y[k]], solves[2 * k + 1].1.x[y[k]]);
+        let margin = BOX_MARGIN * (hi - lo).abs() + 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+        lower[k] = lo - margin;
+        upper[k] = hi + margin;
+    }
+    let mut proved = Region::new(vec![0.0; 3], vec![0.0; 3]);
+    for k in 0..3 {
+        for (i, (p, sol)) in solves[2 * k..2 * k + 2].iter_mut().enumerate() {
+            for j in 0..3 {
+                p.set_variable_bounds(y[j], lower[j], upper[j]);
+            }
+            let bound = p.lower_bound(&sol.z);
+            if i == 0 {
+                proved.lower[k] = bound;
+            } else {
+                proved.upper[k] = -bound;
+            }
+        }
+        if !(proved.lower[k] > lower[k] && proved.upper[k] < upper[k]) {
+            return Err(GlobalStatus::Failed);
+        }
+    }
+    let mut depths = Vec::with_capacity(chart.views.len());
+    for v in &chart.views {
+        let (mut lo, hi) = denominator_range(v, &proved);
+        if lo < WEAK_DEPTH {
+            let mut p = base.clone();
+            for j in 0..3 {
+                p.set_variable_bounds(y[j], proved.lower[j], proved.upper[j]);
+                p.nonneg(Affine::var(y[j]).shifted(-proved.lower[j]));
+                p.nonneg(Affine::term(y[j], -1.0).shifted(proved.upper[j]));
+            }
+            p.minimize(denominator(v, &y));
+            let sol = p.solve();
+            iterations += sol.iterations;
+            if sol.status != SocpStatus::Solved {
+                return Err(GlobalStatus::Failed);
+            }
+            lo = lo.max(sol.lower_bound);
+        }
+        if !(lo > 0.0) {
+            return Err(GlobalStatus::Unbounded);
+        }
+        depths.push((lo, hi));
+    }
+    Ok(Root {
+        region: proved,
+        depths,
+        solver_iterations: iterations,
+    })
+}
+
+/// Settings of [`global_point`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GlobalSettings {
+    /// Per-view radius `γ` of the search set (the user's `max_reprojection_error`, else `ε₀`).
+    pub gamma: f64,
+    /// Stop when `(upper − lower) ≤ max_relative_gap · upper`.
+    pub max_relative_gap: f64,
+    /// Node cap.
+    pub max_nodes: usize,
+    /// The local minimisation of the upper bounds.
+    pub local: TrustRegionOptions,
+    /// The relaxation of each fraction.
+    pub relaxation: Relaxation,
+}
+
+/// Minimises eq. 19 by branch and bound over the search set of the module docs, from the incumbent
+/// `x_local` (in front of every camera, with cost `cost_local`: the local solution). The chart is
+/// centred at the first of `x_local` and `origins` where it is well conditioned (a local solution
+/// that ran off towards infinity is not; a point in front of the cameras at a moderate depth is).
+pub fn global_point(
+    views: &[PointView],
+    x_local: &Vector3<f64>,
+    cost_local: f64,
+    origins: &[Vector3<f64>],
+    settings: &GlobalSettings,
+) -> GlobalPoint {
+    let GlobalSettings {
+        gamma,
+        max_relative_gap,
+        max_nodes,
+        local,
+        relaxation,
+    } = *settings;
+    let finish = |status| GlobalPoint {
+        point: *x_local,
+        cost: cost_local,
+        lower_bound: 0.0,
+        status,
+        nodes: 0,
+        solver_iterations: 0,
+    };
+    let chart = std::iter::once(x_local)
+        .chain(origins)
+        .find_map(|x| Chart::new(views, x, ChartKind::MeanDepth));
+    let Some(chart) = chart else {
+        return finish(GlobalStatus::Failed);
+    };
+    // Every point at least as good as the incumbent lies in S_γ ∩ K when γ ≥ ε₀ (module docs).
+    let enclosure = enclosure(&chart, cost_local, gamma.max(cost_local.sqrt()), true);
+    let from_enclosure = enclosure.as_ref().and_then(|k| {
+        let (lo, hi) = k.bounding_box()?;
+        Some(Root {
+            region: Region::new(lo.iter().copied().collect(), hi.iter().copied().collect()),
+            depths: vec![(1.0 - k.kappa_d, 1.0 + k.kappa_d); views.len()],
+            solver_iterations: 0,
+        })
+    });
+    let root = match from_enclosure {
+        Some(root) => root,
+        None => match root_by_solves(&chart, gamma, enclosure.as_ref()) {
+            Ok(root) => root,
+            Err(status) => return finish(status),
+        },
+    };
+    let mut oracle = PointOracle {
+        views,
+        chart,
+        enclosure,
+        root_depths: root.depths,
+        gamma,
+        relaxation,
+        local,
+    };
+    let opts = BranchAndBoundOptions {
+        max_relative_gap,
+        max_nodes,
+        trivial_lower_bound: 0.0,
+    };
+    let result = branch_and_bound(&mut oracle, root.region, Some((cost_local, *x_local)), &opts);
+    let (cost, point) = result.best.unwrap_or((cost_local, *x_local));
+    let status = if result.lower_bound == f64::INFINITY {
+        GlobalStatus::Infeasible
+    } else if result.converged {
+        GlobalStatus::Converged
+    } else {
+        GlobalStatus::NodeLimit
+    };
+    GlobalPoint {
+        point,
+        cost,
+        lower_bound: result.lower_bound.min(cost),
+        status,
+        nodes: result.nodes,
+        solver_iterations: result.solver_iterations + root.solver_iterations,
+    }
+}

@@ -1,0 +1,131 @@
+//! The linear (DLT) triangulation of a point (Hartley & Zisserman, section 12.2), with conditioning.
+//!
+//! Each view contributes the two rows `W = L [p₁ − u p₃; p₂ − v p₃]` of [`PointView`] (the
+//! numerators of eq. 16, whitened by eq. 18): `W X̃ = 0` for the true point. The point is the least
+//! right singular vector of the stacked rows, i.e. the eigenvector of the least eigenvalue of the 4x4
+//! Gram matrix `Σ BᵢᵀBᵢ` of the conditioned rows `Bᵢ`.
+//!
+//! Conditioning (the role of Hartley's normalisation): the world is translated to the centroid `C̄` of
+//! the camera centres and scaled by their RMS distance `s` to it ([`WorldFrame`]), `X = C̄ + s X'`;
+//! each view's row pair is divided by the Frobenius norm of its 3x3 part, so that every view counts
+//! alike whatever its focal length, covariance scale or the arbitrary scale of its `P`. A solution
+//! with a (relatively) zero fourth coordinate is a point at infinity: parallel rays.
+
+use super::point_cost::PointView;
+use nalgebra::{Matrix2x4, Matrix3x4, Matrix4, SymmetricEigen, Vector3, Vector4};
+
+/// `|X̃₄| ≤ AT_INFINITY · ‖X̃‖` (conditioned coordinates) is a point at infinity: a point
+/// `10¹²` camera spreads away, beyond what double precision can place.
+const AT_INFINITY: f64 = 1e-12;
+
+/// A similarity `X = centre + scale · X'` that conditions the DLT (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorldFrame {
+    /// `C̄`, the centroid of the camera centres (world units).
+    pub centre: Vector3<f64>,
+    /// `s`, the RMS distance of the centres to `C̄` (world units, > 0 when the centres differ).
+    pub scale: f64,
+}
+
+impl WorldFrame {
+    /// The frame of a set of camera centres.
+    pub fn from_centres(centres: &[Vector3<f64>]) -> WorldFrame {
+        let n = centres.len().max(1) as f64;
+        let centre = centres.iter().sum::<Vector3<f64>>() / n;
+        let scale = (centres.iter().map(|c| (c - centre).norm_squared()).sum::<f64>() / n).sqrt();
+        WorldFrame {
+            centre,
+            scale: if scale > 0.0 { scale } else { 1.0 },
+        }
+    }
+}
+
+/// The result of the DLT.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LinearPoint {
+    /// A finite point (world coordinates).
+    Finite(Vector3<f64>),
+    /// A point at infinity in this (unit) world direction.
+    AtInfinity(Vector3<f64>),
+}
+
+/// Adds the conditioned rows of one view to the Gram matrix `g`.
+pub fn accumulate_dlt(g: &mut Matrix4<f64>, view: &PointView, frame: &WorldFrame) {
+    let a = view.a();
+    let norm = a.norm();
+    if !(norm > 0.0) {
+        return;
+    }
+    // B = W H / (s ‖A‖) with H = [[s I, C̄], [0, 1]]: B = [A / ‖A‖, W (C̄, 1) / (s ‖A‖)].
+    let offset = view.numerator(&frame.centre) / (frame.scale * norm);
+    let b = Matrix2x4::from_columns(&[a.column(0) / norm, a.column(1) / norm, a.column(2) / norm, offset]);
+    *g += b.transpose() * b;
+}
+
+/// The DLT solution from the Gram matrix of [`accumulate_dlt`].
+pub fn solve_dlt(g: &Matrix4<f64>, frame: &WorldFrame) -> LinearPoint {
+    let eig = SymmetricEigen::new(*g);
+    let k = eig.eigenvalues.imin();
+    let v: Vector4<f64> = eig.eigenvectors.column(k).into_owned();
+    if v.w.abs() <= AT_INFINITY * v.norm() {
+        let d = v.xyz();
+        return LinearPoint::AtInfinity(d / d.norm());
+    }
+    LinearPoint::Finite(frame.centre + v.xyz() * (frame.scale / v.w))
+}
+
+/// The DLT point of the views (see the module docs).
+pub fn linear_point(views: &[PointView], frame: &WorldFrame) -> LinearPoint {
+    let mut g = Matrix4::zeros();
+    for v in views {
+        accumulate_dlt(&mut g, v, frame);
+    }
+    solve_dlt(&g, frame)
+}
+
+/// The conditioning frame of a set of (finite) cameras.
+pub fn frame_of_cameras(cameras: &[Matrix3x4<f64>]) -> WorldFrame {
+    let centres: Vec<Vector3<f64>> = cameras.iter().map(super::views::centre).collect();
+    WorldFrame::from_centres(&centres)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::triangulation::point_cost::point_views;
+    use crate::triangulation::views::depth_normalized;
+    use nalgebra::{Matrix2, Matrix3, Vector2};
+
+    fn camera(centre: Vector3<f64>, scale: f64) -> Matrix3x4<f64> {
+        let k = Matrix3::new(700.0, 0.0, 300.0, 0.0, 700.0, 200.0, 0.0, 0.0, 1.0);
+        let mut rt = Matrix3x4::identity();
+        rt.set_column(3, &-centre);
+        k * rt * scale
+    }
+
+    #[test]
+    fn recovers_a_far_point_exactly_and_detects_parallel_rays() {
+        let cams = [
+            camera(Vector3::new(0.0, 0.0, 0.0), 1.0),
+            camera(Vector3::new(1e-3, 0.0, 0.0), -5.0),
+        ];
+        let truth = Vector3::new(0.3, -0.2, 50.0);
+        let project = |p: &Matrix3x4<f64>, x: &Vector3<f64>| {
+            let h = p * Vector4::new(x.x, x.y, x.z, 1.0);
+            Vector2::new(h.x / h.z, h.y / h.z)
+        };
+        let ps: Vec<Matrix3x4<f64>> = cams.iter().map(depth_normalized).collect();
+        let obs: Vec<Vector2<f64>> = cams.iter().map(|p| project(p, &truth)).collect();
+        let views = point_views(&ps, &obs, &[Matrix2::identity(); 2]);
+        let frame = frame_of_cameras(&cams);
+        let LinearPoint::Finite(x) = linear_point(&views, &frame) else {
+            panic!("finite expected")
+        };
+        // Depth 5e4 baselines: the triangulation angle is 2e-5 rad, so relative accuracy ~ ε / 2e-5.
+        assert!((x - truth).norm() < 1e-7 * truth.norm(), "{x} vs {truth}");
+        // The same pixel in two translated cameras: parallel rays.
+        let same = vec![obs[0], obs[0]];
+        let views = point_views(&ps, &same, &[Matrix2::identity(); 2]);
+        assert!(matches!(linear_point(&views, &frame), LinearPoint::AtInfinity(_)));
+    }
+}
