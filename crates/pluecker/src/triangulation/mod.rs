@@ -128,8 +128,6 @@ pub enum Status {
     BehindCamera,
     /// The estimate is a point at infinity (parallel rays): no finite point can be returned.
     AtInfinity,
-    /// The estimate is a point at infinity (parallel rays): no finite point can be returned.
-    AtInfinity,
     /// No primitive has every reprojection error below the user's γ.
     Infeasible,
     /// The solver failed numerically (a singular system, a conic solver failure).
@@ -144,7 +142,6 @@ impl Status {
             Status::GapNotClosed => "gap_not_closed",
             Status::NotConverged => "not_converged",
             Status::BehindCamera => "behind_camera",
-            Status::AtInfinity => "at_infinity",
             Status::AtInfinity => "at_infinity",
             Status::Infeasible => "infeasible",
             Status::NumericalFailure => "numerical_failure",
