@@ -39,6 +39,7 @@ from ._core import (
     PlueckerError,
     PoseResult,
     PointTriangulation,
+    PointTriangulations,
     PoseStage,
     ShapeError,
     SingularCameraError,
@@ -58,6 +59,7 @@ from ._core import (
     reprojection_errors,
     triangulate_line,
     triangulate_point,
+    triangulate_points,
 )
 
 __all__ = [
@@ -72,6 +74,7 @@ __all__ = [
     "PlueckerError",
     "PoseResult",
     "PointTriangulation",
+    "PointTriangulations",
     "PoseStage",
     "ShapeError",
     "SingularCameraError",
@@ -91,4 +94,5 @@ __all__ = [
     "reprojection_errors",
     "triangulate_line",
     "triangulate_point",
+    "triangulate_points",
 ]

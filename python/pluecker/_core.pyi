@@ -530,6 +530,82 @@ def triangulate_point(
     The GIL is released while the core runs.
     """
 
+class PointTriangulations:
+    """The results of :func:`triangulate_points`: one entry per track in every array (fresh copies).
+    Tracks the core rejected have a ``status`` naming the problem, NaN in ``X`` and ``cost``, and a
+    message in :attr:`messages`."""
+
+    @property
+    def X(self) -> NDArray[np.float64]:
+        """Points (n, 3), world coordinates (NaN where there is no estimate)."""
+    @property
+    def cost(self) -> NDArray[np.float64]:
+        """Eq. 19 at each point (n,)."""
+    @property
+    def lower_bound(self) -> NDArray[np.float64]:
+        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
+    @property
+    def relative_gap(self) -> NDArray[np.float64]:
+        """``(cost - lower_bound) / cost`` (n,)."""
+    @property
+    def certified(self) -> NDArray[np.bool_]:
+        """Global optimality certified within ``max_relative_gap`` (n,)."""
+    @property
+    def certificate(self) -> NDArray[np.str_]:
+        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
+    @property
+    def status(self) -> NDArray[np.str_]:
+        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
+        ``"too_few_views"`` (fewer than 2 visible views), ``"non_finite"`` (NaN/inf in a visible
+        observation or covariance), ``"degenerate"`` (a covariance that is not positive definite, all
+        visible camera centres equal), ``"singular_camera"``, ``"invalid_input"``."""
+    @property
+    def nodes(self) -> NDArray[np.int64]:
+        """Branch-and-bound nodes per track (n,)."""
+    @property
+    def iterations(self) -> NDArray[np.int64]:
+        """Local-minimisation iterations per track (n,)."""
+    @property
+    def time_seconds(self) -> NDArray[np.float64]:
+        """Core time per track (n,), seconds (one thread)."""
+    @property
+    def messages(self) -> list[str]:
+        """Per track: ``""``, or why the core rejected it (``"track 7: x: non-finite value ..."``)."""
+    @property
+    def method(self) -> str:
+        """The method that ran."""
+    def __len__(self) -> int: ...
+    def __repr__(self) -> str: ...
+
+def triangulate_points(
+    P: ArrayLike,
+    x: ArrayLike,
+    visible: Optional[ArrayLike] = None,
+    cov: Optional[ArrayLike] = None,
+    method: str = "optimal",
+    *,
+    max_relative_gap: Optional[float] = None,
+    max_reprojection_error: Optional[float] = None,
+    max_nodes: Optional[int] = None,
+) -> PointTriangulations:
+    """Triangulate many points (tracks) seen by the same cameras, in parallel with the GIL released.
+
+    Each track is :func:`triangulate_point` on its visible views. One bad track (NaN in a visible view,
+    fewer than 2 visible views, a covariance that is not positive definite) gets a ``status`` and a
+    message and never stops the others.
+
+    Args:
+        P: cameras (v, 3, 4), world → pixels, v >= 2.
+        x: pixels (n, v, 2); entries of views a track is not seen in are ignored (NaN is fine there).
+        visible: (n, v) booleans, True where the track is seen; None: every view.
+        cov: pixel covariances (n, v, 2, 2); None for the identity.
+        method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
+
+    Raises (for the whole call, before any track is solved): ShapeError, NonFiniteError or
+    SingularCameraError for ``P``, TooFewCorrespondencesError (fewer than 2 cameras), InvalidOptionError;
+    TypeError for an unknown keyword or a ``visible`` that is not boolean.
+    """
+
 class LineTriangulation(TriangulationReport):
     """A triangulated 3-D line: Plücker coordinates, a point and a unit direction, and the fields of
     :class:`TriangulationReport` (its ``cost`` in whitened units of the line residual). Immutable; arrays

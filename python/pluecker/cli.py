@@ -7,6 +7,12 @@
     Re-runs the experiments of Phong, Horaud, Yassine & Tao 1995 (section 5) in simulation and writes
     tables, figures and a JSON summary.
 
+``pluecker triangulate FOLDER``
+    Triangulates every point (and with ``--lines`` every line) of a multi-view folder in the Oxford VGG
+    format from the chosen views, and writes the 3-D features with their certificates as JSON and PLY.
+``pluecker reproduce josephson-kahl-2008``
+    Re-runs the experiments of Josephson & Kahl 2008 (section 5) on the VGG data and synthetic conics.
+
 Exit status: 0 on success, 2 on a usage or input error (one line on standard error, no traceback).
 """
 
@@ -26,6 +32,7 @@ import pluecker
 __all__ = ["main"]
 
 METHODS = tuple(pluecker.METHODS)
+TRIANGULATION_METHODS = ("optimal", "local", "linear")
 
 INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "method", "options"}
 #: ``options`` key → (keyword of ``estimate_pose``, accepted Python types).
@@ -82,11 +89,26 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _view_list(text: str) -> list[int]:
+    try:
+        views = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated view numbers such as 0,1,2,3, got '{text}'") from None
+    if any(v < 0 for v in views):
+        raise argparse.ArgumentTypeError(f"view numbers are 0-based and non-negative, got '{text}'")
+    if len(set(views)) != len(views):
+        raise argparse.ArgumentTypeError(f"a view is listed twice in '{text}'")
+    if len(views) < 2:
+        raise argparse.ArgumentTypeError(f"triangulation needs at least 2 views, got '{text}'")
+    return views
+
+
 def build_parser() -> argparse.ArgumentParser:
     from pluecker.experiments import EXPERIMENTS
 
     parser = _Parser(prog="pluecker", description="Camera pose from 2-D/3-D point and line correspondences "
-                     "(Phong, Horaud, Yassine & Tao 1995).")
+                     "(Phong, Horaud, Yassine & Tao 1995) and triangulation of points, lines and conics "
+                     "(Josephson & Kahl 2008).")
     parser.add_argument("--version", action="version",
                         version=f"pluecker {getattr(pluecker, '__version__', 'unknown')}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -103,6 +125,25 @@ def build_parser() -> argparse.ArgumentParser:
     pose.add_argument("--penalty", type=_positive_float, metavar="L",
                       help="penalty λ on the unit and orthogonality constraints (default 50)")
     pose.set_defaults(handler=_pose)
+
+    tri = commands.add_parser(
+        "triangulate", help="triangulate the points (and lines) of a multi-view folder in the VGG format",
+        description="Triangulate every point seen in at least two of the chosen views (and with --lines every "
+        "line) of a folder in the Oxford VGG multi-view format (pluecker.datasets.load_vgg); writes "
+        "points.json / points.ply (lines.json / lines.ply) with per-feature certificates to --out and prints "
+        "a summary. Formats: docs/cli.md.")
+    tri.add_argument("folder", metavar="FOLDER", type=Path, help="a VGG multi-view folder (cameras *.P, "
+                     "*.corners, *.lines, nview-corners, nview-lines)")
+    tri.add_argument("--views", type=_view_list, metavar="I,J,...", help="0-based views to use, comma-separated "
+                     "(default: all)")
+    tri.add_argument("--method", choices=TRIANGULATION_METHODS, default="optimal",
+                     help="estimator (default optimal: certified global minimum of eq. 19)")
+    tri.add_argument("--lines", action="store_true", help="also triangulate the lines (from the segments)")
+    tri.add_argument("--sigma", type=_positive_float, default=1.0, metavar="PX",
+                     help="pixel noise of the segment endpoints, for the line covariances (default 1)")
+    tri.add_argument("--out", metavar="DIR", type=Path, help="output directory (default "
+                     "results/triangulate/NAME)")
+    tri.set_defaults(handler=_triangulate)
 
     rep = commands.add_parser("reproduce", help="re-run a paper's experiments",
                               description="Re-run a paper's experiments in simulation; writes tables.md, "
@@ -291,6 +332,27 @@ def _pose(args: argparse.Namespace) -> int:
     if result.status != "success":
         print(f"pluecker pose: warning: status {result.status} (termination {result.termination}); "
               "the pose may be unusable", file=sys.stderr)
+    return 0
+
+
+# --------------------------------------------------------------------------------------------------
+# triangulate
+
+
+def _triangulate(args: argparse.Namespace) -> int:
+    from pluecker import triangulate_folder
+
+    try:
+        run = triangulate_folder.run(args.folder, views=args.views, method=args.method, lines=args.lines,
+                                 sigma=args.sigma)
+    except (InputError, pluecker.PlueckerError, triangulate_folder.FolderError) as exc:
+        return _fail("triangulate", str(exc))
+    out = args.out if args.out is not None else Path("results") / "triangulate" / run.name
+    try:
+        files = triangulate_folder.write(run, out)
+    except OSError as exc:
+        return _fail("triangulate", f"cannot write to {out}: {exc.strerror or exc}")
+    print("\n".join(triangulate_folder.summary_lines(run, files)))
     return 0
 
 

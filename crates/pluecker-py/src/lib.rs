@@ -15,6 +15,7 @@ mod result;
 mod synthetic;
 mod triangulation;
 mod triangulation_arrays;
+mod triangulation_batch;
 mod triangulation_fitting;
 mod triangulation_line;
 mod triangulation_point;
@@ -41,6 +42,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<triangulation::PyTriangulationReport>()?;
     m.add_class::<triangulation_point::PyPointTriangulation>()?;
     m.add_function(wrap_pyfunction!(triangulation_point::triangulate_point, m)?)?;
+    m.add_class::<triangulation_batch::PyPointTriangulations>()?;
+    m.add_function(wrap_pyfunction!(triangulation_batch::triangulate_points, m)?)?;
     m.add_class::<triangulation_line::PyLineTriangulation>()?;
     m.add_function(wrap_pyfunction!(triangulation_line::triangulate_line, m)?)?;
     m.add_class::<triangulation_fitting::PyFittedLine>()?;

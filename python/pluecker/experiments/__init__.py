@@ -15,6 +15,7 @@ __all__ = ["EXPERIMENTS", "load"]
 #: Experiment name → module (relative to this package).
 EXPERIMENTS = {
     "phong-horaud-1995": "phong_horaud_1995",
+    "josephson-kahl-2008": "josephson_kahl_2008",
 }
 
 
