@@ -5,7 +5,7 @@ use super::Method;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::lines::{interpretation_plane_normal, lines_from_point_pairs, ObjectLine};
-use nalgebra::{Matrix3, Vector2, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector2, Vector3};
 
 /// 2-D/3-D correspondences. Image quantities are pixels, object quantities world coordinates
 /// (any length unit; the translation comes out in the same unit).
@@ -48,9 +48,11 @@ pub(crate) struct PointSpread {
     scatter: Matrix3<f64>,
 }
 
-/// Above this ratio of closed-form standard deviations a spread is certainly not degenerate (the
-/// closed form's error in the ratio is below 1e-7); at or below it the eigen-decomposition decides.
-const CLEARLY_SPREAD: f64 = 1e-6;
+/// Above this ratio of closed-form standard deviations a spread is certainly not degenerate; at or
+/// below it the singular values of the centred points decide. The closed form loses up to half the
+/// digits near repeated eigenvalues (two near-zero ones for collinear points): errors of order √ε λ_max
+/// in an eigenvalue, 1e-4 in a ratio of standard deviations.
+const CLEARLY_SPREAD: f64 = 1e-2;
 
 impl PointSpread {
     /// Unit axis of least spread (an eigen-decomposition: only the restarts need it).
@@ -59,13 +61,16 @@ impl PointSpread {
         eig.eigenvectors.column(eig.eigenvalues.imin()).into_owned()
     }
 
-    /// Whether the `k`-th standard deviation is at most `tolerance` (≤ [`DEGENERACY_TOLERANCE`]) times
-    /// the largest, decided on the eigen-decomposition's values when the closed form cannot settle it.
-    fn degenerate(&self, k: usize, tolerance: f64) -> bool {
+    /// Whether the `k`-th standard deviation of `points` (the points of this shape) is at most
+    /// `tolerance` times the largest. Clear cases are settled by the closed form; the others by the
+    /// singular values of the centred points, accurate to ε relative to the largest — the scatter
+    /// matrix squares the ratio, and its eigenvalues cannot resolve ratios of deviations below √ε.
+    fn degenerate<'p>(&self, points: impl Iterator<Item = &'p Vector3<f64>>, k: usize, tolerance: f64) -> bool {
         if self.spread[k] > CLEARLY_SPREAD * self.spread[0] {
             return false;
         }
-        let mut s = self.scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
+        let centred: Vec<f64> = points.map(|p| p - self.centroid).flat_map(|d| [d.x, d.y, d.z]).collect();
+        let mut s = DMatrix::from_row_slice(centred.len() / 3, 3, &centred).singular_values();
         s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
         s[k] <= tolerance * s[0]
     }
@@ -170,7 +175,7 @@ impl Correspondences {
                 if np < 6 {
                     return Err(too_few("at least 6 points (lines are not used)"));
                 }
-                if principal_axes(self.points3d.iter()).degenerate(2, DEGENERACY_TOLERANCE) {
+                if principal_axes(self.points3d.iter()).degenerate(self.points3d.iter(), 2, DEGENERACY_TOLERANCE) {
                     return Err(Error::Degenerate {
                         what: "points3d are coplanar; the linear (Faugeras-Toscani) method needs non-coplanar points"
                             .into(),
@@ -189,7 +194,7 @@ impl Correspondences {
             }
         }
         let shape = principal_axes(object_points(self));
-        if nl == 0 && shape.degenerate(1, DEGENERACY_TOLERANCE) {
+        if nl == 0 && shape.degenerate(object_points(self), 1, DEGENERACY_TOLERANCE) {
             return Err(Error::Degenerate { what: "all points3d are collinear".into() });
         }
         if np == 0 {
@@ -320,3 +325,47 @@ pub fn constraints(
     Ok((points, lines))
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn points_only(points3d: Vec<Vector3<f64>>) -> Correspondences {
+        Correspondences { points2d: vec![Vector2::new(1.0, 2.0); points3d.len()], points3d, ..Default::default() }
+    }
+
+    #[test]
+    fn collinear_and_coplanar_points_are_degenerate_along_any_direction() {
+        // Steps of 2/9 along a generic direction: the scatter matrix is rank one only up to round-off,
+        // where the closed-form eigenvalues are least accurate.
+        let direction = Vector3::new(1.0, 0.5, 0.2);
+        let line: Vec<Vector3<f64>> =
+            (0..10).map(|i| Vector3::new(0.0, 0.0, 5.0) + direction * (-1.0 + 2.0 * i as f64 / 9.0)).collect();
+        for method in Method::ALL {
+            assert!(matches!(points_only(line.clone()).validate(method), Err(Error::Degenerate { .. })), "{method:?}");
+        }
+        let other = Vector3::new(-0.3, 0.9, 0.4);
+        let plane: Vec<Vector3<f64>> = (0..12)
+            .map(|i| Vector3::new(0.0, 0.0, 5.0) + direction * (i % 4) as f64 / 3.0 + other * (i / 4) as f64 / 7.0)
+            .collect();
+        assert!(matches!(points_only(plane.clone()).validate(Method::Linear), Err(Error::Degenerate { .. })));
+        assert!(points_only(plane).validate(Method::TrustRegion).is_ok());
+    }
+
+    #[test]
+    fn closed_form_spread_matches_the_eigen_decomposition() {
+        let mut rng = crate::rng::Rng::new(3);
+        for _ in 0..100 {
+            let axes = Vector3::new(1.0, rng.uniform_in(0.3, 1.0), 1e-3 * rng.uniform());
+            let rotation = rng.rotation();
+            let points: Vec<Vector3<f64>> = (0..30)
+                .map(|_| rotation * Vector3::new(rng.normal(), rng.normal(), rng.normal()).component_mul(&axes))
+                .collect();
+            let shape = principal_axes(points.iter());
+            let mut exact = shape.scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
+            exact.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+            // Eigenvalue errors of order √ε λ_max (see CLEARLY_SPREAD), so √(1e-7) in a deviation.
+            assert!((shape.spread - exact).amax() <= 1e-3 * exact[0], "{} vs {}", shape.spread, exact);
+            assert!((shape.least_axis().dot(&(rotation * Vector3::z())).abs() - 1.0).abs() < 1e-6);
+        }
+    }
+}
