@@ -175,6 +175,25 @@ impl OrthonormalLine {
             phi: self.phi + delta[3],
         }
     }
+
+    /// `∂𝓛/∂δ` at `δ = 0` (6x4) of `self.retract(δ).to_plucker()`: with `uₖ` the columns of `U`,
+    /// `∂d/∂ω = cos φ (0, −u₃, u₂)`, `∂m/∂ω = sin φ (u₃, 0, −u₁)`, `∂d/∂φ = −sin φ u₁`, `∂m/∂φ = cos φ u₂`.
+    pub fn tangent(&self) -> SMatrix<f64, 6, 4> {
+        let (c, s) = (self.phi.cos(), self.phi.sin());
+        let (u1, u2, u3) = (
+            self.u.column(0).into_owned(),
+            self.u.column(1).into_owned(),
+            self.u.column(2).into_owned(),
+        );
+        let z = Vector3::zeros();
+        let dd = [z, -u3 * c, u2 * c, -u1 * s];
+        let dm = [u3 * s, z, -u1 * s, u2 * c];
+        let mut t = SMatrix::<f64, 6, 4>::zeros();
+        for k in 0..4 {
+            t.set_column(k, &from_direction_moment(&dd[k], &dm[k]));
+        }
+        t
+    }
 }
 
 /// A unit vector orthogonal to the unit vector `v`.
@@ -295,6 +314,15 @@ mod tests {
             assert!(constraint(&moved).abs() < 1e-14);
             let (p, _) = to_point_direction(&l).unwrap();
             assert!((o.phi.tan() - p.norm()).abs() < 1e-10 * (1.0 + p.norm()));
+        }
+        // The tangent against central differences.
+        let o = OrthonormalLine::from_plucker(&from_points(&random_point(&mut rng), &random_point(&mut rng))).unwrap();
+        let t = o.tangent();
+        for k in 0..4 {
+            let mut d = Vector4::zeros();
+            d[k] = 1e-6;
+            let fd = (o.retract(&d).to_plucker() - o.retract(&-d).to_plucker()) / 2e-6;
+            assert!((fd - t.column(k)).norm() < 1e-8, "column {k}");
         }
         // A line through the origin.
         let o = OrthonormalLine::from_plucker(&from_points(&Vector3::zeros(), &Vector3::new(1.0, 2.0, 3.0))).unwrap();

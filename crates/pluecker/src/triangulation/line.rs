@@ -1,1 +1,366 @@
-//! (being written)
+//! Triangulation of a 3-D line from its images in two or more views (Josephson & Kahl 2008,
+//! sections 2.2, 3, 4).
+//!
+//! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(𝓛)‖²`, over 3-D lines `𝓛` (Plücker coordinates, eq. 3,
+//! satisfying eq. 4), with `rᵢ` the residual of the observed image line `lᵢ` (eq. 17 with the
+//! normalisation of section 3.1, see [`super::line_residual`]) and `Lᵢ` the whitening of its 2x2
+//! covariance (eq. 18; identity without covariances). The three [`Method`]s:
+//! - `linear`: the line common to the back-projected planes `πᵢ = Pᵢᵀ lᵢ` in the least-squares sense
+//!   (conditioned world frame, planes scaled to unit normals): the two right singular vectors `A`, `B`
+//!   of the least singular values of the stacked `πᵢᵀ` span it, and `𝓛 = A∧B` (eq. 2) satisfies
+//!   eq. 4 by construction (it is the rank-2 approximation, so no separate correction is needed);
+//! - `local`: the trust region of [`crate::optim`] on eq. 19 from the linear line, moving the line in
+//!   the orthonormal representation of Bartoli & Sturm ([`OrthonormalLine`]): a minimal 4-parameter
+//!   update that keeps eq. 4 exactly;
+//! - `optimal`: the local line, then branch and bound (section 4, [`super::line_optimal`]).
+//!
+//! Degenerate input is an error: fewer than 2 views, mismatched lengths, NaN/inf, a singular camera,
+//! an image line with zero normal, a covariance that is not positive definite, cameras sharing one
+//! centre, or back-projected planes that all coincide (the 3-D line lies in an epipolar plane of every
+//! pair of views, so its images do not determine it). Lines have no cheirality test: every line not
+//! parallel to an image plane crosses that camera's principal plane, so [`Status::BehindCamera`] is
+//! never reported for lines.
+
+use super::conditioning::{check_views, Similarity};
+use super::covariance::whitenings;
+use super::fitting::line_from_segment;
+use super::fraction::{self, FractionalResidual};
+use super::line_optimal::optimal_line;
+use super::line_residual::{line_view, LineFrame};
+use super::{Certificate, Method, Report, Status, TriangulationOptions};
+use crate::error::{Error, Result};
+use crate::geometry::plucker::{self, OrthonormalLine};
+use crate::optim::{trust_region, Linearization, Objective, Termination};
+use nalgebra::{Matrix2, Matrix3x4, Matrix4, SVector, Vector2, Vector3, Vector4, Vector6};
+use std::time::Instant;
+
+/// Ratio of the second to the largest eigenvalue of `Σ πᵢπᵢᵀ` below which the back-projected planes
+/// count as one plane (eigenvalues are squared singular values: 1e-18 is a 1e-9 relative spread).
+const COINCIDENT_PLANES: f64 = 1e-18;
+
+/// A triangulated 3-D line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LineTriangulation {
+    /// Plücker coordinates (eq. 3) in the world frame, unit norm, satisfying eq. 4.
+    pub plucker: Vector6<f64>,
+    /// The point of the line closest to the world origin, world units.
+    pub point: Vector3<f64>,
+    /// Unit direction of the line, world frame (the direction `d` of [`plucker::direction_moment`]).
+    pub direction: Vector3<f64>,
+    /// What the method did: status, cost of eq. 19, certificate, iterations, time.
+    pub report: Report,
+}
+
+/// The checked observations of one line.
+pub(crate) struct LineProblem {
+    pub cameras: Vec<Matrix3x4<f64>>,
+    pub frames: Vec<LineFrame>,
+    pub whitenings: Vec<Matrix2<f64>>,
+}
+
+impl LineProblem {
+    /// The whitened residuals of every view in the conditioned frame `sim` (eqs. 6-7, 17-18).
+    pub fn views(&self, sim: &Similarity) -> Vec<FractionalResidual<2, 6>> {
+        self.cameras
+            .iter()
+            .zip(&self.frames)
+            .zip(&self.whitenings)
+            .map(|((p, f), w)| line_view(&sim.camera(p), f, w))
+            .collect()
+    }
+
+    /// Eq. 19 at a world line.
+    pub fn cost(&self, world_line: &Vector6<f64>) -> f64 {
+        fraction::cost(&self.views(&Similarity::identity()), world_line)
+    }
+
+    /// The point of a world line closest to the centroid of the camera centres, and the distance `ρ`
+    /// between them (at least the RMS spread of the centres).
+    pub fn foot(&self, world_line: &Vector6<f64>) -> (Vector3<f64>, f64) {
+        let spread = Similarity::of_cameras(&self.cameras);
+        let Some((p, d)) = plucker::to_point_direction(world_line) else {
+            return (spread.origin, 1.0 / spread.scale);
+        };
+        let foot = p + d * d.dot(&(spread.origin - p));
+        (foot, (foot - spread.origin).norm().max(1.0 / spread.scale))
+    }
+
+    /// The conditioned frame of the local method: unit `ρ` ([`Self::foot`]) and origin `ρ` away from
+    /// the line (towards the cameras), so that the line has `φ = π/4` in the orthonormal
+    /// representation, far from its singular charts `φ = 0` (a line through the origin, where one
+    /// direction of motion is lost) and `φ = π/2`.
+    pub fn frame_around(&self, world_line: &Vector6<f64>) -> Similarity {
+        let (foot, rho) = self.foot(world_line);
+        let Some((_, d)) = plucker::to_point_direction(world_line) else {
+            return Similarity::of_cameras(&self.cameras);
+        };
+        let towards = Similarity::of_cameras(&self.cameras).origin - foot;
+        let mut side = towards - d * d.dot(&towards);
+        if side.norm() <= 1e-6 * rho {
+            side = if d.x.abs() < 0.9 {
+                d.cross(&Vector3::x())
+            } else {
+                d.cross(&Vector3::y())
+            };
+        }
+        Similarity::around(foot + side.normalize() * rho, rho)
+    }
+}
+
+/// Triangulates one 3-D line seen by `cameras` (3x4, world → pixels, any scale and sign) as the
+/// homogeneous image lines `lines` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
+/// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`]; identity
+/// when `None`).
+///
+/// Errors: [`Error::TooFewCorrespondences`] for fewer than 2 views, [`Error::Shape`] for mismatched
+/// lengths, [`Error::NonFinite`] naming the argument and row, [`Error::SingularCamera`],
+/// [`Error::Degenerate`] (a line with zero normal, a covariance that is not positive definite,
+/// cameras with one centre, a line in an epipolar plane of every view pair),
+/// [`Error::InvalidOption`].
+pub fn triangulate_line(
+    cameras: &[Matrix3x4<f64>],
+    lines: &[Vector3<f64>],
+    covariances: Option<&[Matrix2<f64>]>,
+    opts: &TriangulationOptions,
+) -> Result<LineTriangulation> {
+    let started = Instant::now();
+    opts.validate()?;
+    check_views(cameras, lines.len(), 2, "lines", opts.method)?;
+    let frames = lines
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if !l.iter().all(|v| v.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: "lines".into(),
+                    index: i,
+                });
+            }
+            LineFrame::of_line(l).ok_or_else(|| Error::Degenerate {
+                what: format!("lines[{i}] has a zero normal (the line at infinity)"),
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let problem = LineProblem {
+        cameras: cameras.to_vec(),
+        frames,
+        whitenings: whitenings(covariances, cameras.len(), "covariances")?,
+    };
+    let linear = linear_line(&problem)?;
+    let mut report = Report {
+        method: opts.method,
+        status: Status::Success,
+        cost: problem.cost(&linear),
+        certificate: Certificate::none(),
+        iterations: 0,
+        termination: Termination::ClosedForm,
+        time_seconds: 0.0,
+    };
+    let estimate = match opts.method {
+        Method::Linear => linear,
+        Method::Local => {
+            let (line, local) = local_line(&problem, &linear, opts);
+            report = Report {
+                method: Method::Local,
+                ..local
+            };
+            line
+        }
+        Method::Optimal => {
+            let (line, local) = local_line(&problem, &linear, opts);
+            let (best, optimal) = optimal_line(&problem, &line, &local, opts);
+            report = optimal;
+            best
+        }
+    };
+    report.time_seconds = started.elapsed().as_secs_f64();
+    finish(&estimate, report)
+}
+
+/// The result record of a world line (unit norm, point and direction).
+fn finish(line: &Vector6<f64>, report: Report) -> Result<LineTriangulation> {
+    let plucker = plucker::nearest_line(line).normalize();
+    let (point, direction) = plucker::to_point_direction(&plucker).ok_or_else(|| Error::Degenerate {
+        what: "the estimated line lies at infinity".into(),
+    })?;
+    Ok(LineTriangulation {
+        plucker,
+        point,
+        direction,
+        report,
+    })
+}
+
+/// The image lines and residual covariances of image segments (pixel endpoints, i.i.d. Gaussian
+/// noise of `sigma` px per coordinate): [`line_from_segment`] on each (see [`super::fitting`]).
+/// Errors name the segment index.
+pub fn lines_from_segments(
+    segments: &[[Vector2<f64>; 2]],
+    sigma: f64,
+) -> Result<(Vec<Vector3<f64>>, Vec<Matrix2<f64>>)> {
+    let mut lines = Vec::with_capacity(segments.len());
+    let mut covariances = Vec::with_capacity(segments.len());
+    for (i, s) in segments.iter().enumerate() {
+        if !s.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "segments".into(),
+                index: i,
+            });
+        }
+        let fit = line_from_segment(&s[0], &s[1], sigma).map_err(|e| match e {
+            Error::Degenerate { .. } => Error::Degenerate {
+                what: format!("segments[{i}] has zero length"),
+            },
+            other => other,
+        })?;
+        lines.push(fit.line);
+        covariances.push(fit.covariance);
+    }
+    Ok((lines, covariances))
+}
+
+/// [`triangulate_line`] from image segments (pixel endpoints) whose endpoints have i.i.d. Gaussian
+/// noise of `sigma` px per coordinate: each segment gives its line and covariance by
+/// [`lines_from_segments`].
+pub fn triangulate_line_segments(
+    cameras: &[Matrix3x4<f64>],
+    segments: &[[Vector2<f64>; 2]],
+    sigma: f64,
+    opts: &TriangulationOptions,
+) -> Result<LineTriangulation> {
+    let (lines, covariances) = lines_from_segments(segments, sigma)?;
+    triangulate_line(cameras, &lines, Some(&covariances), opts)
+}
+
+/// The linear method (module docs), as a world line.
+pub(crate) fn linear_line(problem: &LineProblem) -> Result<Vector6<f64>> {
+    let sim = Similarity::of_cameras(&problem.cameras);
+    let mut gram = Matrix4::zeros();
+    for (p, f) in problem.cameras.iter().zip(&problem.frames) {
+        let plane: Vector4<f64> = sim.camera(p).transpose() * f.line();
+        let norm = plane.xyz().norm();
+        if norm > 0.0 {
+            gram += plane * plane.transpose() / (norm * norm);
+        }
+    }
+    let eig = gram.symmetric_eigen();
+    let mut order = [0usize, 1, 2, 3];
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    if !(eig.eigenvalues[order[1]] > COINCIDENT_PLANES * eig.eigenvalues[order[0]]) {
+        return Err(Error::Degenerate {
+            what:
+                "lines: the back-projected planes coincide (the line lies in an epipolar plane of every pair of views)"
+                    .into(),
+        });
+    }
+    let a: Vector4<f64> = eig.eigenvectors.column(order[2]).into_owned();
+    let b: Vector4<f64> = eig.eigenvectors.column(order[3]).into_owned();
+    let conditioned = plucker::from_homogeneous_points(&a, &b);
+    if plucker::to_point_direction(&conditioned).is_none() {
+        return Err(Error::Degenerate {
+            what: "lines: the back-projected planes meet at infinity".into(),
+        });
+    }
+    Ok(plucker::transform(&sim.inverse_matrix(), &conditioned))
+}
+
+/// Eq. 19 over the orthonormal representation (module docs), in a conditioned frame.
+pub(crate) struct LineObjective<'a> {
+    pub views: &'a [FractionalResidual<2, 6>],
+}
+
+impl Objective<4> for LineObjective<'_> {
+    type Point = OrthonormalLine;
+
+    fn cost(&self, x: &OrthonormalLine) -> f64 {
+        0.5 * fraction::cost(self.views, &x.to_plucker())
+    }
+
+    fn linearize(&self, x: &OrthonormalLine) -> Linearization<4> {
+        fraction::linearize(self.views, &x.to_plucker(), &x.tangent())
+    }
+
+    fn retract(&self, x: &OrthonormalLine, d: &SVector<f64, 4>) -> OrthonormalLine {
+        x.retract(d)
+    }
+}
+
+/// The local method from `start` (a world line): the minimised world line and its report.
+pub(crate) fn local_line(
+    problem: &LineProblem,
+    start: &Vector6<f64>,
+    opts: &TriangulationOptions,
+) -> (Vector6<f64>, Report) {
+    let sim = problem.frame_around(start);
+    let views = problem.views(&sim);
+    let h = sim.matrix();
+    let objective = LineObjective { views: &views };
+    let x0 = OrthonormalLine::from_plucker(&plucker::transform(&h, start)).expect("a finite line");
+    let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
+    let world = plucker::transform(&sim.inverse_matrix(), &x.to_plucker());
+    let status = if summary.termination.converged() {
+        Status::Success
+    } else {
+        Status::NotConverged
+    };
+    let report = Report {
+        method: Method::Local,
+        status,
+        cost: 2.0 * summary.final_cost,
+        certificate: Certificate::none(),
+        iterations: summary.iterations,
+        termination: summary.termination,
+        time_seconds: 0.0,
+    };
+    (world, report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optim::problem::testing::gradient_error;
+    use crate::rng::Rng;
+
+    pub(crate) fn ring_cameras(n: usize, rng: &mut Rng) -> Vec<Matrix3x4<f64>> {
+        // Cameras on a circle of radius 4 around the origin, looking at it.
+        let k = nalgebra::Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+        (0..n)
+            .map(|i| {
+                let angle = 0.6 * i as f64 / n.max(1) as f64 + 0.05 * rng.normal();
+                let c = Vector3::new(4.0 * angle.sin(), 0.3 * rng.normal(), -4.0 * angle.cos());
+                let z = (-c).normalize();
+                let x = Vector3::y().cross(&z).normalize();
+                let y = z.cross(&x);
+                let r = nalgebra::Matrix3::from_rows(&[x.transpose(), y.transpose(), z.transpose()]);
+                let mut rt = Matrix3x4::zeros();
+                rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+                rt.set_column(3, &(-r * c));
+                k * rt
+            })
+            .collect()
+    }
+
+    #[test]
+    fn objective_gradient_matches_central_differences() {
+        let mut rng = Rng::new(61);
+        let cameras = ring_cameras(4, &mut rng);
+        let (a, b) = (Vector3::new(0.2, -0.3, 0.1), Vector3::new(-0.3, 0.4, -0.2));
+        let lines: Vec<Vector3<f64>> = cameras
+            .iter()
+            .map(|p| {
+                (p * a.push(1.0)).cross(&(p * b.push(1.0)))
+                    + Vector3::new(rng.normal(), rng.normal(), rng.normal() * 300.0) * 1e-3
+            })
+            .collect();
+        let frames: Vec<LineFrame> = lines.iter().map(|l| LineFrame::of_line(l).unwrap()).collect();
+        let problem = LineProblem {
+            cameras,
+            frames,
+            whitenings: vec![Matrix2::new(0.7, 0.0, 0.3, 1.4); 4],
+        };
+        let views = problem.views(&Similarity::identity());
+        let objective = LineObjective { views: &views };
+        let x = OrthonormalLine::from_plucker(&plucker::from_points(&a, &(b + Vector3::new(0.01, 0.0, 0.02)))).unwrap();
+        assert!(gradient_error(&objective, &x, 1e-6) < 1e-5);
+    }
+}

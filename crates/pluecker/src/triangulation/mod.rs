@@ -13,10 +13,12 @@
 //! (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
 
 pub mod batch;
+pub mod conditioning;
 pub mod covariance;
 pub mod fitting;
 pub mod fraction;
 pub mod line;
+pub mod line_optimal;
 pub mod line_residual;
 pub mod point;
 pub mod point_certificate;
@@ -27,6 +29,7 @@ pub mod point_linear;
 
 pub mod quadric;
 pub mod quadric_residual;
+pub mod scenes;
 pub mod views;
 
 use crate::error::{Error, Result};
