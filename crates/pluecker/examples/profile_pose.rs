@@ -14,6 +14,10 @@
 //! than success, or an error above 10 bounds) and the RMS errors over the RMS bounds.
 //! Build with `CARGO_PROFILE_RELEASE_DEBUG=true cargo build --release --example profile_pose` for
 //! `perf record -g`.
+//!
+//! For experiments, environment variables override the default options: `ALGEBRAIC_RADIUS` and
+//! `ALGEBRAIC_STEP` (initial radius and step tolerance of the algebraic trust region; with refinement
+//! its step tolerance is at least `STEP_TOLERANCE_BEFORE_REFINEMENT`), `REFINE_RADIUS`, `REFINE_STEP`.
 
 use nalgebra::{Matrix3, Vector3};
 use pluecker::geometry::quaternion::rotation_distance;
@@ -41,11 +45,19 @@ fn problem(kind: SceneKind, seed: u64, lines: bool) -> (Scene, Correspondences) 
 
 fn options() -> PoseOptions {
     let mut o = PoseOptions::default();
-    let env = |n: &str| std::env::var(n).ok().map(|v| v.parse::<f64>().unwrap());
-    if let Some(v) = env("R0") { o.trust_region.initial_radius = v; }
-    if let Some(v) = env("STEP") { o.trust_region.stopping.step_tolerance = v; }
-    if let Some(v) = env("RR0") { o.refinement.initial_radius = v; }
-    if let Some(v) = env("RSTEP") { o.refinement.stopping.step_tolerance = v; }
+    let env = |name: &str| std::env::var(name).ok().map(|v| v.parse::<f64>().expect("a number"));
+    if let Some(v) = env("ALGEBRAIC_RADIUS") {
+        o.trust_region.initial_radius = v;
+    }
+    if let Some(v) = env("ALGEBRAIC_STEP") {
+        o.trust_region.stopping.step_tolerance = v;
+    }
+    if let Some(v) = env("REFINE_RADIUS") {
+        o.refinement.initial_radius = v;
+    }
+    if let Some(v) = env("REFINE_STEP") {
+        o.refinement.stopping.step_tolerance = v;
+    }
     o
 }
 
@@ -74,7 +86,12 @@ fn dump(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
     for seed in 0..scenes {
         let (scene, corr) = problem(kind, seed, lines);
         let r = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
-        let values: Vec<String> = r.rotation.iter().chain(r.translation.iter()).map(|v| format!("{v:e}")).collect();
+        let values: Vec<String> = r
+            .rotation
+            .iter()
+            .chain(r.translation.iter())
+            .map(|v| format!("{v:e}"))
+            .collect();
         writeln!(out, "{}", values.join(" ")).unwrap();
     }
 }
@@ -85,7 +102,10 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         .lines()
         .map(|l| {
             let v: Vec<f64> = l.split(' ').map(|s| s.parse().unwrap()).collect();
-            (Matrix3::from_column_slice(&v[..9]), Vector3::from_column_slice(&v[9..12]))
+            (
+                Matrix3::from_column_slice(&v[..9]),
+                Vector3::from_column_slice(&v[9..12]),
+            )
         })
         .collect();
     let (mut worst_r, mut worst_t) = (0.0f64, 0.0f64);
@@ -98,14 +118,23 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         let c = &scene.correspondences;
         let cost = ReprojectionCost::new(scene.camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
         let cov = pose_covariance(&cost, &(scene.rotation, scene.translation), 1.0).unwrap();
-        let (br, bt) = (cov.fixed_view::<3, 3>(0, 0).trace(), cov.fixed_view::<3, 3>(3, 3).trace());
-        let (er, et) =
-            (rotation_distance(&r.rotation, &scene.rotation), (r.translation - scene.translation).norm());
+        let (br, bt) = (
+            cov.fixed_view::<3, 3>(0, 0).trace(),
+            cov.fixed_view::<3, 3>(3, 3).trace(),
+        );
+        let (er, et) = (
+            rotation_distance(&r.rotation, &scene.rotation),
+            (r.translation - scene.translation).norm(),
+        );
         iterations[0] += r.stages[0].iterations;
         iterations[1] += r.stages.last().unwrap().iterations;
         if r.status != Status::Success || !(er <= 10.0 * br.sqrt() && et <= 10.0 * bt.sqrt()) {
             failures += 1;
-            println!("seed {seed}: status {} rotation error {er:.3e} (bound {:.3e})", r.status.as_str(), br.sqrt());
+            println!(
+                "seed {seed}: status {} rotation error {er:.3e} (bound {:.3e})",
+                r.status.as_str(),
+                br.sqrt()
+            );
             continue;
         }
         (err_r, err_t, bound_r, bound_t) = (err_r + er * er, err_t + et * et, bound_r + br, bound_t + bt);

@@ -28,9 +28,18 @@ pub struct Step<const N: usize> {
     pub predicted_decrease: f64,
 }
 
-fn step_with_decrease<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f64, N>, d: SVector<f64, N>, mu: f64) -> Step<N> {
+fn step_with_decrease<const N: usize>(
+    h: &SMatrix<f64, N, N>,
+    g: &SVector<f64, N>,
+    d: SVector<f64, N>,
+    mu: f64,
+) -> Step<N> {
     let predicted_decrease = -g.dot(&d) - 0.5 * d.dot(&(h * d));
-    Step { d, mu, predicted_decrease }
+    Step {
+        d,
+        mu,
+        predicted_decrease,
+    }
 }
 
 /// The factorisation `H + μI = L D Lᵀ` (`L` unit lower triangular, `D` diagonal) of a small dense
@@ -138,9 +147,18 @@ pub fn more_sorensen_step<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f6
     let eig = DMatrix::from_column_slice(N, N, h.as_slice()).symmetric_eigen();
     let lambdas: Vec<f64> = eig.eigenvalues.iter().copied().collect();
     let u = &eig.eigenvectors;
-    let gt: Vec<f64> = (0..N).map(|i| u.column(i).iter().zip(g.iter()).map(|(a, b)| a * b).sum()).collect();
-    let (imin, lmin) = lambdas.iter().copied().enumerate().fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
-    let hscale = lambdas.iter().fold(0.0f64, |a, l| a.max(l.abs())).max(f64::MIN_POSITIVE);
+    let gt: Vec<f64> = (0..N)
+        .map(|i| u.column(i).iter().zip(g.iter()).map(|(a, b)| a * b).sum())
+        .collect();
+    let (imin, lmin) = lambdas
+        .iter()
+        .copied()
+        .enumerate()
+        .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+    let hscale = lambdas
+        .iter()
+        .fold(0.0f64, |a, l| a.max(l.abs()))
+        .max(f64::MIN_POSITIVE);
 
     // d(μ) = −Σ gᵢ/(λᵢ+μ) uᵢ and its norm, in the eigenbasis.
     let coords = |mu: f64| -> Vec<f64> { (0..N).map(|i| -gt[i] / (lambdas[i] + mu)).collect() };
@@ -168,7 +186,13 @@ pub fn more_sorensen_step<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f6
     let gnorm = g.norm();
     if gt[imin].abs() <= 1e-10 * gnorm.max(f64::MIN_POSITIVE) {
         let mut c: Vec<f64> = (0..N)
-            .map(|i| if (lambdas[i] - lmin).abs() <= 1e-12 * hscale { 0.0 } else { -gt[i] / (lambdas[i] + mu_floor) })
+            .map(|i| {
+                if (lambdas[i] - lmin).abs() <= 1e-12 * hscale {
+                    0.0
+                } else {
+                    -gt[i] / (lambdas[i] + mu_floor)
+                }
+            })
             .collect();
         let n = norm(&c);
         if n <= delta {
@@ -179,7 +203,11 @@ pub fn more_sorensen_step<const N: usize>(h: &SMatrix<f64, N, N>, g: &SVector<f6
     // Safeguarded Newton on ψ(μ) = 1/δ − 1/‖d(μ)‖ over (μ_floor, ∞).
     let mut mu_lo = mu_floor;
     let mut mu_hi = gnorm / delta + mu_floor + hscale; // ‖d(μ)‖ ≤ ‖g‖/(μ − μ_floor) < δ here
-    let mut mu = if lmin > 0.0 { 0.0 } else { mu_floor + 1e-8 * hscale.max(1.0) };
+    let mut mu = if lmin > 0.0 {
+        0.0
+    } else {
+        mu_floor + 1e-8 * hscale.max(1.0)
+    };
     for _ in 0..MAX_SECULAR_ITERATIONS {
         if mu <= mu_lo || mu >= mu_hi {
             mu = (mu_lo * mu_hi).sqrt().max(mu_lo + 0.01 * (mu_hi - mu_lo));

@@ -179,7 +179,8 @@ pub fn scaled_rotation_jacobian(r: &Vector4<f64>) -> SMatrix<f64, 9, 4> {
 pub fn lift_jacobian(x: &SVector<f64, 8>) -> SMatrix<f64, 12, 8> {
     let r: Vector4<f64> = x.fixed_rows::<4>(0).into_owned();
     let mut jac = SMatrix::<f64, 12, 8>::zeros();
-    jac.fixed_view_mut::<9, 4>(0, 0).copy_from(&scaled_rotation_jacobian(&r));
+    jac.fixed_view_mut::<9, 4>(0, 0)
+        .copy_from(&scaled_rotation_jacobian(&r));
     // t̃ = 2 (s r̄) = 2 Q(s) C r with C = diag(1, −1, −1, −1), and = 2 W(r)ᵀ s: rows 1-3 of
     // 2 Q(s) C and of 2 W(r)ᵀ (eqs. 8-9), written out.
     let (s0, s1, s2, s3) = (2.0 * x[4], 2.0 * x[5], 2.0 * x[6], 2.0 * x[7]);
@@ -241,20 +242,30 @@ impl Objective<8> for JointCost {
         let gts = self.gram.fixed_view::<12, 3>(0, 9) * ts;
         let mut gradient = SVector::<f64, 8>::zeros();
         gradient.fixed_rows_mut::<4>(0).copy_from(&(y0.transpose() * gy));
-        gradient.fixed_rows_mut::<4>(4).copy_from(&(ts.transpose() * gy.fixed_rows::<3>(9)));
+        gradient
+            .fixed_rows_mut::<4>(4)
+            .copy_from(&(ts.transpose() * gy.fixed_rows::<3>(9)));
         let rs = y0.transpose() * gts;
         let mut gauss_newton = SMatrix::<f64, 8, 8>::zeros();
-        gauss_newton.fixed_view_mut::<4, 4>(0, 0).copy_from(&(y0.transpose() * gy0));
+        gauss_newton
+            .fixed_view_mut::<4, 4>(0, 0)
+            .copy_from(&(y0.transpose() * gy0));
         gauss_newton.fixed_view_mut::<4, 4>(0, 4).copy_from(&rs);
         gauss_newton.fixed_view_mut::<4, 4>(4, 0).copy_from(&rs.transpose());
-        gauss_newton.fixed_view_mut::<4, 4>(4, 4).copy_from(&(ts.transpose() * gts.fixed_rows::<3>(9)));
+        gauss_newton
+            .fixed_view_mut::<4, 4>(4, 4)
+            .copy_from(&(ts.transpose() * gts.fixed_rows::<3>(9)));
         let mut cost = y.dot(&gy);
         for (phi, grad) in self.penalties(x) {
             cost += phi * phi;
             gradient += phi * grad;
             gauss_newton += grad * grad.transpose();
         }
-        Linearization { cost: 0.5 * cost, gradient, gauss_newton }
+        Linearization {
+            cost: 0.5 * cost,
+            gradient,
+            gauss_newton,
+        }
     }
 
     fn exact_hessian(&self, x: &Self::Point) -> Option<SMatrix<f64, 8, 8>> {
@@ -299,7 +310,10 @@ impl RotationCost {
         for l in lines {
             add_rank_one(&mut g, &coefficients(&l.normal, &l.object.direction, 0.0));
         }
-        RotationCost { gram: symmetrize(g).fixed_view::<9, 9>(0, 0).into_owned(), lambda }
+        RotationCost {
+            gram: symmetrize(g).fixed_view::<9, 9>(0, 0).into_owned(),
+            lambda,
+        }
     }
 }
 
@@ -381,7 +395,10 @@ mod tests {
             .map(|_| {
                 let x = Vector3::new(rng.normal(), rng.normal(), rng.normal());
                 let c = rot * x + t;
-                PointConstraint { image: Vector2::new(c.x / c.z + 0.01 * rng.normal(), c.y / c.z), object: x }
+                PointConstraint {
+                    image: Vector2::new(c.x / c.z + 0.01 * rng.normal(), c.y / c.z),
+                    object: x,
+                }
             })
             .collect();
         let lines = (0..5)
@@ -389,7 +406,10 @@ mod tests {
                 let a = Vector3::new(rng.normal(), rng.normal(), rng.normal());
                 let b = Vector3::new(rng.normal(), rng.normal(), rng.normal());
                 let n = (rot * a + t).cross(&(rot * b + t)).normalize() + Vector3::new(0.01, 0.0, 0.0) * rng.normal();
-                LineConstraint { normal: n, object: ObjectLine::from_endpoints(&a, &b).unwrap() }
+                LineConstraint {
+                    normal: n,
+                    object: ObjectLine::from_endpoints(&a, &b).unwrap(),
+                }
             })
             .collect();
         (points, lines)
@@ -450,7 +470,10 @@ mod tests {
         let mut rng = Rng::new(99);
         for _ in 0..20 {
             let (points, lines) = random_problem(&mut rng);
-            let joint = JointCost { gram: gram(&points, &lines, true), lambda: 50.0 };
+            let joint = JointCost {
+                gram: gram(&points, &lines, true),
+                lambda: 50.0,
+            };
             let x = SVector::<f64, 8>::from_fn(|_, _| rng.normal());
             assert!(gradient_error(&joint, &x, 1e-6) < 1e-6);
             assert!(hessian_error(&joint, &x, 1e-6) < 1e-6);
@@ -487,8 +510,14 @@ mod tests {
         let (points, _) = random_problem(&mut rng);
         let mut direct = Gram::zeros();
         for p in &points {
-            add_rank_one(&mut direct, &coefficients(&Vector3::new(1.0, 0.0, -p.image.x), &p.object, 1.0));
-            add_rank_one(&mut direct, &coefficients(&Vector3::new(0.0, 1.0, -p.image.y), &p.object, 1.0));
+            add_rank_one(
+                &mut direct,
+                &coefficients(&Vector3::new(1.0, 0.0, -p.image.x), &p.object, 1.0),
+            );
+            add_rank_one(
+                &mut direct,
+                &coefficients(&Vector3::new(0.0, 1.0, -p.image.y), &p.object, 1.0),
+            );
         }
         let direct = symmetrize(direct);
         assert!((gram(&points, &[], true) - direct).amax() < 1e-12 * direct.amax());

@@ -28,7 +28,10 @@ const DEGENERACY_TOLERANCE: f64 = 1e-9;
 fn check_finite<'a, I: IntoIterator<Item = &'a f64>>(what: &str, rows: impl Iterator<Item = I>) -> Result<()> {
     for (index, row) in rows.enumerate() {
         if row.into_iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { what: what.into(), index });
+            return Err(Error::NonFinite {
+                what: what.into(),
+                index,
+            });
         }
     }
     Ok(())
@@ -69,7 +72,10 @@ impl PointSpread {
         if self.spread[k] > CLEARLY_SPREAD * self.spread[0] {
             return false;
         }
-        let centred: Vec<f64> = points.map(|p| p - self.centroid).flat_map(|d| [d.x, d.y, d.z]).collect();
+        let centred: Vec<f64> = points
+            .map(|p| p - self.centroid)
+            .flat_map(|d| [d.x, d.y, d.z])
+            .collect();
         let mut s = DMatrix::from_row_slice(centred.len() / 3, 3, &centred).singular_values();
         s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
         s[k] <= tolerance * s[0]
@@ -108,7 +114,12 @@ pub(crate) fn principal_axes<'p>(points: impl Iterator<Item = &'p Vector3<f64>> 
     }
     let scatter = Matrix3::new(m[0], m[1], m[2], m[1], m[3], m[4], m[2], m[4], m[5]);
     let spread = symmetric_eigenvalues(&scatter).map(|v| v.max(0.0).sqrt());
-    PointSpread { centroid, rms_radius: ((m[0] + m[3] + m[5]) / n).sqrt(), spread, scatter }
+    PointSpread {
+        centroid,
+        rms_radius: ((m[0] + m[3] + m[5]) / n).sqrt(),
+        spread,
+        scatter,
+    }
 }
 
 /// Every object point of `c`: the points, then both endpoints of every segment.
@@ -156,12 +167,16 @@ impl Correspondences {
         check_finite("lines3d", self.lines3d.iter().map(|s| s[0].iter().chain(s[1].iter())))?;
         for (i, s) in self.lines2d.iter().enumerate() {
             if (s[0] - s[1]).norm() <= DEGENERACY_TOLERANCE * (1.0 + s[0].norm()) {
-                return Err(Error::Degenerate { what: format!("lines2d[{i}] is a zero-length segment") });
+                return Err(Error::Degenerate {
+                    what: format!("lines2d[{i}] is a zero-length segment"),
+                });
             }
         }
         for (i, s) in self.lines3d.iter().enumerate() {
             if (s[0] - s[1]).norm() <= DEGENERACY_TOLERANCE * (1.0 + s[0].norm()) {
-                return Err(Error::Degenerate { what: format!("lines3d[{i}] is a zero-length segment") });
+                return Err(Error::Degenerate {
+                    what: format!("lines3d[{i}] is a zero-length segment"),
+                });
             }
         }
         let (np, nl) = (self.n_points(), self.n_lines());
@@ -184,7 +199,9 @@ impl Correspondences {
             }
             Method::RotationThenTranslation => {
                 if nl + np / 2 < 3 {
-                    return Err(too_few("at least 3 lines, counting each pair of points as a line (Figure 2)"));
+                    return Err(too_few(
+                        "at least 3 lines, counting each pair of points as a line (Figure 2)",
+                    ));
                 }
             }
             _ => {
@@ -195,7 +212,9 @@ impl Correspondences {
         }
         let shape = principal_axes(object_points(self));
         if nl == 0 && shape.degenerate(object_points(self), 1, DEGENERACY_TOLERANCE) {
-            return Err(Error::Degenerate { what: "all points3d are collinear".into() });
+            return Err(Error::Degenerate {
+                what: "all points3d are collinear".into(),
+            });
         }
         if np == 0 {
             self.check_line_configuration()?;
@@ -204,11 +223,16 @@ impl Correspondences {
     }
 
     fn check_line_configuration(&self) -> Result<()> {
-        let lines: Vec<ObjectLine> =
-            self.lines3d.iter().map(|s| ObjectLine::from_endpoints(&s[0], &s[1])).collect::<Result<_>>()?;
+        let lines: Vec<ObjectLine> = self
+            .lines3d
+            .iter()
+            .map(|s| ObjectLine::from_endpoints(&s[0], &s[1]))
+            .collect::<Result<_>>()?;
         let d0 = lines[0].direction;
         if lines.iter().all(|l| l.direction.cross(&d0).norm() <= 1e-9) {
-            return Err(Error::Degenerate { what: "all lines3d are parallel".into() });
+            return Err(Error::Degenerate {
+                what: "all lines3d are parallel".into(),
+            });
         }
         // Concurrent lines: the point nearest to all lines (least squares) lies on every one of them.
         let mut a = Matrix3::zeros();
@@ -219,13 +243,19 @@ impl Correspondences {
             b += p * l.point;
         }
         if let Some(x) = a.try_inverse().map(|inv| inv * b) {
-            let scale = lines.iter().map(|l| (l.point - x).norm()).fold(0.0, f64::max).max(1e-300);
+            let scale = lines
+                .iter()
+                .map(|l| (l.point - x).norm())
+                .fold(0.0, f64::max)
+                .max(1e-300);
             let far = lines.iter().map(|l| {
                 let v = l.point - x;
                 (v - l.direction * l.direction.dot(&v)).norm()
             });
             if far.fold(0.0, f64::max) <= 1e-9 * scale {
-                return Err(Error::Degenerate { what: "all lines3d pass through one point".into() });
+                return Err(Error::Degenerate {
+                    what: "all lines3d pass through one point".into(),
+                });
             }
         }
         Ok(())
@@ -244,7 +274,10 @@ pub struct Conditioning {
 impl Conditioning {
     /// The identity (no conditioning).
     pub fn identity() -> Self {
-        Conditioning { centre: Vector3::zeros(), scale: 1.0 }
+        Conditioning {
+            centre: Vector3::zeros(),
+            scale: 1.0,
+        }
     }
 
     /// Centroid and RMS radius of every 3-D point and segment endpoint.
@@ -253,13 +286,19 @@ impl Conditioning {
         let n = all.clone().count().max(1) as f64;
         let centre = all.clone().fold(Vector3::zeros(), |a, p| a + p) / n;
         let rms = (all.map(|p| (p - centre).norm_squared()).sum::<f64>() / n).sqrt();
-        Conditioning { centre, scale: if rms > 0.0 { rms } else { 1.0 } }
+        Conditioning {
+            centre,
+            scale: if rms > 0.0 { rms } else { 1.0 },
+        }
     }
 
     /// The conditioning of a point set whose shape is known.
     pub(crate) fn of_shape(shape: &PointSpread) -> Self {
         let rms = shape.rms_radius;
-        Conditioning { centre: shape.centroid, scale: if rms > 0.0 { rms } else { 1.0 } }
+        Conditioning {
+            centre: shape.centroid,
+            scale: if rms > 0.0 { rms } else { 1.0 },
+        }
     }
 
     /// World → conditioned.
@@ -306,10 +345,17 @@ pub fn constraints(
         .zip(&c.points3d)
         .map(|(u, x)| {
             let y = (u.y - camera.cy) * inv_fy;
-            PointConstraint { image: Vector2::new((u.x - camera.cx - camera.skew * y) * inv_fx, y), object: *x }
+            PointConstraint {
+                image: Vector2::new((u.x - camera.cx - camera.skew * y) * inv_fx, y),
+                object: *x,
+            }
         })
         .collect();
-    let (extra2d, extra3d) = if points_as_lines { lines_from_point_pairs(&c.points2d, &c.points3d) } else { (vec![], vec![]) };
+    let (extra2d, extra3d) = if points_as_lines {
+        lines_from_point_pairs(&c.points2d, &c.points3d)
+    } else {
+        (vec![], vec![])
+    };
     let lines = c
         .lines2d
         .iter()
@@ -330,7 +376,11 @@ mod tests {
     use super::*;
 
     fn points_only(points3d: Vec<Vector3<f64>>) -> Correspondences {
-        Correspondences { points2d: vec![Vector2::new(1.0, 2.0); points3d.len()], points3d, ..Default::default() }
+        Correspondences {
+            points2d: vec![Vector2::new(1.0, 2.0); points3d.len()],
+            points3d,
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -338,16 +388,26 @@ mod tests {
         // Steps of 2/9 along a generic direction: the scatter matrix is rank one only up to round-off,
         // where the closed-form eigenvalues are least accurate.
         let direction = Vector3::new(1.0, 0.5, 0.2);
-        let line: Vec<Vector3<f64>> =
-            (0..10).map(|i| Vector3::new(0.0, 0.0, 5.0) + direction * (-1.0 + 2.0 * i as f64 / 9.0)).collect();
+        let line: Vec<Vector3<f64>> = (0..10)
+            .map(|i| Vector3::new(0.0, 0.0, 5.0) + direction * (-1.0 + 2.0 * i as f64 / 9.0))
+            .collect();
         for method in Method::ALL {
-            assert!(matches!(points_only(line.clone()).validate(method), Err(Error::Degenerate { .. })), "{method:?}");
+            assert!(
+                matches!(
+                    points_only(line.clone()).validate(method),
+                    Err(Error::Degenerate { .. })
+                ),
+                "{method:?}"
+            );
         }
         let other = Vector3::new(-0.3, 0.9, 0.4);
         let plane: Vec<Vector3<f64>> = (0..12)
             .map(|i| Vector3::new(0.0, 0.0, 5.0) + direction * (i % 4) as f64 / 3.0 + other * (i / 4) as f64 / 7.0)
             .collect();
-        assert!(matches!(points_only(plane.clone()).validate(Method::Linear), Err(Error::Degenerate { .. })));
+        assert!(matches!(
+            points_only(plane.clone()).validate(Method::Linear),
+            Err(Error::Degenerate { .. })
+        ));
         assert!(points_only(plane).validate(Method::TrustRegion).is_ok());
     }
 
@@ -364,7 +424,12 @@ mod tests {
             let mut exact = shape.scatter.symmetric_eigenvalues().map(|v| v.max(0.0).sqrt());
             exact.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
             // Eigenvalue errors of order √ε λ_max (see CLEARLY_SPREAD), so √(1e-7) in a deviation.
-            assert!((shape.spread - exact).amax() <= 1e-3 * exact[0], "{} vs {}", shape.spread, exact);
+            assert!(
+                (shape.spread - exact).amax() <= 1e-3 * exact[0],
+                "{} vs {}",
+                shape.spread,
+                exact
+            );
             assert!((shape.least_axis().dot(&(rotation * Vector3::z())).abs() - 1.0).abs() < 1e-6);
         }
     }

@@ -10,7 +10,9 @@ use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, rotation_distance};
-use crate::optim::{levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions};
+use crate::optim::{
+    levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions,
+};
 use nalgebra::{Matrix3, SVector, Vector3, Vector4};
 use std::time::Instant;
 
@@ -56,7 +58,12 @@ struct Shape<'c> {
 impl<'c> Shape<'c> {
     /// The shape of `corr`, the correspondences conditioned by `cond`, from that of the world points.
     fn of(corr: &'c Correspondences, world: &'c PointSpread, cond: &Conditioning) -> Shape<'c> {
-        Shape { corr, world, centroid: cond.apply(&world.centroid), spread: world.spread / cond.scale }
+        Shape {
+            corr,
+            world,
+            centroid: cond.apply(&world.centroid),
+            spread: world.spread / cond.scale,
+        }
     }
 
     /// Axis of least spread, for the mirror pose.
@@ -157,8 +164,10 @@ fn select(
     runs: Vec<(SVector<f64, 8>, Summary, bool)>,
     score: impl Fn(&SVector<f64, 8>, &Summary) -> f64,
 ) -> (SVector<f64, 8>, Summary, Vec<SVector<f64, 8>>, bool) {
-    let mut ranked: Vec<(f64, bool, SVector<f64, 8>, Summary)> =
-        runs.into_iter().map(|(x, s, valid)| (score(&x, &s), valid, x, s)).collect();
+    let mut ranked: Vec<(f64, bool, SVector<f64, 8>, Summary)> = runs
+        .into_iter()
+        .map(|(x, s, valid)| (score(&x, &s), valid, x, s))
+        .collect();
     ranked.sort_by(|a, b| (!a.1).cmp(&!b.1).then(a.0.total_cmp(&b.0)));
     let total_iterations = ranked.iter().map(|r| r.3.iterations).sum();
     let total_evaluations = ranked.iter().map(|r| r.3.evaluations).sum();
@@ -170,7 +179,9 @@ fn select(
     for (cost, valid, x, _) in ranked.iter().skip(1) {
         let rot = DualQuaternion::from_vector(x).to_rotation_translation().0;
         let distinct = rotation_distance(&rot, &best_rot) > 1e-3
-            && alternatives.iter().all(|a| rotation_distance(&DualQuaternion::from_vector(a).to_rotation_translation().0, &rot) > 1e-3);
+            && alternatives
+                .iter()
+                .all(|a| rotation_distance(&DualQuaternion::from_vector(a).to_rotation_translation().0, &rot) > 1e-3);
         if *valid && distinct && *cost <= ALTERNATIVE_COST_FACTOR * best_score + 1e-300 {
             alternatives.push(*x);
         }
@@ -195,8 +206,16 @@ struct Prepared {
 
 impl Prepared {
     fn new(corr: &Correspondences, shape: PointSpread, opts: &PoseOptions) -> Prepared {
-        let cond = if opts.normalize { Conditioning::of_shape(&shape) } else { Conditioning::identity() };
-        Prepared { shape, cond, conditioned: cond.correspondences(corr) }
+        let cond = if opts.normalize {
+            Conditioning::of_shape(&shape)
+        } else {
+            Conditioning::identity()
+        };
+        Prepared {
+            shape,
+            cond,
+            conditioned: cond.correspondences(corr),
+        }
     }
 }
 
@@ -214,8 +233,20 @@ fn estimator(
         let cal = faugeras_toscani(&corr.points2d, &corr.points3d)?;
         let pose = (cal.rotation, cal.translation);
         let cost = ReprojectionCost::new(cal.camera, &corr.points2d, &corr.points3d, &[], &[]).cost(&pose);
-        let summary = Summary { iterations: 0, evaluations: 1, initial_cost: cost, final_cost: cost, termination: Termination::ClosedForm };
-        return Ok(Estimate { pose, stages: vec![stage("linear", "reprojection", &pose, &summary, started)], camera: Some(cal.camera), alternatives: vec![], valid: true });
+        let summary = Summary {
+            iterations: 0,
+            evaluations: 1,
+            initial_cost: cost,
+            final_cost: cost,
+            termination: Termination::ClosedForm,
+        };
+        return Ok(Estimate {
+            pose,
+            stages: vec![stage("linear", "reprojection", &pose, &summary, started)],
+            camera: Some(cal.camera),
+            alternatives: vec![],
+            valid: true,
+        });
     }
     let (cond, cc) = (prepared.cond, &prepared.conditioned);
     let shape = Shape::of(cc, &prepared.shape, &cond);
@@ -240,16 +271,32 @@ fn estimator(
             .into_iter()
             .map(|r| DualQuaternion { r, s: Vector4::zeros() }.to_vector())
             .collect();
-        let user = user_start(opts, &cond).map(|q| DualQuaternion { r: q.r, s: Vector4::zeros() }.to_vector());
-        let runs = starts(user, default_starts).into_iter().map(|x0| with_cheirality_restart(x0, &shape, &solve)).collect();
+        let user = user_start(opts, &cond).map(|q| {
+            DualQuaternion {
+                r: q.r,
+                s: Vector4::zeros(),
+            }
+            .to_vector()
+        });
+        let runs = starts(user, default_starts)
+            .into_iter()
+            .map(|x0| with_cheirality_restart(x0, &shape, &solve))
+            .collect();
         // Candidates are ranked by the joint cost (eqs. 13 + 22), which sees rotation and translation.
         let (point_cons, line_cons) = constraints(camera, cc, false)?;
-        let joint = JointCost { gram: gram(&point_cons, &line_cons, true), lambda: opts.lambda };
+        let joint = JointCost {
+            gram: gram(&point_cons, &line_cons, true),
+            lambda: opts.lambda,
+        };
         let (x, summary, others, valid) = select(runs, |x, _| joint.cost(x));
         let pose = to_world(&x, &cond);
         let rotation_report = stage("rotation", "algebraic", &pose, &summary, started);
         let t_started = Instant::now();
-        let translation_cost = JointCost { gram: translation_gram, lambda: opts.lambda }.cost(&x);
+        let translation_cost = JointCost {
+            gram: translation_gram,
+            lambda: opts.lambda,
+        }
+        .cost(&x);
         let closed = Summary {
             iterations: 0,
             evaluations: 1,
@@ -259,12 +306,23 @@ fn estimator(
         };
         let translation_report = stage("translation", "algebraic", &pose, &closed, t_started);
         let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
-        return Ok(Estimate { pose, stages: vec![rotation_report, translation_report], camera: None, alternatives, valid });
+        return Ok(Estimate {
+            pose,
+            stages: vec![rotation_report, translation_report],
+            camera: None,
+            alternatives,
+            valid,
+        });
     }
     let (points, lines) = constraints(camera, cc, false)?;
-    let cost = JointCost { gram: gram(&points, &lines, true), lambda: opts.lambda };
-    let mut default_starts: Vec<SVector<f64, 8>> =
-        joint_starts(&cost.gram, &shape.centroid, shape.default_starts()).iter().map(|q| q.to_vector()).collect();
+    let cost = JointCost {
+        gram: gram(&points, &lines, true),
+        lambda: opts.lambda,
+    };
+    let mut default_starts: Vec<SVector<f64, 8>> = joint_starts(&cost.gram, &shape.centroid, shape.default_starts())
+        .iter()
+        .map(|q| q.to_vector())
+        .collect();
     if default_starts.is_empty() {
         default_starts.push(DualQuaternion::identity().to_vector());
     }
@@ -277,7 +335,10 @@ fn estimator(
         _ => trust_region::minimize(&cost, x0, &tr),
     };
     let user = user_start(opts, &cond).map(|q| q.to_vector());
-    let runs = starts(user, default_starts).into_iter().map(|x0| with_cheirality_restart(x0, &shape, &solve)).collect();
+    let runs = starts(user, default_starts)
+        .into_iter()
+        .map(|x0| with_cheirality_restart(x0, &shape, &solve))
+        .collect();
     let (x, summary, others, valid) = select(runs, |_, s| s.final_cost);
     let pose = if x.iter().all(|v| v.is_finite()) && x.fixed_rows::<4>(0).norm() > 0.0 {
         to_world(&x, &cond)
@@ -285,7 +346,13 @@ fn estimator(
         (Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN))
     };
     let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
-    Ok(Estimate { pose, stages: vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)], camera: None, alternatives, valid })
+    Ok(Estimate {
+        pose,
+        stages: vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)],
+        camera: None,
+        alternatives,
+        valid,
+    })
 }
 
 fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
@@ -300,8 +367,17 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
 /// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
 pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
-    let cond = if opts.normalize { Conditioning::of(corr) } else { Conditioning::identity() };
-    refine_conditioned(&cond, &ReprojectionCost::of(camera, &cond.correspondences(corr)), initial, opts)
+    let cond = if opts.normalize {
+        Conditioning::of(corr)
+    } else {
+        Conditioning::identity()
+    };
+    refine_conditioned(
+        &cond,
+        &ReprojectionCost::of(camera, &cond.correspondences(corr)),
+        initial,
+        opts,
+    )
 }
 
 /// [`refine_pose`] on correspondences already conditioned by `cond`.
@@ -335,8 +411,13 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     if opts.refine {
         tr.stopping.step_tolerance = tr.stopping.step_tolerance.max(STEP_TOLERANCE_BEFORE_REFINEMENT);
     }
-    let Estimate { mut pose, mut stages, camera: estimated_camera, alternatives, valid } =
-        estimator(camera, corr, &prepared, opts, &tr, started)?;
+    let Estimate {
+        mut pose,
+        mut stages,
+        camera: estimated_camera,
+        alternatives,
+        valid,
+    } = estimator(camera, corr, &prepared, opts, &tr, started)?;
     let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     if opts.refine && finite {
         let cost = ReprojectionCost::of(camera, &prepared.conditioned);
@@ -346,15 +427,30 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             report.iterations += other_report.iterations;
             report.time_seconds += other_report.time_seconds;
             if other_report.final_cost < report.final_cost {
-                (refined, report) = (other, StageReport { iterations: report.iterations, time_seconds: report.time_seconds, ..other_report });
+                (refined, report) = (
+                    other,
+                    StageReport {
+                        iterations: report.iterations,
+                        time_seconds: report.time_seconds,
+                        ..other_report
+                    },
+                );
             }
         }
         pose = refined;
         stages.push(report);
     }
     let last = stages.last().expect("at least one stage").clone();
-    let behind = if finite { count_behind(object_points(corr).copied(), &pose) } else { 0 };
-    let status = if !finite || stages.iter().any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost)) {
+    let behind = if finite {
+        count_behind(object_points(corr).copied(), &pose)
+    } else {
+        0
+    };
+    let status = if !finite
+        || stages
+            .iter()
+            .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost))
+    {
         Status::NumericalFailure
     } else if !opts.refine && !valid && behind == 0 {
         // The algebraic answer is far from a rigid motion (e.g. a stop at r = 0).
@@ -383,7 +479,11 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         (q, axis, angle)
     } else {
         let nan4 = Vector4::from_element(f64::NAN);
-        (DualQuaternion { r: nan4, s: nan4 }, Vector3::from_element(f64::NAN), f64::NAN)
+        (
+            DualQuaternion { r: nan4, s: nan4 },
+            Vector3::from_element(f64::NAN),
+            f64::NAN,
+        )
     };
     Ok(PoseResult {
         rotation: pose.0,

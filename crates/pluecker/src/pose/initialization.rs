@@ -94,8 +94,18 @@ fn rotation_grid() -> &'static Grid {
         }
         // Even permutations of ½(±φ, ±1, ±1/φ, 0).
         let even_perms = [
-            [0, 1, 2, 3], [0, 2, 3, 1], [0, 3, 1, 2], [1, 0, 3, 2], [1, 2, 0, 3], [1, 3, 2, 0],
-            [2, 0, 1, 3], [2, 1, 3, 0], [2, 3, 0, 1], [3, 0, 2, 1], [3, 1, 0, 2], [3, 2, 1, 0],
+            [0, 1, 2, 3],
+            [0, 2, 3, 1],
+            [0, 3, 1, 2],
+            [1, 0, 3, 2],
+            [1, 2, 0, 3],
+            [1, 3, 2, 0],
+            [2, 0, 1, 3],
+            [2, 1, 3, 0],
+            [2, 3, 0, 1],
+            [3, 0, 2, 1],
+            [3, 1, 0, 2],
+            [3, 2, 1, 0],
         ];
         let base = [phi, 1.0, 1.0 / phi, 0.0];
         for perm in even_perms {
@@ -131,7 +141,12 @@ fn rotation_grid() -> &'static Grid {
                 }
             }
         }
-        Grid { quaternions, rotations, entries, products }
+        Grid {
+            quaternions,
+            rotations,
+            entries,
+            products,
+        }
     })
 }
 
@@ -158,7 +173,10 @@ fn diverse_best(scores: &[f64], k: usize) -> Vec<usize> {
         if picked.len() == k {
             break;
         }
-        if picked.iter().all(|&p| rotation_distance(&rotation(p), &rotation(i)) > DISTINCT_STARTS) {
+        if picked
+            .iter()
+            .all(|&p| rotation_distance(&rotation(p), &rotation(i)) > DISTINCT_STARTS)
+        {
             picked.push(i);
         }
     }
@@ -201,7 +219,10 @@ pub fn joint_starts(gram: &Gram, centroid: &Vector3<f64>, k: usize) -> Vec<DualQ
 /// under its 9x9 Gram matrix.
 pub fn rotation_starts(gram9: &SMatrix<f64, 9, 9>, k: usize) -> Vec<Vector4<f64>> {
     let grid = rotation_grid();
-    diverse_best(&grid.quadratic_forms(gram9), k).into_iter().map(|i| grid.quaternions[i]).collect()
+    diverse_best(&grid.quadratic_forms(gram9), k)
+        .into_iter()
+        .map(|i| grid.quaternions[i])
+        .collect()
 }
 
 /// The mirror pose `(R Rπ(n), −t)` of a pose that puts the object behind the camera.
@@ -231,7 +252,10 @@ mod tests {
         let mut rng = Rng::new(600);
         for _ in 0..2000 {
             let r = rng.rotation();
-            let nearest = mats.iter().map(|m| rotation_distance(m, &r)).fold(f64::INFINITY, f64::min);
+            let nearest = mats
+                .iter()
+                .map(|m| rotation_distance(m, &r))
+                .fold(f64::INFINITY, f64::min);
             assert!(nearest <= 0.777, "{nearest}");
         }
     }

@@ -66,13 +66,16 @@ impl Method {
 
     /// Parses [`Method::as_str`] names.
     pub fn parse(name: &str) -> Result<Method> {
-        Method::ALL.into_iter().find(|m| m.as_str() == name).ok_or_else(|| Error::InvalidOption {
-            name: "method".into(),
-            reason: format!(
-                "unknown method '{name}'; expected one of {}",
-                Method::ALL.map(|m| m.as_str()).join(", ")
-            ),
-        })
+        Method::ALL
+            .into_iter()
+            .find(|m| m.as_str() == name)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "method".into(),
+                reason: format!(
+                    "unknown method '{name}'; expected one of {}",
+                    Method::ALL.map(|m| m.as_str()).join(", ")
+                ),
+            })
     }
 }
 
@@ -134,7 +137,10 @@ impl Default for PoseOptions {
             initial_pose: None,
             trust_region,
             levenberg_marquardt: LevenbergMarquardtOptions::default(),
-            newton: StoppingCriteria { max_iterations: 50, ..StoppingCriteria::default() },
+            newton: StoppingCriteria {
+                max_iterations: 50,
+                ..StoppingCriteria::default()
+            },
             refinement,
         }
     }
@@ -143,7 +149,12 @@ impl Default for PoseOptions {
 impl PoseOptions {
     /// Checks the numeric options.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name: &str, reason: &str| Err(Error::InvalidOption { name: name.into(), reason: reason.into() });
+        let bad = |name: &str, reason: &str| {
+            Err(Error::InvalidOption {
+                name: name.into(),
+                reason: reason.into(),
+            })
+        };
         if !(self.lambda.is_finite() && self.lambda > 0.0) {
             return bad("lambda", "must be a positive finite number");
         }
@@ -163,7 +174,10 @@ impl PoseOptions {
                 || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
                 || r.determinant() <= 0.0
             {
-                return bad("initial_pose", "R must be a finite rotation matrix (orthonormal, det +1) and t finite");
+                return bad(
+                    "initial_pose",
+                    "R must be a finite rotation matrix (orthonormal, det +1) and t finite",
+                );
             }
         }
         Ok(())

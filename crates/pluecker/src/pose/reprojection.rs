@@ -58,7 +58,11 @@ struct Sums<const L: usize> {
 
 impl<const L: usize> Sums<L> {
     fn new() -> Self {
-        Sums { cost: [0.0; L], gradient: [[0.0; L]; 6], upper: [[0.0; L]; 21] }
+        Sums {
+            cost: [0.0; L],
+            gradient: [[0.0; L]; 6],
+            upper: [[0.0; L]; 21],
+        }
     }
 
     #[inline(always)]
@@ -74,7 +78,11 @@ impl<const L: usize> Sums<L> {
             let mut k = 0;
             for a in 0..6 {
                 for b in a..6 {
-                    self.upper[k][l] += if a == 3 || b == 3 { ju[a] * ju[b] } else { ju[a] * ju[b] + jv[a] * jv[b] };
+                    self.upper[k][l] += if a == 3 || b == 3 {
+                        ju[a] * ju[b]
+                    } else {
+                        ju[a] * ju[b] + jv[a] * jv[b]
+                    };
                     k += 1;
                 }
             }
@@ -84,7 +92,11 @@ impl<const L: usize> Sums<L> {
     /// The lanes summed: `(cost, gradient, upper triangle)`.
     fn total(&self) -> (f64, [f64; 6], [f64; 21]) {
         let sum = |v: &[f64; L]| v.iter().sum::<f64>();
-        (sum(&self.cost), std::array::from_fn(|a| sum(&self.gradient[a])), std::array::from_fn(|k| sum(&self.upper[k])))
+        (
+            sum(&self.cost),
+            std::array::from_fn(|a| sum(&self.gradient[a])),
+            std::array::from_fn(|k| sum(&self.upper[k])),
+        )
     }
 }
 
@@ -106,7 +118,14 @@ impl<'a> ReprojectionCost<'a> {
                 columns[c * n + i] = v;
             }
         }
-        ReprojectionCost { camera, k_inv, columns, n_points: n, lines2d, lines3d }
+        ReprojectionCost {
+            camera,
+            k_inv,
+            columns,
+            n_points: n,
+            lines2d,
+            lines3d,
+        }
     }
 
     /// The cost of all the correspondences of `c`.
@@ -131,7 +150,12 @@ impl<'a> ReprojectionCost<'a> {
         let (r, t, cam) = (&pose.0, &pose.1, &self.camera);
         let col = |c: usize| -> [f64; L] { std::array::from_fn(|l| self.column(c)[i0 + l]) };
         let (x, y, z, u, v) = (col(0), col(1), col(2), col(3), col(4));
-        let mut out = PointLanes { ru: [0.0; L], rv: [0.0; L], ju: [[0.0; L]; 6], jv: [[0.0; L]; 6] };
+        let mut out = PointLanes {
+            ru: [0.0; L],
+            rv: [0.0; L],
+            ju: [[0.0; L]; 6],
+            jv: [[0.0; L]; 6],
+        };
         for l in 0..L {
             let px = r[(0, 0)] * x[l] + r[(0, 1)] * y[l] + r[(0, 2)] * z[l];
             let py = r[(1, 0)] * x[l] + r[(1, 1)] * y[l] + r[(1, 2)] * z[l];
@@ -182,7 +206,11 @@ impl<'a> ReprojectionCost<'a> {
         }
         let (c0, g0, u0) = batches.total();
         let (c1, g1, u1) = rest.total();
-        (c0 + c1, std::array::from_fn(|a| g0[a] + g1[a]), std::array::from_fn(|k| u0[k] + u1[k]))
+        (
+            c0 + c1,
+            std::array::from_fn(|a| g0[a] + g1[a]),
+            std::array::from_fn(|k| u0[k] + u1[k]),
+        )
     }
 
     fn line_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
@@ -207,7 +235,8 @@ impl<'a> ReprojectionCost<'a> {
                 dlp.x -= num * lp.x / scale.powi(3);
                 dlp.y -= num * lp.y / scale.powi(3);
                 let dl = self.k_inv * dlp;
-                jac.fixed_view_mut::<1, 3>(k, 0).copy_from(&(dl.transpose() * dl_domega));
+                jac.fixed_view_mut::<1, 3>(k, 0)
+                    .copy_from(&(dl.transpose() * dl_domega));
                 jac.fixed_view_mut::<1, 3>(k, 3).copy_from(&(dl.transpose() * dl_dt));
             }
         }
@@ -241,14 +270,18 @@ impl<'a> ReprojectionCost<'a> {
 /// The number of `points` with `z ≤ 0` in the camera frame at `pose`.
 pub(crate) fn count_behind(points: impl Iterator<Item = Vector3<f64>>, pose: &Pose) -> usize {
     let r = pose.0.row(2);
-    points.filter(|p| r[0] * p.x + r[1] * p.y + r[2] * p.z + pose.1.z <= 0.0).count()
+    points
+        .filter(|p| r[0] * p.x + r[1] * p.y + r[2] * p.z + pose.1.z <= 0.0)
+        .count()
 }
 
 impl Objective<6> for ReprojectionCost<'_> {
     type Point = Pose;
 
     fn cost(&self, pose: &Pose) -> f64 {
-        let lines: f64 = (0..self.lines2d.len()).map(|i| self.line_block(pose, i, false).0.norm_squared()).sum();
+        let lines: f64 = (0..self.lines2d.len())
+            .map(|i| self.line_block(pose, i, false).0.norm_squared())
+            .sum();
         self.point_sums::<false>(pose).0 + 0.5 * lines
     }
 
@@ -275,7 +308,11 @@ impl Objective<6> for ReprojectionCost<'_> {
                 k += 1;
             }
         }
-        Linearization { cost, gradient: SVector::from(grad), gauss_newton }
+        Linearization {
+            cost,
+            gradient: SVector::from(grad),
+            gauss_newton,
+        }
     }
 
     fn retract(&self, pose: &Pose, d: &SVector<f64, 6>) -> Pose {
@@ -317,23 +354,42 @@ mod tests {
         for _ in 0..20 {
             let rot = rng.rotation();
             let t = Vector3::new(rng.normal(), rng.normal(), 20.0);
-            let p3: Vec<Vector3<f64>> = (0..6).map(|_| Vector3::new(rng.normal(), rng.normal(), rng.normal())).collect();
-            let p2: Vec<Vector2<f64>> =
-                p3.iter().map(|x| cam.project(&(rot * x + t)) + Vector2::new(rng.normal(), rng.normal())).collect();
+            let p3: Vec<Vector3<f64>> = (0..6)
+                .map(|_| Vector3::new(rng.normal(), rng.normal(), rng.normal()))
+                .collect();
+            let p2: Vec<Vector2<f64>> = p3
+                .iter()
+                .map(|x| cam.project(&(rot * x + t)) + Vector2::new(rng.normal(), rng.normal()))
+                .collect();
             let l3: Vec<[Vector3<f64>; 2]> = (0..4)
-                .map(|_| [Vector3::new(rng.normal(), rng.normal(), rng.normal()), Vector3::new(rng.normal(), rng.normal(), rng.normal())])
+                .map(|_| {
+                    [
+                        Vector3::new(rng.normal(), rng.normal(), rng.normal()),
+                        Vector3::new(rng.normal(), rng.normal(), rng.normal()),
+                    ]
+                })
                 .collect();
             let l2: Vec<[Vector2<f64>; 2]> = l3
                 .iter()
-                .map(|s| [cam.project(&(rot * s[0] + t)) + Vector2::new(3.0, -2.0), cam.project(&(rot * s[1] + t))])
+                .map(|s| {
+                    [
+                        cam.project(&(rot * s[0] + t)) + Vector2::new(3.0, -2.0),
+                        cam.project(&(rot * s[1] + t)),
+                    ]
+                })
                 .collect();
             let cost = ReprojectionCost::new(cam, &p2, &p3, &l2, &l3);
             // Perturb away from the data so the gradient is not ~0.
-            let pose = (exp_so3(&Vector3::new(0.01, -0.02, 0.03)) * rot, t + Vector3::new(0.1, 0.0, -0.2));
+            let pose = (
+                exp_so3(&Vector3::new(0.01, -0.02, 0.03)) * rot,
+                t + Vector3::new(0.1, 0.0, -0.2),
+            );
             assert!(gradient_error(&cost, &pose, 1e-6) < 1e-6);
             // Line residuals vanish at the true pose for exact endpoints.
-            let l2_exact: Vec<[Vector2<f64>; 2]> =
-                l3.iter().map(|s| [cam.project(&(rot * s[0] + t)), cam.project(&(rot * s[1] + t))]).collect();
+            let l2_exact: Vec<[Vector2<f64>; 2]> = l3
+                .iter()
+                .map(|s| [cam.project(&(rot * s[0] + t)), cam.project(&(rot * s[1] + t))])
+                .collect();
             let exact = ReprojectionCost::new(cam, &[], &[], &l2_exact, &l3);
             assert!(exact.cost(&(rot, t)) < 1e-18);
         }
