@@ -73,7 +73,8 @@ fn centroid_and_scale<const D: usize>(p: &[SVector<f64, D>]) -> (SVector<f64, D>
 }
 
 fn svd(m: DMatrix<f64>, u: bool, v: bool, what: &str) -> Result<SVD<f64, Dyn, Dyn>> {
-    m.try_svd(u, v, f64::EPSILON, SVD_MAX_ITER).ok_or_else(|| degenerate(format!("{what}: SVD did not converge")))
+    m.try_svd(u, v, f64::EPSILON, SVD_MAX_ITER)
+        .ok_or_else(|| degenerate(format!("{what}: SVD did not converge")))
 }
 
 fn validate(points2d: &[Vector2<f64>], points3d: &[Vector3<f64>]) -> Result<()> {
@@ -92,9 +93,18 @@ fn validate(points2d: &[Vector2<f64>], points3d: &[Vector3<f64>]) -> Result<()> 
         });
     }
     let bad = |p: &[f64]| !p.iter().all(|v| v.is_finite());
-    match (points2d.iter().position(|p| bad(p.as_slice())), points3d.iter().position(|p| bad(p.as_slice()))) {
-        (Some(index), _) => Err(Error::NonFinite { what: "points2d".into(), index }),
-        (None, Some(index)) => Err(Error::NonFinite { what: "points3d".into(), index }),
+    match (
+        points2d.iter().position(|p| bad(p.as_slice())),
+        points3d.iter().position(|p| bad(p.as_slice())),
+    ) {
+        (Some(index), _) => Err(Error::NonFinite {
+            what: "points2d".into(),
+            index,
+        }),
+        (None, Some(index)) => Err(Error::NonFinite {
+            what: "points3d".into(),
+            index,
+        }),
         (None, None) => Ok(()),
     }
 }
@@ -154,7 +164,9 @@ pub fn faugeras_toscani(points2d: &[Vector2<f64>], points3d: &[Vector3<f64>]) ->
         return Err(degenerate("reduced system: SVD returned no singular vectors"));
     };
     if !(sb.singular_values[1] > RANK_TOL * sb.singular_values[0]) {
-        return Err(degenerate("the minimiser over m₃ is not unique (rank-deficient system)"));
+        return Err(degenerate(
+            "the minimiser over m₃ is not unique (rank-deficient system)",
+        ));
     }
     let y = Vector3::new(vb_t[(2, 0)], vb_t[(2, 1)], vb_t[(2, 2)]);
     let uby = ua.transpose() * (&b * DVector::from_column_slice(y.as_slice()));
@@ -208,11 +220,21 @@ pub fn faugeras_toscani(points2d: &[Vector2<f64>], points3d: &[Vector3<f64>]) ->
         .map_err(|e| degenerate(format!("the estimated intrinsics are singular: {e}")))?;
     let r_raw = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), m3.transpose()]);
     let rotation = nearest_rotation(&r_raw)?;
-    let translation = Vector3::new((m[(0, 3)] - u0 * m[(2, 3)]) / au, (m[(1, 3)] - v0 * m[(2, 3)]) / av, m[(2, 3)]);
+    let translation = Vector3::new(
+        (m[(0, 3)] - u0 * m[(2, 3)]) / au,
+        (m[(1, 3)] - v0 * m[(2, 3)]) / av,
+        m[(2, 3)],
+    );
     if !(rotation.iter().chain(translation.iter()).all(|v| v.is_finite()) && algebraic_residual.is_finite()) {
         return Err(degenerate("the linear calibration produced non-finite values"));
     }
-    Ok(LinearCalibration { camera, rotation, translation, projection: m, algebraic_residual })
+    Ok(LinearCalibration {
+        camera,
+        rotation,
+        translation,
+        projection: m,
+        algebraic_residual,
+    })
 }
 
 /// The rotation closest to `m` in the Frobenius norm: `U diag(1, 1, det(U Vᵀ)) Vᵀ`.
@@ -236,8 +258,16 @@ mod tests {
     /// `n` points uniform in the camera-frame box `|x|, |y| < half`, `z ∈ depth`, mapped to the world by
     /// `X = Rᵀ (x_cam − t)`, with pixels perturbed by Gaussian noise of standard deviation `sigma`.
     #[allow(clippy::too_many_arguments)]
-    fn scene(cam: &Camera, r: &Matrix3<f64>, t: &Vector3<f64>, n: usize, half: f64, depth: (f64, f64), sigma: f64,
-             rng: &mut Rng) -> (Vec<Vector2<f64>>, Vec<Vector3<f64>>) {
+    fn scene(
+        cam: &Camera,
+        r: &Matrix3<f64>,
+        t: &Vector3<f64>,
+        n: usize,
+        half: f64,
+        depth: (f64, f64),
+        sigma: f64,
+        rng: &mut Rng,
+    ) -> (Vec<Vector2<f64>>, Vec<Vector3<f64>>) {
         let xy = |rng: &mut Rng| rng.uniform_in(-half, half);
         (0..n)
             .map(|_| {
@@ -249,7 +279,13 @@ mod tests {
     }
 
     fn paper() -> (Camera, Matrix3<f64>, Vector3<f64>) {
-        let cam = Camera { fx: -1730.3, fy: 1220.7, cx: 243.8, cy: 241.2, skew: 0.0 };
+        let cam = Camera {
+            fx: -1730.3,
+            fy: 1220.7,
+            cx: 243.8,
+            cy: 241.2,
+            skew: 0.0,
+        };
         let r = to_rotation_matrix(&from_axis_angle(&Vector3::new(-0.185148, -0.973420, -0.156567), 2.9512));
         (cam, r, Vector3::new(2.627650, -11.006138, 77.479236))
     }
@@ -265,7 +301,12 @@ mod tests {
         }
         assert_eq!(est.camera.skew, 0.0);
         assert!((est.rotation - r).amax() < tol, "R error {}", (est.rotation - r).amax());
-        assert!((est.translation - t).norm() < tol * t.norm(), "t {} vs {}", est.translation, t);
+        assert!(
+            (est.translation - t).norm() < tol * t.norm(),
+            "t {} vs {}",
+            est.translation,
+            t
+        );
         assert!((est.rotation.determinant() - 1.0).abs() < 1e-12);
     }
 
@@ -276,16 +317,30 @@ mod tests {
         let est = faugeras_toscani(&p2, &p3).expect("calibration");
         assert_exact(&est, &cam, &r, &t);
         // The algebraic residual is pixel error × depth: rounding only.
-        assert!(est.algebraic_residual < 1e-8 * 85.0, "residual {}", est.algebraic_residual);
+        assert!(
+            est.algebraic_residual < 1e-8 * 85.0,
+            "residual {}",
+            est.algebraic_residual
+        );
     }
 
     #[test]
     fn noise_free_positive_focal_random_rotations_including_minimal_six_points() {
-        let cam = Camera { fx: 800.0, fy: 800.0, cx: 320.0, cy: 240.0, skew: 0.0 };
+        let cam = Camera {
+            fx: 800.0,
+            fy: 800.0,
+            cx: 320.0,
+            cy: 240.0,
+            skew: 0.0,
+        };
         for seed in 0..10 {
             let mut rng = Rng::new(100 + seed);
             let r = rng.rotation();
-            let t = Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), rng.uniform_in(4.0, 8.0));
+            let t = Vector3::new(
+                rng.uniform_in(-1.0, 1.0),
+                rng.uniform_in(-1.0, 1.0),
+                rng.uniform_in(4.0, 8.0),
+            );
             for n in [6, 40] {
                 let (p2, p3) = scene(&cam, &r, &t, n, 2.0, (3.0, 6.0), 0.0, &mut rng);
                 let est = faugeras_toscani(&p2, &p3).expect("calibration");
@@ -318,14 +373,29 @@ mod tests {
     fn errors() {
         let (cam, r, t) = paper();
         let (p2, p3) = scene(&cam, &r, &t, 10, 8.0, (70.0, 85.0), 0.0, &mut Rng::new(3));
-        assert!(matches!(faugeras_toscani(&p2[..5], &p3[..5]), Err(Error::TooFewCorrespondences { .. })));
+        assert!(matches!(
+            faugeras_toscani(&p2[..5], &p3[..5]),
+            Err(Error::TooFewCorrespondences { .. })
+        ));
         assert!(matches!(faugeras_toscani(&p2[..7], &p3[..6]), Err(Error::Shape { .. })));
         let mut bad = p3.clone();
         bad[4].y = f64::NAN;
-        assert_eq!(faugeras_toscani(&p2, &bad), Err(Error::NonFinite { what: "points3d".into(), index: 4 }));
+        assert_eq!(
+            faugeras_toscani(&p2, &bad),
+            Err(Error::NonFinite {
+                what: "points3d".into(),
+                index: 4
+            })
+        );
         let mut bad = p2.clone();
         bad[7].x = f64::INFINITY;
-        assert_eq!(faugeras_toscani(&bad, &p3), Err(Error::NonFinite { what: "points2d".into(), index: 7 }));
+        assert_eq!(
+            faugeras_toscani(&bad, &p3),
+            Err(Error::NonFinite {
+                what: "points2d".into(),
+                index: 7
+            })
+        );
         // Coplanar: all points at the same camera depth (a plane, tilted in the world frame).
         let (p2, p3) = scene(&cam, &r, &t, 20, 8.0, (77.0, 77.0), 0.0, &mut Rng::new(4));
         assert!(matches!(faugeras_toscani(&p2, &p3), Err(Error::Degenerate { .. })));
