@@ -1,0 +1,274 @@
+//! Line triangulation (Josephson & Kahl 2008, sections 2.2, 3, 4): exact recovery, cost ordering,
+//! covariance weighting, the soundness of the branch-and-bound bound, and bad input.
+
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector6};
+use pluecker::geometry::plucker;
+use pluecker::rng::Rng;
+use pluecker::triangulation::line::{
+    lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
+};
+use pluecker::triangulation::scenes::{line_scene, LineScene};
+use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
+use pluecker::Error;
+
+fn opts(method: Method) -> TriangulationOptions {
+    // A node cap keeps the tests fast; certificates below are asserted only where the gap closed.
+    TriangulationOptions {
+        method,
+        max_nodes: 300,
+        ..Default::default()
+    }
+}
+
+/// Sine of the angle between two lines' directions, and the distance between their closest points
+/// to the origin.
+fn line_error(result: &LineTriangulation, truth: &Vector6<f64>) -> (f64, f64) {
+    let (p, d) = plucker::to_point_direction(truth).unwrap();
+    (result.direction.cross(&d).norm(), (result.point - p).norm())
+}
+
+fn exact_lines(scene: &LineScene) -> Vec<Vector3<f64>> {
+    scene
+        .segments
+        .iter()
+        .map(|s| s[0].push(1.0).cross(&s[1].push(1.0)))
+        .collect()
+}
+
+#[test]
+fn noise_free_lines_are_recovered_by_every_method() {
+    for (views, seed) in [(2, 1u64), (3, 2), (6, 3)] {
+        let scene = line_scene(views, 0.8, seed);
+        let lines = exact_lines(&scene);
+        for method in Method::ALL {
+            let r = triangulate_line(&scene.cameras, &lines, None, &opts(method)).unwrap();
+            let (angle, offset) = line_error(&r, &scene.plucker());
+            assert!(
+                angle < 1e-8 && offset < 1e-8,
+                "views {views} seed {seed} {}: {angle} {offset}",
+                method.as_str()
+            );
+            assert!(r.report.cost < 1e-12, "{}", r.report.cost);
+            assert!(plucker::constraint(&r.plucker).abs() < 1e-14);
+            assert!((r.plucker.norm() - 1.0).abs() < 1e-12);
+            // point and direction describe the returned Plücker coordinates.
+            assert!((plucker::from_point_direction(&r.point, &r.direction).normalize() - r.plucker).norm() < 1e-9);
+            assert_eq!(r.report.status, Status::Success);
+        }
+    }
+}
+
+#[test]
+fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
+    let mut certified = 0;
+    for seed in 0..8u64 {
+        let views = 3 + (seed as usize % 4);
+        let scene = line_scene(views, 0.8, 100 + seed);
+        let mut rng = Rng::new(200 + seed);
+        let segments = scene.noisy_segments(1.0, &mut rng);
+        let run = |m| triangulate_line_segments(&scene.cameras, &segments, 1.0, &opts(m)).unwrap();
+        let (linear, local, optimal) = (run(Method::Linear), run(Method::Local), run(Method::Optimal));
+        let tol = 1e-9 * (1.0 + linear.report.cost);
+        assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
+        assert!(optimal.report.cost <= local.report.cost + tol, "seed {seed}");
+        let c = optimal.report.certificate;
+        assert_eq!(c.kind, CertificateKind::BranchAndBound, "seed {seed}");
+        assert!(c.lower_bound <= optimal.report.cost, "seed {seed}");
+        assert!(c.certified == (c.relative_gap <= 1e-3), "seed {seed}");
+        assert_eq!(optimal.report.status == Status::Success, c.certified);
+        certified += c.certified as usize;
+        // The estimate fits the data at least as well as the true line does.
+        let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+        let truth = line_cost(&scene.cameras, &lines, &covariances, &scene.plucker());
+        assert!(
+            optimal.report.cost <= truth + tol,
+            "seed {seed}: {} > {truth}",
+            optimal.report.cost
+        );
+    }
+    // Measured: 6 of 8 close the 1e-3 gap within 300 nodes (5 of them at the root); the other two
+    // are slow instances (a line nearly along the viewing directions, seed 3). A regression that
+    // weakens the bound certifies fewer.
+    assert!(certified >= 6, "{certified} of 8 certified");
+}
+
+#[test]
+fn certified_bound_is_below_the_cost_of_nearby_lines() {
+    let scene = line_scene(4, 0.8, 7);
+    let mut rng = Rng::new(8);
+    let segments = scene.noisy_segments(1.0, &mut rng);
+    let optimal = triangulate_line_segments(&scene.cameras, &segments, 1.0, &opts(Method::Optimal)).unwrap();
+    let c = optimal.report.certificate;
+    assert!(c.certified, "{:?}", optimal.report);
+    let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    // Lines around the optimum, from 1e-1 to 1e-4 of the scene's scale away: none costs less than the
+    // certified lower bound.
+    let (p, d) = (optimal.point, optimal.direction);
+    for k in 0..300 {
+        let scale = 10f64.powi(-(k % 4) - 1);
+        let moved = plucker::from_point_direction(
+            &(p + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 0.1),
+            &(d + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 0.02),
+        );
+        let cost = line_cost(&scene.cameras, &lines, &covariances, &moved);
+        assert!(
+            cost >= c.lower_bound - 1e-9,
+            "cost {cost} below the bound {}",
+            c.lower_bound
+        );
+    }
+}
+
+/// Eq. 19 at a world line, recomputed from first principles: project the line with eq. 7, take the
+/// residual of the normalised observation (section 3.1) and whiten it by the covariance (eq. 18).
+fn line_cost(
+    cameras: &[Matrix3x4<f64>],
+    lines: &[Vector3<f64>],
+    covariances: &[Matrix2<f64>],
+    l: &Vector6<f64>,
+) -> f64 {
+    use pluecker::triangulation::line_residual::LineFrame;
+    cameras
+        .iter()
+        .zip(lines)
+        .zip(covariances)
+        .map(|((p, obs), cov)| {
+            let r = LineFrame::of_line(obs).unwrap().residual(&plucker::project(p, l));
+            r.dot(&(cov.try_inverse().unwrap() * r))
+        })
+        .sum()
+}
+
+#[test]
+fn reported_cost_is_eq_19() {
+    let scene = line_scene(5, 0.8, 9);
+    let mut rng = Rng::new(10);
+    let segments = scene.noisy_segments(1.0, &mut rng);
+    let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    for method in Method::ALL {
+        let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(method)).unwrap();
+        let cost = line_cost(&scene.cameras, &lines, &covariances, &r.plucker);
+        assert!(
+            (cost - r.report.cost).abs() < 1e-8 * (1.0 + cost),
+            "{}: {cost} vs {}",
+            method.as_str(),
+            r.report.cost
+        );
+    }
+}
+
+#[test]
+fn a_view_with_huge_covariance_is_ignored() {
+    // View 3's line is moved by 20 px; with a covariance 1e8 times larger it must not matter: the
+    // answer equals the 3-view answer without it (to the 1e-4 relative weight it keeps).
+    let scene = line_scene(4, 0.8, 11);
+    let mut rng = Rng::new(12);
+    let mut segments = scene.noisy_segments(1.0, &mut rng);
+    segments[3] = [
+        segments[3][0] + Vector2::new(0.0, 20.0),
+        segments[3][1] + Vector2::new(0.0, 20.0),
+    ];
+    let (lines, mut covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    covariances[3] *= 1e8;
+    let all = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(Method::Local)).unwrap();
+    let three = triangulate_line(
+        &scene.cameras[..3],
+        &lines[..3],
+        Some(&covariances[..3]),
+        &opts(Method::Local),
+    )
+    .unwrap();
+    let (angle, offset) = line_error(&all, &three.plucker);
+    assert!(angle < 1e-4 && offset < 1e-4, "{angle} {offset}");
+    // With its nominal covariance the moved view pulls the answer away.
+    let (_, nominal) = lines_from_segments(&segments, 1.0).unwrap();
+    let pulled = triangulate_line(&scene.cameras, &lines, Some(&nominal), &opts(Method::Local)).unwrap();
+    let (angle, offset) = line_error(&pulled, &three.plucker);
+    assert!(angle > 1e-3 || offset > 1e-3, "{angle} {offset}");
+}
+
+#[test]
+fn too_small_gamma_is_infeasible() {
+    let scene = line_scene(4, 0.8, 13);
+    let mut rng = Rng::new(14);
+    let segments = scene.noisy_segments(1.0, &mut rng);
+    let o = TriangulationOptions {
+        max_reprojection_error: Some(1e-4),
+        ..opts(Method::Optimal)
+    };
+    let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
+    assert_eq!(r.report.status, Status::Infeasible);
+    assert!(!r.report.certificate.certified);
+}
+
+#[test]
+fn bad_input_is_rejected_with_the_argument_and_index() {
+    let scene = line_scene(3, 0.8, 15);
+    let lines = exact_lines(&scene);
+    let o = opts(Method::Local);
+    let err = |c: &[Matrix3x4<f64>], l: &[Vector3<f64>], cov: Option<&[Matrix2<f64>]>| {
+        triangulate_line(c, l, cov, &o).unwrap_err()
+    };
+    assert!(matches!(
+        err(&scene.cameras[..1], &lines[..1], None),
+        Error::TooFewCorrespondences { .. }
+    ));
+    assert!(matches!(err(&scene.cameras, &lines[..2], None), Error::Shape { .. }));
+    let mut nan = lines.clone();
+    nan[2].y = f64::NAN;
+    assert!(matches!(err(&scene.cameras, &nan, None), Error::NonFinite { ref what, index: 2 } if what == "lines"));
+    let mut zero = lines.clone();
+    zero[1] = Vector3::new(0.0, 0.0, 1.0);
+    assert!(matches!(err(&scene.cameras, &zero, None), Error::Degenerate { ref what } if what.contains("lines[1]")));
+    let mut cams = scene.cameras.clone();
+    cams[1][(0, 0)] = f64::INFINITY;
+    assert!(matches!(err(&cams, &lines, None), Error::NonFinite { index: 1, .. }));
+    cams[1] = Matrix3x4::zeros();
+    assert!(matches!(err(&cams, &lines, None), Error::SingularCamera { .. }));
+    let bad_cov = [
+        Matrix2::identity(),
+        Matrix2::new(1.0, 2.0, 2.0, 1.0),
+        Matrix2::identity(),
+    ];
+    assert!(
+        matches!(err(&scene.cameras, &lines, Some(&bad_cov)), Error::Degenerate { ref what } if what.contains("covariances[1]"))
+    );
+    // Cameras sharing one centre: rotations about it.
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let same: Vec<Matrix3x4<f64>> = (0..3)
+        .map(|i| {
+            let r = nalgebra::Rotation3::from_euler_angles(0.0, 0.05 * i as f64, 0.0).into_inner();
+            let mut rt = Matrix3x4::zeros();
+            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+            rt.set_column(3, &(r * Vector3::new(0.0, 0.0, 5.0)));
+            k * rt
+        })
+        .collect();
+    assert!(matches!(err(&same, &lines, None), Error::Degenerate { ref what } if what.contains("centres")));
+    // A line in the epipolar plane of the two views (parallel to the baseline): the back-projected
+    // planes coincide.
+    let cams = &scene.cameras[..2];
+    let baseline = pluecker::triangulation::views::centre(&cams[1]) - pluecker::triangulation::views::centre(&cams[0]);
+    let a = Vector3::new(0.1, 0.2, 0.3);
+    let b = a + baseline * 0.2;
+    let epipolar: Vec<Vector3<f64>> = cams
+        .iter()
+        .map(|p| (p * a.push(1.0)).cross(&(p * b.push(1.0))))
+        .collect();
+    assert!(matches!(err(cams, &epipolar, None), Error::Degenerate { ref what } if what.contains("epipolar")));
+    // Options.
+    let bad = TriangulationOptions {
+        max_relative_gap: -1.0,
+        ..o.clone()
+    };
+    assert!(matches!(
+        triangulate_line(&scene.cameras, &lines, None, &bad),
+        Err(Error::InvalidOption { .. })
+    ));
+    // Segments: zero length, named by index.
+    let mut segments = scene.segments.clone();
+    segments[2][1] = segments[2][0];
+    assert!(
+        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("segments[2]"))
+    );
+}
