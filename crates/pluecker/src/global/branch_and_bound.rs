@@ -100,6 +100,12 @@ pub trait BoundingOracle {
 
     /// The axis to split and the position. Default: the widest axis, at the relaxed minimiser
     /// moved into the middle half of the interval (or the midpoint without a minimiser).
+    /// The search also stops when `upper − lower ≤ absolute_gap()` (for optima at the rounding
+    /// level, where a relative gap cannot close). Default `0`.
+    fn absolute_gap(&self) -> f64 {
+        0.0
+    }
+
     fn split(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
         let axis = (0..region.dim())
             .max_by(|&a, &b| region.width(a).total_cmp(&region.width(b)))
@@ -136,8 +142,12 @@ impl Default for BranchAndBoundOptions {
 pub struct BranchAndBoundResult<C> {
     /// The best solution and its cost (the incumbent passed in, or a better candidate).
     pub best: Option<(f64, C)>,
-    /// A valid lower bound of the objective over the whole box (`+∞` when the box was proved empty).
+    /// A valid lower bound of the objective over the whole box, and the incumbent's cost (the
+    /// optimum is at most that): `min(bound over the box, incumbent)`.
     pub lower_bound: f64,
+    /// A valid lower bound over the admissible points of the box alone (`+∞` when every region
+    /// was proved empty: the box holds no admissible point).
+    pub box_lower_bound: f64,
     /// True when the gap closed.
     pub converged: bool,
     /// Bound computations (root included).
@@ -172,10 +182,6 @@ impl Ord for Open {
     }
 }
 
-fn gap_closed(upper: f64, lower: f64, gap: f64) -> bool {
-    upper - lower <= gap * upper.abs()
-}
-
 /// The state of one search.
 struct Search<C> {
     heap: BinaryHeap<Open>,
@@ -187,9 +193,14 @@ struct Search<C> {
     failed_nodes: usize,
     solver_iterations: usize,
     gap: f64,
+    absolute_gap: f64,
 }
 
 impl<C> Search<C> {
+    fn closed(&self, upper: f64, lower: f64) -> bool {
+        upper - lower <= (self.gap * upper.abs()).max(self.absolute_gap)
+    }
+
     fn upper(&self) -> f64 {
         self.best.as_ref().map_or(f64::INFINITY, |b| b.0)
     }
@@ -225,9 +236,10 @@ impl<C> Search<C> {
         };
         let upper = self.upper();
         if lower >= upper {
+            self.pruned_floor = self.pruned_floor.min(lower);
             return;
         }
-        if gap_closed(upper, lower, self.gap) {
+        if self.closed(upper, lower) {
             self.pruned_floor = self.pruned_floor.min(lower);
             return;
         }
@@ -235,7 +247,9 @@ impl<C> Search<C> {
     }
 
     fn finish(self, lower_bound: f64, converged: bool) -> BranchAndBoundResult<C> {
+        let open = self.heap.iter().map(|o| o.lower).fold(f64::INFINITY, f64::min);
         BranchAndBoundResult {
+            box_lower_bound: open.min(self.pruned_floor),
             best: self.best,
             lower_bound,
             converged,
@@ -261,17 +275,19 @@ pub fn branch_and_bound<O: BoundingOracle>(
         failed_nodes: 0,
         solver_iterations: 0,
         gap: opts.max_relative_gap,
+        absolute_gap: oracle.absolute_gap(),
     };
     search.evaluate(oracle, root, opts.trivial_lower_bound);
     loop {
         let upper = search.upper();
         // Drop regions the incumbent has overtaken since they were queued.
-        while search.heap.peek().is_some_and(|top| top.lower >= upper) {
+        while let Some(top) = search.heap.peek().filter(|top| top.lower >= upper) {
+            search.pruned_floor = search.pruned_floor.min(top.lower);
             search.heap.pop();
         }
         let open_lower = search.heap.peek().map_or(f64::INFINITY, |top| top.lower);
         let lower = open_lower.min(search.pruned_floor).min(upper);
-        if search.heap.is_empty() || gap_closed(upper, lower, opts.max_relative_gap) {
+        if search.heap.is_empty() || search.closed(upper, lower) {
             return search.finish(lower, true);
         }
         if search.nodes >= opts.max_nodes {
@@ -336,7 +352,7 @@ mod tests {
         let opts = BranchAndBoundOptions {
             max_relative_gap: 1e-3,
             max_nodes: 200_000,
-            trivial_lower_bound: f64::NEG_INFINITY,
+            ..Default::default()
         };
         let result = branch_and_bound(&mut oracle, root, None, &opts);
         let (cost, x) = result.best.clone().unwrap();
@@ -365,7 +381,7 @@ mod tests {
         let opts = BranchAndBoundOptions {
             max_relative_gap: 1e-9,
             max_nodes: 15,
-            trivial_lower_bound: f64::NEG_INFINITY,
+            ..Default::default()
         };
         let result = branch_and_bound(&mut oracle, root, None, &opts);
         assert!(!result.converged && result.nodes <= 16);

@@ -18,7 +18,7 @@
 use super::covariance::whitenings;
 use super::point_certificate::convexity_test;
 use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
-use super::point_global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
+use super::point_global::{global_point, GlobalSettings, GlobalStatus, COST_FLOOR, DEFAULT_RELAXATION};
 use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::views::{baseline, centre, depth_normalized, validate_cameras};
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
@@ -238,13 +238,9 @@ fn certify(
     linear: LinearPoint,
     opts: &TriangulationOptions,
 ) -> (Vector3<f64>, Status, Certificate, f64) {
-    let relative_gap = |cost: f64, lower: f64| {
-        if cost > 0.0 {
-            ((cost - lower) / cost).max(0.0)
-        } else {
-            0.0
-        }
-    };
+    // Relative to max(cost, COST_FLOOR): exact data (cost at the rounding level) is certified by
+    // the trivial bound, which a relative gap could never show.
+    let relative_gap = |cost: f64, lower: f64| ((cost - lower) / cost.max(COST_FLOOR)).max(0.0);
     let test = convexity_test(views, &x);
     if test.passed {
         let gap = relative_gap(cost, test.lower_bound);

@@ -42,6 +42,9 @@ use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
 use nalgebra::Vector3;
 
+/// Costs below this (squared whitened pixels: 1e-6 px of error) count as exact: gaps are measured
+/// relative to `max(cost, COST_FLOOR)`, since a relative gap cannot close at the rounding level.
+pub const COST_FLOOR: f64 = 1e-12;
 /// Views whose denominator can fall below this value get an eq. 26 solve.
 const WEAK_DEPTH: f64 = 0.5;
 /// Relative enlargement of the suggested initial box.
@@ -68,11 +71,13 @@ pub enum GlobalStatus {
     Converged,
     /// The node cap was reached first.
     NodeLimit,
-    /// The search set is empty (the conic solver's infeasibility certificate): no point within γ.
+    /// The search set is empty (the conic solver's infeasibility certificates): no point within
+    /// the user's γ.
     Infeasible,
     /// The search set is unbounded or reaches a camera's principal plane: no box, no certificate.
     Unbounded,
-    /// A conic solve of the initial box failed, or the chart is singular.
+    /// A conic solve of the initial box failed, the chart is singular, or the solver declared
+    /// empty a search set that holds the incumbent.
     Failed,
 }
 
@@ -162,6 +167,7 @@ struct PointOracle<'a> {
     gamma: f64,
     relaxation: Relaxation,
     local: TrustRegionOptions,
+    max_relative_gap: f64,
 }
 
 impl PointOracle<'_> {
@@ -254,6 +260,10 @@ impl BoundingOracle for PointOracle<'_> {
             }
             _ => Bound::Failed { solver_iterations },
         }
+    }
+
+    fn absolute_gap(&self) -> f64 {
+        self.max_relative_gap * COST_FLOOR
     }
 
     fn split(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
@@ -439,6 +449,7 @@ pub fn global_point(
         gamma,
         relaxation,
         local,
+        max_relative_gap,
     };
     let opts = BranchAndBoundOptions {
         max_relative_gap,
@@ -447,8 +458,14 @@ pub fn global_point(
     };
     let result = branch_and_bound(&mut oracle, root.region, Some((cost_local, *x_local)), &opts);
     let (cost, point) = result.best.unwrap_or((cost_local, *x_local));
-    let status = if result.lower_bound == f64::INFINITY {
-        GlobalStatus::Infeasible
+    // An empty search set: no point within the user's γ, or (when γ ≥ ε₀, so that the incumbent
+    // itself lies in it) a numerical artefact of the infeasibility certificate.
+    let status = if result.box_lower_bound == f64::INFINITY {
+        if gamma < cost_local.sqrt() {
+            GlobalStatus::Infeasible
+        } else {
+            GlobalStatus::Failed
+        }
     } else if result.converged {
         GlobalStatus::Converged
     } else {

@@ -1,0 +1,458 @@
+//! Point triangulation (Josephson & Kahl 2008): exact recovery, the cost, covariance weighting,
+//! soundness of both certificates against sampling and multi-start minimisation, low parallax,
+//! bad input, and the batch.
+
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
+use pluecker::error::Error;
+use pluecker::rng::Rng;
+use pluecker::synthetic::{triangulation_scene, TriangulationScene};
+use pluecker::triangulation::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point_certificate::convexity_test;
+use pluecker::triangulation::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
+use pluecker::triangulation::point_global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
+use pluecker::triangulation::views::depth_normalized;
+use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
+
+fn options(method: Method) -> TriangulationOptions {
+    TriangulationOptions {
+        method,
+        ..Default::default()
+    }
+}
+
+fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
+    let h = p * Vector4::new(x.x, x.y, x.z, 1.0);
+    Vector2::new(h.x / h.z, h.y / h.z)
+}
+
+fn views_of(cameras: &[Matrix3x4<f64>], obs: &[Vector2<f64>], covs: Option<&[Matrix2<f64>]>) -> Vec<PointView> {
+    let ps: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
+    let ls: Vec<Matrix2<f64>> = match covs {
+        None => vec![Matrix2::identity(); cameras.len()],
+        Some(c) => c
+            .iter()
+            .map(|c| c.cholesky().unwrap().l().try_inverse().unwrap())
+            .collect(),
+    };
+    point_views(&ps, obs, &ls)
+}
+
+#[test]
+fn noise_free_points_are_recovered_exactly_by_every_method() {
+    for (views, seed) in [(2, 1), (3, 2), (10, 3)] {
+        let scene = triangulation_scene(views, 0.4, seed);
+        for method in Method::ALL {
+            let r = triangulate_point(&scene.cameras, &scene.observations, None, &options(method)).unwrap();
+            assert_eq!(r.report.status, Status::Success, "{views} views {method:?}");
+            // Points ~5 units away, pixel-exact data: agreement to ~1e-9 relative (DLT conditioning).
+            assert!(
+                (r.point - scene.point).norm() < 1e-8,
+                "{views} views {method:?}: {}",
+                (r.point - scene.point).norm()
+            );
+            assert!(r.report.cost < 1e-12);
+            if method == Method::Optimal {
+                assert!(r.report.certificate.certified, "{views} views: {:?}", r.report);
+            }
+        }
+    }
+}
+
+#[test]
+fn cost_is_the_squared_pixel_error_without_covariance() {
+    let scene = triangulation_scene(4, 0.3, 7);
+    let obs = scene.noisy(1.0, &mut Rng::new(7));
+    let r = triangulate_point(&scene.cameras, &obs, None, &options(Method::Local)).unwrap();
+    let pixel_error: f64 = scene
+        .cameras
+        .iter()
+        .zip(&obs)
+        .map(|(p, u)| (project(p, &r.point) - u).norm_squared())
+        .sum();
+    assert!((r.report.cost - pixel_error).abs() < 1e-10 * pixel_error);
+}
+
+#[test]
+fn covariance_weighting_pulls_the_estimate_and_is_scale_covariant() {
+    let scene = triangulation_scene(2, 0.3, 11);
+    let obs = scene.noisy(2.0, &mut Rng::new(11));
+    let plain = triangulate_point(&scene.cameras, &obs, None, &options(Method::Optimal)).unwrap();
+    // View 0 measured 100x more precisely along x: its x-residual must shrink.
+    let covs = [Matrix2::new(1e-4, 0.0, 0.0, 1.0), Matrix2::identity()];
+    let weighted = triangulate_point(&scene.cameras, &obs, Some(&covs), &options(Method::Optimal)).unwrap();
+    let x_error = |x: &Vector3<f64>| (project(&scene.cameras[0], x) - obs[0]).x.abs();
+    assert!(
+        x_error(&weighted.point) < 0.05 * x_error(&plain.point),
+        "{} vs {}",
+        x_error(&weighted.point),
+        x_error(&plain.point)
+    );
+    // The weighted cost is the Mahalanobis norm at the estimate.
+    let mahalanobis: f64 = scene
+        .cameras
+        .iter()
+        .zip(&obs)
+        .zip(&covs)
+        .map(|((p, u), c)| {
+            let e = project(p, &weighted.point) - u;
+            e.dot(&(c.try_inverse().unwrap() * e))
+        })
+        .sum();
+    assert!((weighted.report.cost - mahalanobis).abs() < 1e-9 * mahalanobis);
+    // Scaling every covariance by 4 keeps the point and divides the cost by 4.
+    let scaled: Vec<Matrix2<f64>> = covs.iter().map(|c| c * 4.0).collect();
+    let again = triangulate_point(&scene.cameras, &obs, Some(&scaled), &options(Method::Optimal)).unwrap();
+    assert!((again.point - weighted.point).norm() < 1e-6 * weighted.point.norm());
+    assert!((4.0 * again.report.cost - weighted.report.cost).abs() < 1e-8 * weighted.report.cost);
+}
+
+#[test]
+fn optimal_is_no_worse_than_local_which_is_no_worse_than_linear() {
+    for seed in 0..40 {
+        let views = 2 + (seed as usize % 6);
+        let parallax = [0.5f64, 0.05, 0.01][seed as usize % 3];
+        let scene = triangulation_scene(views, parallax, seed);
+        let obs = scene.noisy(1.0, &mut Rng::new(100 + seed));
+        let cost = |m| {
+            triangulate_point(&scene.cameras, &obs, None, &options(m))
+                .unwrap()
+                .report
+        };
+        let (linear, local, optimal) = (cost(Method::Linear), cost(Method::Local), cost(Method::Optimal));
+        assert_ne!(optimal.status, Status::BehindCamera);
+        assert!(optimal.cost <= local.cost * (1.0 + 1e-12), "seed {seed}");
+        if linear.status == Status::Success {
+            assert!(
+                local.cost <= linear.cost * (1.0 + 1e-12),
+                "seed {seed}: {} > {}",
+                local.cost,
+                linear.cost
+            );
+        }
+    }
+}
+
+/// Minimum of eq. 19 over many local runs from random points in front of the cameras, spread
+/// along the first camera's ray from 0.1 to 1000 times the true depth and laterally.
+fn multistart_minimum(scene: &TriangulationScene, views: &[PointView], rng: &mut Rng) -> f64 {
+    let opts = TriangulationOptions::default().local;
+    let mut best = f64::INFINITY;
+    let ray = scene.point - pluecker::triangulation::views::centre(&scene.cameras[0]);
+    for _ in 0..300 {
+        let depth = 10f64.powf(rng.uniform_in(-1.0, 3.0));
+        let jitter = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.02 * depth * ray.norm();
+        let x0 = pluecker::triangulation::views::centre(&scene.cameras[0]) + ray * depth + jitter;
+        if !in_front(views, &x0) {
+            continue;
+        }
+        let (x, _) = pluecker::optim::trust_region::minimize(&PointObjective { views }, x0, &opts);
+        if in_front(views, &x) {
+            best = best.min(point_cost(views, &x));
+        }
+    }
+    best
+}
+
+#[test]
+fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
+    let mut passed = 0;
+    for seed in 0..60u64 {
+        let views = [2usize, 3, 5, 8][seed as usize % 4];
+        let parallax = [0.3f64, 0.02, 0.008, 0.0035][(seed / 4) as usize % 4];
+        let scene = triangulation_scene(views, parallax, 300 + seed);
+        let mut rng = Rng::new(seed);
+        let obs = scene.noisy(1.5, &mut rng);
+        let r = triangulate_point(&scene.cameras, &obs, None, &options(Method::Local)).unwrap();
+        if r.report.status != Status::Success {
+            continue;
+        }
+        let vs = views_of(&scene.cameras, &obs, None);
+        let test = convexity_test(&vs, &r.point);
+        if !test.passed {
+            continue;
+        }
+        passed += 1;
+        assert!(test.lower_bound <= r.report.cost * (1.0 + 1e-12));
+        // Random points around the estimate (scaled by its distance to the first camera) in front
+        // of every camera never beat the bound.
+        let scale = (r.point - pluecker::triangulation::views::centre(&scene.cameras[0])).norm();
+        for _ in 0..400 {
+            let step =
+                Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 10f64.powf(rng.uniform_in(-5.0, -0.5));
+            let x = r.point + step;
+            if in_front(&vs, &x) {
+                assert!(point_cost(&vs, &x) >= test.lower_bound * (1.0 - 1e-12), "seed {seed}");
+            }
+        }
+        let best = multistart_minimum(&scene, &vs, &mut rng);
+        assert!(
+            best >= test.lower_bound * (1.0 - 1e-9),
+            "seed {seed}: multistart {best} < bound {}",
+            test.lower_bound
+        );
+    }
+    assert!(passed > 30, "the test passed only {passed} times");
+}
+
+#[test]
+fn low_parallax_goes_to_branch_and_bound_which_certifies_in_front_of_the_cameras() {
+    let mut by_bnb = 0;
+    for seed in 0..12u64 {
+        let scene = triangulation_scene(10, 0.2f64.to_radians(), seed);
+        let obs = scene.noisy(1.0, &mut Rng::new(seed + 1000));
+        let r = triangulate_point(&scene.cameras, &obs, None, &options(Method::Optimal)).unwrap();
+        assert_eq!(r.report.status, Status::Success, "seed {seed}: {:?}", r.report);
+        assert!(r.report.certificate.certified && r.report.certificate.relative_gap <= 1e-3);
+        let vs = views_of(&scene.cameras, &obs, None);
+        assert!(in_front(&vs, &r.point));
+        if r.report.certificate.kind == CertificateKind::BranchAndBound {
+            by_bnb += 1;
+            assert!(r.report.certificate.nodes >= 1);
+            let best = multistart_minimum(&scene, &vs, &mut Rng::new(seed));
+            assert!(best >= r.report.certificate.lower_bound * (1.0 - 1e-9), "seed {seed}");
+            assert!(
+                r.report.cost <= best * (1.0 + 1e-3) + 1e-9,
+                "seed {seed}: {} vs multistart {best}",
+                r.report.cost
+            );
+        }
+    }
+    assert!(
+        by_bnb >= 4,
+        "only {by_bnb} of 12 low-parallax points needed branch and bound"
+    );
+}
+
+#[test]
+fn both_relaxations_give_valid_bounds_below_random_feasible_points() {
+    let scene = triangulation_scene(4, 0.2f64.to_radians(), 5);
+    let obs = scene.noisy(1.0, &mut Rng::new(5));
+    let local = triangulate_point(&scene.cameras, &obs, None, &options(Method::Local)).unwrap();
+    let vs = views_of(&scene.cameras, &obs, None);
+    let mut rng = Rng::new(55);
+    for relaxation in [Relaxation::Fractional, Relaxation::Secant, Relaxation::Both] {
+        let settings = GlobalSettings {
+            gamma: local.report.cost.sqrt(),
+            max_relative_gap: 1e-3,
+            max_nodes: 400,
+            local: TriangulationOptions::default().local,
+            relaxation,
+        };
+        let g = global_point(&vs, &local.point, local.report.cost, &[], &settings);
+        assert_eq!(g.status, GlobalStatus::Converged, "{relaxation:?}");
+        assert!(g.cost <= local.report.cost && g.lower_bound <= g.cost);
+        assert!(g.cost - g.lower_bound <= 1e-3 * g.cost);
+        // Points along the poorly determined depth direction and around it.
+        let ray = local.point - pluecker::triangulation::views::centre(&scene.cameras[0]);
+        for _ in 0..2000 {
+            let x = local.point
+                + ray * rng.uniform_in(-0.9, 20.0)
+                + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 1e-3;
+            if in_front(&vs, &x) {
+                assert!(point_cost(&vs, &x) >= g.lower_bound, "{relaxation:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_point_whose_rays_diverge_is_still_put_in_front() {
+    // Observations of a point behind both cameras: the DLT finds it behind; local and optimal
+    // return a point in front (the best one there).
+    let scene = triangulation_scene(3, 0.3, 21);
+    let behind = scene.point + (scene.point - pluecker::triangulation::views::centre(&scene.cameras[0])) * -2.0;
+    let obs: Vec<Vector2<f64>> = scene.cameras.iter().map(|p| project(p, &behind)).collect();
+    let vs = views_of(&scene.cameras, &obs, None);
+    let linear = triangulate_point(&scene.cameras, &obs, None, &options(Method::Linear)).unwrap();
+    assert_eq!(linear.report.status, Status::BehindCamera);
+    for method in [Method::Local, Method::Optimal] {
+        let r = triangulate_point(&scene.cameras, &obs, None, &options(method)).unwrap();
+        assert!(in_front(&vs, &r.point), "{method:?}: {:?}", r.report);
+        assert_ne!(r.report.status, Status::BehindCamera);
+    }
+}
+
+#[test]
+fn parallel_rays_are_at_infinity_for_the_linear_method() {
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let camera = |cx: f64| {
+        let mut rt = Matrix3x4::identity();
+        rt[(0, 3)] = -cx;
+        k * rt
+    };
+    let cameras = [camera(0.0), camera(1.0)];
+    let obs = [Vector2::new(300.0, 200.0), Vector2::new(300.0, 200.0)];
+    let r = triangulate_point(&cameras, &obs, None, &options(Method::Linear)).unwrap();
+    assert_eq!(r.report.status, Status::AtInfinity);
+    assert!(r.point.iter().all(|v| v.is_nan()));
+}
+
+#[test]
+fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
+    // The first low-parallax scene whose local solution the convexity test cannot certify.
+    let hard = (0..40u64).find_map(|seed| {
+        let scene = triangulation_scene(20, 0.2f64.to_radians(), seed);
+        let obs = scene.noisy(1.0, &mut Rng::new(seed + 1000));
+        let local = triangulate_point(&scene.cameras, &obs, None, &options(Method::Local)).unwrap();
+        let vs = views_of(&scene.cameras, &obs, None);
+        (!convexity_test(&vs, &local.point).passed).then_some((scene, obs))
+    });
+    let (scene, obs) = hard.expect("some 20-view scene at 0.2 degrees needs branch and bound");
+    let opts = TriangulationOptions {
+        max_reprojection_error: Some(0.01),
+        ..Default::default()
+    };
+    let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
+    assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
+    assert!(!r.report.certificate.certified);
+    // With a γ every view can meet, the same scene is certified.
+    let opts = TriangulationOptions {
+        max_reprojection_error: Some(30.0),
+        ..Default::default()
+    };
+    let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
+    assert!(r.report.certificate.certified, "{:?}", r.report);
+}
+
+#[test]
+fn bad_input_gives_the_right_error() {
+    let scene = triangulation_scene(3, 0.3, 4);
+    let (cams, obs) = (&scene.cameras, &scene.observations);
+    let opts = TriangulationOptions::default();
+    let err = |c: &[Matrix3x4<f64>], o: &[Vector2<f64>], cov: Option<&[Matrix2<f64>]>| {
+        triangulate_point(c, o, cov, &opts).unwrap_err()
+    };
+    assert!(matches!(
+        err(&cams[..1], &obs[..1], None),
+        Error::TooFewCorrespondences { .. }
+    ));
+    assert!(matches!(err(cams, &obs[..2], None), Error::Shape { what, .. } if what == "observations"));
+    let mut nan = obs.clone();
+    nan[2].y = f64::NAN;
+    assert!(matches!(err(cams, &nan, None), Error::NonFinite { what, index: 2 } if what == "observations"));
+    let mut bad_cams = cams.clone();
+    bad_cams[1][(0, 3)] = f64::INFINITY;
+    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "cameras"));
+    let mut singular = cams.clone();
+    singular[2].fixed_view_mut::<3, 3>(0, 0).fill(0.0);
+    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("cameras[2]")));
+    let covs = [
+        Matrix2::identity(),
+        Matrix2::new(1.0, 2.0, 2.0, 1.0),
+        Matrix2::identity(),
+    ];
+    assert!(matches!(err(cams, obs, Some(&covs)), Error::Degenerate { what } if what.contains("covariances[1]")));
+    assert!(matches!(err(cams, obs, Some(&covs[..2])), Error::Shape { .. }));
+    // One centre, three orientations: no parallax.
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let rotations = [Matrix3::identity(), Rng::new(1).rotation(), Rng::new(2).rotation()];
+    let same_centre: Vec<Matrix3x4<f64>> = rotations
+        .iter()
+        .map(|r| {
+            let mut rt = Matrix3x4::zeros();
+            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+            rt.set_column(3, &(-r * Vector3::new(1.0, 2.0, 3.0)));
+            k * rt
+        })
+        .collect();
+    assert!(matches!(err(&same_centre, obs, None), Error::Degenerate { what } if what.contains("no parallax")));
+    let bad_opts = TriangulationOptions {
+        max_relative_gap: -1.0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        triangulate_point(cams, obs, None, &bad_opts),
+        Err(Error::InvalidOption { .. })
+    ));
+}
+
+#[test]
+fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
+    let cameras = triangulation_scene(5, 0.3, 8).cameras;
+    let mut rng = Rng::new(8);
+    let n = 6;
+    let v = cameras.len();
+    let mut observations = Vec::new();
+    let mut truths = Vec::new();
+    for _ in 0..n {
+        let x = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        truths.push(x);
+        for p in &cameras {
+            let u = project(p, &x);
+            observations.extend([u.x + rng.normal(), u.y + rng.normal()]);
+        }
+    }
+    let mut visible = vec![true; n * v];
+    // Track 1: NaN in a visible view. Track 2: NaN in an invisible view (fine). Track 3: one view.
+    observations[2 * (v + 3)] = f64::NAN;
+    observations[2 * (2 * v + 4) + 1] = f64::NAN;
+    visible[2 * v + 4] = false;
+    for j in 1..v {
+        visible[3 * v + j] = false;
+    }
+    // Track 4: a covariance that is not positive definite in view 0.
+    let mut covariances = Vec::new();
+    for _ in 0..n * v {
+        covariances.extend([1.0, 0.0, 0.0, 1.0]);
+    }
+    covariances[4 * (4 * v)..4 * (4 * v) + 4].copy_from_slice(&[1.0, 3.0, 3.0, 1.0]);
+    let tracks = PointTracks {
+        observations: &observations,
+        visible: Some(&visible),
+        covariances: Some(&covariances),
+    };
+    let results = triangulate_points(&cameras, &tracks, &TriangulationOptions::default()).unwrap();
+    assert!(matches!(&results[1], Err(Error::NonFinite { what, index: 3 }) if what == "observations[1]"));
+    assert!(matches!(&results[3], Err(Error::TooFewCorrespondences { .. })));
+    assert!(matches!(&results[4], Err(Error::Degenerate { what }) if what.contains("covariances[4]")));
+    for t in [0, 2, 5] {
+        let r = results[t].as_ref().unwrap();
+        assert!(r.report.certificate.certified);
+        let seen: Vec<usize> = (0..v).filter(|&j| visible[t * v + j]).collect();
+        let cams: Vec<Matrix3x4<f64>> = seen.iter().map(|&j| cameras[j]).collect();
+        let obs: Vec<Vector2<f64>> = seen
+            .iter()
+            .map(|&j| Vector2::new(observations[2 * (t * v + j)], observations[2 * (t * v + j) + 1]))
+            .collect();
+        let single = triangulate_point(&cams, &obs, None, &TriangulationOptions::default()).unwrap();
+        assert!(
+            (single.point - r.point).norm() < 1e-9 * (1.0 + r.point.norm()),
+            "track {t}"
+        );
+        assert!((r.point - truths[t]).norm() < 0.1);
+    }
+    let linear = triangulate_points_linear(&cameras, &tracks).unwrap();
+    assert_eq!(linear.outcomes.len(), n);
+    assert!(linear.outcomes[1].is_err() && linear.outcomes[3].is_err() && linear.outcomes[4].is_err());
+    assert!(linear.points[3..6].iter().all(|v| v.is_nan()));
+    for t in [0, 2, 5] {
+        assert_eq!(linear.outcomes[t], Ok(Status::Success));
+        let x = Vector3::from_column_slice(&linear.points[3 * t..3 * t + 3]);
+        let seen: Vec<usize> = (0..v).filter(|&j| visible[t * v + j]).collect();
+        let cams: Vec<Matrix3x4<f64>> = seen.iter().map(|&j| cameras[j]).collect();
+        let obs: Vec<Vector2<f64>> = seen
+            .iter()
+            .map(|&j| Vector2::new(observations[2 * (t * v + j)], observations[2 * (t * v + j) + 1]))
+            .collect();
+        let single = triangulate_point(&cams, &obs, None, &options(Method::Linear)).unwrap();
+        assert!((single.point - x).norm() < 1e-9 * (1.0 + x.norm()), "track {t}");
+        assert!((single.report.cost - linear.costs[t]).abs() < 1e-9 * single.report.cost);
+    }
+    // Whole-call errors.
+    let short = PointTracks {
+        observations: &observations[..5],
+        visible: None,
+        covariances: None,
+    };
+    assert!(matches!(
+        triangulate_points(&cameras, &short, &TriangulationOptions::default()),
+        Err(Error::Shape { .. })
+    ));
+    let mask = PointTracks {
+        observations: &observations,
+        visible: Some(&visible[..3]),
+        covariances: None,
+    };
+    assert!(matches!(triangulate_points_linear(&cameras, &mask), Err(Error::Shape { what, .. }) if what == "visible"));
+}
