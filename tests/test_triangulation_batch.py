@@ -82,8 +82,9 @@ def test_one_bad_track_never_loses_the_others(seed):
         assert batch.status[i] == status, (i, batch.messages[i])
         assert batch.messages[i].startswith(f"track {i}: ")
         assert np.all(np.isnan(batch.X[i])) and not batch.certified[i]
-    assert "x: non-finite value" in batch.messages[3]
-    assert "cov[2] is not positive definite" in batch.messages[11]
+    # The messages name the track and the view (as a row of that track's observations).
+    assert "x[3]: non-finite value (NaN or inf) in row 1" in batch.messages[3]
+    assert "cov[11][2] is not positive definite" in batch.messages[11]
     good = np.setdiff1d(np.arange(50), list(expected))
     assert np.all(batch.status[good] == "success") and np.all(batch.certified[good])
     # The same NaN where the view is not visible is no problem.

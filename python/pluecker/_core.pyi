@@ -567,10 +567,12 @@ class PointTriangulations:
         """Local-minimisation iterations per track (n,)."""
     @property
     def time_seconds(self) -> NDArray[np.float64]:
-        """Core time per track (n,), seconds (one thread)."""
+        """Core time per track (n,), seconds, on one thread. Method ``linear`` runs an allocation-free
+        path that does not time tracks one by one: every track gets the batch's core time over ``n``."""
     @property
     def messages(self) -> list[str]:
-        """Per track: ``""``, or why the core rejected it (``"track 7: x: non-finite value ..."``)."""
+        """Per track: ``""``, or why the core rejected it, naming the track and its view as a row
+        (``"track 3: x[3]: non-finite value (NaN or inf) in row 1"``)."""
     @property
     def method(self) -> str:
         """The method that ran."""

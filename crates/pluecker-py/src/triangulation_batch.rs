@@ -1,40 +1,23 @@
-//! `triangulate_points`: many point tracks seen by one set of cameras, solved in parallel with the GIL
-//! released, and `pluecker.PointTriangulations`, the arrays of their results.
+//! `triangulate_points`: many point tracks seen by one set of cameras, solved by the core's batch
+//! (`pluecker::triangulation::batch`, rayon) with the GIL released, and `pluecker.PointTriangulations`,
+//! the arrays of their results.
 //!
-//! Every track is solved by the core's `triangulate_point` on its visible views; a track the core
-//! rejects (NaN in a visible view, fewer than two visible views, a covariance that is not positive
-//! definite, ...) gets an error status and message and never stops the others. The tracks are split
-//! into one contiguous chunk per available core (`std::thread::scope`).
+//! The numpy arrays go to the core as flat row-major slices (`PointTracks`), one copy each. A track
+//! the core rejects (NaN in a visible view, fewer than two visible views, a covariance that is not
+//! positive definite, ...) gets an error status and a message and never stops the others. Method
+//! `linear` takes the core's allocation-free path (`triangulate_points_linear`).
 
-use crate::errors::{shape_error, solve};
+use crate::errors::{shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, read, read_mask, shape_string, Dim};
-use nalgebra::{Matrix2, Matrix3x4, Vector2};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::views::validate_cameras;
-use pluecker::triangulation::{CertificateKind, Status, TriangulationOptions};
+use pluecker::triangulation::batch::{triangulate_points as core_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::{CertificateKind, Method, Status};
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
 use std::time::Instant;
-
-/// The outcome of one track, flattened for the arrays.
-#[derive(Debug, Clone)]
-struct TrackResult {
-    x: [f64; 3],
-    cost: f64,
-    lower_bound: f64,
-    relative_gap: f64,
-    certified: bool,
-    certificate: &'static str,
-    status: &'static str,
-    nodes: usize,
-    iterations: usize,
-    time_seconds: f64,
-    message: String,
-}
 
 /// The status of a track the core rejected, by error kind.
 fn error_status(err: &Error) -> &'static str {
@@ -48,169 +31,133 @@ fn error_status(err: &Error) -> &'static str {
     }
 }
 
-/// One track: its visible views handed to the core.
-fn solve_track(
-    cams: &[Matrix3x4<f64>],
-    x: &[f64],
-    visible: Option<&[bool]>,
-    cov: Option<&[f64]>,
-    opts: &TriangulationOptions,
-    track: usize,
-) -> TrackResult {
-    let started = Instant::now();
-    let seen: Vec<usize> = (0..cams.len()).filter(|&j| visible.map_or(true, |v| v[j])).collect();
-    let all = seen.len() == cams.len();
-    let chosen: Vec<Matrix3x4<f64>>;
-    let cam_slice: &[Matrix3x4<f64>] = if all {
-        cams
-    } else {
-        chosen = seen.iter().map(|&j| cams[j]).collect();
-        &chosen
-    };
-    let obs: Vec<Vector2<f64>> = seen.iter().map(|&j| Vector2::new(x[2 * j], x[2 * j + 1])).collect();
-    let covs: Option<Vec<Matrix2<f64>>> =
-        cov.map(|c| seen.iter().map(|&j| Matrix2::from_row_slice(&c[4 * j..4 * j + 4])).collect());
-    match triangulate_point(cam_slice, &obs, covs.as_deref(), opts) {
-        Ok(r) => {
-            let c = &r.report.certificate;
-            TrackResult {
-                x: [r.point.x, r.point.y, r.point.z],
-                cost: r.report.cost,
-                lower_bound: c.lower_bound,
-                relative_gap: c.relative_gap,
-                certified: c.certified,
-                certificate: c.kind.as_str(),
-                status: r.report.status.as_str(),
-                nodes: c.nodes,
-                iterations: r.report.iterations,
-                time_seconds: r.report.time_seconds,
-                message: String::new(),
-            }
-        }
-        Err(e) => {
-            let e = renamed(e, POINT_NAMES);
-            TrackResult {
-                x: [f64::NAN; 3],
-                cost: f64::NAN,
-                lower_bound: 0.0,
-                relative_gap: 1.0,
-                certified: false,
-                certificate: CertificateKind::None.as_str(),
-                status: error_status(&e),
-                nodes: 0,
-                iterations: 0,
-                time_seconds: started.elapsed().as_secs_f64(),
-                message: format!("track {track}: {e}"),
-            }
-        }
-    }
-}
-
-/// Every track, in parallel chunks.
-fn solve_all(
-    cams: &[Matrix3x4<f64>],
-    x: &[f64],
-    visible: Option<&[bool]>,
-    cov: Option<&[f64]>,
-    opts: &TriangulationOptions,
-    n: usize,
-) -> Vec<TrackResult> {
-    let v = cams.len();
-    let run = |range: std::ops::Range<usize>| -> Vec<TrackResult> {
-        range
-            .map(|i| {
-                solve_track(
-                    cams,
-                    &x[2 * v * i..2 * v * (i + 1)],
-                    visible.map(|m| &m[v * i..v * (i + 1)]),
-                    cov.map(|c| &c[4 * v * i..4 * v * (i + 1)]),
-                    opts,
-                    i,
-                )
-            })
-            .collect()
-    };
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(n.div_ceil(64)).max(1);
-    if threads == 1 {
-        return run(0..n);
-    }
-    let chunk = n.div_ceil(threads);
-    std::thread::scope(|scope| {
-        let handles: Vec<_> =
-            (0..threads).map(|t| scope.spawn(move || run(t * chunk..((t + 1) * chunk).min(n)))).collect();
-        handles.into_iter().flat_map(|h| h.join().expect("a triangulation thread panicked")).collect()
-    })
-}
-
-/// The results of `triangulate_points`: one entry per track in every array.
+/// The results of `triangulate_points`, column by column: one entry per track.
 #[pyclass(frozen, name = "PointTriangulations", module = "pluecker")]
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct PyPointTriangulations {
     method: &'static str,
-    tracks: Vec<TrackResult>,
+    x: Vec<f64>,
+    cost: Vec<f64>,
+    lower_bound: Vec<f64>,
+    relative_gap: Vec<f64>,
+    certified: Vec<bool>,
+    certificate: Vec<&'static str>,
+    status: Vec<&'static str>,
+    nodes: Vec<i64>,
+    iterations: Vec<i64>,
+    time_seconds: Vec<f64>,
+    /// `(track, message)` of every rejected track.
+    errors: Vec<(usize, String)>,
 }
 
 impl PyPointTriangulations {
-    fn column<'py>(&self, py: Python<'py>, f: impl Fn(&TrackResult) -> f64) -> Bound<'py, PyArray1<f64>> {
-        self.tracks.iter().map(f).collect::<Vec<f64>>().into_pyarray(py)
+    fn with_capacity(method: Method, n: usize) -> Self {
+        PyPointTriangulations {
+            method: method.as_str(),
+            x: Vec::with_capacity(3 * n),
+            cost: Vec::with_capacity(n),
+            lower_bound: Vec::with_capacity(n),
+            relative_gap: Vec::with_capacity(n),
+            certified: Vec::with_capacity(n),
+            certificate: Vec::with_capacity(n),
+            status: Vec::with_capacity(n),
+            nodes: Vec::with_capacity(n),
+            iterations: Vec::with_capacity(n),
+            time_seconds: Vec::with_capacity(n),
+            errors: Vec::new(),
+        }
+    }
+
+    /// Appends a track without a certificate: a linear point, or a track the core rejected.
+    fn push_bare(&mut self, x: &[f64], cost: f64, status: &'static str, seconds: f64) {
+        self.x.extend_from_slice(x);
+        self.cost.push(cost);
+        self.lower_bound.push(0.0);
+        self.relative_gap.push(1.0);
+        self.certified.push(false);
+        self.certificate.push(CertificateKind::None.as_str());
+        self.status.push(status);
+        self.nodes.push(0);
+        self.iterations.push(0);
+        self.time_seconds.push(seconds);
+    }
+
+    fn push_error(&mut self, track: usize, err: Error) {
+        let err = renamed(err, POINT_NAMES);
+        self.push_bare(&[f64::NAN; 3], f64::NAN, error_status(&err), 0.0);
+        self.errors.push((track, format!("track {track}: {err}")));
+    }
+
+    fn len(&self) -> usize {
+        self.status.len()
+    }
+
+    fn floats<'py>(py: Python<'py>, values: &[f64]) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, values)
     }
 }
 
 #[pymethods]
 impl PyPointTriangulations {
     #[getter(X)]
-    fn x<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        Array2::from_shape_fn((self.tracks.len(), 3), |(i, j)| self.tracks[i].x[j]).into_pyarray(py)
+    fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let array = Array2::from_shape_vec((self.len(), 3), self.x.clone())
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        Ok(array.into_pyarray(py))
     }
 
     #[getter]
     fn cost<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |t| t.cost)
+        Self::floats(py, &self.cost)
     }
 
     #[getter]
     fn lower_bound<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |t| t.lower_bound)
+        Self::floats(py, &self.lower_bound)
     }
 
     #[getter]
     fn relative_gap<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |t| t.relative_gap)
+        Self::floats(py, &self.relative_gap)
     }
 
     #[getter]
     fn time_seconds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.column(py, |t| t.time_seconds)
+        Self::floats(py, &self.time_seconds)
     }
 
     #[getter]
     fn certified<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        self.tracks.iter().map(|t| t.certified).collect::<Vec<bool>>().into_pyarray(py)
+        PyArray1::from_slice(py, &self.certified)
     }
 
     #[getter]
     fn nodes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        self.tracks.iter().map(|t| t.nodes as i64).collect::<Vec<i64>>().into_pyarray(py)
+        PyArray1::from_slice(py, &self.nodes)
     }
 
     #[getter]
     fn iterations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        self.tracks.iter().map(|t| t.iterations as i64).collect::<Vec<i64>>().into_pyarray(py)
+        PyArray1::from_slice(py, &self.iterations)
     }
 
     #[getter]
     fn status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        strings(py, self.tracks.iter().map(|t| t.status))
+        strings(py, &self.status)
     }
 
     #[getter]
     fn certificate<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        strings(py, self.tracks.iter().map(|t| t.certificate))
+        strings(py, &self.certificate)
     }
 
     #[getter]
     fn messages(&self) -> Vec<String> {
-        self.tracks.iter().map(|t| t.message.clone()).collect()
+        let mut out = vec![String::new(); self.len()];
+        for (track, message) in &self.errors {
+            out[*track] = message.clone();
+        }
+        out
     }
 
     #[getter]
@@ -219,20 +166,24 @@ impl PyPointTriangulations {
     }
 
     fn __len__(&self) -> usize {
-        self.tracks.len()
+        self.len()
     }
 
     fn __repr__(&self) -> String {
-        let n = self.tracks.len();
-        let success = self.tracks.iter().filter(|t| t.status == Status::Success.as_str()).count();
-        let certified = self.tracks.iter().filter(|t| t.certified).count();
-        format!("PointTriangulations(method='{}', tracks={n}, success={success}, certified={certified})", self.method)
+        let success = self.status.iter().filter(|s| **s == Status::Success.as_str()).count();
+        let certified = self.certified.iter().filter(|c| **c).count();
+        format!(
+            "PointTriangulations(method='{}', tracks={}, success={success}, certified={certified}, rejected={})",
+            self.method,
+            self.len(),
+            self.errors.len()
+        )
     }
 }
 
-/// A numpy array of strings (dtype `<U…`) from `values`.
-fn strings<'py>(py: Python<'py>, values: impl Iterator<Item = &'static str>) -> PyResult<Bound<'py, PyAny>> {
-    let list = PyList::new(py, values.collect::<Vec<_>>())?;
+/// A numpy array of strings (dtype `<U…`).
+fn strings<'py>(py: Python<'py>, values: &[&'static str]) -> PyResult<Bound<'py, PyAny>> {
+    let list = PyList::new(py, values)?;
     py.import("numpy")?.call_method1("array", (list, "str"))
 }
 
@@ -253,32 +204,70 @@ pub fn triangulate_points(
 ) -> PyResult<PyPointTriangulations> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
-    validate_cameras(&cams, "P").map_err(crate::errors::to_py_err)?;
     let v = cams.len();
-    let (shape, xs) = read("x", x, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)])?;
-    if shape[1] != v {
-        return Err(shape_error("x", &format!("shape (n, {v}, 2) (one column per camera in P)"), shape_string(&shape)));
-    }
-    let n = shape[0];
-    let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
-    let covs = match cov {
-        Some(c) => {
-            let (cshape, values) = read("cov", c, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2), Dim::Fixed(2)])?;
-            if cshape[0] != n || cshape[1] != v {
-                return Err(shape_error("cov", &format!("shape ({n}, {v}, 2, 2) (one per observation)"), shape_string(&cshape)));
-            }
-            Some(values)
-        }
-        None => None,
-    };
     if v < 2 {
-        return Err(crate::errors::to_py_err(Error::TooFewCorrespondences {
+        return Err(to_py_err(Error::TooFewCorrespondences {
             method: opts.method.as_str().into(),
             required: "2 cameras".into(),
             actual: format!("{v} camera(s) in P"),
         }));
     }
-    let method_name = opts.method.as_str();
-    let tracks = solve(py, move || Ok(solve_all(&cams, &xs, mask.as_deref(), covs.as_deref(), &opts, n)))?;
-    Ok(PyPointTriangulations { method: method_name, tracks })
+    let (shape, observations) = read("x", x, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)])?;
+    if shape[1] != v {
+        return Err(shape_error("x", &format!("shape (n, {v}, 2) (one column per camera in P)"), shape_string(&shape)));
+    }
+    let n = shape[0];
+    let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
+    let covariances = match cov {
+        Some(c) => {
+            let (cshape, values) = read("cov", c, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2), Dim::Fixed(2)])?;
+            if cshape[0] != n || cshape[1] != v {
+                let expected = format!("shape ({n}, {v}, 2, 2) (one per observation)");
+                return Err(shape_error("cov", &expected, shape_string(&cshape)));
+            }
+            Some(values)
+        }
+        None => None,
+    };
+    let method_used = opts.method;
+    solve(py, move || {
+        let tracks = PointTracks {
+            observations: &observations,
+            visible: mask.as_deref(),
+            covariances: covariances.as_deref(),
+        };
+        let mut out = PyPointTriangulations::with_capacity(method_used, n);
+        if method_used == Method::Linear {
+            let started = Instant::now();
+            let linear = triangulate_points_linear(&cams, &tracks).map_err(|e| renamed(e, POINT_NAMES))?;
+            // The fast path does not time tracks one by one: each gets the batch's mean.
+            let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
+            for (t, outcome) in linear.outcomes.into_iter().enumerate() {
+                match outcome {
+                    Ok(status) => out.push_bare(&linear.points[3 * t..3 * t + 3], linear.costs[t], status.as_str(), mean),
+                    Err(e) => out.push_error(t, e),
+                }
+            }
+            return Ok(out);
+        }
+        for (t, result) in core_points(&cams, &tracks, &opts).map_err(|e| renamed(e, POINT_NAMES))?.into_iter().enumerate() {
+            match result {
+                Ok(r) => {
+                    let (rep, c) = (&r.report, &r.report.certificate);
+                    out.x.extend_from_slice(r.point.as_slice());
+                    out.cost.push(rep.cost);
+                    out.lower_bound.push(c.lower_bound);
+                    out.relative_gap.push(c.relative_gap);
+                    out.certified.push(c.certified);
+                    out.certificate.push(c.kind.as_str());
+                    out.status.push(rep.status.as_str());
+                    out.nodes.push(c.nodes as i64);
+                    out.iterations.push(rep.iterations as i64);
+                    out.time_seconds.push(rep.time_seconds);
+                }
+                Err(e) => out.push_error(t, e),
+            }
+        }
+        Ok(out)
+    })
 }
