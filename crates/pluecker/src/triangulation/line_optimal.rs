@@ -38,7 +38,9 @@ use super::line::{LineObjective, LineProblem};
 use super::line_residual::LINE_FRAME_DISTANCE;
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::geometry::plucker::{self, OrthonormalLine};
-use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+use crate::global::branch_and_bound::{
+    branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, BranchAndBoundResult, Region,
+};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
 use crate::global::monomial::{add_mccormick, product_bounds, Interval};
 use crate::global::socp::{Affine, Socp, SocpStatus};
@@ -280,7 +282,7 @@ impl LineOracle<'_> {
         let mut iterations = 0;
         let mut region = region.clone();
         let mut extreme = |relax: &Relaxation, e: Affine| {
-            let (value, spent) = minimum(relax, e);
+            let (value, spent) = minimum(&relax.p, e);
             iterations += spent;
             value
         };
@@ -328,10 +330,11 @@ impl LineOracle<'_> {
     }
 }
 
-/// The least value of `e` over a relaxation, as a valid bound: `None` when the program is infeasible,
-/// `Some(None)` when the solver failed; with the solver iterations spent.
-fn minimum(relax: &Relaxation, e: Affine) -> (Option<Option<f64>>, usize) {
-    let mut p = relax.p.clone();
+/// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
+/// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the
+/// solver iterations spent.
+pub(crate) fn minimum(program: &Socp, e: Affine) -> (Option<Option<f64>>, usize) {
+    let mut p = program.clone();
     p.minimize(e);
     let s = p.solve();
     let value = match s.status {
@@ -429,14 +432,7 @@ pub(crate) fn optimal_line(
     };
     let cost = local_report.cost;
     if cost <= NEGLIGIBLE_COST {
-        report.certificate = Certificate {
-            lower_bound: 0.0,
-            relative_gap: 0.0,
-            certified: true,
-            kind: CertificateKind::ConvexityTest,
-            nodes: 0,
-            solver_iterations: 0,
-        };
+        report.certificate = negligible_cost_certificate();
         return (*local, report);
     }
     let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());
@@ -526,15 +522,26 @@ pub(crate) fn optimal_line(
     let (best_cost, best) = result.best.clone().unwrap_or((frame_cost, frame_local));
     let world = plucker::transform(&sim.inverse_matrix(), &best);
     report.cost = best_cost;
+    (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
+    (world, report)
+}
+
+/// The certificate of a finished branch and bound whose best cost is `best_cost`: certified when the
+/// relative gap is at most `max_relative_gap`; [`Status::Infeasible`] when the whole box was proved
+/// empty (no primitive in the domain).
+pub(crate) fn certificate_of<C>(
+    result: &BranchAndBoundResult<C>,
+    best_cost: f64,
+    max_relative_gap: f64,
+) -> (Status, Certificate) {
+    let base = Certificate {
+        kind: CertificateKind::BranchAndBound,
+        nodes: result.nodes,
+        solver_iterations: result.solver_iterations,
+        ..Certificate::none()
+    };
     if result.lower_bound == f64::INFINITY {
-        report.status = Status::Infeasible;
-        report.certificate = Certificate {
-            kind: CertificateKind::BranchAndBound,
-            nodes: result.nodes,
-            solver_iterations: result.solver_iterations,
-            ..Certificate::none()
-        };
-        return (world, report);
+        return (Status::Infeasible, base);
     }
     let lower = result.lower_bound.min(best_cost);
     let relative_gap = if best_cost > 0.0 {
@@ -542,19 +549,31 @@ pub(crate) fn optimal_line(
     } else {
         0.0
     };
-    let certified = relative_gap <= opts.max_relative_gap;
-    report.status = if certified {
+    let certified = relative_gap <= max_relative_gap;
+    let status = if certified {
         Status::Success
     } else {
         Status::GapNotClosed
     };
-    report.certificate = Certificate {
-        lower_bound: lower,
-        relative_gap,
-        certified,
-        kind: CertificateKind::BranchAndBound,
-        nodes: result.nodes,
-        solver_iterations: result.solver_iterations,
-    };
-    (world, report)
+    (
+        status,
+        Certificate {
+            lower_bound: lower,
+            relative_gap,
+            certified,
+            ..base
+        },
+    )
+}
+
+/// The certificate of a cost at most [`NEGLIGIBLE_COST`]: the bound 0 of a sum of squares.
+pub(crate) fn negligible_cost_certificate() -> Certificate {
+    Certificate {
+        lower_bound: 0.0,
+        relative_gap: 0.0,
+        certified: true,
+        kind: CertificateKind::ConvexityTest,
+        nodes: 0,
+        solver_iterations: 0,
+    }
 }

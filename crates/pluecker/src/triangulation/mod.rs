@@ -28,6 +28,7 @@ pub mod point_global;
 pub mod point_linear;
 
 pub mod quadric;
+pub mod quadric_optimal;
 pub mod quadric_residual;
 pub mod scenes;
 pub mod views;
