@@ -11,7 +11,7 @@ import pytest
 from pluecker.cli import main
 from pluecker.experiments import josephson_kahl_2008 as jk
 
-FIGURES = ("figure1_line_residuals.png", "figure2_conic_residuals.png")
+FIGURES = ("figure1_line_residuals.png", "figure2_conic_residuals.png", "figure7_conic_reprojection.png")
 
 
 @pytest.fixture(scope="module")
@@ -30,11 +30,12 @@ def test_writes_tables_figures_and_summary(quick_run):
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     assert (out / FIGURES[0]).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     md = (out / "tables.md").read_text()
-    for heading in ("## Table 1", "## Table 2", "## Figures 1-2", "## Certificates, branch-and-bound nodes"):
+    for heading in ("## Table 1", "## Table 2", "## Table 3", "## Figures 1-2", "## Certificates, branch-and-bound nodes"):
         assert heading in md
     assert doc["settings"]["quick"] is True and doc["settings"]["fitting_draws"] == jk.fitting.DRAWS_QUICK
     lines = printed.strip().splitlines()
     assert lines[0].startswith("josephson-kahl-2008 (quick)") and 6 <= len(lines) <= 14
+    assert doc["settings"]["conic_scenes"] == jk.conics.TRIALS_QUICK
 
 
 def test_points_have_the_papers_counts_and_are_certified(quick_run):
@@ -86,3 +87,30 @@ def test_residual_statistics_of_a_gaussian_sample():
     assert stats["mean"] == pytest.approx(2.0, abs=0.1) and stats["std"] == pytest.approx(3.0, rel=0.03)
     # Sampling error of the KS distance at n = 20000 is ~0.006; of skewness/kurtosis ~0.02/0.04.
     assert stats["ks_distance"] < 0.015 and abs(stats["skewness"]) < 0.08 and abs(stats["excess_kurtosis"]) < 0.15
+
+
+def test_quadrics_of_the_synthetic_discs(quick_run):
+    _, _, _, doc = quick_run
+    c = doc["summary"]["conics"]
+    assert c["scenes"] == jk.conics.TRIALS_QUICK and len(c["first_three"]) == 3
+    for run in c["first_three"]:
+        # The optimal quadric never costs more than the local one beyond its gap, nor the local more than
+        # the linear one it starts from (eq. 19, whitened).
+        assert run["optimal"]["cost"] <= run["local"]["cost"] * (1 + 1e-3) + 1e-9
+        assert run["local"]["cost"] <= run["linear"]["cost"] * (1 + 1e-9) + 1e-9
+        for m in jk.METHODS:
+            # 5 views x 5 residuals - 9 parameters = 16 degrees of freedom: sqrt(cost) near 4 with correct
+            # covariances; far above it (say 20) would mean mis-weighted residuals.
+            assert 0.5 < run[m]["residual_norm"] < 20, (m, run[m])
+            assert 0.0 <= run[m]["condition"] < 0.05  # discs: rank-3 duals, condition numbers near 0
+
+
+def test_disc_scene_conics_are_the_projected_disc_without_noise():
+    import numpy as np
+
+    scene = jk.conics.disc_scene(3, sigma=1e-9)
+    for P, conic, points in zip(scene.cameras, scene.conics, scene.points):
+        projected = np.linalg.inv(P @ scene.dual @ P.T)
+        projected /= np.linalg.norm(projected)
+        assert min(np.linalg.norm(conic - projected), np.linalg.norm(conic + projected)) < 1e-6
+        assert np.all((points >= 0) & (points <= jk.conics.IMAGE_SIZE))

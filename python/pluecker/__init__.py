@@ -41,6 +41,7 @@ from ._core import (
     PointTriangulation,
     PointTriangulations,
     PoseStage,
+    QuadricTriangulation,
     ShapeError,
     SingularCameraError,
     TooFewCorrespondencesError,
@@ -60,6 +61,7 @@ from ._core import (
     triangulate_line,
     triangulate_point,
     triangulate_points,
+    triangulate_quadric,
 )
 
 __all__ = [
@@ -76,6 +78,7 @@ __all__ = [
     "PointTriangulation",
     "PointTriangulations",
     "PoseStage",
+    "QuadricTriangulation",
     "ShapeError",
     "SingularCameraError",
     "TooFewCorrespondencesError",
@@ -95,4 +98,5 @@ __all__ = [
     "triangulate_line",
     "triangulate_point",
     "triangulate_points",
+    "triangulate_quadric",
 ]

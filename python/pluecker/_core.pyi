@@ -706,6 +706,106 @@ def triangulate_line(
     The GIL is released while the core runs.
     """
 
+class QuadricTriangulation(TriangulationReport):
+    """A triangulated ellipsoid (possibly flat: a disc): its dual and primal quadric, centre, axes and
+    semi-axes, and the fields of :class:`TriangulationReport` (its ``cost`` in whitened units of the conic
+    residual). Immutable; arrays are fresh copies."""
+
+    @property
+    def Q(self) -> NDArray[np.float64]:
+        """The dual quadric (4, 4) ``L`` of eq. 10, world frame, ``U^T L U = 0`` for tangent planes ``U``,
+        normalised so that ``L[3, 3] = -1``: ``L = H diag(s1², s2², s3², -1) H^T`` with ``H = [axes centre;
+        0 1]``."""
+    @property
+    def primal(self) -> Optional[NDArray[np.float64]]:
+        """The point quadric (4, 4) ``C = L^-1`` of eq. 9 (``X^T C X = 0``), None for a flat ellipsoid."""
+    @property
+    def centre(self) -> NDArray[np.float64]:
+        """Centre (3,), world units."""
+    @property
+    def axes(self) -> NDArray[np.float64]:
+        """Unit axes (3, 3) as columns, in the order of :attr:`semi_axes`."""
+    @property
+    def semi_axes(self) -> NDArray[np.float64]:
+        """Semi-axis lengths (3,), decreasing, world units; a 0 is a flat ellipsoid."""
+    @property
+    def method(self) -> str:
+        """See :attr:`TriangulationReport.method`."""
+    @property
+    def status(self) -> str:
+        """See :attr:`TriangulationReport.status` (``"behind_camera"`` when the ellipsoid's centre is behind
+        a camera or it crosses a camera's principal plane)."""
+    @property
+    def success(self) -> bool:
+        """See :attr:`TriangulationReport.success`."""
+    @property
+    def cost(self) -> float:
+        """See :attr:`TriangulationReport.cost`."""
+    @property
+    def lower_bound(self) -> float:
+        """See :attr:`TriangulationReport.lower_bound`."""
+    @property
+    def relative_gap(self) -> float:
+        """See :attr:`TriangulationReport.relative_gap`."""
+    @property
+    def certified(self) -> bool:
+        """See :attr:`TriangulationReport.certified`."""
+    @property
+    def certificate(self) -> str:
+        """See :attr:`TriangulationReport.certificate`."""
+    @property
+    def nodes(self) -> int:
+        """See :attr:`TriangulationReport.nodes`."""
+    @property
+    def solver_iterations(self) -> int:
+        """See :attr:`TriangulationReport.solver_iterations`."""
+    @property
+    def iterations(self) -> int:
+        """See :attr:`TriangulationReport.iterations`."""
+    @property
+    def termination(self) -> str:
+        """See :attr:`TriangulationReport.termination`."""
+    @property
+    def time_seconds(self) -> float:
+        """See :attr:`TriangulationReport.time_seconds`."""
+    def to_dict(self) -> dict[str, Any]:
+        """The report fields, ``"Q"``, ``"primal"`` (None when flat), ``"centre"``, ``"axes"`` and
+        ``"semi_axes"`` as a plain dict."""
+    def __repr__(self) -> str: ...
+
+def triangulate_quadric(
+    P: ArrayLike,
+    conics: ArrayLike,
+    cov: Optional[ArrayLike] = None,
+    method: str = "optimal",
+    *,
+    max_relative_gap: Optional[float] = None,
+    max_reprojection_error: Optional[float] = None,
+    max_nodes: Optional[int] = None,
+) -> QuadricTriangulation:
+    """Triangulate an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008,
+    sections 2.3, 3-4; the conic camera of Lemma 2.1).
+
+    The cost is eq. 19 over the 5-entry conic residuals of section 3.1; without ``cov`` the shape entries
+    (pixels²) dominate, so pass the covariances of :func:`fit_conic`. ``linear`` is made a proper
+    (possibly flat) ellipsoid; ``local`` keeps every iterate one.
+
+    Args:
+        P: cameras (n, 3, 4), world → pixels, n >= 3 (two views leave a family of quadrics).
+        conics: the observed point conics (n, 3, 3) of eq. 8 (``x^T c x = 0``, homogeneous pixels, any
+            scale and sign), each a real ellipse, e.g. :attr:`FittedConic.conic`.
+        cov: residual covariances (n, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
+        method: ``"optimal"`` (default), ``"local"`` or ``"linear"``.
+        max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
+
+    Raises:
+        ShapeError, NonFiniteError, TooFewCorrespondencesError (fewer than 3 views), SingularCameraError,
+        DegenerateConfigurationError (a conic that is not a real ellipse, a covariance that is not positive
+        definite, all camera centres equal), InvalidOptionError; TypeError for an unknown keyword.
+
+    The GIL is released while the core runs.
+    """
+
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 
 class FittedLine:

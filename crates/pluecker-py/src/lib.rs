@@ -19,6 +19,7 @@ mod triangulation_batch;
 mod triangulation_fitting;
 mod triangulation_line;
 mod triangulation_point;
+mod triangulation_quadric;
 
 use pyo3::prelude::*;
 
@@ -46,6 +47,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(triangulation_batch::triangulate_points, m)?)?;
     m.add_class::<triangulation_line::PyLineTriangulation>()?;
     m.add_function(wrap_pyfunction!(triangulation_line::triangulate_line, m)?)?;
+    m.add_class::<triangulation_quadric::PyQuadricTriangulation>()?;
+    m.add_function(wrap_pyfunction!(triangulation_quadric::triangulate_quadric, m)?)?;
     m.add_class::<triangulation_fitting::PyFittedLine>()?;
     m.add_class::<triangulation_fitting::PyFittedConic>()?;
     m.add_function(wrap_pyfunction!(triangulation_fitting::fit_line, m)?)?;
