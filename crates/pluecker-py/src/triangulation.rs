@@ -20,14 +20,20 @@ pub fn options(
     max_reprojection_error: Option<f64>,
     max_nodes: Option<i64>,
 ) -> PyResult<TriangulationOptions> {
-    let mut opts = TriangulationOptions { method: Method::parse(method).map_err(to_py_err)?, ..Default::default() };
+    let mut opts = TriangulationOptions {
+        method: Method::parse(method).map_err(to_py_err)?,
+        ..Default::default()
+    };
     if let Some(gap) = max_relative_gap {
         opts.max_relative_gap = gap;
     }
     opts.max_reprojection_error = max_reprojection_error;
     if let Some(nodes) = max_nodes {
         if nodes < 1 {
-            return Err(invalid_argument("max_nodes", format!("must be at least 1, got {nodes}")));
+            return Err(invalid_argument(
+                "max_nodes",
+                format!("must be at least 1, got {nodes}"),
+            ));
         }
         opts.max_nodes = nodes as usize;
     }
@@ -54,10 +60,21 @@ fn rename(text: &str, names: &[(&str, &str)]) -> String {
 /// A core error with its argument names translated by `names` (see [`rename`]).
 pub fn renamed(err: Error, names: &[(&str, &str)]) -> Error {
     match err {
-        Error::Shape { what, expected, actual } => Error::Shape { what: rename(&what, names), expected, actual },
-        Error::NonFinite { what, index } => Error::NonFinite { what: rename(&what, names), index },
-        Error::Degenerate { what } => Error::Degenerate { what: rename(&what, names) },
-        Error::SingularCamera { what } => Error::SingularCamera { what: rename(&what, names) },
+        Error::Shape { what, expected, actual } => Error::Shape {
+            what: rename(&what, names),
+            expected,
+            actual,
+        },
+        Error::NonFinite { what, index } => Error::NonFinite {
+            what: rename(&what, names),
+            index,
+        },
+        Error::Degenerate { what } => Error::Degenerate {
+            what: rename(&what, names),
+        },
+        Error::SingularCamera { what } => Error::SingularCamera {
+            what: rename(&what, names),
+        },
         other => other,
     }
 }

@@ -52,14 +52,20 @@ fn float64_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py
     }
     let np = obj.py().import("numpy")?;
     let array = np.call_method1("asarray", (obj,)).map_err(|e| {
-        PyTypeError::new_err(format!("{name}: expected an array of real numbers; numpy could not convert the input: {e}"))
+        PyTypeError::new_err(format!(
+            "{name}: expected an array of real numbers; numpy could not convert the input: {e}"
+        ))
     })?;
     let dtype = array.getattr("dtype")?;
     let kind: String = dtype.getattr("kind")?.extract()?;
     if !matches!(kind.as_str(), "i" | "u" | "f") {
-        return Err(PyTypeError::new_err(format!("{name}: expected an array of real numbers, got dtype {dtype}")));
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected an array of real numbers, got dtype {dtype}"
+        )));
     }
-    Ok(np.call_method1("ascontiguousarray", (array, "float64"))?.downcast_into::<PyArrayDyn<f64>>()?)
+    Ok(np
+        .call_method1("ascontiguousarray", (array, "float64"))?
+        .downcast_into::<PyArrayDyn<f64>>()?)
 }
 
 fn check_shape(name: &str, shape: &[usize], spec: &[Dim]) -> PyResult<()> {
@@ -80,7 +86,9 @@ pub fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<u
     let array = float64_array(name, obj)?;
     let shape = array.shape().to_vec();
     check_shape(name, &shape, spec)?;
-    let readonly = array.try_readonly().map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+    let readonly = array
+        .try_readonly()
+        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
     let values = match readonly.as_slice() {
         Ok(slice) => slice.to_vec(),
         Err(_) => readonly.as_array().iter().copied().collect(),
@@ -92,7 +100,9 @@ pub fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<u
 pub fn read_any(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let array = float64_array(name, obj)?;
     let shape = array.shape().to_vec();
-    let readonly = array.try_readonly().map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+    let readonly = array
+        .try_readonly()
+        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
     let values = match readonly.as_slice() {
         Ok(slice) => slice.to_vec(),
         Err(_) => readonly.as_array().iter().copied().collect(),
@@ -107,15 +117,23 @@ pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResul
     let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
     if !matches!(kind.as_str(), "b" | "i" | "u") {
         let dtype = array.getattr("dtype")?;
-        return Err(PyTypeError::new_err(format!("{name}: expected a boolean array, got dtype {dtype}")));
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected a boolean array, got dtype {dtype}"
+        )));
     }
     let actual: Vec<usize> = array.getattr("shape")?.extract()?;
     if actual != shape {
-        return Err(shape_error(name, &format!("shape {}", shape_string(shape)), shape_string(&actual)));
+        return Err(shape_error(
+            name,
+            &format!("shape {}", shape_string(shape)),
+            shape_string(&actual),
+        ));
     }
     let array = np.call_method1("ascontiguousarray", (array, "bool"))?;
     let array = array.downcast_into::<PyArrayDyn<bool>>()?;
-    let readonly = array.try_readonly().map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+    let readonly = array
+        .try_readonly()
+        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
     Ok(match readonly.as_slice() {
         Ok(slice) => slice.to_vec(),
         Err(_) => readonly.as_array().iter().copied().collect(),
@@ -124,12 +142,17 @@ pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResul
 
 /// Row-major chunks of `R x C` as nalgebra matrices.
 pub fn matrices<const R: usize, const C: usize>(values: &[f64]) -> Vec<SMatrix<f64, R, C>> {
-    values.chunks_exact(R * C).map(SMatrix::<f64, R, C>::from_row_slice).collect()
+    values
+        .chunks_exact(R * C)
+        .map(SMatrix::<f64, R, C>::from_row_slice)
+        .collect()
 }
 
 /// The first row of `values` (rows of `row_len` numbers) that holds a NaN or inf.
 pub fn first_non_finite_row(values: &[f64], row_len: usize) -> Option<usize> {
-    values.chunks(row_len.max(1)).position(|r| r.iter().any(|v| !v.is_finite()))
+    values
+        .chunks(row_len.max(1))
+        .position(|r| r.iter().any(|v| !v.is_finite()))
 }
 
 /// `(n, R, C)` finite matrices, one per view (cameras, covariances, conics).
@@ -167,6 +190,10 @@ pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
     if rows == views {
         Ok(())
     } else {
-        Err(shape_error(name, &format!("{views} rows (one per camera in P)"), rows.to_string()))
+        Err(shape_error(
+            name,
+            &format!("{views} rows (one per camera in P)"),
+            rows.to_string(),
+        ))
     }
 }

@@ -214,13 +214,21 @@ pub fn triangulate_points(
     }
     let (shape, observations) = read("x", x, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)])?;
     if shape[1] != v {
-        return Err(shape_error("x", &format!("shape (n, {v}, 2) (one column per camera in P)"), shape_string(&shape)));
+        return Err(shape_error(
+            "x",
+            &format!("shape (n, {v}, 2) (one column per camera in P)"),
+            shape_string(&shape),
+        ));
     }
     let n = shape[0];
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
     let covariances = match cov {
         Some(c) => {
-            let (cshape, values) = read("cov", c, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2), Dim::Fixed(2)])?;
+            let (cshape, values) = read(
+                "cov",
+                c,
+                &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2), Dim::Fixed(2)],
+            )?;
             if cshape[0] != n || cshape[1] != v {
                 let expected = format!("shape ({n}, {v}, 2, 2) (one per observation)");
                 return Err(shape_error("cov", &expected, shape_string(&cshape)));
@@ -244,13 +252,19 @@ pub fn triangulate_points(
             let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
             for (t, outcome) in linear.outcomes.into_iter().enumerate() {
                 match outcome {
-                    Ok(status) => out.push_bare(&linear.points[3 * t..3 * t + 3], linear.costs[t], status.as_str(), mean),
+                    Ok(status) => {
+                        out.push_bare(&linear.points[3 * t..3 * t + 3], linear.costs[t], status.as_str(), mean)
+                    }
                     Err(e) => out.push_error(t, e),
                 }
             }
             return Ok(out);
         }
-        for (t, result) in core_points(&cams, &tracks, &opts).map_err(|e| renamed(e, POINT_NAMES))?.into_iter().enumerate() {
+        for (t, result) in core_points(&cams, &tracks, &opts)
+            .map_err(|e| renamed(e, POINT_NAMES))?
+            .into_iter()
+            .enumerate()
+        {
             match result {
                 Ok(r) => {
                     let (rep, c) = (&r.report, &r.report.certificate);

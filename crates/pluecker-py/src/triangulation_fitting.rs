@@ -26,7 +26,10 @@ fn sigma_arg(sigma: f64) -> PyResult<f64> {
     if sigma.is_finite() && sigma > 0.0 {
         Ok(sigma)
     } else {
-        Err(invalid_argument("sigma", format!("must be a positive finite number of pixels, got {sigma}")))
+        Err(invalid_argument(
+            "sigma",
+            format!("must be a positive finite number of pixels, got {sigma}"),
+        ))
     }
 }
 
@@ -65,7 +68,10 @@ impl PyFittedLine {
 
     fn __repr__(&self) -> String {
         let l = self.inner.line;
-        format!("FittedLine(line=[{:.6}, {:.6}, {:.6}], rms_distance={:.3e})", l.x, l.y, l.z, self.inner.rms_distance)
+        format!(
+            "FittedLine(line=[{:.6}, {:.6}, {:.6}], rms_distance={:.3e})",
+            l.x, l.y, l.z, self.inner.rms_distance
+        )
     }
 }
 
@@ -166,7 +172,10 @@ pub fn fitting_residual_samples<'py>(
         return Err(invalid_argument("draws", format!("must be at least 1, got {draws}")));
     }
     if !(size.is_finite() && size > 0.0) {
-        return Err(invalid_argument("size", format!("must be a positive number of pixels, got {size}")));
+        return Err(invalid_argument(
+            "size",
+            format!("must be a positive number of pixels, got {size}"),
+        ));
     }
     let sigma = sigma_arg(sigma)?;
     let samples = solve(py, move || fitting::residual_samples(draws as usize, size, sigma, seed))?;

@@ -12,8 +12,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// Core argument names → Python argument names of `triangulate_line`.
-const LINE_NAMES: &[(&str, &str)] =
-    &[("cameras", "P"), ("lines", "lines"), ("segments", "lines"), ("covariances", "cov")];
+const LINE_NAMES: &[(&str, &str)] = &[
+    ("cameras", "P"),
+    ("lines", "lines"),
+    ("segments", "lines"),
+    ("covariances", "cov"),
+];
 
 /// A triangulated 3-D line: Plücker coordinates, a point, a unit direction, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "LineTriangulation", module = "pluecker")]
@@ -27,7 +31,11 @@ pub struct PyLineTriangulation {
 impl PyLineTriangulation {
     pub fn create(py: Python<'_>, result: LineTriangulation) -> PyResult<Py<PyLineTriangulation>> {
         let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
-            PyLineTriangulation { plucker: result.plucker, point: result.point, direction: result.direction },
+            PyLineTriangulation {
+                plucker: result.plucker,
+                point: result.point,
+                direction: result.direction,
+            },
         );
         Py::new(py, init)
     }
@@ -89,7 +97,10 @@ fn image_lines(
         [n, 3] => {
             same_count("lines", *n, views)?;
             if sigma.is_some() {
-                return Err(invalid_argument("sigma", "applies to segments (n, 2, 2) only; give cov for homogeneous lines"));
+                return Err(invalid_argument(
+                    "sigma",
+                    "applies to segments (n, 2, 2) only; give cov for homogeneous lines",
+                ));
             }
             if let Some(row) = first_non_finite_row(&values, 3) {
                 return Err(non_finite("lines", row));
@@ -103,15 +114,24 @@ fn image_lines(
             }
             let sigma = sigma.unwrap_or(1.0);
             if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(invalid_argument("sigma", format!("must be a positive finite number of pixels, got {sigma}")));
+                return Err(invalid_argument(
+                    "sigma",
+                    format!("must be a positive finite number of pixels, got {sigma}"),
+                ));
             }
-            let segments: Vec<[Vector2<f64>; 2]> =
-                values.chunks_exact(4).map(|s| [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])]).collect();
-            let (lines, covs) = lines_from_segments(&segments, sigma)
-                .map_err(|e| crate::errors::to_py_err(renamed(e, LINE_NAMES)))?;
+            let segments: Vec<[Vector2<f64>; 2]> = values
+                .chunks_exact(4)
+                .map(|s| [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])])
+                .collect();
+            let (lines, covs) =
+                lines_from_segments(&segments, sigma).map_err(|e| crate::errors::to_py_err(renamed(e, LINE_NAMES)))?;
             Ok((lines, if have_cov { None } else { Some(covs) }))
         }
-        _ => Err(shape_error("lines", "shape (n, 3) (homogeneous lines) or (n, 2, 2) (segments)", shape_string(&shape))),
+        _ => Err(shape_error(
+            "lines",
+            "shape (n, 3) (homogeneous lines) or (n, 2, 2) (segments)",
+            shape_string(&shape),
+        )),
     }
 }
 

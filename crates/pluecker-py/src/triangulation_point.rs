@@ -41,7 +41,13 @@ impl PyPointTriangulation {
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         let x = slf.get().point;
-        format!("PointTriangulation(X=[{:.6}, {:.6}, {:.6}], {})", x.x, x.y, x.z, slf.as_super().get().repr_fields())
+        format!(
+            "PointTriangulation(X=[{:.6}, {:.6}, {:.6}], {})",
+            x.x,
+            x.y,
+            x.z,
+            slf.as_super().get().repr_fields()
+        )
     }
 }
 

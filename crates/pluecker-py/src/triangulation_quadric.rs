@@ -13,7 +13,10 @@ use pyo3::types::PyDict;
 /// Core argument names → Python argument names of `triangulate_quadric`.
 const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
 
-fn matrix_to_py<'py, const R: usize, const C: usize>(py: Python<'py>, m: &SMatrix<f64, R, C>) -> Bound<'py, PyArray2<f64>> {
+fn matrix_to_py<'py, const R: usize, const C: usize>(
+    py: Python<'py>,
+    m: &SMatrix<f64, R, C>,
+) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((R, C), |(i, j)| m[(i, j)]).into_pyarray(py)
 }
 
@@ -34,13 +37,14 @@ pub struct PyQuadricTriangulation {
 
 impl PyQuadricTriangulation {
     pub fn create(py: Python<'_>, r: QuadricTriangulation) -> PyResult<Py<PyQuadricTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: r.report }).add_subclass(PyQuadricTriangulation {
-            dual: r.dual,
-            primal: r.primal,
-            centre: r.centre,
-            axes: r.axes,
-            semi_axes: r.semi_axes,
-        });
+        let init =
+            PyClassInitializer::from(PyTriangulationReport { inner: r.report }).add_subclass(PyQuadricTriangulation {
+                dual: r.dual,
+                primal: r.primal,
+                centre: r.centre,
+                axes: r.axes,
+                semi_axes: r.semi_axes,
+            });
         Py::new(py, init)
     }
 }
