@@ -10,8 +10,6 @@ from test_triangulation import cameras, cost_eq19, depths
 
 import pluecker
 
-FIELDS = ("cost", "lower_bound", "relative_gap", "certified", "nodes")
-
 
 def scene(seed: int, views: int = 4, n: int = 300, sigma: float = 1.0):
     rng = np.random.default_rng(seed)
@@ -30,10 +28,13 @@ def test_batch_equals_single_calls(method, seed):
     assert batch.X.shape == (200, 3) and batch.status.shape == (200,)
     for i in range(0, 200, 7):
         single = pluecker.triangulate_point(P, x[i], method=method)
-        # The same code on the same data: identical up to the last bit.
-        np.testing.assert_array_equal(batch.X[i], single.X)
-        for field in FIELDS:
-            assert getattr(batch, field)[i] == getattr(single, field), (i, field)
+        # The same equations on the same data; the batch's linear path sums in another order, so the
+        # points may differ in the last bits (1e-16 relative), and a local minimisation started there by
+        # its step tolerance (1e-10 relative). 1e-9 is well above both and far below the noise (~1e-3).
+        np.testing.assert_allclose(batch.X[i], single.X, rtol=1e-9, atol=1e-9)
+        for field in ("cost", "lower_bound", "relative_gap"):
+            assert getattr(batch, field)[i] == pytest.approx(getattr(single, field), rel=1e-9, abs=1e-12), (i, field)
+        assert batch.certified[i] == single.certified and batch.nodes[i] == single.nodes
         assert batch.status[i] == single.status and batch.certificate[i] == single.certificate
     assert np.all(batch.status == "success")
     assert np.all(batch.certified) == (method == "optimal")
@@ -54,7 +55,7 @@ def test_visibility_selects_the_views(seed):
             assert batch.status[i] == "too_few_views"
             continue
         single = pluecker.triangulate_point(P[seen], x[i][seen])
-        np.testing.assert_array_equal(batch.X[i], single.X)
+        np.testing.assert_allclose(batch.X[i], single.X, rtol=1e-9, atol=1e-9)
         assert batch.cost[i] == pytest.approx(cost_eq19(P[seen], batch.X[i], x[i][seen]), rel=1e-9)
 
 
