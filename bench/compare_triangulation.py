@@ -1,6 +1,6 @@
 """Point triangulation side by side: pluecker, OpenCV and pycolmap on the same seeded scenes, plus real data.
 
-**Synthetic scenes** (``make_scene``): ``--points`` points uniform in the cube [-1, 1]³, seen by ``v``
+**Synthetic scenes** (``make_scene``): ``--points`` (default 20,000) points uniform in the cube [-1, 1]³, seen by ``v``
 cameras on a circle of radius 10 around it, all looking at its centre (f = 800 px, 640 x 480), spread
 evenly over an arc of ``parallax`` degrees as seen from the centre; i.i.d. Gaussian pixel noise of
 σ = 1 px from ``numpy.random.default_rng(seed)``. Cases: 2, 5, 10, 20 views over 30°, and the low-parallax
@@ -38,7 +38,7 @@ per point.
 Results go to ``bench/out/compare_triangulation.json``; Markdown tables and PASS/FAIL lines for the
 issue's targets go to standard output. Run from the repository root with the project's venv:
 
-    .venv/bin/python bench/compare_triangulation.py            # 5000 points per case, about a minute
+    .venv/bin/python bench/compare_triangulation.py            # 20,000 points per case, about 15 s
     .venv/bin/python bench/compare_triangulation.py --quick    # 200 points, one repeat: a smoke test
 """
 
@@ -504,13 +504,13 @@ def versions() -> dict[str, str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--points", type=int, default=None, help="points per synthetic case (default 5000)")
+    parser.add_argument("--points", type=int, default=None, help="points per synthetic case (default 20000)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the synthetic scenes")
     parser.add_argument("--repeats", type=int, default=None, help="timed batch calls, fastest kept (default 3)")
     parser.add_argument("--quick", action="store_true", help="200 points, 1 repeat, 10,000-point throughput")
     parser.add_argument("--out", type=Path, default=OUT, help=f"JSON output (default {OUT})")
     args = parser.parse_args(argv)
-    n_points = args.points or (200 if args.quick else 5000)
+    n_points = args.points or (200 if args.quick else 20_000)
     repeats = args.repeats or (1 if args.quick else 3)
     throughput_points = 10_000 if args.quick else THROUGHPUT_POINTS
 
