@@ -3,7 +3,7 @@
 use crate::errors::{invalid_argument, non_finite, shape_error, solve};
 use crate::triangulation::{options, renamed, PyTriangulationReport};
 use crate::triangulation_arrays::{cameras, covariances2, first_non_finite_row, read_any, same_count, shape_string};
-use nalgebra::{Vector2, Vector3, Vector6};
+use nalgebra::{Matrix2, Vector2, Vector3, Vector6};
 use numpy::PyArray1;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
@@ -84,14 +84,12 @@ impl PyLineTriangulation {
     }
 }
 
+/// Homogeneous image lines and, when they come from segments without `cov`, their covariances.
+type ImageLines = (Vec<Vector3<f64>>, Option<Vec<Matrix2<f64>>>);
+
 /// The image lines of `triangulate_line`: `(n, 3)` homogeneous lines, or `(n, 2, 2)` segments whose
 /// lines (and, without `cov`, covariances from endpoint noise `sigma`) come from `lines_from_segments`.
-fn image_lines(
-    obj: &Bound<'_, PyAny>,
-    views: usize,
-    have_cov: bool,
-    sigma: Option<f64>,
-) -> PyResult<(Vec<Vector3<f64>>, Option<Vec<nalgebra::Matrix2<f64>>>)> {
+fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Option<f64>) -> PyResult<ImageLines> {
     let (shape, values) = read_any("lines", obj)?;
     match shape.as_slice() {
         [n, 3] => {
