@@ -1,8 +1,12 @@
-"""pluecker: camera pose from 2-D/3-D point and line correspondences.
+"""pluecker: camera pose from 2-D/3-D point and line correspondences, and triangulation of points,
+lines and quadrics from known cameras.
 
-The estimators of Phong, Horaud, Yassine & Tao, *Object pose from 2-D to 3-D point and line
-correspondences* (IJCV 1995) and their baselines, implemented in Rust (the ``pluecker`` crate) and
-exposed here through the extension module ``pluecker._core``.
+The pose estimators of Phong, Horaud, Yassine & Tao, *Object pose from 2-D to 3-D point and line
+correspondences* (IJCV 1995) and their baselines (:func:`estimate_pose`), and the triangulation of
+Josephson & Kahl, *Triangulation of points, lines and conics* (JMIV 2008) with certified global
+optimality (:func:`triangulate_point`, :func:`triangulate_points`, :func:`triangulate_line`,
+:func:`triangulate_quadric`, and :func:`fit_line` / :func:`fit_conic` for the covariances), implemented in
+Rust (the ``pluecker`` crate) and exposed here through the extension module ``pluecker._core``.
 
 Conventions (everywhere in the package):
 
@@ -15,9 +19,11 @@ Conventions (everywhere in the package):
   object points ``(N, 3)``, image segments ``(M, 2, 2)`` (two pixel endpoints), object segments
   ``(M, 2, 3)`` (two world endpoints). ``None`` stands for zero rows. Any real array-like is
   accepted and converted.
+- Triangulation takes cameras as (n, 3, 4) matrices ``P`` mapping world points straight to pixels,
+  ``λ (u, v, 1) = P (X, 1)`` with ``λ > 0`` in front (e.g. ``K [R | t]``).
 - Bad input raises a subclass of :class:`PlueckerError`, itself a :class:`ValueError`, whose message
-  names the argument and, for NaN/inf, the row. A solver that runs but fails returns a
-  :class:`PoseResult` whose ``status`` says why.
+  names the argument and, for NaN/inf, the row. A solver that runs but fails returns a result
+  (:class:`PoseResult`, :class:`TriangulationReport`) whose ``status`` says why.
 
 Example::
 
@@ -25,6 +31,14 @@ Example::
     scene = pluecker.random_scene("general", n_points=20, seed=1)
     result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"])
     assert result.success
+
+    import numpy as np
+    K = scene["camera"].K
+    P = np.stack([K @ np.hstack([np.eye(3), [[-b], [0.0], [0.0]]]) for b in (0.0, 0.5, 1.0)])
+    X = np.array([0.2, -0.1, 5.0])
+    x = np.array([(p @ np.append(X, 1.0))[:2] / (p @ np.append(X, 1.0))[2] for p in P])
+    point = pluecker.triangulate_point(P, x)
+    assert point.certified and np.allclose(point.X, X)
 """
 
 from ._core import (
