@@ -39,6 +39,11 @@ pub struct PointTracks<'a> {
 struct Prepared {
     normalized: Vec<Matrix3x4<f64>>,
     centres: Vec<Vector3<f64>>,
+    /// The centroid of all centres (spreads are computed relative to it, for accuracy).
+    origin: Vector3<f64>,
+    /// The largest distance of a centre from the world origin, at least 1 (the scale of the
+    /// no-parallax test).
+    extent: f64,
 }
 
 /// Checks the whole call and returns the number of tracks.
@@ -83,9 +88,14 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usiz
             ));
         }
     }
+    let centres: Vec<Vector3<f64>> = cameras.iter().map(centre).collect();
+    let origin = centres.iter().sum::<Vector3<f64>>() / v as f64;
+    let extent = centres.iter().map(|c| c.norm()).fold(1.0, f64::max);
     let prepared = Prepared {
         normalized: cameras.iter().map(depth_normalized).collect(),
-        centres: cameras.iter().map(centre).collect(),
+        centres,
+        origin,
+        extent,
     };
     Ok((n, prepared))
 }
@@ -200,44 +210,61 @@ pub struct LinearPoints {
     pub outcomes: Vec<Result<Status>>,
 }
 
-/// The DLT of one track with no allocation: its point and cost, or its status / error.
+/// The DLT of one track with no allocation: its point and cost, or its status / error. Three
+/// passes over the views: checks and the spread of the centres, the Gram matrix, the cost.
 fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -> Result<(Vector3<f64>, f64, Status)> {
-    let mut count = 0;
-    for j in 0..v {
-        if track_view(tracks, v, t, j)?.is_some() {
-            count += 1;
+    let visible = |j: usize| tracks.visible.map_or(true, |m| m[t * v + j]);
+    let (mut count, mut sum, mut sum2) = (0usize, Vector3::zeros(), 0.0);
+    for j in (0..v).filter(|&j| visible(j)) {
+        let k = t * v + j;
+        if !(tracks.observations[2 * k].is_finite() && tracks.observations[2 * k + 1].is_finite()) {
+            return Err(Error::NonFinite {
+                what: format!("observations[{t}]"),
+                index: j,
+            });
         }
+        let c = prepared.centres[j] - prepared.origin;
+        count += 1;
+        sum += c;
+        sum2 += c.norm_squared();
     }
     if count < 2 {
         return Err(too_few(Method::Linear, t, count));
     }
-    let visible = |j: &usize| tracks.visible.map_or(true, |m| m[t * v + j]);
-    let (frame, spread) = frame_of((0..v).filter(visible).map(|j| prepared.centres[j]));
-    if spread <= SAME_CENTRE {
+    let mean = sum / count as f64;
+    let spread = (sum2 / count as f64 - mean.norm_squared()).max(0.0).sqrt();
+    if spread <= SAME_CENTRE * prepared.extent {
         return Err(no_parallax(t));
     }
-    let view = |j: usize| {
-        track_view(tracks, v, t, j)
-            .ok()
-            .flatten()
-            .map(|(x, l)| PointView::new(&prepared.normalized[j], &x, &l))
+    let frame = WorldFrame {
+        centre: prepared.origin + mean,
+        scale: spread,
+    };
+    let view = |j: usize| -> Result<PointView> {
+        let k = t * v + j;
+        let x = Vector2::new(tracks.observations[2 * k], tracks.observations[2 * k + 1]);
+        match tracks.covariances {
+            None => Ok(PointView::new(&prepared.normalized[j], &x, &Matrix2::identity())),
+            Some(_) => track_view(tracks, v, t, j).map(|o| {
+                let (x, l) = o.expect("visible");
+                PointView::new(&prepared.normalized[j], &x, &l)
+            }),
+        }
     };
     let mut g = Matrix4::zeros();
-    for j in 0..v {
-        if let Some(pv) = view(j) {
-            accumulate_dlt(&mut g, &pv, &frame);
-        }
+    for j in (0..v).filter(|&j| visible(j)) {
+        accumulate_dlt(&mut g, &view(j)?, &frame);
     }
     let nan = Vector3::repeat(f64::NAN);
     let LinearPoint::Finite(x) = solve_dlt(&g, &frame) else {
         return Ok((nan, f64::NAN, Status::AtInfinity));
     };
     let (mut cost, mut front) = (0.0, true);
-    for j in 0..v {
-        if let Some(pv) = view(j) {
-            cost += point_cost(std::slice::from_ref(&pv), &x);
-            front &= in_front(std::slice::from_ref(&pv), &x);
-        }
+    for j in (0..v).filter(|&j| visible(j)) {
+        let pv = view(j)?;
+        let z = pv.depth(&x);
+        cost += (pv.numerator(&x) / z).norm_squared();
+        front &= z > 0.0;
     }
     Ok((x, cost, if front { Status::Success } else { Status::BehindCamera }))
 }
