@@ -143,12 +143,18 @@ def _segment_extent(point: np.ndarray, direction: np.ndarray, cameras: np.ndarra
     return np.stack([point + min(params) * direction, point + max(params) * direction])
 
 
-def _lines(seq: VggSequence, views: list[int], method: str, sigma: float) -> Features:
+def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_progress: bool | None) -> Features:
+    from pluecker.progress import Progress
+
     segments, visible = seq.line_observations(views)
     features = Features("lines", total=len(seq.lines3d))
     cameras = seq.cameras[views]
     geometry, certified = [], []
-    for track in np.flatnonzero(visible.sum(axis=1) >= 2):
+    tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
+    # Branch and bound over lines can take a second per line: a bar on a terminal, nothing in a log.
+    progress = Progress(len(tracks), "lines", enabled=show_progress)
+    for track in tracks:
+        progress.update()
         seen = visible[track]
         result = pluecker.triangulate_line(cameras[seen], segments[track][seen], sigma=sigma, method=method)
         point, direction = np.asarray(result.point), np.asarray(result.direction)
@@ -160,22 +166,25 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float) -> Fea
         if np.all(np.isfinite(extent)):
             geometry.append(extent)
             certified.append(bool(result.certified))
+    if progress.enabled:
+        progress.close(f"lines: {len(tracks)} in {progress.elapsed:.1f} s")
     features.geometry = np.array(geometry).reshape(-1, 2, 3)
     features.certified = np.array(certified, dtype=bool)
     return features
 
 
 def run(folder: str | Path, views: list[int] | None = None, method: str = "optimal", lines: bool = False,
-        sigma: float = 1.0) -> Run:
+        sigma: float = 1.0, show_progress: bool | None = None) -> Run:
     """Triangulates the folder's points (and lines) from ``views`` (default all). Raises
     :class:`FolderError` for an unreadable folder or a view that does not exist, and a
-    :class:`pluecker.PlueckerError` for data the triangulation rejects."""
+    :class:`pluecker.PlueckerError` for data the triangulation rejects. ``show_progress`` draws a
+    progress bar over the lines (None: when standard error is a terminal)."""
     folder = Path(folder)
     seq = _load(folder)
     views = _check_views(seq, views)
     started = time.perf_counter()
     points = _points(seq, views, method)
-    line_features = _lines(seq, views, method, sigma) if lines else None
+    line_features = _lines(seq, views, method, sigma, show_progress) if lines else None
     return Run(seq.name, folder, views, method, sigma, points, line_features, time.perf_counter() - started)
 
 
@@ -268,8 +277,10 @@ def _summary_line(features: Features) -> str:
         return line
     statuses = ", ".join(f"{k} {v}" for k, v in sorted(s["statuses"].items()))
     kinds = ", ".join(f"{k} {v}" for k, v in sorted(s["certificates"].items())) or "none"
+    median = s["median_time_seconds"]
+    median_text = f"{1e6 * median:.1f} µs" if median < 1e-3 else f"{1e3 * median:.1f} ms"
     line += (f"; status {statuses}; certified {s['certified']} ({100 * s['certified_fraction']:.1f} %: {kinds}); "
-             f"median {1e6 * s['median_time_seconds']:.1f} µs per {features.kind[:-1]}")
+             f"median {median_text} per {features.kind[:-1]}")
     if "median_rms_reprojection_px" in s:
         line += f"; median RMS reprojection error {s['median_rms_reprojection_px']:.3f} px"
     return line
