@@ -163,11 +163,24 @@ fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
         let scene = triangulation_scene(views, parallax, 300 + seed);
         let mut rng = Rng::new(seed);
         let obs = scene.noisy(1.5, &mut rng);
-        let r = triangulate_point(&scene.cameras, &obs, None, &options(Method::Local)).unwrap();
+        // Odd seeds: random anisotropic covariances (condition number up to 100).
+        let covs: Vec<Matrix2<f64>> = (0..views)
+            .map(|_| {
+                let (a, b, angle) = (
+                    rng.uniform_in(0.3, 3.0),
+                    rng.uniform_in(0.3, 3.0),
+                    rng.uniform_in(0.0, 3.2),
+                );
+                let r = nalgebra::Rotation2::new(angle).into_inner();
+                r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
+            })
+            .collect();
+        let covs = (seed % 2 == 1).then_some(covs.as_slice());
+        let r = triangulate_point(&scene.cameras, &obs, covs, &options(Method::Local)).unwrap();
         if r.report.status != Status::Success {
             continue;
         }
-        let vs = views_of(&scene.cameras, &obs, None);
+        let vs = views_of(&scene.cameras, &obs, covs);
         let test = convexity_test(&vs, &r.point);
         if !test.passed {
             continue;

@@ -215,26 +215,26 @@ impl BoundingOracle for PointOracle<'_> {
         }
         let cones = self.view_cones.then_some(self.gamma);
         add_search_set(&mut p, &self.chart, &y, cones, self.enclosure.as_ref());
-        // Every view's numerator is at most γ' ζ on the relaxed set.
-        let ellipsoid = self.enclosure.as_ref().map_or(f64::INFINITY, |k| k.q_bound());
-        let gamma = if self.view_cones {
-            self.gamma.min(ellipsoid)
-        } else {
-            ellipsoid
-        };
+        // On the relaxed set ‖aᵢ‖ ≤ q (the ellipsoid) and, with the cones, ‖aᵢ‖ ≤ γζᵢ ≤ γUᵢ.
+        let q = self.enclosure.as_ref().map_or(f64::INFINITY, |k| k.q_bound());
         let mut objective = Affine::default();
         for (v, &(lo, hi, positive)) in self.chart.views.iter().zip(&intervals) {
             let a = numerator(v, &y);
             let zeta = denominator(v, &y);
-            // The relaxation's minimiser has rᵢ = ‖aᵢ‖²/((U + L)ζ − UL) ≤ γ'²U²/L²: a declared bound
-            // holding at the optimum is enough for the dual bound (the optimum lies inside).
-            let r = p.add_variable(0.0, gamma * gamma * hi * hi / (lo * lo));
+            let a_max = if self.view_cones { q.min(self.gamma * hi) } else { q };
+            // The relaxation's minimiser has rᵢ = ‖aᵢ‖²/((U + L)ζ − UL) ≤ a_max²/L²: a declared
+            // bound holding at the optimum is enough for the dual bound (the optimum lies inside).
+            let r = p.add_variable(0.0, a_max * a_max / (lo * lo));
             if self.relaxation != Relaxation::Fractional {
                 let secant = zeta.clone().scaled(hi + lo).shifted(-hi * lo);
                 add_quadratic_over_linear(&mut p, &a, &secant, &Affine::var(r));
             }
             if self.relaxation != Relaxation::Secant {
-                let mut t_upper = gamma * gamma * hi;
+                // tᵢ ≥ fᵢ = ‖aᵢ‖²/ζᵢ ≤ min(γ²Uᵢ, q²/Lᵢ): the box of eq. 22 keeps every feasible y.
+                let mut t_upper = a_max * a_max / lo;
+                if self.view_cones {
+                    t_upper = t_upper.min(self.gamma * self.gamma * hi);
+                }
                 if positive {
                     t_upper = t_upper.min(numerator_peak(v, region));
                 }
