@@ -75,7 +75,11 @@ fn median(v: &[f64]) -> f64 {
 }
 
 fn options(method: Method, gap: f64) -> TriangulationOptions {
-    TriangulationOptions { method, max_relative_gap: gap, ..Default::default() }
+    TriangulationOptions {
+        method,
+        max_relative_gap: gap,
+        ..Default::default()
+    }
 }
 
 fn synthetic(gap: f64) {
@@ -87,7 +91,11 @@ fn synthetic(gap: f64) {
             let mut rng = Rng::new(7 + seed);
             let segments = scene.noisy_segments(1.0, &mut rng);
             for (m, tally) in Method::ALL.iter().zip(&mut tallies) {
-                tally.add(&triangulate_line_segments(&scene.cameras, &segments, 1.0, &options(*m, gap)).unwrap().report);
+                tally.add(
+                    &triangulate_line_segments(&scene.cameras, &segments, 1.0, &options(*m, gap))
+                        .unwrap()
+                        .report,
+                );
             }
         }
         println!("{views} views:");
@@ -103,7 +111,11 @@ fn synthetic(gap: f64) {
             let mut rng = Rng::new(11 + seed);
             let points = scene.noisy_outline_points(63, 1.0, &mut rng);
             for (m, tally) in Method::ALL.iter().zip(&mut tallies) {
-                tally.add(&triangulate_quadric_points(&scene.cameras, &points, 1.0, &options(*m, gap)).unwrap().report);
+                tally.add(
+                    &triangulate_quadric_points(&scene.cameras, &points, 1.0, &options(*m, gap))
+                        .unwrap()
+                        .report,
+                );
             }
         }
         println!("{views} views:");
@@ -115,7 +127,10 @@ fn synthetic(gap: f64) {
 
 fn numbers(path: &Path) -> Vec<Vec<String>> {
     let text = fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    text.lines().map(|l| l.split_whitespace().map(str::to_string).collect::<Vec<_>>()).filter(|r| !r.is_empty()).collect()
+    text.lines()
+        .map(|l| l.split_whitespace().map(str::to_string).collect::<Vec<_>>())
+        .filter(|r| !r.is_empty())
+        .collect()
 }
 
 /// The first four views of a VGG sequence (cameras fixed for the mirrored frame, see the data
@@ -142,8 +157,15 @@ fn vgg_lines(dir: &Path, prefix: &str) -> (Vec<Matrix3x4<f64>>, Vec<(Vec<usize>,
     let lines = tracks
         .iter()
         .filter_map(|row| {
-            let seen: Vec<(usize, usize)> = (0..4).filter_map(|v| row.get(v)?.parse::<usize>().ok().map(|i| (v, i))).collect();
-            (seen.len() >= 2).then(|| (seen.iter().map(|s| s.0).collect(), seen.iter().map(|&(v, i)| segments[v][i]).collect()))
+            let seen: Vec<(usize, usize)> = (0..4)
+                .filter_map(|v| row.get(v)?.parse::<usize>().ok().map(|i| (v, i)))
+                .collect();
+            (seen.len() >= 2).then(|| {
+                (
+                    seen.iter().map(|s| s.0).collect(),
+                    seen.iter().map(|&(v, i)| segments[v][i]).collect(),
+                )
+            })
         })
         .collect();
     (cameras, lines)
@@ -179,15 +201,25 @@ fn real(data: &Path, gap: f64) {
         for (m, tally) in Method::ALL.iter().zip(&tallies) {
             println!("{}", tally.row(m.as_str()));
         }
-        println!("optimal cost equal to the local cost (1e-9) for {same_as_local} of {} lines", lines.len());
+        println!(
+            "optimal cost equal to the local cost (1e-9) for {same_as_local} of {} lines",
+            lines.len()
+        );
     }
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let data = args.get(1).map_or("/work/shared/data/vgg", |s| s.as_str()).to_string();
-    let gap = args.get(2).map_or(TriangulationOptions::default().max_relative_gap, |s| s.parse().expect("GAP must be a number"));
-    println!("relative gap {gap:e}, max nodes {}", TriangulationOptions::default().max_nodes);
+    let gap = args
+        .get(2)
+        .map_or(TriangulationOptions::default().max_relative_gap, |s| {
+            s.parse().expect("GAP must be a number")
+        });
+    println!(
+        "relative gap {gap:e}, max nodes {}",
+        TriangulationOptions::default().max_nodes
+    );
     synthetic(gap);
     real(Path::new(&data), gap);
 }
