@@ -13,7 +13,7 @@
 
 use super::covariance::whitening;
 use super::point::{solve_views, PointTriangulation};
-use super::point_cost::{in_front, point_cost, PointView};
+use super::point_cost::PointView;
 use super::point_linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::views::{centre, depth_normalized, validate_cameras};
 use super::{Method, Status, TriangulationOptions};

@@ -8,8 +8,22 @@
 //!   ([`super::point_cost`]); when that start is behind a camera (or at infinity), from the best point
 //!   in front of every camera on one of the back-projected rays instead;
 //! - `optimal`: the local solution, certified by the convexity test of
-//!   [`super::point_certificate`] when it passes, else by branch and bound over the SOCP relaxation
-//!   of eqs. 21-22 ([`super::point_global`]).
+//!   [`super::point_certificate`] when it passes, else by branch and bound
+//!   ([`super::point_global`]; the relaxation of each fraction is the secant envelope by default,
+//!   eqs. 21-22 on request), which may also return a better point than the local one.
+//!
+//! **Statuses of `optimal`.** `Success` when certified (the gap closed, whatever the local stage's
+//! termination); `GapNotClosed` at the node cap or when the search set could not be boxed;
+//! `Infeasible` when no point is within the user's `max_reprojection_error` of every observation;
+//! `NumericalFailure` when a conic solve of the initial box failed; `BehindCamera`/`AtInfinity`
+//! when no start in front of every camera was found. The certificate's relative gap is
+//! `(cost − lower_bound) / max(cost, 1e-12)`: a cost at the rounding level (exact data) counts as
+//! certified by the trivial bound 0. With a user γ the bound covers the points within γ in every
+//! view; with the default it covers every point in front of the cameras.
+//!
+//! The DLT cannot see that a point lies behind the cameras; the other methods search in front of
+//! every camera only (a point whose best position is "beyond infinity" comes back as a far point
+//! whose cost is within the gap of the infimum).
 //!
 //! Degenerate input is an error: fewer than two views, mismatched lengths, NaN/inf, a singular
 //! camera, a covariance that is not positive definite, or cameras sharing one centre (no parallax).

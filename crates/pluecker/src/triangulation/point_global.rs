@@ -63,7 +63,10 @@ pub enum Relaxation {
     Both,
 }
 
-/// The relaxation used by [`global_point`] (the measured choice, see the crate README).
+/// The relaxation used by `optimal`. Measured on ten 0.2°-parallax scenes each (1 px noise, gap
+/// 1e-3): the secant needs 2, 2.6 and 3 nodes on average at 5, 10 and 20 views, eqs. 21-22 need 14,
+/// 20 and 24 nodes with SOCPs about four times larger; both together need the secant's nodes at the
+/// larger SOCPs' price. Every choice gives valid bounds (test `both_relaxations_give_valid_bounds…`).
 pub const DEFAULT_RELAXATION: Relaxation = Relaxation::Secant;
 
 /// How the search ended.
