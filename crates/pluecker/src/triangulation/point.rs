@@ -31,6 +31,7 @@
 
 use super::covariance::whitenings;
 use super::point_certificate::convexity_test;
+use super::point_chart::{Chart, ChartKind};
 use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use super::point_global::{global_point, GlobalSettings, GlobalStatus, COST_FLOOR, DEFAULT_RELAXATION};
 use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
@@ -272,12 +273,14 @@ fn certify(
     }
     // Chart origins when the local solution itself cannot be one (it ran off towards infinity).
     let mut origins: Vec<Vector3<f64>> = Vec::new();
-    if let LinearPoint::Finite(p) = linear {
-        if in_front(views, &p) {
-            origins.push(p);
+    if Chart::new(views, &x, ChartKind::MeanDepth).is_none() {
+        if let LinearPoint::Finite(p) = linear {
+            if in_front(views, &p) {
+                origins.push(p);
+            }
         }
+        origins.extend(ray_start(views, frame, FARTHEST_ORIGIN));
     }
-    origins.extend(ray_start(views, frame, FARTHEST_ORIGIN));
     let settings = GlobalSettings {
         gamma: opts.max_reprojection_error.unwrap_or_else(|| cost.sqrt()),
         max_relative_gap: opts.max_relative_gap,
