@@ -196,7 +196,7 @@ pub fn triangulate_points(
         }
         Ok(solve_views(&views, &frame, opts, started))
     };
-    Ok((0..n).into_par_iter().map(one).collect())
+    Ok((0..n).into_par_iter().with_min_len(16).map(one).collect())
 }
 
 /// The result of [`triangulate_points_linear`], as flat arrays of length `n` (points `n · 3`).
