@@ -75,7 +75,8 @@ impl Method {
 pub struct TriangulationOptions {
     /// Estimator. Default [`Method::Optimal`].
     pub method: Method,
-    /// Branch and bound stops when `(upper − lower) / upper ≤ max_relative_gap`. Default `1e-3`
+    /// Branch and bound stops when `(upper − lower) / max(upper, 1e-12) ≤ max_relative_gap` (the floor
+    /// lets exact, zero-cost data be certified). Default `1e-3`
     /// (the paper stopped at 10 %).
     pub max_relative_gap: f64,
     /// The paper's γ (sections 4.3.1-4.3.2): the search is restricted to primitives whose whitened
@@ -180,7 +181,7 @@ impl CertificateKind {
 pub struct Certificate {
     /// A lower bound on the cost of eq. 19 over every admissible primitive (`0` when not computed).
     pub lower_bound: f64,
-    /// `(cost − lower_bound) / cost` (`1` when not computed; `0` when the cost is 0).
+    /// `(cost − lower_bound) / max(cost, 1e-12)` (`1` when not computed).
     pub relative_gap: f64,
     /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
     pub certified: bool,
