@@ -38,7 +38,7 @@ per point.
 Results go to ``bench/out/compare_triangulation.json``; Markdown tables and PASS/FAIL lines for the
 issue's targets go to standard output. Run from the repository root with the project's venv:
 
-    .venv/bin/python bench/compare_triangulation.py            # 20,000 points per case, about 15 s
+    .venv/bin/python bench/compare_triangulation.py            # 20,000 points per case, 5-15 s
     .venv/bin/python bench/compare_triangulation.py --quick    # 200 points, one repeat: a smoke test
 """
 
