@@ -1,7 +1,7 @@
 # pluecker developer entry points. Everything goes into ./.venv; nothing is installed globally.
 #   make test    build the extension, run the Rust and Python tests
-#   make demo    reproduce the paper's experiments into results/phong-horaud-1995
-#   make bench   compare against OpenCV and PoseLib, then run the criterion benchmarks
+#   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
+#   make bench   compare against OpenCV, PoseLib and pycolmap, then run the criterion benchmarks
 # Idempotent: the virtualenv is made once, the extension rebuilt only when a Rust source changes.
 
 PYTHON ?= python3
@@ -48,11 +48,14 @@ test-python: develop
 
 demo: develop
 	$(BIN)/pluecker reproduce phong-horaud-1995 --out results/phong-horaud-1995
+	$(BIN)/pluecker reproduce josephson-kahl-2008 --out results/josephson-kahl-2008
 
 bench: develop
-	$(BIN)/python -m pip install --quiet opencv-python-headless poselib
+	$(BIN)/python -m pip install --quiet opencv-python-headless poselib pycolmap
 	$(BIN)/python bench/compare_pose.py
+	$(BIN)/python bench/compare_triangulation.py
 	cargo bench -p pluecker --bench pose
+	cargo bench -p pluecker --bench triangulation
 
 clean:
 	rm -rf $(VENV) python/pluecker/_core*.so
