@@ -27,10 +27,10 @@ use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::line_optimal::optimal_line;
 use super::line_residual::{line_view, LineFrame};
-use super::{Certificate, Method, Report, Status, TriangulationOptions};
+use super::{parse_observations, Certificate, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, OrthonormalLine};
-use crate::optim::{trust_region, Linearization, Objective, Termination};
+use crate::optim::{trust_region, Linearization, Objective};
 use nalgebra::{Matrix2, Matrix3x4, Matrix4, SVector, Vector2, Vector3, Vector4, Vector6};
 use std::time::Instant;
 
@@ -126,36 +126,14 @@ pub fn triangulate_line(
     let started = Instant::now();
     opts.validate()?;
     check_views(cameras, lines.len(), 2, "lines", opts.method)?;
-    let frames = lines
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            if !l.iter().all(|v| v.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: "lines".into(),
-                    index: i,
-                });
-            }
-            LineFrame::of_line(l).ok_or_else(|| Error::Degenerate {
-                what: format!("lines[{i}] has a zero normal (the line at infinity)"),
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let frames = parse_observations(lines, "lines", "has a zero normal (the line at infinity)", LineFrame::of_line)?;
     let problem = LineProblem {
         cameras: cameras.to_vec(),
         frames,
         whitenings: whitenings(covariances, cameras.len(), "covariances")?,
     };
     let linear = linear_line(&problem)?;
-    let mut report = Report {
-        method: opts.method,
-        status: Status::Success,
-        cost: problem.cost(&linear),
-        certificate: Certificate::none(),
-        iterations: 0,
-        termination: Termination::ClosedForm,
-        time_seconds: 0.0,
-    };
+    let mut report = Report { cost: problem.cost(&linear), ..Report::new(opts.method) };
     let estimate = match opts.method {
         Method::Linear => linear,
         Method::Local => {

@@ -218,3 +218,42 @@ pub struct Report {
     /// Wall time of the call, seconds.
     pub time_seconds: f64,
 }
+
+impl Report {
+    /// The report a method starts from: status success, no cost yet, no certificate, no iterations.
+    pub fn new(method: Method) -> Report {
+        Report {
+            method,
+            status: Status::Success,
+            cost: f64::NAN,
+            certificate: Certificate::none(),
+            iterations: 0,
+            termination: Termination::ClosedForm,
+            time_seconds: 0.0,
+        }
+    }
+}
+
+/// Parses one observation per view (image line, conic, ...) with `parse`, checking finiteness first:
+/// [`Error::NonFinite`] names `what` and the row; a row `parse` rejects is [`Error::Degenerate`] with
+/// `what[i] <why>`.
+pub(crate) fn parse_observations<T, F>(
+    rows: &[T],
+    what: &str,
+    why: &str,
+    parse: impl Fn(&T) -> Option<F>,
+) -> Result<Vec<F>>
+where
+    for<'a> &'a T: IntoIterator<Item = &'a f64>,
+{
+    rows.iter()
+        .enumerate()
+        .map(|(i, row)| {
+            if !row.into_iter().all(|v| v.is_finite()) {
+                return Err(Error::NonFinite { what: what.into(), index: i });
+            }
+            parse(row).ok_or_else(|| Error::Degenerate { what: format!("{what}[{i}] {why}") })
+        })
+        .collect()
+}
+

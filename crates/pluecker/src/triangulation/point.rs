@@ -130,15 +130,7 @@ pub(crate) fn solve_views(
     started: Instant,
 ) -> PointTriangulation {
     let linear = linear_point(views, frame);
-    let mut report = Report {
-        method: opts.method,
-        status: Status::Success,
-        cost: f64::NAN,
-        certificate: Certificate::none(),
-        iterations: 0,
-        termination: Termination::ClosedForm,
-        time_seconds: 0.0,
-    };
+    let mut report = Report::new(opts.method);
     let finish = |point: Vector3<f64>, mut report: Report| {
         report.time_seconds = started.elapsed().as_secs_f64();
         PointTriangulation { point, report }

@@ -29,10 +29,10 @@ use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::quadric_optimal::optimal_quadric;
 use super::quadric_residual::{quadric_view, ConicFrame};
-use super::{Certificate, Method, Report, Status, TriangulationOptions};
+use super::{parse_observations, Certificate, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
-use crate::optim::{trust_region, Linearization, Objective, Termination};
+use crate::optim::{trust_region, Linearization, Objective};
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, SMatrix, SVector, Vector2, Vector3};
 use std::time::Instant;
 
@@ -114,35 +114,13 @@ pub fn triangulate_quadric(
     let started = Instant::now();
     opts.validate()?;
     check_views(cameras, conics.len(), 3, "conics", opts.method)?;
-    let frames = conics
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            if !c.iter().all(|v| v.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: "conics".into(),
-                    index: i,
-                });
-            }
-            ConicFrame::of_conic(c).ok_or_else(|| Error::Degenerate {
-                what: format!("conics[{i}] is not a real ellipse"),
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let frames = parse_observations(conics, "conics", "is not a real ellipse", ConicFrame::of_conic)?;
     let problem = QuadricProblem {
         cameras: cameras.to_vec(),
         frames,
         whitenings: whitenings(covariances, cameras.len(), "covariances")?,
     };
-    let mut report = Report {
-        method: opts.method,
-        status: Status::Success,
-        cost: f64::NAN,
-        certificate: Certificate::none(),
-        iterations: 0,
-        termination: Termination::ClosedForm,
-        time_seconds: 0.0,
-    };
+    let mut report = Report::new(opts.method);
     let Some(linear) = linear_quadric(&problem) else {
         report.status = Status::NumericalFailure;
         report.time_seconds = started.elapsed().as_secs_f64();
