@@ -10,6 +10,11 @@
 //!
 //! [`triangulate_points_linear`] is the fast path of [`Method::Linear`]: no allocation per track,
 //! the results written straight into flat arrays.
+//!
+//! The line and quadric batches ([`super::line_batch`], [`super::quadric_batch`]) share this
+//! module's helpers: the shape checks of flat per-observation arrays, the visible views of a track,
+//! the cameras of a batch ([`TrackCameras`]), the parallel loop over tracks and the restating of a
+//! single-track error for the batch.
 
 use super::covariance::whitening;
 use super::point::{solve_views, PointTriangulation};
@@ -20,6 +25,7 @@ use super::{Method, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Matrix3x4, Matrix4, Vector2, Vector3};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Tracks of one batch, as flat row-major arrays (see the module docs). With `v` cameras and `n`
@@ -46,6 +52,65 @@ struct Prepared {
     extent: f64,
 }
 
+/// A shape error of a batch argument.
+fn shape(what: &str, expected: String, actual: usize) -> Error {
+    Error::Shape {
+        what: what.into(),
+        expected,
+        actual: actual.to_string(),
+    }
+}
+
+/// The number of tracks `n` of a flat array of `len = n · v · per_view` values (`unit` names the
+/// `per_view` values of one observation, e.g. "2 coordinates"), or a shape error naming `what`.
+pub(crate) fn track_count(what: &str, len: usize, v: usize, per_view: usize, unit: &str) -> Result<usize> {
+    if v == 0 || len % (per_view * v) != 0 {
+        return Err(shape(
+            what,
+            format!("n·{v}·{per_view} values (n tracks, {v} views, {unit})"),
+            len,
+        ));
+    }
+    Ok(len / (per_view * v))
+}
+
+/// Checks that a per-observation array holds `n · v · per_view` values (`unit`: the shape of one
+/// observation's entry, e.g. "2 x 2").
+pub(crate) fn check_values(
+    what: &str,
+    values: Option<&[f64]>,
+    n: usize,
+    v: usize,
+    per_view: usize,
+    unit: &str,
+) -> Result<()> {
+    match values {
+        Some(values) if values.len() != per_view * n * v => Err(shape(
+            what,
+            format!("{} values ({n} tracks x {v} views x {unit})", per_view * n * v),
+            values.len(),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Checks that a visibility mask holds `n · v` flags.
+pub(crate) fn check_mask(mask: Option<&[bool]>, n: usize, v: usize) -> Result<()> {
+    match mask {
+        Some(mask) if mask.len() != n * v => Err(shape(
+            "visible",
+            format!("{} flags ({n} tracks x {v} views)", n * v),
+            mask.len(),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The views of track `t` (in increasing order) that the mask flags visible: all `v` without a mask.
+pub(crate) fn visible_views(mask: Option<&[bool]>, v: usize, t: usize) -> impl Iterator<Item = usize> + Clone + '_ {
+    (0..v).filter(move |&j| mask.map_or(true, |m| m[t * v + j]))
+}
+
 /// Checks the whole call and returns the number of tracks.
 fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usize, Prepared)> {
     validate_cameras(cameras, "cameras")?;
@@ -57,37 +122,9 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usiz
             actual: "0".into(),
         });
     }
-    let shape = |what: &str, expected: String, actual: usize| Error::Shape {
-        what: what.into(),
-        expected,
-        actual: actual.to_string(),
-    };
-    if tracks.observations.len() % (2 * v) != 0 {
-        return Err(shape(
-            "observations",
-            format!("n·{v}·2 values (n tracks, {v} views, 2 coordinates)"),
-            tracks.observations.len(),
-        ));
-    }
-    let n = tracks.observations.len() / (2 * v);
-    if let Some(mask) = tracks.visible {
-        if mask.len() != n * v {
-            return Err(shape(
-                "visible",
-                format!("{} flags ({n} tracks x {v} views)", n * v),
-                mask.len(),
-            ));
-        }
-    }
-    if let Some(covs) = tracks.covariances {
-        if covs.len() != 4 * n * v {
-            return Err(shape(
-                "covariances",
-                format!("{} values ({n} tracks x {v} views x 2 x 2)", 4 * n * v),
-                covs.len(),
-            ));
-        }
-    }
+    let n = track_count("observations", tracks.observations.len(), v, 2, "2 coordinates")?;
+    check_mask(tracks.visible, n, v)?;
+    check_values("covariances", tracks.covariances, n, v, 4, "2 x 2")?;
     let centres: Vec<Vector3<f64>> = cameras.iter().map(centre).collect();
     let origin = centres.iter().sum::<Vector3<f64>>() / v as f64;
     let extent = centres.iter().map(|c| c.norm()).fold(1.0, f64::max);
@@ -100,12 +137,9 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usiz
     Ok((n, prepared))
 }
 
-/// One visible view of track `t`: its index, pixel and whitening factor, checked.
-fn track_view(tracks: &PointTracks, v: usize, t: usize, j: usize) -> Result<Option<(Vector2<f64>, Matrix2<f64>)>> {
+/// View `j` of track `t` (a visible one): its pixel and whitening factor, checked.
+fn track_view(tracks: &PointTracks, v: usize, t: usize, j: usize) -> Result<(Vector2<f64>, Matrix2<f64>)> {
     let k = t * v + j;
-    if tracks.visible.is_some_and(|m| !m[k]) {
-        return Ok(None);
-    }
     let x = Vector2::new(tracks.observations[2 * k], tracks.observations[2 * k + 1]);
     if !(x.x.is_finite() && x.y.is_finite()) {
         return Err(Error::NonFinite {
@@ -129,7 +163,7 @@ fn track_view(tracks: &PointTracks, v: usize, t: usize, j: usize) -> Result<Opti
             })?
         }
     };
-    Ok(Some((x, l)))
+    Ok((x, l))
 }
 
 /// The conditioning frame of the visible centres (see [`WorldFrame`]), without allocating.
@@ -153,10 +187,11 @@ fn frame_of(centres: impl Iterator<Item = Vector3<f64>> + Clone) -> (WorldFrame,
 /// [`super::point::triangulate_point`] up to the factor between RMS spread and baseline.
 const SAME_CENTRE: f64 = 1e-10;
 
-fn too_few(method: Method, t: usize, visible: usize) -> Error {
+/// Track `t` has `visible` views where the method needs `required`.
+pub(crate) fn too_few(method: Method, t: usize, visible: usize, required: usize) -> Error {
     Error::TooFewCorrespondences {
         method: method.as_str().into(),
-        required: "2 visible views per track".into(),
+        required: format!("{required} visible views per track"),
         actual: format!("track {t}: {visible} view(s)"),
     }
 }
@@ -164,6 +199,136 @@ fn too_few(method: Method, t: usize, visible: usize) -> Error {
 fn no_parallax(t: usize) -> Error {
     Error::Degenerate {
         what: format!("track {t}: the centres of the cameras that see it coincide (no parallax)"),
+    }
+}
+
+/// `one(t)` for every track `t < n`, in parallel (rayon tasks of at least `min_len` tracks), in the
+/// order of the tracks; `done`, when given, counts the finished tracks (another thread may poll it).
+pub(crate) fn solve_tracks<T, F>(n: usize, min_len: usize, done: Option<&AtomicUsize>, one: F) -> Vec<T>
+where
+    T: Send,
+    F: Fn(usize) -> T + Sync + Send,
+{
+    (0..n)
+        .into_par_iter()
+        .with_min_len(min_len.max(1))
+        .map(|t| {
+            let out = one(t);
+            if let Some(done) = done {
+                done.fetch_add(1, Ordering::Relaxed);
+            }
+            out
+        })
+        .collect()
+}
+
+/// The cameras of a line or quadric batch (3x4, world → pixels, any scale and sign): one set seen
+/// by every track, or one set per track (e.g. independent scenes solved together).
+#[derive(Debug, Clone, Copy)]
+pub enum TrackCameras<'a> {
+    /// `v` cameras shared by every track; view `j` of every track is `cameras[j]`.
+    Shared(&'a [Matrix3x4<f64>]),
+    /// `n · views` cameras, track-major: view `j` of track `t` is `cameras[t · views + j]`.
+    PerTrack {
+        /// The cameras of all tracks.
+        cameras: &'a [Matrix3x4<f64>],
+        /// Views per track, `v`.
+        views: usize,
+    },
+}
+
+impl TrackCameras<'_> {
+    /// Views per track, `v`.
+    pub fn views(&self) -> usize {
+        match self {
+            TrackCameras::Shared(cameras) => cameras.len(),
+            TrackCameras::PerTrack { views, .. } => *views,
+        }
+    }
+
+    /// Checks the cameras for the whole call (`n` tracks): shared cameras must all be finite and
+    /// non-singular; per-track cameras must number `n · views` (each track's are checked with it).
+    pub(crate) fn check(&self, n: usize) -> Result<()> {
+        match *self {
+            TrackCameras::Shared(cameras) => validate_cameras(cameras, "cameras"),
+            TrackCameras::PerTrack { cameras, views } if cameras.len() != n * views => Err(shape(
+                "cameras",
+                format!("{} cameras ({n} tracks x {views} views)", n * views),
+                cameras.len(),
+            )),
+            TrackCameras::PerTrack { .. } => Ok(()),
+        }
+    }
+
+    /// The cameras of views `seen` of track `t`.
+    pub(crate) fn of_track(&self, t: usize, seen: &[usize]) -> Vec<Matrix3x4<f64>> {
+        match *self {
+            TrackCameras::Shared(cameras) => seen.iter().map(|&j| cameras[j]).collect(),
+            TrackCameras::PerTrack { cameras, views } => seen.iter().map(|&j| cameras[t * views + j]).collect(),
+        }
+    }
+
+    /// Whether the cameras are indexed by track (their errors then name the track).
+    pub(crate) fn per_track(&self) -> bool {
+        matches!(self, TrackCameras::PerTrack { .. })
+    }
+}
+
+/// `text` of a single-track error restated for the batch (see [`in_track`]).
+fn restate(text: &str, t: usize, seen: &[usize], arrays: &[&str]) -> String {
+    let name_len = text
+        .find(|c: char| !(c.is_ascii_lowercase() || c == '_'))
+        .unwrap_or(text.len());
+    let (name, rest) = text.split_at(name_len);
+    let index = rest
+        .strip_prefix('[')
+        .and_then(|r| r.split_once(']'))
+        .and_then(|(i, after)| Some((seen.get(i.parse::<usize>().ok()?)?, after)));
+    let per_track = arrays.contains(&name);
+    match (per_track, index) {
+        (true, Some((j, after))) => format!("{name}[{t}][{j}]{after}"),
+        (true, None) => format!("{name}[{t}]{rest}"),
+        (false, Some((j, after))) => format!("track {t}: {name}[{j}]{after}"),
+        (false, None) => format!("track {t}: {text}"),
+    }
+}
+
+/// An error of a single-track call on views `seen` of track `t`, restated for the batch: an argument
+/// of `arrays` (the ones indexed by track) gets the track, `lines[1]` → `lines[t][seen[1]]` and
+/// `lines` → `lines[t]`, and an observation index becomes the batch's view `seen[i]`; any other
+/// message is prefixed with `track t: `.
+pub(crate) fn in_track(err: Error, t: usize, seen: &[usize], arrays: &[&str]) -> Error {
+    let view = |i: usize| seen.get(i).copied().unwrap_or(i);
+    match err {
+        Error::NonFinite { what, index } if arrays.contains(&what.as_str()) => Error::NonFinite {
+            what: format!("{what}[{t}]"),
+            index: view(index),
+        },
+        Error::NonFinite { what, index } => Error::NonFinite {
+            what: format!("track {t}: {what}"),
+            index: view(index),
+        },
+        Error::Degenerate { what } => Error::Degenerate {
+            what: restate(&what, t, seen, arrays),
+        },
+        Error::SingularCamera { what } => Error::SingularCamera {
+            what: restate(&what, t, seen, arrays),
+        },
+        Error::Shape { what, expected, actual } => Error::Shape {
+            what: restate(&what, t, seen, arrays),
+            expected,
+            actual,
+        },
+        Error::TooFewCorrespondences {
+            method,
+            required,
+            actual,
+        } => Error::TooFewCorrespondences {
+            method,
+            required,
+            actual: format!("track {t}: {actual}"),
+        },
+        other @ Error::InvalidOption { .. } => other,
     }
 }
 
@@ -181,14 +346,13 @@ pub fn triangulate_points(
         let started = Instant::now();
         let mut views = Vec::with_capacity(v);
         let mut seen = Vec::with_capacity(v);
-        for j in 0..v {
-            if let Some((x, l)) = track_view(tracks, v, t, j)? {
-                views.push(PointView::new(&prepared.normalized[j], &x, &l));
-                seen.push(j);
-            }
+        for j in visible_views(tracks.visible, v, t) {
+            let (x, l) = track_view(tracks, v, t, j)?;
+            views.push(PointView::new(&prepared.normalized[j], &x, &l));
+            seen.push(j);
         }
         if views.len() < 2 {
-            return Err(too_few(opts.method, t, views.len()));
+            return Err(too_few(opts.method, t, views.len(), 2));
         }
         let (frame, spread) = frame_of(seen.iter().map(|&j| prepared.centres[j]));
         if spread <= SAME_CENTRE {
@@ -196,7 +360,7 @@ pub fn triangulate_points(
         }
         Ok(solve_views(&views, &frame, opts, started))
     };
-    Ok((0..n).into_par_iter().with_min_len(16).map(one).collect())
+    Ok(solve_tracks(n, 16, None, one))
 }
 
 /// The result of [`triangulate_points_linear`], as flat arrays of length `n` (points `n · 3`).
@@ -213,9 +377,9 @@ pub struct LinearPoints {
 /// The DLT of one track with no allocation: its point and cost, or its status / error. Three
 /// passes over the views: checks and the spread of the centres, the Gram matrix, the cost.
 fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -> Result<(Vector3<f64>, f64, Status)> {
-    let visible = |j: usize| tracks.visible.map_or(true, |m| m[t * v + j]);
+    let visible = || visible_views(tracks.visible, v, t);
     let (mut count, mut sum, mut sum2) = (0usize, Vector3::zeros(), 0.0);
-    for j in (0..v).filter(|&j| visible(j)) {
+    for j in visible() {
         let k = t * v + j;
         if !(tracks.observations[2 * k].is_finite() && tracks.observations[2 * k + 1].is_finite()) {
             return Err(Error::NonFinite {
@@ -229,7 +393,7 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
         sum2 += c.norm_squared();
     }
     if count < 2 {
-        return Err(too_few(Method::Linear, t, count));
+        return Err(too_few(Method::Linear, t, count, 2));
     }
     let mean = sum / count as f64;
     let spread = (sum2 / count as f64 - mean.norm_squared()).max(0.0).sqrt();
@@ -245,14 +409,11 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
         let x = Vector2::new(tracks.observations[2 * k], tracks.observations[2 * k + 1]);
         match tracks.covariances {
             None => Ok(PointView::new(&prepared.normalized[j], &x, &Matrix2::identity())),
-            Some(_) => track_view(tracks, v, t, j).map(|o| {
-                let (x, l) = o.expect("visible");
-                PointView::new(&prepared.normalized[j], &x, &l)
-            }),
+            Some(_) => track_view(tracks, v, t, j).map(|(x, l)| PointView::new(&prepared.normalized[j], &x, &l)),
         }
     };
     let mut g = Matrix4::zeros();
-    for j in (0..v).filter(|&j| visible(j)) {
+    for j in visible() {
         accumulate_dlt(&mut g, &view(j)?, &frame);
     }
     let nan = Vector3::repeat(f64::NAN);
@@ -260,7 +421,7 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
         return Ok((nan, f64::NAN, Status::AtInfinity));
     };
     let (mut cost, mut front) = (0.0, true);
-    for j in (0..v).filter(|&j| visible(j)) {
+    for j in visible() {
         let pv = view(j)?;
         let z = pv.depth(&x);
         cost += (pv.numerator(&x) / z).norm_squared();

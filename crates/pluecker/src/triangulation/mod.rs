@@ -18,6 +18,7 @@ pub mod covariance;
 pub mod fitting;
 pub mod fraction;
 pub mod line;
+pub mod line_batch;
 pub mod line_optimal;
 pub mod line_residual;
 pub mod point;
@@ -28,6 +29,7 @@ pub mod point_global;
 pub mod point_linear;
 
 pub mod quadric;
+pub mod quadric_batch;
 pub mod quadric_optimal;
 pub mod quadric_residual;
 pub mod scenes;

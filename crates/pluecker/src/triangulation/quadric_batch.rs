@@ -1,0 +1,107 @@
+//! Many quadric tracks at once, in parallel (rayon): the batch form of [`super::quadric`].
+//!
+//! A track is one ellipsoid seen as an outline conic in some of `v` views. Its observations are plain
+//! row-major slices, the layout of numpy arrays, so that a binding can pass `conics (n, v, 3, 3)`,
+//! `visible (n, v)` and `covariances (n, v, 5, 5)` without reshaping: [`QuadricTracks`]. The cameras
+//! are shared by every track or given per track ([`TrackCameras`]; e.g. independent scenes solved
+//! together).
+//!
+//! Every track is [`triangulate_quadric`] on its visible views' cameras, conics and covariances: the
+//! same minimisation of eq. 19 (Josephson & Kahl 2008, sections 2.3, 3, 4) on the same numbers, so the
+//! results are identical to the single calls' but for `time_seconds`. Each track gets its own
+//! `Result`: a bad track (fewer than 3 visible views, NaN in a visible view, a conic that is not a real
+//! ellipse, a covariance that is not positive definite) is an error for that track alone, naming it
+//! (`conics[t][j]`: view `j` of track `t`). Errors of the whole call (bad options, bad shared cameras,
+//! inconsistent array lengths) come first, as the outer `Result`.
+
+use super::batch::{
+    check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
+};
+use super::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
+use super::TriangulationOptions;
+use crate::error::{Error, Result};
+use nalgebra::Matrix3;
+use std::sync::atomic::AtomicUsize;
+
+/// The quadric tracks of one batch (see the module docs). With `v` views, the entry of track `t` in
+/// view `j` is the `(t v + j)`-th of each array; entries of views where a track is not visible are
+/// ignored (they may be NaN).
+#[derive(Debug, Clone, Copy)]
+pub struct QuadricTracks<'a> {
+    /// `n · v · 9` primal image conics (row-major 3x3, eq. 8, pixels, any scale and sign).
+    pub conics: &'a [f64],
+    /// `n · v` visibility flags, or `None` when every track is seen in every view.
+    pub visible: Option<&'a [bool]>,
+    /// `n · v · 25` covariances of the conic residuals (row-major 5x5, e.g. from
+    /// [`super::fitting::fit_conic`]), or `None` (identity).
+    pub covariances: Option<&'a [f64]>,
+}
+
+/// Checks the whole call and returns the number of tracks.
+fn check_batch(cameras: &TrackCameras, tracks: &QuadricTracks) -> Result<usize> {
+    let v = cameras.views();
+    if v == 0 {
+        return Err(Error::Shape {
+            what: "cameras".into(),
+            expected: "at least 3 views".into(),
+            actual: "0".into(),
+        });
+    }
+    let n = track_count("conics", tracks.conics.len(), v, 9, "3 x 3")?;
+    cameras.check(n)?;
+    check_mask(tracks.visible, n, v)?;
+    check_values("covariances", tracks.covariances, n, v, 25, "5 x 5")?;
+    Ok(n)
+}
+
+/// Track `t` by [`triangulate_quadric`] on its visible views.
+fn quadric_track(
+    cameras: &TrackCameras,
+    tracks: &QuadricTracks,
+    t: usize,
+    opts: &TriangulationOptions,
+) -> Result<QuadricTriangulation> {
+    let v = cameras.views();
+    let seen: Vec<usize> = visible_views(tracks.visible, v, t).collect();
+    if seen.len() < 3 {
+        return Err(too_few(opts.method, t, seen.len(), 3));
+    }
+    let cams = cameras.of_track(t, &seen);
+    let conics: Vec<Matrix3<f64>> = seen
+        .iter()
+        .map(|&j| Matrix3::from_row_slice(&tracks.conics[9 * (t * v + j)..][..9]))
+        .collect();
+    let covariances: Option<Vec<Matrix5>> = tracks.covariances.map(|c| {
+        seen.iter()
+            .map(|&j| Matrix5::from_row_slice(&c[25 * (t * v + j)..][..25]))
+            .collect()
+    });
+    let arrays: &[&str] = if cameras.per_track() {
+        &["conics", "covariances", "cameras"]
+    } else {
+        &["conics", "covariances"]
+    };
+    triangulate_quadric(&cams, &conics, covariances.as_deref(), opts).map_err(|e| in_track(e, t, &seen, arrays))
+}
+
+/// Triangulates every quadric track of `tracks` seen by `cameras` with `opts`, in parallel; each
+/// track gets the result [`triangulate_quadric`] gives on its visible views (module docs).
+/// `progress`, when given, counts the finished tracks, for another thread to poll.
+///
+/// Whole-call errors: [`Error::InvalidOption`], [`Error::Shape`] (array lengths that do not fit `v`
+/// views and one another), [`Error::NonFinite`] / [`Error::SingularCamera`] for shared cameras. Per
+/// track: the errors of [`triangulate_quadric`], and [`Error::TooFewCorrespondences`] for fewer than
+/// 3 visible views.
+pub fn triangulate_quadrics(
+    cameras: TrackCameras,
+    tracks: &QuadricTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+) -> Result<Vec<Result<QuadricTriangulation>>> {
+    opts.validate()?;
+    let n = check_batch(&cameras, tracks)?;
+    // A track takes from a millisecond to seconds: one track per rayon task balances the load.
+    Ok(solve_tracks(n, 1, progress, |t| {
+        quadric_track(&cameras, tracks, t, opts)
+    }))
+}
