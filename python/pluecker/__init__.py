@@ -5,7 +5,8 @@ The pose estimators of Phong, Horaud, Yassine & Tao, *Object pose from 2-D to 3-
 correspondences* (IJCV 1995) and their baselines (:func:`estimate_pose`), and the triangulation of
 Josephson & Kahl, *Triangulation of points, lines and conics* (JMIV 2008) with certified global
 optimality (:func:`triangulate_point`, :func:`triangulate_points`, :func:`triangulate_line`,
-:func:`triangulate_quadric`, and :func:`fit_line` / :func:`fit_conic` for the covariances), implemented in
+:func:`triangulate_quadric`, their parallel batches :func:`triangulate_lines` and
+:func:`triangulate_quadrics`, and :func:`fit_line` / :func:`fit_conic` for the covariances), implemented in
 Rust (the ``pluecker`` crate) and exposed here through the extension module ``pluecker._core``.
 
 Conventions (everywhere in the package):
@@ -43,12 +44,14 @@ Example::
 
 from ._core import (
     METHODS,
+    BatchReport,
     Camera,
     DegenerateConfigurationError,
     FittedConic,
     FittedLine,
     InvalidOptionError,
     LineTriangulation,
+    LineTriangulations,
     NonFiniteError,
     PlueckerError,
     PoseResult,
@@ -56,6 +59,7 @@ from ._core import (
     PointTriangulations,
     PoseStage,
     QuadricTriangulation,
+    QuadricTriangulations,
     ShapeError,
     SingularCameraError,
     TooFewCorrespondencesError,
@@ -73,19 +77,23 @@ from ._core import (
     random_scene,
     reprojection_errors,
     triangulate_line,
+    triangulate_lines,
     triangulate_point,
     triangulate_points,
     triangulate_quadric,
+    triangulate_quadrics,
 )
 
 __all__ = [
     "METHODS",
+    "BatchReport",
     "Camera",
     "DegenerateConfigurationError",
     "FittedConic",
     "FittedLine",
     "InvalidOptionError",
     "LineTriangulation",
+    "LineTriangulations",
     "NonFiniteError",
     "PlueckerError",
     "PoseResult",
@@ -93,6 +101,7 @@ __all__ = [
     "PointTriangulations",
     "PoseStage",
     "QuadricTriangulation",
+    "QuadricTriangulations",
     "ShapeError",
     "SingularCameraError",
     "TooFewCorrespondencesError",
@@ -110,7 +119,9 @@ __all__ = [
     "random_scene",
     "reprojection_errors",
     "triangulate_line",
+    "triangulate_lines",
     "triangulate_point",
     "triangulate_points",
     "triangulate_quadric",
+    "triangulate_quadrics",
 ]

@@ -7,7 +7,7 @@ float64 row-major ndarrays owned by the caller. ``tests/test_api.py`` checks tha
 the names of the module agree.
 """
 
-from typing import Any, Optional, Tuple, TypedDict
+from typing import Any, Callable, Optional, Tuple, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -804,6 +804,248 @@ def triangulate_quadric(
         definite, all camera centres equal), InvalidOptionError; TypeError for an unknown keyword.
 
     The GIL is released while the core runs.
+    """
+
+# --- Batches of lines and quadrics ---------------------------------------------------------------
+
+class BatchReport:
+    """The per-track report columns of a batch of lines or quadrics (the base class of
+    :class:`LineTriangulations` and :class:`QuadricTriangulations`): one entry per track in every
+    array (fresh copies). Tracks the core rejected have a ``status`` naming the problem, NaN estimates
+    and cost, and a message in :attr:`messages`."""
+
+    @property
+    def cost(self) -> NDArray[np.float64]:
+        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
+    @property
+    def lower_bound(self) -> NDArray[np.float64]:
+        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
+    @property
+    def relative_gap(self) -> NDArray[np.float64]:
+        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
+    @property
+    def certified(self) -> NDArray[np.bool_]:
+        """Global optimality certified within ``max_relative_gap`` (n,)."""
+    @property
+    def certificate(self) -> NDArray[np.str_]:
+        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
+    @property
+    def status(self) -> NDArray[np.str_]:
+        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
+        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
+        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
+        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
+        definite, all visible camera centres equal, a line in an epipolar plane of its views),
+        ``"singular_camera"``, ``"invalid_input"``."""
+    @property
+    def nodes(self) -> NDArray[np.int64]:
+        """Branch-and-bound nodes per track (n,)."""
+    @property
+    def iterations(self) -> NDArray[np.int64]:
+        """Local-minimisation iterations per track (n,)."""
+    @property
+    def time_seconds(self) -> NDArray[np.float64]:
+        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
+    @property
+    def messages(self) -> list[str]:
+        """Per track: ``""``, or why the core rejected it, naming the track and the view
+        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
+    @property
+    def method(self) -> str:
+        """The method that ran."""
+    def __len__(self) -> int: ...
+    def __repr__(self) -> str: ...
+
+class LineTriangulations(BatchReport):
+    """The results of :func:`triangulate_lines`: the columns of :class:`BatchReport` and each track's
+    line (NaN for a rejected track), as :class:`LineTriangulation` gives them."""
+
+    @property
+    def plucker(self) -> NDArray[np.float64]:
+        """Plücker coordinates (n, 6) of eq. 3, world frame, unit norm (see :attr:`LineTriangulation.plucker`)."""
+    @property
+    def point(self) -> NDArray[np.float64]:
+        """The point of each line closest to the world origin (n, 3)."""
+    @property
+    def direction(self) -> NDArray[np.float64]:
+        """Unit directions (n, 3), world frame."""
+    @property
+    def cost(self) -> NDArray[np.float64]:
+        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
+    @property
+    def lower_bound(self) -> NDArray[np.float64]:
+        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
+    @property
+    def relative_gap(self) -> NDArray[np.float64]:
+        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
+    @property
+    def certified(self) -> NDArray[np.bool_]:
+        """Global optimality certified within ``max_relative_gap`` (n,)."""
+    @property
+    def certificate(self) -> NDArray[np.str_]:
+        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
+    @property
+    def status(self) -> NDArray[np.str_]:
+        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
+        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
+        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
+        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
+        definite, all visible camera centres equal, a line in an epipolar plane of its views),
+        ``"singular_camera"``, ``"invalid_input"``."""
+    @property
+    def nodes(self) -> NDArray[np.int64]:
+        """Branch-and-bound nodes per track (n,)."""
+    @property
+    def iterations(self) -> NDArray[np.int64]:
+        """Local-minimisation iterations per track (n,)."""
+    @property
+    def time_seconds(self) -> NDArray[np.float64]:
+        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
+    @property
+    def messages(self) -> list[str]:
+        """Per track: ``""``, or why the core rejected it, naming the track and the view
+        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
+    @property
+    def method(self) -> str:
+        """The method that ran."""
+    def __len__(self) -> int: ...
+    def __repr__(self) -> str: ...
+
+def triangulate_lines(
+    P: ArrayLike,
+    lines: ArrayLike,
+    visible: Optional[ArrayLike] = None,
+    cov: Optional[ArrayLike] = None,
+    method: str = "optimal",
+    *,
+    sigma: Optional[float] = None,
+    max_relative_gap: Optional[float] = None,
+    max_reprojection_error: Optional[float] = None,
+    max_nodes: Optional[int] = None,
+    progress: Optional[Callable[[int], Any]] = None,
+) -> LineTriangulations:
+    """Triangulate many 3-D lines (tracks) in parallel with the GIL released (Josephson & Kahl 2008,
+    sections 2.2, 3-4).
+
+    Each track is :func:`triangulate_line` on its visible views (the same numbers, but for
+    ``time_seconds``). One bad track (NaN in a visible view, fewer than 2 visible views, a zero-length
+    segment, a covariance that is not positive definite, ...) gets a ``status`` and a message and never
+    stops the others.
+
+    Args:
+        P: cameras (v, 3, 4) seen by every track, or (n, v, 3, 4), one set per track; world → pixels.
+        lines: (n, v, 3) homogeneous image lines, or (n, v, 2, 2) image segments (two pixel endpoints),
+            as for :func:`triangulate_line`; entries of views a track is not seen in are ignored (NaN is
+            fine there).
+        visible: (n, v) booleans, True where the track is seen; None: every view.
+        cov: residual covariances (n, v, 2, 2); None: the identity for homogeneous lines, the endpoint
+            model (``sigma``) for segments.
+        method, sigma, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_line`.
+        progress: called from the calling thread with the number of finished tracks, about ten times a
+            second while it changes and once at the end; the batch then runs on a worker thread. An
+            exception it raises (e.g. ``KeyboardInterrupt``) stops the calls and is raised when the
+            batch has ended (a running batch is not interrupted).
+
+    Raises (for the whole call, before any track is solved): ShapeError (shapes, or counts of views
+    or tracks that differ from P's), NonFiniteError or SingularCameraError for shared cameras,
+    TooFewCorrespondencesError (fewer than 2 cameras per track), InvalidOptionError (options, ``sigma``
+    with homogeneous lines or with ``cov``); TypeError for an unknown keyword or a ``visible`` that is
+    not boolean.
+    """
+
+class QuadricTriangulations(BatchReport):
+    """The results of :func:`triangulate_quadrics`: the columns of :class:`BatchReport` and each track's
+    ellipsoid (NaN for a rejected track), as :class:`QuadricTriangulation` gives them."""
+
+    @property
+    def Q(self) -> NDArray[np.float64]:
+        """Dual quadrics (n, 4, 4) of eq. 10, ``L[3, 3] = -1`` (see :attr:`QuadricTriangulation.Q`)."""
+    @property
+    def primal(self) -> NDArray[np.float64]:
+        """Point quadrics (n, 4, 4) ``C = L^-1`` of eq. 9; NaN for a flat ellipsoid."""
+    @property
+    def centre(self) -> NDArray[np.float64]:
+        """Centres (n, 3), world units."""
+    @property
+    def axes(self) -> NDArray[np.float64]:
+        """Unit axes (n, 3, 3) as columns, in the order of :attr:`semi_axes`."""
+    @property
+    def semi_axes(self) -> NDArray[np.float64]:
+        """Semi-axis lengths (n, 3), decreasing, world units."""
+    @property
+    def cost(self) -> NDArray[np.float64]:
+        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
+    @property
+    def lower_bound(self) -> NDArray[np.float64]:
+        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
+    @property
+    def relative_gap(self) -> NDArray[np.float64]:
+        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
+    @property
+    def certified(self) -> NDArray[np.bool_]:
+        """Global optimality certified within ``max_relative_gap`` (n,)."""
+    @property
+    def certificate(self) -> NDArray[np.str_]:
+        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
+    @property
+    def status(self) -> NDArray[np.str_]:
+        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
+        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
+        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
+        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
+        definite, all visible camera centres equal, a line in an epipolar plane of its views),
+        ``"singular_camera"``, ``"invalid_input"``."""
+    @property
+    def nodes(self) -> NDArray[np.int64]:
+        """Branch-and-bound nodes per track (n,)."""
+    @property
+    def iterations(self) -> NDArray[np.int64]:
+        """Local-minimisation iterations per track (n,)."""
+    @property
+    def time_seconds(self) -> NDArray[np.float64]:
+        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
+    @property
+    def messages(self) -> list[str]:
+        """Per track: ``""``, or why the core rejected it, naming the track and the view
+        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
+    @property
+    def method(self) -> str:
+        """The method that ran."""
+    def __len__(self) -> int: ...
+    def __repr__(self) -> str: ...
+
+def triangulate_quadrics(
+    P: ArrayLike,
+    conics: ArrayLike,
+    visible: Optional[ArrayLike] = None,
+    cov: Optional[ArrayLike] = None,
+    method: str = "optimal",
+    *,
+    max_relative_gap: Optional[float] = None,
+    max_reprojection_error: Optional[float] = None,
+    max_nodes: Optional[int] = None,
+    progress: Optional[Callable[[int], Any]] = None,
+) -> QuadricTriangulations:
+    """Triangulate many ellipsoids (tracks) from their outline conics in parallel with the GIL released
+    (Josephson & Kahl 2008, sections 2.3, 3-4).
+
+    Each track is :func:`triangulate_quadric` on its visible views (the same numbers, but for
+    ``time_seconds``). One bad track (NaN in a visible view, fewer than 3 visible views, a conic that is
+    not a real ellipse, a covariance that is not positive definite) gets a ``status`` and a message and
+    never stops the others.
+
+    Args:
+        P: cameras (v, 3, 4) seen by every track, or (n, v, 3, 4), one set per track (e.g. independent
+            scenes solved together); world → pixels.
+        conics: point conics (n, v, 3, 3) of eq. 8; entries of views a track is not seen in are ignored.
+        visible: (n, v) booleans, True where the track is seen; None: every view.
+        cov: residual covariances (n, v, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
+        method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_quadric`.
+        progress: as for :func:`triangulate_lines`.
+
+    Raises (for the whole call): ShapeError, NonFiniteError or SingularCameraError for shared cameras,
+    TooFewCorrespondencesError (fewer than 3 cameras per track), InvalidOptionError; TypeError for an
+    unknown keyword or a ``visible`` that is not boolean.
     """
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
