@@ -2,10 +2,11 @@
 
 :func:`run` reads the folder with :func:`pluecker.datasets.load_vgg`, keeps the chosen views, and
 triangulates every point seen in at least two of them with :func:`pluecker.triangulate_points` (and, with
-``lines=True``, every line seen in at least two of them with :func:`pluecker.triangulate_line`, whose
-covariance comes from the segment endpoints with pixel noise ``sigma``). :func:`write` stores the features
-as JSON (every feature, with its certificate) and PLY (the finite ones), :func:`summary_lines` says what
-happened. Formats: ``docs/cli.md``.
+``lines=True``, every line seen in at least two of them with :func:`pluecker.triangulate_lines`, whose
+covariances come from the segment endpoints with pixel noise ``sigma``); both batches run in parallel, and
+a feature the triangulation rejects gets its ``status`` and a ``message`` instead of stopping the run.
+:func:`write` stores the features as JSON (every feature, with its certificate) and PLY (the finite ones),
+:func:`summary_lines` says what happened. Formats: ``docs/cli.md``.
 
 Conventions: cameras map world points to pixels (the folder's ``*.P``, in the right-handed frame
 ``load_vgg`` returns); a 3-D line is given by a point on it, a unit direction, its Plücker coordinates
@@ -91,11 +92,17 @@ def _check_views(seq: VggSequence, views: list[int] | None) -> list[int]:
     return list(views)
 
 
-def _report(result: Any, i: int | None = None) -> dict[str, Any]:
-    """The report fields of a single result (``i`` None) or of track ``i`` of a batch result."""
-    if i is None:
-        return {k: getattr(result, k) for k in REPORT_FIELDS}
-    return {k: np.asarray(getattr(result, k))[i].item() for k in REPORT_FIELDS}
+def _columns(result: Any) -> dict[str, np.ndarray]:
+    """The report columns of a batch result, fetched once (every getter returns a fresh array)."""
+    return {k: np.asarray(getattr(result, k)) for k in (*REPORT_FIELDS, "messages")}
+
+
+def _report(columns: dict[str, np.ndarray], i: int) -> dict[str, Any]:
+    """The report fields of track ``i`` of a batch result, and its ``message`` when it was rejected."""
+    record = {k: columns[k][i].item() for k in REPORT_FIELDS}
+    if columns["messages"][i]:
+        record["message"] = str(columns["messages"][i])
+    return record
 
 
 def _points(seq: VggSequence, views: list[int], method: str) -> Features:
@@ -106,6 +113,7 @@ def _points(seq: VggSequence, views: list[int], method: str) -> Features:
         return features
     cameras = seq.cameras[views]
     result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks], method=method)
+    columns = _columns(result)
     X = np.asarray(result.X)
     homogeneous = np.hstack([X, np.ones((len(X), 1))])
     projected = np.einsum("vij,nj->nvi", cameras, homogeneous)
@@ -113,7 +121,7 @@ def _points(seq: VggSequence, views: list[int], method: str) -> Features:
     for k, track in enumerate(tracks):
         seen = visible[track]
         record = {"index": int(track), "views": [views[j] for j in np.flatnonzero(seen)],
-                  "X": X[k].tolist(), **_report(result, k),
+                  "X": X[k].tolist(), **_report(columns, k),
                   "rms_reprojection_px": float(np.sqrt(np.mean(residuals[k][seen] ** 2)))}
         features.records.append(record)
     finite = np.all(np.isfinite(X), axis=1)
@@ -149,23 +157,27 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
     segments, visible = seq.line_observations(views)
     features = Features("lines", total=len(seq.lines3d))
     cameras = seq.cameras[views]
-    geometry, certified = [], []
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
     # Branch and bound over lines can take a second per line: a bar on a terminal, nothing in a log.
     progress = Progress(len(tracks), "lines", enabled=show_progress)
-    for track in tracks:
-        progress.update()
+    report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
+    result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma, method=method,
+                                        progress=report)
+    columns = _columns(result)
+    plucker, points, directions = (np.asarray(a) for a in (result.plucker, result.point, result.direction))
+    geometry, certified = [], []
+    for k, track in enumerate(tracks):
         seen = visible[track]
-        result = pluecker.triangulate_line(cameras[seen], segments[track][seen], sigma=sigma, method=method)
-        point, direction = np.asarray(result.point), np.asarray(result.direction)
-        extent = _segment_extent(point, direction, cameras[seen], segments[track][seen])
+        point, direction = points[k], directions[k]
+        extent = (_segment_extent(point, direction, cameras[seen], segments[track][seen])
+                  if np.all(np.isfinite(point)) else np.full((2, 3), np.nan))
         features.records.append({
             "index": int(track), "views": [views[j] for j in np.flatnonzero(seen)],
-            "plucker": np.asarray(result.plucker).tolist(), "point": point.tolist(),
-            "direction": direction.tolist(), "segment": extent.tolist(), **_report(result)})
+            "plucker": plucker[k].tolist(), "point": point.tolist(),
+            "direction": direction.tolist(), "segment": extent.tolist(), **_report(columns, k)})
         if np.all(np.isfinite(extent)):
             geometry.append(extent)
-            certified.append(bool(result.certified))
+            certified.append(bool(columns["certified"][k]))
     if progress.enabled:
         progress.close(f"lines: {len(tracks)} in {progress.elapsed:.1f} s")
     features.geometry = np.array(geometry).reshape(-1, 2, 3)
@@ -177,7 +189,8 @@ def run(folder: str | Path, views: list[int] | None = None, method: str = "optim
         sigma: float = 1.0, show_progress: bool | None = None) -> Run:
     """Triangulates the folder's points (and lines) from ``views`` (default all). Raises
     :class:`FolderError` for an unreadable folder or a view that does not exist, and a
-    :class:`pluecker.PlueckerError` for data the triangulation rejects. ``show_progress`` draws a
+    :class:`pluecker.PlueckerError` for arguments the triangulation rejects as a whole (a bad ``method``
+    or ``sigma``); a rejected feature is recorded with its status and message. ``show_progress`` draws a
     progress bar over the lines (None: when standard error is a terminal)."""
     folder = Path(folder)
     seq = _load(folder)
