@@ -254,3 +254,31 @@ def test_gil_is_released_during_the_batch(seed):
     worker.join()
     assert state["seconds"] > 20 * sys.getswitchinterval(), "the call is too short to tell"
     assert counted > 0.1 * rate * state["seconds"], (counted, rate, state["seconds"])
+
+
+def test_folder_records_a_rejected_line_and_keeps_the_others(tmp_path):
+    """``pluecker triangulate --lines`` runs one batch: a line whose segment has zero length in one view is
+    recorded with its status and message, left out of the PLY, and every other line is triangulated."""
+    import shutil
+
+    from pluecker import triangulate_folder
+    from pluecker.datasets import load_vgg, vgg_root
+
+    folder = tmp_path / "model_house"
+    shutil.copytree(vgg_root() / "model_house", folder)
+    seq = load_vgg(folder)
+    tracks = np.flatnonzero(((seq.line_tracks[:, :4] >= 0).sum(axis=1) >= 2) & (seq.line_tracks[:, 0] >= 0))
+    bad = int(tracks[0])
+    path = folder / "house.000.lines"
+    rows = path.read_text().splitlines()
+    fields = rows[seq.line_tracks[bad, 0]].split()
+    fields[2:4] = fields[0:2]  # the second endpoint onto the first
+    rows[seq.line_tracks[bad, 0]] = " ".join(fields)
+    path.write_text("\n".join(rows) + "\n")
+    run = triangulate_folder.run(folder, views=[0, 1, 2, 3], method="linear", lines=True, show_progress=False)
+    records = {r["index"]: r for r in run.lines.records}
+    assert records[bad]["status"] == "degenerate" and "has zero length" in records[bad]["message"]
+    assert np.all(np.isnan(records[bad]["point"])) and np.all(np.isnan(records[bad]["segment"]))
+    others = [r for i, r in records.items() if i != bad]
+    assert others and all(r["status"] == "success" and "message" not in r for r in others)
+    assert len(run.lines.geometry) == len(others)
