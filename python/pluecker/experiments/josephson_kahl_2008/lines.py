@@ -3,8 +3,8 @@
 The data hold image segments, not the edge points the paper fitted its lines to, so each view's line is
 the line through the segment's endpoints and its covariance is that of endpoints with i.i.d. Gaussian
 noise of ``SIGMA_PX`` = 1 px per coordinate (``pluecker.fit_line`` on the two endpoints; the
-``segments`` form of ``pluecker.triangulate_line``). Every line seen in at least two of frames 0-3 is
-triangulated by each method. Two errors per observation: the whitened residual norm ``‖L r‖`` of eq. 18
+``segments`` form of ``pluecker.triangulate_lines``). Every line seen in at least two of frames 0-3 is
+triangulated by each method, all lines of a sequence in one parallel batch. Two errors per observation: the whitened residual norm ``‖L r‖`` of eq. 18
 (what eq. 19 sums, squared; the quantity closest to the paper's) and the pixel distances of the observed
 segment's endpoints from the reprojected line.
 """
@@ -100,31 +100,30 @@ def line_data(sequence: str, limit: int | None = None) -> tuple[np.ndarray, np.n
 
 
 def run_lines(sequence: str, method: str, limit: int | None = None, gap: float | None = None) -> LineRun:
-    """``method`` on the lines of ``sequence``; ``gap`` is the optimal method's ``max_relative_gap``
-    (None: pluecker's default)."""
+    """``method`` on the lines of ``sequence``, all in one parallel batch (``pluecker.triangulate_lines``:
+    each line as ``triangulate_line`` on its visible views); ``gap`` is the optimal method's
+    ``max_relative_gap`` (None: pluecker's default). ``wall_seconds`` is the batch's wall time."""
     cameras, segments, visible = line_data(sequence, limit)
-    whitened, endpoints, cost, recomputed, results = [], [], [], [], []
+    whitened, endpoints, recomputed = [], [], []
     start = time.perf_counter()
-    for seg, seen in zip(segments, visible):
-        results.append(pluecker.triangulate_line(cameras[seen], seg[seen], sigma=SIGMA_PX, method=method,
-                                                 max_relative_gap=gap))
+    batch = pluecker.triangulate_lines(cameras, segments, visible, sigma=SIGMA_PX, method=method, max_relative_gap=gap)
     wall = time.perf_counter() - start
-    for r, seg, seen in zip(results, segments, visible):
+    rejected = [m for m in batch.messages if m]
+    if rejected:
+        raise RuntimeError(f"{sequence}: {len(rejected)} line(s) rejected, first: {rejected[0]}")
+    for point, direction, seg, seen in zip(batch.point, batch.direction, segments, visible):
         total = 0.0
         for P, s in zip(cameras[seen], seg[seen]):
             fit = pluecker.fit_line(s, sigma=SIGMA_PX)
-            reprojected = image_line(P, np.asarray(r.point), np.asarray(r.direction))
+            reprojected = image_line(P, point, direction)
             res = residual(np.asarray(fit.line), reprojected)
             w = float(res @ np.linalg.solve(np.asarray(fit.covariance), res))
             total += w
             whitened.append(np.sqrt(w))
             endpoints += list(np.abs(np.c_[s, np.ones(2)] @ reprojected) / np.hypot(*reprojected[:2]))
-        cost.append(r.cost)
         recomputed.append(total)
-    return LineRun(np.array(whitened), np.array(endpoints), np.array(cost), np.array(recomputed),
-                   np.array([r.certified for r in results]), np.array([r.certificate for r in results]),
-                   np.array([r.nodes for r in results]), np.array([r.status for r in results]),
-                   np.array([r.time_seconds for r in results]), wall)
+    return LineRun(np.array(whitened), np.array(endpoints), batch.cost, np.array(recomputed), batch.certified,
+                   batch.certificate, batch.nodes, batch.status, batch.time_seconds, wall)
 
 
 def table2(lines: dict[str, dict[str, LineRun]]) -> str:
