@@ -468,7 +468,7 @@ where
                 }
                 std::thread::park_timeout(Duration::from_millis(100));
             }
-            worker.join().unwrap_or_else(|payload| Err(payload))
+            worker.join().unwrap_or_else(Err)
         })
     });
     if let Some(e) = failure {
