@@ -19,8 +19,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyList;
 use std::time::Instant;
 
-/// The status of a track the core rejected, by error kind.
-fn error_status(err: &Error) -> &'static str {
+/// The status of a track the core rejected, by error kind (shared by every batch result).
+pub(crate) fn error_status(err: &Error) -> &'static str {
     match err {
         Error::TooFewCorrespondences { .. } => "too_few_views",
         Error::NonFinite { .. } => "non_finite",
@@ -182,7 +182,7 @@ impl PyPointTriangulations {
 }
 
 /// A numpy array of strings (dtype `<U…`).
-fn strings<'py>(py: Python<'py>, values: &[&'static str]) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn strings<'py>(py: Python<'py>, values: &[&'static str]) -> PyResult<Bound<'py, PyAny>> {
     let list = PyList::new(py, values)?;
     py.import("numpy")?.call_method1("array", (list, "str"))
 }

@@ -20,41 +20,14 @@ use pluecker::triangulation::line_batch::{triangulate_lines as core_lines, Image
 use pluecker::triangulation::quadric::QuadricTriangulation;
 use pluecker::triangulation::quadric_batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
 use pluecker::triangulation::{CertificateKind, Method, Report, Status, TriangulationOptions};
+use crate::triangulation_batch::{error_status, strings};
+use crate::triangulation_line::LINE_NAMES;
+use crate::triangulation_quadric::QUADRIC_NAMES;
 use pluecker::Error;
 use pyo3::prelude::*;
-use pyo3::types::PyList;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
-
-/// Core argument names → Python argument names of `triangulate_lines`.
-const LINE_NAMES: &[(&str, &str)] = &[
-    ("cameras", "P"),
-    ("lines", "lines"),
-    ("segments", "lines"),
-    ("covariances", "cov"),
-];
-
-/// Core argument names → Python argument names of `triangulate_quadrics`.
-const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
-
-/// The status of a track the core rejected, by error kind (the names `PointTriangulations` uses).
-fn error_status(err: &Error) -> &'static str {
-    match err {
-        Error::TooFewCorrespondences { .. } => "too_few_views",
-        Error::NonFinite { .. } => "non_finite",
-        Error::Degenerate { .. } => "degenerate",
-        Error::SingularCamera { .. } => "singular_camera",
-        Error::Shape { .. } => "invalid_input",
-        Error::InvalidOption { .. } => "invalid_option",
-    }
-}
-
-/// A numpy array of strings (dtype `<U…`).
-fn strings<'py>(py: Python<'py>, values: &[&'static str]) -> PyResult<Bound<'py, PyAny>> {
-    let list = PyList::new(py, values)?;
-    py.import("numpy")?.call_method1("array", (list, "str"))
-}
 
 /// A float64 array of `shape` from row-major `values`.
 fn array<'py>(py: Python<'py>, values: &[f64], shape: &[usize]) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {

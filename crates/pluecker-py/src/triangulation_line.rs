@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// Core argument names → Python argument names of `triangulate_line`.
-const LINE_NAMES: &[(&str, &str)] = &[
+pub(crate) const LINE_NAMES: &[(&str, &str)] = &[
     ("cameras", "P"),
     ("lines", "lines"),
     ("segments", "lines"),

@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// Core argument names → Python argument names of `triangulate_quadric`.
-const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
+pub(crate) const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
 
 fn matrix_to_py<'py, const R: usize, const C: usize>(
     py: Python<'py>,
