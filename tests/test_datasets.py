@@ -47,3 +47,19 @@ def test_right_handed_frame_with_points_in_front_and_small_reprojection_error(na
 def test_missing_folder_is_a_clear_error(tmp_path):
     with pytest.raises(FileNotFoundError, match="no camera files"):
         load_vgg(tmp_path)
+
+
+def test_a_missing_data_folder_names_the_environment_variable(tmp_path):
+    from pluecker.datasets import DataNotFoundError
+
+    with pytest.raises(DataNotFoundError, match="PLUECKER_VGG_DATA"):
+        load_vgg(tmp_path / "nowhere")
+
+
+def test_reproduce_without_data_fails_with_one_clear_line(tmp_path, monkeypatch, capsys):
+    from pluecker.cli import main
+
+    monkeypatch.setenv("PLUECKER_VGG_DATA", str(tmp_path / "nowhere"))
+    status = main(["reproduce", "josephson-kahl-2008", "--quick", "--quiet", "--out", str(tmp_path / "out")])
+    assert status == 2
+    assert "VGG data folder not found" in capsys.readouterr().err

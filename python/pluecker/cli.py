@@ -28,6 +28,7 @@ from typing import Any, NoReturn, Sequence
 import numpy as np
 
 import pluecker
+from pluecker.datasets import DataNotFoundError
 
 __all__ = ["main"]
 
@@ -375,6 +376,8 @@ def _reproduce(args: argparse.Namespace) -> int:
     try:
         report = module.reproduce(out, trials=args.trials, seed=args.seed, quick=args.quick,
                                   show_progress=False if args.quiet else None, plots=plots)
+    except DataNotFoundError as exc:
+        return _fail("reproduce", str(exc))
     except OSError as exc:
         return _fail("reproduce", f"cannot write to {out}: {exc.strerror or exc}")
     print("\n".join(report.lines))

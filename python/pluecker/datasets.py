@@ -24,19 +24,28 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["VggSequence", "load_vgg", "vgg_root", "VGG_SEQUENCES"]
+__all__ = ["DataNotFoundError", "VggSequence", "load_vgg", "vgg_root", "VGG_SEQUENCES"]
 
 #: The five sequences of ``../shared/data/vgg``.
 VGG_SEQUENCES = ("model_house", "corridor", "merton_college_1", "merton_college_2", "merton_college_3")
 
 
+class DataNotFoundError(FileNotFoundError):
+    """A data folder is missing; the message says where it was looked for and how to point to it."""
+
+
 def vgg_root() -> Path:
     """Where the VGG data live: ``$PLUECKER_VGG_DATA`` if set, else ``shared/data/vgg`` beside the checkout
-    (``<repo>/../shared/data/vgg``). The project ships no copy of the data."""
+    (``<repo>/../shared/data/vgg``), else beside the working directory (``./../shared/data/vgg``). The
+    project ships no copy of the data."""
     env = os.environ.get("PLUECKER_VGG_DATA")
     if env:
         return Path(env)
-    return Path(__file__).resolve().parents[3] / "shared" / "data" / "vgg"
+    candidates = [Path(__file__).resolve().parents[3], Path.cwd().resolve().parent]
+    for base in candidates:
+        if (base / "shared" / "data" / "vgg").is_dir():
+            return base / "shared" / "data" / "vgg"
+    return candidates[0] / "shared" / "data" / "vgg"
 
 
 @dataclass(frozen=True)
@@ -130,10 +139,16 @@ def load_vgg(folder: str | Path) -> VggSequence:
     """Reads a VGG multi-view folder (see the module docs) into a right-handed :class:`VggSequence`.
 
     Raises:
+        DataNotFoundError: the folder does not exist.
         FileNotFoundError: no camera files (``*.P``) in the folder.
         ValueError: a malformed file (the message names it).
     """
     folder = Path(folder)
+    if not folder.is_dir():
+        raise DataNotFoundError(
+            f"VGG data folder not found: {folder} (set PLUECKER_VGG_DATA to the folder that holds "
+            f"{', '.join(VGG_SEQUENCES)})"
+        )
     camera_files = sorted(p for p in folder.iterdir() if re.fullmatch(r"(.*\.)?\d+\.P", p.name))
     if not camera_files:
         raise FileNotFoundError(f"{folder}: no camera files '<prefix>NNN.P'")
