@@ -27,7 +27,7 @@ use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::line_optimal::optimal_line;
 use super::line_residual::{line_view, LineFrame};
-use super::{parse_observations, Certificate, Method, Report, Status, TriangulationOptions};
+use super::{parse_observations, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::optim::{trust_region, Linearization, Objective};
@@ -276,21 +276,7 @@ pub(crate) fn local_line(
     let x0 = OrthonormalLine::from_plucker(&plucker::transform(&h, start)).expect("a finite line");
     let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
     let world = plucker::transform(&sim.inverse_matrix(), &x.to_plucker());
-    let status = if summary.termination.converged() {
-        Status::Success
-    } else {
-        Status::NotConverged
-    };
-    let report = Report {
-        method: Method::Local,
-        status,
-        cost: 2.0 * summary.final_cost,
-        certificate: Certificate::none(),
-        iterations: summary.iterations,
-        termination: summary.termination,
-        time_seconds: 0.0,
-    };
-    (world, report)
+    (world, Report::of_local(&summary))
 }
 
 #[cfg(test)]

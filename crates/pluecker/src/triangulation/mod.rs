@@ -36,7 +36,7 @@ pub mod scenes;
 pub mod views;
 
 use crate::error::{Error, Result};
-use crate::optim::{Termination, TrustRegionOptions};
+use crate::optim::{Summary, Termination, TrustRegionOptions};
 
 /// The three estimators of every primitive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -232,6 +232,20 @@ impl Report {
             iterations: 0,
             termination: Termination::ClosedForm,
             time_seconds: 0.0,
+        }
+    }
+}
+
+impl Report {
+    /// The report of a local minimisation that ended as `summary` says (`summary.final_cost` is the
+    /// solvers' `½ Σ`, so the cost of eq. 19 is twice it).
+    pub fn of_local(summary: &Summary) -> Report {
+        Report {
+            status: if summary.termination.converged() { Status::Success } else { Status::NotConverged },
+            cost: 2.0 * summary.final_cost,
+            iterations: summary.iterations,
+            termination: summary.termination,
+            ..Report::new(Method::Local)
         }
     }
 }

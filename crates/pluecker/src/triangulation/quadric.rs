@@ -29,7 +29,7 @@ use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::quadric_optimal::optimal_quadric;
 use super::quadric_residual::{quadric_view, ConicFrame};
-use super::{parse_observations, Certificate, Method, Report, Status, TriangulationOptions};
+use super::{parse_observations, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::optim::{trust_region, Linearization, Objective};
@@ -360,21 +360,7 @@ pub(crate) fn local_quadric(
     let objective = QuadricObjective { views: &views };
     let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
     let world = x.to_world(&sim).unwrap_or(*start);
-    let status = if summary.termination.converged() {
-        Status::Success
-    } else {
-        Status::NotConverged
-    };
-    let report = Report {
-        method: Method::Local,
-        status,
-        cost: 2.0 * summary.final_cost,
-        certificate: Certificate::none(),
-        iterations: summary.iterations,
-        termination: summary.termination,
-        time_seconds: 0.0,
-    };
-    (world, report)
+    (world, Report::of_local(&summary))
 }
 
 #[cfg(test)]
