@@ -530,10 +530,58 @@ def triangulate_point(
     The GIL is released while the core runs.
     """
 
-class PointTriangulations:
-    """The results of :func:`triangulate_points`: one entry per track in every array (fresh copies).
-    Tracks the core rejected have a ``status`` naming the problem, NaN in ``X`` and ``cost``, and a
-    message in :attr:`messages`."""
+class BatchReport:
+    """The per-track report columns of a batch of points, lines or quadrics (the base class of
+    :class:`PointTriangulations`, :class:`LineTriangulations` and :class:`QuadricTriangulations`): one
+    entry per track in every array (fresh copies). Tracks the core rejected have a ``status`` naming
+    the problem, NaN estimates and cost, and a message in :attr:`messages`."""
+
+    @property
+    def cost(self) -> NDArray[np.float64]:
+        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
+    @property
+    def lower_bound(self) -> NDArray[np.float64]:
+        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
+    @property
+    def relative_gap(self) -> NDArray[np.float64]:
+        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
+    @property
+    def certified(self) -> NDArray[np.bool_]:
+        """Global optimality certified within ``max_relative_gap`` (n,)."""
+    @property
+    def certificate(self) -> NDArray[np.str_]:
+        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
+    @property
+    def status(self) -> NDArray[np.str_]:
+        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
+        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
+        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
+        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
+        definite, all visible camera centres equal, a line in an epipolar plane of its views),
+        ``"singular_camera"``, ``"invalid_input"``."""
+    @property
+    def nodes(self) -> NDArray[np.int64]:
+        """Branch-and-bound nodes per track (n,)."""
+    @property
+    def iterations(self) -> NDArray[np.int64]:
+        """Local-minimisation iterations per track (n,)."""
+    @property
+    def time_seconds(self) -> NDArray[np.float64]:
+        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
+    @property
+    def messages(self) -> list[str]:
+        """Per track: ``""``, or why the core rejected it, naming the track and the view
+        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
+    @property
+    def method(self) -> str:
+        """The method that ran."""
+    def __len__(self) -> int: ...
+    def __repr__(self) -> str: ...
+
+class PointTriangulations(BatchReport):
+    """The results of :func:`triangulate_points`: the columns of :class:`BatchReport` and each track's
+    point, one entry per track in every array (fresh copies). Tracks the core rejected have a
+    ``status`` naming the problem, NaN in ``X`` and ``cost``, and a message in :attr:`messages`."""
 
     @property
     def X(self) -> NDArray[np.float64]:
@@ -807,54 +855,6 @@ def triangulate_quadric(
     """
 
 # --- Batches of lines and quadrics ---------------------------------------------------------------
-
-class BatchReport:
-    """The per-track report columns of a batch of lines or quadrics (the base class of
-    :class:`LineTriangulations` and :class:`QuadricTriangulations`): one entry per track in every
-    array (fresh copies). Tracks the core rejected have a ``status`` naming the problem, NaN estimates
-    and cost, and a message in :attr:`messages`."""
-
-    @property
-    def cost(self) -> NDArray[np.float64]:
-        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
-    @property
-    def lower_bound(self) -> NDArray[np.float64]:
-        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
-    @property
-    def relative_gap(self) -> NDArray[np.float64]:
-        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
-    @property
-    def certified(self) -> NDArray[np.bool_]:
-        """Global optimality certified within ``max_relative_gap`` (n,)."""
-    @property
-    def certificate(self) -> NDArray[np.str_]:
-        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
-    @property
-    def status(self) -> NDArray[np.str_]:
-        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
-        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
-        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
-        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
-        definite, all visible camera centres equal, a line in an epipolar plane of its views),
-        ``"singular_camera"``, ``"invalid_input"``."""
-    @property
-    def nodes(self) -> NDArray[np.int64]:
-        """Branch-and-bound nodes per track (n,)."""
-    @property
-    def iterations(self) -> NDArray[np.int64]:
-        """Local-minimisation iterations per track (n,)."""
-    @property
-    def time_seconds(self) -> NDArray[np.float64]:
-        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
-    @property
-    def messages(self) -> list[str]:
-        """Per track: ``""``, or why the core rejected it, naming the track and the view
-        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
-    @property
-    def method(self) -> str:
-        """The method that ran."""
-    def __len__(self) -> int: ...
-    def __repr__(self) -> str: ...
 
 class LineTriangulations(BatchReport):
     """The results of :func:`triangulate_lines`: the columns of :class:`BatchReport` and each track's

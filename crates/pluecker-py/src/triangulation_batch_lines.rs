@@ -1,7 +1,8 @@
 //! `triangulate_lines` and `triangulate_quadrics`: many line or quadric tracks solved by the core's
 //! batches (`pluecker::triangulation::{line_batch, quadric_batch}`, rayon) with the GIL released, and
 //! their results `pluecker.LineTriangulations` / `pluecker.QuadricTriangulations`, column arrays with
-//! the per-track report columns of their base class `pluecker.BatchReport`.
+//! the per-track report columns of their base class `pluecker.BatchReport`
+//! ([`crate::triangulation_batch_report`], which also fills them from the core's results).
 //!
 //! The numpy arrays go to the core as flat row-major slices, one copy each. Cameras are `(v, 3, 4)`,
 //! shared by every track, or `(n, v, 3, 4)`, one set per track. A track the core rejects gets an
@@ -11,18 +12,18 @@
 use crate::errors::{guarded, invalid_argument, shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed};
 use crate::triangulation_arrays::{read, read_any, read_mask, shape_string, Dim};
+use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
+use crate::triangulation_line::LINE_NAMES;
+use crate::triangulation_quadric::QUADRIC_NAMES;
 use nalgebra::Matrix3x4;
 use numpy::ndarray::{ArrayD, IxDyn};
-use numpy::{IntoPyArray, PyArray1, PyArrayDyn};
+use numpy::{IntoPyArray, PyArrayDyn};
 use pluecker::triangulation::batch::TrackCameras;
 use pluecker::triangulation::line::LineTriangulation;
 use pluecker::triangulation::line_batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
 use pluecker::triangulation::quadric::QuadricTriangulation;
 use pluecker::triangulation::quadric_batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
-use pluecker::triangulation::{CertificateKind, Method, Report, Status, TriangulationOptions};
-use crate::triangulation_batch::{error_status, strings};
-use crate::triangulation_line::LINE_NAMES;
-use crate::triangulation_quadric::QUADRIC_NAMES;
+use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
@@ -36,157 +37,6 @@ fn array<'py>(py: Python<'py>, values: &[f64], shape: &[usize]) -> PyResult<Boun
     Ok(array.into_pyarray(py))
 }
 
-/// The per-track report columns of a batch: the fields of `TriangulationReport`, one entry per track.
-#[pyclass(frozen, subclass, name = "BatchReport", module = "pluecker")]
-#[derive(Debug)]
-pub struct PyBatchReport {
-    method: &'static str,
-    cost: Vec<f64>,
-    lower_bound: Vec<f64>,
-    relative_gap: Vec<f64>,
-    certified: Vec<bool>,
-    certificate: Vec<&'static str>,
-    status: Vec<&'static str>,
-    nodes: Vec<i64>,
-    iterations: Vec<i64>,
-    time_seconds: Vec<f64>,
-    /// `(track, message)` of every rejected track.
-    errors: Vec<(usize, String)>,
-}
-
-impl PyBatchReport {
-    fn with_capacity(method: Method, n: usize) -> Self {
-        PyBatchReport {
-            method: method.as_str(),
-            cost: Vec::with_capacity(n),
-            lower_bound: Vec::with_capacity(n),
-            relative_gap: Vec::with_capacity(n),
-            certified: Vec::with_capacity(n),
-            certificate: Vec::with_capacity(n),
-            status: Vec::with_capacity(n),
-            nodes: Vec::with_capacity(n),
-            iterations: Vec::with_capacity(n),
-            time_seconds: Vec::with_capacity(n),
-            errors: Vec::new(),
-        }
-    }
-
-    fn push(&mut self, report: &Report) {
-        let c = &report.certificate;
-        self.cost.push(report.cost);
-        self.lower_bound.push(c.lower_bound);
-        self.relative_gap.push(c.relative_gap);
-        self.certified.push(c.certified);
-        self.certificate.push(c.kind.as_str());
-        self.status.push(report.status.as_str());
-        self.nodes.push(c.nodes as i64);
-        self.iterations.push(report.iterations as i64);
-        self.time_seconds.push(report.time_seconds);
-    }
-
-    /// A rejected track: NaN cost, no certificate, the error's status and message (`"track t: ..."`,
-    /// the core's own `"track t: "` not repeated).
-    fn push_error(&mut self, track: usize, err: Error) {
-        self.cost.push(f64::NAN);
-        self.lower_bound.push(0.0);
-        self.relative_gap.push(1.0);
-        self.certified.push(false);
-        self.certificate.push(CertificateKind::None.as_str());
-        self.status.push(error_status(&err));
-        self.nodes.push(0);
-        self.iterations.push(0);
-        self.time_seconds.push(0.0);
-        let prefix = format!("track {track}: ");
-        let text = err.to_string().replacen(&prefix, "", 1);
-        self.errors.push((track, format!("{prefix}{text}")));
-    }
-
-    fn len(&self) -> usize {
-        self.status.len()
-    }
-
-    fn repr(&self, class: &str) -> String {
-        let success = self.status.iter().filter(|s| **s == Status::Success.as_str()).count();
-        let certified = self.certified.iter().filter(|c| **c).count();
-        format!(
-            "{class}(method='{}', tracks={}, success={success}, certified={certified}, rejected={})",
-            self.method,
-            self.len(),
-            self.errors.len()
-        )
-    }
-}
-
-#[pymethods]
-impl PyBatchReport {
-    #[getter]
-    fn cost<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.cost)
-    }
-
-    #[getter]
-    fn lower_bound<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.lower_bound)
-    }
-
-    #[getter]
-    fn relative_gap<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.relative_gap)
-    }
-
-    #[getter]
-    fn certified<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_slice(py, &self.certified)
-    }
-
-    #[getter]
-    fn certificate<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        strings(py, &self.certificate)
-    }
-
-    #[getter]
-    fn status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        strings(py, &self.status)
-    }
-
-    #[getter]
-    fn nodes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_slice(py, &self.nodes)
-    }
-
-    #[getter]
-    fn iterations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_slice(py, &self.iterations)
-    }
-
-    #[getter]
-    fn time_seconds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.time_seconds)
-    }
-
-    #[getter]
-    fn messages(&self) -> Vec<String> {
-        let mut out = vec![String::new(); self.len()];
-        for (track, message) in &self.errors {
-            out[*track] = message.clone();
-        }
-        out
-    }
-
-    #[getter]
-    fn method(&self) -> &'static str {
-        self.method
-    }
-
-    fn __len__(&self) -> usize {
-        self.len()
-    }
-
-    fn __repr__(&self) -> String {
-        self.repr("BatchReport")
-    }
-}
-
 /// The results of `triangulate_lines`: Plücker coordinates, points and directions per track.
 #[pyclass(frozen, extends = PyBatchReport, name = "LineTriangulations", module = "pluecker")]
 #[derive(Debug, Default)]
@@ -196,27 +46,21 @@ pub struct PyLineTriangulations {
     direction: Vec<f64>,
 }
 
-impl PyLineTriangulations {
-    fn build(method: Method, results: Vec<pluecker::Result<LineTriangulation>>) -> (PyBatchReport, Self) {
-        let mut report = PyBatchReport::with_capacity(method, results.len());
-        let mut lines = PyLineTriangulations::default();
-        for (t, result) in results.into_iter().enumerate() {
-            match result {
-                Ok(r) => {
-                    report.push(&r.report);
-                    lines.plucker.extend_from_slice(r.plucker.as_slice());
-                    lines.point.extend_from_slice(r.point.as_slice());
-                    lines.direction.extend_from_slice(r.direction.as_slice());
-                }
-                Err(e) => {
-                    report.push_error(t, renamed(e, LINE_NAMES));
-                    lines.plucker.extend([f64::NAN; 6]);
-                    lines.point.extend([f64::NAN; 3]);
-                    lines.direction.extend([f64::NAN; 3]);
-                }
-            }
-        }
-        (report, lines)
+impl TrackColumns for PyLineTriangulations {
+    type Track = LineTriangulation;
+    const NAMES: &'static [(&'static str, &'static str)] = LINE_NAMES;
+
+    fn push(&mut self, track: LineTriangulation) -> Report {
+        self.plucker.extend_from_slice(track.plucker.as_slice());
+        self.point.extend_from_slice(track.point.as_slice());
+        self.direction.extend_from_slice(track.direction.as_slice());
+        track.report
+    }
+
+    fn push_missing(&mut self) {
+        self.plucker.extend([f64::NAN; 6]);
+        self.point.extend([f64::NAN; 3]);
+        self.direction.extend([f64::NAN; 3]);
     }
 }
 
@@ -258,36 +102,32 @@ fn row_major<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -
     (0..R).flat_map(move |i| (0..C).map(move |j| m[(i, j)]))
 }
 
-impl PyQuadricTriangulations {
-    fn build(method: Method, results: Vec<pluecker::Result<QuadricTriangulation>>) -> (PyBatchReport, Self) {
-        let mut report = PyBatchReport::with_capacity(method, results.len());
-        let mut q = PyQuadricTriangulations::default();
-        for (t, result) in results.into_iter().enumerate() {
-            match result {
-                Ok(r) => {
-                    report.push(&r.report);
-                    q.dual.extend(row_major(&r.dual));
-                    match &r.primal {
-                        Some(p) => q.primal.extend(row_major(p)),
-                        None => q.primal.extend([f64::NAN; 16]),
-                    }
-                    q.centre.extend_from_slice(r.centre.as_slice());
-                    q.semi_axes.extend_from_slice(r.semi_axes.as_slice());
-                    q.axes.extend(row_major(&r.axes));
-                }
-                Err(e) => {
-                    report.push_error(t, renamed(e, QUADRIC_NAMES));
-                    q.dual.extend([f64::NAN; 16]);
-                    q.primal.extend([f64::NAN; 16]);
-                    q.centre.extend([f64::NAN; 3]);
-                    q.semi_axes.extend([f64::NAN; 3]);
-                    q.axes.extend([f64::NAN; 9]);
-                }
-            }
+impl TrackColumns for PyQuadricTriangulations {
+    type Track = QuadricTriangulation;
+    const NAMES: &'static [(&'static str, &'static str)] = QUADRIC_NAMES;
+
+    fn push(&mut self, track: QuadricTriangulation) -> Report {
+        self.dual.extend(row_major(&track.dual));
+        match &track.primal {
+            Some(p) => self.primal.extend(row_major(p)),
+            None => self.primal.extend([f64::NAN; 16]),
         }
-        (report, q)
+        self.centre.extend_from_slice(track.centre.as_slice());
+        self.semi_axes.extend_from_slice(track.semi_axes.as_slice());
+        self.axes.extend(row_major(&track.axes));
+        track.report
     }
 
+    fn push_missing(&mut self) {
+        self.dual.extend([f64::NAN; 16]);
+        self.primal.extend([f64::NAN; 16]);
+        self.centre.extend([f64::NAN; 3]);
+        self.semi_axes.extend([f64::NAN; 3]);
+        self.axes.extend([f64::NAN; 9]);
+    }
+}
+
+impl PyQuadricTriangulations {
     fn tracks(&self) -> usize {
         self.centre.len() / 3
     }
@@ -509,7 +349,7 @@ pub fn triangulate_lines(
             covariances: covariances.as_deref(),
         };
         let results = core_lines(cams.core(), &tracks, &opts, done).map_err(|e| renamed(e, LINE_NAMES))?;
-        Ok(PyLineTriangulations::build(opts.method, results))
+        Ok(collect::<PyLineTriangulations>(opts.method, results))
     })?;
     Py::new(py, PyClassInitializer::from(report).add_subclass(results))
 }
@@ -545,7 +385,7 @@ pub fn triangulate_quadrics(
             covariances: covariances.as_deref(),
         };
         let results = core_quadrics(cams.core(), &tracks, &opts, done).map_err(|e| renamed(e, QUADRIC_NAMES))?;
-        Ok(PyQuadricTriangulations::build(opts.method, results))
+        Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;
     Py::new(py, PyClassInitializer::from(report).add_subclass(results))
 }
