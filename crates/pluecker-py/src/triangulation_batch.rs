@@ -44,12 +44,6 @@ impl TrackColumns for PyPointTriangulations {
     fn push_missing(&mut self) {
         self.x.extend([f64::NAN; 3]);
     }
-
-    /// `"track t: "` and the core's message as it is: unlike the other batches, a `"track t: "` the
-    /// core's message holds already is not taken out (the messages of points have always read so).
-    fn message(t: usize, err: &Error) -> String {
-        format!("track {t}: {err}")
-    }
 }
 
 impl PyPointTriangulations {

@@ -469,3 +469,19 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
     };
     assert!(matches!(triangulate_points_linear(&cameras, &mask), Err(Error::Shape { what, .. }) if what == "visible"));
 }
+
+#[test]
+fn optimal_reports_exactly_parallel_rays_at_infinity() {
+    // Three cameras translated along x, all seeing the point on their optical axes: the rays are
+    // parallel, eq. 19 tends to 0 at infinity and has no finite minimiser.
+    let cameras: Vec<Matrix3x4<f64>> = (0..3)
+        .map(|i| Matrix3x4::new(800.0, 0.0, 320.0, 800.0 * i as f64, 0.0, 800.0, 240.0, 0.0, 0.0, 0.0, 1.0, 5.0))
+        .collect();
+    let observations = vec![Vector2::new(320.0, 240.0); 3];
+    let opts = TriangulationOptions { method: Method::Optimal, ..Default::default() };
+    let r = triangulate_point(&cameras, &observations, None, &opts).unwrap();
+    assert_eq!(r.report.status, Status::AtInfinity, "{:?}", r.report);
+    assert!(r.point.iter().all(|v| v.is_nan()));
+    assert!(r.report.cost.abs() < 1e-12);
+    assert!(!r.report.certificate.certified);
+}

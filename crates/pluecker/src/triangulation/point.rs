@@ -168,11 +168,36 @@ pub(crate) fn solve_views(
     if opts.method == Method::Local || matches!(report.status, Status::NumericalFailure | Status::BehindCamera) {
         return finish(x, report);
     }
+    if let LinearPoint::AtInfinity(direction) = linear {
+        if let Some(cost) = cost_at_infinity(views, &direction).filter(|c| *c <= report.cost) {
+            // Parallel rays: the point at infinity fits at least as well as the best finite point
+            // found, so eq. 19 has no finite minimiser worth reporting (branch and bound would only
+            // chase it outwards).
+            report.status = Status::AtInfinity;
+            report.cost = cost;
+            return finish(Vector3::repeat(f64::NAN), report);
+        }
+    }
     let (x, status, certificate, cost) = certify(views, frame, x, report.cost, linear, opts);
     report.status = status;
     report.certificate = certificate;
     report.cost = cost;
     finish(x, report)
+}
+
+/// Eq. 19 at the point at infinity in direction `±direction` (whichever is in front of every camera):
+/// the limit of the cost along any ray towards it, `Σ ‖Aᵢ d‖² / (cᵢ·d)²`. `None` when neither sign is
+/// in front of every camera.
+fn cost_at_infinity(views: &[PointView], direction: &Vector3<f64>) -> Option<f64> {
+    [*direction, -direction].into_iter().find_map(|d| {
+        views
+            .iter()
+            .map(|v| {
+                let z = v.c().dot(&d);
+                (z > 0.0).then(|| (v.a() * d).norm_squared() / (z * z))
+            })
+            .sum::<Option<f64>>()
+    })
 }
 
 /// The local minimum of eq. 19 from the linear point, or from a start in front of the cameras when
