@@ -9,6 +9,7 @@ pub mod correspondences;
 mod estimate;
 pub mod initialization;
 pub mod linear;
+pub mod minimal;
 pub mod reprojection;
 
 pub use correspondences::{Conditioning, Correspondences};
