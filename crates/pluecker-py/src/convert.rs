@@ -8,20 +8,22 @@ use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::IntoPyDict;
 
-/// One axis of an expected shape: a free length (`N` rows) or a fixed one.
-#[derive(Clone, Copy)]
-enum Axis {
-    Rows(&'static str),
+/// One axis of an expected shape: a named free length (`N` rows) or a fixed one.
+#[derive(Clone, Copy, Debug)]
+pub enum Dim {
+    Free(&'static str),
     Fixed(usize),
 }
 
-fn describe(spec: &[Axis]) -> String {
+/// An expected shape as the error messages print it: `shape (N, 2)`.
+pub fn describe(spec: &[Dim]) -> String {
     let parts: Vec<String> = spec
         .iter()
         .map(|a| match a {
-            Axis::Rows(name) => (*name).to_string(),
-            Axis::Fixed(n) => n.to_string(),
+            Dim::Free(name) => (*name).to_string(),
+            Dim::Fixed(n) => n.to_string(),
         })
         .collect();
     format!("shape {}", python_tuple(&parts))
@@ -34,14 +36,18 @@ fn python_tuple(parts: &[String]) -> String {
     }
 }
 
-fn shape_string(shape: &[usize]) -> String {
+/// A shape as Python prints it.
+pub fn shape_string(shape: &[usize]) -> String {
     python_tuple(&shape.iter().map(|n| n.to_string()).collect::<Vec<_>>())
 }
 
-/// `obj` as a float64 ndarray; a `TypeError` naming `name` if it is not an array of real numbers.
-fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+/// `obj` as a C-contiguous float64 ndarray (the array itself when it already is one); a `TypeError`
+/// naming `name` if it is not an array of real numbers.
+pub fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     if let Ok(array) = obj.downcast::<PyArrayDyn<f64>>() {
-        return Ok(array.clone());
+        if array.is_c_contiguous() {
+            return Ok(array.clone());
+        }
     }
     let np = obj.py().import("numpy")?;
     let array = np.call_method1("asarray", (obj,)).map_err(|e| {
@@ -56,18 +62,31 @@ fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, 
             "{name}: expected an array of real numbers, got dtype {dtype}"
         )));
     }
-    Ok(array
-        .call_method1("astype", ("float64",))?
+    // `asarray(order="C")` rather than `ascontiguousarray`, which would turn a 0-d input into shape (1,).
+    let kwargs = [("dtype", "float64"), ("order", "C")].into_py_dict(obj.py())?;
+    Ok(np
+        .call_method("asarray", (array,), Some(&kwargs))?
         .downcast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// The values of a float64 array in row-major order, copied as one slice when it is C-contiguous.
+pub fn row_major_values(name: &str, array: &Bound<'_, PyArrayDyn<f64>>) -> PyResult<Vec<f64>> {
+    let readonly = array
+        .try_readonly()
+        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+    Ok(match readonly.as_slice() {
+        Ok(slice) if readonly.is_c_contiguous() => slice.to_vec(),
+        _ => readonly.as_array().iter().copied().collect(),
+    })
 }
 
 /// The values of `obj` in row-major order and the number of rows, after checking that its shape is
 /// `spec` and that it is finite. A free-length array may also be given as an empty 1-D array.
-fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult<(Vec<f64>, usize)> {
+fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<f64>, usize)> {
     let (values, rows) = read_unchecked(name, obj, spec)?;
     let row_len: usize = spec[1..]
         .iter()
-        .map(|a| if let Axis::Fixed(n) = a { *n } else { 1 })
+        .map(|a| if let Dim::Fixed(n) = a { *n } else { 1 })
         .product();
     // One branch-free pass over all values (the common, finite case); the offending row only on failure.
     if !values.iter().fold(true, |finite, v| finite & v.is_finite()) {
@@ -81,42 +100,34 @@ fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult<(Vec<f64>
 }
 
 /// [`read`] without the finiteness check.
-fn read_unchecked(name: &str, obj: &Bound<'_, PyAny>, spec: &[Axis]) -> PyResult<(Vec<f64>, usize)> {
+fn read_unchecked(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<f64>, usize)> {
     let array = float_array(name, obj)?;
     let shape = array.shape().to_vec();
-    if matches!(spec[0], Axis::Rows(_)) && shape == [0] {
+    if matches!(spec[0], Dim::Free(_)) && shape == [0] {
         return Ok((Vec::new(), 0));
     }
     let fits = shape.len() == spec.len()
         && shape.iter().zip(spec).all(|(n, axis)| match axis {
-            Axis::Rows(_) => true,
-            Axis::Fixed(m) => n == m,
+            Dim::Free(_) => true,
+            Dim::Fixed(m) => n == m,
         });
     if !fits {
         return Err(shape_error(name, &describe(spec), shape_string(&shape)));
     }
-    let readonly = array
-        .try_readonly()
-        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
-    // Row-major order: a C-contiguous array (the common case) is copied as one slice.
-    let values: Vec<f64> = match readonly.as_slice() {
-        Ok(slice) if readonly.is_c_contiguous() => slice.to_vec(),
-        _ => readonly.as_array().iter().copied().collect(),
-    };
-    Ok((values, shape[0]))
+    Ok((row_major_values(name, &array)?, shape[0]))
 }
 
 /// An `(N, D)` array of points, `None` meaning zero rows.
 pub fn points<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<SVector<f64, D>>> {
     let Some(obj) = obj else { return Ok(Vec::new()) };
-    let (values, _) = read(name, obj, &[Axis::Rows("N"), Axis::Fixed(D)])?;
+    let (values, _) = read(name, obj, &[Dim::Free("N"), Dim::Fixed(D)])?;
     Ok(values.chunks(D).map(SVector::<f64, D>::from_row_slice).collect())
 }
 
 /// An `(M, 2, D)` array of segments (two endpoints each), `None` meaning zero rows.
 pub fn segments<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<[SVector<f64, D>; 2]>> {
     let Some(obj) = obj else { return Ok(Vec::new()) };
-    let (values, _) = read(name, obj, &[Axis::Rows("M"), Axis::Fixed(2), Axis::Fixed(D)])?;
+    let (values, _) = read(name, obj, &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(D)])?;
     Ok(values
         .chunks(2 * D)
         .map(|s| {
@@ -130,19 +141,19 @@ pub fn segments<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> P
 
 /// A `(3, 3)` matrix.
 pub fn matrix3(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
-    let (values, _) = read(name, obj, &[Axis::Fixed(3), Axis::Fixed(3)])?;
+    let (values, _) = read(name, obj, &[Dim::Fixed(3), Dim::Fixed(3)])?;
     Ok(Matrix3::from_row_slice(&values))
 }
 
 /// A `(3, 3)` matrix that may hold NaN or inf (for arguments whose validation reports them itself).
 pub fn matrix3_allow_non_finite(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
-    let (values, _) = read_unchecked(name, obj, &[Axis::Fixed(3), Axis::Fixed(3)])?;
+    let (values, _) = read_unchecked(name, obj, &[Dim::Fixed(3), Dim::Fixed(3)])?;
     Ok(Matrix3::from_row_slice(&values))
 }
 
 /// A `(D,)` vector.
 pub fn vector<const D: usize>(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SVector<f64, D>> {
-    let (values, _) = read(name, obj, &[Axis::Fixed(D)])?;
+    let (values, _) = read(name, obj, &[Dim::Fixed(D)])?;
     Ok(SVector::<f64, D>::from_row_slice(&values))
 }
 

@@ -7,66 +7,13 @@
 //! reported as `"x: expected shape (n, 2), got (4, 3)"`; NaN/inf checks are left to the callers,
 //! because a batch accepts NaN where a track is not visible.
 
+use crate::convert::{describe, float_array, row_major_values};
+pub use crate::convert::{shape_string, Dim};
 use crate::errors::{non_finite, shape_error};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix};
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-
-/// One axis of an expected shape: a named free length or a fixed one.
-#[derive(Clone, Copy, Debug)]
-pub enum Dim {
-    Free(&'static str),
-    Fixed(usize),
-}
-
-fn tuple(parts: &[String]) -> String {
-    match parts.len() {
-        1 => format!("({},)", parts[0]),
-        _ => format!("({})", parts.join(", ")),
-    }
-}
-
-fn describe(spec: &[Dim]) -> String {
-    let parts: Vec<String> = spec
-        .iter()
-        .map(|d| match d {
-            Dim::Free(name) => (*name).to_string(),
-            Dim::Fixed(n) => n.to_string(),
-        })
-        .collect();
-    format!("shape {}", tuple(&parts))
-}
-
-/// A shape as Python prints it.
-pub fn shape_string(shape: &[usize]) -> String {
-    tuple(&shape.iter().map(|n| n.to_string()).collect::<Vec<_>>())
-}
-
-/// `obj` as a C-contiguous float64 ndarray; `TypeError` naming `name` if it is not real numbers.
-fn float64_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    if let Ok(array) = obj.downcast::<PyArrayDyn<f64>>() {
-        if array.is_c_contiguous() {
-            return Ok(array.clone());
-        }
-    }
-    let np = obj.py().import("numpy")?;
-    let array = np.call_method1("asarray", (obj,)).map_err(|e| {
-        PyTypeError::new_err(format!(
-            "{name}: expected an array of real numbers; numpy could not convert the input: {e}"
-        ))
-    })?;
-    let dtype = array.getattr("dtype")?;
-    let kind: String = dtype.getattr("kind")?.extract()?;
-    if !matches!(kind.as_str(), "i" | "u" | "f") {
-        return Err(PyTypeError::new_err(format!(
-            "{name}: expected an array of real numbers, got dtype {dtype}"
-        )));
-    }
-    Ok(np
-        .call_method1("ascontiguousarray", (array, "float64"))?
-        .downcast_into::<PyArrayDyn<f64>>()?)
-}
 
 fn check_shape(name: &str, shape: &[usize], spec: &[Dim]) -> PyResult<()> {
     let fits = shape.len() == spec.len()
@@ -83,31 +30,17 @@ fn check_shape(name: &str, shape: &[usize], spec: &[Dim]) -> PyResult<()> {
 
 /// The shape and the row-major values of `obj`, after checking the shape against `spec`.
 pub fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<usize>, Vec<f64>)> {
-    let array = float64_array(name, obj)?;
+    let array = float_array(name, obj)?;
     let shape = array.shape().to_vec();
     check_shape(name, &shape, spec)?;
-    let readonly = array
-        .try_readonly()
-        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
-    let values = match readonly.as_slice() {
-        Ok(slice) => slice.to_vec(),
-        Err(_) => readonly.as_array().iter().copied().collect(),
-    };
-    Ok((shape, values))
+    Ok((shape, row_major_values(name, &array)?))
 }
 
 /// The shape and row-major values of `obj`, any shape (the caller dispatches on it).
 pub fn read_any(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
-    let array = float64_array(name, obj)?;
+    let array = float_array(name, obj)?;
     let shape = array.shape().to_vec();
-    let readonly = array
-        .try_readonly()
-        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
-    let values = match readonly.as_slice() {
-        Ok(slice) => slice.to_vec(),
-        Err(_) => readonly.as_array().iter().copied().collect(),
-    };
-    Ok((shape, values))
+    Ok((shape, row_major_values(name, &array)?))
 }
 
 /// A boolean mask of `shape`: a bool or integer array (non-zero is true).

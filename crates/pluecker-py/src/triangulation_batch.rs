@@ -12,6 +12,7 @@ use crate::errors::{shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, read, read_mask, shape_string, Dim};
 use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
+use crate::triangulation_batch_lines::per_observation;
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray2};
 use pluecker::triangulation::batch::{
@@ -117,21 +118,7 @@ pub fn triangulate_points(
     }
     let n = shape[0];
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
-    let covariances = match cov {
-        Some(c) => {
-            let (cshape, values) = read(
-                "cov",
-                c,
-                &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2), Dim::Fixed(2)],
-            )?;
-            if cshape[0] != n || cshape[1] != v {
-                let expected = format!("shape ({n}, {v}, 2, 2) (one per observation)");
-                return Err(shape_error("cov", &expected, shape_string(&cshape)));
-            }
-            Some(values)
-        }
-        None => None,
-    };
+    let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
     let (report, points) = solve(py, move || {
         let tracks = PointTracks {
             observations: &observations,

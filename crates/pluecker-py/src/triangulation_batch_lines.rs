@@ -225,7 +225,7 @@ impl Cameras {
 }
 
 /// `(n, v, ...)` per-observation values of `obj` (`cov`), checked against `n` tracks and `v` views.
-fn per_observation(name: &str, obj: &Bound<'_, PyAny>, n: usize, v: usize, entry: [usize; 2]) -> PyResult<Vec<f64>> {
+pub(crate) fn per_observation(name: &str, obj: &Bound<'_, PyAny>, n: usize, v: usize, entry: [usize; 2]) -> PyResult<Vec<f64>> {
     let spec = [
         Dim::Free("n"),
         Dim::Free("v"),

@@ -36,6 +36,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 import pluecker
+from pluecker.experiments import Report
 from pluecker.progress import Progress
 
 NAME = "phong-horaud-1995"
@@ -563,15 +564,6 @@ def summary_lines(summary: dict, settings: Settings, n_estimates: int, seconds: 
                  f"closer (median translation error {mm[RTT_LINES.label]:.3g} cm vs linear {mm[LINEAR.label]:.3g} cm):"
                  f" {verdict}")
     return lines
-
-
-@dataclass
-class Report:
-    out: Path
-    files: list[Path]
-    summary: dict
-    lines: list[str]
-    seconds: float
 
 
 def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed: int = 0, quick: bool = False,

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from pluecker.experiments import Report
 from pluecker.progress import Progress
 
 from . import conics, fitting, lines, points
@@ -171,15 +172,6 @@ def summary_lines(summary: dict[str, Any], seconds: float, out: Path, quick: boo
     out_lines.append(f"Figures 1-2, {fit['draws']} fits: largest KS distance from a Gaussian, line {worst['line']:.4f}, "
                      f"conic {worst['conic']:.4f}; whitened standard deviations within {white:.3f} of 1")
     return out_lines
-
-
-@dataclass
-class Report:
-    out: Path
-    files: list[Path]
-    summary: dict
-    lines: list[str]
-    seconds: float
 
 
 def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed: int = 0, quick: bool = False,
