@@ -36,16 +36,16 @@ class DataNotFoundError(FileNotFoundError):
 
 def vgg_root() -> Path:
     """Where the VGG data live: ``$PLUECKER_VGG_DATA`` if set, else ``shared/data/vgg`` beside the checkout
-    (``<repo>/../shared/data/vgg``), else beside the working directory (``./../shared/data/vgg``). The
+    (``<repo>/../shared/data/vgg``) or beside any folder above the checkout or the working directory. The
     project ships no copy of the data."""
     env = os.environ.get("PLUECKER_VGG_DATA")
     if env:
         return Path(env)
-    candidates = [Path(__file__).resolve().parents[3], Path.cwd().resolve().parent]
-    for base in candidates:
+    checkout = Path(__file__).resolve().parents[2]
+    for base in [*checkout.parents, *Path.cwd().resolve().parents]:
         if (base / "shared" / "data" / "vgg").is_dir():
             return base / "shared" / "data" / "vgg"
-    return candidates[0] / "shared" / "data" / "vgg"
+    return checkout.parent / "shared" / "data" / "vgg"
 
 
 @dataclass(frozen=True)
