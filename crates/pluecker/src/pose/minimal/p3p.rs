@@ -47,8 +47,7 @@
 use super::polynomial::{binary_quadratic_roots, cubic_real_roots};
 use nalgebra::{Matrix3, Vector3};
 
-/// A pose `(R, t)`: `x_cam = R X_world + t`, `R` a rotation, `t` in world units.
-pub type Pose = (Matrix3<f64>, Vector3<f64>);
+pub use super::Pose;
 
 /// Gauss-Newton steps on eq. 4 (the paper's implementation takes 5; each is kept only if it lowers the
 /// sum of squared residuals).
