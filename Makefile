@@ -54,6 +54,7 @@ bench: develop
 	$(BIN)/python -m pip install --quiet opencv-python-headless poselib pycolmap
 	$(BIN)/python bench/compare_pose.py
 	$(BIN)/python bench/compare_triangulation.py
+	$(BIN)/python bench/compare_robust_pose.py
 	cargo bench -p pluecker --bench pose
 	cargo bench -p pluecker --bench triangulation
 
