@@ -7,15 +7,31 @@
 //! (see [`p3p()`] for how to get them from pixels with [`crate::camera::Camera`]) and unit normals of
 //! interpretation planes for lines ([`crate::geometry::lines::interpretation_plane_normal`]).
 //!
-//! | solver    | data     | max. solutions | reference                                     |
-//! |-----------|----------|----------------|-----------------------------------------------|
-//! | [`p3p()`] | 3 points | 4              | Persson & Nordberg, *Lambda Twist*, ECCV 2018 |
+//! | solver      | data              | max. solutions | method                                 | reference                                          |
+//! |-------------|-------------------|----------------|----------------------------------------|----------------------------------------------------|
+//! | [`p3p()`]   | 3 points          | 4              | cubic + line pair (closed form)        | Persson & Nordberg, *Lambda Twist*, ECCV 2018      |
+//! | [`p2p1l()`] | 2 points + 1 line | 4              | degree-8 polynomial in `tan(β/2)`      | Ramalingam, Bouaziz & Sturm, ICRA 2011             |
+//! | [`p1p2l()`] | 1 point + 2 lines | 4              | degree-8 polynomial in `tan(β/2)`      | Ramalingam, Bouaziz & Sturm, ICRA 2011             |
+//! | [`p3l()`]   | 3 lines           | 8              | degree-8 polynomial in `tan(β/2)`      | Dhome et al., IEEE PAMI 1989; Chen, ICCV 1990      |
+//!
+//! The three solvers with lines share one kernel ([`rotation_constraints`]): the rotation from three
+//! linear constraints on `R` (one of them a line's `nᵀ R d = 0`), the translation and depths then
+//! being linear; the counts of 4 for the mixed solvers are the up-to-8 algebraic rotations less those
+//! that put a point behind the camera (see each solver's documentation).
 //!
 //! [`solve`] dispatches a sample of any mix of three [`Feature`]s to the solver for that mix.
 
+mod input;
+pub mod p1p2l;
+pub mod p2p1l;
+pub mod p3l;
 pub mod p3p;
 mod polynomial;
+pub mod rotation_constraints;
 
+pub use p1p2l::p1p2l;
+pub use p2p1l::p2p1l;
+pub use p3l::p3l;
 pub use p3p::p3p;
 
 use nalgebra::Vector3;
@@ -47,20 +63,51 @@ pub enum Feature {
 }
 
 /// Every real pose that explains the three correspondences of `sample` exactly, from the minimal solver
-/// for its mix of points and lines (in any order). Degenerate or invalid samples give an empty vector.
+/// for its mix of points and lines, in any order: [`p3p()`], [`p2p1l()`], [`p1p2l()`] or [`p3l()`], each
+/// given its points and its lines in the order they appear in `sample`. Degenerate or invalid samples
+/// give an empty vector.
 pub fn solve(sample: &[Feature; 3]) -> Vec<Pose> {
-    let mut bearings = [Vector3::zeros(); 3];
-    let mut points = [Vector3::zeros(); 3];
-    for (k, feature) in sample.iter().enumerate() {
+    let mut bearings = Vec::with_capacity(3);
+    let mut points = Vec::with_capacity(3);
+    let mut normals = Vec::with_capacity(3);
+    let mut endpoints = Vec::with_capacity(3);
+    for feature in sample {
         match *feature {
             Feature::Point { bearing, point } => {
-                bearings[k] = bearing;
-                points[k] = point;
+                bearings.push(bearing);
+                points.push(point);
             }
-            // The mixed and line-only solvers are being added (issue 4); until they land a sample with a
-            // line yields no hypothesis.
-            Feature::Line { .. } => return Vec::new(),
+            Feature::Line { normal, endpoints: e } => {
+                normals.push(normal);
+                endpoints.push(e);
+            }
         }
     }
-    p3p(&bearings, &points)
+    match normals.len() {
+        0 => p3p(
+            &[bearings[0], bearings[1], bearings[2]],
+            &[points[0], points[1], points[2]],
+        ),
+        1 => p2p1l(
+            &[bearings[0], bearings[1]],
+            &[points[0], points[1]],
+            &normals[0],
+            &endpoints[0],
+        ),
+        2 => p1p2l(
+            &bearings[0],
+            &points[0],
+            &[normals[0], normals[1]],
+            &[endpoints[0], endpoints[1]],
+        ),
+        _ => p3l(
+            &[normals[0], normals[1], normals[2]],
+            &[endpoints[0], endpoints[1], endpoints[2]],
+        ),
+    }
 }
+
+#[cfg(test)]
+mod testing;
+#[cfg(test)]
+mod tests;

@@ -1,5 +1,6 @@
 //! Small polynomial kernels shared by the minimal solvers: the real roots of a cubic and the real
-//! directions of a binary quadratic form, both in forms that avoid cancellation.
+//! directions of a binary quadratic form, both in forms that avoid cancellation, and the real roots of
+//! a polynomial of any (small) degree in a bounded interval, isolated by the roots of its derivatives.
 
 use nalgebra::Vector2;
 
@@ -69,6 +70,118 @@ pub(crate) fn cubic_real_roots(k: [f64; 4]) -> Vec<f64> {
     }
     roots.retain(|x| x.is_finite());
     roots
+}
+
+/// `Σ c[k] xᵏ` by Horner's rule (coefficients lowest degree first).
+pub(crate) fn evaluate(c: &[f64], x: f64) -> f64 {
+    c.iter().rev().fold(0.0, |acc, &ck| acc * x + ck)
+}
+
+/// The product of two polynomials (coefficients lowest degree first).
+pub(crate) fn multiply(p: &[f64], q: &[f64]) -> Vec<f64> {
+    if p.is_empty() || q.is_empty() {
+        return Vec::new();
+    }
+    let mut out = vec![0.0; p.len() + q.len() - 1];
+    for (i, &pi) in p.iter().enumerate() {
+        for (j, &qj) in q.iter().enumerate() {
+            out[i + j] += pi * qj;
+        }
+    }
+    out
+}
+
+/// Relative size of `|p(x)|` (against `Σ|cₖ|`, the bound of `|p|` on `[−1, 1]`) under which a local
+/// extremum counts as a root: a double root, or two simple roots so close that rounding of the
+/// coefficients (a few ε relative to `Σ|cₖ|` in the callers) hides their sign change. Candidates
+/// it admits that are not roots of the underlying system are rejected by the callers' verification.
+const TANGENT_TOLERANCE: f64 = 1e-11;
+
+/// The real roots in `[lo, hi]` (with `−1 ≤ lo < hi ≤ 1`) of `Σ c[k] xᵏ`, in increasing order.
+///
+/// Method: the real roots of the derivative split `[lo, hi]` into intervals on which `p` is monotone
+/// (found recursively, down to degree one), and each interval with a sign change holds exactly one
+/// root, found by bisection accelerated with Newton steps that stay inside the bracket, to full
+/// precision. This finds every simple root (unlike a companion matrix, no root is lost to a complex
+/// perturbation, and each is bracketed, so none is found twice). A local extremum whose value is
+/// within rounding of zero ([`TANGENT_TOLERANCE`]) is returned too, as a double root. The zero
+/// polynomial and non-finite coefficients give no roots.
+pub(crate) fn real_roots_in(c: &[f64], lo: f64, hi: f64) -> Vec<f64> {
+    if c.iter().any(|v| !v.is_finite()) {
+        return Vec::new();
+    }
+    let degree = match c.iter().rposition(|&v| v != 0.0) {
+        Some(d) => d,
+        None => return Vec::new(),
+    };
+    let c = &c[..=degree];
+    if degree == 0 {
+        return Vec::new();
+    }
+    if degree == 1 {
+        let x = -c[0] / c[1];
+        return if (lo..=hi).contains(&x) { vec![x] } else { Vec::new() };
+    }
+    let derivative: Vec<f64> = c.iter().enumerate().skip(1).map(|(k, &ck)| k as f64 * ck).collect();
+    let critical = real_roots_in(&derivative, lo, hi);
+    let scale: f64 = c.iter().map(|v| v.abs()).sum();
+    let mut knots = Vec::with_capacity(critical.len() + 2);
+    knots.push(lo);
+    knots.extend(critical.iter().copied());
+    knots.push(hi);
+    let mut roots: Vec<f64> = Vec::with_capacity(degree);
+    let push = |x: f64, roots: &mut Vec<f64>| {
+        if roots.last().map_or(true, |&last| x > last) {
+            roots.push(x);
+        }
+    };
+    for pair in knots.windows(2) {
+        let (a, b) = (pair[0], pair[1]);
+        let (fa, fb) = (evaluate(c, a), evaluate(c, b));
+        if fa == 0.0 {
+            push(a, &mut roots);
+        }
+        if (fa < 0.0 && fb > 0.0) || (fa > 0.0 && fb < 0.0) {
+            push(bracketed_root(c, &derivative, a, b, fa), &mut roots);
+        } else if fa != 0.0 && fb != 0.0 && critical.contains(&b) && fb.abs() <= TANGENT_TOLERANCE * scale {
+            // A tangency (no sign change on either side of this extremum is needed: a sign change on
+            // the next interval adds its own root beside it, and the callers merge duplicates).
+            push(b, &mut roots);
+        }
+    }
+    if evaluate(c, hi) == 0.0 {
+        push(hi, &mut roots);
+    }
+    roots
+}
+
+/// The root of the monotone `p` on `[a, b]` where it changes sign (`fa = p(a)`): bisection with a
+/// Newton step whenever that step stays strictly inside the current bracket.
+fn bracketed_root(c: &[f64], derivative: &[f64], mut a: f64, mut b: f64, fa: f64) -> f64 {
+    let rising = fa < 0.0;
+    let mut x = 0.5 * (a + b);
+    for _ in 0..100 {
+        let fx = evaluate(c, x);
+        if fx == 0.0 {
+            return x;
+        }
+        if (fx < 0.0) == rising {
+            a = x;
+        } else {
+            b = x;
+        }
+        let newton = x - fx / evaluate(derivative, x);
+        let next = if newton > a && newton < b {
+            newton
+        } else {
+            0.5 * (a + b)
+        };
+        if next == x || b - a <= 0.0 || !(a < next && next < b) {
+            return x;
+        }
+        x = next;
+    }
+    x
 }
 
 #[cfg(test)]
