@@ -196,6 +196,129 @@ impl OrthonormalLine {
     }
 }
 
+/// A minimal chart of the lines near a line: the chart of the line covariances of
+/// [`crate::triangulation::uncertainty`].
+///
+/// At the line through the **pivot** `p` with unit **direction** `d`, take the **axes**
+/// `e₁ = (d × a)/‖d × a‖` with `a = x̂` when `|d_x| < 0.9`, else `a = ŷ`, and `e₂ = d × e₁`, so that
+/// `(e₁, e₂, d)` is a right-handed orthonormal basis. The coordinates `δ = (α₁, α₂, t₁, t₂)` name the
+/// line through `p + t₁e₁ + t₂e₂` with direction `d + α₁e₁ + α₂e₂`:
+/// - `t₁, t₂` (world units): where the line crosses the plane through `p` normal to `d`;
+/// - `α₁, α₂` (dimensionless, radians to first order): its tilt from `d` towards `e₁`, `e₂` about
+///   that crossing point (to first order a rotation by `α₁` about `e₂` and by `α₂` about `−e₁`).
+///
+/// Every line not parallel to that plane has exactly one `δ` ([`Self::coordinates`], exact, not a
+/// first-order approximation) and `δ = 0` is the line itself; the chart is singular only for lines
+/// perpendicular to `d`. Moving the pivot along the line by `s` (`p' = p + s d`) keeps the axes and
+/// changes coordinates linearly and exactly: `t = t' − s α` ([`Self::repivot`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineChart {
+    /// `p`, a point of the line, world units.
+    pub pivot: Vector3<f64>,
+    /// `d`, the unit direction of the line.
+    pub direction: Vector3<f64>,
+    /// `e₁`, `e₂` (see the type docs).
+    pub axes: [Vector3<f64>; 2],
+}
+
+impl LineChart {
+    /// The chart of the line through `pivot` with direction `direction` (normalised here); `None`
+    /// when the direction is zero or an entry is not finite.
+    pub fn new(pivot: &Vector3<f64>, direction: &Vector3<f64>) -> Option<LineChart> {
+        let n = direction.norm();
+        if !(n > 0.0 && n.is_finite()) || !pivot.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let d = direction / n;
+        let e1 = any_orthogonal(&d);
+        Some(LineChart {
+            pivot: *pivot,
+            direction: d,
+            axes: [e1, d.cross(&e1)],
+        })
+    }
+
+    /// The chart of a line (eq. 3) pivoted at its point closest to the world origin, with the
+    /// direction of [`to_point_direction`]; `None` for a line at infinity.
+    pub fn of_line(l: &Vector6<f64>) -> Option<LineChart> {
+        let (p, d) = to_point_direction(&nearest_line(l))?;
+        LineChart::new(&p, &d)
+    }
+
+    /// The same line and axes pivoted at `pivot` (projected onto the line).
+    pub fn repivot(&self, pivot: &Vector3<f64>) -> LineChart {
+        let s = self.direction.dot(&(pivot - self.pivot));
+        LineChart {
+            pivot: self.pivot + self.direction * s,
+            ..*self
+        }
+    }
+
+    /// The line (Plücker coordinates, eq. 3, not normalised) of the coordinates `δ`.
+    pub fn line(&self, delta: &Vector4<f64>) -> Vector6<f64> {
+        let [e1, e2] = self.axes;
+        let d = self.direction + e1 * delta[0] + e2 * delta[1];
+        let p = self.pivot + e1 * delta[2] + e2 * delta[3];
+        from_point_direction(&p, &d)
+    }
+
+    /// The coordinates `δ` of a line (eq. 3; projected onto eq. 4 first): `None` when it is at
+    /// infinity or (nearly) perpendicular to the chart's direction.
+    pub fn coordinates(&self, l: &Vector6<f64>) -> Option<Vector4<f64>> {
+        let (q, d) = to_point_direction(&nearest_line(l))?;
+        let k = self.direction.dot(&d);
+        if !(k.abs() > MIN_RELATIVE_DIRECTION) {
+            return None;
+        }
+        let d = d / k;
+        let crossing = q + d * self.direction.dot(&(self.pivot - q));
+        let [e1, e2] = self.axes;
+        let t = crossing - self.pivot;
+        Some(Vector4::new(e1.dot(&d), e2.dot(&d), e1.dot(&t), e2.dot(&t)))
+    }
+
+    /// `∂𝓛/∂δ` (6x4) of [`Self::line`] at `δ = 0`: `∂d/∂α_k = e_k`, `∂m/∂α_k = p × e_k`,
+    /// `∂d/∂t_k = 0`, `∂m/∂t_k = e_k × d`.
+    pub fn tangent(&self) -> SMatrix<f64, 6, 4> {
+        let (p, d) = (self.pivot, self.direction);
+        let z = Vector3::zeros();
+        let mut t = SMatrix::<f64, 6, 4>::zeros();
+        for (k, e) in self.axes.iter().enumerate() {
+            t.set_column(k, &from_direction_moment(e, &p.cross(e)));
+            t.set_column(2 + k, &from_direction_moment(&z, &e.cross(&d)));
+        }
+        t
+    }
+
+    /// The covariance of the unit-norm Plücker coordinates `±𝓛/‖𝓛‖` (6x6, rank 4) of a line whose
+    /// chart coordinates have the covariance `cov` (4x4): `G cov Gᵀ` with
+    /// `G = (I − ûûᵀ)/‖u‖ · ∂𝓛/∂δ`, `u = 𝓛(0)` (the sign of the coordinates does not change it).
+    pub fn plucker_covariance(&self, cov: &Matrix4<f64>) -> SMatrix<f64, 6, 6> {
+        let u = self.line(&Vector4::zeros());
+        let norm = u.norm();
+        let uh = u / norm;
+        let g = (SMatrix::<f64, 6, 6>::identity() - uh * uh.transpose()) * self.tangent() / norm;
+        g * cov * g.transpose()
+    }
+
+    /// The covariance (6x6, rank 4) of `(q, d)` — the point of the line closest to the world origin
+    /// (world units) and the unit direction (the chart's sign) — of a line whose chart coordinates
+    /// have the covariance `cov`. First order: `∂d/∂α_k = e_k`, `∂d/∂t_k = 0`,
+    /// `∂q/∂α_k = −(d·p) e_k − (e_k·p) d`, `∂q/∂t_k = e_k`.
+    pub fn point_direction_covariance(&self, cov: &Matrix4<f64>) -> SMatrix<f64, 6, 6> {
+        let (p, d) = (self.pivot, self.direction);
+        let s = d.dot(&p);
+        let mut g = SMatrix::<f64, 6, 4>::zeros();
+        for (k, e) in self.axes.iter().enumerate() {
+            let dq = -e * s - d * e.dot(&p);
+            g.fixed_view_mut::<3, 1>(0, k).copy_from(&dq);
+            g.fixed_view_mut::<3, 1>(3, k).copy_from(e);
+            g.fixed_view_mut::<3, 1>(0, 2 + k).copy_from(e);
+        }
+        g * cov * g.transpose()
+    }
+}
+
 /// A unit vector orthogonal to the unit vector `v`.
 fn any_orthogonal(v: &Vector3<f64>) -> Vector3<f64> {
     let axis = if v.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
@@ -328,5 +451,64 @@ mod tests {
         let o = OrthonormalLine::from_plucker(&from_points(&Vector3::zeros(), &Vector3::new(1.0, 2.0, 3.0))).unwrap();
         assert_eq!(o.phi, 0.0);
         assert!((o.u.transpose() * o.u - Matrix3::identity()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn line_chart_round_trips_and_its_derivatives_match_central_differences() {
+        let mut rng = Rng::new(17);
+        for _ in 0..30 {
+            let l = from_points(&(random_point(&mut rng) * 3.0), &random_point(&mut rng)) * rng.uniform_in(-2.0, 2.0);
+            let chart = LineChart::of_line(&l).unwrap();
+            let [e1, e2] = chart.axes;
+            let frame = Matrix3::from_columns(&[e1, e2, chart.direction]);
+            assert!((frame.transpose() * frame - Matrix3::identity()).norm() < 1e-12 && frame.determinant() > 0.0);
+            assert!(chart.coordinates(&l).unwrap().norm() < 1e-12);
+            for _ in 0..5 {
+                let delta = Vector4::from_fn(|_, _| 0.5 * rng.normal());
+                let back = chart.coordinates(&(chart.line(&delta) * -1.7)).unwrap();
+                assert!((back - delta).norm() < 1e-10, "{back} vs {delta}");
+                // Another pivot on the line: t = t' − s α exactly.
+                let s = rng.normal() * 2.0;
+                let moved = chart.repivot(&(chart.pivot + chart.direction * s + e1 * 0.3));
+                let d2 = moved.coordinates(&chart.line(&delta)).unwrap();
+                let expected = Vector4::new(d2[0], d2[1], d2[2] - s * d2[0], d2[3] - s * d2[1]);
+                assert!((expected - delta).norm() < 1e-10);
+            }
+            let h = 1e-6;
+            let t = chart.tangent();
+            let mut g_plucker = SMatrix::<f64, 6, 4>::zeros();
+            let mut g_point_direction = SMatrix::<f64, 6, 4>::zeros();
+            let unit = |v: Vector6<f64>| {
+                let v = v.normalize();
+                if v.dot(&chart.line(&Vector4::zeros())) < 0.0 {
+                    -v
+                } else {
+                    v
+                }
+            };
+            let point_direction = |v: Vector6<f64>| {
+                let (q, d) = to_point_direction(&v).unwrap();
+                let d = if d.dot(&chart.direction) < 0.0 { -d } else { d };
+                Vector6::new(q.x, q.y, q.z, d.x, d.y, d.z)
+            };
+            for k in 0..4 {
+                let mut dk = Vector4::zeros();
+                dk[k] = h;
+                let (plus, minus) = (chart.line(&dk), chart.line(&-dk));
+                assert!(
+                    ((plus - minus) / (2.0 * h) - t.column(k)).norm() < 1e-8,
+                    "tangent column {k}"
+                );
+                g_plucker.set_column(k, &((unit(plus) - unit(minus)) / (2.0 * h)));
+                g_point_direction.set_column(k, &((point_direction(plus) - point_direction(minus)) / (2.0 * h)));
+            }
+            let a = SMatrix::<f64, 4, 4>::from_fn(|_, _| rng.normal());
+            let cov = a * a.transpose();
+            let tol = 1e-7 * (1.0 + cov.norm() * (1.0 + chart.pivot.norm_squared()));
+            assert!((chart.plucker_covariance(&cov) - g_plucker * cov * g_plucker.transpose()).norm() < tol);
+            let expected = g_point_direction * cov * g_point_direction.transpose();
+            assert!((chart.point_direction_covariance(&cov) - expected).norm() < tol);
+        }
+        assert!(LineChart::new(&Vector3::zeros(), &Vector3::zeros()).is_none());
     }
 }

@@ -87,6 +87,62 @@ pub fn conic_camera(p: &Matrix3x4<f64>) -> ConicCamera {
     })
 }
 
+/// The 9 coordinates of a dual quadric normalised so that `L₄₄ = −1` (the chart of the quadric
+/// covariances of [`crate::triangulation::uncertainty`]): `θ = (c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`
+/// with the centre `c` (world units) and the upper triangle of the symmetric **shape matrix**
+/// `S = R diag(s²) Rᵀ` (world units²; the ellipsoid is `{c + S^{1/2} u : ‖u‖ ≤ 1}`), so that
+/// `L = [S − c cᵀ, −c; −cᵀ, −1]` (module docs). A linear bijection of the 9 free entries of `L`; an
+/// off-diagonal coordinate `S_ij` moves both `S_ij` and `S_ji`.
+pub type CentreShape = SVector<f64, 9>;
+
+/// The [`CentreShape`] coordinates of a dual quadric of any scale and sign; `None` when `L₄₄ = 0` or
+/// an entry is not finite.
+pub fn centre_shape(dual: &Matrix4<f64>) -> Option<CentreShape> {
+    let q44 = dual[(3, 3)];
+    if !(q44 != 0.0 && dual.iter().all(|v| v.is_finite())) {
+        return None;
+    }
+    let q = dual / -q44;
+    let c: Vector3<f64> = -q.fixed_view::<3, 1>(0, 3).into_owned();
+    let shape: Matrix3<f64> = q.fixed_view::<3, 3>(0, 0).into_owned() + c * c.transpose();
+    let v = sym3_to_vec(&(0.5 * (shape + shape.transpose())));
+    Some(CentreShape::from_fn(|k, _| if k < 3 { c[k] } else { v[k - 3] }))
+}
+
+/// The dual quadric (`L₄₄ = −1`) of [`CentreShape`] coordinates.
+pub fn dual_of_centre_shape(theta: &CentreShape) -> Matrix4<f64> {
+    let c = Vector3::new(theta[0], theta[1], theta[2]);
+    let shape = vec_to_sym3(&Vector6::from_fn(|k, _| theta[3 + k]));
+    let mut q = Matrix4::zeros();
+    q.fixed_view_mut::<3, 3>(0, 0).copy_from(&(shape - c * c.transpose()));
+    q.fixed_view_mut::<3, 1>(0, 3).copy_from(&(-c));
+    q.fixed_view_mut::<1, 3>(3, 0).copy_from(&(-c.transpose()));
+    q[(3, 3)] = -1.0;
+    q
+}
+
+/// `∂L̃/∂θ` (10x9) of [`dual_of_centre_shape`] at a quadric with centre `c` (it does not depend on
+/// `S`): `∂L/∂c_k = −[e_k cᵀ + c e_kᵀ, e_k; e_kᵀ, 0]`, `∂L/∂S_ij` the symmetric unit matrix of `(i, j)`.
+pub fn centre_shape_tangent(c: &Vector3<f64>) -> SMatrix<f64, 10, 9> {
+    let mut t = SMatrix::<f64, 10, 9>::zeros();
+    for k in 0..3 {
+        let e = Vector3::ith(k, 1.0);
+        let mut dl = Matrix4::zeros();
+        dl.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(-(e * c.transpose() + c * e.transpose())));
+        dl.fixed_view_mut::<3, 1>(0, 3).copy_from(&(-e));
+        dl.fixed_view_mut::<1, 3>(3, 0).copy_from(&(-e.transpose()));
+        t.set_column(k, &sym4_to_vec(&dl));
+    }
+    for (k, &(i, j)) in SYM3_INDEX.iter().enumerate() {
+        let mut dl = Matrix4::zeros();
+        dl[(i, j)] = 1.0;
+        dl[(j, i)] = 1.0;
+        t.set_column(3 + k, &sym4_to_vec(&dl));
+    }
+    t
+}
+
 /// A real ellipsoid (possibly flat: a semi-axis may be 0), world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ellipsoid {
@@ -413,5 +469,25 @@ mod tests {
         for bad in [hyperbola, imaginary, parabola] {
             assert!(Ellipse::from_primal(&bad).is_none(), "{bad}");
         }
+    }
+
+    #[test]
+    fn centre_shape_chart_round_trips_and_its_tangent_matches_central_differences() {
+        let mut rng = Rng::new(23);
+        let e = random_ellipsoid(&mut rng);
+        let theta = centre_shape(&(e.dual() * -3.0)).unwrap();
+        assert!((dual_of_centre_shape(&theta) - e.dual()).norm() < 1e-12 * e.dual().norm());
+        let c = Vector3::new(theta[0], theta[1], theta[2]);
+        assert!((c - e.centre).norm() < 1e-12);
+        let t = centre_shape_tangent(&c);
+        for k in 0..9 {
+            let mut d = CentreShape::zeros();
+            d[k] = 1e-6;
+            let fd = (sym4_to_vec(&dual_of_centre_shape(&(theta + d)))
+                - sym4_to_vec(&dual_of_centre_shape(&(theta - d))))
+                / 2e-6;
+            assert!((fd - t.column(k)).norm() < 1e-8, "column {k}");
+        }
+        assert!(centre_shape(&Matrix4::zeros()).is_none());
     }
 }

@@ -20,10 +20,11 @@ use super::covariance::whitening;
 use super::point::{solve_views, PointTriangulation};
 use super::point_cost::PointView;
 use super::point_linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
+use super::uncertainty::covariance_of_information;
 use super::views::{centre, depth_normalized, validate_cameras};
 use super::{Method, Status, TriangulationOptions};
 use crate::error::{Error, Result};
-use nalgebra::{Matrix2, Matrix3x4, Matrix4, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -370,13 +371,20 @@ pub struct LinearPoints {
     pub points: Vec<f64>,
     /// The cost of eq. 19 at each point (squared whitened pixels); NaN where there is no point.
     pub costs: Vec<f64>,
+    /// Row-major `(n, 3, 3)` covariances of the points (world units², [`super::uncertainty`]); NaN
+    /// where there is no point or its covariance is `None`.
+    pub covariances: Vec<f64>,
     /// Per track: the status (`Success`, `BehindCamera` or `AtInfinity`) or why it was rejected.
     pub outcomes: Vec<Result<Status>>,
 }
 
-/// The DLT of one track with no allocation: its point and cost, or its status / error. Three
-/// passes over the views: checks and the spread of the centres, the Gram matrix, the cost.
-fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -> Result<(Vector3<f64>, f64, Status)> {
+/// One track of the linear fast path: point, cost of eq. 19, covariance, status.
+type LinearTrack = (Vector3<f64>, f64, Option<Matrix3<f64>>, Status);
+
+/// The DLT of one track with no allocation: its point, cost and covariance, or its status / error.
+/// Three passes over the views: checks and the spread of the centres, the Gram matrix, the cost and
+/// the information matrix of [`super::uncertainty::point_covariance`].
+fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -> Result<LinearTrack> {
     let visible = || visible_views(tracks.visible, v, t);
     let (mut count, mut sum, mut sum2) = (0usize, Vector3::zeros(), 0.0);
     for j in visible() {
@@ -418,16 +426,23 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
     }
     let nan = Vector3::repeat(f64::NAN);
     let LinearPoint::Finite(x) = solve_dlt(&g, &frame) else {
-        return Ok((nan, f64::NAN, Status::AtInfinity));
+        return Ok((nan, f64::NAN, None, Status::AtInfinity));
     };
-    let (mut cost, mut front) = (0.0, true);
+    let (mut cost, mut front, mut information) = (0.0, true, Matrix3::zeros());
     for j in visible() {
         let pv = view(j)?;
-        let z = pv.depth(&x);
-        cost += (pv.numerator(&x) / z).norm_squared();
-        front &= z > 0.0;
+        let (r, jacobian) = pv.residual_and_jacobian(&x);
+        cost += r.norm_squared();
+        information += jacobian.transpose() * jacobian;
+        front &= pv.depth(&x) > 0.0;
     }
-    Ok((x, cost, if front { Status::Success } else { Status::BehindCamera }))
+    let covariance = covariance_of_information(&information);
+    Ok((
+        x,
+        cost,
+        covariance,
+        if front { Status::Success } else { Status::BehindCamera },
+    ))
 }
 
 /// The linear (DLT) point of every track, in parallel, without allocating per track (module docs).
@@ -437,6 +452,7 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
     let mut out = LinearPoints {
         points: vec![f64::NAN; 3 * n],
         costs: vec![f64::NAN; n],
+        covariances: vec![f64::NAN; 9 * n],
         outcomes: Vec::with_capacity(n),
     };
     (0..n)
@@ -444,14 +460,21 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
         .with_min_len(256)
         .zip(out.points.par_chunks_mut(3))
         .zip(out.costs.par_iter_mut())
-        .map(|((t, point), cost)| match linear_track(&prepared, tracks, v, t) {
-            Ok((x, c, status)) => {
-                point.copy_from_slice(x.as_slice());
-                *cost = c;
-                Ok(status)
-            }
-            Err(e) => Err(e),
-        })
+        .zip(out.covariances.par_chunks_mut(9))
+        .map(
+            |(((t, point), cost), covariance)| match linear_track(&prepared, tracks, v, t) {
+                Ok((x, c, cov, status)) => {
+                    point.copy_from_slice(x.as_slice());
+                    *cost = c;
+                    if let Some(cov) = cov {
+                        // Symmetric: column-major storage is the row-major layout.
+                        covariance.copy_from_slice(cov.as_slice());
+                    }
+                    Ok(status)
+                }
+                Err(e) => Err(e),
+            },
+        )
         .collect_into_vec(&mut out.outcomes);
     Ok(out)
 }

@@ -27,9 +27,10 @@ use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::line_optimal::optimal_line;
 use super::line_residual::{line_view, LineFrame};
+use super::uncertainty::line_covariance;
 use super::{parse_observations, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
-use crate::geometry::plucker::{self, OrthonormalLine};
+use crate::geometry::plucker::{self, LineChart, OrthonormalLine};
 use crate::optim::{trust_region, Linearization, Objective};
 use nalgebra::{Matrix2, Matrix3x4, Matrix4, SVector, Vector2, Vector3, Vector4, Vector6};
 use std::time::Instant;
@@ -47,6 +48,17 @@ pub struct LineTriangulation {
     pub point: Vector3<f64>,
     /// Unit direction of the line, world frame (the direction `d` of [`plucker::direction_moment`]).
     pub direction: Vector3<f64>,
+    /// The chart of [`Self::covariance`]: pivot `point`, direction `direction` and the axes `e₁`, `e₂`
+    /// of [`LineChart`].
+    pub chart: LineChart,
+    /// The first-order 4x4 covariance of the line in `chart`, `(α₁, α₂, t₁, t₂)`: tilts of the
+    /// direction towards `e₁`, `e₂` (dimensionless) and the crossing point of the plane through
+    /// `point` normal to `direction` along `e₁`, `e₂` (world units); `(JᵀJ)⁻¹` with `J` the Jacobian
+    /// of the whitened residuals of eq. 18 ([`super::uncertainty`]; identity residual covariances
+    /// when none are given). Computed for every method and status; `None` when `JᵀJ` is numerically
+    /// singular (a line nearly in an epipolar plane of every pair of views). Map it with
+    /// [`LineChart::plucker_covariance`] or [`LineChart::point_direction_covariance`].
+    pub covariance: Option<Matrix4<f64>>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
 }
@@ -126,14 +138,22 @@ pub fn triangulate_line(
     let started = Instant::now();
     opts.validate()?;
     check_views(cameras, lines.len(), 2, "lines", opts.method)?;
-    let frames = parse_observations(lines, "lines", "has a zero normal (the line at infinity)", LineFrame::of_line)?;
+    let frames = parse_observations(
+        lines,
+        "lines",
+        "has a zero normal (the line at infinity)",
+        LineFrame::of_line,
+    )?;
     let problem = LineProblem {
         cameras: cameras.to_vec(),
         frames,
         whitenings: whitenings(covariances, cameras.len(), "covariances")?,
     };
     let linear = linear_line(&problem)?;
-    let mut report = Report { cost: problem.cost(&linear), ..Report::new(opts.method) };
+    let mut report = Report {
+        cost: problem.cost(&linear),
+        ..Report::new(opts.method)
+    };
     let estimate = match opts.method {
         Method::Linear => linear,
         Method::Local => {
@@ -151,20 +171,25 @@ pub fn triangulate_line(
             best
         }
     };
-    report.time_seconds = started.elapsed().as_secs_f64();
-    finish(&estimate, report)
+    let mut result = finish(&problem, &estimate, report)?;
+    result.report.time_seconds = started.elapsed().as_secs_f64();
+    Ok(result)
 }
 
-/// The result record of a world line (unit norm, point and direction).
-fn finish(line: &Vector6<f64>, report: Report) -> Result<LineTriangulation> {
+/// The result record of a world line (unit norm, point and direction) and its covariance.
+fn finish(problem: &LineProblem, line: &Vector6<f64>, report: Report) -> Result<LineTriangulation> {
     let plucker = plucker::nearest_line(line).normalize();
-    let (point, direction) = plucker::to_point_direction(&plucker).ok_or_else(|| Error::Degenerate {
+    let at_infinity = || Error::Degenerate {
         what: "the estimated line lies at infinity".into(),
-    })?;
+    };
+    let (point, direction) = plucker::to_point_direction(&plucker).ok_or_else(at_infinity)?;
+    let chart = LineChart::new(&point, &direction).ok_or_else(at_infinity)?;
     Ok(LineTriangulation {
         plucker,
         point,
         direction,
+        chart,
+        covariance: line_covariance(problem, &chart),
         report,
     })
 }

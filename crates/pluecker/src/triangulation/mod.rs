@@ -33,6 +33,7 @@ pub mod quadric_batch;
 pub mod quadric_optimal;
 pub mod quadric_residual;
 pub mod scenes;
+pub mod uncertainty;
 pub mod views;
 
 use crate::error::{Error, Result};

@@ -35,11 +35,12 @@ use super::point_chart::{Chart, ChartKind};
 use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use super::point_global::{global_point, GlobalSettings, GlobalStatus, COST_FLOOR, DEFAULT_RELAXATION};
 use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
+use super::uncertainty::point_covariance;
 use super::views::{baseline, centre, depth_normalized, validate_cameras};
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::optim::{trust_region, Termination};
-use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
 
 /// Centres closer than this, relative to their distance from the origin (at least 1), coincide.
@@ -58,6 +59,11 @@ const FARTHEST_ORIGIN: f64 = 1e3;
 pub struct PointTriangulation {
     /// The point, world coordinates (NaN when the status is [`Status::AtInfinity`]).
     pub point: Vector3<f64>,
+    /// The first-order 3x3 covariance of `point` (world units², [`super::uncertainty`]): `(JᵀJ)⁻¹`
+    /// with `J` the Jacobian of the whitened residuals of eq. 18 at `point` (1 px isotropic noise per
+    /// view without covariances). Computed for every method and status whenever `point` is finite;
+    /// `None` when it is not, or when `JᵀJ` is numerically singular (a point at or near infinity).
+    pub covariance: Option<Matrix3<f64>>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
 }
@@ -132,8 +138,13 @@ pub(crate) fn solve_views(
     let linear = linear_point(views, frame);
     let mut report = Report::new(opts.method);
     let finish = |point: Vector3<f64>, mut report: Report| {
+        let covariance = point_covariance(views, &point);
         report.time_seconds = started.elapsed().as_secs_f64();
-        PointTriangulation { point, report }
+        PointTriangulation {
+            point,
+            covariance,
+            report,
+        }
     };
     if opts.method == Method::Linear {
         return match linear {

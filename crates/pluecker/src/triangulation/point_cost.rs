@@ -60,6 +60,13 @@ impl PointView {
     pub fn residual(&self, x: &Vector3<f64>) -> Vector2<f64> {
         self.numerator(x) / self.depth(x)
     }
+
+    /// The whitened residual and its Jacobian `∂r/∂X = (A − r cᵀ)/z` (module docs), at depth `z ≠ 0`.
+    pub fn residual_and_jacobian(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix2x3<f64>) {
+        let z = self.depth(x);
+        let r = self.numerator(x) / z;
+        (r, (self.a() - r * self.c().transpose()) / z)
+    }
 }
 
 /// The views of one track: depth-normalised cameras (see [`super::views::depth_normalized`]),
@@ -118,9 +125,7 @@ impl Objective<3> for PointObjective<'_> {
             gauss_newton: Matrix3::zeros(),
         };
         for v in self.views {
-            let z = v.depth(x);
-            let r = v.numerator(x) / z;
-            let j = (v.a() - r * v.c().transpose()) / z;
+            let (r, j) = v.residual_and_jacobian(x);
             lin.cost += 0.5 * r.norm_squared();
             lin.gradient += j.transpose() * r;
             lin.gauss_newton += j.transpose() * j;

@@ -29,6 +29,7 @@ use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::quadric_optimal::optimal_quadric;
 use super::quadric_residual::{quadric_view, ConicFrame};
+use super::uncertainty::{quadric_covariance, QuadricCovariance};
 use super::{parse_observations, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
@@ -52,6 +53,14 @@ pub struct QuadricTriangulation {
     pub semi_axes: Vector3<f64>,
     /// Unit axes as columns, in the order of `semi_axes`.
     pub axes: Matrix3<f64>,
+    /// The first-order 9x9 covariance of the ellipsoid in the [`crate::geometry::quadric::CentreShape`]
+    /// chart `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`: centre (world units) and upper triangle of
+    /// the shape matrix `S = axes diag(semi_axes²) axesᵀ` (world units²), so that `dual` is
+    /// `[S − c cᵀ, −c; −cᵀ, −1]`. `(JᵀJ)⁻¹` with `J` the Jacobian of the whitened residuals of eq. 18
+    /// ([`super::uncertainty`]; identity residual covariances when none are given). Computed for every
+    /// method and status with a finite estimate; `None` when `JᵀJ` is numerically singular. For a flat
+    /// estimate it ignores the constraint `S ⪰ 0` (see [`super::uncertainty`]).
+    pub covariance: Option<QuadricCovariance>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
 }
@@ -146,8 +155,9 @@ pub fn triangulate_quadric(
             best
         }
     };
-    report.time_seconds = started.elapsed().as_secs_f64();
-    Ok(finish(&problem, &estimate, report))
+    let mut result = finish(&problem, &estimate, report);
+    result.report.time_seconds = started.elapsed().as_secs_f64();
+    Ok(result)
 }
 
 /// The result record of an ellipsoid; sets [`Status::BehindCamera`] when it is not entirely in front
@@ -168,6 +178,7 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
         centre: e.centre,
         semi_axes: e.semi_axes,
         axes: e.axes,
+        covariance: quadric_covariance(problem, e),
         report,
     }
 }

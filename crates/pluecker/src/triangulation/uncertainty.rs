@@ -1,0 +1,147 @@
+//! First-order covariance of a triangulated point, line or quadric, propagated from the covariances of
+//! the observations (Josephson & Kahl 2008, eqs. 17-19).
+//!
+//! **What is computed.** Observation `i` has the covariance `Σᵢ` of its residual `rᵢ` of eq. 17: 2x2
+//! pixels² for a point, 2x2 for an image line and 5x5 for a conic (in the units of
+//! [`super::line_residual`] / [`super::quadric_residual`], e.g. from [`super::fitting`]). Its whitening
+//! `Lᵢ` (eq. 18, `LᵢᵀLᵢ = Σᵢ⁻¹`) makes the stacked whitened residuals `ρ = (L₁r₁, …, Lₙrₙ)` of identity
+//! covariance. At the returned estimate `θ̂`, with a minimal chart `δ ↦ θ(δ)`, `θ(0) = θ̂`, and
+//! `J = ∂ρ/∂δ` at `δ = 0`, the covariance of the estimate in the chart is the first-order
+//!
+//! `Σ_δ = (JᵀJ)⁻¹`,
+//!
+//! the inverse of the Gauss-Newton Hessian of `½` eq. 19. The given covariances carry the scale: the
+//! result is not rescaled by the cost reached (no a-posteriori variance factor). **Without
+//! covariances** every `Σᵢ = I`: 1 px isotropic noise for points; for lines 1 px of offset and
+//! `1/D` rad (`D` = [`super::line_residual::LINE_FRAME_DISTANCE`]) of angle; for conics unit variance
+//! on each of the 5 residual entries (px² and px) — give covariances for lines and conics. It is
+//! evaluated at whatever estimate the method returned: for `linear` that is the maximum-likelihood
+//! covariance at the linear answer, not the covariance of the linear estimator itself. First-order
+//! theory holds while the noise moves the estimate little compared with the curvature of the
+//! problem: a point at low parallax gets a large, correct covariance, but its estimates are skewed
+//! along the ray (an `O(σ²)` bias) once the depth error is a sizeable fraction of the depth.
+//!
+//! **Charts** (the order of the rows and columns):
+//! - point: `X` itself, 3x3, world units²;
+//! - line: [`LineChart`] `(α₁, α₂, t₁, t₂)` pivoted at the point of the line closest to the world
+//!   origin, 4x4 (`α` dimensionless, `t` world units); [`LineChart::plucker_covariance`] and
+//!   [`LineChart::point_direction_covariance`] map it to 6x6 forms;
+//! - quadric: [`CentreShape`] `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`, 9x9 (world units, units²):
+//!   the ellipsoid is estimated as a real ellipsoid (9 dof); this chart of the normalised dual quadric
+//!   stays regular for spheres and spheroids (where axes and semi-axes are not), and for flat ones.
+//!   For a flat estimate (a semi-axis 0) the estimate lies on the boundary `S ⪰ 0` of the set searched,
+//!   and the covariance is that of the unconstrained quadric: an upper bound in the flat direction.
+//!
+//! **`None`** when the estimate is not finite or when `JᵀJ` — in a chart scaled to the primitive
+//! (lines: translations in units of the distance to the cameras; quadrics: units of the ellipsoid's
+//! size) — is numerically singular: not positive definite, or `‖H‖_F ‖H⁻¹‖_F >` [`MAX_CONDITION`]
+//! (the smallest eigenvalue would keep fewer than about 4 significant digits). The data then do not
+//! determine some direction of the chart to first order: a point at infinity (parallel rays, or a
+//! parallax below about 1e-6 rad, as `‖H‖‖H⁻¹‖` grows like 1/parallax²), a line in an epipolar plane of
+//! every pair of views, a quadric seen by cameras that leave a family of quadrics tangent to every cone.
+
+use super::conditioning::Similarity;
+use super::fraction;
+use super::line::LineProblem;
+use super::point_cost::{PointObjective, PointView};
+use super::quadric::{transform_dual, QuadricProblem};
+use crate::geometry::plucker::LineChart;
+use crate::geometry::quadric::{
+    centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, CentreShape, Ellipsoid,
+};
+use crate::optim::Objective;
+use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
+
+/// Largest accepted `‖H‖_F ‖H⁻¹‖_F` of an information matrix `H = JᵀJ` (between the 2-norm condition
+/// number and `N` times it).
+pub const MAX_CONDITION: f64 = 1e12;
+
+/// The 9x9 covariance of a quadric in the [`CentreShape`] chart.
+pub type QuadricCovariance = SMatrix<f64, 9, 9>;
+
+/// `H⁻¹` for a symmetric information matrix `H = JᵀJ`, or `None` when it is not finite, not positive
+/// definite, or `‖H‖_F ‖H⁻¹‖_F > MAX_CONDITION` (module docs). The result is symmetrised.
+pub fn covariance_of_information<const N: usize>(info: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
+    if !info.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let inverse = info.cholesky()?.inverse();
+    let condition = info.norm() * inverse.norm();
+    (condition.is_finite() && condition <= MAX_CONDITION).then(|| 0.5 * (inverse + inverse.transpose()))
+}
+
+/// The 3x3 covariance of a point `x` (world units²) seen in `views` (module docs): `(Σ BᵢᵀBᵢ)⁻¹` with
+/// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18 ([`super::point_cost`]).
+pub fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
+    if !x.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    covariance_of_information(&PointObjective { views }.linearize(x).gauss_newton)
+}
+
+/// The 4x4 covariance of a line in `chart` (pivoted anywhere on the line; module docs). Computed in
+/// the chart pivoted at the point of the line closest to the centroid of the camera centres, in a
+/// frame whose unit is its distance `ρ` from them ([`LineProblem::foot`]), then moved to `chart`'s
+/// pivot exactly: from `δ' = (α, t')` there, `δ = (α, ρ t' − s α)` with `s` the signed distance
+/// along the line from `chart`'s pivot to that point ([`LineChart::repivot`]).
+pub(crate) fn line_covariance(problem: &LineProblem, chart: &LineChart) -> Option<Matrix4<f64>> {
+    let world_line = chart.line(&Vector4::zeros());
+    if !world_line.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let (foot, rho) = problem.foot(&world_line);
+    let near = chart.repivot(&foot);
+    let sim = Similarity::around(near.pivot, rho);
+    // The frame only translates and scales: the pivot is its origin, the axes are unchanged.
+    let framed = LineChart {
+        pivot: Vector3::zeros(),
+        ..near
+    };
+    let views = problem.views(&sim);
+    let info = fraction::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
+    let framed_cov = covariance_of_information(&info)?;
+    let s = chart.direction.dot(&(near.pivot - chart.pivot));
+    let mut m = Matrix4::identity();
+    m[(2, 2)] = rho;
+    m[(3, 3)] = rho;
+    m[(2, 0)] = -s;
+    m[(3, 1)] = -s;
+    Some(m * framed_cov * m.transpose())
+}
+
+/// The 9x9 covariance of an ellipsoid in the [`CentreShape`] chart (module docs), computed in the
+/// frame of [`QuadricProblem::frame_of`] (origin at the centre, unit the largest semi-axis) and
+/// scaled back: centre entries by that unit, shape entries by its square.
+pub(crate) fn quadric_covariance(problem: &QuadricProblem, e: &Ellipsoid) -> Option<QuadricCovariance> {
+    let dual = e.dual();
+    if !dual.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let sim = problem.frame_of(e);
+    let framed: CentreShape = centre_shape(&transform_dual(&sim.matrix(), &dual))?;
+    let views = problem.views(&sim);
+    let tangent = centre_shape_tangent(&Vector3::new(framed[0], framed[1], framed[2]));
+    let info = fraction::linearize(&views, &sym4_to_vec(&dual_of_centre_shape(&framed)), &tangent).gauss_newton;
+    let framed_cov = covariance_of_information(&info)?;
+    let unit = 1.0 / sim.scale;
+    let d = CentreShape::from_fn(|k, _| if k < 3 { unit } else { unit * unit });
+    Some(QuadricCovariance::from_diagonal(&d) * framed_cov * QuadricCovariance::from_diagonal(&d))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix2;
+
+    #[test]
+    fn information_inverse_is_checked() {
+        let h = Matrix2::new(4.0, 1.0, 1.0, 3.0);
+        let c = covariance_of_information(&h).unwrap();
+        assert!((c * h - Matrix2::identity()).norm() < 1e-14);
+        assert!(covariance_of_information(&Matrix2::new(1.0, 1.0, 1.0, 1.0)).is_none());
+        assert!(covariance_of_information(&Matrix2::new(1.0, 0.0, 0.0, 1e-13)).is_none());
+        assert!(covariance_of_information(&Matrix2::new(1.0, 0.0, 0.0, 1e-11)).is_some());
+        assert!(covariance_of_information(&Matrix2::new(f64::NAN, 0.0, 0.0, 1.0)).is_none());
+        assert!(covariance_of_information(&Matrix2::new(-1.0, 0.0, 0.0, 1.0)).is_none());
+    }
+}
