@@ -35,4 +35,7 @@ pub mod triangulation;
 
 pub use camera::Camera;
 pub use error::{Error, Result};
-pub use pose::{estimate_pose, Correspondences, Method, PoseOptions, PoseResult, Status};
+pub use pose::{
+    estimate_pose, Correspondences, CovarianceSource, Method, PoseOptions, PoseResult, RansacOptions, RansacReport,
+    RansacStop, Status,
+};

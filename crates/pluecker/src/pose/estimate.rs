@@ -4,19 +4,27 @@ use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::reprojection::{count_behind, Pose, ReprojectionCost};
-use super::{Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
+use super::reprojection::{count_behind, covariance_from_information, Pose, ReprojectionCost};
+use super::robust::RansacReport;
+use super::{CovarianceSource, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, rotation_distance};
 use crate::optim::{
-    levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions,
+    levenberg_marquardt, newton, trust_region, Linearization, Objective, Subproblem, Summary, Termination,
+    TrustRegionOptions,
 };
-use nalgebra::{Matrix3, SVector, Vector3, Vector4};
+use nalgebra::{Matrix3, Matrix6, SVector, Vector3, Vector4};
 use std::time::Instant;
 
-fn stage(name: &str, cost_kind: &'static str, pose: &Pose, summary: &Summary, started: Instant) -> StageReport {
+pub(super) fn stage(
+    name: &str,
+    cost_kind: &'static str,
+    pose: &Pose,
+    summary: &Summary,
+    started: Instant,
+) -> StageReport {
     StageReport {
         name: name.into(),
         cost_kind,
@@ -381,7 +389,7 @@ pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts
 }
 
 /// [`refine_pose`] on correspondences already conditioned by `cond`.
-fn refine_conditioned(
+pub(super) fn refine_conditioned(
     cond: &Conditioning,
     cost: &ReprojectionCost<'_>,
     initial: &Pose,
@@ -406,6 +414,9 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let started = Instant::now();
     camera.validate()?;
     opts.validate()?;
+    if let Some(robust) = &opts.robust {
+        return super::robust::pipeline::estimate_robust(camera, corr, opts, robust, started);
+    }
     let prepared = Prepared::new(corr, corr.validated(opts.method)?, opts);
     let mut tr = opts.trust_region;
     if opts.refine {
@@ -440,39 +451,92 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         pose = refined;
         stages.push(report);
     }
+    Ok(finish(
+        camera,
+        opts,
+        started,
+        Finished {
+            pose,
+            stages,
+            valid,
+            estimated_camera,
+            used: corr,
+            status: None,
+            inliers: None,
+            ransac: None,
+        },
+    ))
+}
+
+/// The end of a pipeline run, before the result is assembled.
+pub(super) struct Finished<'c> {
+    /// The returned pose, world frame (NaN if the solver failed).
+    pub pose: Pose,
+    /// Stage reports in order; the last one gave `pose`.
+    pub stages: Vec<StageReport>,
+    /// False when the estimator's answer is not a plausible pose (see [`Estimate::valid`]).
+    pub valid: bool,
+    /// Intrinsics estimated by the linear method.
+    pub estimated_camera: Option<Camera>,
+    /// The correspondences the pose was fitted to (world frame): all of them, or the inliers.
+    pub used: &'c Correspondences,
+    /// A status decided by the caller (robust failures), overriding the stage-based one.
+    pub status: Option<Status>,
+    /// Inlier masks (points, lines) when robust; `None`: all used.
+    pub inliers: Option<(Vec<bool>, Vec<bool>)>,
+    /// The robust loop's report.
+    pub ransac: Option<RansacReport>,
+}
+
+/// The status, the reprojection error, the covariance and the rotation forms of a finished run.
+pub(super) fn finish(camera: &Camera, opts: &PoseOptions, started: Instant, run: Finished<'_>) -> PoseResult {
+    let Finished {
+        pose,
+        stages,
+        valid,
+        estimated_camera,
+        used,
+        status,
+        inliers,
+        ransac,
+    } = run;
     let last = stages.last().expect("at least one stage").clone();
+    let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
     let behind = if finite {
-        count_behind(object_points(corr).copied(), &pose)
+        count_behind(object_points(used).copied(), &pose)
     } else {
         0
     };
-    let status = if !finite
-        || stages
-            .iter()
-            .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost))
-    {
-        Status::NumericalFailure
-    } else if !opts.refine && !valid && behind == 0 {
-        // The algebraic answer is far from a rigid motion (e.g. a stop at r = 0).
-        Status::NumericalFailure
-    } else if stages.iter().any(|s| !s.termination.converged()) {
-        Status::NotConverged
-    } else if behind > 0 {
-        Status::PointsBehindCamera
+    let status = status.unwrap_or(
+        if !finite
+            || stages
+                .iter()
+                .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost))
+        {
+            Status::NumericalFailure
+        } else if !opts.refine && !valid && behind == 0 {
+            // The algebraic answer is far from a rigid motion (e.g. a stop at r = 0).
+            Status::NumericalFailure
+        } else if stages.iter().any(|s| !s.termination.converged()) {
+            Status::NotConverged
+        } else if behind > 0 {
+            Status::PointsBehindCamera
+        } else {
+            Status::Success
+        },
+    );
+    let residual_count = 2 * (used.n_points() + used.n_lines());
+    // One linearisation at the returned pose gives the reprojection error and `JᵀJ`.
+    // The refinement uses the given camera; the linear method alone is judged at its own intrinsics.
+    let model = if opts.refine {
+        *camera
     } else {
-        Status::Success
+        estimated_camera.unwrap_or(*camera)
     };
-    let residual_count = 2 * (corr.n_points() + corr.n_lines());
-    let reprojection_cost = if !finite {
-        f64::NAN
-    } else if opts.refine {
-        // The refinement's cost is the reprojection error at the returned pose (in the conditioned
-        // frame, which leaves pixel residuals unchanged).
-        last.final_cost
-    } else {
-        ReprojectionCost::of(&estimated_camera.unwrap_or(*camera), corr).cost(&pose)
-    };
+    let linearization = finite.then(|| ReprojectionCost::of(&model, used).linearize(&pose));
+    let reprojection_cost = linearization.as_ref().map_or(f64::NAN, |l| l.cost);
     let rms_error_px = (2.0 * reprojection_cost / residual_count.max(1) as f64).sqrt();
+    let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);
     let (dual_quaternion, axis, angle) = if finite {
         let q = DualQuaternion::from_rotation_translation(&pose.0, &pose.1);
         let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.0));
@@ -485,7 +549,9 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             f64::NAN,
         )
     };
-    Ok(PoseResult {
+    let (inliers_points, inliers_lines) =
+        inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
+    PoseResult {
         rotation: pose.0,
         translation: pose.1,
         dual_quaternion,
@@ -500,5 +566,35 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         time_seconds: started.elapsed().as_secs_f64(),
         stages,
         estimated_camera,
-    })
+        inliers_points,
+        inliers_lines,
+        ransac,
+        covariance,
+        covariance_source,
+        sigma_px,
+    }
+}
+
+/// `σ² (JᵀJ)⁻¹` with `σ` given or estimated as `σ̂² = Σ r² / (m − 6)` (`Σ r² = 2 × cost`).
+fn covariance(
+    linearization: Option<&Linearization<6>>,
+    residual_count: usize,
+    given: Option<f64>,
+) -> (Option<Matrix6<f64>>, Option<CovarianceSource>, Option<f64>) {
+    let Some(lin) = linearization else {
+        return (None, None, given);
+    };
+    let (sigma, source) = match given {
+        Some(sigma) => (Some(sigma), CovarianceSource::Given),
+        None if residual_count > 6 => (
+            Some((2.0 * lin.cost / (residual_count - 6) as f64).sqrt()),
+            CovarianceSource::Estimated,
+        ),
+        None => (None, CovarianceSource::Estimated),
+    };
+    let cov = sigma
+        .filter(|s| s.is_finite())
+        .and_then(|s| covariance_from_information(&lin.gauss_newton, s));
+    let source = cov.is_some().then_some(source);
+    (cov, source, sigma)
 }

@@ -11,16 +11,18 @@ pub mod initialization;
 pub mod linear;
 pub mod minimal;
 pub mod reprojection;
+pub mod robust;
 
 pub use correspondences::{Conditioning, Correspondences};
 pub use estimate::{algebraic_stage, estimate_pose, refine_pose, Estimate};
+pub use robust::{RansacOptions, RansacReport, RansacStop};
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
 use crate::optim::{StoppingCriteria, Termination, TrustRegionOptions};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix6, Vector3};
 
 /// The estimators. All of them accept points, lines, or both (the linear one uses points only).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -111,6 +113,14 @@ pub struct PoseOptions {
     /// short step is taken, and Gauss-Newton's next one on a small-residual problem would be shorter
     /// still by about the ratio of noise to signal.
     pub refinement: TrustRegionOptions,
+    /// Robust estimation: `Some` runs LO-RANSAC over points and lines ([`robust`]) instead of `method`'s
+    /// estimator, then the reprojection refinement (when `refine`) on the final inliers. The minimal
+    /// solvers generate the hypotheses, so `method` is not used (it is echoed in the result). Default
+    /// `None`: every correspondence is an inlier.
+    pub robust: Option<RansacOptions>,
+    /// Standard deviation of the pixel noise on every image point and segment endpoint, for
+    /// [`PoseResult::covariance`]. `None` estimates it from the residuals. Default `None`.
+    pub sigma_px: Option<f64>,
 }
 
 /// The algebraic stage's step tolerance (in the units of the dual quaternion `x = (r, s)`, conditioned
@@ -143,6 +153,8 @@ impl Default for PoseOptions {
                 ..StoppingCriteria::default()
             },
             refinement,
+            robust: None,
+            sigma_px: None,
         }
     }
 }
@@ -170,6 +182,14 @@ impl PoseOptions {
                 return bad(name, "hessian_shift must be ≥ 0");
             }
         }
+        if let Some(sigma) = self.sigma_px {
+            if !(sigma.is_finite() && sigma > 0.0) {
+                return bad("sigma_px", "must be a positive finite number of pixels");
+            }
+        }
+        if let Some(robust) = &self.robust {
+            robust.validate()?;
+        }
         if let Some((r, t)) = &self.initial_pose {
             if r.iter().chain(t.iter()).any(|v| !v.is_finite())
                 || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
@@ -194,8 +214,17 @@ pub enum Status {
     NotConverged,
     /// The solver failed numerically (singular Hessian, non-finite cost); the pose is the last iterate.
     NumericalFailure,
-    /// Some object points or line endpoints are behind the camera at the returned pose.
+    /// Some object points or line endpoints are behind the camera at the returned pose (robust: of
+    /// the inliers).
     PointsBehindCamera,
+    /// Robust estimation only: the best model has fewer than [`RansacOptions::min_inliers`] inliers
+    /// (e.g. all-outlier data, or thresholds too tight for the noise); the pose is that model's,
+    /// unrefined, and should not be used.
+    TooFewInliers,
+    /// Robust estimation only: no sample gave a pose in front of the camera — every sample was
+    /// degenerate (collinear points, parallel lines, ...) or no mix of the data has a minimal solver
+    /// (see [`RansacReport::stop`]). The pose is NaN.
+    NoHypothesis,
 }
 
 impl Status {
@@ -206,6 +235,8 @@ impl Status {
             Status::NotConverged => "not_converged",
             Status::NumericalFailure => "numerical_failure",
             Status::PointsBehindCamera => "points_behind_camera",
+            Status::TooFewInliers => "too_few_inliers",
+            Status::NoHypothesis => "no_hypothesis",
         }
     }
 }
@@ -265,4 +296,45 @@ pub struct PoseResult {
     pub stages: Vec<StageReport>,
     /// Intrinsics estimated by the linear method (`None` for the others).
     pub estimated_camera: Option<Camera>,
+    /// Which points were used for the returned pose: the final inliers when robust, else all true.
+    pub inliers_points: Vec<bool>,
+    /// Which lines were used for the returned pose: the final inliers when robust, else all true.
+    pub inliers_lines: Vec<bool>,
+    /// What the robust loop did (`None` unless [`PoseOptions::robust`]).
+    pub ransac: Option<RansacReport>,
+    /// Covariance of the pose, 6x6: `σ² (JᵀJ)⁻¹` at the returned pose, `J` the Jacobian of the
+    /// reprojection residuals of the used correspondences (the inliers when robust; two per point, two
+    /// per line) with respect to `(ω, t)` — the rotation as the tangent vector `ω` of `exp(ω) R`
+    /// (radians, camera frame), then the translation (world units). The first-order (Cramér-Rao)
+    /// covariance of the maximum-likelihood pose, meaningful after the refinement. `σ` is
+    /// [`PoseOptions::sigma_px`] or, without it, estimated (see [`PoseResult::sigma_px`]). `None` when
+    /// `JᵀJ` is singular (the used data do not fix the pose: see
+    /// [`reprojection::RELATIVE_RANK_TOLERANCE`]) or not finite, when σ cannot be estimated (at most 6
+    /// residuals), or when the pose is not finite. For `linear`, at the estimated intrinsics taken as
+    /// exact.
+    pub covariance: Option<Matrix6<f64>>,
+    /// Where the `σ` of [`PoseResult::covariance`] came from; `None` when there is no covariance.
+    pub covariance_source: Option<CovarianceSource>,
+    /// The pixel noise `σ` used: the given [`PoseOptions::sigma_px`], or the estimate
+    /// `σ̂ = √(Σ r² / (m − 6))` over the `m` residuals of the used correspondences (`None` if `m ≤ 6`).
+    pub sigma_px: Option<f64>,
+}
+
+/// Origin of the pixel noise level in [`PoseResult::covariance`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CovarianceSource {
+    /// [`PoseOptions::sigma_px`] was given.
+    Given,
+    /// Estimated from the residuals: `σ̂² = Σ r² / (m − 6)`.
+    Estimated,
+}
+
+impl CovarianceSource {
+    /// `"given"` or `"estimated"`.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            CovarianceSource::Given => "given",
+            CovarianceSource::Estimated => "estimated",
+        }
+    }
 }

@@ -329,7 +329,13 @@ pub const RELATIVE_RANK_TOLERANCE: f64 = 1e-12;
 /// symmetrised. At the true pose this is the Cramér-Rao bound for unbiased estimators. `None` if `JᵀJ`
 /// is not finite or is singular (smallest eigenvalue ≤ [`RELATIVE_RANK_TOLERANCE`] × largest).
 pub fn pose_covariance(cost: &ReprojectionCost<'_>, pose: &Pose, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
-    let information = cost.information(pose);
+    covariance_from_information(&cost.information(pose), sigma_px)
+}
+
+/// `σ² (JᵀJ)⁻¹`, symmetrised, from the normal matrix `information = JᵀJ` (see [`pose_covariance`]);
+/// `None` when it is not finite or singular (smallest eigenvalue ≤ [`RELATIVE_RANK_TOLERANCE`] ×
+/// largest).
+pub fn covariance_from_information(information: &SMatrix<f64, 6, 6>, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
     if information.iter().any(|v| !v.is_finite()) {
         return None;
     }

@@ -1,0 +1,325 @@
+//! Robust pose from points and lines with outliers: LO-RANSAC (Chum, Matas & Kittler 2003) with MSAC
+//! scoring (Torr & Zisserman 2000).
+//!
+//! Each iteration draws a minimal sample of three correspondences, points and lines together
+//! ([`sampler`]), solves it with [`crate::pose::minimal::solve`] (P3P today; the mixed and line-only
+//! solvers as they exist), and scores every pose it returns whose sample lies in front of the camera by
+//! the truncated squared reprojection error ([`scoring`]: `½ Σ min(eᵢ², τᵢ²)`, points in pixels, lines
+//! as the RMS of the two endpoint-to-projected-line distances in pixels, with separate thresholds).
+//! Scoring stops early as soon as a hypothesis cannot beat the best one.
+//!
+//! When a hypothesis beats the best model, *local optimisation* re-fits it: the reprojection error of
+//! its inliers is minimised by the trust region of the refinement (at most
+//! [`RansacOptions::local_iterations`] iterations), the result re-scored, and repeated on the new
+//! inliers while the score improves (at most [`LOCAL_ROUNDS`] rounds). The loop stops when the number of
+//! samples reaches the adaptive bound of [`sampler`] for [`RansacOptions::confidence`], the iteration
+//! cap, or the time budget. The caller ([`crate::pose::estimate_pose`]) then refines the best model on
+//! its inliers with the full reprojection refinement.
+//!
+//! Conventions: `x_cam = R X + t` in the frame of the correspondences given (the pipeline passes its
+//! centred, unit-scale frame); pixel errors do not depend on that frame.
+
+pub(crate) mod pipeline;
+pub(crate) mod sampler;
+pub(crate) mod scoring;
+
+use super::correspondences::Correspondences;
+use super::minimal::solve;
+use super::reprojection::{Pose, ReprojectionCost};
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
+use crate::rng::Rng;
+use sampler::{solvable, Sampler};
+use scoring::{subset, Prepared, Thresholds};
+use std::time::{Duration, Instant};
+
+/// Options of the robust estimator (`PoseOptions::robust`). Every field has a documented default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RansacOptions {
+    /// Inlier threshold of a point: the reprojection distance in pixels. Default `4.0`.
+    pub point_threshold: f64,
+    /// Inlier threshold of a line: the RMS of the distances of its two observed segment endpoints to
+    /// the projected 3-D line, pixels. Default `4.0`.
+    pub line_threshold: f64,
+    /// Probability of having drawn at least one all-inlier sample when the loop stops on its adaptive
+    /// bound (see [`sampler`]). In `(0, 1)`. Default `0.9999`.
+    pub confidence: f64,
+    /// Cap on the number of samples drawn. ≥ 1. Default `100_000`.
+    pub max_iterations: usize,
+    /// Minimum number of samples drawn before the adaptive bound may stop the loop. Default `0`.
+    pub min_iterations: usize,
+    /// Wall-time budget of the sampling loop (checked every iteration); `None`: no budget. Default
+    /// `None` (the iteration cap bounds the loop).
+    pub time_budget: Option<Duration>,
+    /// Seed of the sampler ([`Rng`]): the same seed and data give the same result. Default `0`.
+    pub seed: u64,
+    /// Iteration cap of each trust-region run of the local optimisation. 0 disables it. Default `10`.
+    pub local_iterations: usize,
+    /// Fewest inliers a model needs to be accepted; with fewer the status is `TooFewInliers`. At least
+    /// 3 (a sample's worth); fewer than this many correspondences in all is an error. Default `6`:
+    /// random outliers support a wrong model of a 3-correspondence sample by at most one or two
+    /// chance agreements (at 4 px in a 640 x 480 image each falls within threshold with probability
+    /// about 2e-4).
+    pub min_inliers: usize,
+}
+
+/// At most this many local-optimisation rounds per new best model (each: inliers → re-fit → re-score).
+pub const LOCAL_ROUNDS: usize = 3;
+
+impl Default for RansacOptions {
+    fn default() -> Self {
+        RansacOptions {
+            point_threshold: 4.0,
+            line_threshold: 4.0,
+            confidence: 0.9999,
+            max_iterations: 100_000,
+            min_iterations: 0,
+            time_budget: None,
+            seed: 0,
+            local_iterations: 10,
+            min_inliers: 6,
+        }
+    }
+}
+
+impl RansacOptions {
+    /// Checks the ranges stated on each field.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, reason: String| {
+            Err(Error::InvalidOption {
+                name: name.into(),
+                reason,
+            })
+        };
+        for (name, value) in [
+            ("point_threshold", self.point_threshold),
+            ("line_threshold", self.line_threshold),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return bad(name, format!("must be a positive finite number of pixels, got {value}"));
+            }
+        }
+        if !(self.confidence > 0.0 && self.confidence < 1.0) {
+            return bad("confidence", format!("must be in (0, 1), got {}", self.confidence));
+        }
+        if self.max_iterations < 1 {
+            return bad("max_ransac_iterations", "must be at least 1".into());
+        }
+        if self.min_iterations > self.max_iterations {
+            return bad("min_iterations", "must not exceed the iteration cap".into());
+        }
+        if self.min_inliers < 3 {
+            return bad("min_inliers", format!("must be at least 3, got {}", self.min_inliers));
+        }
+        Ok(())
+    }
+
+    fn thresholds(&self) -> Thresholds {
+        Thresholds {
+            point2: self.point_threshold * self.point_threshold,
+            line2: self.line_threshold * self.line_threshold,
+        }
+    }
+}
+
+/// Why the sampling loop stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RansacStop {
+    /// The adaptive bound for the requested confidence was reached.
+    Confidence,
+    /// [`RansacOptions::max_iterations`] samples were drawn first.
+    IterationCap,
+    /// [`RansacOptions::time_budget`] ran out first.
+    TimeBudget,
+    /// No sample can be drawn: no mix of the data's points and lines has a minimal solver (e.g. lines
+    /// only while the three-line solver is missing).
+    NoSolvableSample,
+}
+
+impl RansacStop {
+    /// snake_case name for reports, JSON and Python.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            RansacStop::Confidence => "confidence",
+            RansacStop::IterationCap => "iteration_cap",
+            RansacStop::TimeBudget => "time_budget",
+            RansacStop::NoSolvableSample => "no_solvable_sample",
+        }
+    }
+}
+
+/// What the robust loop did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RansacReport {
+    /// Samples drawn.
+    pub iterations: usize,
+    /// Samples for which the minimal solver returned no pose (degenerate: collinear points, parallel
+    /// lines, ...), or whose every pose put the sample behind the camera.
+    pub degenerate_samples: usize,
+    /// Poses scored (a sample may give up to four).
+    pub models_scored: usize,
+    /// Local optimisations run (one per new best model, each up to [`LOCAL_ROUNDS`] rounds).
+    pub local_optimizations: usize,
+    /// Inliers (points + lines) of the best model before the final refinement.
+    pub inliers: usize,
+    /// MSAC score `½ Σ min(eᵢ², τᵢ²)` of the best model, px².
+    pub score: f64,
+    /// Why the loop stopped.
+    pub stop: RansacStop,
+    /// Wall time of the loop including local optimisation, seconds.
+    pub time_seconds: f64,
+}
+
+/// The best model of [`ransac`] (frame of the correspondences) and the report.
+#[derive(Debug, Clone)]
+pub struct RansacOutcome {
+    /// The best pose, or `None` if no hypothesis was ever scored.
+    pub pose: Option<Pose>,
+    /// Point inlier mask of the best pose (all false without one).
+    pub inliers_points: Vec<bool>,
+    /// Line inlier mask of the best pose (all false without one).
+    pub inliers_lines: Vec<bool>,
+    /// What the loop did.
+    pub report: RansacReport,
+    /// The prepared data, for the inlier tests of the final refinement.
+    pub(crate) data: Prepared,
+    /// The thresholds used.
+    pub(crate) thresholds: Thresholds,
+}
+
+/// The best model so far.
+struct Best {
+    pose: Pose,
+    score: f64,
+}
+
+/// LO-RANSAC on validated correspondences (finite, no zero-length segment), in their frame.
+/// `refinement` sets the trust region of the local optimisation (its cap is replaced by
+/// [`RansacOptions::local_iterations`]).
+pub fn ransac(
+    camera: &Camera,
+    corr: &Correspondences,
+    opts: &RansacOptions,
+    refinement: &TrustRegionOptions,
+) -> Result<RansacOutcome> {
+    let started = Instant::now();
+    let data = Prepared::new(camera, corr)?;
+    let tau = opts.thresholds();
+    let sampler = Sampler::new(data.n_points(), data.n_lines(), solvable());
+    let mut rng = Rng::new(opts.seed);
+    let mut lo = *refinement;
+    lo.subproblem = Subproblem::Hebden;
+    lo.stopping.max_iterations = opts.local_iterations;
+    let mut report = RansacReport {
+        iterations: 0,
+        degenerate_samples: 0,
+        models_scored: 0,
+        local_optimizations: 0,
+        inliers: 0,
+        score: data.all_outlier_score(&tau),
+        stop: RansacStop::IterationCap,
+        time_seconds: 0.0,
+    };
+    let mut best: Option<Best> = None;
+    let mut required = usize::MAX;
+    if !sampler.can_draw() {
+        report.stop = RansacStop::NoSolvableSample;
+    }
+    while sampler.can_draw() {
+        if report.iterations >= required.max(opts.min_iterations) {
+            report.stop = RansacStop::Confidence;
+            break;
+        }
+        if report.iterations >= opts.max_iterations {
+            report.stop = RansacStop::IterationCap;
+            break;
+        }
+        if opts.time_budget.is_some_and(|budget| started.elapsed() >= budget) {
+            report.stop = RansacStop::TimeBudget;
+            break;
+        }
+        report.iterations += 1;
+        let sample = sampler.draw(&mut rng);
+        let features = sample.map(|k| data.features[k]);
+        let mut any = false;
+        for pose in solve(&features) {
+            if !data.sample_in_front(&pose, &sample) {
+                continue;
+            }
+            any = true;
+            report.models_scored += 1;
+            let bound = best.as_ref().map_or(f64::INFINITY, |b| b.score);
+            let Some(score) = data.score(&pose, &tau, bound) else {
+                continue;
+            };
+            if score >= bound {
+                continue;
+            }
+            let mut candidate = Best { pose, score };
+            if opts.local_iterations > 0 {
+                report.local_optimizations += 1;
+                candidate = local_optimization(camera, corr, &data, &tau, &lo, candidate);
+            }
+            let (points, lines) = data.inliers(&candidate.pose, &tau);
+            let count = |m: &[bool]| m.iter().filter(|&&v| v).count();
+            let (ip, il) = (count(&points), count(&lines));
+            report.inliers = ip + il;
+            let fraction = |i: usize, n: usize| if n == 0 { 0.0 } else { i as f64 / n as f64 };
+            required = sampler.required_samples(
+                fraction(ip, data.n_points()),
+                fraction(il, data.n_lines()),
+                opts.confidence,
+            );
+            best = Some(candidate);
+        }
+        if !any {
+            report.degenerate_samples += 1;
+        }
+    }
+    let (inliers_points, inliers_lines) = match &best {
+        Some(b) => data.inliers(&b.pose, &tau),
+        None => (vec![false; data.n_points()], vec![false; data.n_lines()]),
+    };
+    if let Some(b) = &best {
+        report.score = b.score;
+    }
+    report.time_seconds = started.elapsed().as_secs_f64();
+    Ok(RansacOutcome {
+        pose: best.map(|b| b.pose),
+        inliers_points,
+        inliers_lines,
+        report,
+        data,
+        thresholds: tau,
+    })
+}
+
+/// Re-fits `best` on its inliers by the trust region `lo` and keeps the result while the MSAC score
+/// improves, for at most [`LOCAL_ROUNDS`] rounds.
+fn local_optimization(
+    camera: &Camera,
+    corr: &Correspondences,
+    data: &Prepared,
+    tau: &Thresholds,
+    lo: &TrustRegionOptions,
+    mut best: Best,
+) -> Best {
+    for _ in 0..LOCAL_ROUNDS {
+        let (points, lines) = data.inliers(&best.pose, tau);
+        let inliers = subset(corr, &points, &lines);
+        if inliers.n_points() + inliers.n_lines() < 3 {
+            break;
+        }
+        let cost = ReprojectionCost::of(camera, &inliers);
+        let (pose, _) = trust_region::minimize(&cost, best.pose, lo);
+        match data.score(&pose, tau, best.score) {
+            Some(score) if score < best.score => best = Best { pose, score },
+            _ => break,
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests;

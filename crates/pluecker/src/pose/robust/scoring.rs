@@ -1,0 +1,259 @@
+//! The data as the robust loop sees it, prepared once per call, and the MSAC score of a hypothesis.
+//!
+//! Errors are in pixels, as in [`crate::pose::reprojection::ReprojectionCost::errors`]:
+//! - a point: `e = ‖π(R X + t) − u‖` with `π(x_cam) = K x_cam / z`;
+//! - a line: the RMS of the distances of the two observed segment endpoints to the projection of the
+//!   3-D line, `e² = (d₁² + d₂²) / 2` (so a line is an inlier when its endpoints are, on average, within
+//!   the line threshold of the projected line).
+//!
+//! A point (a line) with an object point (either object endpoint) at depth `z ≤ 0` has an infinite
+//! error: it is an outlier of that pose.
+//!
+//! The MSAC score (Torr & Zisserman 2000) of a pose is `½ Σᵢ min(eᵢ², τᵢ²)`, with `τᵢ` the point or the
+//! line threshold: the reprojection cost with each residual capped at its threshold. Lower is better.
+
+use super::super::correspondences::Correspondences;
+use super::super::minimal::Feature;
+use super::super::reprojection::Pose;
+use crate::camera::Camera;
+use crate::error::Result;
+use crate::geometry::lines::interpretation_plane_normal;
+use nalgebra::{Matrix3, Vector2, Vector3};
+
+/// Thresholds of the inlier test, pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Thresholds {
+    /// Squared point threshold `τ_p²`, px².
+    pub point2: f64,
+    /// Squared line threshold `τ_l²`, px² (on the mean of the two squared endpoint distances).
+    pub line2: f64,
+}
+
+/// One point as the scorer needs it: object point (frame of the data) and observed pixel.
+#[derive(Debug, Clone, Copy)]
+struct ScoredPoint {
+    object: [f64; 3],
+    pixel: [f64; 2],
+}
+
+/// One line: two object points and the two observed pixel endpoints, homogeneous.
+#[derive(Debug, Clone, Copy)]
+struct ScoredLine {
+    object: [Vector3<f64>; 2],
+    endpoints: [Vector3<f64>; 2],
+}
+
+/// Correspondences prepared once: the scorer's arrays and the minimal solvers' features.
+#[derive(Debug, Clone)]
+pub(crate) struct Prepared {
+    camera: Camera,
+    /// `K⁻ᵀ`: maps a camera-frame line `a × b` to its pixel form.
+    k_inv_t: Matrix3<f64>,
+    points: Vec<ScoredPoint>,
+    lines: Vec<ScoredLine>,
+    /// Features for [`super::super::minimal::solve`]: points first, then lines.
+    pub features: Vec<Feature>,
+}
+
+impl Prepared {
+    /// Prepares `corr` (already validated: finite, no zero-length segment).
+    pub fn new(camera: &Camera, corr: &Correspondences) -> Result<Prepared> {
+        let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
+        let points = corr
+            .points2d
+            .iter()
+            .zip(&corr.points3d)
+            .map(|(u, x)| ScoredPoint {
+                object: [x.x, x.y, x.z],
+                pixel: [u.x, u.y],
+            })
+            .collect();
+        let lines = corr
+            .lines2d
+            .iter()
+            .zip(&corr.lines3d)
+            .map(|(s2, s3)| ScoredLine {
+                object: *s3,
+                endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
+            })
+            .collect();
+        let mut features = Vec::with_capacity(corr.n_points() + corr.n_lines());
+        for (u, x) in corr.points2d.iter().zip(&corr.points3d) {
+            features.push(Feature::Point {
+                bearing: k_inv * Vector3::new(u.x, u.y, 1.0),
+                point: *x,
+            });
+        }
+        for (s2, s3) in corr.lines2d.iter().zip(&corr.lines3d) {
+            features.push(Feature::Line {
+                normal: interpretation_plane_normal(camera, &s2[0], &s2[1])?,
+                endpoints: *s3,
+            });
+        }
+        Ok(Prepared {
+            camera: *camera,
+            k_inv_t: k_inv.transpose(),
+            points,
+            lines,
+            features,
+        })
+    }
+
+    pub fn n_points(&self) -> usize {
+        self.points.len()
+    }
+
+    pub fn n_lines(&self) -> usize {
+        self.lines.len()
+    }
+
+    /// Squared pixel error of point `i` at `pose` (infinite behind the camera).
+    #[inline(always)]
+    fn point_error2(&self, pose: &Pose, i: usize) -> f64 {
+        let (r, t, c) = (&pose.0, &pose.1, &self.camera);
+        let [x, y, z] = self.points[i].object;
+        let pz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t.z;
+        if !(pz > 0.0) {
+            return f64::INFINITY;
+        }
+        let iz = 1.0 / pz;
+        let xn = (r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + t.x) * iz;
+        let yn = (r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + t.y) * iz;
+        let du = c.fx * xn + c.skew * yn + c.cx - self.points[i].pixel[0];
+        let dv = c.fy * yn + c.cy - self.points[i].pixel[1];
+        du * du + dv * dv
+    }
+
+    /// Mean squared distance of line `i`'s observed endpoints to its projected line (infinite when an
+    /// object endpoint is behind the camera or the line projects to a point).
+    #[inline(always)]
+    fn line_error2(&self, pose: &Pose, i: usize) -> f64 {
+        let line = &self.lines[i];
+        let a = pose.0 * line.object[0] + pose.1;
+        let b = pose.0 * line.object[1] + pose.1;
+        if !(a.z > 0.0 && b.z > 0.0) {
+            return f64::INFINITY;
+        }
+        let l = self.k_inv_t * a.cross(&b);
+        let scale2 = l.x * l.x + l.y * l.y;
+        if !(scale2 > 0.0) {
+            return f64::INFINITY;
+        }
+        let (d1, d2) = (l.dot(&line.endpoints[0]), l.dot(&line.endpoints[1]));
+        0.5 * (d1 * d1 + d2 * d2) / scale2
+    }
+
+    /// Squared error of feature `k` (points first, then lines).
+    #[cfg(test)]
+    pub fn error2(&self, pose: &Pose, k: usize) -> f64 {
+        if k < self.points.len() {
+            self.point_error2(pose, k)
+        } else {
+            self.line_error2(pose, k - self.points.len())
+        }
+    }
+
+    /// The MSAC score `½ Σ min(eᵢ², τᵢ²)` of `pose`, or `None` as soon as the partial sum exceeds
+    /// `bound` (the hypothesis cannot beat a model of score `bound`).
+    pub fn score(&self, pose: &Pose, tau: &Thresholds, bound: f64) -> Option<f64> {
+        // Compare doubled sums with 2·bound: one multiplication for the whole call.
+        let limit = 2.0 * bound;
+        let mut sum = 0.0;
+        for i in 0..self.points.len() {
+            sum += self.point_error2(pose, i).min(tau.point2);
+            if sum > limit {
+                return None;
+            }
+        }
+        for i in 0..self.lines.len() {
+            sum += self.line_error2(pose, i).min(tau.line2);
+            if sum > limit {
+                return None;
+            }
+        }
+        Some(0.5 * sum)
+    }
+
+    /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`.
+    pub fn all_outlier_score(&self, tau: &Thresholds) -> f64 {
+        0.5 * (self.points.len() as f64 * tau.point2 + self.lines.len() as f64 * tau.line2)
+    }
+
+    /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines).
+    pub fn inliers(&self, pose: &Pose, tau: &Thresholds) -> (Vec<bool>, Vec<bool>) {
+        let points = (0..self.points.len())
+            .map(|i| self.point_error2(pose, i) <= tau.point2)
+            .collect();
+        let lines = (0..self.lines.len())
+            .map(|i| self.line_error2(pose, i) <= tau.line2)
+            .collect();
+        (points, lines)
+    }
+
+    /// True when every object point of the sample's features is in front of the camera at `pose`
+    /// (depth `z > 0`): a pose that puts its own sample behind the camera is not worth scoring.
+    pub fn sample_in_front(&self, pose: &Pose, sample: &[usize; 3]) -> bool {
+        let depth = |x: &Vector3<f64>| pose.0.row(2).transpose().dot(x) + pose.1.z;
+        sample.iter().all(|&k| {
+            if k < self.points.len() {
+                let [x, y, z] = self.points[k].object;
+                depth(&Vector3::new(x, y, z)) > 0.0
+            } else {
+                self.lines[k - self.points.len()].object.iter().all(|x| depth(x) > 0.0)
+            }
+        })
+    }
+}
+
+/// The correspondences of `corr` selected by the masks.
+pub(crate) fn subset(corr: &Correspondences, points: &[bool], lines: &[bool]) -> Correspondences {
+    fn pick<T: Copy>(values: &[T], mask: &[bool]) -> Vec<T> {
+        values.iter().zip(mask).filter(|(_, &m)| m).map(|(v, _)| *v).collect()
+    }
+    Correspondences {
+        points2d: pick::<Vector2<f64>>(&corr.points2d, points),
+        points3d: pick(&corr.points3d, points),
+        lines2d: pick(&corr.lines2d, lines),
+        lines3d: pick(&corr.lines3d, lines),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::reprojection::ReprojectionCost;
+    use crate::rng::Rng;
+    use crate::synthetic::{random_scene, SceneKind};
+
+    #[test]
+    fn errors_match_the_reprojection_cost_and_the_score_caps_them() {
+        let scene = random_scene(SceneKind::General, 20, 8, 3);
+        let corr = scene.noisy(2.0, true, &mut Rng::new(4));
+        let prepared = Prepared::new(&scene.camera, &corr).unwrap();
+        let pose = (scene.rotation, scene.translation);
+        let reference = ReprojectionCost::of(&scene.camera, &corr).errors(&pose);
+        for (k, e) in reference.iter().enumerate() {
+            let ours = prepared.error2(&pose, k).sqrt();
+            assert!((ours - e).abs() <= 1e-9 * (1.0 + e), "feature {k}: {ours} vs {e}");
+        }
+        let tau = Thresholds {
+            point2: 4.0,
+            line2: 9.0,
+        };
+        let expected: f64 = reference
+            .iter()
+            .enumerate()
+            .map(|(k, e)| 0.5 * (e * e).min(if k < 20 { 4.0 } else { 9.0 }))
+            .sum();
+        let score = prepared.score(&pose, &tau, f64::INFINITY).unwrap();
+        assert!((score - expected).abs() <= 1e-9 * expected);
+        // The early exit: a bound below the score stops the sum.
+        assert_eq!(prepared.score(&pose, &tau, 0.5 * score), None);
+        // Behind the camera everything is an outlier.
+        let behind = (scene.rotation, scene.translation - Vector3::new(0.0, 0.0, 100.0));
+        let all_out = prepared.score(&behind, &tau, f64::INFINITY).unwrap();
+        assert_eq!(all_out, prepared.all_outlier_score(&tau));
+        let (p, l) = prepared.inliers(&behind, &tau);
+        assert!(p.iter().chain(&l).all(|m| !m));
+    }
+}

@@ -1,0 +1,429 @@
+//! The robust pipeline (`PoseOptions::robust`, LO-RANSAC over points and lines) and the pose
+//! covariance of every `estimate_pose` call, end to end. Seeds are fixed per test and printed on failure.
+//!
+//! Outliers replace an observation by a uniformly random one in the 640 x 480 image (a random pixel, or
+//! a random segment of at least 40 px). "Truly inlier" means: within threshold at the *true* pose. A
+//! robust answer may disagree with that only for features whose true-pose error is within
+//! [`MASK_MARGIN_PX`] of the threshold: the estimated pose differs from the truth by the estimation error,
+//! which moves each predicted feature by about σ/√(n/6) ≈ 0.3 px here (1 px noise, ≥ 20 inliers).
+
+use nalgebra::{Matrix6, Vector2, Vector3, Vector6};
+use pluecker::geometry::quaternion::{log_so3, rotation_distance};
+use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::pose::{
+    estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacStop, Status,
+};
+use pluecker::rng::Rng;
+use pluecker::synthetic::{random_scene, Scene, SceneKind};
+use pluecker::{Camera, Error};
+use std::time::Duration;
+
+/// Features whose error at the true pose is within this of the threshold may be classified either way.
+const MASK_MARGIN_PX: f64 = 1.5;
+const THRESHOLD_PX: f64 = 4.0;
+
+fn robust(seed: u64) -> PoseOptions {
+    PoseOptions {
+        robust: Some(RansacOptions {
+            seed,
+            ..RansacOptions::default()
+        }),
+        ..PoseOptions::default()
+    }
+}
+
+/// A random segment of the image at least 40 px long.
+fn random_segment(rng: &mut Rng) -> [Vector2<f64>; 2] {
+    loop {
+        let mut point = || Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+        let s = [point(), point()];
+        if (s[0] - s[1]).norm() > 40.0 {
+            return s;
+        }
+    }
+}
+
+/// A `General` scene with 1 px noise where a fraction `ratio` of the points and of the lines (chosen at
+/// random) are replaced by random observations.
+fn scene_with_outliers(n_points: usize, n_lines: usize, ratio: f64, seed: u64) -> (Scene, Correspondences) {
+    let scene = random_scene(SceneKind::General, n_points, n_lines, seed);
+    let mut rng = Rng::new(seed ^ 0x5eed);
+    let mut corr = scene.noisy(1.0, true, &mut rng);
+    let bad_points = (ratio * n_points as f64).round() as usize;
+    let bad_lines = (ratio * n_lines as f64).round() as usize;
+    for i in rng.sample_indices(n_points, bad_points) {
+        corr.points2d[i] = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+    }
+    for i in rng.sample_indices(n_lines, bad_lines) {
+        corr.lines2d[i] = random_segment(&mut rng);
+    }
+    (scene, corr)
+}
+
+/// Pose error in the tangent space of the covariance: `(log(R R₀ᵀ), t − t₀)`.
+fn tangent_error(result: &PoseResult, scene: &Scene) -> Vector6<f64> {
+    let w = log_so3(&(result.rotation * scene.rotation.transpose()));
+    let dt = result.translation - scene.translation;
+    Vector6::new(w.x, w.y, w.z, dt.x, dt.y, dt.z)
+}
+
+/// Checks the masks against the truth (see the module docs) and returns the number of true inliers.
+fn check_masks(result: &PoseResult, scene: &Scene, corr: &Correspondences, label: &str) -> usize {
+    let truth = ReprojectionCost::of(&scene.camera, corr).errors(&(scene.rotation, scene.translation));
+    let mask: Vec<bool> = result
+        .inliers_points
+        .iter()
+        .chain(&result.inliers_lines)
+        .copied()
+        .collect();
+    assert_eq!(mask.len(), truth.len(), "{label}");
+    for (k, (&m, &e)) in mask.iter().zip(&truth).enumerate() {
+        if (e - THRESHOLD_PX).abs() > MASK_MARGIN_PX {
+            assert_eq!(
+                m,
+                e <= THRESHOLD_PX,
+                "{label}: feature {k} true error {e:.2} px, mask {m}"
+            );
+        }
+    }
+    truth.iter().filter(|&&e| e <= THRESHOLD_PX).count()
+}
+
+/// `eᵀ Σ⁻¹ e` with the result's covariance.
+fn mahalanobis2(result: &PoseResult, e: &Vector6<f64>) -> f64 {
+    let cov: Matrix6<f64> = result.covariance.expect("a covariance");
+    (e.transpose() * cov.try_inverse().unwrap() * e)[0]
+}
+
+/// 99.9999 % quantile of χ²₆ (P(χ²₆ > 37.9) = 1e-6): a bound on one draw's Mahalanobis distance.
+const CHI2_6_SURE: f64 = 37.9;
+
+#[test]
+fn recovers_the_pose_at_0_50_and_80_percent_outliers_with_points_and_lines() {
+    for (ratio, seed) in [(0.0, 1u64), (0.5, 2), (0.8, 3)] {
+        for (np, nl) in [(100, 0), (100, 30)] {
+            let (scene, corr) = scene_with_outliers(np, nl, ratio, seed);
+            let opts = PoseOptions {
+                sigma_px: Some(1.0),
+                ..robust(seed)
+            };
+            let label = format!("ratio {ratio} seed {seed} {np} points {nl} lines");
+            let r = estimate_pose(&scene.camera, &corr, &opts).unwrap();
+            assert_eq!(r.status, Status::Success, "{label}: {r:?}");
+            let report = r.ransac.as_ref().unwrap();
+            assert_eq!(report.stop, RansacStop::Confidence, "{label}");
+            let inliers = check_masks(&r, &scene, &corr, &label);
+            assert!(inliers >= (0.15 * (np + nl) as f64) as usize, "{label}");
+            // The refined pose is within the covariance's own 1e-6 tail of the truth.
+            let d2 = mahalanobis2(&r, &tangent_error(&r, &scene));
+            assert!(d2 < CHI2_6_SURE, "{label}: d² = {d2}");
+            assert_eq!(r.covariance_source, Some(CovarianceSource::Given));
+            assert_eq!(
+                r.stages.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
+                ["ransac", "refinement"]
+            );
+        }
+    }
+}
+
+/// Depends on the line solvers (P3L, 1P2L, 2P1L): 5 points and 30 lines, 40 % outliers of each. With
+/// the point solver alone, samples of three points are all-inlier with probability 0.6³ and the
+/// 5 points are too few to reach `min_inliers` on their own; the lines must produce hypotheses.
+#[test]
+fn lines_heavy_scene_needs_the_line_solvers() {
+    let (scene, corr) = scene_with_outliers(5, 30, 0.4, 21);
+    let r = estimate_pose(&scene.camera, &corr, &robust(21)).unwrap();
+    assert_eq!(r.status, Status::Success, "{r:?}");
+    check_masks(&r, &scene, &corr, "lines-heavy");
+    assert!(r.inliers_lines.iter().filter(|&&m| m).count() >= 15);
+    assert!(rotation_distance(&r.rotation, &scene.rotation) < 0.02);
+}
+
+#[test]
+fn same_seed_gives_the_same_result() {
+    let (scene, corr) = scene_with_outliers(80, 20, 0.5, 5);
+    let a = estimate_pose(&scene.camera, &corr, &robust(17)).unwrap();
+    let b = estimate_pose(&scene.camera, &corr, &robust(17)).unwrap();
+    assert_eq!((a.rotation, a.translation), (b.rotation, b.translation));
+    assert_eq!(
+        (&a.inliers_points, &a.inliers_lines),
+        (&b.inliers_points, &b.inliers_lines)
+    );
+    let (ra, rb) = (a.ransac.unwrap(), b.ransac.unwrap());
+    assert_eq!(
+        (ra.iterations, ra.models_scored, ra.score),
+        (rb.iterations, rb.models_scored, rb.score)
+    );
+}
+
+fn all_outliers(n_points: usize, seed: u64) -> (Camera, Correspondences) {
+    let scene = random_scene(SceneKind::General, n_points, 0, seed);
+    let mut rng = Rng::new(seed);
+    let mut corr = scene.correspondences.clone();
+    for p in corr.points2d.iter_mut() {
+        *p = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+    }
+    (scene.camera, corr)
+}
+
+#[test]
+fn all_outlier_data_gives_a_status_within_the_iteration_cap() {
+    let (camera, corr) = all_outliers(60, 8);
+    let mut opts = robust(0);
+    opts.robust.as_mut().unwrap().max_iterations = 2000;
+    let r = estimate_pose(&camera, &corr, &opts).unwrap();
+    assert_eq!(r.status, Status::TooFewInliers, "{r:?}");
+    let report = r.ransac.unwrap();
+    assert_eq!((report.stop, report.iterations), (RansacStop::IterationCap, 2000));
+    // Only the model's own sample (and at most two chance agreements) support it.
+    assert!(report.inliers < 6, "{report:?}");
+    assert_eq!(r.stages.len(), 1, "no refinement of a rejected model");
+}
+
+#[test]
+fn the_time_budget_stops_a_loop_whose_cap_would_run_long() {
+    let (camera, corr) = all_outliers(60, 9);
+    let mut opts = robust(0);
+    let ransac = opts.robust.as_mut().unwrap();
+    ransac.max_iterations = usize::MAX;
+    ransac.time_budget = Some(Duration::from_millis(30));
+    let r = estimate_pose(&camera, &corr, &opts).unwrap();
+    let report = r.ransac.unwrap();
+    assert_eq!(report.stop, RansacStop::TimeBudget);
+    // A sample takes far less than a second: the loop stopped on the budget, not near the cap.
+    assert!(report.iterations > 0 && report.iterations < 1_000_000_000, "{report:?}");
+    assert_eq!(r.status, Status::TooFewInliers);
+}
+
+#[test]
+fn bad_options_and_bad_data_are_errors() {
+    let (scene, corr) = scene_with_outliers(20, 5, 0.2, 4);
+    let with = |f: &dyn Fn(&mut RansacOptions)| {
+        let mut opts = robust(0);
+        f(opts.robust.as_mut().unwrap());
+        estimate_pose(&scene.camera, &corr, &opts)
+    };
+    for (name, result) in [
+        ("point_threshold", with(&|o| o.point_threshold = 0.0)),
+        ("point_threshold", with(&|o| o.point_threshold = -1.0)),
+        ("line_threshold", with(&|o| o.line_threshold = f64::NAN)),
+        ("confidence", with(&|o| o.confidence = 1.0)),
+        ("max_ransac_iterations", with(&|o| o.max_iterations = 0)),
+        ("min_inliers", with(&|o| o.min_inliers = 2)),
+    ] {
+        assert!(
+            matches!(&result, Err(Error::InvalidOption { name: n, .. }) if n == name),
+            "{name}: {result:?}"
+        );
+    }
+    let sigma = PoseOptions {
+        sigma_px: Some(0.0),
+        ..robust(0)
+    };
+    assert!(matches!(
+        estimate_pose(&scene.camera, &corr, &sigma),
+        Err(Error::InvalidOption { .. })
+    ));
+    // Fewer correspondences than min_inliers (6), and fewer than a sample.
+    for n in [2, 5] {
+        let few = Correspondences {
+            points2d: corr.points2d[..n].to_vec(),
+            points3d: corr.points3d[..n].to_vec(),
+            ..Default::default()
+        };
+        let r = estimate_pose(&scene.camera, &few, &robust(0));
+        assert!(matches!(r, Err(Error::TooFewCorrespondences { .. })), "{n}: {r:?}");
+    }
+    let mut nan = corr.clone();
+    nan.lines3d[3][1].y = f64::NAN;
+    assert_eq!(
+        estimate_pose(&scene.camera, &nan, &robust(0)).unwrap_err(),
+        Error::NonFinite {
+            what: "lines3d".into(),
+            index: 3
+        }
+    );
+}
+
+#[test]
+fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
+    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
+    // Dyadic coordinates: exactly collinear in floating point.
+    let line: Vec<Vector3<f64>> = (0..12)
+        .map(|i| Vector3::new(0.125 * i as f64 - 0.75, 0.0625 * i as f64, 5.0 + 0.25 * i as f64))
+        .collect();
+    let project = |xs: &[Vector3<f64>]| xs.iter().map(|x| camera.project(x)).collect::<Vec<_>>();
+    let collinear = Correspondences {
+        points2d: project(&line),
+        points3d: line.clone(),
+        ..Default::default()
+    };
+    let r = estimate_pose(&camera, &collinear, &robust(0));
+    assert!(matches!(r, Err(Error::Degenerate { .. })), "{r:?}");
+    // Near-degenerate samples are the minimal solvers' business (P3P returns ill-conditioned poses for
+    // nearly collinear points); a sample with two copies of one object point gives no pose at all.
+    // Twelve correspondences of which ten are one point seen ten times, and two other points.
+    let others = [Vector3::new(0.4, -0.5, 6.0), Vector3::new(-0.5, 0.6, 4.5)];
+    let points3d: Vec<Vector3<f64>> = (0..12).map(|i| if i < 10 { line[0] } else { others[i - 10] }).collect();
+    let repeated = Correspondences {
+        points2d: project(&points3d),
+        points3d,
+        ..Default::default()
+    };
+    let mut opts = robust(0);
+    let ransac = opts.robust.as_mut().unwrap();
+    (ransac.min_iterations, ransac.max_iterations) = (300, 300);
+    let r = estimate_pose(&camera, &repeated, &opts).unwrap();
+    let report = r.ransac.as_ref().unwrap();
+    assert_eq!(report.iterations, 300);
+    // A sample holds two copies with probability p = (C(10,2)·2 + C(10,3)) / C(12,3) = 210/220:
+    // binomial count, 5 standard deviations.
+    let (n, p): (f64, f64) = (300.0, 210.0 / 220.0);
+    let (mean, std) = (n * p, (n * p * (1.0 - p)).sqrt());
+    assert!(
+        (report.degenerate_samples as f64 - mean).abs() < 5.0 * std,
+        "{report:?}"
+    );
+    // Three distinct points: every P3P solution explains all twelve noise-free correspondences.
+    assert_eq!(r.status, Status::Success);
+    assert!(r.rms_error_px < 1e-6 && r.inliers_points.iter().all(|&m| m), "{r:?}");
+}
+
+#[test]
+fn non_robust_results_use_every_correspondence_and_carry_a_covariance() {
+    let scene = random_scene(SceneKind::General, 30, 10, 6);
+    let corr = scene.noisy(1.0, true, &mut Rng::new(6));
+    let r = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
+    assert!(r.inliers_points.iter().all(|&m| m) && r.inliers_points.len() == 30);
+    assert!(r.inliers_lines.iter().all(|&m| m) && r.inliers_lines.len() == 10);
+    assert!(r.ransac.is_none());
+    assert_eq!(r.covariance_source, Some(CovarianceSource::Estimated));
+    // σ̂² ~ σ² χ²₇₄ / 74: within 5 standard deviations √(2/74) of 1.
+    let s2 = r.sigma_px.unwrap().powi(2);
+    assert!((s2 - 1.0).abs() < 5.0 * (2.0f64 / 74.0).sqrt(), "σ̂² = {s2}");
+    let given = PoseOptions {
+        sigma_px: Some(2.0),
+        ..PoseOptions::default()
+    };
+    let g = estimate_pose(&scene.camera, &corr, &given).unwrap();
+    assert_eq!(
+        (g.covariance_source, g.sigma_px),
+        (Some(CovarianceSource::Given), Some(2.0))
+    );
+    let ratio = g.covariance.unwrap()[(0, 0)] / r.covariance.unwrap()[(0, 0)];
+    assert!((ratio - 4.0 / s2).abs() < 1e-9 * ratio);
+}
+
+/// Monte-Carlo statistics of the covariance over `draws` noisy copies of `scene` (1 px Gaussian noise;
+/// `outliers` replaces a fixed random set of observations by random ones in every draw).
+struct MonteCarlo {
+    /// Mean of `d² = eᵀ Σ⁻¹ e` with each result's own covariance.
+    mean_d2: f64,
+    /// Per axis: `Σ e_k² / N` over the mean predicted variance `Σ_kk`.
+    variance_ratio: [f64; 6],
+    /// Mean predicted variances.
+    predicted: [f64; 6],
+    /// Mean of the estimated `σ̂²` (runs without a given σ).
+    mean_sigma2: f64,
+}
+
+fn monte_carlo(scene: &Scene, opts: &PoseOptions, outlier_ratio: f64, draws: usize, seed: u64) -> MonteCarlo {
+    let mut rng = Rng::new(seed);
+    let c = &scene.correspondences;
+    let bad_points = rng.sample_indices(c.n_points(), (outlier_ratio * c.n_points() as f64) as usize);
+    let bad_lines = rng.sample_indices(c.n_lines(), (outlier_ratio * c.n_lines() as f64) as usize);
+    let (mut d2, mut sq, mut predicted, mut sigma2) = (0.0, [0.0; 6], [0.0; 6], 0.0);
+    for draw in 0..draws {
+        let mut corr = scene.noisy(1.0, true, &mut rng);
+        for &i in &bad_points {
+            corr.points2d[i] = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+        }
+        for &i in &bad_lines {
+            corr.lines2d[i] = random_segment(&mut rng);
+        }
+        let r = estimate_pose(&scene.camera, &corr, opts).unwrap();
+        assert_eq!(r.status, Status::Success, "seed {seed} draw {draw}");
+        let e = tangent_error(&r, scene);
+        d2 += mahalanobis2(&r, &e);
+        let cov = r.covariance.unwrap();
+        for k in 0..6 {
+            sq[k] += e[k] * e[k];
+            predicted[k] += cov[(k, k)];
+        }
+        sigma2 += r.sigma_px.unwrap().powi(2);
+    }
+    let n = draws as f64;
+    MonteCarlo {
+        mean_d2: d2 / n,
+        variance_ratio: std::array::from_fn(|k| sq[k] / predicted[k]),
+        predicted: predicted.map(|p| p / n),
+        mean_sigma2: sigma2 / n,
+    }
+}
+
+/// The test: with the true σ given, `d²` is χ²₆ to first order, so its mean over N draws is 6 with
+/// standard deviation √(2·6/N); each axis's `Σ e_k² / Σ Σ_kk` is χ²_N / N with standard deviation
+/// √(2/N). Both must hold within 4 standard deviations (N = 500: ±0.62 and ±0.25).
+fn assert_covariance_matches(mc: &MonteCarlo, draws: usize, label: &str) {
+    let n = draws as f64;
+    assert!(
+        (mc.mean_d2 - 6.0).abs() < 4.0 * (12.0 / n).sqrt(),
+        "{label}: mean d² = {}",
+        mc.mean_d2
+    );
+    for (k, ratio) in mc.variance_ratio.iter().enumerate() {
+        assert!(
+            (ratio - 1.0).abs() < 4.0 * (2.0 / n).sqrt(),
+            "{label}: axis {k} ratio {ratio}"
+        );
+    }
+}
+
+const DRAWS: usize = 500;
+
+#[test]
+fn covariance_matches_monte_carlo_errors_in_a_general_and_a_low_parallax_scene() {
+    let given = PoseOptions {
+        sigma_px: Some(1.0),
+        ..PoseOptions::default()
+    };
+    let general = random_scene(SceneKind::General, 30, 10, 31);
+    let mc_general = monte_carlo(&general, &given, 0.0, DRAWS, 31);
+    assert_covariance_matches(&mc_general, DRAWS, "general");
+    // Far and narrow: a 10-unit box at depth 50 spans ±80 px; rotation and depth are barely separable.
+    let far = random_scene(SceneKind::Far, 30, 10, 32);
+    let mc_far = monte_carlo(&far, &given, 0.0, DRAWS, 32);
+    assert_covariance_matches(&mc_far, DRAWS, "far");
+    // ... where the covariance is large: the rotation (about the image axes; the roll about the optical
+    // axis stays well fixed) and the depth trade off against each other once perspective is weak.
+    let trace = |p: &[f64; 6], axes: std::ops::Range<usize>| axes.map(|k| p[k]).sum::<f64>();
+    let (far_p, general_p) = (&mc_far.predicted, &mc_general.predicted);
+    assert!(
+        trace(far_p, 0..3) > 10.0 * trace(general_p, 0..3),
+        "{far_p:?} vs {general_p:?}"
+    );
+    assert!(
+        trace(far_p, 3..6) > 100.0 * trace(general_p, 3..6),
+        "{far_p:?} vs {general_p:?}"
+    );
+}
+
+#[test]
+fn estimated_sigma_is_close_to_the_true_one() {
+    // σ̂² = Σ r² / (m − 6) with m = 2·40 residuals: mean σ² over N draws, std σ² √(2 / ((m − 6) N)).
+    let scene = random_scene(SceneKind::General, 30, 10, 33);
+    let mc = monte_carlo(&scene, &PoseOptions::default(), 0.0, DRAWS, 33);
+    let std = (2.0 / (74.0 * DRAWS as f64)).sqrt();
+    assert!((mc.mean_sigma2 - 1.0).abs() < 4.0 * std, "mean σ̂² = {}", mc.mean_sigma2);
+}
+
+#[test]
+fn robust_covariance_matches_monte_carlo_errors_on_the_inliers() {
+    let opts = PoseOptions {
+        sigma_px: Some(1.0),
+        ..robust(34)
+    };
+    let scene = random_scene(SceneKind::General, 60, 15, 34);
+    let mc = monte_carlo(&scene, &opts, 0.3, DRAWS, 34);
+    assert_covariance_matches(&mc, DRAWS, "robust, 30 % outliers");
+}
