@@ -31,7 +31,7 @@
 //! a rotation about it). Coincident interpretation planes (`n₁ ∥ n₂`): `q = 0`, a continuum, no pose.
 //! A pose with the point behind the camera (`λ ≤ 0`) is not returned.
 
-use super::input::{finite, unit, Line};
+use super::input::{finite, line_holds, point_holds, unit, Line};
 use super::rotation_constraints::rotations;
 use super::Pose;
 use nalgebra::Vector3;
@@ -89,8 +89,9 @@ pub fn p1p2l(
     .into_iter()
     .filter_map(|r| {
         let depth = -(s[0] * first.normal.dot(&(r * p[0])) + s[1] * second.normal.dot(&(r * p[1]))) / s_squared;
-        let t = y * depth - r * x;
-        (depth > 0.0 && t.iter().all(|v| v.is_finite())).then_some((r, t))
+        let pose = (r, y * depth - r * x);
+        let holds = point_holds(&y, &x, &pose) && lines.iter().all(|l| line_holds(l, &pose));
+        (depth > 0.0 && holds).then_some(pose)
     })
     .collect()
 }

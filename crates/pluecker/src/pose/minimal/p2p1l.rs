@@ -30,9 +30,12 @@
 //! pose. Both points on one ray (`y₁ ∥ y₂`, `m = 0`): no pose (the depths are then not linear in `R`
 //! this way; near it they lose accuracy like `1 / ‖m‖`). The object line through both points: its
 //! constraints repeat the points' (`n ∥ m`, `d ∥ e`), a continuum of poses, no pose returned; near it
-//! the rotation about the line is fixed only through the small offset. Coincident world points: no pose.
+//! the rotation about the line is fixed only through the small offset. The object line through one of
+//! the points: the plane then contains that point's ray whatever the pose, five constraints for six
+//! unknowns, a continuum (no pose, or members of it picked by rounding). Coincident world points: no
+//! pose.
 
-use super::input::{finite, unit, Line};
+use super::input::{finite, line_holds, point_holds, unit, Line};
 use super::rotation_constraints::rotations;
 use super::Pose;
 use nalgebra::Vector3;
@@ -89,8 +92,9 @@ pub fn p2p1l(
         .filter_map(|r| {
             let re = r * e;
             let (depth1, depth2) = (g1.dot(&re), g2.dot(&re));
-            let t = 0.5 * ((y1 * depth1 - r * x1) + (y2 * depth2 - r * x2));
-            (depth1 > 0.0 && depth2 > 0.0 && t.iter().all(|v| v.is_finite())).then_some((r, t))
+            let pose = (r, 0.5 * ((y1 * depth1 - r * x1) + (y2 * depth2 - r * x2)));
+            let holds = point_holds(&y1, &x1, &pose) && point_holds(&y2, &x2, &pose) && line_holds(&line, &pose);
+            (depth1 > 0.0 && depth2 > 0.0 && holds).then_some(pose)
         })
         .collect()
 }

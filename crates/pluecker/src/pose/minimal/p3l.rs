@@ -29,9 +29,12 @@
 //! Image lines through one image point (coplanar normals, `det N = 0`): the translation along that
 //! point's ray is not fixed, no pose; near it the translation's error grows like `1 / |det N|`. Three
 //! object lines through one point give concurrent image lines, so this case too. Coincident
-//! interpretation planes (two equal image lines) leave a one-parameter family: no pose.
+//! interpretation planes (two equal image lines, the camera centre in the plane of two object lines)
+//! make `N` singular too: no pose when it is exactly singular, otherwise members of the family picked
+//! by rounding, which still satisfy the constraints. Noise-free parallel lines have concurrent image
+//! lines (the vanishing point), a continuum again; noisy ones independent normals and no solution.
 
-use super::input::Line;
+use super::input::{line_holds, Line};
 use super::rotation_constraints::rotations;
 use super::Pose;
 use nalgebra::{Matrix3, Vector3};
@@ -71,9 +74,12 @@ pub fn p3l(normals: &[Vector3<f64>; 3], endpoints: &[[Vector3<f64>; 2]; 3]) -> V
     }
     let [first, second, third] = [lines[0], lines[1], lines[2]];
     let normal_matrix = Matrix3::from_rows(&lines.iter().map(|l| l.normal.transpose()).collect::<Vec<_>>());
-    let Some(inverse) = normal_matrix.try_inverse() else {
+    // LU with partial pivoting, not an explicit inverse: its solution satisfies `N t = h` to rounding
+    // (backward stable) even when `N` is nearly singular, so the poses still meet their constraints.
+    let lu = normal_matrix.lu();
+    if !lu.is_invertible() {
         return Vec::new();
-    };
+    }
     let origin = lines.iter().map(|l| l.midpoint).sum::<Vector3<f64>>() / 3.0;
     let offsets: Vec<Vector3<f64>> = lines.iter().map(|l| l.offset_from(&origin)).collect();
     rotations(
@@ -84,8 +90,8 @@ pub fn p3l(normals: &[Vector3<f64>; 3], endpoints: &[[Vector3<f64>; 2]; 3]) -> V
     .into_iter()
     .filter_map(|r| {
         let h = Vector3::from_fn(|i, _| -lines[i].normal.dot(&(r * offsets[i])));
-        let t = inverse * h - r * origin;
-        t.iter().all(|v| v.is_finite()).then_some((r, t))
+        let pose = (r, lu.solve(&h)? - r * origin);
+        lines.iter().all(|l| line_holds(l, &pose)).then_some(pose)
     })
     .collect()
 }

@@ -52,6 +52,12 @@ const POLISH_STEPS: usize = 6;
 /// stay far above it.
 const RESIDUAL_TOLERANCE: f64 = 1e-9;
 
+/// `f ≡ 0` (a continuum of rotations) when every coefficient of the degree-8 polynomial is at most this.
+/// The coefficients are sums of a few hundred products of four entries of `K₂`, `K₃`, which are bounded
+/// by 1 (unit-norm constraints rotated): rounding leaves at most ~1e-13 where they cancel exactly; a
+/// configuration whose polynomial is that small is within ~1e-13 of degenerate in every coefficient.
+const CONTINUUM_TOLERANCE: f64 = 1e-12;
+
 /// Two polished rotations closer than this (Frobenius) are one solution found twice.
 const DUPLICATE_TOLERANCE: f64 = 1e-9;
 
@@ -81,6 +87,11 @@ pub fn rotations(a: &Vector3<f64>, b: &Vector3<f64>, m: [Matrix3<f64>; 2]) -> Ve
     let q2 = frame_with_row(b, 0);
     let k = unit_m.map(|mi| coefficient_matrix(&(q1 * mi * q2.transpose())));
     let polynomial = resultant(&k);
+    // `f` is a sum of products of four entries of the `K` (each at most 1 in magnitude): coefficients
+    // that all vanish to rounding mean a continuum of rotations, and its "roots" would be noise.
+    if polynomial.iter().all(|c| c.abs() <= CONTINUUM_TOLERANCE) {
+        return Vec::new();
+    }
     let reversed: Vec<f64> = polynomial.iter().rev().copied().collect();
     // β from τ = tan(β/2) in [−1, 1] and from u = cot(β/2) in [−1, 1], as (cos β, sin β).
     let half_angles = real_roots_in(&polynomial, -1.0, 1.0)

@@ -157,10 +157,23 @@ impl Sample {
 }
 
 /// The six constraint residuals of a pose, each a sine: for a point, `‖y × x‖ / ‖x‖` (two components
-/// folded into one norm here) and the sign of its depth; for a line, `n · x / ‖x‖` for each object
-/// point `x` in the camera frame. Returns the largest absolute residual and whether every point is in
-/// front (`y · x > 0`).
+/// folded into one norm here); for a line, `n · x / max(‖x‖, D)` for each object point `x` in the
+/// camera frame, with `D` the largest distance between the sample's world points (so that a pose
+/// placing an object point next to the camera centre is judged by the object's size, not by the
+/// vanishing distance). Returns the largest absolute residual and whether every point is in front
+/// (`y · x > 0`).
 pub fn residuals(features: &[Feature; 3], (r, t): &Pose) -> (f64, bool) {
+    let world: Vec<Vector3<f64>> = features
+        .iter()
+        .flat_map(|f| match f {
+            Feature::Point { point, .. } => vec![*point],
+            Feature::Line { endpoints, .. } => endpoints.to_vec(),
+        })
+        .collect();
+    let extent = world
+        .iter()
+        .flat_map(|p| world.iter().map(move |q| (p - q).norm()))
+        .fold(0.0, f64::max);
     let (mut worst, mut in_front): (f64, bool) = (0.0, true);
     for feature in features {
         match feature {
@@ -173,7 +186,7 @@ pub fn residuals(features: &[Feature; 3], (r, t): &Pose) -> (f64, bool) {
             Feature::Line { normal, endpoints } => {
                 for p in endpoints {
                     let x = r * p + t;
-                    worst = worst.max((normal.normalize().dot(&x) / x.norm()).abs());
+                    worst = worst.max((normal.normalize().dot(&x) / x.norm().max(extent)).abs());
                 }
             }
         }
@@ -357,4 +370,80 @@ fn bearing_frame(bearing: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let y = bearing.normalize();
     let axis = if y.x.abs() < 0.6 { 0 } else { 1 };
     (y, y.cross(&Vector3::ith(axis, 1.0)).normalize())
+}
+
+/// Offsets from an exact degeneracy swept by [`sweep_degeneracy`] (relative to the scene's size).
+pub const OFFSETS: [f64; 8] = [1e-2, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12, 1e-14, 0.0];
+
+/// Bound on the six constraints' residuals (sines) of poses returned near a degeneracy. The kernel
+/// accepts rotations whose normalised constraints hold to 1e-9 (its `RESIDUAL_TOLERANCE`): next to a
+/// double root Newton's method converges only linearly and stops there. A line's residual is that
+/// times `‖R cᵢ‖ / ‖x‖`-like ratios of object size to depth, and the normalisation of the eliminated
+/// constraints, both below 100 in these scenes (depths 1-6, objects within the frustum).
+pub const NEAR_DEGENERATE_RESIDUAL: f64 = 1e-7;
+
+/// Draws per offset in [`sweep_degeneracy`].
+pub const SWEEP_DRAWS: usize = 100;
+
+/// Near a degeneracy, built by `make(rng, offset)` at each of [`OFFSETS`]: every returned pose is
+/// finite, a rotation, puts every point in front and satisfies the six constraints within `angle`
+/// ([`NEAR_DEGENERATE_RESIDUAL`] is the bound to use); the
+/// truth is found to [`POSE_TOLERANCE`] whenever `κ ≤ KAPPA_LIMIT` and `offset ≥ truth_down_to` (a
+/// solver whose own elimination degenerates before the problem does passes a larger `truth_down_to`
+/// and says why), and whenever poses are returned and
+/// the truth is not among them to `C κ ε`, the draw is counted as lost (only allowed when `κ` exceeds
+/// the limit). Prints one line per offset: how many draws returned no pose, how many found the truth,
+/// how many lost it, and the largest `κ`. Returns, per offset, (no pose, found, lost).
+pub fn sweep_degeneracy(
+    name: &str,
+    solver: impl Fn(&[Feature; 3]) -> Vec<Pose>,
+    seed: u64,
+    angle: f64,
+    max: usize,
+    truth_down_to: f64,
+    mut make: impl FnMut(&mut Rng, f64) -> Sample,
+) -> Vec<(usize, usize, usize)> {
+    let mut rng = Rng::new(seed);
+    let mut rows = Vec::new();
+    for offset in OFFSETS {
+        let (mut empty, mut found, mut lost, mut worst_kappa, mut worst_residual) = (0, 0, 0, 0.0f64, 0.0f64);
+        for draw in 0..SWEEP_DRAWS {
+            let sample = make(&mut rng, offset);
+            let poses = solver(&sample.features);
+            let what = format!("{name}, offset {offset:e}, draw {draw}");
+            assert_valid(&poses, &sample.features, angle, max, &what);
+            for pose in &poses {
+                worst_residual = worst_residual.max(residuals(&sample.features, pose).0);
+            }
+            let (error, kappa) = (sample.error(&poses), sample.conditioning());
+            let kappa = if kappa.is_finite() { kappa } else { f64::INFINITY };
+            worst_kappa = worst_kappa.max(kappa);
+            if kappa <= KAPPA_LIMIT && offset >= truth_down_to {
+                assert!(error <= POSE_TOLERANCE, "{what}: error {error:e} with κ = {kappa:e}");
+            }
+            if poses.is_empty() {
+                empty += 1;
+            } else if error <= (CONDITIONED_ERROR * kappa * EPS).max(POSE_TOLERANCE) {
+                found += 1;
+            } else {
+                lost += 1;
+            }
+        }
+        println!(
+            "{name}, offset {offset:e}: {empty} draws with no pose, truth within max(Cκε, 1e-8) in {found}, lost in \
+             {lost}; largest κ {worst_kappa:.1e}; largest constraint residual {worst_residual:.1e}"
+        );
+        rows.push((empty, found, lost));
+    }
+    rows
+}
+
+/// A random unit vector orthogonal to `v`.
+pub fn orthogonal_unit(rng: &mut Rng, v: &Vector3<f64>) -> Vector3<f64> {
+    v.cross(&rng.unit_vector3()).normalize()
+}
+
+/// A random pose: uniform rotation, translation of length up to 4.
+pub fn random_pose(rng: &mut Rng) -> (Matrix3<f64>, Vector3<f64>) {
+    (rng.rotation(), rng.unit_vector3() * rng.uniform_in(0.0, 4.0))
 }

@@ -46,3 +46,144 @@ fn every_solution_found_by_multistart_newton_is_returned() {
     println!("p1p2l multistart: {checked} distinct solutions checked");
     assert!(checked >= 100, "{checked}");
 }
+
+/// A point and two lines in the camera frame as a sample under a random pose.
+fn mixed_sample(rng: &mut Rng, point: Vector3<f64>, lines: [[Vector3<f64>; 2]; 2]) -> Sample {
+    let (r, t) = random_pose(rng);
+    Sample::from_camera_frame(rng, KINDS, &[point], &lines, r, t)
+}
+
+#[test]
+fn point_on_a_line_gives_valid_poses_or_none() {
+    // The point `offset` off the first line: at 0 the third rotation constraint vanishes (a continuum).
+    let rows = sweep_degeneracy(
+        "p1p2l, point on a line",
+        solve,
+        6_204,
+        NEAR_DEGENERATE_RESIDUAL,
+        4,
+        0.0,
+        |rng, offset| {
+            let [a, b] = [camera_point(rng, 1.0), camera_point(rng, 1.0)];
+            let point = a + (b - a) * rng.uniform_in(0.2, 0.8) + orthogonal_unit(rng, &(b - a)) * offset;
+            let other = [camera_point(rng, 1.0), camera_point(rng, 1.0)];
+            mixed_sample(rng, point, [[a, b], other])
+        },
+    );
+    assert!(rows[0].0 == 0 && rows[0].2 == 0, "{rows:?}");
+}
+
+#[test]
+fn parallel_lines_and_point_at_their_crossing_give_valid_poses_or_none() {
+    // Parallel object lines: R d ∥ ±n₁ × n₂, then a rotation about it; well posed.
+    let parallel = sweep_degeneracy(
+        "p1p2l, parallel lines",
+        solve,
+        6_205,
+        NEAR_DEGENERATE_RESIDUAL,
+        4,
+        0.0,
+        |rng, offset| {
+            let d = rng.unit_vector3();
+            let tilted = (d + orthogonal_unit(rng, &d) * offset).normalize();
+            let (a, c) = (camera_point(rng, 1.0), camera_point(rng, 1.0));
+            let point = camera_point(rng, 1.0);
+            mixed_sample(rng, point, [[a, a + d], [c, c + tilted * 1.3]])
+        },
+    );
+    assert!(
+        parallel.iter().all(|&(empty, _, lost)| empty == 0 && lost == 0),
+        "{parallel:?}"
+    );
+    // Both lines through the point (each missing it by `offset`): the depth is then not fixed.
+    let crossing = sweep_degeneracy(
+        "p1p2l, point at the crossing",
+        solve,
+        6_206,
+        NEAR_DEGENERATE_RESIDUAL,
+        4,
+        0.0,
+        |rng, offset| {
+            let point = camera_point(rng, 1.0);
+            let [u, v] = [camera_point(rng, 1.0), camera_point(rng, 1.0)];
+            let (miss1, miss2) = (rng.unit_vector3() * offset, rng.unit_vector3() * offset);
+            mixed_sample(rng, point, [[point + miss1, u], [point + miss2, v]])
+        },
+    );
+    assert_eq!(crossing[0].2, 0, "{crossing:?}");
+    // Coincident interpretation planes: the second line in the plane of the camera centre and the first.
+    let planes = sweep_degeneracy(
+        "p1p2l, coincident planes",
+        solve,
+        6_207,
+        NEAR_DEGENERATE_RESIDUAL,
+        4,
+        0.0,
+        |rng, offset| {
+            let [a, b] = [camera_point(rng, 1.0), camera_point(rng, 1.0)];
+            let n = a.cross(&b).normalize();
+            let second = [
+                a * rng.uniform_in(0.5, 2.0) + n * offset,
+                b * rng.uniform_in(0.5, 2.0) + (a - b) * 0.3,
+            ];
+            let point = camera_point(rng, 1.0);
+            mixed_sample(rng, point, [[a, b], second])
+        },
+    );
+    assert_eq!(planes[0].2, 0, "{planes:?}");
+}
+
+#[test]
+fn invalid_input_gives_no_pose() {
+    let mut rng = Rng::new(6_208);
+    let sample = Sample::random(&mut rng, KINDS, 1.0);
+    let reference = solve(&sample.features);
+    assert!(!reference.is_empty());
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for i in 0..3 {
+            let mut f = sample.features;
+            match &mut f[i] {
+                Feature::Point { bearing, .. } => bearing.x = bad,
+                Feature::Line { normal, .. } => normal.z = bad,
+            }
+            assert!(solve(&f).is_empty(), "{bad} in feature {i}");
+            let mut f = sample.features;
+            match &mut f[i] {
+                Feature::Point { point, .. } => point.y = bad,
+                Feature::Line { endpoints, .. } => endpoints[0].x = bad,
+            }
+            assert!(solve(&f).is_empty(), "{bad} in object {i}");
+        }
+    }
+    for i in 0..3 {
+        let mut f = sample.features;
+        match &mut f[i] {
+            Feature::Point { bearing, .. } => *bearing = Vector3::zeros(),
+            Feature::Line { normal, .. } => *normal = Vector3::zeros(),
+        }
+        assert!(solve(&f).is_empty(), "zero bearing or normal {i}");
+    }
+    for i in 1..3 {
+        let mut f = sample.features;
+        if let Feature::Line { endpoints, .. } = &mut f[i] {
+            endpoints[1] = endpoints[0];
+        }
+        assert!(solve(&f).is_empty(), "coincident endpoints {i}");
+    }
+    // Huge and tiny scenes: the same poses, scaled.
+    for scale in [1e-150, 1e150] {
+        let scaled = sample.features.map(|f| match f {
+            Feature::Point { bearing, point } => Feature::Point {
+                bearing,
+                point: point * scale,
+            },
+            Feature::Line { normal, endpoints } => Feature::Line {
+                normal,
+                endpoints: endpoints.map(|p| p * scale),
+            },
+        });
+        let poses = solve(&scaled);
+        assert_eq!(poses.len(), reference.len(), "scale {scale:e}");
+        assert_valid(&poses, &scaled, 1e-9, 4, &format!("scale {scale:e}"));
+    }
+}
