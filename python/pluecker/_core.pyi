@@ -171,9 +171,15 @@ class PoseResult:
         """Why the last stage stopped (see :attr:`PoseStage.termination`)."""
     @property
     def status(self) -> str:
-        """``"success"``, ``"not_converged"`` (a stage hit its iteration cap),
-        ``"numerical_failure"`` (singular Hessian, non-finite cost) or ``"points_behind_camera"``
-        (some 3-D points or segment endpoints have ``z <= 0`` at the returned pose)."""
+        """``"success"``, ``"not_converged"`` (a stage hit its iteration cap; robust: the sampling
+        loop stopped on ``max_ransac_iterations`` or ``time_budget`` before reaching ``confidence``),
+        ``"numerical_failure"`` (singular Hessian, non-finite cost), ``"points_behind_camera"``
+        (some 3-D points or segment endpoints — of the inliers when robust — have ``z <= 0`` at the
+        returned pose), and with ``robust=True``: ``"too_few_inliers"`` (the best model has fewer than
+        ``min_inliers`` inliers, e.g. all-outlier data or thresholds too tight; the pose is that
+        model's, unrefined, and should not be used) or ``"no_hypothesis"`` (no sample gave a pose in
+        front of the camera: every sample degenerate, or no minimal solver for the data's mix, see
+        :attr:`ransac_stop`; the pose is NaN)."""
     @property
     def success(self) -> bool:
         """``status == "success"``."""
@@ -190,6 +196,53 @@ class PoseResult:
     @property
     def estimated_camera(self) -> Optional[Camera]:
         """The intrinsics estimated by ``method="linear"`` (None for the other methods)."""
+    @property
+    def inliers_points(self) -> NDArray[np.bool_]:
+        """(N,) bool: the points the returned pose was fitted to — the final inliers when robust
+        (reprojection distance ``<= point_threshold`` px at the returned pose), else all True."""
+    @property
+    def inliers_lines(self) -> NDArray[np.bool_]:
+        """(M,) bool: the lines used — when robust, those whose two observed endpoints lie at an RMS
+        distance ``<= line_threshold`` px from the projected 3-D line at the returned pose; else all
+        True."""
+    @property
+    def ransac_iterations(self) -> int:
+        """Minimal samples drawn by the robust loop (0 when not robust)."""
+    @property
+    def ransac_models_scored(self) -> int:
+        """Poses scored (a sample gives up to four; 0 when not robust)."""
+    @property
+    def ransac_local_optimizations(self) -> int:
+        """Local optimisations run, one per new best model (0 when not robust)."""
+    @property
+    def ransac_degenerate_samples(self) -> int:
+        """Samples that gave no pose in front of the camera (0 when not robust)."""
+    @property
+    def ransac_time_seconds(self) -> float:
+        """Wall time of the sampling loop, local optimisation included (0.0 when not robust)."""
+    @property
+    def ransac_stop(self) -> Optional[str]:
+        """Why the sampling loop stopped: ``"confidence"`` (enough samples for ``confidence`` at the
+        best model's inlier fractions), ``"iteration_cap"``, ``"time_budget"`` or
+        ``"no_solvable_sample"`` (no mix of the data has a minimal solver); None when not robust."""
+    @property
+    def covariance(self) -> Optional[NDArray[np.float64]]:
+        """(6, 6) covariance ``σ² (JᵀJ)⁻¹`` of the pose at the returned pose: the rotation as the
+        tangent vector ``ω`` of ``R ← exp(ω) R`` (radians, camera frame; first three), then the
+        translation (world units). ``J`` is the Jacobian of the reprojection residuals of the used
+        correspondences (the inliers when robust). ``σ`` is :attr:`sigma_px`. Computed for every call;
+        None when ``JᵀJ`` is singular (the used data do not fix the pose) or not finite, when ``σ``
+        cannot be estimated (at most 6 residuals), or when the pose is NaN. First order: the
+        Cramér-Rao bound at the estimate, meaningful after the refinement."""
+    @property
+    def covariance_source(self) -> Optional[str]:
+        """``"given"`` (``sigma_px`` was passed), ``"estimated"`` (from the residuals), or None when
+        :attr:`covariance` is None."""
+    @property
+    def sigma_px(self) -> Optional[float]:
+        """The pixel noise σ of :attr:`covariance`: the given ``sigma_px``, or
+        ``σ̂ = sqrt(Σ r² / (m − 6))`` over the ``m`` residuals of the used correspondences (two per
+        point, two per line); None if ``m <= 6``."""
     def to_dict(self) -> "_PoseResultDict":
         """Plain-Python form (nested lists, floats, strings, None), JSON-serialisable."""
     def __repr__(self) -> str: ...
@@ -228,6 +281,17 @@ class _PoseResultDict(TypedDict):
     time_seconds: float
     stages: list[_PoseStageDict]
     estimated_camera: Optional[_CameraDict]
+    inliers_points: list[bool]
+    inliers_lines: list[bool]
+    ransac_iterations: int
+    ransac_models_scored: int
+    ransac_local_optimizations: int
+    ransac_degenerate_samples: int
+    ransac_time_seconds: float
+    ransac_stop: Optional[str]
+    covariance: Optional[list[list[float]]]
+    covariance_source: Optional[str]
+    sigma_px: Optional[float]
 
 def estimate_pose(
     camera: Camera,
@@ -243,6 +307,15 @@ def estimate_pose(
     initial_pose: Optional[Tuple[ArrayLike, ArrayLike]] = None,
     max_iterations: int = 200,
     refine_max_iterations: int = 50,
+    robust: bool = False,
+    point_threshold: float = 4.0,
+    line_threshold: float = 4.0,
+    confidence: float = 0.9999,
+    max_ransac_iterations: int = 100000,
+    time_budget: Optional[float] = None,
+    seed: int = 0,
+    min_inliers: int = 6,
+    sigma_px: Optional[float] = None,
 ) -> PoseResult:
     """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera (Phong & Horaud 1995).
 
@@ -269,6 +342,23 @@ def estimate_pose(
         max_iterations: iteration cap of the algebraic stage (trust region, Levenberg-Marquardt,
             Newton); >= 1.
         refine_max_iterations: iteration cap of the refinement; >= 1.
+        robust: estimate robustly to outliers: LO-RANSAC over points and lines together (minimal
+            samples of three correspondences of any mix solved by P3P / P2P1L / P1P2L / P3L, MSAC
+            scoring, local optimisation of each new best model), then the reprojection refinement
+            (``refine``) on the final inliers. ``method`` is not used on this path. The options below
+            are checked whether or not ``robust`` is set.
+        point_threshold: inlier threshold of a point: reprojection distance, pixels; > 0.
+        line_threshold: inlier threshold of a line: RMS of the distances of its two observed
+            endpoints to the projected 3-D line, pixels; > 0.
+        confidence: stop when the probability of having drawn an all-inlier sample reaches this, at
+            the best model's inlier fractions of points and of lines; in (0, 1).
+        max_ransac_iterations: cap on the samples drawn; >= 1.
+        time_budget: wall-time budget of the sampling loop, seconds (None: only the cap bounds it).
+        seed: seed of the sampler (>= 0); the same seed and data give the same result.
+        min_inliers: fewest inliers a model needs (>= 3); fewer gives ``status="too_few_inliers"``,
+            and fewer correspondences than this in all is a TooFewCorrespondencesError.
+        sigma_px: standard deviation of the pixel noise for :attr:`PoseResult.covariance`; None
+            estimates it from the residuals (see :attr:`PoseResult.sigma_px`); > 0.
 
     Returns:
         A :class:`PoseResult`. A solver that ran but failed is not an exception: check
@@ -276,7 +366,7 @@ def estimate_pose(
 
     Raises:
         ShapeError, NonFiniteError, TooFewCorrespondencesError (fewer than 3 points and lines
-        together; 6 points for ``linear``), DegenerateConfigurationError (collinear points, all
+        together; 6 points for ``linear``; ``min_inliers`` when robust), DegenerateConfigurationError (collinear points, all
         lines parallel or concurrent, a zero-length segment, coplanar points for ``linear``),
         InvalidOptionError, all subclasses of PlueckerError (a ValueError); TypeError for an
         argument that is not an array of real numbers.
@@ -450,6 +540,15 @@ class PointTriangulation(TriangulationReport):
     def X(self) -> NDArray[np.float64]:
         """The point (3,), world coordinates (NaN when ``status == "at_infinity"``)."""
     @property
+    def covariance(self) -> Optional[NDArray[np.float64]]:
+        """First-order covariance (3, 3) of :attr:`X`, world units²: ``(JᵀJ)⁻¹`` with ``J`` the Jacobian
+        of the whitened residuals of eq. 18 at ``X``, so the ``cov`` given carries the scale (without
+        ``cov`` every view counts as 1 px isotropic noise); not rescaled by the cost. Computed for every
+        method and status whenever ``X`` is finite (for ``linear``: evaluated at the linear point). None
+        when ``X`` is not finite or ``JᵀJ`` is numerically singular (``‖H‖_F ‖H⁻¹‖_F > 1e12``: a point at
+        or near infinity, parallax below about 1e-6 rad). First order: at low parallax it is large and
+        right while the depth error stays a small fraction of the depth."""
+    @property
     def method(self) -> str:
         """See :attr:`TriangulationReport.method`."""
     @property
@@ -489,7 +588,8 @@ class PointTriangulation(TriangulationReport):
     def time_seconds(self) -> float:
         """See :attr:`TriangulationReport.time_seconds`."""
     def to_dict(self) -> dict[str, Any]:
-        """The report fields and ``"X"`` as a plain dict (JSON-serialisable)."""
+        """The report fields, ``"X"`` and ``"covariance"`` (nested lists or None) as a plain dict
+        (JSON-serialisable)."""
     def __repr__(self) -> str: ...
 
 def triangulate_point(
@@ -587,6 +687,10 @@ class PointTriangulations(BatchReport):
     def X(self) -> NDArray[np.float64]:
         """Points (n, 3), world coordinates (NaN where there is no estimate)."""
     @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Covariances (n, 3, 3) of the points, world units² (see :attr:`PointTriangulation.covariance`);
+        NaN where there is no point or no covariance."""
+    @property
     def cost(self) -> NDArray[np.float64]:
         """Eq. 19 at each point (n,)."""
     @property
@@ -673,6 +777,29 @@ class LineTriangulation(TriangulationReport):
     def direction(self) -> NDArray[np.float64]:
         """Unit direction (3,) of the line, world frame."""
     @property
+    def chart_axes(self) -> NDArray[np.float64]:
+        """The axes ``e1``, ``e2`` (2, 3) of the chart of :attr:`covariance`: ``e1 = d × a / ‖d × a‖``
+        with ``d`` = :attr:`direction` and ``a = (1, 0, 0)`` when ``|d[0]| < 0.9``, else ``(0, 1, 0)``;
+        ``e2 = d × e1`` (``(e1, e2, d)`` right-handed orthonormal)."""
+    @property
+    def covariance(self) -> Optional[NDArray[np.float64]]:
+        """First-order covariance (4, 4) of the line in the chart ``(a1, a2, t1, t2)`` at the estimate:
+        the line through ``point + t1 e1 + t2 e2`` with direction ``direction + a1 e1 + a2 e2``
+        (:attr:`chart_axes`). ``t`` (world units) is where the line crosses the plane through
+        :attr:`point` normal to :attr:`direction`; ``a`` (dimensionless, radians to first order) tilts
+        the direction towards ``e1``, ``e2``. ``(JᵀJ)⁻¹`` with ``J`` the Jacobian of the whitened
+        residuals of eq. 18, so the covariances given (``cov``, or from ``sigma`` for segments) carry
+        the scale; homogeneous lines without ``cov`` count as unit residual covariance (1 px offset,
+        1/1000 rad angle). Computed for every method and status; None when ``JᵀJ`` is numerically
+        singular (a line nearly in an epipolar plane of every pair of views). See
+        :meth:`plucker_covariance` and :meth:`point_direction_covariance`."""
+    def plucker_covariance(self) -> Optional[NDArray[np.float64]]:
+        """Covariance (6, 6), rank 4, of the unit Plücker coordinates :attr:`plucker` (first order, from
+        :attr:`covariance`); None when :attr:`covariance` is None."""
+    def point_direction_covariance(self) -> Optional[NDArray[np.float64]]:
+        """Covariance (6, 6), rank 4, of ``(point, direction)`` stacked (world units, then unit
+        direction; first order, from :attr:`covariance`); None when :attr:`covariance` is None."""
+    @property
     def method(self) -> str:
         """See :attr:`TriangulationReport.method`."""
     @property
@@ -712,7 +839,8 @@ class LineTriangulation(TriangulationReport):
     def time_seconds(self) -> float:
         """See :attr:`TriangulationReport.time_seconds`."""
     def to_dict(self) -> dict[str, Any]:
-        """The report fields, ``"plucker"``, ``"point"`` and ``"direction"`` as a plain dict."""
+        """The report fields, ``"plucker"``, ``"point"``, ``"direction"``, ``"chart_axes"`` and
+        ``"covariance"`` (None when there is none) as a plain dict."""
     def __repr__(self) -> str: ...
 
 def triangulate_line(
@@ -777,6 +905,17 @@ class QuadricTriangulation(TriangulationReport):
     def semi_axes(self) -> NDArray[np.float64]:
         """Semi-axis lengths (3,), decreasing, world units; a 0 is a flat ellipsoid."""
     @property
+    def covariance(self) -> Optional[NDArray[np.float64]]:
+        """First-order covariance (9, 9) of the ellipsoid in the chart ``(c1, c2, c3, S11, S12, S13, S22,
+        S23, S33)``: the centre (world units) and the upper triangle of the shape matrix
+        ``S = axes diag(semi_axes²) axes^T`` (world units²), so that ``Q = [S - c c^T, -c; -c^T, -1]``
+        (an off-diagonal ``S_ij`` moves ``S_ij`` and ``S_ji``). A chart of the 9 dof of a real ellipsoid
+        that stays regular for spheres and flat ellipsoids. ``(JᵀJ)⁻¹`` with ``J`` the Jacobian of the
+        whitened residuals of eq. 18, so ``cov`` carries the scale (without it each conic residual
+        entry counts as unit variance: give ``cov``, e.g. from :func:`fit_conic`). Computed for every
+        method and status with a finite estimate; None when ``JᵀJ`` is numerically singular. For a
+        flat estimate it ignores the constraint ``S ⪰ 0`` (the estimate is on that boundary)."""
+    @property
     def method(self) -> str:
         """See :attr:`TriangulationReport.method`."""
     @property
@@ -817,8 +956,8 @@ class QuadricTriangulation(TriangulationReport):
     def time_seconds(self) -> float:
         """See :attr:`TriangulationReport.time_seconds`."""
     def to_dict(self) -> dict[str, Any]:
-        """The report fields, ``"Q"``, ``"primal"`` (None when flat), ``"centre"``, ``"axes"`` and
-        ``"semi_axes"`` as a plain dict."""
+        """The report fields, ``"Q"``, ``"primal"`` (None when flat), ``"centre"``, ``"axes"``,
+        ``"semi_axes"`` and ``"covariance"`` (None when there is none) as a plain dict."""
     def __repr__(self) -> str: ...
 
 def triangulate_quadric(
@@ -869,6 +1008,13 @@ class LineTriangulations(BatchReport):
     @property
     def direction(self) -> NDArray[np.float64]:
         """Unit directions (n, 3), world frame."""
+    @property
+    def chart_axes(self) -> NDArray[np.float64]:
+        """Chart axes (n, 2, 3) of each covariance (see :attr:`LineTriangulation.chart_axes`)."""
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Covariances (n, 4, 4) in each line's chart (see :attr:`LineTriangulation.covariance`); NaN
+        where there is no line or no covariance."""
     @property
     def cost(self) -> NDArray[np.float64]:
         """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
@@ -972,6 +1118,10 @@ class QuadricTriangulations(BatchReport):
     @property
     def semi_axes(self) -> NDArray[np.float64]:
         """Semi-axis lengths (n, 3), decreasing, world units."""
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Covariances (n, 9, 9) in the centre/shape chart (see :attr:`QuadricTriangulation.covariance`);
+        NaN where there is no ellipsoid or no covariance."""
     @property
     def cost(self) -> NDArray[np.float64]:
         """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""

@@ -1,8 +1,9 @@
 """The ``pluecker`` command line.
 
-``pluecker pose INPUT.json``
+``pluecker pose INPUT.json [--robust] [--point-threshold PX] [--line-threshold PX] [--seed N] [--sigma PX]``
     Estimates a camera pose from the correspondences in a JSON file (``-`` reads standard input) and
-    prints ``PoseResult.to_dict()`` as JSON. The schema is documented in ``docs/cli.md``.
+    prints ``PoseResult.to_dict()`` as JSON (with the inlier masks and the covariance). The schema is
+    documented in ``docs/cli.md``.
 ``pluecker reproduce phong-horaud-1995``
     Re-runs the experiments of Phong, Horaud, Yassine & Tao 1995 (section 5) in simulation and writes
     tables, figures and a JSON summary.
@@ -44,7 +45,19 @@ OPTIONS = {
     "max_iterations": ("max_iterations", (int,)),
     "refine_max_iterations": ("refine_max_iterations", (int,)),
     "initial_pose": ("initial_pose", (dict,)),
+    "robust": ("robust", (bool,)),
+    "point_threshold": ("point_threshold", (int, float)),
+    "line_threshold": ("line_threshold", (int, float)),
+    "confidence": ("confidence", (int, float)),
+    "max_ransac_iterations": ("max_ransac_iterations", (int,)),
+    "time_budget": ("time_budget", (int, float, type(None))),
+    "seed": ("seed", (int,)),
+    "min_inliers": ("min_inliers", (int,)),
+    "sigma_px": ("sigma_px", (int, float)),
 }
+#: Command-line flag (``args`` attribute) → keyword of ``estimate_pose``; a flag given wins over the file.
+POSE_FLAGS = {"robust": "robust", "point_threshold": "point_threshold", "line_threshold": "line_threshold",
+              "seed": "seed", "sigma": "sigma_px", "time_budget": "time_budget"}
 #: Array key → trailing shape of one row.
 ARRAYS = {"points2d": (2,), "points3d": (3,), "lines2d": (2, 2), "lines3d": (2, 3)}
 
@@ -125,6 +138,19 @@ def build_parser() -> argparse.ArgumentParser:
                       help="skip the reprojection refinement: the paper's estimator alone")
     pose.add_argument("--penalty", type=_positive_float, metavar="L",
                       help="penalty λ on the unit and orthogonality constraints (default 50)")
+    pose.add_argument("--robust", action="store_true", default=None,
+                      help="robust to outliers: LO-RANSAC over points and lines, then the refinement on the "
+                      "inliers (the output gains inlier masks and the RANSAC report)")
+    pose.add_argument("--point-threshold", type=_positive_float, metavar="PX",
+                      help="inlier threshold of a point, reprojection distance in pixels (default 4)")
+    pose.add_argument("--line-threshold", type=_positive_float, metavar="PX",
+                      help="inlier threshold of a line, RMS distance of its endpoints to the projected line in "
+                      "pixels (default 4)")
+    pose.add_argument("--seed", type=_non_negative_int, metavar="N", help="seed of the RANSAC sampler (default 0)")
+    pose.add_argument("--time-budget", type=_positive_float, metavar="S",
+                      help="wall-time budget of the RANSAC loop, seconds (default none: the iteration cap bounds it)")
+    pose.add_argument("--sigma", type=_positive_float, metavar="PX",
+                      help="pixel noise σ for the covariance (default: estimated from the residuals)")
     pose.set_defaults(handler=_pose)
 
     tri = commands.add_parser(
@@ -282,6 +308,9 @@ def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
         kwargs["refine"] = args.refine
     if args.penalty is not None:
         kwargs["penalty"] = args.penalty
+    for flag, keyword in POSE_FLAGS.items():
+        if getattr(args, flag) is not None:
+            kwargs[keyword] = getattr(args, flag)
     return kwargs
 
 

@@ -6,7 +6,7 @@ use crate::convert::{points, rotation, segments, vector};
 use crate::errors::{invalid_argument, shape_error, solve};
 use crate::result::PyPoseResult;
 use nalgebra::{Matrix3, Vector3};
-use pluecker::pose::{Correspondences, Method, PoseOptions};
+use pluecker::pose::{Correspondences, Method, PoseOptions, RansacOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -90,12 +90,65 @@ fn options(
     Ok(opts)
 }
 
-/// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences.
+/// The keyword arguments of the robust estimator, as given.
+pub struct RobustArgs {
+    pub robust: bool,
+    pub point_threshold: f64,
+    pub line_threshold: f64,
+    pub confidence: f64,
+    pub max_ransac_iterations: i64,
+    pub time_budget: Option<f64>,
+    pub seed: i64,
+    pub min_inliers: i64,
+}
+
+impl RobustArgs {
+    /// The options, checked whether or not `robust` is set (a bad value is an error either way);
+    /// `None` when not robust.
+    fn options(&self) -> PyResult<Option<RansacOptions>> {
+        let budget = match self.time_budget {
+            None => None,
+            Some(seconds) if seconds.is_finite() && seconds >= 0.0 => Some(std::time::Duration::from_secs_f64(seconds)),
+            Some(seconds) => {
+                return Err(invalid_argument(
+                    "time_budget",
+                    format!("must be None or a finite number of seconds ≥ 0, got {seconds}"),
+                ))
+            }
+        };
+        if self.seed < 0 {
+            return Err(invalid_argument("seed", format!("must be ≥ 0, got {}", self.seed)));
+        }
+        if self.min_inliers < 3 {
+            return Err(invalid_argument(
+                "min_inliers",
+                format!("must be at least 3, got {}", self.min_inliers),
+            ));
+        }
+        let opts = RansacOptions {
+            point_threshold: self.point_threshold,
+            line_threshold: self.line_threshold,
+            confidence: self.confidence,
+            max_iterations: iteration_cap("max_ransac_iterations", self.max_ransac_iterations)?,
+            time_budget: budget,
+            seed: self.seed as u64,
+            min_inliers: self.min_inliers as usize,
+            ..RansacOptions::default()
+        };
+        opts.validate().map_err(crate::errors::to_py_err)?;
+        Ok(self.robust.then_some(opts))
+    }
+}
+
+/// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
+/// robustly (LO-RANSAC), with its covariance.
 #[pyfunction]
 #[pyo3(signature = (
     camera, points2d = None, points3d = None, lines2d = None, lines3d = None, method = "trust-region", *,
     penalty = 50.0, normalize = true, refine = true, initial_pose = None, max_iterations = 200,
-    refine_max_iterations = 50
+    refine_max_iterations = 50, robust = false, point_threshold = 4.0, line_threshold = 4.0,
+    confidence = 0.9999, max_ransac_iterations = 100_000, time_budget = None, seed = 0, min_inliers = 6,
+    sigma_px = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
@@ -112,9 +165,18 @@ pub fn estimate_pose(
     initial_pose: Option<&Bound<'_, PyTuple>>,
     max_iterations: i64,
     refine_max_iterations: i64,
+    robust: bool,
+    point_threshold: f64,
+    line_threshold: f64,
+    confidence: f64,
+    max_ransac_iterations: i64,
+    time_budget: Option<f64>,
+    seed: i64,
+    min_inliers: i64,
+    sigma_px: Option<f64>,
 ) -> PyResult<PyPoseResult> {
     let camera = camera.get().inner;
-    let opts = options(
+    let mut opts = options(
         method,
         penalty,
         normalize,
@@ -123,6 +185,18 @@ pub fn estimate_pose(
         max_iterations,
         refine_max_iterations,
     )?;
+    opts.robust = RobustArgs {
+        robust,
+        point_threshold,
+        line_threshold,
+        confidence,
+        max_ransac_iterations,
+        time_budget,
+        seed,
+        min_inliers,
+    }
+    .options()?;
+    opts.sigma_px = sigma_px;
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let result = solve(py, move || {
         pluecker::estimate_pose(&camera, &corr, &opts).map_err(|e| match e {

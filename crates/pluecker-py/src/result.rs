@@ -3,8 +3,9 @@
 
 use crate::camera::PyCamera;
 use crate::convert::{matrix3_rows, matrix3_to_py, vector_to_py};
-use nalgebra::{Vector3, Vector4};
-use numpy::{PyArray1, PyArray2};
+use nalgebra::{Matrix6, Vector3, Vector4};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::pose::StageReport;
 use pluecker::{PoseResult, Status};
 use pyo3::prelude::*;
@@ -106,6 +107,11 @@ impl PyPoseResult {
         PyPoseResult { inner }
     }
 
+    fn covariance_rows(&self) -> Option<Vec<[f64; 6]>> {
+        let c: &Matrix6<f64> = self.inner.covariance.as_ref()?;
+        Some((0..6).map(|i| std::array::from_fn(|j| c[(i, j)])).collect())
+    }
+
     fn dual_quaternion_values(&self) -> [f64; 8] {
         let q = &self.inner.dual_quaternion;
         [q.r[0], q.r[1], q.r[2], q.r[3], q.s[0], q.s[1], q.s[2], q.s[3]]
@@ -203,6 +209,62 @@ impl PyPoseResult {
         self.inner.estimated_camera.map(PyCamera::wrap)
     }
 
+    #[getter]
+    fn inliers_points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        PyArray1::from_slice(py, &self.inner.inliers_points)
+    }
+
+    #[getter]
+    fn inliers_lines<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        PyArray1::from_slice(py, &self.inner.inliers_lines)
+    }
+
+    #[getter]
+    fn ransac_iterations(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.iterations)
+    }
+
+    #[getter]
+    fn ransac_models_scored(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.models_scored)
+    }
+
+    #[getter]
+    fn ransac_local_optimizations(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.local_optimizations)
+    }
+
+    #[getter]
+    fn ransac_degenerate_samples(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.degenerate_samples)
+    }
+
+    #[getter]
+    fn ransac_time_seconds(&self) -> f64 {
+        self.inner.ransac.as_ref().map_or(0.0, |r| r.time_seconds)
+    }
+
+    #[getter]
+    fn ransac_stop(&self) -> Option<&'static str> {
+        self.inner.ransac.as_ref().map(|r| r.stop.as_str())
+    }
+
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        let c = self.inner.covariance.as_ref()?;
+        Some(Array2::from_shape_fn((6, 6), |(i, j)| c[(i, j)]).into_pyarray(py))
+    }
+
+    #[getter]
+    fn covariance_source(&self) -> Option<&'static str> {
+        self.inner.covariance_source.map(|s| s.as_str())
+    }
+
+    #[getter]
+    fn sigma_px(&self) -> Option<f64> {
+        self.inner.sigma_px
+    }
+
     /// Plain-Python (JSON-serialisable) form.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.inner;
@@ -230,6 +292,17 @@ impl PyPoseResult {
             Some(c) => d.set_item("estimated_camera", camera_dict(py, c)?)?,
             None => d.set_item("estimated_camera", py.None())?,
         }
+        d.set_item("inliers_points", &r.inliers_points)?;
+        d.set_item("inliers_lines", &r.inliers_lines)?;
+        d.set_item("ransac_iterations", self.ransac_iterations())?;
+        d.set_item("ransac_models_scored", self.ransac_models_scored())?;
+        d.set_item("ransac_local_optimizations", self.ransac_local_optimizations())?;
+        d.set_item("ransac_degenerate_samples", self.ransac_degenerate_samples())?;
+        d.set_item("ransac_time_seconds", self.ransac_time_seconds())?;
+        d.set_item("ransac_stop", self.ransac_stop())?;
+        d.set_item("covariance", self.covariance_rows())?;
+        d.set_item("covariance_source", self.covariance_source())?;
+        d.set_item("sigma_px", r.sigma_px)?;
         Ok(d)
     }
 
