@@ -13,8 +13,8 @@ use crate::triangulation::{options, renamed, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, read, read_mask, shape_string, Dim};
 use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
 use crate::triangulation_batch_lines::per_observation;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray2, PyArray3};
 use pluecker::triangulation::batch::{
     triangulate_points as core_points, triangulate_points_linear, LinearPoints, PointTracks,
 };
@@ -31,6 +31,8 @@ use std::time::Instant;
 pub struct PyPointTriangulations {
     /// Row-major `(n, 3)` points, world frame.
     x: Vec<f64>,
+    /// Row-major `(n, 3, 3)` covariances, NaN where there is none.
+    covariance: Vec<f64>,
 }
 
 impl TrackColumns for PyPointTriangulations {
@@ -39,11 +41,17 @@ impl TrackColumns for PyPointTriangulations {
 
     fn push(&mut self, track: PointTriangulation) -> Report {
         self.x.extend_from_slice(track.point.as_slice());
+        match &track.covariance {
+            // Symmetric: column-major storage is the row-major layout.
+            Some(c) => self.covariance.extend_from_slice(c.as_slice()),
+            None => self.covariance.extend([f64::NAN; 9]),
+        }
         track.report
     }
 
     fn push_missing(&mut self) {
         self.x.extend([f64::NAN; 3]);
+        self.covariance.extend([f64::NAN; 9]);
     }
 }
 
@@ -55,12 +63,14 @@ impl PyPointTriangulations {
         let mut report = PyBatchReport::with_capacity(Method::Linear, n);
         let mut columns = PyPointTriangulations {
             x: Vec::with_capacity(3 * n),
+            covariance: Vec::with_capacity(9 * n),
         };
         for (t, outcome) in points.outcomes.into_iter().enumerate() {
             match outcome {
                 Ok(status) => {
                     report.push_uncertified(points.costs[t], status.as_str(), seconds);
                     columns.x.extend_from_slice(&points.points[3 * t..3 * t + 3]);
+                    columns.covariance.extend_from_slice(&points.covariances[9 * t..9 * t + 9]);
                 }
                 Err(e) => report.reject(&mut columns, t, e),
             }
@@ -74,6 +84,13 @@ impl PyPointTriangulations {
     #[getter(X)]
     fn points<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let array = Array2::from_shape_vec((self.x.len() / 3, 3), self.x.clone())
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        Ok(array.into_pyarray(py))
+    }
+
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let array = Array3::from_shape_vec((self.covariance.len() / 9, 3, 3), self.covariance.clone())
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
         Ok(array.into_pyarray(py))
     }

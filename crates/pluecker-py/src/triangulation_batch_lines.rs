@@ -13,7 +13,7 @@ use crate::errors::{guarded, invalid_argument, shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed};
 use crate::triangulation_arrays::{read, read_any, read_mask, shape_string, Dim};
 use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
-use crate::triangulation_line::LINE_NAMES;
+use crate::triangulation_line::{chart_axes, LINE_NAMES};
 use crate::triangulation_quadric::QUADRIC_NAMES;
 use nalgebra::Matrix3x4;
 use numpy::ndarray::{ArrayD, IxDyn};
@@ -44,6 +44,8 @@ pub struct PyLineTriangulations {
     plucker: Vec<f64>,
     point: Vec<f64>,
     direction: Vec<f64>,
+    chart_axes: Vec<f64>,
+    covariance: Vec<f64>,
 }
 
 impl TrackColumns for PyLineTriangulations {
@@ -54,6 +56,11 @@ impl TrackColumns for PyLineTriangulations {
         self.plucker.extend_from_slice(track.plucker.as_slice());
         self.point.extend_from_slice(track.point.as_slice());
         self.direction.extend_from_slice(track.direction.as_slice());
+        self.chart_axes.extend(row_major(&chart_axes(&track.chart)));
+        match &track.covariance {
+            Some(c) => self.covariance.extend(row_major(c)),
+            None => self.covariance.extend([f64::NAN; 16]),
+        }
         track.report
     }
 
@@ -61,6 +68,8 @@ impl TrackColumns for PyLineTriangulations {
         self.plucker.extend([f64::NAN; 6]);
         self.point.extend([f64::NAN; 3]);
         self.direction.extend([f64::NAN; 3]);
+        self.chart_axes.extend([f64::NAN; 6]);
+        self.covariance.extend([f64::NAN; 16]);
     }
 }
 
@@ -81,6 +90,16 @@ impl PyLineTriangulations {
         array(py, &self.direction, &[self.direction.len() / 3, 3])
     }
 
+    #[getter]
+    fn chart_axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        array(py, &self.chart_axes, &[self.chart_axes.len() / 6, 2, 3])
+    }
+
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        array(py, &self.covariance, &[self.covariance.len() / 16, 4, 4])
+    }
+
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         slf.as_super().get().repr("LineTriangulations")
     }
@@ -95,6 +114,7 @@ pub struct PyQuadricTriangulations {
     centre: Vec<f64>,
     semi_axes: Vec<f64>,
     axes: Vec<f64>,
+    covariance: Vec<f64>,
 }
 
 /// Row-major entries of a matrix.
@@ -115,6 +135,10 @@ impl TrackColumns for PyQuadricTriangulations {
         self.centre.extend_from_slice(track.centre.as_slice());
         self.semi_axes.extend_from_slice(track.semi_axes.as_slice());
         self.axes.extend(row_major(&track.axes));
+        match &track.covariance {
+            Some(c) => self.covariance.extend(row_major(c)),
+            None => self.covariance.extend([f64::NAN; 81]),
+        }
         track.report
     }
 
@@ -124,6 +148,7 @@ impl TrackColumns for PyQuadricTriangulations {
         self.centre.extend([f64::NAN; 3]);
         self.semi_axes.extend([f64::NAN; 3]);
         self.axes.extend([f64::NAN; 9]);
+        self.covariance.extend([f64::NAN; 81]);
     }
 }
 
@@ -158,6 +183,11 @@ impl PyQuadricTriangulations {
     #[getter]
     fn axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         array(py, &self.axes, &[self.tracks(), 3, 3])
+    }
+
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        array(py, &self.covariance, &[self.tracks(), 9, 9])
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {

@@ -3,8 +3,10 @@
 use crate::errors::{invalid_argument, non_finite, shape_error, solve};
 use crate::triangulation::{options, renamed, PyTriangulationReport};
 use crate::triangulation_arrays::{cameras, covariances2, first_non_finite_row, read_any, same_count, shape_string};
-use nalgebra::{Matrix2, Vector2, Vector3, Vector6};
-use numpy::PyArray1;
+use crate::triangulation_quadric::{matrix_to_py, rows};
+use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
+use numpy::{PyArray1, PyArray2};
+use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
 };
@@ -26,6 +28,8 @@ pub struct PyLineTriangulation {
     plucker: Vector6<f64>,
     point: Vector3<f64>,
     direction: Vector3<f64>,
+    chart: LineChart,
+    covariance: Option<Matrix4<f64>>,
 }
 
 impl PyLineTriangulation {
@@ -35,6 +39,8 @@ impl PyLineTriangulation {
                 plucker: result.plucker,
                 point: result.point,
                 direction: result.direction,
+                chart: result.chart,
+                covariance: result.covariance,
             },
         );
         Py::new(py, init)
@@ -58,13 +64,40 @@ impl PyLineTriangulation {
         PyArray1::from_slice(py, self.direction.as_slice())
     }
 
-    /// Plain-Python (JSON-serialisable) form: the report fields, `plucker`, `point`, `direction`.
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.covariance.as_ref().map(|m| matrix_to_py::<4, 4>(py, m))
+    }
+
+    #[getter]
+    fn chart_axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        matrix_to_py::<2, 3>(py, &chart_axes(&self.chart))
+    }
+
+    /// The 6x6 covariance of the unit Plücker coordinates (`LineChart::plucker_covariance`).
+    fn plucker_covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.covariance
+            .as_ref()
+            .map(|c| matrix_to_py::<6, 6>(py, &self.chart.plucker_covariance(c)))
+    }
+
+    /// The 6x6 covariance of `(point, direction)` (`LineChart::point_direction_covariance`).
+    fn point_direction_covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.covariance
+            .as_ref()
+            .map(|c| matrix_to_py::<6, 6>(py, &self.chart.point_direction_covariance(c)))
+    }
+
+    /// Plain-Python (JSON-serialisable) form: the report fields, `plucker`, `point`, `direction`,
+    /// `chart_axes`, `covariance`.
     fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let d = slf.as_super().get().report_dict(slf.py())?;
         let me = slf.get();
         d.set_item("plucker", me.plucker.as_slice())?;
         d.set_item("point", me.point.as_slice())?;
         d.set_item("direction", me.direction.as_slice())?;
+        d.set_item("chart_axes", rows::<2, 3>(&chart_axes(&me.chart)))?;
+        d.set_item("covariance", me.covariance.as_ref().map(rows::<4, 4>))?;
         Ok(d)
     }
 
@@ -82,6 +115,11 @@ impl PyLineTriangulation {
             slf.as_super().get().repr_fields()
         )
     }
+}
+
+/// The chart axes `e₁`, `e₂` of a line's covariance as the rows of a 2x3 matrix.
+pub(crate) fn chart_axes(chart: &LineChart) -> Matrix2x3<f64> {
+    Matrix2x3::from_rows(&[chart.axes[0].transpose(), chart.axes[1].transpose()])
 }
 
 /// Homogeneous image lines and, when they come from segments without `cov`, their covariances.

@@ -3,8 +3,9 @@
 use crate::errors::{non_finite, solve};
 use crate::triangulation::{options, renamed, PyTriangulationReport, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, covariances2, first_non_finite_row, read, same_count, Dim};
-use nalgebra::{Vector2, Vector3};
-use numpy::PyArray1;
+use crate::triangulation_quadric::{matrix_to_py, rows};
+use nalgebra::{Matrix3, Vector2, Vector3};
+use numpy::{PyArray1, PyArray2};
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -14,13 +15,17 @@ use pyo3::types::PyDict;
 #[derive(Debug, Clone)]
 pub struct PyPointTriangulation {
     point: Vector3<f64>,
+    covariance: Option<Matrix3<f64>>,
 }
 
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
         let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report })
-            .add_subclass(PyPointTriangulation { point: result.point });
+            .add_subclass(PyPointTriangulation {
+                point: result.point,
+                covariance: result.covariance,
+            });
         Py::new(py, init)
     }
 }
@@ -32,10 +37,16 @@ impl PyPointTriangulation {
         PyArray1::from_slice(py, self.point.as_slice())
     }
 
-    /// Plain-Python (JSON-serialisable) form: the report fields and `X`.
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.covariance.as_ref().map(|m| matrix_to_py::<3, 3>(py, m))
+    }
+
+    /// Plain-Python (JSON-serialisable) form: the report fields, `X` and `covariance`.
     fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let d = slf.as_super().get().report_dict(slf.py())?;
         d.set_item("X", slf.get().point.as_slice())?;
+        d.set_item("covariance", slf.get().covariance.as_ref().map(rows::<3, 3>))?;
         Ok(d)
     }
 

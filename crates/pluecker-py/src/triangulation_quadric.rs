@@ -7,20 +7,23 @@ use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
+use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// Core argument names → Python argument names of `triangulate_quadric`.
 pub(crate) const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
 
-fn matrix_to_py<'py, const R: usize, const C: usize>(
+/// A fresh `(R, C)` float64 array of a matrix.
+pub(crate) fn matrix_to_py<'py, const R: usize, const C: usize>(
     py: Python<'py>,
     m: &SMatrix<f64, R, C>,
 ) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((R, C), |(i, j)| m[(i, j)]).into_pyarray(py)
 }
 
-fn rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> Vec<Vec<f64>> {
+/// The rows of a matrix as nested lists (for `to_dict`).
+pub(crate) fn rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> Vec<Vec<f64>> {
     (0..R).map(|i| (0..C).map(|j| m[(i, j)]).collect()).collect()
 }
 
@@ -33,6 +36,7 @@ pub struct PyQuadricTriangulation {
     centre: Vector3<f64>,
     axes: Matrix3<f64>,
     semi_axes: Vector3<f64>,
+    covariance: Option<QuadricCovariance>,
 }
 
 impl PyQuadricTriangulation {
@@ -44,6 +48,7 @@ impl PyQuadricTriangulation {
                 centre: r.centre,
                 axes: r.axes,
                 semi_axes: r.semi_axes,
+                covariance: r.covariance,
             });
         Py::new(py, init)
     }
@@ -76,8 +81,13 @@ impl PyQuadricTriangulation {
         PyArray1::from_slice(py, self.semi_axes.as_slice())
     }
 
+    #[getter]
+    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.covariance.as_ref().map(|m| matrix_to_py::<9, 9>(py, m))
+    }
+
     /// Plain-Python (JSON-serialisable) form: the report fields, `Q`, `primal`, `centre`, `axes`,
-    /// `semi_axes`.
+    /// `semi_axes`, `covariance`.
     fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let d = slf.as_super().get().report_dict(slf.py())?;
         let me = slf.get();
@@ -86,6 +96,7 @@ impl PyQuadricTriangulation {
         d.set_item("centre", me.centre.as_slice())?;
         d.set_item("axes", rows::<3, 3>(&me.axes))?;
         d.set_item("semi_axes", me.semi_axes.as_slice())?;
+        d.set_item("covariance", me.covariance.as_ref().map(rows::<9, 9>))?;
         Ok(d)
     }
 
