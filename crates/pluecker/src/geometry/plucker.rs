@@ -226,7 +226,7 @@ impl LineChart {
     /// when the direction is zero or an entry is not finite.
     pub fn new(pivot: &Vector3<f64>, direction: &Vector3<f64>) -> Option<LineChart> {
         let n = direction.norm();
-        if !(n > 0.0 && n.is_finite()) || !pivot.iter().all(|v| v.is_finite()) {
+        if !(n > 0.0 && n.is_finite() && pivot.iter().all(|v| v.is_finite())) {
             return None;
         }
         let d = direction / n;
