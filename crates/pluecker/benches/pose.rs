@@ -12,12 +12,20 @@
 //! truth, so that a fast wrong answer cannot pass unnoticed (`FAILED` marks a status other than
 //! `success` or a rotation error above 0.1 rad).
 //!
+//! A third group, `robust/<outliers>`, times the robust pipeline (`PoseOptions::robust`, LO-RANSAC then
+//! the refinement on the inliers, default options, seed 0) on 100 points + 30 lines with 1 px noise where
+//! 0, 25, 50 or 75 % of the points and of the lines are replaced by random observations (a random pixel,
+//! a random segment of at least 40 px) in the 640 x 480 image; its setup line adds the samples drawn,
+//! the inliers found and the number of true inliers missed or outliers kept.
+//!
 //! Run: `cargo bench -p pluecker --bench pose` (a few minutes on 2 cores), or append `-- --quick` for a
 //! rough pass, or `-- pipeline/100` to filter.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
+use nalgebra::Vector2;
 use pluecker::geometry::quaternion::rotation_distance;
-use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, Status};
+use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, RansacOptions, Status};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, Scene, SceneKind};
 use std::time::Duration;
@@ -90,5 +98,77 @@ fn pipeline(c: &mut Criterion) {
     bench_group(c, "pipeline", true);
 }
 
-criterion_group!(benches, estimator, pipeline);
+/// Outlier ratios of the `robust` group.
+const OUTLIER_RATIOS: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
+/// Inlier threshold of the `robust` group (the default), pixels.
+const THRESHOLD_PX: f64 = 4.0;
+
+/// 100 points + 30 lines, 1 px noise, a fraction `ratio` of each kind replaced by random observations.
+fn outlier_problem(ratio: f64, seed: u64) -> (Scene, Correspondences) {
+    let (n_points, n_lines) = (100, 30);
+    let scene = random_scene(SceneKind::General, n_points, n_lines, seed);
+    let mut rng = Rng::new(seed);
+    let mut corr = scene.noisy(SIGMA_PX, true, &mut rng);
+    let mut pixel = |rng: &mut Rng| Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+    for i in rng.sample_indices(n_points, (ratio * n_points as f64).round() as usize) {
+        corr.points2d[i] = pixel(&mut rng);
+    }
+    for i in rng.sample_indices(n_lines, (ratio * n_lines as f64).round() as usize) {
+        corr.lines2d[i] = loop {
+            let s = [pixel(&mut rng), pixel(&mut rng)];
+            if (s[0] - s[1]).norm() > 40.0 {
+                break s;
+            }
+        };
+    }
+    (scene, corr)
+}
+
+fn robust(c: &mut Criterion) {
+    let mut group = c.benchmark_group("robust");
+    group
+        .sample_size(30)
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500));
+    let opts = PoseOptions {
+        robust: Some(RansacOptions::default()),
+        ..Default::default()
+    };
+    for ratio in OUTLIER_RATIOS {
+        let (scene, corr) = outlier_problem(ratio, 14);
+        let name = format!("100-points-30-lines-{}pct-outliers", (100.0 * ratio).round());
+        let r = estimate_pose(&scene.camera, &corr, &opts).expect("valid input");
+        let truth = ReprojectionCost::of(&scene.camera, &corr).errors(&(scene.rotation, scene.translation));
+        let mask: Vec<bool> = r.inliers_points.iter().chain(&r.inliers_lines).copied().collect();
+        let missed = truth
+            .iter()
+            .zip(&mask)
+            .filter(|(e, m)| **e <= THRESHOLD_PX && !**m)
+            .count();
+        let kept = truth
+            .iter()
+            .zip(&mask)
+            .filter(|(e, m)| **e > THRESHOLD_PX && **m)
+            .count();
+        let rotation_error = rotation_distance(&r.rotation, &scene.rotation);
+        let report = r.ransac.as_ref().expect("robust report");
+        let failed = r.status != Status::Success || !(rotation_error <= FAILED_ROTATION_RAD);
+        eprintln!(
+            "setup robust/{name}: {} status {} samples {} models {} LO {} inliers {} (true inliers missed {missed}, outliers kept {kept}) rotation error {rotation_error:.2e} rad translation error {:.2e}",
+            if failed { "FAILED" } else { "ok" },
+            r.status.as_str(),
+            report.iterations,
+            report.models_scored,
+            report.local_optimizations,
+            mask.iter().filter(|&&m| m).count(),
+            (r.translation - scene.translation).norm(),
+        );
+        group.bench_function(name, |b| {
+            b.iter(|| estimate_pose(black_box(&scene.camera), black_box(&corr), &opts))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, estimator, pipeline, robust);
 criterion_main!(benches);

@@ -321,29 +321,33 @@ impl Objective<6> for ReprojectionCost<'_> {
     }
 }
 
-/// `JᵀJ` counts as singular when its smallest eigenvalue is below this fraction of its largest.
+/// `JᵀJ` counts as singular when its smallest eigenvalue may be below this fraction of its largest
+/// (see [`covariance_from_information`] for the test).
 pub const RELATIVE_RANK_TOLERANCE: f64 = 1e-12;
 
 /// The 6x6 covariance of `(ω, t)` (rotation as a tangent vector in radians, translation in world
 /// units) at `pose` for isotropic pixel noise of standard deviation `sigma_px`: `σ² (JᵀJ)⁻¹`,
 /// symmetrised. At the true pose this is the Cramér-Rao bound for unbiased estimators. `None` if `JᵀJ`
-/// is not finite or is singular (smallest eigenvalue ≤ [`RELATIVE_RANK_TOLERANCE`] × largest).
+/// is not finite or is singular (see [`covariance_from_information`]).
 pub fn pose_covariance(cost: &ReprojectionCost<'_>, pose: &Pose, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
     covariance_from_information(&cost.information(pose), sigma_px)
 }
 
-/// `σ² (JᵀJ)⁻¹`, symmetrised, from the normal matrix `information = JᵀJ` (see [`pose_covariance`]);
-/// `None` when it is not finite or singular (smallest eigenvalue ≤ [`RELATIVE_RANK_TOLERANCE`] ×
-/// largest).
+/// `σ² (JᵀJ)⁻¹`, symmetrised, from the normal matrix `A = JᵀJ`. `None` when `A` is not finite, not
+/// positive definite (its Cholesky factorisation fails), or too close to singular:
+/// `1 / tr(A⁻¹) ≤ ` [`RELATIVE_RANK_TOLERANCE`] `· tr(A)`. Since `λ_min ≥ 1 / tr(A⁻¹)` and
+/// `λ_max ≤ tr(A)`, an accepted `A` has `λ_min > 1e-12 λ_max`, and a rejected one has
+/// `λ_min ≤ 36e-12 λ_max` (each bound is within a factor 6 of the eigenvalue it bounds): the
+/// eigenvalue test to within a factor 36, at the price of one Cholesky factorisation.
 pub fn covariance_from_information(information: &SMatrix<f64, 6, 6>, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
     if information.iter().any(|v| !v.is_finite()) {
         return None;
     }
-    let eig = information.symmetric_eigenvalues();
-    if !(eig.max() > 0.0 && eig.min() > RELATIVE_RANK_TOLERANCE * eig.max()) {
+    let inverse = information.cholesky()?.inverse();
+    if !(1.0 / inverse.trace() > RELATIVE_RANK_TOLERANCE * information.trace()) {
         return None;
     }
-    let cov = information.try_inverse()? * (sigma_px * sigma_px);
+    let cov = inverse * (sigma_px * sigma_px);
     cov.iter().all(|v| v.is_finite()).then(|| 0.5 * (cov + cov.transpose()))
 }
 

@@ -296,7 +296,7 @@ pub fn ransac(
 }
 
 /// Re-fits `best` on its inliers by the trust region `lo` and keeps the result while the MSAC score
-/// improves, for at most [`LOCAL_ROUNDS`] rounds.
+/// improves and the inliers change, for at most [`LOCAL_ROUNDS`] rounds.
 fn local_optimization(
     camera: &Camera,
     corr: &Correspondences,
@@ -305,9 +305,14 @@ fn local_optimization(
     lo: &TrustRegionOptions,
     mut best: Best,
 ) -> Best {
+    let mut fitted: Option<(Vec<bool>, Vec<bool>)> = None;
     for _ in 0..LOCAL_ROUNDS {
-        let (points, lines) = data.inliers(&best.pose, tau);
-        let inliers = subset(corr, &points, &lines);
+        let masks = data.inliers(&best.pose, tau);
+        if fitted.as_ref() == Some(&masks) {
+            break; // the same inliers again: the last re-fit already minimised their error
+        }
+        let inliers = subset(corr, &masks.0, &masks.1);
+        fitted = Some(masks);
         if inliers.n_points() + inliers.n_lines() < 3 {
             break;
         }
