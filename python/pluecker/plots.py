@@ -25,13 +25,13 @@ YLABELS = {
 }
 
 # The paper's convention: dashed for Faugeras-Toscani, full for the non-linear method.
-_LINESTYLES = {"full": "-", "dashed": "--", "dotted": ":"}
-_COLORS = {"full": "black", "dashed": "tab:red", "dotted": "tab:blue"}
+_LINESTYLES = {"full": "-", "dashed": "--", "dotted": ":", "dashdot": "-."}
+_COLORS = {"full": "black", "dashed": "tab:red", "dotted": "tab:blue", "dashdot": "tab:green"}
 
 
 @dataclass(frozen=True)
 class Series:
-    """One curve; ``style`` is "full", "dashed" or "dotted"."""
+    """One curve; ``style`` is "full", "dashed", "dotted" or "dashdot"."""
 
     label: str
     x: Sequence[float]

@@ -14,7 +14,11 @@ projections, and every perturbation is drawn with ``numpy.random.default_rng``:
   (50 lines), uniform noise of maximum amplitude ``a`` in each pixel coordinate.
 * **mismatch sweep** (Figure 9): 400 points (200 lines), 0.1 px noise, and ``k`` point mismatched
   pairs: the image points of two points on two different lines are swapped, which also makes a line
-  mismatched pair (Figure 8).
+  mismatched pair (Figure 8). The robust estimator (``estimate_pose(..., robust=True)``: LO-RANSAC over
+  minimal samples, then the refinement on the inliers) is the third curve of Figure 9.
+* **outlier sweep** (not in the paper): 100 points, 0.1 px noise, and a fraction ``f`` (0 to 80 %) of the
+  image points replaced by points drawn uniformly in the bounding box of the 460 true image points, for the
+  linear method, the default pipeline and the robust estimator.
 
 Each cell is the mean over ``trials`` independent draws. A draw depends only on the seed, the sweep,
 the trial and (count sweep only) the value, so every estimator sees the same data, the noise and
@@ -45,6 +49,8 @@ DEFAULT_OUT = Path("results") / NAME
 POINT_COUNTS = (10, 20, 40, 60, 80, 100, 200, 300, 400, 460)
 NOISE_LEVELS = (0.0, 0.01, 0.05, 0.1, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 5.0)
 MISMATCH_COUNTS = tuple(range(11))
+OUTLIER_FRACTIONS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
+OUTLIER_SWEEP_POINTS = 100
 COUNT_SWEEP_NOISE_PX = 0.1
 NOISE_SWEEP_POINTS = 100
 MISMATCH_POINTS = 400
@@ -70,6 +76,7 @@ class Settings:
     point_counts: tuple[int, ...] = POINT_COUNTS
     noise_levels: tuple[float, ...] = NOISE_LEVELS
     mismatch_counts: tuple[int, ...] = MISMATCH_COUNTS
+    outlier_fractions: tuple[float, ...] = OUTLIER_FRACTIONS
 
     @classmethod
     def create(cls, trials: int | None = None, seed: int = 0, quick: bool = False) -> Settings:
@@ -83,6 +90,7 @@ class Settings:
             point_counts=(20, 100, 460),
             noise_levels=(0.0, 1.0, 3.0),
             mismatch_counts=(0, 5, 10),
+            outlier_fractions=(0.0, 0.5, 0.8),
         )
 
 
@@ -141,13 +149,20 @@ def rng_for(seed: int, sweep: str, value: float, trial: int) -> np.random.Genera
 
 
 def draw_observation(
-    truth: Truth, rng: np.random.Generator, n_points: int, noise_px: float, mismatched_pairs: int = 0
+    truth: Truth, rng: np.random.Generator, n_points: int, noise_px: float, mismatched_pairs: int = 0,
+    outlier_fraction: float = 0.0,
 ) -> Observation:
     """``n_points`` of the truth's points in random order, uniform pixel noise of maximum amplitude
-    ``noise_px`` per coordinate, and ``mismatched_pairs`` swaps of image points between two points
-    that lie on two different lines (lines join points ``2i`` and ``2i+1``)."""
+    ``noise_px`` per coordinate, ``mismatched_pairs`` swaps of image points between two points
+    that lie on two different lines (lines join points ``2i`` and ``2i+1``), and
+    ``round(outlier_fraction * n_points)`` image points replaced by points drawn uniformly in the
+    bounding box of all the truth's image points."""
     index = rng.permutation(len(truth.points3d))[:n_points]
     points2d = truth.points2d[index] + rng.uniform(-noise_px, noise_px, size=(n_points, 2))
+    n_outliers = int(round(outlier_fraction * n_points))
+    if n_outliers:
+        low, high = truth.points2d.min(axis=0), truth.points2d.max(axis=0)
+        points2d[rng.permutation(n_points)[:n_outliers]] = rng.uniform(low, high, size=(n_outliers, 2))
     if mismatched_pairs:
         while True:
             chosen = rng.choice(n_points - n_points % 2, size=2 * mismatched_pairs, replace=False)
@@ -169,13 +184,16 @@ class Estimator:
     method: str
     data: str  # "points" or "lines"
     refine: bool = False
+    robust: bool = False  # LO-RANSAC first (the refinement then runs on its inliers)
 
     @property
     def key(self) -> str:
-        return f"{self.method}/{self.data}" + ("/refined" if self.refine else "")
+        return f"{self.method}/{self.data}" + ("/robust" if self.robust else "/refined" if self.refine else "")
 
     @property
     def label(self) -> str:
+        if self.robust:
+            return f"robust (LO-RANSAC + {self.method} refinement), {self.data}"
         name = "linear (Faugeras-Toscani)" if self.method == "linear" else self.method
         return f"{name}, {self.data}" + (" + refinement" if self.refine else "")
 
@@ -187,6 +205,7 @@ LINEAR = Estimator("linear", "points")
 RTT_LINES = Estimator("rotation-then-translation", "lines")
 TR_LINES = Estimator("trust-region", "lines")
 TR_POINTS = Estimator("trust-region", "points")
+ROBUST_POINTS = Estimator("trust-region", "points", refine=True, robust=True)
 SOLVER_COMPARISON = (
     TR_POINTS,
     Estimator("trust-region-exact", "points"),
@@ -216,7 +235,8 @@ def run_and_score(truth: Truth, obs: Observation, est: Estimator) -> Score:
     data = ({"points2d": obs.points2d, "points3d": obs.points3d} if est.data == "points"
             else {"lines2d": obs.lines2d, "lines3d": obs.lines3d})
     try:
-        res = pluecker.estimate_pose(truth.camera, method=est.method, refine=est.refine, **data)
+        extra = {"robust": True, "seed": 0} if est.robust else {}
+        res = pluecker.estimate_pose(truth.camera, method=est.method, refine=est.refine, **data, **extra)
     except pluecker.PlueckerError as exc:
         return Score(nan, failed=True, error=f"{type(exc).__name__}: {exc}")
     R, t = np.asarray(res.R), np.asarray(res.t)
@@ -323,7 +343,11 @@ def _sweeps(settings: Settings) -> list[Sweep]:
               paper + refined + SOLVER_COMPARISON[1:], paired=True),
         Sweep("mismatch", settings.mismatch_counts,
               lambda truth, rng, k: draw_observation(truth, rng, MISMATCH_POINTS, COUNT_SWEEP_NOISE_PX, int(k)),
-              (LINEAR, RTT_LINES, TR_POINTS), paired=True),
+              (LINEAR, RTT_LINES, TR_POINTS, ROBUST_POINTS), paired=True),
+        Sweep("outliers", settings.outlier_fractions,
+              lambda truth, rng, f: draw_observation(truth, rng, OUTLIER_SWEEP_POINTS, COUNT_SWEEP_NOISE_PX,
+                                                     outlier_fraction=f),
+              (LINEAR, TR_POINTS.refined(), ROBUST_POINTS), paired=True),
     ]
 
 
@@ -404,13 +428,15 @@ TABLES = (
 def _row_label(sweep: str, est: Estimator, value: float) -> str:
     if sweep == "count" and est.data == "lines":
         return str(int(value) // 2)
+    if sweep == "outliers":
+        return f"{100 * value:.0f}"
     return f"{value:g}" if sweep != "noise" else f"{value:.2f}"
 
 
 def _first_header(sweep: str, est: Estimator) -> str:
     if sweep == "count":
         return "lines" if est.data == "lines" else "points"
-    return "noise (px)" if sweep == "noise" else "mismatched pairs"
+    return {"noise": "noise (px)", "mismatch": "mismatched pairs", "outliers": "outliers (%)"}[sweep]
 
 
 def markdown_table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
@@ -482,7 +508,15 @@ def render_tables(results: Results, settings: Settings) -> str:
             f"{MISMATCH_POINTS} points ({MISMATCH_POINTS // 2} lines through consecutive pairs), "
             f"{COUNT_SWEEP_NOISE_PX:g} px noise; k pairs of points on different lines have their image points "
             f"swapped (Figure 8). `refine=False`. {mean_note}", "",
-            comparison_table(results, "mismatch", (LINEAR, RTT_LINES, TR_POINTS), TRANSFORMATION + (IMAGE[2],))]
+            comparison_table(results, "mismatch", (LINEAR, RTT_LINES, TR_POINTS, ROBUST_POINTS),
+                             TRANSFORMATION + (IMAGE[2],))]
+    out += ["", "## Extra table: random outliers (not in the paper)", "",
+            f"{OUTLIER_SWEEP_POINTS} points, {COUNT_SWEEP_NOISE_PX:g} px noise, and the given percentage of the image "
+            "points replaced by points drawn uniformly in the bounding box of the 460 true image points. The robust "
+            "estimator uses its defaults (4 px point threshold, seed 0). The median translation error shows where "
+            f"each method breaks down. {mean_note}", "",
+            comparison_table(results, "outliers", (LINEAR, TR_POINTS.refined(), ROBUST_POINTS),
+                             TRANSFORMATION + (MEDIAN_TRANSLATION, IMAGE[2]) + PERFORMANCE)]
     return "\n".join(out) + "\n"
 
 
@@ -490,9 +524,10 @@ def render_tables(results: Results, settings: Settings) -> str:
 # Figures, summary, entry point
 
 
-def _series(results: Results, sweep: str, est: Estimator, metric: str) -> tuple[list[float], list[float]]:
+def _series(results: Results, sweep: str, est: Estimator, metric: str,
+            stat: str = "mean") -> tuple[list[float], list[float]]:
     cells = results[sweep][est.key]
-    return list(cells), [c.mean(metric) for c in cells.values()]
+    return list(cells), [c.mean(metric) if stat == "mean" else c.median(metric) for c in cells.values()]
 
 
 def render_figures(results: Results, out: Path) -> list[Path]:
@@ -511,13 +546,22 @@ def render_figures(results: Results, out: Path) -> list[Path]:
         files.append(plots.two_panel_figure(
             out / f"figure{number}_{what}.png",
             f"Figure {number}: {plots.YLABELS[metric]} (mean over trials)", plots.YLABELS[metric], *panels))
-    mismatch_curves = curves + ((TR_POINTS, "trust region (points)", "dotted"),)
+    robust_curve = (ROBUST_POINTS, "robust: LO-RANSAC + refinement (points)", "dashdot")
+    mismatch_curves = curves + ((TR_POINTS, "trust region (points)", "dotted"), robust_curve)
     panels = [plots.Panel("point mismatched pairs",
                           [plots.Series(label, *_series(results, "mismatch", est, metric), style)
                            for est, label, style in mismatch_curves], ylabel=plots.YLABELS[metric])
               for metric in ("axis", "angle", "translation")]
     files.append(plots.stacked_figure(out / "figure9_mismatches.png",
                                       "Figure 9: matching errors, 400 points (mean over trials)", panels))
+    outlier_curves = ((LINEAR, "Faugeras-Toscani (linear)", "dashed"),
+                      (TR_POINTS.refined(), "trust region + refinement (points)", "full"), robust_curve)
+    panels = [plots.Panel("outliers (fraction of the points)",
+                          [plots.Series(label, *_series(results, "outliers", est, metric, "median"), style)
+                           for est, label, style in outlier_curves], ylabel=plots.YLABELS[metric])
+              for metric in ("axis", "angle", "translation")]
+    files.append(plots.stacked_figure(out / "outliers.png",
+                                      f"Random outliers, {OUTLIER_SWEEP_POINTS} points (median over trials)", panels))
     return files
 
 
@@ -529,7 +573,11 @@ def summarize(results: Results, settings: Settings) -> dict:
     linear_t = medians[LINEAR.label]["translation"]
     claim_noise = all(medians[e.label]["translation"] < linear_t for e in (RTT_LINES, TR_POINTS))
     k = max(settings.mismatch_counts)
-    mismatch = {est.label: results["mismatch"][est.key][k].median("translation") for est in (LINEAR, RTT_LINES)}
+    mismatch = {est.label: results["mismatch"][est.key][k].median("translation")
+                for est in (LINEAR, RTT_LINES, ROBUST_POINTS)}
+    outliers = {f"{v:g}": {"robust_failures": cells.failures, "robust_median_translation": cells.median("translation"),
+                           "default_failures": results["outliers"][TR_POINTS.refined().key][v].failures}
+                for v, cells in results["outliers"][ROBUST_POINTS.key].items()}
     smallest = min(settings.point_counts)
     failures = {est.key: results["count"][est.key][smallest].failures
                 for est in (LINEAR, RTT_LINES, TR_LINES, TR_POINTS)}
@@ -542,6 +590,8 @@ def summarize(results: Results, settings: Settings) -> dict:
         "mismatched_pairs": k,
         "median_translation_with_mismatches": mismatch,
         "nonlinear_beats_linear_with_mismatches": bool(mismatch[RTT_LINES.label] < mismatch[LINEAR.label]),
+        "robust_beats_nonlinear_with_mismatches": bool(mismatch[ROBUST_POINTS.label] < mismatch[RTT_LINES.label]),
+        "outliers": outliers,
     }
 
 
@@ -563,6 +613,11 @@ def summary_lines(summary: dict, settings: Settings, n_estimates: int, seconds: 
     lines.append(f"paper (Figure 9): with {summary['mismatched_pairs']} mismatched pairs the nonlinear method stays "
                  f"closer (median translation error {mm[RTT_LINES.label]:.3g} cm vs linear {mm[LINEAR.label]:.3g} cm):"
                  f" {verdict}")
+    lines.append(f"robust estimator with {summary['mismatched_pairs']} mismatched pairs: median translation error "
+                 f"{mm[ROBUST_POINTS.label]:.3g} cm")
+    trials = settings.trials
+    lines.append("random outliers, failures of " + str(trials) + " trials (robust / default pipeline): " + ", ".join(
+        f"{100 * float(v):.0f}% {o['robust_failures']}/{o['default_failures']}" for v, o in summary["outliers"].items()))
     return lines
 
 
@@ -591,7 +646,8 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
         "experiment": NAME,
         "settings": {"trials": settings.trials, "seed": settings.seed, "quick": settings.quick,
                      "point_counts": settings.point_counts, "noise_levels": settings.noise_levels,
-                     "mismatch_counts": settings.mismatch_counts, "count_sweep_noise_px": COUNT_SWEEP_NOISE_PX,
+                     "mismatch_counts": settings.mismatch_counts, "outlier_fractions": settings.outlier_fractions,
+                     "outlier_sweep_points": OUTLIER_SWEEP_POINTS, "count_sweep_noise_px": COUNT_SWEEP_NOISE_PX,
                      "noise_sweep_points": NOISE_SWEEP_POINTS, "mismatch_points": MISMATCH_POINTS},
         "truth": {"axis": truth.axis.tolist(), "angle": truth.angle, "t": truth.t.tolist()},
         "seconds": seconds,
