@@ -101,16 +101,19 @@ class Camera:
 
 class PoseStage:
     """One stage of the pose pipeline: the algebraic estimator (``"trust-region"``, ``"rotation"``
-    and ``"translation"``, ...), the linear solve (``"linear"``), or the reprojection refinement
-    (``"refinement"``). Immutable; array properties return fresh copies."""
+    and ``"translation"``, ...), the linear solve (``"linear"``), the robust sampling loop
+    (``"ransac"``), or the reprojection refinement (``"refinement"``). Immutable; array properties
+    return fresh copies."""
 
     @property
     def name(self) -> str:
         """Stage name."""
     @property
     def cost_kind(self) -> str:
-        """``"algebraic"`` (the paper's eqs. 13-15, 22 as ½ΣΦ², in normalised units) or
-        ``"reprojection"`` (½Σ squared pixel residuals)."""
+        """``"algebraic"`` (the paper's eqs. 13-15, 22 as ½ΣΦ², in normalised units),
+        ``"reprojection"`` (½Σ squared pixel residuals) or ``"msac"`` (stage ``"ransac"`` of
+        ``robust=True``: ½Σ min(e², τ²) over all correspondences, px²; its iterations are the samples
+        drawn)."""
     @property
     def R(self) -> NDArray[np.float64]:
         """Rotation (3, 3) at the end of the stage, world → camera."""

@@ -244,10 +244,13 @@ impl Status {
 /// What one stage of the pipeline did and where it ended.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StageReport {
-    /// `"trust-region"`, `"rotation"`, `"translation"`, `"linear"`, `"refinement"`, ...
+    /// `"trust-region"`, `"rotation"`, `"translation"`, `"linear"`, `"ransac"`, `"refinement"`, ...
     pub name: String,
-    /// What its cost measures: `"algebraic"` (eqs. 13-15, 22 as `½ΣΦ²`, normalised units) or
-    /// `"reprojection"` (`½ Σ` squared pixel residuals).
+    /// What its cost measures: `"algebraic"` (eqs. 13-15, 22 as `½ΣΦ²`, normalised units),
+    /// `"reprojection"` (`½ Σ` squared pixel residuals) or `"msac"` (the robust loop's truncated
+    /// reprojection cost `½ Σ min(eᵢ², τᵢ²)`, px², over all correspondences; its iterations are the
+    /// samples drawn, and it ends `closed_form` when stopped by confidence, `max_iterations` on the
+    /// iteration cap or the time budget).
     pub cost_kind: &'static str,
     /// Rotation at the end of the stage (world → camera).
     pub rotation: Matrix3<f64>,
@@ -280,7 +283,7 @@ pub struct PoseResult {
     pub angle: f64,
     /// The estimator that ran.
     pub method: Method,
-    /// Iterations summed over stages.
+    /// Iterations summed over stages (the `ransac` stage of the robust path counts its samples).
     pub iterations: usize,
     /// Cost of the last stage at the returned pose (see [`StageReport::cost_kind`]).
     pub final_cost: f64,

@@ -20,6 +20,9 @@ use crate::error::Result;
 use crate::geometry::lines::interpretation_plane_normal;
 use nalgebra::{Matrix3, Vector2, Vector3};
 
+/// Points per batch of the scoring loop.
+const LANES: usize = 4;
+
 /// Thresholds of the inlier test, pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Thresholds {
@@ -113,15 +116,17 @@ impl Prepared {
         let (r, t, c) = (&pose.0, &pose.1, &self.camera);
         let [x, y, z] = self.points[i].object;
         let pz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t.z;
-        if !(pz > 0.0) {
-            return f64::INFINITY;
-        }
         let iz = 1.0 / pz;
         let xn = (r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + t.x) * iz;
         let yn = (r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + t.y) * iz;
         let du = c.fx * xn + c.skew * yn + c.cx - self.points[i].pixel[0];
         let dv = c.fy * yn + c.cy - self.points[i].pixel[1];
-        du * du + dv * dv
+        // A select rather than an early return, so that batches of points stay branch-free.
+        if pz > 0.0 {
+            du * du + dv * dv
+        } else {
+            f64::INFINITY
+        }
     }
 
     /// Mean squared distance of line `i`'s observed endpoints to its projected line (infinite when an
@@ -159,11 +164,18 @@ impl Prepared {
         // Compare doubled sums with 2·bound: one multiplication for the whole call.
         let limit = 2.0 * bound;
         let mut sum = 0.0;
-        for i in 0..self.points.len() {
-            sum += self.point_error2(pose, i).min(tau.point2);
+        // Points in batches of LANES without branches inside (the compiler vectorises them), the
+        // early exit tested once per batch.
+        let full = self.points.len() - self.points.len() % LANES;
+        for i0 in (0..full).step_by(LANES) {
+            let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, i0 + l));
+            sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
             if sum > limit {
                 return None;
             }
+        }
+        for i in full..self.points.len() {
+            sum += self.point_error2(pose, i).min(tau.point2);
         }
         for i in 0..self.lines.len() {
             sum += self.line_error2(pose, i).min(tau.line2);
