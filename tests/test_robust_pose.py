@@ -180,3 +180,17 @@ def test_non_robust_results_report_all_inliers_and_no_ransac(seed):
                 "covariance", "covariance_source", "sigma_px"):
         assert key in d, key
     assert d["covariance_source"] == "estimated" and np.array(d["covariance"]).shape == (6, 6)
+
+
+def test_without_refinement_the_ransac_model_is_returned(seed):
+    scene, data = noisy_scene(60, 10, 0.5, seed)
+    r = pluecker.estimate_pose(scene["camera"], **data, robust=True, refine=False)
+    assert [s.name for s in r.stages] == ["ransac"] and r.stages[0].cost_kind == "msac"
+    assert r.status == "success" and r.stages[0].termination == "closed_form"
+    assert r.stages[0].iterations == r.ransac_iterations
+    check_masks(r, scene, data, f"seed={seed}")
+    # The local optimisation already fitted the inliers: the refinement moves the pose by far less
+    # than its own standard deviation.
+    refined = pluecker.estimate_pose(scene["camera"], **data, robust=True)
+    e = tangent_error(r, {"R": refined.R, "t": refined.t})
+    assert float(e @ np.linalg.solve(refined.covariance, e)) < 1.0

@@ -4,18 +4,17 @@ use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::reprojection::{count_behind, covariance_from_information, Pose, ReprojectionCost};
+use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
-use super::{CovarianceSource, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
+use super::{Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, rotation_distance};
 use crate::optim::{
-    levenberg_marquardt, newton, trust_region, Linearization, Objective, Subproblem, Summary, Termination,
-    TrustRegionOptions,
+    levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions,
 };
-use nalgebra::{Matrix3, Matrix6, SVector, Vector3, Vector4};
+use nalgebra::{Matrix3, SVector, Vector3, Vector4};
 use std::time::Instant;
 
 pub(super) fn stage(
@@ -573,28 +572,4 @@ pub(super) fn finish(camera: &Camera, opts: &PoseOptions, started: Instant, run:
         covariance_source,
         sigma_px,
     }
-}
-
-/// `σ² (JᵀJ)⁻¹` with `σ` given or estimated as `σ̂² = Σ r² / (m − 6)` (`Σ r² = 2 × cost`).
-fn covariance(
-    linearization: Option<&Linearization<6>>,
-    residual_count: usize,
-    given: Option<f64>,
-) -> (Option<Matrix6<f64>>, Option<CovarianceSource>, Option<f64>) {
-    let Some(lin) = linearization else {
-        return (None, None, given);
-    };
-    let (sigma, source) = match given {
-        Some(sigma) => (Some(sigma), CovarianceSource::Given),
-        None if residual_count > 6 => (
-            Some((2.0 * lin.cost / (residual_count - 6) as f64).sqrt()),
-            CovarianceSource::Estimated,
-        ),
-        None => (None, CovarianceSource::Estimated),
-    };
-    let cov = sigma
-        .filter(|s| s.is_finite())
-        .and_then(|s| covariance_from_information(&lin.gauss_newton, s));
-    let source = cov.is_some().then_some(source);
-    (cov, source, sigma)
 }

@@ -9,11 +9,11 @@
 //! The pose is `(R, t)` with `x_cam = R X_world + t`; a tangent step `(ω, τ)` moves it to
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
 
-use super::Correspondences;
+use super::{Correspondences, CovarianceSource};
 use crate::camera::Camera;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
-use nalgebra::{Matrix3, SMatrix, SVector, Vector2, Vector3};
+use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
 
 /// A pose `x_cam = R X + t`.
 pub type Pose = (Matrix3<f64>, Vector3<f64>);
@@ -349,6 +349,32 @@ pub fn covariance_from_information(information: &SMatrix<f64, 6, 6>, sigma_px: f
     }
     let cov = inverse * (sigma_px * sigma_px);
     cov.iter().all(|v| v.is_finite()).then(|| 0.5 * (cov + cov.transpose()))
+}
+
+/// [`crate::pose::PoseResult::covariance`], its source and `σ` from the linearisation at the returned
+/// pose (`None` for a non-finite pose): `σ² (JᵀJ)⁻¹` with `σ` given or estimated as
+/// `σ̂² = Σ r² / (m − 6)` over `m` residuals (`Σ r² = 2 × cost`).
+pub(crate) fn covariance(
+    linearization: Option<&Linearization<6>>,
+    residual_count: usize,
+    given: Option<f64>,
+) -> (Option<Matrix6<f64>>, Option<CovarianceSource>, Option<f64>) {
+    let Some(lin) = linearization else {
+        return (None, None, given);
+    };
+    let (sigma, source) = match given {
+        Some(sigma) => (Some(sigma), CovarianceSource::Given),
+        None if residual_count > 6 => (
+            Some((2.0 * lin.cost / (residual_count - 6) as f64).sqrt()),
+            CovarianceSource::Estimated,
+        ),
+        None => (None, CovarianceSource::Estimated),
+    };
+    let cov = sigma
+        .filter(|s| s.is_finite())
+        .and_then(|s| covariance_from_information(&lin.gauss_newton, s));
+    let source = cov.is_some().then_some(source);
+    (cov, source, sigma)
 }
 
 #[cfg(test)]
