@@ -20,7 +20,7 @@ use super::covariance::whitening;
 use super::point::{solve_views, PointTriangulation};
 use super::point_cost::PointView;
 use super::point_linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
-use super::uncertainty::covariance_of_information;
+use super::uncertainty::covariance_of_information3;
 use super::views::{centre, depth_normalized, validate_cameras};
 use super::{Method, Status, TriangulationOptions};
 use crate::error::{Error, Result};
@@ -431,12 +431,12 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
     let (mut cost, mut front, mut information) = (0.0, true, Matrix3::zeros());
     for j in visible() {
         let pv = view(j)?;
-        let (r, jacobian) = pv.residual_and_jacobian(&x);
+        let (r, h) = pv.residual_and_information(&x);
         cost += r.norm_squared();
-        information += jacobian.transpose() * jacobian;
+        information += h;
         front &= pv.depth(&x) > 0.0;
     }
-    let covariance = covariance_of_information(&information);
+    let covariance = covariance_of_information3(&information);
     Ok((
         x,
         cost,

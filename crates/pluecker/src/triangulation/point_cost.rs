@@ -61,7 +61,34 @@ impl PointView {
         self.numerator(x) / self.depth(x)
     }
 
+    /// The whitened residual `r` and the information `JᵀJ = BᵀB/z²` of this view (`J = ∂r/∂X`,
+    /// `B = A − r cᵀ`, module docs) at depth `z ≠ 0`: one division and the 6 distinct entries of the
+    /// symmetric product, for the covariances of [`super::uncertainty`].
+    #[inline]
+    pub fn residual_and_information(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix3<f64>) {
+        let inv = 1.0 / self.depth(x);
+        let r = self.numerator(x) * inv;
+        let c = self.c();
+        let (mut h00, mut h01, mut h02, mut h11, mut h12, mut h22) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for k in 0..2 {
+            let b = Vector3::new(
+                self.w[(k, 0)] - r[k] * c.x,
+                self.w[(k, 1)] - r[k] * c.y,
+                self.w[(k, 2)] - r[k] * c.z,
+            );
+            h00 += b.x * b.x;
+            h01 += b.x * b.y;
+            h02 += b.x * b.z;
+            h11 += b.y * b.y;
+            h12 += b.y * b.z;
+            h22 += b.z * b.z;
+        }
+        let s = inv * inv;
+        (r, Matrix3::new(h00, h01, h02, h01, h11, h12, h02, h12, h22) * s)
+    }
+
     /// The whitened residual and its Jacobian `∂r/∂X = (A − r cᵀ)/z` (module docs), at depth `z ≠ 0`.
+    #[inline]
     pub fn residual_and_jacobian(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix2x3<f64>) {
         let z = self.depth(x);
         let r = self.numerator(x) / z;
@@ -171,6 +198,16 @@ mod tests {
         let v = PointView::new(&depth_normalized(&(p * 7.0)), &obs, &l);
         assert!((v.residual(&x) - l * (projected - obs)).norm() < 1e-12);
         assert!((v.depth(&x) - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn information_is_the_jacobian_product() {
+        for v in views() {
+            let x = Vector3::new(-0.4, 0.3, 1.5);
+            let (r, j) = v.residual_and_jacobian(&x);
+            let (r2, h) = v.residual_and_information(&x);
+            assert!((r - r2).norm() < 1e-12 * r.norm() && (h - j.transpose() * j).norm() < 1e-12 * h.norm());
+        }
     }
 
     #[test]

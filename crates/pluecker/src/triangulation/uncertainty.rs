@@ -43,13 +43,12 @@
 use super::conditioning::Similarity;
 use super::fraction;
 use super::line::LineProblem;
-use super::point_cost::{PointObjective, PointView};
+use super::point_cost::PointView;
 use super::quadric::{transform_dual, QuadricProblem};
 use crate::geometry::plucker::LineChart;
 use crate::geometry::quadric::{
     centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, CentreShape, Ellipsoid,
 };
-use crate::optim::Objective;
 use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
 
 /// Largest accepted `‖H‖_F ‖H⁻¹‖_F` of an information matrix `H = JᵀJ` (between the 2-norm condition
@@ -65,18 +64,47 @@ pub fn covariance_of_information<const N: usize>(info: &SMatrix<f64, N, N>) -> O
     if !info.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let inverse = info.cholesky()?.inverse();
+    // Cholesky only decides positive definiteness; the closed-form inverse of nalgebra (N ≤ 4, LU
+    // beyond) is several times cheaper than solving with the factor.
+    info.cholesky()?;
+    let inverse = info.try_inverse()?;
     let condition = info.norm() * inverse.norm();
     (condition.is_finite() && condition <= MAX_CONDITION).then(|| 0.5 * (inverse + inverse.transpose()))
 }
 
+/// [`covariance_of_information`] for 3x3, in closed form (the batches call it once per point):
+/// positive definite by Sylvester's criterion (leading minors `h₁₁`, `h₁₁h₂₂ − h₁₂²`, `det H` all
+/// positive), `H⁻¹ = adj(H)/det H`, the same condition test.
+pub fn covariance_of_information3(h: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let minor2 = h[(0, 0)] * h[(1, 1)] - h[(0, 1)] * h[(1, 0)];
+    let (c00, c01, c02) = (
+        h[(1, 1)] * h[(2, 2)] - h[(1, 2)] * h[(2, 1)],
+        h[(1, 2)] * h[(2, 0)] - h[(1, 0)] * h[(2, 2)],
+        h[(1, 0)] * h[(2, 1)] - h[(1, 1)] * h[(2, 0)],
+    );
+    let det = h[(0, 0)] * c00 + h[(0, 1)] * c01 + h[(0, 2)] * c02;
+    // Written so that NaN fails every test.
+    if !(h[(0, 0)] > 0.0 && minor2 > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let c11 = h[(0, 0)] * h[(2, 2)] - h[(0, 2)] * h[(2, 0)];
+    let c12 = h[(0, 1)] * h[(2, 0)] - h[(0, 0)] * h[(2, 1)];
+    let inverse = Matrix3::new(c00, c01, c02, c01, c11, c12, c02, c12, minor2) / det;
+    let condition = h.norm() * inverse.norm();
+    (condition.is_finite() && condition <= MAX_CONDITION).then_some(inverse)
+}
+
 /// The 3x3 covariance of a point `x` (world units²) seen in `views` (module docs): `(Σ BᵢᵀBᵢ)⁻¹` with
-/// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18 ([`super::point_cost`]).
+/// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18
+/// ([`PointView::residual_and_information`]).
 pub fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
     if !x.iter().all(|v| v.is_finite()) {
         return None;
     }
-    covariance_of_information(&PointObjective { views }.linearize(x).gauss_newton)
+    let information = views
+        .iter()
+        .fold(Matrix3::zeros(), |h, v| h + v.residual_and_information(x).1);
+    covariance_of_information3(&information)
 }
 
 /// The 4x4 covariance of a line in `chart` (pivoted anywhere on the line; module docs). Computed in
@@ -132,6 +160,23 @@ pub(crate) fn quadric_covariance(problem: &QuadricProblem, e: &Ellipsoid) -> Opt
 mod tests {
     use super::*;
     use nalgebra::Matrix2;
+
+    #[test]
+    fn closed_form_3x3_agrees_with_the_general_inverse() {
+        let mut rng = crate::rng::Rng::new(5);
+        for scale in [1.0, 1e-3, 1e5] {
+            let a = Matrix3::from_fn(|_, _| rng.normal());
+            let h = (a * a.transpose() + Matrix3::identity() * 0.1) * scale;
+            let general = covariance_of_information(&h).unwrap();
+            let closed = covariance_of_information3(&h).unwrap();
+            assert!((general - closed).norm() <= 1e-10 * general.norm());
+        }
+        let singular = Matrix3::new(1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+        assert!(covariance_of_information3(&singular).is_none());
+        assert!(covariance_of_information3(&Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 1e-13))).is_none());
+        assert!(covariance_of_information3(&Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0))).is_none());
+        assert!(covariance_of_information3(&Matrix3::repeat(f64::NAN)).is_none());
+    }
 
     #[test]
     fn information_inverse_is_checked() {
