@@ -280,6 +280,21 @@ pub fn check_random_draws(
     summary
 }
 
+/// [`assert_multistart_finds_nothing_more`] on 100 random samples of the mix `kinds` (40 starts each),
+/// solved by `solve`; requires at least 100 distinct converged solutions to have been checked, so that
+/// the search was not vacuous.
+pub fn check_multistart_completeness(name: &str, solve: fn(&[Feature; 3]) -> Vec<Pose>, kinds: [bool; 3], seed: u64) {
+    let mut rng = Rng::new(seed);
+    let mut checked = 0;
+    for draw in 0..100 {
+        let sample = Sample::random(&mut rng, kinds, 1.0);
+        let poses = solve(&sample.features);
+        checked += assert_multistart_finds_nothing_more(&sample, &poses, &mut rng, 40, &format!("draw {draw}"));
+    }
+    println!("{name} multistart: {checked} distinct solutions checked");
+    assert!(checked >= 100, "{checked}");
+}
+
 /// An independent search for solutions: Gauss-Newton (square, 6x6) on the six constraints from
 /// `starts` random poses near the scene; every converged solution (residuals ≤ 1e-13, points in front,
 /// well conditioned) must be among `poses` to [`POSE_TOLERANCE`]. Returns how many distinct converged

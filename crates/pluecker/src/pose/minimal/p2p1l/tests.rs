@@ -36,15 +36,7 @@ fn narrow_field_of_view_is_as_accurate_as_its_conditioning() {
 
 #[test]
 fn every_solution_found_by_multistart_newton_is_returned() {
-    let mut rng = Rng::new(6_103);
-    let mut checked = 0;
-    for draw in 0..100 {
-        let sample = Sample::random(&mut rng, KINDS, 1.0);
-        let poses = solve(&sample.features);
-        checked += assert_multistart_finds_nothing_more(&sample, &poses, &mut rng, 40, &format!("draw {draw}"));
-    }
-    println!("p2p1l multistart: {checked} distinct solutions checked");
-    assert!(checked >= 100, "{checked}");
+    check_multistart_completeness("p2p1l", solve, KINDS, 6_103);
 }
 
 /// Two points and a line in the camera frame as a sample under a random pose.
