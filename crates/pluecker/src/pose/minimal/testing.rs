@@ -280,6 +280,47 @@ pub fn check_random_draws(
     summary
 }
 
+/// `solve` returns no pose when any bearing or normal, or any object point, of `sample` holds NaN or ±inf.
+pub fn assert_non_finite_gives_no_pose(solve: fn(&[Feature; 3]) -> Vec<Pose>, sample: &Sample) {
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for i in 0..3 {
+            let mut f = sample.features;
+            match &mut f[i] {
+                Feature::Point { bearing, .. } => bearing.x = bad,
+                Feature::Line { normal, .. } => normal.z = bad,
+            }
+            assert!(solve(&f).is_empty(), "{bad} in feature {i}");
+            let mut f = sample.features;
+            match &mut f[i] {
+                Feature::Point { point, .. } => point.y = bad,
+                Feature::Line { endpoints, .. } => endpoints[0].x = bad,
+            }
+            assert!(solve(&f).is_empty(), "{bad} in object {i}");
+        }
+    }
+}
+
+/// Huge and tiny scenes (object points scaled by 1e∓150): `solve` returns as many poses as on `sample`
+/// itself, each valid ([`assert_valid`] with at most `max` poses).
+pub fn assert_scale_invariant(solve: fn(&[Feature; 3]) -> Vec<Pose>, sample: &Sample, max: usize) {
+    let expected = solve(&sample.features).len();
+    for scale in [1e-150, 1e150] {
+        let scaled = sample.features.map(|f| match f {
+            Feature::Point { bearing, point } => Feature::Point {
+                bearing,
+                point: point * scale,
+            },
+            Feature::Line { normal, endpoints } => Feature::Line {
+                normal,
+                endpoints: endpoints.map(|p| p * scale),
+            },
+        });
+        let poses = solve(&scaled);
+        assert_eq!(poses.len(), expected, "scale {scale:e}");
+        assert_valid(&poses, &scaled, 1e-9, max, &format!("scale {scale:e}"));
+    }
+}
+
 /// [`assert_multistart_finds_nothing_more`] on 100 random samples of the mix `kinds` (40 starts each),
 /// solved by `solve`; requires at least 100 distinct converged solutions to have been checked, so that
 /// the search was not vacuous.
