@@ -11,8 +11,8 @@
 use crate::errors::{shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, read, read_mask, shape_string, Dim};
+use crate::triangulation_batch_lines::{per_observation, push_covariance};
 use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
-use crate::triangulation_batch_lines::per_observation;
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyArray3};
 use pluecker::triangulation::batch::{
@@ -41,17 +41,13 @@ impl TrackColumns for PyPointTriangulations {
 
     fn push(&mut self, track: PointTriangulation) -> Report {
         self.x.extend_from_slice(track.point.as_slice());
-        match &track.covariance {
-            // Symmetric: column-major storage is the row-major layout.
-            Some(c) => self.covariance.extend_from_slice(c.as_slice()),
-            None => self.covariance.extend([f64::NAN; 9]),
-        }
+        push_covariance(&mut self.covariance, track.covariance.as_ref());
         track.report
     }
 
     fn push_missing(&mut self) {
         self.x.extend([f64::NAN; 3]);
-        self.covariance.extend([f64::NAN; 9]);
+        push_covariance::<3>(&mut self.covariance, None);
     }
 }
 
@@ -70,7 +66,9 @@ impl PyPointTriangulations {
                 Ok(status) => {
                     report.push_uncertified(points.costs[t], status.as_str(), seconds);
                     columns.x.extend_from_slice(&points.points[3 * t..3 * t + 3]);
-                    columns.covariance.extend_from_slice(&points.covariances[9 * t..9 * t + 9]);
+                    columns
+                        .covariance
+                        .extend_from_slice(&points.covariances[9 * t..9 * t + 9]);
                 }
                 Err(e) => report.reject(&mut columns, t, e),
             }

@@ -57,10 +57,7 @@ impl TrackColumns for PyLineTriangulations {
         self.point.extend_from_slice(track.point.as_slice());
         self.direction.extend_from_slice(track.direction.as_slice());
         self.chart_axes.extend(row_major(&chart_axes(&track.chart)));
-        match &track.covariance {
-            Some(c) => self.covariance.extend(row_major(c)),
-            None => self.covariance.extend([f64::NAN; 16]),
-        }
+        push_covariance(&mut self.covariance, track.covariance.as_ref());
         track.report
     }
 
@@ -69,7 +66,7 @@ impl TrackColumns for PyLineTriangulations {
         self.point.extend([f64::NAN; 3]);
         self.direction.extend([f64::NAN; 3]);
         self.chart_axes.extend([f64::NAN; 6]);
-        self.covariance.extend([f64::NAN; 16]);
+        push_covariance::<4>(&mut self.covariance, None);
     }
 }
 
@@ -122,6 +119,18 @@ fn row_major<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -
     (0..R).flat_map(move |i| (0..C).map(move |j| m[(i, j)]))
 }
 
+/// Appends one track's `N x N` covariance in row-major order to a batch column, or `N²` NaNs when the
+/// track has none.
+pub(crate) fn push_covariance<const N: usize>(
+    column: &mut Vec<f64>,
+    covariance: Option<&nalgebra::SMatrix<f64, N, N>>,
+) {
+    match covariance {
+        Some(c) => column.extend(row_major(c)),
+        None => column.extend(std::iter::repeat(f64::NAN).take(N * N)),
+    }
+}
+
 impl TrackColumns for PyQuadricTriangulations {
     type Track = QuadricTriangulation;
     const NAMES: &'static [(&'static str, &'static str)] = QUADRIC_NAMES;
@@ -135,10 +144,7 @@ impl TrackColumns for PyQuadricTriangulations {
         self.centre.extend_from_slice(track.centre.as_slice());
         self.semi_axes.extend_from_slice(track.semi_axes.as_slice());
         self.axes.extend(row_major(&track.axes));
-        match &track.covariance {
-            Some(c) => self.covariance.extend(row_major(c)),
-            None => self.covariance.extend([f64::NAN; 81]),
-        }
+        push_covariance(&mut self.covariance, track.covariance.as_ref());
         track.report
     }
 
@@ -148,7 +154,7 @@ impl TrackColumns for PyQuadricTriangulations {
         self.centre.extend([f64::NAN; 3]);
         self.semi_axes.extend([f64::NAN; 3]);
         self.axes.extend([f64::NAN; 9]);
-        self.covariance.extend([f64::NAN; 81]);
+        push_covariance::<9>(&mut self.covariance, None);
     }
 }
 
@@ -255,7 +261,13 @@ impl Cameras {
 }
 
 /// `(n, v, ...)` per-observation values of `obj` (`cov`), checked against `n` tracks and `v` views.
-pub(crate) fn per_observation(name: &str, obj: &Bound<'_, PyAny>, n: usize, v: usize, entry: [usize; 2]) -> PyResult<Vec<f64>> {
+pub(crate) fn per_observation(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+    n: usize,
+    v: usize,
+    entry: [usize; 2],
+) -> PyResult<Vec<f64>> {
     let spec = [
         Dim::Free("n"),
         Dim::Free("v"),
