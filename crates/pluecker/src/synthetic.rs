@@ -146,6 +146,57 @@ pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64)
     Scene { camera, rotation, translation, correspondences }
 }
 
+/// The scenes of the global-minimum tests and benchmark (issue 9): a 640 x 480 image with
+/// `fx = fy = focal` (px), principal point at the centre, a uniformly random pose, and structure drawn
+/// where the camera sees it: each point (segment endpoint) is a uniform pixel back-projected to a depth
+/// uniform in 6 ± 30 % (4.2-7.8 units) or, for `planar`, to a plane through `(0, 0, 6)` (camera frame)
+/// tilted 30-60° from the image plane (depths kept in 2-20). Segments are at least 20 px long.
+/// Noise-free; add noise with [`Scene::noisy`].
+pub fn visible_scene(focal: f64, n_points: usize, n_lines: usize, planar: bool, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed);
+    let camera = Camera { fx: focal, fy: focal, cx: 320.0, cy: 240.0, skew: 0.0 };
+    let rotation = rng.rotation();
+    let normal = {
+        let tilt = rng.uniform_in(30f64.to_radians(), 60f64.to_radians());
+        let azimuth = rng.uniform_in(0.0, std::f64::consts::TAU);
+        Vector3::new(tilt.sin() * azimuth.cos(), tilt.sin() * azimuth.sin(), -tilt.cos())
+    };
+    let sample = |rng: &mut Rng| -> Vector3<f64> {
+        loop {
+            let u = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+            let n = camera.pixel_to_normalized(&u);
+            let ray = Vector3::new(n.x, n.y, 1.0);
+            let depth = if planar {
+                // normal · (depth ray − (0, 0, 6)) = 0
+                6.0 * normal.z / normal.dot(&ray)
+            } else {
+                rng.uniform_in(4.2, 7.8)
+            };
+            if (2.0..=20.0).contains(&depth) {
+                return ray * depth;
+            }
+        }
+    };
+    let translation = Vector3::new(rng.normal(), rng.normal(), rng.normal());
+    let to_world = |x_cam: Vector3<f64>| rotation.transpose() * (x_cam - translation);
+    let points_cam: Vec<Vector3<f64>> = (0..n_points).map(|_| sample(&mut rng)).collect();
+    let segs_cam: Vec<[Vector3<f64>; 2]> = (0..n_lines)
+        .map(|_| loop {
+            let (a, b) = (sample(&mut rng), sample(&mut rng));
+            if (camera.project(&a) - camera.project(&b)).norm() >= 20.0 {
+                break [a, b];
+            }
+        })
+        .collect();
+    let correspondences = Correspondences {
+        points2d: points_cam.iter().map(|x| camera.project(x)).collect(),
+        points3d: points_cam.iter().map(|x| to_world(*x)).collect(),
+        lines2d: segs_cam.iter().map(|s| [camera.project(&s[0]), camera.project(&s[1])]).collect(),
+        lines3d: segs_cam.iter().map(|s| [to_world(s[0]), to_world(s[1])]).collect(),
+    };
+    Scene { camera, rotation, translation, correspondences }
+}
+
 /// One 3-D point seen by several cameras: the input of point triangulation, with its truth.
 #[derive(Debug, Clone)]
 pub struct TriangulationScene {

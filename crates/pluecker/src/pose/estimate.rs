@@ -1,41 +1,36 @@
-//! The pose pipeline: validation → algebraic estimator (or linear baseline) → reprojection refinement.
+//! The plain (non-robust) pose pipeline, stage by stage:
+//!
+//! 1. validation and conditioning ([`super::correspondences`]);
+//! 2. the algebraic solve of the chosen method from its default starts ([`super::initialization`]) and
+//!    the user's, with the cheirality restart (this module);
+//! 3. starting candidates for the refinement besides the algebraic answer: the minimal solvers' poses
+//!    ([`super::candidates`]);
+//! 4. the reprojection refinement from every candidate, and the choice among the local minima found,
+//!    with the runner-up and the ambiguity test ([`super::refinement`]);
+//! 5. the certificate of global optimality, on request ([`super::certificate`]);
+//! 6. the result: status, error, covariance ([`super::result`]).
+//!
+//! The robust pipeline ([`super::robust::pipeline`]) shares stages 4-6.
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
-use super::robust::RansacReport;
-use super::{Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
+use super::candidates::{minimal_hypotheses, EXHAUSTIVE_TRIPLES};
+use super::certificate::{certify, Certificate, Certification};
+use super::refinement::search;
+use super::reprojection::{count_behind, Pose, ReprojectionCost};
+use super::result::{assemble, is_finite, status_of_stages, Parts};
+use super::{stage, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
-use crate::geometry::quaternion::{axis_angle, from_rotation_matrix, rotation_distance};
+use crate::geometry::quaternion::rotation_distance;
 use crate::optim::{
     levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions,
 };
 use nalgebra::{Matrix3, SVector, Vector3, Vector4};
 use std::time::Instant;
-
-pub(super) fn stage(
-    name: &str,
-    cost_kind: &'static str,
-    pose: &Pose,
-    summary: &Summary,
-    started: Instant,
-) -> StageReport {
-    StageReport {
-        name: name.into(),
-        cost_kind,
-        rotation: pose.0,
-        translation: pose.1,
-        iterations: summary.iterations,
-        initial_cost: summary.initial_cost,
-        final_cost: summary.final_cost,
-        termination: summary.termination,
-        time_seconds: started.elapsed().as_secs_f64(),
-    }
-}
 
 /// A dual-quaternion iterate back to a rigid motion in the world frame.
 fn to_world(x: &SVector<f64, 8>, cond: &Conditioning) -> Pose {
@@ -371,41 +366,13 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
     }
 }
 
-/// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
-/// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
-pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
-    let cond = if opts.normalize {
-        Conditioning::of(corr)
-    } else {
-        Conditioning::identity()
-    };
-    refine_conditioned(
-        &cond,
-        &ReprojectionCost::of(camera, &cond.correspondences(corr)),
-        initial,
-        opts,
-    )
-}
-
-/// [`refine_pose`] on correspondences already conditioned by `cond`.
-pub(super) fn refine_conditioned(
-    cond: &Conditioning,
-    cost: &ReprojectionCost<'_>,
-    initial: &Pose,
-    opts: &PoseOptions,
-) -> (Pose, StageReport) {
-    let started = Instant::now();
-    let x0 = (initial.0, cond.pose_from_world(&initial.0, &initial.1));
-    let mut tr = opts.refinement;
-    tr.subproblem = Subproblem::Hebden;
-    let (x, summary) = trust_region::minimize(cost, x0, &tr);
-    let pose = (x.0, cond.pose_to_world(&x.0, &x.1));
-    let report = stage("refinement", "reprojection", &pose, &summary, started);
-    (pose, report)
-}
-
 /// Estimates the pose `x_cam = R X_world + t` of a calibrated camera from point and/or line
 /// correspondences (see [`Method`] and [`PoseOptions`]).
+///
+/// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that
+/// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see
+/// [`super::refinement`]); the result names the runner-up and says when it is nearly as good
+/// ([`Status::Ambiguous`]), and with [`PoseOptions::certify`] carries a certificate of global optimality.
 ///
 /// Errors on invalid input (shapes, NaN/inf, too few correspondences, degenerate configurations,
 /// singular camera, bad options). A solver that fails returns `Ok` with a non-`Success` status.
@@ -422,154 +389,84 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         tr.stopping.step_tolerance = tr.stopping.step_tolerance.max(STEP_TOLERANCE_BEFORE_REFINEMENT);
     }
     let Estimate {
-        mut pose,
+        pose,
         mut stages,
         camera: estimated_camera,
         alternatives,
         valid,
     } = estimator(camera, corr, &prepared, opts, &tr, started)?;
-    let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
-    if opts.refine && finite {
-        let cost = ReprojectionCost::of(camera, &prepared.conditioned);
-        let (mut refined, mut report) = refine_conditioned(&prepared.cond, &cost, &pose, opts);
-        for alternative in &alternatives {
-            let (other, other_report) = refine_conditioned(&prepared.cond, &cost, alternative, opts);
-            report.iterations += other_report.iterations;
-            report.time_seconds += other_report.time_seconds;
-            if other_report.final_cost < report.final_cost {
-                (refined, report) = (
-                    other,
-                    StageReport {
-                        iterations: report.iterations,
-                        time_seconds: report.time_seconds,
-                        ..other_report
-                    },
-                );
-            }
-        }
-        pose = refined;
-        stages.push(report);
+    if !opts.refine || !is_finite(&pose) {
+        let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
+        let certification = Certification::none(Certificate::NotProved("no refinement: the pose is not a minimum of the reprojection error".into()));
+        return Ok(assemble(
+            camera,
+            opts,
+            started,
+            Parts {
+                pose,
+                stages,
+                status,
+                estimated_camera,
+                used: corr,
+                inliers: None,
+                ransac: None,
+                second_best: None,
+                certification,
+            },
+        ));
     }
-    Ok(finish(
+    let cond = &prepared.cond;
+    let conditioned = &prepared.conditioned;
+    let cost = ReprojectionCost::of(camera, conditioned);
+    let to_cond = |p: &Pose| (p.0, cond.pose_from_world(&p.0, &p.1));
+    let to_world = |p: &Pose| (p.0, cond.pose_to_world(&p.0, &p.1));
+    let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
+    let hypotheses = minimal_hypotheses(camera, conditioned);
+    let n = conditioned.n_points() + conditioned.n_lines();
+    let exhaustive = n * n.saturating_sub(1) * n.saturating_sub(2) / 6 <= EXHAUSTIVE_TRIPLES;
+    let minima = search(&cost, &starts, &hypotheses, exhaustive, opts, cond);
+    let residuals = 2 * n;
+    let best_cost = minima.best_cost();
+    let sigma2 = match opts.sigma_px {
+        Some(s) => s * s,
+        None if residuals > 6 => (2.0 * best_cost / (residuals - 6) as f64).max(1.0),
+        None => 1.0,
+    };
+    let margin = 0.5 * opts.ambiguity_threshold * sigma2;
+    let choice = minima.choose(margin).expect("at least the algebraic start was refined");
+    let best = minima.found[choice.best];
+    stages.extend(minima.report.clone());
+    let world = to_world(&best.pose);
+    let mut status = status_of_stages(&world, &stages, corr, valid, true);
+    if !best.converged && status == Status::Success {
+        status = Status::NotConverged;
+    }
+    if choice.ambiguous && status == Status::Success {
+        status = Status::Ambiguous;
+    }
+    let second_best = choice.second.map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
+    let certification = match &opts.certify {
+        None => Certification::none(Certificate::NotRequested),
+        Some(_) if status != Status::Success => Certification::none(Certificate::NotProved(format!(
+            "not attempted: status {}",
+            status.as_str()
+        ))),
+        Some(options) => certify(camera, conditioned, &best.pose, best.cost, options),
+    };
+    Ok(assemble(
         camera,
         opts,
         started,
-        Finished {
-            pose,
+        Parts {
+            pose: world,
             stages,
-            valid,
+            status,
             estimated_camera,
             used: corr,
-            status: None,
             inliers: None,
             ransac: None,
+            second_best,
+            certification,
         },
     ))
-}
-
-/// The end of a pipeline run, before the result is assembled.
-pub(super) struct Finished<'c> {
-    /// The returned pose, world frame (NaN if the solver failed).
-    pub pose: Pose,
-    /// Stage reports in order; the last one gave `pose`.
-    pub stages: Vec<StageReport>,
-    /// False when the estimator's answer is not a plausible pose (see [`Estimate::valid`]).
-    pub valid: bool,
-    /// Intrinsics estimated by the linear method.
-    pub estimated_camera: Option<Camera>,
-    /// The correspondences the pose was fitted to (world frame): all of them, or the inliers.
-    pub used: &'c Correspondences,
-    /// A status decided by the caller (robust failures), overriding the stage-based one.
-    pub status: Option<Status>,
-    /// Inlier masks (points, lines) when robust; `None`: all used.
-    pub inliers: Option<(Vec<bool>, Vec<bool>)>,
-    /// The robust loop's report.
-    pub ransac: Option<RansacReport>,
-}
-
-/// The status, the reprojection error, the covariance and the rotation forms of a finished run.
-pub(super) fn finish(camera: &Camera, opts: &PoseOptions, started: Instant, run: Finished<'_>) -> PoseResult {
-    let Finished {
-        pose,
-        stages,
-        valid,
-        estimated_camera,
-        used,
-        status,
-        inliers,
-        ransac,
-    } = run;
-    let last = stages.last().expect("at least one stage").clone();
-    let finite = pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite());
-    let behind = if finite {
-        count_behind(object_points(used).copied(), &pose)
-    } else {
-        0
-    };
-    let status = status.unwrap_or(
-        if !finite
-            || stages
-                .iter()
-                .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost))
-        {
-            Status::NumericalFailure
-        } else if !opts.refine && !valid && behind == 0 {
-            // The algebraic answer is far from a rigid motion (e.g. a stop at r = 0).
-            Status::NumericalFailure
-        } else if stages.iter().any(|s| !s.termination.converged()) {
-            Status::NotConverged
-        } else if behind > 0 {
-            Status::PointsBehindCamera
-        } else {
-            Status::Success
-        },
-    );
-    let residual_count = 2 * (used.n_points() + used.n_lines());
-    // One linearisation at the returned pose gives the reprojection error and `JᵀJ`.
-    // The refinement uses the given camera; the linear method alone is judged at its own intrinsics.
-    let model = if opts.refine {
-        *camera
-    } else {
-        estimated_camera.unwrap_or(*camera)
-    };
-    let linearization = finite.then(|| ReprojectionCost::of(&model, used).linearize(&pose));
-    let reprojection_cost = linearization.as_ref().map_or(f64::NAN, |l| l.cost);
-    let rms_error_px = (2.0 * reprojection_cost / residual_count.max(1) as f64).sqrt();
-    let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);
-    let (dual_quaternion, axis, angle) = if finite {
-        let q = DualQuaternion::from_rotation_translation(&pose.0, &pose.1);
-        let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.0));
-        (q, axis, angle)
-    } else {
-        let nan4 = Vector4::from_element(f64::NAN);
-        (
-            DualQuaternion { r: nan4, s: nan4 },
-            Vector3::from_element(f64::NAN),
-            f64::NAN,
-        )
-    };
-    let (inliers_points, inliers_lines) =
-        inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
-    PoseResult {
-        rotation: pose.0,
-        translation: pose.1,
-        dual_quaternion,
-        axis,
-        angle,
-        method: opts.method,
-        iterations: stages.iter().map(|s| s.iterations).sum(),
-        final_cost: last.final_cost,
-        termination: last.termination,
-        status,
-        rms_error_px,
-        time_seconds: started.elapsed().as_secs_f64(),
-        stages,
-        estimated_camera,
-        inliers_points,
-        inliers_lines,
-        ransac,
-        covariance,
-        covariance_source,
-        sigma_px,
-    }
 }

@@ -5,16 +5,22 @@
 //! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`.
 
 pub mod algebraic;
+pub mod candidates;
+pub mod certificate;
 pub mod correspondences;
 mod estimate;
 pub mod initialization;
 pub mod linear;
 pub mod minimal;
+pub mod refinement;
 pub mod reprojection;
+mod result;
 pub mod robust;
 
 pub use correspondences::{Conditioning, Correspondences};
-pub use estimate::{algebraic_stage, estimate_pose, refine_pose, Estimate};
+pub use certificate::{Certificate, CertificateOptions};
+pub use estimate::{algebraic_stage, estimate_pose, Estimate};
+pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};
 
 use crate::camera::Camera;
@@ -23,6 +29,9 @@ use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
 use crate::optim::{StoppingCriteria, Termination, TrustRegionOptions};
 use nalgebra::{Matrix3, Matrix6, Vector3};
+use reprojection::Pose;
+use crate::optim::Summary;
+use std::time::Instant;
 
 /// The estimators. All of them accept points, lines, or both (the linear one uses points only).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -121,6 +130,16 @@ pub struct PoseOptions {
     /// Standard deviation of the pixel noise on every image point and segment endpoint, for
     /// [`PoseResult::covariance`]. `None` estimates it from the residuals. Default `None`.
     pub sigma_px: Option<f64>,
+    /// The answer is [`Status::Ambiguous`] when another local minimum with every object point in front
+    /// has a sum of squared residuals `Σ r²` within `ambiguity_threshold · σ²` of the answer's (a
+    /// likelihood-ratio test: the data cannot tell the two apart at that level). `σ` is `sigma_px`
+    /// when given, else the larger of the estimate `σ̂` (see [`PoseResult::sigma_px`]) and 1 px.
+    /// Default `9.0` (three standard deviations of the difference). `0` turns the flag off for exact
+    /// ties only.
+    pub ambiguity_threshold: f64,
+    /// The global-optimality certificate ([`certificate`]): `None` skips it (the result then has
+    /// `certified = false` and the reason in `certificate`). Default `None`: it is on request.
+    pub certify: Option<CertificateOptions>,
 }
 
 /// The algebraic stage's step tolerance (in the units of the dual quaternion `x = (r, s)`, conditioned
@@ -155,6 +174,8 @@ impl Default for PoseOptions {
             refinement,
             robust: None,
             sigma_px: None,
+            ambiguity_threshold: 9.0,
+            certify: None,
         }
     }
 }
@@ -190,6 +211,12 @@ impl PoseOptions {
         if let Some(robust) = &self.robust {
             robust.validate()?;
         }
+        if !(self.ambiguity_threshold.is_finite() && self.ambiguity_threshold >= 0.0) {
+            return bad("ambiguity_threshold", "must be a finite number ≥ 0");
+        }
+        if let Some(certify) = &self.certify {
+            certify.validate()?;
+        }
         if let Some((r, t)) = &self.initial_pose {
             if r.iter().chain(t.iter()).any(|v| !v.is_finite())
                 || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
@@ -221,6 +248,11 @@ pub enum Status {
     /// (e.g. all-outlier data, or thresholds too tight for the noise); the pose is that model's,
     /// unrefined, and should not be used.
     TooFewInliers,
+    /// Another local minimum of the reprojection error with every object point in front explains the
+    /// data nearly as well (see [`PoseOptions::ambiguity_threshold`]): the pose is the better of the two,
+    /// and [`PoseResult::second_best`] is the other. Typical of 4-5 correspondences, of lines only and
+    /// of narrow fields of view. Every stage converged.
+    Ambiguous,
     /// Robust estimation only: no sample gave a pose in front of the camera — every sample was
     /// degenerate (collinear points, parallel lines, ...) or no mix of the data has a minimal solver
     /// (see [`RansacReport::stop`]). The pose is NaN.
@@ -237,6 +269,7 @@ impl Status {
             Status::PointsBehindCamera => "points_behind_camera",
             Status::TooFewInliers => "too_few_inliers",
             Status::NoHypothesis => "no_hypothesis",
+            Status::Ambiguous => "ambiguous",
         }
     }
 }
@@ -321,6 +354,21 @@ pub struct PoseResult {
     /// The pixel noise `σ` used: the given [`PoseOptions::sigma_px`], or the estimate
     /// `σ̂ = √(Σ r² / (m − 6))` over the `m` residuals of the used correspondences (`None` if `m ≤ 6`).
     pub sigma_px: Option<f64>,
+    /// Whether the returned pose is proved to be the global minimum of the reprojection cost, to within
+    /// the relative gap, over every rotation and translation that keeps the object points in front of
+    /// the camera (see [`certificate`]).
+    pub certified: bool,
+    /// The proved lower bound on `½ Σ r²` (px²) over that domain; NaN when there is none.
+    pub lower_bound: f64,
+    /// `(cost − lower_bound) / cost`, NaN when there is no bound.
+    pub gap: f64,
+    /// How the certificate was proved, or why there is none.
+    pub certificate: Certificate,
+    /// True when [`PoseResult::status`] is [`Status::Ambiguous`].
+    pub ambiguous: bool,
+    /// The cheapest other local minimum found with every object point in front (world frame), and its
+    /// cost `½ Σ r²` (px²); `None` when the search found no other.
+    pub second_best: Option<(Pose, f64)>,
 }
 
 /// Origin of the pixel noise level in [`PoseResult::covariance`].
@@ -339,5 +387,20 @@ impl CovarianceSource {
             CovarianceSource::Given => "given",
             CovarianceSource::Estimated => "estimated",
         }
+    }
+}
+
+/// A stage report from a solver's summary; `started` is when the stage's clock started.
+pub(crate) fn stage(name: &str, cost_kind: &'static str, pose: &Pose, summary: &Summary, started: Instant) -> StageReport {
+    StageReport {
+        name: name.into(),
+        cost_kind,
+        rotation: pose.0,
+        translation: pose.1,
+        iterations: summary.iterations,
+        initial_cost: summary.initial_cost,
+        final_cost: summary.final_cost,
+        termination: summary.termination,
+        time_seconds: started.elapsed().as_secs_f64(),
     }
 }

@@ -2,9 +2,11 @@
 //! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose.
 
 use super::super::correspondences::{Conditioning, Correspondences};
-use super::super::estimate::{finish, refine_conditioned, stage, Finished};
+use super::super::certificate::{Certificate, Certification};
+use super::super::refinement::refine_conditioned;
+use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::reprojection::{Pose, ReprojectionCost};
-use super::super::{Method, PoseOptions, PoseResult, StageReport, Status};
+use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
 use crate::camera::Camera;
@@ -119,19 +121,25 @@ pub(crate) fn estimate_robust(
     let used = subset(corr, &points, &lines);
     let failure =
         failure.or_else(|| (count(&points) + count(&lines) < robust.min_inliers).then_some(Status::TooFewInliers));
-    Ok(finish(
+    let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
+    let certification = Certification::none(match opts.certify {
+        None => Certificate::NotRequested,
+        Some(_) => Certificate::NotProved("not available for the robust estimator (the inlier set is not certified)".into()),
+    });
+    Ok(assemble(
         camera,
         opts,
         started,
-        Finished {
+        Parts {
             pose,
             stages,
-            valid: true,
+            status,
             estimated_camera: None,
             used: &used,
-            status: failure,
             inliers: Some((points, lines)),
             ransac: Some(outcome.report),
+            second_best: None,
+            certification,
         },
     ))
 }

@@ -1,0 +1,98 @@
+//! How often the default pose pipeline misses the global minimum of the reprojection error (issue 9),
+//! quickly, in Rust: for each row of seeded `visible_scene`s with 1 px noise, the best known minimum is
+//! the cheapest of the default answer, the refinement from the true pose and from `--starts` random
+//! starts. Development tool; the benchmark with peers is `bench/compare_global_pose.py`.
+//!
+//!     cargo run --release -p pluecker --example global_pose -- [scenes] [starts]
+
+use nalgebra::Vector3;
+use pluecker::optim::Objective;
+use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::pose::{estimate_pose, refine_pose, PoseOptions};
+use pluecker::rng::Rng;
+use pluecker::synthetic::visible_scene;
+use std::time::Instant;
+
+fn main() {
+    let args: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    let scenes = args.first().copied().unwrap_or(150);
+    let starts = args.get(1).copied().unwrap_or(30);
+    let filter = std::env::args().skip(1).find(|a| a.parse::<usize>().is_err());
+    let mut rows: Vec<(f64, usize, usize, bool)> = vec![];
+    for f in [250.0, 800.0, 4000.0, 15000.0] {
+        for n in [4usize, 6, 10, 100] {
+            rows.push((f, n, 0, false));
+            rows.push((f, 0, n, false));
+            rows.push((f, n.div_ceil(2), n / 2, false));
+        }
+    }
+    for f in [800.0, 4000.0] {
+        for n in [4usize, 6, 10, 100] {
+            rows.push((f, n, 0, true));
+            rows.push((f, n.div_ceil(2), n / 2, true));
+        }
+    }
+    println!("| row | misses | of those success | of those ambiguous | certified | median µs | p95 µs |");
+    println!("|---|---|---|---|---|---|---|");
+    let opts = PoseOptions::default();
+    for (f, np, nl, planar) in rows {
+        let name = format!("f={f} {np}p+{nl}l{}", if planar { " planar" } else { "" });
+        if filter.as_ref().is_some_and(|s| !name.contains(s.as_str())) {
+            continue;
+        }
+        let (mut misses, mut miss_success, mut miss_ambiguous, mut certified) = (0, 0, 0, 0);
+        let mut times = vec![];
+        for seed in 0..scenes as u64 {
+            let scene = visible_scene(f, np, nl, planar, seed);
+            let mut rng = Rng::new(1000 + seed);
+            let corr = scene.noisy(1.0, true, &mut rng);
+            let started = Instant::now();
+            let Ok(result) = estimate_pose(&scene.camera, &corr, &opts) else {
+                continue;
+            };
+            times.push(started.elapsed().as_secs_f64() * 1e6);
+            let cost = ReprojectionCost::of(&scene.camera, &corr);
+            let mine = cost.cost(&(result.rotation, result.translation));
+            let mut best = mine;
+            let truth = (scene.rotation, scene.translation);
+            let centroid = corr.points3d.iter().chain(corr.lines3d.iter().flat_map(|s| s.iter())).fold(Vector3::zeros(), |a, p| a + p)
+                / (np + 2 * nl) as f64;
+            let depth = (scene.rotation * centroid + scene.translation).z;
+            let mut candidates = vec![truth];
+            for _ in 0..starts {
+                let r = rng.rotation();
+                candidates.push((r, Vector3::new(0.0, 0.0, depth) - r * centroid));
+            }
+            for start in candidates {
+                let (pose, _) = refine_pose(&scene.camera, &corr, &start, &opts);
+                let c = cost.cost(&pose);
+                if c.is_finite() && cost.points_behind(&pose) == 0 {
+                    best = best.min(c);
+                }
+            }
+            if result.certified {
+                certified += 1;
+            }
+            if mine > best * (1.0 + 1e-6) + 1e-9 {
+                misses += 1;
+                if result.status.as_str() == "success" {
+                    miss_success += 1;
+                }
+                if result.ambiguous {
+                    miss_ambiguous += 1;
+                }
+                if std::env::var("VERBOSE").is_ok() {
+                    println!("  seed {seed}: {} cost {mine:.4} best {best:.4}", result.status.as_str());
+                }
+            }
+        }
+        times.sort_by(f64::total_cmp);
+        let q = |p: f64| times.get(((times.len() as f64 - 1.0) * p) as usize).copied().unwrap_or(f64::NAN);
+        println!(
+            "| {name} | {misses}/{} | {miss_success} | {miss_ambiguous} | {certified} | {:.1} | {:.1} |",
+            times.len(),
+            q(0.5),
+            q(0.95)
+        );
+    }
+}

@@ -1,0 +1,137 @@
+//! Starting candidates of the pose pipeline, beside the algebraic estimator's answer: the poses of the
+//! minimal solvers ([`super::minimal`]) on a few well-spread samples of three correspondences.
+//!
+//! Why: the reprojection error has several local minima where the data are weak — a narrow field of
+//! view (the near-affine "Necker" twin), few correspondences, planar objects, lines only — and the
+//! algebraic stage followed by the refinement converges to one of them. A minimal sample whose three
+//! correspondences are exact up to noise has among its (at most 4 or 8) poses one in the basin of the
+//! true pose, whatever the other minima; its twin, when one exists, comes out of the same polynomial.
+//! So the global minimum is searched over every minimum the refinement reaches from these poses.
+//!
+//! Which samples: with at most [`EXHAUSTIVE_TRIPLES`] triples of correspondences every triple is used
+//! (4-6 correspondences: every minimum of every sample); otherwise [`SPREAD_SAMPLES`] triples with the
+//! largest image footprint among [`SAMPLE_POOL`] seeded random draws (a wide triangle in the image
+//! conditions the minimal problem best). The draws are seeded ([`crate::rng::Rng`], seed 0): the same
+//! data give the same candidates.
+
+use super::correspondences::Correspondences;
+use super::minimal::{solve, Feature};
+use super::reprojection::Pose;
+use crate::camera::Camera;
+use crate::geometry::lines::interpretation_plane_normal;
+use crate::rng::Rng;
+use nalgebra::{Vector2, Vector3};
+
+/// Up to this many triples of correspondences, every triple is a sample (C(6, 3) = 20).
+pub const EXHAUSTIVE_TRIPLES: usize = 20;
+/// Samples drawn when the triples are more than [`EXHAUSTIVE_TRIPLES`].
+pub const SPREAD_SAMPLES: usize = 4;
+/// Random triples among which the [`SPREAD_SAMPLES`] widest are kept.
+pub const SAMPLE_POOL: usize = 24;
+
+/// The correspondences as minimal-solver features (camera-frame bearings and interpretation-plane
+/// normals; points first, then lines) with the image position that stands for each in the spread
+/// measure (a point's pixel, a segment's midpoint). Segments are assumed of non-zero length
+/// (validated input); one that is not is left out.
+pub fn features(camera: &Camera, corr: &Correspondences) -> (Vec<Feature>, Vec<Vector2<f64>>) {
+    let k_inv = camera.matrix().try_inverse().unwrap_or_else(nalgebra::Matrix3::identity);
+    let mut features = Vec::with_capacity(corr.n_points() + corr.n_lines());
+    let mut positions = Vec::with_capacity(features.capacity());
+    for (u, x) in corr.points2d.iter().zip(&corr.points3d) {
+        features.push(Feature::Point {
+            bearing: k_inv * Vector3::new(u.x, u.y, 1.0),
+            point: *x,
+        });
+        positions.push(*u);
+    }
+    for (s2, s3) in corr.lines2d.iter().zip(&corr.lines3d) {
+        if let Ok(normal) = interpretation_plane_normal(camera, &s2[0], &s2[1]) {
+            features.push(Feature::Line { normal, endpoints: *s3 });
+            positions.push(0.5 * (s2[0] + s2[1]));
+        }
+    }
+    (features, positions)
+}
+
+/// Twice the image area of the triangle of three positions.
+fn footprint(p: &[Vector2<f64>], s: &[usize; 3]) -> f64 {
+    let (a, b, c) = (p[s[0]], p[s[1]], p[s[2]]);
+    ((b - a).perp(&(c - a))).abs()
+}
+
+/// The samples of [`features`]' indices (see the module documentation).
+pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
+    let n = positions.len();
+    if n < 3 {
+        return vec![];
+    }
+    let triples = n * (n - 1) * (n - 2) / 6;
+    if triples <= EXHAUSTIVE_TRIPLES {
+        let mut all = Vec::with_capacity(triples);
+        for i in 0..n {
+            for j in i + 1..n {
+                for k in j + 1..n {
+                    all.push([i, j, k]);
+                }
+            }
+        }
+        return all;
+    }
+    let mut rng = Rng::new(0);
+    let mut pool: Vec<(f64, [usize; 3])> = (0..SAMPLE_POOL)
+        .map(|_| {
+            let s = rng.sample_indices(n, 3);
+            let s = [s[0], s[1], s[2]];
+            (footprint(positions, &s), s)
+        })
+        .collect();
+    pool.sort_by(|a, b| b.0.total_cmp(&a.0));
+    pool.dedup_by(|a, b| a.1 == b.1);
+    pool.into_iter().take(SPREAD_SAMPLES).map(|(_, s)| s).collect()
+}
+
+/// Every pose of the minimal solvers on the samples of `corr` (world frame of `corr`).
+pub fn minimal_hypotheses(camera: &Camera, corr: &Correspondences) -> Vec<Pose> {
+    let (features, positions) = features(camera, corr);
+    samples(&positions)
+        .into_iter()
+        .flat_map(|s| solve(&s.map(|k| features[k])))
+        .filter(|(r, t)| r.iter().chain(t.iter()).all(|v| v.is_finite()))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::quaternion::rotation_distance;
+    use crate::synthetic::visible_scene;
+
+    #[test]
+    fn small_problems_use_every_triple_and_large_ones_a_few_wide_ones() {
+        let p: Vec<Vector2<f64>> = (0..6).map(|i| Vector2::new(i as f64, (i * i) as f64)).collect();
+        assert_eq!(samples(&p).len(), 20);
+        assert!(samples(&p[..2]).is_empty());
+        let mut rng = Rng::new(3);
+        let many: Vec<Vector2<f64>> = (0..100).map(|_| Vector2::new(rng.uniform(), rng.uniform())).collect();
+        let chosen = samples(&many);
+        assert_eq!(chosen, samples(&many), "seeded: the same data give the same samples");
+        assert_eq!(chosen.len(), SPREAD_SAMPLES);
+        // The kept triples are the widest of the pool: wider than a typical random triangle (mean
+        // doubled area of a random triangle in the unit square is 11/72 ≈ 0.15).
+        assert!(chosen.iter().all(|s| footprint(&many, s) > 0.15), "{chosen:?}");
+    }
+
+    #[test]
+    fn the_true_pose_is_among_the_hypotheses_of_exact_data() {
+        for (np, nl) in [(10, 0), (0, 10), (5, 5), (4, 0), (0, 4), (2, 2)] {
+            for seed in 0..20 {
+                let scene = visible_scene(4000.0, np, nl, false, seed);
+                let hypotheses = minimal_hypotheses(&scene.camera, &scene.correspondences);
+                let found = hypotheses.iter().any(|(r, t)| {
+                    rotation_distance(r, &scene.rotation) < 1e-6 && (t - scene.translation).norm() < 1e-5
+                });
+                assert!(found, "{np} points, {nl} lines, seed {seed}");
+            }
+        }
+    }
+}

@@ -1,0 +1,239 @@
+//! The reprojection refinement stage: minimises the reprojection error ([`ReprojectionCost`]) from
+//! each starting candidate with the trust region of section 4.1 (Hebden steps on `JᵀJ`), collects the
+//! distinct local minima reached, and chooses the answer among them.
+//!
+//! Starts, in order: the algebraic estimator's answer and its near-best alternatives, then the minimal
+//! solvers' poses ([`super::candidates`]) ranked by their cost. A minimal pose is refined when
+//! - the problem is small (every triple is a sample): every pose, except those already within
+//!   [`SAME_BASIN_SMALL`] rad of a minimum found; or
+//! - otherwise, when its cost is below [`PROMISING_FACTOR`] times the best minimum so far and it is
+//!   more than [`SAME_BASIN_LARGE`] rad from every minimum found (a pose that close starts in a basin
+//!   already explored; one that expensive is far from any good minimum).
+//!
+//! Choice (see [`Minima::choose`]): the cheapest minimum with every object point in front of the
+//! camera, unless a minimum with points behind is cheaper by more than the ambiguity margin (then the
+//! data are best explained behind the camera, and the status says so). The runner-up is the cheapest
+//! other minimum in front; the answer is *ambiguous* when it is within the margin
+//! `Δ(Σ r²) ≤ ambiguity_threshold · σ²` of the answer.
+
+use super::correspondences::Conditioning;
+use super::reprojection::{Pose, ReprojectionCost};
+use super::{stage, PoseOptions, StageReport};
+use crate::camera::Camera;
+use crate::geometry::quaternion::rotation_distance;
+use crate::optim::{trust_region, Objective, Subproblem, Summary};
+use crate::pose::Correspondences;
+use std::time::Instant;
+
+/// Minimal poses of large problems are refined only when their cost is below this multiple of the
+/// best minimum so far: the refinement from a pose of cost `c` ends below `c`, so a pose cheaper than
+/// the best minimum certainly leads to a better one, and the margin admits poses whose noise puts them
+/// a little above the minimum of their own basin.
+pub const PROMISING_FACTOR: f64 = 4.0;
+/// Large problems: a minimal pose within this rotation distance (rad) of a minimum found is taken to be
+/// in its basin and not refined.
+pub const SAME_BASIN_LARGE: f64 = 0.02;
+/// Small problems: the same, tighter (refinements are cheap there).
+pub const SAME_BASIN_SMALL: f64 = 1e-3;
+/// Two refined minima are the same when their rotations differ by less than this (rad) and their
+/// translations by less than this fraction of the object's size (conditioned units).
+pub const SAME_MINIMUM: f64 = 1e-6;
+
+/// One local minimum of the reprojection error, in the conditioned frame of the search.
+#[derive(Debug, Clone, Copy)]
+pub struct LocalMinimum {
+    /// The pose, conditioned frame.
+    pub pose: Pose,
+    /// `½ Σ r²`, px².
+    pub cost: f64,
+    /// Object points and segment endpoints behind the camera at `pose`.
+    pub behind: usize,
+    /// Whether the refinement's last stop was a convergence test.
+    pub converged: bool,
+}
+
+/// The distinct minima found, and the refinement's summed work.
+#[derive(Debug, Clone)]
+pub struct Minima {
+    /// Distinct minima, in the order found.
+    pub found: Vec<LocalMinimum>,
+    /// The stage report of the best one, with iterations and time summed over every run.
+    pub report: Option<StageReport>,
+    summaries: Vec<Summary>,
+}
+
+/// The answer among the minima and its runner-up (indices into [`Minima::found`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Choice {
+    pub best: usize,
+    pub second: Option<usize>,
+    pub ambiguous: bool,
+}
+
+impl Minima {
+    fn new() -> Self {
+        Minima {
+            found: vec![],
+            report: None,
+            summaries: vec![],
+        }
+    }
+
+    /// The best cost found so far (infinite when none).
+    pub fn best_cost(&self) -> f64 {
+        self.found.iter().map(|m| m.cost).fold(f64::INFINITY, f64::min)
+    }
+
+    fn near(&self, pose: &Pose, radius: f64) -> bool {
+        self.found.iter().any(|m| rotation_distance(&m.pose.0, &pose.0) < radius)
+    }
+
+    fn add(&mut self, m: LocalMinimum, summary: Summary) {
+        self.summaries.push(summary);
+        let same = self.found.iter().position(|f| {
+            rotation_distance(&f.pose.0, &m.pose.0) < SAME_MINIMUM && (f.pose.1 - m.pose.1).norm() < SAME_MINIMUM
+        });
+        match same {
+            Some(i) if self.found[i].cost <= m.cost => {}
+            Some(i) => self.found[i] = m,
+            None => self.found.push(m),
+        }
+    }
+
+    /// Chooses the answer (see the module documentation); `margin` is the ambiguity margin in units of
+    /// the cost `½ Σ r²`. `None` when nothing was found.
+    pub fn choose(&self, margin: f64) -> Option<Choice> {
+        let cheapest = |filter: &dyn Fn(&LocalMinimum) -> bool, except: Option<usize>| {
+            (0..self.found.len())
+                .filter(|&i| Some(i) != except && filter(&self.found[i]) && self.found[i].cost.is_finite())
+                .min_by(|&a, &b| self.found[a].cost.total_cmp(&self.found[b].cost))
+        };
+        let in_front = |m: &LocalMinimum| m.behind == 0;
+        let front = cheapest(&in_front, None);
+        let any = cheapest(&|_| true, None);
+        let best = match (front, any) {
+            (Some(f), Some(a)) if self.found[a].cost < self.found[f].cost - margin => a,
+            (Some(f), _) => f,
+            (None, Some(a)) => a,
+            (None, None) => {
+                // Only non-finite costs: return the first, the status will say it failed.
+                return (!self.found.is_empty()).then_some(Choice {
+                    best: 0,
+                    second: None,
+                    ambiguous: false,
+                });
+            }
+        };
+        let second = cheapest(&in_front, Some(best));
+        let ambiguous = second.is_some_and(|s| self.found[s].cost - self.found[best].cost <= margin);
+        Some(Choice { best, second, ambiguous })
+    }
+}
+
+/// The refinement's trust-region settings: `opts.refinement` with Hebden steps.
+fn settings(opts: &PoseOptions) -> crate::optim::TrustRegionOptions {
+    let mut tr = opts.refinement;
+    tr.subproblem = Subproblem::Hebden;
+    tr
+}
+
+/// One refinement from `start` (conditioned frame).
+fn refine_once(cost: &ReprojectionCost<'_>, start: &Pose, opts: &PoseOptions) -> (LocalMinimum, Summary) {
+    let (pose, summary) = trust_region::minimize(cost, *start, &settings(opts));
+    let minimum = LocalMinimum {
+        pose,
+        cost: summary.final_cost,
+        behind: cost.points_behind(&pose),
+        converged: summary.termination.converged(),
+    };
+    (minimum, summary)
+}
+
+/// Refines every start of `starts` (conditioned frame, the algebraic answers) and then the promising
+/// `hypotheses` (see the module documentation); `exhaustive` when the hypotheses are every triple's.
+pub fn search(
+    cost: &ReprojectionCost<'_>,
+    starts: &[Pose],
+    hypotheses: &[Pose],
+    exhaustive: bool,
+    opts: &PoseOptions,
+    cond: &Conditioning,
+) -> Minima {
+    let started = Instant::now();
+    let mut minima = Minima::new();
+    for start in starts {
+        let (m, s) = refine_once(cost, start, opts);
+        minima.add(m, s);
+    }
+    let mut ranked: Vec<(f64, &Pose)> = hypotheses.iter().map(|h| (cost.cost(h), h)).collect();
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (c, h) in ranked {
+        if !c.is_finite() {
+            break;
+        }
+        if exhaustive {
+            if minima.near(h, SAME_BASIN_SMALL) {
+                continue;
+            }
+        } else if c >= PROMISING_FACTOR * minima.best_cost() {
+            break;
+        } else if minima.near(h, SAME_BASIN_LARGE) {
+            continue;
+        }
+        let (m, s) = refine_once(cost, h, opts);
+        minima.add(m, s);
+    }
+    minima.report = minima.choose(0.0).map(|choice| {
+        let best = &minima.found[choice.best];
+        let world = (best.pose.0, cond.pose_to_world(&best.pose.0, &best.pose.1));
+        let runs = &minima.summaries;
+        let total = Summary {
+            iterations: runs.iter().map(|s| s.iterations).sum(),
+            evaluations: runs.iter().map(|s| s.evaluations).sum(),
+            initial_cost: runs.first().map_or(f64::NAN, |s| s.initial_cost),
+            final_cost: best.cost,
+            termination: runs
+                .iter()
+                .find(|s| s.final_cost == best.cost)
+                .map_or(runs[0].termination, |s| s.termination),
+        };
+        stage("refinement", "reprojection", &world, &total, started)
+    });
+    minima
+}
+
+/// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
+/// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
+pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
+    let cond = if opts.normalize {
+        Conditioning::of(corr)
+    } else {
+        Conditioning::identity()
+    };
+    refine_conditioned(
+        &cond,
+        &ReprojectionCost::of(camera, &cond.correspondences(corr)),
+        initial,
+        opts,
+    )
+}
+
+/// [`refine_pose`] on correspondences already conditioned by `cond` (`initial` and the answer in the
+/// world frame).
+pub(crate) fn refine_conditioned(
+    cond: &Conditioning,
+    cost: &ReprojectionCost<'_>,
+    initial: &Pose,
+    opts: &PoseOptions,
+) -> (Pose, StageReport) {
+    let started = Instant::now();
+    let x0 = (initial.0, cond.pose_from_world(&initial.0, &initial.1));
+    let (x, summary) = trust_region::minimize(cost, x0, &settings(opts));
+    let pose = (x.0, cond.pose_to_world(&x.0, &x.1));
+    (pose, stage("refinement", "reprojection", &pose, &summary, started))
+}
+
+/// The cost `½ Σ r²` of a world-frame pose (for reports).
+pub fn reprojection_cost(camera: &Camera, corr: &Correspondences, pose: &Pose) -> f64 {
+    ReprojectionCost::of(camera, corr).cost(pose)
+}
