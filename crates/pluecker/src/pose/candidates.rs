@@ -20,7 +20,7 @@ use super::reprojection::Pose;
 use crate::camera::Camera;
 use crate::geometry::lines::interpretation_plane_normal;
 use crate::rng::Rng;
-use nalgebra::{Vector2, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Up to this many triples of correspondences, every triple is a sample (C(6, 3) = 20).
 pub const EXHAUSTIVE_TRIPLES: usize = 20;
@@ -29,28 +29,30 @@ pub const SPREAD_SAMPLES: usize = 4;
 /// Random triples among which the [`SPREAD_SAMPLES`] widest are kept.
 pub const SAMPLE_POOL: usize = 24;
 
-/// The correspondences as minimal-solver features (camera-frame bearings and interpretation-plane
-/// normals; points first, then lines) with the image position that stands for each in the spread
-/// measure (a point's pixel, a segment's midpoint). Segments are assumed of non-zero length
-/// (validated input); one that is not is left out.
-pub fn features(camera: &Camera, corr: &Correspondences) -> (Vec<Feature>, Vec<Vector2<f64>>) {
-    let k_inv = camera.matrix().try_inverse().unwrap_or_else(nalgebra::Matrix3::identity);
-    let mut features = Vec::with_capacity(corr.n_points() + corr.n_lines());
-    let mut positions = Vec::with_capacity(features.capacity());
-    for (u, x) in corr.points2d.iter().zip(&corr.points3d) {
-        features.push(Feature::Point {
+/// The image position that stands for each correspondence in the spread measure (points first, then
+/// lines): a point's pixel, a segment's midpoint.
+pub fn positions(corr: &Correspondences) -> Vec<Vector2<f64>> {
+    let points = corr.points2d.iter().copied();
+    points.chain(corr.lines2d.iter().map(|s| 0.5 * (s[0] + s[1]))).collect()
+}
+
+/// Correspondence `k` of `corr` (points first, then lines) as a minimal-solver feature: a camera-frame
+/// bearing, or the unit normal of the interpretation plane (`None` for a zero-length segment).
+pub fn feature(camera: &Camera, k_inv: &Matrix3<f64>, corr: &Correspondences, k: usize) -> Option<Feature> {
+    if k < corr.n_points() {
+        let u = corr.points2d[k];
+        return Some(Feature::Point {
             bearing: k_inv * Vector3::new(u.x, u.y, 1.0),
-            point: *x,
+            point: corr.points3d[k],
         });
-        positions.push(*u);
     }
-    for (s2, s3) in corr.lines2d.iter().zip(&corr.lines3d) {
-        if let Ok(normal) = interpretation_plane_normal(camera, &s2[0], &s2[1]) {
-            features.push(Feature::Line { normal, endpoints: *s3 });
-            positions.push(0.5 * (s2[0] + s2[1]));
-        }
-    }
-    (features, positions)
+    let l = k - corr.n_points();
+    let s2 = &corr.lines2d[l];
+    let normal = interpretation_plane_normal(camera, &s2[0], &s2[1]).ok()?;
+    Some(Feature::Line {
+        normal,
+        endpoints: corr.lines3d[l],
+    })
 }
 
 /// Twice the image area of the triangle of three positions.
@@ -59,15 +61,35 @@ fn footprint(p: &[Vector2<f64>], s: &[usize; 3]) -> f64 {
     ((b - a).perp(&(c - a))).abs()
 }
 
-/// The samples of [`features`]' indices (see the module documentation).
+/// Three distinct indices below `n` (≥ 3), uniformly.
+fn random_triple(rng: &mut Rng, n: usize) -> [usize; 3] {
+    let i = rng.below(n);
+    let mut j = rng.below(n - 1);
+    if j >= i {
+        j += 1;
+    }
+    let mut k = rng.below(n - 2);
+    for m in [i.min(j), i.max(j)] {
+        if k >= m {
+            k += 1;
+        }
+    }
+    [i, j, k]
+}
+
+/// Whether there are few enough correspondences for every triple to be a sample.
+pub fn is_exhaustive(n: usize) -> bool {
+    n * n.saturating_sub(1) * n.saturating_sub(2) / 6 <= EXHAUSTIVE_TRIPLES
+}
+
+/// The samples, as indices into [`positions`] (see the module documentation).
 pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
     let n = positions.len();
     if n < 3 {
         return vec![];
     }
-    let triples = n * (n - 1) * (n - 2) / 6;
-    if triples <= EXHAUSTIVE_TRIPLES {
-        let mut all = Vec::with_capacity(triples);
+    if is_exhaustive(n) {
+        let mut all = Vec::with_capacity(EXHAUSTIVE_TRIPLES);
         for i in 0..n {
             for j in i + 1..n {
                 for k in j + 1..n {
@@ -80,24 +102,29 @@ pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
     let mut rng = Rng::new(0);
     let mut pool: Vec<(f64, [usize; 3])> = (0..SAMPLE_POOL)
         .map(|_| {
-            let s = rng.sample_indices(n, 3);
-            let s = [s[0], s[1], s[2]];
+            let mut s = random_triple(&mut rng, n);
+            s.sort_unstable();
             (footprint(positions, &s), s)
         })
         .collect();
-    pool.sort_by(|a, b| b.0.total_cmp(&a.0));
+    pool.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     pool.dedup_by(|a, b| a.1 == b.1);
     pool.into_iter().take(SPREAD_SAMPLES).map(|(_, s)| s).collect()
 }
 
-/// Every pose of the minimal solvers on the samples of `corr` (world frame of `corr`).
-pub fn minimal_hypotheses(camera: &Camera, corr: &Correspondences) -> Vec<Pose> {
-    let (features, positions) = features(camera, corr);
-    samples(&positions)
-        .into_iter()
-        .flat_map(|s| solve(&s.map(|k| features[k])))
-        .filter(|(r, t)| r.iter().chain(t.iter()).all(|v| v.is_finite()))
-        .collect()
+/// The poses of the minimal solvers on each sample of `corr` (world frame of `corr`), one group per
+/// sample, lazily: a caller that is satisfied after the first samples does not pay for the others.
+pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> impl Iterator<Item = Vec<Pose>> + 'a {
+    let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
+    samples(&positions(corr)).into_iter().map(move |s| {
+        let [Some(a), Some(b), Some(c)] = s.map(|k| feature(camera, &k_inv, corr, k)) else {
+            return vec![];
+        };
+        solve(&[a, b, c])
+            .into_iter()
+            .filter(|(r, t)| r.iter().chain(t.iter()).all(|v| v.is_finite()))
+            .collect()
+    })
 }
 
 #[cfg(test)]
@@ -126,7 +153,7 @@ mod tests {
         for (np, nl) in [(10, 0), (0, 10), (5, 5), (4, 0), (0, 4), (2, 2)] {
             for seed in 0..20 {
                 let scene = visible_scene(4000.0, np, nl, false, seed);
-                let hypotheses = minimal_hypotheses(&scene.camera, &scene.correspondences);
+                let hypotheses: Vec<Pose> = minimal_hypotheses(&scene.camera, &scene.correspondences).flatten().collect();
                 let found = hypotheses.iter().any(|(r, t)| {
                     rotation_distance(r, &scene.rotation) < 1e-6 && (t - scene.translation).norm() < 1e-5
                 });

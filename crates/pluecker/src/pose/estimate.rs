@@ -16,7 +16,7 @@ use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::candidates::{minimal_hypotheses, EXHAUSTIVE_TRIPLES};
+use super::candidates::{is_exhaustive, minimal_hypotheses};
 use super::certificate::{certify, Certificate, Certification};
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
@@ -423,8 +423,8 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
     let hypotheses = minimal_hypotheses(camera, conditioned);
     let n = conditioned.n_points() + conditioned.n_lines();
-    let exhaustive = n * n.saturating_sub(1) * n.saturating_sub(2) / 6 <= EXHAUSTIVE_TRIPLES;
-    let minima = search(&cost, &starts, &hypotheses, exhaustive, opts, cond);
+    let exhaustive = is_exhaustive(n);
+    let minima = search(&cost, &starts, hypotheses, exhaustive, opts, cond);
     let residuals = 2 * n;
     let best_cost = minima.best_cost();
     let sigma2 = match opts.sigma_px {

@@ -243,6 +243,31 @@ impl<'a> ReprojectionCost<'a> {
         (residual, jac)
     }
 
+    /// The cost `½ Σ r²` at `pose` when it is below `bound`, else `None`: the points are summed in
+    /// batches and the sum abandoned as soon as it reaches `bound` (for ranking many poses cheaply).
+    pub fn cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
+        let full = self.n_points - self.n_points % LANES;
+        let mut total = 0.0;
+        for i0 in (0..full).step_by(LANES) {
+            let p = self.point_lanes::<LANES, false>(pose, i0);
+            total += (0..LANES).map(|l| 0.5 * (p.ru[l] * p.ru[l] + p.rv[l] * p.rv[l])).sum::<f64>();
+            if !(total < bound) {
+                return None;
+            }
+        }
+        for i in full..self.n_points {
+            let p = self.point_lanes::<1, false>(pose, i);
+            total += 0.5 * (p.ru[0] * p.ru[0] + p.rv[0] * p.rv[0]);
+        }
+        for i in 0..self.lines2d.len() {
+            total += 0.5 * self.line_block(pose, i, false).0.norm_squared();
+            if !(total < bound) {
+                return None;
+            }
+        }
+        (total < bound).then_some(total)
+    }
+
     /// Per-correspondence reprojection errors in pixels: the point distance for points, the RMS of the
     /// two endpoint distances for lines (points first, then lines).
     pub fn errors(&self, pose: &Pose) -> Vec<f64> {
