@@ -34,7 +34,10 @@ fn main() {
     }
     println!("| row | misses | of those success | of those ambiguous | certified | median µs | p95 µs |");
     println!("|---|---|---|---|---|---|---|");
-    let opts = PoseOptions::default();
+    let mut opts = PoseOptions::default();
+    if std::env::var("CERTIFY").is_ok() {
+        opts.certify = Some(Default::default());
+    }
     for (f, np, nl, planar) in rows {
         let name = format!("f={f} {np}p+{nl}l{}", if planar { " planar" } else { "" });
         if filter.as_ref().is_some_and(|s| !name.contains(s.as_str())) {
@@ -72,6 +75,8 @@ fn main() {
             }
             if result.certified {
                 certified += 1;
+            } else if std::env::var("WHY").is_ok() {
+                println!("  seed {seed}: {} {}", result.status.as_str(), result.certificate.message());
             }
             if mine > best * (1.0 + 1e-6) + 1e-9 {
                 misses += 1;
