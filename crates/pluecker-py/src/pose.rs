@@ -148,7 +148,7 @@ impl RobustArgs {
     penalty = 50.0, normalize = true, refine = true, initial_pose = None, max_iterations = 200,
     refine_max_iterations = 50, robust = false, point_threshold = 4.0, line_threshold = 4.0,
     confidence = 0.9999, max_ransac_iterations = 100_000, time_budget = None, seed = 0, min_inliers = 6,
-    sigma_px = None
+    sigma_px = None, certify = false, certify_gap = 1e-3, ambiguity_threshold = 9.0
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
@@ -174,6 +174,9 @@ pub fn estimate_pose(
     seed: i64,
     min_inliers: i64,
     sigma_px: Option<f64>,
+    certify: bool,
+    certify_gap: f64,
+    ambiguity_threshold: f64,
 ) -> PyResult<PyPoseResult> {
     let camera = camera.get().inner;
     let mut opts = options(
@@ -197,6 +200,13 @@ pub fn estimate_pose(
     }
     .options()?;
     opts.sigma_px = sigma_px;
+    opts.ambiguity_threshold = ambiguity_threshold;
+    let certificate = pluecker::pose::CertificateOptions {
+        gap: certify_gap,
+        ..Default::default()
+    };
+    certificate.validate().map_err(crate::errors::to_py_err)?;
+    opts.certify = certify.then_some(certificate);
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let result = solve(py, move || {
         pluecker::estimate_pose(&camera, &corr, &opts).map_err(|e| match e {

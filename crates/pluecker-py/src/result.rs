@@ -265,6 +265,50 @@ impl PyPoseResult {
         self.inner.sigma_px
     }
 
+    #[getter]
+    fn certified(&self) -> bool {
+        self.inner.certified
+    }
+
+    #[getter]
+    fn lower_bound(&self) -> f64 {
+        self.inner.lower_bound
+    }
+
+    #[getter]
+    fn gap(&self) -> f64 {
+        self.inner.gap
+    }
+
+    #[getter]
+    fn certificate(&self) -> String {
+        self.inner.certificate.message()
+    }
+
+    #[getter]
+    fn ambiguous(&self) -> bool {
+        self.inner.ambiguous
+    }
+
+    #[getter]
+    #[allow(non_snake_case)]
+    fn second_best_R<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
+        self.inner.second_best.as_ref().map(|((r, _), _)| matrix3_to_py(py, r))
+    }
+
+    #[getter]
+    fn second_best_t<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .second_best
+            .as_ref()
+            .map(|((_, t), _)| vector_to_py(py, t))
+    }
+
+    #[getter]
+    fn second_best_cost(&self) -> Option<f64> {
+        self.inner.second_best.as_ref().map(|(_, c)| *c)
+    }
+
     /// Plain-Python (JSON-serialisable) form.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.inner;
@@ -303,6 +347,23 @@ impl PyPoseResult {
         d.set_item("covariance", self.covariance_rows())?;
         d.set_item("covariance_source", self.covariance_source())?;
         d.set_item("sigma_px", r.sigma_px)?;
+        d.set_item("certified", r.certified)?;
+        d.set_item("lower_bound", r.lower_bound)?;
+        d.set_item("gap", r.gap)?;
+        d.set_item("certificate", self.certificate())?;
+        d.set_item("ambiguous", r.ambiguous)?;
+        match &r.second_best {
+            Some(((rot, t), c)) => {
+                d.set_item("second_best_R", matrix3_rows(rot))?;
+                d.set_item("second_best_t", t.as_slice())?;
+                d.set_item("second_best_cost", *c)?;
+            }
+            None => {
+                d.set_item("second_best_R", py.None())?;
+                d.set_item("second_best_t", py.None())?;
+                d.set_item("second_best_cost", py.None())?;
+            }
+        }
         Ok(d)
     }
 

@@ -143,16 +143,13 @@ const LOCAL_INTERVALS: usize = 256;
 /// The data of the test, prepared once (conditioned frame, centred on the object).
 struct Problem<'c> {
     corr: &'c Correspondences,
-    /// Least singular value and norm of the 2x2 block of `K`.
-    s_min: f64,
+    /// Norm of the 2x2 block of `K`.
     k_norm: f64,
     /// `K⁻ᵀ` (pixel lines from camera-frame moments) and its norm.
     k_inv_t: Matrix3<f64>,
     k_inv_t_norm: f64,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
-    /// Minorant weights of the points, `s² / Dᵢ²`.
-    point_weights: Vec<f64>,
     /// Per line endpoint: normalised homogeneous endpoint `ẽ`, weight, `η` (see [`Problem::lines`]).
     line_terms: Vec<LineTerm>,
     /// `Σ w η²` over points and line endpoints (the growth of the cell perturbation per θ²).
@@ -280,12 +277,10 @@ impl<'c> Problem<'c> {
         }
         Ok(Problem {
             corr,
-            s_min,
             k_norm,
             k_inv_t,
             k_inv_t_norm,
             bearings,
-            point_weights,
             line_terms,
             eta2,
             gram,
@@ -404,10 +399,10 @@ fn localise(problem: &Problem, pose: &Pose, f_hat: f64, ball: f64, max_nodes: us
 /// A bound `K` on the second derivatives of the residual vector over the ball `‖Δ‖ ≤ rho` around
 /// `pose` (the chart `(ω, τ) ↦ (exp(ω) R̂, t̂ + τ)`), or `None` when a depth or a projected line may
 /// vanish there.
-fn curvature_bound(problem: &Problem, camera: &Camera, pose: &Pose, rho: f64) -> Option<f64> {
+fn curvature_bound(problem: &Problem, pose: &Pose, rho: f64) -> Option<f64> {
     let grow = rho.exp();
     let mut total = 0.0;
-    for (x, u) in problem.corr.points3d.iter().zip(&problem.corr.points2d) {
+    for x in &problem.corr.points3d {
         let y = pose.0 * x;
         let p = y + pose.1;
         let g1 = (grow * grow * y.norm_squared() + 1.0).sqrt();
@@ -418,11 +413,8 @@ fn curvature_bound(problem: &Problem, camera: &Camera, pose: &Pose, rho: f64) ->
         let pi_max = ((p.x * p.x + p.y * p.y).sqrt() + g1 * rho) / z_lo;
         let factor = (1.0 + pi_max * pi_max).sqrt() / z_lo;
         let kappa = problem.k_norm * factor * (grow * y.norm() + 2.0 * g1 * g1 / z_lo);
-        let _ = u;
         total += kappa * kappa;
     }
-    let cost = ReprojectionCost::of(camera, problem.corr);
-    let _ = cost;
     for (s2, s3) in problem.corr.lines2d.iter().zip(&problem.corr.lines3d) {
         let (ya, yb) = (pose.0 * s3[0], pose.0 * s3[1]);
         let (a, b) = (ya + pose.1, yb + pose.1);
@@ -490,7 +482,7 @@ pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, 
     let gradient = lin.gradient.norm();
     // The ball the rotation search localises into: where the local bound can still hold, estimated
     // from the curvature bound at a small radius (K grows slowly with the radius).
-    let Some(k_small) = curvature_bound(&problem, camera, pose, 1e-6) else {
+    let Some(k_small) = curvature_bound(&problem, pose, 1e-6) else {
         return Certification::none(Certificate::NotProved("not proved: a depth vanishes at the pose".into()));
     };
     if !(lambda > k_small * (2.0 * cost).sqrt()) {
@@ -505,7 +497,7 @@ pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, 
         Err(why) => return Certification::none(Certificate::NotProved(why)),
     };
     let rho = localised.rho_rotation.hypot(localised.rho_translation);
-    let Some(k) = curvature_bound(&problem, camera, pose, rho) else {
+    let Some(k) = curvature_bound(&problem, pose, rho) else {
         return Certification::none(Certificate::NotProved("not proved: a depth may vanish within the localised ball".into()));
     };
     let lower_bound = local_lower_bound(lin.cost, gradient, lambda, k, rho).min(lin.cost);

@@ -5,7 +5,8 @@
 //! Starts, in order: the algebraic estimator's answer and its near-best alternatives, then the minimal
 //! solvers' poses ([`super::candidates`]) ranked by their cost. A minimal pose is refined when its cost
 //! is below [`PROMISING_FACTOR`] times the best minimum so far (one that expensive is far from any good
-//! minimum) and it is more than [`SAME_BASIN`] rad from every minimum found (a pose that close starts
+//! minimum) and it is more than [`SAME_BASIN`] rad ([`SAME_BASIN_SMALL`] for 4-6 correspondences) from
+//! every minimum found (a pose that close starts
 //! in a basin already explored). With many correspondences the samples are solved one at a time, and
 //! the first whose poses confirm the best minimum ends the search (see [`search`]).
 //!
@@ -41,6 +42,9 @@ pub const PROMISING_FACTOR_MIN: f64 = 20.0;
 /// and not refined. A minimal pose from 1 px noise is typically a few mrad from the minimum of its
 /// basin, and up to a few hundredths at narrow fields of view.
 pub const SAME_BASIN: f64 = 0.05;
+/// The same when every triple is a sample (4-6 correspondences): minima of so few data can be close
+/// together (two exact fits 0.01 rad apart are common), and the refinements are cheap.
+pub const SAME_BASIN_SMALL: f64 = 1e-4;
 /// Two refined minima are the same when their rotations differ by less than this (rad) and their
 /// translations by less than this fraction of the object's size (conditioned units).
 pub const SAME_MINIMUM: f64 = 1e-6;
@@ -178,12 +182,13 @@ pub fn search(
         let (m, s) = refine_once(cost, start, opts);
         minima.add(m, s);
     }
+    let basin = if exhaustive { SAME_BASIN_SMALL } else { SAME_BASIN };
     let refine_promising = |minima: &mut Minima, group: Vec<Pose>| {
         let limit = |minima: &Minima| factor * minima.best_cost().max(floor);
         let bound = limit(minima);
         let mut ranked: Vec<(f64, Pose)> = group
             .into_iter()
-            .filter(|h| !minima.near(h, SAME_BASIN))
+            .filter(|h| !minima.near(h, basin))
             .filter_map(|h| cost.cost_below(&h, bound).map(|c| (c, h)))
             .collect();
         ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -191,7 +196,7 @@ pub fn search(
             if !(c < limit(minima)) {
                 break;
             }
-            if minima.near(&h, SAME_BASIN) {
+            if minima.near(&h, basin) {
                 continue;
             }
             let (m, s) = refine_once(cost, &h, opts);
