@@ -163,9 +163,10 @@ fn refine_once(cost: &ReprojectionCost<'_>, start: &Pose, opts: &PoseOptions) ->
 /// minimal poses of `hypotheses`, one group per sample (see the module documentation).
 ///
 /// When every triple is a sample (`exhaustive`) all groups are ranked together. Otherwise the groups
-/// are taken in turn, and the search stops at the first group with a pose within [`SAME_BASIN`] of the
-/// best minimum so far: a wide, exactly fitted sample that lands in that basin confirms it, and the
-/// other samples are not solved.
+/// are taken in turn: the promising poses of a group are refined, and the search stops after the first
+/// group with a pose within [`SAME_BASIN`] of the best minimum: a wide, exactly fitted sample that
+/// lands in that basin, and whose other promising poses (a twin, say) led nowhere better, confirms it;
+/// the other samples are not solved.
 pub fn search(
     cost: &ReprojectionCost<'_>,
     starts: &[Pose],
@@ -207,11 +208,12 @@ pub fn search(
         refine_promising(&mut minima, hypotheses.flatten().collect());
     } else {
         for group in hypotheses {
+            let poses = group.clone();
+            refine_promising(&mut minima, group);
             let best = minima.choose(0.0).map(|c| minima.found[c.best].pose);
-            if best.is_some_and(|b| group.iter().any(|h| rotation_distance(&h.0, &b.0) < SAME_BASIN)) {
+            if best.is_some_and(|b| poses.iter().any(|h| rotation_distance(&h.0, &b.0) < SAME_BASIN)) {
                 break;
             }
-            refine_promising(&mut minima, group);
         }
     }
     minima.report = minima.choose(0.0).map(|choice| {
