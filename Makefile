@@ -51,10 +51,11 @@ demo: develop
 	$(BIN)/pluecker reproduce josephson-kahl-2008 --out results/josephson-kahl-2008
 
 bench: develop
-	$(BIN)/python -m pip install --quiet opencv-python-headless poselib pycolmap
+	$(BIN)/python -m pip install --quiet opencv-python-headless poselib pycolmap cvxpnpl
 	$(BIN)/python bench/compare_pose.py
 	$(BIN)/python bench/compare_triangulation.py
 	$(BIN)/python bench/compare_robust_pose.py
+	$(BIN)/python bench/compare_global_pose.py
 	cargo bench -p pluecker --bench pose
 	cargo bench -p pluecker --bench triangulation
 
