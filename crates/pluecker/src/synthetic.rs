@@ -127,23 +127,52 @@ pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64)
     };
     // World frame: a random rigid motion of the camera frame.
     let translation = Vector3::new(rng.normal(), rng.normal(), rng.normal());
-    let to_world = |x_cam: Vector3<f64>| rotation.transpose() * (x_cam - translation);
-    let points_cam: Vec<Vector3<f64>> = (0..n_points).map(|_| sample(&mut rng)).collect();
-    let segs_cam: Vec<[Vector3<f64>; 2]> = (0..n_lines)
-        .map(|_| loop {
-            let (a, b) = (sample(&mut rng), sample(&mut rng));
-            if (camera.project(&a) - camera.project(&b)).norm() > 40.0 {
-                break [a, b];
-            }
-        })
-        .collect();
-    let correspondences = Correspondences {
-        points2d: points_cam.iter().map(|x| camera.project(x)).collect(),
-        points3d: points_cam.iter().map(|x| to_world(*x)).collect(),
-        lines2d: segs_cam.iter().map(|s| [camera.project(&s[0]), camera.project(&s[1])]).collect(),
-        lines3d: segs_cam.iter().map(|s| [to_world(s[0]), to_world(s[1])]).collect(),
-    };
-    Scene { camera, rotation, translation, correspondences }
+    let structure = Structure::draw(&mut rng, sample, n_points, n_lines, |a, b| {
+        (camera.project(a) - camera.project(b)).norm() > 40.0
+    });
+    structure.seen(camera, rotation, translation)
+}
+
+/// Points and segments drawn in the camera frame.
+struct Structure {
+    points: Vec<Vector3<f64>>,
+    segments: Vec<[Vector3<f64>; 2]>,
+}
+
+impl Structure {
+    /// `n_points` points and `n_lines` segments from `sample`, each segment drawn again until `long`
+    /// accepts its endpoints.
+    fn draw(
+        rng: &mut Rng,
+        sample: impl Fn(&mut Rng) -> Vector3<f64>,
+        n_points: usize,
+        n_lines: usize,
+        long: impl Fn(&Vector3<f64>, &Vector3<f64>) -> bool,
+    ) -> Structure {
+        let points = (0..n_points).map(|_| sample(rng)).collect();
+        let segments = (0..n_lines)
+            .map(|_| loop {
+                let (a, b) = (sample(rng), sample(rng));
+                if long(&a, &b) {
+                    break [a, b];
+                }
+            })
+            .collect();
+        Structure { points, segments }
+    }
+
+    /// The scene of this structure seen by `camera` at the pose `(rotation, translation)` (world
+    /// points `Rᵀ (x_cam − t)`), with exact pixels.
+    fn seen(&self, camera: Camera, rotation: Matrix3<f64>, translation: Vector3<f64>) -> Scene {
+        let to_world = |x_cam: &Vector3<f64>| rotation.transpose() * (x_cam - translation);
+        let correspondences = Correspondences {
+            points2d: self.points.iter().map(|x| camera.project(x)).collect(),
+            points3d: self.points.iter().map(to_world).collect(),
+            lines2d: self.segments.iter().map(|s| [camera.project(&s[0]), camera.project(&s[1])]).collect(),
+            lines3d: self.segments.iter().map(|s| [to_world(&s[0]), to_world(&s[1])]).collect(),
+        };
+        Scene { camera, rotation, translation, correspondences }
+    }
 }
 
 /// The scenes of the global-minimum tests and benchmark (issue 9): a 640 x 480 image with
@@ -178,23 +207,10 @@ pub fn visible_scene(focal: f64, n_points: usize, n_lines: usize, planar: bool, 
         }
     };
     let translation = Vector3::new(rng.normal(), rng.normal(), rng.normal());
-    let to_world = |x_cam: Vector3<f64>| rotation.transpose() * (x_cam - translation);
-    let points_cam: Vec<Vector3<f64>> = (0..n_points).map(|_| sample(&mut rng)).collect();
-    let segs_cam: Vec<[Vector3<f64>; 2]> = (0..n_lines)
-        .map(|_| loop {
-            let (a, b) = (sample(&mut rng), sample(&mut rng));
-            if (camera.project(&a) - camera.project(&b)).norm() >= 20.0 {
-                break [a, b];
-            }
-        })
-        .collect();
-    let correspondences = Correspondences {
-        points2d: points_cam.iter().map(|x| camera.project(x)).collect(),
-        points3d: points_cam.iter().map(|x| to_world(*x)).collect(),
-        lines2d: segs_cam.iter().map(|s| [camera.project(&s[0]), camera.project(&s[1])]).collect(),
-        lines3d: segs_cam.iter().map(|s| [to_world(s[0]), to_world(s[1])]).collect(),
-    };
-    Scene { camera, rotation, translation, correspondences }
+    let structure = Structure::draw(&mut rng, sample, n_points, n_lines, |a, b| {
+        (camera.project(a) - camera.project(b)).norm() >= 20.0
+    });
+    structure.seen(camera, rotation, translation)
 }
 
 /// One 3-D point seen by several cameras: the input of point triangulation, with its truth.

@@ -18,6 +18,7 @@ use super::correspondences::Correspondences;
 use super::minimal::{solve, Feature};
 use super::reprojection::Pose;
 use crate::camera::Camera;
+use crate::error::Result;
 use crate::geometry::lines::interpretation_plane_normal;
 use crate::rng::Rng;
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -37,20 +38,19 @@ pub fn positions(corr: &Correspondences) -> Vec<Vector2<f64>> {
 }
 
 /// Correspondence `k` of `corr` (points first, then lines) as a minimal-solver feature: a camera-frame
-/// bearing, or the unit normal of the interpretation plane (`None` for a zero-length segment).
-pub fn feature(camera: &Camera, k_inv: &Matrix3<f64>, corr: &Correspondences, k: usize) -> Option<Feature> {
+/// bearing, or the unit normal of the interpretation plane (an error for a zero-length segment).
+pub fn feature(camera: &Camera, k_inv: &Matrix3<f64>, corr: &Correspondences, k: usize) -> Result<Feature> {
     if k < corr.n_points() {
         let u = corr.points2d[k];
-        return Some(Feature::Point {
+        return Ok(Feature::Point {
             bearing: k_inv * Vector3::new(u.x, u.y, 1.0),
             point: corr.points3d[k],
         });
     }
     let l = k - corr.n_points();
     let s2 = &corr.lines2d[l];
-    let normal = interpretation_plane_normal(camera, &s2[0], &s2[1]).ok()?;
-    Some(Feature::Line {
-        normal,
+    Ok(Feature::Line {
+        normal: interpretation_plane_normal(camera, &s2[0], &s2[1])?,
         endpoints: corr.lines3d[l],
     })
 }
@@ -117,7 +117,7 @@ pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
 pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> impl Iterator<Item = Vec<Pose>> + 'a {
     let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
     samples(&positions(corr)).into_iter().map(move |s| {
-        let [Some(a), Some(b), Some(c)] = s.map(|k| feature(camera, &k_inv, corr, k)) else {
+        let [Ok(a), Ok(b), Ok(c)] = s.map(|k| feature(camera, &k_inv, corr, k)) else {
             return vec![];
         };
         solve(&[a, b, c])

@@ -395,70 +395,48 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         alternatives,
         valid,
     } = estimator(camera, corr, &prepared, opts, &tr, started)?;
-    if !opts.refine || !is_finite(&pose) {
+    let (pose, status, second_best, certification) = if opts.refine && is_finite(&pose) {
+        let cond = &prepared.cond;
+        let conditioned = &prepared.conditioned;
+        let cost = ReprojectionCost::of(camera, conditioned);
+        let to_cond = |p: &Pose| (p.0, cond.pose_from_world(&p.0, &p.1));
+        let to_world = |p: &Pose| (p.0, cond.pose_to_world(&p.0, &p.1));
+        let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
+        let n = conditioned.n_points() + conditioned.n_lines();
+        let minima = search(&cost, &starts, minimal_hypotheses(camera, conditioned), is_exhaustive(n), opts);
+        let margin = 0.5 * opts.ambiguity_threshold * ambiguity_sigma2(opts.sigma_px, minima.best_cost(), 2 * n);
+        let choice = minima.choose(margin).expect("at least the algebraic start was refined");
+        let best = minima.found[choice.best];
+        stages.push(minima.report(choice.best, cond));
+        let world = to_world(&best.pose);
+        let mut status = status_of_stages(&world, &stages, corr, valid, true);
+        if !best.converged() && status == Status::Success {
+            status = Status::NotConverged;
+        }
+        if choice.ambiguous && status == Status::Success {
+            status = Status::Ambiguous;
+        }
+        let second_best = choice.second.map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
+        let certification = match &opts.certify {
+            None => Certification::none(Certificate::NotRequested),
+            Some(_) if status != Status::Success => Certification::none(Certificate::NotProved(format!(
+                "not attempted: status {}",
+                status.as_str()
+            ))),
+            Some(options) => certify(camera, conditioned, &best.pose, best.cost, options),
+        };
+        (world, status, second_best, certification)
+    } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
-        let certification = Certification::none(Certificate::NotProved("no refinement: the pose is not a minimum of the reprojection error".into()));
-        return Ok(assemble(
-            camera,
-            opts,
-            started,
-            Parts {
-                pose,
-                stages,
-                status,
-                estimated_camera,
-                used: corr,
-                inliers: None,
-                ransac: None,
-                second_best: None,
-                certification,
-            },
-        ));
-    }
-    let cond = &prepared.cond;
-    let conditioned = &prepared.conditioned;
-    let cost = ReprojectionCost::of(camera, conditioned);
-    let to_cond = |p: &Pose| (p.0, cond.pose_from_world(&p.0, &p.1));
-    let to_world = |p: &Pose| (p.0, cond.pose_to_world(&p.0, &p.1));
-    let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
-    let hypotheses = minimal_hypotheses(camera, conditioned);
-    let n = conditioned.n_points() + conditioned.n_lines();
-    let exhaustive = is_exhaustive(n);
-    let minima = search(&cost, &starts, hypotheses, exhaustive, opts, cond);
-    let residuals = 2 * n;
-    let best_cost = minima.best_cost();
-    let sigma2 = match opts.sigma_px {
-        Some(s) => s * s,
-        None if residuals > 6 => (2.0 * best_cost / (residuals - 6) as f64).max(1.0),
-        None => 1.0,
-    };
-    let margin = 0.5 * opts.ambiguity_threshold * sigma2;
-    let choice = minima.choose(margin).expect("at least the algebraic start was refined");
-    let best = minima.found[choice.best];
-    stages.extend(minima.report.clone());
-    let world = to_world(&best.pose);
-    let mut status = status_of_stages(&world, &stages, corr, valid, true);
-    if !best.converged && status == Status::Success {
-        status = Status::NotConverged;
-    }
-    if choice.ambiguous && status == Status::Success {
-        status = Status::Ambiguous;
-    }
-    let second_best = choice.second.map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
-    let certification = match &opts.certify {
-        None => Certification::none(Certificate::NotRequested),
-        Some(_) if status != Status::Success => Certification::none(Certificate::NotProved(format!(
-            "not attempted: status {}",
-            status.as_str()
-        ))),
-        Some(options) => certify(camera, conditioned, &best.pose, best.cost, options),
+        let why = "no refinement: the pose is not a minimum of the reprojection error";
+        (pose, status, None, Certification::none(Certificate::NotProved(why.into())))
     };
     Ok(assemble(
         camera,
         opts,
         started,
         Parts {
-            pose: world,
+            pose,
             stages,
             status,
             estimated_camera,
@@ -469,4 +447,14 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             certification,
         },
     ))
+}
+
+/// The `σ²` of the ambiguity test (px²): `sigma_px²` when given, else the larger of 1 px² and the
+/// estimate `Σ r² / (m − 6)` at the best minimum of cost `best_cost` over `m` residuals.
+fn ambiguity_sigma2(sigma_px: Option<f64>, best_cost: f64, residuals: usize) -> f64 {
+    match sigma_px {
+        Some(s) => s * s,
+        None if residuals > 6 => (2.0 * best_cost / (residuals - 6) as f64).max(1.0),
+        None => 1.0,
+    }
 }

@@ -21,7 +21,7 @@ use super::reprojection::{Pose, ReprojectionCost};
 use super::{stage, PoseOptions, StageReport};
 use crate::camera::Camera;
 use crate::geometry::quaternion::rotation_distance;
-use crate::optim::{trust_region, Objective, Subproblem, Summary};
+use crate::optim::{trust_region, Subproblem, Summary, Termination};
 use crate::pose::Correspondences;
 use std::time::Instant;
 
@@ -58,8 +58,15 @@ pub struct LocalMinimum {
     pub cost: f64,
     /// Object points and segment endpoints behind the camera at `pose`.
     pub behind: usize,
+    /// Why the refinement that reached it stopped.
+    pub termination: Termination,
+}
+
+impl LocalMinimum {
     /// Whether the refinement's last stop was a convergence test.
-    pub converged: bool,
+    pub fn converged(&self) -> bool {
+        self.termination.converged()
+    }
 }
 
 /// The distinct minima found, and the refinement's summed work.
@@ -67,9 +74,13 @@ pub struct LocalMinimum {
 pub struct Minima {
     /// Distinct minima, in the order found.
     pub found: Vec<LocalMinimum>,
-    /// The stage report of the best one, with iterations and time summed over every run.
-    pub report: Option<StageReport>,
-    summaries: Vec<Summary>,
+    /// Iterations and cost evaluations summed over every refinement run.
+    iterations: usize,
+    evaluations: usize,
+    /// Cost at the start of the first run (the algebraic answer).
+    initial_cost: f64,
+    /// When the stage started.
+    started: Instant,
 }
 
 /// The answer among the minima and its runner-up (indices into [`Minima::found`]).
@@ -84,9 +95,26 @@ impl Minima {
     fn new() -> Self {
         Minima {
             found: vec![],
-            report: None,
-            summaries: vec![],
+            iterations: 0,
+            evaluations: 0,
+            initial_cost: f64::NAN,
+            started: Instant::now(),
         }
+    }
+
+    /// The stage report of the chosen minimum `best` (world frame through `cond`), with the work of
+    /// every refinement run.
+    pub fn report(&self, best: usize, cond: &Conditioning) -> StageReport {
+        let m = &self.found[best];
+        let world = (m.pose.0, cond.pose_to_world(&m.pose.0, &m.pose.1));
+        let total = Summary {
+            iterations: self.iterations,
+            evaluations: self.evaluations,
+            initial_cost: self.initial_cost,
+            final_cost: m.cost,
+            termination: m.termination,
+        };
+        stage("refinement", "reprojection", &world, &total, self.started)
     }
 
     /// The best cost found so far (infinite when none).
@@ -98,8 +126,12 @@ impl Minima {
         self.found.iter().any(|m| rotation_distance(&m.pose.0, &pose.0) < radius)
     }
 
-    fn add(&mut self, m: LocalMinimum, summary: Summary) {
-        self.summaries.push(summary);
+    fn add(&mut self, m: LocalMinimum, summary: &Summary) {
+        if self.iterations == 0 && self.evaluations == 0 {
+            self.initial_cost = summary.initial_cost;
+        }
+        self.iterations += summary.iterations;
+        self.evaluations += summary.evaluations;
         let same = self.found.iter().position(|f| {
             rotation_distance(&f.pose.0, &m.pose.0) < SAME_MINIMUM && (f.pose.1 - m.pose.1).norm() < SAME_MINIMUM
         });
@@ -154,7 +186,7 @@ fn refine_once(cost: &ReprojectionCost<'_>, start: &Pose, opts: &PoseOptions) ->
         pose,
         cost: summary.final_cost,
         behind: cost.points_behind(&pose),
-        converged: summary.termination.converged(),
+        termination: summary.termination,
     };
     (minimum, summary)
 }
@@ -173,22 +205,21 @@ pub fn search(
     hypotheses: impl Iterator<Item = Vec<Pose>>,
     exhaustive: bool,
     opts: &PoseOptions,
-    cond: &Conditioning,
 ) -> Minima {
-    let started = Instant::now();
     let floor = 0.5 * cost.residual_count() as f64;
     let factor = (PROMISING_FACTOR / (cost.residual_count() / 2).max(1) as f64).max(PROMISING_FACTOR_MIN);
     let mut minima = Minima::new();
     for start in starts {
         let (m, s) = refine_once(cost, start, opts);
-        minima.add(m, s);
+        minima.add(m, &s);
     }
     let basin = if exhaustive { SAME_BASIN_SMALL } else { SAME_BASIN };
-    let refine_promising = |minima: &mut Minima, group: Vec<Pose>| {
+    let refine_promising = |minima: &mut Minima, group: &[Pose]| {
         let limit = |minima: &Minima| factor * minima.best_cost().max(floor);
         let bound = limit(minima);
         let mut ranked: Vec<(f64, Pose)> = group
-            .into_iter()
+            .iter()
+            .copied()
             .filter(|h| !minima.near(h, basin))
             .filter_map(|h| cost.cost_below(&h, bound).map(|c| (c, h)))
             .collect();
@@ -201,37 +232,21 @@ pub fn search(
                 continue;
             }
             let (m, s) = refine_once(cost, &h, opts);
-            minima.add(m, s);
+            minima.add(m, &s);
         }
     };
     if exhaustive {
-        refine_promising(&mut minima, hypotheses.flatten().collect());
+        let all: Vec<Pose> = hypotheses.flatten().collect();
+        refine_promising(&mut minima, &all);
     } else {
         for group in hypotheses {
-            let poses = group.clone();
-            refine_promising(&mut minima, group);
+            refine_promising(&mut minima, &group);
             let best = minima.choose(0.0).map(|c| minima.found[c.best].pose);
-            if best.is_some_and(|b| poses.iter().any(|h| rotation_distance(&h.0, &b.0) < SAME_BASIN)) {
+            if best.is_some_and(|b| group.iter().any(|h| rotation_distance(&h.0, &b.0) < SAME_BASIN)) {
                 break;
             }
         }
     }
-    minima.report = minima.choose(0.0).map(|choice| {
-        let best = &minima.found[choice.best];
-        let world = (best.pose.0, cond.pose_to_world(&best.pose.0, &best.pose.1));
-        let runs = &minima.summaries;
-        let total = Summary {
-            iterations: runs.iter().map(|s| s.iterations).sum(),
-            evaluations: runs.iter().map(|s| s.evaluations).sum(),
-            initial_cost: runs.first().map_or(f64::NAN, |s| s.initial_cost),
-            final_cost: best.cost,
-            termination: runs
-                .iter()
-                .find(|s| s.final_cost == best.cost)
-                .map_or(runs[0].termination, |s| s.termination),
-        };
-        stage("refinement", "reprojection", &world, &total, started)
-    });
     minima
 }
 
@@ -264,9 +279,4 @@ pub(crate) fn refine_conditioned(
     let (x, summary) = trust_region::minimize(cost, x0, &settings(opts));
     let pose = (x.0, cond.pose_to_world(&x.0, &x.1));
     (pose, stage("refinement", "reprojection", &pose, &summary, started))
-}
-
-/// The cost `½ Σ r²` of a world-frame pose (for reports).
-pub fn reprojection_cost(camera: &Camera, corr: &Correspondences, pose: &Pose) -> f64 {
-    ReprojectionCost::of(camera, corr).cost(pose)
 }

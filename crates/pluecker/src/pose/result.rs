@@ -46,13 +46,11 @@ pub(crate) fn is_finite(pose: &Pose) -> bool {
 pub(crate) fn status_of_stages(pose: &Pose, stages: &[StageReport], used: &Correspondences, valid: bool, refine: bool) -> Status {
     let finite = is_finite(pose);
     let behind = if finite { count_behind(object_points(used).copied(), pose) } else { 0 };
-    if !finite
-        || stages
-            .iter()
-            .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost))
-    {
-        Status::NumericalFailure
-    } else if !refine && !valid && behind == 0 {
+    let solver_failed = stages
+        .iter()
+        .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost));
+    // Without refinement, an algebraic answer far from a rigid motion (e.g. a stop at r = 0) failed too.
+    if !finite || solver_failed || (!refine && !valid && behind == 0) {
         Status::NumericalFailure
     } else if stages.iter().any(|s| !s.termination.converged()) {
         Status::NotConverged

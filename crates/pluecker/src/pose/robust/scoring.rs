@@ -12,12 +12,12 @@
 //! The MSAC score (Torr & Zisserman 2000) of a pose is `½ Σᵢ min(eᵢ², τᵢ²)`, with `τᵢ` the point or the
 //! line threshold: the reprojection cost with each residual capped at its threshold. Lower is better.
 
+use super::super::candidates::feature;
 use super::super::correspondences::Correspondences;
 use super::super::minimal::Feature;
 use super::super::reprojection::Pose;
 use crate::camera::Camera;
 use crate::error::Result;
-use crate::geometry::lines::interpretation_plane_normal;
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Points per batch of the scoring loop.
@@ -80,19 +80,9 @@ impl Prepared {
                 endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
             })
             .collect();
-        let mut features = Vec::with_capacity(corr.n_points() + corr.n_lines());
-        for (u, x) in corr.points2d.iter().zip(&corr.points3d) {
-            features.push(Feature::Point {
-                bearing: k_inv * Vector3::new(u.x, u.y, 1.0),
-                point: *x,
-            });
-        }
-        for (s2, s3) in corr.lines2d.iter().zip(&corr.lines3d) {
-            features.push(Feature::Line {
-                normal: interpretation_plane_normal(camera, &s2[0], &s2[1])?,
-                endpoints: *s3,
-            });
-        }
+        let features = (0..corr.n_points() + corr.n_lines())
+            .map(|k| feature(camera, &k_inv, corr, k))
+            .collect::<Result<Vec<Feature>>>()?;
         Ok(Prepared {
             camera: *camera,
             k_inv_t: k_inv.transpose(),
