@@ -102,9 +102,18 @@ fn certified_bounds_are_never_beaten() {
         ..PoseOptions::default()
     };
     let mut certified = 0;
-    for (np, nl) in [(10, 0), (100, 0), (20, 10)] {
-        for seed in 0..10 {
-            let scene = visible_scene(800.0, np, nl, false, seed);
+    let rows = [
+        (800.0, 10, 0, false),
+        (800.0, 100, 0, false),
+        (800.0, 20, 10, false),
+        (800.0, 50, 50, false),
+        (4000.0, 30, 0, false),
+        (4000.0, 10, 0, true),
+        (15000.0, 100, 0, false),
+    ];
+    for (f, np, nl, planar) in rows {
+        for seed in 0..8 {
+            let scene = visible_scene(f, np, nl, planar, seed);
             let mut rng = Rng::new(500 + seed);
             let corr = scene.noisy(1.0, true, &mut rng);
             let result = estimate_pose(&scene.camera, &corr, &opts).unwrap();
@@ -114,12 +123,17 @@ fn certified_bounds_are_never_beaten() {
             }
             certified += 1;
             let cost = ReprojectionCost::of(&scene.camera, &corr).cost(&(result.rotation, result.translation));
-            assert!(result.gap <= 1e-3 && result.lower_bound <= cost, "{np}p {nl}l seed {seed}");
+            assert!(result.gap <= 1e-3 && result.lower_bound <= cost, "f={f} {np}p {nl}l seed {seed}");
             let best = best_known(&scene, &corr, 30, &mut rng);
-            assert!(result.lower_bound <= best * (1.0 + 1e-12), "{np}p {nl}l seed {seed}: bound {} beaten by {best}", result.lower_bound);
+            assert!(
+                result.lower_bound <= best * (1.0 + 1e-12),
+                "f={f} {np}p {nl}l seed {seed}: bound {} beaten by {best}",
+                result.lower_bound
+            );
         }
     }
-    assert!(certified >= 15, "only {certified} of 30 certified");
+    // Measured with the benchmark: nearly every point scene, most of the mixed ones.
+    assert!(certified >= 40, "only {certified} of 56 certified");
 }
 
 /// A local minimum that is not the global one is never certified: the test is run directly on the
@@ -128,8 +142,10 @@ fn certified_bounds_are_never_beaten() {
 fn a_wrong_local_minimum_is_not_certified() {
     let opts = PoseOptions::default();
     let mut tried = 0;
-    for seed in 0..40u64 {
-        let scene = visible_scene(800.0, 6, 0, true, seed);
+    let rows = [(800.0, 6, true), (4000.0, 6, true), (4000.0, 6, false), (15000.0, 10, false)];
+    for seed in 0..80u64 {
+        let (f, n, planar) = rows[seed as usize % rows.len()];
+        let scene = visible_scene(f, n, 0, planar, seed);
         let mut rng = Rng::new(900 + seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let cost = ReprojectionCost::of(&scene.camera, &corr);
@@ -141,11 +157,11 @@ fn a_wrong_local_minimum_is_not_certified() {
             if cost.points_behind(&pose) == 0 && c > 1.5 * best + 1.0 {
                 tried += 1;
                 let verdict = certify(&scene.camera, &corr, &pose, c, &Default::default());
-                assert!(!verdict.certified, "seed {seed}: certified a minimum of cost {c} above {best}");
-                assert!(!(verdict.lower_bound > best), "seed {seed}: bound {} above {best}", verdict.lower_bound);
+                assert!(!verdict.certified, "f={f} seed {seed}: certified a minimum of cost {c} above {best}");
+                assert!(!(verdict.lower_bound > best), "f={f} seed {seed}: bound {} above {best}", verdict.lower_bound);
                 break;
             }
         }
     }
-    assert!(tried >= 5, "only {tried} scenes with a second minimum");
+    assert!(tried >= 10, "only {tried} scenes with a second minimum");
 }

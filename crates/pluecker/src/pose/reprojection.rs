@@ -268,6 +268,20 @@ impl<'a> ReprojectionCost<'a> {
         (total < bound).then_some(total)
     }
 
+    /// The stacked residual vector in pixels: `(u, v)` per point, then the two signed endpoint
+    /// distances per line (the `r` of `½ Σ r²`).
+    pub fn residuals(&self, pose: &Pose) -> Vec<f64> {
+        let points = (0..self.n_points).flat_map(|i| {
+            let p = self.point_lanes::<1, false>(pose, i);
+            [p.ru[0], p.rv[0]]
+        });
+        let lines = (0..self.lines2d.len()).flat_map(|i| {
+            let r = self.line_block(pose, i, false).0;
+            [r.x, r.y]
+        });
+        points.chain(lines).collect()
+    }
+
     /// Per-correspondence reprojection errors in pixels: the point distance for points, the RMS of the
     /// two endpoint distances for lines (points first, then lines).
     pub fn errors(&self, pose: &Pose) -> Vec<f64> {
