@@ -71,6 +71,23 @@ def test_pose_accepts_K_method_and_options(tmp_path, capsys, seed):
     assert_recovers(out, scene, seed, tol=1e-5)
 
 
+def test_certify_flag_and_option(tmp_path, capsys, seed):
+    """``--certify`` (or ``options.certify``) adds a proved lower bound; without it nothing is claimed."""
+    scene, doc = scene_document(seed, n_points=30, n_lines=0)
+    del doc["lines2d"], doc["lines3d"]
+    rng = np.random.default_rng(seed)
+    doc["points2d"] = (np.array(doc["points2d"]) + rng.normal(size=(30, 2))).tolist()
+    assert main(["pose", write(tmp_path, doc)]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert plain["certified"] is False and plain["certificate"] == "not_requested" and plain["lower_bound"] is None
+    doc["options"] = {"certify": False, "certify_gap": 1e-3}
+    assert main(["pose", write(tmp_path, doc), "--certify"]) == 0  # the flag wins over the file
+    out = json.loads(capsys.readouterr().out)
+    assert out["certificate"] == "sublevel_set", out["certificate"]
+    assert out["certified"] is True and out["gap"] <= 1e-3
+    assert out["lower_bound"] <= out["final_cost"] <= out["lower_bound"] / (1 - 1e-3)
+
+
 def test_linear_method_reports_estimated_intrinsics(tmp_path, capsys, seed):
     scene, doc = scene_document(seed, n_points=20, n_lines=0)
     assert main(["pose", write(tmp_path, doc), "--method", "linear", "--no-refine"]) == 0

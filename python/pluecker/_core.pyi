@@ -258,11 +258,15 @@ class PoseResult:
         """The proved lower bound on ``½ Σ r²`` (px²) over that domain; NaN without a certificate."""
     @property
     def gap(self) -> float:
-        """``(cost − lower_bound) / cost``; NaN without a certificate."""
+        """``(cost − lower_bound) / max(cost, 1e-12)``; NaN without a certificate."""
     @property
     def certificate(self) -> str:
-        """How the certificate was proved, or why there is none (``"not requested ..."``,
-        ``"proved by the sublevel-set test (N rotation cells)"``, ``"not proved: ..."``)."""
+        """How the certificate was proved, or that there is none: ``"sublevel_set"``,
+        ``"not_requested"`` (``certify=False``) or ``"not_proved"``."""
+    @property
+    def certificate_message(self) -> str:
+        """A sentence: how it was proved (``"proved by the sublevel-set test (N rotation cells)"``) or
+        why not (``"not requested ..."``, ``"not proved: ..."``, ``"not attempted: ..."``)."""
     @property
     def ambiguous(self) -> bool:
         """True when :attr:`status` is ``"ambiguous"``: another local minimum with every object point
@@ -331,6 +335,7 @@ class _PoseResultDict(TypedDict):
     lower_bound: float
     gap: float
     certificate: str
+    certificate_message: str
     ambiguous: bool
     second_best_R: Optional[list[list[float]]]
     second_best_t: Optional[list[float]]

@@ -1,6 +1,6 @@
 """The ``pluecker`` command line.
 
-``pluecker pose INPUT.json [--robust] [--point-threshold PX] [--line-threshold PX] [--seed N] [--sigma PX]``
+``pluecker pose INPUT.json [--robust] [--point-threshold PX] [--line-threshold PX] [--seed N] [--sigma PX] [--certify]``
     Estimates a camera pose from the correspondences in a JSON file (``-`` reads standard input) and
     prints ``PoseResult.to_dict()`` as JSON (with the inlier masks and the covariance). The schema is
     documented in ``docs/cli.md``.
@@ -54,10 +54,13 @@ OPTIONS = {
     "seed": ("seed", (int,)),
     "min_inliers": ("min_inliers", (int,)),
     "sigma_px": ("sigma_px", (int, float)),
+    "certify": ("certify", (bool,)),
+    "certify_gap": ("certify_gap", (int, float)),
+    "ambiguity_threshold": ("ambiguity_threshold", (int, float)),
 }
 #: Command-line flag (``args`` attribute) → keyword of ``estimate_pose``; a flag given wins over the file.
 POSE_FLAGS = {"robust": "robust", "point_threshold": "point_threshold", "line_threshold": "line_threshold",
-              "seed": "seed", "sigma": "sigma_px", "time_budget": "time_budget"}
+              "seed": "seed", "sigma": "sigma_px", "time_budget": "time_budget", "certify": "certify"}
 #: Array key → trailing shape of one row.
 ARRAYS = {"points2d": (2,), "points3d": (3,), "lines2d": (2, 2), "lines3d": (2, 3)}
 
@@ -151,6 +154,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="wall-time budget of the RANSAC loop, seconds (default none: the iteration cap bounds it)")
     pose.add_argument("--sigma", type=_positive_float, metavar="PX",
                       help="pixel noise σ for the covariance (default: estimated from the residuals)")
+    pose.add_argument("--certify", action="store_true", default=None,
+                      help="prove the answer is the global minimum of the reprojection error (the output's "
+                      "certified, lower_bound, gap and certificate; 0.3-3 ms more on 100 points)")
     pose.set_defaults(handler=_pose)
 
     tri = commands.add_parser(

@@ -281,7 +281,12 @@ impl PyPoseResult {
     }
 
     #[getter]
-    fn certificate(&self) -> String {
+    fn certificate(&self) -> &'static str {
+        self.inner.certificate.as_str()
+    }
+
+    #[getter]
+    fn certificate_message(&self) -> String {
         self.inner.certificate.message()
     }
 
@@ -351,6 +356,7 @@ impl PyPoseResult {
         d.set_item("lower_bound", r.lower_bound)?;
         d.set_item("gap", r.gap)?;
         d.set_item("certificate", self.certificate())?;
+        d.set_item("certificate_message", self.certificate_message())?;
         d.set_item("ambiguous", r.ambiguous)?;
         match &r.second_best {
             Some(((rot, t), c)) => {

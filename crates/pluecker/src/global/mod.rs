@@ -14,3 +14,12 @@ pub mod branch_and_bound;
 pub mod envelopes;
 pub mod monomial;
 pub mod socp;
+
+/// Costs below this (squared pixels: 1e-6 px of error) count as exact: certificate gaps are measured
+/// relative to `max(cost, COST_FLOOR)`, since a relative gap cannot close at the rounding level.
+pub const CERTIFICATE_COST_FLOOR: f64 = 1e-12;
+
+/// The relative gap `(cost − lower) / max(cost, CERTIFICATE_COST_FLOOR)`, at least 0.
+pub fn relative_gap(cost: f64, lower: f64) -> f64 {
+    ((cost - lower) / cost.max(CERTIFICATE_COST_FLOOR)).max(0.0)
+}

@@ -37,7 +37,7 @@
 //!    value of the square of the right-hand side over `s ≤ ρ`, halved, is the lower bound.
 //!
 //! So `lower_bound ≤ f` for every pose that keeps the points in front; the answer is certified when
-//! `(f̂ − lower_bound) / f̂ ≤ gap`. What is needed: at least two points (lines alone give no depth
+//! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
 //! bound here) seen more than `2α` apart. The test fails honestly (`certified = false`, with the
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
 //! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
@@ -47,6 +47,7 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::quaternion::{exp_so3, skew};
+use crate::global::relative_gap;
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 
@@ -765,7 +766,7 @@ pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, 
         lambda_min: eigen.min(),
         curvature,
     };
-    let gap_of = |lower: f64| if model.cost > 0.0 { (model.cost - lower) / model.cost } else { 0.0 };
+    let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
     let Some(target) = BALL_FACTORS.iter().map(|f| f * unit).find(|&radius| {
         model.bound(radius).is_some_and(|lower| gap_of(lower) <= options.gap)
