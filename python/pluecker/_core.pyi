@@ -524,7 +524,9 @@ def random_scene(kind: str, n_points: int, n_lines: int = 0, seed: int = 0) -> _
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
 #
 # Cameras are (n, 3, 4) matrices P that map world points straight to pixels, λ (u, v, 1) = P (X, 1)
-# with λ > 0 in front of the camera (eq. 1); their scale and sign are free. Every method minimises
+# with λ = (P X̃)₃ > 0 in front of the camera (eq. 1) for the matrix as given: any positive scale, but the
+# sign counts (−P sees the other half-space); fx < 0 or a left-handed world (det P[:, :3] < 0) are
+# fine. ``certified`` is True only with status "success". Every method minimises
 # eq. 19, Σ_i ‖L_i r_i‖², the residuals r_i of eq. 17 (pixels) whitened by the Cholesky factor L_i of
 # the inverse observation covariance (eq. 18; identity when ``cov`` is None, so that the cost of a
 # point is its sum of squared pixel errors). Methods: ``"linear"`` (DLT with Hartley normalisation),
