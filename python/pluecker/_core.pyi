@@ -399,7 +399,8 @@ def estimate_pose(
         confidence: stop when the probability of having drawn an all-inlier sample reaches this, at
             the best model's inlier fractions of points and of lines; in (0, 1).
         max_ransac_iterations: cap on the samples drawn; >= 1.
-        time_budget: wall-time budget of the sampling loop, seconds (None: only the cap bounds it).
+        time_budget: wall-time budget of the sampling loop, seconds, at least 0 and below 2**64 (None: only
+            the cap bounds it); anything else is an ``InvalidOptionError``.
         seed: seed of the sampler (>= 0); the same seed and data give the same result.
         min_inliers: fewest inliers a model needs (>= 3); fewer gives ``status="too_few_inliers"``,
             and fewer correspondences than this in all is a TooFewCorrespondencesError.
@@ -518,7 +519,8 @@ def random_scene(kind: str, n_points: int, n_lines: int = 0, seed: int = 0) -> _
     plane tilted 30-60°) or ``"far"`` (1 unit across at depth ~100, weak perspective). Returns
     ``points2d`` (n_points, 2), ``points3d`` (n_points, 3), ``lines2d`` (n_lines, 2, 2),
     ``lines3d`` (n_lines, 2, 3), ``R``, ``t`` and ``camera``. The same seed gives the same scene
-    on every platform (and in Rust, ``pluecker::synthetic::random_scene``).
+    on every platform (and in Rust, ``pluecker::synthetic::random_scene``). At most 10,000,000 points and
+    segments together (``InvalidOptionError`` naming the count beyond, before anything is allocated).
     """
 
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
@@ -1332,5 +1334,5 @@ def fitting_residual_samples(draws: int, size: float = 1000.0, sigma: float = 1.
     point, both refitted (:func:`fit_line`, :func:`fit_conic`). Returns the residuals of the true primitives
     in the frames of the fitted ones: ``line`` (draws, 2) and ``conic`` (draws, 5), and the same whitened by
     the predicted covariances (standard normal to first order). Seeded; the paper used 100,000 draws,
-    size 1000, sigma 1. The GIL is released.
+    size 1000, sigma 1; at most 10,000,000 draws (``InvalidOptionError`` beyond). The GIL is released.
     """
