@@ -183,7 +183,8 @@ def load_vgg(folder: str | Path) -> VggSequence:
 
 
 def _is_mirrored(cameras: np.ndarray, points3d: np.ndarray) -> bool:
-    """True when most points have negative depth ``det(M) (P X̃)₃`` in most cameras (a left-handed frame)."""
+    """True when most points have ``det(M) (P X̃)₃ < 0`` in most cameras: a left-handed frame (every VGG point has
+    ``λ = (P X̃)₃ > 0``, so the sign is that of ``det M``)."""
     if points3d.shape[0] == 0:
         return False
     homogeneous = np.hstack([points3d, np.ones((points3d.shape[0], 1))])

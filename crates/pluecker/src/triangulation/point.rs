@@ -390,13 +390,15 @@ fn certify(
     }
     .min(g.cost);
     let gap = relative_gap(g.cost, lower_bound);
+    let certified = g.status == GlobalStatus::Converged && gap <= opts.max_relative_gap;
+    // Success exactly when certified: branch and bound's own stopping rule measures the gap against
+    // its incumbent, which may differ from `gap` in the last digits.
     let status = match g.status {
-        GlobalStatus::Converged => Status::Success,
-        GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
+        GlobalStatus::Converged if certified => Status::Success,
+        GlobalStatus::Converged | GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
         GlobalStatus::Infeasible => Status::Infeasible,
         GlobalStatus::Failed => Status::NumericalFailure,
     };
-    let certified = g.status == GlobalStatus::Converged && gap <= opts.max_relative_gap;
     let certificate = Certificate {
         lower_bound,
         relative_gap: gap,
