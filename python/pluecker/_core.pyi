@@ -547,8 +547,10 @@ class TriangulationReport:
     def status(self) -> str:
         """``"success"``; ``"gap_not_closed"`` (branch and bound hit ``max_nodes``; the estimate is the
         best found and ``lower_bound`` the bound reached); ``"not_converged"`` (the local minimisation hit
-        its iteration cap); ``"behind_camera"`` (the estimate is at or behind a camera);
-        ``"at_infinity"`` (parallel rays: no finite estimate, ``X`` is NaN); ``"infeasible"`` (no
+        its iteration cap); ``"behind_camera"`` (the estimate is at or behind a camera; for ``local`` and
+        ``optimal`` also: the data are best explained behind the cameras, and ``X`` is the linear point
+        there); ``"at_infinity"`` (parallel rays, or no point in front costs less than a point at
+        infinity: no finite estimate, ``X`` is NaN, ``cost`` the cost at infinity); ``"infeasible"`` (no
         estimate has every reprojection error below ``max_reprojection_error``);
         ``"numerical_failure"``."""
     @property
@@ -566,7 +568,8 @@ class TriangulationReport:
         """``(cost - lower_bound) / cost`` (1 when not computed, 0 when the cost is 0)."""
     @property
     def certified(self) -> bool:
-        """The estimate is the global minimum within ``max_relative_gap``, backed by ``lower_bound``."""
+        """The estimate is the global minimum within ``max_relative_gap``, backed by ``lower_bound``.
+        True only with ``status == "success"``."""
     @property
     def certificate(self) -> str:
         """How optimality was established: ``"none"`` (methods linear and local),

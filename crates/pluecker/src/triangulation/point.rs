@@ -217,20 +217,28 @@ pub(crate) fn solve_views(
     report.cost = cost;
     if certificate.kind == CertificateKind::BranchAndBound && matches!(status, Status::Success | Status::GapNotClosed) {
         // Branch and bound searches the closure of the points in front, infinity included: its best
-        // finite point may be a far point on the way there (module docs of point_infinity). Its
-        // lower bound still holds over the points in front; it is kept for a point at infinity.
+        // finite point may be a far point on the way there (module docs of point_infinity).
         if let Some(u) = unreached(views, frame, &x, cost, linear, opts) {
-            let lower = certificate.lower_bound.min(u.cost);
-            report.certificate.lower_bound = if u.status == Status::AtInfinity { lower } else { 0.0 };
-            report.certificate.relative_gap = if u.status == Status::AtInfinity {
-                ((u.cost - lower) / u.cost.max(COST_FLOOR)).max(0.0)
-            } else {
-                1.0
-            };
+            report.certificate = certificate_when_unreached(&certificate, &u);
             return settle(u, report);
         }
     }
     finish(x, report)
+}
+
+/// The certificate of branch and bound once [`unreached`] has spoken: never certified; for a point
+/// at infinity the lower bound (valid over the points in front, infinity included) and the gap to
+/// the cost there are kept; a point behind a camera is outside the searched set, so nothing is.
+fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Certificate {
+    let mut out = Certificate { certified: false, ..*certificate };
+    if u.status == Status::AtInfinity {
+        out.lower_bound = certificate.lower_bound.min(u.cost);
+        out.relative_gap = ((u.cost - out.lower_bound) / u.cost.max(COST_FLOOR)).max(0.0);
+    } else {
+        out.lower_bound = 0.0;
+        out.relative_gap = 1.0;
+    }
+    out
 }
 
 /// The outcome of a solve whose infimum over points in front of every camera is not reached at a
