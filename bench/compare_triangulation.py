@@ -24,7 +24,8 @@ computed here in numpy for every method alike): median, mean, and the fraction o
 behind a camera or costs more than the best in-front answer any method found for that point by more
 than 1e-6 (relative: a different local minimum or an unconverged one) and by more than 1 %; the fraction of
 certified answers, certificate kinds and branch-and-bound nodes (pluecker optimal); the points behind
-a camera (``sign(det M) (P X̃)₃ ≤ 0`` in some view). A certified lower bound that another method's
+a camera (``λ = (P X̃)₃ ≤ 0`` in some view; every camera here has ``det M > 0``, where this is also
+Hartley & Zisserman's ``sign(det M) (P X̃)₃``). A certified lower bound that another method's
 answer in front of the cameras beats is counted as a violation (there must be none).
 
 **Real data**: Model House and Corridor (``pluecker.datasets``), every 3-D point of the data, triangulated
@@ -160,9 +161,8 @@ def cost_eq19(P: np.ndarray, X: np.ndarray, x: np.ndarray, visible: np.ndarray |
 
 
 def behind(P: np.ndarray, X: np.ndarray, visible: np.ndarray | None = None) -> np.ndarray:
-    """Per point: at or behind some camera (depth ``sign(det M) (P X̃)₃ ≤ 0``), or not finite."""
-    signs = np.sign(np.linalg.det(P[:, :, :3]))
-    depth = np.einsum("vj,nj->nv", P[:, 2, :], np.hstack([X, np.ones((len(X), 1))])) * signs
+    """Per point: at or behind some camera (``λ = (P X̃)₃ ≤ 0``, pluecker's convention), or not finite."""
+    depth = np.einsum("vj,nj->nv", P[:, 2, :], np.hstack([X, np.ones((len(X), 1))]))
     bad = depth <= 0
     if visible is not None:
         bad &= visible

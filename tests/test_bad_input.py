@@ -293,6 +293,94 @@ def test_bad_scene_requests():
         pluecker.random_scene("general", -1)
 
 
+# --- sizes and durations: checked before use, never a panic or an abort (issue 10) ------------------
+
+
+@pytest.mark.parametrize("budget", [1e20, 2.0**64, 1e300])
+def test_a_time_budget_beyond_the_clock_is_an_invalid_option(scene, budget):
+    """``Duration::from_secs_f64`` panicked at 2**64 s and beyond (PanicException)."""
+    with raises(InvalidOptionError, match="time_budget: must be below 2\\*\\*64 seconds"):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], robust=True, time_budget=budget)
+    # Checked whether or not robust is set, like the other robust options.
+    with raises(InvalidOptionError, match="time_budget"):
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], time_budget=budget)
+
+
+def test_the_longest_time_budget_the_clock_holds_is_accepted(scene):
+    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], robust=True,
+                               min_inliers=6, time_budget=1.8e19)
+    assert r.ransac_stop == "confidence"
+
+
+def test_a_time_budget_beyond_the_clock_exits_2_on_the_command_line(tmp_path, capsys, scene):
+    import json
+
+    from pluecker.cli import main
+    cam = scene["camera"]
+    doc = {"camera": {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy},
+           "points2d": scene["points2d"].tolist(), "points3d": scene["points3d"].tolist()}
+    path = tmp_path / "in.json"
+    for argv, options in ((["--robust", "--time-budget", "1e20"], None), ([], {"robust": True, "time_budget": 1e20})):
+        path.write_text(json.dumps({**doc, **({"options": options} if options else {})}))
+        assert main(["pose", str(path), *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("pluecker pose: error: ") and err.count("\n") == 1 and "time_budget" in err, err
+
+
+def run_isolated(code: str, timeout: float = 60.0):
+    """Runs ``code`` in a fresh interpreter (an abort or a hang must fail this test, not end the session)."""
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.mark.parametrize("n_points,n_lines,name", [(2**40, 0, "n_points"), (0, 2**40, "n_lines"),
+                                                   (10**7, 1, "n_lines"), (2**62, 2**62, "n_points")])
+def test_a_scene_too_large_to_allocate_is_an_invalid_option_not_an_abort(n_points, n_lines, name):
+    """``random_scene("general", 2**40)`` aborted the interpreter (memory allocation of 26 TB failed)."""
+    run = run_isolated(
+        "import pluecker\n"
+        "try:\n"
+        f"    pluecker.random_scene('general', {n_points}, {n_lines})\n"
+        "except pluecker.InvalidOptionError as e:\n"
+        "    print(isinstance(e, ValueError), e)\n")
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.startswith("True ") and f"'{name}'" in run.stdout and "at most 10000000" in run.stdout
+
+
+def test_the_largest_scene_request_is_a_clear_message_in_process():
+    with raises(InvalidOptionError, match="'n_points': a scene holds at most 10000000 points and segments"):
+        pluecker.random_scene("general", 2**40)
+    assert len(pluecker.random_scene("general", 3, 2)["points3d"]) == 3
+
+
+def test_residual_samples_refuse_huge_requests_and_end_on_tiny_images():
+    """2**40 draws used to run until memory ran out; an image of 1e-300 px looped forever drawing a
+    segment (its length underflowed to 0)."""
+    with raises(InvalidOptionError, match="'draws': at most 10000000 draws"):
+        pluecker.fitting_residual_samples(2**40)
+    run = run_isolated(
+        "import pluecker\n"
+        "try:\n"
+        "    print(len(pluecker.fitting_residual_samples(2, size=1e-300)['line']))\n"
+        "except pluecker.PlueckerError as e:\n"
+        "    print(type(e).__name__)\n", timeout=30.0)
+    assert run.returncode == 0 and run.stdout.strip() in {"2", "DegenerateConfigurationError"}, run
+
+
+def test_a_line_far_from_the_origin_is_a_documented_error_for_every_method():
+    """Cameras 1e13 from the origin: ``optimal`` raised PlueckerError("internal error: a finite line")."""
+    K = np.array([[800.0, 0, 320], [0, 800.0, 240], [0, 0, 1]])
+    offset = np.array([1e13, 0.0, 0.0])
+    P = np.stack([K @ np.hstack([np.eye(3), -(offset + [x, 0, 0])[:, None]]) for x in (0.0, 1e4, 2e4)])
+    A, B = offset + [0, 0, 5e4], offset + [1e4, 1e4, 6e4]
+    lines = np.array([np.cross(p @ np.append(A, 1), p @ np.append(B, 1)) for p in P])
+    lines = lines / np.linalg.norm(lines[:, :2], axis=1)[:, None] + np.array([[0, 0, 0.5], [0, 0, -0.3], [0, 0, 0.2]])
+    for method in ("local", "optimal"):
+        with raises(DegenerateConfigurationError, match="at infinity"):
+            pluecker.triangulate_line(P, lines, method=method)
+
+
 # --- types ------------------------------------------------------------------------------------------
 
 

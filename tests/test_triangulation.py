@@ -52,7 +52,8 @@ def cost_eq19(P: np.ndarray, X: np.ndarray, x: np.ndarray, cov: np.ndarray | Non
 
 
 def depths(P: np.ndarray, X: np.ndarray) -> np.ndarray:
-    return np.sign(np.linalg.det(P[:, :, :3])) * (P[:, 2] @ np.append(X, 1.0))
+    """λ = (P X̃)₃ per view: positive in front (the sign of P counts, its positive scale does not)."""
+    return P[:, 2] @ np.append(X, 1.0)
 
 
 def noisy_problem(seed: int, views: int = 4, parallax_deg: float = 30.0, sigma: float = 1.0):
@@ -105,14 +106,21 @@ def test_covariance_weights_the_residuals_as_eq18(seed):
     assert scaled.cost == pytest.approx(r.cost / 4.0, rel=1e-9)
 
 
-def test_camera_scale_and_sign_do_not_matter(seed):
+def test_a_positive_camera_scale_does_not_matter_and_the_sign_says_which_side_is_in_front(seed):
     P, _, x = noisy_problem(seed, views=3)
     base = pluecker.triangulate_point(P, x)
-    rescaled = P * np.array([-2.0, 1e-3, 7.0])[:, None, None]
+    rescaled = P * np.array([2.0, 1e-3, 7.0])[:, None, None]
     other = pluecker.triangulate_point(rescaled, x)
     np.testing.assert_allclose(other.X, base.X, atol=1e-8)
     assert other.cost == pytest.approx(base.cost, rel=1e-9)
     assert other.certified and other.status == "success"
+    # λ = (P X̃)₃ > 0 in front for the matrix as given (issue 10): −P sees the other half-space, so the
+    # same point is behind that camera.
+    negated = P * np.array([-1.0, 1.0, 1.0])[:, None, None]
+    assert depths(negated, base.X)[0] < 0
+    for method in METHODS:
+        r = pluecker.triangulate_point(negated, x, method=method)
+        assert r.status != "success" and not r.certified, (method, r)
 
 
 # --- the certificate --------------------------------------------------------------------------------

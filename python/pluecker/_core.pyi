@@ -404,7 +404,8 @@ def estimate_pose(
         confidence: stop when the probability of having drawn an all-inlier sample reaches this, at
             the best model's inlier fractions of points and of lines; in (0, 1).
         max_ransac_iterations: cap on the samples drawn; >= 1.
-        time_budget: wall-time budget of the sampling loop, seconds (None: only the cap bounds it).
+        time_budget: wall-time budget of the sampling loop, seconds, at least 0 and below 2**64 (None: only
+            the cap bounds it); anything else is an ``InvalidOptionError``.
         seed: seed of the sampler (>= 0); the same seed and data give the same result.
         min_inliers: fewest inliers a model needs (>= 3); fewer gives ``status="too_few_inliers"``,
             and fewer correspondences than this in all is a TooFewCorrespondencesError.
@@ -523,13 +524,16 @@ def random_scene(kind: str, n_points: int, n_lines: int = 0, seed: int = 0) -> _
     plane tilted 30-60°) or ``"far"`` (1 unit across at depth ~100, weak perspective). Returns
     ``points2d`` (n_points, 2), ``points3d`` (n_points, 3), ``lines2d`` (n_lines, 2, 2),
     ``lines3d`` (n_lines, 2, 3), ``R``, ``t`` and ``camera``. The same seed gives the same scene
-    on every platform (and in Rust, ``pluecker::synthetic::random_scene``).
+    on every platform (and in Rust, ``pluecker::synthetic::random_scene``). At most 10,000,000 points and
+    segments together (``InvalidOptionError`` naming the count beyond, before anything is allocated).
     """
 
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
 #
 # Cameras are (n, 3, 4) matrices P that map world points straight to pixels, λ (u, v, 1) = P (X, 1)
-# with λ > 0 in front of the camera (eq. 1); their scale and sign are free. Every method minimises
+# with λ = (P X̃)₃ > 0 in front of the camera (eq. 1) for the matrix as given: any positive scale, but the
+# sign counts (−P sees the other half-space); fx < 0 or a left-handed world (det P[:, :3] < 0) are
+# fine. ``certified`` is True only with status "success". Every method minimises
 # eq. 19, Σ_i ‖L_i r_i‖², the residuals r_i of eq. 17 (pixels) whitened by the Cholesky factor L_i of
 # the inverse observation covariance (eq. 18; identity when ``cov`` is None, so that the cost of a
 # point is its sum of squared pixel errors). Methods: ``"linear"`` (DLT with Hartley normalisation),
@@ -548,8 +552,10 @@ class TriangulationReport:
     def status(self) -> str:
         """``"success"``; ``"gap_not_closed"`` (branch and bound hit ``max_nodes``; the estimate is the
         best found and ``lower_bound`` the bound reached); ``"not_converged"`` (the local minimisation hit
-        its iteration cap); ``"behind_camera"`` (the estimate is at or behind a camera);
-        ``"at_infinity"`` (parallel rays: no finite estimate, ``X`` is NaN); ``"infeasible"`` (no
+        its iteration cap); ``"behind_camera"`` (the estimate is at or behind a camera; for ``local`` and
+        ``optimal`` also: the data are best explained behind the cameras, and ``X`` is the linear point
+        there); ``"at_infinity"`` (parallel rays, or no point in front costs less than a point at
+        infinity: no finite estimate, ``X`` is NaN, ``cost`` the cost at infinity); ``"infeasible"`` (no
         estimate has every reprojection error below ``max_reprojection_error``);
         ``"numerical_failure"``."""
     @property
@@ -567,7 +573,8 @@ class TriangulationReport:
         """``(cost - lower_bound) / cost`` (1 when not computed, 0 when the cost is 0)."""
     @property
     def certified(self) -> bool:
-        """The estimate is the global minimum within ``max_relative_gap``, backed by ``lower_bound``."""
+        """The estimate is the global minimum within ``max_relative_gap``, backed by ``lower_bound``.
+        True only with ``status == "success"``."""
     @property
     def certificate(self) -> str:
         """How optimality was established: ``"none"`` (methods linear and local),
@@ -1335,5 +1342,5 @@ def fitting_residual_samples(draws: int, size: float = 1000.0, sigma: float = 1.
     point, both refitted (:func:`fit_line`, :func:`fit_conic`). Returns the residuals of the true primitives
     in the frames of the fitted ones: ``line`` (draws, 2) and ``conic`` (draws, 5), and the same whitened by
     the predicted covariances (standard normal to first order). Seeded; the paper used 100,000 draws,
-    size 1000, sigma 1. The GIL is released.
+    size 1000, sigma 1; at most 10,000,000 draws (``InvalidOptionError`` beyond). The GIL is released.
     """

@@ -9,8 +9,10 @@ view's file, ``*`` when not seen). The prefix (``house.``, ``bt.`` or none) is f
 Two sequences (Model House, Corridor) use a mirrored, left-handed world frame: every camera has
 ``det(P[:, :3]) * (P [X; 1])[2] < 0`` for the reconstructed points. :func:`load_vgg` detects this from the
 data and, when it holds, negates X, Y, Z of every 3-D point and segment and right-multiplies every camera by
-``diag(-1, -1, -1, 1)``: the projections are unchanged, ``det`` of the left 3x3 block becomes positive and
-depths in front of the cameras are positive, as pluecker's conventions require.
+``diag(-1, -1, -1, 1)``: the projections and ``λ = (P X̃)₃`` are unchanged and ``det`` of the left 3x3 block
+becomes positive, so the world frame is right-handed. pluecker does not need the flip: a point is in front
+when ``λ > 0`` for the matrix as given (every point of every sequence, flipped or not), and the raw cameras
+triangulate the mirrored points with the same costs and statuses.
 
 Conventions: pixels with (0, 0) the top-left pixel, x right, y down; arrays row-major float64.
 """
@@ -181,7 +183,8 @@ def load_vgg(folder: str | Path) -> VggSequence:
 
 
 def _is_mirrored(cameras: np.ndarray, points3d: np.ndarray) -> bool:
-    """True when most points have negative depth ``det(M) (P X̃)₃`` in most cameras (a left-handed frame)."""
+    """True when most points have ``det(M) (P X̃)₃ < 0`` in most cameras: a left-handed frame (every VGG point has
+    ``λ = (P X̃)₃ > 0``, so the sign is that of ``det M``)."""
     if points3d.shape[0] == 0:
         return False
     homogeneous = np.hstack([points3d, np.ones((points3d.shape[0], 1))])

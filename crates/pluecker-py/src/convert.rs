@@ -9,6 +9,7 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethod
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::IntoPyDict;
+use std::time::Duration;
 
 /// One axis of an expected shape: a named free length (`N` rows) or a fixed one.
 #[derive(Clone, Copy, Debug)]
@@ -200,6 +201,24 @@ pub fn rotation(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
         ));
     }
     Ok(r)
+}
+
+/// A duration argument in seconds: finite, `≥ 0` and representable as a [`Duration`] (below
+/// `2⁶⁴` s, about 5.8e11 years), else `InvalidOptionError` naming `name`. `Duration::from_secs_f64`
+/// panics beyond that range; this is the one conversion every seconds argument goes through.
+pub fn seconds_arg(name: &str, seconds: f64) -> PyResult<Duration> {
+    if !(seconds.is_finite() && seconds >= 0.0) {
+        return Err(invalid_argument(
+            name,
+            format!("must be None or a finite number of seconds ≥ 0, got {seconds}"),
+        ));
+    }
+    Duration::try_from_secs_f64(seconds).map_err(|_| {
+        invalid_argument(
+            name,
+            format!("must be below 2**64 seconds (the longest duration the clock holds), got {seconds:e}"),
+        )
+    })
 }
 
 /// How far from orthonormal a rotation argument may be (the core's tolerance for `initial_pose`).

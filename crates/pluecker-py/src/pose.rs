@@ -2,7 +2,7 @@
 //! GIL released.
 
 use crate::camera::PyCamera;
-use crate::convert::{points, rotation, segments, vector};
+use crate::convert::{points, rotation, seconds_arg, segments, vector};
 use crate::errors::{invalid_argument, shape_error, solve};
 use crate::result::PyPoseResult;
 use nalgebra::{Matrix3, Vector3};
@@ -106,16 +106,7 @@ impl RobustArgs {
     /// The options, checked whether or not `robust` is set (a bad value is an error either way);
     /// `None` when not robust.
     fn options(&self) -> PyResult<Option<RansacOptions>> {
-        let budget = match self.time_budget {
-            None => None,
-            Some(seconds) if seconds.is_finite() && seconds >= 0.0 => Some(std::time::Duration::from_secs_f64(seconds)),
-            Some(seconds) => {
-                return Err(invalid_argument(
-                    "time_budget",
-                    format!("must be None or a finite number of seconds ≥ 0, got {seconds}"),
-                ))
-            }
-        };
+        let budget = self.time_budget.map(|s| seconds_arg("time_budget", s)).transpose()?;
         if self.seed < 0 {
             return Err(invalid_argument("seed", format!("must be ≥ 0, got {}", self.seed)));
         }

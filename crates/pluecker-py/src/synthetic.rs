@@ -3,7 +3,9 @@
 use crate::camera::PyCamera;
 use crate::convert::{matrix3_to_py, points_to_py, segments_to_py, vector_to_py};
 use crate::errors::{guarded, invalid_argument};
-use pluecker::synthetic::{paper_calibration_object, random_scene as core_random_scene, Scene, SceneKind};
+use pluecker::synthetic::{
+    check_scene_size, paper_calibration_object, random_scene as core_random_scene, Scene, SceneKind,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -53,7 +55,10 @@ pub fn random_scene<'py>(
             return Err(invalid_argument(name, format!("must be non-negative, got {value}")));
         }
     }
+    // Non-negative i64 values fit usize and u64 on the 64-bit targets the wheels are built for.
     let (n_points, n_lines, seed) = (n_points as usize, n_lines as usize, seed as u64);
+    // Sizes before allocation: a failed allocation aborts the interpreter (issue 10).
+    check_scene_size(n_points, n_lines).map_err(crate::errors::to_py_err)?;
     let scene = py.allow_threads(|| guarded(|| Ok(core_random_scene(kind, n_points, n_lines, seed))))?;
     scene_dict(py, &scene, true)
 }

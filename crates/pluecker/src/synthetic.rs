@@ -1,6 +1,7 @@
 //! Seeded synthetic scenes for tests, benchmarks and the paper's experiments.
 
 use crate::camera::Camera;
+use crate::error::{Error, Result};
 use crate::geometry::quaternion::{from_axis_angle, to_rotation_matrix};
 use crate::pose::Correspondences;
 use crate::rng::Rng;
@@ -98,6 +99,28 @@ impl SceneKind {
             SceneKind::Far => "far",
         }
     }
+}
+
+/// The most points plus segments a generated scene may hold through [`check_scene_size`]: ten
+/// million (about 0.5 GB of correspondences, as much again once copied to numpy).
+pub const MAX_SCENE_FEATURES: usize = 10_000_000;
+
+/// [`Error::InvalidOption`] naming the count when a scene of `n_points` points and `n_lines`
+/// segments would hold more than [`MAX_SCENE_FEATURES`] features. The scene generators allocate
+/// their vectors in one go and an allocation that fails aborts the process, so callers with
+/// untrusted sizes (the Python bindings) check first.
+pub fn check_scene_size(n_points: usize, n_lines: usize) -> Result<()> {
+    let too_many = |name: &str, value: usize| Error::InvalidOption {
+        name: name.into(),
+        reason: format!("a scene holds at most {MAX_SCENE_FEATURES} points and segments together, got {value}"),
+    };
+    if n_points > MAX_SCENE_FEATURES {
+        return Err(too_many("n_points", n_points));
+    }
+    if n_lines > MAX_SCENE_FEATURES - n_points {
+        return Err(too_many("n_lines", n_lines));
+    }
+    Ok(())
 }
 
 /// A random scene of `n_points` points and `n_lines` segments with a random pose, noise-free.
@@ -297,6 +320,21 @@ pub fn triangulation_scene(views: usize, parallax: f64, seed: u64) -> Triangulat
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scene_sizes_are_checked_against_the_cap_without_overflow() {
+        assert!(check_scene_size(MAX_SCENE_FEATURES, 0).is_ok());
+        assert!(check_scene_size(MAX_SCENE_FEATURES - 5, 5).is_ok());
+        for (n, m, name) in [
+            (MAX_SCENE_FEATURES + 1, 0, "n_points"),
+            (1 << 40, 0, "n_points"),
+            (MAX_SCENE_FEATURES, 1, "n_lines"),
+            (0, usize::MAX, "n_lines"),
+        ] {
+            let err = check_scene_size(n, m).unwrap_err();
+            assert!(matches!(&err, Error::InvalidOption { name: got, .. } if got == name), "{err}");
+        }
+    }
 
     #[test]
     fn paper_object_is_in_view_and_in_front() {

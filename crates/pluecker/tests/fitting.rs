@@ -186,3 +186,17 @@ fn figure_samples_are_standard_normal_after_whitening() {
         "figure 2",
     );
 }
+
+/// Issue 10: pixels near the underflow threshold used to make the segment draw loop forever
+/// (`‖a − b‖` underflows to 0); too many draws are refused before anything is allocated.
+#[test]
+fn residual_samples_end_on_tiny_images_and_refuse_huge_requests() {
+    match residual_samples(2, 1e-300, 1.0, 3) {
+        Ok(s) => assert_eq!(s.line.len(), 2),
+        Err(e) => assert!(matches!(e, pluecker::Error::Degenerate { .. }), "{e}"),
+    }
+    let (line, _) = random_image_primitives(1e-300, &mut Rng::new(4));
+    assert!(((line[0] - line[20]) / 1e-300).norm() >= 0.2);
+    let huge = residual_samples(usize::MAX, 1000.0, 1.0, 0).unwrap_err();
+    assert!(matches!(huge, pluecker::Error::InvalidOption { ref name, .. } if name == "draws"), "{huge}");
+}

@@ -272,3 +272,35 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
         matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("segments[2]"))
     );
 }
+
+/// Cameras 1e13 units from the world origin (baselines of 1e4): the line they see is "at infinity"
+/// for the world-frame Plücker coordinates (its moment is 1e13 times its direction). `local`
+/// reports that as a degenerate configuration; `optimal` used to panic in its frame (issue 10).
+#[test]
+fn a_line_far_from_the_origin_is_the_same_error_for_optimal_as_for_local() {
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let offset = Vector3::new(1e13, 0.0, 0.0);
+    let cameras: Vec<Matrix3x4<f64>> = [0.0, 1e4, 2e4]
+        .iter()
+        .map(|x| {
+            let mut rt = Matrix3x4::identity();
+            rt.set_column(3, &-(offset + Vector3::new(*x, 0.0, 0.0)));
+            k * rt
+        })
+        .collect();
+    let (a, b) = (offset + Vector3::new(0.0, 0.0, 5e4), offset + Vector3::new(1e4, 1e4, 6e4));
+    let project = |p: &Matrix3x4<f64>, x: &Vector3<f64>| p * x.push(1.0);
+    let lines: Vec<Vector3<f64>> = cameras
+        .iter()
+        .zip([0.5, -0.3, 0.2])
+        .map(|(p, shift)| {
+            let l = project(p, &a).cross(&project(p, &b));
+            let l = l / l.xy().norm();
+            l + Vector3::new(0.0, 0.0, shift)
+        })
+        .collect();
+    for method in [Method::Local, Method::Optimal] {
+        let err = triangulate_line(&cameras, &lines, None, &opts(method)).unwrap_err();
+        assert!(matches!(err, Error::Degenerate { .. }), "{method:?}: {err}");
+    }
+}

@@ -200,6 +200,8 @@ fn an_ellipsoid_behind_a_camera_is_reported() {
     for method in Method::ALL {
         let r = triangulate_quadric(&cameras, &conics, None, &opts(method)).unwrap();
         assert_eq!(r.report.status, Status::BehindCamera, "{}", method.as_str());
+        // Status and certificate agree (issue 10: optimal said behind_camera and certified).
+        assert!(!r.report.certificate.certified, "{}", method.as_str());
     }
 }
 

@@ -223,7 +223,8 @@ where
         .collect()
 }
 
-/// The cameras of a line or quadric batch (3x4, world → pixels, any scale and sign): one set seen
+/// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means
+/// `(P X̃)₃ > 0`, [`super::views`]): one set seen
 /// by every track, or one set per track (e.g. independent scenes solved together).
 #[derive(Debug, Clone, Copy)]
 pub enum TrackCameras<'a> {

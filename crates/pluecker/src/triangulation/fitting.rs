@@ -296,7 +296,9 @@ pub fn random_image_primitives(size: f64, rng: &mut Rng) -> (Vec<Vector2<f64>>, 
     let (a, b) = loop {
         let a = Vector2::new(rng.uniform_in(0.0, size), rng.uniform_in(0.0, size));
         let b = Vector2::new(rng.uniform_in(0.0, size), rng.uniform_in(0.0, size));
-        if (a - b).norm() >= size / 5.0 {
+        // In units of `size`: with pixels near the underflow threshold `‖a − b‖` itself is 0 and
+        // the loop would never end.
+        if ((a - b) / size).norm() >= 0.2 {
             break (a, b);
         }
     };
@@ -316,9 +318,18 @@ fn whiten<const D: usize>(cov: &SMatrix<f64, D, D>, r: &SVector<f64, D>) -> SVec
         .unwrap_or_else(|_| SVector::repeat(f64::NAN))
 }
 
+/// The most draws [`residual_samples`] accepts: a hundred times the paper's 100000 (about 1 GB).
+pub const MAX_RESIDUAL_DRAWS: usize = 10_000_000;
+
 /// The data of Figures 1-2 (see [`ResidualSamples`]); the paper used `draws = 100000`, `size = 1000`,
-/// `sigma = 1`. Seeded by `seed`.
+/// `sigma = 1`. Seeded by `seed`. [`Error::InvalidOption`] for more than [`MAX_RESIDUAL_DRAWS`] draws.
 pub fn residual_samples(draws: usize, size: f64, sigma: f64, seed: u64) -> Result<ResidualSamples> {
+    if draws > MAX_RESIDUAL_DRAWS {
+        return Err(Error::InvalidOption {
+            name: "draws".into(),
+            reason: format!("at most {MAX_RESIDUAL_DRAWS} draws (the paper used 100000), got {draws}"),
+        });
+    }
     let mut rng = Rng::new(seed);
     let mut out = ResidualSamples {
         line: vec![],

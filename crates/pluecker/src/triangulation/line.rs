@@ -119,7 +119,8 @@ impl LineProblem {
     }
 }
 
-/// Triangulates one 3-D line seen by `cameras` (3x4, world → pixels, any scale and sign) as the
+/// Triangulates one 3-D line seen by `cameras` (3x4, world → pixels, any positive scale; in
+/// front means `(P X̃)₃ > 0`, [`super::views`]) as the
 /// homogeneous image lines `lines` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
 /// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`]; identity
 /// when `None`).

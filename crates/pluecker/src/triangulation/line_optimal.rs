@@ -70,10 +70,11 @@ pub fn eq23(x: &Vector2<f64>, y: &Vector2<f64>) -> Vector6<f64> {
 /// `t_c ∓ h` along the line from its foot ([`LineProblem::foot`]), inside the interval of the line
 /// in front of every camera: `t_c` is 0 clamped into the middle half of that interval (or `ρ/4` from
 /// a finite end of a half-infinite one) and `h = min(ρ/20, half the distance from t_c to the nearest
-/// end)`; the frame's unit is `2h`.
-fn plane_frame(problem: &LineProblem, world_line: &Vector6<f64>) -> Similarity {
+/// end)`; the frame's unit is `2h`. `None` when the line is at infinity in world coordinates (so far
+/// from the origin, relative to its own length scale, that its direction is lost).
+fn plane_frame(problem: &LineProblem, world_line: &Vector6<f64>) -> Option<Similarity> {
     let (foot, rho) = problem.foot(world_line);
-    let (_, d) = plucker::to_point_direction(world_line).expect("a finite line");
+    let (_, d) = plucker::to_point_direction(world_line)?;
     // depth_i(foot + t d) = a_i + b_i t > 0 for every camera.
     let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
     for p in &problem.cameras {
@@ -105,10 +106,10 @@ fn plane_frame(problem: &LineProblem, world_line: &Vector6<f64>) -> Similarity {
     }
     .normalize();
     let e2 = d.cross(&e1);
-    Similarity {
+    Some(Similarity {
         rotation: Matrix3::from_rows(&[e1.transpose(), e2.transpose(), d.transpose()]),
         ..Similarity::around(foot + d * (centre - h), 2.0 * h)
-    }
+    })
 }
 
 /// A half-plane `a·v ≤ b` of one of the planes `z = 0, 1`.
@@ -432,11 +433,18 @@ pub(crate) fn optimal_line(
     };
     let cost = local_report.cost;
     if cost <= NEGLIGIBLE_COST {
+        // Certified whatever stopped the local stage: a sum of squares is never negative.
         report.certificate = negligible_cost_certificate();
+        report.status = Status::Success;
         return (*local, report);
     }
     let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());
-    let sim = plane_frame(problem, local);
+    let Some(sim) = plane_frame(problem, local) else {
+        // No frame for eq. 23, so no search: the local line, uncertified (the caller turns a line
+        // at infinity into the same error as for `local`).
+        report.set_status(Status::NumericalFailure);
+        return (*local, report);
+    };
     let h = sim.matrix();
     let frame_local = plucker::transform(&h, local);
     let reference = eq23(&Vector2::zeros(), &Vector2::zeros());

@@ -9,8 +9,10 @@
 //! bound on the cost of every 3-D primitive.
 //!
 //! Conventions: cameras are 3x4 matrices `P` that map world points straight to pixels,
-//! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1); costs are in squared
-//! (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
+//! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1) for the matrix as given, so
+//! any positive scale but not any sign ([`views`]: `fx < 0` and left-handed worlds are fine); costs
+//! are in squared (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
+//! A report's `certified` is true only with [`Status::Success`] ([`Report::set_status`]).
 
 pub mod batch;
 pub mod conditioning;
@@ -26,6 +28,7 @@ pub mod point_certificate;
 pub mod point_chart;
 pub mod point_cost;
 pub mod point_global;
+pub mod point_infinity;
 pub mod point_linear;
 
 pub mod quadric;
@@ -134,7 +137,9 @@ pub enum Status {
     NotConverged,
     /// The estimate lies behind (or on the principal plane of) at least one camera.
     BehindCamera,
-    /// The estimate is a point at infinity (parallel rays): no finite point can be returned.
+    /// The estimate is a point at infinity: parallel rays, or every point in front of the cameras
+    /// costs more than a point at infinity (the infimum is approached only there). No finite point
+    /// is returned.
     AtInfinity,
     /// No primitive has every reprojection error below the user's γ.
     Infeasible,
@@ -238,6 +243,15 @@ impl Report {
 }
 
 impl Report {
+    /// Sets the status; a status other than [`Status::Success`] withdraws the certificate's claim
+    /// (`certified` is false), so that the two fields never disagree.
+    pub fn set_status(&mut self, status: Status) {
+        self.status = status;
+        if status != Status::Success {
+            self.certificate.certified = false;
+        }
+    }
+
     /// The report of a local minimisation that ended as `summary` says (`summary.final_cost` is the
     /// solvers' `½ Σ`, so the cost of eq. 19 is twice it).
     pub fn of_local(summary: &Summary) -> Report {

@@ -16,14 +16,21 @@
 //! termination); `GapNotClosed` at the node cap or when the search set could not be boxed;
 //! `Infeasible` when no point is within the user's `max_reprojection_error` of every observation;
 //! `NumericalFailure` when a conic solve of the initial box failed; `BehindCamera`/`AtInfinity`
-//! when no start in front of every camera was found. The certificate's relative gap is
+//! when no start in front of every camera was found or when the infimum over the points in front
+//! is not reached at a finite point (below). The certificate's relative gap is
 //! `(cost − lower_bound) / max(cost, 1e-12)`: a cost at the rounding level (exact data) counts as
 //! certified by the trivial bound 0. With a user γ the bound covers the points within γ in every
 //! view; with the default it covers every point in front of the cameras.
 //!
 //! The DLT cannot see that a point lies behind the cameras; the other methods search in front of
-//! every camera only (a point whose best position is "beyond infinity" comes back as a far point
-//! whose cost is within the gap of the infimum).
+//! every camera only. When the observations are best explained behind the cameras (the rays diverge
+//! in front) or by parallel rays, the infimum over the points in front is approached only at
+//! infinity and the minimisation runs off towards it. Then ([`super::point_infinity`]: a point at
+//! infinity costs no more than the estimate) `local` and `optimal` report `BehindCamera` with the DLT
+//! point when that point is behind a camera and cheaper than every point at infinity, else
+//! `AtInfinity` with a NaN point and the cost at infinity — never a far point as a success.
+//! `optimal` checks this after branch and bound (whose search set includes the points at infinity),
+//! `local` when it stopped on its iteration cap or more than 1000 camera spreads away.
 //!
 //! Degenerate input is an error: fewer than two views, mismatched lengths, NaN/inf, a singular
 //! camera, a covariance that is not positive definite, or cameras sharing one centre (no parallax).
@@ -34,6 +41,7 @@ use super::point_certificate::convexity_test;
 use super::point_chart::{Chart, ChartKind};
 use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use super::point_global::{global_point, GlobalSettings, GlobalStatus, COST_FLOOR, DEFAULT_RELAXATION};
+use super::point_infinity::best_at_infinity;
 use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::uncertainty::point_covariance;
 use super::views::{baseline, centre, depth_normalized, validate_cameras};
@@ -68,7 +76,8 @@ pub struct PointTriangulation {
     pub report: Report,
 }
 
-/// Triangulates one point seen by `cameras` (3x4, world → pixels, any scale and sign) at the pixels
+/// Triangulates one point seen by `cameras` (3x4, world → pixels, any positive scale; in
+/// front means `(P X̃)₃ > 0`, [`super::views`]) at the pixels
 /// `observations`, with optional 2x2 pixel covariances (one per view; identity when `None`).
 ///
 /// Errors: [`Error::TooFewCorrespondences`] for fewer than 2 views, [`Error::Shape`] for mismatched
@@ -176,38 +185,103 @@ pub(crate) fn solve_views(
         Termination::MaxIterations => Status::NotConverged,
         _ => Status::Success,
     };
-    if opts.method == Method::Local || matches!(report.status, Status::NumericalFailure | Status::BehindCamera) {
+    if matches!(report.status, Status::NumericalFailure | Status::BehindCamera) {
         return finish(x, report);
     }
-    if let LinearPoint::AtInfinity(direction) = linear {
-        if let Some(cost) = cost_at_infinity(views, &direction).filter(|c| *c <= report.cost) {
-            // Parallel rays: the point at infinity fits at least as well as the best finite point
-            // found, so eq. 19 has no finite minimiser worth reporting (branch and bound would only
-            // chase it outwards).
-            report.status = Status::AtInfinity;
-            report.cost = cost;
-            return finish(Vector3::repeat(f64::NAN), report);
+    let settle = |u: Unreached, mut report: Report| {
+        report.set_status(u.status);
+        report.cost = u.cost;
+        finish(u.point, report)
+    };
+    if opts.method == Method::Local {
+        // A local minimisation that ran off towards infinity: say where its infimum lies.
+        let far = (x - frame.centre).norm() > FARTHEST_ORIGIN * frame.scale;
+        if report.status == Status::NotConverged || far {
+            if let Some(u) = unreached(views, frame, &x, report.cost, linear, opts) {
+                return settle(u, report);
+            }
+        }
+        return finish(x, report);
+    }
+    if let LinearPoint::AtInfinity(_) = linear {
+        // Parallel rays: when the point at infinity fits at least as well as the best finite point
+        // found, eq. 19 has no finite minimiser worth reporting (branch and bound would only chase
+        // it outwards).
+        if let Some(u) = unreached(views, frame, &x, report.cost, linear, opts) {
+            return settle(u, report);
         }
     }
     let (x, status, certificate, cost) = certify(views, frame, x, report.cost, linear, opts);
     report.status = status;
     report.certificate = certificate;
     report.cost = cost;
+    if certificate.kind == CertificateKind::BranchAndBound && matches!(status, Status::Success | Status::GapNotClosed) {
+        // Branch and bound searches the closure of the points in front, infinity included: its best
+        // finite point may be a far point on the way there (module docs of point_infinity).
+        if let Some(u) = unreached(views, frame, &x, cost, linear, opts) {
+            report.certificate = certificate_when_unreached(&certificate, &u);
+            return settle(u, report);
+        }
+    }
     finish(x, report)
 }
 
-/// Eq. 19 at the point at infinity in direction `±direction` (whichever is in front of every camera):
-/// the limit of the cost along any ray towards it, `Σ ‖Aᵢ d‖² / (cᵢ·d)²`. `None` when neither sign is
-/// in front of every camera.
-fn cost_at_infinity(views: &[PointView], direction: &Vector3<f64>) -> Option<f64> {
-    [*direction, -direction].into_iter().find_map(|d| {
-        views
-            .iter()
-            .map(|v| {
-                let z = v.c().dot(&d);
-                (z > 0.0).then(|| (v.a() * d).norm_squared() / (z * z))
-            })
-            .sum::<Option<f64>>()
+/// The certificate of branch and bound once [`unreached`] has spoken: never certified; for a point
+/// at infinity the lower bound (valid over the points in front, infinity included) and the gap to
+/// the cost there are kept; a point behind a camera is outside the searched set, so nothing is.
+fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Certificate {
+    let mut out = Certificate { certified: false, ..*certificate };
+    if u.status == Status::AtInfinity {
+        out.lower_bound = certificate.lower_bound.min(u.cost);
+        out.relative_gap = ((u.cost - out.lower_bound) / u.cost.max(COST_FLOOR)).max(0.0);
+    } else {
+        out.lower_bound = 0.0;
+        out.relative_gap = 1.0;
+    }
+    out
+}
+
+/// The outcome of a solve whose infimum over points in front of every camera is not reached at a
+/// finite point ([`unreached`]).
+struct Unreached {
+    point: Vector3<f64>,
+    status: Status,
+    cost: f64,
+}
+
+/// `Some` when a point at infinity in front of every camera costs no more than the finite estimate
+/// `x` of cost `cost` (module docs of [`super::point_infinity`]). Then the data are best explained
+/// behind a camera — status [`Status::BehindCamera`] with the DLT point, when that point is finite,
+/// behind a camera and cheaper than the best point at infinity — or else at infinity — status
+/// [`Status::AtInfinity`], a NaN point and the cost there. The best direction is searched from `x`
+/// seen from the cameras' centroid and from the DLT's direction when the DLT is at infinity.
+fn unreached(
+    views: &[PointView],
+    frame: &WorldFrame,
+    x: &Vector3<f64>,
+    cost: f64,
+    linear: LinearPoint,
+    opts: &TriangulationOptions,
+) -> Option<Unreached> {
+    let mut starts = vec![x - frame.centre];
+    if let LinearPoint::AtInfinity(d) = linear {
+        starts.push(d);
+    }
+    let (_, at_infinity) = best_at_infinity(views, &starts, &opts.local)?;
+    if at_infinity > cost {
+        return None;
+    }
+    Some(match linear {
+        LinearPoint::Finite(p) if !in_front(views, &p) && point_cost(views, &p) < at_infinity => Unreached {
+            point: p,
+            status: Status::BehindCamera,
+            cost: point_cost(views, &p),
+        },
+        _ => Unreached {
+            point: Vector3::repeat(f64::NAN),
+            status: Status::AtInfinity,
+            cost: at_infinity,
+        },
     })
 }
 
@@ -324,13 +398,15 @@ fn certify(
     }
     .min(g.cost);
     let gap = relative_gap(g.cost, lower_bound);
+    let certified = g.status == GlobalStatus::Converged && gap <= opts.max_relative_gap;
+    // Success exactly when certified: branch and bound's own stopping rule measures the gap against
+    // its incumbent, which may differ from `gap` in the last digits.
     let status = match g.status {
-        GlobalStatus::Converged => Status::Success,
-        GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
+        GlobalStatus::Converged if certified => Status::Success,
+        GlobalStatus::Converged | GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
         GlobalStatus::Infeasible => Status::Infeasible,
         GlobalStatus::Failed => Status::NumericalFailure,
     };
-    let certified = g.status == GlobalStatus::Converged && gap <= opts.max_relative_gap;
     let certificate = Certificate {
         lower_bound,
         relative_gap: gap,

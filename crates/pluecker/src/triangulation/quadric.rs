@@ -105,7 +105,8 @@ pub(crate) fn transform_dual(sim_matrix: &Matrix4<f64>, dual: &Matrix4<f64>) -> 
     sim_matrix * dual * sim_matrix.transpose()
 }
 
-/// Triangulates one ellipsoid seen by `cameras` (3x4, world → pixels, any scale and sign) as the
+/// Triangulates one ellipsoid seen by `cameras` (3x4, world → pixels, any positive scale; in
+/// front means `(P X̃)₃ > 0`, [`super::views`]) as the
 /// primal image conics `conics` (eq. 8, pixels, any scale and sign; each must be a real ellipse), with
 /// optional 5x5 covariances of the conic residuals (one per view, e.g. from
 /// [`super::fitting::fit_conic`]; identity when `None`).
@@ -170,7 +171,7 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
         (p * e.centre.push(1.0)).z > 0.0 && row.dot(&(dual * row)) < 0.0
     });
     if !in_front && e.centre.iter().all(|v| v.is_finite()) && report.status != Status::Infeasible {
-        report.status = Status::BehindCamera;
+        report.set_status(Status::BehindCamera);
     }
     QuadricTriangulation {
         dual,

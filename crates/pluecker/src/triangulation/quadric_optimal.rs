@@ -184,7 +184,9 @@ pub(crate) fn optimal_quadric(
     };
     let cost = local_report.cost;
     if cost <= NEGLIGIBLE_COST {
+        // Certified whatever stopped the local stage: a sum of squares is never negative.
         report.certificate = negligible_cost_certificate();
+        report.status = Status::Success;
         return (*local, report);
     }
     let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());

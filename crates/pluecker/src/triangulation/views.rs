@@ -1,9 +1,14 @@
 //! The known cameras of a triangulation: validation, centres and depths.
 //!
 //! A camera is a 3x4 matrix `P = [M | p₄]` mapping a world point to pixels, `λ (u, v, 1)ᵀ = P (X, 1)ᵀ`
-//! (eq. 1). Its scale and sign are arbitrary; the depth of a point is
-//! `depth(P, X) = sign(det M) (P X̃)₃ / ‖m³‖` (Hartley & Zisserman, eq. 6.15), positive in front of
-//! the camera and in the unit of the world. Only finite cameras (`det M ≠ 0`) are accepted.
+//! (eq. 1), and a point is **in front** of it when `λ = (P X̃)₃ > 0` for the matrix as given. Its
+//! positive scale is arbitrary; its sign is not: `P` and `−P` see opposite half-spaces. For
+//! `P = K [R | t]` with `K₃₃ > 0` this is `z_cam > 0`, the pose convention, whatever the signs of
+//! `fx`, `fy` (the pose paper's `α_u = −1730.3`) and of `det R` (a left-handed world frame, as in the
+//! raw VGG files). Hartley & Zisserman's `sign(det M) (P X̃)₃` (eq. 6.15) is the same test when
+//! `det M > 0`, and wrong for those cameras, whose `det M` is negative with every point in front.
+//! The depth of a point is `depth(P, X) = (P X̃)₃ / ‖m³‖`, positive in front and in world units.
+//! Only finite cameras (`det M ≠ 0`) are accepted.
 
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};
@@ -37,16 +42,19 @@ pub fn centre(p: &Matrix3x4<f64>) -> Vector3<f64> {
 
 /// The depth of world point `x` in front of camera `p` (see the module docs), world units.
 pub fn depth(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> f64 {
-    let m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
     let w = p.row(2).dot(&Vector4::new(x.x, x.y, x.z, 1.0).transpose());
-    m.determinant().signum() * w / m.row(2).norm()
+    w / principal_row_norm(p)
 }
 
-/// The camera scaled so that its third row gives the depth: `P / (sign(det M) ‖m³‖)`. Then
-/// `(P X̃)₃ = depth(P, X)` and the pixels are unchanged.
+/// The camera scaled so that its third row gives the depth: `P / ‖m³‖` (a positive scale, so the
+/// side that is in front is kept). Then `(P X̃)₃ = depth(P, X)` and the pixels are unchanged.
 pub fn depth_normalized(p: &Matrix3x4<f64>) -> Matrix3x4<f64> {
-    let m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
-    p / (m.determinant().signum() * m.row(2).norm())
+    p / principal_row_norm(p)
+}
+
+/// `‖m³‖`, the norm of the first three entries of the third row of `P` (non-zero for a finite camera).
+fn principal_row_norm(p: &Matrix3x4<f64>) -> f64 {
+    p.fixed_view::<1, 3>(2, 0).norm()
 }
 
 /// Largest distance between two camera centres: zero parallax when it is (relatively) zero.
@@ -73,16 +81,34 @@ mod tests {
     }
 
     #[test]
-    fn depth_and_centre_do_not_depend_on_the_scale_of_p() {
+    fn depth_and_centre_do_not_depend_on_the_positive_scale_of_p() {
         let x = Vector3::new(0.1, -0.2, 1.0);
-        for scale in [1.0, -3.0, 1e-4] {
+        for scale in [1.0, 3.0, 1e-4] {
             let p = camera(scale);
             assert!((depth(&p, &x) - 5.0).abs() < 1e-12);
             assert!((centre(&p) - Vector3::new(-0.5, 0.0, -4.0)).norm() < 1e-12);
             let pn = depth_normalized(&p);
             assert!(((pn * Vector4::new(x.x, x.y, x.z, 1.0))[2] - 5.0).abs() < 1e-12);
+            // −P: the same centre and pixels, the opposite side in front.
+            assert!((depth(&-p, &x) + 5.0).abs() < 1e-12);
+            assert!((centre(&-p) - centre(&p)).norm() < 1e-12);
         }
         assert!(validate_cameras(&[camera(1.0)], "P").is_ok());
         assert!(validate_cameras(&[Matrix3x4::zeros()], "P").is_err());
+    }
+
+    #[test]
+    fn a_negative_focal_length_or_a_left_handed_world_keeps_z_cam_as_the_depth() {
+        // det M < 0 both ways; the depth is still z_cam = 5 (Hartley-Zisserman's sign(det M)
+        // (P X̃)₃ would say −5).
+        let x = Vector3::new(0.1, -0.2, 1.0);
+        let flip_fx = Matrix3::from_diagonal(&Vector3::new(-1.0, 1.0, 1.0));
+        let mirror_world = nalgebra::Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, -1.0, 1.0));
+        for p in [flip_fx * camera(1.0), camera(1.0) * mirror_world] {
+            let m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
+            assert!(m.determinant() < 0.0);
+            let seen = if p[(2, 2)] > 0.0 { x } else { Vector3::new(x.x, x.y, -x.z) };
+            assert!((depth(&p, &seen) - 5.0).abs() < 1e-12, "{}", depth(&p, &seen));
+        }
     }
 }
