@@ -9,10 +9,11 @@
 //! So the global minimum is searched over every minimum the refinement reaches from these poses.
 //!
 //! Which samples: with at most [`EXHAUSTIVE_TRIPLES`] triples of correspondences every triple is used
-//! (4-6 correspondences: every minimum of every sample); otherwise [`SPREAD_SAMPLES`] triples with the
-//! largest image footprint among [`SAMPLE_POOL`] seeded random draws (a wide triangle in the image
-//! conditions the minimal problem best). The draws are seeded ([`crate::rng::Rng`], seed 0): the same
-//! data give the same candidates.
+//! (4-6 correspondences: every minimum of every sample); otherwise the triples of [`SAMPLE_POOL`]
+//! seeded random draws in decreasing image footprint (a wide triangle in the image conditions the
+//! minimal problem best): the first [`SPREAD_SAMPLES`] are the main samples, the rest a reserve that
+//! the search uses only while no minimum has every point in front of the camera. The draws are seeded
+//! ([`crate::rng::Rng`], seed 0): the same data give the same candidates.
 
 use super::correspondences::Correspondences;
 use super::minimal::{solve, Feature};
@@ -25,9 +26,10 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Up to this many triples of correspondences, every triple is a sample (C(6, 3) = 20).
 pub const EXHAUSTIVE_TRIPLES: usize = 20;
-/// Samples drawn when the triples are more than [`EXHAUSTIVE_TRIPLES`].
+/// Main samples when the triples are more than [`EXHAUSTIVE_TRIPLES`].
 pub const SPREAD_SAMPLES: usize = 4;
-/// Random triples among which the [`SPREAD_SAMPLES`] widest are kept.
+/// Random triples among which the [`SPREAD_SAMPLES`] widest are the main samples (the others, the
+/// reserve, in decreasing footprint).
 pub const SAMPLE_POOL: usize = 24;
 
 /// The image position that stands for each correspondence in the spread measure (points first, then
@@ -82,7 +84,8 @@ pub fn is_exhaustive(n: usize) -> bool {
     n * n.saturating_sub(1) * n.saturating_sub(2) / 6 <= EXHAUSTIVE_TRIPLES
 }
 
-/// The samples, as indices into [`positions`] (see the module documentation).
+/// The samples, as indices into [`positions`], main samples first, then the reserve (see the module
+/// documentation).
 pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
     let n = positions.len();
     if n < 3 {
@@ -109,7 +112,7 @@ pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
         .collect();
     pool.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     pool.dedup_by(|a, b| a.1 == b.1);
-    pool.into_iter().take(SPREAD_SAMPLES).map(|(_, s)| s).collect()
+    pool.into_iter().map(|(_, s)| s).collect()
 }
 
 /// The poses of the minimal solvers on each sample of `corr` (world frame of `corr`), one group per
@@ -140,9 +143,11 @@ mod tests {
         assert!(samples(&p[..2]).is_empty());
         let mut rng = Rng::new(3);
         let many: Vec<Vector2<f64>> = (0..100).map(|_| Vector2::new(rng.uniform(), rng.uniform())).collect();
-        let chosen = samples(&many);
-        assert_eq!(chosen, samples(&many), "seeded: the same data give the same samples");
-        assert_eq!(chosen.len(), SPREAD_SAMPLES);
+        let all = samples(&many);
+        assert_eq!(all, samples(&many), "seeded: the same data give the same samples");
+        assert!(all.len() > SPREAD_SAMPLES && all.len() <= SAMPLE_POOL);
+        assert!(all.windows(2).all(|w| footprint(&many, &w[0]) >= footprint(&many, &w[1])), "widest first");
+        let chosen = &all[..SPREAD_SAMPLES];
         // The kept triples are the widest of the pool: wider than a typical random triangle (mean
         // doubled area of a random triangle in the unit square is 11/72 ≈ 0.15).
         assert!(chosen.iter().all(|s| footprint(&many, s) > 0.15), "{chosen:?}");

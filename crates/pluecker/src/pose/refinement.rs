@@ -6,9 +6,10 @@
 //! solvers' poses ([`super::candidates`]) ranked by their cost. A minimal pose is refined when its cost
 //! is below [`PROMISING_FACTOR`] times the best minimum so far (one that expensive is far from any good
 //! minimum) and it is more than [`SAME_BASIN`] rad ([`SAME_BASIN_SMALL`] for 4-6 correspondences) from
-//! every minimum found (a pose that close starts
-//! in a basin already explored). With many correspondences the samples are solved one at a time, and
-//! the first whose poses confirm the best minimum ends the search (see [`search`]).
+//! every minimum found (a pose that close starts in a basin already explored). With many
+//! correspondences the samples are solved one at a time, and the first whose poses confirm the best
+//! minimum (one with every point in front) ends the search; the reserve samples are used only while no
+//! minimum has every point in front (see [`search`]).
 //!
 //! Choice (see [`Minima::choose`]): the cheapest minimum with every object point in front of the
 //! camera, unless a minimum with points behind is cheaper by more than the ambiguity margin (then the
@@ -16,6 +17,7 @@
 //! other minimum in front; the answer is *ambiguous* when it is within the margin
 //! `Δ(Σ r²) ≤ ambiguity_threshold · σ²` of the answer.
 
+use super::candidates::SPREAD_SAMPLES;
 use super::correspondences::Conditioning;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{stage, PoseOptions, StageReport};
@@ -196,9 +198,10 @@ fn refine_once(cost: &ReprojectionCost<'_>, start: &Pose, opts: &PoseOptions) ->
 ///
 /// When every triple is a sample (`exhaustive`) all groups are ranked together. Otherwise the groups
 /// are taken in turn: the promising poses of a group are refined, and the search stops after the first
-/// group with a pose within [`SAME_BASIN`] of the best minimum: a wide, exactly fitted sample that
-/// lands in that basin, and whose other promising poses (a twin, say) led nowhere better, confirms it;
-/// the other samples are not solved.
+/// group with a pose within [`SAME_BASIN`] of the best minimum, when that minimum has every point in
+/// front: a wide, exactly fitted sample that lands in that basin, and whose other promising poses (a
+/// twin, say) led nowhere better, confirms it; the other samples are not solved. Groups after the
+/// first [`SPREAD_SAMPLES`] (the reserve) are solved only while no minimum has every point in front.
 pub fn search(
     cost: &ReprojectionCost<'_>,
     starts: &[Pose],
@@ -239,10 +242,14 @@ pub fn search(
         let all: Vec<Pose> = hypotheses.flatten().collect();
         refine_promising(&mut minima, &all);
     } else {
-        for group in hypotheses {
+        for (k, group) in hypotheses.enumerate() {
+            let in_front = minima.found.iter().any(|m| m.behind == 0);
+            if k >= SPREAD_SAMPLES && in_front {
+                break;
+            }
             refine_promising(&mut minima, &group);
-            let best = minima.choose(0.0).map(|c| minima.found[c.best].pose);
-            if best.is_some_and(|b| group.iter().any(|h| rotation_distance(&h.0, &b.0) < SAME_BASIN)) {
+            let best = minima.choose(0.0).map(|c| &minima.found[c.best]);
+            if best.is_some_and(|b| b.behind == 0 && group.iter().any(|h| rotation_distance(&h.0, &b.pose.0) < SAME_BASIN)) {
                 break;
             }
         }
