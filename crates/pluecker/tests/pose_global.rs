@@ -165,3 +165,56 @@ fn a_wrong_local_minimum_is_not_certified() {
     }
     assert!(tried >= 10, "only {tried} scenes with a second minimum");
 }
+
+/// The certificate does not depend on the sign conventions of the camera: mirroring the image
+/// (`fx → −fx`, `u → 2cx − u`, as the pose paper's camera with α_u < 0) and adding skew leave the
+/// cost unchanged, and the certificate, lower bound and pose come out the same.
+#[test]
+fn certificate_holds_for_mirrored_and_skewed_cameras() {
+    let opts = PoseOptions {
+        certify: Some(Default::default()),
+        ..PoseOptions::default()
+    };
+    let mut compared = 0;
+    for seed in 0..12 {
+        let (np, nl) = if seed % 2 == 0 { (20, 0) } else { (30, 10) };
+        let scene = visible_scene(800.0, np, nl, false, seed);
+        let mut rng = Rng::new(300 + seed);
+        let corr = scene.noisy(1.0, true, &mut rng);
+        let plain = estimate_pose(&scene.camera, &corr, &opts).unwrap();
+        let cam = scene.camera;
+        let mirror = |u: &nalgebra::Vector2<f64>| nalgebra::Vector2::new(2.0 * cam.cx - u.x, u.y);
+        let mirrored_camera = pluecker::Camera { fx: -cam.fx, ..cam };
+        let mirrored = Correspondences {
+            points2d: corr.points2d.iter().map(mirror).collect(),
+            lines2d: corr.lines2d.iter().map(|s| [mirror(&s[0]), mirror(&s[1])]).collect(),
+            ..corr.clone()
+        };
+        let other = estimate_pose(&mirrored_camera, &mirrored, &opts).unwrap();
+        assert_eq!(plain.certified, other.certified, "seed {seed}");
+        if plain.certified {
+            compared += 1;
+            assert!((plain.lower_bound - other.lower_bound).abs() <= 1e-6 * plain.lower_bound.max(1.0), "seed {seed}");
+            assert!(pluecker::geometry::quaternion::rotation_distance(&plain.rotation, &other.rotation) < 1e-8);
+        }
+        // Skew: the same pixels seen through K with skew are certified with a bound below the cost.
+        let skewed_camera = pluecker::Camera { skew: 30.0, ..cam };
+        let skewed = Correspondences {
+            points2d: corr.points2d.iter().map(|u| nalgebra::Vector2::new(u.x + 30.0 * (u.y - cam.cy) / cam.fy, u.y)).collect(),
+            lines2d: corr
+                .lines2d
+                .iter()
+                .map(|s| s.map(|u| nalgebra::Vector2::new(u.x + 30.0 * (u.y - cam.cy) / cam.fy, u.y)))
+                .collect(),
+            ..corr.clone()
+        };
+        let res = estimate_pose(&skewed_camera, &skewed, &opts).unwrap();
+        if res.certified {
+            let cost = ReprojectionCost::of(&skewed_camera, &skewed).cost(&(res.rotation, res.translation));
+            assert!(res.lower_bound <= cost, "seed {seed}");
+            let best = best_known(&Scene { camera: skewed_camera, ..scene.clone() }, &skewed, 10, &mut rng);
+            assert!(res.lower_bound <= best * (1.0 + 1e-12), "seed {seed}: skewed bound beaten");
+        }
+    }
+    assert!(compared >= 6, "only {compared} certified");
+}
