@@ -16,7 +16,7 @@ pub mod monomial;
 pub mod socp;
 
 /// Costs below this (squared pixels: 1e-6 px of error) count as exact: certificate gaps are measured
-/// relative to `max(cost, COST_FLOOR)`, since a relative gap cannot close at the rounding level.
+/// relative to `max(cost, CERTIFICATE_COST_FLOOR)` ([`relative_gap`]), since a relative gap cannot close at the rounding level.
 pub const CERTIFICATE_COST_FLOOR: f64 = 1e-12;
 
 /// The relative gap `(cost − lower) / max(cost, CERTIFICATE_COST_FLOOR)`, at least 0.

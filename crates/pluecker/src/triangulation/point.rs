@@ -40,7 +40,8 @@ use super::covariance::whitenings;
 use super::point_certificate::convexity_test;
 use super::point_chart::{Chart, ChartKind};
 use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
-use super::point_global::{global_point, GlobalSettings, GlobalStatus, COST_FLOOR, DEFAULT_RELAXATION};
+use super::point_global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
+use crate::global::relative_gap;
 use super::point_infinity::best_at_infinity;
 use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::uncertainty::point_covariance;
@@ -233,7 +234,7 @@ fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Certi
     let mut out = Certificate { certified: false, ..*certificate };
     if u.status == Status::AtInfinity {
         out.lower_bound = certificate.lower_bound.min(u.cost);
-        out.relative_gap = ((u.cost - out.lower_bound) / u.cost.max(COST_FLOOR)).max(0.0);
+        out.relative_gap = relative_gap(u.cost, out.lower_bound);
     } else {
         out.lower_bound = 0.0;
         out.relative_gap = 1.0;
@@ -355,9 +356,8 @@ fn certify(
     linear: LinearPoint,
     opts: &TriangulationOptions,
 ) -> (Vector3<f64>, Status, Certificate, f64) {
-    // Relative to max(cost, COST_FLOOR): exact data (cost at the rounding level) is certified by
-    // the trivial bound, which a relative gap could never show.
-    let relative_gap = |cost: f64, lower: f64| ((cost - lower) / cost.max(COST_FLOOR)).max(0.0);
+    // Relative to max(cost, CERTIFICATE_COST_FLOOR) (`relative_gap`): exact data (cost at the rounding level) is
+    // certified by the trivial bound, which a relative gap could never show.
     let test = convexity_test(views, &x);
     if test.passed {
         let gap = relative_gap(cost, test.lower_bound);

@@ -41,12 +41,10 @@ use super::point_cost::{in_front, point_cost, PointObjective, PointView};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpStatus};
+use crate::global::CERTIFICATE_COST_FLOOR;
 use crate::optim::{trust_region, TrustRegionOptions};
 use nalgebra::Vector3;
 
-/// Costs below this (squared whitened pixels: 1e-6 px of error) count as exact: gaps are measured
-/// relative to `max(cost, COST_FLOOR)`, since a relative gap cannot close at the rounding level.
-pub const COST_FLOOR: f64 = 1e-12;
 /// Views whose denominator can fall below this value get an eq. 26 solve.
 const WEAK_DEPTH: f64 = 0.5;
 /// Relative enlargement of the suggested initial box.
@@ -276,7 +274,7 @@ impl BoundingOracle for PointOracle<'_> {
     }
 
     fn absolute_gap(&self) -> f64 {
-        self.max_relative_gap * COST_FLOOR
+        self.max_relative_gap * CERTIFICATE_COST_FLOOR
     }
 
     fn split(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
