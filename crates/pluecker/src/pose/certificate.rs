@@ -302,8 +302,9 @@ struct Whitening {
     /// Largest rotation and translation per unit whitened step: `‖T_ω‖`, `‖T_τ‖` (row blocks).
     alpha_omega: f64,
     alpha_tau: f64,
-    /// `√λ_max(W_ωω)`: the whitened length of a unit rotation step.
-    omega_scale: f64,
+    /// The largest whitened length of a rotation step in the cube `[−1, 1]³`: `max √(sᵀ W_ωω s)` over
+    /// its vertices `s` (a convex function peaks at a vertex).
+    cube_scale: f64,
 }
 
 impl Whitening {
@@ -319,7 +320,14 @@ impl Whitening {
             w: *w,
             alpha_omega: block_norm(0),
             alpha_tau: block_norm(3),
-            omega_scale: w.fixed_view::<3, 3>(0, 0).into_owned().symmetric_eigenvalues().max().max(0.0).sqrt(),
+            cube_scale: [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+                .iter()
+                .map(|&(b, c)| {
+                    let v = Vector3::new(1.0, b, c);
+                    (v.transpose() * w.fixed_view::<3, 3>(0, 0) * v)[0]
+                })
+                .fold(0.0f64, f64::max)
+                .sqrt(),
             t,
         })
     }
@@ -424,7 +432,7 @@ fn localise(
                 let extent = whitening
                     .ellipsoid_extent(&c, slack)
                     .ok_or("not proved: the minorant does not fix the translation")?;
-                let radius = whitening.length(&cell.centre, &(t_star - pose.1)) + theta * whitening.omega_scale + extent;
+                let radius = whitening.length(&cell.centre, &(t_star - pose.1)) + cell.half * whitening.cube_scale + extent;
                 if radius <= target {
                     out.radius = out.radius.max(radius);
                     continue;
