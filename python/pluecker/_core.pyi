@@ -5,6 +5,12 @@ Conventions: ``x_cam = R @ X_world + t``; pixels ``u = K x_cam / z`` with
 Array arguments accept any real array-like and are converted to float64; returned arrays are fresh
 float64 row-major ndarrays owned by the caller. ``tests/test_api.py`` checks that the names here and
 the names of the module agree.
+
+Scalar arguments: a bool is not a number (``penalty=True`` or ``max_iterations=True`` is an
+``InvalidOptionError``). Counts, caps and seeds take any Python or numpy integer from their minimum to
+``2**64 - 1``; beyond that range, or below the minimum, they raise ``InvalidOptionError`` naming the
+argument and the range (never a bare ``OverflowError``); a float where an integer is expected is a
+``TypeError``.
 """
 
 from typing import Any, Callable, Optional, Tuple, TypedDict
@@ -48,7 +54,9 @@ class SingularCameraError(PlueckerError):
 
 class InvalidOptionError(PlueckerError):
     """An option or argument value outside its domain: unknown method or scene kind, ``penalty <= 0``,
-    an iteration cap below 1, ``sigma_px <= 0``, an ``R`` that is not a rotation matrix."""
+    an iteration cap below 1 or beyond ``2**64 - 1``, a bool for a number, ``sigma_px <= 0``, an ``R``
+    that is not a rotation matrix, a ``visible`` entry other than 0/1, a ``sigma`` whose covariance
+    overflows or underflows, 3-D coordinates whose squares overflow double precision."""
 
 # --- Camera ---------------------------------------------------------------------------------------
 
@@ -819,13 +827,14 @@ def triangulate_points(
     Args:
         P: cameras (v, 3, 4), world → pixels, v >= 2.
         x: pixels (n, v, 2); entries of views a track is not seen in are ignored (NaN is fine there).
-        visible: (n, v) booleans, True where the track is seen; None: every view.
+        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
+            e.g. -1, is an InvalidOptionError); None: every view.
         cov: pixel covariances (n, v, 2, 2); None for the identity.
         method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
 
     Raises (for the whole call, before any track is solved): ShapeError, NonFiniteError or
     SingularCameraError for ``P``, TooFewCorrespondencesError (fewer than 2 cameras), InvalidOptionError;
-    TypeError for an unknown keyword or a ``visible`` that is not boolean.
+    TypeError for an unknown keyword or a ``visible`` that is neither boolean nor integer.
     """
 
 class LineTriangulation(TriangulationReport):
@@ -1151,7 +1160,8 @@ def triangulate_lines(
         lines: (n, v, 3) homogeneous image lines, or (n, v, 2, 2) image segments (two pixel endpoints),
             as for :func:`triangulate_line`; entries of views a track is not seen in are ignored (NaN is
             fine there).
-        visible: (n, v) booleans, True where the track is seen; None: every view.
+        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
+            e.g. -1, is an InvalidOptionError); None: every view.
         cov: residual covariances (n, v, 2, 2); None: the identity for homogeneous lines, the endpoint
             model (``sigma``) for segments.
         method, sigma, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_line`.
@@ -1256,7 +1266,8 @@ def triangulate_quadrics(
         P: cameras (v, 3, 4) seen by every track, or (n, v, 3, 4), one set per track (e.g. independent
             scenes solved together); world → pixels.
         conics: point conics (n, v, 3, 3) of eq. 8; entries of views a track is not seen in are ignored.
-        visible: (n, v) booleans, True where the track is seen; None: every view.
+        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
+            e.g. -1, is an InvalidOptionError); None: every view.
         cov: residual covariances (n, v, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
         method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_quadric`.
         progress: as for :func:`triangulate_lines`.
@@ -1318,15 +1329,18 @@ def fit_line(points: ArrayLike, sigma: float = 1.0) -> FittedLine:
     covariance of its residual for i.i.d. Gaussian pixel noise of ``sigma`` px per coordinate.
 
     Raises TooFewCorrespondencesError (N < 2), NonFiniteError, DegenerateConfigurationError (all
-    points coincide), InvalidOptionError (``sigma <= 0``), ShapeError.
+    points coincide to the rounding of their coordinates), InvalidOptionError (``sigma <= 0``, or a
+    ``sigma`` for which the covariance ``σ² Σ₁`` overflows or underflows), ShapeError.
     """
 
 def fit_conic(points: ArrayLike, sigma: float = 1.0) -> FittedConic:
     """Fit an ellipse to points (N, 2), N >= 5 (Sampson's reweighted algebraic fit, at the KCR bound),
     with the first-order covariance of its residual for i.i.d. Gaussian pixel noise of ``sigma`` px.
 
-    Raises TooFewCorrespondencesError (N < 5), NonFiniteError, DegenerateConfigurationError (no real
-    ellipse fits: collinear points, a hyperbola, ...), InvalidOptionError (``sigma <= 0``), ShapeError.
+    Raises TooFewCorrespondencesError (N < 5), NonFiniteError, DegenerateConfigurationError (no
+    ellipse is determined: the points lie on a line to within the noise — the χ² of their distances
+    from the best line, ``Σ d²/σ²``, is below its 99.9 % quantile with N − 2 degrees of freedom — or no
+    real ellipse fits, e.g. a hyperbola), InvalidOptionError (``sigma <= 0``), ShapeError.
     The GIL is released during the fit.
     """
 

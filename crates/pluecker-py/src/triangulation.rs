@@ -6,7 +6,8 @@
 //! `triangulation_line.rs`, `triangulation_quadric.rs` and `triangulation_fitting.rs`; the array
 //! readers in `triangulation_arrays.rs`.
 
-use crate::errors::{invalid_argument, to_py_err};
+use crate::convert::{optional_count, optional_real, Integer, Real};
+use crate::errors::to_py_err;
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
@@ -16,26 +17,20 @@ use pyo3::types::PyDict;
 /// by the core (`TriangulationOptions::validate`) so the messages read the same from Rust and Python.
 pub fn options(
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<TriangulationOptions> {
     let mut opts = TriangulationOptions {
         method: Method::parse(method).map_err(to_py_err)?,
         ..Default::default()
     };
-    if let Some(gap) = max_relative_gap {
+    if let Some(gap) = optional_real("max_relative_gap", max_relative_gap)? {
         opts.max_relative_gap = gap;
     }
-    opts.max_reprojection_error = max_reprojection_error;
-    if let Some(nodes) = max_nodes {
-        if nodes < 1 {
-            return Err(invalid_argument(
-                "max_nodes",
-                format!("must be at least 1, got {nodes}"),
-            ));
-        }
-        opts.max_nodes = nodes as usize;
+    opts.max_reprojection_error = optional_real("max_reprojection_error", max_reprojection_error)?;
+    if let Some(nodes) = optional_count("max_nodes", max_nodes, 1)? {
+        opts.max_nodes = nodes;
     }
     opts.validate().map_err(to_py_err)?;
     Ok(opts)

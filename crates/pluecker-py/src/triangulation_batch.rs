@@ -21,6 +21,7 @@ use pluecker::triangulation::batch::{
 use pluecker::triangulation::point::PointTriangulation;
 use pluecker::triangulation::{Method, Report};
 use pluecker::Error;
+use crate::convert::{Integer, Real};
 use pyo3::prelude::*;
 use std::time::Instant;
 
@@ -109,9 +110,9 @@ pub fn triangulate_points(
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;

@@ -25,6 +25,7 @@ use pluecker::triangulation::quadric::QuadricTriangulation;
 use pluecker::triangulation::quadric_batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use pluecker::Error;
+use crate::convert::{optional_real, Integer, Real};
 use pyo3::prelude::*;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -343,13 +344,14 @@ pub fn triangulate_lines(
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    sigma: Option<f64>,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    sigma: Option<Real>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
+    let sigma = optional_real("sigma", sigma)?;
     let cams = Cameras::read(P, 2, opts.method)?;
     let (shape, values) = read_any("lines", lines)?;
     let segments = match shape.as_slice() {
@@ -407,9 +409,9 @@ pub fn triangulate_quadrics(
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let opts: TriangulationOptions = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;

@@ -10,6 +10,7 @@ use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
 };
+use crate::convert::{optional_real, Integer, Real};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -181,13 +182,14 @@ pub fn triangulate_line(
     lines: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    sigma: Option<f64>,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    sigma: Option<Real>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyLineTriangulation>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
+    let sigma = optional_real("sigma", sigma)?;
     let (image, from_segments) = image_lines(lines, cams.len(), cov.is_some(), sigma)?;
     let covs = match covariances2("cov", cov, cams.len())? {
         Some(c) => Some(c),

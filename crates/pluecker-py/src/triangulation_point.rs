@@ -7,6 +7,7 @@ use crate::triangulation_quadric::{matrix_to_py, rows};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use numpy::{PyArray1, PyArray2};
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
+use crate::convert::{Integer, Real};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -82,9 +83,9 @@ pub fn triangulate_point(
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyPointTriangulation>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;

@@ -8,6 +8,7 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
+use crate::convert::{Integer, Real};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -126,9 +127,9 @@ pub fn triangulate_quadric(
     conics: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
