@@ -6,6 +6,10 @@ Array arguments accept any real array-like and are converted to float64; returne
 float64 row-major ndarrays owned by the caller. ``tests/test_api.py`` checks that the names here and
 the names of the module agree.
 
+Results (every class below that a function returns) are immutable; ``to_dict()`` gives strict JSON
+(NaN and inf as ``None``), and ``pickle`` / ``copy.deepcopy`` reproduce them exactly within one version
+of pluecker (a pickle from another version raises ``PlueckerError``).
+
 Scalar arguments: a bool is not a number (``penalty=True`` or ``max_iterations=True`` is an
 ``InvalidOptionError``). Counts, caps and seeds take any Python or numpy integer from their minimum to
 ``2**64 - 1``; beyond that range, or below the minimum, they raise ``InvalidOptionError`` naming the
@@ -146,7 +150,7 @@ class PoseStage:
     def time_seconds(self) -> float:
         """Wall time of the stage, seconds."""
     def to_dict(self) -> "_PoseStageDict":
-        """Plain-Python form (lists, floats, strings), JSON-serialisable."""
+        """Plain-Python form (lists, floats, strings), strict JSON: NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 class PoseResult:
@@ -291,7 +295,7 @@ class PoseResult:
     def second_best_cost(self) -> Optional[float]:
         """``½ Σ r²`` (px²) of that minimum; None when there is none."""
     def to_dict(self) -> "_PoseResultDict":
-        """Plain-Python form (nested lists, floats, strings, None), JSON-serialisable."""
+        """Plain-Python form (nested lists, floats, strings, None), strict JSON: NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 class _PoseStageDict(TypedDict):
@@ -605,7 +609,7 @@ class TriangulationReport:
     def time_seconds(self) -> float:
         """Wall time of the call in the core, seconds (the Python boundary excluded)."""
     def to_dict(self) -> dict[str, Any]:
-        """The fields above as a plain dict (JSON-serialisable)."""
+        """The fields above as a plain dict (strict JSON: NaN and inf are ``None``)."""
     def __repr__(self) -> str: ...
 
 class PointTriangulation(TriangulationReport):
@@ -665,7 +669,7 @@ class PointTriangulation(TriangulationReport):
         """See :attr:`TriangulationReport.time_seconds`."""
     def to_dict(self) -> dict[str, Any]:
         """The report fields, ``"X"`` and ``"covariance"`` (nested lists or None) as a plain dict
-        (JSON-serialisable)."""
+        (strict JSON: NaN and inf are ``None``)."""
     def __repr__(self) -> str: ...
 
 def triangulate_point(
@@ -752,6 +756,10 @@ class BatchReport:
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``); NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 class PointTriangulations(BatchReport):
@@ -805,6 +813,10 @@ class PointTriangulations(BatchReport):
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``) and ``X``, ``covariance``; NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 def triangulate_points(
@@ -1132,6 +1144,10 @@ class LineTriangulations(BatchReport):
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``) and ``plucker``, ``point``, ``direction``, ``chart_axes``, ``covariance``; NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 def triangulate_lines(
@@ -1240,6 +1256,10 @@ class QuadricTriangulations(BatchReport):
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``) and ``Q``, ``primal``, ``centre``, ``axes``, ``semi_axes``, ``covariance``; NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 def triangulate_quadrics(
@@ -1294,7 +1314,7 @@ class FittedLine:
     def rms_distance(self) -> float:
         """Root-mean-square distance of the points from the line, pixels."""
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python (JSON-serialisable) form."""
+        """Plain-Python (strict JSON: NaN and inf are ``None``) form."""
     def __repr__(self) -> str: ...
 
 class FittedConic:
@@ -1321,7 +1341,7 @@ class FittedConic:
     def iterations(self) -> int:
         """Reweighting iterations of the fit."""
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python (JSON-serialisable) form."""
+        """Plain-Python (strict JSON: NaN and inf are ``None``) form."""
     def __repr__(self) -> str: ...
 
 def fit_line(points: ArrayLike, sigma: float = 1.0) -> FittedLine:

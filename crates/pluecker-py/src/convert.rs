@@ -8,7 +8,7 @@ use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{IntoPyDict, PyBool};
+use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PyTuple};
 use std::time::Duration;
 
 /// One axis of an expected shape: a named free length (`N` rows) or a fixed one.
@@ -346,4 +346,35 @@ fn as_bool(ob: &Bound<'_, PyAny>) -> PyResult<Option<bool>> {
 fn bool_given(name: &str, b: bool) -> PyErr {
     let b = if b { "True" } else { "False" };
     invalid_argument(name, format!("expected a number, got the bool {b}"))
+}
+
+/// `value` as strict JSON allows it: every NaN or infinite float, at any depth of dicts, lists and
+/// tuples, replaced by `None` (the `to_dict()` of every result goes through here, so that
+/// `json.dumps(result.to_dict(), allow_nan=False)` holds for failed results too). Dicts are changed
+/// in place; lists and tuples are rebuilt as lists.
+pub fn strict_json<'py>(value: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    let py = value.py();
+    if let Ok(x) = value.downcast::<PyFloat>() {
+        return Ok(if x.value().is_finite() { value } else { py.None().into_bound(py) });
+    }
+    if let Ok(d) = value.downcast::<PyDict>() {
+        for (k, v) in d.clone().iter() {
+            d.set_item(k, strict_json(v)?)?;
+        }
+        return Ok(value);
+    }
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let items = value
+            .try_iter()?
+            .map(|v| strict_json(v?))
+            .collect::<PyResult<Vec<_>>>()?;
+        return Ok(PyList::new(py, items)?.into_any());
+    }
+    Ok(value)
+}
+
+/// [`strict_json`] of a dict.
+pub fn strict_json_dict<'py>(d: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+    strict_json(d.clone().into_any())?;
+    Ok(d)
 }

@@ -6,12 +6,15 @@
 //! `triangulation_line.rs`, `triangulation_quadric.rs` and `triangulation_fitting.rs`; the array
 //! readers in `triangulation_arrays.rs`.
 
-use crate::convert::{optional_count, optional_real, Integer, Real};
+use crate::convert::{optional_count, optional_real, strict_json_dict, Integer, Real};
 use crate::errors::to_py_err;
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// The options from the keyword arguments every triangulation function takes; each is validated
 /// by the core (`TriangulationOptions::validate`) so the messages read the same from Rust and Python.
@@ -190,10 +193,18 @@ impl PyTriangulationReport {
 
     /// Plain-Python (JSON-serialisable) form of the report fields.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.report_dict(py)
+        strict_json_dict(self.report_dict(py)?)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "TriangulationReport", &[self])
     }
 
     fn __repr__(&self) -> String {
         format!("TriangulationReport({})", self.repr_fields())
     }
 }
+
+pack_struct!(PyTriangulationReport { inner });

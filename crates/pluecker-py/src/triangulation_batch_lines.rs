@@ -12,7 +12,7 @@
 use crate::errors::{guarded, invalid_argument, shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed};
 use crate::triangulation_arrays::{read, read_any, read_mask, shape_string, Dim};
-use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
+use crate::triangulation_batch_report::{batch_dict, collect, PyBatchReport, TrackColumns};
 use crate::triangulation_line::{chart_axes, LINE_NAMES};
 use crate::triangulation_quadric::QUADRIC_NAMES;
 use nalgebra::Matrix3x4;
@@ -27,6 +27,9 @@ use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use pluecker::Error;
 use crate::convert::{optional_real, Integer, Real};
 use pyo3::prelude::*;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
@@ -100,6 +103,16 @@ impl PyLineTriangulations {
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         slf.as_super().get().repr("LineTriangulations")
+    }
+
+    /// Plain-Python (strict JSON) form: the report columns of `BatchReport.to_dict()` and the estimates.
+    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        batch_dict(slf.as_any(), &["plucker", "point", "direction", "chart_axes", "covariance"])
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "LineTriangulations", &[slf.as_super().get(), slf.get()])
     }
 }
 
@@ -199,6 +212,16 @@ impl PyQuadricTriangulations {
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         slf.as_super().get().repr("QuadricTriangulations")
+    }
+
+    /// Plain-Python (strict JSON) form: the report columns of `BatchReport.to_dict()` and the estimates.
+    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        batch_dict(slf.as_any(), &["Q", "primal", "centre", "axes", "semi_axes", "covariance"])
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "QuadricTriangulations", &[slf.as_super().get(), slf.get()])
     }
 }
 
@@ -433,3 +456,7 @@ pub fn triangulate_quadrics(
     })?;
     Py::new(py, PyClassInitializer::from(report).add_subclass(results))
 }
+
+pack_struct!(PyLineTriangulations { plucker, point, direction, chart_axes, covariance });
+
+pack_struct!(PyQuadricTriangulations { dual, primal, centre, semi_axes, axes, covariance });

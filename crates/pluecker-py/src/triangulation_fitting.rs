@@ -8,8 +8,12 @@ use nalgebra::{SMatrix, SVector};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 fn matrix_to_py<'py, const R: usize, const C: usize>(
     py: Python<'py>,
@@ -64,7 +68,13 @@ impl PyFittedLine {
         d.set_item("line", self.inner.line.as_slice())?;
         d.set_item("covariance", matrix_rows::<2, 2>(&self.inner.covariance))?;
         d.set_item("rms_distance", self.inner.rms_distance)?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "FittedLine", &[self])
     }
 
     fn __repr__(&self) -> String {
@@ -125,7 +135,13 @@ impl PyFittedConic {
         d.set_item("semi_axes", e.semi_axes.as_slice())?;
         d.set_item("covariance", matrix_rows::<5, 5>(&self.inner.covariance))?;
         d.set_item("iterations", self.inner.iterations)?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "FittedConic", &[self])
     }
 
     fn __repr__(&self) -> String {
@@ -187,3 +203,6 @@ pub fn fitting_residual_samples<'py>(
     d.set_item("conic_whitened", rows_to_py(py, &samples.conic_whitened))?;
     Ok(d)
 }
+
+pack_struct!(PyFittedLine { inner });
+pack_struct!(PyFittedConic { inner });

@@ -11,8 +11,12 @@ use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
 };
 use crate::convert::{optional_real, Integer, Real};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// Core argument names → Python argument names of `triangulate_line`.
 pub(crate) const LINE_NAMES: &[(&str, &str)] = &[
@@ -99,7 +103,12 @@ impl PyLineTriangulation {
         d.set_item("direction", me.direction.as_slice())?;
         d.set_item("chart_axes", rows::<2, 3>(&chart_axes(&me.chart)))?;
         d.set_item("covariance", me.covariance.as_ref().map(rows::<4, 4>))?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "LineTriangulation", &[slf.as_super().get(), slf.get()])
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -200,3 +209,5 @@ pub fn triangulate_line(
     })?;
     PyLineTriangulation::create(py, result)
 }
+
+pack_struct!(PyLineTriangulation { plucker, point, direction, chart, covariance });
