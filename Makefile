@@ -1,5 +1,6 @@
 # pluecker developer entry points. Everything goes into ./.venv; nothing is installed globally.
-#   make test    build the extension, run the Rust and Python tests
+#   make test    build the extension, run the Rust and Python tests (property tests: the hypothesis
+#                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run)
 #   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
 #   make bench   compare against OpenCV, PoseLib and pycolmap, then run the criterion benchmarks
 # Idempotent: the virtualenv is made once, the extension rebuilt only when a Rust source changes.
@@ -25,7 +26,7 @@ setup: develop
 $(DEPS_STAMP): Makefile
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "matplotlib>=3.5" "pytest>=7"
+	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "matplotlib>=3.5" "pytest>=7" "hypothesis>=6.100"
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,

@@ -6,12 +6,23 @@ orderings), and every assertion helper puts the seed in its failure message.
 
 from __future__ import annotations
 
+import os
 import zlib
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 import pluecker
+
+# Property tests (hypothesis). "ci", the default, is deterministic and small enough for every
+# `make test`; PLUECKER_HYPOTHESIS=nightly explores 40x more examples from a fresh random seed each run
+# (a failure prints the example and how to reproduce it).
+settings.register_profile("ci", max_examples=60, deadline=None, derandomize=True, print_blob=True,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.register_profile("nightly", max_examples=2500, deadline=None, print_blob=True,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.load_profile(os.environ.get("PLUECKER_HYPOTHESIS", "ci"))
 
 
 def seed_for(name: str) -> int:

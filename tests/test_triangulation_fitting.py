@@ -83,8 +83,9 @@ def test_residual_samples_are_seeded(seed):
         (pluecker.fit_line, [[1.0, 2.0], [np.nan, 2.0]], pluecker.NonFiniteError, "row 1"),
         (pluecker.fit_line, [[1.0, 2.0, 3.0]], pluecker.ShapeError, "points: expected shape (N, 2)"),
         (pluecker.fit_conic, [[0.0, 0.0]] * 4, pluecker.TooFewCorrespondencesError, "at least 5 points"),
-        (pluecker.fit_conic, [[k, 2.0 * k] for k in range(10)], pluecker.DegenerateConfigurationError, "not lie on a real ellipse"),
-        (pluecker.fit_conic, [[k, 10.0 / k] for k in range(1, 12)], pluecker.DegenerateConfigurationError, "not lie on a real ellipse"),
+        (pluecker.fit_conic, [[k, 2.0 * k] for k in range(10)], pluecker.DegenerateConfigurationError, "lie on a line"),
+        # A hyperbola 100 px across: far from a line at σ = 1 px, and no ellipse.
+        (pluecker.fit_conic, [[10.0 * k, 100.0 / k] for k in range(1, 12)], pluecker.DegenerateConfigurationError, "not lie on a real ellipse"),
     ],
     ids=["line-one-point", "line-coincident", "line-nan", "line-shape", "conic-four", "conic-collinear",
          "conic-hyperbola"],

@@ -5,6 +5,16 @@ Conventions: ``x_cam = R @ X_world + t``; pixels ``u = K x_cam / z`` with
 Array arguments accept any real array-like and are converted to float64; returned arrays are fresh
 float64 row-major ndarrays owned by the caller. ``tests/test_api.py`` checks that the names here and
 the names of the module agree.
+
+Results (every class below that a function returns) are immutable; ``to_dict()`` gives strict JSON
+(NaN and inf as ``None``), and ``pickle`` / ``copy.deepcopy`` reproduce them exactly within one version
+of pluecker (a pickle from another version raises ``PlueckerError``).
+
+Scalar arguments: a bool is not a number (``penalty=True`` or ``max_iterations=True`` is an
+``InvalidOptionError``). Counts, caps and seeds take any Python or numpy integer from their minimum to
+``2**64 - 1``; beyond that range, or below the minimum, they raise ``InvalidOptionError`` naming the
+argument and the range (never a bare ``OverflowError``); a float where an integer is expected is a
+``TypeError``.
 """
 
 from typing import Any, Callable, Optional, Tuple, TypedDict
@@ -48,7 +58,9 @@ class SingularCameraError(PlueckerError):
 
 class InvalidOptionError(PlueckerError):
     """An option or argument value outside its domain: unknown method or scene kind, ``penalty <= 0``,
-    an iteration cap below 1, ``sigma_px <= 0``, an ``R`` that is not a rotation matrix."""
+    an iteration cap below 1 or beyond ``2**64 - 1``, a bool for a number, ``sigma_px <= 0``, an ``R``
+    that is not a rotation matrix, a ``visible`` entry other than 0/1, a ``sigma`` whose covariance
+    overflows or underflows, 3-D coordinates whose squares overflow double precision."""
 
 # --- Camera ---------------------------------------------------------------------------------------
 
@@ -138,7 +150,7 @@ class PoseStage:
     def time_seconds(self) -> float:
         """Wall time of the stage, seconds."""
     def to_dict(self) -> "_PoseStageDict":
-        """Plain-Python form (lists, floats, strings), JSON-serialisable."""
+        """Plain-Python form (lists, floats, strings), strict JSON: NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 class PoseResult:
@@ -283,7 +295,7 @@ class PoseResult:
     def second_best_cost(self) -> Optional[float]:
         """``½ Σ r²`` (px²) of that minimum; None when there is none."""
     def to_dict(self) -> "_PoseResultDict":
-        """Plain-Python form (nested lists, floats, strings, None), JSON-serialisable."""
+        """Plain-Python form (nested lists, floats, strings, None), strict JSON: NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 class _PoseStageDict(TypedDict):
@@ -597,7 +609,7 @@ class TriangulationReport:
     def time_seconds(self) -> float:
         """Wall time of the call in the core, seconds (the Python boundary excluded)."""
     def to_dict(self) -> dict[str, Any]:
-        """The fields above as a plain dict (JSON-serialisable)."""
+        """The fields above as a plain dict (strict JSON: NaN and inf are ``None``)."""
     def __repr__(self) -> str: ...
 
 class PointTriangulation(TriangulationReport):
@@ -657,7 +669,7 @@ class PointTriangulation(TriangulationReport):
         """See :attr:`TriangulationReport.time_seconds`."""
     def to_dict(self) -> dict[str, Any]:
         """The report fields, ``"X"`` and ``"covariance"`` (nested lists or None) as a plain dict
-        (JSON-serialisable)."""
+        (strict JSON: NaN and inf are ``None``)."""
     def __repr__(self) -> str: ...
 
 def triangulate_point(
@@ -744,6 +756,10 @@ class BatchReport:
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``); NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 class PointTriangulations(BatchReport):
@@ -797,6 +813,10 @@ class PointTriangulations(BatchReport):
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``) and ``X``, ``covariance``; NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 def triangulate_points(
@@ -819,13 +839,14 @@ def triangulate_points(
     Args:
         P: cameras (v, 3, 4), world → pixels, v >= 2.
         x: pixels (n, v, 2); entries of views a track is not seen in are ignored (NaN is fine there).
-        visible: (n, v) booleans, True where the track is seen; None: every view.
+        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
+            e.g. -1, is an InvalidOptionError); None: every view.
         cov: pixel covariances (n, v, 2, 2); None for the identity.
         method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
 
     Raises (for the whole call, before any track is solved): ShapeError, NonFiniteError or
     SingularCameraError for ``P``, TooFewCorrespondencesError (fewer than 2 cameras), InvalidOptionError;
-    TypeError for an unknown keyword or a ``visible`` that is not boolean.
+    TypeError for an unknown keyword or a ``visible`` that is neither boolean nor integer.
     """
 
 class LineTriangulation(TriangulationReport):
@@ -1123,6 +1144,10 @@ class LineTriangulations(BatchReport):
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``) and ``plucker``, ``point``, ``direction``, ``chart_axes``, ``covariance``; NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 def triangulate_lines(
@@ -1151,7 +1176,8 @@ def triangulate_lines(
         lines: (n, v, 3) homogeneous image lines, or (n, v, 2, 2) image segments (two pixel endpoints),
             as for :func:`triangulate_line`; entries of views a track is not seen in are ignored (NaN is
             fine there).
-        visible: (n, v) booleans, True where the track is seen; None: every view.
+        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
+            e.g. -1, is an InvalidOptionError); None: every view.
         cov: residual covariances (n, v, 2, 2); None: the identity for homogeneous lines, the endpoint
             model (``sigma``) for segments.
         method, sigma, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_line`.
@@ -1230,6 +1256,10 @@ class QuadricTriangulations(BatchReport):
     def method(self) -> str:
         """The method that ran."""
     def __len__(self) -> int: ...
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
+        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
+        ``iterations``, ``time_seconds``, ``messages``) and ``Q``, ``primal``, ``centre``, ``axes``, ``semi_axes``, ``covariance``; NaN and inf are ``None``."""
     def __repr__(self) -> str: ...
 
 def triangulate_quadrics(
@@ -1256,7 +1286,8 @@ def triangulate_quadrics(
         P: cameras (v, 3, 4) seen by every track, or (n, v, 3, 4), one set per track (e.g. independent
             scenes solved together); world → pixels.
         conics: point conics (n, v, 3, 3) of eq. 8; entries of views a track is not seen in are ignored.
-        visible: (n, v) booleans, True where the track is seen; None: every view.
+        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
+            e.g. -1, is an InvalidOptionError); None: every view.
         cov: residual covariances (n, v, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
         method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_quadric`.
         progress: as for :func:`triangulate_lines`.
@@ -1283,7 +1314,7 @@ class FittedLine:
     def rms_distance(self) -> float:
         """Root-mean-square distance of the points from the line, pixels."""
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python (JSON-serialisable) form."""
+        """Plain-Python (strict JSON: NaN and inf are ``None``) form."""
     def __repr__(self) -> str: ...
 
 class FittedConic:
@@ -1310,7 +1341,7 @@ class FittedConic:
     def iterations(self) -> int:
         """Reweighting iterations of the fit."""
     def to_dict(self) -> dict[str, Any]:
-        """Plain-Python (JSON-serialisable) form."""
+        """Plain-Python (strict JSON: NaN and inf are ``None``) form."""
     def __repr__(self) -> str: ...
 
 def fit_line(points: ArrayLike, sigma: float = 1.0) -> FittedLine:
@@ -1318,15 +1349,18 @@ def fit_line(points: ArrayLike, sigma: float = 1.0) -> FittedLine:
     covariance of its residual for i.i.d. Gaussian pixel noise of ``sigma`` px per coordinate.
 
     Raises TooFewCorrespondencesError (N < 2), NonFiniteError, DegenerateConfigurationError (all
-    points coincide), InvalidOptionError (``sigma <= 0``), ShapeError.
+    points coincide to the rounding of their coordinates), InvalidOptionError (``sigma <= 0``, or a
+    ``sigma`` for which the covariance ``σ² Σ₁`` overflows or underflows), ShapeError.
     """
 
 def fit_conic(points: ArrayLike, sigma: float = 1.0) -> FittedConic:
     """Fit an ellipse to points (N, 2), N >= 5 (Sampson's reweighted algebraic fit, at the KCR bound),
     with the first-order covariance of its residual for i.i.d. Gaussian pixel noise of ``sigma`` px.
 
-    Raises TooFewCorrespondencesError (N < 5), NonFiniteError, DegenerateConfigurationError (no real
-    ellipse fits: collinear points, a hyperbola, ...), InvalidOptionError (``sigma <= 0``), ShapeError.
+    Raises TooFewCorrespondencesError (N < 5), NonFiniteError, DegenerateConfigurationError (no
+    ellipse is determined: the points lie on a line to within the noise — the χ² of their distances
+    from the best line, ``Σ d²/σ²``, is below its 99.9 % quantile with N − 2 degrees of freedom — or no
+    real ellipse fits, e.g. a hyperbola), InvalidOptionError (``sigma <= 0``), ShapeError.
     The GIL is released during the fit.
     """
 

@@ -224,7 +224,9 @@ def _read_document(source: str) -> dict[str, Any]:
         raise InputError(f"cannot read {name}: {exc}") from None
     try:
         doc = json.loads(text)
-    except json.JSONDecodeError as exc:
+    except RecursionError:
+        raise InputError(f"{name}: the JSON is nested too deeply to parse") from None
+    except ValueError as exc:  # JSONDecodeError, or an integer beyond Python's digit limit
         raise InputError(f"{name} is not valid JSON: {exc}") from None
     if not isinstance(doc, dict):
         raise InputError(f"{name}: expected a JSON object at the top level, got {type(doc).__name__}")
@@ -238,9 +240,21 @@ def _read_document(source: str) -> dict[str, Any]:
 def _number_array(value: Any, what: str) -> np.ndarray:
     try:
         array = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, RecursionError):
         raise InputError(f"'{what}' must be a (nested) list of numbers of equal lengths") from None
+    except OverflowError:
+        raise InputError(f"'{what}' holds an integer too large for a float (beyond 1.8e308)") from None
     return array
+
+
+def _number(value: Any, what: str) -> float:
+    """A JSON number as a float; bools and numbers beyond the float range are input errors."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise InputError(f"'{what}' must be a number, got {json.dumps(value)[:80]}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise InputError(f"'{what}' is an integer too large for a float (beyond 1.8e308)") from None
 
 
 def _camera(doc: dict[str, Any]) -> pluecker.Camera:
@@ -259,11 +273,7 @@ def _camera(doc: dict[str, Any]) -> pluecker.Camera:
         raise InputError(f"'camera' lacks {', '.join(missing)} (or give \"K\")")
     if unknown := sorted(set(spec) - allowed):
         raise InputError(f"'camera' has unknown key(s) {', '.join(unknown)}")
-    values = {}
-    for key, value in spec.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InputError(f"'camera.{key}' must be a number, got {json.dumps(value)}")
-        values[key] = float(value)
+    values = {key: _number(value, f"camera.{key}") for key, value in spec.items()}
     return pluecker.Camera(values["fx"], values["fy"], values["cx"], values["cy"], skew=values.get("skew", 0.0))
 
 
@@ -303,7 +313,7 @@ def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
         keyword, types = OPTIONS[key]
         if (isinstance(value, bool) and bool not in types) or not isinstance(value, types):
             raise InputError(f"option '{key}' must be {' or '.join(t.__name__ for t in types)}, "
-                             f"got {json.dumps(value)}")
+                             f"got {json.dumps(value)[:80]}")
         kwargs[keyword] = _initial_pose(value) if key == "initial_pose" else value
     method = args.method or doc.get("method")
     if method is not None:

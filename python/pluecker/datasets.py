@@ -110,23 +110,54 @@ def _observations(tracks, per_view, views, shape):
     return out, visible
 
 
+def _numbered_rows(path: Path) -> list[tuple[int, list[str]]]:
+    """The non-empty lines of ``path`` as (1-based line number, whitespace-separated fields)."""
+    return [(n, line.split()) for n, line in enumerate(path.read_text().splitlines(), start=1) if line.strip()]
+
+
 def _read_rows(path: Path, columns: int) -> np.ndarray:
-    """Whitespace-separated numbers, the first ``columns`` of every non-empty row."""
-    rows = [line.split()[:columns] for line in path.read_text().splitlines() if line.strip()]
-    if not rows:
-        return np.zeros((0, columns))
-    if any(len(r) < columns for r in rows):
-        raise ValueError(f"{path}: every row needs at least {columns} numbers")
-    return np.array(rows, dtype=float)
+    """Whitespace-separated finite numbers, the first ``columns`` of every non-empty row; a ValueError
+    naming the file and line otherwise."""
+    rows = _numbered_rows(path)
+    values = np.zeros((len(rows), columns))
+    for k, (line, fields) in enumerate(rows):
+        if len(fields) < columns:
+            raise ValueError(f"{path}: line {line}: expected at least {columns} numbers, got {len(fields)}")
+        try:
+            values[k] = [float(v) for v in fields[:columns]]
+        except ValueError:
+            raise ValueError(f"{path}: line {line}: not a number in {' '.join(fields[:columns])!r}") from None
+        if not np.all(np.isfinite(values[k])):
+            raise ValueError(f"{path}: line {line}: non-finite value (NaN or inf)")
+    return values
 
 
 def _read_tracks(path: Path, n_views: int) -> np.ndarray:
+    """Rows of 0-based feature indices (``*`` where a view does not see the track, stored as -1)."""
     if not path.exists():
         return np.zeros((0, n_views), dtype=np.int64)
-    rows = [line.split() for line in path.read_text().splitlines() if line.strip()]
-    if any(len(r) != n_views for r in rows):
-        raise ValueError(f"{path}: expected {n_views} columns (one per view) in every row")
-    return np.array([[-1 if v == "*" else int(v) for v in r] for r in rows], dtype=np.int64).reshape(-1, n_views)
+    rows = _numbered_rows(path)
+    tracks = np.full((len(rows), n_views), -1, dtype=np.int64)
+    for k, (line, fields) in enumerate(rows):
+        if len(fields) != n_views:
+            raise ValueError(f"{path}: line {line}: expected {n_views} columns (one per view), got {len(fields)}")
+        for j, v in enumerate(fields):
+            if v == "*":
+                continue
+            if not (v.isascii() and v.isdigit()):
+                raise ValueError(f"{path}: line {line}: expected a 0-based row index or '*', got {v!r}")
+            tracks[k, j] = int(v) if len(v) < 19 else np.iinfo(np.int64).max
+    return tracks
+
+
+def _check_tracks(path: Path, tracks: np.ndarray, files: list[Path], counts: list[int]) -> None:
+    """A ValueError naming both files unless every index of ``tracks`` is a row of its view's file."""
+    for j, (file, count) in enumerate(zip(files, counts)):
+        beyond = np.flatnonzero(tracks[:, j] >= count)
+        if len(beyond):
+            line = _numbered_rows(path)[beyond[0]][0]
+            raise ValueError(f"{path}: line {line} refers to row {tracks[beyond[0], j]} of {file}, which has "
+                             f"{count} rows")
 
 
 def _find(folder: Path, suffix: str) -> Path:
@@ -163,6 +194,10 @@ def load_vgg(folder: str | Path) -> VggSequence:
     n_views = len(camera_files)
     point_tracks = _read_tracks(_find(folder, "nview-corners"), n_views)
     line_tracks = _read_tracks(_find(folder, "nview-lines"), n_views)
+    _check_tracks(_find(folder, "nview-corners"), point_tracks, [folder / f"{s}.corners" for s in stems],
+                  [len(c) for c in corners])
+    _check_tracks(_find(folder, "nview-lines"), line_tracks, [folder / f"{s}.lines" for s in stems],
+                  [len(g) for g in segments])
     mirrored = _is_mirrored(cameras, points3d)
     if mirrored:
         flip = np.diag([-1.0, -1.0, -1.0, 1.0])

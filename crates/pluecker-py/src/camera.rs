@@ -1,6 +1,6 @@
 //! `pluecker.Camera`: pinhole intrinsics, projection and normalisation.
 
-use crate::convert::{matrix3_allow_non_finite, matrix3_to_py, points, points_to_py};
+use crate::convert::{matrix3_allow_non_finite, matrix3_to_py, points, points_to_py, Real};
 use crate::errors::guarded;
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
@@ -25,8 +25,10 @@ impl PyCamera {
 #[pymethods]
 impl PyCamera {
     #[new]
-    #[pyo3(signature = (fx, fy, cx, cy, skew = 0.0))]
-    fn new(fx: f64, fy: f64, cx: f64, cy: f64, skew: f64) -> PyResult<Self> {
+    #[pyo3(signature = (fx, fy, cx, cy, skew = Real::new(0.0)), text_signature = "(fx, fy, cx, cy, skew=0.0)")]
+    fn new(fx: Real, fy: Real, cx: Real, cy: Real, skew: Real) -> PyResult<Self> {
+        let (fx, fy, cx, cy) = (fx.get("fx")?, fy.get("fy")?, cx.get("cx")?, cy.get("cy")?);
+        let skew = skew.get("skew")?;
         guarded(|| pluecker::Camera::new(fx, fy, cx, cy, skew)).map(PyCamera::wrap)
     }
 

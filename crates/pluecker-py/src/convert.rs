@@ -6,9 +6,9 @@ use crate::errors::{invalid_argument, non_finite, shape_error};
 use nalgebra::{Matrix3, SVector};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::IntoPyDict;
+use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PyTuple};
 use std::time::Duration;
 
 /// One axis of an expected shape: a named free length (`N` rows) or a fixed one.
@@ -223,3 +223,158 @@ pub fn seconds_arg(name: &str, seconds: f64) -> PyResult<Duration> {
 
 /// How far from orthonormal a rotation argument may be (the core's tolerance for `initial_pose`).
 const ROTATION_TOLERANCE: f64 = 1e-6;
+
+/// A real-number argument as Python gave it, checked (with its name) by [`Real::get`]: anything
+/// `float()` accepts except a bool, which is remembered so that it can be rejected by name (a bool is
+/// an `int` to Python, so `penalty=True` would otherwise run with λ = 1).
+#[derive(Clone, Copy, Debug)]
+pub struct Real {
+    value: f64,
+    from_bool: Option<bool>,
+}
+
+impl Real {
+    /// A default value.
+    pub const fn new(value: f64) -> Real {
+        Real { value, from_bool: None }
+    }
+
+    /// The value, or `InvalidOptionError` naming `name` for a bool.
+    pub fn get(self, name: &str) -> PyResult<f64> {
+        match self.from_bool {
+            Some(b) => Err(bool_given(name, b)),
+            None => Ok(self.value),
+        }
+    }
+}
+
+/// `Some(real.get(name))` for an optional real argument.
+pub fn optional_real(name: &str, real: Option<Real>) -> PyResult<Option<f64>> {
+    real.map(|r| r.get(name)).transpose()
+}
+
+impl<'py> FromPyObject<'py> for Real {
+    fn extract_bound(ob: &Bound<'py, PyAny>) -> PyResult<Self> {
+        if let Some(b) = as_bool(ob)? {
+            return Ok(Real { value: f64::NAN, from_bool: Some(b) });
+        }
+        Ok(Real::new(ob.extract()?))
+    }
+}
+
+/// An integer argument as Python gave it (an `int`, a numpy integer, anything with `__index__`),
+/// checked with its name by [`Integer::in_range`]. Values beyond the 128-bit range saturate there, so
+/// the check reports them instead of a bare `OverflowError`; a bool is remembered and rejected.
+#[derive(Clone, Copy, Debug)]
+pub struct Integer {
+    value: i128,
+    beyond_i128: bool,
+    from_bool: Option<bool>,
+}
+
+impl Integer {
+    /// A default value.
+    pub const fn new(value: i64) -> Integer {
+        Integer { value: value as i128, beyond_i128: false, from_bool: None }
+    }
+
+    /// The value when `min ≤ value ≤ max`, else `InvalidOptionError` naming `name` and the range.
+    pub fn in_range(self, name: &str, min: i128, max: i128) -> PyResult<i128> {
+        if let Some(b) = self.from_bool {
+            return Err(bool_given(name, b));
+        }
+        if self.beyond_i128 || self.value < min || self.value > max {
+            let got = if self.beyond_i128 {
+                format!("an integer beyond {}2**127", if self.value < 0 { "-" } else { "" })
+            } else {
+                self.value.to_string()
+            };
+            return Err(invalid_argument(name, format!("must be an integer from {min} to {max}, got {got}")));
+        }
+        Ok(self.value)
+    }
+
+    /// A count or cap: `min ≤ value < 2⁶⁴` (usize on the 64-bit targets the wheels are built for).
+    pub fn count(self, name: &str, min: usize) -> PyResult<usize> {
+        let max = usize::MAX as i128;
+        Ok(self.in_range(name, min as i128, max)? as usize)
+    }
+
+    /// A seed: any unsigned 64-bit integer.
+    pub fn seed(self, name: &str) -> PyResult<u64> {
+        Ok(self.in_range(name, 0, u64::MAX as i128)? as u64)
+    }
+}
+
+/// `Some(integer.count(name, min))` for an optional count.
+pub fn optional_count(name: &str, integer: Option<Integer>, min: usize) -> PyResult<Option<usize>> {
+    integer.map(|i| i.count(name, min)).transpose()
+}
+
+impl<'py> FromPyObject<'py> for Integer {
+    fn extract_bound(ob: &Bound<'py, PyAny>) -> PyResult<Self> {
+        if let Some(b) = as_bool(ob)? {
+            return Ok(Integer { value: 0, beyond_i128: false, from_bool: Some(b) });
+        }
+        match ob.extract::<i128>() {
+            Ok(value) => Ok(Integer { value, beyond_i128: false, from_bool: None }),
+            Err(e) if e.is_instance_of::<PyOverflowError>(ob.py()) => {
+                let negative = ob.lt(0)?;
+                let value = if negative { i128::MIN } else { i128::MAX };
+                Ok(Integer { value, beyond_i128: true, from_bool: None })
+            }
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// `Some(b)` when `ob` is a Python or numpy bool.
+fn as_bool(ob: &Bound<'_, PyAny>) -> PyResult<Option<bool>> {
+    if let Ok(b) = ob.downcast::<PyBool>() {
+        return Ok(Some(b.is_true()));
+    }
+    // numpy.bool_ (named `bool` since numpy 2) is not a Python bool but converts like one.
+    let ty = ob.get_type();
+    let module: String = ty.getattr("__module__")?.extract().unwrap_or_default();
+    let name = ty.name()?.to_string();
+    if module == "numpy" && (name == "bool" || name == "bool_") {
+        return Ok(Some(ob.is_truthy()?));
+    }
+    Ok(None)
+}
+
+fn bool_given(name: &str, b: bool) -> PyErr {
+    let b = if b { "True" } else { "False" };
+    invalid_argument(name, format!("expected a number, got the bool {b}"))
+}
+
+/// `value` as strict JSON allows it: every NaN or infinite float, at any depth of dicts, lists and
+/// tuples, replaced by `None` (the `to_dict()` of every result goes through here, so that
+/// `json.dumps(result.to_dict(), allow_nan=False)` holds for failed results too). Dicts are changed
+/// in place; lists and tuples are rebuilt as lists.
+pub fn strict_json<'py>(value: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    let py = value.py();
+    if let Ok(x) = value.downcast::<PyFloat>() {
+        return Ok(if x.value().is_finite() { value } else { py.None().into_bound(py) });
+    }
+    if let Ok(d) = value.downcast::<PyDict>() {
+        for (k, v) in d.clone().iter() {
+            d.set_item(k, strict_json(v)?)?;
+        }
+        return Ok(value);
+    }
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        let items = value
+            .try_iter()?
+            .map(|v| strict_json(v?))
+            .collect::<PyResult<Vec<_>>>()?;
+        return Ok(PyList::new(py, items)?.into_any());
+    }
+    Ok(value)
+}
+
+/// [`strict_json`] of a dict.
+pub fn strict_json_dict<'py>(d: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+    strict_json(d.clone().into_any())?;
+    Ok(d)
+}

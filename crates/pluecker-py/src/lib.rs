@@ -9,6 +9,7 @@ mod camera;
 mod convert;
 mod errors;
 mod geometry;
+mod pickle;
 mod pose;
 mod reprojection;
 mod result;
@@ -61,6 +62,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(triangulation_fitting::fit_line, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation_fitting::fit_conic, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation_fitting::fitting_residual_samples, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_unpickle, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
 }

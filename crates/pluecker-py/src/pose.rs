@@ -2,8 +2,8 @@
 //! GIL released.
 
 use crate::camera::PyCamera;
-use crate::convert::{points, rotation, seconds_arg, segments, vector};
-use crate::errors::{invalid_argument, shape_error, solve};
+use crate::convert::{optional_real, points, rotation, seconds_arg, segments, vector, Integer, Real};
+use crate::errors::{shape_error, solve};
 use crate::result::PyPoseResult;
 use nalgebra::{Matrix3, Vector3};
 use pluecker::pose::{Correspondences, Method, PoseOptions, RansacOptions};
@@ -45,27 +45,20 @@ pub fn pose_arg(
     Ok((rotation(r_name, r)?, vector::<3>(t_name, t)?))
 }
 
-fn iteration_cap(name: &str, value: i64) -> PyResult<usize> {
-    if value < 1 {
-        return Err(invalid_argument(name, format!("must be at least 1, got {value}")));
-    }
-    Ok(value as usize)
-}
-
 /// The options, from the keyword arguments of `estimate_pose`.
 #[allow(clippy::too_many_arguments)]
 fn options(
     method: &str,
-    penalty: f64,
+    penalty: Real,
     normalize: bool,
     refine: bool,
     initial_pose: Option<&Bound<'_, PyTuple>>,
-    max_iterations: i64,
-    refine_max_iterations: i64,
+    max_iterations: Integer,
+    refine_max_iterations: Integer,
 ) -> PyResult<PoseOptions> {
     let mut opts = PoseOptions {
         method: Method::parse(method).map_err(crate::errors::to_py_err)?,
-        lambda: penalty,
+        lambda: penalty.get("penalty")?,
         normalize,
         refine,
         ..PoseOptions::default()
@@ -82,48 +75,41 @@ fn options(
             &pair.get_item(1)?,
         )?);
     }
-    let cap = iteration_cap("max_iterations", max_iterations)?;
+    let cap = max_iterations.count("max_iterations", 1)?;
     opts.trust_region.stopping.max_iterations = cap;
     opts.levenberg_marquardt.stopping.max_iterations = cap;
     opts.newton.max_iterations = cap;
-    opts.refinement.stopping.max_iterations = iteration_cap("refine_max_iterations", refine_max_iterations)?;
+    opts.refinement.stopping.max_iterations = refine_max_iterations.count("refine_max_iterations", 1)?;
     Ok(opts)
 }
 
 /// The keyword arguments of the robust estimator, as given.
 pub struct RobustArgs {
     pub robust: bool,
-    pub point_threshold: f64,
-    pub line_threshold: f64,
-    pub confidence: f64,
-    pub max_ransac_iterations: i64,
-    pub time_budget: Option<f64>,
-    pub seed: i64,
-    pub min_inliers: i64,
+    pub point_threshold: Real,
+    pub line_threshold: Real,
+    pub confidence: Real,
+    pub max_ransac_iterations: Integer,
+    pub time_budget: Option<Real>,
+    pub seed: Integer,
+    pub min_inliers: Integer,
 }
 
 impl RobustArgs {
     /// The options, checked whether or not `robust` is set (a bad value is an error either way);
     /// `None` when not robust.
     fn options(&self) -> PyResult<Option<RansacOptions>> {
-        let budget = self.time_budget.map(|s| seconds_arg("time_budget", s)).transpose()?;
-        if self.seed < 0 {
-            return Err(invalid_argument("seed", format!("must be ≥ 0, got {}", self.seed)));
-        }
-        if self.min_inliers < 3 {
-            return Err(invalid_argument(
-                "min_inliers",
-                format!("must be at least 3, got {}", self.min_inliers),
-            ));
-        }
+        let budget = optional_real("time_budget", self.time_budget)?
+            .map(|s| seconds_arg("time_budget", s))
+            .transpose()?;
         let opts = RansacOptions {
-            point_threshold: self.point_threshold,
-            line_threshold: self.line_threshold,
-            confidence: self.confidence,
-            max_iterations: iteration_cap("max_ransac_iterations", self.max_ransac_iterations)?,
+            point_threshold: self.point_threshold.get("point_threshold")?,
+            line_threshold: self.line_threshold.get("line_threshold")?,
+            confidence: self.confidence.get("confidence")?,
+            max_iterations: self.max_ransac_iterations.count("max_ransac_iterations", 1)?,
             time_budget: budget,
-            seed: self.seed as u64,
-            min_inliers: self.min_inliers as usize,
+            seed: self.seed.seed("seed")?,
+            min_inliers: self.min_inliers.count("min_inliers", 3)?,
             ..RansacOptions::default()
         };
         opts.validate().map_err(crate::errors::to_py_err)?;
@@ -136,11 +122,13 @@ impl RobustArgs {
 #[pyfunction]
 #[pyo3(signature = (
     camera, points2d = None, points3d = None, lines2d = None, lines3d = None, method = "trust-region", *,
-    penalty = 50.0, normalize = true, refine = true, initial_pose = None, max_iterations = 200,
-    refine_max_iterations = 50, robust = false, point_threshold = 4.0, line_threshold = 4.0,
-    confidence = 0.9999, max_ransac_iterations = 100_000, time_budget = None, seed = 0, min_inliers = 6,
-    sigma_px = None, certify = false, certify_gap = 1e-3, ambiguity_threshold = 9.0
-))]
+    penalty = Real::new(50.0), normalize = true, refine = true, initial_pose = None,
+    max_iterations = Integer::new(200), refine_max_iterations = Integer::new(50), robust = false,
+    point_threshold = Real::new(4.0), line_threshold = Real::new(4.0), confidence = Real::new(0.9999),
+    max_ransac_iterations = Integer::new(100_000), time_budget = None, seed = Integer::new(0),
+    min_inliers = Integer::new(6), sigma_px = None, certify = false, certify_gap = Real::new(1e-3),
+    ambiguity_threshold = Real::new(9.0)
+), text_signature = "(camera, points2d=None, points3d=None, lines2d=None, lines3d=None, method='trust-region', *, penalty=50.0, normalize=True, refine=True, initial_pose=None, max_iterations=200, refine_max_iterations=50, robust=False, point_threshold=4.0, line_threshold=4.0, confidence=0.9999, max_ransac_iterations=100000, time_budget=None, seed=0, min_inliers=6, sigma_px=None, certify=False, certify_gap=0.001, ambiguity_threshold=9.0)")]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
     py: Python<'_>,
@@ -150,24 +138,24 @@ pub fn estimate_pose(
     lines2d: Option<&Bound<'_, PyAny>>,
     lines3d: Option<&Bound<'_, PyAny>>,
     method: &str,
-    penalty: f64,
+    penalty: Real,
     normalize: bool,
     refine: bool,
     initial_pose: Option<&Bound<'_, PyTuple>>,
-    max_iterations: i64,
-    refine_max_iterations: i64,
+    max_iterations: Integer,
+    refine_max_iterations: Integer,
     robust: bool,
-    point_threshold: f64,
-    line_threshold: f64,
-    confidence: f64,
-    max_ransac_iterations: i64,
-    time_budget: Option<f64>,
-    seed: i64,
-    min_inliers: i64,
-    sigma_px: Option<f64>,
+    point_threshold: Real,
+    line_threshold: Real,
+    confidence: Real,
+    max_ransac_iterations: Integer,
+    time_budget: Option<Real>,
+    seed: Integer,
+    min_inliers: Integer,
+    sigma_px: Option<Real>,
     certify: bool,
-    certify_gap: f64,
-    ambiguity_threshold: f64,
+    certify_gap: Real,
+    ambiguity_threshold: Real,
 ) -> PyResult<PyPoseResult> {
     let camera = camera.get().inner;
     let mut opts = options(
@@ -190,10 +178,10 @@ pub fn estimate_pose(
         min_inliers,
     }
     .options()?;
-    opts.sigma_px = sigma_px;
-    opts.ambiguity_threshold = ambiguity_threshold;
+    opts.sigma_px = optional_real("sigma_px", sigma_px)?;
+    opts.ambiguity_threshold = ambiguity_threshold.get("ambiguity_threshold")?;
     let certificate = pluecker::pose::CertificateOptions {
-        gap: certify_gap,
+        gap: certify_gap.get("certify_gap")?,
         ..Default::default()
     };
     certificate.validate().map_err(crate::errors::to_py_err)?;

@@ -1,16 +1,17 @@
 //! Reprojection errors and the pose covariance (Cramér-Rao bound) at a given pose.
 
 use crate::camera::PyCamera;
+use crate::convert::Real;
 use crate::errors::{degenerate, invalid_argument, solve};
 use crate::pose::{correspondences, pose_arg};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pluecker::pose::reprojection::{pose_covariance as covariance, ReprojectionCost};
+use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;
 
 /// The 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose `(R, t)`.
 #[pyfunction]
-#[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, sigma_px = 1.0))]
+#[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, sigma_px = Real::new(1.0)), text_signature = "(camera, R, t, points2d=None, points3d=None, lines2d=None, lines3d=None, sigma_px=1.0)")]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn pose_covariance<'py>(
     py: Python<'py>,
@@ -21,8 +22,9 @@ pub fn pose_covariance<'py>(
     points3d: Option<&Bound<'py, PyAny>>,
     lines2d: Option<&Bound<'py, PyAny>>,
     lines3d: Option<&Bound<'py, PyAny>>,
-    sigma_px: f64,
+    sigma_px: Real,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let sigma_px = sigma_px.get("sigma_px")?;
     let camera = camera.get().inner;
     let pose = pose_arg("R", R, "t", t)?;
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
@@ -41,6 +43,15 @@ pub fn pose_covariance<'py>(
         if information.iter().any(|v| !v.is_finite()) {
             return degenerate(
                 "the information matrix JᵀJ is not finite at this pose (a 3-D point or endpoint on the camera plane z = 0?)",
+            );
+        }
+        if let Some(unit) = covariance_from_information(&information, 1.0) {
+            return invalid_argument(
+                "sigma_px",
+                format!(
+                    "σ² (JᵀJ)⁻¹ overflows double precision at σ = {sigma_px:e} px (its largest entry at σ = 1 px is {:.3e})",
+                    unit.amax()
+                ),
             );
         }
         let eig = information.symmetric_eigenvalues();

@@ -8,8 +8,12 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::pose::StageReport;
 use pluecker::{PoseResult, Status};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// One stage of the pose pipeline (algebraic estimator, linear solve, reprojection refinement).
 #[pyclass(frozen, name = "PoseStage", module = "pluecker")]
@@ -78,7 +82,13 @@ impl PyPoseStage {
         d.set_item("final_cost", s.final_cost)?;
         d.set_item("termination", s.termination.as_str())?;
         d.set_item("time_seconds", s.time_seconds)?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "PoseStage", &[self])
     }
 
     fn __repr__(&self) -> String {
@@ -370,7 +380,13 @@ impl PyPoseResult {
                 d.set_item("second_best_cost", py.None())?;
             }
         }
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "PoseResult", &[self])
     }
 
     fn __repr__(&self) -> String {
@@ -394,3 +410,6 @@ impl PyPoseResult {
         )
     }
 }
+
+pack_struct!(PyPoseStage { inner });
+pack_struct!(PyPoseResult { inner });

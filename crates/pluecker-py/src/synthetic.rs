@@ -1,7 +1,7 @@
 //! Seeded synthetic scenes (the paper's calibration object, random scenes) as dicts of arrays.
 
 use crate::camera::PyCamera;
-use crate::convert::{matrix3_to_py, points_to_py, segments_to_py, vector_to_py};
+use crate::convert::{matrix3_to_py, points_to_py, segments_to_py, vector_to_py, Integer};
 use crate::errors::{guarded, invalid_argument};
 use pluecker::synthetic::{
     check_scene_size, paper_calibration_object, random_scene as core_random_scene, Scene, SceneKind,
@@ -35,13 +35,13 @@ pub fn paper_scene(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 
 /// A seeded random scene, noise-free.
 #[pyfunction]
-#[pyo3(signature = (kind, n_points, n_lines = 0, seed = 0))]
+#[pyo3(signature = (kind, n_points, n_lines = Integer::new(0), seed = Integer::new(0)), text_signature = "(kind, n_points, n_lines=0, seed=0)")]
 pub fn random_scene<'py>(
     py: Python<'py>,
     kind: &str,
-    n_points: i64,
-    n_lines: i64,
-    seed: i64,
+    n_points: Integer,
+    n_lines: Integer,
+    seed: Integer,
 ) -> PyResult<Bound<'py, PyDict>> {
     let Some(kind) = KINDS.into_iter().find(|k| k.as_str() == kind) else {
         let names: Vec<&str> = KINDS.iter().map(|k| k.as_str()).collect();
@@ -50,13 +50,8 @@ pub fn random_scene<'py>(
             format!("unknown scene kind '{kind}'; expected one of {}", names.join(", ")),
         ));
     };
-    for (name, value) in [("n_points", n_points), ("n_lines", n_lines), ("seed", seed)] {
-        if value < 0 {
-            return Err(invalid_argument(name, format!("must be non-negative, got {value}")));
-        }
-    }
-    // Non-negative i64 values fit usize and u64 on the 64-bit targets the wheels are built for.
-    let (n_points, n_lines, seed) = (n_points as usize, n_lines as usize, seed as u64);
+    let (n_points, n_lines) = (n_points.count("n_points", 0)?, n_lines.count("n_lines", 0)?);
+    let seed = seed.seed("seed")?;
     // Sizes before allocation: a failed allocation aborts the interpreter (issue 10).
     check_scene_size(n_points, n_lines).map_err(crate::errors::to_py_err)?;
     let scene = py.allow_threads(|| guarded(|| Ok(core_random_scene(kind, n_points, n_lines, seed))))?;

@@ -6,36 +6,34 @@
 //! `triangulation_line.rs`, `triangulation_quadric.rs` and `triangulation_fitting.rs`; the array
 //! readers in `triangulation_arrays.rs`.
 
-use crate::errors::{invalid_argument, to_py_err};
+use crate::convert::{optional_count, optional_real, strict_json_dict, Integer, Real};
+use crate::errors::to_py_err;
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// The options from the keyword arguments every triangulation function takes; each is validated
 /// by the core (`TriangulationOptions::validate`) so the messages read the same from Rust and Python.
 pub fn options(
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<TriangulationOptions> {
     let mut opts = TriangulationOptions {
         method: Method::parse(method).map_err(to_py_err)?,
         ..Default::default()
     };
-    if let Some(gap) = max_relative_gap {
+    if let Some(gap) = optional_real("max_relative_gap", max_relative_gap)? {
         opts.max_relative_gap = gap;
     }
-    opts.max_reprojection_error = max_reprojection_error;
-    if let Some(nodes) = max_nodes {
-        if nodes < 1 {
-            return Err(invalid_argument(
-                "max_nodes",
-                format!("must be at least 1, got {nodes}"),
-            ));
-        }
-        opts.max_nodes = nodes as usize;
+    opts.max_reprojection_error = optional_real("max_reprojection_error", max_reprojection_error)?;
+    if let Some(nodes) = optional_count("max_nodes", max_nodes, 1)? {
+        opts.max_nodes = nodes;
     }
     opts.validate().map_err(to_py_err)?;
     Ok(opts)
@@ -195,10 +193,18 @@ impl PyTriangulationReport {
 
     /// Plain-Python (JSON-serialisable) form of the report fields.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        self.report_dict(py)
+        strict_json_dict(self.report_dict(py)?)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "TriangulationReport", &[self])
     }
 
     fn __repr__(&self) -> String {
         format!("TriangulationReport({})", self.repr_fields())
     }
 }
+
+pack_struct!(PyTriangulationReport { inner });

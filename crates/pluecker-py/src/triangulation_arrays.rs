@@ -9,7 +9,7 @@
 
 use crate::convert::{describe, float_array, row_major_values};
 pub use crate::convert::{shape_string, Dim};
-use crate::errors::{non_finite, shape_error};
+use crate::errors::{invalid_argument, non_finite, shape_error};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix};
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
@@ -43,7 +43,8 @@ pub fn read_any(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec
     Ok((shape, row_major_values(name, &array)?))
 }
 
-/// A boolean mask of `shape`: a bool or integer array (non-zero is true).
+/// A boolean mask of `shape`: a bool array, or an integer array holding only 0 and 1 (any other
+/// integer is an `InvalidOptionError` naming its index: `-1` must not count as visible).
 pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResult<Vec<bool>> {
     let np = obj.py().import("numpy")?;
     let array = np.call_method1("asarray", (obj,))?;
@@ -62,6 +63,9 @@ pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResul
             shape_string(&actual),
         ));
     }
+    if kind != "b" {
+        check_zero_one(name, &array)?;
+    }
     let array = np.call_method1("ascontiguousarray", (array, "bool"))?;
     let array = array.downcast_into::<PyArrayDyn<bool>>()?;
     let readonly = array
@@ -71,6 +75,24 @@ pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResul
         Ok(slice) => slice.to_vec(),
         Err(_) => readonly.as_array().iter().copied().collect(),
     })
+}
+
+/// `InvalidOptionError` unless the integer array `array` holds only 0 and 1.
+fn check_zero_one(name: &str, array: &Bound<'_, PyAny>) -> PyResult<()> {
+    use pyo3::basic::CompareOp::Ne;
+    let outside = array.rich_compare(0, Ne)?.call_method1("__and__", (array.rich_compare(1, Ne)?,))?;
+    let np = array.py().import("numpy")?;
+    let bad = np.call_method1("argwhere", (outside,))?;
+    if bad.len()? == 0 {
+        return Ok(());
+    }
+    let index: Vec<usize> = bad.get_item(0)?.call_method0("tolist")?.extract()?;
+    let value = array.get_item(pyo3::types::PyTuple::new(array.py(), &index)?)?;
+    let at: Vec<String> = index.iter().map(|i| i.to_string()).collect();
+    Err(invalid_argument(
+        name,
+        format!("expected True/False or 0/1, got {value} at [{}]", at.join(", ")),
+    ))
 }
 
 /// Row-major chunks of `R x C` as nalgebra matrices.

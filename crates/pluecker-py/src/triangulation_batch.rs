@@ -12,7 +12,7 @@ use crate::errors::{shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, read, read_mask, shape_string, Dim};
 use crate::triangulation_batch_lines::{per_observation, push_covariance};
-use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
+use crate::triangulation_batch_report::{batch_dict, collect, PyBatchReport, TrackColumns};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyArray3};
 use pluecker::triangulation::batch::{
@@ -21,7 +21,11 @@ use pluecker::triangulation::batch::{
 use pluecker::triangulation::point::PointTriangulation;
 use pluecker::triangulation::{Method, Report};
 use pluecker::Error;
+use crate::convert::{Integer, Real};
 use pyo3::prelude::*;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 use std::time::Instant;
 
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
@@ -96,6 +100,16 @@ impl PyPointTriangulations {
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         slf.as_super().get().repr("PointTriangulations")
     }
+
+    /// Plain-Python (strict JSON) form: the report columns of `BatchReport.to_dict()` and the estimates.
+    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        batch_dict(slf.as_any(), &["X", "covariance"])
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "PointTriangulations", &[slf.as_super().get(), slf.get()])
+    }
 }
 
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
@@ -109,9 +123,9 @@ pub fn triangulate_points(
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
@@ -152,3 +166,5 @@ pub fn triangulate_points(
     })?;
     Py::new(py, PyClassInitializer::from(report).add_subclass(points))
 }
+
+pack_struct!(PyPointTriangulations { x, covariance });

@@ -12,7 +12,7 @@
 use crate::errors::{guarded, invalid_argument, shape_error, solve, to_py_err};
 use crate::triangulation::{options, renamed};
 use crate::triangulation_arrays::{read, read_any, read_mask, shape_string, Dim};
-use crate::triangulation_batch_report::{collect, PyBatchReport, TrackColumns};
+use crate::triangulation_batch_report::{batch_dict, collect, PyBatchReport, TrackColumns};
 use crate::triangulation_line::{chart_axes, LINE_NAMES};
 use crate::triangulation_quadric::QUADRIC_NAMES;
 use nalgebra::Matrix3x4;
@@ -25,7 +25,11 @@ use pluecker::triangulation::quadric::QuadricTriangulation;
 use pluecker::triangulation::quadric_batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use pluecker::Error;
+use crate::convert::{optional_real, Integer, Real};
 use pyo3::prelude::*;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
@@ -99,6 +103,16 @@ impl PyLineTriangulations {
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         slf.as_super().get().repr("LineTriangulations")
+    }
+
+    /// Plain-Python (strict JSON) form: the report columns of `BatchReport.to_dict()` and the estimates.
+    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        batch_dict(slf.as_any(), &["plucker", "point", "direction", "chart_axes", "covariance"])
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "LineTriangulations", &[slf.as_super().get(), slf.get()])
     }
 }
 
@@ -198,6 +212,16 @@ impl PyQuadricTriangulations {
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
         slf.as_super().get().repr("QuadricTriangulations")
+    }
+
+    /// Plain-Python (strict JSON) form: the report columns of `BatchReport.to_dict()` and the estimates.
+    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        batch_dict(slf.as_any(), &["Q", "primal", "centre", "axes", "semi_axes", "covariance"])
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "QuadricTriangulations", &[slf.as_super().get(), slf.get()])
     }
 }
 
@@ -343,13 +367,14 @@ pub fn triangulate_lines(
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    sigma: Option<f64>,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    sigma: Option<Real>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
+    let sigma = optional_real("sigma", sigma)?;
     let cams = Cameras::read(P, 2, opts.method)?;
     let (shape, values) = read_any("lines", lines)?;
     let segments = match shape.as_slice() {
@@ -407,9 +432,9 @@ pub fn triangulate_quadrics(
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
     progress: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let opts: TriangulationOptions = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
@@ -431,3 +456,7 @@ pub fn triangulate_quadrics(
     })?;
     Py::new(py, PyClassInitializer::from(report).add_subclass(results))
 }
+
+pack_struct!(PyLineTriangulations { plucker, point, direction, chart_axes, covariance });
+
+pack_struct!(PyQuadricTriangulations { dual, primal, centre, semi_axes, axes, covariance });

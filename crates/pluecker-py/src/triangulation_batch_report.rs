@@ -10,7 +10,11 @@ use numpy::PyArray1;
 use pluecker::triangulation::{CertificateKind, Method, Report, Status};
 use pluecker::Error;
 use pyo3::prelude::*;
-use pyo3::types::PyList;
+use pyo3::types::{PyDict, PyList};
+use crate::convert::strict_json_dict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// The status of a track the core rejected, by error kind (shared by every batch result).
 pub(crate) fn error_status(err: &Error) -> &'static str {
@@ -220,7 +224,35 @@ impl PyBatchReport {
         self.len()
     }
 
+    /// Plain-Python (strict JSON) form: every report column as a list, one entry per track.
+    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
+        batch_dict(slf.as_any(), &[])
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "BatchReport", &[self])
+    }
+
     fn __repr__(&self) -> String {
         self.repr("BatchReport")
     }
+}
+
+pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, errors });
+
+/// The report columns of `NAMES` below and then the estimate `columns` of a batch result as lists,
+/// NaN and inf as `None`: the `to_dict()` of every batch class (each array getter's `tolist()`).
+pub(crate) fn batch_dict<'py>(result: &Bound<'py, PyAny>, columns: &[&str]) -> PyResult<Bound<'py, PyDict>> {
+    const NAMES: [&str; 11] = [
+        "method", "status", "cost", "lower_bound", "relative_gap", "certified", "certificate", "nodes",
+        "iterations", "time_seconds", "messages",
+    ];
+    let d = PyDict::new(result.py());
+    for name in NAMES.iter().chain(columns) {
+        let value = result.getattr(*name)?;
+        let value = if value.hasattr("tolist")? { value.call_method0("tolist")? } else { value };
+        d.set_item(*name, value)?;
+    }
+    strict_json_dict(d)
 }

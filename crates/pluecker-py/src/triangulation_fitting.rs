@@ -2,14 +2,18 @@
 //! the covariance of their residual (Josephson & Kahl 2008, section 3.1), the weights `triangulate_line`
 //! and `triangulate_quadric` take.
 
-use crate::convert::{matrix3_rows, matrix3_to_py, points as read_points};
+use crate::convert::{matrix3_rows, matrix3_to_py, points as read_points, Integer, Real};
 use crate::errors::{guarded, invalid_argument, solve};
 use nalgebra::{SMatrix, SVector};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 fn matrix_to_py<'py, const R: usize, const C: usize>(
     py: Python<'py>,
@@ -22,7 +26,8 @@ fn matrix_rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> Vec<Ve
     (0..R).map(|i| (0..C).map(|j| m[(i, j)]).collect()).collect()
 }
 
-fn sigma_arg(sigma: f64) -> PyResult<f64> {
+fn sigma_arg(sigma: Real) -> PyResult<f64> {
+    let sigma = sigma.get("sigma")?;
     if sigma.is_finite() && sigma > 0.0 {
         Ok(sigma)
     } else {
@@ -63,7 +68,13 @@ impl PyFittedLine {
         d.set_item("line", self.inner.line.as_slice())?;
         d.set_item("covariance", matrix_rows::<2, 2>(&self.inner.covariance))?;
         d.set_item("rms_distance", self.inner.rms_distance)?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "FittedLine", &[self])
     }
 
     fn __repr__(&self) -> String {
@@ -124,7 +135,13 @@ impl PyFittedConic {
         d.set_item("semi_axes", e.semi_axes.as_slice())?;
         d.set_item("covariance", matrix_rows::<5, 5>(&self.inner.covariance))?;
         d.set_item("iterations", self.inner.iterations)?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "FittedConic", &[self])
     }
 
     fn __repr__(&self) -> String {
@@ -138,8 +155,8 @@ impl PyFittedConic {
 
 /// Fits an image line to points (total least squares) and returns it with its residual covariance.
 #[pyfunction]
-#[pyo3(signature = (points, sigma = 1.0))]
-pub fn fit_line(points: &Bound<'_, PyAny>, sigma: f64) -> PyResult<PyFittedLine> {
+#[pyo3(signature = (points, sigma = Real::new(1.0)), text_signature = "(points, sigma=1.0)")]
+pub fn fit_line(points: &Bound<'_, PyAny>, sigma: Real) -> PyResult<PyFittedLine> {
     let pts = read_points::<2>("points", Some(points))?;
     let sigma = sigma_arg(sigma)?;
     guarded(|| fitting::fit_line(&pts, sigma)).map(|inner| PyFittedLine { inner })
@@ -147,8 +164,8 @@ pub fn fit_line(points: &Bound<'_, PyAny>, sigma: f64) -> PyResult<PyFittedLine>
 
 /// Fits an ellipse to points and returns it with its residual covariance.
 #[pyfunction]
-#[pyo3(signature = (points, sigma = 1.0))]
-pub fn fit_conic(py: Python<'_>, points: &Bound<'_, PyAny>, sigma: f64) -> PyResult<PyFittedConic> {
+#[pyo3(signature = (points, sigma = Real::new(1.0)), text_signature = "(points, sigma=1.0)")]
+pub fn fit_conic(py: Python<'_>, points: &Bound<'_, PyAny>, sigma: Real) -> PyResult<PyFittedConic> {
     let pts = read_points::<2>("points", Some(points))?;
     let sigma = sigma_arg(sigma)?;
     solve(py, move || fitting::fit_conic(&pts, sigma)).map(|inner| PyFittedConic { inner })
@@ -160,17 +177,17 @@ fn rows_to_py<'py, const D: usize>(py: Python<'py>, rows: &[SVector<f64, D>]) ->
 
 /// The residual samples of the paper's Figures 1-2 (section 3.1).
 #[pyfunction]
-#[pyo3(signature = (draws, size = 1000.0, sigma = 1.0, seed = 0))]
+#[pyo3(signature = (draws, size = Real::new(1000.0), sigma = Real::new(1.0), seed = Integer::new(0)), text_signature = "(draws, size=1000.0, sigma=1.0, seed=0)")]
 pub fn fitting_residual_samples<'py>(
     py: Python<'py>,
-    draws: i64,
-    size: f64,
-    sigma: f64,
-    seed: u64,
+    draws: Integer,
+    size: Real,
+    sigma: Real,
+    seed: Integer,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if draws < 1 {
-        return Err(invalid_argument("draws", format!("must be at least 1, got {draws}")));
-    }
+    let draws = draws.count("draws", 1)?;
+    let seed = seed.seed("seed")?;
+    let size = size.get("size")?;
     if !(size.is_finite() && size > 0.0) {
         return Err(invalid_argument(
             "size",
@@ -178,7 +195,7 @@ pub fn fitting_residual_samples<'py>(
         ));
     }
     let sigma = sigma_arg(sigma)?;
-    let samples = solve(py, move || fitting::residual_samples(draws as usize, size, sigma, seed))?;
+    let samples = solve(py, move || fitting::residual_samples(draws, size, sigma, seed))?;
     let d = PyDict::new(py);
     d.set_item("line", rows_to_py(py, &samples.line))?;
     d.set_item("line_whitened", rows_to_py(py, &samples.line_whitened))?;
@@ -186,3 +203,6 @@ pub fn fitting_residual_samples<'py>(
     d.set_item("conic_whitened", rows_to_py(py, &samples.conic_whitened))?;
     Ok(d)
 }
+
+pack_struct!(PyFittedLine { inner });
+pack_struct!(PyFittedConic { inner });

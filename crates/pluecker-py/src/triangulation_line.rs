@@ -10,8 +10,13 @@ use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
 };
+use crate::convert::{optional_real, Integer, Real};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// Core argument names → Python argument names of `triangulate_line`.
 pub(crate) const LINE_NAMES: &[(&str, &str)] = &[
@@ -98,7 +103,12 @@ impl PyLineTriangulation {
         d.set_item("direction", me.direction.as_slice())?;
         d.set_item("chart_axes", rows::<2, 3>(&chart_axes(&me.chart)))?;
         d.set_item("covariance", me.covariance.as_ref().map(rows::<4, 4>))?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "LineTriangulation", &[slf.as_super().get(), slf.get()])
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -181,13 +191,14 @@ pub fn triangulate_line(
     lines: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    sigma: Option<f64>,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    sigma: Option<Real>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyLineTriangulation>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
+    let sigma = optional_real("sigma", sigma)?;
     let (image, from_segments) = image_lines(lines, cams.len(), cov.is_some(), sigma)?;
     let covs = match covariances2("cov", cov, cams.len())? {
         Some(c) => Some(c),
@@ -198,3 +209,5 @@ pub fn triangulate_line(
     })?;
     PyLineTriangulation::create(py, result)
 }
+
+pack_struct!(PyLineTriangulation { plucker, point, direction, chart, covariance });

@@ -7,8 +7,13 @@ use crate::triangulation_quadric::{matrix_to_py, rows};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use numpy::{PyArray1, PyArray2};
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
+use crate::convert::{Integer, Real};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// A triangulated point: the estimate `X` and the report fields of `TriangulationReport`.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "PointTriangulation", module = "pluecker")]
@@ -47,7 +52,12 @@ impl PyPointTriangulation {
         let d = slf.as_super().get().report_dict(slf.py())?;
         d.set_item("X", slf.get().point.as_slice())?;
         d.set_item("covariance", slf.get().covariance.as_ref().map(rows::<3, 3>))?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "PointTriangulation", &[slf.as_super().get(), slf.get()])
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -82,9 +92,9 @@ pub fn triangulate_point(
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyPointTriangulation>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
@@ -95,3 +105,5 @@ pub fn triangulate_point(
     })?;
     PyPointTriangulation::create(py, result)
 }
+
+pack_struct!(PyPointTriangulation { point, covariance });

@@ -8,8 +8,13 @@ use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
+use crate::convert::{Integer, Real};
+use crate::convert::strict_json_dict;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pyo3::types::PyTuple;
+
 
 /// Core argument names → Python argument names of `triangulate_quadric`.
 pub(crate) const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
@@ -97,7 +102,12 @@ impl PyQuadricTriangulation {
         d.set_item("axes", rows::<3, 3>(&me.axes))?;
         d.set_item("semi_axes", me.semi_axes.as_slice())?;
         d.set_item("covariance", me.covariance.as_ref().map(rows::<9, 9>))?;
-        Ok(d)
+        strict_json_dict(d)
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "QuadricTriangulation", &[slf.as_super().get(), slf.get()])
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -126,9 +136,9 @@ pub fn triangulate_quadric(
     conics: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
     method: &str,
-    max_relative_gap: Option<f64>,
-    max_reprojection_error: Option<f64>,
-    max_nodes: Option<i64>,
+    max_relative_gap: Option<Real>,
+    max_reprojection_error: Option<Real>,
+    max_nodes: Option<Integer>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
@@ -147,3 +157,5 @@ pub fn triangulate_quadric(
     })?;
     PyQuadricTriangulation::create(py, result)
 }
+
+pack_struct!(PyQuadricTriangulation { dual, primal, centre, axes, semi_axes, covariance });

@@ -9,19 +9,33 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use nalgebra::{Vector2, Vector3};
 
-/// Endpoints closer than this (in normalised image units, or in world units for 3-D segments,
-/// relative to their size) make a zero-length segment.
+/// Endpoints closer than this (relative to their size: the angle between the rays of two image
+/// endpoints, or the distance of two 3-D endpoints over their magnitude) make a zero-length segment.
 const MIN_SEGMENT: f64 = 1e-12;
+
+/// `v / ‖v‖∞` (`v` itself when it is zero): the same direction with every entry in `[-1, 1]`, so that
+/// squares and cross products of coordinates up to `f64::MAX` cannot overflow (a segment 1e300 long
+/// is long, not zero-length).
+fn max_scaled(v: &Vector3<f64>) -> Vector3<f64> {
+    let m = v.amax();
+    if m > 0.0 {
+        v / m
+    } else {
+        *v
+    }
+}
 
 /// Unit normal of the interpretation plane of the image segment `a`–`b` (pixels), in the camera frame.
 ///
-/// Fails with [`Error::Degenerate`] when the endpoints coincide.
+/// Fails with [`Error::Degenerate`] when the endpoints coincide: their viewing rays are less than
+/// [`MIN_SEGMENT`] radians apart (scale-free, so neither pixels near 1e300 nor subnormal ones fool it).
 pub fn interpretation_plane_normal(camera: &Camera, a: &Vector2<f64>, b: &Vector2<f64>) -> Result<Vector3<f64>> {
     let xa = camera.pixel_to_normalized(a);
     let xb = camera.pixel_to_normalized(b);
-    let n = Vector3::new(xa.x, xa.y, 1.0).cross(&Vector3::new(xb.x, xb.y, 1.0));
+    let ray = |x: Vector2<f64>| max_scaled(&Vector3::new(x.x, x.y, 1.0)).normalize();
+    let n = ray(xa).cross(&ray(xb));
     let norm = n.norm();
-    if norm <= MIN_SEGMENT * (1.0 + xa.norm() + xb.norm()) {
+    if !(norm > MIN_SEGMENT) {
         return Err(Error::Degenerate { what: "zero-length image segment".into() });
     }
     Ok(n / norm)
@@ -38,13 +52,17 @@ pub struct ObjectLine {
 
 impl ObjectLine {
     /// The line through two distinct 3-D points; fails on a zero-length segment.
+    /// The test is `‖b − a‖ ≤ MIN_SEGMENT (1 + ‖a‖ + ‖b‖)`, evaluated on coordinates scaled by their
+    /// largest magnitude so that it cannot overflow.
     pub fn from_endpoints(a: &Vector3<f64>, b: &Vector3<f64>) -> Result<Self> {
-        let d = b - a;
+        let scale = a.amax().max(b.amax()).max(1.0);
+        let (a_s, b_s) = (a / scale, b / scale);
+        let d = b_s - a_s;
         let len = d.norm();
-        if len <= MIN_SEGMENT * (1.0 + a.norm() + b.norm()) {
+        if !(len > MIN_SEGMENT * (1.0 / scale + a_s.norm() + b_s.norm())) {
             return Err(Error::Degenerate { what: "zero-length 3-D segment".into() });
         }
-        Ok(ObjectLine { point: 0.5 * (a + b), direction: d / len })
+        Ok(ObjectLine { point: 0.5 * a + 0.5 * b, direction: d / len })
     }
 }
 

@@ -5,7 +5,7 @@ use super::Method;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::lines::{interpretation_plane_normal, lines_from_point_pairs, ObjectLine};
-use nalgebra::{DMatrix, Matrix3, Vector2, Vector3};
+use nalgebra::{DMatrix, Matrix3, SVector, Vector2, Vector3};
 
 /// 2-D/3-D correspondences. Image quantities are pixels, object quantities world coordinates
 /// (any length unit; the translation comes out in the same unit).
@@ -33,6 +33,30 @@ fn check_finite<'a, I: IntoIterator<Item = &'a f64>>(what: &str, rows: impl Iter
                 index,
             });
         }
+    }
+    Ok(())
+}
+
+/// [`Error::InvalidOption`] naming the 3-D argument whose coordinates overflow double precision when
+/// squared and summed (the centroid, spread and costs of every method need `Σ ‖X‖²`): a segment 1e300
+/// long is out of range, not zero-length.
+fn check_squares_finite(c: &Correspondences) -> Result<()> {
+    let sum = |points: &mut dyn Iterator<Item = &Vector3<f64>>| points.map(|p| p.norm_squared()).sum::<f64>();
+    let out_of_range = |name: &str, largest: f64| Error::InvalidOption {
+        name: name.into(),
+        reason: format!(
+            "coordinates up to {largest:e} overflow double precision when squared and summed; rescale the 3-D data"
+        ),
+    };
+    let largest = |points: &mut dyn Iterator<Item = &Vector3<f64>>| points.map(|p| p.amax()).fold(0.0, f64::max);
+    if !sum(&mut c.points3d.iter()).is_finite() {
+        return Err(out_of_range("points3d", largest(&mut c.points3d.iter())));
+    }
+    if !sum(&mut c.lines3d.iter().flatten()).is_finite() {
+        return Err(out_of_range("lines3d", largest(&mut c.lines3d.iter().flatten())));
+    }
+    if !sum(&mut object_points(c)).is_finite() {
+        return Err(out_of_range("points3d / lines3d", largest(&mut object_points(c))));
     }
     Ok(())
 }
@@ -165,15 +189,16 @@ impl Correspondences {
         check_finite("points3d", self.points3d.iter().map(|p| p.iter()))?;
         check_finite("lines2d", self.lines2d.iter().map(|s| s[0].iter().chain(s[1].iter())))?;
         check_finite("lines3d", self.lines3d.iter().map(|s| s[0].iter().chain(s[1].iter())))?;
+        check_squares_finite(self)?;
         for (i, s) in self.lines2d.iter().enumerate() {
-            if (s[0] - s[1]).norm() <= DEGENERACY_TOLERANCE * (1.0 + s[0].norm()) {
+            if zero_length(&s[0], &s[1]) {
                 return Err(Error::Degenerate {
                     what: format!("lines2d[{i}] is a zero-length segment"),
                 });
             }
         }
         for (i, s) in self.lines3d.iter().enumerate() {
-            if (s[0] - s[1]).norm() <= DEGENERACY_TOLERANCE * (1.0 + s[0].norm()) {
+            if zero_length(&s[0], &s[1]) {
                 return Err(Error::Degenerate {
                     what: format!("lines3d[{i}] is a zero-length segment"),
                 });
@@ -330,6 +355,14 @@ impl Conditioning {
     }
 }
 
+/// `‖a − b‖ ≤ DEGENERACY_TOLERANCE (1 + ‖a‖)`, evaluated on coordinates divided by their largest
+/// magnitude (at least 1) so that endpoints 1e300 apart do not overflow into a zero length.
+fn zero_length<const D: usize>(a: &SVector<f64, D>, b: &SVector<f64, D>) -> bool {
+    let scale = a.amax().max(b.amax()).max(1.0);
+    let (a, b) = (a / scale, b / scale);
+    !((a - b).norm() > DEGENERACY_TOLERANCE * (1.0 / scale + a.norm()))
+}
+
 /// The constraints of the dual-quaternion costs: normalised image points and interpretation-plane
 /// normals. With `points_as_lines`, points are also paired into lines (Figure 2) and appended.
 pub fn constraints(
@@ -361,14 +394,29 @@ pub fn constraints(
         .iter()
         .chain(&extra2d)
         .zip(c.lines3d.iter().chain(&extra3d))
-        .map(|(s2, s3)| {
+        .enumerate()
+        .map(|(i, (s2, s3))| {
+            let short = |kind: &str| short_segment(kind, i, c.lines2d.len());
             Ok(LineConstraint {
-                normal: interpretation_plane_normal(camera, &s2[0], &s2[1])?,
-                object: ObjectLine::from_endpoints(&s3[0], &s3[1])?,
+                normal: interpretation_plane_normal(camera, &s2[0], &s2[1]).map_err(|_| short("2d"))?,
+                object: ObjectLine::from_endpoints(&s3[0], &s3[1]).map_err(|_| short("3d"))?,
             })
         })
         .collect::<Result<_>>()?;
     Ok((points, lines))
+}
+
+/// The error of constraint `i` (a segment, or past `n_lines` a pair of points, Figure 2) whose endpoints
+/// coincide at the scale of the data: [`Correspondences::validate`] has rejected segments of zero
+/// length, so this one is negligible next to the extent of the data (`kind` `"2d"` or `"3d"`).
+fn short_segment(kind: &str, i: usize, n_lines: usize) -> Error {
+    let what = if i < n_lines {
+        format!("lines{kind}[{i}] is shorter than 1e-12 of the extent of the data")
+    } else {
+        let k = 2 * (i - n_lines);
+        format!("points{kind}[{k}] and points{kind}[{}] are closer than 1e-12 of the extent of the data", k + 1)
+    };
+    Error::Degenerate { what }
 }
 
 #[cfg(test)]

@@ -13,6 +13,9 @@ const SYMMETRY_TOLERANCE: f64 = 1e-9;
 /// Smallest accepted ratio of the least to the largest Cholesky pivot (squared: a condition number
 /// of 1e24 is numerically singular in double precision).
 const PIVOT_RATIO: f64 = 1e-12;
+/// Smallest accepted Cholesky pivot, `1/√f64::MAX`: below it `Σ⁻¹` (entries up to `1/pivot²`)
+/// overflows, and the whitened cost with it (`5e-324 I` gave NaN estimates).
+const MIN_PIVOT: f64 = 7.458_340_731_200_208e-155;
 
 /// The whitening factor `L = C⁻¹` of one covariance `Σ = C Cᵀ` (see the module docs).
 ///
@@ -33,6 +36,13 @@ pub fn whitening<const D: usize>(cov: &SMatrix<f64, D, D>, what: &str, index: us
     let (lo, hi) = (pivots.min(), pivots.max());
     if !(lo > PIVOT_RATIO * hi) {
         return Err(not_pd());
+    }
+    if !(lo >= MIN_PIVOT) {
+        return Err(Error::Degenerate {
+            what: format!(
+                "{what}[{index}] is too small to invert in double precision (Cholesky pivot {lo:e} < {MIN_PIVOT:e}: Σ⁻¹ overflows)"
+            ),
+        });
     }
     c.solve_lower_triangular(&SMatrix::<f64, D, D>::identity()).ok_or_else(not_pd)
 }
@@ -81,5 +91,15 @@ mod tests {
         assert!(whitening(&Matrix2::new(1.0, 0.5, 0.0, 1.0), "cov", 0).is_err());
         assert!(matches!(whitening(&Matrix2::new(f64::NAN, 0.0, 0.0, 1.0), "cov", 1), Err(Error::NonFinite { index: 1, .. })));
         assert!(whitening(&Matrix2::new(1.0, 0.0, 0.0, 0.0), "cov", 0).is_err());
+    }
+
+    #[test]
+    fn rejects_a_covariance_whose_inverse_overflows() {
+        assert_eq!(MIN_PIVOT, 1.0 / f64::MAX.sqrt());
+        let tiny = Matrix2::identity() * 5e-324;
+        assert!(matches!(whitening(&tiny, "cov", 2), Err(Error::Degenerate { what }) if what.contains("cov[2] is too small")));
+        let smallest = Matrix2::identity() * (MIN_PIVOT * MIN_PIVOT * 1.01);
+        let l = whitening(&smallest, "cov", 0).unwrap();
+        assert!(l.iter().all(|v| v.is_finite()) && (l.transpose() * l).iter().all(|v| v.is_finite()));
     }
 }

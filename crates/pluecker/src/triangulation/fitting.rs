@@ -10,6 +10,7 @@
 //! identically 0). These functions return the fit and that covariance `J Cov(δ) Jᵀ`.
 
 use super::line_residual::{LineFrame, LINE_FRAME_DISTANCE};
+use super::covariance::whitening;
 use super::quadric_residual::{ConicFrame, Vector5};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{sym3_to_vec, Ellipse};
@@ -69,6 +70,45 @@ fn check_points(points: &[Vector2<f64>], sigma: f64, needed: usize, what: &str) 
     Ok(())
 }
 
+/// True when every point equals the first to within the rounding of their coordinates (4 ulps of
+/// the largest magnitude): no line, let alone a conic, is determined.
+fn coincide(points: &[Vector2<f64>]) -> bool {
+    let largest = points.iter().map(|p| p.amax()).fold(0.0, f64::max);
+    let spread = points.iter().map(|p| (p - points[0]).amax()).fold(0.0, f64::max);
+    !(spread > 4.0 * f64::EPSILON * largest)
+}
+
+/// The total-least-squares line of points that do not [`coincide`]: the centroid, the unit normal,
+/// and the points' centred coordinates divided by `scale` (their largest magnitude), so that squares
+/// of coordinates up to `f64::MAX` neither overflow nor underflow.
+struct PrincipalLine {
+    centroid: Vector2<f64>,
+    normal: Vector2<f64>,
+    scaled: Vec<Vector2<f64>>,
+    scale: f64,
+}
+
+impl PrincipalLine {
+    fn of(points: &[Vector2<f64>]) -> PrincipalLine {
+        let n = points.len() as f64;
+        let largest = points.iter().map(|p| p.amax()).fold(0.0, f64::max);
+        let centroid = points.iter().map(|p| p / largest).sum::<Vector2<f64>>() / n * largest;
+        let centred: Vec<Vector2<f64>> = points.iter().map(|p| p - centroid).collect();
+        let scale = centred.iter().map(|d| d.amax()).fold(0.0, f64::max);
+        let scaled: Vec<Vector2<f64>> = centred.iter().map(|d| d / scale).collect();
+        let scatter = scaled.iter().fold(Matrix2::zeros(), |acc, d| acc + d * d.transpose());
+        let eig = scatter.symmetric_eigen();
+        let minor = if eig.eigenvalues[0] >= eig.eigenvalues[1] { 1 } else { 0 };
+        PrincipalLine { centroid, normal: eig.eigenvectors.column(minor).into_owned(), scaled, scale }
+    }
+
+    /// `Σ (n·(pₖ − m))² / σ²`: the χ² of the points' distances from the line for noise `sigma`.
+    fn chi_square(&self, sigma: f64) -> f64 {
+        let ratio = self.scale / sigma;
+        self.scaled.iter().map(|d| (self.normal.dot(d) * ratio).powi(2)).sum()
+    }
+}
+
 /// Total least squares line through `points` (pixels) and the covariance of its residual for
 /// i.i.d. isotropic Gaussian noise of `sigma` px per coordinate.
 ///
@@ -76,29 +116,21 @@ fn check_points(points: &[Vector2<f64>], sigma: f64, needed: usize, what: &str) 
 /// turns by `δθ` (variance `σ²/S`, `S = Σ sₖ²` with `sₖ` the positions along the line, uncorrelated
 /// with `δρ` since `Σ sₖ = 0`). With the frame fixed, the residual is `D δθ n⊥ + (δρ + a δθ) n`,
 /// `a = n⊥·m` (the position of the centroid along the line from the foot point), hence in the basis
-/// `(n⊥, n)`: `Σ = σ² [[D²/S, D a/S], [D a/S, 1/N + a²/S]]`.
+/// `(n⊥, n)`: `Σ = σ² [[D²/S, D a/S], [D a/S, 1/N + a²/S]]`, computed as `σ² Σ₁` with the ratios
+/// `D/√S`, `a/√S` (no square of a coordinate is formed).
 ///
-/// Errors: fewer than 2 points, non-finite values, `sigma ≤ 0`, or all points coincident.
+/// Errors: fewer than 2 points, non-finite values, `sigma ≤ 0`, all points coincident (to the
+/// rounding of their coordinates), or a `σ` for which `σ² Σ₁` overflows or underflows
+/// ([`Error::InvalidOption`] naming `sigma`, see [`scaled_covariance`]).
 pub fn fit_line(points: &[Vector2<f64>], sigma: f64) -> Result<FittedLine> {
     check_points(points, sigma, 2, "fit_line")?;
-    let n_points = points.len() as f64;
-    let centroid = points.iter().sum::<Vector2<f64>>() / n_points;
-    let scatter = points.iter().fold(Matrix2::zeros(), |acc, p| {
-        acc + (p - centroid) * (p - centroid).transpose()
-    });
-    let eig = scatter.symmetric_eigen();
-    let (major, minor) = if eig.eigenvalues[0] >= eig.eigenvalues[1] {
-        (0, 1)
-    } else {
-        (1, 0)
-    };
-    let spread = eig.eigenvalues[major];
-    if !(spread > 1e-18 * (1.0 + centroid.norm_squared())) {
+    if coincide(points) {
         return Err(Error::Degenerate {
             what: "fit_line: all points coincide".into(),
         });
     }
-    let normal: Vector2<f64> = eig.eigenvectors.column(minor).into_owned();
+    let fit = PrincipalLine::of(points);
+    let (centroid, normal) = (fit.centroid, fit.normal);
     let frame = LineFrame::of_line(&Vector3::new(normal.x, normal.y, -normal.dot(&centroid))).ok_or_else(|| {
         Error::Degenerate {
             what: "fit_line: no line".into(),
@@ -106,30 +138,60 @@ pub fn fit_line(points: &[Vector2<f64>], sigma: f64) -> Result<FittedLine> {
     })?;
     let n = frame.normal;
     let n_perp = Vector2::new(-n.y, n.x);
-    let s: f64 = points.iter().map(|p| n_perp.dot(&(p - centroid)).powi(2)).sum();
-    let a = n_perp.dot(&centroid);
-    let d = LINE_FRAME_DISTANCE;
-    let sigma2 = sigma * sigma;
-    let in_basis = Matrix2::new(d * d / s, d * a / s, d * a / s, 1.0 / n_points + a * a / s) * sigma2;
+    // √S = scale · √(Σ (n⊥·dₖ)²) over the scaled centred points dₖ.
+    let root_s = fit.scale * fit.scaled.iter().map(|d| n_perp.dot(d).powi(2)).sum::<f64>().sqrt();
+    let (d, a) = (LINE_FRAME_DISTANCE / root_s, n_perp.dot(&centroid) / root_s);
+    let unit = Matrix2::new(d * d, d * a, d * a, 1.0 / points.len() as f64 + a * a);
     let basis = Matrix2::from_columns(&[n_perp, n]);
-    let rms = (points.iter().map(|p| n.dot(&(p - centroid)).powi(2)).sum::<f64>() / n_points).sqrt();
+    let unit = basis * unit * basis.transpose();
+    let rms = fit.scale * (fit.chi_square(fit.scale) / points.len() as f64).sqrt();
     Ok(FittedLine {
         line: frame.line(),
-        covariance: basis * in_basis * basis.transpose(),
+        covariance: scaled_covariance(&unit, sigma)?,
         rms_distance: rms,
     })
+}
+
+/// `σ² Σ₁` for the covariance `Σ₁` of unit noise, or [`Error::InvalidOption`] naming `sigma` when
+/// `σ² Σ₁` overflows, or underflows where `Σ₁` is a usable covariance (see [`whitening`]) and `σ² Σ₁`
+/// is not. A `Σ₁` that is itself numerically singular (points far closer together than their
+/// distance from the origin) is returned scaled: it is the data's, not `σ`'s.
+fn scaled_covariance<const D: usize>(unit: &SMatrix<f64, D, D>, sigma: f64) -> Result<SMatrix<f64, D, D>> {
+    let unit = 0.5 * (unit + unit.transpose());
+    let scaled = unit * (sigma * sigma);
+    let finite = scaled.iter().all(|v| v.is_finite());
+    if !finite || (whitening(&unit, "covariance", 0).is_ok() && whitening(&scaled, "covariance", 0).is_err()) {
+        let flow = if finite { "underflows" } else { "overflows" };
+        return Err(Error::InvalidOption {
+            name: "sigma".into(),
+            reason: format!("σ = {sigma:e} px: the covariance σ² Σ {flow} double precision"),
+        });
+    }
+    Ok(scaled)
 }
 
 /// The line through an image segment `a`–`b` (pixels) whose endpoints have i.i.d. Gaussian noise of
 /// `sigma` px per coordinate: [`fit_line`] on the two endpoints (the paper's real-data setting when
 /// only segments are known).
 pub fn line_from_segment(a: &Vector2<f64>, b: &Vector2<f64>, sigma: f64) -> Result<FittedLine> {
-    fit_line(&[*a, *b], sigma).map_err(|e| match e {
-        Error::Degenerate { .. } => Error::Degenerate {
+    if coincide(&[*a, *b]) {
+        return Err(Error::Degenerate {
             what: "line_from_segment: zero-length segment".into(),
-        },
-        other => other,
-    })
+        });
+    }
+    fit_line(&[*a, *b], sigma)
+}
+
+/// The standard normal quantile of 0.999.
+const Z_999: f64 = 3.090_232_306_167_813_5;
+
+/// The `p` quantile of χ² with `k` degrees of freedom, `z` the standard normal quantile of `p`
+/// (Wilson & Hilferty 1931: `(χ²/k)^⅓` is nearly normal with mean `1 − 2/(9k)` and variance `2/(9k)`;
+/// within 1 % of the exact quantile at 0.999 for `k ≥ 3`).
+fn chi_square_quantile(k: usize, z: f64) -> f64 {
+    let k = k.max(1) as f64;
+    let v = 2.0 / (9.0 * k);
+    k * (1.0 - v + z * v.sqrt()).powi(3)
 }
 
 /// Monomials `(x², xy, y², x, y, 1)` of the conic `θᵀ m(x) = 0`.
@@ -170,14 +232,25 @@ fn least_eigenvector(m: &SMatrix<f64, 6, 6>) -> Vector6<f64> {
 /// Errors: fewer than 5 points, non-finite values, `sigma ≤ 0`, or points that no real ellipse fits.
 pub fn fit_conic(points: &[Vector2<f64>], sigma: f64) -> Result<FittedConic> {
     check_points(points, sigma, 5, "fit_conic")?;
-    let n = points.len() as f64;
-    let centroid = points.iter().sum::<Vector2<f64>>() / n;
-    let rms = (points.iter().map(|p| (p - centroid).norm_squared()).sum::<f64>() / n).sqrt();
-    if !(rms > 0.0) {
+    if coincide(points) {
         return Err(Error::Degenerate {
             what: "fit_conic: all points coincide".into(),
         });
     }
+    let line = PrincipalLine::of(points);
+    let (chi2, dof) = (line.chi_square(sigma), points.len() - 2);
+    let bound = chi_square_quantile(dof, Z_999);
+    if !(chi2 > bound) {
+        return Err(Error::Degenerate {
+            what: format!(
+                "fit_conic: the points lie on a line to within the noise σ = {sigma:e} px (Σ d²/σ² = {chi2:.3e} \
+                 ≤ {bound:.1}, the 99.9 % quantile of χ² with {dof} degrees of freedom): no ellipse is determined"
+            ),
+        });
+    }
+    let n = points.len() as f64;
+    let centroid = line.centroid;
+    let rms = line.scale * (line.scaled.iter().map(|d| d.norm_squared()).sum::<f64>() / n).sqrt();
     let scale = std::f64::consts::SQRT_2 / rms;
     let normalized: Vec<Vector2<f64>> = points.iter().map(|p| (p - centroid) * scale).collect();
     let design: Vec<Vector6<f64>> = normalized.iter().map(monomials).collect();

@@ -22,7 +22,7 @@
 //! never reported for lines.
 
 use super::conditioning::{check_views, Similarity};
-use super::covariance::whitenings;
+use super::covariance::{whitening, whitenings};
 use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::line_optimal::optimal_line;
@@ -212,11 +212,18 @@ pub fn lines_from_segments(
             });
         }
         let fit = line_from_segment(&s[0], &s[1], sigma).map_err(|e| match e {
-            Error::Degenerate { .. } => Error::Degenerate {
+            Error::Degenerate { what } if what.contains("zero-length") => Error::Degenerate {
                 what: format!("segments[{i}] has zero length"),
             },
             other => other,
         })?;
+        if whitening(&fit.covariance, "segments", i).is_err() {
+            return Err(Error::Degenerate {
+                what: format!(
+                    "segments[{i}]: the covariance of its line is numerically singular (a segment far shorter than its distance from the image origin)"
+                ),
+            });
+        }
         lines.push(fit.line);
         covariances.push(fit.covariance);
     }

@@ -1,0 +1,152 @@
+"""Every command-line failure prints one line on standard error and exits 2, never a traceback or a
+numpy warning (docs/cli.md, issue 10 §5): hostile JSON for ``pose`` and corrupted VGG folders for
+``triangulate``."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import warnings
+
+import pytest
+
+import pluecker
+from pluecker.cli import main
+from pluecker.datasets import vgg_root
+
+HOUSE = vgg_root() / "model_house"
+
+
+def pose_document() -> dict:
+    scene = pluecker.random_scene("general", 8, 2, seed=3)
+    cam = scene["camera"]
+    return {"camera": {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy},
+            "points2d": scene["points2d"].tolist(), "points3d": scene["points3d"].tolist()}
+
+
+def assert_one_line_exit_2(argv, capsys, command: str, *words: str) -> str:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a numpy RuntimeWarning would fail the run
+        status = main(argv)
+    captured = capsys.readouterr()
+    assert status == 2, captured
+    assert captured.out == ""
+    assert captured.err.startswith(f"pluecker {command}: error: "), captured.err
+    assert captured.err.count("\n") == 1 and "Traceback" not in captured.err, captured.err
+    for word in words:
+        assert word in captured.err, captured.err
+    return captured.err
+
+
+# --- pose --------------------------------------------------------------------------------------------
+
+
+def test_deeply_nested_json(tmp_path, capsys):
+    """``[[[[...]]]]`` 100000 deep raised RecursionError with a traceback."""
+    path = tmp_path / "deep.json"
+    path.write_text("[" * 100_000 + "]" * 100_000)
+    assert_one_line_exit_2(["pose", str(path)], capsys, "pose", "nested")
+    doc = pose_document()
+    doc["points2d"] = json.loads("[" * 50 + "]" * 50)
+    text = json.dumps(doc).replace('[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]]',
+                                   "[" * 100_000 + "]" * 100_000)
+    path.write_text(text)
+    assert_one_line_exit_2(["pose", str(path)], capsys, "pose")
+
+
+@pytest.mark.parametrize("where", ["option", "camera", "points2d", "initial_pose"])
+def test_a_400_digit_integer(tmp_path, capsys, where):
+    """A 400-digit integer raised OverflowError with a traceback."""
+    doc = pose_document()
+    big = 10**400
+    if where == "option":
+        doc["options"] = {"max_iterations": big}
+    elif where == "camera":
+        doc["camera"]["fx"] = big
+    elif where == "points2d":
+        doc["points2d"][0][0] = big
+    else:
+        doc["options"] = {"initial_pose": {"R": [[big, 0, 0], [0, 1, 0], [0, 0, 1]], "t": [0, 0, 0]}}
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(doc))
+    assert_one_line_exit_2(["pose", str(path)], capsys, "pose")
+
+
+def test_an_integer_beyond_the_json_digit_limit(tmp_path, capsys):
+    """Python refuses to parse integers of more than 4300 digits (ValueError, not JSONDecodeError)."""
+    doc = pose_document()
+    text = json.dumps(doc).replace('"points2d": [[', '"points2d": [[' + "9" * 5000 + ", ", 1)
+    path = tmp_path / "huge.json"
+    path.write_text(text)
+    assert_one_line_exit_2(["pose", str(path)], capsys, "pose")
+
+
+# --- triangulate ---------------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def house_copy(tmp_path):
+    """Views 0-2 of Model House with their tracks, in a folder the test may corrupt."""
+    folder = tmp_path / "house"
+    folder.mkdir()
+    for k in range(3):
+        for ext in ("P", "corners", "lines"):
+            shutil.copy(HOUSE / f"house.00{k}.{ext}", folder)
+    for name in ("p3d", "l3d"):
+        shutil.copy(HOUSE / f"house.{name}", folder)
+    for name in ("nview-corners", "nview-lines"):
+        rows = [r.split()[:3] for r in (HOUSE / f"house.{name}").read_text().splitlines() if r.strip()]
+        (folder / f"house.{name}").write_text("\n".join(" ".join(r) for r in rows) + "\n")
+    return folder
+
+
+def test_the_house_copy_triangulates(house_copy, tmp_path, capsys):
+    assert main(["triangulate", str(house_copy), "--out", str(tmp_path / "out")]) == 0
+
+
+def test_a_track_index_beyond_the_corners(house_copy, tmp_path, capsys):
+    """A track pointing past the last row of a ``.corners`` file raised IndexError."""
+    n = len((house_copy / "house.001.corners").read_text().split("\n")) + 5
+    tracks = house_copy / "house.nview-corners"
+    tracks.write_text(tracks.read_text() + f"0 {n} *\n")
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
+                           "house.nview-corners", "house.001.corners", str(n))
+
+
+def test_a_track_index_beyond_the_lines(house_copy, tmp_path, capsys):
+    tracks = house_copy / "house.nview-lines"
+    tracks.write_text(tracks.read_text() + "* 100000 0\n")
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--lines", "--out", str(tmp_path / "o")], capsys,
+                           "triangulate", "house.nview-lines", "house.001.lines")
+
+
+def test_an_empty_corners_file(house_copy, tmp_path, capsys):
+    """An empty ``.corners`` file that the tracks refer to raised IndexError."""
+    (house_copy / "house.002.corners").write_text("")
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
+                           "house.002.corners")
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-inf"])
+def test_a_non_finite_camera_names_the_file(house_copy, tmp_path, capsys, value):
+    """A NaN in a ``.P`` file printed a numpy RuntimeWarning, and the message did not name the file."""
+    path = house_copy / "house.001.P"
+    rows = path.read_text().split("\n")
+    rows[1] = f"{value} " + " ".join(rows[1].split()[1:])
+    path.write_text("\n".join(rows))
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
+                           "house.001.P", "line 2")
+
+
+def test_a_non_numeric_entry_names_the_file(house_copy, tmp_path, capsys):
+    path = house_copy / "house.000.corners"
+    path.write_text("12.5 abc\n" + path.read_text())
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
+                           "house.000.corners")
+
+
+def test_a_negative_track_index(house_copy, tmp_path, capsys):
+    tracks = house_copy / "house.nview-corners"
+    tracks.write_text(tracks.read_text() + "0 -3 1\n")
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
+                           "house.nview-corners", "-3")
