@@ -100,6 +100,8 @@ pub struct RobustArgs {
     pub time_budget: Option<f64>,
     pub seed: i64,
     pub min_inliers: i64,
+    pub min_inlier_ratio: f64,
+    pub sprt: bool,
 }
 
 impl RobustArgs {
@@ -124,6 +126,8 @@ impl RobustArgs {
             time_budget: budget,
             seed: self.seed as u64,
             min_inliers: self.min_inliers as usize,
+            min_inlier_ratio: self.min_inlier_ratio,
+            sprt: self.sprt,
             ..RansacOptions::default()
         };
         opts.validate().map_err(crate::errors::to_py_err)?;
@@ -139,7 +143,7 @@ impl RobustArgs {
     penalty = 50.0, normalize = true, refine = true, initial_pose = None, max_iterations = 200,
     refine_max_iterations = 50, robust = false, point_threshold = 4.0, line_threshold = 4.0,
     confidence = 0.9999, max_ransac_iterations = 100_000, time_budget = None, seed = 0, min_inliers = 6,
-    sigma_px = None, certify = false, certify_gap = 1e-3, ambiguity_threshold = 9.0
+    min_inlier_ratio = 0.1, sprt = true, sigma_px = None, certify = false, certify_gap = 1e-3, ambiguity_threshold = 9.0
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
@@ -164,6 +168,8 @@ pub fn estimate_pose(
     time_budget: Option<f64>,
     seed: i64,
     min_inliers: i64,
+    min_inlier_ratio: f64,
+    sprt: bool,
     sigma_px: Option<f64>,
     certify: bool,
     certify_gap: f64,
@@ -188,6 +194,8 @@ pub fn estimate_pose(
         time_budget,
         seed,
         min_inliers,
+        min_inlier_ratio,
+        sprt,
     }
     .options()?;
     opts.sigma_px = sigma_px;

@@ -11,13 +11,21 @@
 //!
 //! The MSAC score (Torr & Zisserman 2000) of a pose is `½ Σᵢ min(eᵢ², τᵢ²)`, with `τᵢ` the point or the
 //! line threshold: the reprojection cost with each residual capped at its threshold. Lower is better.
+//!
+//! The points and the lines are stored in a random order drawn once per call (the *slots*), and each
+//! hypothesis is verified from a random slot onwards, wrapping around: the correspondences verified
+//! first are a random subset, as the sequential test of [`super::sprt`] assumes, and not the same
+//! subset for every hypothesis (a good model whose first few slots happen to be outliers would
+//! otherwise be rejected every time).
 
 use super::super::candidates::feature;
 use super::super::correspondences::Correspondences;
 use super::super::minimal::Feature;
 use super::super::reprojection::Pose;
+use super::sprt::SprtTest;
 use crate::camera::Camera;
 use crate::error::Result;
+use crate::rng::Rng;
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Points per batch of the scoring loop.
@@ -46,7 +54,76 @@ struct ScoredLine {
     endpoints: [Vector3<f64>; 2],
 }
 
-/// Correspondences prepared once: the scorer's arrays and the minimal solvers' features.
+/// A random order of `n` items: `index[slot]` is the item in a slot, `slot[item]` its inverse.
+#[derive(Debug, Clone)]
+struct Order {
+    index: Vec<usize>,
+    slot: Vec<usize>,
+}
+
+impl Order {
+    /// A uniformly random permutation (Fisher-Yates).
+    fn random(n: usize, rng: &mut Rng) -> Order {
+        let mut index: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            index.swap(i, rng.below(i + 1));
+        }
+        let mut slot = vec![0; n];
+        for (s, &i) in index.iter().enumerate() {
+            slot[i] = s;
+        }
+        Order { index, slot }
+    }
+
+    /// One value per slot, returned in item order.
+    fn to_items(&self, in_slots: Vec<bool>) -> Vec<bool> {
+        let mut out = vec![false; in_slots.len()];
+        for (s, v) in in_slots.into_iter().enumerate() {
+            out[self.index[s]] = v;
+        }
+        out
+    }
+}
+
+/// The outcome of scoring one hypothesis ([`Prepared::evaluate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Verdict {
+    /// Every error evaluated: the MSAC score.
+    Score(f64),
+    /// The partial score exceeded the bound: the hypothesis cannot beat the best model.
+    Beaten,
+    /// Rejected by the sequential test after `evaluated` correspondences per kind (points, lines; the
+    /// sample's own excluded), `consistent` of them within threshold.
+    Rejected {
+        evaluated: [usize; 2],
+        consistent: [usize; 2],
+    },
+}
+
+/// The sample's correspondences in the verification order of one hypothesis, to leave them out of
+/// the sequential test: per entry the kind (0 points, 1 lines), the rank from the start slot, and
+/// whether it is consistent.
+struct SampleRanks {
+    ranks: [(usize, usize, bool); 3],
+}
+
+impl SampleRanks {
+    /// `(evaluated, consistent)` sample correspondences of `kind` among the first `done` verified.
+    #[inline(always)]
+    fn among(&self, kind: usize, done: usize) -> (usize, usize) {
+        let mut out = (0, 0);
+        for &(k, rank, consistent) in &self.ranks {
+            if k == kind && rank < done {
+                out.0 += 1;
+                out.1 += consistent as usize;
+            }
+        }
+        out
+    }
+}
+
+/// Correspondences prepared once: the scorer's arrays (in slot order) and the minimal solvers'
+/// features (in the order given).
 #[derive(Debug, Clone)]
 pub(crate) struct Prepared {
     camera: Camera,
@@ -54,40 +131,60 @@ pub(crate) struct Prepared {
     k_inv_t: Matrix3<f64>,
     points: Vec<ScoredPoint>,
     lines: Vec<ScoredLine>,
-    /// Features for [`super::super::minimal::solve`]: points first, then lines.
+    point_order: Order,
+    line_order: Order,
+    /// `[u₀, v₀, u₁, v₁]`: the bounding box of the observed pixels (points and segment endpoints).
+    pub window: [f64; 4],
+    /// Features for [`super::super::minimal::solve`]: points first, then lines, in the order given.
     pub features: Vec<Feature>,
 }
 
 impl Prepared {
-    /// Prepares `corr` (already validated: finite, no zero-length segment).
-    pub fn new(camera: &Camera, corr: &Correspondences) -> Result<Prepared> {
+    /// Prepares `corr` (already validated: finite, no zero-length segment), drawing the slot order
+    /// from `rng`.
+    pub fn new(camera: &Camera, corr: &Correspondences, rng: &mut Rng) -> Result<Prepared> {
         let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
-        let points = corr
-            .points2d
+        let point_order = Order::random(corr.n_points(), rng);
+        let line_order = Order::random(corr.n_lines(), rng);
+        let points = point_order
+            .index
             .iter()
-            .zip(&corr.points3d)
-            .map(|(u, x)| ScoredPoint {
-                object: [x.x, x.y, x.z],
-                pixel: [u.x, u.y],
+            .map(|&i| {
+                let (u, x) = (corr.points2d[i], corr.points3d[i]);
+                ScoredPoint {
+                    object: [x.x, x.y, x.z],
+                    pixel: [u.x, u.y],
+                }
             })
             .collect();
-        let lines = corr
-            .lines2d
+        let lines = line_order
+            .index
             .iter()
-            .zip(&corr.lines3d)
-            .map(|(s2, s3)| ScoredLine {
-                object: *s3,
-                endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
+            .map(|&i| ScoredLine {
+                object: corr.lines3d[i],
+                endpoints: corr.lines2d[i].map(|e| Vector3::new(e.x, e.y, 1.0)),
             })
             .collect();
         let features = (0..corr.n_points() + corr.n_lines())
             .map(|k| feature(camera, &k_inv, corr, k))
             .collect::<Result<Vec<Feature>>>()?;
+        let mut window = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        for u in corr.points2d.iter().chain(corr.lines2d.iter().flatten()) {
+            window = [
+                window[0].min(u.x),
+                window[1].min(u.y),
+                window[2].max(u.x),
+                window[3].max(u.y),
+            ];
+        }
         Ok(Prepared {
             camera: *camera,
             k_inv_t: k_inv.transpose(),
             points,
             lines,
+            point_order,
+            line_order,
+            window,
             features,
         })
     }
@@ -100,7 +197,7 @@ impl Prepared {
         self.lines.len()
     }
 
-    /// Squared pixel error of point `i` at `pose` (infinite behind the camera).
+    /// Squared pixel error of the point in slot `i` at `pose` (infinite behind the camera).
     #[inline(always)]
     fn point_error2(&self, pose: &Pose, i: usize) -> f64 {
         let (r, t, c) = (&pose.0, &pose.1, &self.camera);
@@ -119,8 +216,8 @@ impl Prepared {
         }
     }
 
-    /// Mean squared distance of line `i`'s observed endpoints to its projected line (infinite when an
-    /// object endpoint is behind the camera or the line projects to a point).
+    /// Mean squared distance of the observed endpoints of the line in slot `i` to its projected line
+    /// (infinite when an object endpoint is behind the camera or the line projects to a point).
     #[inline(always)]
     fn line_error2(&self, pose: &Pose, i: usize) -> f64 {
         let line = &self.lines[i];
@@ -138,42 +235,112 @@ impl Prepared {
         0.5 * (d1 * d1 + d2 * d2) / scale2
     }
 
+    /// Squared error of feature `k` (points first, then lines, in the order given).
+    fn feature_error2(&self, pose: &Pose, k: usize) -> f64 {
+        if k < self.points.len() {
+            self.point_error2(pose, self.point_order.slot[k])
+        } else {
+            self.line_error2(pose, self.line_order.slot[k - self.points.len()])
+        }
+    }
+
     /// Squared error of feature `k` (points first, then lines).
     #[cfg(test)]
     pub fn error2(&self, pose: &Pose, k: usize) -> f64 {
-        if k < self.points.len() {
-            self.point_error2(pose, k)
-        } else {
-            self.line_error2(pose, k - self.points.len())
-        }
+        self.feature_error2(pose, k)
     }
 
     /// The MSAC score `½ Σ min(eᵢ², τᵢ²)` of `pose`, or `None` as soon as the partial sum exceeds
     /// `bound` (the hypothesis cannot beat a model of score `bound`).
     pub fn score(&self, pose: &Pose, tau: &Thresholds, bound: f64) -> Option<f64> {
+        match self.evaluate(pose, tau, bound, None, None, [0, 0]).0 {
+            Verdict::Score(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// Scores `pose`, verifying the points and then the lines each from its `start` slot onwards
+    /// (wrapping around), with two early exits checked after every batch of points and every line:
+    /// [`Verdict::Beaten`] as soon as the partial MSAC sum exceeds `bound`, and with a `test`,
+    /// [`Verdict::Rejected`] as soon as its `ln λ` exceeds `ln A` (the correspondences of `sample`, the
+    /// hypothesis's own, are left out of `λ`). Also returns the number of errors evaluated.
+    pub fn evaluate(
+        &self,
+        pose: &Pose,
+        tau: &Thresholds,
+        bound: f64,
+        test: Option<&SprtTest>,
+        sample: Option<&[usize; 3]>,
+        start: [usize; 2],
+    ) -> (Verdict, usize) {
+        let (np, nl) = (self.points.len(), self.lines.len());
+        let start = [
+            if np > 0 { start[0] % np } else { 0 },
+            if nl > 0 { start[1] % nl } else { 0 },
+        ];
+        let skip = SampleRanks {
+            ranks: match sample {
+                None => [(2, 0, false); 3],
+                Some(sample) => sample.map(|k| {
+                    let consistent = self.feature_error2(pose, k) <= if k < np { tau.point2 } else { tau.line2 };
+                    if k < np {
+                        (0, (self.point_order.slot[k] + np - start[0]) % np, consistent)
+                    } else {
+                        let slot = self.line_order.slot[k - np];
+                        (1, (slot + nl - start[1]) % nl, consistent)
+                    }
+                }),
+            },
+        };
         // Compare doubled sums with 2·bound: one multiplication for the whole call.
         let limit = 2.0 * bound;
         let mut sum = 0.0;
+        let (mut done, mut consistent) = ([0usize; 2], [0usize; 2]);
+        // The decision after `done` / `consistent` so far.
+        let decide = |sum: f64, done: [usize; 2], consistent: [usize; 2]| -> Option<Verdict> {
+            if sum > limit {
+                return Some(Verdict::Beaten);
+            }
+            let test = test?;
+            let (sp, cp) = skip.among(0, done[0]);
+            let (sl, cl) = skip.among(1, done[1]);
+            let evaluated = [done[0] - sp, done[1] - sl];
+            let consistent = [consistent[0] - cp, consistent[1] - cl];
+            (test.log_lambda(evaluated, consistent) > test.log_a).then_some(Verdict::Rejected { evaluated, consistent })
+        };
         // Points in batches of LANES without branches inside (the compiler vectorises them), the
-        // early exit tested once per batch.
-        let full = self.points.len() - self.points.len() % LANES;
-        for i0 in (0..full).step_by(LANES) {
-            let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, i0 + l));
-            sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
-            if sum > limit {
-                return None;
+        // early exits tested once per batch; the slots from start[0] to the end, then from 0.
+        for (from, to) in [(start[0], np), (0, start[0])] {
+            let full = to - (to - from) % LANES;
+            for i0 in (from..full).step_by(LANES) {
+                let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, i0 + l));
+                sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
+                consistent[0] += e2.iter().filter(|&&e| e <= tau.point2).count();
+                done[0] += LANES;
+                if let Some(v) = decide(sum, done, consistent) {
+                    return (v, done[0]);
+                }
+            }
+            for i in full..to {
+                let e2 = self.point_error2(pose, i);
+                sum += e2.min(tau.point2);
+                consistent[0] += (e2 <= tau.point2) as usize;
+                done[0] += 1;
             }
         }
-        for i in full..self.points.len() {
-            sum += self.point_error2(pose, i).min(tau.point2);
-        }
-        for i in 0..self.lines.len() {
-            sum += self.line_error2(pose, i).min(tau.line2);
-            if sum > limit {
-                return None;
+        for i in (start[1]..nl).chain(0..start[1]) {
+            let e2 = self.line_error2(pose, i);
+            sum += e2.min(tau.line2);
+            consistent[1] += (e2 <= tau.line2) as usize;
+            done[1] += 1;
+            if let Some(v) = decide(sum, done, consistent) {
+                return (v, done[0] + done[1]);
             }
         }
-        Some(0.5 * sum)
+        if sum > limit {
+            return (Verdict::Beaten, np + nl);
+        }
+        (Verdict::Score(0.5 * sum), np + nl)
     }
 
     /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`.
@@ -181,7 +348,7 @@ impl Prepared {
         0.5 * (self.points.len() as f64 * tau.point2 + self.lines.len() as f64 * tau.line2)
     }
 
-    /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines).
+    /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).
     pub fn inliers(&self, pose: &Pose, tau: &Thresholds) -> (Vec<bool>, Vec<bool>) {
         let points = (0..self.points.len())
             .map(|i| self.point_error2(pose, i) <= tau.point2)
@@ -189,7 +356,7 @@ impl Prepared {
         let lines = (0..self.lines.len())
             .map(|i| self.line_error2(pose, i) <= tau.line2)
             .collect();
-        (points, lines)
+        (self.point_order.to_items(points), self.line_order.to_items(lines))
     }
 
     /// True when every object point of the sample's features is in front of the camera at `pose`
@@ -198,10 +365,11 @@ impl Prepared {
         let depth = |x: &Vector3<f64>| pose.0.row(2).transpose().dot(x) + pose.1.z;
         sample.iter().all(|&k| {
             if k < self.points.len() {
-                let [x, y, z] = self.points[k].object;
+                let [x, y, z] = self.points[self.point_order.slot[k]].object;
                 depth(&Vector3::new(x, y, z)) > 0.0
             } else {
-                self.lines[k - self.points.len()].object.iter().all(|x| depth(x) > 0.0)
+                let slot = self.line_order.slot[k - self.points.len()];
+                self.lines[slot].object.iter().all(|x| depth(x) > 0.0)
             }
         })
     }
@@ -231,7 +399,7 @@ mod tests {
     fn errors_match_the_reprojection_cost_and_the_score_caps_them() {
         let scene = random_scene(SceneKind::General, 20, 8, 3);
         let corr = scene.noisy(2.0, true, &mut Rng::new(4));
-        let prepared = Prepared::new(&scene.camera, &corr).unwrap();
+        let prepared = Prepared::new(&scene.camera, &corr, &mut Rng::new(5)).unwrap();
         let pose = (scene.rotation, scene.translation);
         let reference = ReprojectionCost::of(&scene.camera, &corr).errors(&pose);
         for (k, e) in reference.iter().enumerate() {
