@@ -217,23 +217,15 @@ pub(crate) fn chance_probabilities(window: [f64; 4], point_threshold: f64, line_
     [p, l].map(|x| if x.is_finite() { x.clamp(0.0, 1.0) } else { 1.0 })
 }
 
-/// The most inliers that chance plausibly gives a wrong model: `3 + k − 1`, with `k` the smallest count
-/// such that `P(X ≥ k) ≤ ψ / M` for `X ~ Binomial(m, p)` (the chance inliers among the `m`
-/// correspondences outside the sample, see the module documentation). `models` is `M`, the number
-/// of hypotheses the best was chosen from (Bonferroni), `psi` the probability that the best of them
-/// has more. The tail is summed exactly (in log space) up to `m p + 40 σ + 60`, beyond which it is
-/// below 1e-300. Returns `3 + m` when no `k ≤ m` qualifies (`p` near 1).
-pub(crate) fn chance_inliers(m: usize, p: f64, models: usize, psi: f64) -> usize {
-    if p <= 0.0 {
-        return 3; // no chance agreement: k = 1
+/// The mass function of `Binomial(m, p)` on `0..=end`, scaled so that its largest entry is 1, with
+/// the log of the scale; `end = min(m, m p + 40 σ + 60)`, beyond which the mass is below 1e-300.
+fn scaled_binomial(m: usize, p: f64) -> (Vec<f64>, f64) {
+    if m == 0 || p <= 0.0 {
+        return (vec![1.0], 0.0);
     }
-    if p >= 1.0 {
-        return 3 + m;
-    }
-    let log_alpha = psi.ln() - (models.max(1) as f64).ln();
     let mf = m as f64;
     let end = ((mf * p + 40.0 * (mf * p * (1.0 - p)).sqrt() + 60.0).ceil() as usize).min(m);
-    // ln P(X = j) for j = 0..=end, by the ratio of consecutive terms.
+    // ln P(X = j) by the ratio of consecutive terms.
     let ratio = (p / (1.0 - p)).ln();
     let mut log_pmf = Vec::with_capacity(end + 1);
     let mut lp = mf * (-p).ln_1p();
@@ -241,23 +233,43 @@ pub(crate) fn chance_inliers(m: usize, p: f64, models: usize, psi: f64) -> usize
         log_pmf.push(lp);
         lp += ((m - j) as f64 / (j + 1) as f64).ln() + ratio;
     }
+    let top = log_pmf.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    (log_pmf.iter().map(|l| (l - top).exp()).collect(), top)
+}
+
+/// The most inliers that chance plausibly gives a wrong model: `3 + k − 1`, with `k` the smallest count
+/// such that `P(X ≥ k) ≤ ψ / M` for `X = X_p + X_l`, `X_p ~ Binomial(m_p, p_p)` and
+/// `X_l ~ Binomial(m_l, p_l)` the chance inliers among the points and the lines (see the module
+/// documentation; `m_p`, `m_l` are the counts of each kind, the sample's 3 counted too, a bound).
+/// `models` is `M`, the number of hypotheses the best was chosen from (Bonferroni), `psi` the
+/// probability that the best of them has more. The tail is exact (the two mass functions convolved)
+/// up to the 1e-300 truncation of each. Returns `3 + m_p + m_l` when no count qualifies (`p` near 1).
+pub(crate) fn chance_inliers(counts: [usize; 2], p: [f64; 2], models: usize, psi: f64) -> usize {
+    let all = counts[0] + counts[1];
+    if (0..2).any(|k| counts[k] > 0 && p[k] >= 1.0) {
+        return 3 + all;
+    }
+    let log_alpha = psi.ln() - (models.max(1) as f64).ln();
+    let (points, log_scale_p) = scaled_binomial(counts[0], p[0]);
+    let (lines, log_scale_l) = scaled_binomial(counts[1], p[1]);
+    let mut pmf = vec![0.0; points.len() + lines.len() - 1];
+    for (i, a) in points.iter().enumerate() {
+        for (j, b) in lines.iter().enumerate() {
+            pmf[i + j] += a * b;
+        }
+    }
     // Tails from the top: k is the smallest count whose tail is at most α.
-    let mut log_tail = f64::NEG_INFINITY;
-    let mut k = end + 1;
-    for j in (0..=end).rev() {
-        let (hi, lo) = if log_tail > log_pmf[j] {
-            (log_tail, log_pmf[j])
-        } else {
-            (log_pmf[j], log_tail)
-        };
-        log_tail = hi + (lo - hi).exp().ln_1p();
-        if log_tail > log_alpha {
+    let log_scale = log_scale_p + log_scale_l;
+    let (mut tail, mut k) = (0.0, pmf.len());
+    for j in (0..pmf.len()).rev() {
+        tail += pmf[j];
+        if tail.ln() + log_scale > log_alpha {
             break;
         }
         k = j;
     }
-    if k > m {
-        3 + m
+    if k > all {
+        3 + all
     } else {
         2 + k
     }
@@ -284,11 +296,14 @@ mod tests {
             (60, 0.2, 1000),
         ] {
             let alpha = 0.01 / models as f64;
-            let k = chance_inliers(m, p, models, 0.01) - 2;
+            let k = chance_inliers([m, 0], [p, 0.3], models, 0.01) - 2;
             assert!(
                 binomial_tail(m, p, k) <= alpha && binomial_tail(m, p, k - 1) > alpha,
                 "m {m} p {p}: k {k}"
             );
+            // The same correspondences as lines, or split between points and lines of equal p.
+            assert_eq!(chance_inliers([0, m], [0.3, p], models, 0.01), k + 2);
+            assert_eq!(chance_inliers([m / 3, m - m / 3], [p, p], models, 0.01), k + 2);
         }
         // Large m: against the Poisson limit (m p = 3.2 at 20,000 points, 4 px, 640 x 480).
         let poisson_tail = |lambda: f64, k: usize| {
@@ -300,16 +315,16 @@ mod tests {
             }
             1.0 - cdf
         };
-        let k = chance_inliers(20_000, 1.6e-4, 20_000, 0.01) - 2;
+        let k = chance_inliers([20_000, 0], [1.6e-4, 0.0], 20_000, 0.01) - 2;
         assert!(
             poisson_tail(3.2, k) <= 5e-7 * 1.01 && poisson_tail(3.2, k - 1) > 5e-7 * 0.99,
             "{k}"
         );
-        assert_eq!(chance_inliers(100, 1.0, 10, 0.01), 103);
-        assert_eq!(chance_inliers(100, 0.0, 10, 0.01), 3);
+        assert_eq!(chance_inliers([100, 5], [1.0, 0.1], 10, 0.01), 108);
+        assert_eq!(chance_inliers([100, 0], [0.0, 1.0], 10, 0.01), 3);
         // A million correspondences with half of them agreeing by chance: no underflow; the normal
         // quantile of α = 1e-3, m p + 3.09 σ.
-        let k = chance_inliers(1_000_000, 0.5, 10, 0.01) as f64 - 2.0;
+        let k = chance_inliers([1_000_000, 0], [0.5, 0.0], 10, 0.01) as f64 - 2.0;
         assert!((k - 500_000.0 - 3.09 * 500.0).abs() < 0.02 * 500.0, "{k}");
     }
 
