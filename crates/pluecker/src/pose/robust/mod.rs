@@ -377,7 +377,7 @@ pub fn ransac(
                 alpha = alpha.max(s.rejection_bound());
                 *s.test()
             });
-            let start = [order_rng.below(np.max(1)), order_rng.below(nl.max(1))];
+            let start = [scoring::below(&mut order_rng, np), scoring::below(&mut order_rng, nl)];
             let (verdict, work) = data.evaluate(&pose, &tau, bound, test.as_ref(), Some(&sample), start);
             report.errors_evaluated += work;
             let score = match verdict {

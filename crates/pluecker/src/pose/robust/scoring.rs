@@ -61,27 +61,25 @@ struct Order {
     slot: Vec<usize>,
 }
 
+/// Uniform in `0..n` (`n ≥ 1`; 0 for `n = 0`) by a multiply-shift of 64 random bits (Lemire 2019):
+/// no division, bias below `n / 2⁶⁴`.
+#[inline(always)]
+pub(crate) fn below(rng: &mut Rng, n: usize) -> usize {
+    ((rng.next_u64() as u128 * n as u128) >> 64) as usize
+}
+
 impl Order {
     /// A uniformly random permutation (Fisher-Yates).
     fn random(n: usize, rng: &mut Rng) -> Order {
         let mut index: Vec<usize> = (0..n).collect();
         for i in (1..n).rev() {
-            index.swap(i, rng.below(i + 1));
+            index.swap(i, below(rng, i + 1));
         }
         let mut slot = vec![0; n];
         for (s, &i) in index.iter().enumerate() {
             slot[i] = s;
         }
         Order { index, slot }
-    }
-
-    /// One value per slot, returned in item order.
-    fn to_items(&self, in_slots: Vec<bool>) -> Vec<bool> {
-        let mut out = vec![false; in_slots.len()];
-        for (s, v) in in_slots.into_iter().enumerate() {
-            out[self.index[s]] = v;
-        }
-        out
     }
 }
 
@@ -278,20 +276,37 @@ impl Prepared {
             if np > 0 { start[0] % np } else { 0 },
             if nl > 0 { start[1] % nl } else { 0 },
         ];
-        let skip = SampleRanks {
-            ranks: match sample {
-                None => [(2, 0, false); 3],
-                Some(sample) => sample.map(|k| {
-                    let consistent = self.feature_error2(pose, k) <= if k < np { tau.point2 } else { tau.line2 };
-                    if k < np {
-                        (0, (self.point_order.slot[k] + np - start[0]) % np, consistent)
-                    } else {
-                        let slot = self.line_order.slot[k - np];
-                        (1, (slot + nl - start[1]) % nl, consistent)
-                    }
-                }),
-            },
-        };
+        match test {
+            None => self.verify::<false>(pose, tau, bound, &SprtTest::NONE, None, start),
+            Some(test) => {
+                let skip = sample.map(|sample| SampleRanks {
+                    ranks: sample.map(|k| {
+                        let consistent = self.feature_error2(pose, k) <= if k < np { tau.point2 } else { tau.line2 };
+                        if k < np {
+                            (0, (self.point_order.slot[k] + np - start[0]) % np, consistent)
+                        } else {
+                            let slot = self.line_order.slot[k - np];
+                            (1, (slot + nl - start[1]) % nl, consistent)
+                        }
+                    }),
+                });
+                self.verify::<true>(pose, tau, bound, test, skip.as_ref(), start)
+            }
+        }
+    }
+
+    /// [`Prepared::evaluate`], with the sequential test compiled in or out (`TEST`).
+    #[inline(always)]
+    fn verify<const TEST: bool>(
+        &self,
+        pose: &Pose,
+        tau: &Thresholds,
+        bound: f64,
+        test: &SprtTest,
+        skip: Option<&SampleRanks>,
+        start: [usize; 2],
+    ) -> (Verdict, usize) {
+        let (np, nl) = (self.points.len(), self.lines.len());
         // Compare doubled sums with 2·bound: one multiplication for the whole call.
         let limit = 2.0 * bound;
         let mut sum = 0.0;
@@ -301,9 +316,10 @@ impl Prepared {
             if sum > limit {
                 return Some(Verdict::Beaten);
             }
-            let test = test?;
-            let (sp, cp) = skip.among(0, done[0]);
-            let (sl, cl) = skip.among(1, done[1]);
+            if !TEST {
+                return None;
+            }
+            let ((sp, cp), (sl, cl)) = skip.map_or(((0, 0), (0, 0)), |s| (s.among(0, done[0]), s.among(1, done[1])));
             let evaluated = [done[0] - sp, done[1] - sl];
             let consistent = [consistent[0] - cp, consistent[1] - cl];
             (test.log_lambda(evaluated, consistent) > test.log_a).then_some(Verdict::Rejected { evaluated, consistent })
@@ -315,7 +331,9 @@ impl Prepared {
             for i0 in (from..full).step_by(LANES) {
                 let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, i0 + l));
                 sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
-                consistent[0] += e2.iter().filter(|&&e| e <= tau.point2).count();
+                if TEST {
+                    consistent[0] += e2.iter().filter(|&&e| e <= tau.point2).count();
+                }
                 done[0] += LANES;
                 if let Some(v) = decide(sum, done, consistent) {
                     return (v, done[0]);
@@ -350,13 +368,15 @@ impl Prepared {
 
     /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).
     pub fn inliers(&self, pose: &Pose, tau: &Thresholds) -> (Vec<bool>, Vec<bool>) {
-        let points = (0..self.points.len())
-            .map(|i| self.point_error2(pose, i) <= tau.point2)
-            .collect();
-        let lines = (0..self.lines.len())
-            .map(|i| self.line_error2(pose, i) <= tau.line2)
-            .collect();
-        (self.point_order.to_items(points), self.line_order.to_items(lines))
+        let mut points = vec![false; self.points.len()];
+        for (slot, &i) in self.point_order.index.iter().enumerate() {
+            points[i] = self.point_error2(pose, slot) <= tau.point2;
+        }
+        let mut lines = vec![false; self.lines.len()];
+        for (slot, &i) in self.line_order.index.iter().enumerate() {
+            lines[i] = self.line_error2(pose, slot) <= tau.line2;
+        }
+        (points, lines)
     }
 
     /// True when every object point of the sample's features is in front of the camera at `pose`

@@ -60,6 +60,13 @@ pub(crate) struct SprtTest {
 }
 
 impl SprtTest {
+    /// A test that never rejects (no evidence from either kind).
+    pub const NONE: SprtTest = SprtTest {
+        consistent: [0.0; 2],
+        inconsistent: [0.0; 2],
+        log_a: f64::INFINITY,
+    };
+
     /// `ln λ` after `evaluated` correspondences per kind (sample excluded) of which `consistent` were.
     #[inline(always)]
     pub fn log_lambda(&self, evaluated: [usize; 2], consistent: [usize; 2]) -> f64 {
@@ -217,23 +224,26 @@ pub(crate) fn chance_probabilities(window: [f64; 4], point_threshold: f64, line_
     [p, l].map(|x| if x.is_finite() { x.clamp(0.0, 1.0) } else { 1.0 })
 }
 
-/// The mass function of `Binomial(m, p)` on `0..=end`, scaled so that its largest entry is 1, with
-/// the log of the scale; `end = min(m, m p + 40 σ + 60)`, beyond which the mass is below 1e-300.
+/// The mass function of `Binomial(m, p)` from 0 up to where it is negligible, scaled so that its
+/// largest entry is 1, with the log of the scale.
 fn scaled_binomial(m: usize, p: f64) -> (Vec<f64>, f64) {
     if m == 0 || p <= 0.0 {
         return (vec![1.0], 0.0);
     }
     let mf = m as f64;
-    let end = ((mf * p + 40.0 * (mf * p * (1.0 - p)).sqrt() + 60.0).ceil() as usize).min(m);
-    // ln P(X = j) by the ratio of consecutive terms.
+    // ln P(X = j) by the ratio of consecutive terms, past the mode until 1e-40 of the largest (far
+    // below any ψ / M) or m.
     let ratio = (p / (1.0 - p)).ln();
-    let mut log_pmf = Vec::with_capacity(end + 1);
-    let mut lp = mf * (-p).ln_1p();
-    for j in 0..=end {
+    let mut log_pmf = Vec::new();
+    let (mut lp, mut top) = (mf * (-p).ln_1p(), f64::NEG_INFINITY);
+    for j in 0..=m {
+        top = top.max(lp);
         log_pmf.push(lp);
+        if j as f64 > mf * p && lp < top - 92.0 {
+            break;
+        }
         lp += ((m - j) as f64 / (j + 1) as f64).ln() + ratio;
     }
-    let top = log_pmf.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     (log_pmf.iter().map(|l| (l - top).exp()).collect(), top)
 }
 
@@ -242,8 +252,8 @@ fn scaled_binomial(m: usize, p: f64) -> (Vec<f64>, f64) {
 /// `X_l ~ Binomial(m_l, p_l)` the chance inliers among the points and the lines (see the module
 /// documentation; `m_p`, `m_l` are the counts of each kind, the sample's 3 counted too, a bound).
 /// `models` is `M`, the number of hypotheses the best was chosen from (Bonferroni), `psi` the
-/// probability that the best of them has more. The tail is exact (the two mass functions convolved)
-/// up to the 1e-300 truncation of each. Returns `3 + m_p + m_l` when no count qualifies (`p` near 1).
+/// probability that the best of them has more. The tail is exact (the two mass functions convolved),
+/// each truncated where it falls below 1e-40 of its mode. Returns `3 + m_p + m_l` when no count qualifies (`p` near 1).
 pub(crate) fn chance_inliers(counts: [usize; 2], p: [f64; 2], models: usize, psi: f64) -> usize {
     let all = counts[0] + counts[1];
     if (0..2).any(|k| counts[k] > 0 && p[k] >= 1.0) {
