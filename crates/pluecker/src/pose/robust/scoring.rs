@@ -118,6 +118,48 @@ impl SampleRanks {
         }
         out
     }
+
+    /// The ranks of the entries of `kind` in increasing order, with whether each is consistent,
+    /// padded with `usize::MAX`.
+    fn sorted(&self, kind: usize) -> [(usize, bool); 4] {
+        let mut out = [(usize::MAX, false); 4];
+        let mut n = 0;
+        for &(k, rank, consistent) in &self.ranks {
+            if k == kind {
+                out[n] = (rank, consistent);
+                n += 1;
+            }
+        }
+        out[..n].sort_unstable();
+        out
+    }
+}
+
+/// The running `ln λ` of one hypothesis (see [`super::sprt`]): per correspondence verified, the
+/// increment of its kind, less those of the sample's own correspondences once they are passed.
+struct RunningTest<'a> {
+    test: &'a SprtTest,
+    log_lambda: f64,
+    /// Per kind, the sample's ranks (sorted, padded) and the next one not yet passed.
+    pending: [[(usize, bool); 4]; 2],
+    next: [usize; 2],
+}
+
+impl RunningTest<'_> {
+    /// Adds `count` verified correspondences of `kind`, `consistent` of them, `done` verified so far.
+    #[inline(always)]
+    fn add(&mut self, kind: usize, count: usize, consistent: usize, done: usize) {
+        let (a, b) = (self.test.consistent[kind], self.test.inconsistent[kind]);
+        self.log_lambda += consistent as f64 * a + (count - consistent) as f64 * b;
+        while self.pending[kind][self.next[kind]].0 < done {
+            self.log_lambda -= if self.pending[kind][self.next[kind]].1 { a } else { b };
+            self.next[kind] += 1;
+        }
+    }
+
+    fn rejects(&self) -> bool {
+        self.log_lambda > self.test.log_a
+    }
 }
 
 /// Correspondences prepared once: the scorer's arrays (in slot order) and the minimal solvers'
@@ -127,8 +169,11 @@ pub(crate) struct Prepared {
     camera: Camera,
     /// `K⁻ᵀ`: maps a camera-frame line `a × b` to its pixel form.
     k_inv_t: Matrix3<f64>,
+    /// Points and lines in slot order (verification), and in the order given (inlier masks).
     points: Vec<ScoredPoint>,
     lines: Vec<ScoredLine>,
+    points_given: Vec<ScoredPoint>,
+    lines_given: Vec<ScoredLine>,
     point_order: Order,
     line_order: Order,
     /// `[u₀, v₀, u₁, v₁]`: the bounding box of the observed pixels (points and segment endpoints).
@@ -144,25 +189,26 @@ impl Prepared {
         let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
         let point_order = Order::random(corr.n_points(), rng);
         let line_order = Order::random(corr.n_lines(), rng);
-        let points = point_order
-            .index
+        let points_given: Vec<ScoredPoint> = corr
+            .points2d
             .iter()
-            .map(|&i| {
-                let (u, x) = (corr.points2d[i], corr.points3d[i]);
-                ScoredPoint {
-                    object: [x.x, x.y, x.z],
-                    pixel: [u.x, u.y],
-                }
+            .zip(&corr.points3d)
+            .map(|(u, x)| ScoredPoint {
+                object: [x.x, x.y, x.z],
+                pixel: [u.x, u.y],
             })
             .collect();
-        let lines = line_order
-            .index
+        let lines_given: Vec<ScoredLine> = corr
+            .lines2d
             .iter()
-            .map(|&i| ScoredLine {
-                object: corr.lines3d[i],
-                endpoints: corr.lines2d[i].map(|e| Vector3::new(e.x, e.y, 1.0)),
+            .zip(&corr.lines3d)
+            .map(|(s2, s3)| ScoredLine {
+                object: *s3,
+                endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
             })
             .collect();
+        let points = point_order.index.iter().map(|&i| points_given[i]).collect();
+        let lines = line_order.index.iter().map(|&i| lines_given[i]).collect();
         let features = (0..corr.n_points() + corr.n_lines())
             .map(|k| feature(camera, &k_inv, corr, k))
             .collect::<Result<Vec<Feature>>>()?;
@@ -180,6 +226,8 @@ impl Prepared {
             k_inv_t: k_inv.transpose(),
             points,
             lines,
+            points_given,
+            lines_given,
             point_order,
             line_order,
             window,
@@ -195,17 +243,17 @@ impl Prepared {
         self.lines.len()
     }
 
-    /// Squared pixel error of the point in slot `i` at `pose` (infinite behind the camera).
+    /// Squared pixel error of `point` at `pose` (infinite behind the camera).
     #[inline(always)]
-    fn point_error2(&self, pose: &Pose, i: usize) -> f64 {
+    fn point_error2(&self, pose: &Pose, point: &ScoredPoint) -> f64 {
         let (r, t, c) = (&pose.0, &pose.1, &self.camera);
-        let [x, y, z] = self.points[i].object;
+        let [x, y, z] = point.object;
         let pz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t.z;
         let iz = 1.0 / pz;
         let xn = (r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + t.x) * iz;
         let yn = (r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + t.y) * iz;
-        let du = c.fx * xn + c.skew * yn + c.cx - self.points[i].pixel[0];
-        let dv = c.fy * yn + c.cy - self.points[i].pixel[1];
+        let du = c.fx * xn + c.skew * yn + c.cx - point.pixel[0];
+        let dv = c.fy * yn + c.cy - point.pixel[1];
         // A select rather than an early return, so that batches of points stay branch-free.
         if pz > 0.0 {
             du * du + dv * dv
@@ -214,11 +262,10 @@ impl Prepared {
         }
     }
 
-    /// Mean squared distance of the observed endpoints of the line in slot `i` to its projected line
-    /// (infinite when an object endpoint is behind the camera or the line projects to a point).
+    /// Mean squared distance of the observed endpoints of `line` to its projected line (infinite when
+    /// an object endpoint is behind the camera or the line projects to a point).
     #[inline(always)]
-    fn line_error2(&self, pose: &Pose, i: usize) -> f64 {
-        let line = &self.lines[i];
+    fn line_error2(&self, pose: &Pose, line: &ScoredLine) -> f64 {
         let a = pose.0 * line.object[0] + pose.1;
         let b = pose.0 * line.object[1] + pose.1;
         if !(a.z > 0.0 && b.z > 0.0) {
@@ -236,9 +283,9 @@ impl Prepared {
     /// Squared error of feature `k` (points first, then lines, in the order given).
     fn feature_error2(&self, pose: &Pose, k: usize) -> f64 {
         if k < self.points.len() {
-            self.point_error2(pose, self.point_order.slot[k])
+            self.point_error2(pose, &self.points_given[k])
         } else {
-            self.line_error2(pose, self.line_order.slot[k - self.points.len()])
+            self.line_error2(pose, &self.lines_given[k - self.points.len()])
         }
     }
 
@@ -311,48 +358,69 @@ impl Prepared {
         let limit = 2.0 * bound;
         let mut sum = 0.0;
         let (mut done, mut consistent) = ([0usize; 2], [0usize; 2]);
-        // The decision after `done` / `consistent` so far.
-        let decide = |sum: f64, done: [usize; 2], consistent: [usize; 2]| -> Option<Verdict> {
-            if sum > limit {
-                return Some(Verdict::Beaten);
+        let no_sample = SampleRanks {
+            ranks: [(2, 0, false); 3],
+        };
+        let skip = skip.unwrap_or(&no_sample);
+        let mut running = RunningTest {
+            test,
+            log_lambda: 0.0,
+            pending: if TEST { [skip.sorted(0), skip.sorted(1)] } else { [[(usize::MAX, false); 4]; 2] },
+            next: [0; 2],
+        };
+        // The verdict of a rejection after `done` / `consistent`, the sample's own left out.
+        let rejected = |done: [usize; 2], consistent: [usize; 2]| {
+            let ((sp, cp), (sl, cl)) = (skip.among(0, done[0]), skip.among(1, done[1]));
+            Verdict::Rejected {
+                evaluated: [done[0] - sp, done[1] - sl],
+                consistent: [consistent[0] - cp, consistent[1] - cl],
             }
-            if !TEST {
-                return None;
-            }
-            let ((sp, cp), (sl, cl)) = skip.map_or(((0, 0), (0, 0)), |s| (s.among(0, done[0]), s.among(1, done[1])));
-            let evaluated = [done[0] - sp, done[1] - sl];
-            let consistent = [consistent[0] - cp, consistent[1] - cl];
-            (test.log_lambda(evaluated, consistent) > test.log_a).then_some(Verdict::Rejected { evaluated, consistent })
         };
         // Points in batches of LANES without branches inside (the compiler vectorises them), the
         // early exits tested once per batch; the slots from start[0] to the end, then from 0.
         for (from, to) in [(start[0], np), (0, start[0])] {
             let full = to - (to - from) % LANES;
             for i0 in (from..full).step_by(LANES) {
-                let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, i0 + l));
+                let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, &self.points[i0 + l]));
                 sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
-                if TEST {
-                    consistent[0] += e2.iter().filter(|&&e| e <= tau.point2).count();
-                }
                 done[0] += LANES;
-                if let Some(v) = decide(sum, done, consistent) {
-                    return (v, done[0]);
+                if sum > limit {
+                    return (Verdict::Beaten, done[0]);
+                }
+                if TEST {
+                    let c = e2.iter().filter(|&&e| e <= tau.point2).count();
+                    consistent[0] += c;
+                    running.add(0, LANES, c, done[0]);
+                    if running.rejects() {
+                        return (rejected(done, consistent), done[0]);
+                    }
                 }
             }
             for i in full..to {
-                let e2 = self.point_error2(pose, i);
+                let e2 = self.point_error2(pose, &self.points[i]);
                 sum += e2.min(tau.point2);
-                consistent[0] += (e2 <= tau.point2) as usize;
+                let c = (e2 <= tau.point2) as usize;
+                consistent[0] += c;
                 done[0] += 1;
+                if TEST {
+                    running.add(0, 1, c, done[0]);
+                }
             }
         }
         for i in (start[1]..nl).chain(0..start[1]) {
-            let e2 = self.line_error2(pose, i);
+            let e2 = self.line_error2(pose, &self.lines[i]);
             sum += e2.min(tau.line2);
-            consistent[1] += (e2 <= tau.line2) as usize;
+            let c = (e2 <= tau.line2) as usize;
+            consistent[1] += c;
             done[1] += 1;
-            if let Some(v) = decide(sum, done, consistent) {
-                return (v, done[0] + done[1]);
+            if sum > limit {
+                return (Verdict::Beaten, done[0] + done[1]);
+            }
+            if TEST {
+                running.add(1, 1, c, done[1]);
+                if running.rejects() {
+                    return (rejected(done, consistent), done[0] + done[1]);
+                }
             }
         }
         if sum > limit {
@@ -368,14 +436,8 @@ impl Prepared {
 
     /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).
     pub fn inliers(&self, pose: &Pose, tau: &Thresholds) -> (Vec<bool>, Vec<bool>) {
-        let mut points = vec![false; self.points.len()];
-        for (slot, &i) in self.point_order.index.iter().enumerate() {
-            points[i] = self.point_error2(pose, slot) <= tau.point2;
-        }
-        let mut lines = vec![false; self.lines.len()];
-        for (slot, &i) in self.line_order.index.iter().enumerate() {
-            lines[i] = self.line_error2(pose, slot) <= tau.line2;
-        }
+        let points = self.points_given.iter().map(|p| self.point_error2(pose, p) <= tau.point2).collect();
+        let lines = self.lines_given.iter().map(|l| self.line_error2(pose, l) <= tau.line2).collect();
         (points, lines)
     }
 
@@ -385,11 +447,10 @@ impl Prepared {
         let depth = |x: &Vector3<f64>| pose.0.row(2).transpose().dot(x) + pose.1.z;
         sample.iter().all(|&k| {
             if k < self.points.len() {
-                let [x, y, z] = self.points[self.point_order.slot[k]].object;
+                let [x, y, z] = self.points_given[k].object;
                 depth(&Vector3::new(x, y, z)) > 0.0
             } else {
-                let slot = self.line_order.slot[k - self.points.len()];
-                self.lines[slot].object.iter().all(|x| depth(x) > 0.0)
+                self.lines_given[k - self.points.len()].object.iter().all(|x| depth(x) > 0.0)
             }
         })
     }
