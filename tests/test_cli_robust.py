@@ -42,7 +42,8 @@ def test_robust_flag_finds_the_inliers_and_prints_masks_and_covariance(tmp_path,
 def test_options_in_the_file_equal_the_flags_and_flags_win(tmp_path, capsys, seed):
     scene, data = noisy_scene(40, 10, 0.3, seed % 1000)
     options = {"robust": True, "point_threshold": 3.0, "line_threshold": 5, "seed": 11, "sigma_px": 2.0,
-               "confidence": 0.999, "max_ransac_iterations": 5000, "time_budget": None, "min_inliers": 8}
+               "confidence": 0.999, "max_ransac_iterations": 5000, "time_budget": None, "min_inliers": 8,
+               "min_inlier_ratio": 0.1, "sprt": True}
     assert main(["pose", write(tmp_path, document(scene, data, options))]) == 0
     from_file = json.loads(capsys.readouterr().out)
     assert main(["pose", write(tmp_path, document(scene, data, {"confidence": 0.999, "max_ransac_iterations": 5000,

@@ -122,16 +122,56 @@ def test_all_outlier_data_is_a_status_within_the_cap(seed):
 def test_time_budget_stops_a_loop_whose_cap_would_run_long(seed):
     scene, data = all_outliers(seed)
     cap = 10**12
-    r = pluecker.estimate_pose(scene["camera"], **data, robust=True, max_ransac_iterations=cap, time_budget=0.02)
+    r = pluecker.estimate_pose(scene["camera"], **data, robust=True, max_ransac_iterations=cap, time_budget=0.02,
+                               min_inlier_ratio=0.0)
     assert r.ransac_stop == "time_budget"
     assert 0 < r.ransac_iterations < cap
+
+
+def test_all_outlier_data_is_cheap_and_too_few_inliers(seed):
+    """Issue 10 §4: 20,000 all-outlier points ran 100,000 samples (16 s) and ended ``not_converged``.
+    The ``min_inlier_ratio`` cap bounds the samples, the SPRT the errors per pose; the work is
+    asserted, not the time (``bench/robust_outliers.py`` times it)."""
+    scene, data = all_outliers(seed, 20_000)
+    r = pluecker.estimate_pose(scene["camera"], **data, robust=True, seed=seed)
+    label = f"seed={seed}: {r.ransac_iterations} samples, {r.ransac_errors_evaluated} errors"
+    assert r.status == "too_few_inliers" and r.ransac_stop == "min_inlier_ratio", label
+    # ceil(log(1e-4) / log(1 - 0.1**3)) = 9206 samples, a few % more for the SPRT's 1/A.
+    assert 9206 <= r.ransac_iterations <= 10_230, label
+    assert r.ransac_errors_evaluated <= 100 * r.ransac_models_scored, label
+    assert r.inliers_points.sum() < r.ransac_required_inliers, label
+    assert 15 <= r.ransac_required_inliers <= 25, label
+    assert [s.name for s in r.stages] == ["ransac"]
+    d = r.to_dict()
+    assert (d["ransac_stop"], d["ransac_required_inliers"]) == ("min_inlier_ratio", r.ransac_required_inliers)
+    assert d["ransac_sprt_rejections"] == r.ransac_sprt_rejections > 0
+
+
+@pytest.mark.parametrize("n_points,n_lines,ratio", [(100, 0, 0.3), (100, 30, 0.5), (2000, 0, 0.5)])
+def test_sprt_and_cap_give_the_result_of_the_plain_loop_for_less_work(n_points, n_lines, ratio, seed):
+    """Seeded scenes with inliers: the defaults (SPRT, ``min_inlier_ratio`` cap) against the loop without
+    them (the samples drawn are the same): the same inliers and pose, fewer errors evaluated."""
+    scene, data = noisy_scene(n_points, n_lines, ratio, seed)
+    new = pluecker.estimate_pose(scene["camera"], **data, robust=True, seed=seed)
+    old = pluecker.estimate_pose(scene["camera"], **data, robust=True, seed=seed, sprt=False, min_inlier_ratio=0.0)
+    label = f"seed={seed}"
+    assert new.status == old.status == "success", label
+    assert old.ransac_sprt_rejections == 0 and new.ransac_sprt_rejections > 0, label
+    check_masks(new, scene, data, label)
+    np.testing.assert_array_equal(new.inliers_points, old.inliers_points)
+    np.testing.assert_array_equal(new.inliers_lines, old.inliers_lines)
+    np.testing.assert_allclose(new.R, old.R, atol=1e-9)
+    assert new.ransac_errors_evaluated < old.ransac_errors_evaluated, label
+    # The chance requirement: min_inliers for small data, a few more with thousands of correspondences.
+    assert new.ransac_required_inliers == 6 if n_points + n_lines <= 130 else 6 <= new.ransac_required_inliers <= 10
 
 
 @pytest.mark.parametrize("keyword,value", [
     ("point_threshold", 0.0), ("point_threshold", -2.0), ("point_threshold", float("nan")),
     ("line_threshold", 0.0), ("line_threshold", float("inf")), ("confidence", 1.0), ("confidence", 0.0),
     ("max_ransac_iterations", 0), ("time_budget", -1.0), ("seed", -1), ("min_inliers", 2), ("sigma_px", 0.0),
-    ("sigma_px", float("nan")),
+    ("sigma_px", float("nan")), ("min_inlier_ratio", 1.0), ("min_inlier_ratio", -0.1),
+    ("min_inlier_ratio", float("nan")),
 ])
 def test_bad_options_are_invalid_option_errors(keyword, value, seed):
     scene, data = noisy_scene(20, 5, 0.0, seed)

@@ -187,12 +187,15 @@ class PoseResult:
     @property
     def status(self) -> str:
         """``"success"``, ``"not_converged"`` (a stage hit its iteration cap; robust: the sampling
-        loop stopped on ``max_ransac_iterations`` or ``time_budget`` before reaching ``confidence``),
+        loop stopped on ``max_ransac_iterations``, ``time_budget`` or the ``min_inlier_ratio`` cap
+        before reaching ``confidence`` for the best model),
         ``"numerical_failure"`` (singular Hessian, non-finite cost), ``"points_behind_camera"``
         (some 3-D points or segment endpoints — of the inliers when robust — have ``z <= 0`` at the
         returned pose), ``"ambiguous"`` (another local minimum explains the data nearly as well: see
         :attr:`ambiguous` and :attr:`second_best_cost`), and with ``robust=True``: ``"too_few_inliers"`` (the best model has fewer than
-        ``min_inliers`` inliers, e.g. all-outlier data or thresholds too tight; the pose is that
+        :attr:`ransac_required_inliers` inliers — ``min_inliers``, or more when chance alone gives a
+        wrong pose that many among many correspondences — e.g. all-outlier data or thresholds too
+        tight; the pose is that
         model's, unrefined, and should not be used) or ``"no_hypothesis"`` (no sample gave a pose in
         front of the camera: every sample degenerate, or no minimal solver for the data's mix, see
         :attr:`ransac_stop`; the pose is NaN)."""
@@ -231,6 +234,22 @@ class PoseResult:
     def ransac_local_optimizations(self) -> int:
         """Local optimisations run, one per new best model (0 when not robust)."""
     @property
+    def ransac_sprt_rejections(self) -> int:
+        """Poses rejected early by the sequential probability ratio test (``sprt=True``; 0 when not
+        robust)."""
+    @property
+    def ransac_errors_evaluated(self) -> int:
+        """Reprojection errors evaluated while scoring the poses, early exits included (the work of the
+        scoring; 0 when not robust)."""
+    @property
+    def ransac_required_inliers(self) -> int:
+        """Fewest inliers the best model needed, else ``status="too_few_inliers"``:
+        ``max(min_inliers, min(c + 1, ceil(min_inlier_ratio * n)))`` with ``c`` the most inliers a wrong
+        pose plausibly gets by chance among the ``n`` correspondences (observations uniform in their
+        bounding box; the best of the poses tried exceeds ``c`` with probability <= 1 %). Equals
+        ``min_inliers`` up to a few hundred correspondences; about 20 for 20,000 points in a 640 x 480
+        image (0 when not robust)."""
+    @property
     def ransac_degenerate_samples(self) -> int:
         """Samples that gave no pose in front of the camera (0 when not robust)."""
     @property
@@ -239,8 +258,10 @@ class PoseResult:
     @property
     def ransac_stop(self) -> Optional[str]:
         """Why the sampling loop stopped: ``"confidence"`` (enough samples for ``confidence`` at the
-        best model's inlier fractions), ``"iteration_cap"``, ``"time_budget"`` or
-        ``"no_solvable_sample"`` (no mix of the data has a minimal solver); None when not robust."""
+        best model's inlier fractions), ``"min_inlier_ratio"`` (enough samples to have found a model
+        with that inlier fraction, while the best has fewer or there is none), ``"iteration_cap"``,
+        ``"time_budget"`` or ``"no_solvable_sample"`` (no mix of the data has a minimal solver); None
+        when not robust."""
     @property
     def covariance(self) -> Optional[NDArray[np.float64]]:
         """(6, 6) covariance ``σ² (JᵀJ)⁻¹`` of the pose at the returned pose: the rotation as the
@@ -338,6 +359,9 @@ class _PoseResultDict(TypedDict):
     ransac_models_scored: int
     ransac_local_optimizations: int
     ransac_degenerate_samples: int
+    ransac_sprt_rejections: int
+    ransac_errors_evaluated: int
+    ransac_required_inliers: int
     ransac_time_seconds: float
     ransac_stop: Optional[str]
     covariance: Optional[list[list[float]]]
@@ -375,6 +399,8 @@ def estimate_pose(
     time_budget: Optional[float] = None,
     seed: int = 0,
     min_inliers: int = 6,
+    min_inlier_ratio: float = 0.1,
+    sprt: bool = True,
     sigma_px: Optional[float] = None,
     certify: bool = False,
     certify_gap: float = 1e-3,
@@ -414,13 +440,26 @@ def estimate_pose(
         line_threshold: inlier threshold of a line: RMS of the distances of its two observed
             endpoints to the projected 3-D line, pixels; > 0.
         confidence: stop when the probability of having drawn an all-inlier sample reaches this, at
-            the best model's inlier fractions of points and of lines; in (0, 1).
+            the best model's inlier fractions of points and of lines (with ``sprt``, counting that
+            the test may reject a good pose with probability 1/A); in (0, 1).
         max_ransac_iterations: cap on the samples drawn; >= 1.
         time_budget: wall-time budget of the sampling loop, seconds, at least 0 and below 2**64 (None: only
             the cap bounds it); anything else is an ``InvalidOptionError``.
         seed: seed of the sampler (>= 0); the same seed and data give the same result.
         min_inliers: fewest inliers a model needs (>= 3); fewer gives ``status="too_few_inliers"``,
-            and fewer correspondences than this in all is a TooFewCorrespondencesError.
+            and fewer correspondences than this in all is a TooFewCorrespondencesError. With many
+            correspondences the model must also beat chance: see
+            :attr:`PoseResult.ransac_required_inliers`.
+        min_inlier_ratio: the smallest inlier fraction the loop is designed to find, in [0, 1): it
+            stops after ``ceil(log(1 - confidence) / log(1 - min_inlier_ratio**3))`` samples (9,206 at
+            the defaults; a little more with ``sprt``) even when the best model has fewer inliers or
+            there is none (``ransac_stop="min_inlier_ratio"``), so all-outlier data end quickly with
+            ``"too_few_inliers"``. A model with at least this fraction of inliers always meets
+            :attr:`PoseResult.ransac_required_inliers`. 0 removes the cap and the chance requirement.
+        sprt: reject bad poses early by Wald's sequential probability ratio test (Matas & Chum 2005)
+            on the correspondences in a random order, with the inlier fraction of the best model so
+            far (at least ``min_inlier_ratio``) against the rate of chance agreements estimated from
+            the rejected poses. ``False`` scores every pose until it cannot beat the best one.
         sigma_px: standard deviation of the pixel noise for :attr:`PoseResult.covariance`; None
             estimates it from the residuals (see :attr:`PoseResult.sigma_px`); > 0.
 

@@ -53,6 +53,8 @@ OPTIONS = {
     "time_budget": ("time_budget", (int, float, type(None))),
     "seed": ("seed", (int,)),
     "min_inliers": ("min_inliers", (int,)),
+    "min_inlier_ratio": ("min_inlier_ratio", (int, float)),
+    "sprt": ("sprt", (bool,)),
     "sigma_px": ("sigma_px", (int, float)),
     "certify": ("certify", (bool,)),
     "certify_gap": ("certify_gap", (int, float)),

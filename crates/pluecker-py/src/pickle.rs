@@ -226,7 +226,7 @@ pack_by_name!(PoseStatus: PoseStatus::Success, PoseStatus::NotConverged, PoseSta
     PoseStatus::PointsBehindCamera, PoseStatus::TooFewInliers, PoseStatus::Ambiguous, PoseStatus::NoHypothesis);
 pack_by_name!(CovarianceSource: CovarianceSource::Given, CovarianceSource::Estimated);
 pack_by_name!(RansacStop: RansacStop::Confidence, RansacStop::IterationCap, RansacStop::TimeBudget,
-    RansacStop::NoSolvableSample);
+    RansacStop::NoSolvableSample, RansacStop::MinInlierRatio);
 
 /// [`Pack`] for a struct of packable fields: `pack` destructures it completely (a new field does
 /// not compile until listed) and `unpack` reads the fields back in the same order.
@@ -263,8 +263,11 @@ pack_struct!(RansacReport {
     iterations,
     degenerate_samples,
     models_scored,
+    sprt_rejections,
+    errors_evaluated,
     local_optimizations,
     inliers,
+    required_inliers,
     score,
     stop,
     time_seconds

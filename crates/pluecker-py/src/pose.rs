@@ -93,6 +93,8 @@ pub struct RobustArgs {
     pub time_budget: Option<Real>,
     pub seed: Integer,
     pub min_inliers: Integer,
+    pub min_inlier_ratio: Real,
+    pub sprt: bool,
 }
 
 impl RobustArgs {
@@ -110,6 +112,8 @@ impl RobustArgs {
             time_budget: budget,
             seed: self.seed.seed("seed")?,
             min_inliers: self.min_inliers.count("min_inliers", 3)?,
+            min_inlier_ratio: self.min_inlier_ratio.get("min_inlier_ratio")?,
+            sprt: self.sprt,
             ..RansacOptions::default()
         };
         opts.validate().map_err(crate::errors::to_py_err)?;
@@ -126,9 +130,9 @@ impl RobustArgs {
     max_iterations = Integer::new(200), refine_max_iterations = Integer::new(50), robust = false,
     point_threshold = Real::new(4.0), line_threshold = Real::new(4.0), confidence = Real::new(0.9999),
     max_ransac_iterations = Integer::new(100_000), time_budget = None, seed = Integer::new(0),
-    min_inliers = Integer::new(6), sigma_px = None, certify = false, certify_gap = Real::new(1e-3),
-    ambiguity_threshold = Real::new(9.0)
-), text_signature = "(camera, points2d=None, points3d=None, lines2d=None, lines3d=None, method='trust-region', *, penalty=50.0, normalize=True, refine=True, initial_pose=None, max_iterations=200, refine_max_iterations=50, robust=False, point_threshold=4.0, line_threshold=4.0, confidence=0.9999, max_ransac_iterations=100000, time_budget=None, seed=0, min_inliers=6, sigma_px=None, certify=False, certify_gap=0.001, ambiguity_threshold=9.0)")]
+    min_inliers = Integer::new(6), min_inlier_ratio = Real::new(0.1), sprt = true, sigma_px = None,
+    certify = false, certify_gap = Real::new(1e-3), ambiguity_threshold = Real::new(9.0)
+), text_signature = "(camera, points2d=None, points3d=None, lines2d=None, lines3d=None, method='trust-region', *, penalty=50.0, normalize=True, refine=True, initial_pose=None, max_iterations=200, refine_max_iterations=50, robust=False, point_threshold=4.0, line_threshold=4.0, confidence=0.9999, max_ransac_iterations=100000, time_budget=None, seed=0, min_inliers=6, min_inlier_ratio=0.1, sprt=True, sigma_px=None, certify=False, certify_gap=0.001, ambiguity_threshold=9.0)")]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
     py: Python<'_>,
@@ -152,6 +156,8 @@ pub fn estimate_pose(
     time_budget: Option<Real>,
     seed: Integer,
     min_inliers: Integer,
+    min_inlier_ratio: Real,
+    sprt: bool,
     sigma_px: Option<Real>,
     certify: bool,
     certify_gap: Real,
@@ -176,6 +182,8 @@ pub fn estimate_pose(
         time_budget,
         seed,
         min_inliers,
+        min_inlier_ratio,
+        sprt,
     }
     .options()?;
     opts.sigma_px = optional_real("sigma_px", sigma_px)?;

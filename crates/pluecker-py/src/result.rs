@@ -245,6 +245,21 @@ impl PyPoseResult {
     }
 
     #[getter]
+    fn ransac_sprt_rejections(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.sprt_rejections)
+    }
+
+    #[getter]
+    fn ransac_errors_evaluated(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.errors_evaluated)
+    }
+
+    #[getter]
+    fn ransac_required_inliers(&self) -> usize {
+        self.inner.ransac.as_ref().map_or(0, |r| r.required_inliers)
+    }
+
+    #[getter]
     fn ransac_degenerate_samples(&self) -> usize {
         self.inner.ransac.as_ref().map_or(0, |r| r.degenerate_samples)
     }
@@ -357,6 +372,9 @@ impl PyPoseResult {
         d.set_item("ransac_models_scored", self.ransac_models_scored())?;
         d.set_item("ransac_local_optimizations", self.ransac_local_optimizations())?;
         d.set_item("ransac_degenerate_samples", self.ransac_degenerate_samples())?;
+        d.set_item("ransac_sprt_rejections", self.ransac_sprt_rejections())?;
+        d.set_item("ransac_errors_evaluated", self.ransac_errors_evaluated())?;
+        d.set_item("ransac_required_inliers", self.ransac_required_inliers())?;
         d.set_item("ransac_time_seconds", self.ransac_time_seconds())?;
         d.set_item("ransac_stop", self.ransac_stop())?;
         d.set_item("covariance", self.covariance_rows())?;

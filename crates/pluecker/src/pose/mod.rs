@@ -244,9 +244,10 @@ pub enum Status {
     /// Some object points or line endpoints are behind the camera at the returned pose (robust: of
     /// the inliers).
     PointsBehindCamera,
-    /// Robust estimation only: the best model has fewer than [`RansacOptions::min_inliers`] inliers
-    /// (e.g. all-outlier data, or thresholds too tight for the noise); the pose is that model's,
-    /// unrefined, and should not be used.
+    /// Robust estimation only: the best model has fewer than [`RansacReport::required_inliers`]
+    /// inliers ([`RansacOptions::min_inliers`], or more when chance alone gives a wrong pose that many
+    /// among many correspondences), e.g. all-outlier data, or thresholds too tight for the noise; the
+    /// pose is that model's, unrefined, and should not be used.
     TooFewInliers,
     /// Another local minimum of the reprojection error with every object point in front explains the
     /// data nearly as well (see [`PoseOptions::ambiguity_threshold`]): the pose is the better of the two,

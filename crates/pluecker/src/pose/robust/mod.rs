@@ -6,7 +6,10 @@
 //! solvers as they exist), and scores every pose it returns whose sample lies in front of the camera by
 //! the truncated squared reprojection error ([`scoring`]: `½ Σ min(eᵢ², τᵢ²)`, points in pixels, lines
 //! as the RMS of the two endpoint-to-projected-line distances in pixels, with separate thresholds).
-//! Scoring stops early as soon as a hypothesis cannot beat the best one.
+//! Scoring stops early as soon as a hypothesis cannot beat the best one, or, once a best model exists,
+//! as soon as Wald's sequential probability ratio test (SPRT, [`sprt`]: Matas & Chum, ICCV 2005) finds
+//! it no better than a random pose: with many correspondences and few inliers a bad hypothesis is then
+//! rejected after a few tens of errors instead of all of them.
 //!
 //! When a hypothesis beats the best model, *local optimisation* re-fits it by iterated least squares with a
 //! shrinking threshold (the "LO+" of Lebeda, Matas & Chum, BMVC 2012): the inliers within
@@ -19,9 +22,35 @@
 //! outliers (100 points): RMS rotation error 1.078 × the Cramér-Rao bound with the thresholds alone and
 //! 1.038 with the wider rounds, against 1.037 for the maximum-likelihood fit on the true inliers; 40
 //! true inliers dropped before, 2 after. The loop stops when the number of
-//! samples reaches the adaptive bound of [`sampler`] for [`RansacOptions::confidence`], the iteration
-//! cap, or the time budget. The caller ([`crate::pose::estimate_pose`]) then refines the best model on
-//! its inliers with the full reprojection refinement.
+//! samples reaches the adaptive bound of [`sampler`] for [`RansacOptions::confidence`], the cap of
+//! [`RansacOptions::min_inlier_ratio`], the iteration cap, or the time budget. The caller
+//! ([`crate::pose::estimate_pose`]) then refines the best model on its inliers with the full
+//! reprojection refinement, if it has at least [`RansacReport::required_inliers`].
+//!
+//! **All-outlier data.** With no model in the data, no inlier fraction is ever found, so the adaptive
+//! bound never comes down: before the SPRT and the `min_inlier_ratio` cap the loop ran to
+//! `max_iterations` (100,000 samples), each hypothesis scored on nearly every correspondence (its
+//! partial MSAC sum stays below the best's until the end), 16 s for 20,000 points. Now it draws about
+//! 9,800 samples (the cap of the default 0.1: 9,206, a few % more for the SPRT's `α`) and rejects each
+//! hypothesis after about 30 errors: 18 ms (`bench/robust_outliers.py`).
+//!
+//! **Inliers by chance.** A wrong pose still agrees with some outliers: each falls within the threshold
+//! of its prediction with probability `p ≈ π τ² / (W H)` for observations spread over a `W × H` window
+//! (1.6e-4 at 4 px in 640 x 480), so among `n` correspondences a wrong model has its 3 sample inliers
+//! plus about `n p` chance ones (3.3 at `n = 20,000`), the best of tens of thousands of such models a
+//! dozen, and a local optimisation fitted to them pulls in more (18 were reported after the final
+//! refinement at 20,000 points). A fixed `min_inliers = 6` therefore separates real models from chance
+//! only for small `n`: all-outlier data used to end `not_converged` with 6-18 "inliers". The best model
+//! must also beat chance: [`RansacReport::required_inliers`] is `max(min_inliers, min(c + 1, ⌈ρ n⌉))`,
+//! with `c` the most inliers that the best of the `M` hypotheses tried reaches by chance with
+//! probability above [`CHANCE_SIGNIFICANCE`] ([`sprt::chance_inliers`]: the exact binomial tails of
+//! the points and the lines, Bonferroni over `M`) and `ρ` = [`RansacOptions::min_inlier_ratio`]: a model with at least the
+//! fraction of inliers the loop is designed to find is never refused, so a threshold wider than the
+//! image (every correspondence an inlier of every pose) still gives an answer. With the defaults and
+//! 4 px thresholds in a 640 x 480 image, `c + 1` is at most `min_inliers` = 6 up to about 150
+//! correspondences even after the ~17,000 poses of an all-outlier run (up to about 500 after the few
+//! hundred poses of a run that finds a model), 7 at 500, 9 at 2,000 and 18 at 20,000: a small fraction
+//! of the inliers of any model the loop is designed to find (at least `⌈ρ n⌉` = 2,000 at 20,000).
 //!
 //! Conventions: `x_cam = R X + t` in the frame of the correspondences given (the pipeline passes its
 //! centred, unit-scale frame); pixel errors do not depend on that frame.
@@ -29,6 +58,7 @@
 pub(crate) mod pipeline;
 pub(crate) mod sampler;
 pub(crate) mod scoring;
+pub(crate) mod sprt;
 
 use super::correspondences::Correspondences;
 use super::minimal::solve;
@@ -38,7 +68,8 @@ use crate::error::{Error, Result};
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
 use sampler::{solvable, Sampler};
-use scoring::{subset, Prepared, Thresholds};
+use scoring::{subset, Prepared, Thresholds, Verdict};
+use sprt::{chance_inliers, chance_probabilities, Sprt};
 use std::time::{Duration, Instant};
 
 /// Options of the robust estimator (`PoseOptions::robust`). Every field has a documented default.
@@ -54,8 +85,21 @@ pub struct RansacOptions {
     pub confidence: f64,
     /// Cap on the number of samples drawn. ≥ 1. Default `100_000`.
     pub max_iterations: usize,
-    /// Minimum number of samples drawn before the adaptive bound may stop the loop. Default `0`.
+    /// Minimum number of samples drawn before the adaptive bound (or the `min_inlier_ratio` cap) may
+    /// stop the loop. Default `0`.
     pub min_iterations: usize,
+    /// `ρ`, the smallest inlier fraction the loop is designed to find. It stops after
+    /// `⌈ln(1 − confidence) / ln(1 − ρ³ (1 − α))⌉` samples (see [`sampler`]) even when the best model so
+    /// far has fewer inliers: by then a model with a fraction `ρ` of the points and of the lines as
+    /// inliers would have been found with probability `confidence`. It is also the floor of the SPRT's
+    /// `ε`, and a model with at least `⌈ρ n⌉` inliers always meets [`RansacReport::required_inliers`].
+    /// In `[0, 1)`; 0 removes the cap and the chance requirement (only `max_iterations` bounds the
+    /// loop). Default `0.1` (COLMAP's default): at most 9,206 samples at the default confidence; data
+    /// with 90 % outliers or fewer are found with the requested confidence, sparser models only by luck.
+    pub min_inlier_ratio: f64,
+    /// Early rejection of bad hypotheses by the sequential probability ratio test ([`sprt`]); `false`
+    /// scores every hypothesis until it cannot beat the best one. Default `true`.
+    pub sprt: bool,
     /// Wall-time budget of the sampling loop (checked every iteration); `None`: no budget. Default
     /// `None` (the iteration cap bounds the loop).
     pub time_budget: Option<Duration>,
@@ -66,8 +110,10 @@ pub struct RansacOptions {
     /// Fewest inliers a model needs to be accepted; with fewer the status is `TooFewInliers`. At least
     /// 3 (a sample's worth); fewer than this many correspondences in all is an error. Default `6`:
     /// random outliers support a wrong model of a 3-correspondence sample by at most one or two
-    /// chance agreements (at 4 px in a 640 x 480 image each falls within threshold with probability
-    /// about 2e-4).
+    /// chance agreements when there are a few hundred correspondences (at 4 px in a 640 x 480 image
+    /// each falls within threshold with probability about 1.6e-4). With more, the chance agreements
+    /// grow with their number: the model must then also beat chance, see
+    /// [`RansacReport::required_inliers`].
     pub min_inliers: usize,
 }
 
@@ -79,6 +125,15 @@ pub const LOCAL_ROUNDS: usize = 4;
 /// (Lebeda et al. 2012 use 3 with 4 rounds).
 pub const LO_THRESHOLD_MULTIPLIER: f64 = 3.0;
 
+/// `ψ`: the probability, under the outlier model of [`sprt::chance_probabilities`], that the best of
+/// the hypotheses tried on all-outlier data meets the chance part of [`RansacReport::required_inliers`]
+/// (the 5 % of PROSAC's non-randomness test, Chum & Matas, CVPR 2005, here for the best of `M`).
+pub const CHANCE_SIGNIFICANCE: f64 = 0.05;
+
+/// Seed offset of the second random stream (the verification order and start slots of
+/// [`scoring`]), so that the samples drawn for a seed do not depend on the scoring.
+const ORDER_STREAM: u64 = 0x5b7d_3c4e_a1f2_9e07;
+
 impl Default for RansacOptions {
     fn default() -> Self {
         RansacOptions {
@@ -87,6 +142,8 @@ impl Default for RansacOptions {
             confidence: 0.9999,
             max_iterations: 100_000,
             min_iterations: 0,
+            min_inlier_ratio: 0.1,
+            sprt: true,
             time_budget: None,
             seed: 0,
             local_iterations: 10,
@@ -121,6 +178,12 @@ impl RansacOptions {
         if self.min_iterations > self.max_iterations {
             return bad("min_iterations", "must not exceed the iteration cap".into());
         }
+        if !(self.min_inlier_ratio >= 0.0 && self.min_inlier_ratio < 1.0) {
+            return bad(
+                "min_inlier_ratio",
+                format!("must be in [0, 1), got {}", self.min_inlier_ratio),
+            );
+        }
         if self.min_inliers < 3 {
             return bad("min_inliers", format!("must be at least 3, got {}", self.min_inliers));
         }
@@ -142,6 +205,9 @@ pub enum RansacStop {
     Confidence,
     /// [`RansacOptions::max_iterations`] samples were drawn first.
     IterationCap,
+    /// The cap of [`RansacOptions::min_inlier_ratio`] was reached first: the best model has a smaller
+    /// inlier fraction than that, or there is none.
+    MinInlierRatio,
     /// [`RansacOptions::time_budget`] ran out first.
     TimeBudget,
     /// No sample can be drawn: no mix of the data's points and lines has a minimal solver (e.g. lines
@@ -155,6 +221,7 @@ impl RansacStop {
         match self {
             RansacStop::Confidence => "confidence",
             RansacStop::IterationCap => "iteration_cap",
+            RansacStop::MinInlierRatio => "min_inlier_ratio",
             RansacStop::TimeBudget => "time_budget",
             RansacStop::NoSolvableSample => "no_solvable_sample",
         }
@@ -169,12 +236,21 @@ pub struct RansacReport {
     /// Samples for which the minimal solver returned no pose (degenerate: collinear points, parallel
     /// lines, ...), or whose every pose put the sample behind the camera.
     pub degenerate_samples: usize,
-    /// Poses scored (a sample may give up to four).
+    /// Poses scored (a sample may give up to four), fully or until an early exit.
     pub models_scored: usize,
+    /// Poses rejected by the sequential test ([`RansacOptions::sprt`]).
+    pub sprt_rejections: usize,
+    /// Reprojection errors evaluated while scoring the poses (early exits included; not those of the
+    /// local optimisation or of the inlier masks): the work of the scoring.
+    pub errors_evaluated: usize,
     /// Local optimisations run (one per new best model, each up to [`LOCAL_ROUNDS`] rounds).
     pub local_optimizations: usize,
     /// Inliers (points + lines) of the best model before the final refinement.
     pub inliers: usize,
+    /// Fewest inliers the best model needs (before and after the final refinement), else the status is
+    /// `TooFewInliers`: `max(min_inliers, min(c + 1, ⌈ρ n⌉))` with `c` the most inliers a wrong model
+    /// plausibly gets by chance (see the module documentation) and `ρ` = `min_inlier_ratio`.
+    pub required_inliers: usize,
     /// MSAC score `½ Σ min(eᵢ², τᵢ²)` of the best model, px².
     pub score: f64,
     /// Why the loop stopped.
@@ -216,9 +292,11 @@ pub fn ransac(
     refinement: &TrustRegionOptions,
 ) -> Result<RansacOutcome> {
     let started = Instant::now();
-    let data = Prepared::new(camera, corr)?;
+    let mut order_rng = Rng::new(opts.seed ^ ORDER_STREAM);
+    let data = Prepared::new(camera, corr, &mut order_rng)?;
     let tau = opts.thresholds();
-    let sampler = Sampler::new(data.n_points(), data.n_lines(), solvable());
+    let (np, nl) = (data.n_points(), data.n_lines());
+    let sampler = Sampler::new(np, nl, solvable());
     let mut rng = Rng::new(opts.seed);
     let mut lo = *refinement;
     lo.subproblem = Subproblem::Hebden;
@@ -227,20 +305,51 @@ pub fn ransac(
         iterations: 0,
         degenerate_samples: 0,
         models_scored: 0,
+        sprt_rejections: 0,
+        errors_evaluated: 0,
         local_optimizations: 0,
         inliers: 0,
+        required_inliers: opts.min_inliers,
         score: data.all_outlier_score(&tau),
         stop: RansacStop::IterationCap,
         time_seconds: 0.0,
     };
+    let chance = chance_probabilities(data.window, opts.point_threshold, opts.line_threshold);
+    let mut sprt = opts
+        .sprt
+        .then(|| Sprt::new([np, nl], chance, opts.min_inlier_ratio, 1.0));
     let mut best: Option<Best> = None;
-    let mut required = usize::MAX;
+    // Inlier fractions (points, lines) of the best model.
+    let mut fractions: Option<[f64; 2]> = None;
+    // The samples drawn, counted per `α` (1/A of the test their poses were verified with, 0 without).
+    let mut history: Vec<(f64, usize)> = Vec::new();
+    // The stopping bound, its reason, and the `α` assumed for the samples to come; recomputed when
+    // the best model or the test changes.
+    let mut limit: Option<(usize, RansacStop, f64)> = None;
     if !sampler.can_draw() {
         report.stop = RansacStop::NoSolvableSample;
     }
     while sampler.can_draw() {
-        if report.iterations >= required.max(opts.min_iterations) {
-            report.stop = RansacStop::Confidence;
+        let alpha_next = sprt
+            .as_ref()
+            .filter(|_| best.is_some())
+            .map_or(0.0, Sprt::rejection_bound);
+        if limit.is_some_and(|l| l.2 != alpha_next) {
+            limit = None;
+        }
+        let (bound, reason, _) = *limit.get_or_insert_with(|| {
+            let needed = |[p, l]: [f64; 2]| sampler.required_samples_after(p, l, opts.confidence, &history, alpha_next);
+            let required = fractions.map_or(usize::MAX, needed);
+            let rho = opts.min_inlier_ratio;
+            let cap = if rho > 0.0 { needed([rho, rho]) } else { usize::MAX };
+            if required <= cap {
+                (required, RansacStop::Confidence, alpha_next)
+            } else {
+                (cap, RansacStop::MinInlierRatio, alpha_next)
+            }
+        });
+        if report.iterations >= bound.max(opts.min_iterations) {
+            report.stop = reason;
             break;
         }
         if report.iterations >= opts.max_iterations {
@@ -255,6 +364,7 @@ pub fn ransac(
         let sample = sampler.draw(&mut rng);
         let features = sample.map(|k| data.features[k]);
         let mut any = false;
+        let mut alpha = 0.0f64;
         for pose in solve(&features) {
             if !data.sample_in_front(&pose, &sample) {
                 continue;
@@ -262,12 +372,26 @@ pub fn ransac(
             any = true;
             report.models_scored += 1;
             let bound = best.as_ref().map_or(f64::INFINITY, |b| b.score);
-            let Some(score) = data.score(&pose, &tau, bound) else {
-                continue;
+            // The first model is scored in full; the test needs a best model to compare with.
+            let test = sprt.as_ref().filter(|_| best.is_some()).map(|s| {
+                alpha = alpha.max(s.rejection_bound());
+                *s.test()
+            });
+            let start = [scoring::below(&mut order_rng, np), scoring::below(&mut order_rng, nl)];
+            let (verdict, work) = data.evaluate(&pose, &tau, bound, test.as_ref(), Some(&sample), start);
+            report.errors_evaluated += work;
+            let score = match verdict {
+                Verdict::Score(score) if score < bound => score,
+                Verdict::Rejected { evaluated, consistent } => {
+                    report.sprt_rejections += 1;
+                    let per_sample = report.models_scored as f64 / report.iterations as f64;
+                    if let Some(s) = sprt.as_mut() {
+                        s.rejected(evaluated, consistent, per_sample);
+                    }
+                    continue;
+                }
+                _ => continue,
             };
-            if score >= bound {
-                continue;
-            }
             let mut candidate = Best { pose, score };
             if opts.local_iterations > 0 {
                 report.local_optimizations += 1;
@@ -278,20 +402,26 @@ pub fn ransac(
             let (ip, il) = (count(&points), count(&lines));
             report.inliers = ip + il;
             let fraction = |i: usize, n: usize| if n == 0 { 0.0 } else { i as f64 / n as f64 };
-            required = sampler.required_samples(
-                fraction(ip, data.n_points()),
-                fraction(il, data.n_lines()),
-                opts.confidence,
-            );
+            let f = [fraction(ip, np), fraction(il, nl)];
+            fractions = Some(f);
+            if let Some(s) = sprt.as_mut() {
+                s.new_best(f, report.models_scored as f64 / report.iterations as f64);
+            }
+            limit = None;
             best = Some(candidate);
         }
         if !any {
             report.degenerate_samples += 1;
         }
+        match history.iter_mut().find(|h| h.0 == alpha) {
+            Some(h) => h.1 += 1,
+            None => history.push((alpha, 1)),
+        }
     }
+    report.required_inliers = required_inliers(opts, &report, chance, np, nl);
     let (inliers_points, inliers_lines) = match &best {
         Some(b) => data.inliers(&b.pose, &tau),
-        None => (vec![false; data.n_points()], vec![false; data.n_lines()]),
+        None => (vec![false; np], vec![false; nl]),
     };
     if let Some(b) = &best {
         report.score = b.score;
@@ -305,6 +435,19 @@ pub fn ransac(
         data,
         thresholds: tau,
     })
+}
+
+/// [`RansacReport::required_inliers`]: `max(min_inliers, min(c + 1, ⌈ρ n⌉))` (see the module
+/// documentation), `c` from the hypotheses scored and refitted so far.
+fn required_inliers(opts: &RansacOptions, report: &RansacReport, chance: [f64; 2], np: usize, nl: usize) -> usize {
+    let n = np + nl;
+    let floor = (opts.min_inlier_ratio * n as f64).ceil() as usize;
+    if floor == 0 {
+        return opts.min_inliers;
+    }
+    let models = report.models_scored + LOCAL_ROUNDS * report.local_optimizations;
+    let by_chance = chance_inliers([np, nl], chance, models, CHANCE_SIGNIFICANCE);
+    opts.min_inliers.max((by_chance + 1).min(floor))
 }
 
 /// Re-fits `best` by iterated least squares on the inliers of a shrinking threshold (see the module

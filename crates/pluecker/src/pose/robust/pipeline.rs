@@ -88,7 +88,7 @@ pub(crate) fn estimate_robust(
     let (mut points, mut lines) = (outcome.inliers_points.clone(), outcome.inliers_lines.clone());
     let failure = if outcome.pose.is_none() {
         Some(Status::NoHypothesis)
-    } else if count(&points) + count(&lines) < robust.min_inliers {
+    } else if count(&points) + count(&lines) < outcome.report.required_inliers {
         Some(Status::TooFewInliers)
     } else {
         None
@@ -119,8 +119,8 @@ pub(crate) fn estimate_robust(
         stages.extend(refinement);
     }
     let used = subset(corr, &points, &lines);
-    let failure =
-        failure.or_else(|| (count(&points) + count(&lines) < robust.min_inliers).then_some(Status::TooFewInliers));
+    let required = outcome.report.required_inliers;
+    let failure = failure.or_else(|| (count(&points) + count(&lines) < required).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
     let certification = Certification::none(match opts.certify {
         None => Certificate::NotRequested,

@@ -18,6 +18,15 @@
 //! `P = Σ_k w_k ε_p^k ε_l^(3−k) / Σ_k w_k` over the drawable mixes (`w_k = C(n_p, k) C(n_l, 3 − k)`).
 //! After `N = ⌈log(1 − confidence) / log(1 − P)⌉` samples the probability of never having drawn an
 //! all-inlier sample is below `1 − confidence` (Fischler & Bolles 1981; Hartley & Zisserman §4.7.1).
+//! With the sequential test of [`super::sprt`], the hypothesis of an all-inlier sample is kept with
+//! probability at least `1 − αᵢ`, `αᵢ = 1 / Aᵢ` for the test of threshold `Aᵢ`, so the loop stops
+//! when `Σᵢ kᵢ ln(1 − P (1 − αᵢ)) ≤ ln(1 − confidence)` over the `kᵢ` samples verified with each test
+//! (Chum & Matas 2008, eq. 9; `αᵢ = 0` for a sample scored without the test).
+//!
+//! **Cap.** The same formula at the fractions `ε_p = ε_l = min_inlier_ratio` caps the loop whatever the
+//! best model (COLMAP's `min_inlier_ratio`): after that many samples, a model with at least that
+//! fraction of inliers would have been found with probability `confidence`. Without it, data with no
+//! model at all (every correspondence an outlier) would run to `max_iterations`.
 
 use super::super::minimal::{solve, Feature};
 use crate::geometry::quaternion::{exp_so3, rotation_distance};
@@ -148,19 +157,41 @@ impl Sampler {
         (sum / self.total_weight).clamp(0.0, 1.0)
     }
 
-    /// `N = ⌈log(1 − confidence) / log(1 − P)⌉` samples for the given inlier fractions; `usize::MAX`
-    /// when `P = 0`, 1 when `P = 1`.
-    pub fn required_samples(&self, point_fraction: f64, line_fraction: f64, confidence: f64) -> usize {
+    /// `N = ⌈log(1 − confidence) / log(1 − P (1 − α))⌉` samples for the given inlier fractions, with
+    /// `α` a bound on the probability that the hypothesis of an all-inlier sample is rejected by the
+    /// sequential test (`1 / A` of [`super::sprt`]; 0 without it); `usize::MAX` when
+    /// `P (1 − α) = 0`, 1 when it is 1.
+    #[cfg(test)]
+    pub fn required_samples(&self, point_fraction: f64, line_fraction: f64, confidence: f64, rejection: f64) -> usize {
+        self.required_samples_after(point_fraction, line_fraction, confidence, &[], rejection)
+    }
+
+    /// The number of samples after which `Σᵢ kᵢ ln(1 − P (1 − αᵢ)) ≤ ln(1 − confidence)` (see the
+    /// module documentation), given the samples drawn so far as runs `(αᵢ, kᵢ)` in `history` and
+    /// `rejection` = `α` of those still to come; at least the samples drawn. `usize::MAX` if never.
+    pub fn required_samples_after(
+        &self,
+        point_fraction: f64,
+        line_fraction: f64,
+        confidence: f64,
+        history: &[(f64, usize)],
+        rejection: f64,
+    ) -> usize {
         let p = self.all_inlier_probability(point_fraction, line_fraction);
-        if p <= 0.0 {
-            return usize::MAX;
+        let log_miss = |alpha: f64| (-(p * (1.0 - alpha.clamp(0.0, 1.0)))).ln_1p();
+        let target = (1.0 - confidence).ln();
+        let drawn: usize = history.iter().map(|h| h.1).sum();
+        let so_far: f64 = history.iter().map(|&(alpha, k)| k as f64 * log_miss(alpha)).sum();
+        if so_far <= target {
+            return drawn.max(1);
         }
-        if p >= 1.0 {
-            return 1;
+        let step = log_miss(rejection);
+        if step == f64::NEG_INFINITY {
+            return drawn + 1;
         }
-        let n = (1.0 - confidence).ln() / (-p).ln_1p();
-        if n.is_finite() && n < usize::MAX as f64 {
-            (n.ceil() as usize).max(1)
+        let n = (target - so_far) / step;
+        if n.is_finite() && n < (usize::MAX - drawn) as f64 {
+            drawn + (n.ceil() as usize).max(1)
         } else {
             usize::MAX
         }
@@ -209,9 +240,24 @@ mod tests {
     fn required_samples_follow_the_closed_form() {
         let points_only = Sampler::new(100, 30, &[false, false, false, true]);
         // ε = 0.5 for points: P = 1/8, N = ⌈ln(1e-4) / ln(7/8)⌉ = 69.
-        assert_eq!(points_only.required_samples(0.5, 0.0, 0.9999), 69);
-        assert_eq!(points_only.required_samples(0.0, 1.0, 0.9999), usize::MAX);
-        assert_eq!(points_only.required_samples(1.0, 0.0, 0.9999), 1);
+        assert_eq!(points_only.required_samples(0.5, 0.0, 0.9999, 0.0), 69);
+        assert_eq!(points_only.required_samples(0.0, 1.0, 0.9999, 0.0), usize::MAX);
+        assert_eq!(points_only.required_samples(1.0, 0.0, 0.9999, 0.0), 1);
+        // A sequential test that may reject a good hypothesis with probability 1/20:
+        // N = ⌈ln(1e-4) / ln(1 − 0.95 / 8)⌉ = 73.
+        assert_eq!(points_only.required_samples(0.5, 0.0, 0.9999, 0.05), 73);
+        // The cap of min_inlier_ratio = 0.1: ⌈ln(1e-4) / ln(1 − 1e-3)⌉ = 9206.
+        assert_eq!(points_only.required_samples(0.1, 0.1, 0.9999, 0.0), 9206);
+        // 40 samples without the test, then a test with α = 1/20: the first 40 count in full,
+        // 40 + ⌈(ln(1e-4) − 40 ln(7/8)) / ln(1 − 0.95 / 8)⌉ = 40 + 31 = 71.
+        assert_eq!(
+            points_only.required_samples_after(0.5, 0.0, 0.9999, &[(0.0, 40)], 0.05),
+            71
+        );
+        assert_eq!(
+            points_only.required_samples_after(0.5, 0.0, 0.9999, &[(0.0, 40), (0.05, 40)], 0.05),
+            80
+        );
         // All mixes and equal fractions: P = ε³ whatever the counts.
         let all = Sampler::new(100, 30, &[true; 4]);
         assert!((all.all_inlier_probability(0.4, 0.4) - 0.064).abs() < 1e-12);

@@ -11,13 +11,21 @@
 //!
 //! The MSAC score (Torr & Zisserman 2000) of a pose is `½ Σᵢ min(eᵢ², τᵢ²)`, with `τᵢ` the point or the
 //! line threshold: the reprojection cost with each residual capped at its threshold. Lower is better.
+//!
+//! The points and the lines are stored in a random order drawn once per call (the *slots*), and each
+//! hypothesis is verified from a random slot onwards, wrapping around: the correspondences verified
+//! first are a random subset, as the sequential test of [`super::sprt`] assumes, and not the same
+//! subset for every hypothesis (a good model whose first few slots happen to be outliers would
+//! otherwise be rejected every time).
 
 use super::super::candidates::feature;
 use super::super::correspondences::Correspondences;
 use super::super::minimal::Feature;
 use super::super::reprojection::Pose;
+use super::sprt::SprtTest;
 use crate::camera::Camera;
 use crate::error::Result;
+use crate::rng::Rng;
 use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Points per batch of the scoring loop.
@@ -46,23 +54,142 @@ struct ScoredLine {
     endpoints: [Vector3<f64>; 2],
 }
 
-/// Correspondences prepared once: the scorer's arrays and the minimal solvers' features.
+/// A random order of `n` items: `index[slot]` is the item in a slot, `slot[item]` its inverse.
+#[derive(Debug, Clone)]
+struct Order {
+    index: Vec<usize>,
+    slot: Vec<usize>,
+}
+
+/// Uniform in `0..n` (`n ≥ 1`; 0 for `n = 0`) by a multiply-shift of 64 random bits (Lemire 2019):
+/// no division, bias below `n / 2⁶⁴`.
+#[inline(always)]
+pub(crate) fn below(rng: &mut Rng, n: usize) -> usize {
+    ((rng.next_u64() as u128 * n as u128) >> 64) as usize
+}
+
+impl Order {
+    /// A uniformly random permutation (Fisher-Yates).
+    fn random(n: usize, rng: &mut Rng) -> Order {
+        let mut index: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            index.swap(i, below(rng, i + 1));
+        }
+        let mut slot = vec![0; n];
+        for (s, &i) in index.iter().enumerate() {
+            slot[i] = s;
+        }
+        Order { index, slot }
+    }
+}
+
+/// The outcome of scoring one hypothesis ([`Prepared::evaluate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Verdict {
+    /// Every error evaluated: the MSAC score.
+    Score(f64),
+    /// The partial score exceeded the bound: the hypothesis cannot beat the best model.
+    Beaten,
+    /// Rejected by the sequential test after `evaluated` correspondences per kind (points, lines; the
+    /// sample's own excluded), `consistent` of them within threshold.
+    Rejected {
+        evaluated: [usize; 2],
+        consistent: [usize; 2],
+    },
+}
+
+/// The sample's correspondences in the verification order of one hypothesis, to leave them out of
+/// the sequential test: per entry the kind (0 points, 1 lines), the rank from the start slot, and
+/// whether it is consistent.
+struct SampleRanks {
+    ranks: [(usize, usize, bool); 3],
+}
+
+impl SampleRanks {
+    /// `(evaluated, consistent)` sample correspondences of `kind` among the first `done` verified.
+    #[inline(always)]
+    fn among(&self, kind: usize, done: usize) -> (usize, usize) {
+        let mut out = (0, 0);
+        for &(k, rank, consistent) in &self.ranks {
+            if k == kind && rank < done {
+                out.0 += 1;
+                out.1 += consistent as usize;
+            }
+        }
+        out
+    }
+
+    /// The ranks of the entries of `kind` in increasing order, with whether each is consistent,
+    /// padded with `usize::MAX`.
+    fn sorted(&self, kind: usize) -> [(usize, bool); 4] {
+        let mut out = [(usize::MAX, false); 4];
+        let mut n = 0;
+        for &(k, rank, consistent) in &self.ranks {
+            if k == kind {
+                out[n] = (rank, consistent);
+                n += 1;
+            }
+        }
+        out[..n].sort_unstable();
+        out
+    }
+}
+
+/// The running `ln λ` of one hypothesis (see [`super::sprt`]): per correspondence verified, the
+/// increment of its kind, less those of the sample's own correspondences once they are passed.
+struct RunningTest<'a> {
+    test: &'a SprtTest,
+    log_lambda: f64,
+    /// Per kind, the sample's ranks (sorted, padded) and the next one not yet passed.
+    pending: [[(usize, bool); 4]; 2],
+    next: [usize; 2],
+}
+
+impl RunningTest<'_> {
+    /// Adds `count` verified correspondences of `kind`, `consistent` of them, `done` verified so far.
+    #[inline(always)]
+    fn add(&mut self, kind: usize, count: usize, consistent: usize, done: usize) {
+        let (a, b) = (self.test.consistent[kind], self.test.inconsistent[kind]);
+        self.log_lambda += consistent as f64 * a + (count - consistent) as f64 * b;
+        while self.pending[kind][self.next[kind]].0 < done {
+            self.log_lambda -= if self.pending[kind][self.next[kind]].1 { a } else { b };
+            self.next[kind] += 1;
+        }
+    }
+
+    fn rejects(&self) -> bool {
+        self.log_lambda > self.test.log_a
+    }
+}
+
+/// Correspondences prepared once: the scorer's arrays (in slot order) and the minimal solvers'
+/// features (in the order given).
 #[derive(Debug, Clone)]
 pub(crate) struct Prepared {
     camera: Camera,
     /// `K⁻ᵀ`: maps a camera-frame line `a × b` to its pixel form.
     k_inv_t: Matrix3<f64>,
+    /// Points and lines in slot order (verification), and in the order given (inlier masks).
     points: Vec<ScoredPoint>,
     lines: Vec<ScoredLine>,
-    /// Features for [`super::super::minimal::solve`]: points first, then lines.
+    points_given: Vec<ScoredPoint>,
+    lines_given: Vec<ScoredLine>,
+    point_order: Order,
+    line_order: Order,
+    /// `[u₀, v₀, u₁, v₁]`: the bounding box of the observed pixels (points and segment endpoints).
+    pub window: [f64; 4],
+    /// Features for [`super::super::minimal::solve`]: points first, then lines, in the order given.
     pub features: Vec<Feature>,
 }
 
 impl Prepared {
-    /// Prepares `corr` (already validated: finite, no zero-length segment).
-    pub fn new(camera: &Camera, corr: &Correspondences) -> Result<Prepared> {
+    /// Prepares `corr` (already validated: finite, no zero-length segment), drawing the slot order
+    /// from `rng`.
+    pub fn new(camera: &Camera, corr: &Correspondences, rng: &mut Rng) -> Result<Prepared> {
         let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
-        let points = corr
+        let point_order = Order::random(corr.n_points(), rng);
+        let line_order = Order::random(corr.n_lines(), rng);
+        let points_given: Vec<ScoredPoint> = corr
             .points2d
             .iter()
             .zip(&corr.points3d)
@@ -71,7 +198,7 @@ impl Prepared {
                 pixel: [u.x, u.y],
             })
             .collect();
-        let lines = corr
+        let lines_given: Vec<ScoredLine> = corr
             .lines2d
             .iter()
             .zip(&corr.lines3d)
@@ -80,14 +207,30 @@ impl Prepared {
                 endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
             })
             .collect();
+        let points = point_order.index.iter().map(|&i| points_given[i]).collect();
+        let lines = line_order.index.iter().map(|&i| lines_given[i]).collect();
         let features = (0..corr.n_points() + corr.n_lines())
             .map(|k| feature(camera, &k_inv, corr, k))
             .collect::<Result<Vec<Feature>>>()?;
+        let mut window = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        for u in corr.points2d.iter().chain(corr.lines2d.iter().flatten()) {
+            window = [
+                window[0].min(u.x),
+                window[1].min(u.y),
+                window[2].max(u.x),
+                window[3].max(u.y),
+            ];
+        }
         Ok(Prepared {
             camera: *camera,
             k_inv_t: k_inv.transpose(),
             points,
             lines,
+            points_given,
+            lines_given,
+            point_order,
+            line_order,
+            window,
             features,
         })
     }
@@ -100,17 +243,17 @@ impl Prepared {
         self.lines.len()
     }
 
-    /// Squared pixel error of point `i` at `pose` (infinite behind the camera).
+    /// Squared pixel error of `point` at `pose` (infinite behind the camera).
     #[inline(always)]
-    fn point_error2(&self, pose: &Pose, i: usize) -> f64 {
+    fn point_error2(&self, pose: &Pose, point: &ScoredPoint) -> f64 {
         let (r, t, c) = (&pose.0, &pose.1, &self.camera);
-        let [x, y, z] = self.points[i].object;
+        let [x, y, z] = point.object;
         let pz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t.z;
         let iz = 1.0 / pz;
         let xn = (r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + t.x) * iz;
         let yn = (r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + t.y) * iz;
-        let du = c.fx * xn + c.skew * yn + c.cx - self.points[i].pixel[0];
-        let dv = c.fy * yn + c.cy - self.points[i].pixel[1];
+        let du = c.fx * xn + c.skew * yn + c.cx - point.pixel[0];
+        let dv = c.fy * yn + c.cy - point.pixel[1];
         // A select rather than an early return, so that batches of points stay branch-free.
         if pz > 0.0 {
             du * du + dv * dv
@@ -119,11 +262,10 @@ impl Prepared {
         }
     }
 
-    /// Mean squared distance of line `i`'s observed endpoints to its projected line (infinite when an
-    /// object endpoint is behind the camera or the line projects to a point).
+    /// Mean squared distance of the observed endpoints of `line` to its projected line (infinite when
+    /// an object endpoint is behind the camera or the line projects to a point).
     #[inline(always)]
-    fn line_error2(&self, pose: &Pose, i: usize) -> f64 {
-        let line = &self.lines[i];
+    fn line_error2(&self, pose: &Pose, line: &ScoredLine) -> f64 {
         let a = pose.0 * line.object[0] + pose.1;
         let b = pose.0 * line.object[1] + pose.1;
         if !(a.z > 0.0 && b.z > 0.0) {
@@ -138,42 +280,153 @@ impl Prepared {
         0.5 * (d1 * d1 + d2 * d2) / scale2
     }
 
+    /// Squared error of feature `k` (points first, then lines, in the order given).
+    fn feature_error2(&self, pose: &Pose, k: usize) -> f64 {
+        if k < self.points.len() {
+            self.point_error2(pose, &self.points_given[k])
+        } else {
+            self.line_error2(pose, &self.lines_given[k - self.points.len()])
+        }
+    }
+
     /// Squared error of feature `k` (points first, then lines).
     #[cfg(test)]
     pub fn error2(&self, pose: &Pose, k: usize) -> f64 {
-        if k < self.points.len() {
-            self.point_error2(pose, k)
-        } else {
-            self.line_error2(pose, k - self.points.len())
-        }
+        self.feature_error2(pose, k)
     }
 
     /// The MSAC score `½ Σ min(eᵢ², τᵢ²)` of `pose`, or `None` as soon as the partial sum exceeds
     /// `bound` (the hypothesis cannot beat a model of score `bound`).
     pub fn score(&self, pose: &Pose, tau: &Thresholds, bound: f64) -> Option<f64> {
+        match self.evaluate(pose, tau, bound, None, None, [0, 0]).0 {
+            Verdict::Score(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// Scores `pose`, verifying the points and then the lines each from its `start` slot onwards
+    /// (wrapping around), with two early exits checked after every batch of points and every line:
+    /// [`Verdict::Beaten`] as soon as the partial MSAC sum exceeds `bound`, and with a `test`,
+    /// [`Verdict::Rejected`] as soon as its `ln λ` exceeds `ln A` (the correspondences of `sample`, the
+    /// hypothesis's own, are left out of `λ`). Also returns the number of errors evaluated.
+    pub fn evaluate(
+        &self,
+        pose: &Pose,
+        tau: &Thresholds,
+        bound: f64,
+        test: Option<&SprtTest>,
+        sample: Option<&[usize; 3]>,
+        start: [usize; 2],
+    ) -> (Verdict, usize) {
+        let (np, nl) = (self.points.len(), self.lines.len());
+        let start = [
+            if np > 0 { start[0] % np } else { 0 },
+            if nl > 0 { start[1] % nl } else { 0 },
+        ];
+        match test {
+            None => self.verify::<false>(pose, tau, bound, &SprtTest::NONE, None, start),
+            Some(test) => {
+                let skip = sample.map(|sample| SampleRanks {
+                    ranks: sample.map(|k| {
+                        let consistent = self.feature_error2(pose, k) <= if k < np { tau.point2 } else { tau.line2 };
+                        if k < np {
+                            (0, (self.point_order.slot[k] + np - start[0]) % np, consistent)
+                        } else {
+                            let slot = self.line_order.slot[k - np];
+                            (1, (slot + nl - start[1]) % nl, consistent)
+                        }
+                    }),
+                });
+                self.verify::<true>(pose, tau, bound, test, skip.as_ref(), start)
+            }
+        }
+    }
+
+    /// [`Prepared::evaluate`], with the sequential test compiled in or out (`TEST`).
+    #[inline(always)]
+    fn verify<const TEST: bool>(
+        &self,
+        pose: &Pose,
+        tau: &Thresholds,
+        bound: f64,
+        test: &SprtTest,
+        skip: Option<&SampleRanks>,
+        start: [usize; 2],
+    ) -> (Verdict, usize) {
+        let (np, nl) = (self.points.len(), self.lines.len());
         // Compare doubled sums with 2·bound: one multiplication for the whole call.
         let limit = 2.0 * bound;
         let mut sum = 0.0;
+        let (mut done, mut consistent) = ([0usize; 2], [0usize; 2]);
+        let no_sample = SampleRanks {
+            ranks: [(2, 0, false); 3],
+        };
+        let skip = skip.unwrap_or(&no_sample);
+        let mut running = RunningTest {
+            test,
+            log_lambda: 0.0,
+            pending: if TEST { [skip.sorted(0), skip.sorted(1)] } else { [[(usize::MAX, false); 4]; 2] },
+            next: [0; 2],
+        };
+        // The verdict of a rejection after `done` / `consistent`, the sample's own left out.
+        let rejected = |done: [usize; 2], consistent: [usize; 2]| {
+            let ((sp, cp), (sl, cl)) = (skip.among(0, done[0]), skip.among(1, done[1]));
+            Verdict::Rejected {
+                evaluated: [done[0] - sp, done[1] - sl],
+                consistent: [consistent[0] - cp, consistent[1] - cl],
+            }
+        };
         // Points in batches of LANES without branches inside (the compiler vectorises them), the
-        // early exit tested once per batch.
-        let full = self.points.len() - self.points.len() % LANES;
-        for i0 in (0..full).step_by(LANES) {
-            let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, i0 + l));
-            sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
-            if sum > limit {
-                return None;
+        // early exits tested once per batch; the slots from start[0] to the end, then from 0.
+        for (from, to) in [(start[0], np), (0, start[0])] {
+            let full = to - (to - from) % LANES;
+            for i0 in (from..full).step_by(LANES) {
+                let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, &self.points[i0 + l]));
+                sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
+                done[0] += LANES;
+                if sum > limit {
+                    return (Verdict::Beaten, done[0]);
+                }
+                if TEST {
+                    let c = e2.iter().filter(|&&e| e <= tau.point2).count();
+                    consistent[0] += c;
+                    running.add(0, LANES, c, done[0]);
+                    if running.rejects() {
+                        return (rejected(done, consistent), done[0]);
+                    }
+                }
+            }
+            for i in full..to {
+                let e2 = self.point_error2(pose, &self.points[i]);
+                sum += e2.min(tau.point2);
+                let c = (e2 <= tau.point2) as usize;
+                consistent[0] += c;
+                done[0] += 1;
+                if TEST {
+                    running.add(0, 1, c, done[0]);
+                }
             }
         }
-        for i in full..self.points.len() {
-            sum += self.point_error2(pose, i).min(tau.point2);
-        }
-        for i in 0..self.lines.len() {
-            sum += self.line_error2(pose, i).min(tau.line2);
+        for i in (start[1]..nl).chain(0..start[1]) {
+            let e2 = self.line_error2(pose, &self.lines[i]);
+            sum += e2.min(tau.line2);
+            let c = (e2 <= tau.line2) as usize;
+            consistent[1] += c;
+            done[1] += 1;
             if sum > limit {
-                return None;
+                return (Verdict::Beaten, done[0] + done[1]);
+            }
+            if TEST {
+                running.add(1, 1, c, done[1]);
+                if running.rejects() {
+                    return (rejected(done, consistent), done[0] + done[1]);
+                }
             }
         }
-        Some(0.5 * sum)
+        if sum > limit {
+            return (Verdict::Beaten, np + nl);
+        }
+        (Verdict::Score(0.5 * sum), np + nl)
     }
 
     /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`.
@@ -181,14 +434,10 @@ impl Prepared {
         0.5 * (self.points.len() as f64 * tau.point2 + self.lines.len() as f64 * tau.line2)
     }
 
-    /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines).
+    /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).
     pub fn inliers(&self, pose: &Pose, tau: &Thresholds) -> (Vec<bool>, Vec<bool>) {
-        let points = (0..self.points.len())
-            .map(|i| self.point_error2(pose, i) <= tau.point2)
-            .collect();
-        let lines = (0..self.lines.len())
-            .map(|i| self.line_error2(pose, i) <= tau.line2)
-            .collect();
+        let points = self.points_given.iter().map(|p| self.point_error2(pose, p) <= tau.point2).collect();
+        let lines = self.lines_given.iter().map(|l| self.line_error2(pose, l) <= tau.line2).collect();
         (points, lines)
     }
 
@@ -198,10 +447,10 @@ impl Prepared {
         let depth = |x: &Vector3<f64>| pose.0.row(2).transpose().dot(x) + pose.1.z;
         sample.iter().all(|&k| {
             if k < self.points.len() {
-                let [x, y, z] = self.points[k].object;
+                let [x, y, z] = self.points_given[k].object;
                 depth(&Vector3::new(x, y, z)) > 0.0
             } else {
-                self.lines[k - self.points.len()].object.iter().all(|x| depth(x) > 0.0)
+                self.lines_given[k - self.points.len()].object.iter().all(|x| depth(x) > 0.0)
             }
         })
     }
@@ -231,7 +480,7 @@ mod tests {
     fn errors_match_the_reprojection_cost_and_the_score_caps_them() {
         let scene = random_scene(SceneKind::General, 20, 8, 3);
         let corr = scene.noisy(2.0, true, &mut Rng::new(4));
-        let prepared = Prepared::new(&scene.camera, &corr).unwrap();
+        let prepared = Prepared::new(&scene.camera, &corr, &mut Rng::new(5)).unwrap();
         let pose = (scene.rotation, scene.translation);
         let reference = ReprojectionCost::of(&scene.camera, &corr).errors(&pose);
         for (k, e) in reference.iter().enumerate() {

@@ -33,10 +33,22 @@ fn loop_finds_the_inliers_and_stops_by_confidence() {
     assert!(out.inliers_points[..30].iter().all(|&m| !m));
     assert!(out.inliers_points[30..].iter().all(|&m| m));
     assert!(out.report.local_optimizations >= 1);
-    // ε = 1/2 for points only: at most ⌈ln(1e-4)/ln(7/8)⌉ = 69 samples once the best model is found.
-    assert!(out.report.iterations <= 69, "{:?}", out.report);
+    // ε = 1/2 for points only: ⌈ln(1e-4)/ln(7/8)⌉ = 69 samples once the best model is found; the SPRT
+    // keeps the pose of an all-inlier sample with probability 1 − 1/A, A ≥ 50 here (MODEL_COST C / m_S
+    // with C ≈ ln 2 and m_S ≤ 2): at most ⌈ln(1e-4)/ln(1 − 0.98/8)⌉ = 71 samples.
+    assert!(out.report.iterations <= 71, "{:?}", out.report);
     let (r, _) = out.pose.unwrap();
     assert!(crate::geometry::quaternion::rotation_distance(&r, &scene.rotation) < 0.01);
+    let without = RansacOptions {
+        sprt: false,
+        ..RansacOptions::default()
+    };
+    let plain = ransac(&scene.camera, &corr, &without, &TrustRegionOptions::default()).unwrap();
+    assert!(plain.report.iterations <= 69, "{:?}", plain.report);
+    assert_eq!(
+        (plain.inliers_points, plain.report.sprt_rejections),
+        (out.inliers_points, 0)
+    );
 }
 
 #[test]
