@@ -8,10 +8,12 @@
 //! verified in a random order (see [`super::scoring`]), the correspondences of its own sample skipped
 //! (they are consistent by construction), and after `j` of them the likelihood ratio
 //!
-//! `λ_j = Π_{i ≤ j} p(xᵢ | bad) / p(xᵢ | good)`, with `p(1|·) / p(1|·) = δ / ε` for a consistent one
+//! `λ_j = Π_{i ≤ j} p(xᵢ | bad) / p(xᵢ | good)`, a factor `δ / ε` for a consistent correspondence
 //! and `(1 − δ) / (1 − ε)` for an inconsistent one,
 //!
-//! is compared with a threshold `A`: the hypothesis is rejected as soon as `λ_j > A`. Under a good
+//! is compared with a threshold `A`: the hypothesis is rejected as soon as `λ_j > A` (checked after
+//! every batch of points and every line). The first hypothesis of a run is scored in full: the test
+//! needs a best model to compare with. Under a good
 //! hypothesis `λ_j` is a martingale of mean 1, so it is rejected with probability `α ≤ 1 / A` (Wald;
 //! Ville's inequality), whatever `δ`. Points and lines have their own `ε` and `δ`; `ln λ` is the sum of
 //! their terms.
@@ -32,8 +34,9 @@
 //!
 //! **Chance inliers.** Under the outlier model (each observation uniform in the window of the observed
 //! pixels, [`chance_probabilities`]), a wrong model has its 3 sample correspondences plus
-//! `X ~ Binomial(m, p)` chance inliers among the `m` others. [`chance_inliers`] bounds the count that
-//! the best of `M` such models reaches with probability at most `ψ`.
+//! `X = X_p + X_l` chance inliers, `X_p ~ Binomial(n_p, p_p)` among the points and
+//! `X_l ~ Binomial(n_l, p_l)` among the lines. [`chance_inliers`] gives the count that the best of `M`
+//! such models exceeds with probability at most `ψ`.
 
 /// `t_M`: the time of a minimal sample (P3P, the pose checks and the loop's bookkeeping) in units of
 /// one point-error evaluation, measured on 20,000 all-outlier points: about 1.1 µs per sample and
