@@ -231,3 +231,13 @@ def test_a_subnormal_covariance_is_an_error_not_nan(method):
     cov = np.stack([5e-324 * np.eye(2)] * 3)
     with pytest.raises(DegenerateConfigurationError, match=r"cov\[0\].*too small"):
         pluecker.triangulate_point(P, x, cov=cov, method=method)
+
+
+@pytest.mark.parametrize("bad", [[[1.0, 2.0], [3.0]], [[True, False], [True]]])
+def test_a_ragged_visible_is_a_type_error_naming_it(bad):
+    """A ragged ``visible`` leaked numpy's bare ValueError (found by the nightly property run)."""
+    P, x = stereo()
+    with pytest.raises(TypeError, match="^visible: "):
+        pluecker.triangulate_points(P[:2], np.zeros((2, 2, 2)), bad)
+    with pytest.raises(TypeError, match="^visible: "):
+        pluecker.triangulate_lines(P[:2], np.zeros((2, 2, 3)), bad)

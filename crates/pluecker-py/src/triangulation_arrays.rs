@@ -47,7 +47,11 @@ pub fn read_any(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec
 /// integer is an `InvalidOptionError` naming its index: `-1` must not count as visible).
 pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResult<Vec<bool>> {
     let np = obj.py().import("numpy")?;
-    let array = np.call_method1("asarray", (obj,))?;
+    let array = np.call_method1("asarray", (obj,)).map_err(|e| {
+        PyTypeError::new_err(format!(
+            "{name}: expected a boolean array; numpy could not convert the input: {e}"
+        ))
+    })?;
     let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
     if !matches!(kind.as_str(), "b" | "i" | "u") {
         let dtype = array.getattr("dtype")?;
