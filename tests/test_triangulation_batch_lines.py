@@ -211,12 +211,14 @@ def test_progress_counts_finished_tracks(seed):
     assert counts and counts == sorted(counts) and counts[-1] == 12 and len(set(counts)) == len(counts)
     np.testing.assert_array_equal(batch.plucker, plain.plucker)
 
-    # An exception raised by the callback comes out of the call (after the batch ends).
+    # An exception raised by the callback stops the batch and comes out of the call, with the results
+    # (test_interrupt.py checks them).
     def stop(done: int) -> None:
         raise KeyboardInterrupt
 
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt) as caught:
         pluecker.triangulate_lines(P, segments, method="local", progress=stop)
+    assert len(caught.value.partial) == len(segments)
 
 
 def test_gil_is_released_during_the_batch(seed):

@@ -260,8 +260,9 @@ class PoseResult:
         """Why the sampling loop stopped: ``"confidence"`` (enough samples for ``confidence`` at the
         best model's inlier fractions), ``"min_inlier_ratio"`` (enough samples to have found a model
         with that inlier fraction, while the best has fewer or there is none), ``"iteration_cap"``,
-        ``"time_budget"`` or ``"no_solvable_sample"`` (no mix of the data has a minimal solver); None
-        when not robust."""
+        ``"time_budget"``, ``"interrupted"`` (Ctrl-C; the result is then attached to the
+        ``KeyboardInterrupt`` as ``partial``) or ``"no_solvable_sample"`` (no mix of the data has a
+        minimal solver); None when not robust."""
     @property
     def covariance(self) -> Optional[NDArray[np.float64]]:
         """(6, 6) covariance ``σ² (JᵀJ)⁻¹`` of the pose at the returned pose: the rotation as the
@@ -484,7 +485,10 @@ def estimate_pose(
         InvalidOptionError, all subclasses of PlueckerError (a ValueError); TypeError for an
         argument that is not an array of real numbers.
 
-    The GIL is released while the solver runs.
+    The GIL is released while the solver runs. From 1000 correspondences on, the solve runs on a
+    worker thread and Ctrl-C stops it within about 0.1 s: the ``KeyboardInterrupt`` carries the pose
+    reached so far as ``partial`` (a robust pose: ``ransac_stop == "interrupted"``). Smaller problems
+    take milliseconds and see Ctrl-C when they end.
     """
 
 def pose_covariance(
@@ -608,7 +612,8 @@ class TriangulationReport:
         there); ``"at_infinity"`` (parallel rays, or no point in front costs less than a point at
         infinity: no finite estimate, ``X`` is NaN, ``cost`` the cost at infinity); ``"infeasible"`` (no
         estimate has every reprojection error below ``max_reprojection_error``);
-        ``"numerical_failure"``."""
+        ``"numerical_failure"``; in batches, ``"interrupted"`` or ``"time_budget"`` (the batch was stopped
+        by Ctrl-C, a failed ``progress`` callback or its ``time_budget``: see :func:`triangulate_lines`)."""
     @property
     def success(self) -> bool:
         """``status == "success"``."""
@@ -868,6 +873,8 @@ def triangulate_points(
     max_relative_gap: Optional[float] = None,
     max_reprojection_error: Optional[float] = None,
     max_nodes: Optional[int] = None,
+    progress: Optional[Callable[[int], Any]] = None,
+    time_budget: Optional[float] = None,
 ) -> PointTriangulations:
     """Triangulate many points (tracks) seen by the same cameras, in parallel with the GIL released.
 
@@ -882,6 +889,9 @@ def triangulate_points(
             e.g. -1, is an InvalidOptionError); None: every view.
         cov: pixel covariances (n, v, 2, 2); None for the identity.
         method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
+        progress, time_budget: as for :func:`triangulate_lines` (Ctrl-C too). ``linear`` and ``local``
+            batches of at most 4096 observations (tracks x views) without either run on the calling
+            thread and see Ctrl-C only when they end (they take milliseconds).
 
     Raises (for the whole call, before any track is solved): ShapeError, NonFiniteError or
     SingularCameraError for ``P``, TooFewCorrespondencesError (fewer than 2 cameras), InvalidOptionError;
@@ -1201,6 +1211,7 @@ def triangulate_lines(
     max_reprojection_error: Optional[float] = None,
     max_nodes: Optional[int] = None,
     progress: Optional[Callable[[int], Any]] = None,
+    time_budget: Optional[float] = None,
 ) -> LineTriangulations:
     """Triangulate many 3-D lines (tracks) in parallel with the GIL released (Josephson & Kahl 2008,
     sections 2.2, 3-4).
@@ -1220,10 +1231,18 @@ def triangulate_lines(
         cov: residual covariances (n, v, 2, 2); None: the identity for homogeneous lines, the endpoint
             model (``sigma``) for segments.
         method, sigma, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_line`.
-        progress: called from the calling thread with the number of finished tracks, about ten times a
-            second while it changes and once at the end; the batch then runs on a worker thread. An
-            exception it raises (e.g. ``KeyboardInterrupt``) stops the calls and is raised when the
-            batch has ended (a running batch is not interrupted).
+        progress: called from the calling thread with the number of finished tracks, about twenty times
+            a second while it changes and once at the end.
+        time_budget: seconds (finite, >= 0) after which the batch stops; None (default): no limit.
+
+    Stopping: the batch runs on a worker thread while the calling thread checks for Ctrl-C every 0.05 s.
+    Ctrl-C, or an exception raised by ``progress``, stops the batch within about 0.1 s: tracks being
+    solved stop at their next branch-and-bound node and keep the estimate and ``lower_bound`` reached
+    (uncertified), with status ``"interrupted"``; tracks not yet started get status ``"interrupted"``,
+    NaN estimates and the message ``"not solved: interrupted"``. Finished tracks keep their results.
+    The exception (``KeyboardInterrupt`` or the callback's) is then raised with these results attached
+    as its attribute ``partial``. A ``time_budget`` that runs out does the same with status
+    ``"time_budget"``, and the call returns normally.
 
     Raises (for the whole call, before any track is solved): ShapeError (shapes, or counts of views
     or tracks that differ from P's), NonFiniteError or SingularCameraError for shared cameras,
@@ -1312,6 +1331,7 @@ def triangulate_quadrics(
     max_reprojection_error: Optional[float] = None,
     max_nodes: Optional[int] = None,
     progress: Optional[Callable[[int], Any]] = None,
+    time_budget: Optional[float] = None,
 ) -> QuadricTriangulations:
     """Triangulate many ellipsoids (tracks) from their outline conics in parallel with the GIL released
     (Josephson & Kahl 2008, sections 2.3, 3-4).
@@ -1329,7 +1349,7 @@ def triangulate_quadrics(
             e.g. -1, is an InvalidOptionError); None: every view.
         cov: residual covariances (n, v, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
         method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_quadric`.
-        progress: as for :func:`triangulate_lines`.
+        progress, time_budget: as for :func:`triangulate_lines`, which also says how Ctrl-C stops the batch.
 
     Raises (for the whole call): ShapeError, NonFiniteError or SingularCameraError for shared cameras,
     TooFewCorrespondencesError (fewer than 3 cameras per track), InvalidOptionError; TypeError for an

@@ -204,7 +204,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help(sys.stderr)
         return 2
-    return args.handler(args)
+    try:
+        return args.handler(args)
+    except KeyboardInterrupt:  # Ctrl-C: one line and the shell's convention, 128 + SIGINT
+        print(f"pluecker {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 def _fail(command: str, message: str) -> int:

@@ -5,6 +5,7 @@
 //! first, so that both kinds of message read the same. A Rust panic never reaches the interpreter:
 //! [`guarded`] and [`solve`] turn it into `PlueckerError("internal error: ...")`.
 
+use pluecker::interrupt::StopReason;
 use pluecker::Error;
 use pyo3::create_exception;
 use pyo3::exceptions::PyValueError;
@@ -65,6 +66,12 @@ pub fn to_py_err(err: Error) -> PyErr {
         Error::Degenerate { .. } => DegenerateConfigurationError::new_err(message),
         Error::SingularCamera { .. } => SingularCameraError::new_err(message),
         Error::InvalidOption { .. } => InvalidOptionError::new_err(message),
+        Error::Interrupted {
+            reason: StopReason::Requested,
+        } => pyo3::exceptions::PyKeyboardInterrupt::new_err(message),
+        Error::Interrupted {
+            reason: StopReason::TimeBudget,
+        } => pyo3::exceptions::PyTimeoutError::new_err(message),
     }
 }
 

@@ -9,6 +9,7 @@ mod camera;
 mod convert;
 mod errors;
 mod geometry;
+mod interrupt;
 mod pickle;
 mod pose;
 mod reprojection;

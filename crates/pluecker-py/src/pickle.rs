@@ -217,7 +217,7 @@ pack_by_name!(Termination: Termination::GradientTolerance, Termination::RadiusTo
     Termination::SingularHessian, Termination::NonFiniteCost, Termination::ClosedForm);
 pack_by_name!(Method: Method::Linear, Method::Local, Method::Optimal);
 pack_by_name!(Status: Status::Success, Status::GapNotClosed, Status::NotConverged, Status::BehindCamera,
-    Status::AtInfinity, Status::Infeasible, Status::NumericalFailure);
+    Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::Interrupted, Status::TimeBudget);
 pack_by_name!(CertificateKind: CertificateKind::None, CertificateKind::ConvexityTest,
     CertificateKind::BranchAndBound);
 pack_by_name!(PoseMethod: PoseMethod::TrustRegion, PoseMethod::RotationThenTranslation,
@@ -226,7 +226,7 @@ pack_by_name!(PoseStatus: PoseStatus::Success, PoseStatus::NotConverged, PoseSta
     PoseStatus::PointsBehindCamera, PoseStatus::TooFewInliers, PoseStatus::Ambiguous, PoseStatus::NoHypothesis);
 pack_by_name!(CovarianceSource: CovarianceSource::Given, CovarianceSource::Estimated);
 pack_by_name!(RansacStop: RansacStop::Confidence, RansacStop::IterationCap, RansacStop::TimeBudget,
-    RansacStop::NoSolvableSample, RansacStop::MinInlierRatio);
+    RansacStop::NoSolvableSample, RansacStop::MinInlierRatio, RansacStop::Interrupted);
 
 /// [`Pack`] for a struct of packable fields: `pack` destructures it completely (a new field does
 /// not compile until listed) and `unpack` reads the fields back in the same order.

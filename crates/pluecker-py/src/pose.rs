@@ -3,7 +3,8 @@
 
 use crate::camera::PyCamera;
 use crate::convert::{optional_real, points, rotation, seconds_arg, segments, vector, Integer, Real};
-use crate::errors::{shape_error, solve};
+use crate::errors::shape_error;
+use crate::interrupt::{run_interruptible, with_partial};
 use crate::result::PyPoseResult;
 use nalgebra::{Matrix3, Vector3};
 use pluecker::pose::{Correspondences, Method, PoseOptions, RansacOptions};
@@ -121,6 +122,10 @@ impl RobustArgs {
     }
 }
 
+/// Correspondences from which `estimate_pose` runs on a worker thread, so that Ctrl-C stops it
+/// within about 0.1 s (fewer take milliseconds, and run on the calling thread).
+const SHORT_POSE: usize = 1000;
+
 /// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
 /// robustly (LO-RANSAC), with its covariance.
 #[pyfunction]
@@ -162,7 +167,7 @@ pub fn estimate_pose(
     certify: bool,
     certify_gap: Real,
     ambiguity_threshold: Real,
-) -> PyResult<PyPoseResult> {
+) -> PyResult<Py<PyPoseResult>> {
     let camera = camera.get().inner;
     let mut opts = options(
         method,
@@ -195,7 +200,9 @@ pub fn estimate_pose(
     certificate.validate().map_err(crate::errors::to_py_err)?;
     opts.certify = certify.then_some(certificate);
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
-    let result = solve(py, move || {
+    // A pose from fewer correspondences ends within milliseconds (see `interrupt::run_interruptible`).
+    let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
+    let outcome = run_interruptible(py, None, None, short, move |_| {
         pluecker::estimate_pose(&camera, &corr, &opts).map_err(|e| match e {
             // The core calls the paper's λ `lambda`; Python calls it `penalty`.
             Error::InvalidOption { name, reason } if name == "lambda" => Error::InvalidOption {
@@ -205,5 +212,10 @@ pub fn estimate_pose(
             e => e,
         })
     })?;
-    Ok(PyPoseResult::wrap(result))
+    let result = Py::new(py, PyPoseResult::wrap(outcome.value))?;
+    match outcome.pending {
+        // Ctrl-C: the pose reached so far (RANSAC stopped with `ransac_stop == "interrupted"`).
+        Some(e) => Err(with_partial(py, e, result.into_any())),
+        None => Ok(result),
+    }
 }

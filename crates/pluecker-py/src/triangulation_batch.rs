@@ -8,7 +8,8 @@
 //! positive definite, ...) gets an error status and a message and never stops the others. Method
 //! `linear` takes the core's allocation-free path (`triangulate_points_linear`).
 
-use crate::errors::{shape_error, solve, to_py_err};
+use crate::errors::{shape_error, to_py_err};
+use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::triangulation::{options, renamed, POINT_NAMES};
 use crate::triangulation_arrays::{cameras, read, read_mask, shape_string, Dim};
 use crate::triangulation_batch_lines::{per_observation, push_covariance};
@@ -26,6 +27,7 @@ use pyo3::prelude::*;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use pyo3::types::PyTuple;
 
+use std::sync::atomic::Ordering;
 use std::time::Instant;
 
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
@@ -112,9 +114,13 @@ impl PyPointTriangulations {
     }
 }
 
+/// Observations (tracks x views) up to which a `linear` or `local` batch runs on the calling thread
+/// ([`interrupt::run_interruptible`]'s `short`).
+const SHORT_BATCH: usize = 4096;
+
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, x, visible = None, cov = None, method = "optimal", *, max_relative_gap = None, max_reprojection_error = None, max_nodes = None))]
+#[pyo3(signature = (P, x, visible = None, cov = None, method = "optimal", *, max_relative_gap = None, max_reprojection_error = None, max_nodes = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_points(
     py: Python<'_>,
@@ -126,7 +132,10 @@ pub fn triangulate_points(
     max_relative_gap: Option<Real>,
     max_reprojection_error: Option<Real>,
     max_nodes: Option<Integer>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
 ) -> PyResult<Py<PyPointTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = cameras("P", P)?;
     let v = cams.len();
@@ -148,7 +157,9 @@ pub fn triangulate_points(
     let n = shape[0];
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
     let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
-    let (report, points) = solve(py, move || {
+    // The linear and local solves of a few thousand observations end within milliseconds.
+    let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
+    let outcome = run_interruptible(py, progress, budget, short, move |done| {
         let tracks = PointTracks {
             observations: &observations,
             visible: mask.as_deref(),
@@ -159,12 +170,13 @@ pub fn triangulate_points(
             let linear = triangulate_points_linear(&cams, &tracks).map_err(|e| renamed(e, POINT_NAMES))?;
             // The fast path does not time tracks one by one: each gets the batch's mean.
             let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
+            done.store(n, Ordering::Relaxed);
             return Ok(PyPointTriangulations::linear(linear, mean));
         }
-        let results = core_points(&cams, &tracks, &opts).map_err(|e| renamed(e, POINT_NAMES))?;
+        let results = core_points(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
         Ok(collect::<PyPointTriangulations>(opts.method, results))
     })?;
-    Py::new(py, PyClassInitializer::from(report).add_subclass(points))
+    batch_result(py, outcome)
 }
 
 pack_struct!(PyPointTriangulations { x, covariance });

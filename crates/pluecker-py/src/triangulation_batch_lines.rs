@@ -6,10 +6,12 @@
 //!
 //! The numpy arrays go to the core as flat row-major slices, one copy each. Cameras are `(v, 3, 4)`,
 //! shared by every track, or `(n, v, 3, 4)`, one set per track. A track the core rejects gets an
-//! error status and a message and never stops the others. With a `progress` callable the batch runs
-//! on a worker thread while the calling thread reports the count of finished tracks to it.
+//! error status and a message and never stops the others. The batch runs on a worker thread while
+//! the calling thread checks for Ctrl-C and reports the count of finished tracks to `progress`
+//! ([`crate::interrupt`]).
 
-use crate::errors::{guarded, invalid_argument, shape_error, solve, to_py_err};
+use crate::errors::{invalid_argument, shape_error, to_py_err};
+use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::triangulation::{options, renamed};
 use crate::triangulation_arrays::{read, read_any, read_mask, shape_string, Dim};
 use crate::triangulation_batch_report::{batch_dict, collect, PyBatchReport, TrackColumns};
@@ -30,9 +32,6 @@ use pyo3::prelude::*;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use pyo3::types::PyTuple;
 
-use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Duration;
 
 /// A float64 array of `shape` from row-major `values`.
 fn array<'py>(py: Python<'py>, values: &[f64], shape: &[usize]) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
@@ -306,59 +305,9 @@ pub(crate) fn per_observation(
     Ok(values)
 }
 
-/// Runs a batch with the GIL released, like [`solve`]. With a `progress` callable the batch runs on
-/// a worker thread and this thread calls `progress(done)` (finished tracks) about ten times a second
-/// while the count changes, and once at the end with the final count. An exception raised by
-/// `progress` (e.g. `KeyboardInterrupt`) stops the reports and is raised once the batch has ended.
-fn run_batch<T, F>(py: Python<'_>, progress: Option<&Bound<'_, PyAny>>, work: F) -> PyResult<T>
-where
-    T: Send,
-    F: FnOnce(Option<&AtomicUsize>) -> Result<T, Error> + Send,
-{
-    let Some(callback) = progress else {
-        return solve(py, move || work(None));
-    };
-    let callback = callback.clone().unbind();
-    let done = AtomicUsize::new(0);
-    let mut failure: Option<PyErr> = None;
-    let joined = py.allow_threads(|| {
-        std::thread::scope(|scope| {
-            let caller = std::thread::current();
-            let done = &done;
-            let worker = scope.spawn(move || {
-                let out = catch_unwind(AssertUnwindSafe(|| work(Some(done))));
-                caller.unpark();
-                out
-            });
-            let mut reported = None;
-            loop {
-                let finished = worker.is_finished();
-                let now = done.load(Ordering::Relaxed);
-                if failure.is_none() && reported != Some(now) {
-                    reported = Some(now);
-                    Python::with_gil(|py| {
-                        if let Err(e) = callback.call1(py, (now,)) {
-                            failure = Some(e);
-                        }
-                    });
-                }
-                if finished {
-                    break;
-                }
-                std::thread::park_timeout(Duration::from_millis(100));
-            }
-            worker.join().unwrap_or_else(Err)
-        })
-    });
-    if let Some(e) = failure {
-        return Err(e);
-    }
-    guarded(|| joined.unwrap_or_else(|payload| resume_unwind(payload)))
-}
-
 /// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, lines, visible = None, cov = None, method = "optimal", *, sigma = None, max_relative_gap = None, max_reprojection_error = None, max_nodes = None, progress = None))]
+#[pyo3(signature = (P, lines, visible = None, cov = None, method = "optimal", *, sigma = None, max_relative_gap = None, max_reprojection_error = None, max_nodes = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_lines(
     py: Python<'_>,
@@ -372,7 +321,9 @@ pub fn triangulate_lines(
     max_reprojection_error: Option<Real>,
     max_nodes: Option<Integer>,
     progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
 ) -> PyResult<Py<PyLineTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
     let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let sigma = optional_real("sigma", sigma)?;
     let cams = Cameras::read(P, 2, opts.method)?;
@@ -402,7 +353,7 @@ pub fn triangulate_lines(
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
     let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
     let sigma = sigma.unwrap_or(1.0);
-    let (report, results) = run_batch(py, progress, move |done| {
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = LineTracks {
             lines: if segments {
                 ImageLines::Segments {
@@ -415,15 +366,15 @@ pub fn triangulate_lines(
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let results = core_lines(cams.core(), &tracks, &opts, done).map_err(|e| renamed(e, LINE_NAMES))?;
+        let results = core_lines(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
         Ok(collect::<PyLineTriangulations>(opts.method, results))
     })?;
-    Py::new(py, PyClassInitializer::from(report).add_subclass(results))
+    batch_result(py, outcome)
 }
 
 /// Triangulates many ellipsoids (tracks) from their outline conics in parallel (Josephson & Kahl 2008).
 #[pyfunction]
-#[pyo3(signature = (P, conics, visible = None, cov = None, method = "optimal", *, max_relative_gap = None, max_reprojection_error = None, max_nodes = None, progress = None))]
+#[pyo3(signature = (P, conics, visible = None, cov = None, method = "optimal", *, max_relative_gap = None, max_reprojection_error = None, max_nodes = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_quadrics(
     py: Python<'_>,
@@ -436,7 +387,9 @@ pub fn triangulate_quadrics(
     max_reprojection_error: Option<Real>,
     max_nodes: Option<Integer>,
     progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
     let opts: TriangulationOptions = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
     let cams = Cameras::read(P, 3, opts.method)?;
     let spec = [Dim::Free("n"), Dim::Free("v"), Dim::Fixed(3), Dim::Fixed(3)];
@@ -445,16 +398,16 @@ pub fn triangulate_quadrics(
     let (n, v) = (shape[0], shape[1]);
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
     let covariances = cov.map(|c| per_observation("cov", c, n, v, [5, 5])).transpose()?;
-    let (report, results) = run_batch(py, progress, move |done| {
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = QuadricTracks {
             conics: &values,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let results = core_quadrics(cams.core(), &tracks, &opts, done).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+        let results = core_quadrics(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
         Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;
-    Py::new(py, PyClassInitializer::from(report).add_subclass(results))
+    batch_result(py, outcome)
 }
 
 pack_struct!(PyLineTriangulations { plucker, point, direction, chart_axes, covariance });

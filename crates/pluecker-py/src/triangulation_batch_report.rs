@@ -8,6 +8,7 @@
 use crate::triangulation::renamed;
 use numpy::PyArray1;
 use pluecker::triangulation::{CertificateKind, Method, Report, Status};
+use pluecker::interrupt::StopReason;
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -25,6 +26,21 @@ pub(crate) fn error_status(err: &Error) -> &'static str {
         Error::SingularCamera { .. } => "singular_camera",
         Error::Shape { .. } => "invalid_input",
         Error::InvalidOption { .. } => "invalid_option",
+        Error::Interrupted { reason } => Status::stopped(*reason).as_str(),
+    }
+}
+
+/// Why track of `status` and `cost` was not started, if the batch was stopped before it (its cost is
+/// NaN; a track stopped while being solved keeps the cost it reached).
+fn not_started(status: &str, cost: f64) -> Option<StopReason> {
+    if !cost.is_nan() {
+        None
+    } else if status == Status::Interrupted.as_str() {
+        Some(StopReason::Requested)
+    } else if status == Status::TimeBudget.as_str() {
+        Some(StopReason::TimeBudget)
+    } else {
+        None
     }
 }
 
@@ -135,7 +151,15 @@ impl PyBatchReport {
 
     /// Appends track `t`, rejected by the core with `err` (its core argument names renamed by
     /// `C::NAMES`): NaN cost and estimates, the error's status and message, time 0.
+    ///
+    /// A track the call was stopped before (`Error::Interrupted`) stores no message: `messages` says
+    /// it from the status, so that stopping a batch of millions of tracks stays cheap.
     pub(crate) fn reject<C: TrackColumns>(&mut self, columns: &mut C, t: usize, err: Error) {
+        if let Error::Interrupted { reason } = err {
+            self.push_uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0);
+            columns.push_missing();
+            return;
+        }
         let err = renamed(err, C::NAMES);
         self.push_uncertified(f64::NAN, error_status(&err), 0.0);
         self.errors.push((t, C::message(t, &err)));
@@ -208,7 +232,16 @@ impl PyBatchReport {
 
     #[getter]
     fn messages(&self) -> Vec<String> {
-        let mut out = vec![String::new(); self.len()];
+        let mut out: Vec<String> = self
+            .status
+            .iter()
+            .zip(&self.cost)
+            .enumerate()
+            .map(|(t, (&status, cost))| match not_started(status, *cost) {
+                Some(reason) => format!("track {t}: {}", Error::Interrupted { reason }),
+                None => String::new(),
+            })
+            .collect();
         for (track, message) in &self.errors {
             out[*track] = message.clone();
         }

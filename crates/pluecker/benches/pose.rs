@@ -109,7 +109,7 @@ fn outlier_problem(ratio: f64, seed: u64) -> (Scene, Correspondences) {
     let scene = random_scene(SceneKind::General, n_points, n_lines, seed);
     let mut rng = Rng::new(seed);
     let mut corr = scene.noisy(SIGMA_PX, true, &mut rng);
-    let mut pixel = |rng: &mut Rng| Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+    let pixel = |rng: &mut Rng| Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
     for i in rng.sample_indices(n_points, (ratio * n_points as f64).round() as usize) {
         corr.points2d[i] = pixel(&mut rng);
     }

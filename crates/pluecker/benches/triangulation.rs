@@ -177,7 +177,7 @@ fn bench_batch(c: &mut Criterion) {
             ..Default::default()
         };
         group.bench_function(format!("5-views-10deg/{}", method.as_str()), |b| {
-            b.iter(|| black_box(triangulate_points(&scene.cameras, &tracks, &opts).unwrap()))
+            b.iter(|| black_box(triangulate_points(&scene.cameras, &tracks, &opts, None).unwrap()))
         });
     }
     group.finish();

@@ -163,7 +163,7 @@ fn run(name: &str, data: &Dataset, views: &[usize]) {
         covariances: None,
     };
     let started = std::time::Instant::now();
-    let results = triangulate_points(&data.cameras, &tracks, &opts).unwrap();
+    let results = triangulate_points(&data.cameras, &tracks, &opts, None).unwrap();
     let elapsed = started.elapsed().as_secs_f64();
     let batch_certified = results
         .iter()

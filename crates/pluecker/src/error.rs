@@ -21,6 +21,8 @@ pub enum Error {
     SingularCamera { what: String },
     /// An option is out of its documented range.
     InvalidOption { name: String, reason: String },
+    /// The call was stopped ([`crate::interrupt`]) before this problem (a batch track) was solved.
+    Interrupted { reason: crate::interrupt::StopReason },
 }
 
 impl fmt::Display for Error {
@@ -38,6 +40,7 @@ impl fmt::Display for Error {
             Error::Degenerate { what } => write!(f, "degenerate configuration: {what}"),
             Error::SingularCamera { what } => write!(f, "singular camera: {what}"),
             Error::InvalidOption { name, reason } => write!(f, "invalid option '{name}': {reason}"),
+            Error::Interrupted { reason } => write!(f, "not solved: {}", reason.describe()),
         }
     }
 }

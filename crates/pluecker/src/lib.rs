@@ -27,6 +27,7 @@ pub mod camera;
 pub mod error;
 pub mod geometry;
 pub mod global;
+pub mod interrupt;
 pub mod optim;
 pub mod pose;
 pub mod rng;

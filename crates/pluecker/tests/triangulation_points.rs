@@ -417,7 +417,7 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         visible: Some(&visible),
         covariances: Some(&covariances),
     };
-    let results = triangulate_points(&cameras, &tracks, &TriangulationOptions::default()).unwrap();
+    let results = triangulate_points(&cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
     assert!(matches!(&results[1], Err(Error::NonFinite { what, index: 3 }) if what == "observations[1]"));
     assert!(matches!(&results[3], Err(Error::TooFewCorrespondences { .. })));
     assert!(matches!(&results[4], Err(Error::Degenerate { what }) if what.contains("covariances[4]")));
@@ -461,7 +461,7 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         covariances: None,
     };
     assert!(matches!(
-        triangulate_points(&cameras, &short, &TriangulationOptions::default()),
+        triangulate_points(&cameras, &short, &TriangulationOptions::default(), None),
         Err(Error::Shape { .. })
     ));
     let mask = PointTracks {

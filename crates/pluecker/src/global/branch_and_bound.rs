@@ -10,10 +10,12 @@
 //! The search always expands the open region with the least lower bound; its bound is the global
 //! lower bound (every admissible point lies in an open region, in a pruned one whose bound is
 //! recorded, or in a region proved empty). It stops when `(upper − lower) ≤ max_relative_gap · upper`
-//! or after `max_nodes` bound computations. Splitting (section 4.2): the oracle picks the axis and
+//! or after `max_nodes` bound computations, or when the call is stopped ([`crate::interrupt`], polled
+//! before every split; [`BranchAndBoundResult::stopped`]). Splitting (section 4.2): the oracle picks the axis and
 //! the position ([`BoundingOracle::split`]; by default the widest axis at the relaxed minimiser,
 //! kept inside the middle half of the interval so that every split shrinks the region).
 
+use crate::interrupt::{stop_reason, StopReason};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -150,6 +152,8 @@ pub struct BranchAndBoundResult<C> {
     pub box_lower_bound: f64,
     /// True when the gap closed.
     pub converged: bool,
+    /// Why the search was stopped before the gap closed or `max_nodes` was reached, if it was.
+    pub stopped: Option<StopReason>,
     /// Bound computations (root included).
     pub nodes: usize,
     /// Regions whose bound computation failed.
@@ -246,13 +250,14 @@ impl<C> Search<C> {
         self.heap.push(Open { lower, region, hint });
     }
 
-    fn finish(self, lower_bound: f64, converged: bool) -> BranchAndBoundResult<C> {
+    fn finish(self, lower_bound: f64, converged: bool, stopped: Option<StopReason>) -> BranchAndBoundResult<C> {
         let open = self.heap.iter().map(|o| o.lower).fold(f64::INFINITY, f64::min);
         BranchAndBoundResult {
             box_lower_bound: open.min(self.pruned_floor),
             best: self.best,
             lower_bound,
             converged,
+            stopped,
             nodes: self.nodes,
             failed_nodes: self.failed_nodes,
             solver_iterations: self.solver_iterations,
@@ -288,10 +293,13 @@ pub fn branch_and_bound<O: BoundingOracle>(
         let open_lower = search.heap.peek().map_or(f64::INFINITY, |top| top.lower);
         let lower = open_lower.min(search.pruned_floor).min(upper);
         if search.heap.is_empty() || search.closed(upper, lower) {
-            return search.finish(lower, true);
+            return search.finish(lower, true, None);
         }
         if search.nodes >= opts.max_nodes {
-            return search.finish(lower, false);
+            return search.finish(lower, false, None);
+        }
+        if let Some(reason) = stop_reason() {
+            return search.finish(lower, false, Some(reason));
         }
         let open = search.heap.pop().expect("the heap is not empty");
         let (axis, at) = oracle.split(&open.region, open.hint.as_deref());
@@ -385,6 +393,27 @@ mod tests {
         };
         let result = branch_and_bound(&mut oracle, root, None, &opts);
         assert!(!result.converged && result.nodes <= 16);
+        assert!(result.lower_bound <= result.best.unwrap().0);
+    }
+
+    #[test]
+    fn a_stop_ends_the_search_with_an_honest_bound() {
+        use crate::interrupt::{with_stop, Stop};
+        use std::sync::Arc;
+        let mut oracle = DoubleWell { calls: 0 };
+        let root = Region::new(vec![-2.0; 3], vec![2.5; 3]);
+        let opts = BranchAndBoundOptions {
+            max_relative_gap: 1e-9,
+            max_nodes: 200_000,
+            ..Default::default()
+        };
+        let stop = Arc::new(Stop::new());
+        stop.request();
+        let result = with_stop(stop, || branch_and_bound(&mut oracle, root, None, &opts));
+        // Only the root is bounded: the stop is polled before the first split.
+        assert_eq!(result.nodes, 1);
+        assert_eq!(result.stopped, Some(StopReason::Requested));
+        assert!(!result.converged);
         assert!(result.lower_bound <= result.best.unwrap().0);
     }
 }

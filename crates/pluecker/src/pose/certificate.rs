@@ -42,6 +42,7 @@
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
 //! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
 
+use crate::interrupt::stop_reason;
 use super::correspondences::Correspondences;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
@@ -399,6 +400,9 @@ fn localise(
             out.nodes += 1;
             if out.nodes > max_nodes {
                 return Err(format!("not proved: the rotation search reached max_nodes = {max_nodes}"));
+            }
+            if let Some(reason) = stop_reason() {
+                return Err(format!("not proved: {} during the rotation search", reason.describe()));
             }
             // The cube's nearest point to the origin: cubes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
             let nearest = cell.centre.map(|c| (c.abs() - cell.half).max(0.0)).norm();

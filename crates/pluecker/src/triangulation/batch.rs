@@ -11,6 +11,10 @@
 //! [`triangulate_points_linear`] is the fast path of [`Method::Linear`]: no allocation per track,
 //! the results written straight into flat arrays.
 //!
+//! Every batch polls the stop of [`crate::interrupt`] before each track: tracks not started when it
+//! fires are rejected with [`Error::Interrupted`] (the others keep their results), and a track being
+//! solved by branch and bound ends with status `Interrupted` or `TimeBudget`.
+//!
 //! The line and quadric batches ([`super::line_batch`], [`super::quadric_batch`]) share this
 //! module's helpers: the shape checks of flat per-observation arrays, the visible views of a track,
 //! the cameras of a batch ([`TrackCameras`]), the parallel loop over tracks and the restating of a
@@ -24,6 +28,7 @@ use super::uncertainty::covariance_of_information3;
 use super::views::{centre, depth_normalized, validate_cameras};
 use super::{Method, Status, TriangulationOptions};
 use crate::error::{Error, Result};
+use crate::interrupt::{current, stop_reason, with_stop};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -205,16 +210,23 @@ fn no_parallax(t: usize) -> Error {
 
 /// `one(t)` for every track `t < n`, in parallel (rayon tasks of at least `min_len` tracks), in the
 /// order of the tracks; `done`, when given, counts the finished tracks (another thread may poll it).
-pub(crate) fn solve_tracks<T, F>(n: usize, min_len: usize, done: Option<&AtomicUsize>, one: F) -> Vec<T>
+/// The stop installed on the calling thread ([`crate::interrupt`]) is carried into every task: a
+/// track not started when it fires is `Err(Error::Interrupted)`, and the solvers of a started one
+/// poll it themselves.
+pub(crate) fn solve_tracks<X, F>(n: usize, min_len: usize, done: Option<&AtomicUsize>, one: F) -> Vec<Result<X>>
 where
-    T: Send,
-    F: Fn(usize) -> T + Sync + Send,
+    X: Send,
+    F: Fn(usize) -> Result<X> + Sync + Send,
 {
+    let stop = current();
     (0..n)
         .into_par_iter()
         .with_min_len(min_len.max(1))
         .map(|t| {
-            let out = one(t);
+            let out = with_stop(stop.clone(), || match stop_reason() {
+                Some(reason) => Err(Error::Interrupted { reason }),
+                None => one(t),
+            });
             if let Some(done) = done {
                 done.fetch_add(1, Ordering::Relaxed);
             }
@@ -330,16 +342,18 @@ pub(crate) fn in_track(err: Error, t: usize, seen: &[usize], arrays: &[&str]) ->
             required,
             actual: format!("track {t}: {actual}"),
         },
-        other @ Error::InvalidOption { .. } => other,
+        other @ (Error::InvalidOption { .. } | Error::Interrupted { .. }) => other,
     }
 }
 
 /// Triangulates every track of `tracks` seen by `cameras` (3x4, world → pixels) with `opts`, in
 /// parallel. The outer error is about the whole call; each track has its own result (module docs).
+/// `progress`, when given, counts the finished tracks, for another thread to poll.
 pub fn triangulate_points(
     cameras: &[Matrix3x4<f64>],
     tracks: &PointTracks,
     opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
     opts.validate()?;
     let (n, prepared) = check_batch(cameras, tracks)?;
@@ -362,7 +376,7 @@ pub fn triangulate_points(
         }
         Ok(solve_views(&views, &frame, opts, started))
     };
-    Ok(solve_tracks(n, 16, None, one))
+    Ok(solve_tracks(n, 16, progress, one))
 }
 
 /// The result of [`triangulate_points_linear`], as flat arrays of length `n` (points `n · 3`).
@@ -456,6 +470,7 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
         covariances: vec![f64::NAN; 9 * n],
         outcomes: Vec::with_capacity(n),
     };
+    let stop = current();
     (0..n)
         .into_par_iter()
         .with_min_len(256)
@@ -463,18 +478,20 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
         .zip(out.costs.par_iter_mut())
         .zip(out.covariances.par_chunks_mut(9))
         .map(
-            |(((t, point), cost), covariance)| match linear_track(&prepared, tracks, v, t) {
-                Ok((x, c, cov, status)) => {
-                    point.copy_from_slice(x.as_slice());
-                    *cost = c;
-                    if let Some(cov) = cov {
-                        // Symmetric: column-major storage is the row-major layout.
-                        covariance.copy_from_slice(cov.as_slice());
-                    }
-                    Ok(status)
+            |(((t, point), cost), covariance)| match stop.as_ref().and_then(|s| s.reason()) {
+                Some(reason) => Err(Error::Interrupted { reason }),
+                None => linear_track(&prepared, tracks, v, t),
+            }
+            .and_then(|track| {
+                let (x, c, cov, status) = track;
+                point.copy_from_slice(x.as_slice());
+                *cost = c;
+                if let Some(cov) = cov {
+                    // Symmetric: column-major storage is the row-major layout.
+                    covariance.copy_from_slice(cov.as_slice());
                 }
-                Err(e) => Err(e),
-            },
+                Ok(status)
+            }),
         )
         .collect_into_vec(&mut out.outcomes);
     Ok(out)

@@ -536,7 +536,8 @@ pub(crate) fn optimal_line(
 
 /// The certificate of a finished branch and bound whose best cost is `best_cost`: certified when the
 /// relative gap is at most `max_relative_gap`; [`Status::Infeasible`] when the whole box was proved
-/// empty (no primitive in the domain).
+/// empty (no primitive in the domain); [`Status::Interrupted`] or [`Status::TimeBudget`] when the
+/// call was stopped before the gap closed.
 pub(crate) fn certificate_of<C>(
     result: &BranchAndBoundResult<C>,
     best_cost: f64,
@@ -558,10 +559,10 @@ pub(crate) fn certificate_of<C>(
         0.0
     };
     let certified = relative_gap <= max_relative_gap;
-    let status = if certified {
-        Status::Success
-    } else {
-        Status::GapNotClosed
+    let status = match result.stopped {
+        _ if certified => Status::Success,
+        Some(reason) => Status::stopped(reason),
+        None => Status::GapNotClosed,
     };
     (
         status,

@@ -40,6 +40,7 @@ pub mod uncertainty;
 pub mod views;
 
 use crate::error::{Error, Result};
+use crate::interrupt::StopReason;
 use crate::optim::{Summary, Termination, TrustRegionOptions};
 
 /// The three estimators of every primitive.
@@ -145,6 +146,12 @@ pub enum Status {
     Infeasible,
     /// The solver failed numerically (a singular system, a conic solver failure).
     NumericalFailure,
+    /// The call was stopped ([`crate::interrupt`]: Ctrl-C, a failed progress callback) before the
+    /// solve ended: the estimate and lower bound are those reached, uncertified. In a batch, a track
+    /// not started when the stop came is rejected with the same status and no estimate.
+    Interrupted,
+    /// Like [`Status::Interrupted`], stopped because the call's time budget ran out.
+    TimeBudget,
 }
 
 impl Status {
@@ -158,6 +165,16 @@ impl Status {
             Status::AtInfinity => "at_infinity",
             Status::Infeasible => "infeasible",
             Status::NumericalFailure => "numerical_failure",
+            Status::Interrupted => "interrupted",
+            Status::TimeBudget => "time_budget",
+        }
+    }
+
+    /// The status of a solve stopped for `reason`.
+    pub fn stopped(reason: StopReason) -> Status {
+        match reason {
+            StopReason::Requested => Status::Interrupted,
+            StopReason::TimeBudget => Status::TimeBudget,
         }
     }
 }

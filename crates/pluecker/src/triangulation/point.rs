@@ -404,6 +404,7 @@ fn certify(
     let status = match g.status {
         GlobalStatus::Converged if certified => Status::Success,
         GlobalStatus::Converged | GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
+        GlobalStatus::Stopped(reason) => Status::stopped(reason),
         GlobalStatus::Infeasible => Status::Infeasible,
         GlobalStatus::Failed => Status::NumericalFailure,
     };

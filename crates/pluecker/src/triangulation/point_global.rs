@@ -38,6 +38,7 @@
 use super::point_certificate::{enclosure, Enclosure};
 use super::point_chart::{Chart, ChartKind, ChartView};
 use super::point_cost::{in_front, point_cost, PointObjective, PointView};
+use crate::interrupt::StopReason;
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpStatus};
@@ -74,6 +75,8 @@ pub enum GlobalStatus {
     Converged,
     /// The node cap was reached first.
     NodeLimit,
+    /// The call was stopped first ([`crate::interrupt`]).
+    Stopped(StopReason),
     /// The search set is empty (the conic solver's infeasibility certificates): no point within
     /// the user's γ.
     Infeasible,
@@ -481,6 +484,8 @@ pub fn global_point(
         }
     } else if result.converged {
         GlobalStatus::Converged
+    } else if let Some(reason) = result.stopped {
+        GlobalStatus::Stopped(reason)
     } else {
         GlobalStatus::NodeLimit
     };

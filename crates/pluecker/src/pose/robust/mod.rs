@@ -65,6 +65,7 @@ use super::minimal::solve;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
 use sampler::{solvable, Sampler};
@@ -208,8 +209,11 @@ pub enum RansacStop {
     /// The cap of [`RansacOptions::min_inlier_ratio`] was reached first: the best model has a smaller
     /// inlier fraction than that, or there is none.
     MinInlierRatio,
-    /// [`RansacOptions::time_budget`] ran out first.
+    /// [`RansacOptions::time_budget`], or the time budget of the call's stop ([`crate::interrupt`]),
+    /// ran out first.
     TimeBudget,
+    /// The call was stopped ([`crate::interrupt`]: Ctrl-C seen by a binding, the caller's request).
+    Interrupted,
     /// No sample can be drawn: no mix of the data's points and lines has a minimal solver (e.g. lines
     /// only while the three-line solver is missing).
     NoSolvableSample,
@@ -223,6 +227,7 @@ impl RansacStop {
             RansacStop::IterationCap => "iteration_cap",
             RansacStop::MinInlierRatio => "min_inlier_ratio",
             RansacStop::TimeBudget => "time_budget",
+            RansacStop::Interrupted => "interrupted",
             RansacStop::NoSolvableSample => "no_solvable_sample",
         }
     }
@@ -358,6 +363,13 @@ pub fn ransac(
         }
         if opts.time_budget.is_some_and(|budget| started.elapsed() >= budget) {
             report.stop = RansacStop::TimeBudget;
+            break;
+        }
+        if let Some(reason) = stop_reason() {
+            report.stop = match reason {
+                StopReason::Requested => RansacStop::Interrupted,
+                StopReason::TimeBudget => RansacStop::TimeBudget,
+            };
             break;
         }
         report.iterations += 1;

@@ -1,0 +1,160 @@
+//! Stopping long calls (`pluecker::interrupt`): batches reject the tracks they had not started and
+//! keep the others, branch and bound ends with an honest bound and status `Interrupted`, the RANSAC
+//! loop and the pose certificate stop at their next poll.
+
+use nalgebra::{Matrix3x4, Vector2, Vector3};
+use pluecker::interrupt::{with_stop, Stop, StopReason};
+use pluecker::pose::{estimate_pose, CertificateOptions, PoseOptions, RansacOptions, RansacStop};
+use pluecker::rng::Rng;
+use pluecker::synthetic::{random_scene, SceneKind};
+use pluecker::triangulation::batch::{triangulate_points, triangulate_points_linear, PointTracks, TrackCameras};
+use pluecker::triangulation::line_batch::{triangulate_lines, ImageLines, LineTracks};
+use pluecker::triangulation::scenes::arc_cameras;
+use pluecker::triangulation::{Method, Status, TriangulationOptions};
+use pluecker::Error;
+use std::sync::Arc;
+use std::time::Duration;
+
+fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
+    let u = p * x.push(1.0);
+    u.xy() / u.z
+}
+
+/// `n` noisy segments (2 px) seen by 4 cameras: flat `(n, v, 2, 2)` endpoints.
+fn segments(n: usize, seed: u64) -> (Vec<Matrix3x4<f64>>, Vec<f64>) {
+    let mut rng = Rng::new(seed);
+    let cameras = arc_cameras(4, 0.5, &mut rng);
+    let mut out = Vec::new();
+    for _ in 0..n {
+        let mid = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.2;
+        let half = rng.unit_vector3() * rng.uniform_in(0.4, 0.8);
+        for p in &cameras {
+            for end in [mid + half, mid - half] {
+                let u = project(p, &end);
+                out.extend([u.x + 2.0 * rng.normal(), u.y + 2.0 * rng.normal()]);
+            }
+        }
+    }
+    (cameras, out)
+}
+
+/// Branch and bound to a 1e-9 gap: minutes per line, unless stopped.
+fn endless() -> TriangulationOptions {
+    TriangulationOptions {
+        method: Method::Optimal,
+        max_relative_gap: 1e-9,
+        max_nodes: usize::MAX,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_request_from_another_thread_stops_a_line_batch() {
+    let (cameras, endpoints) = segments(8, 1);
+    let tracks = LineTracks {
+        lines: ImageLines::Segments {
+            endpoints: &endpoints,
+            sigma: 1.0,
+        },
+        visible: None,
+        covariances: None,
+    };
+    let stop = Arc::new(Stop::new());
+    let requester = Arc::clone(&stop);
+    let timer = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(300));
+        requester.request();
+    });
+    let batch = with_stop(stop, || triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &endless(), None)).unwrap();
+    timer.join().unwrap();
+    let (mut started, mut skipped) = (0, 0);
+    for result in &batch {
+        match result {
+            Ok(line) => {
+                started += 1;
+                let report = &line.report;
+                assert_eq!(report.status, Status::Interrupted);
+                assert!(!report.certificate.certified);
+                assert!(report.certificate.lower_bound <= report.cost && report.cost.is_finite());
+            }
+            Err(Error::Interrupted {
+                reason: StopReason::Requested,
+            }) => skipped += 1,
+            Err(e) => panic!("unexpected {e}"),
+        }
+    }
+    // Each rayon worker was inside a track when the stop came; the rest never started.
+    assert!(started >= 1 && skipped >= 1, "{started} started, {skipped} skipped");
+}
+
+#[test]
+fn an_expired_budget_solves_nothing_in_every_point_path() {
+    let mut rng = Rng::new(3);
+    let cameras = arc_cameras(3, 0.5, &mut rng);
+    let observations: Vec<f64> = (0..50)
+        .flat_map(|_| {
+            let x = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+            cameras.iter().flat_map(move |p| {
+                let u = project(p, &x);
+                [u.x, u.y]
+            })
+        })
+        .collect();
+    let tracks = PointTracks {
+        observations: &observations,
+        visible: None,
+        covariances: None,
+    };
+    let expired = || Arc::new(Stop::with_time_budget(Some(Duration::ZERO)));
+    let budget = Error::Interrupted {
+        reason: StopReason::TimeBudget,
+    };
+    for method in [Method::Local, Method::Optimal] {
+        let opts = TriangulationOptions {
+            method,
+            ..Default::default()
+        };
+        let batch = with_stop(expired(), || triangulate_points(&cameras, &tracks, &opts, None)).unwrap();
+        assert!(batch.iter().all(|r| r.as_ref().err() == Some(&budget)));
+    }
+    let linear = with_stop(expired(), || triangulate_points_linear(&cameras, &tracks)).unwrap();
+    assert!(linear.outcomes.iter().all(|r| *r == Err(budget.clone())));
+    assert!(linear.points.iter().all(|x| x.is_nan()));
+    // Without a stop the same batch solves every track.
+    let free = triangulate_points_linear(&cameras, &tracks).unwrap();
+    assert!(free.outcomes.iter().all(|r| *r == Ok(Status::Success)));
+}
+
+#[test]
+fn ransac_and_the_certificate_stop_at_their_next_poll() {
+    let scene = random_scene(SceneKind::General, 30, 0, 5);
+    let requested = || {
+        let stop = Arc::new(Stop::new());
+        stop.request();
+        stop
+    };
+    let robust = PoseOptions {
+        robust: Some(RansacOptions {
+            max_iterations: usize::MAX,
+            min_inlier_ratio: 0.0,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let r = with_stop(requested(), || estimate_pose(&scene.camera, &scene.correspondences, &robust)).unwrap();
+    let report = r.ransac.unwrap();
+    assert_eq!((report.stop, report.iterations), (RansacStop::Interrupted, 0));
+
+    let certify = PoseOptions {
+        certify: Some(CertificateOptions::default()),
+        ..Default::default()
+    };
+    let plain = estimate_pose(&scene.camera, &scene.correspondences, &certify).unwrap();
+    assert!(plain.certified, "{:?}", plain.certificate);
+    let stopped = with_stop(requested(), || estimate_pose(&scene.camera, &scene.correspondences, &certify)).unwrap();
+    assert!(!stopped.certified);
+    let why = stopped.certificate.message();
+    assert!(why.contains("interrupted"), "{why}");
+    // The pose itself does not depend on the stop.
+    assert_eq!(stopped.rotation, plain.rotation);
+}
