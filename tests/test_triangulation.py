@@ -16,7 +16,7 @@ import pluecker
 
 METHODS = ("linear", "local", "optimal")
 REPORT_FIELDS = ("method", "status", "success", "cost", "lower_bound", "relative_gap", "certified",
-                 "certificate", "nodes", "solver_iterations", "iterations", "termination", "time_seconds")
+                 "certificate", "nodes", "solver_iterations", "iterations", "termination", "time_seconds", "residual_test")
 
 
 def look_at(centre: np.ndarray, roll: float) -> np.ndarray:

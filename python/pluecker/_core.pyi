@@ -191,7 +191,8 @@ class PoseResult:
         before reaching ``confidence`` for the best model),
         ``"numerical_failure"`` (singular Hessian, non-finite cost), ``"points_behind_camera"``
         (some 3-D points or segment endpoints — of the inliers when robust — have ``z <= 0`` at the
-        returned pose), ``"ambiguous"`` (another local minimum explains the data nearly as well: see
+        returned pose, or the data are explained better with every point behind the camera: see
+        :attr:`behind_camera_cost`), ``"ambiguous"`` (another local minimum explains the data nearly as well: see
         :attr:`ambiguous` and :attr:`second_best_cost`), and with ``robust=True``: ``"too_few_inliers"`` (the best model has fewer than
         :attr:`ransac_required_inliers` inliers — ``min_inliers``, or more when chance alone gives a
         wrong pose that many among many correspondences — e.g. all-outlier data or thresholds too
@@ -209,6 +210,20 @@ class PoseResult:
     @property
     def time_seconds(self) -> float:
         """Total wall time, seconds."""
+    @property
+    def residual_test(self) -> Optional["_ResidualTestDict"]:
+        """The χ² test of the residuals against ``sigma_px``: ``{"chi2", "dof", "p_value",
+        "consistent"}``, ``chi2 = Σ r² / σ²`` over the ``m`` residuals of the used correspondences
+        (inliers when robust), ``dof = m - 6``, ``consistent`` is ``p_value >= 1e-3``.
+        ``consistent == False`` says the residuals are not explained by that noise (lens distortion
+        left in the pixels, a wrong camera, noise larger than stated). None without ``sigma_px``."""
+    @property
+    def behind_camera_cost(self) -> Optional[float]:
+        """When the residuals exceed the noise (``sigma_px``, else 1 px), the minimal solvers also look
+        for poses with every object point *behind* the camera (the same pixels as a mirrored object in
+        front); ``½ Σ r²`` (px²) of the best such pose when it fits better than the returned pose.
+        :attr:`status` is then ``"points_behind_camera"``: the data come from points behind the
+        camera, which no pose in front explains. None otherwise."""
     @property
     def stages(self) -> list[PoseStage]:
         """Every stage in order; the last one gave the returned pose."""
@@ -377,6 +392,14 @@ class _PoseResultDict(TypedDict):
     second_best_R: Optional[list[list[float]]]
     second_best_t: Optional[list[float]]
     second_best_cost: Optional[float]
+    behind_camera_cost: Optional[float]
+    residual_test: Optional[_ResidualTestDict]
+
+class _ResidualTestDict(TypedDict):
+    chi2: float
+    dof: int
+    p_value: float
+    consistent: bool
 
 def estimate_pose(
     camera: Camera,
@@ -652,6 +675,14 @@ class TriangulationReport:
     @property
     def time_seconds(self) -> float:
         """Wall time of the call in the core, seconds (the Python boundary excluded)."""
+    @property
+    def residual_test(self) -> Optional["_ResidualTestDict"]:
+        """The χ² test of :attr:`cost` against the given covariances (identity: 1 px):
+        ``{"chi2", "dof", "p_value", "consistent"}`` with ``dof`` = whitened residuals (2 per view for
+        points and lines, 5 for conics) minus parameters (3, 4, 9); ``consistent`` is ``p_value >=
+        1e-3``. ``consistent == False`` says the observations disagree beyond their stated noise (an
+        outlier, a wrong camera, lens distortion, a covariance too small). None when ``dof`` is 0 or
+        there is no cost."""
     def to_dict(self) -> dict[str, Any]:
         """The fields above as a plain dict (strict JSON: NaN and inf are ``None``)."""
     def __repr__(self) -> str: ...
@@ -711,6 +742,9 @@ class PointTriangulation(TriangulationReport):
     @property
     def time_seconds(self) -> float:
         """See :attr:`TriangulationReport.time_seconds`."""
+    @property
+    def residual_test(self) -> Optional["_ResidualTestDict"]:
+        """See :attr:`TriangulationReport.residual_test`."""
     def to_dict(self) -> dict[str, Any]:
         """The report fields, ``"X"`` and ``"covariance"`` (nested lists or None) as a plain dict
         (strict JSON: NaN and inf are ``None``)."""
@@ -793,6 +827,10 @@ class BatchReport:
     def time_seconds(self) -> NDArray[np.float64]:
         """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
     @property
+    def p_value(self) -> NDArray[np.float64]:
+        """Per track (n,): the ``p_value`` of :attr:`TriangulationReport.residual_test`, NaN where
+        there is none (rejected tracks included)."""
+    @property
     def messages(self) -> list[str]:
         """Per track: ``""``, or why the core rejected it, naming the track and the view
         (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
@@ -849,6 +887,9 @@ class PointTriangulations(BatchReport):
     def time_seconds(self) -> NDArray[np.float64]:
         """Core time per track (n,), seconds, on one thread. Method ``linear`` runs an allocation-free
         path that does not time tracks one by one: every track gets the batch's core time over ``n``."""
+    @property
+    def p_value(self) -> NDArray[np.float64]:
+        """See :attr:`BatchReport.p_value`."""
     @property
     def messages(self) -> list[str]:
         """Per track: ``""``, or why the core rejected it, naming the track and its view as a row
@@ -976,6 +1017,9 @@ class LineTriangulation(TriangulationReport):
     @property
     def time_seconds(self) -> float:
         """See :attr:`TriangulationReport.time_seconds`."""
+    @property
+    def residual_test(self) -> Optional["_ResidualTestDict"]:
+        """See :attr:`TriangulationReport.residual_test`."""
     def to_dict(self) -> dict[str, Any]:
         """The report fields, ``"plucker"``, ``"point"``, ``"direction"``, ``"chart_axes"`` and
         ``"covariance"`` (None when there is none) as a plain dict."""
@@ -1093,6 +1137,9 @@ class QuadricTriangulation(TriangulationReport):
     @property
     def time_seconds(self) -> float:
         """See :attr:`TriangulationReport.time_seconds`."""
+    @property
+    def residual_test(self) -> Optional["_ResidualTestDict"]:
+        """See :attr:`TriangulationReport.residual_test`."""
     def to_dict(self) -> dict[str, Any]:
         """The report fields, ``"Q"``, ``"primal"`` (None when flat), ``"centre"``, ``"axes"``,
         ``"semi_axes"`` and ``"covariance"`` (None when there is none) as a plain dict."""
@@ -1185,6 +1232,9 @@ class LineTriangulations(BatchReport):
     @property
     def time_seconds(self) -> NDArray[np.float64]:
         """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
+    @property
+    def p_value(self) -> NDArray[np.float64]:
+        """See :attr:`BatchReport.p_value`."""
     @property
     def messages(self) -> list[str]:
         """Per track: ``""``, or why the core rejected it, naming the track and the view
@@ -1306,6 +1356,9 @@ class QuadricTriangulations(BatchReport):
     @property
     def time_seconds(self) -> NDArray[np.float64]:
         """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
+    @property
+    def p_value(self) -> NDArray[np.float64]:
+        """See :attr:`BatchReport.p_value`."""
     @property
     def messages(self) -> list[str]:
         """Per track: ``""``, or why the core rejected it, naming the track and the view

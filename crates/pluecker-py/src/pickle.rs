@@ -13,6 +13,7 @@ use nalgebra::SMatrix;
 use pluecker::geometry::dual_quaternion::DualQuaternion;
 use pluecker::geometry::plucker::LineChart;
 use pluecker::geometry::quadric::Ellipse;
+use pluecker::chi_square::ResidualTest;
 use pluecker::optim::Termination;
 use pluecker::pose::certificate::Certificate as PoseCertificate;
 use pluecker::pose::{CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport};
@@ -298,8 +299,11 @@ pack_struct!(PoseResult {
     gap,
     certificate,
     ambiguous,
-    second_best
+    second_best,
+    behind_camera_cost,
+    residual_test
 });
+pack_struct!(ResidualTest { chi2, dof, p_value, consistent });
 pack_struct!(Certificate {
     lower_bound,
     relative_gap,
@@ -315,7 +319,8 @@ pack_struct!(Report {
     certificate,
     iterations,
     termination,
-    time_seconds
+    time_seconds,
+    residual_test
 });
 pack_struct!(LineChart { pivot, direction, axes });
 pack_struct!(Ellipse {

@@ -1,6 +1,7 @@
 //! `pluecker.PoseResult` and `pluecker.PoseStage`: immutable reports owning their data. Every array
 //! getter returns a fresh array, so changing it cannot change the result.
 
+use pluecker::chi_square::ResidualTest;
 use crate::camera::PyCamera;
 use crate::convert::{matrix3_rows, matrix3_to_py, vector_to_py};
 use nalgebra::{Matrix6, Vector3, Vector4};
@@ -339,6 +340,16 @@ impl PyPoseResult {
         self.inner.second_best.as_ref().map(|(_, c)| *c)
     }
 
+    #[getter]
+    fn behind_camera_cost(&self) -> Option<f64> {
+        self.inner.behind_camera_cost
+    }
+
+    #[getter]
+    fn residual_test<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.inner.residual_test.as_ref().map(|t| residual_test_dict(py, t)).transpose()
+    }
+
     /// Plain-Python (JSON-serialisable) form.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.inner;
@@ -398,9 +409,10 @@ impl PyPoseResult {
                 d.set_item("second_best_cost", py.None())?;
             }
         }
+        d.set_item("behind_camera_cost", r.behind_camera_cost)?;
+        d.set_item("residual_test", self.residual_test(py)?)?;
         strict_json_dict(d)
     }
-
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
@@ -431,3 +443,13 @@ impl PyPoseResult {
 
 pack_struct!(PyPoseStage { inner });
 pack_struct!(PyPoseResult { inner });
+
+/// `{"chi2", "dof", "p_value", "consistent"}` of a χ² test of the residuals.
+pub(crate) fn residual_test_dict<'py>(py: Python<'py>, t: &ResidualTest) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("chi2", t.chi2)?;
+    d.set_item("dof", t.dof)?;
+    d.set_item("p_value", t.p_value)?;
+    d.set_item("consistent", t.consistent)?;
+    Ok(d)
+}

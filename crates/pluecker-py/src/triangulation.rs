@@ -6,6 +6,7 @@
 //! `triangulation_line.rs`, `triangulation_quadric.rs` and `triangulation_fitting.rs`; the array
 //! readers in `triangulation_arrays.rs`.
 
+use crate::result::residual_test_dict;
 use crate::convert::{optional_count, optional_real, strict_json_dict, Integer, Real};
 use crate::errors::to_py_err;
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
@@ -105,6 +106,7 @@ impl PyTriangulationReport {
         d.set_item("iterations", r.iterations)?;
         d.set_item("termination", r.termination.as_str())?;
         d.set_item("time_seconds", r.time_seconds)?;
+        d.set_item("residual_test", self.residual_test(py)?)?;
         Ok(d)
     }
 
@@ -189,6 +191,11 @@ impl PyTriangulationReport {
     #[getter]
     fn time_seconds(&self) -> f64 {
         self.inner.time_seconds
+    }
+
+    #[getter]
+    fn residual_test<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.inner.residual_test.as_ref().map(|t| residual_test_dict(py, t)).transpose()
     }
 
     /// Plain-Python (JSON-serialisable) form of the report fields.

@@ -99,6 +99,8 @@ pub struct PyBatchReport {
     nodes: Vec<i64>,
     iterations: Vec<i64>,
     time_seconds: Vec<f64>,
+    /// p-values of the residuals' χ² tests, NaN where there is none.
+    p_value: Vec<f64>,
     /// `(track, message)` of every rejected track.
     errors: Vec<(usize, String)>,
 }
@@ -117,6 +119,7 @@ impl PyBatchReport {
             nodes: Vec::with_capacity(n),
             iterations: Vec::with_capacity(n),
             time_seconds: Vec::with_capacity(n),
+            p_value: Vec::with_capacity(n),
             errors: Vec::new(),
         }
     }
@@ -133,11 +136,12 @@ impl PyBatchReport {
         self.nodes.push(c.nodes as i64);
         self.iterations.push(report.iterations as i64);
         self.time_seconds.push(report.time_seconds);
+        self.p_value.push(report.residual_test.map_or(f64::NAN, |t| t.p_value));
     }
 
     /// Appends a track without a certificate (lower bound 0, relative gap 1, no nodes or
     /// iterations): a linear estimate of the point fast path, or a rejected track.
-    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64) {
+    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, p_value: f64) {
         self.cost.push(cost);
         self.lower_bound.push(0.0);
         self.relative_gap.push(1.0);
@@ -147,6 +151,7 @@ impl PyBatchReport {
         self.nodes.push(0);
         self.iterations.push(0);
         self.time_seconds.push(seconds);
+        self.p_value.push(p_value);
     }
 
     /// Appends track `t`, rejected by the core with `err` (its core argument names renamed by
@@ -156,12 +161,12 @@ impl PyBatchReport {
     /// it from the status, so that stopping a batch of millions of tracks stays cheap.
     pub(crate) fn reject<C: TrackColumns>(&mut self, columns: &mut C, t: usize, err: Error) {
         if let Error::Interrupted { reason } = err {
-            self.push_uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0);
+            self.push_uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, f64::NAN);
             columns.push_missing();
             return;
         }
         let err = renamed(err, C::NAMES);
-        self.push_uncertified(f64::NAN, error_status(&err), 0.0);
+        self.push_uncertified(f64::NAN, error_status(&err), 0.0, f64::NAN);
         self.errors.push((t, C::message(t, &err)));
         columns.push_missing();
     }
@@ -231,6 +236,11 @@ impl PyBatchReport {
     }
 
     #[getter]
+    fn p_value<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_slice(py, &self.p_value)
+    }
+
+    #[getter]
     fn messages(&self) -> Vec<String> {
         let mut out: Vec<String> = self
             .status
@@ -272,14 +282,14 @@ impl PyBatchReport {
     }
 }
 
-pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, errors });
+pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, p_value, errors });
 
 /// The report columns of `NAMES` below and then the estimate `columns` of a batch result as lists,
 /// NaN and inf as `None`: the `to_dict()` of every batch class (each array getter's `tolist()`).
 pub(crate) fn batch_dict<'py>(result: &Bound<'py, PyAny>, columns: &[&str]) -> PyResult<Bound<'py, PyDict>> {
-    const NAMES: [&str; 11] = [
+    const NAMES: [&str; 12] = [
         "method", "status", "cost", "lower_bound", "relative_gap", "certified", "certificate", "nodes",
-        "iterations", "time_seconds", "messages",
+        "iterations", "time_seconds", "p_value", "messages",
     ];
     let d = PyDict::new(result.py());
     for name in NAMES.iter().chain(columns) {

@@ -15,9 +15,9 @@
 //! the search uses only while no minimum has every point in front of the camera. The draws are seeded
 //! ([`crate::rng::Rng`], seed 0): the same data give the same candidates.
 
-use super::correspondences::Correspondences;
+use super::correspondences::{object_points, Correspondences};
 use super::minimal::{solve, Feature};
-use super::reprojection::Pose;
+use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::geometry::lines::interpretation_plane_normal;
@@ -128,6 +128,31 @@ pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> 
             .filter(|(r, t)| r.iter().chain(t.iter()).all(|v| v.is_finite()))
             .collect()
     })
+}
+
+/// The cost `½ Σ r²` (px²) of the cheapest pose that the minimal solvers find, on the main samples of
+/// `corr`, with every object point *behind* the camera, when it is below `bound`.
+///
+/// Such a pose `(R, t)` is the pose `(R, −t)` of the object reflected through the origin (`X → −X`)
+/// with every point in front: `u = K x / z` does not see the sign of `x_cam`, so both give the same
+/// pixels. The pose is searched in front for the reflected object. Data that such a pose explains
+/// better than the best pose in front come from points behind the camera.
+pub fn behind_camera_cost(camera: &Camera, corr: &Correspondences, bound: f64) -> Option<f64> {
+    let mut mirrored = corr.clone();
+    mirrored.points3d.iter_mut().for_each(|x| *x = -*x);
+    mirrored.lines3d.iter_mut().flatten().for_each(|x| *x = -*x);
+    let cost = ReprojectionCost::of(camera, &mirrored);
+    let groups = if is_exhaustive(mirrored.n_points() + mirrored.n_lines()) {
+        usize::MAX
+    } else {
+        SPREAD_SAMPLES
+    };
+    minimal_hypotheses(camera, &mirrored)
+        .take(groups)
+        .flatten()
+        .filter(|pose| count_behind(object_points(&mirrored).copied(), pose) == 0)
+        .filter_map(|pose| cost.cost_below(&pose, bound))
+        .min_by(f64::total_cmp)
 }
 
 #[cfg(test)]

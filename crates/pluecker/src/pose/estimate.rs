@@ -16,7 +16,7 @@ use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::candidates::{is_exhaustive, minimal_hypotheses};
+use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
 use super::certificate::{certify, Certificate, Certification};
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
@@ -395,7 +395,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         alternatives,
         valid,
     } = estimator(camera, corr, &prepared, opts, &tr, started)?;
-    let (pose, status, second_best, certification) = if opts.refine && is_finite(&pose) {
+    let (pose, status, second_best, certification, behind_camera_cost) = if opts.refine && is_finite(&pose) {
         let cond = &prepared.cond;
         let conditioned = &prepared.conditioned;
         let cost = ReprojectionCost::of(camera, conditioned);
@@ -416,6 +416,15 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         if choice.ambiguous && status == Status::Success {
             status = Status::Ambiguous;
         }
+        // Residuals above the noise (σ = sigma_px, else 1 px): are the data better explained with
+        // the points behind the camera? (Cheap, and only then.)
+        let sigma2 = opts.sigma_px.map_or(1.0, |s| s * s);
+        let behind_cost = (matches!(status, Status::Success | Status::Ambiguous) && 2.0 * best.cost > sigma2 * (2 * n) as f64)
+            .then(|| behind_camera_cost(camera, conditioned, best.cost))
+            .flatten();
+        if behind_cost.is_some() {
+            status = Status::PointsBehindCamera;
+        }
         let second_best = choice.second.map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
         let certification = match &opts.certify {
             None => Certification::none(Certificate::NotRequested),
@@ -425,11 +434,11 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             ))),
             Some(options) => certify(camera, conditioned, &best.pose, best.cost, options),
         };
-        (world, status, second_best, certification)
+        (world, status, second_best, certification, behind_cost)
     } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
         let why = "no refinement: the pose is not a minimum of the reprojection error";
-        (pose, status, None, Certification::none(Certificate::NotProved(why.into())))
+        (pose, status, None, Certification::none(Certificate::NotProved(why.into())), None)
     };
     Ok(assemble(
         camera,
@@ -445,6 +454,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             ransac: None,
             second_best,
             certification,
+            behind_camera_cost,
         },
     ))
 }

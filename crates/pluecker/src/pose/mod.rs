@@ -24,6 +24,7 @@ pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};
 
 use crate::camera::Camera;
+use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
@@ -242,7 +243,8 @@ pub enum Status {
     /// The solver failed numerically (singular Hessian, non-finite cost); the pose is the last iterate.
     NumericalFailure,
     /// Some object points or line endpoints are behind the camera at the returned pose (robust: of
-    /// the inliers).
+    /// the inliers), or the data are explained better by a pose with every point behind the camera
+    /// ([`PoseResult::behind_camera_cost`]).
     PointsBehindCamera,
     /// Robust estimation only: the best model has fewer than [`RansacReport::required_inliers`]
     /// inliers ([`RansacOptions::min_inliers`], or more when chance alone gives a wrong pose that many
@@ -370,6 +372,18 @@ pub struct PoseResult {
     /// The cheapest other local minimum found with every object point in front (world frame), and its
     /// cost `½ Σ r²` (px²); `None` when the search found no other.
     pub second_best: Option<(Pose, f64)>,
+    /// When the residuals at the returned pose exceed the noise (`σ` = [`PoseOptions::sigma_px`], else
+    /// 1 px), the minimal solvers also look for poses with every object point *behind* the camera
+    /// ([`candidates::behind_camera_cost`]); the cost `½ Σ r²` (px²) of the best one that fits better
+    /// than the returned pose, if any. Then [`PoseResult::status`] is
+    /// [`Status::PointsBehindCamera`]: the returned pose is the best found with the points in front,
+    /// but the data come from points behind the camera (or a mirrored object). `None` otherwise.
+    pub behind_camera_cost: Option<f64>,
+    /// The χ² test of the residuals against [`PoseOptions::sigma_px`] ([`crate::chi_square`]):
+    /// `Σ r² / σ²` over the `m` residuals of the used correspondences with `m − 6` degrees of freedom.
+    /// `consistent == false` says the residuals are not explained by that noise (distortion left in the
+    /// pixels, a wrong camera, noise larger than stated). `None` without `sigma_px` or when `m ≤ 6`.
+    pub residual_test: Option<ResidualTest>,
 }
 
 /// Origin of the pixel noise level in [`PoseResult::covariance`].

@@ -7,6 +7,7 @@ use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
 use super::{PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
+use crate::chi_square::ResidualTest;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::{axis_angle, from_rotation_matrix};
 use crate::optim::{Objective, Termination};
@@ -33,6 +34,8 @@ pub(crate) struct Parts<'c> {
     pub second_best: Option<(Pose, f64)>,
     /// The certificate stage's outcome.
     pub certification: Certification,
+    /// The cost of a pose with every object point behind the camera, when it beats `pose`.
+    pub behind_camera_cost: Option<f64>,
 }
 
 /// Whether `pose` is finite.
@@ -73,6 +76,7 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
         ransac,
         second_best,
         certification,
+        behind_camera_cost,
     } = parts;
     let last = stages.last().expect("at least one stage").clone();
     let finite = is_finite(&pose);
@@ -88,6 +92,12 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
     let reprojection_cost = linearization.as_ref().map_or(f64::NAN, |l| l.cost);
     let rms_error_px = (2.0 * reprojection_cost / residual_count.max(1) as f64).sqrt();
     let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);
+    // The χ² test needs the noise from the caller; without the refinement the linear method also
+    // fitted the five intrinsics.
+    let fitted = if !opts.refine && estimated_camera.is_some() { 11 } else { 6 };
+    let residual_test = opts.sigma_px.and_then(|s| {
+        ResidualTest::new(2.0 * reprojection_cost / (s * s), residual_count.saturating_sub(fitted))
+    });
     let (dual_quaternion, axis, angle) = if finite {
         let q = DualQuaternion::from_rotation_translation(&pose.0, &pose.1);
         let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.0));
@@ -129,5 +139,7 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
         certificate: certification.certificate,
         ambiguous: status == Status::Ambiguous,
         second_best,
+        behind_camera_cost,
+        residual_test,
     }
 }

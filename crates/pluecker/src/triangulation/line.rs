@@ -178,7 +178,8 @@ pub fn triangulate_line(
 }
 
 /// The result record of a world line (unit norm, point and direction) and its covariance.
-fn finish(problem: &LineProblem, line: &Vector6<f64>, report: Report) -> Result<LineTriangulation> {
+fn finish(problem: &LineProblem, line: &Vector6<f64>, mut report: Report) -> Result<LineTriangulation> {
+    report.test_residuals(2 * problem.cameras.len(), 4);
     let plucker = plucker::nearest_line(line).normalize();
     let at_infinity = || Error::Degenerate {
         what: "the estimated line lies at infinity".into(),

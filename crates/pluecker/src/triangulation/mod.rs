@@ -40,6 +40,7 @@ pub mod uncertainty;
 pub mod views;
 
 use crate::error::{Error, Result};
+use crate::chi_square::ResidualTest;
 use crate::interrupt::StopReason;
 use crate::optim::{Summary, Termination, TrustRegionOptions};
 
@@ -242,6 +243,12 @@ pub struct Report {
     pub termination: Termination,
     /// Wall time of the call, seconds.
     pub time_seconds: f64,
+    /// The χ² test of `cost` against the given covariances ([`crate::chi_square`]; identity
+    /// covariances mean 1 px): `cost` has `m − p` degrees of freedom for `m` whitened residuals (2 per
+    /// view for points and lines, 5 for conics) and `p` parameters (3, 4, 9). `consistent == false`:
+    /// the observations disagree beyond their stated noise (an outlier, a wrong camera, distortion, a
+    /// covariance too small). `None` when `m ≤ p` or there is no cost.
+    pub residual_test: Option<ResidualTest>,
 }
 
 impl Report {
@@ -255,7 +262,13 @@ impl Report {
             iterations: 0,
             termination: Termination::ClosedForm,
             time_seconds: 0.0,
+            residual_test: None,
         }
+    }
+
+    /// Sets [`Report::residual_test`] for `residuals` whitened residuals and `parameters` fitted ones.
+    pub(crate) fn test_residuals(&mut self, residuals: usize, parameters: usize) {
+        self.residual_test = ResidualTest::new(self.cost, residuals.saturating_sub(parameters));
     }
 }
 

@@ -149,6 +149,7 @@ pub(crate) fn solve_views(
     let mut report = Report::new(opts.method);
     let finish = |point: Vector3<f64>, mut report: Report| {
         let covariance = point_covariance(views, &point);
+        report.test_residuals(2 * views.len(), 3);
         report.time_seconds = started.elapsed().as_secs_f64();
         PointTriangulation {
             point,

@@ -164,6 +164,7 @@ pub fn triangulate_quadric(
 /// The result record of an ellipsoid; sets [`Status::BehindCamera`] when it is not entirely in front
 /// of every camera (module docs).
 fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> QuadricTriangulation {
+    report.test_residuals(5 * problem.cameras.len(), 9);
     let dual = e.dual();
     let in_front = problem.cameras.iter().all(|p| {
         let p = super::views::depth_normalized(p);

@@ -140,6 +140,7 @@ pub(crate) fn estimate_robust(
             ransac: Some(outcome.report),
             second_best: None,
             certification,
+            behind_camera_cost: None,
         },
     ))
 }
