@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -63,3 +66,20 @@ def test_reproduce_without_data_fails_with_one_clear_line(tmp_path, monkeypatch,
     status = main(["reproduce", "josephson-kahl-2008", "--quick", "--quiet", "--out", str(tmp_path / "out")])
     assert status == 2
     assert "VGG data folder not found" in capsys.readouterr().err
+
+
+def test_the_sequences_ship_with_the_package_and_their_attribution():
+    """A clone or an installed wheel has the data with nothing beside it (issue 11 §5)."""
+    import pluecker.datasets as datasets
+
+    root = vgg_root()
+    package = Path(datasets.__file__).resolve().parent
+    if "PLUECKER_VGG_DATA" not in os.environ:
+        assert root == package / "data" / "vgg"
+    attribution = (package / "data" / "vgg" / "README-VGG.txt").read_text()
+    assert "VGG Multiview Dataset" in attribution and "robots.ox.ac.uk" in attribution
+    for name in VGG_SEQUENCES:
+        by_name = load_vgg(name)
+        by_path = load_vgg(root / name)
+        assert by_name.name == by_path.name == name
+        np.testing.assert_array_equal(by_name.cameras, by_path.cameras)

@@ -28,7 +28,10 @@ import numpy as np
 
 __all__ = ["DataNotFoundError", "VggSequence", "load_vgg", "vgg_root", "VGG_SEQUENCES"]
 
-#: The five sequences of ``../shared/data/vgg``.
+# The data: Oxford Visual Geometry Group, "VGG Multiview Dataset",
+# http://www.robots.ox.ac.uk/~vgg/data/data-mview.html (see data/vgg/README-VGG.txt).
+
+#: The five sequences shipped in ``pluecker/data/vgg`` (see :func:`vgg_root`).
 VGG_SEQUENCES = ("model_house", "corridor", "merton_college_1", "merton_college_2", "merton_college_3")
 
 
@@ -37,17 +40,13 @@ class DataNotFoundError(FileNotFoundError):
 
 
 def vgg_root() -> Path:
-    """Where the VGG data live: ``$PLUECKER_VGG_DATA`` if set, else ``shared/data/vgg`` beside the checkout
-    (``<repo>/../shared/data/vgg``) or beside any folder above the checkout or the working directory. The
-    project ships no copy of the data."""
+    """Where the VGG data live: ``$PLUECKER_VGG_DATA`` if set, else the copy shipped inside the package
+    (``pluecker/data/vgg``: the geometry files of the five sequences, 1.5 MB, with the VGG's attribution in
+    ``README-VGG.txt``)."""
     env = os.environ.get("PLUECKER_VGG_DATA")
     if env:
         return Path(env)
-    checkout = Path(__file__).resolve().parents[2]
-    for base in [*checkout.parents, *Path.cwd().resolve().parents]:
-        if (base / "shared" / "data" / "vgg").is_dir():
-            return base / "shared" / "data" / "vgg"
-    return checkout.parent / "shared" / "data" / "vgg"
+    return Path(__file__).resolve().parent / "data" / "vgg"
 
 
 @dataclass(frozen=True)
@@ -171,12 +170,15 @@ def _find(folder: Path, suffix: str) -> Path:
 def load_vgg(folder: str | Path) -> VggSequence:
     """Reads a VGG multi-view folder (see the module docs) into a right-handed :class:`VggSequence`.
 
+    ``folder`` is a path, or the name of a shipped sequence (one of :data:`VGG_SEQUENCES`, read from
+    :func:`vgg_root`): ``load_vgg("model_house")``.
+
     Raises:
         DataNotFoundError: the folder does not exist.
         FileNotFoundError: no camera files (``*.P``) in the folder.
         ValueError: a malformed file (the message names it).
     """
-    folder = Path(folder)
+    folder = vgg_root() / folder if str(folder) in VGG_SEQUENCES else Path(folder)
     if not folder.is_dir():
         raise DataNotFoundError(
             f"VGG data folder not found: {folder} (set PLUECKER_VGG_DATA to the folder that holds "

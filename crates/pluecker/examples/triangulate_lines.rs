@@ -2,7 +2,7 @@
 //! view counts with 1 px noise, and the real Model House and Corridor lines (Table 2).
 //!
 //! Run: `cargo run --release -p pluecker --example triangulate_lines [-- DATA_DIR [GAP]]`, with
-//! `DATA_DIR` the VGG folder (default `/work/shared/data/vgg`) and `GAP` the relative gap (default the
+//! `DATA_DIR` the VGG folder (default: the copy shipped in `python/pluecker/data/vgg`) and `GAP` the relative gap (default the
 //! library's 1e-3). Every number printed is computed here; nothing is copied from the paper.
 //!
 //! Real data: the first four frames of each sequence, every 3-D line seen in at least two of them.
@@ -21,6 +21,9 @@ use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use std::fs;
 use std::path::Path;
+
+/// The VGG sequences shipped with the Python package.
+const SHIPPED_DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../python/pluecker/data/vgg");
 
 /// Summary statistics of one method over many runs.
 #[derive(Default)]
@@ -210,7 +213,7 @@ fn real(data: &Path, gap: f64) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let data = args.get(1).map_or("/work/shared/data/vgg", |s| s.as_str()).to_string();
+    let data = args.get(1).map_or(SHIPPED_DATA, |s| s.as_str()).to_string();
     let gap = args
         .get(2)
         .map_or(TriangulationOptions::default().max_relative_gap, |s| {

@@ -3,7 +3,7 @@
 //! Table 1 setting).
 //!
 //! `cargo run --release -p pluecker --example triangulate_vgg [-- DATA_DIR]` (default
-//! `/work/shared/data/vgg`). Prints, per data set: points, fraction certified and by which
+//! the copy shipped in `python/pluecker/data/vgg`). Prints, per data set: points, fraction certified and by which
 //! certificate, statuses, branch-and-bound nodes, median / 99th-percentile / max time per point
 //! (single calls), the batch time per point, and the mean and standard deviation of the per-point
 //! RMS reprojection error of the linear, local and optimal methods.
@@ -17,6 +17,9 @@ use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use std::collections::BTreeMap;
 use std::path::Path;
+
+/// The VGG sequences shipped with the Python package.
+const SHIPPED_DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../python/pluecker/data/vgg");
 
 fn numbers(path: &Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
@@ -180,7 +183,7 @@ fn run(name: &str, data: &Dataset, views: &[usize]) {
 fn main() {
     let root = std::env::args()
         .nth(1)
-        .unwrap_or_else(|| "/work/shared/data/vgg".into());
+        .unwrap_or_else(|| SHIPPED_DATA.into());
     let root = Path::new(&root);
     for (name, folder, prefix, views) in [
         ("Model House", "model_house", "house.", 10),
