@@ -45,6 +45,22 @@ def test_ordinary_data_never_looks_behind_the_camera():
         assert r.status == "success" and r.behind_camera_cost is None, (seed, r.status)
 
 
+@pytest.mark.parametrize("focal", [250.0, 800.0, 4000.0, 15000.0])
+@pytest.mark.parametrize("n", [4, 6, 10])
+def test_noisy_data_in_front_is_not_called_behind_at_any_field_of_view(focal, n):
+    """Under a narrow field of view a pose behind the camera fits nearly as well as its twin in front
+    (rotated by π about the optical axis); only a fit better by more than the ambiguity margin counts."""
+    rng = np.random.default_rng(int(focal) + n)
+    camera = pluecker.Camera(focal, focal, 320, 240)
+    for trial in range(15):
+        depth = 6.0
+        half = np.array([320.0, 240.0]) / focal * depth * 0.8
+        X = np.c_[rng.uniform(-half, half, (n, 2)), rng.uniform(-0.3, 0.3, n) * depth] + [0, 0, depth]
+        u = X[:, :2] / X[:, 2:] * focal + [320, 240] + rng.normal(0, 2.0, (n, 2))
+        r = pluecker.estimate_pose(camera, u, X)
+        assert r.behind_camera_cost is None and r.status != "points_behind_camera", (focal, n, trial, r.status)
+
+
 def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
     rng = np.random.default_rng(7)
     X = rng.uniform([-2.2, -1.6, -1.0], [2.2, 1.6, 1.0], (200, 3)) + [0, 0, 6]  # across the whole image

@@ -417,10 +417,12 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             status = Status::Ambiguous;
         }
         // Residuals above the noise (σ = sigma_px, else 1 px): are the data better explained with
-        // the points behind the camera? (Cheap, and only then.)
+        // the points behind the camera, by more than the ambiguity margin? (Cheap, and only then.
+        // Under a narrow field of view a pose behind the camera fits about as well as its twin in
+        // front, rotated by π about the optical axis: the margin keeps that near-tie from counting.)
         let sigma2 = opts.sigma_px.map_or(1.0, |s| s * s);
         let behind_cost = (matches!(status, Status::Success | Status::Ambiguous) && 2.0 * best.cost > sigma2 * (2 * n) as f64)
-            .then(|| behind_camera_cost(camera, conditioned, best.cost))
+            .then(|| behind_camera_cost(camera, conditioned, best.cost - margin))
             .flatten();
         if behind_cost.is_some() {
             status = Status::PointsBehindCamera;
