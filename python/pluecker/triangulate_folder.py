@@ -177,7 +177,7 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
     features = Features("lines", total=len(seq.line_tracks))
     cameras = seq.cameras[views]
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
-    # Branch and bound over lines can take a second per line: a bar on a terminal, nothing in a log.
+    # Branch and bound over lines is far slower than over points: a bar on a terminal, nothing in a log.
     progress = Progress(len(tracks), "lines", enabled=show_progress)
     report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
     result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma, method=method,
