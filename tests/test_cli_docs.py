@@ -165,3 +165,12 @@ def test_where_figures_need_matplotlib_is_said(monkeypatch):
         assert "matplotlib" in where and "pip install pluecker[plots]" in where
     figures = [row for row in CLI_MD.splitlines() if row.startswith("| `") and ".png`" in row]
     assert len(figures) == 5 and all("(needs matplotlib)" in row for row in figures)
+
+
+def test_the_phong_horaud_run_size_is_the_documented_one():
+    from pluecker.experiments import load
+
+    phong = load("phong-horaud-1995")
+    count = phong.count_estimates(phong.Settings.create())
+    text = section(CLI_MD, "## `pluecker reproduce phong-horaud-1995`")
+    assert f"({count:,} estimates)" in text and f"phong-horaud-1995: {count} estimates (100 trials" in text
