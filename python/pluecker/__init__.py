@@ -9,22 +9,13 @@ optimality (:func:`triangulate_point`, :func:`triangulate_points`, :func:`triang
 :func:`triangulate_quadrics`, and :func:`fit_line` / :func:`fit_conic` for the covariances), implemented in
 Rust (the ``pluecker`` crate) and exposed here through the extension module ``pluecker._core``.
 
-Conventions (everywhere in the package):
+Conventions (frames, pixels, units, array shapes, when a point is in front): stated once, in the
+"Conventions" section of the README. In Python, ``None`` stands for zero rows and any real array-like is
+accepted and converted to float64.
 
-- A world point maps to the camera frame by ``x_cam = R @ X_world + t``; the camera looks down
-  ``+z`` and a point is in front of it when ``z > 0``.
-- Pixels are ``u = K x_cam / z`` with ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``. ``fx`` and
-  ``fy`` may be negative (a mirrored axis, as in the paper's camera), never zero.
-- Angles are in radians; lengths in the unit of the 3-D data; image quantities in pixels.
-- Arrays are numpy float64, row-major, one correspondence per row: image points ``(N, 2)``,
-  object points ``(N, 3)``, image segments ``(M, 2, 2)`` (two pixel endpoints), object segments
-  ``(M, 2, 3)`` (two world endpoints). ``None`` stands for zero rows. Any real array-like is
-  accepted and converted.
-- Triangulation takes cameras as (n, 3, 4) matrices ``P`` mapping world points straight to pixels,
-  ``λ (u, v, 1) = P (X, 1)`` with ``λ > 0`` in front (e.g. ``K [R | t]``).
-- Bad input raises a subclass of :class:`PlueckerError`, itself a :class:`ValueError`, whose message
-  names the argument and, for NaN/inf, the row. A solver that runs but fails returns a result
-  (:class:`PoseResult`, :class:`TriangulationReport`) whose ``status`` says why.
+Bad input raises a subclass of :class:`PlueckerError`, itself a :class:`ValueError`, whose message names
+the argument and, for NaN/inf, the row. A solver that runs but fails returns a result
+(:class:`PoseResult`, :class:`TriangulationReport`) whose ``status`` says why.
 
 Example::
 

@@ -1,7 +1,6 @@
 """Typed stubs of the extension module ``pluecker._core`` (Rust, PyO3).
 
-Conventions: ``x_cam = R @ X_world + t``; pixels ``u = K x_cam / z`` with
-``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``; radians; lengths in the unit of the 3-D data.
+Conventions (frames, pixels, units, array shapes): the "Conventions" section of the README.
 Array arguments accept any real array-like and are converted to float64; returned arrays are fresh
 float64 row-major ndarrays owned by the caller. ``tests/test_api.py`` checks that the names here and
 the names of the module agree.

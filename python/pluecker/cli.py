@@ -1,9 +1,9 @@
 """The ``pluecker`` command line.
 
-``pluecker pose INPUT.json [--robust] [--point-threshold PX] [--line-threshold PX] [--seed N] [--sigma PX] [--certify]``
+``pluecker pose INPUT.json [options]``
     Estimates a camera pose from the correspondences in a JSON file (``-`` reads standard input) and
-    prints ``PoseResult.to_dict()`` as JSON (with the inlier masks and the covariance). The schema is
-    documented in ``docs/cli.md``.
+    prints ``PoseResult.to_dict()`` as JSON (with the inlier masks and the covariance). The schema and
+    every flag are documented in ``docs/cli.md`` (``tests/test_cli_docs.py`` keeps them in step).
 ``pluecker reproduce phong-horaud-1995``
     Re-runs the experiments of Phong, Horaud, Yassine & Tao 1995 (section 5) in simulation and writes
     tables, figures and a JSON summary.
@@ -35,6 +35,31 @@ __all__ = ["main"]
 
 METHODS = tuple(pluecker.METHODS)
 TRIANGULATION_METHODS = ("optimal", "local", "linear")
+
+#: ``pluecker triangulate --help``: the files ``pluecker.datasets.load_vgg`` reads, as it reads them.
+TRIANGULATE_DESCRIPTION = """\
+Triangulate every point seen in at least two of the chosen views (and with --lines every line) of a
+folder in the Oxford VGG multi-view format (pluecker.datasets.load_vgg); write points.json / points.ply
+(lines.json / lines.ply) with per-feature certificates to --out and print a summary. Formats: docs/cli.md.
+
+Files of FOLDER (<prefix> is empty or a name ending in a dot, such as "house."; NNN are digits; the
+views are the .P files in name order, numbered from 0):
+  <prefix>NNN.P          required, one per view: the 3x4 camera matrix, world to pixels
+  <prefix>NNN.corners    required for every view: its corners, one "x y" row each
+  <prefix>NNN.lines      required for every view, also without --lines: its segments, "x0 y0 x1 y1" rows
+  p3d or <prefix>p3d     required, may be empty: the folder's own 3-D points, "X Y Z" rows (read only to
+                         detect a mirrored world frame, which is then made right-handed)
+  l3d or <prefix>l3d     required, may be empty: the folder's own 3-D segments, "X1 Y1 Z1 X2 Y2 Z2" rows
+  nview-corners or <prefix>nview-corners
+                         optional (without it no point is triangulated): the point tracks, one row per
+                         3-D point, one column per view holding a 0-based row of that view's .corners, or *
+  nview-lines or <prefix>nview-lines
+                         optional (without it no line is triangulated): the line tracks, likewise into
+                         the .lines files
+A missing required file, a malformed row or a track pointing past the end of a view's file is an
+error: one line naming the file, exit status 2.
+The summary counts tracks: "460 of 672 triangulated" means 460 of the 672 rows of nview-corners were
+seen in at least two of the chosen views (the folder's p3d may have another number of rows)."""
 
 INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "method", "options"}
 #: ``options`` key → (keyword of ``estimate_pose``, accepted Python types).
@@ -145,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="penalty λ on the unit and orthogonality constraints (default 50)")
     pose.add_argument("--robust", action="store_true", default=None,
                       help="robust to outliers: LO-RANSAC over points and lines, then the refinement on the "
-                      "inliers (the output gains inlier masks and the RANSAC report)")
+                      "inliers (reported by the output's inliers_points, inliers_lines and ransac_* keys)")
     pose.add_argument("--point-threshold", type=_positive_float, metavar="PX",
                       help="inlier threshold of a point, reprojection distance in pixels (default 4)")
     pose.add_argument("--line-threshold", type=_positive_float, metavar="PX",
@@ -155,20 +180,18 @@ def build_parser() -> argparse.ArgumentParser:
     pose.add_argument("--time-budget", type=_positive_float, metavar="S",
                       help="wall-time budget of the RANSAC loop, seconds (default none: the iteration cap bounds it)")
     pose.add_argument("--sigma", type=_positive_float, metavar="PX",
-                      help="pixel noise σ for the covariance (default: estimated from the residuals)")
+                      help="pixel noise σ for the covariance and the χ² residual test (default: σ estimated "
+                      "from the residuals, no test)")
     pose.add_argument("--certify", action="store_true", default=None,
                       help="prove the answer is the global minimum of the reprojection error (the output's "
-                      "certified, lower_bound, gap and certificate; 0.3-3 ms more on 100 points)")
+                      "certified, lower_bound, gap and certificate; costs extra time, see bench/README.md)")
     pose.set_defaults(handler=_pose)
 
     tri = commands.add_parser(
         "triangulate", help="triangulate the points (and lines) of a multi-view folder in the VGG format",
-        description="Triangulate every point seen in at least two of the chosen views (and with --lines every "
-        "line) of a folder in the Oxford VGG multi-view format (pluecker.datasets.load_vgg); writes "
-        "points.json / points.ply (lines.json / lines.ply) with per-feature certificates to --out and prints "
-        "a summary. Formats: docs/cli.md.")
-    tri.add_argument("folder", metavar="FOLDER", type=Path, help="a VGG multi-view folder (cameras *.P, "
-                     "*.corners, *.lines, nview-corners, nview-lines)")
+        formatter_class=argparse.RawDescriptionHelpFormatter, description=TRIANGULATE_DESCRIPTION)
+    tri.add_argument("folder", metavar="FOLDER", type=Path,
+                     help="a folder in the Oxford VGG multi-view format (its files: see above)")
     tri.add_argument("--views", type=_view_list, metavar="I,J,...", help="0-based views to use, comma-separated "
                      "(default: all)")
     tri.add_argument("--method", choices=TRIANGULATION_METHODS, default="optimal",
@@ -180,15 +203,24 @@ def build_parser() -> argparse.ArgumentParser:
                      "results/triangulate/NAME)")
     tri.set_defaults(handler=_triangulate)
 
-    rep = commands.add_parser("reproduce", help="re-run a paper's experiments",
-                              description="Re-run a paper's experiments in simulation; writes tables.md, "
-                              "summary.json and figures to --out.")
+    rep = commands.add_parser(
+        "reproduce", help="re-run a paper's experiments",
+        description="Re-run the experiments of section 5 of a paper: phong-horaud-1995 in simulation, "
+        "josephson-kahl-2008 on the shipped VGG data and synthetic conics. Writes tables.md, summary.json and "
+        "PNG figures to --out. The figures need matplotlib (pip install pluecker[plots]); without it the "
+        "tables and summary.json are still written, with a warning. Details: docs/cli.md.")
     rep.add_argument("name", choices=sorted(EXPERIMENTS), help="experiment")
     rep.add_argument("--out", metavar="DIR", type=Path, help="output directory (default results/NAME)")
-    rep.add_argument("--trials", type=_positive_int, metavar="N", help="random draws per table cell "
-                     "(default 100; 10 with --quick)")
-    rep.add_argument("--seed", type=_non_negative_int, default=0, metavar="S", help="random seed (default 0)")
-    rep.add_argument("--quick", action="store_true", help="a reduced run: fewer sizes, noise levels and trials")
+    rep.add_argument("--trials", type=_positive_int, metavar="N",
+                     help="phong-horaud-1995: random draws averaged in every table cell (default 100, 10 with "
+                     "--quick); josephson-kahl-2008: synthetic disc scenes of Table 3 (default 30, 3 with --quick; "
+                     "the real-data tables have no random draws)")
+    rep.add_argument("--seed", type=_non_negative_int, default=0, metavar="S",
+                     help="random seed (default 0): phong-horaud-1995: of every draw; josephson-kahl-2008: of the "
+                     "synthetic discs and the fitting draws of Figures 1-2")
+    rep.add_argument("--quick", action="store_true",
+                     help="a reduced run: phong-horaud-1995: 3 values per sweep and 10 trials; josephson-kahl-2008: "
+                     "3 discs, 2,000 fitting draws instead of 100,000 and the first 6 lines of each sequence")
     rep.add_argument("--quiet", action="store_true", help="no progress bar (the final lines are still printed)")
     rep.set_defaults(handler=_reproduce)
     return parser
@@ -421,8 +453,8 @@ def _reproduce(args: argparse.Namespace) -> int:
         plots = True
     except ImportError:
         plots = False
-        print("pluecker reproduce: warning: matplotlib is not installed; writing tables without figures",
-              file=sys.stderr)
+        print("pluecker reproduce: warning: matplotlib is not installed; writing tables without figures "
+              "(pip install pluecker[plots] provides it)", file=sys.stderr)
     out = args.out if args.out is not None else module.DEFAULT_OUT
     try:
         report = module.reproduce(out, trials=args.trials, seed=args.seed, quick=args.quick,

@@ -41,10 +41,12 @@ class FolderError(Exception):
 class Features:
     """The triangulated features of one kind (``"points"`` or ``"lines"``).
 
-    ``indices`` are the rows of the folder's ``p3d`` / ``l3d`` (the tracks), ``views`` per feature the
-    original numbers of the views it was seen in, ``records`` the per-feature JSON objects, ``geometry``
-    the PLY content (``(k, 3)`` points or ``(k, 2, 3)`` segments of the finite features) with
-    ``certified`` flags, and ``total`` the number of tracks in the folder.
+    ``records`` are the per-feature JSON objects (``index``: the track's row in ``nview-corners`` /
+    ``nview-lines``; ``views``: the original numbers of the views it was seen in), ``geometry`` the PLY
+    content (``(k, 3)`` points or ``(k, 2, 3)`` segments of the finite features) with ``certified``
+    flags, and ``total`` the number of tracks in the folder (rows of its track file). Every count comes
+    from the tracks, the features that are triangulated: the folder's own ``p3d`` / ``l3d`` may have
+    another number of rows (or none), since triangulation does not read them.
     """
 
     kind: str
@@ -72,6 +74,16 @@ class Run:
     seconds: float
 
 
+#: Why a file of the folder is needed, by the end of its name (the list: ``pluecker triangulate --help``).
+_REQUIRED = {".corners": "every camera file <prefix>NNN.P needs <prefix>NNN.corners and <prefix>NNN.lines",
+             ".lines": "every camera file <prefix>NNN.P needs <prefix>NNN.corners and <prefix>NNN.lines, also "
+                       "without --lines",
+             "p3d": "the folder needs its 3-D points file, p3d or <prefix>p3d, which may be empty",
+             "l3d": "the folder needs its 3-D segments file, l3d or <prefix>l3d, which may be empty"}
+#: The track file of each kind of feature.
+TRACK_FILES = {"points": "nview-corners", "lines": "nview-lines"}
+
+
 def _load(folder: Path) -> VggSequence:
     if not folder.exists():
         raise FolderError(f"{folder}: no such directory")
@@ -79,7 +91,14 @@ def _load(folder: Path) -> VggSequence:
         raise FolderError(f"{folder}: not a directory")
     try:
         return load_vgg(folder)
-    except (OSError, ValueError) as exc:
+    except OSError as exc:
+        if exc.filename is None:  # no camera files: load_vgg's own one-line message
+            raise FolderError(str(exc).replace("\n", " ")) from None
+        if isinstance(exc, FileNotFoundError):
+            why = next((text for end, text in _REQUIRED.items() if str(exc.filename).endswith(end)), None)
+            raise FolderError(f"{exc.filename}: no such file" + (f"; {why}" if why else "")) from None
+        raise FolderError(f"cannot read {exc.filename}: {exc.strerror or exc}") from None
+    except ValueError as exc:
         raise FolderError(str(exc).replace("\n", " ")) from None
 
 
@@ -108,7 +127,7 @@ def _report(columns: dict[str, np.ndarray], i: int) -> dict[str, Any]:
 def _points(seq: VggSequence, views: list[int], method: str) -> Features:
     x, visible = seq.point_observations(views)
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
-    features = Features("points", total=len(seq.points3d))
+    features = Features("points", total=len(seq.point_tracks))
     if len(tracks) == 0:
         return features
     cameras = seq.cameras[views]
@@ -155,10 +174,10 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
     from pluecker.progress import Progress
 
     segments, visible = seq.line_observations(views)
-    features = Features("lines", total=len(seq.lines3d))
+    features = Features("lines", total=len(seq.line_tracks))
     cameras = seq.cameras[views]
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
-    # Branch and bound over lines can take a second per line: a bar on a terminal, nothing in a log.
+    # Branch and bound over lines is far slower than over points: a bar on a terminal, nothing in a log.
     progress = Progress(len(tracks), "lines", enabled=show_progress)
     report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
     result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma, method=method,
@@ -284,6 +303,8 @@ def write(run: Run, out: str | Path) -> list[Path]:
 
 def _summary_line(features: Features) -> str:
     s = summary(features)
+    if not s["tracks"]:
+        return f"{features.kind}: no tracks ({TRACK_FILES[features.kind]} missing or empty)"
     line = (f"{features.kind}: {s['triangulated']} of {s['tracks']} triangulated ({s['skipped']} seen in fewer "
             f"than 2 of the views)")
     if not s["triangulated"]:
@@ -304,6 +325,7 @@ def summary_lines(run: Run, files: list[Path]) -> list[str]:
     lines = [f"triangulate {run.name} (views {','.join(map(str, run.views))}, method {run.method}) in "
              f"{run.seconds:.2f} s", _summary_line(run.points)]
     if run.lines is not None:
-        lines.append(_summary_line(run.lines) + f" (segment endpoints σ = {run.sigma:g} px)")
+        lines.append(_summary_line(run.lines) + (f" (segment endpoints σ = {run.sigma:g} px)" if run.lines.total
+                                                 else ""))
     lines.append("wrote " + ", ".join(str(f) for f in files))
     return lines

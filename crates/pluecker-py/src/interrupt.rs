@@ -37,8 +37,8 @@ pub(crate) struct Outcome<T> {
 /// is a panic (`PlueckerError("internal error: ...")`); a pending exception wins over both.
 ///
 /// `short`: the caller knows the work takes well under [`POLL`] (a small linear batch). Without
-/// `progress` and `time_budget` it then runs on this thread, sparing the worker thread's start
-/// (about 20 µs), and sees Ctrl-C only when it ends.
+/// `progress` and `time_budget` it then runs on this thread, sparing the worker thread's start (its
+/// cost: `bench/README.md`), and sees Ctrl-C only when it ends.
 pub(crate) fn run_interruptible<T, F>(
     py: Python<'_>,
     progress: Option<&Bound<'_, PyAny>>,

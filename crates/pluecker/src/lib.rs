@@ -4,11 +4,17 @@
 //! 3-D structure from known cameras, with statistically optimal answers.
 //!
 //! ## Conventions (used everywhere)
-//! - World to camera: `x_cam = R X_world + t`; the camera looks down `+z`.
+//! The same statement as the README's "Conventions" section, which Python and JSON users read.
+//! - World to camera: `x_cam = R X_world + t`; the camera looks down `+z`; a point is in front when `z > 0`.
 //! - Pixels: `u = K x_cam / z` with `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`; `fx`, `fy` may be
 //!   negative (a mirrored axis, as in Phong & Horaud's camera), never zero.
 //! - Angles in radians; lengths in the unit of the 3-D data; image quantities in pixels.
-//! - Image segments are pairs of pixel endpoints; 3-D segments pairs of world endpoints.
+//! - Image segments are pairs of pixel endpoints; 3-D segments pairs of world endpoints (only the 3-D
+//!   line through them is used).
+//! - Row-major data, one correspondence or track per row: points `(N, 2)` / `(N, 3)` (the batch slices of
+//!   [`triangulation`] and the numpy arrays of the Python package).
+//! - Known cameras (triangulation) are 3x4 matrices `P = K [R | t]` (any positive scale) mapping world
+//!   points to pixels, `λ (u, v, 1)ᵀ = P (X, 1)ᵀ`; a point is in front when `λ = (P X̃)₃ > 0`.
 //!
 //! ## Example
 //! ```

@@ -222,8 +222,9 @@ impl Socp {
     }
 
     /// Solves with clarabel's default tolerances (1e-8), silently, without presolve (no infinite
-    /// bounds arise here) and without iterative refinement of the KKT solves (measured 30 % faster on
-    /// the branch-and-bound nodes; the bound below does not rely on the solver's accuracy).
+    /// bounds arise here) and without iterative refinement of the KKT solves (faster on the
+    /// branch-and-bound nodes, see `bench/README.md`; the bound below does not rely on the solver's
+    /// accuracy).
     pub fn solve(&self) -> SocpSolution {
         self.solve_with(DefaultSettings::<f64> {
             verbose: false,

@@ -18,10 +18,9 @@
 //! new pose, down to the thresholds themselves over [`LOCAL_ROUNDS`] rounds; every fit is scored with the
 //! true thresholds and the best kept. A minimal sample's pose is off by several pixels at the far side of
 //! the scene, so inliers selected at the thresholds alone can miss part of the true inlier set and
-//! settle on a worse model nearby. Measured on 1000 scenes of `bench/compare_robust_pose.py` at 75 %
-//! outliers (100 points): RMS rotation error 1.078 × the Cramér-Rao bound with the thresholds alone and
-//! 1.038 with the wider rounds, against 1.037 for the maximum-likelihood fit on the true inliers; 40
-//! true inliers dropped before, 2 after. The loop stops when the number of
+//! settle on a worse model nearby; the wider rounds bring the accuracy to that of the
+//! maximum-likelihood fit on the true inliers (measured with `bench/compare_robust_pose.py`: the figures
+//! are in `bench/README.md`, "Figures behind the code"). The loop stops when the number of
 //! samples reaches the adaptive bound of [`sampler`] for [`RansacOptions::confidence`], the cap of
 //! [`RansacOptions::min_inlier_ratio`], the iteration cap, or the time budget. The caller
 //! ([`crate::pose::estimate_pose`]) then refines the best model on its inliers with the full
@@ -30,9 +29,9 @@
 //! **All-outlier data.** With no model in the data, no inlier fraction is ever found, so the adaptive
 //! bound never comes down: before the SPRT and the `min_inlier_ratio` cap the loop ran to
 //! `max_iterations` (100,000 samples), each hypothesis scored on nearly every correspondence (its
-//! partial MSAC sum stays below the best's until the end), 16 s for 20,000 points. Now it draws about
-//! 9,800 samples (the cap of the default 0.1: 9,206, a few % more for the SPRT's `α`) and rejects each
-//! hypothesis after about 30 errors: 18 ms (`bench/robust_outliers.py`).
+//! partial MSAC sum stays below the best's until the end). Now it draws about 9,800 samples (the cap of
+//! the default 0.1: 9,206, a few % more for the SPRT's `α`) and rejects each hypothesis after about 30
+//! errors (the times before and after, from `bench/robust_outliers.py`: `bench/README.md`).
 //!
 //! **Inliers by chance.** A wrong pose still agrees with some outliers: each falls within the threshold
 //! of its prediction with probability `p ≈ π τ² / (W H)` for observations spread over a `W × H` window

@@ -39,9 +39,9 @@
 //! such models exceeds with probability at most `ψ`.
 
 /// `t_M`: the time of a minimal sample (P3P, the pose checks and the loop's bookkeeping) in units of
-/// one point-error evaluation, measured on 20,000 all-outlier points: about 1.1 µs per sample and
-/// 4.7 ns per error in the batched loop, so about 230. It sets how much verification a rejection may
-/// cost; the line solvers are slower, so this errs towards a smaller `A`.
+/// one point-error evaluation, measured on 20,000 all-outlier points (the timings: `bench/README.md`,
+/// "Figures behind the code"). It sets how much verification a rejection may cost; the line solvers are
+/// slower, so the constant is set below the measured ratio and errs towards a smaller `A`.
 pub const MODEL_COST: f64 = 200.0;
 
 /// Largest `ε` of a test: with `ε → 1` one inconsistent correspondence would reject a good model.
