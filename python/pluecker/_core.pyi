@@ -221,7 +221,7 @@ class PoseResult:
         """When the residuals exceed the noise (``sigma_px``, else 1 px), the minimal solvers also look
         for poses with every object point *behind* the camera (the same pixels as a mirrored object in
         front); ``½ Σ r²`` (px²) of the best such pose when it fits better than the returned pose by
-        more than the ambiguity margin (``½ ambiguity_threshold σ²``).
+        more than ``½ ambiguity_threshold σ²`` (σ = ``sigma_px``, else 1 px) and by a factor of at least 100.
         :attr:`status` is then ``"points_behind_camera"``: the data come from points behind the
         camera, which no pose in front explains. None otherwise."""
     @property

@@ -420,9 +420,12 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         // the points behind the camera, by more than the ambiguity margin? (Cheap, and only then.
         // Under a narrow field of view a pose behind the camera fits about as well as its twin in
         // front, rotated by π about the optical axis: the margin keeps that near-tie from counting.)
+        // The reference σ here is the stated noise (1 px without sigma_px), not σ̂: a misfit inflates σ̂.
         let sigma2 = opts.sigma_px.map_or(1.0, |s| s * s);
+        let behind_margin = 0.5 * opts.ambiguity_threshold * sigma2;
+        let bound = (best.cost - behind_margin).min(best.cost / BEHIND_CAMERA_RATIO);
         let behind_cost = (matches!(status, Status::Success | Status::Ambiguous) && 2.0 * best.cost > sigma2 * (2 * n) as f64)
-            .then(|| behind_camera_cost(camera, conditioned, best.cost - margin))
+            .then(|| behind_camera_cost(camera, conditioned, bound))
             .flatten();
         if behind_cost.is_some() {
             status = Status::PointsBehindCamera;
@@ -460,6 +463,12 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         },
     ))
 }
+
+/// How many times lower than the returned pose's cost the cost of a pose with every point behind the
+/// camera must be for [`PoseResult::behind_camera_cost`] to count: without a stated noise a mere
+/// margin cannot tell a near-tie (4-5 noisy correspondences, a narrow field of view) from data that
+/// only a pose behind the camera explains, whose in-front fit is worse by orders of magnitude.
+const BEHIND_CAMERA_RATIO: f64 = 100.0;
 
 /// The `σ²` of the ambiguity test (px²): `sigma_px²` when given, else the larger of 1 px² and the
 /// estimate `Σ r² / (m − 6)` at the best minimum of cost `best_cost` over `m` residuals.

@@ -375,7 +375,8 @@ pub struct PoseResult {
     /// When the residuals at the returned pose exceed the noise (`σ` = [`PoseOptions::sigma_px`], else
     /// 1 px), the minimal solvers also look for poses with every object point *behind* the camera
     /// ([`candidates::behind_camera_cost`]); the cost `½ Σ r²` (px²) of the best one that fits better
-    /// than the returned pose by more than the ambiguity margin (`½ ambiguity_threshold σ²`), if any. Then [`PoseResult::status`] is
+    /// than the returned pose by more than `½ ambiguity_threshold σ²` (the ambiguity margin, with the
+    /// stated σ) and by a factor of at least 100, if any. Then [`PoseResult::status`] is
     /// [`Status::PointsBehindCamera`]: the returned pose is the best found with the points in front,
     /// but the data come from points behind the camera (or a mirrored object). `None` otherwise.
     pub behind_camera_cost: Option<f64>,
