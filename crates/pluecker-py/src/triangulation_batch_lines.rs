@@ -20,7 +20,7 @@ use crate::triangulation_quadric::QUADRIC_NAMES;
 use nalgebra::Matrix3x4;
 use numpy::ndarray::{ArrayD, IxDyn};
 use numpy::{IntoPyArray, PyArrayDyn};
-use pluecker::triangulation::batch::TrackCameras;
+use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::line::LineTriangulation;
 use pluecker::triangulation::line_batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
 use pluecker::triangulation::quadric::QuadricTriangulation;

@@ -5,7 +5,7 @@
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use pluecker::geometry::quadric::{project_dual, Ellipse};
 use pluecker::rng::Rng;
-use pluecker::triangulation::batch::TrackCameras;
+use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,

@@ -15,7 +15,7 @@
 //! call (bad options, a bad `sigma`, bad shared cameras, inconsistent array lengths) come first, as the
 //! outer `Result`.
 
-use super::batch::{
+use super::tracks::{
     check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
 };
 use super::line::{lines_from_segments, triangulate_line, LineTriangulation};

@@ -14,7 +14,7 @@
 //! (`conics[t][j]`: view `j` of track `t`). Errors of the whole call (bad options, bad shared cameras,
 //! inconsistent array lengths) come first, as the outer `Result`.
 
-use super::batch::{
+use super::tracks::{
     check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
 };
 use super::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};

@@ -43,7 +43,7 @@
 use super::conditioning::Similarity;
 use super::fraction;
 use super::line::LineProblem;
-use super::point_cost::PointView;
+use super::point::cost::PointView;
 use super::quadric::{transform_dual, QuadricProblem};
 use crate::geometry::plucker::LineChart;
 use crate::geometry::quadric::{
