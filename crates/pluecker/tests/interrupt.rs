@@ -9,7 +9,7 @@ use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
 use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::tracks::TrackCameras;
-use pluecker::triangulation::line_batch::{triangulate_lines, ImageLines, LineTracks};
+use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
 use pluecker::triangulation::scenes::arc_cameras;
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::Error;

@@ -14,19 +14,14 @@
 //! are in squared (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
 //! A report's `certified` is true only with [`Status::Success`] ([`Report::set_status`]).
 
+pub(crate) mod certificate;
 pub mod conditioning;
 pub mod covariance;
 pub mod fitting;
 pub mod fraction;
 pub mod line;
-pub mod line_batch;
-pub mod line_optimal;
-pub mod line_residual;
 pub mod point;
 pub mod quadric;
-pub mod quadric_batch;
-pub mod quadric_optimal;
-pub mod quadric_residual;
 pub mod scenes;
 pub mod tracks;
 pub mod uncertainty;

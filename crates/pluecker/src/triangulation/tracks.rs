@@ -1,5 +1,5 @@
-//! Helpers shared by the batches of points ([`super::point::batch`]), lines ([`super::line_batch`]) and
-//! quadrics ([`super::quadric_batch`]): the shape checks of flat per-observation arrays, the visible
+//! Helpers shared by the batches of points ([`super::point::batch`]), lines ([`super::line::batch`]) and
+//! quadrics ([`super::quadric::batch`]): the shape checks of flat per-observation arrays, the visible
 //! views of a track, the cameras of a batch ([`TrackCameras`]), the parallel loop over tracks and the
 //! restating of a single-track error for the batch.
 

@@ -52,7 +52,7 @@ use self::global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATIO
 use crate::global::relative_gap;
 use self::infinity::best_at_infinity;
 use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
-use super::uncertainty::point_covariance;
+use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras};
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
@@ -227,7 +227,7 @@ pub(crate) fn solve_views(
     report.cost = cost;
     if certificate.kind == CertificateKind::BranchAndBound && matches!(status, Status::Success | Status::GapNotClosed) {
         // Branch and bound searches the closure of the points in front, infinity included: its best
-        // finite point may be a far point on the way there (module docs of point_infinity).
+        // finite point may be a far point on the way there (module docs of `infinity`).
         if let Some(u) = unreached(views, frame, &x, cost, linear, opts) {
             report.certificate = certificate_when_unreached(&certificate, &u);
             return settle(u, report);
@@ -426,4 +426,17 @@ fn certify(
         solver_iterations: g.solver_iterations,
     };
     (g.point, status, certificate, g.cost)
+}
+
+/// The 3x3 covariance of a point `x` (world units²) seen in `views` ([`super::uncertainty`]): `(Σ BᵢᵀBᵢ)⁻¹` with
+/// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18
+/// ([`PointView::residual_and_information`]).
+pub fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
+    if !x.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let information = views
+        .iter()
+        .fold(Matrix3::zeros(), |h, v| h + v.residual_and_information(x).1);
+    covariance_of_information3(&information)
 }
