@@ -22,7 +22,7 @@
 //! never reported for lines.
 
 pub mod batch;
-pub(crate) mod optimal;
+pub mod optimal;
 pub mod residual;
 
 use super::conditioning::{check_views, Similarity};

@@ -38,11 +38,11 @@
 
 pub mod batch;
 pub mod certificate;
-pub(crate) mod chart;
+pub mod chart;
 pub mod cost;
 pub mod global;
 pub mod infinity;
-pub(crate) mod linear;
+pub mod linear;
 
 use super::covariance::whitenings;
 use self::certificate::convexity_test;

@@ -24,7 +24,7 @@
 //! camera's principal plane, has status [`Status::BehindCamera`].
 
 pub mod batch;
-pub(crate) mod optimal;
+pub mod optimal;
 pub mod residual;
 
 use super::conditioning::{check_views, Similarity};
