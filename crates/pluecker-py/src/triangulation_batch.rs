@@ -1,5 +1,5 @@
 //! `triangulate_points`: many point tracks seen by one set of cameras, solved by the core's batch
-//! (`pluecker::triangulation::batch`, rayon) with the GIL released, and `pluecker.PointTriangulations`,
+//! (`pluecker::triangulation::point::batch`, rayon) with the GIL released, and `pluecker.PointTriangulations`,
 //! the arrays of their points with the per-track report columns of its base class
 //! `pluecker.BatchReport` ([`crate::triangulation_batch_report`]).
 //!
@@ -16,7 +16,7 @@ use crate::triangulation_batch_lines::{per_observation, push_covariance};
 use crate::triangulation_batch_report::{batch_dict, collect, PyBatchReport, TrackColumns};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray2, PyArray3};
-use pluecker::triangulation::batch::{
+use pluecker::triangulation::point::batch::{
     triangulate_points as core_points, triangulate_points_linear, LinearPoints, PointTracks,
 };
 use pluecker::triangulation::point::PointTriangulation;

@@ -1,5 +1,5 @@
 //! `triangulate_lines` and `triangulate_quadrics`: many line or quadric tracks solved by the core's
-//! batches (`pluecker::triangulation::{line_batch, quadric_batch}`, rayon) with the GIL released, and
+//! batches (`pluecker::triangulation::{line::batch, quadric::batch}`, rayon) with the GIL released, and
 //! their results `pluecker.LineTriangulations` / `pluecker.QuadricTriangulations`, column arrays with
 //! the per-track report columns of their base class `pluecker.BatchReport`
 //! ([`crate::triangulation_batch_report`], which also fills them from the core's results).
@@ -20,11 +20,11 @@ use crate::triangulation_quadric::QUADRIC_NAMES;
 use nalgebra::Matrix3x4;
 use numpy::ndarray::{ArrayD, IxDyn};
 use numpy::{IntoPyArray, PyArrayDyn};
-use pluecker::triangulation::batch::TrackCameras;
+use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::line::LineTriangulation;
-use pluecker::triangulation::line_batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
+use pluecker::triangulation::line::batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
 use pluecker::triangulation::quadric::QuadricTriangulation;
-use pluecker::triangulation::quadric_batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
+use pluecker::triangulation::quadric::batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use pluecker::Error;
 use crate::convert::{optional_real, Integer, Real};

@@ -20,7 +20,7 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::{CertificateKind, Method, TriangulationOptions};
 use std::time::Duration;

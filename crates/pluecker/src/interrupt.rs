@@ -3,7 +3,7 @@
 //!
 //! A [`Stop`] is installed for the duration of a call with [`with_stop`]; the long loops of the crate
 //! poll it through [`stop_reason`]:
-//! - the batches ([`crate::triangulation::batch`], line and quadric batches), before each track: a
+//! - the batches ([`crate::triangulation::point::batch`], line and quadric batches), before each track: a
 //!   track not yet started when the stop arrives is not solved
 //!   ([`crate::Error::Interrupted`]);
 //! - the node loop of [`crate::global::branch_and_bound`]: a track being solved keeps the best

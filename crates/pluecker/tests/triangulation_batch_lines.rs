@@ -1,18 +1,18 @@
-//! The line and quadric batches (`triangulation::line_batch`, `triangulation::quadric_batch`): every
+//! The line and quadric batches (`triangulation::line::batch`, `triangulation::quadric::batch`): every
 //! track's result equals the single call's on its visible views (bit for bit: the same function on the
 //! same numbers), a bad track is an error naming it and never loses the others, and whole-call errors.
 
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use pluecker::geometry::quadric::{project_dual, Ellipse};
 use pluecker::rng::Rng;
-use pluecker::triangulation::batch::TrackCameras;
+use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
 };
-use pluecker::triangulation::line_batch::{triangulate_lines, ImageLines, LineTracks};
+use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
 use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
-use pluecker::triangulation::quadric_batch::{triangulate_quadrics, QuadricTracks};
+use pluecker::triangulation::quadric::batch::{triangulate_quadrics, QuadricTracks};
 use pluecker::triangulation::scenes::{arc_cameras, quadric_scene};
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::Error;

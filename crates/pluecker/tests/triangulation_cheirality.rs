@@ -9,7 +9,7 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3, Vector4};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, paper_pose, triangulation_scene};
-use pluecker::triangulation::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
 use pluecker::triangulation::point::{triangulate_point, PointTriangulation};

@@ -127,7 +127,7 @@ fn line_cost(
     covariances: &[Matrix2<f64>],
     l: &Vector6<f64>,
 ) -> f64 {
-    use pluecker::triangulation::line_residual::LineFrame;
+    use pluecker::triangulation::line::residual::LineFrame;
     cameras
         .iter()
         .zip(lines)

@@ -6,11 +6,11 @@ use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
 use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{triangulation_scene, TriangulationScene};
-use pluecker::triangulation::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::point_certificate::convexity_test;
-use pluecker::triangulation::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
-use pluecker::triangulation::point_global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
+use pluecker::triangulation::point::certificate::convexity_test;
+use pluecker::triangulation::point::cost::{in_front, point_cost, point_views, PointObjective, PointView};
+use pluecker::triangulation::point::global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
 use pluecker::triangulation::views::depth_normalized;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 

@@ -7,7 +7,7 @@ use pluecker::geometry::quadric::{project_dual, Ellipse, Ellipsoid};
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::quadric::{triangulate_quadric, triangulate_quadric_points, Matrix5};
-use pluecker::triangulation::quadric_residual::ConicFrame;
+use pluecker::triangulation::quadric::residual::ConicFrame;
 use pluecker::triangulation::scenes::quadric_scene;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use pluecker::Error;

@@ -22,7 +22,7 @@ use pluecker::geometry::plucker::LineChart;
 use pluecker::geometry::quadric::centre_shape;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
 use pluecker::triangulation::point::triangulate_point;

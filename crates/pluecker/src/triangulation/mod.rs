@@ -14,28 +14,16 @@
 //! are in squared (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
 //! A report's `certified` is true only with [`Status::Success`] ([`Report::set_status`]).
 
-pub mod batch;
+pub(crate) mod certificate;
 pub mod conditioning;
 pub mod covariance;
 pub mod fitting;
 pub mod fraction;
 pub mod line;
-pub mod line_batch;
-pub mod line_optimal;
-pub mod line_residual;
 pub mod point;
-pub mod point_certificate;
-pub mod point_chart;
-pub mod point_cost;
-pub mod point_global;
-pub mod point_infinity;
-pub mod point_linear;
-
 pub mod quadric;
-pub mod quadric_batch;
-pub mod quadric_optimal;
-pub mod quadric_residual;
 pub mod scenes;
+pub mod tracks;
 pub mod uncertainty;
 pub mod views;
 

@@ -3,7 +3,7 @@
 //!
 //! **What is computed.** Observation `i` has the covariance `Σᵢ` of its residual `rᵢ` of eq. 17: 2x2
 //! pixels² for a point, 2x2 for an image line and 5x5 for a conic (in the units of
-//! [`super::line_residual`] / [`super::quadric_residual`], e.g. from [`super::fitting`]). Its whitening
+//! [`super::line::residual`] / [`super::quadric::residual`], e.g. from [`super::fitting`]). Its whitening
 //! `Lᵢ` (eq. 18, `LᵢᵀLᵢ = Σᵢ⁻¹`) makes the stacked whitened residuals `ρ = (L₁r₁, …, Lₙrₙ)` of identity
 //! covariance. At the returned estimate `θ̂`, with a minimal chart `δ ↦ θ(δ)`, `θ(0) = θ̂`, and
 //! `J = ∂ρ/∂δ` at `δ = 0`, the covariance of the estimate in the chart is the first-order
@@ -13,7 +13,7 @@
 //! the inverse of the Gauss-Newton Hessian of `½` eq. 19. The given covariances carry the scale: the
 //! result is not rescaled by the cost reached (no a-posteriori variance factor). **Without
 //! covariances** every `Σᵢ = I`: 1 px isotropic noise for points; for lines 1 px of offset and
-//! `1/D` rad (`D` = [`super::line_residual::LINE_FRAME_DISTANCE`]) of angle; for conics unit variance
+//! `1/D` rad (`D` = [`super::line::residual::LINE_FRAME_DISTANCE`]) of angle; for conics unit variance
 //! on each of the 5 residual entries (px² and px) — give covariances for lines and conics. It is
 //! evaluated at whatever estimate the method returned: for `linear` that is the maximum-likelihood
 //! covariance at the linear answer, not the covariance of the linear estimator itself. First-order
@@ -21,12 +21,15 @@
 //! problem: a point at low parallax gets a large, correct covariance, but its estimates are skewed
 //! along the ray (an `O(σ²)` bias) once the depth error is a sizeable fraction of the depth.
 //!
+//! The covariances themselves are computed beside each primitive: `point_covariance` in
+//! [`super::point`], `line_covariance` in [`super::line`], `quadric_covariance` in [`super::quadric`].
+//!
 //! **Charts** (the order of the rows and columns):
 //! - point: `X` itself, 3x3, world units²;
-//! - line: [`LineChart`] `(α₁, α₂, t₁, t₂)` pivoted at the point of the line closest to the world
-//!   origin, 4x4 (`α` dimensionless, `t` world units); [`LineChart::plucker_covariance`] and
-//!   [`LineChart::point_direction_covariance`] map it to 6x6 forms;
-//! - quadric: [`CentreShape`] `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`, 9x9 (world units, units²):
+//! - line: [`LineChart`](crate::geometry::plucker::LineChart) `(α₁, α₂, t₁, t₂)` pivoted at the point of the line closest to the world
+//!   origin, 4x4 (`α` dimensionless, `t` world units); [`LineChart::plucker_covariance`](crate::geometry::plucker::LineChart::plucker_covariance) and
+//!   [`LineChart::point_direction_covariance`](crate::geometry::plucker::LineChart::point_direction_covariance) map it to 6x6 forms;
+//! - quadric: [`CentreShape`](crate::geometry::quadric::CentreShape) `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`, 9x9 (world units, units²):
 //!   the ellipsoid is estimated as a real ellipsoid (9 dof); this chart of the normalised dual quadric
 //!   stays regular for spheres and spheroids (where axes and semi-axes are not), and for flat ones.
 //!   For a flat estimate (a semi-axis 0) the estimate lies on the boundary `S ⪰ 0` of the set searched,
@@ -40,22 +43,13 @@
 //! parallax below about 1e-6 rad, as `‖H‖‖H⁻¹‖` grows like 1/parallax²), a line in an epipolar plane of
 //! every pair of views, a quadric seen by cameras that leave a family of quadrics tangent to every cone.
 
-use super::conditioning::Similarity;
-use super::fraction;
-use super::line::LineProblem;
-use super::point_cost::PointView;
-use super::quadric::{transform_dual, QuadricProblem};
-use crate::geometry::plucker::LineChart;
-use crate::geometry::quadric::{
-    centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, CentreShape, Ellipsoid,
-};
-use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
+use nalgebra::{Matrix3, SMatrix};
 
 /// Largest accepted `‖H‖_F ‖H⁻¹‖_F` of an information matrix `H = JᵀJ` (between the 2-norm condition
 /// number and `N` times it).
 pub const MAX_CONDITION: f64 = 1e12;
 
-/// The 9x9 covariance of a quadric in the [`CentreShape`] chart.
+/// The 9x9 covariance of a quadric in the [`CentreShape`](crate::geometry::quadric::CentreShape) chart.
 pub type QuadricCovariance = SMatrix<f64, 9, 9>;
 
 /// `H⁻¹` for a symmetric information matrix `H = JᵀJ`, or `None` when it is not finite, not positive
@@ -94,72 +88,10 @@ pub fn covariance_of_information3(h: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     (condition.is_finite() && condition <= MAX_CONDITION).then_some(inverse)
 }
 
-/// The 3x3 covariance of a point `x` (world units²) seen in `views` (module docs): `(Σ BᵢᵀBᵢ)⁻¹` with
-/// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18
-/// ([`PointView::residual_and_information`]).
-pub fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
-    if !x.iter().all(|v| v.is_finite()) {
-        return None;
-    }
-    let information = views
-        .iter()
-        .fold(Matrix3::zeros(), |h, v| h + v.residual_and_information(x).1);
-    covariance_of_information3(&information)
-}
-
-/// The 4x4 covariance of a line in `chart` (pivoted anywhere on the line; module docs). Computed in
-/// the chart pivoted at the point of the line closest to the centroid of the camera centres, in a
-/// frame whose unit is its distance `ρ` from them ([`LineProblem::foot`]), then moved to `chart`'s
-/// pivot exactly: from `δ' = (α, t')` there, `δ = (α, ρ t' − s α)` with `s` the signed distance
-/// along the line from `chart`'s pivot to that point ([`LineChart::repivot`]).
-pub(crate) fn line_covariance(problem: &LineProblem, chart: &LineChart) -> Option<Matrix4<f64>> {
-    let world_line = chart.line(&Vector4::zeros());
-    if !world_line.iter().all(|v| v.is_finite()) {
-        return None;
-    }
-    let (foot, rho) = problem.foot(&world_line);
-    let near = chart.repivot(&foot);
-    let sim = Similarity::around(near.pivot, rho);
-    // The frame only translates and scales: the pivot is its origin, the axes are unchanged.
-    let framed = LineChart {
-        pivot: Vector3::zeros(),
-        ..near
-    };
-    let views = problem.views(&sim);
-    let info = fraction::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
-    let framed_cov = covariance_of_information(&info)?;
-    let s = chart.direction.dot(&(near.pivot - chart.pivot));
-    let mut m = Matrix4::identity();
-    m[(2, 2)] = rho;
-    m[(3, 3)] = rho;
-    m[(2, 0)] = -s;
-    m[(3, 1)] = -s;
-    Some(m * framed_cov * m.transpose())
-}
-
-/// The 9x9 covariance of an ellipsoid in the [`CentreShape`] chart (module docs), computed in the
-/// frame of [`QuadricProblem::frame_of`] (origin at the centre, unit the largest semi-axis) and
-/// scaled back: centre entries by that unit, shape entries by its square.
-pub(crate) fn quadric_covariance(problem: &QuadricProblem, e: &Ellipsoid) -> Option<QuadricCovariance> {
-    let dual = e.dual();
-    if !dual.iter().all(|v| v.is_finite()) {
-        return None;
-    }
-    let sim = problem.frame_of(e);
-    let framed: CentreShape = centre_shape(&transform_dual(&sim.matrix(), &dual))?;
-    let views = problem.views(&sim);
-    let tangent = centre_shape_tangent(&Vector3::new(framed[0], framed[1], framed[2]));
-    let info = fraction::linearize(&views, &sym4_to_vec(&dual_of_centre_shape(&framed)), &tangent).gauss_newton;
-    let framed_cov = covariance_of_information(&info)?;
-    let unit = 1.0 / sim.scale;
-    let d = CentreShape::from_fn(|k, _| if k < 3 { unit } else { unit * unit });
-    Some(QuadricCovariance::from_diagonal(&d) * framed_cov * QuadricCovariance::from_diagonal(&d))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::Matrix2;
+    use nalgebra::{Matrix2, Vector3};
 
     #[test]
     fn closed_form_3x3_agrees_with_the_general_inverse() {

@@ -1,8 +1,8 @@
 //! Branch and bound for a point (Josephson & Kahl 2008, section 4), when the convexity test of
-//! [`super::point_certificate`] cannot decide.
+//! [`super::certificate`] cannot decide.
 //!
 //! **Coordinates.** The box is over the whitened coordinates `y` of the mean-depth chart around the
-//! local solution `X̂` ([`super::point_chart`]): per view the numerator `aᵢ(y)` and the denominator
+//! local solution `X̂` ([`super::chart`]): per view the numerator `aᵢ(y)` and the denominator
 //! `ζᵢ(y)` of the fraction `‖rᵢ‖² = ‖aᵢ‖²/ζᵢ²` are affine, points at infinity are finite (`w = 0`),
 //! and the denominators' intervals over a box follow exactly from it (interval arithmetic on affine
 //! functions). Branching on three coordinates therefore refines every view's denominator — the
@@ -11,7 +11,7 @@
 //! the split is at the relaxed minimiser kept inside the middle half of the interval.
 //!
 //! **Search set.** Every point at least as good as `X̂` lies in `S_{ε₀}` (each view's error is at
-//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of [`super::point_certificate::enclosure`]
+//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of [`super::certificate::enclosure`]
 //! (`S_{ε₀}` cut by an ellipsoid); points outside cost more than `f(X̂)`. The search runs over
 //! `K ∩ S_γ ∩ {w ≥ 0}` (`γ` the user's `max_reprojection_error`, by default `ε₀`), so a lower bound
 //! below `f(X̂)` is a lower bound over every point in front of the cameras within `γ`.
@@ -35,9 +35,9 @@
 //! [`crate::global::socp`], valid despite the solver's tolerance. The upper bound comes from a
 //! local minimisation started at the relaxed minimiser.
 
-use super::point_certificate::{enclosure, Enclosure};
-use super::point_chart::{Chart, ChartKind, ChartView};
-use super::point_cost::{in_front, point_cost, PointObjective, PointView};
+use super::certificate::{enclosure, Enclosure};
+use super::chart::{Chart, ChartKind, ChartView};
+use super::cost::{in_front, point_cost, PointObjective, PointView};
 use crate::interrupt::StopReason;
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};

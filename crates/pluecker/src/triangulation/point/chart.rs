@@ -16,7 +16,7 @@
 //! whitened pixels and the Gauss-Newton Hessian of `f` in `y` at `0` is `2I`. A chart point is a
 //! point in front of every camera iff `w > 0` and every `ζᵢ > 0`; it is `X = X̂ + T y / w`.
 
-use super::point_cost::PointView;
+use super::cost::PointView;
 use nalgebra::{Matrix2x3, Matrix3, SymmetricEigen, Vector2, Vector3};
 
 /// Smallest accepted ratio of the least to the largest eigenvalue of `M` (a direction the data do
@@ -137,7 +137,7 @@ mod tests {
     use super::*;
     use crate::rng::Rng;
     use crate::synthetic::triangulation_scene;
-    use crate::triangulation::point_cost::{point_cost, point_views};
+    use crate::triangulation::point::cost::{point_cost, point_views};
     use crate::triangulation::views::depth_normalized;
     use nalgebra::{Matrix2, Matrix3x4};
 

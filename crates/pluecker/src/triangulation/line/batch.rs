@@ -1,4 +1,4 @@
-//! Many line tracks at once, in parallel (rayon): the batch form of [`super::line`].
+//! Many line tracks at once, in parallel (rayon): the batch form of [`crate::triangulation::line`].
 //!
 //! A track is one 3-D line seen in some of `v` views. Its observations are plain row-major slices,
 //! the layout of numpy arrays, so that a binding can pass `lines (n, v, 3)` or `segments (n, v, 2, 2)`,
@@ -15,11 +15,11 @@
 //! call (bad options, a bad `sigma`, bad shared cameras, inconsistent array lengths) come first, as the
 //! outer `Result`.
 
-use super::batch::{
+use crate::triangulation::tracks::{
     check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
 };
-use super::line::{lines_from_segments, triangulate_line, LineTriangulation};
-use super::TriangulationOptions;
+use super::{lines_from_segments, triangulate_line, LineTriangulation};
+use crate::triangulation::TriangulationOptions;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Vector2, Vector3};
 use std::sync::atomic::AtomicUsize;
@@ -50,7 +50,7 @@ pub struct LineTracks<'a> {
     /// `n · v` visibility flags, or `None` when every track is seen in every view.
     pub visible: Option<&'a [bool]>,
     /// `n · v · 4` covariances of the line residuals (row-major 2x2, the normalisation of section 3.1,
-    /// e.g. from [`super::fitting::fit_line`]), or `None`: the identity for homogeneous lines, the
+    /// e.g. from [`crate::triangulation::fitting::fit_line`]), or `None`: the identity for homogeneous lines, the
     /// endpoint noise `sigma` for segments. With segments, given covariances replace the endpoint
     /// noise's (the segments then only give the lines).
     pub covariances: Option<&'a [f64]>,

@@ -12,7 +12,7 @@
 //! the last two (the centre offset). The covariance of `r` for a fitted conic is
 //! [`crate::triangulation::fitting::fit_conic`]'s; without covariances the identity is used.
 
-use super::fraction::FractionalResidual;
+use crate::triangulation::fraction::FractionalResidual;
 use crate::geometry::quadric::{conic_camera, sym3_to_vec, vec_to_sym3, Ellipse};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector, Vector2, Vector6};
 

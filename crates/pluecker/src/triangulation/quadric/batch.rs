@@ -1,4 +1,4 @@
-//! Many quadric tracks at once, in parallel (rayon): the batch form of [`super::quadric`].
+//! Many quadric tracks at once, in parallel (rayon): the batch form of [`crate::triangulation::quadric`].
 //!
 //! A track is one ellipsoid seen as an outline conic in some of `v` views. Its observations are plain
 //! row-major slices, the layout of numpy arrays, so that a binding can pass `conics (n, v, 3, 3)`,
@@ -14,11 +14,11 @@
 //! (`conics[t][j]`: view `j` of track `t`). Errors of the whole call (bad options, bad shared cameras,
 //! inconsistent array lengths) come first, as the outer `Result`.
 
-use super::batch::{
+use crate::triangulation::tracks::{
     check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
 };
-use super::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
-use super::TriangulationOptions;
+use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
+use crate::triangulation::TriangulationOptions;
 use crate::error::{Error, Result};
 use nalgebra::Matrix3;
 use std::sync::atomic::AtomicUsize;
@@ -33,7 +33,7 @@ pub struct QuadricTracks<'a> {
     /// `n · v` visibility flags, or `None` when every track is seen in every view.
     pub visible: Option<&'a [bool]>,
     /// `n · v · 25` covariances of the conic residuals (row-major 5x5, e.g. from
-    /// [`super::fitting::fit_conic`]), or `None` (identity).
+    /// [`crate::triangulation::fitting::fit_conic`]), or `None` (identity).
     pub covariances: Option<&'a [f64]>,
 }
 

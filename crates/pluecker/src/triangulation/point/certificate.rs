@@ -1,7 +1,7 @@
 //! A cheap sufficient test of global optimality for a triangulated point (in the spirit of
 //! Hartley & Seo 2008, "Verifying global minima for L2 minimization problems").
 //!
-//! Work in a whitened chart ([`super::point_chart`]) around the local solution `X̂` (`y = 0`): per
+//! Work in a whitened chart ([`super::chart`]) around the local solution `X̂` (`y = 0`): per
 //! view `aᵢ(y) = r̂ᵢ + Gᵢy`, `ζᵢ(y) = 1 + dᵢᵀy`, `‖rᵢ‖ = ‖aᵢ‖/ζᵢ`, and `Σ BᵢᵀBᵢ = I` with
 //! `Bᵢ = Gᵢ − r̂ᵢdᵢᵀ`. Let `ε₀² = f(X̂) = Σ ρ̂ᵢ²` (`ρ̂ᵢ = ‖r̂ᵢ‖`) and `L = {y : f(y) ≤ ε₀², ζᵢ > 0}`,
 //! the points at least as good as `X̂` (not known to be convex). The test builds a convex set
@@ -28,7 +28,7 @@
 //! on `K`, and `f ≤ F/(1 − κ_d)² ≤ R² = (1 + κ_Q)²ε₀²/(1 − κ_d)²` on `K`.
 //!
 //! **3. Hessian.** For one view and `w ∈ ℝ³`, `α = Gᵢw`, `β = dᵢᵀw` (see
-//! [`super::point_cost::term_hessian`], the same algebra in any chart):
+//! [`super::cost::term_hessian`], the same algebra in any chart):
 //! `wᵀ∇²‖rᵢ‖²w · ζᵢ²/2 = ‖α − 2βrᵢ‖² − ρᵢ²β² ≥ (1 − θ)‖α‖² − (4/θ − 3)ρᵢ²β²` for `θ ∈ (0, 1]`,
 //! least ratio at `θ = 2/3` (factors ⅓ and 3; the lead's `θ = ½` gives ½ and 5). On `K`:
 //! `wᵀ∇²f w ≥ wᵀPw − (6/(1 − κ_d)²) Σᵢ ρᵢ²(dᵢᵀw)²` with `P = 2N/(3(1 + κ_d)²)`; and since
@@ -45,8 +45,8 @@
 //! It fails (branch and bound decides) when `q ≥ 1`, `κ_d ≥ 1` or `μ ≥ 1`: low parallax in the
 //! Euclidean chart, large residuals, or a second minimum nearby.
 
-use super::point_chart::{Chart, ChartKind};
-use super::point_cost::PointView;
+use super::chart::{Chart, ChartKind};
+use super::cost::PointView;
 use nalgebra::{Matrix3, Vector3};
 
 /// `κ` bounds are taken this much above the computed ones (strict inequalities, rounding).
@@ -236,7 +236,7 @@ pub fn convexity_test(views: &[PointView], x: &Vector3<f64>) -> ConvexityCertifi
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::triangulation::point_cost::term_hessian;
+    use crate::triangulation::point::cost::term_hessian;
     use nalgebra::{Matrix2x4, Vector4};
 
     #[test]

@@ -1,6 +1,6 @@
 //! Points at infinity in front of the cameras: where eq. 19 goes when no finite point is best.
 //!
-//! With the views of [`super::point_cost`] (`W = [A | b]`, depth row `(c, d)`, `‖c‖ = 1`), along a ray
+//! With the views of [`super::cost`] (`W = [A | b]`, depth row `(c, d)`, `‖c‖ = 1`), along a ray
 //! `X = X₀ + t D` with `cᵢ·D > 0` in every view the residual of view `i` tends, as `t → ∞`, to
 //! `rᵢ(D) = Aᵢ D / (cᵢ·D)`, the whitened error of the vanishing point of `D`; so eq. 19 tends to
 //! `f_∞(D) = Σᵢ ‖Aᵢ D‖² / (cᵢ·D)²`, the cost of the point at infinity `D`, which does not depend on
@@ -16,7 +16,7 @@
 //! chart `D(s) = (D₀ + E s)/‖D₀ + E s‖` (`E` an orthonormal basis of `D₀^⊥`), where the Jacobian of
 //! view `i` at `s = 0` is `(Aᵢ − rᵢ cᵢᵀ) E / (cᵢ·D₀)`.
 
-use super::point_cost::PointView;
+use super::cost::PointView;
 use crate::optim::{trust_region, Linearization, Objective, TrustRegionOptions};
 use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
 
@@ -119,7 +119,7 @@ impl Objective<2> for InfinityObjective<'_> {
 mod tests {
     use super::*;
     use crate::optim::problem::testing::gradient_error;
-    use crate::triangulation::point_cost::{point_cost, point_views};
+    use crate::triangulation::point::cost::{point_cost, point_views};
     use crate::triangulation::views::depth_normalized;
     use nalgebra::{Matrix3, Matrix3x4};
 

@@ -23,10 +23,10 @@
 //! minimiser; each node's relaxed `q`, made an ellipsoid, starts a short local minimisation whose cost
 //! is an upper bound.
 
-use super::fraction::{self, FractionalResidual};
-use super::line_optimal::{certificate_of, minimum, negligible_cost_certificate, NEGLIGIBLE_COST};
-use super::quadric::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
-use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::certificate::{certificate_of, minimum, negligible_cost_certificate, NEGLIGIBLE_COST};
+use super::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
+use crate::triangulation::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
@@ -199,7 +199,7 @@ pub(crate) fn optimal_quadric(
         .cameras
         .iter()
         .map(|p| sim.camera(p))
-        .map(|p| super::views::centre(&p).norm())
+        .map(|p| crate::triangulation::views::centre(&p).norm())
         .fold(0.0, f64::max);
     let b = CENTRE_FACTOR * reach.max(1.0);
     let (q_lower, q_upper): (Vec<f64>, Vec<f64>) = (0..9)

@@ -3,7 +3,7 @@
 //!
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(L)‖²`, over dual quadrics `L` (eq. 10), with `rᵢ` the
 //! 5-entry residual of the observed image ellipse (eq. 17 with the normalisation of
-//! [`super::quadric_residual`]) and `Lᵢ` the whitening of its 5x5 covariance (eq. 18; identity without
+//! [`self::residual`]) and `Lᵢ` the whitening of its 5x5 covariance (eq. 18; identity without
 //! covariances — then the shape entries, in px², dominate: pass covariances from
 //! [`super::fitting::fit_conic`]). The three [`Method`]s:
 //! - `linear`: Lemma 2.1 stacked over the views with the unknown scales eliminated — each view gives
@@ -15,7 +15,7 @@
 //! - `local`: the trust region of [`crate::optim`] from the linear ellipsoid over its centre, rotation
 //!   and signed semi-axes `s` with `L = H diag(s₁², s₂², s₃², −1) Hᵀ` (`H = [R c; 0 1]`): every
 //!   iterate is a real ellipsoid (flat when a semi-axis reaches 0), so the result is always proper;
-//! - `optimal`: the local ellipsoid, then branch and bound (section 4, [`super::quadric_optimal`]).
+//! - `optimal`: the local ellipsoid, then branch and bound (section 4, [`self::optimal`]).
 //!
 //! Degenerate input is an error: fewer than 3 views (two views leave a one-parameter family of
 //! quadrics tangent to both viewing cones), mismatched lengths, NaN/inf, a singular camera, a conic
@@ -23,16 +23,22 @@
 //! cameras sharing one centre. An estimate whose centre is behind a camera, or that crosses a
 //! camera's principal plane, has status [`Status::BehindCamera`].
 
+pub mod batch;
+pub mod optimal;
+pub mod residual;
+
 use super::conditioning::{check_views, Similarity};
 use super::covariance::whitenings;
 use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
-use super::quadric_optimal::optimal_quadric;
-use super::quadric_residual::{quadric_view, ConicFrame};
-use super::uncertainty::{quadric_covariance, QuadricCovariance};
+use self::optimal::optimal_quadric;
+use self::residual::{quadric_view, ConicFrame};
+use super::uncertainty::{covariance_of_information, QuadricCovariance};
 use super::{parse_observations, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
-use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
+use crate::geometry::quadric::{
+    centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, vec_to_sym4, CentreShape, Ellipsoid,
+};
 use crate::optim::{trust_region, Linearization, Objective};
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, SMatrix, SVector, Vector2, Vector3};
 use std::time::Instant;
@@ -246,7 +252,7 @@ fn linear_pass(problem: &QuadricProblem, sim: &Similarity) -> Option<Matrix4<f64
     let mut normal = SMatrix::<f64, 10, 10>::zeros();
     for (p, frame) in problem.cameras.iter().zip(&problem.frames) {
         // Rows scaled by the ellipse's size: px² for the shape entries, px for the centre entries.
-        let shape = super::quadric_residual::observed_shape(frame);
+        let shape = self::residual::observed_shape(frame);
         let size = shape.trace().abs().sqrt().max(f64::MIN_POSITIVE);
         let w = Matrix5::from_diagonal(
             &(SVector::<f64, 5>::from_column_slice(&[1.0, 1.0, 1.0, size, size]) / (size * size)),
@@ -374,6 +380,25 @@ pub(crate) fn local_quadric(
     let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
     let world = x.to_world(&sim).unwrap_or(*start);
     (world, Report::of_local(&summary))
+}
+
+/// The 9x9 covariance of an ellipsoid in the [`CentreShape`] chart ([`super::uncertainty`]), computed in the
+/// frame of [`QuadricProblem::frame_of`] (origin at the centre, unit the largest semi-axis) and
+/// scaled back: centre entries by that unit, shape entries by its square.
+pub(crate) fn quadric_covariance(problem: &QuadricProblem, e: &Ellipsoid) -> Option<QuadricCovariance> {
+    let dual = e.dual();
+    if !dual.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let sim = problem.frame_of(e);
+    let framed: CentreShape = centre_shape(&transform_dual(&sim.matrix(), &dual))?;
+    let views = problem.views(&sim);
+    let tangent = centre_shape_tangent(&Vector3::new(framed[0], framed[1], framed[2]));
+    let info = fraction::linearize(&views, &sym4_to_vec(&dual_of_centre_shape(&framed)), &tangent).gauss_newton;
+    let framed_cov = covariance_of_information(&info)?;
+    let unit = 1.0 / sim.scale;
+    let d = CentreShape::from_fn(|k, _| if k < 3 { unit } else { unit * unit });
+    Some(QuadricCovariance::from_diagonal(&d) * framed_cov * QuadricCovariance::from_diagonal(&d))
 }
 
 #[cfg(test)]

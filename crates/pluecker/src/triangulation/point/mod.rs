@@ -3,13 +3,13 @@
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(X)‖²`, the reprojection error of eq. 15 whitened by the
 //! observation covariances (eq. 18; squared pixels without covariances), over points in front of
 //! every camera (`λ > 0` in eq. 1). The three [`Method`]s:
-//! - `linear`: the DLT with conditioning ([`super::point_linear`]);
+//! - `linear`: the DLT with conditioning ([`self::linear`]);
 //! - `local`: the trust region of [`crate::optim`] on eq. 19 from the linear point
-//!   ([`super::point_cost`]); when that start is behind a camera (or at infinity), from the best point
+//!   ([`self::cost`]); when that start is behind a camera (or at infinity), from the best point
 //!   in front of every camera on one of the back-projected rays instead;
 //! - `optimal`: the local solution, certified by the convexity test of
-//!   [`super::point_certificate`] when it passes, else by branch and bound
-//!   ([`super::point_global`]; the relaxation of each fraction is the secant envelope by default,
+//!   [`self::certificate`] when it passes, else by branch and bound
+//!   ([`self::global`]; the relaxation of each fraction is the secant envelope by default,
 //!   eqs. 21-22 on request), which may also return a better point than the local one.
 //!
 //! **Statuses of `optimal`.** `Success` when certified (the gap closed, whatever the local stage's
@@ -25,7 +25,7 @@
 //! The DLT cannot see that a point lies behind the cameras; the other methods search in front of
 //! every camera only. When the observations are best explained behind the cameras (the rays diverge
 //! in front) or by parallel rays, the infimum over the points in front is approached only at
-//! infinity and the minimisation runs off towards it. Then ([`super::point_infinity`]: a point at
+//! infinity and the minimisation runs off towards it. Then ([`self::infinity`]: a point at
 //! infinity costs no more than the estimate) `local` and `optimal` report `BehindCamera` with the DLT
 //! point when that point is behind a camera and cheaper than every point at infinity, else
 //! `AtInfinity` with a NaN point and the cost at infinity — never a far point as a success.
@@ -36,15 +36,23 @@
 //! camera, a covariance that is not positive definite, or cameras sharing one centre (no parallax).
 //! A solve that runs but fails reports it in [`Report::status`].
 
+pub mod batch;
+pub mod certificate;
+pub mod chart;
+pub mod cost;
+pub mod global;
+pub mod infinity;
+pub mod linear;
+
 use super::covariance::whitenings;
-use super::point_certificate::convexity_test;
-use super::point_chart::{Chart, ChartKind};
-use super::point_cost::{in_front, point_cost, point_views, PointObjective, PointView};
-use super::point_global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
+use self::certificate::convexity_test;
+use self::chart::{Chart, ChartKind};
+use self::cost::{in_front, point_cost, point_views, PointObjective, PointView};
+use self::global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
 use crate::global::relative_gap;
-use super::point_infinity::best_at_infinity;
-use super::point_linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
-use super::uncertainty::point_covariance;
+use self::infinity::best_at_infinity;
+use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
+use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras};
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
@@ -219,7 +227,7 @@ pub(crate) fn solve_views(
     report.cost = cost;
     if certificate.kind == CertificateKind::BranchAndBound && matches!(status, Status::Success | Status::GapNotClosed) {
         // Branch and bound searches the closure of the points in front, infinity included: its best
-        // finite point may be a far point on the way there (module docs of point_infinity).
+        // finite point may be a far point on the way there (module docs of `infinity`).
         if let Some(u) = unreached(views, frame, &x, cost, linear, opts) {
             report.certificate = certificate_when_unreached(&certificate, &u);
             return settle(u, report);
@@ -252,7 +260,7 @@ struct Unreached {
 }
 
 /// `Some` when a point at infinity in front of every camera costs no more than the finite estimate
-/// `x` of cost `cost` (module docs of [`super::point_infinity`]). Then the data are best explained
+/// `x` of cost `cost` (module docs of [`self::infinity`]). Then the data are best explained
 /// behind a camera — status [`Status::BehindCamera`] with the DLT point, when that point is finite,
 /// behind a camera and cheaper than the best point at infinity — or else at infinity — status
 /// [`Status::AtInfinity`], a NaN point and the cost there. The best direction is searched from `x`
@@ -418,4 +426,17 @@ fn certify(
         solver_iterations: g.solver_iterations,
     };
     (g.point, status, certificate, g.cost)
+}
+
+/// The 3x3 covariance of a point `x` (world units²) seen in `views` ([`super::uncertainty`]): `(Σ BᵢᵀBᵢ)⁻¹` with
+/// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18
+/// ([`PointView::residual_and_information`]).
+pub fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
+    if !x.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let information = views
+        .iter()
+        .fold(Matrix3::zeros(), |h, v| h + v.residual_and_information(x).1);
+    covariance_of_information3(&information)
 }

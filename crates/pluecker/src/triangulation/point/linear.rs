@@ -11,7 +11,7 @@
 //! alike whatever its focal length, covariance scale or the arbitrary scale of its `P`. A solution
 //! with a (relatively) zero fourth coordinate is a point at infinity: parallel rays.
 
-use super::point_cost::PointView;
+use super::cost::PointView;
 use nalgebra::{Matrix2x4, Matrix3x4, Matrix4, Vector3, Vector4};
 
 /// `|X̃₄| ≤ AT_INFINITY · ‖X̃‖` (conditioned coordinates) is a point at infinity: a point
@@ -162,14 +162,14 @@ pub fn linear_point(views: &[PointView], frame: &WorldFrame) -> LinearPoint {
 
 /// The conditioning frame of a set of (finite) cameras.
 pub fn frame_of_cameras(cameras: &[Matrix3x4<f64>]) -> WorldFrame {
-    let centres: Vec<Vector3<f64>> = cameras.iter().map(super::views::centre).collect();
+    let centres: Vec<Vector3<f64>> = cameras.iter().map(crate::triangulation::views::centre).collect();
     WorldFrame::from_centres(&centres)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::triangulation::point_cost::point_views;
+    use crate::triangulation::point::cost::point_views;
     use crate::triangulation::views::depth_normalized;
     use nalgebra::{Matrix2, Matrix3, Vector2};
 

@@ -15,7 +15,7 @@
 //! `opts.max_reprojection_error`, by default `sqrt(local cost)`: every line cheaper than the local
 //! line satisfies it. The strip widths `γᵢ` are derived from `γ`: an image line `ℓ` with
 //! `‖Lᵢ rᵢ(ℓ)‖ ≤ γ` passes within `(γ/D) ‖Lᵢ⁻ᵀ (u − oᵢ)‖` px of the observed line at the pixel `u`
-//! (see [`super::line_residual`]); `γᵢ` is [`STRIP_MARGIN`] times that width at the images of the
+//! (see [`super::residual`]); `γᵢ` is [`STRIP_MARGIN`] times that width at the images of the
 //! local line's points `X̂`, `Ŷ`, and `z_max` is [`DEPTH_FACTOR`] times their largest depth. The
 //! certificate is a certificate over this domain: a line within `γ` whose points `X`, `Y` project far
 //! from the images of `X̂`, `Ŷ` along the observed line (where the strips of whitened width are wider
@@ -32,14 +32,15 @@
 //! parameters (section 4.2), the widest at the relaxed minimiser; each node's relaxed minimiser starts
 //! a short local minimisation whose cost is an upper bound (section 5).
 
-use super::conditioning::Similarity;
-use super::fraction::{self, FractionalResidual};
-use super::line::{LineObjective, LineProblem};
-use super::line_residual::LINE_FRAME_DISTANCE;
-use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use crate::triangulation::conditioning::Similarity;
+use crate::triangulation::fraction::{self, FractionalResidual};
+use super::{LineObjective, LineProblem};
+use crate::triangulation::certificate::{certificate_of, minimum, negligible_cost_certificate, NEGLIGIBLE_COST};
+use super::residual::LINE_FRAME_DISTANCE;
+use crate::triangulation::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::{
-    branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, BranchAndBoundResult, Region,
+    branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region,
 };
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
 use crate::global::monomial::{add_mccormick, product_bounds, Interval};
@@ -51,8 +52,6 @@ use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 pub const STRIP_MARGIN: f64 = 2.0;
 /// `z_max` as a multiple of the largest depth of the local line's points `X̂`, `Ŷ`.
 pub const DEPTH_FACTOR: f64 = 100.0;
-/// A cost at most this (squared whitened pixels) is certified by the bound 0 of a sum of squares.
-pub const NEGLIGIBLE_COST: f64 = 1e-12;
 /// Rounds of bound tightening at the root (stopping early when a round shrinks the box's volume by
 /// less than 10 %).
 const MAX_TIGHTENING_ROUNDS: usize = 6;
@@ -331,21 +330,6 @@ impl LineOracle<'_> {
     }
 }
 
-/// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
-/// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the
-/// solver iterations spent.
-pub(crate) fn minimum(program: &Socp, e: Affine) -> (Option<Option<f64>>, usize) {
-    let mut p = program.clone();
-    p.minimize(e);
-    let s = p.solve();
-    let value = match s.status {
-        SocpStatus::Infeasible => None,
-        SocpStatus::Solved if s.lower_bound.is_finite() => Some(Some(s.lower_bound)),
-        _ => Some(None),
-    };
-    (value, s.iterations)
-}
-
 impl BoundingOracle for LineOracle<'_> {
     type Candidate = Vector6<f64>;
 
@@ -532,57 +516,4 @@ pub(crate) fn optimal_line(
     report.cost = best_cost;
     (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
     (world, report)
-}
-
-/// The certificate of a finished branch and bound whose best cost is `best_cost`: certified when the
-/// relative gap is at most `max_relative_gap`; [`Status::Infeasible`] when the whole box was proved
-/// empty (no primitive in the domain); [`Status::Interrupted`] or [`Status::TimeBudget`] when the
-/// call was stopped before the gap closed.
-pub(crate) fn certificate_of<C>(
-    result: &BranchAndBoundResult<C>,
-    best_cost: f64,
-    max_relative_gap: f64,
-) -> (Status, Certificate) {
-    let base = Certificate {
-        kind: CertificateKind::BranchAndBound,
-        nodes: result.nodes,
-        solver_iterations: result.solver_iterations,
-        ..Certificate::none()
-    };
-    if result.lower_bound == f64::INFINITY {
-        return (Status::Infeasible, base);
-    }
-    let lower = result.lower_bound.min(best_cost);
-    let relative_gap = if best_cost > 0.0 {
-        (best_cost - lower) / best_cost
-    } else {
-        0.0
-    };
-    let certified = relative_gap <= max_relative_gap;
-    let status = match result.stopped {
-        _ if certified => Status::Success,
-        Some(reason) => Status::stopped(reason),
-        None => Status::GapNotClosed,
-    };
-    (
-        status,
-        Certificate {
-            lower_bound: lower,
-            relative_gap,
-            certified,
-            ..base
-        },
-    )
-}
-
-/// The certificate of a cost at most [`NEGLIGIBLE_COST`]: the bound 0 of a sum of squares.
-pub(crate) fn negligible_cost_certificate() -> Certificate {
-    Certificate {
-        lower_bound: 0.0,
-        relative_gap: 0.0,
-        certified: true,
-        kind: CertificateKind::ConvexityTest,
-        nodes: 0,
-        solver_iterations: 0,
-    }
 }

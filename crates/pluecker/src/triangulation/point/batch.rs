@@ -3,7 +3,7 @@
 //! The data are plain row-major slices, the layout of numpy arrays, so that a binding can pass
 //! `observations (n, v, 2)`, `visible (n, v)` and `covariances (n, v, 2, 2)` without reshaping:
 //! [`PointTracks`]. Every track is triangulated from its visible views only, exactly as
-//! [`super::point::triangulate_point`] would do it, and gets its own `Result`: a bad track (too
+//! [`super::triangulate_point`] would do it, and gets its own `Result`: a bad track (too
 //! few visible views, NaN in a visible view, a covariance that is not positive definite, no
 //! parallax between its views) is an error for that track alone. Errors of the whole call (bad
 //! options, bad cameras, inconsistent array lengths) come first, as the outer `Result`.
@@ -15,24 +15,23 @@
 //! fires are rejected with [`Error::Interrupted`] (the others keep their results), and a track being
 //! solved by branch and bound ends with status `Interrupted` or `TimeBudget`.
 //!
-//! The line and quadric batches ([`super::line_batch`], [`super::quadric_batch`]) share this
-//! module's helpers: the shape checks of flat per-observation arrays, the visible views of a track,
-//! the cameras of a batch ([`TrackCameras`]), the parallel loop over tracks and the restating of a
-//! single-track error for the batch.
+//! The helpers it shares with the line and quadric batches (shape checks, visible views, the
+//! parallel loop over tracks) are in [`crate::triangulation::tracks`].
 
-use super::covariance::whitening;
-use super::point::{solve_views, PointTriangulation};
-use super::point_cost::PointView;
-use super::point_linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
-use super::uncertainty::covariance_of_information3;
-use super::views::{centre, depth_normalized, validate_cameras};
-use super::{Method, Status, TriangulationOptions};
+use super::cost::PointView;
+use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
+use super::{solve_views, PointTriangulation};
 use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
-use crate::interrupt::{current, stop_reason, with_stop};
+use crate::triangulation::covariance::whitening;
+use crate::interrupt::current;
+use crate::triangulation::tracks::{check_mask, check_values, solve_tracks, too_few, track_count, visible_views};
+use crate::triangulation::uncertainty::covariance_of_information3;
+use crate::triangulation::views::{centre, depth_normalized, validate_cameras};
+use crate::triangulation::{Method, Status, TriangulationOptions};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::AtomicUsize;
 use std::time::Instant;
 
 /// Tracks of one batch, as flat row-major arrays (see the module docs). With `v` cameras and `n`
@@ -57,65 +56,6 @@ struct Prepared {
     /// The largest distance of a centre from the world origin, at least 1 (the scale of the
     /// no-parallax test).
     extent: f64,
-}
-
-/// A shape error of a batch argument.
-fn shape(what: &str, expected: String, actual: usize) -> Error {
-    Error::Shape {
-        what: what.into(),
-        expected,
-        actual: actual.to_string(),
-    }
-}
-
-/// The number of tracks `n` of a flat array of `len = n · v · per_view` values (`unit` names the
-/// `per_view` values of one observation, e.g. "2 coordinates"), or a shape error naming `what`.
-pub(crate) fn track_count(what: &str, len: usize, v: usize, per_view: usize, unit: &str) -> Result<usize> {
-    if v == 0 || len % (per_view * v) != 0 {
-        return Err(shape(
-            what,
-            format!("n·{v}·{per_view} values (n tracks, {v} views, {unit})"),
-            len,
-        ));
-    }
-    Ok(len / (per_view * v))
-}
-
-/// Checks that a per-observation array holds `n · v · per_view` values (`unit`: the shape of one
-/// observation's entry, e.g. "2 x 2").
-pub(crate) fn check_values(
-    what: &str,
-    values: Option<&[f64]>,
-    n: usize,
-    v: usize,
-    per_view: usize,
-    unit: &str,
-) -> Result<()> {
-    match values {
-        Some(values) if values.len() != per_view * n * v => Err(shape(
-            what,
-            format!("{} values ({n} tracks x {v} views x {unit})", per_view * n * v),
-            values.len(),
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// Checks that a visibility mask holds `n · v` flags.
-pub(crate) fn check_mask(mask: Option<&[bool]>, n: usize, v: usize) -> Result<()> {
-    match mask {
-        Some(mask) if mask.len() != n * v => Err(shape(
-            "visible",
-            format!("{} flags ({n} tracks x {v} views)", n * v),
-            mask.len(),
-        )),
-        _ => Ok(()),
-    }
-}
-
-/// The views of track `t` (in increasing order) that the mask flags visible: all `v` without a mask.
-pub(crate) fn visible_views(mask: Option<&[bool]>, v: usize, t: usize) -> impl Iterator<Item = usize> + Clone + '_ {
-    (0..v).filter(move |&j| mask.map_or(true, |m| m[t * v + j]))
 }
 
 /// Checks the whole call and returns the number of tracks.
@@ -191,159 +131,12 @@ fn frame_of(centres: impl Iterator<Item = Vector3<f64>> + Clone) -> (WorldFrame,
 }
 
 /// Relative spread of the visible centres below which they coincide (no parallax); the same rule as
-/// [`super::point::triangulate_point`] up to the factor between RMS spread and baseline.
+/// [`super::triangulate_point`] up to the factor between RMS spread and baseline.
 const SAME_CENTRE: f64 = 1e-10;
-
-/// Track `t` has `visible` views where the method needs `required`.
-pub(crate) fn too_few(method: Method, t: usize, visible: usize, required: usize) -> Error {
-    Error::TooFewCorrespondences {
-        method: method.as_str().into(),
-        required: format!("{required} visible views per track"),
-        actual: format!("track {t}: {visible} view(s)"),
-    }
-}
 
 fn no_parallax(t: usize) -> Error {
     Error::Degenerate {
         what: format!("track {t}: the centres of the cameras that see it coincide (no parallax)"),
-    }
-}
-
-/// `one(t)` for every track `t < n`, in parallel (rayon tasks of at least `min_len` tracks), in the
-/// order of the tracks; `done`, when given, counts the finished tracks (another thread may poll it).
-/// The stop installed on the calling thread ([`crate::interrupt`]) is carried into every task: a
-/// track not started when it fires is `Err(Error::Interrupted)`, and the solvers of a started one
-/// poll it themselves.
-pub(crate) fn solve_tracks<X, F>(n: usize, min_len: usize, done: Option<&AtomicUsize>, one: F) -> Vec<Result<X>>
-where
-    X: Send,
-    F: Fn(usize) -> Result<X> + Sync + Send,
-{
-    let stop = current();
-    (0..n)
-        .into_par_iter()
-        .with_min_len(min_len.max(1))
-        .map(|t| {
-            let out = with_stop(stop.clone(), || match stop_reason() {
-                Some(reason) => Err(Error::Interrupted { reason }),
-                None => one(t),
-            });
-            if let Some(done) = done {
-                done.fetch_add(1, Ordering::Relaxed);
-            }
-            out
-        })
-        .collect()
-}
-
-/// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means
-/// `(P X̃)₃ > 0`, [`super::views`]): one set seen
-/// by every track, or one set per track (e.g. independent scenes solved together).
-#[derive(Debug, Clone, Copy)]
-pub enum TrackCameras<'a> {
-    /// `v` cameras shared by every track; view `j` of every track is `cameras[j]`.
-    Shared(&'a [Matrix3x4<f64>]),
-    /// `n · views` cameras, track-major: view `j` of track `t` is `cameras[t · views + j]`.
-    PerTrack {
-        /// The cameras of all tracks.
-        cameras: &'a [Matrix3x4<f64>],
-        /// Views per track, `v`.
-        views: usize,
-    },
-}
-
-impl TrackCameras<'_> {
-    /// Views per track, `v`.
-    pub fn views(&self) -> usize {
-        match self {
-            TrackCameras::Shared(cameras) => cameras.len(),
-            TrackCameras::PerTrack { views, .. } => *views,
-        }
-    }
-
-    /// Checks the cameras for the whole call (`n` tracks): shared cameras must all be finite and
-    /// non-singular; per-track cameras must number `n · views` (each track's are checked with it).
-    pub(crate) fn check(&self, n: usize) -> Result<()> {
-        match *self {
-            TrackCameras::Shared(cameras) => validate_cameras(cameras, "cameras"),
-            TrackCameras::PerTrack { cameras, views } if cameras.len() != n * views => Err(shape(
-                "cameras",
-                format!("{} cameras ({n} tracks x {views} views)", n * views),
-                cameras.len(),
-            )),
-            TrackCameras::PerTrack { .. } => Ok(()),
-        }
-    }
-
-    /// The cameras of views `seen` of track `t`.
-    pub(crate) fn of_track(&self, t: usize, seen: &[usize]) -> Vec<Matrix3x4<f64>> {
-        match *self {
-            TrackCameras::Shared(cameras) => seen.iter().map(|&j| cameras[j]).collect(),
-            TrackCameras::PerTrack { cameras, views } => seen.iter().map(|&j| cameras[t * views + j]).collect(),
-        }
-    }
-
-    /// Whether the cameras are indexed by track (their errors then name the track).
-    pub(crate) fn per_track(&self) -> bool {
-        matches!(self, TrackCameras::PerTrack { .. })
-    }
-}
-
-/// `text` of a single-track error restated for the batch (see [`in_track`]).
-fn restate(text: &str, t: usize, seen: &[usize], arrays: &[&str]) -> String {
-    let name_len = text
-        .find(|c: char| !(c.is_ascii_lowercase() || c == '_'))
-        .unwrap_or(text.len());
-    let (name, rest) = text.split_at(name_len);
-    let index = rest
-        .strip_prefix('[')
-        .and_then(|r| r.split_once(']'))
-        .and_then(|(i, after)| Some((seen.get(i.parse::<usize>().ok()?)?, after)));
-    let per_track = arrays.contains(&name);
-    match (per_track, index) {
-        (true, Some((j, after))) => format!("{name}[{t}][{j}]{after}"),
-        (true, None) => format!("{name}[{t}]{rest}"),
-        (false, Some((j, after))) => format!("track {t}: {name}[{j}]{after}"),
-        (false, None) => format!("track {t}: {text}"),
-    }
-}
-
-/// An error of a single-track call on views `seen` of track `t`, restated for the batch: an argument
-/// of `arrays` (the ones indexed by track) gets the track, `lines[1]` → `lines[t][seen[1]]` and
-/// `lines` → `lines[t]`, and an observation index becomes the batch's view `seen[i]`; any other
-/// message is prefixed with `track t: `.
-pub(crate) fn in_track(err: Error, t: usize, seen: &[usize], arrays: &[&str]) -> Error {
-    let view = |i: usize| seen.get(i).copied().unwrap_or(i);
-    match err {
-        Error::NonFinite { what, index } if arrays.contains(&what.as_str()) => Error::NonFinite {
-            what: format!("{what}[{t}]"),
-            index: view(index),
-        },
-        Error::NonFinite { what, index } => Error::NonFinite {
-            what: format!("track {t}: {what}"),
-            index: view(index),
-        },
-        Error::Degenerate { what } => Error::Degenerate {
-            what: restate(&what, t, seen, arrays),
-        },
-        Error::SingularCamera { what } => Error::SingularCamera {
-            what: restate(&what, t, seen, arrays),
-        },
-        Error::Shape { what, expected, actual } => Error::Shape {
-            what: restate(&what, t, seen, arrays),
-            expected,
-            actual,
-        },
-        Error::TooFewCorrespondences {
-            method,
-            required,
-            actual,
-        } => Error::TooFewCorrespondences {
-            method,
-            required,
-            actual: format!("track {t}: {actual}"),
-        },
-        other @ (Error::InvalidOption { .. } | Error::Interrupted { .. }) => other,
     }
 }
 
@@ -387,22 +180,22 @@ pub struct LinearPoints {
     pub points: Vec<f64>,
     /// The cost of eq. 19 at each point (squared whitened pixels); NaN where there is no point.
     pub costs: Vec<f64>,
-    /// Row-major `(n, 3, 3)` covariances of the points (world units², [`super::uncertainty`]); NaN
+    /// Row-major `(n, 3, 3)` covariances of the points (world units², [`crate::triangulation::uncertainty`]); NaN
     /// where there is no point or its covariance is `None`.
     pub covariances: Vec<f64>,
-    /// The p-value of each cost's χ² test ([`super::Report::residual_test`]); NaN where there is none.
+    /// The p-value of each cost's χ² test ([`crate::triangulation::Report::residual_test`]); NaN where there is none.
     pub p_values: Vec<f64>,
     /// Per track: the status (`Success`, `BehindCamera` or `AtInfinity`) or why it was rejected.
     pub outcomes: Vec<Result<Status>>,
 }
 
 /// One track of the linear fast path: point, cost of eq. 19, covariance, status, and the p-value of
-/// the cost's χ² test (NaN when there is none; see [`super::Report::residual_test`]).
+/// the cost's χ² test (NaN when there is none; see [`crate::triangulation::Report::residual_test`]).
 type LinearTrack = (Vector3<f64>, f64, Option<Matrix3<f64>>, Status, f64);
 
 /// The DLT of one track with no allocation: its point, cost and covariance, or its status / error.
 /// Three passes over the views: checks and the spread of the centres, the Gram matrix, the cost and
-/// the information matrix of [`super::uncertainty::point_covariance`].
+/// the information matrix of [`crate::triangulation::uncertainty::point_covariance`].
 fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -> Result<LinearTrack> {
     let visible = || visible_views(tracks.visible, v, t);
     let (mut count, mut sum, mut sum2) = (0usize, Vector3::zeros(), 0.0);

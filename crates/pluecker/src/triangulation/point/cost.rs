@@ -1,6 +1,6 @@
 //! The cost of a triangulated point (Josephson & Kahl 2008, eqs. 15-19) and its derivatives.
 //!
-//! With the depth-normalised camera `P = (p₁, p₂, p₃)ᵀ` ([`super::views::depth_normalized`]: `p₃ᵀX̃`
+//! With the depth-normalised camera `P = (p₁, p₂, p₃)ᵀ` ([`crate::triangulation::views::depth_normalized`]: `p₃ᵀX̃`
 //! is the depth `z` of `X`, `X̃ = (X, 1)`), the observation `(u, v)` and the whitening factor `L`
 //! (eq. 18), the residual of eqs. 16-17 is
 //! `r(X) = L (p₁ᵀX̃/z − u, p₂ᵀX̃/z − v) = W X̃ / z`, `W = L [p₁ − u p₃; p₂ − v p₃]` (2x4),
@@ -63,7 +63,7 @@ impl PointView {
 
     /// The whitened residual `r` and the information `JᵀJ = BᵀB/z²` of this view (`J = ∂r/∂X`,
     /// `B = A − r cᵀ`, module docs) at depth `z ≠ 0`: one division and the 6 distinct entries of the
-    /// symmetric product, for the covariances of [`super::uncertainty`].
+    /// symmetric product, for the covariances of [`crate::triangulation::uncertainty`].
     #[inline]
     pub fn residual_and_information(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix3<f64>) {
         let inv = 1.0 / self.depth(x);
@@ -96,7 +96,7 @@ impl PointView {
     }
 }
 
-/// The views of one track: depth-normalised cameras (see [`super::views::depth_normalized`]),
+/// The views of one track: depth-normalised cameras (see [`crate::triangulation::views::depth_normalized`]),
 /// observations (pixels) and whitening factors (eq. 18).
 pub fn point_views(
     cameras: &[Matrix3x4<f64>],

@@ -3,7 +3,7 @@
 //!
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(𝓛)‖²`, over 3-D lines `𝓛` (Plücker coordinates, eq. 3,
 //! satisfying eq. 4), with `rᵢ` the residual of the observed image line `lᵢ` (eq. 17 with the
-//! normalisation of section 3.1, see [`super::line_residual`]) and `Lᵢ` the whitening of its 2x2
+//! normalisation of section 3.1, see [`self::residual`]) and `Lᵢ` the whitening of its 2x2
 //! covariance (eq. 18; identity without covariances). The three [`Method`]s:
 //! - `linear`: the line common to the back-projected planes `πᵢ = Pᵢᵀ lᵢ` in the least-squares sense
 //!   (conditioned world frame, planes scaled to unit normals): the two right singular vectors `A`, `B`
@@ -12,7 +12,7 @@
 //! - `local`: the trust region of [`crate::optim`] on eq. 19 from the linear line, moving the line in
 //!   the orthonormal representation of Bartoli & Sturm ([`OrthonormalLine`]): a minimal 4-parameter
 //!   update that keeps eq. 4 exactly;
-//! - `optimal`: the local line, then branch and bound (section 4, [`super::line_optimal`]).
+//! - `optimal`: the local line, then branch and bound (section 4, [`self::optimal`]).
 //!
 //! Degenerate input is an error: fewer than 2 views, mismatched lengths, NaN/inf, a singular camera,
 //! an image line with zero normal, a covariance that is not positive definite, cameras sharing one
@@ -21,13 +21,17 @@
 //! parallel to an image plane crosses that camera's principal plane, so [`Status::BehindCamera`] is
 //! never reported for lines.
 
+pub mod batch;
+pub mod optimal;
+pub mod residual;
+
 use super::conditioning::{check_views, Similarity};
 use super::covariance::{whitening, whitenings};
 use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
-use super::line_optimal::optimal_line;
-use super::line_residual::{line_view, LineFrame};
-use super::uncertainty::line_covariance;
+use self::optimal::optimal_line;
+use self::residual::{line_view, LineFrame};
+use super::uncertainty::covariance_of_information;
 use super::{parse_observations, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, LineChart, OrthonormalLine};
@@ -311,6 +315,36 @@ pub(crate) fn local_line(
     let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
     let world = plucker::transform(&sim.inverse_matrix(), &x.to_plucker());
     (world, Report::of_local(&summary))
+}
+
+/// The 4x4 covariance of a line in `chart` (pivoted anywhere on the line; [`super::uncertainty`]). Computed in
+/// the chart pivoted at the point of the line closest to the centroid of the camera centres, in a
+/// frame whose unit is its distance `ρ` from them ([`LineProblem::foot`]), then moved to `chart`'s
+/// pivot exactly: from `δ' = (α, t')` there, `δ = (α, ρ t' − s α)` with `s` the signed distance
+/// along the line from `chart`'s pivot to that point ([`LineChart::repivot`]).
+pub(crate) fn line_covariance(problem: &LineProblem, chart: &LineChart) -> Option<Matrix4<f64>> {
+    let world_line = chart.line(&Vector4::zeros());
+    if !world_line.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let (foot, rho) = problem.foot(&world_line);
+    let near = chart.repivot(&foot);
+    let sim = Similarity::around(near.pivot, rho);
+    // The frame only translates and scales: the pivot is its origin, the axes are unchanged.
+    let framed = LineChart {
+        pivot: Vector3::zeros(),
+        ..near
+    };
+    let views = problem.views(&sim);
+    let info = fraction::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
+    let framed_cov = covariance_of_information(&info)?;
+    let s = chart.direction.dot(&(near.pivot - chart.pivot));
+    let mut m = Matrix4::identity();
+    m[(2, 2)] = rho;
+    m[(3, 3)] = rho;
+    m[(2, 0)] = -s;
+    m[(3, 1)] = -s;
+    Some(m * framed_cov * m.transpose())
 }
 
 #[cfg(test)]

@@ -1,0 +1,79 @@
+//! The certificate of a branch and bound over lines or quadrics (Josephson & Kahl 2008, section 4):
+//! the relative gap between the best cost found and the lower bound reached, the status it implies,
+//! and the bound 0 that certifies a negligible cost. Points have their own convexity test
+//! ([`super::point::certificate`]).
+
+use super::{Certificate, CertificateKind, Status};
+use crate::global::branch_and_bound::BranchAndBoundResult;
+use crate::global::socp::{Affine, Socp, SocpStatus};
+
+/// A cost at most this (squared whitened pixels) is certified by the bound 0 of a sum of squares.
+pub const NEGLIGIBLE_COST: f64 = 1e-12;
+
+/// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
+/// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the
+/// solver iterations spent.
+pub(crate) fn minimum(program: &Socp, e: Affine) -> (Option<Option<f64>>, usize) {
+    let mut p = program.clone();
+    p.minimize(e);
+    let s = p.solve();
+    let value = match s.status {
+        SocpStatus::Infeasible => None,
+        SocpStatus::Solved if s.lower_bound.is_finite() => Some(Some(s.lower_bound)),
+        _ => Some(None),
+    };
+    (value, s.iterations)
+}
+
+/// The certificate of a finished branch and bound whose best cost is `best_cost`: certified when the
+/// relative gap is at most `max_relative_gap`; [`Status::Infeasible`] when the whole box was proved
+/// empty (no primitive in the domain); [`Status::Interrupted`] or [`Status::TimeBudget`] when the
+/// call was stopped before the gap closed.
+pub(crate) fn certificate_of<C>(
+    result: &BranchAndBoundResult<C>,
+    best_cost: f64,
+    max_relative_gap: f64,
+) -> (Status, Certificate) {
+    let base = Certificate {
+        kind: CertificateKind::BranchAndBound,
+        nodes: result.nodes,
+        solver_iterations: result.solver_iterations,
+        ..Certificate::none()
+    };
+    if result.lower_bound == f64::INFINITY {
+        return (Status::Infeasible, base);
+    }
+    let lower = result.lower_bound.min(best_cost);
+    let relative_gap = if best_cost > 0.0 {
+        (best_cost - lower) / best_cost
+    } else {
+        0.0
+    };
+    let certified = relative_gap <= max_relative_gap;
+    let status = match result.stopped {
+        _ if certified => Status::Success,
+        Some(reason) => Status::stopped(reason),
+        None => Status::GapNotClosed,
+    };
+    (
+        status,
+        Certificate {
+            lower_bound: lower,
+            relative_gap,
+            certified,
+            ..base
+        },
+    )
+}
+
+/// The certificate of a cost at most [`NEGLIGIBLE_COST`]: the bound 0 of a sum of squares.
+pub(crate) fn negligible_cost_certificate() -> Certificate {
+    Certificate {
+        lower_bound: 0.0,
+        relative_gap: 0.0,
+        certified: true,
+        kind: CertificateKind::ConvexityTest,
+        nodes: 0,
+        solver_iterations: 0,
+    }
+}
