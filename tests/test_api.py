@@ -541,3 +541,14 @@ def test_version_is_the_crate_version():
     from importlib.metadata import version
 
     assert version("pluecker") == pluecker.__version__
+
+
+def test_triangulation_methods_are_exported_and_each_is_accepted():
+    assert pluecker.TRIANGULATION_METHODS == ("linear", "local", "optimal")
+    P = np.array([np.hstack([np.eye(3), [[c], [0.0], [5.0]]]) for c in (-1.0, 1.0)])
+    X = np.array([0.1, -0.2, 1.0, 1.0])
+    x = np.array([(p @ X)[:2] / (p @ X)[2] for p in P])
+    for method in pluecker.TRIANGULATION_METHODS:
+        assert pluecker.triangulate_point(P, x, method=method).method == method
+    with pytest.raises(pluecker.InvalidOptionError):
+        pluecker.triangulate_point(P, x, method="best")

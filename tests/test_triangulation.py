@@ -14,7 +14,7 @@ import pytest
 
 import pluecker
 
-METHODS = ("linear", "local", "optimal")
+METHODS = pluecker.TRIANGULATION_METHODS
 REPORT_FIELDS = ("method", "status", "success", "cost", "lower_bound", "relative_gap", "certified",
                  "certificate", "nodes", "solver_iterations", "iterations", "termination", "time_seconds", "residual_test")
 

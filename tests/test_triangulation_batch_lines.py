@@ -16,7 +16,7 @@ from test_triangulation_quadric import ellipsoid, outlines
 import pluecker
 from pluecker.experiments.josephson_kahl_2008.conics import disc_scene
 
-METHODS = ("linear", "local", "optimal")
+METHODS = pluecker.TRIANGULATION_METHODS
 #: Branch and bound is capped so that the optimal runs stay short; the equality holds at any cap.
 NODES = 30
 REPORT = ("cost", "lower_bound", "relative_gap", "certified", "certificate", "status", "nodes", "iterations")

@@ -16,7 +16,7 @@ import pytest
 import pluecker
 from pluecker.datasets import load_vgg, vgg_root
 
-METHODS = ("linear", "local", "optimal")
+METHODS = pluecker.TRIANGULATION_METHODS
 
 
 def project(P: np.ndarray, X: np.ndarray) -> np.ndarray:

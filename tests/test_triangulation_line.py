@@ -15,7 +15,7 @@ from test_triangulation import cameras
 import pluecker
 
 D = 1000.0
-METHODS = ("linear", "local", "optimal")
+METHODS = pluecker.TRIANGULATION_METHODS
 
 
 def project_point(P: np.ndarray, X: np.ndarray) -> np.ndarray:

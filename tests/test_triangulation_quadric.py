@@ -13,7 +13,7 @@ from test_triangulation import cameras
 import pluecker
 from pluecker.experiments.josephson_kahl_2008.conics import disc_scene, ellipse_points
 
-METHODS = ("linear", "local", "optimal")
+METHODS = pluecker.TRIANGULATION_METHODS
 
 
 def ellipsoid(rng):

@@ -35,6 +35,7 @@ Example::
 
 from ._core import (
     METHODS,
+    TRIANGULATION_METHODS,
     BatchReport,
     Camera,
     DegenerateConfigurationError,
@@ -77,6 +78,7 @@ from ._core import (
 
 __all__ = [
     "METHODS",
+    "TRIANGULATION_METHODS",
     "BatchReport",
     "Camera",
     "DegenerateConfigurationError",

@@ -27,6 +27,9 @@ __version__: str
 METHODS: Tuple[str, ...]
 """Every name ``estimate_pose`` accepts for ``method``, the default first."""
 
+TRIANGULATION_METHODS: Tuple[str, ...]
+"""Every name the triangulation functions accept for ``method``: ``("linear", "local", "optimal")``."""
+
 # --- Exceptions -----------------------------------------------------------------------------------
 
 class PlueckerError(ValueError):

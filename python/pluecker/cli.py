@@ -34,7 +34,7 @@ from pluecker.datasets import DataNotFoundError
 __all__ = ["main"]
 
 METHODS = tuple(pluecker.METHODS)
-TRIANGULATION_METHODS = ("optimal", "local", "linear")
+TRIANGULATION_METHODS = pluecker.TRIANGULATION_METHODS
 
 #: ``pluecker triangulate --help``: the files ``pluecker.datasets.load_vgg`` reads, as it reads them.
 TRIANGULATE_DESCRIPTION = """\
