@@ -3,7 +3,7 @@
 //! and the bound 0 that certifies a negligible cost. Points have their own convexity test
 //! ([`super::point::certificate`]).
 
-use super::{Certificate, CertificateKind, Status};
+use super::{Certificate, CertificateKind, Method, Report, Status};
 use crate::global::branch_and_bound::BranchAndBoundResult;
 use crate::global::socp::{Affine, Socp, SocpStatus};
 
@@ -66,8 +66,24 @@ pub(crate) fn certificate_of<C>(
     )
 }
 
+/// The report the optimal method of a line or quadric starts from: the local stage's, as `optimal`.
+/// `Err` holds the finished report when the local cost is at most [`NEGLIGIBLE_COST`]: certified
+/// whatever stopped the local stage, a sum of squares being never negative, with no search.
+pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
+    let mut report = Report {
+        method: Method::Optimal,
+        ..local_report.clone()
+    };
+    if local_report.cost <= NEGLIGIBLE_COST {
+        report.certificate = negligible_cost_certificate();
+        report.status = Status::Success;
+        return Err(report);
+    }
+    Ok(report)
+}
+
 /// The certificate of a cost at most [`NEGLIGIBLE_COST`]: the bound 0 of a sum of squares.
-pub(crate) fn negligible_cost_certificate() -> Certificate {
+fn negligible_cost_certificate() -> Certificate {
     Certificate {
         lower_bound: 0.0,
         relative_gap: 0.0,

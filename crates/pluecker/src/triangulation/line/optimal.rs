@@ -35,9 +35,9 @@
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
 use super::{LineObjective, LineProblem};
-use crate::triangulation::certificate::{certificate_of, minimum, negligible_cost_certificate, NEGLIGIBLE_COST};
+use crate::triangulation::certificate::{certificate_of, minimum, optimal_start};
 use super::residual::LINE_FRAME_DISTANCE;
-use crate::triangulation::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::{
     branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region,
@@ -411,17 +411,11 @@ pub(crate) fn optimal_line(
     local_report: &Report,
     opts: &TriangulationOptions,
 ) -> (Vector6<f64>, Report) {
-    let mut report = Report {
-        method: Method::Optimal,
-        ..local_report.clone()
+    let mut report = match optimal_start(local_report) {
+        Ok(report) => report,
+        Err(certified) => return (*local, certified),
     };
     let cost = local_report.cost;
-    if cost <= NEGLIGIBLE_COST {
-        // Certified whatever stopped the local stage: a sum of squares is never negative.
-        report.certificate = negligible_cost_certificate();
-        report.status = Status::Success;
-        return (*local, report);
-    }
     let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());
     let Some(sim) = plane_frame(problem, local) else {
         // No frame for eq. 23, so no search: the local line, uncertified (the caller turns a line

@@ -24,9 +24,9 @@
 //! is an upper bound.
 
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::certificate::{certificate_of, minimum, negligible_cost_certificate, NEGLIGIBLE_COST};
+use crate::triangulation::certificate::{certificate_of, minimum, optimal_start};
 use super::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
-use crate::triangulation::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
@@ -178,17 +178,11 @@ pub(crate) fn optimal_quadric(
     local_report: &Report,
     opts: &TriangulationOptions,
 ) -> (Ellipsoid, Report) {
-    let mut report = Report {
-        method: Method::Optimal,
-        ..local_report.clone()
+    let mut report = match optimal_start(local_report) {
+        Ok(report) => report,
+        Err(certified) => return (*local, certified),
     };
     let cost = local_report.cost;
-    if cost <= NEGLIGIBLE_COST {
-        // Certified whatever stopped the local stage: a sum of squares is never negative.
-        report.certificate = negligible_cost_certificate();
-        report.status = Status::Success;
-        return (*local, report);
-    }
     let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());
     let sim = problem.frame_of(local);
     let frame_dual = transform_dual(&sim.matrix(), &local.dual());
