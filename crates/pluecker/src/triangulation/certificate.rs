@@ -5,7 +5,8 @@
 
 use super::{Certificate, CertificateKind, Method, Report, Status};
 use crate::global::branch_and_bound::BranchAndBoundResult;
-use crate::global::socp::{Affine, Socp, SocpStatus};
+use crate::global::envelopes::{add_fraction_envelope, FractionBox};
+use crate::global::socp::{Affine, Socp, SocpSolution, SocpStatus};
 
 /// A cost at most this (squared whitened pixels) is certified by the bound 0 of a sum of squares.
 pub const NEGLIGIBLE_COST: f64 = 1e-12;
@@ -92,4 +93,29 @@ fn negligible_cost_certificate() -> Certificate {
         nodes: 0,
         solver_iterations: 0,
     }
+}
+
+/// Minimises the relaxation of eq. 19 in `p` (eq. 22): the sum, over the `views` `(tᵢ, gᵢ, lo, hi)`
+/// whose denominator range `gᵢ ∈ [lo, hi]` is positive, of the convex envelope of `tᵢ / gᵢ` on
+/// `tᵢ ∈ [0, t_cap · hi]`. A view whose range reaches 0 contributes nothing (its term is ≥ 0), so the
+/// minimum stays a lower bound. Shared by the line and quadric branch and bound.
+pub(crate) fn solve_fraction_relaxation<'a>(
+    p: &mut Socp,
+    views: impl IntoIterator<Item = (usize, &'a Affine, f64, f64)>,
+    t_cap: f64,
+) -> SocpSolution {
+    let mut objective = Affine::constant(0.0);
+    for (t, g, lo, hi) in views {
+        if lo > 0.0 {
+            let b = FractionBox {
+                t_lower: 0.0,
+                t_upper: t_cap * hi,
+                s_lower: lo,
+                s_upper: hi,
+            };
+            objective = objective.plus(&Affine::var(add_fraction_envelope(p, &Affine::var(t), g, &b)));
+        }
+    }
+    p.minimize(objective);
+    p.solve()
 }

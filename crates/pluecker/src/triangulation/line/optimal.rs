@@ -35,14 +35,14 @@
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
 use super::{LineObjective, LineProblem};
-use crate::triangulation::certificate::{certificate_of, minimum, optimal_start};
+use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use super::residual::LINE_FRAME_DISTANCE;
 use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::{
     branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region,
 };
-use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
+use crate::global::envelopes::add_quadratic_over_linear;
 use crate::global::monomial::{add_mccormick, product_bounds, Interval};
 use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
@@ -337,21 +337,8 @@ impl BoundingOracle for LineOracle<'_> {
         let Some(Relaxation { mut p, vars, views }) = self.relaxation(region) else {
             return Bound::Empty { solver_iterations: 0 };
         };
-        let mut objective = Affine::constant(0.0);
-        for (_, g, g_range, t) in &views {
-            if g_range.lo > 0.0 {
-                let t_max = self.gamma.powi(2).min(self.incumbent) * g_range.hi;
-                let b = FractionBox {
-                    t_lower: 0.0,
-                    t_upper: t_max,
-                    s_lower: g_range.lo,
-                    s_upper: g_range.hi,
-                };
-                objective = objective.plus(&Affine::var(add_fraction_envelope(&mut p, &Affine::var(*t), g, &b)));
-            }
-        }
-        p.minimize(objective);
-        let s = p.solve();
+        let terms = views.iter().map(|(_, g, range, t)| (*t, g, range.lo, range.hi));
+        let s = solve_fraction_relaxation(&mut p, terms, self.gamma.powi(2).min(self.incumbent));
         match s.status {
             SocpStatus::Infeasible => Bound::Empty {
                 solver_iterations: s.iterations,

@@ -24,12 +24,12 @@
 //! is an upper bound.
 
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::certificate::{certificate_of, minimum, optimal_start};
+use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use super::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
 use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
-use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
+use crate::global::envelopes::add_quadratic_over_linear;
 use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
 use nalgebra::SVector;
@@ -130,21 +130,8 @@ impl BoundingOracle for QuadricOracle<'_> {
 
     fn bound(&mut self, region: &Region) -> Bound<Ellipsoid> {
         let Relaxation { mut p, q, views } = self.relaxation(Some(region));
-        let mut objective = Affine::constant(0.0);
-        for (g, (lo, hi), t) in &views {
-            if let (true, Some(t)) = (*lo > 0.0, t) {
-                let t_max = self.gamma.powi(2).min(self.incumbent) * hi;
-                let b = FractionBox {
-                    t_lower: 0.0,
-                    t_upper: t_max,
-                    s_lower: *lo,
-                    s_upper: *hi,
-                };
-                objective = objective.plus(&Affine::var(add_fraction_envelope(&mut p, &Affine::var(*t), g, &b)));
-            }
-        }
-        p.minimize(objective);
-        let s = p.solve();
+        let terms = views.iter().filter_map(|(g, (lo, hi), t)| t.map(|t| (t, g, *lo, *hi)));
+        let s = solve_fraction_relaxation(&mut p, terms, self.gamma.powi(2).min(self.incumbent));
         match s.status {
             SocpStatus::Infeasible => Bound::Empty {
                 solver_iterations: s.iterations,
