@@ -93,10 +93,19 @@ thread_local! {
     static CURRENT: RefCell<Option<Arc<Stop>>> = const { RefCell::new(None) };
 }
 
-/// Restores the previously installed stop when dropped (also on unwinding).
-struct Restore(Option<Arc<Stop>>);
+/// A stop installed on this thread until dropped, which restores the previous one (also on
+/// unwinding). For loops that install a stop once per task rather than once per item (a rayon
+/// `map_init`).
+pub(crate) struct Installed(Option<Arc<Stop>>);
 
-impl Drop for Restore {
+impl Installed {
+    /// Installs `stop` (`None`: none) on this thread.
+    pub(crate) fn new(stop: Option<Arc<Stop>>) -> Installed {
+        Installed(CURRENT.with(|c| c.replace(stop)))
+    }
+}
+
+impl Drop for Installed {
     fn drop(&mut self) {
         let previous = self.0.take();
         CURRENT.with(|c| *c.borrow_mut() = previous);
@@ -105,8 +114,7 @@ impl Drop for Restore {
 
 /// Runs `f` on this thread with `stop` installed (`None`: none), then restores the previous one.
 pub fn with_stop<R>(stop: impl Into<Option<Arc<Stop>>>, f: impl FnOnce() -> R) -> R {
-    let previous = CURRENT.with(|c| c.replace(stop.into()));
-    let _restore = Restore(previous);
+    let _installed = Installed::new(stop.into());
     f()
 }
 

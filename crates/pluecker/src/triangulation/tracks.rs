@@ -4,7 +4,7 @@
 //! restating of a single-track error for the batch.
 
 use crate::error::{Error, Result};
-use crate::interrupt::{current, stop_reason, with_stop};
+use crate::interrupt::{current, stop_reason, Installed};
 use crate::triangulation::views::validate_cameras;
 use crate::triangulation::Method;
 use nalgebra::Matrix3x4;
@@ -93,16 +93,20 @@ where
     (0..n)
         .into_par_iter()
         .with_min_len(min_len.max(1))
-        .map(|t| {
-            let out = with_stop(stop.clone(), || match stop_reason() {
-                Some(reason) => Err(Error::Interrupted { reason }),
-                None => one(t),
-            });
-            if let Some(done) = done {
-                done.fetch_add(1, Ordering::Relaxed);
-            }
-            out
-        })
+        // Installed once per rayon task, not per track (an `Arc` clone per track contends).
+        .map_init(
+            || Installed::new(stop.clone()),
+            |_, t| {
+                let out = match stop_reason() {
+                    Some(reason) => Err(Error::Interrupted { reason }),
+                    None => one(t),
+                };
+                if let Some(done) = done {
+                    done.fetch_add(1, Ordering::Relaxed);
+                }
+                out
+            },
+        )
         .collect()
 }
 
