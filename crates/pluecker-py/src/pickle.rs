@@ -320,7 +320,7 @@ pack_struct!(Report {
     iterations,
     termination,
     time_seconds,
-    residual_test
+    residual_dof
 });
 pack_struct!(LineChart { pivot, direction, axes });
 pack_struct!(Ellipse {

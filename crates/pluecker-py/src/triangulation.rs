@@ -195,7 +195,7 @@ impl PyTriangulationReport {
 
     #[getter]
     fn residual_test<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        self.inner.residual_test.as_ref().map(|t| residual_test_dict(py, t)).transpose()
+        self.inner.residual_test().map(|t| residual_test_dict(py, &t)).transpose()
     }
 
     /// Plain-Python (JSON-serialisable) form of the report fields.

@@ -70,7 +70,7 @@ impl PyPointTriangulations {
         for (t, outcome) in points.outcomes.into_iter().enumerate() {
             match outcome {
                 Ok(status) => {
-                    report.push_uncertified(points.costs[t], status.as_str(), seconds, points.p_values[t]);
+                    report.push_uncertified(points.costs[t], status.as_str(), seconds, points.residual_dofs[t]);
                     columns.x.extend_from_slice(&points.points[3 * t..3 * t + 3]);
                     columns
                         .covariance

@@ -8,6 +8,7 @@
 use crate::triangulation::renamed;
 use numpy::PyArray1;
 use pluecker::triangulation::{CertificateKind, Method, Report, Status};
+use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;
 use pluecker::Error;
 use pyo3::prelude::*;
@@ -99,8 +100,8 @@ pub struct PyBatchReport {
     nodes: Vec<i64>,
     iterations: Vec<i64>,
     time_seconds: Vec<f64>,
-    /// p-values of the residuals' χ² tests, NaN where there is none.
-    p_value: Vec<f64>,
+    /// Degrees of freedom of each cost (0: no χ² test); `p_value` derives from them and `cost`.
+    residual_dof: Vec<usize>,
     /// `(track, message)` of every rejected track.
     errors: Vec<(usize, String)>,
 }
@@ -119,7 +120,7 @@ impl PyBatchReport {
             nodes: Vec::with_capacity(n),
             iterations: Vec::with_capacity(n),
             time_seconds: Vec::with_capacity(n),
-            p_value: Vec::with_capacity(n),
+            residual_dof: Vec::with_capacity(n),
             errors: Vec::new(),
         }
     }
@@ -136,12 +137,12 @@ impl PyBatchReport {
         self.nodes.push(c.nodes as i64);
         self.iterations.push(report.iterations as i64);
         self.time_seconds.push(report.time_seconds);
-        self.p_value.push(report.residual_test.map_or(f64::NAN, |t| t.p_value));
+        self.residual_dof.push(report.residual_dof);
     }
 
     /// Appends a track without a certificate (lower bound 0, relative gap 1, no nodes or
     /// iterations): a linear estimate of the point fast path, or a rejected track.
-    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, p_value: f64) {
+    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
         self.cost.push(cost);
         self.lower_bound.push(0.0);
         self.relative_gap.push(1.0);
@@ -151,7 +152,7 @@ impl PyBatchReport {
         self.nodes.push(0);
         self.iterations.push(0);
         self.time_seconds.push(seconds);
-        self.p_value.push(p_value);
+        self.residual_dof.push(residual_dof);
     }
 
     /// Appends track `t`, rejected by the core with `err` (its core argument names renamed by
@@ -161,12 +162,12 @@ impl PyBatchReport {
     /// it from the status, so that stopping a batch of millions of tracks stays cheap.
     pub(crate) fn reject<C: TrackColumns>(&mut self, columns: &mut C, t: usize, err: Error) {
         if let Error::Interrupted { reason } = err {
-            self.push_uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, f64::NAN);
+            self.push_uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, 0);
             columns.push_missing();
             return;
         }
         let err = renamed(err, C::NAMES);
-        self.push_uncertified(f64::NAN, error_status(&err), 0.0, f64::NAN);
+        self.push_uncertified(f64::NAN, error_status(&err), 0.0, 0);
         self.errors.push((t, C::message(t, &err)));
         columns.push_missing();
     }
@@ -237,7 +238,13 @@ impl PyBatchReport {
 
     #[getter]
     fn p_value<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.p_value)
+        let p: Vec<f64> = self
+            .cost
+            .iter()
+            .zip(&self.residual_dof)
+            .map(|(&cost, &dof)| ResidualTest::new(cost, dof).map_or(f64::NAN, |t| t.p_value))
+            .collect();
+        PyArray1::from_vec(py, p)
     }
 
     #[getter]
@@ -282,7 +289,7 @@ impl PyBatchReport {
     }
 }
 
-pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, p_value, errors });
+pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, residual_dof, errors });
 
 /// The report columns of `NAMES` below and then the estimate `columns` of a batch result as lists,
 /// NaN and inf as `None`: the `to_dict()` of every batch class (each array getter's `tolist()`).

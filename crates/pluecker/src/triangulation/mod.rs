@@ -231,12 +231,10 @@ pub struct Report {
     pub termination: Termination,
     /// Wall time of the call, seconds.
     pub time_seconds: f64,
-    /// The χ² test of `cost` against the given covariances ([`crate::chi_square`]; identity
-    /// covariances mean 1 px): `cost` has `m − p` degrees of freedom for `m` whitened residuals (2 per
-    /// view for points and lines, 5 for conics) and `p` parameters (3, 4, 9). `consistent == false`:
-    /// the observations disagree beyond their stated noise (an outlier, a wrong camera, distortion, a
-    /// covariance too small). `None` when `m ≤ p` or there is no cost.
-    pub residual_test: Option<ResidualTest>,
+    /// Degrees of freedom of `cost`: `m − p` for `m` whitened residuals (2 per view for points and
+    /// lines, 5 for conics) and `p` fitted parameters (3, 4, 9); 0 when not known. See
+    /// [`Report::residual_test`].
+    pub residual_dof: usize,
 }
 
 impl Report {
@@ -250,13 +248,22 @@ impl Report {
             iterations: 0,
             termination: Termination::ClosedForm,
             time_seconds: 0.0,
-            residual_test: None,
+            residual_dof: 0,
         }
     }
 
-    /// Sets [`Report::residual_test`] for `residuals` whitened residuals and `parameters` fitted ones.
+    /// Sets [`Report::residual_dof`] for `residuals` whitened residuals and `parameters` fitted ones.
     pub(crate) fn test_residuals(&mut self, residuals: usize, parameters: usize) {
-        self.residual_test = ResidualTest::new(self.cost, residuals.saturating_sub(parameters));
+        self.residual_dof = residuals.saturating_sub(parameters);
+    }
+
+    /// The χ² test of `cost` against the given covariances ([`crate::chi_square`]; identity
+    /// covariances mean 1 px) with [`Report::residual_dof`] degrees of freedom. `consistent == false`:
+    /// the observations disagree beyond their stated noise (an outlier, a wrong camera, distortion, a
+    /// covariance too small). `None` when the degrees of freedom are 0 or there is no cost. Computed
+    /// on demand (about 0.1 µs), not in the solvers' hot loops.
+    pub fn residual_test(&self) -> Option<ResidualTest> {
+        ResidualTest::new(self.cost, self.residual_dof)
     }
 }
 

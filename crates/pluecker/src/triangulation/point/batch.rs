@@ -21,7 +21,6 @@
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{solve_views, PointTriangulation};
-use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
 use crate::triangulation::covariance::whitening;
 use crate::interrupt::current;
@@ -183,15 +182,16 @@ pub struct LinearPoints {
     /// Row-major `(n, 3, 3)` covariances of the points (world units², [`crate::triangulation::uncertainty`]); NaN
     /// where there is no point or its covariance is `None`.
     pub covariances: Vec<f64>,
-    /// The p-value of each cost's χ² test ([`crate::triangulation::Report::residual_test`]); NaN where there is none.
-    pub p_values: Vec<f64>,
+    /// The degrees of freedom of each cost (`2 v − 3` over its `v` visible views, 0 where there is
+    /// no cost): the χ² test of [`crate::triangulation::Report::residual_test`].
+    pub residual_dofs: Vec<usize>,
     /// Per track: the status (`Success`, `BehindCamera` or `AtInfinity`) or why it was rejected.
     pub outcomes: Vec<Result<Status>>,
 }
 
-/// One track of the linear fast path: point, cost of eq. 19, covariance, status, and the p-value of
-/// the cost's χ² test (NaN when there is none; see [`crate::triangulation::Report::residual_test`]).
-type LinearTrack = (Vector3<f64>, f64, Option<Matrix3<f64>>, Status, f64);
+/// One track of the linear fast path: point, cost of eq. 19, covariance, status, and the degrees of
+/// freedom of the cost (see [`crate::triangulation::Report::residual_dof`]).
+type LinearTrack = (Vector3<f64>, f64, Option<Matrix3<f64>>, Status, usize);
 
 /// The DLT of one track with no allocation: its point, cost and covariance, or its status / error.
 /// Three passes over the views: checks and the spread of the centres, the Gram matrix, the cost and
@@ -238,7 +238,7 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
     }
     let nan = Vector3::repeat(f64::NAN);
     let LinearPoint::Finite(x) = solve_dlt(&g, &frame) else {
-        return Ok((nan, f64::NAN, None, Status::AtInfinity, f64::NAN));
+        return Ok((nan, f64::NAN, None, Status::AtInfinity, 0));
     };
     let (mut cost, mut front, mut information) = (0.0, true, Matrix3::zeros());
     for j in visible() {
@@ -249,13 +249,13 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
         front &= pv.depth(&x) > 0.0;
     }
     let covariance = covariance_of_information3(&information);
-    let p_value = ResidualTest::new(cost, (2 * count).saturating_sub(3)).map_or(f64::NAN, |t| t.p_value);
+    let dof = (2 * count).saturating_sub(3);
     Ok((
         x,
         cost,
         covariance,
         if front { Status::Success } else { Status::BehindCamera },
-        p_value,
+        dof,
     ))
 }
 
@@ -267,7 +267,7 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
         points: vec![f64::NAN; 3 * n],
         costs: vec![f64::NAN; n],
         covariances: vec![f64::NAN; 9 * n],
-        p_values: vec![f64::NAN; n],
+        residual_dofs: vec![0; n],
         outcomes: Vec::with_capacity(n),
     };
     let stop = current();
@@ -277,17 +277,17 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
         .zip(out.points.par_chunks_mut(3))
         .zip(out.costs.par_iter_mut())
         .zip(out.covariances.par_chunks_mut(9))
-        .zip(out.p_values.par_iter_mut())
+        .zip(out.residual_dofs.par_iter_mut())
         .map(
-            |((((t, point), cost), covariance), p_value)| match stop.as_ref().and_then(|s| s.reason()) {
+            |((((t, point), cost), covariance), residual_dof)| match stop.as_ref().and_then(|s| s.reason()) {
                 Some(reason) => Err(Error::Interrupted { reason }),
                 None => linear_track(&prepared, tracks, v, t),
             }
             .and_then(|track| {
-                let (x, c, cov, status, p) = track;
+                let (x, c, cov, status, dof) = track;
                 point.copy_from_slice(x.as_slice());
                 *cost = c;
-                *p_value = p;
+                *residual_dof = dof;
                 if let Some(cov) = cov {
                     // Symmetric: column-major storage is the row-major layout.
                     covariance.copy_from_slice(cov.as_slice());
