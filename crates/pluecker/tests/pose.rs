@@ -168,7 +168,7 @@ fn bad_input_gets_a_clear_error() {
     ));
     let singular = Camera { fx: 0.0, ..cam };
     assert!(matches!(estimate_pose(&singular, &good, &default).unwrap_err(), Error::SingularCamera { .. }));
-    let bad = PoseOptions { lambda: -1.0, ..PoseOptions::default() };
+    let bad = PoseOptions { penalty: -1.0, ..PoseOptions::default() };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
     let bad = PoseOptions { initial_pose: Some((Matrix3::zeros(), Vector3::zeros())), ..PoseOptions::default() };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));

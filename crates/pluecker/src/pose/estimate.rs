@@ -255,7 +255,7 @@ fn estimator(
     let mut tr = *tr;
     if opts.method == Method::RotationThenTranslation {
         let (points, lines) = constraints(camera, cc, true)?;
-        let rotation_cost = RotationCost::new(&lines, opts.lambda);
+        let rotation_cost = RotationCost::new(&lines, opts.penalty);
         let translation_gram = gram(&points, &lines[..cc.n_lines()], false);
         tr.subproblem = Subproblem::Hebden;
         // Eq. 14 by the trust region, then eq. 15; both together form one solve of the restart logic.
@@ -263,7 +263,7 @@ fn estimator(
             let r0: Vector4<f64> = x0.fixed_rows::<4>(0).into_owned();
             let (r, summary) = trust_region::minimize(&rotation_cost, r0, &tr);
             let r = normalized_or_identity(&r);
-            let s = solve_translation(&translation_gram, &r, opts.lambda).unwrap_or_else(Vector4::zeros);
+            let s = solve_translation(&translation_gram, &r, opts.penalty).unwrap_or_else(Vector4::zeros);
             let mut x = SVector::<f64, 8>::zeros();
             x.fixed_rows_mut::<4>(0).copy_from(&r);
             x.fixed_rows_mut::<4>(4).copy_from(&s);
@@ -288,7 +288,7 @@ fn estimator(
         let (point_cons, line_cons) = constraints(camera, cc, false)?;
         let joint = JointCost {
             gram: gram(&point_cons, &line_cons, true),
-            lambda: opts.lambda,
+            lambda: opts.penalty,
         };
         let (x, summary, others, valid) = select(runs, |x, _| joint.cost(x));
         let pose = to_world(&x, &cond);
@@ -296,7 +296,7 @@ fn estimator(
         let t_started = Instant::now();
         let translation_cost = JointCost {
             gram: translation_gram,
-            lambda: opts.lambda,
+            lambda: opts.penalty,
         }
         .cost(&x);
         let closed = Summary {
@@ -319,7 +319,7 @@ fn estimator(
     let (points, lines) = constraints(camera, cc, false)?;
     let cost = JointCost {
         gram: gram(&points, &lines, true),
-        lambda: opts.lambda,
+        lambda: opts.penalty,
     };
     let mut default_starts: Vec<SVector<f64, 8>> = joint_starts(&cost.gram, &shape.centroid, shape.default_starts())
         .iter()

@@ -98,7 +98,7 @@ pub struct PoseOptions {
     /// Estimator. Default [`Method::TrustRegion`].
     pub method: Method,
     /// Penalty λ on `r·r = 1` and `r·s = 0` (eqs. 13-15, 22). Paper: 50. Default `50.0`.
-    pub lambda: f64,
+    pub penalty: f64,
     /// Solve the algebraic stage in a centred, unit-scale object frame ([`Conditioning`]). Default true.
     pub normalize: bool,
     /// Follow the estimator with a minimisation of the reprojection error (pixel distances for points,
@@ -162,7 +162,7 @@ impl Default for PoseOptions {
         trust_region.stopping.step_tolerance = 1e-10;
         PoseOptions {
             method: Method::TrustRegion,
-            lambda: 50.0,
+            penalty: 50.0,
             normalize: true,
             refine: true,
             initial_pose: None,
@@ -190,8 +190,8 @@ impl PoseOptions {
                 reason: reason.into(),
             })
         };
-        if !(self.lambda.is_finite() && self.lambda > 0.0) {
-            return bad("lambda", "must be a positive finite number");
+        if !(self.penalty.is_finite() && self.penalty > 0.0) {
+            return bad("penalty", "must be a positive finite number");
         }
         for (name, tr) in [("trust_region", &self.trust_region), ("refinement", &self.refinement)] {
             if !(tr.initial_radius.is_finite() && tr.initial_radius > 0.0) {

@@ -173,7 +173,7 @@ impl RansacOptions {
             return bad("confidence", format!("must be in (0, 1), got {}", self.confidence));
         }
         if self.max_iterations < 1 {
-            return bad("max_ransac_iterations", "must be at least 1".into());
+            return bad("max_iterations", "must be at least 1".into());
         }
         if self.min_iterations > self.max_iterations {
             return bad("min_iterations", "must not exceed the iteration cap".into());
