@@ -1,22 +1,23 @@
 """Typed stubs of the extension module ``pluecker._core`` (Rust, PyO3).
 
-Conventions (frames, pixels, units, array shapes): the "Conventions" section of the README.
-Array arguments accept any real array-like and are converted to float64; returned arrays are fresh
-float64 row-major ndarrays owned by the caller. ``tests/test_api.py`` checks that the names here and
-the names of the module agree.
+Conventions (frames, pixels, units, array shapes): the "Conventions" section of the README. Array
+arguments accept any real array-like (converted to float64); returned arrays are fresh row-major
+float64 arrays owned by the caller. ``None`` for an array stands for zero rows.
 
-Results (every class below that a function returns) are immutable; ``to_dict()`` gives strict JSON
-(NaN and inf as ``None``), and ``pickle`` / ``copy.deepcopy`` reproduce them exactly within one version
-of pluecker (a pickle from another version raises ``PlueckerError``).
+The properties of every result and options class are generated from the extension's own tables
+(``python -m pluecker._stubgen``; ``tests/test_stubs.py`` checks that they are up to date): a
+property is declared once, in Rust, with its getter, its ``to_dict()`` entry and its doc.
 
-Scalar arguments: a bool is not a number (``penalty=True`` or ``max_iterations=True`` is an
-``InvalidOptionError``). Counts, caps and seeds take any Python or numpy integer from their minimum to
-``2**64 - 1``; beyond that range, or below the minimum, they raise ``InvalidOptionError`` naming the
-argument and the range (never a bare ``OverflowError``); a float where an integer is expected is a
-``TypeError``.
+Results are immutable; ``to_dict()`` gives strict JSON (NaN and inf as ``None``); ``pickle`` and
+``copy.deepcopy`` reproduce them exactly within one version of pluecker. Options classes are mutable,
+compare with ``==``, pickle, and check every value as it is set (``InvalidOptionError`` naming the
+option); their defaults are the Rust ``Default`` of the same struct.
+
+Scalars: a bool is not a number (``InvalidOptionError``); counts, caps and seeds take any Python or
+numpy integer up to ``2**64 - 1`` (beyond, or below their minimum: ``InvalidOptionError``).
 """
 
-from typing import Any, Callable, Optional, Tuple, TypedDict
+from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,384 +26,278 @@ __version__: str
 """The package version (the Rust crates' version)."""
 
 METHODS: Tuple[str, ...]
-"""Every name ``estimate_pose`` accepts for ``method``, the default first."""
+"""Every ``method`` of :func:`estimate_pose`, the default first."""
 
 TRIANGULATION_METHODS: Tuple[str, ...]
-"""Every name the triangulation functions accept for ``method``: ``("linear", "local", "optimal")``."""
+"""Every ``method`` of the triangulation functions: ``("linear", "local", "optimal")``."""
 
-# --- Exceptions -----------------------------------------------------------------------------------
+# --- Exceptions (all ValueError) ------------------------------------------------------------------
 
 class PlueckerError(ValueError):
-    """Base class of every error pluecker raises for bad input or a failed computation.
-
-    A Rust panic (a bug) also arrives as ``PlueckerError("internal error: ...")``, never as a crash.
-    """
+    """Base class of every error for bad input or a failed computation; a Rust panic (a bug) arrives
+    as ``PlueckerError("internal error: ...")``, never as a crash."""
 
 class ShapeError(PlueckerError):
-    """An array has the wrong shape, or two arrays that must have the same number of rows do not.
-
-    Example message: ``"points2d: expected shape (N, 2), got (5, 3)"``.
-    """
+    """Wrong shape, or row counts that must agree and do not: ``"points2d: expected shape (N, 2), got (5, 3)"``."""
 
 class NonFiniteError(PlueckerError):
-    """An input holds NaN or inf: ``"points3d: non-finite value (NaN or inf) in row 4"``."""
+    """NaN or inf in an input: ``"points3d: non-finite value (NaN or inf) in row 4"``."""
 
 class TooFewCorrespondencesError(PlueckerError):
-    """Fewer correspondences than the method needs (3 points/lines; 6 points for ``linear``)."""
+    """Fewer correspondences or views than the method needs."""
 
 class DegenerateConfigurationError(PlueckerError):
-    """The data cannot determine the answer: collinear points, all lines parallel or through one
-    point, a zero-length segment, coplanar points for ``linear``, a singular information matrix."""
+    """Data that cannot determine the answer: collinear points, parallel or concurrent lines only, a
+    zero-length segment, coincident camera centres, a singular information matrix."""
 
 class SingularCameraError(PlueckerError):
-    """Intrinsics that cannot be inverted: a zero focal length, a NaN/inf entry, or a ``K`` that is
-    not upper triangular with last row ``(0, 0, 1)``."""
+    """Intrinsics or a camera matrix that cannot be inverted (zero focal length, NaN/inf, ``K`` not
+    upper triangular with last row ``(0, 0, 1)``)."""
 
 class InvalidOptionError(PlueckerError):
-    """An option or argument value outside its domain: unknown method or scene kind, ``penalty <= 0``,
-    an iteration cap below 1 or beyond ``2**64 - 1``, a bool for a number, ``sigma_px <= 0``, an ``R``
-    that is not a rotation matrix, a ``visible`` entry other than 0/1, a ``sigma`` whose covariance
-    overflows or underflows, 3-D coordinates whose squares overflow double precision."""
+    """An option or argument outside its domain (unknown method, ``penalty <= 0``, a cap below 1, a
+    bool for a number, an ``R`` that is not a rotation, a ``visible`` entry other than 0/1, ...)."""
+
+class ResidualTest(TypedDict):
+    """A χ² test of residuals against their stated noise (level 1e-3)."""
+
+    chi2: float
+    dof: int
+    p_value: float
+    consistent: bool
 
 # --- Camera ---------------------------------------------------------------------------------------
 
 class Camera:
     """Pinhole intrinsics in pixels, ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``. Immutable,
-    hashable, comparable with ``==``, picklable.
+    hashable, ``==``, picklable. ``fx``, ``fy`` may be negative (a mirrored axis), never zero."""
 
-    ``fx`` and ``fy`` may be negative (a mirrored image axis, as in Phong & Horaud's camera);
-    zero or non-finite values raise :class:`SingularCameraError`.
-    """
-
-    def __init__(self, fx: float, fy: float, cx: float, cy: float, skew: float = 0.0) -> None: ...
+    def __init__(self, fx: float, fy: float, cx: float, cy: float, skew: Optional[float] = None) -> None:
+        """``skew=None``: 0 (orthogonal pixel axes)."""
     @staticmethod
     def from_matrix(K: ArrayLike) -> "Camera":
-        """From a (3, 3) calibration matrix, divided by ``K[2, 2]`` first. Raises
-        :class:`ShapeError` for another shape and :class:`SingularCameraError` when ``K`` has a
-        NaN/inf, is not upper triangular with last row ``(0, 0, 1)``, or has a zero focal length."""
-    @property
-    def fx(self) -> float:
-        """Focal length along u, pixels (the paper's alpha_u)."""
-    @property
-    def fy(self) -> float:
-        """Focal length along v, pixels (alpha_v)."""
-    @property
-    def cx(self) -> float:
-        """Principal point u, pixels (u_0)."""
-    @property
-    def cy(self) -> float:
-        """Principal point v, pixels (v_0)."""
-    @property
-    def skew(self) -> float:
-        """Skew, pixels."""
-    @property
-    def K(self) -> NDArray[np.float64]:
-        """The (3, 3) calibration matrix."""
+        """From a (3, 3) calibration matrix, divided by ``K[2, 2]`` first."""
+    # fields of Camera (generated: python -m pluecker._stubgen)
+    fx: float
+    """Focal length along u, pixels (negative for a mirrored axis)."""
+    fy: float
+    """Focal length along v, pixels (negative for a mirrored axis)."""
+    cx: float
+    """Principal point u, pixels."""
+    cy: float
+    """Principal point v, pixels."""
+    skew: float
+    """Skew, pixels."""
+    K: NDArray[np.float64]
+    """The calibration matrix `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`."""
+    # end of fields
+    def P(self, R: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
+        """The (3, 4) camera matrix ``K [R | t]`` at the pose ``x_cam = R X_world + t``: the known
+        camera of the triangulation functions, from a pose estimate."""
     def project(self, points_cam: ArrayLike) -> NDArray[np.float64]:
-        """Pixels (N, 2) ``u = K x_cam / z`` of camera-frame points (N, 3). Points with ``z <= 0``
-        are not rejected: ``z = 0`` gives inf, ``z < 0`` the mirrored projection."""
+        """Pixels (N, 2) ``u = K x_cam / z`` of camera-frame points (N, 3) (``z <= 0`` not rejected)."""
     def pixel_to_normalized(self, pixels: ArrayLike) -> NDArray[np.float64]:
-        """Normalised image coordinates (N, 2), ``(x, y, 1) ∝ K^-1 (u, v, 1)``, of pixels (N, 2)."""
+        """Normalised coordinates (N, 2), ``(x, y, 1) ∝ K⁻¹ (u, v, 1)``, of pixels (N, 2)."""
     def normalized_to_pixel(self, normalized: ArrayLike) -> NDArray[np.float64]:
-        """Pixels (N, 2) of normalised image coordinates (N, 2); the inverse of
-        :meth:`pixel_to_normalized`."""
-    def __eq__(self, other: object) -> bool: ...
-    def __hash__(self) -> int: ...
-    def __repr__(self) -> str: ...
-    def __reduce__(self) -> Tuple[Any, Tuple[float, float, float, float, float]]: ...
+        """Pixels (N, 2) of normalised coordinates (N, 2)."""
+    def to_dict(self) -> Dict[str, Any]: ...
 
-# --- Pose estimation ------------------------------------------------------------------------------
+# --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
+
+class PoseOptions:
+    """Options of :func:`estimate_pose` (the core's ``PoseOptions``). The ``method=`` keyword of
+    :func:`estimate_pose` wins over :attr:`method`. ``certify`` and ``certify_*`` are the core's
+    ``certify: Option<CertificateOptions>``; the robust estimator is the separate ``ransac=``."""
+
+    # fields of PoseOptions (generated: python -m pluecker._stubgen)
+    def __init__(self, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, certify: bool = False, certify_gap: float = 0.001, certify_max_nodes: int = 20000) -> None: ...
+    method: str
+    """Estimator, one of `METHODS`. Default `'trust-region'`."""
+    penalty: float
+    """Penalty λ on the dual-quaternion constraints `r·r = 1`, `r·s = 0` (Phong & Horaud 1995, eqs. 13-15, 22)."""
+    normalize: bool
+    """Solve the algebraic stage in a centred, unit-scale object frame."""
+    refine: bool
+    """Follow the estimator with a minimisation of the reprojection error in pixels."""
+    initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]]
+    """An extra starting pose `(R, t)`, tried first besides the default starts; `None`: no guess needed."""
+    trust_region_max_iterations: int
+    """Iteration cap of the trust-region methods' algebraic stage."""
+    levenberg_marquardt_max_iterations: int
+    """Iteration cap of method `'levenberg-marquardt'`."""
+    newton_max_iterations: int
+    """Iteration cap of method `'newton'`."""
+    refinement_max_iterations: int
+    """Iteration cap of the reprojection refinement."""
+    sigma_px: Optional[float]
+    """Pixel noise σ of every image point and endpoint, for the covariance; `None`: estimated from the residuals."""
+    ambiguity_threshold: float
+    """Status `ambiguous` when another minimum is within `ambiguity_threshold · σ²` of the answer's cost."""
+    certify: bool
+    """Run the global-optimality certificate (branch and bound over rotations)."""
+    certify_gap: float
+    """Relative gap at or below which the certificate holds."""
+    certify_max_nodes: int
+    """Cap on the rotation cells the certificate examines."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+class RansacOptions:
+    """Options of the robust estimator (LO-RANSAC over points and lines; the core's
+    ``RansacOptions``): ``estimate_pose(..., ransac=RansacOptions(...))``."""
+
+    # fields of RansacOptions (generated: python -m pluecker._stubgen)
+    def __init__(self, *, point_threshold: float = 4.0, line_threshold: float = 4.0, confidence: float = 0.9999, max_iterations: int = 100000, min_iterations: int = 0, min_inlier_ratio: float = 0.1, sprt: bool = True, time_budget: Optional[float] = None, seed: int = 0, local_iterations: int = 10, min_inliers: int = 6) -> None: ...
+    point_threshold: float
+    """Inlier threshold of a point: reprojection distance, pixels."""
+    line_threshold: float
+    """Inlier threshold of a segment: RMS distance of its endpoints to the projected line, pixels."""
+    confidence: float
+    """Probability of having drawn an all-inlier sample when sampling stops, in (0, 1)."""
+    max_iterations: int
+    """Cap on the samples drawn."""
+    min_iterations: int
+    """Samples drawn at least, whatever the confidence."""
+    min_inlier_ratio: float
+    """Lowest inlier ratio sampling plans for (caps the samples drawn), in [0, 1)."""
+    sprt: bool
+    """Sequential probability ratio test: stop scoring a hypothesis once it cannot beat the best."""
+    time_budget: Optional[float]
+    """Wall-time budget of the sampling loop, seconds; `None`: no budget."""
+    seed: int
+    """Seed of the sampler: the same seed and data give the same result."""
+    local_iterations: int
+    """Iteration cap of each local optimisation run; 0 disables local optimisation."""
+    min_inliers: int
+    """Fewest inliers of a usable model (at least 3); fewer correspondences in all is an error."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
 class PoseStage:
-    """One stage of the pose pipeline: the algebraic estimator (``"trust-region"``, ``"rotation"``
-    and ``"translation"``, ...), the linear solve (``"linear"``), the robust sampling loop
-    (``"ransac"``), or the reprojection refinement (``"refinement"``). Immutable; array properties
-    return fresh copies."""
+    """One stage of the pose pipeline: the algebraic estimator, the linear solve, the sampling loop
+    (``"ransac"``) or the reprojection refinement (``"refinement"``)."""
 
-    @property
-    def name(self) -> str:
-        """Stage name."""
-    @property
-    def cost_kind(self) -> str:
-        """``"algebraic"`` (the paper's eqs. 13-15, 22 as ½ΣΦ², in normalised units),
-        ``"reprojection"`` (½Σ squared pixel residuals) or ``"msac"`` (stage ``"ransac"`` of
-        ``robust=True``: ½Σ min(e², τ²) over all correspondences, px²; its iterations are the samples
-        drawn)."""
-    @property
-    def R(self) -> NDArray[np.float64]:
-        """Rotation (3, 3) at the end of the stage, world → camera."""
-    @property
-    def t(self) -> NDArray[np.float64]:
-        """Translation (3,) at the end of the stage, world units."""
-    @property
-    def iterations(self) -> int:
-        """Accepted iterations (0 for a closed-form stage)."""
-    @property
-    def initial_cost(self) -> float:
-        """Cost at the start of the stage."""
-    @property
-    def final_cost(self) -> float:
-        """Cost at the end of the stage."""
-    @property
-    def termination(self) -> str:
-        """Why it stopped: ``"gradient_tolerance"``, ``"radius_tolerance"``, ``"cost_tolerance"``,
-        ``"step_tolerance"``, ``"max_iterations"``, ``"singular_hessian"``, ``"non_finite_cost"``
-        or ``"closed_form"``."""
-    @property
-    def time_seconds(self) -> float:
-        """Wall time of the stage, seconds."""
-    def to_dict(self) -> "_PoseStageDict":
-        """Plain-Python form (lists, floats, strings), strict JSON: NaN and inf are ``None``."""
-    def __repr__(self) -> str: ...
+    # fields of PoseStage (generated: python -m pluecker._stubgen)
+    name: str
+    """Name of the stage."""
+    cost_kind: str
+    """What `initial_cost` and `final_cost` measure."""
+    R: NDArray[np.float64]
+    """Rotation at the end of the stage, `x_cam = R X_world + t`."""
+    t: NDArray[np.float64]
+    """Translation at the end of the stage, world units."""
+    iterations: int
+    """Iterations of the stage."""
+    initial_cost: float
+    """Cost at the stage's start."""
+    final_cost: float
+    """Cost at the stage's end."""
+    termination: str
+    """Why the stage stopped."""
+    time_seconds: float
+    """Wall time of the stage, seconds."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+class RansacReport:
+    """What the robust loop did (:attr:`PoseResult.ransac` of a robust estimate)."""
+
+    # fields of RansacReport (generated: python -m pluecker._stubgen)
+    iterations: int
+    """Samples drawn."""
+    degenerate_samples: int
+    """Samples without a pose in front of the camera (collinear points, parallel lines, ...)."""
+    models_scored: int
+    """Poses scored (a sample may give several), fully or until an early exit."""
+    sprt_rejections: int
+    """Poses rejected by the sequential probability ratio test."""
+    errors_evaluated: int
+    """Reprojection errors evaluated while scoring: the work of the scoring."""
+    local_optimizations: int
+    """Local optimisations run (one per new best model)."""
+    inliers: int
+    """Inliers (points + lines) of the best model before the final refinement."""
+    required_inliers: int
+    """Fewest inliers a usable model needs, else status `too_few_inliers`."""
+    score: float
+    """MSAC score `½ Σ min(e², τ²)` of the best model, px²."""
+    stop: str
+    """Why sampling stopped: `confidence`, `iteration_cap`, `time_budget`, `interrupted`, ..."""
+    time_seconds: float
+    """Wall time of the loop including local optimisation, seconds."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
 class PoseResult:
-    """The answer of :func:`estimate_pose`. Immutable; array properties return fresh copies."""
+    """The answer of :func:`estimate_pose`: the pose, how it was found, whether it can be used."""
 
-    @property
-    def R(self) -> NDArray[np.float64]:
-        """Rotation (3, 3) with ``x_cam = R @ X_world + t`` (NaN if the solver failed numerically)."""
-    @property
-    def t(self) -> NDArray[np.float64]:
-        """Translation (3,), in the unit of the 3-D data."""
-    @property
-    def dual_quaternion(self) -> NDArray[np.float64]:
-        """The same motion as a unit dual quaternion (8,) ``(r0, rx, ry, rz, s0, sx, sy, sz)``,
-        ``r`` the rotation quaternion (``r0 >= 0``) and ``s = ½ t r`` (paper eqs. 6-7)."""
-    @property
-    def axis(self) -> NDArray[np.float64]:
-        """Unit rotation axis (3,), camera frame."""
-    @property
-    def angle(self) -> float:
-        """Rotation angle about :attr:`axis`, radians in [0, π]."""
-    @property
-    def method(self) -> str:
-        """The estimator that ran (one of :data:`METHODS`)."""
-    @property
-    def iterations(self) -> int:
-        """Iterations summed over the stages."""
-    @property
-    def final_cost(self) -> float:
-        """Cost of the last stage at the returned pose (see :attr:`PoseStage.cost_kind`)."""
-    @property
-    def termination(self) -> str:
-        """Why the last stage stopped (see :attr:`PoseStage.termination`)."""
-    @property
-    def status(self) -> str:
-        """``"success"``, ``"not_converged"`` (a stage hit its iteration cap; robust: the sampling
-        loop stopped on ``max_ransac_iterations``, ``time_budget`` or the ``min_inlier_ratio`` cap
-        before reaching ``confidence`` for the best model),
-        ``"numerical_failure"`` (singular Hessian, non-finite cost), ``"points_behind_camera"``
-        (some 3-D points or segment endpoints — of the inliers when robust — have ``z <= 0`` at the
-        returned pose, or the data are explained better with every point behind the camera: see
-        :attr:`behind_camera_cost`), ``"ambiguous"`` (another local minimum explains the data nearly as well: see
-        :attr:`ambiguous` and :attr:`second_best_cost`), and with ``robust=True``: ``"too_few_inliers"`` (the best model has fewer than
-        :attr:`ransac_required_inliers` inliers — ``min_inliers``, or more when chance alone gives a
-        wrong pose that many among many correspondences — e.g. all-outlier data or thresholds too
-        tight; the pose is that
-        model's, unrefined, and should not be used) or ``"no_hypothesis"`` (no sample gave a pose in
-        front of the camera: every sample degenerate, or no minimal solver for the data's mix, see
-        :attr:`ransac_stop`; the pose is NaN)."""
-    @property
-    def success(self) -> bool:
-        """``status == "success"``."""
-    @property
-    def rms_error_px(self) -> float:
-        """Root-mean-square reprojection error over all residuals (two per point, two per line),
-        pixels."""
-    @property
-    def time_seconds(self) -> float:
-        """Total wall time, seconds."""
-    @property
-    def residual_test(self) -> Optional["_ResidualTestDict"]:
-        """The χ² test of the residuals against ``sigma_px``: ``{"chi2", "dof", "p_value",
-        "consistent"}``, ``chi2 = Σ r² / σ²`` over the ``m`` residuals of the used correspondences
-        (inliers when robust), ``dof = m - 6``, ``consistent`` is ``p_value >= 1e-3``.
-        ``consistent == False`` says the residuals are not explained by that noise (lens distortion
-        left in the pixels, a wrong camera, noise larger than stated). None without ``sigma_px``."""
-    @property
-    def behind_camera_cost(self) -> Optional[float]:
-        """When the residuals exceed the noise (``sigma_px``, else 1 px), the minimal solvers also look
-        for poses with every object point *behind* the camera (the same pixels as a mirrored object in
-        front); ``½ Σ r²`` (px²) of the best such pose when it fits better than the returned pose by
-        more than ``½ ambiguity_threshold σ²`` (σ = ``sigma_px``, else 1 px) and by a factor of at least 100.
-        :attr:`status` is then ``"points_behind_camera"``: the data come from points behind the
-        camera, which no pose in front explains. None otherwise."""
-    @property
-    def stages(self) -> list[PoseStage]:
-        """Every stage in order; the last one gave the returned pose."""
-    @property
-    def estimated_camera(self) -> Optional[Camera]:
-        """The intrinsics estimated by ``method="linear"`` (None for the other methods)."""
-    @property
-    def inliers_points(self) -> NDArray[np.bool_]:
-        """(N,) bool: the points the returned pose was fitted to — the final inliers when robust
-        (reprojection distance ``<= point_threshold`` px at the returned pose), else all True."""
-    @property
-    def inliers_lines(self) -> NDArray[np.bool_]:
-        """(M,) bool: the lines used — when robust, those whose two observed endpoints lie at an RMS
-        distance ``<= line_threshold`` px from the projected 3-D line at the returned pose; else all
-        True."""
-    @property
-    def ransac_iterations(self) -> int:
-        """Minimal samples drawn by the robust loop (0 when not robust)."""
-    @property
-    def ransac_models_scored(self) -> int:
-        """Poses scored (a sample gives up to four; 0 when not robust)."""
-    @property
-    def ransac_local_optimizations(self) -> int:
-        """Local optimisations run, one per new best model (0 when not robust)."""
-    @property
-    def ransac_sprt_rejections(self) -> int:
-        """Poses rejected early by the sequential probability ratio test (``sprt=True``; 0 when not
-        robust)."""
-    @property
-    def ransac_errors_evaluated(self) -> int:
-        """Reprojection errors evaluated while scoring the poses, early exits included (the work of the
-        scoring; 0 when not robust)."""
-    @property
-    def ransac_required_inliers(self) -> int:
-        """Fewest inliers the best model needed, else ``status="too_few_inliers"``:
-        ``max(min_inliers, min(c + 1, ceil(min_inlier_ratio * n)))`` with ``c`` the most inliers a wrong
-        pose plausibly gets by chance among the ``n`` correspondences (observations uniform in their
-        bounding box; the best of the poses tried exceeds ``c`` with probability <= 1 %). Equals
-        ``min_inliers`` up to a few hundred correspondences; about 20 for 20,000 points in a 640 x 480
-        image (0 when not robust)."""
-    @property
-    def ransac_degenerate_samples(self) -> int:
-        """Samples that gave no pose in front of the camera (0 when not robust)."""
-    @property
-    def ransac_time_seconds(self) -> float:
-        """Wall time of the sampling loop, local optimisation included (0.0 when not robust)."""
-    @property
-    def ransac_stop(self) -> Optional[str]:
-        """Why the sampling loop stopped: ``"confidence"`` (enough samples for ``confidence`` at the
-        best model's inlier fractions), ``"min_inlier_ratio"`` (enough samples to have found a model
-        with that inlier fraction, while the best has fewer or there is none), ``"iteration_cap"``,
-        ``"time_budget"``, ``"interrupted"`` (Ctrl-C; the result is then attached to the
-        ``KeyboardInterrupt`` as ``partial``) or ``"no_solvable_sample"`` (no mix of the data has a
-        minimal solver); None when not robust."""
-    @property
-    def covariance(self) -> Optional[NDArray[np.float64]]:
-        """(6, 6) covariance ``σ² (JᵀJ)⁻¹`` of the pose at the returned pose: the rotation as the
-        tangent vector ``ω`` of ``R ← exp(ω) R`` (radians, camera frame; first three), then the
-        translation (world units). ``J`` is the Jacobian of the reprojection residuals of the used
-        correspondences (the inliers when robust). ``σ`` is :attr:`sigma_px`. Computed for every call;
-        None when ``JᵀJ`` is singular (the used data do not fix the pose) or not finite, when ``σ``
-        cannot be estimated (at most 6 residuals), or when the pose is NaN. First order: the
-        Cramér-Rao bound at the estimate, meaningful after the refinement."""
-    @property
-    def covariance_source(self) -> Optional[str]:
-        """``"given"`` (``sigma_px`` was passed), ``"estimated"`` (from the residuals), or None when
-        :attr:`covariance` is None."""
-    @property
-    def sigma_px(self) -> Optional[float]:
-        """The pixel noise σ of :attr:`covariance`: the given ``sigma_px``, or
-        ``σ̂ = sqrt(Σ r² / (m − 6))`` over the ``m`` residuals of the used correspondences (two per
-        point, two per line); None if ``m <= 6``."""
-    @property
-    def certified(self) -> bool:
-        """True when the pose is proved to be the global minimum of the reprojection cost
-        ``½ Σ r²`` (px²), to within the relative gap ``certify_gap``, over every rotation and
-        translation that keeps the object points in front of the camera (``certify=True`` only;
-        the sublevel-set test of ``pluecker::pose::certificate``)."""
-    @property
-    def lower_bound(self) -> float:
-        """The proved lower bound on ``½ Σ r²`` (px²) over that domain; NaN without a certificate."""
-    @property
-    def gap(self) -> float:
-        """``(cost − lower_bound) / max(cost, 1e-12)``; NaN without a certificate."""
-    @property
-    def certificate(self) -> str:
-        """How the certificate was proved, or that there is none: ``"sublevel_set"``,
-        ``"not_requested"`` (``certify=False``) or ``"not_proved"``."""
-    @property
-    def certificate_message(self) -> str:
-        """A sentence: how it was proved (``"proved by the sublevel-set test (N rotation cells)"``) or
-        why not (``"not requested ..."``, ``"not proved: ..."``, ``"not attempted: ..."``)."""
-    @property
-    def ambiguous(self) -> bool:
-        """True when :attr:`status` is ``"ambiguous"``: another local minimum with every object point
-        in front (:attr:`second_best_R`, :attr:`second_best_t`) has ``Σ r²`` within
-        ``ambiguity_threshold · σ²`` of this one (σ = ``sigma_px``, else max(σ̂, 1 px))."""
-    @property
-    def second_best_R(self) -> Optional[NDArray[np.float64]]:
-        """Rotation (3, 3) of the cheapest other local minimum found with every object point in
-        front; None when the search found no other."""
-    @property
-    def second_best_t(self) -> Optional[NDArray[np.float64]]:
-        """Translation (3,) of that minimum; None when there is none."""
-    @property
-    def second_best_cost(self) -> Optional[float]:
-        """``½ Σ r²`` (px²) of that minimum; None when there is none."""
-    def to_dict(self) -> "_PoseResultDict":
-        """Plain-Python form (nested lists, floats, strings, None), strict JSON: NaN and inf are ``None``."""
-    def __repr__(self) -> str: ...
-
-class _PoseStageDict(TypedDict):
-    name: str
-    cost_kind: str
-    R: list[list[float]]
-    t: list[float]
-    iterations: int
-    initial_cost: float
-    final_cost: float
-    termination: str
-    time_seconds: float
-
-class _CameraDict(TypedDict):
-    fx: float
-    fy: float
-    cx: float
-    cy: float
-    skew: float
-
-class _PoseResultDict(TypedDict):
-    R: list[list[float]]
-    t: list[float]
-    dual_quaternion: list[float]
-    axis: list[float]
+    # fields of PoseResult (generated: python -m pluecker._stubgen)
+    R: NDArray[np.float64]
+    """Rotation, `x_cam = R X_world + t`."""
+    t: NDArray[np.float64]
+    """Translation, world units."""
+    dual_quaternion: NDArray[np.float64]
+    """The same motion as a unit dual quaternion `(r0, rx, ry, rz, s0, sx, sy, sz)` (eqs. 6-7), `r0 ≥ 0`."""
+    axis: NDArray[np.float64]
+    """Unit rotation axis."""
     angle: float
+    """Rotation angle about `axis`, radians in [0, π]."""
     method: str
+    """The estimator that ran."""
     iterations: int
+    """Iterations summed over the stages."""
     final_cost: float
+    """Cost of the last stage at the returned pose."""
     termination: str
+    """Why the last iterative stage stopped."""
     status: str
+    """Whether the pose can be used, and if not why: `success`, `ambiguous`, `points_behind_camera`, ..."""
     success: bool
+    """`status == 'success'`."""
     rms_error_px: float
+    """Root-mean-square reprojection error over all correspondences, pixels."""
     time_seconds: float
-    stages: list[_PoseStageDict]
-    estimated_camera: Optional[_CameraDict]
-    inliers_points: list[bool]
-    inliers_lines: list[bool]
-    ransac_iterations: int
-    ransac_models_scored: int
-    ransac_local_optimizations: int
-    ransac_degenerate_samples: int
-    ransac_sprt_rejections: int
-    ransac_errors_evaluated: int
-    ransac_required_inliers: int
-    ransac_time_seconds: float
-    ransac_stop: Optional[str]
-    covariance: Optional[list[list[float]]]
+    """Total wall time, seconds."""
+    stages: List[PoseStage]
+    """Every stage in order; the last one gave the returned pose."""
+    estimated_camera: Optional[Camera]
+    """Intrinsics estimated by method `'linear'` (`None` for the others)."""
+    inliers_points: NDArray[np.bool_]
+    """Points used for the pose: the final inliers when robust, else all true."""
+    inliers_lines: NDArray[np.bool_]
+    """Lines used for the pose: the final inliers when robust, else all true."""
+    ransac: Optional[RansacReport]
+    """What the robust loop did; `None` unless estimated with `ransac=`."""
+    covariance: Optional[NDArray[np.float64]]
+    """6x6 covariance of `(ω, t)` (rotation tangent in radians, camera frame; translation, world units)."""
     covariance_source: Optional[str]
+    """Where the σ of the covariance came from: `given` or `estimated`."""
     sigma_px: Optional[float]
+    """The pixel noise σ used: `options.sigma_px`, or estimated from the residuals."""
     certified: bool
+    """Whether the pose is proved globally optimal to within the relative gap (`options.certify`)."""
     lower_bound: float
+    """The proved lower bound on `½ Σ r²` (px²); NaN when there is none."""
     gap: float
+    """`(cost − lower_bound) / cost`; NaN when there is no bound."""
     certificate: str
+    """How the certificate was proved, or why there is none."""
     certificate_message: str
+    """The certificate's explanation in words."""
     ambiguous: bool
-    second_best_R: Optional[list[list[float]]]
-    second_best_t: Optional[list[float]]
+    """`status == 'ambiguous'`: another local minimum explains the data nearly as well."""
+    second_best_R: Optional[NDArray[np.float64]]
+    """Rotation of the cheapest other local minimum with every point in front; `None` if none was found."""
+    second_best_t: Optional[NDArray[np.float64]]
+    """Translation of that minimum."""
     second_best_cost: Optional[float]
+    """Its cost `½ Σ r²`, px²."""
     behind_camera_cost: Optional[float]
-    residual_test: Optional[_ResidualTestDict]
-
-class _ResidualTestDict(TypedDict):
-    chi2: float
-    dof: int
-    p_value: float
-    consistent: bool
+    """Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`)."""
+    residual_test: Optional[ResidualTest]
+    """χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
 def estimate_pose(
     camera: Camera,
@@ -410,111 +305,30 @@ def estimate_pose(
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
     lines3d: Optional[ArrayLike] = None,
-    method: str = "trust-region",
+    method: Optional[str] = None,
     *,
-    penalty: float = 50.0,
-    normalize: bool = True,
-    refine: bool = True,
-    initial_pose: Optional[Tuple[ArrayLike, ArrayLike]] = None,
-    max_iterations: int = 200,
-    refine_max_iterations: int = 50,
-    robust: bool = False,
-    point_threshold: float = 4.0,
-    line_threshold: float = 4.0,
-    confidence: float = 0.9999,
-    max_ransac_iterations: int = 100000,
-    time_budget: Optional[float] = None,
-    seed: int = 0,
-    min_inliers: int = 6,
-    min_inlier_ratio: float = 0.1,
-    sprt: bool = True,
-    sigma_px: Optional[float] = None,
-    certify: bool = False,
-    certify_gap: float = 1e-3,
-    ambiguity_threshold: float = 9.0,
+    options: Optional[PoseOptions] = None,
+    ransac: "RansacOptions | bool | None" = None,
 ) -> PoseResult:
-    """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera (Phong & Horaud 1995).
+    """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera from points (N, 2) ↔ (N, 3)
+    and/or segments (M, 2, 2) ↔ (M, 2, 3) (only the 3-D line through a 3-D segment is used).
 
-    Args:
-        camera: the intrinsics.
-        points2d: observed image points (N, 2), pixels.
-        points3d: object points (N, 3), world frame, row i matching ``points2d[i]``.
-        lines2d: observed image segments (M, 2, 2), two pixel endpoints each.
-        lines3d: object segments (M, 2, 3), two world endpoints each; only the 3-D line through
-            them is used (the endpoints need not correspond to the image ones).
-        method: one of :data:`METHODS`: ``"trust-region"`` (rotation and translation together,
-            eqs. 13 + 22, trust region with Hebden's step, section 4.1), ``"rotation-then-translation"``
-            (eq. 14 then eq. 15), ``"trust-region-exact"`` (exact Hessian, Moré-Sorensen step,
-            section 4.2), ``"newton"``, ``"levenberg-marquardt"`` (the paper's baselines), or
-            ``"linear"`` (Faugeras-Toscani calibration from >= 6 non-coplanar points, which also
-            estimates the intrinsics, see :attr:`PoseResult.estimated_camera`; lines are ignored).
-        penalty: the paper's λ weighting the constraints ``r·r = 1`` and ``r·s = 0``; > 0.
-        normalize: solve the algebraic stage in a centred, unit-scale object frame.
-        refine: follow the estimator with a minimisation of the reprojection error (the
-            maximum-likelihood pose under Gaussian pixel noise).
-        initial_pose: an extra starting pose ``(R (3, 3), t (3,))`` for the iterative methods,
-            world frame. It is tried first and the default starts too; the cheapest valid answer
-            wins. Not needed: the default starts do not depend on a guess.
-        max_iterations: iteration cap of the algebraic stage (trust region, Levenberg-Marquardt,
-            Newton); >= 1.
-        refine_max_iterations: iteration cap of the refinement; >= 1.
-        robust: estimate robustly to outliers: LO-RANSAC over points and lines together (minimal
-            samples of three correspondences of any mix solved by P3P / P2P1L / P1P2L / P3L, MSAC
-            scoring, local optimisation of each new best model), then the reprojection refinement
-            (``refine``) on the final inliers. ``method`` is not used on this path. The options below
-            are checked whether or not ``robust`` is set.
-        point_threshold: inlier threshold of a point: reprojection distance, pixels; > 0.
-        line_threshold: inlier threshold of a line: RMS of the distances of its two observed
-            endpoints to the projected 3-D line, pixels; > 0.
-        confidence: stop when the probability of having drawn an all-inlier sample reaches this, at
-            the best model's inlier fractions of points and of lines (with ``sprt``, counting that
-            the test may reject a good pose with probability 1/A); in (0, 1).
-        max_ransac_iterations: cap on the samples drawn; >= 1.
-        time_budget: wall-time budget of the sampling loop, seconds, at least 0 and below 2**64 (None: only
-            the cap bounds it); anything else is an ``InvalidOptionError``.
-        seed: seed of the sampler (>= 0); the same seed and data give the same result.
-        min_inliers: fewest inliers a model needs (>= 3); fewer gives ``status="too_few_inliers"``,
-            and fewer correspondences than this in all is a TooFewCorrespondencesError. With many
-            correspondences the model must also beat chance: see
-            :attr:`PoseResult.ransac_required_inliers`.
-        min_inlier_ratio: the smallest inlier fraction the loop is designed to find, in [0, 1): it
-            stops after ``ceil(log(1 - confidence) / log(1 - min_inlier_ratio**3))`` samples (9,206 at
-            the defaults; a little more with ``sprt``) even when the best model has fewer inliers or
-            there is none (``ransac_stop="min_inlier_ratio"``), so all-outlier data end quickly with
-            ``"too_few_inliers"``. A model with at least this fraction of inliers always meets
-            :attr:`PoseResult.ransac_required_inliers`. 0 removes the cap and the chance requirement.
-        sprt: reject bad poses early by Wald's sequential probability ratio test (Matas & Chum 2005)
-            on the correspondences in a random order, with the inlier fraction of the best model so
-            far (at least ``min_inlier_ratio``) against the rate of chance agreements estimated from
-            the rejected poses. ``False`` scores every pose until it cannot beat the best one.
-        sigma_px: standard deviation of the pixel noise for :attr:`PoseResult.covariance`; None
-            estimates it from the residuals (see :attr:`PoseResult.sigma_px`); > 0.
+    ``method``: one of :data:`METHODS` (``None``: ``options.method``): ``"trust-region"`` (eqs. 13 +
+    22, Hebden's step, section 4.1), ``"rotation-then-translation"`` (eq. 14 then 15),
+    ``"trust-region-exact"`` (section 4.2), ``"newton"``, ``"levenberg-marquardt"``, or ``"linear"``
+    (Faugeras-Toscani from >= 6 non-coplanar points, which also estimates the intrinsics).
+    ``options``: :class:`PoseOptions` (``None``: the defaults). ``ransac``: :class:`RansacOptions` or
+    ``True`` (its defaults) estimates robustly (minimal solvers P3P/P2P1L/P1P2L/P3L, MSAC, local
+    optimisation, then the refinement on the inliers; ``method`` is then not used).
 
-        certify: prove that the answer is the global minimum (see :attr:`PoseResult.certified`);
-            off by default (0.2-2 ms for 10-100 points at f = 800 px, see the README).
-        certify_gap: relative gap at or below which the answer is certified, in (0, 1).
-        ambiguity_threshold: the answer's status is ``"ambiguous"`` when another local minimum has
-            ``Σ r²`` within this many ``σ²`` of it; ≥ 0.
+    With ``options.refine`` (the default) the answer is the cheapest local minimum of the reprojection
+    error reached from the algebraic answer and from minimal-solver poses. A solver that runs but fails
+    is not an exception: see :attr:`PoseResult.status`. The GIL is released; from 1000 correspondences
+    on, Ctrl-C stops the call within about 0.1 s and the ``KeyboardInterrupt`` carries the pose so far
+    as ``partial``.
 
-    With ``refine=True`` (the default) the answer is the cheapest local minimum of the reprojection
-    error that the refinement reaches from the algebraic answer and from the minimal solvers' poses on
-    a few wide samples (every triple for 4-6 correspondences).
-
-    Returns:
-        A :class:`PoseResult`. A solver that ran but failed is not an exception: check
-        :attr:`PoseResult.status`.
-
-    Raises:
-        ShapeError, NonFiniteError, TooFewCorrespondencesError (fewer than 3 points and lines
-        together; 6 points for ``linear``; ``min_inliers`` when robust), DegenerateConfigurationError (collinear points, all
-        lines parallel or concurrent, a zero-length segment, coplanar points for ``linear``),
-        InvalidOptionError, all subclasses of PlueckerError (a ValueError); TypeError for an
-        argument that is not an array of real numbers.
-
-    The GIL is released while the solver runs. From 1000 correspondences on, the solve runs on a
-    worker thread and Ctrl-C stops it within about 0.1 s: the ``KeyboardInterrupt`` carries the pose
-    reached so far as ``partial`` (a robust pose: ``ransac_stop == "interrupted"``). Smaller problems
-    take milliseconds and see Ctrl-C when they end.
+    Raises ShapeError, NonFiniteError, TooFewCorrespondencesError, DegenerateConfigurationError,
+    InvalidOptionError (all ValueError); TypeError for an argument of the wrong kind.
     """
 
 def pose_covariance(
@@ -525,17 +339,12 @@ def pose_covariance(
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
     lines3d: Optional[ArrayLike] = None,
-    sigma_px: float = 1.0,
+    sigma_px: Optional[float] = None,
 ) -> NDArray[np.float64]:
-    """The (6, 6) covariance ``σ² (JᵀJ)⁻¹`` of the pose ``(ω, t)`` for isotropic Gaussian pixel
-    noise of standard deviation ``sigma_px`` (pixels) on every image point and segment endpoint.
-
-    ``ω`` (first three, radians) is the rotation tangent vector with ``R ← exp(ω) R`` (camera
-    frame); the last three are the translation, world units. ``J`` is the Jacobian of the
-    reprojection residuals at ``(R, t)``; at the true pose this is the Cramér-Rao bound.
-    Raises DegenerateConfigurationError when ``JᵀJ`` is singular (the data do not determine the
-    pose) or not finite, InvalidOptionError when ``R`` is not a rotation or ``sigma_px <= 0``.
-    """
+    """The (6, 6) covariance ``σ² (JᵀJ)⁻¹`` of ``(ω, t)`` at ``(R, t)`` for pixel noise ``sigma_px``
+    (``None``: 1 px): ``ω`` the rotation tangent of ``exp(ω) R`` (radians, camera frame), then the
+    translation (world units); the Cramér-Rao bound at the true pose. DegenerateConfigurationError when
+    ``JᵀJ`` is singular or not finite."""
 
 def reprojection_errors(
     camera: Camera,
@@ -546,20 +355,16 @@ def reprojection_errors(
     lines2d: Optional[ArrayLike] = None,
     lines3d: Optional[ArrayLike] = None,
 ) -> NDArray[np.float64]:
-    """Per-correspondence reprojection errors (N + M,) in pixels at ``(R, t)``: points first (the
-    distance between the observed and projected point), then lines (the RMS of the distances of the
-    two observed endpoints to the projected 3-D line). A zero-length segment gives NaN."""
-
-# --- Dual quaternions -----------------------------------------------------------------------------
+    """Reprojection errors (N + M,) in pixels at ``(R, t)``: points first (distance to the projected
+    point), then segments (RMS distance of the two endpoints to the projected line)."""
 
 def pose_to_dual_quaternion(R: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
-    """The unit dual quaternion (8,) ``(r0, rx, ry, rz, s0, sx, sy, sz)`` of ``(R, t)``:
-    ``r`` the rotation quaternion and ``s = ½ t r`` (paper eqs. 6-7)."""
+    """The unit dual quaternion (8,) ``(r0, rx, ry, rz, s0, sx, sy, sz)`` of ``(R, t)``, ``s = ½ t r``
+    (eqs. 6-7)."""
 
 def dual_quaternion_to_pose(q: ArrayLike) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(R (3, 3), t (3,))`` of a dual quaternion (8,). ``r`` is normalised first; the component
-    of ``s`` along ``r`` is ignored. ``q`` and ``-q`` give the same pose. Raises
-    DegenerateConfigurationError when the real part is zero."""
+    """``(R, t)`` of a dual quaternion (8,); ``r`` is normalised first (a zero ``r`` is a
+    DegenerateConfigurationError)."""
 
 class _Screw(TypedDict):
     d: float
@@ -568,916 +373,339 @@ class _Screw(TypedDict):
     point: NDArray[np.float64]
 
 def pose_to_screw(R: ArrayLike, t: ArrayLike) -> _Screw:
-    """Chasles' screw of ``(R, t)`` (section 2.1): a rotation by ``angle`` (radians, [0, π]) about
-    the line through ``point`` (3,) with unit ``direction`` (3,), then a slide ``d`` along it.
-    ``point`` is the point of the axis nearest the origin. For a pure translation the axis is the
-    translation direction through the origin."""
+    """Chasles' screw of ``(R, t)``: rotation ``angle`` about the axis through ``point`` along
+    ``direction``, and translation ``d`` along it."""
 
-# --- Synthetic scenes -----------------------------------------------------------------------------
-
-class _PaperScene(TypedDict):
+class _Scene(TypedDict, total=False):
     camera: Camera
     R: NDArray[np.float64]
     t: NDArray[np.float64]
-    points3d: NDArray[np.float64]
     points2d: NDArray[np.float64]
-
-class _RandomScene(TypedDict):
-    camera: Camera
-    R: NDArray[np.float64]
-    t: NDArray[np.float64]
     points3d: NDArray[np.float64]
-    points2d: NDArray[np.float64]
-    lines3d: NDArray[np.float64]
     lines2d: NDArray[np.float64]
+    lines3d: NDArray[np.float64]
 
-def paper_scene() -> _PaperScene:
-    """The calibration object of Phong & Horaud 1995, section 5: 460 points (two faces of a
-    dihedral corner, centimetres) at the paper's pose, seen by the paper's camera
-    (fx = -1730.3, fy = 1220.7, cx = 243.8, cy = 241.2), noise-free: ``points3d`` (460, 3),
-    ``points2d`` (460, 2), ``R`` (3, 3), ``t`` (3,)."""
+def paper_scene() -> _Scene:
+    """The calibration object of Phong & Horaud 1995, section 5 (460 points, centimetres) at the
+    paper's pose and camera, noise-free."""
 
-def random_scene(kind: str, n_points: int, n_lines: int = 0, seed: int = 0) -> _RandomScene:
-    """A seeded random scene, noise-free, every point and endpoint in front of the camera and inside
-    a 640 x 480 image (fx = fy = 800, cx = 320, cy = 240).
-
-    ``kind``: ``"general"`` (points in a box 4-8 units in front of the camera), ``"planar"`` (one
-    plane tilted 30-60°) or ``"far"`` (1 unit across at depth ~100, weak perspective). Returns
-    ``points2d`` (n_points, 2), ``points3d`` (n_points, 3), ``lines2d`` (n_lines, 2, 2),
-    ``lines3d`` (n_lines, 2, 3), ``R``, ``t`` and ``camera``. The same seed gives the same scene
-    on every platform (and in Rust, ``pluecker::synthetic::random_scene``). At most 10,000,000 points and
-    segments together (``InvalidOptionError`` naming the count beyond, before anything is allocated).
-    """
+def random_scene(kind: str, n_points: int, n_lines: Optional[int] = None, seed: Optional[int] = None) -> _Scene:
+    """A seeded random scene, noise-free, every point in front and inside a 640 x 480 image (fx = fy =
+    800): ``kind`` ``"general"``, ``"planar"`` or ``"far"``; ``n_lines`` (``None``: 0) segments;
+    ``seed`` (``None``: 0) gives the same scene on every platform. At most 10,000,000 points and
+    segments together."""
 
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
 #
-# Cameras are (n, 3, 4) matrices P that map world points straight to pixels, λ (u, v, 1) = P (X, 1)
-# with λ = (P X̃)₃ > 0 in front of the camera (eq. 1) for the matrix as given: any positive scale, but the
-# sign counts (−P sees the other half-space); fx < 0 or a left-handed world (det P[:, :3] < 0) are
-# fine. ``certified`` is True only with status "success". Every method minimises
-# eq. 19, Σ_i ‖L_i r_i‖², the residuals r_i of eq. 17 (pixels) whitened by the Cholesky factor L_i of
-# the inverse observation covariance (eq. 18; identity when ``cov`` is None, so that the cost of a
-# point is its sum of squared pixel errors). Methods: ``"linear"`` (DLT with Hartley normalisation),
-# ``"local"`` (minimisation of eq. 19 from the linear answer; the paper's "bundle") and ``"optimal"``
-# (the default: the local answer certified as the global minimum by a convexity test, or by branch
-# and bound over the SOCP envelopes of eqs. 21-22 when the test cannot decide).
+# Cameras are (n, 3, 4) matrices P mapping world points to pixels, λ (u, v, 1) = P (X, 1), λ > 0 in
+# front (eq. 1): any positive scale, but the sign counts; fx < 0 or det P[:, :3] < 0 are fine. Every
+# method minimises eq. 19, the sum of squared residuals (eq. 17, pixels) whitened by the observation
+# covariances (identity when ``cov`` is None). ``"linear"`` (DLT), ``"local"`` (eq. 19 from the
+# linear answer) and ``"optimal"`` (the default: the local answer certified globally optimal by a
+# convexity test, or by branch and bound over the SOCP envelopes of eqs. 21-22). ``certified`` is True
+# only with status ``"success"``. Batches run in parallel with the GIL released; ``progress`` is
+# called with the count of finished tracks; ``time_budget`` (seconds) stops a batch with status
+# ``"time_budget"``; Ctrl-C (or an exception from ``progress``) stops it within about 0.1 s and the
+# exception carries the finished tracks as ``partial``. One bad track gets a status and a message
+# and never stops the others.
+
+class TriangulationOptions:
+    """Options of every triangulation function (the core's ``TriangulationOptions``). A ``method=``
+    given to the function wins over :attr:`method`."""
+
+    # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
+    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, local_max_iterations: int = 100) -> None: ...
+    method: str
+    """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
+    max_relative_gap: float
+    """Branch and bound stops when `(upper − lower) / upper` is at most this."""
+    max_reprojection_error: Optional[float]
+    """The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing."""
+    max_nodes: int
+    """Branch and bound gives up (status `gap_not_closed`) after this many nodes."""
+    local_max_iterations: int
+    """Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`)."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
 class TriangulationReport:
-    """What a triangulation did: method, status, cost, certificate of global optimality, iterations,
-    time. The base class of :class:`PointTriangulation`; immutable."""
+    """What one triangulation did: the base class of the point, line and quadric results."""
 
-    @property
-    def method(self) -> str:
-        """``"linear"``, ``"local"`` or ``"optimal"``."""
-    @property
-    def status(self) -> str:
-        """``"success"``; ``"gap_not_closed"`` (branch and bound hit ``max_nodes``; the estimate is the
-        best found and ``lower_bound`` the bound reached); ``"not_converged"`` (the local minimisation hit
-        its iteration cap); ``"behind_camera"`` (the estimate is at or behind a camera; for ``local`` and
-        ``optimal`` also: the data are best explained behind the cameras, and ``X`` is the linear point
-        there); ``"at_infinity"`` (parallel rays, or no point in front costs less than a point at
-        infinity: no finite estimate, ``X`` is NaN, ``cost`` the cost at infinity); ``"infeasible"`` (no
-        estimate has every reprojection error below ``max_reprojection_error``);
-        ``"numerical_failure"``; in batches, ``"interrupted"`` or ``"time_budget"`` (the batch was stopped
-        by Ctrl-C, a failed ``progress`` callback or its ``time_budget``: see :func:`triangulate_lines`)."""
-    @property
-    def success(self) -> bool:
-        """``status == "success"``."""
-    @property
-    def cost(self) -> float:
-        """Eq. 19 at the estimate: the sum of squared whitened residuals (squared pixels without
-        covariances)."""
-    @property
-    def lower_bound(self) -> float:
-        """A lower bound on eq. 19 over every estimate in front of the cameras (0 when not computed)."""
-    @property
-    def relative_gap(self) -> float:
-        """``(cost - lower_bound) / cost`` (1 when not computed, 0 when the cost is 0)."""
-    @property
-    def certified(self) -> bool:
-        """The estimate is the global minimum within ``max_relative_gap``, backed by ``lower_bound``.
-        True only with ``status == "success"``."""
-    @property
-    def certificate(self) -> str:
-        """How optimality was established: ``"none"`` (methods linear and local),
-        ``"convexity_test"`` (a sufficient condition at the local minimum, no branching) or
-        ``"branch_and_bound"``."""
-    @property
-    def nodes(self) -> int:
-        """Branch-and-bound nodes whose bound was computed (0 for the convexity test)."""
-    @property
-    def solver_iterations(self) -> int:
-        """Interior-point iterations of the conic solver, summed over the nodes."""
-    @property
-    def iterations(self) -> int:
-        """Accepted iterations of the local minimisation (0 for ``linear``)."""
-    @property
-    def termination(self) -> str:
-        """Why the local minimisation stopped (see :attr:`PoseStage.termination`; ``"closed_form"``
-        for ``linear``)."""
-    @property
-    def time_seconds(self) -> float:
-        """Wall time of the call in the core, seconds (the Python boundary excluded)."""
-    @property
-    def residual_test(self) -> Optional["_ResidualTestDict"]:
-        """The χ² test of :attr:`cost` against the given covariances (identity: 1 px):
-        ``{"chi2", "dof", "p_value", "consistent"}`` with ``dof`` = whitened residuals (2 per view for
-        points and lines, 5 for conics) minus parameters (3, 4, 9); ``consistent`` is ``p_value >=
-        1e-3``. ``consistent == False`` says the observations disagree beyond their stated noise (an
-        outlier, a wrong camera, lens distortion, a covariance too small). None when ``dof`` is 0 or
-        there is no cost."""
-    def to_dict(self) -> dict[str, Any]:
-        """The fields above as a plain dict (strict JSON: NaN and inf are ``None``)."""
-    def __repr__(self) -> str: ...
+    # fields of TriangulationReport (generated: python -m pluecker._stubgen)
+    method: str
+    """The method that ran: `linear`, `local` or `optimal`."""
+    status: str
+    """`success`, or why not: `gap_not_closed`, `not_converged`, `behind_camera`, `at_infinity`, ..."""
+    success: bool
+    """`status == 'success'`."""
+    cost: float
+    """The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate."""
+    lower_bound: float
+    """Proved lower bound on the cost over the certificate's domain (0 without a certificate)."""
+    relative_gap: float
+    """`(cost − lower_bound) / cost`."""
+    certified: bool
+    """Whether the estimate is proved globally optimal to within the gap."""
+    certificate: str
+    """How it was proved: `none`, `convexity_test` or `branch_and_bound`."""
+    nodes: int
+    """Branch-and-bound nodes."""
+    solver_iterations: int
+    """Conic-solver iterations summed over the nodes."""
+    iterations: int
+    """Iterations of the local minimisation."""
+    termination: str
+    """Why the local minimisation stopped."""
+    time_seconds: float
+    """Wall time, seconds."""
+    residual_test: Optional[ResidualTest]
+    """χ² test of the cost (Gaussian noise of the given covariances); `None` without spare degrees of freedom."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
 class PointTriangulation(TriangulationReport):
-    """A triangulated point: :attr:`X` and the fields of :class:`TriangulationReport`. Immutable;
-    ``X`` returns a fresh array."""
+    """A triangulated point and its report."""
 
-    @property
-    def X(self) -> NDArray[np.float64]:
-        """The point (3,), world coordinates (NaN when ``status == "at_infinity"``)."""
-    @property
-    def covariance(self) -> Optional[NDArray[np.float64]]:
-        """First-order covariance (3, 3) of :attr:`X`, world units²: ``(JᵀJ)⁻¹`` with ``J`` the Jacobian
-        of the whitened residuals of eq. 18 at ``X``, so the ``cov`` given carries the scale (without
-        ``cov`` every view counts as 1 px isotropic noise); not rescaled by the cost. Computed for every
-        method and status whenever ``X`` is finite (for ``linear``: evaluated at the linear point). None
-        when ``X`` is not finite or ``JᵀJ`` is numerically singular (``‖H‖_F ‖H⁻¹‖_F > 1e12``: a point at
-        or near infinity, parallax below about 1e-6 rad). First order: at low parallax it is large and
-        right while the depth error stays a small fraction of the depth."""
-    @property
-    def method(self) -> str:
-        """See :attr:`TriangulationReport.method`."""
-    @property
-    def status(self) -> str:
-        """See :attr:`TriangulationReport.status`."""
-    @property
-    def success(self) -> bool:
-        """See :attr:`TriangulationReport.success`."""
-    @property
-    def cost(self) -> float:
-        """See :attr:`TriangulationReport.cost`."""
-    @property
-    def lower_bound(self) -> float:
-        """See :attr:`TriangulationReport.lower_bound`."""
-    @property
-    def relative_gap(self) -> float:
-        """See :attr:`TriangulationReport.relative_gap`."""
-    @property
-    def certified(self) -> bool:
-        """See :attr:`TriangulationReport.certified`."""
-    @property
-    def certificate(self) -> str:
-        """See :attr:`TriangulationReport.certificate`."""
-    @property
-    def nodes(self) -> int:
-        """See :attr:`TriangulationReport.nodes`."""
-    @property
-    def solver_iterations(self) -> int:
-        """See :attr:`TriangulationReport.solver_iterations`."""
-    @property
-    def iterations(self) -> int:
-        """See :attr:`TriangulationReport.iterations`."""
-    @property
-    def termination(self) -> str:
-        """See :attr:`TriangulationReport.termination`."""
-    @property
-    def time_seconds(self) -> float:
-        """See :attr:`TriangulationReport.time_seconds`."""
-    @property
-    def residual_test(self) -> Optional["_ResidualTestDict"]:
-        """See :attr:`TriangulationReport.residual_test`."""
-    def to_dict(self) -> dict[str, Any]:
-        """The report fields, ``"X"`` and ``"covariance"`` (nested lists or None) as a plain dict
-        (strict JSON: NaN and inf are ``None``)."""
-    def __repr__(self) -> str: ...
+    # fields of PointTriangulation (generated: python -m pluecker._stubgen)
+    X: NDArray[np.float64]
+    """The point, world frame."""
+    covariance: Optional[NDArray[np.float64]]
+    """Its 3x3 covariance (first order, from the observation covariances); `None` when singular."""
+    # end of fields
+
+class LineTriangulation(TriangulationReport):
+    """A triangulated 3-D line and its report."""
+
+    # fields of LineTriangulation (generated: python -m pluecker._stubgen)
+    plucker: NDArray[np.float64]
+    """Plücker coordinates `(l12, l13, l14, l23, l42, l34)` of the line, unit norm (eq. 4 holds)."""
+    point: NDArray[np.float64]
+    """The point of the line closest to the world origin."""
+    direction: NDArray[np.float64]
+    """Unit direction of the line."""
+    chart_axes: NDArray[np.float64]
+    """Rows `e1`, `e2`: the axes of the 4-parameter chart in which `covariance` is expressed."""
+    covariance: Optional[NDArray[np.float64]]
+    """4x4 covariance of the line in its chart (first order); `None` when singular."""
+    # end of fields
+    def plucker_covariance(self) -> Optional[NDArray[np.float64]]:
+        """The (6, 6) covariance of the unit Plücker coordinates."""
+    def point_direction_covariance(self) -> Optional[NDArray[np.float64]]:
+        """The (6, 6) covariance of ``(point, direction)``."""
+
+class QuadricTriangulation(TriangulationReport):
+    """A triangulated ellipsoid (dual quadric) and its report."""
+
+    # fields of QuadricTriangulation (generated: python -m pluecker._stubgen)
+    Q: NDArray[np.float64]
+    """The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19."""
+    primal: Optional[NDArray[np.float64]]
+    """The primal quadric `Q⁻¹` (4x4); `None` when `Q` is singular."""
+    centre: NDArray[np.float64]
+    """Centre of the ellipsoid, world frame."""
+    axes: NDArray[np.float64]
+    """Principal axes of the ellipsoid, one per column."""
+    semi_axes: NDArray[np.float64]
+    """Semi-axis lengths along `axes`, world units."""
+    covariance: Optional[NDArray[np.float64]]
+    """9x9 covariance of the quadric's parameters (first order); `None` when singular."""
+    # end of fields
+
+class BatchReport:
+    """The per-track report columns of a batch (one entry per track in every array): the base class
+    of :class:`PointTriangulations`, :class:`LineTriangulations`, :class:`QuadricTriangulations`."""
+
+    # fields of BatchReport (generated: python -m pluecker._stubgen)
+    method: str
+    """The method that ran: `linear`, `local` or `optimal`."""
+    status: NDArray[np.str_]
+    """Per track: `success`, or why not (the statuses of `TriangulationReport`, and `too_few_views`, `non_finite`, `degenerate`, ... for a rejected track)."""
+    cost: NDArray[np.float64]
+    """Per track: the cost of eq. 19 at the estimate (NaN for a rejected track)."""
+    lower_bound: NDArray[np.float64]
+    """Per track: the proved lower bound on the cost."""
+    relative_gap: NDArray[np.float64]
+    """Per track: `(cost − lower_bound) / cost`."""
+    certified: NDArray[np.bool_]
+    """Per track: whether the estimate is certified globally optimal."""
+    certificate: NDArray[np.str_]
+    """Per track: `none`, `convexity_test` or `branch_and_bound`."""
+    nodes: NDArray[np.int64]
+    """Per track: branch-and-bound nodes."""
+    iterations: NDArray[np.int64]
+    """Per track: iterations of the local minimisation."""
+    time_seconds: NDArray[np.float64]
+    """Per track: wall time, seconds."""
+    p_value: NDArray[np.float64]
+    """Per track: p-value of the χ² test of the cost (NaN without spare degrees of freedom)."""
+    messages: List[str]
+    """Per track: why it was rejected or not started; empty otherwise."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+    def __len__(self) -> int: ...
+
+class PointTriangulations(BatchReport):
+    """The points of :func:`triangulate_points` beside the report columns."""
+
+    # fields of PointTriangulations (generated: python -m pluecker._stubgen)
+    X: NDArray[np.float64]
+    """Per track: the point, world frame, shape (n, 3) (NaN for a rejected track)."""
+    covariance: NDArray[np.float64]
+    """Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none)."""
+    # end of fields
+
+class LineTriangulations(BatchReport):
+    """The lines of :func:`triangulate_lines` beside the report columns."""
+
+    # fields of LineTriangulations (generated: python -m pluecker._stubgen)
+    plucker: NDArray[np.float64]
+    """Per track: Plücker coordinates, shape (n, 6) (NaN for a rejected track)."""
+    point: NDArray[np.float64]
+    """Per track: the point of the line closest to the origin, shape (n, 3)."""
+    direction: NDArray[np.float64]
+    """Per track: unit direction, shape (n, 3)."""
+    chart_axes: NDArray[np.float64]
+    """Per track: the chart axes of `covariance`, shape (n, 2, 3)."""
+    covariance: NDArray[np.float64]
+    """Per track: 4x4 covariance in the chart, shape (n, 4, 4) (NaN where there is none)."""
+    # end of fields
+
+class QuadricTriangulations(BatchReport):
+    """The ellipsoids of :func:`triangulate_quadrics` beside the report columns."""
+
+    # fields of QuadricTriangulations (generated: python -m pluecker._stubgen)
+    Q: NDArray[np.float64]
+    """Per track: the dual quadric, shape (n, 4, 4) (NaN for a rejected track)."""
+    primal: NDArray[np.float64]
+    """Per track: the primal quadric, shape (n, 4, 4) (NaN where `Q` is singular)."""
+    centre: NDArray[np.float64]
+    """Per track: centre, shape (n, 3)."""
+    axes: NDArray[np.float64]
+    """Per track: principal axes (columns), shape (n, 3, 3)."""
+    semi_axes: NDArray[np.float64]
+    """Per track: semi-axis lengths, shape (n, 3)."""
+    covariance: NDArray[np.float64]
+    """Per track: 9x9 covariance, shape (n, 9, 9) (NaN where there is none)."""
+    # end of fields
 
 def triangulate_point(
     P: ArrayLike,
     x: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: str = "optimal",
+    method: Optional[str] = None,
     *,
-    max_relative_gap: Optional[float] = None,
-    max_reprojection_error: Optional[float] = None,
-    max_nodes: Optional[int] = None,
+    options: Optional[TriangulationOptions] = None,
 ) -> PointTriangulation:
-    """Triangulate one point seen in two or more views (Josephson & Kahl 2008, sections 2.1, 3-4).
-
-    Args:
-        P: cameras (n, 3, 4), world → pixels, n >= 2.
-        x: the point's pixels in each view (n, 2).
-        cov: pixel covariances (n, 2, 2), symmetric positive definite; None for the identity.
-        method: ``"optimal"`` (default), ``"local"`` or ``"linear"`` (see the section comment).
-        max_relative_gap: branch and bound stops when ``(cost - lower_bound) / cost`` is at most this;
-            None for the default 1e-3 (the paper stopped at 10 %).
-        max_reprojection_error: the paper's γ (section 4.3): only points whose whitened reprojection
-            error is at most γ in every view are searched. None (default) takes the square root of the
-            local solution's cost, which every better point satisfies: the certificate then covers every
-            point in front of the cameras.
-        max_nodes: branch-and-bound node budget; None for the default 2000.
-
-    Returns:
-        A :class:`PointTriangulation`; a solve that runs but fails says so in ``status``.
-
-    Raises:
-        ShapeError (shapes, or row counts that differ from P's), NonFiniteError, TooFewCorrespondencesError
-        (fewer than 2 views), SingularCameraError (a camera whose left 3x3 block is singular),
-        DegenerateConfigurationError (a covariance that is not positive definite, all camera centres
-        equal), InvalidOptionError (unknown method, out-of-range option); TypeError for an unknown
-        keyword or an argument that is not numeric.
-
-    The GIL is released while the core runs.
-    """
-
-class BatchReport:
-    """The per-track report columns of a batch of points, lines or quadrics (the base class of
-    :class:`PointTriangulations`, :class:`LineTriangulations` and :class:`QuadricTriangulations`): one
-    entry per track in every array (fresh copies). Tracks the core rejected have a ``status`` naming
-    the problem, NaN estimates and cost, and a message in :attr:`messages`."""
-
-    @property
-    def cost(self) -> NDArray[np.float64]:
-        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
-    @property
-    def lower_bound(self) -> NDArray[np.float64]:
-        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
-    @property
-    def relative_gap(self) -> NDArray[np.float64]:
-        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
-    @property
-    def certified(self) -> NDArray[np.bool_]:
-        """Global optimality certified within ``max_relative_gap`` (n,)."""
-    @property
-    def certificate(self) -> NDArray[np.str_]:
-        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
-    @property
-    def status(self) -> NDArray[np.str_]:
-        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
-        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
-        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
-        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
-        definite, all visible camera centres equal, a line in an epipolar plane of its views),
-        ``"singular_camera"``, ``"invalid_input"``."""
-    @property
-    def nodes(self) -> NDArray[np.int64]:
-        """Branch-and-bound nodes per track (n,)."""
-    @property
-    def iterations(self) -> NDArray[np.int64]:
-        """Local-minimisation iterations per track (n,)."""
-    @property
-    def time_seconds(self) -> NDArray[np.float64]:
-        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
-    @property
-    def p_value(self) -> NDArray[np.float64]:
-        """Per track (n,): the ``p_value`` of :attr:`TriangulationReport.residual_test`, NaN where
-        there is none (rejected tracks included)."""
-    @property
-    def messages(self) -> list[str]:
-        """Per track: ``""``, or why the core rejected it, naming the track and the view
-        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
-    @property
-    def method(self) -> str:
-        """The method that ran."""
-    def __len__(self) -> int: ...
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
-        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
-        ``iterations``, ``time_seconds``, ``messages``); NaN and inf are ``None``."""
-    def __repr__(self) -> str: ...
-
-class PointTriangulations(BatchReport):
-    """The results of :func:`triangulate_points`: the columns of :class:`BatchReport` and each track's
-    point, one entry per track in every array (fresh copies). Tracks the core rejected have a
-    ``status`` naming the problem, NaN in ``X`` and ``cost``, and a message in :attr:`messages`."""
-
-    @property
-    def X(self) -> NDArray[np.float64]:
-        """Points (n, 3), world coordinates (NaN where there is no estimate)."""
-    @property
-    def covariance(self) -> NDArray[np.float64]:
-        """Covariances (n, 3, 3) of the points, world units² (see :attr:`PointTriangulation.covariance`);
-        NaN where there is no point or no covariance."""
-    @property
-    def cost(self) -> NDArray[np.float64]:
-        """Eq. 19 at each point (n,)."""
-    @property
-    def lower_bound(self) -> NDArray[np.float64]:
-        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
-    @property
-    def relative_gap(self) -> NDArray[np.float64]:
-        """``(cost - lower_bound) / cost`` (n,)."""
-    @property
-    def certified(self) -> NDArray[np.bool_]:
-        """Global optimality certified within ``max_relative_gap`` (n,)."""
-    @property
-    def certificate(self) -> NDArray[np.str_]:
-        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
-    @property
-    def status(self) -> NDArray[np.str_]:
-        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
-        ``"too_few_views"`` (fewer than 2 visible views), ``"non_finite"`` (NaN/inf in a visible
-        observation or covariance), ``"degenerate"`` (a covariance that is not positive definite, all
-        visible camera centres equal), ``"singular_camera"``, ``"invalid_input"``."""
-    @property
-    def nodes(self) -> NDArray[np.int64]:
-        """Branch-and-bound nodes per track (n,)."""
-    @property
-    def iterations(self) -> NDArray[np.int64]:
-        """Local-minimisation iterations per track (n,)."""
-    @property
-    def time_seconds(self) -> NDArray[np.float64]:
-        """Core time per track (n,), seconds, on one thread. Method ``linear`` runs an allocation-free
-        path that does not time tracks one by one: every track gets the batch's core time over ``n``."""
-    @property
-    def p_value(self) -> NDArray[np.float64]:
-        """See :attr:`BatchReport.p_value`."""
-    @property
-    def messages(self) -> list[str]:
-        """Per track: ``""``, or why the core rejected it, naming the track and its view as a row
-        (``"track 3: x[3]: non-finite value (NaN or inf) in row 1"``)."""
-    @property
-    def method(self) -> str:
-        """The method that ran."""
-    def __len__(self) -> int: ...
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
-        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
-        ``iterations``, ``time_seconds``, ``messages``) and ``X``, ``covariance``; NaN and inf are ``None``."""
-    def __repr__(self) -> str: ...
+    """One point from its pixels ``x`` (n, 2) in cameras ``P`` (n, 3, 4), n >= 2, with pixel
+    covariances ``cov`` (n, 2, 2) (sections 2.1, 3-4)."""
 
 def triangulate_points(
     P: ArrayLike,
     x: ArrayLike,
     visible: Optional[ArrayLike] = None,
     cov: Optional[ArrayLike] = None,
-    method: str = "optimal",
+    method: Optional[str] = None,
     *,
-    max_relative_gap: Optional[float] = None,
-    max_reprojection_error: Optional[float] = None,
-    max_nodes: Optional[int] = None,
+    options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
 ) -> PointTriangulations:
-    """Triangulate many points (tracks) seen by the same cameras, in parallel with the GIL released.
-
-    Each track is :func:`triangulate_point` on its visible views. One bad track (NaN in a visible view,
-    fewer than 2 visible views, a covariance that is not positive definite) gets a ``status`` and a
-    message and never stops the others.
-
-    Args:
-        P: cameras (v, 3, 4), world → pixels, v >= 2.
-        x: pixels (n, v, 2); entries of views a track is not seen in are ignored (NaN is fine there).
-        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
-            e.g. -1, is an InvalidOptionError); None: every view.
-        cov: pixel covariances (n, v, 2, 2); None for the identity.
-        method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
-        progress, time_budget: as for :func:`triangulate_lines` (Ctrl-C too). ``linear`` and ``local``
-            batches of at most 4096 observations (tracks x views) without either run on the calling
-            thread and see Ctrl-C only when they end (they take milliseconds).
-
-    Raises (for the whole call, before any track is solved): ShapeError, NonFiniteError or
-    SingularCameraError for ``P``, TooFewCorrespondencesError (fewer than 2 cameras), InvalidOptionError;
-    TypeError for an unknown keyword or a ``visible`` that is neither boolean nor integer.
-    """
-
-class LineTriangulation(TriangulationReport):
-    """A triangulated 3-D line: Plücker coordinates, a point and a unit direction, and the fields of
-    :class:`TriangulationReport` (its ``cost`` in whitened units of the line residual). Immutable; arrays
-    are fresh copies."""
-
-    @property
-    def plucker(self) -> NDArray[np.float64]:
-        """Plücker coordinates (6,) ``(l12, l13, l14, l23, l42, l34)`` of eq. 3, world frame, unit norm,
-        satisfying eq. 4. For two points ``A``, ``B`` of the line: direction ``(l14, -l42, l34) ∝ A - B``,
-        moment ``(-l23, l13, -l12) = p × d``."""
-    @property
-    def point(self) -> NDArray[np.float64]:
-        """The point (3,) of the line closest to the world origin."""
-    @property
-    def direction(self) -> NDArray[np.float64]:
-        """Unit direction (3,) of the line, world frame."""
-    @property
-    def chart_axes(self) -> NDArray[np.float64]:
-        """The axes ``e1``, ``e2`` (2, 3) of the chart of :attr:`covariance`: ``e1 = d × a / ‖d × a‖``
-        with ``d`` = :attr:`direction` and ``a = (1, 0, 0)`` when ``|d[0]| < 0.9``, else ``(0, 1, 0)``;
-        ``e2 = d × e1`` (``(e1, e2, d)`` right-handed orthonormal)."""
-    @property
-    def covariance(self) -> Optional[NDArray[np.float64]]:
-        """First-order covariance (4, 4) of the line in the chart ``(a1, a2, t1, t2)`` at the estimate:
-        the line through ``point + t1 e1 + t2 e2`` with direction ``direction + a1 e1 + a2 e2``
-        (:attr:`chart_axes`). ``t`` (world units) is where the line crosses the plane through
-        :attr:`point` normal to :attr:`direction`; ``a`` (dimensionless, radians to first order) tilts
-        the direction towards ``e1``, ``e2``. ``(JᵀJ)⁻¹`` with ``J`` the Jacobian of the whitened
-        residuals of eq. 18, so the covariances given (``cov``, or from ``sigma`` for segments) carry
-        the scale; homogeneous lines without ``cov`` count as unit residual covariance (1 px offset,
-        1/1000 rad angle). Computed for every method and status; None when ``JᵀJ`` is numerically
-        singular (a line nearly in an epipolar plane of every pair of views). See
-        :meth:`plucker_covariance` and :meth:`point_direction_covariance`."""
-    def plucker_covariance(self) -> Optional[NDArray[np.float64]]:
-        """Covariance (6, 6), rank 4, of the unit Plücker coordinates :attr:`plucker` (first order, from
-        :attr:`covariance`); None when :attr:`covariance` is None."""
-    def point_direction_covariance(self) -> Optional[NDArray[np.float64]]:
-        """Covariance (6, 6), rank 4, of ``(point, direction)`` stacked (world units, then unit
-        direction; first order, from :attr:`covariance`); None when :attr:`covariance` is None."""
-    @property
-    def method(self) -> str:
-        """See :attr:`TriangulationReport.method`."""
-    @property
-    def status(self) -> str:
-        """See :attr:`TriangulationReport.status` (never ``"behind_camera"`` for lines)."""
-    @property
-    def success(self) -> bool:
-        """See :attr:`TriangulationReport.success`."""
-    @property
-    def cost(self) -> float:
-        """See :attr:`TriangulationReport.cost`."""
-    @property
-    def lower_bound(self) -> float:
-        """See :attr:`TriangulationReport.lower_bound`."""
-    @property
-    def relative_gap(self) -> float:
-        """See :attr:`TriangulationReport.relative_gap`."""
-    @property
-    def certified(self) -> bool:
-        """See :attr:`TriangulationReport.certified`."""
-    @property
-    def certificate(self) -> str:
-        """See :attr:`TriangulationReport.certificate`."""
-    @property
-    def nodes(self) -> int:
-        """See :attr:`TriangulationReport.nodes`."""
-    @property
-    def solver_iterations(self) -> int:
-        """See :attr:`TriangulationReport.solver_iterations`."""
-    @property
-    def iterations(self) -> int:
-        """See :attr:`TriangulationReport.iterations`."""
-    @property
-    def termination(self) -> str:
-        """See :attr:`TriangulationReport.termination`."""
-    @property
-    def time_seconds(self) -> float:
-        """See :attr:`TriangulationReport.time_seconds`."""
-    @property
-    def residual_test(self) -> Optional["_ResidualTestDict"]:
-        """See :attr:`TriangulationReport.residual_test`."""
-    def to_dict(self) -> dict[str, Any]:
-        """The report fields, ``"plucker"``, ``"point"``, ``"direction"``, ``"chart_axes"`` and
-        ``"covariance"`` (None when there is none) as a plain dict."""
-    def __repr__(self) -> str: ...
+    """Many points seen by the same cameras ``P`` (v, 3, 4): pixels ``x`` (n, v, 2), ``visible`` (n, v)
+    booleans (``None``: every view; NaN is fine where not visible), ``cov`` (n, v, 2, 2)."""
 
 def triangulate_line(
     P: ArrayLike,
     lines: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: str = "optimal",
+    method: Optional[str] = None,
     *,
     sigma: Optional[float] = None,
-    max_relative_gap: Optional[float] = None,
-    max_reprojection_error: Optional[float] = None,
-    max_nodes: Optional[int] = None,
+    options: Optional[TriangulationOptions] = None,
 ) -> LineTriangulation:
-    """Triangulate one 3-D line seen in two or more views (Josephson & Kahl 2008, sections 2.2, 3-4).
-
-    The cost is eq. 19 over the residuals of section 3.1: each observed image line is normalised (unit
-    normal, put 1000 px from a shifted origin) and the residual of a candidate line is 2 numbers in pixels;
-    the 3-D line stays on the Plücker quadric (eq. 4) throughout.
-
-    Args:
-        P: cameras (n, 3, 4), world → pixels, n >= 2.
-        lines: the observed lines, either (n, 3) homogeneous image lines ``l`` with ``l · (u, v, 1) = 0``
-            (any scale and sign), or (n, 2, 2) image segments (two pixel endpoints each): then each view's
-            line is the one through the endpoints and, unless ``cov`` is given, its covariance is that of
-            endpoints with i.i.d. Gaussian noise of ``sigma`` px per coordinate (:func:`fit_line` on two points).
-        cov: residual covariances (n, 2, 2), e.g. :attr:`FittedLine.covariance`; None: the identity for
-            homogeneous lines, the endpoint model for segments.
-        method: ``"optimal"`` (default), ``"local"`` or ``"linear"``.
-        sigma: endpoint noise for segments, pixels; None means 1. An error with homogeneous lines or
-            together with ``cov``.
-        max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
-
-    Raises:
-        ShapeError, NonFiniteError, TooFewCorrespondencesError, SingularCameraError,
-        DegenerateConfigurationError (a line with zero normal, a zero-length segment, a covariance that is
-        not positive definite, all camera centres equal, a 3-D line in an epipolar plane of every view pair),
-        InvalidOptionError; TypeError for an unknown keyword.
-
-    The GIL is released while the core runs.
-    """
-
-class QuadricTriangulation(TriangulationReport):
-    """A triangulated ellipsoid (possibly flat: a disc): its dual and primal quadric, centre, axes and
-    semi-axes, and the fields of :class:`TriangulationReport` (its ``cost`` in whitened units of the conic
-    residual). Immutable; arrays are fresh copies."""
-
-    @property
-    def Q(self) -> NDArray[np.float64]:
-        """The dual quadric (4, 4) ``L`` of eq. 10, world frame, ``U^T L U = 0`` for tangent planes ``U``,
-        normalised so that ``L[3, 3] = -1``: ``L = H diag(s1², s2², s3², -1) H^T`` with ``H = [axes centre;
-        0 1]``."""
-    @property
-    def primal(self) -> Optional[NDArray[np.float64]]:
-        """The point quadric (4, 4) ``C = L^-1`` of eq. 9 (``X^T C X = 0``), None for a flat ellipsoid."""
-    @property
-    def centre(self) -> NDArray[np.float64]:
-        """Centre (3,), world units."""
-    @property
-    def axes(self) -> NDArray[np.float64]:
-        """Unit axes (3, 3) as columns, in the order of :attr:`semi_axes`."""
-    @property
-    def semi_axes(self) -> NDArray[np.float64]:
-        """Semi-axis lengths (3,), decreasing, world units; a 0 is a flat ellipsoid."""
-    @property
-    def covariance(self) -> Optional[NDArray[np.float64]]:
-        """First-order covariance (9, 9) of the ellipsoid in the chart ``(c1, c2, c3, S11, S12, S13, S22,
-        S23, S33)``: the centre (world units) and the upper triangle of the shape matrix
-        ``S = axes diag(semi_axes²) axes^T`` (world units²), so that ``Q = [S - c c^T, -c; -c^T, -1]``
-        (an off-diagonal ``S_ij`` moves ``S_ij`` and ``S_ji``). A chart of the 9 dof of a real ellipsoid
-        that stays regular for spheres and flat ellipsoids. ``(JᵀJ)⁻¹`` with ``J`` the Jacobian of the
-        whitened residuals of eq. 18, so ``cov`` carries the scale (without it each conic residual
-        entry counts as unit variance: give ``cov``, e.g. from :func:`fit_conic`). Computed for every
-        method and status with a finite estimate; None when ``JᵀJ`` is numerically singular. For a
-        flat estimate it ignores the constraint ``S ⪰ 0`` (the estimate is on that boundary)."""
-    @property
-    def method(self) -> str:
-        """See :attr:`TriangulationReport.method`."""
-    @property
-    def status(self) -> str:
-        """See :attr:`TriangulationReport.status` (``"behind_camera"`` when the ellipsoid's centre is behind
-        a camera or it crosses a camera's principal plane)."""
-    @property
-    def success(self) -> bool:
-        """See :attr:`TriangulationReport.success`."""
-    @property
-    def cost(self) -> float:
-        """See :attr:`TriangulationReport.cost`."""
-    @property
-    def lower_bound(self) -> float:
-        """See :attr:`TriangulationReport.lower_bound`."""
-    @property
-    def relative_gap(self) -> float:
-        """See :attr:`TriangulationReport.relative_gap`."""
-    @property
-    def certified(self) -> bool:
-        """See :attr:`TriangulationReport.certified`."""
-    @property
-    def certificate(self) -> str:
-        """See :attr:`TriangulationReport.certificate`."""
-    @property
-    def nodes(self) -> int:
-        """See :attr:`TriangulationReport.nodes`."""
-    @property
-    def solver_iterations(self) -> int:
-        """See :attr:`TriangulationReport.solver_iterations`."""
-    @property
-    def iterations(self) -> int:
-        """See :attr:`TriangulationReport.iterations`."""
-    @property
-    def termination(self) -> str:
-        """See :attr:`TriangulationReport.termination`."""
-    @property
-    def time_seconds(self) -> float:
-        """See :attr:`TriangulationReport.time_seconds`."""
-    @property
-    def residual_test(self) -> Optional["_ResidualTestDict"]:
-        """See :attr:`TriangulationReport.residual_test`."""
-    def to_dict(self) -> dict[str, Any]:
-        """The report fields, ``"Q"``, ``"primal"`` (None when flat), ``"centre"``, ``"axes"``,
-        ``"semi_axes"`` and ``"covariance"`` (None when there is none) as a plain dict."""
-    def __repr__(self) -> str: ...
-
-def triangulate_quadric(
-    P: ArrayLike,
-    conics: ArrayLike,
-    cov: Optional[ArrayLike] = None,
-    method: str = "optimal",
-    *,
-    max_relative_gap: Optional[float] = None,
-    max_reprojection_error: Optional[float] = None,
-    max_nodes: Optional[int] = None,
-) -> QuadricTriangulation:
-    """Triangulate an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008,
-    sections 2.3, 3-4; the conic camera of Lemma 2.1).
-
-    The cost is eq. 19 over the 5-entry conic residuals of section 3.1; without ``cov`` the shape entries
-    (pixels²) dominate, so pass the covariances of :func:`fit_conic`. ``linear`` is made a proper
-    (possibly flat) ellipsoid; ``local`` keeps every iterate one.
-
-    Args:
-        P: cameras (n, 3, 4), world → pixels, n >= 3 (two views leave a family of quadrics).
-        conics: the observed point conics (n, 3, 3) of eq. 8 (``x^T c x = 0``, homogeneous pixels, any
-            scale and sign), each a real ellipse, e.g. :attr:`FittedConic.conic`.
-        cov: residual covariances (n, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
-        method: ``"optimal"`` (default), ``"local"`` or ``"linear"``.
-        max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_point`.
-
-    Raises:
-        ShapeError, NonFiniteError, TooFewCorrespondencesError (fewer than 3 views), SingularCameraError,
-        DegenerateConfigurationError (a conic that is not a real ellipse, a covariance that is not positive
-        definite, all camera centres equal), InvalidOptionError; TypeError for an unknown keyword.
-
-    The GIL is released while the core runs.
-    """
-
-# --- Batches of lines and quadrics ---------------------------------------------------------------
-
-class LineTriangulations(BatchReport):
-    """The results of :func:`triangulate_lines`: the columns of :class:`BatchReport` and each track's
-    line (NaN for a rejected track), as :class:`LineTriangulation` gives them."""
-
-    @property
-    def plucker(self) -> NDArray[np.float64]:
-        """Plücker coordinates (n, 6) of eq. 3, world frame, unit norm (see :attr:`LineTriangulation.plucker`)."""
-    @property
-    def point(self) -> NDArray[np.float64]:
-        """The point of each line closest to the world origin (n, 3)."""
-    @property
-    def direction(self) -> NDArray[np.float64]:
-        """Unit directions (n, 3), world frame."""
-    @property
-    def chart_axes(self) -> NDArray[np.float64]:
-        """Chart axes (n, 2, 3) of each covariance (see :attr:`LineTriangulation.chart_axes`)."""
-    @property
-    def covariance(self) -> NDArray[np.float64]:
-        """Covariances (n, 4, 4) in each line's chart (see :attr:`LineTriangulation.covariance`); NaN
-        where there is no line or no covariance."""
-    @property
-    def cost(self) -> NDArray[np.float64]:
-        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
-    @property
-    def lower_bound(self) -> NDArray[np.float64]:
-        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
-    @property
-    def relative_gap(self) -> NDArray[np.float64]:
-        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
-    @property
-    def certified(self) -> NDArray[np.bool_]:
-        """Global optimality certified within ``max_relative_gap`` (n,)."""
-    @property
-    def certificate(self) -> NDArray[np.str_]:
-        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
-    @property
-    def status(self) -> NDArray[np.str_]:
-        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
-        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
-        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
-        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
-        definite, all visible camera centres equal, a line in an epipolar plane of its views),
-        ``"singular_camera"``, ``"invalid_input"``."""
-    @property
-    def nodes(self) -> NDArray[np.int64]:
-        """Branch-and-bound nodes per track (n,)."""
-    @property
-    def iterations(self) -> NDArray[np.int64]:
-        """Local-minimisation iterations per track (n,)."""
-    @property
-    def time_seconds(self) -> NDArray[np.float64]:
-        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
-    @property
-    def p_value(self) -> NDArray[np.float64]:
-        """See :attr:`BatchReport.p_value`."""
-    @property
-    def messages(self) -> list[str]:
-        """Per track: ``""``, or why the core rejected it, naming the track and the view
-        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
-    @property
-    def method(self) -> str:
-        """The method that ran."""
-    def __len__(self) -> int: ...
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
-        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
-        ``iterations``, ``time_seconds``, ``messages``) and ``plucker``, ``point``, ``direction``, ``chart_axes``, ``covariance``; NaN and inf are ``None``."""
-    def __repr__(self) -> str: ...
+    """One 3-D line (sections 2.2, 3-4) from (n, 3) homogeneous image lines or (n, 2, 2) segments.
+    ``cov`` (n, 2, 2) residual covariances, e.g. :attr:`FittedLine.covariance`; for segments without
+    ``cov``, that of endpoints with noise ``sigma`` px (``None``: 1)."""
 
 def triangulate_lines(
     P: ArrayLike,
     lines: ArrayLike,
     visible: Optional[ArrayLike] = None,
     cov: Optional[ArrayLike] = None,
-    method: str = "optimal",
+    method: Optional[str] = None,
     *,
     sigma: Optional[float] = None,
-    max_relative_gap: Optional[float] = None,
-    max_reprojection_error: Optional[float] = None,
-    max_nodes: Optional[int] = None,
+    options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
 ) -> LineTriangulations:
-    """Triangulate many 3-D lines (tracks) in parallel with the GIL released (Josephson & Kahl 2008,
-    sections 2.2, 3-4).
+    """Many 3-D lines: ``P`` (v, 3, 4) shared or (n, v, 3, 4) per track; ``lines`` (n, v, 3) or
+    (n, v, 2, 2); ``visible`` (n, v); ``cov`` (n, v, 2, 2)."""
 
-    Each track is :func:`triangulate_line` on its visible views (the same numbers, but for
-    ``time_seconds``). One bad track (NaN in a visible view, fewer than 2 visible views, a zero-length
-    segment, a covariance that is not positive definite, ...) gets a ``status`` and a message and never
-    stops the others.
-
-    Args:
-        P: cameras (v, 3, 4) seen by every track, or (n, v, 3, 4), one set per track; world → pixels.
-        lines: (n, v, 3) homogeneous image lines, or (n, v, 2, 2) image segments (two pixel endpoints),
-            as for :func:`triangulate_line`; entries of views a track is not seen in are ignored (NaN is
-            fine there).
-        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
-            e.g. -1, is an InvalidOptionError); None: every view.
-        cov: residual covariances (n, v, 2, 2); None: the identity for homogeneous lines, the endpoint
-            model (``sigma``) for segments.
-        method, sigma, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_line`.
-        progress: called from the calling thread with the number of finished tracks, about twenty times
-            a second while it changes and once at the end.
-        time_budget: seconds (finite, >= 0) after which the batch stops; None (default): no limit.
-
-    Stopping: the batch runs on a worker thread while the calling thread checks for Ctrl-C every 0.05 s.
-    Ctrl-C, or an exception raised by ``progress``, stops the batch within about 0.1 s: tracks being
-    solved stop at their next branch-and-bound node and keep the estimate and ``lower_bound`` reached
-    (uncertified), with status ``"interrupted"``; tracks not yet started get status ``"interrupted"``,
-    NaN estimates and the message ``"not solved: interrupted"``. Finished tracks keep their results.
-    The exception (``KeyboardInterrupt`` or the callback's) is then raised with these results attached
-    as its attribute ``partial``. A ``time_budget`` that runs out does the same with status
-    ``"time_budget"``, and the call returns normally.
-
-    Raises (for the whole call, before any track is solved): ShapeError (shapes, or counts of views
-    or tracks that differ from P's), NonFiniteError or SingularCameraError for shared cameras,
-    TooFewCorrespondencesError (fewer than 2 cameras per track), InvalidOptionError (options, ``sigma``
-    with homogeneous lines or with ``cov``); TypeError for an unknown keyword or a ``visible`` that is
-    not boolean.
-    """
-
-class QuadricTriangulations(BatchReport):
-    """The results of :func:`triangulate_quadrics`: the columns of :class:`BatchReport` and each track's
-    ellipsoid (NaN for a rejected track), as :class:`QuadricTriangulation` gives them."""
-
-    @property
-    def Q(self) -> NDArray[np.float64]:
-        """Dual quadrics (n, 4, 4) of eq. 10, ``L[3, 3] = -1`` (see :attr:`QuadricTriangulation.Q`)."""
-    @property
-    def primal(self) -> NDArray[np.float64]:
-        """Point quadrics (n, 4, 4) ``C = L^-1`` of eq. 9; NaN for a flat ellipsoid."""
-    @property
-    def centre(self) -> NDArray[np.float64]:
-        """Centres (n, 3), world units."""
-    @property
-    def axes(self) -> NDArray[np.float64]:
-        """Unit axes (n, 3, 3) as columns, in the order of :attr:`semi_axes`."""
-    @property
-    def semi_axes(self) -> NDArray[np.float64]:
-        """Semi-axis lengths (n, 3), decreasing, world units."""
-    @property
-    def covariance(self) -> NDArray[np.float64]:
-        """Covariances (n, 9, 9) in the centre/shape chart (see :attr:`QuadricTriangulation.covariance`);
-        NaN where there is no ellipsoid or no covariance."""
-    @property
-    def cost(self) -> NDArray[np.float64]:
-        """Eq. 19 at each estimate (n,) (NaN for a rejected track)."""
-    @property
-    def lower_bound(self) -> NDArray[np.float64]:
-        """Lower bounds on eq. 19 (n,) (0 when not computed)."""
-    @property
-    def relative_gap(self) -> NDArray[np.float64]:
-        """``(cost - lower_bound) / max(cost, 1e-12)`` (n,) (1 when not computed)."""
-    @property
-    def certified(self) -> NDArray[np.bool_]:
-        """Global optimality certified within ``max_relative_gap`` (n,)."""
-    @property
-    def certificate(self) -> NDArray[np.str_]:
-        """``"none"``, ``"convexity_test"`` or ``"branch_and_bound"`` per track (n,)."""
-    @property
-    def status(self) -> NDArray[np.str_]:
-        """Per track (n,): a :attr:`TriangulationReport.status`, or for a track the core rejected
-        ``"too_few_views"`` (fewer visible views than the primitive needs), ``"non_finite"`` (NaN/inf
-        in a visible observation, covariance or per-track camera), ``"degenerate"`` (a zero-length
-        segment, a line at infinity, a conic that is not an ellipse, a covariance that is not positive
-        definite, all visible camera centres equal, a line in an epipolar plane of its views),
-        ``"singular_camera"``, ``"invalid_input"``."""
-    @property
-    def nodes(self) -> NDArray[np.int64]:
-        """Branch-and-bound nodes per track (n,)."""
-    @property
-    def iterations(self) -> NDArray[np.int64]:
-        """Local-minimisation iterations per track (n,)."""
-    @property
-    def time_seconds(self) -> NDArray[np.float64]:
-        """Core time per track (n,), seconds, on one thread (0 for a rejected track)."""
-    @property
-    def p_value(self) -> NDArray[np.float64]:
-        """See :attr:`BatchReport.p_value`."""
-    @property
-    def messages(self) -> list[str]:
-        """Per track: ``""``, or why the core rejected it, naming the track and the view
-        (``"track 3: degenerate configuration: lines[3][1] has zero length"``)."""
-    @property
-    def method(self) -> str:
-        """The method that ran."""
-    def __len__(self) -> int: ...
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-Python, strict-JSON form: ``method`` and every per-track column as a list (``status``,
-        ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``certificate``, ``nodes``,
-        ``iterations``, ``time_seconds``, ``messages``) and ``Q``, ``primal``, ``centre``, ``axes``, ``semi_axes``, ``covariance``; NaN and inf are ``None``."""
-    def __repr__(self) -> str: ...
+def triangulate_quadric(
+    P: ArrayLike,
+    conics: ArrayLike,
+    cov: Optional[ArrayLike] = None,
+    method: Optional[str] = None,
+    *,
+    options: Optional[TriangulationOptions] = None,
+) -> QuadricTriangulation:
+    """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views, ``cov`` (n, 5, 5) e.g.
+    :attr:`FittedConic.covariance` (sections 2.3, 3-4)."""
 
 def triangulate_quadrics(
     P: ArrayLike,
     conics: ArrayLike,
     visible: Optional[ArrayLike] = None,
     cov: Optional[ArrayLike] = None,
-    method: str = "optimal",
+    method: Optional[str] = None,
     *,
-    max_relative_gap: Optional[float] = None,
-    max_reprojection_error: Optional[float] = None,
-    max_nodes: Optional[int] = None,
+    options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
 ) -> QuadricTriangulations:
-    """Triangulate many ellipsoids (tracks) from their outline conics in parallel with the GIL released
-    (Josephson & Kahl 2008, sections 2.3, 3-4).
-
-    Each track is :func:`triangulate_quadric` on its visible views (the same numbers, but for
-    ``time_seconds``). One bad track (NaN in a visible view, fewer than 3 visible views, a conic that is
-    not a real ellipse, a covariance that is not positive definite) gets a ``status`` and a message and
-    never stops the others.
-
-    Args:
-        P: cameras (v, 3, 4) seen by every track, or (n, v, 3, 4), one set per track (e.g. independent
-            scenes solved together); world → pixels.
-        conics: point conics (n, v, 3, 3) of eq. 8; entries of views a track is not seen in are ignored.
-        visible: (n, v) booleans, True where the track is seen, or integers 0/1 (any other integer,
-            e.g. -1, is an InvalidOptionError); None: every view.
-        cov: residual covariances (n, v, 5, 5), e.g. :attr:`FittedConic.covariance`; None for the identity.
-        method, max_relative_gap, max_reprojection_error, max_nodes: as for :func:`triangulate_quadric`.
-        progress, time_budget: as for :func:`triangulate_lines`, which also says how Ctrl-C stops the batch.
-
-    Raises (for the whole call): ShapeError, NonFiniteError or SingularCameraError for shared cameras,
-    TooFewCorrespondencesError (fewer than 3 cameras per track), InvalidOptionError; TypeError for an
-    unknown keyword or a ``visible`` that is not boolean.
-    """
+    """Many ellipsoids: ``P`` (v, 3, 4) or (n, v, 3, 4); ``conics`` (n, v, 3, 3); ``cov`` (n, v, 5, 5)."""
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 
 class FittedLine:
-    """An image line fitted to points by :func:`fit_line`. Immutable; arrays are fresh copies."""
+    """An image line fitted to points by :func:`fit_line`."""
 
-    @property
-    def line(self) -> NDArray[np.float64]:
-        """Homogeneous line (3,) ``(a, b, c)`` with ``a u + b v + c = 0`` in pixels, ``a² + b² = 1`` and
-        ``c <= 0``."""
-    @property
-    def covariance(self) -> NDArray[np.float64]:
-        """(2, 2) covariance of the line's residual (pixels², section 3.1 normalisation): the ``cov``
-        row :func:`triangulate_line` takes for this view."""
-    @property
-    def rms_distance(self) -> float:
-        """Root-mean-square distance of the points from the line, pixels."""
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-Python (strict JSON: NaN and inf are ``None``) form."""
-    def __repr__(self) -> str: ...
+    # fields of FittedLine (generated: python -m pluecker._stubgen)
+    line: NDArray[np.float64]
+    """The image line `(a, b, c)`, `a u + b v + c = 0`, with `a² + b² = 1`."""
+    covariance: NDArray[np.float64]
+    """2x2 covariance of the line's residual (section 3.1), px²."""
+    rms_distance: float
+    """RMS distance of the points to the line, pixels."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
 class FittedConic:
-    """An ellipse fitted to points by :func:`fit_conic`. Immutable; arrays are fresh copies."""
+    """An ellipse fitted to points by :func:`fit_conic`."""
 
-    @property
-    def conic(self) -> NDArray[np.float64]:
-        """The point conic (3, 3) ``c`` of eq. 8, ``x^T c x = 0`` for homogeneous pixels, unit Frobenius
-        norm."""
-    @property
-    def centre(self) -> NDArray[np.float64]:
-        """Centre (2,), pixels."""
-    @property
-    def axes(self) -> NDArray[np.float64]:
-        """Orthonormal axes (2, 2) as columns, in the order of :attr:`semi_axes`."""
-    @property
-    def semi_axes(self) -> NDArray[np.float64]:
-        """Semi-axis lengths (2,), pixels, decreasing."""
-    @property
-    def covariance(self) -> NDArray[np.float64]:
-        """(5, 5) covariance of the conic's 5-entry residual (section 3.1 normalisation): the ``cov``
-        row :func:`triangulate_quadric` takes for this view."""
-    @property
-    def iterations(self) -> int:
-        """Reweighting iterations of the fit."""
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-Python (strict JSON: NaN and inf are ``None``) form."""
-    def __repr__(self) -> str: ...
+    # fields of FittedConic (generated: python -m pluecker._stubgen)
+    conic: NDArray[np.float64]
+    """The conic `C` (3x3, symmetric): `(u, v, 1) C (u, v, 1)ᵀ = 0` on the ellipse."""
+    centre: NDArray[np.float64]
+    """Centre of the ellipse, pixels."""
+    axes: NDArray[np.float64]
+    """Principal axes of the ellipse, one per column."""
+    semi_axes: NDArray[np.float64]
+    """Semi-axis lengths along `axes`, pixels."""
+    covariance: NDArray[np.float64]
+    """5x5 covariance of the conic's residual (section 3.1)."""
+    iterations: int
+    """Iterations of the geometric fit."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
 
-def fit_line(points: ArrayLike, sigma: float = 1.0) -> FittedLine:
-    """Fit an image line to points (N, 2), N >= 2, by total least squares, with the first-order
-    covariance of its residual for i.i.d. Gaussian pixel noise of ``sigma`` px per coordinate.
+def fit_line(points: ArrayLike, sigma: Optional[float] = None) -> FittedLine:
+    """Total-least-squares line through points (N, 2), N >= 2, with its residual covariance for
+    point noise ``sigma`` px (``None``: 1)."""
 
-    Raises TooFewCorrespondencesError (N < 2), NonFiniteError, DegenerateConfigurationError (all
-    points coincide to the rounding of their coordinates), InvalidOptionError (``sigma <= 0``, or a
-    ``sigma`` for which the covariance ``σ² Σ₁`` overflows or underflows), ShapeError.
-    """
-
-def fit_conic(points: ArrayLike, sigma: float = 1.0) -> FittedConic:
-    """Fit an ellipse to points (N, 2), N >= 5 (Sampson's reweighted algebraic fit, at the KCR bound),
-    with the first-order covariance of its residual for i.i.d. Gaussian pixel noise of ``sigma`` px.
-
-    Raises TooFewCorrespondencesError (N < 5), NonFiniteError, DegenerateConfigurationError (no
-    ellipse is determined: the points lie on a line to within the noise — the χ² of their distances
-    from the best line, ``Σ d²/σ²``, is below its 99.9 % quantile with N − 2 degrees of freedom — or no
-    real ellipse fits, e.g. a hyperbola), InvalidOptionError (``sigma <= 0``), ShapeError.
-    The GIL is released during the fit.
-    """
+def fit_conic(points: ArrayLike, sigma: Optional[float] = None) -> FittedConic:
+    """Ellipse through points (N, 2), N >= 5, with its residual covariance for point noise ``sigma``
+    px (``None``: 1)."""
 
 class _ResidualSamples(TypedDict):
     line: NDArray[np.float64]
@@ -1485,11 +713,8 @@ class _ResidualSamples(TypedDict):
     conic: NDArray[np.float64]
     conic_whitened: NDArray[np.float64]
 
-def fitting_residual_samples(draws: int, size: float = 1000.0, sigma: float = 1.0, seed: int = 0) -> _ResidualSamples:
-    """The data of the paper's Figures 1-2 (section 3.1): ``draws`` random ``size`` x ``size`` images, each
-    with a line sampled at 21 points and an ellipse sampled at 63, Gaussian noise of ``sigma`` px on every
-    point, both refitted (:func:`fit_line`, :func:`fit_conic`). Returns the residuals of the true primitives
-    in the frames of the fitted ones: ``line`` (draws, 2) and ``conic`` (draws, 5), and the same whitened by
-    the predicted covariances (standard normal to first order). Seeded; the paper used 100,000 draws,
-    size 1000, sigma 1; at most 10,000,000 draws (``InvalidOptionError`` beyond). The GIL is released.
-    """
+def fitting_residual_samples(
+    draws: int, size: Optional[float] = None, sigma: Optional[float] = None, seed: Optional[int] = None
+) -> _ResidualSamples:
+    """The residual samples of Figures 1-2 (section 3.1): ``draws`` images of ``size`` px (``None``:
+    1000), noise ``sigma`` px (``None``: 1), seeded (``None``: 0)."""

@@ -1,6 +1,8 @@
 //! `pluecker.Camera`: pinhole intrinsics, projection and normalisation.
 
-use crate::convert::{matrix3_allow_non_finite, matrix3_to_py, points, points_to_py, Real};
+use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
+use crate::fields::{result_class, Field};
+use crate::pose::Pose;
 use crate::errors::guarded;
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
@@ -22,13 +24,28 @@ impl PyCamera {
     }
 }
 
-#[pymethods]
-impl PyCamera {
+result_class! {
+    PyCamera {
+        /// Focal length along u, pixels (negative for a mirrored axis).
+        fx = |c| c.inner.fx;
+        /// Focal length along v, pixels (negative for a mirrored axis).
+        fy = |c| c.inner.fy;
+        /// Principal point u, pixels.
+        cx = |c| c.inner.cx;
+        /// Principal point v, pixels.
+        cy = |c| c.inner.cy;
+        /// Skew, pixels.
+        skew = |c| c.inner.skew;
+        /// The calibration matrix `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`.
+        K = |c| c.inner.matrix();
+    }
+
     #[new]
-    #[pyo3(signature = (fx, fy, cx, cy, skew = Real::new(0.0)), text_signature = "(fx, fy, cx, cy, skew=0.0)")]
-    fn new(fx: Real, fy: Real, cx: Real, cy: Real, skew: Real) -> PyResult<Self> {
+    #[pyo3(signature = (fx, fy, cx, cy, skew = None))]
+    fn new(fx: Real, fy: Real, cx: Real, cy: Real, skew: Option<Real>) -> PyResult<Self> {
         let (fx, fy, cx, cy) = (fx.get("fx")?, fy.get("fy")?, cx.get("cx")?, cy.get("cy")?);
-        let skew = skew.get("skew")?;
+        // No skew unless given: the pixel axes of every camera made in the last decades are orthogonal.
+        let skew = skew.map_or(Ok(0.0), |s| s.get("skew"))?;
         guarded(|| pluecker::Camera::new(fx, fy, cx, cy, skew)).map(PyCamera::wrap)
     }
 
@@ -42,34 +59,16 @@ impl PyCamera {
         guarded(|| pluecker::Camera::from_matrix(&k)).map(PyCamera::wrap)
     }
 
-    #[getter]
-    fn fx(&self) -> f64 {
-        self.inner.fx
-    }
-
-    #[getter]
-    fn fy(&self) -> f64 {
-        self.inner.fy
-    }
-
-    #[getter]
-    fn cx(&self) -> f64 {
-        self.inner.cx
-    }
-
-    #[getter]
-    fn cy(&self) -> f64 {
-        self.inner.cy
-    }
-
-    #[getter]
-    fn skew(&self) -> f64 {
-        self.inner.skew
-    }
-
-    #[getter(K)]
-    fn k<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix3_to_py(py, &self.inner.matrix())
+    /// The 3x4 camera matrix `P = K [R | t]` of this camera at the pose `x_cam = R X_world + t`:
+    /// what the triangulation functions take as known cameras (`λ (u, v, 1) = P (X, 1)`).
+    #[pyo3(signature = (R, t))]
+    #[allow(non_snake_case)]
+    fn P<'py>(&self, py: Python<'py>, R: &Bound<'py, PyAny>, t: &Bound<'py, PyAny>) -> PyResult<PyObject> {
+        let pose = Pose::from_parts("R", R, "t", t)?;
+        let mut rt = nalgebra::Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&pose.rotation);
+        rt.set_column(3, &pose.translation);
+        (self.inner.matrix() * rt).get(py)
     }
 
     /// Pixels `u = K x_cam / z` of camera-frame points (N, 3).

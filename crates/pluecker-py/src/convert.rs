@@ -1,9 +1,14 @@
 //! numpy ↔ nalgebra. Inputs: any real array-like, converted to float64, its shape checked against
 //! the expected one and every row checked for NaN/inf, each failure naming the argument (and row).
 //! Outputs: fresh row-major float64 arrays the caller owns.
+//!
+//! Every array argument of the module is read here, in one pass from a contiguous float64 buffer
+//! when the caller hands one over (the batch functions must cost well under a microsecond per
+//! track), otherwise after one `numpy.asarray(obj, dtype=float64, order="C")`. Shapes are checked
+//! against the expected one and reported as `"x: expected shape (n, 2), got (4, 3)"`.
 
 use crate::errors::{invalid_argument, non_finite, shape_error};
-use nalgebra::{Matrix3, SVector};
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyOverflowError, PyTypeError};
@@ -81,54 +86,77 @@ pub fn row_major_values(name: &str, array: &Bound<'_, PyArrayDyn<f64>>) -> PyRes
     })
 }
 
-/// The values of `obj` in row-major order and the number of rows, after checking that its shape is
-/// `spec` and that it is finite. A free-length array may also be given as an empty 1-D array.
-fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<f64>, usize)> {
-    let (values, rows) = read_unchecked(name, obj, spec)?;
-    let row_len: usize = spec[1..]
-        .iter()
-        .map(|a| if let Dim::Fixed(n) = a { *n } else { 1 })
-        .product();
-    // One branch-free pass over all values (the common, finite case); the offending row only on failure.
-    if !values.iter().fold(true, |finite, v| finite & v.is_finite()) {
-        let row = values
-            .chunks(row_len.max(1))
-            .position(|r| r.iter().any(|v| !v.is_finite()))
-            .unwrap_or(0);
-        return Err(non_finite(name, row));
-    }
-    Ok((values, rows))
+/// The shape and the row-major values of `obj`, after checking the shape against `spec`. NaN and
+/// inf are the caller's to check ([`check_finite`]): a batch accepts them where a view is not visible.
+pub fn read(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    let (shape, values) = read_any(name, obj)?;
+    check_shape(name, &shape, spec)?;
+    Ok((shape, values))
 }
 
-/// [`read`] without the finiteness check.
-fn read_unchecked(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<(Vec<f64>, usize)> {
-    let array = float_array(name, obj)?;
-    let shape = array.shape().to_vec();
-    if matches!(spec[0], Dim::Free(_)) && shape == [0] {
-        return Ok((Vec::new(), 0));
-    }
+/// `ShapeError` naming `name` unless `shape` is `spec`.
+fn check_shape(name: &str, shape: &[usize], spec: &[Dim]) -> PyResult<()> {
     let fits = shape.len() == spec.len()
         && shape.iter().zip(spec).all(|(n, axis)| match axis {
             Dim::Free(_) => true,
             Dim::Fixed(m) => n == m,
         });
     if !fits {
-        return Err(shape_error(name, &describe(spec), shape_string(&shape)));
+        return Err(shape_error(name, &describe(spec), shape_string(shape)));
     }
-    Ok((row_major_values(name, &array)?, shape[0]))
+    Ok(())
+}
+
+/// The shape and row-major values of `obj`, any shape (the caller dispatches on it).
+pub fn read_any(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    let array = float_array(name, obj)?;
+    let shape = array.shape().to_vec();
+    Ok((shape, row_major_values(name, &array)?))
+}
+
+/// `NonFiniteError` naming `name` and the first row (of `row_len` values) holding NaN or inf.
+pub fn check_finite(name: &str, values: &[f64], row_len: usize) -> PyResult<()> {
+    // One branch-free pass over all values (the common, finite case); the offending row only on failure.
+    if values.iter().fold(true, |finite, v| finite & v.is_finite()) {
+        return Ok(());
+    }
+    let row = values
+        .chunks(row_len.max(1))
+        .position(|r| r.iter().any(|v| !v.is_finite()))
+        .unwrap_or(0);
+    Err(non_finite(name, row))
+}
+
+/// The finite values of an array of shape `spec` whose leading axis is free; an empty 1-D array is
+/// taken as zero rows.
+fn read_rows(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<Vec<f64>> {
+    let (shape, values) = read_any(name, obj)?;
+    if shape == [0] {
+        return Ok(Vec::new());
+    }
+    check_shape(name, &shape, spec)?;
+    check_finite(name, &values, shape[1..].iter().product())?;
+    Ok(values)
+}
+
+/// The finite values of an array of the fixed shape `spec`.
+fn read_fixed(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<Vec<f64>> {
+    let (_, values) = read(name, obj, spec)?;
+    check_finite(name, &values, values.len())?;
+    Ok(values)
 }
 
 /// An `(N, D)` array of points, `None` meaning zero rows.
 pub fn points<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<SVector<f64, D>>> {
     let Some(obj) = obj else { return Ok(Vec::new()) };
-    let (values, _) = read(name, obj, &[Dim::Free("N"), Dim::Fixed(D)])?;
+    let values = read_rows(name, obj, &[Dim::Free("N"), Dim::Fixed(D)])?;
     Ok(values.chunks(D).map(SVector::<f64, D>::from_row_slice).collect())
 }
 
 /// An `(M, 2, D)` array of segments (two endpoints each), `None` meaning zero rows.
 pub fn segments<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<[SVector<f64, D>; 2]>> {
     let Some(obj) = obj else { return Ok(Vec::new()) };
-    let (values, _) = read(name, obj, &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(D)])?;
+    let values = read_rows(name, obj, &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(D)])?;
     Ok(values
         .chunks(2 * D)
         .map(|s| {
@@ -142,19 +170,19 @@ pub fn segments<const D: usize>(name: &str, obj: Option<&Bound<'_, PyAny>>) -> P
 
 /// A `(3, 3)` matrix.
 pub fn matrix3(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
-    let (values, _) = read(name, obj, &[Dim::Fixed(3), Dim::Fixed(3)])?;
+    let values = read_fixed(name, obj, &[Dim::Fixed(3), Dim::Fixed(3)])?;
     Ok(Matrix3::from_row_slice(&values))
 }
 
 /// A `(3, 3)` matrix that may hold NaN or inf (for arguments whose validation reports them itself).
 pub fn matrix3_allow_non_finite(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
-    let (values, _) = read_unchecked(name, obj, &[Dim::Fixed(3), Dim::Fixed(3)])?;
+    let (_, values) = read(name, obj, &[Dim::Fixed(3), Dim::Fixed(3)])?;
     Ok(Matrix3::from_row_slice(&values))
 }
 
 /// A `(D,)` vector.
 pub fn vector<const D: usize>(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SVector<f64, D>> {
-    let (values, _) = read(name, obj, &[Dim::Fixed(D)])?;
+    let values = read_fixed(name, obj, &[Dim::Fixed(D)])?;
     Ok(SVector::<f64, D>::from_row_slice(&values))
 }
 
@@ -179,11 +207,6 @@ pub fn segments_to_py<'py, const D: usize>(
     segs: &[[SVector<f64, D>; 2]],
 ) -> Bound<'py, PyArray3<f64>> {
     Array3::from_shape_fn((segs.len(), 2, D), |(i, k, j)| segs[i][k][j]).into_pyarray(py)
-}
-
-/// Rows of a matrix as nested lists, for `to_dict`.
-pub fn matrix3_rows(m: &Matrix3<f64>) -> Vec<[f64; 3]> {
-    (0..3).map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]).collect()
 }
 
 /// A `(3, 3)` rotation matrix: finite, `R Rᵀ = I` to 1e-6 and `det R = +1`, else `InvalidOptionError`.
@@ -273,11 +296,6 @@ pub struct Integer {
 }
 
 impl Integer {
-    /// A default value.
-    pub const fn new(value: i64) -> Integer {
-        Integer { value: value as i128, beyond_i128: false, from_bool: None }
-    }
-
     /// The value when `min ≤ value ≤ max`, else `InvalidOptionError` naming `name` and the range.
     pub fn in_range(self, name: &str, min: i128, max: i128) -> PyResult<i128> {
         if let Some(b) = self.from_bool {
@@ -304,11 +322,6 @@ impl Integer {
     pub fn seed(self, name: &str) -> PyResult<u64> {
         Ok(self.in_range(name, 0, u64::MAX as i128)? as u64)
     }
-}
-
-/// `Some(integer.count(name, min))` for an optional count.
-pub fn optional_count(name: &str, integer: Option<Integer>, min: usize) -> PyResult<Option<usize>> {
-    integer.map(|i| i.count(name, min)).transpose()
 }
 
 impl<'py> FromPyObject<'py> for Integer {
@@ -377,4 +390,109 @@ pub fn strict_json<'py>(value: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>>
 pub fn strict_json_dict<'py>(d: Bound<'py, PyDict>) -> PyResult<Bound<'py, PyDict>> {
     strict_json(d.clone().into_any())?;
     Ok(d)
+}
+
+/// A boolean mask of `shape`: a bool array, or an integer array holding only 0 and 1 (any other
+/// integer is an `InvalidOptionError` naming its index: `-1` must not count as visible).
+pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResult<Vec<bool>> {
+    let np = obj.py().import("numpy")?;
+    let array = np.call_method1("asarray", (obj,)).map_err(|e| {
+        PyTypeError::new_err(format!(
+            "{name}: expected a boolean array; numpy could not convert the input: {e}"
+        ))
+    })?;
+    let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "b" | "i" | "u") {
+        let dtype = array.getattr("dtype")?;
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected a boolean array, got dtype {dtype}"
+        )));
+    }
+    let actual: Vec<usize> = array.getattr("shape")?.extract()?;
+    if actual != shape {
+        return Err(shape_error(
+            name,
+            &format!("shape {}", shape_string(shape)),
+            shape_string(&actual),
+        ));
+    }
+    if kind != "b" {
+        check_zero_one(name, &array)?;
+    }
+    let array = np.call_method1("ascontiguousarray", (array, "bool"))?;
+    let array = array.downcast_into::<PyArrayDyn<bool>>()?;
+    let readonly = array
+        .try_readonly()
+        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+    Ok(match readonly.as_slice() {
+        Ok(slice) => slice.to_vec(),
+        Err(_) => readonly.as_array().iter().copied().collect(),
+    })
+}
+
+/// `InvalidOptionError` unless the integer array `array` holds only 0 and 1.
+fn check_zero_one(name: &str, array: &Bound<'_, PyAny>) -> PyResult<()> {
+    use pyo3::basic::CompareOp::Ne;
+    let outside = array.rich_compare(0, Ne)?.call_method1("__and__", (array.rich_compare(1, Ne)?,))?;
+    let np = array.py().import("numpy")?;
+    let bad = np.call_method1("argwhere", (outside,))?;
+    if bad.len()? == 0 {
+        return Ok(());
+    }
+    let index: Vec<usize> = bad.get_item(0)?.call_method0("tolist")?.extract()?;
+    let value = array.get_item(pyo3::types::PyTuple::new(array.py(), &index)?)?;
+    let at: Vec<String> = index.iter().map(|i| i.to_string()).collect();
+    Err(invalid_argument(
+        name,
+        format!("expected True/False or 0/1, got {value} at [{}]", at.join(", ")),
+    ))
+}
+
+/// Row-major chunks of `R x C` as nalgebra matrices.
+pub fn matrices<const R: usize, const C: usize>(values: &[f64]) -> Vec<SMatrix<f64, R, C>> {
+    values
+        .chunks_exact(R * C)
+        .map(SMatrix::<f64, R, C>::from_row_slice)
+        .collect()
+}
+
+/// `(n, R, C)` finite matrices, one per view (cameras, covariances, conics).
+pub fn matrix_stack<const R: usize, const C: usize>(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+) -> PyResult<Vec<SMatrix<f64, R, C>>> {
+    let (_, values) = read(name, obj, &[Dim::Free("n"), Dim::Fixed(R), Dim::Fixed(C)])?;
+    check_finite(name, &values, R * C)?;
+    Ok(matrices::<R, C>(&values))
+}
+
+/// `(n, 3, 4)` cameras.
+pub fn cameras(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Matrix3x4<f64>>> {
+    matrix_stack::<3, 4>(name, obj)
+}
+
+/// `(n, 2, 2)` covariances, one per view, or none.
+pub fn covariances2(name: &str, obj: Option<&Bound<'_, PyAny>>, views: usize) -> PyResult<Option<Vec<Matrix2<f64>>>> {
+    let Some(obj) = obj else { return Ok(None) };
+    let covs = matrix_stack::<2, 2>(name, obj)?;
+    same_count(name, covs.len(), views)?;
+    Ok(Some(covs))
+}
+
+/// `(n, 3, 3)` conics.
+pub fn conics(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<Matrix3<f64>>> {
+    matrix_stack::<3, 3>(name, obj)
+}
+
+/// A `ShapeError` unless an argument has one row per camera.
+pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
+    if rows == views {
+        Ok(())
+    } else {
+        Err(shape_error(
+            name,
+            &format!("{views} rows (one per camera in P)"),
+            rows.to_string(),
+        ))
+    }
 }

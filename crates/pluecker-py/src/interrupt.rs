@@ -11,7 +11,7 @@
 
 use crate::convert::{optional_real, seconds_arg, Real};
 use crate::errors::{guarded, solve};
-use crate::triangulation_batch_report::PyBatchReport;
+use crate::triangulation::batch::PyBatchReport;
 use pluecker::interrupt::{with_stop, Stop};
 use pluecker::Error;
 use pyo3::prelude::*;

@@ -1,73 +1,119 @@
 //! Python bindings of [`pluecker`]: the extension module `pluecker._core`.
 //!
-//! This crate holds no geometry. It converts numpy arrays to nalgebra and back ([`convert`]), maps
-//! the core's errors to Python exceptions in one place ([`errors`]), releases the GIL around every
-//! solve, and turns any Rust panic into a Python exception. The Python package `pluecker`
-//! (python/pluecker/__init__.py) re-exports everything defined here; `_core.pyi` documents it.
+//! This crate holds no geometry. Its layout mirrors the core's: [`pose`] and [`triangulation`], one
+//! module per primitive inside the latter. Around them: numpy arrays to nalgebra and back in one
+//! reader ([`convert`]), the core's errors as Python exceptions ([`errors`]), every property of a
+//! result or options class declared once ([`fields`]), pickling ([`pickle`]) and calls that Ctrl-C
+//! can stop ([`interrupt`]). Every solve runs with the GIL released, and a Rust panic becomes a
+//! Python exception. The Python package `pluecker` (python/pluecker/__init__.py) re-exports
+//! everything defined here; `_core.pyi` types it.
 
 mod camera;
 mod convert;
 mod errors;
-mod geometry;
+mod fields;
 mod interrupt;
 mod pickle;
 mod pose;
-mod reprojection;
-mod result;
 mod synthetic;
 mod triangulation;
-mod triangulation_arrays;
-mod triangulation_batch;
-mod triangulation_batch_lines;
-mod triangulation_batch_report;
-mod triangulation_fitting;
-mod triangulation_line;
-mod triangulation_point;
-mod triangulation_quadric;
 
+use pickle::{finished, part, parts, plain};
+use pose::options::{PyPoseOptions, PyRansacOptions};
+use pose::result::{PyPoseResult, PyPoseStage, PyRansacReport};
 use pyo3::prelude::*;
+use triangulation::batch::PyBatchReport;
+use triangulation::fitting::{PyFittedConic, PyFittedLine};
+use triangulation::line::{PyLineTriangulation, PyLineTriangulations};
+use triangulation::point::{PyPointTriangulation, PyPointTriangulations};
+use triangulation::quadric::{PyQuadricTriangulation, PyQuadricTriangulations};
+use triangulation::report::PyTriangulationReport;
+use triangulation::PyTriangulationOptions;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    let methods: Vec<&str> = pluecker::Method::ALL.iter().map(|m| m.as_str()).collect();
+    let methods: Vec<&str> = pluecker::pose::Method::ALL.iter().map(|m| m.as_str()).collect();
     m.add("METHODS", pyo3::types::PyTuple::new(m.py(), methods)?)?;
     let triangulation: Vec<&str> = pluecker::triangulation::Method::ALL.iter().map(|m| m.as_str()).collect();
     m.add("TRIANGULATION_METHODS", pyo3::types::PyTuple::new(m.py(), triangulation)?)?;
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
-    m.add_class::<result::PyPoseResult>()?;
-    m.add_class::<result::PyPoseStage>()?;
+    // Pose.
+    m.add_class::<PyPoseOptions>()?;
+    m.add_class::<PyRansacOptions>()?;
+    m.add_class::<PyPoseResult>()?;
+    m.add_class::<PyPoseStage>()?;
+    m.add_class::<PyRansacReport>()?;
     m.add_function(wrap_pyfunction!(pose::estimate_pose, m)?)?;
-    m.add_function(wrap_pyfunction!(reprojection::pose_covariance, m)?)?;
-    m.add_function(wrap_pyfunction!(reprojection::reprojection_errors, m)?)?;
-    m.add_function(wrap_pyfunction!(geometry::pose_to_dual_quaternion, m)?)?;
-    m.add_function(wrap_pyfunction!(geometry::dual_quaternion_to_pose, m)?)?;
-    m.add_function(wrap_pyfunction!(geometry::pose_to_screw, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::reprojection::pose_covariance, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::reprojection::reprojection_errors, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::geometry::pose_to_dual_quaternion, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::geometry::dual_quaternion_to_pose, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::geometry::pose_to_screw, m)?)?;
     m.add_function(wrap_pyfunction!(synthetic::paper_scene, m)?)?;
     m.add_function(wrap_pyfunction!(synthetic::random_scene, m)?)?;
-    m.add_class::<triangulation::PyTriangulationReport>()?;
-    m.add_class::<triangulation_point::PyPointTriangulation>()?;
-    m.add_function(wrap_pyfunction!(triangulation_point::triangulate_point, m)?)?;
-    m.add_class::<triangulation_batch_report::PyBatchReport>()?;
-    m.add_class::<triangulation_batch::PyPointTriangulations>()?;
-    m.add_function(wrap_pyfunction!(triangulation_batch::triangulate_points, m)?)?;
-    m.add_class::<triangulation_line::PyLineTriangulation>()?;
-    m.add_function(wrap_pyfunction!(triangulation_line::triangulate_line, m)?)?;
-    m.add_class::<triangulation_quadric::PyQuadricTriangulation>()?;
-    m.add_function(wrap_pyfunction!(triangulation_quadric::triangulate_quadric, m)?)?;
-    m.add_class::<triangulation_batch_lines::PyLineTriangulations>()?;
-    m.add_class::<triangulation_batch_lines::PyQuadricTriangulations>()?;
-    m.add_function(wrap_pyfunction!(triangulation_batch_lines::triangulate_lines, m)?)?;
-    m.add_function(wrap_pyfunction!(triangulation_batch_lines::triangulate_quadrics, m)?)?;
-    m.add_class::<triangulation_fitting::PyFittedLine>()?;
-    m.add_class::<triangulation_fitting::PyFittedConic>()?;
-    m.add_function(wrap_pyfunction!(triangulation_fitting::fit_line, m)?)?;
-    m.add_function(wrap_pyfunction!(triangulation_fitting::fit_conic, m)?)?;
-    m.add_function(wrap_pyfunction!(triangulation_fitting::fitting_residual_samples, m)?)?;
-    m.add_function(wrap_pyfunction!(pickle::_unpickle, m)?)?;
+    // Triangulation.
+    m.add_class::<PyTriangulationOptions>()?;
+    m.add_class::<PyTriangulationReport>()?;
+    m.add_class::<PyBatchReport>()?;
+    m.add_class::<PyPointTriangulation>()?;
+    m.add_class::<PyPointTriangulations>()?;
+    m.add_function(wrap_pyfunction!(triangulation::point::triangulate_point, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation::point::triangulate_points, m)?)?;
+    m.add_class::<PyLineTriangulation>()?;
+    m.add_class::<PyLineTriangulations>()?;
+    m.add_function(wrap_pyfunction!(triangulation::line::triangulate_line, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation::line::triangulate_lines, m)?)?;
+    m.add_class::<PyQuadricTriangulation>()?;
+    m.add_class::<PyQuadricTriangulations>()?;
+    m.add_function(wrap_pyfunction!(triangulation::quadric::triangulate_quadric, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation::quadric::triangulate_quadrics, m)?)?;
+    m.add_class::<PyFittedLine>()?;
+    m.add_class::<PyFittedConic>()?;
+    m.add_function(wrap_pyfunction!(triangulation::fitting::fit_line, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation::fitting::fit_conic, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation::fitting::fitting_residual_samples, m)?)?;
+    m.add_function(wrap_pyfunction!(_unpickle, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
+}
+
+/// A subclass result `$sub` of `$base`, read from a pickle (base part first).
+macro_rules! subclass {
+    ($py:expr, $kind:expr, $input:expr, $base:ty, $sub:ty) => {{
+        let base = part::<$base>($kind, $input)?;
+        let sub = part::<$sub>($kind, $input)?;
+        Py::new($py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
+    }};
+}
+
+/// Rebuilds a result pickled by its `__reduce__` (`pickle::reduce`).
+#[pyfunction]
+fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
+    let input = &mut parts(kind, data)?;
+    let object = match kind {
+        "PoseResult" => plain::<PyPoseResult>(py, kind, input)?,
+        "PoseStage" => plain::<PyPoseStage>(py, kind, input)?,
+        "RansacReport" => plain::<PyRansacReport>(py, kind, input)?,
+        "FittedLine" => plain::<PyFittedLine>(py, kind, input)?,
+        "FittedConic" => plain::<PyFittedConic>(py, kind, input)?,
+        "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input)?,
+        "PointTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyPointTriangulation),
+        "LineTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyLineTriangulation),
+        "QuadricTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyQuadricTriangulation),
+        "BatchReport" => plain::<PyBatchReport>(py, kind, input)?,
+        "PointTriangulations" => subclass!(py, kind, input, PyBatchReport, PyPointTriangulations),
+        "LineTriangulations" => subclass!(py, kind, input, PyBatchReport, PyLineTriangulations),
+        "QuadricTriangulations" => subclass!(py, kind, input, PyBatchReport, PyQuadricTriangulations),
+        _ => {
+            return Err(errors::PlueckerError::new_err(format!(
+                "cannot unpickle a {kind}: not a pluecker result class"
+            )))
+        }
+    };
+    finished(kind, input)?;
+    Ok(object)
 }
 
 /// Panics inside the guarded, GIL-released section every solve uses: the tests check that this

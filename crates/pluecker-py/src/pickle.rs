@@ -427,69 +427,10 @@ fn malformed(kind: &str) -> PyErr {
     PlueckerError::new_err(format!("cannot unpickle a {kind}: the data are malformed"))
 }
 
-fn plain<T>(py: Python<'_>, kind: &str, input: &mut Reader<'_>) -> PyResult<PyObject>
+/// A result of class `T` read from `input` (a pickle of class `kind`).
+pub fn plain<T>(py: Python<'_>, kind: &str, input: &mut Reader<'_>) -> PyResult<PyObject>
 where
     T: PyClass + Pack + Into<PyClassInitializer<T>>,
 {
     Ok(Py::new(py, part::<T>(kind, input)?)?.into_any())
-}
-
-/// Rebuilds a result pickled by its `__reduce__` ([`reduce`]).
-#[pyfunction]
-pub fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
-    use crate::result::{PyPoseResult, PyPoseStage};
-    use crate::triangulation::PyTriangulationReport as Report;
-    use crate::triangulation_batch::PyPointTriangulations;
-    use crate::triangulation_batch_lines::{PyLineTriangulations, PyQuadricTriangulations};
-    use crate::triangulation_batch_report::PyBatchReport as Batch;
-    use crate::triangulation_fitting::{PyFittedConic, PyFittedLine};
-    use crate::triangulation_line::PyLineTriangulation;
-    use crate::triangulation_point::PyPointTriangulation;
-    use crate::triangulation_quadric::PyQuadricTriangulation;
-    let input = &mut parts(kind, data)?;
-    let object = match kind {
-        "PoseResult" => plain::<PyPoseResult>(py, kind, input)?,
-        "PoseStage" => plain::<PyPoseStage>(py, kind, input)?,
-        "FittedLine" => plain::<PyFittedLine>(py, kind, input)?,
-        "FittedConic" => plain::<PyFittedConic>(py, kind, input)?,
-        "TriangulationReport" => plain::<Report>(py, kind, input)?,
-        "PointTriangulation" => {
-            let (base, sub) = (part::<Report>(kind, input)?, part::<PyPointTriangulation>(kind, input)?);
-            Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-        }
-        "LineTriangulation" => {
-            let (base, sub) = (part::<Report>(kind, input)?, part::<PyLineTriangulation>(kind, input)?);
-            Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-        }
-        "QuadricTriangulation" => {
-            let (base, sub) = (
-                part::<Report>(kind, input)?,
-                part::<PyQuadricTriangulation>(kind, input)?,
-            );
-            Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-        }
-        "BatchReport" => plain::<Batch>(py, kind, input)?,
-        "PointTriangulations" => {
-            let (base, sub) = (part::<Batch>(kind, input)?, part::<PyPointTriangulations>(kind, input)?);
-            Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-        }
-        "LineTriangulations" => {
-            let (base, sub) = (part::<Batch>(kind, input)?, part::<PyLineTriangulations>(kind, input)?);
-            Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-        }
-        "QuadricTriangulations" => {
-            let (base, sub) = (
-                part::<Batch>(kind, input)?,
-                part::<PyQuadricTriangulations>(kind, input)?,
-            );
-            Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-        }
-        _ => {
-            return Err(PlueckerError::new_err(format!(
-                "cannot unpickle a {kind}: not a pluecker result class"
-            )))
-        }
-    };
-    finished(kind, input)?;
-    Ok(object)
 }

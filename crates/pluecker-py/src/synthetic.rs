@@ -35,13 +35,13 @@ pub fn paper_scene(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 
 /// A seeded random scene, noise-free.
 #[pyfunction]
-#[pyo3(signature = (kind, n_points, n_lines = Integer::new(0), seed = Integer::new(0)), text_signature = "(kind, n_points, n_lines=0, seed=0)")]
+#[pyo3(signature = (kind, n_points, n_lines = None, seed = None))]
 pub fn random_scene<'py>(
     py: Python<'py>,
     kind: &str,
     n_points: Integer,
-    n_lines: Integer,
-    seed: Integer,
+    n_lines: Option<Integer>,
+    seed: Option<Integer>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let Some(kind) = KINDS.into_iter().find(|k| k.as_str() == kind) else {
         let names: Vec<&str> = KINDS.iter().map(|k| k.as_str()).collect();
@@ -50,8 +50,9 @@ pub fn random_scene<'py>(
             format!("unknown scene kind '{kind}'; expected one of {}", names.join(", ")),
         ));
     };
-    let (n_points, n_lines) = (n_points.count("n_points", 0)?, n_lines.count("n_lines", 0)?);
-    let seed = seed.seed("seed")?;
+    let n_points = n_points.count("n_points", 0)?;
+    let n_lines = n_lines.map_or(Ok(0), |n| n.count("n_lines", 0))?;
+    let seed = seed.map_or(Ok(0), |s| s.seed("seed"))?;
     // Sizes before allocation: a failed allocation aborts the interpreter (issue 10).
     check_scene_size(n_points, n_lines).map_err(crate::errors::to_py_err)?;
     let scene = py.allow_threads(|| guarded(|| Ok(core_random_scene(kind, n_points, n_lines, seed))))?;

@@ -3,15 +3,20 @@
 use crate::camera::PyCamera;
 use crate::convert::Real;
 use crate::errors::{degenerate, invalid_argument, solve};
-use crate::pose::{correspondences, pose_arg};
+use crate::pose::{correspondences, Pose};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;
 
-/// The 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose `(R, t)`.
+/// The pixel noise `pose_covariance` assumes when `sigma_px` is not given: the covariance per px².
+const UNIT_SIGMA_PX: f64 = 1.0;
+
+/// The 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose `(R, t)`: the rotation as the tangent
+/// `ω` of `exp(ω) R` (radians, camera frame), then the translation (world units); `σ = sigma_px`
+/// pixels (`None`: 1 px).
 #[pyfunction]
-#[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, sigma_px = Real::new(1.0)), text_signature = "(camera, R, t, points2d=None, points3d=None, lines2d=None, lines3d=None, sigma_px=1.0)")]
+#[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, sigma_px = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn pose_covariance<'py>(
     py: Python<'py>,
@@ -22,11 +27,11 @@ pub fn pose_covariance<'py>(
     points3d: Option<&Bound<'py, PyAny>>,
     lines2d: Option<&Bound<'py, PyAny>>,
     lines3d: Option<&Bound<'py, PyAny>>,
-    sigma_px: Real,
+    sigma_px: Option<Real>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let sigma_px = sigma_px.get("sigma_px")?;
+    let sigma_px = sigma_px.map_or(Ok(UNIT_SIGMA_PX), |s| s.get("sigma_px"))?;
     let camera = camera.get().inner;
-    let pose = pose_arg("R", R, "t", t)?;
+    let pose: (nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>) = Pose::from_parts("R", R, "t", t)?.into();
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
         return Err(invalid_argument(
             "sigma_px",
@@ -79,7 +84,7 @@ pub fn reprojection_errors<'py>(
     lines3d: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let camera = camera.get().inner;
-    let pose = pose_arg("R", R, "t", t)?;
+    let pose: (nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>) = Pose::from_parts("R", R, "t", t)?.into();
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
     let errors = solve(py, move || {
         Ok(ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d).errors(&pose))

@@ -1,20 +1,15 @@
-//! `pluecker.PoseResult` and `pluecker.PoseStage`: immutable reports owning their data. Every array
-//! getter returns a fresh array, so changing it cannot change the result.
+//! `pluecker.PoseResult`, `pluecker.PoseStage` and `pluecker.RansacReport`: immutable reports owning
+//! their data, each property declared once in a table ([`crate::fields`]). Every array property
+//! returns a fresh array, so changing it cannot change the result.
 
-use pluecker::chi_square::ResidualTest;
 use crate::camera::PyCamera;
-use crate::convert::{matrix3_rows, matrix3_to_py, vector_to_py};
-use nalgebra::{Matrix6, Vector3, Vector4};
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pluecker::pose::StageReport;
-use pluecker::{PoseResult, Status};
-use crate::convert::strict_json_dict;
-use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use crate::fields::{result_class, Field};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use pyo3::types::PyTuple;
-
+use pluecker::chi_square::ResidualTest;
+use pluecker::pose::{RansacReport, StageReport};
+use pluecker::{PoseResult, Status};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
 /// One stage of the pose pipeline (algebraic estimator, linear solve, reprojection refinement).
 #[pyclass(frozen, name = "PoseStage", module = "pluecker")]
@@ -23,69 +18,33 @@ pub struct PyPoseStage {
     inner: StageReport,
 }
 
-#[pymethods]
 impl PyPoseStage {
-    #[getter]
-    fn name(&self) -> &str {
-        &self.inner.name
+    pub(crate) fn wrap(inner: StageReport) -> Self {
+        PyPoseStage { inner }
     }
+}
 
-    #[getter]
-    fn cost_kind(&self) -> &str {
-        self.inner.cost_kind
+result_class! {
+    PyPoseStage {
+        /// Name of the stage.
+        name = |s| s.inner.name.clone();
+        /// What `initial_cost` and `final_cost` measure.
+        cost_kind = |s| s.inner.cost_kind;
+        /// Rotation at the end of the stage, `x_cam = R X_world + t`.
+        R = |s| s.inner.rotation;
+        /// Translation at the end of the stage, world units.
+        t = |s| s.inner.translation;
+        /// Iterations of the stage.
+        iterations = |s| s.inner.iterations;
+        /// Cost at the stage's start.
+        initial_cost = |s| s.inner.initial_cost;
+        /// Cost at the stage's end.
+        final_cost = |s| s.inner.final_cost;
+        /// Why the stage stopped.
+        termination = |s| s.inner.termination.as_str();
+        /// Wall time of the stage, seconds.
+        time_seconds = |s| s.inner.time_seconds;
     }
-
-    #[getter(R)]
-    fn rotation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix3_to_py(py, &self.inner.rotation)
-    }
-
-    #[getter(t)]
-    fn translation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector_to_py(py, &self.inner.translation)
-    }
-
-    #[getter]
-    fn iterations(&self) -> usize {
-        self.inner.iterations
-    }
-
-    #[getter]
-    fn initial_cost(&self) -> f64 {
-        self.inner.initial_cost
-    }
-
-    #[getter]
-    fn final_cost(&self) -> f64 {
-        self.inner.final_cost
-    }
-
-    #[getter]
-    fn termination(&self) -> &'static str {
-        self.inner.termination.as_str()
-    }
-
-    #[getter]
-    fn time_seconds(&self) -> f64 {
-        self.inner.time_seconds
-    }
-
-    /// Plain-Python (JSON-serialisable) form.
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = &self.inner;
-        let d = PyDict::new(py);
-        d.set_item("name", &s.name)?;
-        d.set_item("cost_kind", s.cost_kind)?;
-        d.set_item("R", matrix3_rows(&s.rotation))?;
-        d.set_item("t", s.translation.as_slice())?;
-        d.set_item("iterations", s.iterations)?;
-        d.set_item("initial_cost", s.initial_cost)?;
-        d.set_item("final_cost", s.final_cost)?;
-        d.set_item("termination", s.termination.as_str())?;
-        d.set_item("time_seconds", s.time_seconds)?;
-        strict_json_dict(d)
-    }
-
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
@@ -96,13 +55,128 @@ impl PyPoseStage {
         let s = &self.inner;
         format!(
             "PoseStage(name='{}', cost_kind='{}', iterations={}, initial_cost={:e}, final_cost={:e}, termination='{}')",
-            s.name,
-            s.cost_kind,
-            s.iterations,
-            s.initial_cost,
-            s.final_cost,
-            s.termination.as_str()
+            s.name, s.cost_kind, s.iterations, s.initial_cost, s.final_cost, s.termination.as_str()
         )
+    }
+}
+
+impl Field for StageReport {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(Py::new(py, PyPoseStage::wrap(self))?.into_any())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let d = PyDict::new(py);
+        PyPoseStage::wrap(self).fill_dict(py, &d)?;
+        Ok(d.into_any().unbind())
+    }
+    fn stub() -> String {
+        "PoseStage".into()
+    }
+}
+
+impl Field for Vec<StageReport> {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        let stages = self.into_iter().map(|s| s.get(py)).collect::<PyResult<Vec<_>>>()?;
+        Ok(stages.into_pyobject(py)?.into_any().unbind())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let stages = self.into_iter().map(|s| s.plain(py)).collect::<PyResult<Vec<_>>>()?;
+        Ok(stages.into_pyobject(py)?.into_any().unbind())
+    }
+    fn stub() -> String {
+        "List[PoseStage]".into()
+    }
+}
+
+/// What the robust loop (LO-RANSAC) did: `PoseResult.ransac` of a robust estimate.
+#[pyclass(frozen, name = "RansacReport", module = "pluecker")]
+#[derive(Debug, Clone)]
+pub struct PyRansacReport {
+    inner: RansacReport,
+}
+
+result_class! {
+    PyRansacReport {
+        /// Samples drawn.
+        iterations = |r| r.inner.iterations;
+        /// Samples without a pose in front of the camera (collinear points, parallel lines, ...).
+        degenerate_samples = |r| r.inner.degenerate_samples;
+        /// Poses scored (a sample may give several), fully or until an early exit.
+        models_scored = |r| r.inner.models_scored;
+        /// Poses rejected by the sequential probability ratio test.
+        sprt_rejections = |r| r.inner.sprt_rejections;
+        /// Reprojection errors evaluated while scoring: the work of the scoring.
+        errors_evaluated = |r| r.inner.errors_evaluated;
+        /// Local optimisations run (one per new best model).
+        local_optimizations = |r| r.inner.local_optimizations;
+        /// Inliers (points + lines) of the best model before the final refinement.
+        inliers = |r| r.inner.inliers;
+        /// Fewest inliers a usable model needs, else status `too_few_inliers`.
+        required_inliers = |r| r.inner.required_inliers;
+        /// MSAC score `½ Σ min(e², τ²)` of the best model, px².
+        score = |r| r.inner.score;
+        /// Why sampling stopped: `confidence`, `iteration_cap`, `time_budget`, `interrupted`, ...
+        stop = |r| r.inner.stop.as_str();
+        /// Wall time of the loop including local optimisation, seconds.
+        time_seconds = |r| r.inner.time_seconds;
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "RansacReport", &[self])
+    }
+
+    fn __repr__(&self) -> String {
+        let r = &self.inner;
+        format!(
+            "RansacReport(iterations={}, inliers={}, required_inliers={}, stop='{}', time_seconds={:.3e})",
+            r.iterations, r.inliers, r.required_inliers, r.stop.as_str(), r.time_seconds
+        )
+    }
+}
+
+impl Field for RansacReport {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(Py::new(py, PyRansacReport { inner: self })?.into_any())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let d = PyDict::new(py);
+        PyRansacReport { inner: self }.fill_dict(py, &d)?;
+        Ok(d.into_any().unbind())
+    }
+    fn stub() -> String {
+        "RansacReport".into()
+    }
+}
+
+impl Field for ResidualTest {
+    /// `{"chi2", "dof", "p_value", "consistent"}`.
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        let d = PyDict::new(py);
+        d.set_item("chi2", self.chi2)?;
+        d.set_item("dof", self.dof)?;
+        d.set_item("p_value", self.p_value)?;
+        d.set_item("consistent", self.consistent)?;
+        Ok(d.into_any().unbind())
+    }
+    fn stub() -> String {
+        "ResidualTest".into()
+    }
+}
+
+impl Field for pluecker::Camera {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(Py::new(py, PyCamera::wrap(self))?.into_any())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let d = PyDict::new(py);
+        for (k, v) in [("fx", self.fx), ("fy", self.fy), ("cx", self.cx), ("cy", self.cy), ("skew", self.skew)] {
+            d.set_item(k, v)?;
+        }
+        Ok(d.into_any().unbind())
+    }
+    fn stub() -> String {
+        "Camera".into()
     }
 }
 
@@ -117,301 +191,74 @@ impl PyPoseResult {
     pub fn wrap(inner: PoseResult) -> Self {
         PyPoseResult { inner }
     }
-
-    fn covariance_rows(&self) -> Option<Vec<[f64; 6]>> {
-        let c: &Matrix6<f64> = self.inner.covariance.as_ref()?;
-        Some((0..6).map(|i| std::array::from_fn(|j| c[(i, j)])).collect())
-    }
-
-    fn dual_quaternion_values(&self) -> [f64; 8] {
-        let q = &self.inner.dual_quaternion;
-        [q.r[0], q.r[1], q.r[2], q.r[3], q.s[0], q.s[1], q.s[2], q.s[3]]
-    }
 }
 
-fn camera_dict<'py>(py: Python<'py>, c: &pluecker::Camera) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("fx", c.fx)?;
-    d.set_item("fy", c.fy)?;
-    d.set_item("cx", c.cx)?;
-    d.set_item("cy", c.cy)?;
-    d.set_item("skew", c.skew)?;
-    Ok(d)
-}
-
-#[pymethods]
-impl PyPoseResult {
-    #[getter(R)]
-    fn rotation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix3_to_py(py, &self.inner.rotation)
-    }
-
-    #[getter(t)]
-    fn translation<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector_to_py(py, &self.inner.translation)
-    }
-
-    #[getter]
-    fn dual_quaternion<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.dual_quaternion_values())
-    }
-
-    #[getter]
-    fn axis<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vector_to_py::<3>(py, &self.inner.axis)
-    }
-
-    #[getter]
-    fn angle(&self) -> f64 {
-        self.inner.angle
-    }
-
-    #[getter]
-    fn method(&self) -> &'static str {
-        self.inner.method.as_str()
-    }
-
-    #[getter]
-    fn iterations(&self) -> usize {
-        self.inner.iterations
-    }
-
-    #[getter]
-    fn final_cost(&self) -> f64 {
-        self.inner.final_cost
-    }
-
-    #[getter]
-    fn termination(&self) -> &'static str {
-        self.inner.termination.as_str()
-    }
-
-    #[getter]
-    fn status(&self) -> &'static str {
-        self.inner.status.as_str()
-    }
-
-    #[getter]
-    fn success(&self) -> bool {
-        self.inner.status == Status::Success
-    }
-
-    #[getter]
-    fn rms_error_px(&self) -> f64 {
-        self.inner.rms_error_px
-    }
-
-    #[getter]
-    fn time_seconds(&self) -> f64 {
-        self.inner.time_seconds
-    }
-
-    #[getter]
-    fn stages(&self) -> Vec<PyPoseStage> {
-        self.inner
-            .stages
-            .iter()
-            .map(|s| PyPoseStage { inner: s.clone() })
-            .collect()
-    }
-
-    #[getter]
-    fn estimated_camera(&self) -> Option<PyCamera> {
-        self.inner.estimated_camera.map(PyCamera::wrap)
-    }
-
-    #[getter]
-    fn inliers_points<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_slice(py, &self.inner.inliers_points)
-    }
-
-    #[getter]
-    fn inliers_lines<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_slice(py, &self.inner.inliers_lines)
-    }
-
-    #[getter]
-    fn ransac_iterations(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.iterations)
-    }
-
-    #[getter]
-    fn ransac_models_scored(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.models_scored)
-    }
-
-    #[getter]
-    fn ransac_local_optimizations(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.local_optimizations)
-    }
-
-    #[getter]
-    fn ransac_sprt_rejections(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.sprt_rejections)
-    }
-
-    #[getter]
-    fn ransac_errors_evaluated(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.errors_evaluated)
-    }
-
-    #[getter]
-    fn ransac_required_inliers(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.required_inliers)
-    }
-
-    #[getter]
-    fn ransac_degenerate_samples(&self) -> usize {
-        self.inner.ransac.as_ref().map_or(0, |r| r.degenerate_samples)
-    }
-
-    #[getter]
-    fn ransac_time_seconds(&self) -> f64 {
-        self.inner.ransac.as_ref().map_or(0.0, |r| r.time_seconds)
-    }
-
-    #[getter]
-    fn ransac_stop(&self) -> Option<&'static str> {
-        self.inner.ransac.as_ref().map(|r| r.stop.as_str())
-    }
-
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        let c = self.inner.covariance.as_ref()?;
-        Some(Array2::from_shape_fn((6, 6), |(i, j)| c[(i, j)]).into_pyarray(py))
-    }
-
-    #[getter]
-    fn covariance_source(&self) -> Option<&'static str> {
-        self.inner.covariance_source.map(|s| s.as_str())
-    }
-
-    #[getter]
-    fn sigma_px(&self) -> Option<f64> {
-        self.inner.sigma_px
-    }
-
-    #[getter]
-    fn certified(&self) -> bool {
-        self.inner.certified
-    }
-
-    #[getter]
-    fn lower_bound(&self) -> f64 {
-        self.inner.lower_bound
-    }
-
-    #[getter]
-    fn gap(&self) -> f64 {
-        self.inner.gap
-    }
-
-    #[getter]
-    fn certificate(&self) -> &'static str {
-        self.inner.certificate.as_str()
-    }
-
-    #[getter]
-    fn certificate_message(&self) -> String {
-        self.inner.certificate.message()
-    }
-
-    #[getter]
-    fn ambiguous(&self) -> bool {
-        self.inner.ambiguous
-    }
-
-    #[getter]
-    #[allow(non_snake_case)]
-    fn second_best_R<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.inner.second_best.as_ref().map(|((r, _), _)| matrix3_to_py(py, r))
-    }
-
-    #[getter]
-    fn second_best_t<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner
-            .second_best
-            .as_ref()
-            .map(|((_, t), _)| vector_to_py(py, t))
-    }
-
-    #[getter]
-    fn second_best_cost(&self) -> Option<f64> {
-        self.inner.second_best.as_ref().map(|(_, c)| *c)
-    }
-
-    #[getter]
-    fn behind_camera_cost(&self) -> Option<f64> {
-        self.inner.behind_camera_cost
-    }
-
-    #[getter]
-    fn residual_test<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        self.inner.residual_test.as_ref().map(|t| residual_test_dict(py, t)).transpose()
-    }
-
-    /// Plain-Python (JSON-serialisable) form.
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let r = &self.inner;
-        let d = PyDict::new(py);
-        d.set_item("R", matrix3_rows(&r.rotation))?;
-        d.set_item("t", r.translation.as_slice())?;
-        d.set_item("dual_quaternion", self.dual_quaternion_values())?;
-        d.set_item("axis", r.axis.as_slice())?;
-        d.set_item("angle", r.angle)?;
-        d.set_item("method", r.method.as_str())?;
-        d.set_item("iterations", r.iterations)?;
-        d.set_item("final_cost", r.final_cost)?;
-        d.set_item("termination", r.termination.as_str())?;
-        d.set_item("status", r.status.as_str())?;
-        d.set_item("success", r.status == Status::Success)?;
-        d.set_item("rms_error_px", r.rms_error_px)?;
-        d.set_item("time_seconds", r.time_seconds)?;
-        let stages = self
-            .stages()
-            .iter()
-            .map(|s| s.to_dict(py))
-            .collect::<PyResult<Vec<_>>>()?;
-        d.set_item("stages", stages)?;
-        match &r.estimated_camera {
-            Some(c) => d.set_item("estimated_camera", camera_dict(py, c)?)?,
-            None => d.set_item("estimated_camera", py.None())?,
-        }
-        d.set_item("inliers_points", &r.inliers_points)?;
-        d.set_item("inliers_lines", &r.inliers_lines)?;
-        d.set_item("ransac_iterations", self.ransac_iterations())?;
-        d.set_item("ransac_models_scored", self.ransac_models_scored())?;
-        d.set_item("ransac_local_optimizations", self.ransac_local_optimizations())?;
-        d.set_item("ransac_degenerate_samples", self.ransac_degenerate_samples())?;
-        d.set_item("ransac_sprt_rejections", self.ransac_sprt_rejections())?;
-        d.set_item("ransac_errors_evaluated", self.ransac_errors_evaluated())?;
-        d.set_item("ransac_required_inliers", self.ransac_required_inliers())?;
-        d.set_item("ransac_time_seconds", self.ransac_time_seconds())?;
-        d.set_item("ransac_stop", self.ransac_stop())?;
-        d.set_item("covariance", self.covariance_rows())?;
-        d.set_item("covariance_source", self.covariance_source())?;
-        d.set_item("sigma_px", r.sigma_px)?;
-        d.set_item("certified", r.certified)?;
-        d.set_item("lower_bound", r.lower_bound)?;
-        d.set_item("gap", r.gap)?;
-        d.set_item("certificate", self.certificate())?;
-        d.set_item("certificate_message", self.certificate_message())?;
-        d.set_item("ambiguous", r.ambiguous)?;
-        match &r.second_best {
-            Some(((rot, t), c)) => {
-                d.set_item("second_best_R", matrix3_rows(rot))?;
-                d.set_item("second_best_t", t.as_slice())?;
-                d.set_item("second_best_cost", *c)?;
-            }
-            None => {
-                d.set_item("second_best_R", py.None())?;
-                d.set_item("second_best_t", py.None())?;
-                d.set_item("second_best_cost", py.None())?;
-            }
-        }
-        d.set_item("behind_camera_cost", r.behind_camera_cost)?;
-        d.set_item("residual_test", self.residual_test(py)?)?;
-        strict_json_dict(d)
+result_class! {
+    PyPoseResult {
+        /// Rotation, `x_cam = R X_world + t`.
+        R = |r| r.inner.rotation;
+        /// Translation, world units.
+        t = |r| r.inner.translation;
+        /// The same motion as a unit dual quaternion `(r0, rx, ry, rz, s0, sx, sy, sz)` (eqs. 6-7), `r0 ≥ 0`.
+        dual_quaternion = |r| r.inner.dual_quaternion.to_vector();
+        /// Unit rotation axis.
+        axis = |r| r.inner.axis;
+        /// Rotation angle about `axis`, radians in [0, π].
+        angle = |r| r.inner.angle;
+        /// The estimator that ran.
+        method = |r| r.inner.method.as_str();
+        /// Iterations summed over the stages.
+        iterations = |r| r.inner.iterations;
+        /// Cost of the last stage at the returned pose.
+        final_cost = |r| r.inner.final_cost;
+        /// Why the last iterative stage stopped.
+        termination = |r| r.inner.termination.as_str();
+        /// Whether the pose can be used, and if not why: `success`, `ambiguous`, `points_behind_camera`, ...
+        status = |r| r.inner.status.as_str();
+        /// `status == 'success'`.
+        success = |r| r.inner.status == Status::Success;
+        /// Root-mean-square reprojection error over all correspondences, pixels.
+        rms_error_px = |r| r.inner.rms_error_px;
+        /// Total wall time, seconds.
+        time_seconds = |r| r.inner.time_seconds;
+        /// Every stage in order; the last one gave the returned pose.
+        stages = |r| r.inner.stages.clone();
+        /// Intrinsics estimated by method `'linear'` (`None` for the others).
+        estimated_camera = |r| r.inner.estimated_camera;
+        /// Points used for the pose: the final inliers when robust, else all true.
+        inliers_points = |r| r.inner.inliers_points.clone();
+        /// Lines used for the pose: the final inliers when robust, else all true.
+        inliers_lines = |r| r.inner.inliers_lines.clone();
+        /// What the robust loop did; `None` unless estimated with `ransac=`.
+        ransac = |r| r.inner.ransac.clone();
+        /// 6x6 covariance of `(ω, t)` (rotation tangent in radians, camera frame; translation, world units).
+        covariance = |r| r.inner.covariance;
+        /// Where the σ of the covariance came from: `given` or `estimated`.
+        covariance_source = |r| r.inner.covariance_source.map(|s| s.as_str());
+        /// The pixel noise σ used: `options.sigma_px`, or estimated from the residuals.
+        sigma_px = |r| r.inner.sigma_px;
+        /// Whether the pose is proved globally optimal to within the relative gap (`options.certify`).
+        certified = |r| r.inner.certified;
+        /// The proved lower bound on `½ Σ r²` (px²); NaN when there is none.
+        lower_bound = |r| r.inner.lower_bound;
+        /// `(cost − lower_bound) / cost`; NaN when there is no bound.
+        gap = |r| r.inner.gap;
+        /// How the certificate was proved, or why there is none.
+        certificate = |r| r.inner.certificate.as_str();
+        /// The certificate's explanation in words.
+        certificate_message = |r| r.inner.certificate.message();
+        /// `status == 'ambiguous'`: another local minimum explains the data nearly as well.
+        ambiguous = |r| r.inner.ambiguous;
+        /// Rotation of the cheapest other local minimum with every point in front; `None` if none was found.
+        second_best_R = |r| r.inner.second_best.as_ref().map(|((rot, _), _)| *rot);
+        /// Translation of that minimum.
+        second_best_t = |r| r.inner.second_best.as_ref().map(|((_, t), _)| *t);
+        /// Its cost `½ Σ r²`, px².
+        second_best_cost = |r| r.inner.second_best.as_ref().map(|(_, c)| *c);
+        /// Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`).
+        behind_camera_cost = |r| r.inner.behind_camera_cost;
+        /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.
+        residual_test = |r| r.inner.residual_test.clone();
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -421,35 +268,15 @@ impl PyPoseResult {
 
     fn __repr__(&self) -> String {
         let r = &self.inner;
-        let t: &Vector3<f64> = &r.translation;
-        let q: &Vector4<f64> = &r.dual_quaternion.r;
+        let (t, q) = (&r.translation, &r.dual_quaternion.r);
         format!(
             "PoseResult(method='{}', status='{}', iterations={}, rms_error_px={:.3e}, angle={:.6}, t=[{:.6}, {:.6}, {:.6}], r=[{:.6}, {:.6}, {:.6}, {:.6}])",
-            r.method.as_str(),
-            r.status.as_str(),
-            r.iterations,
-            r.rms_error_px,
-            r.angle,
-            t.x,
-            t.y,
-            t.z,
-            q[0],
-            q[1],
-            q[2],
-            q[3]
+            r.method.as_str(), r.status.as_str(), r.iterations, r.rms_error_px, r.angle,
+            t.x, t.y, t.z, q[0], q[1], q[2], q[3]
         )
     }
 }
 
 pack_struct!(PyPoseStage { inner });
+pack_struct!(PyRansacReport { inner });
 pack_struct!(PyPoseResult { inner });
-
-/// `{"chi2", "dof", "p_value", "consistent"}` of a χ² test of the residuals.
-pub(crate) fn residual_test_dict<'py>(py: Python<'py>, t: &ResidualTest) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("chi2", t.chi2)?;
-    d.set_item("dof", t.dof)?;
-    d.set_item("p_value", t.p_value)?;
-    d.set_item("consistent", t.consistent)?;
-    Ok(d)
-}

@@ -4,17 +4,22 @@
 //!
 //! A track the core rejected gets a NaN cost, no certificate, a status naming the error kind
 //! ([`error_status`]) and a message; its estimate columns are NaN.
+//!
+//! Also the inputs every batch shares: cameras `(v, 3, 4)` for all tracks or `(n, v, 3, 4)` per
+//! track ([`Cameras`]) and per-observation arrays ([`per_observation`]).
 
+use crate::convert::{read, read_any, shape_string, Dim};
+use crate::errors::{shape_error, to_py_err};
+use crate::fields::result_class;
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::triangulation::renamed;
-use numpy::PyArray1;
-use pluecker::triangulation::{CertificateKind, Method, Report, Status};
+use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;
+use pluecker::triangulation::tracks::TrackCameras;
+use pluecker::triangulation::{CertificateKind, Method, Report, Status};
 use pluecker::Error;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
-use crate::convert::strict_json_dict;
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use pyo3::types::PyTuple;
 
 
@@ -43,12 +48,6 @@ fn not_started(status: &str, cost: f64) -> Option<StopReason> {
     } else {
         None
     }
-}
-
-/// A numpy array of strings (dtype `<U…`).
-pub(crate) fn strings<'py>(py: Python<'py>, values: &[&'static str]) -> PyResult<Bound<'py, PyAny>> {
-    let list = PyList::new(py, values)?;
-    py.import("numpy")?.call_method1("array", (list, "str"))
 }
 
 /// The estimate columns of a batch result class (its fields beside the [`PyBatchReport`] columns),
@@ -189,66 +188,18 @@ impl PyBatchReport {
     }
 }
 
-#[pymethods]
 impl PyBatchReport {
-    #[getter]
-    fn cost<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.cost)
-    }
-
-    #[getter]
-    fn lower_bound<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.lower_bound)
-    }
-
-    #[getter]
-    fn relative_gap<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.relative_gap)
-    }
-
-    #[getter]
-    fn certified<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_slice(py, &self.certified)
-    }
-
-    #[getter]
-    fn certificate<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        strings(py, &self.certificate)
-    }
-
-    #[getter]
-    fn status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        strings(py, &self.status)
-    }
-
-    #[getter]
-    fn nodes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_slice(py, &self.nodes)
-    }
-
-    #[getter]
-    fn iterations<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        PyArray1::from_slice(py, &self.iterations)
-    }
-
-    #[getter]
-    fn time_seconds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, &self.time_seconds)
-    }
-
-    #[getter]
-    fn p_value<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let p: Vec<f64> = self
-            .cost
+    /// `p_value` of every track: the χ² test of its cost with its degrees of freedom (NaN without).
+    fn p_values(&self) -> Vec<f64> {
+        self.cost
             .iter()
             .zip(&self.residual_dof)
             .map(|(&cost, &dof)| ResidualTest::new(cost, dof).map_or(f64::NAN, |t| t.p_value))
-            .collect();
-        PyArray1::from_vec(py, p)
+            .collect()
     }
 
-    #[getter]
-    fn messages(&self) -> Vec<String> {
+    /// The message of every track: why it was rejected or not started, else empty.
+    fn track_messages(&self) -> Vec<String> {
         let mut out: Vec<String> = self
             .status
             .iter()
@@ -264,19 +215,38 @@ impl PyBatchReport {
         }
         out
     }
+}
 
-    #[getter]
-    fn method(&self) -> &'static str {
-        self.method
+result_class! {
+    PyBatchReport {
+        /// The method that ran: `linear`, `local` or `optimal`.
+        method = |b| b.method;
+        /// Per track: `success`, or why not (the statuses of `TriangulationReport`, and `too_few_views`, `non_finite`, `degenerate`, ... for a rejected track).
+        status = |b| b.status.clone();
+        /// Per track: the cost of eq. 19 at the estimate (NaN for a rejected track).
+        cost = |b| b.cost.clone();
+        /// Per track: the proved lower bound on the cost.
+        lower_bound = |b| b.lower_bound.clone();
+        /// Per track: `(cost − lower_bound) / cost`.
+        relative_gap = |b| b.relative_gap.clone();
+        /// Per track: whether the estimate is certified globally optimal.
+        certified = |b| b.certified.clone();
+        /// Per track: `none`, `convexity_test` or `branch_and_bound`.
+        certificate = |b| b.certificate.clone();
+        /// Per track: branch-and-bound nodes.
+        nodes = |b| b.nodes.clone();
+        /// Per track: iterations of the local minimisation.
+        iterations = |b| b.iterations.clone();
+        /// Per track: wall time, seconds.
+        time_seconds = |b| b.time_seconds.clone();
+        /// Per track: p-value of the χ² test of the cost (NaN without spare degrees of freedom).
+        p_value = |b| b.p_values();
+        /// Per track: why it was rejected or not started; empty otherwise.
+        messages = |b| b.track_messages();
     }
 
     fn __len__(&self) -> usize {
         self.len()
-    }
-
-    /// Plain-Python (strict JSON) form: every report column as a list, one entry per track.
-    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
-        batch_dict(slf.as_any(), &[])
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -291,18 +261,101 @@ impl PyBatchReport {
 
 pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, residual_dof, errors });
 
-/// The report columns of `NAMES` below and then the estimate `columns` of a batch result as lists,
-/// NaN and inf as `None`: the `to_dict()` of every batch class (each array getter's `tolist()`).
-pub(crate) fn batch_dict<'py>(result: &Bound<'py, PyAny>, columns: &[&str]) -> PyResult<Bound<'py, PyDict>> {
-    const NAMES: [&str; 12] = [
-        "method", "status", "cost", "lower_bound", "relative_gap", "certified", "certificate", "nodes",
-        "iterations", "time_seconds", "p_value", "messages",
-    ];
-    let d = PyDict::new(result.py());
-    for name in NAMES.iter().chain(columns) {
-        let value = result.getattr(*name)?;
-        let value = if value.hasattr("tolist")? { value.call_method0("tolist")? } else { value };
-        d.set_item(*name, value)?;
-    }
-    strict_json_dict(d)
+/// Row-major entries of a matrix.
+pub(crate) fn row_major<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -> impl Iterator<Item = f64> + '_ {
+    (0..R).flat_map(move |i| (0..C).map(move |j| m[(i, j)]))
 }
+
+/// Appends one track's `N x N` covariance in row-major order to a batch column, or `N²` NaNs when the
+/// track has none.
+pub(crate) fn push_covariance<const N: usize>(
+    column: &mut Vec<f64>,
+    covariance: Option<&nalgebra::SMatrix<f64, N, N>>,
+) {
+    match covariance {
+        Some(c) => column.extend(row_major(c)),
+        None => column.extend(std::iter::repeat(f64::NAN).take(N * N)),
+    }
+}
+
+/// The cameras of a batch: `(v, 3, 4)` shared or `(n, v, 3, 4)` per track; `n` is `None` when shared.
+pub(crate) struct Cameras {
+    matrices: Vec<Matrix3x4<f64>>,
+    tracks: Option<usize>,
+    views: usize,
+}
+
+impl Cameras {
+    pub(crate) fn read(obj: &Bound<'_, PyAny>, min_views: usize, method: Method) -> PyResult<Cameras> {
+        let (shape, values) = read_any("P", obj)?;
+        let (tracks, views) = match shape.as_slice() {
+            [v, 3, 4] => (None, *v),
+            [n, v, 3, 4] => (Some(*n), *v),
+            _ => {
+                return Err(shape_error(
+                    "P",
+                    "shape (v, 3, 4) (shared cameras) or (n, v, 3, 4) (cameras per track)",
+                    shape_string(&shape),
+                ))
+            }
+        };
+        if views < min_views {
+            return Err(to_py_err(Error::TooFewCorrespondences {
+                method: method.as_str().into(),
+                required: format!("{min_views} cameras"),
+                actual: format!("{views} camera(s) in P"),
+            }));
+        }
+        let matrices = values.chunks_exact(12).map(Matrix3x4::from_row_slice).collect();
+        Ok(Cameras {
+            matrices,
+            tracks,
+            views,
+        })
+    }
+
+    /// A shape error unless an observation array of shape `shape` has `v` views (and `n` tracks for
+    /// cameras per track).
+    pub(crate) fn check_observations(&self, name: &str, shape: &[usize], tail: &str) -> PyResult<()> {
+        let tracks_fit = self.tracks.map_or(true, |n| n == shape[0]);
+        if shape[1] != self.views || !tracks_fit {
+            let n = self.tracks.map_or("n".to_string(), |n| n.to_string());
+            let expected = format!("shape ({n}, {}, {tail}) (one column per camera in P)", self.views);
+            return Err(shape_error(name, &expected, shape_string(shape)));
+        }
+        Ok(())
+    }
+
+    pub(crate) fn core(&self) -> TrackCameras<'_> {
+        match self.tracks {
+            None => TrackCameras::Shared(&self.matrices),
+            Some(_) => TrackCameras::PerTrack {
+                cameras: &self.matrices,
+                views: self.views,
+            },
+        }
+    }
+}
+
+/// `(n, v, ...)` per-observation values of `obj` (`cov`), checked against `n` tracks and `v` views.
+pub(crate) fn per_observation(
+    name: &str,
+    obj: &Bound<'_, PyAny>,
+    n: usize,
+    v: usize,
+    entry: [usize; 2],
+) -> PyResult<Vec<f64>> {
+    let spec = [
+        Dim::Free("n"),
+        Dim::Free("v"),
+        Dim::Fixed(entry[0]),
+        Dim::Fixed(entry[1]),
+    ];
+    let (shape, values) = read(name, obj, &spec)?;
+    if shape[0] != n || shape[1] != v {
+        let expected = format!("shape ({n}, {v}, {}, {}) (one per observation)", entry[0], entry[1]);
+        return Err(shape_error(name, &expected, shape_string(&shape)));
+    }
+    Ok(values)
+}
+

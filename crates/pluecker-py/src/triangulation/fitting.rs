@@ -2,32 +2,20 @@
 //! the covariance of their residual (Josephson & Kahl 2008, section 3.1), the weights `triangulate_line`
 //! and `triangulate_quadric` take.
 
-use crate::convert::{matrix3_rows, matrix3_to_py, points as read_points, Integer, Real};
+use crate::convert::{points as read_points, Integer, Real};
 use crate::errors::{guarded, invalid_argument, solve};
-use nalgebra::{SMatrix, SVector};
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
-use pluecker::triangulation::fitting::{self, FittedConic, FittedLine};
-use crate::convert::strict_json_dict;
-use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use pyo3::types::PyTuple;
+use nalgebra::SVector;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2};
+use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
 
-
-fn matrix_to_py<'py, const R: usize, const C: usize>(
-    py: Python<'py>,
-    m: &SMatrix<f64, R, C>,
-) -> Bound<'py, PyArray2<f64>> {
-    Array2::from_shape_fn((R, C), |(i, j)| m[(i, j)]).into_pyarray(py)
-}
-
-fn matrix_rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> Vec<Vec<f64>> {
-    (0..R).map(|i| (0..C).map(|j| m[(i, j)]).collect()).collect()
-}
-
-fn sigma_arg(sigma: Real) -> PyResult<f64> {
-    let sigma = sigma.get("sigma")?;
+/// The `sigma` argument in pixels (`None`: the core's default), checked.
+fn sigma_arg(sigma: Option<Real>) -> PyResult<f64> {
+    let sigma = sigma.map_or(Ok(DEFAULT_SIGMA_PX), |s| s.get("sigma"))?;
     if sigma.is_finite() && sigma > 0.0 {
         Ok(sigma)
     } else {
@@ -45,32 +33,15 @@ pub struct PyFittedLine {
     inner: FittedLine,
 }
 
-#[pymethods]
-impl PyFittedLine {
-    #[getter]
-    fn line<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.inner.line.as_slice())
+result_class! {
+    PyFittedLine {
+        /// The image line `(a, b, c)`, `a u + b v + c = 0`, with `a² + b² = 1`.
+        line = |f| f.inner.line;
+        /// 2x2 covariance of the line's residual (section 3.1), px².
+        covariance = |f| f.inner.covariance;
+        /// RMS distance of the points to the line, pixels.
+        rms_distance = |f| f.inner.rms_distance;
     }
-
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix_to_py::<2, 2>(py, &self.inner.covariance)
-    }
-
-    #[getter]
-    fn rms_distance(&self) -> f64 {
-        self.inner.rms_distance
-    }
-
-    /// Plain-Python (JSON-serialisable) form.
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        d.set_item("line", self.inner.line.as_slice())?;
-        d.set_item("covariance", matrix_rows::<2, 2>(&self.inner.covariance))?;
-        d.set_item("rms_distance", self.inner.rms_distance)?;
-        strict_json_dict(d)
-    }
-
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
@@ -93,51 +64,21 @@ pub struct PyFittedConic {
     inner: FittedConic,
 }
 
-#[pymethods]
-impl PyFittedConic {
-    #[getter]
-    fn conic<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix3_to_py(py, &self.inner.conic)
+result_class! {
+    PyFittedConic {
+        /// The conic `C` (3x3, symmetric): `(u, v, 1) C (u, v, 1)ᵀ = 0` on the ellipse.
+        conic = |f| f.inner.conic;
+        /// Centre of the ellipse, pixels.
+        centre = |f| f.inner.ellipse.centre;
+        /// Principal axes of the ellipse, one per column.
+        axes = |f| f.inner.ellipse.axes;
+        /// Semi-axis lengths along `axes`, pixels.
+        semi_axes = |f| f.inner.ellipse.semi_axes;
+        /// 5x5 covariance of the conic's residual (section 3.1).
+        covariance = |f| f.inner.covariance;
+        /// Iterations of the geometric fit.
+        iterations = |f| f.inner.iterations;
     }
-
-    #[getter]
-    fn centre<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.inner.ellipse.centre.as_slice())
-    }
-
-    #[getter]
-    fn axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix_to_py::<2, 2>(py, &self.inner.ellipse.axes)
-    }
-
-    #[getter]
-    fn semi_axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.inner.ellipse.semi_axes.as_slice())
-    }
-
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix_to_py::<5, 5>(py, &self.inner.covariance)
-    }
-
-    #[getter]
-    fn iterations(&self) -> usize {
-        self.inner.iterations
-    }
-
-    /// Plain-Python (JSON-serialisable) form.
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let e = &self.inner.ellipse;
-        let d = PyDict::new(py);
-        d.set_item("conic", matrix3_rows(&self.inner.conic))?;
-        d.set_item("centre", e.centre.as_slice())?;
-        d.set_item("axes", matrix_rows::<2, 2>(&e.axes))?;
-        d.set_item("semi_axes", e.semi_axes.as_slice())?;
-        d.set_item("covariance", matrix_rows::<5, 5>(&self.inner.covariance))?;
-        d.set_item("iterations", self.inner.iterations)?;
-        strict_json_dict(d)
-    }
-
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
@@ -153,19 +94,21 @@ impl PyFittedConic {
     }
 }
 
-/// Fits an image line to points (total least squares) and returns it with its residual covariance.
+/// Fits an image line to points `(N, 2)` (total least squares) and returns it with its residual
+/// covariance, for point noise `sigma` pixels (`None`: 1 px).
 #[pyfunction]
-#[pyo3(signature = (points, sigma = Real::new(1.0)), text_signature = "(points, sigma=1.0)")]
-pub fn fit_line(points: &Bound<'_, PyAny>, sigma: Real) -> PyResult<PyFittedLine> {
+#[pyo3(signature = (points, sigma = None))]
+pub fn fit_line(points: &Bound<'_, PyAny>, sigma: Option<Real>) -> PyResult<PyFittedLine> {
     let pts = read_points::<2>("points", Some(points))?;
     let sigma = sigma_arg(sigma)?;
     guarded(|| fitting::fit_line(&pts, sigma)).map(|inner| PyFittedLine { inner })
 }
 
-/// Fits an ellipse to points and returns it with its residual covariance.
+/// Fits an ellipse to points `(N, 2)` and returns it with its residual covariance, for point noise
+/// `sigma` pixels (`None`: 1 px).
 #[pyfunction]
-#[pyo3(signature = (points, sigma = Real::new(1.0)), text_signature = "(points, sigma=1.0)")]
-pub fn fit_conic(py: Python<'_>, points: &Bound<'_, PyAny>, sigma: Real) -> PyResult<PyFittedConic> {
+#[pyo3(signature = (points, sigma = None))]
+pub fn fit_conic(py: Python<'_>, points: &Bound<'_, PyAny>, sigma: Option<Real>) -> PyResult<PyFittedConic> {
     let pts = read_points::<2>("points", Some(points))?;
     let sigma = sigma_arg(sigma)?;
     solve(py, move || fitting::fit_conic(&pts, sigma)).map(|inner| PyFittedConic { inner })
@@ -175,19 +118,20 @@ fn rows_to_py<'py, const D: usize>(py: Python<'py>, rows: &[SVector<f64, D>]) ->
     Array2::from_shape_fn((rows.len(), D), |(i, j)| rows[i][j]).into_pyarray(py)
 }
 
-/// The residual samples of the paper's Figures 1-2 (section 3.1).
+/// The residual samples of the paper's Figures 1-2 (section 3.1): `draws` fits to points spread
+/// over `size` pixels (`None`: the paper's 1000) with noise `sigma` pixels (`None`: 1 px), seeded by `seed` (`None`: 0).
 #[pyfunction]
-#[pyo3(signature = (draws, size = Real::new(1000.0), sigma = Real::new(1.0), seed = Integer::new(0)), text_signature = "(draws, size=1000.0, sigma=1.0, seed=0)")]
+#[pyo3(signature = (draws, size = None, sigma = None, seed = None))]
 pub fn fitting_residual_samples<'py>(
     py: Python<'py>,
     draws: Integer,
-    size: Real,
-    sigma: Real,
-    seed: Integer,
+    size: Option<Real>,
+    sigma: Option<Real>,
+    seed: Option<Integer>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let draws = draws.count("draws", 1)?;
-    let seed = seed.seed("seed")?;
-    let size = size.get("size")?;
+    let seed = seed.map_or(Ok(0), |s| s.seed("seed"))?;
+    let size = size.map_or(Ok(PAPER_IMAGE_SIZE), |s| s.get("size"))?;
     if !(size.is_finite() && size > 0.0) {
         return Err(invalid_argument(
             "size",

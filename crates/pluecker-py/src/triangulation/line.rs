@@ -1,22 +1,26 @@
-//! `triangulate_line` (one 3-D line from its images) and `pluecker.LineTriangulation`.
+//! Lines: `triangulate_line` (one 3-D line from its images) with `pluecker.LineTriangulation`, and
+//! `triangulate_lines` (many tracks, solved by the core's batch with the GIL released) with
+//! `pluecker.LineTriangulations`, column arrays beside the per-track report columns of
+//! `pluecker.BatchReport` ([`super::batch`]).
+//!
+//! Image lines are `(…, 3)` homogeneous lines or `(…, 2, 2)` segments; cameras of a batch are
+//! shared `(v, 3, 4)` or per track `(n, v, 3, 4)` ([`super::batch::Cameras`]).
 
-use crate::errors::{invalid_argument, non_finite, shape_error, solve};
-use crate::triangulation::{options, renamed, PyTriangulationReport};
-use crate::triangulation_arrays::{cameras, covariances2, first_non_finite_row, read_any, same_count, shape_string};
-use crate::triangulation_quadric::{matrix_to_py, rows};
-use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
-use numpy::{PyArray1, PyArray2};
-use pluecker::geometry::plucker::LineChart;
-use pluecker::triangulation::line::{
-    lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
-};
-use crate::convert::{optional_real, Integer, Real};
-use crate::convert::strict_json_dict;
-use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
+use super::report::PyTriangulationReport;
+use super::{options_arg, renamed, PyTriangulationOptions};
+use crate::convert::{cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Real};
+use crate::errors::{invalid_argument, shape_error, solve};
+use crate::fields::{result_class, Array, Field};
+use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
+use pluecker::geometry::plucker::LineChart;
+use pluecker::triangulation::line::batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation};
+use pluecker::triangulation::Report;
+use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-
 
 /// Core argument names → Python argument names of `triangulate_line`.
 pub(crate) const LINE_NAMES: &[(&str, &str)] = &[
@@ -52,58 +56,28 @@ impl PyLineTriangulation {
     }
 }
 
-#[pymethods]
-impl PyLineTriangulation {
-    #[getter]
-    fn plucker<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.plucker.as_slice())
-    }
-
-    #[getter]
-    fn point<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.point.as_slice())
-    }
-
-    #[getter]
-    fn direction<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.direction.as_slice())
-    }
-
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.covariance.as_ref().map(|m| matrix_to_py::<4, 4>(py, m))
-    }
-
-    #[getter]
-    fn chart_axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix_to_py::<2, 3>(py, &chart_axes(&self.chart))
+result_class! {
+    PyLineTriangulation: PyTriangulationReport {
+        /// Plücker coordinates `(l12, l13, l14, l23, l42, l34)` of the line, unit norm (eq. 4 holds).
+        plucker = |l| l.plucker;
+        /// The point of the line closest to the world origin.
+        point = |l| l.point;
+        /// Unit direction of the line.
+        direction = |l| l.direction;
+        /// Rows `e1`, `e2`: the axes of the 4-parameter chart in which `covariance` is expressed.
+        chart_axes = |l| chart_axes(&l.chart);
+        /// 4x4 covariance of the line in its chart (first order); `None` when singular.
+        covariance = |l| l.covariance;
     }
 
     /// The 6x6 covariance of the unit Plücker coordinates (`LineChart::plucker_covariance`).
-    fn plucker_covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.covariance
-            .as_ref()
-            .map(|c| matrix_to_py::<6, 6>(py, &self.chart.plucker_covariance(c)))
+    fn plucker_covariance(&self, py: Python<'_>) -> PyResult<PyObject> {
+        self.covariance.map(|c| self.chart.plucker_covariance(&c)).get(py)
     }
 
     /// The 6x6 covariance of `(point, direction)` (`LineChart::point_direction_covariance`).
-    fn point_direction_covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.covariance
-            .as_ref()
-            .map(|c| matrix_to_py::<6, 6>(py, &self.chart.point_direction_covariance(c)))
-    }
-
-    /// Plain-Python (JSON-serialisable) form: the report fields, `plucker`, `point`, `direction`,
-    /// `chart_axes`, `covariance`.
-    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
-        let d = slf.as_super().get().report_dict(slf.py())?;
-        let me = slf.get();
-        d.set_item("plucker", me.plucker.as_slice())?;
-        d.set_item("point", me.point.as_slice())?;
-        d.set_item("direction", me.direction.as_slice())?;
-        d.set_item("chart_axes", rows::<2, 3>(&chart_axes(&me.chart)))?;
-        d.set_item("covariance", me.covariance.as_ref().map(rows::<4, 4>))?;
-        strict_json_dict(d)
+    fn point_direction_covariance(&self, py: Python<'_>) -> PyResult<PyObject> {
+        self.covariance.map(|c| self.chart.point_direction_covariance(&c)).get(py)
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -133,11 +107,11 @@ pub(crate) fn chart_axes(chart: &LineChart) -> Matrix2x3<f64> {
 }
 
 /// Homogeneous image lines and, when they come from segments without `cov`, their covariances.
-type ImageLines = (Vec<Vector3<f64>>, Option<Vec<Matrix2<f64>>>);
+type HomogeneousLines = (Vec<Vector3<f64>>, Option<Vec<Matrix2<f64>>>);
 
 /// The image lines of `triangulate_line`: `(n, 3)` homogeneous lines, or `(n, 2, 2)` segments whose
 /// lines (and, without `cov`, covariances from endpoint noise `sigma`) come from `lines_from_segments`.
-fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Option<f64>) -> PyResult<ImageLines> {
+fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Option<f64>) -> PyResult<HomogeneousLines> {
     let (shape, values) = read_any("lines", obj)?;
     match shape.as_slice() {
         [n, 3] => {
@@ -148,9 +122,7 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
                     "applies to segments (n, 2, 2) only; give cov for homogeneous lines",
                 ));
             }
-            if let Some(row) = first_non_finite_row(&values, 3) {
-                return Err(non_finite("lines", row));
-            }
+            check_finite("lines", &values, 3)?;
             Ok((values.chunks_exact(3).map(Vector3::from_row_slice).collect(), None))
         }
         [n, 2, 2] => {
@@ -183,20 +155,18 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
 
 /// Triangulates one 3-D line from its images in two or more views (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, lines, cov = None, method = "optimal", *, sigma = None, max_relative_gap = None, max_reprojection_error = None, max_nodes = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (P, lines, cov = None, method = None, *, sigma = None, options = None))]
+#[allow(non_snake_case)]
 pub fn triangulate_line(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: &str,
+    method: Option<&str>,
     sigma: Option<Real>,
-    max_relative_gap: Option<Real>,
-    max_reprojection_error: Option<Real>,
-    max_nodes: Option<Integer>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
 ) -> PyResult<Py<PyLineTriangulation>> {
-    let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
+    let opts = options_arg(method, options)?;
     let cams = cameras("P", P)?;
     let sigma = optional_real("sigma", sigma)?;
     let (image, from_segments) = image_lines(lines, cams.len(), cov.is_some(), sigma)?;
@@ -210,4 +180,127 @@ pub fn triangulate_line(
     PyLineTriangulation::create(py, result)
 }
 
+/// The results of `triangulate_lines`: Plücker coordinates, points and directions per track.
+#[pyclass(frozen, extends = PyBatchReport, name = "LineTriangulations", module = "pluecker")]
+#[derive(Debug, Default)]
+pub struct PyLineTriangulations {
+    plucker: Vec<f64>,
+    point: Vec<f64>,
+    direction: Vec<f64>,
+    chart_axes: Vec<f64>,
+    covariance: Vec<f64>,
+}
+
+impl TrackColumns for PyLineTriangulations {
+    type Track = LineTriangulation;
+    const NAMES: &'static [(&'static str, &'static str)] = LINE_NAMES;
+
+    fn push(&mut self, track: LineTriangulation) -> Report {
+        self.plucker.extend_from_slice(track.plucker.as_slice());
+        self.point.extend_from_slice(track.point.as_slice());
+        self.direction.extend_from_slice(track.direction.as_slice());
+        self.chart_axes.extend(row_major(&chart_axes(&track.chart)));
+        push_covariance(&mut self.covariance, track.covariance.as_ref());
+        track.report
+    }
+
+    fn push_missing(&mut self) {
+        self.plucker.extend([f64::NAN; 6]);
+        self.point.extend([f64::NAN; 3]);
+        self.direction.extend([f64::NAN; 3]);
+        self.chart_axes.extend([f64::NAN; 6]);
+        push_covariance::<4>(&mut self.covariance, None);
+    }
+}
+
+result_class! {
+    PyLineTriangulations: PyBatchReport {
+        /// Per track: Plücker coordinates, shape (n, 6) (NaN for a rejected track).
+        plucker = |b| Array::rows(b.plucker.clone(), &[6]);
+        /// Per track: the point of the line closest to the origin, shape (n, 3).
+        point = |b| Array::rows(b.point.clone(), &[3]);
+        /// Per track: unit direction, shape (n, 3).
+        direction = |b| Array::rows(b.direction.clone(), &[3]);
+        /// Per track: the chart axes of `covariance`, shape (n, 2, 3).
+        chart_axes = |b| Array::rows(b.chart_axes.clone(), &[2, 3]);
+        /// Per track: 4x4 covariance in the chart, shape (n, 4, 4) (NaN where there is none).
+        covariance = |b| Array::rows(b.covariance.clone(), &[4, 4]);
+    }
+
+    fn __repr__(slf: &Bound<'_, Self>) -> String {
+        slf.as_super().get().repr("LineTriangulations")
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "LineTriangulations", &[slf.as_super().get(), slf.get()])
+    }
+}
+
+/// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
+#[pyfunction]
+#[pyo3(signature = (P, lines, visible = None, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn triangulate_lines(
+    py: Python<'_>,
+    P: &Bound<'_, PyAny>,
+    lines: &Bound<'_, PyAny>,
+    visible: Option<&Bound<'_, PyAny>>,
+    cov: Option<&Bound<'_, PyAny>>,
+    method: Option<&str>,
+    sigma: Option<Real>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
+) -> PyResult<Py<PyLineTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
+    let opts = options_arg(method, options)?;
+    let sigma = optional_real("sigma", sigma)?;
+    let cams = Cameras::read(P, 2, opts.method)?;
+    let (shape, values) = read_any("lines", lines)?;
+    let segments = match shape.as_slice() {
+        [_, _, 3] => false,
+        [_, _, 2, 2] => true,
+        _ => {
+            return Err(shape_error(
+                "lines",
+                "shape (n, v, 3) (homogeneous lines) or (n, v, 2, 2) (segments)",
+                shape_string(&shape),
+            ))
+        }
+    };
+    cams.check_observations("lines", &shape, if segments { "2, 2" } else { "3" })?;
+    let (n, v) = (shape[0], shape[1]);
+    if sigma.is_some() && !segments {
+        return Err(invalid_argument(
+            "sigma",
+            "applies to segments (n, v, 2, 2) only; give cov for homogeneous lines",
+        ));
+    }
+    if sigma.is_some() && cov.is_some() {
+        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+    }
+    let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
+    let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
+    let sigma = sigma.unwrap_or(1.0);
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
+        let tracks = LineTracks {
+            lines: if segments {
+                ImageLines::Segments {
+                    endpoints: &values,
+                    sigma,
+                }
+            } else {
+                ImageLines::Homogeneous(&values)
+            },
+            visible: mask.as_deref(),
+            covariances: covariances.as_deref(),
+        };
+        let results = core_lines(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
+        Ok(collect::<PyLineTriangulations>(opts.method, results))
+    })?;
+    batch_result(py, outcome)
+}
+
 pack_struct!(PyLineTriangulation { plucker, point, direction, chart, covariance });
+pack_struct!(PyLineTriangulations { plucker, point, direction, chart_axes, covariance });

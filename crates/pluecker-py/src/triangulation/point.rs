@@ -1,19 +1,32 @@
-//! `triangulate_point` (one point from its views) and `pluecker.PointTriangulation`.
+//! Points: `triangulate_point` (one point from its views) with its result `pluecker.PointTriangulation`,
+//! and `triangulate_points` (many tracks seen by one set of cameras, solved by the core's batch with
+//! the GIL released) with `pluecker.PointTriangulations`, the arrays of their points beside the
+//! per-track report columns of `pluecker.BatchReport` ([`super::batch`]).
+//!
+//! The batch's numpy arrays go to the core as flat row-major slices (`PointTracks`), one copy each.
+//! A track the core rejects (NaN in a visible view, fewer than two visible views, a covariance that
+//! is not positive definite, ...) gets an error status and a message and never stops the others.
+//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear`).
 
-use crate::errors::{non_finite, solve};
-use crate::triangulation::{options, renamed, PyTriangulationReport, POINT_NAMES};
-use crate::triangulation_arrays::{cameras, covariances2, first_non_finite_row, read, same_count, Dim};
-use crate::triangulation_quadric::{matrix_to_py, rows};
-use nalgebra::{Matrix3, Vector2, Vector3};
-use numpy::{PyArray1, PyArray2};
-use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
-use crate::convert::{Integer, Real};
-use crate::convert::strict_json_dict;
-use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use super::batch::{collect, per_observation, push_covariance, PyBatchReport, TrackColumns};
+use super::report::PyTriangulationReport;
+use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
+use crate::convert::{cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Real};
+use crate::errors::{shape_error, solve, to_py_err};
+use crate::fields::{result_class, Array};
+use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use nalgebra::{Matrix3, Vector2, Vector3};
+use pluecker::triangulation::point::batch::{
+    triangulate_points as core_points, triangulate_points_linear, LinearPoints, PointTracks,
+};
+use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
+use pluecker::triangulation::{Method, Report};
+use pluecker::Error;
+use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-
+use std::sync::atomic::Ordering;
+use std::time::Instant;
 
 /// A triangulated point: the estimate `X` and the report fields of `TriangulationReport`.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "PointTriangulation", module = "pluecker")]
@@ -35,24 +48,12 @@ impl PyPointTriangulation {
     }
 }
 
-#[pymethods]
-impl PyPointTriangulation {
-    #[getter(X)]
-    fn x<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.point.as_slice())
-    }
-
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.covariance.as_ref().map(|m| matrix_to_py::<3, 3>(py, m))
-    }
-
-    /// Plain-Python (JSON-serialisable) form: the report fields, `X` and `covariance`.
-    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
-        let d = slf.as_super().get().report_dict(slf.py())?;
-        d.set_item("X", slf.get().point.as_slice())?;
-        d.set_item("covariance", slf.get().covariance.as_ref().map(rows::<3, 3>))?;
-        strict_json_dict(d)
+result_class! {
+    PyPointTriangulation: PyTriangulationReport {
+        /// The point, world frame.
+        X = |p| p.point;
+        /// Its 3x3 covariance (first order, from the observation covariances); `None` when singular.
+        covariance = |p| p.covariance;
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -73,30 +74,26 @@ impl PyPointTriangulation {
 }
 
 /// `(n, 2)` finite pixels, one row per camera.
-pub fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vector2<f64>>> {
+fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vector2<f64>>> {
     let (shape, values) = read(name, obj, &[Dim::Free("n"), Dim::Fixed(2)])?;
     same_count(name, shape[0], views)?;
-    if let Some(row) = first_non_finite_row(&values, 2) {
-        return Err(non_finite(name, row));
-    }
+    check_finite(name, &values, 2)?;
     Ok(values.chunks_exact(2).map(|r| Vector2::new(r[0], r[1])).collect())
 }
 
 /// Triangulates one point from its pixels in two or more views (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, x, cov = None, method = "optimal", *, max_relative_gap = None, max_reprojection_error = None, max_nodes = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (P, x, cov = None, method = None, *, options = None))]
+#[allow(non_snake_case)]
 pub fn triangulate_point(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: &str,
-    max_relative_gap: Option<Real>,
-    max_reprojection_error: Option<Real>,
-    max_nodes: Option<Integer>,
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
 ) -> PyResult<Py<PyPointTriangulation>> {
-    let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
+    let opts = options_arg(method, options)?;
     let cams = cameras("P", P)?;
     let obs = observations("x", x, cams.len())?;
     let covs = covariances2("cov", cov, cams.len())?;
@@ -107,3 +104,139 @@ pub fn triangulate_point(
 }
 
 pack_struct!(PyPointTriangulation { point, covariance });
+
+/// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
+/// each track's point (NaN for a rejected track).
+#[pyclass(frozen, extends = PyBatchReport, name = "PointTriangulations", module = "pluecker")]
+#[derive(Debug, Default)]
+pub struct PyPointTriangulations {
+    /// Row-major `(n, 3)` points, world frame.
+    x: Vec<f64>,
+    /// Row-major `(n, 3, 3)` covariances, NaN where there is none.
+    covariance: Vec<f64>,
+}
+
+impl TrackColumns for PyPointTriangulations {
+    type Track = PointTriangulation;
+    const NAMES: &'static [(&'static str, &'static str)] = POINT_NAMES;
+
+    fn push(&mut self, track: PointTriangulation) -> Report {
+        self.x.extend_from_slice(track.point.as_slice());
+        push_covariance(&mut self.covariance, track.covariance.as_ref());
+        track.report
+    }
+
+    fn push_missing(&mut self) {
+        self.x.extend([f64::NAN; 3]);
+        push_covariance::<3>(&mut self.covariance, None);
+    }
+}
+
+impl PyPointTriangulations {
+    /// The report and point columns of the core's linear fast path: no certificates, and every
+    /// track timed at the batch's mean `seconds`.
+    fn linear(points: LinearPoints, seconds: f64) -> (PyBatchReport, Self) {
+        let n = points.outcomes.len();
+        let mut report = PyBatchReport::with_capacity(Method::Linear, n);
+        let mut columns = PyPointTriangulations {
+            x: Vec::with_capacity(3 * n),
+            covariance: Vec::with_capacity(9 * n),
+        };
+        for (t, outcome) in points.outcomes.into_iter().enumerate() {
+            match outcome {
+                Ok(status) => {
+                    report.push_uncertified(points.costs[t], status.as_str(), seconds, points.residual_dofs[t]);
+                    columns.x.extend_from_slice(&points.points[3 * t..3 * t + 3]);
+                    columns
+                        .covariance
+                        .extend_from_slice(&points.covariances[9 * t..9 * t + 9]);
+                }
+                Err(e) => report.reject(&mut columns, t, e),
+            }
+        }
+        (report, columns)
+    }
+}
+
+result_class! {
+    PyPointTriangulations: PyBatchReport {
+        /// Per track: the point, world frame, shape (n, 3) (NaN for a rejected track).
+        X = |b| Array::rows(b.x.clone(), &[3]);
+        /// Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none).
+        covariance = |b| Array::rows(b.covariance.clone(), &[3, 3]);
+    }
+
+    fn __repr__(slf: &Bound<'_, Self>) -> String {
+        slf.as_super().get().repr("PointTriangulations")
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "PointTriangulations", &[slf.as_super().get(), slf.get()])
+    }
+}
+
+/// Observations (tracks x views) up to which a `linear` or `local` batch runs on the calling thread
+/// ([`interrupt::run_interruptible`]'s `short`).
+const SHORT_BATCH: usize = 4096;
+
+/// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
+#[pyfunction]
+#[pyo3(signature = (P, x, visible = None, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn triangulate_points(
+    py: Python<'_>,
+    P: &Bound<'_, PyAny>,
+    x: &Bound<'_, PyAny>,
+    visible: Option<&Bound<'_, PyAny>>,
+    cov: Option<&Bound<'_, PyAny>>,
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
+) -> PyResult<Py<PyPointTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
+    let opts = options_arg(method, options)?;
+    let cams = cameras("P", P)?;
+    let v = cams.len();
+    if v < 2 {
+        return Err(to_py_err(Error::TooFewCorrespondences {
+            method: opts.method.as_str().into(),
+            required: "2 cameras".into(),
+            actual: format!("{v} camera(s) in P"),
+        }));
+    }
+    let (shape, observations) = read("x", x, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)])?;
+    if shape[1] != v {
+        return Err(shape_error(
+            "x",
+            &format!("shape (n, {v}, 2) (one column per camera in P)"),
+            shape_string(&shape),
+        ));
+    }
+    let n = shape[0];
+    let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
+    let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
+    // The linear and local solves of a few thousand observations end within milliseconds.
+    let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
+    let outcome = run_interruptible(py, progress, budget, short, move |done| {
+        let tracks = PointTracks {
+            observations: &observations,
+            visible: mask.as_deref(),
+            covariances: covariances.as_deref(),
+        };
+        if opts.method == Method::Linear {
+            let started = Instant::now();
+            let linear = triangulate_points_linear(&cams, &tracks).map_err(|e| renamed(e, POINT_NAMES))?;
+            // The fast path does not time tracks one by one: each gets the batch's mean.
+            let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
+            done.store(n, Ordering::Relaxed);
+            return Ok(PyPointTriangulations::linear(linear, mean));
+        }
+        let results = core_points(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
+        Ok(collect::<PyPointTriangulations>(opts.method, results))
+    })?;
+    batch_result(py, outcome)
+}
+
+pack_struct!(PyPointTriangulations { x, covariance });

@@ -1,36 +1,26 @@
-//! `triangulate_quadric` (an ellipsoid from its outline conics) and `pluecker.QuadricTriangulation`.
+//! Quadrics: `triangulate_quadric` (an ellipsoid from its outline conics) with
+//! `pluecker.QuadricTriangulation`, and `triangulate_quadrics` (many tracks, solved by the core's
+//! batch with the GIL released) with `pluecker.QuadricTriangulations`, column arrays beside the
+//! per-track report columns of `pluecker.BatchReport` ([`super::batch`]).
 
+use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
+use super::report::PyTriangulationReport;
+use super::{options_arg, renamed, PyTriangulationOptions};
+use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Real};
 use crate::errors::solve;
-use crate::triangulation::{options, renamed, PyTriangulationReport};
-use crate::triangulation_arrays::{cameras, matrix_stack, same_count};
-use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3};
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use crate::fields::{result_class, Array};
+use crate::interrupt::{self, batch_result, run_interruptible};
+use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use nalgebra::{Matrix3, Matrix4, Vector3};
+use pluecker::triangulation::quadric::batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
 use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
-use crate::convert::{Integer, Real};
-use crate::convert::strict_json_dict;
+use pluecker::triangulation::Report;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use pyo3::types::PyTuple;
 
-
-/// Core argument names → Python argument names of `triangulate_quadric`.
+/// Core argument names → Python argument names of the quadric functions.
 pub(crate) const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
-
-/// A fresh `(R, C)` float64 array of a matrix.
-pub(crate) fn matrix_to_py<'py, const R: usize, const C: usize>(
-    py: Python<'py>,
-    m: &SMatrix<f64, R, C>,
-) -> Bound<'py, PyArray2<f64>> {
-    Array2::from_shape_fn((R, C), |(i, j)| m[(i, j)]).into_pyarray(py)
-}
-
-/// The rows of a matrix as nested lists (for `to_dict`).
-pub(crate) fn rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> Vec<Vec<f64>> {
-    (0..R).map(|i| (0..C).map(|j| m[(i, j)]).collect()).collect()
-}
 
 /// A triangulated ellipsoid: dual and primal quadric, centre, axes, semi-axes, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "QuadricTriangulation", module = "pluecker")]
@@ -59,50 +49,20 @@ impl PyQuadricTriangulation {
     }
 }
 
-#[pymethods]
-impl PyQuadricTriangulation {
-    #[getter(Q)]
-    fn dual<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix_to_py::<4, 4>(py, &self.dual)
-    }
-
-    #[getter]
-    fn primal<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.primal.as_ref().map(|m| matrix_to_py::<4, 4>(py, m))
-    }
-
-    #[getter]
-    fn centre<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.centre.as_slice())
-    }
-
-    #[getter]
-    fn axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        matrix_to_py::<3, 3>(py, &self.axes)
-    }
-
-    #[getter]
-    fn semi_axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_slice(py, self.semi_axes.as_slice())
-    }
-
-    #[getter]
-    fn covariance<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray2<f64>>> {
-        self.covariance.as_ref().map(|m| matrix_to_py::<9, 9>(py, m))
-    }
-
-    /// Plain-Python (JSON-serialisable) form: the report fields, `Q`, `primal`, `centre`, `axes`,
-    /// `semi_axes`, `covariance`.
-    fn to_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
-        let d = slf.as_super().get().report_dict(slf.py())?;
-        let me = slf.get();
-        d.set_item("Q", rows::<4, 4>(&me.dual))?;
-        d.set_item("primal", me.primal.as_ref().map(rows::<4, 4>))?;
-        d.set_item("centre", me.centre.as_slice())?;
-        d.set_item("axes", rows::<3, 3>(&me.axes))?;
-        d.set_item("semi_axes", me.semi_axes.as_slice())?;
-        d.set_item("covariance", me.covariance.as_ref().map(rows::<9, 9>))?;
-        strict_json_dict(d)
+result_class! {
+    PyQuadricTriangulation: PyTriangulationReport {
+        /// The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19.
+        Q = |q| q.dual;
+        /// The primal quadric `Q⁻¹` (4x4); `None` when `Q` is singular.
+        primal = |q| q.primal;
+        /// Centre of the ellipsoid, world frame.
+        centre = |q| q.centre;
+        /// Principal axes of the ellipsoid, one per column.
+        axes = |q| q.axes;
+        /// Semi-axis lengths along `axes`, world units.
+        semi_axes = |q| q.semi_axes;
+        /// 9x9 covariance of the quadric's parameters (first order); `None` when singular.
+        covariance = |q| q.covariance;
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -128,21 +88,19 @@ impl PyQuadricTriangulation {
 
 /// Triangulates an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008).
 #[pyfunction]
-#[pyo3(signature = (P, conics, cov = None, method = "optimal", *, max_relative_gap = None, max_reprojection_error = None, max_nodes = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (P, conics, cov = None, method = None, *, options = None))]
+#[allow(non_snake_case)]
 pub fn triangulate_quadric(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: &str,
-    max_relative_gap: Option<Real>,
-    max_reprojection_error: Option<Real>,
-    max_nodes: Option<Integer>,
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
-    let opts = options(method, max_relative_gap, max_reprojection_error, max_nodes)?;
+    let opts = options_arg(method, options)?;
     let cams = cameras("P", P)?;
-    let observed = crate::triangulation_arrays::conics("conics", conics)?;
+    let observed = convert::conics("conics", conics)?;
     same_count("conics", observed.len(), cams.len())?;
     let covs = match cov {
         Some(c) => {
@@ -158,4 +116,106 @@ pub fn triangulate_quadric(
     PyQuadricTriangulation::create(py, result)
 }
 
+/// The results of `triangulate_quadrics`: dual and primal quadrics, centres, semi-axes and axes.
+#[pyclass(frozen, extends = PyBatchReport, name = "QuadricTriangulations", module = "pluecker")]
+#[derive(Debug, Default)]
+pub struct PyQuadricTriangulations {
+    dual: Vec<f64>,
+    primal: Vec<f64>,
+    centre: Vec<f64>,
+    semi_axes: Vec<f64>,
+    axes: Vec<f64>,
+    covariance: Vec<f64>,
+}
+
+impl TrackColumns for PyQuadricTriangulations {
+    type Track = QuadricTriangulation;
+    const NAMES: &'static [(&'static str, &'static str)] = QUADRIC_NAMES;
+
+    fn push(&mut self, track: QuadricTriangulation) -> Report {
+        self.dual.extend(row_major(&track.dual));
+        match &track.primal {
+            Some(p) => self.primal.extend(row_major(p)),
+            None => self.primal.extend([f64::NAN; 16]),
+        }
+        self.centre.extend_from_slice(track.centre.as_slice());
+        self.semi_axes.extend_from_slice(track.semi_axes.as_slice());
+        self.axes.extend(row_major(&track.axes));
+        push_covariance(&mut self.covariance, track.covariance.as_ref());
+        track.report
+    }
+
+    fn push_missing(&mut self) {
+        self.dual.extend([f64::NAN; 16]);
+        self.primal.extend([f64::NAN; 16]);
+        self.centre.extend([f64::NAN; 3]);
+        self.semi_axes.extend([f64::NAN; 3]);
+        self.axes.extend([f64::NAN; 9]);
+        push_covariance::<9>(&mut self.covariance, None);
+    }
+}
+
+result_class! {
+    PyQuadricTriangulations: PyBatchReport {
+        /// Per track: the dual quadric, shape (n, 4, 4) (NaN for a rejected track).
+        Q = |b| Array::rows(b.dual.clone(), &[4, 4]);
+        /// Per track: the primal quadric, shape (n, 4, 4) (NaN where `Q` is singular).
+        primal = |b| Array::rows(b.primal.clone(), &[4, 4]);
+        /// Per track: centre, shape (n, 3).
+        centre = |b| Array::rows(b.centre.clone(), &[3]);
+        /// Per track: principal axes (columns), shape (n, 3, 3).
+        axes = |b| Array::rows(b.axes.clone(), &[3, 3]);
+        /// Per track: semi-axis lengths, shape (n, 3).
+        semi_axes = |b| Array::rows(b.semi_axes.clone(), &[3]);
+        /// Per track: 9x9 covariance, shape (n, 9, 9) (NaN where there is none).
+        covariance = |b| Array::rows(b.covariance.clone(), &[9, 9]);
+    }
+
+    fn __repr__(slf: &Bound<'_, Self>) -> String {
+        slf.as_super().get().repr("QuadricTriangulations")
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(slf.py(), "QuadricTriangulations", &[slf.as_super().get(), slf.get()])
+    }
+}
+
+/// Triangulates many ellipsoids (tracks) from their outline conics in parallel (Josephson & Kahl 2008).
+#[pyfunction]
+#[pyo3(signature = (P, conics, visible = None, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn triangulate_quadrics(
+    py: Python<'_>,
+    P: &Bound<'_, PyAny>,
+    conics: &Bound<'_, PyAny>,
+    visible: Option<&Bound<'_, PyAny>>,
+    cov: Option<&Bound<'_, PyAny>>,
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
+) -> PyResult<Py<PyQuadricTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
+    let opts = options_arg(method, options)?;
+    let cams = Cameras::read(P, 3, opts.method)?;
+    let spec = [Dim::Free("n"), Dim::Free("v"), Dim::Fixed(3), Dim::Fixed(3)];
+    let (shape, values) = read("conics", conics, &spec)?;
+    cams.check_observations("conics", &shape, "3, 3")?;
+    let (n, v) = (shape[0], shape[1]);
+    let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
+    let covariances = cov.map(|c| per_observation("cov", c, n, v, [5, 5])).transpose()?;
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
+        let tracks = QuadricTracks {
+            conics: &values,
+            visible: mask.as_deref(),
+            covariances: covariances.as_deref(),
+        };
+        let results = core_quadrics(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+        Ok(collect::<PyQuadricTriangulations>(opts.method, results))
+    })?;
+    batch_result(py, outcome)
+}
+
 pack_struct!(PyQuadricTriangulation { dual, primal, centre, axes, semi_axes, covariance });
+pack_struct!(PyQuadricTriangulations { dual, primal, centre, semi_axes, axes, covariance });

@@ -109,6 +109,12 @@ impl PrincipalLine {
     }
 }
 
+/// Pixel noise σ assumed by the Python `fit_line`/`fit_conic` when none is given.
+pub const DEFAULT_SIGMA_PX: f64 = 1.0;
+
+/// Side of the square images of the paper's Figures 1-2 (section 3.1), pixels.
+pub const PAPER_IMAGE_SIZE: f64 = 1000.0;
+
 /// Total least squares line through `points` (pixels) and the covariance of its residual for
 /// i.i.d. isotropic Gaussian noise of `sigma` px per coordinate.
 ///

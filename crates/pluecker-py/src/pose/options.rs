@@ -1,0 +1,129 @@
+//! `pluecker.PoseOptions` and `pluecker.RansacOptions`: the core's `PoseOptions` and `RansacOptions`
+//! with the same names and the same defaults (their `Default`), settable from Python and checked by
+//! the core's `validate` as they are set.
+//!
+//! Three Python fields have no core field of the same shape: `certify` and `certify_gap` together
+//! are the core's `certify: Option<CertificateOptions>`, and the robust estimator is the separate
+//! `ransac=` argument of `estimate_pose` (the core's `robust: Option<RansacOptions>`).
+
+use crate::convert::{seconds_arg, Integer, Real};
+use crate::errors::to_py_err;
+use crate::fields::options_class;
+use crate::pose::Pose;
+use pluecker::pose::{CertificateOptions, Method, PoseOptions, RansacOptions};
+use pyo3::prelude::*;
+
+/// Options of `estimate_pose`, the core's `PoseOptions` (every default is the core's).
+///
+/// A keyword given to `estimate_pose` itself (`method=`) wins over the same field here.
+#[pyclass(name = "PoseOptions", module = "pluecker")]
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PyPoseOptions {
+    /// The core's options; `robust` and `certify` stay `None` here (see `core`).
+    inner: PoseOptions,
+    certify: bool,
+    certificate: CertificateOptions,
+}
+
+impl PyPoseOptions {
+    fn validate(&self) -> PyResult<()> {
+        self.inner.validate().map_err(to_py_err)?;
+        self.certificate.validate().map_err(to_py_err)
+    }
+
+    /// The core's options, robust with `ransac` when given.
+    pub(crate) fn core(&self, ransac: Option<RansacOptions>) -> PoseOptions {
+        PoseOptions {
+            robust: ransac,
+            certify: self.certify.then_some(self.certificate),
+            ..self.inner.clone()
+        }
+    }
+
+    /// These options with `method` set (the `method=` keyword of `estimate_pose`).
+    pub(crate) fn with_method(&self, method: &str) -> PyResult<Self> {
+        let mut next = self.clone();
+        next.inner.method = Method::parse(method).map_err(to_py_err)?;
+        Ok(next)
+    }
+}
+
+options_class! {
+    PyPoseOptions {
+        /// Estimator, one of `METHODS`.
+        method: String = |o| o.inner.method.as_str(), |o, v| Method::parse(&v).map(|m| o.inner.method = m).map_err(to_py_err);
+        /// Penalty λ on the dual-quaternion constraints `r·r = 1`, `r·s = 0` (Phong & Horaud 1995, eqs. 13-15, 22).
+        penalty: Real = |o| o.inner.penalty, |o, v| v.get("penalty").map(|x| o.inner.penalty = x);
+        /// Solve the algebraic stage in a centred, unit-scale object frame.
+        normalize: bool = |o| o.inner.normalize, |o, v| Ok::<(), PyErr>(o.inner.normalize = v);
+        /// Follow the estimator with a minimisation of the reprojection error in pixels.
+        refine: bool = |o| o.inner.refine, |o, v| Ok::<(), PyErr>(o.inner.refine = v);
+        /// An extra starting pose `(R, t)`, tried first besides the default starts; `None`: no guess needed.
+        initial_pose: Option<Bound<'_, PyAny>> = |o| o.inner.initial_pose.map(Pose::from),
+            |o, v| v.map(|p| Pose::extract("initial_pose", &p)).transpose().map(|p| o.inner.initial_pose = p.map(Into::into));
+        /// Iteration cap of the trust-region methods' algebraic stage.
+        trust_region_max_iterations: Integer = |o| o.inner.trust_region.stopping.max_iterations,
+            |o, v| v.count("trust_region_max_iterations", 1).map(|n| o.inner.trust_region.stopping.max_iterations = n);
+        /// Iteration cap of method `'levenberg-marquardt'`.
+        levenberg_marquardt_max_iterations: Integer = |o| o.inner.levenberg_marquardt.stopping.max_iterations,
+            |o, v| v.count("levenberg_marquardt_max_iterations", 1).map(|n| o.inner.levenberg_marquardt.stopping.max_iterations = n);
+        /// Iteration cap of method `'newton'`.
+        newton_max_iterations: Integer = |o| o.inner.newton.max_iterations,
+            |o, v| v.count("newton_max_iterations", 1).map(|n| o.inner.newton.max_iterations = n);
+        /// Iteration cap of the reprojection refinement.
+        refinement_max_iterations: Integer = |o| o.inner.refinement.stopping.max_iterations,
+            |o, v| v.count("refinement_max_iterations", 1).map(|n| o.inner.refinement.stopping.max_iterations = n);
+        /// Pixel noise σ of every image point and endpoint, for the covariance; `None`: estimated from the residuals.
+        sigma_px: Option<Real> = |o| o.inner.sigma_px, |o, v| v.map(|r| r.get("sigma_px")).transpose().map(|s| o.inner.sigma_px = s);
+        /// Status `ambiguous` when another minimum is within `ambiguity_threshold · σ²` of the answer's cost.
+        ambiguity_threshold: Real = |o| o.inner.ambiguity_threshold, |o, v| v.get("ambiguity_threshold").map(|x| o.inner.ambiguity_threshold = x);
+        /// Run the global-optimality certificate (branch and bound over rotations).
+        certify: bool = |o| o.certify, |o, v| Ok::<(), PyErr>(o.certify = v);
+        /// Relative gap at or below which the certificate holds.
+        certify_gap: Real = |o| o.certificate.gap, |o, v| v.get("certify_gap").map(|x| o.certificate.gap = x);
+        /// Cap on the rotation cells the certificate examines.
+        certify_max_nodes: Integer = |o| o.certificate.max_nodes, |o, v| v.count("certify_max_nodes", 1).map(|n| o.certificate.max_nodes = n);
+    }
+}
+
+/// Options of the robust estimator (LO-RANSAC over points and lines), the core's `RansacOptions`.
+/// Thresholds are in pixels.
+#[pyclass(name = "RansacOptions", module = "pluecker")]
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PyRansacOptions {
+    pub(crate) inner: RansacOptions,
+}
+
+impl PyRansacOptions {
+    fn validate(&self) -> PyResult<()> {
+        self.inner.validate().map_err(to_py_err)
+    }
+}
+
+options_class! {
+    PyRansacOptions {
+        /// Inlier threshold of a point: reprojection distance, pixels.
+        point_threshold: Real = |o| o.inner.point_threshold, |o, v| v.get("point_threshold").map(|x| o.inner.point_threshold = x);
+        /// Inlier threshold of a segment: RMS distance of its endpoints to the projected line, pixels.
+        line_threshold: Real = |o| o.inner.line_threshold, |o, v| v.get("line_threshold").map(|x| o.inner.line_threshold = x);
+        /// Probability of having drawn an all-inlier sample when sampling stops, in (0, 1).
+        confidence: Real = |o| o.inner.confidence, |o, v| v.get("confidence").map(|x| o.inner.confidence = x);
+        /// Cap on the samples drawn.
+        max_iterations: Integer = |o| o.inner.max_iterations, |o, v| v.count("max_iterations", 1).map(|n| o.inner.max_iterations = n);
+        /// Samples drawn at least, whatever the confidence.
+        min_iterations: Integer = |o| o.inner.min_iterations, |o, v| v.count("min_iterations", 0).map(|n| o.inner.min_iterations = n);
+        /// Lowest inlier ratio sampling plans for (caps the samples drawn), in [0, 1).
+        min_inlier_ratio: Real = |o| o.inner.min_inlier_ratio, |o, v| v.get("min_inlier_ratio").map(|x| o.inner.min_inlier_ratio = x);
+        /// Sequential probability ratio test: stop scoring a hypothesis once it cannot beat the best.
+        sprt: bool = |o| o.inner.sprt, |o, v| Ok::<(), PyErr>(o.inner.sprt = v);
+        /// Wall-time budget of the sampling loop, seconds; `None`: no budget.
+        time_budget: Option<Real> = |o| o.inner.time_budget.map(|d| d.as_secs_f64()),
+            |o, v| v.map(|r| r.get("time_budget").and_then(|s| seconds_arg("time_budget", s))).transpose().map(|d| o.inner.time_budget = d);
+        /// Seed of the sampler: the same seed and data give the same result.
+        seed: Integer = |o| o.inner.seed, |o, v| v.seed("seed").map(|s| o.inner.seed = s);
+        /// Iteration cap of each local optimisation run; 0 disables local optimisation.
+        local_iterations: Integer = |o| o.inner.local_iterations, |o, v| v.count("local_iterations", 0).map(|n| o.inner.local_iterations = n);
+        /// Fewest inliers of a usable model (at least 3); fewer correspondences in all is an error.
+        min_inliers: Integer = |o| o.inner.min_inliers, |o, v| v.count("min_inliers", 3).map(|n| o.inner.min_inliers = n);
+    }
+}
