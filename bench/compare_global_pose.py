@@ -602,7 +602,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
 
         if Features.certify_kw is None:
             try:
-                pluecker.estimate_pose(s.camera, **kw, certify=True)
+                pluecker.estimate_pose(s.camera, **kw, options=pluecker.PoseOptions(certify=True))
                 Features.certify_kw = True
             except TypeError:
                 Features.certify_kw = False
@@ -610,7 +610,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
                 Features.certify_kw = True
         cost_cert = math.nan
         if Features.certify_kw:
-            cres, csec, cerr = call_pluecker(s, args.repeats, certify=True)
+            cres, csec, cerr = call_pluecker(s, args.repeats, options=pluecker.PoseOptions(certify=True))
             t_cert.append(csec * 1e6)
             cstatus = str(cres.status) if cres is not None else f"exception: {cerr}"
             cert_statuses[cstatus] = cert_statuses.get(cstatus, 0) + 1
@@ -622,11 +622,11 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         run_peers(LAST_PEERS)
 
         # (a) the truth as a start, (b) robust with huge thresholds, (c) random starts
-        r, _, _ = call_pluecker(s, 1, initial_pose=(s.R, s.t))
+        r, _, _ = call_pluecker(s, 1, options=pluecker.PoseOptions(initial_pose=(s.R, s.t)))
         candidates["true-start"] = pose_cost(s, r.R, r.t) if r is not None else math.inf
         lap("true-start")
         r, _, err = call_pluecker(
-            s, 1, robust=True, point_threshold=HUGE_THRESHOLD, line_threshold=HUGE_THRESHOLD, min_inliers=3, seed=seed
+            s, 1, ransac=pluecker.RansacOptions(point_threshold=HUGE_THRESHOLD, line_threshold=HUGE_THRESHOLD, min_inliers=3, seed=seed)
         )
         if r is None:
             robust_errors[err] = robust_errors.get(err, 0) + 1
@@ -637,7 +637,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         for _ in range(starts):
             R0 = random_rotation(srng)
             t0 = np.array([0.0, 0.0, s.depth]) - R0 @ s.centroid
-            r, _, _ = call_pluecker(s, 1, initial_pose=(R0, t0))
+            r, _, _ = call_pluecker(s, 1, options=pluecker.PoseOptions(initial_pose=(R0, t0)))
             if r is not None:
                 best_start = min(best_start, pose_cost(s, r.R, r.t))
         candidates["random-start"] = best_start

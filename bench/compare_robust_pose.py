@@ -153,16 +153,7 @@ Outcome = tuple[np.ndarray, np.ndarray, "np.ndarray | None"]
 
 def _pluecker(s: Scene, with_lines: bool) -> Outcome:
     lines = {"lines2d": s.lines2d, "lines3d": s.lines3d} if with_lines else {}
-    r = pluecker.estimate_pose(
-        s.camera,
-        s.points2d,
-        s.points3d,
-        **lines,
-        robust=True,
-        point_threshold=POINT_THRESHOLD_PX,
-        line_threshold=LINE_THRESHOLD_PX,
-        seed=s.seed,
-    )
+    r = pluecker.estimate_pose(s.camera, s.points2d, s.points3d, **lines, ransac=pluecker.RansacOptions(point_threshold=POINT_THRESHOLD_PX, line_threshold=LINE_THRESHOLD_PX, seed=s.seed))
     mask = np.concatenate([np.asarray(r.inliers_points), np.asarray(r.inliers_lines)]) if with_lines else np.asarray(r.inliers_points)
     return np.asarray(r.R), np.asarray(r.t), mask
 

@@ -41,7 +41,7 @@ def points_workload(n: int):
 
 def lines_workload():
     P, segments = line_tracks(0, n=40, views=4, sigma=2.0)
-    return lambda: pluecker.triangulate_lines(P, segments, method="optimal", max_relative_gap=1e-9, max_nodes=10**7)
+    return lambda: pluecker.triangulate_lines(P, segments, method="optimal", options=pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=10**7))
 
 
 def pose_workload():
@@ -50,8 +50,7 @@ def pose_workload():
     camera = pluecker.Camera(800, 800, 320, 240)
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = rng.uniform(0, 640, (n, 2))
-    return lambda: pluecker.estimate_pose(camera, u, X, robust=True, min_inlier_ratio=0.0,
-                                          max_ransac_iterations=10**12, confidence=1 - 1e-12)
+    return lambda: pluecker.estimate_pose(camera, u, X, ransac=pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12))
 
 
 def latency(call, delay: float) -> tuple[float, str]:
@@ -74,7 +73,7 @@ def latency(call, delay: float) -> tuple[float, str]:
         if hasattr(partial, "status") and not isinstance(partial.status, str):
             done = int((partial.status != "interrupted").sum())
             return arrived - sent["at"], f"{done} of {len(partial)} tracks finished"
-        return arrived - sent["at"], f"ransac_stop={partial.ransac_stop}, {partial.ransac_iterations} samples"
+        return arrived - sent["at"], f"ransac_stop={partial.ransac.stop}, {partial.ransac.iterations} samples"
     timer.cancel()
     raise RuntimeError("the call ended before the signal: make the workload longer")
 

@@ -107,12 +107,12 @@ def worker(rows: list[tuple], out: Path) -> None:
             best = float("inf")
             for _ in range(repeats):
                 start = time.perf_counter()
-                r = pluecker.estimate_pose(s["camera"], **s["data"], robust=True, seed=seed)
+                r = pluecker.estimate_pose(s["camera"], **s["data"], ransac=pluecker.RansacOptions(seed=seed))
                 best = min(best, time.perf_counter() - start)
             cell["times"].append(best)
             cell["status"][r.status] = cell["status"].get(r.status, 0) + 1
-            cell["samples"].append(r.ransac_iterations)
-            cell["errors_evaluated"].append(getattr(r, "ransac_errors_evaluated", None))
+            cell["samples"].append(r.ransac.iterations)
+            cell["errors_evaluated"].append((r.ransac.errors_evaluated if r.ransac else None))
             if ratio < 1.0:
                 dR = r.R @ s["R"].T
                 cell["rot_deg"].append(float(np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1)))))

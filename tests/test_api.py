@@ -77,7 +77,7 @@ def test_noise_free_points_recover_the_pose(method, seed):
 def test_noise_free_points_recover_the_pose_without_refinement(method, seed):
     # The algebraic estimators alone are exact on exact data (their cost is 0 at the truth).
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method, refine=False)
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method, options=pluecker.PoseOptions(refine=False))
     assert "refinement" not in [s.name for s in result.stages]
     assert_pose_close(result, scene["R"], scene["t"], 1e-6, seed)
 
@@ -147,7 +147,7 @@ def test_newton_stop_at_r_zero_is_not_reported_as_success():
     """Plain Newton (the paper's baseline, which may diverge) stops on the paper scene at the
     stationary point r = 0 of the algebraic cost, whose pose is meaningless (~1e8 px error)."""
     scene = pluecker.paper_scene()
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="newton", refine=False)
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="newton", options=pluecker.PoseOptions(refine=False))
     assert result.success is False or np.max(np.abs(result.t - scene["t"])) < 1e-6
 
 
@@ -190,9 +190,7 @@ def test_random_scene_is_deterministic_and_in_front_of_the_camera(seed):
 @pytest.mark.parametrize("method", ALGEBRAIC_METHODS)
 def test_iteration_cap_is_reported_as_not_converged(method, seed):
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(
-        scene["camera"], scene["points2d"], scene["points3d"], method=method, max_iterations=1, refine=False
-    )
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False))
     assert result.stages[0].termination == "max_iterations"
     assert result.status == "not_converged"
     assert result.success is False
@@ -203,9 +201,9 @@ def test_initial_pose_is_used(seed):
     # and the user's start is one of the runs the pipeline picks the best answer from.
     scene = pluecker.random_scene("general", 20, 0, seed=seed)
     args = (scene["camera"], scene["points2d"], scene["points3d"])
-    capped = pluecker.estimate_pose(*args, max_iterations=1, refine=False)
+    capped = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False))
     assert capped.status == "not_converged"
-    result = pluecker.estimate_pose(*args, max_iterations=1, refine=False, initial_pose=(scene["R"], scene["t"]))
+    result = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False, initial_pose=(scene["R"], scene["t"])))
     assert result.status == "success", f"seed={seed}"
     # Zero up to the round-off of the Gram-matrix form of the algebraic cost.
     assert result.final_cost < 1e-12
@@ -226,11 +224,11 @@ def test_penalty_and_normalize_are_passed_through(seed):
     scene = pluecker.random_scene("general", 20, 0, seed=seed)
     args = (scene["camera"], scene["points2d"], scene["points3d"])
     for kwargs in ({"penalty": 5.0}, {"penalty": 500.0}, {"normalize": False}):
-        result = pluecker.estimate_pose(*args, **kwargs)
+        result = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(**kwargs))
         assert_pose_close(result, scene["R"], scene["t"], EXACT, seed)
     # Without normalisation the algebraic stage sees a different cost, so a different path.
-    a = pluecker.estimate_pose(*args, refine=False, normalize=True)
-    b = pluecker.estimate_pose(*args, refine=False, normalize=False)
+    a = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(refine=False, normalize=True))
+    b = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(refine=False, normalize=False))
     assert a.stages[0].initial_cost != b.stages[0].initial_cost
 
 
@@ -327,7 +325,9 @@ def test_to_dict_is_json_serialisable_and_matches_the_attributes():
     assert [s["name"] for s in d["stages"]] == [s.name for s in r.stages]
     assert d["stages"][0] == json.loads(json.dumps(r.stages[0].to_dict()))
     cam = r.estimated_camera
-    assert d["estimated_camera"] == {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy, "skew": cam.skew}
+    assert {k: d["estimated_camera"][k] for k in ("fx", "fy", "cx", "cy", "skew")} == \
+        {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy, "skew": cam.skew}
+    assert d["estimated_camera"] == json.loads(json.dumps(cam.to_dict()))
     other = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"]).to_dict()
     assert other["estimated_camera"] is None
 
@@ -524,9 +524,18 @@ def test_stub_signatures_and_class_members_match_the_runtime():
             assert _stub_args(node) == _runtime_args(runtime), node.name
         elif isinstance(node, ast.ClassDef) and not issubclass(runtime, Exception):
             members = {m.name: m for m in node.body if isinstance(m, ast.FunctionDef)}
-            assert _public(members) == _public(dir(runtime)), node.name
+            properties = {m.target.id for m in node.body if isinstance(m, ast.AnnAssign)}
+            # Everything the stub lists exists; everything the class adds to its base is listed.
+            base = runtime.__base__
+            inherited = _public(dir(base)) if base is not object else set()
+            assert _public(dir(runtime)) - inherited <= _public(members) | properties <= _public(dir(runtime)), node.name
             for name, member in members.items():
-                if name == "__init__":
+                if name == "__init__" and node.name.endswith("Options"):
+                    # Options take keywords only, one per field, defaults from the Rust Default.
+                    defaults = runtime().to_dict()
+                    expected = [(f, "keyword", repr(defaults[f])) for f, _, _ in runtime.__fields__]
+                    assert _stub_args(member) == expected, node.name
+                elif name == "__init__":
                     assert _stub_args(member) == _runtime_args(runtime), node.name
                 elif not name.startswith("_") and callable(getattr(runtime, name)):
                     assert _stub_args(member) == _runtime_args(getattr(runtime, name)), f"{node.name}.{name}"

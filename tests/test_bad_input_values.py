@@ -28,45 +28,57 @@ def stereo(X=(0.2, -0.1, 5.0)):
 
 # --- integers: out of range, negative, bool ------------------------------------------------------
 
-POSE_INTEGERS = {"max_iterations": 1, "refine_max_iterations": 1, "max_ransac_iterations": 1, "seed": 0,
-                 "min_inliers": 3}
+#: Integer options of the pose: (options class, field) → smallest value.
+POSE_INTEGERS = {
+    (pluecker.PoseOptions, "trust_region_max_iterations"): 1,
+    (pluecker.PoseOptions, "newton_max_iterations"): 1,
+    (pluecker.PoseOptions, "refinement_max_iterations"): 1,
+    (pluecker.PoseOptions, "certify_max_nodes"): 1,
+    (pluecker.RansacOptions, "max_iterations"): 1,
+    (pluecker.RansacOptions, "seed"): 0,
+    (pluecker.RansacOptions, "min_inliers"): 3,
+}
 
 
-@pytest.mark.parametrize("option", sorted(POSE_INTEGERS))
+@pytest.mark.parametrize("option", sorted(POSE_INTEGERS, key=lambda o: (o[0].__name__, o[1])), ids=lambda o: o[1])
 @pytest.mark.parametrize("value", [2**64, 2**200, -(2**63) - 1, -(2**64), 10**400])
-def test_an_integer_option_out_of_range_names_the_option(scene, option, value):
+def test_an_integer_option_out_of_range_names_the_option(option, value):
     """``max_iterations=2**63`` raised a bare OverflowError("Python int too large to convert to C long")."""
-    with pytest.raises(InvalidOptionError, match=rf"^{option}: must be an integer from {POSE_INTEGERS[option]} to "):
-        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], robust=True, **{option: value})
+    cls, name = option
+    with pytest.raises(InvalidOptionError, match=rf"^{name}: must be an integer from {POSE_INTEGERS[option]} to "):
+        cls(**{name: value})
 
 
-@pytest.mark.parametrize("option", sorted(POSE_INTEGERS))
+@pytest.mark.parametrize("option", sorted(POSE_INTEGERS, key=lambda o: (o[0].__name__, o[1])), ids=lambda o: o[1])
 def test_an_integer_option_up_to_2_64_is_accepted(scene, option):
     """Caps and seeds are unsigned 64-bit: 2**63 and 2**64 - 1 are valid (a cap that never binds)."""
+    cls, name = option
     for value in (2**63, 2**64 - 1):
-        kwargs = {option: value}
-        if option == "min_inliers":
+        given = cls(**{name: value})
+        assert getattr(given, name) == value
+        options, ransac = (given, pluecker.RansacOptions()) if cls is pluecker.PoseOptions else (None, given)
+        if name == "min_inliers":
             with pytest.raises(pluecker.TooFewCorrespondencesError, match=f"min_inliers = {value}"):
-                pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], robust=True, **kwargs)
+                pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], ransac=ransac)
         else:
-            result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], robust=True,
-                                            min_inliers=6, **kwargs)
+            result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options,
+                                            ransac=ransac)
             assert result.success, result
 
 
 def test_numpy_integers_are_integers(scene):
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
-                                    max_iterations=np.int64(50), seed=np.uint64(2**64 - 1), robust=True,
-                                    min_inliers=np.int32(6))
+    options = pluecker.PoseOptions(trust_region_max_iterations=np.int64(50))
+    ransac = pluecker.RansacOptions(seed=np.uint64(2**64 - 1), min_inliers=np.int32(6))
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options, ransac=ransac)
     assert result.success
 
 
 @pytest.mark.parametrize("value", [2**64, -1, 10**400])
 def test_max_nodes_out_of_range(value):
     P, x = stereo()
-    for call in (lambda: pluecker.triangulate_point(P, x, max_nodes=value),
-                 lambda: pluecker.triangulate_points(P, x[None], max_nodes=value),
-                 lambda: pluecker.triangulate_quadrics(P, np.tile(np.eye(3), (1, 3, 1, 1)), max_nodes=value)):
+    for call in (lambda: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_nodes=value)),
+                 lambda: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(max_nodes=value)),
+                 lambda: pluecker.triangulate_quadrics(P, np.tile(np.eye(3), (1, 3, 1, 1)), options=pluecker.TriangulationOptions(max_nodes=value))):
         with pytest.raises(InvalidOptionError, match=r"^max_nodes: must be an integer from 1 to "):
             call()
 
@@ -85,20 +97,34 @@ def test_other_integer_arguments_out_of_range(scene, call):
         call(scene)
 
 
-@pytest.mark.parametrize("option", ["penalty", "point_threshold", "line_threshold", "confidence", "time_budget",
-                                    "sigma_px", "certify_gap", "ambiguity_threshold", "max_iterations",
-                                    "refine_max_iterations", "max_ransac_iterations", "seed", "min_inliers"])
+NUMBER_OPTIONS = [(pluecker.PoseOptions, name) for name in
+                  ("penalty", "sigma_px", "certify_gap", "ambiguity_threshold", "trust_region_max_iterations",
+                   "refinement_max_iterations")] + \
+                 [(pluecker.RansacOptions, name) for name in
+                  ("point_threshold", "line_threshold", "confidence", "time_budget", "max_iterations", "seed",
+                   "min_inliers")] + \
+                 [(pluecker.TriangulationOptions, name) for name in
+                  ("max_relative_gap", "max_reprojection_error", "max_nodes", "local_max_iterations")]
+
+
+@pytest.mark.parametrize("option", NUMBER_OPTIONS, ids=lambda o: f"{o[0].__name__}.{o[1]}")
 @pytest.mark.parametrize("value", [True, False, np.True_])
-def test_a_bool_is_not_a_number(scene, option, value):
-    """``penalty=True`` ran with λ = 1 and ``max_iterations=True`` with a cap of 1."""
-    with pytest.raises(InvalidOptionError, match=rf"^{option}: expected a number, got the bool {bool(value)}$"):
-        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], **{option: value})
+def test_a_bool_is_not_a_number(option, value):
+    """``penalty=True`` ran with λ = 1 and ``max_iterations=True`` with a cap of 1; a rejected value
+    leaves the options as they were."""
+    cls, name = option
+    with pytest.raises(InvalidOptionError, match=rf"^{name}: expected a number, got the bool {bool(value)}$"):
+        cls(**{name: value})
+    options = cls()
+    with pytest.raises(InvalidOptionError, match=rf"^{name}: expected a number"):
+        setattr(options, name, value)
+    assert options == cls()
 
 
 @pytest.mark.parametrize("call,name", [
-    (lambda P, x: pluecker.triangulate_point(P, x, max_nodes=True), "max_nodes"),
-    (lambda P, x: pluecker.triangulate_point(P, x, max_relative_gap=True), "max_relative_gap"),
-    (lambda P, x: pluecker.triangulate_points(P, x[None], max_reprojection_error=True), "max_reprojection_error"),
+    (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_nodes=True)), "max_nodes"),
+    (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_relative_gap=True)), "max_relative_gap"),
+    (lambda P, x: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(max_reprojection_error=True)), "max_reprojection_error"),
     (lambda P, x: pluecker.triangulate_line(P, np.zeros((3, 2, 2)), sigma=True), "sigma"),
     (lambda P, x: pluecker.fit_line(x, sigma=True), "sigma"),
     (lambda P, x: pluecker.Camera(True, 800, 320, 240), "fx"),
@@ -112,8 +138,8 @@ def test_a_bool_is_not_a_number_anywhere(call, name):
 
 
 def test_a_float_is_not_an_integer(scene):
-    with pytest.raises(TypeError, match="max_iterations"):
-        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], max_iterations=5.0)
+    with pytest.raises(TypeError, match="^trust_region_max_iterations: "):
+        pluecker.PoseOptions(trust_region_max_iterations=5.0)
 
 
 # --- visible: a boolean mask ----------------------------------------------------------------------

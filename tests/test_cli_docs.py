@@ -108,10 +108,32 @@ def test_the_output_table_lists_every_key_of_to_dict():
     cells = table_column(section(CLI_MD, "### Output"), "| key |")
     documented = {name for cell in cells for name in re.findall(r"`([a-z_A-Z0-9]+)`", cell)}
     scene = pluecker.random_scene("general", 8, 2, seed=3)
-    for kwargs in ({}, {"robust": True}, {"certify": True, "sigma_px": 1.0}):
+    for kwargs in ({}, {"ransac": True}, {"options": pluecker.PoseOptions(certify=True, sigma_px=1.0)}):
         result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
                                         lines2d=scene["lines2d"], lines3d=scene["lines3d"], **kwargs)
         assert documented == set(result.to_dict()), kwargs
+
+
+@pytest.mark.parametrize("heading, cls", [("`options` holds fields of", pluecker.PoseOptions),
+                                          ("`ransac` holds fields of", pluecker.RansacOptions)])
+def test_the_input_tables_are_the_options_classes(heading, cls):
+    """One vocabulary: the JSON keys are the fields of the Python (and Rust) options, with their defaults."""
+    text = CLI_MD[CLI_MD.index(heading):]
+    lines = text.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("| key |"))
+    rows = [line.split("|")[1:4] for line in lines[start + 2:] if line.startswith("|")][:len(cls.__fields__)]
+    keys = [cell[0].strip().strip("`") for cell in rows]
+    assert keys == [name for name, _, _ in cls.__fields__]
+    defaults = cls().to_dict()
+    for key, (_, _, shown) in zip(keys, rows):
+        value = defaults[key]
+        shown = shown.strip().split(":")[0].strip("` ")
+        expected = {None: "null", True: "true", False: "false"}.get(value, value) if not isinstance(value, (int, float)) \
+            or isinstance(value, bool) else value
+        if isinstance(expected, (int, float)):
+            assert float(shown) == expected, key
+        else:
+            assert shown == str(expected), key
 
 
 def test_the_example_output_is_a_real_run_with_every_key(tmp_path):

@@ -1,4 +1,5 @@
-"""``pluecker pose --robust``: flags, the same keys in the JSON ``options``, and the output."""
+"""``pluecker pose --robust``: flags, the same keys in the JSON ``ransac`` object (the fields of
+``RansacOptions``), and the output."""
 
 from __future__ import annotations
 
@@ -12,10 +13,12 @@ from test_cli import write
 from test_robust_pose import check_masks, noisy_scene
 
 
-def document(scene: dict, data: dict, options: dict | None = None) -> dict:
+def document(scene: dict, data: dict, ransac: dict | bool | None = None, options: dict | None = None) -> dict:
     cam = scene["camera"]
     doc = {"camera": {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy},
            **{k: np.asarray(v).tolist() for k, v in data.items()}}
+    if ransac is not None:
+        doc["ransac"] = ransac
     if options is not None:
         doc["options"] = options
     return doc
@@ -28,7 +31,7 @@ def test_robust_flag_finds_the_inliers_and_prints_masks_and_covariance(tmp_path,
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["status"] == "success", out["status"]
-    assert out["ransac_stop"] == "confidence" and out["ransac_iterations"] >= 1
+    assert out["ransac"]["stop"] == "confidence" and out["ransac"]["iterations"] >= 1
     assert out["covariance_source"] == "given" and out["sigma_px"] == 1.0
     assert np.array(out["covariance"]).shape == (6, 6)
 
@@ -41,19 +44,22 @@ def test_robust_flag_finds_the_inliers_and_prints_masks_and_covariance(tmp_path,
 
 def test_options_in_the_file_equal_the_flags_and_flags_win(tmp_path, capsys, seed):
     scene, data = noisy_scene(40, 10, 0.3, seed % 1000)
-    options = {"robust": True, "point_threshold": 3.0, "line_threshold": 5, "seed": 11, "sigma_px": 2.0,
-               "confidence": 0.999, "max_ransac_iterations": 5000, "time_budget": None, "min_inliers": 8,
-               "min_inlier_ratio": 0.1, "sprt": True}
-    assert main(["pose", write(tmp_path, document(scene, data, options))]) == 0
+    ransac = {"point_threshold": 3.0, "line_threshold": 5, "seed": 11, "confidence": 0.999, "max_iterations": 5000,
+              "time_budget": None, "min_inliers": 8, "min_inlier_ratio": 0.1, "sprt": True}
+    options = {"sigma_px": 2.0}
+    assert main(["pose", write(tmp_path, document(scene, data, ransac, options))]) == 0
     from_file = json.loads(capsys.readouterr().out)
-    assert main(["pose", write(tmp_path, document(scene, data, {"confidence": 0.999, "max_ransac_iterations": 5000,
+    assert main(["pose", write(tmp_path, document(scene, data, {"confidence": 0.999, "max_iterations": 5000,
                                                                  "min_inliers": 8}), "b.json"),
                  "--robust", "--point-threshold", "3", "--line-threshold", "5", "--seed", "11", "--sigma", "2"]) == 0
     from_flags = json.loads(capsys.readouterr().out)
-    for key in ("R", "t", "inliers_points", "inliers_lines", "ransac_iterations", "covariance"):
-        assert from_file[key] == from_flags[key], key
+    for key in ("R", "t", "inliers_points", "inliers_lines", "ransac", "covariance"):
+        if key == "ransac":
+            assert from_file[key]["iterations"] == from_flags[key]["iterations"]
+        else:
+            assert from_file[key] == from_flags[key], key
     # A flag overrides the file: another sigma scales the covariance by (σ'/σ)².
-    assert main(["pose", write(tmp_path, document(scene, data, options), "c.json"), "--sigma", "1"]) == 0
+    assert main(["pose", write(tmp_path, document(scene, data, ransac, options), "c.json"), "--sigma", "1"]) == 0
     scaled = json.loads(capsys.readouterr().out)
     np.testing.assert_allclose(np.array(scaled["covariance"]) * 4.0, np.array(from_file["covariance"]), rtol=1e-12)
 
@@ -62,11 +68,11 @@ def test_all_outlier_input_warns_with_the_status(tmp_path, capsys, seed):
     rng = np.random.default_rng(seed)
     scene, data = noisy_scene(30, 0, 0.0, seed % 1000)
     data = dict(points2d=rng.uniform([0, 0], [640, 480], size=(30, 2)), points3d=data["points3d"])
-    doc = document(scene, data, {"max_ransac_iterations": 500})
+    doc = document(scene, data, {"max_iterations": 500})
     assert main(["pose", write(tmp_path, doc), "--robust"]) == 0
     captured = capsys.readouterr()
     out = json.loads(captured.out)
-    assert out["status"] == "too_few_inliers" and out["ransac_stop"] == "iteration_cap"
+    assert out["status"] == "too_few_inliers" and out["ransac"]["stop"] == "iteration_cap"
     assert "too_few_inliers" in captured.err
 
 
@@ -82,15 +88,16 @@ def test_bad_flags_are_usage_errors(tmp_path, capsys, argv, message, seed):
     assert message in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("options,message", [
-    ({"robust": True, "point_threshold": 0}, "point_threshold"),
-    ({"robust": True, "line_threshold": -3.0}, "line_threshold"),
-    ({"robust": True, "confidence": 1}, "confidence"),
-    ({"robust": "yes"}, "option 'robust' must be bool"),
-    ({"robust": True, "seed": 1.5}, "option 'seed' must be int"),
+@pytest.mark.parametrize("ransac,message", [
+    ({"point_threshold": 0}, "point_threshold"),
+    ({"line_threshold": -3.0}, "line_threshold"),
+    ({"confidence": 1}, "confidence"),
+    ("yes", "'ransac' must be true, false or a JSON object"),
+    ({"seed": 1.5}, "'ransac': seed: "),
+    ({"robust": True}, "'ransac': RansacOptions() got an unexpected keyword argument 'robust'"),
 ])
-def test_bad_options_in_the_file_are_errors(tmp_path, capsys, options, message, seed):
+def test_bad_options_in_the_file_are_errors(tmp_path, capsys, ransac, message, seed):
     scene, data = noisy_scene(10, 0, 0.0, seed % 1000)
-    assert main(["pose", write(tmp_path, document(scene, data, options))]) == 2
+    assert main(["pose", write(tmp_path, document(scene, data, ransac))]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1

@@ -36,7 +36,7 @@ def sigint_after(seconds: float) -> threading.Timer:
 def endless_lines(n: int = 8):
     """A line batch that branch and bound cannot finish in minutes: noisy lines, a 1e-9 gap."""
     P, segments = line_tracks(0, n=n, views=4, sigma=2.0)
-    return P, segments, dict(method="optimal", max_relative_gap=1e-9, max_nodes=10**7)
+    return P, segments, dict(method="optimal", options=pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=10**7))
 
 
 def assert_stopped_batch(batch, n: int, status: str) -> None:
@@ -80,7 +80,7 @@ def test_time_budget_ends_a_batch_without_an_exception():
 
 def test_a_failing_progress_callback_stops_the_batch_and_keeps_finished_tracks():
     P, segments = line_tracks(3, n=60, views=4, sigma=1.0)
-    plain = pluecker.triangulate_lines(P, segments, method="optimal", max_nodes=NODES)
+    plain = pluecker.triangulate_lines(P, segments, method="optimal", options=pluecker.TriangulationOptions(max_nodes=NODES))
     seen: list[int] = []
 
     def stop_after_some(done: int) -> None:
@@ -89,7 +89,7 @@ def test_a_failing_progress_callback_stops_the_batch_and_keeps_finished_tracks()
             raise RuntimeError("enough")
 
     with pytest.raises(RuntimeError, match="enough") as caught:
-        pluecker.triangulate_lines(P, segments, method="optimal", max_nodes=NODES, progress=stop_after_some)
+        pluecker.triangulate_lines(P, segments, method="optimal", progress=stop_after_some, options=pluecker.TriangulationOptions(max_nodes=NODES))
     partial = caught.value.partial
     finished = partial.status != "interrupted"
     # The callback is not called again once it raised.
@@ -109,13 +109,12 @@ def test_ctrl_c_stops_a_robust_pose_and_returns_the_best_so_far():
     u = rng.uniform(0, 640, (n, 2))  # all outliers, and no inlier-ratio cap: it would sample for hours
     timer = sigint_after(DELAY)
     with pytest.raises(KeyboardInterrupt) as caught:
-        pluecker.estimate_pose(camera, u, X, robust=True, min_inlier_ratio=0.0, max_ransac_iterations=10**12,
-                               confidence=1 - 1e-12, time_budget=SAFETY)
+        pluecker.estimate_pose(camera, u, X, ransac=pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12, time_budget=SAFETY))
     timer.join()
     partial = caught.value.partial
     assert isinstance(partial, pluecker.PoseResult)
-    assert partial.ransac_stop == "interrupted" and partial.status != "success"
-    assert partial.ransac_iterations > 0
+    assert partial.ransac.stop == "interrupted" and partial.status != "success"
+    assert partial.ransac.iterations > 0
 
 
 @pytest.mark.parametrize("budget", [-1.0, float("nan"), float("inf"), 1e20])

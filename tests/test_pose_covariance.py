@@ -53,7 +53,7 @@ def assert_matches(errors: np.ndarray, covariances: np.ndarray, label: str) -> N
 
 
 def test_covariance_matches_monte_carlo_in_a_general_scene(seed):
-    errors, cov, _ = monte_carlo("general", 30, 10, seed % 1000, sigma_px=1.0)
+    errors, cov, _ = monte_carlo("general", 30, 10, seed % 1000, options=pluecker.PoseOptions(sigma_px=1.0))
     assert_matches(errors, cov, f"general seed={seed % 1000}")
 
 
@@ -61,9 +61,9 @@ def test_covariance_matches_monte_carlo_at_low_parallax_where_it_is_large(seed):
     """Far, narrow field of view (a 10-unit box at depth 50, ±80 px): weak perspective, where the
     rotation about the image axes trades off against the depth and the covariance is large."""
     s = seed % 1000
-    errors, cov, _ = monte_carlo("far", 30, 10, s, sigma_px=1.0)
+    errors, cov, _ = monte_carlo("far", 30, 10, s, options=pluecker.PoseOptions(sigma_px=1.0))
     assert_matches(errors, cov, f"far seed={s}")
-    _, cov_general, _ = monte_carlo("general", 30, 10, s, sigma_px=1.0)
+    _, cov_general, _ = monte_carlo("general", 30, 10, s, options=pluecker.PoseOptions(sigma_px=1.0))
     rot = lambda c: np.trace(c[:, :3, :3], axis1=1, axis2=2).mean()  # noqa: E731
     assert rot(cov) > 10 * rot(cov_general), (rot(cov), rot(cov_general))
 
@@ -77,7 +77,7 @@ def test_estimated_sigma_is_close_to_the_true_one(seed):
 
 def test_robust_covariance_uses_the_inliers(seed):
     s = seed % 1000
-    errors, cov, _ = monte_carlo("general", 60, 15, s, outlier_ratio=0.3, robust=True, seed=s, sigma_px=1.0)
+    errors, cov, _ = monte_carlo("general", 60, 15, s, outlier_ratio=0.3, ransac=pluecker.RansacOptions(seed=s), options=pluecker.PoseOptions(sigma_px=1.0))
     assert_matches(errors, cov, f"robust seed={s}")
 
 
@@ -87,7 +87,7 @@ def test_sources_and_the_cases_without_a_covariance(seed):
     # Three points: m = 6 residuals, nothing left to estimate σ from.
     r = pluecker.estimate_pose(*args)
     assert (r.covariance, r.covariance_source, r.sigma_px) == (None, None, None)
-    given = pluecker.estimate_pose(*args, sigma_px=0.5)
+    given = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(sigma_px=0.5))
     assert given.covariance_source == "given" and given.sigma_px == 0.5 and given.covariance.shape == (6, 6)
     # Same as the standalone function at the returned pose.
     expected = pluecker.pose_covariance(scene["camera"], given.R, given.t, scene["points2d"], scene["points3d"],

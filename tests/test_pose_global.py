@@ -22,7 +22,7 @@ def test_certified_answer_carries_a_bound_below_its_cost():
     certified = 0
     for seed in range(5):
         scene, p2, _ = _noisy("general", 50, 0, seed)
-        res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], certify=True)
+        res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=pluecker.PoseOptions(certify=True))
         assert res.status == "success"
         cost = 0.5 * np.sum(pluecker.reprojection_errors(scene["camera"], res.R, res.t, p2, scene["points3d"]) ** 2)
         if res.certified:
@@ -56,7 +56,7 @@ def test_near_tie_is_ambiguous_with_its_runner_up():
     assert res.status == "ambiguous" and res.ambiguous and not res.success
     assert res.second_best_R.shape == (3, 3) and res.second_best_t.shape == (3,)
     assert 0.3 < res.second_best_cost < 0.5
-    sure = pluecker.estimate_pose(cam, p2, p3, l2, l3, sigma_px=0.01)
+    sure = pluecker.estimate_pose(cam, p2, p3, l2, l3, options=pluecker.PoseOptions(sigma_px=0.01))
     assert sure.status == "success" and not sure.ambiguous
 
 
@@ -64,18 +64,18 @@ def test_near_tie_is_ambiguous_with_its_runner_up():
 def test_bad_certify_gap_is_an_option_error(gap):
     scene, p2, _ = _noisy("general", 10, 0, 2)
     with pytest.raises(pluecker.InvalidOptionError, match="certify_gap"):
-        pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], certify=True, certify_gap=gap)
+        pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=pluecker.PoseOptions(certify=True, certify_gap=gap))
 
 
 def test_bad_ambiguity_threshold_is_an_option_error():
     scene, p2, _ = _noisy("general", 10, 0, 2)
     with pytest.raises(pluecker.InvalidOptionError, match="ambiguity_threshold"):
-        pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], ambiguity_threshold=-1.0)
+        pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=pluecker.PoseOptions(ambiguity_threshold=-1.0))
 
 
 def test_robust_path_says_why_it_is_not_certified():
     scene, p2, _ = _noisy("general", 30, 0, 3)
-    res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], robust=True, certify=True)
+    res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=pluecker.PoseOptions(certify=True), ransac=True)
     assert res.certified is False and "robust" in res.certificate_message
 
 
@@ -90,7 +90,7 @@ def test_narrow_lines_without_a_pose_in_front_use_the_reserve_samples():
         camera = pluecker.Camera(K[0, 0], K[1, 1], K[0, 2], K[1, 2])
         kw = dict(lines2d=np.array(s["lines2d"]), lines3d=np.array(s["lines3d"]))
         res = pluecker.estimate_pose(camera, **kw)
-        best = pluecker.estimate_pose(camera, **kw, initial_pose=(np.array(s["R"]), np.array(s["t"])))
+        best = pluecker.estimate_pose(camera, **kw, options=pluecker.PoseOptions(initial_pose=(np.array(s["R"]), np.array(s["t"]))))
         assert best.status == "success", seed
         assert res.status == "success", (seed, res.status, res.final_cost, best.final_cost)
         assert res.final_cost <= best.final_cost * (1 + 1e-9), (seed, res.final_cost, best.final_cost)

@@ -150,7 +150,7 @@ def test_line_certificates_are_sound(rig, sigma):
     lines = np.cross(np.c_[ends[:, 0], np.ones(len(P))], np.c_[ends[:, 1], np.ones(len(P))])
     note(f"A={A}, B={B}, σ={sigma}")
     try:
-        opt = pluecker.triangulate_line(P, lines, method="optimal", max_nodes=300)
+        opt = pluecker.triangulate_line(P, lines, method="optimal", options=pluecker.TriangulationOptions(max_nodes=300))
         local = pluecker.triangulate_line(P, lines, method="local")
     except pluecker.DegenerateConfigurationError:
         return  # e.g. the line lies in an epipolar plane of every pair of views
@@ -200,7 +200,7 @@ def test_quadric_certificates_are_sound(rig, noise):
     conics = np.linalg.inv(duals)
     note(f"centre={T[:3, 3]}, noise={noise}")
     try:
-        opt = pluecker.triangulate_quadric(P, conics, method="optimal", max_nodes=200)
+        opt = pluecker.triangulate_quadric(P, conics, method="optimal", options=pluecker.TriangulationOptions(max_nodes=200))
         local = pluecker.triangulate_quadric(P, conics, method="local")
     except pluecker.DegenerateConfigurationError:
         return  # an outline that is no real ellipse (the ellipsoid crosses a principal plane)
@@ -224,7 +224,7 @@ def test_pose_certificates_are_sound(seed, n_points, n_lines, sigma, focal):
     lines3d = scene["lines3d"]
     lines2d = camera.project(lines3d.reshape(-1, 3) @ R.T + t).reshape(-1, 2, 2) + rng.normal(0, sigma, (n_lines, 2, 2))
     data = dict(points2d=points2d, points3d=scene["points3d"], lines2d=lines2d, lines3d=lines3d)
-    result = pluecker.estimate_pose(camera, **data, certify=True)
+    result = pluecker.estimate_pose(camera, **data, options=pluecker.PoseOptions(certify=True))
     event(f"certified={result.certified}")
     assume(result.certified)
     # ½ Σ r² over the residuals (two per point, two per line) from the per-correspondence errors
@@ -235,7 +235,7 @@ def test_pose_certificates_are_sound(seed, n_points, n_lines, sigma, focal):
     assert np.isclose(cost(result.R, result.t), result.final_cost, rtol=1e-6, atol=1e-12), result
     eps = 1e-9
     assert result.lower_bound <= result.final_cost * (1 + 1e-9) + eps, result
-    refined = pluecker.estimate_pose(camera, **data, initial_pose=(R, t))
+    refined = pluecker.estimate_pose(camera, **data, options=pluecker.PoseOptions(initial_pose=(R, t)))
     if refined.status in {"success", "ambiguous"}:
         assert result.lower_bound <= cost(refined.R, refined.t) * (1 + 1e-9) + eps, (result, refined)
         assert result.final_cost * (1 - GAP) <= cost(refined.R, refined.t) * (1 + 1e-9) + eps, (result, refined)

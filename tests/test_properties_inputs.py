@@ -149,23 +149,30 @@ def pose_problems(draw):
     return camera, arrays, False
 
 
+POSE_FIELDS = ["penalty", "trust_region_max_iterations", "refinement_max_iterations", "sigma_px", "certify_gap",
+               "ambiguity_threshold"]
+RANSAC_FIELDS = ["seed", "min_inliers", "point_threshold", "confidence", "time_budget", "max_iterations"]
+INTEGER_FIELDS = {"trust_region_max_iterations", "refinement_max_iterations", "seed", "min_inliers", "max_iterations"}
+
+
 @given(pose_problems(), st.sampled_from(pluecker.METHODS), st.booleans(), st.booleans(),
-       st.dictionaries(st.sampled_from(["penalty", "max_iterations", "refine_max_iterations", "seed", "min_inliers",
-                                        "point_threshold", "confidence", "sigma_px", "time_budget",
-                                        "max_ransac_iterations", "certify_gap", "ambiguity_threshold"]),
-                       st.one_of(reals(), integers()), max_size=2))
-def test_estimate_pose(problem, method, robust, certify, options):
+       st.dictionaries(st.sampled_from(POSE_FIELDS + RANSAC_FIELDS), st.one_of(reals(), integers()), max_size=2))
+def test_estimate_pose(problem, method, robust, certify, fields):
     camera, arrays, well_typed = problem
-    for key in ("max_iterations", "refine_max_iterations", "max_ransac_iterations"):
-        if isinstance(options.get(key), int) and options[key] > 10**4:
-            options[key] = 10**4  # a valid but huge cap only costs time
-    if isinstance(options.get("time_budget"), float) and options["time_budget"] > 1.0:
-        options["time_budget"] = 1.0
-    note(f"options={options}")
-    integer_options = {"max_iterations", "refine_max_iterations", "seed", "min_inliers", "max_ransac_iterations"}
-    typed = well_typed and not any(k in integer_options and isinstance(v, float) for k, v in options.items())
-    result = outcome(lambda: pluecker.estimate_pose(camera, **arrays, method=method, robust=robust, certify=certify,
-                                                    **options), type_error_ok=not typed)
+    for key in ("trust_region_max_iterations", "refinement_max_iterations", "max_iterations"):
+        if isinstance(fields.get(key), int) and fields[key] > 10**4:
+            fields[key] = 10**4  # a valid but huge cap only costs time
+    if isinstance(fields.get("time_budget"), float) and fields["time_budget"] > 1.0:
+        fields["time_budget"] = 1.0
+    note(f"fields={fields}")
+    typed = well_typed and not any(k in INTEGER_FIELDS and isinstance(v, float) for k, v in fields.items())
+
+    def run():
+        options = pluecker.PoseOptions(certify=certify, **{k: v for k, v in fields.items() if k in POSE_FIELDS})
+        ransac = pluecker.RansacOptions(**{k: v for k, v in fields.items() if k in RANSAC_FIELDS})
+        return pluecker.estimate_pose(camera, **arrays, method=method, options=options, ransac=ransac if robust else None)
+
+    result = outcome(run, type_error_ok=not typed)
     if isinstance(result, pluecker.PoseResult):
         check_pose(result)
 
@@ -227,8 +234,7 @@ def point_problems(draw):
 @given(point_problems(), METHODS, GAPS, GAMMAS, NODES)
 def test_triangulate_point(problem, method, gap, gamma, nodes):
     P, x, cov = problem
-    r = outcome(lambda: pluecker.triangulate_point(P, x, cov, method, max_relative_gap=gap,
-                                                   max_reprojection_error=gamma, max_nodes=nodes))
+    r = outcome(lambda: pluecker.triangulate_point(P, x, cov, method, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_reprojection_error=gamma, max_nodes=nodes)))
     if isinstance(r, pluecker.PointTriangulation):
         check_report(r, gap_of(gap))
         if r.success:
@@ -244,7 +250,7 @@ def test_triangulate_points(problem, n, method, nodes, data):
                                   array_likes((n, views)).map(lambda a: a if not isinstance(a, np.ndarray)
                                                               else (a != 0) if a.dtype.kind == "f" else a)))
     covs = data.draw(st.one_of(st.none(), float_arrays((n, views, 2, 2))))
-    batch = outcome(lambda: pluecker.triangulate_points(P, xs, visible, covs, method, max_nodes=nodes))
+    batch = outcome(lambda: pluecker.triangulate_points(P, xs, visible, covs, method, options=pluecker.TriangulationOptions(max_nodes=nodes)))
     if isinstance(batch, pluecker.PointTriangulations):
         check_batch(batch, n)
         X = batch.X
@@ -267,8 +273,7 @@ def line_problems(draw):
 @given(line_problems(), METHODS, GAPS, NODES)
 def test_triangulate_line(problem, method, gap, nodes):
     P, lines, cov, sigma = problem
-    r = outcome(lambda: pluecker.triangulate_line(P, lines, cov, method, sigma=sigma, max_relative_gap=gap,
-                                                  max_nodes=nodes))
+    r = outcome(lambda: pluecker.triangulate_line(P, lines, cov, method, sigma=sigma, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_nodes=nodes)))
     if isinstance(r, pluecker.LineTriangulation):
         check_report(r, gap_of(gap))
         if r.success:
@@ -283,8 +288,7 @@ def test_triangulate_lines(problem, n, method, data):
     batch_lines = data.draw(st.one_of(float_arrays((n, views, *tail)), array_likes((n, views, *tail))))
     visible = data.draw(st.one_of(st.none(), array_likes((n, views)).map(
         lambda a: (a != 0) if isinstance(a, np.ndarray) and a.dtype.kind == "f" else a)))
-    batch = outcome(lambda: pluecker.triangulate_lines(P, batch_lines, visible, method=method, sigma=sigma,
-                                                       max_nodes=30))
+    batch = outcome(lambda: pluecker.triangulate_lines(P, batch_lines, visible, method=method, sigma=sigma, options=pluecker.TriangulationOptions(max_nodes=30)))
     if isinstance(batch, pluecker.LineTriangulations):
         check_batch(batch, n)
 
@@ -312,7 +316,7 @@ def quadric_problems(draw):
 @given(quadric_problems(), METHODS, GAPS, st.one_of(st.none(), st.integers(1, 20)))
 def test_triangulate_quadric(problem, method, gap, nodes):
     P, conics, cov = problem
-    r = outcome(lambda: pluecker.triangulate_quadric(P, conics, cov, method, max_relative_gap=gap, max_nodes=nodes))
+    r = outcome(lambda: pluecker.triangulate_quadric(P, conics, cov, method, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_nodes=nodes)))
     if isinstance(r, pluecker.QuadricTriangulation):
         check_report(r, gap_of(gap))
         if r.success:
@@ -329,7 +333,7 @@ def test_triangulate_quadrics(problem, n, method, data):
         stack = np.repeat(one[None], n, axis=0)
     else:
         stack = data.draw(array_likes((n, 2, 3, 3)))
-    batch = outcome(lambda: pluecker.triangulate_quadrics(P, stack, method=method, max_nodes=10))
+    batch = outcome(lambda: pluecker.triangulate_quadrics(P, stack, method=method, options=pluecker.TriangulationOptions(max_nodes=10)))
     if isinstance(batch, pluecker.QuadricTriangulations):
         check_batch(batch, n)
 

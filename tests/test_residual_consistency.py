@@ -67,17 +67,17 @@ def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
     accepted = 0
     for trial in range(50):
         u = project(X) + rng.normal(0, 1.0, (200, 2))
-        test = pluecker.estimate_pose(CAMERA, u, X, sigma_px=1.0).residual_test
+        test = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0)).residual_test
         assert test["dof"] == 2 * 200 - 6
         accepted += test["consistent"]
     # A level-1e-3 test rejects a correct model once in a thousand: 50 of 50 (seeded) here.
     assert accepted == 50
     # Radial distortion left in the pixels (k1 = -0.1, about 7 px at the corners): inconsistent.
     u = project(X, k1=-0.1) + rng.normal(0, 1.0, (200, 2))
-    r = pluecker.estimate_pose(CAMERA, u, X, sigma_px=1.0)
+    r = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0))
     assert r.residual_test["consistent"] is False and r.residual_test["p_value"] < 1e-3
     # The same through the robust estimator: its inliers are still not explained by 1 px.
-    r = pluecker.estimate_pose(CAMERA, u, X, sigma_px=1.0, robust=True)
+    r = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0), ransac=True)
     assert r.residual_test["consistent"] is False
     # Without sigma_px there is no stated noise, hence no test.
     assert pluecker.estimate_pose(CAMERA, u, X).residual_test is None

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import copy
+import inspect
 import json
 import pickle
 
@@ -40,11 +41,10 @@ def results():
     scene = pluecker.random_scene("general", 12, 3, seed=4)
     cam = scene["camera"]
     out = []
-    ok = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], scene["lines2d"], scene["lines3d"],
-                                certify=True)
+    ok = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], scene["lines2d"], scene["lines3d"], options=pluecker.PoseOptions(certify=True))
     out += [("pose", ok), ("pose-stage", ok.stages[-1])]
-    robust = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], robust=True, min_inliers=6)
-    out.append(("pose-robust", robust))
+    robust = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], ransac=pluecker.RansacOptions(min_inliers=6))
+    out += [("pose-robust", robust), ("pose-ransac", robust.ransac)]
     lines2d = scene["lines2d"].copy()
     lines2d[0, 1] = lines2d[0, 0] + 1e300  # numerical failure: rms_error_px is inf
     failed = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], lines2d, scene["lines3d"])
@@ -79,8 +79,8 @@ RESULTS = results()
 def test_every_result_class_is_covered():
     classes = {type(r).__name__ for _, r in RESULTS}
     exposed = {name for name in pluecker.__all__ if isinstance(getattr(pluecker, name), type)
-               and not issubclass(getattr(pluecker, name), Exception) and name not in {"Camera", "BatchReport",
-                                                                                          "TriangulationReport"}}
+               and not issubclass(getattr(pluecker, name), Exception) and not name.endswith("Options")
+               and name not in {"Camera", "BatchReport", "TriangulationReport"}}
     assert exposed <= classes, exposed - classes
 
 
@@ -93,6 +93,8 @@ def fields(result) -> dict:
         value = getattr(result, name)
         if isinstance(value, list) and value and hasattr(value[0], "to_dict"):
             value = [v.to_dict() for v in value]
+        elif hasattr(value, "to_dict"):
+            value = value.to_dict()
         out[name] = value
     return out
 
@@ -116,6 +118,31 @@ def assert_same(a, b, where=""):
             assert_same(x, y, f"{where}[{i}]")
     else:
         assert type(a) is type(b) and a == b, (where, a, b)
+
+
+@pytest.mark.parametrize("name,result", RESULTS, ids=[n for n, _ in RESULTS])
+def test_to_dict_has_exactly_the_properties(name, result):
+    """Each property is declared once (crates/pluecker-py/src/fields.rs): its getter and its to_dict entry
+    come from the same table entry, so the keys are the properties and the values agree."""
+    cls = type(result)
+    properties = {n for n in dir(cls) if not n.startswith("_")
+                  and inspect.isgetsetdescriptor(inspect.getattr_static(cls, n))}
+    d = result.to_dict()
+    assert set(d) == properties, set(d) ^ properties
+    assert d == strict(fields(result))
+
+
+def strict(value):
+    """``value`` as ``to_dict`` writes it: arrays and tuples as lists, NaN and inf as None."""
+    if isinstance(value, dict):
+        return {k: strict(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return strict(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [strict(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
 
 
 @pytest.mark.parametrize("name,result", RESULTS, ids=[n for n, _ in RESULTS])

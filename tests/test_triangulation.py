@@ -161,7 +161,7 @@ def test_tight_gap_and_branch_and_bound_report_nodes(seed):
     # forced tiny gap must still end certified or say that the node budget ran out.
     for k in range(40):
         P, _, x = noisy_problem(seed + k, views=2, parallax_deg=1.0, sigma=5.0)
-        r = pluecker.triangulate_point(P, x, max_relative_gap=1e-9)
+        r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_relative_gap=1e-9))
         assert r.status in ("success", "gap_not_closed"), f"seed={seed + k} {r}"
         assert r.certified == (r.relative_gap <= 1e-9)
         if r.certificate == "branch_and_bound":
@@ -173,7 +173,7 @@ def test_tight_gap_and_branch_and_bound_report_nodes(seed):
 
 def test_node_budget_is_respected(seed):
     P, _, x = noisy_problem(seed, views=2, parallax_deg=0.5, sigma=5.0)
-    r = pluecker.triangulate_point(P, x, max_relative_gap=1e-12, max_nodes=1)
+    r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_relative_gap=1e-12, max_nodes=1))
     assert r.nodes <= 1
     assert r.status in ("success", "gap_not_closed")
     assert r.certified == (r.status == "success" and r.relative_gap <= 1e-12)
@@ -181,7 +181,7 @@ def test_node_budget_is_respected(seed):
 
 def test_tiny_gamma_is_infeasible(seed):
     P, _, x = noisy_problem(seed, views=3, sigma=2.0)
-    r = pluecker.triangulate_point(P, x, max_reprojection_error=1e-6)
+    r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_reprojection_error=1e-6))
     # No point reprojects within 1e-6 px of noisy data in every view, unless the convexity test already
     # certified the local minimum (γ only restricts branch and bound).
     assert r.status == "infeasible" or r.certificate == "convexity_test", r
@@ -271,7 +271,10 @@ def test_bad_input_raises_named_errors(change, error, message, seed):
 )
 def test_bad_options_raise_invalid_option(kwargs, message, seed):
     with pytest.raises(pluecker.InvalidOptionError, match=message):
-        pluecker.triangulate_point(*good(seed), **kwargs)
+        if "method" in kwargs:
+            pluecker.triangulate_point(*good(seed), **kwargs)
+        else:
+            pluecker.triangulate_point(*good(seed), options=pluecker.TriangulationOptions(**kwargs))
 
 
 def test_unknown_keyword_and_non_numeric_input_are_type_errors(seed):

@@ -179,4 +179,4 @@ def test_bad_mask_and_cov_shapes(seed):
     with pytest.raises(pluecker.ShapeError, match="cov"):
         pluecker.triangulate_points(P, x, cov=np.ones((5, 3, 2, 2)))
     with pytest.raises(pluecker.InvalidOptionError, match="max_nodes"):
-        pluecker.triangulate_points(P, x, max_nodes=0)
+        pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(max_nodes=0))

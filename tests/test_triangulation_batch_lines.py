@@ -55,12 +55,12 @@ def test_line_batch_equals_single_calls(method, seed):
     rng = np.random.default_rng(seed)
     visible = random_visibility(rng, len(segments), 4, 2)
     masked = np.where(visible[..., None, None], segments, np.nan)  # unseen entries may hold anything
-    batch = pluecker.triangulate_lines(P, masked, visible, method=method, sigma=1.5, max_nodes=NODES)
+    batch = pluecker.triangulate_lines(P, masked, visible, method=method, sigma=1.5, options=pluecker.TriangulationOptions(max_nodes=NODES))
     assert len(batch) == 10 and batch.method == method and isinstance(batch, pluecker.BatchReport)
     assert batch.plucker.shape == (10, 6) and batch.point.shape == (10, 3) and batch.direction.shape == (10, 3)
     assert batch.status.shape == (10,) and batch.time_seconds.shape == (10,)
     for i, seen in enumerate(visible):
-        single = pluecker.triangulate_line(P[seen], segments[i][seen], sigma=1.5, method=method, max_nodes=NODES)
+        single = pluecker.triangulate_line(P[seen], segments[i][seen], sigma=1.5, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
         assert_same_line(batch, i, single)
     assert all(m == "" for m in batch.messages)
     assert "LineTriangulations(method=" in repr(batch)
@@ -122,11 +122,11 @@ def test_quadric_batch_equals_single_calls_with_cameras_per_track(seed):
     conics = np.stack([s.conics for s in scenes])
     cov = np.stack([s.covariances for s in scenes])
     for method in METHODS:
-        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, method=method, max_nodes=NODES)
+        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
         assert batch.Q.shape == (3, 4, 4) and batch.primal.shape == (3, 4, 4) and batch.axes.shape == (3, 3, 3)
         assert batch.centre.shape == (3, 3) and batch.semi_axes.shape == (3, 3)
         for i, s in enumerate(scenes):
-            single = pluecker.triangulate_quadric(s.cameras, s.conics, s.covariances, method=method, max_nodes=NODES)
+            single = pluecker.triangulate_quadric(s.cameras, s.conics, s.covariances, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
             for field in ("Q", "centre", "semi_axes", "axes"):
                 np.testing.assert_array_equal(getattr(batch, field)[i], getattr(single, field), err_msg=field)
             if single.primal is None:
@@ -206,8 +206,8 @@ def test_empty_batches(seed):
 def test_progress_counts_finished_tracks(seed):
     P, segments = line_tracks(seed, n=12)
     counts: list[int] = []
-    batch = pluecker.triangulate_lines(P, segments, method="optimal", max_nodes=NODES, progress=counts.append)
-    plain = pluecker.triangulate_lines(P, segments, method="optimal", max_nodes=NODES)
+    batch = pluecker.triangulate_lines(P, segments, method="optimal", progress=counts.append, options=pluecker.TriangulationOptions(max_nodes=NODES))
+    plain = pluecker.triangulate_lines(P, segments, method="optimal", options=pluecker.TriangulationOptions(max_nodes=NODES))
     assert counts and counts == sorted(counts) and counts[-1] == 12 and len(set(counts)) == len(counts)
     np.testing.assert_array_equal(batch.plucker, plain.plucker)
 
@@ -241,7 +241,7 @@ def test_gil_is_released_during_the_batch(seed):
     def work():
         state["inside"] = True
         start = time.perf_counter()
-        pluecker.triangulate_lines(P, segments, method="optimal", max_nodes=NODES)
+        pluecker.triangulate_lines(P, segments, method="optimal", options=pluecker.TriangulationOptions(max_nodes=NODES))
         state["seconds"] = time.perf_counter() - start
         state["inside"] = False
 

@@ -92,8 +92,8 @@ def test_raw_vgg_lines_agree_with_the_flipped_frame():
     kept = visible.sum(axis=1) >= 3
     segments, visible = segments[kept][:4], visible[kept][:4]
     for method in METHODS:
-        flipped = pluecker.triangulate_lines(seq.cameras, segments, visible, sigma=1.0, method=method, max_nodes=300)
-        as_read = pluecker.triangulate_lines(raw, segments, visible, sigma=1.0, method=method, max_nodes=300)
+        flipped = pluecker.triangulate_lines(seq.cameras, segments, visible, sigma=1.0, method=method, options=pluecker.TriangulationOptions(max_nodes=300))
+        as_read = pluecker.triangulate_lines(raw, segments, visible, sigma=1.0, method=method, options=pluecker.TriangulationOptions(max_nodes=300))
         assert np.all(as_read.status == flipped.status), method
         np.testing.assert_allclose(as_read.cost, flipped.cost, rtol=1e-6)
         np.testing.assert_allclose(as_read.point, -flipped.point, atol=1e-6 * 10)

@@ -58,7 +58,7 @@ class InvalidOptionError(PlueckerError):
     """An option or argument outside its domain (unknown method, ``penalty <= 0``, a cap below 1, a
     bool for a number, an ``R`` that is not a rotation, a ``visible`` entry other than 0/1, ...)."""
 
-class ResidualTest(TypedDict):
+class _ResidualTest(TypedDict):
     """A χ² test of residuals against their stated noise (level 1e-3)."""
 
     chi2: float
@@ -112,7 +112,7 @@ class PoseOptions:
     # fields of PoseOptions (generated: python -m pluecker._stubgen)
     def __init__(self, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, certify: bool = False, certify_gap: float = 0.001, certify_max_nodes: int = 20000) -> None: ...
     method: str
-    """Estimator, one of `METHODS`. Default `'trust-region'`."""
+    """Estimator, one of `METHODS`."""
     penalty: float
     """Penalty λ on the dual-quaternion constraints `r·r = 1`, `r·s = 0` (Phong & Horaud 1995, eqs. 13-15, 22)."""
     normalize: bool
@@ -294,7 +294,7 @@ class PoseResult:
     """Its cost `½ Σ r²`, px²."""
     behind_camera_cost: Optional[float]
     """Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`)."""
-    residual_test: Optional[ResidualTest]
+    residual_test: Optional[_ResidualTest]
     """χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
@@ -458,7 +458,7 @@ class TriangulationReport:
     """Why the local minimisation stopped."""
     time_seconds: float
     """Wall time, seconds."""
-    residual_test: Optional[ResidualTest]
+    residual_test: Optional[_ResidualTest]
     """χ² test of the cost (Gaussian noise of the given covariances); `None` without spare degrees of freedom."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...

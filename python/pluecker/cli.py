@@ -61,33 +61,13 @@ error: one line naming the file, exit status 2.
 The summary counts tracks: "460 of 672 triangulated" means 460 of the 672 rows of nview-corners were
 seen in at least two of the chosen views (the folder's p3d may have another number of rows)."""
 
-INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "method", "options"}
-#: ``options`` key → (keyword of ``estimate_pose``, accepted Python types).
-OPTIONS = {
-    "penalty": ("penalty", (int, float)),
-    "normalize": ("normalize", (bool,)),
-    "refine": ("refine", (bool,)),
-    "max_iterations": ("max_iterations", (int,)),
-    "refine_max_iterations": ("refine_max_iterations", (int,)),
-    "initial_pose": ("initial_pose", (dict,)),
-    "robust": ("robust", (bool,)),
-    "point_threshold": ("point_threshold", (int, float)),
-    "line_threshold": ("line_threshold", (int, float)),
-    "confidence": ("confidence", (int, float)),
-    "max_ransac_iterations": ("max_ransac_iterations", (int,)),
-    "time_budget": ("time_budget", (int, float, type(None))),
-    "seed": ("seed", (int,)),
-    "min_inliers": ("min_inliers", (int,)),
-    "min_inlier_ratio": ("min_inlier_ratio", (int, float)),
-    "sprt": ("sprt", (bool,)),
-    "sigma_px": ("sigma_px", (int, float)),
-    "certify": ("certify", (bool,)),
-    "certify_gap": ("certify_gap", (int, float)),
-    "ambiguity_threshold": ("ambiguity_threshold", (int, float)),
-}
-#: Command-line flag (``args`` attribute) → keyword of ``estimate_pose``; a flag given wins over the file.
-POSE_FLAGS = {"robust": "robust", "point_threshold": "point_threshold", "line_threshold": "line_threshold",
-              "seed": "seed", "sigma": "sigma_px", "time_budget": "time_budget", "certify": "certify"}
+INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "method", "options", "ransac"}
+#: Command-line flag (``args`` attribute) → field of ``PoseOptions``; a flag given wins over the file.
+POSE_FLAGS = {"refine": "refine", "penalty": "penalty", "sigma": "sigma_px", "certify": "certify"}
+#: Command-line flag (``args`` attribute) → field of ``RansacOptions``; a flag given wins over the file
+#: (and makes the estimate robust).
+RANSAC_FLAGS = {"point_threshold": "point_threshold", "line_threshold": "line_threshold", "seed": "seed",
+                "time_budget": "time_budget"}
 #: Array key → trailing shape of one row.
 ARRAYS = {"points2d": (2,), "points3d": (3,), "lines2d": (2, 2), "lines3d": (2, 3)}
 
@@ -332,7 +312,7 @@ def _correspondences(doc: dict[str, Any]) -> dict[str, np.ndarray]:
 
 
 def _initial_pose(value: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    if set(value) != {"R", "t"}:
+    if not isinstance(value, dict) or set(value) != {"R", "t"}:
         raise InputError("option 'initial_pose' must be {\"R\": 3x3, \"t\": [x, y, z]}")
     R, t = _number_array(value["R"], "initial_pose.R"), _number_array(value["t"], "initial_pose.t")
     if R.shape != (3, 3) or t.shape != (3,):
@@ -340,32 +320,47 @@ def _initial_pose(value: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     return R, t
 
 
+def _object(doc: dict[str, Any], key: str) -> dict[str, Any]:
+    value = doc.get(key) or {}
+    if not isinstance(value, dict):
+        raise InputError(f"'{key}' must be a JSON object")
+    return dict(value)
+
+
+def _options_class(cls: type, key: str, fields: dict[str, Any]) -> Any:
+    """``cls(**fields)`` with its TypeError (unknown key, wrong type) as an ``InputError`` naming ``key``."""
+    try:
+        return cls(**fields)
+    except TypeError as exc:
+        raise InputError(f"'{key}': {exc}") from None
+
+
 def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
-    options = doc.get("options") or {}
-    if not isinstance(options, dict):
-        raise InputError("'options' must be a JSON object")
-    kwargs: dict[str, Any] = {}
-    for key, value in options.items():
-        if key not in OPTIONS:
-            raise InputError(f"unknown option '{key}'; expected {', '.join(OPTIONS)}")
-        keyword, types = OPTIONS[key]
-        if (isinstance(value, bool) and bool not in types) or not isinstance(value, types):
-            raise InputError(f"option '{key}' must be {' or '.join(t.__name__ for t in types)}, "
-                             f"got {json.dumps(value)[:80]}")
-        kwargs[keyword] = _initial_pose(value) if key == "initial_pose" else value
-    method = args.method or doc.get("method")
-    if method is not None:
-        if method not in METHODS:
-            raise InputError(f"unknown method {json.dumps(method)}; expected one of {', '.join(METHODS)}")
-        kwargs["method"] = method
-    if args.refine is not None:
-        kwargs["refine"] = args.refine
-    if args.penalty is not None:
-        kwargs["penalty"] = args.penalty
-    for flag, keyword in POSE_FLAGS.items():
+    """The keywords of ``estimate_pose``: ``method``, ``options`` (``PoseOptions`` from the file's
+    ``"options"`` object and the flags) and ``ransac`` (``RansacOptions`` from the file's ``"ransac"``,
+    ``true`` or an object, and the flags)."""
+    fields = _object(doc, "options")
+    if "initial_pose" in fields:
+        fields["initial_pose"] = _initial_pose(fields["initial_pose"])
+    for flag, field in POSE_FLAGS.items():
         if getattr(args, flag) is not None:
-            kwargs[keyword] = getattr(args, flag)
-    return kwargs
+            fields[field] = getattr(args, flag)
+    options = _options_class(pluecker.PoseOptions, "options", fields)
+    robust = doc.get("ransac")
+    if not isinstance(robust, (bool, dict, type(None))):
+        raise InputError(f"'ransac' must be true, false or a JSON object, got {json.dumps(robust)[:80]}")
+    ransac_fields = robust if isinstance(robust, dict) else {}
+    for flag, field in RANSAC_FLAGS.items():
+        if getattr(args, flag) is not None:
+            ransac_fields[field] = getattr(args, flag)
+            robust = robust or True
+    if args.robust:
+        robust = robust or True
+    ransac = _options_class(pluecker.RansacOptions, "ransac", ransac_fields) if robust else None
+    method = args.method or doc.get("method")
+    if method is not None and method not in METHODS:
+        raise InputError(f"unknown method {json.dumps(method)}; expected one of {', '.join(METHODS)}")
+    return {"method": method, "options": options, "ransac": ransac}
 
 
 def jsonable(value: Any) -> Any:

@@ -141,8 +141,8 @@ fn read_rows(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<Vec<f
 
 /// The finite values of an array of the fixed shape `spec`.
 fn read_fixed(name: &str, obj: &Bound<'_, PyAny>, spec: &[Dim]) -> PyResult<Vec<f64>> {
-    let (_, values) = read(name, obj, spec)?;
-    check_finite(name, &values, values.len())?;
+    let (shape, values) = read(name, obj, spec)?;
+    check_finite(name, &values, shape[1..].iter().product())?;
     Ok(values)
 }
 

@@ -244,7 +244,9 @@ macro_rules! options_class {
                     let Some(value) = value else {
                         return Err(pyo3::exceptions::PyAttributeError::new_err(concat!("cannot delete ", stringify!($name))));
                     };
-                    let $v: $ty = value.extract()?;
+                    let $v: $ty = value.extract().map_err(|e: PyErr| {
+                        pyo3::exceptions::PyTypeError::new_err(format!("{}: {}", stringify!($name), e.value(value.py())))
+                    })?;
                     let mut next = self.clone();
                     {
                         let $m = &mut next;

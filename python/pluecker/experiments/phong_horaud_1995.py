@@ -14,7 +14,7 @@ projections, and every perturbation is drawn with ``numpy.random.default_rng``:
   (50 lines), uniform noise of maximum amplitude ``a`` in each pixel coordinate.
 * **mismatch sweep** (Figure 9): 400 points (200 lines), 0.1 px noise, and ``k`` point mismatched
   pairs: the image points of two points on two different lines are swapped, which also makes a line
-  mismatched pair (Figure 8). The robust estimator (``estimate_pose(..., robust=True)``: LO-RANSAC over
+  mismatched pair (Figure 8). The robust estimator (``estimate_pose(..., ransac=True)``: LO-RANSAC over
   minimal samples, then the refinement on the inliers) is the third curve of Figure 9.
 * **outlier sweep** (not in the paper): 100 points, 0.1 px noise, and a fraction ``f`` (0 to 80 %) of the
   image points replaced by points drawn uniformly in the bounding box of the 460 true image points, for the
@@ -235,8 +235,9 @@ def run_and_score(truth: Truth, obs: Observation, est: Estimator) -> Score:
     data = ({"points2d": obs.points2d, "points3d": obs.points3d} if est.data == "points"
             else {"lines2d": obs.lines2d, "lines3d": obs.lines3d})
     try:
-        extra = {"robust": True, "seed": 0} if est.robust else {}
-        res = pluecker.estimate_pose(truth.camera, method=est.method, refine=est.refine, **data, **extra)
+        ransac = pluecker.RansacOptions(seed=0) if est.robust else None
+        res = pluecker.estimate_pose(truth.camera, method=est.method, **data, options=pluecker.PoseOptions(refine=est.refine),
+                                     ransac=ransac)
     except pluecker.PlueckerError as exc:
         return Score(nan, failed=True, error=f"{type(exc).__name__}: {exc}")
     R, t = np.asarray(res.R), np.asarray(res.t)

@@ -30,13 +30,13 @@ pub struct Pose {
 impl Pose {
     /// The pose of the `(R, t)` pair `obj`, its parts checked and named `"{name} R"` and `"{name} t"`.
     pub fn extract(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
-        let pair = obj.downcast::<PyTuple>().ok().filter(|p| p.len() == 2).ok_or_else(|| {
-            let actual = match obj.downcast::<PyTuple>() {
-                Ok(p) => format!("a tuple of length {}", p.len()),
-                Err(_) => format!("a {}", obj.get_type().name().map_or("?".into(), |n| n.to_string())),
-            };
-            shape_error(name, "a tuple (R, t)", actual)
+        let pair = obj.downcast::<PyTuple>().map_err(|_| {
+            let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
+            pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
         })?;
+        if pair.len() != 2 {
+            return Err(shape_error(name, "a tuple (R, t)", format!("a tuple of length {}", pair.len())));
+        }
         Pose::from_parts(&format!("{name} R"), &pair.get_item(0)?, &format!("{name} t"), &pair.get_item(1)?)
     }
 

@@ -160,7 +160,7 @@ impl Field for ResidualTest {
         Ok(d.into_any().unbind())
     }
     fn stub() -> String {
-        "ResidualTest".into()
+        "_ResidualTest".into()
     }
 }
 
@@ -170,9 +170,7 @@ impl Field for pluecker::Camera {
     }
     fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
         let d = PyDict::new(py);
-        for (k, v) in [("fx", self.fx), ("fy", self.fy), ("cx", self.cx), ("cy", self.cy), ("skew", self.skew)] {
-            d.set_item(k, v)?;
-        }
+        PyCamera::wrap(self).fill_dict(py, &d)?;
         Ok(d.into_any().unbind())
     }
     fn stub() -> String {

@@ -106,7 +106,7 @@ def run_lines(sequence: str, method: str, limit: int | None = None, gap: float |
     cameras, segments, visible = line_data(sequence, limit)
     whitened, endpoints, recomputed = [], [], []
     start = time.perf_counter()
-    batch = pluecker.triangulate_lines(cameras, segments, visible, sigma=SIGMA_PX, method=method, max_relative_gap=gap)
+    batch = pluecker.triangulate_lines(cameras, segments, visible, sigma=SIGMA_PX, method=method, options=pluecker.TriangulationOptions(**({} if gap is None else {"max_relative_gap": gap})))
     wall = time.perf_counter() - start
     rejected = [m for m in batch.messages if m]
     if rejected:
