@@ -181,7 +181,9 @@ class PoseStage:
     name: str
     """Name of the stage."""
     cost_kind: str
-    """What `initial_cost` and `final_cost` measure."""
+    """What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
+    (½Σ squared pixel residuals) or `msac` (stage `ransac`: ½Σ min(e², τ²), px²).
+    """
     R: NDArray[np.float64]
     """Rotation at the end of the stage, `x_cam = R X_world + t`."""
     t: NDArray[np.float64]
@@ -193,7 +195,9 @@ class PoseStage:
     final_cost: float
     """Cost at the stage's end."""
     termination: str
-    """Why the stage stopped."""
+    """Why the stage stopped: `gradient_tolerance`, `radius_tolerance`, `cost_tolerance`, `step_tolerance`,
+    `max_iterations`, `singular_hessian`, `non_finite_cost` or `closed_form`.
+    """
     time_seconds: float
     """Wall time of the stage, seconds."""
     # end of fields
@@ -218,11 +222,15 @@ class RansacReport:
     inliers: int
     """Inliers (points + lines) of the best model before the final refinement."""
     required_inliers: int
-    """Fewest inliers a usable model needs, else status `too_few_inliers`."""
+    """Fewest inliers the best model needed, else status `too_few_inliers`: `max(min_inliers, min(c + 1,
+    ⌈min_inlier_ratio · n⌉))`, `c` the most inliers a wrong pose plausibly gets by chance among `n`.
+    """
     score: float
     """MSAC score `½ Σ min(e², τ²)` of the best model, px²."""
     stop: str
-    """Why sampling stopped: `confidence`, `iteration_cap`, `time_budget`, `interrupted`, ..."""
+    """Why sampling stopped: `confidence`, `min_inlier_ratio` (enough samples to find a model with that
+    inlier fraction, and none was), `iteration_cap`, `time_budget`, `interrupted` or `no_solvable_sample`.
+    """
     time_seconds: float
     """Wall time of the loop including local optimisation, seconds."""
     # end of fields
@@ -251,7 +259,10 @@ class PoseResult:
     termination: str
     """Why the last iterative stage stopped."""
     status: str
-    """Whether the pose can be used, and if not why: `success`, `ambiguous`, `points_behind_camera`, ..."""
+    """`success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `points_behind_camera`
+    (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
+    (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
+    """
     success: bool
     """`status == 'success'`."""
     rms_error_px: float
@@ -263,25 +274,29 @@ class PoseResult:
     estimated_camera: Optional[Camera]
     """Intrinsics estimated by method `'linear'` (`None` for the others)."""
     inliers_points: NDArray[np.bool_]
-    """Points used for the pose: the final inliers when robust, else all true."""
+    """(N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true."""
     inliers_lines: NDArray[np.bool_]
-    """Lines used for the pose: the final inliers when robust, else all true."""
+    """(M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true."""
     ransac: Optional[RansacReport]
     """What the robust loop did; `None` unless estimated with `ransac=`."""
     covariance: Optional[NDArray[np.float64]]
-    """6x6 covariance of `(ω, t)` (rotation tangent in radians, camera frame; translation, world units)."""
+    """6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
+    frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
+    """
     covariance_source: Optional[str]
     """Where the σ of the covariance came from: `given` or `estimated`."""
     sigma_px: Optional[float]
-    """The pixel noise σ used: `options.sigma_px`, or estimated from the residuals."""
+    """The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals."""
     certified: bool
-    """Whether the pose is proved globally optimal to within the relative gap (`options.certify`)."""
+    """Proved global minimum of `½ Σ r²` within `certify_gap`, over every pose keeping the points in front
+    (`options.certify` only).
+    """
     lower_bound: float
     """The proved lower bound on `½ Σ r²` (px²); NaN when there is none."""
     gap: float
     """`(cost − lower_bound) / cost`; NaN when there is no bound."""
     certificate: str
-    """How the certificate was proved, or why there is none."""
+    """`sublevel_set` (proved), `not_requested` or `not_proved`."""
     certificate_message: str
     """The certificate's explanation in words."""
     ambiguous: bool
@@ -435,13 +450,16 @@ class TriangulationReport:
     method: str
     """The method that ran: `linear`, `local` or `optimal`."""
     status: str
-    """`success`, or why not: `gap_not_closed`, `not_converged`, `behind_camera`, `at_infinity`, ..."""
+    """`success`, or why not: `gap_not_closed` (branch and bound hit `max_nodes`), `not_converged`, `behind_camera`,
+    `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
+    `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
+    """
     success: bool
     """`status == 'success'`."""
     cost: float
     """The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate."""
     lower_bound: float
-    """Proved lower bound on the cost over the certificate's domain (0 without a certificate)."""
+    """Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate)."""
     relative_gap: float
     """`(cost − lower_bound) / cost`."""
     certified: bool
@@ -459,7 +477,9 @@ class TriangulationReport:
     time_seconds: float
     """Wall time, seconds."""
     residual_test: Optional[_ResidualTest]
-    """χ² test of the cost (Gaussian noise of the given covariances); `None` without spare degrees of freedom."""
+    """χ² test of `cost` against the given covariances (identity: 1 px), `dof` = residuals − parameters;
+    `consistent == False` flags an outlier, a wrong camera or noise beyond the stated one. `None` when `dof` is 0.
+    """
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 

@@ -28,7 +28,8 @@ result_class! {
     PyPoseStage {
         /// Name of the stage.
         name = |s| s.inner.name.clone();
-        /// What `initial_cost` and `final_cost` measure.
+        /// What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
+        /// (½Σ squared pixel residuals) or `msac` (stage `ransac`: ½Σ min(e², τ²), px²).
         cost_kind = |s| s.inner.cost_kind;
         /// Rotation at the end of the stage, `x_cam = R X_world + t`.
         R = |s| s.inner.rotation;
@@ -40,7 +41,8 @@ result_class! {
         initial_cost = |s| s.inner.initial_cost;
         /// Cost at the stage's end.
         final_cost = |s| s.inner.final_cost;
-        /// Why the stage stopped.
+        /// Why the stage stopped: `gradient_tolerance`, `radius_tolerance`, `cost_tolerance`, `step_tolerance`,
+        /// `max_iterations`, `singular_hessian`, `non_finite_cost` or `closed_form`.
         termination = |s| s.inner.termination.as_str();
         /// Wall time of the stage, seconds.
         time_seconds = |s| s.inner.time_seconds;
@@ -111,11 +113,13 @@ result_class! {
         local_optimizations = |r| r.inner.local_optimizations;
         /// Inliers (points + lines) of the best model before the final refinement.
         inliers = |r| r.inner.inliers;
-        /// Fewest inliers a usable model needs, else status `too_few_inliers`.
+        /// Fewest inliers the best model needed, else status `too_few_inliers`: `max(min_inliers, min(c + 1,
+        /// ⌈min_inlier_ratio · n⌉))`, `c` the most inliers a wrong pose plausibly gets by chance among `n`.
         required_inliers = |r| r.inner.required_inliers;
         /// MSAC score `½ Σ min(e², τ²)` of the best model, px².
         score = |r| r.inner.score;
-        /// Why sampling stopped: `confidence`, `iteration_cap`, `time_budget`, `interrupted`, ...
+        /// Why sampling stopped: `confidence`, `min_inlier_ratio` (enough samples to find a model with that
+        /// inlier fraction, and none was), `iteration_cap`, `time_budget`, `interrupted` or `no_solvable_sample`.
         stop = |r| r.inner.stop.as_str();
         /// Wall time of the loop including local optimisation, seconds.
         time_seconds = |r| r.inner.time_seconds;
@@ -211,7 +215,9 @@ result_class! {
         final_cost = |r| r.inner.final_cost;
         /// Why the last iterative stage stopped.
         termination = |r| r.inner.termination.as_str();
-        /// Whether the pose can be used, and if not why: `success`, `ambiguous`, `points_behind_camera`, ...
+        /// `success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `points_behind_camera`
+        /// (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
+        /// (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
         status = |r| r.inner.status.as_str();
         /// `status == 'success'`.
         success = |r| r.inner.status == Status::Success;
@@ -223,25 +229,27 @@ result_class! {
         stages = |r| r.inner.stages.clone();
         /// Intrinsics estimated by method `'linear'` (`None` for the others).
         estimated_camera = |r| r.inner.estimated_camera;
-        /// Points used for the pose: the final inliers when robust, else all true.
+        /// (N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true.
         inliers_points = |r| r.inner.inliers_points.clone();
-        /// Lines used for the pose: the final inliers when robust, else all true.
+        /// (M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true.
         inliers_lines = |r| r.inner.inliers_lines.clone();
         /// What the robust loop did; `None` unless estimated with `ransac=`.
         ransac = |r| r.inner.ransac.clone();
-        /// 6x6 covariance of `(ω, t)` (rotation tangent in radians, camera frame; translation, world units).
+        /// 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
+        /// frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
         covariance = |r| r.inner.covariance;
         /// Where the σ of the covariance came from: `given` or `estimated`.
         covariance_source = |r| r.inner.covariance_source.map(|s| s.as_str());
-        /// The pixel noise σ used: `options.sigma_px`, or estimated from the residuals.
+        /// The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals.
         sigma_px = |r| r.inner.sigma_px;
-        /// Whether the pose is proved globally optimal to within the relative gap (`options.certify`).
+        /// Proved global minimum of `½ Σ r²` within `certify_gap`, over every pose keeping the points in front
+        /// (`options.certify` only).
         certified = |r| r.inner.certified;
         /// The proved lower bound on `½ Σ r²` (px²); NaN when there is none.
         lower_bound = |r| r.inner.lower_bound;
         /// `(cost − lower_bound) / cost`; NaN when there is no bound.
         gap = |r| r.inner.gap;
-        /// How the certificate was proved, or why there is none.
+        /// `sublevel_set` (proved), `not_requested` or `not_proved`.
         certificate = |r| r.inner.certificate.as_str();
         /// The certificate's explanation in words.
         certificate_message = |r| r.inner.certificate.message();

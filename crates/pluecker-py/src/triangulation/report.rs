@@ -36,13 +36,15 @@ result_class! {
     PyTriangulationReport {
         /// The method that ran: `linear`, `local` or `optimal`.
         method = |r| r.inner.method.as_str();
-        /// `success`, or why not: `gap_not_closed`, `not_converged`, `behind_camera`, `at_infinity`, ...
+        /// `success`, or why not: `gap_not_closed` (branch and bound hit `max_nodes`), `not_converged`, `behind_camera`,
+        /// `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
+        /// `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
         status = |r| r.inner.status.as_str();
         /// `status == 'success'`.
         success = |r| r.inner.status == Status::Success;
         /// The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate.
         cost = |r| r.inner.cost;
-        /// Proved lower bound on the cost over the certificate's domain (0 without a certificate).
+        /// Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate).
         lower_bound = |r| r.inner.certificate.lower_bound;
         /// `(cost − lower_bound) / cost`.
         relative_gap = |r| r.inner.certificate.relative_gap;
@@ -60,7 +62,8 @@ result_class! {
         termination = |r| r.inner.termination.as_str();
         /// Wall time, seconds.
         time_seconds = |r| r.inner.time_seconds;
-        /// χ² test of the cost (Gaussian noise of the given covariances); `None` without spare degrees of freedom.
+        /// χ² test of `cost` against the given covariances (identity: 1 px), `dof` = residuals − parameters;
+        /// `consistent == False` flags an outlier, a wrong camera or noise beyond the stated one. `None` when `dof` is 0.
         residual_test = |r| r.inner.residual_test();
     }
 
