@@ -16,7 +16,7 @@ import threading
 
 import numpy as np
 import pytest
-from test_triangulation_batch_lines import NODES, line_tracks
+from triangulation_scenes import NODES, line_tracks
 
 import pluecker
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_triangulation import cameras
+from triangulation_scenes import cameras
 
 import pluecker
 

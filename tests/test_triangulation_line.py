@@ -1,32 +1,19 @@
-"""``pluecker.triangulate_line``: recovery, the cost of eq. 19 recomputed here, certificates, bad input.
-
-The residual is recomputed with numpy from its definition (section 3.1 normalisation as pluecker applies
-it in pixels): an observed line ``l`` gets the unit normal ``n`` and offset ``c0 <= 0``, the frame origin
-``o = (D - c0) n`` with ``D = 1000`` px, and a candidate image line ``(a, b, c)`` has the residual
-``D (D (a, b) / c' - n)`` with ``c' = c + (a, b)·o`` its offset in that frame.
-"""
+"""Lines: ``pluecker.triangulate_line`` (Josephson & Kahl 2008, sections 2.2, 3.1: the residual of an
+image line as 2 numbers in pixels after normalising it 1000 px from a shifted origin, eq. 19 over them)
+and ``pluecker.triangulate_lines`` (the batch equals single calls, homogeneous lines with covariances,
+cameras per track, bad tracks). The residual and the cost are recomputed here with numpy."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_triangulation import cameras
+from triangulation_scenes import (METHODS, NODES, assert_same_line, cameras, image_line, line_tracks, project,
+                                  random_visibility)
 
 import pluecker
 
+
 D = 1000.0
-METHODS = pluecker.TRIANGULATION_METHODS
-
-
-def project_point(P: np.ndarray, X: np.ndarray) -> np.ndarray:
-    h = P @ np.append(X, 1.0)
-    return h[:, :2] / h[:, 2:]
-
-
-def image_line(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Homogeneous image lines (v, 3) of the 3-D line through A and B."""
-    a, b = P @ np.append(A, 1.0), P @ np.append(B, 1.0)
-    return np.cross(a, b)
 
 
 def residual(observed: np.ndarray, candidate: np.ndarray) -> np.ndarray:
@@ -52,7 +39,7 @@ def line_problem(seed: int, views: int = 4, sigma: float = 1.0):
     rng = np.random.default_rng(seed)
     P = cameras(views, 30.0, rng)
     A, B = rng.uniform(-1.0, 1.0, (2, 3))
-    segments = np.stack([project_point(P, A), project_point(P, B)], axis=1)
+    segments = np.stack([project(P, A), project(P, B)], axis=1)
     return P, A, B, segments + rng.normal(0.0, sigma, segments.shape)
 
 
@@ -172,3 +159,74 @@ def test_line_in_an_epipolar_plane_is_degenerate(seed):
     B = A + 0.3 * (centres[1] - centres[0]) + 0.2 * (A - centres[0])
     with pytest.raises(pluecker.DegenerateConfigurationError, match="epipolar|coincide|plane"):
         pluecker.triangulate_line(P, image_line(P, A, B))
+
+
+
+# --- the batch: triangulate_lines -------------------------------------------------------------
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_line_batch_equals_single_calls(method, seed):
+    P, segments = line_tracks(seed)
+    rng = np.random.default_rng(seed)
+    visible = random_visibility(rng, len(segments), 4, 2)
+    masked = np.where(visible[..., None, None], segments, np.nan)  # unseen entries may hold anything
+    batch = pluecker.triangulate_lines(P, masked, visible, method=method, sigma=1.5, options=pluecker.TriangulationOptions(max_nodes=NODES))
+    assert len(batch) == 10 and batch.method == method and isinstance(batch, pluecker.BatchReport)
+    assert batch.plucker.shape == (10, 6) and batch.point.shape == (10, 3) and batch.direction.shape == (10, 3)
+    assert batch.status.shape == (10,) and batch.time_seconds.shape == (10,)
+    for i, seen in enumerate(visible):
+        single = pluecker.triangulate_line(P[seen], segments[i][seen], sigma=1.5, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
+        assert_same_line(batch, i, single)
+    assert all(m == "" for m in batch.messages)
+    assert "LineTriangulations(method=" in repr(batch)
+
+
+def test_homogeneous_lines_with_covariances_and_cameras_per_track(seed):
+    rng = np.random.default_rng(seed)
+    n, views = 6, 3
+    P = np.stack([cameras(views, 20.0 + 5 * i, rng) for i in range(n)])  # each track its own cameras
+    ends = rng.uniform(-1.0, 1.0, (n, 2, 3))
+    lines = np.stack([np.cross(P[i] @ np.append(A, 1.0), P[i] @ np.append(B, 1.0)) for i, (A, B) in enumerate(ends)])
+    lines += rng.normal(0.0, 1e-3, lines.shape) * np.abs(lines)
+    A = rng.normal(size=(n, views, 2, 2))
+    cov = A @ A.transpose(0, 1, 3, 2) + 0.5 * np.eye(2)
+    batch = pluecker.triangulate_lines(P, lines, cov=cov, method="local")
+    for i in range(n):
+        assert_same_line(batch, i, pluecker.triangulate_line(P[i], lines[i], cov[i], method="local"))
+    # Segments whose covariances are given: the segments give only the lines.
+    P1, segments = line_tracks(seed, n=4, views=3)
+    cov = np.tile(np.diag([4.0, 0.25]), (4, 3, 1, 1))
+    batch = pluecker.triangulate_lines(P1, segments, cov=cov, method="local")
+    for i in range(4):
+        assert_same_line(batch, i, pluecker.triangulate_line(P1, segments[i], cov[i], method="local"))
+
+
+def test_one_bad_line_track_never_loses_the_others(seed):
+    P, segments = line_tracks(seed, n=8)
+    visible = np.ones((8, 4), dtype=bool)
+    segments = segments.copy()
+    segments[1, 2, 0, 1] = np.nan  # NaN in a visible view
+    segments[2, 3] = np.nan  # NaN where the track is not seen: fine
+    visible[2, 3] = False
+    visible[3] = [False, True, False, False]  # one view
+    segments[4, 1, 1] = segments[4, 1, 0]  # a zero-length segment
+    batch = pluecker.triangulate_lines(P, segments, visible, method="local")
+    expected = {1: ("non_finite", "lines[1]: non-finite value (NaN or inf) in row 2"),
+                3: ("too_few_views", "needs 2 visible views per track, got 1 view(s)"),
+                4: ("degenerate", "lines[4][1] has zero length")}
+    for i, (status, message) in expected.items():
+        assert batch.status[i] == status, (i, batch.messages[i])
+        assert batch.messages[i].startswith(f"track {i}: ") and message in batch.messages[i], batch.messages[i]
+        assert np.all(np.isnan(batch.plucker[i])) and np.isnan(batch.cost[i]) and not batch.certified[i]
+    good = np.setdiff1d(np.arange(8), list(expected))
+    assert np.all(batch.status[good] == "success")
+    # A covariance that is not positive definite, in homogeneous form.
+    homogeneous = np.concatenate([segments, np.ones((8, 4, 2, 1))], axis=-1)
+    lines = np.cross(homogeneous[..., 0, :], homogeneous[..., 1, :])
+    cov = np.tile(np.eye(2), (8, 4, 1, 1))
+    cov[6, 0] = [[1.0, 2.0], [2.0, 1.0]]
+    batch = pluecker.triangulate_lines(P, lines, visible, cov, method="linear")
+    assert batch.status[6] == "degenerate" and "cov[6][0] is not positive definite" in batch.messages[6]
+    assert batch.status[0] == "success" and batch.status[5] == "success"
+

@@ -1,33 +1,15 @@
-"""``pluecker.triangulate_quadric``: recovery of ellipsoids and discs, result fields, bad input.
-
-Scenes: an ellipsoid (or the synthetic discs of the reproduction, ``disc_scene``) seen by cameras of
-``test_triangulation.cameras``; exact image conics are the outlines ``(P L P^T)^-1`` of the dual quadric.
-"""
+"""Quadrics: ``pluecker.triangulate_quadric`` (an ellipsoid from its outline conics, Josephson & Kahl
+2008, section 2.3) and ``pluecker.triangulate_quadrics`` (the batch equals single calls, with shared
+cameras or cameras per track, and visibility)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_triangulation import cameras
+from triangulation_scenes import METHODS, NODES, assert_same_report, cameras, ellipsoid, outlines, random_visibility
 
 import pluecker
 from pluecker.experiments.josephson_kahl_2008.conics import disc_scene, ellipse_points
-
-METHODS = pluecker.TRIANGULATION_METHODS
-
-
-def ellipsoid(rng):
-    """A random ellipsoid near the origin: centre, axes (columns), semi-axes, dual quadric (L44 = -1)."""
-    centre = rng.uniform(-0.3, 0.3, 3)
-    axes, _ = np.linalg.qr(rng.normal(size=(3, 3)))
-    semi = np.sort(rng.uniform(0.3, 1.0, 3))[::-1]
-    H = np.eye(4)
-    H[:3, :3], H[:3, 3] = axes, centre
-    return centre, axes, semi, H @ np.diag([*(semi**2), -1.0]) @ H.T
-
-
-def outlines(P, dual):
-    return np.array([np.linalg.inv(p @ dual @ p.T) for p in P])
 
 
 @pytest.mark.parametrize("method", METHODS)
@@ -104,3 +86,50 @@ def test_bad_input(change, error, message, seed):
     with pytest.raises(error) as info:
         pluecker.triangulate_quadric(*args)
     assert message in str(info.value)
+
+
+
+# --- the batch: triangulate_quadrics ----------------------------------------------------------
+
+
+def test_quadric_batch_equals_single_calls_with_cameras_per_track(seed):
+    # The reproduction's discs: each scene has its own cameras, solved together.
+    scenes = [disc_scene(seed % 1000 + k) for k in range(3)]
+    P = np.stack([s.cameras for s in scenes])
+    conics = np.stack([s.conics for s in scenes])
+    cov = np.stack([s.covariances for s in scenes])
+    for method in METHODS:
+        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
+        assert batch.Q.shape == (3, 4, 4) and batch.primal.shape == (3, 4, 4) and batch.axes.shape == (3, 3, 3)
+        assert batch.centre.shape == (3, 3) and batch.semi_axes.shape == (3, 3)
+        for i, s in enumerate(scenes):
+            single = pluecker.triangulate_quadric(s.cameras, s.conics, s.covariances, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
+            for field in ("Q", "centre", "semi_axes", "axes"):
+                np.testing.assert_array_equal(getattr(batch, field)[i], getattr(single, field), err_msg=field)
+            if single.primal is None:
+                assert np.all(np.isnan(batch.primal[i]))
+            else:
+                np.testing.assert_array_equal(batch.primal[i], single.primal)
+            assert_same_report(batch, i, single)
+
+
+def test_quadric_batch_with_shared_cameras_and_visibility(seed):
+    rng = np.random.default_rng(seed)
+    n, views = 5, 5
+    P = cameras(views, 60.0, rng)
+    conics = np.stack([outlines(P, ellipsoid(rng)[3]) for _ in range(n)])
+    conics += rng.normal(0.0, 1e-9, conics.shape) * np.abs(conics)
+    visible = random_visibility(rng, n, views, 3)
+    visible[4] = [True, True, False, False, False]  # two views: too few for a quadric
+    conics[0, 1] = np.diag([1.0, -1.0, -100.0])  # a hyperbola, in a view the track is seen in
+    visible[0, 1] = True
+    batch = pluecker.triangulate_quadrics(P, conics, visible, method="local")
+    assert batch.status[4] == "too_few_views" and "3 visible views" in batch.messages[4]
+    assert batch.status[0] == "degenerate" and "conics[0][1] is not a real ellipse" in batch.messages[0]
+    for i in range(1, 4):
+        seen = visible[i]
+        single = pluecker.triangulate_quadric(P[seen], conics[i][seen], method="local")
+        np.testing.assert_array_equal(batch.Q[i], single.Q)
+        assert_same_report(batch, i, single)
+    assert "QuadricTriangulations(method='local', tracks=5" in repr(batch)
+

@@ -19,8 +19,7 @@ import math
 
 import numpy as np
 import pytest
-from test_triangulation import cameras, project
-from test_triangulation_quadric import ellipsoid, outlines
+from triangulation_scenes import cameras, ellipsoid, outlines, project
 
 import pluecker
 
