@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 import pluecker
+from pluecker.jsonio import dumps  # one key per line, every vector on one line
 from pluecker.datasets import VggSequence, load_vgg
 
 __all__ = ["FolderError", "Features", "Run", "run", "write", "summary_lines"]
@@ -287,7 +288,6 @@ def _ply(path: Path, run: Run, features: Features) -> Path:
 
 def write(run: Run, out: str | Path) -> list[Path]:
     """Writes ``points.json`` and ``points.ply`` (and ``lines.json``, ``lines.ply``) into ``out``."""
-    from pluecker.cli import dumps  # one key per line, every vector on one line
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
