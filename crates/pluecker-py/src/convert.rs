@@ -186,9 +186,9 @@ pub fn vector<const D: usize>(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SV
     Ok(SVector::<f64, D>::from_row_slice(&values))
 }
 
-/// A matrix as a `(3, 3)` array.
-pub fn matrix3_to_py<'py>(py: Python<'py>, m: &Matrix3<f64>) -> Bound<'py, PyArray2<f64>> {
-    Array2::from_shape_fn((3, 3), |(i, j)| m[(i, j)]).into_pyarray(py)
+/// A matrix as an `(R, C)` array.
+pub fn matrix_to_py<'py, const R: usize, const C: usize>(py: Python<'py>, m: &SMatrix<f64, R, C>) -> Bound<'py, PyArray2<f64>> {
+    Array2::from_shape_fn((R, C), |(i, j)| m[(i, j)]).into_pyarray(py)
 }
 
 /// A vector as a `(D,)` array.

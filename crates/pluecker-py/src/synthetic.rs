@@ -1,7 +1,7 @@
 //! Seeded synthetic scenes (the paper's calibration object, random scenes) as dicts of arrays.
 
 use crate::camera::PyCamera;
-use crate::convert::{matrix3_to_py, points_to_py, segments_to_py, vector_to_py, Integer};
+use crate::convert::{matrix_to_py, points_to_py, segments_to_py, vector_to_py, Integer};
 use crate::errors::{guarded, invalid_argument};
 use pluecker::synthetic::{
     check_scene_size, paper_calibration_object, random_scene as core_random_scene, Scene, SceneKind,
@@ -15,7 +15,7 @@ fn scene_dict<'py>(py: Python<'py>, scene: &Scene, with_lines: bool) -> PyResult
     let c = &scene.correspondences;
     let d = PyDict::new(py);
     d.set_item("camera", PyCamera::wrap(scene.camera))?;
-    d.set_item("R", matrix3_to_py(py, &scene.rotation))?;
+    d.set_item("R", matrix_to_py(py, &scene.rotation))?;
     d.set_item("t", vector_to_py(py, &scene.translation))?;
     d.set_item("points2d", points_to_py(py, &c.points2d))?;
     d.set_item("points3d", points_to_py(py, &c.points3d))?;

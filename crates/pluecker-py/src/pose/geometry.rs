@@ -1,6 +1,6 @@
 //! Dual-quaternion and screw forms of a pose (Phong & Horaud 1995, section 2.1).
 
-use crate::convert::{matrix3_to_py, vector, vector_to_py};
+use crate::convert::{matrix_to_py, vector, vector_to_py};
 use crate::errors::{degenerate, guarded};
 use crate::pose::Pose;
 use nalgebra::SVector;
@@ -38,7 +38,7 @@ pub fn dual_quaternion_to_pose<'py>(py: Python<'py>, q: &Bound<'py, PyAny>) -> P
         )));
     }
     let (rot, t) = guarded(|| Ok(q.to_rotation_translation()))?;
-    Ok((matrix3_to_py(py, &rot), vector_to_py(py, &t)))
+    Ok((matrix_to_py(py, &rot), vector_to_py(py, &t)))
 }
 
 /// Chasles' screw of `(R, t)`: `dict(d, angle, direction, point)`.

@@ -1,11 +1,10 @@
 //! Reprojection errors and the pose covariance (Cramér-Rao bound) at a given pose.
 
 use crate::camera::PyCamera;
-use crate::convert::Real;
+use crate::convert::{matrix_to_py, Real};
 use crate::errors::{degenerate, invalid_argument, solve};
 use crate::pose::{correspondences, Pose};
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::{PyArray1, PyArray2};
 use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;
 
@@ -66,7 +65,7 @@ pub fn pose_covariance<'py>(
             eig.max()
         ))
     })?;
-    Ok(Array2::from_shape_fn((6, 6), |(i, j)| cov[(i, j)]).into_pyarray(py))
+    Ok(matrix_to_py(py, &cov))
 }
 
 /// Per-correspondence reprojection errors in pixels at the pose `(R, t)`: points first, then lines.

@@ -2,13 +2,10 @@
 //! the covariance of their residual (Josephson & Kahl 2008, section 3.1), the weights `triangulate_line`
 //! and `triangulate_quadric` take.
 
-use crate::convert::{points as read_points, Integer, Real};
+use crate::convert::{points as read_points, points_to_py, Integer, Real};
 use crate::errors::{guarded, invalid_argument, solve};
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use nalgebra::SVector;
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray2};
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -114,10 +111,6 @@ pub fn fit_conic(py: Python<'_>, points: &Bound<'_, PyAny>, sigma: Option<Real>)
     solve(py, move || fitting::fit_conic(&pts, sigma)).map(|inner| PyFittedConic { inner })
 }
 
-fn rows_to_py<'py, const D: usize>(py: Python<'py>, rows: &[SVector<f64, D>]) -> Bound<'py, PyArray2<f64>> {
-    Array2::from_shape_fn((rows.len(), D), |(i, j)| rows[i][j]).into_pyarray(py)
-}
-
 /// The residual samples of the paper's Figures 1-2 (section 3.1): `draws` fits to points spread
 /// over `size` pixels (`None`: the paper's 1000) with noise `sigma` pixels (`None`: 1 px), seeded by `seed` (`None`: 0).
 #[pyfunction]
@@ -141,10 +134,10 @@ pub fn fitting_residual_samples<'py>(
     let sigma = sigma_arg(sigma)?;
     let samples = solve(py, move || fitting::residual_samples(draws, size, sigma, seed))?;
     let d = PyDict::new(py);
-    d.set_item("line", rows_to_py(py, &samples.line))?;
-    d.set_item("line_whitened", rows_to_py(py, &samples.line_whitened))?;
-    d.set_item("conic", rows_to_py(py, &samples.conic))?;
-    d.set_item("conic_whitened", rows_to_py(py, &samples.conic_whitened))?;
+    d.set_item("line", points_to_py(py, &samples.line))?;
+    d.set_item("line_whitened", points_to_py(py, &samples.line_whitened))?;
+    d.set_item("conic", points_to_py(py, &samples.conic))?;
+    d.set_item("conic_whitened", points_to_py(py, &samples.conic_whitened))?;
     Ok(d)
 }
 
