@@ -87,7 +87,7 @@ impl Field for Array {
         Ok(array.into_pyarray(py).into_any().unbind())
     }
     fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
-        Ok(self.get(py)?.call_method0(py, "tolist")?)
+        self.get(py)?.call_method0(py, "tolist")
     }
     fn stub() -> String {
         "NDArray[np.float64]".into()

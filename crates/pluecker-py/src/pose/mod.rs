@@ -104,7 +104,7 @@ pub fn correspondences(
 fn ransac_arg(ransac: Option<&Bound<'_, PyAny>>) -> PyResult<Option<pluecker::pose::RansacOptions>> {
     let Some(ransac) = ransac else { return Ok(None) };
     if let Ok(options) = ransac.downcast::<PyRansacOptions>() {
-        return Ok(Some(options.borrow().inner.clone()));
+        return Ok(Some(options.borrow().inner));
     }
     match ransac.extract::<bool>() {
         Ok(robust) => Ok(robust.then(Default::default)),
@@ -126,6 +126,7 @@ const SHORT_POSE: usize = 1000;
 /// `options.method`. `ransac`: `RansacOptions` or `True` (its defaults) estimates robustly.
 #[pyfunction]
 #[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, method = None, *, options = None, ransac = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
     py: Python<'_>,
     camera: &Bound<'_, PyCamera>,

@@ -264,7 +264,7 @@ result_class! {
         /// Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`).
         behind_camera_cost = |r| r.inner.behind_camera_cost;
         /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.
-        residual_test = |r| r.inner.residual_test.clone();
+        residual_test = |r| r.inner.residual_test;
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
