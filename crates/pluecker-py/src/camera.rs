@@ -2,7 +2,7 @@
 
 use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
 use crate::fields::{result_class, Field};
-use crate::pose::Pose;
+use crate::pose::pose_from_parts;
 use crate::errors::guarded;
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
@@ -64,11 +64,7 @@ result_class! {
     #[pyo3(signature = (R, t))]
     #[allow(non_snake_case)]
     fn P<'py>(&self, py: Python<'py>, R: &Bound<'py, PyAny>, t: &Bound<'py, PyAny>) -> PyResult<PyObject> {
-        let pose = Pose::from_parts("R", R, "t", t)?;
-        let mut rt = nalgebra::Matrix3x4::zeros();
-        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&pose.rotation);
-        rt.set_column(3, &pose.translation);
-        (self.inner.matrix() * rt).get(py)
+        self.inner.projection(&pose_from_parts("R", R, "t", t)?).get(py)
     }
 
     /// Pixels `u = K x_cam / z` of camera-frame points (N, 3).

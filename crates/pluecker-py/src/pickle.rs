@@ -16,10 +16,10 @@ use pluecker::geometry::quadric::Ellipse;
 use pluecker::chi_square::ResidualTest;
 use pluecker::optim::Termination;
 use pluecker::pose::certificate::Certificate as PoseCertificate;
-use pluecker::pose::{CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport};
+use pluecker::pose::{CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport, Status as PoseStatus};
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, Method, Report, Status};
-use pluecker::{Camera, PoseResult, Status as PoseStatus};
+use pluecker::{Camera, Pose, PoseResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 use pyo3::PyClass;
@@ -248,6 +248,7 @@ macro_rules! pack_struct {
 pub(crate) use pack_struct;
 
 pack_struct!(Camera { fx, fy, cx, cy, skew });
+pack_struct!(Pose { rotation, translation });
 pack_struct!(DualQuaternion { r, s });
 pack_struct!(StageReport {
     name,

@@ -42,7 +42,7 @@ fn sample(rng: &mut Rng, n_points: usize) -> ([Feature; 3], Pose) {
             }
         }
     });
-    (features, (r, t))
+    (features, Pose::new(r, t))
 }
 
 fn bench_minimal(c: &mut Criterion) {
@@ -55,13 +55,13 @@ fn bench_minimal(c: &mut Criterion) {
         let mut rng = Rng::new(seed);
         let samples: Vec<_> = (0..SAMPLES).map(|_| sample(&mut rng, n_points)).collect();
         let (mut found, mut solutions) = (0, 0);
-        for (features, (r, t)) in &samples {
+        for (features, Pose { rotation: r, translation: t }) in &samples {
             let poses = solve(features);
             solutions += poses.len();
             let scale = t.norm().max(10.0);
             if poses
                 .iter()
-                .any(|(q, u)| (q - r).norm() <= 1e-8 && (u - t).norm() <= 1e-8 * scale)
+                .any(|p| (p.rotation - r).norm() <= 1e-8 && (p.translation - t).norm() <= 1e-8 * scale)
             {
                 found += 1;
             }

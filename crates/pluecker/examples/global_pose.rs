@@ -10,6 +10,7 @@ use pluecker::optim::Objective;
 use pluecker::pose::reprojection::ReprojectionCost;
 use pluecker::pose::{estimate_pose, refine_pose, PoseOptions};
 use pluecker::rng::Rng;
+use pluecker::Pose;
 use pluecker::synthetic::visible_scene;
 use std::time::Instant;
 
@@ -55,16 +56,16 @@ fn main() {
             };
             times.push(started.elapsed().as_secs_f64() * 1e6);
             let cost = ReprojectionCost::of(&scene.camera, &corr);
-            let mine = cost.cost(&(result.rotation, result.translation));
+            let mine = cost.cost(&result.pose());
             let mut best = mine;
-            let truth = (scene.rotation, scene.translation);
+            let truth = Pose::new(scene.rotation, scene.translation);
             let centroid = corr.points3d.iter().chain(corr.lines3d.iter().flat_map(|s| s.iter())).fold(Vector3::zeros(), |a, p| a + p)
                 / (np + 2 * nl) as f64;
             let depth = (scene.rotation * centroid + scene.translation).z;
             let mut candidates = vec![truth];
             for _ in 0..starts {
                 let r = rng.rotation();
-                candidates.push((r, Vector3::new(0.0, 0.0, depth) - r * centroid));
+                candidates.push(Pose::new(r, Vector3::new(0.0, 0.0, depth) - r * centroid));
             }
             for start in candidates {
                 let (pose, _) = refine_pose(&scene.camera, &corr, &start, &opts);

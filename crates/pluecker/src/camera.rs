@@ -11,7 +11,8 @@
 //! image axis. Nothing here assumes positive focal lengths; only a zero (singular) one is rejected.
 
 use crate::error::{Error, Result};
-use nalgebra::{Matrix3, Vector2, Vector3};
+use crate::rigid::Pose;
+use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 
 /// Pinhole intrinsics in pixels. `fx` and `fy` may be negative (mirrored axes), never zero.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,6 +96,16 @@ impl Camera {
         Vector2::new(self.fx * x.x + self.skew * x.y + self.cx, self.fy * x.y + self.cy)
     }
 
+    /// The 3x4 camera matrix `P = K [R | t]` of this camera at `pose` (`x_cam = R X_world + t`): it maps
+    /// world points to pixels, `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ = z_cam`, the known camera of
+    /// [`crate::triangulation`]. The bridge from a pose estimate to triangulation.
+    pub fn projection(&self, pose: &Pose) -> Matrix3x4<f64> {
+        let mut rt = Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&pose.rotation);
+        rt.set_column(3, &pose.translation);
+        self.matrix() * rt
+    }
+
     /// Pixel of a camera-frame point, `u = K x_cam / z`. The caller checks `z > 0` when it matters.
     pub fn project(&self, x_cam: &Vector3<f64>) -> Vector2<f64> {
         self.normalized_to_pixel(&Vector2::new(x_cam.x / x_cam.z, x_cam.y / x_cam.z))
@@ -123,6 +134,20 @@ mod tests {
         let k = cam.matrix() * x_cam;
         assert!((cam.project(&x_cam) - Vector2::new(k.x / k.z, k.y / k.z)).norm() < 1e-9);
         assert_eq!(Camera::from_matrix(&cam.matrix()).unwrap(), cam);
+    }
+
+    #[test]
+    fn the_projection_matrix_projects_as_the_pose_and_the_camera_do() {
+        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 3.5).unwrap();
+        let rotation = *nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.2, -0.4, 0.1)).matrix();
+        let pose = Pose::new(rotation, Vector3::new(0.3, -0.1, 6.0));
+        let p = cam.projection(&pose);
+        for x in [Vector3::new(0.1, 0.2, 0.3), Vector3::new(-1.0, 0.5, 2.0)] {
+            let h = p * x.push(1.0);
+            let expected = cam.project(&pose.transform(&x));
+            assert!((Vector2::new(h.x / h.z, h.y / h.z) - expected).norm() < 1e-9);
+            assert!((h.z - pose.transform(&x).z).abs() < 1e-12, "λ is the depth");
+        }
     }
 
     #[test]

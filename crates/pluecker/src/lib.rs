@@ -37,13 +37,14 @@ pub mod global;
 pub mod interrupt;
 pub mod optim;
 pub mod pose;
+pub mod rigid;
 pub mod rng;
 pub mod synthetic;
 pub mod triangulation;
 
 pub use camera::Camera;
 pub use error::{Error, Result};
-pub use pose::{
-    estimate_pose, Correspondences, CovarianceSource, Method, PoseOptions, PoseResult, RansacOptions, RansacReport,
-    RansacStop, Status,
-};
+// The crate root holds no two things of one name: each primitive's `Status`, `Method` and certificate
+// stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
+pub use rigid::Pose;
+pub use pose::{estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacReport, RansacStop};

@@ -7,7 +7,7 @@ use pluecker::pose::reprojection::{pose_covariance, ReprojectionCost};
 use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, Status};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, random_scene, SceneKind};
-use pluecker::{Camera, Error};
+use pluecker::{Camera, Error, Pose};
 
 fn options(method: Method, refine: bool) -> PoseOptions {
     PoseOptions { method, refine, ..PoseOptions::default() }
@@ -85,7 +85,7 @@ fn result_does_not_depend_on_the_start() {
             let reference = estimate_pose(camera, data, &opts).unwrap();
             for trial in 0..100 {
                 let t0 = reference.translation + reference.translation.norm() * Vector3::new(rng.normal(), rng.normal(), rng.normal());
-                opts.initial_pose = Some((rng.rotation(), t0));
+                opts.initial_pose = Some(Pose::new(rng.rotation(), t0));
                 let r = estimate_pose(camera, data, &opts).unwrap();
                 let rot = rotation_distance(&r.rotation, &reference.rotation);
                 let t = (r.translation - reference.translation).norm() / reference.translation.norm();
@@ -111,7 +111,7 @@ fn default_pipeline_attains_the_cramer_rao_bound() {
             assert_eq!(r.status, Status::Success, "{kind:?} seed {seed}");
             let c = &scene.correspondences;
             let cost = ReprojectionCost::new(scene.camera, &c.points2d, &c.points3d, &[], &[]);
-            let cov = pose_covariance(&cost, &(scene.rotation, scene.translation), 1.0).unwrap();
+            let cov = pose_covariance(&cost, &Pose::new(scene.rotation, scene.translation), 1.0).unwrap();
             e_rot += log_so3(&(r.rotation * scene.rotation.transpose())).norm_squared();
             e_t += (r.translation - scene.translation).norm_squared();
             b_rot += cov.fixed_view::<3, 3>(0, 0).trace();
@@ -170,10 +170,10 @@ fn bad_input_gets_a_clear_error() {
     assert!(matches!(estimate_pose(&singular, &good, &default).unwrap_err(), Error::SingularCamera { .. }));
     let bad = PoseOptions { penalty: -1.0, ..PoseOptions::default() };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
-    let bad = PoseOptions { initial_pose: Some((Matrix3::zeros(), Vector3::zeros())), ..PoseOptions::default() };
+    let bad = PoseOptions { initial_pose: Some(Pose::new(Matrix3::zeros(), Vector3::zeros())), ..PoseOptions::default() };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
     let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
-    let bad = PoseOptions { initial_pose: Some((reflection, Vector3::zeros())), ..PoseOptions::default() };
+    let bad = PoseOptions { initial_pose: Some(Pose::new(reflection, Vector3::zeros())), ..PoseOptions::default() };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
 }
 

@@ -18,10 +18,10 @@ fn best_known(scene: &Scene, corr: &Correspondences, starts: usize, rng: &mut Rn
     let centroid = all.iter().sum::<Vector3<f64>>() / all.len() as f64;
     let depth = (scene.rotation * centroid + scene.translation).z;
     let mut best = f64::INFINITY;
-    let mut candidates = vec![(scene.rotation, scene.translation)];
+    let mut candidates = vec![pluecker::Pose::new(scene.rotation, scene.translation)];
     for _ in 0..starts {
         let r = rng.rotation();
-        candidates.push((r, Vector3::new(0.0, 0.0, depth) - r * centroid));
+        candidates.push(pluecker::Pose::new(r, Vector3::new(0.0, 0.0, depth) - r * centroid));
     }
     for start in candidates {
         let (pose, _) = refine_pose(&scene.camera, corr, &start, &opts);
@@ -53,7 +53,7 @@ fn the_default_pipeline_reaches_the_best_known_minimum_or_says_it_is_ambiguous()
             let mut rng = Rng::new(100 + seed);
             let corr = scene.noisy(1.0, true, &mut rng);
             let result = estimate_pose(&scene.camera, &corr, &opts).unwrap();
-            let cost = ReprojectionCost::of(&scene.camera, &corr).cost(&(result.rotation, result.translation));
+            let cost = ReprojectionCost::of(&scene.camera, &corr).cost(&result.pose());
             let best = best_known(&scene, &corr, 20, &mut rng);
             let missed = cost > best * (1.0 + 1e-6) + 1e-9;
             let row = format!("f={f} {np}p+{nl}l planar={planar} seed {seed}: cost {cost} best {best}");
@@ -122,7 +122,7 @@ fn certified_bounds_are_never_beaten() {
                 continue;
             }
             certified += 1;
-            let cost = ReprojectionCost::of(&scene.camera, &corr).cost(&(result.rotation, result.translation));
+            let cost = ReprojectionCost::of(&scene.camera, &corr).cost(&result.pose());
             assert!(result.gap <= 1e-3 && result.lower_bound <= cost, "f={f} {np}p {nl}l seed {seed}");
             let best = best_known(&scene, &corr, 30, &mut rng);
             assert!(
@@ -152,7 +152,7 @@ fn a_wrong_local_minimum_is_not_certified() {
         let best = best_known(&scene, &corr, 30, &mut rng);
         for _ in 0..30 {
             let r = rng.rotation();
-            let (pose, _) = refine_pose(&scene.camera, &corr, &(r, scene.translation), &opts);
+            let (pose, _) = refine_pose(&scene.camera, &corr, &pluecker::Pose::new(r, scene.translation), &opts);
             let c = cost.cost(&pose);
             if cost.points_behind(&pose) == 0 && c > 1.5 * best + 1.0 {
                 tried += 1;
@@ -210,7 +210,7 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
         };
         let res = estimate_pose(&skewed_camera, &skewed, &opts).unwrap();
         if res.certified {
-            let cost = ReprojectionCost::of(&skewed_camera, &skewed).cost(&(res.rotation, res.translation));
+            let cost = ReprojectionCost::of(&skewed_camera, &skewed).cost(&res.pose());
             assert!(res.lower_bound <= cost, "seed {seed}");
             let best = best_known(&Scene { camera: skewed_camera, ..scene.clone() }, &skewed, 10, &mut rng);
             assert!(res.lower_bound <= best * (1.0 + 1e-12), "seed {seed}: skewed bound beaten");

@@ -12,53 +12,29 @@ use crate::convert::{points, rotation, segments, vector};
 use crate::errors::shape_error;
 use crate::fields::Field;
 use crate::interrupt::{run_interruptible, with_partial};
-use nalgebra::{Matrix3, Vector3};
 use options::{PyPoseOptions, PyRansacOptions};
 use pluecker::pose::Correspondences;
+use pluecker::Pose;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use result::PyPoseResult;
 
-/// A pose `(R, t)`, `x_cam = R X_world + t`, as Python passes it: a tuple of a `(3, 3)` rotation
-/// and a `(3,)` translation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Pose {
-    pub rotation: Matrix3<f64>,
-    pub translation: Vector3<f64>,
+/// A pose `x_cam = R X_world + t` as Python passes it: the pair `(R, t)` of a `(3, 3)` rotation and a
+/// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.
+pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
+    let pair = obj.downcast::<PyTuple>().map_err(|_| {
+        let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
+        pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
+    })?;
+    if pair.len() != 2 {
+        return Err(shape_error(name, "a tuple (R, t)", format!("a tuple of length {}", pair.len())));
+    }
+    pose_from_parts(&format!("{name} R"), &pair.get_item(0)?, &format!("{name} t"), &pair.get_item(1)?)
 }
 
-impl Pose {
-    /// The pose of the `(R, t)` pair `obj`, its parts checked and named `"{name} R"` and `"{name} t"`.
-    pub fn extract(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
-        let pair = obj.downcast::<PyTuple>().map_err(|_| {
-            let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
-            pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
-        })?;
-        if pair.len() != 2 {
-            return Err(shape_error(name, "a tuple (R, t)", format!("a tuple of length {}", pair.len())));
-        }
-        Pose::from_parts(&format!("{name} R"), &pair.get_item(0)?, &format!("{name} t"), &pair.get_item(1)?)
-    }
-
-    /// The pose of separate arguments `R` (named `r_name`) and `t`.
-    pub fn from_parts(r_name: &str, r: &Bound<'_, PyAny>, t_name: &str, t: &Bound<'_, PyAny>) -> PyResult<Pose> {
-        Ok(Pose {
-            rotation: rotation(r_name, r)?,
-            translation: vector::<3>(t_name, t)?,
-        })
-    }
-}
-
-impl From<(Matrix3<f64>, Vector3<f64>)> for Pose {
-    fn from((rotation, translation): (Matrix3<f64>, Vector3<f64>)) -> Pose {
-        Pose { rotation, translation }
-    }
-}
-
-impl From<Pose> for (Matrix3<f64>, Vector3<f64>) {
-    fn from(p: Pose) -> Self {
-        (p.rotation, p.translation)
-    }
+/// The pose of separate arguments `R` (named `r_name`) and `t` (named `t_name`).
+pub fn pose_from_parts(r_name: &str, r: &Bound<'_, PyAny>, t_name: &str, t: &Bound<'_, PyAny>) -> PyResult<Pose> {
+    Ok(Pose::new(rotation(r_name, r)?, vector::<3>(t_name, t)?))
 }
 
 impl Field for Pose {

@@ -9,7 +9,7 @@
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::options_class;
-use crate::pose::Pose;
+use crate::pose::extract_pose;
 use pluecker::pose::{CertificateOptions, Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
 
@@ -59,8 +59,8 @@ options_class! {
         /// Follow the estimator with a minimisation of the reprojection error in pixels.
         refine: bool = |o| o.inner.refine, |o, v| Ok::<(), PyErr>(o.inner.refine = v);
         /// An extra starting pose `(R, t)`, tried first besides the default starts; `None`: no guess needed.
-        initial_pose: Option<Bound<'_, PyAny>> = |o| o.inner.initial_pose.map(Pose::from),
-            |o, v| v.map(|p| Pose::extract("initial_pose", &p)).transpose().map(|p| o.inner.initial_pose = p.map(Into::into));
+        initial_pose: Option<Bound<'_, PyAny>> = |o| o.inner.initial_pose,
+            |o, v| v.map(|p| extract_pose("initial_pose", &p)).transpose().map(|p| o.inner.initial_pose = p);
         /// Iteration cap of the trust-region methods' algebraic stage.
         trust_region_max_iterations: Integer = |o| o.inner.trust_region.stopping.max_iterations,
             |o, v| v.count("trust_region_max_iterations", 1).map(|n| o.inner.trust_region.stopping.max_iterations = n);

@@ -3,7 +3,7 @@
 use crate::camera::PyCamera;
 use crate::convert::{matrix_to_py, Real};
 use crate::errors::{degenerate, invalid_argument, solve};
-use crate::pose::{correspondences, Pose};
+use crate::pose::{correspondences, pose_from_parts};
 use numpy::{PyArray1, PyArray2};
 use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;
@@ -30,7 +30,7 @@ pub fn pose_covariance<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let sigma_px = sigma_px.map_or(Ok(UNIT_SIGMA_PX), |s| s.get("sigma_px"))?;
     let camera = camera.get().inner;
-    let pose: (nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>) = Pose::from_parts("R", R, "t", t)?.into();
+    let pose = pose_from_parts("R", R, "t", t)?;
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
         return Err(invalid_argument(
             "sigma_px",
@@ -83,7 +83,7 @@ pub fn reprojection_errors<'py>(
     lines3d: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let camera = camera.get().inner;
-    let pose: (nalgebra::Matrix3<f64>, nalgebra::Vector3<f64>) = Pose::from_parts("R", R, "t", t)?.into();
+    let pose = pose_from_parts("R", R, "t", t)?;
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
     let errors = solve(py, move || {
         Ok(ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d).errors(&pose))

@@ -6,8 +6,8 @@ use crate::camera::PyCamera;
 use crate::fields::{result_class, Field};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use pluecker::chi_square::ResidualTest;
-use pluecker::pose::{RansacReport, StageReport};
-use pluecker::{PoseResult, Status};
+use pluecker::pose::{RansacReport, StageReport, Status};
+use pluecker::PoseResult;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -256,11 +256,11 @@ result_class! {
         /// `status == 'ambiguous'`: another local minimum explains the data nearly as well.
         ambiguous = |r| r.inner.ambiguous;
         /// Rotation of the cheapest other local minimum with every point in front; `None` if none was found.
-        second_best_R = |r| r.inner.second_best.as_ref().map(|((rot, _), _)| *rot);
+        second_best_R = |r| r.inner.second_best.map(|(p, _)| p.rotation);
         /// Translation of that minimum.
-        second_best_t = |r| r.inner.second_best.as_ref().map(|((_, t), _)| *t);
+        second_best_t = |r| r.inner.second_best.map(|(p, _)| p.translation);
         /// Its cost `½ Σ r²`, px².
-        second_best_cost = |r| r.inner.second_best.as_ref().map(|(_, c)| *c);
+        second_best_cost = |r| r.inner.second_best.map(|(_, c)| c);
         /// Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`).
         behind_camera_cost = |r| r.inner.behind_camera_cost;
         /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.

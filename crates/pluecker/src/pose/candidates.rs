@@ -125,7 +125,7 @@ pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> 
         };
         solve(&[a, b, c])
             .into_iter()
-            .filter(|(r, t)| r.iter().chain(t.iter()).all(|v| v.is_finite()))
+            .filter(|Pose { rotation: r, translation: t }| r.iter().chain(t.iter()).all(|v| v.is_finite()))
             .collect()
     })
 }
@@ -184,7 +184,7 @@ mod tests {
             for seed in 0..20 {
                 let scene = visible_scene(4000.0, np, nl, false, seed);
                 let hypotheses: Vec<Pose> = minimal_hypotheses(&scene.camera, &scene.correspondences).flatten().collect();
-                let found = hypotheses.iter().any(|(r, t)| {
+                let found = hypotheses.iter().any(|Pose { rotation: r, translation: t }| {
                     rotation_distance(r, &scene.rotation) < 1e-6 && (t - scene.translation).norm() < 1e-5
                 });
                 assert!(found, "{np} points, {nl} lines, seed {seed}");

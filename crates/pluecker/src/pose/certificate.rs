@@ -410,7 +410,7 @@ fn localise(
                 continue;
             }
             let theta = sqrt3 * cell.half;
-            let r_c = exp_so3(&cell.centre) * pose.0;
+            let r_c = exp_so3(&cell.centre) * pose.rotation;
             let (c, g, c0) = problem.quadratic(&r_c);
             let Some(c_inv) = c.try_inverse() else {
                 return Err("not proved: the minorant does not fix the translation".into());
@@ -436,7 +436,7 @@ fn localise(
                 let extent = whitening
                     .ellipsoid_extent(&c, slack)
                     .ok_or("not proved: the minorant does not fix the translation")?;
-                let radius = whitening.length(&cell.centre, &(t_star - pose.1)) + cell.half * whitening.cube_scale + extent;
+                let radius = whitening.length(&cell.centre, &(t_star - pose.translation)) + cell.half * whitening.cube_scale + extent;
                 if radius <= target {
                     out.radius = out.radius.max(radius);
                     continue;
@@ -558,8 +558,8 @@ impl RayCurvature {
             .points3d
             .iter()
             .map(|x| {
-                let y = pose.0 * x;
-                let p = y + pose.1;
+                let y = pose.rotation * x;
+                let p = y + pose.translation;
                 let d_pi = SMatrix::<f64, 2, 3>::new(1.0 / p.z, 0.0, -p.x / (p.z * p.z), 0.0, 1.0 / p.z, -p.y / (p.z * p.z));
                 let pt = tangent_map(&y) * t;
                 let g = problem.k2 * d_pi * pt;
@@ -578,8 +578,8 @@ impl RayCurvature {
             .zip(&problem.corr.lines3d)
             .map(|(s2, s3)| {
                 // Endpoints A = R_s y_A + t: A' = a_ω × R_s y_A + a_τ = P_A a.
-                let (y_a, y_b) = (pose.0 * s3[0], pose.0 * s3[1]);
-                let (a, b) = (y_a + pose.1, y_b + pose.1);
+                let (y_a, y_b) = (pose.rotation * s3[0], pose.rotation * s3[1]);
+                let (a, b) = (y_a + pose.translation, y_b + pose.translation);
                 let m0 = a.cross(&b);
                 let w0 = (problem.g * m0.xy()).norm();
                 // m = A × B moves as m' = N a, N = [[B]×[y_A]× − [A]×[y_B]×, [A]× − [B]×].
@@ -845,8 +845,8 @@ mod tests {
                 let mut rng = Rng::new(70 + seed);
                 let corr = scene.noisy(1.0, true, &mut rng);
                 let cost = ReprojectionCost::of(&scene.camera, &corr);
-                let truth = (scene.rotation, scene.translation);
-                let nudged = (exp_so3(&Vector3::new(2e-3, -1e-3, 1e-3)) * truth.0, truth.1 + Vector3::new(1e-3, 2e-3, -3e-3));
+                let truth = Pose::new(scene.rotation, scene.translation);
+                let nudged = Pose::new(exp_so3(&Vector3::new(2e-3, -1e-3, 1e-3)) * truth.rotation, truth.translation + Vector3::new(1e-3, 2e-3, -3e-3));
                 for pose in [truth, nudged] {
                     let f_hat = cost.cost(&pose);
                     let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
@@ -863,7 +863,7 @@ mod tests {
                         let at = |s: f64| -> Vec<f64> {
                             let omega = Vector3::new(a[0], a[1], a[2]) * s;
                             let tau = Vector3::new(a[3], a[4], a[5]) * s;
-                            cost.residuals(&(exp_so3(&omega) * pose.0, pose.1 + tau))
+                            cost.residuals(&Pose::new(exp_so3(&omega) * pose.rotation, pose.translation + tau))
                         };
                         let h = 1e-2 * radius;
                         for i in 1..10 {

@@ -35,14 +35,14 @@ use std::time::Instant;
 /// A dual-quaternion iterate back to a rigid motion in the world frame.
 fn to_world(x: &SVector<f64, 8>, cond: &Conditioning) -> Pose {
     let (rot, t) = DualQuaternion::from_vector(x).to_rotation_translation();
-    (rot, cond.pose_to_world(&rot, &t))
+    Pose::new(rot, cond.pose_to_world(&rot, &t))
 }
 
 /// The user's starting pose in the conditioned frame, if any.
 fn user_start(opts: &PoseOptions, cond: &Conditioning) -> Option<DualQuaternion> {
     opts.initial_pose
         .as_ref()
-        .map(|(rot, t)| DualQuaternion::from_rotation_translation(rot, &cond.pose_from_world(rot, t)))
+        .map(|p| DualQuaternion::from_rotation_translation(&p.rotation, &cond.pose_from_world(&p.rotation, &p.translation)))
 }
 
 /// What the restart logic needs to know about the object (in the frame of the cost).
@@ -90,7 +90,7 @@ impl<'c> Shape<'c> {
         if !x.iter().all(|v| v.is_finite()) || (r_norm2 - 1.0).abs() >= 0.5 {
             return false;
         }
-        let pose = DualQuaternion::from_vector(x).to_rotation_translation();
+        let pose: Pose = DualQuaternion::from_vector(x).to_rotation_translation().into();
         count_behind(object_points(self.corr).copied(), &pose) == 0
     }
 }
@@ -233,7 +233,7 @@ fn estimator(
 ) -> Result<Estimate> {
     if opts.method == Method::Linear {
         let cal = faugeras_toscani(&corr.points2d, &corr.points3d)?;
-        let pose = (cal.rotation, cal.translation);
+        let pose = Pose::new(cal.rotation, cal.translation);
         let cost = ReprojectionCost::new(cal.camera, &corr.points2d, &corr.points3d, &[], &[]).cost(&pose);
         let summary = Summary {
             iterations: 0,
@@ -345,7 +345,7 @@ fn estimator(
     let pose = if x.iter().all(|v| v.is_finite()) && x.fixed_rows::<4>(0).norm() > 0.0 {
         to_world(&x, &cond)
     } else {
-        (Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN))
+        Pose::new(Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN))
     };
     let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
     Ok(Estimate {
@@ -399,8 +399,8 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         let cond = &prepared.cond;
         let conditioned = &prepared.conditioned;
         let cost = ReprojectionCost::of(camera, conditioned);
-        let to_cond = |p: &Pose| (p.0, cond.pose_from_world(&p.0, &p.1));
-        let to_world = |p: &Pose| (p.0, cond.pose_to_world(&p.0, &p.1));
+        let to_cond = |p: &Pose| Pose::new(p.rotation, cond.pose_from_world(&p.rotation, &p.translation));
+        let to_world = |p: &Pose| Pose::new(p.rotation, cond.pose_to_world(&p.rotation, &p.translation));
         let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
         let n = conditioned.n_points() + conditioned.n_lines();
         let minima = search(&cost, &starts, minimal_hypotheses(camera, conditioned), is_exhaustive(n), opts);

@@ -104,10 +104,10 @@ pub struct PoseOptions {
     /// Follow the estimator with a minimisation of the reprojection error (pixel distances for points,
     /// endpoint-to-projected-line distances for lines). Default true.
     pub refine: bool,
-    /// An extra starting pose `(R, t)` for the iterative methods, world frame. It is tried first, and
+    /// An extra starting pose for the iterative methods, world frame. It is tried first, and
     /// the default starts too (see [`initialization`]); the cheapest valid answer wins. Default `None`:
     /// no guess from the user is needed.
-    pub initial_pose: Option<(Matrix3<f64>, Vector3<f64>)>,
+    pub initial_pose: Option<crate::Pose>,
     /// Trust-region settings of the algebraic stage: the paper's values (section 4.1), and a step
     /// tolerance of 1e-10 on top of its k.2 tests. When the refinement follows (`refine`), the stage
     /// also stops at steps shorter than [`STEP_TOLERANCE_BEFORE_REFINEMENT`]. `subproblem` is set by
@@ -218,7 +218,7 @@ impl PoseOptions {
         if let Some(certify) = &self.certify {
             certify.validate()?;
         }
-        if let Some((r, t)) = &self.initial_pose {
+        if let Some(crate::Pose { rotation: r, translation: t }) = &self.initial_pose {
             if r.iter().chain(t.iter()).any(|v| !v.is_finite())
                 || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
                 || r.determinant() <= 0.0
@@ -387,6 +387,13 @@ pub struct PoseResult {
     pub residual_test: Option<ResidualTest>,
 }
 
+impl PoseResult {
+    /// The returned pose, `x_cam = R X_world + t`.
+    pub fn pose(&self) -> crate::Pose {
+        crate::Pose::new(self.rotation, self.translation)
+    }
+}
+
 /// Origin of the pixel noise level in [`PoseResult::covariance`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CovarianceSource {
@@ -411,8 +418,8 @@ pub(crate) fn stage(name: &str, cost_kind: &'static str, pose: &Pose, summary: &
     StageReport {
         name: name.into(),
         cost_kind,
-        rotation: pose.0,
-        translation: pose.1,
+        rotation: pose.rotation,
+        translation: pose.translation,
         iterations: summary.iterations,
         initial_cost: summary.initial_cost,
         final_cost: summary.final_cost,

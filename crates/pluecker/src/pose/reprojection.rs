@@ -15,8 +15,7 @@ use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
 
-/// A pose `x_cam = R X + t`.
-pub type Pose = (Matrix3<f64>, Vector3<f64>);
+pub use crate::rigid::Pose;
 
 /// Points per batch of the point kernel. The kernel is written lane by lane over fixed-size arrays so
 /// that the compiler turns each batch into vector instructions (the speed-up: `bench/README.md`).
@@ -147,7 +146,7 @@ impl<'a> ReprojectionCost<'a> {
     /// rotation part of a Jacobian row `a = ∂u/∂x_cam` is `(R X) × a` (left perturbation `exp(ω) R`).
     #[inline(always)]
     fn point_lanes<const L: usize, const JACOBIAN: bool>(&self, pose: &Pose, i0: usize) -> PointLanes<L> {
-        let (r, t, cam) = (&pose.0, &pose.1, &self.camera);
+        let (r, t, cam) = (&pose.rotation, &pose.translation, &self.camera);
         let col = |c: usize| -> [f64; L] { std::array::from_fn(|l| self.column(c)[i0 + l]) };
         let (x, y, z, u, v) = (col(0), col(1), col(2), col(3), col(4));
         let mut out = PointLanes {
@@ -215,8 +214,8 @@ impl<'a> ReprojectionCost<'a> {
 
     fn line_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
         let [wa, wb] = self.lines3d[i];
-        let (ra, rb) = (pose.0 * wa, pose.0 * wb);
-        let (a, b) = (ra + pose.1, rb + pose.1);
+        let (ra, rb) = (pose.rotation * wa, pose.rotation * wb);
+        let (a, b) = (ra + pose.translation, rb + pose.translation);
         // The projected line in normalised coordinates, and its pixel form Kᵀ⁻¹ l.
         let l = a.cross(&b);
         let lp = self.k_inv.transpose() * l;
@@ -308,9 +307,9 @@ impl<'a> ReprojectionCost<'a> {
 
 /// The number of `points` with `z ≤ 0` in the camera frame at `pose`.
 pub(crate) fn count_behind(points: impl Iterator<Item = Vector3<f64>>, pose: &Pose) -> usize {
-    let r = pose.0.row(2);
+    let r = pose.rotation.row(2);
     points
-        .filter(|p| r[0] * p.x + r[1] * p.y + r[2] * p.z + pose.1.z <= 0.0)
+        .filter(|p| r[0] * p.x + r[1] * p.y + r[2] * p.z + pose.translation.z <= 0.0)
         .count()
 }
 
@@ -356,7 +355,7 @@ impl Objective<6> for ReprojectionCost<'_> {
 
     fn retract(&self, pose: &Pose, d: &SVector<f64, 6>) -> Pose {
         let omega = Vector3::new(d[0], d[1], d[2]);
-        (exp_so3(&omega) * pose.0, pose.1 + Vector3::new(d[3], d[4], d[5]))
+        Pose::new(exp_so3(&omega) * pose.rotation, pose.translation + Vector3::new(d[3], d[4], d[5]))
     }
 }
 
@@ -455,10 +454,7 @@ mod tests {
                 .collect();
             let cost = ReprojectionCost::new(cam, &p2, &p3, &l2, &l3);
             // Perturb away from the data so the gradient is not ~0.
-            let pose = (
-                exp_so3(&Vector3::new(0.01, -0.02, 0.03)) * rot,
-                t + Vector3::new(0.1, 0.0, -0.2),
-            );
+            let pose = Pose::new(exp_so3(&Vector3::new(0.01, -0.02, 0.03)) * rot, t + Vector3::new(0.1, 0.0, -0.2));
             assert!(gradient_error(&cost, &pose, 1e-6) < 1e-6);
             // Line residuals vanish at the true pose for exact endpoints.
             let l2_exact: Vec<[Vector2<f64>; 2]> = l3
@@ -466,7 +462,7 @@ mod tests {
                 .map(|s| [cam.project(&(rot * s[0] + t)), cam.project(&(rot * s[1] + t))])
                 .collect();
             let exact = ReprojectionCost::new(cam, &[], &[], &l2_exact, &l3);
-            assert!(exact.cost(&(rot, t)) < 1e-18);
+            assert!(exact.cost(&Pose::new(rot, t)) < 1e-18);
         }
     }
 }

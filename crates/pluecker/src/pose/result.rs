@@ -40,7 +40,7 @@ pub(crate) struct Parts<'c> {
 
 /// Whether `pose` is finite.
 pub(crate) fn is_finite(pose: &Pose) -> bool {
-    pose.0.iter().chain(pose.1.iter()).all(|v| v.is_finite())
+    pose.rotation.iter().chain(pose.translation.iter()).all(|v| v.is_finite())
 }
 
 /// The status that the stages and the pose imply: a numerical failure (non-finite pose, singular
@@ -99,8 +99,8 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
         ResidualTest::new(2.0 * reprojection_cost / (s * s), residual_count.saturating_sub(fitted))
     });
     let (dual_quaternion, axis, angle) = if finite {
-        let q = DualQuaternion::from_rotation_translation(&pose.0, &pose.1);
-        let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.0));
+        let q = DualQuaternion::from_rotation_translation(&pose.rotation, &pose.translation);
+        let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.rotation));
         (q, axis, angle)
     } else {
         let nan4 = Vector4::from_element(f64::NAN);
@@ -113,8 +113,8 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
     let (inliers_points, inliers_lines) =
         inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
     PoseResult {
-        rotation: pose.0,
-        translation: pose.1,
+        rotation: pose.rotation,
+        translation: pose.translation,
         dual_quaternion,
         axis,
         angle,

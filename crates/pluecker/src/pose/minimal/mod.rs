@@ -36,8 +36,7 @@ pub use p3p::p3p;
 
 use nalgebra::Vector3;
 
-/// A pose `(R, t)`: `x_cam = R X_world + t`, `R` a rotation, `t` in world units.
-pub type Pose = (nalgebra::Matrix3<f64>, Vector3<f64>);
+pub use crate::rigid::Pose;
 
 /// One 2-D/3-D correspondence as a minimal solver sees it (camera-frame image data, world-frame
 /// object data).

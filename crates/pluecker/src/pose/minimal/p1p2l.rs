@@ -89,7 +89,7 @@ pub fn p1p2l(
     .into_iter()
     .filter_map(|r| {
         let depth = -(s[0] * first.normal.dot(&(r * p[0])) + s[1] * second.normal.dot(&(r * p[1]))) / s_squared;
-        let pose = (r, y * depth - r * x);
+        let pose = Pose::new(r, y * depth - r * x);
         let holds = point_holds(&y, &x, &pose) && lines.iter().all(|l| line_holds(l, &pose));
         (depth > 0.0 && holds).then_some(pose)
     })

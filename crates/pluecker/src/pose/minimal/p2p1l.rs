@@ -92,7 +92,7 @@ pub fn p2p1l(
         .filter_map(|r| {
             let re = r * e;
             let (depth1, depth2) = (g1.dot(&re), g2.dot(&re));
-            let pose = (r, 0.5 * ((y1 * depth1 - r * x1) + (y2 * depth2 - r * x2)));
+            let pose = Pose::new(r, 0.5 * ((y1 * depth1 - r * x1) + (y2 * depth2 - r * x2)));
             let holds = point_holds(&y1, &x1, &pose) && point_holds(&y2, &x2, &pose) && line_holds(&line, &pose);
             (depth1 > 0.0 && depth2 > 0.0 && holds).then_some(pose)
         })

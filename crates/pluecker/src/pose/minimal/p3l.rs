@@ -90,7 +90,7 @@ pub fn p3l(normals: &[Vector3<f64>; 3], endpoints: &[[Vector3<f64>; 2]; 3]) -> V
     .into_iter()
     .filter_map(|r| {
         let h = Vector3::from_fn(|i, _| -lines[i].normal.dot(&(r * offsets[i])));
-        let pose = (r, lu.solve(&h)? - r * origin);
+        let pose = Pose::new(r, lu.solve(&h)? - r * origin);
         lines.iter().all(|l| line_holds(l, &pose)).then_some(pose)
     })
     .collect()

@@ -270,7 +270,7 @@ impl Problem {
         let centroid = |p: &[Vector3<f64>; 3]| (p[0] + p[1] + p[2]) / 3.0;
         let translation = centroid(&cam) - rotation * centroid(&self.x);
         let finite = rotation.iter().chain(translation.iter()).all(|v| v.is_finite());
-        finite.then_some((rotation, translation))
+        finite.then_some(Pose { rotation: rotation, translation: translation })
     }
 }
 

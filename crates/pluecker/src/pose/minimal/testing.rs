@@ -115,7 +115,7 @@ impl Sample {
         let scale = self.scale();
         poses
             .iter()
-            .map(|(r, t)| (r - self.rotation).norm().max((t - self.translation).norm() / scale))
+            .map(|Pose { rotation: r, translation: t }| (r - self.rotation).norm().max((t - self.translation).norm() / scale))
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -162,7 +162,7 @@ impl Sample {
 /// placing an object point next to the camera centre is judged by the object's size, not by the
 /// vanishing distance). Returns the largest absolute residual and whether every point is in front
 /// (`y · x > 0`).
-pub fn residuals(features: &[Feature; 3], (r, t): &Pose) -> (f64, bool) {
+pub fn residuals(features: &[Feature; 3], Pose { rotation: r, translation: t }: &Pose) -> (f64, bool) {
     let world: Vec<Vector3<f64>> = features
         .iter()
         .flat_map(|f| match f {
@@ -199,7 +199,7 @@ pub fn residuals(features: &[Feature; 3], (r, t): &Pose) -> (f64, bool) {
 pub fn assert_valid(poses: &[Pose], features: &[Feature; 3], angle: f64, max: usize, what: &str) {
     assert!(poses.len() <= max, "{what}: {} solutions", poses.len());
     for pose in poses {
-        let (r, t) = pose;
+        let Pose { rotation: r, translation: t } = pose;
         assert!(
             r.iter().chain(t.iter()).all(|v| v.is_finite()),
             "{what}: non-finite pose"
@@ -352,7 +352,7 @@ pub fn assert_multistart_finds_nothing_more(
         let mut r = rng.rotation();
         let mut t = sample.translation + rng.unit_vector3() * rng.uniform_in(0.0, 2.0 * sample.scale());
         for _ in 0..60 {
-            let (res, jac) = constraint_system(&sample.features, &(r, t));
+            let (res, jac) = constraint_system(&sample.features, &Pose::new(r, t));
             let Some(step) = jac.lu().solve(&(-res)) else { break };
             r = nalgebra::Rotation3::new(Vector3::new(step[0], step[1], step[2])).into_inner() * r;
             t += Vector3::new(step[3], step[4], step[5]);
@@ -360,12 +360,12 @@ pub fn assert_multistart_finds_nothing_more(
                 break;
             }
         }
-        let candidate = (r, t);
+        let candidate = Pose::new(r, t);
         if !r.iter().chain(t.iter()).all(|v| v.is_finite()) {
             continue;
         }
         let (worst, in_front) = residuals(&sample.features, &candidate);
-        if worst > 1e-13 || !in_front || seen.iter().any(|(s, u)| (s - r).norm() + (u - t).norm() < 1e-6) {
+        if worst > 1e-13 || !in_front || seen.iter().any(|Pose { rotation: s, translation: u }| (s - r).norm() + (u - t).norm() < 1e-6) {
             continue;
         }
         seen.push(candidate);
@@ -389,7 +389,7 @@ pub fn assert_multistart_finds_nothing_more(
 /// The six residuals (`uᵀx/‖x‖`-free, plain `uᵀx` for speed of convergence: points `y × x` projected
 /// on two directions orthogonal to `y`, lines `n · x`) and their Jacobian in a left rotation increment
 /// and the translation.
-fn constraint_system(features: &[Feature; 3], (r, t): &Pose) -> (SMatrix<f64, 6, 1>, SMatrix<f64, 6, 6>) {
+fn constraint_system(features: &[Feature; 3], Pose { rotation: r, translation: t }: &Pose) -> (SMatrix<f64, 6, 1>, SMatrix<f64, 6, 6>) {
     let mut res = SMatrix::<f64, 6, 1>::zeros();
     let mut jac = SMatrix::<f64, 6, 6>::zeros();
     let mut row = 0;

@@ -81,8 +81,8 @@ pub(crate) fn estimate_robust(
     };
     let conditioned = cond.correspondences(corr);
     let outcome = ransac(camera, &conditioned, robust, &opts.refinement)?;
-    let to_world = |p: &Pose| (p.0, cond.pose_to_world(&p.0, &p.1));
-    let nan_pose = (Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN));
+    let to_world = |p: &Pose| Pose::new(p.rotation, cond.pose_to_world(&p.rotation, &p.translation));
+    let nan_pose = Pose::new(Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN));
     let ransac_pose = outcome.pose.as_ref().map_or(nan_pose, to_world);
     let mut stages = vec![ransac_stage(&outcome, &ransac_pose, started)];
     let (mut points, mut lines) = (outcome.inliers_points.clone(), outcome.inliers_lines.clone());
@@ -108,7 +108,7 @@ pub(crate) fn estimate_robust(
                     ..report
                 },
             });
-            let at = (pose.0, cond.pose_from_world(&pose.0, &pose.1));
+            let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
             let (new_points, new_lines) = outcome.data.inliers(&at, &outcome.thresholds);
             let unchanged = new_points == points && new_lines == lines;
             (points, lines) = (new_points, new_lines);

@@ -31,6 +31,7 @@
 use super::super::minimal::{solve, Feature};
 use crate::geometry::quaternion::{exp_so3, rotation_distance};
 use crate::rng::Rng;
+use crate::Pose;
 use nalgebra::Vector3;
 use std::sync::OnceLock;
 
@@ -71,7 +72,7 @@ fn probe(k: usize) -> bool {
     });
     solve(&sample)
         .iter()
-        .any(|(r, t)| rotation_distance(r, &rotation) < 1e-6 && (t - translation).norm() < 1e-6 * translation.norm())
+        .any(|Pose { rotation: r, translation: t }| rotation_distance(r, &rotation) < 1e-6 && (t - translation).norm() < 1e-6 * translation.norm())
 }
 
 /// Draws samples and computes how many are needed.

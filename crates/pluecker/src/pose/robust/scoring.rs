@@ -246,7 +246,7 @@ impl Prepared {
     /// Squared pixel error of `point` at `pose` (infinite behind the camera).
     #[inline(always)]
     fn point_error2(&self, pose: &Pose, point: &ScoredPoint) -> f64 {
-        let (r, t, c) = (&pose.0, &pose.1, &self.camera);
+        let (r, t, c) = (&pose.rotation, &pose.translation, &self.camera);
         let [x, y, z] = point.object;
         let pz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t.z;
         let iz = 1.0 / pz;
@@ -266,8 +266,8 @@ impl Prepared {
     /// an object endpoint is behind the camera or the line projects to a point).
     #[inline(always)]
     fn line_error2(&self, pose: &Pose, line: &ScoredLine) -> f64 {
-        let a = pose.0 * line.object[0] + pose.1;
-        let b = pose.0 * line.object[1] + pose.1;
+        let a = pose.rotation * line.object[0] + pose.translation;
+        let b = pose.rotation * line.object[1] + pose.translation;
         if !(a.z > 0.0 && b.z > 0.0) {
             return f64::INFINITY;
         }
@@ -444,7 +444,7 @@ impl Prepared {
     /// True when every object point of the sample's features is in front of the camera at `pose`
     /// (depth `z > 0`): a pose that puts its own sample behind the camera is not worth scoring.
     pub fn sample_in_front(&self, pose: &Pose, sample: &[usize; 3]) -> bool {
-        let depth = |x: &Vector3<f64>| pose.0.row(2).transpose().dot(x) + pose.1.z;
+        let depth = |x: &Vector3<f64>| pose.rotation.row(2).transpose().dot(x) + pose.translation.z;
         sample.iter().all(|&k| {
             if k < self.points.len() {
                 let [x, y, z] = self.points_given[k].object;
@@ -481,7 +481,7 @@ mod tests {
         let scene = random_scene(SceneKind::General, 20, 8, 3);
         let corr = scene.noisy(2.0, true, &mut Rng::new(4));
         let prepared = Prepared::new(&scene.camera, &corr, &mut Rng::new(5)).unwrap();
-        let pose = (scene.rotation, scene.translation);
+        let pose = Pose::new(scene.rotation, scene.translation);
         let reference = ReprojectionCost::of(&scene.camera, &corr).errors(&pose);
         for (k, e) in reference.iter().enumerate() {
             let ours = prepared.error2(&pose, k).sqrt();
@@ -501,7 +501,7 @@ mod tests {
         // The early exit: a bound below the score stops the sum.
         assert_eq!(prepared.score(&pose, &tau, 0.5 * score), None);
         // Behind the camera everything is an outlier.
-        let behind = (scene.rotation, scene.translation - Vector3::new(0.0, 0.0, 100.0));
+        let behind = Pose::new(scene.rotation, scene.translation - Vector3::new(0.0, 0.0, 100.0));
         let all_out = prepared.score(&behind, &tau, f64::INFINITY).unwrap();
         assert_eq!(all_out, prepared.all_outlier_score(&tau));
         let (p, l) = prepared.inliers(&behind, &tau);

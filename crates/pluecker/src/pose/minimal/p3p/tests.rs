@@ -70,7 +70,7 @@ impl Instance {
     /// The larger of `‖R − R*‖_F` and `‖t − t*‖ / scale` for the closest returned pose.
     fn error(&self, poses: &[Pose]) -> f64 {
         let scale = self.scale();
-        let error = |(r, t): &Pose| {
+        let error = |Pose { rotation: r, translation: t }: &Pose| {
             let rotation_error = (r - self.rotation).norm();
             rotation_error.max((t - self.translation).norm() / scale)
         };
@@ -91,7 +91,7 @@ impl Instance {
 /// `angle` radians of its bearing.
 fn assert_valid(poses: &[Pose], bearings: &[Vector3<f64>; 3], points: &[Vector3<f64>; 3], angle: f64, what: &str) {
     assert!(poses.len() <= 4, "{what}: {} solutions", poses.len());
-    for (r, t) in poses {
+    for Pose { rotation: r, translation: t } in poses {
         assert!(
             r.iter().chain(t.iter()).all(|v| v.is_finite()),
             "{what}: non-finite pose"
@@ -250,7 +250,7 @@ fn every_solution_found_by_multistart_newton_is_returned() {
                 skipped += 1;
                 continue;
             }
-            let (r, t) = problem.pose(&lambda).expect("a pose");
+            let Pose { rotation: r, translation: t } = problem.pose(&lambda).expect("a pose");
             let truth = Instance {
                 rotation: r,
                 translation: t,
@@ -282,7 +282,7 @@ fn solutions_do_not_depend_on_the_order_of_the_correspondences() {
             let permuted = Instance::new(order.map(|i| inst.cam[i]), inst.rotation, inst.translation);
             let other = p3p(&permuted.bearings(), &permuted.points);
             assert_eq!(other.len(), poses.len(), "draw {draw}, order {order:?}");
-            for (r, t) in &other {
+            for Pose { rotation: r, translation: t } in &other {
                 let same = Instance {
                     rotation: *r,
                     translation: *t,
