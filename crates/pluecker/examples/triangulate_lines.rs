@@ -188,7 +188,7 @@ fn real(data: &Path, gap: f64) {
             for (k, m) in Method::ALL.iter().enumerate() {
                 let r = triangulate_line(&cams, &homogeneous, Some(&covariances), &options(*m, gap)).unwrap();
                 for (p, s) in cams.iter().zip(segments) {
-                    let d = endpoint_distances(&plucker::project(p, &r.plucker), &s[0], &s[1]);
+                    let d = endpoint_distances(&plucker::project(p, r.plucker.coordinates()), &s[0], &s[1]);
                     errors[k].push(0.5 * (d[0] + d[1]));
                 }
                 tallies[k].add(&r.report);

@@ -332,7 +332,7 @@ fn bad_options_and_bad_data_are_errors() {
         ("point_threshold", with(&|o| o.point_threshold = -1.0)),
         ("line_threshold", with(&|o| o.line_threshold = f64::NAN)),
         ("confidence", with(&|o| o.confidence = 1.0)),
-        ("max_ransac_iterations", with(&|o| o.max_iterations = 0)),
+        ("max_iterations", with(&|o| o.max_iterations = 0)),
         ("min_inlier_ratio", with(&|o| o.min_inlier_ratio = 1.0)),
         ("min_inlier_ratio", with(&|o| o.min_inlier_ratio = -0.1)),
         ("min_inlier_ratio", with(&|o| o.min_inlier_ratio = f64::NAN)),

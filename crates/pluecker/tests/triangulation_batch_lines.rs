@@ -158,9 +158,9 @@ fn line_batch_equals_single_calls_for_every_input_form() {
             // ignores (section 3.1 normalises each line): the same line to rounding (Plücker
             // coordinates are homogeneous: up to sign), and the same cost (about 1 per observation; 0
             // to rounding for a track in two views, which fit any line exactly).
-            let distance = (r.plucker - single.plucker)
+            let distance = (r.plucker.coordinates() - single.plucker.coordinates())
                 .norm()
-                .min((r.plucker + single.plucker).norm());
+                .min((r.plucker.coordinates() + single.plucker.coordinates()).norm());
             assert!(distance < 1e-9, "track {t}: {distance}");
             let tolerance = 1e-9 * single.report.cost + 1e-12;
             assert!((r.report.cost - single.report.cost).abs() <= tolerance, "track {t}");

@@ -49,10 +49,10 @@ fn noise_free_lines_are_recovered_by_every_method() {
                 method.as_str()
             );
             assert!(r.report.cost < 1e-12, "{}", r.report.cost);
-            assert!(plucker::constraint(&r.plucker).abs() < 1e-14);
-            assert!((r.plucker.norm() - 1.0).abs() < 1e-12);
+            assert!(plucker::constraint(r.plucker.coordinates()).abs() < 1e-14);
+            assert!((r.plucker.coordinates().norm() - 1.0).abs() < 1e-12);
             // point and direction describe the returned Plücker coordinates.
-            assert!((plucker::from_point_direction(&r.point, &r.direction).normalize() - r.plucker).norm() < 1e-9);
+            assert!((plucker::from_point_direction(&r.point, &r.direction).normalize() - r.plucker.coordinates()).norm() < 1e-9);
             assert_eq!(r.report.status, Status::Success);
         }
     }
@@ -147,7 +147,7 @@ fn reported_cost_is_eq_19() {
     let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
     for method in Method::ALL {
         let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(method)).unwrap();
-        let cost = line_cost(&scene.cameras, &lines, &covariances, &r.plucker);
+        let cost = line_cost(&scene.cameras, &lines, &covariances, r.plucker.coordinates());
         assert!(
             (cost - r.report.cost).abs() < 1e-8 * (1.0 + cost),
             "{}: {cost} vs {}",
@@ -178,12 +178,12 @@ fn a_view_with_huge_covariance_is_ignored() {
         &opts(Method::Local),
     )
     .unwrap();
-    let (angle, offset) = line_error(&all, &three.plucker);
+    let (angle, offset) = line_error(&all, three.plucker.coordinates());
     assert!(angle < 1e-4 && offset < 1e-4, "{angle} {offset}");
     // With its nominal covariance the moved view pulls the answer away.
     let (_, nominal) = lines_from_segments(&segments, 1.0).unwrap();
     let pulled = triangulate_line(&scene.cameras, &lines, Some(&nominal), &opts(Method::Local)).unwrap();
-    let (angle, offset) = line_error(&pulled, &three.plucker);
+    let (angle, offset) = line_error(&pulled, three.plucker.coordinates());
     assert!(angle > 1e-3 || offset > 1e-3, "{angle} {offset}");
 }
 

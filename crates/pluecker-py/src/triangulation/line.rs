@@ -45,7 +45,7 @@ impl PyLineTriangulation {
     pub fn create(py: Python<'_>, result: LineTriangulation) -> PyResult<Py<PyLineTriangulation>> {
         let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
             PyLineTriangulation {
-                plucker: result.plucker,
+                plucker: *result.plucker.coordinates(),
                 point: result.point,
                 direction: result.direction,
                 chart: result.chart,
@@ -196,7 +196,7 @@ impl TrackColumns for PyLineTriangulations {
     const NAMES: &'static [(&'static str, &'static str)] = LINE_NAMES;
 
     fn push(&mut self, track: LineTriangulation) -> Report {
-        self.plucker.extend_from_slice(track.plucker.as_slice());
+        self.plucker.extend_from_slice(track.plucker.coordinates().as_slice());
         self.point.extend_from_slice(track.point.as_slice());
         self.direction.extend_from_slice(track.direction.as_slice());
         self.chart_axes.extend(row_major(&chart_axes(&track.chart)));

@@ -59,7 +59,7 @@ use nalgebra::Vector3;
 /// let normals = lines.map(|[p, q]| to_camera(&p).cross(&to_camera(&q)));
 /// let poses = p1p2l(&to_camera(&point), &point, &normals, &lines);
 /// assert!(poses.len() <= 4);
-/// assert!(poses.iter().any(|(r, t)| (r - rotation).norm() < 1e-9 && (t - translation).norm() < 1e-9));
+/// assert!(poses.iter().any(|p| (p.rotation - rotation).norm() < 1e-9 && (p.translation - translation).norm() < 1e-9));
 /// ```
 pub fn p1p2l(
     bearing: &Vector3<f64>,

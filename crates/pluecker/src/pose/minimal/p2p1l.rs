@@ -60,7 +60,7 @@ use nalgebra::Vector3;
 /// let normal = to_camera(&line[0]).cross(&to_camera(&line[1]));
 /// let poses = p2p1l(&points.map(|x| to_camera(&x)), &points, &normal, &line);
 /// assert!(poses.len() <= 4);
-/// assert!(poses.iter().any(|(r, t)| (r - rotation).norm() < 1e-9 && (t - translation).norm() < 1e-9));
+/// assert!(poses.iter().any(|p| (p.rotation - rotation).norm() < 1e-9 && (p.translation - translation).norm() < 1e-9));
 /// ```
 pub fn p2p1l(
     bearings: &[Vector3<f64>; 2],

@@ -62,7 +62,7 @@ use nalgebra::{Matrix3, Vector3};
 /// let normals = lines.map(|[p, q]| (rotation * p + translation).cross(&(rotation * q + translation)));
 /// let poses = p3l(&normals, &lines);
 /// assert!(poses.len() <= 8);
-/// assert!(poses.iter().any(|(r, t)| (r - rotation).norm() < 1e-9 && (t - translation).norm() < 1e-9));
+/// assert!(poses.iter().any(|p| (p.rotation - rotation).norm() < 1e-9 && (p.translation - translation).norm() < 1e-9));
 /// ```
 pub fn p3l(normals: &[Vector3<f64>; 3], endpoints: &[[Vector3<f64>; 2]; 3]) -> Vec<Pose> {
     let mut lines = Vec::with_capacity(3);

@@ -101,7 +101,7 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 /// });
 /// let poses = p3p(&bearings, &points);
 /// assert!(!poses.is_empty() && poses.len() <= 4);
-/// assert!(poses.iter().any(|(r, t)| (r - rotation).norm() < 1e-9 && (t - translation).norm() < 1e-9));
+/// assert!(poses.iter().any(|p| (p.rotation - rotation).norm() < 1e-9 && (p.translation - translation).norm() < 1e-9));
 /// ```
 pub fn p3p(bearings: &[Vector3<f64>; 3], points: &[Vector3<f64>; 3]) -> Vec<Pose> {
     let Some(problem) = Problem::new(bearings, points) else {

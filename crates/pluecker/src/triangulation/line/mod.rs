@@ -34,7 +34,7 @@ use self::residual::{line_view, LineFrame};
 use super::uncertainty::covariance_of_information;
 use super::{parse_observations, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
-use crate::geometry::plucker::{self, LineChart, OrthonormalLine};
+use crate::geometry::plucker::{self, LineChart, OrthonormalLine, PluckerLine};
 use crate::optim::{trust_region, Linearization, Objective};
 use nalgebra::{Matrix2, Matrix3x4, Matrix4, SVector, Vector2, Vector3, Vector4, Vector6};
 use std::time::Instant;
@@ -46,8 +46,8 @@ const COINCIDENT_PLANES: f64 = 1e-18;
 /// A triangulated 3-D line.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LineTriangulation {
-    /// Plücker coordinates (eq. 3) in the world frame, unit norm, satisfying eq. 4.
-    pub plucker: Vector6<f64>,
+    /// The line in the world frame: Plücker coordinates (eq. 3), unit norm, satisfying eq. 4.
+    pub plucker: PluckerLine,
     /// The point of the line closest to the world origin, world units.
     pub point: Vector3<f64>,
     /// Unit direction of the line, world frame (the direction `d` of [`plucker::direction_moment`]).
@@ -184,11 +184,11 @@ pub fn triangulate_line(
 /// The result record of a world line (unit norm, point and direction) and its covariance.
 fn finish(problem: &LineProblem, line: &Vector6<f64>, mut report: Report) -> Result<LineTriangulation> {
     report.test_residuals(2 * problem.cameras.len(), 4);
-    let plucker = plucker::nearest_line(line).normalize();
+    let plucker = PluckerLine::new(&plucker::nearest_line(line))?;
     let at_infinity = || Error::Degenerate {
         what: "the estimated line lies at infinity".into(),
     };
-    let (point, direction) = plucker::to_point_direction(&plucker).ok_or_else(at_infinity)?;
+    let (point, direction) = plucker.point_direction().ok_or_else(at_infinity)?;
     let chart = LineChart::new(&point, &direction).ok_or_else(at_infinity)?;
     Ok(LineTriangulation {
         plucker,
