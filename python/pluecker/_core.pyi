@@ -94,6 +94,10 @@ class Camera:
     def P(self, R: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
         """The (3, 4) camera matrix ``K [R | t]`` at the pose ``x_cam = R X_world + t``: the known
         camera of the triangulation functions, from a pose estimate."""
+    def bearings(self, pixels: ArrayLike) -> NDArray[np.float64]:
+        """Unit rays (N, 3), camera frame, of pixels (N, 2): ``K⁻¹ (u, v, 1)`` normalised (minimal solvers)."""
+    def plane_normals(self, segments: ArrayLike) -> NDArray[np.float64]:
+        """Unit normals (M, 3), camera frame, of the interpretation planes of segments (M, 2, 2), pixels."""
     def project(self, points_cam: ArrayLike) -> NDArray[np.float64]:
         """Pixels (N, 2) ``u = K x_cam / z`` of camera-frame points (N, 3) (``z <= 0`` not rejected)."""
     def pixel_to_normalized(self, pixels: ArrayLike) -> NDArray[np.float64]:
@@ -345,6 +349,36 @@ def estimate_pose(
     Raises ShapeError, NonFiniteError, TooFewCorrespondencesError, DegenerateConfigurationError,
     InvalidOptionError (all ValueError); TypeError for an argument of the wrong kind.
     """
+
+# Minimal solvers (camera-frame data from Camera.bearings / Camera.plane_normals): every real pose that
+# explains the sample exactly, as a list of (R, t); empty for a degenerate sample.
+
+_Poses = List[Tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+def p3p(bearings: ArrayLike, points: ArrayLike) -> _Poses:
+    """Three rays (3, 3) and world points (3, 3): Lambda Twist (Persson & Nordberg 2018), at most 4."""
+
+def p2p1l(bearings: ArrayLike, points: ArrayLike, normal: ArrayLike, endpoints: ArrayLike) -> _Poses:
+    """Two rays (2, 3) and points (2, 3), one plane normal (3,) and two world points of its line (2, 3)."""
+
+def p1p2l(bearing: ArrayLike, point: ArrayLike, normals: ArrayLike, endpoints: ArrayLike) -> _Poses:
+    """One ray (3,) and point (3,), two plane normals (2, 3) and their lines' world points (2, 2, 3)."""
+
+def p3l(normals: ArrayLike, endpoints: ArrayLike) -> _Poses:
+    """Three plane normals (3, 3) and their lines' world points (3, 2, 3); at most 8 poses."""
+
+def refine_pose(
+    camera: Camera,
+    R: ArrayLike,
+    t: ArrayLike,
+    points2d: Optional[ArrayLike] = None,
+    points3d: Optional[ArrayLike] = None,
+    lines2d: Optional[ArrayLike] = None,
+    lines3d: Optional[ArrayLike] = None,
+    *,
+    options: Optional[PoseOptions] = None,
+) -> Tuple[NDArray[np.float64], NDArray[np.float64], PoseStage]:
+    """The reprojection refinement of :func:`estimate_pose` alone, from ``(R, t)``: ``(R, t, stage)``."""
 
 def pose_covariance(
     camera: Camera,

@@ -3,6 +3,7 @@
 use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
 use crate::fields::{result_class, Field};
 use crate::pose::pose_from_parts;
+use pluecker::geometry::lines::interpretation_plane_normal;
 use crate::errors::guarded;
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
@@ -65,6 +66,36 @@ result_class! {
     #[allow(non_snake_case)]
     fn P<'py>(&self, py: Python<'py>, R: &Bound<'py, PyAny>, t: &Bound<'py, PyAny>) -> PyResult<PyObject> {
         self.inner.projection(&pose_from_parts("R", R, "t", t)?).get(py)
+    }
+
+    /// Unit rays (N, 3), camera frame, of pixels (N, 2): `K⁻¹ (u, v, 1)` normalised; the bearings of the
+    /// minimal solvers (`p3p`, ...).
+    fn bearings<'py>(&self, py: Python<'py>, pixels: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let us = points::<2>("pixels", Some(pixels))?;
+        let cam = self.inner;
+        let rays: Vec<Vector3<f64>> = guarded(|| {
+            Ok(us.iter().map(|u| { let x = cam.pixel_to_normalized(u); Vector3::new(x.x, x.y, 1.0).normalize() }).collect())
+        })?;
+        Ok(points_to_py(py, &rays))
+    }
+
+    /// Unit normals (M, 3), camera frame, of the interpretation planes (through the optical centre and
+    /// the image segment) of segments (M, 2, 2) in pixels: the line data of the minimal solvers.
+    /// `DegenerateConfigurationError` naming the row for a zero-length segment.
+    fn plane_normals<'py>(&self, py: Python<'py>, segments: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let segs = crate::convert::segments::<2>("segments", Some(segments))?;
+        let cam = self.inner;
+        let normals = guarded(|| {
+            segs.iter()
+                .enumerate()
+                .map(|(i, [a, b])| {
+                    interpretation_plane_normal(&cam, a, b).map_err(|_| pluecker::Error::Degenerate {
+                        what: format!("segments[{i}]: zero-length image segment"),
+                    })
+                })
+                .collect::<pluecker::Result<Vec<_>>>()
+        })?;
+        Ok(points_to_py(py, &normals))
     }
 
     /// Pixels `u = K x_cam / z` of camera-frame points (N, 3).

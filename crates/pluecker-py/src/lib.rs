@@ -46,6 +46,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyPoseStage>()?;
     m.add_class::<PyRansacReport>()?;
     m.add_function(wrap_pyfunction!(pose::estimate_pose, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::minimal::p3p, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::minimal::p2p1l, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::minimal::p1p2l, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::minimal::p3l, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::minimal::refine_pose, m)?)?;
     m.add_function(wrap_pyfunction!(pose::reprojection::pose_covariance, m)?)?;
     m.add_function(wrap_pyfunction!(pose::reprojection::reprojection_errors, m)?)?;
     m.add_function(wrap_pyfunction!(pose::geometry::pose_to_dual_quaternion, m)?)?;

@@ -1,8 +1,10 @@
 //! Pose bindings: `estimate_pose` ([`estimate_pose`]), its options ([`options`]) and result
-//! ([`result`]), the reprojection error and covariance at a given pose ([`reprojection`]), and the
-//! dual-quaternion forms of a pose ([`geometry`]).
+//! ([`result`]), the minimal solvers and the refinement one by one ([`minimal`]), the reprojection
+//! error and covariance at a given pose ([`reprojection`]), and the dual-quaternion forms of a pose
+//! ([`geometry`]).
 
 pub mod geometry;
+pub mod minimal;
 pub mod options;
 pub mod reprojection;
 pub mod result;

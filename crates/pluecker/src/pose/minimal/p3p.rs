@@ -122,6 +122,9 @@ pub fn p3p(bearings: &[Vector3<f64>; 3], points: &[Vector3<f64>; 3]) -> Vec<Pose
     depths.iter().filter_map(|lambda| problem.pose(lambda)).collect()
 }
 
+/// How far from orthonormal a returned rotation may be (it is orthonormal to rounding by construction).
+const ROTATION_TOLERANCE: f64 = 1e-9;
+
 /// The data of eq. 4, conditioned: squared sides divided by the largest one.
 struct Problem {
     /// Unit bearings, relabelled so that side 23 is the longest.
@@ -270,7 +273,11 @@ impl Problem {
         let centroid = |p: &[Vector3<f64>; 3]| (p[0] + p[1] + p[2]) / 3.0;
         let translation = centroid(&cam) - rotation * centroid(&self.x);
         let finite = rotation.iter().chain(translation.iter()).all(|v| v.is_finite());
-        finite.then_some(Pose { rotation: rotation, translation: translation })
+        // The two triads are orthonormal, so is their product; a flat camera-side triangle (points on one
+        // ray) is the one way to lose that, and such a pose explains nothing.
+        let orthonormal = (rotation * rotation.transpose() - Matrix3::identity()).amax() <= ROTATION_TOLERANCE
+            && rotation.determinant() > 0.0;
+        (finite && orthonormal).then_some(Pose::new(rotation, translation))
     }
 }
 

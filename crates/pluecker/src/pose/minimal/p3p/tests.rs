@@ -474,3 +474,20 @@ fn collinear_coincident_and_invalid_inputs_return_no_pose_or_valid_ones() {
         assert_valid(&poses, &bearings, &scaled, 1e-9, &format!("scale {scale:e}"));
     }
 }
+
+#[test]
+fn collinear_world_points_never_give_a_matrix_that_is_not_a_rotation() {
+    // Found from Python (tests/test_pose_minimal.py): the points 0, 0.3 (1, 1, 1), 0.6 (1, 1, 1) on a line
+    // seen from a random pose gave a rank-one "rotation", the product of a camera-side triad built from
+    // rounding noise. Every returned R must be a rotation.
+    let bearings = [
+        Vector3::new(-0.07526772324075112, -0.01967980950306423, 0.9969691444252811),
+        Vector3::new(-0.02218546740365586, -0.08926486036048183, 0.9957608095024152),
+        Vector3::new(0.03175390807588196, -0.1590491898256914, 0.9867598717710908),
+    ];
+    let points = [Vector3::zeros(), Vector3::new(0.3, 0.3, 0.3), Vector3::new(0.6, 0.6, 0.6)];
+    for pose in p3p(&bearings, &points) {
+        let r = pose.rotation;
+        assert!((r * r.transpose() - nalgebra::Matrix3::identity()).amax() < 1e-9 && r.determinant() > 0.0, "{r}");
+    }
+}
