@@ -2,41 +2,29 @@
 //! keep the others, branch and bound ends with an honest bound and status `Interrupted`, the RANSAC
 //! loop and the pose certificate stop at their next poll.
 
-use nalgebra::{Matrix3x4, Vector2, Vector3};
+mod common;
+
+use common::{noisy_segments, project, segment_tracks};
+use nalgebra::{Matrix3x4, Vector3};
 use pluecker::interrupt::{with_stop, Stop, StopReason};
 use pluecker::pose::{estimate_pose, CertificateOptions, PoseOptions, RansacOptions, RansacStop};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
 use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::tracks::TrackCameras;
-use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
+use pluecker::triangulation::line::batch::triangulate_lines;
 use pluecker::triangulation::scenes::arc_cameras;
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::Error;
 use std::sync::Arc;
 use std::time::Duration;
 
-fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
-    let u = p * x.push(1.0);
-    u.xy() / u.z
-}
-
 /// `n` noisy segments (2 px) seen by 4 cameras: flat `(n, v, 2, 2)` endpoints.
 fn segments(n: usize, seed: u64) -> (Vec<Matrix3x4<f64>>, Vec<f64>) {
     let mut rng = Rng::new(seed);
     let cameras = arc_cameras(4, 0.5, &mut rng);
-    let mut out = Vec::new();
-    for _ in 0..n {
-        let mid = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.2;
-        let half = rng.unit_vector3() * rng.uniform_in(0.4, 0.8);
-        for p in &cameras {
-            for end in [mid + half, mid - half] {
-                let u = project(p, &end);
-                out.extend([u.x + 2.0 * rng.normal(), u.y + 2.0 * rng.normal()]);
-            }
-        }
-    }
-    (cameras, out)
+    let endpoints = noisy_segments(&cameras, n, 2.0, &mut rng);
+    (cameras, endpoints)
 }
 
 /// Branch and bound to a 1e-9 gap: minutes per line, unless stopped.
@@ -52,14 +40,7 @@ fn endless() -> TriangulationOptions {
 #[test]
 fn a_request_from_another_thread_stops_a_line_batch() {
     let (cameras, endpoints) = segments(8, 1);
-    let tracks = LineTracks {
-        lines: ImageLines::Segments {
-            endpoints: &endpoints,
-            sigma: 1.0,
-        },
-        visible: None,
-        covariances: None,
-    };
+    let tracks = segment_tracks(&endpoints, 1.0);
     let stop = Arc::new(Stop::new());
     let requester = Arc::clone(&stop);
     let timer = std::thread::spawn(move || {

@@ -2,6 +2,8 @@
 //! quadric, the paper's real-data case), cost ordering and certificates, the soundness of the bound,
 //! cheirality and bad input.
 
+mod common;
+
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
 use pluecker::geometry::quadric::{project_dual, Ellipse, Ellipsoid};
 use pluecker::rng::Rng;
@@ -244,4 +246,177 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
         triangulate_quadric(&scene.cameras, &conics, None, &bad),
         Err(Error::InvalidOption { .. })
     ));
+}
+
+/// The quadric batch (`triangulation::quadric::batch`): every track equals the single call, with shared
+/// and per-track cameras; a bad track never loses the others.
+mod batch {
+    use super::common::{mask, seen};
+    use nalgebra::{Matrix3, Matrix3x4, Vector2};
+    use pluecker::geometry::quadric::{project_dual, Ellipse};
+    use pluecker::rng::Rng;
+    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::fitting::fit_conic;
+    use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
+    use pluecker::triangulation::quadric::batch::{triangulate_quadrics, QuadricTracks};
+    use pluecker::triangulation::scenes::quadric_scene;
+    use pluecker::triangulation::{Method, Status, TriangulationOptions};
+    use pluecker::Error;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    fn opts(method: Method) -> TriangulationOptions {
+        // A node cap keeps branch and bound short; equality with the single call holds at any cap.
+        TriangulationOptions {
+            method,
+            max_nodes: 40,
+            ..Default::default()
+        }
+    }
+
+    fn untimed_quadric(mut r: QuadricTriangulation) -> QuadricTriangulation {
+        r.report.time_seconds = 0.0;
+        r
+    }
+
+    /// Conics fitted to 63 outline points with 1 px noise, and their covariances, of an ellipsoid seen by
+    /// `cameras`: the flat `(v, 3, 3)` and `(v, 5, 5)` entries of one track.
+    fn fitted_outlines(cameras: &[Matrix3x4<f64>], dual: &nalgebra::Matrix4<f64>, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
+        let (mut conics, mut covariances) = (Vec::new(), Vec::new());
+        for p in cameras {
+            let outline = Ellipse::from_primal(&project_dual(p, dual).try_inverse().unwrap()).unwrap();
+            let points: Vec<Vector2<f64>> = outline
+                .sample(63, rng.uniform_in(0.0, 6.3))
+                .into_iter()
+                .map(|x| x + Vector2::new(rng.normal(), rng.normal()))
+                .collect();
+            let fit = fit_conic(&points, 1.0).unwrap();
+            conics.extend(fit.conic.transpose().iter());
+            covariances.extend(fit.covariance.transpose().iter());
+        }
+        (conics, covariances)
+    }
+
+    #[test]
+    fn quadric_batch_equals_single_calls_with_shared_and_per_track_cameras() {
+        let mut rng = Rng::new(15);
+        let (n, v) = (4, 5);
+        let cameras = quadric_scene(v, 0.8, 1).cameras;
+        let (mut conics, mut covariances) = (Vec::new(), Vec::new());
+        for k in 0..n {
+            let e = quadric_scene(v, 0.8, 20 + k as u64).ellipsoid;
+            let (c, s) = fitted_outlines(&cameras, &e.dual(), &mut rng);
+            conics.extend(c);
+            covariances.extend(s);
+        }
+        let visible = mask(n, v, 3, &mut rng);
+        let single = |cams: &[Matrix3x4<f64>], t: usize, views: &[usize], method| {
+            let c: Vec<Matrix3<f64>> = views
+                .iter()
+                .map(|&j| Matrix3::from_row_slice(&conics[9 * (t * v + j)..][..9]))
+                .collect();
+            let s: Vec<Matrix5> = views
+                .iter()
+                .map(|&j| Matrix5::from_row_slice(&covariances[25 * (t * v + j)..][..25]))
+                .collect();
+            triangulate_quadric(cams, &c, Some(&s), &opts(method)).unwrap()
+        };
+        for method in Method::ALL {
+            let tracks = QuadricTracks {
+                conics: &conics,
+                visible: Some(&visible),
+                covariances: Some(&covariances),
+            };
+            let batch = triangulate_quadrics(TrackCameras::Shared(&cameras), &tracks, &opts(method), None).unwrap();
+            for (t, r) in batch.into_iter().enumerate() {
+                let views = seen(&visible, v, t);
+                let cams: Vec<Matrix3x4<f64>> = views.iter().map(|&j| cameras[j]).collect();
+                let expected = untimed_quadric(single(&cams, t, &views, method));
+                assert_eq!(untimed_quadric(r.unwrap()), expected, "{} track {t}", method.as_str());
+            }
+        }
+        // The same conics with every track's cameras given per track (here the shared ones, repeated,
+        // with track 1's scaled: a camera's scale does not matter).
+        let mut per_track: Vec<Matrix3x4<f64>> = (0..n).flat_map(|_| cameras.iter().copied()).collect();
+        for p in &mut per_track[v..2 * v] {
+            *p *= -3.0;
+        }
+        let tracks = QuadricTracks {
+            conics: &conics,
+            visible: None,
+            covariances: Some(&covariances),
+        };
+        let done = AtomicUsize::new(0);
+        let cams = TrackCameras::PerTrack {
+            cameras: &per_track,
+            views: v,
+        };
+        let batch = triangulate_quadrics(cams, &tracks, &opts(Method::Local), Some(&done)).unwrap();
+        assert_eq!(done.load(Ordering::Relaxed), n);
+        let all: Vec<usize> = (0..v).collect();
+        for (t, r) in batch.into_iter().enumerate() {
+            let expected = untimed_quadric(single(&per_track[t * v..(t + 1) * v], t, &all, Method::Local));
+            assert_eq!(untimed_quadric(r.unwrap()), expected, "track {t}");
+        }
+    }
+
+    #[test]
+    fn a_bad_quadric_track_is_its_own_error_and_never_loses_the_others() {
+        let mut rng = Rng::new(16);
+        let (n, v) = (6, 4);
+        let cameras = quadric_scene(v, 0.8, 2).cameras;
+        let (mut conics, mut covariances) = (Vec::new(), Vec::new());
+        for k in 0..n {
+            let e = quadric_scene(v, 0.8, 40 + k as u64).ellipsoid;
+            let (c, s) = fitted_outlines(&cameras, &e.dual(), &mut rng);
+            conics.extend(c);
+            covariances.extend(s);
+        }
+        let mut visible = vec![true; n * v];
+        // Track 1: NaN in visible view 3. Track 2: two visible views. Track 3: a hyperbola in view 0.
+        // Track 4: a covariance that is not positive definite in view 2.
+        conics[9 * (v + 3) + 4] = f64::NAN;
+        visible[2 * v] = false;
+        visible[2 * v + 1] = false;
+        conics[9 * 3 * v..9 * 3 * v + 9].copy_from_slice(&[1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -100.0]);
+        covariances[25 * (4 * v + 2) + 24] = -1.0;
+        let tracks = QuadricTracks {
+            conics: &conics,
+            visible: Some(&visible),
+            covariances: Some(&covariances),
+        };
+        let batch = triangulate_quadrics(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
+        assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 3 }) if what == "conics[1]"));
+        assert!(
+            matches!(&batch[2], Err(Error::TooFewCorrespondences { required, actual, .. }) if required.starts_with('3') && actual == "track 2: 2 view(s)")
+        );
+        assert!(matches!(&batch[3], Err(Error::Degenerate { what }) if what == "conics[3][0] is not a real ellipse"));
+        assert!(matches!(&batch[4], Err(Error::Degenerate { what }) if what.starts_with("covariances[4][2]")));
+        for t in [0, 5] {
+            let r = batch[t].as_ref().unwrap();
+            assert_eq!(r.report.status, Status::Success, "track {t}");
+        }
+        // Whole-call errors: lengths that do not fit.
+        let short = QuadricTracks {
+            conics: &conics[..10],
+            visible: None,
+            covariances: None,
+        };
+        let o = opts(Method::Linear);
+        assert!(matches!(
+            triangulate_quadrics(TrackCameras::Shared(&cameras), &short, &o, None),
+            Err(Error::Shape { what, .. }) if what == "conics"
+        ));
+        let covs = QuadricTracks {
+            covariances: Some(&covariances[..25]),
+            ..tracks
+        };
+        assert!(matches!(
+            triangulate_quadrics(TrackCameras::Shared(&cameras), &covs, &o, None),
+            Err(Error::Shape { what, .. }) if what == "covariances"
+        ));
+        assert!(matches!(
+            triangulate_quadrics(TrackCameras::Shared(&[]), &tracks, &o, None),
+            Err(Error::Shape { what, .. }) if what == "cameras"
+        ));
+    }
 }

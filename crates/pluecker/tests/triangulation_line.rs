@@ -1,0 +1,613 @@
+//! Line triangulation (Josephson & Kahl 2008, sections 2.2, 3, 4): exact recovery, cost ordering,
+//! covariance weighting, the soundness of the branch-and-bound bound, and bad input.
+
+mod common;
+
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector6};
+use pluecker::geometry::plucker;
+use pluecker::rng::Rng;
+use pluecker::triangulation::line::{
+    lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
+};
+use pluecker::triangulation::scenes::{line_scene, LineScene};
+use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
+use pluecker::Error;
+
+fn opts(method: Method) -> TriangulationOptions {
+    // A node cap keeps the tests fast; certificates below are asserted only where the gap closed.
+    TriangulationOptions {
+        method,
+        max_nodes: 300,
+        ..Default::default()
+    }
+}
+
+/// Sine of the angle between two lines' directions, and the distance between their closest points
+/// to the origin.
+fn line_error(result: &LineTriangulation, truth: &Vector6<f64>) -> (f64, f64) {
+    let (p, d) = plucker::to_point_direction(truth).unwrap();
+    (result.direction.cross(&d).norm(), (result.point - p).norm())
+}
+
+fn exact_lines(scene: &LineScene) -> Vec<Vector3<f64>> {
+    scene
+        .segments
+        .iter()
+        .map(|s| s[0].push(1.0).cross(&s[1].push(1.0)))
+        .collect()
+}
+
+#[test]
+fn noise_free_lines_are_recovered_by_every_method() {
+    for (views, seed) in [(2, 1u64), (3, 2), (6, 3)] {
+        let scene = line_scene(views, 0.8, seed);
+        let lines = exact_lines(&scene);
+        for method in Method::ALL {
+            let r = triangulate_line(&scene.cameras, &lines, None, &opts(method)).unwrap();
+            let (angle, offset) = line_error(&r, &scene.plucker());
+            assert!(
+                angle < 1e-8 && offset < 1e-8,
+                "views {views} seed {seed} {}: {angle} {offset}",
+                method.as_str()
+            );
+            assert!(r.report.cost < 1e-12, "{}", r.report.cost);
+            assert!(plucker::constraint(r.plucker.coordinates()).abs() < 1e-14);
+            assert!((r.plucker.coordinates().norm() - 1.0).abs() < 1e-12);
+            // point and direction describe the returned Plücker coordinates.
+            assert!((plucker::from_point_direction(&r.point, &r.direction).normalize() - r.plucker.coordinates()).norm() < 1e-9);
+            assert_eq!(r.report.status, Status::Success);
+        }
+    }
+}
+
+#[test]
+fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
+    let mut certified = 0;
+    for seed in 0..8u64 {
+        let views = 3 + (seed as usize % 4);
+        let scene = line_scene(views, 0.8, 100 + seed);
+        let mut rng = Rng::new(200 + seed);
+        let segments = scene.noisy_segments(1.0, &mut rng);
+        let run = |m| triangulate_line_segments(&scene.cameras, &segments, 1.0, &opts(m)).unwrap();
+        let (linear, local, optimal) = (run(Method::Linear), run(Method::Local), run(Method::Optimal));
+        let tol = 1e-9 * (1.0 + linear.report.cost);
+        assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
+        assert!(optimal.report.cost <= local.report.cost + tol, "seed {seed}");
+        let c = optimal.report.certificate;
+        assert_eq!(c.kind, CertificateKind::BranchAndBound, "seed {seed}");
+        assert!(c.lower_bound <= optimal.report.cost, "seed {seed}");
+        assert!(c.certified == (c.relative_gap <= 1e-3), "seed {seed}");
+        assert_eq!(optimal.report.status == Status::Success, c.certified);
+        certified += c.certified as usize;
+        // The estimate fits the data at least as well as the true line does.
+        let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+        let truth = line_cost(&scene.cameras, &lines, &covariances, &scene.plucker());
+        assert!(
+            optimal.report.cost <= truth + tol,
+            "seed {seed}: {} > {truth}",
+            optimal.report.cost
+        );
+    }
+    // Measured: 6 of 8 close the 1e-3 gap within 300 nodes (5 of them at the root); the other two
+    // are slow instances (a line nearly along the viewing directions, seed 3). A regression that
+    // weakens the bound certifies fewer.
+    assert!(certified >= 6, "{certified} of 8 certified");
+}
+
+#[test]
+fn certified_bound_is_below_the_cost_of_nearby_lines() {
+    let scene = line_scene(4, 0.8, 7);
+    let mut rng = Rng::new(8);
+    let segments = scene.noisy_segments(1.0, &mut rng);
+    let optimal = triangulate_line_segments(&scene.cameras, &segments, 1.0, &opts(Method::Optimal)).unwrap();
+    let c = optimal.report.certificate;
+    assert!(c.certified, "{:?}", optimal.report);
+    let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    // Lines around the optimum, from 1e-1 to 1e-4 of the scene's scale away: none costs less than the
+    // certified lower bound.
+    let (p, d) = (optimal.point, optimal.direction);
+    for k in 0..300 {
+        let scale = 10f64.powi(-(k % 4) - 1);
+        let moved = plucker::from_point_direction(
+            &(p + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 0.1),
+            &(d + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 0.02),
+        );
+        let cost = line_cost(&scene.cameras, &lines, &covariances, &moved);
+        assert!(
+            cost >= c.lower_bound - 1e-9,
+            "cost {cost} below the bound {}",
+            c.lower_bound
+        );
+    }
+}
+
+/// Eq. 19 at a world line, recomputed from first principles: project the line with eq. 7, take the
+/// residual of the normalised observation (section 3.1) and whiten it by the covariance (eq. 18).
+fn line_cost(
+    cameras: &[Matrix3x4<f64>],
+    lines: &[Vector3<f64>],
+    covariances: &[Matrix2<f64>],
+    l: &Vector6<f64>,
+) -> f64 {
+    use pluecker::triangulation::line::residual::LineFrame;
+    cameras
+        .iter()
+        .zip(lines)
+        .zip(covariances)
+        .map(|((p, obs), cov)| {
+            let r = LineFrame::of_line(obs).unwrap().residual(&plucker::project(p, l));
+            r.dot(&(cov.try_inverse().unwrap() * r))
+        })
+        .sum()
+}
+
+#[test]
+fn reported_cost_is_eq_19() {
+    let scene = line_scene(5, 0.8, 9);
+    let mut rng = Rng::new(10);
+    let segments = scene.noisy_segments(1.0, &mut rng);
+    let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    for method in Method::ALL {
+        let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(method)).unwrap();
+        let cost = line_cost(&scene.cameras, &lines, &covariances, r.plucker.coordinates());
+        assert!(
+            (cost - r.report.cost).abs() < 1e-8 * (1.0 + cost),
+            "{}: {cost} vs {}",
+            method.as_str(),
+            r.report.cost
+        );
+    }
+}
+
+#[test]
+fn a_view_with_huge_covariance_is_ignored() {
+    // View 3's line is moved by 20 px; with a covariance 1e8 times larger it must not matter: the
+    // answer equals the 3-view answer without it (to the 1e-4 relative weight it keeps).
+    let scene = line_scene(4, 0.8, 11);
+    let mut rng = Rng::new(12);
+    let mut segments = scene.noisy_segments(1.0, &mut rng);
+    segments[3] = [
+        segments[3][0] + Vector2::new(0.0, 20.0),
+        segments[3][1] + Vector2::new(0.0, 20.0),
+    ];
+    let (lines, mut covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    covariances[3] *= 1e8;
+    let all = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(Method::Local)).unwrap();
+    let three = triangulate_line(
+        &scene.cameras[..3],
+        &lines[..3],
+        Some(&covariances[..3]),
+        &opts(Method::Local),
+    )
+    .unwrap();
+    let (angle, offset) = line_error(&all, three.plucker.coordinates());
+    assert!(angle < 1e-4 && offset < 1e-4, "{angle} {offset}");
+    // With its nominal covariance the moved view pulls the answer away.
+    let (_, nominal) = lines_from_segments(&segments, 1.0).unwrap();
+    let pulled = triangulate_line(&scene.cameras, &lines, Some(&nominal), &opts(Method::Local)).unwrap();
+    let (angle, offset) = line_error(&pulled, three.plucker.coordinates());
+    assert!(angle > 1e-3 || offset > 1e-3, "{angle} {offset}");
+}
+
+#[test]
+fn too_small_gamma_is_infeasible() {
+    let scene = line_scene(4, 0.8, 13);
+    let mut rng = Rng::new(14);
+    let segments = scene.noisy_segments(1.0, &mut rng);
+    let o = TriangulationOptions {
+        max_reprojection_error: Some(1e-4),
+        ..opts(Method::Optimal)
+    };
+    let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
+    assert_eq!(r.report.status, Status::Infeasible);
+    assert!(!r.report.certificate.certified);
+}
+
+#[test]
+fn bad_input_is_rejected_with_the_argument_and_index() {
+    let scene = line_scene(3, 0.8, 15);
+    let lines = exact_lines(&scene);
+    let o = opts(Method::Local);
+    let err = |c: &[Matrix3x4<f64>], l: &[Vector3<f64>], cov: Option<&[Matrix2<f64>]>| {
+        triangulate_line(c, l, cov, &o).unwrap_err()
+    };
+    assert!(matches!(
+        err(&scene.cameras[..1], &lines[..1], None),
+        Error::TooFewCorrespondences { .. }
+    ));
+    assert!(matches!(err(&scene.cameras, &lines[..2], None), Error::Shape { .. }));
+    let mut nan = lines.clone();
+    nan[2].y = f64::NAN;
+    assert!(matches!(err(&scene.cameras, &nan, None), Error::NonFinite { ref what, index: 2 } if what == "lines"));
+    let mut zero = lines.clone();
+    zero[1] = Vector3::new(0.0, 0.0, 1.0);
+    assert!(matches!(err(&scene.cameras, &zero, None), Error::Degenerate { ref what } if what.contains("lines[1]")));
+    let mut cams = scene.cameras.clone();
+    cams[1][(0, 0)] = f64::INFINITY;
+    assert!(matches!(err(&cams, &lines, None), Error::NonFinite { index: 1, .. }));
+    cams[1] = Matrix3x4::zeros();
+    assert!(matches!(err(&cams, &lines, None), Error::SingularCamera { .. }));
+    let bad_cov = [
+        Matrix2::identity(),
+        Matrix2::new(1.0, 2.0, 2.0, 1.0),
+        Matrix2::identity(),
+    ];
+    assert!(
+        matches!(err(&scene.cameras, &lines, Some(&bad_cov)), Error::Degenerate { ref what } if what.contains("covariances[1]"))
+    );
+    // Cameras sharing one centre: rotations about it.
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let same: Vec<Matrix3x4<f64>> = (0..3)
+        .map(|i| {
+            let r = nalgebra::Rotation3::from_euler_angles(0.0, 0.05 * i as f64, 0.0).into_inner();
+            let mut rt = Matrix3x4::zeros();
+            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+            rt.set_column(3, &(r * Vector3::new(0.0, 0.0, 5.0)));
+            k * rt
+        })
+        .collect();
+    assert!(matches!(err(&same, &lines, None), Error::Degenerate { ref what } if what.contains("centres")));
+    // A line in the epipolar plane of the two views (parallel to the baseline): the back-projected
+    // planes coincide.
+    let cams = &scene.cameras[..2];
+    let baseline = pluecker::triangulation::views::centre(&cams[1]) - pluecker::triangulation::views::centre(&cams[0]);
+    let a = Vector3::new(0.1, 0.2, 0.3);
+    let b = a + baseline * 0.2;
+    let epipolar: Vec<Vector3<f64>> = cams
+        .iter()
+        .map(|p| (p * a.push(1.0)).cross(&(p * b.push(1.0))))
+        .collect();
+    assert!(matches!(err(cams, &epipolar, None), Error::Degenerate { ref what } if what.contains("epipolar")));
+    // Options.
+    let bad = TriangulationOptions {
+        max_relative_gap: -1.0,
+        ..o.clone()
+    };
+    assert!(matches!(
+        triangulate_line(&scene.cameras, &lines, None, &bad),
+        Err(Error::InvalidOption { .. })
+    ));
+    // Segments: zero length, named by index.
+    let mut segments = scene.segments.clone();
+    segments[2][1] = segments[2][0];
+    assert!(
+        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("segments[2]"))
+    );
+}
+
+/// Cameras 1e13 units from the world origin (baselines of 1e4): the line they see is "at infinity"
+/// for the world-frame Plücker coordinates (its moment is 1e13 times its direction). `local`
+/// reports that as a degenerate configuration; `optimal` used to panic in its frame (issue 10).
+#[test]
+fn a_line_far_from_the_origin_is_the_same_error_for_optimal_as_for_local() {
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let offset = Vector3::new(1e13, 0.0, 0.0);
+    let cameras: Vec<Matrix3x4<f64>> = [0.0, 1e4, 2e4]
+        .iter()
+        .map(|x| {
+            let mut rt = Matrix3x4::identity();
+            rt.set_column(3, &-(offset + Vector3::new(*x, 0.0, 0.0)));
+            k * rt
+        })
+        .collect();
+    let (a, b) = (offset + Vector3::new(0.0, 0.0, 5e4), offset + Vector3::new(1e4, 1e4, 6e4));
+    let project = |p: &Matrix3x4<f64>, x: &Vector3<f64>| p * x.push(1.0);
+    let lines: Vec<Vector3<f64>> = cameras
+        .iter()
+        .zip([0.5, -0.3, 0.2])
+        .map(|(p, shift)| {
+            let l = project(p, &a).cross(&project(p, &b));
+            let l = l / l.xy().norm();
+            l + Vector3::new(0.0, 0.0, shift)
+        })
+        .collect();
+    for method in [Method::Local, Method::Optimal] {
+        let err = triangulate_line(&cameras, &lines, None, &opts(method)).unwrap_err();
+        assert!(matches!(err, Error::Degenerate { .. }), "{method:?}: {err}");
+    }
+}
+
+/// The line batch (`triangulation::line::batch`): every track's result equals the single call's on its
+/// visible views, bit for bit; a bad track is an error naming it and never loses the others; whole-call errors.
+mod batch {
+    use super::common::{mask, noisy_segments, seen, segment, segment_tracks};
+    use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
+    use pluecker::rng::Rng;
+    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::line::{
+        lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
+    };
+    use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
+    use pluecker::triangulation::scenes::arc_cameras;
+    use pluecker::triangulation::{Method, Status, TriangulationOptions};
+    use pluecker::Error;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    fn opts(method: Method) -> TriangulationOptions {
+        // A node cap keeps branch and bound short; equality with the single call holds at any cap.
+        TriangulationOptions {
+            method,
+            max_nodes: 40,
+            ..Default::default()
+        }
+    }
+
+    /// A result with its wall time zeroed: the one field a batch and a single call may not share.
+    fn untimed_line(mut r: LineTriangulation) -> LineTriangulation {
+        r.report.time_seconds = 0.0;
+        r
+    }
+
+    #[test]
+    fn line_batch_equals_single_calls_for_every_input_form() {
+        let mut rng = Rng::new(11);
+        let (n, v) = (6, 5);
+        let cameras = arc_cameras(v, 0.8, &mut rng);
+        let endpoints = noisy_segments(&cameras, n, 1.0, &mut rng);
+        let visible = mask(n, v, 2, &mut rng);
+        let segments_of = |t: usize| -> Vec<[Vector2<f64>; 2]> {
+            seen(&visible, v, t)
+                .iter()
+                .map(|&j| segment(&endpoints, v, t, j))
+                .collect()
+        };
+        let cams_of = |t: usize| -> Vec<Matrix3x4<f64>> { seen(&visible, v, t).iter().map(|&j| cameras[j]).collect() };
+
+        // Segments with endpoint noise, every method.
+        for method in Method::ALL {
+            let tracks = LineTracks {
+                lines: ImageLines::Segments {
+                    endpoints: &endpoints,
+                    sigma: 1.5,
+                },
+                visible: Some(&visible),
+                covariances: None,
+            };
+            let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(method), None).unwrap();
+            assert_eq!(batch.len(), n);
+            for (t, r) in batch.into_iter().enumerate() {
+                let single = triangulate_line_segments(&cams_of(t), &segments_of(t), 1.5, &opts(method)).unwrap();
+                assert_eq!(
+                    untimed_line(r.unwrap()),
+                    untimed_line(single),
+                    "{} track {t}",
+                    method.as_str()
+                );
+            }
+        }
+
+        // Homogeneous lines with covariances (a skewed one per observation), and segments whose
+        // covariances are given: both replace the endpoint noise.
+        let mut lines = Vec::new();
+        let mut covariances = Vec::new();
+        for k in 0..n * v {
+            let s = segment(&endpoints, v, k / v, k % v);
+            lines.extend(s[0].push(1.0).cross(&s[1].push(1.0)).iter());
+            let a = Matrix2::new(1.0 + rng.uniform(), rng.normal(), 0.0, 1.0 + rng.uniform());
+            covariances.extend((a * a.transpose()).transpose().iter());
+        }
+        let covs_of = |t: usize| -> Vec<Matrix2<f64>> {
+            seen(&visible, v, t)
+                .iter()
+                .map(|&j| Matrix2::from_row_slice(&covariances[4 * (t * v + j)..][..4]))
+                .collect()
+        };
+        let homogeneous = LineTracks {
+            lines: ImageLines::Homogeneous(&lines),
+            visible: Some(&visible),
+            covariances: Some(&covariances),
+        };
+        let with_covariances = LineTracks {
+            lines: ImageLines::Segments {
+                endpoints: &endpoints,
+                sigma: 1.0,
+            },
+            ..homogeneous
+        };
+        for tracks in [homogeneous, with_covariances] {
+            let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
+            for (t, r) in batch.into_iter().enumerate() {
+                let (image, _) = lines_from_segments(&segments_of(t), 1.0).unwrap();
+                let single = triangulate_line(&cams_of(t), &image, Some(&covs_of(t)), &opts(Method::Local)).unwrap();
+                let r = untimed_line(r.unwrap());
+                // The homogeneous lines are the segments' lines up to scale and sign, which the residual
+                // ignores (section 3.1 normalises each line): the same line to rounding (Plücker
+                // coordinates are homogeneous: up to sign), and the same cost (about 1 per observation; 0
+                // to rounding for a track in two views, which fit any line exactly).
+                let distance = (r.plucker.coordinates() - single.plucker.coordinates())
+                    .norm()
+                    .min((r.plucker.coordinates() + single.plucker.coordinates()).norm());
+                assert!(distance < 1e-9, "track {t}: {distance}");
+                let tolerance = 1e-9 * single.report.cost + 1e-12;
+                assert!((r.report.cost - single.report.cost).abs() <= tolerance, "track {t}");
+            }
+        }
+    }
+
+    #[test]
+    fn line_batch_with_cameras_per_track_and_progress() {
+        let mut rng = Rng::new(12);
+        let (n, v) = (4, 3);
+        let mut cameras = Vec::new();
+        let mut endpoints = Vec::new();
+        for _ in 0..n {
+            let own = arc_cameras(v, 0.6, &mut rng);
+            endpoints.extend(noisy_segments(&own, 1, 1.0, &mut rng));
+            cameras.extend(own);
+        }
+        let tracks = segment_tracks(&endpoints, 1.0);
+        let done = AtomicUsize::new(0);
+        let per_track = TrackCameras::PerTrack {
+            cameras: &cameras,
+            views: v,
+        };
+        let batch = triangulate_lines(per_track, &tracks, &opts(Method::Local), Some(&done)).unwrap();
+        assert_eq!(done.load(Ordering::Relaxed), n);
+        for (t, r) in batch.into_iter().enumerate() {
+            let segments: Vec<[Vector2<f64>; 2]> = (0..v).map(|j| segment(&endpoints, v, t, j)).collect();
+            let single =
+                triangulate_line_segments(&cameras[t * v..(t + 1) * v], &segments, 1.0, &opts(Method::Local)).unwrap();
+            assert_eq!(untimed_line(r.unwrap()), untimed_line(single), "track {t}");
+        }
+        // A singular camera of one track is that track's error, named by track and view.
+        let mut bad = cameras.clone();
+        bad[2 * v + 1] = Matrix3x4::zeros();
+        let per_track = TrackCameras::PerTrack {
+            cameras: &bad,
+            views: v,
+        };
+        let batch = triangulate_lines(per_track, &tracks, &opts(Method::Linear), None).unwrap();
+        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("cameras[2][1]")));
+        assert!(batch.iter().enumerate().all(|(t, r)| r.is_ok() == (t != 2)));
+    }
+
+    #[test]
+    fn a_bad_line_track_is_its_own_error_and_never_loses_the_others() {
+        let mut rng = Rng::new(13);
+        let (n, v) = (8, 4);
+        let cameras = arc_cameras(v, 0.8, &mut rng);
+        let endpoints = noisy_segments(&cameras, n, 1.0, &mut rng);
+        let mut lines: Vec<f64> = (0..n * v)
+            .flat_map(|k| {
+                let s = segment(&endpoints, v, k / v, k % v);
+                s[0].push(1.0)
+                    .cross(&s[1].push(1.0))
+                    .iter()
+                    .copied()
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        let mut visible = vec![true; n * v];
+        let mut covariances: Vec<f64> = (0..n * v).flat_map(|_| [1.0, 0.0, 0.0, 1.0]).collect();
+        // Track 1: NaN in visible view 2. Track 2: NaN in a view it is not seen in (fine).
+        lines[3 * (v + 2)] = f64::NAN;
+        lines[3 * (2 * v + 3) + 1] = f64::NAN;
+        visible[2 * v + 3] = false;
+        // Track 3: one visible view.
+        for j in 1..v {
+            visible[3 * v + j] = false;
+        }
+        // Track 4: the line at infinity (zero normal) in view 1.
+        lines[3 * (4 * v + 1)..3 * (4 * v + 1) + 3].copy_from_slice(&[0.0, 0.0, 1.0]);
+        // Track 5: a covariance that is not positive definite in view 3.
+        covariances[4 * (5 * v + 3)..4 * (5 * v + 3) + 4].copy_from_slice(&[1.0, 2.0, 2.0, 1.0]);
+        // Track 6: seen by views 0 and 1 only, the 3-D line parallel to their baseline: it lies in an
+        // epipolar plane of the pair, both back-projected planes are that plane.
+        let (c0, c1) = (centre(&cameras[0]), centre(&cameras[1]));
+        let a = (c0 + c1) / 2.0 + (c1 - c0).cross(&Vector3::y()).normalize() * 4.0;
+        let b = a + (c1 - c0);
+        for j in 0..v {
+            visible[6 * v + j] = j < 2;
+            let l = (cameras[j] * a.push(1.0)).cross(&(cameras[j] * b.push(1.0)));
+            lines[3 * (6 * v + j)..3 * (6 * v + j) + 3].copy_from_slice(l.as_slice());
+        }
+        let tracks = LineTracks {
+            lines: ImageLines::Homogeneous(&lines),
+            visible: Some(&visible),
+            covariances: Some(&covariances),
+        };
+        let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
+        assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 2 }) if what == "lines[1]"));
+        assert!(matches!(&batch[3], Err(Error::TooFewCorrespondences { actual, .. }) if actual == "track 3: 1 view(s)"));
+        assert!(matches!(&batch[4], Err(Error::Degenerate { what }) if what.starts_with("lines[4][1] has a zero normal")));
+        assert!(
+            matches!(&batch[5], Err(Error::Degenerate { what }) if what == "covariances[5][3] is not positive definite")
+        );
+        assert!(
+            matches!(&batch[6], Err(Error::Degenerate { what }) if what.starts_with("lines[6]: the back-projected planes coincide")),
+            "{:?}",
+            batch[6]
+        );
+        for t in [0, 2, 7] {
+            let r = batch[t].as_ref().unwrap();
+            assert_eq!(r.report.status, Status::Success, "track {t}");
+            let views = seen(&visible, v, t);
+            let cams: Vec<Matrix3x4<f64>> = views.iter().map(|&j| cameras[j]).collect();
+            let image: Vec<Vector3<f64>> = views
+                .iter()
+                .map(|&j| Vector3::from_row_slice(&lines[3 * (t * v + j)..][..3]))
+                .collect();
+            let covs = vec![Matrix2::identity(); views.len()];
+            let single = triangulate_line(&cams, &image, Some(&covs), &opts(Method::Local)).unwrap();
+            assert_eq!(untimed_line(r.clone()), untimed_line(single), "track {t}");
+        }
+
+        // Segments: NaN and a zero-length segment name the segment.
+        let mut endpoints = endpoints.clone();
+        endpoints[4 * (2 * v + 1) + 3] = f64::INFINITY;
+        let p = &endpoints[4 * 5 * v..][..2].to_vec();
+        endpoints[4 * 5 * v + 2..4 * 5 * v + 4].copy_from_slice(p);
+        let tracks = segment_tracks(&endpoints, 1.0);
+        let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Linear), None).unwrap();
+        assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "segments[2]"));
+        assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "segments[5][0] has zero length"));
+        assert_eq!(batch.iter().filter(|r| r.is_ok()).count(), n - 2);
+    }
+
+    fn centre(p: &Matrix3x4<f64>) -> Vector3<f64> {
+        let m = p.fixed_view::<3, 3>(0, 0).into_owned();
+        -(m.try_inverse().unwrap() * p.column(3))
+    }
+
+    #[test]
+    fn line_batch_whole_call_errors() {
+        let mut rng = Rng::new(14);
+        let cameras = arc_cameras(3, 0.8, &mut rng);
+        let endpoints = noisy_segments(&cameras, 2, 1.0, &mut rng);
+        let shared = TrackCameras::Shared(&cameras);
+        let o = opts(Method::Linear);
+        let run = |tracks: &LineTracks, o: &TriangulationOptions| triangulate_lines(shared, tracks, o, None).unwrap_err();
+        let tracks = |sigma| LineTracks {
+            lines: ImageLines::Segments {
+                endpoints: &endpoints,
+                sigma,
+            },
+            visible: None,
+            covariances: None,
+        };
+        assert!(matches!(run(&tracks(0.0), &o), Error::InvalidOption { name, .. } if name == "sigma"));
+        assert!(matches!(run(&tracks(f64::NAN), &o), Error::InvalidOption { name, .. } if name == "sigma"));
+        let bad = TriangulationOptions {
+            max_nodes: 0,
+            ..o.clone()
+        };
+        assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "max_nodes"));
+        let short = LineTracks {
+            lines: ImageLines::Homogeneous(&endpoints[..8]),
+            ..tracks(1.0)
+        };
+        assert!(matches!(run(&short, &o), Error::Shape { what, .. } if what == "lines"));
+        let flags = [true; 5];
+        let masked = LineTracks {
+            visible: Some(&flags),
+            ..tracks(1.0)
+        };
+        assert!(matches!(run(&masked, &o), Error::Shape { what, .. } if what == "visible"));
+        let covs = [1.0; 8];
+        let covariances = LineTracks {
+            covariances: Some(&covs),
+            ..tracks(1.0)
+        };
+        assert!(matches!(run(&covariances, &o), Error::Shape { what, .. } if what == "covariances"));
+        let mut singular = cameras.clone();
+        singular[1][(0, 0)] = f64::NAN;
+        assert!(matches!(
+            triangulate_lines(TrackCameras::Shared(&singular), &tracks(1.0), &o, None),
+            Err(Error::NonFinite { what, index: 1 }) if what == "cameras"
+        ));
+        let per_track = TrackCameras::PerTrack {
+            cameras: &cameras,
+            views: 3,
+        };
+        assert!(matches!(
+            triangulate_lines(per_track, &tracks(1.0), &o, None),
+            Err(Error::Shape { what, .. }) if what == "cameras"
+        ));
+        let empty = LineTracks {
+            lines: ImageLines::Homogeneous(&[]),
+            ..tracks(1.0)
+        };
+        assert!(triangulate_lines(shared, &empty, &o, None).unwrap().is_empty());
+    }
+
+}
