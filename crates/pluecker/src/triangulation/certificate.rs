@@ -9,7 +9,7 @@ use crate::global::envelopes::{add_fraction_envelope, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpSolution, SocpStatus};
 
 /// A cost at most this (squared whitened pixels) is certified by the bound 0 of a sum of squares.
-pub const NEGLIGIBLE_COST: f64 = 1e-12;
+pub(crate) const NEGLIGIBLE_COST: f64 = 1e-12;
 
 /// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
 /// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the

@@ -15,7 +15,7 @@ const SAME_CENTRE: f64 = 1e-10;
 
 /// The similarity `X_c = scale · rotation · (X − origin)` of the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Similarity {
+pub(crate) struct Similarity {
     /// The world point mapped to the origin.
     pub origin: Vector3<f64>,
     /// The scale `s > 0`.
@@ -26,7 +26,7 @@ pub struct Similarity {
 
 impl Similarity {
     /// Origin at the centroid of the camera centres, unit = their RMS distance from it.
-    pub fn of_cameras(cameras: &[Matrix3x4<f64>]) -> Similarity {
+    pub(crate) fn of_cameras(cameras: &[Matrix3x4<f64>]) -> Similarity {
         let centres: Vec<Vector3<f64>> = cameras.iter().map(centre).collect();
         let origin = centres.iter().sum::<Vector3<f64>>() / centres.len() as f64;
         let rms = (centres.iter().map(|c| (c - origin).norm_squared()).sum::<f64>() / centres.len() as f64).sqrt();
@@ -57,7 +57,7 @@ impl Similarity {
     }
 
     /// `H⁻¹`.
-    pub fn inverse_matrix(&self) -> Matrix4<f64> {
+    pub(crate) fn inverse_matrix(&self) -> Matrix4<f64> {
         let mut h = Matrix4::identity();
         h.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(self.rotation.transpose() / self.scale));
@@ -70,7 +70,8 @@ impl Similarity {
         depth_normalized(&(p * self.inverse_matrix()))
     }
 
-    /// A conditioned point back in the world.
+    /// A conditioned point back in the world (the tests' round trip).
+    #[cfg(test)]
     pub fn to_world(&self, x: &Vector3<f64>) -> Vector3<f64> {
         self.rotation.transpose() * x / self.scale + self.origin
     }
@@ -78,7 +79,7 @@ impl Similarity {
 
 /// Checks counts and cameras: at least `min_views` cameras, one observation per camera, finite
 /// non-singular cameras, and not all centres the same (no parallax: [`Error::Degenerate`]).
-pub fn check_views(
+pub(crate) fn check_views(
     cameras: &[Matrix3x4<f64>],
     observations: usize,
     min_views: usize,

@@ -49,7 +49,7 @@ pub fn whitening<const D: usize>(cov: &SMatrix<f64, D, D>, what: &str, index: us
 
 /// Whitening factors of every observation: identities when `covariances` is `None`, else one per
 /// row (the caller has checked the count).
-pub fn whitenings<const D: usize>(
+pub(crate) fn whitenings<const D: usize>(
     covariances: Option<&[SMatrix<f64, D, D>]>,
     count: usize,
     what: &str,

@@ -5,7 +5,7 @@
 //! for a line, the 10 entries of a dual quadric), `p_k` the rows of the camera acting on `z`, `x_k` the
 //! normalised observation and `g(z) = p_nᵀz` the last coordinate. Whitened by eq. 18 it reads
 //! `L r(z) = A z / (cᵀz)` with `A = L (x cᵀ − P)` (`D x K`) and `c = p_n`. The ratio is invariant to the
-//! scale of `z` and to a common sign change of `(A, c)`; [`FractionalResidual::oriented`] uses the
+//! scale of `z` and to a common sign change of `(A, c)`; `FractionalResidual::oriented` uses the
 //! latter to make `cᵀz > 0` at a reference primitive, as the fractional program of eq. 20 requires.
 
 use crate::optim::Linearization;
@@ -43,14 +43,14 @@ impl<const D: usize, const K: usize> FractionalResidual<D, K> {
     }
 
     /// The residual and its Jacobian `∂r/∂z = (A − r cᵀ) / (cᵀz)`.
-    pub fn residual_and_jacobian(&self, z: &SVector<f64, K>) -> (SVector<f64, D>, SMatrix<f64, D, K>) {
+    pub(crate) fn residual_and_jacobian(&self, z: &SVector<f64, K>) -> (SVector<f64, D>, SMatrix<f64, D, K>) {
         let g = self.denominator.dot(z);
         let r = self.numerator * z / g;
         (r, (self.numerator - r * self.denominator.transpose()) / g)
     }
 
     /// The same residual with `(A, c)` negated if needed so that `cᵀ z_ref ≥ 0`.
-    pub fn oriented(&self, z_ref: &SVector<f64, K>) -> Self {
+    pub(crate) fn oriented(&self, z_ref: &SVector<f64, K>) -> Self {
         if self.denominator.dot(z_ref) < 0.0 {
             FractionalResidual {
                 numerator: -self.numerator,
@@ -69,7 +69,7 @@ pub fn cost<const D: usize, const K: usize>(views: &[FractionalResidual<D, K>], 
 
 /// The Gauss-Newton model of `½ Σ ‖Lᵢ rᵢ(z(x))‖²` at `z` for a parametrisation with tangent
 /// Jacobian `dz = ∂z/∂δ` (`K x N`), as the solvers of [`crate::optim`] expect.
-pub fn linearize<const D: usize, const K: usize, const N: usize>(
+pub(crate) fn linearize<const D: usize, const K: usize, const N: usize>(
     views: &[FractionalResidual<D, K>],
     z: &SVector<f64, K>,
     dz: &SMatrix<f64, K, N>,

@@ -279,7 +279,7 @@ impl Report {
 
     /// The report of a local minimisation that ended as `summary` says (`summary.final_cost` is the
     /// solvers' `½ Σ`, so the cost of eq. 19 is twice it).
-    pub fn of_local(summary: &Summary) -> Report {
+    pub(crate) fn of_local(summary: &Summary) -> Report {
         Report {
             status: if summary.termination.converged() { Status::Success } else { Status::NotConverged },
             cost: 2.0 * summary.final_cost,

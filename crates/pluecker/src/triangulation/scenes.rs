@@ -10,7 +10,7 @@ use crate::rng::Rng;
 use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3, Vector6};
 
 /// Image width and height, pixels.
-pub const IMAGE_SIZE: (f64, f64) = (640.0, 480.0);
+pub(crate) const IMAGE_SIZE: (f64, f64) = (640.0, 480.0);
 
 /// A segment seen by several cameras, with its truth.
 #[derive(Debug, Clone)]

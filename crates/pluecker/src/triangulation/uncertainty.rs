@@ -54,7 +54,7 @@ pub type QuadricCovariance = SMatrix<f64, 9, 9>;
 
 /// `H⁻¹` for a symmetric information matrix `H = JᵀJ`, or `None` when it is not finite, not positive
 /// definite, or `‖H‖_F ‖H⁻¹‖_F > MAX_CONDITION` (module docs). The result is symmetrised.
-pub fn covariance_of_information<const N: usize>(info: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
+pub(crate) fn covariance_of_information<const N: usize>(info: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
     if !info.iter().all(|v| v.is_finite()) {
         return None;
     }
@@ -69,7 +69,7 @@ pub fn covariance_of_information<const N: usize>(info: &SMatrix<f64, N, N>) -> O
 /// [`covariance_of_information`] for 3x3, in closed form (the batches call it once per point):
 /// positive definite by Sylvester's criterion (leading minors `h₁₁`, `h₁₁h₂₂ − h₁₂²`, `det H` all
 /// positive), `H⁻¹ = adj(H)/det H`, the same condition test.
-pub fn covariance_of_information3(h: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+pub(crate) fn covariance_of_information3(h: &Matrix3<f64>) -> Option<Matrix3<f64>> {
     let minor2 = h[(0, 0)] * h[(1, 1)] - h[(0, 1)] * h[(1, 0)];
     let (c00, c01, c02) = (
         h[(1, 1)] * h[(2, 2)] - h[(1, 2)] * h[(2, 1)],

@@ -17,7 +17,7 @@ use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};
 const MIN_RELATIVE_DET: f64 = 1e-12;
 
 /// Checks every camera: finite entries and a finite centre (`det M ≠ 0`).
-pub fn validate_cameras(cameras: &[Matrix3x4<f64>], what: &str) -> Result<()> {
+pub(crate) fn validate_cameras(cameras: &[Matrix3x4<f64>], what: &str) -> Result<()> {
     for (i, p) in cameras.iter().enumerate() {
         if p.iter().any(|v| !v.is_finite()) {
             return Err(Error::NonFinite { what: what.into(), index: i });

@@ -105,7 +105,7 @@ impl LineProblem {
     /// the line (towards the cameras), so that the line has `φ = π/4` in the orthonormal
     /// representation, far from its singular charts `φ = 0` (a line through the origin, where one
     /// direction of motion is lost) and `φ = π/2`.
-    pub fn frame_around(&self, world_line: &Vector6<f64>) -> Similarity {
+    pub(crate) fn frame_around(&self, world_line: &Vector6<f64>) -> Similarity {
         let (foot, rho) = self.foot(world_line);
         let Some((_, d)) = plucker::to_point_direction(world_line) else {
             return Similarity::of_cameras(&self.cameras);

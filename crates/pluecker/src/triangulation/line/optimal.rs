@@ -61,7 +61,7 @@ const NODE_LOCAL_ITERATIONS: usize = 10;
 const FAR: f64 = 1e6;
 
 /// Eq. 23: the Plücker coordinates of the line through `(x₁, x₂, 1)` and `(y₁, y₂, 0)`.
-pub fn eq23(x: &Vector2<f64>, y: &Vector2<f64>) -> Vector6<f64> {
+pub(crate) fn eq23(x: &Vector2<f64>, y: &Vector2<f64>) -> Vector6<f64> {
     Vector6::new(x[0] * y[1] - x[1] * y[0], -y[0], x[0] - y[0], -y[1], y[1] - x[1], 1.0)
 }
 

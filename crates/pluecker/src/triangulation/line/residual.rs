@@ -89,7 +89,7 @@ impl LineFrame {
 
 /// The whitened residual of a 3-D line (Plücker coordinates, eq. 3) seen by camera `p` as the
 /// observed line of `frame`: `N P_𝓛 𝓛 / (dᵀ P_𝓛 𝓛)` (eqs. 6-7, 17-18), whitened by `w`.
-pub fn line_view(p: &Matrix3x4<f64>, frame: &LineFrame, w: &Matrix2<f64>) -> FractionalResidual<2, 6> {
+pub(crate) fn line_view(p: &Matrix3x4<f64>, frame: &LineFrame, w: &Matrix2<f64>) -> FractionalResidual<2, 6> {
     let pl = plucker::camera(p);
     let (num, d) = frame.fraction();
     let a: SMatrix<f64, 2, 6> = num * pl;

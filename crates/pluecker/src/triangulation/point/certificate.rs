@@ -28,7 +28,7 @@
 //! on `K`, and `f ≤ F/(1 − κ_d)² ≤ R² = (1 + κ_Q)²ε₀²/(1 − κ_d)²` on `K`.
 //!
 //! **3. Hessian.** For one view and `w ∈ ℝ³`, `α = Gᵢw`, `β = dᵢᵀw` (see
-//! [`super::cost::term_hessian`], the same algebra in any chart):
+//! `cost::term_hessian`, the same algebra in any chart):
 //! `wᵀ∇²‖rᵢ‖²w · ζᵢ²/2 = ‖α − 2βrᵢ‖² − ρᵢ²β² ≥ (1 − θ)‖α‖² − (4/θ − 3)ρᵢ²β²` for `θ ∈ (0, 1]`,
 //! least ratio at `θ = 2/3` (factors ⅓ and 3; the lead's `θ = ½` gives ½ and 5). On `K`:
 //! `wᵀ∇²f w ≥ wᵀPw − (6/(1 − κ_d)²) Σᵢ ρᵢ²(dᵢᵀw)²` with `P = 2N/(3(1 + κ_d)²)`; and since
@@ -59,7 +59,7 @@ const MAX_REFINEMENTS: usize = 60;
 
 /// A convex set `K ⊇ {f ≤ ε₀²}` in chart coordinates with its depth bound (module docs, stages 1-2).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Enclosure {
+pub(crate) struct Enclosure {
     /// The per-view radius of `S` (`ε₀` for the test).
     pub gamma: f64,
     /// `S` lies in the cube `|y_k| ≤ ball_radius` (`∞` when stage 1 did not apply).
@@ -80,7 +80,7 @@ pub struct Enclosure {
 
 impl Enclosure {
     /// The box `[lo, hi]` containing the ellipsoid `Q_{κ_Q}` and the ball of `S`.
-    pub fn bounding_box(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
+    pub(crate) fn bounding_box(&self) -> Option<(Vector3<f64>, Vector3<f64>)> {
         let inverse = self.n.cholesky()?.inverse();
         let centre = -(inverse * self.b);
         let radius = self.q_radius(&inverse)?;
@@ -98,7 +98,7 @@ impl Enclosure {
     }
 
     /// `(1 + κ_Q) √ℓ`: `K` lies in `‖(a₁(y), …, a_n(y))‖ ≤ q_bound`.
-    pub fn q_bound(&self) -> f64 {
+    pub(crate) fn q_bound(&self) -> f64 {
         (1.0 + self.kappa_q) * self.level.sqrt()
     }
 }
@@ -108,7 +108,7 @@ impl Enclosure {
 /// a convex set containing every point in front of the cameras with `f ≤ level`, or `None` when no
 /// depth bound below 1 results or `N` is singular. `mean_depth` says the chart is the mean-depth
 /// one, where `Σᵢ ζᵢ = n` gives the a-priori bound `ζᵢ < n` for points in front of every camera.
-pub fn enclosure(chart: &Chart, level: f64, gamma: f64, mean_depth: bool) -> Option<Enclosure> {
+pub(crate) fn enclosure(chart: &Chart, level: f64, gamma: f64, mean_depth: bool) -> Option<Enclosure> {
     let origin_cost: f64 = chart.views.iter().map(|v| v.a0.norm_squared()).sum();
     let (mut n, mut b, mut m) = (Matrix3::zeros(), Vector3::zeros(), Matrix3::zeros());
     for v in &chart.views {

@@ -25,7 +25,7 @@ const MIN_CONDITION: f64 = 1e-14;
 
 /// One view in chart coordinates: `a(y) = a0 + G y`, `ζ(y) = 1 + dᵀy`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ChartView {
+pub(crate) struct ChartView {
     /// `r̂`, the whitened residual at the local solution (pixels).
     pub a0: Vector2<f64>,
     /// `G`, the numerator's Jacobian in `y`.
@@ -36,19 +36,19 @@ pub struct ChartView {
 
 impl ChartView {
     /// `a(y)`.
-    pub fn numerator(&self, y: &Vector3<f64>) -> Vector2<f64> {
+    pub(crate) fn numerator(&self, y: &Vector3<f64>) -> Vector2<f64> {
         self.a0 + self.g * y
     }
 
     /// `ζ(y)`.
-    pub fn denominator(&self, y: &Vector3<f64>) -> f64 {
+    pub(crate) fn denominator(&self, y: &Vector3<f64>) -> f64 {
         1.0 + self.d.dot(y)
     }
 }
 
 /// Which chart (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ChartKind {
+pub(crate) enum ChartKind {
     /// `e = 0`.
     Euclidean,
     /// `e = mean(cᵢ/ẑᵢ)`.
@@ -57,7 +57,7 @@ pub enum ChartKind {
 
 /// A whitened affine chart around a local solution (module docs).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Chart {
+pub(crate) struct Chart {
     /// `X̂`, the chart's origin.
     pub origin: Vector3<f64>,
     /// `T`, world units per whitened pixel.
@@ -123,7 +123,8 @@ impl Chart {
         (w > 0.0).then(|| self.origin + self.t * y / w)
     }
 
-    /// The cost of eq. 19 at `y`, `Σ ‖aᵢ‖²/ζᵢ²`.
+    /// The cost of eq. 19 at `y`, `Σ ‖aᵢ‖²/ζᵢ²` (the tests' check of the chart against eq. 19).
+    #[cfg(test)]
     pub fn cost(&self, y: &Vector3<f64>) -> f64 {
         self.views
             .iter()

@@ -52,7 +52,7 @@ impl PointView {
     }
 
     /// The whitened numerator `W X̃` (eq. 16 times the depth).
-    pub fn numerator(&self, x: &Vector3<f64>) -> Vector2<f64> {
+    pub(crate) fn numerator(&self, x: &Vector3<f64>) -> Vector2<f64> {
         self.a() * x + self.w.column(3)
     }
 
@@ -65,7 +65,7 @@ impl PointView {
     /// `B = A − r cᵀ`, module docs) at depth `z ≠ 0`: one division and the 6 distinct entries of the
     /// symmetric product, for the covariances of [`crate::triangulation::uncertainty`].
     #[inline]
-    pub fn residual_and_information(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix3<f64>) {
+    pub(crate) fn residual_and_information(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix3<f64>) {
         let inv = 1.0 / self.depth(x);
         let r = self.numerator(x) * inv;
         let c = self.c();
@@ -89,7 +89,7 @@ impl PointView {
 
     /// The whitened residual and its Jacobian `∂r/∂X = (A − r cᵀ)/z` (module docs), at depth `z ≠ 0`.
     #[inline]
-    pub fn residual_and_jacobian(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix2x3<f64>) {
+    pub(crate) fn residual_and_jacobian(&self, x: &Vector3<f64>) -> (Vector2<f64>, Matrix2x3<f64>) {
         let z = self.depth(x);
         let r = self.numerator(x) / z;
         (r, (self.a() - r * self.c().transpose()) / z)
@@ -122,7 +122,7 @@ pub fn in_front(views: &[PointView], x: &Vector3<f64>) -> bool {
 }
 
 /// The Hessian of `‖r(X)‖²` for one view at `X` (module docs), whose depth there is `z`.
-pub fn term_hessian(view: &PointView, x: &Vector3<f64>) -> Matrix3<f64> {
+pub(crate) fn term_hessian(view: &PointView, x: &Vector3<f64>) -> Matrix3<f64> {
     let z = view.depth(x);
     let r = view.numerator(x) / z;
     let c = view.c();

@@ -11,7 +11,7 @@
 //! the split is at the relaxed minimiser kept inside the middle half of the interval.
 //!
 //! **Search set.** Every point at least as good as `X̂` lies in `S_{ε₀}` (each view's error is at
-//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of [`super::certificate::enclosure`]
+//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of `certificate::enclosure`
 //! (`S_{ε₀}` cut by an ellipsoid); points outside cost more than `f(X̂)`. The search runs over
 //! `K ∩ S_γ ∩ {w ≥ 0}` (`γ` the user's `max_reprojection_error`, by default `ε₀`), so a lower bound
 //! below `f(X̂)` is a lower bound over every point in front of the cameras within `γ`.
@@ -66,7 +66,7 @@ pub enum Relaxation {
 /// 1e-3): the secant needs 2, 2.6 and 3 nodes on average at 5, 10 and 20 views, eqs. 21-22 need 14,
 /// 20 and 24 nodes with SOCPs about four times larger; both together need the secant's nodes at the
 /// larger SOCPs' price. Every choice gives valid bounds (test `both_relaxations_give_valid_bounds…`).
-pub const DEFAULT_RELAXATION: Relaxation = Relaxation::Secant;
+pub(crate) const DEFAULT_RELAXATION: Relaxation = Relaxation::Secant;
 
 /// How the search ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

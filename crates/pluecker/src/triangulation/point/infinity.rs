@@ -51,7 +51,7 @@ fn cost_in_direction(views: &[PointView], d: &Vector3<f64>) -> Option<f64> {
 /// The least `f_∞` found by local minimisations from each direction of `starts` (either sign, see
 /// [`cost_at_infinity`]), and its unit direction; `None` when no start has a sign in front of every
 /// camera.
-pub fn best_at_infinity(
+pub(crate) fn best_at_infinity(
     views: &[PointView],
     starts: &[Vector3<f64>],
     opts: &TrustRegionOptions,

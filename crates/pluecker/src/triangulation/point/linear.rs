@@ -6,7 +6,7 @@
 //! Gram matrix `Σ BᵢᵀBᵢ` of the conditioned rows `Bᵢ`.
 //!
 //! Conditioning (the role of Hartley's normalisation): the world is translated to the centroid `C̄` of
-//! the camera centres and scaled by their RMS distance `s` to it ([`WorldFrame`]), `X = C̄ + s X'`;
+//! the camera centres and scaled by their RMS distance `s` to it (`WorldFrame`), `X = C̄ + s X'`;
 //! each view's row pair is divided by the Frobenius norm of its 3x3 part, so that every view counts
 //! alike whatever its focal length, covariance scale or the arbitrary scale of its `P`. A solution
 //! with a (relatively) zero fourth coordinate is a point at infinity: parallel rays.
@@ -20,7 +20,7 @@ const AT_INFINITY: f64 = 1e-12;
 
 /// A similarity `X = centre + scale · X'` that conditions the DLT (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WorldFrame {
+pub(crate) struct WorldFrame {
     /// `C̄`, the centroid of the camera centres (world units).
     pub centre: Vector3<f64>,
     /// `s`, the RMS distance of the centres to `C̄` (world units, > 0 when the centres differ).
@@ -29,7 +29,7 @@ pub struct WorldFrame {
 
 impl WorldFrame {
     /// The frame of a set of camera centres.
-    pub fn from_centres(centres: &[Vector3<f64>]) -> WorldFrame {
+    pub(crate) fn from_centres(centres: &[Vector3<f64>]) -> WorldFrame {
         let n = centres.len().max(1) as f64;
         let centre = centres.iter().sum::<Vector3<f64>>() / n;
         let scale = (centres.iter().map(|c| (c - centre).norm_squared()).sum::<f64>() / n).sqrt();
@@ -42,7 +42,7 @@ impl WorldFrame {
 
 /// The result of the DLT.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LinearPoint {
+pub(crate) enum LinearPoint {
     /// A finite point (world coordinates).
     Finite(Vector3<f64>),
     /// A point at infinity in this (unit) world direction.
@@ -50,7 +50,7 @@ pub enum LinearPoint {
 }
 
 /// Adds the conditioned rows of one view to the Gram matrix `g`.
-pub fn accumulate_dlt(g: &mut Matrix4<f64>, view: &PointView, frame: &WorldFrame) {
+pub(crate) fn accumulate_dlt(g: &mut Matrix4<f64>, view: &PointView, frame: &WorldFrame) {
     let a = view.a();
     let norm = a.norm();
     if !(norm > 0.0) {
@@ -67,7 +67,7 @@ pub fn accumulate_dlt(g: &mut Matrix4<f64>, view: &PointView, frame: &WorldFrame
 /// the trace, started from the column of `G⁻¹` with the largest diagonal), checked by its residual,
 /// else cyclic Jacobi rotations. Both are accurate to rounding in the eigenvector when the least
 /// eigenvalue is separated (an implicit QR iteration was measured to lose half the digits).
-pub fn least_eigenvector(g: &Matrix4<f64>) -> Vector4<f64> {
+pub(crate) fn least_eigenvector(g: &Matrix4<f64>) -> Vector4<f64> {
     let shift = 16.0 * f64::EPSILON * g.trace().abs();
     if let Some(chol) = (g + Matrix4::identity() * shift).cholesky() {
         let inverse = chol.inverse();
@@ -142,7 +142,7 @@ fn jacobi_least_eigenvector(g: &Matrix4<f64>) -> Vector4<f64> {
 const JACOBI_SWEEPS: usize = 30;
 
 /// The DLT solution from the Gram matrix of [`accumulate_dlt`].
-pub fn solve_dlt(g: &Matrix4<f64>, frame: &WorldFrame) -> LinearPoint {
+pub(crate) fn solve_dlt(g: &Matrix4<f64>, frame: &WorldFrame) -> LinearPoint {
     let v = least_eigenvector(g);
     if v.w.abs() <= AT_INFINITY * v.norm() {
         let d = v.xyz();
@@ -152,7 +152,7 @@ pub fn solve_dlt(g: &Matrix4<f64>, frame: &WorldFrame) -> LinearPoint {
 }
 
 /// The DLT point of the views (see the module docs).
-pub fn linear_point(views: &[PointView], frame: &WorldFrame) -> LinearPoint {
+pub(crate) fn linear_point(views: &[PointView], frame: &WorldFrame) -> LinearPoint {
     let mut g = Matrix4::zeros();
     for v in views {
         accumulate_dlt(&mut g, v, frame);
@@ -161,7 +161,7 @@ pub fn linear_point(views: &[PointView], frame: &WorldFrame) -> LinearPoint {
 }
 
 /// The conditioning frame of a set of (finite) cameras.
-pub fn frame_of_cameras(cameras: &[Matrix3x4<f64>]) -> WorldFrame {
+pub(crate) fn frame_of_cameras(cameras: &[Matrix3x4<f64>]) -> WorldFrame {
     let centres: Vec<Vector3<f64>> = cameras.iter().map(crate::triangulation::views::centre).collect();
     WorldFrame::from_centres(&centres)
 }

@@ -431,7 +431,7 @@ fn certify(
 /// The 3x3 covariance of a point `x` (world units²) seen in `views` ([`super::uncertainty`]): `(Σ BᵢᵀBᵢ)⁻¹` with
 /// `Bᵢ = (Aᵢ − rᵢcᵢᵀ)/zᵢ` the Jacobian of the whitened residual of eqs. 15-18
 /// ([`PointView::residual_and_information`]).
-pub fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
+pub(crate) fn point_covariance(views: &[PointView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
     if !x.iter().all(|v| v.is_finite()) {
         return None;
     }

@@ -96,7 +96,7 @@ impl QuadricProblem {
 
     /// The conditioned frame of an ellipsoid: origin at its centre, unit its largest semi-axis (at
     /// least 1e-3 of the distance to the nearest camera).
-    pub fn frame_of(&self, e: &Ellipsoid) -> Similarity {
+    pub(crate) fn frame_of(&self, e: &Ellipsoid) -> Similarity {
         let nearest = self
             .cameras
             .iter()
@@ -331,7 +331,7 @@ impl EllipsoidPoint {
         t
     }
 
-    pub fn retract(&self, d: &SVector<f64, 9>) -> EllipsoidPoint {
+    pub(crate) fn retract(&self, d: &SVector<f64, 9>) -> EllipsoidPoint {
         let r = Rotation3::new(Vector3::new(d[3], d[4], d[5]));
         EllipsoidPoint {
             centre: self.centre + Vector3::new(d[0], d[1], d[2]),

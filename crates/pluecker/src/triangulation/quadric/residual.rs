@@ -17,7 +17,7 @@ use crate::geometry::quadric::{conic_camera, sym3_to_vec, vec_to_sym3, Ellipse};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector, Vector2, Vector6};
 
 /// A 5-vector: the conic residual.
-pub type Vector5 = SVector<f64, 5>;
+pub(crate) type Vector5 = SVector<f64, 5>;
 
 /// Positions in the stacked dual conic (`geometry::quadric` order) of the five residual entries
 /// `(l₁₁, l₁₂, l₂₂, l₁₃, l₂₃)`.
@@ -89,7 +89,7 @@ impl ConicFrame {
 
 /// The whitened residual of a dual quadric `L̃` (stacked, eq. 14) seen by camera `p` as the observed
 /// ellipse of `frame`: `N P_C L̃ / (dᵀ P_C L̃)` (Lemma 2.1, eqs. 17-18), whitened by `w`.
-pub fn quadric_view(p: &Matrix3x4<f64>, frame: &ConicFrame, w: &SMatrix<f64, 5, 5>) -> FractionalResidual<5, 10> {
+pub(crate) fn quadric_view(p: &Matrix3x4<f64>, frame: &ConicFrame, w: &SMatrix<f64, 5, 5>) -> FractionalResidual<5, 10> {
     let pc = conic_camera(p);
     let (num, d) = frame.fraction();
     let a: SMatrix<f64, 5, 10> = num * pc;
@@ -98,7 +98,7 @@ pub fn quadric_view(p: &Matrix3x4<f64>, frame: &ConicFrame, w: &SMatrix<f64, 5, 
 }
 
 /// The observed ellipse of a frame, back in pixels (its shape entries are `−R diag(s²) Rᵀ`).
-pub fn observed_shape(frame: &ConicFrame) -> Matrix2<f64> {
+pub(crate) fn observed_shape(frame: &ConicFrame) -> Matrix2<f64> {
     let v = frame.observed;
     -Matrix2::new(v[0], v[1], v[1], v[2])
 }
