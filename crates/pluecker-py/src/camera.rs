@@ -2,7 +2,7 @@
 
 use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
 use crate::fields::{result_class, Field};
-use crate::pose::pose_from_parts;
+use crate::convert::pose_from_parts;
 use pluecker::geometry::lines::interpretation_plane_normal;
 use crate::errors::guarded;
 use nalgebra::{Vector2, Vector3};

@@ -8,6 +8,7 @@
 //! against the expected one and reported as `"x: expected shape (n, 2), got (4, 3)"`.
 
 use crate::errors::{invalid_argument, non_finite, shape_error};
+use pluecker::Pose;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
@@ -494,5 +495,38 @@ pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
             &format!("{views} rows (one per camera in P)"),
             rows.to_string(),
         ))
+    }
+}
+
+/// A pose `x_cam = R X_world + t` as Python passes it: the pair `(R, t)` of a `(3, 3)` rotation and a
+/// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.
+pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
+    let pair = obj.downcast::<PyTuple>().map_err(|_| {
+        let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
+        pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
+    })?;
+    if pair.len() != 2 {
+        return Err(shape_error(name, "a tuple (R, t)", format!("a tuple of length {}", pair.len())));
+    }
+    pose_from_parts(&format!("{name} R"), &pair.get_item(0)?, &format!("{name} t"), &pair.get_item(1)?)
+}
+
+/// The pose of separate arguments `R` (named `r_name`) and `t` (named `t_name`).
+pub fn pose_from_parts(r_name: &str, r: &Bound<'_, PyAny>, t_name: &str, t: &Bound<'_, PyAny>) -> PyResult<Pose> {
+    Ok(Pose::new(rotation(r_name, r)?, vector::<3>(t_name, t)?))
+}
+
+impl crate::fields::Field for Pose {
+    /// `(R, t)` as numpy arrays.
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        let parts = [self.rotation.get(py)?, self.translation.get(py)?];
+        Ok(PyTuple::new(py, parts)?.into_any().unbind())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let parts = [self.rotation.plain(py)?, self.translation.plain(py)?];
+        Ok(PyTuple::new(py, parts)?.into_any().unbind())
+    }
+    fn stub() -> String {
+        "Tuple[NDArray[np.float64], NDArray[np.float64]]".into()
     }
 }

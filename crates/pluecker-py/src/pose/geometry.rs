@@ -2,7 +2,7 @@
 
 use crate::convert::{matrix_to_py, vector, vector_to_py};
 use crate::errors::{degenerate, guarded};
-use crate::pose::pose_from_parts;
+use crate::convert::pose_from_parts;
 use pluecker::Pose;
 use nalgebra::SVector;
 use numpy::{PyArray1, PyArray2};

@@ -10,49 +10,13 @@ pub mod reprojection;
 pub mod result;
 
 use crate::camera::PyCamera;
-use crate::convert::{points, rotation, segments, vector};
+use crate::convert::{points, segments};
 use crate::errors::shape_error;
-use crate::fields::Field;
 use crate::interrupt::{run_interruptible, with_partial};
 use options::{PyPoseOptions, PyRansacOptions};
 use pluecker::pose::Correspondences;
-use pluecker::Pose;
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
 use result::PyPoseResult;
-
-/// A pose `x_cam = R X_world + t` as Python passes it: the pair `(R, t)` of a `(3, 3)` rotation and a
-/// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.
-pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
-    let pair = obj.downcast::<PyTuple>().map_err(|_| {
-        let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
-        pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
-    })?;
-    if pair.len() != 2 {
-        return Err(shape_error(name, "a tuple (R, t)", format!("a tuple of length {}", pair.len())));
-    }
-    pose_from_parts(&format!("{name} R"), &pair.get_item(0)?, &format!("{name} t"), &pair.get_item(1)?)
-}
-
-/// The pose of separate arguments `R` (named `r_name`) and `t` (named `t_name`).
-pub fn pose_from_parts(r_name: &str, r: &Bound<'_, PyAny>, t_name: &str, t: &Bound<'_, PyAny>) -> PyResult<Pose> {
-    Ok(Pose::new(rotation(r_name, r)?, vector::<3>(t_name, t)?))
-}
-
-impl Field for Pose {
-    /// `(R, t)` as numpy arrays.
-    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
-        let parts = [self.rotation.get(py)?, self.translation.get(py)?];
-        Ok(PyTuple::new(py, parts)?.into_any().unbind())
-    }
-    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
-        let parts = [self.rotation.plain(py)?, self.translation.plain(py)?];
-        Ok(PyTuple::new(py, parts)?.into_any().unbind())
-    }
-    fn stub() -> String {
-        "Tuple[NDArray[np.float64], NDArray[np.float64]]".into()
-    }
-}
 
 /// The four correspondence arrays, converted and checked (shapes, finiteness, matching counts).
 pub fn correspondences(

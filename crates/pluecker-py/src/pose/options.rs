@@ -9,7 +9,7 @@
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::options_class;
-use crate::pose::extract_pose;
+use crate::convert::extract_pose;
 use pluecker::pose::{CertificateOptions, Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
 
