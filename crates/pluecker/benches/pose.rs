@@ -12,7 +12,7 @@
 //! truth, so that a fast wrong answer cannot pass unnoticed (`FAILED` marks a status other than
 //! `success` or a rotation error above 0.1 rad).
 //!
-//! A third group, `robust/<outliers>`, times the robust pipeline (`PoseOptions::robust`, LO-RANSAC then
+//! A third group, `robust/<outliers>`, times the robust pipeline (`PoseOptions::ransac`, LO-RANSAC then
 //! the refinement on the inliers, default options, seed 0) on 100 points + 30 lines with 1 px noise where
 //! 0, 25, 50 or 75 % of the points and of the lines are replaced by random observations (a random pixel,
 //! a random segment of at least 40 px) in the 640 x 480 image; its setup line adds the samples drawn,
@@ -131,7 +131,7 @@ fn robust(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(3))
         .warm_up_time(Duration::from_millis(500));
     let opts = PoseOptions {
-        robust: Some(RansacOptions::default()),
+        ransac: Some(RansacOptions::default()),
         ..Default::default()
     };
     for ratio in OUTLIER_RATIOS {

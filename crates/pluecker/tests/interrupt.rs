@@ -116,7 +116,7 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
         stop
     };
     let robust = PoseOptions {
-        robust: Some(RansacOptions {
+        ransac: Some(RansacOptions {
             max_iterations: usize::MAX,
             min_inlier_ratio: 0.0,
             ..Default::default()

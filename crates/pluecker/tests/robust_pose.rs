@@ -1,4 +1,4 @@
-//! The robust pipeline (`PoseOptions::robust`, LO-RANSAC over points and lines) and the pose
+//! The robust pipeline (`PoseOptions::ransac`, LO-RANSAC over points and lines) and the pose
 //! covariance of every `estimate_pose` call, end to end. Seeds are fixed per test and printed on failure.
 //!
 //! Outliers replace an observation by a uniformly random one in the 640 x 480 image (a random pixel, or
@@ -24,7 +24,7 @@ const THRESHOLD_PX: f64 = 4.0;
 
 fn robust(seed: u64) -> PoseOptions {
     PoseOptions {
-        robust: Some(RansacOptions {
+        ransac: Some(RansacOptions {
             seed,
             ..RansacOptions::default()
         }),
@@ -170,7 +170,7 @@ fn all_outliers(n_points: usize, seed: u64) -> (Camera, Correspondences) {
 fn all_outlier_data_gives_a_status_within_the_iteration_cap() {
     let (camera, corr) = all_outliers(60, 8);
     let mut opts = robust(0);
-    opts.robust.as_mut().unwrap().max_iterations = 2000;
+    opts.ransac.as_mut().unwrap().max_iterations = 2000;
     let r = estimate_pose(&camera, &corr, &opts).unwrap();
     assert_eq!(r.status, Status::TooFewInliers, "{r:?}");
     let report = r.ransac.unwrap();
@@ -233,7 +233,7 @@ fn required_inliers_grow_with_chance_only() {
     // Without the cap (min_inlier_ratio = 0) the requirement is min_inliers, as before.
     let (camera, corr) = all_outliers(2000, 43);
     let mut opts = robust(43);
-    let ransac = opts.robust.as_mut().unwrap();
+    let ransac = opts.ransac.as_mut().unwrap();
     (ransac.min_inlier_ratio, ransac.max_iterations) = (0.0, 3000);
     let r = estimate_pose(&camera, &corr, &opts).unwrap();
     assert_eq!(r.ransac.unwrap().required_inliers, 6);
@@ -243,7 +243,7 @@ fn required_inliers_grow_with_chance_only() {
 /// The samples drawn for a seed are the same (the verification order has its own random stream).
 fn legacy(seed: u64) -> PoseOptions {
     let mut opts = robust(seed);
-    let ransac = opts.robust.as_mut().unwrap();
+    let ransac = opts.ransac.as_mut().unwrap();
     (ransac.sprt, ransac.min_inlier_ratio) = (false, 0.0);
     opts
 }
@@ -307,7 +307,7 @@ fn sprt_and_cap_keep_the_inliers_and_the_accuracy_of_the_plain_loop() {
 fn the_time_budget_stops_a_loop_whose_cap_would_run_long() {
     let (camera, corr) = all_outliers(60, 9);
     let mut opts = robust(0);
-    let ransac = opts.robust.as_mut().unwrap();
+    let ransac = opts.ransac.as_mut().unwrap();
     ransac.max_iterations = usize::MAX;
     ransac.min_inlier_ratio = 0.0; // no cap from the inlier fraction either
     ransac.time_budget = Some(Duration::from_millis(30));
@@ -324,7 +324,7 @@ fn bad_options_and_bad_data_are_errors() {
     let (scene, corr) = scene_with_outliers(20, 5, 0.2, 4);
     let with = |f: &dyn Fn(&mut RansacOptions)| {
         let mut opts = robust(0);
-        f(opts.robust.as_mut().unwrap());
+        f(opts.ransac.as_mut().unwrap());
         estimate_pose(&scene.camera, &corr, &opts)
     };
     for (name, result) in [
@@ -398,7 +398,7 @@ fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
         ..Default::default()
     };
     let mut opts = robust(0);
-    let ransac = opts.robust.as_mut().unwrap();
+    let ransac = opts.ransac.as_mut().unwrap();
     (ransac.min_iterations, ransac.max_iterations) = (300, 300);
     let r = estimate_pose(&camera, &repeated, &opts).unwrap();
     let report = r.ransac.as_ref().unwrap();

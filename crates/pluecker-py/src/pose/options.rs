@@ -4,7 +4,7 @@
 //!
 //! Three Python fields have no core field of the same shape: `certify` and `certify_gap` together
 //! are the core's `certify: Option<CertificateOptions>`, and the robust estimator is the separate
-//! `ransac=` argument of `estimate_pose` (the core's `robust: Option<RansacOptions>`).
+//! `ransac=` argument of `estimate_pose` (the core's `ransac: Option<RansacOptions>`).
 
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
@@ -19,7 +19,7 @@ use pyo3::prelude::*;
 #[pyclass(name = "PoseOptions", module = "pluecker")]
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PyPoseOptions {
-    /// The core's options; `robust` and `certify` stay `None` here (see `core`).
+    /// The core's options; `ransac` and `certify` stay `None` here (see `core`).
     inner: PoseOptions,
     certify: bool,
     certificate: CertificateOptions,
@@ -34,7 +34,7 @@ impl PyPoseOptions {
     /// The core's options, robust with `ransac` when given.
     pub(crate) fn core(&self, ransac: Option<RansacOptions>) -> PoseOptions {
         PoseOptions {
-            robust: ransac,
+            ransac,
             certify: self.certify.then_some(self.certificate),
             ..self.inner.clone()
         }

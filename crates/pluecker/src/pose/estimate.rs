@@ -380,7 +380,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let started = Instant::now();
     camera.validate()?;
     opts.validate()?;
-    if let Some(robust) = &opts.robust {
+    if let Some(robust) = &opts.ransac {
         return super::robust::pipeline::estimate_robust(camera, corr, opts, robust, started);
     }
     let prepared = Prepared::new(corr, corr.validated(opts.method)?, opts);

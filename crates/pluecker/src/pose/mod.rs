@@ -127,7 +127,7 @@ pub struct PoseOptions {
     /// estimator, then the reprojection refinement (when `refine`) on the final inliers. The minimal
     /// solvers generate the hypotheses, so `method` is not used (it is echoed in the result). Default
     /// `None`: every correspondence is an inlier.
-    pub robust: Option<RansacOptions>,
+    pub ransac: Option<RansacOptions>,
     /// Standard deviation of the pixel noise on every image point and segment endpoint, for
     /// [`PoseResult::covariance`]. `None` estimates it from the residuals. Default `None`.
     pub sigma_px: Option<f64>,
@@ -173,7 +173,7 @@ impl Default for PoseOptions {
                 ..StoppingCriteria::default()
             },
             refinement,
-            robust: None,
+            ransac: None,
             sigma_px: None,
             ambiguity_threshold: 9.0,
             certify: None,
@@ -209,7 +209,7 @@ impl PoseOptions {
                 return bad("sigma_px", "must be a positive finite number of pixels");
             }
         }
-        if let Some(robust) = &self.robust {
+        if let Some(robust) = &self.ransac {
             robust.validate()?;
         }
         if !(self.ambiguity_threshold.is_finite() && self.ambiguity_threshold >= 0.0) {
@@ -339,7 +339,7 @@ pub struct PoseResult {
     pub inliers_points: Vec<bool>,
     /// Which lines were used for the returned pose: the final inliers when robust, else all true.
     pub inliers_lines: Vec<bool>,
-    /// What the robust loop did (`None` unless [`PoseOptions::robust`]).
+    /// What the robust loop did (`None` unless [`PoseOptions::ransac`]).
     pub ransac: Option<RansacReport>,
     /// Covariance of the pose, 6x6: `σ² (JᵀJ)⁻¹` at the returned pose, `J` the Jacobian of the
     /// reprojection residuals of the used correspondences (the inliers when robust; two per point, two

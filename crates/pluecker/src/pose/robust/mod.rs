@@ -72,7 +72,7 @@ use scoring::{subset, Prepared, Thresholds, Verdict};
 use sprt::{chance_inliers, chance_probabilities, Sprt};
 use std::time::{Duration, Instant};
 
-/// Options of the robust estimator (`PoseOptions::robust`). Every field has a documented default.
+/// Options of the robust estimator (`PoseOptions::ransac`). Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RansacOptions {
     /// Inlier threshold of a point: the reprojection distance in pixels. Default `4.0`.

@@ -65,7 +65,7 @@ fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> Stage
     report
 }
 
-/// [`crate::pose::estimate_pose`] with `opts.robust = Some(robust)`.
+/// [`crate::pose::estimate_pose`] with `opts.ransac = Some(robust)`.
 pub(crate) fn estimate_robust(
     camera: &Camera,
     corr: &Correspondences,
