@@ -11,11 +11,11 @@ is taken as +inf.
 
 **Best known minimum** of a scene: the lowest valid cost among
 
-- (a) ``estimate_pose(..., initial_pose=(R_true, t_true))``: pluecker started at the truth;
-- (b) ``estimate_pose(..., robust=True, point_threshold=1e6, line_threshold=1e6, min_inliers=3,
-  seed=scene_seed)``: LO-RANSAC over every minimal sample mix, scoring with the plain squared error,
+- (a) ``estimate_pose(..., options=PoseOptions(initial_pose=(R_true, t_true)))``: pluecker started at the truth;
+- (b) ``estimate_pose(..., ransac=RansacOptions(point_threshold=1e6, line_threshold=1e6, min_inliers=3,
+  seed=scene_seed))``: LO-RANSAC over every minimal sample mix, scoring with the plain squared error,
   then refined (an exception counts as no candidate);
-- (c) ``S`` random starts ``estimate_pose(..., initial_pose=(R_rand, t_rand))``, ``R_rand`` uniform on
+- (c) ``S`` random starts ``estimate_pose(..., options=PoseOptions(initial_pose=(R_rand, t_rand)))``, ``R_rand`` uniform on
   SO(3), ``t_rand`` putting the object's centroid at its true depth on the optical axis. ``S`` is
   ``--starts`` (default 100) on the rows with ≤ 10 correspondences and ``--starts-large`` (default 20)
   on the rows with more (70 or 100), whose cost has far fewer local minima: the random starts are the
@@ -61,7 +61,7 @@ every image point and endpoint. Mixed data of ``n`` correspondences are ``ceil(n
   follows one of the same code on the same data, which would be warmer, and none follows cvxpnpl,
   after which a call is up to 4 times slower; ``--repeats 3`` gives warm timings as in
   ``bench/compare_pose.py``);
-- ``certify=True``: fraction certified, median and p95 µs of ``estimate_pose(..., certify=True)``, or
+- ``certify=True``: fraction certified, median and p95 µs of ``estimate_pose(..., options=PoseOptions(certify=True))``, or
   ``n/a`` when the keyword is not accepted;
 - ``status``: histogram of the default answers' statuses;
 - per peer: ``misses`` (``k/m`` when it ran on a subset of the scenes; ``[g]``, shown when it differs:

@@ -1,4 +1,4 @@
-"""Robust pose with outliers, side by side: pluecker ``estimate_pose(..., robust=True)`` and PoseLib's
+"""Robust pose with outliers, side by side: pluecker ``estimate_pose(..., ransac=True)`` and PoseLib's
 LO-RANSAC ``estimate_absolute_pose`` (points) / ``estimate_absolute_pose_pnpl`` (points + lines), on the same
 seeded scenes.
 

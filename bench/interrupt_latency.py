@@ -6,7 +6,7 @@ and the time from the signal to the ``KeyboardInterrupt`` reaching Python is mea
 Workloads (each would run for seconds to minutes if nothing stopped it):
 - ``triangulate_points``: 2M tracks in 3 views, ``optimal``;
 - ``triangulate_lines``: 40 noisy segments in 4 views, branch and bound to a 1e-9 gap;
-- ``estimate_pose(robust=True)``: 20k all-outlier points, no inlier-ratio cap.
+- ``estimate_pose(ransac=RansacOptions(...))``: 20k all-outlier points, no inlier-ratio cap.
 Prints the median and largest latency per workload, and how many tracks had finished.
 """
 
