@@ -45,11 +45,8 @@ pub(crate) fn certificate_of<C>(
         return (Status::Infeasible, base);
     }
     let lower = result.lower_bound.min(best_cost);
-    let relative_gap = if best_cost > 0.0 {
-        (best_cost - lower) / best_cost
-    } else {
-        0.0
-    };
+    // The one gap formula of every certificate (points too): relative to max(cost, 1e-12).
+    let relative_gap = crate::global::relative_gap(best_cost, lower);
     let certified = relative_gap <= max_relative_gap;
     let status = match result.stopped {
         _ if certified => Status::Success,
