@@ -30,6 +30,7 @@
 //!   correspondences*, IJCV 15(3), 1995. Equation numbers in doc comments refer to this paper.
 
 pub mod camera;
+pub mod camera_model;
 pub mod chi_square;
 pub mod error;
 pub mod geometry;
