@@ -1,20 +1,10 @@
-"""Typed stubs of the extension module ``pluecker._core`` (Rust, PyO3).
+"""Typed stubs of ``pluecker._core`` (Rust, PyO3). Conventions: the README's "Conventions" section.
 
-Conventions (frames, pixels, units, array shapes): the "Conventions" section of the README. Array
-arguments accept any real array-like (converted to float64); returned arrays are fresh row-major
-float64 arrays owned by the caller. ``None`` for an array stands for zero rows.
-
-The properties of every result and options class are generated from the extension's own tables
-(``python -m pluecker._stubgen``; ``tests/test_stubs.py`` checks that they are up to date): a
-property is declared once, in Rust, with its getter, its ``to_dict()`` entry and its doc.
-
-Results are immutable; ``to_dict()`` gives strict JSON (NaN and inf as ``None``); ``pickle`` and
-``copy.deepcopy`` reproduce them exactly within one version of pluecker. Options classes are mutable,
-compare with ``==``, pickle, and check every value as it is set (``InvalidOptionError`` naming the
-option); their defaults are the Rust ``Default`` of the same struct.
-
-Scalars: a bool is not a number (``InvalidOptionError``); counts, caps and seeds take any Python or
-numpy integer up to ``2**64 - 1`` (beyond, or below their minimum: ``InvalidOptionError``).
+Arrays: any real array-like in (float64), fresh row-major arrays out; ``None`` is zero rows. Each
+property is declared once in Rust; its block here is generated (``python -m pluecker._stubgen``,
+checked by tests/test_stubs.py). Results are immutable, ``to_dict()`` is strict JSON, pickles are
+exact within one version. Options are mutable, ``==``, picklable, checked as set; their defaults are
+the Rust ``Default``. A bool is not a number; counts and seeds take integers up to ``2**64 - 1``.
 """
 
 from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict
@@ -34,8 +24,7 @@ TRIANGULATION_METHODS: Tuple[str, ...]
 # --- Exceptions (all ValueError) ------------------------------------------------------------------
 
 class PlueckerError(ValueError):
-    """Base class of every error for bad input or a failed computation; a Rust panic (a bug) arrives
-    as ``PlueckerError("internal error: ...")``, never as a crash."""
+    """Base of every error for bad input or a failed computation (a Rust panic too: never a crash)."""
 
 class ShapeError(PlueckerError):
     """Wrong shape, or row counts that must agree and do not: ``"points2d: expected shape (N, 2), got (5, 3)"``."""
@@ -47,16 +36,13 @@ class TooFewCorrespondencesError(PlueckerError):
     """Fewer correspondences or views than the method needs."""
 
 class DegenerateConfigurationError(PlueckerError):
-    """Data that cannot determine the answer: collinear points, parallel or concurrent lines only, a
-    zero-length segment, coincident camera centres, a singular information matrix."""
+    """Data that cannot determine the answer (collinear points, a zero-length segment, ...)."""
 
 class SingularCameraError(PlueckerError):
-    """Intrinsics or a camera matrix that cannot be inverted (zero focal length, NaN/inf, ``K`` not
-    upper triangular with last row ``(0, 0, 1)``)."""
+    """Intrinsics or a camera matrix that cannot be inverted (zero focal length, NaN/inf, ...)."""
 
 class InvalidOptionError(PlueckerError):
-    """An option or argument outside its domain (unknown method, ``penalty <= 0``, a cap below 1, a
-    bool for a number, an ``R`` that is not a rotation, a ``visible`` entry other than 0/1, ...)."""
+    """An option or argument outside its domain (unknown method, ``penalty <= 0``, a bool, ...)."""
 
 class _ResidualTest(TypedDict):
     """A χ² test of residuals against their stated noise (level 1e-3)."""
@@ -104,6 +90,30 @@ class Camera:
         """Normalised coordinates (N, 2), ``(x, y, 1) ∝ K⁻¹ (u, v, 1)``, of pixels (N, 2)."""
     def normalized_to_pixel(self, normalized: ArrayLike) -> NDArray[np.float64]:
         """Pixels (N, 2) of normalised coordinates (N, 2)."""
+    def to_dict(self) -> Dict[str, Any]: ...
+
+class LensCamera:
+    """A camera of one of COLMAP's models (:attr:`MODELS`) with lens distortion, parameters in COLMAP's
+    order. Immutable, ``==``, picklable. Unprojection inverts the projection to 1e-10 px."""
+
+    MODELS: List[str]
+    def __init__(self, model: str, params: List[float]) -> None: ...
+    # fields of LensCamera (generated: python -m pluecker._stubgen)
+    model: str
+    """COLMAP's name of the model, e.g. `'OPENCV'`."""
+    params: NDArray[np.float64]
+    """The parameters in COLMAP's order (see `parameter_names`)."""
+    parameter_names: List[str]
+    """The names of `params`, e.g. `['fx', 'fy', 'cx', 'cy', 'k1', 'k2', 'p1', 'p2']`."""
+    # end of fields
+    def project(self, points_cam: ArrayLike) -> NDArray[np.float64]:
+        """Pixels (N, 2) of camera-frame points (N, 3) in front of the camera."""
+    def unproject(self, pixels: ArrayLike) -> NDArray[np.float64]:
+        """Undistorted normalised coordinates (N, 2) of pixels (N, 2); an error names a pixel beyond the fold."""
+    def bearings(self, pixels: ArrayLike) -> NDArray[np.float64]:
+        """Unit rays (N, 3), camera frame, of pixels (N, 2)."""
+    def normalized_covariances(self, pixels: ArrayLike, cov: Optional[ArrayLike] = None) -> NDArray[np.float64]:
+        """First-order (N, 2, 2) covariances of the normalised coordinates for pixel covariances ``cov`` (N, 2, 2) (``None``: 1 px)."""
     def to_dict(self) -> Dict[str, Any]: ...
 
 # --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
@@ -445,18 +455,11 @@ def random_scene(kind: str, n_points: int, n_lines: Optional[int] = None, seed: 
     segments together."""
 
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
-#
-# Cameras are (n, 3, 4) matrices P mapping world points to pixels, λ (u, v, 1) = P (X, 1), λ > 0 in
-# front (eq. 1): any positive scale, but the sign counts; fx < 0 or det P[:, :3] < 0 are fine. Every
-# method minimises eq. 19, the sum of squared residuals (eq. 17, pixels) whitened by the observation
-# covariances (identity when ``cov`` is None). ``"linear"`` (DLT), ``"local"`` (eq. 19 from the
-# linear answer) and ``"optimal"`` (the default: the local answer certified globally optimal by a
-# convexity test, or by branch and bound over the SOCP envelopes of eqs. 21-22). ``certified`` is True
-# only with status ``"success"``. Batches run in parallel with the GIL released; ``progress`` is
-# called with the count of finished tracks; ``time_budget`` (seconds) stops a batch with status
-# ``"time_budget"``; Ctrl-C (or an exception from ``progress``) stops it within about 0.1 s and the
-# exception carries the finished tracks as ``partial``. One bad track gets a status and a message
-# and never stops the others.
+# Cameras P (n, 3, 4) map world points to pixels, λ (u, v, 1) = P (X, 1), λ > 0 in front (eq. 1). Every
+# method minimises eq. 19 (residuals of eq. 17 whitened by ``cov``; identity when None): ``"linear"``,
+# ``"local"``, or ``"optimal"`` (default: certified by a convexity test or branch and bound, eqs. 21-22).
+# Batches run in parallel without the GIL; ``progress(done)``; ``time_budget`` (s) ends with status
+# ``"time_budget"``; Ctrl-C raises with the finished tracks as ``partial``. A bad track never stops others.
 
 class TriangulationOptions:
     """Options of every triangulation function (the core's ``TriangulationOptions``). A ``method=``

@@ -13,6 +13,7 @@ mod convert;
 mod errors;
 mod fields;
 mod interrupt;
+mod lens_camera;
 mod pickle;
 mod pose;
 mod synthetic;
@@ -39,6 +40,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TRIANGULATION_METHODS", pyo3::types::PyTuple::new(m.py(), triangulation)?)?;
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
+    m.add_class::<lens_camera::PyLensCamera>()?;
     // Pose.
     m.add_class::<PyPoseOptions>()?;
     m.add_class::<PyRansacOptions>()?;
