@@ -1,12 +1,12 @@
 //! `pluecker.Camera`: pinhole intrinsics, projection and normalisation.
 
-use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
-use crate::fields::{result_class, Field};
 use crate::convert::pose_from_parts;
-use pluecker::geometry::lines::interpretation_plane_normal;
+use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
 use crate::errors::guarded;
+use crate::fields::{result_class, Field};
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
+use pluecker::geometry::lines::interpretation_plane_normal;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use std::collections::hash_map::DefaultHasher;

@@ -8,10 +8,10 @@
 //! against the expected one and reported as `"x: expected shape (n, 2), got (4, 3)"`.
 
 use crate::errors::{invalid_argument, non_finite, shape_error};
-use pluecker::Pose;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pluecker::Pose;
 use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PyTuple};
@@ -188,7 +188,10 @@ pub fn vector<const D: usize>(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SV
 }
 
 /// A matrix as an `(R, C)` array.
-pub fn matrix_to_py<'py, const R: usize, const C: usize>(py: Python<'py>, m: &SMatrix<f64, R, C>) -> Bound<'py, PyArray2<f64>> {
+pub fn matrix_to_py<'py, const R: usize, const C: usize>(
+    py: Python<'py>,
+    m: &SMatrix<f64, R, C>,
+) -> Bound<'py, PyArray2<f64>> {
     Array2::from_shape_fn((R, C), |(i, j)| m[(i, j)]).into_pyarray(py)
 }
 
@@ -280,7 +283,10 @@ pub fn optional_real(name: &str, real: Option<Real>) -> PyResult<Option<f64>> {
 impl<'py> FromPyObject<'py> for Real {
     fn extract_bound(ob: &Bound<'py, PyAny>) -> PyResult<Self> {
         if let Some(b) = as_bool(ob)? {
-            return Ok(Real { value: f64::NAN, from_bool: Some(b) });
+            return Ok(Real {
+                value: f64::NAN,
+                from_bool: Some(b),
+            });
         }
         Ok(Real::new(ob.extract()?))
     }
@@ -308,7 +314,10 @@ impl Integer {
             } else {
                 self.value.to_string()
             };
-            return Err(invalid_argument(name, format!("must be an integer from {min} to {max}, got {got}")));
+            return Err(invalid_argument(
+                name,
+                format!("must be an integer from {min} to {max}, got {got}"),
+            ));
         }
         Ok(self.value)
     }
@@ -328,14 +337,26 @@ impl Integer {
 impl<'py> FromPyObject<'py> for Integer {
     fn extract_bound(ob: &Bound<'py, PyAny>) -> PyResult<Self> {
         if let Some(b) = as_bool(ob)? {
-            return Ok(Integer { value: 0, beyond_i128: false, from_bool: Some(b) });
+            return Ok(Integer {
+                value: 0,
+                beyond_i128: false,
+                from_bool: Some(b),
+            });
         }
         match ob.extract::<i128>() {
-            Ok(value) => Ok(Integer { value, beyond_i128: false, from_bool: None }),
+            Ok(value) => Ok(Integer {
+                value,
+                beyond_i128: false,
+                from_bool: None,
+            }),
             Err(e) if e.is_instance_of::<PyOverflowError>(ob.py()) => {
                 let negative = ob.lt(0)?;
                 let value = if negative { i128::MIN } else { i128::MAX };
-                Ok(Integer { value, beyond_i128: true, from_bool: None })
+                Ok(Integer {
+                    value,
+                    beyond_i128: true,
+                    from_bool: None,
+                })
             }
             Err(e) => Err(e),
         }
@@ -369,7 +390,11 @@ fn bool_given(name: &str, b: bool) -> PyErr {
 pub fn strict_json<'py>(value: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     let py = value.py();
     if let Ok(x) = value.downcast::<PyFloat>() {
-        return Ok(if x.value().is_finite() { value } else { py.None().into_bound(py) });
+        return Ok(if x.value().is_finite() {
+            value
+        } else {
+            py.None().into_bound(py)
+        });
     }
     if let Ok(d) = value.downcast::<PyDict>() {
         for (k, v) in d.clone().iter() {
@@ -434,7 +459,9 @@ pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResul
 /// `InvalidOptionError` unless the integer array `array` holds only 0 and 1.
 fn check_zero_one(name: &str, array: &Bound<'_, PyAny>) -> PyResult<()> {
     use pyo3::basic::CompareOp::Ne;
-    let outside = array.rich_compare(0, Ne)?.call_method1("__and__", (array.rich_compare(1, Ne)?,))?;
+    let outside = array
+        .rich_compare(0, Ne)?
+        .call_method1("__and__", (array.rich_compare(1, Ne)?,))?;
     let np = array.py().import("numpy")?;
     let bad = np.call_method1("argwhere", (outside,))?;
     if bad.len()? == 0 {
@@ -506,9 +533,18 @@ pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
         pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
     })?;
     if pair.len() != 2 {
-        return Err(shape_error(name, "a tuple (R, t)", format!("a tuple of length {}", pair.len())));
+        return Err(shape_error(
+            name,
+            "a tuple (R, t)",
+            format!("a tuple of length {}", pair.len()),
+        ));
     }
-    pose_from_parts(&format!("{name} R"), &pair.get_item(0)?, &format!("{name} t"), &pair.get_item(1)?)
+    pose_from_parts(
+        &format!("{name} R"),
+        &pair.get_item(0)?,
+        &format!("{name} t"),
+        &pair.get_item(1)?,
+    )
 }
 
 /// The pose of separate arguments `R` (named `r_name`) and `t` (named `t_name`).

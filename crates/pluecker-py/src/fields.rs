@@ -143,7 +143,11 @@ pub(crate) type FieldDoc = (&'static str, String, String);
 
 /// The doc comment lines of a table entry as one text (each `///` line starts with a space).
 pub(crate) fn doc(lines: &[&str]) -> String {
-    lines.iter().map(|l| l.strip_prefix(' ').unwrap_or(l)).collect::<Vec<_>>().join("\n")
+    lines
+        .iter()
+        .map(|l| l.strip_prefix(' ').unwrap_or(l))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// The properties of a frozen result class from a table of `/// doc` + `name = |this| value;`

@@ -36,8 +36,14 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     let methods: Vec<&str> = pluecker::pose::Method::ALL.iter().map(|m| m.as_str()).collect();
     m.add("METHODS", pyo3::types::PyTuple::new(m.py(), methods)?)?;
-    let triangulation: Vec<&str> = pluecker::triangulation::Method::ALL.iter().map(|m| m.as_str()).collect();
-    m.add("TRIANGULATION_METHODS", pyo3::types::PyTuple::new(m.py(), triangulation)?)?;
+    let triangulation: Vec<&str> = pluecker::triangulation::Method::ALL
+        .iter()
+        .map(|m| m.as_str())
+        .collect();
+    m.add(
+        "TRIANGULATION_METHODS",
+        pyo3::types::PyTuple::new(m.py(), triangulation)?,
+    )?;
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<lens_camera::PyLensCamera>()?;

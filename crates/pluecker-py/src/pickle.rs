@@ -10,13 +10,15 @@
 
 use crate::errors::PlueckerError;
 use nalgebra::SMatrix;
+use pluecker::chi_square::ResidualTest;
 use pluecker::geometry::dual_quaternion::DualQuaternion;
 use pluecker::geometry::plucker::LineChart;
 use pluecker::geometry::quadric::Ellipse;
-use pluecker::chi_square::ResidualTest;
 use pluecker::optim::Termination;
 use pluecker::pose::certificate::Certificate as PoseCertificate;
-use pluecker::pose::{CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport, Status as PoseStatus};
+use pluecker::pose::{
+    CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport, Status as PoseStatus,
+};
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, Method, Report, Status};
 use pluecker::{Camera, Pose, PoseResult};
@@ -304,7 +306,12 @@ pack_struct!(PoseResult {
     behind_camera_cost,
     residual_test
 });
-pack_struct!(ResidualTest { chi2, dof, p_value, consistent });
+pack_struct!(ResidualTest {
+    chi2,
+    dof,
+    p_value,
+    consistent
+});
 pack_struct!(Certificate {
     lower_bound,
     relative_gap,

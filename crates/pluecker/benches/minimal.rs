@@ -55,7 +55,14 @@ fn bench_minimal(c: &mut Criterion) {
         let mut rng = Rng::new(seed);
         let samples: Vec<_> = (0..SAMPLES).map(|_| sample(&mut rng, n_points)).collect();
         let (mut found, mut solutions) = (0, 0);
-        for (features, Pose { rotation: r, translation: t }) in &samples {
+        for (
+            features,
+            Pose {
+                rotation: r,
+                translation: t,
+            },
+        ) in &samples
+        {
             let poses = solve(features);
             solutions += poses.len();
             let scale = t.norm().max(10.0);

@@ -39,9 +39,24 @@ struct Problem {
 }
 
 const PROBLEMS: [Problem; 3] = [
-    Problem { name: "30-lines", n_points: 0, n_lines: 30, seed: 11 },
-    Problem { name: "100-points", n_points: 100, n_lines: 0, seed: 12 },
-    Problem { name: "50-points-20-lines", n_points: 50, n_lines: 20, seed: 13 },
+    Problem {
+        name: "30-lines",
+        n_points: 0,
+        n_lines: 30,
+        seed: 11,
+    },
+    Problem {
+        name: "100-points",
+        n_points: 100,
+        n_lines: 0,
+        seed: 12,
+    },
+    Problem {
+        name: "50-points-20-lines",
+        n_points: 50,
+        n_lines: 20,
+        seed: 13,
+    },
 ];
 
 /// Pixel noise, standard deviation.
@@ -58,12 +73,19 @@ fn noisy_problem(problem: &Problem) -> (Scene, Correspondences) {
 
 fn bench_group(c: &mut Criterion, group_name: &str, refine: bool) {
     let mut group = c.benchmark_group(group_name);
-    group.sample_size(30).measurement_time(Duration::from_secs(2)).warm_up_time(Duration::from_millis(500));
+    group
+        .sample_size(30)
+        .measurement_time(Duration::from_secs(2))
+        .warm_up_time(Duration::from_millis(500));
     for problem in &PROBLEMS {
         let (scene, corr) = noisy_problem(problem);
         let camera = scene.camera;
         for method in Method::ALL {
-            let opts = PoseOptions { method, refine, ..Default::default() };
+            let opts = PoseOptions {
+                method,
+                refine,
+                ..Default::default()
+            };
             let id = format!("{group_name}/{}/{}", problem.name, method.as_str());
             match estimate_pose(&camera, &corr, &opts) {
                 Err(e) => {
@@ -72,7 +94,8 @@ fn bench_group(c: &mut Criterion, group_name: &str, refine: bool) {
                 }
                 Ok(r) => {
                     let rotation_error = rotation_distance(&r.rotation, &scene.rotation);
-                    let failed = r.status != Status::Success || rotation_error.is_nan() || rotation_error > FAILED_ROTATION_RAD;
+                    let failed =
+                        r.status != Status::Success || rotation_error.is_nan() || rotation_error > FAILED_ROTATION_RAD;
                     eprintln!(
                         "setup {id}: {} status {} iterations {} rotation error {rotation_error:.2e} rad translation error {:.2e}",
                         if failed { "FAILED" } else { "ok" },
@@ -138,7 +161,8 @@ fn robust(c: &mut Criterion) {
         let (scene, corr) = outlier_problem(ratio, 14);
         let name = format!("100-points-30-lines-{}pct-outliers", (100.0 * ratio).round());
         let r = estimate_pose(&scene.camera, &corr, &opts).expect("valid input");
-        let truth = ReprojectionCost::of(&scene.camera, &corr).errors(&pluecker::Pose::new(scene.rotation, scene.translation));
+        let truth =
+            ReprojectionCost::of(&scene.camera, &corr).errors(&pluecker::Pose::new(scene.rotation, scene.translation));
         let mask: Vec<bool> = r.inliers_points.iter().chain(&r.inliers_lines).copied().collect();
         let missed = truth
             .iter()

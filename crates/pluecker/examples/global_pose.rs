@@ -10,8 +10,8 @@ use pluecker::optim::Objective;
 use pluecker::pose::reprojection::ReprojectionCost;
 use pluecker::pose::{estimate_pose, refine_pose, PoseOptions};
 use pluecker::rng::Rng;
-use pluecker::Pose;
 use pluecker::synthetic::visible_scene;
+use pluecker::Pose;
 use std::time::Instant;
 
 fn main() {
@@ -59,7 +59,11 @@ fn main() {
             let mine = cost.cost(&result.pose());
             let mut best = mine;
             let truth = Pose::new(scene.rotation, scene.translation);
-            let centroid = corr.points3d.iter().chain(corr.lines3d.iter().flat_map(|s| s.iter())).fold(Vector3::zeros(), |a, p| a + p)
+            let centroid = corr
+                .points3d
+                .iter()
+                .chain(corr.lines3d.iter().flat_map(|s| s.iter()))
+                .fold(Vector3::zeros(), |a, p| a + p)
                 / (np + 2 * nl) as f64;
             let depth = (scene.rotation * centroid + scene.translation).z;
             let mut candidates = vec![truth];
@@ -77,7 +81,11 @@ fn main() {
             if result.certified {
                 certified += 1;
             } else if std::env::var("WHY").is_ok() {
-                println!("  seed {seed}: {} {}", result.status.as_str(), result.certificate.message());
+                println!(
+                    "  seed {seed}: {} {}",
+                    result.status.as_str(),
+                    result.certificate.message()
+                );
             }
             if mine > best * (1.0 + 1e-6) + 1e-9 {
                 misses += 1;
@@ -88,12 +96,20 @@ fn main() {
                     miss_ambiguous += 1;
                 }
                 if std::env::var("VERBOSE").is_ok() {
-                    println!("  seed {seed}: {} cost {mine:.4} best {best:.4}", result.status.as_str());
+                    println!(
+                        "  seed {seed}: {} cost {mine:.4} best {best:.4}",
+                        result.status.as_str()
+                    );
                 }
             }
         }
         times.sort_by(f64::total_cmp);
-        let q = |p: f64| times.get(((times.len() as f64 - 1.0) * p) as usize).copied().unwrap_or(f64::NAN);
+        let q = |p: f64| {
+            times
+                .get(((times.len() as f64 - 1.0) * p) as usize)
+                .copied()
+                .unwrap_or(f64::NAN)
+        };
         println!(
             "| {name} | {misses}/{} | {miss_success} | {miss_ambiguous} | {certified} | {:.1} | {:.1} |",
             times.len(),

@@ -14,8 +14,8 @@
 use nalgebra::{Matrix3x4, Matrix4, Vector2};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line, triangulate_line_segments};
 use pluecker::triangulation::line::residual::endpoint_distances;
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, triangulate_line_segments};
 use pluecker::triangulation::quadric::triangulate_quadric_points;
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};

@@ -181,9 +181,7 @@ fn run(name: &str, data: &Dataset, views: &[usize]) {
 }
 
 fn main() {
-    let root = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| SHIPPED_DATA.into());
+    let root = std::env::args().nth(1).unwrap_or_else(|| SHIPPED_DATA.into());
     let root = Path::new(&root);
     for (name, folder, prefix, views) in [
         ("Model House", "model_house", "house.", 10),

@@ -44,11 +44,15 @@ impl Camera {
     /// (the matrix is divided by `K[2,2]`) and `K[1,0]` must be 0.
     pub fn from_matrix(k: &Matrix3<f64>) -> Result<Self> {
         if k.iter().any(|v| !v.is_finite()) {
-            return Err(Error::SingularCamera { what: "K has a non-finite entry".into() });
+            return Err(Error::SingularCamera {
+                what: "K has a non-finite entry".into(),
+            });
         }
         let w = k[(2, 2)];
         if w.abs() < 1e-300 {
-            return Err(Error::SingularCamera { what: "K[2,2] is zero".into() });
+            return Err(Error::SingularCamera {
+                what: "K[2,2] is zero".into(),
+            });
         }
         let k = k / w;
         let tol = 1e-9 * k.abs().max();
@@ -69,7 +73,9 @@ impl Camera {
     pub fn validate(&self) -> Result<()> {
         let p = [self.fx, self.fy, self.cx, self.cy, self.skew];
         if p.iter().any(|v| !v.is_finite()) {
-            return Err(Error::SingularCamera { what: format!("non-finite intrinsics {p:?}") });
+            return Err(Error::SingularCamera {
+                what: format!("non-finite intrinsics {p:?}"),
+            });
         }
         if self.fx.abs() < MIN_FOCAL || self.fy.abs() < MIN_FOCAL {
             return Err(Error::SingularCamera {
@@ -152,7 +158,10 @@ mod tests {
 
     #[test]
     fn singular_cameras_are_rejected() {
-        assert!(matches!(Camera::new(0.0, 1.0, 0.0, 0.0, 0.0), Err(Error::SingularCamera { .. })));
+        assert!(matches!(
+            Camera::new(0.0, 1.0, 0.0, 0.0, 0.0),
+            Err(Error::SingularCamera { .. })
+        ));
         assert!(Camera::new(f64::NAN, 1.0, 0.0, 0.0, 0.0).is_err());
         let mut k = Matrix3::identity();
         k[(2, 0)] = 1.0;

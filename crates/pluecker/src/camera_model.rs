@@ -67,13 +67,16 @@ impl CameraModel {
 
     /// The model of a COLMAP name; `Error::InvalidOption` naming the known ones otherwise.
     pub fn parse(name: &str) -> Result<CameraModel> {
-        CameraModel::ALL.into_iter().find(|m| m.as_str() == name).ok_or_else(|| Error::InvalidOption {
-            name: "model".into(),
-            reason: format!(
-                "unknown camera model '{name}'; expected one of {}",
-                CameraModel::ALL.map(|m| m.as_str()).join(", ")
-            ),
-        })
+        CameraModel::ALL
+            .into_iter()
+            .find(|m| m.as_str() == name)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "model".into(),
+                reason: format!(
+                    "unknown camera model '{name}'; expected one of {}",
+                    CameraModel::ALL.map(|m| m.as_str()).join(", ")
+                ),
+            })
     }
 
     /// The parameter names, in COLMAP's order.
@@ -117,12 +120,20 @@ impl LensCamera {
             });
         }
         if let Some(index) = params.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { what: format!("{} parameters", model.as_str()), index });
+            return Err(Error::NonFinite {
+                what: format!("{} parameters", model.as_str()),
+                index,
+            });
         }
-        let camera = LensCamera { model, params: params.to_vec() };
+        let camera = LensCamera {
+            model,
+            params: params.to_vec(),
+        };
         let (fx, fy) = camera.focal();
         if fx == 0.0 || fy == 0.0 {
-            return Err(Error::SingularCamera { what: format!("{}: zero focal length", model.as_str()) });
+            return Err(Error::SingularCamera {
+                what: format!("{}: zero focal length", model.as_str()),
+            });
         }
         Ok(camera)
     }
@@ -172,7 +183,10 @@ impl LensCamera {
             (d, j)
         };
         let tangential = |p1: f64, p2: f64| {
-            let t = Vector2::new(2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x), p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y);
+            let t = Vector2::new(
+                2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+                p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y,
+            );
             let j = Matrix2::new(
                 2.0 * p1 * y + 6.0 * p2 * x,
                 2.0 * p1 * x + 2.0 * p2 * y,
@@ -248,7 +262,12 @@ impl LensCamera {
             return Ok(d);
         }
         let outside = |why: &str| Error::Degenerate {
-            what: format!("pixel {index} ({}, {}): outside the invertible region of the {} distortion ({why})", u.x, u.y, self.model.as_str()),
+            what: format!(
+                "pixel {index} ({}, {}): outside the invertible region of the {} distortion ({why})",
+                u.x,
+                u.y,
+                self.model.as_str()
+            ),
         };
         let pixel_error = |e: &Vector2<f64>| (e.x * fx).hypot(e.y * fy);
         let mut n = d;
@@ -293,9 +312,20 @@ mod tests {
             (CameraModel::Pinhole, &[800.0, 790.0, 320.0, 240.0]),
             (CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]),
             (CameraModel::Radial, &[800.0, 320.0, 240.0, -0.1, 0.02]),
-            (CameraModel::OpenCv, &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4]),
-            (CameraModel::FullOpenCv, &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005]),
-            (CameraModel::OpenCvFisheye, &[400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4]),
+            (
+                CameraModel::OpenCv,
+                &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4],
+            ),
+            (
+                CameraModel::FullOpenCv,
+                &[
+                    800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005,
+                ],
+            ),
+            (
+                CameraModel::OpenCvFisheye,
+                &[400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
+            ),
         ];
         params.iter().map(|(m, p)| LensCamera::new(*m, p).unwrap()).collect()
     }
@@ -305,7 +335,11 @@ mod tests {
         let mut rng = Rng::new(41);
         for cam in cameras() {
             for _ in 0..50 {
-                let x = Vector3::new(rng.uniform_in(-0.5, 0.5), rng.uniform_in(-0.4, 0.4), rng.uniform_in(1.0, 3.0));
+                let x = Vector3::new(
+                    rng.uniform_in(-0.5, 0.5),
+                    rng.uniform_in(-0.4, 0.4),
+                    rng.uniform_in(1.0, 3.0),
+                );
                 let (_, j) = cam.project(&x);
                 for k in 0..3 {
                     let h = 1e-6;
@@ -315,7 +349,11 @@ mod tests {
                     xm[k] -= h;
                     let numeric = (cam.project(&xp).0 - cam.project(&xm).0) / (2.0 * h);
                     // Central differences: O(h²) truncation and O(ε |u| / h) rounding, about 1e-7 px per unit.
-                    assert!((numeric - j.column(k)).norm() < 1e-5 * (1.0 + j.column(k).norm()), "{:?}", cam.model());
+                    assert!(
+                        (numeric - j.column(k)).norm() < 1e-5 * (1.0 + j.column(k).norm()),
+                        "{:?}",
+                        cam.model()
+                    );
                 }
             }
         }
@@ -326,22 +364,40 @@ mod tests {
         // Reference pixels from OpenCV 5.0.0, an independent implementation: `cv2.projectPoints` with
         // distCoeffs (k1, k2, p1, p2) and the rational (k1, k2, p1, p2, k3, k4, k5, k6), and
         // `cv2.fisheye.projectPoints` with (k1, k2, k3, k4), of the points below at the identity pose.
-        let points = [Vector3::new(0.3, -0.2, 1.5), Vector3::new(-0.4, 0.25, 2.0), Vector3::new(0.05, 0.1, 1.0)];
+        let points = [
+            Vector3::new(0.3, -0.2, 1.5),
+            Vector3::new(-0.4, 0.25, 2.0),
+            Vector3::new(0.05, 0.1, 1.0),
+        ];
         let cases: [(CameraModel, &[f64], [[f64; 2]; 3]); 3] = [
             (
                 CameraModel::OpenCv,
                 &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4],
-                [[478.08003950617285, 135.96107028806586], [161.66099687500002, 337.7550648193359], [359.9013125, 318.8248421875]],
+                [
+                    [478.08003950617285, 135.96107028806586],
+                    [161.66099687500002, 337.7550648193359],
+                    [359.9013125, 318.8248421875],
+                ],
             ),
             (
                 CameraModel::FullOpenCv,
-                &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005],
-                [[477.9028916767527, 136.07769260910078], [161.83182374163687, 337.6496326125835], [359.89140261979446, 318.805270174094]],
+                &[
+                    800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005,
+                ],
+                [
+                    [477.9028916767527, 136.07769260910078],
+                    [161.83182374163687, 337.6496326125835],
+                    [359.89140261979446, 318.805270174094],
+                ],
             ),
             (
                 CameraModel::OpenCvFisheye,
                 &[400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
-                [[398.7265990991503, 188.1716555930594], [241.22721516597178, 288.6175781397518], [339.92960115866975, 279.3609622883728]],
+                [
+                    [398.7265990991503, 188.1716555930594],
+                    [241.22721516597178, 288.6175781397518],
+                    [339.92960115866975, 279.3609622883728],
+                ],
             ),
         ];
         for (model, params, expected) in cases {
@@ -362,7 +418,12 @@ mod tests {
                 let (u, _) = cam.project(&x);
                 let n = cam.unproject(&u, i).unwrap();
                 let (back, _) = cam.project(&Vector3::new(n.x, n.y, 1.0));
-                assert!((back - u).norm() <= 1e-10 * 1.5, "{:?}: {:e} px", cam.model(), (back - u).norm());
+                assert!(
+                    (back - u).norm() <= 1e-10 * 1.5,
+                    "{:?}: {:e} px",
+                    cam.model(),
+                    (back - u).norm()
+                );
                 assert!((n - x.xy()).norm() < 1e-12, "{:?}", cam.model());
             }
         }
@@ -377,7 +438,10 @@ mod tests {
         assert!(cam.unproject(&Vector2::new(inside, 0.0), 0).is_ok());
         let beyond = peak * (1.0 - 0.5 * peak * peak) * 1.05 * 500.0;
         let err = cam.unproject(&Vector2::new(beyond, 0.0), 7).unwrap_err();
-        assert!(matches!(&err, Error::Degenerate { what } if what.starts_with("pixel 7")), "{err}");
+        assert!(
+            matches!(&err, Error::Degenerate { what } if what.starts_with("pixel 7")),
+            "{err}"
+        );
     }
 
     #[test]
@@ -385,10 +449,22 @@ mod tests {
         for m in CameraModel::ALL {
             assert_eq!(CameraModel::parse(m.as_str()).unwrap(), m);
         }
-        assert!(matches!(CameraModel::parse("KANNALA"), Err(Error::InvalidOption { .. })));
-        assert!(matches!(LensCamera::new(CameraModel::OpenCv, &[1.0; 4]), Err(Error::Shape { .. })));
-        assert!(matches!(LensCamera::new(CameraModel::Pinhole, &[0.0, 1.0, 0.0, 0.0]), Err(Error::SingularCamera { .. })));
-        assert!(matches!(LensCamera::new(CameraModel::Pinhole, &[1.0, f64::NAN, 0.0, 0.0]), Err(Error::NonFinite { index: 1, .. })));
+        assert!(matches!(
+            CameraModel::parse("KANNALA"),
+            Err(Error::InvalidOption { .. })
+        ));
+        assert!(matches!(
+            LensCamera::new(CameraModel::OpenCv, &[1.0; 4]),
+            Err(Error::Shape { .. })
+        ));
+        assert!(matches!(
+            LensCamera::new(CameraModel::Pinhole, &[0.0, 1.0, 0.0, 0.0]),
+            Err(Error::SingularCamera { .. })
+        ));
+        assert!(matches!(
+            LensCamera::new(CameraModel::Pinhole, &[1.0, f64::NAN, 0.0, 0.0]),
+            Err(Error::NonFinite { index: 1, .. })
+        ));
     }
 
     #[test]
@@ -396,7 +472,9 @@ mod tests {
         // With the pinhole model it is Σ / f²; with distortion, J⁻¹ Σ J⁻ᵀ checked by Monte Carlo would be
         // the next step; here the exact linear case.
         let cam = LensCamera::new(CameraModel::Pinhole, &[800.0, 400.0, 320.0, 240.0]).unwrap();
-        let c = cam.normalized_covariance(&Vector2::new(0.1, 0.2), &Matrix2::identity()).unwrap();
+        let c = cam
+            .normalized_covariance(&Vector2::new(0.1, 0.2), &Matrix2::identity())
+            .unwrap();
         assert!((c - Matrix2::new(1.0 / 640000.0, 0.0, 0.0, 1.0 / 160000.0)).norm() < 1e-18);
     }
 }

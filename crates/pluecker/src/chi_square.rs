@@ -110,7 +110,10 @@ fn ln_gamma(a: f64) -> f64 {
     }
     let a = a - 1.0;
     let t = a + G + 0.5;
-    let series = C[1..].iter().enumerate().fold(C[0], |s, (i, c)| s + c / (a + i as f64 + 1.0));
+    let series = C[1..]
+        .iter()
+        .enumerate()
+        .fold(C[0], |s, (i, c)| s + c / (a + i as f64 + 1.0));
     0.5 * (2.0 * std::f64::consts::PI).ln() + (a + 0.5) * t.ln() - t + series.ln()
 }
 
@@ -126,7 +129,11 @@ mod tests {
             let expected = [(-h).exp(), (-h).exp() * (1.0 + h), (-h).exp() * (1.0 + h + h * h / 2.0)];
             for (k, e) in expected.iter().enumerate() {
                 let got = survival(x, 2 * (k + 1));
-                assert!((got - e).abs() <= 1e-13 * e.max(1e-300) + 1e-300, "x {x} dof {}: {got} vs {e}", 2 * (k + 1));
+                assert!(
+                    (got - e).abs() <= 1e-13 * e.max(1e-300) + 1e-300,
+                    "x {x} dof {}: {got} vs {e}",
+                    2 * (k + 1)
+                );
             }
         }
     }
@@ -135,7 +142,11 @@ mod tests {
     fn odd_degrees_of_freedom_and_known_quantiles() {
         // dof = 1: P(χ² ≥ 3.841459) = 0.05 and P(χ² ≥ 6.634897) = 0.01 (the tabulated quantiles);
         // dof = 10: P(χ² ≥ 29.58830) = 0.001; dof = 194: the median is ≈ 193.33.
-        for (x, dof, p) in [(3.841_458_820_694_124, 1, 0.05), (6.634_896_601_021_214, 1, 0.01), (29.588_298_445_074_4, 10, 0.001)] {
+        for (x, dof, p) in [
+            (3.841_458_820_694_124, 1, 0.05),
+            (6.634_896_601_021_214, 1, 0.01),
+            (29.588_298_445_074_4, 10, 0.001),
+        ] {
             assert!((survival(x, dof) - p).abs() < 1e-9 * p.max(1e-3), "{x} {dof}");
         }
         assert!((survival(193.334, 194) - 0.5).abs() < 1e-3);

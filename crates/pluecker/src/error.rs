@@ -10,11 +10,19 @@ use std::fmt;
 #[derive(Debug, Clone, PartialEq)]
 pub enum Error {
     /// An array has the wrong length or two arrays that must match do not.
-    Shape { what: String, expected: String, actual: String },
+    Shape {
+        what: String,
+        expected: String,
+        actual: String,
+    },
     /// A NaN or infinite value; `what` names the argument and `index` the first offending row.
     NonFinite { what: String, index: usize },
     /// Fewer correspondences than the method needs.
-    TooFewCorrespondences { method: String, required: String, actual: String },
+    TooFewCorrespondences {
+        method: String,
+        required: String,
+        actual: String,
+    },
     /// The data cannot determine the pose: collinear points, parallel lines, a zero-length segment, ...
     Degenerate { what: String },
     /// The camera intrinsics cannot be inverted (zero focal length, non-finite values).
@@ -34,7 +42,11 @@ impl fmt::Display for Error {
             Error::NonFinite { what, index } => {
                 write!(f, "{what}: non-finite value (NaN or inf) in row {index}")
             }
-            Error::TooFewCorrespondences { method, required, actual } => {
+            Error::TooFewCorrespondences {
+                method,
+                required,
+                actual,
+            } => {
                 write!(f, "method '{method}' needs {required}, got {actual}")
             }
             Error::Degenerate { what } => write!(f, "degenerate configuration: {what}"),

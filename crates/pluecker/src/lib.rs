@@ -47,5 +47,7 @@ pub use camera::Camera;
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Status`, `Method` and certificate
 // stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
+pub use pose::{
+    estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacReport, RansacStop,
+};
 pub use rigid::Pose;
-pub use pose::{estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacReport, RansacStop};

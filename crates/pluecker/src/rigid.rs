@@ -45,12 +45,18 @@ impl Pose {
 
     /// `self` after `first`: `x = self(first(X))`.
     pub fn compose(&self, first: &Pose) -> Pose {
-        Pose::new(self.rotation * first.rotation, self.rotation * first.translation + self.translation)
+        Pose::new(
+            self.rotation * first.rotation,
+            self.rotation * first.translation + self.translation,
+        )
     }
 
     /// Whether every entry is finite.
     pub fn is_finite(&self) -> bool {
-        self.rotation.iter().chain(self.translation.iter()).all(|v| v.is_finite())
+        self.rotation
+            .iter()
+            .chain(self.translation.iter())
+            .all(|v| v.is_finite())
     }
 }
 

@@ -21,7 +21,10 @@ impl Rng {
             x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
             x ^ (x >> 31)
         };
-        Rng { s: [next(), next(), next(), next()], spare_normal: None }
+        Rng {
+            s: [next(), next(), next(), next()],
+            spare_normal: None,
+        }
     }
 
     /// The next 64 random bits.
@@ -80,7 +83,9 @@ impl Rng {
     /// A uniformly distributed rotation (unit quaternion drawn from the 4-sphere).
     pub fn rotation(&mut self) -> nalgebra::Matrix3<f64> {
         let q = nalgebra::Quaternion::new(self.normal(), self.normal(), self.normal(), self.normal());
-        nalgebra::UnitQuaternion::from_quaternion(q).to_rotation_matrix().into_inner()
+        nalgebra::UnitQuaternion::from_quaternion(q)
+            .to_rotation_matrix()
+            .into_inner()
     }
 
     /// A Fisher-Yates shuffle of `0..n` truncated to its first `k` entries.

@@ -30,7 +30,13 @@ impl Scene {
     /// per coordinate with `a = sigma` (the paper's "maximum amplitude").
     pub fn noisy(&self, sigma: f64, gaussian: bool, rng: &mut Rng) -> Correspondences {
         let mut noise = || {
-            let mut draw = || if gaussian { sigma * rng.normal() } else { rng.uniform_in(-sigma, sigma) };
+            let mut draw = || {
+                if gaussian {
+                    sigma * rng.normal()
+                } else {
+                    rng.uniform_in(-sigma, sigma)
+                }
+            };
             Vector2::new(draw(), draw())
         };
         let c = &self.correspondences;
@@ -45,7 +51,13 @@ impl Scene {
 
 /// The ground truth of Phong & Horaud 1995, section 5: axis, angle (rad), translation (cm), intrinsics.
 pub fn paper_pose() -> (Camera, Matrix3<f64>, Vector3<f64>) {
-    let camera = Camera { fx: -1730.3, fy: 1220.7, cx: 243.8, cy: 241.2, skew: 0.0 };
+    let camera = Camera {
+        fx: -1730.3,
+        fy: 1220.7,
+        cx: 243.8,
+        cy: 241.2,
+        skew: 0.0,
+    };
     let axis = Vector3::new(-0.185148, -0.973420, -0.156567);
     let rotation = to_rotation_matrix(&from_axis_angle(&axis, 2.9512));
     (camera, rotation, Vector3::new(2.627650, -11.006138, 77.479236))
@@ -70,12 +82,20 @@ pub fn paper_calibration_object() -> Scene {
             }
         }
     }
-    let points2d = points3d.iter().map(|x| camera.project(&(rotation * x + translation))).collect();
+    let points2d = points3d
+        .iter()
+        .map(|x| camera.project(&(rotation * x + translation)))
+        .collect();
     Scene {
         camera,
         rotation,
         translation,
-        correspondences: Correspondences { points2d, points3d, lines2d: vec![], lines3d: vec![] },
+        correspondences: Correspondences {
+            points2d,
+            points3d,
+            lines2d: vec![],
+            lines3d: vec![],
+        },
     }
 }
 
@@ -127,7 +147,13 @@ pub fn check_scene_size(n_points: usize, n_lines: usize) -> Result<()> {
 /// Every point and endpoint is in front of the camera and inside the 640 x 480 image.
 pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64) -> Scene {
     let mut rng = Rng::new(seed);
-    let camera = Camera { fx: 800.0, fy: 800.0, cx: 320.0, cy: 240.0, skew: 0.0 };
+    let camera = Camera {
+        fx: 800.0,
+        fy: 800.0,
+        cx: 320.0,
+        cy: 240.0,
+        skew: 0.0,
+    };
     let rotation = rng.rotation();
     let (depth, half_width) = match kind {
         SceneKind::Far => (50.0, 5.0),
@@ -137,9 +163,24 @@ pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64)
     let sample = |rng: &mut Rng| -> Vector3<f64> {
         loop {
             let local = match kind {
-                SceneKind::Planar => Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 0.0) * 2.0 * half_width,
-                SceneKind::General => Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0)) * 2.0 * half_width,
-                SceneKind::Far => Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0)) * half_width,
+                SceneKind::Planar => {
+                    Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 0.0) * 2.0 * half_width
+                }
+                SceneKind::General => {
+                    Vector3::new(
+                        rng.uniform_in(-1.0, 1.0),
+                        rng.uniform_in(-1.0, 1.0),
+                        rng.uniform_in(-1.0, 1.0),
+                    ) * 2.0
+                        * half_width
+                }
+                SceneKind::Far => {
+                    Vector3::new(
+                        rng.uniform_in(-1.0, 1.0),
+                        rng.uniform_in(-1.0, 1.0),
+                        rng.uniform_in(-1.0, 1.0),
+                    ) * half_width
+                }
             };
             let x_cam = tilt * local + Vector3::new(0.0, 0.0, depth);
             let u = camera.project(&x_cam);
@@ -191,10 +232,23 @@ impl Structure {
         let correspondences = Correspondences {
             points2d: self.points.iter().map(|x| camera.project(x)).collect(),
             points3d: self.points.iter().map(to_world).collect(),
-            lines2d: self.segments.iter().map(|s| [camera.project(&s[0]), camera.project(&s[1])]).collect(),
-            lines3d: self.segments.iter().map(|s| [to_world(&s[0]), to_world(&s[1])]).collect(),
+            lines2d: self
+                .segments
+                .iter()
+                .map(|s| [camera.project(&s[0]), camera.project(&s[1])])
+                .collect(),
+            lines3d: self
+                .segments
+                .iter()
+                .map(|s| [to_world(&s[0]), to_world(&s[1])])
+                .collect(),
         };
-        Scene { camera, rotation, translation, correspondences }
+        Scene {
+            camera,
+            rotation,
+            translation,
+            correspondences,
+        }
     }
 }
 
@@ -206,7 +260,13 @@ impl Structure {
 /// Noise-free; add noise with [`Scene::noisy`].
 pub fn visible_scene(focal: f64, n_points: usize, n_lines: usize, planar: bool, seed: u64) -> Scene {
     let mut rng = Rng::new(seed);
-    let camera = Camera { fx: focal, fy: focal, cx: 320.0, cy: 240.0, skew: 0.0 };
+    let camera = Camera {
+        fx: focal,
+        fy: focal,
+        cx: 320.0,
+        cy: 240.0,
+        skew: 0.0,
+    };
     let rotation = rng.rotation();
     let normal = {
         let tilt = rng.uniform_in(30f64.to_radians(), 60f64.to_radians());
@@ -332,7 +392,10 @@ mod tests {
             (0, usize::MAX, "n_lines"),
         ] {
             let err = check_scene_size(n, m).unwrap_err();
-            assert!(matches!(&err, Error::InvalidOption { name: got, .. } if got == name), "{err}");
+            assert!(
+                matches!(&err, Error::InvalidOption { name: got, .. } if got == name),
+                "{err}"
+            );
         }
     }
 
@@ -340,7 +403,12 @@ mod tests {
     fn paper_object_is_in_view_and_in_front() {
         let scene = paper_calibration_object();
         assert_eq!(scene.correspondences.points3d.len(), 460);
-        for (x, u) in scene.correspondences.points3d.iter().zip(&scene.correspondences.points2d) {
+        for (x, u) in scene
+            .correspondences
+            .points3d
+            .iter()
+            .zip(&scene.correspondences.points2d)
+        {
             assert!(scene.to_camera(x).z > 0.0);
             assert!((0.0..512.0).contains(&u.x) && (0.0..512.0).contains(&u.y), "{u}");
         }

@@ -10,10 +10,10 @@ use pluecker::interrupt::{with_stop, Stop, StopReason};
 use pluecker::pose::{estimate_pose, CertificateOptions, PoseOptions, RansacOptions, RansacStop};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
-use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::line::batch::triangulate_lines;
+use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::scenes::arc_cameras;
+use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::Error;
 use std::sync::Arc;
@@ -47,7 +47,10 @@ fn a_request_from_another_thread_stops_a_line_batch() {
         std::thread::sleep(Duration::from_millis(300));
         requester.request();
     });
-    let batch = with_stop(stop, || triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &endless(), None)).unwrap();
+    let batch = with_stop(stop, || {
+        triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &endless(), None)
+    })
+    .unwrap();
     timer.join().unwrap();
     let (mut started, mut skipped) = (0, 0);
     for result in &batch {
@@ -123,7 +126,10 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
         }),
         ..Default::default()
     };
-    let r = with_stop(requested(), || estimate_pose(&scene.camera, &scene.correspondences, &robust)).unwrap();
+    let r = with_stop(requested(), || {
+        estimate_pose(&scene.camera, &scene.correspondences, &robust)
+    })
+    .unwrap();
     let report = r.ransac.unwrap();
     assert_eq!((report.stop, report.iterations), (RansacStop::Interrupted, 0));
 
@@ -133,7 +139,10 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
     };
     let plain = estimate_pose(&scene.camera, &scene.correspondences, &certify).unwrap();
     assert!(plain.certified, "{:?}", plain.certificate);
-    let stopped = with_stop(requested(), || estimate_pose(&scene.camera, &scene.correspondences, &certify)).unwrap();
+    let stopped = with_stop(requested(), || {
+        estimate_pose(&scene.camera, &scene.correspondences, &certify)
+    })
+    .unwrap();
     assert!(!stopped.certified);
     let why = stopped.certificate.message();
     assert!(why.contains("interrupted"), "{why}");

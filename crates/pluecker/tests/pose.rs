@@ -10,7 +10,11 @@ use pluecker::synthetic::{paper_calibration_object, random_scene, SceneKind};
 use pluecker::{Camera, Error, Pose};
 
 fn options(method: Method, refine: bool) -> PoseOptions {
-    PoseOptions { method, refine, ..PoseOptions::default() }
+    PoseOptions {
+        method,
+        refine,
+        ..PoseOptions::default()
+    }
 }
 
 fn subset(c: &Correspondences, n: usize, rng: &mut Rng) -> Correspondences {
@@ -40,7 +44,10 @@ fn every_method_recovers_noise_free_poses_from_points_lines_and_both() {
                     let rot_err = rotation_distance(&r.rotation, &scene.rotation);
                     let t_err = (r.translation - scene.translation).norm();
                     // Noise-free data: only round-off and the solvers' stopping tests limit accuracy.
-                    assert!(rot_err < 1e-6 && t_err < 1e-5, "seed {seed} {np}p {nl}l {method:?} refine={refine}: {rot_err} {t_err}");
+                    assert!(
+                        rot_err < 1e-6 && t_err < 1e-5,
+                        "seed {seed} {np}p {nl}l {method:?} refine={refine}: {rot_err} {t_err}"
+                    );
                     assert_eq!(r.status, Status::Success, "seed {seed} {method:?}");
                 }
             }
@@ -60,7 +67,10 @@ fn the_papers_camera_with_negative_focal_length_works_for_every_method() {
         let rot_err = rotation_distance(&r.rotation, &scene.rotation);
         assert!(rot_err < 1e-6, "{method:?}: {rot_err}");
         // The paper prints the axis to 6 digits, not normalised (its norm is 1.0032).
-        assert!((r.angle - 2.9512).abs() < 1e-6 && (r.axis - Vector3::new(-0.185148, -0.973420, -0.156567).normalize()).norm() < 1e-6);
+        assert!(
+            (r.angle - 2.9512).abs() < 1e-6
+                && (r.axis - Vector3::new(-0.185148, -0.973420, -0.156567).normalize()).norm() < 1e-6
+        );
         if method == Method::Linear {
             let k = r.estimated_camera.unwrap();
             assert!((k.fx + 1730.3).abs() < 1e-4 && (k.fy - 1220.7).abs() < 1e-4, "{k:?}");
@@ -80,16 +90,27 @@ fn result_does_not_depend_on_the_start() {
     let lines_scene = random_scene(SceneKind::General, 0, 30, 6);
     let lines = lines_scene.noisy(0.5, false, &mut rng);
     for (camera, data) in [(&scene.camera, &c), (&lines_scene.camera, &lines)] {
-        for method in [Method::TrustRegion, Method::TrustRegionExact, Method::LevenbergMarquardt, Method::RotationThenTranslation] {
+        for method in [
+            Method::TrustRegion,
+            Method::TrustRegionExact,
+            Method::LevenbergMarquardt,
+            Method::RotationThenTranslation,
+        ] {
             let mut opts = options(method, false);
             let reference = estimate_pose(camera, data, &opts).unwrap();
             for trial in 0..100 {
-                let t0 = reference.translation + reference.translation.norm() * Vector3::new(rng.normal(), rng.normal(), rng.normal());
+                let t0 = reference.translation
+                    + reference.translation.norm() * Vector3::new(rng.normal(), rng.normal(), rng.normal());
                 opts.initial_pose = Some(Pose::new(rng.rotation(), t0));
                 let r = estimate_pose(camera, data, &opts).unwrap();
                 let rot = rotation_distance(&r.rotation, &reference.rotation);
                 let t = (r.translation - reference.translation).norm() / reference.translation.norm();
-                assert!(rot < 1e-6 && t < 1e-6, "{method:?} trial {trial}: {rot} {t} {:?}; reference error {}", r.termination, rotation_distance(&reference.rotation, &scene.rotation));
+                assert!(
+                    rot < 1e-6 && t < 1e-6,
+                    "{method:?} trial {trial}: {rot} {t} {:?}; reference error {}",
+                    r.termination,
+                    rotation_distance(&reference.rotation, &scene.rotation)
+                );
             }
         }
     }
@@ -118,7 +139,10 @@ fn default_pipeline_attains_the_cramer_rao_bound() {
             b_t += cov.fixed_view::<3, 3>(3, 3).trace();
         }
         let (ratio_rot, ratio_t) = ((e_rot / b_rot).sqrt(), (e_t / b_t).sqrt());
-        assert!((0.90..1.10).contains(&ratio_rot) && (0.90..1.10).contains(&ratio_t), "{kind:?}: {ratio_rot} {ratio_t}");
+        assert!(
+            (0.90..1.10).contains(&ratio_rot) && (0.90..1.10).contains(&ratio_t),
+            "{kind:?}: {ratio_rot} {ratio_t}"
+        );
     }
 }
 
@@ -135,27 +159,71 @@ fn bad_input_gets_a_clear_error() {
     assert!(matches!(err(&c, &default), Error::Shape { .. }));
     let mut c = good.clone();
     c.points2d[4].x = f64::NAN;
-    assert_eq!(err(&c, &default), Error::NonFinite { what: "points2d".into(), index: 4 });
+    assert_eq!(
+        err(&c, &default),
+        Error::NonFinite {
+            what: "points2d".into(),
+            index: 4
+        }
+    );
     let mut c = good.clone();
     c.lines3d[2][1].z = f64::INFINITY;
-    assert_eq!(err(&c, &default), Error::NonFinite { what: "lines3d".into(), index: 2 });
-    let two = Correspondences { points2d: good.points2d[..2].to_vec(), points3d: good.points3d[..2].to_vec(), ..Default::default() };
+    assert_eq!(
+        err(&c, &default),
+        Error::NonFinite {
+            what: "lines3d".into(),
+            index: 2
+        }
+    );
+    let two = Correspondences {
+        points2d: good.points2d[..2].to_vec(),
+        points3d: good.points3d[..2].to_vec(),
+        ..Default::default()
+    };
     assert!(matches!(err(&two, &default), Error::TooFewCorrespondences { .. }));
-    let points_only = Correspondences { lines2d: vec![], lines3d: vec![], ..good.clone() };
+    let points_only = Correspondences {
+        lines2d: vec![],
+        lines3d: vec![],
+        ..good.clone()
+    };
     let five = subset(&points_only, 5, &mut Rng::new(1));
-    assert!(matches!(err(&five, &options(Method::Linear, true)), Error::TooFewCorrespondences { .. }));
+    assert!(matches!(
+        err(&five, &options(Method::Linear, true)),
+        Error::TooFewCorrespondences { .. }
+    ));
     // Collinear points.
     let line_pts: Vec<Vector3<f64>> = (0..8).map(|i| Vector3::new(i as f64, 2.0 * i as f64, 5.0)).collect();
-    let c = Correspondences { points2d: vec![Vector2::new(1.0, 1.0); 8], points3d: line_pts, ..Default::default() };
+    let c = Correspondences {
+        points2d: vec![Vector2::new(1.0, 1.0); 8],
+        points3d: line_pts,
+        ..Default::default()
+    };
     assert!(matches!(err(&c, &default), Error::Degenerate { .. }));
     // Parallel lines, concurrent lines, zero-length segments.
     let seg = |a: Vector3<f64>, b: Vector3<f64>| [a, b];
     let img = vec![[Vector2::new(0.0, 0.0), Vector2::new(10.0, 5.0)]; 4];
-    let parallel: Vec<_> = (0..4).map(|i| seg(Vector3::new(i as f64, 0.0, 5.0), Vector3::new(i as f64, 1.0, 5.0))).collect();
-    let c = Correspondences { lines2d: img.clone(), lines3d: parallel, ..Default::default() };
+    let parallel: Vec<_> = (0..4)
+        .map(|i| seg(Vector3::new(i as f64, 0.0, 5.0), Vector3::new(i as f64, 1.0, 5.0)))
+        .collect();
+    let c = Correspondences {
+        lines2d: img.clone(),
+        lines3d: parallel,
+        ..Default::default()
+    };
     assert!(matches!(err(&c, &default), Error::Degenerate { .. }));
-    let star: Vec<_> = (0..4).map(|i| seg(Vector3::new(1.0, 1.0, 5.0), Vector3::new(1.0 + i as f64, 2.0, 5.0 + (i * i) as f64))).collect();
-    let c = Correspondences { lines2d: img.clone(), lines3d: star, ..Default::default() };
+    let star: Vec<_> = (0..4)
+        .map(|i| {
+            seg(
+                Vector3::new(1.0, 1.0, 5.0),
+                Vector3::new(1.0 + i as f64, 2.0, 5.0 + (i * i) as f64),
+            )
+        })
+        .collect();
+    let c = Correspondences {
+        lines2d: img.clone(),
+        lines3d: star,
+        ..Default::default()
+    };
     assert!(matches!(err(&c, &default), Error::Degenerate { .. }));
     let mut c = good.clone();
     c.lines2d[1][1] = c.lines2d[1][0];
@@ -167,13 +235,25 @@ fn bad_input_gets_a_clear_error() {
         Error::Degenerate { .. }
     ));
     let singular = Camera { fx: 0.0, ..cam };
-    assert!(matches!(estimate_pose(&singular, &good, &default).unwrap_err(), Error::SingularCamera { .. }));
-    let bad = PoseOptions { penalty: -1.0, ..PoseOptions::default() };
+    assert!(matches!(
+        estimate_pose(&singular, &good, &default).unwrap_err(),
+        Error::SingularCamera { .. }
+    ));
+    let bad = PoseOptions {
+        penalty: -1.0,
+        ..PoseOptions::default()
+    };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
-    let bad = PoseOptions { initial_pose: Some(Pose::new(Matrix3::zeros(), Vector3::zeros())), ..PoseOptions::default() };
+    let bad = PoseOptions {
+        initial_pose: Some(Pose::new(Matrix3::zeros(), Vector3::zeros())),
+        ..PoseOptions::default()
+    };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
     let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
-    let bad = PoseOptions { initial_pose: Some(Pose::new(reflection, Vector3::zeros())), ..PoseOptions::default() };
+    let bad = PoseOptions {
+        initial_pose: Some(Pose::new(reflection, Vector3::zeros())),
+        ..PoseOptions::default()
+    };
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
 }
 

@@ -14,7 +14,12 @@ use pluecker::synthetic::{visible_scene, Scene};
 fn best_known(scene: &Scene, corr: &Correspondences, starts: usize, rng: &mut Rng) -> f64 {
     let cost = ReprojectionCost::of(&scene.camera, corr);
     let opts = PoseOptions::default();
-    let all: Vec<Vector3<f64>> = corr.points3d.iter().chain(corr.lines3d.iter().flatten()).copied().collect();
+    let all: Vec<Vector3<f64>> = corr
+        .points3d
+        .iter()
+        .chain(corr.lines3d.iter().flatten())
+        .copied()
+        .collect();
     let centroid = all.iter().sum::<Vector3<f64>>() / all.len() as f64;
     let depth = (scene.rotation * centroid + scene.translation).z;
     let mut best = f64::INFINITY;
@@ -60,7 +65,10 @@ fn the_default_pipeline_reaches_the_best_known_minimum_or_says_it_is_ambiguous()
             if np + nl >= 6 {
                 assert!(!missed, "{row}: missed the best known minimum");
             } else {
-                assert!(!missed || result.status != Status::Success, "{row}: a miss that says success");
+                assert!(
+                    !missed || result.status != Status::Success,
+                    "{row}: a miss that says success"
+                );
             }
             if let Some((_, second)) = result.second_best {
                 assert!(second >= cost - 1e-9, "{row}: the runner-up {second} is cheaper");
@@ -77,10 +85,21 @@ fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
     use nalgebra::Vector2;
     let camera = pluecker::Camera::new(100.0, 100.0, 320.0, 240.0, 0.0).unwrap();
     let corr = Correspondences {
-        points2d: vec![Vector2::new(328.25225, 236.53891), Vector2::new(318.75583, 245.31756), Vector2::new(318.47324, 240.83389)],
-        points3d: vec![Vector3::new(-0.71231, -1.01011, -0.35883), Vector3::new(0.38466, -0.23661, 0.41702), Vector3::new(0.06198, -0.65361, 0.44170)],
+        points2d: vec![
+            Vector2::new(328.25225, 236.53891),
+            Vector2::new(318.75583, 245.31756),
+            Vector2::new(318.47324, 240.83389),
+        ],
+        points3d: vec![
+            Vector3::new(-0.71231, -1.01011, -0.35883),
+            Vector3::new(0.38466, -0.23661, 0.41702),
+            Vector3::new(0.06198, -0.65361, 0.44170),
+        ],
         lines2d: vec![[Vector2::new(317.01928, 245.04923), Vector2::new(319.19993, 233.70367)]],
-        lines3d: vec![[Vector3::new(-0.28900, -0.29550, 0.56466), Vector3::new(-0.14120, -1.27669, 0.37747)]],
+        lines3d: vec![[
+            Vector3::new(-0.28900, -0.29550, 0.56466),
+            Vector3::new(-0.14120, -1.27669, 0.37747),
+        ]],
     };
     let result = estimate_pose(&camera, &corr, &PoseOptions::default()).unwrap();
     // The data are rounded to 1e-5 px: the exact fit is at that level, the old answer at 0.315 px.
@@ -89,7 +108,10 @@ fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
     let (_, second) = result.second_best.expect("the 0.315 px minimum is found too");
     assert!((0.3..0.5).contains(&second), "{second}");
     // Told that the noise is 0.01 px, the data do tell the two apart.
-    let sure = PoseOptions { sigma_px: Some(0.01), ..PoseOptions::default() };
+    let sure = PoseOptions {
+        sigma_px: Some(0.01),
+        ..PoseOptions::default()
+    };
     assert_eq!(estimate_pose(&camera, &corr, &sure).unwrap().status, Status::Success);
 }
 
@@ -123,7 +145,10 @@ fn certified_bounds_are_never_beaten() {
             }
             certified += 1;
             let cost = ReprojectionCost::of(&scene.camera, &corr).cost(&result.pose());
-            assert!(result.gap <= 1e-3 && result.lower_bound <= cost, "f={f} {np}p {nl}l seed {seed}");
+            assert!(
+                result.gap <= 1e-3 && result.lower_bound <= cost,
+                "f={f} {np}p {nl}l seed {seed}"
+            );
             let best = best_known(&scene, &corr, 30, &mut rng);
             assert!(
                 result.lower_bound <= best * (1.0 + 1e-12),
@@ -142,7 +167,12 @@ fn certified_bounds_are_never_beaten() {
 fn a_wrong_local_minimum_is_not_certified() {
     let opts = PoseOptions::default();
     let mut tried = 0;
-    let rows = [(800.0, 6, true), (4000.0, 6, true), (4000.0, 6, false), (15000.0, 10, false)];
+    let rows = [
+        (800.0, 6, true),
+        (4000.0, 6, true),
+        (4000.0, 6, false),
+        (15000.0, 10, false),
+    ];
     for seed in 0..80u64 {
         let (f, n, planar) = rows[seed as usize % rows.len()];
         let scene = visible_scene(f, n, 0, planar, seed);
@@ -157,8 +187,15 @@ fn a_wrong_local_minimum_is_not_certified() {
             if cost.points_behind(&pose) == 0 && c > 1.5 * best + 1.0 {
                 tried += 1;
                 let verdict = certify(&scene.camera, &corr, &pose, c, &Default::default());
-                assert!(!verdict.certified, "f={f} seed {seed}: certified a minimum of cost {c} above {best}");
-                assert!(!(verdict.lower_bound > best), "f={f} seed {seed}: bound {} above {best}", verdict.lower_bound);
+                assert!(
+                    !verdict.certified,
+                    "f={f} seed {seed}: certified a minimum of cost {c} above {best}"
+                );
+                assert!(
+                    !(verdict.lower_bound > best),
+                    "f={f} seed {seed}: bound {} above {best}",
+                    verdict.lower_bound
+                );
                 break;
             }
         }
@@ -194,13 +231,20 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
         assert_eq!(plain.certified, other.certified, "seed {seed}");
         if plain.certified {
             compared += 1;
-            assert!((plain.lower_bound - other.lower_bound).abs() <= 1e-6 * plain.lower_bound.max(1.0), "seed {seed}");
+            assert!(
+                (plain.lower_bound - other.lower_bound).abs() <= 1e-6 * plain.lower_bound.max(1.0),
+                "seed {seed}"
+            );
             assert!(pluecker::geometry::quaternion::rotation_distance(&plain.rotation, &other.rotation) < 1e-8);
         }
         // Skew: the same pixels seen through K with skew are certified with a bound below the cost.
         let skewed_camera = pluecker::Camera { skew: 30.0, ..cam };
         let skewed = Correspondences {
-            points2d: corr.points2d.iter().map(|u| nalgebra::Vector2::new(u.x + 30.0 * (u.y - cam.cy) / cam.fy, u.y)).collect(),
+            points2d: corr
+                .points2d
+                .iter()
+                .map(|u| nalgebra::Vector2::new(u.x + 30.0 * (u.y - cam.cy) / cam.fy, u.y))
+                .collect(),
             lines2d: corr
                 .lines2d
                 .iter()
@@ -212,8 +256,19 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
         if res.certified {
             let cost = ReprojectionCost::of(&skewed_camera, &skewed).cost(&res.pose());
             assert!(res.lower_bound <= cost, "seed {seed}");
-            let best = best_known(&Scene { camera: skewed_camera, ..scene.clone() }, &skewed, 10, &mut rng);
-            assert!(res.lower_bound <= best * (1.0 + 1e-12), "seed {seed}: skewed bound beaten");
+            let best = best_known(
+                &Scene {
+                    camera: skewed_camera,
+                    ..scene.clone()
+                },
+                &skewed,
+                10,
+                &mut rng,
+            );
+            assert!(
+                res.lower_bound <= best * (1.0 + 1e-12),
+                "seed {seed}: skewed bound beaten"
+            );
         }
     }
     assert!(compared >= 6, "only {compared} certified");

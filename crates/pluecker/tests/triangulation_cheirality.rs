@@ -9,9 +9,9 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3, Vector4};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, paper_pose, triangulation_scene};
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::{triangulate_point, PointTriangulation};
 use pluecker::triangulation::quadric::triangulate_quadric;
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
@@ -189,7 +189,10 @@ fn mirrored_images_give_the_same_lines() {
             let a = triangulate_line(&cameras, &mlines, Some(&mcovs), &opts(method)).unwrap();
             let b = triangulate_line(&world, &lines, Some(&covs), &opts(method)).unwrap();
             let b_plucker = plucker::transform(&mirror_world(), b.plucker.coordinates()).normalize();
-            for (other, line, how) in [(&a.report, *a.plucker.coordinates(), "images"), (&b.report, b_plucker, "world")] {
+            for (other, line, how) in [
+                (&a.report, *a.plucker.coordinates(), "images"),
+                (&b.report, b_plucker, "world"),
+            ] {
                 assert_eq!(plain.report.status, other.status, "{what}, mirrored {how}");
                 assert_eq!(
                     plain.report.certificate.certified, other.certificate.certified,

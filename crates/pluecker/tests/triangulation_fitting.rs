@@ -198,5 +198,8 @@ fn residual_samples_end_on_tiny_images_and_refuse_huge_requests() {
     let (line, _) = random_image_primitives(1e-300, &mut Rng::new(4));
     assert!(((line[0] - line[20]) / 1e-300).norm() >= 0.2);
     let huge = residual_samples(usize::MAX, 1000.0, 1.0, 0).unwrap_err();
-    assert!(matches!(huge, pluecker::Error::InvalidOption { ref name, .. } if name == "draws"), "{huge}");
+    assert!(
+        matches!(huge, pluecker::Error::InvalidOption { ref name, .. } if name == "draws"),
+        "{huge}"
+    );
 }

@@ -54,7 +54,10 @@ fn noise_free_lines_are_recovered_by_every_method() {
             assert!(plucker::constraint(r.plucker.coordinates()).abs() < 1e-14);
             assert!((r.plucker.coordinates().norm() - 1.0).abs() < 1e-12);
             // point and direction describe the returned Plücker coordinates.
-            assert!((plucker::from_point_direction(&r.point, &r.direction).normalize() - r.plucker.coordinates()).norm() < 1e-9);
+            assert!(
+                (plucker::from_point_direction(&r.point, &r.direction).normalize() - r.plucker.coordinates()).norm()
+                    < 1e-9
+            );
             assert_eq!(r.report.status, Status::Success);
         }
     }
@@ -290,7 +293,10 @@ fn a_line_far_from_the_origin_is_the_same_error_for_optimal_as_for_local() {
             k * rt
         })
         .collect();
-    let (a, b) = (offset + Vector3::new(0.0, 0.0, 5e4), offset + Vector3::new(1e4, 1e4, 6e4));
+    let (a, b) = (
+        offset + Vector3::new(0.0, 0.0, 5e4),
+        offset + Vector3::new(1e4, 1e4, 6e4),
+    );
     let project = |p: &Matrix3x4<f64>, x: &Vector3<f64>| p * x.push(1.0);
     let lines: Vec<Vector3<f64>> = cameras
         .iter()
@@ -313,12 +319,12 @@ mod batch {
     use super::common::{mask, noisy_segments, seen, segment, segment_tracks};
     use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
     use pluecker::rng::Rng;
-    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
     use pluecker::triangulation::line::{
         lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
     };
-    use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
     use pluecker::triangulation::scenes::arc_cameras;
+    use pluecker::triangulation::tracks::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
     use pluecker::Error;
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -508,8 +514,12 @@ mod batch {
         };
         let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
         assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 2 }) if what == "lines[1]"));
-        assert!(matches!(&batch[3], Err(Error::TooFewCorrespondences { actual, .. }) if actual == "track 3: 1 view(s)"));
-        assert!(matches!(&batch[4], Err(Error::Degenerate { what }) if what.starts_with("lines[4][1] has a zero normal")));
+        assert!(
+            matches!(&batch[3], Err(Error::TooFewCorrespondences { actual, .. }) if actual == "track 3: 1 view(s)")
+        );
+        assert!(
+            matches!(&batch[4], Err(Error::Degenerate { what }) if what.starts_with("lines[4][1] has a zero normal"))
+        );
         assert!(
             matches!(&batch[5], Err(Error::Degenerate { what }) if what == "covariances[5][3] is not positive definite")
         );
@@ -556,7 +566,8 @@ mod batch {
         let endpoints = noisy_segments(&cameras, 2, 1.0, &mut rng);
         let shared = TrackCameras::Shared(&cameras);
         let o = opts(Method::Linear);
-        let run = |tracks: &LineTracks, o: &TriangulationOptions| triangulate_lines(shared, tracks, o, None).unwrap_err();
+        let run =
+            |tracks: &LineTracks, o: &TriangulationOptions| triangulate_lines(shared, tracks, o, None).unwrap_err();
         let tracks = |sigma| LineTracks {
             lines: ImageLines::Segments {
                 endpoints: &endpoints,
@@ -609,5 +620,4 @@ mod batch {
         };
         assert!(triangulate_lines(shared, &empty, &o, None).unwrap().is_empty());
     }
-
 }

@@ -7,10 +7,10 @@ use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{triangulation_scene, TriangulationScene};
 use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
-use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::point::certificate::convexity_test;
 use pluecker::triangulation::point::cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use pluecker::triangulation::point::global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
+use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::views::depth_normalized;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 
@@ -284,7 +284,11 @@ fn a_point_whose_rays_diverge_is_reported_behind_the_cameras() {
         let r = triangulate_point(&scene.cameras, &obs, None, &options(method)).unwrap();
         assert_eq!(r.report.status, Status::BehindCamera, "{method:?}: {:?}", r.report);
         assert!(!r.report.certificate.certified);
-        assert!(!in_front(&vs, &r.point) && (r.point - behind).norm() < 1e-8, "{method:?}: {}", r.point);
+        assert!(
+            !in_front(&vs, &r.point) && (r.point - behind).norm() < 1e-8,
+            "{method:?}: {}",
+            r.point
+        );
     }
 }
 
@@ -477,10 +481,28 @@ fn optimal_reports_exactly_parallel_rays_at_infinity() {
     // Three cameras translated along x, all seeing the point on their optical axes: the rays are
     // parallel, eq. 19 tends to 0 at infinity and has no finite minimiser.
     let cameras: Vec<Matrix3x4<f64>> = (0..3)
-        .map(|i| Matrix3x4::new(800.0, 0.0, 320.0, 800.0 * i as f64, 0.0, 800.0, 240.0, 0.0, 0.0, 0.0, 1.0, 5.0))
+        .map(|i| {
+            Matrix3x4::new(
+                800.0,
+                0.0,
+                320.0,
+                800.0 * i as f64,
+                0.0,
+                800.0,
+                240.0,
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+                5.0,
+            )
+        })
         .collect();
     let observations = vec![Vector2::new(320.0, 240.0); 3];
-    let opts = TriangulationOptions { method: Method::Optimal, ..Default::default() };
+    let opts = TriangulationOptions {
+        method: Method::Optimal,
+        ..Default::default()
+    };
     let r = triangulate_point(&cameras, &observations, None, &opts).unwrap();
     assert_eq!(r.report.status, Status::AtInfinity, "{:?}", r.report);
     assert!(r.point.iter().all(|v| v.is_nan()));

@@ -8,8 +8,8 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
 use pluecker::geometry::quadric::{project_dual, Ellipse, Ellipsoid};
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::fit_conic;
-use pluecker::triangulation::quadric::{triangulate_quadric, triangulate_quadric_points, Matrix5};
 use pluecker::triangulation::quadric::residual::ConicFrame;
+use pluecker::triangulation::quadric::{triangulate_quadric, triangulate_quadric_points, Matrix5};
 use pluecker::triangulation::scenes::quadric_scene;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use pluecker::Error;
@@ -255,11 +255,11 @@ mod batch {
     use nalgebra::{Matrix3, Matrix3x4, Vector2};
     use pluecker::geometry::quadric::{project_dual, Ellipse};
     use pluecker::rng::Rng;
-    use pluecker::triangulation::tracks::TrackCameras;
     use pluecker::triangulation::fitting::fit_conic;
-    use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
     use pluecker::triangulation::quadric::batch::{triangulate_quadrics, QuadricTracks};
+    use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
     use pluecker::triangulation::scenes::quadric_scene;
+    use pluecker::triangulation::tracks::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
     use pluecker::Error;
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -280,7 +280,11 @@ mod batch {
 
     /// Conics fitted to 63 outline points with 1 px noise, and their covariances, of an ellipsoid seen by
     /// `cameras`: the flat `(v, 3, 3)` and `(v, 5, 5)` entries of one track.
-    fn fitted_outlines(cameras: &[Matrix3x4<f64>], dual: &nalgebra::Matrix4<f64>, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
+    fn fitted_outlines(
+        cameras: &[Matrix3x4<f64>],
+        dual: &nalgebra::Matrix4<f64>,
+        rng: &mut Rng,
+    ) -> (Vec<f64>, Vec<f64>) {
         let (mut conics, mut covariances) = (Vec::new(), Vec::new());
         for p in cameras {
             let outline = Ellipse::from_primal(&project_dual(p, dual).try_inverse().unwrap()).unwrap();

@@ -1,12 +1,12 @@
 //! Dual-quaternion and screw forms of a pose (Phong & Horaud 1995, section 2.1).
 
+use crate::convert::pose_from_parts;
 use crate::convert::{matrix_to_py, vector, vector_to_py};
 use crate::errors::{degenerate, guarded};
-use crate::convert::pose_from_parts;
-use pluecker::Pose;
 use nalgebra::SVector;
 use numpy::{PyArray1, PyArray2};
 use pluecker::geometry::dual_quaternion::DualQuaternion;
+use pluecker::Pose;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -22,7 +22,10 @@ pub fn pose_to_dual_quaternion<'py>(
     R: &Bound<'py, PyAny>,
     t: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let Pose { rotation: rot, translation: t } = pose_from_parts("R", R, "t", t)?;
+    let Pose {
+        rotation: rot,
+        translation: t,
+    } = pose_from_parts("R", R, "t", t)?;
     let q = guarded(|| Ok(DualQuaternion::from_rotation_translation(&rot, &t)))?;
     Ok(vector_to_py::<8>(py, &q.to_vector()))
 }
@@ -51,7 +54,10 @@ pub fn pose_to_screw<'py>(
     R: &Bound<'py, PyAny>,
     t: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let Pose { rotation: rot, translation: t } = pose_from_parts("R", R, "t", t)?;
+    let Pose {
+        rotation: rot,
+        translation: t,
+    } = pose_from_parts("R", R, "t", t)?;
     let screw = guarded(|| Ok(DualQuaternion::from_rotation_translation(&rot, &t).to_screw()))?;
     let d = PyDict::new(py);
     d.set_item("d", screw.d)?;

@@ -7,13 +7,13 @@
 //! as a list of `(R, t)`: possibly empty (a degenerate sample), never an error for valid arrays.
 
 use crate::camera::PyCamera;
+use crate::convert::pose_from_parts;
 use crate::convert::{points, segments};
 use crate::errors::{shape_error, solve};
 use crate::fields::Field;
+use crate::pose::correspondences;
 use crate::pose::options::PyPoseOptions;
 use crate::pose::result::PyPoseStage;
-use crate::convert::pose_from_parts;
-use crate::pose::correspondences;
 use nalgebra::{SVector, Vector3};
 use pluecker::pose::minimal;
 use pluecker::pose::refinement::refine_pose as core_refine_pose;
@@ -45,7 +45,11 @@ fn pose_list<'py>(py: Python<'py>, poses: Vec<Pose>) -> PyResult<Bound<'py, PyLi
 /// P3P (Lambda Twist, Persson & Nordberg 2018): the poses that put the three world `points` (3, 3) on
 /// the camera-frame rays `bearings` (3, 3) at positive depth; at most 4.
 #[pyfunction]
-pub fn p3p<'py>(py: Python<'py>, bearings: &Bound<'py, PyAny>, points: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyList>> {
+pub fn p3p<'py>(
+    py: Python<'py>,
+    bearings: &Bound<'py, PyAny>,
+    points: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyList>> {
     let (y, x) = (rows::<3, 3>("bearings", bearings)?, rows::<3, 3>("points", points)?);
     pose_list(py, solve(py, move || Ok(minimal::p3p(&y, &x)))?)
 }
@@ -62,7 +66,10 @@ pub fn p2p1l<'py>(
     endpoints: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyList>> {
     let (y, x) = (rows::<2, 3>("bearings", bearings)?, rows::<2, 3>("points", points)?);
-    let (n, e) = (crate::convert::vector::<3>("normal", normal)?, rows::<2, 3>("endpoints", endpoints)?);
+    let (n, e) = (
+        crate::convert::vector::<3>("normal", normal)?,
+        rows::<2, 3>("endpoints", endpoints)?,
+    );
     pose_list(py, solve(py, move || Ok(minimal::p2p1l(&y, &x, &n, &e)))?)
 }
 
@@ -77,7 +84,10 @@ pub fn p1p2l<'py>(
     normals: &Bound<'py, PyAny>,
     endpoints: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyList>> {
-    let (y, x) = (crate::convert::vector::<3>("bearing", bearing)?, crate::convert::vector::<3>("point", point)?);
+    let (y, x) = (
+        crate::convert::vector::<3>("bearing", bearing)?,
+        crate::convert::vector::<3>("point", point)?,
+    );
     let (n, e) = (rows::<2, 3>("normals", normals)?, pairs::<2>("endpoints", endpoints)?);
     pose_list(py, solve(py, move || Ok(minimal::p1p2l(&y, &x, &n, &e)))?)
 }
@@ -85,7 +95,11 @@ pub fn p1p2l<'py>(
 /// Three lines (Dhome et al. 1989; Chen 1990): the interpretation-plane `normals` (3, 3) and world
 /// `endpoints` (3, 2, 3) of three lines; at most 8 poses.
 #[pyfunction]
-pub fn p3l<'py>(py: Python<'py>, normals: &Bound<'py, PyAny>, endpoints: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyList>> {
+pub fn p3l<'py>(
+    py: Python<'py>,
+    normals: &Bound<'py, PyAny>,
+    endpoints: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyList>> {
     let (n, e) = (rows::<3, 3>("normals", normals)?, pairs::<3>("endpoints", endpoints)?);
     pose_list(py, solve(py, move || Ok(minimal::p3l(&n, &e)))?)
 }
@@ -113,5 +127,9 @@ pub fn refine_pose<'py>(
     let opts = options.map_or_else(PyPoseOptions::default, |o| o.clone()).core(None);
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let (pose, stage) = solve(py, move || Ok(core_refine_pose(&camera, &corr, &start, &opts)))?;
-    Ok((pose.rotation.get(py)?, pose.translation.get(py)?, PyPoseStage::wrap(stage)))
+    Ok((
+        pose.rotation.get(py)?,
+        pose.translation.get(py)?,
+        PyPoseStage::wrap(stage),
+    ))
 }

@@ -90,7 +90,9 @@ pub fn estimate_pose(
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     // A pose from fewer correspondences ends within milliseconds (see `interrupt::run_interruptible`).
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
-    let outcome = run_interruptible(py, None, None, short, move |_| pluecker::estimate_pose(&camera, &corr, &opts))?;
+    let outcome = run_interruptible(py, None, None, short, move |_| {
+        pluecker::estimate_pose(&camera, &corr, &opts)
+    })?;
     let result = Py::new(py, PyPoseResult::wrap(outcome.value))?;
     match outcome.pending {
         // Ctrl-C: the pose reached so far (RANSAC stopped with `ransac.stop == "interrupted"`).

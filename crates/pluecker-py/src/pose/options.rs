@@ -6,10 +6,10 @@
 //! are the core's `certify: Option<CertificateOptions>`, and the robust estimator is the separate
 //! `ransac=` argument of `estimate_pose` (the core's `ransac: Option<RansacOptions>`).
 
+use crate::convert::extract_pose;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::options_class;
-use crate::convert::extract_pose;
 use pluecker::pose::{CertificateOptions, Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
 

@@ -1,9 +1,9 @@
 //! Reprojection errors and the pose covariance (Cramér-Rao bound) at a given pose.
 
 use crate::camera::PyCamera;
+use crate::convert::pose_from_parts;
 use crate::convert::{matrix_to_py, Real};
 use crate::errors::{degenerate, invalid_argument, solve};
-use crate::convert::pose_from_parts;
 use crate::pose::correspondences;
 use numpy::{PyArray1, PyArray2};
 use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};

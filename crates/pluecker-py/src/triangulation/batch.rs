@@ -22,7 +22,6 @@ use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-
 /// The status of a track the core rejected, by error kind (shared by every batch result).
 pub(crate) fn error_status(err: &Error) -> &'static str {
     match err {
@@ -259,10 +258,25 @@ result_class! {
     }
 }
 
-pack_struct!(PyBatchReport { method, cost, lower_bound, relative_gap, certified, certificate, status, nodes, iterations, time_seconds, residual_dof, errors });
+pack_struct!(PyBatchReport {
+    method,
+    cost,
+    lower_bound,
+    relative_gap,
+    certified,
+    certificate,
+    status,
+    nodes,
+    iterations,
+    time_seconds,
+    residual_dof,
+    errors
+});
 
 /// Row-major entries of a matrix.
-pub(crate) fn row_major<const R: usize, const C: usize>(m: &nalgebra::SMatrix<f64, R, C>) -> impl Iterator<Item = f64> + '_ {
+pub(crate) fn row_major<const R: usize, const C: usize>(
+    m: &nalgebra::SMatrix<f64, R, C>,
+) -> impl Iterator<Item = f64> + '_ {
     (0..R).flat_map(move |i| (0..C).map(move |j| m[(i, j)]))
 }
 
@@ -358,4 +372,3 @@ pub(crate) fn per_observation(
     }
     Ok(values)
 }
-

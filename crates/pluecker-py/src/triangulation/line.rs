@@ -9,7 +9,9 @@
 use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
 use super::report::PyTriangulationReport;
 use super::{options_arg, renamed, PyTriangulationOptions};
-use crate::convert::{cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Real};
+use crate::convert::{
+    cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Real,
+};
 use crate::errors::{invalid_argument, shape_error, solve};
 use crate::fields::{result_class, Array, Field};
 use crate::interrupt::{self, batch_result, run_interruptible};
@@ -17,7 +19,9 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation};
+use pluecker::triangulation::line::{
+    lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
+};
 use pluecker::triangulation::Report;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -302,5 +306,17 @@ pub fn triangulate_lines(
     batch_result(py, outcome)
 }
 
-pack_struct!(PyLineTriangulation { plucker, point, direction, chart, covariance });
-pack_struct!(PyLineTriangulations { plucker, point, direction, chart_axes, covariance });
+pack_struct!(PyLineTriangulation {
+    plucker,
+    point,
+    direction,
+    chart,
+    covariance
+});
+pack_struct!(PyLineTriangulations {
+    plucker,
+    point,
+    direction,
+    chart_axes,
+    covariance
+});

@@ -49,7 +49,10 @@ options_class! {
 }
 
 /// The core's options of a triangulation function's `options=` and `method=` (which wins).
-pub(crate) fn options_arg(method: Option<&str>, options: Option<PyRef<'_, PyTriangulationOptions>>) -> PyResult<TriangulationOptions> {
+pub(crate) fn options_arg(
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+) -> PyResult<TriangulationOptions> {
     let mut opts = options.map_or_else(TriangulationOptions::default, |o| o.inner.clone());
     if let Some(method) = method {
         opts.method = Method::parse(method).map_err(to_py_err)?;
@@ -94,4 +97,3 @@ pub fn renamed(err: Error, names: &[(&str, &str)]) -> Error {
         other => other,
     }
 }
-

@@ -39,11 +39,12 @@ pub struct PyPointTriangulation {
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report })
-            .add_subclass(PyPointTriangulation {
+        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
+            PyPointTriangulation {
                 point: result.point,
                 covariance: result.covariance,
-            });
+            },
+        );
         Py::new(py, init)
     }
 }

@@ -217,5 +217,19 @@ pub fn triangulate_quadrics(
     batch_result(py, outcome)
 }
 
-pack_struct!(PyQuadricTriangulation { dual, primal, centre, axes, semi_axes, covariance });
-pack_struct!(PyQuadricTriangulations { dual, primal, centre, semi_axes, axes, covariance });
+pack_struct!(PyQuadricTriangulation {
+    dual,
+    primal,
+    centre,
+    axes,
+    semi_axes,
+    covariance
+});
+pack_struct!(PyQuadricTriangulations {
+    dual,
+    primal,
+    centre,
+    semi_axes,
+    axes,
+    covariance
+});

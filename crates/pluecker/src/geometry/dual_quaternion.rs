@@ -35,7 +35,10 @@ pub struct Screw {
 impl DualQuaternion {
     /// The identity motion.
     pub fn identity() -> Self {
-        DualQuaternion { r: Vector4::new(1.0, 0.0, 0.0, 0.0), s: Vector4::zeros() }
+        DualQuaternion {
+            r: Vector4::new(1.0, 0.0, 0.0, 0.0),
+            s: Vector4::zeros(),
+        }
     }
 
     /// From a rotation matrix and translation (`x_cam = R X_world + t`), eqs. 6-7 inverted.
@@ -49,7 +52,10 @@ impl DualQuaternion {
     pub fn to_rotation_translation(&self) -> (Matrix3<f64>, Vector3<f64>) {
         let n = self.r.norm();
         let (r, s) = (self.r / n, self.s / n);
-        (to_rotation_matrix(&r), vector_part(&(2.0 * w_matrix(&r).transpose() * s)))
+        (
+            to_rotation_matrix(&r),
+            vector_part(&(2.0 * w_matrix(&r).transpose() * s)),
+        )
     }
 
     /// The translation `t` (eq. 7).
@@ -67,7 +73,10 @@ impl DualQuaternion {
         let n = self.r.norm();
         let r = self.r / n;
         let s = self.s / n;
-        DualQuaternion { r, s: s - r * r.dot(&s) }
+        DualQuaternion {
+            r,
+            s: s - r * r.dot(&s),
+        }
     }
 
     /// From Chasles' screw, section 2.1: `r = (cos φ/2, sin φ/2 ř)`,
@@ -79,7 +88,10 @@ impl DualQuaternion {
         let (sn, cs) = (0.5 * screw.angle).sin_cos();
         let r = Vector4::new(cs, sn * dir.x, sn * dir.y, sn * dir.z);
         let sv = 0.5 * screw.d * cs * dir + sn * l.cross(&dir);
-        DualQuaternion { r, s: Vector4::new(-0.5 * screw.d * sn, sv.x, sv.y, sv.z) }
+        DualQuaternion {
+            r,
+            s: Vector4::new(-0.5 * screw.d * sn, sv.x, sv.y, sv.z),
+        }
     }
 
     /// To Chasles' screw. For a pure translation (φ = 0) the axis is the translation direction through
@@ -90,13 +102,23 @@ impl DualQuaternion {
         if angle < 1e-12 {
             let d = t.norm();
             let direction = if d > 0.0 { t / d } else { Vector3::z() };
-            return Screw { d, angle: 0.0, direction, point: Vector3::zeros() };
+            return Screw {
+                d,
+                angle: 0.0,
+                direction,
+                point: Vector3::zeros(),
+            };
         }
         let d = t.dot(&direction);
         let t_perp = t - d * direction;
         // t_perp = (I − R) l for l ⊥ axis, whose solution is l = ½ (t_perp + cot(φ/2) ř × t_perp).
         let point = 0.5 * (t_perp + direction.cross(&t_perp) / (0.5 * angle).tan());
-        Screw { d, angle, direction, point }
+        Screw {
+            d,
+            angle,
+            direction,
+            point,
+        }
     }
 
     /// The composition `self ∘ other`: first `other`, then `self`
@@ -110,7 +132,10 @@ impl DualQuaternion {
 
     /// The inverse motion `(r̄, s̄)` of a rigid motion.
     pub fn inverse(&self) -> Self {
-        DualQuaternion { r: conjugate(&self.r), s: conjugate(&self.s) }
+        DualQuaternion {
+            r: conjugate(&self.r),
+            s: conjugate(&self.s),
+        }
     }
 
     /// Applies the motion to a point: `R X + t`.
@@ -129,7 +154,10 @@ impl DualQuaternion {
 
     /// From the 8-vector `(r, s)`.
     pub fn from_vector(x: &nalgebra::SVector<f64, 8>) -> Self {
-        DualQuaternion { r: x.fixed_rows::<4>(0).into_owned(), s: x.fixed_rows::<4>(4).into_owned() }
+        DualQuaternion {
+            r: x.fixed_rows::<4>(0).into_owned(),
+            s: x.fixed_rows::<4>(4).into_owned(),
+        }
     }
 }
 
@@ -198,7 +226,10 @@ mod tests {
 
     #[test]
     fn normalization_projects_onto_the_constraints() {
-        let q = DualQuaternion { r: Vector4::new(2.0, 0.1, -0.3, 0.2), s: Vector4::new(0.5, 1.0, 2.0, -1.0) };
+        let q = DualQuaternion {
+            r: Vector4::new(2.0, 0.1, -0.3, 0.2),
+            s: Vector4::new(0.5, 1.0, 2.0, -1.0),
+        };
         let (c1, c2) = q.normalized().constraint_residuals();
         assert!(c1.abs() < 1e-12 && c2.abs() < 1e-12);
     }

@@ -36,7 +36,9 @@ pub fn interpretation_plane_normal(camera: &Camera, a: &Vector2<f64>, b: &Vector
     let n = ray(xa).cross(&ray(xb));
     let norm = n.norm();
     if !(norm > MIN_SEGMENT) {
-        return Err(Error::Degenerate { what: "zero-length image segment".into() });
+        return Err(Error::Degenerate {
+            what: "zero-length image segment".into(),
+        });
     }
     Ok(n / norm)
 }
@@ -60,9 +62,14 @@ impl ObjectLine {
         let d = b_s - a_s;
         let len = d.norm();
         if !(len > MIN_SEGMENT * (1.0 / scale + a_s.norm() + b_s.norm())) {
-            return Err(Error::Degenerate { what: "zero-length 3-D segment".into() });
+            return Err(Error::Degenerate {
+                what: "zero-length 3-D segment".into(),
+            });
         }
-        Ok(ObjectLine { point: 0.5 * a + 0.5 * b, direction: d / len })
+        Ok(ObjectLine {
+            point: 0.5 * a + 0.5 * b,
+            direction: d / len,
+        })
     }
 }
 

@@ -348,12 +348,17 @@ impl PluckerLine {
     /// whose direction and moment are not orthogonal to within [`PluckerLine::TOLERANCE`] (not a line).
     pub fn new(l: &Vector6<f64>) -> Result<PluckerLine> {
         if let Some(index) = l.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { what: "Plücker coordinates".into(), index });
+            return Err(Error::NonFinite {
+                what: "Plücker coordinates".into(),
+                index,
+            });
         }
         let (d, m) = direction_moment(l);
         let scale = d.norm() * m.norm();
         if l.norm() == 0.0 {
-            return Err(Error::Degenerate { what: "Plücker coordinates: the zero vector is no line".into() });
+            return Err(Error::Degenerate {
+                what: "Plücker coordinates: the zero vector is no line".into(),
+            });
         }
         if d.dot(&m).abs() > Self::TOLERANCE * scale {
             return Err(Error::Degenerate {
@@ -363,7 +368,9 @@ impl PluckerLine {
                 ),
             });
         }
-        Ok(PluckerLine { coordinates: nearest_line(l).normalize() })
+        Ok(PluckerLine {
+            coordinates: nearest_line(l).normalize(),
+        })
     }
 
     /// The line through the world points `a` and `b` (eqs. 2-3), directed from `b` towards `a`;
@@ -424,12 +431,23 @@ mod tests {
             let l = line.coordinates();
             assert!((l.norm() - 1.0).abs() < 1e-15);
             assert!(constraint(l).abs() < 1e-15, "eq. 4: {:e}", constraint(l));
-            let moved = line.transform(&Matrix4::new_scaling(2.0).append_translation(&Vector3::new(1.0, 2.0, 3.0))).unwrap();
+            let moved = line
+                .transform(&Matrix4::new_scaling(2.0).append_translation(&Vector3::new(1.0, 2.0, 3.0)))
+                .unwrap();
             assert!(constraint(moved.coordinates()).abs() < 1e-15);
         }
-        assert!(matches!(PluckerLine::new(&Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0)), Err(Error::Degenerate { .. })));
-        assert!(matches!(PluckerLine::new(&Vector6::zeros()), Err(Error::Degenerate { .. })));
-        assert!(matches!(PluckerLine::new(&Vector6::new(f64::NAN, 0.0, 0.0, 0.0, 0.0, 1.0)), Err(Error::NonFinite { .. })));
+        assert!(matches!(
+            PluckerLine::new(&Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0)),
+            Err(Error::Degenerate { .. })
+        ));
+        assert!(matches!(
+            PluckerLine::new(&Vector6::zeros()),
+            Err(Error::Degenerate { .. })
+        ));
+        assert!(matches!(
+            PluckerLine::new(&Vector6::new(f64::NAN, 0.0, 0.0, 0.0, 0.0, 1.0)),
+            Err(Error::NonFinite { .. })
+        ));
         assert!(matches!(PluckerLine::through(&a, &a), Err(Error::Degenerate { .. })));
     }
     use crate::rng::Rng;

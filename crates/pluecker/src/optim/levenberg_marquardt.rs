@@ -18,12 +18,20 @@ pub struct LevenbergMarquardtOptions {
 
 impl Default for LevenbergMarquardtOptions {
     fn default() -> Self {
-        LevenbergMarquardtOptions { initial_damping: 1e-3, max_rejections: 40, stopping: StoppingCriteria::default() }
+        LevenbergMarquardtOptions {
+            initial_damping: 1e-3,
+            max_rejections: 40,
+            stopping: StoppingCriteria::default(),
+        }
     }
 }
 
 /// Minimises `obj` from `x0` by Levenberg-Marquardt.
-pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &LevenbergMarquardtOptions) -> (O::Point, Summary) {
+pub fn minimize<const N: usize, O: Objective<N>>(
+    obj: &O,
+    x0: O::Point,
+    opts: &LevenbergMarquardtOptions,
+) -> (O::Point, Summary) {
     let mut x = x0;
     let mut lin = obj.linearize(&x);
     let initial_cost = lin.cost;
@@ -69,5 +77,14 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &L
             }
         }
     };
-    (x, Summary { iterations, evaluations, initial_cost, final_cost: lin.cost, termination })
+    (
+        x,
+        Summary {
+            iterations,
+            evaluations,
+            initial_cost,
+            final_cost: lin.cost,
+            termination,
+        },
+    )
 }

@@ -6,7 +6,11 @@ use super::problem::{Objective, StoppingCriteria, Summary, Termination};
 
 /// Minimises `obj` from `x0` by undamped Newton steps. Needs [`Objective::exact_hessian`]; without it
 /// the Gauss-Newton Hessian is used (Gauss-Newton's method).
-pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, stopping: &StoppingCriteria) -> (O::Point, Summary) {
+pub fn minimize<const N: usize, O: Objective<N>>(
+    obj: &O,
+    x0: O::Point,
+    stopping: &StoppingCriteria,
+) -> (O::Point, Summary) {
     let mut x = x0;
     let mut lin = obj.linearize(&x);
     let initial_cost = lin.cost;
@@ -20,7 +24,10 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, stopping
         }
         let h = obj.exact_hessian(&x).unwrap_or(lin.gauss_newton);
         let dense = nalgebra::DMatrix::from_column_slice(N, N, h.as_slice());
-        let Some(d) = dense.lu().solve(&nalgebra::DVector::from_column_slice((-lin.gradient).as_slice())) else {
+        let Some(d) = dense
+            .lu()
+            .solve(&nalgebra::DVector::from_column_slice((-lin.gradient).as_slice()))
+        else {
             break Termination::SingularHessian;
         };
         let d = nalgebra::SVector::<f64, N>::from_column_slice(d.as_slice());
@@ -32,8 +39,21 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, stopping
         lin = obj.linearize(&x);
         evaluations += 1;
         if stopping.step_is_negligible(&d, 1.0) {
-            break if lin.cost.is_finite() { Termination::StepTolerance } else { Termination::NonFiniteCost };
+            break if lin.cost.is_finite() {
+                Termination::StepTolerance
+            } else {
+                Termination::NonFiniteCost
+            };
         }
     };
-    (x, Summary { iterations, evaluations, initial_cost, final_cost: lin.cost, termination })
+    (
+        x,
+        Summary {
+            iterations,
+            evaluations,
+            initial_cost,
+            final_cost: lin.cost,
+            termination,
+        },
+    )
 }

@@ -115,7 +115,12 @@ pub struct StoppingCriteria {
 
 impl Default for StoppingCriteria {
     fn default() -> Self {
-        StoppingCriteria { gradient_tolerance: 1e-12, cost_tolerance: 1e-24, step_tolerance: 1e-12, max_iterations: 200 }
+        StoppingCriteria {
+            gradient_tolerance: 1e-12,
+            cost_tolerance: 1e-24,
+            step_tolerance: 1e-12,
+            max_iterations: 200,
+        }
     }
 }
 

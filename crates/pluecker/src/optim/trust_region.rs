@@ -57,7 +57,11 @@ impl Default for TrustRegionOptions {
 /// Minimises `obj` from `x0` by the trust-region method of section 4.1.
 ///
 /// Each accepted step decreases the cost (Figure 4). Returns the last accepted point and a summary.
-pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &TrustRegionOptions) -> (O::Point, Summary) {
+pub fn minimize<const N: usize, O: Objective<N>>(
+    obj: &O,
+    x0: O::Point,
+    opts: &TrustRegionOptions,
+) -> (O::Point, Summary) {
     let mut x = x0;
     let mut delta = opts.initial_radius;
     let mut lin = obj.linearize(&x);
@@ -65,7 +69,16 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &T
     let mut evaluations = 1;
     let mut iterations = 0;
     let finish = |x, cost, iterations, evaluations, termination| {
-        (x, Summary { iterations, evaluations, initial_cost, final_cost: cost, termination })
+        (
+            x,
+            Summary {
+                iterations,
+                evaluations,
+                initial_cost,
+                final_cost: cost,
+                termination,
+            },
+        )
     };
     loop {
         // k.2
@@ -101,7 +114,13 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &T
                 let trial_cost = obj.cost(&trial);
                 evaluations += 1;
                 if trial_cost <= lin.cost {
-                    return finish(trial, trial_cost, iterations + 1, evaluations, Termination::StepTolerance);
+                    return finish(
+                        trial,
+                        trial_cost,
+                        iterations + 1,
+                        evaluations,
+                        Termination::StepTolerance,
+                    );
                 }
                 return finish(x, lin.cost, iterations, evaluations, Termination::StepTolerance);
             }
@@ -112,7 +131,11 @@ pub fn minimize<const N: usize, O: Objective<N>>(obj: &O, x0: O::Point, opts: &T
             evaluations += 1;
             let actual = lin.cost - trial_lin.cost;
             // eq. 28; a zero predicted decrease means the model is flat: treat as a failed step.
-            let ratio = if step.predicted_decrease > 0.0 { actual / step.predicted_decrease } else { -1.0 };
+            let ratio = if step.predicted_decrease > 0.0 {
+                actual / step.predicted_decrease
+            } else {
+                -1.0
+            };
             if trial_lin.cost.is_finite() && ratio >= opts.accept_ratio {
                 // k.5
                 if ratio >= opts.expand_ratio {

@@ -125,7 +125,12 @@ pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> 
         };
         solve(&[a, b, c])
             .into_iter()
-            .filter(|Pose { rotation: r, translation: t }| r.iter().chain(t.iter()).all(|v| v.is_finite()))
+            .filter(
+                |Pose {
+                     rotation: r,
+                     translation: t,
+                 }| r.iter().chain(t.iter()).all(|v| v.is_finite()),
+            )
             .collect()
     })
 }
@@ -171,7 +176,11 @@ mod tests {
         let all = samples(&many);
         assert_eq!(all, samples(&many), "seeded: the same data give the same samples");
         assert!(all.len() > SPREAD_SAMPLES && all.len() <= SAMPLE_POOL);
-        assert!(all.windows(2).all(|w| footprint(&many, &w[0]) >= footprint(&many, &w[1])), "widest first");
+        assert!(
+            all.windows(2)
+                .all(|w| footprint(&many, &w[0]) >= footprint(&many, &w[1])),
+            "widest first"
+        );
         let chosen = &all[..SPREAD_SAMPLES];
         // The kept triples are the widest of the pool: wider than a typical random triangle (mean
         // doubled area of a random triangle in the unit square is 11/72 ≈ 0.15).
@@ -183,10 +192,17 @@ mod tests {
         for (np, nl) in [(10, 0), (0, 10), (5, 5), (4, 0), (0, 4), (2, 2)] {
             for seed in 0..20 {
                 let scene = visible_scene(4000.0, np, nl, false, seed);
-                let hypotheses: Vec<Pose> = minimal_hypotheses(&scene.camera, &scene.correspondences).flatten().collect();
-                let found = hypotheses.iter().any(|Pose { rotation: r, translation: t }| {
-                    rotation_distance(r, &scene.rotation) < 1e-6 && (t - scene.translation).norm() < 1e-5
-                });
+                let hypotheses: Vec<Pose> = minimal_hypotheses(&scene.camera, &scene.correspondences)
+                    .flatten()
+                    .collect();
+                let found = hypotheses.iter().any(
+                    |Pose {
+                         rotation: r,
+                         translation: t,
+                     }| {
+                        rotation_distance(r, &scene.rotation) < 1e-6 && (t - scene.translation).norm() < 1e-5
+                    },
+                );
                 assert!(found, "{np} points, {nl} lines, seed {seed}");
             }
         }

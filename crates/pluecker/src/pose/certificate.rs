@@ -42,13 +42,13 @@
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
 //! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
 
-use crate::interrupt::stop_reason;
 use super::correspondences::Correspondences;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::global::relative_gap;
+use crate::interrupt::stop_reason;
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 
@@ -64,7 +64,10 @@ pub struct CertificateOptions {
 
 impl Default for CertificateOptions {
     fn default() -> Self {
-        CertificateOptions { gap: 1e-3, max_nodes: 20_000 }
+        CertificateOptions {
+            gap: 1e-3,
+            max_nodes: 20_000,
+        }
     }
 }
 
@@ -141,7 +144,6 @@ impl Certification {
         }
     }
 }
-
 
 /// Partners per point for its depth bound (the widest-apart in the image of a small spread set).
 const DEPTH_PARTNERS: usize = 16;
@@ -233,7 +235,9 @@ impl<'c> Problem<'c> {
         let eps0 = (2.0 * f_hat).sqrt();
         let alpha = eps0 / s_min;
         if !(alpha < 0.25) {
-            return Err(format!("not proved: residuals too large ({eps0:.3e} px) for the angle bounds"));
+            return Err(format!(
+                "not proved: residuals too large ({eps0:.3e} px) for the angle bounds"
+            ));
         }
         let bearings: Vec<Vector3<f64>> = corr
             .points2d
@@ -399,7 +403,9 @@ fn localise(
         for cell in level {
             out.nodes += 1;
             if out.nodes > max_nodes {
-                return Err(format!("not proved: the rotation search reached max_nodes = {max_nodes}"));
+                return Err(format!(
+                    "not proved: the rotation search reached max_nodes = {max_nodes}"
+                ));
             }
             if let Some(reason) = stop_reason() {
                 return Err(format!("not proved: {} during the rotation search", reason.describe()));
@@ -436,7 +442,9 @@ fn localise(
                 let extent = whitening
                     .ellipsoid_extent(&c, slack)
                     .ok_or("not proved: the minorant does not fix the translation")?;
-                let radius = whitening.length(&cell.centre, &(t_star - pose.translation)) + cell.half * whitening.cube_scale + extent;
+                let radius = whitening.length(&cell.centre, &(t_star - pose.translation))
+                    + cell.half * whitening.cube_scale
+                    + extent;
                 if radius <= target {
                     out.radius = out.radius.max(radius);
                     continue;
@@ -560,7 +568,8 @@ impl RayCurvature {
             .map(|x| {
                 let y = pose.rotation * x;
                 let p = y + pose.translation;
-                let d_pi = SMatrix::<f64, 2, 3>::new(1.0 / p.z, 0.0, -p.x / (p.z * p.z), 0.0, 1.0 / p.z, -p.y / (p.z * p.z));
+                let d_pi =
+                    SMatrix::<f64, 2, 3>::new(1.0 / p.z, 0.0, -p.x / (p.z * p.z), 0.0, 1.0 / p.z, -p.y / (p.z * p.z));
                 let pt = tangent_map(&y) * t;
                 let g = problem.k2 * d_pi * pt;
                 PointRay {
@@ -584,7 +593,8 @@ impl RayCurvature {
                 let w0 = (problem.g * m0.xy()).norm();
                 // m = A × B moves as m' = N a, N = [[B]×[y_A]× − [A]×[y_B]×, [A]× − [B]×].
                 let mut n0 = SMatrix::<f64, 3, 6>::zeros();
-                n0.fixed_view_mut::<3, 3>(0, 0).copy_from(&(skew(&b) * skew(&y_a) - skew(&a) * skew(&y_b)));
+                n0.fixed_view_mut::<3, 3>(0, 0)
+                    .copy_from(&(skew(&b) * skew(&y_a) - skew(&a) * skew(&y_b)));
                 n0.fixed_view_mut::<3, 3>(0, 3).copy_from(&(skew(&a) - skew(&b)));
                 let nt = n0 * t;
                 let q_t = problem.g * nt.fixed_view::<2, 6>(0, 0);
@@ -599,7 +609,8 @@ impl RayCurvature {
                     let g = (e_bar.transpose() * nt - w1 * r0) / w0;
                     // n''(0) = ē·(A'' × B + A × B'' + 2 A' × B') = aᵀ H a.
                     let mut h = SMatrix::<f64, 6, 6>::zeros();
-                    let rotation = double_cross_form(&y_a, &b.cross(&e_bar)) + double_cross_form(&y_b, &e_bar.cross(&a));
+                    let rotation =
+                        double_cross_form(&y_a, &b.cross(&e_bar)) + double_cross_form(&y_b, &e_bar.cross(&a));
                     h.fixed_view_mut::<3, 3>(0, 0).copy_from(&rotation);
                     let cross = p_a.transpose() * skew(&e_bar) * p_b;
                     h -= cross + cross.transpose();
@@ -626,15 +637,18 @@ impl RayCurvature {
                 }
             })
             .collect::<Vec<_>>();
-        lines.iter().all(|l: &LineRay| l.w0 > 0.0 && l.w0.is_finite()).then_some(RayCurvature {
-            alpha_omega: whitening.alpha_omega,
-            alpha_tau: whitening.alpha_tau,
-            k_norm: problem.k_norm,
-            g_norm: problem.g_norm,
-            mu,
-            points,
-            lines,
-        })
+        lines
+            .iter()
+            .all(|l: &LineRay| l.w0 > 0.0 && l.w0.is_finite())
+            .then_some(RayCurvature {
+                alpha_omega: whitening.alpha_omega,
+                alpha_tau: whitening.alpha_tau,
+                k_norm: problem.k_norm,
+                g_norm: problem.g_norm,
+                mu,
+                points,
+                lines,
+            })
     }
 
     /// `K` on the whitened ball of radius `s`, or `None` when a depth or a projected line may vanish
@@ -679,7 +693,8 @@ impl RayCurvature {
             let rho = (line.w1_0 + s * w2) / w_lo;
             rate = rate.max(rho);
             for end in &line.endpoints {
-                let n3 = a_w.powi(3) * (line.ya * (end.cross_b + s * v_b * end.e_norm) + line.yb * (end.cross_a + s * v_a * end.e_norm))
+                let n3 = a_w.powi(3)
+                    * (line.ya * (end.cross_b + s * v_b * end.e_norm) + line.yb * (end.cross_a + s * v_a * end.e_norm))
                     + end.e_norm * mixed3;
                 let n2 = end.n2_exact + s * n3;
                 // |r(s)| ≤ |r(0)| + s σ with σ a bound on |r'| along the ray, confirmed by Grönwall
@@ -723,7 +738,11 @@ fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64) -
             rho * i as f64 / LOCAL_INTERVALS as f64,
             rho * (i + 1) as f64 / LOCAL_INTERVALS as f64,
         );
-        let q_min = if (a..=b).contains(&vertex) { q(vertex) } else { q(a).min(q(b)) };
+        let q_min = if (a..=b).contains(&vertex) {
+            q(vertex)
+        } else {
+            q(a).min(q(b))
+        };
         let h = q_min.max(0.0).sqrt() - 0.5 * k * b * b;
         least = least.min(0.5 * h.max(0.0).powi(2));
     }
@@ -755,7 +774,13 @@ const BALL_FACTORS: [f64; 5] = [64.0, 16.0, 6.0, 3.0, 2.0];
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
 /// module documentation). Never fails: a certificate that cannot be computed is `certified = false`
 /// with the reason.
-pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, options: &CertificateOptions) -> Certification {
+pub fn certify(
+    camera: &Camera,
+    corr: &Correspondences,
+    pose: &Pose,
+    cost: f64,
+    options: &CertificateOptions,
+) -> Certification {
     if !(cost.is_finite() && cost >= 0.0) {
         return Certification::none(Certificate::NotProved("not attempted: the cost is not finite".into()));
     }
@@ -770,7 +795,9 @@ pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, 
     let whitened = whitening.t.transpose() * lin.gauss_newton * whitening.t;
     let eigen = whitened.symmetric_eigenvalues();
     let Some(curvature) = RayCurvature::new(&problem, &whitening, pose, eigen.max().max(0.0).sqrt()) else {
-        return Certification::none(Certificate::NotProved("not proved: a projected line vanishes at the pose".into()));
+        return Certification::none(Certificate::NotProved(
+            "not proved: a projected line vanishes at the pose".into(),
+        ));
     };
     let model = LocalModel {
         cost: lin.cost,
@@ -780,9 +807,11 @@ pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, 
     };
     let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some(target) = BALL_FACTORS.iter().map(|f| f * unit).find(|&radius| {
-        model.bound(radius).is_some_and(|lower| gap_of(lower) <= options.gap)
-    }) else {
+    let Some(target) = BALL_FACTORS
+        .iter()
+        .map(|f| f * unit)
+        .find(|&radius| model.bound(radius).is_some_and(|lower| gap_of(lower) <= options.gap))
+    else {
         return Certification::none(Certificate::NotProved(format!(
             "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
             (2.0 * cost).sqrt()
@@ -793,7 +822,9 @@ pub fn certify(camera: &Camera, corr: &Correspondences, pose: &Pose, cost: f64, 
         Err(why) => return Certification::none(Certificate::NotProved(why)),
     };
     let Some(lower_bound) = model.bound(localised.radius.min(target)) else {
-        return Certification::none(Certificate::NotProved("not proved: a depth may vanish within the localised ball".into()));
+        return Certification::none(Certificate::NotProved(
+            "not proved: a depth may vanish within the localised ball".into(),
+        ));
     };
     let gap = gap_of(lower_bound);
     let certified = gap <= options.gap;
@@ -830,7 +861,10 @@ mod tests {
             let m = a * a.transpose() + Matrix3::identity() * if i % 3 == 0 { 0.0 } else { 1e-3 };
             let exact = m.symmetric_eigenvalues().max();
             let mine = largest_eigenvalue(&m);
-            assert!(mine >= exact && mine <= exact * (1.0 + 1e-7) + 1e-300, "{mine} vs {exact}");
+            assert!(
+                mine >= exact && mine <= exact * (1.0 + 1e-7) + 1e-300,
+                "{mine} vs {exact}"
+            );
         }
         assert_eq!(largest_eigenvalue(&(Matrix3::identity() * 2.0)), 2.0 * (1.0 + 1e-9));
     }
@@ -839,22 +873,34 @@ mod tests {
     fn ray_curvature_bounds_the_second_derivative() {
         let mut checked = 0;
         let mut worst: f64 = 0.0;
-        for (f, np, nl, planar) in [(250.0, 10, 0, false), (800.0, 20, 20, false), (4000.0, 30, 10, true), (15000.0, 10, 5, false)] {
+        for (f, np, nl, planar) in [
+            (250.0, 10, 0, false),
+            (800.0, 20, 20, false),
+            (4000.0, 30, 10, true),
+            (15000.0, 10, 5, false),
+        ] {
             for seed in 0..4 {
                 let scene = visible_scene(f, np, nl, planar, seed);
                 let mut rng = Rng::new(70 + seed);
                 let corr = scene.noisy(1.0, true, &mut rng);
                 let cost = ReprojectionCost::of(&scene.camera, &corr);
                 let truth = Pose::new(scene.rotation, scene.translation);
-                let nudged = Pose::new(exp_so3(&Vector3::new(2e-3, -1e-3, 1e-3)) * truth.rotation, truth.translation + Vector3::new(1e-3, 2e-3, -3e-3));
+                let nudged = Pose::new(
+                    exp_so3(&Vector3::new(2e-3, -1e-3, 1e-3)) * truth.rotation,
+                    truth.translation + Vector3::new(1e-3, 2e-3, -3e-3),
+                );
                 for pose in [truth, nudged] {
                     let f_hat = cost.cost(&pose);
                     let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
                     let lin = cost.linearize(&pose);
                     let whitening = Whitening::new(&lin.gauss_newton).unwrap();
-                    let mu = (whitening.t.transpose() * lin.gauss_newton * whitening.t).symmetric_eigenvalues().max().sqrt();
+                    let mu = (whitening.t.transpose() * lin.gauss_newton * whitening.t)
+                        .symmetric_eigenvalues()
+                        .max()
+                        .sqrt();
                     let radius = 3.0 * ((2.0 * f_hat).sqrt() + 0.1);
-                    let Some(k) = RayCurvature::new(&problem, &whitening, &pose, mu).and_then(|c| c.bound(radius)) else {
+                    let Some(k) = RayCurvature::new(&problem, &whitening, &pose, mu).and_then(|c| c.bound(radius))
+                    else {
                         continue;
                     };
                     for _ in 0..20 {
@@ -877,7 +923,10 @@ mod tests {
                                 .sum::<f64>()
                                 .sqrt();
                             // Central differences: error O(h² r'''), far below K here.
-                            assert!(second <= k * 1.01 + 1e-9, "f={f} {np}p {nl}l seed {seed}: ‖r''‖ = {second} > K = {k}");
+                            assert!(
+                                second <= k * 1.01 + 1e-9,
+                                "f={f} {np}p {nl}l seed {seed}: ‖r''‖ = {second} > K = {k}"
+                            );
                             checked += 1;
                             worst = worst.max(second / k);
                         }
@@ -887,6 +936,10 @@ mod tests {
         }
         assert!(checked > 1000, "only {checked} samples");
         // Not vacuous: the bound is within two orders of magnitude of what the rays reach.
-        assert!(worst > 1e-2, "K is {:.0}x the largest sampled second derivative", 1.0 / worst);
+        assert!(
+            worst > 1e-2,
+            "K is {:.0}x the largest sampled second derivative",
+            1.0 / worst
+        );
     }
 }

@@ -414,7 +414,10 @@ fn short_segment(kind: &str, i: usize, n_lines: usize) -> Error {
         format!("lines{kind}[{i}] is shorter than 1e-12 of the extent of the data")
     } else {
         let k = 2 * (i - n_lines);
-        format!("points{kind}[{k}] and points{kind}[{}] are closer than 1e-12 of the extent of the data", k + 1)
+        format!(
+            "points{kind}[{k}] and points{kind}[{}] are closer than 1e-12 of the extent of the data",
+            k + 1
+        )
     };
     Error::Degenerate { what }
 }

@@ -13,11 +13,11 @@
 //! The robust pipeline ([`super::robust::pipeline`]) shares stages 4-6.
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
+use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
+use super::certificate::{certify, Certificate, Certification};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
-use super::certificate::{certify, Certificate, Certification};
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
@@ -40,9 +40,9 @@ fn to_world(x: &SVector<f64, 8>, cond: &Conditioning) -> Pose {
 
 /// The user's starting pose in the conditioned frame, if any.
 fn user_start(opts: &PoseOptions, cond: &Conditioning) -> Option<DualQuaternion> {
-    opts.initial_pose
-        .as_ref()
-        .map(|p| DualQuaternion::from_rotation_translation(&p.rotation, &cond.pose_from_world(&p.rotation, &p.translation)))
+    opts.initial_pose.as_ref().map(|p| {
+        DualQuaternion::from_rotation_translation(&p.rotation, &cond.pose_from_world(&p.rotation, &p.translation))
+    })
 }
 
 /// What the restart logic needs to know about the object (in the frame of the cost).
@@ -403,7 +403,13 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         let to_world = |p: &Pose| Pose::new(p.rotation, cond.pose_to_world(&p.rotation, &p.translation));
         let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
         let n = conditioned.n_points() + conditioned.n_lines();
-        let minima = search(&cost, &starts, minimal_hypotheses(camera, conditioned), is_exhaustive(n), opts);
+        let minima = search(
+            &cost,
+            &starts,
+            minimal_hypotheses(camera, conditioned),
+            is_exhaustive(n),
+            opts,
+        );
         let margin = 0.5 * opts.ambiguity_threshold * ambiguity_sigma2(opts.sigma_px, minima.best_cost(), 2 * n);
         let choice = minima.choose(margin).expect("at least the algebraic start was refined");
         let best = minima.found[choice.best];
@@ -424,13 +430,16 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         let sigma2 = opts.sigma_px.map_or(1.0, |s| s * s);
         let behind_margin = 0.5 * opts.ambiguity_threshold * sigma2;
         let bound = (best.cost - behind_margin).min(best.cost / BEHIND_CAMERA_RATIO);
-        let behind_cost = (matches!(status, Status::Success | Status::Ambiguous) && 2.0 * best.cost > sigma2 * (2 * n) as f64)
+        let behind_cost = (matches!(status, Status::Success | Status::Ambiguous)
+            && 2.0 * best.cost > sigma2 * (2 * n) as f64)
             .then(|| behind_camera_cost(camera, conditioned, bound))
             .flatten();
         if behind_cost.is_some() {
             status = Status::PointsBehindCamera;
         }
-        let second_best = choice.second.map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
+        let second_best = choice
+            .second
+            .map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
         let certification = match &opts.certify {
             None => Certification::none(Certificate::NotRequested),
             Some(_) if status != Status::Success => Certification::none(Certificate::NotProved(format!(
@@ -443,7 +452,13 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
         let why = "no refinement: the pose is not a minimum of the reprojection error";
-        (pose, status, None, Certification::none(Certificate::NotProved(why.into())), None)
+        (
+            pose,
+            status,
+            None,
+            Certification::none(Certificate::NotProved(why.into())),
+            None,
+        )
     };
     Ok(assemble(
         camera,

@@ -17,8 +17,8 @@ pub mod reprojection;
 mod result;
 pub mod robust;
 
-pub use correspondences::{Conditioning, Correspondences};
 pub use certificate::{Certificate, CertificateOptions};
+pub use correspondences::{Conditioning, Correspondences};
 pub use estimate::{algebraic_stage, estimate_pose, Estimate};
 pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};
@@ -28,10 +28,10 @@ use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
+use crate::optim::Summary;
 use crate::optim::{StoppingCriteria, Termination, TrustRegionOptions};
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use reprojection::Pose;
-use crate::optim::Summary;
 use std::time::Instant;
 
 /// The estimators. All of them accept points, lines, or both (the linear one uses points only).
@@ -218,7 +218,11 @@ impl PoseOptions {
         if let Some(certify) = &self.certify {
             certify.validate()?;
         }
-        if let Some(crate::Pose { rotation: r, translation: t }) = &self.initial_pose {
+        if let Some(crate::Pose {
+            rotation: r,
+            translation: t,
+        }) = &self.initial_pose
+        {
             if r.iter().chain(t.iter()).any(|v| !v.is_finite())
                 || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
                 || r.determinant() <= 0.0
@@ -414,7 +418,13 @@ impl CovarianceSource {
 }
 
 /// A stage report from a solver's summary; `started` is when the stage's clock started.
-pub(crate) fn stage(name: &str, cost_kind: &'static str, pose: &Pose, summary: &Summary, started: Instant) -> StageReport {
+pub(crate) fn stage(
+    name: &str,
+    cost_kind: &'static str,
+    pose: &Pose,
+    summary: &Summary,
+    started: Instant,
+) -> StageReport {
     StageReport {
         name: name.into(),
         cost_kind,

@@ -108,7 +108,10 @@ impl Minima {
     /// every refinement run.
     pub fn report(&self, best: usize, cond: &Conditioning) -> StageReport {
         let m = &self.found[best];
-        let world = Pose::new(m.pose.rotation, cond.pose_to_world(&m.pose.rotation, &m.pose.translation));
+        let world = Pose::new(
+            m.pose.rotation,
+            cond.pose_to_world(&m.pose.rotation, &m.pose.translation),
+        );
         let total = Summary {
             iterations: self.iterations,
             evaluations: self.evaluations,
@@ -125,7 +128,9 @@ impl Minima {
     }
 
     fn near(&self, pose: &Pose, radius: f64) -> bool {
-        self.found.iter().any(|m| rotation_distance(&m.pose.rotation, &pose.rotation) < radius)
+        self.found
+            .iter()
+            .any(|m| rotation_distance(&m.pose.rotation, &pose.rotation) < radius)
     }
 
     fn add(&mut self, m: LocalMinimum, summary: &Summary) {
@@ -135,7 +140,8 @@ impl Minima {
         self.iterations += summary.iterations;
         self.evaluations += summary.evaluations;
         let same = self.found.iter().position(|f| {
-            rotation_distance(&f.pose.rotation, &m.pose.rotation) < SAME_MINIMUM && (f.pose.translation - m.pose.translation).norm() < SAME_MINIMUM
+            rotation_distance(&f.pose.rotation, &m.pose.rotation) < SAME_MINIMUM
+                && (f.pose.translation - m.pose.translation).norm() < SAME_MINIMUM
         });
         match same {
             Some(i) if self.found[i].cost <= m.cost => {}
@@ -170,7 +176,11 @@ impl Minima {
         };
         let second = cheapest(&in_front, Some(best));
         let ambiguous = second.is_some_and(|s| self.found[s].cost - self.found[best].cost <= margin);
-        Some(Choice { best, second, ambiguous })
+        Some(Choice {
+            best,
+            second,
+            ambiguous,
+        })
     }
 }
 
@@ -249,7 +259,12 @@ pub fn search(
             }
             refine_promising(&mut minima, &group);
             let best = minima.choose(0.0).map(|c| &minima.found[c.best]);
-            if best.is_some_and(|b| b.behind == 0 && group.iter().any(|h| rotation_distance(&h.rotation, &b.pose.rotation) < SAME_BASIN)) {
+            if best.is_some_and(|b| {
+                b.behind == 0
+                    && group
+                        .iter()
+                        .any(|h| rotation_distance(&h.rotation, &b.pose.rotation) < SAME_BASIN)
+            }) {
                 break;
             }
         }
@@ -282,7 +297,10 @@ pub(crate) fn refine_conditioned(
     opts: &PoseOptions,
 ) -> (Pose, StageReport) {
     let started = Instant::now();
-    let x0 = Pose::new(initial.rotation, cond.pose_from_world(&initial.rotation, &initial.translation));
+    let x0 = Pose::new(
+        initial.rotation,
+        cond.pose_from_world(&initial.rotation, &initial.translation),
+    );
     let (x, summary) = trust_region::minimize(cost, x0, &settings(opts));
     let pose = Pose::new(x.rotation, cond.pose_to_world(&x.rotation, &x.translation));
     (pose, stage("refinement", "reprojection", &pose, &summary, started))

@@ -249,7 +249,9 @@ impl<'a> ReprojectionCost<'a> {
         let mut total = 0.0;
         for i0 in (0..full).step_by(LANES) {
             let p = self.point_lanes::<LANES, false>(pose, i0);
-            total += (0..LANES).map(|l| 0.5 * (p.ru[l] * p.ru[l] + p.rv[l] * p.rv[l])).sum::<f64>();
+            total += (0..LANES)
+                .map(|l| 0.5 * (p.ru[l] * p.ru[l] + p.rv[l] * p.rv[l]))
+                .sum::<f64>();
             if !(total < bound) {
                 return None;
             }
@@ -355,7 +357,10 @@ impl Objective<6> for ReprojectionCost<'_> {
 
     fn retract(&self, pose: &Pose, d: &SVector<f64, 6>) -> Pose {
         let omega = Vector3::new(d[0], d[1], d[2]);
-        Pose::new(exp_so3(&omega) * pose.rotation, pose.translation + Vector3::new(d[3], d[4], d[5]))
+        Pose::new(
+            exp_so3(&omega) * pose.rotation,
+            pose.translation + Vector3::new(d[3], d[4], d[5]),
+        )
     }
 }
 
@@ -454,7 +459,10 @@ mod tests {
                 .collect();
             let cost = ReprojectionCost::new(cam, &p2, &p3, &l2, &l3);
             // Perturb away from the data so the gradient is not ~0.
-            let pose = Pose::new(exp_so3(&Vector3::new(0.01, -0.02, 0.03)) * rot, t + Vector3::new(0.1, 0.0, -0.2));
+            let pose = Pose::new(
+                exp_so3(&Vector3::new(0.01, -0.02, 0.03)) * rot,
+                t + Vector3::new(0.1, 0.0, -0.2),
+            );
             assert!(gradient_error(&cost, &pose, 1e-6) < 1e-6);
             // Line residuals vanish at the true pose for exact endpoints.
             let l2_exact: Vec<[Vector2<f64>; 2]> = l3

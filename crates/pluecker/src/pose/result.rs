@@ -40,15 +40,28 @@ pub(crate) struct Parts<'c> {
 
 /// Whether `pose` is finite.
 pub(crate) fn is_finite(pose: &Pose) -> bool {
-    pose.rotation.iter().chain(pose.translation.iter()).all(|v| v.is_finite())
+    pose.rotation
+        .iter()
+        .chain(pose.translation.iter())
+        .all(|v| v.is_finite())
 }
 
 /// The status that the stages and the pose imply: a numerical failure (non-finite pose, singular
 /// Hessian, non-finite cost, or — without refinement — an algebraic answer far from a rigid motion),
 /// else not converged, else points behind the camera, else success.
-pub(crate) fn status_of_stages(pose: &Pose, stages: &[StageReport], used: &Correspondences, valid: bool, refine: bool) -> Status {
+pub(crate) fn status_of_stages(
+    pose: &Pose,
+    stages: &[StageReport],
+    used: &Correspondences,
+    valid: bool,
+    refine: bool,
+) -> Status {
     let finite = is_finite(pose);
-    let behind = if finite { count_behind(object_points(used).copied(), pose) } else { 0 };
+    let behind = if finite {
+        count_behind(object_points(used).copied(), pose)
+    } else {
+        0
+    };
     let solver_failed = stages
         .iter()
         .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost));
@@ -94,10 +107,14 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
     let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);
     // The χ² test needs the noise from the caller; without the refinement the linear method also
     // fitted the five intrinsics.
-    let fitted = if !opts.refine && estimated_camera.is_some() { 11 } else { 6 };
-    let residual_test = opts.sigma_px.and_then(|s| {
-        ResidualTest::new(2.0 * reprojection_cost / (s * s), residual_count.saturating_sub(fitted))
-    });
+    let fitted = if !opts.refine && estimated_camera.is_some() {
+        11
+    } else {
+        6
+    };
+    let residual_test = opts
+        .sigma_px
+        .and_then(|s| ResidualTest::new(2.0 * reprojection_cost / (s * s), residual_count.saturating_sub(fitted)));
     let (dual_quaternion, axis, angle) = if finite {
         let q = DualQuaternion::from_rotation_translation(&pose.rotation, &pose.translation);
         let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.rotation));

@@ -23,13 +23,20 @@ const MIN_PIVOT: f64 = 7.458_340_731_200_208e-155;
 /// positive definite; `what` names the argument and `index` the observation in the message.
 pub fn whitening<const D: usize>(cov: &SMatrix<f64, D, D>, what: &str, index: usize) -> Result<SMatrix<f64, D, D>> {
     if cov.iter().any(|v| !v.is_finite()) {
-        return Err(Error::NonFinite { what: what.into(), index });
+        return Err(Error::NonFinite {
+            what: what.into(),
+            index,
+        });
     }
     let scale = cov.amax();
     if (cov - cov.transpose()).amax() > SYMMETRY_TOLERANCE * scale {
-        return Err(Error::Degenerate { what: format!("{what}[{index}] is not symmetric") });
+        return Err(Error::Degenerate {
+            what: format!("{what}[{index}] is not symmetric"),
+        });
     }
-    let not_pd = || Error::Degenerate { what: format!("{what}[{index}] is not positive definite") };
+    let not_pd = || Error::Degenerate {
+        what: format!("{what}[{index}] is not positive definite"),
+    };
     let chol = cov.cholesky().ok_or_else(not_pd)?;
     let c = chol.l();
     let pivots = c.diagonal();
@@ -44,7 +51,8 @@ pub fn whitening<const D: usize>(cov: &SMatrix<f64, D, D>, what: &str, index: us
             ),
         });
     }
-    c.solve_lower_triangular(&SMatrix::<f64, D, D>::identity()).ok_or_else(not_pd)
+    c.solve_lower_triangular(&SMatrix::<f64, D, D>::identity())
+        .ok_or_else(not_pd)
 }
 
 /// Whitening factors of every observation: identities when `covariances` is `None`, else one per
@@ -89,7 +97,10 @@ mod tests {
         let indefinite = Matrix2::new(1.0, 2.0, 2.0, 1.0);
         assert!(matches!(whitening(&indefinite, "cov", 3), Err(Error::Degenerate { what }) if what.contains("cov[3]")));
         assert!(whitening(&Matrix2::new(1.0, 0.5, 0.0, 1.0), "cov", 0).is_err());
-        assert!(matches!(whitening(&Matrix2::new(f64::NAN, 0.0, 0.0, 1.0), "cov", 1), Err(Error::NonFinite { index: 1, .. })));
+        assert!(matches!(
+            whitening(&Matrix2::new(f64::NAN, 0.0, 0.0, 1.0), "cov", 1),
+            Err(Error::NonFinite { index: 1, .. })
+        ));
         assert!(whitening(&Matrix2::new(1.0, 0.0, 0.0, 0.0), "cov", 0).is_err());
     }
 
@@ -97,7 +108,9 @@ mod tests {
     fn rejects_a_covariance_whose_inverse_overflows() {
         assert_eq!(MIN_PIVOT, 1.0 / f64::MAX.sqrt());
         let tiny = Matrix2::identity() * 5e-324;
-        assert!(matches!(whitening(&tiny, "cov", 2), Err(Error::Degenerate { what }) if what.contains("cov[2] is too small")));
+        assert!(
+            matches!(whitening(&tiny, "cov", 2), Err(Error::Degenerate { what }) if what.contains("cov[2] is too small"))
+        );
         let smallest = Matrix2::identity() * (MIN_PIVOT * MIN_PIVOT * 1.01);
         let l = whitening(&smallest, "cov", 0).unwrap();
         assert!(l.iter().all(|v| v.is_finite()) && (l.transpose() * l).iter().all(|v| v.is_finite()));

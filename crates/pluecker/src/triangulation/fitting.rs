@@ -9,8 +9,8 @@
 //! dependence on the fit cancels to first order, because the residual of the fit in its own frame is
 //! identically 0). These functions return the fit and that covariance `J Cov(δ) Jᵀ`.
 
-use super::line::residual::{LineFrame, LINE_FRAME_DISTANCE};
 use super::covariance::whitening;
+use super::line::residual::{LineFrame, LINE_FRAME_DISTANCE};
 use super::quadric::residual::{ConicFrame, Vector5};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{sym3_to_vec, Ellipse};
@@ -99,7 +99,12 @@ impl PrincipalLine {
         let scatter = scaled.iter().fold(Matrix2::zeros(), |acc, d| acc + d * d.transpose());
         let eig = scatter.symmetric_eigen();
         let minor = if eig.eigenvalues[0] >= eig.eigenvalues[1] { 1 } else { 0 };
-        PrincipalLine { centroid, normal: eig.eigenvectors.column(minor).into_owned(), scaled, scale }
+        PrincipalLine {
+            centroid,
+            normal: eig.eigenvectors.column(minor).into_owned(),
+            scaled,
+            scale,
+        }
     }
 
     /// `Σ (n·(pₖ − m))² / σ²`: the χ² of the points' distances from the line for noise `sigma`.

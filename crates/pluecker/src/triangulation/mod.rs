@@ -27,8 +27,8 @@ pub mod tracks;
 pub mod uncertainty;
 pub mod views;
 
-use crate::error::{Error, Result};
 use crate::chi_square::ResidualTest;
+use crate::error::{Error, Result};
 use crate::interrupt::StopReason;
 use crate::optim::{Summary, Termination, TrustRegionOptions};
 
@@ -59,10 +59,13 @@ impl Method {
 
     /// Parses [`Method::as_str`] names.
     pub fn parse(name: &str) -> Result<Method> {
-        Method::ALL.into_iter().find(|m| m.as_str() == name).ok_or_else(|| Error::InvalidOption {
-            name: "method".into(),
-            reason: format!("unknown triangulation method '{name}'; expected one of linear, local, optimal"),
-        })
+        Method::ALL
+            .into_iter()
+            .find(|m| m.as_str() == name)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "method".into(),
+                reason: format!("unknown triangulation method '{name}'; expected one of linear, local, optimal"),
+            })
     }
 }
 
@@ -92,20 +95,34 @@ impl Default for TriangulationOptions {
         let mut local = TrustRegionOptions::default();
         local.stopping.max_iterations = 100;
         local.stopping.step_tolerance = 1e-10;
-        TriangulationOptions { method: Method::Optimal, max_relative_gap: 1e-3, max_reprojection_error: None, max_nodes: 2000, local }
+        TriangulationOptions {
+            method: Method::Optimal,
+            max_relative_gap: 1e-3,
+            max_reprojection_error: None,
+            max_nodes: 2000,
+            local,
+        }
     }
 }
 
 impl TriangulationOptions {
     /// Checks the numeric options.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name: &str, reason: &str| Err(Error::InvalidOption { name: name.into(), reason: reason.into() });
+        let bad = |name: &str, reason: &str| {
+            Err(Error::InvalidOption {
+                name: name.into(),
+                reason: reason.into(),
+            })
+        };
         if !(self.max_relative_gap.is_finite() && self.max_relative_gap > 0.0) {
             return bad("max_relative_gap", "must be a positive finite number");
         }
         if let Some(gamma) = self.max_reprojection_error {
             if !(gamma.is_finite() && gamma > 0.0) {
-                return bad("max_reprojection_error", "must be a positive finite number of (whitened) pixels");
+                return bad(
+                    "max_reprojection_error",
+                    "must be a positive finite number of (whitened) pixels",
+                );
             }
         }
         if self.max_nodes == 0 {
@@ -210,7 +227,14 @@ pub struct Certificate {
 impl Certificate {
     /// The certificate of a method that does not look for one.
     pub fn none() -> Certificate {
-        Certificate { lower_bound: 0.0, relative_gap: 1.0, certified: false, kind: CertificateKind::None, nodes: 0, solver_iterations: 0 }
+        Certificate {
+            lower_bound: 0.0,
+            relative_gap: 1.0,
+            certified: false,
+            kind: CertificateKind::None,
+            nodes: 0,
+            solver_iterations: 0,
+        }
     }
 }
 
@@ -281,7 +305,11 @@ impl Report {
     /// solvers' `½ Σ`, so the cost of eq. 19 is twice it).
     pub(crate) fn of_local(summary: &Summary) -> Report {
         Report {
-            status: if summary.termination.converged() { Status::Success } else { Status::NotConverged },
+            status: if summary.termination.converged() {
+                Status::Success
+            } else {
+                Status::NotConverged
+            },
             cost: 2.0 * summary.final_cost,
             iterations: summary.iterations,
             termination: summary.termination,
@@ -306,10 +334,14 @@ where
         .enumerate()
         .map(|(i, row)| {
             if !row.into_iter().all(|v| v.is_finite()) {
-                return Err(Error::NonFinite { what: what.into(), index: i });
+                return Err(Error::NonFinite {
+                    what: what.into(),
+                    index: i,
+                });
             }
-            parse(row).ok_or_else(|| Error::Degenerate { what: format!("{what}[{i}] {why}") })
+            parse(row).ok_or_else(|| Error::Degenerate {
+                what: format!("{what}[{i}] {why}"),
+            })
         })
         .collect()
 }
-

@@ -20,13 +20,18 @@ const MIN_RELATIVE_DET: f64 = 1e-12;
 pub(crate) fn validate_cameras(cameras: &[Matrix3x4<f64>], what: &str) -> Result<()> {
     for (i, p) in cameras.iter().enumerate() {
         if p.iter().any(|v| !v.is_finite()) {
-            return Err(Error::NonFinite { what: what.into(), index: i });
+            return Err(Error::NonFinite {
+                what: what.into(),
+                index: i,
+            });
         }
         let m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
         let norm = m.norm();
         if !(m.determinant().abs() > MIN_RELATIVE_DET * norm * norm * norm) {
             return Err(Error::SingularCamera {
-                what: format!("{what}[{i}]: the left 3x3 block of P is singular (a camera at infinity or a zero matrix)"),
+                what: format!(
+                    "{what}[{i}]: the left 3x3 block of P is singular (a camera at infinity or a zero matrix)"
+                ),
             });
         }
     }
@@ -107,7 +112,11 @@ mod tests {
         for p in [flip_fx * camera(1.0), camera(1.0) * mirror_world] {
             let m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
             assert!(m.determinant() < 0.0);
-            let seen = if p[(2, 2)] > 0.0 { x } else { Vector3::new(x.x, x.y, -x.z) };
+            let seen = if p[(2, 2)] > 0.0 {
+                x
+            } else {
+                Vector3::new(x.x, x.y, -x.z)
+            };
             assert!((depth(&p, &seen) - 5.0).abs() < 1e-12, "{}", depth(&p, &seen));
         }
     }

@@ -62,13 +62,26 @@ impl Line {
 pub(crate) const SOLUTION_TOLERANCE: f64 = 1e-8;
 
 /// `x = R X + t` lies on the ray of the unit bearing `y`, in front ([`SOLUTION_TOLERANCE`]).
-pub(crate) fn point_holds(y: &Vector3<f64>, point: &Vector3<f64>, Pose { rotation: r, translation: t }: &super::Pose) -> bool {
+pub(crate) fn point_holds(
+    y: &Vector3<f64>,
+    point: &Vector3<f64>,
+    Pose {
+        rotation: r,
+        translation: t,
+    }: &super::Pose,
+) -> bool {
     let x = r * point + t;
     y.dot(&x) > 0.0 && y.cross(&x).norm() <= SOLUTION_TOLERANCE * x.norm()
 }
 
 /// Both object points of `line` lie on its interpretation plane ([`SOLUTION_TOLERANCE`]).
-pub(crate) fn line_holds(line: &Line, Pose { rotation: r, translation: t }: &super::Pose) -> bool {
+pub(crate) fn line_holds(
+    line: &Line,
+    Pose {
+        rotation: r,
+        translation: t,
+    }: &super::Pose,
+) -> bool {
     line.endpoints.iter().all(|p| {
         let x = r * p + t;
         line.normal.dot(&x).abs() <= SOLUTION_TOLERANCE * x.norm()

@@ -115,7 +115,12 @@ impl Sample {
         let scale = self.scale();
         poses
             .iter()
-            .map(|Pose { rotation: r, translation: t }| (r - self.rotation).norm().max((t - self.translation).norm() / scale))
+            .map(
+                |Pose {
+                     rotation: r,
+                     translation: t,
+                 }| (r - self.rotation).norm().max((t - self.translation).norm() / scale),
+            )
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -162,7 +167,13 @@ impl Sample {
 /// placing an object point next to the camera centre is judged by the object's size, not by the
 /// vanishing distance). Returns the largest absolute residual and whether every point is in front
 /// (`y · x > 0`).
-pub fn residuals(features: &[Feature; 3], Pose { rotation: r, translation: t }: &Pose) -> (f64, bool) {
+pub fn residuals(
+    features: &[Feature; 3],
+    Pose {
+        rotation: r,
+        translation: t,
+    }: &Pose,
+) -> (f64, bool) {
     let world: Vec<Vector3<f64>> = features
         .iter()
         .flat_map(|f| match f {
@@ -199,7 +210,10 @@ pub fn residuals(features: &[Feature; 3], Pose { rotation: r, translation: t }: 
 pub fn assert_valid(poses: &[Pose], features: &[Feature; 3], angle: f64, max: usize, what: &str) {
     assert!(poses.len() <= max, "{what}: {} solutions", poses.len());
     for pose in poses {
-        let Pose { rotation: r, translation: t } = pose;
+        let Pose {
+            rotation: r,
+            translation: t,
+        } = pose;
         assert!(
             r.iter().chain(t.iter()).all(|v| v.is_finite()),
             "{what}: non-finite pose"
@@ -365,7 +379,15 @@ pub fn assert_multistart_finds_nothing_more(
             continue;
         }
         let (worst, in_front) = residuals(&sample.features, &candidate);
-        if worst > 1e-13 || !in_front || seen.iter().any(|Pose { rotation: s, translation: u }| (s - r).norm() + (u - t).norm() < 1e-6) {
+        if worst > 1e-13
+            || !in_front
+            || seen.iter().any(
+                |Pose {
+                     rotation: s,
+                     translation: u,
+                 }| (s - r).norm() + (u - t).norm() < 1e-6,
+            )
+        {
             continue;
         }
         seen.push(candidate);
@@ -389,7 +411,13 @@ pub fn assert_multistart_finds_nothing_more(
 /// The six residuals (`uᵀx/‖x‖`-free, plain `uᵀx` for speed of convergence: points `y × x` projected
 /// on two directions orthogonal to `y`, lines `n · x`) and their Jacobian in a left rotation increment
 /// and the translation.
-fn constraint_system(features: &[Feature; 3], Pose { rotation: r, translation: t }: &Pose) -> (SMatrix<f64, 6, 1>, SMatrix<f64, 6, 6>) {
+fn constraint_system(
+    features: &[Feature; 3],
+    Pose {
+        rotation: r,
+        translation: t,
+    }: &Pose,
+) -> (SMatrix<f64, 6, 1>, SMatrix<f64, 6, 6>) {
     let mut res = SMatrix::<f64, 6, 1>::zeros();
     let mut jac = SMatrix::<f64, 6, 6>::zeros();
     let mut row = 0;

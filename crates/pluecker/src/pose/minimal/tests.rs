@@ -24,7 +24,11 @@ fn solve_dispatches_every_mix_in_every_order() {
                 let features = order.map(|i| sample.features[i]);
                 let poses = solve(&features);
                 assert_eq!(poses.len(), reference.len(), "{what}, order {order:?}");
-                for Pose { rotation: r, translation: t } in &poses {
+                for Pose {
+                    rotation: r,
+                    translation: t,
+                } in &poses
+                {
                     let same = Sample {
                         rotation: *r,
                         translation: *t,

@@ -1,11 +1,11 @@
 //! The robust pipeline of [`crate::pose::estimate_pose`]: validation → LO-RANSAC in the conditioned
 //! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose.
 
-use super::super::correspondences::{Conditioning, Correspondences};
 use super::super::certificate::{Certificate, Certification};
+use super::super::correspondences::{Conditioning, Correspondences};
 use super::super::refinement::refine_conditioned;
-use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::reprojection::{Pose, ReprojectionCost};
+use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
@@ -124,7 +124,9 @@ pub(crate) fn estimate_robust(
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
     let certification = Certification::none(match opts.certify {
         None => Certificate::NotRequested,
-        Some(_) => Certificate::NotProved("not available for the robust estimator (the inlier set is not certified)".into()),
+        Some(_) => {
+            Certificate::NotProved("not available for the robust estimator (the inlier set is not certified)".into())
+        }
     });
     Ok(assemble(
         camera,

@@ -70,9 +70,12 @@ fn probe(k: usize) -> bool {
             }
         }
     });
-    solve(&sample)
-        .iter()
-        .any(|Pose { rotation: r, translation: t }| rotation_distance(r, &rotation) < 1e-6 && (t - translation).norm() < 1e-6 * translation.norm())
+    solve(&sample).iter().any(
+        |Pose {
+             rotation: r,
+             translation: t,
+         }| rotation_distance(r, &rotation) < 1e-6 && (t - translation).norm() < 1e-6 * translation.norm(),
+    )
 }
 
 /// Draws samples and computes how many are needed.

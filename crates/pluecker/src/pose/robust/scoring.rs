@@ -365,7 +365,11 @@ impl Prepared {
         let mut running = RunningTest {
             test,
             log_lambda: 0.0,
-            pending: if TEST { [skip.sorted(0), skip.sorted(1)] } else { [[(usize::MAX, false); 4]; 2] },
+            pending: if TEST {
+                [skip.sorted(0), skip.sorted(1)]
+            } else {
+                [[(usize::MAX, false); 4]; 2]
+            },
             next: [0; 2],
         };
         // The verdict of a rejection after `done` / `consistent`, the sample's own left out.
@@ -436,8 +440,16 @@ impl Prepared {
 
     /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).
     pub fn inliers(&self, pose: &Pose, tau: &Thresholds) -> (Vec<bool>, Vec<bool>) {
-        let points = self.points_given.iter().map(|p| self.point_error2(pose, p) <= tau.point2).collect();
-        let lines = self.lines_given.iter().map(|l| self.line_error2(pose, l) <= tau.line2).collect();
+        let points = self
+            .points_given
+            .iter()
+            .map(|p| self.point_error2(pose, p) <= tau.point2)
+            .collect();
+        let lines = self
+            .lines_given
+            .iter()
+            .map(|l| self.line_error2(pose, l) <= tau.line2)
+            .collect();
         (points, lines)
     }
 
@@ -450,7 +462,10 @@ impl Prepared {
                 let [x, y, z] = self.points_given[k].object;
                 depth(&Vector3::new(x, y, z)) > 0.0
             } else {
-                self.lines_given[k - self.points.len()].object.iter().all(|x| depth(x) > 0.0)
+                self.lines_given[k - self.points.len()]
+                    .object
+                    .iter()
+                    .all(|x| depth(x) > 0.0)
             }
         })
     }

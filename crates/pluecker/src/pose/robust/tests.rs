@@ -37,7 +37,10 @@ fn loop_finds_the_inliers_and_stops_by_confidence() {
     // keeps the pose of an all-inlier sample with probability 1 − 1/A, A ≥ 50 here (MODEL_COST C / m_S
     // with C ≈ ln 2 and m_S ≤ 2): at most ⌈ln(1e-4)/ln(1 − 0.98/8)⌉ = 71 samples.
     assert!(out.report.iterations <= 71, "{:?}", out.report);
-    let Pose { rotation: r, translation: _ } = out.pose.unwrap();
+    let Pose {
+        rotation: r,
+        translation: _,
+    } = out.pose.unwrap();
     assert!(crate::geometry::quaternion::rotation_distance(&r, &scene.rotation) < 0.01);
     let without = RansacOptions {
         sprt: false,

@@ -15,12 +15,12 @@
 //! call (bad options, a bad `sigma`, bad shared cameras, inconsistent array lengths) come first, as the
 //! outer `Result`.
 
+use super::{lines_from_segments, triangulate_line, LineTriangulation};
+use crate::error::{Error, Result};
 use crate::triangulation::tracks::{
     check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
 };
-use super::{lines_from_segments, triangulate_line, LineTriangulation};
 use crate::triangulation::TriangulationOptions;
-use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Vector2, Vector3};
 use std::sync::atomic::AtomicUsize;
 

@@ -25,12 +25,12 @@ pub mod batch;
 pub mod optimal;
 pub mod residual;
 
+use self::optimal::optimal_line;
+use self::residual::{line_view, LineFrame};
 use super::conditioning::{check_views, Similarity};
 use super::covariance::{whitening, whitenings};
 use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
-use self::optimal::optimal_line;
-use self::residual::{line_view, LineFrame};
 use super::uncertainty::covariance_of_information;
 use super::{parse_observations, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};

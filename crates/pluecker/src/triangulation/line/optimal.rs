@@ -32,20 +32,18 @@
 //! parameters (section 4.2), the widest at the relaxed minimiser; each node's relaxed minimiser starts
 //! a short local minimisation whose cost is an upper bound (section 5).
 
-use crate::triangulation::conditioning::Similarity;
-use crate::triangulation::fraction::{self, FractionalResidual};
-use super::{LineObjective, LineProblem};
-use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use super::residual::LINE_FRAME_DISTANCE;
-use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
+use super::{LineObjective, LineProblem};
 use crate::geometry::plucker::{self, OrthonormalLine};
-use crate::global::branch_and_bound::{
-    branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region,
-};
+use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::add_quadratic_over_linear;
 use crate::global::monomial::{add_mccormick, product_bounds, Interval};
 use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
+use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
+use crate::triangulation::conditioning::Similarity;
+use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 
 /// Factor between the eq. 27 strip widths and the width implied by `γ` at the local line's points.

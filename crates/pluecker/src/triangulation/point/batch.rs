@@ -22,8 +22,8 @@ use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{solve_views, PointTriangulation};
 use crate::error::{Error, Result};
-use crate::triangulation::covariance::whitening;
 use crate::interrupt::current;
+use crate::triangulation::covariance::whitening;
 use crate::triangulation::tracks::{check_mask, check_values, solve_tracks, too_few, track_count, visible_views};
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{centre, depth_normalized, validate_cameras};
@@ -278,8 +278,8 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
         .zip(out.costs.par_iter_mut())
         .zip(out.covariances.par_chunks_mut(9))
         .zip(out.residual_dofs.par_iter_mut())
-        .map(
-            |((((t, point), cost), covariance), residual_dof)| match stop.as_ref().and_then(|s| s.reason()) {
+        .map(|((((t, point), cost), covariance), residual_dof)| {
+            match stop.as_ref().and_then(|s| s.reason()) {
                 Some(reason) => Err(Error::Interrupted { reason }),
                 None => linear_track(&prepared, tracks, v, t),
             }
@@ -293,8 +293,8 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
                     covariance.copy_from_slice(cov.as_slice());
                 }
                 Ok(status)
-            }),
-        )
+            })
+        })
         .collect_into_vec(&mut out.outcomes);
     Ok(out)
 }

@@ -38,11 +38,11 @@
 use super::certificate::{enclosure, Enclosure};
 use super::chart::{Chart, ChartKind, ChartView};
 use super::cost::{in_front, point_cost, PointObjective, PointView};
-use crate::interrupt::StopReason;
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::global::CERTIFICATE_COST_FLOOR;
+use crate::interrupt::StopReason;
 use crate::optim::{trust_region, TrustRegionOptions};
 use nalgebra::Vector3;
 

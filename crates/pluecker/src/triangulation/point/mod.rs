@@ -44,18 +44,18 @@ pub mod global;
 pub mod infinity;
 pub mod linear;
 
-use super::covariance::whitenings;
 use self::certificate::convexity_test;
 use self::chart::{Chart, ChartKind};
 use self::cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use self::global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
-use crate::global::relative_gap;
 use self::infinity::best_at_infinity;
 use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
+use super::covariance::whitenings;
 use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras};
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
+use crate::global::relative_gap;
 use crate::optim::{trust_region, Termination};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
@@ -240,7 +240,10 @@ pub(crate) fn solve_views(
 /// at infinity the lower bound (valid over the points in front, infinity included) and the gap to
 /// the cost there are kept; a point behind a camera is outside the searched set, so nothing is.
 fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Certificate {
-    let mut out = Certificate { certified: false, ..*certificate };
+    let mut out = Certificate {
+        certified: false,
+        ..*certificate
+    };
     if u.status == Status::AtInfinity {
         out.lower_bound = certificate.lower_bound.min(u.cost);
         out.relative_gap = relative_gap(u.cost, out.lower_bound);

@@ -14,12 +14,12 @@
 //! (`conics[t][j]`: view `j` of track `t`). Errors of the whole call (bad options, bad shared cameras,
 //! inconsistent array lengths) come first, as the outer `Result`.
 
+use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
+use crate::error::{Error, Result};
 use crate::triangulation::tracks::{
     check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
 };
-use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
 use crate::triangulation::TriangulationOptions;
-use crate::error::{Error, Result};
 use nalgebra::Matrix3;
 use std::sync::atomic::AtomicUsize;
 

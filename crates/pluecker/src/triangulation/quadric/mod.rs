@@ -27,12 +27,12 @@ pub mod batch;
 pub mod optimal;
 pub mod residual;
 
+use self::optimal::optimal_quadric;
+use self::residual::{quadric_view, ConicFrame};
 use super::conditioning::{check_views, Similarity};
 use super::covariance::whitenings;
 use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
-use self::optimal::optimal_quadric;
-use self::residual::{quadric_view, ConicFrame};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};
 use super::{parse_observations, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};

@@ -23,15 +23,15 @@
 //! minimiser; each node's relaxed `q`, made an ellipsoid, starts a short local minimisation whose cost
 //! is an upper bound.
 
-use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use super::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
-use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::add_quadratic_over_linear;
 use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
+use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
+use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
 use nalgebra::SVector;
 
 /// `B` of the a-priori box (module docs) as a multiple of the largest camera distance.

@@ -12,8 +12,8 @@
 //! the last two (the centre offset). The covariance of `r` for a fitted conic is
 //! [`crate::triangulation::fitting::fit_conic`]'s; without covariances the identity is used.
 
-use crate::triangulation::fraction::FractionalResidual;
 use crate::geometry::quadric::{conic_camera, sym3_to_vec, vec_to_sym3, Ellipse};
+use crate::triangulation::fraction::FractionalResidual;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector, Vector2, Vector6};
 
 /// A 5-vector: the conic residual.
@@ -89,7 +89,11 @@ impl ConicFrame {
 
 /// The whitened residual of a dual quadric `L̃` (stacked, eq. 14) seen by camera `p` as the observed
 /// ellipse of `frame`: `N P_C L̃ / (dᵀ P_C L̃)` (Lemma 2.1, eqs. 17-18), whitened by `w`.
-pub(crate) fn quadric_view(p: &Matrix3x4<f64>, frame: &ConicFrame, w: &SMatrix<f64, 5, 5>) -> FractionalResidual<5, 10> {
+pub(crate) fn quadric_view(
+    p: &Matrix3x4<f64>,
+    frame: &ConicFrame,
+    w: &SMatrix<f64, 5, 5>,
+) -> FractionalResidual<5, 10> {
     let pc = conic_camera(p);
     let (num, d) = frame.fraction();
     let a: SMatrix<f64, 5, 10> = num * pc;

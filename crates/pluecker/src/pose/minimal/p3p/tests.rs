@@ -70,7 +70,10 @@ impl Instance {
     /// The larger of `‖R − R*‖_F` and `‖t − t*‖ / scale` for the closest returned pose.
     fn error(&self, poses: &[Pose]) -> f64 {
         let scale = self.scale();
-        let error = |Pose { rotation: r, translation: t }: &Pose| {
+        let error = |Pose {
+                         rotation: r,
+                         translation: t,
+                     }: &Pose| {
             let rotation_error = (r - self.rotation).norm();
             rotation_error.max((t - self.translation).norm() / scale)
         };
@@ -91,7 +94,11 @@ impl Instance {
 /// `angle` radians of its bearing.
 fn assert_valid(poses: &[Pose], bearings: &[Vector3<f64>; 3], points: &[Vector3<f64>; 3], angle: f64, what: &str) {
     assert!(poses.len() <= 4, "{what}: {} solutions", poses.len());
-    for Pose { rotation: r, translation: t } in poses {
+    for Pose {
+        rotation: r,
+        translation: t,
+    } in poses
+    {
         assert!(
             r.iter().chain(t.iter()).all(|v| v.is_finite()),
             "{what}: non-finite pose"
@@ -250,7 +257,10 @@ fn every_solution_found_by_multistart_newton_is_returned() {
                 skipped += 1;
                 continue;
             }
-            let Pose { rotation: r, translation: t } = problem.pose(&lambda).expect("a pose");
+            let Pose {
+                rotation: r,
+                translation: t,
+            } = problem.pose(&lambda).expect("a pose");
             let truth = Instance {
                 rotation: r,
                 translation: t,
@@ -282,7 +292,11 @@ fn solutions_do_not_depend_on_the_order_of_the_correspondences() {
             let permuted = Instance::new(order.map(|i| inst.cam[i]), inst.rotation, inst.translation);
             let other = p3p(&permuted.bearings(), &permuted.points);
             assert_eq!(other.len(), poses.len(), "draw {draw}, order {order:?}");
-            for Pose { rotation: r, translation: t } in &other {
+            for Pose {
+                rotation: r,
+                translation: t,
+            } in &other
+            {
                 let same = Instance {
                     rotation: *r,
                     translation: *t,
@@ -485,9 +499,16 @@ fn collinear_world_points_never_give_a_matrix_that_is_not_a_rotation() {
         Vector3::new(-0.02218546740365586, -0.08926486036048183, 0.9957608095024152),
         Vector3::new(0.03175390807588196, -0.1590491898256914, 0.9867598717710908),
     ];
-    let points = [Vector3::zeros(), Vector3::new(0.3, 0.3, 0.3), Vector3::new(0.6, 0.6, 0.6)];
+    let points = [
+        Vector3::zeros(),
+        Vector3::new(0.3, 0.3, 0.3),
+        Vector3::new(0.6, 0.6, 0.6),
+    ];
     for pose in p3p(&bearings, &points) {
         let r = pose.rotation;
-        assert!((r * r.transpose() - nalgebra::Matrix3::identity()).amax() < 1e-9 && r.determinant() > 0.0, "{r}");
+        assert!(
+            (r * r.transpose() - nalgebra::Matrix3::identity()).amax() < 1e-9 && r.determinant() > 0.0,
+            "{r}"
+        );
     }
 }
