@@ -6,7 +6,9 @@ use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
 use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{triangulation_scene, TriangulationScene};
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::batch::{
+    triangulate_points, triangulate_points_linear, triangulate_points_sparse, PointTracks, SparsePointTracks,
+};
 use pluecker::triangulation::point::certificate::convexity_test;
 use pluecker::triangulation::point::cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use pluecker::triangulation::point::global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
@@ -508,4 +510,114 @@ fn optimal_reports_exactly_parallel_rays_at_infinity() {
     assert!(r.point.iter().all(|v| v.is_nan()));
     assert!(r.report.cost.abs() < 1e-12);
     assert!(!r.report.certificate.certified);
+}
+
+#[test]
+fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
+    // The same tracks in both forms: dense (n, v) with a visibility mask, and sparse (CSR over the
+    // visible observations). In the dense order every result is the same, bit for bit but the wall time;
+    // in another order of the images the sums run in another order, and the results agree to rounding.
+    // A track naming an image beyond the cameras or one image twice is its own error.
+    let cameras = triangulation_scene(7, 0.4, 9).cameras;
+    let v = cameras.len();
+    let mut rng = Rng::new(9);
+    let n = 40;
+    let (mut dense, mut visible, mut dense_cov) = (vec![f64::NAN; 2 * n * v], vec![false; n * v], vec![0.0; 4 * n * v]);
+    let (mut offsets, mut images, mut sparse, mut sparse_cov) = (vec![0], Vec::new(), Vec::new(), Vec::new());
+    for t in 0..n {
+        let x = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        let count = 2 + rng.below(v - 1);
+        let mut seen = rng.sample_indices(v, count);
+        seen.sort_unstable();
+        for j in seen {
+            let u = project(&cameras[j], &x) + Vector2::new(rng.normal(), rng.normal());
+            let s = 0.5 + rng.uniform_in(0.0, 1.0);
+            let cov = [s, 0.1 * s, 0.1 * s, s];
+            dense[2 * (t * v + j)..][..2].copy_from_slice(&[u.x, u.y]);
+            dense_cov[4 * (t * v + j)..][..4].copy_from_slice(&cov);
+            visible[t * v + j] = true;
+            images.push(j);
+            sparse.extend([u.x, u.y]);
+            sparse_cov.extend(cov);
+        }
+        offsets.push(images.len());
+    }
+    let opts = options(Method::Optimal);
+    let d = PointTracks {
+        observations: &dense,
+        visible: Some(&visible),
+        covariances: Some(&dense_cov),
+    };
+    let s = SparsePointTracks {
+        offsets: &offsets,
+        images: &images,
+        observations: &sparse,
+        covariances: Some(&sparse_cov),
+    };
+    let a = triangulate_points(&cameras, &d, &opts, None).unwrap();
+    let b = triangulate_points_sparse(&cameras, &s, &opts, None).unwrap();
+    for (t, (a, b)) in a.into_iter().zip(b).enumerate() {
+        let (mut a, mut b) = (a.unwrap(), b.unwrap());
+        (a.report.time_seconds, b.report.time_seconds) = (0.0, 0.0);
+        assert_eq!(a, b, "track {t}");
+    }
+    // Each track's observations reversed: the same answers to rounding.
+    let (mut rev_images, mut rev_obs, mut rev_cov) = (Vec::new(), Vec::new(), Vec::new());
+    for t in 0..n {
+        for k in (offsets[t]..offsets[t + 1]).rev() {
+            rev_images.push(images[k]);
+            rev_obs.extend_from_slice(&sparse[2 * k..2 * k + 2]);
+            rev_cov.extend_from_slice(&sparse_cov[4 * k..4 * k + 4]);
+        }
+    }
+    let reversed = SparsePointTracks {
+        offsets: &offsets,
+        images: &rev_images,
+        observations: &rev_obs,
+        covariances: Some(&rev_cov),
+    };
+    let c = triangulate_points_sparse(&cameras, &reversed, &opts, None).unwrap();
+    for (t, (b, c)) in triangulate_points_sparse(&cameras, &s, &opts, None)
+        .unwrap()
+        .into_iter()
+        .zip(c)
+        .enumerate()
+    {
+        let (b, c) = (b.unwrap(), c.unwrap());
+        assert!((b.point - c.point).norm() <= 1e-8 * (1.0 + b.point.norm()), "track {t}");
+        assert!(
+            (b.report.cost - c.report.cost).abs() <= 1e-12 * (1.0 + b.report.cost),
+            "track {t}"
+        );
+        assert_eq!(
+            (b.report.status, b.report.certificate.certified),
+            (c.report.status, c.report.certificate.certified)
+        );
+    }
+    // Bad tracks: an image index beyond the cameras (track 0), an image twice (track 1).
+    let mut bad_images = images.clone();
+    bad_images[offsets[0]] = v;
+    bad_images[offsets[1] + 1] = bad_images[offsets[1]];
+    let bad = SparsePointTracks {
+        images: &bad_images,
+        ..s
+    };
+    let r = triangulate_points_sparse(&cameras, &bad, &opts, None).unwrap();
+    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
+    assert!(matches!(&r[1], Err(Error::Degenerate { what }) if what.starts_with("track 1: image")));
+    assert!(r[2..].iter().all(|x| x.is_ok()));
+    // Whole-call errors: offsets that do not end at the observations, or decrease.
+    let short = SparsePointTracks {
+        offsets: &offsets[..n],
+        ..s
+    };
+    assert!(
+        matches!(triangulate_points_sparse(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+    );
+    let mut down = offsets.clone();
+    down.swap(1, 2);
+    let down = SparsePointTracks { offsets: &down, ..s };
+    assert!(
+        matches!(triangulate_points_sparse(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+    );
 }

@@ -59,6 +59,16 @@ struct Prepared {
 
 /// Checks the whole call and returns the number of tracks.
 fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usize, Prepared)> {
+    let prepared = prepare(cameras)?;
+    let v = cameras.len();
+    let n = track_count("observations", tracks.observations.len(), v, 2, "2 coordinates")?;
+    check_mask(tracks.visible, n, v)?;
+    check_values("covariances", tracks.covariances, n, v, 4, "2 x 2")?;
+    Ok((n, prepared))
+}
+
+/// The checked, depth-normalised cameras and their centres, shared by every track.
+fn prepare(cameras: &[Matrix3x4<f64>]) -> Result<Prepared> {
     validate_cameras(cameras, "cameras")?;
     let v = cameras.len();
     if v == 0 {
@@ -68,9 +78,6 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usiz
             actual: "0".into(),
         });
     }
-    let n = track_count("observations", tracks.observations.len(), v, 2, "2 coordinates")?;
-    check_mask(tracks.visible, n, v)?;
-    check_values("covariances", tracks.covariances, n, v, 4, "2 x 2")?;
     let centres: Vec<Vector3<f64>> = cameras.iter().map(centre).collect();
     let origin = centres.iter().sum::<Vector3<f64>>() / v as f64;
     let extent = centres.iter().map(|c| c.norm()).fold(1.0, f64::max);
@@ -80,20 +87,31 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usiz
         origin,
         extent,
     };
-    Ok((n, prepared))
+    Ok(prepared)
 }
 
 /// View `j` of track `t` (a visible one): its pixel and whitening factor, checked.
 fn track_view(tracks: &PointTracks, v: usize, t: usize, j: usize) -> Result<(Vector2<f64>, Matrix2<f64>)> {
-    let k = t * v + j;
-    let x = Vector2::new(tracks.observations[2 * k], tracks.observations[2 * k + 1]);
+    observation(tracks.observations, tracks.covariances, t * v + j, t, j)
+}
+
+/// Observation `k` of the flat arrays (pixel `observations[2k..]`, covariance `covariances[4k..]`),
+/// checked and named as entry `j` of track `t`: its pixel and whitening factor.
+fn observation(
+    observations: &[f64],
+    covariances: Option<&[f64]>,
+    k: usize,
+    t: usize,
+    j: usize,
+) -> Result<(Vector2<f64>, Matrix2<f64>)> {
+    let x = Vector2::new(observations[2 * k], observations[2 * k + 1]);
     if !(x.x.is_finite() && x.y.is_finite()) {
         return Err(Error::NonFinite {
             what: format!("observations[{t}]"),
             index: j,
         });
     }
-    let l = match tracks.covariances {
+    let l = match covariances {
         None => Matrix2::identity(),
         // The name is formatted only on failure: the fast path allocates nothing per track.
         Some(c) => {
@@ -151,23 +169,136 @@ pub fn triangulate_points(
     opts.validate()?;
     let (n, prepared) = check_batch(cameras, tracks)?;
     let v = cameras.len();
-    let one = |t: usize| -> Result<PointTriangulation> {
-        let started = Instant::now();
-        let mut views = Vec::with_capacity(v);
-        let mut seen = Vec::with_capacity(v);
-        for j in visible_views(tracks.visible, v, t) {
-            let (x, l) = track_view(tracks, v, t, j)?;
-            views.push(PointView::new(&prepared.normalized[j], &x, &l));
-            seen.push(j);
+    let one = |t: usize| {
+        let views = visible_views(tracks.visible, v, t).map(|j| Ok((j, track_view(tracks, v, t, j)?)));
+        solve_track(&prepared, opts, t, views)
+    };
+    Ok(solve_tracks(n, 16, progress, one))
+}
+
+/// Track `t` from its observations `(image, (pixel, whitening))`: at least two, with parallax.
+fn solve_track(
+    prepared: &Prepared,
+    opts: &TriangulationOptions,
+    t: usize,
+    observations: impl Iterator<Item = Result<(usize, (Vector2<f64>, Matrix2<f64>))>>,
+) -> Result<PointTriangulation> {
+    let started = Instant::now();
+    let mut views = Vec::new();
+    let mut seen = Vec::new();
+    for o in observations {
+        let (j, (x, l)) = o?;
+        views.push(PointView::new(&prepared.normalized[j], &x, &l));
+        seen.push(j);
+    }
+    if views.len() < 2 {
+        return Err(too_few(opts.method, t, views.len(), 2));
+    }
+    let (frame, spread) = frame_of(seen.iter().map(|&j| prepared.centres[j]));
+    if spread <= SAME_CENTRE {
+        return Err(no_parallax(t));
+    }
+    Ok(solve_views(&views, &frame, opts, started))
+}
+
+/// Point tracks as a flat list of observations grouped by track (CSR), for models where each track
+/// is seen in few of many images: memory grows with the observations, not with tracks × images.
+/// Track `t` owns observations `offsets[t]..offsets[t + 1]`; observation `k` is the pixel
+/// `observations[2k..2k + 2]` in image `images[k]` (an index into the cameras), with the covariance
+/// `covariances[4k..4k + 4]` (row-major 2x2) when given.
+#[derive(Debug, Clone, Copy)]
+pub struct SparsePointTracks<'a> {
+    /// `n + 1` non-decreasing offsets, from 0 to the number of observations `m`.
+    pub offsets: &'a [usize],
+    /// `m` image indices.
+    pub images: &'a [usize],
+    /// `m · 2` pixels.
+    pub observations: &'a [f64],
+    /// `m · 4` covariances, or `None` (identity: costs in squared pixels).
+    pub covariances: Option<&'a [f64]>,
+}
+
+impl SparsePointTracks<'_> {
+    /// The number of tracks, after checking the shapes of the arrays (errors about the whole call).
+    fn check(&self) -> Result<usize> {
+        let shape = |what: &str, expected: String, actual: usize| Error::Shape {
+            what: what.into(),
+            expected,
+            actual: actual.to_string(),
+        };
+        let m = self.images.len();
+        match (self.offsets.first(), self.offsets.last()) {
+            (Some(0), Some(&last)) if last == m => {}
+            _ => {
+                return Err(shape(
+                    "offsets",
+                    format!("n + 1 offsets from 0 to {m} (the observations)"),
+                    self.offsets.len(),
+                ))
+            }
         }
-        if views.len() < 2 {
-            return Err(too_few(opts.method, t, views.len(), 2));
+        if let Some(t) = self.offsets.windows(2).position(|w| w[1] < w[0]) {
+            return Err(shape(
+                "offsets",
+                format!("non-decreasing offsets (offsets[{}] < offsets[{t}])", t + 1),
+                t + 1,
+            ));
         }
-        let (frame, spread) = frame_of(seen.iter().map(|&j| prepared.centres[j]));
-        if spread <= SAME_CENTRE {
-            return Err(no_parallax(t));
+        if self.observations.len() != 2 * m {
+            return Err(shape(
+                "observations",
+                format!("{} values (2 per observation)", 2 * m),
+                self.observations.len(),
+            ));
         }
-        Ok(solve_views(&views, &frame, opts, started))
+        if let Some(c) = self.covariances {
+            if c.len() != 4 * m {
+                return Err(shape(
+                    "covariances",
+                    format!("{} values (2 x 2 per observation)", 4 * m),
+                    c.len(),
+                ));
+            }
+        }
+        Ok(self.offsets.len() - 1)
+    }
+}
+
+/// Triangulates every track of the sparse `tracks` seen by `cameras` (3x4, world → pixels), in
+/// parallel: the same per-track solve and results as [`triangulate_points`] on the dense form. A track
+/// naming an image beyond the cameras, or one image twice, is its own error.
+pub fn triangulate_points_sparse(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &SparsePointTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+) -> Result<Vec<Result<PointTriangulation>>> {
+    opts.validate()?;
+    let prepared = prepare(cameras)?;
+    let n = tracks.check()?;
+    let v = cameras.len();
+    let one = |t: usize| {
+        let range = tracks.offsets[t]..tracks.offsets[t + 1];
+        let images = &tracks.images[range.clone()];
+        if let Some(i) = images.iter().position(|&j| j >= v) {
+            return Err(Error::Shape {
+                what: format!("images[{}]", range.start + i),
+                expected: format!("an image index below {v} (the cameras)"),
+                actual: images[i].to_string(),
+            });
+        }
+        if let Some(i) = (1..images.len()).find(|&i| images[..i].contains(&images[i])) {
+            return Err(Error::Degenerate {
+                what: format!("track {t}: image {} observed twice", images[i]),
+            });
+        }
+        let views = range.enumerate().map(|(i, k)| {
+            Ok((
+                tracks.images[k],
+                observation(tracks.observations, tracks.covariances, k, t, i)?,
+            ))
+        });
+        solve_track(&prepared, opts, t, views)
     };
     Ok(solve_tracks(n, 16, progress, one))
 }
