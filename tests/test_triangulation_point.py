@@ -408,3 +408,63 @@ def test_bad_mask_and_cov_shapes(seed):
     with pytest.raises(pluecker.InvalidOptionError, match="max_nodes"):
         pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(max_nodes=0))
 
+
+
+# --- the batch from observations: triangulate_point_observations ------------------------------------
+
+
+def observation_rows(x, visible, cov, rng):
+    """The dense tracks as observation rows (track, image, pixel, covariance): the rows of different
+    tracks interleaved at random, each track's rows in ascending image order (the dense order)."""
+    queues = {t: [j for j in range(x.shape[1]) if visible[t, j]] for t in range(x.shape[0])}
+    rows = []
+    while any(queues.values()):
+        t = rng.choice([t for t, q in queues.items() if q])
+        rows.append((t, queues[t].pop(0)))
+    track, image = np.array(rows).T
+    return track, image, x[track, image], cov[track, image]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_observation_rows_give_the_dense_batch(method, seed):
+    rng = np.random.default_rng(seed)
+    P = cameras(6, 40.0, rng)
+    n = 30
+    X = rng.uniform(-1.0, 1.0, (n, 3))
+    x = np.stack([project(P, Xi) for Xi in X]) + rng.normal(0.0, 1.0, (n, 6, 2))
+    visible = rng.uniform(size=(n, 6)) < 0.6
+    visible[np.arange(n), rng.integers(0, 6, n)] = True
+    visible[np.arange(n), (rng.integers(0, 5, n) + 1 + rng.integers(0, 6, n)) % 6] = True
+    s = rng.uniform(0.5, 2.0, (n, 6))
+    cov = s[..., None, None] * np.eye(2)
+    dense = pluecker.triangulate_points(P, x, visible, cov, method=method)
+    track, image, rows, row_cov = observation_rows(x, visible, cov, rng)
+    sparse = pluecker.triangulate_point_observations(P, track, image, rows, row_cov, method=method)
+    assert len(sparse) == n
+    if method == "linear":
+        # The dense linear batch has its own allocation-free DLT; the same sums in another order agree to
+        # rounding (about 1e-16 of the coordinates, 1e-12 allowed).
+        np.testing.assert_allclose(sparse.X, dense.X, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(sparse.cost, dense.cost, rtol=1e-9)
+    else:
+        np.testing.assert_array_equal(sparse.X, dense.X)
+        np.testing.assert_array_equal(sparse.cost, dense.cost)
+    np.testing.assert_array_equal(sparse.certified, dense.certified)
+    np.testing.assert_array_equal(sparse.status, dense.status)
+
+
+def test_observation_rows_name_their_bad_rows_and_keep_the_others():
+    rng = np.random.default_rng(4)
+    P = cameras(4, 30.0, rng)
+    X = rng.uniform(-1.0, 1.0, (3, 3))
+    track = np.repeat([0, 1, 2], 4)
+    image = np.tile(np.arange(4), 3)
+    x = np.concatenate([project(P, Xi) for Xi in X])
+    image[5] = 9  # track 1 names a camera that does not exist
+    r = pluecker.triangulate_point_observations(P, track, image, x)
+    assert r.status[1] == "invalid_input" and "image[5]" in r.messages[1]
+    assert r.status[0] == r.status[2] == "success"
+    with pytest.raises(pluecker.ShapeError, match="^image: expected 12 rows"):
+        pluecker.triangulate_point_observations(P, track, image[:5], x)
+    with pytest.raises(pluecker.InvalidOptionError, match="^track: entry 2 is -1"):
+        pluecker.triangulate_point_observations(P, np.where(np.arange(12) == 2, -1, track), image, x)

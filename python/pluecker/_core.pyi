@@ -670,6 +670,22 @@ def triangulate_points(
     """Many points seen by the same cameras ``P`` (v, 3, 4): pixels ``x`` (n, v, 2), ``visible`` (n, v)
     booleans (``None``: every view; NaN is fine where not visible), ``cov`` (n, v, 2, 2)."""
 
+def triangulate_point_observations(
+    P: ArrayLike,
+    track: ArrayLike,
+    image: ArrayLike,
+    x: ArrayLike,
+    cov: Optional[ArrayLike] = None,
+    method: Optional[str] = None,
+    *,
+    options: Optional[TriangulationOptions] = None,
+    progress: Optional[Callable[[int], Any]] = None,
+    time_budget: Optional[float] = None,
+) -> PointTriangulations:
+    """Point tracks given one observation per row (memory in the observations): pixel ``x[k]`` (m, 2)
+    of track ``track[k]`` in camera ``image[k]`` of ``P`` (v, 3, 4), ``cov[k]`` (m, 2, 2); result row t
+    is track t."""
+
 def triangulate_line(
     P: ArrayLike,
     lines: ArrayLike,

@@ -74,6 +74,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyPointTriangulations>()?;
     m.add_function(wrap_pyfunction!(triangulation::point::triangulate_point, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::point::triangulate_points, m)?)?;
+    m.add_function(wrap_pyfunction!(
+        triangulation::point::triangulate_point_observations,
+        m
+    )?)?;
     m.add_class::<PyLineTriangulation>()?;
     m.add_class::<PyLineTriangulations>()?;
     m.add_function(wrap_pyfunction!(triangulation::line::triangulate_line, m)?)?;

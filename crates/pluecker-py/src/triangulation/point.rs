@@ -18,7 +18,8 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::triangulation::point::batch::{
-    triangulate_points as core_points, triangulate_points_linear, LinearPoints, PointTracks,
+    triangulate_points as core_points, triangulate_points_linear, triangulate_points_sparse, LinearPoints, PointTracks,
+    SparsePointTracks,
 };
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
 use pluecker::triangulation::{Method, Report};
@@ -238,6 +239,121 @@ pub fn triangulate_points(
         Ok(collect::<PyPointTriangulations>(opts.method, results))
     })?;
     batch_result(py, outcome)
+}
+
+/// Non-negative integer indices `(m,)` (track or image ids), `InvalidOptionError` naming the first other value.
+fn indices(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
+    let (_, values) = read(name, obj, &[Dim::Free("m")])?;
+    values
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            if v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53) {
+                Ok(v as usize)
+            } else {
+                Err(crate::errors::invalid_argument(
+                    name,
+                    format!("entry {k} is {v}, not an index ≥ 0"),
+                ))
+            }
+        })
+        .collect()
+}
+
+/// Triangulates the point tracks of observations given one per row, as COLMAP lists them: observation
+/// `k` is the pixel `x[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)),
+/// with the covariance `cov[k]` (m, 2, 2) when given. Memory grows with the observations, not with
+/// tracks × images. Track `t` of the result is `t` of `track` (`0..max(track)`; a track id without
+/// observations is rejected as too few views); each is solved as `triangulate_points` would.
+#[pyfunction]
+#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn triangulate_point_observations(
+    py: Python<'_>,
+    P: &Bound<'_, PyAny>,
+    track: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    x: &Bound<'_, PyAny>,
+    cov: Option<&Bound<'_, PyAny>>,
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
+) -> PyResult<Py<PyPointTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
+    let opts = options_arg(method, options)?;
+    let cams = cameras("P", P)?;
+    let (tracks, images) = (indices("track", track)?, indices("image", image)?);
+    let m = tracks.len();
+    same_count_as("image", images.len(), m)?;
+    let (xshape, pixels) = read("x", x, &[Dim::Free("m"), Dim::Fixed(2)])?;
+    same_count_as("x", xshape[0], m)?;
+    let covariances = match cov {
+        Some(c) => {
+            let (shape, values) = read("cov", c, &[Dim::Free("m"), Dim::Fixed(2), Dim::Fixed(2)])?;
+            same_count_as("cov", shape[0], m)?;
+            Some(values)
+        }
+        None => None,
+    };
+    // COO → CSR by a stable counting sort on the track ids: `order[k']` is the row of the k'-th sorted one.
+    let n = tracks.iter().max().map_or(0, |t| t + 1);
+    let mut offsets = vec![0usize; n + 1];
+    tracks.iter().for_each(|&t| offsets[t + 1] += 1);
+    (0..n).for_each(|t| offsets[t + 1] += offsets[t]);
+    let mut next = offsets.clone();
+    let mut order = vec![0usize; m];
+    for (k, &t) in tracks.iter().enumerate() {
+        order[next[t]] = k;
+        next[t] += 1;
+    }
+    let sorted_images: Vec<usize> = order.iter().map(|&k| images[k]).collect();
+    let sorted_pixels: Vec<f64> = order.iter().flat_map(|&k| [pixels[2 * k], pixels[2 * k + 1]]).collect();
+    let sorted_covs: Option<Vec<f64>> =
+        covariances.map(|c| order.iter().flat_map(|&k| c[4 * k..4 * k + 4].to_vec()).collect());
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
+        let sparse = SparsePointTracks {
+            offsets: &offsets,
+            images: &sorted_images,
+            observations: &sorted_pixels,
+            covariances: sorted_covs.as_deref(),
+        };
+        let results =
+            triangulate_points_sparse(&cams, &sparse, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
+        // A track's error names a sorted row; the caller knows the rows as given.
+        let results = results
+            .into_iter()
+            .map(|r| {
+                r.map_err(|e| match e {
+                    Error::Shape { what, expected, actual } => Error::Shape {
+                        what: what
+                            .strip_prefix("images[")
+                            .and_then(|k| k.strip_suffix(']'))
+                            .and_then(|k| k.parse::<usize>().ok())
+                            .map_or(what.clone(), |k| format!("image[{}]", order[k])),
+                        expected,
+                        actual,
+                    },
+                    e => e,
+                })
+            })
+            .collect();
+        Ok(collect::<PyPointTriangulations>(opts.method, results))
+    })?;
+    batch_result(py, outcome)
+}
+
+/// A `ShapeError` unless the per-observation argument `name` has `m` rows, as `track` has.
+fn same_count_as(name: &str, rows: usize, m: usize) -> PyResult<()> {
+    if rows == m {
+        Ok(())
+    } else {
+        Err(shape_error(
+            name,
+            &format!("{m} rows (one per observation, as track)"),
+            rows.to_string(),
+        ))
+    }
 }
 
 pack_struct!(PyPointTriangulations { x, covariance });
