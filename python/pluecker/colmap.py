@@ -76,3 +76,57 @@ def colmap_camera(camera: _core.LensCamera, width: int, height: int) -> Any:
     """The ``pycolmap.Camera`` of a ``pluecker.LensCamera``, for an image of ``width`` x ``height`` pixels."""
     pycolmap = _pycolmap()
     return pycolmap.Camera(model=camera.model, width=width, height=height, params=list(camera.params))
+
+
+def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None = None,
+                  options: Any = None) -> tuple[np.ndarray, Any]:
+    """Re-triangulates every 3-D point of a ``pycolmap.Reconstruction`` from its track, with the
+    cameras (models, distortion) and poses held fixed: ``(point3D_ids, PointTriangulations)``, row ``i``
+    the point ``point3D_ids[i]``.
+
+    Each observation is unprojected exactly through its camera model (``LensCamera.unproject``), and its
+    pixel noise (``sigma_px`` pixels, isotropic) is carried to the normalised coordinates to first order
+    (``LensCamera.normalized_covariances``). The cost of eq. 19 is therefore in pixels² as COLMAP's bundle
+    adjustment counts it, and a certificate proves the global minimum of that first-order cost. Use
+    :func:`update_points` to write the points back. ``method`` and ``options`` are those of
+    :func:`pluecker.triangulate_point_observations`.
+    """
+    images = [image for image in reconstruction.images.values() if image.has_pose]
+    index = {image.image_id: j for j, image in enumerate(images)}
+    # Normalised cameras [R | t]: the pixels are unprojected through each camera's model below.
+    P = np.stack([np.hstack([R, t[:, None]]) for R, t in (pose_from_rigid(image.cam_from_world()) for image in images)])
+    lens = {image.image_id: lens_camera(reconstruction.cameras[image.camera_id]) for image in images}
+    ids, track, image_of, pixels = [], [], [], []
+    for t, (point_id, point) in enumerate(sorted(reconstruction.points3D.items())):
+        ids.append(point_id)
+        for element in point.track.elements:
+            if element.image_id not in index:
+                continue
+            track.append(t)
+            image_of.append(element.image_id)
+            pixels.append(reconstruction.images[element.image_id].points2D[element.point2D_idx].xy)
+    track_a = np.asarray(track, dtype=np.int64)
+    pixels_a = np.asarray(pixels, dtype=float).reshape(-1, 2)
+    normalized = np.empty_like(pixels_a)
+    covariances = np.empty((len(pixels_a), 2, 2))
+    image_a = np.asarray(image_of, dtype=np.int64)
+    for image_id in np.unique(image_a):
+        rows = np.flatnonzero(image_a == image_id)
+        camera = lens[int(image_id)]
+        normalized[rows] = camera.unproject(pixels_a[rows])
+        covariances[rows] = camera.normalized_covariances(pixels_a[rows], np.tile(sigma_px**2 * np.eye(2), (len(rows), 1, 1)))
+    cameras_index = np.array([index[int(i)] for i in image_a], dtype=np.int64)
+    result = _core.triangulate_point_observations(P, track_a, cameras_index, normalized, covariances,
+                                                  method=method, options=options)
+    return np.asarray(ids), result
+
+
+def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:
+    """Writes the successfully re-triangulated points of :func:`retriangulate` into ``reconstruction``
+    (their ``xyz``); the others are left as they were. Returns how many were written."""
+    written = 0
+    for point_id, X, status in zip(point3D_ids, result.X, result.status):
+        if status == "success":
+            reconstruction.points3D[int(point_id)].xyz = X
+            written += 1
+    return written
