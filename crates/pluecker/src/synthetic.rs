@@ -45,6 +45,7 @@ impl Scene {
             points3d: c.points3d.clone(),
             lines2d: c.lines2d.iter().map(|s| [s[0] + noise(), s[1] + noise()]).collect(),
             lines3d: c.lines3d.clone(),
+            noise: None,
         }
     }
 }
@@ -95,6 +96,7 @@ pub fn paper_calibration_object() -> Scene {
             points3d,
             lines2d: vec![],
             lines3d: vec![],
+            noise: None,
         },
     }
 }
@@ -242,6 +244,7 @@ impl Structure {
                 .iter()
                 .map(|s| [to_world(&s[0]), to_world(&s[1])])
                 .collect(),
+            noise: None,
         };
         Scene {
             camera,

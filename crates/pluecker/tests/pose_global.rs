@@ -100,6 +100,7 @@ fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
             Vector3::new(-0.28900, -0.29550, 0.56466),
             Vector3::new(-0.14120, -1.27669, 0.37747),
         ]],
+        noise: None,
     };
     let result = estimate_pose(&camera, &corr, &PoseOptions::default()).unwrap();
     // The data are rounded to 1e-5 px: the exact fit is at that level, the old answer at 0.315 px.

@@ -30,6 +30,7 @@ pub fn correspondences(
         points3d: points::<3>("points3d", points3d)?,
         lines2d: segments::<2>("lines2d", lines2d)?,
         lines3d: segments::<3>("lines3d", lines3d)?,
+        noise: None,
     };
     if c.points2d.len() != c.points3d.len() {
         let actual = format!("{} and {} rows", c.points2d.len(), c.points3d.len());

@@ -784,6 +784,13 @@ pub fn certify(
     if !(cost.is_finite() && cost >= 0.0) {
         return Certification::none(Certificate::NotProved("not attempted: the cost is not finite".into()));
     }
+    if corr.noise.is_some() {
+        return Certification::none(Certificate::NotProved(
+            "not attempted: the relaxation holds for isotropic pixel noise on a pinhole camera; \
+             per-observation covariances and distortion are not covered"
+                .into(),
+        ));
+    }
     let mut problem = match Problem::new(camera, corr, cost) {
         Ok(p) => p,
         Err(why) => return Certification::none(Certificate::NotProved(why)),

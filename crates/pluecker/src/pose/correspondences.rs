@@ -1,6 +1,7 @@
 //! The input of pose estimation, its validation, and the similarity that conditions it.
 
 use super::algebraic::{LineConstraint, PointConstraint};
+use super::noise::ObservationNoise;
 use super::Method;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -20,6 +21,9 @@ pub struct Correspondences {
     /// Object segments (two world endpoints). The endpoints need not correspond to the image ones:
     /// only the 3-D line through them is used.
     pub lines3d: Vec<[Vector3<f64>; 2]>,
+    /// Per-observation covariances (or a lens's distortion, [`super::noise::undistort`]) that weight
+    /// the reprojection residuals. `None`: isotropic pixel noise, the plain reprojection error.
+    pub noise: Option<ObservationNoise>,
 }
 
 /// Relative size below which a spread of points or directions counts as degenerate.
@@ -184,6 +188,9 @@ impl Correspondences {
                 expected: "the same number of segments".into(),
                 actual: format!("{} and {}", self.lines2d.len(), self.lines3d.len()),
             });
+        }
+        if let Some(noise) = &self.noise {
+            noise.check_counts(self)?;
         }
         check_finite("points2d", self.points2d.iter().map(|p| p.iter()))?;
         check_finite("points3d", self.points3d.iter().map(|p| p.iter()))?;
@@ -351,6 +358,7 @@ impl Conditioning {
             points3d: c.points3d.iter().map(apply).collect(),
             lines2d: c.lines2d.clone(),
             lines3d: c.lines3d.iter().map(|s| [apply(&s[0]), apply(&s[1])]).collect(),
+            noise: c.noise.clone(),
         }
     }
 }

@@ -18,11 +18,13 @@ use super::certificate::{certify, Certificate, Certification};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
+use super::noise::{undistort, ObservationNoise};
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
 use super::{stage, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
+use crate::camera_model::LensCamera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::rotation_distance;
@@ -376,10 +378,24 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 ///
 /// Errors on invalid input (shapes, NaN/inf, too few correspondences, degenerate configurations,
 /// singular camera, bad options). A solver that fails returns `Ok` with a non-`Success` status.
+///
+/// With per-observation noise on `corr` ([`super::noise`]) every stage after the algebraic one uses
+/// the whitened residuals; user covariances are absolute, so `sigma_px` defaults to 1 (standard
+/// deviations) instead of the estimate from the residuals.
 pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult> {
     let started = Instant::now();
     camera.validate()?;
     opts.validate()?;
+    let absolute;
+    let opts = if corr.noise.as_ref().is_some_and(|n| n.absolute) && opts.sigma_px.is_none() {
+        absolute = PoseOptions {
+            sigma_px: Some(1.0),
+            ..opts.clone()
+        };
+        &absolute
+    } else {
+        opts
+    };
     if let Some(robust) = &opts.ransac {
         return super::robust::pipeline::estimate_robust(camera, corr, opts, robust, started);
     }
@@ -477,6 +493,21 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             behind_camera_cost,
         },
     ))
+}
+
+/// [`estimate_pose`] for a camera with distortion: `corr` holds the observed (distorted) pixels of
+/// `lens`, and `noise` optionally their covariances ([`ObservationNoise::from_covariances`]). The
+/// stages run on the undistorted pixels and the refinement minimises the error in the distorted ones
+/// ([`super::noise`] says how, and what RANSAC's thresholds then mean). The result's pixels
+/// (reprojection errors, `sigma_px`) are distorted pixels, or standard deviations with covariances.
+pub fn estimate_pose_lens(
+    lens: &LensCamera,
+    corr: &Correspondences,
+    noise: Option<&ObservationNoise>,
+    opts: &PoseOptions,
+) -> Result<PoseResult> {
+    let (camera, undistorted) = undistort(lens, corr, noise)?;
+    estimate_pose(&camera, &undistorted, opts)
 }
 
 /// How many times lower than the returned pose's cost the cost of a pose with every point behind the

@@ -12,6 +12,7 @@ mod estimate;
 pub mod initialization;
 pub mod linear;
 pub mod minimal;
+pub mod noise;
 pub mod refinement;
 pub mod reprojection;
 mod result;
@@ -19,7 +20,8 @@ pub mod robust;
 
 pub use certificate::{Certificate, CertificateOptions};
 pub use correspondences::{Conditioning, Correspondences};
-pub use estimate::{algebraic_stage, estimate_pose, Estimate};
+pub use estimate::{algebraic_stage, estimate_pose, estimate_pose_lens, Estimate};
+pub use noise::ObservationNoise;
 pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};
 

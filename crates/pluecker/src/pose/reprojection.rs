@@ -6,14 +6,17 @@
 //! - a line: the signed distances of the two observed segment endpoints to the projection of the
 //!   3-D line (the line through the projections of its two 3-D endpoints), two residuals.
 //!
+//! With per-observation noise ([`super::noise`]) the residuals are whitened: `W (π(R X + t) − u)` for a
+//! point, the endpoint distance divided by the endpoint's standard deviation across the line.
+//!
 //! The pose is `(R, t)` with `x_cam = R X_world + t`; a tangent step `(ω, τ)` moves it to
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
 
-use super::{Correspondences, CovarianceSource};
+use super::{Correspondences, CovarianceSource, ObservationNoise};
 use crate::camera::Camera;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
-use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
 
 pub use crate::rigid::Pose;
 
@@ -31,6 +34,8 @@ pub struct ReprojectionCost<'a> {
     n_points: usize,
     lines2d: &'a [[Vector2<f64>; 2]],
     lines3d: &'a [[Vector3<f64>; 2]],
+    /// Per-observation weights ([`super::noise`]); `None` is the isotropic fast path.
+    noise: Option<&'a ObservationNoise>,
 }
 
 /// One residual pair and its 2x6 Jacobian with respect to `(ω, τ)`.
@@ -124,12 +129,15 @@ impl<'a> ReprojectionCost<'a> {
             n_points: n,
             lines2d,
             lines3d,
+            noise: None,
         }
     }
 
-    /// The cost of all the correspondences of `c`.
+    /// The cost of all the correspondences of `c`, weighted by their noise when they carry one.
     pub fn of(camera: &Camera, c: &'a Correspondences) -> Self {
-        ReprojectionCost::new(*camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d)
+        let mut cost = ReprojectionCost::new(*camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
+        cost.noise = c.noise.as_ref();
+        cost
     }
 
     /// Number of scalar residuals: two per point and two per line.
@@ -187,6 +195,13 @@ impl<'a> ReprojectionCost<'a> {
     /// The point terms of the cost and, with `JACOBIAN`, of the gradient and `JᵀJ`: full batches of
     /// [`LANES`] points, then the rest one by one.
     fn point_sums<const JACOBIAN: bool>(&self, pose: &Pose) -> (f64, [f64; 6], [f64; 21]) {
+        if self.noise.is_some() {
+            let mut sums = (0.0, [0.0; 6], [0.0; 21]);
+            for i in 0..self.n_points {
+                add_block(&mut sums, &self.point_block(pose, i, JACOBIAN));
+            }
+            return sums;
+        }
         let full = self.n_points - self.n_points % LANES;
         let mut batches = Sums::<LANES>::new();
         let mut rest = Sums::<1>::new();
@@ -212,6 +227,17 @@ impl<'a> ReprojectionCost<'a> {
         )
     }
 
+    /// Point `i`'s residual `W (π(R X + t) − u)` and its Jacobian, whitened by the noise (if any).
+    fn point_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
+        let p = self.point_lanes::<1, true>(pose, i);
+        let r = Vector2::new(p.ru[0], p.rv[0]);
+        let j = SMatrix::<f64, 2, 6>::from_fn(|row, col| if row == 0 { p.ju[col][0] } else { p.jv[col][0] });
+        let w = self.noise.map_or_else(Matrix2::identity, |n| n.points[i]);
+        (w * r, if with_jacobian { w * j } else { j })
+    }
+
+    /// Line `i`'s two endpoint residuals and their Jacobian: `(l·ẽ) / √(l₁₂ᵀ C l₁₂)` with `C` the
+    /// endpoint's covariance (the identity without noise: the pixel distance).
     fn line_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
         let [wa, wb] = self.lines3d[i];
         let (ra, rb) = (pose.rotation * wa, pose.rotation * wb);
@@ -219,7 +245,7 @@ impl<'a> ReprojectionCost<'a> {
         // The projected line in normalised coordinates, and its pixel form Kᵀ⁻¹ l.
         let l = a.cross(&b);
         let lp = self.k_inv.transpose() * l;
-        let scale = lp.fixed_rows::<2>(0).norm();
+        let lp12 = lp.fixed_rows::<2>(0).into_owned();
         let mut residual = Vector2::zeros();
         let mut jac = SMatrix::<f64, 2, 6>::zeros();
         let dl_domega = skew(&b) * skew(&ra) - skew(&a) * skew(&rb);
@@ -227,12 +253,15 @@ impl<'a> ReprojectionCost<'a> {
         for (k, e) in self.lines2d[i].iter().enumerate() {
             let eh = Vector3::new(e.x, e.y, 1.0);
             let num = lp.dot(&eh);
+            // C l₁₂, with C = I on the fast path.
+            let c_l = self.noise.map_or(lp12, |n| n.lines[i][k] * lp12);
+            let scale = lp12.dot(&c_l).sqrt();
             residual[k] = num / scale;
             if with_jacobian {
-                // ∂/∂lp of (lp·e)/‖lp₀₁‖, then chain through lp = K⁻ᵀ l.
+                // ∂/∂lp of (lp·e)/√(lp₁₂ᵀ C lp₁₂), then chain through lp = K⁻ᵀ l.
                 let mut dlp = eh / scale;
-                dlp.x -= num * lp.x / scale.powi(3);
-                dlp.y -= num * lp.y / scale.powi(3);
+                dlp.x -= num * c_l.x / scale.powi(3);
+                dlp.y -= num * c_l.y / scale.powi(3);
                 let dl = self.k_inv * dlp;
                 jac.fixed_view_mut::<1, 3>(k, 0)
                     .copy_from(&(dl.transpose() * dl_domega));
@@ -245,7 +274,12 @@ impl<'a> ReprojectionCost<'a> {
     /// The cost `½ Σ r²` at `pose` when it is below `bound`, else `None`: the points are summed in
     /// batches and the sum abandoned as soon as it reaches `bound` (for ranking many poses cheaply).
     pub fn cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
-        let full = self.n_points - self.n_points % LANES;
+        // The weighted path checks the bound after every point; the fast one after every batch.
+        let full = if self.noise.is_some() {
+            0
+        } else {
+            self.n_points - self.n_points % LANES
+        };
         let mut total = 0.0;
         for i0 in (0..full).step_by(LANES) {
             let p = self.point_lanes::<LANES, false>(pose, i0);
@@ -257,8 +291,10 @@ impl<'a> ReprojectionCost<'a> {
             }
         }
         for i in full..self.n_points {
-            let p = self.point_lanes::<1, false>(pose, i);
-            total += 0.5 * (p.ru[0] * p.ru[0] + p.rv[0] * p.rv[0]);
+            total += 0.5 * self.point_residual(pose, i).norm_squared();
+            if !(total < bound) {
+                return None;
+            }
         }
         for i in 0..self.lines2d.len() {
             total += 0.5 * self.line_block(pose, i, false).0.norm_squared();
@@ -269,12 +305,19 @@ impl<'a> ReprojectionCost<'a> {
         (total < bound).then_some(total)
     }
 
-    /// The stacked residual vector in pixels: `(u, v)` per point, then the two signed endpoint
+    /// Point `i`'s residual, whitened by the noise (if any).
+    fn point_residual(&self, pose: &Pose, i: usize) -> Vector2<f64> {
+        let p = self.point_lanes::<1, false>(pose, i);
+        let r = Vector2::new(p.ru[0], p.rv[0]);
+        self.noise.map_or(r, |n| n.points[i] * r)
+    }
+
+    /// The stacked residual vector in pixels (whitened units with noise): `(u, v)` per point, then the two signed endpoint
     /// distances per line (the `r` of `½ Σ r²`).
     pub fn residuals(&self, pose: &Pose) -> Vec<f64> {
         let points = (0..self.n_points).flat_map(|i| {
-            let p = self.point_lanes::<1, false>(pose, i);
-            [p.ru[0], p.rv[0]]
+            let r = self.point_residual(pose, i);
+            [r.x, r.y]
         });
         let lines = (0..self.lines2d.len()).flat_map(|i| {
             let r = self.line_block(pose, i, false).0;
@@ -286,10 +329,7 @@ impl<'a> ReprojectionCost<'a> {
     /// Per-correspondence reprojection errors in pixels: the point distance for points, the RMS of the
     /// two endpoint distances for lines (points first, then lines).
     pub fn errors(&self, pose: &Pose) -> Vec<f64> {
-        let points = (0..self.n_points).map(|i| {
-            let p = self.point_lanes::<1, false>(pose, i);
-            (p.ru[0] * p.ru[0] + p.rv[0] * p.rv[0]).sqrt()
-        });
+        let points = (0..self.n_points).map(|i| self.point_residual(pose, i).norm());
         let lines = (0..self.lines2d.len()).map(|i| (0.5 * self.line_block(pose, i, false).0.norm_squared()).sqrt());
         points.chain(lines).collect()
     }
@@ -304,6 +344,19 @@ impl<'a> ReprojectionCost<'a> {
         let (x, y, z) = (self.column(0), self.column(1), self.column(2));
         let points = (0..self.n_points).map(|i| Vector3::new(x[i], y[i], z[i]));
         count_behind(points.chain(self.lines3d.iter().flat_map(|s| s.iter().copied())), pose)
+    }
+}
+
+/// Adds one residual pair's cost, gradient and upper triangle of `JᵀJ` to `sums`.
+fn add_block(sums: &mut (f64, [f64; 6], [f64; 21]), (r, j): &Block) {
+    sums.0 += 0.5 * r.norm_squared();
+    let mut k = 0;
+    for a in 0..6 {
+        sums.1[a] += j[(0, a)] * r.x + j[(1, a)] * r.y;
+        for b in a..6 {
+            sums.2[k] += j[(0, a)] * j[(0, b)] + j[(1, a)] * j[(1, b)];
+            k += 1;
+        }
     }
 }
 
@@ -326,19 +379,11 @@ impl Objective<6> for ReprojectionCost<'_> {
     }
 
     fn linearize(&self, pose: &Pose) -> Linearization<6> {
-        let (mut cost, mut grad, mut upper) = self.point_sums::<true>(pose);
+        let mut sums = self.point_sums::<true>(pose);
         for i in 0..self.lines2d.len() {
-            let (r, j) = self.line_block(pose, i, true);
-            cost += 0.5 * r.norm_squared();
-            let mut k = 0;
-            for a in 0..6 {
-                grad[a] += j[(0, a)] * r.x + j[(1, a)] * r.y;
-                for b in a..6 {
-                    upper[k] += j[(0, a)] * j[(0, b)] + j[(1, a)] * j[(1, b)];
-                    k += 1;
-                }
-            }
+            add_block(&mut sums, &self.line_block(pose, i, true));
         }
+        let (cost, grad, upper) = sums;
         let mut gauss_newton = SMatrix::<f64, 6, 6>::zeros();
         let mut k = 0;
         for a in 0..6 {
@@ -472,5 +517,107 @@ mod tests {
             let exact = ReprojectionCost::new(cam, &[], &[], &l2_exact, &l3);
             assert!(exact.cost(&Pose::new(rot, t)) < 1e-18);
         }
+    }
+
+    #[test]
+    fn weighted_residuals_match_finite_differences_and_reduce_to_pixels() {
+        let mut rng = Rng::new(8);
+        let cam = Camera::new(900.0, 880.0, 320.0, 240.0, 0.0).unwrap();
+        let rot = rng.rotation();
+        let t = Vector3::new(0.2, -0.1, 8.0);
+        let p3: Vec<Vector3<f64>> = (0..5)
+            .map(|_| Vector3::new(rng.normal(), rng.normal(), rng.normal()))
+            .collect();
+        let p2: Vec<Vector2<f64>> = p3
+            .iter()
+            .map(|x| cam.project(&(rot * x + t)) + Vector2::new(1.0, -2.0))
+            .collect();
+        let l3: Vec<[Vector3<f64>; 2]> = (0..3)
+            .map(|_| {
+                [
+                    Vector3::new(rng.normal(), rng.normal(), 1.0),
+                    Vector3::new(rng.normal(), 0.5, rng.normal()),
+                ]
+            })
+            .collect();
+        let l2: Vec<[Vector2<f64>; 2]> = l3
+            .iter()
+            .map(|s| {
+                [
+                    cam.project(&(rot * s[0] + t)) + Vector2::new(2.0, 1.0),
+                    cam.project(&(rot * s[1] + t)),
+                ]
+            })
+            .collect();
+        let plain = Correspondences {
+            points2d: p2,
+            points3d: p3,
+            lines2d: l2,
+            lines3d: l3,
+            noise: None,
+        };
+        let pose = Pose::new(rot, t);
+        // Identity noise: the same cost as the fast path.
+        let identity = Correspondences {
+            noise: Some(ObservationNoise {
+                points: vec![Matrix2::identity(); 5],
+                lines: vec![[Matrix2::identity(); 2]; 3],
+                absolute: false,
+            }),
+            ..plain.clone()
+        };
+        let (a, b) = (
+            ReprojectionCost::of(&cam, &plain),
+            ReprojectionCost::of(&cam, &identity),
+        );
+        assert!((a.cost(&pose) - b.cost(&pose)).abs() < 1e-12 * a.cost(&pose));
+        assert!(
+            (a.linearize(&pose).gauss_newton - b.linearize(&pose).gauss_newton).amax()
+                < 1e-9 * a.information(&pose).amax()
+        );
+        // Anisotropic covariances: point i's cost is ½ rᵀ Σ⁻¹ r, and the gradient is consistent.
+        let covs: Vec<Matrix2<f64>> = (0..5).map(|i| Matrix2::new(1.0 + i as f64, 0.3, 0.3, 0.5)).collect();
+        let line_covs: Vec<[Matrix2<f64>; 2]> = (0..3)
+            .map(|_| [Matrix2::new(2.0, -0.4, -0.4, 0.7), Matrix2::new(0.3, 0.0, 0.0, 3.0)])
+            .collect();
+        let weighted = Correspondences {
+            noise: Some(ObservationNoise::from_covariances(&covs, &line_covs).unwrap()),
+            ..plain.clone()
+        };
+        let cost = ReprojectionCost::of(&cam, &weighted);
+        let expected_points: f64 = (0..5)
+            .map(|i| {
+                let r = cam.project(&(rot * plain.points3d[i] + t)) - plain.points2d[i];
+                0.5 * (r.transpose() * covs[i].try_inverse().unwrap() * r)[0]
+            })
+            .sum();
+        let expected_lines: f64 = (0..3)
+            .map(|i| {
+                // The projected line in pixels from two projected points; the distance's variance is nᵀ C n.
+                let (a, b) = (
+                    cam.project(&(rot * plain.lines3d[i][0] + t)),
+                    cam.project(&(rot * plain.lines3d[i][1] + t)),
+                );
+                let d = (b - a).normalize();
+                let n = Vector2::new(-d.y, d.x);
+                (0..2)
+                    .map(|k| {
+                        let dist = n.dot(&(plain.lines2d[i][k] - a));
+                        0.5 * dist * dist / (n.transpose() * line_covs[i][k] * n)[0]
+                    })
+                    .sum::<f64>()
+            })
+            .sum();
+        let total = expected_points + expected_lines;
+        assert!(
+            (cost.cost(&pose) - total).abs() < 1e-9 * total,
+            "{} vs {total}",
+            cost.cost(&pose)
+        );
+        let moved = Pose::new(
+            exp_so3(&Vector3::new(0.01, 0.02, -0.01)) * rot,
+            t + Vector3::new(0.05, 0.0, 0.1),
+        );
+        assert!(gradient_error(&cost, &moved, 1e-6) < 1e-6);
     }
 }

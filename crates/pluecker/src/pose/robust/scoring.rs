@@ -481,6 +481,7 @@ pub(crate) fn subset(corr: &Correspondences, points: &[bool], lines: &[bool]) ->
         points3d: pick(&corr.points3d, points),
         lines2d: pick(&corr.lines2d, lines),
         lines3d: pick(&corr.lines3d, lines),
+        noise: corr.noise.as_ref().map(|n| n.subset(points, lines)),
     }
 }
 
