@@ -329,7 +329,7 @@ class PoseResult:
     def to_dict(self) -> Dict[str, Any]: ...
 
 def estimate_pose(
-    camera: Camera,
+    camera: "Camera | LensCamera",
     points2d: Optional[ArrayLike] = None,
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
@@ -338,9 +338,18 @@ def estimate_pose(
     *,
     options: Optional[PoseOptions] = None,
     ransac: "RansacOptions | bool | None" = None,
+    point_covariances: Optional[ArrayLike] = None,
+    line_covariances: Optional[ArrayLike] = None,
 ) -> PoseResult:
     """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera from points (N, 2) ↔ (N, 3)
     and/or segments (M, 2, 2) ↔ (M, 2, 3) (only the 3-D line through a 3-D segment is used).
+
+    ``camera``: :class:`Camera`, or :class:`LensCamera` whose observed (distorted) pixels are given:
+    every stage runs on exactly undistorted pixels (RANSAC thresholds apply there), the refinement and
+    all reported pixels are the distorted ones, segments as each endpoint's distance to the tangent of
+    the curved image of the line. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
+    (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
+    in standard deviations (``sigma_px`` defaults to 1). No certificate with either (status says why).
 
     ``method``: one of :data:`METHODS` (``None``: ``options.method``): ``"trust-region"`` (eqs. 13 +
     22, Hebden's step, section 4.1), ``"rotation-then-translation"`` (eq. 14 then 15),

@@ -10,8 +10,12 @@ pub mod reprojection;
 pub mod result;
 
 use crate::camera::PyCamera;
-use crate::convert::{points, segments};
-use crate::errors::shape_error;
+use crate::convert::{check_finite, matrix_stack, points, read_any, segments, shape_string};
+use crate::errors::{guarded, shape_error};
+use crate::lens_camera::PyLensCamera;
+use nalgebra::Matrix2;
+use pluecker::camera_model::LensCamera;
+use pluecker::pose::ObservationNoise;
 use crate::interrupt::{run_interruptible, with_partial};
 use options::{PyPoseOptions, PyRansacOptions};
 use pluecker::pose::Correspondences;
@@ -58,6 +62,67 @@ fn ransac_arg(ransac: Option<&Bound<'_, PyAny>>) -> PyResult<Option<pluecker::po
     }
 }
 
+/// The `line_covariances=` argument: one 2x2 covariance per segment for both endpoints `(M, 2, 2)`, or
+/// one per endpoint `(M, 2, 2, 2)`.
+fn line_covariances(obj: &Bound<'_, PyAny>) -> PyResult<Vec<[Matrix2<f64>; 2]>> {
+    const NAME: &str = "line_covariances";
+    let (shape, values) = read_any(NAME, obj)?;
+    let per_endpoint = match shape.as_slice() {
+        [_, 2, 2] => false,
+        [_, 2, 2, 2] => true,
+        _ => return Err(shape_error(NAME, "shape (M, 2, 2) or (M, 2, 2, 2)", shape_string(&shape))),
+    };
+    let stride = if per_endpoint { 8 } else { 4 };
+    check_finite(NAME, &values, stride)?;
+    let matrix = |v: &[f64]| Matrix2::new(v[0], v[1], v[2], v[3]);
+    Ok(values
+        .chunks(stride)
+        .map(|v| if per_endpoint { [matrix(&v[..4]), matrix(&v[4..])] } else { [matrix(v); 2] })
+        .collect())
+}
+
+/// The noise of the covariance arguments, when either is given (the other defaults to the identity:
+/// 1 px² isotropic).
+fn observation_noise(
+    corr: &Correspondences,
+    point_covariances: Option<&Bound<'_, PyAny>>,
+    line_covariances_arg: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<ObservationNoise>> {
+    if point_covariances.is_none() && line_covariances_arg.is_none() {
+        return Ok(None);
+    }
+    let points = match point_covariances {
+        Some(obj) => matrix_stack::<2, 2>("point_covariances", obj)?,
+        None => vec![Matrix2::identity(); corr.n_points()],
+    };
+    let lines = match line_covariances_arg {
+        Some(obj) => line_covariances(obj)?,
+        None => vec![[Matrix2::identity(); 2]; corr.n_lines()],
+    };
+    let noise = guarded(|| ObservationNoise::from_covariances(&points, &lines))?;
+    guarded(|| noise.check_counts(corr))?;
+    Ok(Some(noise))
+}
+
+/// The `camera=` argument: a pinhole `Camera` or a `LensCamera` of one of COLMAP's models.
+enum AnyCamera {
+    Pinhole(pluecker::Camera),
+    Lens(LensCamera),
+}
+
+fn any_camera(camera: &Bound<'_, PyAny>) -> PyResult<AnyCamera> {
+    if let Ok(c) = camera.downcast::<PyCamera>() {
+        return Ok(AnyCamera::Pinhole(c.get().inner));
+    }
+    if let Ok(c) = camera.downcast::<PyLensCamera>() {
+        return Ok(AnyCamera::Lens(c.get().inner.clone()));
+    }
+    Err(pyo3::exceptions::PyTypeError::new_err(format!(
+        "camera: expected Camera or LensCamera, got {}",
+        camera.get_type().name()?
+    )))
+}
+
 /// Correspondences from which `estimate_pose` runs on a worker thread, so that Ctrl-C stops it
 /// within about 0.1 s (fewer take milliseconds, and run on the calling thread).
 const SHORT_POSE: usize = 1000;
@@ -65,14 +130,17 @@ const SHORT_POSE: usize = 1000;
 /// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
 /// robustly (LO-RANSAC), with its covariance.
 ///
+/// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones).
 /// `options`: `PoseOptions` (default `PoseOptions()`); `method`, when given, wins over
 /// `options.method`. `ransac`: `RansacOptions` or `True` (its defaults) estimates robustly.
+/// `point_covariances` (N, 2, 2) and `line_covariances` (M, 2, 2) or (M, 2, 2, 2): pixel² covariances
+/// of the observations (core `pose::noise`).
 #[pyfunction]
-#[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, method = None, *, options = None, ransac = None))]
+#[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, method = None, *, options = None, ransac = None, point_covariances = None, line_covariances = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
     py: Python<'_>,
-    camera: &Bound<'_, PyCamera>,
+    camera: &Bound<'_, PyAny>,
     points2d: Option<&Bound<'_, PyAny>>,
     points3d: Option<&Bound<'_, PyAny>>,
     lines2d: Option<&Bound<'_, PyAny>>,
@@ -80,19 +148,26 @@ pub fn estimate_pose(
     method: Option<&str>,
     options: Option<PyRef<'_, PyPoseOptions>>,
     ransac: Option<&Bound<'_, PyAny>>,
+    point_covariances: Option<&Bound<'_, PyAny>>,
+    line_covariances: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPoseResult>> {
-    let camera = camera.get().inner;
+    let camera = any_camera(camera)?;
     let options = options.map_or_else(PyPoseOptions::default, |o| o.clone());
     let options = match method {
         Some(m) => options.with_method(m)?,
         None => options,
     };
     let opts = options.core(ransac_arg(ransac)?);
-    let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
+    let mut corr = correspondences(points2d, points3d, lines2d, lines3d)?;
+    let noise = observation_noise(&corr, point_covariances, line_covariances)?;
     // A pose from fewer correspondences ends within milliseconds (see `interrupt::run_interruptible`).
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
-    let outcome = run_interruptible(py, None, None, short, move |_| {
-        pluecker::estimate_pose(&camera, &corr, &opts)
+    let outcome = run_interruptible(py, None, None, short, move |_| match &camera {
+        AnyCamera::Pinhole(camera) => {
+            corr.noise = noise;
+            pluecker::estimate_pose(camera, &corr, &opts)
+        }
+        AnyCamera::Lens(lens) => pluecker::pose::estimate_pose_lens(lens, &corr, noise.as_ref(), &opts),
     })?;
     let result = Py::new(py, PyPoseResult::wrap(outcome.value))?;
     match outcome.pending {

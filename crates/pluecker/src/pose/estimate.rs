@@ -18,7 +18,7 @@ use super::certificate::{certify, Certificate, Certification};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::noise::{undistort, ObservationNoise};
+use super::noise::{pinhole_part, undistort, ObservationNoise};
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
@@ -506,6 +506,14 @@ pub fn estimate_pose_lens(
     noise: Option<&ObservationNoise>,
     opts: &PoseOptions,
 ) -> Result<PoseResult> {
+    if lens.is_pinhole() {
+        // No distortion: the pinhole path, with the covariances (if any) as they are.
+        let corr = Correspondences {
+            noise: noise.cloned(),
+            ..corr.clone()
+        };
+        return estimate_pose(&pinhole_part(lens)?, &corr, opts);
+    }
     let (camera, undistorted) = undistort(lens, corr, noise)?;
     estimate_pose(&camera, &undistorted, opts)
 }
