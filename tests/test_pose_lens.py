@@ -145,3 +145,33 @@ def test_bad_covariances_and_cameras_are_named_errors():
     far[3] = [320 + 0.8 * 600, 240]  # beyond the fold of the distortion
     with pytest.raises(pluecker.DegenerateConfigurationError, match=r"points2d.*pixel 3"):
         pluecker.estimate_pose(radial, far, X)
+
+
+def test_command_line_takes_colmap_camera_models_and_covariances(tmp_path, capsys):
+    import json
+
+    from pluecker.cli import main
+
+    rng = np.random.default_rng(8)
+    R, t, X, L = scene(rng, 20, 3)
+    u = observe(FISHEYE, R, t, X, 0.5, rng)
+    s = observe(FISHEYE, R, t, L, 0.5, rng).reshape(-1, 2, 2)
+    doc = {
+        "camera": {"model": FISHEYE.model, "params": [float(p) for p in FISHEYE.params]},
+        "points2d": u.tolist(), "points3d": X.tolist(), "lines2d": s.tolist(), "lines3d": L.tolist(),
+        "point_covariances": np.tile(0.25 * np.eye(2), (20, 1, 1)).tolist(),
+        "line_covariances": np.tile(0.25 * np.eye(2), (3, 1, 1)).tolist(),
+    }
+    path = tmp_path / "pose.json"
+    path.write_text(json.dumps(doc))
+    assert main(["pose", str(path)]) == 0
+    out = json.loads(capsys.readouterr().out)
+    direct = pluecker.estimate_pose(FISHEYE, u, X, s, L, point_covariances=doc["point_covariances"],
+                                    line_covariances=doc["line_covariances"])
+    np.testing.assert_allclose(out["R"], direct.R, atol=1e-12)
+    assert out["status"] == "success" and out["sigma_px"] == 1.0
+    assert nees(direct, R, t) < 22.5
+    doc["camera"] = {"model": "OPENCV", "params": [600.0, 600.0]}
+    path.write_text(json.dumps(doc))
+    assert main(["pose", str(path)]) == 2
+    assert "OPENCV parameters: expected 8 values" in capsys.readouterr().err

@@ -62,7 +62,10 @@ error: one line naming the file, exit status 2.
 The summary counts tracks: "460 of 672 triangulated" means 460 of the 672 rows of nview-corners were
 seen in at least two of the chosen views (the folder's p3d may have another number of rows)."""
 
-INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "method", "options", "ransac"}
+INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "point_covariances", "line_covariances",
+              "method", "options", "ransac"}
+#: Optional per-observation covariances, pixels², passed to ``estimate_pose`` as they are.
+COVARIANCES = ("point_covariances", "line_covariances")
 #: Command-line flag (``args`` attribute) → field of ``PoseOptions``; a flag given wins over the file.
 POSE_FLAGS = {"refine": "refine", "penalty": "penalty", "sigma": "sigma_px", "certify": "certify"}
 #: Command-line flag (``args`` attribute) → field of ``RansacOptions``; a flag given wins over the file
@@ -276,10 +279,27 @@ def _number(value: Any, what: str) -> float:
         raise InputError(f"'{what}' is an integer too large for a float (beyond 1.8e308)") from None
 
 
-def _camera(doc: dict[str, Any]) -> pluecker.Camera:
+def _lens_camera(spec: dict[str, Any]) -> pluecker.LensCamera:
+    """``{"model": COLMAP name, "params": [...]}``: a camera with distortion (``pluecker.LensCamera``)."""
+    if set(spec) != {"model", "params"}:
+        raise InputError("'camera' with 'model' takes exactly {\"model\": name, \"params\": [...]}, got keys "
+                         + ", ".join(sorted(spec)))
+    model, params = spec["model"], spec["params"]
+    if model not in pluecker.LensCamera.MODELS:
+        raise InputError(f"'camera.model' {json.dumps(model)[:40]} is not one of {', '.join(pluecker.LensCamera.MODELS)}")
+    if not isinstance(params, list):
+        raise InputError("'camera.params' must be a list of numbers in COLMAP's order")
+    values = [_number(v, f"camera.params[{i}]") for i, v in enumerate(params)]
+    return pluecker.LensCamera(model, values)
+
+
+def _camera(doc: dict[str, Any]) -> pluecker.Camera | pluecker.LensCamera:
     spec = doc.get("camera")
     if not isinstance(spec, dict):
-        raise InputError("'camera' is required: {\"fx\", \"fy\", \"cx\", \"cy\", \"skew\"?} or {\"K\": 3x3}")
+        raise InputError("'camera' is required: {\"fx\", \"fy\", \"cx\", \"cy\", \"skew\"?}, {\"K\": 3x3} or "
+                         "{\"model\": COLMAP model, \"params\": [...]}")
+    if "model" in spec:
+        return _lens_camera(spec)
     if "K" in spec:
         if set(spec) != {"K"}:
             raise InputError("'camera' has 'K' and other keys; give either K or fx, fy, cx, cy, skew")
@@ -289,7 +309,7 @@ def _camera(doc: dict[str, Any]) -> pluecker.Camera:
         return pluecker.Camera.from_matrix(K)
     required, allowed = {"fx", "fy", "cx", "cy"}, {"fx", "fy", "cx", "cy", "skew"}
     if missing := sorted(required - set(spec)):
-        raise InputError(f"'camera' lacks {', '.join(missing)} (or give \"K\")")
+        raise InputError(f"'camera' lacks {', '.join(missing)} (or give \"K\", or \"model\" and \"params\")")
     if unknown := sorted(set(spec) - allowed):
         raise InputError(f"'camera' has unknown key(s) {', '.join(unknown)}")
     values = {key: _number(value, f"camera.{key}") for key, value in spec.items()}
@@ -309,6 +329,9 @@ def _correspondences(doc: dict[str, Any]) -> dict[str, np.ndarray]:
         arrays[key] = array
     if not arrays:
         raise InputError("no correspondences: give points2d + points3d and/or lines2d + lines3d")
+    for key in COVARIANCES:
+        if doc.get(key) is not None:
+            arrays[key] = _number_array(doc[key], key)
     return arrays
 
 
