@@ -475,7 +475,7 @@ class TriangulationOptions:
     given to the function wins over :attr:`method`."""
 
     # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, local_max_iterations: int = 100) -> None: ...
+    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, local_max_iterations: int = 100) -> None: ...
     method: str
     """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
     max_relative_gap: float
@@ -484,6 +484,8 @@ class TriangulationOptions:
     """The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing."""
     max_nodes: int
     """Branch and bound gives up (status `gap_not_closed`) after this many nodes."""
+    outlier_threshold: Optional[float]
+    """Points only: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     local_max_iterations: int
     """Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`)."""
     # end of fields
@@ -537,6 +539,8 @@ class PointTriangulation(TriangulationReport):
     """The point, world frame."""
     covariance: Optional[NDArray[np.float64]]
     """Its 3x3 covariance (first order, from the observation covariances); `None` when singular."""
+    inliers: Optional[NDArray[np.bool_]]
+    """With `options.outlier_threshold`: (v,) the views the point was solved from; else `None`."""
     # end of fields
 
 class LineTriangulation(TriangulationReport):
@@ -618,6 +622,11 @@ class PointTriangulations(BatchReport):
     """Per track: the point, world frame, shape (n, 3) (NaN for a rejected track)."""
     covariance: NDArray[np.float64]
     """Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none)."""
+    inliers: Optional[NDArray[np.bool_]]
+    """With `options.outlier_threshold`: which observations each point was solved from, shaped as
+    the observations were given ((n, v) for `triangulate_points`, (m,) for
+    `triangulate_point_observations`; false where not visible or rejected); else `None`.
+    """
     # end of fields
 
 class LineTriangulations(BatchReport):

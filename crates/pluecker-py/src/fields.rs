@@ -94,6 +94,26 @@ impl Field for Array {
     }
 }
 
+/// A boolean array of any shape, row-major (a batch's inlier masks).
+pub(crate) struct Mask {
+    pub values: Vec<bool>,
+    pub shape: Vec<usize>,
+}
+
+impl Field for Mask {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        let array = ArrayD::from_shape_vec(IxDyn(&self.shape), self.values)
+            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
+        Ok(array.into_pyarray(py).into_any().unbind())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        self.get(py)?.call_method0(py, "tolist")
+    }
+    fn stub() -> String {
+        "NDArray[np.bool_]".into()
+    }
+}
+
 impl<const R: usize, const C: usize> Field for nalgebra::SMatrix<f64, R, C> {
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
         Array::from(self).get(py)

@@ -220,7 +220,8 @@ pack_by_name!(Termination: Termination::GradientTolerance, Termination::RadiusTo
     Termination::SingularHessian, Termination::NonFiniteCost, Termination::ClosedForm);
 pack_by_name!(Method: Method::Linear, Method::Local, Method::Optimal);
 pack_by_name!(Status: Status::Success, Status::GapNotClosed, Status::NotConverged, Status::BehindCamera,
-    Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::Interrupted, Status::TimeBudget);
+    Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::Interrupted, Status::TimeBudget,
+    Status::TooFewInliers);
 pack_by_name!(CertificateKind: CertificateKind::None, CertificateKind::ConvexityTest,
     CertificateKind::BranchAndBound);
 pack_by_name!(PoseMethod: PoseMethod::TrustRegion, PoseMethod::RotationThenTranslation,

@@ -12,13 +12,13 @@ pub mod result;
 use crate::camera::PyCamera;
 use crate::convert::{check_finite, matrix_stack, points, read_any, segments, shape_string};
 use crate::errors::{guarded, shape_error};
+use crate::interrupt::{run_interruptible, with_partial};
 use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
-use pluecker::camera_model::LensCamera;
-use pluecker::pose::ObservationNoise;
-use crate::interrupt::{run_interruptible, with_partial};
 use options::{PyPoseOptions, PyRansacOptions};
+use pluecker::camera_model::LensCamera;
 use pluecker::pose::Correspondences;
+use pluecker::pose::ObservationNoise;
 use pyo3::prelude::*;
 use result::PyPoseResult;
 
@@ -70,14 +70,26 @@ fn line_covariances(obj: &Bound<'_, PyAny>) -> PyResult<Vec<[Matrix2<f64>; 2]>> 
     let per_endpoint = match shape.as_slice() {
         [_, 2, 2] => false,
         [_, 2, 2, 2] => true,
-        _ => return Err(shape_error(NAME, "shape (M, 2, 2) or (M, 2, 2, 2)", shape_string(&shape))),
+        _ => {
+            return Err(shape_error(
+                NAME,
+                "shape (M, 2, 2) or (M, 2, 2, 2)",
+                shape_string(&shape),
+            ))
+        }
     };
     let stride = if per_endpoint { 8 } else { 4 };
     check_finite(NAME, &values, stride)?;
     let matrix = |v: &[f64]| Matrix2::new(v[0], v[1], v[2], v[3]);
     Ok(values
         .chunks(stride)
-        .map(|v| if per_endpoint { [matrix(&v[..4]), matrix(&v[4..])] } else { [matrix(v); 2] })
+        .map(|v| {
+            if per_endpoint {
+                [matrix(&v[..4]), matrix(&v[4..])]
+            } else {
+                [matrix(v); 2]
+            }
+        })
         .collect())
 }
 

@@ -13,7 +13,7 @@ use super::report::PyTriangulationReport;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
 use crate::convert::{cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Real};
 use crate::errors::{shape_error, solve, to_py_err};
-use crate::fields::{result_class, Array};
+use crate::fields::{result_class, Array, Mask};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -35,6 +35,7 @@ use std::time::Instant;
 pub struct PyPointTriangulation {
     point: Vector3<f64>,
     covariance: Option<Matrix3<f64>>,
+    inliers: Option<Vec<bool>>,
 }
 
 impl PyPointTriangulation {
@@ -44,6 +45,7 @@ impl PyPointTriangulation {
             PyPointTriangulation {
                 point: result.point,
                 covariance: result.covariance,
+                inliers: result.inliers,
             },
         );
         Py::new(py, init)
@@ -56,6 +58,8 @@ result_class! {
         X = |p| p.point;
         /// Its 3x3 covariance (first order, from the observation covariances); `None` when singular.
         covariance = |p| p.covariance;
+        /// With `options.outlier_threshold`: (v,) the views the point was solved from; else `None`.
+        inliers = |p| p.inliers.clone();
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -105,7 +109,11 @@ pub fn triangulate_point(
     PyPointTriangulation::create(py, result)
 }
 
-pack_struct!(PyPointTriangulation { point, covariance });
+pack_struct!(PyPointTriangulation {
+    point,
+    covariance,
+    inliers
+});
 
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
 /// each track's point (NaN for a rejected track).
@@ -116,6 +124,12 @@ pub struct PyPointTriangulations {
     x: Vec<f64>,
     /// Row-major `(n, 3, 3)` covariances, NaN where there is none.
     covariance: Vec<f64>,
+    /// Robust only: each solved track's inlier flags over its views, concatenated, and their count per
+    /// track (0 for a rejected track), as the core returns them; [`Self::scatter_inliers`] lays them out.
+    track_inliers: Vec<bool>,
+    track_inlier_counts: Vec<usize>,
+    /// Robust only: the inlier mask, laid out as the observations were given (`(n, v)` or `(m,)`).
+    inliers: Option<(Vec<bool>, Vec<usize>)>,
 }
 
 impl TrackColumns for PyPointTriangulations {
@@ -125,12 +139,35 @@ impl TrackColumns for PyPointTriangulations {
     fn push(&mut self, track: PointTriangulation) -> Report {
         self.x.extend_from_slice(track.point.as_slice());
         push_covariance(&mut self.covariance, track.covariance.as_ref());
+        let mask = track.inliers.unwrap_or_default();
+        self.track_inlier_counts.push(mask.len());
+        self.track_inliers.extend(mask);
         track.report
     }
 
     fn push_missing(&mut self) {
         self.x.extend([f64::NAN; 3]);
         push_covariance::<3>(&mut self.covariance, None);
+        self.track_inlier_counts.push(0);
+    }
+}
+
+impl PyPointTriangulations {
+    /// Lays the per-track inlier flags out as the observations were given: `positions(t)` lists, in
+    /// the track's order, where its observations go in a mask of `shape` (false elsewhere, and for
+    /// every observation of a rejected track).
+    fn scatter_inliers(&mut self, shape: Vec<usize>, positions: impl Fn(usize) -> Vec<usize>) {
+        let mut mask = vec![false; shape.iter().product()];
+        let mut from = 0;
+        for (t, &count) in self.track_inlier_counts.iter().enumerate() {
+            if count > 0 {
+                for (flag, k) in self.track_inliers[from..from + count].iter().zip(positions(t)) {
+                    mask[k] = *flag;
+                }
+            }
+            from += count;
+        }
+        self.inliers = Some((mask, shape));
     }
 }
 
@@ -143,6 +180,7 @@ impl PyPointTriangulations {
         let mut columns = PyPointTriangulations {
             x: Vec::with_capacity(3 * n),
             covariance: Vec::with_capacity(9 * n),
+            ..Default::default()
         };
         for (t, outcome) in points.outcomes.into_iter().enumerate() {
             match outcome {
@@ -166,6 +204,10 @@ result_class! {
         X = |b| Array::rows(b.x.clone(), &[3]);
         /// Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none).
         covariance = |b| Array::rows(b.covariance.clone(), &[3, 3]);
+        /// With `options.outlier_threshold`: which observations each point was solved from, shaped as
+        /// the observations were given ((n, v) for `triangulate_points`, (m,) for
+        /// `triangulate_point_observations`; false where not visible or rejected); else `None`.
+        inliers = |b| b.inliers.clone().map(|(values, shape)| Mask { values, shape });
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -236,7 +278,15 @@ pub fn triangulate_points(
             return Ok(PyPointTriangulations::linear(linear, mean));
         }
         let results = core_points(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
-        Ok(collect::<PyPointTriangulations>(opts.method, results))
+        let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
+        if opts.outlier_threshold.is_some() {
+            // Track t's views are its visible ones, in camera order.
+            let visible = |t: usize, j: usize| mask.as_ref().is_none_or(|m| m[t * v + j]);
+            columns.scatter_inliers(vec![n, v], |t| {
+                (0..v).filter(|&j| visible(t, j)).map(|j| t * v + j).collect()
+            });
+        }
+        Ok((report, columns))
     })?;
     batch_result(py, outcome)
 }
@@ -338,7 +388,12 @@ pub fn triangulate_point_observations(
                 })
             })
             .collect();
-        Ok(collect::<PyPointTriangulations>(opts.method, results))
+        let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
+        if opts.outlier_threshold.is_some() {
+            // Track t's observations are its sorted rows, each back at its row as given.
+            columns.scatter_inliers(vec![m], |t| order[offsets[t]..offsets[t + 1]].to_vec());
+        }
+        Ok((report, columns))
     })?;
     batch_result(py, outcome)
 }
@@ -356,4 +411,10 @@ fn same_count_as(name: &str, rows: usize, m: usize) -> PyResult<()> {
     }
 }
 
-pack_struct!(PyPointTriangulations { x, covariance });
+pack_struct!(PyPointTriangulations {
+    x,
+    covariance,
+    track_inliers,
+    track_inlier_counts,
+    inliers
+});

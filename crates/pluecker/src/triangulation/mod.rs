@@ -85,6 +85,11 @@ pub struct TriangulationOptions {
     pub max_reprojection_error: Option<f64>,
     /// Branch and bound gives up (status [`Status::GapNotClosed`]) after this many nodes. Default 2000.
     pub max_nodes: usize,
+    /// Points only: reject outlier observations of a track ([`point::robust`]). A view is an inlier
+    /// when its whitened reprojection error (pixels without covariances) is at most this; the result
+    /// carries the inlier mask and is solved on the inliers only. Default `None`: every observation
+    /// is used. Lines and quadrics reject it with [`Error::InvalidOption`].
+    pub outlier_threshold: Option<f64>,
     /// Settings of the local minimisation (method `local`, and the upper bounds of `optimal`).
     /// Default: the trust region of section 4.1 with 100 iterations and a step tolerance of 1e-10.
     pub local: TrustRegionOptions,
@@ -100,6 +105,7 @@ impl Default for TriangulationOptions {
             max_relative_gap: 1e-3,
             max_reprojection_error: None,
             max_nodes: 2000,
+            outlier_threshold: None,
             local,
         }
     }
@@ -128,7 +134,27 @@ impl TriangulationOptions {
         if self.max_nodes == 0 {
             return bad("max_nodes", "must be at least 1");
         }
+        if let Some(tau) = self.outlier_threshold {
+            if !(tau.is_finite() && tau > 0.0) {
+                return bad(
+                    "outlier_threshold",
+                    "must be a positive finite number of (whitened) pixels",
+                );
+            }
+        }
         Ok(())
+    }
+
+    /// [`Error::InvalidOption`] when `outlier_threshold` is set for `what` (lines, quadrics), which
+    /// have no robust form yet: a silently ignored threshold would keep the outliers.
+    pub fn reject_outlier_threshold(&self, what: &str) -> Result<()> {
+        match self.outlier_threshold {
+            None => Ok(()),
+            Some(_) => Err(Error::InvalidOption {
+                name: "outlier_threshold".into(),
+                reason: format!("applies to points only; {what} have no robust triangulation yet"),
+            }),
+        }
     }
 }
 
@@ -158,6 +184,8 @@ pub enum Status {
     Interrupted,
     /// Like [`Status::Interrupted`], stopped because the call's time budget ran out.
     TimeBudget,
+    /// With an outlier threshold: fewer than two observations of the track agree on a point.
+    TooFewInliers,
 }
 
 impl Status {
@@ -173,6 +201,7 @@ impl Status {
             Status::NumericalFailure => "numerical_failure",
             Status::Interrupted => "interrupted",
             Status::TimeBudget => "time_budget",
+            Status::TooFewInliers => "too_few_inliers",
         }
     }
 

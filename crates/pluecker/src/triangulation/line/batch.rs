@@ -146,6 +146,7 @@ pub fn triangulate_lines(
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
     opts.validate()?;
+    opts.reject_outlier_threshold("lines")?;
     let n = check_batch(&cameras, tracks)?;
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
     Ok(solve_tracks(n, 1, progress, |t| line_track(&cameras, tracks, t, opts)))

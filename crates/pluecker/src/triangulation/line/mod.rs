@@ -142,6 +142,7 @@ pub fn triangulate_line(
 ) -> Result<LineTriangulation> {
     let started = Instant::now();
     opts.validate()?;
+    opts.reject_outlier_threshold("lines")?;
     check_views(cameras, lines.len(), 2, "lines", opts.method)?;
     let frames = parse_observations(
         lines,

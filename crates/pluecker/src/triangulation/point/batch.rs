@@ -20,7 +20,7 @@
 
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
-use super::{solve_views, PointTriangulation};
+use super::{solve_track_views, PointTriangulation};
 use crate::error::{Error, Result};
 use crate::interrupt::current;
 use crate::triangulation::covariance::whitening;
@@ -198,7 +198,7 @@ fn solve_track(
     if spread <= SAME_CENTRE {
         return Err(no_parallax(t));
     }
-    Ok(solve_views(&views, &frame, opts, started))
+    Ok(solve_track_views(&views, &frame, opts, started))
 }
 
 /// Point tracks as a flat list of observations grouped by track (CSR), for models where each track

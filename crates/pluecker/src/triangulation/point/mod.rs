@@ -43,6 +43,7 @@ pub mod cost;
 pub mod global;
 pub mod infinity;
 pub mod linear;
+pub mod robust;
 
 use self::certificate::convexity_test;
 use self::chart::{Chart, ChartKind};
@@ -83,6 +84,9 @@ pub struct PointTriangulation {
     pub covariance: Option<Matrix3<f64>>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
+    /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
+    /// order): the observations the point was solved from ([`robust`]). `None` otherwise.
+    pub inliers: Option<Vec<bool>>,
 }
 
 /// Triangulates one point seen by `cameras` (3x4, world → pixels, any positive scale; in
@@ -113,7 +117,20 @@ pub fn triangulate_point(
     check_parallax(cameras, "cameras")?;
     let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
-    Ok(solve_views(&views, &frame_of_cameras(cameras), opts, started))
+    Ok(solve_track_views(&views, &frame_of_cameras(cameras), opts, started))
+}
+
+/// [`solve_views`], or its robust form when `opts.outlier_threshold` is set.
+pub(crate) fn solve_track_views(
+    views: &[PointView],
+    frame: &WorldFrame,
+    opts: &TriangulationOptions,
+    started: Instant,
+) -> PointTriangulation {
+    match opts.outlier_threshold {
+        None => solve_views(views, frame, opts, started),
+        Some(tau) => robust::solve_views_robust(views, frame, opts, tau, started),
+    }
 }
 
 /// At least two views and one observation per camera.
@@ -163,6 +180,7 @@ pub(crate) fn solve_views(
             point,
             covariance,
             report,
+            inliers: None,
         }
     };
     if opts.method == Method::Linear {

@@ -99,6 +99,7 @@ pub fn triangulate_quadrics(
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<QuadricTriangulation>>> {
     opts.validate()?;
+    opts.reject_outlier_threshold("quadrics")?;
     let n = check_batch(&cameras, tracks)?;
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
     Ok(solve_tracks(n, 1, progress, |t| {

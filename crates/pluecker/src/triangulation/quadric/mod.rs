@@ -129,6 +129,7 @@ pub fn triangulate_quadric(
 ) -> Result<QuadricTriangulation> {
     let started = Instant::now();
     opts.validate()?;
+    opts.reject_outlier_threshold("quadrics")?;
     check_views(cameras, conics.len(), 3, "conics", opts.method)?;
     let frames = parse_observations(conics, "conics", "is not a real ellipse", ConicFrame::of_conic)?;
     let problem = QuadricProblem {

@@ -1,0 +1,93 @@
+"""Outlier observations in point tracks (issue 12 §4): ``TriangulationOptions(outlier_threshold=...)`` on
+the single call, the dense batch and the sparse one, with the inlier masks laid out as the input was."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import pluecker
+from triangulation_scenes import cameras, project
+
+ROBUST = pluecker.TriangulationOptions(outlier_threshold=4.0)
+
+
+def tracks(n: int, views: int, seed: int):
+    """n points near the origin seen by all views with 1 px noise, one 40 px outlier per track."""
+    rng = np.random.default_rng(seed)
+    P = cameras(views, 40.0, rng)
+    X = rng.normal(scale=0.5, size=(n, 3))
+    x = np.stack([project(P, p) for p in X]) + rng.normal(size=(n, views, 2))
+    outlier = rng.integers(0, views, size=n)
+    angle = rng.uniform(0, 2 * np.pi, size=n)
+    x[np.arange(n), outlier] += 40 * np.column_stack([np.cos(angle), np.sin(angle)])
+    return P, X, x, outlier
+
+
+def test_single_call_rejects_the_outlier_and_certifies_the_rest():
+    P, X, x, outlier = tracks(30, 8, 1)
+    for k in range(30):
+        r = pluecker.triangulate_point(P, x[k], options=ROBUST)
+        assert r.status == "success" and r.certified
+        assert r.inliers.shape == (8,) and not r.inliers[outlier[k]]
+        kept = r.inliers
+        alone = pluecker.triangulate_point(P[kept], x[k][kept])
+        np.testing.assert_allclose(r.X, alone.X, atol=1e-9)
+    assert pluecker.triangulate_point(P, x[0]).inliers is None
+
+
+def test_dense_batch_masks_are_per_view_and_false_where_not_visible():
+    P, X, x, outlier = tracks(40, 8, 2)
+    visible = np.ones((40, 8), dtype=bool)
+    visible[::5, 3] = False  # some tracks miss view 3
+    r = pluecker.triangulate_points(P, x, visible=visible, options=ROBUST)
+    assert r.inliers.shape == (40, 8) and r.inliers.dtype == bool
+    assert not r.inliers[~visible].any()
+    rejected = ~r.inliers[np.arange(40), outlier] | ~visible[np.arange(40), outlier]
+    assert rejected.all()
+    error = np.linalg.norm(r.X - X, axis=1)
+    plain = np.linalg.norm(pluecker.triangulate_points(P, x, visible=visible).X - X, axis=1)
+    assert np.sqrt(np.mean(error**2)) < 0.3 * np.sqrt(np.mean(plain**2))
+    assert pluecker.triangulate_points(P, x).inliers is None
+    again = pickle.loads(pickle.dumps(r))
+    np.testing.assert_array_equal(again.inliers, r.inliers)
+    assert r.to_dict()["inliers"] == r.inliers.tolist()
+
+
+def test_sparse_batch_masks_follow_the_rows_as_given():
+    P, X, x, outlier = tracks(25, 6, 3)
+    track, image = np.meshgrid(np.arange(25), np.arange(6), indexing="ij")
+    rows = np.random.default_rng(4).permutation(25 * 6)  # rows in any order
+    t, i, px = track.ravel()[rows], image.ravel()[rows], x.reshape(-1, 2)[rows]
+    r = pluecker.triangulate_point_observations(P, t, i, px, options=ROBUST)
+    assert r.inliers.shape == (150,)
+    is_outlier = i == outlier[t]
+    assert not r.inliers[is_outlier].any()
+    dense = pluecker.triangulate_points(P, x, options=ROBUST)
+    np.testing.assert_array_equal(r.inliers, dense.inliers[t, i])
+    np.testing.assert_allclose(r.X, dense.X, atol=1e-9)
+
+
+def test_threshold_is_checked_and_refused_for_lines():
+    with pytest.raises(pluecker.InvalidOptionError, match="outlier_threshold"):
+        pluecker.TriangulationOptions(outlier_threshold=-1.0)
+    rng = np.random.default_rng(5)
+    P = cameras(3, 30.0, rng)
+    segments = rng.uniform(100, 500, size=(3, 2, 2))
+    with pytest.raises(pluecker.InvalidOptionError, match="points only"):
+        pluecker.triangulate_line(P, segments, options=ROBUST)
+
+
+def test_too_few_inliers_is_a_status():
+    # Two views whose rays meet behind both cameras: no pair gives a point in front, so no two
+    # observations agree on one.
+    rng = np.random.default_rng(6)
+    P = cameras(2, 30.0, rng)
+    centres = [-np.linalg.solve(p[:, :3], p[:, 3]) for p in P]
+    behind = centres[0] + centres[1]  # beyond both cameras, seen from the origin
+    x = np.array([p[:2] / p[2] for p in (P @ np.append(behind, 1.0))])
+    r = pluecker.triangulate_point(P, x, options=ROBUST)
+    assert r.status == "too_few_inliers" and not r.certified
+    assert np.isnan(r.X).all() and not r.inliers.any()
