@@ -120,3 +120,96 @@ def test_with_noise_the_cost_is_the_pixel_reprojection_cost():
             u = camera.img_from_cam(np.atleast_2d(image.cam_from_world() * X))[0]
             pixel_cost += np.sum((u - image.points2D[element.point2D_idx].xy) ** 2)
         assert abs(cost / pixel_cost - 1) < 1e-3, (i, cost, pixel_cost)
+
+
+def test_rigs_of_several_cameras_compose_into_each_image_pose():
+    """Images of a rig get their pose from the frame (rig_from_world) and the sensor (cam_from_rig):
+    with two cameras per rig the exact observations still give back every point."""
+    options = pycolmap.SyntheticDatasetOptions()
+    options.num_rigs, options.num_cameras_per_rig, options.num_frames_per_rig = 1, 2, 4
+    options.num_points3D = 40
+    options.camera_model_id = pycolmap.CameraModelId.OPENCV
+    options.camera_params = [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4]
+    pycolmap.set_random_seed(5)
+    rec = pycolmap.synthesize_dataset(options)
+    assert rec.num_rigs() == 1 and any(not r.sensor_from_rig(s).rotation.matrix().trace() == 3
+                                       for r in rec.rigs.values() for s in r.non_ref_sensors)
+    ids, result = colmap.retriangulate(rec)
+    for i, X in zip(ids, result.X):
+        np.testing.assert_allclose(X, rec.points3D[int(i)].xyz, atol=1e-7 * (1 + np.linalg.norm(X)))
+
+
+def noisy_model_with_outliers(seed: int):
+    """A 12-image OPENCV model with 1 px noise and one 40 px outlier in every other track."""
+    rec = synthetic_model(pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 1e-3, -1e-3], seed)
+    rng = np.random.default_rng(seed)
+    for image in rec.images.values():
+        for point2D in image.points2D:
+            point2D.xy = point2D.xy + rng.normal(size=2)
+    outliers = set()
+    for k, (point_id, point) in enumerate(sorted(rec.points3D.items())):
+        if k % 2 == 0:
+            element = point.track.elements[rng.integers(len(point.track.elements))]
+            image = rec.images[element.image_id]
+            angle = rng.uniform(0, 2 * np.pi)
+            image.points2D[element.point2D_idx].xy = image.points2D[element.point2D_idx].xy + 40 * np.array(
+                [np.cos(angle), np.sin(angle)])
+            outliers.add((element.image_id, element.point2D_idx))
+    return rec, outliers
+
+
+def test_outlier_observations_are_rejected_and_removed_from_the_written_model(tmp_path):
+    rec, outliers = noisy_model_with_outliers(6)
+    run = colmap.retriangulate(rec, outlier_threshold_px=4.0)
+    rejected = {(int(i), int(k)) for i, k, ok in zip(run.observation_image, run.observation_point2D,
+                                                     run.result.inliers) if not ok}
+    assert outliers <= rejected  # every outlier, and inliers only at the 4 σ rate (e^-8 of them)
+    assert len(rejected - outliers) <= 2
+    assert (run.result.status == "success").all() and run.result.certified.all()
+    files = {p.name for p in colmap.write(rec, run, tmp_path / "out")}
+    assert {"points3D.bin", "images.bin", "points3D.ply", "points3D_triangulation.npz"} <= files
+    back = pycolmap.Reconstruction(str(tmp_path / "out"))
+    kept = {(e.image_id, e.point2D_idx) for p in back.points3D.values() for e in p.track.elements}
+    assert not kept & rejected
+    saved = np.load(tmp_path / "out" / "points3D_triangulation.npz")
+    np.testing.assert_array_equal(saved["observation_inlier"], run.result.inliers)
+    assert saved["covariance"].shape == (len(run.point3D_ids), 3, 3) and saved["certified"].all()
+    for i, X in zip(saved["point3D_id"], saved["X"]):
+        np.testing.assert_allclose(back.points3D[int(i)].xyz, X)
+    ply = (tmp_path / "out" / "points3D.ply").read_text().splitlines()
+    assert f"element vertex {len(run.point3D_ids)}" in ply
+
+
+def test_command_line_retriangulates_a_colmap_model(tmp_path, capsys):
+    from pluecker.cli import main
+
+    rec, _ = noisy_model_with_outliers(7)
+    (tmp_path / "in").mkdir()
+    rec.write(str(tmp_path / "in"))
+    code = main(["triangulate", "--colmap", str(tmp_path / "in"), "--out", str(tmp_path / "out"),
+                 "--outlier-threshold", "4", "--text"])
+    out = capsys.readouterr().out
+    assert code == 0 and "60 certified" in out and "rejected as outliers" in out
+    assert (tmp_path / "out" / "points3D.txt").exists()
+    assert main(["triangulate", "--colmap", str(tmp_path / "in")]) == 2
+    assert "--out" in capsys.readouterr().err
+    assert main(["triangulate", "--colmap", str(tmp_path / "missing"), "--out", str(tmp_path / "o2")]) == 2
+    assert "not a directory" in capsys.readouterr().err
+    assert main(["triangulate", str(tmp_path), "--colmap", str(tmp_path / "in"), "--out", str(tmp_path / "o3")]) == 2
+
+
+def test_localize_an_image_of_the_model_with_its_camera_model():
+    rec, _ = noisy_model_with_outliers(8)
+    image = next(iter(rec.images.values()))
+    matched = [p for p in image.points2D if p.has_point3D()]
+    u = np.array([p.xy for p in matched])
+    X = np.array([rec.points3D[p.point3D_id].xyz for p in matched])
+    rng = np.random.default_rng(9)
+    wrong = rng.choice(len(u), size=len(u) * 3 // 10, replace=False)  # 30 % outliers
+    u[wrong] = rng.uniform([0, 0], [1024, 768], size=(len(wrong), 2))
+    rigid, result = colmap.localize(rec.cameras[image.camera_id], u, X)
+    assert result.status == "success" and rigid is not None
+    R, t = colmap.pose_from_rigid(image.cam_from_world())
+    centre = -R.T @ t
+    assert np.linalg.norm(-result.R.T @ result.t - centre) < 0.05 * np.linalg.norm(centre)
+    np.testing.assert_allclose(np.array(rigid.rotation.matrix()), result.R, atol=1e-12)

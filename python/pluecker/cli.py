@@ -174,15 +174,25 @@ def build_parser() -> argparse.ArgumentParser:
     tri = commands.add_parser(
         "triangulate", help="triangulate the points (and lines) of a multi-view folder in the VGG format",
         formatter_class=argparse.RawDescriptionHelpFormatter, description=TRIANGULATE_DESCRIPTION)
-    tri.add_argument("folder", metavar="FOLDER", type=Path,
+    tri.add_argument("folder", metavar="FOLDER", type=Path, nargs="?",
                      help="a folder in the Oxford VGG multi-view format (its files: see above)")
+    tri.add_argument("--colmap", metavar="DIR", type=Path,
+                     help="instead of FOLDER: a COLMAP model (cameras, images, points3D; text or binary, rigs "
+                     "included; needs pycolmap: pip install 'pluecker[colmap]'). Every track is re-triangulated "
+                     "with the cameras fixed, through their models; --out gets the COLMAP model, points3D.ply and "
+                     "points3D_triangulation.npz (covariances, certificates, inlier flags)")
+    tri.add_argument("--outlier-threshold", type=_positive_float, metavar="PX", dest="outlier_threshold",
+                     help="with --colmap: reject observations farther than PX pixels from their track's consensus "
+                     "(default: keep every observation)")
+    tri.add_argument("--text", action="store_true", help="with --colmap: write the model as text (default binary)")
     tri.add_argument("--views", type=_view_list, metavar="I,J,...", help="0-based views to use, comma-separated "
                      "(default: all)")
     tri.add_argument("--method", choices=TRIANGULATION_METHODS, default="optimal",
                      help="estimator (default optimal: certified global minimum of eq. 19)")
     tri.add_argument("--lines", action="store_true", help="also triangulate the lines (from the segments)")
     tri.add_argument("--sigma", type=_positive_float, default=1.0, metavar="PX",
-                     help="pixel noise of the segment endpoints, for the line covariances (default 1)")
+                     help="pixel noise of the segment endpoints, for the line covariances, and with --colmap of "
+                     "every observation (default 1)")
     tri.add_argument("--out", metavar="DIR", type=Path, help="output directory (default "
                      "results/triangulate/NAME)")
     tri.set_defaults(handler=_triangulate)
@@ -414,8 +424,62 @@ def _pose(args: argparse.Namespace) -> int:
 # triangulate
 
 
+def _triangulate_colmap(args: argparse.Namespace) -> int:
+    """``pluecker triangulate --colmap DIR --out DIR``: re-triangulate every track of a COLMAP model."""
+    from pluecker import colmap
+    from pluecker.progress import Progress
+
+    if args.out is None:
+        return _fail("triangulate", "--colmap needs --out DIR (the model is written there, never over the input)")
+    if args.lines or args.views:
+        return _fail("triangulate", "--lines and --views apply to VGG folders, not to --colmap")
+    try:
+        pycolmap = colmap._pycolmap()
+    except ImportError as exc:
+        return _fail("triangulate", str(exc))
+    if not args.colmap.is_dir():
+        return _fail("triangulate", f"{args.colmap}: not a directory")
+    try:
+        reconstruction = pycolmap.Reconstruction(str(args.colmap))
+    except Exception as exc:  # pycolmap raises its own exception types for unreadable models
+        return _fail("triangulate", f"{args.colmap}: cannot read a COLMAP model: {exc}")
+    progress = Progress(max(1, reconstruction.num_points3D()), "points")
+    report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
+    try:
+        run = colmap.retriangulate(reconstruction, sigma_px=args.sigma, method=args.method,
+                                   outlier_threshold_px=args.outlier_threshold, progress=report)
+    except pluecker.PlueckerError as exc:
+        return _fail("triangulate", str(exc))
+    progress.done = progress.total
+    progress.close(f"points: {len(run.point3D_ids)} in {progress.elapsed:.1f} s")
+    try:
+        files = colmap.write(reconstruction, run, args.out, text=args.text)
+    except OSError as exc:
+        return _fail("triangulate", f"cannot write to {args.out}: {exc.strerror or exc}")
+    result = run.result
+    status = np.asarray(result.status)
+    lines = [f"{args.colmap}: {len(status)} points, {int((status == 'success').sum())} triangulated, "
+             f"{int(np.sum(result.certified))} certified ({args.method})"]
+    if result.inliers is not None:
+        lines.append(f"observations: {int((~result.inliers).sum())} of {len(result.inliers)} rejected as outliers "
+                     f"(threshold {args.outlier_threshold} px)")
+    others = {s: int((status == s).sum()) for s in sorted(set(status)) if s != "success"}
+    if others:
+        lines.append("not updated: " + ", ".join(f"{n} {s}" for s, n in others.items()))
+    lines.append(f"wrote {len(files)} files to {args.out}: " + ", ".join(f.name for f in files))
+    print("\n".join(lines))
+    return 0
+
+
 def _triangulate(args: argparse.Namespace) -> int:
     from pluecker import triangulate_folder
+
+    if args.colmap is not None:
+        if args.folder is not None:
+            return _fail("triangulate", "give either FOLDER or --colmap DIR, not both")
+        return _triangulate_colmap(args)
+    if args.folder is None:
+        return _fail("triangulate", "give a VGG FOLDER or --colmap DIR")
 
     try:
         run = triangulate_folder.run(args.folder, views=args.views, method=args.method, lines=args.lines,

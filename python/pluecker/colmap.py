@@ -78,25 +78,53 @@ def colmap_camera(camera: _core.LensCamera, width: int, height: int) -> Any:
     return pycolmap.Camera(model=camera.model, width=width, height=height, params=list(camera.params))
 
 
+class Retriangulation:
+    """What :func:`retriangulate` found: one row per 3-D point of the model and one per observation.
+
+    Attributes: ``point3D_ids`` (n,), ``result`` (a ``pluecker.PointTriangulations``, row ``i`` the point
+    ``point3D_ids[i]``), and the observations as ``observation_point`` (m,) (a row of
+    ``point3D_ids``), ``observation_image`` (m,) and ``observation_point2D`` (m,) (COLMAP's image id and
+    ``point2D_idx``); with an outlier threshold, ``result.inliers`` (m,) flags them.
+    """
+
+    def __init__(self, point3D_ids: np.ndarray, result: Any, observation_point: np.ndarray,
+                 observation_image: np.ndarray, observation_point2D: np.ndarray) -> None:
+        self.point3D_ids = point3D_ids
+        self.result = result
+        self.observation_point = observation_point
+        self.observation_image = observation_image
+        self.observation_point2D = observation_point2D
+
+    def __iter__(self):  # ``ids, result = retriangulate(...)``
+        return iter((self.point3D_ids, self.result))
+
+
 def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None = None,
-                  options: Any = None) -> tuple[np.ndarray, Any]:
+                  options: Any = None, *, outlier_threshold_px: float | None = None,
+                  progress: Any = None) -> Retriangulation:
     """Re-triangulates every 3-D point of a ``pycolmap.Reconstruction`` from its track, with the
-    cameras (models, distortion) and poses held fixed: ``(point3D_ids, PointTriangulations)``, row ``i``
-    the point ``point3D_ids[i]``.
+    cameras (models, distortion, rigs) and poses held fixed. Returns a :class:`Retriangulation`, which
+    also unpacks as ``(point3D_ids, PointTriangulations)``, row ``i`` the point ``point3D_ids[i]``.
 
     Each observation is unprojected exactly through its camera model (``LensCamera.unproject``), and its
     pixel noise (``sigma_px`` pixels, isotropic) is carried to the normalised coordinates to first order
-    (``LensCamera.normalized_covariances``). The cost of eq. 19 is therefore in pixels² as COLMAP's bundle
-    adjustment counts it, and a certificate proves the global minimum of that first-order cost. Use
-    :func:`update_points` to write the points back. ``method`` and ``options`` are those of
-    :func:`pluecker.triangulate_point_observations`.
+    (``LensCamera.normalized_covariances``). The cost of eq. 19 is therefore in squared standard deviations
+    (pixels² for ``sigma_px = 1``) as COLMAP's bundle adjustment counts it, and a certificate proves the
+    global minimum of that first-order cost over the observations used. The propagation is first order:
+    where the distortion changes fast across a pixel's noise (the edge of a wide fisheye), the cost is
+    an approximation of the pixel cost and the certificate is about the approximation.
+
+    ``outlier_threshold_px`` rejects observations farther than that many pixels from the consensus of
+    their track (``TriangulationOptions.outlier_threshold``; ``result.inliers`` flags the observations).
+    ``method``, ``options`` and ``progress`` are those of :func:`pluecker.triangulate_point_observations`.
+    Use :func:`update_points` or :func:`write` to put the points back.
     """
     images = [image for image in reconstruction.images.values() if image.has_pose]
     index = {image.image_id: j for j, image in enumerate(images)}
     # Normalised cameras [R | t]: the pixels are unprojected through each camera's model below.
     P = np.stack([np.hstack([R, t[:, None]]) for R, t in (pose_from_rigid(image.cam_from_world()) for image in images)])
     lens = {image.image_id: lens_camera(reconstruction.cameras[image.camera_id]) for image in images}
-    ids, track, image_of, pixels = [], [], [], []
+    ids, track, image_of, pixels, point2D_idx = [], [], [], [], []
     for t, (point_id, point) in enumerate(sorted(reconstruction.points3D.items())):
         ids.append(point_id)
         for element in point.track.elements:
@@ -104,6 +132,7 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
                 continue
             track.append(t)
             image_of.append(element.image_id)
+            point2D_idx.append(element.point2D_idx)
             pixels.append(reconstruction.images[element.image_id].points2D[element.point2D_idx].xy)
     track_a = np.asarray(track, dtype=np.int64)
     pixels_a = np.asarray(pixels, dtype=float).reshape(-1, 2)
@@ -116,9 +145,13 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
         normalized[rows] = camera.unproject(pixels_a[rows])
         covariances[rows] = camera.normalized_covariances(pixels_a[rows], np.tile(sigma_px**2 * np.eye(2), (len(rows), 1, 1)))
     cameras_index = np.array([index[int(i)] for i in image_a], dtype=np.int64)
+    if outlier_threshold_px is not None:
+        fields = options.to_dict() if options is not None else {}
+        options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
     result = _core.triangulate_point_observations(P, track_a, cameras_index, normalized, covariances,
-                                                  method=method, options=options)
-    return np.asarray(ids), result
+                                                  method=method, options=options, progress=progress)
+    return Retriangulation(np.asarray(ids, dtype=np.int64), result, track_a, image_a,
+                           np.asarray(point2D_idx, dtype=np.int64))
 
 
 def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:
@@ -130,3 +163,73 @@ def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:
             reconstruction.points3D[int(point_id)].xyz = X
             written += 1
     return written
+
+
+def remove_outliers(reconstruction: Any, run: Retriangulation) -> int:
+    """Deletes from ``reconstruction`` the observations that :func:`retriangulate` rejected as outliers
+    (``run.result.inliers`` false) of the points it solved; COLMAP deletes a point left with fewer than
+    two observations. Returns how many observations were deleted."""
+    inliers = run.result.inliers
+    if inliers is None:
+        return 0
+    solved = np.asarray(run.result.status) == "success"
+    deleted = 0
+    for k in np.flatnonzero(~inliers & solved[run.observation_point]):
+        point_id = int(run.point3D_ids[run.observation_point[k]])
+        if reconstruction.exists_point3D(point_id):
+            reconstruction.delete_observation(int(run.observation_image[k]), int(run.observation_point2D[k]))
+            deleted += 1
+    return deleted
+
+
+def write_ply(path: Any, X: np.ndarray, certified: np.ndarray) -> None:
+    """An ASCII PLY of points (n, 3), green where certified and red where not (NaN rows left out)."""
+    keep = np.all(np.isfinite(X), axis=1)
+    colours = np.where(certified[keep, None], [[40, 180, 60]], [[220, 40, 40]])
+    header = ["ply", "format ascii 1.0", "comment pluecker: green certified global optimum, red not",
+              f"element vertex {int(keep.sum())}", "property double x", "property double y", "property double z",
+              "property uchar red", "property uchar green", "property uchar blue", "end_header"]
+    rows = (f"{x:.9g} {y:.9g} {z:.9g} {r} {g} {b}" for (x, y, z), (r, g, b) in zip(X[keep], colours))
+    with open(path, "w", encoding="utf-8") as f:
+        f.write("\n".join([*header, *rows]) + "\n")
+
+
+def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = False) -> list[Any]:
+    """Writes a re-triangulated model into the directory ``out``: the points back into
+    ``reconstruction`` (:func:`update_points`, :func:`remove_outliers`) and the COLMAP model (binary, or
+    text with ``text``), ``points3D.ply`` (green: certified) and ``points3D_triangulation.npz``: per point
+    ``point3D_id``, ``X``, ``covariance`` (3, 3), ``cost``, ``lower_bound``, ``certified``, ``status``; per
+    observation ``observation_point3D_id``, ``observation_image_id``, ``observation_point2D_idx`` and
+    ``observation_inlier``. Returns the paths written."""
+    from pathlib import Path
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    result = run.result
+    update_points(reconstruction, run.point3D_ids, result)
+    remove_outliers(reconstruction, run)
+    (reconstruction.write_text if text else reconstruction.write)(str(out))
+    certified = np.asarray(result.certified, dtype=bool)
+    write_ply(out / "points3D.ply", np.asarray(result.X), certified)
+    inliers = result.inliers if result.inliers is not None else np.ones(len(run.observation_point), dtype=bool)
+    np.savez_compressed(
+        out / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.X, covariance=result.covariance,
+        cost=result.cost, lower_bound=result.lower_bound, certified=certified,
+        status=np.asarray(result.status, dtype=str), observation_point3D_id=run.point3D_ids[run.observation_point],
+        observation_image_id=run.observation_image, observation_point2D_idx=run.observation_point2D,
+        observation_inlier=inliers)
+    return sorted(out.iterdir())
+
+
+def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: Any = None, lines3D: Any = None,
+             *, ransac: Any = True, options: Any = None, point_covariances: Any = None,
+             line_covariances: Any = None) -> tuple[Any, Any]:
+    """Localises one image from its 2D-3D matches (points and/or segments, distorted pixels of
+    ``camera``, a ``pycolmap.Camera`` or ``pluecker.LensCamera``): ``(cam_from_world, PoseResult)``, the
+    first a ``pycolmap.Rigid3d`` (``None`` unless the status is ``success``). Robust by default
+    (``ransac=True``); the rest as :func:`pluecker.estimate_pose`."""
+    lens = camera if isinstance(camera, _core.LensCamera) else lens_camera(camera)
+    result = _core.estimate_pose(lens, points2D, points3D, lines2D, lines3D, ransac=ransac, options=options,
+                                 point_covariances=point_covariances, line_covariances=line_covariances)
+    rigid = rigid_from_pose(result.R, result.t) if result.status == "success" else None
+    return rigid, result
