@@ -82,6 +82,18 @@ def test_ply_holds_the_finite_points(house_run):
     assert green.sum() == sum(p["certified"] for p in points if all(v is not None for v in p["X"]))
 
 
+def test_the_json_carries_covariances(house_run):
+    _, out, _ = house_run
+    for p in json.loads((out / "points.json").read_text())["points"]:
+        C = np.array(p["covariance"])
+        assert C.shape == (3, 3) and np.allclose(C, C.T) and np.linalg.eigvalsh(C).min() > 0
+    for line in json.loads((out / "lines.json").read_text())["lines"]:
+        assert np.array(line["chart_axes"]).shape == (2, 3)
+        if line["covariance"] is not None:
+            C = np.array(line["covariance"])
+            assert C.shape == (4, 4) and np.linalg.eigvalsh(C).min() > 0
+
+
 def test_lines_are_written_with_their_extent(house_run):
     _, out, printed = house_run
     doc = json.loads((out / "lines.json").read_text())

@@ -699,6 +699,7 @@ def triangulate_point_observations(
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
+    n_tracks: Optional[int] = None,
 ) -> PointTriangulations:
     """Point tracks given one observation per row (memory in the observations): pixel ``x[k]`` (m, 2)
     of track ``track[k]`` in camera ``image[k]`` of ``P`` (v, 3, 4), ``cov[k]`` (m, 2, 2); result row t

@@ -120,38 +120,38 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     Use :func:`update_points` or :func:`write` to put the points back.
     """
     images = [image for image in reconstruction.images.values() if image.has_pose]
-    index = {image.image_id: j for j, image in enumerate(images)}
     # Normalised cameras [R | t]: the pixels are unprojected through each camera's model below.
     P = np.stack([np.hstack([R, t[:, None]]) for R, t in (pose_from_rigid(image.cam_from_world()) for image in images)])
-    lens = {image.image_id: lens_camera(reconstruction.cameras[image.camera_id]) for image in images}
-    ids, track, image_of, pixels, point2D_idx = [], [], [], [], []
-    for t, (point_id, point) in enumerate(sorted(reconstruction.points3D.items())):
-        ids.append(point_id)
-        for element in point.track.elements:
-            if element.image_id not in index:
-                continue
-            track.append(t)
-            image_of.append(element.image_id)
-            point2D_idx.append(element.point2D_idx)
-            pixels.append(reconstruction.images[element.image_id].points2D[element.point2D_idx].xy)
-    track_a = np.asarray(track, dtype=np.int64)
-    pixels_a = np.asarray(pixels, dtype=float).reshape(-1, 2)
-    normalized = np.empty_like(pixels_a)
-    covariances = np.empty((len(pixels_a), 2, 2))
-    image_a = np.asarray(image_of, dtype=np.int64)
-    for image_id in np.unique(image_a):
-        rows = np.flatnonzero(image_a == image_id)
-        camera = lens[int(image_id)]
-        normalized[rows] = camera.unproject(pixels_a[rows])
-        covariances[rows] = camera.normalized_covariances(pixels_a[rows], np.tile(sigma_px**2 * np.eye(2), (len(rows), 1, 1)))
-    cameras_index = np.array([index[int(i)] for i in image_a], dtype=np.int64)
+    ids = np.array(sorted(reconstruction.point3D_ids()), dtype=np.int64)
+    # The observations image by image (pycolmap hands them over per image), then sorted by point.
+    parts = []
+    for j, image in enumerate(images):
+        observed = image.get_observation_points2D()
+        if not observed:
+            continue
+        xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
+        point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
+        idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
+        camera = lens_camera(reconstruction.cameras[image.camera_id])
+        normalized = camera.unproject(xy)
+        covariances = camera.normalized_covariances(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
+        parts.append((np.searchsorted(ids, point_ids), np.full(len(xy), j), np.full(len(xy), image.image_id), idx,
+                      normalized, covariances))
+    if parts:
+        track_a, cameras_index, image_a, point2D_idx, normalized, covariances = (np.concatenate(c) for c in zip(*parts))
+    else:
+        track_a = cameras_index = image_a = point2D_idx = np.zeros(0, dtype=np.int64)
+        normalized, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
+    order = np.argsort(track_a, kind="stable")
+    track_a, cameras_index, image_a, point2D_idx = (a[order] for a in (track_a, cameras_index, image_a, point2D_idx))
+    normalized, covariances = normalized[order], covariances[order]
     if outlier_threshold_px is not None:
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
     result = _core.triangulate_point_observations(P, track_a, cameras_index, normalized, covariances,
-                                                  method=method, options=options, progress=progress)
-    return Retriangulation(np.asarray(ids, dtype=np.int64), result, track_a, image_a,
-                           np.asarray(point2D_idx, dtype=np.int64))
+                                                  method=method, options=options, progress=progress,
+                                                  n_tracks=len(ids))
+    return Retriangulation(ids, result, track_a, image_a, point2D_idx)
 
 
 def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:

@@ -125,6 +125,11 @@ def _report(columns: dict[str, np.ndarray], i: int) -> dict[str, Any]:
     return record
 
 
+def _matrix_or_none(m: np.ndarray) -> Any:
+    """A covariance as nested lists, or ``None`` where the batch has none (NaN)."""
+    return m.tolist() if np.all(np.isfinite(m)) else None
+
+
 def _points(seq: VggSequence, views: list[int], method: str) -> Features:
     x, visible = seq.point_observations(views)
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
@@ -135,13 +140,14 @@ def _points(seq: VggSequence, views: list[int], method: str) -> Features:
     result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks], method=method)
     columns = _columns(result)
     X = np.asarray(result.X)
+    covariances = np.asarray(result.covariance)
     homogeneous = np.hstack([X, np.ones((len(X), 1))])
     projected = np.einsum("vij,nj->nvi", cameras, homogeneous)
     residuals = np.linalg.norm(projected[..., :2] / projected[..., 2:] - x[tracks], axis=2)
     for k, track in enumerate(tracks):
         seen = visible[track]
         record = {"index": int(track), "views": [views[j] for j in np.flatnonzero(seen)],
-                  "X": X[k].tolist(), **_report(columns, k),
+                  "X": X[k].tolist(), "covariance": _matrix_or_none(covariances[k]), **_report(columns, k),
                   "rms_reprojection_px": float(np.sqrt(np.mean(residuals[k][seen] ** 2)))}
         features.records.append(record)
     finite = np.all(np.isfinite(X), axis=1)
@@ -185,6 +191,7 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
                                         progress=report)
     columns = _columns(result)
     plucker, points, directions = (np.asarray(a) for a in (result.plucker, result.point, result.direction))
+    chart_axes, covariances = np.asarray(result.chart_axes), np.asarray(result.covariance)
     geometry, certified = [], []
     for k, track in enumerate(tracks):
         seen = visible[track]
@@ -194,7 +201,8 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
         features.records.append({
             "index": int(track), "views": [views[j] for j in np.flatnonzero(seen)],
             "plucker": plucker[k].tolist(), "point": point.tolist(),
-            "direction": direction.tolist(), "segment": extent.tolist(), **_report(columns, k)})
+            "direction": direction.tolist(), "segment": extent.tolist(),
+            "chart_axes": chart_axes[k].tolist(), "covariance": _matrix_or_none(covariances[k]), **_report(columns, k)})
         if np.all(np.isfinite(extent)):
             geometry.append(extent)
             certified.append(bool(columns["certified"][k]))

@@ -276,3 +276,29 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
     let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
     assert!(!result.certified);
 }
+
+#[test]
+fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
+    // A fisheye of f = 300 px: no point in front of the camera projects beyond θ_d(π/2) ≈ 1.67 focal
+    // lengths from the centre, where a random mismatch can still land.
+    let lens = LensCamera::new(
+        CameraModel::OpenCvFisheye,
+        &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
+    )
+    .unwrap();
+    let scene = visible_scene(600.0, 30, 2, false, 9);
+    let mut corr = observe(&scene, &lens, &|_| 0.5, &mut Rng::new(9));
+    corr.points2d[7] = Vector2::new(320.0 + 1.8 * 300.0, 240.0);
+    corr.lines2d[1][0] = Vector2::new(320.0, 240.0 - 1.8 * 300.0);
+    assert!(estimate_pose_lens(&lens, &corr, None, &PoseOptions::default()).is_err());
+    let opts = PoseOptions {
+        ransac: Some(RansacOptions::default()),
+        ..PoseOptions::default()
+    };
+    let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
+    assert_eq!(result.status, Status::Success);
+    assert_eq!(result.inliers_points.len(), 30);
+    assert_eq!(result.inliers_lines.len(), 2);
+    assert!(!result.inliers_points[7] && !result.inliers_lines[1]);
+    assert!(result.inliers_points.iter().filter(|&&k| k).count() >= 28 && result.inliers_lines[0]);
+}

@@ -313,10 +313,11 @@ fn indices(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
 /// Triangulates the point tracks of observations given one per row, as COLMAP lists them: observation
 /// `k` is the pixel `x[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)),
 /// with the covariance `cov[k]` (m, 2, 2) when given. Memory grows with the observations, not with
-/// tracks × images. Track `t` of the result is `t` of `track` (`0..max(track)`; a track id without
-/// observations is rejected as too few views); each is solved as `triangulate_points` would.
+/// tracks × images. Track `t` of the result is `t` of `track` (`0..n_tracks`, by default
+/// `max(track) + 1`; a track id without observations is rejected as too few views); each is solved as
+/// `triangulate_points` would.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_point_observations(
     py: Python<'_>,
@@ -329,6 +330,7 @@ pub fn triangulate_point_observations(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
+    n_tracks: Option<usize>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;
@@ -347,7 +349,17 @@ pub fn triangulate_point_observations(
         None => None,
     };
     // COO → CSR by a stable counting sort on the track ids: `order[k']` is the row of the k'-th sorted one.
-    let n = tracks.iter().max().map_or(0, |t| t + 1);
+    let used = tracks.iter().max().map_or(0, |t| t + 1);
+    let n = match n_tracks {
+        Some(n) if n < used => {
+            return Err(crate::errors::invalid_argument(
+                "n_tracks",
+                format!("{n} is below max(track) + 1 = {used}"),
+            ))
+        }
+        Some(n) => n,
+        None => used,
+    };
     let mut offsets = vec![0usize; n + 1];
     tracks.iter().for_each(|&t| offsets[t + 1] += 1);
     (0..n).for_each(|t| offsets[t + 1] += offsets[t]);

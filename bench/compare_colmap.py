@@ -1,0 +1,306 @@
+"""pluecker against pycolmap and PoseLib on COLMAP models (issue 12 §6).
+
+Models come from ``pycolmap.synthesize_dataset`` (2 rigs x 6 frames = 12 images, 500 points) with three
+cameras of 1024 x 768 pixels: a narrow OPENCV (f = 2000 px, about 28 degrees across), a wide OPENCV
+(f = 400 px, about 104 degrees) and an OPENCV_FISHEYE (f = 300 px). Every observation gets 1 px of
+Gaussian noise.
+
+1. **Re-triangulation** of every track with the cameras fixed:
+   - ``pluecker``: ``pluecker.colmap.retriangulate`` (certified optimum through the camera model);
+   - ``pycolmap BA``: ``pycolmap.bundle_adjustment`` refining only the points (intrinsics, rigs and
+     poses constant), started from pycolmap's RANSAC triangulation, as COLMAP does;
+   - ``pycolmap RANSAC``: ``pycolmap.estimate_triangulation`` per track (reprojection error, 4 px).
+   Cost: the squared pixel reprojection error summed over all observations, computed for every method by
+   pycolmap's own projection (``Camera.img_from_cam``). Then with one 40 px outlier in each of 100
+   tracks of at least 6 views: outliers rejected, inliers dropped, RMS 3-D error on those tracks.
+2. **Localisation** of every image from its 2D-3D matches, with 0, 30 and 60 % of them replaced by
+   random pixels, each library with its own camera models: ``pluecker.colmap.localize``,
+   ``pycolmap.estimate_and_refine_absolute_pose`` and ``poselib.estimate_absolute_pose`` (threshold 4 px for
+   all). Median rotation error (degrees), median camera-centre error (scene units), failures, median
+   time per image.
+3. **Glue code**: the lines a user writes for each job beyond loading the model, counted from the
+   functions ``job_*`` below.
+4. **Sparse batch**: ``bench/sparse_tracks.py`` (1000 images x 200k tracks) is run as a subprocess for its
+   time and peak memory.
+
+Run: ``.venv/bin/python bench/compare_colmap.py [--quick]``; prints Markdown tables.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import poselib
+import pycolmap
+
+import pluecker
+from pluecker import colmap
+
+CAMERAS = {
+    "OPENCV narrow": (pycolmap.CameraModelId.OPENCV, [2000.0, 2000.0, 512.0, 384.0, -0.1, 0.02, 1e-4, -1e-4]),
+    "OPENCV wide": (pycolmap.CameraModelId.OPENCV, [400.0, 400.0, 512.0, 384.0, -0.25, 0.06, 5e-4, -5e-4]),
+    "OPENCV_FISHEYE": (pycolmap.CameraModelId.OPENCV_FISHEYE, [300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4]),
+}
+THRESHOLD_PX = 4.0
+
+
+# --------------------------------------------------------------------------------------------------
+# The jobs as a user writes them (section 3 counts their lines).
+
+
+def job_pluecker_triangulate(rec: Any, out: Path) -> Any:
+    run = colmap.retriangulate(rec)
+    colmap.write(rec, run, out)
+    return run
+
+
+def job_pycolmap_triangulate_and_ba(rec: Any) -> None:
+    for point_id, point in rec.points3D.items():
+        elements = point.track.elements
+        images = [rec.images[e.image_id] for e in elements]
+        xy = np.array([im.points2D[e.point2D_idx].xy for im, e in zip(images, elements)])
+        options = pycolmap.EstimateTriangulationOptions()
+        options.residual_type = pycolmap.TriangulationResidualType.REPROJECTION_ERROR
+        options.ransac.max_error = THRESHOLD_PX
+        found = pycolmap.estimate_triangulation(
+            xy, [im.cam_from_world() for im in images], [rec.cameras[im.camera_id] for im in images], options)
+        if found is not None:
+            point.xyz = found["xyz"]
+    options = pycolmap.BundleAdjustmentOptions(
+        refine_focal_length=False, refine_extra_params=False, refine_principal_point=False,
+        refine_rig_from_world=False, refine_sensor_from_rig=False, print_summary=False)
+    pycolmap.bundle_adjustment(rec, options)
+
+
+def job_pluecker_localize(camera: Any, u: np.ndarray, X: np.ndarray) -> Any:
+    rigid, result = colmap.localize(camera, u, X)
+    return rigid
+
+
+def job_pycolmap_localize(camera: Any, u: np.ndarray, X: np.ndarray) -> Any:
+    options = pycolmap.AbsolutePoseEstimationOptions()
+    options.ransac.max_error = THRESHOLD_PX
+    found = pycolmap.estimate_and_refine_absolute_pose(u, X, camera, options)
+    return None if found is None else found["cam_from_world"]
+
+
+def job_poselib_localize(camera: Any, u: np.ndarray, X: np.ndarray) -> Any:
+    cam = {"model": camera.model.name, "width": camera.width, "height": camera.height, "params": list(camera.params)}
+    pose, info = poselib.estimate_absolute_pose(u, X, cam, {"max_reproj_error": THRESHOLD_PX}, {})
+    return pose
+
+
+def glue_lines(job: Callable[..., Any]) -> int:
+    """Statements in the body of ``job``, its ``return`` line excluded (what a user types)."""
+    body = inspect.getsource(job).splitlines()[1:]
+    lines = [l.strip() for l in body if l.strip() and not l.strip().startswith("#")]
+    statements = [l for l in lines if not l.startswith("return")]
+    # Continuation lines of one call count once: those that start inside an open bracket.
+    depth, count = 0, 0
+    for line in statements:
+        if depth == 0:
+            count += 1
+        depth += line.count("(") + line.count("[") + line.count("{") - line.count(")") - line.count("]") - line.count("}")
+    return count
+
+
+# --------------------------------------------------------------------------------------------------
+
+
+def model(camera: str, seed: int, points: int = 500) -> tuple[Any, dict[int, np.ndarray]]:
+    """A synthetic model with 1 px noise on every observation, and the true points."""
+    model_id, params = CAMERAS[camera]
+    options = pycolmap.SyntheticDatasetOptions()
+    options.num_rigs, options.num_frames_per_rig, options.num_points3D = 2, 6, points
+    options.camera_model_id, options.camera_params = model_id, params
+    pycolmap.set_random_seed(seed)
+    rec = pycolmap.synthesize_dataset(options)
+    truth = {i: np.array(p.xyz) for i, p in rec.points3D.items()}
+    rng = np.random.default_rng(seed)
+    for image in rec.images.values():
+        for point2D in image.points2D:
+            if point2D.has_point3D():
+                point2D.xy = point2D.xy + rng.normal(size=2)
+    return rec, truth
+
+
+def pixel_cost(rec: Any, point_id: int, X: np.ndarray, skip: set | None = None) -> float:
+    """Squared pixel reprojection error of ``X`` over the track of ``point_id`` (pycolmap's projection)."""
+    total = 0.0
+    for e in rec.points3D[point_id].track.elements:
+        if skip and (e.image_id, e.point2D_idx) in skip:
+            continue
+        image = rec.images[e.image_id]
+        u = rec.cameras[image.camera_id].img_from_cam(np.atleast_2d(image.cam_from_world() * X))[0]
+        total += float(np.sum((u - image.points2D[e.point2D_idx].xy) ** 2))
+    return total
+
+
+def add_outliers(rec: Any, count: int, rng: np.random.Generator) -> tuple[set, set[int]]:
+    """One 40 px outlier in each of ``count`` tracks of at least 6 views: the observations and tracks."""
+    long = [i for i, p in sorted(rec.points3D.items()) if p.track.length() >= 6]
+    chosen = rng.choice(long, size=min(count, len(long)), replace=False)
+    observations = set()
+    for point_id in chosen:
+        elements = rec.points3D[int(point_id)].track.elements
+        e = elements[rng.integers(len(elements))]
+        angle = rng.uniform(0, 2 * np.pi)
+        p2d = rec.images[e.image_id].points2D[e.point2D_idx]
+        p2d.xy = p2d.xy + 40.0 * np.array([np.cos(angle), np.sin(angle)])
+        observations.add((e.image_id, e.point2D_idx))
+    return observations, {int(i) for i in chosen}
+
+
+def pycolmap_ransac(rec: Any) -> tuple[dict[int, np.ndarray], dict[int, set], float]:
+    """pycolmap's RANSAC triangulation of every track: points, rejected observations, seconds."""
+    options = pycolmap.EstimateTriangulationOptions()
+    options.residual_type = pycolmap.TriangulationResidualType.REPROJECTION_ERROR
+    options.ransac.max_error = THRESHOLD_PX
+    options.ransac.random_seed = 0
+    points, rejected = {}, {}
+    started = time.perf_counter()
+    for point_id, point in rec.points3D.items():
+        elements = point.track.elements
+        images = [rec.images[e.image_id] for e in elements]
+        xy = np.array([im.points2D[e.point2D_idx].xy for im, e in zip(images, elements)])
+        found = pycolmap.estimate_triangulation(
+            xy, [im.cam_from_world() for im in images], [rec.cameras[im.camera_id] for im in images], options)
+        if found is not None:
+            points[point_id] = np.asarray(found["xyz"])
+            rejected[point_id] = {(e.image_id, e.point2D_idx) for e, ok in zip(elements, found["inliers"]) if not ok}
+    return points, rejected, time.perf_counter() - started
+
+
+def pycolmap_ba(rec: Any, start: dict[int, np.ndarray]) -> tuple[dict[int, np.ndarray], float]:
+    """pycolmap's bundle adjustment of the points only, from ``start``: points and seconds."""
+    copy = pycolmap.Reconstruction(rec)
+    for point_id, X in start.items():
+        copy.points3D[point_id].xyz = X
+    options = pycolmap.BundleAdjustmentOptions(
+        refine_focal_length=False, refine_extra_params=False, refine_principal_point=False,
+        refine_rig_from_world=False, refine_sensor_from_rig=False, print_summary=False)
+    started = time.perf_counter()
+    pycolmap.bundle_adjustment(copy, options)
+    seconds = time.perf_counter() - started
+    return {i: np.array(p.xyz) for i, p in copy.points3D.items()}, seconds
+
+
+def triangulation_rows(camera: str, seed: int) -> list[str]:
+    rows = []
+    for with_outliers in (False, True):
+        rec, truth = model(camera, seed)
+        outliers, dirty_tracks = add_outliers(rec, 100, np.random.default_rng(seed)) if with_outliers else (set(), set())
+        started = time.perf_counter()
+        run = colmap.retriangulate(rec, outlier_threshold_px=THRESHOLD_PX if with_outliers else None)
+        seconds = time.perf_counter() - started
+        ours = {int(i): X for i, X, s in zip(run.point3D_ids, run.result.X, run.result.status) if s == "success"}
+        ours_rejected: dict[int, set] = {}
+        if run.result.inliers is not None:
+            for k in np.flatnonzero(~run.result.inliers):
+                key = int(run.point3D_ids[run.observation_point[k]])
+                ours_rejected.setdefault(key, set()).add((int(run.observation_image[k]), int(run.observation_point2D[k])))
+        ransac, ransac_rejected, ransac_seconds = pycolmap_ransac(rec)
+        ba, ba_seconds = pycolmap_ba(rec, ransac)
+        certified = int(np.sum(run.result.certified))
+        for name, points, rejected, secs, note in (
+            ("pluecker", ours, ours_rejected, seconds, f"{certified}/{len(run.point3D_ids)} certified"),
+            ("pycolmap BA (points only)", ba, None, ba_seconds, "from pycolmap RANSAC; keeps outliers"),
+            ("pycolmap RANSAC", ransac, ransac_rejected, ransac_seconds, "per-track Python loop"),
+        ):
+            ids = sorted(points)
+            # The cost over each method's own inliers (all observations where it rejects none).
+            cost = sum(pixel_cost(rec, i, points[i], (rejected or {}).get(i)) for i in ids)
+            tracks = dirty_tracks if with_outliers else set(ids)
+            err = np.sqrt(np.mean([np.sum((points[i] - truth[i]) ** 2) for i in tracks if i in points]))
+            if with_outliers and rejected is not None:
+                flagged = set().union(*rejected.values()) if rejected else set()
+                caught = len(outliers & flagged)
+                rejection = f"{caught}/{len(outliers)} rejected, {len(flagged - outliers)} inliers dropped"
+            elif with_outliers:
+                rejection = "none rejected"
+            else:
+                rejection = "-"
+            rows.append(f"| {camera} | {'100 x 40 px' if with_outliers else 'none'} | {name} | {len(ids)} | "
+                        f"{cost:.1f} | {err:.2e} | {1e3 * secs:.1f} | {rejection} | {note} |")
+    return rows
+
+
+def rotation_error_deg(Ra: np.ndarray, Rb: np.ndarray) -> float:
+    return float(np.degrees(np.arccos(np.clip((np.trace(Ra @ Rb.T) - 1) / 2, -1, 1))))
+
+
+def localisation_rows(camera: str, seed: int, ratios: tuple[float, ...]) -> list[str]:
+    rec, _ = model(camera, seed)
+    rows = []
+    jobs = {"pluecker": job_pluecker_localize, "pycolmap": job_pycolmap_localize, "PoseLib": job_poselib_localize}
+    for ratio in ratios:
+        rng = np.random.default_rng(seed)
+        stats = {name: {"rot": [], "centre": [], "fail": 0, "time": []} for name in jobs}
+        for image in rec.images.values():
+            matched = [p for p in image.points2D if p.has_point3D()]
+            u = np.array([p.xy for p in matched])
+            X = np.array([rec.points3D[p.point3D_id].xyz for p in matched])
+            wrong = rng.choice(len(u), size=int(ratio * len(u)), replace=False)
+            u[wrong] = rng.uniform([0, 0], [1024, 768], size=(len(wrong), 2))
+            R_true, t_true = colmap.pose_from_rigid(image.cam_from_world())
+            camera_model = rec.cameras[image.camera_id]
+            for name, job in jobs.items():
+                started = time.perf_counter()
+                found = job(camera_model, u, X)
+                stats[name]["time"].append(time.perf_counter() - started)
+                if found is None:
+                    stats[name]["fail"] += 1
+                    continue
+                R, t = (np.asarray(found.R), np.asarray(found.t)) if name == "PoseLib" else colmap.pose_from_rigid(found)
+                stats[name]["rot"].append(rotation_error_deg(R, R_true))
+                stats[name]["centre"].append(float(np.linalg.norm(-R.T @ t + R_true.T @ t_true)))
+        for name, s in stats.items():
+            rows.append(f"| {camera} | {int(100 * ratio)} % | {name} | {np.median(s['rot']):.4f} | "
+                        f"{np.median(s['centre']):.2e} | {s['fail']}/{len(rec.images)} | {1e3 * np.median(s['time']):.2f} |")
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="one camera, no sparse batch")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    cameras = list(CAMERAS)[:1] if args.quick else list(CAMERAS)
+    print(f"pluecker {pluecker.__version__}, pycolmap {pycolmap.__version__}, PoseLib {poselib.__version__}\n")
+    pycolmap.logging.minloglevel = 2  # no glog lines from the bundle adjuster
+    colmap.retriangulate(model(cameras[0], 99, 20)[0])  # warm-up: one-off imports are not timed
+    print("## Re-triangulation (cameras fixed, 1 px noise; cost: Σ squared pixel reprojection error over each "
+          "method's inliers; 3-D error: RMS over all tracks, or over the 100 tracks with an outlier)\n")
+    print("| camera | outliers | method | points | cost (px²) | RMS 3-D error | time (ms) | outlier rejection | note |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for camera in cameras:
+        print("\n".join(triangulation_rows(camera, args.seed)), flush=True)
+    print("\n## Localisation (12 images per camera; threshold 4 px)\n")
+    print("| camera | outliers | method | median rotation error (deg) | median centre error | failures | median time (ms) |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for camera in cameras:
+        print("\n".join(localisation_rows(camera, args.seed, (0.0, 0.3, 0.6))), flush=True)
+    print("\n## Glue code beyond loading the model (statements a user writes)\n")
+    print("| job | pluecker | pycolmap | PoseLib |")
+    print("| --- | --- | --- | --- |")
+    print(f"| re-triangulate and write a model | {glue_lines(job_pluecker_triangulate)} (command line: 0, "
+          f"`pluecker triangulate --colmap DIR --out DIR`) | {glue_lines(job_pycolmap_triangulate_and_ba)} "
+          "(RANSAC per track, then BA with cameras fixed; no covariances, no certificates) | - |")
+    print(f"| localise an image | {glue_lines(job_pluecker_localize)} | {glue_lines(job_pycolmap_localize)} | "
+          f"{glue_lines(job_poselib_localize)} |")
+    if not args.quick:
+        print("\n## Sparse batch (bench/sparse_tracks.py)\n")
+        script = Path(__file__).with_name("sparse_tracks.py")
+        out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, check=True).stdout
+        print("```\n" + out.strip() + "\n```")
+
+
+if __name__ == "__main__":
+    main()
