@@ -345,9 +345,9 @@ def estimate_pose(
     and/or segments (M, 2, 2) ↔ (M, 2, 3) (only the 3-D line through a 3-D segment is used).
 
     ``camera``: :class:`Camera`, or :class:`LensCamera` whose observed (distorted) pixels are given:
-    every stage runs on exactly undistorted pixels (RANSAC thresholds apply there), the refinement and
-    all reported pixels are the distorted ones, segments as each endpoint's distance to the tangent of
-    the curved image of the line. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
+    every stage runs on exactly undistorted pixels, weighted so that RANSAC's thresholds, the refinement
+    and all reported pixels are the distorted ones (to first order); segments as each endpoint's distance
+    to the tangent of the curved image of the line; with RANSAC a pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
     in standard deviations (``sigma_px`` defaults to 1). No certificate with either (status says why).
 

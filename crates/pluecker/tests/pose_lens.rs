@@ -302,3 +302,30 @@ fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
     assert!(!result.inliers_points[7] && !result.inliers_lines[1]);
     assert!(result.inliers_points.iter().filter(|&&k| k).count() >= 28 && result.inliers_lines[0]);
 }
+
+#[test]
+fn ransac_thresholds_are_distorted_pixels_at_the_fisheye_edge() {
+    // Structure filling a 140° field of view seen by a fisheye: at 70° off-axis the undistortion stretches
+    // a pixel about 8.5-fold radially. With thresholds in undistorted pixels the 1 px noise there would
+    // exceed 4 px; in distorted pixels only the 4 σ tail (3e-4) is lost.
+    let lens = fisheye();
+    let (mut kept, mut total) = (0, 0);
+    for seed in 0..10 {
+        let scene = visible_scene(120.0, 60, 0, false, 500 + seed);
+        let corr = observe(&scene, &lens, &|_| 1.0, &mut Rng::new(seed));
+        let opts = PoseOptions {
+            ransac: Some(RansacOptions {
+                seed,
+                ..RansacOptions::default()
+            }),
+            sigma_px: Some(1.0),
+            ..PoseOptions::default()
+        };
+        let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
+        assert_eq!(result.status, Status::Success, "seed {seed}");
+        kept += result.inliers_points.iter().filter(|&&k| k).count();
+        total += 60;
+        assert!(nees(&result, &scene).unwrap() < 22.5, "seed {seed}");
+    }
+    assert!(kept as f64 >= 0.99 * total as f64, "{kept} of {total} inliers kept");
+}

@@ -23,9 +23,10 @@
 //!   approximated by the distance to its tangent at the point nearest the endpoint: the distorted image
 //!   of a line is a curve, and a segment's endpoints are the only part of it that is used.
 //!
-//! RANSAC's thresholds apply to the undistorted pixels (as PoseLib scales them by the focal length in
-//! normalised coordinates): the same pixels where the distortion is mild, larger ones where it
-//! stretches the image (the edge of a fisheye).
+//! RANSAC scores hypotheses with the same whitened errors ([`super::robust::scoring`]), so its
+//! thresholds are distorted pixels too (to first order), also where the undistortion stretches the
+//! image tenfold (the edge of a fisheye); with covariances they are standard deviations. (PoseLib and
+//! OpenCV apply one threshold in undistorted, normalised coordinates instead.)
 
 use super::correspondences::Correspondences;
 use crate::camera::Camera;

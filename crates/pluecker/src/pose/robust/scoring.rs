@@ -9,6 +9,12 @@
 //! A point (a line) with an object point (either object endpoint) at depth `z ≤ 0` has an infinite
 //! error: it is an outlier of that pose.
 //!
+//! With per-observation noise on the correspondences ([`crate::pose::noise`]) the errors are whitened as
+//! the reprojection cost's are: `e = ‖W r‖` for a point and each endpoint distance divided by its standard
+//! deviation across the line. Through a lens without covariances that makes them distorted pixels (to
+//! first order), so the thresholds keep their meaning at the edge of a fisheye; with covariances they
+//! are in standard deviations.
+//!
 //! The MSAC score (Torr & Zisserman 2000) of a pose is `½ Σᵢ min(eᵢ², τᵢ²)`, with `τᵢ` the point or the
 //! line threshold: the reprojection cost with each residual capped at its threshold. Lower is better.
 //!
@@ -26,7 +32,7 @@ use super::sprt::SprtTest;
 use crate::camera::Camera;
 use crate::error::Result;
 use crate::rng::Rng;
-use nalgebra::{Matrix3, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 /// Points per batch of the scoring loop.
 const LANES: usize = 4;
@@ -47,12 +53,17 @@ struct ScoredPoint {
     pixel: [f64; 2],
 }
 
-/// One line: two object points and the two observed pixel endpoints, homogeneous.
+/// One line: two object points, the two observed pixel endpoints (homogeneous) and their covariances
+/// (the identity without noise: plain pixel distances).
 #[derive(Debug, Clone, Copy)]
 struct ScoredLine {
     object: [Vector3<f64>; 2],
     endpoints: [Vector3<f64>; 2],
+    covariances: [Matrix2<f64>; 2],
 }
+
+/// The whitening of a point without noise (unused on the fast path).
+const UNIT: [f64; 4] = [1.0, 0.0, 0.0, 1.0];
 
 /// A random order of `n` items: `index[slot]` is the item in a slot, `slot[item]` its inverse.
 #[derive(Debug, Clone)]
@@ -174,6 +185,12 @@ pub(crate) struct Prepared {
     lines: Vec<ScoredLine>,
     points_given: Vec<ScoredPoint>,
     lines_given: Vec<ScoredLine>,
+    /// With noise on the correspondences ([`crate::pose::noise`]): each point's whitening `W`
+    /// (row-major), in slot order and in the order given; empty without. Errors are then `‖W r‖`.
+    point_whitening: Vec<[f64; 4]>,
+    point_whitening_given: Vec<[f64; 4]>,
+    /// The correspondences carry noise: points are scored through `point_whitening`.
+    weighted: bool,
     point_order: Order,
     line_order: Order,
     /// `[u₀, v₀, u₁, v₁]`: the bounding box of the observed pixels (points and segment endpoints).
@@ -202,11 +219,24 @@ impl Prepared {
             .lines2d
             .iter()
             .zip(&corr.lines3d)
-            .map(|(s2, s3)| ScoredLine {
+            .enumerate()
+            .map(|(i, (s2, s3))| ScoredLine {
                 object: *s3,
                 endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
+                covariances: corr.noise.as_ref().map_or([Matrix2::identity(); 2], |n| n.lines[i]),
             })
             .collect();
+        let point_whitening_given: Vec<[f64; 4]> = corr.noise.as_ref().map_or_else(Vec::new, |n| {
+            n.points
+                .iter()
+                .map(|w| [w[(0, 0)], w[(0, 1)], w[(1, 0)], w[(1, 1)]])
+                .collect()
+        });
+        let point_whitening = if point_whitening_given.is_empty() {
+            Vec::new()
+        } else {
+            point_order.index.iter().map(|&i| point_whitening_given[i]).collect()
+        };
         let points = point_order.index.iter().map(|&i| points_given[i]).collect();
         let lines = line_order.index.iter().map(|&i| lines_given[i]).collect();
         let features = (0..corr.n_points() + corr.n_lines())
@@ -228,6 +258,9 @@ impl Prepared {
             lines,
             points_given,
             lines_given,
+            point_whitening,
+            point_whitening_given,
+            weighted: corr.noise.is_some(),
             point_order,
             line_order,
             window,
@@ -243,17 +276,26 @@ impl Prepared {
         self.lines.len()
     }
 
-    /// Squared pixel error of `point` at `pose` (infinite behind the camera).
+    /// Whether the errors are whitened by per-observation noise.
+    fn weighted(&self) -> bool {
+        self.weighted
+    }
+
+    /// Squared pixel error of `point` at `pose` (infinite behind the camera); with `WEIGHTED`, of the
+    /// residual whitened by `w` (row-major 2x2).
     #[inline(always)]
-    fn point_error2(&self, pose: &Pose, point: &ScoredPoint) -> f64 {
+    fn point_error2<const WEIGHTED: bool>(&self, pose: &Pose, point: &ScoredPoint, w: &[f64; 4]) -> f64 {
         let (r, t, c) = (&pose.rotation, &pose.translation, &self.camera);
         let [x, y, z] = point.object;
         let pz = r[(2, 0)] * x + r[(2, 1)] * y + r[(2, 2)] * z + t.z;
         let iz = 1.0 / pz;
         let xn = (r[(0, 0)] * x + r[(0, 1)] * y + r[(0, 2)] * z + t.x) * iz;
         let yn = (r[(1, 0)] * x + r[(1, 1)] * y + r[(1, 2)] * z + t.y) * iz;
-        let du = c.fx * xn + c.skew * yn + c.cx - point.pixel[0];
-        let dv = c.fy * yn + c.cy - point.pixel[1];
+        let mut du = c.fx * xn + c.skew * yn + c.cx - point.pixel[0];
+        let mut dv = c.fy * yn + c.cy - point.pixel[1];
+        if WEIGHTED {
+            (du, dv) = (w[0] * du + w[1] * dv, w[2] * du + w[3] * dv);
+        }
         // A select rather than an early return, so that batches of points stay branch-free.
         if pz > 0.0 {
             du * du + dv * dv
@@ -272,18 +314,38 @@ impl Prepared {
             return f64::INFINITY;
         }
         let l = self.k_inv_t * a.cross(&b);
-        let scale2 = l.x * l.x + l.y * l.y;
-        if !(scale2 > 0.0) {
+        let l12 = nalgebra::Vector2::new(l.x, l.y);
+        // The variance across the line of each endpoint: lᵀ C l (the pixel metric for C = I).
+        let (s1, s2) = (
+            l12.dot(&(line.covariances[0] * l12)),
+            l12.dot(&(line.covariances[1] * l12)),
+        );
+        if !(s1 > 0.0 && s2 > 0.0) {
             return f64::INFINITY;
         }
         let (d1, d2) = (l.dot(&line.endpoints[0]), l.dot(&line.endpoints[1]));
-        0.5 * (d1 * d1 + d2 * d2) / scale2
+        0.5 * (d1 * d1 / s1 + d2 * d2 / s2)
+    }
+
+    /// Squared error of point `i` in the order given.
+    fn given_point_error2(&self, pose: &Pose, i: usize) -> f64 {
+        match self.point_whitening_given.get(i) {
+            Some(w) => self.point_error2::<true>(pose, &self.points_given[i], w),
+            None => self.point_error2::<false>(pose, &self.points_given[i], &UNIT),
+        }
+    }
+
+    /// Squared error of the point in slot `i`.
+    #[inline(always)]
+    fn slot_point_error2<const WEIGHTED: bool>(&self, pose: &Pose, i: usize) -> f64 {
+        let w = if WEIGHTED { &self.point_whitening[i] } else { &UNIT };
+        self.point_error2::<WEIGHTED>(pose, &self.points[i], w)
     }
 
     /// Squared error of feature `k` (points first, then lines, in the order given).
     fn feature_error2(&self, pose: &Pose, k: usize) -> f64 {
         if k < self.points.len() {
-            self.point_error2(pose, &self.points_given[k])
+            self.given_point_error2(pose, k)
         } else {
             self.line_error2(pose, &self.lines_given[k - self.points.len()])
         }
@@ -324,7 +386,8 @@ impl Prepared {
             if nl > 0 { start[1] % nl } else { 0 },
         ];
         match test {
-            None => self.verify::<false>(pose, tau, bound, &SprtTest::NONE, None, start),
+            None if self.weighted() => self.verify::<false, true>(pose, tau, bound, &SprtTest::NONE, None, start),
+            None => self.verify::<false, false>(pose, tau, bound, &SprtTest::NONE, None, start),
             Some(test) => {
                 let skip = sample.map(|sample| SampleRanks {
                     ranks: sample.map(|k| {
@@ -337,14 +400,18 @@ impl Prepared {
                         }
                     }),
                 });
-                self.verify::<true>(pose, tau, bound, test, skip.as_ref(), start)
+                if self.weighted() {
+                    self.verify::<true, true>(pose, tau, bound, test, skip.as_ref(), start)
+                } else {
+                    self.verify::<true, false>(pose, tau, bound, test, skip.as_ref(), start)
+                }
             }
         }
     }
 
     /// [`Prepared::evaluate`], with the sequential test compiled in or out (`TEST`).
     #[inline(always)]
-    fn verify<const TEST: bool>(
+    fn verify<const TEST: bool, const WEIGHTED: bool>(
         &self,
         pose: &Pose,
         tau: &Thresholds,
@@ -385,7 +452,7 @@ impl Prepared {
         for (from, to) in [(start[0], np), (0, start[0])] {
             let full = to - (to - from) % LANES;
             for i0 in (from..full).step_by(LANES) {
-                let e2: [f64; LANES] = std::array::from_fn(|l| self.point_error2(pose, &self.points[i0 + l]));
+                let e2: [f64; LANES] = std::array::from_fn(|l| self.slot_point_error2::<WEIGHTED>(pose, i0 + l));
                 sum += e2.iter().map(|e| e.min(tau.point2)).sum::<f64>();
                 done[0] += LANES;
                 if sum > limit {
@@ -401,7 +468,7 @@ impl Prepared {
                 }
             }
             for i in full..to {
-                let e2 = self.point_error2(pose, &self.points[i]);
+                let e2 = self.slot_point_error2::<WEIGHTED>(pose, i);
                 sum += e2.min(tau.point2);
                 let c = (e2 <= tau.point2) as usize;
                 consistent[0] += c;
@@ -443,7 +510,8 @@ impl Prepared {
         let points = self
             .points_given
             .iter()
-            .map(|p| self.point_error2(pose, p) <= tau.point2)
+            .enumerate()
+            .map(|(i, _)| self.given_point_error2(pose, i) <= tau.point2)
             .collect();
         let lines = self
             .lines_given
