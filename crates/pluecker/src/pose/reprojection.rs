@@ -196,11 +196,7 @@ impl<'a> ReprojectionCost<'a> {
     /// [`LANES`] points, then the rest one by one.
     fn point_sums<const JACOBIAN: bool>(&self, pose: &Pose) -> (f64, [f64; 6], [f64; 21]) {
         if self.noise.is_some() {
-            let mut sums = (0.0, [0.0; 6], [0.0; 21]);
-            for i in 0..self.n_points {
-                add_block(&mut sums, &self.point_block(pose, i, JACOBIAN));
-            }
-            return sums;
+            return self.weighted_point_sums::<JACOBIAN>(pose);
         }
         let full = self.n_points - self.n_points % LANES;
         let mut batches = Sums::<LANES>::new();
@@ -227,6 +223,16 @@ impl<'a> ReprojectionCost<'a> {
         )
     }
 
+    /// [`Self::point_sums`] with per-observation noise: point by point, whitened.
+    #[cold]
+    fn weighted_point_sums<const JACOBIAN: bool>(&self, pose: &Pose) -> (f64, [f64; 6], [f64; 21]) {
+        let mut sums = (0.0, [0.0; 6], [0.0; 21]);
+        for i in 0..self.n_points {
+            add_block(&mut sums, &self.point_block(pose, i, JACOBIAN));
+        }
+        sums
+    }
+
     /// Point `i`'s residual `W (π(R X + t) − u)` and its Jacobian, whitened by the noise (if any).
     fn point_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
         let p = self.point_lanes::<1, true>(pose, i);
@@ -238,7 +244,16 @@ impl<'a> ReprojectionCost<'a> {
 
     /// Line `i`'s two endpoint residuals and their Jacobian: `(l·ẽ) / √(l₁₂ᵀ C l₁₂)` with `C` the
     /// endpoint's covariance (the identity without noise: the pixel distance).
+    #[inline(always)]
     fn line_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
+        match self.noise {
+            None => self.line_block_with::<false>(pose, i, with_jacobian),
+            Some(_) => self.line_block_with::<true>(pose, i, with_jacobian),
+        }
+    }
+
+    /// [`Self::line_block`], with the endpoint covariances compiled in (`WEIGHTED`) or out.
+    fn line_block_with<const WEIGHTED: bool>(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
         let [wa, wb] = self.lines3d[i];
         let (ra, rb) = (pose.rotation * wa, pose.rotation * wb);
         let (a, b) = (ra + pose.translation, rb + pose.translation);
@@ -246,6 +261,7 @@ impl<'a> ReprojectionCost<'a> {
         let l = a.cross(&b);
         let lp = self.k_inv.transpose() * l;
         let lp12 = lp.fixed_rows::<2>(0).into_owned();
+        let plain_scale = if WEIGHTED { 0.0 } else { lp12.norm() };
         let mut residual = Vector2::zeros();
         let mut jac = SMatrix::<f64, 2, 6>::zeros();
         let dl_domega = skew(&b) * skew(&ra) - skew(&a) * skew(&rb);
@@ -253,9 +269,14 @@ impl<'a> ReprojectionCost<'a> {
         for (k, e) in self.lines2d[i].iter().enumerate() {
             let eh = Vector3::new(e.x, e.y, 1.0);
             let num = lp.dot(&eh);
-            // C l₁₂, with C = I on the fast path.
-            let c_l = self.noise.map_or(lp12, |n| n.lines[i][k] * lp12);
-            let scale = lp12.dot(&c_l).sqrt();
+            // C l₁₂ and √(l₁₂ᵀ C l₁₂), with C = I on the fast path.
+            let (c_l, scale) = match self.noise {
+                Some(n) if WEIGHTED => {
+                    let c_l = n.lines[i][k] * lp12;
+                    (c_l, lp12.dot(&c_l).sqrt())
+                }
+                _ => (lp12, plain_scale),
+            };
             residual[k] = num / scale;
             if with_jacobian {
                 // ∂/∂lp of (lp·e)/√(lp₁₂ᵀ C lp₁₂), then chain through lp = K⁻ᵀ l.
@@ -274,12 +295,10 @@ impl<'a> ReprojectionCost<'a> {
     /// The cost `½ Σ r²` at `pose` when it is below `bound`, else `None`: the points are summed in
     /// batches and the sum abandoned as soon as it reaches `bound` (for ranking many poses cheaply).
     pub fn cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
-        // The weighted path checks the bound after every point; the fast one after every batch.
-        let full = if self.noise.is_some() {
-            0
-        } else {
-            self.n_points - self.n_points % LANES
-        };
+        if self.noise.is_some() {
+            return self.weighted_cost_below(pose, bound);
+        }
+        let full = self.n_points - self.n_points % LANES;
         let mut total = 0.0;
         for i0 in (0..full).step_by(LANES) {
             let p = self.point_lanes::<LANES, false>(pose, i0);
@@ -291,11 +310,28 @@ impl<'a> ReprojectionCost<'a> {
             }
         }
         for i in full..self.n_points {
+            let p = self.point_lanes::<1, false>(pose, i);
+            total += 0.5 * (p.ru[0] * p.ru[0] + p.rv[0] * p.rv[0]);
+        }
+        self.lines_below(pose, total, bound)
+    }
+
+    /// [`Self::cost_below`] with per-observation noise: the bound checked after every point.
+    #[cold]
+    fn weighted_cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
+        let mut total = 0.0;
+        for i in 0..self.n_points {
             total += 0.5 * self.point_residual(pose, i).norm_squared();
             if !(total < bound) {
                 return None;
             }
         }
+        self.lines_below(pose, total, bound)
+    }
+
+    /// `total` plus the line terms, while below `bound`.
+    #[inline(always)]
+    fn lines_below(&self, pose: &Pose, mut total: f64, bound: f64) -> Option<f64> {
         for i in 0..self.lines2d.len() {
             total += 0.5 * self.line_block(pose, i, false).0.norm_squared();
             if !(total < bound) {
@@ -348,6 +384,7 @@ impl<'a> ReprojectionCost<'a> {
 }
 
 /// Adds one residual pair's cost, gradient and upper triangle of `JᵀJ` to `sums`.
+#[inline(always)]
 fn add_block(sums: &mut (f64, [f64; 6], [f64; 21]), (r, j): &Block) {
     sums.0 += 0.5 * r.norm_squared();
     let mut k = 0;

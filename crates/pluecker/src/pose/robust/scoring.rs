@@ -53,17 +53,17 @@ struct ScoredPoint {
     pixel: [f64; 2],
 }
 
-/// One line: two object points, the two observed pixel endpoints (homogeneous) and their covariances
-/// (the identity without noise: plain pixel distances).
+/// One line: two object points and the two observed pixel endpoints, homogeneous.
 #[derive(Debug, Clone, Copy)]
 struct ScoredLine {
     object: [Vector3<f64>; 2],
     endpoints: [Vector3<f64>; 2],
-    covariances: [Matrix2<f64>; 2],
 }
 
 /// The whitening of a point without noise (unused on the fast path).
 const UNIT: [f64; 4] = [1.0, 0.0, 0.0, 1.0];
+/// The endpoint covariances of a line without noise (unused on the fast path).
+const UNIT_COVARIANCES: [Matrix2<f64>; 2] = [Matrix2::new(1.0, 0.0, 0.0, 1.0); 2];
 
 /// A random order of `n` items: `index[slot]` is the item in a slot, `slot[item]` its inverse.
 #[derive(Debug, Clone)]
@@ -189,6 +189,10 @@ pub(crate) struct Prepared {
     /// (row-major), in slot order and in the order given; empty without. Errors are then `‖W r‖`.
     point_whitening: Vec<[f64; 4]>,
     point_whitening_given: Vec<[f64; 4]>,
+    /// With noise: each line's endpoint covariances `C` (errors are distances over `√(lᵀ C l)`), in slot
+    /// order and in the order given; empty without.
+    line_covariances: Vec<[Matrix2<f64>; 2]>,
+    line_covariances_given: Vec<[Matrix2<f64>; 2]>,
     /// The correspondences carry noise: points are scored through `point_whitening`.
     weighted: bool,
     point_order: Order,
@@ -219,13 +223,17 @@ impl Prepared {
             .lines2d
             .iter()
             .zip(&corr.lines3d)
-            .enumerate()
-            .map(|(i, (s2, s3))| ScoredLine {
+            .map(|(s2, s3)| ScoredLine {
                 object: *s3,
                 endpoints: s2.map(|e| Vector3::new(e.x, e.y, 1.0)),
-                covariances: corr.noise.as_ref().map_or([Matrix2::identity(); 2], |n| n.lines[i]),
             })
             .collect();
+        let line_covariances_given = corr.noise.as_ref().map_or_else(Vec::new, |n| n.lines.clone());
+        let line_covariances = if line_covariances_given.is_empty() {
+            Vec::new()
+        } else {
+            line_order.index.iter().map(|&i| line_covariances_given[i]).collect()
+        };
         let point_whitening_given: Vec<[f64; 4]> = corr.noise.as_ref().map_or_else(Vec::new, |n| {
             n.points
                 .iter()
@@ -260,6 +268,8 @@ impl Prepared {
             lines_given,
             point_whitening,
             point_whitening_given,
+            line_covariances,
+            line_covariances_given,
             weighted: corr.noise.is_some(),
             point_order,
             line_order,
@@ -306,28 +316,60 @@ impl Prepared {
 
     /// Mean squared distance of the observed endpoints of `line` to its projected line (infinite when
     /// an object endpoint is behind the camera or the line projects to a point).
+    /// With `WEIGHTED`, each distance is divided by the endpoint's standard deviation across the line
+    /// (`covariances`).
     #[inline(always)]
-    fn line_error2(&self, pose: &Pose, line: &ScoredLine) -> f64 {
+    fn line_error2<const WEIGHTED: bool>(
+        &self,
+        pose: &Pose,
+        line: &ScoredLine,
+        covariances: &[Matrix2<f64>; 2],
+    ) -> f64 {
         let a = pose.rotation * line.object[0] + pose.translation;
         let b = pose.rotation * line.object[1] + pose.translation;
         if !(a.z > 0.0 && b.z > 0.0) {
             return f64::INFINITY;
         }
         let l = self.k_inv_t * a.cross(&b);
-        let l12 = nalgebra::Vector2::new(l.x, l.y);
-        // The variance across the line of each endpoint: lᵀ C l (the pixel metric for C = I).
-        let (s1, s2) = (
-            l12.dot(&(line.covariances[0] * l12)),
-            l12.dot(&(line.covariances[1] * l12)),
-        );
-        if !(s1 > 0.0 && s2 > 0.0) {
+        let (d1, d2) = (l.dot(&line.endpoints[0]), l.dot(&line.endpoints[1]));
+        if WEIGHTED {
+            // The variance across the line of each endpoint: lᵀ C l.
+            let l12 = Vector2::new(l.x, l.y);
+            let (s1, s2) = (l12.dot(&(covariances[0] * l12)), l12.dot(&(covariances[1] * l12)));
+            if !(s1 > 0.0 && s2 > 0.0) {
+                return f64::INFINITY;
+            }
+            return 0.5 * (d1 * d1 / s1 + d2 * d2 / s2);
+        }
+        let scale2 = l.x * l.x + l.y * l.y;
+        if !(scale2 > 0.0) {
             return f64::INFINITY;
         }
-        let (d1, d2) = (l.dot(&line.endpoints[0]), l.dot(&line.endpoints[1]));
-        0.5 * (d1 * d1 / s1 + d2 * d2 / s2)
+        0.5 * (d1 * d1 + d2 * d2) / scale2
+    }
+
+    /// Squared error of the line in slot `i`.
+    #[inline(always)]
+    fn slot_line_error2<const WEIGHTED: bool>(&self, pose: &Pose, i: usize) -> f64 {
+        let c = if WEIGHTED {
+            &self.line_covariances[i]
+        } else {
+            &UNIT_COVARIANCES
+        };
+        self.line_error2::<WEIGHTED>(pose, &self.lines[i], c)
+    }
+
+    /// Squared error of line `i` in the order given.
+    #[inline(always)]
+    fn given_line_error2(&self, pose: &Pose, i: usize) -> f64 {
+        match self.line_covariances_given.get(i) {
+            Some(c) => self.line_error2::<true>(pose, &self.lines_given[i], c),
+            None => self.line_error2::<false>(pose, &self.lines_given[i], &UNIT_COVARIANCES),
+        }
     }
 
     /// Squared error of point `i` in the order given.
+    #[inline(always)]
     fn given_point_error2(&self, pose: &Pose, i: usize) -> f64 {
         match self.point_whitening_given.get(i) {
             Some(w) => self.point_error2::<true>(pose, &self.points_given[i], w),
@@ -347,7 +389,7 @@ impl Prepared {
         if k < self.points.len() {
             self.given_point_error2(pose, k)
         } else {
-            self.line_error2(pose, &self.lines_given[k - self.points.len()])
+            self.given_line_error2(pose, k - self.points.len())
         }
     }
 
@@ -479,7 +521,7 @@ impl Prepared {
             }
         }
         for i in (start[1]..nl).chain(0..start[1]) {
-            let e2 = self.line_error2(pose, &self.lines[i]);
+            let e2 = self.slot_line_error2::<WEIGHTED>(pose, i);
             sum += e2.min(tau.line2);
             let c = (e2 <= tau.line2) as usize;
             consistent[1] += c;
@@ -516,7 +558,8 @@ impl Prepared {
         let lines = self
             .lines_given
             .iter()
-            .map(|l| self.line_error2(pose, l) <= tau.line2)
+            .enumerate()
+            .map(|(i, _)| self.given_line_error2(pose, i) <= tau.line2)
             .collect();
         (points, lines)
     }
