@@ -79,11 +79,13 @@ from ._core import (
     random_scene,
     reprojection_errors,
     triangulate_line,
+    triangulate_line_observations,
     triangulate_lines,
     triangulate_point,
     triangulate_point_observations,
     triangulate_points,
     triangulate_quadric,
+    triangulate_quadric_observations,
     triangulate_quadrics,
 )
 
@@ -133,10 +135,12 @@ __all__ = [
     "random_scene",
     "reprojection_errors",
     "triangulate_line",
+    "triangulate_line_observations",
     "triangulate_lines",
     "triangulate_point",
     "triangulate_point_observations",
     "triangulate_points",
     "triangulate_quadric",
+    "triangulate_quadric_observations",
     "triangulate_quadrics",
 ]

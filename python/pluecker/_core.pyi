@@ -733,6 +733,24 @@ def triangulate_lines(
     """Many 3-D lines: ``P`` (v, 3, 4) shared or (n, v, 3, 4) per track; ``lines`` (n, v, 3) or
     (n, v, 2, 2); ``visible`` (n, v); ``cov`` (n, v, 2, 2)."""
 
+def triangulate_line_observations(
+    P: ArrayLike,
+    track: ArrayLike,
+    image: ArrayLike,
+    lines: ArrayLike,
+    cov: Optional[ArrayLike] = None,
+    method: Optional[str] = None,
+    *,
+    sigma: Optional[float] = None,
+    options: Optional[TriangulationOptions] = None,
+    progress: Optional[Callable[[int], Any]] = None,
+    time_budget: Optional[float] = None,
+    n_tracks: Optional[int] = None,
+) -> LineTriangulations:
+    """Line tracks given one observation per row: ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments)
+    of track ``track[k]`` in image ``image[k]`` (a row of ``P`` (v, 3, 4)), ``cov[k]`` (m, 2, 2) when given.
+    Each track is solved as :func:`triangulate_lines` would; memory grows with the rows."""
+
 def triangulate_quadric(
     P: ArrayLike,
     conics: ArrayLike,
@@ -756,6 +774,23 @@ def triangulate_quadrics(
     time_budget: Optional[float] = None,
 ) -> QuadricTriangulations:
     """Many ellipsoids: ``P`` (v, 3, 4) or (n, v, 3, 4); ``conics`` (n, v, 3, 3); ``cov`` (n, v, 5, 5)."""
+
+def triangulate_quadric_observations(
+    P: ArrayLike,
+    track: ArrayLike,
+    image: ArrayLike,
+    conics: ArrayLike,
+    cov: Optional[ArrayLike] = None,
+    method: Optional[str] = None,
+    *,
+    options: Optional[TriangulationOptions] = None,
+    progress: Optional[Callable[[int], Any]] = None,
+    time_budget: Optional[float] = None,
+    n_tracks: Optional[int] = None,
+) -> QuadricTriangulations:
+    """Ellipsoid tracks given one outline conic per row: ``conics[k]`` (m, 3, 3) of track ``track[k]`` in
+    image ``image[k]``, ``cov[k]`` (m, 5, 5) when given. Each track is solved as
+    :func:`triangulate_quadrics` would."""
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 

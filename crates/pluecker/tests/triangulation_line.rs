@@ -621,3 +621,63 @@ mod batch {
         assert!(triangulate_lines(shared, &empty, &o, None).unwrap().is_empty());
     }
 }
+
+#[test]
+fn sparse_line_tracks_equal_the_dense_batch() {
+    use pluecker::triangulation::line::batch::{triangulate_lines_sparse, SparseLineTracks};
+    use pluecker::triangulation::tracks::Csr;
+    // Three views, four tracks seen in all of them; the sparse form lists the same rows track by track.
+    let mut rng = pluecker::rng::Rng::new(21);
+    let scene = pluecker::synthetic::triangulation_scene(3, 0.6, 21);
+    let cameras = scene.cameras.clone();
+    let mut endpoints = Vec::new();
+    for _ in 0..4 {
+        let a = scene.point + nalgebra::Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        let b = scene.point + nalgebra::Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        for p in &cameras {
+            for x in [a, b] {
+                let h = p * x.push(1.0);
+                endpoints.extend([h.x / h.z + 0.5 * rng.normal(), h.y / h.z + 0.5 * rng.normal()]);
+            }
+        }
+    }
+    let opts = pluecker::triangulation::TriangulationOptions::default();
+    let dense = pluecker::triangulation::line::batch::triangulate_lines(
+        pluecker::triangulation::tracks::TrackCameras::Shared(&cameras),
+        &pluecker::triangulation::line::batch::LineTracks {
+            lines: pluecker::triangulation::line::batch::ImageLines::Segments {
+                endpoints: &endpoints,
+                sigma: 1.0,
+            },
+            visible: None,
+            covariances: None,
+        },
+        &opts,
+        None,
+    )
+    .unwrap();
+    let offsets = [0, 3, 6, 9, 12];
+    let images: Vec<usize> = (0..4).flat_map(|_| 0..3).collect();
+    let sparse = triangulate_lines_sparse(
+        &cameras,
+        &SparseLineTracks {
+            csr: Csr {
+                offsets: &offsets,
+                images: &images,
+            },
+            lines: pluecker::triangulation::line::batch::ImageLines::Segments {
+                endpoints: &endpoints,
+                sigma: 1.0,
+            },
+            covariances: None,
+        },
+        &opts,
+        None,
+    )
+    .unwrap();
+    for (t, (d, s)) in dense.into_iter().zip(sparse).enumerate() {
+        let (mut d, mut s) = (d.unwrap(), s.unwrap());
+        (d.report.time_seconds, s.report.time_seconds) = (0.0, 0.0);
+        assert_eq!(d, s, "track {t}");
+    }
+}

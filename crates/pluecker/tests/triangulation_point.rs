@@ -13,6 +13,7 @@ use pluecker::triangulation::point::certificate::convexity_test;
 use pluecker::triangulation::point::cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use pluecker::triangulation::point::global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::tracks::Csr;
 use pluecker::triangulation::views::depth_normalized;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 
@@ -549,8 +550,10 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         covariances: Some(&dense_cov),
     };
     let s = SparsePointTracks {
-        offsets: &offsets,
-        images: &images,
+        csr: Csr {
+            offsets: &offsets,
+            images: &images,
+        },
         observations: &sparse,
         covariances: Some(&sparse_cov),
     };
@@ -571,8 +574,10 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         }
     }
     let reversed = SparsePointTracks {
-        offsets: &offsets,
-        images: &rev_images,
+        csr: Csr {
+            offsets: &offsets,
+            images: &rev_images,
+        },
         observations: &rev_obs,
         covariances: Some(&rev_cov),
     };
@@ -599,7 +604,10 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     bad_images[offsets[0]] = v;
     bad_images[offsets[1] + 1] = bad_images[offsets[1]];
     let bad = SparsePointTracks {
-        images: &bad_images,
+        csr: Csr {
+            images: &bad_images,
+            ..s.csr
+        },
         ..s
     };
     let r = triangulate_points_sparse(&cameras, &bad, &opts, None).unwrap();
@@ -608,7 +616,10 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     assert!(r[2..].iter().all(|x| x.is_ok()));
     // Whole-call errors: offsets that do not end at the observations, or decrease.
     let short = SparsePointTracks {
-        offsets: &offsets[..n],
+        csr: Csr {
+            offsets: &offsets[..n],
+            ..s.csr
+        },
         ..s
     };
     assert!(
@@ -616,7 +627,13 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     );
     let mut down = offsets.clone();
     down.swap(1, 2);
-    let down = SparsePointTracks { offsets: &down, ..s };
+    let down = SparsePointTracks {
+        csr: Csr {
+            offsets: &down,
+            ..s.csr
+        },
+        ..s
+    };
     assert!(
         matches!(triangulate_points_sparse(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );

@@ -11,6 +11,7 @@ use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{triangulate_points_sparse, SparsePointTracks};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::tracks::Csr;
 use pluecker::triangulation::{Status, TriangulationOptions};
 
 fn robust() -> TriangulationOptions {
@@ -132,8 +133,10 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
         singles.push(triangulate_point(&scene.cameras, &obs, None, &robust()).unwrap());
     }
     let tracks = SparsePointTracks {
-        offsets: &offsets,
-        images: &images,
+        csr: Csr {
+            offsets: &offsets,
+            images: &images,
+        },
         observations: &observations,
         covariances: None,
     };

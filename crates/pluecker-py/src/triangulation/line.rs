@@ -8,6 +8,7 @@
 
 use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
 use super::report::PyTriangulationReport;
+use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
 use crate::convert::{
     cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Real,
@@ -18,7 +19,9 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
-use pluecker::triangulation::line::batch::{triangulate_lines as core_lines, ImageLines, LineTracks};
+use pluecker::triangulation::line::batch::{
+    triangulate_lines as core_lines, triangulate_lines_sparse, ImageLines, LineTracks, SparseLineTracks,
+};
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
 };
@@ -301,6 +304,77 @@ pub fn triangulate_lines(
             covariances: covariances.as_deref(),
         };
         let results = core_lines(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
+        Ok(collect::<PyLineTriangulations>(opts.method, results))
+    })?;
+    batch_result(py, outcome)
+}
+
+/// Triangulates the line tracks of observations given one per row, as `triangulate_point_observations`
+/// does points: row `k` is the line `lines[k]` ((m, 3) homogeneous, or (m, 2, 2) segments with endpoint
+/// noise `sigma`) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)), with the
+/// covariance `cov[k]` (m, 2, 2) when given. Each track is solved as `triangulate_lines` would.
+#[pyfunction]
+#[pyo3(signature = (P, track, image, lines, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn triangulate_line_observations(
+    py: Python<'_>,
+    P: &Bound<'_, PyAny>,
+    track: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    lines: &Bound<'_, PyAny>,
+    cov: Option<&Bound<'_, PyAny>>,
+    method: Option<&str>,
+    sigma: Option<Real>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
+    n_tracks: Option<usize>,
+) -> PyResult<Py<PyLineTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
+    let opts = options_arg(method, options)?;
+    let sigma = optional_real("sigma", sigma)?;
+    let cams = cameras("P", P)?;
+    let rows = SortedRows::read(track, image, n_tracks)?;
+    let (shape, _) = read_any("lines", lines)?;
+    let segments = match shape.as_slice() {
+        [_, 3] => false,
+        [_, 2, 2] => true,
+        _ => {
+            return Err(shape_error(
+                "lines",
+                "shape (m, 3) (homogeneous lines) or (m, 2, 2) (segments)",
+                shape_string(&shape),
+            ))
+        }
+    };
+    if sigma.is_some() && !segments {
+        return Err(invalid_argument(
+            "sigma",
+            "applies to segments (m, 2, 2) only; give cov for homogeneous lines",
+        ));
+    }
+    if sigma.is_some() && cov.is_some() {
+        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+    }
+    let values = rows.per_row("lines", lines, &shape[1..])?;
+    let covariances = cov.map(|c| rows.per_row("cov", c, &[2, 2])).transpose()?;
+    let sigma = sigma.unwrap_or(1.0);
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
+        let tracks = SparseLineTracks {
+            csr: rows.csr(),
+            lines: if segments {
+                ImageLines::Segments {
+                    endpoints: &values,
+                    sigma,
+                }
+            } else {
+                ImageLines::Homogeneous(&values)
+            },
+            covariances: covariances.as_deref(),
+        };
+        let results =
+            triangulate_lines_sparse(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
+        let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
         Ok(collect::<PyLineTriangulations>(opts.method, results))
     })?;
     batch_result(py, outcome)

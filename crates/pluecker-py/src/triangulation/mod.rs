@@ -9,6 +9,7 @@ pub mod line;
 pub mod point;
 pub mod quadric;
 pub mod report;
+pub mod rows;
 
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;

@@ -10,6 +10,7 @@
 
 use super::batch::{collect, per_observation, push_covariance, PyBatchReport, TrackColumns};
 use super::report::PyTriangulationReport;
+use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
 use crate::convert::{cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Real};
 use crate::errors::{shape_error, solve, to_py_err};
@@ -291,25 +292,6 @@ pub fn triangulate_points(
     batch_result(py, outcome)
 }
 
-/// Non-negative integer indices `(m,)` (track or image ids), `InvalidOptionError` naming the first other value.
-fn indices(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
-    let (_, values) = read(name, obj, &[Dim::Free("m")])?;
-    values
-        .iter()
-        .enumerate()
-        .map(|(k, &v)| {
-            if v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53) {
-                Ok(v as usize)
-            } else {
-                Err(crate::errors::invalid_argument(
-                    name,
-                    format!("entry {k} is {v}, not an index ≥ 0"),
-                ))
-            }
-        })
-        .collect()
-}
-
 /// Triangulates the point tracks of observations given one per row, as COLMAP lists them: observation
 /// `k` is the pixel `x[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)),
 /// with the covariance `cov[k]` (m, 2, 2) when given. Memory grows with the observations, not with
@@ -335,92 +317,27 @@ pub fn triangulate_point_observations(
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;
     let cams = cameras("P", P)?;
-    let (tracks, images) = (indices("track", track)?, indices("image", image)?);
-    let m = tracks.len();
-    same_count_as("image", images.len(), m)?;
-    let (xshape, pixels) = read("x", x, &[Dim::Free("m"), Dim::Fixed(2)])?;
-    same_count_as("x", xshape[0], m)?;
-    let covariances = match cov {
-        Some(c) => {
-            let (shape, values) = read("cov", c, &[Dim::Free("m"), Dim::Fixed(2), Dim::Fixed(2)])?;
-            same_count_as("cov", shape[0], m)?;
-            Some(values)
-        }
-        None => None,
-    };
-    // COO → CSR by a stable counting sort on the track ids: `order[k']` is the row of the k'-th sorted one.
-    let used = tracks.iter().max().map_or(0, |t| t + 1);
-    let n = match n_tracks {
-        Some(n) if n < used => {
-            return Err(crate::errors::invalid_argument(
-                "n_tracks",
-                format!("{n} is below max(track) + 1 = {used}"),
-            ))
-        }
-        Some(n) => n,
-        None => used,
-    };
-    let mut offsets = vec![0usize; n + 1];
-    tracks.iter().for_each(|&t| offsets[t + 1] += 1);
-    (0..n).for_each(|t| offsets[t + 1] += offsets[t]);
-    let mut next = offsets.clone();
-    let mut order = vec![0usize; m];
-    for (k, &t) in tracks.iter().enumerate() {
-        order[next[t]] = k;
-        next[t] += 1;
-    }
-    let sorted_images: Vec<usize> = order.iter().map(|&k| images[k]).collect();
-    let sorted_pixels: Vec<f64> = order.iter().flat_map(|&k| [pixels[2 * k], pixels[2 * k + 1]]).collect();
-    let sorted_covs: Option<Vec<f64>> =
-        covariances.map(|c| order.iter().flat_map(|&k| c[4 * k..4 * k + 4].to_vec()).collect());
+    let rows = SortedRows::read(track, image, n_tracks)?;
+    let m = rows.len();
+    let pixels = rows.per_row("x", x, &[2])?;
+    let covariances = cov.map(|c| rows.per_row("cov", c, &[2, 2])).transpose()?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let sparse = SparsePointTracks {
-            offsets: &offsets,
-            images: &sorted_images,
-            observations: &sorted_pixels,
-            covariances: sorted_covs.as_deref(),
+            csr: rows.csr(),
+            observations: &pixels,
+            covariances: covariances.as_deref(),
         };
         let results =
             triangulate_points_sparse(&cams, &sparse, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
-        // A track's error names a sorted row; the caller knows the rows as given.
-        let results = results
-            .into_iter()
-            .map(|r| {
-                r.map_err(|e| match e {
-                    Error::Shape { what, expected, actual } => Error::Shape {
-                        what: what
-                            .strip_prefix("images[")
-                            .and_then(|k| k.strip_suffix(']'))
-                            .and_then(|k| k.parse::<usize>().ok())
-                            .map_or(what.clone(), |k| format!("image[{}]", order[k])),
-                        expected,
-                        actual,
-                    },
-                    e => e,
-                })
-            })
-            .collect();
+        let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
         let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
         if opts.outlier_threshold.is_some() {
             // Track t's observations are its sorted rows, each back at its row as given.
-            columns.scatter_inliers(vec![m], |t| order[offsets[t]..offsets[t + 1]].to_vec());
+            columns.scatter_inliers(vec![m], |t| rows.rows_of(t));
         }
         Ok((report, columns))
     })?;
     batch_result(py, outcome)
-}
-
-/// A `ShapeError` unless the per-observation argument `name` has `m` rows, as `track` has.
-fn same_count_as(name: &str, rows: usize, m: usize) -> PyResult<()> {
-    if rows == m {
-        Ok(())
-    } else {
-        Err(shape_error(
-            name,
-            &format!("{m} rows (one per observation, as track)"),
-            rows.to_string(),
-        ))
-    }
 }
 
 pack_struct!(PyPointTriangulations {

@@ -5,6 +5,7 @@
 
 use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
 use super::report::PyTriangulationReport;
+use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
 use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Real};
 use crate::errors::solve;
@@ -12,7 +13,9 @@ use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
-use pluecker::triangulation::quadric::batch::{triangulate_quadrics as core_quadrics, QuadricTracks};
+use pluecker::triangulation::quadric::batch::{
+    triangulate_quadrics as core_quadrics, triangulate_quadrics_sparse, QuadricTracks, SparseQuadricTracks,
+};
 use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::Report;
@@ -212,6 +215,46 @@ pub fn triangulate_quadrics(
             covariances: covariances.as_deref(),
         };
         let results = core_quadrics(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+        Ok(collect::<PyQuadricTriangulations>(opts.method, results))
+    })?;
+    batch_result(py, outcome)
+}
+
+/// Triangulates the ellipsoid tracks of outline conics given one per row, as
+/// `triangulate_point_observations` does points: row `k` is the conic `conics[k]` (m, 3, 3) of track
+/// `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)), with the covariance `cov[k]` (m, 5, 5)
+/// when given. Each track is solved as `triangulate_quadrics` would.
+#[pyfunction]
+#[pyo3(signature = (P, track, image, conics, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
+pub fn triangulate_quadric_observations(
+    py: Python<'_>,
+    P: &Bound<'_, PyAny>,
+    track: &Bound<'_, PyAny>,
+    image: &Bound<'_, PyAny>,
+    conics: &Bound<'_, PyAny>,
+    cov: Option<&Bound<'_, PyAny>>,
+    method: Option<&str>,
+    options: Option<PyRef<'_, PyTriangulationOptions>>,
+    progress: Option<&Bound<'_, PyAny>>,
+    time_budget: Option<Real>,
+    n_tracks: Option<usize>,
+) -> PyResult<Py<PyQuadricTriangulations>> {
+    let budget = interrupt::time_budget(time_budget)?;
+    let opts = options_arg(method, options)?;
+    let cams = cameras("P", P)?;
+    let rows = SortedRows::read(track, image, n_tracks)?;
+    let values = rows.per_row("conics", conics, &[3, 3])?;
+    let covariances = cov.map(|c| rows.per_row("cov", c, &[5, 5])).transpose()?;
+    let outcome = run_interruptible(py, progress, budget, false, move |done| {
+        let tracks = SparseQuadricTracks {
+            csr: rows.csr(),
+            conics: &values,
+            covariances: covariances.as_deref(),
+        };
+        let results =
+            triangulate_quadrics_sparse(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+        let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
         Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;
     batch_result(py, outcome)

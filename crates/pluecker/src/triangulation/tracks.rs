@@ -70,6 +70,81 @@ pub(crate) fn visible_views(mask: Option<&[bool]>, v: usize, t: usize) -> impl I
     (0..v).filter(move |&j| mask.map_or(true, |m| m[t * v + j]))
 }
 
+/// Tracks given one observation per row, grouped by track (compressed sparse rows), for models where a
+/// track is seen in few of many images: track `t` owns rows `offsets[t]..offsets[t + 1]`, and row `k`
+/// is an observation in image `images[k]` (an index into the cameras). The per-observation arrays of a
+/// sparse batch hold one entry per row.
+#[derive(Debug, Clone, Copy)]
+pub struct Csr<'a> {
+    /// `n + 1` non-decreasing offsets, from 0 to the number of rows `m`.
+    pub offsets: &'a [usize],
+    /// `m` image indices.
+    pub images: &'a [usize],
+}
+
+impl Csr<'_> {
+    /// The number of tracks, after checking the offsets against the `m` rows (an error of the call).
+    pub(crate) fn check(&self) -> Result<usize> {
+        let m = self.images.len();
+        match (self.offsets.first(), self.offsets.last()) {
+            (Some(0), Some(&last)) if last == m => {}
+            _ => {
+                return Err(shape(
+                    "offsets",
+                    format!("n + 1 offsets from 0 to {m} (the observations)"),
+                    self.offsets.len(),
+                ))
+            }
+        }
+        if let Some(t) = self.offsets.windows(2).position(|w| w[1] < w[0]) {
+            return Err(shape(
+                "offsets",
+                format!("non-decreasing offsets (offsets[{}] < offsets[{t}])", t + 1),
+                t + 1,
+            ));
+        }
+        Ok(self.offsets.len() - 1)
+    }
+
+    /// Checks that a per-observation array holds `m · per_row` values (`unit`: one entry's shape).
+    pub(crate) fn check_values(&self, what: &str, values: Option<&[f64]>, per_row: usize, unit: &str) -> Result<()> {
+        let m = self.images.len();
+        match values {
+            Some(values) if values.len() != per_row * m => Err(shape(
+                what,
+                format!("{} values ({m} observations x {unit})", per_row * m),
+                values.len(),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// `(image, row)` of every observation of track `t`, in row order; an image beyond the `v` cameras
+    /// or an image seen twice is the track's own error.
+    pub(crate) fn observations(&self, t: usize, v: usize) -> Result<Vec<(usize, usize)>> {
+        let rows = self.offsets[t]..self.offsets[t + 1];
+        let images = &self.images[rows.clone()];
+        if let Some(i) = images.iter().position(|&j| j >= v) {
+            return Err(Error::Shape {
+                what: format!("images[{}]", rows.start + i),
+                expected: format!("an image index below {v} (the cameras)"),
+                actual: images[i].to_string(),
+            });
+        }
+        if let Some(i) = (1..images.len()).find(|&i| images[..i].contains(&images[i])) {
+            return Err(Error::Degenerate {
+                what: format!("track {t}: image {} observed twice", images[i]),
+            });
+        }
+        Ok(images.iter().copied().zip(rows).collect())
+    }
+}
+
+/// `(view, row)` of the visible views of track `t` of a dense batch of `v` views (row `t v + j`).
+pub(crate) fn dense_observations(mask: Option<&[bool]>, v: usize, t: usize) -> Vec<(usize, usize)> {
+    visible_views(mask, v, t).map(|j| (j, t * v + j)).collect()
+}
+
 /// Track `t` has `visible` views where the method needs `required`.
 pub(crate) fn too_few(method: Method, t: usize, visible: usize, required: usize) -> Error {
     Error::TooFewCorrespondences {

@@ -18,10 +18,10 @@
 use super::{lines_from_segments, triangulate_line, LineTriangulation};
 use crate::error::{Error, Result};
 use crate::triangulation::tracks::{
-    check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
+    check_mask, check_values, dense_observations, in_track, solve_tracks, too_few, track_count, Csr, TrackCameras,
 };
 use crate::triangulation::TriangulationOptions;
-use nalgebra::{Matrix2, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
 use std::sync::atomic::AtomicUsize;
 
 /// The image lines of a batch, one entry per track and view (row-major, track-major: the entry of
@@ -66,15 +66,10 @@ fn check_batch(cameras: &TrackCameras, tracks: &LineTracks) -> Result<usize> {
             actual: "0".into(),
         });
     }
+    check_sigma(&tracks.lines)?;
     let n = match tracks.lines {
         ImageLines::Homogeneous(lines) => track_count("lines", lines.len(), v, 3, "3 line coordinates")?,
-        ImageLines::Segments { endpoints, sigma } => {
-            if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(Error::InvalidOption {
-                    name: "sigma".into(),
-                    reason: format!("must be a positive finite number of pixels, got {sigma}"),
-                });
-            }
+        ImageLines::Segments { endpoints, .. } => {
             track_count("segments", endpoints.len(), v, 4, "2 endpoints x 2 coordinates")?
         }
     };
@@ -84,37 +79,39 @@ fn check_batch(cameras: &TrackCameras, tracks: &LineTracks) -> Result<usize> {
     Ok(n)
 }
 
-/// Track `t` by the single-line functions on its visible views (module docs).
+/// Track `t` by the single-line functions on its observations `seen`, `(view, row)` pairs: the camera
+/// of the view, the line (or segment) and covariance of the row (module docs).
 fn line_track(
     cameras: &TrackCameras,
-    tracks: &LineTracks,
+    lines: &ImageLines,
+    covariances: Option<&[f64]>,
     t: usize,
+    seen: &[(usize, usize)],
     opts: &TriangulationOptions,
 ) -> Result<LineTriangulation> {
-    let v = cameras.views();
-    let seen: Vec<usize> = visible_views(tracks.visible, v, t).collect();
     if seen.len() < 2 {
         return Err(too_few(opts.method, t, seen.len(), 2));
     }
-    let cams = cameras.of_track(t, &seen);
-    let covariances: Option<Vec<Matrix2<f64>>> = tracks.covariances.map(|c| {
+    let views: Vec<usize> = seen.iter().map(|&(j, _)| j).collect();
+    let cams = cameras.of_track(t, &views);
+    let covariances: Option<Vec<Matrix2<f64>>> = covariances.map(|c| {
         seen.iter()
-            .map(|&j| Matrix2::from_row_slice(&c[4 * (t * v + j)..][..4]))
+            .map(|&(_, k)| Matrix2::from_row_slice(&c[4 * k..][..4]))
             .collect()
     });
-    let result = match tracks.lines {
+    let result = match *lines {
         ImageLines::Homogeneous(values) => {
             let lines: Vec<Vector3<f64>> = seen
                 .iter()
-                .map(|&j| Vector3::from_row_slice(&values[3 * (t * v + j)..][..3]))
+                .map(|&(_, k)| Vector3::from_row_slice(&values[3 * k..][..3]))
                 .collect();
             triangulate_line(&cams, &lines, covariances.as_deref(), opts)
         }
         ImageLines::Segments { endpoints, sigma } => {
             let segments: Vec<[Vector2<f64>; 2]> = seen
                 .iter()
-                .map(|&j| {
-                    let s = &endpoints[4 * (t * v + j)..][..4];
+                .map(|&(_, k)| {
+                    let s = &endpoints[4 * k..][..4];
                     [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])]
                 })
                 .collect();
@@ -128,7 +125,18 @@ fn line_track(
     } else {
         &["lines", "segments", "covariances"]
     };
-    result.map_err(|e| in_track(e, t, &seen, arrays))
+    result.map_err(|e| in_track(e, t, &views, arrays))
+}
+
+/// `sigma` of segments: positive and finite.
+fn check_sigma(lines: &ImageLines) -> Result<()> {
+    match *lines {
+        ImageLines::Segments { sigma, .. } if !(sigma.is_finite() && sigma > 0.0) => Err(Error::InvalidOption {
+            name: "sigma".into(),
+            reason: format!("must be a positive finite number of pixels, got {sigma}"),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Triangulates every line track of `tracks` seen by `cameras` with `opts`, in parallel; each track
@@ -148,6 +156,53 @@ pub fn triangulate_lines(
     opts.validate()?;
     opts.reject_outlier_threshold("lines")?;
     let n = check_batch(&cameras, tracks)?;
+    let v = cameras.views();
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
-    Ok(solve_tracks(n, 1, progress, |t| line_track(&cameras, tracks, t, opts)))
+    Ok(solve_tracks(n, 1, progress, |t| {
+        let seen = dense_observations(tracks.visible, v, t);
+        line_track(&cameras, &tracks.lines, tracks.covariances, t, &seen, opts)
+    }))
+}
+
+/// Line tracks given one observation per row ([`Csr`]): row `k` is the line or segment `k` of `lines`
+/// (`m · 3` or `m · 4` values) in image `csr.images[k]`, with the covariance `covariances[4k..]` when
+/// given. Memory grows with the observations, not with tracks × images.
+#[derive(Debug, Clone, Copy)]
+pub struct SparseLineTracks<'a> {
+    /// Which rows belong to which track, and their images.
+    pub csr: Csr<'a>,
+    /// The observed image lines or segments, one per row.
+    pub lines: ImageLines<'a>,
+    /// `m · 4` covariances of the line residuals (as in [`LineTracks::covariances`]), or `None`.
+    pub covariances: Option<&'a [f64]>,
+}
+
+/// Triangulates every track of the sparse `tracks` seen by `cameras` (3x4, world → pixels), in
+/// parallel: the same per-track solve and results as [`triangulate_lines`] on the dense form. A track
+/// naming an image beyond the cameras, or one image twice, is its own error.
+pub fn triangulate_lines_sparse(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &SparseLineTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+) -> Result<Vec<Result<LineTriangulation>>> {
+    opts.validate()?;
+    opts.reject_outlier_threshold("lines")?;
+    check_sigma(&tracks.lines)?;
+    let shared = TrackCameras::Shared(cameras);
+    shared.check(0)?;
+    let n = tracks.csr.check()?;
+    match tracks.lines {
+        ImageLines::Homogeneous(lines) => tracks.csr.check_values("lines", Some(lines), 3, "3 line coordinates")?,
+        ImageLines::Segments { endpoints, .. } => {
+            tracks
+                .csr
+                .check_values("segments", Some(endpoints), 4, "2 endpoints x 2 coordinates")?
+        }
+    }
+    tracks.csr.check_values("covariances", tracks.covariances, 4, "2 x 2")?;
+    Ok(solve_tracks(n, 1, progress, |t| {
+        let seen = tracks.csr.observations(t, cameras.len())?;
+        line_track(&shared, &tracks.lines, tracks.covariances, t, &seen, opts)
+    }))
 }

@@ -24,7 +24,7 @@ use super::{solve_track_views, PointTriangulation};
 use crate::error::{Error, Result};
 use crate::interrupt::current;
 use crate::triangulation::covariance::whitening;
-use crate::triangulation::tracks::{check_mask, check_values, solve_tracks, too_few, track_count, visible_views};
+use crate::triangulation::tracks::{check_mask, check_values, solve_tracks, too_few, track_count, visible_views, Csr};
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{centre, depth_normalized, validate_cameras};
 use crate::triangulation::{Method, Status, TriangulationOptions};
@@ -201,17 +201,14 @@ fn solve_track(
     Ok(solve_track_views(&views, &frame, opts, started))
 }
 
-/// Point tracks as a flat list of observations grouped by track (CSR), for models where each track
-/// is seen in few of many images: memory grows with the observations, not with tracks × images.
-/// Track `t` owns observations `offsets[t]..offsets[t + 1]`; observation `k` is the pixel
-/// `observations[2k..2k + 2]` in image `images[k]` (an index into the cameras), with the covariance
-/// `covariances[4k..4k + 4]` (row-major 2x2) when given.
+/// Point tracks as a flat list of observations grouped by track ([`Csr`]), for models where each track
+/// is seen in few of many images: memory grows with the observations, not with tracks × images. Row `k`
+/// is the pixel `observations[2k..2k + 2]` in image `csr.images[k]` (an index into the cameras), with the
+/// covariance `covariances[4k..4k + 4]` (row-major 2x2) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparsePointTracks<'a> {
-    /// `n + 1` non-decreasing offsets, from 0 to the number of observations `m`.
-    pub offsets: &'a [usize],
-    /// `m` image indices.
-    pub images: &'a [usize],
+    /// Which rows belong to which track, and their images.
+    pub csr: Csr<'a>,
     /// `m · 2` pixels.
     pub observations: &'a [f64],
     /// `m · 4` covariances, or `None` (identity: costs in squared pixels).
@@ -221,46 +218,11 @@ pub struct SparsePointTracks<'a> {
 impl SparsePointTracks<'_> {
     /// The number of tracks, after checking the shapes of the arrays (errors about the whole call).
     fn check(&self) -> Result<usize> {
-        let shape = |what: &str, expected: String, actual: usize| Error::Shape {
-            what: what.into(),
-            expected,
-            actual: actual.to_string(),
-        };
-        let m = self.images.len();
-        match (self.offsets.first(), self.offsets.last()) {
-            (Some(0), Some(&last)) if last == m => {}
-            _ => {
-                return Err(shape(
-                    "offsets",
-                    format!("n + 1 offsets from 0 to {m} (the observations)"),
-                    self.offsets.len(),
-                ))
-            }
-        }
-        if let Some(t) = self.offsets.windows(2).position(|w| w[1] < w[0]) {
-            return Err(shape(
-                "offsets",
-                format!("non-decreasing offsets (offsets[{}] < offsets[{t}])", t + 1),
-                t + 1,
-            ));
-        }
-        if self.observations.len() != 2 * m {
-            return Err(shape(
-                "observations",
-                format!("{} values (2 per observation)", 2 * m),
-                self.observations.len(),
-            ));
-        }
-        if let Some(c) = self.covariances {
-            if c.len() != 4 * m {
-                return Err(shape(
-                    "covariances",
-                    format!("{} values (2 x 2 per observation)", 4 * m),
-                    c.len(),
-                ));
-            }
-        }
-        Ok(self.offsets.len() - 1)
+        let n = self.csr.check()?;
+        self.csr
+            .check_values("observations", Some(self.observations), 2, "2 coordinates")?;
+        self.csr.check_values("covariances", self.covariances, 4, "2 x 2")?;
+        Ok(n)
     }
 }
 
@@ -278,26 +240,11 @@ pub fn triangulate_points_sparse(
     let n = tracks.check()?;
     let v = cameras.len();
     let one = |t: usize| {
-        let range = tracks.offsets[t]..tracks.offsets[t + 1];
-        let images = &tracks.images[range.clone()];
-        if let Some(i) = images.iter().position(|&j| j >= v) {
-            return Err(Error::Shape {
-                what: format!("images[{}]", range.start + i),
-                expected: format!("an image index below {v} (the cameras)"),
-                actual: images[i].to_string(),
-            });
-        }
-        if let Some(i) = (1..images.len()).find(|&i| images[..i].contains(&images[i])) {
-            return Err(Error::Degenerate {
-                what: format!("track {t}: image {} observed twice", images[i]),
-            });
-        }
-        let views = range.enumerate().map(|(i, k)| {
-            Ok((
-                tracks.images[k],
-                observation(tracks.observations, tracks.covariances, k, t, i)?,
-            ))
-        });
+        let rows = tracks.csr.observations(t, v)?;
+        let views = rows
+            .iter()
+            .enumerate()
+            .map(|(i, &(j, k))| Ok((j, observation(tracks.observations, tracks.covariances, k, t, i)?)));
         solve_track(&prepared, opts, t, views)
     };
     Ok(solve_tracks(n, 16, progress, one))

@@ -17,10 +17,10 @@
 use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
 use crate::error::{Error, Result};
 use crate::triangulation::tracks::{
-    check_mask, check_values, in_track, solve_tracks, too_few, track_count, visible_views, TrackCameras,
+    check_mask, check_values, dense_observations, in_track, solve_tracks, too_few, track_count, Csr, TrackCameras,
 };
 use crate::triangulation::TriangulationOptions;
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Matrix3x4};
 use std::sync::atomic::AtomicUsize;
 
 /// The quadric tracks of one batch (see the module docs). With `v` views, the entry of track `t` in
@@ -54,26 +54,28 @@ fn check_batch(cameras: &TrackCameras, tracks: &QuadricTracks) -> Result<usize> 
     Ok(n)
 }
 
-/// Track `t` by [`triangulate_quadric`] on its visible views.
+/// Track `t` by [`triangulate_quadric`] on its observations `seen`, `(view, row)` pairs: the camera of
+/// the view, the conic and covariance of the row.
 fn quadric_track(
     cameras: &TrackCameras,
-    tracks: &QuadricTracks,
+    conics: &[f64],
+    covariances: Option<&[f64]>,
     t: usize,
+    seen: &[(usize, usize)],
     opts: &TriangulationOptions,
 ) -> Result<QuadricTriangulation> {
-    let v = cameras.views();
-    let seen: Vec<usize> = visible_views(tracks.visible, v, t).collect();
     if seen.len() < 3 {
         return Err(too_few(opts.method, t, seen.len(), 3));
     }
-    let cams = cameras.of_track(t, &seen);
+    let views: Vec<usize> = seen.iter().map(|&(j, _)| j).collect();
+    let cams = cameras.of_track(t, &views);
     let conics: Vec<Matrix3<f64>> = seen
         .iter()
-        .map(|&j| Matrix3::from_row_slice(&tracks.conics[9 * (t * v + j)..][..9]))
+        .map(|&(_, k)| Matrix3::from_row_slice(&conics[9 * k..][..9]))
         .collect();
-    let covariances: Option<Vec<Matrix5>> = tracks.covariances.map(|c| {
+    let covariances: Option<Vec<Matrix5>> = covariances.map(|c| {
         seen.iter()
-            .map(|&j| Matrix5::from_row_slice(&c[25 * (t * v + j)..][..25]))
+            .map(|&(_, k)| Matrix5::from_row_slice(&c[25 * k..][..25]))
             .collect()
     });
     let arrays: &[&str] = if cameras.per_track() {
@@ -81,7 +83,7 @@ fn quadric_track(
     } else {
         &["conics", "covariances"]
     };
-    triangulate_quadric(&cams, &conics, covariances.as_deref(), opts).map_err(|e| in_track(e, t, &seen, arrays))
+    triangulate_quadric(&cams, &conics, covariances.as_deref(), opts).map_err(|e| in_track(e, t, &views, arrays))
 }
 
 /// Triangulates every quadric track of `tracks` seen by `cameras` with `opts`, in parallel; each
@@ -102,7 +104,45 @@ pub fn triangulate_quadrics(
     opts.reject_outlier_threshold("quadrics")?;
     let n = check_batch(&cameras, tracks)?;
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
+    let v = cameras.views();
     Ok(solve_tracks(n, 1, progress, |t| {
-        quadric_track(&cameras, tracks, t, opts)
+        let seen = dense_observations(tracks.visible, v, t);
+        quadric_track(&cameras, tracks.conics, tracks.covariances, t, &seen, opts)
+    }))
+}
+
+/// Quadric tracks given one observation per row ([`Csr`]): row `k` is the conic `conics[9k..]` (row-major
+/// 3x3) in image `csr.images[k]`, with the covariance `covariances[25k..]` (5x5) when given.
+#[derive(Debug, Clone, Copy)]
+pub struct SparseQuadricTracks<'a> {
+    /// Which rows belong to which track, and their images.
+    pub csr: Csr<'a>,
+    /// `m · 9` primal image conics.
+    pub conics: &'a [f64],
+    /// `m · 25` covariances of the conic residuals, or `None` (identity).
+    pub covariances: Option<&'a [f64]>,
+}
+
+/// Triangulates every track of the sparse `tracks` seen by `cameras`, in parallel: the same per-track
+/// solve and results as [`triangulate_quadrics`] on the dense form. A track naming an image beyond the
+/// cameras, or one image twice, is its own error.
+pub fn triangulate_quadrics_sparse(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &SparseQuadricTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+) -> Result<Vec<Result<QuadricTriangulation>>> {
+    opts.validate()?;
+    opts.reject_outlier_threshold("quadrics")?;
+    let shared = TrackCameras::Shared(cameras);
+    shared.check(0)?;
+    let n = tracks.csr.check()?;
+    tracks.csr.check_values("conics", Some(tracks.conics), 9, "3 x 3")?;
+    tracks
+        .csr
+        .check_values("covariances", tracks.covariances, 25, "5 x 5")?;
+    Ok(solve_tracks(n, 1, progress, |t| {
+        let seen = tracks.csr.observations(t, cameras.len())?;
+        quadric_track(&shared, tracks.conics, tracks.covariances, t, &seen, opts)
     }))
 }

@@ -1,0 +1,132 @@
+//! Observations given one per row, as COLMAP lists them (`track`, `image` and the row's data): the
+//! shared reading and the stable counting sort into the core's compressed rows ([`Csr`]), used by
+//! `triangulate_point_observations`, `triangulate_line_observations` and
+//! `triangulate_quadric_observations`.
+
+use crate::convert::{read, Dim};
+use crate::errors::{invalid_argument, shape_error};
+use pluecker::triangulation::tracks::Csr;
+use pluecker::Error;
+use pyo3::prelude::*;
+
+/// Non-negative integer indices `(m,)` (track or image ids), `InvalidOptionError` naming the first other value.
+pub fn indices(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
+    let (_, values) = read(name, obj, &[Dim::Free("m")])?;
+    values
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            if v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53) {
+                Ok(v as usize)
+            } else {
+                Err(invalid_argument(name, format!("entry {k} is {v}, not an index ≥ 0")))
+            }
+        })
+        .collect()
+}
+
+/// A `ShapeError` unless the per-observation argument `name` has `m` rows, as `track` has.
+pub fn same_count_as(name: &str, rows: usize, m: usize) -> PyResult<()> {
+    if rows == m {
+        Ok(())
+    } else {
+        Err(shape_error(
+            name,
+            &format!("{m} rows (one per entry of track)"),
+            rows.to_string(),
+        ))
+    }
+}
+
+/// The rows sorted by track: `order[k']` is the row (as given) of the `k'`-th sorted one.
+pub struct SortedRows {
+    /// `n + 1` offsets into the sorted rows.
+    pub offsets: Vec<usize>,
+    /// The image of each sorted row.
+    pub images: Vec<usize>,
+    /// The row as given of each sorted row.
+    pub order: Vec<usize>,
+}
+
+impl SortedRows {
+    /// Reads `track` and `image` and sorts the rows by track (stable: a track's rows keep their order).
+    /// Tracks are `0..n_tracks`, by default `max(track) + 1`.
+    pub fn read(track: &Bound<'_, PyAny>, image: &Bound<'_, PyAny>, n_tracks: Option<usize>) -> PyResult<SortedRows> {
+        let (tracks, images) = (indices("track", track)?, indices("image", image)?);
+        let m = tracks.len();
+        same_count_as("image", images.len(), m)?;
+        let used = tracks.iter().max().map_or(0, |t| t + 1);
+        let n = match n_tracks {
+            Some(n) if n < used => {
+                return Err(invalid_argument(
+                    "n_tracks",
+                    format!("{n} is below max(track) + 1 = {used}"),
+                ))
+            }
+            Some(n) => n,
+            None => used,
+        };
+        let mut offsets = vec![0usize; n + 1];
+        tracks.iter().for_each(|&t| offsets[t + 1] += 1);
+        (0..n).for_each(|t| offsets[t + 1] += offsets[t]);
+        let mut next = offsets.clone();
+        let mut order = vec![0usize; m];
+        for (k, &t) in tracks.iter().enumerate() {
+            order[next[t]] = k;
+            next[t] += 1;
+        }
+        let images = order.iter().map(|&k| images[k]).collect();
+        Ok(SortedRows { offsets, images, order })
+    }
+
+    /// The number of rows, `m`.
+    pub fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    /// The core's view of the sorted rows.
+    pub fn csr(&self) -> Csr<'_> {
+        Csr {
+            offsets: &self.offsets,
+            images: &self.images,
+        }
+    }
+
+    /// `values` (`per_row` per row as given) in sorted order.
+    pub fn gather(&self, values: &[f64], per_row: usize) -> Vec<f64> {
+        self.order
+            .iter()
+            .flat_map(|&k| values[per_row * k..per_row * (k + 1)].iter().copied())
+            .collect()
+    }
+
+    /// The rows as given of track `t`, in its order.
+    pub fn rows_of(&self, t: usize) -> Vec<usize> {
+        self.order[self.offsets[t]..self.offsets[t + 1]].to_vec()
+    }
+
+    /// A track's error as the caller knows the rows: `images[k']` (sorted) becomes `image[k]` (given).
+    pub fn restate(&self, e: Error) -> Error {
+        match e {
+            Error::Shape { what, expected, actual } => Error::Shape {
+                what: what
+                    .strip_prefix("images[")
+                    .and_then(|k| k.strip_suffix(']'))
+                    .and_then(|k| k.parse::<usize>().ok())
+                    .map_or(what.clone(), |k| format!("image[{}]", self.order[k])),
+                expected,
+                actual,
+            },
+            e => e,
+        }
+    }
+
+    /// Reads the per-row argument `name` of shape `(m, *tail)` and returns it in sorted order.
+    pub fn per_row(&self, name: &str, obj: &Bound<'_, PyAny>, tail: &[usize]) -> PyResult<Vec<f64>> {
+        let mut spec = vec![Dim::Free("m")];
+        spec.extend(tail.iter().map(|&d| Dim::Fixed(d)));
+        let (shape, values) = read(name, obj, &spec)?;
+        same_count_as(name, shape[0], self.len())?;
+        Ok(self.gather(&values, tail.iter().product()))
+    }
+}
