@@ -175,3 +175,47 @@ def test_command_line_takes_colmap_camera_models_and_covariances(tmp_path, capsy
     path.write_text(json.dumps(doc))
     assert main(["pose", str(path)]) == 2
     assert "OPENCV parameters: expected 8 values" in capsys.readouterr().err
+
+
+def test_lines_triangulated_through_a_lens():
+    """Segments seen by 4 wide OPENCV cameras (f = 400 px, out to the image corners), 1 px noise on the
+    distorted endpoints: undistorted with their covariances and turned into lines (``lines_from_endpoints``),
+    the minimal cost is χ² with 2·4 − 4 = 4 degrees of freedom (mean over 60 lines 4 ± 0.37); taken as
+    pinhole pixels, the distortion shows as a cost far above it."""
+    import math
+
+    from triangulation_scenes import look_at
+
+    lens = pluecker.LensCamera("OPENCV", [400.0, 400.0, 512.0, 384.0, -0.25, 0.06, 5e-4, -5e-4])
+    rng = np.random.default_rng(11)
+    poses = []
+    for a in np.radians([-25.0, -8.0, 8.0, 25.0]):
+        centre = 6.0 * np.array([math.sin(a), 0.3 * rng.uniform(-1, 1), -math.cos(a)])
+        R = look_at(centre, rng.uniform(-0.3, 0.3))
+        poses.append((R, -R @ centre))
+    P = np.array([lens.pinhole.P(R, t) for R, t in poses])
+    costs, ignored, errors, naive_errors = [], [], [], []
+    while len(costs) < 60:
+        ends = rng.uniform(-3.0, 3.0, (2, 3))
+        pixels = np.array([lens.project(ends @ R.T + t) for R, t in poses])  # (4, 2, 2)
+        inside = np.all((pixels >= 0) & (pixels < [1024, 768]))
+        if not inside or np.min([(ends @ R.T + t)[:, 2] for R, t in poses]) < 1.0:
+            continue
+        observed = pixels + rng.normal(size=pixels.shape)
+        ubar, C = lens.undistort(observed.reshape(-1, 2))
+        lines, cov = pluecker.lines_from_endpoints(ubar.reshape(4, 2, 2), C.reshape(4, 2, 2, 2))
+        r = pluecker.triangulate_line(P, lines, cov, method="local")  # certifying lines is issue 13's
+        assert r.status == "success"
+        costs.append(r.cost)  # eq. 19: Σ r², the χ² statistic
+        # Distance of the true endpoints to the estimated line.
+        d = r.direction
+        errors.append(max(np.linalg.norm(np.cross(e - r.point, d)) for e in ends))
+        naive = pluecker.triangulate_line(P, observed, sigma=1.0, method="local")
+        ignored.append(naive.cost)
+        naive_errors.append(max(np.linalg.norm(np.cross(e - naive.point, naive.direction)) for e in ends))
+    print(f"lines through a lens: mean cost {np.mean(costs):.2f} (χ²(4): 4), ignored {np.mean(ignored):.1f}; median "
+          f"3-D error {np.median(errors):.4f} vs {np.median(naive_errors):.4f}")
+    assert 4 - 3 * 0.37 < np.mean(costs) < 4 + 3 * 0.37, np.mean(costs)
+    # Ignoring the distortion: a cost far beyond χ²(4) (its mean's 3σ bound is 5.1) and larger 3-D errors.
+    assert np.mean(ignored) > 8.0, np.mean(ignored)
+    assert np.median(errors) < 0.5 * np.median(naive_errors), (np.median(errors), np.median(naive_errors))

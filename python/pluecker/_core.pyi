@@ -112,6 +112,13 @@ class LensCamera:
         """Undistorted normalised coordinates (N, 2) of pixels (N, 2); an error names a pixel beyond the fold."""
     def bearings(self, pixels: ArrayLike) -> NDArray[np.float64]:
         """Unit rays (N, 3), camera frame, of pixels (N, 2)."""
+    @property
+    def pinhole(self) -> Camera:
+        """The pinhole part ``K = [fx 0 cx; 0 fy cy; 0 0 1]``: the camera of undistorted pixels."""
+    def undistort(self, pixels: ArrayLike, cov: Optional[ArrayLike] = None) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Undistorted pixels (N, 2) (exact to 1e-10 px) and their covariances (N, 2, 2) for pixel
+        covariances ``cov`` (N, 2, 2) (``None``: 1 px²), first order: the input of ``triangulate_*`` with
+        ``P = pinhole.P(R, t)``; segments go through :func:`lines_from_endpoints`."""
     def normalized_covariances(self, pixels: ArrayLike, cov: Optional[ArrayLike] = None) -> NDArray[np.float64]:
         """First-order (N, 2, 2) covariances of the normalised coordinates for pixel covariances ``cov`` (N, 2, 2) (``None``: 1 px)."""
     def to_dict(self) -> Dict[str, Any]: ...
@@ -829,6 +836,10 @@ class FittedConic:
 def fit_line(points: ArrayLike, sigma: Optional[float] = None) -> FittedLine:
     """Total-least-squares line through points (N, 2), N >= 2, with its residual covariance for
     point noise ``sigma`` px (``None``: 1)."""
+
+def lines_from_endpoints(segments: ArrayLike, cov: ArrayLike) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Lines (M, 3) through segments (M, 2, 2) whose endpoints have covariances ``cov`` (M, 2, 2, 2), px², and
+    the covariances (M, 2, 2) of their residuals: the ``lines`` and ``cov`` of :func:`triangulate_line`."""
 
 def fit_conic(points: ArrayLike, sigma: Optional[float] = None) -> FittedConic:
     """Ellipse through points (N, 2), N >= 5, with its residual covariance for point noise ``sigma``

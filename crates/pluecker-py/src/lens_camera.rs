@@ -85,17 +85,7 @@ result_class! {
         cov: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let us = points::<2>("pixels", Some(pixels))?;
-        let covs: Vec<Matrix2<f64>> = match cov {
-            Some(c) => {
-                let (shape, values) = crate::convert::read("cov", c, &[crate::convert::Dim::Free("N"), crate::convert::Dim::Fixed(2), crate::convert::Dim::Fixed(2)])?;
-                crate::convert::check_finite("cov", &values, 4)?;
-                if shape[0] != us.len() {
-                    return Err(shape_error("cov", &format!("shape ({}, 2, 2) (one per pixel)", us.len()), crate::convert::shape_string(&shape)));
-                }
-                crate::convert::matrices::<2, 2>(&values)
-            }
-            None => vec![Matrix2::identity(); us.len()],
-        };
+        let covs = pixel_covariances(cov, us.len())?;
         let cam = &self.inner;
         let out = guarded(|| {
             us.iter()
@@ -112,6 +102,43 @@ result_class! {
         Ok(Array3::from_shape_fn((out.len(), 2, 2), |(i, j, k)| out[i][(j, k)]).into_pyarray(py))
     }
 
+    /// The pinhole part `K = [fx 0 cx; 0 fy cy; 0 0 1]` as a `Camera`: the camera of undistorted pixels.
+    #[getter]
+    fn pinhole(&self) -> PyResult<crate::camera::PyCamera> {
+        guarded(|| pluecker::pose::noise::pinhole_part(&self.inner)).map(|inner| crate::camera::PyCamera { inner })
+    }
+
+    /// Undistorted pixels (N, 2) of pixels (N, 2) (the image of the pinhole part, exact to 1e-10 px) and
+    /// their covariances (N, 2, 2) for pixel covariances `cov` (N, 2, 2) (`None`: 1 px² isotropic), to
+    /// first order `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂ū`: the input of `triangulate_*` with `P = pinhole.P(R, t)`.
+    #[pyo3(signature = (pixels, cov = None))]
+    fn undistort<'py>(
+        &self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        cov: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>)> {
+        let us = points::<2>("pixels", Some(pixels))?;
+        let covs = pixel_covariances(cov, us.len())?;
+        let cam = &self.inner;
+        let out = guarded(|| {
+            us.iter()
+                .zip(&covs)
+                .enumerate()
+                .map(|(i, (u, c))| {
+                    let (ubar, j) = cam.undistort(u, i)?;
+                    let j_inv = j.try_inverse().ok_or_else(|| pluecker::Error::Degenerate {
+                        what: format!("pixel {i}: the distortion is singular there"),
+                    })?;
+                    Ok((ubar, j_inv * c * j_inv.transpose()))
+                })
+                .collect::<pluecker::Result<Vec<_>>>()
+        })?;
+        let ubar: Vec<Vector2<f64>> = out.iter().map(|o| o.0).collect();
+        let c = Array3::from_shape_fn((out.len(), 2, 2), |(i, j, k)| out[i].1[(j, k)]);
+        Ok((points_to_py(py, &ubar), c.into_pyarray(py)))
+    }
+
     fn __repr__(&self) -> String {
         format!("LensCamera('{}', {:?})", self.inner.model().as_str(), self.inner.params())
     }
@@ -121,4 +148,22 @@ result_class! {
         let args = PyTuple::new(slf.py(), [c.model().as_str().into_pyobject(slf.py())?.into_any(), c.params().to_vec().into_pyobject(slf.py())?.into_any()])?;
         Ok((slf.get_type().into_any(), args))
     }
+}
+
+/// The `cov=` argument of the pixel methods: (N, 2, 2), or the identity (1 px²) for each of `n` pixels.
+fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Matrix2<f64>>> {
+    use crate::convert::{check_finite, matrices, read, shape_string, Dim};
+    let Some(c) = cov else {
+        return Ok(vec![Matrix2::identity(); n]);
+    };
+    let (shape, values) = read("cov", c, &[Dim::Free("N"), Dim::Fixed(2), Dim::Fixed(2)])?;
+    check_finite("cov", &values, 4)?;
+    if shape[0] != n {
+        return Err(shape_error(
+            "cov",
+            &format!("shape ({n}, 2, 2) (one per pixel)"),
+            shape_string(&shape),
+        ));
+    }
+    Ok(matrices::<2, 2>(&values))
 }

@@ -95,6 +95,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyFittedConic>()?;
     m.add_function(wrap_pyfunction!(triangulation::fitting::fit_line, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::fitting::fit_conic, m)?)?;
+    m.add_function(wrap_pyfunction!(triangulation::fitting::lines_from_endpoints, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::fitting::fitting_residual_samples, m)?)?;
     m.add_function(wrap_pyfunction!(_unpickle, m)?)?;
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;

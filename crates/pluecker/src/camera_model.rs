@@ -289,6 +289,19 @@ impl LensCamera {
         Err(outside("Newton's method did not converge"))
     }
 
+    /// The undistorted pixel `ū = K n` of the pixel `u` (its position in the image of the pinhole part
+    /// `K = [fx 0 cx; 0 fy cy; 0 0 1]`, with `n` = [`LensCamera::unproject`]) and the Jacobian
+    /// `∂u/∂ū = diag(f) ∂D/∂n diag(f)⁻¹` there, which maps a small displacement of `ū` to the
+    /// distorted pixels. Errors as [`LensCamera::unproject`].
+    pub fn undistort(&self, u: &Vector2<f64>, index: usize) -> Result<(Vector2<f64>, Matrix2<f64>)> {
+        let n = self.unproject(u, index)?;
+        let (_, jd) = self.distort(&n);
+        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
+        let f = Matrix2::new(fx, 0.0, 0.0, fy);
+        let f_inv = Matrix2::new(1.0 / fx, 0.0, 0.0, 1.0 / fy);
+        Ok((Vector2::new(fx * n.x + cx, fy * n.y + cy), f * jd * f_inv))
+    }
+
     /// The 2x2 covariance of the undistorted normalised coordinates of a pixel with covariance `cov_px`,
     /// at the unprojected point `n`: `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂n` (first order; see the module docs for
     /// when that is not enough).

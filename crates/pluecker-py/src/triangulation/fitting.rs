@@ -101,6 +101,69 @@ pub fn fit_line(points: &Bound<'_, PyAny>, sigma: Option<Real>) -> PyResult<PyFi
     guarded(|| fitting::fit_line(&pts, sigma)).map(|inner| PyFittedLine { inner })
 }
 
+/// The image lines `(M, 3)` (unit normal, pixels) through segments `(M, 2, 2)` whose two endpoints have
+/// the covariances `cov` `(M, 2, 2, 2)` (pixels²; e.g. from `LensCamera.undistort`), and the covariances
+/// `(M, 2, 2)` of their residuals: the `lines` and `cov` of `triangulate_line(s)`
+/// (core `fitting::line_from_endpoints`).
+#[pyfunction]
+pub fn lines_from_endpoints<'py>(
+    py: Python<'py>,
+    segments: &Bound<'py, PyAny>,
+    cov: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    use crate::convert::{check_finite, read, Dim};
+    let (shape, ends) = read("segments", segments, &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(2)])?;
+    let (cshape, covs) = read(
+        "cov",
+        cov,
+        &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(2), Dim::Fixed(2)],
+    )?;
+    check_finite("segments", &ends, 4)?;
+    check_finite("cov", &covs, 8)?;
+    if cshape[0] != shape[0] {
+        return Err(crate::errors::shape_error(
+            "cov",
+            &format!("shape ({}, 2, 2, 2) (two endpoints per segment)", shape[0]),
+            crate::convert::shape_string(&cshape),
+        ));
+    }
+    let m = |v: &[f64]| nalgebra::Matrix2::new(v[0], v[1], v[2], v[3]);
+    let fits = guarded(|| {
+        ends.chunks_exact(4)
+            .zip(covs.chunks_exact(8))
+            .enumerate()
+            .map(|(i, (e, c))| {
+                let (a, b) = (nalgebra::Vector2::new(e[0], e[1]), nalgebra::Vector2::new(e[2], e[3]));
+                fitting::line_from_endpoints(&a, &b, &m(&c[..4]), &m(&c[4..])).map_err(|err| match err {
+                    pluecker::Error::Degenerate { what } => pluecker::Error::Degenerate {
+                        what: format!("segments[{i}]: {what}"),
+                    },
+                    other => other,
+                })
+            })
+            .collect::<pluecker::Result<Vec<_>>>()
+    })?;
+    let lines: Vec<f64> = fits
+        .iter()
+        .flat_map(|f| f.line.iter().copied().collect::<Vec<_>>())
+        .collect();
+    let covariances: Vec<f64> = fits
+        .iter()
+        .flat_map(|f| {
+            [
+                f.covariance[(0, 0)],
+                f.covariance[(0, 1)],
+                f.covariance[(1, 0)],
+                f.covariance[(1, 1)],
+            ]
+        })
+        .collect();
+    use crate::fields::Field;
+    let lines = crate::fields::Array::rows(lines, &[3]).get(py)?.into_bound(py);
+    let covariances = crate::fields::Array::rows(covariances, &[2, 2]).get(py)?.into_bound(py);
+    Ok((lines, covariances))
+}
+
 /// Fits an ellipse to points `(N, 2)` and returns it with its residual covariance, for point noise
 /// `sigma` pixels (`None`: 1 px).
 #[pyfunction]

@@ -193,6 +193,60 @@ pub fn line_from_segment(a: &Vector2<f64>, b: &Vector2<f64>, sigma: f64) -> Resu
     fit_line(&[*a, *b], sigma)
 }
 
+/// The line through the image points `a` and `b` (pixels) with independent Gaussian noise of
+/// covariances `cov_a` and `cov_b` (pixels², any 2x2 positive definite: the endpoints of a segment seen
+/// through a lens, whose undistorted covariances differ): [`line_from_segment`] for `σ² I`.
+///
+/// Only the noise across the line moves it: `x = n·δa`, `y = n·δb`, of variances `nᵀ Σ n`. With `L`
+/// the signed length `n⊥·(b − a)` and `m` the midpoint, the line moves by `δρ = (x + y)/2` at `m` and
+/// turns by `δθ = (x − y)/L` (the frame's sense of rotation); in the frame's basis `(n⊥, n)` its
+/// residual is `(D δθ, δρ + (n⊥·m) δθ)` (as in [`fit_line`], where the two endpoints' equal variances
+/// hide the sense), whose covariance this returns.
+pub fn line_from_endpoints(
+    a: &Vector2<f64>,
+    b: &Vector2<f64>,
+    cov_a: &Matrix2<f64>,
+    cov_b: &Matrix2<f64>,
+) -> Result<FittedLine> {
+    if !(a.iter().chain(b.iter()).all(|v| v.is_finite())) {
+        return Err(Error::NonFinite {
+            what: "endpoints".into(),
+            index: 0,
+        });
+    }
+    if coincide(&[*a, *b]) {
+        return Err(Error::Degenerate {
+            what: "line_from_endpoints: zero-length segment".into(),
+        });
+    }
+    for (i, c) in [cov_a, cov_b].into_iter().enumerate() {
+        whitening(c, "endpoint covariances", i)?;
+    }
+    let centroid = 0.5 * (a + b);
+    let direction = (b - a).normalize();
+    let normal = Vector2::new(-direction.y, direction.x);
+    let frame = LineFrame::of_line(&Vector3::new(normal.x, normal.y, -normal.dot(&centroid))).ok_or_else(|| {
+        Error::Degenerate {
+            what: "line_from_endpoints: no line".into(),
+        }
+    })?;
+    let n = frame.normal;
+    let n_perp = Vector2::new(-n.y, n.x);
+    let length = n_perp.dot(&(b - a));
+    let (var_x, var_y) = (n.dot(&(cov_a * n)), n.dot(&(cov_b * n)));
+    let (d, pos) = (LINE_FRAME_DISTANCE / length, n_perp.dot(&centroid) / length);
+    // r = A (x, y) with A = [[D/L, −D/L], [½ + pos, ½ − pos]] (pos = (n⊥·m)/L).
+    let rows = Matrix2::new(d, -d, 0.5 + pos, 0.5 - pos);
+    let local = rows * Matrix2::new(var_x, 0.0, 0.0, var_y) * rows.transpose();
+    let basis = Matrix2::from_columns(&[n_perp, n]);
+    let covariance = basis * local * basis.transpose();
+    Ok(FittedLine {
+        line: frame.line(),
+        covariance: 0.5 * (covariance + covariance.transpose()),
+        rms_distance: 0.0,
+    })
+}
+
 /// The standard normal quantile of 0.999.
 const Z_999: f64 = 3.090_232_306_167_813_5;
 
@@ -443,6 +497,47 @@ pub fn residual_samples(draws: usize, size: f64, sigma: f64, seed: u64) -> Resul
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn endpoints_with_covariances_give_the_residual_covariance() {
+        let (a, b) = (Vector2::new(120.0, 340.0), Vector2::new(610.0, 90.0));
+        // Isotropic noise: the same line and covariance as the two-point fit.
+        let sigma = 1.7;
+        let iso = line_from_endpoints(
+            &a,
+            &b,
+            &(Matrix2::identity() * sigma * sigma),
+            &(Matrix2::identity() * sigma * sigma),
+        )
+        .unwrap();
+        let fit = line_from_segment(&a, &b, sigma).unwrap();
+        assert!((iso.line - fit.line).norm() < 1e-12 * fit.line.norm());
+        assert!((iso.covariance - fit.covariance).norm() < 1e-9 * fit.covariance.norm());
+        // Anisotropic, different endpoints: against the sample covariance of the true line's residual in
+        // the frame of lines through noisy endpoints (20000 draws: entries within 3 % at these sizes).
+        let (ca, cb) = (Matrix2::new(4.0, 1.5, 1.5, 1.0), Matrix2::new(0.3, -0.2, -0.2, 2.5));
+        let truth = a.push(1.0).cross(&b.push(1.0));
+        let (la, lb) = (ca.cholesky().unwrap().l(), cb.cholesky().unwrap().l());
+        let mut rng = Rng::new(3);
+        let draws = 20_000;
+        let mut sum = Matrix2::zeros();
+        for _ in 0..draws {
+            let na = a + la * Vector2::new(rng.normal(), rng.normal());
+            let nb = b + lb * Vector2::new(rng.normal(), rng.normal());
+            let fitted = line_from_endpoints(&na, &nb, &ca, &cb).unwrap();
+            let r = LineFrame::of_line(&fitted.line).unwrap().residual(&truth);
+            sum += r * r.transpose();
+        }
+        let sample = sum / draws as f64;
+        let predicted = line_from_endpoints(&a, &b, &ca, &cb).unwrap().covariance;
+        for (s, p) in sample.iter().zip(predicted.iter()) {
+            assert!(
+                (s - p).abs() < 0.03 * predicted.norm(),
+                "sample {sample} vs predicted {predicted}"
+            );
+        }
+    }
+
     use super::*;
 
     #[test]
