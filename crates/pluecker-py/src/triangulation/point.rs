@@ -282,7 +282,7 @@ pub fn triangulate_points(
         let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
-            let visible = |t: usize, j: usize| mask.as_ref().is_none_or(|m| m[t * v + j]);
+            let visible = |t: usize, j: usize| mask.as_ref().map_or(true, |m| m[t * v + j]);
             columns.scatter_inliers(vec![n, v], |t| {
                 (0..v).filter(|&j| visible(t, j)).map(|j| t * v + j).collect()
             });

@@ -76,7 +76,7 @@ pub(crate) fn consensus(views: &[PointView], frame: &WorldFrame, tau2: f64) -> O
             continue;
         }
         let score: f64 = views.iter().map(|v| squared_error(v, &x).min(tau2)).sum();
-        if best.is_none_or(|(s, _)| score < s) {
+        if best.map_or(true, |(s, _)| score < s) {
             best = Some((score, x));
         }
     }
