@@ -55,11 +55,27 @@ impl<T: Field> Field for Option<T> {
     }
 }
 
-/// A float64 array of any shape, row-major.
-pub(crate) struct Array {
-    pub values: Vec<f64>,
+/// The element types of the arrays of properties, with their name in the stub.
+pub(crate) trait Element: numpy::Element {
+    const STUB: &'static str;
+}
+
+impl Element for f64 {
+    const STUB: &'static str = "NDArray[np.float64]";
+}
+
+impl Element for bool {
+    const STUB: &'static str = "NDArray[np.bool_]";
+}
+
+/// A numpy array of any shape, row-major: float64 by default, bool for the masks.
+pub(crate) struct Array<T = f64> {
+    pub values: Vec<T>,
     pub shape: Vec<usize>,
 }
+
+/// A boolean array (a batch's inlier masks).
+pub(crate) type Mask = Array<bool>;
 
 impl Array {
     /// `values` (row-major) as an array whose trailing axes are `tail`; the leading axis is what is left.
@@ -80,7 +96,7 @@ impl<const R: usize, const C: usize> From<nalgebra::SMatrix<f64, R, C>> for Arra
     }
 }
 
-impl Field for Array {
+impl<T: Element> Field for Array<T> {
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
         let array = ArrayD::from_shape_vec(IxDyn(&self.shape), self.values)
             .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
@@ -90,27 +106,7 @@ impl Field for Array {
         self.get(py)?.call_method0(py, "tolist")
     }
     fn stub() -> String {
-        "NDArray[np.float64]".into()
-    }
-}
-
-/// A boolean array of any shape, row-major (a batch's inlier masks).
-pub(crate) struct Mask {
-    pub values: Vec<bool>,
-    pub shape: Vec<usize>,
-}
-
-impl Field for Mask {
-    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
-        let array = ArrayD::from_shape_vec(IxDyn(&self.shape), self.values)
-            .map_err(|e| pyo3::exceptions::PyRuntimeError::new_err(e.to_string()))?;
-        Ok(array.into_pyarray(py).into_any().unbind())
-    }
-    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
-        self.get(py)?.call_method0(py, "tolist")
-    }
-    fn stub() -> String {
-        "NDArray[np.bool_]".into()
+        T::STUB.into()
     }
 }
 
@@ -122,7 +118,7 @@ impl<const R: usize, const C: usize> Field for nalgebra::SMatrix<f64, R, C> {
         Array::from(self).plain(py)
     }
     fn stub() -> String {
-        Array::stub()
+        Array::<f64>::stub()
     }
 }
 

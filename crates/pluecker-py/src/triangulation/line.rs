@@ -244,6 +244,47 @@ result_class! {
     }
 }
 
+/// Whether the `lines` of a batch (shape `(*lead, 3)` or `(*lead, 2, 2)` with `lead` leading axes:
+/// 2 for `(n, v, ...)`, 1 for one row per observation) are segments, with the checks of `sigma`: it
+/// applies to segments only, and not together with `cov`.
+fn segments_or_lines(shape: &[usize], lead: usize, sigma: Option<f64>, have_cov: bool) -> PyResult<bool> {
+    let axes = if lead == 2 { "n, v" } else { "m" };
+    let tail = shape.get(lead..).unwrap_or(&[]);
+    let segments = match (shape.len() - tail.len() == lead, tail) {
+        (true, [3]) => false,
+        (true, [2, 2]) => true,
+        _ => {
+            return Err(shape_error(
+                "lines",
+                &format!("shape ({axes}, 3) (homogeneous lines) or ({axes}, 2, 2) (segments)"),
+                shape_string(shape),
+            ))
+        }
+    };
+    if sigma.is_some() && !segments {
+        return Err(invalid_argument(
+            "sigma",
+            format!("applies to segments ({axes}, 2, 2) only; give cov for homogeneous lines"),
+        ));
+    }
+    if sigma.is_some() && have_cov {
+        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+    }
+    Ok(segments)
+}
+
+/// The core's view of a batch's `values`: segments with endpoint noise `sigma`, or homogeneous lines.
+fn image_lines_of(values: &[f64], segments: bool, sigma: f64) -> ImageLines<'_> {
+    if segments {
+        ImageLines::Segments {
+            endpoints: values,
+            sigma,
+        }
+    } else {
+        ImageLines::Homogeneous(values)
+    }
+}
+
 /// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
 #[pyo3(signature = (P, lines, visible = None, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None))]
@@ -265,41 +306,15 @@ pub fn triangulate_lines(
     let sigma = optional_real("sigma", sigma)?;
     let cams = Cameras::read(P, 2, opts.method)?;
     let (shape, values) = read_any("lines", lines)?;
-    let segments = match shape.as_slice() {
-        [_, _, 3] => false,
-        [_, _, 2, 2] => true,
-        _ => {
-            return Err(shape_error(
-                "lines",
-                "shape (n, v, 3) (homogeneous lines) or (n, v, 2, 2) (segments)",
-                shape_string(&shape),
-            ))
-        }
-    };
+    let segments = segments_or_lines(&shape, 2, sigma, cov.is_some())?;
     cams.check_observations("lines", &shape, if segments { "2, 2" } else { "3" })?;
     let (n, v) = (shape[0], shape[1]);
-    if sigma.is_some() && !segments {
-        return Err(invalid_argument(
-            "sigma",
-            "applies to segments (n, v, 2, 2) only; give cov for homogeneous lines",
-        ));
-    }
-    if sigma.is_some() && cov.is_some() {
-        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
-    }
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
     let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
     let sigma = sigma.unwrap_or(1.0);
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = LineTracks {
-            lines: if segments {
-                ImageLines::Segments {
-                    endpoints: &values,
-                    sigma,
-                }
-            } else {
-                ImageLines::Homogeneous(&values)
-            },
+            lines: image_lines_of(&values, segments, sigma),
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
@@ -336,40 +351,14 @@ pub fn triangulate_line_observations(
     let cams = cameras("P", P)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let (shape, _) = read_any("lines", lines)?;
-    let segments = match shape.as_slice() {
-        [_, 3] => false,
-        [_, 2, 2] => true,
-        _ => {
-            return Err(shape_error(
-                "lines",
-                "shape (m, 3) (homogeneous lines) or (m, 2, 2) (segments)",
-                shape_string(&shape),
-            ))
-        }
-    };
-    if sigma.is_some() && !segments {
-        return Err(invalid_argument(
-            "sigma",
-            "applies to segments (m, 2, 2) only; give cov for homogeneous lines",
-        ));
-    }
-    if sigma.is_some() && cov.is_some() {
-        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
-    }
+    let segments = segments_or_lines(&shape, 1, sigma, cov.is_some())?;
     let values = rows.per_row("lines", lines, &shape[1..])?;
     let covariances = cov.map(|c| rows.per_row("cov", c, &[2, 2])).transpose()?;
     let sigma = sigma.unwrap_or(1.0);
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = SparseLineTracks {
             csr: rows.csr(),
-            lines: if segments {
-                ImageLines::Segments {
-                    endpoints: &values,
-                    sigma,
-                }
-            } else {
-                ImageLines::Homogeneous(&values)
-            },
+            lines: image_lines_of(&values, segments, sigma),
             covariances: covariances.as_deref(),
         };
         let results =
