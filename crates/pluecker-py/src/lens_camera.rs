@@ -105,7 +105,7 @@ result_class! {
     /// The pinhole part `K = [fx 0 cx; 0 fy cy; 0 0 1]` as a `Camera`: the camera of undistorted pixels.
     #[getter]
     fn pinhole(&self) -> PyResult<crate::camera::PyCamera> {
-        guarded(|| pluecker::pose::noise::pinhole_part(&self.inner)).map(|inner| crate::camera::PyCamera { inner })
+        guarded(|| self.inner.pinhole()).map(|inner| crate::camera::PyCamera { inner })
     }
 
     /// Undistorted pixels (N, 2) of pixels (N, 2) (the image of the pinhole part, exact to 1e-10 px) and

@@ -166,6 +166,12 @@ impl LensCamera {
         }
     }
 
+    /// The pinhole part: the focal lengths and principal point, no skew (the camera of undistorted pixels).
+    pub fn pinhole(&self) -> Result<crate::camera::Camera> {
+        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
+        crate::camera::Camera::new(fx, fy, cx, cy, 0.0)
+    }
+
     /// Whether the model has no distortion (the pinhole fast path applies).
     pub fn is_pinhole(&self) -> bool {
         matches!(self.model, CameraModel::SimplePinhole | CameraModel::Pinhole)

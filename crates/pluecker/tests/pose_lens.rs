@@ -9,7 +9,6 @@
 use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::quaternion::log_so3;
-use pluecker::pose::noise::pinhole_part;
 use pluecker::pose::{
     estimate_pose, estimate_pose_lens, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions,
     Status,
@@ -98,7 +97,7 @@ fn distortion_is_modelled_and_the_covariance_is_right() {
         // covariance (the failure that issue 12 reports).
         let ignored = mean_nees(20, |scene, rng| {
             let corr = observe(scene, &lens, &|_| 1.0, rng);
-            estimate_pose(&pinhole_part(&lens).unwrap(), &corr, &with_sigma(1.0)).unwrap()
+            estimate_pose(&lens.pinhole().unwrap(), &corr, &with_sigma(1.0)).unwrap()
         });
         eprintln!(
             "{:?}: mean NEES {modelled:.3} modelled, {ignored:.0} ignored",

@@ -112,7 +112,7 @@ fn observation_noise(
         None => vec![[Matrix2::identity(); 2]; corr.n_lines()],
     };
     let noise = guarded(|| ObservationNoise::from_covariances(&points, &lines))?;
-    guarded(|| noise.check_counts(corr))?;
+    guarded(|| noise.check_counts(corr.n_points(), corr.n_lines()))?;
     Ok(Some(noise))
 }
 

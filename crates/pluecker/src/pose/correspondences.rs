@@ -21,7 +21,7 @@ pub struct Correspondences {
     /// Object segments (two world endpoints). The endpoints need not correspond to the image ones:
     /// only the 3-D line through them is used.
     pub lines3d: Vec<[Vector3<f64>; 2]>,
-    /// Per-observation covariances (or a lens's distortion, [`super::noise::undistort`]) that weight
+    /// Per-observation covariances (or a lens's distortion, [`super::lens::undistort`]) that weight
     /// the reprojection residuals. `None`: isotropic pixel noise, the plain reprojection error.
     pub noise: Option<ObservationNoise>,
 }
@@ -190,7 +190,7 @@ impl Correspondences {
             });
         }
         if let Some(noise) = &self.noise {
-            noise.check_counts(self)?;
+            noise.check_counts(self.n_points(), self.n_lines())?;
         }
         check_finite("points2d", self.points2d.iter().map(|p| p.iter()))?;
         check_finite("points3d", self.points3d.iter().map(|p| p.iter()))?;

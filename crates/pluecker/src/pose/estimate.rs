@@ -18,14 +18,11 @@ use super::certificate::{certify, Certificate, Certification};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::linear::faugeras_toscani;
-use super::noise::{pinhole_part, undistort, ObservationNoise};
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
-use super::robust::scoring::subset;
 use super::{stage, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
-use crate::camera_model::LensCamera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::rotation_distance;
@@ -494,61 +491,6 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             behind_camera_cost,
         },
     ))
-}
-
-/// [`estimate_pose`] for a camera with distortion: `corr` holds the observed (distorted) pixels of
-/// `lens`, and `noise` optionally their covariances ([`ObservationNoise::from_covariances`]). The
-/// stages run on the undistorted pixels and the refinement minimises the error in the distorted ones
-/// ([`super::noise`] says how, and what RANSAC's thresholds then mean). The result's pixels
-/// (reprojection errors, `sigma_px`) are distorted pixels, or standard deviations with covariances.
-///
-/// An observation outside the invertible region of the distortion (a pixel no point in front of the
-/// camera projects to) is an error naming it, except with RANSAC: there it is an outlier (its inlier flag
-/// false, and not counted by the RANSAC report), as a random mismatch at the edge of a fisheye is.
-pub fn estimate_pose_lens(
-    lens: &LensCamera,
-    corr: &Correspondences,
-    noise: Option<&ObservationNoise>,
-    opts: &PoseOptions,
-) -> Result<PoseResult> {
-    if lens.is_pinhole() {
-        // No distortion: the pinhole path, with the covariances (if any) as they are.
-        let corr = Correspondences {
-            noise: noise.cloned(),
-            ..corr.clone()
-        };
-        return estimate_pose(&pinhole_part(lens)?, &corr, opts);
-    }
-    let (points, lines) = invertible(lens, corr);
-    if opts.ransac.is_none() || points.iter().chain(&lines).all(|&ok| ok) {
-        let (camera, undistorted) = undistort(lens, corr, noise)?;
-        return estimate_pose(&camera, &undistorted, opts);
-    }
-    if let Some(n) = noise {
-        n.check_counts(corr)?;
-    }
-    let kept = subset(corr, &points, &lines);
-    let kept_noise = noise.map(|n| n.subset(&points, &lines));
-    let (camera, undistorted) = undistort(lens, &kept, kept_noise.as_ref())?;
-    let mut result = estimate_pose(&camera, &undistorted, opts)?;
-    result.inliers_points = expand(&result.inliers_points, &points);
-    result.inliers_lines = expand(&result.inliers_lines, &lines);
-    Ok(result)
-}
-
-/// Which points and segments of `corr` `lens` can unproject (both endpoints for a segment).
-fn invertible(lens: &LensCamera, corr: &Correspondences) -> (Vec<bool>, Vec<bool>) {
-    let ok = |u: &nalgebra::Vector2<f64>| lens.unproject(u, 0).is_ok();
-    (
-        corr.points2d.iter().map(ok).collect(),
-        corr.lines2d.iter().map(|s| ok(&s[0]) && ok(&s[1])).collect(),
-    )
-}
-
-/// The flags of the kept entries (`kept` true) back at their places, false at the others.
-fn expand(flags: &[bool], kept: &[bool]) -> Vec<bool> {
-    let mut it = flags.iter();
-    kept.iter().map(|&k| k && *it.next().unwrap_or(&false)).collect()
 }
 
 /// How many times lower than the returned pose's cost the cost of a pose with every point behind the

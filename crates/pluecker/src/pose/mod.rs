@@ -10,6 +10,7 @@ pub mod certificate;
 pub mod correspondences;
 mod estimate;
 pub mod initialization;
+pub mod lens;
 pub mod linear;
 pub mod minimal;
 pub mod noise;
@@ -20,7 +21,8 @@ pub mod robust;
 
 pub use certificate::{Certificate, CertificateOptions};
 pub use correspondences::{Conditioning, Correspondences};
-pub use estimate::{algebraic_stage, estimate_pose, estimate_pose_lens, Estimate};
+pub use estimate::{algebraic_stage, estimate_pose, Estimate};
+pub use lens::estimate_pose_lens;
 pub use noise::ObservationNoise;
 pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};
