@@ -1,5 +1,5 @@
-"""Outlier observations in point tracks (issue 12 §4): ``TriangulationOptions(outlier_threshold=...)`` on
-the single call, the dense batch and the sparse one, with the inlier masks laid out as the input was."""
+"""Outlier observations in point and line tracks (issue 12 §4): ``TriangulationOptions(outlier_threshold=...)``
+on the single call, the dense batch and the sparse one, with the inlier masks laid out as the input was."""
 
 from __future__ import annotations
 
@@ -70,14 +70,50 @@ def test_sparse_batch_masks_follow_the_rows_as_given():
     np.testing.assert_allclose(r.X, dense.X, atol=1e-9)
 
 
-def test_threshold_is_checked_and_refused_for_lines():
+def test_threshold_is_checked_and_refused_for_quadrics():
     with pytest.raises(pluecker.InvalidOptionError, match="outlier_threshold"):
         pluecker.TriangulationOptions(outlier_threshold=-1.0)
     rng = np.random.default_rng(5)
     P = cameras(3, 30.0, rng)
-    segments = rng.uniform(100, 500, size=(3, 2, 2))
-    with pytest.raises(pluecker.InvalidOptionError, match="points only"):
-        pluecker.triangulate_line(P, segments, options=ROBUST)
+    conics = np.tile(np.diag([1.0, 1.0, -100.0]), (3, 1, 1))
+    with pytest.raises(pluecker.InvalidOptionError, match="points and lines"):
+        pluecker.triangulate_quadric(P, conics, options=ROBUST)
+
+
+def line_tracks_with_outliers(n: int, views: int, seed: int):
+    """n segments near the origin seen by all views with 1 px endpoint noise; one view per track moved
+    40 px across the segment."""
+    rng = np.random.default_rng(seed)
+    P = cameras(views, 40.0, rng)
+    ends = rng.normal(scale=0.5, size=(n, 2, 3))
+    segments = np.stack([np.stack([project(P, A), project(P, B)], axis=1) for A, B in ends])  # (n, v, 2, 2)
+    segments = segments + rng.normal(size=segments.shape)
+    outlier = rng.integers(0, views, size=n)
+    for k in range(n):
+        a, b = segments[k, outlier[k]]
+        d = (b - a) / np.linalg.norm(b - a)
+        segments[k, outlier[k]] += 40.0 * np.array([-d[1], d[0]])
+    return P, ends, segments, outlier
+
+
+def test_robust_lines_reject_the_outlier_views():
+    P, ends, segments, outlier = line_tracks_with_outliers(20, 7, 8)
+    options = pluecker.TriangulationOptions(outlier_threshold=4.0, method="local")
+    batch = pluecker.triangulate_lines(P, segments, options=options)
+    assert batch.inliers.shape == (20, 7)
+    assert not batch.inliers[np.arange(20), outlier].any()
+    single = pluecker.triangulate_line(P, segments[3], options=options)
+    np.testing.assert_array_equal(single.inliers, batch.inliers[3])
+    kept = single.inliers
+    np.testing.assert_allclose(single.plucker, pluecker.triangulate_line(P[kept], segments[3][kept],
+                                                                         method="local").plucker, atol=1e-9)
+    # Sparse rows in any order: the mask follows the rows as given.
+    track, image = np.nonzero(np.ones((20, 7), dtype=bool))
+    order = np.random.default_rng(9).permutation(len(track))
+    track, image = track[order], image[order]
+    sparse = pluecker.triangulate_line_observations(P, track, image, segments[track, image], options=options)
+    np.testing.assert_array_equal(sparse.inliers, batch.inliers[track, image])
+    assert pluecker.triangulate_lines(P, segments, method="local").inliers is None
 
 
 def test_too_few_inliers_is_a_status():

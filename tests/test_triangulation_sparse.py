@@ -86,5 +86,5 @@ def test_bad_rows_stay_in_their_track(seed):
     with pytest.raises(pluecker.InvalidOptionError, match="n_tracks"):
         pluecker.triangulate_line_observations(P, track, image, rows, n_tracks=3)
     with pytest.raises(pluecker.InvalidOptionError, match="outlier_threshold"):
-        pluecker.triangulate_line_observations(P, track, image, rows,
-                                               options=pluecker.TriangulationOptions(outlier_threshold=4.0))
+        pluecker.triangulate_quadric_observations(P, track, image, np.tile(np.eye(3), (len(track), 1, 1)),
+                                                  options=pluecker.TriangulationOptions(outlier_threshold=4.0))

@@ -492,7 +492,7 @@ class TriangulationOptions:
     max_nodes: int
     """Branch and bound gives up (status `gap_not_closed`) after this many nodes."""
     outlier_threshold: Optional[float]
-    """Points only: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
+    """Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     local_max_iterations: int
     """Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`)."""
     # end of fields
@@ -564,6 +564,8 @@ class LineTriangulation(TriangulationReport):
     """Rows `e1`, `e2`: the axes of the 4-parameter chart in which `covariance` is expressed."""
     covariance: Optional[NDArray[np.float64]]
     """4x4 covariance of the line in its chart (first order); `None` when singular."""
+    inliers: Optional[NDArray[np.bool_]]
+    """With `options.outlier_threshold`: (v,) the views the line was solved from; else `None`."""
     # end of fields
     def plucker_covariance(self) -> Optional[NDArray[np.float64]]:
         """The (6, 6) covariance of the unit Plücker coordinates."""
@@ -650,6 +652,11 @@ class LineTriangulations(BatchReport):
     """Per track: the chart axes of `covariance`, shape (n, 2, 3)."""
     covariance: NDArray[np.float64]
     """Per track: 4x4 covariance in the chart, shape (n, 4, 4) (NaN where there is none)."""
+    inliers: Optional[NDArray[np.bool_]]
+    """With `options.outlier_threshold`: which observations each line was solved from, shaped as the
+    observations were given ((n, v) for `triangulate_lines`, (m,) for
+    `triangulate_line_observations`; false where not visible or rejected); else `None`.
+    """
     # end of fields
 
 class QuadricTriangulations(BatchReport):

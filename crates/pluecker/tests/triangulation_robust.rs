@@ -149,13 +149,89 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
 }
 
 #[test]
-fn lines_and_quadrics_refuse_the_threshold() {
+fn quadrics_refuse_the_threshold() {
     let opts = robust();
-    let err = opts.reject_outlier_threshold("lines").unwrap_err();
+    let err = opts.reject_outlier_threshold("quadrics").unwrap_err();
     assert!(err.to_string().contains("outlier_threshold"), "{err}");
     let bad = TriangulationOptions {
         outlier_threshold: Some(f64::NAN),
         ..TriangulationOptions::default()
     };
     assert!(bad.validate().is_err());
+}
+
+#[test]
+fn one_outlier_line_per_track_is_rejected() {
+    use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+    // Tracks of 6-10 views of a segment near the scene's point; one view's segment moved 40 px across.
+    let (mut rejected, mut tracks) = (0, 0);
+    let (mut robust_error2, mut oracle_error2, mut naive_error2) = (0.0, 0.0, 0.0);
+    let mut rng = Rng::new(31);
+    for seed in 0..60u64 {
+        let views = 6 + (seed % 5) as usize;
+        let scene = triangulation_scene(views, 0.5, 100 + seed);
+        let d = nalgebra::Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize();
+        let (a, b) = (scene.point - 0.4 * d, scene.point + 0.4 * d);
+        let project = |p: &nalgebra::Matrix3x4<f64>, x: &nalgebra::Vector3<f64>| {
+            let h = p * x.push(1.0);
+            Vector2::new(h.x / h.z, h.y / h.z)
+        };
+        let mut segments: Vec<[Vector2<f64>; 2]> = scene
+            .cameras
+            .iter()
+            .map(|p| {
+                [
+                    project(p, &a) + Vector2::new(rng.normal(), rng.normal()),
+                    project(p, &b) + Vector2::new(rng.normal(), rng.normal()),
+                ]
+            })
+            .collect();
+        let outlier = rng.below(views);
+        let [s0, s1] = segments[outlier];
+        let across = Vector2::new(-(s1 - s0).y, (s1 - s0).x).normalize() * 40.0;
+        segments[outlier] = [s0 + across, s1 + across];
+        let (lines, covs) = lines_from_segments(&segments, 1.0).unwrap();
+        let opts = TriangulationOptions {
+            method: pluecker::triangulation::Method::Local,
+            ..robust()
+        };
+        let result = triangulate_line(&scene.cameras, &lines, Some(&covs), &opts).unwrap();
+        let mask = result.inliers.clone().unwrap();
+        tracks += 1;
+        rejected += !mask[outlier] as usize;
+        let keep: Vec<usize> = (0..views).filter(|&j| j != outlier).collect();
+        fn pick<T: Copy>(v: &[T], keep: &[usize]) -> Vec<T> {
+            keep.iter().map(|&j| v[j]).collect()
+        }
+        let oracle = triangulate_line(
+            &pick(&scene.cameras, &keep),
+            &pick(&lines, &keep),
+            Some(&pick(&covs, &keep)),
+            &TriangulationOptions {
+                method: pluecker::triangulation::Method::Local,
+                ..TriangulationOptions::default()
+            },
+        )
+        .unwrap();
+        // Error: the distance of the true endpoints from the estimated line.
+        let distance = |r: &pluecker::triangulation::line::LineTriangulation, x: &nalgebra::Vector3<f64>| {
+            (x - r.point).cross(&r.direction).norm_squared()
+        };
+        let local = TriangulationOptions {
+            method: pluecker::triangulation::Method::Local,
+            ..TriangulationOptions::default()
+        };
+        let naive = triangulate_line(&scene.cameras, &lines, Some(&covs), &local).unwrap();
+        naive_error2 += distance(&naive, &a) + distance(&naive, &b);
+        robust_error2 += distance(&result, &a) + distance(&result, &b);
+        oracle_error2 += distance(&oracle, &a) + distance(&oracle, &b);
+    }
+    let ratio = (robust_error2 / oracle_error2).sqrt();
+    let naive = (naive_error2 / oracle_error2).sqrt();
+    eprintln!(
+        "lines: {rejected} of {tracks} outliers rejected; RMS error {ratio:.4}x the oracle's (kept: {naive:.2}x)"
+    );
+    assert_eq!(rejected, tracks);
+    assert!(naive > 2.0, "the outlier should hurt without rejection ({naive}x)");
+    assert!(ratio <= 1.01, "{ratio}");
 }

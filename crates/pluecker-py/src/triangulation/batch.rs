@@ -10,7 +10,7 @@
 
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{shape_error, to_py_err};
-use crate::fields::result_class;
+use crate::fields::{result_class, Mask};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::triangulation::renamed;
 use nalgebra::Matrix3x4;
@@ -69,6 +69,65 @@ pub(crate) trait TrackColumns: Default {
         format!("{prefix}{text}")
     }
 }
+
+/// The inlier masks of a robust batch (`TriangulationOptions.outlier_threshold`): each solved track's
+/// flags over its views, concatenated, and their count per track (0 for a rejected track) as the core
+/// returns them, until [`InlierColumns::scatter`] lays them out as the observations were given.
+#[derive(Debug, Default)]
+pub(crate) struct InlierColumns {
+    flags: Vec<bool>,
+    counts: Vec<usize>,
+    laid_out: Option<(Vec<bool>, Vec<usize>)>,
+}
+
+impl InlierColumns {
+    /// A solved track's mask (`None` when not robust).
+    pub fn push(&mut self, mask: Option<Vec<bool>>) {
+        let mask = mask.unwrap_or_default();
+        self.counts.push(mask.len());
+        self.flags.extend(mask);
+    }
+
+    /// A rejected track: none of its observations is an inlier.
+    pub fn push_missing(&mut self) {
+        self.counts.push(0);
+    }
+
+    /// Lays the flags out in a mask of `shape`: `positions(t)` lists, in track `t`'s order, where its
+    /// observations go (false elsewhere, and for every observation of a rejected track).
+    pub fn scatter(&mut self, shape: Vec<usize>, positions: impl Fn(usize) -> Vec<usize>) {
+        let mut mask = vec![false; shape.iter().product()];
+        let mut from = 0;
+        for (t, &count) in self.counts.iter().enumerate() {
+            if count > 0 {
+                for (flag, k) in self.flags[from..from + count].iter().zip(positions(t)) {
+                    mask[k] = *flag;
+                }
+            }
+            from += count;
+        }
+        self.laid_out = Some((mask, shape));
+    }
+
+    /// The positions of track `t`'s observations in a dense `(n, v)` batch: its visible views.
+    pub fn dense_positions(visible: Option<&[bool]>, v: usize, t: usize) -> Vec<usize> {
+        (0..v)
+            .filter(|&j| visible.map_or(true, |m| m[t * v + j]))
+            .map(|j| t * v + j)
+            .collect()
+    }
+
+    /// The laid-out mask, `None` when not robust.
+    pub fn mask(&self) -> Option<Mask> {
+        self.laid_out.clone().map(|(values, shape)| Mask { values, shape })
+    }
+}
+
+pack_struct!(InlierColumns {
+    flags,
+    counts,
+    laid_out
+});
 
 /// The report columns and the estimate columns of the core's per-track `results` (track `t` is
 /// `results[t]`), solved with `method`.

@@ -6,7 +6,9 @@
 //! Image lines are `(…, 3)` homogeneous lines or `(…, 2, 2)` segments; cameras of a batch are
 //! shared `(v, 3, 4)` or per track `(n, v, 3, 4)` ([`super::batch::Cameras`]).
 
-use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
+use super::batch::{
+    collect, per_observation, push_covariance, row_major, Cameras, InlierColumns, PyBatchReport, TrackColumns,
+};
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
@@ -46,6 +48,7 @@ pub struct PyLineTriangulation {
     direction: Vector3<f64>,
     chart: LineChart,
     covariance: Option<Matrix4<f64>>,
+    inliers: Option<Vec<bool>>,
 }
 
 impl PyLineTriangulation {
@@ -57,6 +60,7 @@ impl PyLineTriangulation {
                 direction: result.direction,
                 chart: result.chart,
                 covariance: result.covariance,
+                inliers: result.inliers,
             },
         );
         Py::new(py, init)
@@ -75,6 +79,8 @@ result_class! {
         chart_axes = |l| chart_axes(&l.chart);
         /// 4x4 covariance of the line in its chart (first order); `None` when singular.
         covariance = |l| l.covariance;
+        /// With `options.outlier_threshold`: (v,) the views the line was solved from; else `None`.
+        inliers = |l| l.inliers.clone();
     }
 
     /// The 6x6 covariance of the unit Plücker coordinates (`LineChart::plucker_covariance`).
@@ -196,6 +202,8 @@ pub struct PyLineTriangulations {
     direction: Vec<f64>,
     chart_axes: Vec<f64>,
     covariance: Vec<f64>,
+    /// Robust only: the inlier masks, laid out as the observations were given (`(n, v)` or `(m,)`).
+    inliers: InlierColumns,
 }
 
 impl TrackColumns for PyLineTriangulations {
@@ -208,6 +216,7 @@ impl TrackColumns for PyLineTriangulations {
         self.direction.extend_from_slice(track.direction.as_slice());
         self.chart_axes.extend(row_major(&chart_axes(&track.chart)));
         push_covariance(&mut self.covariance, track.covariance.as_ref());
+        self.inliers.push(track.inliers);
         track.report
     }
 
@@ -217,6 +226,7 @@ impl TrackColumns for PyLineTriangulations {
         self.direction.extend([f64::NAN; 3]);
         self.chart_axes.extend([f64::NAN; 6]);
         push_covariance::<4>(&mut self.covariance, None);
+        self.inliers.push_missing();
     }
 }
 
@@ -232,6 +242,10 @@ result_class! {
         chart_axes = |b| Array::rows(b.chart_axes.clone(), &[2, 3]);
         /// Per track: 4x4 covariance in the chart, shape (n, 4, 4) (NaN where there is none).
         covariance = |b| Array::rows(b.covariance.clone(), &[4, 4]);
+        /// With `options.outlier_threshold`: which observations each line was solved from, shaped as the
+        /// observations were given ((n, v) for `triangulate_lines`, (m,) for
+        /// `triangulate_line_observations`; false where not visible or rejected); else `None`.
+        inliers = |b| b.inliers.mask();
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -319,7 +333,12 @@ pub fn triangulate_lines(
             covariances: covariances.as_deref(),
         };
         let results = core_lines(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
-        Ok(collect::<PyLineTriangulations>(opts.method, results))
+        let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
+        if opts.outlier_threshold.is_some() {
+            let visible = mask.as_deref();
+            (columns.inliers).scatter(vec![n, v], |t| InlierColumns::dense_positions(visible, v, t));
+        }
+        Ok((report, columns))
     })?;
     batch_result(py, outcome)
 }
@@ -364,7 +383,11 @@ pub fn triangulate_line_observations(
         let results =
             triangulate_lines_sparse(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
         let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
-        Ok(collect::<PyLineTriangulations>(opts.method, results))
+        let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
+        if opts.outlier_threshold.is_some() {
+            columns.inliers.scatter(vec![rows.len()], |t| rows.rows_of(t));
+        }
+        Ok((report, columns))
     })?;
     batch_result(py, outcome)
 }
@@ -374,12 +397,14 @@ pack_struct!(PyLineTriangulation {
     point,
     direction,
     chart,
-    covariance
+    covariance,
+    inliers
 });
 pack_struct!(PyLineTriangulations {
     plucker,
     point,
     direction,
     chart_axes,
-    covariance
+    covariance,
+    inliers
 });

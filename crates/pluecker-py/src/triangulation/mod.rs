@@ -43,7 +43,7 @@ options_class! {
             |o, v| v.map(|r| r.get("max_reprojection_error")).transpose().map(|g| o.inner.max_reprojection_error = g);
         /// Branch and bound gives up (status `gap_not_closed`) after this many nodes.
         max_nodes: Integer = |o| o.inner.max_nodes, |o, v| v.count("max_nodes", 1).map(|n| o.inner.max_nodes = n);
-        /// Points only: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
+        /// Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
         outlier_threshold: Option<Real> = |o| o.inner.outlier_threshold,
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);
         /// Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`).

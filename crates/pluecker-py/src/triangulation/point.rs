@@ -8,13 +8,13 @@
 //! is not positive definite, ...) gets an error status and a message and never stops the others.
 //! Method `linear` takes the core's allocation-free path (`triangulate_points_linear`).
 
-use super::batch::{collect, per_observation, push_covariance, PyBatchReport, TrackColumns};
+use super::batch::{collect, per_observation, push_covariance, InlierColumns, PyBatchReport, TrackColumns};
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
 use crate::convert::{cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Real};
 use crate::errors::{shape_error, solve, to_py_err};
-use crate::fields::{result_class, Array, Mask};
+use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -125,12 +125,8 @@ pub struct PyPointTriangulations {
     x: Vec<f64>,
     /// Row-major `(n, 3, 3)` covariances, NaN where there is none.
     covariance: Vec<f64>,
-    /// Robust only: each solved track's inlier flags over its views, concatenated, and their count per
-    /// track (0 for a rejected track), as the core returns them; [`Self::scatter_inliers`] lays them out.
-    track_inliers: Vec<bool>,
-    track_inlier_counts: Vec<usize>,
-    /// Robust only: the inlier mask, laid out as the observations were given (`(n, v)` or `(m,)`).
-    inliers: Option<(Vec<bool>, Vec<usize>)>,
+    /// Robust only: the inlier masks, laid out as the observations were given (`(n, v)` or `(m,)`).
+    inliers: InlierColumns,
 }
 
 impl TrackColumns for PyPointTriangulations {
@@ -140,35 +136,14 @@ impl TrackColumns for PyPointTriangulations {
     fn push(&mut self, track: PointTriangulation) -> Report {
         self.x.extend_from_slice(track.point.as_slice());
         push_covariance(&mut self.covariance, track.covariance.as_ref());
-        let mask = track.inliers.unwrap_or_default();
-        self.track_inlier_counts.push(mask.len());
-        self.track_inliers.extend(mask);
+        self.inliers.push(track.inliers);
         track.report
     }
 
     fn push_missing(&mut self) {
         self.x.extend([f64::NAN; 3]);
         push_covariance::<3>(&mut self.covariance, None);
-        self.track_inlier_counts.push(0);
-    }
-}
-
-impl PyPointTriangulations {
-    /// Lays the per-track inlier flags out as the observations were given: `positions(t)` lists, in
-    /// the track's order, where its observations go in a mask of `shape` (false elsewhere, and for
-    /// every observation of a rejected track).
-    fn scatter_inliers(&mut self, shape: Vec<usize>, positions: impl Fn(usize) -> Vec<usize>) {
-        let mut mask = vec![false; shape.iter().product()];
-        let mut from = 0;
-        for (t, &count) in self.track_inlier_counts.iter().enumerate() {
-            if count > 0 {
-                for (flag, k) in self.track_inliers[from..from + count].iter().zip(positions(t)) {
-                    mask[k] = *flag;
-                }
-            }
-            from += count;
-        }
-        self.inliers = Some((mask, shape));
+        self.inliers.push_missing();
     }
 }
 
@@ -208,7 +183,7 @@ result_class! {
         /// With `options.outlier_threshold`: which observations each point was solved from, shaped as
         /// the observations were given ((n, v) for `triangulate_points`, (m,) for
         /// `triangulate_point_observations`; false where not visible or rejected); else `None`.
-        inliers = |b| b.inliers.clone().map(|(values, shape)| Mask { values, shape });
+        inliers = |b| b.inliers.mask();
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -282,10 +257,8 @@ pub fn triangulate_points(
         let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
-            let visible = |t: usize, j: usize| mask.as_ref().map_or(true, |m| m[t * v + j]);
-            columns.scatter_inliers(vec![n, v], |t| {
-                (0..v).filter(|&j| visible(t, j)).map(|j| t * v + j).collect()
-            });
+            let visible = mask.as_deref();
+            (columns.inliers).scatter(vec![n, v], |t| InlierColumns::dense_positions(visible, v, t));
         }
         Ok((report, columns))
     })?;
@@ -333,17 +306,11 @@ pub fn triangulate_point_observations(
         let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
         if opts.outlier_threshold.is_some() {
             // Track t's observations are its sorted rows, each back at its row as given.
-            columns.scatter_inliers(vec![m], |t| rows.rows_of(t));
+            columns.inliers.scatter(vec![m], |t| rows.rows_of(t));
         }
         Ok((report, columns))
     })?;
     batch_result(py, outcome)
 }
 
-pack_struct!(PyPointTriangulations {
-    x,
-    covariance,
-    track_inliers,
-    track_inlier_counts,
-    inliers
-});
+pack_struct!(PyPointTriangulations { x, covariance, inliers });

@@ -85,10 +85,10 @@ pub struct TriangulationOptions {
     pub max_reprojection_error: Option<f64>,
     /// Branch and bound gives up (status [`Status::GapNotClosed`]) after this many nodes. Default 2000.
     pub max_nodes: usize,
-    /// Points only: reject outlier observations of a track ([`point::robust`]). A view is an inlier
-    /// when its whitened reprojection error (pixels without covariances) is at most this; the result
-    /// carries the inlier mask and is solved on the inliers only. Default `None`: every observation
-    /// is used. Lines and quadrics reject it with [`Error::InvalidOption`].
+    /// Points and lines: reject outlier observations of a track ([`point::robust`], [`line::robust`]).
+    /// A view is an inlier when its whitened residual (pixels without covariances) is at most this;
+    /// the result carries the inlier mask and is solved on the inliers only. Default `None`: every
+    /// observation is used. Quadrics reject it with [`Error::InvalidOption`].
     pub outlier_threshold: Option<f64>,
     /// Settings of the local minimisation (method `local`, and the upper bounds of `optimal`).
     /// Default: the trust region of section 4.1 with 100 iterations and a step tolerance of 1e-10.
@@ -145,14 +145,14 @@ impl TriangulationOptions {
         Ok(())
     }
 
-    /// [`Error::InvalidOption`] when `outlier_threshold` is set for `what` (lines, quadrics), which
-    /// have no robust form yet: a silently ignored threshold would keep the outliers.
+    /// [`Error::InvalidOption`] when `outlier_threshold` is set for `what` (quadrics), which have no
+    /// robust form yet: a silently ignored threshold would keep the outliers.
     pub fn reject_outlier_threshold(&self, what: &str) -> Result<()> {
         match self.outlier_threshold {
             None => Ok(()),
             Some(_) => Err(Error::InvalidOption {
                 name: "outlier_threshold".into(),
-                reason: format!("applies to points only; {what} have no robust triangulation yet"),
+                reason: format!("applies to points and lines; {what} have no robust triangulation yet"),
             }),
         }
     }

@@ -154,7 +154,6 @@ pub fn triangulate_lines(
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
     opts.validate()?;
-    opts.reject_outlier_threshold("lines")?;
     let n = check_batch(&cameras, tracks)?;
     let v = cameras.views();
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
@@ -187,7 +186,6 @@ pub fn triangulate_lines_sparse(
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
     opts.validate()?;
-    opts.reject_outlier_threshold("lines")?;
     check_sigma(&tracks.lines)?;
     let shared = TrackCameras::Shared(cameras);
     shared.check(0)?;

@@ -24,6 +24,7 @@
 pub mod batch;
 pub mod optimal;
 pub mod residual;
+pub mod robust;
 
 use self::optimal::optimal_line;
 use self::residual::{line_view, LineFrame};
@@ -65,6 +66,9 @@ pub struct LineTriangulation {
     pub covariance: Option<Matrix4<f64>>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
+    /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
+    /// order): the observations the line was solved from ([`robust`]). `None` otherwise.
+    pub inliers: Option<Vec<bool>>,
 }
 
 /// The checked observations of one line.
@@ -142,7 +146,6 @@ pub fn triangulate_line(
 ) -> Result<LineTriangulation> {
     let started = Instant::now();
     opts.validate()?;
-    opts.reject_outlier_threshold("lines")?;
     check_views(cameras, lines.len(), 2, "lines", opts.method)?;
     let frames = parse_observations(
         lines,
@@ -155,7 +158,17 @@ pub fn triangulate_line(
         frames,
         whitenings: whitenings(covariances, cameras.len(), "covariances")?,
     };
-    let linear = linear_line(&problem)?;
+    let mut result = match opts.outlier_threshold {
+        None => triangulate_line_views(&problem, opts)?,
+        Some(tau) => robust::triangulate_line_robust(&problem, opts, tau)?,
+    };
+    result.report.time_seconds = started.elapsed().as_secs_f64();
+    Ok(result)
+}
+
+/// The chosen method on checked observations (every view of `problem`).
+pub(crate) fn triangulate_line_views(problem: &LineProblem, opts: &TriangulationOptions) -> Result<LineTriangulation> {
+    let linear = linear_line(problem)?;
     let mut report = Report {
         cost: problem.cost(&linear),
         ..Report::new(opts.method)
@@ -163,7 +176,7 @@ pub fn triangulate_line(
     let estimate = match opts.method {
         Method::Linear => linear,
         Method::Local => {
-            let (line, local) = local_line(&problem, &linear, opts);
+            let (line, local) = local_line(problem, &linear, opts);
             report = Report {
                 method: Method::Local,
                 ..local
@@ -171,15 +184,13 @@ pub fn triangulate_line(
             line
         }
         Method::Optimal => {
-            let (line, local) = local_line(&problem, &linear, opts);
-            let (best, optimal) = optimal_line(&problem, &line, &local, opts);
+            let (line, local) = local_line(problem, &linear, opts);
+            let (best, optimal) = optimal_line(problem, &line, &local, opts);
             report = optimal;
             best
         }
     };
-    let mut result = finish(&problem, &estimate, report)?;
-    result.report.time_seconds = started.elapsed().as_secs_f64();
-    Ok(result)
+    finish(problem, &estimate, report)
 }
 
 /// The result record of a world line (unit norm, point and direction) and its covariance.
@@ -198,6 +209,7 @@ fn finish(problem: &LineProblem, line: &Vector6<f64>, mut report: Report) -> Res
         chart,
         covariance: line_covariance(problem, &chart),
         report,
+        inliers: None,
     })
 }
 

@@ -43,7 +43,7 @@ fn inliers_at(views: &[PointView], x: &Vector3<f64>, tau2: f64) -> Vec<bool> {
 
 /// The pairs of views the consensus tries: all when there are at most [`MAX_PAIRS`], else that many
 /// distinct pairs drawn with a seed fixed by the track length (reproducible).
-fn pairs(n: usize) -> Vec<(usize, usize)> {
+pub(crate) fn pairs(n: usize) -> Vec<(usize, usize)> {
     let all = n * (n - 1) / 2;
     if all <= MAX_PAIRS {
         return (0..n).flat_map(|a| (a + 1..n).map(move |b| (a, b))).collect();
