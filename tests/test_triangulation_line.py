@@ -101,6 +101,8 @@ def test_optimal_is_certified_and_never_worse(seed):
         opt = results["optimal"]
         assert opt.status in ("success", "gap_not_closed"), f"seed={seed + k} {opt}"
         assert opt.certified == (opt.relative_gap <= 1e-3 and opt.status == "success")
+        if len(P) == 2:  # two views determine the line exactly: always certified
+            assert opt.certified, f"seed={seed + k} {opt}"
         assert opt.lower_bound <= opt.cost * (1 + 1e-12)
         for m in ("linear", "local"):
             assert not results[m].certified and results[m].certificate == "none"
@@ -160,6 +162,19 @@ def test_line_in_an_epipolar_plane_is_degenerate(seed):
     with pytest.raises(pluecker.DegenerateConfigurationError, match="epipolar|coincide|plane"):
         pluecker.triangulate_line(P, image_line(P, A, B))
 
+
+
+def test_branch_and_bound_certifies_a_share_of_three_and_four_view_lines(seed):
+    """A regression guard on the bound itself (issue 13 §2): measured over 60 problems of 3 and 4 views,
+    38 certify at the 1e-3 gap (63 %). Of 12 here, fewer than 3 certified would happen with probability
+    0.003 at that rate (binomial), and always if the bound stopped closing gaps."""
+    certified = 0
+    for k in range(12):
+        P, A, B, segments = line_problem(seed + 100 + k, views=3 + k % 2)
+        r = pluecker.triangulate_line(P, segments, method="optimal")
+        assert r.lower_bound <= r.cost * (1 + 1e-12)
+        certified += r.certified
+    assert certified >= 3, f"{certified} of 12 certified"
 
 
 # --- the batch: triangulate_lines -------------------------------------------------------------

@@ -97,10 +97,10 @@ fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
             optimal.report.cost
         );
     }
-    // Measured: 6 of 8 close the 1e-3 gap within 300 nodes (5 of them at the root); the other two
-    // are slow instances (a line nearly along the viewing directions, seed 3). A regression that
-    // weakens the bound certifies fewer.
-    assert!(certified >= 6, "{certified} of 8 certified");
+    // Measured: 6 of 8 close the 1e-3 gap within 300 nodes (5 of them at the root). At a rate of 3/4,
+    // fewer than 3 of 8 certify with probability 0.004 (binomial); a bound that stops closing gaps
+    // certifies none. (Not pinned at the measured 6: issue 13 is to raise the rate, not to hold it.)
+    assert!(certified >= 3, "{certified} of 8 certified");
 }
 
 #[test]
