@@ -164,7 +164,7 @@ def test_result_is_frozen_and_owns_its_arrays(seed):
     with pytest.raises(AttributeError):
         r.cost = 0.0  # type: ignore[misc]
     d = r.to_dict()
-    assert set(d) == set(REPORT_FIELDS) | {"X", "covariance", "inliers"}
+    assert set(d) == set(REPORT_FIELDS) | {"X", "covariance", "inliers", "certificate_domain"}
     assert d["X"] == r.X.tolist() and d["certificate"] == r.certificate
     assert "PointTriangulation(" in repr(r) and "certified=True" in repr(r)
 

@@ -127,3 +127,26 @@ def test_too_few_inliers_is_a_status():
     r = pluecker.triangulate_point(P, x, options=ROBUST)
     assert r.status == "too_few_inliers" and not r.certified
     assert np.isnan(r.X).all() and not r.inliers.any()
+
+
+def test_every_result_says_which_domain_its_certificate_covers():
+    """Issue 13 §1: a point certificate covers every point in front of the cameras; a line or quadric
+    one from branch and bound only its search domain, and the result says so."""
+    rng = np.random.default_rng(11)
+    P = cameras(3, 30.0, rng)
+    x = project(P, np.zeros(3)) + rng.normal(size=(3, 2))
+    point = pluecker.triangulate_point(P, x)
+    assert point.certified and point.certificate_domain == "every point in front of every camera"
+    assert pluecker.triangulate_point(P, x, method="local").certificate_domain == "none"
+    P4, _, segments, _ = line_tracks_with_outliers(1, 4, 12)
+    expected = {"none": "none", "convexity_test": "every line (a cost at the zero bound)"}
+    for views in (2, 4):  # two views: the zero-cost certificate; four: branch and bound
+        line = pluecker.triangulate_line(P4[:views], segments[0][:views])
+        domain = expected.get(line.certificate)
+        if line.certificate == "branch_and_bound":
+            assert "eq. 27 strip widths" in line.certificate_domain and "100 times" in line.certificate_domain
+        else:
+            assert line.certificate_domain == domain, (views, line.certificate)
+        assert line.to_dict()["certificate_domain"] == line.certificate_domain
+    assert pluecker.triangulate_line(P4[:2], segments[0][:2]).certificate == "convexity_test"
+    assert pluecker.triangulate_line(P4, segments[0]).certificate == "branch_and_bound"

@@ -542,6 +542,8 @@ class PointTriangulation(TriangulationReport):
     """A triangulated point and its report."""
 
     # fields of PointTriangulation (generated: python -m pluecker._stubgen)
+    certificate_domain: str
+    """Which points the certificate's lower bound covers (`'none'` without one): every point in front of the cameras, or the search domain of branch and bound."""
     X: NDArray[np.float64]
     """The point, world frame."""
     covariance: Optional[NDArray[np.float64]]
@@ -554,6 +556,8 @@ class LineTriangulation(TriangulationReport):
     """A triangulated 3-D line and its report."""
 
     # fields of LineTriangulation (generated: python -m pluecker._stubgen)
+    certificate_domain: str
+    """Which lines the certificate's lower bound covers (`'none'` without one): every line in front of the cameras, or the search domain of branch and bound."""
     plucker: NDArray[np.float64]
     """Plücker coordinates `(l12, l13, l14, l23, l42, l34)` of the line, unit norm (eq. 4 holds)."""
     point: NDArray[np.float64]
@@ -576,6 +580,8 @@ class QuadricTriangulation(TriangulationReport):
     """A triangulated ellipsoid (dual quadric) and its report."""
 
     # fields of QuadricTriangulation (generated: python -m pluecker._stubgen)
+    certificate_domain: str
+    """Which quadrics the certificate's lower bound covers (`'none'` without one): every quadric in front of the cameras, or the search domain of branch and bound."""
     Q: NDArray[np.float64]
     """The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19."""
     primal: Optional[NDArray[np.float64]]

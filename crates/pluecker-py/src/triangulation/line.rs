@@ -27,7 +27,7 @@ use pluecker::triangulation::line::batch::{
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
 };
-use pluecker::triangulation::Report;
+use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -49,10 +49,12 @@ pub struct PyLineTriangulation {
     chart: LineChart,
     covariance: Option<Matrix4<f64>>,
     inliers: Option<Vec<bool>>,
+    certificate_domain: &'static str,
 }
 
 impl PyLineTriangulation {
     pub fn create(py: Python<'_>, result: LineTriangulation) -> PyResult<Py<PyLineTriangulation>> {
+        let certificate_domain = result.report.certificate.kind.domain(Primitive::Line);
         let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
             PyLineTriangulation {
                 plucker: *result.plucker.coordinates(),
@@ -61,6 +63,7 @@ impl PyLineTriangulation {
                 chart: result.chart,
                 covariance: result.covariance,
                 inliers: result.inliers,
+                certificate_domain,
             },
         );
         Py::new(py, init)
@@ -69,6 +72,8 @@ impl PyLineTriangulation {
 
 result_class! {
     PyLineTriangulation: PyTriangulationReport {
+        /// Which lines the certificate's lower bound covers (`'none'` without one): every line in front of the cameras, or the search domain of branch and bound.
+        certificate_domain = |x| x.certificate_domain;
         /// Plücker coordinates `(l12, l13, l14, l23, l42, l34)` of the line, unit norm (eq. 4 holds).
         plucker = |l| l.plucker;
         /// The point of the line closest to the world origin.
@@ -398,7 +403,8 @@ pack_struct!(PyLineTriangulation {
     direction,
     chart,
     covariance,
-    inliers
+    inliers,
+    certificate_domain
 });
 pack_struct!(PyLineTriangulations {
     plucker,

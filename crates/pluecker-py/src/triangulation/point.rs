@@ -23,7 +23,7 @@ use pluecker::triangulation::point::batch::{
     SparsePointTracks,
 };
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
-use pluecker::triangulation::{Method, Report};
+use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -37,16 +37,19 @@ pub struct PyPointTriangulation {
     point: Vector3<f64>,
     covariance: Option<Matrix3<f64>>,
     inliers: Option<Vec<bool>>,
+    certificate_domain: &'static str,
 }
 
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
+        let certificate_domain = result.report.certificate.kind.domain(Primitive::Point);
         let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
             PyPointTriangulation {
                 point: result.point,
                 covariance: result.covariance,
                 inliers: result.inliers,
+                certificate_domain,
             },
         );
         Py::new(py, init)
@@ -55,6 +58,8 @@ impl PyPointTriangulation {
 
 result_class! {
     PyPointTriangulation: PyTriangulationReport {
+        /// Which points the certificate's lower bound covers (`'none'` without one): every point in front of the cameras, or the search domain of branch and bound.
+        certificate_domain = |x| x.certificate_domain;
         /// The point, world frame.
         X = |p| p.point;
         /// Its 3x3 covariance (first order, from the observation covariances); `None` when singular.
@@ -113,7 +118,8 @@ pub fn triangulate_point(
 pack_struct!(PyPointTriangulation {
     point,
     covariance,
-    inliers
+    inliers,
+    certificate_domain
 });
 
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and

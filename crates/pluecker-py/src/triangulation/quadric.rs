@@ -18,7 +18,7 @@ use pluecker::triangulation::quadric::batch::{
 };
 use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
-use pluecker::triangulation::Report;
+use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -35,10 +35,12 @@ pub struct PyQuadricTriangulation {
     axes: Matrix3<f64>,
     semi_axes: Vector3<f64>,
     covariance: Option<QuadricCovariance>,
+    certificate_domain: &'static str,
 }
 
 impl PyQuadricTriangulation {
     pub fn create(py: Python<'_>, r: QuadricTriangulation) -> PyResult<Py<PyQuadricTriangulation>> {
+        let certificate_domain = r.report.certificate.kind.domain(Primitive::Quadric);
         let init =
             PyClassInitializer::from(PyTriangulationReport { inner: r.report }).add_subclass(PyQuadricTriangulation {
                 dual: r.dual,
@@ -47,6 +49,7 @@ impl PyQuadricTriangulation {
                 axes: r.axes,
                 semi_axes: r.semi_axes,
                 covariance: r.covariance,
+                certificate_domain,
             });
         Py::new(py, init)
     }
@@ -54,6 +57,8 @@ impl PyQuadricTriangulation {
 
 result_class! {
     PyQuadricTriangulation: PyTriangulationReport {
+        /// Which quadrics the certificate's lower bound covers (`'none'` without one): every quadric in front of the cameras, or the search domain of branch and bound.
+        certificate_domain = |x| x.certificate_domain;
         /// The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19.
         Q = |q| q.dual;
         /// The primal quadric `Q⁻¹` (4x4); `None` when `Q` is singular.
@@ -266,7 +271,8 @@ pack_struct!(PyQuadricTriangulation {
     centre,
     axes,
     semi_axes,
-    covariance
+    covariance,
+    certificate_domain
 });
 pack_struct!(PyQuadricTriangulations {
     dual,

@@ -236,6 +236,36 @@ impl CertificateKind {
     }
 }
 
+/// The primitive a certificate is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Primitive {
+    Point,
+    Line,
+    Quadric,
+}
+
+impl CertificateKind {
+    /// The set of primitives over which a certificate of this kind bounds the cost of eq. 19 (each
+    /// branch and bound's module docs give the details). A line or quadric certificate from branch and
+    /// bound covers a search domain, not every primitive in front of the cameras.
+    pub fn domain(&self, primitive: Primitive) -> &'static str {
+        match (self, primitive) {
+            (CertificateKind::None, _) => "none",
+            (_, Primitive::Point) => "every point in front of every camera",
+            (CertificateKind::ConvexityTest, Primitive::Line) => "every line (a cost at the zero bound)",
+            (CertificateKind::ConvexityTest, Primitive::Quadric) => "every quadric (a cost at the zero bound)",
+            (CertificateKind::BranchAndBound, Primitive::Line) => {
+                "lines whose points on two planes across the local line project within twice the eq. 27 strip \
+                 widths of every observed line, at depths up to 100 times the local line's"
+            }
+            (CertificateKind::BranchAndBound, Primitive::Quadric) => {
+                "quadrics centred within 10 times the largest camera distance of the local centre, with \
+                 semi-axes up to that distance"
+            }
+        }
+    }
+}
+
 /// The global-optimality evidence of an estimate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Certificate {
