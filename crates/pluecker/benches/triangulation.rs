@@ -6,7 +6,8 @@
 //! two rays), and 5 and 20 views at 1° and 0.2°. Groups:
 //! - `point/<case>/<method>`: one `triangulate_point` call;
 //! - `batch/<case>/<method>`: `triangulate_points` (rayon) or the linear fast path on 4096 tracks
-//!   of the same cameras, timed per batch (divide by 4096).
+//!   of the same cameras, timed per batch (divide by 4096);
+//! - `line/<views>-views/optimal`: one certified line at 3 and 5 views ([`bench_lines`]).
 //!
 //! At setup, one line per case goes to stderr: the fraction certified, by which certificate, the
 //! branch-and-bound nodes, the median and 90th-percentile time per point measured sequentially
@@ -183,5 +184,47 @@ fn bench_batch(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_points, bench_batch);
+/// `line/<views>-views/optimal`: one certified line (issue 13's criterion numbers), on a pool of 16
+/// seeded scenes of [`line_scene`] (46° of parallax) with 1 px endpoint noise; the fraction certified
+/// and the nodes go to stderr at setup.
+fn bench_lines(c: &mut Criterion) {
+    use pluecker::triangulation::line::triangulate_line_segments;
+    use pluecker::triangulation::scenes::line_scene;
+    let mut group = c.benchmark_group("line");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(5));
+    for views in [3usize, 5] {
+        let problems: Vec<_> = (0..16u64)
+            .map(|seed| {
+                let scene = line_scene(views, 0.8, 500 + seed);
+                let segments = scene.noisy_segments(SIGMA_PX, &mut Rng::new(600 + seed));
+                (scene.cameras, segments)
+            })
+            .collect();
+        let opts = TriangulationOptions::default();
+        let results: Vec<_> = problems
+            .iter()
+            .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
+            .collect();
+        let certified = results.iter().filter(|r| r.report.certificate.certified).count();
+        let nodes: usize = results.iter().map(|r| r.report.certificate.nodes).sum();
+        eprintln!(
+            "setup line/{views}-views: {certified}/16 certified, mean nodes {}",
+            nodes / 16
+        );
+        let mut k = 0;
+        group.bench_function(format!("{views}-views/optimal"), |b| {
+            b.iter(|| {
+                let (p, s) = &problems[k % problems.len()];
+                k += 1;
+                triangulate_line_segments(black_box(p), black_box(s), SIGMA_PX, &opts)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_points, bench_batch, bench_lines);
 criterion_main!(benches);
