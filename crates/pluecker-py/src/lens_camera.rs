@@ -117,7 +117,7 @@ result_class! {
         py: Python<'py>,
         pixels: &Bound<'py, PyAny>,
         cov: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>)> {
+    ) -> PyResult<Undistorted<'py>> {
         let us = points::<2>("pixels", Some(pixels))?;
         let covs = pixel_covariances(cov, us.len())?;
         let cam = &self.inner;
@@ -149,6 +149,9 @@ result_class! {
         Ok((slf.get_type().into_any(), args))
     }
 }
+
+/// `LensCamera.undistort`'s answer: undistorted pixels (N, 2) and their covariances (N, 2, 2).
+type Undistorted<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>);
 
 /// The `cov=` argument of the pixel methods: (N, 2, 2), or the identity (1 px²) for each of `n` pixels.
 fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Matrix2<f64>>> {
