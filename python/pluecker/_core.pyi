@@ -356,7 +356,8 @@ def estimate_pose(
     and all reported pixels are the distorted ones (to first order); segments as each endpoint's distance
     to the tangent of the curved image of the line; with RANSAC a pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
-    in standard deviations (``sigma_px`` defaults to 1). No certificate with either (status says why).
+    in standard deviations (``sigma_px`` defaults to 1). With either, ``certify`` is refused: ``certified``
+    false, ``certificate_message`` says why.
 
     ``method``: one of :data:`METHODS` (``None``: ``options.method``): ``"trust-region"`` (eqs. 13 +
     22, Hebden's step, section 4.1), ``"rotation-then-translation"`` (eq. 14 then 15),
