@@ -46,8 +46,7 @@ pub fn undistort(
     if let Some(n) = noise {
         n.check_counts(corr.n_points(), corr.n_lines())?;
     }
-    let ((fx, fy), (cx, cy)) = (lens.focal(), lens.principal_point());
-    // Undistorted pixel ū of a pixel, and J = ∂u/∂ū = diag(f) ∂D/∂n diag(f)⁻¹ there.
+    // Undistorted pixel ū of a pixel, and J = ∂u/∂ū there, with errors naming the argument.
     let through = |u: &Vector2<f64>, what: &str, index: usize| -> Result<(Vector2<f64>, Matrix2<f64>)> {
         if !(u.x.is_finite() && u.y.is_finite()) {
             return Err(Error::NonFinite {
@@ -55,16 +54,12 @@ pub fn undistort(
                 index,
             });
         }
-        let n = lens.unproject(u, index).map_err(|e| match e {
+        lens.undistort(u, index).map_err(|e| match e {
             Error::Degenerate { what: why } => Error::Degenerate {
                 what: format!("{what}: {why}"),
             },
             other => other,
-        })?;
-        let (_, jd) = lens.distort(&n);
-        let f = Matrix2::new(fx, 0.0, 0.0, fy);
-        let f_inv = Matrix2::new(1.0 / fx, 0.0, 0.0, 1.0 / fy);
-        Ok((Vector2::new(fx * n.x + cx, fy * n.y + cy), f * jd * f_inv))
+        })
     };
     let singular = |what: &str, index: usize| Error::Degenerate {
         what: format!("{what}[{index}]: the distortion is singular there"),
@@ -125,8 +120,13 @@ pub fn estimate_pose_lens(
         };
         return estimate_pose(&lens.pinhole()?, &corr, opts);
     }
-    let (points, lines) = invertible(lens, corr);
-    if opts.ransac.is_none() || points.iter().chain(&lines).all(|&ok| ok) {
+    // Without RANSAC a pixel beyond the lens is an error (from `undistort`); with it, an outlier.
+    let (points, lines) = if opts.ransac.is_some() {
+        invertible(lens, corr)
+    } else {
+        (vec![], vec![])
+    };
+    if points.iter().chain(&lines).all(|&ok| ok) {
         let (camera, undistorted) = undistort(lens, corr, noise)?;
         return estimate_pose(&camera, &undistorted, opts);
     }

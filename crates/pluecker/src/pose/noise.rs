@@ -12,6 +12,7 @@
 //! Through a lens ([`super::lens`]) the noise also carries the distortion's Jacobians.
 
 use crate::error::{Error, Result};
+use crate::triangulation::covariance::whitening;
 use nalgebra::Matrix2;
 
 /// Per-observation noise, in the pixels of the correspondences it belongs to.
@@ -28,39 +29,11 @@ pub struct ObservationNoise {
     pub absolute: bool,
 }
 
-/// The inverse Cholesky factor `L⁻¹` of a symmetric positive-definite 2x2 covariance (`(L⁻¹)ᵀ L⁻¹ =
-/// Σ⁻¹`), or an error naming `what` and `index` for a non-finite, asymmetric or non-positive-definite one.
-fn whitening(cov: &Matrix2<f64>, what: &str, index: usize) -> Result<Matrix2<f64>> {
-    check_covariance(cov, what, index)?;
-    let l = cov.cholesky().map(|c| c.l()).ok_or_else(|| not_positive(what, index))?;
-    l.try_inverse().ok_or_else(|| not_positive(what, index))
-}
-
-fn not_positive(what: &str, index: usize) -> Error {
-    Error::Degenerate {
-        what: format!("{what}[{index}] is not a positive-definite covariance"),
-    }
-}
-
-/// Finite, symmetric (to 1e-9 relative) and positive definite.
-fn check_covariance(cov: &Matrix2<f64>, what: &str, index: usize) -> Result<()> {
-    if cov.iter().any(|v| !v.is_finite()) {
-        return Err(Error::NonFinite {
-            what: what.into(),
-            index,
-        });
-    }
-    let asymmetric = (cov[(0, 1)] - cov[(1, 0)]).abs() > 1e-9 * cov.amax();
-    if asymmetric || !(cov[(0, 0)] > 0.0 && cov.determinant() > 0.0) {
-        return Err(not_positive(what, index));
-    }
-    Ok(())
-}
-
 impl ObservationNoise {
     /// The noise of covariances (pixels², in the frame of the correspondences): one 2x2 per point and
-    /// one per segment endpoint. Errors name the argument (`point_covariances`, `line_covariances`)
-    /// and the index of a covariance that is not finite, symmetric and positive definite.
+    /// one per segment endpoint, checked and whitened as triangulation's are
+    /// ([`crate::triangulation::covariance::whitening`]). Errors name the argument
+    /// (`point_covariances`, `line_covariances`) and the index.
     pub fn from_covariances(points: &[Matrix2<f64>], lines: &[[Matrix2<f64>; 2]]) -> Result<ObservationNoise> {
         let points = points
             .iter()
@@ -69,7 +42,7 @@ impl ObservationNoise {
             .collect::<Result<Vec<_>>>()?;
         for (i, pair) in lines.iter().enumerate() {
             for c in pair {
-                check_covariance(c, "line_covariances", i)?;
+                whitening(c, "line_covariances", i)?;
             }
         }
         Ok(ObservationNoise {

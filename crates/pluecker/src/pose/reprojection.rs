@@ -228,18 +228,18 @@ impl<'a> ReprojectionCost<'a> {
     fn weighted_point_sums<const JACOBIAN: bool>(&self, pose: &Pose) -> (f64, [f64; 6], [f64; 21]) {
         let mut sums = (0.0, [0.0; 6], [0.0; 21]);
         for i in 0..self.n_points {
-            add_block(&mut sums, &self.point_block(pose, i, JACOBIAN));
+            add_block(&mut sums, &self.point_block(pose, i));
         }
         sums
     }
 
     /// Point `i`'s residual `W (π(R X + t) − u)` and its Jacobian, whitened by the noise (if any).
-    fn point_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
+    fn point_block(&self, pose: &Pose, i: usize) -> Block {
         let p = self.point_lanes::<1, true>(pose, i);
         let r = Vector2::new(p.ru[0], p.rv[0]);
         let j = SMatrix::<f64, 2, 6>::from_fn(|row, col| if row == 0 { p.ju[col][0] } else { p.jv[col][0] });
         let w = self.noise.map_or_else(Matrix2::identity, |n| n.points[i]);
-        (w * r, if with_jacobian { w * j } else { j })
+        (w * r, w * j)
     }
 
     /// Line `i`'s two endpoint residuals and their Jacobian: `(l·ẽ) / √(l₁₂ᵀ C l₁₂)` with `C` the

@@ -286,11 +286,6 @@ impl Prepared {
         self.lines.len()
     }
 
-    /// Whether the errors are whitened by per-observation noise.
-    fn weighted(&self) -> bool {
-        self.weighted
-    }
-
     /// Squared pixel error of `point` at `pose` (infinite behind the camera); with `WEIGHTED`, of the
     /// residual whitened by `w` (row-major 2x2).
     #[inline(always)]
@@ -428,7 +423,7 @@ impl Prepared {
             if nl > 0 { start[1] % nl } else { 0 },
         ];
         match test {
-            None if self.weighted() => self.verify::<false, true>(pose, tau, bound, &SprtTest::NONE, None, start),
+            None if self.weighted => self.verify::<false, true>(pose, tau, bound, &SprtTest::NONE, None, start),
             None => self.verify::<false, false>(pose, tau, bound, &SprtTest::NONE, None, start),
             Some(test) => {
                 let skip = sample.map(|sample| SampleRanks {
@@ -442,7 +437,7 @@ impl Prepared {
                         }
                     }),
                 });
-                if self.weighted() {
+                if self.weighted {
                     self.verify::<true, true>(pose, tau, bound, test, skip.as_ref(), start)
                 } else {
                     self.verify::<true, false>(pose, tau, bound, test, skip.as_ref(), start)

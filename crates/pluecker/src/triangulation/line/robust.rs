@@ -14,7 +14,7 @@
 use super::{linear_line, triangulate_line_views, LineProblem, LineTriangulation};
 use crate::error::Result;
 use crate::triangulation::conditioning::Similarity;
-use crate::triangulation::fraction;
+use crate::triangulation::fraction::{self, FractionalResidual};
 use crate::triangulation::point::robust::{pairs, MAX_ROUNDS};
 use crate::triangulation::TriangulationOptions;
 use nalgebra::Vector6;
@@ -30,9 +30,9 @@ fn subproblem(problem: &LineProblem, keep: impl Iterator<Item = usize> + Clone) 
     }
 }
 
-/// `‖r_j‖²` of `line` (world Plücker coordinates) in every view.
-fn squared_errors(problem: &LineProblem, line: &Vector6<f64>) -> Vec<f64> {
-    let views = problem.views(&Similarity::identity());
+/// `‖r_j‖²` of `line` (world Plücker coordinates) in every view (`views`: [`LineProblem::views`] in
+/// the world frame).
+fn squared_errors(views: &[FractionalResidual<2, 6>], line: &Vector6<f64>) -> Vec<f64> {
     views
         .iter()
         .map(|v| fraction::cost(std::slice::from_ref(v), line))
@@ -40,13 +40,13 @@ fn squared_errors(problem: &LineProblem, line: &Vector6<f64>) -> Vec<f64> {
 }
 
 /// The inlier mask of the best two-view line (step 1); `None` when no pair determines a line.
-fn consensus(problem: &LineProblem, tau2: f64) -> Option<Vec<bool>> {
+fn consensus(problem: &LineProblem, views: &[FractionalResidual<2, 6>], tau2: f64) -> Option<Vec<bool>> {
     let mut best: Option<(f64, Vec<f64>)> = None;
     for (a, b) in pairs(problem.cameras.len()) {
         let Ok(line) = linear_line(&subproblem(problem, [a, b].into_iter())) else {
             continue;
         };
-        let errors = squared_errors(problem, &line);
+        let errors = squared_errors(views, &line);
         let score: f64 = errors
             .iter()
             .map(|e| if e.is_finite() { e.min(tau2) } else { tau2 })
@@ -67,7 +67,8 @@ pub(crate) fn triangulate_line_robust(
     tau: f64,
 ) -> Result<LineTriangulation> {
     let tau2 = tau * tau;
-    let Some(mut mask) = consensus(problem, tau2) else {
+    let views = problem.views(&Similarity::identity());
+    let Some(mut mask) = consensus(problem, &views, tau2) else {
         return linear_line(problem).and_then(|_| triangulate_line_views(problem, opts));
     };
     let mut rounds = 0;
@@ -75,7 +76,7 @@ pub(crate) fn triangulate_line_robust(
         let kept = subproblem(problem, (0..mask.len()).filter(|&j| mask[j]));
         let mut result = triangulate_line_views(&kept, opts)?;
         rounds += 1;
-        let next: Vec<bool> = squared_errors(problem, result.plucker.coordinates())
+        let next: Vec<bool> = squared_errors(&views, result.plucker.coordinates())
             .iter()
             .map(|&e| e <= tau2)
             .collect();
