@@ -10,8 +10,8 @@ pycolmap objects import it when called and say how to install it when it is miss
 - **Cameras.** ``pycolmap.Camera(model, width, height, params)`` is ``pluecker.LensCamera(model,
   params)``: the same model names and parameter order. The image size is not part of the model.
 - **Camera matrices.** Triangulation takes ``P = K [R | t]`` of an undistorted camera
-  (``Camera.P(R, t)``). With a distorting model, the pixels are unprojected first
-  (``LensCamera.unproject``) and ``K`` is the identity.
+  (``Camera.P(R, t)``). With a distorting model, the pixels are undistorted first
+  (``LensCamera.undistort``) and ``K`` is the model's pinhole part (``LensCamera.pinhole``).
 """
 
 from __future__ import annotations
@@ -106,9 +106,9 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     cameras (models, distortion, rigs) and poses held fixed. Returns a :class:`Retriangulation`, which
     also unpacks as ``(point3D_ids, PointTriangulations)``, row ``i`` the point ``point3D_ids[i]``.
 
-    Each observation is unprojected exactly through its camera model (``LensCamera.unproject``), and its
-    pixel noise (``sigma_px`` pixels, isotropic) is carried to the normalised coordinates to first order
-    (``LensCamera.normalized_covariances``). The cost of eq. 19 is therefore in squared standard deviations
+    Each observation is undistorted exactly through its camera model into the pixels of the camera's
+    pinhole part, and its pixel noise (``sigma_px`` pixels, isotropic) is carried there to first order
+    (``LensCamera.undistort``). The cost of eq. 19 is therefore in squared standard deviations
     (pixels² for ``sigma_px = 1``) as COLMAP's bundle adjustment counts it, and a certificate proves the
     global minimum of that first-order cost over the observations used. The propagation is first order:
     where the distortion changes fast across a pixel's noise (the edge of a wide fisheye), the cost is
@@ -120,35 +120,32 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     Use :func:`update_points` or :func:`write` to put the points back.
     """
     images = [image for image in reconstruction.images.values() if image.has_pose]
-    # Normalised cameras [R | t]: the pixels are unprojected through each camera's model below.
-    P = np.stack([np.hstack([R, t[:, None]]) for R, t in (pose_from_rigid(image.cam_from_world()) for image in images)])
+    lenses = [lens_camera(reconstruction.cameras[image.camera_id]) for image in images]
+    # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
+    P = np.stack([lens.pinhole.P(*pose_from_rigid(image.cam_from_world())) for lens, image in zip(lenses, images)])
     ids = np.array(sorted(reconstruction.point3D_ids()), dtype=np.int64)
     # The observations image by image (pycolmap hands them over per image), then sorted by point.
     parts = []
-    for j, image in enumerate(images):
+    for j, (image, lens) in enumerate(zip(images, lenses)):
         observed = image.get_observation_points2D()
         if not observed:
             continue
         xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
         point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
         idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
-        camera = lens_camera(reconstruction.cameras[image.camera_id])
-        normalized = camera.unproject(xy)
-        covariances = camera.normalized_covariances(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
+        undistorted, covariances = lens.undistort(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
         parts.append((np.searchsorted(ids, point_ids), np.full(len(xy), j), np.full(len(xy), image.image_id), idx,
-                      normalized, covariances))
+                      undistorted, covariances))
+    # Rows image by image; triangulate_point_observations groups them by track itself.
     if parts:
-        track_a, cameras_index, image_a, point2D_idx, normalized, covariances = (np.concatenate(c) for c in zip(*parts))
+        track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
     else:
         track_a = cameras_index = image_a = point2D_idx = np.zeros(0, dtype=np.int64)
-        normalized, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
-    order = np.argsort(track_a, kind="stable")
-    track_a, cameras_index, image_a, point2D_idx = (a[order] for a in (track_a, cameras_index, image_a, point2D_idx))
-    normalized, covariances = normalized[order], covariances[order]
+        undistorted, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
     if outlier_threshold_px is not None:
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
-    result = _core.triangulate_point_observations(P, track_a, cameras_index, normalized, covariances,
+    result = _core.triangulate_point_observations(P, track_a, cameras_index, undistorted, covariances,
                                                   method=method, options=options, progress=progress,
                                                   n_tracks=len(ids))
     return Retriangulation(ids, result, track_a, image_a, point2D_idx)
