@@ -139,8 +139,9 @@ def test_every_result_says_which_domain_its_certificate_covers():
     assert point.certified and point.certificate_domain == "every point in front of every camera"
     assert pluecker.triangulate_point(P, x, method="local").certificate_domain == "none"
     P4, _, segments, _ = line_tracks_with_outliers(1, 4, 12)
-    expected = {"none": "none", "convexity_test": "every line (a cost at the zero bound)"}
-    for views in (2, 4):  # two views: the zero-cost certificate; four: branch and bound
+    expected = {"none": "none", "convexity_test": "every line (a cost at the zero bound)",
+                "taylor_branch_and_bound": "every line not through a camera centre"}
+    for views in (2, 4):  # two views: the zero-cost certificate; four: the Taylor branch and bound
         line = pluecker.triangulate_line(P4[:views], segments[0][:views])
         domain = expected.get(line.certificate)
         if line.certificate == "branch_and_bound":
@@ -149,4 +150,7 @@ def test_every_result_says_which_domain_its_certificate_covers():
             assert line.certificate_domain == domain, (views, line.certificate)
         assert line.to_dict()["certificate_domain"] == line.certificate_domain
     assert pluecker.triangulate_line(P4[:2], segments[0][:2]).certificate == "convexity_test"
-    assert pluecker.triangulate_line(P4, segments[0]).certificate == "branch_and_bound"
+    assert pluecker.triangulate_line(P4, segments[0]).certificate == "taylor_branch_and_bound"
+    paper = pluecker.TriangulationOptions(line_bound="relaxation")
+    line = pluecker.triangulate_line(P4, segments[0], options=paper)
+    assert line.certificate == "branch_and_bound" and "eq. 27 strip widths" in line.certificate_domain

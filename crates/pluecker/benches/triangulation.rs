@@ -90,7 +90,7 @@ fn summary(case: &Case, tracks: &[Track]) {
             errors.push((r.point - truth).norm());
             match r.report.certificate.kind {
                 CertificateKind::ConvexityTest => by_test += 1,
-                CertificateKind::BranchAndBound => {
+                CertificateKind::BranchAndBound | CertificateKind::TaylorBranchAndBound => {
                     by_bnb += 1;
                     nodes.push(r.report.certificate.nodes as f64);
                 }

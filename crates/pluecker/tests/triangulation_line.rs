@@ -77,7 +77,7 @@ fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
         assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
         assert!(optimal.report.cost <= local.report.cost + tol, "seed {seed}");
         let c = optimal.report.certificate;
-        assert_eq!(c.kind, CertificateKind::BranchAndBound, "seed {seed}");
+        assert_eq!(c.kind, CertificateKind::TaylorBranchAndBound, "seed {seed}");
         assert!(c.lower_bound <= optimal.report.cost, "seed {seed}");
         assert!(c.certified == (c.relative_gap <= 1e-3), "seed {seed}");
         assert_eq!(optimal.report.status == Status::Success, c.certified);

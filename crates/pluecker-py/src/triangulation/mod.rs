@@ -14,7 +14,7 @@ pub mod rows;
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::options_class;
-use pluecker::triangulation::{Method, TriangulationOptions};
+use pluecker::triangulation::{LineBound, Method, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
 
@@ -46,6 +46,8 @@ options_class! {
         /// Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
         outlier_threshold: Option<Real> = |o| o.inner.outlier_threshold,
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);
+        /// Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips).
+        line_bound: String = |o| o.inner.line_bound.as_str(), |o, v| LineBound::parse(&v).map(|m| o.inner.line_bound = m).map_err(to_py_err);
         /// Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`).
         local_max_iterations: Integer = |o| o.inner.local.stopping.max_iterations,
             |o, v| v.count("local_max_iterations", 1).map(|n| o.inner.local.stopping.max_iterations = n);

@@ -7,13 +7,17 @@
 //!   numerator constraint of eq. 21, for residuals of any dimension;
 //! - [`monomial`]: the convex and concave envelopes of a bilinear monomial (eqs. 24-25), for the
 //!   Plücker coordinates of lines;
+//! - [`interval`], [`taylor_bound`]: interval arithmetic and the interval Taylor bounds of a sum of
+//!   squared ratios of quadratics over a box (the line certificate's default bound);
 //! - [`branch_and_bound`]: a generic best-first branch and bound over an axis-aligned box, driven by a
 //!   problem-specific [`branch_and_bound::BoundingOracle`].
 
 pub mod branch_and_bound;
 pub mod envelopes;
+pub mod interval;
 pub mod monomial;
 pub mod socp;
+pub mod taylor_bound;
 
 /// Costs below this (squared pixels: 1e-6 px of error) count as exact: certificate gaps are measured
 /// relative to `max(cost, CERTIFICATE_COST_FLOOR)` ([`relative_gap`]), since a relative gap cannot close at the rounding level.

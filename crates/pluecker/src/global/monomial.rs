@@ -10,62 +10,12 @@
 //! the four linear inequalities `convenv ≤ w ≤ concenv` ([`add_mccormick`]), which keep it in the
 //! interval [`product_bounds`].
 
+pub use super::interval::Interval;
 use super::socp::{Affine, Socp};
-
-/// A closed interval `[lo, hi]`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Interval {
-    /// Lower end.
-    pub lo: f64,
-    /// Upper end.
-    pub hi: f64,
-}
-
-impl Interval {
-    /// `[lo, hi]`.
-    pub fn new(lo: f64, hi: f64) -> Interval {
-        Interval { lo, hi }
-    }
-
-    /// `{a + b}`.
-    pub fn add(self, other: Interval) -> Interval {
-        Interval {
-            lo: self.lo + other.lo,
-            hi: self.hi + other.hi,
-        }
-    }
-
-    /// `{a − b}`.
-    pub fn sub(self, other: Interval) -> Interval {
-        Interval {
-            lo: self.lo - other.hi,
-            hi: self.hi - other.lo,
-        }
-    }
-
-    /// `{c a}`.
-    pub fn scale(self, c: f64) -> Interval {
-        if c >= 0.0 {
-            Interval {
-                lo: c * self.lo,
-                hi: c * self.hi,
-            }
-        } else {
-            Interval {
-                lo: c * self.hi,
-                hi: c * self.lo,
-            }
-        }
-    }
-}
 
 /// The range of `xy` over the box: the least and greatest of the four corner products.
 pub fn product_bounds(x: Interval, y: Interval) -> Interval {
-    let c = [x.lo * y.lo, x.lo * y.hi, x.hi * y.lo, x.hi * y.hi];
-    Interval {
-        lo: c.iter().copied().fold(f64::INFINITY, f64::min),
-        hi: c.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-    }
+    x.mul(y)
 }
 
 /// Eq. 24 at `(x, y)`.

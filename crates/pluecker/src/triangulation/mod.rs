@@ -69,6 +69,43 @@ impl Method {
     }
 }
 
+/// The lower bound of the optimal method for lines.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LineBound {
+    /// Interval Taylor bounds over the chart of the line's images in two views
+    /// ([`line::taylor_search`]; certificate kind `taylor_branch_and_bound`, domain: every line). The
+    /// default. When no pair of views charts every cheaper line (a line near an epipolar plane of
+    /// every pair), [`LineBound::Relaxation`] is used instead.
+    Taylor,
+    /// The paper's SOCP relaxation of eqs. 21-27 ([`line::optimal`]; kind `branch_and_bound`, domain:
+    /// the eq. 27 strips).
+    Relaxation,
+}
+
+impl LineBound {
+    /// Every bound, in the order above.
+    pub const ALL: [LineBound; 2] = [LineBound::Taylor, LineBound::Relaxation];
+
+    /// The name used by Python and the command line.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            LineBound::Taylor => "taylor",
+            LineBound::Relaxation => "relaxation",
+        }
+    }
+
+    /// Parses [`LineBound::as_str`] names.
+    pub fn parse(name: &str) -> Result<LineBound> {
+        LineBound::ALL
+            .into_iter()
+            .find(|m| m.as_str() == name)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "line_bound".into(),
+                reason: format!("unknown line bound '{name}'; expected taylor or relaxation"),
+            })
+    }
+}
+
 /// Options of every triangulation function; each field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriangulationOptions {
@@ -90,6 +127,8 @@ pub struct TriangulationOptions {
     /// the result carries the inlier mask and is solved on the inliers only. Default `None`: every
     /// observation is used. Quadrics reject it with [`Error::InvalidOption`].
     pub outlier_threshold: Option<f64>,
+    /// The lower bound of the line certificate ([`LineBound`]). Default [`LineBound::Taylor`].
+    pub line_bound: LineBound,
     /// Settings of the local minimisation (method `local`, and the upper bounds of `optimal`).
     /// Default: the trust region of section 4.1 with 100 iterations and a step tolerance of 1e-10.
     pub local: TrustRegionOptions,
@@ -106,6 +145,7 @@ impl Default for TriangulationOptions {
             max_reprojection_error: None,
             max_nodes: 2000,
             outlier_threshold: None,
+            line_bound: LineBound::Taylor,
             local,
         }
     }
@@ -221,8 +261,11 @@ pub enum CertificateKind {
     None,
     /// A sufficient condition proved the local minimum global without branching.
     ConvexityTest,
-    /// Branch and bound closed the gap.
+    /// Branch and bound closed the gap (the SOCP relaxations of section 4).
     BranchAndBound,
+    /// Lines: interval branch and bound with Taylor bounds over the two-view chart
+    /// ([`line::taylor_search`]), whose domain is every line.
+    TaylorBranchAndBound,
 }
 
 impl CertificateKind {
@@ -232,6 +275,7 @@ impl CertificateKind {
             CertificateKind::None => "none",
             CertificateKind::ConvexityTest => "convexity_test",
             CertificateKind::BranchAndBound => "branch_and_bound",
+            CertificateKind::TaylorBranchAndBound => "taylor_branch_and_bound",
         }
     }
 }
@@ -258,6 +302,7 @@ impl CertificateKind {
                 "lines whose points on two planes across the local line project within twice the eq. 27 strip \
                  widths of every observed line, at depths up to 100 times the local line's"
             }
+            (CertificateKind::TaylorBranchAndBound, _) => "every line not through a camera centre",
             (CertificateKind::BranchAndBound, Primitive::Quadric) => {
                 "quadrics centred within 10 times the largest camera distance of the local centre, with \
                  semi-axes up to that distance"

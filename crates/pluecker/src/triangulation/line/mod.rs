@@ -12,7 +12,10 @@
 //! - `local`: the trust region of [`crate::optim`] on eq. 19 from the linear line, moving the line in
 //!   the orthonormal representation of Bartoli & Sturm ([`OrthonormalLine`]): a minimal 4-parameter
 //!   update that keeps eq. 4 exactly;
-//! - `optimal`: the local line, then branch and bound (section 4, [`self::optimal`]).
+//! - `optimal`: the local line, then branch and bound: by default with interval Taylor bounds over
+//!   the two-view chart ([`self::taylor_search`], [`self::two_view_chart`]), whose certificate covers
+//!   every line; or with the paper's SOCP relaxation (section 4, [`self::optimal`]), selected by
+//!   [`TriangulationOptions::line_bound`] and used when the chart has no pair of views.
 //!
 //! Degenerate input is an error: fewer than 2 views, mismatched lengths, NaN/inf, a singular camera,
 //! an image line with zero normal, a covariance that is not positive definite, cameras sharing one
@@ -25,15 +28,18 @@ pub mod batch;
 pub mod optimal;
 pub mod residual;
 pub mod robust;
+pub mod taylor_search;
+pub mod two_view_chart;
 
 use self::optimal::optimal_line;
 use self::residual::{line_view, LineFrame};
+use self::taylor_search::optimal_line_taylor;
 use super::conditioning::{check_views, Similarity};
 use super::covariance::{whitening, whitenings};
 use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::covariance_of_information;
-use super::{parse_observations, Method, Report, TriangulationOptions};
+use super::{parse_observations, LineBound, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, LineChart, OrthonormalLine, PluckerLine};
 use crate::optim::{trust_region, Linearization, Objective};
@@ -185,7 +191,11 @@ pub(crate) fn triangulate_line_views(problem: &LineProblem, opts: &Triangulation
         }
         Method::Optimal => {
             let (line, local) = local_line(problem, &linear, opts);
-            let (best, optimal) = optimal_line(problem, &line, &local, opts);
+            let taylor = match opts.line_bound {
+                LineBound::Taylor => optimal_line_taylor(problem, &line, &local, opts),
+                LineBound::Relaxation => None,
+            };
+            let (best, optimal) = taylor.unwrap_or_else(|| optimal_line(problem, &line, &local, opts));
             report = optimal;
             best
         }

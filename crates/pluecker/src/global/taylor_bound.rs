@@ -1,0 +1,344 @@
+//! Interval Taylor bounds of a sum of squared ratios of quadratic polynomials over a box.
+//!
+//! The cost is `f(w) = Σᵥ ‖rᵥ(w)‖²` with `rᵥ = nᵥ(w) / gᵥ(w)`, every entry of `nᵥ` and `gᵥ` a
+//! quadratic polynomial on `ℝᴺ` ([`Quadratic`]). Over a box `Q` (centre `m`, half-widths `h`) the
+//! polynomials, their gradients and (constant) Hessians have exact or nearly exact interval
+//! enclosures (the centred form `s(m) + ∇s(m)·δ + ½ δᵀSδ`), and interval arithmetic
+//! ([`super::interval`]) carries them through the quotient rule to enclosures of `rᵥ`, `∇rᵥ`, `∇²rᵥ`
+//! and then of `∇f` and `∇²f` on `Q`. From these ([`bound_over_box`]):
+//! - the **zeroth-order bound** `Σ mig([rᵥₖ])²`, with `mig([rᵥₖ]) ≥ mig([nᵥₖ]) / mag([gᵥ])` also where the
+//!   denominator interval contains 0 (near a pole the residual is large, not unknown);
+//! - the **second-order Taylor bound**: along the segment from `m` to any `m + δ ∈ Q`,
+//!   `f(m + δ) = f(m) + ∇f(m)·δ + ½ δᵀ∇²f(ξ)δ` for some `ξ ∈ Q`, and `∇²f(ξ) ⪰ μ I` with `μ` the
+//!   Gershgorin lower bound of the interval Hessian, so `f ≥ f(m) + Σᵢ min_{|δᵢ| ≤ hᵢ} (∂ᵢf(m) δᵢ +
+//!   ½ μ δᵢ²)` on `Q` (valid for any sign of `μ`; tight, to second order, where `f` is convex);
+//! - the **stationarity test**: when some `[∂ᵢf]` excludes 0, `Q` holds no stationary point.
+//!
+//! A denominator interval containing 0 makes the derivative enclosures of its view infinite (no
+//! Taylor bound, no stationarity test for that box); the zeroth-order bound keeps `mig(n)/mag(g)`. The bounds are the pieces of the
+//! interval branch and bound of [`crate::triangulation::line::taylor_search`].
+
+use super::interval::Interval;
+use nalgebra::{SMatrix, SVector};
+
+/// Relative widening of every bound for rounding (module docs of [`super::interval`]).
+pub const ROUNDING_MARGIN: f64 = 1e-9;
+
+/// The quadratic polynomial `s(w) = c + gᵀw + ½ wᵀSw` on `ℝᴺ` (`S` symmetric).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quadratic<const N: usize> {
+    /// `c = s(0)`.
+    pub constant: f64,
+    /// `g = ∇s(0)`.
+    pub gradient: SVector<f64, N>,
+    /// `S = ∇²s`.
+    pub hessian: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> Quadratic<N> {
+    /// The zero polynomial.
+    pub fn zero() -> Self {
+        Quadratic {
+            constant: 0.0,
+            gradient: SVector::zeros(),
+            hessian: SMatrix::zeros(),
+        }
+    }
+
+    /// `s(w)`.
+    pub fn value(&self, w: &SVector<f64, N>) -> f64 {
+        self.constant + self.gradient.dot(w) + 0.5 * w.dot(&(self.hessian * w))
+    }
+
+    /// `∇s(w)`.
+    pub fn gradient_at(&self, w: &SVector<f64, N>) -> SVector<f64, N> {
+        self.gradient + self.hessian * w
+    }
+
+    /// `Σ cⱼ sⱼ`.
+    pub fn combination<'a>(terms: impl IntoIterator<Item = (f64, &'a Quadratic<N>)>) -> Self {
+        terms.into_iter().fold(Quadratic::zero(), |acc, (c, s)| Quadratic {
+            constant: acc.constant + c * s.constant,
+            gradient: acc.gradient + s.gradient * c,
+            hessian: acc.hessian + s.hessian * c,
+        })
+    }
+
+    /// Value and gradient enclosures over the box `m ± h` (centred form, exact for the gradient).
+    fn enclose(&self, m: &SVector<f64, N>, h: &SVector<f64, N>) -> (Interval, [Interval; N], f64, SVector<f64, N>) {
+        let value = self.value(m);
+        let grad = self.gradient_at(m);
+        let abs_s = self.hessian.abs();
+        let spread = abs_s * h;
+        let radius = grad.abs().dot(h) + 0.5 * h.dot(&spread);
+        let grads = std::array::from_fn(|i| Interval::centred(grad[i], spread[i]));
+        (Interval::centred(value, radius), grads, value, grad)
+    }
+}
+
+/// One view's residual `r(w) = n(w) / g(w)` with `D` entries (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QuadraticRatio<const D: usize, const N: usize> {
+    /// The numerators `nₖ`.
+    pub numerator: [Quadratic<N>; D],
+    /// The denominator `g`.
+    pub denominator: Quadratic<N>,
+}
+
+impl<const D: usize, const N: usize> QuadraticRatio<D, N> {
+    /// `r(w)`.
+    pub fn residual(&self, w: &SVector<f64, N>) -> SVector<f64, D> {
+        let g = self.denominator.value(w);
+        SVector::from_fn(|k, _| self.numerator[k].value(w) / g)
+    }
+}
+
+/// `f(w) = Σᵥ ‖rᵥ(w)‖²`.
+pub fn cost<const D: usize, const N: usize>(views: &[QuadraticRatio<D, N>], w: &SVector<f64, N>) -> f64 {
+    views.iter().map(|v| v.residual(w).norm_squared()).sum()
+}
+
+/// `f(w)` and `∇f(w)`.
+pub fn cost_and_gradient<const D: usize, const N: usize>(
+    views: &[QuadraticRatio<D, N>],
+    w: &SVector<f64, N>,
+) -> (f64, SVector<f64, N>) {
+    let mut f = 0.0;
+    let mut grad = SVector::zeros();
+    for v in views {
+        let g = v.denominator.value(w);
+        let dg = v.denominator.gradient_at(w);
+        for n in &v.numerator {
+            let r = n.value(w) / g;
+            f += r * r;
+            grad += (n.gradient_at(w) - dg * r) * (2.0 * r / g);
+        }
+    }
+    (f, grad)
+}
+
+/// What [`bound_over_box`] proved about a box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoxBound {
+    /// A lower bound of `f` over the box (at least 0), widened for rounding.
+    pub lower: f64,
+    /// `f` at the centre of the box.
+    pub centre_cost: f64,
+    /// False when some `[∂ᵢf]` excludes 0: the box holds no stationary point of `f`.
+    pub may_be_stationary: bool,
+    /// The largest lower bound of a single view's `‖rᵥ‖²` over the box.
+    pub worst_view: f64,
+    /// The Gershgorin lower bound `μ` of the Hessian's eigenvalues over the box (`−∞` when a
+    /// denominator may vanish).
+    pub curvature: f64,
+}
+
+/// The bounds of the module docs over the box `[lower, upper]`.
+pub fn bound_over_box<const D: usize, const N: usize>(
+    views: &[QuadraticRatio<D, N>],
+    lower: &[f64],
+    upper: &[f64],
+) -> BoxBound {
+    let m = SVector::<f64, N>::from_fn(|i, _| 0.5 * (lower[i] + upper[i]));
+    let h = SVector::<f64, N>::from_fn(|i, _| 0.5 * (upper[i] - lower[i]));
+    let mut zeroth = 0.0;
+    let mut worst_view: f64 = 0.0;
+    let mut centre_cost = 0.0;
+    let mut centre_grad = SVector::<f64, N>::zeros();
+    let mut grad = [Interval::point(0.0); N];
+    let mut hess = [[Interval::point(0.0); N]; N];
+    for v in views {
+        let (g, dg, g_m, dg_m) = v.denominator.enclose(&m, &h);
+        let mut view_lower = 0.0;
+        for n in &v.numerator {
+            let (num, dnum, n_m, dn_m) = n.enclose(&m, &h);
+            // Point values at the centre.
+            let r_m = n_m / g_m;
+            let dr_m = (dn_m - dg_m * r_m) / g_m;
+            centre_cost += r_m * r_m;
+            centre_grad += dr_m * (2.0 * r_m);
+            // ∇r = (∇n − r ∇g) / g, first with the natural enclosure of r, then with the centred one.
+            let natural = num.div(g);
+            let d_r = |r: Interval| -> [Interval; N] { std::array::from_fn(|i| dnum[i].sub(r.mul(dg[i])).div(g)) };
+            let dr_natural = d_r(natural);
+            let centred = (0..N).fold(Interval::point(r_m), |acc, i| {
+                acc.add(dr_natural[i].mul(Interval::centred(0.0, h[i])))
+            });
+            let r = if natural.lo.is_finite() && natural.hi.is_finite() {
+                natural.meet(centred)
+            } else {
+                centred
+            };
+            let dr = d_r(r);
+            // |r| = |n|/|g| ≥ mig(n)/mag(g) holds where g may vanish too (near a pole of r).
+            let term = r.mig().max(num.mig() / g.mag()).powi(2);
+            view_lower += term;
+            for i in 0..N {
+                grad[i] = grad[i].add(r.mul(dr[i]).scale(2.0));
+                for j in i..N {
+                    // ∂ᵢⱼr = (∂ᵢⱼn − ∂ᵢr ∂ⱼg − ∂ᵢg ∂ⱼr − r ∂ᵢⱼg) / g.
+                    let d2r = Interval::point(n.hessian[(i, j)])
+                        .sub(dr[i].mul(dg[j]))
+                        .sub(dg[i].mul(dr[j]))
+                        .sub(r.mul(Interval::point(v.denominator.hessian[(i, j)])))
+                        .div(g);
+                    let outer = if i == j { dr[i].sqr() } else { dr[i].mul(dr[j]) };
+                    hess[i][j] = hess[i][j].add(outer.add(r.mul(d2r)).scale(2.0));
+                }
+            }
+        }
+        zeroth += view_lower;
+        worst_view = worst_view.max(view_lower);
+    }
+    // Gershgorin: λ_min(H) ≥ minᵢ (min Hᵢᵢ − Σ_{j≠i} max |Hᵢⱼ|) for every H in the interval matrix.
+    let curvature = (0..N)
+        .map(|i| {
+            let off: f64 = (0..N)
+                .filter(|&j| j != i)
+                .map(|j| if j > i { hess[i][j].mag() } else { hess[j][i].mag() })
+                .sum();
+            hess[i][i].lo - off
+        })
+        .fold(f64::INFINITY, f64::min);
+    let curvature = if curvature.is_nan() {
+        f64::NEG_INFINITY
+    } else {
+        curvature
+    };
+    let second = if curvature == f64::NEG_INFINITY {
+        f64::NEG_INFINITY
+    } else {
+        centre_cost
+            + (0..N)
+                .map(|i| {
+                    let (g, hi) = (centre_grad[i], h[i]);
+                    if curvature > 0.0 {
+                        let d = (-g / curvature).clamp(-hi, hi);
+                        g * d + 0.5 * curvature * d * d
+                    } else {
+                        -g.abs() * hi + 0.5 * curvature * hi * hi
+                    }
+                })
+                .sum::<f64>()
+    };
+    let best = zeroth.max(second);
+    let lower = (best - ROUNDING_MARGIN * best.abs().max(centre_cost)).max(0.0);
+    let may_be_stationary = grad.iter().all(|gi| {
+        let slack = ROUNDING_MARGIN * gi.mag().min(1e300) + 1e-300;
+        !(gi.lo > slack || gi.hi < -slack)
+    });
+    BoxBound {
+        lower: if lower.is_nan() { 0.0 } else { lower },
+        centre_cost,
+        may_be_stationary,
+        worst_view,
+        curvature,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use nalgebra::{Matrix4, Vector4};
+
+    fn random_quadratic(rng: &mut Rng, scale: f64) -> Quadratic<4> {
+        let a = Matrix4::from_fn(|_, _| rng.normal() * scale);
+        Quadratic {
+            constant: rng.normal() + 3.0,
+            gradient: Vector4::from_fn(|_, _| rng.normal()),
+            hessian: a + a.transpose(),
+        }
+    }
+
+    #[test]
+    fn quadratic_value_and_gradient_match_the_definition() {
+        let mut rng = Rng::new(3);
+        let s = random_quadratic(&mut rng, 0.3);
+        let w = Vector4::from_fn(|_, _| rng.normal());
+        let e = 1e-6;
+        for i in 0..4 {
+            let mut d = Vector4::zeros();
+            d[i] = e;
+            let fd = (s.value(&(w + d)) - s.value(&(w - d))) / (2.0 * e);
+            assert!((fd - s.gradient_at(&w)[i]).abs() < 1e-6);
+        }
+    }
+
+    /// Random ratios, random boxes: the bound is below `f` at every sampled point of the box, and
+    /// a box whose sampled gradients change sign in every coordinate is never declared free of
+    /// stationary points.
+    #[test]
+    fn bounds_hold_at_every_sampled_point() {
+        let mut rng = Rng::new(4);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let views: Vec<QuadraticRatio<2, 4>> = (0..3)
+                .map(|_| QuadraticRatio {
+                    numerator: [random_quadratic(&mut rng, 0.2), random_quadratic(&mut rng, 0.2)],
+                    denominator: random_quadratic(&mut rng, 0.05),
+                })
+                .collect();
+            let centre: Vec<f64> = (0..4).map(|_| rng.normal()).collect();
+            let width = 10f64.powf(rng.uniform_in(-3.0, 0.0));
+            let lower: Vec<f64> = centre.iter().map(|c| c - width * rng.uniform()).collect();
+            let upper: Vec<f64> = centre.iter().map(|c| c + width * rng.uniform()).collect();
+            let b = bound_over_box(&views, &lower, &upper);
+            let mut signs = [[false; 2]; 4];
+            for _ in 0..200 {
+                let w = Vector4::from_fn(|i, _| rng.uniform_in(lower[i], upper[i]));
+                let (f, g) = cost_and_gradient(&views, &w);
+                if !f.is_finite() {
+                    continue;
+                }
+                checked += 1;
+                assert!(b.lower <= f * (1.0 + 1e-12), "bound {} above f {f}", b.lower);
+                for i in 0..4 {
+                    signs[i][usize::from(g[i] > 0.0)] = true;
+                }
+            }
+            if signs.iter().all(|s| s[0] && s[1]) {
+                assert!(b.may_be_stationary);
+            }
+        }
+        assert!(checked > 50_000);
+    }
+
+    #[test]
+    fn second_order_bound_is_tight_at_a_convex_minimum() {
+        // f = ‖w‖² + ‖(w₁ + 0.1 w₂², w₃)/(1 + 0.01 w₄)‖²: minimum 0 at w = 0.
+        let mut id = [Quadratic::<4>::zero(); 4];
+        for (i, q) in id.iter_mut().enumerate() {
+            q.gradient[i] = 1.0;
+        }
+        let one = Quadratic {
+            constant: 1.0,
+            ..Quadratic::zero()
+        };
+        let mut bent = id[0];
+        bent.hessian[(1, 1)] = 0.2;
+        let mut den = one;
+        den.gradient[3] = 0.01;
+        let views = vec![
+            QuadraticRatio {
+                numerator: [id[0], id[1]],
+                denominator: one,
+            },
+            QuadraticRatio {
+                numerator: [id[2], id[3]],
+                denominator: one,
+            },
+            QuadraticRatio {
+                numerator: [bent, id[2]],
+                denominator: den,
+            },
+        ];
+        let b = bound_over_box(&views, &[-0.01, -0.02, -0.01, -0.03], &[0.02, 0.01, 0.01, 0.01]);
+        assert!(b.curvature > 1.5, "{}", b.curvature);
+        assert!(b.lower <= 0.0 + 1e-15 && b.lower >= 0.0);
+        let b = bound_over_box(&views, &[0.1, 0.1, 0.1, 0.1], &[0.11, 0.12, 0.11, 0.11]);
+        let (f_corner, _) = cost_and_gradient(&views, &Vector4::new(0.1, 0.1, 0.1, 0.1));
+        assert!(b.lower > 0.95 * f_corner, "{} vs {f_corner}", b.lower);
+        assert!(!b.may_be_stationary);
+    }
+}

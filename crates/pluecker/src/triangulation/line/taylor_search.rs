@@ -1,0 +1,160 @@
+//! The Taylor certificate of a line: interval branch and bound over the two-view chart.
+//!
+//! **Domain.** Every line cheaper than the local line `𝓛̂` lies in the ball `‖z‖² ≤ f(𝓛̂)` of the
+//! chart of [`super::two_view_chart`], which covers every 3-D line not through a camera centre
+//! (lines through a centre have no image there, so no cost). The search box is that ball's bounding
+//! box in the branching coordinates `w`. With a user `γ` (`max_reprojection_error`) below
+//! `√f(𝓛̂)` the ball has radius `min(√f(𝓛̂), √2 γ)` (`‖z_a‖, ‖z_b‖ ≤ γ`), regions where some view's error
+//! exceeds `γ` are discarded, and when every region is, the status is `infeasible`.
+//!
+//! **Bound per region** ([`crate::global::taylor_bound`]): the larger of the zeroth-order interval
+//! bound `Σ mig([rᵥₖ])²` and the second-order Taylor bound with the Gershgorin curvature of the
+//! interval Hessian. Near the local minimum the cost is convex, so the Taylor bound there is the cost
+//! to second order in the region's width, and the gap closes after a few splits.
+//!
+//! **Stationarity.** Without a user `γ`, a global minimiser is cheaper than `𝓛̂` (or is `𝓛̂`), so it
+//! lies strictly inside the ball where the cost is smooth (denominators non-zero): it is a
+//! stationary point. A region whose interval gradient excludes 0 in some coordinate holds none and is
+//! discarded (Hansen's monotonicity test). Regions where a denominator may vanish keep infinite
+//! derivative enclosures and are never discarded this way.
+//!
+//! **Upper bounds.** A region whose centre is cheaper than the incumbent starts a short local
+//! minimisation there; a cheaper line found replaces the incumbent (the local method stopped in a
+//! wrong minimum). Splitting: the widest axis at the midpoint. No conic program is solved.
+
+use super::two_view_chart::TwoViewChart;
+use super::{LineObjective, LineProblem};
+use crate::geometry::plucker::{self, OrthonormalLine};
+use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+use crate::global::taylor_bound::{bound_over_box, cost_and_gradient, ROUNDING_MARGIN};
+use crate::optim::{trust_region, TrustRegionOptions};
+use crate::triangulation::certificate::{certificate_of, optimal_start};
+use crate::triangulation::conditioning::Similarity;
+use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::{CertificateKind, Report, Status, TriangulationOptions};
+use nalgebra::{Vector4, Vector6};
+
+/// Trust-region iterations of the local step from a region's centre.
+const NODE_LOCAL_ITERATIONS: usize = 20;
+
+struct TaylorOracle<'a> {
+    chart: &'a TwoViewChart,
+    /// Every view's residual in the conditioned frame (for the local steps).
+    views: &'a [FractionalResidual<2, 6>],
+    /// `γ²` when the user's γ restricts the domain (then no stationarity test), else `None`.
+    restricted: Option<f64>,
+    incumbent: f64,
+    /// The cost and gradient at `w = 0` (the local line), for the convex-hull bound.
+    at_local: (f64, Vector4<f64>),
+    local: TrustRegionOptions,
+}
+
+impl TaylorOracle<'_> {
+    fn local_step(&self, w: &Vector4<f64>) -> Option<(f64, Vector6<f64>)> {
+        let start = OrthonormalLine::from_plucker(&self.chart.line(w))?;
+        let objective = LineObjective { views: self.views };
+        let line = trust_region::minimize(&objective, start, &self.local).0.to_plucker();
+        let cost = fraction::cost(self.views, &line);
+        cost.is_finite().then_some((cost, line))
+    }
+}
+
+impl TaylorOracle<'_> {
+    /// The convex-hull bound: when the cost is convex (`∇²f ⪰ μI`, `μ > 0`) on the box hull `H` of
+    /// `region` and the local line `w = 0`, then `f(w) ≥ f(0) + ∇f(0)·w + ½μ‖w‖² ≥ f(0) − ‖∇f(0)‖²/(2μ)`
+    /// on `H ⊇ region`. `0` otherwise.
+    fn hull_bound(&self, region: &Region) -> f64 {
+        let lower: Vec<f64> = region.lower.iter().map(|&v| v.min(0.0)).collect();
+        let upper: Vec<f64> = region.upper.iter().map(|&v| v.max(0.0)).collect();
+        let mu = bound_over_box(&self.chart.views, &lower, &upper).curvature;
+        if !(mu > 0.0) {
+            return 0.0;
+        }
+        let (f0, g0) = self.at_local;
+        let bound = f0 - g0.norm_squared() / (2.0 * mu);
+        (bound - ROUNDING_MARGIN * f0).max(0.0)
+    }
+}
+
+impl BoundingOracle for TaylorOracle<'_> {
+    type Candidate = Vector6<f64>;
+
+    fn bound(&mut self, region: &Region) -> Bound<Vector6<f64>> {
+        let b = bound_over_box(&self.chart.views, &region.lower, &region.upper);
+        let empty = Bound::Empty { solver_iterations: 0 };
+        match self.restricted {
+            Some(gamma2) if b.worst_view > gamma2 => return empty,
+            None if !b.may_be_stationary => return empty,
+            _ => {}
+        }
+        let mut lower = b.lower;
+        if lower < self.incumbent {
+            lower = lower.max(self.hull_bound(region));
+        }
+        let centre = region.centre();
+        let candidate = if b.centre_cost < self.incumbent * (1.0 - 1e-9) {
+            let found = self.local_step(&Vector4::from_column_slice(&centre));
+            if let Some((cost, _)) = found {
+                self.incumbent = self.incumbent.min(cost);
+            }
+            found
+        } else {
+            None
+        };
+        Bound::Bounded {
+            lower,
+            relaxed_minimizer: centre,
+            candidate,
+            solver_iterations: 0,
+        }
+    }
+}
+
+/// The optimal method with the Taylor certificate (module docs) from the local line `local`
+/// (world) and its report; `None` when the two-view chart has no accepted pair (the caller then uses
+/// the relaxation of [`super::optimal`]).
+pub(crate) fn optimal_line_taylor(
+    problem: &LineProblem,
+    local: &Vector6<f64>,
+    local_report: &Report,
+    opts: &TriangulationOptions,
+) -> Option<(Vector6<f64>, Report)> {
+    let mut report = match optimal_start(local_report) {
+        Ok(report) => report,
+        Err(certified) => return Some((*local, certified)),
+    };
+    let sim = Similarity::of_cameras(&problem.cameras);
+    let views = problem.views(&sim);
+    let frame_local = plucker::transform(&sim.matrix(), local);
+    let cost = fraction::cost(&views, &frame_local);
+    let restricted = opts.max_reprojection_error.filter(|g| g * g < cost).map(|g| g * g);
+    // Lines of the domain: ‖z_a‖, ‖z_b‖ ≤ γ, or ‖z‖² ≤ f(𝓛̂) for lines that can improve on 𝓛̂.
+    let radius2 = restricted.map_or(cost, |g2| cost.min(2.0 * g2));
+    let chart = TwoViewChart::new(problem, &sim, &frame_local, radius2)?;
+    let mut local_opts = opts.local;
+    local_opts.stopping.max_iterations = NODE_LOCAL_ITERATIONS;
+    let mut oracle = TaylorOracle {
+        chart: &chart,
+        views: &views,
+        restricted,
+        incumbent: cost,
+        at_local: cost_and_gradient(&chart.views, &Vector4::zeros()),
+        local: local_opts,
+    };
+    let bb_opts = BranchAndBoundOptions {
+        max_relative_gap: opts.max_relative_gap,
+        max_nodes: opts.max_nodes,
+        trivial_lower_bound: 0.0,
+    };
+    let root = chart.root(radius2.sqrt());
+    let result = branch_and_bound(&mut oracle, root, Some((cost, frame_local)), &bb_opts);
+    let (best_cost, best) = result.best.unwrap_or((cost, frame_local));
+    report.cost = best_cost;
+    (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
+    report.certificate.kind = CertificateKind::TaylorBranchAndBound;
+    if restricted.is_some() && result.box_lower_bound == f64::INFINITY {
+        // Every region was proved to hold no line within γ in every view.
+        report.set_status(Status::Infeasible);
+    }
+    Some((plucker::transform(&sim.inverse_matrix(), &best), report))
+}

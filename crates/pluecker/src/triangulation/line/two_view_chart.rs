@@ -1,0 +1,316 @@
+//! A chart of 3-D lines by their images in two views, in which every line cheaper than the local
+//! line lies in a known ball (the domain of the Taylor certificate, [`super::taylor_search`]).
+//!
+//! **The chart.** Pick two views `a`, `b`. An image line of view `v` is described by its whitened
+//! residual `zᵥ = Lᵥ rᵥ ∈ ℝ²` (eqs. 17-18, [`super::residual`]): in the frame of the observed line
+//! the candidate line `(α, β, γ)` has `D (D (α, β)/γ − n) = rᵥ`, so with `γ = 1` its pixel
+//! coordinates are `lᵥ(zᵥ) = (μ, 1 − μ·o)`, `μ = n/D + Lᵥ⁻¹ zᵥ / D²`, affine in `zᵥ`. The line
+//! back-projects to the plane `πᵥ = Pᵥᵀ lᵥ(zᵥ)` through the camera centre, and the 3-D line of
+//! `z = (z_a, z_b)` is the meet of the two planes, whose Plücker coordinates (eq. 3, dual form of
+//! eq. 2: `l₁₂ : l₁₃ : l₁₄ : l₂₃ : l₄₂ : l₃₄ = l*₃₄ : l*₄₂ : l*₂₃ : l*₁₄ : l*₁₃ : l*₁₂` with
+//! `L* = π_a π_bᵀ − π_b π_aᵀ`) are **bilinear** in `(z_a, z_b)`. So every view's residual
+//! `Aᵥ𝓛/(cᵥᵀ𝓛)` (eqs. 6-7, 17-18) is a ratio of quadratic polynomials in `z`, and the residuals of
+//! views `a` and `b` are `z_a` and `z_b` themselves (the meet lies in `π_a`, so its image in view `a`
+//! is `l_a`).
+//!
+//! **What it covers.** Every 3-D line `𝓛` not through a camera centre has images `l_a`, `l_b` and, unless it
+//! lies in an epipolar plane of the pair (then `π_a = π_b`), `𝓛 = π_a ∧ π_b`. A line whose cost of
+//! eq. 19 is at most `U` has `‖z_a‖² + ‖z_b‖² ≤ U`: the ball `‖z‖ ≤ √U`. The pair is accepted only
+//! when no image line of view `a` in the disc `‖z_a‖ ≤ √U` passes through the epipole `e_a = P_a C_b`
+//! (`|l_a(z_a)·e_a| > 0` on the disc, an affine function), or the same with `a`, `b` swapped: then no
+//! line of the ball lies in an epipolar plane (its image would pass through the epipole) or passes
+//! through the other centre, and the chart covers **every line cheaper than `U`**.
+//!
+//! **Branching coordinates.** `z = z* + M w`, with `z*` the local line's chart point and `M = T⁻ᵀ`
+//! for the Gauss-Newton information `Σ Jᵥᵀ Jᵥ = T Tᵀ` at `z*`: the cost's level sets near the local line
+//! are nearly balls in `w` and its Hessian nearly `2I`.
+//!
+//! **The pair.** Among the accepted pairs, the one with least `tr((I_a + I_b)⁻¹ Σᵥ Iᵥ)`
+//! (`Iᵥ = JᵥᵀJᵥ` at the local line): the two views that alone pin the line down best relative to
+//! all of them, so that the ball is small on the scale of the other views' curvature.
+
+use super::LineProblem;
+use crate::geometry::plucker::{self, OrthonormalLine};
+use crate::global::branch_and_bound::Region;
+use crate::global::taylor_bound::{Quadratic, QuadraticRatio};
+use crate::triangulation::conditioning::Similarity;
+use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::line::residual::LINE_FRAME_DISTANCE;
+use crate::triangulation::views;
+use nalgebra::{Matrix3x4, Matrix4, Matrix4x2, SMatrix, Vector4, Vector6};
+
+/// Views beyond which pair selection considers only the most informative ones (the selection
+/// is quadratic in the number of views).
+const MAX_PAIR_CANDIDATES: usize = 24;
+/// The epipole must stay this factor beyond the disc of accepted image lines.
+const EPIPOLE_MARGIN: f64 = 1.05;
+
+/// The chart of the module docs in the conditioned frame `sim` of a problem.
+pub(crate) struct TwoViewChart {
+    /// The views `(a, b)`.
+    pub pair: (usize, usize),
+    /// The planes of the pair as affine maps of `w`: `π_a = p₀ + P w`, `π_b = q₀ + Q w`.
+    planes: [(Vector4<f64>, Matrix4<f64>); 2],
+    /// `z*` and `M` (module docs).
+    centre: Vector4<f64>,
+    map: Matrix4<f64>,
+    /// Every view's whitened residual as a ratio of quadratics in `w` (views `a`, `b` exactly affine).
+    pub views: Vec<QuadraticRatio<2, 4>>,
+}
+
+/// The primal Plücker coordinates (eq. 3) of the meet of the planes `p`, `q` (module docs).
+pub(crate) fn meet(p: &Vector4<f64>, q: &Vector4<f64>) -> Vector6<f64> {
+    let k = plucker::from_homogeneous_points(p, q);
+    Vector6::new(k[5], k[4], k[3], k[2], k[1], k[0])
+}
+
+/// `π = π₀ + G z` of view `v` (module docs): the plane of the image line with whitened residual `z`.
+fn plane_of_residual(problem: &LineProblem, camera: &Matrix3x4<f64>, v: usize) -> (Vector4<f64>, Matrix4x2<f64>) {
+    let (frame, d) = (&problem.frames[v], LINE_FRAME_DISTANCE);
+    let w_inv = problem.whitenings[v]
+        .try_inverse()
+        .unwrap_or_else(nalgebra::Matrix2::zeros);
+    let l0 = nalgebra::Vector3::new(
+        frame.normal.x / d,
+        frame.normal.y / d,
+        1.0 - frame.normal.dot(&frame.origin) / d,
+    );
+    let mut e = SMatrix::<f64, 3, 2>::zeros();
+    e.fixed_view_mut::<2, 2>(0, 0).copy_from(&(w_inv / (d * d)));
+    let last = -(frame.origin.transpose() * w_inv) / (d * d);
+    e.set_row(2, &last);
+    (camera.transpose() * l0, camera.transpose() * e)
+}
+
+impl TwoViewChart {
+    /// The chart around the frame line `line` (Plücker, in `sim`'s frame, cost `cost`) for lines
+    /// cheaper than `bound`; `None` when no pair of views is accepted (module docs).
+    pub fn new(problem: &LineProblem, sim: &Similarity, line: &Vector6<f64>, bound: f64) -> Option<TwoViewChart> {
+        let cameras: Vec<Matrix3x4<f64>> = problem.cameras.iter().map(|p| sim.camera(p)).collect();
+        let residuals = problem.views(sim);
+        let pair = select_pair(problem, &cameras, &residuals, line, bound.sqrt())?;
+        let planes = [pair.0, pair.1].map(|v| plane_of_residual(problem, &cameras[v], v));
+        let centre = {
+            let (za, zb) = (residuals[pair.0].residual(line), residuals[pair.1].residual(line));
+            Vector4::new(za.x, za.y, zb.x, zb.y)
+        };
+        let mut chart = TwoViewChart {
+            pair,
+            planes: [(Vector4::zeros(), Matrix4::zeros()); 2],
+            centre,
+            map: Matrix4::identity(),
+            views: Vec::new(),
+        };
+        chart.set_map(&planes, &residuals, Matrix4::identity());
+        // Whiten w by the Gauss-Newton information at z* (w = 0).
+        let info = chart.views.iter().fold(Matrix4::zeros(), |acc, v| {
+            let jac = SMatrix::<f64, 2, 4>::from_fn(|k, i| {
+                v.numerator[k].gradient[i] / v.denominator.constant
+                    - v.numerator[k].constant * v.denominator.gradient[i] / v.denominator.constant.powi(2)
+            });
+            acc + jac.transpose() * jac
+        });
+        let map = info
+            .cholesky()
+            .and_then(|c| c.l().try_inverse())
+            .map(|l| l.transpose())
+            .unwrap_or_else(Matrix4::identity);
+        chart.set_map(&planes, &residuals, map);
+        Some(chart)
+    }
+
+    /// Builds the planes and the residual forms for `z = z* + map · w`.
+    fn set_map(
+        &mut self,
+        planes: &[(Vector4<f64>, Matrix4x2<f64>); 2],
+        residuals: &[FractionalResidual<2, 6>],
+        map: Matrix4<f64>,
+    ) {
+        self.map = map;
+        for (s, (pi0, g)) in planes.iter().enumerate() {
+            let rows = map.fixed_rows::<2>(2 * s).into_owned();
+            let z0 = self.centre.fixed_rows::<2>(2 * s).into_owned();
+            self.planes[s] = (pi0 + g * z0, g * rows);
+        }
+        let [(p0, p), (q0, q)] = self.planes;
+        // 𝓛(w) = meet(p₀ + P w, q₀ + Q w): six quadratic forms.
+        let mut coords = [Quadratic::<4>::zero(); 6];
+        let constant = meet(&p0, &q0);
+        let linear: [Vector6<f64>; 4] =
+            std::array::from_fn(|i| meet(&p.column(i).into_owned(), &q0) + meet(&p0, &q.column(i).into_owned()));
+        for i in 0..4 {
+            for j in 0..4 {
+                let h = meet(&p.column(i).into_owned(), &q.column(j).into_owned());
+                for (k, c) in coords.iter_mut().enumerate() {
+                    c.hessian[(i, j)] += h[k];
+                    c.hessian[(j, i)] += h[k];
+                }
+            }
+        }
+        for (k, c) in coords.iter_mut().enumerate() {
+            c.constant = constant[k];
+            c.gradient = Vector4::from_fn(|i, _| linear[i][k]);
+        }
+        let combine = |row: &Vector6<f64>| Quadratic::combination(row.iter().copied().zip(coords.iter()));
+        self.views = residuals
+            .iter()
+            .enumerate()
+            .map(|(v, r)| {
+                if v == self.pair.0 || v == self.pair.1 {
+                    // Exactly the chart coordinates: z_v = z*_v + M_v w.
+                    let s = usize::from(v == self.pair.1);
+                    let affine = |k: usize| Quadratic {
+                        constant: self.centre[2 * s + k],
+                        gradient: map.row(2 * s + k).transpose(),
+                        hessian: Matrix4::zeros(),
+                    };
+                    QuadraticRatio {
+                        numerator: [affine(0), affine(1)],
+                        denominator: Quadratic {
+                            constant: 1.0,
+                            ..Quadratic::zero()
+                        },
+                    }
+                } else {
+                    QuadraticRatio {
+                        numerator: [0, 1].map(|k| combine(&r.numerator.row(k).transpose())),
+                        denominator: combine(&r.denominator),
+                    }
+                }
+            })
+            .collect();
+    }
+
+    /// The 3-D line (Plücker, conditioned frame) at `w`.
+    pub fn line(&self, w: &Vector4<f64>) -> Vector6<f64> {
+        let [(p0, p), (q0, q)] = self.planes;
+        meet(&(p0 + p * w), &(q0 + q * w))
+    }
+
+    /// The bounding box, in `w`, of the ball `‖z‖ ≤ radius`.
+    pub fn root(&self, radius: f64) -> Region {
+        // w = M⁻¹ (z − z*): row i of M⁻¹ dotted with the ball.
+        let inv = self.map.try_inverse().unwrap_or_else(Matrix4::identity);
+        let offset = -(inv * self.centre);
+        let (lower, upper) = (0..4)
+            .map(|i| {
+                let half = radius * inv.row(i).norm();
+                (offset[i] - half, offset[i] + half)
+            })
+            .unzip();
+        Region::new(lower, upper)
+    }
+}
+
+/// The accepted pair with the least score of the module docs (views with non-singular `Iᵥ` sums).
+fn select_pair(
+    problem: &LineProblem,
+    cameras: &[Matrix3x4<f64>],
+    residuals: &[FractionalResidual<2, 6>],
+    line: &Vector6<f64>,
+    radius: f64,
+) -> Option<(usize, usize)> {
+    let x = OrthonormalLine::from_plucker(line)?;
+    let tangent = x.tangent();
+    let info: Vec<Matrix4<f64>> = residuals
+        .iter()
+        .map(|r| fraction::linearize(std::slice::from_ref(r), line, &tangent).gauss_newton)
+        .collect();
+    let total: Matrix4<f64> = info.iter().sum();
+    let mut candidates: Vec<usize> = (0..info.len()).collect();
+    candidates.sort_by(|&i, &j| info[j].trace().total_cmp(&info[i].trace()));
+    candidates.truncate(MAX_PAIR_CANDIDATES);
+    let centres: Vec<Vector4<f64>> = cameras.iter().map(|p| views::centre(p).push(1.0)).collect();
+    let mut best: Option<(f64, (usize, usize))> = None;
+    for (k, &a) in candidates.iter().enumerate() {
+        for &b in &candidates[k + 1..] {
+            let Some(inv) = (info[a] + info[b]).try_inverse() else {
+                continue;
+            };
+            let score = (inv * total).trace();
+            if !(score.is_finite() && score > 0.0) || best.is_some_and(|(s, _)| s <= score) {
+                continue;
+            }
+            // l_v(z)·e_v = π_v(z)·C_other = (π₀ + G z)·C_other, affine in z: no zero on the disc.
+            let clear = |v: usize, other: usize| {
+                let (pi0, g) = plane_of_residual(problem, &cameras[v], v);
+                let c = centres[other];
+                pi0.dot(&c).abs() > EPIPOLE_MARGIN * radius * (g.transpose() * c).norm()
+            };
+            if clear(a, b) || clear(b, a) {
+                best = Some((score, (a, b)));
+            }
+        }
+    }
+    best.map(|(_, pair)| pair)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use crate::triangulation::line::tests::ring_cameras;
+    use crate::triangulation::line::LineFrame;
+    use nalgebra::{Matrix2, Vector3};
+
+    #[test]
+    fn meet_of_two_planes_is_the_line_through_their_common_points() {
+        let mut rng = Rng::new(8);
+        for _ in 0..20 {
+            let (a, b) = (
+                Vector3::from_fn(|_, _| rng.normal()),
+                Vector3::from_fn(|_, _| rng.normal()),
+            );
+            let plane = |c: Vector3<f64>| {
+                let n = (a - c).cross(&(b - c));
+                Vector4::new(n.x, n.y, n.z, -n.dot(&c))
+            };
+            let l = meet(
+                &plane(Vector3::from_fn(|_, _| rng.normal())),
+                &plane(Vector3::from_fn(|_, _| rng.normal())),
+            );
+            let expected = plucker::from_points(&a, &b);
+            let cos = l.normalize().dot(&expected.normalize()).abs();
+            assert!((cos - 1.0).abs() < 1e-9, "{cos}");
+        }
+    }
+
+    #[test]
+    fn chart_residuals_equal_the_views_residuals_and_the_pair_is_exact() {
+        let mut rng = Rng::new(9);
+        let cameras = ring_cameras(5, &mut rng);
+        let (a, b) = (Vector3::new(0.2, -0.3, 0.1), Vector3::new(-0.3, 0.4, -0.2));
+        let lines: Vec<Vector3<f64>> = cameras
+            .iter()
+            .map(|p| {
+                (p * a.push(1.0)).cross(&(p * b.push(1.0)))
+                    + Vector3::new(rng.normal(), rng.normal(), rng.normal() * 300.0) * 1e-3
+            })
+            .collect();
+        let problem = LineProblem {
+            cameras: cameras.clone(),
+            frames: lines.iter().map(|l| LineFrame::of_line(l).unwrap()).collect(),
+            whitenings: (0..5)
+                .map(|i| Matrix2::new(0.7 + 0.1 * i as f64, 0.0, 0.3, 1.4))
+                .collect(),
+        };
+        let sim = Similarity::of_cameras(&cameras);
+        let truth = plucker::transform(&sim.matrix(), &plucker::from_points(&a, &b));
+        let cost = fraction::cost(&problem.views(&sim), &truth);
+        let chart = TwoViewChart::new(&problem, &sim, &truth, 4.0 * cost).expect("a pair");
+        assert!(chart.line(&Vector4::zeros()).normalize().dot(&truth.normalize()).abs() > 1.0 - 1e-10);
+        let residuals = problem.views(&sim);
+        for _ in 0..50 {
+            let w = Vector4::from_fn(|_, _| rng.normal() * 0.5);
+            let l = chart.line(&w);
+            for (v, form) in chart.views.iter().enumerate() {
+                let direct = residuals[v].residual(&l);
+                let via_forms = form.residual(&w);
+                assert!(
+                    (direct - via_forms).norm() < 1e-7 * (1.0 + direct.norm()),
+                    "view {v}: {direct} vs {via_forms}"
+                );
+            }
+        }
+    }
+}
