@@ -483,7 +483,7 @@ class TriangulationOptions:
     given to the function wins over :attr:`method`."""
 
     # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', local_max_iterations: int = 100) -> None: ...
+    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', max_taylor_nodes: int = 50000, local_max_iterations: int = 100) -> None: ...
     method: str
     """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
     max_relative_gap: float
@@ -491,11 +491,13 @@ class TriangulationOptions:
     max_reprojection_error: Optional[float]
     """The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing."""
     max_nodes: int
-    """Branch and bound gives up (status `gap_not_closed`) after this many nodes."""
+    """Branch and bound with conic relaxations (points, quadrics, `line_bound="relaxation"`) gives up (status `gap_not_closed`) after this many nodes."""
     outlier_threshold: Optional[float]
     """Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     line_bound: str
     """Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips)."""
+    max_taylor_nodes: int
+    """Node cap of the Taylor bound of lines (microseconds per node, so separate from `max_nodes`)."""
     local_max_iterations: int
     """Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`)."""
     # end of fields

@@ -41,13 +41,15 @@ options_class! {
         /// The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing.
         max_reprojection_error: Option<Real> = |o| o.inner.max_reprojection_error,
             |o, v| v.map(|r| r.get("max_reprojection_error")).transpose().map(|g| o.inner.max_reprojection_error = g);
-        /// Branch and bound gives up (status `gap_not_closed`) after this many nodes.
+        /// Branch and bound with conic relaxations (points, quadrics, `line_bound="relaxation"`) gives up (status `gap_not_closed`) after this many nodes.
         max_nodes: Integer = |o| o.inner.max_nodes, |o, v| v.count("max_nodes", 1).map(|n| o.inner.max_nodes = n);
         /// Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
         outlier_threshold: Option<Real> = |o| o.inner.outlier_threshold,
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);
         /// Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips).
         line_bound: String = |o| o.inner.line_bound.as_str(), |o, v| LineBound::parse(&v).map(|m| o.inner.line_bound = m).map_err(to_py_err);
+        /// Node cap of the Taylor bound of lines (microseconds per node, so separate from `max_nodes`).
+        max_taylor_nodes: Integer = |o| o.inner.max_taylor_nodes, |o, v| v.count("max_taylor_nodes", 1).map(|n| o.inner.max_taylor_nodes = n);
         /// Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`).
         local_max_iterations: Integer = |o| o.inner.local.stopping.max_iterations,
             |o, v| v.count("local_max_iterations", 1).map(|n| o.inner.local.stopping.max_iterations = n);

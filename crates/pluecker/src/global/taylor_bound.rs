@@ -64,6 +64,11 @@ impl<const N: usize> Quadratic<N> {
         })
     }
 
+    /// An enclosure of `s` over the box `m ± h` (centred form).
+    pub fn range(&self, m: &SVector<f64, N>, h: &SVector<f64, N>) -> Interval {
+        self.enclose(m, h).0
+    }
+
     /// Value and gradient enclosures over the box `m ± h` (centred form, exact for the gradient).
     fn enclose(&self, m: &SVector<f64, N>, h: &SVector<f64, N>) -> (Interval, [Interval; N], f64, SVector<f64, N>) {
         let value = self.value(m);
@@ -134,10 +139,15 @@ pub struct BoxBound {
 }
 
 /// The bounds of the module docs over the box `[lower, upper]`.
+///
+/// `target` (`∞`: none) is the bound the caller needs to discard the box: a view whose denominator
+/// may vanish on the box gets the projective test [`ratio_exceeds`] at the share of `target` the other
+/// views leave it.
 pub fn bound_over_box<const D: usize, const N: usize>(
     views: &[QuadraticRatio<D, N>],
     lower: &[f64],
     upper: &[f64],
+    target: f64,
 ) -> BoxBound {
     let m = SVector::<f64, N>::from_fn(|i, _| 0.5 * (lower[i] + upper[i]));
     let h = SVector::<f64, N>::from_fn(|i, _| 0.5 * (upper[i] - lower[i]));
@@ -147,7 +157,8 @@ pub fn bound_over_box<const D: usize, const N: usize>(
     let mut centre_grad = SVector::<f64, N>::zeros();
     let mut grad = [Interval::point(0.0); N];
     let mut hess = [[Interval::point(0.0); N]; N];
-    for v in views {
+    let mut poles: Vec<(usize, f64)> = Vec::new();
+    for (index, v) in views.iter().enumerate() {
         let (g, dg, g_m, dg_m) = v.denominator.enclose(&m, &h);
         let mut view_lower = 0.0;
         for n in &v.numerator {
@@ -187,8 +198,18 @@ pub fn bound_over_box<const D: usize, const N: usize>(
                 }
             }
         }
+        if g.contains_zero() {
+            poles.push((index, view_lower));
+        }
         zeroth += view_lower;
         worst_view = worst_view.max(view_lower);
+    }
+    for (index, view_lower) in poles {
+        let share = target - (zeroth - view_lower);
+        if share.is_finite() && share > view_lower && ratio_exceeds(&views[index], &m, &h, share) {
+            zeroth += share - view_lower;
+            worst_view = worst_view.max(share);
+        }
     }
     // Gershgorin: λ_min(H) ≥ minᵢ (min Hᵢᵢ − Σ_{j≠i} max |Hᵢⱼ|) for every H in the interval matrix.
     let curvature = (0..N)
@@ -223,6 +244,18 @@ pub fn bound_over_box<const D: usize, const N: usize>(
     };
     let best = zeroth.max(second);
     let lower = (best - ROUNDING_MARGIN * best.abs().max(centre_cost)).max(0.0);
+    // The mean-value form of the gradient, ∇f(m) + [∇²f]·[−h, h], intersected with the natural one.
+    let sym = |i: usize, j: usize| if i <= j { hess[i][j] } else { hess[j][i] };
+    let grad: [Interval; N] = std::array::from_fn(|i| {
+        let mean_value = (0..N).fold(Interval::point(centre_grad[i]), |acc, j| {
+            acc.add(sym(i, j).mul(Interval::centred(0.0, h[j])))
+        });
+        if mean_value.lo.is_finite() && mean_value.hi.is_finite() {
+            grad[i].meet(mean_value)
+        } else {
+            grad[i]
+        }
+    });
     let may_be_stationary = grad.iter().all(|gi| {
         let slack = ROUNDING_MARGIN * gi.mag().min(1e300) + 1e-300;
         !(gi.lo > slack || gi.hi < -slack)
@@ -234,6 +267,51 @@ pub fn bound_over_box<const D: usize, const N: usize>(
         worst_view,
         curvature,
     }
+}
+
+/// True when `‖n(w)‖² > t g(w)²` on the box `m ± h`, so that `‖r‖² > t` wherever `r` is defined:
+/// the centred second-order form of `φ = ‖n‖² − t g²` (a quartic) with interval Hessian. Unlike the
+/// quotient of intervals it keeps the correlation of `n` and `g`, which near a pole (where both are
+/// small) is what decides.
+pub fn ratio_exceeds<const D: usize, const N: usize>(
+    view: &QuadraticRatio<D, N>,
+    m: &SVector<f64, N>,
+    h: &SVector<f64, N>,
+    t: f64,
+) -> bool {
+    let mut value = 0.0;
+    let mut grad = SVector::<f64, N>::zeros();
+    let mut hess = [[Interval::point(0.0); N]; N];
+    let terms = view
+        .numerator
+        .iter()
+        .map(|n| (1.0, n))
+        .chain(std::iter::once((-t, &view.denominator)));
+    for (weight, s) in terms {
+        let (range, d_range, at_m, d_at_m) = s.enclose(m, h);
+        value += weight * at_m * at_m;
+        grad += d_at_m * (2.0 * weight * at_m);
+        for i in 0..N {
+            for j in i..N {
+                // ∂ᵢⱼ(s²) = 2 (∂ᵢs ∂ⱼs + s ∂ᵢⱼs).
+                let outer = if i == j {
+                    d_range[i].sqr()
+                } else {
+                    d_range[i].mul(d_range[j])
+                };
+                let term = outer.add(range.scale(s.hessian[(i, j)]));
+                hess[i][j] = hess[i][j].add(term.scale(2.0 * weight));
+            }
+        }
+    }
+    let mut least = value - grad.abs().dot(h);
+    for i in 0..N {
+        least += 0.5 * hess[i][i].lo.min(0.0) * h[i] * h[i];
+        for j in i + 1..N {
+            least -= hess[i][j].mag() * h[i] * h[j];
+        }
+    }
+    least > ROUNDING_MARGIN * value.abs()
 }
 
 #[cfg(test)]
@@ -283,7 +361,7 @@ mod tests {
             let width = 10f64.powf(rng.uniform_in(-3.0, 0.0));
             let lower: Vec<f64> = centre.iter().map(|c| c - width * rng.uniform()).collect();
             let upper: Vec<f64> = centre.iter().map(|c| c + width * rng.uniform()).collect();
-            let b = bound_over_box(&views, &lower, &upper);
+            let b = bound_over_box(&views, &lower, &upper, f64::INFINITY);
             let mut signs = [[false; 2]; 4];
             for _ in 0..200 {
                 let w = Vector4::from_fn(|i, _| rng.uniform_in(lower[i], upper[i]));
@@ -333,10 +411,15 @@ mod tests {
                 denominator: den,
             },
         ];
-        let b = bound_over_box(&views, &[-0.01, -0.02, -0.01, -0.03], &[0.02, 0.01, 0.01, 0.01]);
+        let b = bound_over_box(
+            &views,
+            &[-0.01, -0.02, -0.01, -0.03],
+            &[0.02, 0.01, 0.01, 0.01],
+            f64::INFINITY,
+        );
         assert!(b.curvature > 1.5, "{}", b.curvature);
         assert!(b.lower <= 0.0 + 1e-15 && b.lower >= 0.0);
-        let b = bound_over_box(&views, &[0.1, 0.1, 0.1, 0.1], &[0.11, 0.12, 0.11, 0.11]);
+        let b = bound_over_box(&views, &[0.1, 0.1, 0.1, 0.1], &[0.11, 0.12, 0.11, 0.11], f64::INFINITY);
         let (f_corner, _) = cost_and_gradient(&views, &Vector4::new(0.1, 0.1, 0.1, 0.1));
         assert!(b.lower > 0.95 * f_corner, "{} vs {f_corner}", b.lower);
         assert!(!b.may_be_stationary);

@@ -120,7 +120,8 @@ pub struct TriangulationOptions {
     /// cost of the local solution, which every better primitive satisfies, so the restriction loses
     /// nothing and the certificate is a certificate over all primitives in front of the cameras.
     pub max_reprojection_error: Option<f64>,
-    /// Branch and bound gives up (status [`Status::GapNotClosed`]) after this many nodes. Default 2000.
+    /// Branch and bound with conic relaxations (points, quadrics, [`LineBound::Relaxation`]) gives up
+    /// (status [`Status::GapNotClosed`]) after this many nodes. Default 2000.
     pub max_nodes: usize,
     /// Points and lines: reject outlier observations of a track ([`point::robust`], [`line::robust`]).
     /// A view is an inlier when its whitened residual (pixels without covariances) is at most this;
@@ -129,6 +130,10 @@ pub struct TriangulationOptions {
     pub outlier_threshold: Option<f64>,
     /// The lower bound of the line certificate ([`LineBound`]). Default [`LineBound::Taylor`].
     pub line_bound: LineBound,
+    /// Node cap of the Taylor bound of lines (status [`Status::GapNotClosed`] beyond it); its nodes
+    /// cost microseconds (interval arithmetic, no conic program), so the cap is separate from
+    /// `max_nodes`. Default 50000.
+    pub max_taylor_nodes: usize,
     /// Settings of the local minimisation (method `local`, and the upper bounds of `optimal`).
     /// Default: the trust region of section 4.1 with 100 iterations and a step tolerance of 1e-10.
     pub local: TrustRegionOptions,
@@ -146,6 +151,7 @@ impl Default for TriangulationOptions {
             max_nodes: 2000,
             outlier_threshold: None,
             line_bound: LineBound::Taylor,
+            max_taylor_nodes: 50_000,
             local,
         }
     }
@@ -173,6 +179,9 @@ impl TriangulationOptions {
         }
         if self.max_nodes == 0 {
             return bad("max_nodes", "must be at least 1");
+        }
+        if self.max_taylor_nodes == 0 {
+            return bad("max_taylor_nodes", "must be at least 1");
         }
         if let Some(tau) = self.outlier_threshold {
             if !(tau.is_finite() && tau > 0.0) {

@@ -22,7 +22,7 @@
 //! minimisation there; a cheaper line found replaces the incumbent (the local method stopped in a
 //! wrong minimum). Splitting: the widest axis at the midpoint. No conic program is solved.
 
-use super::two_view_chart::TwoViewChart;
+use super::two_view_chart::{Clearance, TwoViewChart};
 use super::{LineObjective, LineProblem};
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
@@ -44,6 +44,8 @@ struct TaylorOracle<'a> {
     /// `γ²` when the user's γ restricts the domain (then no stationarity test), else `None`.
     restricted: Option<f64>,
     incumbent: f64,
+    /// The relative gap at which regions are discarded.
+    gap: f64,
     /// The cost and gradient at `w = 0` (the local line), for the convex-hull bound.
     at_local: (f64, Vector4<f64>),
     local: TrustRegionOptions,
@@ -55,18 +57,23 @@ impl TaylorOracle<'_> {
         let objective = LineObjective { views: self.views };
         let line = trust_region::minimize(&objective, start, &self.local).0.to_plucker();
         let cost = fraction::cost(self.views, &line);
-        cost.is_finite().then_some((cost, line))
+        (cost.is_finite() && self.chart.is_clear(&line)).then_some((cost, line))
     }
 }
 
 impl TaylorOracle<'_> {
+    /// The bound that discards a region: within the gap of the incumbent.
+    fn target(&self) -> f64 {
+        self.incumbent * (1.0 - self.gap)
+    }
+
     /// The convex-hull bound: when the cost is convex (`∇²f ⪰ μI`, `μ > 0`) on the box hull `H` of
     /// `region` and the local line `w = 0`, then `f(w) ≥ f(0) + ∇f(0)·w + ½μ‖w‖² ≥ f(0) − ‖∇f(0)‖²/(2μ)`
     /// on `H ⊇ region`. `0` otherwise.
     fn hull_bound(&self, region: &Region) -> f64 {
         let lower: Vec<f64> = region.lower.iter().map(|&v| v.min(0.0)).collect();
         let upper: Vec<f64> = region.upper.iter().map(|&v| v.max(0.0)).collect();
-        let mu = bound_over_box(&self.chart.views, &lower, &upper).curvature;
+        let mu = bound_over_box(&self.chart.views, &lower, &upper, f64::INFINITY).curvature;
         if !(mu > 0.0) {
             return 0.0;
         }
@@ -80,11 +87,16 @@ impl BoundingOracle for TaylorOracle<'_> {
     type Candidate = Vector6<f64>;
 
     fn bound(&mut self, region: &Region) -> Bound<Vector6<f64>> {
-        let b = bound_over_box(&self.chart.views, &region.lower, &region.upper);
         let empty = Bound::Empty { solver_iterations: 0 };
+        let clearance = self.chart.clearance(&region.lower, &region.upper);
+        if clearance == Clearance::Inside {
+            return empty;
+        }
+        let b = bound_over_box(&self.chart.views, &region.lower, &region.upper, self.target());
         match self.restricted {
             Some(gamma2) if b.worst_view > gamma2 => return empty,
-            None if !b.may_be_stationary => return empty,
+            // A minimiser of the domain off its boundary is stationary (module docs).
+            None if !b.may_be_stationary && clearance == Clearance::Clear => return empty,
             _ => {}
         }
         let mut lower = b.lower;
@@ -138,12 +150,13 @@ pub(crate) fn optimal_line_taylor(
         views: &views,
         restricted,
         incumbent: cost,
+        gap: opts.max_relative_gap,
         at_local: cost_and_gradient(&chart.views, &Vector4::zeros()),
         local: local_opts,
     };
     let bb_opts = BranchAndBoundOptions {
         max_relative_gap: opts.max_relative_gap,
-        max_nodes: opts.max_nodes,
+        max_nodes: opts.max_taylor_nodes,
         trivial_lower_bound: 0.0,
     };
     let root = chart.root(radius2.sqrt());

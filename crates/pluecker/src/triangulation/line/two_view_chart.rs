@@ -56,6 +56,32 @@ pub(crate) struct TwoViewChart {
     map: Matrix4<f64>,
     /// Every view's whitened residual as a ratio of quadratics in `w` (views `a`, `b` exactly affine).
     pub views: Vec<QuadraticRatio<2, 4>>,
+    /// Per view, `u(w) = Mᵀ P_𝓛 𝓛(w)` (`M` the left 3x3 of the conditioned camera), whose norm is
+    /// `|det M| ‖d‖` times the distance from the camera centre to the line (`d` its direction).
+    moments: Vec<[Quadratic<4>; 3]>,
+    /// The direction `d(w)` of the line.
+    direction: [Quadratic<4>; 3],
+    /// Per view, `Mᵀ P_𝓛` (3x6): `u = Mᵀ P_𝓛 𝓛`.
+    moment_rows: Vec<SMatrix<f64, 3, 6>>,
+    /// Per view, `|det M|` times the least distance from the camera centre allowed in the domain
+    /// ([`CENTRE_CLEARANCE`] times the local line's).
+    clearance: Vec<f64>,
+}
+
+/// The domain leaves out lines closer to a camera centre than this fraction of the local line's
+/// distance from it: near a centre the line's image in that view can be any line through one point, so
+/// eq. 19 approaches values no physical line seen as a segment has (module docs).
+pub const CENTRE_CLEARANCE: f64 = 0.01;
+
+/// Where a box lies relative to the lines too close to a camera centre.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Clearance {
+    /// Every line of the box is too close to some camera centre: outside the domain.
+    Inside,
+    /// Every line of the box is clear of every camera centre.
+    Clear,
+    /// Undecided.
+    Straddles,
 }
 
 /// The primal Plücker coordinates (eq. 3) of the meet of the planes `p`, `q` (module docs).
@@ -100,6 +126,13 @@ impl TwoViewChart {
             centre,
             map: Matrix4::identity(),
             views: Vec::new(),
+            moments: Vec::new(),
+            direction: [Quadratic::zero(); 3],
+            moment_rows: cameras
+                .iter()
+                .map(|p| p.fixed_view::<3, 3>(0, 0).transpose() * plucker::camera(p))
+                .collect(),
+            clearance: Vec::new(),
         };
         chart.set_map(&planes, &residuals, Matrix4::identity());
         // Whiten w by the Gauss-Newton information at z* (w = 0).
@@ -116,6 +149,10 @@ impl TwoViewChart {
             .map(|l| l.transpose())
             .unwrap_or_else(Matrix4::identity);
         chart.set_map(&planes, &residuals, map);
+        let zero = Vector4::zeros();
+        let norm = |q: &[Quadratic<4>; 3]| q.iter().map(|c| c.value(&zero).powi(2)).sum::<f64>().sqrt();
+        let d0 = norm(&chart.direction);
+        chart.clearance = chart.moments.iter().map(|u| CENTRE_CLEARANCE * norm(u) / d0).collect();
         Some(chart)
     }
 
@@ -152,6 +189,15 @@ impl TwoViewChart {
             c.gradient = Vector4::from_fn(|i, _| linear[i][k]);
         }
         let combine = |row: &Vector6<f64>| Quadratic::combination(row.iter().copied().zip(coords.iter()));
+        // d = (l₁₄, −l₄₂, l₃₄) (plucker::direction_moment).
+        let mut minus_l42 = coords[4];
+        minus_l42 = Quadratic::combination([(-1.0, &minus_l42)]);
+        self.direction = [coords[2], minus_l42, coords[5]];
+        self.moments = self
+            .moment_rows
+            .iter()
+            .map(|rows| [0, 1, 2].map(|k| combine(&rows.row(k).transpose())))
+            .collect();
         self.views = residuals
             .iter()
             .enumerate()
@@ -185,6 +231,45 @@ impl TwoViewChart {
     pub fn line(&self, w: &Vector4<f64>) -> Vector6<f64> {
         let [(p0, p), (q0, q)] = self.planes;
         meet(&(p0 + p * w), &(q0 + q * w))
+    }
+
+    /// Where the box `[lower, upper]` lies relative to the lines closer to a camera centre than the
+    /// clearance (interval bounds of `‖u‖` and `|det M| ‖d‖`).
+    pub fn clearance(&self, lower: &[f64], upper: &[f64]) -> Clearance {
+        let m = Vector4::from_fn(|i, _| 0.5 * (lower[i] + upper[i]));
+        let h = Vector4::from_fn(|i, _| 0.5 * (upper[i] - lower[i]));
+        let ranges = |q: &[Quadratic<4>; 3]| q.map(|c| c.range(&m, &h));
+        let d = ranges(&self.direction);
+        let (d_min, d_max) = (
+            d.iter().map(|x| x.mig().powi(2)).sum::<f64>().sqrt(),
+            d.iter().map(|x| x.mag().powi(2)).sum::<f64>().sqrt(),
+        );
+        let mut clear = true;
+        for (u, &c) in self.moments.iter().zip(&self.clearance) {
+            let u = ranges(u);
+            let u_min = u.iter().map(|x| x.mig().powi(2)).sum::<f64>().sqrt();
+            let u_max = u.iter().map(|x| x.mag().powi(2)).sum::<f64>().sqrt();
+            if u_max < c * d_min {
+                return Clearance::Inside;
+            }
+            clear &= u_min > c * d_max;
+        }
+        if clear {
+            Clearance::Clear
+        } else {
+            Clearance::Straddles
+        }
+    }
+
+    /// True when the line `l` (Plücker, conditioned frame) is at least the clearance away from every
+    /// camera centre.
+    pub fn is_clear(&self, l: &Vector6<f64>) -> bool {
+        let (d, _) = plucker::direction_moment(l);
+        let d = d.norm();
+        self.moment_rows
+            .iter()
+            .zip(&self.clearance)
+            .all(|(rows, &c)| (rows * l).norm() >= c * d)
     }
 
     /// The bounding box, in `w`, of the ball `‖z‖ ≤ radius`.
@@ -300,6 +385,22 @@ mod tests {
         let chart = TwoViewChart::new(&problem, &sim, &truth, 4.0 * cost).expect("a pair");
         assert!(chart.line(&Vector4::zeros()).normalize().dot(&truth.normalize()).abs() > 1.0 - 1e-10);
         let residuals = problem.views(&sim);
+        // The clearance is CENTRE_CLEARANCE times the local line's distance from each centre.
+        let cams: Vec<Matrix3x4<f64>> = cameras.iter().map(|p| sim.camera(p)).collect();
+        let (p0, d0) = plucker::to_point_direction(&truth).unwrap();
+        for (p, c) in cams.iter().zip(&chart.clearance) {
+            let centre = views::centre(p);
+            let dist = (centre - p0).cross(&d0).norm();
+            let det = p.fixed_view::<3, 3>(0, 0).determinant().abs();
+            assert!(
+                (c / det - CENTRE_CLEARANCE * dist).abs() < 1e-9 * dist,
+                "{} vs {}",
+                c / det,
+                CENTRE_CLEARANCE * dist
+            );
+        }
+        assert!(chart.is_clear(&truth));
+        assert_eq!(chart.clearance(&[-1e-6; 4], &[1e-6; 4]), Clearance::Clear);
         for _ in 0..50 {
             let w = Vector4::from_fn(|_, _| rng.normal() * 0.5);
             let l = chart.line(&w);
