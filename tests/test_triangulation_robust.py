@@ -140,7 +140,8 @@ def test_every_result_says_which_domain_its_certificate_covers():
     assert pluecker.triangulate_point(P, x, method="local").certificate_domain == "none"
     P4, _, segments, _ = line_tracks_with_outliers(1, 4, 12)
     expected = {"none": "none", "convexity_test": "every line (a cost at the zero bound)",
-                "taylor_branch_and_bound": "every line not through a camera centre"}
+                "taylor_branch_and_bound": "every line at least 1/100 of the estimate's distance from each camera "
+                                           "centre, in front of the cameras or not"}
     for views in (2, 4):  # two views: the zero-cost certificate; four: the Taylor branch and bound
         line = pluecker.triangulate_line(P4[:views], segments[0][:views])
         domain = expected.get(line.certificate)

@@ -10,7 +10,7 @@ use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
 };
 use pluecker::triangulation::scenes::{line_scene, LineScene};
-use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
+use pluecker::triangulation::{CertificateKind, LineBound, Method, Status, TriangulationOptions};
 use pluecker::Error;
 
 fn opts(method: Method) -> TriangulationOptions {
@@ -97,30 +97,42 @@ fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
             optimal.report.cost
         );
     }
-    // Measured: 6 of 8 close the 1e-3 gap within 300 nodes (5 of them at the root). At a rate of 3/4,
-    // fewer than 3 of 8 certify with probability 0.004 (binomial); a bound that stops closing gaps
-    // certifies none. (Not pinned at the measured 6: issue 13 is to raise the rate, not to hold it.)
-    assert!(certified >= 3, "{certified} of 8 certified");
+    // Measured with the Taylor bound: 8 of 8 (7 at the root, where the whole search box is proved
+    // convex; one after 73 nodes). At the real-data rate of 0.99 (bench/compare_line_triangulation.py),
+    // fewer than 7 of 8 certify with probability 0.003 (binomial); a bound that stops closing gaps
+    // certifies none.
+    assert!(certified >= 7, "{certified} of 8 certified");
 }
 
 #[test]
 fn no_line_anywhere_costs_less_than_the_certified_bound() {
-    // The bound of every certified line is checked against lines from the whole domain, not only near
-    // the answer: 20000 lines through two uniform points of a box ten times the scene (those in front of
-    // every camera), the 50 cheapest of them improved by a random descent (many-start local search), and
-    // lines 1e-1 to 1e-6 of the scene away from the optimum. The cost is recomputed independently.
-    // Three regimes: 46° of parallax, 3° (low parallax), and anisotropic covariances (endpoint noise
-    // 3 px along x, 0.3 px along y, so that every view weighs its residual's two entries differently).
-    let (mut checked, mut violations) = (0, 0);
-    for (regime, spread, anisotropic) in [
-        ("wide", 0.8, false),
-        ("low parallax", 0.05, false),
-        ("anisotropic", 0.8, true),
-    ] {
+    // The bound of every certified line is checked against lines from the whole domain of its
+    // certificate (every line at least 1 % of the local line's distance from each camera centre, in
+    // front of the cameras or not), not only near the answer: 20000 lines through two uniform points
+    // of a box ten times the scene, 2000 lines through points near each camera centre (between 1 % and
+    // the full distance of the answer), the 50 cheapest of all improved by a random descent
+    // (many-start local search), and lines 1e-1 to 1e-6 of the scene away from the optimum. The cost
+    // is recomputed independently. Six regimes: 46° of parallax, 3°, 0.3°, anisotropic covariances
+    // (endpoint noise 3 px along x, 0.3 px along y), a line 2° off the epipolar plane of the first two
+    // views (nearly parallel image lines), and the paper's SOCP relaxation on the wide regime.
+    let (mut checked, mut violations, mut tried) = (0, 0, 0);
+    let regimes = [
+        ("wide", 0.8, false, false, LineBound::Taylor),
+        ("low parallax 3°", 0.05, false, false, LineBound::Taylor),
+        ("low parallax 0.3°", 0.005, false, false, LineBound::Taylor),
+        ("anisotropic", 0.8, true, false, LineBound::Taylor),
+        ("near the epipolar plane", 0.8, false, true, LineBound::Taylor),
+        ("wide, relaxation", 0.8, false, false, LineBound::Relaxation),
+    ];
+    for (regime, spread, anisotropic, epipolar, bound) in regimes {
         let mut certified_here = 0;
         for seed in 0..6u64 {
             let views = 3 + (seed as usize % 3);
-            let scene = line_scene(views, spread, 300 + seed);
+            let mut scene = line_scene(views, spread, 300 + seed);
+            if epipolar && !tilt_into_epipolar_plane(&mut scene, 2f64.to_radians()) {
+                continue;
+            }
+            tried += 1;
             let mut rng = Rng::new(400 + seed);
             let segments = scene.noisy_segments(1.0, &mut rng);
             let (lines, covariances) = if anisotropic {
@@ -136,18 +148,28 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
             } else {
                 lines_from_segments(&segments, 1.0).unwrap()
             };
-            let optimal = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(Method::Optimal)).unwrap();
+            let o = TriangulationOptions {
+                line_bound: bound,
+                ..opts(Method::Optimal)
+            };
+            let optimal = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let c = optimal.report.certificate;
             if !c.certified {
                 continue;
             }
             certified_here += 1;
+            let expected = match bound {
+                LineBound::Taylor => CertificateKind::TaylorBranchAndBound,
+                LineBound::Relaxation => CertificateKind::BranchAndBound,
+            };
+            assert_eq!(c.kind, expected, "{regime} seed {seed}");
             let found = search_below(
                 &scene,
                 &lines,
                 &covariances,
                 &optimal,
                 c.lower_bound,
+                bound == LineBound::Taylor,
                 &mut rng,
                 &mut violations,
             );
@@ -159,27 +181,76 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
                 optimal.report.cost
             );
         }
-        eprintln!("{regime}: {certified_here} of 6 certified and checked");
+        eprintln!("{regime}: {certified_here} certified and checked");
         checked += certified_here;
     }
-    eprintln!("{checked} certified lines checked; {violations} violations");
-    assert!(checked >= 5, "only {checked} of 18 certified");
+    eprintln!("{checked} of {tried} certified lines checked; {violations} violations");
+    // Measured: 35 of 36. The Taylor bound closes the gap on every line of these regimes within
+    // 300 nodes but the relaxation's (5 of 6 at this cap); fewer than 30 means certification broke.
+    assert!(checked >= 30, "only {checked} of {tried} certified");
     assert_eq!(violations, 0);
 }
 
-/// The least cost found over the whole domain (see the test above); every cost below `bound` (less
-/// a rounding slack) counts as a violation.
+/// Turns the scene's line so that it lies 2° (`angle`) off the plane through the first two camera
+/// centres and its midpoint (an epipolar plane): its images are nearly the epipolar lines. False when
+/// an endpoint leaves an image.
+fn tilt_into_epipolar_plane(scene: &mut LineScene, angle: f64) -> bool {
+    let centres: Vec<Vector3<f64>> = scene.cameras.iter().map(pluecker::triangulation::views::centre).collect();
+    let mid = 0.5 * (scene.endpoints[0] + scene.endpoints[1]);
+    let baseline = (centres[1] - centres[0]).normalize();
+    let normal = baseline.cross(&(mid - centres[0])).normalize();
+    let half = 0.5 * (scene.endpoints[0] - scene.endpoints[1]).norm();
+    let direction = baseline * angle.cos() + normal * angle.sin();
+    scene.endpoints = [mid + direction * half, mid - direction * half];
+    let mut segments = Vec::new();
+    for p in &scene.cameras {
+        let mut seg = [Vector2::zeros(); 2];
+        for (k, x) in scene.endpoints.iter().enumerate() {
+            let u = p * x.push(1.0);
+            if !(u.z > 0.0) {
+                return false;
+            }
+            seg[k] = u.xy() / u.z;
+        }
+        if (seg[0] - seg[1]).norm() < 30.0 {
+            return false;
+        }
+        segments.push(seg);
+    }
+    scene.segments = segments;
+    true
+}
+
+/// The least cost found over the domain of the certificate (see the test above; `every_line`: the
+/// Taylor bound's, else lines through two points in front of every camera); every cost below
+/// `bound` (less a rounding slack) counts as a violation.
+#[allow(clippy::too_many_arguments)]
 fn search_below(
     scene: &LineScene,
     lines: &[Vector3<f64>],
     covariances: &[Matrix2<f64>],
     optimal: &LineTriangulation,
     bound: f64,
+    every_line: bool,
     rng: &mut Rng,
     violations: &mut usize,
 ) -> f64 {
     let cost = |a: &Vector3<f64>, b: &Vector3<f64>| independent_line_cost(&scene.cameras, lines, covariances, a, b);
-    let in_front = |x: &Vector3<f64>| scene.cameras.iter().all(|p| (p * x.push(1.0)).z > 0.0);
+    let centres: Vec<Vector3<f64>> = scene.cameras.iter().map(pluecker::triangulation::views::centre).collect();
+    let distance = |c: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| (c - a).cross(&(b - a).normalize()).norm();
+    let (p, d) = (optimal.point, optimal.direction);
+    let reference: Vec<f64> = centres.iter().map(|c| distance(c, &p, &(p + d))).collect();
+    // 1.2 % rather than 1 %: the clearance is relative to the local line, the answer may differ.
+    let admissible = |a: &Vector3<f64>, b: &Vector3<f64>| {
+        if (a - b).norm() < 1e-6 {
+            return false;
+        }
+        if every_line {
+            centres.iter().zip(&reference).all(|(c, r)| distance(c, a, b) >= 0.012 * r)
+        } else {
+            [a, b].iter().all(|x| scene.cameras.iter().all(|p| (p * x.push(1.0)).z > 0.0))
+        }
+    };
     let sample = |scale: f64, rng: &mut Rng| {
         Vector3::new(
             rng.uniform_in(-1.0, 1.0),
@@ -190,8 +261,21 @@ fn search_below(
     let mut candidates: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::new();
     while candidates.len() < 20_000 {
         let (a, b) = (sample(8.0, rng), sample(8.0, rng));
-        if in_front(&a) && in_front(&b) && (a - b).norm() > 1e-3 {
+        if admissible(&a, &b) {
             candidates.push((cost(&a, &b), a, b));
+        }
+    }
+    if every_line {
+        for (c, r) in centres.iter().zip(&reference) {
+            let mut added = 0;
+            while added < 2000 {
+                let a = c + rng.unit_vector3() * (*r * 10f64.powf(rng.uniform_in(-2.0, 0.0)));
+                let b = a + rng.unit_vector3();
+                if admissible(&a, &b) {
+                    candidates.push((cost(&a, &b), a, b));
+                    added += 1;
+                }
+            }
         }
     }
     candidates.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -201,7 +285,7 @@ fn search_below(
         for _ in 0..400 {
             let (na, nb) = (a + sample(step, rng), b + sample(step, rng));
             let c = cost(&na, &nb);
-            if c < best && in_front(&na) && in_front(&nb) {
+            if c < best && admissible(&na, &nb) {
                 (best, a, b) = (c, na, nb);
             } else {
                 step *= 0.98;
@@ -209,7 +293,6 @@ fn search_below(
         }
         costs.push(best);
     }
-    let (p, d) = (optimal.point, optimal.direction);
     for k in 0..600 {
         let scale = 10f64.powi(-(k % 6) - 1);
         costs.push(cost(&(p + sample(scale, rng)), &(p + d + sample(scale, rng))));

@@ -73,7 +73,8 @@ impl Method {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LineBound {
     /// Interval Taylor bounds over the chart of the line's images in two views
-    /// ([`line::taylor_search`]; certificate kind `taylor_branch_and_bound`, domain: every line). The
+    /// ([`line::taylor_search`]; certificate kind `taylor_branch_and_bound`, domain: every line but
+    /// those within 1 % of the local line's distance from a camera centre). The
     /// default. When no pair of views charts every cheaper line (a line near an epipolar plane of
     /// every pair), [`LineBound::Relaxation`] is used instead.
     Taylor,
@@ -273,7 +274,8 @@ pub enum CertificateKind {
     /// Branch and bound closed the gap (the SOCP relaxations of section 4).
     BranchAndBound,
     /// Lines: interval branch and bound with Taylor bounds over the two-view chart
-    /// ([`line::taylor_search`]), whose domain is every line.
+    /// ([`line::taylor_search`]), whose domain is every line not within 1 % of the local line's
+    /// distance from a camera centre.
     TaylorBranchAndBound,
 }
 
@@ -311,7 +313,10 @@ impl CertificateKind {
                 "lines whose points on two planes across the local line project within twice the eq. 27 strip \
                  widths of every observed line, at depths up to 100 times the local line's"
             }
-            (CertificateKind::TaylorBranchAndBound, _) => "every line not through a camera centre",
+            (CertificateKind::TaylorBranchAndBound, _) => {
+                "every line at least 1/100 of the estimate's distance from each camera centre, in front of the \
+                 cameras or not"
+            }
             (CertificateKind::BranchAndBound, Primitive::Quadric) => {
                 "quadrics centred within 10 times the largest camera distance of the local centre, with \
                  semi-axes up to that distance"

@@ -3,19 +3,26 @@
 //! **Domain.** Every line cheaper than the local line `𝓛̂` lies in the ball `‖z‖² ≤ f(𝓛̂)` of the
 //! chart of [`super::two_view_chart`], which covers every 3-D line not through a camera centre
 //! (lines through a centre have no image there, so no cost). The search box is that ball's bounding
-//! box in the branching coordinates `w`. With a user `γ` (`max_reprojection_error`) below
+//! box in the branching coordinates `w`. Lines closer to a camera centre than
+//! [`super::two_view_chart::CENTRE_CLEARANCE`] (1 %) of `𝓛̂`'s distance from it are left out: their
+//! image in that view can be any line through one point, so eq. 19 there reaches values that no line
+//! seen as a segment has (regions proved inside that tube are discarded; a local step ending there
+//! is not an upper bound). The estimate is `𝓛̂` unless a cheaper line of the domain is found; the
+//! certificate's domain is reported ([`crate::triangulation::CertificateKind::domain`]). With a user `γ` (`max_reprojection_error`) below
 //! `√f(𝓛̂)` the ball has radius `min(√f(𝓛̂), √2 γ)` (`‖z_a‖, ‖z_b‖ ≤ γ`), regions where some view's error
 //! exceeds `γ` are discarded, and when every region is, the status is `infeasible`.
 //!
 //! **Bound per region** ([`crate::global::taylor_bound`]): the larger of the zeroth-order interval
-//! bound `Σ mig([rᵥₖ])²` and the second-order Taylor bound with the Gershgorin curvature of the
-//! interval Hessian. Near the local minimum the cost is convex, so the Taylor bound there is the cost
-//! to second order in the region's width, and the gap closes after a few splits.
+//! bound `Σ mig([rᵥₖ])²` (with the projective test near a view's pole) and the second-order Taylor
+//! bound with the Gershgorin curvature of the interval Hessian; and the **convex-hull bound**: when
+//! the interval Hessian is positive definite (`⪰ μI`) on the box hull of the region and `𝓛̂`
+//! (`w = 0`), `f ≥ f(0) − ‖∇f(0)‖²/(2μ)` on the region. Often the whole search box is convex and the
+//! certificate is proved at the root.
 //!
 //! **Stationarity.** Without a user `γ`, a global minimiser is cheaper than `𝓛̂` (or is `𝓛̂`), so it
-//! lies strictly inside the ball where the cost is smooth (denominators non-zero): it is a
-//! stationary point. A region whose interval gradient excludes 0 in some coordinate holds none and is
-//! discarded (Hansen's monotonicity test). Regions where a denominator may vanish keep infinite
+//! lies strictly inside the ball where the cost is smooth (denominators non-zero); off the boundary
+//! of the centre tubes it is a stationary point. A region proved clear of every tube whose interval
+//! gradient excludes 0 in some coordinate holds none and is discarded (Hansen's monotonicity test). Regions where a denominator may vanish keep infinite
 //! derivative enclosures and are never discarded this way.
 //!
 //! **Upper bounds.** A region whose centre is cheaper than the incumbent starts a short local
