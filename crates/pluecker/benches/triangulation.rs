@@ -7,7 +7,8 @@
 //! - `point/<case>/<method>`: one `triangulate_point` call;
 //! - `batch/<case>/<method>`: `triangulate_points` (rayon) or the linear fast path on 4096 tracks
 //!   of the same cameras, timed per batch (divide by 4096);
-//! - `line/<views>-views/optimal`: one certified line at 3 and 5 views ([`bench_lines`]).
+//! - `line/<views>-views/optimal-<bound>`: one certified line at 3 and 5 views, with the Taylor bound
+//!   and the paper's relaxation ([`bench_lines`]).
 //!
 //! At setup, one line per case goes to stderr: the fraction certified, by which certificate, the
 //! branch-and-bound nodes, the median and 90th-percentile time per point measured sequentially
@@ -23,7 +24,7 @@ use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::{CertificateKind, Method, TriangulationOptions};
+use pluecker::triangulation::{CertificateKind, LineBound, Method, TriangulationOptions};
 use std::time::Duration;
 
 const SIGMA_PX: f64 = 1.0;
@@ -184,7 +185,7 @@ fn bench_batch(c: &mut Criterion) {
     group.finish();
 }
 
-/// `line/<views>-views/optimal`: one certified line (issue 13's criterion numbers), on a pool of 16
+/// `line/<views>-views/optimal-<bound>`: one certified line (issue 13's criterion numbers), on a pool of 16
 /// seeded scenes of [`line_scene`] (46° of parallax) with 1 px endpoint noise; the fraction certified
 /// and the nodes go to stderr at setup.
 fn bench_lines(c: &mut Criterion) {
@@ -203,25 +204,28 @@ fn bench_lines(c: &mut Criterion) {
                 (scene.cameras, segments)
             })
             .collect();
-        let opts = TriangulationOptions::default();
-        let results: Vec<_> = problems
-            .iter()
-            .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
-            .collect();
-        let certified = results.iter().filter(|r| r.report.certificate.certified).count();
-        let nodes: usize = results.iter().map(|r| r.report.certificate.nodes).sum();
-        eprintln!(
-            "setup line/{views}-views: {certified}/16 certified, mean nodes {}",
-            nodes / 16
-        );
-        let mut k = 0;
-        group.bench_function(format!("{views}-views/optimal"), |b| {
-            b.iter(|| {
-                let (p, s) = &problems[k % problems.len()];
-                k += 1;
-                triangulate_line_segments(black_box(p), black_box(s), SIGMA_PX, &opts)
-            })
-        });
+        for bound in LineBound::ALL {
+            let opts = TriangulationOptions {
+                line_bound: bound,
+                ..Default::default()
+            };
+            let results: Vec<_> = problems
+                .iter()
+                .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
+                .collect();
+            let certified = results.iter().filter(|r| r.report.certificate.certified).count();
+            let nodes: usize = results.iter().map(|r| r.report.certificate.nodes).sum();
+            let name = format!("{views}-views/optimal-{}", bound.as_str());
+            eprintln!("setup line/{name}: {certified}/16 certified, mean nodes {}", nodes / 16);
+            let mut k = 0;
+            group.bench_function(name, |b| {
+                b.iter(|| {
+                    let (p, s) = &problems[k % problems.len()];
+                    k += 1;
+                    triangulate_line_segments(black_box(p), black_box(s), SIGMA_PX, &opts)
+                })
+            });
+        }
     }
     group.finish();
 }
