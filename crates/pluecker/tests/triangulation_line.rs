@@ -195,7 +195,11 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
 /// centres and its midpoint (an epipolar plane): its images are nearly the epipolar lines. False when
 /// an endpoint leaves an image.
 fn tilt_into_epipolar_plane(scene: &mut LineScene, angle: f64) -> bool {
-    let centres: Vec<Vector3<f64>> = scene.cameras.iter().map(pluecker::triangulation::views::centre).collect();
+    let centres: Vec<Vector3<f64>> = scene
+        .cameras
+        .iter()
+        .map(pluecker::triangulation::views::centre)
+        .collect();
     let mid = 0.5 * (scene.endpoints[0] + scene.endpoints[1]);
     let baseline = (centres[1] - centres[0]).normalize();
     let normal = baseline.cross(&(mid - centres[0])).normalize();
@@ -236,7 +240,11 @@ fn search_below(
     violations: &mut usize,
 ) -> f64 {
     let cost = |a: &Vector3<f64>, b: &Vector3<f64>| independent_line_cost(&scene.cameras, lines, covariances, a, b);
-    let centres: Vec<Vector3<f64>> = scene.cameras.iter().map(pluecker::triangulation::views::centre).collect();
+    let centres: Vec<Vector3<f64>> = scene
+        .cameras
+        .iter()
+        .map(pluecker::triangulation::views::centre)
+        .collect();
     let distance = |c: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| (c - a).cross(&(b - a).normalize()).norm();
     let (p, d) = (optimal.point, optimal.direction);
     let reference: Vec<f64> = centres.iter().map(|c| distance(c, &p, &(p + d))).collect();
@@ -246,9 +254,14 @@ fn search_below(
             return false;
         }
         if every_line {
-            centres.iter().zip(&reference).all(|(c, r)| distance(c, a, b) >= 0.012 * r)
+            centres
+                .iter()
+                .zip(&reference)
+                .all(|(c, r)| distance(c, a, b) >= 0.012 * r)
         } else {
-            [a, b].iter().all(|x| scene.cameras.iter().all(|p| (p * x.push(1.0)).z > 0.0))
+            [a, b]
+                .iter()
+                .all(|x| scene.cameras.iter().all(|p| (p * x.push(1.0)).z > 0.0))
         }
     };
     let sample = |scale: f64, rng: &mut Rng| {

@@ -64,6 +64,15 @@ impl<const N: usize> Quadratic<N> {
         })
     }
 
+    /// The polynomial in new variables `u` with `w = M u`: `c`, `Mᵀg`, `MᵀSM`.
+    pub fn substitute(&self, m: &SMatrix<f64, N, N>) -> Self {
+        Quadratic {
+            constant: self.constant,
+            gradient: m.transpose() * self.gradient,
+            hessian: m.transpose() * self.hessian * m,
+        }
+    }
+
     /// An enclosure of `s` over the box `m ± h` (centred form).
     pub fn range(&self, m: &SVector<f64, N>, h: &SVector<f64, N>) -> Interval {
         self.enclose(m, h).0
@@ -96,11 +105,6 @@ impl<const D: usize, const N: usize> QuadraticRatio<D, N> {
         let g = self.denominator.value(w);
         SVector::from_fn(|k, _| self.numerator[k].value(w) / g)
     }
-}
-
-/// `f(w) = Σᵥ ‖rᵥ(w)‖²`.
-pub fn cost<const D: usize, const N: usize>(views: &[QuadraticRatio<D, N>], w: &SVector<f64, N>) -> f64 {
-    views.iter().map(|v| v.residual(w).norm_squared()).sum()
 }
 
 /// `f(w)` and `∇f(w)`.

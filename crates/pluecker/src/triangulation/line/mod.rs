@@ -395,24 +395,35 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn objective_gradient_matches_central_differences() {
-        let mut rng = Rng::new(61);
-        let cameras = ring_cameras(4, &mut rng);
+    /// `n` ring cameras (seed `seed`), the images of the line through `a = (0.2, −0.3, 0.1)` and
+    /// `b = (−0.3, 0.4, −0.2)` with small random errors, and view `i`'s whitening `whitening(i)`.
+    pub(crate) fn noisy_problem(
+        n: usize,
+        seed: u64,
+        whitening: impl Fn(usize) -> Matrix2<f64>,
+    ) -> (LineProblem, (Vector3<f64>, Vector3<f64>)) {
+        let mut rng = Rng::new(seed);
+        let cameras = ring_cameras(n, &mut rng);
         let (a, b) = (Vector3::new(0.2, -0.3, 0.1), Vector3::new(-0.3, 0.4, -0.2));
-        let lines: Vec<Vector3<f64>> = cameras
+        let frames = cameras
             .iter()
             .map(|p| {
-                (p * a.push(1.0)).cross(&(p * b.push(1.0)))
-                    + Vector3::new(rng.normal(), rng.normal(), rng.normal() * 300.0) * 1e-3
+                let l = (p * a.push(1.0)).cross(&(p * b.push(1.0)))
+                    + Vector3::new(rng.normal(), rng.normal(), rng.normal() * 300.0) * 1e-3;
+                LineFrame::of_line(&l).unwrap()
             })
             .collect();
-        let frames: Vec<LineFrame> = lines.iter().map(|l| LineFrame::of_line(l).unwrap()).collect();
         let problem = LineProblem {
             cameras,
             frames,
-            whitenings: vec![Matrix2::new(0.7, 0.0, 0.3, 1.4); 4],
+            whitenings: (0..n).map(whitening).collect(),
         };
+        (problem, (a, b))
+    }
+
+    #[test]
+    fn objective_gradient_matches_central_differences() {
+        let (problem, (a, b)) = noisy_problem(4, 61, |_| Matrix2::new(0.7, 0.0, 0.3, 1.4));
         let views = problem.views(&Similarity::identity());
         let objective = LineObjective { views: &views };
         let x = OrthonormalLine::from_plucker(&plucker::from_points(&a, &(b + Vector3::new(0.01, 0.0, 0.02)))).unwrap();

@@ -81,7 +81,7 @@ impl TaylorOracle<'_> {
         let lower: Vec<f64> = region.lower.iter().map(|&v| v.min(0.0)).collect();
         let upper: Vec<f64> = region.upper.iter().map(|&v| v.max(0.0)).collect();
         let mu = bound_over_box(&self.chart.views, &lower, &upper, f64::INFINITY).curvature;
-        if !(mu > 0.0) {
+        if mu.is_nan() || mu <= 0.0 {
             return 0.0;
         }
         let (f0, g0) = self.at_local;
@@ -149,7 +149,7 @@ pub(crate) fn optimal_line_taylor(
     let restricted = opts.max_reprojection_error.filter(|g| g * g < cost).map(|g| g * g);
     // Lines of the domain: ‖z_a‖, ‖z_b‖ ≤ γ, or ‖z‖² ≤ f(𝓛̂) for lines that can improve on 𝓛̂.
     let radius2 = restricted.map_or(cost, |g2| cost.min(2.0 * g2));
-    let chart = TwoViewChart::new(problem, &sim, &frame_local, radius2)?;
+    let chart = TwoViewChart::new(problem, &sim, &views, &frame_local, radius2)?;
     let mut local_opts = opts.local;
     local_opts.stopping.max_iterations = NODE_LOCAL_ITERATIONS;
     let mut oracle = TaylorOracle {

@@ -109,13 +109,23 @@ fn plane_of_residual(problem: &LineProblem, camera: &Matrix3x4<f64>, v: usize) -
 }
 
 impl TwoViewChart {
-    /// The chart around the frame line `line` (Plücker, in `sim`'s frame, cost `cost`) for lines
-    /// cheaper than `bound`; `None` when no pair of views is accepted (module docs).
-    pub fn new(problem: &LineProblem, sim: &Similarity, line: &Vector6<f64>, bound: f64) -> Option<TwoViewChart> {
+    /// The chart around the frame line `line` (Plücker, in `sim`'s frame) for lines cheaper than
+    /// `bound`, from the views' residuals in that frame (`problem.views(sim)`); `None` when no pair
+    /// of views is accepted (module docs).
+    pub fn new(
+        problem: &LineProblem,
+        sim: &Similarity,
+        residuals: &[FractionalResidual<2, 6>],
+        line: &Vector6<f64>,
+        bound: f64,
+    ) -> Option<TwoViewChart> {
         let cameras: Vec<Matrix3x4<f64>> = problem.cameras.iter().map(|p| sim.camera(p)).collect();
-        let residuals = problem.views(sim);
-        let pair = select_pair(problem, &cameras, &residuals, line, bound.sqrt())?;
-        let planes = [pair.0, pair.1].map(|v| plane_of_residual(problem, &cameras[v], v));
+        let planes: Vec<_> = cameras
+            .iter()
+            .enumerate()
+            .map(|(v, p)| plane_of_residual(problem, p, v))
+            .collect();
+        let pair = select_pair(&cameras, &planes, residuals, line, bound.sqrt())?;
         let centre = {
             let (za, zb) = (residuals[pair.0].residual(line), residuals[pair.1].residual(line));
             Vector4::new(za.x, za.y, zb.x, zb.y)
@@ -134,7 +144,7 @@ impl TwoViewChart {
                 .collect(),
             clearance: Vec::new(),
         };
-        chart.set_map(&planes, &residuals, Matrix4::identity());
+        chart.build(&[planes[pair.0], planes[pair.1]], residuals);
         // Whiten w by the Gauss-Newton information at z* (w = 0).
         let info = chart.views.iter().fold(Matrix4::zeros(), |acc, v| {
             let jac = SMatrix::<f64, 2, 4>::from_fn(|k, i| {
@@ -143,12 +153,9 @@ impl TwoViewChart {
             });
             acc + jac.transpose() * jac
         });
-        let map = info
-            .cholesky()
-            .and_then(|c| c.l().try_inverse())
-            .map(|l| l.transpose())
-            .unwrap_or_else(Matrix4::identity);
-        chart.set_map(&planes, &residuals, map);
+        if let Some(map) = info.cholesky().and_then(|c| c.l().try_inverse()).map(|l| l.transpose()) {
+            chart.whiten(&map);
+        }
         let zero = Vector4::zeros();
         let norm = |q: &[Quadratic<4>; 3]| q.iter().map(|c| c.value(&zero).powi(2)).sum::<f64>().sqrt();
         let d0 = norm(&chart.direction);
@@ -156,18 +163,13 @@ impl TwoViewChart {
         Some(chart)
     }
 
-    /// Builds the planes and the residual forms for `z = z* + map · w`.
-    fn set_map(
-        &mut self,
-        planes: &[(Vector4<f64>, Matrix4x2<f64>); 2],
-        residuals: &[FractionalResidual<2, 6>],
-        map: Matrix4<f64>,
-    ) {
-        self.map = map;
+    /// Builds the planes and the polynomial forms in `w = z − z*` (the map `M = I`).
+    fn build(&mut self, planes: &[(Vector4<f64>, Matrix4x2<f64>); 2], residuals: &[FractionalResidual<2, 6>]) {
         for (s, (pi0, g)) in planes.iter().enumerate() {
-            let rows = map.fixed_rows::<2>(2 * s).into_owned();
             let z0 = self.centre.fixed_rows::<2>(2 * s).into_owned();
-            self.planes[s] = (pi0 + g * z0, g * rows);
+            let mut p = Matrix4::zeros();
+            p.fixed_columns_mut::<2>(2 * s).copy_from(g);
+            self.planes[s] = (pi0 + g * z0, p);
         }
         let [(p0, p), (q0, q)] = self.planes;
         // 𝓛(w) = meet(p₀ + P w, q₀ + Q w): six quadratic forms.
@@ -190,9 +192,7 @@ impl TwoViewChart {
         }
         let combine = |row: &Vector6<f64>| Quadratic::combination(row.iter().copied().zip(coords.iter()));
         // d = (l₁₄, −l₄₂, l₃₄) (plucker::direction_moment).
-        let mut minus_l42 = coords[4];
-        minus_l42 = Quadratic::combination([(-1.0, &minus_l42)]);
-        self.direction = [coords[2], minus_l42, coords[5]];
+        self.direction = [coords[2], Quadratic::combination([(-1.0, &coords[4])]), coords[5]];
         self.moments = self
             .moment_rows
             .iter()
@@ -203,11 +203,11 @@ impl TwoViewChart {
             .enumerate()
             .map(|(v, r)| {
                 if v == self.pair.0 || v == self.pair.1 {
-                    // Exactly the chart coordinates: z_v = z*_v + M_v w.
+                    // Exactly the chart coordinates: z_v = z*_v + w_v.
                     let s = usize::from(v == self.pair.1);
                     let affine = |k: usize| Quadratic {
                         constant: self.centre[2 * s + k],
-                        gradient: map.row(2 * s + k).transpose(),
+                        gradient: Vector4::ith(2 * s + k, 1.0),
                         hessian: Matrix4::zeros(),
                     };
                     QuadraticRatio {
@@ -225,6 +225,24 @@ impl TwoViewChart {
                 }
             })
             .collect();
+    }
+
+    /// Changes the branching coordinates to `w'` with `w = map · w'` (so `z = z* + map · w'`): every
+    /// form is substituted, no form is rebuilt.
+    fn whiten(&mut self, map: &Matrix4<f64>) {
+        self.map *= map;
+        for (_, p) in self.planes.iter_mut() {
+            *p *= map;
+        }
+        let sub = |q: &Quadratic<4>| q.substitute(map);
+        for v in self.views.iter_mut() {
+            v.numerator = v.numerator.map(|n| sub(&n));
+            v.denominator = sub(&v.denominator);
+        }
+        for u in self.moments.iter_mut() {
+            *u = u.map(|c| sub(&c));
+        }
+        self.direction = self.direction.map(|c| sub(&c));
     }
 
     /// The 3-D line (Plücker, conditioned frame) at `w`.
@@ -289,8 +307,8 @@ impl TwoViewChart {
 
 /// The accepted pair with the least score of the module docs (views with non-singular `Iᵥ` sums).
 fn select_pair(
-    problem: &LineProblem,
     cameras: &[Matrix3x4<f64>],
+    planes: &[(Vector4<f64>, Matrix4x2<f64>)],
     residuals: &[FractionalResidual<2, 6>],
     line: &Vector6<f64>,
     radius: f64,
@@ -318,7 +336,7 @@ fn select_pair(
             }
             // l_v(z)·e_v = π_v(z)·C_other = (π₀ + G z)·C_other, affine in z: no zero on the disc.
             let clear = |v: usize, other: usize| {
-                let (pi0, g) = plane_of_residual(problem, &cameras[v], v);
+                let (pi0, g) = planes[v];
                 let c = centres[other];
                 pi0.dot(&c).abs() > EPIPOLE_MARGIN * radius * (g.transpose() * c).norm()
             };
@@ -334,8 +352,7 @@ fn select_pair(
 mod tests {
     use super::*;
     use crate::rng::Rng;
-    use crate::triangulation::line::tests::ring_cameras;
-    use crate::triangulation::line::LineFrame;
+    use crate::triangulation::line::tests::noisy_problem;
     use nalgebra::{Matrix2, Vector3};
 
     #[test]
@@ -362,29 +379,15 @@ mod tests {
 
     #[test]
     fn chart_residuals_equal_the_views_residuals_and_the_pair_is_exact() {
-        let mut rng = Rng::new(9);
-        let cameras = ring_cameras(5, &mut rng);
-        let (a, b) = (Vector3::new(0.2, -0.3, 0.1), Vector3::new(-0.3, 0.4, -0.2));
-        let lines: Vec<Vector3<f64>> = cameras
-            .iter()
-            .map(|p| {
-                (p * a.push(1.0)).cross(&(p * b.push(1.0)))
-                    + Vector3::new(rng.normal(), rng.normal(), rng.normal() * 300.0) * 1e-3
-            })
-            .collect();
-        let problem = LineProblem {
-            cameras: cameras.clone(),
-            frames: lines.iter().map(|l| LineFrame::of_line(l).unwrap()).collect(),
-            whitenings: (0..5)
-                .map(|i| Matrix2::new(0.7 + 0.1 * i as f64, 0.0, 0.3, 1.4))
-                .collect(),
-        };
+        let (problem, (a, b)) = noisy_problem(5, 9, |i| Matrix2::new(0.7 + 0.1 * i as f64, 0.0, 0.3, 1.4));
+        let cameras = problem.cameras.clone();
+        let mut rng = Rng::new(10);
         let sim = Similarity::of_cameras(&cameras);
         let truth = plucker::transform(&sim.matrix(), &plucker::from_points(&a, &b));
-        let cost = fraction::cost(&problem.views(&sim), &truth);
-        let chart = TwoViewChart::new(&problem, &sim, &truth, 4.0 * cost).expect("a pair");
-        assert!(chart.line(&Vector4::zeros()).normalize().dot(&truth.normalize()).abs() > 1.0 - 1e-10);
         let residuals = problem.views(&sim);
+        let cost = fraction::cost(&residuals, &truth);
+        let chart = TwoViewChart::new(&problem, &sim, &residuals, &truth, 4.0 * cost).expect("a pair");
+        assert!(chart.line(&Vector4::zeros()).normalize().dot(&truth.normalize()).abs() > 1.0 - 1e-10);
         // The clearance is CENTRE_CLEARANCE times the local line's distance from each centre.
         let cams: Vec<Matrix3x4<f64>> = cameras.iter().map(|p| sim.camera(p)).collect();
         let (p0, d0) = plucker::to_point_direction(&truth).unwrap();
