@@ -26,6 +26,16 @@ DELAY, SAFETY = 0.3, 60.0
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGINT") or os.name == "nt", reason="POSIX signals")
 
 
+@pytest.fixture(autouse=True)
+def sigint_raises_keyboard_interrupt():
+    """Python's own SIGINT handler for the test. A process started in the background by a
+    non-interactive shell (``make test &``) inherits SIGINT ignored, and Python then installs no
+    handler: the signal would be dropped and no call could be stopped."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def sigint_after(seconds: float) -> threading.Timer:
     """Sends SIGINT to this process after ``seconds`` (Python raises KeyboardInterrupt in the main thread)."""
     timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
