@@ -97,7 +97,7 @@ fn noisy_ellipsoids_are_certified_and_costs_ordered() {
         assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
         assert!(optimal.report.cost <= local.report.cost + tol, "seed {seed}");
         let c = optimal.report.certificate;
-        assert_eq!(c.kind, CertificateKind::BranchAndBound);
+        assert_eq!(c.kind, CertificateKind::ConvexityTest, "seed {seed}");
         assert!(
             c.certified && c.lower_bound <= optimal.report.cost,
             "seed {seed}: {:?}",
@@ -119,99 +119,223 @@ fn noisy_ellipsoids_are_certified_and_costs_ordered() {
     }
 }
 
+/// A regime of the soundness test: the scene and the covariances of its fitted conics.
+struct Regime {
+    name: &'static str,
+    spread: f64,
+    /// `Some(tilt)`: the ellipsoid made a disc whose normal is `tilt` radians from the arc's axis.
+    disc_tilt: Option<f64>,
+    /// Per-entry standard-deviation factors applied to the fitted covariances.
+    anisotropy: [f64; 5],
+}
+
+/// The scene of a regime: `None` when an outline is not an ellipse at least 8 px across.
+fn regime_scene(regime: &Regime, seed: u64) -> Option<pluecker::triangulation::scenes::QuadricScene> {
+    let mut scene = quadric_scene(4, regime.spread, seed);
+    if let Some(tilt) = regime.disc_tilt {
+        let mut rng = Rng::new(seed + 7);
+        // The normal −z (towards the cameras) turned by `tilt` about a random axis in the xy plane.
+        let about = Vector3::new(rng.normal(), rng.normal(), 0.0).normalize();
+        let normal = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(about), tilt) * -Vector3::z();
+        let first = normal.cross(&rng.unit_vector3()).normalize();
+        let axes = Matrix3::from_columns(&[first, normal.cross(&first), normal]);
+        scene.ellipsoid = Ellipsoid {
+            centre: scene.ellipsoid.centre,
+            axes,
+            semi_axes: Vector3::new(rng.uniform_in(0.3, 0.5), rng.uniform_in(0.15, 0.3), 0.0),
+        };
+        scene.outlines = scene
+            .cameras
+            .iter()
+            .map(|p| Ellipse::from_primal(&project_dual(p, &scene.ellipsoid.dual()).try_inverse()?))
+            .collect::<Option<Vec<_>>>()?;
+    }
+    scene.outlines.iter().all(|e| e.semi_axes.y > 8.0).then_some(scene)
+}
+
 #[test]
 fn no_ellipsoid_anywhere_costs_less_than_the_certified_bound() {
-    // The bound of certified ellipsoids against ellipsoids from the whole domain (not only near the
-    // answer): 20000 random ones (centres in a box 4x the scene, random axes, semi-axes 0.05-2) in front
-    // of every camera, a random descent from the 30 cheapest (many starts), and the optimum moved by 1e-1
-    // to 1e-5 of the scene. The cost is recomputed without the library's quadric code.
-    let (mut checked, mut violations) = (0, 0);
-    for seed in [30u64, 32, 34] {
-        let scene = quadric_scene(4, 0.8, seed);
-        let mut rng = Rng::new(seed + 1);
-        let points = scene.noisy_outline_points(63, 1.0, &mut rng);
-        let optimal = triangulate_quadric_points(&scene.cameras, &points, 1.0, &opts(Method::Optimal)).unwrap();
-        let c = optimal.report.certificate;
-        if !c.certified {
-            continue;
-        }
-        checked += 1;
-        let fits: Vec<_> = points.iter().map(|p| fit_conic(p, 1.0).unwrap()).collect();
-        let conics: Vec<Matrix3<f64>> = fits.iter().map(|f| f.conic).collect();
-        let covariances: Vec<Matrix5> = fits.iter().map(|f| f.covariance).collect();
-        // (centre, rotation vector, semi-axes) → cost, when every camera sees it in front.
-        let cost = |x: &[f64; 9]| -> Option<f64> {
-            let e = Ellipsoid {
-                centre: Vector3::new(x[0], x[1], x[2]),
-                axes: Rotation3::new(Vector3::new(x[3], x[4], x[5])).into_inner(),
-                semi_axes: Vector3::new(x[6].abs(), x[7].abs(), x[8].abs()),
+    // The bound of every certified ellipsoid against ellipsoids from the whole domain of the
+    // certificate (every ellipsoid, flat ones included, that no camera's principal plane cuts, in front
+    // of the cameras or behind them), not only near the answer: 20000 random ones (centres in a box 16
+    // units wide around the scene and the cameras, random axes, semi-axes 0.01-3, a third of them
+    // flat), 1000 small ones near each camera centre, a random descent from the 30 cheapest (many
+    // starts, flat ones reachable), and the answer moved by 1e-1 to 1e-5 (flattened too). The cost is
+    // recomputed without the library's quadric code. Six regimes: ellipsoids at 46° and 3° of
+    // parallax, discs at 46° and 3°, discs seen up to 83° from their normal (nearly edge-on), and
+    // anisotropic covariances (entry standard deviations scaled by 3 to 0.3).
+    let regimes = [
+        Regime {
+            name: "ellipsoid, 46°",
+            spread: 0.8,
+            disc_tilt: None,
+            anisotropy: [1.0; 5],
+        },
+        Regime {
+            name: "ellipsoid, 3°",
+            spread: 0.05,
+            disc_tilt: None,
+            anisotropy: [1.0; 5],
+        },
+        Regime {
+            name: "disc, 46°",
+            spread: 0.8,
+            disc_tilt: Some(0.4),
+            anisotropy: [1.0; 5],
+        },
+        Regime {
+            name: "disc, 3°",
+            spread: 0.05,
+            disc_tilt: Some(0.4),
+            anisotropy: [1.0; 5],
+        },
+        Regime {
+            name: "disc nearly edge-on",
+            spread: 0.8,
+            disc_tilt: Some(1.05),
+            anisotropy: [1.0; 5],
+        },
+        Regime {
+            name: "anisotropic",
+            spread: 0.8,
+            disc_tilt: Some(0.4),
+            anisotropy: [3.0, 1.0, 0.3, 2.0, 0.5],
+        },
+    ];
+    let (mut checked, mut tried, mut violations) = (0, 0, 0);
+    for regime in &regimes {
+        let mut certified_here = 0;
+        for seed in 0..5u64 {
+            let Some(scene) = regime_scene(regime, 30 + seed) else {
+                continue;
             };
-            let in_front = scene
-                .cameras
-                .iter()
-                .all(|p| (p * e.centre.push(1.0)).z > 2.0 * e.semi_axes.max());
-            in_front.then(|| independent_quadric_cost(&scene.cameras, &conics, &covariances, &e.dual()))
+            tried += 1;
+            let mut rng = Rng::new(seed + 1);
+            let points = scene.noisy_outline_points(63, 1.0, &mut rng);
+            let fits: Vec<_> = points.iter().map(|p| fit_conic(p, 1.0).unwrap()).collect();
+            let conics: Vec<Matrix3<f64>> = fits.iter().map(|f| f.conic).collect();
+            let scale = Matrix5::from_diagonal(&nalgebra::SVector::<f64, 5>::from(regime.anisotropy));
+            let covariances: Vec<Matrix5> = fits.iter().map(|f| scale * f.covariance * scale).collect();
+            let optimal =
+                triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).unwrap();
+            let c = optimal.report.certificate;
+            if !c.certified {
+                continue;
+            }
+            certified_here += 1;
+            let found = search_below(
+                &scene.cameras,
+                &conics,
+                &covariances,
+                &optimal,
+                c.lower_bound,
+                &mut rng,
+                &mut violations,
+            );
+            let slack = 1e-9 * (1.0 + optimal.report.cost);
+            assert!(
+                found >= optimal.report.cost * (1.0 - 1e-3) - slack,
+                "{} seed {seed}: {found} < {}",
+                regime.name,
+                optimal.report.cost
+            );
+        }
+        eprintln!("{}: {certified_here} certified and checked", regime.name);
+        checked += certified_here;
+    }
+    eprintln!("{checked} of {tried} certified ellipsoids checked; {violations} violations");
+    assert_eq!(violations, 0);
+    // Measured: 29 of 29, every one by the convexity test (a nearly edge-on seed has no scene). At
+    // the target rate of 0.95, fewer than 24 of 29 happens with probability 0.003 (binomial);
+    // a test that stops certifying leaves these to a node cap of 200.
+    assert!(checked + 5 >= tried, "only {checked} of {tried} certified");
+}
+
+/// The least cost found over the certificate's domain (see the test above); every cost below `bound`
+/// (less a rounding slack) counts as a violation.
+fn search_below(
+    cameras: &[Matrix3x4<f64>],
+    conics: &[Matrix3<f64>],
+    covariances: &[Matrix5],
+    optimal: &pluecker::triangulation::quadric::QuadricTriangulation,
+    bound: f64,
+    rng: &mut Rng,
+    violations: &mut usize,
+) -> f64 {
+    // (centre, rotation vector, signed semi-axes) → cost, when no principal plane cuts the ellipsoid
+    // (πᵀ Q* π < 0 for the dual Q* normalised to Q*₄₄ = −1).
+    let cost = |x: &[f64; 9]| -> Option<f64> {
+        let e = Ellipsoid {
+            centre: Vector3::new(x[0], x[1], x[2]),
+            axes: Rotation3::new(Vector3::new(x[3], x[4], x[5])).into_inner(),
+            semi_axes: Vector3::new(x[6].abs(), x[7].abs(), x[8].abs()),
         };
-        let mut candidates: Vec<(f64, [f64; 9])> = Vec::new();
-        while candidates.len() < 20_000 {
-            let x: [f64; 9] = std::array::from_fn(|k| match k {
-                0..=2 => rng.uniform_in(-2.0, 2.0),
-                3..=5 => rng.uniform_in(-3.2, 3.2),
-                _ => rng.uniform_in(0.05, 2.0),
-            });
+        let dual = e.dual();
+        let missed = cameras.iter().all(|p| {
+            let plane = p.row(2).transpose();
+            plane.dot(&(dual * plane)) < 0.0
+        });
+        missed.then(|| independent_quadric_cost(cameras, conics, covariances, &dual))
+    };
+    let random = |centre: Vector3<f64>, reach: f64, largest: f64, rng: &mut Rng| -> [f64; 9] {
+        let flat = rng.uniform_in(0.0, 1.0) < 1.0 / 3.0;
+        std::array::from_fn(|k| match k {
+            0..=2 => centre[k] + rng.uniform_in(-reach, reach),
+            3..=5 => rng.uniform_in(-3.2, 3.2),
+            8 if flat => 0.0,
+            _ => largest * 10f64.powf(rng.uniform_in(-2.0, 0.0)),
+        })
+    };
+    let mut candidates: Vec<(f64, [f64; 9])> = Vec::new();
+    while candidates.len() < 20_000 {
+        let x = random(Vector3::zeros(), 8.0, 3.0, rng);
+        candidates.extend(cost(&x).map(|v| (v, x)));
+    }
+    for p in cameras {
+        let centre = pluecker::triangulation::views::centre(p);
+        let mut added = 0;
+        while added < 1000 {
+            let x = random(centre, 2.0, 0.5, rng);
             if let Some(v) = cost(&x) {
                 candidates.push((v, x));
+                added += 1;
             }
         }
-        candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut costs: Vec<f64> = candidates.iter().map(|c| c.0).collect();
-        for &(mut best, mut x) in candidates.iter().take(30) {
-            let mut step = 0.3;
-            for _ in 0..500 {
-                let y: [f64; 9] = std::array::from_fn(|k| x[k] + step * rng.normal());
-                match cost(&y) {
-                    Some(v) if v < best => (best, x) = (v, y),
-                    _ => step *= 0.99,
-                }
-            }
-            costs.push(best);
-        }
-        // The independent cost agrees with the reported one at the answer.
-        let at_answer = independent_quadric_cost(&scene.cameras, &conics, &covariances, &optimal.dual);
-        assert!(
-            (at_answer - optimal.report.cost).abs() <= 1e-8 * (1.0 + at_answer),
-            "{at_answer} vs {}",
-            optimal.report.cost
-        );
-        let rotation = Rotation3::from_matrix(&optimal.axes).scaled_axis();
-        let at = [
-            optimal.centre.x,
-            optimal.centre.y,
-            optimal.centre.z,
-            rotation.x,
-            rotation.y,
-            rotation.z,
-            optimal.semi_axes.x,
-            optimal.semi_axes.y,
-            optimal.semi_axes.z,
-        ];
-        for k in 0..500 {
-            let scale = 10f64.powi(-(k % 5) - 1);
-            let y: [f64; 9] = std::array::from_fn(|i| at[i] + scale * rng.normal());
-            costs.extend(cost(&y));
-        }
-        let slack = 1e-9 * (1.0 + optimal.report.cost);
-        violations += costs.iter().filter(|&&v| v < c.lower_bound - slack).count();
-        let found = costs.iter().copied().fold(f64::INFINITY, f64::min);
-        assert!(
-            found >= optimal.report.cost * (1.0 - 1e-3) - slack,
-            "seed {seed}: {found} < {}",
-            optimal.report.cost
-        );
     }
-    eprintln!("{checked} certified ellipsoids checked; {violations} violations");
-    assert!(checked >= 2, "only {checked} of 3 certified");
-    assert_eq!(violations, 0);
+    candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut costs: Vec<f64> = candidates.iter().map(|c| c.0).collect();
+    for &(mut best, mut x) in candidates.iter().take(30) {
+        let mut step = 0.3;
+        for _ in 0..500 {
+            let y: [f64; 9] = std::array::from_fn(|k| x[k] + step * rng.normal());
+            match cost(&y) {
+                Some(v) if v < best => (best, x) = (v, y),
+                _ => step *= 0.99,
+            }
+        }
+        costs.push(best);
+    }
+    // The independent cost agrees with the reported one at the answer.
+    let at_answer = independent_quadric_cost(cameras, conics, covariances, &optimal.dual);
+    assert!(
+        (at_answer - optimal.report.cost).abs() <= 1e-8 * (1.0 + at_answer),
+        "{at_answer} vs {}",
+        optimal.report.cost
+    );
+    let rotation = Rotation3::from_matrix(&optimal.axes).scaled_axis();
+    let (c, s) = (optimal.centre, optimal.semi_axes);
+    let at = [c.x, c.y, c.z, rotation.x, rotation.y, rotation.z, s.x, s.y, s.z];
+    for k in 0..1000 {
+        let scale = 10f64.powi(-(k % 5) - 1);
+        let mut y: [f64; 9] = std::array::from_fn(|i| at[i] + scale * rng.normal());
+        if k % 2 == 0 {
+            y[8] = 0.0;
+        }
+        costs.extend(cost(&y));
+    }
+    let slack = 1e-9 * (1.0 + optimal.report.cost);
+    *violations += costs.iter().filter(|&&v| v < bound - slack).count();
+    costs.iter().copied().fold(f64::INFINITY, f64::min)
 }
 
 /// Eq. 19 at a world dual quadric without the library's quadric code: the image dual conic `P Q* Pᵀ`
@@ -241,16 +365,33 @@ fn independent_quadric_cost(
 }
 
 #[test]
-fn too_small_gamma_is_infeasible() {
-    let scene = quadric_scene(4, 0.8, 40);
-    let mut rng = Rng::new(41);
-    let points = scene.noisy_outline_points(63, 1.0, &mut rng);
+fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
+    // γ restricts the domain of branch and bound; the convexity test's certificate covers every
+    // ellipsoid and does not look at it (as for points). The first 3-view scene with 15 px of outline
+    // noise whose local ellipsoid the convexity test cannot certify:
+    let fitted = |scene: &pluecker::triangulation::scenes::QuadricScene, seed: u64| {
+        let points = scene.noisy_outline_points(63, 15.0, &mut Rng::new(seed));
+        let fits: Option<Vec<_>> = points.iter().map(|p| fit_conic(p, 15.0).ok()).collect();
+        fits.map(|f| {
+            (
+                f.iter().map(|f| f.conic).collect::<Vec<_>>(),
+                f.iter().map(|f| f.covariance).collect::<Vec<_>>(),
+            )
+        })
+    };
+    let hard = (0..60u64).find_map(|seed| {
+        let scene = quadric_scene(3, 0.8, 40 + seed);
+        let (conics, covariances) = fitted(&scene, seed)?;
+        let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).ok()?;
+        (r.report.certificate.kind == CertificateKind::BranchAndBound).then_some((scene, conics, covariances))
+    });
+    let (scene, conics, covariances) = hard.expect("some 3-view scene at 15 px needs branch and bound");
     let o = TriangulationOptions {
         max_reprojection_error: Some(1e-3),
         ..opts(Method::Optimal)
     };
-    let r = triangulate_quadric_points(&scene.cameras, &points, 1.0, &o).unwrap();
-    assert_eq!(r.report.status, Status::Infeasible);
+    let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &o).unwrap();
+    assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
     assert!(!r.report.certificate.certified);
 }
 

@@ -9,10 +9,13 @@
 //!   Plücker coordinates of lines;
 //! - [`interval`], [`taylor_bound`]: interval arithmetic and the interval Taylor bounds of a sum of
 //!   squared ratios of quadratics over a box (the line certificate's default bound);
+//! - [`convexity`]: the sufficient global-optimality test of a sum of squared ratios of affine maps
+//!   (strong convexity on an enclosure of the sublevel set), shared by points and quadrics;
 //! - [`branch_and_bound`]: a generic best-first branch and bound over an axis-aligned box, driven by a
 //!   problem-specific [`branch_and_bound::BoundingOracle`].
 
 pub mod branch_and_bound;
+pub mod convexity;
 pub mod envelopes;
 pub mod interval;
 pub mod monomial;

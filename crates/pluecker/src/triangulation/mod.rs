@@ -308,7 +308,10 @@ impl CertificateKind {
             (CertificateKind::None, _) => "none",
             (_, Primitive::Point) => "every point in front of every camera",
             (CertificateKind::ConvexityTest, Primitive::Line) => "every line (a cost at the zero bound)",
-            (CertificateKind::ConvexityTest, Primitive::Quadric) => "every quadric (a cost at the zero bound)",
+            (CertificateKind::ConvexityTest, Primitive::Quadric) => {
+                "every ellipsoid, flat ones included, that no camera's principal plane cuts, in front of the \
+                 cameras or behind them"
+            }
             (CertificateKind::BranchAndBound, Primitive::Line) => {
                 "lines whose points on two planes across the local line project within twice the eq. 27 strip \
                  widths of every observed line, at depths up to 100 times the local line's"

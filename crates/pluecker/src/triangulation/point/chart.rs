@@ -17,34 +17,15 @@
 //! point in front of every camera iff `w > 0` and every `ζᵢ > 0`; it is `X = X̂ + T y / w`.
 
 use super::cost::PointView;
-use nalgebra::{Matrix2x3, Matrix3, SymmetricEigen, Vector2, Vector3};
+use crate::global::convexity::RatioView;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 /// Smallest accepted ratio of the least to the largest eigenvalue of `M` (a direction the data do
 /// not constrain at all makes the chart singular).
 const MIN_CONDITION: f64 = 1e-14;
 
 /// One view in chart coordinates: `a(y) = a0 + G y`, `ζ(y) = 1 + dᵀy`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct ChartView {
-    /// `r̂`, the whitened residual at the local solution (pixels).
-    pub a0: Vector2<f64>,
-    /// `G`, the numerator's Jacobian in `y`.
-    pub g: Matrix2x3<f64>,
-    /// `d`, the denominator's gradient in `y`.
-    pub d: Vector3<f64>,
-}
-
-impl ChartView {
-    /// `a(y)`.
-    pub(crate) fn numerator(&self, y: &Vector3<f64>) -> Vector2<f64> {
-        self.a0 + self.g * y
-    }
-
-    /// `ζ(y)`.
-    pub(crate) fn denominator(&self, y: &Vector3<f64>) -> f64 {
-        1.0 + self.d.dot(y)
-    }
-}
+pub(crate) type ChartView = RatioView<2, 3>;
 
 /// Which chart (module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -126,10 +107,7 @@ impl Chart {
     /// The cost of eq. 19 at `y`, `Σ ‖aᵢ‖²/ζᵢ²` (the tests' check of the chart against eq. 19).
     #[cfg(test)]
     pub fn cost(&self, y: &Vector3<f64>) -> f64 {
-        self.views
-            .iter()
-            .map(|v| v.numerator(y).norm_squared() / v.denominator(y).powi(2))
-            .sum()
+        crate::global::convexity::cost(&self.views, y)
     }
 }
 

@@ -11,7 +11,7 @@
 //! the split is at the relaxed minimiser kept inside the middle half of the interval.
 //!
 //! **Search set.** Every point at least as good as `X̂` lies in `S_{ε₀}` (each view's error is at
-//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of `certificate::enclosure`
+//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of `crate::global::convexity::enclosure`
 //! (`S_{ε₀}` cut by an ellipsoid); points outside cost more than `f(X̂)`. The search runs over
 //! `K ∩ S_γ ∩ {w ≥ 0}` (`γ` the user's `max_reprojection_error`, by default `ε₀`), so a lower bound
 //! below `f(X̂)` is a lower bound over every point in front of the cameras within `γ`.
@@ -35,10 +35,11 @@
 //! [`crate::global::socp`], valid despite the solver's tolerance. The upper bound comes from a
 //! local minimisation started at the relaxed minimiser.
 
-use super::certificate::{enclosure, Enclosure};
+use super::certificate::a_priori_kappa;
 use super::chart::{Chart, ChartKind, ChartView};
 use super::cost::{in_front, point_cost, PointObjective, PointView};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+use crate::global::convexity::{enclosure, Enclosure};
 use crate::global::envelopes::{add_fraction_envelope, add_quadratic_over_linear, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::global::CERTIFICATE_COST_FLOOR;
@@ -149,7 +150,7 @@ fn numerator_peak(v: &ChartView, region: &Region) -> f64 {
 
 /// The constraints of the search set (module docs) on the variables `y`: `w ≥ 0`, the per-view
 /// cones of `S_γ` when `gamma` is given, the ellipsoid of `K` when `enclosure` is.
-fn add_search_set(p: &mut Socp, chart: &Chart, y: &[usize; 3], gamma: Option<f64>, enclosure: Option<&Enclosure>) {
+fn add_search_set(p: &mut Socp, chart: &Chart, y: &[usize; 3], gamma: Option<f64>, enclosure: Option<&Enclosure<3>>) {
     let w = Affine {
         terms: (0..3).map(|j| (y[j], -chart.w_gradient[j])).collect(),
         constant: 1.0,
@@ -168,7 +169,7 @@ fn add_search_set(p: &mut Socp, chart: &Chart, y: &[usize; 3], gamma: Option<f64
 struct PointOracle<'a> {
     views: &'a [PointView],
     chart: Chart,
-    enclosure: Option<Enclosure>,
+    enclosure: Option<Enclosure<3>>,
     /// Denominator bounds valid on the whole search set.
     root_depths: Vec<(f64, f64)>,
     gamma: f64,
@@ -316,7 +317,7 @@ struct Root {
 }
 
 /// The initial box by conic solves (module docs).
-fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure>) -> Result<Root, GlobalStatus> {
+fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -> Result<Root, GlobalStatus> {
     let mut base = Socp::new();
     let y = [0, 1, 2].map(|_| base.add_variable(f64::NEG_INFINITY, f64::INFINITY));
     add_search_set(&mut base, chart, &y, Some(gamma), enclosure);
@@ -439,7 +440,12 @@ pub fn global_point(
         return finish(GlobalStatus::Failed);
     };
     // Every point at least as good as the incumbent lies in S_γ ∩ K when γ ≥ ε₀ (module docs).
-    let enclosure = enclosure(&chart, cost_local, gamma.max(cost_local.sqrt()), true);
+    let enclosure = enclosure(
+        &chart.views,
+        cost_local,
+        gamma.max(cost_local.sqrt()),
+        a_priori_kappa(ChartKind::MeanDepth, chart.views.len()),
+    );
     let from_enclosure = enclosure.as_ref().and_then(|k| {
         let (lo, hi) = k.bounding_box()?;
         Some(Root {

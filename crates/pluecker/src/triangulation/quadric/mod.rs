@@ -15,7 +15,11 @@
 //! - `local`: the trust region of [`crate::optim`] from the linear ellipsoid over its centre, rotation
 //!   and signed semi-axes `s` with `L = H diag(s₁², s₂², s₃², −1) Hᵀ` (`H = [R c; 0 1]`): every
 //!   iterate is a real ellipsoid (flat when a semi-axis reaches 0), so the result is always proper;
-//! - `optimal`: the local ellipsoid, then branch and bound (section 4, [`self::optimal`]).
+//!   A run that ends flat is tried again from a thin ellipsoid when the cost decreases with the
+//!   zero semi-axis (a flat start is a stationary point of the signed semi-axes, see `unflattened`);
+//! - `optimal`: the local ellipsoid, certified by the convexity test of [`self::certificate`] (every
+//!   ellipsoid that no principal plane cuts), or, when the test cannot decide, by branch and bound
+//!   (section 4, [`self::optimal`], over an a-priori box).
 //!
 //! Degenerate input is an error: fewer than 3 views (two views leave a one-parameter family of
 //! quadrics tangent to both viewing cones), mismatched lengths, NaN/inf, a singular camera, a conic
@@ -24,6 +28,7 @@
 //! camera's principal plane, has status [`Status::BehindCamera`].
 
 pub mod batch;
+pub mod certificate;
 pub mod optimal;
 pub mod residual;
 
@@ -39,7 +44,7 @@ use crate::error::{Error, Result};
 use crate::geometry::quadric::{
     centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, vec_to_sym4, CentreShape, Ellipsoid,
 };
-use crate::optim::{trust_region, Linearization, Objective};
+use crate::optim::{trust_region, Linearization, Objective, Summary};
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, SMatrix, SVector, Vector2, Vector3};
 use std::time::Instant;
 
@@ -378,9 +383,51 @@ pub(crate) fn local_quadric(
     let views = problem.views(&sim);
     let x0 = EllipsoidPoint::of(&Ellipsoid::from_dual(&transform_dual(&sim.matrix(), &start.dual())).unwrap_or(*start));
     let objective = QuadricObjective { views: &views };
-    let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
+    let (mut x, mut summary) = trust_region::minimize(&objective, x0, &opts.local);
+    // At most one escape per semi-axis.
+    for _ in 0..3 {
+        let Some(thin) = unflattened(&views, &x) else {
+            break;
+        };
+        let (y, again) = trust_region::minimize(&objective, thin, &opts.local);
+        if !(again.final_cost < summary.final_cost) {
+            break;
+        }
+        x = y;
+        summary = Summary {
+            iterations: summary.iterations + again.iterations,
+            evaluations: summary.evaluations + again.evaluations,
+            initial_cost: summary.initial_cost,
+            ..again
+        };
+    }
     let world = x.to_world(&sim).unwrap_or(*start);
     (world, Report::of_local(&summary))
+}
+
+/// Semi-axes at most this fraction of the largest count as zero for [`unflattened`].
+const FLAT: f64 = 1e-6;
+
+/// A flat ellipsoid (a semi-axis at 0) is a stationary point of the cost over [`EllipsoidPoint`]s
+/// whatever the data say, the cost depending on `s²` only: the local method started flat (the linear
+/// method clamps a negative eigenvalue of the shape to 0) stays flat even where a thin ellipsoid fits
+/// better. When the cost decreases with `s_k²` at a zero `s_k`, the start of a second run:
+/// `s_k² = −f'/f''`, the Gauss-Newton step along `s_k²` (tangent `∂L/∂(s_k²) = hₖhₖᵀ`, `hₖ` the
+/// `k`-th column of `H`). `None` when no semi-axis is zero or none should grow.
+fn unflattened(views: &[FractionalResidual<5, 10>], x: &EllipsoidPoint) -> Option<EllipsoidPoint> {
+    let largest = x.s.abs().max();
+    let z = sym4_to_vec(&x.dual());
+    (0..3).filter(|&k| x.s[k].abs() <= FLAT * largest).find_map(|k| {
+        let column = x.h().column(k).into_owned();
+        let tangent = SMatrix::<f64, 10, 1>::from_column_slice(sym4_to_vec(&(column * column.transpose())).as_slice());
+        let lin = fraction::linearize(views, &z, &tangent);
+        let (slope, curvature) = (lin.gradient[0], lin.gauss_newton[(0, 0)]);
+        (slope < 0.0 && curvature > 0.0).then(|| {
+            let mut thin = *x;
+            thin.s[k] = (-slope / curvature).sqrt();
+            thin
+        })
+    })
 }
 
 /// The 9x9 covariance of an ellipsoid in the [`CentreShape`] chart ([`super::uncertainty`]), computed in the
@@ -435,6 +482,41 @@ mod tests {
         };
         let views = problem.views(&Similarity::identity());
         assert!(gradient_error(&QuadricObjective { views: &views }, &x, 1e-6) < 1e-5);
+    }
+
+    #[test]
+    fn a_thin_ellipsoid_is_found_from_a_flat_start() {
+        // Started flat, the local method would stay flat (the cost depends on s² only); the escape
+        // of `unflattened` finds the thin ellipsoid of the exact outlines.
+        let scene = quadric_scene(4, 0.8, 3);
+        let thin = Ellipsoid {
+            semi_axes: Vector3::new(0.4, 0.3, 0.03),
+            ..scene.ellipsoid
+        };
+        let frames: Vec<ConicFrame> = scene
+            .cameras
+            .iter()
+            .map(|p| {
+                ConicFrame::of_conic(
+                    &crate::geometry::quadric::project_dual(p, &thin.dual())
+                        .try_inverse()
+                        .unwrap(),
+                )
+                .unwrap()
+            })
+            .collect();
+        let problem = QuadricProblem {
+            cameras: scene.cameras.clone(),
+            frames,
+            whitenings: vec![Matrix5::identity(); 4],
+        };
+        let flat = Ellipsoid {
+            semi_axes: Vector3::new(0.4, 0.3, 0.0),
+            ..thin
+        };
+        let (e, report) = local_quadric(&problem, &flat, &TriangulationOptions::default());
+        assert!((e.semi_axes - thin.semi_axes).norm() < 1e-6, "{:?}", e.semi_axes);
+        assert!(report.cost < 1e-10, "{}", report.cost);
     }
 
     #[test]

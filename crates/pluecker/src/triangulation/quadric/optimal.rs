@@ -1,4 +1,5 @@
-//! Branch and bound for quadrics (Josephson & Kahl 2008, sections 4.1.1, 4.2, 4.3.1).
+//! Branch and bound for quadrics (Josephson & Kahl 2008, sections 4.1.1, 4.2, 4.3.1), when the
+//! convexity test of [`super::certificate`], tried first, cannot close the gap.
 //!
 //! **Variables.** In the conditioned frame of the local ellipsoid (origin at its centre, unit its
 //! largest semi-axis) the dual quadric is normalised to `L₄₄ = +1`, so that `L = [ccᵀ − S, c; cᵀ, 1]`
@@ -23,6 +24,7 @@
 //! minimiser; each node's relaxed `q`, made an ellipsoid, starts a short local minimisation whose cost
 //! is an upper bound.
 
+use super::certificate::convexity_bound;
 use super::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
@@ -157,6 +159,25 @@ impl BoundingOracle for QuadricOracle<'_> {
     }
 }
 
+/// The certificate of the convexity test ([`super::certificate`]) when it closes the gap.
+fn convexity_certificate(
+    views: &[FractionalResidual<5, 10>],
+    reference: &SVector<f64, 10>,
+    cost: f64,
+    max_relative_gap: f64,
+) -> Option<Certificate> {
+    let lower = convexity_bound(views, reference)?.min(cost);
+    let relative_gap = crate::global::relative_gap(cost, lower);
+    (relative_gap <= max_relative_gap).then_some(Certificate {
+        lower_bound: lower,
+        relative_gap,
+        certified: true,
+        kind: CertificateKind::ConvexityTest,
+        nodes: 0,
+        solver_iterations: 0,
+    })
+}
+
 /// The optimal method from the local ellipsoid `local` (world) with report `local_report`: the best
 /// world ellipsoid found and the report with its certificate (module docs).
 pub(crate) fn optimal_quadric(
@@ -174,7 +195,13 @@ pub(crate) fn optimal_quadric(
     let sim = problem.frame_of(local);
     let frame_dual = transform_dual(&sim.matrix(), &local.dual());
     let reference = sym4_to_vec(&(-frame_dual / frame_dual[(3, 3)].abs()));
-    let views: Vec<FractionalResidual<5, 10>> = problem.views(&sim).iter().map(|v| v.oriented(&reference)).collect();
+    let raw_views = problem.views(&sim);
+    if let Some(certified) = convexity_certificate(&raw_views, &reference, cost, opts.max_relative_gap) {
+        report.status = Status::Success;
+        report.certificate = certified;
+        return (*local, report);
+    }
+    let views: Vec<FractionalResidual<5, 10>> = raw_views.iter().map(|v| v.oriented(&reference)).collect();
     let frame_cost = fraction::cost(&views, &reference);
     let reach = problem
         .cameras

@@ -1,0 +1,383 @@
+//! A cheap sufficient test of global optimality for a sum of squared ratios of affine maps (in the
+//! spirit of Hartley & Seo 2008, "Verifying global minima for L2 minimization problems"), for any
+//! residual dimension `M` and number of unknowns `N`: points (`M = 2`, `N = 3`,
+//! [`crate::triangulation::point::certificate`]) and quadrics (`M = 5`, `N = 9`,
+//! [`crate::triangulation::quadric::certificate`]).
+//!
+//! The caller supplies a whitened affine chart around a local solution (`y = 0`): per view
+//! `aᵢ(y) = r̂ᵢ + Gᵢy ∈ ℝᴹ`, `ζᵢ(y) = 1 + dᵢᵀy`, `‖rᵢ‖ = ‖aᵢ‖/ζᵢ`, and `Σ BᵢᵀBᵢ = I` with
+//! `Bᵢ = Gᵢ − r̂ᵢdᵢᵀ` (the Gauss-Newton Hessian of `f = Σ‖rᵢ‖²` at `0` is `2I`). The domain is every
+//! `y` with all `ζᵢ > 0`. Let `ε₀² = f(0) = Σ ρ̂ᵢ²` (`ρ̂ᵢ = ‖r̂ᵢ‖`) and `L = {y : f(y) ≤ ε₀², ζᵢ > 0}`,
+//! the chart points at least as good as the origin (not known to be convex). The test builds a
+//! convex set `K ⊇ L`, shows `f` strongly convex on `K`, and concludes.
+//!
+//! **1. Per-view cones.** `S = ∩ᵢ {‖aᵢ(y)‖ ≤ ε₀ ζᵢ(y)}` is convex and contains `L`. On `S`,
+//! `aᵢ − r̂ᵢζᵢ = Bᵢy`, so `‖Bᵢy‖ ≤ (ε₀ + ρ̂ᵢ)ζᵢ`. If `|dᵢᵀy| ≤ κ` for all `i`, then `ζᵢ ≤ 1 + κ` and
+//! `‖y‖² = Σ‖Bᵢy‖² ≤ (1 + κ)²E²`, `E² = Σ(ε₀ + ρ̂ᵢ)²`, hence `|dᵢᵀy| ≤ (1 + κ)E‖dᵢ‖`. With
+//! `q = E maxᵢ‖dᵢ‖ < 1` and `κ₁ > q/(1 − q)` the assumption reproduces itself strictly; it holds at
+//! `y = 0`, and on a segment from `0` inside the convex `S` it cannot fail first at a point where it
+//! still holds. So `|dᵢᵀy| ≤ κ₁` on all of `S` (in the code, the metric of `ΣBᵢᵀBᵢ`, which is `I`
+//! for a whitened chart, so that any chart origin works). A chart may also know an a-priori bound
+//! (points: `ζᵢ < n` in the mean-depth chart, where `Σᵢ ζᵢ = n`), used whether or not `q < 1`.
+//!
+//! **2. The quadratic ellipsoid.** `F(y) = Σ‖aᵢ(y)‖² = ε₀² + 2bᵀy + yᵀNy` (`N = ΣGᵢᵀGᵢ`,
+//! `b = ΣGᵢᵀr̂ᵢ`) is a convex quadratic, and `F = Σ‖rᵢ‖²ζᵢ² ≤ (1 + κ)² f` where `ζᵢ ≤ 1 + κ`. Given a
+//! convex `K ⊇ L` with `|dᵢᵀy| ≤ κ` on `K`, every point of `L` lies in
+//! `Q_κ = {F ≤ (1 + κ)²ε₀²}`, an ellipsoid of centre `−N⁻¹b` and radius
+//! `ρ_Q² = (1 + κ)²ε₀² − ε₀² + bᵀN⁻¹b` in the `N` metric, on which
+//! `|dᵢᵀy| ≤ |dᵢᵀN⁻¹b| + ρ_Q √(dᵢᵀN⁻¹dᵢ)`. Replacing `K` by `K ∩ Q_κ` and `κ` by this smaller bound,
+//! from `K = S`, `κ = κ₁`, a few times, shrinks the depth bound by about `√n` (the sum `E` bounds
+//! every view at once; `Q` only the total). At the end `K = S ∩ Q_{κ_Q}` with `|dᵢᵀy| ≤ κ_d < 1`
+//! on `K`, and `f ≤ F/(1 − κ_d)² ≤ R² = (1 + κ_Q)²ε₀²/(1 − κ_d)²` on `K`.
+//!
+//! **3. Hessian.** For one view and `w ∈ ℝᴺ`, `α = Gᵢw`, `β = dᵢᵀw`:
+//! `wᵀ∇²‖rᵢ‖²w · ζᵢ²/2 = ‖α − 2βrᵢ‖² − ρᵢ²β² ≥ (1 − θ)‖α‖² − (4/θ − 3)ρᵢ²β²` for `θ ∈ (0, 1]`
+//! (the second derivative of `‖(a + tα)/(ζ + tβ)‖²`, whatever `M`), least ratio at `θ = 2/3`
+//! (factors ⅓ and 3). On `K`: `wᵀ∇²f w ≥ wᵀPw − (6/(1 − κ_d)²) Σᵢ ρᵢ²(dᵢᵀw)²` with
+//! `P = 2N/(3(1 + κ_d)²)`; and since `Σρᵢ² = f ≤ R²` and `(dᵢᵀw)² ≤ (dᵢᵀP⁻¹dᵢ)(wᵀPw)`,
+//! `∇²f ⪰ (1 − μ)P`, `μ = 6R²/(1 − κ_d)² · maxᵢ dᵢᵀP⁻¹dᵢ`. Bounding the total `Σρᵢ²` rather than
+//! each `ρᵢ ≤ ε₀` keeps the negative part from growing with the number of views.
+//!
+//! **4. Conclusion.** If `μ < 1`, `f` is strongly convex on the convex `K ∋ 0`; for `y ∈ K`, Taylor
+//! along the segment gives the [`Minorant`] `f(y) ≥ m(y) = f(0) + gᵀy + ½yᵀHy` with `H = (1 − μ)P`
+//! and `g` the gradient at `0`. Points outside `K` cost more than `ε₀²`, so any lower bound of `m`
+//! over a set containing the feasible part of `K` is, capped at `ε₀²`, a lower bound of `f` over
+//! every feasible chart point: over all of them, `ε₀² − ½gᵀH⁻¹g`
+//! ([`Minorant::unconstrained_minimum`]); under one extra quadratic constraint, the Lagrangian bound
+//! of [`Minorant::minimum_subject_to`].
+//!
+//! It fails (the caller's branch and bound decides) when `q ≥ 1` without an a-priori bound,
+//! `κ_d ≥ 1` or `μ ≥ 1`: low parallax in an affine chart, large residuals, or a second minimum
+//! nearby.
+
+use nalgebra::{Cholesky, Const, SMatrix, SVector};
+
+/// `κ` bounds are taken this much above the computed ones (strict inequalities, rounding).
+const KAPPA_MARGIN: f64 = 1e-6;
+/// `μ` must stay below `1 − MU_MARGIN`.
+const MU_MARGIN: f64 = 1e-6;
+/// Stage 2 stops when `κ` shrinks by less than this factor, or after `MAX_REFINEMENTS` passes.
+const REFINEMENT_RATIO: f64 = 0.99;
+const MAX_REFINEMENTS: usize = 60;
+/// Golden-section steps of the Lagrange multiplier in [`Minorant::minimum_subject_to`].
+const MULTIPLIER_STEPS: usize = 80;
+
+/// One view in chart coordinates: `a(y) = a0 + G y ∈ ℝᴹ`, `ζ(y) = 1 + dᵀy`, `y ∈ ℝᴺ`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct RatioView<const M: usize, const N: usize> {
+    /// `r̂`, the whitened residual at the chart's origin.
+    pub a0: SVector<f64, M>,
+    /// `G`, the numerator's Jacobian in `y`.
+    pub g: SMatrix<f64, M, N>,
+    /// `d`, the denominator's gradient in `y`.
+    pub d: SVector<f64, N>,
+}
+
+impl<const M: usize, const N: usize> RatioView<M, N> {
+    /// `a(y)`.
+    pub(crate) fn numerator(&self, y: &SVector<f64, N>) -> SVector<f64, M> {
+        self.a0 + self.g * y
+    }
+
+    /// `ζ(y)`.
+    pub(crate) fn denominator(&self, y: &SVector<f64, N>) -> f64 {
+        1.0 + self.d.dot(y)
+    }
+
+    /// `Bᵢ = Gᵢ − r̂ᵢdᵢᵀ`, the residual's Jacobian at `y = 0`.
+    fn jacobian(&self) -> SMatrix<f64, M, N> {
+        self.g - self.a0 * self.d.transpose()
+    }
+}
+
+/// `f(y) = Σ ‖aᵢ(y)‖²/ζᵢ(y)²` (no ½): the tests' check of a chart against eq. 19.
+#[cfg(test)]
+pub(crate) fn cost<const M: usize, const N: usize>(views: &[RatioView<M, N>], y: &SVector<f64, N>) -> f64 {
+    views
+        .iter()
+        .map(|v| v.numerator(y).norm_squared() / v.denominator(y).powi(2))
+        .sum()
+}
+
+/// A convex set `K ⊇ {f ≤ ℓ}` in chart coordinates with its depth bound (module docs, stages 1-2).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Enclosure<const N: usize> {
+    /// The per-view radius of `S` (`ε₀` for the test).
+    pub gamma: f64,
+    /// `S` lies in the cube `|y_k| ≤ ball_radius` (`∞` when stage 1 did not apply).
+    pub ball_radius: f64,
+    /// `N = ΣGᵢᵀGᵢ`.
+    pub n: SMatrix<f64, N, N>,
+    /// `b = ΣGᵢᵀr̂ᵢ`.
+    pub b: SVector<f64, N>,
+    /// The level `ℓ` of the enclosed sublevel set `{f ≤ ℓ}` (`ε₀²` for the test).
+    pub level: f64,
+    /// `F(0) = f` at the chart's origin (`ε₀²` for the test).
+    pub origin_cost: f64,
+    /// `κ_Q`: `K = S ∩ {F ≤ (1 + κ_Q)² ℓ}`.
+    pub kappa_q: f64,
+    /// `κ_d`: `|dᵢᵀy| ≤ κ_d` on `K`.
+    pub kappa_d: f64,
+}
+
+impl<const N: usize> Enclosure<N> {
+    /// The box `[lo, hi]` containing the ellipsoid `Q_{κ_Q}` and the ball of `S`.
+    pub(crate) fn bounding_box(&self) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        let inverse = self.n.cholesky()?.inverse();
+        let centre = -(inverse * self.b);
+        let radius = self.q_radius(&inverse)?;
+        let half = inverse.diagonal().map(|v| radius * v.max(0.0).sqrt());
+        let ball = SVector::<f64, N>::repeat(self.ball_radius);
+        let lo = (centre - half).sup(&-ball);
+        let hi = (centre + half).inf(&ball);
+        (lo < hi).then_some((lo, hi))
+    }
+
+    /// `ρ_Q` for `κ_Q`: `F ≤ (1 + κ_Q)² ℓ` is `(y − c)ᵀN(y − c) ≤ ρ_Q²`, `c = −N⁻¹b`.
+    fn q_radius(&self, inverse: &SMatrix<f64, N, N>) -> Option<f64> {
+        let r2 = (1.0 + self.kappa_q).powi(2) * self.level - self.origin_cost + self.b.dot(&(inverse * self.b));
+        (r2 >= 0.0).then(|| r2.sqrt())
+    }
+
+    /// `(1 + κ_Q) √ℓ`: `K` lies in `‖(a₁(y), …, a_n(y))‖ ≤ q_bound`.
+    pub(crate) fn q_bound(&self) -> f64 {
+        (1.0 + self.kappa_q) * self.level.sqrt()
+    }
+}
+
+/// Stages 1-2 of the module docs for the sublevel set `{f ≤ level}` (`level = ε₀²` for the test;
+/// the chart's origin need not be a minimiser) and the per-view radius `gamma ≥ √level` of `S_γ`:
+/// a convex set containing every chart point with all `ζᵢ > 0` and `f ≤ level`, or `None` when no
+/// depth bound below 1 results or `N` is singular. `a_priori_kappa`, when the chart knows one, bounds
+/// `|dᵢᵀy|` for every chart point with all `ζᵢ > 0`.
+pub(crate) fn enclosure<const M: usize, const N: usize>(
+    views: &[RatioView<M, N>],
+    level: f64,
+    gamma: f64,
+    a_priori_kappa: Option<f64>,
+) -> Option<Enclosure<N>> {
+    let origin_cost: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+    let (mut n, mut b, mut m) = (
+        SMatrix::<f64, N, N>::zeros(),
+        SVector::<f64, N>::zeros(),
+        SMatrix::<f64, N, N>::zeros(),
+    );
+    for v in views {
+        let bi = v.jacobian();
+        m += bi.transpose() * bi;
+        n += v.g.transpose() * v.g;
+        b += v.g.transpose() * v.a0;
+    }
+    // Stage 1 in the metric of M = Σ BᵢᵀBᵢ (the identity at a whitened local solution).
+    let m_inverse = m.cholesky()?.inverse();
+    let e = views.iter().map(|v| (gamma + v.a0.norm()).powi(2)).sum::<f64>().sqrt();
+    let q = e * views
+        .iter()
+        .map(|v| v.d.dot(&(m_inverse * v.d)).max(0.0).sqrt())
+        .fold(0.0, f64::max);
+    let mut kappa = a_priori_kappa.unwrap_or(f64::INFINITY);
+    let mut ball_radius = f64::INFINITY;
+    if q < 1.0 {
+        let kappa_1 = q / (1.0 - q) * (1.0 + KAPPA_MARGIN);
+        // yᵀMy ≤ ((1 + κ₁)E)² implies |y_k| ≤ (1 + κ₁)E √(M⁻¹)_kk; keep the widest for the ball.
+        ball_radius = (1.0 + kappa_1) * e * m_inverse.diagonal().max().max(0.0).sqrt();
+        kappa = kappa.min(kappa_1);
+    }
+    if !kappa.is_finite() {
+        return None;
+    }
+    let inverse = n.cholesky()?.inverse();
+    let centre = -(inverse * b);
+    let mut out = Enclosure {
+        gamma,
+        ball_radius,
+        n,
+        b,
+        level,
+        origin_cost,
+        kappa_q: kappa,
+        kappa_d: kappa,
+    };
+    for _ in 0..MAX_REFINEMENTS {
+        let candidate = Enclosure {
+            kappa_q: out.kappa_d,
+            ..out.clone()
+        };
+        let radius = candidate.q_radius(&inverse)?;
+        let depth = views
+            .iter()
+            .map(|v| v.d.dot(&centre).abs() + radius * v.d.dot(&(inverse * v.d)).max(0.0).sqrt())
+            .fold(0.0, f64::max)
+            * (1.0 + KAPPA_MARGIN);
+        if !(depth < REFINEMENT_RATIO * candidate.kappa_q) {
+            break;
+        }
+        out = Enclosure {
+            kappa_d: depth,
+            ..candidate
+        };
+    }
+    (out.kappa_d < 1.0).then_some(out)
+}
+
+/// `m(y) = f(0) + gᵀy + ½yᵀHy ≤ f(y)` on the enclosure `K` of the sublevel set `{f ≤ f(0)}` (module
+/// docs, stage 4): every feasible chart point outside `K` costs more than `f(0)`.
+#[derive(Debug, Clone)]
+pub(crate) struct Minorant<const N: usize> {
+    /// `f(0) = ε₀²`.
+    pub cost: f64,
+    /// `g = ∇f(0)`.
+    pub gradient: SVector<f64, N>,
+    /// The Cholesky factor of `H = (1 − μ)P`.
+    pub hessian: Cholesky<f64, Const<N>>,
+}
+
+impl<const N: usize> Minorant<N> {
+    /// `ε₀² − ½gᵀH⁻¹g`, at least 0: a lower bound of `f` over every chart point with all `ζᵢ > 0`.
+    pub(crate) fn unconstrained_minimum(&self) -> f64 {
+        (self.cost - 0.5 * self.gradient.dot(&self.hessian.solve(&self.gradient))).max(0.0)
+    }
+
+    /// A lower bound of `f` over the chart points with all `ζᵢ > 0` that satisfy
+    /// `φ(y) = (c₀ + kᵀy)² − s₀ − pᵀy ≥ 0`: for every `λ ≥ 0` with `H − 2λkkᵀ ≻ 0`,
+    /// `min_y m(y) − λφ(y) = ε₀² − λ(c₀² − s₀) − ½bᵀ(H − 2λkkᵀ)⁻¹b` with `b = g − 2λc₀k + λp` is below
+    /// `m` wherever `φ ≥ 0` (weak duality: any such `λ` gives a valid bound; for one quadratic
+    /// constraint the best `λ` closes the gap, by the S-lemma). The best `λ` of a golden-section
+    /// search over `[0, 1/(2kᵀH⁻¹k))`, capped at `ε₀²`.
+    pub(crate) fn minimum_subject_to(&self, c0: f64, k: &SVector<f64, N>, s0: f64, p: &SVector<f64, N>) -> f64 {
+        // (H − αkkᵀ)⁻¹ = H⁻¹ + αH⁻¹kkᵀH⁻¹/(1 − αkᵀH⁻¹k) (Sherman-Morrison), α = 2λ.
+        let (hg, hk, hp) = (
+            self.hessian.solve(&self.gradient),
+            self.hessian.solve(k),
+            self.hessian.solve(p),
+        );
+        let kk = k.dot(&hk);
+        let dual = |lambda: f64| -> f64 {
+            let alpha = 2.0 * lambda;
+            let denominator = 1.0 - alpha * kk;
+            if !(denominator > 0.0) {
+                return f64::NEG_INFINITY;
+            }
+            // b = g + λ(p − 2c₀k); H⁻¹b and kᵀH⁻¹b from the solves above.
+            let hb = hg + (hp - hk * (2.0 * c0)) * lambda;
+            let b = self.gradient + (p - k * (2.0 * c0)) * lambda;
+            let kb = k.dot(&hb);
+            let quadratic = b.dot(&hb) + alpha * kb * kb / denominator;
+            self.cost - lambda * (c0 * c0 - s0) - 0.5 * quadratic
+        };
+        let upper = if kk > 0.0 { 0.5 / kk } else { 1e12 };
+        let (mut lo, mut hi) = (0.0, upper * (1.0 - 1e-9));
+        let ratio = 0.5 * (5f64.sqrt() - 1.0);
+        let mut best = dual(0.0);
+        for _ in 0..MULTIPLIER_STEPS {
+            let (a, b) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
+            let (fa, fb) = (dual(a), dual(b));
+            best = best.max(fa).max(fb);
+            if fa < fb {
+                lo = a;
+            } else {
+                hi = b;
+            }
+        }
+        best.clamp(0.0, self.cost)
+    }
+}
+
+/// Stages 1-4 of the module docs at the chart's origin: the minorant when `μ < 1`. `a_priori_kappa`
+/// as for [`enclosure`].
+pub(crate) fn minorant<const M: usize, const N: usize>(
+    views: &[RatioView<M, N>],
+    a_priori_kappa: Option<f64>,
+) -> Option<Minorant<N>> {
+    let cost: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+    let k = enclosure(views, cost, cost.sqrt(), a_priori_kappa)?;
+    let r2 = (1.0 + k.kappa_q).powi(2) * cost / (1.0 - k.kappa_d).powi(2);
+    let p = k.n * (2.0 / (3.0 * (1.0 + k.kappa_d).powi(2)));
+    let p_chol = p.cholesky()?;
+    let worst = views.iter().map(|v| v.d.dot(&p_chol.solve(&v.d))).fold(0.0, f64::max);
+    let mu = 6.0 * r2 / (1.0 - k.kappa_d).powi(2) * worst;
+    if !(mu < 1.0 - MU_MARGIN) {
+        return None;
+    }
+    // g = ∇f(0) = 2 Σ Bᵢᵀ r̂ᵢ.
+    let gradient: SVector<f64, N> = views.iter().map(|v| 2.0 * v.jacobian().transpose() * v.a0).sum();
+    let hessian = (p * (1.0 - mu)).cholesky()?;
+    Some(Minorant {
+        cost,
+        gradient,
+        hessian,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use nalgebra::{Matrix2, Vector2};
+
+    #[test]
+    fn per_view_hessian_identity_holds_in_any_dimension() {
+        // wᵀ∇²‖a/ζ‖²w · ζ²/2 = ‖α − 2βr‖² − ρ²β² (stage 3), by central differences, M = 5, N = 9.
+        let mut rng = Rng::new(8);
+        for _ in 0..200 {
+            let v = RatioView::<5, 9> {
+                a0: SVector::from_fn(|_, _| rng.normal()),
+                g: SMatrix::from_fn(|_, _| rng.normal()),
+                d: SVector::from_fn(|_, _| 0.2 * rng.normal()),
+            };
+            let y = SVector::<f64, 9>::from_fn(|_, _| 0.3 * rng.normal());
+            let w = SVector::<f64, 9>::from_fn(|_, _| rng.normal());
+            let f = |t: f64| cost(std::slice::from_ref(&v), &(y + w * t));
+            let h = 1e-4;
+            let second = (f(h) - 2.0 * f(0.0) + f(-h)) / (h * h);
+            let (zeta, r) = (v.denominator(&y), v.numerator(&y) / v.denominator(&y));
+            let (alpha, beta) = (v.g * w, v.d.dot(&w));
+            let identity =
+                2.0 / (zeta * zeta) * ((alpha - r * (2.0 * beta)).norm_squared() - r.norm_squared() * beta * beta);
+            assert!(
+                (second - identity).abs() < 1e-4 * (1.0 + identity.abs()),
+                "{second} vs {identity}"
+            );
+        }
+    }
+
+    #[test]
+    fn constrained_minimum_is_below_the_minorant_on_the_feasible_set_and_tight_for_a_linear_constraint() {
+        // m(y) = 4 + gᵀy + ½yᵀHy on ℝ², φ(y) = (c₀ + kᵀy)² − s₀ − pᵀy ≥ 0.
+        let h = Matrix2::new(2.0, 0.3, 0.3, 1.0);
+        let m = Minorant {
+            cost: 4.0,
+            gradient: Vector2::new(0.8, -0.5),
+            hessian: h.cholesky().unwrap(),
+        };
+        let model = |y: &Vector2<f64>| 4.0 + m.gradient.dot(y) + 0.5 * y.dot(&(h * y));
+        let mut rng = Rng::new(3);
+        for _ in 0..50 {
+            let (c0, s0) = (0.3 * rng.normal(), 0.3 * rng.normal());
+            let (k, p) = (
+                Vector2::new(rng.normal(), rng.normal()) * 0.5,
+                Vector2::new(rng.normal(), rng.normal()),
+            );
+            let bound = m.minimum_subject_to(c0, &k, s0, &p);
+            // Dense sampling of the feasible set: the model is never below the bound.
+            let mut least = f64::INFINITY;
+            for i in 0..200 {
+                for j in 0..200 {
+                    let y = Vector2::new(-4.0 + 0.04 * i as f64, -4.0 + 0.04 * j as f64);
+                    if (c0 + k.dot(&y)).powi(2) - s0 - p.dot(&y) >= 0.0 {
+                        least = least.min(model(&y));
+                    }
+                }
+            }
+            assert!(bound <= least.min(4.0) + 1e-9, "{bound} > {least}");
+        }
+        // A linear constraint (k = 0), here y₁ ≤ −0.8, is a half-plane: the bound is its exact minimum.
+        let p = Vector2::new(1.0, 0.0);
+        let bound = m.minimum_subject_to(0.0, &Vector2::zeros(), 0.8, &p);
+        let unconstrained = -h.cholesky().unwrap().solve(&m.gradient);
+        assert!(unconstrained.x > -0.8, "the test needs an active constraint");
+        let y2 = -(m.gradient.y - h[(1, 0)] * 0.8) / h[(1, 1)];
+        let exact = model(&Vector2::new(-0.8, y2));
+        assert!((bound - exact).abs() < 1e-6, "{bound} vs {exact}");
+    }
+}
