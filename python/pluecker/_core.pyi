@@ -483,7 +483,7 @@ class TriangulationOptions:
     given to the function wins over :attr:`method`."""
 
     # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', max_taylor_nodes: int = 50000, local_max_iterations: int = 100) -> None: ...
+    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', max_taylor_nodes: int = 50000, local_max_iterations: int = 100) -> None: ...
     method: str
     """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
     max_relative_gap: float
@@ -496,6 +496,8 @@ class TriangulationOptions:
     """Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     line_bound: str
     """Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips)."""
+    quadric_bound: str
+    """Quadrics, method `optimal`: the lower bound, `convexity` (the convexity test, certificate `convexity_test` over every ellipsoid no principal plane cuts; the relaxation when it cannot decide) or `relaxation` (the paper's SOCP relaxation only; certificate `branch_and_bound` over an a-priori box)."""
     max_taylor_nodes: int
     """Node cap of the Taylor bound of lines (microseconds per node, so separate from `max_nodes`)."""
     local_max_iterations: int
@@ -586,7 +588,7 @@ class QuadricTriangulation(TriangulationReport):
 
     # fields of QuadricTriangulation (generated: python -m pluecker._stubgen)
     certificate_domain: str
-    """Which quadrics the certificate's lower bound covers (`'none'` without one): every quadric in front of the cameras, or the search domain of branch and bound."""
+    """Which quadrics the certificate's lower bound covers (`'none'` without one): every ellipsoid that no camera's principal plane cuts (`convexity_test`), or the search domain of branch and bound."""
     Q: NDArray[np.float64]
     """The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19."""
     primal: Optional[NDArray[np.float64]]

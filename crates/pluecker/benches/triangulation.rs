@@ -8,7 +8,9 @@
 //! - `batch/<case>/<method>`: `triangulate_points` (rayon) or the linear fast path on 4096 tracks
 //!   of the same cameras, timed per batch (divide by 4096);
 //! - `line/<views>-views/optimal-<bound>`: one certified line at 3 and 5 views, with the Taylor bound
-//!   and the paper's relaxation ([`bench_lines`]).
+//!   and the paper's relaxation ([`bench_lines`]);
+//! - `quadric/<views>-views/<method>`: one ellipsoid at 3 and 5 views, `local` and `optimal`
+//!   ([`bench_quadrics`]; fitting the conics included).
 //!
 //! At setup, one line per case goes to stderr: the fraction certified, by which certificate, the
 //! branch-and-bound nodes, the median and 90th-percentile time per point measured sequentially
@@ -230,5 +232,51 @@ fn bench_lines(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_points, bench_batch, bench_lines);
+/// `quadric/<views>-views/<method>`: one ellipsoid by `local` and by `optimal` (the convexity test), on
+/// a pool of 16 seeded scenes of [`quadric_scene`] (46° of parallax) with conics fitted to 63 outline
+/// points of 1 px noise; the fraction certified goes to stderr at setup.
+fn bench_quadrics(c: &mut Criterion) {
+    use pluecker::triangulation::quadric::triangulate_quadric_points;
+    use pluecker::triangulation::scenes::quadric_scene;
+    let mut group = c.benchmark_group("quadric");
+    group
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    for views in [3usize, 5] {
+        let problems: Vec<_> = (0..16u64)
+            .map(|seed| {
+                let scene = quadric_scene(views, 0.8, 700 + seed);
+                let points = scene.noisy_outline_points(63, SIGMA_PX, &mut Rng::new(800 + seed));
+                (scene.cameras, points)
+            })
+            .collect();
+        for method in [Method::Local, Method::Optimal] {
+            let opts = TriangulationOptions {
+                method,
+                ..Default::default()
+            };
+            let certified = problems
+                .iter()
+                .map(|(p, x)| triangulate_quadric_points(p, x, SIGMA_PX, &opts).expect("valid"))
+                .filter(|r| {
+                    r.report.certificate.kind == CertificateKind::ConvexityTest && r.report.certificate.certified
+                })
+                .count();
+            let name = format!("{views}-views/{}", method.as_str());
+            eprintln!("setup quadric/{name}: {certified}/16 certified by the convexity test");
+            let mut k = 0;
+            group.bench_function(name, |b| {
+                b.iter(|| {
+                    let (p, x) = &problems[k % problems.len()];
+                    k += 1;
+                    triangulate_quadric_points(black_box(p), black_box(x), SIGMA_PX, &opts)
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_points, bench_batch, bench_lines, bench_quadrics);
 criterion_main!(benches);

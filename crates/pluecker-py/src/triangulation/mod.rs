@@ -14,7 +14,7 @@ pub mod rows;
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::options_class;
-use pluecker::triangulation::{LineBound, Method, TriangulationOptions};
+use pluecker::triangulation::{LineBound, Method, QuadricBound, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
 
@@ -48,6 +48,8 @@ options_class! {
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);
         /// Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips).
         line_bound: String = |o| o.inner.line_bound.as_str(), |o, v| LineBound::parse(&v).map(|m| o.inner.line_bound = m).map_err(to_py_err);
+        /// Quadrics, method `optimal`: the lower bound, `convexity` (the convexity test, certificate `convexity_test` over every ellipsoid no principal plane cuts; the relaxation when it cannot decide) or `relaxation` (the paper's SOCP relaxation only; certificate `branch_and_bound` over an a-priori box).
+        quadric_bound: String = |o| o.inner.quadric_bound.as_str(), |o, v| QuadricBound::parse(&v).map(|m| o.inner.quadric_bound = m).map_err(to_py_err);
         /// Node cap of the Taylor bound of lines (microseconds per node, so separate from `max_nodes`).
         max_taylor_nodes: Integer = |o| o.inner.max_taylor_nodes, |o, v| v.count("max_taylor_nodes", 1).map(|n| o.inner.max_taylor_nodes = n);
         /// Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`).

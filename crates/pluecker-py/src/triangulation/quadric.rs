@@ -57,7 +57,7 @@ impl PyQuadricTriangulation {
 
 result_class! {
     PyQuadricTriangulation: PyTriangulationReport {
-        /// Which quadrics the certificate's lower bound covers (`'none'` without one): every quadric in front of the cameras, or the search domain of branch and bound.
+        /// Which quadrics the certificate's lower bound covers (`'none'` without one): every ellipsoid that no camera's principal plane cuts (`convexity_test`), or the search domain of branch and bound.
         certificate_domain = |x| x.certificate_domain;
         /// The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19.
         Q = |q| q.dual;

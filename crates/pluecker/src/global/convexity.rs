@@ -61,6 +61,8 @@ const REFINEMENT_RATIO: f64 = 0.99;
 const MAX_REFINEMENTS: usize = 60;
 /// Golden-section steps of the Lagrange multiplier in [`Minorant::minimum_subject_to`].
 const MULTIPLIER_STEPS: usize = 80;
+/// The bound of [`Minorant::minimum_subject_to`] is lowered by this fraction of the cost.
+const ROUNDING_MARGIN: f64 = 1e-9;
 
 /// One view in chart coordinates: `a(y) = a0 + G y ∈ ℝᴹ`, `ζ(y) = 1 + dᵀy`, `y ∈ ℝᴺ`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -243,7 +245,7 @@ impl<const N: usize> Minorant<N> {
     /// `min_y m(y) − λφ(y) = ε₀² − λ(c₀² − s₀) − ½bᵀ(H − 2λkkᵀ)⁻¹b` with `b = g − 2λc₀k + λp` is below
     /// `m` wherever `φ ≥ 0` (weak duality: any such `λ` gives a valid bound; for one quadratic
     /// constraint the best `λ` closes the gap, by the S-lemma). The best `λ` of a golden-section
-    /// search over `[0, 1/(2kᵀH⁻¹k))`, capped at `ε₀²`.
+    /// search over `[0, 1/(2kᵀH⁻¹k))`, less a rounding margin of 1e-9 `ε₀²`, capped at `ε₀²`.
     pub(crate) fn minimum_subject_to(&self, c0: f64, k: &SVector<f64, N>, s0: f64, p: &SVector<f64, N>) -> f64 {
         // (H − αkkᵀ)⁻¹ = H⁻¹ + αH⁻¹kkᵀH⁻¹/(1 − αkᵀH⁻¹k) (Sherman-Morrison), α = 2λ.
         let (hg, hk, hp) = (
@@ -266,7 +268,7 @@ impl<const N: usize> Minorant<N> {
             self.cost - lambda * (c0 * c0 - s0) - 0.5 * quadratic
         };
         let upper = if kk > 0.0 { 0.5 / kk } else { 1e12 };
-        let (mut lo, mut hi) = (0.0, upper * (1.0 - 1e-9));
+        let (mut lo, mut hi) = (0.0, upper * (1.0 - 1e-6));
         let ratio = 0.5 * (5f64.sqrt() - 1.0);
         let mut best = dual(0.0);
         for _ in 0..MULTIPLIER_STEPS {
@@ -279,7 +281,8 @@ impl<const N: usize> Minorant<N> {
                 hi = b;
             }
         }
-        best.clamp(0.0, self.cost)
+        // The terms of the dual cancel partly: a relative margin for their rounding.
+        (best - ROUNDING_MARGIN * self.cost).clamp(0.0, self.cost)
     }
 }
 

@@ -107,6 +107,42 @@ impl LineBound {
     }
 }
 
+/// The lower bound of the optimal method for quadrics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum QuadricBound {
+    /// The convexity test of [`quadric::certificate`] (kind `convexity_test`, domain: every ellipsoid
+    /// that no camera's principal plane cuts), then the paper's relaxation when the test cannot
+    /// decide. The default.
+    Convexity,
+    /// The paper's SOCP relaxation of eqs. 21-22, 26 only ([`quadric::optimal`]; kind
+    /// `branch_and_bound`, domain: an a-priori box).
+    Relaxation,
+}
+
+impl QuadricBound {
+    /// Every bound, in the order above.
+    pub const ALL: [QuadricBound; 2] = [QuadricBound::Convexity, QuadricBound::Relaxation];
+
+    /// The name used by Python and the command line.
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            QuadricBound::Convexity => "convexity",
+            QuadricBound::Relaxation => "relaxation",
+        }
+    }
+
+    /// Parses [`QuadricBound::as_str`] names.
+    pub fn parse(name: &str) -> Result<QuadricBound> {
+        QuadricBound::ALL
+            .into_iter()
+            .find(|m| m.as_str() == name)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "quadric_bound".into(),
+                reason: format!("unknown quadric bound '{name}'; expected convexity or relaxation"),
+            })
+    }
+}
+
 /// Options of every triangulation function; each field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriangulationOptions {
@@ -131,6 +167,9 @@ pub struct TriangulationOptions {
     pub outlier_threshold: Option<f64>,
     /// The lower bound of the line certificate ([`LineBound`]). Default [`LineBound::Taylor`].
     pub line_bound: LineBound,
+    /// The lower bound of the quadric certificate ([`QuadricBound`]). Default
+    /// [`QuadricBound::Convexity`].
+    pub quadric_bound: QuadricBound,
     /// Node cap of the Taylor bound of lines (status [`Status::GapNotClosed`] beyond it); its nodes
     /// cost microseconds (interval arithmetic, no conic program), so the cap is separate from
     /// `max_nodes`. Default 50000.
@@ -152,6 +191,7 @@ impl Default for TriangulationOptions {
             max_nodes: 2000,
             outlier_threshold: None,
             line_bound: LineBound::Taylor,
+            quadric_bound: QuadricBound::Convexity,
             max_taylor_nodes: 50_000,
             local,
         }

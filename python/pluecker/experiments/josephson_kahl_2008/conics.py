@@ -164,6 +164,7 @@ def summary(runs: list[dict[str, Any]]) -> dict[str, Any]:
             "median_condition": float(np.median([c["condition"] for c in cells])),
             "statuses": {s: sum(c["status"] == s for c in cells) for s in sorted({c["status"] for c in cells})},
             "certified": int(sum(c["certified"] for c in cells)),
+            "by_convexity_test": int(sum(c["certified"] and c["certificate"] == "convexity_test" for c in cells)),
             "mean_nodes": float(np.mean([c["nodes"] for c in cells])),
             "max_nodes": int(max(c["nodes"] for c in cells)),
             "median_core_ms": float(np.median([c["seconds"] for c in cells]) * 1e3),
@@ -179,11 +180,12 @@ def summary(runs: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def statistics_table(s: dict[str, Any]) -> str:
-    headers = ["method", "median ‖L r‖", "median condition", "statuses", "certified", "mean / max nodes",
-               "median / max ms"]
+    headers = ["method", "median ‖L r‖", "median condition", "statuses", "certified", "by convexity test / B&B",
+               "mean / max nodes", "median / max ms"]
     labels = {**METHOD_LABELS, "optimal_paper_gap": f"Optimal, gap {PAPER_GAP:g} (paper)"}
     rows = [[labels[m], f"{s[m]['median_residual_norm']:.3g}", f"{s[m]['median_condition']:.2g}",
              ", ".join(f"{k} {v}" for k, v in s[m]["statuses"].items()), f"{s[m]['certified']}/{s['scenes']}",
+             f"{s[m]['by_convexity_test']} / {s[m]['certified'] - s[m]['by_convexity_test']}" if m.startswith("optimal") else "",
              f"{s[m]['mean_nodes']:.1f} / {s[m]['max_nodes']}", f"{s[m]['median_core_ms']:.2f} / {s[m]['max_core_ms']:.1f}"]
             for m in (*METHODS, "optimal_paper_gap")]
     return markdown_table(headers, rows)

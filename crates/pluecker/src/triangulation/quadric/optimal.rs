@@ -33,7 +33,7 @@ use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, CertificateKind, QuadricBound, Report, Status, TriangulationOptions};
 use nalgebra::SVector;
 
 /// `B` of the a-priori box (module docs) as a multiple of the largest camera distance.
@@ -196,7 +196,10 @@ pub(crate) fn optimal_quadric(
     let frame_dual = transform_dual(&sim.matrix(), &local.dual());
     let reference = sym4_to_vec(&(-frame_dual / frame_dual[(3, 3)].abs()));
     let raw_views = problem.views(&sim);
-    if let Some(certified) = convexity_certificate(&raw_views, &reference, cost, opts.max_relative_gap) {
+    let test = (opts.quadric_bound == QuadricBound::Convexity)
+        .then(|| convexity_certificate(&raw_views, &reference, cost, opts.max_relative_gap))
+        .flatten();
+    if let Some(certified) = test {
         report.status = Status::Success;
         report.certificate = certified;
         return (*local, report);
