@@ -79,6 +79,8 @@ from ._core import (
     pose_to_screw,
     random_scene,
     reprojection_errors,
+    get_num_threads,
+    set_num_threads,
     triangulate_line,
     triangulate_line_observations,
     triangulate_lines,
@@ -91,6 +93,8 @@ from ._core import (
 )
 
 __all__ = [
+    "get_num_threads",
+    "set_num_threads",
     "METHODS",
     "TRIANGULATION_METHODS",
     "BatchReport",

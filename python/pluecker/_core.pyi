@@ -471,6 +471,14 @@ def random_scene(kind: str, n_points: int, n_lines: Optional[int] = None, seed: 
     ``seed`` (``None``: 0) gives the same scene on every platform. At most 10,000,000 points and
     segments together."""
 
+def set_num_threads(n: Optional[int], /) -> None:
+    """Sets the number of threads the batches of this process use (``n >= 1``; ``None``: the default,
+    one per core or ``RAYON_NUM_THREADS``). For several processes sharing one machine, e.g. Dask
+    workers (``pluecker.distributed``). Takes effect for the next call."""
+
+def get_num_threads() -> int:
+    """The number of threads the batches of this process use (see :func:`set_num_threads`)."""
+
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
 # Cameras P (n, 3, 4) map world points to pixels, λ (u, v, 1) = P (X, 1), λ > 0 in front (eq. 1). Every
 # method minimises eq. 19 (residuals of eq. 17 whitened by ``cov``; identity when None): ``"linear"``,

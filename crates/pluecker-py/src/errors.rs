@@ -134,7 +134,7 @@ where
     T: Send,
     F: FnOnce() -> Result<T, Error> + Send,
 {
-    match py.allow_threads(move || catch_unwind(AssertUnwindSafe(f))) {
+    match py.allow_threads(move || crate::threads::install(move || catch_unwind(AssertUnwindSafe(f)))) {
         Ok(result) => result.map_err(to_py_err),
         Err(payload) => Err(internal(payload)),
     }

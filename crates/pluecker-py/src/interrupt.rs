@@ -63,7 +63,9 @@ where
             let (sender, receiver) = mpsc::channel();
             let (done, worker_stop) = (&done, Arc::clone(&stop));
             scope.spawn(move || {
-                let out = catch_unwind(AssertUnwindSafe(|| with_stop(worker_stop, || work(done))));
+                let out = crate::threads::install(|| {
+                    catch_unwind(AssertUnwindSafe(|| with_stop(worker_stop, || work(done))))
+                });
                 // The receiver outlives the scope: sending cannot fail.
                 let _ = sender.send(out);
             });

@@ -17,6 +17,7 @@ mod lens_camera;
 mod pickle;
 mod pose;
 mod synthetic;
+mod threads;
 mod triangulation;
 
 use pickle::{finished, part, parts, plain};
@@ -65,6 +66,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pose::geometry::dual_quaternion_to_pose, m)?)?;
     m.add_function(wrap_pyfunction!(pose::geometry::pose_to_screw, m)?)?;
     m.add_function(wrap_pyfunction!(synthetic::paper_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(threads::set_num_threads, m)?)?;
+    m.add_function(wrap_pyfunction!(threads::get_num_threads, m)?)?;
     m.add_function(wrap_pyfunction!(synthetic::random_scene, m)?)?;
     // Triangulation.
     m.add_class::<PyTriangulationOptions>()?;
