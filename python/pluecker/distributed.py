@@ -1,0 +1,339 @@
+"""Triangulation beyond one machine, on Dask distributed (``pip install pluecker[dask]``).
+
+The batches of pluecker already use every core of one machine. This module spreads a job over the
+workers of a Dask cluster, for observation tables larger than one machine's memory. Dask is never
+needed for the main job: without a client everything here runs in this process.
+
+**Tables (Parquet, read and written with pyarrow).** Observations, one row per observation:
+
+========== ======= ================================================================
+column     type    meaning
+========== ======= ================================================================
+track      int64   the 3-D point the observation belongs to (any id)
+image      int64   the image (camera) id, a key of ``cameras``
+x, y       float64 pixel, ``u = K x_cam / z`` (``x_cam = R X_world + t``)
+cov_xx,    float64 optional: the pixel covariance (px²); absent: ``sigma_px²`` I
+cov_xy,
+cov_yy
+========== ======= ================================================================
+
+Cameras are a :class:`Cameras` (image ids and their 3x4 matrices ``P = K [R | t]``), sent to every
+worker once. The result is two Parquet datasets under ``out``: ``points/`` with one row per track
+(``track``, ``X``, ``Y``, ``Z``, ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``status``,
+``certificate``, ``message``, ``covariance`` — the 3x3 covariance row-major as 9 values) and
+``observations/`` with one row per observation (``track``, ``image``, ``inlier``).
+
+**How a job runs.** 1. *Split*: each row group of the input is read by one task, which sends every row
+to one of ``buckets`` buckets by a hash of its track and writes one Parquet file per bucket to
+``out/_buckets`` (a shuffle through storage: every track ends up in exactly one bucket). 2. *Solve*:
+one task per bucket reads its files, sorts the rows by (track, image, x, y) and solves them with
+:func:`triangulate_table`, the single-machine kernel, writing ``points/part-<bucket>.parquet`` and
+``observations/part-<bucket>.parquet``. Every task is a pure function of its input files and writes
+files named after its input, so a retried task (a worker killed mid-job) rewrites the same files and
+the output holds every track once; a track's answer depends on its own rows only, so results are bit
+for bit those of :func:`triangulate_table` on the whole table, whatever the buckets and workers.
+Memory per task is bounded by a row group or a bucket, never by the job. ``out`` must be storage every
+worker sees (a shared file system, or an object store URI pyarrow can write).
+
+**Bad rows.** A non-finite pixel or covariance, or an image id that is not among the cameras, gives
+its track a status (``non_finite``, ``invalid_input``) and a message in ``points``; it never fails
+the job or loses other tracks.
+
+**Threads.** Before the job each worker sets its pluecker threads (:func:`pluecker.set_num_threads`)
+to its share of its machine's cores: the cores divided by the task slots of all workers on that
+machine, so that nothing is oversubscribed.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Optional, Union
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations"]
+
+OBSERVATION_COLUMNS = ("track", "image", "x", "y")
+COVARIANCE_COLUMNS = ("cov_xx", "cov_xy", "cov_yy")
+#: Rows per bucket the default bucket count aims at (about 60 MB of observations).
+ROWS_PER_BUCKET = 2_000_000
+
+
+def _pyarrow() -> Any:
+    try:
+        import pyarrow
+        import pyarrow.parquet  # noqa: F401
+    except ImportError as exc:  # pragma: no cover - the extra is installed in the test environment
+        raise ImportError("pluecker.distributed needs pyarrow: pip install 'pluecker[dask]'") from exc
+    return pyarrow
+
+
+@dataclass(frozen=True)
+class Cameras:
+    """Image ids (v,) and their cameras ``P`` (v, 3, 4) mapping world points to pixels."""
+
+    ids: np.ndarray
+    P: np.ndarray
+
+    def __post_init__(self) -> None:
+        ids = np.asarray(self.ids, dtype=np.int64).reshape(-1)
+        P = np.asarray(self.P, dtype=float)
+        if P.shape != (len(ids), 3, 4):
+            raise _core.ShapeError(f"Cameras: P must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
+        if len(np.unique(ids)) != len(ids):
+            raise ValueError("Cameras: image ids must be unique")
+        object.__setattr__(self, "ids", ids)
+        object.__setattr__(self, "P", P)
+
+    @classmethod
+    def from_dict(cls, cameras: dict[int, Any]) -> "Cameras":
+        """From ``{image id: P (3, 4)}``."""
+        ids = np.array(sorted(cameras), dtype=np.int64)
+        return cls(ids, np.stack([np.asarray(cameras[int(i)], dtype=float) for i in ids]) if len(ids) else
+                   np.zeros((0, 3, 4)))
+
+    def index_of(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Row of ``P`` for each image id, and whether the id is known (unknown ids get row ``v``)."""
+        order = np.argsort(self.ids)
+        position = np.searchsorted(self.ids[order], image)
+        position = np.minimum(position, max(len(self.ids) - 1, 0))
+        known = (len(self.ids) > 0) & (self.ids[order][position] == image) if len(self.ids) else np.zeros(len(image), bool)
+        index = np.where(known, order[position] if len(self.ids) else 0, len(self.ids))
+        return index.astype(np.int64), known
+
+
+def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = None,
+                      options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0) -> tuple[Any, Any]:
+    """The single-machine kernel: every track of an observation ``table`` (a ``pyarrow.Table`` with the
+    columns of the module docs) by :func:`pluecker.triangulate_point_observations`. Returns the
+    ``points`` and ``observations`` tables of the module docs, rows in increasing track id and, per
+    track, observations in increasing (image, x, y). Without covariance columns every pixel has
+    covariance ``sigma_px²`` I."""
+    pa = _pyarrow()
+    columns = {name: table.column(name).to_numpy() for name in OBSERVATION_COLUMNS}
+    track = np.asarray(columns["track"], dtype=np.int64)
+    image = np.asarray(columns["image"], dtype=np.int64)
+    x = np.stack([np.asarray(columns["x"], dtype=float), np.asarray(columns["y"], dtype=float)], axis=1)
+    has_cov = all(name in table.column_names for name in COVARIANCE_COLUMNS)
+    if has_cov:
+        cxx, cxy, cyy = (np.asarray(table.column(n).to_numpy(), dtype=float) for n in COVARIANCE_COLUMNS)
+        cov = np.stack([np.stack([cxx, cxy], -1), np.stack([cxy, cyy], -1)], axis=1)
+    else:
+        cov = np.broadcast_to(sigma_px**2 * np.eye(2), (len(track), 2, 2))
+    # A total order that does not depend on how the rows arrived.
+    order = np.lexsort((x[:, 1], x[:, 0], image, track))
+    track, image, x, cov = track[order], image[order], x[order], np.ascontiguousarray(cov[order])
+    ids, track_index = np.unique(track, return_inverse=True)
+    camera_index, known = cameras.index_of(image)
+    result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov, method=method,
+                                                  options=options, n_tracks=len(ids))
+    status = np.asarray(result.status).astype(object)
+    messages = np.asarray(result.messages, dtype=object)
+    for row in np.flatnonzero(~known):
+        t = track_index[row]
+        status[t] = "invalid_input"
+        messages[t] = f"track {ids[t]}: image id {image[row]} is not among the cameras"
+    X = np.asarray(result.X)
+    points = pa.table({
+        "track": ids,
+        "X": X[:, 0], "Y": X[:, 1], "Z": X[:, 2],
+        "cost": np.asarray(result.cost),
+        "lower_bound": np.asarray(result.lower_bound),
+        "relative_gap": np.asarray(result.relative_gap),
+        "certified": np.asarray(result.certified, dtype=bool),
+        "status": status.astype(str),
+        "certificate": np.asarray(result.certificate).astype(str),
+        "message": messages.astype(str),
+        "covariance": pa.FixedSizeListArray.from_arrays(np.asarray(result.covariance).reshape(-1), 9),
+    })
+    inliers = np.ones(len(track), bool) if result.inliers is None else np.asarray(result.inliers, dtype=bool)
+    observations = pa.table({"track": track, "image": image, "inlier": inliers})
+    return points, observations
+
+
+@dataclass
+class JobSummary:
+    """What a job did: tracks, certified tracks, statuses, seconds and where the tables are."""
+
+    tracks: int
+    certified: int
+    statuses: dict[str, int]
+    seconds: float
+    points: Path
+    observations: Path
+    buckets: int = 0
+    workers: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def _bucket_of(track: np.ndarray, buckets: int) -> np.ndarray:
+    """A hash of the track id (splitmix64's finaliser) modulo ``buckets``: tracks with neighbouring ids
+    spread over every bucket."""
+    z = track.astype(np.uint64) + np.uint64(0x9E3779B97F4A7C15)
+    with np.errstate(over="ignore"):
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z = z ^ (z >> np.uint64(31))
+    return (z % np.uint64(buckets)).astype(np.int64)
+
+
+def _split(source: str, fragment: int, row_group: int, buckets: int, scratch: str) -> int:
+    """Task 1: one row group of the input, sent to the buckets (module docs). Returns its rows."""
+    pa = _pyarrow()
+    import pyarrow.parquet as pq
+
+    path = _input_files(source)[fragment]
+    part = pq.ParquetFile(path).read_row_group(row_group)
+    bucket = _bucket_of(np.asarray(part.column("track").to_numpy(), dtype=np.int64), buckets)
+    order = np.argsort(bucket, kind="stable")
+    edges = np.searchsorted(bucket[order], np.arange(buckets + 1))
+    for b in range(buckets):
+        rows = part.take(pa.array(order[edges[b]:edges[b + 1]]))
+        folder = Path(scratch) / f"bucket={b}"
+        folder.mkdir(parents=True, exist_ok=True)
+        pq.write_table(rows, folder / f"part-{fragment}-{row_group}.parquet")
+    return part.num_rows
+
+
+def _solve(bucket: int, scratch: str, out: str, cameras: Cameras, method: Optional[str],
+           options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
+    """Task 2: one bucket solved (module docs). Returns its counts."""
+    pa = _pyarrow()
+    import pyarrow.parquet as pq
+
+    folder = Path(scratch) / f"bucket={bucket}"
+    files = sorted(folder.glob("*.parquet"))
+    parts = [pq.read_table(f) for f in files]
+    table = pa.concat_tables(parts) if parts else None
+    opts = _core.TriangulationOptions(**options) if options is not None else None
+    if table is None or table.num_rows == 0:
+        return {"tracks": 0, "certified": 0, "statuses": {}}
+    points, observations = triangulate_table(table, cameras, method=method, options=opts, sigma_px=sigma_px)
+    for name, t in (("points", points), ("observations", observations)):
+        target = Path(out) / name
+        target.mkdir(parents=True, exist_ok=True)
+        pq.write_table(t, target / f"part-{bucket:05d}.parquet")
+    status = points.column("status").to_numpy(zero_copy_only=False)
+    values, counts = np.unique(status.astype(str), return_counts=True)
+    return {"tracks": points.num_rows, "certified": int(np.sum(points.column("certified").to_numpy())),
+            "statuses": {str(v): int(c) for v, c in zip(values, counts)}}
+
+
+def _input_files(source: str) -> list[str]:
+    path = Path(source)
+    if path.is_dir():
+        return [str(p) for p in sorted(path.rglob("*.parquet"))]
+    return [str(path)]
+
+
+def _row_groups(source: str) -> list[tuple[int, int]]:
+    import pyarrow.parquet as pq
+
+    out = []
+    for i, f in enumerate(_input_files(source)):
+        out += [(i, g) for g in range(pq.ParquetFile(f).num_row_groups)]
+    return out
+
+
+def share_threads(client: Any) -> dict[str, int]:
+    """Sets every worker's pluecker threads to its share of its machine's cores (module docs) and
+    returns them by worker address."""
+    cores = client.run(os.cpu_count)
+    info = client.scheduler_info()["workers"]
+    slots: dict[str, int] = {}
+    for address, w in info.items():
+        slots[w["host"]] = slots.get(w["host"], 0) + int(w["nthreads"])
+    # One process-wide pool per worker, shared by its task slots: per slot the machine's cores over
+    # the slots of every worker on it.
+    shares = {address: max(1, int(cores.get(address) or 1) // max(1, slots[w["host"]])) * int(w["nthreads"])
+              for address, w in info.items()}
+    for address, n in shares.items():
+        client.run(_core.set_num_threads, n, workers=[address])
+    return shares
+
+
+def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path], *, client: Any = None,
+                buckets: Optional[int] = None, method: Optional[str] = None,
+                options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0,
+                progress: bool = False) -> JobSummary:
+    """Re-triangulates every track of the observation table at ``source`` (a Parquet file or a folder
+    of them, columns of the module docs) and writes ``out/points`` and ``out/observations``.
+
+    ``client``: a ``distributed.Client`` (``None``: run here, without Dask). ``buckets``: the number of
+    solve tasks (default: enough for about 2 million observations each, at least 4 per worker).
+    ``method``, ``options``: those of :func:`pluecker.triangulate_point_observations`. ``progress``:
+    a progress bar on the terminal (Dask's). Returns a :class:`JobSummary`.
+    """
+    import pyarrow.parquet as pq
+
+    started = time.perf_counter()
+    source, out = str(source), Path(out)
+    groups = _row_groups(source)
+    rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
+    workers = len(client.scheduler_info()["workers"]) if client is not None else 1
+    if buckets is None:
+        buckets = max(4 * workers, -(-rows // ROWS_PER_BUCKET), 1)
+    scratch = str(out / "_buckets")
+    option_fields = options.to_dict() if options is not None else None
+    if client is None:
+        for fragment, group in groups:
+            _split(source, fragment, group, buckets, scratch)
+        results = [_solve(b, scratch, str(out), cameras, method, option_fields, sigma_px) for b in range(buckets)]
+    else:
+        share_threads(client)
+        cams = client.scatter(cameras, broadcast=True)
+        splits = [client.submit(_split, source, f, g, buckets, scratch, pure=False, retries=3) for f, g in groups]
+        # The solves wait for every split (each bucket gathers rows from all of them).
+        barrier = client.submit(lambda *counts: sum(counts), *splits, pure=False)
+        solves = [client.submit(_solve_after, barrier, b, scratch, str(out), cams, method, option_fields, sigma_px,
+                                pure=False, retries=3) for b in range(buckets)]
+        if progress:
+            from distributed import progress as dask_progress
+
+            dask_progress(solves)
+        results = client.gather(solves)
+    _remove_tree(Path(scratch))
+    statuses: dict[str, int] = {}
+    for r in results:
+        for k, v in r["statuses"].items():
+            statuses[k] = statuses.get(k, 0) + v
+    return JobSummary(tracks=sum(r["tracks"] for r in results), certified=sum(r["certified"] for r in results),
+                      statuses=statuses, seconds=time.perf_counter() - started, points=out / "points",
+                      observations=out / "observations", buckets=buckets, workers=workers)
+
+
+def _solve_after(_barrier: int, *args: Any) -> dict[str, Any]:
+    return _solve(*args)
+
+
+def _remove_tree(path: Path) -> None:
+    if not path.exists():
+        return
+    for p in sorted(path.rglob("*"), reverse=True):
+        p.unlink() if p.is_file() else p.rmdir()
+    path.rmdir()
+
+
+def read_points(out: Union[str, Path]) -> Any:
+    """The ``points`` table of a job, rows in increasing track id (a ``pyarrow.Table``)."""
+    return _read_sorted(Path(out) / "points", ["track"])
+
+
+def read_observations(out: Union[str, Path]) -> Any:
+    """The ``observations`` table of a job, rows in increasing track id and, per track, in the
+    kernel's order (a ``pyarrow.Table``)."""
+    return _read_sorted(Path(out) / "observations", ["track"])
+
+
+def _read_sorted(folder: Path, keys: Iterable[str]) -> Any:
+    pa = _pyarrow()
+    import pyarrow.parquet as pq
+
+    files = sorted(folder.glob("*.parquet"))
+    table = pa.concat_tables([pq.read_table(f) for f in files])
+    return table.sort_by([(k, "ascending") for k in keys])
