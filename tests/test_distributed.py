@@ -1,0 +1,185 @@
+"""``pluecker.distributed`` (issue 14) on a ``LocalCluster`` of 2 worker processes, on generated tracks:
+the same tables as the single-machine kernel bit for bit whatever the buckets and workers, bad rows as
+statuses, Parquet round trips, and a worker killed mid-job losing nothing."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import pluecker
+
+pa = pytest.importorskip("pyarrow")
+pq = pytest.importorskip("pyarrow.parquet")
+distributed = pytest.importorskip("distributed")
+
+from pluecker import distributed as dist  # noqa: E402
+
+VIEWS = 8
+
+
+def generated(n_tracks: int, seed: int, covariances: bool = False):
+    """Cameras (ids 3, 13, ..., 73) on a 36° arc 10 units from the origin, f = 800 px; ``n_tracks``
+    points near the origin seen by 2-8 cameras each with 1 px noise; track ids 1, 8, 15, ...; rows in
+    random order."""
+    rng = np.random.default_rng(seed)
+    ids = np.arange(VIEWS) * 10 + 3
+    K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
+    P = []
+    for i in range(VIEWS):
+        a = 0.2 * 2 * np.pi * i / VIEWS
+        R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+        c = np.array([10 * np.sin(a), 0.0, -10 * np.cos(a)])
+        P.append(K @ np.hstack([R, (-R @ c)[:, None]]))
+    P = np.array(P)
+    X = rng.normal(0, 1, (n_tracks, 3))
+    counts = rng.integers(2, VIEWS + 1, n_tracks)
+    track = np.repeat(np.arange(n_tracks), counts)
+    views = np.concatenate([rng.choice(VIEWS, k, replace=False) for k in counts])
+    h = np.einsum("kij,kj->ki", P[views], np.c_[X[track], np.ones(len(track))])
+    xy = h[:, :2] / h[:, 2:] + rng.normal(0, 1, (len(track), 2))
+    order = rng.permutation(len(track))
+    columns = {"track": track[order] * 7 + 1, "image": ids[views][order], "x": xy[order, 0], "y": xy[order, 1]}
+    if covariances:
+        s = rng.uniform(0.5, 2.0, (len(track), 2))
+        columns.update(cov_xx=s[:, 0] ** 2, cov_xy=0.1 * s[:, 0] * s[:, 1], cov_yy=s[:, 1] ** 2)
+    return dist.Cameras(ids, P), pa.table(columns)
+
+
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  silence_logs=40) as cluster, distributed.Client(cluster) as c:
+        yield c
+
+
+def write(table, folder, row_group_size: int):
+    folder.mkdir(parents=True, exist_ok=True)
+    pq.write_table(table, folder / "observations.parquet", row_group_size=row_group_size)
+    return folder / "observations.parquet"
+
+
+def test_the_kernel_is_the_batch_and_independent_of_row_order():
+    cameras, table = generated(300, 1)
+    points, observations = dist.triangulate_table(table, cameras)
+    assert points.num_rows == 300 and observations.num_rows == table.num_rows
+    assert np.all(np.diff(points.column("track").to_numpy()) > 0)
+    # The same tracks through the batch directly (rows grouped by track).
+    track, image = table.column("track").to_numpy(), table.column("image").to_numpy()
+    x = np.c_[table.column("x").to_numpy(), table.column("y").to_numpy()]
+    order = np.lexsort((x[:, 1], x[:, 0], image, track))
+    ids, index = np.unique(track[order], return_inverse=True)
+    batch = pluecker.triangulate_point_observations(cameras.P, index, (image[order] - 3) // 10, x[order])
+    np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], batch.X)
+    np.testing.assert_array_equal(points.column("cost").to_numpy(), batch.cost)
+    assert points.column("certified").to_numpy().all()
+    # Shuffled rows give the same tables, bit for bit.
+    shuffled = table.take(pa.array(np.random.default_rng(2).permutation(table.num_rows)))
+    again = dist.triangulate_table(shuffled, cameras)
+    assert again[0].equals(points) and again[1].equals(observations)
+
+
+def test_covariance_columns_weight_the_pixels():
+    cameras, table = generated(50, 3, covariances=True)
+    points, _ = dist.triangulate_table(table, cameras)
+    plain, _ = dist.triangulate_table(table.drop(["cov_xx", "cov_xy", "cov_yy"]), cameras)
+    assert not np.allclose(points.column("cost").to_numpy(), plain.column("cost").to_numpy())
+    # The covariance column: 9 values per track, a symmetric positive definite 3x3.
+    cov = np.asarray(points.column("covariance").to_pylist()).reshape(-1, 3, 3)
+    np.testing.assert_allclose(cov, np.swapaxes(cov, 1, 2))
+    assert np.all(np.linalg.eigvalsh(cov) > 0)
+
+
+@pytest.mark.parametrize("buckets", [1, 3, 8])
+def test_dask_equals_the_single_machine_kernel_whatever_the_buckets(client, tmp_path, buckets):
+    cameras, table = generated(1500, 4, covariances=buckets == 3)
+    source = write(table, tmp_path / "in", row_group_size=1000)
+    reference = dist.triangulate_table(table, cameras)
+    summary = dist.triangulate(source, cameras, tmp_path / "out", client=client, buckets=buckets)
+    assert summary.tracks == 1500 and summary.workers == 2 and summary.buckets == buckets
+    assert dist.read_points(tmp_path / "out").equals(reference[0])
+    assert dist.read_observations(tmp_path / "out").equals(reference[1])
+    assert not (tmp_path / "out" / "_buckets").exists()
+    # Without a client the same job runs here, with the same tables.
+    dist.triangulate(source, cameras, tmp_path / "local", buckets=buckets + 1)
+    assert dist.read_points(tmp_path / "local").equals(reference[0])
+
+
+def test_each_worker_gets_its_share_of_the_cores(client):
+    shares = dist.share_threads(client)
+    cores = os.cpu_count() or 1
+    assert set(shares.values()) == {max(1, cores // 2)}
+    assert set(client.run(pluecker.get_num_threads).values()) == {max(1, cores // 2)}
+
+
+def test_bad_rows_get_a_status_and_never_lose_other_tracks(client, tmp_path):
+    cameras, table = generated(400, 5)
+    x = table.column("x").to_numpy().copy()
+    image = table.column("image").to_numpy().copy()
+    track = table.column("track").to_numpy()
+    nan_track, unknown_track = track[0], track[1]
+    x[np.flatnonzero(track == nan_track)[0]] = np.nan
+    image[np.flatnonzero(track == unknown_track)[0]] = 999
+    bad = table.set_column(2, "x", pa.array(x)).set_column(1, "image", pa.array(image))
+    summary = dist.triangulate(write(bad, tmp_path / "in", 500), cameras, tmp_path / "out", client=client, buckets=4)
+    points = dist.read_points(tmp_path / "out")
+    assert summary.tracks == 400 and points.num_rows == 400
+    rows = {t: i for i, t in enumerate(points.column("track").to_pylist())}
+    status, message = points.column("status").to_pylist(), points.column("message").to_pylist()
+    assert status[rows[nan_track]] == "non_finite" and "non-finite" in message[rows[nan_track]]
+    assert status[rows[unknown_track]] == "invalid_input"
+    assert "image id 999 is not among the cameras" in message[rows[unknown_track]]
+    # Every other track is as it would be without the bad ones.
+    clean = table.filter(pa.compute.invert(pa.compute.is_in(table.column("track"), pa.array([nan_track, unknown_track]))))
+    reference = dist.triangulate_table(clean, cameras)[0]
+    others = points.filter(pa.compute.invert(pa.compute.is_in(points.column("track"), pa.array([nan_track, unknown_track]))))
+    assert others.equals(reference)
+
+
+def test_parquet_round_trip_of_the_tables(tmp_path):
+    cameras, table = generated(200, 6)
+    points, observations = dist.triangulate_table(table, cameras)
+    pq.write_table(points, tmp_path / "p.parquet")
+    pq.write_table(observations, tmp_path / "o.parquet")
+    assert pq.read_table(tmp_path / "p.parquet").equals(points)
+    assert pq.read_table(tmp_path / "o.parquet").equals(observations)
+    assert points.schema.field("covariance").type == pa.list_(pa.float64(), 9)
+
+
+def test_a_worker_killed_mid_job_loses_nothing(tmp_path):
+    # Its own cluster: the nanny restarts the killed worker; Dask reruns its tasks.
+    cameras, table = generated(6000, 7)
+    source = write(table, tmp_path / "in", row_group_size=2000)
+    reference = dist.triangulate_table(table, cameras)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  silence_logs=50) as cluster, distributed.Client(cluster) as c:
+        pids = c.run(os.getpid)
+        victim = sorted(pids.values())[0]
+        def kill_when_solving():
+            # Waits for the first solve to start, then kills one worker process outright.
+            deadline = time.time() + 60
+            while time.time() < deadline:
+                solving = [k for k in c.processing().values() for k in k if "_solve" in str(k)]
+                if solving:
+                    os.kill(victim, signal.SIGKILL)
+                    return True
+                time.sleep(0.005)
+            return False
+
+        outcome = {}
+        thread = threading.Thread(target=lambda: outcome.setdefault("killed", kill_when_solving()))
+        thread.start()
+        summary = dist.triangulate(source, cameras, tmp_path / "out", client=c, buckets=40)
+        thread.join()
+        assert outcome["killed"], "no solve task was seen running"
+        assert victim not in c.run(os.getpid).values()
+    assert summary.tracks == 6000
+    points = dist.read_points(tmp_path / "out")
+    assert points.num_rows == 6000 and len(np.unique(points.column("track").to_numpy())) == 6000
+    assert points.equals(reference[0])
+    assert dist.read_observations(tmp_path / "out").equals(reference[1])
