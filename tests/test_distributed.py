@@ -164,7 +164,7 @@ def test_a_worker_killed_mid_job_loses_nothing(tmp_path):
             # Waits for the first solve to start, then kills one worker process outright.
             deadline = time.time() + 60
             while time.time() < deadline:
-                solving = [k for k in c.processing().values() for k in k if "_solve" in str(k)]
+                solving = [k for k in c.processing().values() for k in k if "_after" in str(k)]
                 if solving:
                     os.kill(victim, signal.SIGKILL)
                     return True

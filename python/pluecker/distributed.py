@@ -182,22 +182,34 @@ def _bucket_of(track: np.ndarray, buckets: int) -> np.ndarray:
     return (z % np.uint64(buckets)).astype(np.int64)
 
 
-def _split(source: str, fragment: int, row_group: int, buckets: int, scratch: str) -> int:
-    """Task 1: one row group of the input, sent to the buckets (module docs). Returns its rows."""
+def _split(source: str, fragment: int, row_group: int, buckets: int, scratch: str, key: str = "track",
+           name: str = "part") -> int:
+    """Task 1: one row group of the input, sent to the buckets by a hash of its ``key`` column (module
+    docs), written as ``scratch/bucket=<b>/<name>-<fragment>-<row group>.parquet``. Returns its rows."""
     pa = _pyarrow()
     import pyarrow.parquet as pq
 
     path = _input_files(source)[fragment]
     part = pq.ParquetFile(path).read_row_group(row_group)
-    bucket = _bucket_of(np.asarray(part.column("track").to_numpy(), dtype=np.int64), buckets)
+    bucket = _bucket_of(np.asarray(part.column(key).to_numpy(), dtype=np.int64), buckets)
     order = np.argsort(bucket, kind="stable")
     edges = np.searchsorted(bucket[order], np.arange(buckets + 1))
     for b in range(buckets):
         rows = part.take(pa.array(order[edges[b]:edges[b + 1]]))
         folder = Path(scratch) / f"bucket={b}"
         folder.mkdir(parents=True, exist_ok=True)
-        pq.write_table(rows, folder / f"part-{fragment}-{row_group}.parquet")
+        pq.write_table(rows, folder / f"{name}-{fragment}-{row_group}.parquet")
     return part.num_rows
+
+
+def _bucket_table(scratch: str, bucket: int, name: str = "part") -> Any:
+    """Every row of one bucket of one input (``None`` when it has none)."""
+    pa = _pyarrow()
+    import pyarrow.parquet as pq
+
+    files = sorted((Path(scratch) / f"bucket={bucket}").glob(f"{name}-*.parquet"))
+    table = pa.concat_tables([pq.read_table(f) for f in files]) if files else None
+    return table if table is not None and table.num_rows else None
 
 
 def _solve(bucket: int, scratch: str, out: str, cameras: Cameras, method: Optional[str],
@@ -206,10 +218,7 @@ def _solve(bucket: int, scratch: str, out: str, cameras: Cameras, method: Option
     pa = _pyarrow()
     import pyarrow.parquet as pq
 
-    folder = Path(scratch) / f"bucket={bucket}"
-    files = sorted(folder.glob("*.parquet"))
-    parts = [pq.read_table(f) for f in files]
-    table = pa.concat_tables(parts) if parts else None
+    table = _bucket_table(scratch, bucket)
     opts = _core.TriangulationOptions(**options) if options is not None else None
     if table is None or table.num_rows == 0:
         return {"tracks": 0, "certified": 0, "statuses": {}}
@@ -273,30 +282,14 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     started = time.perf_counter()
     source, out = str(source), Path(out)
-    groups = _row_groups(source)
     rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
     if buckets is None:
         buckets = max(4 * workers, -(-rows // ROWS_PER_BUCKET), 1)
     scratch = str(out / "_buckets")
     option_fields = options.to_dict() if options is not None else None
-    if client is None:
-        for fragment, group in groups:
-            _split(source, fragment, group, buckets, scratch)
-        results = [_solve(b, scratch, str(out), cameras, method, option_fields, sigma_px) for b in range(buckets)]
-    else:
-        share_threads(client)
-        cams = client.scatter(cameras, broadcast=True)
-        splits = [client.submit(_split, source, f, g, buckets, scratch, pure=False, retries=3) for f, g in groups]
-        # The solves wait for every split (each bucket gathers rows from all of them).
-        barrier = client.submit(lambda *counts: sum(counts), *splits, pure=False)
-        solves = [client.submit(_solve_after, barrier, b, scratch, str(out), cams, method, option_fields, sigma_px,
-                                pure=False, retries=3) for b in range(buckets)]
-        if progress:
-            from distributed import progress as dask_progress
-
-            dask_progress(solves)
-        results = client.gather(solves)
+    results = _run_job(client, [(source, "track", "part")], buckets, scratch, _solve,
+                       (scratch, str(out), cameras, method, option_fields, sigma_px), progress)
     _remove_tree(Path(scratch))
     statuses: dict[str, int] = {}
     for r in results:
@@ -307,8 +300,36 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
                       observations=out / "observations", buckets=buckets, workers=workers)
 
 
-def _solve_after(_barrier: int, *args: Any) -> dict[str, Any]:
-    return _solve(*args)
+def _run_job(client: Any, inputs: list[tuple[str, str, str]], buckets: int, scratch: str, solve: Any,
+             args: tuple[Any, ...], progress: bool) -> list[Any]:
+    """Splits every input ``(source, key column, name)`` into the buckets, then runs
+    ``solve(bucket, *args)`` on each (module docs): here without ``client``, else on its workers, with
+    the broadcast-once argument ``args[2]`` scattered to every worker and 3 retries per task."""
+    groups = [(source, key, name, f, g) for source, key, name in inputs for f, g in _row_groups(source)]
+    if client is None:
+        for source, key, name, f, g in groups:
+            _split(source, f, g, buckets, scratch, key, name)
+        return [solve(b, *args) for b in range(buckets)]
+    share_threads(client)
+    args = (*args[:2], client.scatter(args[2], broadcast=True), *args[3:])
+    splits = [client.submit(_split, source, f, g, buckets, scratch, key, name, pure=False, retries=3)
+              for source, key, name, f, g in groups]
+    # Every solve waits for every split (a bucket gathers rows from all of them).
+    barrier = client.submit(_count, *splits, pure=False, retries=3)
+    solves = [client.submit(_after, barrier, solve, b, *args, pure=False, retries=3) for b in range(buckets)]
+    if progress:
+        from distributed import progress as dask_progress
+
+        dask_progress(solves)
+    return client.gather(solves)
+
+
+def _count(*rows: int) -> int:
+    return sum(rows)
+
+
+def _after(_barrier: int, solve: Any, *args: Any) -> Any:
+    return solve(*args)
 
 
 def _remove_tree(path: Path) -> None:
