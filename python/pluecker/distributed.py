@@ -56,7 +56,8 @@ import numpy as np
 
 from . import _core
 
-__all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations"]
+__all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations",
+           "localize", "localize_tables", "read_poses", "read_matches", "share_threads"]
 
 OBSERVATION_COLUMNS = ("track", "image", "x", "y")
 COVARIANCE_COLUMNS = ("cov_xx", "cov_xy", "cov_yy")
@@ -338,6 +339,161 @@ def _remove_tree(path: Path) -> None:
     for p in sorted(path.rglob("*"), reverse=True):
         p.unlink() if p.is_file() else p.rmdir()
     path.rmdir()
+
+
+QUERY_COLUMNS = ("query", "fx", "fy", "cx", "cy")
+POINT_MATCH_COLUMNS = ("query", "x", "y", "X", "Y", "Z")
+LINE_MATCH_COLUMNS = ("query", "x1", "y1", "x2", "y2", "X1", "Y1", "Z1", "X2", "Y2", "Z2")
+
+
+def _columns(table: Any, names: Iterable[str]) -> np.ndarray:
+    return np.stack([np.asarray(table.column(n).to_numpy(), dtype=float) for n in names], axis=1)
+
+
+def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, *, ransac: Any = None,
+                    options: Optional[_core.PoseOptions] = None, seed: int = 0, threads: Optional[int] = None
+                    ) -> tuple[Any, Any]:
+    """The single-machine kernel of :func:`localize`: one robust pose per row of ``queries`` (columns
+    ``query``, ``fx``, ``fy``, ``cx``, ``cy``: a pinhole camera) from its rows of ``point_matches``
+    (``query``, pixel ``x``, ``y``, world ``X``, ``Y``, ``Z``) and ``line_matches`` (``query``, segment
+    ``x1 … y2`` in pixels, 3-D segment ``X1 … Z2``), all ``pyarrow.Table``. Each query runs
+    :func:`pluecker.estimate_pose` with RANSAC (``ransac``: :class:`pluecker.RansacOptions`, ``None``:
+    its defaults) seeded ``seed + query`` (reproducible whatever the partitioning), matches sorted by
+    their values. Returns the ``poses`` table (``query``, ``R`` 9 values row-major, ``t`` 3, ``status``,
+    ``rms_error_px``, ``point_inliers``, ``line_inliers``, ``message``; ``x_cam = R X_world + t``) and the
+    ``matches`` table (``query``, ``kind`` point/line, ``index`` in the sorted order, ``inlier``), rows in
+    increasing query id. A query with bad or too few matches gets a status and a message."""
+    pa = _pyarrow()
+    from concurrent.futures import ThreadPoolExecutor
+
+    base = (ransac if ransac is not None else _core.RansacOptions()).to_dict()
+    q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
+    intrinsics = _columns(queries, QUERY_COLUMNS[1:])
+    order = np.argsort(q_ids, kind="stable")
+    q_ids, intrinsics = q_ids[order], intrinsics[order]
+
+    def grouped(table: Any, names: tuple[str, ...]) -> dict[int, np.ndarray]:
+        if table is None or table.num_rows == 0:
+            return {}
+        key = np.asarray(table.column("query").to_numpy(), dtype=np.int64)
+        values = _columns(table, names[1:])
+        rows = np.lexsort((*values.T[::-1], key))
+        key, values = key[rows], values[rows]
+        starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+        return {int(key[a]): values[a:b] for a, b in zip(starts, np.r_[starts[1:], len(key)])}
+
+    points, lines = grouped(point_matches, POINT_MATCH_COLUMNS), grouped(line_matches, LINE_MATCH_COLUMNS)
+
+    def solve(i: int) -> dict[str, Any]:
+        q = int(q_ids[i])
+        p, l = points.get(q, np.zeros((0, 5))), lines.get(q, np.zeros((0, 10)))
+        out: dict[str, Any] = {"R": np.full(9, np.nan), "t": np.full(3, np.nan), "rms": np.nan, "message": "",
+                               "pin": np.zeros(len(p), bool), "lin": np.zeros(len(l), bool)}
+        try:
+            camera = _core.Camera(*intrinsics[i])
+            options_q = _core.RansacOptions(**{**base, "seed": (seed + q) % 2**63})
+            r = _core.estimate_pose(camera, p[:, :2] if len(p) else None, p[:, 2:] if len(p) else None,
+                                    l[:, :4].reshape(-1, 2, 2) if len(l) else None,
+                                    l[:, 4:].reshape(-1, 2, 3) if len(l) else None, options=options,
+                                    ransac=options_q)
+        except (_core.PlueckerError, TypeError) as exc:
+            out["status"] = "invalid_input"
+            out["message"] = f"query {q}: {exc}"
+            return out
+        out.update(status=r.status, R=np.asarray(r.R).reshape(-1), t=np.asarray(r.t), rms=r.rms_error_px,
+                   pin=np.asarray(r.inliers_points, dtype=bool), lin=np.asarray(r.inliers_lines, dtype=bool))
+        return out
+
+    with ThreadPoolExecutor(max_workers=threads or _core.get_num_threads()) as pool:
+        solved = list(pool.map(solve, range(len(q_ids))))
+    poses = pa.table({
+        "query": q_ids,
+        "R": pa.FixedSizeListArray.from_arrays(np.concatenate([s["R"] for s in solved]) if solved else np.zeros(0), 9),
+        "t": pa.FixedSizeListArray.from_arrays(np.concatenate([s["t"] for s in solved]) if solved else np.zeros(0), 3),
+        "status": pa.array([s["status"] for s in solved], pa.string()),
+        "rms_error_px": np.array([s["rms"] for s in solved], float),
+        "point_inliers": np.array([int(s["pin"].sum()) for s in solved], np.int64),
+        "line_inliers": np.array([int(s["lin"].sum()) for s in solved], np.int64),
+        "message": pa.array([s["message"] for s in solved], pa.string()),
+    })
+    kinds, query, index, inlier = [], [], [], []
+    for q, s in zip(q_ids, solved):
+        for kind, mask in (("point", s["pin"]), ("line", s["lin"])):
+            kinds += [kind] * len(mask)
+            query.append(np.full(len(mask), q, np.int64))
+            index.append(np.arange(len(mask), dtype=np.int64))
+            inlier.append(mask)
+    matches = pa.table({
+        "query": np.concatenate(query) if query else np.zeros(0, np.int64),
+        "kind": pa.array(kinds, pa.string()),
+        "index": np.concatenate(index) if index else np.zeros(0, np.int64),
+        "inlier": np.concatenate(inlier) if inlier else np.zeros(0, bool),
+    })
+    return poses, matches
+
+
+def _localize_bucket(bucket: int, scratch: str, out: str, settings: dict[str, Any]) -> dict[str, Any]:
+    """Task 2 of :func:`localize`: one bucket of queries solved and written."""
+    import pyarrow.parquet as pq
+
+    queries = _bucket_table(scratch, bucket, "queries")
+    if queries is None:
+        return {"queries": 0, "statuses": {}}
+    ransac = _core.RansacOptions(**settings["ransac"]) if settings["ransac"] is not None else None
+    options = _core.PoseOptions(**settings["options"]) if settings["options"] is not None else None
+    poses, matches = localize_tables(queries, _bucket_table(scratch, bucket, "points"),
+                                     _bucket_table(scratch, bucket, "lines"), ransac=ransac, options=options,
+                                     seed=settings["seed"])
+    for name, t in (("poses", poses), ("matches", matches)):
+        target = Path(out) / name
+        target.mkdir(parents=True, exist_ok=True)
+        pq.write_table(t, target / f"part-{bucket:05d}.parquet")
+    values, counts = np.unique(np.asarray(poses.column("status").to_pylist(), dtype=str), return_counts=True)
+    return {"queries": poses.num_rows, "statuses": {str(v): int(c) for v, c in zip(values, counts)}}
+
+
+def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
+             line_matches: Union[str, Path, None] = None, client: Any = None, buckets: Optional[int] = None,
+             ransac: Any = None, options: Optional[_core.PoseOptions] = None, seed: int = 0,
+             progress: bool = False) -> JobSummary:
+    """Batch localisation: one robust pose per query of the Parquet tables ``queries`` and
+    ``point_matches`` (and ``line_matches``), columns of :func:`localize_tables`, written to
+    ``out/poses`` and ``out/matches``. The tables are split by a hash of ``query`` (module docs), so a
+    query's matches meet in one task; results equal :func:`localize_tables` on the whole tables.
+    ``client``: a ``distributed.Client`` (``None``: here, without Dask). Returns a :class:`JobSummary`
+    (``tracks`` counts queries; ``points``/``observations`` are the poses and matches folders)."""
+    import pyarrow.parquet as pq
+
+    started = time.perf_counter()
+    out = Path(out)
+    n = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(queries)))
+    workers = len(client.scheduler_info()["workers"]) if client is not None else 1
+    buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
+    inputs = [(str(queries), "query", "queries"), (str(point_matches), "query", "points")]
+    if line_matches is not None:
+        inputs.append((str(line_matches), "query", "lines"))
+    scratch = str(out / "_buckets")
+    settings = {"ransac": ransac.to_dict() if ransac is not None else None,
+                "options": options.to_dict() if options is not None else None, "seed": int(seed)}
+    results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress)
+    _remove_tree(Path(scratch))
+    statuses: dict[str, int] = {}
+    for r in results:
+        for k, v in r["statuses"].items():
+            statuses[k] = statuses.get(k, 0) + v
+    return JobSummary(tracks=sum(r["queries"] for r in results), certified=0, statuses=statuses,
+                      seconds=time.perf_counter() - started, points=out / "poses", observations=out / "matches",
+                      buckets=buckets, workers=workers)
+
+
+def read_poses(out: Union[str, Path]) -> Any:
+    """The ``poses`` table of a :func:`localize` job, rows in increasing query id."""
+    return _read_sorted(Path(out) / "poses", ["query"])
+
+
+def read_matches(out: Union[str, Path]) -> Any:
+    """The ``matches`` table of a :func:`localize` job, rows in increasing query id (stable within)."""
+    return _read_sorted(Path(out) / "matches", ["query"])
 
 
 def read_points(out: Union[str, Path]) -> Any:
