@@ -254,3 +254,49 @@ def test_batch_localisation_on_dask_equals_the_kernel_and_finds_the_poses(client
         # pose (a RANSAC failure, a flipped solution) is off by many degrees.
         angle = np.arccos(np.clip((np.trace(r.T @ truth[q][0]) - 1) / 2, -1, 1))
         assert angle < np.radians(2.0) and np.linalg.norm(tt - truth[q][1]) < 0.2, (q, np.degrees(angle))
+
+
+def test_command_line_on_a_scheduler_writes_the_same_colmap_model(client, tmp_path, capsys):
+    pycolmap = pytest.importorskip("pycolmap")
+    from test_colmap import noisy_model_with_outliers
+
+    from pluecker.cli import main
+
+    rec, _ = noisy_model_with_outliers(7)
+    (tmp_path / "in").mkdir()
+    rec.write(str(tmp_path / "in"))
+    common = ["triangulate", "--colmap", str(tmp_path / "in"), "--outlier-threshold", "4"]
+    assert main([*common, "--out", str(tmp_path / "here")]) == 0
+    assert main([*common, "--out", str(tmp_path / "dask"), "--scheduler", client.scheduler.address]) == 0
+    out = capsys.readouterr().out
+    assert "on 2 Dask workers" in out and "60 certified" in out
+    here, there = (np.load(tmp_path / d / "points3D_triangulation.npz") for d in ("here", "dask"))
+    np.testing.assert_array_equal(here["point3D_id"], there["point3D_id"])
+    np.testing.assert_array_equal(here["X"], there["X"])
+    np.testing.assert_array_equal(here["certified"], there["certified"])
+    # The same observations rejected, whatever their order in the two files.
+    rejected = lambda s: {(int(i), int(k)) for i, k, ok in zip(s["observation_image_id"], s["observation_point2D_idx"],  # noqa: E731
+                                                               s["observation_inlier"]) if not ok}
+    assert rejected(here) == rejected(there) and rejected(here)
+    back = pycolmap.Reconstruction(str(tmp_path / "dask"))
+    assert back.num_points3D() == 60 and not (tmp_path / "dask" / "_job").exists()
+    # --scheduler only with --colmap, and an unreachable scheduler is an error line.
+    assert main(["triangulate", str(tmp_path), "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    assert main([*common, "--out", str(tmp_path / "x"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    assert "cannot reach the Dask scheduler" in capsys.readouterr().err
+
+
+def test_command_line_localize_with_and_without_a_scheduler(client, tmp_path, capsys):
+    from pluecker.cli import main
+
+    queries, points, lines, _ = generated_queries(12, 9)
+    paths = {name: write(t, tmp_path / name, 100) for name, t in
+             (("queries", queries), ("points", points), ("lines", lines))}
+    base = ["localize", str(paths["queries"]), str(paths["points"]), "--lines", str(paths["lines"])]
+    assert main([*base, "--out", str(tmp_path / "here")]) == 0
+    assert "12 queries on this machine" in capsys.readouterr().out
+    assert main([*base, "--out", str(tmp_path / "dask"), "--scheduler", client.scheduler.address]) == 0
+    assert "12 success" in capsys.readouterr().out
+    assert_same_table(dist.read_poses(tmp_path / "here"), dist.read_poses(tmp_path / "dask"))
+    assert main(["localize", str(tmp_path / "missing"), str(paths["points"]), "--out", str(tmp_path / "x")]) == 2
+    assert "no such file" in capsys.readouterr().err

@@ -195,7 +195,27 @@ def build_parser() -> argparse.ArgumentParser:
                      "every observation (default 1)")
     tri.add_argument("--out", metavar="DIR", type=Path, help="output directory (default "
                      "results/triangulate/NAME)")
+    tri.add_argument("--scheduler", metavar="ADDRESS",
+                     help="with --colmap: run on the Dask cluster of this scheduler (e.g. tcp://host:8786; needs "
+                     "pip install 'pluecker[dask]'); --out must be storage every worker sees. Without it the job "
+                     "runs here, without Dask")
     tri.set_defaults(handler=_triangulate)
+
+    loc = commands.add_parser(
+        "localize", help="localise many query images from their 2D-3D matches (Parquet tables)",
+        description="One robust pose per query (RANSAC with minimal solvers, then refinement) from Parquet "
+        "tables: QUERIES (query, fx, fy, cx, cy), POINTS (query, x, y, X, Y, Z) and optionally --lines "
+        "(query, x1, y1, x2, y2, X1, Y1, Z1, X2, Y2, Z2); pixels u = K x_cam / z, x_cam = R X_world + t. "
+        "Writes --out/poses and --out/matches as Parquet (pluecker.distributed.localize). Needs pyarrow; "
+        "with --scheduler also Dask: pip install 'pluecker[dask]'.")
+    loc.add_argument("queries", metavar="QUERIES", type=Path, help="Parquet file or folder of the queries")
+    loc.add_argument("points", metavar="POINTS", type=Path, help="Parquet file or folder of the point matches")
+    loc.add_argument("--lines", metavar="LINES", type=Path, help="Parquet file or folder of the line matches")
+    loc.add_argument("--out", metavar="DIR", type=Path, required=True, help="output directory")
+    loc.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler")
+    loc.add_argument("--seed", type=_non_negative_int, default=0, metavar="N",
+                     help="RANSAC seed (query q uses N + q; default 0)")
+    loc.set_defaults(handler=_localize)
 
     rep = commands.add_parser(
         "reproduce", help="re-run a paper's experiments",
@@ -424,6 +444,79 @@ def _pose(args: argparse.Namespace) -> int:
 # triangulate
 
 
+def _client(command: str, address: str) -> Any:
+    """A Dask client of the scheduler at ``address`` (an error line when Dask is missing or unreachable)."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise InputError("--scheduler needs Dask: pip install 'pluecker[dask]'") from None
+    try:
+        return Client(address, timeout=30)
+    except (OSError, TimeoutError) as exc:
+        raise InputError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+
+
+def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -> int:
+    """``--colmap --scheduler``: the observations to Parquet under --out, the job on the cluster
+    (pluecker.distributed.triangulate), the tables back into the model, written as without Dask."""
+    import pyarrow.parquet as pq
+
+    from pluecker import colmap, distributed
+
+    try:
+        client = _client("triangulate", args.scheduler)
+    except InputError as exc:
+        return _fail("triangulate", str(exc))
+    with client:
+        cameras, table = colmap.observation_table(reconstruction, args.sigma)
+        job = args.out / "_job"
+        (job / "input").mkdir(parents=True, exist_ok=True)
+        pq.write_table(table, job / "input" / "observations.parquet", row_group_size=1_000_000)
+        options = (pluecker.TriangulationOptions(outlier_threshold=args.outlier_threshold / args.sigma)
+                   if args.outlier_threshold is not None else None)
+        summary = distributed.triangulate(job / "input" / "observations.parquet", cameras, job, client=client,
+                                          method=args.method, options=options, progress=sys.stderr.isatty())
+    run = colmap.retriangulation_of_job(distributed.read_points(job), distributed.read_observations(job))
+    distributed._remove_tree(job)
+    files = colmap.write(reconstruction, run, args.out, text=args.text)
+    print(f"{args.colmap}: {summary.tracks} points on {summary.workers} Dask workers in {summary.seconds:.1f} s, "
+          f"{summary.statuses.get('success', 0)} triangulated, {summary.certified} certified ({args.method})\n"
+          f"wrote {len(files)} files to {args.out}: " + ", ".join(f.name for f in files))
+    return 0
+
+
+def _localize(args: argparse.Namespace) -> int:
+    """``pluecker localize QUERIES POINTS --out DIR [--lines L] [--scheduler ADDRESS]``."""
+    try:
+        from pluecker import distributed
+
+        distributed._pyarrow()
+    except ImportError as exc:
+        return _fail("localize", str(exc))
+    for path in (args.queries, args.points, args.lines):
+        if path is not None and not path.exists():
+            return _fail("localize", f"{path}: no such file or directory")
+    client = None
+    if args.scheduler is not None:
+        try:
+            client = _client("localize", args.scheduler)
+        except InputError as exc:
+            return _fail("localize", str(exc))
+    try:
+        summary = distributed.localize(args.queries, args.points, args.out, line_matches=args.lines, client=client,
+                                       seed=args.seed, progress=client is not None and sys.stderr.isatty())
+    except (KeyError, ValueError, OSError) as exc:
+        return _fail("localize", f"cannot read the tables: {exc}")
+    finally:
+        if client is not None:
+            client.close()
+    where = f"{summary.workers} Dask workers" if client is not None else "this machine"
+    print(f"{summary.tracks} queries on {where} in {summary.seconds:.1f} s: "
+          + ", ".join(f"{n} {s}" for s, n in sorted(summary.statuses.items())) + f"\nwrote {args.out}/poses and "
+          f"{args.out}/matches")
+    return 0
+
+
 def _triangulate_colmap(args: argparse.Namespace) -> int:
     """``pluecker triangulate --colmap DIR --out DIR``: re-triangulate every track of a COLMAP model."""
     from pluecker import colmap
@@ -443,6 +536,8 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
         reconstruction = pycolmap.Reconstruction(str(args.colmap))
     except Exception as exc:  # pycolmap raises its own exception types for unreadable models
         return _fail("triangulate", f"{args.colmap}: cannot read a COLMAP model: {exc}")
+    if args.scheduler is not None:
+        return _triangulate_colmap_on_dask(args, reconstruction)
     progress = Progress(max(1, reconstruction.num_points3D()), "points")
     report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
     try:
@@ -474,6 +569,8 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
 def _triangulate(args: argparse.Namespace) -> int:
     from pluecker import triangulate_folder
 
+    if args.scheduler is not None and args.colmap is None:
+        return _fail("triangulate", "--scheduler applies to --colmap models (VGG folders run here)")
     if args.colmap is not None:
         if args.folder is not None:
             return _fail("triangulate", "give either FOLDER or --colmap DIR, not both")

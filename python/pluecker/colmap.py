@@ -99,6 +99,81 @@ class Retriangulation:
         return iter((self.point3D_ids, self.result))
 
 
+def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...]:
+    """Every observation of a model's 3-D points, undistorted into its camera's pinhole part with the
+    pixel covariance carried there (:func:`retriangulate`): the cameras ``P`` (one per posed image),
+    the sorted point ids, and per observation its point's row, its camera's row, COLMAP image id,
+    ``point2D_idx``, undistorted pixel and covariance."""
+    images = [image for image in reconstruction.images.values() if image.has_pose]
+    lenses = [lens_camera(reconstruction.cameras[image.camera_id]) for image in images]
+    # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
+    P = np.stack([lens.pinhole.P(*pose_from_rigid(image.cam_from_world())) for lens, image in zip(lenses, images)])
+    ids = np.array(sorted(reconstruction.point3D_ids()), dtype=np.int64)
+    # The observations image by image (pycolmap hands them over per image), then sorted by point.
+    parts = []
+    for j, (image, lens) in enumerate(zip(images, lenses)):
+        observed = image.get_observation_points2D()
+        if not observed:
+            continue
+        xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
+        point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
+        idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
+        undistorted, covariances = lens.undistort(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
+        parts.append((np.searchsorted(ids, point_ids), np.full(len(xy), j), np.full(len(xy), image.image_id), idx,
+                      undistorted, covariances))
+    if parts:
+        track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
+    else:
+        track_a = cameras_index = image_a = point2D_idx = np.zeros(0, dtype=np.int64)
+        undistorted, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
+    # Sorted as pluecker.distributed sorts them (track, image id, pixel), so that both give the same bits.
+    order = np.lexsort((undistorted[:, 1], undistorted[:, 0], image_a, track_a))
+    return (P, ids, track_a[order], cameras_index[order], image_a[order], point2D_idx[order], undistorted[order],
+            covariances[order])
+
+
+def observation_table(reconstruction: Any, sigma_px: float = 1.0) -> tuple[Any, Any]:
+    """A model's observations as the table of :mod:`pluecker.distributed` (``track`` = point3D id,
+    ``image`` = image id, undistorted ``x``, ``y`` and ``cov_*`` as :func:`retriangulate` computes them,
+    ``point2D_idx``) and its :class:`pluecker.distributed.Cameras` (posed images' pinhole cameras)."""
+    import pyarrow as pa
+
+    from .distributed import Cameras
+
+    P, ids, track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = _observations(
+        reconstruction, sigma_px)
+    image_ids = np.array([image.image_id for image in reconstruction.images.values() if image.has_pose], np.int64)
+    table = pa.table({"track": ids[track_a] if len(ids) else np.zeros(0, np.int64), "image": image_a.astype(np.int64),
+                      "x": undistorted[:, 0], "y": undistorted[:, 1], "cov_xx": covariances[:, 0, 0],
+                      "cov_xy": covariances[:, 0, 1], "cov_yy": covariances[:, 1, 1],
+                      "point2D_idx": point2D_idx.astype(np.int64)})
+    return Cameras(image_ids, P if len(P) else np.zeros((0, 3, 4))), table
+
+
+class TableResult:
+    """The columns of :func:`retriangulate`'s result read from the tables of a distributed job, in the
+    order of ``point3D_ids`` and of the observations (for :func:`write`)."""
+
+    def __init__(self, points: Any, inliers: np.ndarray) -> None:
+        self.X = np.c_[points.column("X").to_numpy(), points.column("Y").to_numpy(), points.column("Z").to_numpy()]
+        self.status = np.asarray(points.column("status").to_pylist(), dtype=str)
+        self.certified = points.column("certified").to_numpy(zero_copy_only=False).astype(bool)
+        self.cost = points.column("cost").to_numpy()
+        self.lower_bound = points.column("lower_bound").to_numpy()
+        self.covariance = np.asarray(points.column("covariance").combine_chunks().flatten().to_numpy()).reshape(-1, 3, 3)
+        self.inliers = inliers
+
+
+def retriangulation_of_job(points: Any, observations: Any) -> Retriangulation:
+    """A :class:`Retriangulation` from the ``points`` and ``observations`` tables of
+    :func:`pluecker.distributed.triangulate` run on :func:`observation_table` (for :func:`write`)."""
+    ids = points.column("track").to_numpy()
+    obs_track = observations.column("track").to_numpy()
+    inliers = observations.column("inlier").to_numpy(zero_copy_only=False).astype(bool)
+    return Retriangulation(ids, TableResult(points, inliers), np.searchsorted(ids, obs_track),
+                           observations.column("image").to_numpy(), observations.column("point2D_idx").to_numpy())
+
+
 def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None = None,
                   options: Any = None, *, outlier_threshold_px: float | None = None,
                   progress: Any = None) -> Retriangulation:
@@ -119,29 +194,8 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     ``method``, ``options`` and ``progress`` are those of :func:`pluecker.triangulate_point_observations`.
     Use :func:`update_points` or :func:`write` to put the points back.
     """
-    images = [image for image in reconstruction.images.values() if image.has_pose]
-    lenses = [lens_camera(reconstruction.cameras[image.camera_id]) for image in images]
-    # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
-    P = np.stack([lens.pinhole.P(*pose_from_rigid(image.cam_from_world())) for lens, image in zip(lenses, images)])
-    ids = np.array(sorted(reconstruction.point3D_ids()), dtype=np.int64)
-    # The observations image by image (pycolmap hands them over per image), then sorted by point.
-    parts = []
-    for j, (image, lens) in enumerate(zip(images, lenses)):
-        observed = image.get_observation_points2D()
-        if not observed:
-            continue
-        xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
-        point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
-        idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
-        undistorted, covariances = lens.undistort(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
-        parts.append((np.searchsorted(ids, point_ids), np.full(len(xy), j), np.full(len(xy), image.image_id), idx,
-                      undistorted, covariances))
-    # Rows image by image; triangulate_point_observations groups them by track itself.
-    if parts:
-        track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
-    else:
-        track_a = cameras_index = image_a = point2D_idx = np.zeros(0, dtype=np.int64)
-        undistorted, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
+    P, ids, track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = _observations(
+        reconstruction, sigma_px)
     if outlier_threshold_px is not None:
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})

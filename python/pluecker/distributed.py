@@ -21,7 +21,8 @@ Cameras are a :class:`Cameras` (image ids and their 3x4 matrices ``P = K [R | t]
 worker once. The result is two Parquet datasets under ``out``: ``points/`` with one row per track
 (``track``, ``X``, ``Y``, ``Z``, ``cost``, ``lower_bound``, ``relative_gap``, ``certified``, ``status``,
 ``certificate``, ``message``, ``covariance`` — the 3x3 covariance row-major as 9 values) and
-``observations/`` with one row per observation (``track``, ``image``, ``inlier``).
+``observations/`` with one row per observation (``track``, ``image``, ``inlier``, and ``point2D_idx``
+when the input has it).
 
 **How a job runs.** 1. *Split*: each row group of the input is read by one task, which sends every row
 to one of ``buckets`` buckets by a hash of its track and writes one Parquet file per bucket to
@@ -61,6 +62,8 @@ __all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_po
 
 OBSERVATION_COLUMNS = ("track", "image", "x", "y")
 COVARIANCE_COLUMNS = ("cov_xx", "cov_xy", "cov_yy")
+#: Optional observation columns copied to the ``observations`` result (COLMAP's ``point2D_idx``).
+PASSTHROUGH_COLUMNS = ("point2D_idx",)
 #: Rows per bucket the default bucket count aims at (about 60 MB of observations).
 ROWS_PER_BUCKET = 2_000_000
 
@@ -129,6 +132,8 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
     # A total order that does not depend on how the rows arrived.
     order = np.lexsort((x[:, 1], x[:, 0], image, track))
     track, image, x, cov = track[order], image[order], x[order], np.ascontiguousarray(cov[order])
+    passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
+                   if name in table.column_names}
     ids, track_index = np.unique(track, return_inverse=True)
     camera_index, known = cameras.index_of(image)
     result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov, method=method,
@@ -153,7 +158,7 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
         "covariance": pa.FixedSizeListArray.from_arrays(np.asarray(result.covariance).reshape(-1), 9),
     })
     inliers = np.ones(len(track), bool) if result.inliers is None else np.asarray(result.inliers, dtype=bool)
-    observations = pa.table({"track": track, "image": image, "inlier": inliers})
+    observations = pa.table({"track": track, "image": image, "inlier": inliers, **passthrough})
     return points, observations
 
 
