@@ -300,3 +300,19 @@ def test_command_line_localize_with_and_without_a_scheduler(client, tmp_path, ca
     assert_same_table(dist.read_poses(tmp_path / "here"), dist.read_poses(tmp_path / "dask"))
     assert main(["localize", str(tmp_path / "missing"), str(paths["points"]), "--out", str(tmp_path / "x")]) == 2
     assert "no such file" in capsys.readouterr().err
+
+
+def test_an_input_partitioned_by_track_is_solved_file_by_file(client, tmp_path):
+    cameras, table = generated(900, 10)
+    track = table.column("track").to_numpy()
+    (tmp_path / "in").mkdir()
+    for k, part in enumerate(np.array_split(np.unique(track), 3)):
+        pq.write_table(table.filter(pa.compute.is_in(table.column("track"), pa.array(part))),
+                       tmp_path / "in" / f"chunk-{k}.parquet")
+    summary = dist.triangulate(tmp_path / "in", cameras, tmp_path / "out", client=client, partitioned=True,
+                               threads_per_worker=1)
+    assert summary.buckets == 3 and summary.tracks == 900
+    reference = dist.triangulate_table(table, cameras)
+    assert dist.read_points(tmp_path / "out").equals(reference[0])
+    assert dist.read_observations(tmp_path / "out").equals(reference[1])
+    assert set(client.run(pluecker.get_num_threads).values()) == {1}

@@ -33,7 +33,8 @@ one task per bucket reads its files, sorts the rows by (track, image, x, y) and 
 files named after its input, so a retried task (a worker killed mid-job) rewrites the same files and
 the output holds every track once; a track's answer depends on its own rows only, so results are bit
 for bit those of :func:`triangulate_table` on the whole table, whatever the buckets and workers.
-Memory per task is bounded by a row group or a bucket, never by the job. ``out`` must be storage every
+Memory per task is bounded by a row group or a bucket, never by the job. An input whose files each hold
+whole tracks (``partitioned=True``) skips the split: one solve per file. ``out`` must be storage every
 worker sees (a shared file system, or an object store URI pyarrow can write).
 
 **Bad rows.** A non-finite pixel or covariance, or an image id that is not among the cameras, gives
@@ -224,7 +225,22 @@ def _solve(bucket: int, scratch: str, out: str, cameras: Cameras, method: Option
     pa = _pyarrow()
     import pyarrow.parquet as pq
 
-    table = _bucket_table(scratch, bucket)
+    return _solve_table(_bucket_table(scratch, bucket), bucket, out, cameras, method, options, sigma_px)
+
+
+def _solve_file(index: int, source: str, out: str, cameras: Cameras, method: Optional[str],
+                options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
+    """Task of a ``partitioned`` job: one input file of whole tracks solved and written."""
+    import pyarrow.parquet as pq
+
+    return _solve_table(pq.read_table(_input_files(source)[index]), index, out, cameras, method, options, sigma_px)
+
+
+def _solve_table(table: Any, bucket: int, out: str, cameras: Cameras, method: Optional[str],
+                 options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
+    """Solves one bucket's table and writes ``points`` and ``observations`` part ``bucket``."""
+    import pyarrow.parquet as pq
+
     opts = _core.TriangulationOptions(**options) if options is not None else None
     if table is None or table.num_rows == 0:
         return {"tracks": 0, "certified": 0, "statuses": {}}
@@ -275,14 +291,18 @@ def share_threads(client: Any) -> dict[str, int]:
 def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path], *, client: Any = None,
                 buckets: Optional[int] = None, method: Optional[str] = None,
                 options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0,
-                progress: bool = False) -> JobSummary:
+                progress: bool = False, partitioned: bool = False,
+                threads_per_worker: Optional[int] = None) -> JobSummary:
     """Re-triangulates every track of the observation table at ``source`` (a Parquet file or a folder
     of them, columns of the module docs) and writes ``out/points`` and ``out/observations``.
 
     ``client``: a ``distributed.Client`` (``None``: run here, without Dask). ``buckets``: the number of
     solve tasks (default: enough for about 2 million observations each, at least 4 per worker).
     ``method``, ``options``: those of :func:`pluecker.triangulate_point_observations`. ``progress``:
-    a progress bar on the terminal (Dask's). Returns a :class:`JobSummary`.
+    a progress bar on the terminal (Dask's). ``partitioned``: every input file already holds whole
+    tracks (written by track, e.g. one file per chunk of tracks): one solve per file, no split.
+    ``threads_per_worker``: pluecker threads of every worker (default: its share of the cores,
+    :func:`share_threads`). Returns a :class:`JobSummary`.
     """
     import pyarrow.parquet as pq
 
@@ -294,8 +314,15 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
         buckets = max(4 * workers, -(-rows // ROWS_PER_BUCKET), 1)
     scratch = str(out / "_buckets")
     option_fields = options.to_dict() if options is not None else None
-    results = _run_job(client, [(source, "track", "part")], buckets, scratch, _solve,
-                       (scratch, str(out), cameras, method, option_fields, sigma_px), progress)
+    if partitioned:
+        files = _input_files(source)
+        buckets = len(files)
+        results = _run_tasks(client, _solve_file, [(i, source) for i in range(len(files))],
+                             (str(out), cameras, method, option_fields, sigma_px), progress, threads_per_worker)
+    else:
+        results = _run_job(client, [(source, "track", "part")], buckets, scratch, _solve,
+                           (scratch, str(out), cameras, method, option_fields, sigma_px), progress,
+                           threads_per_worker)
     _remove_tree(Path(scratch))
     statuses: dict[str, int] = {}
     for r in results:
@@ -306,8 +333,31 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
                       observations=out / "observations", buckets=buckets, workers=workers)
 
 
+def _set_threads(client: Any, threads_per_worker: Optional[int]) -> None:
+    if threads_per_worker is None:
+        share_threads(client)
+    else:
+        client.run(_core.set_num_threads, int(threads_per_worker))
+
+
+def _run_tasks(client: Any, task: Any, items: list[tuple[Any, ...]], args: tuple[Any, ...], progress: bool,
+               threads_per_worker: Optional[int] = None) -> list[Any]:
+    """``task(*item, *args)`` for every item: here without ``client``, else on its workers with
+    ``args[1]`` broadcast once and 3 retries per task."""
+    if client is None:
+        return [task(*item, *args) for item in items]
+    _set_threads(client, threads_per_worker)
+    args = (args[0], client.scatter(args[1], broadcast=True), *args[2:])
+    futures = [client.submit(task, *item, *args, pure=False, retries=3) for item in items]
+    if progress:
+        from distributed import progress as dask_progress
+
+        dask_progress(futures)
+    return client.gather(futures)
+
+
 def _run_job(client: Any, inputs: list[tuple[str, str, str]], buckets: int, scratch: str, solve: Any,
-             args: tuple[Any, ...], progress: bool) -> list[Any]:
+             args: tuple[Any, ...], progress: bool, threads_per_worker: Optional[int] = None) -> list[Any]:
     """Splits every input ``(source, key column, name)`` into the buckets, then runs
     ``solve(bucket, *args)`` on each (module docs): here without ``client``, else on its workers, with
     the broadcast-once argument ``args[2]`` scattered to every worker and 3 retries per task."""
@@ -316,7 +366,7 @@ def _run_job(client: Any, inputs: list[tuple[str, str, str]], buckets: int, scra
         for source, key, name, f, g in groups:
             _split(source, f, g, buckets, scratch, key, name)
         return [solve(b, *args) for b in range(buckets)]
-    share_threads(client)
+    _set_threads(client, threads_per_worker)
     args = (*args[:2], client.scatter(args[2], broadcast=True), *args[3:])
     splits = [client.submit(_split, source, f, g, buckets, scratch, key, name, pure=False, retries=3)
               for source, key, name, f, g in groups]
