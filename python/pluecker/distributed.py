@@ -510,12 +510,13 @@ def _localize_bucket(bucket: int, scratch: str, out: str, settings: dict[str, An
 def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
              line_matches: Union[str, Path, None] = None, client: Any = None, buckets: Optional[int] = None,
              ransac: Any = None, options: Optional[_core.PoseOptions] = None, seed: int = 0,
-             progress: bool = False) -> JobSummary:
+             progress: bool = False, threads_per_worker: Optional[int] = None) -> JobSummary:
     """Batch localisation: one robust pose per query of the Parquet tables ``queries`` and
     ``point_matches`` (and ``line_matches``), columns of :func:`localize_tables`, written to
     ``out/poses`` and ``out/matches``. The tables are split by a hash of ``query`` (module docs), so a
     query's matches meet in one task; results equal :func:`localize_tables` on the whole tables.
-    ``client``: a ``distributed.Client`` (``None``: here, without Dask). Returns a :class:`JobSummary`
+    ``client``: a ``distributed.Client`` (``None``: here, without Dask); ``threads_per_worker`` as for
+    :func:`triangulate` (the poses of a task run on that many threads). Returns a :class:`JobSummary`
     (``tracks`` counts queries; ``points``/``observations`` are the poses and matches folders)."""
     import pyarrow.parquet as pq
 
@@ -530,7 +531,8 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     scratch = str(out / "_buckets")
     settings = {"ransac": ransac.to_dict() if ransac is not None else None,
                 "options": options.to_dict() if options is not None else None, "seed": int(seed)}
-    results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress)
+    results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
+                       threads_per_worker)
     _remove_tree(Path(scratch))
     statuses: dict[str, int] = {}
     for r in results:
