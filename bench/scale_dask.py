@@ -123,6 +123,7 @@ class RssSampler:
 
         self.peak, self._stop = 0.0, threading.Event()
         process = psutil.Process()
+        self.before = process.memory_info().rss / 2**20
 
         def sample() -> None:
             while not self._stop.is_set():
@@ -162,7 +163,8 @@ def tracks_row(workers: int, n: int, data: Path, out: Path) -> dict:
         worker_rss = client.run(peak_rss_mb)
     return {"workers": workers, "tracks": s.tracks, "certified": s.certified, "seconds": s.seconds,
             "per_second": s.tracks / s.seconds, "per_core": s.tracks / s.seconds / workers,
-            "worker_peak_mb": max(worker_rss.values()), "client_peak_mb": sampler.peak, "statuses": s.statuses}
+            "worker_peak_mb": max(worker_rss.values()), "client_peak_mb": sampler.peak,
+            "client_before_mb": sampler.before, "statuses": s.statuses}
 
 
 def single_machine(data: Path, out: Path) -> float:
@@ -192,7 +194,7 @@ def main() -> None:
         args.tracks, args.overhead_tracks, args.queries = 100_000, 100_000, 2_000
     scratch = args.scratch or Path(tempfile.mkdtemp(prefix="pluecker-scale-"))
     print(f"pluecker {pluecker.__version__}; scratch {scratch}\n")
-    client_rss: list[tuple[str, float]] = []
+    client_rss: list[tuple[str, float, float]] = []
 
     # Overhead first (small), then the big job.
     c, client = cluster(2)
@@ -201,7 +203,8 @@ def main() -> None:
     single = single_machine(scratch / "small", scratch / "single")
     dask_small = tracks_row(2, args.overhead_tracks, scratch / "small", scratch / "out-small")
     same = dist.read_points(scratch / "out-small").equals(dist.read_points(scratch / "single"))
-    client_rss.append((f"Dask job on {args.overhead_tracks:,} tracks (2 workers)", dask_small["client_peak_mb"]))
+    client_rss.append((f"Dask job on {args.overhead_tracks:,} tracks (2 workers)", dask_small["client_before_mb"],
+                       dask_small["client_peak_mb"]))
     print("## Overhead of Dask over the single-machine batch\n")
     print("| tracks | single machine s (2 threads) | Dask s (2 workers × 1 thread) | overhead | same tables |")
     print("| --- | --- | --- | --- | --- |")
@@ -212,7 +215,8 @@ def main() -> None:
     with c, client:
         gen = generate(client, generate_tracks, args.tracks, CHUNK, scratch / "big")
     rows = [tracks_row(w, args.tracks, scratch / "big", scratch / f"out-{w}") for w in (1, 2)]
-    client_rss += [(f"Dask job on {args.tracks:,} tracks ({r['workers']} workers)", r["client_peak_mb"]) for r in rows]
+    client_rss += [(f"Dask job on {args.tracks:,} tracks ({r['workers']} workers)", r["client_before_mb"],
+                    r["client_peak_mb"]) for r in rows]
     print(f"## {args.tracks:,} tracks of 2-20 observations (generated on the workers in {gen:.0f} s)\n")
     print("| workers | tracks | certified | s | tracks/s | tracks/s per core | speed-up | worker peak MB |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
@@ -233,7 +237,8 @@ def main() -> None:
                                   scratch / f"loc-{w}", line_matches=scratch / "queries" / "lines", client=client,
                                   threads_per_worker=1)
         loc.append((w, s))
-        client_rss.append((f"Dask localisation of {args.queries:,} queries ({w} workers)", sampler.peak))
+        client_rss.append((f"Dask localisation of {args.queries:,} queries ({w} workers)", sampler.before,
+                           sampler.peak))
     print(f"## Localisation of {args.queries:,} queries (30 points with 20 % outliers, 4 lines each)\n")
     print("| workers | queries | success | s | queries/s | speed-up |")
     print("| --- | --- | --- | --- | --- | --- |")
@@ -241,9 +246,9 @@ def main() -> None:
         print(f"| {w} | {s.tracks:,} | {s.statuses.get('success', 0):,} | {s.seconds:.1f} | {s.tracks / s.seconds:,.0f} | "
               f"{loc[0][1].seconds / s.seconds:.2f} |")
     print("\n## Client resident memory during the Dask jobs (largest sample, MB)\n")
-    print("| when | MB |\n| --- | --- |")
-    for when, mb in client_rss:
-        print(f"| {when} | {mb:.0f} |")
+    print("| job | before MB | largest during MB | increase MB |\n| --- | --- | --- | --- |")
+    for when, before, peak in client_rss:
+        print(f"| {when} | {before:.0f} | {peak:.0f} | {peak - before:+.0f} |")
     if args.scratch is None:
         shutil.rmtree(scratch, ignore_errors=True)
 

@@ -316,3 +316,23 @@ def test_an_input_partitioned_by_track_is_solved_file_by_file(client, tmp_path):
     assert dist.read_points(tmp_path / "out").equals(reference[0])
     assert dist.read_observations(tmp_path / "out").equals(reference[1])
     assert set(client.run(pluecker.get_num_threads).values()) == {1}
+
+
+def test_localisation_of_a_dask_bag_of_query_records(client, tmp_path):
+    import dask
+    import dask.bag as db
+
+    queries, points, lines, _ = generated_queries(10, 11)
+    reference = dist.localize_tables(queries, points, lines, seed=2)
+    q = queries.column("query").to_numpy()
+    P, L = points.to_pydict(), lines.to_pydict()
+    pq_, lq = np.asarray(P["query"]), np.asarray(L["query"])
+    records = [{"query": int(i), "camera": (800.0, 800.0, 320.0, 240.0),
+                "points2d": np.c_[np.asarray(P["x"])[pq_ == i], np.asarray(P["y"])[pq_ == i]],
+                "points3d": np.c_[[np.asarray(P[c])[pq_ == i] for c in "XYZ"]].T,
+                "lines2d": np.c_[[np.asarray(L[c])[lq == i] for c in ("x1", "y1", "x2", "y2")]].T.reshape(-1, 2, 2),
+                "lines3d": np.c_[[np.asarray(L[c])[lq == i] for c in ("X1", "Y1", "Z1", "X2", "Y2", "Z2")]].T.reshape(-1, 2, 3)}
+               for i in q]
+    counts = dask.compute(*dist.localize_bag(db.from_sequence(records, npartitions=3), tmp_path / "out", seed=2))
+    assert sum(counts) == 10
+    assert_same_table(dist.read_poses(tmp_path / "out"), reference[0])

@@ -59,7 +59,8 @@ import numpy as np
 from . import _core
 
 __all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations",
-           "localize", "localize_tables", "read_poses", "read_matches", "share_threads"]
+           "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses", "read_matches",
+           "share_threads"]
 
 OBSERVATION_COLUMNS = ("track", "image", "x", "y")
 COVARIANCE_COLUMNS = ("cov_xx", "cov_xy", "cov_yy")
@@ -112,6 +113,23 @@ class Cameras:
         return index.astype(np.int64), known
 
 
+def _canonical_order(track: np.ndarray, image: np.ndarray, x: np.ndarray, cameras: Cameras) -> np.ndarray:
+    """The rows in increasing (track id, image id, x, y): a total order that does not depend on how the
+    rows arrived. One stable sort of an integer key (track rank, image rank); the full four-key sort only
+    when a track has two rows of one image."""
+    _, track_rank = np.unique(track, return_inverse=True)
+    known_ids = np.sort(cameras.ids)
+    image_rank = np.searchsorted(known_ids, image)
+    unknown = (image_rank >= len(known_ids)) | (known_ids[np.minimum(image_rank, len(known_ids) - 1)] != image
+                                                if len(known_ids) else True)
+    key = track_rank.astype(np.int64) * (len(known_ids) + 1) + np.where(unknown, len(known_ids), image_rank)
+    order = np.argsort(key, kind="stable")
+    ordered = key[order]
+    if np.any(ordered[1:] == ordered[:-1]):
+        order = np.lexsort((x[:, 1], x[:, 0], image, track))
+    return order
+
+
 def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = None,
                       options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0) -> tuple[Any, Any]:
     """The single-machine kernel: every track of an observation ``table`` (a ``pyarrow.Table`` with the
@@ -130,8 +148,7 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
         cov = np.stack([np.stack([cxx, cxy], -1), np.stack([cxy, cyy], -1)], axis=1)
     else:
         cov = np.broadcast_to(sigma_px**2 * np.eye(2), (len(track), 2, 2))
-    # A total order that does not depend on how the rows arrived.
-    order = np.lexsort((x[:, 1], x[:, 0], image, track))
+    order = _canonical_order(track, image, x, cameras)
     track, image, x, cov = track[order], image[order], x[order], np.ascontiguousarray(cov[order])
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
@@ -541,6 +558,61 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     return JobSummary(tracks=sum(r["queries"] for r in results), certified=0, statuses=statuses,
                       seconds=time.perf_counter() - started, points=out / "poses", observations=out / "matches",
                       buckets=buckets, workers=workers)
+
+
+def queries_to_tables(queries: Iterable[dict[str, Any]]) -> tuple[Any, Any, Any]:
+    """The three tables of :func:`localize_tables` from query records: dicts with ``query`` (int),
+    ``camera`` (``(fx, fy, cx, cy)``), ``points2d`` (n, 2), ``points3d`` (n, 3) and optionally
+    ``lines2d`` (m, 2, 2), ``lines3d`` (m, 2, 3)."""
+    pa = _pyarrow()
+    q_rows, p_parts, l_parts = [], [], []
+    for record in queries:
+        q = int(record["query"])
+        q_rows.append((q, *map(float, record["camera"])))
+        p2, p3 = np.asarray(record.get("points2d", np.zeros((0, 2))), float), np.asarray(
+            record.get("points3d", np.zeros((0, 3))), float)
+        p_parts.append(np.c_[np.full(len(p2), q), p2.reshape(-1, 2), p3.reshape(-1, 3)])
+        l2, l3 = np.asarray(record.get("lines2d", np.zeros((0, 2, 2))), float), np.asarray(
+            record.get("lines3d", np.zeros((0, 2, 3))), float)
+        l_parts.append(np.c_[np.full(len(l2), q), l2.reshape(-1, 4), l3.reshape(-1, 6)])
+
+    def table(rows: np.ndarray, names: tuple[str, ...]) -> Any:
+        rows = rows.reshape(-1, len(names))
+        return pa.table({n: rows[:, i].astype(np.int64) if n == "query" else rows[:, i] for i, n in enumerate(names)})
+
+    return (table(np.array(q_rows, float), QUERY_COLUMNS), table(np.concatenate(p_parts) if p_parts else np.zeros(0),
+            POINT_MATCH_COLUMNS), table(np.concatenate(l_parts) if l_parts else np.zeros(0), LINE_MATCH_COLUMNS))
+
+
+def localize_bag(bag: Any, out: Union[str, Path], *, ransac: Any = None, options: Optional[_core.PoseOptions] = None,
+                 seed: int = 0) -> Any:
+    """Batch localisation of a ``dask.bag.Bag`` of query records (:func:`queries_to_tables`): each
+    partition solved by :func:`localize_tables` and written as ``out/poses/part-<k>.parquet`` and
+    ``out/matches/part-<k>.parquet``. Returns the delayed per-partition query counts (compute them,
+    e.g. ``dask.compute(*localize_bag(bag, out))``)."""
+    settings = {"ransac": ransac.to_dict() if ransac is not None else None,
+                "options": options.to_dict() if options is not None else None, "seed": int(seed)}
+    out = str(out)
+    return [_localize_records(part, k, out, settings) for k, part in enumerate(bag.to_delayed())]
+
+
+def _localize_records(records: Any, k: Any, out: str, settings: dict[str, Any]) -> Any:
+    from dask import delayed
+
+    return delayed(_localize_partition)(records, k, out, settings)
+
+
+def _localize_partition(records: list[dict[str, Any]], k: int, out: str, settings: dict[str, Any]) -> int:
+    import pyarrow.parquet as pq
+
+    ransac = _core.RansacOptions(**settings["ransac"]) if settings["ransac"] is not None else None
+    options = _core.PoseOptions(**settings["options"]) if settings["options"] is not None else None
+    poses, matches = localize_tables(*queries_to_tables(records), ransac=ransac, options=options, seed=settings["seed"])
+    for name, t in (("poses", poses), ("matches", matches)):
+        target = Path(out) / name
+        target.mkdir(parents=True, exist_ok=True)
+        pq.write_table(t, target / f"part-{k:05d}.parquet")
+    return poses.num_rows
 
 
 def read_poses(out: Union[str, Path]) -> Any:
