@@ -341,10 +341,7 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
                            (scratch, str(out), cameras, method, option_fields, sigma_px), progress,
                            threads_per_worker)
     _remove_tree(Path(scratch))
-    statuses: dict[str, int] = {}
-    for r in results:
-        for k, v in r["statuses"].items():
-            statuses[k] = statuses.get(k, 0) + v
+    statuses = _tally(results)
     return JobSummary(tracks=sum(r["tracks"] for r in results), certified=sum(r["certified"] for r in results),
                       statuses=statuses, seconds=time.perf_counter() - started, points=out / "points",
                       observations=out / "observations", buckets=buckets, workers=workers)
@@ -395,6 +392,15 @@ def _run_job(client: Any, inputs: list[tuple[str, str, str]], buckets: int, scra
 
         dask_progress(solves)
     return client.gather(solves)
+
+
+def _tally(results: list[dict[str, Any]]) -> dict[str, int]:
+    """The tasks' status counts, summed."""
+    statuses: dict[str, int] = {}
+    for r in results:
+        for k, v in r["statuses"].items():
+            statuses[k] = statuses.get(k, 0) + v
+    return statuses
 
 
 def _count(*rows: int) -> int:
@@ -551,10 +557,7 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
                        threads_per_worker)
     _remove_tree(Path(scratch))
-    statuses: dict[str, int] = {}
-    for r in results:
-        for k, v in r["statuses"].items():
-            statuses[k] = statuses.get(k, 0) + v
+    statuses = _tally(results)
     return JobSummary(tracks=sum(r["queries"] for r in results), certified=0, statuses=statuses,
                       seconds=time.perf_counter() - started, points=out / "poses", observations=out / "matches",
                       buckets=buckets, workers=workers)
