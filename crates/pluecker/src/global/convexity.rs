@@ -50,7 +50,8 @@
 //! `κ_d ≥ 1` or `μ ≥ 1`: low parallax in an affine chart, large residuals, or a second minimum
 //! nearby.
 
-use nalgebra::{Cholesky, Const, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{Cholesky, Const, DefaultAllocator, DimDiff, DimSub, SMatrix, SVector, SymmetricEigen, U1};
 
 /// `κ` bounds are taken this much above the computed ones (strict inequalities, rounding).
 const KAPPA_MARGIN: f64 = 1e-6;
@@ -90,6 +91,24 @@ impl<const M: usize, const N: usize> RatioView<M, N> {
     fn jacobian(&self) -> SMatrix<f64, M, N> {
         self.g - self.a0 * self.d.transpose()
     }
+}
+
+/// Smallest accepted ratio of the least to the largest eigenvalue of a chart's Gauss-Newton Hessian
+/// (a direction the data do not constrain at all makes the chart singular).
+const MIN_CONDITION: f64 = 1e-14;
+
+/// The whitening `T = VΛ^{-1/2}` of a chart's Gauss-Newton Hessian `M = ΣBᵢᵀBᵢ = VΛVᵀ` (then
+/// `TᵀMT = I`, as the module docs assume); `None` when `M` is numerically singular.
+pub(crate) fn whitening<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>>
+where
+    Const<N>: DimSub<U1>,
+    DefaultAllocator: Allocator<DimDiff<Const<N>, U1>>,
+{
+    let eig = SymmetricEigen::<f64, Const<N>>::new(*m);
+    if !(eig.eigenvalues.min() > MIN_CONDITION * eig.eigenvalues.max()) {
+        return None;
+    }
+    Some(eig.eigenvectors * SMatrix::<f64, N, N>::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.sqrt())))
 }
 
 /// `f(y) = Σ ‖aᵢ(y)‖²/ζᵢ(y)²` (no ½): the tests' check of a chart against eq. 19.

@@ -397,6 +397,20 @@ impl Certificate {
             solver_iterations: 0,
         }
     }
+
+    /// The certificate of a convexity test whose lower bound on the cost is `lower_bound`, when it
+    /// closes the gap (`relative_gap(cost, lower_bound) ≤ max_relative_gap`); `None` otherwise.
+    pub(crate) fn of_convexity_test(cost: f64, lower_bound: f64, max_relative_gap: f64) -> Option<Certificate> {
+        let relative_gap = crate::global::relative_gap(cost, lower_bound);
+        (relative_gap <= max_relative_gap).then_some(Certificate {
+            lower_bound,
+            relative_gap,
+            certified: true,
+            kind: CertificateKind::ConvexityTest,
+            nodes: 0,
+            solver_iterations: 0,
+        })
+    }
 }
 
 /// What one triangulation did: shared by every primitive's result.

@@ -17,12 +17,8 @@
 //! point in front of every camera iff `w > 0` and every `ζᵢ > 0`; it is `X = X̂ + T y / w`.
 
 use super::cost::PointView;
-use crate::global::convexity::RatioView;
-use nalgebra::{Matrix3, SymmetricEigen, Vector3};
-
-/// Smallest accepted ratio of the least to the largest eigenvalue of `M` (a direction the data do
-/// not constrain at all makes the chart singular).
-const MIN_CONDITION: f64 = 1e-14;
+use crate::global::convexity::{whitening, RatioView};
+use nalgebra::{Matrix3, Vector3};
 
 /// One view in chart coordinates: `a(y) = a0 + G y`, `ζ(y) = 1 + dᵀy`.
 pub(crate) type ChartView = RatioView<2, 3>;
@@ -71,11 +67,7 @@ impl Chart {
             ChartKind::Euclidean => Vector3::zeros(),
             ChartKind::MeanDepth => mean / views.len() as f64,
         };
-        let eig = SymmetricEigen::new(m);
-        if !(eig.eigenvalues.min() > MIN_CONDITION * eig.eigenvalues.max()) {
-            return None;
-        }
-        let t = eig.eigenvectors * Matrix3::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.sqrt()));
+        let t = whitening(&m)?;
         let chart_views = views
             .iter()
             .zip(&at)

@@ -389,19 +389,12 @@ fn certify(
     // Relative to max(cost, CERTIFICATE_COST_FLOOR) (`relative_gap`): exact data (cost at the rounding level) is
     // certified by the trivial bound, which a relative gap could never show.
     let test = convexity_test(views, &x);
-    if test.passed {
-        let gap = relative_gap(cost, test.lower_bound);
-        if gap <= opts.max_relative_gap {
-            let certificate = Certificate {
-                lower_bound: test.lower_bound,
-                relative_gap: gap,
-                certified: true,
-                kind: CertificateKind::ConvexityTest,
-                nodes: 0,
-                solver_iterations: 0,
-            };
-            return (x, Status::Success, certificate, cost);
-        }
+    if let Some(certificate) = test
+        .passed
+        .then(|| Certificate::of_convexity_test(cost, test.lower_bound, opts.max_relative_gap))
+        .flatten()
+    {
+        return (x, Status::Success, certificate, cost);
     }
     // Chart origins when the local solution itself cannot be one (it ran off towards infinity).
     let mut origins: Vec<Vector3<f64>> = Vec::new();

@@ -29,12 +29,9 @@
 //! test of [`crate::global::convexity`] fails (large residuals, weak geometry, a second minimum).
 
 use crate::geometry::quadric::vec_to_sym4;
-use crate::global::convexity::{minorant, RatioView};
+use crate::global::convexity::{minorant, whitening, RatioView};
 use crate::triangulation::fraction::FractionalResidual;
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
-
-/// Smallest accepted ratio of the least to the largest eigenvalue of the Gauss-Newton Hessian.
-const MIN_CONDITION: f64 = 1e-14;
 
 /// The whitened chart of the module docs around the stacked frame dual quadric `reference`
 /// (`L₄₄ = +1`): its views, and `T`. `None` when a principal plane meets the reference or the
@@ -57,11 +54,7 @@ fn chart(
         m += b.transpose() * b;
         at.push((r, a, d));
     }
-    let eig = SymmetricEigen::new(m);
-    if !(eig.eigenvalues.min() > MIN_CONDITION * eig.eigenvalues.max()) {
-        return None;
-    }
-    let t = eig.eigenvectors * SMatrix::<f64, 9, 9>::from_diagonal(&eig.eigenvalues.map(|l| 1.0 / l.sqrt()));
+    let t = whitening(&m)?;
     let chart_views = at
         .into_iter()
         .map(|(r, a, d)| RatioView {

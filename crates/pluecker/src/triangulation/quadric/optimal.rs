@@ -159,25 +159,6 @@ impl BoundingOracle for QuadricOracle<'_> {
     }
 }
 
-/// The certificate of the convexity test ([`super::certificate`]) when it closes the gap.
-fn convexity_certificate(
-    views: &[FractionalResidual<5, 10>],
-    reference: &SVector<f64, 10>,
-    cost: f64,
-    max_relative_gap: f64,
-) -> Option<Certificate> {
-    let lower = convexity_bound(views, reference)?.min(cost);
-    let relative_gap = crate::global::relative_gap(cost, lower);
-    (relative_gap <= max_relative_gap).then_some(Certificate {
-        lower_bound: lower,
-        relative_gap,
-        certified: true,
-        kind: CertificateKind::ConvexityTest,
-        nodes: 0,
-        solver_iterations: 0,
-    })
-}
-
 /// The optimal method from the local ellipsoid `local` (world) with report `local_report`: the best
 /// world ellipsoid found and the report with its certificate (module docs).
 pub(crate) fn optimal_quadric(
@@ -196,9 +177,11 @@ pub(crate) fn optimal_quadric(
     let frame_dual = transform_dual(&sim.matrix(), &local.dual());
     let reference = sym4_to_vec(&(-frame_dual / frame_dual[(3, 3)].abs()));
     let raw_views = problem.views(&sim);
+    // The convexity test first (module docs of `super::certificate`); its bound is capped at the cost.
     let test = (opts.quadric_bound == QuadricBound::Convexity)
-        .then(|| convexity_certificate(&raw_views, &reference, cost, opts.max_relative_gap))
-        .flatten();
+        .then(|| convexity_bound(&raw_views, &reference))
+        .flatten()
+        .and_then(|lower| Certificate::of_convexity_test(cost, lower.min(cost), opts.max_relative_gap));
     if let Some(certified) = test {
         report.status = Status::Success;
         report.certificate = certified;
