@@ -199,7 +199,7 @@ def main() -> None:
     # Overhead first (small), then the big job.
     c, client = cluster(2)
     with c, client:
-        gen_small = generate(client, generate_tracks, args.overhead_tracks, CHUNK, scratch / "small")
+        generate(client, generate_tracks, args.overhead_tracks, CHUNK, scratch / "small")
     single = single_machine(scratch / "small", scratch / "single")
     dask_small = tracks_row(2, args.overhead_tracks, scratch / "small", scratch / "out-small")
     same = dist.read_points(scratch / "out-small").equals(dist.read_points(scratch / "single"))

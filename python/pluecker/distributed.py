@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable, Optional, Union
 
@@ -103,26 +103,26 @@ class Cameras:
         return cls(ids, np.stack([np.asarray(cameras[int(i)], dtype=float) for i in ids]) if len(ids) else
                    np.zeros((0, 3, 4)))
 
-    def index_of(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Row of ``P`` for each image id, and whether the id is known (unknown ids get row ``v``)."""
+    def lookup(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For each image id: its rank among the sorted ids, whether it is known, and its row of ``P``
+        (an unknown id gets rank and row ``v``, one past the cameras)."""
+        v = len(self.ids)
         order = np.argsort(self.ids)
-        position = np.searchsorted(self.ids[order], image)
-        position = np.minimum(position, max(len(self.ids) - 1, 0))
-        known = (len(self.ids) > 0) & (self.ids[order][position] == image) if len(self.ids) else np.zeros(len(image), bool)
-        index = np.where(known, order[position] if len(self.ids) else 0, len(self.ids))
-        return index.astype(np.int64), known
+        rank = np.searchsorted(self.ids[order], image)
+        known = rank < v
+        known[known] = self.ids[order][rank[known]] == image[known]
+        rank = np.where(known, rank, v)
+        row = np.full(len(image), v, dtype=np.int64)
+        row[known] = order[rank[known]]
+        return rank.astype(np.int64), known, row
 
 
-def _canonical_order(track: np.ndarray, image: np.ndarray, x: np.ndarray, cameras: Cameras) -> np.ndarray:
+def _canonical_order(track_rank: np.ndarray, image_rank: np.ndarray, images: int, track: np.ndarray,
+                     image: np.ndarray, x: np.ndarray) -> np.ndarray:
     """The rows in increasing (track id, image id, x, y): a total order that does not depend on how the
-    rows arrived. One stable sort of an integer key (track rank, image rank); the full four-key sort only
-    when a track has two rows of one image."""
-    _, track_rank = np.unique(track, return_inverse=True)
-    known_ids = np.sort(cameras.ids)
-    image_rank = np.searchsorted(known_ids, image)
-    unknown = (image_rank >= len(known_ids)) | (known_ids[np.minimum(image_rank, len(known_ids) - 1)] != image
-                                                if len(known_ids) else True)
-    key = track_rank.astype(np.int64) * (len(known_ids) + 1) + np.where(unknown, len(known_ids), image_rank)
+    rows arrived. One stable sort of the integer key (track rank, image rank among ``images`` ids, the
+    unknown ones last); the full four-key sort only when a track has two rows of one image rank."""
+    key = track_rank.astype(np.int64) * (images + 1) + image_rank
     order = np.argsort(key, kind="stable")
     ordered = key[order]
     if np.any(ordered[1:] == ordered[:-1]):
@@ -148,12 +148,13 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
         cov = np.stack([np.stack([cxx, cxy], -1), np.stack([cxy, cyy], -1)], axis=1)
     else:
         cov = np.broadcast_to(sigma_px**2 * np.eye(2), (len(track), 2, 2))
-    order = _canonical_order(track, image, x, cameras)
-    track, image, x, cov = track[order], image[order], x[order], np.ascontiguousarray(cov[order])
+    ids, track_index = np.unique(track, return_inverse=True)
+    image_rank, known, camera_index = cameras.lookup(image)
+    order = _canonical_order(track_index, image_rank, len(cameras.ids), track, image, x)
+    track_index, camera_index, known = track_index[order], camera_index[order], known[order]
+    image, x, cov = image[order], x[order], np.ascontiguousarray(cov[order])
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
-    ids, track_index = np.unique(track, return_inverse=True)
-    camera_index, known = cameras.index_of(image)
     result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov, method=method,
                                                   options=options, n_tracks=len(ids))
     status = np.asarray(result.status).astype(object)
@@ -175,8 +176,8 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
         "message": messages.astype(str),
         "covariance": pa.FixedSizeListArray.from_arrays(np.asarray(result.covariance).reshape(-1), 9),
     })
-    inliers = np.ones(len(track), bool) if result.inliers is None else np.asarray(result.inliers, dtype=bool)
-    observations = pa.table({"track": track, "image": image, "inlier": inliers, **passthrough})
+    inliers = np.ones(len(image), bool) if result.inliers is None else np.asarray(result.inliers, dtype=bool)
+    observations = pa.table({"track": ids[track_index], "image": image, "inlier": inliers, **passthrough})
     return points, observations
 
 
@@ -192,7 +193,6 @@ class JobSummary:
     observations: Path
     buckets: int = 0
     workers: int = 0
-    extra: dict[str, Any] = field(default_factory=dict)
 
 
 def _bucket_of(track: np.ndarray, buckets: int) -> np.ndarray:
@@ -239,9 +239,6 @@ def _bucket_table(scratch: str, bucket: int, name: str = "part") -> Any:
 def _solve(bucket: int, scratch: str, out: str, cameras: Cameras, method: Optional[str],
            options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
     """Task 2: one bucket solved (module docs). Returns its counts."""
-    pa = _pyarrow()
-    import pyarrow.parquet as pq
-
     return _solve_table(_bucket_table(scratch, bucket), bucket, out, cameras, method, options, sigma_px)
 
 
@@ -256,20 +253,29 @@ def _solve_file(index: int, source: str, out: str, cameras: Cameras, method: Opt
 def _solve_table(table: Any, bucket: int, out: str, cameras: Cameras, method: Optional[str],
                  options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
     """Solves one bucket's table and writes ``points`` and ``observations`` part ``bucket``."""
-    import pyarrow.parquet as pq
-
     opts = _core.TriangulationOptions(**options) if options is not None else None
     if table is None or table.num_rows == 0:
         return {"tracks": 0, "certified": 0, "statuses": {}}
     points, observations = triangulate_table(table, cameras, method=method, options=opts, sigma_px=sigma_px)
-    for name, t in (("points", points), ("observations", observations)):
+    _write_part(out, bucket, points=points, observations=observations)
+    return {"tracks": points.num_rows, "certified": int(np.sum(points.column("certified").to_numpy())),
+            "statuses": _status_counts(points)}
+
+
+def _write_part(out: str, part: int, **tables: Any) -> None:
+    """Writes each table as ``out/<its name>/part-<part>.parquet`` (a retried task rewrites the same file)."""
+    import pyarrow.parquet as pq
+
+    for name, table in tables.items():
         target = Path(out) / name
         target.mkdir(parents=True, exist_ok=True)
-        pq.write_table(t, target / f"part-{bucket:05d}.parquet")
-    status = points.column("status").to_numpy(zero_copy_only=False)
-    values, counts = np.unique(status.astype(str), return_counts=True)
-    return {"tracks": points.num_rows, "certified": int(np.sum(points.column("certified").to_numpy())),
-            "statuses": {str(v): int(c) for v, c in zip(values, counts)}}
+        pq.write_table(table, target / f"part-{part:05d}.parquet")
+
+
+def _status_counts(table: Any) -> dict[str, int]:
+    """How many rows of a result table have each status."""
+    values, counts = np.unique(np.asarray(table.column("status").to_pylist(), dtype=str), return_counts=True)
+    return {str(v): int(c) for v, c in zip(values, counts)}
 
 
 def _input_files(source: str) -> list[str]:
@@ -325,9 +331,9 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     started = time.perf_counter()
     source, out = str(source), Path(out)
-    rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
-    if buckets is None:
+    if buckets is None and not partitioned:
+        rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
         buckets = max(4 * workers, -(-rows // ROWS_PER_BUCKET), 1)
     scratch = str(out / "_buckets")
     option_fields = options.to_dict() if options is not None else None
@@ -355,14 +361,18 @@ def _set_threads(client: Any, threads_per_worker: Optional[int]) -> None:
 
 
 def _run_tasks(client: Any, task: Any, items: list[tuple[Any, ...]], args: tuple[Any, ...], progress: bool,
-               threads_per_worker: Optional[int] = None) -> list[Any]:
-    """``task(*item, *args)`` for every item: here without ``client``, else on its workers with
-    ``args[1]`` broadcast once and 3 retries per task."""
+               threads_per_worker: Optional[int] = None, *, broadcast: int = 1, after: Any = None) -> list[Any]:
+    """``task(*item, *args)`` for every item: here without ``client``, else on its workers, with
+    ``args[broadcast]`` sent to every worker once, each task started after the future ``after`` when
+    given, and 3 retries per task."""
     if client is None:
         return [task(*item, *args) for item in items]
     _set_threads(client, threads_per_worker)
-    args = (args[0], client.scatter(args[1], broadcast=True), *args[2:])
-    futures = [client.submit(task, *item, *args, pure=False, retries=3) for item in items]
+    args = (*args[:broadcast], client.scatter(args[broadcast], broadcast=True), *args[broadcast + 1:])
+    if after is None:
+        futures = [client.submit(task, *item, *args, pure=False, retries=3) for item in items]
+    else:
+        futures = [client.submit(_after, after, task, *item, *args, pure=False, retries=3) for item in items]
     if progress:
         from distributed import progress as dask_progress
 
@@ -373,25 +383,19 @@ def _run_tasks(client: Any, task: Any, items: list[tuple[Any, ...]], args: tuple
 def _run_job(client: Any, inputs: list[tuple[str, str, str]], buckets: int, scratch: str, solve: Any,
              args: tuple[Any, ...], progress: bool, threads_per_worker: Optional[int] = None) -> list[Any]:
     """Splits every input ``(source, key column, name)`` into the buckets, then runs
-    ``solve(bucket, *args)`` on each (module docs): here without ``client``, else on its workers, with
-    the broadcast-once argument ``args[2]`` scattered to every worker and 3 retries per task."""
+    ``solve(bucket, *args)`` on each (module docs) by :func:`_run_tasks`, ``args[2]`` broadcast."""
     groups = [(source, key, name, f, g) for source, key, name in inputs for f, g in _row_groups(source)]
+    barrier = None
     if client is None:
         for source, key, name, f, g in groups:
             _split(source, f, g, buckets, scratch, key, name)
-        return [solve(b, *args) for b in range(buckets)]
-    _set_threads(client, threads_per_worker)
-    args = (*args[:2], client.scatter(args[2], broadcast=True), *args[3:])
-    splits = [client.submit(_split, source, f, g, buckets, scratch, key, name, pure=False, retries=3)
-              for source, key, name, f, g in groups]
-    # Every solve waits for every split (a bucket gathers rows from all of them).
-    barrier = client.submit(_count, *splits, pure=False, retries=3)
-    solves = [client.submit(_after, barrier, solve, b, *args, pure=False, retries=3) for b in range(buckets)]
-    if progress:
-        from distributed import progress as dask_progress
-
-        dask_progress(solves)
-    return client.gather(solves)
+    else:
+        splits = [client.submit(_split, source, f, g, buckets, scratch, key, name, pure=False, retries=3)
+                  for source, key, name, f, g in groups]
+        # Every solve waits for every split (a bucket gathers rows from all of them).
+        barrier = client.submit(_count, *splits, pure=False, retries=3)
+    return _run_tasks(client, solve, [(b,) for b in range(buckets)], args, progress, threads_per_worker,
+                      broadcast=2, after=barrier)
 
 
 def _tally(results: list[dict[str, Any]]) -> dict[str, int]:
@@ -512,22 +516,28 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
 
 def _localize_bucket(bucket: int, scratch: str, out: str, settings: dict[str, Any]) -> dict[str, Any]:
     """Task 2 of :func:`localize`: one bucket of queries solved and written."""
-    import pyarrow.parquet as pq
-
     queries = _bucket_table(scratch, bucket, "queries")
     if queries is None:
         return {"queries": 0, "statuses": {}}
+    poses = _localize_part(out, bucket, settings, queries, _bucket_table(scratch, bucket, "points"),
+                           _bucket_table(scratch, bucket, "lines"))
+    return {"queries": poses.num_rows, "statuses": _status_counts(poses)}
+
+
+def _pose_settings(ransac: Any, options: Optional[_core.PoseOptions], seed: int) -> dict[str, Any]:
+    """The options of a localisation job as plain data, for the tasks."""
+    return {"ransac": ransac.to_dict() if ransac is not None else None,
+            "options": options.to_dict() if options is not None else None, "seed": int(seed)}
+
+
+def _localize_part(out: str, part: int, settings: dict[str, Any], *tables: Any) -> Any:
+    """:func:`localize_tables` on one part's tables with the job's ``settings``; writes and returns
+    its ``poses`` (and ``matches``) as part ``part``."""
     ransac = _core.RansacOptions(**settings["ransac"]) if settings["ransac"] is not None else None
     options = _core.PoseOptions(**settings["options"]) if settings["options"] is not None else None
-    poses, matches = localize_tables(queries, _bucket_table(scratch, bucket, "points"),
-                                     _bucket_table(scratch, bucket, "lines"), ransac=ransac, options=options,
-                                     seed=settings["seed"])
-    for name, t in (("poses", poses), ("matches", matches)):
-        target = Path(out) / name
-        target.mkdir(parents=True, exist_ok=True)
-        pq.write_table(t, target / f"part-{bucket:05d}.parquet")
-    values, counts = np.unique(np.asarray(poses.column("status").to_pylist(), dtype=str), return_counts=True)
-    return {"queries": poses.num_rows, "statuses": {str(v): int(c) for v, c in zip(values, counts)}}
+    poses, matches = localize_tables(*tables, ransac=ransac, options=options, seed=settings["seed"])
+    _write_part(out, part, poses=poses, matches=matches)
+    return poses
 
 
 def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
@@ -552,8 +562,7 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     if line_matches is not None:
         inputs.append((str(line_matches), "query", "lines"))
     scratch = str(out / "_buckets")
-    settings = {"ransac": ransac.to_dict() if ransac is not None else None,
-                "options": options.to_dict() if options is not None else None, "seed": int(seed)}
+    settings = _pose_settings(ransac, options, seed)
     results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
                        threads_per_worker)
     _remove_tree(Path(scratch))
@@ -593,29 +602,14 @@ def localize_bag(bag: Any, out: Union[str, Path], *, ransac: Any = None, options
     partition solved by :func:`localize_tables` and written as ``out/poses/part-<k>.parquet`` and
     ``out/matches/part-<k>.parquet``. Returns the delayed per-partition query counts (compute them,
     e.g. ``dask.compute(*localize_bag(bag, out))``)."""
-    settings = {"ransac": ransac.to_dict() if ransac is not None else None,
-                "options": options.to_dict() if options is not None else None, "seed": int(seed)}
-    out = str(out)
-    return [_localize_records(part, k, out, settings) for k, part in enumerate(bag.to_delayed())]
-
-
-def _localize_records(records: Any, k: Any, out: str, settings: dict[str, Any]) -> Any:
     from dask import delayed
 
-    return delayed(_localize_partition)(records, k, out, settings)
+    settings = _pose_settings(ransac, options, seed)
+    return [delayed(_localize_partition)(part, k, str(out), settings) for k, part in enumerate(bag.to_delayed())]
 
 
 def _localize_partition(records: list[dict[str, Any]], k: int, out: str, settings: dict[str, Any]) -> int:
-    import pyarrow.parquet as pq
-
-    ransac = _core.RansacOptions(**settings["ransac"]) if settings["ransac"] is not None else None
-    options = _core.PoseOptions(**settings["options"]) if settings["options"] is not None else None
-    poses, matches = localize_tables(*queries_to_tables(records), ransac=ransac, options=options, seed=settings["seed"])
-    for name, t in (("poses", poses), ("matches", matches)):
-        target = Path(out) / name
-        target.mkdir(parents=True, exist_ok=True)
-        pq.write_table(t, target / f"part-{k:05d}.parquet")
-    return poses.num_rows
+    return _localize_part(out, k, settings, *queries_to_tables(records)).num_rows
 
 
 def read_poses(out: Union[str, Path]) -> Any:
