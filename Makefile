@@ -3,6 +3,7 @@
 #                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run)
 #   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
 #   make bench   compare against OpenCV, PoseLib and pycolmap, then run the criterion benchmarks
+#   make mutants mutation-test the proof code (.cargo/mutants.toml); SHARD=k/n runs round-robin shard k of n
 # Idempotent: the virtualenv is made once, the extension rebuilt only when a Rust source changes.
 
 PYTHON ?= python3
@@ -17,7 +18,7 @@ RUST_SOURCES := $(shell find crates -name '*.rs' -o -name Cargo.toml) Cargo.toml
 export PYO3_PYTHON := $(CURDIR)/$(BIN)/python
 export PYO3_ENVIRONMENT_SIGNATURE := $(shell $(PYTHON) -c 'import struct, sys; print(f"{sys.implementation.name}-{sys.version_info[0]}.{sys.version_info[1]}-{struct.calcsize(chr(80)) * 8}bit")')
 
-.PHONY: setup develop test test-rust test-python demo bench clean
+.PHONY: setup develop test test-rust test-python demo bench mutants clean
 
 setup: develop
 
@@ -59,6 +60,13 @@ bench: develop
 	$(BIN)/python bench/compare_global_pose.py
 	cargo bench -p pluecker --bench pose
 	cargo bench -p pluecker --bench triangulation
+
+# About 5,000 mutants: a whole run takes days on two cores, so it is split into shards, e.g.
+# `make mutants SHARD=0/100` (a 1 % sample, round-robin over every file). Results in mutants.out/.
+CARGO_MUTANTS_VERSION := 27.1.0
+mutants: develop
+	@cargo mutants --version 2>/dev/null | grep -q $(CARGO_MUTANTS_VERSION) || cargo install --locked cargo-mutants@$(CARGO_MUTANTS_VERSION)
+	cargo mutants $(if $(SHARD),--shard $(SHARD) --sharding round-robin) --output .
 
 clean:
 	rm -rf $(VENV) python/pluecker/_core*.so
