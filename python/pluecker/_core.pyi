@@ -472,9 +472,11 @@ def random_scene(kind: str, n_points: int, n_lines: Optional[int] = None, seed: 
     segments together."""
 
 def set_num_threads(n: Optional[int], /) -> None:
-    """Sets the number of threads the batches of this process use (``n >= 1``; ``None``: the default,
-    one per core or ``RAYON_NUM_THREADS``). For several processes sharing one machine, e.g. Dask
-    workers (``pluecker.distributed``). Takes effect for the next call."""
+    """Sets the number of threads the batches of this process use: ``n`` from 1 to
+    ``max(64, 4 × the cores available)`` (more only oversubscribes the cores), or ``None`` for the
+    default, one per core or ``RAYON_NUM_THREADS``. Any other value (0, a negative or larger count, a
+    bool) raises ``InvalidOptionError`` naming ``n``. For several processes sharing one machine, e.g.
+    Dask workers (``pluecker.distributed``). Takes effect for the next call."""
 
 def get_num_threads() -> int:
     """The number of threads the batches of this process use (see :func:`set_num_threads`)."""

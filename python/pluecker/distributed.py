@@ -138,6 +138,7 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
     track, observations in increasing (image, x, y). Without covariance columns every pixel has
     covariance ``sigma_px²`` I."""
     pa = _pyarrow()
+    _require_columns(table.column_names, OBSERVATION_COLUMNS, "observations")
     columns = {name: table.column(name).to_numpy() for name in OBSERVATION_COLUMNS}
     track = np.asarray(columns["track"], dtype=np.int64)
     image = np.asarray(columns["image"], dtype=np.int64)
@@ -285,6 +286,28 @@ def _input_files(source: str) -> list[str]:
     return [str(path)]
 
 
+def _require_columns(names: Iterable[str], required: Iterable[str], what: str) -> None:
+    """A ``pluecker.ShapeError`` naming ``what`` and the missing columns unless ``names`` holds every
+    one of ``required``."""
+    required, present = tuple(required), set(names)
+    missing = [c for c in required if c not in present]
+    if missing:
+        raise _core.ShapeError(f"{what}: missing column(s) {', '.join(missing)}; expected the columns "
+                               f"{', '.join(required)}")
+
+
+def _check_inputs(source: str, required: Iterable[str], what: str) -> None:
+    """Before a job: ``source`` must hold Parquet files, each with the ``required`` columns (a
+    ``ShapeError`` naming the file otherwise), so that a bad input fails here, not in every task."""
+    import pyarrow.parquet as pq
+
+    files = _input_files(source)
+    if not files:
+        raise _core.ShapeError(f"{what} {source}: no Parquet files (*.parquet) in the folder")
+    for f in files:
+        _require_columns(pq.read_schema(f).names, required, f"{what} {f}")
+
+
 def _row_groups(source: str) -> list[tuple[int, int]]:
     import pyarrow.parquet as pq
 
@@ -331,6 +354,7 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     started = time.perf_counter()
     source, out = str(source), Path(out)
+    _check_inputs(source, OBSERVATION_COLUMNS, "observations")
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
     if buckets is None and not partitioned:
         rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
@@ -448,6 +472,11 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     pa = _pyarrow()
     from concurrent.futures import ThreadPoolExecutor
 
+    _require_columns(queries.column_names, QUERY_COLUMNS, "queries")
+    for table, names, what in ((point_matches, POINT_MATCH_COLUMNS, "point_matches"),
+                               (line_matches, LINE_MATCH_COLUMNS, "line_matches")):
+        if table is not None:
+            _require_columns(table.column_names, names, what)
     base = (ransac if ransac is not None else _core.RansacOptions()).to_dict()
     q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
     intrinsics = _columns(queries, QUERY_COLUMNS[1:])
@@ -555,6 +584,10 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
 
     started = time.perf_counter()
     out = Path(out)
+    _check_inputs(str(queries), QUERY_COLUMNS, "queries")
+    _check_inputs(str(point_matches), POINT_MATCH_COLUMNS, "point_matches")
+    if line_matches is not None:
+        _check_inputs(str(line_matches), LINE_MATCH_COLUMNS, "line_matches")
     n = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(queries)))
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
     buckets = buckets or max(4 * workers, -(-n // 20_000), 1)

@@ -35,14 +35,15 @@ pub fn pose_covariance<'py>(
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
         return Err(invalid_argument(
             "sigma_px",
-            format!("must be a positive finite number, got {sigma_px}"),
+            format!("must be a positive finite number, got {}", pluecker::error::number(sigma_px)),
         ));
     }
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
     // The information matrix is computed again only to explain a failure.
     let cov = solve(py, move || {
         let cost = ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
-        Ok(covariance(&cost, &pose, sigma_px).ok_or_else(|| cost.information(&pose)))
+        let cov = covariance(&cost, &pose, sigma_px).filter(|c| !underflowed(c));
+        Ok(cov.ok_or_else(|| cost.information(&pose)))
     })?;
     let cov = cov.map_err(|information| {
         if information.iter().any(|v| !v.is_finite()) {
@@ -54,7 +55,9 @@ pub fn pose_covariance<'py>(
             return invalid_argument(
                 "sigma_px",
                 format!(
-                    "σ² (JᵀJ)⁻¹ overflows double precision at σ = {sigma_px:e} px (its largest entry at σ = 1 px is {:.3e})",
+                    "σ² (JᵀJ)⁻¹ {} double precision at σ = {} px (its largest entry at σ = 1 px is {:.3e})",
+                    if sigma_px > 1.0 { "overflows" } else { "underflows" },
+                    pluecker::error::number(sigma_px),
                     unit.amax()
                 ),
             );
@@ -67,6 +70,13 @@ pub fn pose_covariance<'py>(
         ))
     })?;
     Ok(matrix_to_py(py, &cov))
+}
+
+/// Whether a covariance `σ² (JᵀJ)⁻¹` of a positive definite `JᵀJ` lost its variances to underflow
+/// (a tiny σ): a variance below the smallest normal double, or no Cholesky factor left. Such a matrix
+/// (all zeros at σ = 1e-200 px) would claim a pose known exactly.
+fn underflowed(cov: &nalgebra::Matrix6<f64>) -> bool {
+    cov.diagonal().iter().any(|&v| !(v >= f64::MIN_POSITIVE)) || cov.cholesky().is_none()
 }
 
 /// Per-correspondence reprojection errors in pixels at the pose `(R, t)`: points first, then lines.
