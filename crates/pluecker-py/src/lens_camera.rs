@@ -174,7 +174,10 @@ fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<M
     if let Some(k) = covs.iter().position(|c| !symmetric_psd(c)) {
         return Err(degenerate(format!(
             "cov[{k}] is not a covariance (symmetric positive semidefinite): {:?}",
-            values[4 * k..4 * k + 4].iter().map(|&v| pluecker::error::number(v)).collect::<Vec<_>>()
+            values[4 * k..4 * k + 4]
+                .iter()
+                .map(|&v| pluecker::error::number(v))
+                .collect::<Vec<_>>()
         )));
     }
     Ok(covs)

@@ -292,7 +292,7 @@ impl LensCamera {
             if pixel_error(&e) <= UNPROJECTION_TOLERANCE_PX {
                 // A preimage past the fold radius is on an outer branch of the distortion, where it
                 // increases again: the image of the inner branch never reaches this pixel.
-                if !(n.norm() < self.fold_radius) {
+                if n.norm() >= self.fold_radius {
                     return Err(outside(&format!(
                         "its preimage, at radius {}, lies beyond the fold of the radial distortion at radius {}",
                         number(n.norm()),
@@ -566,7 +566,11 @@ mod tests {
                 let u = Vector2::new(320.0 + radius * angle.cos(), 240.0 + radius * angle.sin());
                 match cam.unproject(&u, k) {
                     Ok(n) => {
-                        assert!(radius < peak_px, "{radius} px is beyond the fold ({peak_px} px) yet unprojected to |n| = {}", n.norm());
+                        assert!(
+                            radius <= peak_px,
+                            "{radius} px is beyond the fold ({peak_px} px) yet unprojected to |n| = {}",
+                            n.norm()
+                        );
                         assert!(n.norm() < 1.0);
                     }
                     // Newton may give up just inside the fold, where ρ' → 0; never further in than 1 %.
@@ -588,9 +592,14 @@ mod tests {
             (CameraModel::OpenCv, &[800.0, 790.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0]),
             (
                 CameraModel::FullOpenCv,
-                &[800.0, 790.0, 320.0, 240.0, -0.4, 0.05, 0.0, 0.0, 0.01, 0.1, -0.01, 0.005],
+                &[
+                    800.0, 790.0, 320.0, 240.0, -0.4, 0.05, 0.0, 0.0, 0.01, 0.1, -0.01, 0.005,
+                ],
             ),
-            (CameraModel::OpenCvFisheye, &[400.0, 395.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0]),
+            (
+                CameraModel::OpenCvFisheye,
+                &[400.0, 395.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0],
+            ),
         ];
         for (model, params) in cases {
             let cam = LensCamera::new(model, params).unwrap();
@@ -601,7 +610,11 @@ mod tests {
                 .find(|&r| rho(r + step) <= rho(r))
                 .expect("each case folds below r = 20");
             // The scan finds the turn to within one step (the maximum is flat: ρ' changes sign there).
-            assert!((cam.fold_radius - turn).abs() <= 2.0 * step, "{model:?}: {} vs {turn}", cam.fold_radius);
+            assert!(
+                (cam.fold_radius - turn).abs() <= 2.0 * step,
+                "{model:?}: {} vs {turn}",
+                cam.fold_radius
+            );
         }
         for cam in cameras() {
             // The mild distortions of the other tests fold far outside their images, if at all.

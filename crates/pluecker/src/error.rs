@@ -86,7 +86,7 @@ pub fn number(x: f64) -> String {
             s.to_string()
         }
     };
-    if (-5..DIGITS).contains(&exponent) {
+    if (-4..DIGITS).contains(&exponent) {
         trim(&format!("{:.*}", (DIGITS - 1 - exponent) as usize, x))
     } else {
         let sign = if exponent < 0 { '-' } else { '+' };

@@ -35,7 +35,10 @@ pub fn pose_covariance<'py>(
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
         return Err(invalid_argument(
             "sigma_px",
-            format!("must be a positive finite number, got {}", pluecker::error::number(sigma_px)),
+            format!(
+                "must be a positive finite number, got {}",
+                pluecker::error::number(sigma_px)
+            ),
         ));
     }
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
@@ -76,7 +79,7 @@ pub fn pose_covariance<'py>(
 /// (a tiny σ): a variance below the smallest normal double, or no Cholesky factor left. Such a matrix
 /// (all zeros at σ = 1e-200 px) would claim a pose known exactly.
 fn underflowed(cov: &nalgebra::Matrix6<f64>) -> bool {
-    cov.diagonal().iter().any(|&v| !(v >= f64::MIN_POSITIVE)) || cov.cholesky().is_none()
+    cov.diagonal().iter().any(|&v| v.is_nan() || v < f64::MIN_POSITIVE) || cov.cholesky().is_none()
 }
 
 /// Per-correspondence reprojection errors in pixels at the pose `(R, t)`: points first, then lines.

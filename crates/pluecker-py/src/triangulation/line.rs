@@ -152,7 +152,10 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
             if !(sigma.is_finite() && sigma > 0.0) {
                 return Err(invalid_argument(
                     "sigma",
-                    format!("must be a positive finite number of pixels, got {}", pluecker::error::number(sigma)),
+                    format!(
+                        "must be a positive finite number of pixels, got {}",
+                        pluecker::error::number(sigma)
+                    ),
                 ));
             }
             let segments: Vec<[Vector2<f64>; 2]> = values

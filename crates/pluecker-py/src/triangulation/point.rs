@@ -12,7 +12,9 @@ use super::batch::{collect, per_observation, push_covariance, InlierColumns, PyB
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
-use crate::convert::{cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real};
+use crate::convert::{
+    cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real,
+};
 use crate::errors::{shape_error, solve, to_py_err};
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};

@@ -42,7 +42,9 @@ fn refuse_object_entries(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<()> {
     let Ok(array) = np.call_method1("asarray", (obj,)) else {
         return Ok(()); // `read` names the argument in its TypeError
     };
-    if array.getattr("dtype")?.getattr("kind")?.extract::<String>()? != "O" || array.getattr("ndim")?.extract::<usize>()? != 1 {
+    if array.getattr("dtype")?.getattr("kind")?.extract::<String>()? != "O"
+        || array.getattr("ndim")?.extract::<usize>()? != 1
+    {
         return Ok(());
     }
     for (k, entry) in array.call_method0("tolist")?.try_iter()?.enumerate() {
@@ -53,7 +55,11 @@ fn refuse_object_entries(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<()> {
         if let Ok(i) = entry.extract::<Integer>() {
             if i.in_range(name, 0, u64::MAX as i128).is_err() {
                 let shown = entry.str()?.to_string();
-                let shown = if shown.len() > 24 { format!("{}…", &shown[..24]) } else { shown };
+                let shown = if shown.len() > 24 {
+                    format!("{}…", &shown[..24])
+                } else {
+                    shown
+                };
                 return Err(not_an_index(name, k, &shown));
             }
         }

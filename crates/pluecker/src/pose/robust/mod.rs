@@ -166,11 +166,17 @@ impl RansacOptions {
             ("line_threshold", self.line_threshold),
         ] {
             if !(value.is_finite() && value > 0.0) {
-                return bad(name, format!("must be a positive finite number of pixels, got {}", number(value)));
+                return bad(
+                    name,
+                    format!("must be a positive finite number of pixels, got {}", number(value)),
+                );
             }
         }
         if !(self.confidence > 0.0 && self.confidence < 1.0) {
-            return bad("confidence", format!("must be in (0, 1), got {}", number(self.confidence)));
+            return bad(
+                "confidence",
+                format!("must be in (0, 1), got {}", number(self.confidence)),
+            );
         }
         if self.max_iterations < 1 {
             return bad("max_iterations", "must be at least 1".into());
