@@ -248,6 +248,17 @@ def test_a_pose_covariance_that_underflows_is_an_error_like_one_that_overflows()
     np.testing.assert_allclose(pluecker.pose_covariance(*args, sigma_px=1e-3), 1e-6 * unit, rtol=1e-12)
 
 
+@pytest.mark.parametrize("sigma", [1e-200, 1e200])
+def test_a_given_sigma_whose_covariance_does_not_fit_gives_no_covariance(sigma):
+    """``estimate_pose`` with ``sigma_px=1e-200`` reported an all-zero covariance as "given"; with 1e200
+    none. Either way the covariance is not representable, and the result says so."""
+    scene = pluecker.random_scene("general", 8, 2, seed=1)
+    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
+                               options=pluecker.PoseOptions(sigma_px=sigma))
+    assert r.status == "success"
+    assert r.covariance is None and r.covariance_source is None
+
+
 def ellipse_points(n=40):
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)
     rng = np.random.default_rng(5)

@@ -119,3 +119,14 @@ def test_retriangulate_refuses_a_sigma_that_is_not_a_positive_number(sigma):
         colmap.observation_table(rec, sigma)
     ids, result = colmap.retriangulate(rec, sigma_px=0.5)
     assert len(ids) == len(result) == len(rec.points3D) > 0
+
+
+@pytest.mark.parametrize("sigma", [-1.0, 0.0, math.nan, True])
+def test_a_distributed_job_refuses_a_sigma_that_is_not_a_positive_number(tmp_path, sigma):
+    """``sigma_px=-1`` squared into the covariance as in ``colmap.retriangulate``."""
+    with pytest.raises(InvalidOptionError, match=r"^sigma_px: must be a positive finite number of pixels"):
+        dist.triangulate_table(observations(), CAMERAS, sigma_px=sigma)
+    (tmp_path / "in").mkdir()
+    pq.write_table(observations(), tmp_path / "in" / "a.parquet")
+    with pytest.raises(InvalidOptionError, match=r"^sigma_px: "):
+        dist.triangulate(tmp_path / "in", CAMERAS, tmp_path / "out", sigma_px=sigma)

@@ -45,8 +45,7 @@ pub fn pose_covariance<'py>(
     // The information matrix is computed again only to explain a failure.
     let cov = solve(py, move || {
         let cost = ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
-        let cov = covariance(&cost, &pose, sigma_px).filter(|c| !underflowed(c));
-        Ok(cov.ok_or_else(|| cost.information(&pose)))
+        Ok(covariance(&cost, &pose, sigma_px).ok_or_else(|| cost.information(&pose)))
     })?;
     let cov = cov.map_err(|information| {
         if information.iter().any(|v| !v.is_finite()) {
@@ -73,13 +72,6 @@ pub fn pose_covariance<'py>(
         ))
     })?;
     Ok(matrix_to_py(py, &cov))
-}
-
-/// Whether a covariance `σ² (JᵀJ)⁻¹` of a positive definite `JᵀJ` lost its variances to underflow
-/// (a tiny σ): a variance below the smallest normal double, or no Cholesky factor left. Such a matrix
-/// (all zeros at σ = 1e-200 px) would claim a pose known exactly.
-fn underflowed(cov: &nalgebra::Matrix6<f64>) -> bool {
-    cov.diagonal().iter().any(|&v| v.is_nan() || v < f64::MIN_POSITIVE) || cov.cholesky().is_none()
 }
 
 /// Per-correspondence reprojection errors in pixels at the pose `(R, t)`: points first, then lines.
