@@ -740,7 +740,9 @@ def triangulate_point_observations(
 ) -> PointTriangulations:
     """Point tracks given one observation per row (memory in the observations): pixel ``x[k]`` (m, 2)
     of track ``track[k]`` in camera ``image[k]`` of ``P`` (v, 3, 4), ``cov[k]`` (m, 2, 2); result row t
-    is track t."""
+    is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m rows given
+    (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a negative id,
+    is an ``InvalidOptionError`` naming the argument."""
 
 def triangulate_line(
     P: ArrayLike,
@@ -786,7 +788,9 @@ def triangulate_line_observations(
 ) -> LineTriangulations:
     """Line tracks given one observation per row: ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments)
     of track ``track[k]`` in image ``image[k]`` (a row of ``P`` (v, 3, 4)), ``cov[k]`` (m, 2, 2) when given.
-    Each track is solved as :func:`triangulate_lines` would; memory grows with the rows."""
+    Each track is solved as :func:`triangulate_lines` would; memory grows with the rows.
+    Track ids and ``n_tracks`` are at most the m rows given, as for
+    :func:`triangulate_point_observations`."""
 
 def triangulate_quadric(
     P: ArrayLike,
@@ -827,7 +831,9 @@ def triangulate_quadric_observations(
 ) -> QuadricTriangulations:
     """Ellipsoid tracks given one outline conic per row: ``conics[k]`` (m, 3, 3) of track ``track[k]`` in
     image ``image[k]``, ``cov[k]`` (m, 5, 5) when given. Each track is solved as
-    :func:`triangulate_quadrics` would."""
+    :func:`triangulate_quadrics` would.
+    Track ids and ``n_tracks`` are at most the m rows given, as for
+    :func:`triangulate_point_observations`."""
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 

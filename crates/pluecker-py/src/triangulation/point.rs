@@ -277,7 +277,8 @@ pub fn triangulate_points(
 /// `k` is the pixel `x[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)),
 /// with the covariance `cov[k]` (m, 2, 2) when given. Memory grows with the observations, not with
 /// tracks × images. Track `t` of the result is `t` of `track` (`0..n_tracks`, by default
-/// `max(track) + 1`; a track id without observations is rejected as too few views); each is solved as
+/// `max(track) + 1`, both below or at the `m` rows given, else `InvalidOptionError`: the result never
+/// outgrows the input; a track id without observations is rejected as too few views); each is solved as
 /// `triangulate_points` would.
 #[pyfunction]
 #[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
