@@ -130,3 +130,22 @@ def test_a_distributed_job_refuses_a_sigma_that_is_not_a_positive_number(tmp_pat
     pq.write_table(observations(), tmp_path / "in" / "a.parquet")
     with pytest.raises(InvalidOptionError, match=r"^sigma_px: "):
         dist.triangulate(tmp_path / "in", CAMERAS, tmp_path / "out", sigma_px=sigma)
+
+
+def test_a_job_on_a_table_without_rows_writes_empty_result_tables(tmp_path):
+    """An input with the columns but no rows: reading the result raised pyarrow's "Must pass at least one
+    table"; it is now the empty tables, with the columns of a job's result."""
+    (tmp_path / "in").mkdir()
+    pq.write_table(observations().slice(0, 0), tmp_path / "in" / "a.parquet")
+    reference = dist.triangulate_table(observations(), CAMERAS)
+    for partitioned in (False, True):
+        out = tmp_path / f"out-{partitioned}"
+        summary = dist.triangulate(tmp_path / "in", CAMERAS, out, partitioned=partitioned)
+        assert summary.tracks == 0 and summary.statuses == {}
+        points, obs = dist.read_points(out), dist.read_observations(out)
+        assert points.num_rows == obs.num_rows == 0
+        assert points.schema.names == reference[0].schema.names and obs.schema.names == reference[1].schema.names
+    paths = localisation_files(tmp_path, {k: [] for k in QUERIES})
+    summary = dist.localize(*paths, tmp_path / "poses")
+    assert summary.tracks == 0
+    assert dist.read_poses(tmp_path / "poses").num_rows == dist.read_matches(tmp_path / "poses").num_rows == 0

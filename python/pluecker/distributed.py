@@ -374,6 +374,11 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
                            (scratch, str(out), cameras, method, option_fields, sigma_px), progress,
                            threads_per_worker)
     _remove_tree(Path(scratch))
+    if not any(r["tracks"] for r in results):
+        # No rows at all: the result tables still exist, empty, with the columns a job writes.
+        empty = pq.read_schema(_input_files(source)[0]).empty_table()
+        points, observations = triangulate_table(empty, cameras, method=method, options=options, sigma_px=sigma_px)
+        _write_part(str(out), 0, points=points, observations=observations)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["tracks"] for r in results), certified=sum(r["certified"] for r in results),
                       statuses=statuses, seconds=time.perf_counter() - started, points=out / "points",
@@ -602,6 +607,10 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
                        threads_per_worker)
     _remove_tree(Path(scratch))
+    if not any(r["queries"] for r in results):
+        # No queries: empty ``poses`` and ``matches`` tables, as for :func:`triangulate`.
+        tables = [pq.read_schema(_input_files(str(f))[0]).empty_table() for f in (queries, point_matches)]
+        _localize_part(str(out), 0, settings, *tables)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["queries"] for r in results), certified=0, statuses=statuses,
                       seconds=time.perf_counter() - started, points=out / "poses", observations=out / "matches",
