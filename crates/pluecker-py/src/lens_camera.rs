@@ -9,6 +9,7 @@ use numpy::ndarray::Array3;
 use numpy::PyArray2;
 use numpy::{IntoPyArray, PyArray3};
 use pluecker::camera_model::{CameraModel, LensCamera};
+use pluecker::error::number;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -173,11 +174,11 @@ fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<M
     let covs = matrices::<2, 2>(&values);
     if let Some(k) = covs.iter().position(|c| !symmetric_psd(c)) {
         return Err(degenerate(format!(
-            "cov[{k}] is not a covariance (symmetric positive semidefinite): {:?}",
-            values[4 * k..4 * k + 4]
-                .iter()
-                .map(|&v| pluecker::error::number(v))
-                .collect::<Vec<_>>()
+            "cov[{k}] is not a covariance (symmetric positive semidefinite): [[{}, {}], [{}, {}]]",
+            number(values[4 * k]),
+            number(values[4 * k + 1]),
+            number(values[4 * k + 2]),
+            number(values[4 * k + 3])
         )));
     }
     Ok(covs)

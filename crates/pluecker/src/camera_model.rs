@@ -276,8 +276,8 @@ impl LensCamera {
         let outside = |why: &str| Error::Degenerate {
             what: format!(
                 "pixel {index} ({}, {}): outside the invertible region of the {} distortion ({why})",
-                u.x,
-                u.y,
+                number(u.x),
+                number(u.y),
                 self.model.as_str()
             ),
         };
