@@ -391,6 +391,11 @@ fn first_positive_root(coefficients: &[f64]) -> Option<f64> {
         return None;
     }
     let lead = coefficients[degree];
+    if coefficients[..degree].iter().any(|c| !(c / lead).is_finite()) {
+        // A leading coefficient too small to divide by: its roots are beyond any double, so the
+        // polynomial of one degree less has the same roots in range.
+        return first_positive_root(&coefficients[..degree]);
+    }
     let companion = nalgebra::DMatrix::from_fn(degree, degree, |i, j| {
         if j == degree - 1 {
             -coefficients[i] / lead
@@ -620,6 +625,32 @@ mod tests {
             // The mild distortions of the other tests fold far outside their images, if at all.
             assert!(cam.fold_radius > 1.0, "{:?}: {}", cam.model(), cam.fold_radius);
         }
+    }
+
+    #[test]
+    fn extreme_distortion_parameters_give_a_fold_radius_without_failing() {
+        // Subnormal, huge and mixed coefficients: the companion matrix must stay finite (a non-finite
+        // one could make the eigenvalue iteration run for ever).
+        let extremes: [&[f64]; 6] = [
+            &[800.0, 0.0, 0.0, 1.0, 1e-320],
+            &[800.0, 0.0, 0.0, -1e300, 1e-320],
+            &[800.0, 0.0, 0.0, 1e300, -1e300],
+            &[800.0, 0.0, 0.0, -1e-300, 1e-300],
+            &[800.0, 0.0, 0.0, 0.0, 0.0],
+            &[800.0, 0.0, 0.0, f64::MAX, f64::MIN_POSITIVE],
+        ];
+        for params in extremes {
+            let cam = LensCamera::new(CameraModel::Radial, params).unwrap();
+            assert!(cam.fold_radius > 0.0, "{params:?}: {}", cam.fold_radius);
+            let _ = cam.unproject(&Vector2::new(900.0, 100.0), 0);
+        }
+        let cam = LensCamera::new(CameraModel::Radial, &[800.0, 0.0, 0.0, -1e300, 1e-320]).unwrap();
+        // ρ' = 1 - 3e300 r² (+ a negligible r⁴ term) vanishes at r = 1/√(3e300).
+        assert!(
+            (cam.fold_radius * (3e300f64).sqrt() - 1.0).abs() < 1e-12,
+            "{}",
+            cam.fold_radius
+        );
     }
 
     #[test]
