@@ -150,3 +150,67 @@ def test_a_negative_track_index(house_copy, tmp_path, capsys):
     tracks.write_text(tracks.read_text() + "0 -3 1\n")
     assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
                            "house.nview-corners", "-3")
+
+
+# --- pose: JSON values that are not numbers ------------------------------------------------------------
+
+
+def pose_document_with_everything() -> dict:
+    """Points and lines with their covariances, ``camera.K`` and an ``initial_pose``: every array field."""
+    scene = pluecker.random_scene("general", 8, 4, seed=3)
+    K = scene["camera"].K
+    return {"camera": {"K": K.tolist()},
+            "points2d": scene["points2d"].tolist(), "points3d": scene["points3d"].tolist(),
+            "lines2d": scene["lines2d"].tolist(), "lines3d": scene["lines3d"].tolist(),
+            "point_covariances": [[[1.0, 0.0], [0.0, 1.0]] for _ in range(8)],
+            "line_covariances": [[[1.0, 0.0], [0.0, 1.0]] for _ in range(4)],
+            "options": {"initial_pose": {"R": scene["R"].tolist(), "t": scene["t"].tolist()}}}
+
+
+#: (path of an entry in the document, how it is printed in the message).
+ENTRIES = [
+    (("points2d", 0, 0), "points2d[0][0]"),
+    (("points3d", 3, 2), "points3d[3][2]"),
+    (("lines2d", 1, 0, 1), "lines2d[1][0][1]"),
+    (("lines3d", 2, 1, 0), "lines3d[2][1][0]"),
+    (("camera", "K", 0, 0), "camera.K[0][0]"),
+    (("point_covariances", 4, 1, 1), "point_covariances[4][1][1]"),
+    (("line_covariances", 3, 0, 1), "line_covariances[3][0][1]"),
+    (("options", "initial_pose", "R", 1, 1), "initial_pose.R[1][1]"),
+    (("options", "initial_pose", "t", 2), "initial_pose.t[2]"),
+]
+
+
+@pytest.mark.parametrize("path, shown", ENTRIES, ids=[e[1] for e in ENTRIES])
+@pytest.mark.parametrize("value", [True, False, "118.6", "1e3", None])
+def test_a_json_bool_or_string_in_an_array_is_refused_not_coerced(tmp_path, capsys, path, shown, value):
+    """``"points2d": [[true, 118.6], ...]`` ran as 1.0 and gave ``success`` at 31 px RMS; numeric
+    strings were parsed. Every array field refuses them, naming the entry."""
+    doc = pose_document_with_everything()
+    where = doc
+    for key in path[:-1]:
+        where = where[key]
+    where[path[-1]] = value
+    (tmp_path / "in.json").write_text(json.dumps(doc))
+    assert_one_line_exit_2(["pose", str(tmp_path / "in.json")], capsys, "pose",
+                           f"'{shown}' must be a number, got {json.dumps(value)}")
+
+
+def test_the_document_with_every_array_field_runs(tmp_path, capsys):
+    """The document the test above corrupts is valid as it is."""
+    (tmp_path / "in.json").write_text(json.dumps(pose_document_with_everything()))
+    assert main(["pose", str(tmp_path / "in.json")]) == 0
+    assert json.loads(capsys.readouterr().out)["status"] == "success"
+
+
+# --- triangulate: camera files ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("rows", [2, 4])
+def test_a_camera_file_without_three_rows_names_the_file(house_copy, tmp_path, capsys, rows):
+    """A 2-row ``.P`` file raised numpy's "cannot reshape array of size 8 into shape (3,4)"."""
+    path = house_copy / "house.002.P"
+    lines = [line for line in path.read_text().splitlines() if line.strip()]
+    path.write_text("\n".join((lines * 2)[:rows]) + "\n")
+    assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
+                           "house.002.P", f"3x4 camera matrix (3 rows of 4 numbers), got {rows} rows")

@@ -472,9 +472,11 @@ def random_scene(kind: str, n_points: int, n_lines: Optional[int] = None, seed: 
     segments together."""
 
 def set_num_threads(n: Optional[int], /) -> None:
-    """Sets the number of threads the batches of this process use (``n >= 1``; ``None``: the default,
-    one per core or ``RAYON_NUM_THREADS``). For several processes sharing one machine, e.g. Dask
-    workers (``pluecker.distributed``). Takes effect for the next call."""
+    """Sets the number of threads the batches of this process use: ``n`` from 1 to
+    ``max(64, 4 × the cores available)`` (more only oversubscribes the cores), or ``None`` for the
+    default, one per core or ``RAYON_NUM_THREADS``. Any other value (0, a negative or larger count, a
+    bool) raises ``InvalidOptionError`` naming ``n``. For several processes sharing one machine, e.g.
+    Dask workers (``pluecker.distributed``). Takes effect for the next call."""
 
 def get_num_threads() -> int:
     """The number of threads the batches of this process use (see :func:`set_num_threads`)."""
@@ -738,7 +740,9 @@ def triangulate_point_observations(
 ) -> PointTriangulations:
     """Point tracks given one observation per row (memory in the observations): pixel ``x[k]`` (m, 2)
     of track ``track[k]`` in camera ``image[k]`` of ``P`` (v, 3, 4), ``cov[k]`` (m, 2, 2); result row t
-    is track t."""
+    is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m rows given
+    (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a negative id,
+    is an ``InvalidOptionError`` naming the argument."""
 
 def triangulate_line(
     P: ArrayLike,
@@ -784,7 +788,9 @@ def triangulate_line_observations(
 ) -> LineTriangulations:
     """Line tracks given one observation per row: ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments)
     of track ``track[k]`` in image ``image[k]`` (a row of ``P`` (v, 3, 4)), ``cov[k]`` (m, 2, 2) when given.
-    Each track is solved as :func:`triangulate_lines` would; memory grows with the rows."""
+    Each track is solved as :func:`triangulate_lines` would; memory grows with the rows.
+    Track ids and ``n_tracks`` are at most the m rows given, as for
+    :func:`triangulate_point_observations`."""
 
 def triangulate_quadric(
     P: ArrayLike,
@@ -825,7 +831,9 @@ def triangulate_quadric_observations(
 ) -> QuadricTriangulations:
     """Ellipsoid tracks given one outline conic per row: ``conics[k]`` (m, 3, 3) of track ``track[k]`` in
     image ``image[k]``, ``cov[k]`` (m, 5, 5) when given. Each track is solved as
-    :func:`triangulate_quadrics` would."""
+    :func:`triangulate_quadrics` would.
+    Track ids and ``n_tracks`` are at most the m rows given, as for
+    :func:`triangulate_point_observations`."""
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any, NoReturn, Sequence
@@ -289,7 +290,30 @@ def _read_document(source: str) -> dict[str, Any]:
     return doc
 
 
+def _first_non_number(value: Any, what: str) -> tuple[str, Any] | None:
+    """The path (``points2d[0][1]``) and value of the first leaf of the nested lists ``value`` that is
+    not a JSON number: ``true`` / ``false`` and numeric strings are refused, never coerced to 1.0 / 0.0
+    or parsed."""
+    stack: list[tuple[Any, str]] = [(value, what)]
+    while stack:
+        item, path = stack.pop()
+        if isinstance(item, list):
+            stack.extend((item[i], f"{path}[{i}]") for i in reversed(range(len(item))))
+        elif isinstance(item, bool) or not isinstance(item, (int, float)):
+            return path, item
+    return None
+
+
 def _number_array(value: Any, what: str) -> np.ndarray:
+    """A (nested) list of JSON numbers as a float array; an ``InputError`` naming the first entry that
+    is not a number (a bool, a string, null, an object)."""
+    if (bad := _first_non_number(value, what)) is not None:
+        path, item = bad
+        try:
+            shown = json.dumps(item)[:80]
+        except RecursionError:
+            shown = "a deeply nested value"
+        raise InputError(f"'{path}' must be a number, got {shown}")
     try:
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError, RecursionError):
@@ -485,6 +509,20 @@ def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -
     return 0
 
 
+def _unwritable(folder: Path) -> str | None:
+    """Why the output folder ``folder`` cannot be written (made if missing), or ``None`` when it can: so
+    that the error says so before any work, not as a failure to read the inputs."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    if not folder.is_dir():
+        return "not a folder"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return "permission denied"
+    return None
+
+
 def _localize(args: argparse.Namespace) -> int:
     """``pluecker localize QUERIES POINTS --out DIR [--lines L] [--scheduler ADDRESS]``."""
     try:
@@ -496,6 +534,8 @@ def _localize(args: argparse.Namespace) -> int:
     for path in (args.queries, args.points, args.lines):
         if path is not None and not path.exists():
             return _fail("localize", f"{path}: no such file or directory")
+    if (problem := _unwritable(args.out)) is not None:
+        return _fail("localize", f"cannot write --out {args.out}: {problem}")
     client = None
     if args.scheduler is not None:
         try:

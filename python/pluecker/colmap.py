@@ -16,6 +16,7 @@ pycolmap objects import it when called and say how to install it when it is miss
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -99,11 +100,26 @@ class Retriangulation:
         return iter((self.point3D_ids, self.result))
 
 
+def _check_sigma(sigma_px: Any) -> None:
+    """``pluecker.InvalidOptionError`` unless ``sigma_px`` is a positive finite number (not a bool): the
+    covariance is ``sigma_px²`` I, so a negative σ would pass as its absolute value and a zero or NaN
+    one would make every cost meaningless."""
+    if isinstance(sigma_px, (bool, np.bool_)) or not isinstance(sigma_px, (int, float, np.integer, np.floating)):
+        raise _core.InvalidOptionError(f"sigma_px: must be a positive finite number of pixels, got {sigma_px!r}")
+    try:
+        value = float(sigma_px)
+    except OverflowError:
+        value = math.inf
+    if not (math.isfinite(value) and value > 0):
+        raise _core.InvalidOptionError(f"sigma_px: must be a positive finite number of pixels, got {value:.6g}")
+
+
 def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...]:
     """Every observation of a model's 3-D points, undistorted into its camera's pinhole part with the
     pixel covariance carried there (:func:`retriangulate`): the cameras ``P`` (one per posed image),
     the sorted point ids, and per observation its point's row, its camera's row, COLMAP image id,
     ``point2D_idx``, undistorted pixel and covariance."""
+    _check_sigma(sigma_px)
     images = [image for image in reconstruction.images.values() if image.has_pose]
     lenses = [lens_camera(reconstruction.cameras[image.camera_id]) for image in images]
     # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.

@@ -131,6 +131,15 @@ def _read_rows(path: Path, columns: int) -> np.ndarray:
     return values
 
 
+def _read_camera(path: Path) -> np.ndarray:
+    """The 3x4 camera of a ``.P`` file: exactly three rows of (at least) four numbers, else a ValueError
+    naming the file."""
+    rows = _read_rows(path, 4)
+    if rows.shape[0] != 3:
+        raise ValueError(f"{path}: expected a 3x4 camera matrix (3 rows of 4 numbers), got {rows.shape[0]} rows")
+    return rows
+
+
 def _read_tracks(path: Path, n_views: int) -> np.ndarray:
     """Rows of 0-based feature indices (``*`` where a view does not see the track, stored as -1)."""
     if not path.exists():
@@ -187,7 +196,7 @@ def load_vgg(folder: str | Path) -> VggSequence:
     camera_files = sorted(p for p in folder.iterdir() if re.fullmatch(r"(.*\.)?\d+\.P", p.name))
     if not camera_files:
         raise FileNotFoundError(f"{folder}: no camera files '<prefix>NNN.P'")
-    cameras = np.stack([_read_rows(p, 4).reshape(3, 4) for p in camera_files])
+    cameras = np.stack([_read_camera(p) for p in camera_files])
     stems = [p.name[: -len(".P")] for p in camera_files]
     corners = [_read_rows(folder / f"{s}.corners", 2) for s in stems]
     segments = [_read_rows(folder / f"{s}.lines", 4).reshape(-1, 2, 2) for s in stems]

@@ -57,6 +57,7 @@ from typing import Any, Iterable, Optional, Union
 import numpy as np
 
 from . import _core
+from .colmap import _check_sigma
 
 __all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations",
            "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses", "read_matches",
@@ -138,6 +139,8 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
     track, observations in increasing (image, x, y). Without covariance columns every pixel has
     covariance ``sigma_px²`` I."""
     pa = _pyarrow()
+    _check_sigma(sigma_px)
+    _require_columns(table.column_names, OBSERVATION_COLUMNS, "observations")
     columns = {name: table.column(name).to_numpy() for name in OBSERVATION_COLUMNS}
     track = np.asarray(columns["track"], dtype=np.int64)
     image = np.asarray(columns["image"], dtype=np.int64)
@@ -285,6 +288,28 @@ def _input_files(source: str) -> list[str]:
     return [str(path)]
 
 
+def _require_columns(names: Iterable[str], required: Iterable[str], what: str) -> None:
+    """A ``pluecker.ShapeError`` naming ``what`` and the missing columns unless ``names`` holds every
+    one of ``required``."""
+    required, present = tuple(required), set(names)
+    missing = [c for c in required if c not in present]
+    if missing:
+        raise _core.ShapeError(f"{what}: missing column(s) {', '.join(missing)}; expected the columns "
+                               f"{', '.join(required)}")
+
+
+def _check_inputs(source: str, required: Iterable[str], what: str) -> None:
+    """Before a job: ``source`` must hold Parquet files, each with the ``required`` columns (a
+    ``ShapeError`` naming the file otherwise), so that a bad input fails here, not in every task."""
+    import pyarrow.parquet as pq
+
+    files = _input_files(source)
+    if not files:
+        raise _core.ShapeError(f"{what} {source}: no Parquet files (*.parquet) in the folder")
+    for f in files:
+        _require_columns(pq.read_schema(f).names, required, f"{what} {f}")
+
+
 def _row_groups(source: str) -> list[tuple[int, int]]:
     import pyarrow.parquet as pq
 
@@ -331,6 +356,8 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     started = time.perf_counter()
     source, out = str(source), Path(out)
+    _check_sigma(sigma_px)
+    _check_inputs(source, OBSERVATION_COLUMNS, "observations")
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
     if buckets is None and not partitioned:
         rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
@@ -347,6 +374,11 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
                            (scratch, str(out), cameras, method, option_fields, sigma_px), progress,
                            threads_per_worker)
     _remove_tree(Path(scratch))
+    if not any(r["tracks"] for r in results):
+        # No rows at all: the result tables still exist, empty, with the columns a job writes.
+        empty = pq.read_schema(_input_files(source)[0]).empty_table()
+        points, observations = triangulate_table(empty, cameras, method=method, options=options, sigma_px=sigma_px)
+        _write_part(str(out), 0, points=points, observations=observations)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["tracks"] for r in results), certified=sum(r["certified"] for r in results),
                       statuses=statuses, seconds=time.perf_counter() - started, points=out / "points",
@@ -448,6 +480,11 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     pa = _pyarrow()
     from concurrent.futures import ThreadPoolExecutor
 
+    _require_columns(queries.column_names, QUERY_COLUMNS, "queries")
+    for table, names, what in ((point_matches, POINT_MATCH_COLUMNS, "point_matches"),
+                               (line_matches, LINE_MATCH_COLUMNS, "line_matches")):
+        if table is not None:
+            _require_columns(table.column_names, names, what)
     base = (ransac if ransac is not None else _core.RansacOptions()).to_dict()
     q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
     intrinsics = _columns(queries, QUERY_COLUMNS[1:])
@@ -555,6 +592,10 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
 
     started = time.perf_counter()
     out = Path(out)
+    _check_inputs(str(queries), QUERY_COLUMNS, "queries")
+    _check_inputs(str(point_matches), POINT_MATCH_COLUMNS, "point_matches")
+    if line_matches is not None:
+        _check_inputs(str(line_matches), LINE_MATCH_COLUMNS, "line_matches")
     n = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(queries)))
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
     buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
@@ -566,6 +607,10 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
                        threads_per_worker)
     _remove_tree(Path(scratch))
+    if not any(r["queries"] for r in results):
+        # No queries: empty ``poses`` and ``matches`` tables, as for :func:`triangulate`.
+        tables = [pq.read_schema(_input_files(str(f))[0]).empty_table() for f in (queries, point_matches)]
+        _localize_part(str(out), 0, settings, *tables)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["queries"] for r in results), certified=0, statuses=statuses,
                       seconds=time.perf_counter() - started, points=out / "poses", observations=out / "matches",

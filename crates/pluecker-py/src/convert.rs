@@ -237,13 +237,19 @@ pub fn seconds_arg(name: &str, seconds: f64) -> PyResult<Duration> {
     if !(seconds.is_finite() && seconds >= 0.0) {
         return Err(invalid_argument(
             name,
-            format!("must be None or a finite number of seconds ≥ 0, got {seconds}"),
+            format!(
+                "must be None or a finite number of seconds ≥ 0, got {}",
+                pluecker::error::number(seconds)
+            ),
         ));
     }
     Duration::try_from_secs_f64(seconds).map_err(|_| {
         invalid_argument(
             name,
-            format!("must be below 2**64 seconds (the longest duration the clock holds), got {seconds:e}"),
+            format!(
+                "must be below 2**64 seconds (the longest duration the clock holds), got {}",
+                pluecker::error::number(seconds)
+            ),
         )
     })
 }

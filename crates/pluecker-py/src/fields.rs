@@ -260,10 +260,8 @@ macro_rules! options_class {
                 }
 
                 #[setter($name)]
-                fn [<set_ $name>](&mut self, value: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
-                    let Some(value) = value else {
-                        return Err(pyo3::exceptions::PyAttributeError::new_err(concat!("cannot delete ", stringify!($name))));
-                    };
+                // `del options.x` is pyo3's AttributeError; `options.x = None` resets an optional field.
+                fn [<set_ $name>](&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
                     let $v: $ty = value.extract().map_err(|e: PyErr| {
                         pyo3::exceptions::PyTypeError::new_err(format!("{}: {}", stringify!($name), e.value(value.py())))
                     })?;
@@ -326,7 +324,7 @@ macro_rules! options_class {
                 for (key, value) in values.iter() {
                     let key: String = key.extract()?;
                     match key.as_str() {
-                        $( stringify!($name) => next.[<set_ $name>](Some(&value))?, )*
+                        $( stringify!($name) => next.[<set_ $name>](&value)?, )*
                         _ => {
                             let class = class.trim_start_matches("Py");
                             return Err(pyo3::exceptions::PyTypeError::new_err(format!(

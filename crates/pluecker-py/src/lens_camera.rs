@@ -2,13 +2,14 @@
 //! (`pluecker::camera_model`): projection, and unprojection exact to 1e-10 px.
 
 use crate::convert::{points, points_to_py, Real};
-use crate::errors::{guarded, shape_error};
+use crate::errors::{degenerate, guarded, shape_error};
 use crate::fields::result_class;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use numpy::ndarray::Array3;
 use numpy::PyArray2;
 use numpy::{IntoPyArray, PyArray3};
 use pluecker::camera_model::{CameraModel, LensCamera};
+use pluecker::error::number;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -77,6 +78,7 @@ result_class! {
     /// The (N, 2, 2) covariances of the undistorted normalised coordinates of pixels (N, 2) whose pixel
     /// covariances are `cov` (N, 2, 2), or `sigma_px`² I (`None`: 1 px): first order, `J⁻¹ Σ J⁻ᵀ` with
     /// `J` the Jacobian of the projection at the unprojected point.
+    /// A `cov[k]` that is not symmetric positive semidefinite is a `DegenerateConfigurationError` naming it.
     #[pyo3(signature = (pixels, cov = None))]
     fn normalized_covariances<'py>(
         &self,
@@ -111,6 +113,7 @@ result_class! {
     /// Undistorted pixels (N, 2) of pixels (N, 2) (the image of the pinhole part, exact to 1e-10 px) and
     /// their covariances (N, 2, 2) for pixel covariances `cov` (N, 2, 2) (`None`: 1 px² isotropic), to
     /// first order `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂ū`: the input of `triangulate_*` with `P = pinhole.P(R, t)`.
+    /// A `cov[k]` that is not symmetric positive semidefinite is a `DegenerateConfigurationError` naming it.
     #[pyo3(signature = (pixels, cov = None))]
     fn undistort<'py>(
         &self,
@@ -168,5 +171,26 @@ fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<M
             shape_string(&shape),
         ));
     }
-    Ok(matrices::<2, 2>(&values))
+    let covs = matrices::<2, 2>(&values);
+    if let Some(k) = covs.iter().position(|c| !symmetric_psd(c)) {
+        return Err(degenerate(format!(
+            "cov[{k}] is not a covariance (symmetric positive semidefinite): [[{}, {}], [{}, {}]]",
+            number(values[4 * k]),
+            number(values[4 * k + 1]),
+            number(values[4 * k + 2]),
+            number(values[4 * k + 3])
+        )));
+    }
+    Ok(covs)
+}
+
+/// Whether `c` is symmetric and positive semidefinite, to the rounding of its entries (relative
+/// 1e-12 of its largest entry): the only matrices a covariance can be.
+fn symmetric_psd(c: &Matrix2<f64>) -> bool {
+    let tolerance = 1e-12 * c.amax();
+    let (a, b, d) = (c[(0, 0)], 0.5 * (c[(0, 1)] + c[(1, 0)]), c[(1, 1)]);
+    (c[(0, 1)] - c[(1, 0)]).abs() <= tolerance
+        && a >= -tolerance
+        && d >= -tolerance
+        && a * d - b * b >= -tolerance * c.amax()
 }

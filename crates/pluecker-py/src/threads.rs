@@ -3,7 +3,8 @@
 //! processes on one machine — Dask workers, say — can share its cores without oversubscribing them.
 //! Every solve runs inside [`install`].
 
-use pyo3::exceptions::PyValueError;
+use crate::convert::Integer;
+use crate::errors::{invalid_argument, InvalidOptionError, PlueckerError};
 use pyo3::prelude::*;
 use std::sync::{Arc, RwLock};
 
@@ -22,33 +23,53 @@ pub fn install<T: Send>(f: impl FnOnce() -> T + Send) -> T {
     }
 }
 
+/// The most threads a pool may have per core (`std::thread::available_parallelism`): more only
+/// oversubscribes the cores, and a mistyped count (`10**6`) would try to start that many threads.
+pub const MAX_THREADS_PER_CORE: usize = 4;
+
+/// The fewest threads the cap allows whatever the core count, so that a small machine can still run a
+/// pool the size of a larger one (to reproduce its scheduling, say).
+pub const MIN_THREAD_CAP: usize = 64;
+
+/// The largest `n` that `set_num_threads` accepts: `max(MIN_THREAD_CAP, MAX_THREADS_PER_CORE × cores)`.
+pub fn thread_cap() -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    MIN_THREAD_CAP.max(MAX_THREADS_PER_CORE.saturating_mul(cores))
+}
+
 /// set_num_threads(n, /)
 /// --
 ///
 /// Sets the number of threads the batches of this process use (``triangulate_points``,
-/// ``estimate_poses``, …): ``n >= 1``, or ``None`` for the default (one per core, or the
-/// ``RAYON_NUM_THREADS`` environment variable). Takes effect for the next call.
+/// ``estimate_poses``, …): an integer from 1 to ``max(64, 4 × the cores available)``, or ``None`` for
+/// the default (one per core, or the ``RAYON_NUM_THREADS`` environment variable). Takes effect for the
+/// next call. Any other value (0, a negative or larger count, a bool) raises ``InvalidOptionError``
+/// naming ``n``.
 #[pyfunction]
 #[pyo3(signature = (n, /))]
-pub fn set_num_threads(n: Option<usize>) -> PyResult<()> {
+pub fn set_num_threads(py: Python<'_>, n: Option<Integer>) -> PyResult<()> {
     let pool = match n {
         None => None,
-        Some(0) => {
-            return Err(PyValueError::new_err(
-                "set_num_threads: n must be at least 1, or None for the default",
+        Some(n) => {
+            let cap = thread_cap();
+            let n = n.in_range("n", 1, cap as i128).map_err(|e| {
+                InvalidOptionError::new_err(format!(
+                    "set_num_threads: {} (at most {MAX_THREADS_PER_CORE} threads per core, and {MIN_THREAD_CAP} on any machine), or None for the default",
+                    e.value(py)
+                ))
+            })? as usize;
+            Some(Arc::new(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .thread_name(|i| format!("pluecker-{i}"))
+                    .build()
+                    .map_err(|e| invalid_argument("set_num_threads", format!("cannot start {n} threads: {e}")))?,
             ))
         }
-        Some(n) => Some(Arc::new(
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .thread_name(|i| format!("pluecker-{i}"))
-                .build()
-                .map_err(|e| PyValueError::new_err(format!("set_num_threads: cannot start {n} threads: {e}")))?,
-        )),
     };
     *POOL
         .write()
-        .map_err(|_| PyValueError::new_err("set_num_threads: the pool lock is poisoned"))? = pool;
+        .map_err(|_| PlueckerError::new_err("set_num_threads: the pool lock is poisoned"))? = pool;
     Ok(())
 }
 

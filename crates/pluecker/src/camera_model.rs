@@ -21,11 +21,14 @@
 //! **Unprojection** inverts the distortion by Newton's method on `D(n) = d`, with the analytic Jacobian.
 //! It stops when the residual, in pixels, is below [`UNPROJECTION_TOLERANCE_PX`] (1e-10 px). The answer
 //! must be in the invertible region: the Jacobian of `D` must have a positive determinant there, so
-//! that the distortion is locally one-to-one and keeps the orientation. A strong barrel distortion folds
-//! the image beyond some radius: points there have two preimages, or none, and are rejected with
-//! [`Error::Degenerate`] naming the point.
+//! that the distortion is locally one-to-one and keeps the orientation, and it must lie inside the
+//! fold radius ([`fold_radius`]), the first radius where the radial distortion stops increasing. A
+//! strong barrel distortion folds the image beyond that radius: pixels past the fold have no preimage
+//! on the branch through the principal point (a polynomial such as RADIAL's may rise again further
+//! out, where Newton's method would otherwise find a preimage on the outer branch) and are rejected
+//! with [`Error::Degenerate`] naming the point.
 
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use nalgebra::{Matrix2, Vector2, Vector3};
 
 /// The camera models, with COLMAP's names (see the module table for their parameters).
@@ -105,6 +108,8 @@ const MAX_UNPROJECTION_ITERATIONS: usize = 100;
 pub struct LensCamera {
     model: CameraModel,
     params: Vec<f64>,
+    /// The radius `|n|` where the radial distortion stops increasing ([`fold_radius`]); `∞` when it never does.
+    fold_radius: f64,
 }
 
 impl LensCamera {
@@ -128,6 +133,7 @@ impl LensCamera {
         let camera = LensCamera {
             model,
             params: params.to_vec(),
+            fold_radius: fold_radius(model, params),
         };
         let (fx, fy) = camera.focal();
         if fx == 0.0 || fy == 0.0 {
@@ -270,8 +276,8 @@ impl LensCamera {
         let outside = |why: &str| Error::Degenerate {
             what: format!(
                 "pixel {index} ({}, {}): outside the invertible region of the {} distortion ({why})",
-                u.x,
-                u.y,
+                number(u.x),
+                number(u.y),
                 self.model.as_str()
             ),
         };
@@ -284,6 +290,15 @@ impl LensCamera {
                 return Err(outside("the distortion folds there"));
             }
             if pixel_error(&e) <= UNPROJECTION_TOLERANCE_PX {
+                // A preimage past the fold radius is on an outer branch of the distortion, where it
+                // increases again: the image of the inner branch never reaches this pixel.
+                if n.norm() >= self.fold_radius {
+                    return Err(outside(&format!(
+                        "its preimage, at radius {}, lies beyond the fold of the radial distortion at radius {}",
+                        number(n.norm()),
+                        number(self.fold_radius)
+                    )));
+                }
                 return Ok(n);
             }
             let step = j.lu().solve(&e).ok_or_else(|| outside("singular Jacobian"))?;
@@ -317,6 +332,85 @@ impl LensCamera {
         let inv = (Matrix2::new(fx, 0.0, 0.0, fy) * jd).try_inverse()?;
         Some(inv * cov_px * inv.transpose())
     }
+}
+
+/// The radius `r*` of normalised coordinates where the radial part of the distortion of `model` stops
+/// increasing (`∞` when it increases everywhere): the first positive zero of `dρ/dr` for the radial map
+/// `ρ(r) = r g(r²)`, or of the rational model's denominator, or for the fisheye the first zero of
+/// `dθ_d/dθ` in `θ = atan r < π/2`. Beyond it the distortion folds back, and a pixel whose Newton
+/// solution lies there has no preimage on the branch through the principal point ([`LensCamera::unproject`]).
+///
+/// In `s = r²` the zeros are those of polynomials: `1 + 3k s` (SIMPLE_RADIAL), `1 + 3k₁ s + 5k₂ s²`
+/// (RADIAL, OPENCV), `(1 + 3k₁ s + 5k₂ s² + 7k₃ s³) den(s) − num(s) (2k₄ s + 4k₅ s² + 6k₆ s³)` and
+/// `den(s)` (FULL_OPENCV, `g = num / den`), and in `t = θ²` `1 + 3k₁ t + 5k₂ t² + 7k₃ t³ + 9k₄ t⁴`
+/// (OPENCV_FISHEYE). Tangential terms are not part of it (the Jacobian test of the unprojection covers
+/// them where they fold).
+pub fn fold_radius(model: CameraModel, params: &[f64]) -> f64 {
+    let p = params;
+    let radius_of_s = |s: Option<f64>| s.map_or(f64::INFINITY, f64::sqrt);
+    match model {
+        CameraModel::SimplePinhole | CameraModel::Pinhole => f64::INFINITY,
+        CameraModel::SimpleRadial => radius_of_s(first_positive_root(&[1.0, 3.0 * p[3]])),
+        CameraModel::Radial => radius_of_s(first_positive_root(&[1.0, 3.0 * p[3], 5.0 * p[4]])),
+        CameraModel::OpenCv => radius_of_s(first_positive_root(&[1.0, 3.0 * p[4], 5.0 * p[5]])),
+        CameraModel::FullOpenCv => {
+            let (k1, k2, k3, k4, k5, k6) = (p[4], p[5], p[8], p[9], p[10], p[11]);
+            let num = [1.0, k1, k2, k3];
+            let den = [1.0, k4, k5, k6];
+            let slope = [1.0, 3.0 * k1, 5.0 * k2, 7.0 * k3];
+            let den_slope = [0.0, 2.0 * k4, 4.0 * k5, 6.0 * k6];
+            let mut derivative = [0.0; 7];
+            for i in 0..4 {
+                for j in 0..4 {
+                    derivative[i + j] += slope[i] * den[j] - num[i] * den_slope[j];
+                }
+            }
+            let fold = first_positive_root(&derivative);
+            let pole = first_positive_root(&den);
+            radius_of_s(match (fold, pole) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            })
+        }
+        CameraModel::OpenCvFisheye => {
+            let (k1, k2, k3, k4) = (p[4], p[5], p[6], p[7]);
+            match first_positive_root(&[1.0, 3.0 * k1, 5.0 * k2, 7.0 * k3, 9.0 * k4]) {
+                Some(t) if t.sqrt() < std::f64::consts::FRAC_PI_2 => t.sqrt().tan(),
+                _ => f64::INFINITY,
+            }
+        }
+    }
+}
+
+/// The least positive real root of `c₀ + c₁ x + … + c_d x^d` (`c₀ ≠ 0`), from the eigenvalues of its
+/// companion matrix; a root is taken as real when its imaginary part is below `1e-6` of its modulus (a
+/// double root that only touches zero may come out so, and is then counted: the answer errs small).
+fn first_positive_root(coefficients: &[f64]) -> Option<f64> {
+    let degree = coefficients.iter().rposition(|&c| c != 0.0)?;
+    if degree == 0 {
+        return None;
+    }
+    let lead = coefficients[degree];
+    if coefficients[..degree].iter().any(|c| !(c / lead).is_finite()) {
+        // A leading coefficient too small to divide by: its roots are beyond any double, so the
+        // polynomial of one degree less has the same roots in range.
+        return first_positive_root(&coefficients[..degree]);
+    }
+    let companion = nalgebra::DMatrix::from_fn(degree, degree, |i, j| {
+        if j == degree - 1 {
+            -coefficients[i] / lead
+        } else if i == j + 1 {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    companion
+        .complex_eigenvalues()
+        .iter()
+        .filter(|z| z.re > 0.0 && z.im.abs() <= 1e-6 * z.norm())
+        .map(|z| z.re)
+        .min_by(f64::total_cmp)
 }
 
 #[cfg(test)]
@@ -460,6 +554,102 @@ mod tests {
         assert!(
             matches!(&err, Error::Degenerate { what } if what.starts_with("pixel 7")),
             "{err}"
+        );
+    }
+
+    #[test]
+    fn every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused() {
+        // RADIAL k1 = -0.5, k2 = 0.1: ρ(r) = r - 0.5 r³ + 0.1 r⁵, ρ'(r) = 1 - 1.5 r² + 0.5 r⁴ = 0 at r = 1
+        // and r = √2; ρ rises to ρ(1) = 0.6, falls to ρ(√2) = 0.4√2 and rises again without bound.
+        let cam = LensCamera::new(CameraModel::Radial, &[800.0, 320.0, 240.0, -0.5, 0.1]).unwrap();
+        assert!((cam.fold_radius - 1.0).abs() < 1e-12, "{}", cam.fold_radius);
+        let peak_px = 0.6 * 800.0;
+        // Pixels on a ray from the principal point, every distance to 20x the peak: accepted exactly below it.
+        for k in 1..=4000 {
+            let radius = peak_px * k as f64 / 200.0;
+            for angle in [0.0f64, 0.7, 2.0, 4.0] {
+                let u = Vector2::new(320.0 + radius * angle.cos(), 240.0 + radius * angle.sin());
+                match cam.unproject(&u, k) {
+                    Ok(n) => {
+                        assert!(
+                            radius <= peak_px,
+                            "{radius} px is beyond the fold ({peak_px} px) yet unprojected to |n| = {}",
+                            n.norm()
+                        );
+                        assert!(n.norm() < 1.0);
+                    }
+                    // Newton may give up just inside the fold, where ρ' → 0; never further in than 1 %.
+                    Err(_) => assert!(radius > 0.99 * peak_px, "{radius} px refused inside the fold"),
+                }
+            }
+        }
+        for u in [Vector2::new(1000.0, 1000.0), Vector2::new(5000.0, 5000.0)] {
+            assert!(matches!(cam.unproject(&u, 3), Err(Error::Degenerate { .. })), "{u}");
+        }
+    }
+
+    #[test]
+    fn the_fold_radius_of_each_model_is_where_the_radial_map_turns() {
+        // Independent check: the first r (scanned finely) where ρ(r) = |D((r, 0))| stops increasing.
+        let cases: [(CameraModel, &[f64]); 5] = [
+            (CameraModel::SimpleRadial, &[500.0, 0.0, 0.0, -0.5]),
+            (CameraModel::Radial, &[800.0, 320.0, 240.0, -0.5, 0.1]),
+            (CameraModel::OpenCv, &[800.0, 790.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0]),
+            (
+                CameraModel::FullOpenCv,
+                &[
+                    800.0, 790.0, 320.0, 240.0, -0.4, 0.05, 0.0, 0.0, 0.01, 0.1, -0.01, 0.005,
+                ],
+            ),
+            (
+                CameraModel::OpenCvFisheye,
+                &[400.0, 395.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0],
+            ),
+        ];
+        for (model, params) in cases {
+            let cam = LensCamera::new(model, params).unwrap();
+            let rho = |r: f64| cam.distort(&Vector2::new(r, 0.0)).0.x;
+            let step = 1e-4;
+            let turn = (1..200_000)
+                .map(|i| i as f64 * step)
+                .find(|&r| rho(r + step) <= rho(r))
+                .expect("each case folds below r = 20");
+            // The scan finds the turn to within one step (the maximum is flat: ρ' changes sign there).
+            assert!(
+                (cam.fold_radius - turn).abs() <= 2.0 * step,
+                "{model:?}: {} vs {turn}",
+                cam.fold_radius
+            );
+        }
+        for cam in cameras() {
+            // The mild distortions of the other tests fold far outside their images, if at all.
+            assert!(cam.fold_radius > 1.0, "{:?}: {}", cam.model(), cam.fold_radius);
+        }
+    }
+
+    #[test]
+    fn extreme_distortion_parameters_give_a_fold_radius_without_failing() {
+        // Subnormal, huge and mixed coefficients: the companion matrix must stay finite (a non-finite
+        // one could make the eigenvalue iteration run for ever).
+        let extremes: [&[f64]; 6] = [
+            &[800.0, 0.0, 0.0, 1.0, 1e-320],
+            &[800.0, 0.0, 0.0, -1e300, 1e-320],
+            &[800.0, 0.0, 0.0, 1e300, -1e300],
+            &[800.0, 0.0, 0.0, -1e-300, 1e-300],
+            &[800.0, 0.0, 0.0, 0.0, 0.0],
+            &[800.0, 0.0, 0.0, f64::MAX, f64::MIN_POSITIVE],
+        ];
+        for params in extremes {
+            let cam = LensCamera::new(CameraModel::Radial, params).unwrap();
+            assert!(cam.fold_radius > 0.0, "{params:?}: {}", cam.fold_radius);
+            let _ = cam.unproject(&Vector2::new(900.0, 100.0), 0);
+        }
+        let cam = LensCamera::new(CameraModel::Radial, &[800.0, 0.0, 0.0, -1e300, 1e-320]).unwrap();
+        // ρ' = 1 - 3e300 r² (+ a negligible r⁴ term) vanishes at r = 1/√(3e300).
+        assert!(
+            (cam.fold_radius * (3e300f64).sqrt() - 1.0).abs() < 1e-12,
+            "{}",
+            cam.fold_radius
         );
     }
 

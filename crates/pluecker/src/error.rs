@@ -61,3 +61,62 @@ impl std::error::Error for Error {}
 
 /// Shorthand used throughout the crate.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// A number as messages print it: six significant digits, like C's `%g` (`1e+300`, `0.001`,
+/// `-2.5`, `nan`, `inf`), so that a value such as `1e300` is not spelled out in 300 digits.
+pub fn number(x: f64) -> String {
+    if x.is_nan() {
+        return "nan".into();
+    }
+    if x.is_infinite() {
+        return if x > 0.0 { "inf" } else { "-inf" }.into();
+    }
+    if x == 0.0 {
+        return "0".into();
+    }
+    const DIGITS: i32 = 6;
+    // The decimal exponent after rounding to DIGITS significant digits (9.999995 rounds to 10).
+    let scientific = format!("{:.*e}", (DIGITS - 1) as usize, x);
+    let (mantissa, exponent) = scientific.split_once('e').expect("`{:e}` writes an exponent");
+    let exponent: i32 = exponent.parse().expect("`{:e}` writes an integer exponent");
+    let trim = |s: &str| -> String {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    if (-4..DIGITS).contains(&exponent) {
+        trim(&format!("{:.*}", (DIGITS - 1 - exponent) as usize, x))
+    } else {
+        let sign = if exponent < 0 { '-' } else { '+' };
+        format!("{}e{sign}{:02}", trim(mantissa), exponent.abs())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::number;
+
+    #[test]
+    fn numbers_print_with_six_significant_digits_as_percent_g() {
+        let cases = [
+            (1e300, "1e+300"),
+            (-1e-200, "-1e-200"),
+            (0.5, "0.5"),
+            (2.0, "2"),
+            (123456.0, "123456"),
+            (1234567.0, "1.23457e+06"),
+            (9.999995, "10"),
+            (0.0001, "0.0001"),
+            (0.00001234, "1.234e-05"),
+            (1.0 / 3.0, "0.333333"),
+            (0.0, "0"),
+            (f64::NAN, "nan"),
+            (f64::NEG_INFINITY, "-inf"),
+        ];
+        for (x, shown) in cases {
+            assert_eq!(number(x), shown, "{x:e}");
+        }
+    }
+}

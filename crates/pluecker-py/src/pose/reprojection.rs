@@ -35,7 +35,10 @@ pub fn pose_covariance<'py>(
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
         return Err(invalid_argument(
             "sigma_px",
-            format!("must be a positive finite number, got {sigma_px}"),
+            format!(
+                "must be a positive finite number, got {}",
+                pluecker::error::number(sigma_px)
+            ),
         ));
     }
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
@@ -54,7 +57,9 @@ pub fn pose_covariance<'py>(
             return invalid_argument(
                 "sigma_px",
                 format!(
-                    "σ² (JᵀJ)⁻¹ overflows double precision at σ = {sigma_px:e} px (its largest entry at σ = 1 px is {:.3e})",
+                    "σ² (JᵀJ)⁻¹ {} double precision at σ = {} px (its largest entry at σ = 1 px is {:.3e})",
+                    if sigma_px > 1.0 { "overflows" } else { "underflows" },
+                    pluecker::error::number(sigma_px),
                     unit.amax()
                 ),
             );

@@ -6,6 +6,7 @@ use crate::convert::{points as read_points, points_to_py, Integer, Real};
 use crate::errors::{guarded, invalid_argument, solve};
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pluecker::error::number;
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -18,7 +19,7 @@ fn sigma_arg(sigma: Option<Real>) -> PyResult<f64> {
     } else {
         Err(invalid_argument(
             "sigma",
-            format!("must be a positive finite number of pixels, got {sigma}"),
+            format!("must be a positive finite number of pixels, got {}", number(sigma)),
         ))
     }
 }
@@ -191,7 +192,7 @@ pub fn fitting_residual_samples<'py>(
     if !(size.is_finite() && size > 0.0) {
         return Err(invalid_argument(
             "size",
-            format!("must be a positive number of pixels, got {size}"),
+            format!("must be a positive number of pixels, got {}", number(size)),
         ));
     }
     let sigma = sigma_arg(sigma)?;

@@ -13,7 +13,7 @@ use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
 use crate::convert::{
-    cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Real,
+    cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
 use crate::errors::{invalid_argument, shape_error, solve};
 use crate::fields::{result_class, Array, Field};
@@ -152,7 +152,10 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
             if !(sigma.is_finite() && sigma > 0.0) {
                 return Err(invalid_argument(
                     "sigma",
-                    format!("must be a positive finite number of pixels, got {sigma}"),
+                    format!(
+                        "must be a positive finite number of pixels, got {}",
+                        pluecker::error::number(sigma)
+                    ),
                 ));
             }
             let segments: Vec<[Vector2<f64>; 2]> = values
@@ -367,7 +370,7 @@ pub fn triangulate_line_observations(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
-    n_tracks: Option<usize>,
+    n_tracks: Option<Integer>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;

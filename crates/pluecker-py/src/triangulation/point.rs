@@ -12,7 +12,9 @@ use super::batch::{collect, per_observation, push_covariance, InlierColumns, PyB
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
-use crate::convert::{cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Real};
+use crate::convert::{
+    cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real,
+};
 use crate::errors::{shape_error, solve, to_py_err};
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
@@ -275,7 +277,8 @@ pub fn triangulate_points(
 /// `k` is the pixel `x[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)),
 /// with the covariance `cov[k]` (m, 2, 2) when given. Memory grows with the observations, not with
 /// tracks × images. Track `t` of the result is `t` of `track` (`0..n_tracks`, by default
-/// `max(track) + 1`; a track id without observations is rejected as too few views); each is solved as
+/// `max(track) + 1`, both below or at the `m` rows given, else `InvalidOptionError`: the result never
+/// outgrows the input; a track id without observations is rejected as too few views); each is solved as
 /// `triangulate_points` would.
 #[pyfunction]
 #[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
@@ -291,7 +294,7 @@ pub fn triangulate_point_observations(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
-    n_tracks: Option<usize>,
+    n_tracks: Option<Integer>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;

@@ -7,7 +7,7 @@ use super::batch::{collect, per_observation, push_covariance, row_major, Cameras
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
-use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Real};
+use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
 use crate::errors::solve;
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
@@ -243,7 +243,7 @@ pub fn triangulate_quadric_observations(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
-    n_tracks: Option<usize>,
+    n_tracks: Option<Integer>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;

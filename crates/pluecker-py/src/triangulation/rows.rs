@@ -3,14 +3,19 @@
 //! `triangulate_point_observations`, `triangulate_line_observations` and
 //! `triangulate_quadric_observations`.
 
-use crate::convert::{read, Dim};
+use crate::convert::{read, Dim, Integer};
 use crate::errors::{invalid_argument, shape_error};
+use pluecker::error::number;
 use pluecker::triangulation::tracks::Csr;
 use pluecker::Error;
 use pyo3::prelude::*;
+use pyo3::types::PyBool;
 
-/// Non-negative integer indices `(m,)` (track or image ids), `InvalidOptionError` naming the first other value.
+/// Non-negative integer indices `(m,)` (track or image ids), `InvalidOptionError` naming the first other
+/// value (a negative, fractional or bool entry, or an integer too large for any array: numpy holds those
+/// as Python objects).
 pub fn indices(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
+    refuse_object_entries(name, obj)?;
     let (_, values) = read(name, obj, &[Dim::Free("m")])?;
     values
         .iter()
@@ -19,10 +24,63 @@ pub fn indices(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
             if v >= 0.0 && v.fract() == 0.0 && v < 2f64.powi(53) {
                 Ok(v as usize)
             } else {
-                Err(invalid_argument(name, format!("entry {k} is {v}, not an index ≥ 0")))
+                Err(not_an_index(name, k, &number(v)))
             }
         })
         .collect()
+}
+
+fn not_an_index(name: &str, k: usize, shown: &str) -> PyErr {
+    invalid_argument(name, format!("entry {k} is {shown}, not an index ≥ 0"))
+}
+
+/// An index argument that numpy can only hold as Python objects (`[0, 2**64]`, `[True, 1]` stays
+/// numeric): `InvalidOptionError` naming the first entry that is not an index ≥ 0 below 2⁶⁴ (a huge
+/// or negative int, a bool); any other object (a string) is left to [`read`]'s `TypeError`.
+fn refuse_object_entries(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<()> {
+    let np = obj.py().import("numpy")?;
+    let Ok(array) = np.call_method1("asarray", (obj,)) else {
+        return Ok(()); // `read` names the argument in its TypeError
+    };
+    if array.getattr("dtype")?.getattr("kind")?.extract::<String>()? != "O"
+        || array.getattr("ndim")?.extract::<usize>()? != 1
+    {
+        return Ok(());
+    }
+    for (k, entry) in array.call_method0("tolist")?.try_iter()?.enumerate() {
+        let entry = entry?;
+        if entry.is_instance_of::<PyBool>() {
+            return Err(not_an_index(name, k, &entry.str()?.to_string()));
+        }
+        if let Ok(i) = entry.extract::<Integer>() {
+            if i.in_range(name, 0, u64::MAX as i128).is_err() {
+                let shown = entry.str()?.to_string();
+                let shown = if shown.len() > 24 {
+                    format!("{}…", &shown[..24])
+                } else {
+                    shown
+                };
+                return Err(not_an_index(name, k, &shown));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `n_tracks`: `None`, or an integer from 0 to the number of rows `m` (every track beyond the rows
+/// would have none, and the result holds one entry per track: memory follows the rows given).
+fn track_count_arg(n_tracks: Option<Integer>, m: usize) -> PyResult<Option<usize>> {
+    let Some(n) = n_tracks else { return Ok(None) };
+    n.in_range("n_tracks", 0, i128::MAX).and_then(|n| {
+        if n > m as i128 {
+            Err(invalid_argument(
+                "n_tracks",
+                format!("{n} exceeds the {m} rows given: a track without rows has no answer; number the tracks 0..n densely (numpy.unique(track, return_inverse=True))"),
+            ))
+        } else {
+            Ok(Some(n as usize))
+        }
+    })
 }
 
 /// A `ShapeError` unless the per-observation argument `name` has `m` rows, as `track` has.
@@ -50,11 +108,19 @@ pub struct SortedRows {
 
 impl SortedRows {
     /// Reads `track` and `image` and sorts the rows by track (stable: a track's rows keep their order).
-    /// Tracks are `0..n_tracks`, by default `max(track) + 1`.
-    pub fn read(track: &Bound<'_, PyAny>, image: &Bound<'_, PyAny>, n_tracks: Option<usize>) -> PyResult<SortedRows> {
+    /// Tracks are `0..n_tracks`, by default `max(track) + 1`; both are at most the number of rows.
+    pub fn read(track: &Bound<'_, PyAny>, image: &Bound<'_, PyAny>, n_tracks: Option<Integer>) -> PyResult<SortedRows> {
         let (tracks, images) = (indices("track", track)?, indices("image", image)?);
         let m = tracks.len();
         same_count_as("image", images.len(), m)?;
+        let n_tracks = track_count_arg(n_tracks, m)?;
+        // Every track id is below the rows given (as `n_tracks` is), so that no allocation exceeds them.
+        if let Some((k, &t)) = tracks.iter().enumerate().find(|(_, &t)| t >= m) {
+            return Err(invalid_argument(
+                "track",
+                format!("entry {k} is {t}, not a track id below the {m} rows given (number the tracks 0..n densely: numpy.unique(track, return_inverse=True))"),
+            ));
+        }
         let used = tracks.iter().max().map_or(0, |t| t + 1);
         let n = match n_tracks {
             Some(n) if n < used => {

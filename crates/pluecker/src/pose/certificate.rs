@@ -77,7 +77,7 @@ impl CertificateOptions {
         if !(self.gap.is_finite() && self.gap > 0.0 && self.gap < 1.0) {
             return Err(Error::InvalidOption {
                 name: "certify_gap".into(),
-                reason: format!("must be in (0, 1), got {}", self.gap),
+                reason: format!("must be in (0, 1), got {}", crate::error::number(self.gap)),
             });
         }
         if self.max_nodes < 1 {

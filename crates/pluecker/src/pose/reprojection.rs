@@ -458,7 +458,8 @@ pub fn pose_covariance(cost: &ReprojectionCost<'_>, pose: &Pose, sigma_px: f64) 
     covariance_from_information(&cost.information(pose), sigma_px)
 }
 
-/// `σ² (JᵀJ)⁻¹`, symmetrised, from the normal matrix `A = JᵀJ`. `None` when `A` is not finite, not
+/// `σ² (JᵀJ)⁻¹`, symmetrised, from the normal matrix `A = JᵀJ`. `None` when `σ² A⁻¹` overflows or
+/// (for `σ > 0`) underflows a variance below the smallest normal double, or `A` is not finite, not
 /// positive definite (its Cholesky factorisation fails), or too close to singular:
 /// `1 / tr(A⁻¹) ≤ ` [`RELATIVE_RANK_TOLERANCE`] `· tr(A)`. Since `λ_min ≥ 1 / tr(A⁻¹)` and
 /// `λ_max ≤ tr(A)`, an accepted `A` has `λ_min > 1e-12 λ_max`, and a rejected one has
@@ -473,7 +474,10 @@ pub fn covariance_from_information(information: &SMatrix<f64, 6, 6>, sigma_px: f
         return None;
     }
     let cov = inverse * (sigma_px * sigma_px);
-    cov.iter().all(|v| v.is_finite()).then(|| 0.5 * (cov + cov.transpose()))
+    // σ² (JᵀJ)⁻¹ must be representable: no overflow, and no variance lost to underflow for a σ > 0
+    // (σ = 1e-200 px would give zeros, a pose known exactly).
+    let underflow = sigma_px > 0.0 && cov.diagonal().iter().any(|&v| v < f64::MIN_POSITIVE);
+    (cov.iter().all(|v| v.is_finite()) && !underflow).then(|| 0.5 * (cov + cov.transpose()))
 }
 
 /// [`crate::pose::PoseResult::covariance`], its source and `σ` from the linearisation at the returned

@@ -294,7 +294,8 @@ fn least_eigenvector(m: &SMatrix<f64, 6, 6>) -> Vector6<f64> {
 /// and `P = I − θθᵀ` (Kanatani 1996, cited as [12] by the paper); it is propagated through the dual
 /// conic and the normalisation of [`super::quadric::residual`].
 ///
-/// Errors: fewer than 5 points, non-finite values, `sigma ≤ 0`, or points that no real ellipse fits.
+/// Errors: fewer than 5 points, non-finite values, `sigma ≤ 0`, points that no real ellipse fits, or a
+/// `σ` for which the covariance overflows or underflows (as [`fit_line`], see [`scaled_covariance`]).
 pub fn fit_conic(points: &[Vector2<f64>], sigma: f64) -> Result<FittedConic> {
     check_points(points, sigma, 5, "fit_conic")?;
     if coincide(points) {
@@ -387,8 +388,8 @@ pub fn fit_conic(points: &[Vector2<f64>], sigma: f64) -> Result<FittedConic> {
         let v = eig.eigenvectors.column(k);
         pinv += v * v.transpose() / eig.eigenvalues[k];
     }
-    let sigma_n = sigma * scale;
-    let cov_theta = pinv * (sigma_n * sigma_n);
+    // For unit noise σ = 1 px (σ̄ = scale); σ² is applied last, checked as `fit_line` does.
+    let cov_theta = pinv * (scale * scale);
     // Jacobian of the residual with respect to θ through l = c⁻¹.
     let dual = conic.try_inverse().ok_or_else(|| Error::Degenerate {
         what: "fit_conic: singular conic".into(),
@@ -400,12 +401,12 @@ pub fn fit_conic(points: &[Vector2<f64>], sigma: f64) -> Result<FittedConic> {
         dl_dtheta.set_column(j, &sym3_to_vec(&(-dual * dc * dual)));
     }
     let jac = dr_dl * dl_dtheta;
-    let covariance = jac * cov_theta * jac.transpose();
+    let unit = jac * cov_theta * jac.transpose();
     let norm = conic.norm();
     Ok(FittedConic {
         conic: conic / norm,
         ellipse,
-        covariance: 0.5 * (covariance + covariance.transpose()),
+        covariance: scaled_covariance(&unit, sigma)?,
         iterations,
     })
 }

@@ -149,7 +149,7 @@ pub struct TriangulationOptions {
     /// Estimator. Default [`Method::Optimal`].
     pub method: Method,
     /// Branch and bound stops when `(upper − lower) / max(upper, 1e-12) ≤ max_relative_gap` (the floor
-    /// lets exact, zero-cost data be certified). Default `1e-3`
+    /// lets exact, zero-cost data be certified), in (0, 1). Default `1e-3`
     /// (the paper stopped at 10 %).
     pub max_relative_gap: f64,
     /// The paper's γ (sections 4.3.1-4.3.2): the search is restricted to primitives whose whitened
@@ -207,8 +207,13 @@ impl TriangulationOptions {
                 reason: reason.into(),
             })
         };
-        if !(self.max_relative_gap.is_finite() && self.max_relative_gap > 0.0) {
-            return bad("max_relative_gap", "must be a positive finite number");
+        // A relative gap is (upper − lower) / upper ≤ 1 whenever the lower bound is ≥ 0, so a threshold
+        // of 1 or more would certify without any bound (as `certify_gap` of the pose, in (0, 1)).
+        if !(self.max_relative_gap > 0.0 && self.max_relative_gap < 1.0) {
+            return Err(Error::InvalidOption {
+                name: "max_relative_gap".into(),
+                reason: format!("must be in (0, 1), got {}", crate::error::number(self.max_relative_gap)),
+            });
         }
         if let Some(gamma) = self.max_reprojection_error {
             if !(gamma.is_finite() && gamma > 0.0) {

@@ -63,7 +63,7 @@ use super::correspondences::Correspondences;
 use super::minimal::solve;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
@@ -166,11 +166,17 @@ impl RansacOptions {
             ("line_threshold", self.line_threshold),
         ] {
             if !(value.is_finite() && value > 0.0) {
-                return bad(name, format!("must be a positive finite number of pixels, got {value}"));
+                return bad(
+                    name,
+                    format!("must be a positive finite number of pixels, got {}", number(value)),
+                );
             }
         }
         if !(self.confidence > 0.0 && self.confidence < 1.0) {
-            return bad("confidence", format!("must be in (0, 1), got {}", self.confidence));
+            return bad(
+                "confidence",
+                format!("must be in (0, 1), got {}", number(self.confidence)),
+            );
         }
         if self.max_iterations < 1 {
             return bad("max_iterations", "must be at least 1".into());
@@ -181,7 +187,7 @@ impl RansacOptions {
         if !(self.min_inlier_ratio >= 0.0 && self.min_inlier_ratio < 1.0) {
             return bad(
                 "min_inlier_ratio",
-                format!("must be in [0, 1), got {}", self.min_inlier_ratio),
+                format!("must be in [0, 1), got {}", number(self.min_inlier_ratio)),
             );
         }
         if self.min_inliers < 3 {

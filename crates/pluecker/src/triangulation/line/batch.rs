@@ -133,7 +133,10 @@ fn check_sigma(lines: &ImageLines) -> Result<()> {
     match *lines {
         ImageLines::Segments { sigma, .. } if !(sigma.is_finite() && sigma > 0.0) => Err(Error::InvalidOption {
             name: "sigma".into(),
-            reason: format!("must be a positive finite number of pixels, got {sigma}"),
+            reason: format!(
+                "must be a positive finite number of pixels, got {}",
+                crate::error::number(sigma)
+            ),
         }),
         _ => Ok(()),
     }
