@@ -103,13 +103,49 @@ fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &O
         let _ = tau;
         return Ok(());
     }
+    let what = if in_cube == 0 {
+        "its rotation lies in no kept cube (its cell was pruned)".to_string()
+    } else {
+        format!("its rotation lies in {in_cube} kept cubes but its translation in none of their ellipsoids")
+    };
     Err(format!(
-        "ω = {omega:?} (‖ω‖ = {:.3e}) lies in {in_cube} kept cubes but in none of their translation ellipsoids \
-         ({} cells kept, {} pruned)",
+        "ω = {omega:?} (‖ω‖ = {:.3e}): {what} ({} cells kept, {} pruned)",
         omega.norm(),
         region.cells.len(),
         region.pruned
     ))
+}
+
+/// The largest whitened length `‖(ω, t − t̂)‖_W` over the corners of each kept cube inside the ball and
+/// points of its ellipsoid (its principal axes and random boundary points): the search claims that
+/// every pose of such a cell, not only those of the sublevel set, is within its radius.
+fn widest_cell_point(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, rng: &mut Rng) -> f64 {
+    let mut widest: f64 = 0.0;
+    for cell in region.cells.iter().filter(|c| c.inside_ball).take(200) {
+        let Some(l) = cell.c.cholesky().map(|c| c.l()) else { continue };
+        let Some(l_inv_t) = l.try_inverse().map(|m| m.transpose()) else { continue };
+        let radius = cell.slack.max(0.0).sqrt();
+        let mut offsets: Vec<Vector3<f64>> = Vec::new();
+        let eig = cell.c.symmetric_eigen();
+        for i in 0..3 {
+            let axis = eig.eigenvectors.column(i) / eig.eigenvalues[i].sqrt() * radius;
+            offsets.push(axis);
+            offsets.push(-axis);
+        }
+        for _ in 0..24 {
+            offsets.push(l_inv_t * rng.unit_vector3() * radius);
+        }
+        for corner in 0..8 {
+            let sign = |b: usize| if corner >> b & 1 == 1 { 1.0 } else { -1.0 };
+            let omega = cell.centre + Vector3::new(sign(0), sign(1), sign(2)) * cell.half;
+            for e in &offsets {
+                let tau = cell.t_star + e - centre.t;
+                let d = Vector6::new(omega.x, omega.y, omega.z, tau.x, tau.y, tau.z);
+                widest = widest.max((d.transpose() * w * d)[0].sqrt());
+            }
+        }
+    }
+    widest
 }
 
 /// One scene of the region test.
@@ -153,6 +189,13 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
                 }
             };
             assert!(region.pruned > 0, "{name}: nothing pruned: the test would be vacuous");
+            let widest = widest_cell_point(&region, centre, &w, &mut rng);
+            // W is the oracle's (central differences, relative error ~1e-8).
+            assert!(
+                widest <= region.radius * (1.0 + 1e-6),
+                "{name}, level {factor}x: a point of a cell inside the ball is at whitened distance {widest} > radius {}",
+                region.radius
+            );
             for (pose, f) in &poses {
                 assert!(*f <= level * (1.0 + 1e-12));
                 if let Err(why) = check_inside(&region, centre, &w, pose) {
