@@ -122,7 +122,11 @@ fn the_local_bound_is_below_its_function_on_a_fine_grid() {
     for i in 0..400 {
         let f_hat = 10f64.powf(rng.uniform_in(-3.0, 3.0));
         let root = (2.0 * f_hat).sqrt();
-        let gradient = if i % 4 == 0 { 0.0 } else { root * rng.uniform_in(0.0, 1.5) };
+        let gradient = if i % 4 == 0 {
+            0.0
+        } else {
+            root * rng.uniform_in(0.0, 1.5)
+        };
         let lambda = rng.uniform_in(0.5, 1.5);
         let k = 10f64.powf(rng.uniform_in(-4.0, 0.0)) / root;
         let rho = root * rng.uniform_in(0.5, 20.0);
@@ -132,7 +136,9 @@ fn the_local_bound_is_below_its_function_on_a_fine_grid() {
             0.5 * (q.max(0.0).sqrt() - 0.5 * k * d * d).max(0.0).powi(2)
         };
         let n = 20_000;
-        let least = (0..=n).map(|j| function(rho * j as f64 / n as f64)).fold(f64::INFINITY, f64::min);
+        let least = (0..=n)
+            .map(|j| function(rho * j as f64 / n as f64))
+            .fold(f64::INFINITY, f64::min);
         // Rounding of q near its vertex: ~1e-15 of 2f̂.
         assert!(
             bound <= least + 1e-12 * f_hat,
@@ -161,7 +167,12 @@ fn step4_scenes() -> Vec<(Camera, Correspondences, OraclePose, String)> {
             let (corr, c) = centred(&scene.noisy(1.0, true, &mut rng));
             let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
             let minimum = many_start(&scene.camera, &corr, &truth, 0, &mut rng)[0].0;
-            out.push((scene.camera, corr, minimum, format!("f={f} {np}p+{nl}l planar={planar} seed {seed}")));
+            out.push((
+                scene.camera,
+                corr,
+                minimum,
+                format!("f={f} {np}p+{nl}l planar={planar} seed {seed}"),
+            ));
         }
     }
     out

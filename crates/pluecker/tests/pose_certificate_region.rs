@@ -122,8 +122,12 @@ fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &O
 fn widest_cell_point(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, rng: &mut Rng) -> f64 {
     let mut widest: f64 = 0.0;
     for cell in region.cells.iter().filter(|c| c.inside_ball).take(200) {
-        let Some(l) = cell.c.cholesky().map(|c| c.l()) else { continue };
-        let Some(l_inv_t) = l.try_inverse().map(|m| m.transpose()) else { continue };
+        let Some(l) = cell.c.cholesky().map(|c| c.l()) else {
+            continue;
+        };
+        let Some(l_inv_t) = l.try_inverse().map(|m| m.transpose()) else {
+            continue;
+        };
         let radius = cell.slack.max(0.0).sqrt();
         let mut offsets: Vec<Vector3<f64>> = Vec::new();
         let eig = cell.c.symmetric_eigen();
