@@ -289,37 +289,3 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
     assert!(checked > 500, "only {checked} poses checked");
     assert!(second >= 5, "only {second} second minima below a level");
 }
-
-#[test]
-#[ignore]
-fn explore() {
-    for (f, np, nl, planar) in [
-        (250.0, 4, 0, false),
-        (250.0, 4, 0, true),
-        (250.0, 5, 0, true),
-        (800.0, 4, 0, true),
-        (4000.0, 6, 0, true),
-        (15000.0, 6, 0, false),
-        (15000.0, 5, 0, false),
-        (250.0, 3, 1, false),
-        (4000.0, 4, 0, true),
-    ] {
-        for seed in 0..12u64 {
-            let scene = visible_scene(f, np, nl, planar, seed);
-            let mut rng = Rng::new(7000 + seed);
-            let noisy = scene.noisy(1.0, true, &mut rng);
-            let (corr, c) = centred(&noisy);
-            let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
-            let minima = many_start(&scene.camera, &corr, &truth, 40, &mut rng);
-            let costs: Vec<String> = minima.iter().take(4).map(|m| format!("{:.4}", m.1)).collect();
-            let ratio = if minima.len() > 1 {
-                minima[1].1 / minima[0].1
-            } else {
-                f64::NAN
-            };
-            if ratio < 12.0 {
-                eprintln!("f={f} {np}p{nl}l planar={planar} seed {seed}: ratio {ratio:.3} {costs:?}");
-            }
-        }
-    }
-}
