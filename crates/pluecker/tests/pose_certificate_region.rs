@@ -13,7 +13,7 @@ use nalgebra::{Matrix6, Vector3, Vector6};
 use pluecker::pose::certificate::testing::{rotation_search, Region};
 use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
-use pluecker::synthetic::visible_scene;
+use pluecker::synthetic::{visible_scene, Scene};
 use pluecker::Camera;
 use pose_oracle::{centred, cost, information, many_start, points_in_front, OraclePose};
 
@@ -159,12 +159,45 @@ struct Case {
     lines: usize,
     planar: bool,
     seed: u64,
+    /// Depths from 0.4 to 12 units (log-uniform) instead of `visible_scene`'s 4.2-7.8: points much
+    /// nearer the camera than the object is large, where the cheirality test matters.
+    deep: bool,
+}
+
+/// `n` points seen in a 640 x 480 image at `fx = fy = focal`, at depths log-uniform in [0.4, 12],
+/// from a random pose.
+fn deep_scene(focal: f64, n: usize, seed: u64) -> Scene {
+    let mut rng = Rng::new(seed);
+    let camera = Camera::new(focal, focal, 320.0, 240.0, 0.0).unwrap();
+    let rotation = rng.rotation();
+    let translation = Vector3::new(rng.normal(), rng.normal(), rng.normal());
+    let cam: Vec<Vector3<f64>> = (0..n)
+        .map(|_| {
+            let u = Vector3::new((rng.uniform_in(0.0, 640.0) - 320.0) / focal, (rng.uniform_in(0.0, 480.0) - 240.0) / focal, 1.0);
+            u * (0.4f64.ln() + rng.uniform() * (12.0f64 / 0.4).ln()).exp()
+        })
+        .collect();
+    let correspondences = Correspondences {
+        points2d: cam.iter().map(|x| pose_oracle::pixel(&camera, x)).collect(),
+        points3d: cam.iter().map(|x| rotation.transpose() * (x - translation)).collect(),
+        ..Default::default()
+    };
+    Scene {
+        camera,
+        rotation,
+        translation,
+        correspondences,
+    }
 }
 
 /// Runs the rotation search around each minimum below each level and checks every sublevel pose.
 /// Returns (poses checked, second minima below a level that were checked).
 fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
-    let scene = visible_scene(case.focal, case.points, case.lines, case.planar, case.seed);
+    let scene = if case.deep {
+        deep_scene(case.focal, case.points, case.seed)
+    } else {
+        visible_scene(case.focal, case.points, case.lines, case.planar, case.seed)
+    };
     let mut rng = Rng::new(7000 + case.seed);
     let noisy = scene.noisy(1.0, true, &mut rng);
     let (corr, c) = centred(&noisy);
@@ -221,63 +254,19 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
     // Generic scenes, and scenes with a second minimum within 1.7-10x the optimum (found by the
     // oracle: f = 250 px with 4 points, near-planar objects at f = 4000 px with 4-6 points), which the
     // levels 3x and 10x include.
+    #[rustfmt::skip]
     let cases = [
-        Case {
-            focal: 800.0,
-            points: 20,
-            lines: 0,
-            planar: false,
-            seed: 1,
-        },
-        Case {
-            focal: 800.0,
-            points: 10,
-            lines: 4,
-            planar: false,
-            seed: 2,
-        },
-        Case {
-            focal: 15000.0,
-            points: 6,
-            lines: 0,
-            planar: false,
-            seed: 6,
-        },
-        Case {
-            focal: 250.0,
-            points: 4,
-            lines: 0,
-            planar: false,
-            seed: 2,
-        },
-        Case {
-            focal: 4000.0,
-            points: 6,
-            lines: 0,
-            planar: true,
-            seed: 4,
-        },
-        Case {
-            focal: 4000.0,
-            points: 4,
-            lines: 0,
-            planar: true,
-            seed: 3,
-        },
-        Case {
-            focal: 4000.0,
-            points: 4,
-            lines: 0,
-            planar: true,
-            seed: 4,
-        },
-        Case {
-            focal: 4000.0,
-            points: 4,
-            lines: 0,
-            planar: true,
-            seed: 9,
-        },
+        Case { focal: 800.0, points: 20, lines: 0, planar: false, seed: 1, deep: false },
+        Case { focal: 800.0, points: 10, lines: 4, planar: false, seed: 2, deep: false },
+        Case { focal: 15000.0, points: 6, lines: 0, planar: false, seed: 6, deep: false },
+        Case { focal: 250.0, points: 4, lines: 0, planar: false, seed: 2, deep: false },
+        Case { focal: 4000.0, points: 6, lines: 0, planar: true, seed: 4, deep: false },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 3, deep: false },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 4, deep: false },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 9, deep: false },
+        Case { focal: 250.0, points: 6, lines: 0, planar: false, seed: 1, deep: true },
+        Case { focal: 250.0, points: 8, lines: 0, planar: false, seed: 2, deep: true },
+        Case { focal: 120.0, points: 6, lines: 0, planar: false, seed: 3, deep: true },
     ];
     let (mut checked, mut second) = (0, 0);
     for case in &cases {
