@@ -248,7 +248,6 @@ fn the_curvature_bound_holds_along_whitened_rays() {
                 b.curvature,
                 best.2
             );
-            eprintln!("{name}, shift {shift}: ‖r''‖ reaches {:.3} of K = {:.3e}", best.0 / b.curvature, b.curvature);
             worst = worst.max(best.0 / b.curvature);
             checked += 1;
         }

@@ -76,7 +76,6 @@ fn sublevel_poses(
 fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &OraclePose) -> Result<(), String> {
     let d = centre.chart(pose);
     let omega = Vector3::new(d[0], d[1], d[2]);
-    let tau = Vector3::new(d[3], d[4], d[5]);
     let mut in_cube = 0;
     for cell in &region.cells {
         // Rounding of the cube test: ω is a log, exact to ~1e-15 rad.
@@ -100,7 +99,6 @@ fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &O
                 ));
             }
         }
-        let _ = tau;
         return Ok(());
     }
     let what = if in_cube == 0 {
@@ -173,7 +171,11 @@ fn deep_scene(focal: f64, n: usize, seed: u64) -> Scene {
     let translation = Vector3::new(rng.normal(), rng.normal(), rng.normal());
     let cam: Vec<Vector3<f64>> = (0..n)
         .map(|_| {
-            let u = Vector3::new((rng.uniform_in(0.0, 640.0) - 320.0) / focal, (rng.uniform_in(0.0, 480.0) - 240.0) / focal, 1.0);
+            let u = Vector3::new(
+                (rng.uniform_in(0.0, 640.0) - 320.0) / focal,
+                (rng.uniform_in(0.0, 480.0) - 240.0) / focal,
+                1.0,
+            );
             u * (0.4f64.ln() + rng.uniform() * (12.0f64 / 0.4).ln()).exp()
         })
         .collect();
