@@ -427,10 +427,10 @@ fn undistorted_covariances_match_the_derivative_of_the_distortion() {
                 "point {i}: WᵀW = {} vs {expected}",
                 w.transpose() * w
             );
-            for k in 0..2 {
-                let j = jacobian(&undistorted.lines2d[i][k]);
+            for (k, (end, cov)) in undistorted.lines2d[i].iter().zip(&line_covs[i]).enumerate() {
+                let j = jacobian(end);
                 let j_inv = j.try_inverse().unwrap();
-                let expected = j_inv * line_covs[i][k] * j_inv.transpose();
+                let expected = j_inv * cov * j_inv.transpose();
                 assert!(
                     close(&out.lines[i][k], &expected),
                     "{:?} segment {i} endpoint {k}: covariance {} vs J⁻¹ Σ J⁻ᵀ = {expected}",

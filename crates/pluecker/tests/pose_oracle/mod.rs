@@ -44,7 +44,7 @@ impl OraclePose {
         Vector6::new(w.x, w.y, w.z, d.x, d.y, d.z)
     }
 
-    pub fn to_library(&self) -> pluecker::Pose {
+    pub fn to_library(self) -> pluecker::Pose {
         pluecker::Pose::new(self.r, self.t)
     }
 
