@@ -314,6 +314,8 @@ class PoseResult:
     """
     lower_bound: float
     """The proved lower bound on `½ Σ r²` (px²); NaN when there is none."""
+    raw_lower_bound: float
+    """The bound as proved, before the clamp to the cost that gives `lower_bound`; NaN when there is none."""
     gap: float
     """`(cost − lower_bound) / cost`; NaN when there is no bound."""
     certificate: str

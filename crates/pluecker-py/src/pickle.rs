@@ -300,6 +300,7 @@ pack_struct!(PoseResult {
     sigma_px,
     certified,
     lower_bound,
+    raw_lower_bound,
     gap,
     certificate,
     ambiguous,

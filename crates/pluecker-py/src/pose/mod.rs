@@ -3,6 +3,7 @@
 //! error and covariance at a given pose ([`reprojection`]), and the dual-quaternion forms of a pose
 //! ([`geometry`]).
 
+pub mod certificate;
 pub mod geometry;
 pub mod minimal;
 pub mod options;

@@ -247,6 +247,8 @@ result_class! {
         certified = |r| r.inner.certified;
         /// The proved lower bound on `½ Σ r²` (px²); NaN when there is none.
         lower_bound = |r| r.inner.lower_bound;
+        /// The bound as proved, before the clamp to the cost that gives `lower_bound`; NaN when there is none.
+        raw_lower_bound = |r| r.inner.raw_lower_bound;
         /// `(cost − lower_bound) / cost`; NaN when there is no bound.
         gap = |r| r.inner.gap;
         /// `sublevel_set` (proved), `not_requested` or `not_proved`.

@@ -128,7 +128,12 @@ impl Certificate {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Certification {
     pub certified: bool,
+    /// The proved bound, clamped to the cost (NaN when there is none).
     pub lower_bound: f64,
+    /// The bound as step 4 proved it, before any clamp to the cost (NaN when there is none). A sound
+    /// bound is at most the cost of every pose that keeps the points in front; `lower_bound` is
+    /// `min(raw_lower_bound, cost)`.
+    pub raw_lower_bound: f64,
     pub gap: f64,
     pub certificate: Certificate,
 }
@@ -139,6 +144,7 @@ impl Certification {
         Certification {
             certified: false,
             lower_bound: f64::NAN,
+            raw_lower_bound: f64::NAN,
             gap: f64::NAN,
             certificate,
         }
@@ -369,6 +375,14 @@ fn largest_eigenvalue(m: &Matrix3<f64>) -> f64 {
     lambda + 1e-9 * (lambda.abs() + p)
 }
 
+/// What [`localise`] records for the test hook: the cells kept, the cells pruned, and the half-width
+/// at which cells stop being split.
+struct Record {
+    min_half: f64,
+    cells: Vec<testing::KeptCell>,
+    pruned: usize,
+}
+
 /// What the rotation search proved: every pose of `S` lies within `radius` of `(R̂, t̂)` in the
 /// whitened metric.
 struct Localised {
@@ -381,6 +395,9 @@ struct Localised {
 /// to the largest distance any point reaches over the cells still to be split (their rotation
 /// cubes and translation ellipsoids hold every pose of `S` left to examine), and the minorant is
 /// rebuilt with them.
+///
+/// `record` (the test hook [`testing::rotation_search`] only) collects the cells that are not pruned,
+/// and stops splitting cells at its `min_half`.
 fn localise(
     problem: &mut Problem,
     whitening: &Whitening,
@@ -388,6 +405,7 @@ fn localise(
     f_hat: f64,
     target: f64,
     max_nodes: usize,
+    mut record: Option<&mut Record>,
 ) -> std::result::Result<Localised, String> {
     let root = (2.0 * f_hat).sqrt();
     let pi = std::f64::consts::PI;
@@ -426,6 +444,9 @@ fn localise(
             let beta = root + theta * problem.eta2.sqrt();
             let slack = beta * beta - q_min;
             if slack < 0.0 {
+                if let Some(r) = record.as_deref_mut() {
+                    r.pruned += 1;
+                }
                 continue;
             }
             // Cheirality: a point behind the camera for every t of the ellipsoid.
@@ -434,8 +455,19 @@ fn localise(
                 reach <= -theta * x.norm()
             });
             if behind {
+                if let Some(r) = record.as_deref_mut() {
+                    r.pruned += 1;
+                }
                 continue;
             }
+            let kept = |inside_ball: bool| testing::KeptCell {
+                centre: cell.centre,
+                half: cell.half,
+                t_star,
+                c,
+                slack,
+                inside_ball,
+            };
             // Whitened radius of the cell: centre, rotation spread and translation ellipsoid (triangle
             // inequality over the three parts of the step).
             if cell.centre.norm() + theta <= 1.0 {
@@ -447,6 +479,15 @@ fn localise(
                     + extent;
                 if radius <= target {
                     out.radius = out.radius.max(radius);
+                    if let Some(r) = record.as_deref_mut() {
+                        r.cells.push(kept(true));
+                    }
+                    continue;
+                }
+            }
+            if let Some(r) = record.as_deref_mut() {
+                if cell.half <= r.min_half {
+                    r.cells.push(kept(false));
                     continue;
                 }
             }
@@ -759,11 +800,33 @@ struct LocalModel {
 }
 
 impl LocalModel {
+    /// The local model at `pose` (frame of `problem`) and the whitening it is expressed in.
+    fn at(problem: &Problem, camera: &Camera, pose: &Pose) -> std::result::Result<(Whitening, Self), String> {
+        let lin = ReprojectionCost::of(camera, problem.corr).linearize(pose);
+        let whitening = Whitening::new(&lin.gauss_newton).ok_or("not proved: JᵀJ is singular at the pose")?;
+        let whitened = whitening.t.transpose() * lin.gauss_newton * whitening.t;
+        let eigen = whitened.symmetric_eigenvalues();
+        let curvature = RayCurvature::new(problem, &whitening, pose, eigen.max().max(0.0).sqrt())
+            .ok_or("not proved: a projected line vanishes at the pose")?;
+        let model = LocalModel {
+            cost: lin.cost,
+            gradient: (whitening.t.transpose() * lin.gradient).norm(),
+            lambda_min: eigen.min(),
+            curvature,
+        };
+        Ok((whitening, model))
+    }
+
     /// The lower bound of step 4 over the whitened ball of `radius`, or `None` where a depth or a
     /// projected line may vanish.
     fn bound(&self, radius: f64) -> Option<f64> {
+        self.raw_bound(radius).map(|b| b.min(self.cost))
+    }
+
+    /// [`Self::bound`] before the clamp to the cost.
+    fn raw_bound(&self, radius: f64) -> Option<f64> {
         let k = self.curvature.bound(radius)?;
-        Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius).min(self.cost))
+        Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius))
     }
 }
 
@@ -795,22 +858,9 @@ pub fn certify(
         Ok(p) => p,
         Err(why) => return Certification::none(Certificate::NotProved(why)),
     };
-    let lin = ReprojectionCost::of(camera, corr).linearize(pose);
-    let Some(whitening) = Whitening::new(&lin.gauss_newton) else {
-        return Certification::none(Certificate::NotProved("not proved: JᵀJ is singular at the pose".into()));
-    };
-    let whitened = whitening.t.transpose() * lin.gauss_newton * whitening.t;
-    let eigen = whitened.symmetric_eigenvalues();
-    let Some(curvature) = RayCurvature::new(&problem, &whitening, pose, eigen.max().max(0.0).sqrt()) else {
-        return Certification::none(Certificate::NotProved(
-            "not proved: a projected line vanishes at the pose".into(),
-        ));
-    };
-    let model = LocalModel {
-        cost: lin.cost,
-        gradient: (whitening.t.transpose() * lin.gradient).norm(),
-        lambda_min: eigen.min(),
-        curvature,
+    let (whitening, model) = match LocalModel::at(&problem, camera, pose) {
+        Ok(m) => m,
+        Err(why) => return Certification::none(Certificate::NotProved(why)),
     };
     let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
@@ -824,20 +874,22 @@ pub fn certify(
             (2.0 * cost).sqrt()
         )));
     };
-    let localised = match localise(&mut problem, &whitening, pose, cost, target, options.max_nodes) {
+    let localised = match localise(&mut problem, &whitening, pose, cost, target, options.max_nodes, None) {
         Ok(l) => l,
         Err(why) => return Certification::none(Certificate::NotProved(why)),
     };
-    let Some(lower_bound) = model.bound(localised.radius.min(target)) else {
+    let Some(raw_lower_bound) = model.raw_bound(localised.radius.min(target)) else {
         return Certification::none(Certificate::NotProved(
             "not proved: a depth may vanish within the localised ball".into(),
         ));
     };
+    let lower_bound = raw_lower_bound.min(model.cost);
     let gap = gap_of(lower_bound);
     let certified = gap <= options.gap;
     Certification {
         certified,
         lower_bound,
+        raw_lower_bound,
         gap,
         certificate: if certified {
             Certificate::SublevelSet { nodes: localised.nodes }
@@ -847,6 +899,131 @@ pub fn certify(
                 localised.radius, localised.nodes
             ))
         },
+    }
+}
+
+/// Hooks for the tests of the proof (not part of the API): the steps of [`certify`] one by one, on
+/// any pose and at any level, so that the tests can check each against an independent oracle.
+#[doc(hidden)]
+pub mod testing {
+    use super::*;
+
+    /// A rotation cell that the search kept: the cube `‖ω − centre‖_∞ ≤ half` of rotation vectors
+    /// (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the minorant's
+    /// Hessian and minimiser at the cube's centre) that holds the translation of every pose of the
+    /// sublevel set whose rotation lies in the cube.
+    #[derive(Debug, Clone, Copy)]
+    pub struct KeptCell {
+        pub centre: Vector3<f64>,
+        pub half: f64,
+        pub t_star: Vector3<f64>,
+        pub c: Matrix3<f64>,
+        pub slack: f64,
+        /// Whether the cell lies inside the whitened ball of the target radius (else it was left
+        /// unsplit at the least half-width).
+        pub inside_ball: bool,
+    }
+
+    /// What [`rotation_search`] proved.
+    #[derive(Debug, Clone)]
+    pub struct Region {
+        /// Step 1's depth bounds `Dᵢ` (before the search tightens them).
+        pub depths: Vec<f64>,
+        /// The cells neither pruned nor split: every pose of the sublevel set with the points in front
+        /// lies in one of them (rotation in the cube, translation in the ellipsoid).
+        pub cells: Vec<KeptCell>,
+        /// Cells pruned (by the minorant or by cheirality).
+        pub pruned: usize,
+        /// Cells examined.
+        pub nodes: usize,
+        /// The largest whitened radius `‖(ω, t − t̂)‖_W` (`W = JᵀJ` at the centre) of the cells
+        /// inside the ball: a bound on that of every pose of the sublevel set in those cells.
+        pub radius: f64,
+    }
+
+    /// Step 1's depth bounds for the level `level` (px²): every pose with cost at most `level` and the
+    /// points in front has `‖R Xᵢ + t‖ ≤ Dᵢ`.
+    pub fn depth_bounds(camera: &Camera, corr: &Correspondences, level: f64) -> std::result::Result<Vec<f64>, String> {
+        Problem::new(camera, corr, level).map(|p| p.depths)
+    }
+
+    /// Steps 1-3 around `centre` (any pose, not necessarily a minimum) for the sublevel set of
+    /// `level` (px², any value, e.g. above the optimum): cells are split until they are pruned, lie
+    /// inside the whitened ball of radius `target`, or reach the half-width `min_half`.
+    pub fn rotation_search(
+        camera: &Camera,
+        corr: &Correspondences,
+        centre: &Pose,
+        level: f64,
+        target: f64,
+        min_half: f64,
+        max_nodes: usize,
+    ) -> std::result::Result<Region, String> {
+        let mut problem = Problem::new(camera, corr, level)?;
+        let depths = problem.depths.clone();
+        let lin = ReprojectionCost::of(camera, corr).linearize(centre);
+        let whitening = Whitening::new(&lin.gauss_newton).ok_or("JᵀJ is singular at the pose")?;
+        let mut record = Record {
+            min_half,
+            cells: vec![],
+            pruned: 0,
+        };
+        let localised = localise(
+            &mut problem,
+            &whitening,
+            centre,
+            level,
+            target,
+            max_nodes,
+            Some(&mut record),
+        )?;
+        Ok(Region {
+            depths,
+            cells: record.cells,
+            pruned: record.pruned,
+            nodes: localised.nodes,
+            radius: localised.radius,
+        })
+    }
+
+    /// Step 4's one-dimensional bound: the least of `½ (√q(d) − ½ k d²)₊²` over `d ≤ rho`,
+    /// `q(d) = 2f̂ − 2 gradient d + lambda d²`.
+    pub fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64) -> f64 {
+        super::local_lower_bound(f_hat, gradient, lambda, k, rho)
+    }
+
+    /// Step 4 at `pose` (any pose) over the whitened ball of `radius`.
+    #[derive(Debug, Clone)]
+    pub struct LocalBound {
+        /// `T` with `Tᵀ JᵀJ T = I`: the whitened step `v` is the chart step `(ω, τ) = T v`.
+        pub whitening: SMatrix<f64, 6, 6>,
+        /// `K`: a bound on `‖r''(s)‖` along every whitened ray of the ball.
+        pub curvature: f64,
+        /// The bound on the cost over the ball, unclamped.
+        pub raw_bound: f64,
+    }
+
+    /// [`LocalBound`] at `pose` for the ball of whitened `radius`; the depth bounds are those of the
+    /// level `max(cost at pose, level)`.
+    pub fn local_bound(
+        camera: &Camera,
+        corr: &Correspondences,
+        pose: &Pose,
+        level: f64,
+        radius: f64,
+    ) -> std::result::Result<LocalBound, String> {
+        let cost = ReprojectionCost::of(camera, corr).cost(pose);
+        let problem = Problem::new(camera, corr, cost.max(level))?;
+        let (whitening, model) = LocalModel::at(&problem, camera, pose)?;
+        let curvature = model
+            .curvature
+            .bound(radius)
+            .ok_or("a depth or a projected line may vanish in the ball")?;
+        Ok(LocalBound {
+            whitening: whitening.t,
+            curvature,
+            raw_bound: super::local_lower_bound(model.cost, model.gradient, model.lambda_min, curvature, radius),
+        })
     }
 }
 

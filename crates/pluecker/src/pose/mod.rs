@@ -371,6 +371,9 @@ pub struct PoseResult {
     pub certified: bool,
     /// The proved lower bound on `½ Σ r²` (px²) over that domain; NaN when there is none.
     pub lower_bound: f64,
+    /// The bound as the certificate proved it, before the clamp to the cost that gives `lower_bound`
+    /// (NaN when there is none): a test of the proof compares it with the costs of other poses.
+    pub raw_lower_bound: f64,
     /// `(cost − lower_bound) / cost`, NaN when there is no bound.
     pub gap: f64,
     /// How the certificate was proved, or why there is none.

@@ -152,6 +152,7 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
         sigma_px,
         certified: certification.certified,
         lower_bound: certification.lower_bound,
+        raw_lower_bound: certification.raw_lower_bound,
         gap: certification.gap,
         certificate: certification.certificate,
         ambiguous: status == Status::Ambiguous,

@@ -1,0 +1,323 @@
+//! The bounds inside the pose certificate (`pose::certificate`), each checked against an independent
+//! oracle (`pose_oracle`: the cost written again, numeric derivatives, brute force), on poses that are
+//! not minima and where the bounds are nearly tight:
+//! - step 1's depth bounds against a pose of the sublevel set built to reach as far as it can;
+//! - step 4's one-dimensional bound against a fine grid;
+//! - step 4's curvature bound `K` against second differences of the oracle's residuals along
+//!   whitened rays;
+//! - step 4's bound over a whitened ball against the least cost found in the ball.
+
+mod pose_oracle;
+
+use nalgebra::{Rotation3, Unit, Vector2, Vector3, Vector6};
+use pluecker::pose::certificate::testing::{depth_bounds, local_bound, local_lower_bound};
+use pluecker::pose::Correspondences;
+use pluecker::rng::Rng;
+use pluecker::synthetic::visible_scene;
+use pluecker::Camera;
+use pose_oracle::{centred, cost, many_start, pixel, residuals, OraclePose};
+
+/// The unit ray of pixel `u` (camera frame).
+fn bearing(k: &Camera, u: &Vector2<f64>) -> Vector3<f64> {
+    let y = (u.y - k.cy) / k.fy;
+    let x = (u.x - k.cx - k.skew * y) / k.fx;
+    Vector3::new(x, y, 1.0).normalize()
+}
+
+/// `b` turned by `angle` towards `towards`, in their plane.
+fn turned(b: &Vector3<f64>, towards: &Vector3<f64>, angle: f64) -> Vector3<f64> {
+    let axis = Unit::new_normalize(b.cross(towards));
+    Rotation3::from_axis_angle(&axis, angle) * b
+}
+
+/// Step 1: two points seen `γ` apart at the level `f̂`. The pose built here has each point turned
+/// towards the other by the angle `δ` at which its pixel error is `√f̂` (so the cost is `f̂`), and the
+/// triangle camera-Xᵢ-Xⱼ right-angled at Xⱼ, which puts Xᵢ at the largest distance `d / sin(γ − 2δ)`
+/// that those angles allow. The depth bound must hold there; it is `d / sin(γ − 2α)` with
+/// `α = √(2f̂) / s` (`s` the least singular value of `K`'s 2x2 block), and `δ ≈ α / √2`, so a
+/// bound that drops a factor of the angle, takes the wrong sine, or uses `K`'s largest singular value
+/// falls below it.
+#[test]
+fn depth_bounds_hold_at_the_farthest_pose_of_the_sublevel_set() {
+    let mut rng = Rng::new(41);
+    let mut checked = 0;
+    let mut tightest: f64 = 0.0;
+    // (fx, fy, skew, separation direction in the image): square pixels; fy < fx with the points
+    // apart vertically (the least singular value is fy's); skew.
+    let cameras = [
+        (800.0, 800.0, 0.0, Vector2::new(1.0, 0.0)),
+        (250.0, 250.0, 0.0, Vector2::new(0.6, 0.8)),
+        (900.0, 450.0, 0.0, Vector2::new(0.0, 1.0)),
+        (600.0, 600.0, 40.0, Vector2::new(0.0, 1.0)),
+    ];
+    for &(fx, fy, skew, dir) in &cameras {
+        let k = Camera::new(fx, fy, 320.0, 240.0, skew).unwrap();
+        for _ in 0..25 {
+            let centre = Vector2::new(rng.uniform_in(200.0, 440.0), rng.uniform_in(150.0, 330.0));
+            let sep = rng.uniform_in(10.0, 80.0);
+            let (ui, uj) = (centre - dir * sep * 0.5, centre + dir * sep * 0.5);
+            let (bi, bj) = (bearing(&k, &ui), bearing(&k, &uj));
+            let gamma = bi.angle(&bj);
+            // The level at which α is a third of γ (γ − 2α = γ/3 > 0).
+            let s_min = nalgebra::Matrix2::new(fx, skew, 0.0, fy).singular_values().min();
+            let level = 0.5 * (gamma * s_min / 3.0).powi(2);
+            // δ at which the pixel error of a point turned towards its partner is √level (bisection
+            // on the oracle's pixel; the error grows with δ).
+            let error = |b: &Vector3<f64>, other: &Vector3<f64>, u: &Vector2<f64>, delta: f64| {
+                (pixel(&k, &turned(b, other, delta)) - u).norm()
+            };
+            let solve = |b: &Vector3<f64>, other: &Vector3<f64>, u: &Vector2<f64>| {
+                let (mut lo, mut hi) = (0.0, gamma / 2.0);
+                for _ in 0..80 {
+                    let mid = 0.5 * (lo + hi);
+                    if error(b, other, u, mid) <= level.sqrt() {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                lo
+            };
+            let (di, dj) = (solve(&bi, &bj, &ui), solve(&bj, &bi, &uj));
+            let (ai, aj) = (turned(&bi, &bj, di), turned(&bj, &bi, dj));
+            let g = ai.angle(&aj);
+            let d = rng.uniform_in(0.5, 3.0);
+            let (xi, xj) = (ai * d / g.sin(), aj * d / g.tan());
+            // World points: the pair moved by a random rigid motion.
+            let r = rng.rotation();
+            let offset = Vector3::new(rng.normal(), rng.normal(), rng.normal());
+            let (wi, wj) = (r.transpose() * (xi - offset), r.transpose() * (xj - offset));
+            let corr = Correspondences {
+                points2d: vec![ui, uj],
+                points3d: vec![wi, wj],
+                ..Default::default()
+            };
+            let pose = OraclePose::new(r, offset);
+            let f = cost(&k, &corr, &pose);
+            // The construction: cost at the level (bisection to ~1e-16 relative), points in front.
+            assert!(f <= level * (1.0 + 1e-9), "cost {f} above the level {level}");
+            assert!(xi.z > 0.0 && xj.z > 0.0);
+            let bounds = depth_bounds(&k, &corr, level).expect("two points seen apart");
+            let reached = xi.norm();
+            assert!(
+                reached <= bounds[0] * (1.0 + 1e-9),
+                "fx={fx} fy={fy} skew={skew}: ‖xᵢ‖ = {reached} at cost {f} ≤ {level}, above the depth bound {}",
+                bounds[0]
+            );
+            tightest = tightest.max(reached / bounds[0]);
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 100);
+    // The construction nearly reaches the bound (δ ≈ α/√2: sin(γ/3) / sin((1 − √2/3)γ) ≈ 0.63).
+    eprintln!("depth bounds: the farthest pose reaches {tightest:.3} of the bound");
+    assert!(tightest > 0.5, "the construction reaches only {tightest} of the bound");
+}
+
+/// Step 4's one-dimensional bound is at most the least of `½ (√q(d) − ½ k d²)₊²` on a fine grid of
+/// `[0, ρ]`, for random models (vertex inside and outside the interval, small and large `k`).
+#[test]
+fn the_local_bound_is_below_its_function_on_a_fine_grid() {
+    let mut rng = Rng::new(42);
+    for i in 0..400 {
+        let f_hat = 10f64.powf(rng.uniform_in(-3.0, 3.0));
+        let root = (2.0 * f_hat).sqrt();
+        let gradient = if i % 4 == 0 {
+            0.0
+        } else {
+            root * rng.uniform_in(0.0, 1.5)
+        };
+        let lambda = rng.uniform_in(0.5, 1.5);
+        let k = 10f64.powf(rng.uniform_in(-4.0, 0.0)) / root;
+        let rho = root * rng.uniform_in(0.5, 20.0);
+        let bound = local_lower_bound(f_hat, gradient, lambda, k, rho);
+        let function = |d: f64| {
+            let q = 2.0 * f_hat - 2.0 * gradient * d + lambda * d * d;
+            0.5 * (q.max(0.0).sqrt() - 0.5 * k * d * d).max(0.0).powi(2)
+        };
+        let n = 20_000;
+        let least = (0..=n)
+            .map(|j| function(rho * j as f64 / n as f64))
+            .fold(f64::INFINITY, f64::min);
+        // Rounding of q near its vertex: ~1e-15 of 2f̂.
+        assert!(
+            bound <= least + 1e-12 * f_hat,
+            "case {i}: bound {bound} above the least sampled value {least} (f̂ {f_hat}, g {gradient}, λ {lambda}, k {k}, ρ {rho})"
+        );
+        assert!(bound >= 0.0);
+    }
+    // Exact for a flat model: q(d) = 2f̂ + d², k = 0: the least value is f̂ at d = 0.
+    assert_eq!(local_lower_bound(2.0, 0.0, 1.0, 0.0, 5.0), 2.0);
+}
+
+/// Scenes for step 4: wide and narrow fields of view, with and without lines, at a pose that is not
+/// a minimum (the oracle's minimum moved by a whitened step).
+fn step4_scenes() -> Vec<(Camera, Correspondences, OraclePose, String)> {
+    let mut out = Vec::new();
+    for (f, np, nl, planar) in [
+        (250.0, 10, 0, false),
+        (800.0, 20, 6, false),
+        (800.0, 6, 0, true),
+        (800.0, 5, 0, true),
+        (250.0, 6, 0, true),
+        (4000.0, 12, 4, true),
+        (15000.0, 10, 3, false),
+    ] {
+        for seed in 0..3u64 {
+            let scene = visible_scene(f, np, nl, planar, seed);
+            let mut rng = Rng::new(800 + seed);
+            let (corr, c) = centred(&scene.noisy(1.0, true, &mut rng));
+            let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
+            let minimum = many_start(&scene.camera, &corr, &truth, 0, &mut rng)[0].0;
+            out.push((
+                scene.camera,
+                corr,
+                minimum,
+                format!("f={f} {np}p+{nl}l planar={planar} seed {seed}"),
+            ));
+        }
+    }
+    out
+}
+
+/// `K` bounds `‖r''(s)‖` along whitened rays `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`, `a = T v`, `s ≤ ρ`: the
+/// second differences of the oracle's residuals, along random directions and then along the
+/// direction that maximised them refined by random search, never exceed it.
+#[test]
+fn the_curvature_bound_holds_along_whitened_rays() {
+    let mut rng = Rng::new(43);
+    let mut worst: f64 = 0.0;
+    let mut checked = 0;
+    for (k, corr, minimum, name) in step4_scenes() {
+        for (shift, scale) in [(0.0, 3.0), (2.0, 6.0), (0.0, 16.0)] {
+            let f_hat = cost(&k, &corr, &minimum);
+            let unit = (2.0 * f_hat).sqrt() + 0.1;
+            let start = local_bound(&k, &corr, &minimum.to_library(), f_hat, 1.0).unwrap();
+            // A pose that is not the minimum: `shift` units of whitened step away.
+            let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
+            let pose = minimum.step(&(start.whitening * v0 * shift * unit));
+            let radius = scale * unit;
+            let Ok(b) = local_bound(&k, &corr, &pose.to_library(), cost(&k, &corr, &pose), radius) else {
+                continue;
+            };
+            let second = |v: &Vector6<f64>, s: f64| -> f64 {
+                let a = b.whitening * v;
+                let h = 1e-2 * radius;
+                let at = |x: f64| residuals(&k, &corr, &pose.step(&(a * x)));
+                let (lo, mid, hi) = (at(s - h), at(s), at(s + h));
+                lo.iter()
+                    .zip(&mid)
+                    .zip(&hi)
+                    .map(|((l, m), u)| ((l - 2.0 * m + u) / (h * h)).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            };
+            // Random directions at the ball's edge and half-way, then a hill climb from the three
+            // largest on the sphere of directions and the radius.
+            let mut found: Vec<(f64, Vector6<f64>, f64)> = Vec::new();
+            for _ in 0..60 {
+                let v = Vector6::from_fn(|_, _| rng.normal()).normalize();
+                for s in [radius, 0.5 * radius] {
+                    found.push((second(&v, s), v, s));
+                }
+            }
+            found.sort_by(|a, b| b.0.total_cmp(&a.0));
+            let mut best = found[0];
+            for start in found.into_iter().take(3) {
+                let mut here = start;
+                let mut step = 0.3;
+                for _ in 0..80 {
+                    let v = (here.1 + Vector6::from_fn(|_, _| rng.normal()) * step).normalize();
+                    let s = (here.2 + radius * step * rng.normal()).clamp(0.0, radius);
+                    let value = second(&v, s);
+                    if value > here.0 {
+                        here = (value, v, s);
+                    } else {
+                        step = (step * 0.93).max(1e-3);
+                    }
+                }
+                if here.0 > best.0 {
+                    best = here;
+                }
+            }
+            // Central differences: error O(h² r''''), far below K (h = ρ/100).
+            assert!(
+                best.0 <= b.curvature * 1.01 + 1e-9,
+                "{name}, shift {shift}: ‖r''‖ = {} > K = {} at s = {} of {radius}",
+                best.0,
+                b.curvature,
+                best.2
+            );
+            worst = worst.max(best.0 / b.curvature);
+            checked += 1;
+        }
+    }
+    eprintln!("curvature: {checked} balls, the largest ‖r''‖ reaches {worst:.3} of K");
+    assert!(checked >= 20, "only {checked} balls");
+}
+
+/// Step 4's bound over a whitened ball is at most the least cost in the ball, found by the oracle
+/// (projected gradient descent in whitened coordinates from the centre and from random points), at
+/// poses that are not minima (nonzero gradient), where the bound is far below the centre's cost.
+#[test]
+fn the_local_bound_is_below_the_least_cost_in_the_ball() {
+    let mut rng = Rng::new(44);
+    let mut checked = 0;
+    let mut closest: f64 = f64::INFINITY;
+    for (k, corr, minimum, name) in step4_scenes() {
+        let f_hat = cost(&k, &corr, &minimum);
+        let unit = (2.0 * f_hat).sqrt() + 0.1;
+        for (shift, scale) in [(0.0, 2.0), (1.0, 2.0), (3.0, 4.0)] {
+            let start = local_bound(&k, &corr, &minimum.to_library(), f_hat, 1.0).unwrap();
+            let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
+            let pose = minimum.step(&(start.whitening * v0 * shift * unit));
+            let radius = scale * unit;
+            let Ok(b) = local_bound(&k, &corr, &pose.to_library(), cost(&k, &corr, &pose), radius) else {
+                continue;
+            };
+            let t = b.whitening;
+            let f = |v: &Vector6<f64>| cost(&k, &corr, &pose.step(&(t * v)));
+            let project = |v: Vector6<f64>| if v.norm() > radius { v * (radius / v.norm()) } else { v };
+            let mut least = f(&Vector6::zeros());
+            for trial in 0..6 {
+                let mut v = if trial == 0 {
+                    Vector6::zeros()
+                } else {
+                    project(Vector6::from_fn(|_, _| rng.normal()) * radius)
+                };
+                let mut fv = f(&v);
+                let mut step = 0.5;
+                for _ in 0..200 {
+                    // Whitened gradient by central differences.
+                    let g = Vector6::from_fn(|i, _| {
+                        let mut e = Vector6::zeros();
+                        e[i] = 1e-6 * unit;
+                        (f(&(v + e)) - f(&(v - e))) / (2e-6 * unit)
+                    });
+                    let next = project(v - g * step);
+                    let fn_ = f(&next);
+                    if fn_ < fv {
+                        v = next;
+                        fv = fn_;
+                        step *= 1.2;
+                    } else {
+                        step *= 0.5;
+                        if step < 1e-12 {
+                            break;
+                        }
+                    }
+                }
+                least = least.min(fv);
+            }
+            assert!(
+                b.raw_bound <= least * (1.0 + 1e-9) + 1e-12,
+                "{name}, shift {shift}: bound {} above the least cost {least} found in the ball of radius {radius}",
+                b.raw_bound
+            );
+            closest = closest.min((least - b.raw_bound) / least.max(1e-12));
+            checked += 1;
+        }
+    }
+    eprintln!("local bound: {checked} balls, the closest bound is within {closest:.3e} (relative) of the least cost");
+    assert!(checked >= 30, "only {checked} balls");
+}
