@@ -172,17 +172,50 @@ where
         .map_init(
             || Installed::new(stop.clone()),
             |_, t| {
-                let out = match stop_reason() {
-                    Some(reason) => Err(Error::Interrupted { reason }),
-                    None => one(t),
-                };
-                if let Some(done) = done {
-                    done.fetch_add(1, Ordering::Relaxed);
-                }
+                let out = unless_stopped(t, &one);
+                count(done);
                 out
             },
         )
         .collect()
+}
+
+/// [`solve_tracks`] handing each track's result to `write(t, row, result)` as it finishes, with
+/// row `t` of `rows` (one per track), instead of collecting them: a binding writes them straight into
+/// its output columns. `rows.len()` is the number of tracks.
+pub(crate) fn solve_tracks_into<X, R, F, W>(
+    rows: impl IndexedParallelIterator<Item = R>,
+    min_len: usize,
+    done: Option<&AtomicUsize>,
+    one: F,
+    write: W,
+) where
+    R: Send,
+    F: Fn(usize) -> Result<X> + Sync + Send,
+    W: Fn(usize, R, Result<X>) + Sync + Send,
+{
+    let stop = current();
+    rows.enumerate().with_min_len(min_len.max(1)).for_each_init(
+        || Installed::new(stop.clone()),
+        |_, (t, row)| {
+            write(t, row, unless_stopped(t, &one));
+            count(done);
+        },
+    );
+}
+
+/// `one(t)`, or `Err(Error::Interrupted)` when the installed stop has fired.
+fn unless_stopped<X>(t: usize, one: impl Fn(usize) -> Result<X>) -> Result<X> {
+    match stop_reason() {
+        Some(reason) => Err(Error::Interrupted { reason }),
+        None => one(t),
+    }
+}
+
+fn count(done: Option<&AtomicUsize>) {
+    if let Some(done) = done {
+        done.fetch_add(1, Ordering::Relaxed);
+    }
 }
 
 /// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means
