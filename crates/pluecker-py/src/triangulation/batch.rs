@@ -297,6 +297,19 @@ impl PyBatchReport {
         )
     }
 
+    /// The tracks whose rows were never written ([`PyBatchReport::unstarted`]) were not started
+    /// because of `reason`.
+    pub(crate) fn not_started_because(&mut self, reason: StopReason) {
+        let status = Status::stopped(reason).as_str();
+        if status == Status::Interrupted.as_str() {
+            return; // as they were filled
+        }
+        (self.status.par_iter_mut())
+            .zip(self.cost.par_iter())
+            .filter(|(s, cost)| not_started(s, **cost).is_some())
+            .for_each(|(s, _)| *s = status);
+    }
+
     /// The messages of the rejected tracks, `(track, message)` in any order.
     pub(crate) fn set_errors(&mut self, mut errors: Vec<(usize, String)>) {
         errors.sort_unstable_by_key(|(t, _)| *t);

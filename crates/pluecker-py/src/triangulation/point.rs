@@ -20,6 +20,7 @@ use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
+use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::batch::{
     triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into, LinearPoints,
     PointTracks, SparsePointTracks,
@@ -195,13 +196,17 @@ impl PointSink {
         }
     }
 
-    /// The columns of the `n` tracks written.
+    /// The columns of the `n` tracks, those not written not started because of `stopped`.
     fn finish(
         self,
         mut report: PyBatchReport,
         mut columns: PyPointTriangulations,
         n: usize,
+        stopped: Option<StopReason>,
     ) -> (PyBatchReport, PyPointTriangulations) {
+        if let Some(reason) = stopped {
+            report.not_started_because(reason);
+        }
         report.set_errors(self.errors.into_inner().unwrap_or_else(|p| p.into_inner()));
         columns.inliers = InlierColumns::from_masks(n, self.masks.into_inner().unwrap_or_else(|p| p.into_inner()));
         (report, columns)
@@ -342,11 +347,10 @@ pub fn triangulate_points(
         let (mut report, mut columns) = written.expect("allocated for every method but linear");
         let sink = PointSink::default();
         let rows = report.rows_mut().zip(columns.rows_mut());
-        core_points(&cams, &tracks, &opts, Some(done), rows, |t, row, r| {
-            sink.write(t, row, r)
-        })
-        .map_err(|e| renamed(e, POINT_NAMES))?;
-        let (report, mut columns) = sink.finish(report, columns, n);
+        let write = |t, row, r| sink.write(t, row, r);
+        let stopped =
+            core_points(&cams, &tracks, &opts, Some(done), rows, write).map_err(|e| renamed(e, POINT_NAMES))?;
+        let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
             let visible = mask.as_deref();
@@ -397,9 +401,9 @@ pub fn triangulate_point_observations(
         let sink = PointSink::default();
         let out = report.rows_mut().zip(columns.rows_mut());
         let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
-        triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write)
+        let stopped = triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write)
             .map_err(|e| renamed(e, POINT_NAMES))?;
-        let (report, mut columns) = sink.finish(report, columns, n);
+        let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's observations are its sorted rows, each back at its row as given.
             columns.inliers.scatter(vec![m], |t| rows.rows_of(t));

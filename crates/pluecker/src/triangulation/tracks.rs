@@ -4,7 +4,7 @@
 //! restating of a single-track error for the batch.
 
 use crate::error::{Error, Result};
-use crate::interrupt::{current, stop_reason, Installed};
+use crate::interrupt::{current, stop_reason, Installed, StopReason};
 use crate::triangulation::views::validate_cameras;
 use crate::triangulation::Method;
 use nalgebra::Matrix3x4;
@@ -182,26 +182,38 @@ where
 
 /// [`solve_tracks`] handing each track's result to `write(t, row, result)` as it finishes, with
 /// row `t` of `rows` (one per track), instead of collecting them: a binding writes them straight into
-/// its output columns. `rows.len()` is the number of tracks.
+/// its output columns. `rows.len()` is the number of tracks; `done` counts the tracks written.
+///
+/// Once the installed stop fires, the tracks not started are not handed to `write` at all (their rows
+/// stay as they were, and the loop ends without a pass over them): the reason is returned, `None`
+/// when every track was written.
 pub(crate) fn solve_tracks_into<X, R, F, W>(
     rows: impl IndexedParallelIterator<Item = R>,
     min_len: usize,
     done: Option<&AtomicUsize>,
     one: F,
     write: W,
-) where
+) -> Option<StopReason>
+where
     R: Send,
     F: Fn(usize) -> Result<X> + Sync + Send,
     W: Fn(usize, R, Result<X>) + Sync + Send,
 {
     let stop = current();
-    rows.enumerate().with_min_len(min_len.max(1)).for_each_init(
-        || Installed::new(stop.clone()),
-        |_, (t, row)| {
-            write(t, row, unless_stopped(t, &one));
-            count(done);
-        },
-    );
+    rows.enumerate()
+        .with_min_len(min_len.max(1))
+        .try_for_each_init(
+            || Installed::new(stop.clone()),
+            |_, (t, row)| {
+                if let Some(reason) = stop_reason() {
+                    return Err(reason);
+                }
+                write(t, row, one(t));
+                count(done);
+                Ok(())
+            },
+        )
+        .err()
 }
 
 /// `one(t)`, or `Err(Error::Interrupted)` when the installed stop has fired.

@@ -22,7 +22,7 @@ use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{solve_track_views, PointTriangulation};
 use crate::error::{Error, Result};
-use crate::interrupt::current;
+use crate::interrupt::{current, StopReason};
 use crate::triangulation::covariance::whitening;
 use crate::triangulation::tracks::{
     check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
@@ -174,8 +174,12 @@ pub fn triangulate_points(
 
 /// [`triangulate_points`] handing each track's result to `write(t, row, result)` as it finishes,
 /// with row `t` of `rows` (e.g. track `t`'s entries of preallocated output columns), instead of
-/// collecting them: nothing is kept per track beyond what `write` keeps, and a stopped batch ends
-/// without a pass over its results. `rows` must have one row per track.
+/// collecting them: nothing is kept per track beyond what `write` keeps. `rows` must have one row
+/// per track.
+///
+/// A stopped batch ([`crate::interrupt`]) does not hand the tracks it had not started to `write`
+/// (their rows stay as they were, and it ends without a pass over them): `Ok(Some(reason))` then
+/// says why; `Ok(None)`: every track was written. `progress` counts the tracks written.
 pub fn triangulate_points_into<R: Send>(
     cameras: &[Matrix3x4<f64>],
     tracks: &PointTracks,
@@ -183,11 +187,10 @@ pub fn triangulate_points_into<R: Send>(
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
-) -> Result<()> {
+) -> Result<Option<StopReason>> {
     let (n, one) = dense_solver(cameras, tracks, opts)?;
     check_rows(rows.len(), n)?;
-    solve_tracks_into(rows, 16, progress, one, write);
-    Ok(())
+    Ok(solve_tracks_into(rows, 16, progress, one, write))
 }
 
 /// The number of tracks of a dense batch, checked, and the solve of track `t`.
@@ -290,11 +293,10 @@ pub fn triangulate_points_sparse_into<R: Send>(
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
-) -> Result<()> {
+) -> Result<Option<StopReason>> {
     let (n, one) = sparse_solver(cameras, tracks, opts)?;
     check_rows(rows.len(), n)?;
-    solve_tracks_into(rows, 16, progress, one, write);
-    Ok(())
+    Ok(solve_tracks_into(rows, 16, progress, one, write))
 }
 
 /// The number of tracks of a sparse batch, checked, and the solve of track `t`.
