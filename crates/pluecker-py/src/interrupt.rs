@@ -27,7 +27,7 @@ use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::sync::GILOnceCell;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -47,6 +47,8 @@ enum HookAction {
 
 /// The hook armed by `_on_poll_for_tests`, for the next call that makes a stop.
 static ARMED: Mutex<Option<(usize, HookAction)>> = Mutex::new(None);
+/// Whether [`ARMED`] may hold a hook (spares every call the lock).
+static MAYBE_ARMED: AtomicBool = AtomicBool::new(false);
 
 /// The test hook of one call: acts at the `at`-th poll of its stop, counted over every thread.
 struct Hook {
@@ -59,6 +61,9 @@ struct Hook {
 impl Hook {
     /// The armed hook, if any (disarmed: it serves one call).
     fn take(deadline: Option<Instant>) -> Option<Hook> {
+        if !MAYBE_ARMED.swap(false, Ordering::Relaxed) {
+            return None;
+        }
         let (at, action) = ARMED.lock().ok()?.take()?;
         Some(Hook {
             at,
@@ -108,6 +113,7 @@ pub(crate) fn _on_poll_for_tests(poll: usize, action: &str) -> PyResult<()> {
     *ARMED
         .lock()
         .map_err(|_| invalid_argument("poll", "the hook's lock is poisoned"))? = Some((poll, action));
+    MAYBE_ARMED.store(true, Ordering::Relaxed);
     Ok(())
 }
 
@@ -116,12 +122,18 @@ struct SignalWatch {
     started: Instant,
     /// Nanoseconds after `started` of the next check.
     next: AtomicU64,
+    /// Polls so far: the clock is read at every [`CLOCK_EVERY`]-th only (a poll can come every
+    /// fraction of a microsecond, e.g. the rotation cells of a pose certificate).
+    polls: AtomicU64,
     /// Whether the calling thread is Python's main thread, the only one that runs signal handlers
     /// (elsewhere the watch never takes the GIL).
     main: bool,
     /// The exception a handler raised (`KeyboardInterrupt`).
     raised: Mutex<Option<PyErr>>,
 }
+
+/// Polls of a single call per reading of the clock ([`SignalWatch::due`]).
+const CLOCK_EVERY: u64 = 16;
 
 extern "C" {
     /// CPython's identifier of the calling thread (`threading.get_ident()`); no GIL needed.
@@ -144,6 +156,7 @@ impl SignalWatch {
         SignalWatch {
             started: Instant::now(),
             next: AtomicU64::new(POLL.as_nanos() as u64),
+            polls: AtomicU64::new(0),
             main: *main == Some(this),
             raised: Mutex::new(None),
         }
@@ -152,6 +165,9 @@ impl SignalWatch {
     /// Whether a check is due: once per [`POLL`], the first one a [`POLL`] after the start (a
     /// shorter call never takes the GIL).
     fn due(&self) -> bool {
+        if self.polls.fetch_add(1, Ordering::Relaxed) % CLOCK_EVERY != 0 {
+            return false;
+        }
         let now = self.started.elapsed().as_nanos() as u64;
         let next = self.next.load(Ordering::Relaxed);
         now >= next
