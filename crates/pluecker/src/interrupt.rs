@@ -31,6 +31,7 @@
 //! ```
 
 use std::cell::RefCell;
+use std::panic::{RefUnwindSafe, UnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -54,8 +55,9 @@ impl StopReason {
     }
 }
 
-/// The check of [`Stop::with_check`]: `true` asks for the stop.
-type Check = Box<dyn Fn() -> bool + Send + Sync>;
+/// The check of [`Stop::with_check`]: `true` asks for the stop. Unwind-safe, as a stop shared with a
+/// `catch_unwind` must be.
+type Check = Box<dyn Fn() -> bool + Send + Sync + UnwindSafe + RefUnwindSafe>;
 
 /// A stop signal shared between the solving threads and the thread that may raise it.
 #[derive(Default)]
@@ -97,7 +99,7 @@ impl Stop {
     /// [`StopReason::Requested`]). Polls come once per track, branch-and-bound node, RANSAC sample or
     /// rotation cell, from every solving thread: `check` must be cheap (rate-limit anything costly)
     /// and thread-safe.
-    pub fn with_check(self, check: impl Fn() -> bool + Send + Sync + 'static) -> Self {
+    pub fn with_check(self, check: impl Fn() -> bool + Send + Sync + UnwindSafe + RefUnwindSafe + 'static) -> Self {
         Stop {
             check: Some(Box::new(check)),
             ..self
