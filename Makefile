@@ -1,6 +1,8 @@
 # pluecker developer entry points. Everything goes into ./.venv; nothing is installed globally.
 #   make test    build the extension, run the Rust and Python tests (property tests: the hypothesis
-#                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run)
+#                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run; their
+#                examples come from the seed in pytest's header, the UTC date unless
+#                PLUECKER_HYPOTHESIS_SEED=<seed> replays a run or =random draws a fresh one)
 #   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
 #   make bench   compare against OpenCV, PoseLib and pycolmap, then run the criterion benchmarks
 #   make mutants mutation-test the proof code (.cargo/mutants.toml); SHARD=k/n runs round-robin shard k of n

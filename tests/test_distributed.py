@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import os
 import signal
-import threading
-import time
 
 import numpy as np
 import pytest
@@ -162,31 +160,33 @@ def test_parquet_round_trip_of_the_tables(tmp_path):
 
 
 def test_a_worker_killed_mid_job_loses_nothing(tmp_path):
-    # Its own cluster: the nanny restarts the killed worker; Dask reruns its tasks.
+    # Its own cluster: the nanny restarts the killed worker; Dask reruns its tasks. The worker that starts
+    # the job's first solve task kills itself as that task begins (a plugin on every worker; the first
+    # to create the marker file is the one), so the kill always falls inside the job.
+    from distributed.diagnostics.plugin import WorkerPlugin
+
+    marker = tmp_path / "killed"
+
+    class KillAtTheFirstSolve(WorkerPlugin):
+        def transition(self, key, start, finish, **kwargs):
+            if finish != "executing" or not str(key).startswith("_after"):
+                return
+            try:
+                fd = os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            except FileExistsError:
+                return  # a worker was killed already (also the restarted one gets this plugin)
+            os.write(fd, str(os.getpid()).encode())
+            os.close(fd)
+            os.kill(os.getpid(), signal.SIGKILL)
+
     cameras, table = generated(6000, 7)
     source = write(table, tmp_path / "in", row_group_size=2000)
     reference = dist.triangulate_table(table, cameras)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=50) as cluster, distributed.Client(cluster) as c:
-        pids = c.run(os.getpid)
-        victim = sorted(pids.values())[0]
-        def kill_when_solving():
-            # Waits for the first solve to start, then kills one worker process outright.
-            deadline = time.time() + 60
-            while time.time() < deadline:
-                solving = [k for k in c.processing().values() for k in k if "_after" in str(k)]
-                if solving:
-                    os.kill(victim, signal.SIGKILL)
-                    return True
-                time.sleep(0.005)
-            return False
-
-        outcome = {}
-        thread = threading.Thread(target=lambda: outcome.setdefault("killed", kill_when_solving()))
-        thread.start()
+        c.register_plugin(KillAtTheFirstSolve())
         summary = dist.triangulate(source, cameras, tmp_path / "out", client=c, buckets=40)
-        thread.join()
-        assert outcome["killed"], "no solve task was seen running"
+        victim = int(marker.read_text())
         assert victim not in c.run(os.getpid).values()
     assert summary.tracks == 6000
     points = dist.read_points(tmp_path / "out")

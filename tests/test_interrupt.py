@@ -2,26 +2,33 @@
 batch's ``progress`` callback, and a batch's ``time_budget``. Stopped batches keep their finished tracks
 (bit-exact with an uninterrupted run) and say ``interrupted`` / ``time_budget`` for the others.
 
-The workloads are chosen to run for minutes if nothing stops them (branch and bound with a 1e-9 gap), so
-that the signal always arrives during the call; a ``time_budget`` far beyond the signal's delay is the
-safety net that keeps a broken build from hanging the suite (it would then fail, not hang: the pending
-signal would surface after the call, without ``partial``)."""
+No test waits a fixed delay: a hook of the extension (``_on_poll_for_tests``) simulates Ctrl-C (what
+Python's SIGINT handler does) at a given poll of the call's stop, that is once a given track or
+branch-and-bound node has been reached, or holds that poll until the time budget has run out; the
+call then has to notice it by itself. The workloads run for minutes if nothing stops them (branch and
+bound with a 1e-9 gap), and a batch has one track more than the extension has threads, so that
+whatever the number of cores some tracks have started and some cannot have. A ``time_budget`` (or a
+node cap) far beyond what a working build needs keeps a broken one from hanging the suite."""
 
 from __future__ import annotations
 
 import json
 import os
 import signal
-import threading
 
 import numpy as np
 import pytest
 from triangulation_scenes import NODES, line_tracks
 
 import pluecker
+from pluecker import _core
+from pluecker.experiments.josephson_kahl_2008.conics import disc_scene
 
-#: Seconds after which the test's SIGINT is sent, and the safety budget of the interrupted call.
-DELAY, SAFETY = 0.3, 60.0
+#: The safety budget of an interrupted batch (seconds), and the time budget of the budget test.
+SAFETY, BUDGET = 60.0, 0.3
+#: The node cap of an interrupted single call: seconds of branch and bound that a build which does not
+#: stop single calls runs to the end (and fails), where a working one stops within a few nodes.
+SAFETY_NODES = 2_000
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGINT") or os.name == "nt", reason="POSIX signals")
 
@@ -36,18 +43,18 @@ def sigint_raises_keyboard_interrupt():
     signal.signal(signal.SIGINT, previous)
 
 
-def sigint_after(seconds: float) -> threading.Timer:
-    """Sends SIGINT to this process after ``seconds`` (Python raises KeyboardInterrupt in the main thread)."""
-    timer = threading.Timer(seconds, os.kill, (os.getpid(), signal.SIGINT))
-    timer.start()
-    return timer
+def ctrl_c_at_poll(poll: int) -> None:
+    """Ctrl-C (as Python's SIGINT handler records it) at the ``poll``-th poll of the next call's stop."""
+    _core._on_poll_for_tests(poll, "interrupt")
 
 
-def endless_lines(n: int = 8):
+def endless_lines(n: int | None = None, max_nodes: int = 10**7):
     """A line batch that branch and bound cannot finish in minutes: noisy lines, a 1e-9 gap, the paper's
-    relaxation (the default Taylor bound closes even this gap in milliseconds)."""
+    relaxation (the default Taylor bound closes even this gap in milliseconds). By default one line more
+    than the batch has threads: at most one per thread can be started before a stop, none finishes."""
+    n = pluecker.get_num_threads() + 1 if n is None else n
     P, segments = line_tracks(0, n=n, views=4, sigma=2.0)
-    options = pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=10**7, line_bound="relaxation")
+    options = pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=max_nodes, line_bound="relaxation")
     return P, segments, dict(method="optimal", options=options)
 
 
@@ -58,6 +65,7 @@ def assert_stopped_batch(batch, n: int, status: str) -> None:
     assert not batch.certified.any()
     started = np.array([m == "" for m in batch.messages])
     assert started.any() and not started.all()
+    assert started.sum() <= pluecker.get_num_threads()
     assert np.isfinite(batch.plucker[started]).all()
     assert (batch.lower_bound[started] <= batch.cost[started]).all()
     assert np.isnan(batch.plucker[~started]).all()
@@ -67,10 +75,10 @@ def assert_stopped_batch(batch, n: int, status: str) -> None:
 
 def test_ctrl_c_stops_a_line_batch_and_keeps_what_it_had():
     P, segments, options = endless_lines()
-    timer = sigint_after(DELAY)
+    # The first poll comes before the first track, which then starts.
+    ctrl_c_at_poll(1)
     with pytest.raises(KeyboardInterrupt) as caught:
         pluecker.triangulate_lines(P, segments, time_budget=SAFETY, **options)
-    timer.join()
     partial = caught.value.partial
     assert isinstance(partial, pluecker.LineTriangulations)
     assert_stopped_batch(partial, len(segments), "interrupted")
@@ -78,7 +86,9 @@ def test_ctrl_c_stops_a_line_batch_and_keeps_what_it_had():
 
 def test_time_budget_ends_a_batch_without_an_exception():
     P, segments, options = endless_lines()
-    batch = pluecker.triangulate_lines(P, segments, time_budget=DELAY, **options)
+    # The first track starts, its poll held until the budget has run out.
+    _core._on_poll_for_tests(1, "await_deadline")
+    batch = pluecker.triangulate_lines(P, segments, time_budget=BUDGET, **options)
     assert_stopped_batch(batch, len(segments), "time_budget")
     # A zero budget solves nothing, in every batch, and the linear fast path says so too.
     for method in ("linear", "optimal"):
@@ -119,14 +129,65 @@ def test_ctrl_c_stops_a_robust_pose_and_returns_the_best_so_far():
     camera = pluecker.Camera(800, 800, 320, 240)
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = rng.uniform(0, 640, (n, 2))  # all outliers, and no inlier-ratio cap: it would sample for hours
-    timer = sigint_after(DELAY)
+    # RANSAC polls before each sample: two samples are drawn before Ctrl-C.
+    ctrl_c_at_poll(3)
     with pytest.raises(KeyboardInterrupt) as caught:
         pluecker.estimate_pose(camera, u, X, ransac=pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12, time_budget=SAFETY))
-    timer.join()
     partial = caught.value.partial
     assert isinstance(partial, pluecker.PoseResult)
     assert partial.ransac.stop == "interrupted" and partial.status != "success"
-    assert partial.ransac.iterations > 0
+    assert partial.ransac.iterations >= 2
+
+
+def assert_stopped_single(partial, started_nodes: int) -> None:
+    """A single triangulation stopped in its branch and bound: the estimate reached, uncertified, with a
+    bound at most its cost, far below the node cap."""
+    assert partial.status == "interrupted" and not partial.certified
+    assert np.isfinite(partial.cost) and partial.lower_bound <= partial.cost
+    assert started_nodes <= partial.nodes < SAFETY_NODES
+
+
+def test_ctrl_c_stops_a_single_line():
+    P, segments, options = endless_lines(n=1, max_nodes=SAFETY_NODES)
+    # Branch and bound polls before each split: Ctrl-C after its fifth node (root and two splits).
+    ctrl_c_at_poll(3)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        pluecker.triangulate_line(P, segments[0], **options)
+    assert isinstance(caught.value.partial, pluecker.LineTriangulation)
+    assert_stopped_single(caught.value.partial, 5)
+
+
+def test_ctrl_c_stops_a_single_quadric():
+    scene = disc_scene(3)
+    options = pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=SAFETY_NODES, quadric_bound="relaxation")
+    ctrl_c_at_poll(3)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, method="optimal", options=options)
+    assert isinstance(caught.value.partial, pluecker.QuadricTriangulation)
+    assert_stopped_single(caught.value.partial, 5)
+
+
+def test_ctrl_c_stops_the_certificate_of_a_single_pose():
+    scene = pluecker.random_scene("general", 30, 0, 5)
+    options = pluecker.PoseOptions(certify=True, certify_max_nodes=10**9)
+    plain = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
+    assert plain.certified
+    # The rotation search polls before each cell: Ctrl-C at its first.
+    ctrl_c_at_poll(1)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
+    partial = caught.value.partial
+    assert isinstance(partial, pluecker.PoseResult) and not partial.certified
+    assert partial.certificate == "not_proved" and "interrupted" in partial.certificate_message
+    # The pose itself does not depend on the stop.
+    np.testing.assert_array_equal(partial.R, plain.R)
+
+
+def test_the_test_hook_checks_its_arguments():
+    with pytest.raises(pluecker.InvalidOptionError, match="action"):
+        _core._on_poll_for_tests(1, "explode")
+    with pytest.raises(pluecker.InvalidOptionError, match="poll"):
+        _core._on_poll_for_tests(0, "interrupt")
 
 
 @pytest.mark.parametrize("budget", [-1.0, float("nan"), float("inf"), 1e20])

@@ -8,21 +8,243 @@
 //! RANSAC iteration, and the work's value (for a batch: the finished tracks, the others with status
 //! `interrupted`) comes back together with the pending exception, for the caller to attach as
 //! `exception.partial` and raise ([`with_partial`]).
+//!
+//! [`run_single`] runs a single call (one point, line, quadric or pose) on the calling thread itself,
+//! sparing the worker thread's start: the stop's own check ([`Stop::with_check`]) runs Python's
+//! signal handlers from the core's polls (branch-and-bound nodes, rotation cells, RANSAC samples), at
+//! most once per [`POLL`], when the caller is Python's main thread (the only one that runs them).
+//! A call that never reaches a poll is short and sees a signal when it ends.
+//!
+//! `_on_poll_for_tests` arms a test hook for the next call: at a given poll it simulates Ctrl-C, or
+//! waits until the time budget has run out, so that the tests stop a call at a known point of its
+//! work rather than after a delay.
 
 use crate::convert::{optional_real, seconds_arg, Real};
-use crate::errors::{guarded, solve};
+use crate::errors::{guarded, invalid_argument, solve};
 use crate::triangulation::batch::PyBatchReport;
 use pluecker::interrupt::{with_stop, Stop};
 use pluecker::Error;
 use pyo3::prelude::*;
+use pyo3::sync::GILOnceCell;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
-use std::sync::Arc;
-use std::time::Duration;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 /// How often the calling thread checks for signals and reports progress.
 const POLL: Duration = Duration::from_millis(50);
+
+/// What the test hook does at its poll.
+#[derive(Debug, Clone, Copy)]
+enum HookAction {
+    /// What Python's SIGINT handler does (`PyErr_SetInterrupt`): the call then sees a
+    /// `KeyboardInterrupt` exactly as after Ctrl-C.
+    Interrupt,
+    /// Waits until the call's time budget has run out (the poll itself still goes ahead).
+    AwaitDeadline,
+}
+
+/// The hook armed by `_on_poll_for_tests`, for the next call that makes a stop.
+static ARMED: Mutex<Option<(usize, HookAction)>> = Mutex::new(None);
+/// Whether [`ARMED`] may hold a hook (spares every call the lock).
+static MAYBE_ARMED: AtomicBool = AtomicBool::new(false);
+
+/// The test hook of one call: acts at the `at`-th poll of its stop, counted over every thread.
+struct Hook {
+    at: usize,
+    action: HookAction,
+    polls: AtomicUsize,
+    deadline: Option<Instant>,
+}
+
+impl Hook {
+    /// The armed hook, if any (disarmed: it serves one call).
+    fn take(deadline: Option<Instant>) -> Option<Hook> {
+        if !MAYBE_ARMED.swap(false, Ordering::Relaxed) {
+            return None;
+        }
+        let (at, action) = ARMED.lock().ok()?.take()?;
+        Some(Hook {
+            at,
+            action,
+            polls: AtomicUsize::new(0),
+            deadline,
+        })
+    }
+
+    /// Counts a poll and acts at the `at`-th; `true` when it just simulated Ctrl-C.
+    fn poll(&self) -> bool {
+        if self.polls.fetch_add(1, Ordering::Relaxed) + 1 != self.at {
+            return false;
+        }
+        match self.action {
+            HookAction::Interrupt => {
+                // Safe from any thread, with or without the GIL (CPython's documentation).
+                unsafe { pyo3::ffi::PyErr_SetInterrupt() };
+                true
+            }
+            HookAction::AwaitDeadline => {
+                while let Some(left) = self.deadline.and_then(|d| d.checked_duration_since(Instant::now())) {
+                    std::thread::sleep(left);
+                }
+                false
+            }
+        }
+    }
+}
+
+/// _on_poll_for_tests(poll, action, /)
+/// --
+///
+/// Test hook: the next interruptible call, at the ``poll``-th poll of its stop (1 is the first: before
+/// the first track of a batch, the first split of branch and bound, ...), ``"interrupt"``s as Ctrl-C
+/// does or ``"await_deadline"``s until its time budget has run out.
+#[pyfunction]
+pub(crate) fn _on_poll_for_tests(poll: usize, action: &str) -> PyResult<()> {
+    let action = match action {
+        "interrupt" => HookAction::Interrupt,
+        "await_deadline" => HookAction::AwaitDeadline,
+        _ => return Err(invalid_argument("action", "'interrupt' or 'await_deadline'")),
+    };
+    if poll == 0 {
+        return Err(invalid_argument("poll", "must be at least 1"));
+    }
+    *ARMED
+        .lock()
+        .map_err(|_| invalid_argument("poll", "the hook's lock is poisoned"))? = Some((poll, action));
+    MAYBE_ARMED.store(true, Ordering::Relaxed);
+    Ok(())
+}
+
+/// Python's signal handlers run from the polls of a single call on the calling thread ([`run_single`]).
+struct SignalWatch {
+    started: Instant,
+    /// Nanoseconds after `started` of the next check.
+    next: AtomicU64,
+    /// Polls so far: the clock is read at every [`CLOCK_EVERY`]-th only (a poll can come every
+    /// fraction of a microsecond, e.g. the rotation cells of a pose certificate).
+    polls: AtomicU64,
+    /// Whether the calling thread is Python's main thread, the only one that runs signal handlers
+    /// (elsewhere the watch never takes the GIL).
+    main: bool,
+    /// The exception a handler raised (`KeyboardInterrupt`).
+    raised: Mutex<Option<PyErr>>,
+}
+
+/// Polls of a single call per reading of the clock ([`SignalWatch::due`]).
+const CLOCK_EVERY: u64 = 16;
+
+extern "C" {
+    /// CPython's identifier of the calling thread (`threading.get_ident()`); no GIL needed.
+    fn PyThread_get_thread_ident() -> std::os::raw::c_ulong;
+}
+
+/// `threading.main_thread().ident`, read once.
+static MAIN_THREAD: GILOnceCell<Option<u64>> = GILOnceCell::new();
+
+impl SignalWatch {
+    fn new(py: Python<'_>) -> SignalWatch {
+        let main = MAIN_THREAD.get_or_init(py, || {
+            let ident = py
+                .import("threading")
+                .and_then(|t| t.call_method0("main_thread")?.getattr("ident"));
+            ident.and_then(|i| i.extract::<u64>()).ok()
+        });
+        // Safe: a plain C call of the interpreter's API.
+        let this = unsafe { PyThread_get_thread_ident() } as u64;
+        SignalWatch {
+            started: Instant::now(),
+            next: AtomicU64::new(POLL.as_nanos() as u64),
+            polls: AtomicU64::new(0),
+            main: *main == Some(this),
+            raised: Mutex::new(None),
+        }
+    }
+
+    /// Whether a check is due: once per [`POLL`], the first one a [`POLL`] after the start (a
+    /// shorter call never takes the GIL).
+    fn due(&self) -> bool {
+        if self.polls.fetch_add(1, Ordering::Relaxed) % CLOCK_EVERY != 0 {
+            return false;
+        }
+        let now = self.started.elapsed().as_nanos() as u64;
+        let next = self.next.load(Ordering::Relaxed);
+        now >= next
+            && (self.next)
+                .compare_exchange(next, now + POLL.as_nanos() as u64, Ordering::Relaxed, Ordering::Relaxed)
+                .is_ok()
+    }
+
+    /// Runs the signal handlers (with the GIL) when due, or `now`; `true` when one raised.
+    fn check(&self, now: bool) -> bool {
+        if !self.main || !(now || self.due()) {
+            return false;
+        }
+        Python::with_gil(|py| match py.check_signals() {
+            Ok(()) => false,
+            Err(e) => {
+                if let Ok(mut raised) = self.raised.lock() {
+                    raised.get_or_insert(e);
+                }
+                true
+            }
+        })
+    }
+
+    fn take(&self) -> Option<PyErr> {
+        self.raised.lock().ok()?.take()
+    }
+}
+
+/// The stop of one call: its time budget, the test hook if armed, and the signal watch of a single
+/// call.
+fn call_stop(time_budget: Option<Duration>, watch: Option<Arc<SignalWatch>>) -> Arc<Stop> {
+    let stop = Stop::with_time_budget(time_budget);
+    let hook = Hook::take(stop.deadline());
+    if hook.is_none() && watch.is_none() {
+        return Arc::new(stop);
+    }
+    Arc::new(stop.with_check(move || {
+        let interrupted = hook.as_ref().is_some_and(Hook::poll);
+        // The hook's simulated Ctrl-C is checked at once, so that a test knows where the call stops.
+        watch.as_ref().is_some_and(|w| w.check(interrupted))
+    }))
+}
+
+/// Runs a single call's `work` on this thread with the GIL released, under a stop whose polls run
+/// Python's signal handlers (module docs); they run once more when it ends. A core error is raised,
+/// as is a panic (`PlueckerError("internal error: ...")`); an exception from a handler wins over both
+/// and otherwise comes back as [`Outcome::pending`], beside the value (a stopped branch and bound
+/// or rotation search says so in its status or certificate).
+pub(crate) fn run_single<T, F>(py: Python<'_>, work: F) -> PyResult<Outcome<T>>
+where
+    T: Send,
+    F: FnOnce() -> Result<T, Error> + Send,
+{
+    let watch = Arc::new(SignalWatch::new(py));
+    let stop = call_stop(None, Some(Arc::clone(&watch)));
+    let value = py.allow_threads(|| catch_unwind(AssertUnwindSafe(|| with_stop(stop, work))));
+    let pending = watch.take().or_else(|| py.check_signals().err());
+    let value = guarded(|| value.unwrap_or_else(|payload| resume_unwind(payload)));
+    match (value, pending) {
+        (Err(_), Some(e)) => Err(e),
+        (value, pending) => value.map(|value| Outcome { value, pending }),
+    }
+}
+
+/// The Python object of a single call's result; raised as `exception.partial` instead when a signal
+/// handler raised during the call.
+pub(crate) fn single_result<C: pyo3::PyClass>(
+    py: Python<'_>,
+    pending: Option<PyErr>,
+    object: Py<C>,
+) -> PyResult<Py<C>> {
+    match pending {
+        Some(e) => Err(with_partial(py, e, object.into_any())),
+        None => Ok(object),
+    }
+}
 
 /// What an interruptible call produced: the work's value, and the exception that stopped it early
 /// (`KeyboardInterrupt`, or whatever the progress callback raised), if any.
@@ -55,7 +277,7 @@ where
         return Ok(Outcome { value, pending: None });
     }
     let callback = progress.map(|p| p.clone().unbind());
-    let stop = Arc::new(Stop::with_time_budget(time_budget));
+    let stop = call_stop(time_budget, None);
     let done = AtomicUsize::new(0);
     let mut pending: Option<PyErr> = None;
     let joined = py.allow_threads(|| {

@@ -16,6 +16,11 @@
 //! polled loop does not change any signature; the batches carry it into their rayon tasks. Without an
 //! installed stop, [`stop_reason`] is `None` and costs a thread-local read.
 //!
+//! A stop may also carry a check of its own ([`Stop::with_check`]) that every poll runs: a binding
+//! whose call runs on the thread that must notice Ctrl-C (Python runs its signal handlers on the main
+//! thread only) checks its signals there, rate-limited; a test learns that a poll happened, i.e. that
+//! a track or a node was reached.
+//!
 //! ```
 //! use pluecker::interrupt::{with_stop, Stop};
 //! use std::{sync::Arc, time::Duration};
@@ -26,6 +31,7 @@
 //! ```
 
 use std::cell::RefCell;
+use std::panic::{RefUnwindSafe, UnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -49,12 +55,27 @@ impl StopReason {
     }
 }
 
+/// The check of [`Stop::with_check`]: `true` asks for the stop. Unwind-safe, as a stop shared with a
+/// `catch_unwind` must be.
+type Check = Box<dyn Fn() -> bool + Send + Sync + UnwindSafe + RefUnwindSafe>;
+
 /// A stop signal shared between the solving threads and the thread that may raise it.
-#[derive(Debug, Default)]
+#[derive(Default)]
 pub struct Stop {
     requested: AtomicBool,
     /// `None`: no time budget (or one too large to represent, which never runs out).
     deadline: Option<Instant>,
+    check: Option<Check>,
+}
+
+impl std::fmt::Debug for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Stop")
+            .field("requested", &self.requested)
+            .field("deadline", &self.deadline)
+            .field("check", &self.check.as_ref().map(|_| "Fn() -> bool"))
+            .finish()
+    }
 }
 
 impl Stop {
@@ -69,7 +90,25 @@ impl Stop {
         Stop {
             requested: AtomicBool::new(false),
             deadline: budget.and_then(|b| Instant::now().checked_add(b)),
+            check: None,
         }
+    }
+
+    /// This stop, with `check` run by every poll that neither a request nor the deadline has
+    /// answered, on the polling thread: `true` requests the stop (that poll already answers
+    /// [`StopReason::Requested`]). Polls come once per track, branch-and-bound node, RANSAC sample or
+    /// rotation cell, from every solving thread: `check` must be cheap (rate-limit anything costly)
+    /// and thread-safe.
+    pub fn with_check(self, check: impl Fn() -> bool + Send + Sync + UnwindSafe + RefUnwindSafe + 'static) -> Self {
+        Stop {
+            check: Some(Box::new(check)),
+            ..self
+        }
+    }
+
+    /// When the time budget runs out (`None`: no budget).
+    pub fn deadline(&self) -> Option<Instant> {
+        self.deadline
     }
 
     /// Asks every loop polling this stop to end at its next poll.
@@ -77,12 +116,16 @@ impl Stop {
         self.requested.store(true, Ordering::Relaxed);
     }
 
-    /// Why the calls under this stop must end, if they must (a request wins over the deadline).
+    /// Why the calls under this stop must end, if they must (a request wins over the deadline); runs
+    /// the check of [`Stop::with_check`] when neither has fired.
     pub fn reason(&self) -> Option<StopReason> {
         if self.requested.load(Ordering::Relaxed) {
             Some(StopReason::Requested)
         } else if self.deadline.is_some_and(|d| Instant::now() >= d) {
             Some(StopReason::TimeBudget)
+        } else if self.check.as_ref().is_some_and(|check| check()) {
+            self.request();
+            Some(StopReason::Requested)
         } else {
             None
         }
@@ -164,6 +207,27 @@ mod tests {
         let both = Arc::new(Stop::with_time_budget(Some(Duration::ZERO)));
         both.request();
         assert_eq!(both.reason(), Some(StopReason::Requested));
+    }
+
+    #[test]
+    fn a_check_runs_at_every_poll_until_it_asks_for_the_stop() {
+        use std::sync::atomic::AtomicUsize;
+        let polls = Arc::new(AtomicUsize::new(0));
+        let counted = Arc::clone(&polls);
+        // Asks for the stop at its third run.
+        let stop = Arc::new(Stop::new().with_check(move || counted.fetch_add(1, Ordering::Relaxed) == 2));
+        with_stop(Arc::clone(&stop), || {
+            assert_eq!(stop_reason(), None);
+            assert_eq!(stop_reason(), None);
+            assert_eq!(stop_reason(), Some(StopReason::Requested));
+            // Once requested, the check no longer runs.
+            assert_eq!(stop_reason(), Some(StopReason::Requested));
+        });
+        assert_eq!(polls.load(Ordering::Relaxed), 3);
+        // An expired deadline answers before the check.
+        let expired = Stop::with_time_budget(Some(Duration::ZERO)).with_check(|| panic!("not reached"));
+        assert_eq!(expired.reason(), Some(StopReason::TimeBudget));
+        assert!(expired.deadline().is_some() && Stop::new().deadline().is_none());
     }
 
     #[test]

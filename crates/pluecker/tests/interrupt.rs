@@ -5,18 +5,20 @@
 mod common;
 
 use common::{noisy_segments, project, segment_tracks};
-use nalgebra::{Matrix3x4, Vector3};
+use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::interrupt::{with_stop, Stop, StopReason};
 use pluecker::pose::{estimate_pose, CertificateOptions, PoseOptions, RansacOptions, RansacStop};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
 use pluecker::triangulation::line::batch::triangulate_lines;
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
 use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::scenes::arc_cameras;
 use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::{LineBound, Method, Status, TriangulationOptions};
 use pluecker::Error;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Barrier};
 use std::time::Duration;
 
 /// `n` noisy segments (2 px) seen by 4 cameras: flat `(n, v, 2, 2)` endpoints.
@@ -39,21 +41,42 @@ fn endless() -> TriangulationOptions {
     }
 }
 
-#[test]
-fn a_request_from_another_thread_stops_a_line_batch() {
-    let (cameras, endpoints) = segments(8, 1);
-    let tracks = segment_tracks(&endpoints, 1.0);
-    let stop = Arc::new(Stop::new());
+/// A stop that another thread requests once the first poll has been reached, and that thread: the
+/// poll blocks on a barrier until the requester is there, so the request comes after that poll
+/// (whose track or node goes ahead) whatever the timing.
+fn requested_after_poll(k: usize) -> (Arc<Stop>, std::thread::JoinHandle<()>) {
+    let barrier = Arc::new(Barrier::new(2));
+    let polls = AtomicUsize::new(0);
+    let at_poll = Arc::clone(&barrier);
+    let stop = Arc::new(Stop::new().with_check(move || {
+        if polls.fetch_add(1, Ordering::Relaxed) + 1 == k {
+            at_poll.wait();
+        }
+        false
+    }));
     let requester = Arc::clone(&stop);
-    let timer = std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_millis(300));
+    let thread = std::thread::spawn(move || {
+        barrier.wait();
         requester.request();
     });
+    (stop, thread)
+}
+
+#[test]
+fn a_request_from_another_thread_stops_a_line_batch() {
+    // One track more than rayon has threads: every track is endless, so at most one per thread can
+    // have started when the request comes, and at least one cannot have.
+    let threads = rayon::current_num_threads();
+    let n = threads + 1;
+    let (cameras, endpoints) = segments(n, 1);
+    let tracks = segment_tracks(&endpoints, 1.0);
+    // The first poll is the one before the first track: that track starts.
+    let (stop, requester) = requested_after_poll(1);
     let batch = with_stop(stop, || {
         triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &endless(), None)
     })
     .unwrap();
-    timer.join().unwrap();
+    requester.join().unwrap();
     let (mut started, mut skipped) = (0, 0);
     for result in &batch {
         match result {
@@ -70,8 +93,33 @@ fn a_request_from_another_thread_stops_a_line_batch() {
             Err(e) => panic!("unexpected {e}"),
         }
     }
-    // Each rayon worker was inside a track when the stop came; the rest never started.
-    assert!(started >= 1 && skipped >= 1, "{started} started, {skipped} skipped");
+    assert_eq!(started + skipped, n);
+    assert!(
+        (1..=threads).contains(&started) && skipped >= 1,
+        "{started} started, {skipped} skipped, {threads} threads"
+    );
+}
+
+#[test]
+fn a_request_from_another_thread_stops_a_single_line() {
+    let (cameras, endpoints) = segments(1, 2);
+    let segments: Vec<[Vector2<f64>; 2]> = endpoints
+        .chunks_exact(4)
+        .map(|e| [Vector2::new(e[0], e[1]), Vector2::new(e[2], e[3])])
+        .collect();
+    let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
+    // Polls come before each split of the branch and bound: the request follows its third node.
+    let (stop, requester) = requested_after_poll(3);
+    let line = with_stop(stop, || {
+        triangulate_line(&cameras, &lines, Some(&covariances), &endless())
+    })
+    .unwrap();
+    requester.join().unwrap();
+    let report = &line.report;
+    assert_eq!(report.status, Status::Interrupted);
+    assert!(!report.certificate.certified && report.cost.is_finite());
+    assert!(report.certificate.nodes >= 3, "{} nodes", report.certificate.nodes);
+    assert!(report.certificate.lower_bound <= report.cost);
 }
 
 #[test]

@@ -13,7 +13,7 @@ pub mod result;
 use crate::camera::PyCamera;
 use crate::convert::{check_finite, matrix_stack, points, read_any, segments, shape_string};
 use crate::errors::{guarded, shape_error};
-use crate::interrupt::{run_interruptible, with_partial};
+use crate::interrupt::{run_interruptible, run_single, with_partial};
 use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
 use options::{PyPoseOptions, PyRansacOptions};
@@ -137,7 +137,8 @@ fn any_camera(camera: &Bound<'_, PyAny>) -> PyResult<AnyCamera> {
 }
 
 /// Correspondences from which `estimate_pose` runs on a worker thread, so that Ctrl-C stops it
-/// within about 0.1 s (fewer take milliseconds, and run on the calling thread).
+/// within about 0.1 s also in the stages that do not poll (fewer take milliseconds there, and run on
+/// the calling thread).
 const SHORT_POSE: usize = 1000;
 
 /// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
@@ -173,15 +174,21 @@ pub fn estimate_pose(
     let opts = options.core(ransac_arg(ransac)?);
     let mut corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let noise = observation_noise(&corr, point_covariances, line_covariances)?;
-    // A pose from fewer correspondences ends within milliseconds (see `interrupt::run_interruptible`).
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
-    let outcome = run_interruptible(py, None, None, short, move |_| match &camera {
+    let work = move || match &camera {
         AnyCamera::Pinhole(camera) => {
             corr.noise = noise;
             pluecker::estimate_pose(camera, &corr, &opts)
         }
         AnyCamera::Lens(lens) => pluecker::pose::estimate_pose_lens(lens, &corr, noise.as_ref(), &opts),
-    })?;
+    };
+    // Fewer correspondences: on this thread, where the polls of RANSAC and of the certificate's
+    // rotation search see Ctrl-C (`interrupt::run_single`); the other stages end within milliseconds.
+    let outcome = if short {
+        run_single(py, work)?
+    } else {
+        run_interruptible(py, None, None, false, move |_| work())?
+    };
     let result = Py::new(py, PyPoseResult::wrap(outcome.value))?;
     match outcome.pending {
         // Ctrl-C: the pose reached so far (RANSAC stopped with `ransac.stop == "interrupted"`).

@@ -19,8 +19,10 @@ use pluecker::interrupt::StopReason;
 use pluecker::triangulation::tracks::TrackCameras;
 use pluecker::triangulation::{CertificateKind, Method, Report, Status};
 use pluecker::Error;
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
+use rayon::prelude::*;
 
 /// The status of a track the core rejected, by error kind (shared by every batch result).
 pub(crate) fn error_status(err: &Error) -> &'static str {
@@ -93,6 +95,20 @@ impl InlierColumns {
         self.counts.push(0);
     }
 
+    /// The columns of `n` tracks from the masks of the solved ones, `(track, mask)` in any order.
+    pub fn from_masks(n: usize, mut masks: Vec<(usize, Vec<bool>)>) -> InlierColumns {
+        masks.sort_unstable_by_key(|(t, _)| *t);
+        let mut columns = InlierColumns {
+            counts: vec![0; n],
+            ..Default::default()
+        };
+        for (t, mask) in masks {
+            columns.counts[t] = mask.len();
+            columns.flags.extend(mask);
+        }
+        columns
+    }
+
     /// Lays the flags out in a mask of `shape`: `positions(t)` lists, in track `t`'s order, where its
     /// observations go (false elsewhere, and for every observation of a rejected track).
     pub fn scatter(&mut self, shape: Vec<usize>, positions: impl Fn(usize) -> Vec<usize>) {
@@ -163,7 +179,143 @@ pub struct PyBatchReport {
     errors: Vec<(usize, String)>,
 }
 
+/// One track's entries of the report columns, written in place (by a batch that writes its tracks
+/// as they finish, [`PyBatchReport::rows_mut`]).
+pub(crate) struct ReportRow<'a> {
+    cost: &'a mut f64,
+    lower_bound: &'a mut f64,
+    relative_gap: &'a mut f64,
+    certified: &'a mut bool,
+    certificate: &'a mut &'static str,
+    status: &'a mut &'static str,
+    nodes: &'a mut i64,
+    iterations: &'a mut i64,
+    time_seconds: &'a mut f64,
+    residual_dof: &'a mut usize,
+}
+
+impl ReportRow<'_> {
+    /// A solved track's report.
+    pub(crate) fn solved(self, report: &Report) {
+        let c = &report.certificate;
+        *self.cost = report.cost;
+        *self.lower_bound = c.lower_bound;
+        *self.relative_gap = c.relative_gap;
+        *self.certified = c.certified;
+        *self.certificate = c.kind.as_str();
+        *self.status = report.status.as_str();
+        *self.nodes = c.nodes as i64;
+        *self.iterations = report.iterations as i64;
+        *self.time_seconds = report.time_seconds;
+        *self.residual_dof = report.residual_dof;
+    }
+
+    /// A track without a certificate (lower bound 0, relative gap 1, no nodes or iterations): a linear
+    /// estimate of the point fast path, or a rejected track.
+    pub(crate) fn uncertified(self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
+        *self.cost = cost;
+        *self.lower_bound = 0.0;
+        *self.relative_gap = 1.0;
+        *self.certified = false;
+        *self.certificate = CertificateKind::None.as_str();
+        *self.status = status;
+        *self.nodes = 0;
+        *self.iterations = 0;
+        *self.time_seconds = seconds;
+        *self.residual_dof = residual_dof;
+    }
+
+    /// Track `t`, rejected by the core with `err` (its core argument names renamed by `C::NAMES`): NaN
+    /// cost, the error's status, time 0; the message to keep, except for a track the call was stopped
+    /// before (`Error::Interrupted`): `messages` says it from the status, so that stopping a batch of
+    /// millions of tracks stays cheap.
+    pub(crate) fn rejected<C: TrackColumns>(self, t: usize, err: Error) -> Option<(usize, String)> {
+        if let Error::Interrupted { reason } = err {
+            self.uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, 0);
+            return None;
+        }
+        let err = renamed(err, C::NAMES);
+        self.uncertified(f64::NAN, error_status(&err), 0.0, 0);
+        Some((t, C::message(t, &err)))
+    }
+}
+
 impl PyBatchReport {
+    /// Columns for `n` tracks solved with `method`, each not started (`interrupted`) until its row
+    /// is written ([`PyBatchReport::rows_mut`]).
+    pub(crate) fn unstarted(method: Method, n: usize) -> PyResult<Self> {
+        Ok(PyBatchReport {
+            method: method.as_str(),
+            cost: column(f64::NAN, n)?,
+            lower_bound: column(0.0, n)?,
+            relative_gap: column(1.0, n)?,
+            certified: column(false, n)?,
+            certificate: column(CertificateKind::None.as_str(), n)?,
+            status: column(Status::Interrupted.as_str(), n)?,
+            nodes: column(0, n)?,
+            iterations: column(0, n)?,
+            time_seconds: column(0.0, n)?,
+            residual_dof: column(0, n)?,
+            errors: Vec::new(),
+        })
+    }
+
+    /// The rows of every track, to write in parallel.
+    pub(crate) fn rows_mut(&mut self) -> impl IndexedParallelIterator<Item = ReportRow<'_>> {
+        let numbers = (
+            self.cost.par_iter_mut(),
+            self.lower_bound.par_iter_mut(),
+            self.relative_gap.par_iter_mut(),
+            self.time_seconds.par_iter_mut(),
+            self.nodes.par_iter_mut(),
+            self.iterations.par_iter_mut(),
+            self.residual_dof.par_iter_mut(),
+        );
+        let labels = (
+            self.certified.par_iter_mut(),
+            self.certificate.par_iter_mut(),
+            self.status.par_iter_mut(),
+        );
+        numbers.into_par_iter().zip(labels.into_par_iter()).map(
+            |(
+                (cost, lower_bound, relative_gap, time_seconds, nodes, iterations, residual_dof),
+                (certified, certificate, status),
+            )| {
+                ReportRow {
+                    cost,
+                    lower_bound,
+                    relative_gap,
+                    certified,
+                    certificate,
+                    status,
+                    nodes,
+                    iterations,
+                    time_seconds,
+                    residual_dof,
+                }
+            },
+        )
+    }
+
+    /// The tracks whose rows were never written ([`PyBatchReport::unstarted`]) were not started
+    /// because of `reason`.
+    pub(crate) fn not_started_because(&mut self, reason: StopReason) {
+        let status = Status::stopped(reason).as_str();
+        if status == Status::Interrupted.as_str() {
+            return; // as they were filled
+        }
+        (self.status.par_iter_mut())
+            .zip(self.cost.par_iter())
+            .filter(|(s, cost)| not_started(s, **cost).is_some())
+            .for_each(|(s, _)| *s = status);
+    }
+
+    /// The messages of the rejected tracks, `(track, message)` in any order.
+    pub(crate) fn set_errors(&mut self, mut errors: Vec<(usize, String)>) {
+        errors.sort_unstable_by_key(|(t, _)| *t);
+        self.errors = errors;
+    }
+
     /// Empty columns for `n` tracks solved with `method`.
     pub(crate) fn with_capacity(method: Method, n: usize) -> Self {
         PyBatchReport {
@@ -182,50 +334,49 @@ impl PyBatchReport {
         }
     }
 
-    /// Appends a solved track's report.
-    pub(crate) fn push(&mut self, report: &Report) {
-        let c = &report.certificate;
-        self.cost.push(report.cost);
-        self.lower_bound.push(c.lower_bound);
-        self.relative_gap.push(c.relative_gap);
-        self.certified.push(c.certified);
-        self.certificate.push(c.kind.as_str());
-        self.status.push(report.status.as_str());
-        self.nodes.push(c.nodes as i64);
-        self.iterations.push(report.iterations as i64);
-        self.time_seconds.push(report.time_seconds);
-        self.residual_dof.push(report.residual_dof);
-    }
-
-    /// Appends a track without a certificate (lower bound 0, relative gap 1, no nodes or
-    /// iterations): a linear estimate of the point fast path, or a rejected track.
-    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
-        self.cost.push(cost);
+    /// A new last row, to write.
+    fn push_row(&mut self) -> ReportRow<'_> {
+        self.cost.push(f64::NAN);
         self.lower_bound.push(0.0);
         self.relative_gap.push(1.0);
         self.certified.push(false);
         self.certificate.push(CertificateKind::None.as_str());
-        self.status.push(status);
+        self.status.push(Status::Interrupted.as_str());
         self.nodes.push(0);
         self.iterations.push(0);
-        self.time_seconds.push(seconds);
-        self.residual_dof.push(residual_dof);
+        self.time_seconds.push(0.0);
+        self.residual_dof.push(0);
+        let last = self.cost.len() - 1;
+        ReportRow {
+            cost: &mut self.cost[last],
+            lower_bound: &mut self.lower_bound[last],
+            relative_gap: &mut self.relative_gap[last],
+            certified: &mut self.certified[last],
+            certificate: &mut self.certificate[last],
+            status: &mut self.status[last],
+            nodes: &mut self.nodes[last],
+            iterations: &mut self.iterations[last],
+            time_seconds: &mut self.time_seconds[last],
+            residual_dof: &mut self.residual_dof[last],
+        }
     }
 
-    /// Appends track `t`, rejected by the core with `err` (its core argument names renamed by
-    /// `C::NAMES`): NaN cost and estimates, the error's status and message, time 0.
-    ///
-    /// A track the call was stopped before (`Error::Interrupted`) stores no message: `messages` says
-    /// it from the status, so that stopping a batch of millions of tracks stays cheap.
+    /// Appends a solved track's report.
+    pub(crate) fn push(&mut self, report: &Report) {
+        self.push_row().solved(report);
+    }
+
+    /// Appends a track without a certificate ([`ReportRow::uncertified`]).
+    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
+        self.push_row().uncertified(cost, status, seconds, residual_dof);
+    }
+
+    /// Appends track `t`, rejected by the core with `err` ([`ReportRow::rejected`]), and NaN
+    /// estimates.
     pub(crate) fn reject<C: TrackColumns>(&mut self, columns: &mut C, t: usize, err: Error) {
-        if let Error::Interrupted { reason } = err {
-            self.push_uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, 0);
-            columns.push_missing();
-            return;
+        if let Some(message) = self.push_row().rejected::<C>(t, err) {
+            self.errors.push(message);
         }
-        let err = renamed(err, C::NAMES);
-        self.push_uncertified(f64::NAN, error_status(&err), 0.0, 0);
-        self.errors.push((t, C::message(t, &err)));
         columns.push_missing();
     }
 
@@ -331,6 +482,17 @@ pack_struct!(PyBatchReport {
     residual_dof,
     errors
 });
+
+/// An output column of `n` copies of `value`; a `MemoryError` rather than an abort when it cannot be
+/// allocated.
+pub(crate) fn column<T: Clone>(value: T, n: usize) -> PyResult<Vec<T>> {
+    let mut entries = Vec::new();
+    entries
+        .try_reserve_exact(n)
+        .map_err(|_| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))?;
+    entries.resize(n, value);
+    Ok(entries)
+}
 
 /// Row-major entries of a matrix.
 pub(crate) fn row_major<const R: usize, const C: usize>(

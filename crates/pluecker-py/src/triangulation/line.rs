@@ -15,7 +15,7 @@ use super::{options_arg, renamed, PyTriangulationOptions};
 use crate::convert::{
     cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
-use crate::errors::{invalid_argument, shape_error, solve};
+use crate::errors::{invalid_argument, shape_error};
 use crate::fields::{result_class, Array, Field};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
@@ -195,10 +195,11 @@ pub fn triangulate_line(
         Some(c) => Some(c),
         None => from_segments,
     };
-    let result = solve(py, move || {
+    // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
+    let outcome = interrupt::run_single(py, move || {
         core_triangulate_line(&cams, &image, covs.as_deref(), &opts).map_err(|e| renamed(e, LINE_NAMES))
     })?;
-    PyLineTriangulation::create(py, result)
+    interrupt::single_result(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?)
 }
 
 /// The results of `triangulate_lines`: Plücker coordinates, points and directions per track.

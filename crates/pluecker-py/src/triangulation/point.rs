@@ -8,28 +8,34 @@
 //! is not positive definite, ...) gets an error status and a message and never stops the others.
 //! Method `linear` takes the core's allocation-free path (`triangulate_points_linear`).
 
-use super::batch::{collect, per_observation, push_covariance, InlierColumns, PyBatchReport, TrackColumns};
+use super::batch::{
+    column, per_observation, push_covariance, row_major, InlierColumns, PyBatchReport, ReportRow, TrackColumns,
+};
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
 use crate::convert::{
     cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real,
 };
-use crate::errors::{shape_error, solve, to_py_err};
+use crate::errors::{shape_error, to_py_err};
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
+use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::batch::{
-    triangulate_points as core_points, triangulate_points_linear, triangulate_points_sparse, LinearPoints, PointTracks,
-    SparsePointTracks,
+    triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into, LinearPoints,
+    PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
 use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
+use rayon::prelude::*;
 use std::sync::atomic::Ordering;
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// A triangulated point: the estimate `X` and the report fields of `TriangulationReport`.
@@ -111,10 +117,11 @@ pub fn triangulate_point(
     let cams = cameras("P", P)?;
     let obs = observations("x", x, cams.len())?;
     let covs = covariances2("cov", cov, cams.len())?;
-    let result = solve(py, move || {
+    // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
+    let outcome = interrupt::run_single(py, move || {
         core_triangulate_point(&cams, &obs, covs.as_deref(), &opts).map_err(|e| renamed(e, POINT_NAMES))
     })?;
-    PyPointTriangulation::create(py, result)
+    interrupt::single_result(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
 }
 
 pack_struct!(PyPointTriangulation {
@@ -155,7 +162,81 @@ impl TrackColumns for PyPointTriangulations {
     }
 }
 
+/// One track's entries of the point columns, written in place.
+struct PointRow<'a> {
+    x: &'a mut [f64],
+    covariance: &'a mut [f64],
+}
+
+/// Where the core writes each finished track of a point batch ([`triangulate_points_into`]): the
+/// report and point columns in place, the messages of rejected tracks and the inlier masks of a
+/// robust batch aside, until [`PointSink::finish`].
+#[derive(Default)]
+struct PointSink {
+    errors: Mutex<Vec<(usize, String)>>,
+    masks: Mutex<Vec<(usize, Vec<bool>)>>,
+}
+
+impl PointSink {
+    fn write(&self, t: usize, (report, point): (ReportRow, PointRow), result: Result<PointTriangulation, Error>) {
+        match result {
+            Ok(track) => {
+                point.x.copy_from_slice(track.point.as_slice());
+                if let Some(c) = &track.covariance {
+                    point.covariance.iter_mut().zip(row_major(c)).for_each(|(e, v)| *e = v);
+                }
+                if let Some(mask) = track.inliers {
+                    lock(&self.masks).push((t, mask));
+                }
+                report.solved(&track.report);
+            }
+            Err(e) => {
+                if let Some(message) = report.rejected::<PyPointTriangulations>(t, e) {
+                    lock(&self.errors).push(message);
+                }
+            }
+        }
+    }
+
+    /// The columns of the `n` tracks, those not written not started because of `stopped`.
+    fn finish(
+        self,
+        mut report: PyBatchReport,
+        mut columns: PyPointTriangulations,
+        n: usize,
+        stopped: Option<StopReason>,
+    ) -> (PyBatchReport, PyPointTriangulations) {
+        if let Some(reason) = stopped {
+            report.not_started_because(reason);
+        }
+        report.set_errors(self.errors.into_inner().unwrap_or_else(|p| p.into_inner()));
+        columns.inliers = InlierColumns::from_masks(n, self.masks.into_inner().unwrap_or_else(|p| p.into_inner()));
+        (report, columns)
+    }
+}
+
+/// The vector behind `mutex`, also if a panicking writer poisoned it (the panic is reported anyway).
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 impl PyPointTriangulations {
+    /// Columns for `n` tracks, NaN until written ([`PyPointTriangulations::rows_mut`]).
+    fn unstarted(n: usize) -> PyResult<Self> {
+        let too_many = || PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks"));
+        Ok(PyPointTriangulations {
+            x: column(f64::NAN, n.checked_mul(3).ok_or_else(too_many)?)?,
+            covariance: column(f64::NAN, n.checked_mul(9).ok_or_else(too_many)?)?,
+            inliers: InlierColumns::default(),
+        })
+    }
+
+    fn rows_mut(&mut self) -> impl IndexedParallelIterator<Item = PointRow<'_>> {
+        (self.x.par_chunks_mut(3))
+            .zip(self.covariance.par_chunks_mut(9))
+            .map(|(x, covariance)| PointRow { x, covariance })
+    }
+
     /// The report and point columns of the core's linear fast path: no certificates, and every
     /// track timed at the batch's mean `seconds`.
     fn linear(points: LinearPoints, seconds: f64) -> (PyBatchReport, Self) {
@@ -247,6 +328,10 @@ pub fn triangulate_points(
     let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
     // The linear and local solves of a few thousand observations end within milliseconds.
     let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
+    let written = match opts.method {
+        Method::Linear => None,
+        _ => Some(unstarted(py, opts.method, n)?),
+    };
     let outcome = run_interruptible(py, progress, budget, short, move |done| {
         let tracks = PointTracks {
             observations: &observations,
@@ -261,8 +346,13 @@ pub fn triangulate_points(
             done.store(n, Ordering::Relaxed);
             return Ok(PyPointTriangulations::linear(linear, mean));
         }
-        let results = core_points(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
-        let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
+        let (mut report, mut columns) = written.expect("allocated for every method but linear");
+        let sink = PointSink::default();
+        let rows = report.rows_mut().zip(columns.rows_mut());
+        let write = |t, row, r| sink.write(t, row, r);
+        let stopped =
+            core_points(&cams, &tracks, &opts, Some(done), rows, write).map_err(|e| renamed(e, POINT_NAMES))?;
+        let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
             let visible = mask.as_deref();
@@ -303,16 +393,20 @@ pub fn triangulate_point_observations(
     let m = rows.len();
     let pixels = rows.per_row("x", x, &[2])?;
     let covariances = cov.map(|c| rows.per_row("cov", c, &[2, 2])).transpose()?;
+    let n = rows.offsets.len() - 1;
+    let (mut report, mut columns) = unstarted(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let sparse = SparsePointTracks {
             csr: rows.csr(),
             observations: &pixels,
             covariances: covariances.as_deref(),
         };
-        let results =
-            triangulate_points_sparse(&cams, &sparse, &opts, Some(done)).map_err(|e| renamed(e, POINT_NAMES))?;
-        let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
-        let (report, mut columns) = collect::<PyPointTriangulations>(opts.method, results);
+        let sink = PointSink::default();
+        let out = report.rows_mut().zip(columns.rows_mut());
+        let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
+        let stopped = triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write)
+            .map_err(|e| renamed(e, POINT_NAMES))?;
+        let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's observations are its sorted rows, each back at its row as given.
             columns.inliers.scatter(vec![m], |t| rows.rows_of(t));
@@ -320,6 +414,17 @@ pub fn triangulate_point_observations(
         Ok((report, columns))
     })?;
     batch_result(py, outcome)
+}
+
+/// The report and point columns of `n` tracks not started yet (allocated and filled with the GIL
+/// released), for the core to write each track into as it finishes ([`PointSink`]).
+fn unstarted(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, PyPointTriangulations)> {
+    py.allow_threads(|| {
+        Ok((
+            PyBatchReport::unstarted(method, n)?,
+            PyPointTriangulations::unstarted(n)?,
+        ))
+    })
 }
 
 pack_struct!(PyPointTriangulations { x, covariance, inliers });

@@ -8,7 +8,6 @@ use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
 use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
-use crate::errors::solve;
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
@@ -118,10 +117,11 @@ pub fn triangulate_quadric(
         }
         None => None,
     };
-    let result = solve(py, move || {
+    // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
+    let outcome = interrupt::run_single(py, move || {
         core_triangulate_quadric(&cams, &observed, covs.as_deref(), &opts).map_err(|e| renamed(e, QUADRIC_NAMES))
     })?;
-    PyQuadricTriangulation::create(py, result)
+    interrupt::single_result(py, outcome.pending, PyQuadricTriangulation::create(py, outcome.value)?)
 }
 
 /// The results of `triangulate_quadrics`: dual and primal quadrics, centres, semi-axes and axes.

@@ -4,7 +4,7 @@
 //! restating of a single-track error for the batch.
 
 use crate::error::{Error, Result};
-use crate::interrupt::{current, stop_reason, Installed};
+use crate::interrupt::{current, stop_reason, Installed, StopReason};
 use crate::triangulation::views::validate_cameras;
 use crate::triangulation::Method;
 use nalgebra::Matrix3x4;
@@ -172,17 +172,62 @@ where
         .map_init(
             || Installed::new(stop.clone()),
             |_, t| {
-                let out = match stop_reason() {
-                    Some(reason) => Err(Error::Interrupted { reason }),
-                    None => one(t),
-                };
-                if let Some(done) = done {
-                    done.fetch_add(1, Ordering::Relaxed);
-                }
+                let out = unless_stopped(t, &one);
+                count(done);
                 out
             },
         )
         .collect()
+}
+
+/// [`solve_tracks`] handing each track's result to `write(t, row, result)` as it finishes, with
+/// row `t` of `rows` (one per track), instead of collecting them: a binding writes them straight into
+/// its output columns. `rows.len()` is the number of tracks; `done` counts the tracks written.
+///
+/// Once the installed stop fires, the tracks not started are not handed to `write` at all (their rows
+/// stay as they were, and the loop ends without a pass over them): the reason is returned, `None`
+/// when every track was written.
+pub(crate) fn solve_tracks_into<X, R, F, W>(
+    rows: impl IndexedParallelIterator<Item = R>,
+    min_len: usize,
+    done: Option<&AtomicUsize>,
+    one: F,
+    write: W,
+) -> Option<StopReason>
+where
+    R: Send,
+    F: Fn(usize) -> Result<X> + Sync + Send,
+    W: Fn(usize, R, Result<X>) + Sync + Send,
+{
+    let stop = current();
+    rows.enumerate()
+        .with_min_len(min_len.max(1))
+        .try_for_each_init(
+            || Installed::new(stop.clone()),
+            |_, (t, row)| {
+                if let Some(reason) = stop_reason() {
+                    return Err(reason);
+                }
+                write(t, row, one(t));
+                count(done);
+                Ok(())
+            },
+        )
+        .err()
+}
+
+/// `one(t)`, or `Err(Error::Interrupted)` when the installed stop has fired.
+fn unless_stopped<X>(t: usize, one: impl Fn(usize) -> Result<X>) -> Result<X> {
+    match stop_reason() {
+        Some(reason) => Err(Error::Interrupted { reason }),
+        None => one(t),
+    }
+}
+
+fn count(done: Option<&AtomicUsize>) {
+    if let Some(done) = done {
+        done.fetch_add(1, Ordering::Relaxed);
+    }
 }
 
 /// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means

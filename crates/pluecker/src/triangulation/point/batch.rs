@@ -22,9 +22,11 @@ use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{solve_track_views, PointTriangulation};
 use crate::error::{Error, Result};
-use crate::interrupt::current;
+use crate::interrupt::{current, StopReason};
 use crate::triangulation::covariance::whitening;
-use crate::triangulation::tracks::{check_mask, check_values, solve_tracks, too_few, track_count, visible_views, Csr};
+use crate::triangulation::tracks::{
+    check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
+};
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{centre, depth_normalized, validate_cameras};
 use crate::triangulation::{Method, Status, TriangulationOptions};
@@ -166,14 +168,57 @@ pub fn triangulate_points(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
+    let (n, one) = dense_solver(cameras, tracks, opts)?;
+    Ok(solve_tracks(n, 16, progress, one))
+}
+
+/// [`triangulate_points`] handing each track's result to `write(t, row, result)` as it finishes,
+/// with row `t` of `rows` (e.g. track `t`'s entries of preallocated output columns), instead of
+/// collecting them: nothing is kept per track beyond what `write` keeps. `rows` must have one row
+/// per track.
+///
+/// A stopped batch ([`crate::interrupt`]) does not hand the tracks it had not started to `write`
+/// (their rows stay as they were, and it ends without a pass over them): `Ok(Some(reason))` then
+/// says why; `Ok(None)`: every track was written. `progress` counts the tracks written.
+pub fn triangulate_points_into<R: Send>(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &PointTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = dense_solver(cameras, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 16, progress, one, write))
+}
+
+/// The number of tracks of a dense batch, checked, and the solve of track `t`.
+fn dense_solver<'a>(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &'a PointTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<PointTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     let (n, prepared) = check_batch(cameras, tracks)?;
     let v = cameras.len();
-    let one = |t: usize| {
+    let one = move |t: usize| {
         let views = visible_views(tracks.visible, v, t).map(|j| Ok((j, track_view(tracks, v, t, j)?)));
         solve_track(&prepared, opts, t, views)
     };
-    Ok(solve_tracks(n, 16, progress, one))
+    Ok((n, one))
+}
+
+/// The output rows of a batch of `n` tracks number `rows`: an error of the caller's, not the data's.
+fn check_rows(rows: usize, n: usize) -> Result<()> {
+    if rows == n {
+        return Ok(());
+    }
+    Err(Error::Shape {
+        what: "rows".into(),
+        expected: format!("one output row per track ({n})"),
+        actual: rows.to_string(),
+    })
 }
 
 /// Track `t` from its observations `(image, (pixel, whitening))`: at least two, with parallax.
@@ -235,11 +280,36 @@ pub fn triangulate_points_sparse(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
+    let (n, one) = sparse_solver(cameras, tracks, opts)?;
+    Ok(solve_tracks(n, 16, progress, one))
+}
+
+/// [`triangulate_points_sparse`] handing each track's result to `write(t, row, result)` as it
+/// finishes, as [`triangulate_points_into`] does.
+pub fn triangulate_points_sparse_into<R: Send>(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &SparsePointTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = sparse_solver(cameras, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 16, progress, one, write))
+}
+
+/// The number of tracks of a sparse batch, checked, and the solve of track `t`.
+fn sparse_solver<'a>(
+    cameras: &[Matrix3x4<f64>],
+    tracks: &'a SparsePointTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<PointTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     let prepared = prepare(cameras)?;
     let n = tracks.check()?;
     let v = cameras.len();
-    let one = |t: usize| {
+    let one = move |t: usize| {
         let rows = tracks.csr.observations(t, v)?;
         let views = rows
             .iter()
@@ -247,7 +317,7 @@ pub fn triangulate_points_sparse(
             .map(|(i, &(j, k))| Ok((j, observation(tracks.observations, tracks.covariances, k, t, i)?)));
         solve_track(&prepared, opts, t, views)
     };
-    Ok(solve_tracks(n, 16, progress, one))
+    Ok((n, one))
 }
 
 /// The result of [`triangulate_points_linear`], as flat arrays of length `n` (points `n · 3`).
