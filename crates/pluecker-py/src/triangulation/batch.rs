@@ -150,6 +150,7 @@ pub struct PyBatchReport {
     method: &'static str,
     cost: Vec<f64>,
     lower_bound: Vec<f64>,
+    raw_lower_bound: Vec<f64>,
     relative_gap: Vec<f64>,
     certified: Vec<bool>,
     certificate: Vec<&'static str>,
@@ -170,6 +171,7 @@ impl PyBatchReport {
             method: method.as_str(),
             cost: Vec::with_capacity(n),
             lower_bound: Vec::with_capacity(n),
+            raw_lower_bound: Vec::with_capacity(n),
             relative_gap: Vec::with_capacity(n),
             certified: Vec::with_capacity(n),
             certificate: Vec::with_capacity(n),
@@ -187,6 +189,7 @@ impl PyBatchReport {
         let c = &report.certificate;
         self.cost.push(report.cost);
         self.lower_bound.push(c.lower_bound);
+        self.raw_lower_bound.push(c.raw_lower_bound);
         self.relative_gap.push(c.relative_gap);
         self.certified.push(c.certified);
         self.certificate.push(c.kind.as_str());
@@ -202,6 +205,7 @@ impl PyBatchReport {
     pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
         self.cost.push(cost);
         self.lower_bound.push(0.0);
+        self.raw_lower_bound.push(f64::NAN);
         self.relative_gap.push(1.0);
         self.certified.push(false);
         self.certificate.push(CertificateKind::None.as_str());
@@ -285,6 +289,8 @@ result_class! {
         cost = |b| b.cost.clone();
         /// Per track: the proved lower bound on the cost.
         lower_bound = |b| b.lower_bound.clone();
+        /// Per track: the proved bound before the cap at the cost (NaN without a bound).
+        raw_lower_bound = |b| b.raw_lower_bound.clone();
         /// Per track: `(cost − lower_bound) / cost`.
         relative_gap = |b| b.relative_gap.clone();
         /// Per track: whether the estimate is certified globally optimal.
@@ -321,6 +327,7 @@ pack_struct!(PyBatchReport {
     method,
     cost,
     lower_bound,
+    raw_lower_bound,
     relative_gap,
     certified,
     certificate,

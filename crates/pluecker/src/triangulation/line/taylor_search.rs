@@ -172,6 +172,11 @@ pub(crate) fn optimal_line_taylor(
     report.cost = best_cost;
     (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
     report.certificate.kind = CertificateKind::TaylorBranchAndBound;
+    if restricted.is_none() {
+        // Regions were discarded for holding no stationary point, which only shows that no line
+        // there is cheaper than the local one (module docs): the proved bound is at most its cost.
+        report.certificate.raw_lower_bound = report.certificate.raw_lower_bound.min(cost);
+    }
     if restricted.is_some() && result.box_lower_bound == f64::INFINITY {
         // Every region was proved to hold no line within γ in every view.
         report.set_status(Status::Infeasible);
