@@ -5,7 +5,7 @@
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
 use pluecker::error::Error;
 use pluecker::rng::Rng;
-use pluecker::synthetic::{triangulation_scene, TriangulationScene};
+use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{
     triangulate_points, triangulate_points_linear, triangulate_points_sparse, PointTracks, SparsePointTracks,
 };
@@ -201,8 +201,9 @@ fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
             test.lower_bound
         );
     }
-    // Rate guard (not the check): 42 of 60 pass at the time of writing; below 30 the loop above
+    // Rate guard (not the check): 54 of 60 pass at the time of writing; below 30 the loop above
     // checks too little to mean anything.
+    eprintln!("{passed} of 60 local solutions pass the convexity test");
     assert!(passed > 30, "the test passed only {passed} times");
 }
 
@@ -254,7 +255,8 @@ fn convexity_test_centred_away_from_the_minimiser_bounds_the_global_minimum() {
             }
         }
     }
-    // Rate guards: at the time of writing 251 origins pass the test, 204 of them 1 % above the minimum.
+    // Rate guards: at the time of writing 371 origins pass the test, 348 of them 1 % above the minimum.
+    eprintln!("{passed} chart origins pass the test, {informative} of them 1 % above the minimum");
     assert!(
         passed >= 100 && informative >= 50,
         "{passed} passed, {informative} informative"
@@ -299,6 +301,7 @@ fn low_parallax_goes_to_branch_and_bound_which_certifies_in_front_of_the_cameras
     // Rate guard: 0.2° of parallax over 10 views is the regime the convexity test is known to give
     // up on (measured: 6 of 12 go to branch and bound); if none does, this test no longer exercises
     // branch and bound, though the checks above stay valid.
+    eprintln!("{by_bnb} of 12 by branch and bound");
     assert!(
         by_bnb >= 4,
         "only {by_bnb} of 12 low-parallax points needed branch and bound"
@@ -400,9 +403,10 @@ fn branch_and_bound_from_a_point_that_is_not_a_minimum_finds_and_bounds_the_glob
             );
         }
     }
-    // Rate guard: 16 of 16 converge at the time of writing; fewer than 10 means the checks above
+    // Rate guard: 13 of 16 converge within 2000 nodes at the time of writing; fewer than 8 means the checks above
     // saw too few finished searches.
-    assert!(converged >= 10, "{converged}");
+    eprintln!("{converged} of 16 searches converged");
+    assert!(converged >= 8, "{converged}");
 }
 
 /// Certified points over the regimes of the convexity test: the raw bound (convexity test or branch
@@ -446,7 +450,9 @@ fn certified_points_have_raw_bounds_below_every_cost_found() {
             "seed {seed}: {c:?}"
         );
     }
-    // Rate guard: 24 of 24 at the time of writing.
+    // Rate guard: 23 of 24 at the time of writing; fewer than 18 means certification broke and the
+    // checks above saw too little.
+    eprintln!("{certified} of 24 certified");
     assert!(certified >= 18, "{certified}");
 }
 
