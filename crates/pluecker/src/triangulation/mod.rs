@@ -369,7 +369,7 @@ impl CertificateKind {
 }
 
 /// The global-optimality evidence of an estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Certificate {
     /// A lower bound on the cost of eq. 19 over every admissible primitive (`0` when not computed),
     /// capped at the cost: `min(raw_lower_bound, cost)`.
@@ -388,6 +388,22 @@ pub struct Certificate {
     pub nodes: usize,
     /// Interior-point iterations of the conic solver, summed over nodes.
     pub solver_iterations: usize,
+}
+
+/// Field by field, with the NaN of "no raw bound" equal to itself (two certificates without a
+/// bound are the same certificate).
+impl PartialEq for Certificate {
+    fn eq(&self, other: &Self) -> bool {
+        let same_raw = self.raw_lower_bound == other.raw_lower_bound
+            || (self.raw_lower_bound.is_nan() && other.raw_lower_bound.is_nan());
+        same_raw
+            && self.lower_bound == other.lower_bound
+            && self.relative_gap == other.relative_gap
+            && self.certified == other.certified
+            && self.kind == other.kind
+            && self.nodes == other.nodes
+            && self.solver_iterations == other.solver_iterations
+    }
 }
 
 impl Certificate {
