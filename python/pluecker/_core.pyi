@@ -530,6 +530,10 @@ class TriangulationReport:
     """The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate."""
     lower_bound: float
     """Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate)."""
+    raw_lower_bound: float
+    """The bound as the search or test proved it, before `lower_bound`'s cap at the cost (NaN without a
+    bound, inf when the search set was proved empty); a value above the cost of any admissible estimate disproves the certificate.
+    """
     relative_gap: float
     """`(cost − lower_bound) / cost`."""
     certified: bool
@@ -624,6 +628,8 @@ class BatchReport:
     """Per track: the cost of eq. 19 at the estimate (NaN for a rejected track)."""
     lower_bound: NDArray[np.float64]
     """Per track: the proved lower bound on the cost."""
+    raw_lower_bound: NDArray[np.float64]
+    """Per track: the proved bound before the cap at the cost (NaN without a bound)."""
     relative_gap: NDArray[np.float64]
     """Per track: `(cost − lower_bound) / cost`."""
     certified: NDArray[np.bool_]

@@ -46,8 +46,7 @@ result_class! {
         cost = |r| r.inner.cost;
         /// Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate).
         lower_bound = |r| r.inner.certificate.lower_bound;
-        /// The bound as the search or test proved it, before `lower_bound`'s cap at the cost (NaN without a
-        /// bound, inf when the search set was proved empty); a value above the cost of any admissible estimate disproves the certificate.
+        /// The bound as proved, before `lower_bound`'s cap at the cost (NaN without a bound, inf for an empty search set).
         raw_lower_bound = |r| r.inner.certificate.raw_lower_bound;
         /// `(cost − lower_bound) / cost`.
         relative_gap = |r| r.inner.certificate.relative_gap;
