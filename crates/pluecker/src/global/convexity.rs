@@ -593,8 +593,9 @@ mod tests {
     /// Stage 3's claim, checked pointwise: the minorant's Hessian `H = (1 − μ)P` is at most the cost's
     /// curvature at every point of the enclosure `K = S ∩ Q` (central differences of the cost written out
     /// in [`plain_cost`], on a 4001-point grid of `K`'s bounding box). The inequality chain has slack
-    /// (measured: the cost's curvature on `K` is at least 1.9 `H` over these charts), but a minorant twice
-    /// as curved is caught on the charts where it is least.
+    /// (the cost's curvature on `K` comes down to about twice `H` on the worst of these charts, none
+    /// lower), so a minorant twice as curved (`P` doubled) is caught only on those worst charts; halving
+    /// the `6` of `μ` is not caught here (the documented-formula test below catches it).
     #[test]
     fn the_minorants_curvature_is_below_the_costs_on_the_enclosure() {
         let mut rng = Rng::new(31);
