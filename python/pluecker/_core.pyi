@@ -531,9 +531,7 @@ class TriangulationReport:
     lower_bound: float
     """Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate)."""
     raw_lower_bound: float
-    """The bound as the search or test proved it, before `lower_bound`'s cap at the cost (NaN without a
-    bound, inf when the search set was proved empty); a value above the cost of any admissible estimate disproves the certificate.
-    """
+    """The bound as proved, before `lower_bound`'s cap at the cost (NaN without a bound, inf for an empty search set)."""
     relative_gap: float
     """`(cost − lower_bound) / cost`."""
     certified: bool
