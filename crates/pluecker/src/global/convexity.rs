@@ -410,7 +410,7 @@ mod tests {
         let mut f = 0.0;
         for v in views {
             let zeta = 1.0 + (0..N).map(|j| v.d[j] * y[j]).sum::<f64>();
-            if !(zeta > 0.0) {
+            if zeta <= 0.0 || zeta.is_nan() {
                 return None;
             }
             for i in 0..M {

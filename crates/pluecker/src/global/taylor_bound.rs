@@ -507,7 +507,7 @@ mod tests {
                     }
                 });
                 let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
-                if !(norm > 0.0) {
+                if norm <= 0.0 || norm.is_nan() {
                     break;
                 }
                 let mut moved = false;
