@@ -57,6 +57,53 @@ def depths(P: np.ndarray, X: np.ndarray) -> np.ndarray:
     return P[:, 2] @ np.append(X, 1.0)
 
 
+def refine_point(P: np.ndarray, x: np.ndarray, X0: np.ndarray, cov: np.ndarray | None = None,
+                 iterations: int = 200) -> tuple[np.ndarray, float]:
+    """Levenberg-Marquardt on ``cost_eq19`` from ``X0`` (numpy only, not the library), kept in front of
+    every camera: the point and its cost, an upper bound of the minimum over the points in front."""
+    W = np.broadcast_to(np.eye(2), (len(P), 2, 2)) if cov is None else np.linalg.inv(cov)
+    X, f, damping = np.asarray(X0, float), cost_eq19(P, X0, x, cov), 1e-3
+    for _ in range(iterations):
+        h = P @ np.append(X, 1.0)
+        proj = h[:, :2] / h[:, 2:]
+        # ∂π/∂X = (rows 1-2 of M − π · row 3 of M) / λ per view.
+        J = (P[:, :2, :3] - proj[:, :, None] * P[:, 2:3, :3]) / h[:, 2, None, None]
+        e = proj - x
+        H = np.einsum("vai,vab,vbj->ij", J, W, J)
+        g = np.einsum("vai,vab,vb->i", J, W, e)
+        while damping < 1e12:
+            try:
+                trial = X - np.linalg.solve(H + damping * np.diag(np.diag(H)) + 1e-300 * np.eye(3), g)
+            except np.linalg.LinAlgError:
+                damping *= 10
+                continue
+            ft = cost_eq19(P, trial, x, cov)
+            if np.all(depths(P, trial) > 0) and ft < f:
+                done = f - ft <= 1e-15 * f
+                X, f, damping = trial, ft, max(damping * 0.3, 1e-12)
+                break
+            damping *= 10
+        else:
+            break
+        if done:
+            break
+    return X, f
+
+
+def many_start_point_minimum(P: np.ndarray, x: np.ndarray, X_ref: np.ndarray, rng: np.random.Generator,
+                             starts: int = 30, cov: np.ndarray | None = None) -> float:
+    """The least cost ``refine_point`` reaches from ``X_ref`` and from ``starts`` random points in front of
+    every camera along camera 0's ray through ``X_ref`` (0.1 to 1000 times its depth, jittered)."""
+    centre = -np.linalg.solve(P[0, :, :3], P[0, :, 3])
+    best = refine_point(P, x, X_ref, cov)[1] if np.all(depths(P, X_ref) > 0) else math.inf
+    for _ in range(starts):
+        depth = 10 ** rng.uniform(-1, 3)
+        X0 = centre + (X_ref - centre) * depth + rng.normal(0, 0.02 * depth * np.linalg.norm(X_ref - centre), 3)
+        if np.all(depths(P, X0) > 0):
+            best = min(best, refine_point(P, x, X0, cov)[1])
+    return best
+
+
 def image_line(P: np.ndarray, A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Homogeneous image lines (v, 3) of the 3-D line through A and B."""
     a, b = P @ np.append(A, 1.0), P @ np.append(B, 1.0)

@@ -534,6 +534,8 @@ class TriangulationReport:
     """The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate."""
     lower_bound: float
     """Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate)."""
+    raw_lower_bound: float
+    """The bound as proved, before `lower_bound`'s cap at the cost (NaN without a bound, inf for an empty search set)."""
     relative_gap: float
     """`(cost − lower_bound) / cost`."""
     certified: bool
@@ -628,6 +630,8 @@ class BatchReport:
     """Per track: the cost of eq. 19 at the estimate (NaN for a rejected track)."""
     lower_bound: NDArray[np.float64]
     """Per track: the proved lower bound on the cost."""
+    raw_lower_bound: NDArray[np.float64]
+    """Per track: the proved bound before the cap at the cost (NaN without a bound)."""
     relative_gap: NDArray[np.float64]
     """Per track: `(cost − lower_bound) / cost`."""
     certified: NDArray[np.bool_]

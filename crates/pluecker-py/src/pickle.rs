@@ -316,6 +316,7 @@ pack_struct!(ResidualTest {
 });
 pack_struct!(Certificate {
     lower_bound,
+    raw_lower_bound,
     relative_gap,
     certified,
     kind,

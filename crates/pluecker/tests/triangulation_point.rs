@@ -5,17 +5,20 @@
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
 use pluecker::error::Error;
 use pluecker::rng::Rng;
-use pluecker::synthetic::{triangulation_scene, TriangulationScene};
+use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{
     triangulate_points, triangulate_points_linear, triangulate_points_sparse, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::certificate::convexity_test;
-use pluecker::triangulation::point::cost::{in_front, point_cost, point_views, PointObjective, PointView};
+use pluecker::triangulation::point::cost::{in_front, point_views, PointView};
 use pluecker::triangulation::point::global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::tracks::Csr;
 use pluecker::triangulation::views::depth_normalized;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
+
+#[path = "common/oracle_triangulation.rs"]
+mod oracle;
 
 fn options(method: Method) -> TriangulationOptions {
     TriangulationOptions {
@@ -136,29 +139,26 @@ fn optimal_is_no_worse_than_local_which_is_no_worse_than_linear() {
     }
 }
 
-/// Minimum of eq. 19 over many local runs from random points in front of the cameras, spread
-/// along the first camera's ray from 0.1 to 1000 times the true depth and laterally.
-fn multistart_minimum(scene: &TriangulationScene, views: &[PointView], rng: &mut Rng) -> f64 {
-    let opts = TriangulationOptions::default().local;
-    let mut best = f64::INFINITY;
-    let ray = scene.point - pluecker::triangulation::views::centre(&scene.cameras[0]);
-    for _ in 0..300 {
-        let depth = 10f64.powf(rng.uniform_in(-1.0, 3.0));
-        let jitter = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.02 * depth * ray.norm();
-        let x0 = pluecker::triangulation::views::centre(&scene.cameras[0]) + ray * depth + jitter;
-        if !in_front(views, &x0) {
-            continue;
-        }
-        let (x, _) = pluecker::optim::trust_region::minimize(&PointObjective { views }, x0, &opts);
-        if in_front(views, &x) {
-            best = best.min(point_cost(views, &x));
-        }
-    }
-    best
+/// Random anisotropic covariances (condition number up to 100).
+fn random_covariances(views: usize, rng: &mut Rng) -> Vec<Matrix2<f64>> {
+    (0..views)
+        .map(|_| {
+            let (a, b, angle) = (
+                rng.uniform_in(0.3, 3.0),
+                rng.uniform_in(0.3, 3.0),
+                rng.uniform_in(0.0, 3.2),
+            );
+            let r = nalgebra::Rotation2::new(angle).into_inner();
+            r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
+        })
+        .collect()
 }
 
 #[test]
 fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
+    // The raw bound of the convexity test at the local solution against the oracle's costs: at the
+    // answer, at random points around it and at the many-start minimum (all computed without the
+    // library's point code).
     let mut passed = 0;
     for seed in 0..60u64 {
         let views = [2usize, 3, 5, 8][seed as usize % 4];
@@ -166,18 +166,8 @@ fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
         let scene = triangulation_scene(views, parallax, 300 + seed);
         let mut rng = Rng::new(seed);
         let obs = scene.noisy(1.5, &mut rng);
-        // Odd seeds: random anisotropic covariances (condition number up to 100).
-        let covs: Vec<Matrix2<f64>> = (0..views)
-            .map(|_| {
-                let (a, b, angle) = (
-                    rng.uniform_in(0.3, 3.0),
-                    rng.uniform_in(0.3, 3.0),
-                    rng.uniform_in(0.0, 3.2),
-                );
-                let r = nalgebra::Rotation2::new(angle).into_inner();
-                r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
-            })
-            .collect();
+        // Odd seeds: random anisotropic covariances.
+        let covs = random_covariances(views, &mut rng);
         let covs = (seed % 2 == 1).then_some(covs.as_slice());
         let r = triangulate_point(&scene.cameras, &obs, covs, &options(Method::Local)).unwrap();
         if r.report.status != Status::Success {
@@ -189,7 +179,10 @@ fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
             continue;
         }
         passed += 1;
-        assert!(test.lower_bound <= r.report.cost * (1.0 + 1e-12));
+        let data = oracle::PointData::new(&scene.cameras, &obs, covs);
+        // The oracle's cost of the answer, rounded like any sum of a few squares (1e-12 relative).
+        let at_answer = data.cost(&r.point);
+        assert!(test.lower_bound <= at_answer * (1.0 + 1e-12), "seed {seed}");
         // Random points around the estimate (scaled by its distance to the first camera) in front
         // of every camera never beat the bound.
         let scale = (r.point - pluecker::triangulation::views::centre(&scene.cameras[0])).norm();
@@ -197,18 +190,77 @@ fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
             let step =
                 Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 10f64.powf(rng.uniform_in(-5.0, -0.5));
             let x = r.point + step;
-            if in_front(&vs, &x) {
-                assert!(point_cost(&vs, &x) >= test.lower_bound * (1.0 - 1e-12), "seed {seed}");
+            if data.in_front(&x) {
+                assert!(data.cost(&x) >= test.lower_bound * (1.0 - 1e-12), "seed {seed}");
             }
         }
-        let best = multistart_minimum(&scene, &vs, &mut rng);
+        let (_, best) = data.many_start_minimum(&r.point, 300, &mut rng);
         assert!(
             best >= test.lower_bound * (1.0 - 1e-9),
             "seed {seed}: multistart {best} < bound {}",
             test.lower_bound
         );
     }
+    // Rate guard (not the check): 54 of 60 pass at the time of writing; below 30 the loop above
+    // checks too little to mean anything.
+    eprintln!("{passed} of 60 local solutions pass the convexity test");
     assert!(passed > 30, "the test passed only {passed} times");
+}
+
+/// The convexity test is a sufficient test at any chart origin, not only at a minimiser: centred at
+/// points moved away from the local solution (along the ill-determined depth and across it, by a few
+/// standard deviations), a passing test's bound must stay below the global minimum found by the
+/// oracle's many-start search. There the minorant's gradient term is not zero, so its curvature
+/// decides the bound: a minorant more curved than the cost shows here, not at the minimiser.
+#[test]
+fn convexity_test_centred_away_from_the_minimiser_bounds_the_global_minimum() {
+    let (mut passed, mut informative) = (0, 0);
+    for seed in 0..40u64 {
+        let views = [2usize, 3, 5][seed as usize % 3];
+        let parallax = [0.3f64, 0.05, 0.01, 0.004][(seed / 3) as usize % 4];
+        let scene = triangulation_scene(views, parallax, 700 + seed);
+        let mut rng = Rng::new(seed + 77);
+        let sigma = [0.5, 2.0, 5.0][seed as usize % 3];
+        let obs = scene.noisy(sigma, &mut rng);
+        let covs = random_covariances(views, &mut rng);
+        let covs = (seed % 2 == 0).then_some(covs.as_slice());
+        let data = oracle::PointData::new(&scene.cameras, &obs, covs);
+        let (x_min, f_min) = data.many_start_minimum(&scene.point, 200, &mut rng);
+        let vs = views_of(&scene.cameras, &obs, covs);
+        let ray = (x_min - pluecker::triangulation::views::centre(&scene.cameras[0])).normalize();
+        for k in 0..12 {
+            let along = rng.normal() * 10f64.powf(rng.uniform_in(-3.0, -0.5));
+            let across =
+                Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 10f64.powf(rng.uniform_in(-4.0, -1.5));
+            let depth = (x_min - pluecker::triangulation::views::centre(&scene.cameras[0])).norm();
+            let x = x_min + (ray * along + across) * depth;
+            if !data.in_front(&x) {
+                continue;
+            }
+            let test = convexity_test(&vs, &x);
+            if !test.passed {
+                continue;
+            }
+            passed += 1;
+            let f_x = data.cost(&x);
+            assert!(test.lower_bound <= f_x * (1.0 + 1e-12), "seed {seed} start {k}");
+            // Costs of a few squares rounded to 1e-12 relative; the bound is widened by its own margin.
+            assert!(
+                test.lower_bound <= f_min * (1.0 + 1e-12),
+                "seed {seed} start {k}: bound {} above the global minimum {f_min} (cost at the chart origin {f_x})",
+                test.lower_bound
+            );
+            if f_x > 1.01 * f_min {
+                informative += 1;
+            }
+        }
+    }
+    // Rate guards: at the time of writing 371 origins pass the test, 348 of them 1 % above the minimum.
+    eprintln!("{passed} chart origins pass the test, {informative} of them 1 % above the minimum");
+    assert!(
+        passed >= 100 && informative >= 50,
+        "{passed} passed, {informative} informative"
+    );
 }
 
 #[test]
@@ -219,21 +271,37 @@ fn low_parallax_goes_to_branch_and_bound_which_certifies_in_front_of_the_cameras
         let obs = scene.noisy(1.0, &mut Rng::new(seed + 1000));
         let r = triangulate_point(&scene.cameras, &obs, None, &options(Method::Optimal)).unwrap();
         assert_eq!(r.report.status, Status::Success, "seed {seed}: {:?}", r.report);
-        assert!(r.report.certificate.certified && r.report.certificate.relative_gap <= 1e-3);
-        let vs = views_of(&scene.cameras, &obs, None);
-        assert!(in_front(&vs, &r.point));
-        if r.report.certificate.kind == CertificateKind::BranchAndBound {
+        let c = r.report.certificate;
+        let data = oracle::PointData::new(&scene.cameras, &obs, None);
+        assert!(data.in_front(&r.point));
+        let cost = data.cost(&r.point);
+        assert!(
+            (cost - r.report.cost).abs() <= 1e-9 * cost,
+            "seed {seed}: {cost} vs {}",
+            r.report.cost
+        );
+        // The raw bound is below the answer's cost and the many-start minimum, and the gap
+        // recomputed from them closed.
+        let (_, best) = data.many_start_minimum(&r.point, 300, &mut Rng::new(seed));
+        assert!(c.raw_lower_bound <= cost * (1.0 + 1e-12), "seed {seed}: {c:?}");
+        assert!(best >= c.raw_lower_bound * (1.0 - 1e-9), "seed {seed}: {best} < {c:?}");
+        assert!(
+            c.certified && oracle::gap(cost, c.raw_lower_bound) <= 1e-3 * (1.0 + 1e-9),
+            "seed {seed}: {c:?}"
+        );
+        assert!(
+            cost <= best * (1.0 + 1e-3) + 1e-9,
+            "seed {seed}: {cost} vs multistart {best}"
+        );
+        if c.kind == CertificateKind::BranchAndBound {
             by_bnb += 1;
-            assert!(r.report.certificate.nodes >= 1);
-            let best = multistart_minimum(&scene, &vs, &mut Rng::new(seed));
-            assert!(best >= r.report.certificate.lower_bound * (1.0 - 1e-9), "seed {seed}");
-            assert!(
-                r.report.cost <= best * (1.0 + 1e-3) + 1e-9,
-                "seed {seed}: {} vs multistart {best}",
-                r.report.cost
-            );
+            assert!(c.nodes >= 1);
         }
     }
+    // Rate guard: 0.2° of parallax over 10 views is the regime the convexity test is known to give
+    // up on (measured: 6 of 12 go to branch and bound); if none does, this test no longer exercises
+    // branch and bound, though the checks above stay valid.
+    eprintln!("{by_bnb} of 12 by branch and bound");
     assert!(
         by_bnb >= 4,
         "only {by_bnb} of 12 low-parallax points needed branch and bound"
@@ -246,7 +314,9 @@ fn both_relaxations_give_valid_bounds_below_random_feasible_points() {
     let obs = scene.noisy(1.0, &mut Rng::new(5));
     let local = triangulate_point(&scene.cameras, &obs, None, &options(Method::Local)).unwrap();
     let vs = views_of(&scene.cameras, &obs, None);
+    let data = oracle::PointData::new(&scene.cameras, &obs, None);
     let mut rng = Rng::new(55);
+    let (_, best) = data.many_start_minimum(&local.point, 200, &mut rng);
     for relaxation in [Relaxation::Fractional, Relaxation::Secant, Relaxation::Both] {
         let settings = GlobalSettings {
             gamma: local.report.cost.sqrt(),
@@ -257,19 +327,133 @@ fn both_relaxations_give_valid_bounds_below_random_feasible_points() {
         };
         let g = global_point(&vs, &local.point, local.report.cost, &[], &settings);
         assert_eq!(g.status, GlobalStatus::Converged, "{relaxation:?}");
-        assert!(g.cost <= local.report.cost && g.lower_bound <= g.cost);
-        assert!(g.cost - g.lower_bound <= 1e-3 * g.cost);
+        let cost = data.cost(&g.point);
+        assert!(cost <= data.cost(&local.point) * (1.0 + 1e-12));
+        assert!(g.raw_lower_bound <= cost * (1.0 + 1e-12) && g.raw_lower_bound <= best * (1.0 + 1e-12));
+        assert!(
+            oracle::gap(cost, g.raw_lower_bound) <= 1e-3 * (1.0 + 1e-9),
+            "{relaxation:?}: {g:?}"
+        );
         // Points along the poorly determined depth direction and around it.
         let ray = local.point - pluecker::triangulation::views::centre(&scene.cameras[0]);
         for _ in 0..2000 {
             let x = local.point
                 + ray * rng.uniform_in(-0.9, 20.0)
                 + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 1e-3;
-            if in_front(&vs, &x) {
-                assert!(point_cost(&vs, &x) >= g.lower_bound, "{relaxation:?}");
+            if data.in_front(&x) {
+                assert!(data.cost(&x) >= g.raw_lower_bound * (1.0 - 1e-12), "{relaxation:?}");
             }
         }
     }
+}
+
+/// Branch and bound started from a point that is not a minimum (the local solution moved along the
+/// depth direction, so its cost is 1.2 to 10 times the minimum): the search set is the enclosure
+/// of that point's sublevel set, centred away from the minimiser. The search must find the minimum
+/// the oracle's many-start search finds, and its raw bound must stay below it; the certified gap is
+/// recomputed from the oracle's cost and the raw bound.
+#[test]
+fn branch_and_bound_from_a_point_that_is_not_a_minimum_finds_and_bounds_the_global_one() {
+    let mut converged = 0;
+    for seed in 0..16u64 {
+        let views = [2usize, 3, 6, 10][seed as usize % 4];
+        let parallax = [0.1f64, 0.01, 0.2f64.to_radians()][seed as usize % 3];
+        let scene = triangulation_scene(views, parallax, 900 + seed);
+        let mut rng = Rng::new(seed + 5);
+        let obs = scene.noisy(1.0, &mut rng);
+        let data = oracle::PointData::new(&scene.cameras, &obs, None);
+        let (x_min, f_min) = data.many_start_minimum(&scene.point, 200, &mut rng);
+        let ray = x_min - pluecker::triangulation::views::centre(&scene.cameras[0]);
+        let ratio = [1.2, 2.0, 10.0][seed as usize % 3];
+        // The first point along the ray (outwards) whose cost reaches `ratio` times the minimum.
+        let Some(start) = (1..4000)
+            .map(|k| x_min + ray * (1e-4 * 1.005f64.powi(k)))
+            .find(|x| data.cost(x) >= ratio * f_min.max(1e-6))
+        else {
+            continue;
+        };
+        if !data.in_front(&start) {
+            continue;
+        }
+        let vs = views_of(&scene.cameras, &obs, None);
+        let start_cost = data.cost(&start);
+        let settings = GlobalSettings {
+            gamma: start_cost.sqrt(),
+            max_relative_gap: 1e-3,
+            max_nodes: 2000,
+            local: TriangulationOptions::default().local,
+            relaxation: Relaxation::Secant,
+        };
+        let g = global_point(&vs, &start, start_cost, &[], &settings);
+        assert!(
+            g.raw_lower_bound <= f_min * (1.0 + 1e-12),
+            "seed {seed}: raw bound {} above the minimum {f_min} ({g:?})",
+            g.raw_lower_bound
+        );
+        if g.status == GlobalStatus::Converged {
+            converged += 1;
+            let cost = data.cost(&g.point);
+            assert!(
+                cost <= f_min * (1.0 + 1e-3) + 1e-12,
+                "seed {seed}: found {cost}, minimum {f_min}"
+            );
+            assert!(
+                oracle::gap(cost, g.raw_lower_bound) <= 1e-3 * (1.0 + 1e-9),
+                "seed {seed}: {g:?}"
+            );
+        }
+    }
+    // Rate guard: 13 of 16 converge within 2000 nodes at the time of writing; fewer than 8 means the checks above
+    // saw too few finished searches.
+    eprintln!("{converged} of 16 searches converged");
+    assert!(converged >= 8, "{converged}");
+}
+
+/// Certified points over the regimes of the convexity test: the raw bound (convexity test or branch
+/// and bound) against the oracle's cost at the answer and its many-start minimum, and the gap
+/// recomputed from them.
+#[test]
+fn certified_points_have_raw_bounds_below_every_cost_found() {
+    let mut certified = 0;
+    for seed in 0..24u64 {
+        let views = [2usize, 3, 5, 8][seed as usize % 4];
+        let parallax = [0.3f64, 0.02, 0.005][(seed / 4) as usize % 3];
+        let scene = triangulation_scene(views, parallax, 1300 + seed);
+        let mut rng = Rng::new(seed);
+        let obs = scene.noisy([0.5, 3.0][seed as usize % 2], &mut rng);
+        let covs = random_covariances(views, &mut rng);
+        let covs = (seed % 3 == 0).then_some(covs.as_slice());
+        let r = triangulate_point(&scene.cameras, &obs, covs, &options(Method::Optimal)).unwrap();
+        let c = r.report.certificate;
+        if !c.certified {
+            continue;
+        }
+        certified += 1;
+        let data = oracle::PointData::new(&scene.cameras, &obs, covs);
+        let cost = data.cost(&r.point);
+        assert!((cost - r.report.cost).abs() <= 1e-9 * cost.max(1e-12), "seed {seed}");
+        let (_, best) = data.many_start_minimum(&r.point, 150, &mut rng);
+        assert!(
+            c.raw_lower_bound <= cost * (1.0 + 1e-12),
+            "seed {seed}: {c:?}, cost {cost}"
+        );
+        assert!(
+            c.raw_lower_bound <= best * (1.0 + 1e-12),
+            "seed {seed}: {c:?}, minimum {best}"
+        );
+        assert!(
+            oracle::gap(cost, c.raw_lower_bound) <= 1e-3 * (1.0 + 1e-9),
+            "seed {seed}: {c:?}"
+        );
+        assert!(
+            c.lower_bound == c.raw_lower_bound.min(r.report.cost),
+            "seed {seed}: {c:?}"
+        );
+    }
+    // Rate guard: 23 of 24 at the time of writing; fewer than 18 means certification broke and the
+    // checks above saw too little.
+    eprintln!("{certified} of 24 certified");
+    assert!(certified >= 18, "{certified}");
 }
 
 #[test]

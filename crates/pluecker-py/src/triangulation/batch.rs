@@ -166,6 +166,7 @@ pub struct PyBatchReport {
     method: &'static str,
     cost: Vec<f64>,
     lower_bound: Vec<f64>,
+    raw_lower_bound: Vec<f64>,
     relative_gap: Vec<f64>,
     certified: Vec<bool>,
     certificate: Vec<&'static str>,
@@ -184,6 +185,7 @@ pub struct PyBatchReport {
 pub(crate) struct ReportRow<'a> {
     cost: &'a mut f64,
     lower_bound: &'a mut f64,
+    raw_lower_bound: &'a mut f64,
     relative_gap: &'a mut f64,
     certified: &'a mut bool,
     certificate: &'a mut &'static str,
@@ -200,6 +202,7 @@ impl ReportRow<'_> {
         let c = &report.certificate;
         *self.cost = report.cost;
         *self.lower_bound = c.lower_bound;
+        *self.raw_lower_bound = c.raw_lower_bound;
         *self.relative_gap = c.relative_gap;
         *self.certified = c.certified;
         *self.certificate = c.kind.as_str();
@@ -215,6 +218,7 @@ impl ReportRow<'_> {
     pub(crate) fn uncertified(self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
         *self.cost = cost;
         *self.lower_bound = 0.0;
+        *self.raw_lower_bound = f64::NAN;
         *self.relative_gap = 1.0;
         *self.certified = false;
         *self.certificate = CertificateKind::None.as_str();
@@ -248,6 +252,7 @@ impl PyBatchReport {
             method: method.as_str(),
             cost: column(f64::NAN, n)?,
             lower_bound: column(0.0, n)?,
+            raw_lower_bound: column(f64::NAN, n)?,
             relative_gap: column(1.0, n)?,
             certified: column(false, n)?,
             certificate: column(CertificateKind::None.as_str(), n)?,
@@ -272,6 +277,7 @@ impl PyBatchReport {
             self.residual_dof.par_iter_mut(),
         );
         let labels = (
+            self.raw_lower_bound.par_iter_mut(),
             self.certified.par_iter_mut(),
             self.certificate.par_iter_mut(),
             self.status.par_iter_mut(),
@@ -279,11 +285,12 @@ impl PyBatchReport {
         numbers.into_par_iter().zip(labels.into_par_iter()).map(
             |(
                 (cost, lower_bound, relative_gap, time_seconds, nodes, iterations, residual_dof),
-                (certified, certificate, status),
+                (raw_lower_bound, certified, certificate, status),
             )| {
                 ReportRow {
                     cost,
                     lower_bound,
+                    raw_lower_bound,
                     relative_gap,
                     certified,
                     certificate,
@@ -322,6 +329,7 @@ impl PyBatchReport {
             method: method.as_str(),
             cost: Vec::with_capacity(n),
             lower_bound: Vec::with_capacity(n),
+            raw_lower_bound: Vec::with_capacity(n),
             relative_gap: Vec::with_capacity(n),
             certified: Vec::with_capacity(n),
             certificate: Vec::with_capacity(n),
@@ -338,6 +346,7 @@ impl PyBatchReport {
     fn push_row(&mut self) -> ReportRow<'_> {
         self.cost.push(f64::NAN);
         self.lower_bound.push(0.0);
+        self.raw_lower_bound.push(f64::NAN);
         self.relative_gap.push(1.0);
         self.certified.push(false);
         self.certificate.push(CertificateKind::None.as_str());
@@ -350,6 +359,7 @@ impl PyBatchReport {
         ReportRow {
             cost: &mut self.cost[last],
             lower_bound: &mut self.lower_bound[last],
+            raw_lower_bound: &mut self.raw_lower_bound[last],
             relative_gap: &mut self.relative_gap[last],
             certified: &mut self.certified[last],
             certificate: &mut self.certificate[last],
@@ -436,6 +446,8 @@ result_class! {
         cost = |b| b.cost.clone();
         /// Per track: the proved lower bound on the cost.
         lower_bound = |b| b.lower_bound.clone();
+        /// Per track: the proved bound before the cap at the cost (NaN without a bound).
+        raw_lower_bound = |b| b.raw_lower_bound.clone();
         /// Per track: `(cost − lower_bound) / cost`.
         relative_gap = |b| b.relative_gap.clone();
         /// Per track: whether the estimate is certified globally optimal.
@@ -472,6 +484,7 @@ pack_struct!(PyBatchReport {
     method,
     cost,
     lower_bound,
+    raw_lower_bound,
     relative_gap,
     certified,
     certificate,

@@ -46,6 +46,8 @@ result_class! {
         cost = |r| r.inner.cost;
         /// Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate).
         lower_bound = |r| r.inner.certificate.lower_bound;
+        /// The bound as proved, before `lower_bound`'s cap at the cost (NaN without a bound, inf for an empty search set).
+        raw_lower_bound = |r| r.inner.certificate.raw_lower_bound;
         /// `(cost − lower_bound) / cost`.
         relative_gap = |r| r.inner.certificate.relative_gap;
         /// Whether the estimate is proved globally optimal to within the gap.

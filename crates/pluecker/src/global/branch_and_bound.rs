@@ -416,4 +416,131 @@ mod tests {
         assert!(!result.converged);
         assert!(result.lower_bound <= result.best.unwrap().0);
     }
+
+    /// The minimum of the tilted double well, each coordinate by Newton's method from −1 (an
+    /// oracle of its own: no branch and bound involved).
+    fn double_well_minimum(dim: usize) -> f64 {
+        TILT[..dim]
+            .iter()
+            .map(|&t| {
+                let mut v: f64 = -1.0;
+                for _ in 0..50 {
+                    v -= (4.0 * v * (v * v - 1.0) + t) / (12.0 * v * v - 4.0);
+                }
+                (v * v - 1.0).powi(2) + t * v
+            })
+            .sum()
+    }
+
+    /// The double well whose oracle fails (no bound, no candidate) on every region that contains the
+    /// global minimiser's neighbourhood (near `(−1, −1)`) and is wider than `fail_above`, and on every
+    /// third call.
+    struct Failing {
+        inner: DoubleWell,
+        fail_above: f64,
+        calls: usize,
+    }
+
+    impl BoundingOracle for Failing {
+        type Candidate = Vec<f64>;
+        fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
+            self.calls += 1;
+            let holds_minimiser = (0..region.dim()).all(|k| region.lower[k] <= -0.95 && region.upper[k] >= -1.05);
+            let wide = (0..region.dim()).any(|k| region.width(k) > self.fail_above);
+            if (holds_minimiser && wide) || self.calls % 3 == 0 {
+                return Bound::Failed { solver_iterations: 1 };
+            }
+            self.inner.bound(region)
+        }
+    }
+
+    /// Failure injection: regions whose bound could not be computed keep their parent's bound and
+    /// are split further, so the global bound stays at or below the known minimum and the search
+    /// still finds it. Dropping failed regions (as if empty) loses the minimiser's region: the bound
+    /// then rises above the minimum.
+    #[test]
+    fn failed_regions_keep_their_parents_bound() {
+        let truth = double_well_minimum(2);
+        for (fail_above, max_nodes) in [(1.0, 200_000), (0.3, 200_000), (0.3, 40), (0.05, 3000)] {
+            let mut oracle = Failing {
+                inner: DoubleWell { calls: 0 },
+                fail_above,
+                calls: 0,
+            };
+            let root = Region::new(vec![-2.0; 2], vec![2.5; 2]);
+            let opts = BranchAndBoundOptions {
+                max_relative_gap: 1e-3,
+                max_nodes,
+                trivial_lower_bound: f64::NEG_INFINITY,
+            };
+            // The incumbent of a local search that stopped in the wrong well, near (1, 1).
+            let incumbent = vec![0.97, 0.95];
+            let result = branch_and_bound(&mut oracle, root, Some((double_well(&incumbent), incumbent)), &opts);
+            assert!(result.failed_nodes > 0);
+            assert!(
+                result.lower_bound <= truth && result.box_lower_bound <= truth,
+                "fail above {fail_above}, {max_nodes} nodes: bound {} / {} above the minimum {truth}",
+                result.lower_bound,
+                result.box_lower_bound
+            );
+            if result.converged {
+                let (cost, _) = result.best.unwrap();
+                assert!(cost - truth <= 1e-3 * cost.abs() + 1e-12, "{cost} vs {truth}");
+            }
+        }
+    }
+
+    /// The double well bounded exactly on each region's centre cell but without candidates: the
+    /// incumbent passed in is all the search knows as an upper bound.
+    struct NoCandidates(DoubleWell);
+
+    impl BoundingOracle for NoCandidates {
+        type Candidate = Vec<f64>;
+        fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
+            match self.0.bound(region) {
+                Bound::Bounded {
+                    lower,
+                    relaxed_minimizer,
+                    solver_iterations,
+                    ..
+                } => Bound::Bounded {
+                    lower,
+                    relaxed_minimizer,
+                    candidate: None,
+                    solver_iterations,
+                },
+                other => other,
+            }
+        }
+    }
+
+    /// The floor of regions discarded within the gap: with an incumbent a little above the minimum
+    /// (inside the gap tolerance) and no better candidate, the region of the minimiser is discarded
+    /// because it cannot improve the incumbent by more than the gap, not because its bound is high:
+    /// its bound (below the minimum) must stay in the result. Forgetting it reports the incumbent's
+    /// cost, above the minimum, as the bound.
+    #[test]
+    fn regions_discarded_within_the_gap_keep_their_bound_in_the_result() {
+        let truth = double_well_minimum(2);
+        for (excess, gap) in [(5e-4, 1e-3), (9e-4, 1e-3), (1e-2, 2e-2)] {
+            let incumbent_cost = truth + excess * truth.abs();
+            let mut oracle = NoCandidates(DoubleWell { calls: 0 });
+            let root = Region::new(vec![-2.0; 2], vec![2.5; 2]);
+            let opts = BranchAndBoundOptions {
+                max_relative_gap: gap,
+                max_nodes: 200_000,
+                trivial_lower_bound: f64::NEG_INFINITY,
+            };
+            let result = branch_and_bound(&mut oracle, root, Some((incumbent_cost, vec![-1.0; 2])), &opts);
+            assert!(result.converged);
+            assert!(
+                result.lower_bound <= truth && result.box_lower_bound <= truth,
+                "excess {excess}: bound {} / {} above the minimum {truth}",
+                result.lower_bound,
+                result.box_lower_bound
+            );
+            // The true gap, recomputed from the incumbent and the bound, closed.
+            assert!(incumbent_cost - result.lower_bound <= gap * incumbent_cost.abs() * (1.0 + 1e-12));
+        }
+    }
 }

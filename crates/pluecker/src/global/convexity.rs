@@ -264,7 +264,8 @@ impl<const N: usize> Minorant<N> {
     /// `min_y m(y) − λφ(y) = ε₀² − λ(c₀² − s₀) − ½bᵀ(H − 2λkkᵀ)⁻¹b` with `b = g − 2λc₀k + λp` is below
     /// `m` wherever `φ ≥ 0` (weak duality: any such `λ` gives a valid bound; for one quadratic
     /// constraint the best `λ` closes the gap, by the S-lemma). The best `λ` of a golden-section
-    /// search over `[0, 1/(2kᵀH⁻¹k))`, less a rounding margin of 1e-9 `ε₀²`, capped at `ε₀²`.
+    /// search over `[0, 1/(2kᵀH⁻¹k))`, less a rounding margin of 1e-9 `ε₀²`, capped at `ε₀²` (part of
+    /// the proof, not a cosmetic cap: points outside `K` are only known to cost more than `ε₀²`).
     pub(crate) fn minimum_subject_to(&self, c0: f64, k: &SVector<f64, N>, s0: f64, p: &SVector<f64, N>) -> f64 {
         // (H − αkkᵀ)⁻¹ = H⁻¹ + αH⁻¹kkᵀH⁻¹/(1 − αkᵀH⁻¹k) (Sherman-Morrison), α = 2λ.
         let (hg, hk, hp) = (
@@ -401,5 +402,283 @@ mod tests {
         let y2 = -(m.gradient.y - h[(1, 0)] * 0.8) / h[(1, 1)];
         let exact = model(&Vector2::new(-0.8, y2));
         assert!((bound - exact).abs() < 1e-6, "{bound} vs {exact}");
+    }
+
+    /// `f(y) = Σ ‖a₀ + Gy‖²/(1 + dᵀy)²` written out entry by entry (not [`RatioView`]'s methods), and
+    /// whether every denominator is positive (the chart's domain).
+    fn plain_cost<const M: usize, const N: usize>(views: &[RatioView<M, N>], y: &[f64; N]) -> Option<f64> {
+        let mut f = 0.0;
+        for v in views {
+            let zeta = 1.0 + (0..N).map(|j| v.d[j] * y[j]).sum::<f64>();
+            if zeta <= 0.0 || zeta.is_nan() {
+                return None;
+            }
+            for i in 0..M {
+                let a = v.a0[i] + (0..N).map(|j| v.g[(i, j)] * y[j]).sum::<f64>();
+                f += (a / zeta).powi(2);
+            }
+        }
+        Some(f)
+    }
+
+    /// Random charts of `n` views whose origin is not a minimiser (`a₀` random), residuals of every
+    /// size relative to the data's curvature, and strong perspective (`d`) on some views.
+    fn random_chart<const M: usize, const N: usize>(rng: &mut Rng, n: usize) -> Vec<RatioView<M, N>> {
+        let residual = 10f64.powf(rng.uniform_in(-2.0, 0.0));
+        let perspective = 10f64.powf(rng.uniform_in(-1.5, 0.0));
+        (0..n)
+            .map(|_| RatioView {
+                a0: SVector::from_fn(|_, _| residual * rng.normal()),
+                g: SMatrix::from_fn(|_, _| rng.normal()),
+                d: SVector::from_fn(|_, _| perspective * rng.normal()),
+            })
+            .collect()
+    }
+
+    /// A grid of `per_axis^N` points over the box `[lo, hi]`.
+    fn grid<const N: usize>(lo: &SVector<f64, N>, hi: &SVector<f64, N>, per_axis: usize) -> Vec<[f64; N]> {
+        let total = per_axis.pow(N as u32);
+        (0..total)
+            .map(|mut k| {
+                std::array::from_fn(|j| {
+                    let i = k % per_axis;
+                    k /= per_axis;
+                    lo[j] + (hi[j] - lo[j]) * i as f64 / (per_axis - 1) as f64
+                })
+            })
+            .collect()
+    }
+
+    /// The minorant and the enclosure of random charts centred away from the minimiser, checked
+    /// against the cost on a dense grid over a box three times the enclosure's bounding box: every
+    /// grid point in the chart's domain with `f ≤ f(0)` lies in the box, satisfies the depth bound
+    /// `|dᵢᵀy| ≤ κ_d` and the ellipsoid `F ≤ (1 + κ_Q)² f(0)`, and has `m(y) ≤ f(y)`; the bound
+    /// `min m` is below the least cost on the grid and below the minimum a golden-section or
+    /// coordinate search reaches from the best grid point. A minorant whose curvature is too large,
+    /// or an enclosure too small, fails here.
+    fn check_minorants<const M: usize, const N: usize>(seed: u64, instances: usize, per_axis: usize) -> usize {
+        let mut rng = Rng::new(seed);
+        let mut passed = 0;
+        for instance in 0..instances {
+            let count = 2 + rng.below(3);
+            let views = random_chart::<M, N>(&mut rng, count);
+            let f0: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+            let Some(m) = minorant(&views, None) else {
+                continue;
+            };
+            let k = enclosure(&views, f0, f0.sqrt(), None).expect("the minorant's enclosure exists");
+            let (lo, hi) = k.bounding_box().expect("a bounding box");
+            let (centre, half) = ((lo + hi) * 0.5, (hi - lo) * 0.5);
+            let (big_lo, big_hi) = (centre - half * 3.0, centre + half * 3.0);
+            let h = m.hessian.l() * m.hessian.l().transpose();
+            let model = |y: &SVector<f64, N>| m.cost + m.gradient.dot(y) + 0.5 * y.dot(&(h * y));
+            let bound = m.unconstrained_minimum();
+            let mut least = (f64::INFINITY, [0.0; N]);
+            for y in grid(&big_lo, &big_hi, per_axis) {
+                let Some(f) = plain_cost(&views, &y) else {
+                    continue;
+                };
+                if f < least.0 {
+                    least = (f, y);
+                }
+                let yv = SVector::<f64, N>::from_column_slice(&y);
+                // The minorant is claimed on all of K = S ∩ Q, not only on the sublevel set.
+                let in_s = views
+                    .iter()
+                    .all(|v| (v.a0 + v.g * yv).norm() <= k.gamma * (1.0 + v.d.dot(&yv)));
+                let big_f: f64 = views.iter().map(|v| (v.a0 + v.g * yv).norm_squared()).sum();
+                if in_s && big_f <= (1.0 + k.kappa_q).powi(2) * f0 {
+                    assert!(
+                        model(&yv) <= f + 1e-12 * f0,
+                        "instance {instance}: minorant {} above the cost {f} at {y:?} in K",
+                        model(&yv)
+                    );
+                }
+                if f > f0 {
+                    continue;
+                }
+                // Rounding of the grid cost and of the model: a few ulps of f(0).
+                let tol = 1e-12 * f0;
+                assert!(
+                    (0..N).all(|j| yv[j] >= lo[j] - tol && yv[j] <= hi[j] + tol),
+                    "instance {instance}: {y:?} with f {f} ≤ f(0) {f0} outside the box [{lo:?}, {hi:?}]"
+                );
+                for v in &views {
+                    assert!(
+                        v.d.dot(&yv).abs() <= k.kappa_d * (1.0 + 1e-9),
+                        "instance {instance}: depth {} beyond κ_d {}",
+                        v.d.dot(&yv),
+                        k.kappa_d
+                    );
+                }
+                let big_f: f64 = views.iter().map(|v| (v.a0 + v.g * yv).norm_squared()).sum();
+                assert!(
+                    big_f <= (1.0 + k.kappa_q).powi(2) * f0 * (1.0 + 1e-9) + tol,
+                    "instance {instance}: F"
+                );
+                assert!(
+                    model(&yv) <= f + tol,
+                    "instance {instance}: minorant {} above the cost {f} at {y:?}",
+                    model(&yv)
+                );
+            }
+            // Polish the best grid point by coordinate golden-section searches (any point's cost is
+            // an upper bound of the minimum, so the polish cannot make the check fail wrongly).
+            let (mut best, mut y) = least;
+            let step: [f64; N] = std::array::from_fn(|j| (big_hi[j] - big_lo[j]) / per_axis as f64);
+            for _ in 0..30 {
+                for j in 0..N {
+                    let (mut a, mut b) = (y[j] - step[j], y[j] + step[j]);
+                    let at = |t: f64, y: &[f64; N]| {
+                        let mut z = *y;
+                        z[j] = t;
+                        plain_cost(&views, &z).unwrap_or(f64::INFINITY)
+                    };
+                    for _ in 0..60 {
+                        let (c, d) = (b - 0.618 * (b - a), a + 0.618 * (b - a));
+                        if at(c, &y) < at(d, &y) {
+                            b = d;
+                        } else {
+                            a = c;
+                        }
+                    }
+                    let t = 0.5 * (a + b);
+                    if at(t, &y) < best {
+                        best = at(t, &y);
+                        y[j] = t;
+                    }
+                }
+            }
+            assert!(
+                bound <= best + 1e-12 * f0,
+                "instance {instance}: bound {bound} above the cost {best} at {y:?} (f(0) = {f0})"
+            );
+            passed += 1;
+        }
+        passed
+    }
+
+    #[test]
+    fn minorants_of_random_charts_centred_away_from_the_minimiser_stay_below_the_cost_in_one_dimension() {
+        // How many instances pass the test is not the point; a handful must, or nothing was checked.
+        let passed = check_minorants::<1, 1>(11, 3000, 4001) + check_minorants::<2, 1>(12, 2000, 4001);
+        assert!(passed >= 200, "only {passed} instances passed the test");
+    }
+
+    #[test]
+    fn minorants_of_random_charts_centred_away_from_the_minimiser_stay_below_the_cost_in_two_dimensions() {
+        let passed = check_minorants::<1, 2>(21, 600, 161) + check_minorants::<2, 2>(22, 600, 161);
+        assert!(passed >= 100, "only {passed} instances passed the test");
+    }
+    /// Charts of two or three views whose residuals are large against the perspective: each view's
+    /// `t = dᵢ r̂ᵢ / gᵢ` (the ratio that decides the sign of its curvature, module docs stage 3)
+    /// between −0.4 and 0.4, the region where the test is close to failing and the cost's curvature
+    /// on the enclosure comes closest to the minorant's.
+    fn adversarial_chart(rng: &mut Rng) -> Vec<RatioView<1, 1>> {
+        let views = 2 + rng.below(2);
+        (0..views)
+            .map(|_| {
+                let g = rng.normal();
+                let a0 = 10f64.powf(rng.uniform_in(-1.5, 0.0)) * rng.normal();
+                let t = rng.uniform_in(-0.4, 0.4);
+                RatioView {
+                    a0: SVector::from([a0]),
+                    g: SMatrix::from([[g]]),
+                    d: SVector::from([t * g / a0]),
+                }
+            })
+            .collect()
+    }
+
+    /// Stage 3's claim, checked pointwise: the minorant's Hessian `H = (1 − μ)P` is at most the cost's
+    /// curvature at every point of the enclosure `K = S ∩ Q` (central differences of the cost written out
+    /// in [`plain_cost`], on a 4001-point grid of `K`'s bounding box). The inequality chain has slack
+    /// (the cost's curvature on `K` comes down to about twice `H` on the worst of these charts, none
+    /// lower), so a minorant twice as curved (`P` doubled) is caught only on those worst charts; halving
+    /// the `6` of `μ` is not caught here (the documented-formula test below catches it).
+    #[test]
+    fn the_minorants_curvature_is_below_the_costs_on_the_enclosure() {
+        let mut rng = Rng::new(31);
+        let (mut passed, mut points) = (0, 0);
+        for instance in 0..40_000 {
+            let views = adversarial_chart(&mut rng);
+            let Some(m) = minorant(&views, None) else {
+                continue;
+            };
+            let f0: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+            let k = enclosure(&views, f0, f0.sqrt(), None).expect("the minorant's enclosure");
+            let (lo, hi) = k.bounding_box().expect("a bounding box");
+            let h = (m.hessian.l() * m.hessian.l().transpose())[(0, 0)];
+            let step = (hi[0] - lo[0]) / 4000.0;
+            let in_k = |y: f64| {
+                let in_s = views.iter().all(|v| {
+                    let zeta = 1.0 + v.d[0] * y;
+                    zeta > 0.0 && (v.a0[0] + v.g[(0, 0)] * y).abs() <= f0.sqrt() * zeta
+                });
+                let big_f: f64 = views.iter().map(|v| (v.a0[0] + v.g[(0, 0)] * y).powi(2)).sum();
+                in_s && big_f <= (1.0 + k.kappa_q).powi(2) * f0
+            };
+            passed += 1;
+            for i in 1..4000 {
+                let y = lo[0] + step * i as f64;
+                if !(in_k(y - step) && in_k(y) && in_k(y + step)) {
+                    continue;
+                }
+                let f = |y: f64| plain_cost(&views, &[y]).expect("inside the domain");
+                let curvature = (f(y + step) - 2.0 * f(y) + f(y - step)) / (step * step);
+                // Rounding of the three costs (a few ulps of f(0), divided by step²) and the
+                // truncation of central differences (step ~1e-4 of K: ~1e-8 relative).
+                let tol = 1e-6 * h + 1e-14 * f0 / (step * step);
+                assert!(
+                    curvature >= h - tol,
+                    "instance {instance}: the cost's curvature {curvature} at {y} is below the minorant's {h}"
+                );
+                points += 1;
+            }
+        }
+        assert!(passed >= 1000 && points >= 100_000, "{passed} charts, {points} points");
+    }
+
+    /// The minorant of stage 4 is the documented one, recomputed here from the module docs' formulas
+    /// and the enclosure: `g` is the cost's gradient at the origin (central differences of
+    /// [`plain_cost`]), `H = (1 − μ)P` with `P = 2N/(3(1 + κ_d)²)`, `R² = (1 + κ_Q)² ε₀²/(1 − κ_d)²`,
+    /// `μ = 6R²/(1 − κ_d)² maxᵢ dᵢᵀP⁻¹dᵢ`, and the test passes exactly when `μ < 1 − 10⁻⁶`. The
+    /// constants are the proof's (θ = 2/3 gives the factors ⅓ and 3); a minorant more curved than the
+    /// proof allows, which the pointwise check above meets only where the proof's slack runs out, is
+    /// caught here on every chart.
+    #[test]
+    fn the_minorant_is_the_documented_one() {
+        let mut rng = Rng::new(37);
+        let mut compared = 0;
+        for _ in 0..3000 {
+            let views = adversarial_chart(&mut rng);
+            let f0: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+            let Some(k) = enclosure(&views, f0, f0.sqrt(), None) else {
+                assert!(minorant(&views, None).is_none());
+                continue;
+            };
+            let n: f64 = views.iter().map(|v| v.g[(0, 0)].powi(2)).sum();
+            let r2 = (1.0 + k.kappa_q).powi(2) * f0 / (1.0 - k.kappa_d).powi(2);
+            let p = 2.0 * n / (3.0 * (1.0 + k.kappa_d).powi(2));
+            let worst = views.iter().map(|v| v.d[0] * v.d[0] / p).fold(0.0, f64::max);
+            let mu = 6.0 * r2 / (1.0 - k.kappa_d).powi(2) * worst;
+            let m = minorant(&views, None);
+            assert_eq!(m.is_some(), mu < 1.0 - 1e-6, "μ = {mu}");
+            let Some(m) = m else {
+                continue;
+            };
+            let h = (m.hessian.l() * m.hessian.l().transpose())[(0, 0)];
+            assert!((h - (1.0 - mu) * p).abs() <= 1e-9 * p, "{h} vs {}", (1.0 - mu) * p);
+            let e = 1e-6 * (f0.sqrt() / n.sqrt()).max(1e-12);
+            let f = |y: f64| plain_cost(&views, &[y]).unwrap();
+            let gradient = (f(e) - f(-e)) / (2.0 * e);
+            assert!(
+                (m.gradient[0] - gradient).abs() <= 1e-5 * (gradient.abs() + f0.sqrt() * n.sqrt()),
+                "{} vs {gradient}",
+                m.gradient[0]
+            );
+            compared += 1;
+        }
+        assert!(compared >= 200, "{compared}");
     }
 }

@@ -458,4 +458,131 @@ mod tests {
         project_second_order(&mut inside);
         assert_eq!(inside, [5.0, 3.0, 4.0]);
     }
+
+    /// Three programs with optima known in closed form: `min x + y` over a disc, `min t` with
+    /// `x² ≤ t`, `x ≥ 2`, and `min −x − 2y` over a triangle with an equality.
+    fn known_programs() -> Vec<(Socp, f64)> {
+        let mut disc = Socp::new();
+        let (x, y) = (disc.add_variable(-10.0, 10.0), disc.add_variable(-10.0, 10.0));
+        disc.minimize(Affine::var(x).plus(&Affine::var(y)));
+        disc.second_order(
+            Affine::constant(1.0),
+            &[Affine::var(x).shifted(-1.0), Affine::var(y).shifted(-2.0)],
+        );
+        let mut rotated = Socp::new();
+        let (x, t) = (rotated.add_variable(0.0, 100.0), rotated.add_variable(0.0, 1e4));
+        rotated.minimize(Affine::var(t));
+        rotated.rotated_second_order(&Affine::var(t), &Affine::constant(1.0), &[Affine::var(x)]);
+        rotated.nonneg(Affine::var(x).shifted(-2.0));
+        // x, y ≥ 0, x + y ≤ 1, z = x: the optimum −2 at (0, 1).
+        let mut lp = Socp::new();
+        let (x, y, z) = (
+            lp.add_variable(0.0, 1.0),
+            lp.add_variable(0.0, 1.0),
+            lp.add_variable(-1.0, 1.0),
+        );
+        lp.minimize(Affine::term(x, -1.0).plus(&Affine::term(y, -2.0)));
+        lp.nonneg(Affine::var(x));
+        lp.nonneg(Affine::var(y));
+        lp.less_eq(&Affine::var(x).plus(&Affine::var(y)), &Affine::constant(1.0));
+        lp.equal(Affine::var(z).minus(&Affine::var(x)));
+        vec![(disc, 3.0 - 2f64.sqrt()), (rotated, 4.0), (lp, -2.0)]
+    }
+
+    /// Weak duality holds for every dual vector, not only the solver's: perturbed, scaled, random
+    /// and zero vectors all give bounds at or below the optimum, because the dual residual
+    /// `c + Aᵀz` is paid for over the declared variable bounds. Without that correction the
+    /// perturbed vectors give bounds above the optimum.
+    #[test]
+    fn perturbed_dual_vectors_keep_the_bound_below_the_optimum() {
+        let mut rng = crate::rng::Rng::new(17);
+        let mut above_without_residual = 0;
+        for (p, optimum) in known_programs() {
+            let s = p.solve();
+            assert_eq!(s.status, SocpStatus::Solved);
+            assert!(
+                s.lower_bound <= optimum && s.lower_bound > optimum - 1e-5,
+                "{}",
+                s.lower_bound
+            );
+            for trial in 0..400 {
+                let scale = 10f64.powf(rng.uniform_in(-6.0, 1.0));
+                let z: Vec<f64> = match trial % 4 {
+                    0 => s.z.iter().map(|v| v + scale * rng.normal()).collect(),
+                    1 => s.z.iter().map(|v| v * (1.0 + scale * rng.normal())).collect(),
+                    2 => s.z.iter().map(|_| scale * rng.normal()).collect(),
+                    _ => vec![0.0; s.z.len()],
+                };
+                let bound = p.lower_bound(&z);
+                // The bound's own rounding margin covers its arithmetic: no tolerance here.
+                assert!(
+                    bound <= optimum,
+                    "trial {trial}: bound {bound} above the optimum {optimum}"
+                );
+                // −bᵀz alone (no residual term) over-reaches for many of these vectors: the test
+                // exercises the correction.
+                let projected = p.project_dual(&z);
+                let naive = p.objective.constant
+                    - p.rows
+                        .iter()
+                        .zip(&projected)
+                        .map(|(r, zi)| r.constant * zi)
+                        .sum::<f64>();
+                if naive > optimum + 1e-9 {
+                    above_without_residual += 1;
+                }
+            }
+        }
+        assert!(above_without_residual > 100, "{above_without_residual}");
+    }
+
+    /// A solve stopped after a few iterations, or with loose tolerances, still yields a bound at or
+    /// below the optimum from whatever dual vector it reached.
+    #[test]
+    fn an_early_or_loose_solve_gives_a_bound_below_the_optimum() {
+        for (p, optimum) in known_programs() {
+            for (max_iter, tol) in [(1, 1e-8), (2, 1e-8), (3, 1e-8), (50, 1e-1), (50, 1e-3)] {
+                let settings = DefaultSettings::<f64> {
+                    verbose: false,
+                    presolve_enable: false,
+                    max_iter,
+                    tol_gap_abs: tol,
+                    tol_gap_rel: tol,
+                    tol_feas: tol,
+                    tol_ktratio: tol.max(1e-6),
+                    ..DefaultSettings::default()
+                };
+                let (a, b) = p.constraint_matrix();
+                let n = p.variables();
+                let mut q = vec![0.0; n];
+                for &(j, c) in &p.objective.terms {
+                    q[j] += c;
+                }
+                let cones: Vec<SupportedConeT<f64>> = p
+                    .blocks
+                    .iter()
+                    .map(|&(cone, k)| match cone {
+                        Cone::Zero => SupportedConeT::ZeroConeT(k),
+                        Cone::Nonnegative => SupportedConeT::NonnegativeConeT(k),
+                        Cone::SecondOrder => SupportedConeT::SecondOrderConeT(k),
+                    })
+                    .collect();
+                let mut solver = DefaultSolver::new(&CscMatrix::zeros((n, n)), &q, &a, &b, &cones, settings).unwrap();
+                solver.solve();
+                let bound = p.lower_bound(&solver.solution.z);
+                assert!(bound <= optimum, "max_iter {max_iter}, tol {tol}: {bound} > {optimum}");
+                let s = p.solve_with(DefaultSettings::<f64> {
+                    verbose: false,
+                    max_iter,
+                    ..DefaultSettings::default()
+                });
+                assert!(
+                    s.lower_bound <= optimum,
+                    "{:?}: {} > {optimum}",
+                    s.status,
+                    s.lower_bound
+                );
+            }
+        }
+    }
 }

@@ -428,4 +428,210 @@ mod tests {
         assert!(b.lower > 0.95 * f_corner, "{} vs {f_corner}", b.lower);
         assert!(!b.may_be_stationary);
     }
+
+    /// `f(w) = Σᵥ Σₖ (nᵥₖ(w)/gᵥ(w))²` with every quadratic written out (`c + gᵀw + ½wᵀSw`), not
+    /// through [`Quadratic::value`] or [`cost_and_gradient`]; `None` where a denominator vanishes.
+    fn plain_cost<const D: usize>(views: &[QuadraticRatio<D, 4>], w: &[f64; 4]) -> Option<f64> {
+        let q = |s: &Quadratic<4>| {
+            let mut v = s.constant;
+            for i in 0..4 {
+                v += s.gradient[i] * w[i];
+                for j in 0..4 {
+                    v += 0.5 * s.hessian[(i, j)] * w[i] * w[j];
+                }
+            }
+            v
+        };
+        let mut f = 0.0;
+        for v in views {
+            let g = q(&v.denominator);
+            if g == 0.0 {
+                return None;
+            }
+            for n in &v.numerator {
+                f += (q(n) / g).powi(2);
+            }
+        }
+        f.is_finite().then_some(f)
+    }
+
+    /// The least eigenvalue of the Hessian of [`plain_cost`] at `w` by central differences.
+    fn least_curvature<const D: usize>(views: &[QuadraticRatio<D, 4>], w: &[f64; 4], e: f64) -> Option<f64> {
+        let at = |di: usize, si: f64, dj: usize, sj: f64| {
+            let mut z = *w;
+            z[di] += si * e;
+            z[dj] += sj * e;
+            plain_cost(views, &z)
+        };
+        let mut h = Matrix4::zeros();
+        for i in 0..4 {
+            for j in 0..4 {
+                h[(i, j)] = (at(i, 1.0, j, 1.0)? - at(i, 1.0, j, -1.0)? - at(i, -1.0, j, 1.0)? + at(i, -1.0, j, -1.0)?)
+                    / (4.0 * e * e);
+            }
+        }
+        Some(
+            nalgebra::SymmetricEigen::new(0.5 * (h + h.transpose()))
+                .eigenvalues
+                .min(),
+        )
+    }
+
+    /// The least value of [`plain_cost`] over the box that projected gradient descent (numerical
+    /// gradient, backtracking) reaches from the centre and from random points: an upper bound of the
+    /// box's minimum, so a bound above it is wrong.
+    fn box_minimum<const D: usize>(views: &[QuadraticRatio<D, 4>], lo: &[f64], hi: &[f64], rng: &mut Rng) -> f64 {
+        let project = |w: [f64; 4]| -> [f64; 4] { std::array::from_fn(|i| w[i].clamp(lo[i], hi[i])) };
+        let mut best = f64::INFINITY;
+        for start in 0..4 {
+            let mut w: [f64; 4] = std::array::from_fn(|i| {
+                if start == 0 {
+                    0.5 * (lo[i] + hi[i])
+                } else {
+                    rng.uniform_in(lo[i], hi[i])
+                }
+            });
+            let Some(mut f) = plain_cost(views, &w) else {
+                continue;
+            };
+            let mut step = (0..4).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+            for _ in 0..400 {
+                let e = 1e-7 * (1.0 + w.iter().map(|v| v.abs()).fold(0.0, f64::max));
+                let grad: [f64; 4] = std::array::from_fn(|i| {
+                    let (mut a, mut b) = (w, w);
+                    a[i] += e;
+                    b[i] -= e;
+                    match (plain_cost(views, &a), plain_cost(views, &b)) {
+                        (Some(fa), Some(fb)) => (fa - fb) / (2.0 * e),
+                        _ => 0.0,
+                    }
+                });
+                let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+                if norm <= 0.0 || norm.is_nan() {
+                    break;
+                }
+                let mut moved = false;
+                while step > 1e-14 {
+                    let trial = project(std::array::from_fn(|i| w[i] - step * grad[i] / norm));
+                    if let Some(ft) = plain_cost(views, &trial).filter(|&ft| ft < f) {
+                        (w, f) = (trial, ft);
+                        step *= 2.0;
+                        moved = true;
+                        break;
+                    }
+                    step *= 0.5;
+                }
+                if !moved {
+                    break;
+                }
+            }
+            best = best.min(f);
+        }
+        best
+    }
+
+    /// Views whose cost is a rotated, badly conditioned quadratic bowl (strong off-diagonal
+    /// curvature) bent by small quadratic terms and a mild perspective denominator.
+    fn coupled_views(rng: &mut Rng) -> Vec<QuadraticRatio<2, 4>> {
+        let rotation = nalgebra::SymmetricEigen::new({
+            let a = Matrix4::from_fn(|_, _| rng.normal());
+            a + a.transpose()
+        })
+        .eigenvectors;
+        let bend = 10f64.powf(rng.uniform_in(-3.0, -1.0));
+        let row = |k: usize, scale: f64, rng: &mut Rng| {
+            let a = Matrix4::from_fn(|_, _| rng.normal() * bend);
+            Quadratic {
+                constant: 0.3 * rng.normal(),
+                gradient: rotation.column(k).into_owned() * scale,
+                hessian: a + a.transpose(),
+            }
+        };
+        let weak = 10f64.powf(rng.uniform_in(-2.0, -0.5));
+        (0..2)
+            .map(|v| {
+                let mut denominator = Quadratic {
+                    constant: 1.0,
+                    ..Quadratic::zero()
+                };
+                denominator.gradient = Vector4::from_fn(|_, _| 0.05 * rng.normal());
+                QuadraticRatio {
+                    numerator: [
+                        row(2 * v, if v == 0 { weak } else { 1.0 }, rng),
+                        row(2 * v + 1, 1.0, rng),
+                    ],
+                    denominator,
+                }
+            })
+            .collect()
+    }
+
+    /// Over random boxes of functions whose curvature is mostly off the diagonal: the Gershgorin
+    /// curvature is at most the least Hessian eigenvalue at every sampled point, and the bound is
+    /// below the box's minimum reached by projected gradient descent. Halving the off-diagonal
+    /// term of the Gershgorin bound fails both.
+    #[test]
+    fn bounds_hold_against_local_minimisation_in_the_box_when_off_diagonal_curvature_matters() {
+        let mut rng = Rng::new(41);
+        let mut curvature_checks = 0;
+        for instance in 0..300 {
+            let views = coupled_views(&mut rng);
+            let centre: Vec<f64> = (0..4).map(|_| rng.normal()).collect();
+            let width = 10f64.powf(rng.uniform_in(-1.5, 0.3));
+            let lower: Vec<f64> = centre.iter().map(|c| c - width * rng.uniform_in(0.2, 1.0)).collect();
+            let upper: Vec<f64> = centre.iter().map(|c| c + width * rng.uniform_in(0.2, 1.0)).collect();
+            let b = bound_over_box(&views, &lower, &upper, f64::INFINITY);
+            let least = box_minimum(&views, &lower, &upper, &mut rng);
+            // The bound is widened by 1e-9 relative for rounding; the descent's value is exact to ~1e-15.
+            assert!(
+                b.lower <= least * (1.0 + 1e-12) + 1e-300,
+                "instance {instance}: bound {} above the box minimum {least}",
+                b.lower
+            );
+            if b.curvature.is_finite() {
+                for _ in 0..20 {
+                    let w: [f64; 4] = std::array::from_fn(|i| rng.uniform_in(lower[i], upper[i]));
+                    let scale = 1.0 + w.iter().map(|v| v.abs()).fold(0.0, f64::max);
+                    if let Some(lambda) = least_curvature(&views, &w, 1e-4 * scale) {
+                        // Central differences of a function of size ~1: errors ~1e-8/1e-8 = 1e-5 relative.
+                        assert!(
+                            b.curvature <= lambda + 1e-5 * (1.0 + lambda.abs()),
+                            "instance {instance}: Gershgorin curvature {} above the Hessian's least eigenvalue {lambda}",
+                            b.curvature
+                        );
+                        curvature_checks += 1;
+                    }
+                }
+            }
+        }
+        assert!(curvature_checks > 1000, "{curvature_checks}");
+    }
+
+    /// The same against the random ratios of [`bounds_hold_at_every_sampled_point`], now checked
+    /// against projected gradient descent inside each box (samples alone miss a narrow valley).
+    #[test]
+    fn bound_over_box_is_below_a_local_minimisation_inside_random_boxes() {
+        let mut rng = Rng::new(43);
+        for instance in 0..300 {
+            let views: Vec<QuadraticRatio<2, 4>> = (0..3)
+                .map(|_| QuadraticRatio {
+                    numerator: [random_quadratic(&mut rng, 0.2), random_quadratic(&mut rng, 0.2)],
+                    denominator: random_quadratic(&mut rng, 0.05),
+                })
+                .collect();
+            let centre: Vec<f64> = (0..4).map(|_| rng.normal()).collect();
+            let width = 10f64.powf(rng.uniform_in(-3.0, 0.0));
+            let lower: Vec<f64> = centre.iter().map(|c| c - width * rng.uniform()).collect();
+            let upper: Vec<f64> = centre.iter().map(|c| c + width * rng.uniform()).collect();
+            let b = bound_over_box(&views, &lower, &upper, f64::INFINITY);
+            let least = box_minimum(&views, &lower, &upper, &mut rng);
+            if least.is_finite() {
+                assert!(
+                    b.lower <= least * (1.0 + 1e-12),
+                    "instance {instance}: bound {} above the box minimum {least}",
+                    b.lower
+                );
+            }
+        }
+    }
 }

@@ -44,6 +44,9 @@ pub(crate) fn certificate_of<C>(
     if result.lower_bound == f64::INFINITY {
         return (Status::Infeasible, base);
     }
+    // The bound the search proved over its box, before any cap (`lower_bound` also caps it at the
+    // incumbent's cost).
+    let raw_lower_bound = result.box_lower_bound;
     let lower = result.lower_bound.min(best_cost);
     // The one gap formula of every certificate (points too): relative to max(cost, 1e-12).
     let relative_gap = crate::global::relative_gap(best_cost, lower);
@@ -57,6 +60,7 @@ pub(crate) fn certificate_of<C>(
         status,
         Certificate {
             lower_bound: lower,
+            raw_lower_bound,
             relative_gap,
             certified,
             ..base
@@ -84,6 +88,7 @@ pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
 fn negligible_cost_certificate() -> Certificate {
     Certificate {
         lower_bound: 0.0,
+        raw_lower_bound: 0.0,
         relative_gap: 0.0,
         certified: true,
         kind: CertificateKind::ConvexityTest,
@@ -115,4 +120,92 @@ pub(crate) fn solve_fraction_relaxation<'a>(
     }
     p.minimize(objective);
     p.solve()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+
+    /// `f(x) = (x − 0.3)² + 1` on `[−1, 1]` (minimum 1), bounded over each interval exactly and then
+    /// lowered by `slack`: a valid but loose bound, so that the gap cannot close below `slack`.
+    struct Loose {
+        slack: f64,
+    }
+
+    fn f(x: f64) -> f64 {
+        (x - 0.3).powi(2) + 1.0
+    }
+
+    impl BoundingOracle for Loose {
+        type Candidate = f64;
+        fn bound(&mut self, region: &Region) -> Bound<f64> {
+            let (a, b) = (region.lower[0], region.upper[0]);
+            let exact = f(0.3f64.clamp(a, b));
+            let centre = 0.5 * (a + b);
+            Bound::Bounded {
+                lower: exact - self.slack,
+                relaxed_minimizer: vec![centre],
+                candidate: Some((f(centre), centre)),
+                solver_iterations: 0,
+            }
+        }
+    }
+
+    /// Boundary cases of the gap: a branch and bound whose true gap ends between 1e-3 and 2e-3
+    /// (its bound is 1.5e-3 too loose everywhere, and the node cap stops it) is not certified at
+    /// 1e-3, and is at 2e-3; the gap is recomputed here from the cost and the raw bound. The same
+    /// for the convexity test's certificate. A gap measured against twice the cost passes the
+    /// first case as certified.
+    #[test]
+    fn a_gap_between_one_and_two_thousandths_is_not_certified_at_one_thousandth() {
+        for slack in [1.2e-3, 1.5e-3, 1.9e-3] {
+            let root = Region::new(vec![-1.0], vec![1.0]);
+            let opts = BranchAndBoundOptions {
+                max_relative_gap: 1e-3,
+                max_nodes: 200,
+                trivial_lower_bound: 0.0,
+            };
+            let result = branch_and_bound(&mut Loose { slack }, root, None, &opts);
+            let (cost, _) = result.best.unwrap();
+            let raw = result.box_lower_bound;
+            let true_gap = (cost - raw) / cost;
+            assert!(
+                true_gap > 1e-3 && true_gap < 2e-3,
+                "slack {slack}: the test needs a gap in (1e-3, 2e-3): {true_gap}"
+            );
+            let (status, c) = certificate_of(&result, cost, 1e-3);
+            assert!(!c.certified, "slack {slack}: certified with a true gap of {true_gap}");
+            assert_eq!(status, Status::GapNotClosed);
+            assert_eq!(c.raw_lower_bound, raw);
+            // The reported gap is the true one (both from the same two numbers: rounding only).
+            assert!(
+                (c.relative_gap - true_gap).abs() <= 1e-12,
+                "{} vs {true_gap}",
+                c.relative_gap
+            );
+            let (status, c) = certificate_of(&result, cost, 2e-3);
+            assert!(c.certified && status == Status::Success, "slack {slack}");
+            // The convexity test's certificate: the same boundary.
+            assert!(
+                Certificate::of_convexity_test(cost, raw, 1e-3).is_none(),
+                "slack {slack}"
+            );
+            let c = Certificate::of_convexity_test(cost, raw, 2e-3).expect("certified at 2e-3");
+            assert!((c.relative_gap - true_gap).abs() <= 1e-12 && c.raw_lower_bound == raw);
+        }
+    }
+
+    /// The raw bound is reported unclamped: a bound above the best cost (which only a wrong proof
+    /// or an incumbent outside the search set can give) shows in `raw_lower_bound`, while
+    /// `lower_bound` is capped at the cost.
+    #[test]
+    fn the_raw_bound_is_not_capped_at_the_cost() {
+        let root = Region::new(vec![-1.0], vec![1.0]);
+        let opts = BranchAndBoundOptions::default();
+        let mut oracle = Loose { slack: 0.0 };
+        let result = branch_and_bound(&mut oracle, root, Some((0.9, 0.3)), &opts);
+        let (_, c) = certificate_of(&result, 0.9, 1e-3);
+        assert!(c.raw_lower_bound >= 1.0 - 1e-12 && c.lower_bound == 0.9, "{c:?}");
+    }
 }

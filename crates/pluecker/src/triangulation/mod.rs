@@ -374,10 +374,15 @@ impl CertificateKind {
 }
 
 /// The global-optimality evidence of an estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy)]
 pub struct Certificate {
-    /// A lower bound on the cost of eq. 19 over every admissible primitive (`0` when not computed).
+    /// A lower bound on the cost of eq. 19 over every admissible primitive (`0` when not computed),
+    /// capped at the cost: `min(raw_lower_bound, cost)`.
     pub lower_bound: f64,
+    /// The bound as the search or test proved it, before the cap at the cost (NaN when no bound was
+    /// computed; `+∞` when the search set was proved empty). A bound above the cost of an admissible
+    /// primitive would disprove the certificate: tests check it against independently computed costs.
+    pub raw_lower_bound: f64,
     /// `(cost − lower_bound) / max(cost, 1e-12)` (`1` when not computed).
     pub relative_gap: f64,
     /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
@@ -390,11 +395,28 @@ pub struct Certificate {
     pub solver_iterations: usize,
 }
 
+/// Field by field, with the NaN of "no raw bound" equal to itself (two certificates without a
+/// bound are the same certificate).
+impl PartialEq for Certificate {
+    fn eq(&self, other: &Self) -> bool {
+        let same_raw = self.raw_lower_bound == other.raw_lower_bound
+            || (self.raw_lower_bound.is_nan() && other.raw_lower_bound.is_nan());
+        same_raw
+            && self.lower_bound == other.lower_bound
+            && self.relative_gap == other.relative_gap
+            && self.certified == other.certified
+            && self.kind == other.kind
+            && self.nodes == other.nodes
+            && self.solver_iterations == other.solver_iterations
+    }
+}
+
 impl Certificate {
     /// The certificate of a method that does not look for one.
     pub fn none() -> Certificate {
         Certificate {
             lower_bound: 0.0,
+            raw_lower_bound: f64::NAN,
             relative_gap: 1.0,
             certified: false,
             kind: CertificateKind::None,
@@ -403,12 +425,15 @@ impl Certificate {
         }
     }
 
-    /// The certificate of a convexity test whose lower bound on the cost is `lower_bound`, when it
-    /// closes the gap (`relative_gap(cost, lower_bound) ≤ max_relative_gap`); `None` otherwise.
-    pub(crate) fn of_convexity_test(cost: f64, lower_bound: f64, max_relative_gap: f64) -> Option<Certificate> {
+    /// The certificate of a convexity test whose (raw) lower bound on the cost is `raw_lower_bound`,
+    /// when it closes the gap (`relative_gap(cost, min(raw_lower_bound, cost)) ≤ max_relative_gap`);
+    /// `None` otherwise.
+    pub(crate) fn of_convexity_test(cost: f64, raw_lower_bound: f64, max_relative_gap: f64) -> Option<Certificate> {
+        let lower_bound = raw_lower_bound.min(cost);
         let relative_gap = crate::global::relative_gap(cost, lower_bound);
         (relative_gap <= max_relative_gap).then_some(Certificate {
             lower_bound,
+            raw_lower_bound,
             relative_gap,
             certified: true,
             kind: CertificateKind::ConvexityTest,

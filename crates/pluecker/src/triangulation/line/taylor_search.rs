@@ -172,9 +172,155 @@ pub(crate) fn optimal_line_taylor(
     report.cost = best_cost;
     (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
     report.certificate.kind = CertificateKind::TaylorBranchAndBound;
+    if restricted.is_none() {
+        // Regions were discarded for holding no stationary point, which only shows that no line
+        // there is cheaper than the local one (module docs): the proved bound is at most its cost.
+        report.certificate.raw_lower_bound = report.certificate.raw_lower_bound.min(cost);
+    }
     if restricted.is_some() && result.box_lower_bound == f64::INFINITY {
         // Every region was proved to hold no line within γ in every view.
         report.set_status(Status::Infeasible);
     }
     Some((plucker::transform(&sim.inverse_matrix(), &best), report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use crate::triangulation::line::residual::LineFrame;
+    use crate::triangulation::line::tests::ring_cameras;
+    use nalgebra::{Matrix2, Vector3};
+
+    /// Ring cameras and the images of the line through `a` and `b` with errors of `noise` (relative
+    /// to the image line's coefficients, about `noise` × 500 px): a line problem whose minimum cost is
+    /// far from 0, so that bounds near it are not the trivial 0.
+    fn problem(n: usize, seed: u64, noise: f64) -> (LineProblem, (Vector3<f64>, Vector3<f64>)) {
+        let mut rng = Rng::new(seed);
+        let cameras = ring_cameras(n, &mut rng);
+        let (a, b) = (Vector3::new(0.2, -0.3, 0.1), Vector3::new(-0.3, 0.4, -0.2));
+        let frames = cameras
+            .iter()
+            .map(|p| {
+                let l = (p * a.push(1.0)).cross(&(p * b.push(1.0)));
+                let l = l / l.xy().norm() + Vector3::new(rng.normal(), rng.normal(), rng.normal() * 300.0) * noise;
+                LineFrame::of_line(&l).unwrap()
+            })
+            .collect();
+        let whitenings = vec![Matrix2::identity(); n];
+        (
+            LineProblem {
+                cameras,
+                frames,
+                whitenings,
+            },
+            (a, b),
+        )
+    }
+
+    /// The least cost over a box by projected gradient descent (backtracking) from its centre: an
+    /// upper bound of the box's minimum.
+    fn box_minimum(chart: &TwoViewChart, lower: &[f64], upper: &[f64]) -> f64 {
+        let project = |w: Vector4<f64>| Vector4::from_fn(|i, _| w[i].clamp(lower[i], upper[i]));
+        let mut w = Vector4::from_fn(|i, _| 0.5 * (lower[i] + upper[i]));
+        let (mut f, mut g) = cost_and_gradient(&chart.views, &w);
+        let mut step = (0..4).map(|i| upper[i] - lower[i]).fold(0.0, f64::max);
+        for _ in 0..2000 {
+            let mut moved = false;
+            while step > 1e-15 {
+                let trial = project(w - g * (step / g.norm().max(1e-300)));
+                let (ft, gt) = cost_and_gradient(&chart.views, &trial);
+                if ft < f {
+                    (w, f, g) = (trial, ft, gt);
+                    step *= 2.0;
+                    moved = true;
+                    break;
+                }
+                step *= 0.5;
+            }
+            if !moved {
+                break;
+            }
+        }
+        f
+    }
+
+    /// The convex-hull bound of a chart centred on a line that is not a minimum (the chart's origin
+    /// has a gradient, so the bound `f(0) − ‖∇f(0)‖²/(2μ)` is not the origin's cost): over boxes around
+    /// the minimiser, of every size, it stays below the box's minimum reached by descent.
+    #[test]
+    fn the_hull_bound_is_below_the_minimum_of_boxes_around_the_minimiser() {
+        let mut checked = 0;
+        for seed in 0..6u64 {
+            let (problem, (a, b)) = problem(4 + seed as usize % 3, 70 + seed, 10f64.powf(-3.0 + 0.3 * seed as f64));
+            let sim = Similarity::of_cameras(&problem.cameras);
+            let views = problem.views(&sim);
+            let mut rng = Rng::new(seed);
+            for _ in 0..4 {
+                let off =
+                    Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 10f64.powf(rng.uniform_in(-3.0, -1.5));
+                let world = plucker::from_points(&a, &(b + off));
+                let frame_line = plucker::transform(&sim.matrix(), &world);
+                let cost = fraction::cost(&views, &frame_line);
+                let Some(chart) = TwoViewChart::new(&problem, &sim, &views, &frame_line, cost) else {
+                    continue;
+                };
+                let at_local = cost_and_gradient(&chart.views, &Vector4::zeros());
+                let oracle = TaylorOracle {
+                    chart: &chart,
+                    views: &views,
+                    restricted: None,
+                    incumbent: cost,
+                    gap: 1e-3,
+                    at_local,
+                    local: TriangulationOptions::default().local,
+                };
+                let root = chart.root(cost.sqrt());
+                // The minimiser over the root box, then boxes of every size around it.
+                let least = box_minimum(&chart, &root.lower, &root.upper);
+                let mut w_min = Vector4::zeros();
+                {
+                    // Recover the minimiser by the same descent, keeping the point.
+                    let project = |w: Vector4<f64>| Vector4::from_fn(|i, _| w[i].clamp(root.lower[i], root.upper[i]));
+                    let (mut f, mut g) = cost_and_gradient(&chart.views, &w_min);
+                    let mut step = 1.0;
+                    for _ in 0..5000 {
+                        let trial = project(w_min - g * (step / g.norm().max(1e-300)));
+                        let (ft, gt) = cost_and_gradient(&chart.views, &trial);
+                        if ft < f {
+                            (w_min, f, g) = (trial, ft, gt);
+                            step *= 2.0;
+                        } else {
+                            step *= 0.5;
+                            if step < 1e-15 {
+                                break;
+                            }
+                        }
+                    }
+                    assert!(f <= least * (1.0 + 1e-6) + 1e-12);
+                }
+                for k in 0..8 {
+                    let half = 10f64.powf(-4.0 + 0.5 * k as f64) * cost.sqrt();
+                    let region = Region::new(
+                        (0..4)
+                            .map(|i| (w_min[i] - half * rng.uniform_in(0.2, 1.0)).max(root.lower[i]))
+                            .collect(),
+                        (0..4)
+                            .map(|i| (w_min[i] + half * rng.uniform_in(0.2, 1.0)).min(root.upper[i]))
+                            .collect(),
+                    );
+                    let bound = oracle.hull_bound(&region);
+                    let minimum = box_minimum(&chart, &region.lower, &region.upper)
+                        .min(cost_and_gradient(&chart.views, &w_min).0);
+                    assert!(
+                        bound <= minimum * (1.0 + 1e-12),
+                        "seed {seed}, box {k}: hull bound {bound} above the box minimum {minimum} (origin {})",
+                        at_local.0
+                    );
+                    checked += usize::from(bound > 0.0);
+                }
+            }
+        }
+        assert!(checked >= 20, "only {checked} boxes had a positive hull bound");
+    }
 }

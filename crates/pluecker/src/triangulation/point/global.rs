@@ -95,8 +95,11 @@ pub struct GlobalPoint {
     pub point: Vector3<f64>,
     /// Its cost (eq. 19).
     pub cost: f64,
-    /// A valid lower bound of the cost over the search set (0 when none was proved).
+    /// A valid lower bound of the cost over the search set (0 when none was proved), capped at `cost`.
     pub lower_bound: f64,
+    /// The bound the search proved over its box, before the cap (NaN when there was no search,
+    /// `+∞` when the search set was proved empty).
+    pub raw_lower_bound: f64,
     /// How it ended.
     pub status: GlobalStatus,
     /// Nodes whose bound was computed.
@@ -429,6 +432,7 @@ pub fn global_point(
         point: *x_local,
         cost: cost_local,
         lower_bound: 0.0,
+        raw_lower_bound: f64::NAN,
         status,
         nodes: 0,
         solver_iterations: 0,
@@ -499,6 +503,7 @@ pub fn global_point(
         point,
         cost,
         lower_bound: result.lower_bound.min(cost),
+        raw_lower_bound: result.box_lower_bound,
         status,
         nodes: result.nodes,
         solver_iterations: result.solver_iterations + root.solver_iterations,

@@ -267,6 +267,7 @@ fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Certi
         out.relative_gap = relative_gap(u.cost, out.lower_bound);
     } else {
         out.lower_bound = 0.0;
+        out.raw_lower_bound = f64::NAN;
         out.relative_gap = 1.0;
     }
     out
@@ -414,6 +415,13 @@ fn certify(
         relaxation: DEFAULT_RELAXATION,
     };
     let g = global_point(views, &x, cost, &origins, &settings);
+    // Both bounds hold over every point in front of the cameras (within γ): the better one, before
+    // and after the cap at the cost.
+    let raw_lower_bound = if test.passed {
+        g.raw_lower_bound.max(test.lower_bound)
+    } else {
+        g.raw_lower_bound
+    };
     let lower_bound = if test.passed {
         g.lower_bound.max(test.lower_bound)
     } else {
@@ -433,6 +441,7 @@ fn certify(
     };
     let certificate = Certificate {
         lower_bound,
+        raw_lower_bound,
         relative_gap: gap,
         certified,
         kind: CertificateKind::BranchAndBound,

@@ -181,7 +181,7 @@ pub(crate) fn optimal_quadric(
     let test = (opts.quadric_bound == QuadricBound::Convexity)
         .then(|| convexity_bound(&raw_views, &reference))
         .flatten()
-        .and_then(|lower| Certificate::of_convexity_test(cost, lower.min(cost), opts.max_relative_gap));
+        .and_then(|lower| Certificate::of_convexity_test(cost, lower, opts.max_relative_gap));
     if let Some(certified) = test {
         report.status = Status::Success;
         report.certificate = certified;
