@@ -365,17 +365,7 @@ mod tests {
         let result = branch_and_bound(&mut oracle, root, None, &opts);
         let (cost, x) = result.best.clone().unwrap();
         assert!(result.converged, "{} nodes", result.nodes);
-        // The true minimum: each x_k solves 4x(x²−1) + τ_k = 0 near −1 (Newton's method).
-        let truth: f64 = TILT
-            .iter()
-            .map(|&t| {
-                let mut v: f64 = -1.0;
-                for _ in 0..50 {
-                    v -= (4.0 * v * (v * v - 1.0) + t) / (12.0 * v * v - 4.0);
-                }
-                (v * v - 1.0).powi(2) + t * v
-            })
-            .sum();
+        let truth = double_well_minimum(TILT.len());
         assert!(result.lower_bound <= truth + 1e-12, "{} > {truth}", result.lower_bound);
         assert!(cost >= truth && cost - result.lower_bound <= 1e-3 * cost.abs() + 1e-12);
         assert!(x.iter().all(|v| (v + 1.0).abs() < 0.1), "{x:?}");
@@ -417,8 +407,8 @@ mod tests {
         assert!(result.lower_bound <= result.best.unwrap().0);
     }
 
-    /// The minimum of the tilted double well, each coordinate by Newton's method from −1 (an
-    /// oracle of its own: no branch and bound involved).
+    /// The minimum of the tilted double well: each `x_k` solves `4x(x²−1) + τ_k = 0` near −1, by
+    /// Newton's method (an oracle of its own: no branch and bound involved).
     fn double_well_minimum(dim: usize) -> f64 {
         TILT[..dim]
             .iter()

@@ -244,23 +244,7 @@ impl Socp {
             z: Vec::new(),
             iterations,
         };
-        let n = self.variables();
-        let (a, b) = self.constraint_matrix();
-        let mut q = vec![0.0; n];
-        for &(j, c) in &self.objective.terms {
-            q[j] += c;
-        }
-        let p = CscMatrix::zeros((n, n));
-        let cones: Vec<SupportedConeT<f64>> = self
-            .blocks
-            .iter()
-            .map(|&(cone, k)| match cone {
-                Cone::Zero => SupportedConeT::ZeroConeT(k),
-                Cone::Nonnegative => SupportedConeT::NonnegativeConeT(k),
-                Cone::SecondOrder => SupportedConeT::SecondOrderConeT(k),
-            })
-            .collect();
-        let Ok(mut solver) = DefaultSolver::new(&p, &q, &a, &b, &cones, settings) else {
+        let Some(mut solver) = self.clarabel_solver(settings) else {
             return failed(0);
         };
         solver.solve();
@@ -294,6 +278,27 @@ impl Socp {
             z,
             iterations,
         }
+    }
+
+    /// Clarabel's solver for this program (linear objective `qᵀx`, constraints `b − A x ∈ cones`), not
+    /// yet run; `None` when clarabel refuses the data.
+    fn clarabel_solver(&self, settings: DefaultSettings<f64>) -> Option<DefaultSolver<f64>> {
+        let n = self.variables();
+        let (a, b) = self.constraint_matrix();
+        let mut q = vec![0.0; n];
+        for &(j, c) in &self.objective.terms {
+            q[j] += c;
+        }
+        let cones: Vec<SupportedConeT<f64>> = self
+            .blocks
+            .iter()
+            .map(|&(cone, k)| match cone {
+                Cone::Zero => SupportedConeT::ZeroConeT(k),
+                Cone::Nonnegative => SupportedConeT::NonnegativeConeT(k),
+                Cone::SecondOrder => SupportedConeT::SecondOrderConeT(k),
+            })
+            .collect();
+        DefaultSolver::new(&CscMatrix::zeros((n, n)), &q, &a, &b, &cones, settings).ok()
     }
 
     /// The constraint matrix `A` (CSC) and right-hand side `b` in clarabel's form.
@@ -552,22 +557,7 @@ mod tests {
                     tol_ktratio: tol.max(1e-6),
                     ..DefaultSettings::default()
                 };
-                let (a, b) = p.constraint_matrix();
-                let n = p.variables();
-                let mut q = vec![0.0; n];
-                for &(j, c) in &p.objective.terms {
-                    q[j] += c;
-                }
-                let cones: Vec<SupportedConeT<f64>> = p
-                    .blocks
-                    .iter()
-                    .map(|&(cone, k)| match cone {
-                        Cone::Zero => SupportedConeT::ZeroConeT(k),
-                        Cone::Nonnegative => SupportedConeT::NonnegativeConeT(k),
-                        Cone::SecondOrder => SupportedConeT::SecondOrderConeT(k),
-                    })
-                    .collect();
-                let mut solver = DefaultSolver::new(&CscMatrix::zeros((n, n)), &q, &a, &b, &cones, settings).unwrap();
+                let mut solver = p.clarabel_solver(settings).unwrap();
                 solver.solve();
                 let bound = p.lower_bound(&solver.solution.z);
                 assert!(bound <= optimum, "max_iter {max_iter}, tol {tol}: {bound} > {optimum}");

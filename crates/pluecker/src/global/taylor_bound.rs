@@ -324,6 +324,21 @@ mod tests {
     use crate::rng::Rng;
     use nalgebra::{Matrix4, Vector4};
 
+    /// Three views of random ratios of quadratics in 4 unknowns and a random box of width 1e-3 to 1.
+    fn random_ratios_and_box(rng: &mut Rng) -> (Vec<QuadraticRatio<2, 4>>, Vec<f64>, Vec<f64>) {
+        let views = (0..3)
+            .map(|_| QuadraticRatio {
+                numerator: [random_quadratic(rng, 0.2), random_quadratic(rng, 0.2)],
+                denominator: random_quadratic(rng, 0.05),
+            })
+            .collect();
+        let centre: Vec<f64> = (0..4).map(|_| rng.normal()).collect();
+        let width = 10f64.powf(rng.uniform_in(-3.0, 0.0));
+        let lower = centre.iter().map(|c| c - width * rng.uniform()).collect();
+        let upper = centre.iter().map(|c| c + width * rng.uniform()).collect();
+        (views, lower, upper)
+    }
+
     fn random_quadratic(rng: &mut Rng, scale: f64) -> Quadratic<4> {
         let a = Matrix4::from_fn(|_, _| rng.normal() * scale);
         Quadratic {
@@ -355,16 +370,7 @@ mod tests {
         let mut rng = Rng::new(4);
         let mut checked = 0;
         for _ in 0..300 {
-            let views: Vec<QuadraticRatio<2, 4>> = (0..3)
-                .map(|_| QuadraticRatio {
-                    numerator: [random_quadratic(&mut rng, 0.2), random_quadratic(&mut rng, 0.2)],
-                    denominator: random_quadratic(&mut rng, 0.05),
-                })
-                .collect();
-            let centre: Vec<f64> = (0..4).map(|_| rng.normal()).collect();
-            let width = 10f64.powf(rng.uniform_in(-3.0, 0.0));
-            let lower: Vec<f64> = centre.iter().map(|c| c - width * rng.uniform()).collect();
-            let upper: Vec<f64> = centre.iter().map(|c| c + width * rng.uniform()).collect();
+            let (views, lower, upper) = random_ratios_and_box(&mut rng);
             let b = bound_over_box(&views, &lower, &upper, f64::INFINITY);
             let mut signs = [[false; 2]; 4];
             for _ in 0..200 {
@@ -613,16 +619,7 @@ mod tests {
     fn bound_over_box_is_below_a_local_minimisation_inside_random_boxes() {
         let mut rng = Rng::new(43);
         for instance in 0..300 {
-            let views: Vec<QuadraticRatio<2, 4>> = (0..3)
-                .map(|_| QuadraticRatio {
-                    numerator: [random_quadratic(&mut rng, 0.2), random_quadratic(&mut rng, 0.2)],
-                    denominator: random_quadratic(&mut rng, 0.05),
-                })
-                .collect();
-            let centre: Vec<f64> = (0..4).map(|_| rng.normal()).collect();
-            let width = 10f64.powf(rng.uniform_in(-3.0, 0.0));
-            let lower: Vec<f64> = centre.iter().map(|c| c - width * rng.uniform()).collect();
-            let upper: Vec<f64> = centre.iter().map(|c| c + width * rng.uniform()).collect();
+            let (views, lower, upper) = random_ratios_and_box(&mut rng);
             let b = bound_over_box(&views, &lower, &upper, f64::INFINITY);
             let least = box_minimum(&views, &lower, &upper, &mut rng);
             if least.is_finite() {
