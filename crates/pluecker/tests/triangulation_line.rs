@@ -156,13 +156,8 @@ fn the_relaxation_bound_is_below_the_costs_at_every_node_cap() {
             if bound.is_nan() {
                 continue; // nothing proved, nothing claimed
             }
-            let at_answer = independent_line_cost(
-                &scene.cameras,
-                &lines,
-                &covariances,
-                &r.point,
-                &(r.point + r.direction),
-            );
+            let at_answer =
+                independent_line_cost(&scene.cameras, &lines, &covariances, &r.point, &(r.point + r.direction));
             for (what, cost) in [("answer", at_answer), ("truth", truth)] {
                 assert!(
                     bound <= cost * (1.0 + 1e-9) + 1e-12,
