@@ -7,7 +7,7 @@
 //! raises the stop; the worker ends at its next poll, within a track's branch-and-bound node or a
 //! RANSAC iteration, and the work's value (for a batch: the finished tracks, the others with status
 //! `interrupted`) comes back together with the pending exception, for the caller to attach as
-//! `exception.partial` and raise ([`with_partial`]).
+//! `exception.partial` and raise ([`object_or_partial`]).
 //!
 //! [`run_single`] runs a single call (one point, line, quadric or pose) on the calling thread itself,
 //! sparing the worker thread's start: the stop's own check ([`Stop::with_check`]) runs Python's
@@ -233,9 +233,9 @@ where
     }
 }
 
-/// The Python object of a single call's result; raised as `exception.partial` instead when a signal
-/// handler raised during the call.
-pub(crate) fn single_result<C: pyo3::PyClass>(
+/// The Python object of a call's result; raised as `exception.partial` instead when the call was
+/// stopped by an exception (`pending`: Ctrl-C, or what a progress callback raised).
+pub(crate) fn object_or_partial<C: pyo3::PyClass>(
     py: Python<'_>,
     pending: Option<PyErr>,
     object: Py<C>,
@@ -329,7 +329,7 @@ where
 }
 
 /// Sets `error.partial = partial` (the results of an interrupted batch) and returns `error`.
-pub(crate) fn with_partial(py: Python<'_>, error: PyErr, partial: PyObject) -> PyErr {
+fn with_partial(py: Python<'_>, error: PyErr, partial: PyObject) -> PyErr {
     // An exception instance without a writable `__dict__` keeps its message; the results are lost.
     let _ = error.value(py).setattr("partial", partial);
     error
@@ -353,8 +353,5 @@ where
         pending,
     } = outcome;
     let object = Py::new(py, PyClassInitializer::from(report).add_subclass(results))?;
-    match pending {
-        Some(e) => Err(with_partial(py, e, object.into_any())),
-        None => Ok(object),
-    }
+    object_or_partial(py, pending, object)
 }

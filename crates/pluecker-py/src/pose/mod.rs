@@ -13,7 +13,7 @@ pub mod result;
 use crate::camera::PyCamera;
 use crate::convert::{check_finite, matrix_stack, points, read_any, segments, shape_string};
 use crate::errors::{guarded, shape_error};
-use crate::interrupt::{run_interruptible, run_single, with_partial};
+use crate::interrupt::{object_or_partial, run_interruptible, run_single};
 use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
 use options::{PyPoseOptions, PyRansacOptions};
@@ -189,10 +189,6 @@ pub fn estimate_pose(
     } else {
         run_interruptible(py, None, None, false, move |_| work())?
     };
-    let result = Py::new(py, PyPoseResult::wrap(outcome.value))?;
-    match outcome.pending {
-        // Ctrl-C: the pose reached so far (RANSAC stopped with `ransac.stop == "interrupted"`).
-        Some(e) => Err(with_partial(py, e, result.into_any())),
-        None => Ok(result),
-    }
+    // Ctrl-C: the pose reached so far as `partial` (RANSAC stopped with `ransac.stop == "interrupted"`).
+    object_or_partial(py, outcome.pending, Py::new(py, PyPoseResult::wrap(outcome.value))?)
 }

@@ -199,7 +199,7 @@ pub fn triangulate_line(
     let outcome = interrupt::run_single(py, move || {
         core_triangulate_line(&cams, &image, covs.as_deref(), &opts).map_err(|e| renamed(e, LINE_NAMES))
     })?;
-    interrupt::single_result(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?)
+    interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?)
 }
 
 /// The results of `triangulate_lines`: Plücker coordinates, points and directions per track.

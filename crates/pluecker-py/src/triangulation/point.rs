@@ -121,7 +121,7 @@ pub fn triangulate_point(
     let outcome = interrupt::run_single(py, move || {
         core_triangulate_point(&cams, &obs, covs.as_deref(), &opts).map_err(|e| renamed(e, POINT_NAMES))
     })?;
-    interrupt::single_result(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
+    interrupt::object_or_partial(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
 }
 
 pack_struct!(PyPointTriangulation {

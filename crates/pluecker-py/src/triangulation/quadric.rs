@@ -121,7 +121,7 @@ pub fn triangulate_quadric(
     let outcome = interrupt::run_single(py, move || {
         core_triangulate_quadric(&cams, &observed, covs.as_deref(), &opts).map_err(|e| renamed(e, QUADRIC_NAMES))
     })?;
-    interrupt::single_result(py, outcome.pending, PyQuadricTriangulation::create(py, outcome.value)?)
+    interrupt::object_or_partial(py, outcome.pending, PyQuadricTriangulation::create(py, outcome.value)?)
 }
 
 /// The results of `triangulate_quadrics`: dual and primal quadrics, centres, semi-axes and axes.
