@@ -471,6 +471,8 @@ fn too_small_gamma_is_infeasible() {
     let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
     assert_eq!(r.report.status, Status::Infeasible);
     assert!(!r.report.certificate.certified);
+    // The search proved the box empty: no admissible answer, a raw bound of +∞.
+    assert_eq!(r.report.certificate.raw_lower_bound, f64::INFINITY, "{:?}", r.report);
 }
 
 #[test]

@@ -512,6 +512,8 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
     assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
     assert!(!r.report.certificate.certified);
+    // The search proved the box empty: no admissible answer, a raw bound of +∞.
+    assert_eq!(r.report.certificate.raw_lower_bound, f64::INFINITY, "{:?}", r.report);
     // With a γ every view can meet, the same scene is certified.
     let opts = TriangulationOptions {
         max_reprojection_error: Some(30.0),

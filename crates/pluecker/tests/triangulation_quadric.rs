@@ -416,6 +416,8 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &o).unwrap();
     assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
     assert!(!r.report.certificate.certified);
+    // The search proved the box empty: no admissible answer, a raw bound of +∞.
+    assert_eq!(r.report.certificate.raw_lower_bound, f64::INFINITY, "{:?}", r.report);
 }
 
 #[test]

@@ -39,14 +39,14 @@ pub(crate) fn certificate_of<C>(
         kind: CertificateKind::BranchAndBound,
         nodes: result.nodes,
         solver_iterations: result.solver_iterations,
+        // The bound the search proved over its box, before any cap (`lower_bound` also caps it at
+        // the incumbent's cost); `+∞` when the box was proved to hold no admissible primitive.
+        raw_lower_bound: result.box_lower_bound,
         ..Certificate::none()
     };
     if result.lower_bound == f64::INFINITY {
         return (Status::Infeasible, base);
     }
-    // The bound the search proved over its box, before any cap (`lower_bound` also caps it at the
-    // incumbent's cost).
-    let raw_lower_bound = result.box_lower_bound;
     let lower = result.lower_bound.min(best_cost);
     // The one gap formula of every certificate (points too): relative to max(cost, 1e-12).
     let relative_gap = crate::global::relative_gap(best_cost, lower);
@@ -60,7 +60,6 @@ pub(crate) fn certificate_of<C>(
         status,
         Certificate {
             lower_bound: lower,
-            raw_lower_bound,
             relative_gap,
             certified,
             ..base

@@ -425,6 +425,17 @@ impl Certificate {
         }
     }
 
+    /// The certificate of a search that proved its domain holds no admissible primitive (every one
+    /// breaks `max_reprojection_error` in some view): no bound to cap, a raw bound of `+∞`.
+    pub(crate) fn infeasible(solver_iterations: usize) -> Certificate {
+        Certificate {
+            raw_lower_bound: f64::INFINITY,
+            kind: CertificateKind::BranchAndBound,
+            solver_iterations,
+            ..Certificate::none()
+        }
+    }
+
     /// The certificate of a convexity test whose (raw) lower bound on the cost is `raw_lower_bound`,
     /// when it closes the gap (`relative_gap(cost, min(raw_lower_bound, cost)) ≤ max_relative_gap`);
     /// `None` otherwise.

@@ -43,7 +43,7 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::{Certificate, CertificateKind, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, Report, Status, TriangulationOptions};
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 
 /// Factor between the eq. 27 strip widths and the width implied by `γ` at the local line's points.
@@ -436,10 +436,7 @@ pub(crate) fn optimal_line(
     }
     let (Some((xlo, xhi)), Some((ylo, yhi))) = (clip_bounds(&x_strips), clip_bounds(&y_strips)) else {
         report.status = Status::Infeasible;
-        report.certificate = Certificate {
-            kind: CertificateKind::BranchAndBound,
-            ..Certificate::none()
-        };
+        report.certificate = Certificate::infeasible(0);
         return (*local, report);
     };
     // The strips' box in p = (x, y), then its bounding box in the branching coordinates z = T⁻¹ p.
@@ -476,11 +473,7 @@ pub(crate) fn optimal_line(
     let (root, tightening_iterations) = oracle.tighten(&root);
     let Some(root) = root else {
         report.status = Status::Infeasible;
-        report.certificate = Certificate {
-            kind: CertificateKind::BranchAndBound,
-            solver_iterations: tightening_iterations,
-            ..Certificate::none()
-        };
+        report.certificate = Certificate::infeasible(tightening_iterations);
         return (*local, report);
     };
     let bb_opts = BranchAndBoundOptions {

@@ -432,7 +432,12 @@ pub fn global_point(
         point: *x_local,
         cost: cost_local,
         lower_bound: 0.0,
-        raw_lower_bound: f64::NAN,
+        // Proved empty: nothing admissible, so no cost below +∞; otherwise nothing proved.
+        raw_lower_bound: if status == GlobalStatus::Infeasible {
+            f64::INFINITY
+        } else {
+            f64::NAN
+        },
         status,
         nodes: 0,
         solver_iterations: 0,

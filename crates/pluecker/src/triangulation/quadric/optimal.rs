@@ -33,7 +33,7 @@ use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::{Certificate, CertificateKind, QuadricBound, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, QuadricBound, Report, Status, TriangulationOptions};
 use nalgebra::SVector;
 
 /// `B` of the a-priori box (module docs) as a multiple of the largest camera distance.
@@ -217,11 +217,7 @@ pub(crate) fn optimal_quadric(
     };
     let infeasible = |mut report: Report, iterations: usize| {
         report.status = Status::Infeasible;
-        report.certificate = Certificate {
-            kind: CertificateKind::BranchAndBound,
-            solver_iterations: iterations,
-            ..Certificate::none()
-        };
+        report.certificate = Certificate::infeasible(iterations);
         (*local, report)
     };
     // Eq. 26: the denominators' range without the cut, then the variables' and again the
