@@ -10,7 +10,7 @@
 mod pose_oracle;
 
 use nalgebra::{Rotation3, Unit, Vector2, Vector3, Vector6};
-use pluecker::pose::certificate::testing::{depth_bounds, local_bound, local_lower_bound};
+use pluecker::pose::certificate::testing::{depth_bounds, local_bound, local_lower_bound, LocalBound};
 use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
 use pluecker::synthetic::visible_scene;
@@ -180,6 +180,32 @@ fn step4_scenes() -> Vec<(Camera, Correspondences, OraclePose, String)> {
     out
 }
 
+/// The length unit of the step-4 tests: `√(2f̂) + 0.1`, the residual norm at the minimum (plus a
+/// margin for exact data).
+fn residual_unit(k: &Camera, corr: &Correspondences, minimum: &OraclePose) -> f64 {
+    (2.0 * cost(k, corr, minimum)).sqrt() + 0.1
+}
+
+/// A ball of step 4 centred away from `minimum`: the pose `shift` units ([`residual_unit`]) of
+/// whitened step from it in a random direction, the ball's radius of `scale` units, and step 4's bound
+/// there (`None` where it cannot be formed).
+fn ball_off_the_minimum(
+    k: &Camera,
+    corr: &Correspondences,
+    minimum: &OraclePose,
+    shift: f64,
+    scale: f64,
+    rng: &mut Rng,
+) -> Option<(OraclePose, f64, LocalBound)> {
+    let unit = residual_unit(k, corr, minimum);
+    let start = local_bound(k, corr, &minimum.to_library(), cost(k, corr, minimum), 1.0).unwrap();
+    let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
+    let pose = minimum.step(&(start.whitening * v0 * shift * unit));
+    let radius = scale * unit;
+    let b = local_bound(k, corr, &pose.to_library(), cost(k, corr, &pose), radius).ok()?;
+    Some((pose, radius, b))
+}
+
 /// `K` bounds `‖r''(s)‖` along whitened rays `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`, `a = T v`, `s ≤ ρ`: the
 /// second differences of the oracle's residuals, along random directions and then along the
 /// direction that maximised them refined by random search, never exceed it.
@@ -190,14 +216,7 @@ fn the_curvature_bound_holds_along_whitened_rays() {
     let mut checked = 0;
     for (k, corr, minimum, name) in step4_scenes() {
         for (shift, scale) in [(0.0, 3.0), (2.0, 6.0), (0.0, 16.0)] {
-            let f_hat = cost(&k, &corr, &minimum);
-            let unit = (2.0 * f_hat).sqrt() + 0.1;
-            let start = local_bound(&k, &corr, &minimum.to_library(), f_hat, 1.0).unwrap();
-            // A pose that is not the minimum: `shift` units of whitened step away.
-            let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
-            let pose = minimum.step(&(start.whitening * v0 * shift * unit));
-            let radius = scale * unit;
-            let Ok(b) = local_bound(&k, &corr, &pose.to_library(), cost(&k, &corr, &pose), radius) else {
+            let Some((pose, radius, b)) = ball_off_the_minimum(&k, &corr, &minimum, shift, scale, &mut rng) else {
                 continue;
             };
             let second = |v: &Vector6<f64>, s: f64| -> f64 {
@@ -265,14 +284,9 @@ fn the_local_bound_is_below_the_least_cost_in_the_ball() {
     let mut checked = 0;
     let mut closest: f64 = f64::INFINITY;
     for (k, corr, minimum, name) in step4_scenes() {
-        let f_hat = cost(&k, &corr, &minimum);
-        let unit = (2.0 * f_hat).sqrt() + 0.1;
+        let unit = residual_unit(&k, &corr, &minimum);
         for (shift, scale) in [(0.0, 2.0), (1.0, 2.0), (3.0, 4.0)] {
-            let start = local_bound(&k, &corr, &minimum.to_library(), f_hat, 1.0).unwrap();
-            let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
-            let pose = minimum.step(&(start.whitening * v0 * shift * unit));
-            let radius = scale * unit;
-            let Ok(b) = local_bound(&k, &corr, &pose.to_library(), cost(&k, &corr, &pose), radius) else {
+            let Some((pose, radius, b)) = ball_off_the_minimum(&k, &corr, &minimum, shift, scale, &mut rng) else {
                 continue;
             };
             let t = b.whitening;

@@ -170,6 +170,18 @@ pub fn minimise(k: &Camera, corr: &Correspondences, start: &OraclePose) -> (Orac
     (pose, f)
 }
 
+/// Every object point (the points and the segments' endpoints) and their centroid.
+fn object_points(corr: &Correspondences) -> (Vec<Vector3<f64>>, Vector3<f64>) {
+    let all: Vec<Vector3<f64>> = corr
+        .points3d
+        .iter()
+        .chain(corr.lines3d.iter().flatten())
+        .copied()
+        .collect();
+    let centroid = all.iter().sum::<Vector3<f64>>() / all.len() as f64;
+    (all, centroid)
+}
+
 /// Distinct local minima with every object point in front, cheapest first, from the truth and from
 /// `starts` random rotations placing the object's centroid at `depth` on the optical axis.
 pub fn many_start(
@@ -179,13 +191,7 @@ pub fn many_start(
     starts: usize,
     rng: &mut Rng,
 ) -> Vec<(OraclePose, f64)> {
-    let all: Vec<Vector3<f64>> = corr
-        .points3d
-        .iter()
-        .chain(corr.lines3d.iter().flatten())
-        .copied()
-        .collect();
-    let centroid = all.iter().sum::<Vector3<f64>>() / all.len() as f64;
+    let (all, centroid) = object_points(corr);
     let depth = (truth.r * centroid + truth.t).z;
     let mut candidates = vec![*truth];
     for _ in 0..starts {
@@ -216,13 +222,7 @@ pub fn many_start(
 /// The correspondences with the object moved to its centroid (`X → X − c`), and that centroid: a pose
 /// `(R, t)` of the original is `(R, t + R c)` of the centred one, with the same residuals.
 pub fn centred(corr: &Correspondences) -> (Correspondences, Vector3<f64>) {
-    let all: Vec<Vector3<f64>> = corr
-        .points3d
-        .iter()
-        .chain(corr.lines3d.iter().flatten())
-        .copied()
-        .collect();
-    let c = all.iter().sum::<Vector3<f64>>() / all.len() as f64;
+    let (_, c) = object_points(corr);
     let mut out = corr.clone();
     out.points3d.iter_mut().for_each(|x| *x -= c);
     out.lines3d.iter_mut().flatten().for_each(|x| *x -= c);
