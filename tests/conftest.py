@@ -62,14 +62,21 @@ def pytest_report_header(config):
             f"({SEED_SOURCE}; PLUECKER_HYPOTHESIS_SEED={HYPOTHESIS_SEED} replays it)")
 
 
+def _property_test(item):
+    """The hypothesis test function behind a collected ``item`` (a method's underlying function), or
+    ``None`` when it is not a property test."""
+    obj = getattr(item, "obj", None)
+    test = getattr(obj, "__func__", obj)
+    return test if hypothesis.is_hypothesis_test(test) else None
+
+
 def pytest_collection_modifyitems(config, items):
     """Every property test draws from this run's seed (``hypothesis.seed``; a ``--hypothesis-seed``
     given to pytest wins)."""
     if config.getoption("--hypothesis-seed", default=None) is not None:
         return
     for item in items:
-        test = getattr(getattr(item, "obj", None), "__func__", getattr(item, "obj", None))
-        if hypothesis.is_hypothesis_test(test):
+        if (test := _property_test(item)) is not None:
             hypothesis.seed(HYPOTHESIS_SEED)(test)
 
 
@@ -78,8 +85,7 @@ def pytest_runtest_makereport(item, call):
     """Puts the seed beside the failure of a property test."""
     outcome = yield
     report = outcome.get_result()
-    test = getattr(getattr(item, "obj", None), "__func__", getattr(item, "obj", None))
-    if report.failed and hypothesis.is_hypothesis_test(test):
+    if report.failed and _property_test(item) is not None:
         report.sections.append(("hypothesis seed", f"PLUECKER_HYPOTHESIS_SEED={HYPOTHESIS_SEED} ({SEED_SOURCE}) "
                                                     f"reruns this test with the same examples"))
 
