@@ -213,3 +213,106 @@ def test_localize_an_image_of_the_model_with_its_camera_model():
     centre = -R.T @ t
     assert np.linalg.norm(-result.R.T @ result.t - centre) < 0.05 * np.linalg.norm(centre)
     np.testing.assert_allclose(np.array(rigid.rotation.matrix()), result.R, atol=1e-12)
+
+
+def test_an_observation_of_a_missing_point_is_a_named_error_never_another_point():
+    """A point2D whose point3D_id names no point (a model edited in memory) is refused with its COLMAP
+    ids: before, it was attached to the next point by id, whose cost jumped and stayed certified."""
+    rec = synthetic_model(pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4], 3)
+    image = rec.images[sorted(rec.images)[1]]
+    k = next(i for i, p in enumerate(image.points2D) if p.has_point3D())
+    missing = max(rec.point3D_ids()) + 7 if k % 2 else min(rec.point3D_ids()) - 1 if min(rec.point3D_ids()) > 1 \
+        else max(rec.point3D_ids()) + 7
+    image.points2D[k].point3D_id = missing
+    with pytest.raises(colmap.ModelError, match=rf"image_id {image.image_id}, point2D_idx {k} .*point3D_id "
+                                                rf"{missing}") as info:
+        colmap.retriangulate(rec)
+    assert isinstance(info.value, pluecker.PlueckerError) and isinstance(info.value, ValueError)
+    # A gap inside the ids is refused the same way (the case that attached it to the next point).
+    ids = sorted(rec.point3D_ids())
+    rec.delete_point3D(ids[5])
+    image.points2D[k].point3D_id = ids[5]
+    with pytest.raises(colmap.ModelError, match=rf"point3D_id {ids[5]}, which is not in the model"):
+        colmap.retriangulate(rec)
+
+
+def test_an_empty_model_is_a_named_error_and_one_line_on_the_command_line(tmp_path, capsys):
+    from pluecker.cli import main
+
+    with pytest.raises(colmap.ModelError, match="no 3-D points"):
+        colmap.retriangulate(pycolmap.Reconstruction())
+    (tmp_path / "empty").mkdir()
+    pycolmap.Reconstruction().write(str(tmp_path / "empty"))
+    assert main(["triangulate", "--colmap", str(tmp_path / "empty"), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no 3-D points" in err and "Traceback" not in err
+
+
+def test_the_command_line_never_writes_into_the_input_model(tmp_path, capsys):
+    """``--out`` resolving to the input folder (same path, a trailing ``/.``, a symlink) is one line and
+    exit 2, and the input's files are untouched."""
+    from pluecker.cli import main
+
+    rec, _ = noisy_model_with_outliers(11)
+    model = tmp_path / "in"
+    model.mkdir()
+    rec.write(str(model))
+    (tmp_path / "link").symlink_to(model)
+    before = {p.name: p.read_bytes() for p in model.iterdir()}
+    for out in (model, model / ".", tmp_path / "link"):
+        assert main(["triangulate", "--colmap", str(model), "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "input model's folder" in err
+    assert {p.name: p.read_bytes() for p in model.iterdir()} == before
+
+
+def test_the_written_model_is_complete_and_honest(tmp_path):
+    """What write() puts out: ERROR recomputed for the moved points as COLMAP defines it (the mean pixel
+    reprojection error, computed here through pycolmap's own projection), every point in the PLY
+    coloured by state with a legend, the npz saying what ``certified`` proves, and only the files
+    written listed."""
+    rec, _ = noisy_model_with_outliers(12)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("a user's file")
+    run = colmap.retriangulate(rec, outlier_threshold_px=4.0)
+    files = colmap.write(rec, run, out)
+    assert out / "notes.txt" not in files and {"points3D.bin", "points3D.ply"} <= {f.name for f in files}
+    back = pycolmap.Reconstruction(str(out))
+    for point in back.points3D.values():
+        errors = []
+        for element in point.track.elements:
+            image = back.images[element.image_id]
+            u = back.cameras[image.camera_id].img_from_cam(np.atleast_2d(image.cam_from_world() * point.xyz))[0]
+            errors.append(np.linalg.norm(u - image.points2D[element.point2D_idx].xy))
+        assert abs(point.error - np.mean(errors)) < 1e-9 * (1 + np.mean(errors))
+    ply = (out / "points3D.ply").read_text().splitlines()
+    assert f"element vertex {back.num_points3D()}" in ply
+    assert any(line.startswith("comment pluecker: certified = rgb") for line in ply)
+    assert any(line.startswith("comment pluecker: unsolved = rgb") for line in ply)
+    saved = np.load(out / "points3D_triangulation.npz")
+    assert "lower bound on the global minimum" in str(saved["certified_meaning"])
+    # Writing again reports the files rewritten, and still not the user's file.
+    assert out / "notes.txt" not in colmap.write(rec, run, out)
+
+
+def test_unsolved_points_stay_in_the_ply_in_their_colour(tmp_path):
+    """A track that cannot be solved (a two-view track whose second view is 100 px off, so that no pair
+    of views fits within the 4 px threshold) keeps its model position and is in the PLY as unsolved."""
+    rec = synthetic_model(pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4], 13)
+    point_id, point = next((i, p) for i, p in sorted(rec.points3D.items()) if p.track.length() >= 2)
+    elements = [(e.image_id, e.point2D_idx) for e in point.track.elements]  # copies: deleting moves the rest
+    for image_id, point2D_idx in elements[2:]:
+        rec.delete_observation(image_id, point2D_idx)
+    moved = rec.images[elements[1][0]].points2D[elements[1][1]]
+    moved.xy = moved.xy + np.array([100.0, 0.0])
+    xyz = rec.points3D[point_id].xyz.copy()
+    run = colmap.retriangulate(rec, outlier_threshold_px=4.0)
+    row = int(np.flatnonzero(run.point3D_ids == point_id)[0])
+    assert run.result.status[row] != "success"
+    colmap.write(rec, run, tmp_path / "out")
+    ply = (tmp_path / "out" / "points3D.ply").read_text().splitlines()
+    assert f"element vertex {rec.num_points3D()}" in ply
+    red = " ".join(map(str, colmap.PLY_COLOURS["unsolved"]))
+    rows = [line for line in ply if line.endswith(red) and not line.startswith("comment")]
+    assert len(rows) == 1 and np.allclose([float(v) for v in rows[0].split()[:3]], xyz, rtol=1e-8)

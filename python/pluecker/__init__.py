@@ -33,6 +33,12 @@ Example::
     assert point.certified and np.allclose(point.X, X)
 """
 
+# pycolmap's wheels carry their own zlib: when pycolmap is imported before Python's zlib module, the first
+# compression through the module aborts the process. Loading zlib here, before pluecker.colmap can import
+# pycolmap, avoids it for every import order that imports pluecker first; pluecker itself never compresses
+# with zlib, so the order pycolmap-then-pluecker is safe too.
+import zlib  # noqa: F401  (isort: skip)
+
 from ._core import (
     METHODS,
     TRIANGULATION_METHODS,

@@ -572,12 +572,20 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
         return _fail("triangulate", str(exc))
     if not args.colmap.is_dir():
         return _fail("triangulate", f"{args.colmap}: not a directory")
+    if args.out.resolve() == args.colmap.resolve():
+        return _fail("triangulate", f"--out {args.out} is the input model's folder: give another folder (the "
+                     "input model is never overwritten)")
     try:
         reconstruction = pycolmap.Reconstruction(str(args.colmap))
     except Exception as exc:  # pycolmap raises its own exception types for unreadable models
         return _fail("triangulate", f"{args.colmap}: cannot read a COLMAP model: {exc}")
+    if reconstruction.num_points3D() == 0:
+        return _fail("triangulate", f"{args.colmap}: the model has no 3-D points to re-triangulate")
     if args.scheduler is not None:
-        return _triangulate_colmap_on_dask(args, reconstruction)
+        try:
+            return _triangulate_colmap_on_dask(args, reconstruction)
+        except pluecker.PlueckerError as exc:
+            return _fail("triangulate", str(exc))
     progress = Progress(max(1, reconstruction.num_points3D()), "points")
     report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
     try:

@@ -1,4 +1,4 @@
-"""COLMAP and pluecker conventions side by side, in one place (issue 12 §2).
+"""COLMAP and pluecker conventions side by side, in one place.
 
 pycolmap is an optional extra (``pip install pluecker[colmap]``); the functions that take or return
 pycolmap objects import it when called and say how to install it when it is missing.
@@ -24,8 +24,15 @@ import numpy as np
 from . import _core
 
 
+class ModelError(_core.PlueckerError):
+    """A COLMAP model that cannot be re-triangulated as it stands: no 3-D points, or an observation whose
+    ``point3D_id`` names no point of the model. The message names COLMAP's ids."""
+
+
 def _pycolmap() -> Any:
     try:
+        import zlib  # noqa: F401  (loaded before pycolmap, whose own zlib otherwise aborts Python's; see __init__)
+
         import pycolmap
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("pluecker.colmap needs pycolmap: pip install 'pluecker[colmap]'") from exc
@@ -120,6 +127,8 @@ def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...
     the sorted point ids, and per observation its point's row, its camera's row, COLMAP image id,
     ``point2D_idx``, undistorted pixel and covariance."""
     _check_sigma(sigma_px)
+    if reconstruction.num_points3D() == 0:
+        raise ModelError("reconstruction: the model has no 3-D points to re-triangulate")
     images = [image for image in reconstruction.images.values() if image.has_pose]
     lenses = [lens_camera(reconstruction.cameras[image.camera_id]) for image in images]
     # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
@@ -134,6 +143,7 @@ def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...
         xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
         point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
         idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
+        _check_point_ids(ids, point_ids, image.image_id, idx)
         undistorted, covariances = lens.undistort(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
         parts.append((np.searchsorted(ids, point_ids), np.full(len(xy), j), np.full(len(xy), image.image_id), idx,
                       undistorted, covariances))
@@ -146,6 +156,18 @@ def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...
     order = np.lexsort((undistorted[:, 1], undistorted[:, 0], image_a, track_a))
     return (P, ids, track_a[order], cameras_index[order], image_a[order], point2D_idx[order], undistorted[order],
             covariances[order])
+
+
+def _check_point_ids(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> None:
+    """:class:`ModelError` naming the first observation of image ``image_id`` whose ``point3D_id`` is not
+    among the model's sorted point ids ``ids`` (a dangling id, as a model edited in memory can hold)."""
+    rows = np.minimum(np.searchsorted(ids, point_ids), max(len(ids) - 1, 0))
+    dangling = np.flatnonzero(ids[rows] != point_ids) if len(ids) else np.arange(len(point_ids))
+    if len(dangling):
+        k = dangling[0]
+        raise ModelError(f"reconstruction: image_id {image_id}, point2D_idx {int(point2D_idx[k])} observes "
+                         f"point3D_id {int(point_ids[k])}, which is not in the model ({len(dangling)} such "
+                         f"observation{'s' if len(dangling) > 1 else ''} in this image)")
 
 
 def observation_table(reconstruction: Any, sigma_px: float = 1.0) -> tuple[Any, Any]:
@@ -243,49 +265,88 @@ def remove_outliers(reconstruction: Any, run: Retriangulation) -> int:
     deleted = 0
     for k in np.flatnonzero(~inliers & solved[run.observation_point]):
         point_id = int(run.point3D_ids[run.observation_point[k]])
-        if reconstruction.exists_point3D(point_id):
+        image_id, point2D_idx = int(run.observation_image[k]), int(run.observation_point2D[k])
+        # Only if the observation is still there: a second write of the same run deletes nothing twice.
+        if (reconstruction.exists_point3D(point_id)
+                and reconstruction.images[image_id].points2D[point2D_idx].point3D_id == point_id):
             reconstruction.delete_observation(int(run.observation_image[k]), int(run.observation_point2D[k]))
             deleted += 1
     return deleted
 
 
-def write_ply(path: Any, X: np.ndarray, certified: np.ndarray) -> None:
-    """An ASCII PLY of points (n, 3), green where certified and red where not (NaN rows left out)."""
+#: PLY colours per point state, in the order of the legend in the file's header.
+PLY_COLOURS = {
+    "certified": (40, 180, 60),     # green: re-triangulated, global optimum certified
+    "solved": (240, 200, 30),       # yellow: re-triangulated, not certified
+    "unsolved": (220, 40, 40),      # red: not re-triangulated, the model's position kept
+}
+
+#: What ``certified`` proves, as stated in ``points3D_triangulation.npz``.
+CERTIFIED_MEANING = (
+    "certified: lower_bound is a proved lower bound on the global minimum of the point's cost (eq. 19: the "
+    "squared reprojection residuals whitened by sigma_px, summed over the observations used), within the "
+    "relative gap max_relative_gap of cost; the residuals are those of the pixels undistorted through the "
+    "camera model into its pinhole part, with the pixel covariance propagated to first order")
+
+
+def write_ply(path: Any, X: np.ndarray, states: np.ndarray) -> None:
+    """An ASCII PLY of every point (n, 3), coloured by its state (``"certified"``, ``"solved"`` or
+    ``"unsolved"``; :data:`PLY_COLOURS`), with the legend as comments in the header. Points with a
+    non-finite coordinate (none in a COLMAP model) are left out."""
     keep = np.all(np.isfinite(X), axis=1)
-    colours = np.where(certified[keep, None], [[40, 180, 60]], [[220, 40, 40]])
-    header = ["ply", "format ascii 1.0", "comment pluecker: green certified global optimum, red not",
-              f"element vertex {int(keep.sum())}", "property double x", "property double y", "property double z",
-              "property uchar red", "property uchar green", "property uchar blue", "end_header"]
-    rows = (f"{x:.9g} {y:.9g} {z:.9g} {r} {g} {b}" for (x, y, z), (r, g, b) in zip(X[keep], colours))
+    colours = np.array([PLY_COLOURS[state] for state in states], dtype=int).reshape(-1, 3)
+    legend = [f"comment pluecker: {state} = rgb {r} {g} {b}" for state, (r, g, b) in PLY_COLOURS.items()]
+    header = ["ply", "format ascii 1.0", *legend, f"element vertex {int(keep.sum())}", "property double x",
+              "property double y", "property double z", "property uchar red", "property uchar green",
+              "property uchar blue", "end_header"]
+    rows = (f"{x:.9g} {y:.9g} {z:.9g} {r} {g} {b}" for (x, y, z), (r, g, b) in zip(X[keep], colours[keep]))
     with open(path, "w", encoding="utf-8") as f:
         f.write("\n".join([*header, *rows]) + "\n")
 
 
+def _stamps(folder: Any) -> dict[str, tuple[int, int, int]]:
+    """Each file of ``folder`` by name: (inode, size, mtime in ns), to tell which files a write touched."""
+    return {p.name: (st.st_ino, st.st_size, st.st_mtime_ns) for p in folder.iterdir() if p.is_file()
+            for st in [p.stat()]}
+
+
 def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = False) -> list[Any]:
     """Writes a re-triangulated model into the directory ``out``: the points back into
-    ``reconstruction`` (:func:`update_points`, :func:`remove_outliers`) and the COLMAP model (binary, or
-    text with ``text``), ``points3D.ply`` (green: certified) and ``points3D_triangulation.npz``: per point
-    ``point3D_id``, ``X``, ``covariance`` (3, 3), ``cost``, ``lower_bound``, ``certified``, ``status``; per
-    observation ``observation_point3D_id``, ``observation_image_id``, ``observation_point2D_idx`` and
-    ``observation_inlier``. Returns the paths written."""
+    ``reconstruction`` (:func:`update_points`, :func:`remove_outliers`, then every point's ERROR
+    recomputed as COLMAP defines it, the mean reprojection error in pixels), the COLMAP model (binary,
+    or text with ``text``), ``points3D.ply`` (every point of the model, coloured by state:
+    :data:`PLY_COLOURS`) and ``points3D_triangulation.npz``: per point ``point3D_id``, ``X``,
+    ``covariance`` (3, 3), ``cost``, ``lower_bound``, ``certified``, ``status``; per observation
+    ``observation_point3D_id``, ``observation_image_id``, ``observation_point2D_idx`` and
+    ``observation_inlier``; and ``certified_meaning``, what ``certified`` proves. Returns the paths of
+    the files written, sorted."""
     from pathlib import Path
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    before = _stamps(out)
     result = run.result
     update_points(reconstruction, run.point3D_ids, result)
     remove_outliers(reconstruction, run)
+    reconstruction.update_point_3d_errors()
     (reconstruction.write_text if text else reconstruction.write)(str(out))
     certified = np.asarray(result.certified, dtype=bool)
-    write_ply(out / "points3D.ply", np.asarray(result.X), certified)
+    solved = np.asarray(result.status) == "success"
+    state = dict(zip(run.point3D_ids.tolist(), np.where(certified, "certified", np.where(solved, "solved",
+                                                                                             "unsolved"))))
+    ply_ids = sorted(reconstruction.point3D_ids())  # points that lost their track to outliers are gone
+    ply_X = np.array([reconstruction.points3D[i].xyz for i in ply_ids], dtype=float).reshape(-1, 3)
+    write_ply(out / "points3D.ply", ply_X, np.array([state.get(i, "unsolved") for i in ply_ids]))
     inliers = result.inliers if result.inliers is not None else np.ones(len(run.observation_point), dtype=bool)
-    np.savez_compressed(
+    # Not savez_compressed: Python's zlib aborts the process when pycolmap was imported before it.
+    np.savez(
         out / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.X, covariance=result.covariance,
         cost=result.cost, lower_bound=result.lower_bound, certified=certified,
         status=np.asarray(result.status, dtype=str), observation_point3D_id=run.point3D_ids[run.observation_point],
         observation_image_id=run.observation_image, observation_point2D_idx=run.observation_point2D,
-        observation_inlier=inliers)
-    return sorted(out.iterdir())
+        observation_inlier=inliers, certified_meaning=np.array(CERTIFIED_MEANING))
+    after = _stamps(out)
+    return sorted(out / name for name, stamp in after.items() if before.get(name) != stamp)
 
 
 def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: Any = None, lines3D: Any = None,
