@@ -189,7 +189,7 @@ def test_command_line_retriangulates_a_colmap_model(tmp_path, capsys):
     code = main(["triangulate", "--colmap", str(tmp_path / "in"), "--out", str(tmp_path / "out"),
                  "--outlier-threshold", "4", "--text"])
     out = capsys.readouterr().out
-    assert code == 0 and "60 certified" in out and "rejected as outliers" in out
+    assert code == 0 and "60 certified" in out and "removed as outliers" in out
     assert (tmp_path / "out" / "points3D.txt").exists()
     assert main(["triangulate", "--colmap", str(tmp_path / "in")]) == 2
     assert "--out" in capsys.readouterr().err
@@ -316,3 +316,32 @@ def test_unsolved_points_stay_in_the_ply_in_their_colour(tmp_path):
     red = " ".join(map(str, colmap.PLY_COLOURS["unsolved"]))
     rows = [line for line in ply if line.endswith(red) and not line.startswith("comment")]
     assert len(rows) == 1 and np.allclose([float(v) for v in rows[0].split()[:3]], xyz, rtol=1e-8)
+
+
+def test_summaries_count_only_removed_observations_and_unsolved_flags_are_unknown(tmp_path, capsys):
+    """The observations of a point that was not re-triangulated are neither removed nor called outliers:
+    the command line counts the observations it deleted from the model, and the npz marks the unsolved
+    point's observations ``unknown``; its status line names the point3D_id."""
+    from pluecker.cli import main
+
+    rec, _ = noisy_model_with_outliers(14)
+    point_id, point = next((i, p) for i, p in sorted(rec.points3D.items()) if p.track.length() >= 3)
+    elements = [(e.image_id, e.point2D_idx) for e in point.track.elements]
+    for image_id, point2D_idx in elements[2:]:
+        rec.delete_observation(image_id, point2D_idx)
+    moved = rec.images[elements[1][0]].points2D[elements[1][1]]
+    moved.xy = moved.xy + np.array([100.0, 0.0])
+    (tmp_path / "in").mkdir()
+    rec.write(str(tmp_path / "in"))
+    observations = sum(p.track.length() for p in rec.points3D.values())
+    assert main(["triangulate", "--colmap", str(tmp_path / "in"), "--out", str(tmp_path / "out"),
+                 "--outlier-threshold", "4"]) == 0
+    out = capsys.readouterr().out
+    back = pycolmap.Reconstruction(str(tmp_path / "out"))
+    removed = observations - sum(p.track.length() for p in back.points3D.values())
+    assert f"observations: {removed} of {observations} removed as outliers" in out
+    assert f"point3D_id {point_id}" in out
+    saved = np.load(tmp_path / "out" / "points3D_triangulation.npz")
+    mine = saved["observation_point3D_id"] == point_id
+    assert mine.sum() == 2 and (saved["observation_state"][mine] == "unknown").all()
+    assert (saved["observation_state"] == "outlier").sum() == removed

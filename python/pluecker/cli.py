@@ -604,11 +604,13 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
     lines = [f"{args.colmap}: {len(status)} points, {int((status == 'success').sum())} triangulated, "
              f"{int(np.sum(result.certified))} certified ({args.method})"]
     if result.inliers is not None:
-        lines.append(f"observations: {int((~result.inliers).sum())} of {len(result.inliers)} rejected as outliers "
-                     f"(threshold {args.outlier_threshold} px)")
-    others = {s: int((status == s).sum()) for s in sorted(set(status)) if s != "success"}
+        lines.append(f"observations: {int(colmap.removed_observations(run).sum())} of {len(result.inliers)} "
+                     f"removed as outliers (threshold {args.outlier_threshold} px)")
+    others = {s: run.point3D_ids[status == s] for s in sorted(set(status)) if s != "success"}
     if others:
-        lines.append("not updated: " + ", ".join(f"{n} {s}" for s, n in others.items()))
+        lines.append("not updated: " + "; ".join(
+            f"{len(ids)} {s} (point3D_id {', '.join(map(str, ids[:5]))}{', …' if len(ids) > 5 else ''})"
+            for s, ids in others.items()))
     lines.append(f"wrote {len(files)} files to {args.out}: " + ", ".join(f.name for f in files))
     print("\n".join(lines))
     return 0

@@ -254,16 +254,22 @@ def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:
     return written
 
 
+def removed_observations(run: Retriangulation) -> np.ndarray:
+    """Mask (m,) of the observations that :func:`remove_outliers` deletes: rejected by the outlier
+    threshold at a point that was re-triangulated. Those of unsolved points are kept (their flag in
+    ``result.inliers`` says nothing: no point was found to judge them against)."""
+    if run.result.inliers is None:
+        return np.zeros(len(run.observation_point), dtype=bool)
+    solved = np.asarray(run.result.status) == "success"
+    return ~np.asarray(run.result.inliers, dtype=bool) & solved[run.observation_point]
+
+
 def remove_outliers(reconstruction: Any, run: Retriangulation) -> int:
     """Deletes from ``reconstruction`` the observations that :func:`retriangulate` rejected as outliers
     (``run.result.inliers`` false) of the points it solved; COLMAP deletes a point left with fewer than
     two observations. Returns how many observations were deleted."""
-    inliers = run.result.inliers
-    if inliers is None:
-        return 0
-    solved = np.asarray(run.result.status) == "success"
     deleted = 0
-    for k in np.flatnonzero(~inliers & solved[run.observation_point]):
+    for k in np.flatnonzero(removed_observations(run)):
         point_id = int(run.point3D_ids[run.observation_point[k]])
         image_id, point2D_idx = int(run.observation_image[k]), int(run.observation_point2D[k])
         # Only if the observation is still there: a second write of the same run deletes nothing twice.
@@ -317,8 +323,10 @@ def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = F
     or text with ``text``), ``points3D.ply`` (every point of the model, coloured by state:
     :data:`PLY_COLOURS`) and ``points3D_triangulation.npz``: per point ``point3D_id``, ``X``,
     ``covariance`` (3, 3), ``cost``, ``lower_bound``, ``certified``, ``status``; per observation
-    ``observation_point3D_id``, ``observation_image_id``, ``observation_point2D_idx`` and
-    ``observation_inlier``; and ``certified_meaning``, what ``certified`` proves. Returns the paths of
+    ``observation_point3D_id``, ``observation_image_id``, ``observation_point2D_idx``,
+    ``observation_inlier`` and ``observation_state`` (``"inlier"``, ``"outlier"`` (removed from the
+    model), or ``"unknown"`` for the observations of a point that was not re-triangulated); and
+    ``certified_meaning``, what ``certified`` proves. Returns the paths of
     the files written, sorted."""
     from pathlib import Path
 
@@ -338,13 +346,14 @@ def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = F
     ply_X = np.array([reconstruction.points3D[i].xyz for i in ply_ids], dtype=float).reshape(-1, 3)
     write_ply(out / "points3D.ply", ply_X, np.array([state.get(i, "unsolved") for i in ply_ids]))
     inliers = result.inliers if result.inliers is not None else np.ones(len(run.observation_point), dtype=bool)
+    observation_state = np.where(~solved[run.observation_point], "unknown", np.where(inliers, "inlier", "outlier"))
     # Not savez_compressed: Python's zlib aborts the process when pycolmap was imported before it.
     np.savez(
         out / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.X, covariance=result.covariance,
         cost=result.cost, lower_bound=result.lower_bound, certified=certified,
         status=np.asarray(result.status, dtype=str), observation_point3D_id=run.point3D_ids[run.observation_point],
         observation_image_id=run.observation_image, observation_point2D_idx=run.observation_point2D,
-        observation_inlier=inliers, certified_meaning=np.array(CERTIFIED_MEANING))
+        observation_inlier=inliers, observation_state=observation_state, certified_meaning=np.array(CERTIFIED_MEANING))
     after = _stamps(out)
     return sorted(out / name for name, stamp in after.items() if before.get(name) != stamp)
 
