@@ -345,3 +345,51 @@ def test_summaries_count_only_removed_observations_and_unsolved_flags_are_unknow
     mine = saved["observation_point3D_id"] == point_id
     assert mine.sum() == 2 and (saved["observation_state"][mine] == "unknown").all()
     assert (saved["observation_state"] == "outlier").sum() == removed
+
+
+def test_a_camera_that_cannot_be_handled_is_named_and_the_others_solved(tmp_path, capsys):
+    """One camera of a model that pluecker cannot handle (here a zero focal length; equally a model it
+    does not know) does not refuse the model: the other cameras' observations are solved, and the camera
+    is named with COLMAP's id."""
+    from pluecker.cli import main
+
+    options = pycolmap.SyntheticDatasetOptions()
+    options.num_rigs, options.num_cameras_per_rig, options.num_frames_per_rig = 2, 1, 4
+    options.num_points3D = 40
+    options.camera_model_id = pycolmap.CameraModelId.OPENCV
+    options.camera_params = [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4]
+    pycolmap.set_random_seed(15)
+    rec = pycolmap.synthesize_dataset(options)
+    odd = sorted(rec.cameras)[1]
+    rec.cameras[odd] = pycolmap.Camera(camera_id=odd, model="SIMPLE_PINHOLE", width=1024, height=768,
+                                       params=[0.0, 512.0, 384.0])  # a zero focal length: no camera
+    run = colmap.retriangulate(rec)
+    named = [m for m in run.skipped if m.startswith(f"camera_id {odd} (SIMPLE_PINHOLE)") and "focal" in m]
+    assert len(named) == 1 and len(run.skipped) == 1
+    used = set(run.observation_image.tolist())
+    assert used and not used & {i for i, image in rec.images.items() if image.camera_id == odd}
+    seen_twice = np.bincount(run.observation_point, minlength=len(run.point3D_ids)) >= 2
+    assert (run.result.status[seen_twice] == "success").all() and seen_twice.sum() >= 10
+    (tmp_path / "in").mkdir()
+    rec.write(str(tmp_path / "in"))
+    assert main(["triangulate", "--colmap", str(tmp_path / "in"), "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert f"camera_id {odd} (SIMPLE_PINHOLE)" in out
+
+
+def test_a_pixel_beyond_the_fold_is_left_out_by_name():
+    """A pixel with no preimage through its camera's distortion (past the fold of a strong barrel) is left
+    out, named, and its point solved from its other views."""
+    rec = synthetic_model(pycolmap.CameraModelId.SIMPLE_RADIAL, [300.0, 512.0, 384.0, -0.05], 16)
+    point_id, point = next((i, p) for i, p in sorted(rec.points3D.items()) if p.track.length() >= 4)
+    element = point.track.elements[0]
+    image_id, point2D_idx = element.image_id, element.point2D_idx
+    fold = pluecker.LensCamera("SIMPLE_RADIAL", [300.0, 512.0, 384.0, -0.05])
+    rec.images[image_id].points2D[point2D_idx].xy = np.array([512.0 + 300.0 * 3.0, 384.0])  # r = 3 > fold at 2.58
+    with pytest.raises(pluecker.PlueckerError):
+        fold.undistort([[512.0 + 300.0 * 3.0, 384.0]])
+    run = colmap.retriangulate(rec)
+    assert len(run.skipped) == 1 and run.skipped[0].startswith(
+        f"image_id {image_id}, point2D_idx {point2D_idx} (point3D_id {point_id})")
+    row = int(np.flatnonzero(run.point3D_ids == point_id)[0])
+    assert run.result.status[row] == "success"

@@ -603,6 +603,9 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
     status = np.asarray(result.status)
     lines = [f"{args.colmap}: {len(status)} points, {int((status == 'success').sum())} triangulated, "
              f"{int(np.sum(result.certified))} certified ({args.method})"]
+    if run.skipped:
+        lines.append(f"left out: {len(run.skipped)} (" + "; ".join(run.skipped[:3])
+                     + ("; …" if len(run.skipped) > 3 else "") + ")")
     if result.inliers is not None:
         lines.append(f"observations: {int(colmap.removed_observations(run).sum())} of {len(result.inliers)} "
                      f"removed as outliers (threshold {args.outlier_threshold} px)")

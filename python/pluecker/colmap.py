@@ -17,7 +17,7 @@ pycolmap objects import it when called and say how to install it when it is miss
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -92,11 +92,14 @@ class Retriangulation:
     Attributes: ``point3D_ids`` (n,), ``result`` (a ``pluecker.PointTriangulations``, row ``i`` the point
     ``point3D_ids[i]``), and the observations as ``observation_point`` (m,) (a row of
     ``point3D_ids``), ``observation_image`` (m,) and ``observation_point2D`` (m,) (COLMAP's image id and
-    ``point2D_idx``); with an outlier threshold, ``result.inliers`` (m,) flags them.
+    ``point2D_idx``); with an outlier threshold, ``result.inliers`` (m,) flags them. ``skipped`` lists,
+    with COLMAP's ids, what was left out: a camera whose model is not handled (its observations), or
+    a pixel outside the invertible region of its camera's distortion.
     """
 
     def __init__(self, point3D_ids: np.ndarray, result: Any, observation_point: np.ndarray,
-                 observation_image: np.ndarray, observation_point2D: np.ndarray) -> None:
+                 observation_image: np.ndarray, observation_point2D: np.ndarray, skipped: list | None = None) -> None:
+        self.skipped = list(skipped or [])
         self.point3D_ids = point3D_ids
         self.result = result
         self.observation_point = observation_point
@@ -121,22 +124,64 @@ def _check_sigma(sigma_px: Any) -> None:
         raise _core.InvalidOptionError(f"sigma_px: must be a positive finite number of pixels, got {value:.6g}")
 
 
-def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...]:
+class _Observations(NamedTuple):
+    """A model's observations as the triangulation takes them (:func:`_observations`)."""
+
+    P: np.ndarray               # (v, 3, 4) pinhole cameras of the posed images whose camera is handled
+    P_image_ids: np.ndarray     # (v,) their COLMAP image ids
+    ids: np.ndarray             # (n,) sorted point3D ids
+    track: np.ndarray           # (m,) row of ids per observation
+    camera: np.ndarray          # (m,) row of P
+    image_id: np.ndarray        # (m,) COLMAP image id
+    point2D_idx: np.ndarray     # (m,)
+    undistorted: np.ndarray     # (m, 2) pixels of the camera's pinhole part
+    covariances: np.ndarray     # (m, 2, 2)
+    skipped: list               # messages naming the cameras and observations left out, with COLMAP's ids
+
+
+def _undistort(lens: _core.LensCamera, xy: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``lens.undistort`` of the pixels that have a preimage: (kept mask, undistorted, covariances). The
+    pixels of an image go in one call; only when one of them is refused are they tried one by one."""
+    try:
+        undistorted, covariances = lens.undistort(xy, cov)
+        return np.ones(len(xy), dtype=bool), undistorted, covariances
+    except _core.PlueckerError:
+        kept = np.ones(len(xy), dtype=bool)
+        undistorted, covariances = np.full((len(xy), 2), np.nan), np.full((len(xy), 2, 2), np.nan)
+        for k in range(len(xy)):
+            try:
+                u, c = lens.undistort(xy[k:k + 1], cov[k:k + 1])
+                undistorted[k], covariances[k] = u[0], c[0]
+            except _core.PlueckerError:
+                kept[k] = False
+        return kept, undistorted, covariances
+
+
+def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     """Every observation of a model's 3-D points, undistorted into its camera's pinhole part with the
-    pixel covariance carried there (:func:`retriangulate`): the cameras ``P`` (one per posed image),
-    the sorted point ids, and per observation its point's row, its camera's row, COLMAP image id,
-    ``point2D_idx``, undistorted pixel and covariance."""
+    pixel covariance carried there (:func:`retriangulate`), sorted by point. An observation whose camera
+    model is not handled, or whose pixel has no preimage through the camera's distortion, is left out
+    and named in ``skipped``; a dangling ``point3D_id`` or a model without points is a :class:`ModelError`."""
     _check_sigma(sigma_px)
     if reconstruction.num_points3D() == 0:
         raise ModelError("reconstruction: the model has no 3-D points to re-triangulate")
-    images = [image for image in reconstruction.images.values() if image.has_pose]
-    lenses = [lens_camera(reconstruction.cameras[image.camera_id]) for image in images]
-    # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
-    P = np.stack([lens.pinhole.P(*pose_from_rigid(image.cam_from_world())) for lens, image in zip(lenses, images)])
     ids = np.array(sorted(reconstruction.point3D_ids()), dtype=np.int64)
+    posed = [image for image in reconstruction.images.values() if image.has_pose]
+    lenses, skipped = {}, []
+    for camera_id in sorted({image.camera_id for image in posed}):
+        camera = reconstruction.cameras[camera_id]
+        try:
+            lenses[camera_id] = lens_camera(camera)
+        except _core.PlueckerError as exc:
+            count = sum(image.num_points3D for image in posed if image.camera_id == camera_id)
+            skipped.append(f"camera_id {camera_id} ({camera.model.name}): {exc}; its {count} observations not used")
+    images = [image for image in posed if image.camera_id in lenses]
+    # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
+    P = np.array([lenses[image.camera_id].pinhole.P(*pose_from_rigid(image.cam_from_world())) for image in images],
+                 dtype=float).reshape(-1, 3, 4)
     # The observations image by image (pycolmap hands them over per image), then sorted by point.
     parts = []
-    for j, (image, lens) in enumerate(zip(images, lenses)):
+    for j, image in enumerate(images):
         observed = image.get_observation_points2D()
         if not observed:
             continue
@@ -144,18 +189,22 @@ def _observations(reconstruction: Any, sigma_px: float) -> tuple[np.ndarray, ...
         point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
         idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
         _check_point_ids(ids, point_ids, image.image_id, idx)
-        undistorted, covariances = lens.undistort(xy, np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
-        parts.append((np.searchsorted(ids, point_ids), np.full(len(xy), j), np.full(len(xy), image.image_id), idx,
-                      undistorted, covariances))
+        kept, undistorted, covariances = _undistort(lenses[image.camera_id], xy,
+                                                    np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
+        skipped.extend(f"image_id {image.image_id}, point2D_idx {int(idx[k])} (point3D_id {int(point_ids[k])}): "
+                       f"pixel ({xy[k, 0]:.6g}, {xy[k, 1]:.6g}) outside the invertible region of the camera's "
+                       "distortion; not used" for k in np.flatnonzero(~kept))
+        parts.append((np.searchsorted(ids, point_ids)[kept], np.full(kept.sum(), j), np.full(kept.sum(), image.image_id),
+                      idx[kept], undistorted[kept], covariances[kept]))
     if parts:
-        track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
+        track, camera, image_id, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
     else:
-        track_a = cameras_index = image_a = point2D_idx = np.zeros(0, dtype=np.int64)
+        track = camera = image_id = point2D_idx = np.zeros(0, dtype=np.int64)
         undistorted, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
     # Sorted as pluecker.distributed sorts them (track, image id, pixel), so that both give the same bits.
-    order = np.lexsort((undistorted[:, 1], undistorted[:, 0], image_a, track_a))
-    return (P, ids, track_a[order], cameras_index[order], image_a[order], point2D_idx[order], undistorted[order],
-            covariances[order])
+    order = np.lexsort((undistorted[:, 1], undistorted[:, 0], image_id, track))
+    return _Observations(P, np.array([image.image_id for image in images], dtype=np.int64), ids, track[order], camera[order], image_id[order], point2D_idx[order], undistorted[order],
+                         covariances[order], skipped)
 
 
 def _check_point_ids(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> None:
@@ -178,14 +227,12 @@ def observation_table(reconstruction: Any, sigma_px: float = 1.0) -> tuple[Any, 
 
     from .distributed import Cameras
 
-    P, ids, track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = _observations(
-        reconstruction, sigma_px)
-    image_ids = np.array([image.image_id for image in reconstruction.images.values() if image.has_pose], np.int64)
-    table = pa.table({"track": ids[track_a] if len(ids) else np.zeros(0, np.int64), "image": image_a.astype(np.int64),
-                      "x": undistorted[:, 0], "y": undistorted[:, 1], "cov_xx": covariances[:, 0, 0],
-                      "cov_xy": covariances[:, 0, 1], "cov_yy": covariances[:, 1, 1],
-                      "point2D_idx": point2D_idx.astype(np.int64)})
-    return Cameras(image_ids, P if len(P) else np.zeros((0, 3, 4))), table
+    o = _observations(reconstruction, sigma_px)
+    table = pa.table({"track": o.ids[o.track], "image": o.image_id.astype(np.int64),
+                      "x": o.undistorted[:, 0], "y": o.undistorted[:, 1], "cov_xx": o.covariances[:, 0, 0],
+                      "cov_xy": o.covariances[:, 0, 1], "cov_yy": o.covariances[:, 1, 1],
+                      "point2D_idx": o.point2D_idx.astype(np.int64)})
+    return Cameras(o.P_image_ids, o.P), table
 
 
 class TableResult:
@@ -232,15 +279,14 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     ``method``, ``options`` and ``progress`` are those of :func:`pluecker.triangulate_point_observations`.
     Use :func:`update_points` or :func:`write` to put the points back.
     """
-    P, ids, track_a, cameras_index, image_a, point2D_idx, undistorted, covariances = _observations(
-        reconstruction, sigma_px)
+    o = _observations(reconstruction, sigma_px)
     if outlier_threshold_px is not None:
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
-    result = _core.triangulate_point_observations(P, track_a, cameras_index, undistorted, covariances,
+    result = _core.triangulate_point_observations(o.P, o.track, o.camera, o.undistorted, o.covariances,
                                                   method=method, options=options, progress=progress,
-                                                  n_tracks=len(ids))
-    return Retriangulation(ids, result, track_a, image_a, point2D_idx)
+                                                  n_tracks=len(o.ids))
+    return Retriangulation(o.ids, result, o.track, o.image_id, o.point2D_idx, o.skipped)
 
 
 def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:
