@@ -444,6 +444,20 @@ mod tests {
     }
 
     #[test]
+    fn an_objective_unbounded_below_is_reported_as_such_with_no_bound() {
+        // min x + 2y s.t. |y| ≤ x: along (x, y) = (s, −s) the objective is −s → −∞: unbounded
+        // below, the dual infeasible.
+        let mut p = Socp::new();
+        let x = p.add_variable(f64::NEG_INFINITY, f64::INFINITY);
+        let y = p.add_variable(f64::NEG_INFINITY, f64::INFINITY);
+        p.minimize(Affine::var(x).plus(&Affine::term(y, 2.0)));
+        p.second_order(Affine::var(x), &[Affine::var(y)]);
+        let s = p.solve();
+        assert_eq!(s.status, SocpStatus::Unbounded);
+        assert_eq!(s.lower_bound, f64::NEG_INFINITY);
+    }
+
+    #[test]
     fn unknown_variable_bounds_give_no_bound_unless_the_residual_vanishes() {
         let mut p = Socp::new();
         let x = p.add_variable(f64::NEG_INFINITY, f64::INFINITY);
