@@ -704,7 +704,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     // The same tracks in both forms: dense (n, v) with a visibility mask, and sparse (CSR over the
     // visible observations). In the dense order every result is the same, bit for bit but the wall time;
     // in another order of the images the sums run in another order, and the results agree to rounding.
-    // A track naming an image beyond the cameras or one image twice is its own error.
+    // A track naming an image beyond the cameras or seen from one image only is its own error.
     let cameras = triangulation_scene(7, 0.4, 9).cameras;
     let v = cameras.len();
     let mut rng = Rng::new(9);
@@ -785,10 +785,12 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
             (c.report.status, c.report.certificate.certified)
         );
     }
-    // Bad tracks: an image index beyond the cameras (track 0), an image twice (track 1).
+    // Bad tracks: an image index beyond the cameras (track 0), every observation in one image
+    // (track 1: several keypoints of one image are allowed, but a point needs two distinct images).
     let mut bad_images = images.clone();
     bad_images[offsets[0]] = v;
-    bad_images[offsets[1] + 1] = bad_images[offsets[1]];
+    let first = bad_images[offsets[1]];
+    bad_images[offsets[1]..offsets[2]].fill(first);
     let bad = SparsePointTracks {
         csr: Csr {
             images: &bad_images,
@@ -798,7 +800,10 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     };
     let r = triangulate_points_sparse(&cameras, &bad, &opts, None).unwrap();
     assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
-    assert!(matches!(&r[1], Err(Error::Degenerate { what }) if what.starts_with("track 1: image")));
+    assert!(
+        matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
+            if required == "2 distinct images per track" && actual.starts_with("track 1: "))
+    );
     assert!(r[2..].iter().all(|x| x.is_ok()));
     // Whole-call errors: offsets that do not end at the observations, or decrease.
     let short = SparsePointTracks {

@@ -6,7 +6,11 @@
 //! more when it is one of the two views farthest apart: the reference for the rejection itself is an
 //! oracle that removes exactly the outlier's view.
 
-use nalgebra::Vector2;
+#[path = "common/oracle_triangulation.rs"]
+mod oracle;
+
+use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
+use oracle::PointData;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{triangulate_points_sparse, SparsePointTracks};
@@ -234,4 +238,127 @@ fn one_outlier_line_per_track_is_rejected() {
     assert_eq!(rejected, tracks);
     assert!(naive > 2.0, "the outlier should hurt without rejection ({naive}x)");
     assert!(ratio <= 1.01, "{ratio}");
+}
+
+/// A camera `K [R | t]` at `centre` looking at `target` (f = 800 px, principal point (320, 240)).
+fn looking_at(centre: Vector3<f64>, target: Vector3<f64>) -> Matrix3x4<f64> {
+    let z = (target - centre).normalize();
+    let helper = if z.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    let x = helper.cross(&z).normalize();
+    let r = Matrix3::from_rows(&[x.transpose(), z.cross(&x).transpose(), z.transpose()]);
+    let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+    let mut rt = Matrix3x4::zeros();
+    rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    rt.set_column(3, &(-r * centre));
+    k * rt
+}
+
+/// The pixel residual norm of `x` in view `i` of `data`, by projection (not the library's residual).
+fn pixel_error(data: &PointData, i: usize, x: &Vector3<f64>) -> f64 {
+    let h = data.cameras[i] * x.push(1.0);
+    (h.xy() / h.z - data.pixels[i]).norm()
+}
+
+/// The linear (DLT) point of two views, from the SVD of the 4x4 system of their pixel equations.
+fn two_view_dlt(data: &PointData) -> Vector3<f64> {
+    let rows: Vec<_> = (0..2)
+        .flat_map(|i| {
+            let (p, u) = (data.cameras[i], data.pixels[i]);
+            [p.row(0) - p.row(2) * u.x, p.row(1) - p.row(2) * u.y]
+        })
+        .collect();
+    let a = Matrix4::from_rows(&rows);
+    let v = a.svd(false, true).v_t.expect("v_t").row(3).transpose();
+    v.xyz() / v.w
+}
+
+#[test]
+fn a_two_view_track_whose_optimum_fits_both_views_keeps_both() {
+    // One camera 1-2 units from the point, the other 15-30: the linear point weighs the views by
+    // depth, so with 2.5 px noise it can miss the far or near view by more than τ = 4 px where the
+    // optimum of eq. 19 fits both. "too_few_inliers" is only right when no pair's optimum fits.
+    let tau = 4.0;
+    let mut rng = Rng::new(24);
+    let (mut fitting, mut linear_misfits) = (0, 0);
+    for _ in 0..300 {
+        let point = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        let near = point + rng.unit_vector3() * rng.uniform_in(1.0, 2.0);
+        let mut far_direction = rng.unit_vector3();
+        if far_direction.dot(&(near - point)) < 0.0 {
+            far_direction = -far_direction; // both cameras on the same side: the parallax stays moderate
+        }
+        let far = point + far_direction * rng.uniform_in(15.0, 30.0);
+        let cameras = [looking_at(near, point), looking_at(far, point)];
+        let pixels: Vec<Vector2<f64>> = cameras
+            .iter()
+            .map(|p| {
+                let h = p * point.push(1.0);
+                h.xy() / h.z + Vector2::new(rng.normal(), rng.normal()) * 2.5
+            })
+            .collect();
+        let data = PointData::new(&cameras, &pixels, None);
+        let (optimum, _) = data.many_start_minimum(&point, 20, &mut rng);
+        // Within τ by more than the rounding of the pixel residuals (1e-9 px).
+        if !(0..2).all(|i| pixel_error(&data, i, &optimum) <= tau - 1e-9) {
+            continue;
+        }
+        fitting += 1;
+        let dlt = two_view_dlt(&data);
+        linear_misfits += (0..2).any(|i| pixel_error(&data, i, &dlt) > tau) as usize;
+        let result = triangulate_point(&cameras, &pixels, None, &robust()).unwrap();
+        assert_eq!(result.report.status, Status::Success, "{pixels:?}");
+        assert_eq!(result.inliers.as_deref(), Some(&[true, true][..]), "{pixels:?}");
+        assert!((result.point - optimum).norm() <= 1e-6 * (1.0 + optimum.norm()));
+    }
+    // The case the test is about occurs (the linear point misfits though the optimum fits).
+    assert!(linear_misfits >= 3 && fitting >= 100, "{linear_misfits} of {fitting}");
+}
+
+#[test]
+fn a_track_may_see_one_image_twice_and_uses_every_observation() {
+    // Two keypoints of one image on the same track (COLMAP keeps them after merging tracks): all four
+    // observations enter eq. 19, and the certificate is about that cost, recomputed independently.
+    let mut rng = Rng::new(25);
+    let scene = triangulation_scene(3, 0.5, 25);
+    let mut noisy = scene.noisy(1.0, &mut rng);
+    noisy.push(scene.noisy(1.0, &mut rng)[0]);
+    let images = [0usize, 1, 2, 0];
+    let observations: Vec<f64> = noisy.iter().flat_map(|x| [x.x, x.y]).collect();
+    let offsets = [0usize, 4];
+    let tracks = SparsePointTracks {
+        csr: Csr {
+            offsets: &offsets,
+            images: &images,
+        },
+        observations: &observations,
+        covariances: None,
+    };
+    let result = triangulate_points_sparse(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let result = result[0].as_ref().unwrap();
+    assert_eq!(result.report.status, Status::Success);
+    let cameras: Vec<_> = images.iter().map(|&j| scene.cameras[j]).collect();
+    let data = PointData::new(&cameras, &noisy, None);
+    let (_, best) = data.many_start_minimum(&scene.point, 50, &mut rng);
+    let cost = data.cost(&result.point);
+    // Both are local minima of the same smooth cost: equal to the solvers' 1e-10 relative accuracy.
+    assert!((cost - best).abs() <= 1e-8 * best, "{cost} vs {best}");
+    assert!((result.report.cost - cost).abs() <= 1e-8 * cost);
+    assert!(result.report.certificate.certified);
+    assert!(result.report.certificate.raw_lower_bound <= best * (1.0 + 1e-9));
+    // Seen from one image only (twice): too few distinct images, named as such.
+    let one_image = [0usize, 0];
+    let tracks = SparsePointTracks {
+        csr: Csr {
+            offsets: &[0, 2],
+            images: &one_image,
+        },
+        observations: &observations[..4],
+        covariances: None,
+    };
+    let refused = triangulate_points_sparse(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let message = refused[0].as_ref().unwrap_err().to_string();
+    assert!(
+        message.contains("2 distinct images") && message.contains("all in image 0"),
+        "{message}"
+    );
 }

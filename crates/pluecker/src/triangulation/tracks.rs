@@ -120,7 +120,8 @@ impl Csr<'_> {
     }
 
     /// `(image, row)` of every observation of track `t`, in row order; an image beyond the `v` cameras
-    /// or an image seen twice is the track's own error.
+    /// is the track's own error. An image may appear more than once (two keypoints of one image, as
+    /// COLMAP's track merging leaves them): see [`Csr::distinct_observations`] for the kinds that refuse it.
     pub(crate) fn observations(&self, t: usize, v: usize) -> Result<Vec<(usize, usize)>> {
         let rows = self.offsets[t]..self.offsets[t + 1];
         let images = &self.images[rows.clone()];
@@ -131,12 +132,19 @@ impl Csr<'_> {
                 actual: images[i].to_string(),
             });
         }
-        if let Some(i) = (1..images.len()).find(|&i| images[..i].contains(&images[i])) {
+        Ok(images.iter().copied().zip(rows).collect())
+    }
+
+    /// [`Csr::observations`] of a track that must see each image at most once (lines and quadrics,
+    /// whose two-view charts need two distinct cameras): an image seen twice is the track's own error.
+    pub(crate) fn distinct_observations(&self, t: usize, v: usize) -> Result<Vec<(usize, usize)>> {
+        let seen = self.observations(t, v)?;
+        if let Some(i) = (1..seen.len()).find(|&i| seen[..i].iter().any(|o| o.0 == seen[i].0)) {
             return Err(Error::Degenerate {
-                what: format!("track {t}: image {} observed twice", images[i]),
+                what: format!("track {t}: image {} observed twice", seen[i].0),
             });
         }
-        Ok(images.iter().copied().zip(rows).collect())
+        Ok(seen)
     }
 }
 

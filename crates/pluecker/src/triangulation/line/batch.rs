@@ -203,7 +203,7 @@ pub fn triangulate_lines_sparse(
     }
     tracks.csr.check_values("covariances", tracks.covariances, 4, "2 x 2")?;
     Ok(solve_tracks(n, 1, progress, |t| {
-        let seen = tracks.csr.observations(t, cameras.len())?;
+        let seen = tracks.csr.distinct_observations(t, cameras.len())?;
         line_track(&shared, &tracks.lines, tracks.covariances, t, &seen, opts)
     }))
 }

@@ -239,7 +239,19 @@ fn solve_track(
     if views.len() < 2 {
         return Err(too_few(opts.method, t, views.len(), 2));
     }
-    let (frame, spread) = frame_of(seen.iter().map(|&j| prepared.centres[j]));
+    // Several observations may share an image (two keypoints of one image): all are used, but the
+    // point needs two distinct images.
+    let mut images = seen.clone();
+    images.sort_unstable();
+    images.dedup();
+    if images.len() < 2 {
+        return Err(Error::TooFewCorrespondences {
+            method: opts.method.as_str().into(),
+            required: "2 distinct images per track".into(),
+            actual: format!("track {t}: {} observations, all in image {}", views.len(), images[0]),
+        });
+    }
+    let (frame, spread) = frame_of(images.iter().map(|&j| prepared.centres[j]));
     if spread <= SAME_CENTRE {
         return Err(no_parallax(t));
     }

@@ -319,7 +319,7 @@ fn unreached(
 
 /// The local minimum of eq. 19 from the linear point, or from a start in front of the cameras when
 /// that one is behind a camera, at infinity, or ends behind one. `None` when no start exists.
-fn local_solution(
+pub(crate) fn local_solution(
     views: &[PointView],
     frame: &WorldFrame,
     linear: LinearPoint,

@@ -2,10 +2,13 @@
 //! optimum of eq. 19 on the inliers ([`TriangulationOptions::outlier_threshold`]).
 //!
 //! 1. **Consensus.** Every pair of views (or [`MAX_PAIRS`] of them, drawn with a fixed seed, for long
-//!    tracks) gives a two-view linear point; its MSAC score is `Σ_j min(r_j², τ²)` over all views,
-//!    with `r_j` the whitened residual of eq. 18 in view `j` (`τ²` for a view the point is behind).
-//!    The lowest score wins. A single outlier in a track of 3 or more views cannot win: any pair of
-//!    inliers explains every inlier view.
+//!    tracks) gives a two-view point: the linear point, or, when that does not fit both views of the
+//!    pair within `τ`, the local minimum of eq. 19 over the pair started from it (the linear point
+//!    weighs the views by depth, so a pair whose optimum fits can look inconsistent at it). Its MSAC
+//!    score is `Σ_j min(r_j², τ²)` over all views, with `r_j` the whitened residual of eq. 18 in view
+//!    `j` (`τ²` for a view the point is behind). The lowest score wins. A single outlier in a track of
+//!    3 or more views cannot win: any pair of inliers explains every inlier view. Two observations in
+//!    one image give no two-view point (their linear point is the camera centre) and are skipped.
 //! 2. **Optimum on the inliers.** The views with `r_j ≤ τ` (and in front) are solved by the chosen
 //!    method, certificate included; the inliers are then re-selected at that point, and the solve
 //!    repeated while they change (at most [`MAX_ROUNDS`] times).
@@ -16,7 +19,7 @@
 
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
-use super::{solve_views, PointTriangulation};
+use super::{local_solution, solve_views, PointTriangulation};
 use crate::rng::Rng;
 use crate::triangulation::{Report, Status, TriangulationOptions};
 use nalgebra::{Matrix4, Vector3};
@@ -61,20 +64,52 @@ pub(crate) fn pairs(n: usize) -> Vec<(usize, usize)> {
     out
 }
 
+/// The point of the pair of views `(a, b)` for the consensus (module docs): the linear point, or the
+/// pair's local minimum from it when the linear point does not fit both views within `τ`; `None`
+/// when there is no finite point in front of both.
+fn pair_point(
+    views: &[PointView],
+    (a, b): (usize, usize),
+    frame: &WorldFrame,
+    tau2: f64,
+    opts: &TriangulationOptions,
+) -> Option<Vector3<f64>> {
+    let pair = [views[a], views[b]];
+    let mut g = Matrix4::zeros();
+    accumulate_dlt(&mut g, &pair[0], frame);
+    accumulate_dlt(&mut g, &pair[1], frame);
+    let linear = solve_dlt(&g, frame);
+    let LinearPoint::Finite(x) = linear else {
+        return None;
+    };
+    let fits = |x: &Vector3<f64>| pair.iter().all(|v| squared_error(v, x) <= tau2);
+    if !pair.iter().all(|v| v.depth(&x) > 0.0) {
+        return None;
+    }
+    if fits(&x) {
+        return Some(x);
+    }
+    let (optimum, _, _) = local_solution(&pair, frame, linear, opts)?;
+    Some(if pair.iter().all(|v| v.depth(&optimum) > 0.0) && fits(&optimum) {
+        optimum
+    } else {
+        x
+    })
+}
+
 /// The consensus of step 1: the inlier mask of the best two-view point (`None` when no pair gives a
 /// finite point in front of its two views).
-pub(crate) fn consensus(views: &[PointView], frame: &WorldFrame, tau2: f64) -> Option<Vec<bool>> {
+pub(crate) fn consensus(
+    views: &[PointView],
+    frame: &WorldFrame,
+    tau2: f64,
+    opts: &TriangulationOptions,
+) -> Option<Vec<bool>> {
     let mut best: Option<(f64, Vector3<f64>)> = None;
-    for (a, b) in pairs(views.len()) {
-        let mut g = Matrix4::zeros();
-        accumulate_dlt(&mut g, &views[a], frame);
-        accumulate_dlt(&mut g, &views[b], frame);
-        let LinearPoint::Finite(x) = solve_dlt(&g, frame) else {
+    for pair in pairs(views.len()) {
+        let Some(x) = pair_point(views, pair, frame, tau2, opts) else {
             continue;
         };
-        if !(views[a].depth(&x) > 0.0 && views[b].depth(&x) > 0.0) {
-            continue;
-        }
         let score: f64 = views.iter().map(|v| squared_error(v, &x).min(tau2)).sum();
         if best.map_or(true, |(s, _)| score < s) {
             best = Some((score, x));
@@ -104,7 +139,7 @@ pub(crate) fn solve_views_robust(
             inliers: Some(mask),
         }
     };
-    let mut mask = match consensus(views, frame, tau2) {
+    let mut mask = match consensus(views, frame, tau2, opts) {
         Some(mask) if mask.iter().filter(|&&m| m).count() >= 2 => mask,
         other => return too_few(other.unwrap_or_else(|| vec![false; views.len()])),
     };

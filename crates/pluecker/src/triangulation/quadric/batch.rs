@@ -142,7 +142,7 @@ pub fn triangulate_quadrics_sparse(
         .csr
         .check_values("covariances", tracks.covariances, 25, "5 x 5")?;
     Ok(solve_tracks(n, 1, progress, |t| {
-        let seen = tracks.csr.observations(t, cameras.len())?;
+        let seen = tracks.csr.distinct_observations(t, cameras.len())?;
         quadric_track(&shared, tracks.conics, tracks.covariances, t, &seen, opts)
     }))
 }
