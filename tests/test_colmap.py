@@ -393,3 +393,47 @@ def test_a_pixel_beyond_the_fold_is_left_out_by_name():
         f"image_id {image_id}, point2D_idx {point2D_idx} (point3D_id {point_id})")
     row = int(np.flatnonzero(run.point3D_ids == point_id)[0])
     assert run.result.status[row] == "success"
+
+
+def with_a_second_keypoint(rec, image_id: int, point_id: int, xy, folder):
+    """``rec`` with one more keypoint ``xy`` in image ``image_id`` on the track of ``point_id``, edited in
+    COLMAP's text files as track merging leaves such tracks (pycolmap cannot append to an image's
+    keypoints in memory)."""
+    folder.mkdir()
+    rec.write_text(str(folder))
+    images = (folder / "images.txt").read_text().splitlines()
+    at = next(k for k, line in enumerate(images) if line and not line.startswith("#")
+              and int(line.split()[0]) == image_id)
+    index = len(images[at + 1].split()) // 3
+    images[at + 1] = f"{images[at + 1]} {xy[0]:.17g} {xy[1]:.17g} {point_id}".strip()
+    (folder / "images.txt").write_text("\n".join(images) + "\n")
+    points = (folder / "points3D.txt").read_text().splitlines()
+    at = next(k for k, line in enumerate(points) if line and not line.startswith("#")
+              and int(line.split()[0]) == point_id)
+    points[at] = f"{points[at]} {image_id} {index}"
+    (folder / "points3D.txt").write_text("\n".join(points) + "\n")
+    return pycolmap.Reconstruction(str(folder))
+
+
+def test_a_track_that_sees_one_image_twice_uses_both_keypoints(tmp_path):
+    """COLMAP's track merging can leave two keypoints of one image on one track: both are used (the
+    cost counts every observation, as pycolmap's bundle adjustment does)."""
+    rec = synthetic_model(pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4], 17)
+    point_id, point = next((i, p) for i, p in sorted(rec.points3D.items()) if p.track.length() >= 3)
+    image_id = point.track.elements[0].image_id
+    image = rec.images[image_id]
+    u = rec.cameras[image.camera_id].img_from_cam(np.atleast_2d(image.cam_from_world() * point.xyz))[0]
+    rec = with_a_second_keypoint(rec, image_id, point_id, u + np.array([0.7, -0.4]), tmp_path / "merged")
+    run = colmap.retriangulate(rec)
+    row = int(np.flatnonzero(run.point3D_ids == point_id)[0])
+    mine = run.observation_point == row
+    assert mine.sum() == rec.points3D[point_id].track.length() and (run.observation_image[mine] == image_id).sum() == 2
+    assert run.result.status[row] == "success" and run.result.certified[row]
+    # The cost is the squared pixel error over every observation (noise-free but the moved keypoint).
+    X = run.result.X[row]
+    pixel_cost = 0.0
+    for element in rec.points3D[point_id].track.elements:
+        im = rec.images[element.image_id]
+        proj = rec.cameras[im.camera_id].img_from_cam(np.atleast_2d(im.cam_from_world() * X))[0]
+        pixel_cost += np.sum((proj - im.points2D[element.point2D_idx].xy) ** 2)
+    assert pixel_cost > 0.1 and abs(run.result.cost[row] - pixel_cost) <= 1e-3 * pixel_cost
