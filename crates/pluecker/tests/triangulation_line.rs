@@ -308,6 +308,12 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
             );
         }
         eprintln!("{regime}: {certified_here} certified and checked");
+        if bound == LineBound::Relaxation {
+            // Measured 5 of 6. A relaxation that never closes (a wrong eq. 23 map from the branching
+            // variables to the line makes every node's program fail, keeping its parent's bound) is
+            // sound but useless, and the other regimes' counts would hide it.
+            assert!(certified_here >= 4, "{regime}: only {certified_here} of 6 certified");
+        }
         checked += certified_here;
     }
     eprintln!("{checked} of {tried} certified lines checked; {violations} violations");
