@@ -227,13 +227,7 @@ pub(crate) fn enclosure<const M: usize, const N: usize>(
         let radius = candidate.q_radius(&inverse)?;
         let depth = views
             .iter()
-            .map(|v| {
             .map(|v| v.d.dot(&centre).abs() + radius * v.d.dot(&(inverse * v.d)).max(0.0).sqrt())
-                    v.d.dot(&centre).abs() + radius + v.d.dot(&(inverse * v.d)).max(0.0).sqrt()
-                } else {
-                    v.d.dot(&centre).abs() + radius * v.d.dot(&(inverse * v.d)).max(0.0).sqrt()
-                }
-            })
             .fold(0.0, f64::max)
             * (1.0 + KAPPA_MARGIN);
         if !(depth < REFINEMENT_RATIO * candidate.kappa_q) {
