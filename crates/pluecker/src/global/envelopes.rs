@@ -255,8 +255,9 @@ mod tests {
     }
 
     /// The closed form equals the envelope built from its definition, over random boxes and points
-    /// inside them (the `t` edges excluded, where λ is 0 or 1); the closed form's clamp of `s'` to
-    /// `s − (1 − λ)L` is what keeps `s₂ ≥ L`, and a sign slip there puts it below the envelope.
+    /// inside them (the `t` edges excluded, where λ is 0 or 1). The clamp of `s'` to `s − (1 − λ)L`
+    /// never binds (the unclamped minimiser `sλ√l/(λ√l + (1 − λ)√u)` is below it since `s ≥ L` and
+    /// `√u ≥ λ√l + (1 − λ)√u`), so no test can see a slip in it; the other clamps can be seen here.
     #[test]
     fn envelope_equals_the_least_mix_of_two_edge_points() {
         let mut rng = Rng::new(25);
