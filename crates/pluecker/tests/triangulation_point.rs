@@ -390,6 +390,13 @@ fn branch_and_bound_from_a_point_that_is_not_a_minimum_finds_and_bounds_the_glob
             "seed {seed}: raw bound {} above the minimum {f_min} ({g:?})",
             g.raw_lower_bound
         );
+        // The start is not the minimum (its cost is `ratio` times it): whatever the node cap, the
+        // search reports a cheaper point than the one it started from.
+        let found = data.cost(&g.point);
+        assert!(
+            found < start_cost * (1.0 - 1e-6),
+            "seed {seed}: the search kept its start ({found} vs {start_cost}); the minimum costs {f_min}"
+        );
         if g.status == GlobalStatus::Converged {
             converged += 1;
             let cost = data.cost(&g.point);

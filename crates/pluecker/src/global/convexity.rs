@@ -570,6 +570,98 @@ mod tests {
         let passed = check_minorants::<1, 2>(21, 600, 161) + check_minorants::<2, 2>(22, 600, 161);
         assert!(passed >= 100, "only {passed} instances passed the test");
     }
+    /// Mean-depth-like charts (`Σᵢ dᵢ = 0`, so `Σᵢ ζᵢ = n` and every chart point with all `ζᵢ > 0`
+    /// has `|dᵢᵀy| < n − 1`, the a-priori bound of points) of 4 to 12 views in one unknown, with
+    /// residuals and perspective large enough that stage 2 starts from the a-priori `κ = n − 1` with
+    /// radii above 1. Every point of the chart's domain with `f ≤ f(0)` on a 20001-point grid lies in
+    /// the enclosure: `|dᵢᵀy| ≤ κ_d` and `F(y) ≤ (1 + κ_Q)² f(0)`.
+    #[test]
+    fn enclosures_from_the_a_priori_depth_bound_hold_every_point_of_the_sublevel_set() {
+        let mut rng = Rng::new(39);
+        let (mut enclosed, mut points) = (0, 0);
+        for instance in 0..3000 {
+            let n = 4 + rng.below(9);
+            let residual = 10f64.powf(rng.uniform_in(-1.0, 0.7));
+            let perspective = 10f64.powf(rng.uniform_in(-1.0, 0.5));
+            let mut views: Vec<RatioView<1, 1>> = (0..n)
+                .map(|_| RatioView {
+                    a0: SVector::from([residual * rng.normal()]),
+                    g: SMatrix::from([[rng.normal()]]),
+                    d: SVector::from([perspective * rng.normal()]),
+                })
+                .collect();
+            let mean = views.iter().map(|v| v.d[0]).sum::<f64>() / n as f64;
+            for v in &mut views {
+                v.d[0] -= mean;
+            }
+            let f0: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+            let Some(k) = enclosure(&views, f0, f0.sqrt(), Some(n as f64 - 1.0)) else {
+                continue;
+            };
+            enclosed += 1;
+            // Tight as well as sound: unless stage 2 never refined (`κ_d = κ_Q`), `κ_d` is the largest
+            // depth over the ellipsoid `F ≤ (1 + κ_Q)² f(0)` (the roots of the quadratic `F`, written
+            // out), widened by the margin `KAPPA_MARGIN`.
+            let (qa, qb, qc) = views
+                .iter()
+                .fold((0.0, 0.0, -(1.0 + k.kappa_q).powi(2) * f0), |(a, b, c), v| {
+                    let (g, a0) = (v.g[(0, 0)], v.a0[0]);
+                    (a + g * g, b + 2.0 * g * a0, c + a0 * a0)
+                });
+            let disc = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
+            let ends = [(-qb - disc) / (2.0 * qa), (-qb + disc) / (2.0 * qa)];
+            let deepest = views
+                .iter()
+                .flat_map(|v| ends.map(|y| (v.d[0] * y).abs()))
+                .fold(0.0, f64::max);
+            // Rounding of the roots and of κ_d's own formula: ~1e-12 relative to the terms, well
+            // inside the margin's 1e-6.
+            assert!(
+                k.kappa_d == k.kappa_q || k.kappa_d <= deepest * (1.0 + KAPPA_MARGIN) * (1.0 + 1e-9) + 1e-12,
+                "instance {instance} ({n} views): κ_d {} above the ellipsoid's largest depth {deepest}",
+                k.kappa_d
+            );
+            // The chart's domain {all ζᵢ > 0} is the interval (lo, hi) between the nearest poles.
+            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            for v in &views {
+                let pole = -1.0 / v.d[0];
+                if v.d[0] > 0.0 {
+                    lo = lo.max(pole);
+                } else if v.d[0] < 0.0 {
+                    hi = hi.min(pole);
+                }
+            }
+            let (lo, hi) = (lo.max(-1e3), hi.min(1e3));
+            for i in 1..20_000 {
+                let y = lo + (hi - lo) * i as f64 / 20_000.0;
+                let Some(f) = plain_cost(&views, &[y]) else {
+                    continue;
+                };
+                if f > f0 {
+                    continue;
+                }
+                points += 1;
+                for v in &views {
+                    assert!(
+                        (v.d[0] * y).abs() <= k.kappa_d * (1.0 + 1e-9),
+                        "instance {instance} ({n} views): depth {} at y = {y} (f {f} ≤ f(0) {f0}) beyond κ_d {}",
+                        v.d[0] * y,
+                        k.kappa_d
+                    );
+                }
+                let big_f: f64 = views.iter().map(|v| (v.a0[0] + v.g[(0, 0)] * y).powi(2)).sum();
+                // Rounding of F at a point where it is ~f(0): a few ulps.
+                assert!(
+                    big_f <= (1.0 + k.kappa_q).powi(2) * f0 * (1.0 + 1e-9),
+                    "instance {instance} ({n} views): F {big_f} at y = {y} beyond (1 + κ_Q)² f(0), κ_Q {}",
+                    k.kappa_q
+                );
+            }
+        }
+        eprintln!("{enclosed} enclosures, {points} sublevel points checked");
+        assert!(enclosed >= 300, "{enclosed}");
+    }
+
     /// Charts of two or three views whose residuals are large against the perspective: each view's
     /// `t = dᵢ r̂ᵢ / gᵢ` (the ratio that decides the sign of its curvature, module docs stage 3)
     /// between −0.4 and 0.4, the region where the test is close to failing and the cost's curvature

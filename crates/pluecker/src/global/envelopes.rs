@@ -230,6 +230,64 @@ mod tests {
         }
     }
 
+    /// The convex envelope of `t/s` (linear in `t`) is the least mix `λ l/s₁ + (1 − λ) u/s₂` of two
+    /// points `(l, s₁)`, `(u, s₂)` of the box's `t` edges averaging to `(t, s)`:
+    /// `λ = (u − t)/(u − l)`, `s₂ = (s − λs₁)/(1 − λ)`, both `s₁, s₂ ∈ [L, U]`. Minimised here by
+    /// golden section over `s₁` (the mix is convex in `s₁`), written from that definition and not from
+    /// the closed form.
+    fn envelope_by_edge_points(t: f64, s: f64, b: &FractionBox) -> f64 {
+        let (l, u, lo, hi) = (b.t_lower, b.t_upper, b.s_lower, b.s_upper);
+        let lambda = (u - t) / (u - l);
+        let mix = |s1: f64| lambda * l / s1 + (1.0 - lambda) * u / ((s - lambda * s1) / (1.0 - lambda));
+        // s₂ ∈ [L, U] ⇔ s₁ ∈ [(s − (1 − λ)U)/λ, (s − (1 − λ)L)/λ].
+        let mut a = lo.max((s - (1.0 - lambda) * hi) / lambda);
+        let mut c = hi.min((s - (1.0 - lambda) * lo) / lambda);
+        let ratio = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..200 {
+            let (x1, x2) = (c - ratio * (c - a), a + ratio * (c - a));
+            if mix(x1) <= mix(x2) {
+                c = x2;
+            } else {
+                a = x1;
+            }
+        }
+        mix(0.5 * (a + c))
+    }
+
+    /// The closed form equals the envelope built from its definition, over random boxes and points
+    /// inside them (the `t` edges excluded, where λ is 0 or 1). The clamp of `s'` to `s − (1 − λ)L`
+    /// never binds (the unclamped minimiser `sλ√l/(λ√l + (1 − λ)√u)` is below it since `s ≥ L` and
+    /// `√u ≥ λ√l + (1 − λ)√u`), so no test can see a slip in it; the other clamps can be seen here.
+    #[test]
+    fn envelope_equals_the_least_mix_of_two_edge_points() {
+        let mut rng = Rng::new(25);
+        for _ in 0..200 {
+            let l = if rng.uniform() < 0.3 {
+                0.0
+            } else {
+                rng.uniform_in(0.0, 3.0)
+            };
+            let lo = rng.uniform_in(0.05, 2.0);
+            let b = FractionBox {
+                t_lower: l,
+                t_upper: l + rng.uniform_in(0.1, 5.0),
+                s_lower: lo,
+                s_upper: lo * rng.uniform_in(1.05, 20.0),
+            };
+            for _ in 0..50 {
+                let t = rng.uniform_in(b.t_lower, b.t_upper);
+                let s = rng.uniform_in(b.s_lower, b.s_upper);
+                let closed = fraction_envelope(t, s, &b);
+                let defined = envelope_by_edge_points(t, s, &b);
+                // Golden section to 1e-40 of the interval: the two agree to rounding, ~1e-12 relative.
+                assert!(
+                    (closed - defined).abs() <= 1e-9 * (1.0 + defined),
+                    "{b:?} ({t}, {s}): closed form {closed}, envelope {defined}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn quadratic_over_linear_is_the_fraction_numerator() {
         // min t s.t. ‖(x − 1, 2)‖² ≤ t z with z = 2 fixed and x free: t = 4/2 = 2 at x = 1.

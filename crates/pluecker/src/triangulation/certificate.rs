@@ -126,6 +126,40 @@ mod tests {
     use super::*;
     use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 
+    /// One fraction `‖r‖² = a²/g²` with `a = 2` and the denominator `g ∈ [1.5, 2]` (above 1, as in a
+    /// line's frame far from the local solution): its least value is 1, at `g = 2`, where the numerator
+    /// `t = a²/g = 2` lies inside the relaxation's box `[0, t_cap · hi] = [0, 2.1]` for `t_cap = 1.05`
+    /// (every point with `‖r‖² ≤ t_cap` has `t = ‖r‖²g ≤ t_cap · hi`). The relaxation's bound is at
+    /// most that least value; a box cut at `t_cap / hi` would exclude the minimiser.
+    #[test]
+    fn fraction_relaxation_is_below_the_least_ratio_when_the_denominator_exceeds_one() {
+        use crate::global::envelopes::add_quadratic_over_linear;
+        for (lo, hi) in [(1.5, 2.0), (1.2, 3.0), (1.01, 1.1)] {
+            let a: f64 = 2.0;
+            let least = (a / hi).powi(2);
+            let t_cap = least * 1.05;
+            let mut p = Socp::new();
+            let g = p.add_variable(lo, hi);
+            let t = p.add_variable(0.0, t_cap * hi);
+            let g_expr = Affine::var(g);
+            p.less_eq(&Affine::constant(lo), &g_expr);
+            p.less_eq(&g_expr, &Affine::constant(hi));
+            add_quadratic_over_linear(&mut p, &[Affine::constant(a)], &g_expr, &Affine::var(t));
+            let s = solve_fraction_relaxation(&mut p, [(t, &g_expr, lo, hi)], t_cap);
+            assert_eq!(
+                s.status,
+                SocpStatus::Solved,
+                "g ∈ [{lo}, {hi}]: the minimiser g = {hi} is feasible"
+            );
+            // The solver's tolerance is ~1e-8; its lower bound is valid by construction.
+            assert!(
+                s.lower_bound <= least * (1.0 + 1e-9),
+                "g ∈ [{lo}, {hi}]: bound {} above the least ratio {least}",
+                s.lower_bound
+            );
+        }
+    }
+
     /// `f(x) = (x − 0.3)² + 1` on `[−1, 1]` (minimum 1), bounded over each interval exactly and then
     /// lowered by `slack`: a valid but loose bound, so that the gap cannot close below `slack`.
     struct Loose {

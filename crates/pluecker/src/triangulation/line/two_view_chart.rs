@@ -377,6 +377,55 @@ mod tests {
         }
     }
 
+    /// The chart's pair is the accepted pair of least score `tr((I_a + I_b)⁻¹ Σᵥ Iᵥ)` (module docs):
+    /// every pair of views is scored here and tested for the epipole condition, and none that is
+    /// accepted scores less than the chosen one.
+    #[test]
+    fn the_chosen_pair_has_the_least_score_of_the_accepted_pairs() {
+        let mut compared = 0;
+        for seed in 0..12u64 {
+            let n = 3 + seed as usize % 5;
+            let (problem, (a, b)) = noisy_problem(n, 40 + seed, |i| Matrix2::new(0.5 + 0.3 * i as f64, 0.0, 0.2, 1.0));
+            let sim = Similarity::of_cameras(&problem.cameras);
+            let line = plucker::transform(&sim.matrix(), &plucker::from_points(&a, &b));
+            let residuals = problem.views(&sim);
+            let bound = 4.0 * fraction::cost(&residuals, &line);
+            let Some(chart) = TwoViewChart::new(&problem, &sim, &residuals, &line, bound) else {
+                continue;
+            };
+            let cameras: Vec<Matrix3x4<f64>> = problem.cameras.iter().map(|p| sim.camera(p)).collect();
+            let tangent = OrthonormalLine::from_plucker(&line).unwrap().tangent();
+            let info: Vec<Matrix4<f64>> = residuals
+                .iter()
+                .map(|r| fraction::linearize(std::slice::from_ref(r), &line, &tangent).gauss_newton)
+                .collect();
+            let total: Matrix4<f64> = info.iter().sum();
+            let score = |i: usize, j: usize| ((info[i] + info[j]).try_inverse().unwrap() * total).trace();
+            // The image line of view v on the disc ‖z_v‖ ≤ √bound misses the epipole of the other view.
+            let clear = |v: usize, other: usize| {
+                let (pi0, g) = plane_of_residual(&problem, &cameras[v], v);
+                let c = views::centre(&cameras[other]).push(1.0);
+                pi0.dot(&c).abs() > EPIPOLE_MARGIN * bound.sqrt() * (g.transpose() * c).norm()
+            };
+            let chosen = score(chart.pair.0, chart.pair.1);
+            for i in 0..n {
+                for j in i + 1..n {
+                    if clear(i, j) || clear(j, i) {
+                        // Scores of a few 4×4 inverses: rounding ~1e-12 relative.
+                        assert!(
+                            chosen <= score(i, j) * (1.0 + 1e-9),
+                            "seed {seed}: pair {:?} scores {chosen}, the accepted pair ({i}, {j}) {}",
+                            chart.pair,
+                            score(i, j)
+                        );
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        assert!(compared >= 50, "{compared}");
+    }
+
     #[test]
     fn chart_residuals_equal_the_views_residuals_and_the_pair_is_exact() {
         let (problem, (a, b)) = noisy_problem(5, 9, |i| Matrix2::new(0.7 + 0.1 * i as f64, 0.0, 0.3, 1.4));
