@@ -206,6 +206,15 @@ fn ball_off_the_minimum(
     Some((pose, radius, b))
 }
 
+/// The correspondences with every object coordinate multiplied by `lambda`, and `pose` with its
+/// translation multiplied by `lambda`: the same pixels, the same residuals at corresponding poses.
+fn scaled_world(corr: &Correspondences, pose: &OraclePose, lambda: f64) -> (Correspondences, OraclePose) {
+    let mut out = corr.clone();
+    out.points3d.iter_mut().for_each(|x| *x *= lambda);
+    out.lines3d.iter_mut().flatten().for_each(|x| *x *= lambda);
+    (out, OraclePose::new(pose.r, pose.t * lambda))
+}
+
 /// `K` bounds `‖r''(s)‖` along whitened rays `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`, `a = T v`, `s ≤ ρ`: the
 /// second differences of the oracle's residuals, along random directions and then along the
 /// direction that maximised them refined by random search, never exceed it.
@@ -267,6 +276,26 @@ fn the_curvature_bound_holds_along_whitened_rays() {
                 b.curvature,
                 best.2
             );
+            // The same ball in units λ times larger (object and translation scaled by λ; pixels and
+            // rotations unchanged) is the same problem: the whitened rays map one to one and
+            // `‖r''(s)‖` along them is unchanged, so the largest value found above bounds it there too
+            // and `K` must cover it at every λ. Depths far below one unit and segments whose moment is
+            // far above or below one exercise every term of the bound (a term whose units are wrong,
+            // say `‖y‖ + ‖y‖²` or a `%` for a `/`, falls below the truth at one of the scales).
+            let level = cost(&k, &corr, &pose);
+            for lambda in [1e-3, 1e-2, 0.1, 10.0, 1e3] {
+                let (scaled, scaled_pose) = scaled_world(&corr, &pose, lambda);
+                let Ok(b_scaled) = local_bound(&k, &scaled, &scaled_pose.to_library(), level, radius) else {
+                    panic!("{name}, shift {shift}: no bound at scale {lambda} where there is one at scale 1");
+                };
+                assert!(
+                    best.0 <= b_scaled.curvature * 1.01 + 1e-9,
+                    "{name}, shift {shift}, world scaled by {lambda}: ‖r''‖ = {} > K = {} (K = {} at scale 1)",
+                    best.0,
+                    b_scaled.curvature,
+                    b.curvature
+                );
+            }
             worst = worst.max(best.0 / b.curvature);
             checked += 1;
         }
