@@ -381,6 +381,7 @@ struct Record {
     min_half: f64,
     cells: Vec<testing::KeptCell>,
     pruned: usize,
+    behind: Vec<testing::KeptCell>,
 }
 
 /// What the rotation search proved: every pose of `S` lies within `radius` of `(R̂, t̂)` in the
@@ -454,12 +455,6 @@ fn localise(
                 let reach = b.dot(&(r_c * x + t_star)) + (slack * b.dot(&(c_inv * b))).max(0.0).sqrt();
                 reach <= -theta * x.norm()
             });
-            if behind {
-                if let Some(r) = record.as_deref_mut() {
-                    r.pruned += 1;
-                }
-                continue;
-            }
             let kept = |inside_ball: bool| testing::KeptCell {
                 centre: cell.centre,
                 half: cell.half,
@@ -468,6 +463,13 @@ fn localise(
                 slack,
                 inside_ball,
             };
+            if behind {
+                if let Some(r) = record.as_deref_mut() {
+                    r.pruned += 1;
+                    r.behind.push(kept(false));
+                }
+                continue;
+            }
             // Whitened radius of the cell: centre, rotation spread and translation ellipsoid (triangle
             // inequality over the three parts of the step).
             if cell.centre.norm() + theta <= 1.0 {
@@ -934,6 +936,10 @@ pub mod testing {
         pub cells: Vec<KeptCell>,
         /// Cells pruned (by the minorant or by cheirality).
         pub pruned: usize,
+        /// The cells pruned by cheirality, with their translation ellipsoids (`inside_ball` false):
+        /// the search claims that for each some point `i` has `bᵢ · (R Xᵢ + t) ≤ 0` (`bᵢ` its observed
+        /// ray) for every rotation of the cube and every translation of the ellipsoid.
+        pub behind: Vec<KeptCell>,
         /// Cells examined.
         pub nodes: usize,
         /// The largest whitened radius `‖(ω, t − t̂)‖_W` (`W = JᵀJ` at the centre) of the cells
@@ -967,6 +973,7 @@ pub mod testing {
             min_half,
             cells: vec![],
             pruned: 0,
+            behind: vec![],
         };
         let localised = localise(
             &mut problem,
@@ -981,6 +988,7 @@ pub mod testing {
             depths,
             cells: record.cells,
             pruned: record.pruned,
+            behind: record.behind,
             nodes: localised.nodes,
             radius: localised.radius,
         })
