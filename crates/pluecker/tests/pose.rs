@@ -320,7 +320,10 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
         let r = estimate_pose(&camera, &corr, &opts).unwrap();
         let name = format!("f={focal} n={n} seed {seed}");
         let front = pose_oracle::OraclePose::new(r.rotation, r.translation);
-        assert!(pose_oracle::points_in_front(&corr, &front), "{name}: the answer is the best pose in front");
+        assert!(
+            pose_oracle::points_in_front(&corr, &front),
+            "{name}: the answer is the best pose in front"
+        );
         let fit = pose_oracle::cost(&camera, &corr, &front);
         // The regime of the test: the fit in front is a few px² (far above the 0.011 px² margin of the
         // stated noise, below 4.5 px²) and the pose behind fits more than 100 times better.
@@ -334,7 +337,10 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
             "{name}: a fit of {fit} px² in front (σ = {sigma} px) against {behind} px² behind the camera"
         );
         let reported = r.behind_camera_cost.expect("a behind-camera cost with that status");
-        assert!(reported * 100.0 <= fit, "{name}: reported behind-camera cost {reported} vs {fit}");
+        assert!(
+            reported * 100.0 <= fit,
+            "{name}: reported behind-camera cost {reported} vs {fit}"
+        );
         checked += 1;
     }
     assert_eq!(checked, 4);

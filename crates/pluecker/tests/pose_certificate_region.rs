@@ -286,14 +286,12 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
 /// ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack`, whose largest `b · t` is `b · t* + √slack ‖L⁻¹ b‖`
 /// (`C = L Lᵀ`, `t = t* + √slack L⁻ᵀ u`, `‖u‖ ≤ 1`). A lower estimate of the true maximum: a positive
 /// value is a pose of the cell with the point in front of the camera.
-fn largest_front_reach(
-    cell: &KeptCell,
-    centre: &OraclePose,
-    x: &Vector3<f64>,
-    b: &Vector3<f64>,
-    rng: &mut Rng,
-) -> f64 {
-    let l = cell.c.cholesky().expect("the ellipsoid's form is positive definite").l();
+fn largest_front_reach(cell: &KeptCell, centre: &OraclePose, x: &Vector3<f64>, b: &Vector3<f64>, rng: &mut Rng) -> f64 {
+    let l = cell
+        .c
+        .cholesky()
+        .expect("the ellipsoid's form is positive definite")
+        .l();
     let l_inv_b = l.solve_lower_triangular(b).expect("L is invertible");
     let t_reach = b.dot(&cell.t_star) + cell.slack.max(0.0).sqrt() * l_inv_b.norm();
     let reach = |w: &Vector3<f64>| b.dot(&(pose_oracle::exp(w) * centre.r * x)) + t_reach;

@@ -197,10 +197,18 @@ mod tests {
             let triples = (0..n)
                 .flat_map(|i| (i + 1..n).flat_map(move |j| (j + 1..n).map(move |k| (i, j, k))))
                 .count();
-            assert_eq!(is_exhaustive(n), triples <= EXHAUSTIVE_TRIPLES, "n = {n}, {triples} triples");
+            assert_eq!(
+                is_exhaustive(n),
+                triples <= EXHAUSTIVE_TRIPLES,
+                "n = {n}, {triples} triples"
+            );
             if n >= 3 {
                 let p: Vec<Vector2<f64>> = (0..n).map(|i| Vector2::new(i as f64, (i * i % 7) as f64)).collect();
-                let expected = if triples <= EXHAUSTIVE_TRIPLES { triples } else { SAMPLE_POOL };
+                let expected = if triples <= EXHAUSTIVE_TRIPLES {
+                    triples
+                } else {
+                    SAMPLE_POOL
+                };
                 assert!(samples(&p).len() <= expected, "n = {n}: {} samples", samples(&p).len());
             }
         }
