@@ -206,6 +206,15 @@ fn ball_off_the_minimum(
     Some((pose, radius, b))
 }
 
+/// The correspondences with every object coordinate multiplied by `lambda`, and `pose` with its
+/// translation multiplied by `lambda`: the same pixels, the same residuals at corresponding poses.
+fn scaled_world(corr: &Correspondences, pose: &OraclePose, lambda: f64) -> (Correspondences, OraclePose) {
+    let mut out = corr.clone();
+    out.points3d.iter_mut().for_each(|x| *x *= lambda);
+    out.lines3d.iter_mut().flatten().for_each(|x| *x *= lambda);
+    (out, OraclePose::new(pose.r, pose.t * lambda))
+}
+
 /// `K` bounds `‖r''(s)‖` along whitened rays `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`, `a = T v`, `s ≤ ρ`: the
 /// second differences of the oracle's residuals, along random directions and then along the
 /// direction that maximised them refined by random search, never exceed it.
@@ -267,6 +276,26 @@ fn the_curvature_bound_holds_along_whitened_rays() {
                 b.curvature,
                 best.2
             );
+            // The same ball in units λ times larger (object and translation scaled by λ; pixels and
+            // rotations unchanged) is the same problem: the whitened rays map one to one and
+            // `‖r''(s)‖` along them is unchanged, so the largest value found above bounds it there too
+            // and `K` must cover it at every λ. Depths far below one unit and segments whose moment is
+            // far above or below one exercise every term of the bound (a term whose units are wrong,
+            // say `‖y‖ + ‖y‖²` or a `%` for a `/`, falls below the truth at one of the scales).
+            let level = cost(&k, &corr, &pose);
+            for lambda in [1e-3, 1e-2, 0.1, 10.0, 1e3] {
+                let (scaled, scaled_pose) = scaled_world(&corr, &pose, lambda);
+                let Ok(b_scaled) = local_bound(&k, &scaled, &scaled_pose.to_library(), level, radius) else {
+                    panic!("{name}, shift {shift}: no bound at scale {lambda} where there is one at scale 1");
+                };
+                assert!(
+                    best.0 <= b_scaled.curvature * 1.01 + 1e-9,
+                    "{name}, shift {shift}, world scaled by {lambda}: ‖r''‖ = {} > K = {} (K = {} at scale 1)",
+                    best.0,
+                    b_scaled.curvature,
+                    b.curvature
+                );
+            }
             worst = worst.max(best.0 / b.curvature);
             checked += 1;
         }
@@ -334,4 +363,125 @@ fn the_local_bound_is_below_the_least_cost_in_the_ball() {
     }
     eprintln!("local bound: {checked} balls, the closest bound is within {closest:.3e} (relative) of the least cost");
     assert!(checked >= 30, "only {checked} balls");
+}
+
+/// The largest value of `f(v, s)` found over unit directions `v` and `s ≤ radius`: random directions
+/// at the edge of the ball and half-way, then a hill climb from the best three.
+fn climb(f: &dyn Fn(&Vector6<f64>, f64) -> f64, radius: f64, rng: &mut Rng) -> f64 {
+    let mut found: Vec<(f64, Vector6<f64>, f64)> = Vec::new();
+    for _ in 0..30 {
+        let v = Vector6::from_fn(|_, _| rng.normal()).normalize();
+        for s in [radius, 0.5 * radius] {
+            found.push((f(&v, s), v, s));
+        }
+    }
+    found.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut best = found[0].0;
+    for start in found.into_iter().take(3) {
+        let mut here = start;
+        let mut step = 0.3;
+        for _ in 0..60 {
+            let v = (here.1 + Vector6::from_fn(|_, _| rng.normal()) * step).normalize();
+            let s = (here.2 + radius * step * rng.normal()).clamp(0.0, radius);
+            let value = f(&v, s);
+            if value > here.0 {
+                here = (value, v, s);
+            } else {
+                step = (step * 0.93).max(1e-3);
+            }
+        }
+        best = best.max(here.0);
+    }
+    best
+}
+
+/// The parts of `K`, each against the quantity it bounds, recomputed here from its definition along
+/// whitened rays `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)` (`a = T v`) and differentiated numerically: a point's
+/// depth `p_z` and `|p_z' / p_z|`; a segment's `w = ‖G (A × B)_xy‖` (`G` the upper-left 2x2 block of
+/// `K⁻ᵀ`), `|w''|`, `|w' / w|` and each endpoint's `|(ēᵀ (A × B))''|`. On scenes with points and
+/// lines, narrow and wide fields of view, in balls up to 32 residual units, and with the world scaled
+/// by λ = 0.01 and 30 (the same problem; depths and moments far from one unit, where a term with
+/// the wrong units, or a `%` for a `/`, falls below the truth).
+#[test]
+fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
+    use pluecker::pose::certificate::testing::curvature_parts;
+    let mut rng = Rng::new(45);
+    let (mut checked, mut worst) = (0usize, 0.0f64);
+    for (k, corr, minimum, name) in step4_scenes() {
+        let k_inv = k.matrix().try_inverse().unwrap();
+        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
+        for (shift, scale) in [(0.0, 6.0), (2.0, 16.0), (0.0, 32.0)] {
+            let Some((pose0, radius, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, scale, &mut rng) else {
+                continue;
+            };
+            let level = cost(&k, &corr, &pose0);
+            for lambda in [1.0, 0.01, 30.0] {
+                let (c, pose) = scaled_world(&corr, &pose0, lambda);
+                let Ok(parts) = curvature_parts(&k, &c, &pose.to_library(), level, radius) else {
+                    continue;
+                };
+                let t = parts.whitening;
+                let at = |v: &Vector6<f64>, s: f64| pose.step(&(t * v * s));
+                // Central differences in s: step 1e-3 of the radius (relative error ~1e-6 of the
+                // derivative, far below the slack the checks allow).
+                let h = 1e-3 * radius;
+                let diff = |q: &dyn Fn(f64) -> f64, s: f64| {
+                    let (lo, mid, hi) = (q(s - h), q(s), q(s + h));
+                    ((hi - lo) / (2.0 * h), (hi - 2.0 * mid + lo) / (h * h), mid)
+                };
+                let mut check = |what: String, found: f64, bound: f64| {
+                    assert!(
+                        found <= bound * (1.0 + 1e-3) + 1e-12 * bound.abs().max(1e-300),
+                        "{name}, shift {shift}, scale {lambda}: {what}: found {found} above the bound {bound}"
+                    );
+                    worst = worst.max(found / bound);
+                    checked += 1;
+                };
+                for (x, pp) in c.points3d.iter().zip(&parts.points) {
+                    let depth = |v: &Vector6<f64>, s: f64| {
+                        let p = at(v, s);
+                        (p.r * x + p.t).z
+                    };
+                    let least = -climb(&|v, s| -depth(v, s), radius, &mut rng);
+                    check(format!("depth lower bound (least depth {least})"), pp.z_lo, least);
+                    let rate = climb(
+                        &|v, s| {
+                            let (d1, _, z) = diff(&|u| depth(v, u), s);
+                            (d1 / z).abs()
+                        },
+                        radius,
+                        &mut rng,
+                    );
+                    check("|p_z'/p_z|".into(), rate, pp.rate);
+                }
+                for ((seen, ends), lp) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines) {
+                    let moment = |v: &Vector6<f64>, s: f64| {
+                        let p = at(v, s);
+                        (p.r * ends[0] + p.t).cross(&(p.r * ends[1] + p.t))
+                    };
+                    let w = |v: &Vector6<f64>, s: f64| (g * moment(v, s).xy()).norm();
+                    let least = -climb(&|v, s| -w(v, s), radius, &mut rng);
+                    check(format!("w lower bound (least w {least})"), lp.w_lo, least);
+                    let w2 = climb(&|v, s| diff(&|u| w(v, u), s).1.abs(), radius, &mut rng);
+                    check("|w''|".into(), w2, lp.w2);
+                    let rate = climb(
+                        &|v, s| {
+                            let (d1, _, value) = diff(&|u| w(v, u), s);
+                            (d1 / value).abs()
+                        },
+                        radius,
+                        &mut rng,
+                    );
+                    check("|w'/w|".into(), rate, lp.rate);
+                    for (e, n2) in seen.iter().zip(lp.n2) {
+                        let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
+                        let n = climb(&|v, s| diff(&|u| e_bar.dot(&moment(v, u)), s).1.abs(), radius, &mut rng);
+                        check("|n''|".into(), n, n2);
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("curvature parts: {checked} checks, the closest reaches {worst:.3} of its bound");
+    assert!(checked > 500, "only {checked} checks");
 }

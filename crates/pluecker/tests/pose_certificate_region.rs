@@ -10,7 +10,7 @@
 mod pose_oracle;
 
 use nalgebra::{Matrix6, Vector3, Vector6};
-use pluecker::pose::certificate::testing::{rotation_search, Region};
+use pluecker::pose::certificate::testing::{rotation_search, KeptCell, Region};
 use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{visible_scene, Scene};
@@ -279,4 +279,111 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
     eprintln!("{checked} poses checked, {second} other minima below a level");
     assert!(checked > 500, "only {checked} poses checked");
     assert!(second >= 5, "only {second} second minima below a level");
+}
+
+/// The largest `b · (R X + t)` over the cell: rotations `exp(ω) R̂` with `ω` in the cube (its corners,
+/// face centres, centre and random points, then a hill climb from the best) and translations in its
+/// ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack`, whose largest `b · t` is `b · t* + √slack ‖L⁻¹ b‖`
+/// (`C = L Lᵀ`, `t = t* + √slack L⁻ᵀ u`, `‖u‖ ≤ 1`). A lower estimate of the true maximum: a positive
+/// value is a pose of the cell with the point in front of the camera.
+fn largest_front_reach(cell: &KeptCell, centre: &OraclePose, x: &Vector3<f64>, b: &Vector3<f64>, rng: &mut Rng) -> f64 {
+    let l = cell
+        .c
+        .cholesky()
+        .expect("the ellipsoid's form is positive definite")
+        .l();
+    let l_inv_b = l.solve_lower_triangular(b).expect("L is invertible");
+    let t_reach = b.dot(&cell.t_star) + cell.slack.max(0.0).sqrt() * l_inv_b.norm();
+    let reach = |w: &Vector3<f64>| b.dot(&(pose_oracle::exp(w) * centre.r * x)) + t_reach;
+    let clamp = |w: Vector3<f64>| w.zip_map(&cell.centre, |v, c| v.clamp(c - cell.half, c + cell.half));
+    let mut starts: Vec<Vector3<f64>> = vec![cell.centre];
+    for corner in 0..8 {
+        let sign = |k: usize| if corner >> k & 1 == 1 { 1.0 } else { -1.0 };
+        starts.push(cell.centre + Vector3::new(sign(0), sign(1), sign(2)) * cell.half);
+    }
+    for axis in 0..6 {
+        let mut e = Vector3::zeros();
+        e[axis % 3] = if axis < 3 { cell.half } else { -cell.half };
+        starts.push(cell.centre + e);
+    }
+    for _ in 0..16 {
+        starts.push(cell.centre + Vector3::from_fn(|_, _| rng.uniform_in(-1.0, 1.0)) * cell.half);
+    }
+    let mut best = starts
+        .iter()
+        .map(|w| (reach(w), *w))
+        .fold((f64::NEG_INFINITY, cell.centre), |a, b| if b.0 > a.0 { b } else { a });
+    let mut step = 0.3 * cell.half;
+    for _ in 0..60 {
+        let w = clamp(best.1 + Vector3::from_fn(|_, _| rng.normal()) * step);
+        let value = reach(&w);
+        if value > best.0 {
+            best = (value, w);
+        } else {
+            step *= 0.93;
+        }
+    }
+    best.0
+}
+
+/// Cheirality pruning: a cell is pruned as "behind the camera" only if some point `i` has
+/// `bᵢ · (R Xᵢ + t) ≤ 0` for every rotation of its cube and every translation of its ellipsoid (which
+/// holds the translation of every pose of the sublevel set with its rotation in the cube). The oracle
+/// maximises `bᵢ · (R Xᵢ + t)` over each pruned cell for every point; a cell where every point reaches
+/// in front was pruned on a false premise (had a pose of the sublevel set been there, it would have
+/// been dropped). Scenes with points much nearer the camera than the object is large, wide fields of
+/// view and levels well above the optimum, where many cells are pruned this way.
+#[test]
+fn cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere() {
+    let cases = [(250.0, 6, 1u64), (250.0, 8, 2), (120.0, 6, 3), (250.0, 10, 5)];
+    let (mut cells_checked, mut near) = (0usize, 0usize);
+    for (focal, n, seed) in cases {
+        let scene = deep_scene(focal, n, seed);
+        let mut rng = Rng::new(9000 + seed);
+        let noisy = scene.noisy(1.0, true, &mut rng);
+        let (corr, c) = centred(&noisy);
+        let k = scene.camera;
+        let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
+        let minimum = many_start(&k, &corr, &truth, 0, &mut rng)[0];
+        let bearings: Vec<Vector3<f64>> = corr
+            .points2d
+            .iter()
+            .map(|u| {
+                let y = (u.y - k.cy) / k.fy;
+                Vector3::new((u.x - k.cx - k.skew * y) / k.fx, y, 1.0).normalize()
+            })
+            .collect();
+        for factor in [1.5, 10.0, 100.0] {
+            let level = factor * minimum.1;
+            let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
+            let Ok(region) = rotation_search(&k, &corr, &minimum.0.to_library(), level, target, 2e-3, 200_000) else {
+                continue;
+            };
+            for cell in region.behind.iter().take(400) {
+                let reaches: Vec<f64> = corr
+                    .points3d
+                    .iter()
+                    .zip(&bearings)
+                    .map(|(x, b)| largest_front_reach(cell, &minimum.0, x, b, &mut rng))
+                    .collect();
+                // The least of the largest reaches: ≤ 0 where the pruning holds. Rounding: the
+                // reaches are sums of terms of the size of the scene (~10 units), exact to ~1e-14.
+                let least = reaches.iter().copied().fold(f64::INFINITY, f64::min);
+                assert!(
+                    least <= 1e-12,
+                    "f={focal} {n}p seed {seed}, level {factor}x: a cell (centre {:?}, half {}) pruned as behind \
+                     the camera has a pose with each point in front (largest reaches {reaches:?})",
+                    cell.centre,
+                    cell.half
+                );
+                // Pruned with little to spare: the oracle's reach within θ‖X‖ of zero.
+                if least > -0.1 {
+                    near += 1;
+                }
+                cells_checked += 1;
+            }
+        }
+    }
+    eprintln!("{cells_checked} cells pruned by cheirality checked, {near} within 0.1 of the boundary");
+    assert!(cells_checked >= 100, "only {cells_checked} cells pruned by cheirality");
 }

@@ -17,7 +17,9 @@ use pyo3::types::PyDict;
 /// or of half-width `min_half` (rad). Returns a dict: `depths` (step 1's bounds), the kept cells as
 /// `centres` (K, 3) (rotation vectors `ω`, `R' = exp(ω) R`), `halves` (K,), `t_star` (K, 3), `C`
 /// (K, 3, 3), `slack` (K,) (the translation ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack`), `inside_ball`
-/// (K,), `radius`, `pruned`, `nodes`. A refusal of the proof (`not proved: ...`) is a `ValueError`.
+/// (K,), `radius`, `pruned`, `nodes`; and the cells pruned by cheirality as `behind_centres`,
+/// `behind_halves`, `behind_t_star`, `behind_C`, `behind_slack` (the search claims that in each some
+/// point has `b · (R' X + t) ≤ 0`, `b` its observed ray, over the whole cube and ellipsoid). A refusal of the proof (`not proved: ...`) is a `ValueError`.
 #[pyfunction]
 #[pyo3(signature = (camera, R, t, level, points2d = None, points3d = None, lines2d = None, lines3d = None, *, target = Real::new(f64::INFINITY), min_half = Real::new(2e-3), max_nodes = 400_000))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
@@ -45,28 +47,10 @@ pub fn _pose_rotation_search<'py>(
         ))
     })?
     .map_err(|why| invalid_argument("level", why))?;
-    let n = region.cells.len();
     let out = PyDict::new(py);
     out.set_item("depths", PyArray1::from_vec(py, region.depths.clone()))?;
-    let flat = |f: &dyn Fn(&KeptCell) -> Vec<f64>| region.cells.iter().flat_map(f).collect::<Vec<f64>>();
-    out.set_item(
-        "centres",
-        PyArray1::from_vec(py, flat(&|c| c.centre.as_slice().to_vec())).reshape([n, 3])?,
-    )?;
-    out.set_item(
-        "t_star",
-        PyArray1::from_vec(py, flat(&|c| c.t_star.as_slice().to_vec())).reshape([n, 3])?,
-    )?;
-    let c = flat(&|c| (0..9).map(|i| c.c[(i / 3, i % 3)]).collect());
-    out.set_item("C", PyArray1::from_vec(py, c).reshape([n, 3, 3])?)?;
-    out.set_item(
-        "halves",
-        PyArray1::from_vec(py, region.cells.iter().map(|c| c.half).collect()),
-    )?;
-    out.set_item(
-        "slack",
-        PyArray1::from_vec(py, region.cells.iter().map(|c| c.slack).collect()),
-    )?;
+    set_cells(&out, "", &region.cells)?;
+    set_cells(&out, "behind_", &region.behind)?;
     out.set_item(
         "inside_ball",
         PyArray1::from_vec(py, region.cells.iter().map(|c| c.inside_ball).collect()),
@@ -75,4 +59,31 @@ pub fn _pose_rotation_search<'py>(
     out.set_item("pruned", region.pruned)?;
     out.set_item("nodes", region.nodes)?;
     Ok(out)
+}
+
+/// The cubes and translation ellipsoids of `cells` as arrays `{prefix}centres` (K, 3),
+/// `{prefix}halves` (K,), `{prefix}t_star` (K, 3), `{prefix}C` (K, 3, 3), `{prefix}slack` (K,).
+fn set_cells(out: &Bound<'_, PyDict>, prefix: &str, cells: &[KeptCell]) -> PyResult<()> {
+    let py = out.py();
+    let n = cells.len();
+    let flat = |f: &dyn Fn(&KeptCell) -> Vec<f64>| cells.iter().flat_map(f).collect::<Vec<f64>>();
+    out.set_item(
+        format!("{prefix}centres"),
+        PyArray1::from_vec(py, flat(&|c| c.centre.as_slice().to_vec())).reshape([n, 3])?,
+    )?;
+    out.set_item(
+        format!("{prefix}t_star"),
+        PyArray1::from_vec(py, flat(&|c| c.t_star.as_slice().to_vec())).reshape([n, 3])?,
+    )?;
+    let c = flat(&|c| (0..9).map(|i| c.c[(i / 3, i % 3)]).collect());
+    out.set_item(format!("{prefix}C"), PyArray1::from_vec(py, c).reshape([n, 3, 3])?)?;
+    out.set_item(
+        format!("{prefix}halves"),
+        PyArray1::from_vec(py, cells.iter().map(|c| c.half).collect()),
+    )?;
+    out.set_item(
+        format!("{prefix}slack"),
+        PyArray1::from_vec(py, cells.iter().map(|c| c.slack).collect()),
+    )?;
+    Ok(())
 }

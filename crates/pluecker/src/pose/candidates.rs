@@ -187,6 +187,33 @@ mod tests {
         assert!(chosen.iter().all(|s| footprint(&many, s) > 0.15), "{chosen:?}");
     }
 
+    /// `is_exhaustive(n)` is `C(n, 3) ≤ EXHAUSTIVE_TRIPLES`, with the binomial counted here by listing
+    /// the triples; and past that size the samples are the pool's few, not every triple (7 to 9
+    /// correspondences would otherwise run 35 to 84 minimal solves per estimate, and the behind-camera
+    /// check every one of them).
+    #[test]
+    fn exhaustive_exactly_when_the_triples_are_few() {
+        for n in 0..40usize {
+            let triples = (0..n)
+                .flat_map(|i| (i + 1..n).flat_map(move |j| (j + 1..n).map(move |k| (i, j, k))))
+                .count();
+            assert_eq!(
+                is_exhaustive(n),
+                triples <= EXHAUSTIVE_TRIPLES,
+                "n = {n}, {triples} triples"
+            );
+            if n >= 3 {
+                let p: Vec<Vector2<f64>> = (0..n).map(|i| Vector2::new(i as f64, (i * i % 7) as f64)).collect();
+                let expected = if triples <= EXHAUSTIVE_TRIPLES {
+                    triples
+                } else {
+                    SAMPLE_POOL
+                };
+                assert!(samples(&p).len() <= expected, "n = {n}: {} samples", samples(&p).len());
+            }
+        }
+    }
+
     #[test]
     fn the_true_pose_is_among_the_hypotheses_of_exact_data() {
         for (np, nl) in [(10, 0), (0, 10), (5, 5), (4, 0), (0, 4), (2, 2)] {

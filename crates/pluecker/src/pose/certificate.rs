@@ -381,6 +381,7 @@ struct Record {
     min_half: f64,
     cells: Vec<testing::KeptCell>,
     pruned: usize,
+    behind: Vec<testing::KeptCell>,
 }
 
 /// What the rotation search proved: every pose of `S` lies within `radius` of `(R̂, t̂)` in the
@@ -454,12 +455,6 @@ fn localise(
                 let reach = b.dot(&(r_c * x + t_star)) + (slack * b.dot(&(c_inv * b))).max(0.0).sqrt();
                 reach <= -theta * x.norm()
             });
-            if behind {
-                if let Some(r) = record.as_deref_mut() {
-                    r.pruned += 1;
-                }
-                continue;
-            }
             let kept = |inside_ball: bool| testing::KeptCell {
                 centre: cell.centre,
                 half: cell.half,
@@ -468,6 +463,13 @@ fn localise(
                 slack,
                 inside_ball,
             };
+            if behind {
+                if let Some(r) = record.as_deref_mut() {
+                    r.pruned += 1;
+                    r.behind.push(kept(false));
+                }
+                continue;
+            }
             // Whitened radius of the cell: centre, rotation spread and translation ellipsoid (triangle
             // inequality over the three parts of the step).
             if cell.centre.norm() + theta <= 1.0 {
@@ -695,6 +697,12 @@ impl RayCurvature {
     /// `K` on the whitened ball of radius `s`, or `None` when a depth or a projected line may vanish
     /// there (or a per-residual slope bound cannot be confirmed).
     fn bound(&self, s: f64) -> Option<f64> {
+        self.bound_with_parts(s, None)
+    }
+
+    /// [`Self::bound`], recording its per-residual parts in `parts` (the test hook
+    /// [`testing::curvature_parts`] only).
+    fn bound_with_parts(&self, s: f64, mut parts: Option<&mut testing::CurvatureParts>) -> Option<f64> {
         let (a_w, a_t) = (self.alpha_omega, self.alpha_tau);
         let mut direct2 = 0.0;
         let mut rate: f64 = 0.0;
@@ -711,6 +719,9 @@ impl RayCurvature {
             let direct = self.k_norm * (1.0 + pi_max * pi_max).sqrt() / z_lo * a_w * a_w * pt.y_norm;
             direct2 += direct * direct;
             let rho = depth_rate / z_lo;
+            if let Some(p) = parts.as_deref_mut() {
+                p.points.push(testing::PointParts { z_lo, rate: rho });
+            }
             rate = rate.max(rho);
             weighted += pt.gram * (rho * rho);
         }
@@ -733,11 +744,13 @@ impl RayCurvature {
             let w2 = q1 * q1 / w_lo + self.g_norm * m2;
             let rho = (line.w1_0 + s * w2) / w_lo;
             rate = rate.max(rho);
-            for end in &line.endpoints {
+            let mut n2_bounds = [0.0; 2];
+            for (end, n2_bound) in line.endpoints.iter().zip(&mut n2_bounds) {
                 let n3 = a_w.powi(3)
                     * (line.ya * (end.cross_b + s * v_b * end.e_norm) + line.yb * (end.cross_a + s * v_a * end.e_norm))
                     + end.e_norm * mixed3;
                 let n2 = end.n2_exact + s * n3;
+                *n2_bound = n2;
                 // |r(s)| ≤ |r(0)| + s σ with σ a bound on |r'| along the ray, confirmed by Grönwall
                 // on |r''| ≤ d + 2ρ |r'|, d = (|n''| + |r| |w''|) / w.
                 let mut sigma = 1.2 * end.slope0 + 1e-12;
@@ -754,6 +767,14 @@ impl RayCurvature {
                 let direct = confirmed?;
                 direct2 += direct * direct;
                 weighted += end.gram * (rho * rho);
+            }
+            if let Some(p) = parts.as_deref_mut() {
+                p.lines.push(testing::LineParts {
+                    w_lo,
+                    w2,
+                    rate: rho,
+                    n2: n2_bounds,
+                });
             }
         }
         let (c1, c2) = (2.0 * rate, direct2.sqrt());
@@ -934,6 +955,10 @@ pub mod testing {
         pub cells: Vec<KeptCell>,
         /// Cells pruned (by the minorant or by cheirality).
         pub pruned: usize,
+        /// The cells pruned by cheirality, with their translation ellipsoids (`inside_ball` false):
+        /// the search claims that for each some point `i` has `bᵢ · (R Xᵢ + t) ≤ 0` (`bᵢ` its observed
+        /// ray) for every rotation of the cube and every translation of the ellipsoid.
+        pub behind: Vec<KeptCell>,
         /// Cells examined.
         pub nodes: usize,
         /// The largest whitened radius `‖(ω, t − t̂)‖_W` (`W = JᵀJ` at the centre) of the cells
@@ -967,6 +992,7 @@ pub mod testing {
             min_half,
             cells: vec![],
             pruned: 0,
+            behind: vec![],
         };
         let localised = localise(
             &mut problem,
@@ -981,6 +1007,7 @@ pub mod testing {
             depths,
             cells: record.cells,
             pruned: record.pruned,
+            behind: record.behind,
             nodes: localised.nodes,
             radius: localised.radius,
         })
@@ -1001,6 +1028,56 @@ pub mod testing {
         pub curvature: f64,
         /// The bound on the cost over the ball, unclamped.
         pub raw_bound: f64,
+    }
+
+    /// A point's part of `K` on the ball: along every whitened ray `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`
+    /// (`a = T v`, `‖v‖ = 1`, `s ≤ radius`) its camera-frame depth `p_z ≥ z_lo` and `|p_z' / p_z| ≤ rate`.
+    #[derive(Debug, Clone, Copy)]
+    pub struct PointParts {
+        pub z_lo: f64,
+        pub rate: f64,
+    }
+
+    /// A line's part of `K` on the ball, along the same rays: with `m = A × B` (camera-frame endpoints
+    /// of the object segment) and `w = ‖G m_xy‖` (`G` the upper-left 2x2 block of `K⁻ᵀ`), `w ≥ w_lo`,
+    /// `|w''| ≤ w2`, `|w' / w| ≤ rate`, and for each observed endpoint `ē = K⁻¹ ẽ`, `|(ēᵀ m)''| ≤ n2`.
+    #[derive(Debug, Clone, Copy)]
+    pub struct LineParts {
+        pub w_lo: f64,
+        pub w2: f64,
+        pub rate: f64,
+        pub n2: [f64; 2],
+    }
+
+    /// The parts of `K` (see [`PointParts`], [`LineParts`]) and the whitening `T` of the rays.
+    #[derive(Debug, Clone, Default)]
+    pub struct CurvatureParts {
+        pub whitening: SMatrix<f64, 6, 6>,
+        pub points: Vec<PointParts>,
+        pub lines: Vec<LineParts>,
+    }
+
+    /// [`CurvatureParts`] at `pose` for the ball of whitened `radius` (depth bounds as in
+    /// [`local_bound`]).
+    pub fn curvature_parts(
+        camera: &Camera,
+        corr: &Correspondences,
+        pose: &Pose,
+        level: f64,
+        radius: f64,
+    ) -> std::result::Result<CurvatureParts, String> {
+        let cost = ReprojectionCost::of(camera, corr).cost(pose);
+        let problem = Problem::new(camera, corr, cost.max(level))?;
+        let (whitening, model) = LocalModel::at(&problem, camera, pose)?;
+        let mut parts = CurvatureParts {
+            whitening: whitening.t,
+            ..Default::default()
+        };
+        model
+            .curvature
+            .bound_with_parts(radius, Some(&mut parts))
+            .ok_or("a depth or a projected line may vanish in the ball")?;
+        Ok(parts)
     }
 
     /// [`LocalBound`] at `pose` for the ball of whitened `radius`; the depth bounds are those of the
