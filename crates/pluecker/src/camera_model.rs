@@ -644,7 +644,8 @@ pub fn fold_radius(model: CameraModel, params: &[f64]) -> f64 {
                 return f64::INFINITY;
             }
             let t = (omega / 2.0).tan();
-            if !(t / omega > 0.0) || !t.is_finite() {
+            // |ω| ≥ 0.01 here, so t / ω is a number whenever t is finite.
+            if !t.is_finite() || t / omega <= 0.0 {
                 return 0.0;
             }
             let turn = 1.0 / (2.0 * t.abs());
@@ -1093,7 +1094,7 @@ mod tests {
             let step = 1e-4;
             let turn = (1..200_000)
                 .map(|i| i as f64 * step)
-                .find(|&r| !(rho(r + step) > rho(r)))
+                .find(|&r| rho(r + step).partial_cmp(&rho(r)) != Some(std::cmp::Ordering::Greater))
                 .expect("each case folds below r = 20");
             // The scan finds the turn to within one step (the maximum is flat: ρ' changes sign there; past
             // the edge of a domain or a pole ρ is NaN or negative, which is no increase either).
