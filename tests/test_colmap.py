@@ -154,9 +154,18 @@ def synthetic_model(model_id, params, seed):
     return pycolmap.synthesize_dataset(options)
 
 
+def _synthetic_params(model):
+    """PARAMS' distortion with this image's focal length 300 and centre (512, 384)."""
+    one_focal = pycolmap.Camera(model=model, width=1024, height=768, params=PARAMS[model]).params_info.startswith("f,")
+    return ([300.0, 512.0, 384.0] if one_focal else [300.0, 300.0, 512.0, 384.0]) + PARAMS[model][3 if one_focal else 4:]
+
+
 @pytest.mark.parametrize("model_id, params", [
     (pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4]),
     (pycolmap.CameraModelId.OPENCV_FISHEYE, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-3, -1e-4]),
+    *[(getattr(pycolmap.CameraModelId, model), _synthetic_params(model))
+      for model in ["FOV", "SIMPLE_RADIAL_FISHEYE", "RADIAL_FISHEYE", "THIN_PRISM_FISHEYE", "RAD_TAN_THIN_PRISM_FISHEYE",
+                    "SIMPLE_DIVISION", "DIVISION", "SIMPLE_FISHEYE", "FISHEYE", "EUCM"]],
 ])
 def test_retriangulating_a_model_recovers_its_points_certified(model_id, params):
     """A pycolmap synthetic model's observations are exact: every track comes back to its point, with a
