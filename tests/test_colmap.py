@@ -16,29 +16,106 @@ PARAMS = {
     "SIMPLE_RADIAL": [800.0, 320.0, 240.0, -0.1],
     "RADIAL": [800.0, 320.0, 240.0, -0.1, 0.02],
     "OPENCV": [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4],
-    "FULL_OPENCV": [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005],
     "OPENCV_FISHEYE": [400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
+    "FULL_OPENCV": [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005],
+    # omega = 0.9: 33 % barrel at 60° off axis.
+    "FOV": [400.0, 395.0, 320.0, 240.0, 0.9],
+    # The fisheyes' polynomials change theta_d by 5-10 % at 80°; tangential and thin-prism terms ~1 px.
+    "SIMPLE_RADIAL_FISHEYE": [400.0, 320.0, 240.0, 0.05],
+    "RADIAL_FISHEYE": [400.0, 320.0, 240.0, 0.05, -0.01],
+    "THIN_PRISM_FISHEYE": [400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 1e-3, -5e-4, 0.002, -3e-4, 2e-3, -1e-3],
+    "RAD_TAN_THIN_PRISM_FISHEYE": [400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4, 1e-5, -1e-6,
+                                   1e-3, -5e-4, 2e-3, -1e-3, 3e-4, -2e-4],
+    # k = -0.2: 9 % barrel at the image corner (r = 0.5).
+    "SIMPLE_DIVISION": [800.0, 320.0, 240.0, -0.2],
+    "DIVISION": [800.0, 790.0, 320.0, 240.0, -0.2],
+    "SIMPLE_FISHEYE": [400.0, 320.0, 240.0],
+    "FISHEYE": [400.0, 395.0, 320.0, 240.0],
+    "EUCM": [400.0, 395.0, 320.0, 240.0, 0.6, 1.1],
 }
+# The models that see 80° off axis (fisheyes, FOV, EUCM, the barrel division model); the polynomial
+# models fold before that.
+WIDE = {"OPENCV_FISHEYE", "FOV", "SIMPLE_RADIAL_FISHEYE", "RADIAL_FISHEYE", "THIN_PRISM_FISHEYE",
+        "RAD_TAN_THIN_PRISM_FISHEYE", "SIMPLE_DIVISION", "DIVISION", "SIMPLE_FISHEYE", "FISHEYE", "EUCM"}
 
 
 def test_the_model_lists_agree():
-    assert set(PARAMS) <= {m.name for m in pycolmap.CameraModelId.__members__.values()}
-    assert set(pluecker.LensCamera.MODELS) == set(PARAMS)
+    """Every perspective model of pycolmap, with its name, id (the order of MODELS) and parameter names;
+    EQUIRECTANGULAR, the one spherical model, is refused (test below)."""
+    colmap_models = {m.name: int(m) for m in pycolmap.CameraModelId.__members__.values() if int(m) >= 0}
+    assert set(colmap_models) - set(PARAMS) == {"EQUIRECTANGULAR"}
+    assert pluecker.LensCamera.MODELS == sorted(PARAMS, key=colmap_models.__getitem__)
+    assert [colmap_models[m] for m in pluecker.LensCamera.MODELS] == list(range(len(PARAMS)))
+    for model, params in PARAMS.items():
+        info = pycolmap.Camera(model=model, width=640, height=480, params=params).params_info
+        assert pluecker.LensCamera(model, params).parameter_names == [s.strip() for s in info.split(",")]
+
+
+def points_off_axis(rng, n, widest_degrees):
+    """n camera-frame points at angles up to widest_degrees off the optical axis, depth 1 to 1.5."""
+    theta = np.deg2rad(rng.uniform(0.0, widest_degrees, n))
+    phi = rng.uniform(0.0, 2 * np.pi, n)
+    z = rng.uniform(1.0, 1.5, n)
+    return np.c_[np.tan(theta) * np.cos(phi) * z, np.tan(theta) * np.sin(phi) * z, z]
 
 
 @pytest.mark.parametrize("model", list(PARAMS))
 def test_projection_and_unprojection_agree_with_colmap(model):
     rng = np.random.default_rng(7)
     X = np.c_[rng.uniform(-0.6, 0.6, 100), rng.uniform(-0.45, 0.45, 100), rng.uniform(1.0, 1.5, 100)]
+    # Near the axis (FOV's series in r holds below r = 0.01) and, for the wide models, up to 80° off it.
+    X = np.r_[X, [[0.0, 0.0, 1.0], [1e-7, -2e-7, 1.0], [3e-3, 4e-3, 1.0], [6e-3, -8e-3, 2.0]]]
+    if model in WIDE:
+        X = np.r_[X, points_off_axis(rng, 200, 80.0), [[np.tan(np.deg2rad(80.0)), 0.0, 1.0]]]
     ours = pluecker.LensCamera(model, PARAMS[model])
     theirs = colmap.colmap_camera(ours, 640, 480)
     assert colmap.lens_camera(theirs) == ours
     np.testing.assert_allclose(ours.project(X), theirs.img_from_cam(X), rtol=0, atol=1e-9)
     u = ours.project(X)
-    # COLMAP's own unprojection (cam_from_img) is iterative with its own tolerance; ours is exact to
+    # COLMAP's own unprojection (cam_from_img) is iterative for the polynomial models, stopping when its
+    # Newton step is below 1e-5 (the error is then about its square), or closed form; ours is exact to
     # 1e-10 px. They agree to COLMAP's accuracy, and ours reprojects to the pixels.
     np.testing.assert_allclose(ours.unproject(u), theirs.cam_from_img(u), atol=1e-6)
     np.testing.assert_allclose(ours.project(np.c_[ours.unproject(u), np.ones(len(u))]), u, atol=2e-10)
+
+
+@pytest.mark.parametrize("omega", [0.005, 0.9, 3.0])
+def test_fov_follows_colmaps_projection_with_its_series(omega):
+    """COLMAP's FOV projection replaces the closed form by a series for omega² < 1e-4 (the series of the
+    undistortion, so COLMAP's cam_from_img does not invert it there) and for r² < 1e-4; pluecker's
+    projection is COLMAP's in every branch, and its unprojection inverts it."""
+    rng = np.random.default_rng(11)
+    r = np.r_[rng.uniform(0.0, 0.0099, 50), rng.uniform(0.0101, 2.0, 50), 0.0, 1e-9]
+    phi = rng.uniform(0.0, 2 * np.pi, len(r))
+    X = np.c_[r * np.cos(phi), r * np.sin(phi), np.ones(len(r))]
+    params = [400.0, 395.0, 320.0, 240.0, omega]
+    ours = pluecker.LensCamera("FOV", params)
+    theirs = pycolmap.Camera(model="FOV", width=640, height=480, params=params)
+    u = ours.project(X)
+    np.testing.assert_allclose(u, theirs.img_from_cam(X), rtol=0, atol=1e-9)
+    # COLMAP's series in r jumps up to the closed form at r = 0.01, by 8e-9 px (omega = 0.9) to 0.045 px
+    # (omega = 3; 400 (2 r tan(omega/2))^5 / (5 omega)): a pixel in that gap has no preimage (an error
+    # naming it); the points here keep 1e-4 away from r = 0.01.
+    np.testing.assert_allclose(ours.project(np.c_[ours.unproject(u), np.ones(len(u))]), u, atol=2e-10)
+
+
+def test_an_equirectangular_camera_is_refused_by_name():
+    """COLMAP's spherical EQUIRECTANGULAR model sees behind the camera, where no (x/z, y/z) exists: a
+    model holding such a camera is a named error, naming the camera, not a crash or a wrong answer."""
+    options = pycolmap.SyntheticDatasetOptions()
+    options.num_frames_per_rig, options.num_points3D = 4, 20
+    options.camera_model_id = pycolmap.CameraModelId.EQUIRECTANGULAR
+    options.camera_params = [1024.0, 512.0]
+    pycolmap.set_random_seed(3)
+    rec = pycolmap.synthesize_dataset(options)
+    camera_id = min(rec.cameras)
+    message = rf"camera_id {camera_id}: .*'EQUIRECTANGULAR' is not supported: it is a spherical"
+    with pytest.raises(pluecker.InvalidOptionError, match=message):
+        colmap.lens_camera(rec.cameras[camera_id])
+    with pytest.raises(pluecker.InvalidOptionError, match="'EQUIRECTANGULAR' is not supported"):
+        colmap.retriangulate(rec)
+    with pytest.raises(pluecker.InvalidOptionError, match="'EQUIRECTANGULAR' is not supported"):
+        pluecker.LensCamera("EQUIRECTANGULAR", [1024.0, 512.0])
 
 
 def test_poses_round_trip_through_rigid3d():
@@ -77,9 +154,18 @@ def synthetic_model(model_id, params, seed):
     return pycolmap.synthesize_dataset(options)
 
 
+def _synthetic_params(model):
+    """PARAMS' distortion with this image's focal length 300 and centre (512, 384)."""
+    one_focal = pycolmap.Camera(model=model, width=1024, height=768, params=PARAMS[model]).params_info.startswith("f,")
+    return ([300.0, 512.0, 384.0] if one_focal else [300.0, 300.0, 512.0, 384.0]) + PARAMS[model][3 if one_focal else 4:]
+
+
 @pytest.mark.parametrize("model_id, params", [
     (pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-4, -1e-4]),
     (pycolmap.CameraModelId.OPENCV_FISHEYE, [300.0, 300.0, 512.0, 384.0, 0.01, -0.002, 1e-3, -1e-4]),
+    *[(getattr(pycolmap.CameraModelId, model), _synthetic_params(model))
+      for model in ["FOV", "SIMPLE_RADIAL_FISHEYE", "RADIAL_FISHEYE", "THIN_PRISM_FISHEYE", "RAD_TAN_THIN_PRISM_FISHEYE",
+                    "SIMPLE_DIVISION", "DIVISION", "SIMPLE_FISHEYE", "FISHEYE", "EUCM"]],
 ])
 def test_retriangulating_a_model_recovers_its_points_certified(model_id, params):
     """A pycolmap synthetic model's observations are exact: every track comes back to its point, with a

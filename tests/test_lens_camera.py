@@ -19,14 +19,32 @@ CAMERAS = {
     "OPENCV": [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4],
     "FULL_OPENCV": [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005],
     "OPENCV_FISHEYE": [400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
+    "FOV": [400.0, 395.0, 320.0, 240.0, 0.9],
+    "SIMPLE_RADIAL_FISHEYE": [400.0, 320.0, 240.0, 0.05],
+    "RADIAL_FISHEYE": [400.0, 320.0, 240.0, 0.05, -0.01],
+    "THIN_PRISM_FISHEYE": [400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 1e-3, -5e-4, 0.002, -3e-4, 2e-3, -1e-3],
+    "RAD_TAN_THIN_PRISM_FISHEYE": [400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4, 1e-5, -1e-6,
+                                   1e-3, -5e-4, 2e-3, -1e-3, 3e-4, -2e-4],
+    "SIMPLE_DIVISION": [800.0, 320.0, 240.0, -0.2],
+    "DIVISION": [800.0, 790.0, 320.0, 240.0, -0.2],
+    "SIMPLE_FISHEYE": [400.0, 320.0, 240.0],
+    "FISHEYE": [400.0, 395.0, 320.0, 240.0],
+    "EUCM": [400.0, 395.0, 320.0, 240.0, 0.6, 1.1],
 }
+ONE_FOCAL_LENGTH = ("SIMPLE_PINHOLE", "SIMPLE_RADIAL", "RADIAL", "SIMPLE_RADIAL_FISHEYE", "RADIAL_FISHEYE",
+                    "SIMPLE_DIVISION", "SIMPLE_FISHEYE")
+
+
+def tangential(u, v, p1, p2):
+    r2 = u * u + v * v
+    return 2 * p1 * u * v + p2 * (r2 + 2 * u * u), p1 * (r2 + 2 * v * v) + 2 * p2 * u * v
 
 
 def reference_project(model: str, p: list[float], X: np.ndarray) -> np.ndarray:
     """COLMAP's projection, written out with numpy."""
     u, v = X[:, 0] / X[:, 2], X[:, 1] / X[:, 2]
     r2 = u * u + v * v
-    if model in ("SIMPLE_PINHOLE", "SIMPLE_RADIAL", "RADIAL"):
+    if model in ONE_FOCAL_LENGTH:
         f, cx, cy = p[:3]
         fx = fy = f
     else:
@@ -45,14 +63,45 @@ def reference_project(model: str, p: list[float], X: np.ndarray) -> np.ndarray:
         else:
             k3, k4, k5, k6 = p[8:12]
             g = (1 + k1 * r2 + k2 * r2**2 + k3 * r2**3) / (1 + k4 * r2 + k5 * r2**2 + k6 * r2**3)
-        du = u * g + 2 * p1 * u * v + p2 * (r2 + 2 * u * u)
-        dv = v * g + p1 * (r2 + 2 * v * v) + 2 * p2 * u * v
-    else:  # OPENCV_FISHEYE
-        k1, k2, k3, k4 = p[4:8]
+        tu, tv = tangential(u, v, p1, p2)
+        du, dv = u * g + tu, v * g + tv
+    elif model == "FOV":
+        w = p[4]
+        t = np.tan(w / 2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = np.where(r2 < 1e-4, 2 * t / w * (1 - 4 * t * t * r2 / 3), np.arctan(2 * np.sqrt(r2) * t) / (np.sqrt(r2) * w))
+        if w * w < 1e-4:  # COLMAP's series in omega (that of its undistortion)
+            g = 1 + w * w * r2 / 3 - w * w / 12
+        du, dv = u * g, v * g
+    elif model in ("SIMPLE_DIVISION", "DIVISION"):
+        g = 2 / (1 + np.sqrt(1 - 4 * p[-1] * r2))
+        du, dv = u * g, v * g
+    elif model == "EUCM":
+        alpha, beta = p[4:6]
+        g = 1 / (alpha * np.sqrt(1 + beta * r2) + 1 - alpha)
+        du, dv = u * g, v * g
+    else:  # the fisheyes: the polynomials act on m = n theta / r, |m| = theta
         r = np.sqrt(r2)
         theta = np.arctan(r)
-        theta_d = theta * (1 + k1 * theta**2 + k2 * theta**4 + k3 * theta**6 + k4 * theta**8)
-        du, dv = u * theta_d / r, v * theta_d / r
+        mu, mv = u * theta / r, v * theta / r
+        t2 = theta**2
+        if model in ("SIMPLE_FISHEYE", "FISHEYE"):
+            du, dv = mu, mv
+        elif model == "RAD_TAN_THIN_PRISM_FISHEYE":
+            g = 1 + sum(k * t2 ** (i + 1) for i, k in enumerate(p[4:10]))
+            x, y = mu * g, mv * g
+            p0, p1, s0, s1, s2, s3 = p[10:16]
+            q = x * x + y * y
+            du = x + 2 * p1 * x * y + p0 * (q + 2 * x * x) + s0 * q + s1 * q * q
+            dv = y + 2 * p0 * x * y + p1 * (q + 2 * y * y) + s2 * q + s3 * q * q
+        else:
+            k = {"SIMPLE_RADIAL_FISHEYE": p[3:4], "RADIAL_FISHEYE": p[3:5], "OPENCV_FISHEYE": p[4:8],
+                 "THIN_PRISM_FISHEYE": p[4:6] + p[8:10]}[model]
+            g = 1 + sum(c * t2 ** (i + 1) for i, c in enumerate(k))
+            du, dv = mu * g, mv * g
+            if model == "THIN_PRISM_FISHEYE":
+                tu, tv = tangential(mu, mv, p[6], p[7])
+                du, dv = du + tu + p[10] * t2, dv + tv + p[11] * t2
     return np.c_[fx * du + cx, fy * dv + cy]
 
 
@@ -115,8 +164,11 @@ def test_bad_cameras_are_named_errors():
 
 
 def test_models_round_trip():
+    # COLMAP's model ids 0-16 (colmap/sensor/models.h, CameraModelId; 17, EQUIRECTANGULAR, is refused).
     assert pluecker.LensCamera.MODELS == ["SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV",
-                                          "OPENCV_FISHEYE", "FULL_OPENCV"]
+                                          "OPENCV_FISHEYE", "FULL_OPENCV", "FOV", "SIMPLE_RADIAL_FISHEYE",
+                                          "RADIAL_FISHEYE", "THIN_PRISM_FISHEYE", "RAD_TAN_THIN_PRISM_FISHEYE",
+                                          "SIMPLE_DIVISION", "DIVISION", "SIMPLE_FISHEYE", "FISHEYE", "EUCM"]
     cam = pluecker.LensCamera("OPENCV_FISHEYE", CAMERAS["OPENCV_FISHEYE"])
     assert pickle.loads(pickle.dumps(cam)) == cam
     assert cam.to_dict()["parameter_names"] == ["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"]

@@ -76,8 +76,13 @@ def rigid_from_pose(R: Any, t: Any) -> Any:
 
 
 def lens_camera(camera: Any) -> _core.LensCamera:
-    """The ``pluecker.LensCamera`` of a ``pycolmap.Camera``: same model, same parameters."""
-    return _core.LensCamera(camera.model.name, list(camera.params))
+    """The ``pluecker.LensCamera`` of a ``pycolmap.Camera``: same model, same parameters. A camera that
+    is not one (``EQUIRECTANGULAR``, wrong parameters) raises the error of ``LensCamera`` naming its
+    ``camera_id``."""
+    try:
+        return _core.LensCamera(camera.model.name, list(camera.params))
+    except _core.PlueckerError as error:
+        raise type(error)(f"camera_id {camera.camera_id}: {error}") from error
 
 
 def colmap_camera(camera: _core.LensCamera, width: int, height: int) -> Any:

@@ -1,24 +1,49 @@
-//! Camera models with lens distortion, with COLMAP's names and parameter orders (`colmap/sensor/models.h`),
-//! so that a COLMAP camera's `model` and `params` mean the same here.
+//! Camera models with lens distortion, with COLMAP's names, model ids and parameter orders
+//! (`colmap/sensor/models.h`), so that a COLMAP camera's `model` and `params` mean the same here.
 //!
 //! A model maps a camera-frame point `x_cam` (in front: `z > 0`) to pixels in three steps:
 //! 1. normalised coordinates `n = (x/z, y/z)`;
 //! 2. the distortion `d = D(n)`, in normalised units (identity for the pinhole models);
-//! 3. pixels `u = (fx d₁ + cx, fy d₂ + cy)`.
+//! 3. pixels `u = (fx d₁ + cx, fy d₂ + cy)` (`fx = fy = f` for the models with one focal length).
 //!
-//! | model | parameters | distortion `D(n)`, with `r² = n·n` |
-//! |---|---|---|
-//! | `SIMPLE_PINHOLE` | f, cx, cy | none |
-//! | `PINHOLE` | fx, fy, cx, cy | none |
-//! | `SIMPLE_RADIAL` | f, cx, cy, k | `n (1 + k r²)` |
-//! | `RADIAL` | f, cx, cy, k1, k2 | `n (1 + k1 r² + k2 r⁴)` |
-//! | `OPENCV` | fx, fy, cx, cy, k1, k2, p1, p2 | `n (1 + k1 r² + k2 r⁴) + t(n)` |
-//! | `FULL_OPENCV` | fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6 | `n (1 + k1 r² + k2 r⁴ + k3 r⁶) / (1 + k4 r² + k5 r⁴ + k6 r⁶) + t(n)` |
-//! | `OPENCV_FISHEYE` | fx, fy, cx, cy, k1, k2, k3, k4 | `n θ (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸) / r`, `θ = atan r` |
+//! | id | model | parameters | distortion `D(n)`, with `r² = n·n` |
+//! |---|---|---|---|
+//! | 0 | `SIMPLE_PINHOLE` | f, cx, cy | none |
+//! | 1 | `PINHOLE` | fx, fy, cx, cy | none |
+//! | 2 | `SIMPLE_RADIAL` | f, cx, cy, k | `n (1 + k r²)` |
+//! | 3 | `RADIAL` | f, cx, cy, k1, k2 | `n (1 + k1 r² + k2 r⁴)` |
+//! | 4 | `OPENCV` | fx, fy, cx, cy, k1, k2, p1, p2 | `n (1 + k1 r² + k2 r⁴) + t(n)` |
+//! | 5 | `OPENCV_FISHEYE` | fx, fy, cx, cy, k1, k2, k3, k4 | `m (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸)` |
+//! | 6 | `FULL_OPENCV` | fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6 | `n (1 + k1 r² + k2 r⁴ + k3 r⁶) / (1 + k4 r² + k5 r⁴ + k6 r⁶) + t(n)` |
+//! | 7 | `FOV` | fx, fy, cx, cy, omega | `n atan(2 r tan(ω/2)) / (ω r)` (with COLMAP's series, below) |
+//! | 8 | `SIMPLE_RADIAL_FISHEYE` | f, cx, cy, k | `m (1 + k θ²)` |
+//! | 9 | `RADIAL_FISHEYE` | f, cx, cy, k1, k2 | `m (1 + k1 θ² + k2 θ⁴)` |
+//! | 10 | `THIN_PRISM_FISHEYE` | fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1 | `m (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸) + t(m) + θ² (sx1, sy1)` |
+//! | 11 | `RAD_TAN_THIN_PRISM_FISHEYE` | fx, fy, cx, cy, k0, k1, k2, k3, k4, k5, p0, p1, s0, s1, s2, s3 | `v + t(v)|_{p1 := p1, p2 := p0} + (s0 ρ² + s1 ρ⁴, s2 ρ² + s3 ρ⁴)`, `v = m (1 + k0 θ² + k1 θ⁴ + … + k5 θ¹²)`, `ρ = |v|` |
+//! | 12 | `SIMPLE_DIVISION` | f, cx, cy, k | `2 n / (1 + √(1 − 4 k r²))` |
+//! | 13 | `DIVISION` | fx, fy, cx, cy, k | `2 n / (1 + √(1 − 4 k r²))` |
+//! | 14 | `SIMPLE_FISHEYE` | f, cx, cy | `m` |
+//! | 15 | `FISHEYE` | fx, fy, cx, cy | `m` |
+//! | 16 | `EUCM` | fx, fy, cx, cy, alpha, beta | `n / (α √(1 + β r²) + 1 − α)` |
 //!
-//! `t(n) = (2 p1 n₁n₂ + p2 (r² + 2n₁²), p1 (r² + 2n₂²) + 2 p2 n₁n₂)` is the tangential term.
+//! `t(n) = (2 p1 n₁n₂ + p2 (r² + 2n₁²), p1 (r² + 2n₂²) + 2 p2 n₁n₂)` is the tangential term (of its
+//! argument). The fisheye models distort the equidistant coordinates `m = n θ / r`, `θ = atan r`, the
+//! angle of the ray to the optical axis (`|m| = θ`). The division models are defined in COLMAP by their
+//! unprojection `n = d / (1 + k |d|²)`; `D` is its inverse on the branch through the principal point, the
+//! projection COLMAP computes. FOV follows COLMAP's projection exactly, including its two series: for
+//! `ω² < 1e-4`, `D(n) = n (1 + ω² r² / 3 − ω² / 12)` (COLMAP's expression, which is the series of the
+//! *undistortion*; it differs from the closed form by `O(ω²)`, and COLMAP's own unprojection does not
+//! invert it), and for `r² < 1e-4`, `D(n) = n (2 tan(ω/2) / ω) (1 − 4 tan²(ω/2) r² / 3)`, which jumps to the
+//! closed form at `r = 0.01` by `(2 r tan(ω/2))⁵ / (5ω)`: 3e-11 in normalised units for `ω = 1`,
+//! 1e-4 for `ω = 3` (pixels in that gap have no preimage, and their unprojection is an error).
+//! COLMAP's bundle adjustment minimises reprojection errors through this projection, so it is the one a
+//! COLMAP model is consistent with.
 //!
-//! **Unprojection** inverts the distortion by Newton's method on `D(n) = d`, with the analytic Jacobian.
+//! `EQUIRECTANGULAR` (COLMAP's id 17) is not a model here: it is spherical, sees behind the camera where
+//! `n = (x/z, y/z)` does not exist, and has no focal length; [`CameraModel::parse`] refuses it by name.
+//!
+//! **Unprojection** inverts the distortion by Newton's method on `D(n) = d`, with the analytic Jacobian,
+//! from the closed-form inverse where the model has one (division, EUCM, FOV, the fisheyes' `tan θ`).
 //! It stops when the residual, in pixels, is below [`UNPROJECTION_TOLERANCE_PX`] (1e-10 px). The answer
 //! must be in the invertible region: the Jacobian of `D` must have a positive determinant there, so
 //! that the distortion is locally one-to-one and keeps the orientation, and it must lie inside the
@@ -31,21 +56,32 @@
 use crate::error::{number, Error, Result};
 use nalgebra::{Matrix2, Vector2, Vector3};
 
-/// The camera models, with COLMAP's names (see the module table for their parameters).
+/// The camera models, with COLMAP's names (see the module table for their parameters); the
+/// discriminant is COLMAP's model id.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum CameraModel {
-    SimplePinhole,
-    Pinhole,
-    SimpleRadial,
-    Radial,
-    OpenCv,
-    FullOpenCv,
-    OpenCvFisheye,
+    SimplePinhole = 0,
+    Pinhole = 1,
+    SimpleRadial = 2,
+    Radial = 3,
+    OpenCv = 4,
+    OpenCvFisheye = 5,
+    FullOpenCv = 6,
+    Fov = 7,
+    SimpleRadialFisheye = 8,
+    RadialFisheye = 9,
+    ThinPrismFisheye = 10,
+    RadTanThinPrismFisheye = 11,
+    SimpleDivision = 12,
+    Division = 13,
+    SimpleFisheye = 14,
+    Fisheye = 15,
+    Eucm = 16,
 }
 
 impl CameraModel {
-    /// Every model, in COLMAP's order of model ids (0-6: the same ids as COLMAP's).
-    pub const ALL: [CameraModel; 7] = [
+    /// Every model, in COLMAP's order of model ids (0-16: `ALL[i] as usize == i`, COLMAP's ids).
+    pub const ALL: [CameraModel; 17] = [
         CameraModel::SimplePinhole,
         CameraModel::Pinhole,
         CameraModel::SimpleRadial,
@@ -53,6 +89,16 @@ impl CameraModel {
         CameraModel::OpenCv,
         CameraModel::OpenCvFisheye,
         CameraModel::FullOpenCv,
+        CameraModel::Fov,
+        CameraModel::SimpleRadialFisheye,
+        CameraModel::RadialFisheye,
+        CameraModel::ThinPrismFisheye,
+        CameraModel::RadTanThinPrismFisheye,
+        CameraModel::SimpleDivision,
+        CameraModel::Division,
+        CameraModel::SimpleFisheye,
+        CameraModel::Fisheye,
+        CameraModel::Eucm,
     ];
 
     /// COLMAP's name of the model.
@@ -63,13 +109,33 @@ impl CameraModel {
             CameraModel::SimpleRadial => "SIMPLE_RADIAL",
             CameraModel::Radial => "RADIAL",
             CameraModel::OpenCv => "OPENCV",
-            CameraModel::FullOpenCv => "FULL_OPENCV",
             CameraModel::OpenCvFisheye => "OPENCV_FISHEYE",
+            CameraModel::FullOpenCv => "FULL_OPENCV",
+            CameraModel::Fov => "FOV",
+            CameraModel::SimpleRadialFisheye => "SIMPLE_RADIAL_FISHEYE",
+            CameraModel::RadialFisheye => "RADIAL_FISHEYE",
+            CameraModel::ThinPrismFisheye => "THIN_PRISM_FISHEYE",
+            CameraModel::RadTanThinPrismFisheye => "RAD_TAN_THIN_PRISM_FISHEYE",
+            CameraModel::SimpleDivision => "SIMPLE_DIVISION",
+            CameraModel::Division => "DIVISION",
+            CameraModel::SimpleFisheye => "SIMPLE_FISHEYE",
+            CameraModel::Fisheye => "FISHEYE",
+            CameraModel::Eucm => "EUCM",
         }
     }
 
-    /// The model of a COLMAP name; `Error::InvalidOption` naming the known ones otherwise.
+    /// The model of a COLMAP name; `Error::InvalidOption` naming the known ones otherwise, and saying
+    /// why for COLMAP's `EQUIRECTANGULAR`.
     pub fn parse(name: &str) -> Result<CameraModel> {
+        if name == "EQUIRECTANGULAR" {
+            return Err(Error::InvalidOption {
+                name: "model".into(),
+                reason: "camera model 'EQUIRECTANGULAR' is not supported: it is a spherical (360°) model, \
+                         which sees behind the camera where normalised coordinates (x/z, y/z) do not exist, \
+                         and has no focal length; only COLMAP's perspective models are"
+                    .into(),
+            });
+        }
         CameraModel::ALL
             .into_iter()
             .find(|m| m.as_str() == name)
@@ -85,14 +151,53 @@ impl CameraModel {
     /// The parameter names, in COLMAP's order.
     pub fn parameter_names(&self) -> &'static [&'static str] {
         match self {
-            CameraModel::SimplePinhole => &["f", "cx", "cy"],
-            CameraModel::Pinhole => &["fx", "fy", "cx", "cy"],
-            CameraModel::SimpleRadial => &["f", "cx", "cy", "k"],
-            CameraModel::Radial => &["f", "cx", "cy", "k1", "k2"],
+            CameraModel::SimplePinhole | CameraModel::SimpleFisheye => &["f", "cx", "cy"],
+            CameraModel::Pinhole | CameraModel::Fisheye => &["fx", "fy", "cx", "cy"],
+            CameraModel::SimpleRadial | CameraModel::SimpleRadialFisheye | CameraModel::SimpleDivision => {
+                &["f", "cx", "cy", "k"]
+            }
+            CameraModel::Radial | CameraModel::RadialFisheye => &["f", "cx", "cy", "k1", "k2"],
             CameraModel::OpenCv => &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"],
-            CameraModel::FullOpenCv => &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"],
             CameraModel::OpenCvFisheye => &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"],
+            CameraModel::FullOpenCv => &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"],
+            CameraModel::Fov => &["fx", "fy", "cx", "cy", "omega"],
+            CameraModel::ThinPrismFisheye => {
+                &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "sx1", "sy1"]
+            }
+            CameraModel::RadTanThinPrismFisheye => &[
+                "fx", "fy", "cx", "cy", "k0", "k1", "k2", "k3", "k4", "k5", "p0", "p1", "s0", "s1", "s2", "s3",
+            ],
+            CameraModel::Division => &["fx", "fy", "cx", "cy", "k"],
+            CameraModel::Eucm => &["fx", "fy", "cx", "cy", "alpha", "beta"],
         }
+    }
+
+    /// Whether the model has one focal length `f` (`fx = fy = f`), first, then `cx, cy`.
+    fn has_one_focal_length(&self) -> bool {
+        matches!(
+            self,
+            CameraModel::SimplePinhole
+                | CameraModel::SimpleRadial
+                | CameraModel::Radial
+                | CameraModel::SimpleRadialFisheye
+                | CameraModel::RadialFisheye
+                | CameraModel::SimpleDivision
+                | CameraModel::SimpleFisheye
+        )
+    }
+
+    /// Whether the model distorts the equidistant coordinates `m = n θ / r` (see the module docs).
+    fn is_fisheye(&self) -> bool {
+        matches!(
+            self,
+            CameraModel::OpenCvFisheye
+                | CameraModel::SimpleRadialFisheye
+                | CameraModel::RadialFisheye
+                | CameraModel::ThinPrismFisheye
+                | CameraModel::RadTanThinPrismFisheye
+                | CameraModel::SimpleFisheye
+                | CameraModel::Fisheye
+        )
     }
 }
 
@@ -103,6 +208,9 @@ pub const UNPROJECTION_TOLERANCE_PX: f64 = 1e-10;
 /// are used in the invertible region).
 const MAX_UNPROJECTION_ITERATIONS: usize = 100;
 
+/// Below this `ω²` COLMAP's FOV projection uses its series in `ω`, and below this `r²` its series in `r`.
+const FOV_SERIES_BOUND: f64 = 1e-4;
+
 /// A camera of one of the [`CameraModel`]s: intrinsics and distortion, checked.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LensCamera {
@@ -110,6 +218,107 @@ pub struct LensCamera {
     params: Vec<f64>,
     /// The radius `|n|` where the radial distortion stops increasing ([`fold_radius`]); `∞` when it never does.
     fold_radius: f64,
+}
+
+/// `v g` and its Jacobian `g I + 2 g' v vᵀ`, for a radial factor `g(|v|²)` with derivative `g' = dg/d|v|²`.
+fn scaled(v: &Vector2<f64>, g: f64, dg: f64) -> (Vector2<f64>, Matrix2<f64>) {
+    (v * g, Matrix2::identity() * g + v * v.transpose() * (2.0 * dg))
+}
+
+/// `g(s) = 1 + c₁ s + c₂ s² + …` for `coefficients = [c₁, c₂, …]`, and `g'(s)` (Horner's scheme).
+fn polynomial(coefficients: &[f64], s: f64) -> (f64, f64) {
+    let (mut p, mut dp) = (0.0, 0.0);
+    for c in coefficients.iter().rev() {
+        dp = p + s * dp;
+        p = c + s * p;
+    }
+    (1.0 + s * p, p + s * dp)
+}
+
+/// The radial polynomial distortion `v g(|v|²)`, `g` = [`polynomial`]`(coefficients)`, and its Jacobian.
+fn radial(v: &Vector2<f64>, coefficients: &[f64]) -> (Vector2<f64>, Matrix2<f64>) {
+    let (g, dg) = polynomial(coefficients, v.norm_squared());
+    scaled(v, g, dg)
+}
+
+/// The tangential term `t(v)` of the module docs and its Jacobian.
+fn tangential(v: &Vector2<f64>, p1: f64, p2: f64) -> (Vector2<f64>, Matrix2<f64>) {
+    let (x, y) = (v.x, v.y);
+    let r2 = x * x + y * y;
+    let t = Vector2::new(
+        2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
+        p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y,
+    );
+    let j = Matrix2::new(
+        2.0 * p1 * y + 6.0 * p2 * x,
+        2.0 * p1 * x + 2.0 * p2 * y,
+        2.0 * p1 * x + 2.0 * p2 * y,
+        6.0 * p1 * y + 2.0 * p2 * x,
+    );
+    (t, j)
+}
+
+/// The thin-prism term `(s0 ρ² + s1 ρ⁴, s2 ρ² + s3 ρ⁴)`, `ρ = |v|`, and its Jacobian (rows
+/// `(2 s0 + 4 s1 ρ²) vᵀ` and `(2 s2 + 4 s3 ρ²) vᵀ`).
+fn thin_prism(v: &Vector2<f64>, s: [f64; 4]) -> (Vector2<f64>, Matrix2<f64>) {
+    let q = v.norm_squared();
+    let (a, b) = (2.0 * s[0] + 4.0 * s[1] * q, 2.0 * s[2] + 4.0 * s[3] * q);
+    (
+        Vector2::new(q * (s[0] + s[1] * q), q * (s[2] + s[3] * q)),
+        Matrix2::new(a * v.x, a * v.y, b * v.x, b * v.y),
+    )
+}
+
+/// The equidistant fisheye coordinates `m = n θ / r`, `θ = atan r`, and `∂m/∂n`.
+fn equidistant(n: &Vector2<f64>) -> (Vector2<f64>, Matrix2<f64>) {
+    let r2 = n.norm_squared();
+    let r = r2.sqrt();
+    if r < 1e-8 {
+        // θ / r = 1 − r²/3 + …, which is 1 in double precision; the Jacobian is the identity to O(r²).
+        return (*n, Matrix2::identity());
+    }
+    let theta = r.atan();
+    // m = n s(r), s = θ / r: ∂m/∂n = s I + (s'(r) / r) n nᵀ with s' = (r θ'(r) − θ) / r², θ' = 1 / (1 + r²).
+    // The cancellation in s' costs an absolute error ε / r² in s' / r, multiplied by |n nᵀ| = r².
+    let s = theta / r;
+    let ds = (r / (1.0 + r2) - theta) / r2;
+    (n * s, Matrix2::identity() * s + n * n.transpose() * (ds / r))
+}
+
+/// COLMAP's FOV distortion (module docs, with its two series) and its Jacobian.
+fn fov(n: &Vector2<f64>, omega: f64) -> (Vector2<f64>, Matrix2<f64>) {
+    let s = n.norm_squared();
+    let w2 = omega * omega;
+    if w2 < FOV_SERIES_BOUND {
+        return scaled(n, w2 * s / 3.0 - w2 / 12.0 + 1.0, w2 / 3.0);
+    }
+    let t = (omega / 2.0).tan();
+    if s < FOV_SERIES_BOUND {
+        let g = -2.0 * t * (4.0 * s * t * t - 3.0) / (3.0 * omega);
+        return scaled(n, g, -8.0 * t * t * t / (3.0 * omega));
+    }
+    let r = s.sqrt();
+    let a = (2.0 * r * t).atan();
+    let g = a / (r * omega);
+    // dg/dr = (2 t r / (1 + 4 t² r²) − a) / (ω r²), and dg/ds = (dg/dr) / (2r).
+    let dg_dr = (2.0 * t * r / (1.0 + 4.0 * t * t * s) - a) / (omega * s);
+    scaled(n, g, dg_dr / (2.0 * r))
+}
+
+/// The division model's projection `2 n / (1 + √(1 − 4 k r²))` and its Jacobian (NaN where `4 k r² > 1`:
+/// no point there projects).
+fn division(n: &Vector2<f64>, k: f64) -> (Vector2<f64>, Matrix2<f64>) {
+    let q = (1.0 - 4.0 * k * n.norm_squared()).sqrt();
+    // g = 2 / (1 + q), q' = dq/ds = −2k / q: g' = 4k / (q (1 + q)²).
+    scaled(n, 2.0 / (1.0 + q), 4.0 * k / (q * (1.0 + q) * (1.0 + q)))
+}
+
+/// EUCM's projection `n / (α √(1 + β r²) + 1 − α)` and its Jacobian.
+fn eucm(n: &Vector2<f64>, alpha: f64, beta: f64) -> (Vector2<f64>, Matrix2<f64>) {
+    let q = (1.0 + beta * n.norm_squared()).sqrt();
+    let g = 1.0 / (alpha * q + 1.0 - alpha);
+    // g' = −α q' g², q' = β / (2q).
+    scaled(n, g, -alpha * beta / (2.0 * q) * g * g)
 }
 
 impl LensCamera {
@@ -157,18 +366,20 @@ impl LensCamera {
     /// `(fx, fy)`, pixels.
     pub fn focal(&self) -> (f64, f64) {
         let p = &self.params;
-        match self.model {
-            CameraModel::SimplePinhole | CameraModel::SimpleRadial | CameraModel::Radial => (p[0], p[0]),
-            _ => (p[0], p[1]),
+        if self.model.has_one_focal_length() {
+            (p[0], p[0])
+        } else {
+            (p[0], p[1])
         }
     }
 
     /// `(cx, cy)`, pixels.
     pub fn principal_point(&self) -> (f64, f64) {
         let p = &self.params;
-        match self.model {
-            CameraModel::SimplePinhole | CameraModel::SimpleRadial | CameraModel::Radial => (p[1], p[2]),
-            _ => (p[2], p[3]),
+        if self.model.has_one_focal_length() {
+            (p[1], p[2])
+        } else {
+            (p[2], p[3])
         }
     }
 
@@ -186,64 +397,92 @@ impl LensCamera {
     /// The distortion `D(n)` of normalised coordinates (see the module table) and its Jacobian `∂D/∂n`.
     pub fn distort(&self, n: &Vector2<f64>) -> (Vector2<f64>, Matrix2<f64>) {
         let p = &self.params;
-        let (x, y) = (n.x, n.y);
-        let r2 = x * x + y * y;
-        // Radial factor g(r²) and its derivative g'(r²), so that D = n g + t and ∂(n g)/∂n = g I + 2 g' n nᵀ.
-        let radial = |g: f64, dg: f64| {
-            let d = n * g;
-            let j = Matrix2::identity() * g + n * n.transpose() * (2.0 * dg);
-            (d, j)
-        };
-        let tangential = |p1: f64, p2: f64| {
-            let t = Vector2::new(
-                2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x),
-                p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y,
-            );
-            let j = Matrix2::new(
-                2.0 * p1 * y + 6.0 * p2 * x,
-                2.0 * p1 * x + 2.0 * p2 * y,
-                2.0 * p1 * x + 2.0 * p2 * y,
-                6.0 * p1 * y + 2.0 * p2 * x,
-            );
-            (t, j)
-        };
         match self.model {
             CameraModel::SimplePinhole | CameraModel::Pinhole => (*n, Matrix2::identity()),
-            CameraModel::SimpleRadial => radial(1.0 + p[3] * r2, p[3]),
-            CameraModel::Radial => radial(1.0 + p[3] * r2 + p[4] * r2 * r2, p[3] + 2.0 * p[4] * r2),
+            CameraModel::SimpleRadial => radial(n, &p[3..4]),
+            CameraModel::Radial => radial(n, &p[3..5]),
             CameraModel::OpenCv => {
-                let (k1, k2, p1, p2) = (p[4], p[5], p[6], p[7]);
-                let (d, j) = radial(1.0 + k1 * r2 + k2 * r2 * r2, k1 + 2.0 * k2 * r2);
-                let (t, jt) = tangential(p1, p2);
+                let (d, j) = radial(n, &p[4..6]);
+                let (t, jt) = tangential(n, p[6], p[7]);
                 (d + t, j + jt)
             }
             CameraModel::FullOpenCv => {
-                let (k1, k2, p1, p2, k3, k4, k5, k6) = (p[4], p[5], p[6], p[7], p[8], p[9], p[10], p[11]);
-                let num = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
-                let den = 1.0 + r2 * (k4 + r2 * (k5 + r2 * k6));
-                let dnum = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
-                let dden = k4 + r2 * (2.0 * k5 + 3.0 * k6 * r2);
-                let (d, j) = radial(num / den, (dnum * den - num * dden) / (den * den));
-                let (t, jt) = tangential(p1, p2);
+                let s = n.norm_squared();
+                let (num, dnum) = polynomial(&[p[4], p[5], p[8]], s);
+                let (den, dden) = polynomial(&[p[9], p[10], p[11]], s);
+                let (d, j) = scaled(n, num / den, (dnum * den - num * dden) / (den * den));
+                let (t, jt) = tangential(n, p[6], p[7]);
                 (d + t, j + jt)
             }
-            CameraModel::OpenCvFisheye => {
-                let (k1, k2, k3, k4) = (p[4], p[5], p[6], p[7]);
-                let r = r2.sqrt();
-                if r < 1e-8 {
-                    // θ = atan r ≈ r: D(n) = n (1 + O(r²)); the Jacobian is the identity to O(r²).
-                    return (*n, Matrix2::identity());
-                }
-                let theta = r.atan();
-                let t2 = theta * theta;
-                let poly = 1.0 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4)));
-                let theta_d = theta * poly;
-                let dtheta_d = poly + t2 * (2.0 * k1 + t2 * (4.0 * k2 + t2 * (6.0 * k3 + t2 * 8.0 * k4)));
-                // D = n s(r) with s = θ_d / r; ∂D/∂n = s I + (s'(r) / r) n nᵀ, s' = (θ_d' θ' r − θ_d) / r².
-                let s = theta_d / r;
-                let ds = (dtheta_d / (1.0 + r2) * r - theta_d) / r2;
-                (n * s, Matrix2::identity() * s + n * n.transpose() * (ds / r))
+            CameraModel::Fov => fov(n, p[4]),
+            CameraModel::SimpleDivision => division(n, p[3]),
+            CameraModel::Division => division(n, p[4]),
+            CameraModel::Eucm => eucm(n, p[4], p[5]),
+            _ => {
+                let (m, jm) = equidistant(n);
+                let (d, jd) = self.distort_fisheye(&m);
+                (d, jd * jm)
             }
+        }
+    }
+
+    /// The fisheye models' distortion of the equidistant coordinates `m` (`|m| = θ`) and its Jacobian.
+    fn distort_fisheye(&self, m: &Vector2<f64>) -> (Vector2<f64>, Matrix2<f64>) {
+        let p = &self.params;
+        match self.model {
+            CameraModel::SimpleRadialFisheye => radial(m, &p[3..4]),
+            CameraModel::RadialFisheye => radial(m, &p[3..5]),
+            CameraModel::OpenCvFisheye => radial(m, &p[4..8]),
+            CameraModel::ThinPrismFisheye => {
+                let (d, j) = radial(m, &[p[4], p[5], p[8], p[9]]);
+                let (t, jt) = tangential(m, p[6], p[7]);
+                let (s, js) = thin_prism(m, [p[10], 0.0, p[11], 0.0]);
+                (d + t + s, j + jt + js)
+            }
+            CameraModel::RadTanThinPrismFisheye => {
+                // The tangential and thin-prism terms act on the radially distorted v (Fisheye624).
+                let (v, jv) = radial(m, &p[4..10]);
+                let (t, jt) = tangential(&v, p[11], p[10]);
+                let (s, js) = thin_prism(&v, [p[12], p[13], p[14], p[15]]);
+                (v + t + s, (Matrix2::identity() + jt + js) * jv)
+            }
+            _ => (*m, Matrix2::identity()),
+        }
+    }
+
+    /// Where Newton's method starts for the distorted normalised coordinates `d`: the closed-form
+    /// inverse where the model has one (the first two are COLMAP's unprojections), else `d`.
+    fn newton_start(&self, d: &Vector2<f64>) -> Vector2<f64> {
+        let p = &self.params;
+        let start = match self.model {
+            CameraModel::SimpleDivision | CameraModel::Division => {
+                let k = p[p.len() - 1];
+                d / (1.0 + k * d.norm_squared())
+            }
+            CameraModel::Eucm => {
+                let (alpha, beta, s) = (p[4], p[5], d.norm_squared());
+                let gamma = 1.0 - alpha;
+                let root = (1.0 - (alpha - gamma) * beta * s).sqrt();
+                d * ((alpha * root + gamma) / (1.0 - alpha * alpha * beta * s))
+            }
+            CameraModel::Fov if p[4] * p[4] >= FOV_SERIES_BOUND => {
+                // The inverse of the closed form, r = tan(ρ ω) / (2 tan(ω/2)), while ρ ω < π/2.
+                let rho = d.norm();
+                let angle = rho * p[4];
+                if rho > 0.0 && angle.abs() < 1.5 {
+                    d * (angle.tan() / (2.0 * rho * (p[4] / 2.0).tan()))
+                } else {
+                    *d
+                }
+            }
+            // The inverse of the equidistant map without distortion: r = tan θ, θ < 80°.
+            m if m.is_fisheye() && d.norm() > 0.0 => d * (d.norm().min(1.4).tan() / d.norm()),
+            _ => *d,
+        };
+        if start.iter().all(|v| v.is_finite()) {
+            start
+        } else {
+            *d
         }
     }
 
@@ -282,7 +521,7 @@ impl LensCamera {
             ),
         };
         let pixel_error = |e: &Vector2<f64>| (e.x * fx).hypot(e.y * fy);
-        let mut n = d;
+        let mut n = self.newton_start(&d);
         for _ in 0..MAX_UNPROJECTION_ITERATIONS {
             let (dn, j) = self.distort(&n);
             let e = dn - d;
@@ -336,23 +575,44 @@ impl LensCamera {
 
 /// The radius `r*` of normalised coordinates where the radial part of the distortion of `model` stops
 /// increasing (`∞` when it increases everywhere): the first positive zero of `dρ/dr` for the radial map
-/// `ρ(r) = r g(r²)`, or of the rational model's denominator, or for the fisheye the first zero of
-/// `dθ_d/dθ` in `θ = atan r < π/2`. Beyond it the distortion folds back, and a pixel whose Newton
-/// solution lies there has no preimage on the branch through the principal point ([`LensCamera::unproject`]).
+/// `ρ(r) = r g(r²)`, or of the rational model's denominator, or for the fisheyes the first zero of
+/// `dθ_d/dθ` in `θ = atan r < π/2`, or where the projection stops existing (division, EUCM). Beyond it
+/// the distortion folds back, and a pixel whose Newton solution lies there has no preimage on the
+/// branch through the principal point ([`LensCamera::unproject`]).
 ///
 /// In `s = r²` the zeros are those of polynomials: `1 + 3k s` (SIMPLE_RADIAL), `1 + 3k₁ s + 5k₂ s²`
 /// (RADIAL, OPENCV), `(1 + 3k₁ s + 5k₂ s² + 7k₃ s³) den(s) − num(s) (2k₄ s + 4k₅ s² + 6k₆ s³)` and
-/// `den(s)` (FULL_OPENCV, `g = num / den`), and in `t = θ²` `1 + 3k₁ t + 5k₂ t² + 7k₃ t³ + 9k₄ t⁴`
-/// (OPENCV_FISHEYE). Tangential terms are not part of it (the Jacobian test of the unprojection covers
-/// them where they fold).
+/// `den(s)` (FULL_OPENCV, `g = num / den`), and in `t = θ²` `1 + 3k₁ t + 5k₂ t² + …`, the odd
+/// multiples of the radial coefficients (every fisheye: `θ_d = θ (1 + k₁ θ² + …)`; SIMPLE_FISHEYE and
+/// FISHEYE have `θ_d = θ`, increasing: `∞`). Tangential and thin-prism terms are not part of it (the
+/// Jacobian test of the unprojection covers them where they fold). The others, in closed form:
+/// - FOV: `ρ = atan(2 r tan(ω/2)) / ω` increases for `0 < |ω| < π` (`∞`), decreases at once otherwise
+///   (`0`); COLMAP's series in `ω` increases (`ρ' = 1 − ω²/12 + ω² r² > 0` for `ω² < 1e-4`), and its
+///   series in `r`, `ρ' ∝ 1 − 4 tan²(ω/2) r²`, turns at `r = 1 / (2 |tan(ω/2)|)` if that is below
+///   its range `r < 0.01`.
+/// - division: `ρ' = 2 / (q (1 + q))`, `q = √(1 − 4k r²)`, is positive wherever the projection exists:
+///   `∞` for `k ≤ 0`, `1 / (2 √k)` (the edge of its domain, where `ρ' = ∞`) for `k > 0`.
+/// - EUCM: `ρ' = (α / q + 1 − α) / den²`, `q = √(1 + β r²)`, `den = α q + 1 − α`: the first `r > 0`
+///   where `q = 0` (the edge of the domain), `den = 0` (a pole, `q = (α − 1) / α`) or the numerator
+///   vanishes (`q = α / (α − 1)`); `∞` for COLMAP's valid range `0 ≤ α ≤ 1`, `β > 0`.
 pub fn fold_radius(model: CameraModel, params: &[f64]) -> f64 {
     let p = params;
     let radius_of_s = |s: Option<f64>| s.map_or(f64::INFINITY, f64::sqrt);
+    // 1 + 3k₁ t + 5k₂ t² + …: the derivative of t ↦ √t (1 + k₁ t + k₂ t² + …) times 2√t.
+    let odd_slope = |k: &[f64]| {
+        std::iter::once(1.0)
+            .chain(k.iter().enumerate().map(|(i, c)| (2 * i + 3) as f64 * c))
+            .collect::<Vec<f64>>()
+    };
+    let fisheye = |k: &[f64]| match first_positive_root(&odd_slope(k)) {
+        Some(t) if t.sqrt() < std::f64::consts::FRAC_PI_2 => t.sqrt().tan(),
+        _ => f64::INFINITY,
+    };
     match model {
         CameraModel::SimplePinhole | CameraModel::Pinhole => f64::INFINITY,
-        CameraModel::SimpleRadial => radius_of_s(first_positive_root(&[1.0, 3.0 * p[3]])),
-        CameraModel::Radial => radius_of_s(first_positive_root(&[1.0, 3.0 * p[3], 5.0 * p[4]])),
-        CameraModel::OpenCv => radius_of_s(first_positive_root(&[1.0, 3.0 * p[4], 5.0 * p[5]])),
+        CameraModel::SimpleRadial => radius_of_s(first_positive_root(&odd_slope(&p[3..4]))),
+        CameraModel::Radial => radius_of_s(first_positive_root(&odd_slope(&p[3..5]))),
+        CameraModel::OpenCv => radius_of_s(first_positive_root(&odd_slope(&p[4..6]))),
         CameraModel::FullOpenCv => {
             let (k1, k2, k3, k4, k5, k6) = (p[4], p[5], p[8], p[9], p[10], p[11]);
             let num = [1.0, k1, k2, k3];
@@ -372,12 +632,53 @@ pub fn fold_radius(model: CameraModel, params: &[f64]) -> f64 {
                 (a, b) => a.or(b),
             })
         }
-        CameraModel::OpenCvFisheye => {
-            let (k1, k2, k3, k4) = (p[4], p[5], p[6], p[7]);
-            match first_positive_root(&[1.0, 3.0 * k1, 5.0 * k2, 7.0 * k3, 9.0 * k4]) {
-                Some(t) if t.sqrt() < std::f64::consts::FRAC_PI_2 => t.sqrt().tan(),
-                _ => f64::INFINITY,
+        CameraModel::OpenCvFisheye => fisheye(&p[4..8]),
+        CameraModel::SimpleRadialFisheye => fisheye(&p[3..4]),
+        CameraModel::RadialFisheye => fisheye(&p[3..5]),
+        CameraModel::ThinPrismFisheye => fisheye(&[p[4], p[5], p[8], p[9]]),
+        CameraModel::RadTanThinPrismFisheye => fisheye(&p[4..10]),
+        CameraModel::SimpleFisheye | CameraModel::Fisheye => f64::INFINITY,
+        CameraModel::Fov => {
+            let omega = p[4];
+            if omega * omega < FOV_SERIES_BOUND {
+                return f64::INFINITY;
             }
+            let t = (omega / 2.0).tan();
+            // |ω| ≥ 0.01 here, so t / ω is a number whenever t is finite.
+            if !t.is_finite() || t / omega <= 0.0 {
+                return 0.0;
+            }
+            let turn = 1.0 / (2.0 * t.abs());
+            if turn * turn < FOV_SERIES_BOUND {
+                turn
+            } else {
+                f64::INFINITY
+            }
+        }
+        CameraModel::SimpleDivision | CameraModel::Division => {
+            let k = p[p.len() - 1];
+            if k > 0.0 {
+                0.5 / k.sqrt()
+            } else {
+                f64::INFINITY
+            }
+        }
+        CameraModel::Eucm => {
+            let (alpha, beta) = (p[4], p[5]);
+            // r² of a value of q = √(1 + β r²), when it is reached at some r > 0.
+            let s_of_q = |q: f64| {
+                let s = (q * q - 1.0) / beta;
+                (q >= 0.0 && s > 0.0 && s.is_finite()).then_some(s)
+            };
+            [
+                s_of_q(0.0),
+                s_of_q((alpha - 1.0) / alpha),
+                s_of_q(alpha / (alpha - 1.0)),
+            ]
+            .into_iter()
+            .flatten()
+            .min_by(f64::total_cmp)
+            .map_or(f64::INFINITY, f64::sqrt)
         }
     }
 }
@@ -418,9 +719,10 @@ mod tests {
     use super::*;
     use crate::rng::Rng;
 
-    /// A camera of each model with COLMAP-like distortion (moderate barrel, small tangential terms).
+    /// A camera of each model, in COLMAP's id order, with COLMAP-like distortion (moderate barrel, small
+    /// tangential and thin-prism terms; the fisheyes' distortion is 5-10 % at 80° off axis).
     fn cameras() -> Vec<LensCamera> {
-        let params: [(CameraModel, &[f64]); 7] = [
+        let params: [(CameraModel, &[f64]); 17] = [
             (CameraModel::SimplePinhole, &[800.0, 320.0, 240.0]),
             (CameraModel::Pinhole, &[800.0, 790.0, 320.0, 240.0]),
             (CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]),
@@ -430,17 +732,55 @@ mod tests {
                 &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4],
             ),
             (
+                CameraModel::OpenCvFisheye,
+                &[400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
+            ),
+            (
                 CameraModel::FullOpenCv,
                 &[
                     800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4, 0.01, 0.02, -0.01, 0.005,
                 ],
             ),
+            (CameraModel::Fov, &[400.0, 395.0, 320.0, 240.0, 0.9]),
+            (CameraModel::SimpleRadialFisheye, &[400.0, 320.0, 240.0, 0.05]),
+            (CameraModel::RadialFisheye, &[400.0, 320.0, 240.0, 0.05, -0.01]),
             (
-                CameraModel::OpenCvFisheye,
-                &[400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
+                CameraModel::ThinPrismFisheye,
+                &[
+                    400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 1e-3, -5e-4, 0.002, -3e-4, 2e-3, -1e-3,
+                ],
             ),
+            (
+                CameraModel::RadTanThinPrismFisheye,
+                &[
+                    400.0, 395.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4, 1e-5, -1e-6, 1e-3, -5e-4, 2e-3, -1e-3, 3e-4,
+                    -2e-4,
+                ],
+            ),
+            (CameraModel::SimpleDivision, &[800.0, 320.0, 240.0, -0.2]),
+            (CameraModel::Division, &[800.0, 790.0, 320.0, 240.0, -0.2]),
+            (CameraModel::SimpleFisheye, &[400.0, 320.0, 240.0]),
+            (CameraModel::Fisheye, &[400.0, 395.0, 320.0, 240.0]),
+            (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]),
         ];
+        assert_eq!(params.map(|(m, _)| m), CameraModel::ALL);
         params.iter().map(|(m, p)| LensCamera::new(*m, p).unwrap()).collect()
+    }
+
+    /// The largest angle off axis of the test points of a model: 80° for the models that see that far
+    /// (fisheyes, FOV, EUCM, the barrel division model), 30° for the polynomial ones, whose fold is near.
+    fn widest_angle(model: CameraModel) -> f64 {
+        let wide = model.is_fisheye()
+            || matches!(
+                model,
+                CameraModel::Fov | CameraModel::Eucm | CameraModel::SimpleDivision | CameraModel::Division
+            );
+        (if wide { 80.0f64 } else { 30.0f64 }).to_radians()
+    }
+
+    /// Normalised coordinates at the given angle off axis, in direction `phi`.
+    fn at_angle(theta: f64, phi: f64) -> Vector2<f64> {
+        Vector2::new(phi.cos(), phi.sin()) * theta.tan()
     }
 
     #[test]
@@ -470,6 +810,80 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_distortion_jacobians_match_finite_differences_from_the_axis_to_wide_angles() {
+        let mut rng = Rng::new(43);
+        for cam in cameras() {
+            let widest = widest_angle(cam.model());
+            // Near the axis (every radius from 1e-9, both sides of FOV's series bound r = 0.01), then
+            // uniformly in angle up to the widest.
+            let mut points: Vec<Vector2<f64>> = [1e-9, 1e-7, 1e-5, 1e-3, 5e-3, 9.9e-3, 1.01e-2, 0.05]
+                .iter()
+                .map(|&r| Vector2::new(r * 0.6, -r * 0.8))
+                .collect();
+            points.extend((0..200).map(|_| at_angle(rng.uniform_in(0.0, widest), rng.uniform_in(0.0, 6.3))));
+            for n in points {
+                let (_, j) = cam.distort(&n);
+                // A step relative to |n| (down to 1e-4 of it, so that it stays on one side of FOV's
+                // bound at |n| = 0.01 ± 1e-4), and 1e-7 in absolute terms away from the axis.
+                let h = (1e-4 * n.norm()).min(1e-7);
+                for k in 0..2 {
+                    let mut np = n;
+                    np[k] += h;
+                    let mut nm = n;
+                    nm[k] -= h;
+                    let numeric = (cam.distort(&np).0 - cam.distort(&nm).0) / (2.0 * h);
+                    // Truncation O(h² |D⁽³⁾|) ≤ 1e-14 and rounding O(ε |D| / h): |D| ≤ 2
+                    // over h = min(1e-4 |n|, 1e-7) gives at most 4e-16 / 1e-7 = 4e-9 here.
+                    let error = (numeric - j.column(k)).norm();
+                    assert!(
+                        error < 2e-8 * (1.0 + j.column(k).norm()),
+                        "{:?} at n = {n:?}: ∂D/∂n{k} = {} vs {numeric} ({error:e})",
+                        cam.model(),
+                        j.column(k)
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn models_have_colmap_ids_and_names() {
+        // COLMAP's ids (colmap/sensor/models.h, CameraModelId), independent of the order of ALL.
+        let colmap = [
+            "SIMPLE_PINHOLE",
+            "PINHOLE",
+            "SIMPLE_RADIAL",
+            "RADIAL",
+            "OPENCV",
+            "OPENCV_FISHEYE",
+            "FULL_OPENCV",
+            "FOV",
+            "SIMPLE_RADIAL_FISHEYE",
+            "RADIAL_FISHEYE",
+            "THIN_PRISM_FISHEYE",
+            "RAD_TAN_THIN_PRISM_FISHEYE",
+            "SIMPLE_DIVISION",
+            "DIVISION",
+            "SIMPLE_FISHEYE",
+            "FISHEYE",
+            "EUCM",
+        ];
+        for (id, name) in colmap.iter().enumerate() {
+            let model = CameraModel::parse(name).unwrap();
+            assert_eq!(model as usize, id, "{name}");
+            assert_eq!(CameraModel::ALL[id], model);
+            assert_eq!(model.as_str(), *name);
+        }
+        let err = CameraModel::parse("EQUIRECTANGULAR").unwrap_err();
+        assert!(
+            matches!(&err, Error::InvalidOption { name, reason } if name == "model"
+                && reason.contains("'EQUIRECTANGULAR' is not supported")
+                && reason.contains("behind the camera")),
+            "{err}"
+        );
     }
 
     #[test]
@@ -526,10 +940,18 @@ mod tests {
     fn unprojection_inverts_projection_to_1e_10_px() {
         let mut rng = Rng::new(42);
         for cam in cameras() {
-            for i in 0..200 {
-                let x = Vector3::new(rng.uniform_in(-0.4, 0.4), rng.uniform_in(-0.3, 0.3), 1.0);
-                let (u, _) = cam.project(&x);
-                let n = cam.unproject(&u, i).unwrap();
+            let widest = widest_angle(cam.model());
+            let (fx, fy) = cam.focal();
+            let mut points: Vec<Vector2<f64>> = (0..200)
+                .map(|_| at_angle(rng.uniform_in(0.0, widest), rng.uniform_in(0.0, 6.3)))
+                .collect();
+            points.extend([0.0, 1e-9, 1e-5, 5e-3, 0.0101].map(|r| Vector2::new(r * 0.6, -r * 0.8)));
+            points.push(at_angle(widest, 2.0));
+            for (i, x) in points.into_iter().enumerate() {
+                let (u, _) = cam.project(&Vector3::new(x.x, x.y, 1.0));
+                let n = cam
+                    .unproject(&u, i)
+                    .unwrap_or_else(|e| panic!("{:?} at {:.1}°: {e}", cam.model(), x.norm().atan().to_degrees()));
                 let (back, _) = cam.project(&Vector3::new(n.x, n.y, 1.0));
                 assert!(
                     (back - u).norm() <= 1e-10 * 1.5,
@@ -537,7 +959,45 @@ mod tests {
                     cam.model(),
                     (back - u).norm()
                 );
-                assert!((n - x.xy()).norm() < 1e-12, "{:?}", cam.model());
+                // A residual of 1e-10 px moves n by at most ‖(diag(f) ∂D/∂n)⁻¹‖ 1e-10 (33x more at 80°
+                // off axis than at the centre for an equidistant fisheye: dr/dθ = 1 / cos² θ).
+                let (_, j) = cam.distort(&n);
+                let sensitivity = (Matrix2::new(fx, 0.0, 0.0, fy) * j).try_inverse().unwrap().norm();
+                assert!(
+                    (n - x).norm() < 2.0 * sensitivity * 1.5e-10 + 1e-15 * (1.0 + x.norm()),
+                    "{:?}: {:e} at |n| = {}",
+                    cam.model(),
+                    (n - x).norm(),
+                    x.norm()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn pixels_without_a_preimage_are_refused_by_every_model() {
+        // Pixels at 4 and 50 focal lengths from the principal point, far beyond the image of the half
+        // space z > 0 for the models whose image is bounded: ρ < θ_d(90°) < 2 for these fisheyes,
+        // 1 / (α √β) = 1.6 for EUCM, π / (2ω) = 1.75 for FOV, 2.2 = 1/√|k| for the barrel division model.
+        for cam in cameras() {
+            let bounded = cam.model().is_fisheye()
+                || matches!(
+                    cam.model(),
+                    CameraModel::Fov | CameraModel::Eucm | CameraModel::SimpleDivision | CameraModel::Division
+                );
+            if !bounded {
+                continue;
+            }
+            let (fx, fy) = cam.focal();
+            let (cx, cy) = cam.principal_point();
+            for scale in [4.0, 50.0] {
+                let u = Vector2::new(cx + scale * fx * 0.6, cy - scale * fy * 0.8);
+                let err = cam.unproject(&u, 9).unwrap_err();
+                assert!(
+                    matches!(&err, Error::Degenerate { what } if what.starts_with("pixel 9")),
+                    "{:?}: {err}",
+                    cam.model()
+                );
             }
         }
     }
@@ -591,7 +1051,7 @@ mod tests {
     #[test]
     fn the_fold_radius_of_each_model_is_where_the_radial_map_turns() {
         // Independent check: the first r (scanned finely) where ρ(r) = |D((r, 0))| stops increasing.
-        let cases: [(CameraModel, &[f64]); 5] = [
+        let cases: [(CameraModel, &[f64]); 14] = [
             (CameraModel::SimpleRadial, &[500.0, 0.0, 0.0, -0.5]),
             (CameraModel::Radial, &[800.0, 320.0, 240.0, -0.5, 0.1]),
             (CameraModel::OpenCv, &[800.0, 790.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0]),
@@ -605,6 +1065,28 @@ mod tests {
                 CameraModel::OpenCvFisheye,
                 &[400.0, 395.0, 320.0, 240.0, -0.3, 0.02, 0.0, 0.0],
             ),
+            (CameraModel::SimpleRadialFisheye, &[400.0, 320.0, 240.0, -0.3]),
+            (CameraModel::RadialFisheye, &[400.0, 320.0, 240.0, -0.1, -0.05]),
+            (
+                CameraModel::ThinPrismFisheye,
+                &[400.0, 395.0, 320.0, 240.0, -0.2, 0.01, 0.0, 0.0, -0.01, 0.001, 0.0, 0.0],
+            ),
+            (
+                CameraModel::RadTanThinPrismFisheye,
+                &[
+                    400.0, 395.0, 320.0, 240.0, -0.2, 0.01, -0.01, 0.001, 1e-4, -1e-5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                ],
+            ),
+            // tan(ω/2) = 92.6: COLMAP's series in r turns at r = 0.0054, inside its range r < 0.01.
+            (CameraModel::Fov, &[400.0, 395.0, 320.0, 240.0, 3.12]),
+            // k > 0: the projection exists for r < 1/(2√k) only.
+            (CameraModel::SimpleDivision, &[800.0, 320.0, 240.0, 0.2]),
+            // α > 1: ρ turns where q = α / (α − 1) = 3, r = √8.
+            (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 1.5, 1.0]),
+            // α < 0: a pole where q = (α − 1) / α = 3, r = √8.
+            (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, -0.5, 1.0]),
+            // β < 0: the projection exists for r² < −1/β = 2 only.
+            (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.5, -0.5]),
         ];
         for (model, params) in cases {
             let cam = LensCamera::new(model, params).unwrap();
@@ -612,9 +1094,10 @@ mod tests {
             let step = 1e-4;
             let turn = (1..200_000)
                 .map(|i| i as f64 * step)
-                .find(|&r| rho(r + step) <= rho(r))
+                .find(|&r| rho(r + step).partial_cmp(&rho(r)) != Some(std::cmp::Ordering::Greater))
                 .expect("each case folds below r = 20");
-            // The scan finds the turn to within one step (the maximum is flat: ρ' changes sign there).
+            // The scan finds the turn to within one step (the maximum is flat: ρ' changes sign there; past
+            // the edge of a domain or a pole ρ is NaN or negative, which is no increase either).
             assert!(
                 (cam.fold_radius - turn).abs() <= 2.0 * step,
                 "{model:?}: {} vs {turn}",
