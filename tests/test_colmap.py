@@ -100,8 +100,9 @@ def test_fov_follows_colmaps_projection_with_its_series(omega):
 
 
 def test_an_equirectangular_camera_is_refused_by_name():
-    """COLMAP's spherical EQUIRECTANGULAR model sees behind the camera, where no (x/z, y/z) exists: a
-    model holding such a camera is a named error, naming the camera, not a crash or a wrong answer."""
+    """COLMAP's spherical EQUIRECTANGULAR model sees behind the camera, where no (x/z, y/z) exists: such a
+    camera is a named error, naming the camera, not a crash or a wrong answer; a model with no other
+    camera is a ModelError naming it (with others, their points are solved: the test below)."""
     options = pycolmap.SyntheticDatasetOptions()
     options.num_frames_per_rig, options.num_points3D = 4, 20
     options.camera_model_id = pycolmap.CameraModelId.EQUIRECTANGULAR
@@ -112,7 +113,7 @@ def test_an_equirectangular_camera_is_refused_by_name():
     message = rf"camera_id {camera_id}: .*'EQUIRECTANGULAR' is not supported: it is a spherical"
     with pytest.raises(pluecker.InvalidOptionError, match=message):
         colmap.lens_camera(rec.cameras[camera_id])
-    with pytest.raises(pluecker.InvalidOptionError, match="'EQUIRECTANGULAR' is not supported"):
+    with pytest.raises(colmap.ModelError, match=rf"camera_id {camera_id} \(EQUIRECTANGULAR\): .*is not supported"):
         colmap.retriangulate(rec)
     with pytest.raises(pluecker.InvalidOptionError, match="'EQUIRECTANGULAR' is not supported"):
         pluecker.LensCamera("EQUIRECTANGULAR", [1024.0, 512.0])

@@ -179,7 +179,10 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
             lenses[camera_id] = lens_camera(camera)
         except _core.PlueckerError as exc:
             count = sum(image.num_points3D for image in posed if image.camera_id == camera_id)
-            skipped.append(f"camera_id {camera_id} ({camera.model.name}): {exc}; its {count} observations not used")
+            reason = exc.__cause__ or exc  # lens_camera's own error, without its camera_id prefix
+            skipped.append(f"camera_id {camera_id} ({camera.model.name}): {reason}; its {count} observations not used")
+    if posed and not lenses:
+        raise ModelError("reconstruction: no camera of the model can be used: " + "; ".join(skipped))
     images = [image for image in posed if image.camera_id in lenses]
     # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
     P = np.array([lenses[image.camera_id].pinhole.P(*pose_from_rigid(image.cam_from_world())) for image in images],
