@@ -409,6 +409,13 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
         (r.report.certificate.kind == CertificateKind::BranchAndBound).then_some((scene, conics, covariances))
     });
     let (scene, conics, covariances) = hard.expect("some 3-view scene at 15 px needs branch and bound");
+    // The search's work as reported: each node solves at least one conic program (≥ 1 interior-point
+    // iteration), and no program takes more than clarabel's 200 iterations; the root's bound
+    // tightening adds at most 2 passes of 2 solves per each of the 9 entries of the dual's upper block.
+    let searched = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).unwrap();
+    let c = searched.report.certificate;
+    assert!(c.nodes >= 1 && c.solver_iterations >= c.nodes, "{c:?}");
+    assert!(c.solver_iterations <= 200 * (4 * c.nodes + 36), "{c:?}");
     let o = TriangulationOptions {
         max_reprojection_error: Some(1e-3),
         ..opts(Method::Optimal)
