@@ -599,13 +599,14 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
         }
         let k_inv = k.matrix().try_inverse().unwrap();
         let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
+        let g_norm = g.singular_values().max();
         let unit = residual_unit(&k, &corr, &minimum);
         for shift in [0.0, 2.0] {
             let Some((pose0, _, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, 1.0, &mut rng) else {
                 continue;
             };
             let level = cost(&k, &corr, &pose0);
-            for lambda in [1.0, 0.01, 30.0] {
+            for lambda in [1.0, 0.01, 30.0, 1e-3, 1e3] {
                 let (c, pose) = scaled_world(&corr, &pose0, lambda);
                 let parts_at = |r: f64| curvature_parts(&k, &c, &pose.to_library(), level, r).ok();
                 // The largest radius with a bound, by doubling then bisection (in residual units).
@@ -687,10 +688,42 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                         let q1 = climb(&|v, s| (g * jets(v, s).2[1].xy()).norm(), radius, &mut rng);
                         check("‖q'‖", q1, lp.q1);
                         check("|w''|", climb(&w2, radius, &mut rng), lp.w2);
+                        // Within w2 = q1² / w_lo + ‖G‖ m2: ‖m''‖ ≤ m2 and ‖q'‖² / w ≤ w2 − ‖G‖ m2 (the
+                        // difference rounds to ~1e-16 w2, hence the absolute 1e-12 w2).
+                        check("‖m''‖", climb(&|v, s| jets(v, s).2[2].norm(), radius, &mut rng), lp.m2);
+                        let q1_over_w = climb(
+                            &|v, s| {
+                                let m = jets(v, s).2;
+                                (g * m[1].xy()).norm_squared() / (g * m[0].xy()).norm()
+                            },
+                            radius,
+                            &mut rng,
+                        );
+                        check("‖q'‖² / w", q1_over_w, lp.w2 - g_norm * lp.m2 + 1e-12 * lp.w2);
+                        // m''' less its two ends' third derivatives: 3 (A'' × B' + A' × B'').
+                        let mixed = climb(
+                            &|v, s| {
+                                let (ja, jb, _) = jets(v, s);
+                                (ja[2].cross(&jb[1]) + ja[1].cross(&jb[2])).norm() * 3.0
+                            },
+                            radius,
+                            &mut rng,
+                        );
+                        check("‖3 (A'' × B' + A' × B'')‖", mixed, lp.mixed3);
                         for (i, e) in seen.iter().enumerate() {
                             let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
                             let n3 = climb(&|v, s| e_bar.dot(&jets(v, s).2[3]).abs(), radius, &mut rng);
                             check("|n'''|", n3, lp.n3[i]);
+                            let ends3 = climb(
+                                &|v, s| {
+                                    let (ja, jb, _) = jets(v, s);
+                                    e_bar.dot(&(ja[3].cross(&jb[0]) + ja[0].cross(&jb[3]))).abs()
+                                },
+                                radius,
+                                &mut rng,
+                            );
+                            let rest = lp.n3[i] - e_bar.norm() * lp.mixed3;
+                            check("|ēᵀ (A''' × B + A × B''')|", ends3, rest + 1e-12 * lp.n3[i]);
                             let n2 = climb(&|v, s| e_bar.dot(&jets(v, s).2[2]).abs(), radius, &mut rng);
                             check("|n''|", n2, lp.n2[i]);
                         }

@@ -781,6 +781,8 @@ impl RayCurvature {
                     q1,
                     n2_exact: line.endpoints.each_ref().map(|end| end.n2_exact),
                     n3: n3_bounds,
+                    m2,
+                    mixed3,
                 });
             }
         }
@@ -1052,7 +1054,9 @@ pub mod testing {
     /// The terms these are built from, each a claim of its own: `speed` bounds `‖A'‖` and `‖B'‖`,
     /// `drift` bounds `‖m'(s) − m'(0)‖ / s`, `q1` bounds `‖q'‖` (`q = G m_xy`), `n3` bounds
     /// `|(ēᵀ m)'''|` per endpoint (all over the ball), and `n2_exact` is `max |(ēᵀ m)''(0)|` over the
-    /// unit whitened directions, exactly.
+    /// unit whitened directions, exactly. Within them: `m2` bounds `‖m''‖`, `w2 − ‖G‖ m2` bounds
+    /// `‖q'‖² / w`, `mixed3` bounds `‖3 (A'' × B' + A' × B'')‖` and `n3 − ‖ē‖ mixed3` bounds
+    /// `|ēᵀ (A''' × B + A × B''')|`.
     #[derive(Debug, Clone, Copy)]
     pub struct LineParts {
         pub w_lo: f64,
@@ -1064,6 +1068,8 @@ pub mod testing {
         pub q1: f64,
         pub n2_exact: [f64; 2],
         pub n3: [f64; 2],
+        pub m2: f64,
+        pub mixed3: f64,
     }
 
     /// The parts of `K` (see [`PointParts`], [`LineParts`]) and the whitening `T` of the rays.
