@@ -685,6 +685,50 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                             &mut rng,
                         );
                         check("‖m'(s) − m'(0)‖ / s", drift, lp.drift);
+                        // drift is the sum of bounds on the drifts of the three parts of
+                        // m' = (ω × y_A) × B + A × (ω × y_B) + (A − B) × τ (y = R_s X, so ω × y_A = A' − τ):
+                        // α_ω ‖y_A‖ (‖B'‖ + α_ω ‖B‖), α_ω ‖y_B‖ (‖A'‖ + α_ω ‖A‖) and α_τ α_ω ‖B − A‖.
+                        // Each part's drift stays below drift less the other two.
+                        let alpha_w = t.fixed_rows::<3>(0).into_owned().singular_values().max();
+                        let alpha_t = t.fixed_rows::<3>(3).into_owned().singular_values().max();
+                        let (a0, b0) = (pose.r * ends[0] + pose.t, pose.r * ends[1] + pose.t);
+                        let pieces = [
+                            alpha_w * ends[0].norm() * (lp.speed[1] + alpha_w * b0.norm()),
+                            alpha_w * ends[1].norm() * (lp.speed[0] + alpha_w * a0.norm()),
+                            alpha_t * alpha_w * (ends[1] - ends[0]).norm(),
+                        ];
+                        for (i, what) in [
+                            "drift of (ω × y_A) × B",
+                            "drift of A × (ω × y_B)",
+                            "drift of (A − B) × τ",
+                        ]
+                        .into_iter()
+                        .enumerate()
+                        {
+                            let part = |v: &Vector6<f64>, s: f64| {
+                                let tau = (t * v).fixed_rows::<3>(3).into_owned();
+                                let (ja, jb, _) = jets(v, s);
+                                [
+                                    (ja[1] - tau).cross(&jb[0]),
+                                    ja[0].cross(&(jb[1] - tau)),
+                                    (ja[0] - jb[0]).cross(&tau),
+                                ][i]
+                            };
+                            let found = climb(
+                                &|v, s| {
+                                    if s > 0.0 {
+                                        (part(v, s) - part(v, 0.0)).norm() / s
+                                    } else {
+                                        0.0
+                                    }
+                                },
+                                radius,
+                                &mut rng,
+                            );
+                            let others: f64 = (0..3).filter(|&j| j != i).map(|j| pieces[j]).sum();
+                            // The subtraction rounds to ~1e-16 drift: 1e-12 drift of room.
+                            check(what, found, lp.drift - others + 1e-12 * lp.drift);
+                        }
                         let q1 = climb(&|v, s| (g * jets(v, s).2[1].xy()).norm(), radius, &mut rng);
                         check("‖q'‖", q1, lp.q1);
                         check("|w''|", climb(&w2, radius, &mut rng), lp.w2);
