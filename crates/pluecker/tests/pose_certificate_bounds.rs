@@ -485,3 +485,300 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
     eprintln!("curvature parts: {checked} checks, the closest reaches {worst:.3} of its bound");
     assert!(checked > 500, "only {checked} checks");
 }
+
+/// `n2_exact`, the largest `|n''(0)|` over unit whitened directions (`n = ēᵀ (A × B)`), is exact: it
+/// equals the largest `|eigenvalue|` of the Hessian of `x ↦ n(exp(ω(Tx)) R̂, t̂ + τ(Tx))` at `x = 0`
+/// (`d²n(s v)/ds² = vᵀ H v`), the Hessian taken here by central differences of the oracle's pose
+/// step with Richardson extrapolation. Equality both ways: a form that is too small or too large fails.
+#[test]
+fn the_exact_moment_curvature_at_the_pose_matches_a_numeric_hessian() {
+    use nalgebra::Matrix6;
+    use pluecker::pose::certificate::testing::curvature_parts;
+    let mut rng = Rng::new(46);
+    let (mut checked, mut worst) = (0usize, 0.0f64);
+    for (k, corr, minimum, name) in step4_scenes() {
+        if corr.lines3d.is_empty() {
+            continue;
+        }
+        let k_inv = k.matrix().try_inverse().unwrap();
+        for shift in [0.0, 2.0] {
+            let Some((pose0, radius, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, 1.0, &mut rng) else {
+                continue;
+            };
+            let level = cost(&k, &corr, &pose0);
+            for lambda in [1.0, 0.01, 30.0] {
+                let (c, pose) = scaled_world(&corr, &pose0, lambda);
+                let parts = curvature_parts(&k, &c, &pose.to_library(), level, radius).unwrap();
+                let t = parts.whitening;
+                // The step h of the differences: 1e-3 rad of rotation and 1e-3 of the least depth of
+                // translation (the whitened chart is far from isotropic, so h is set per scene).
+                let alpha_w = t.fixed_rows::<3>(0).into_owned().singular_values().max();
+                let alpha_t = t.fixed_rows::<3>(3).into_owned().singular_values().max();
+                let depth = c
+                    .lines3d
+                    .iter()
+                    .flatten()
+                    .map(|x| (pose.r * x + pose.t).z)
+                    .fold(f64::INFINITY, f64::min);
+                let h = 1e-3 / alpha_w.max(alpha_t / depth);
+                for ((seen, ends), lp) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines) {
+                    for (e, n2_exact) in seen.iter().zip(lp.n2_exact) {
+                        let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
+                        let n = |x: &Vector6<f64>| {
+                            let p = pose.step(&(t * x));
+                            e_bar.dot(&(p.r * ends[0] + p.t).cross(&(p.r * ends[1] + p.t)))
+                        };
+                        let hessian = |h: f64| {
+                            Matrix6::from_fn(|i, j| {
+                                let (ei, ej) = (Vector6::ith(i, h), Vector6::ith(j, h));
+                                (n(&(ei + ej)) - n(&(ei - ej)) - n(&(ej - ei)) + n(&(-ei - ej))) / (4.0 * h * h)
+                            })
+                        };
+                        // Central differences err by O(h²); Richardson's (4 H(h/2) − H(h)) / 3 by O(h⁴).
+                        let hm = (hessian(0.5 * h) * 4.0 - hessian(h)) / 3.0;
+                        let hm = (hm + hm.transpose()) * 0.5;
+                        let numeric = hm.symmetric_eigenvalues().abs().max();
+                        let gap = (n2_exact - numeric).abs() / numeric;
+                        // h is 1e-3 of the scales over which n bends, so the O(h⁴) truncation is ~1e-12
+                        // and the rounding (ε |n| / h² with |n''| ~ 1e-6 |n| / h²) is ~1e-10: 1e-5
+                        // leaves room and still catches any wrong term of the form.
+                        assert!(
+                            gap <= 1e-5,
+                            "{name}, shift {shift}, scale {lambda}: n2_exact = {n2_exact}, numeric Hessian gives {numeric}"
+                        );
+                        worst = worst.max(gap);
+                        checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("n2_exact: {checked} endpoints, the largest relative gap is {worst:.2e}");
+    assert!(checked >= 50, "only {checked} endpoints");
+}
+
+/// Derivatives along a whitened ray `s ↦ (exp(s ω) R̂, t̂ + s τ)` of an object point `X`, in closed
+/// form from the group motion (independent of the certificate's code): the camera-frame point
+/// `p = R_s X + t̂ + s τ` and `p', p'', p'''` (`p' = ω × R_s X + τ`, `p⁽ᵏ⁺¹⁾ = ω × p⁽ᵏ⁾` for k ≥ 1).
+fn point_jet(pose: &OraclePose, a: &Vector6<f64>, s: f64, x: &Vector3<f64>) -> [Vector3<f64>; 4] {
+    let omega = a.fixed_rows::<3>(0).into_owned();
+    let tau = a.fixed_rows::<3>(3).into_owned();
+    let p = pose.step(&(a * s));
+    let y = p.r * x;
+    let d2 = omega.cross(&omega.cross(&y));
+    [y + p.t, omega.cross(&y) + tau, d2, omega.cross(&d2)]
+}
+
+/// `m = A × B` and its first three derivatives along the ray (Leibniz).
+fn moment_jet(jet_a: &[Vector3<f64>; 4], jet_b: &[Vector3<f64>; 4]) -> [Vector3<f64>; 4] {
+    let binom = [
+        [1.0, 0.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0, 0.0],
+        [1.0, 2.0, 1.0, 0.0],
+        [1.0, 3.0, 3.0, 1.0],
+    ];
+    std::array::from_fn(|k| (0..=k).map(|i| jet_a[i].cross(&jet_b[k - i]) * binom[k][i]).sum())
+}
+
+/// Each term of a line's part of `K`, against the quantity it bounds, its largest value along whitened
+/// rays found by a hill climb over directions and `s ≤ ρ` ([`climb`]): the endpoint speeds `‖A'‖`,
+/// `‖B'‖` (`speed`), the drift `‖m'(s) − m'(0)‖ / s` (`drift`), `‖q'‖` with `q = G m_xy` (`q1`),
+/// `|w''|` (`w2`), and per endpoint `|n'''|` (`n3`) and `|n''|` (`n2`), `n = ēᵀ m`. The balls go out
+/// to the largest radius at which the bound exists (where `w_lo` nears 0 and the `s`-terms carry the
+/// bound), on wide and narrow fields of view, with the world scaled by λ from 1e-3 to 1e3 (segments
+/// whose lengths, depths and moments are far from one unit). The sums are also checked piece by piece,
+/// each piece against the quantity it bounds (the totals reach only ~0.1-0.4 of their bounds, the
+/// pieces 0.6-0.95): the three parts of the drift, `‖m''‖ ≤ m2` and `‖q'‖² / w ≤ w2 − ‖G‖ m2` in
+/// `w2`, and the mixed and end terms of `n'''` in `n3`. The derivatives come in closed form from the
+/// group motion ([`point_jet`], [`moment_jet`]), themselves checked against central differences here.
+#[test]
+fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
+    use pluecker::pose::certificate::testing::curvature_parts;
+    let mut rng = Rng::new(47);
+    let (mut checked, mut worst) = (0usize, std::collections::BTreeMap::<&str, f64>::new());
+    for (k, corr, minimum, name) in step4_scenes() {
+        if corr.lines3d.is_empty() {
+            continue;
+        }
+        let k_inv = k.matrix().try_inverse().unwrap();
+        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
+        let g_norm = g.singular_values().max();
+        let unit = residual_unit(&k, &corr, &minimum);
+        for shift in [0.0, 2.0] {
+            let Some((pose0, _, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, 1.0, &mut rng) else {
+                continue;
+            };
+            let level = cost(&k, &corr, &pose0);
+            for lambda in [1.0, 0.01, 30.0, 1e-3, 1e3] {
+                let (c, pose) = scaled_world(&corr, &pose0, lambda);
+                let parts_at = |r: f64| curvature_parts(&k, &c, &pose.to_library(), level, r).ok();
+                // The largest radius with a bound, by doubling then bisection (in residual units).
+                let (mut lo, mut hi) = (1.0, 2.0);
+                while parts_at(hi * unit).is_some() && hi < 1e9 {
+                    (lo, hi) = (hi, 2.0 * hi);
+                }
+                for _ in 0..30 {
+                    let mid = 0.5 * (lo + hi);
+                    if parts_at(mid * unit).is_some() {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                for radius in [0.999 * lo * unit, 0.5 * lo * unit, 16.0f64.min(0.1 * lo) * unit] {
+                    let Some(parts) = parts_at(radius) else {
+                        continue;
+                    };
+                    let t = parts.whitening;
+                    for ((seen, ends), lp) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines) {
+                        let jets = |v: &Vector6<f64>, s: f64| {
+                            let a = t * v;
+                            let (ja, jb) = (point_jet(&pose, &a, s, &ends[0]), point_jet(&pose, &a, s, &ends[1]));
+                            (ja, jb, moment_jet(&ja, &jb))
+                        };
+                        // |w''| = |(‖q'‖² + q·q'' − w'²) / w| with w' = q·q' / w.
+                        let w2 = |v: &Vector6<f64>, s: f64| {
+                            let m = jets(v, s).2;
+                            let (q, q1, q2) = (g * m[0].xy(), g * m[1].xy(), g * m[2].xy());
+                            let w = q.norm();
+                            let w1 = q.dot(&q1) / w;
+                            ((q1.norm_squared() + q.dot(&q2) - w1 * w1) / w).abs()
+                        };
+                        // The closed forms against central differences of the oracle's pose step.
+                        for _ in 0..3 {
+                            let v = Vector6::from_fn(|_, _| rng.normal()).normalize();
+                            let s = rng.uniform_in(0.1, 0.9) * radius;
+                            let h = 1e-2 * radius;
+                            let w = |u: f64| {
+                                let p = pose.step(&(t * v * u));
+                                (g * (p.r * ends[0] + p.t).cross(&(p.r * ends[1] + p.t)).xy()).norm()
+                            };
+                            let numeric = ((w(s + h) - 2.0 * w(s) + w(s - h)) / (h * h)).abs();
+                            let exact = w2(&v, s);
+                            // Second differences err by O(h² w'''') + O(ε w / h²); 1% still catches a
+                            // wrong term or factor in the closed forms.
+                            assert!(
+                                (numeric - exact).abs() <= 1e-2 * exact.max(lp.w2 * 1e-3),
+                                "{name}: closed-form |w''| {exact} vs differences {numeric}"
+                            );
+                        }
+                        let mut check = |what: &'static str, found: f64, bound: f64| {
+                            assert!(
+                                found <= bound * (1.0 + 1e-9),
+                                "{name}, shift {shift}, scale {lambda}, radius {radius:.4e} (largest {:.4e}): \
+                                 {what}: found {found} above the bound {bound}",
+                                lo * unit
+                            );
+                            let r = worst.entry(what).or_insert(0.0);
+                            *r = r.max(found / bound);
+                            checked += 1;
+                        };
+                        let speed_a = climb(&|v, s| jets(v, s).0[1].norm(), radius, &mut rng);
+                        check("‖A'‖", speed_a, lp.speed[0]);
+                        let speed_b = climb(&|v, s| jets(v, s).1[1].norm(), radius, &mut rng);
+                        check("‖B'‖", speed_b, lp.speed[1]);
+                        let drift = climb(
+                            &|v, s| {
+                                if s <= 0.0 {
+                                    return 0.0;
+                                }
+                                (jets(v, s).2[1] - jets(v, 0.0).2[1]).norm() / s
+                            },
+                            radius,
+                            &mut rng,
+                        );
+                        check("‖m'(s) − m'(0)‖ / s", drift, lp.drift);
+                        // drift is the sum of bounds on the drifts of the three parts of
+                        // m' = (ω × y_A) × B + A × (ω × y_B) + (A − B) × τ (y = R_s X, so ω × y_A = A' − τ):
+                        // α_ω ‖y_A‖ (‖B'‖ + α_ω ‖B‖), α_ω ‖y_B‖ (‖A'‖ + α_ω ‖A‖) and α_τ α_ω ‖B − A‖.
+                        // Each part's drift stays below drift less the other two.
+                        let alpha_w = t.fixed_rows::<3>(0).into_owned().singular_values().max();
+                        let alpha_t = t.fixed_rows::<3>(3).into_owned().singular_values().max();
+                        let (a0, b0) = (pose.r * ends[0] + pose.t, pose.r * ends[1] + pose.t);
+                        let pieces = [
+                            alpha_w * ends[0].norm() * (lp.speed[1] + alpha_w * b0.norm()),
+                            alpha_w * ends[1].norm() * (lp.speed[0] + alpha_w * a0.norm()),
+                            alpha_t * alpha_w * (ends[1] - ends[0]).norm(),
+                        ];
+                        for (i, what) in [
+                            "drift of (ω × y_A) × B",
+                            "drift of A × (ω × y_B)",
+                            "drift of (A − B) × τ",
+                        ]
+                        .into_iter()
+                        .enumerate()
+                        {
+                            let part = |v: &Vector6<f64>, s: f64| {
+                                let tau = (t * v).fixed_rows::<3>(3).into_owned();
+                                let (ja, jb, _) = jets(v, s);
+                                [
+                                    (ja[1] - tau).cross(&jb[0]),
+                                    ja[0].cross(&(jb[1] - tau)),
+                                    (ja[0] - jb[0]).cross(&tau),
+                                ][i]
+                            };
+                            let found = climb(
+                                &|v, s| {
+                                    if s > 0.0 {
+                                        (part(v, s) - part(v, 0.0)).norm() / s
+                                    } else {
+                                        0.0
+                                    }
+                                },
+                                radius,
+                                &mut rng,
+                            );
+                            let others: f64 = (0..3).filter(|&j| j != i).map(|j| pieces[j]).sum();
+                            // The subtraction rounds to ~1e-16 drift: 1e-12 drift of room.
+                            check(what, found, lp.drift - others + 1e-12 * lp.drift);
+                        }
+                        let q1 = climb(&|v, s| (g * jets(v, s).2[1].xy()).norm(), radius, &mut rng);
+                        check("‖q'‖", q1, lp.q1);
+                        check("|w''|", climb(&w2, radius, &mut rng), lp.w2);
+                        // Within w2 = q1² / w_lo + ‖G‖ m2: ‖m''‖ ≤ m2 and ‖q'‖² / w ≤ w2 − ‖G‖ m2 (the
+                        // difference rounds to ~1e-16 w2, hence the absolute 1e-12 w2).
+                        check("‖m''‖", climb(&|v, s| jets(v, s).2[2].norm(), radius, &mut rng), lp.m2);
+                        let q1_over_w = climb(
+                            &|v, s| {
+                                let m = jets(v, s).2;
+                                (g * m[1].xy()).norm_squared() / (g * m[0].xy()).norm()
+                            },
+                            radius,
+                            &mut rng,
+                        );
+                        check("‖q'‖² / w", q1_over_w, lp.w2 - g_norm * lp.m2 + 1e-12 * lp.w2);
+                        // m''' less its two ends' third derivatives: 3 (A'' × B' + A' × B'').
+                        let mixed = climb(
+                            &|v, s| {
+                                let (ja, jb, _) = jets(v, s);
+                                (ja[2].cross(&jb[1]) + ja[1].cross(&jb[2])).norm() * 3.0
+                            },
+                            radius,
+                            &mut rng,
+                        );
+                        check("‖3 (A'' × B' + A' × B'')‖", mixed, lp.mixed3);
+                        for (i, e) in seen.iter().enumerate() {
+                            let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
+                            let n3 = climb(&|v, s| e_bar.dot(&jets(v, s).2[3]).abs(), radius, &mut rng);
+                            check("|n'''|", n3, lp.n3[i]);
+                            let ends3 = climb(
+                                &|v, s| {
+                                    let (ja, jb, _) = jets(v, s);
+                                    e_bar.dot(&(ja[3].cross(&jb[0]) + ja[0].cross(&jb[3]))).abs()
+                                },
+                                radius,
+                                &mut rng,
+                            );
+                            let rest = lp.n3[i] - e_bar.norm() * lp.mixed3;
+                            check("|ēᵀ (A''' × B + A × B''')|", ends3, rest + 1e-12 * lp.n3[i]);
+                            let n2 = climb(&|v, s| e_bar.dot(&jets(v, s).2[2]).abs(), radius, &mut rng);
+                            check("|n''|", n2, lp.n2[i]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("line terms: {checked} checks, the closest per term (found / bound): {worst:?}");
+    assert!(checked > 300, "only {checked} checks");
+}

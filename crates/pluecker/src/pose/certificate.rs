@@ -745,12 +745,14 @@ impl RayCurvature {
             let rho = (line.w1_0 + s * w2) / w_lo;
             rate = rate.max(rho);
             let mut n2_bounds = [0.0; 2];
-            for (end, n2_bound) in line.endpoints.iter().zip(&mut n2_bounds) {
+            let mut n3_bounds = [0.0; 2];
+            for ((end, n2_bound), n3_bound) in line.endpoints.iter().zip(&mut n2_bounds).zip(&mut n3_bounds) {
                 let n3 = a_w.powi(3)
                     * (line.ya * (end.cross_b + s * v_b * end.e_norm) + line.yb * (end.cross_a + s * v_a * end.e_norm))
                     + end.e_norm * mixed3;
                 let n2 = end.n2_exact + s * n3;
                 *n2_bound = n2;
+                *n3_bound = n3;
                 // |r(s)| ≤ |r(0)| + s σ with σ a bound on |r'| along the ray, confirmed by Grönwall
                 // on |r''| ≤ d + 2ρ |r'|, d = (|n''| + |r| |w''|) / w.
                 let mut sigma = 1.2 * end.slope0 + 1e-12;
@@ -774,6 +776,13 @@ impl RayCurvature {
                     w2,
                     rate: rho,
                     n2: n2_bounds,
+                    speed: [v_a, v_b],
+                    drift,
+                    q1,
+                    n2_exact: line.endpoints.each_ref().map(|end| end.n2_exact),
+                    n3: n3_bounds,
+                    m2,
+                    mixed3,
                 });
             }
         }
@@ -1041,12 +1050,26 @@ pub mod testing {
     /// A line's part of `K` on the ball, along the same rays: with `m = A × B` (camera-frame endpoints
     /// of the object segment) and `w = ‖G m_xy‖` (`G` the upper-left 2x2 block of `K⁻ᵀ`), `w ≥ w_lo`,
     /// `|w''| ≤ w2`, `|w' / w| ≤ rate`, and for each observed endpoint `ē = K⁻¹ ẽ`, `|(ēᵀ m)''| ≤ n2`.
+    ///
+    /// The terms these are built from, each a claim of its own: `speed` bounds `‖A'‖` and `‖B'‖`,
+    /// `drift` bounds `‖m'(s) − m'(0)‖ / s`, `q1` bounds `‖q'‖` (`q = G m_xy`), `n3` bounds
+    /// `|(ēᵀ m)'''|` per endpoint (all over the ball), and `n2_exact` is `max |(ēᵀ m)''(0)|` over the
+    /// unit whitened directions, exactly. Within them: `m2` bounds `‖m''‖`, `w2 − ‖G‖ m2` bounds
+    /// `‖q'‖² / w`, `mixed3` bounds `‖3 (A'' × B' + A' × B'')‖` and `n3 − ‖ē‖ mixed3` bounds
+    /// `|ēᵀ (A''' × B + A × B''')|`.
     #[derive(Debug, Clone, Copy)]
     pub struct LineParts {
         pub w_lo: f64,
         pub w2: f64,
         pub rate: f64,
         pub n2: [f64; 2],
+        pub speed: [f64; 2],
+        pub drift: f64,
+        pub q1: f64,
+        pub n2_exact: [f64; 2],
+        pub n3: [f64; 2],
+        pub m2: f64,
+        pub mixed3: f64,
     }
 
     /// The parts of `K` (see [`PointParts`], [`LineParts`]) and the whitening `T` of the rays.
