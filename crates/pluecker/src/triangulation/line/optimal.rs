@@ -489,3 +489,63 @@ pub(crate) fn optimal_line(
     (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
     (world, report)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::triangulation_scene;
+
+    #[test]
+    fn the_plane_frame_is_the_documented_one() {
+        // Lines through a scene point, recomputed from the doc comment of `plane_frame`: the interval
+        // of `t` in front of every camera, `t_c` = 0 clamped into its middle half, `h = min(ρ/20, half
+        // the room to the nearest end)`, origin at `t_c − h` along the line, unit `2h`.
+        let mut rng = crate::rng::Rng::new(31);
+        let mut checked = 0;
+        for seed in 0..20u64 {
+            let scene = triangulation_scene(4, 0.5, seed);
+            let problem = LineProblem {
+                cameras: scene.cameras.clone(),
+                frames: vec![],
+                whitenings: vec![],
+            };
+            let line = plucker::from_point_direction(&scene.point, &rng.unit_vector3());
+            let Some(sim) = plane_frame(&problem, &line) else {
+                continue;
+            };
+            let (foot, rho) = problem.foot(&line);
+            let (_, d) = plucker::to_point_direction(&line).unwrap();
+            let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+            for p in &problem.cameras {
+                let p = p / p.fixed_view::<1, 3>(2, 0).norm() * p.fixed_view::<3, 3>(0, 0).determinant().signum();
+                let (a, b) = ((p * foot.push(1.0)).z, (p * d.push(0.0)).z);
+                if b > 0.0 {
+                    lo = lo.max(-a / b);
+                } else if b < 0.0 {
+                    hi = hi.min(-a / b);
+                }
+            }
+            let (inner_lo, inner_hi) = match (lo.is_finite(), hi.is_finite()) {
+                (true, true) => (0.75 * lo + 0.25 * hi, 0.25 * lo + 0.75 * hi),
+                (true, false) => (lo + 0.25 * rho, f64::INFINITY),
+                (false, true) => (f64::NEG_INFINITY, hi - 0.25 * rho),
+                (false, false) => (f64::NEG_INFINITY, f64::INFINITY),
+            };
+            let t_c = 0.0f64.max(inner_lo).min(inner_hi);
+            let h = (rho / 20.0).min(0.5 * (t_c - lo).min(hi - t_c));
+            let origin = foot + d * (t_c - h);
+            assert!(
+                (sim.scale * 2.0 * h - 1.0).abs() < 1e-12,
+                "seed {seed}: unit {} vs {}",
+                1.0 / sim.scale,
+                2.0 * h
+            );
+            assert!(
+                (sim.origin - origin).norm() <= 1e-12 * (1.0 + origin.norm()),
+                "seed {seed}"
+            );
+            checked += 1;
+        }
+        assert!(checked >= 15, "{checked}");
+    }
+}
