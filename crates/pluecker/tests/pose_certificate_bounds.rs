@@ -690,14 +690,15 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                         check("‖m'(s) − m'(0)‖ / s", drift, lp.drift);
                         // drift is the sum of bounds on the drifts of the three parts of
                         // m' = (ω × y_A) × B + A × (ω × y_B) + (A − B) × τ (y = R_s X, so ω × y_A = A' − τ):
-                        // α_ω ‖y_A‖ (‖B'‖ + α_ω ‖B‖), α_ω ‖y_B‖ (‖A'‖ + α_ω ‖A‖) and α_τ α_ω ‖B − A‖.
+                        // α_ω ‖y_A‖ (‖B'‖ + α_ω ‖B‖), α_ω ‖y_B‖ (‖A'‖ + α_ω ‖A‖) and α_τ α_ω ‖B − A‖, with
+                        // ‖A‖, ‖B‖ their largest over the ball (‖B(0)‖ + radius ‖B'‖).
                         // Each part's drift stays below drift less the other two.
                         let alpha_w = t.fixed_rows::<3>(0).into_owned().singular_values().max();
                         let alpha_t = t.fixed_rows::<3>(3).into_owned().singular_values().max();
                         let (a0, b0) = (pose.r * ends[0] + pose.t, pose.r * ends[1] + pose.t);
                         let pieces = [
-                            alpha_w * ends[0].norm() * (lp.speed[1] + alpha_w * b0.norm()),
-                            alpha_w * ends[1].norm() * (lp.speed[0] + alpha_w * a0.norm()),
+                            alpha_w * ends[0].norm() * (lp.speed[1] + alpha_w * (b0.norm() + radius * lp.speed[1])),
+                            alpha_w * ends[1].norm() * (lp.speed[0] + alpha_w * (a0.norm() + radius * lp.speed[0])),
                             alpha_t * alpha_w * (ends[1] - ends[0]).norm(),
                         ];
                         for (i, what) in [

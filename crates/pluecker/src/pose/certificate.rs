@@ -727,8 +727,11 @@ impl RayCurvature {
         }
         for line in &self.lines {
             let (v_a, v_b) = (a_w * line.ya + a_t, a_w * line.yb + a_t);
-            // ‖(N(s) − N(0)) a‖ ≤ s · drift.
-            let drift = a_w * (v_b * line.ya + line.b * a_w * line.ya + v_a * line.yb + line.a * a_w * line.yb)
+            // ‖A‖, ‖B‖ anywhere on the ball: they move at most v_a, v_b per unit of s.
+            let (a_max, b_max) = (line.a + s * v_a, line.b + s * v_b);
+            // ‖(N(s) − N(0)) a‖ ≤ s · drift, drift ≥ sup ‖N'(σ) a‖ over σ ≤ s: the rotation block moves as
+            // (a_ω × y_A)' × B + (a_ω × y_A) × B' (and A's twin), with ‖B(σ)‖ ≤ b_max, not ‖B(0)‖.
+            let drift = a_w * (v_b * line.ya + b_max * a_w * line.ya + v_a * line.yb + a_max * a_w * line.yb)
                 + a_t * a_w * line.length;
             let q1 = line.q1_0 + s * self.g_norm * drift;
             let w_lo = line.w0 - s * q1;
@@ -736,7 +739,6 @@ impl RayCurvature {
                 return None;
             }
             // ‖m''‖: m'' = A'' × B + A × B'' + 2 A' × (a_ω × D), D = B − A = R_s (y_B − y_A).
-            let (a_max, b_max) = (line.a + s * v_a, line.b + s * v_b);
             let m2 = a_w * a_w * (line.ya * b_max + a_max * line.yb) + 2.0 * v_a.min(v_b) * a_w * line.length;
             // m''' = A''' × B + A × B''' + 3 (A'' × (a_ω × D) + A' × (a_ω × (a_ω × D))).
             let mixed3 = 3.0 * a_w * a_w * line.length * (v_a + a_w * line.ya).min(v_b + a_w * line.yb);
