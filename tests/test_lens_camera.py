@@ -12,6 +12,7 @@ import pytest
 import pluecker
 
 from camera_models import PARAMS as CAMERAS  # noqa: E402
+
 ONE_FOCAL_LENGTH = ("SIMPLE_PINHOLE", "SIMPLE_RADIAL", "RADIAL", "SIMPLE_RADIAL_FISHEYE", "RADIAL_FISHEYE",
                     "SIMPLE_DIVISION", "SIMPLE_FISHEYE")
 
