@@ -196,13 +196,13 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
         xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
         point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
         idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
-        _check_point_ids(ids, point_ids, image.image_id, idx)
+        rows = _point_rows(ids, point_ids, image.image_id, idx)
         kept, undistorted, covariances = _undistort(lenses[image.camera_id], xy,
                                                     np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
         skipped.extend(f"image_id {image.image_id}, point2D_idx {int(idx[k])} (point3D_id {int(point_ids[k])}): "
                        f"pixel ({xy[k, 0]:.6g}, {xy[k, 1]:.6g}) outside the invertible region of the camera's "
                        "distortion; not used" for k in np.flatnonzero(~kept))
-        parts.append((np.searchsorted(ids, point_ids)[kept], np.full(kept.sum(), j), np.full(kept.sum(), image.image_id),
+        parts.append((rows[kept], np.full(kept.sum(), j), np.full(kept.sum(), image.image_id),
                       idx[kept], undistorted[kept], covariances[kept]))
     if parts:
         track, camera, image_id, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
@@ -215,9 +215,10 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
                          covariances[order], skipped)
 
 
-def _check_point_ids(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> None:
-    """:class:`ModelError` naming the first observation of image ``image_id`` whose ``point3D_id`` is not
-    among the model's sorted point ids ``ids`` (a dangling id, as a model edited in memory can hold)."""
+def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> np.ndarray:
+    """The rows of ``point_ids`` in the model's sorted point ids ``ids``; :class:`ModelError` naming the
+    first observation of image ``image_id`` whose ``point3D_id`` is not among them (a dangling id, as a
+    model edited in memory can hold)."""
     rows = np.minimum(np.searchsorted(ids, point_ids), max(len(ids) - 1, 0))
     dangling = np.flatnonzero(ids[rows] != point_ids) if len(ids) else np.arange(len(point_ids))
     if len(dangling):
@@ -225,6 +226,7 @@ def _check_point_ids(ids: np.ndarray, point_ids: np.ndarray, image_id: int, poin
         raise ModelError(f"reconstruction: image_id {image_id}, point2D_idx {int(point2D_idx[k])} observes "
                          f"point3D_id {int(point_ids[k])}, which is not in the model ({len(dangling)} such "
                          f"observation{'s' if len(dangling) > 1 else ''} in this image)")
+    return rows
 
 
 def observation_table(reconstruction: Any, sigma_px: float = 1.0) -> tuple[Any, Any]:
