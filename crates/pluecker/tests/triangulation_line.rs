@@ -158,17 +158,23 @@ fn the_relaxation_bound_is_below_the_costs_at_every_node_cap() {
             }
             let at_answer =
                 independent_line_cost(&scene.cameras, &lines, &covariances, &r.point, &(r.point + r.direction));
-            for (what, cost) in [("answer", at_answer), ("truth", truth)] {
-                assert!(
-                    bound <= cost * (1.0 + 1e-9) + 1e-12,
-                    "seed {seed}, {max_nodes} nodes: raw bound {bound} above the {what}'s cost {cost}"
-                );
-            }
+            assert_bound_below_costs(bound, at_answer, truth, &format!("seed {seed}, {max_nodes} nodes"));
             compared += 1;
         }
     }
     // Every run proves some bound (the root relaxation is always solvable for lines in front).
     assert!(compared >= 35, "only {compared} of 40 runs proved a bound");
+}
+
+/// A raw bound at or below the independent costs of the answer and of the true line, to the rounding
+/// of the costs (1e-9 relative; the bound is made valid against the solver's tolerance).
+fn assert_bound_below_costs(bound: f64, at_answer: f64, truth: f64, context: &str) {
+    for (what, cost) in [("answer", at_answer), ("truth", truth)] {
+        assert!(
+            bound <= cost * (1.0 + 1e-9) + 1e-12,
+            "{context}: raw bound {bound} above the {what}'s cost {cost}"
+        );
+    }
 }
 
 /// The relaxation's raw bound against the independent cost of the true line and of the answer when
@@ -210,14 +216,8 @@ fn the_relaxation_bound_is_below_the_costs_when_one_view_carries_the_residual() 
             }
             let at_answer =
                 independent_line_cost(&scene.cameras, &lines, &covariances, &r.point, &(r.point + r.direction));
-            // Rounding of the costs, 1e-9 relative (the bound is made valid against the solver's tolerance).
-            for (what, cost) in [("answer", at_answer), ("truth", truth)] {
-                assert!(
-                    c.raw_lower_bound <= cost * (1.0 + 1e-9) + 1e-12,
-                    "seed {seed}, shift {shift}, {max_nodes} nodes: raw bound {} above the {what}'s cost {cost}",
-                    c.raw_lower_bound
-                );
-            }
+            let context = format!("seed {seed}, shift {shift}, {max_nodes} nodes");
+            assert_bound_below_costs(c.raw_lower_bound, at_answer, truth, &context);
             if c.certified {
                 assert!(
                     at_answer <= truth * (1.0 + 1e-3) + 1e-9,
