@@ -383,6 +383,12 @@ impl LensCamera {
         }
     }
 
+    /// The radius `|n|` of normalised coordinates where the radial distortion stops increasing
+    /// ([`fold_radius`]; `∞` when it never does): inside it the lens maps one-to-one.
+    pub fn fold_radius(&self) -> f64 {
+        self.fold_radius
+    }
+
     /// The pinhole part: the focal lengths and principal point, no skew (the camera of undistorted pixels).
     pub fn pinhole(&self) -> Result<crate::camera::Camera> {
         let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());

@@ -36,6 +36,7 @@ pub mod error;
 pub mod geometry;
 pub mod global;
 pub mod interrupt;
+pub mod lens_bounds;
 pub mod optim;
 pub mod pose;
 pub mod rigid;
