@@ -223,7 +223,7 @@ pack_by_name!(Status: Status::Success, Status::GapNotClosed, Status::NotConverge
     Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::Interrupted, Status::TimeBudget,
     Status::TooFewInliers);
 pack_by_name!(CertificateKind: CertificateKind::None, CertificateKind::ConvexityTest,
-    CertificateKind::BranchAndBound, CertificateKind::TaylorBranchAndBound);
+    CertificateKind::BranchAndBound, CertificateKind::TaylorBranchAndBound, CertificateKind::LensConvexityTest);
 pack_by_name!(PoseMethod: PoseMethod::TrustRegion, PoseMethod::RotationThenTranslation,
     PoseMethod::TrustRegionExact, PoseMethod::Newton, PoseMethod::LevenbergMarquardt, PoseMethod::Linear);
 pack_by_name!(PoseStatus: PoseStatus::Success, PoseStatus::NotConverged, PoseStatus::NumericalFailure,

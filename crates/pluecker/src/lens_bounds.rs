@@ -80,7 +80,8 @@ fn scaled(g: Interval, dg: Interval, x: Interval, y: Interval) -> IntervalMatrix
     [[g.add(two_dg.mul(x.sqr())), off], [off, g.add(two_dg.mul(y.sqr()))]]
 }
 
-fn product(a: &IntervalMatrix, b: &IntervalMatrix) -> IntervalMatrix {
+/// The product of two interval matrices.
+pub fn product(a: &IntervalMatrix, b: &IntervalMatrix) -> IntervalMatrix {
     let entry = |i: usize, j: usize| a[i][0].mul(b[0][j]).add(a[i][1].mul(b[1][j]));
     [[entry(0, 0), entry(0, 1)], [entry(1, 0), entry(1, 1)]]
 }

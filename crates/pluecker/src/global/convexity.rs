@@ -313,8 +313,23 @@ pub(crate) fn minorant<const M: usize, const N: usize>(
     a_priori_kappa: Option<f64>,
 ) -> Option<Minorant<N>> {
     let cost: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
-    let k = enclosure(views, cost, cost.sqrt(), a_priori_kappa)?;
-    let r2 = (1.0 + k.kappa_q).powi(2) * cost / (1.0 - k.kappa_d).powi(2);
+    minorant_at_level(views, cost, a_priori_kappa).map(|(m, _)| m)
+}
+
+/// Stages 1-4 for the sublevel set `{f ≤ level}`, `level ≥ f(0)`: the minorant `m ≤ f` on a convex
+/// `K ⊇ {f ≤ level}` (every feasible chart point outside `K` costs more than `level`), with the
+/// depth bound `κ_d` of `K` (`|dᵢᵀy| ≤ κ_d` there). With `level = f(0)` it is [`minorant`].
+pub(crate) fn minorant_at_level<const M: usize, const N: usize>(
+    views: &[RatioView<M, N>],
+    level: f64,
+    a_priori_kappa: Option<f64>,
+) -> Option<(Minorant<N>, f64)> {
+    let cost: f64 = views.iter().map(|v| v.a0.norm_squared()).sum();
+    if !(level >= cost) {
+        return None;
+    }
+    let k = enclosure(views, level, level.sqrt(), a_priori_kappa)?;
+    let r2 = (1.0 + k.kappa_q).powi(2) * level / (1.0 - k.kappa_d).powi(2);
     let p = k.n * (2.0 / (3.0 * (1.0 + k.kappa_d).powi(2)));
     let p_chol = p.cholesky()?;
     let worst = views.iter().map(|v| v.d.dot(&p_chol.solve(&v.d))).fold(0.0, f64::max);
@@ -325,11 +340,14 @@ pub(crate) fn minorant<const M: usize, const N: usize>(
     // g = ∇f(0) = 2 Σ Bᵢᵀ r̂ᵢ.
     let gradient: SVector<f64, N> = views.iter().map(|v| 2.0 * v.jacobian().transpose() * v.a0).sum();
     let hessian = (p * (1.0 - mu)).cholesky()?;
-    Some(Minorant {
-        cost,
-        gradient,
-        hessian,
-    })
+    Some((
+        Minorant {
+            cost,
+            gradient,
+            hessian,
+        },
+        k.kappa_d,
+    ))
 }
 
 #[cfg(test)]

@@ -322,6 +322,11 @@ pub enum CertificateKind {
     /// ([`line::taylor_search`]), whose domain is every line not within 1 % of the local line's
     /// distance from a camera centre.
     TaylorBranchAndBound,
+    /// Points through lenses with distortion: the convexity test of the linearisation at the
+    /// estimate, carried to the exact cost by interval bounds of the lenses' Jacobians
+    /// ([`point::lens`]), whose domain is every point whose projections lie inside each lens's fold
+    /// radius.
+    LensConvexityTest,
 }
 
 impl CertificateKind {
@@ -332,6 +337,7 @@ impl CertificateKind {
             CertificateKind::ConvexityTest => "convexity_test",
             CertificateKind::BranchAndBound => "branch_and_bound",
             CertificateKind::TaylorBranchAndBound => "taylor_branch_and_bound",
+            CertificateKind::LensConvexityTest => "lens_convexity_test",
         }
     }
 }
@@ -351,6 +357,10 @@ impl CertificateKind {
     pub fn domain(&self, primitive: Primitive) -> &'static str {
         match (self, primitive) {
             (CertificateKind::None, _) => "none",
+            (CertificateKind::LensConvexityTest, _) => {
+                "every point in front of every camera whose projection in each image lies inside the fold radius \
+                 of its lens, where the distortion is one-to-one"
+            }
             (_, Primitive::Point) => "every point in front of every camera",
             (CertificateKind::ConvexityTest, Primitive::Line) => "every line (a cost at the zero bound)",
             (CertificateKind::ConvexityTest, Primitive::Quadric) => {

@@ -9,9 +9,39 @@
 //! `det M > 0`, and wrong for those cameras, whose `det M` is negative with every point in front.
 //! The depth of a point is `depth(P, X) = (P X̃)₃ / ‖m³‖`, positive in front and in world units.
 //! Only finite cameras (`det M ≠ 0`) are accepted.
+//!
+//! A [`View`] is the other form of a known camera: the camera itself ([`AnyCamera`], a pinhole or any
+//! of COLMAP's models) and its pose. Through a lens with distortion the observations are the image's
+//! own (distorted) pixels; `P = K [R | t]` is the view of a pinhole camera.
 
+use crate::camera::AnyCamera;
 use crate::error::{Error, Result};
+use crate::rigid::Pose;
 use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};
+
+/// A known camera with its pose, `x_cam = R X_world + t` (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct View {
+    /// The camera: a pinhole or any of COLMAP's models.
+    pub camera: AnyCamera,
+    /// Its pose.
+    pub pose: Pose,
+}
+
+impl View {
+    /// The view of `camera` at `pose`.
+    pub fn new(camera: impl Into<AnyCamera>, pose: Pose) -> View {
+        View {
+            camera: camera.into(),
+            pose,
+        }
+    }
+
+    /// `P = K [R | t]` of the camera's pinhole part.
+    pub fn projection(&self) -> Result<Matrix3x4<f64>> {
+        Ok(self.camera.pinhole()?.projection(&self.pose))
+    }
+}
 
 /// Relative size of `det M` (against `‖M‖³`) below which a camera is rejected as singular.
 const MIN_RELATIVE_DET: f64 = 1e-12;

@@ -19,6 +19,7 @@
 //! parallel loop over tracks) are in [`crate::triangulation::tracks`].
 
 use super::cost::PointView;
+use super::lens::{first_order_view, through_lenses, LensView};
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{solve_track_views, PointTriangulation};
 use crate::error::{Error, Result};
@@ -28,7 +29,7 @@ use crate::triangulation::tracks::{
     check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };
 use crate::triangulation::uncertainty::covariance_of_information3;
-use crate::triangulation::views::{centre, depth_normalized, validate_cameras};
+use crate::triangulation::views::{centre, depth_normalized, validate_cameras, View};
 use crate::triangulation::{Method, Status, TriangulationOptions};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use rayon::prelude::*;
@@ -57,6 +58,8 @@ struct Prepared {
     /// The largest distance of a centre from the world origin, at least 1 (the scale of the
     /// no-parallax test).
     extent: f64,
+    /// The views, when a camera distorts: then the tracks go through [`super::lens`].
+    views: Option<Vec<View>>,
 }
 
 /// Checks the whole call and returns the number of tracks.
@@ -88,7 +91,18 @@ fn prepare(cameras: &[Matrix3x4<f64>]) -> Result<Prepared> {
         centres,
         origin,
         extent,
+        views: None,
     };
+    Ok(prepared)
+}
+
+/// [`prepare`] of the views' matrices `K [R | t]`, keeping the views when a camera distorts.
+fn prepare_views(views: &[View]) -> Result<Prepared> {
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    let mut prepared = prepare(&cameras)?;
+    if views.iter().any(|v| v.camera.distortion().is_some()) {
+        prepared.views = Some(views.to_vec());
+    }
     Ok(prepared)
 }
 
@@ -231,9 +245,22 @@ fn solve_track(
     let started = Instant::now();
     let mut views = Vec::new();
     let mut seen = Vec::new();
+    let mut lens_views = Vec::new();
     for o in observations {
         let (j, (x, l)) = o?;
-        views.push(PointView::new(&prepared.normalized[j], &x, &l));
+        match &prepared.views {
+            Some(all) => {
+                let view = LensView::new(&all[j], x, l);
+                views.push(first_order_view(&view, seen.len()).map_err(|e| match e {
+                    Error::Degenerate { what } => Error::Degenerate {
+                        what: format!("track {t}, image {j}: {what}"),
+                    },
+                    other => other,
+                })?);
+                lens_views.push(view);
+            }
+            None => views.push(PointView::new(&prepared.normalized[j], &x, &l)),
+        }
         seen.push(j);
     }
     if views.len() < 2 {
@@ -255,7 +282,12 @@ fn solve_track(
     if spread <= SAME_CENTRE {
         return Err(no_parallax(t));
     }
-    Ok(solve_track_views(&views, &frame, opts, started))
+    let mut result = solve_track_views(&views, &frame, opts, started);
+    if !lens_views.is_empty() {
+        through_lenses(&mut result, &lens_views, opts);
+        result.report.time_seconds = started.elapsed().as_secs_f64();
+    }
+    Ok(result)
 }
 
 /// Point tracks as a flat list of observations grouped by track ([`Csr`]), for models where each track
@@ -292,7 +324,7 @@ pub fn triangulate_points_sparse(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
-    let (n, one) = sparse_solver(cameras, tracks, opts)?;
+    let (n, one) = sparse_solver(prepare(cameras), tracks, opts)?;
     Ok(solve_tracks(n, 16, progress, one))
 }
 
@@ -306,21 +338,50 @@ pub fn triangulate_points_sparse_into<R: Send>(
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
-    let (n, one) = sparse_solver(cameras, tracks, opts)?;
+    let (n, one) = sparse_solver(prepare(cameras), tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 16, progress, one, write))
+}
+
+/// [`triangulate_points_sparse`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models,
+/// and a pose): the observations are the images' own (distorted) pixels, and each track is solved as
+/// [`super::triangulate_point_views`] solves it. An observation whose pixel has no preimage inside
+/// its lens's fold is an error of its track, naming it.
+pub fn triangulate_points_sparse_views(
+    views: &[View],
+    tracks: &SparsePointTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+) -> Result<Vec<Result<PointTriangulation>>> {
+    let (n, one) = sparse_solver(prepare_views(views), tracks, opts)?;
+    Ok(solve_tracks(n, 16, progress, one))
+}
+
+/// [`triangulate_points_sparse_views`] handing each track's result to `write(t, row, result)` as
+/// [`triangulate_points_into`] does.
+pub fn triangulate_points_sparse_views_into<R: Send>(
+    views: &[View],
+    tracks: &SparsePointTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = sparse_solver(prepare_views(views), tracks, opts)?;
     check_rows(rows.len(), n)?;
     Ok(solve_tracks_into(rows, 16, progress, one, write))
 }
 
 /// The number of tracks of a sparse batch, checked, and the solve of track `t`.
 fn sparse_solver<'a>(
-    cameras: &[Matrix3x4<f64>],
+    prepared: Result<Prepared>,
     tracks: &'a SparsePointTracks<'a>,
     opts: &'a TriangulationOptions,
 ) -> Result<(usize, impl Fn(usize) -> Result<PointTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
-    let prepared = prepare(cameras)?;
+    let prepared = prepared?;
     let n = tracks.check()?;
-    let v = cameras.len();
+    let v = prepared.normalized.len();
     let one = move |t: usize| {
         let rows = tracks.csr.observations(t, v)?;
         let views = rows

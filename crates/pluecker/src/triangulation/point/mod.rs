@@ -42,6 +42,7 @@ pub mod chart;
 pub mod cost;
 pub mod global;
 pub mod infinity;
+pub mod lens;
 pub mod linear;
 pub mod robust;
 
@@ -50,10 +51,11 @@ use self::chart::{Chart, ChartKind};
 use self::cost::{in_front, point_cost, point_views, PointObjective, PointView};
 use self::global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATION};
 use self::infinity::best_at_infinity;
+use self::lens::LensView;
 use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::covariance::whitenings;
 use super::uncertainty::covariance_of_information3;
-use super::views::{baseline, centre, depth_normalized, validate_cameras};
+use super::views::{baseline, centre, depth_normalized, validate_cameras, View};
 use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::global::relative_gap;
@@ -118,6 +120,42 @@ pub fn triangulate_point(
     let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
     Ok(solve_track_views(&views, &frame_of_cameras(cameras), opts, started))
+}
+
+/// Triangulates one point seen in `views` (each a camera, pinhole or any of COLMAP's models, and its
+/// pose) at the observed pixels `observations` (the images' own, distorted pixels), with optional 2x2
+/// covariances of those pixels. The cost is the reprojection error in those pixels through the exact
+/// projection, and `optimal` certifies it with [`lens::lens_certificate`] (module docs of [`lens`]).
+/// With pinhole cameras only it is [`triangulate_point`] of their matrices `K [R | t]`.
+///
+/// Errors as [`triangulate_point`], and [`Error::Degenerate`] naming an observation whose pixel has
+/// no preimage inside its lens's fold.
+pub fn triangulate_point_views(
+    views: &[View],
+    observations: &[Vector2<f64>],
+    covariances: Option<&[Matrix2<f64>]>,
+    opts: &TriangulationOptions,
+) -> Result<PointTriangulation> {
+    let started = Instant::now();
+    opts.validate()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    check_track(&cameras, observations, opts.method)?;
+    validate_cameras(&cameras, "views")?;
+    if let Some(row) = observations.iter().position(|x| !(x.x.is_finite() && x.y.is_finite())) {
+        return Err(Error::NonFinite {
+            what: "observations".into(),
+            index: row,
+        });
+    }
+    let whitening = whitenings(covariances, views.len(), "covariances")?;
+    check_parallax(&cameras, "views")?;
+    let lens_views: Vec<LensView> = views
+        .iter()
+        .zip(observations)
+        .zip(&whitening)
+        .map(|((v, x), l)| LensView::new(v, *x, *l))
+        .collect();
+    lens::solve_lens_track(&lens_views, &frame_of_cameras(&cameras), opts, started)
 }
 
 /// [`solve_views`], or its robust form when `opts.outlier_threshold` is set.

@@ -1,0 +1,504 @@
+//! A point seen through lenses with distortion: the exact cost in the images' own pixels, its local
+//! minimisation and its certificate.
+//!
+//! **Cost.** View `i` has a camera ([`AnyCamera`]: `u = K D(n)`, `n = (x/z, y/z)`,
+//! `x_cam = Rᵢ X + tᵢ`), the observed (distorted) pixel `uᵢ` and the whitening `Lᵢ` of its covariance.
+//! The residual is `eᵢ(X) = Lᵢ (u(X) − uᵢ)` through the exact projection, and the cost is
+//! `F(X) = Σ ‖eᵢ(X)‖²` (eq. 19 in the observed pixels). The first stages (DLT, the local and global
+//! searches of [`super`]) run on the first-order problem in the undistorted pixels of each lens's
+//! pinhole part ([`first_order_view`]); [`refine`] then minimises `F` itself from their answer.
+//!
+//! **Certificate** ([`lens_certificate`]), at a local minimiser `X*` of cost `C = F(X*)`, with
+//! `eᵢ* = eᵢ(X*)`, `nᵢ*` its normalised projection, `Mᵢ = Lᵢ K₂` (`K₂` the upper-left block of `K`),
+//! `Jᵢ* = ∂D/∂n(nᵢ*)` and `Wᵢ = Mᵢ Jᵢ*`. Its domain is every point in front of the cameras whose
+//! projection in each image lies inside that lens's fold radius, where the (radially symmetric)
+//! distortion maps the disc one-to-one onto a disc ([`crate::lens_bounds`]).
+//! 1. *Each view's projection is confined.* Let `Bᵢ = {n : ‖Wᵢ(n − nᵢ*)‖ ≤ ρᵢ}` and `Eᵢ` an entrywise
+//!    bound of `|J(n) − Jᵢ*|` over a box holding `Bᵢ` (interval enclosure), `εᵢ = ‖ |Mᵢ| Eᵢ |Wᵢ⁻¹| ‖_F`.
+//!    Along the segment from `nᵢ*` (mean value theorem),
+//!    `eᵢ(n) = eᵢ* + (I + Δ) Wᵢ (n − nᵢ*)`, `‖Δ‖ ≤ εᵢ`, so on the boundary of `Bᵢ`
+//!    `‖eᵢ‖ ≥ (1 − εᵢ)ρᵢ − ‖eᵢ*‖ > √C` for `ρᵢ` chosen so. The projections with `‖eᵢ‖ ≤ √C` inside the
+//!    fold disc `Dᵢ` are the preimage, under the homeomorphism `D|Dᵢ`, of a convex set (an ellipse meets
+//!    the disc `D(Dᵢ)`): a connected set that contains `nᵢ*` and misses `∂Bᵢ`, hence lies in `Bᵢ`.
+//!    So every point of the domain with `F ≤ C` has every projection in its `Bᵢ`.
+//! 2. *A pinhole problem bounds `F` there.* With `vᵢ = Wᵢ(n − nᵢ*)` and `ℓᵢ = eᵢ* + vᵢ` (the
+//!    linearisation at the estimate, a pinhole residual of the normalised camera `[Rᵢ | tᵢ]` with
+//!    whitening `Wᵢ`), `‖eᵢ‖ ≥ ‖ℓᵢ‖ − δᵢ`, `δᵢ = εᵢ‖vᵢ‖ + sᵢ` (`sᵢ` the rounding of `eᵢ*`), hence
+//!    `‖eᵢ‖² ≥ ‖ℓᵢ‖² − 2‖ℓᵢ‖δᵢ` and `F ≥ Q − 2Σ(‖eᵢ*‖ + ‖vᵢ‖)(εᵢ‖vᵢ‖ + sᵢ)`, `Q = Σ‖ℓᵢ‖²`; and
+//!    `F ≤ C` implies `Q ≤ C' = C + Σ 2√C(εᵢρᵢ + sᵢ) + (εᵢρᵢ + sᵢ)²`.
+//! 3. *Convexity.* The test of [`crate::global::convexity`] at the level `C'`, in a whitened chart of
+//!    the pinhole problem at `X*` (`Q(X*) = C`, `vᵢ = Bᵢy/ζᵢ`, `Σ BᵢᵀBᵢ = I`, `ζᵢ ≥ 1 − κ_d`): a convex
+//!    `K ⊇ {Q ≤ C'}` on which `Q ≥ C + gᵀy + ½yᵀHy`. With `t = ‖y‖` and `k = 1/(1 − κ_d)`, on `K`
+//!    `F ≥ C − 2Σ‖eᵢ*‖sᵢ − (‖g‖ + 2kα)t + (½λ_min(H) − 2k²ε)t²`, `α = (Σ(‖eᵢ*‖εᵢ + sᵢ)²)^½`,
+//!    `ε = maxᵢ εᵢ`. Its minimum over `t ≥ 0` is a lower bound of `F` over the domain (points outside
+//!    `K` cost more than `C`).
+//! 4. *Tightening.* The loss is of order `ε²C`. Where the bound exceeds `C(1 − ½ gap)` for
+//!    `t ≥ t₁`, the rest has `‖vᵢ‖ ≤ k‖Bᵢ‖t₁`: smaller boxes, smaller `εᵢ`, and step 3 again over
+//!    `t ≤ t₁`, a few times.
+//!
+//! The certificate fails (the result is not certified) for a lens that is not radially symmetric,
+//! a projection or box reaching a fold, `εᵢ ≥ 1`, or a failed convexity test (low parallax, large
+//! residuals); there is no branch and bound through a lens.
+
+use super::chart::{Chart, ChartKind};
+use super::cost::PointView;
+use crate::camera::AnyCamera;
+use crate::camera_model::LensCamera;
+use crate::error::Result;
+use crate::global::convexity::{minorant_at_level, Minorant};
+use crate::global::relative_gap;
+use crate::lens_bounds::{jacobian_enclosure, radial_profile, radius_about, RadialProfile};
+use crate::optim::Termination;
+use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
+use crate::triangulation::point::linear::WorldFrame;
+use crate::triangulation::point::PointTriangulation;
+use crate::triangulation::uncertainty::covariance_of_information3;
+use crate::triangulation::views::{depth_normalized, View};
+use crate::triangulation::{Certificate, CertificateKind, Method, Status, TriangulationOptions};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, SymmetricEigen, Vector2, Vector3};
+use std::time::Instant;
+
+/// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
+/// 1e5 computed through a few dozen operations).
+const PIXEL_ROUNDING: f64 = 1e-13;
+/// Rounds of the tightening of step 4.
+const TIGHTENING_ROUNDS: usize = 6;
+/// Growth of a view's confinement radius per retry of step 1.
+const RADIUS_RETRIES: usize = 8;
+
+/// One observation through a camera: the camera, its pose, the observed pixel and the whitening `L`
+/// of its covariance (`Lᵀ L = Σ⁻¹`).
+#[derive(Debug, Clone, Copy)]
+pub struct LensView<'a> {
+    /// The camera.
+    pub camera: &'a AnyCamera,
+    /// `R`, world to camera.
+    pub rotation: Matrix3<f64>,
+    /// `t`.
+    pub translation: Vector3<f64>,
+    /// The observed pixel.
+    pub pixel: Vector2<f64>,
+    /// `L`.
+    pub whitening: Matrix2<f64>,
+}
+
+impl<'a> LensView<'a> {
+    /// The observation `pixel`, whitened by `whitening`, in `view`.
+    pub fn new(view: &'a View, pixel: Vector2<f64>, whitening: Matrix2<f64>) -> LensView<'a> {
+        LensView {
+            camera: &view.camera,
+            rotation: view.pose.rotation,
+            translation: view.pose.translation,
+            pixel,
+            whitening,
+        }
+    }
+
+    fn x_cam(&self, x: &Vector3<f64>) -> Vector3<f64> {
+        self.rotation * x + self.translation
+    }
+
+    /// The whitened residual `e = L (u(X) − uᵢ)` and `∂e/∂X`; `None` behind the camera.
+    pub fn residual_and_jacobian(&self, x: &Vector3<f64>) -> Option<(Vector2<f64>, Matrix2x3<f64>)> {
+        let xc = self.x_cam(x);
+        if !(xc.z > 0.0) {
+            return None;
+        }
+        let (u, j) = self.camera.project(&xc);
+        Some((self.whitening * (u - self.pixel), self.whitening * j * self.rotation))
+    }
+
+    /// `‖e(X)‖²`, `∞` behind the camera.
+    pub fn squared_residual(&self, x: &Vector3<f64>) -> f64 {
+        self.residual_and_jacobian(x)
+            .map_or(f64::INFINITY, |(e, _)| e.norm_squared())
+    }
+
+    /// The `2x2` map `M = L K₂` from distorted normalised coordinates to whitened pixels.
+    fn pixel_map(&self) -> Result<Matrix2<f64>> {
+        Ok(self.whitening * self.camera.pinhole()?.pixel_jacobian())
+    }
+}
+
+/// The first-order view of `view` for the stages of [`super`]: the undistorted pixel of the lens's
+/// pinhole part and the whitening `L J`, `J = ∂u/∂ū` at the observation, so that the whitened
+/// residual is the observed one to first order. `Error::Degenerate` names observation `index` when
+/// its pixel has no preimage inside the fold.
+pub(crate) fn first_order_view(view: &LensView, index: usize) -> Result<PointView> {
+    let k = view.camera.pinhole()?;
+    let mut rt = Matrix3x4::zeros();
+    rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&view.rotation);
+    rt.set_column(3, &view.translation);
+    let p = depth_normalized(&(k.matrix() * rt));
+    match view.camera {
+        AnyCamera::Lens(lens) if !lens.is_pinhole() => {
+            let (undistorted, j) = lens.undistort(&view.pixel, index)?;
+            Ok(PointView::new(&p, &undistorted, &(view.whitening * j)))
+        }
+        _ => Ok(PointView::new(&p, &view.pixel, &view.whitening)),
+    }
+}
+
+/// `F(X) = Σ ‖eᵢ(X)‖²` (module docs), `∞` when `X` is behind a camera.
+pub fn exact_cost(views: &[LensView], x: &Vector3<f64>) -> f64 {
+    views.iter().map(|v| v.squared_residual(x)).sum()
+}
+
+/// `½ F` for [`crate::optim`]; points behind a camera cost `∞`, which the trust region rejects.
+struct ExactObjective<'a, 'b> {
+    views: &'a [LensView<'b>],
+}
+
+impl Objective<3> for ExactObjective<'_, '_> {
+    type Point = Vector3<f64>;
+
+    fn cost(&self, x: &Vector3<f64>) -> f64 {
+        0.5 * exact_cost(self.views, x)
+    }
+
+    fn linearize(&self, x: &Vector3<f64>) -> Linearization<3> {
+        let mut lin = Linearization {
+            cost: 0.0,
+            gradient: Vector3::zeros(),
+            gauss_newton: Matrix3::zeros(),
+        };
+        for v in self.views {
+            let Some((e, j)) = v.residual_and_jacobian(x) else {
+                lin.cost = f64::INFINITY;
+                return lin;
+            };
+            lin.cost += 0.5 * e.norm_squared();
+            lin.gradient += j.transpose() * e;
+            lin.gauss_newton += j.transpose() * j;
+        }
+        lin
+    }
+
+    fn retract(&self, x: &Vector3<f64>, d: &Vector3<f64>) -> Vector3<f64> {
+        x + d
+    }
+}
+
+/// The local minimum of `F` from `x0` (in front of every camera) by the trust region of
+/// [`crate::optim`].
+pub(crate) fn refine(views: &[LensView], x0: &Vector3<f64>, opts: &TrustRegionOptions) -> (Vector3<f64>, Summary) {
+    trust_region::minimize(&ExactObjective { views }, *x0, opts)
+}
+
+/// A proved lower bound of `F` over the certificate's domain (module docs), at most `cost`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LensBound {
+    /// The bound, before any cap at the cost.
+    pub raw_lower_bound: f64,
+}
+
+/// Why [`lens_certificate`] found no bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LensBoundFailure {
+    /// A lens that is not radially symmetric, or not covered by [`crate::lens_bounds`].
+    Lens,
+    /// A projection, or the box about it, reaches a lens's fold radius, or `εᵢ ≥ 1`.
+    Fold,
+    /// The convexity test failed (low parallax, large residuals, a second minimum nearby).
+    Convexity,
+}
+
+/// Per view: `Wᵢ`, `Mᵢ`, `eᵢ*`, `nᵢ*`, `Jᵢ*`, the profile and fold radius, `sᵢ`.
+struct Linearised {
+    w: Matrix2<f64>,
+    w_inverse: Matrix2<f64>,
+    m: Matrix2<f64>,
+    e: Vector2<f64>,
+    n: Vector2<f64>,
+    j: Matrix2<f64>,
+    profile: RadialProfile,
+    fold: f64,
+    rounding: f64,
+}
+
+impl Linearised {
+    fn new(view: &LensView, x: &Vector3<f64>) -> std::result::Result<Linearised, LensBoundFailure> {
+        let (profile, fold, lens) = match view.camera {
+            AnyCamera::Pinhole(_) => (RadialProfile::Polynomial(vec![]), f64::INFINITY, None),
+            AnyCamera::Lens(lens) => (
+                radial_profile(lens).ok_or(LensBoundFailure::Lens)?,
+                lens.fold_radius(),
+                Some(lens),
+            ),
+        };
+        let xc = view.x_cam(x);
+        if !(xc.z > 0.0) {
+            return Err(LensBoundFailure::Fold);
+        }
+        let n = Vector2::new(xc.x / xc.z, xc.y / xc.z);
+        if !(n.norm() < fold) {
+            return Err(LensBoundFailure::Fold);
+        }
+        let j = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
+        let m = view.pixel_map().map_err(|_| LensBoundFailure::Lens)?;
+        let w = m * j;
+        let w_inverse = w.try_inverse().ok_or(LensBoundFailure::Fold)?;
+        let u = view.camera.project(&xc).0;
+        let e = view.whitening * (u - view.pixel);
+        // The rounding of e: of u and of the pixel, through L.
+        let rounding = view.whitening.norm() * PIXEL_ROUNDING * (u.norm() + view.pixel.norm() + 1.0);
+        Ok(Linearised {
+            w,
+            w_inverse,
+            m,
+            e,
+            n,
+            j,
+            profile,
+            fold,
+            rounding,
+        })
+    }
+
+    /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the fold.
+    fn epsilon(&self, rho: f64) -> Option<f64> {
+        let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
+        let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
+        let enclosure = jacobian_enclosure(&self.profile, self.fold, &(self.n - half), &(self.n + half))?;
+        let e = radius_about(&enclosure, &self.j);
+        let eps = (self.m.abs() * e * self.w_inverse.abs()).norm();
+        eps.is_finite().then_some(eps)
+    }
+
+    /// Step 1: `(ρᵢ, εᵢ)` with `(1 − εᵢ)ρᵢ − ‖eᵢ*‖ − sᵢ > √C`.
+    fn confinement(&self, cost: f64) -> Option<(f64, f64)> {
+        let need = cost.sqrt() + self.e.norm() + self.rounding;
+        let mut rho = need * 1.001;
+        for _ in 0..RADIUS_RETRIES {
+            let eps = self.epsilon(rho)?;
+            if eps < 1.0 && (1.0 - eps) * rho > need {
+                return Some((rho, eps));
+            }
+            if !(eps < 0.5) {
+                return None;
+            }
+            rho = need / (1.0 - eps) * 1.01;
+        }
+        None
+    }
+}
+
+/// The certificate's lower bound of `F` at the local minimiser `x` of cost `cost` (module docs), or
+/// why there is none. `gap` is the relative gap the caller will ask for (the tightening aims at half of it).
+pub fn lens_certificate(
+    views: &[LensView],
+    x: &Vector3<f64>,
+    cost: f64,
+    gap: f64,
+) -> std::result::Result<LensBound, LensBoundFailure> {
+    let lin: Vec<Linearised> = views
+        .iter()
+        .map(|v| Linearised::new(v, x))
+        .collect::<std::result::Result<_, _>>()?;
+    // Step 1.
+    let confined: Vec<(f64, f64)> = lin
+        .iter()
+        .map(|l| l.confinement(cost))
+        .collect::<Option<_>>()
+        .ok_or(LensBoundFailure::Fold)?;
+    // Step 2: the pinhole problem of the linearisation at X*, and the level C'.
+    let root_cost = cost.sqrt();
+    let level = cost
+        + lin
+            .iter()
+            .zip(&confined)
+            .map(|(l, &(rho, eps))| {
+                let slack = eps * rho + l.rounding;
+                2.0 * root_cost * slack + slack * slack
+            })
+            .sum::<f64>();
+    let pinhole: Vec<PointView> = views
+        .iter()
+        .zip(&lin)
+        .map(|(v, l)| {
+            let mut rt = Matrix3x4::zeros();
+            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&v.rotation);
+            rt.set_column(3, &v.translation);
+            // ℓ = W (n − c) with c = n* − W⁻¹ e*: ℓ(X*) = e*.
+            PointView::new(&depth_normalized(&rt), &(l.n - l.w_inverse * l.e), &l.w)
+        })
+        .collect();
+    // Step 3, in the mean-depth chart, else the Euclidean one.
+    let mut failure = LensBoundFailure::Convexity;
+    for kind in [ChartKind::MeanDepth, ChartKind::Euclidean] {
+        let Some(chart) = Chart::new(&pinhole, x, kind) else {
+            continue;
+        };
+        let kappa = super::certificate::a_priori_kappa(kind, views.len());
+        let Some((minorant, kappa_d)) = minorant_at_level(&chart.views, level, kappa) else {
+            continue;
+        };
+        match tightened_bound(&chart, &lin, &confined, &minorant, kappa_d, gap) {
+            Ok(bound) => return Ok(LensBound { raw_lower_bound: bound }),
+            Err(why) => failure = why,
+        }
+    }
+    Err(failure)
+}
+
+/// Steps 3-4 in one chart: the bound, or why there is none.
+fn tightened_bound(
+    chart: &Chart,
+    lin: &[Linearised],
+    confined: &[(f64, f64)],
+    minorant: &Minorant<3>,
+    kappa_d: f64,
+    gap: f64,
+) -> std::result::Result<f64, LensBoundFailure> {
+    let k = 1.0 / (1.0 - kappa_d);
+    // Σ‖Bᵢy‖² ≤ λ_S ‖y‖² (λ_S = 1 up to the rounding of the whitening), and ‖Bᵢ‖ per view.
+    let jacobians: Vec<_> = chart.views.iter().map(|v| v.g - v.a0 * v.d.transpose()).collect();
+    let s: Matrix3<f64> = jacobians.iter().map(|b| b.transpose() * b).sum();
+    let lambda_s = SymmetricEigen::new(s).eigenvalues.max();
+    let b_norms: Vec<f64> = jacobians.iter().map(|b| b.norm()).collect();
+    // H = LLᵀ from its Cholesky factor.
+    let factor = minorant.hessian.clone().unpack();
+    let lambda_h = SymmetricEigen::new(factor * factor.transpose()).eigenvalues.min();
+    let g_norm = minorant.gradient.norm();
+    let a0 = minorant.cost - 2.0 * lin.iter().map(|l| l.e.norm() * l.rounding).sum::<f64>();
+    // The bound a0 − a1 t + a2 t² over a ball of y where view i has the constant eps[i].
+    let coefficients = |eps: &[f64]| {
+        let alpha = lin
+            .iter()
+            .zip(eps)
+            .map(|(l, e)| (l.e.norm() * e + l.rounding).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let eps_max = eps.iter().copied().fold(0.0, f64::max);
+        (
+            g_norm + 2.0 * k * alpha * lambda_s.sqrt(),
+            0.5 * lambda_h - 2.0 * k * k * eps_max * lambda_s,
+        )
+    };
+    let target = minorant.cost * (1.0 - 0.5 * gap);
+    let mut eps: Vec<f64> = confined.iter().map(|c| c.1).collect();
+    // Outside the ball of `radius` every point is known to cost at least `target`.
+    let mut radius = f64::INFINITY;
+    let mut bound = f64::NEG_INFINITY;
+    for _ in 0..TIGHTENING_ROUNDS {
+        let (a1, a2) = coefficients(&eps);
+        if !(a2 > 0.0) {
+            break;
+        }
+        let t_min = (a1 / (2.0 * a2)).min(radius);
+        bound = a0 - a1 * t_min + a2 * t_min * t_min;
+        if bound >= target {
+            break;
+        }
+        // The bound reaches the target at t₁ and stays above it beyond.
+        let t1 = (a1 + (a1 * a1 - 4.0 * a2 * (a0 - target)).max(0.0).sqrt()) / (2.0 * a2);
+        if !(t1 < radius) {
+            break;
+        }
+        radius = t1;
+        eps = lin
+            .iter()
+            .zip(confined)
+            .zip(&b_norms)
+            .map(|((l, &(rho, _)), b)| l.epsilon((k * b * radius).min(rho)))
+            .collect::<Option<_>>()
+            .ok_or(LensBoundFailure::Fold)?;
+    }
+    if !bound.is_finite() {
+        return Err(LensBoundFailure::Convexity);
+    }
+    Ok(if radius.is_finite() { bound.min(target) } else { bound })
+}
+
+/// The exact stage after the first-order stages of [`super`] (module docs): `result` was solved
+/// from the first-order views of `views` (all of them, or its inliers). Its point is refined on `F`
+/// over the views it used; its cost, covariance and status become those of `F`; with method
+/// `optimal` the certificate is [`lens_certificate`]'s, and never the first-order one, which bounds
+/// another cost.
+pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView], opts: &TriangulationOptions) {
+    let used: Vec<LensView> = match &result.inliers {
+        Some(flags) => views.iter().zip(flags).filter(|(_, &f)| f).map(|(v, _)| *v).collect(),
+        None => views.to_vec(),
+    };
+    let report = &mut result.report;
+    let x0 = result.point;
+    let refinable = matches!(
+        report.status,
+        Status::Success | Status::GapNotClosed | Status::NotConverged
+    ) && opts.method != Method::Linear
+        && exact_cost(&used, &x0).is_finite();
+    if !refinable {
+        if x0.iter().all(|v| v.is_finite()) && exact_cost(&used, &x0).is_finite() {
+            report.cost = exact_cost(&used, &x0);
+            result.covariance = exact_covariance(&used, &x0);
+        }
+        if report.certificate.kind != CertificateKind::None {
+            report.certificate = Certificate::none();
+        }
+        report.test_residuals(2 * used.len(), 3);
+        return;
+    }
+    let (x, summary) = refine(&used, &x0, &opts.local);
+    let cost = exact_cost(&used, &x);
+    result.point = x;
+    result.covariance = exact_covariance(&used, &x);
+    report.cost = cost;
+    report.iterations += summary.iterations;
+    report.termination = summary.termination;
+    report.status = match summary.termination {
+        Termination::NonFiniteCost | Termination::SingularHessian => Status::NumericalFailure,
+        Termination::MaxIterations => Status::NotConverged,
+        _ => Status::Success,
+    };
+    report.certificate = Certificate::none();
+    if opts.method == Method::Optimal && report.status == Status::Success {
+        if let Ok(bound) = lens_certificate(&used, &x, cost, opts.max_relative_gap) {
+            let lower_bound = bound.raw_lower_bound.min(cost).max(0.0);
+            let relative_gap = relative_gap(cost, lower_bound);
+            report.certificate = Certificate {
+                lower_bound,
+                raw_lower_bound: bound.raw_lower_bound,
+                relative_gap,
+                certified: relative_gap <= opts.max_relative_gap,
+                kind: CertificateKind::LensConvexityTest,
+                nodes: 0,
+                solver_iterations: 0,
+            };
+        }
+        if !report.certificate.certified {
+            report.status = Status::GapNotClosed;
+        }
+    }
+    report.test_residuals(2 * used.len(), 3);
+}
+
+/// `(Σ JᵢᵀJᵢ)⁻¹` of the exact residuals at `x` ([`crate::triangulation::uncertainty`]).
+fn exact_covariance(views: &[LensView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
+    let mut information = Matrix3::zeros();
+    for v in views {
+        let (_, j) = v.residual_and_jacobian(x)?;
+        information += j.transpose() * j;
+    }
+    covariance_of_information3(&information)
+}
+
+/// One track seen through `views`: the first-order stages of [`super`] on [`first_order_view`]s,
+/// then, when a camera distorts, [`through_lenses`]. `started` times the whole call.
+pub(crate) fn solve_lens_track(
+    views: &[LensView],
+    frame: &WorldFrame,
+    opts: &TriangulationOptions,
+    started: Instant,
+) -> Result<PointTriangulation> {
+    let first: Vec<PointView> = views
+        .iter()
+        .enumerate()
+        .map(|(i, v)| first_order_view(v, i))
+        .collect::<Result<_>>()?;
+    let mut result = super::solve_track_views(&first, frame, opts, started);
+    if views.iter().any(|v| v.camera.distortion().is_some()) {
+        through_lenses(&mut result, views, opts);
+        result.report.time_seconds = started.elapsed().as_secs_f64();
+    }
+    Ok(result)
+}
