@@ -140,8 +140,10 @@ class _Observations(NamedTuple):
     image_id: np.ndarray        # (m,) COLMAP image id
     point2D_idx: np.ndarray     # (m,)
     undistorted: np.ndarray     # (m, 2) pixels of the camera's pinhole part
-    covariances: np.ndarray     # (m, 2, 2)
+    covariances: np.ndarray     # (m, 2, 2) of the undistorted pixels (first order)
     skipped: list               # messages naming the cameras and observations left out, with COLMAP's ids
+    pixels: np.ndarray          # (m, 2) the observed (distorted) pixels
+    lenses: list                # (v,) the LensCamera of each row of P
 
 
 def _undistort(lens: _core.LensCamera, xy: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -203,16 +205,18 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
                        f"pixel ({xy[k, 0]:.6g}, {xy[k, 1]:.6g}) outside the invertible region of the camera's "
                        "distortion; not used" for k in np.flatnonzero(~kept))
         parts.append((rows[kept], np.full(kept.sum(), j), np.full(kept.sum(), image.image_id),
-                      idx[kept], undistorted[kept], covariances[kept]))
+                      idx[kept], undistorted[kept], covariances[kept], xy[kept]))
     if parts:
-        track, camera, image_id, point2D_idx, undistorted, covariances = (np.concatenate(c) for c in zip(*parts))
+        track, camera, image_id, point2D_idx, undistorted, covariances, pixels = (np.concatenate(c)
+                                                                                  for c in zip(*parts))
     else:
         track = camera = image_id = point2D_idx = np.zeros(0, dtype=np.int64)
-        undistorted, covariances = np.zeros((0, 2)), np.zeros((0, 2, 2))
+        undistorted, covariances, pixels = np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros((0, 2))
     # Sorted as pluecker.distributed sorts them (track, image id, pixel), so that both give the same bits.
     order = np.lexsort((undistorted[:, 1], undistorted[:, 0], image_id, track))
     return _Observations(P, np.array([image.image_id for image in images], dtype=np.int64), ids, track[order], camera[order], image_id[order], point2D_idx[order], undistorted[order],
-                         covariances[order], skipped)
+                         covariances[order], skipped, pixels[order],
+                         [lenses[image.camera_id] for image in images])
 
 
 def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> np.ndarray:
@@ -276,13 +280,13 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     cameras (models, distortion, rigs) and poses held fixed. Returns a :class:`Retriangulation`, which
     also unpacks as ``(point3D_ids, PointTriangulations)``, row ``i`` the point ``point3D_ids[i]``.
 
-    Each observation is undistorted exactly through its camera model into the pixels of the camera's
-    pinhole part, and its pixel noise (``sigma_px`` pixels, isotropic) is carried there to first order
-    (``LensCamera.undistort``). The cost of eq. 19 is therefore in squared standard deviations
-    (pixels² for ``sigma_px = 1``) as COLMAP's bundle adjustment counts it, and a certificate proves the
-    global minimum of that first-order cost over the observations used. The propagation is first order:
-    where the distortion changes fast across a pixel's noise (the edge of a wide fisheye), the cost is
-    an approximation of the pixel cost and the certificate is about the approximation.
+    The cost is the reprojection error in each image's own (distorted) pixels through its camera model,
+    exactly, in squared standard deviations (``sigma_px`` pixels, isotropic; pixels² for
+    ``sigma_px = 1``), as COLMAP's bundle adjustment counts it. The first stages run on the pixels
+    undistorted into each camera's pinhole part; the point is then refined on the exact cost, and a
+    certificate (``lens_convexity_test`` through a lens) proves its global minimum over every point whose
+    projections lie inside each lens's fold radius. Where no proof is found the point is
+    ``gap_not_closed``: uncertified, never certified on an approximation.
 
     ``outlier_threshold_px`` rejects observations farther than that many pixels from the consensus of
     their track (``TriangulationOptions.outlier_threshold``; ``result.inliers`` flags the observations).
@@ -293,9 +297,10 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     if outlier_threshold_px is not None:
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
-    result = _core.triangulate_point_observations(o.P, o.track, o.camera, o.undistorted, o.covariances,
+    covariances = np.broadcast_to(float(sigma_px)**2 * np.eye(2), (len(o.track), 2, 2))
+    result = _core.triangulate_point_observations(o.P, o.track, o.camera, o.pixels, covariances,
                                                   method=method, options=options, progress=progress,
-                                                  n_tracks=len(o.ids))
+                                                  n_tracks=len(o.ids), cameras=o.lenses)
     return Retriangulation(o.ids, result, o.track, o.image_id, o.point2D_idx, o.skipped)
 
 
@@ -347,8 +352,9 @@ PLY_COLOURS = {
 CERTIFIED_MEANING = (
     "certified: lower_bound is a proved lower bound on the global minimum of the point's cost (eq. 19: the "
     "squared reprojection residuals whitened by sigma_px, summed over the observations used), within the "
-    "relative gap max_relative_gap of cost; the residuals are those of the pixels undistorted through the "
-    "camera model into its pinhole part, with the pixel covariance propagated to first order")
+    "relative gap max_relative_gap of cost; the residuals are those of the observed (distorted) pixels "
+    "through the exact camera model, and the bound holds over every point whose projection in each image "
+    "lies inside the fold radius of its camera's distortion")
 
 
 def write_ply(path: Any, X: np.ndarray, states: np.ndarray) -> None:

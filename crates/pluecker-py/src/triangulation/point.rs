@@ -24,9 +24,14 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::batch::{
-    triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into, LinearPoints,
-    PointTracks, SparsePointTracks,
+    triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into,
+    triangulate_points_sparse_views_into, LinearPoints, PointTracks, SparsePointTracks,
 };
+use pluecker::triangulation::views::View;
+use pluecker::{AnyCamera, Pose};
+use crate::camera::PyCamera;
+use crate::lens_camera::PyLensCamera;
+use crate::errors::invalid_argument;
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
 use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
@@ -370,8 +375,14 @@ pub fn triangulate_points(
 /// `max(track) + 1`, both below or at the `m` rows given, else `InvalidOptionError`: the result never
 /// outgrows the input; a track id without observations is rejected as too few views); each is solved as
 /// `triangulate_points` would.
+///
+/// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `LensCamera` of any of
+/// COLMAP's models: then `P[j]` is `K [R | t]` of that camera's pinhole part at the image's pose, `x`
+/// are the observed (distorted) pixels and `cov` their covariances, and the cost is the reprojection
+/// error in those pixels through the exact projection; `optimal` certifies that cost (certificate
+/// `lens_convexity_test`) where it can prove it, and is `gap_not_closed` where it cannot.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
+#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_point_observations(
     py: Python<'_>,
@@ -385,10 +396,12 @@ pub fn triangulate_point_observations(
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
     n_tracks: Option<Integer>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;
-    let cams = cameras("P", P)?;
+    let cams = crate::convert::cameras("P", P)?;
+    let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let m = rows.len();
     let pixels = rows.per_row("x", x, &[2])?;
@@ -404,8 +417,11 @@ pub fn triangulate_point_observations(
         let sink = PointSink::default();
         let out = report.rows_mut().zip(columns.rows_mut());
         let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
-        let stopped = triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write)
-            .map_err(|e| renamed(e, POINT_NAMES))?;
+        let stopped = match &views {
+            Some(views) => triangulate_points_sparse_views_into(views, &sparse, &opts, Some(done), out, write),
+            None => triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write),
+        }
+        .map_err(|e| renamed(e, POINT_NAMES))?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's observations are its sorted rows, each back at its row as given.
@@ -414,6 +430,40 @@ pub fn triangulate_point_observations(
         Ok((report, columns))
     })?;
     batch_result(py, outcome)
+}
+
+/// The views of `cameras` (one `Camera` or `LensCamera` per row of `P`) with the poses
+/// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row whose `P` is not
+/// `K [R | t]` of its camera's pinhole part.
+fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
+    let list: Vec<Bound<'_, PyAny>> = cameras.try_iter()?.collect::<PyResult<_>>()?;
+    if list.len() != p.len() {
+        return Err(shape_error("cameras", &format!("one camera per row of P ({})", p.len()), list.len().to_string()));
+    }
+    list.iter()
+        .zip(p)
+        .enumerate()
+        .map(|(j, (c, pj))| {
+            let camera: AnyCamera = if let Ok(c) = c.downcast::<PyCamera>() {
+                c.get().inner.into()
+            } else if let Ok(c) = c.downcast::<PyLensCamera>() {
+                c.get().inner.clone().into()
+            } else {
+                return Err(invalid_argument("cameras", format!("entry {j} is not a Camera or LensCamera")));
+            };
+            let k = camera.pinhole().map_err(to_py_err)?.matrix();
+            let rt = k.try_inverse().map(|ki| ki * pj);
+            let pose = rt.and_then(|rt| {
+                let scale = rt.fixed_view::<1, 3>(2, 0).norm();
+                let rotation: Matrix3<f64> = rt.fixed_view::<3, 3>(0, 0) / scale;
+                let orthonormal = (rotation * rotation.transpose() - Matrix3::identity()).norm() < 1e-6;
+                (orthonormal && scale > 0.0).then(|| Pose::new(rotation, rt.column(3) / scale))
+            });
+            pose.map(|pose| View::new(camera, pose)).ok_or_else(|| {
+                invalid_argument("P", format!("row {j} is not K [R | t] of the pinhole part of cameras[{j}]"))
+            })
+        })
+        .collect()
 }
 
 /// The report and point columns of `n` tracks not started yet (allocated and filled with the GIL
