@@ -14,12 +14,15 @@ use super::batch::{
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
+use crate::camera::PyCamera;
 use crate::convert::{
     cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real,
 };
+use crate::errors::invalid_argument;
 use crate::errors::{shape_error, to_py_err};
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
+use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
@@ -27,14 +30,11 @@ use pluecker::triangulation::point::batch::{
     triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into,
     triangulate_points_sparse_views_into, LinearPoints, PointTracks, SparsePointTracks,
 };
-use pluecker::triangulation::views::View;
-use pluecker::{AnyCamera, Pose};
-use crate::camera::PyCamera;
-use crate::lens_camera::PyLensCamera;
-use crate::errors::invalid_argument;
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
+use pluecker::triangulation::views::View;
 use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
+use pluecker::{AnyCamera, Pose};
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -438,7 +438,11 @@ pub fn triangulate_point_observations(
 fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
     let list: Vec<Bound<'_, PyAny>> = cameras.try_iter()?.collect::<PyResult<_>>()?;
     if list.len() != p.len() {
-        return Err(shape_error("cameras", &format!("one camera per row of P ({})", p.len()), list.len().to_string()));
+        return Err(shape_error(
+            "cameras",
+            &format!("one camera per row of P ({})", p.len()),
+            list.len().to_string(),
+        ));
     }
     list.iter()
         .zip(p)
@@ -449,7 +453,10 @@ fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyRes
             } else if let Ok(c) = c.downcast::<PyLensCamera>() {
                 c.get().inner.clone().into()
             } else {
-                return Err(invalid_argument("cameras", format!("entry {j} is not a Camera or LensCamera")));
+                return Err(invalid_argument(
+                    "cameras",
+                    format!("entry {j} is not a Camera or LensCamera"),
+                ));
             };
             let k = camera.pinhole().map_err(to_py_err)?.matrix();
             let rt = k.try_inverse().map(|ki| ki * pj);
@@ -460,7 +467,10 @@ fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyRes
                 (orthonormal && scale > 0.0).then(|| Pose::new(rotation, rt.column(3) / scale))
             });
             pose.map(|pose| View::new(camera, pose)).ok_or_else(|| {
-                invalid_argument("P", format!("row {j} is not K [R | t] of the pinhole part of cameras[{j}]"))
+                invalid_argument(
+                    "P",
+                    format!("row {j} is not K [R | t] of the pinhole part of cameras[{j}]"),
+                )
             })
         })
         .collect()

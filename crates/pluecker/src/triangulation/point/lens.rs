@@ -452,12 +452,17 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
     };
     report.certificate = Certificate::none();
     if opts.method == Method::Optimal && report.status == Status::Success {
-        if let Ok(bound) = lens_certificate(&used, &x, cost, opts.max_relative_gap) {
-            let lower_bound = bound.raw_lower_bound.min(cost).max(0.0);
+        // Without a proof, the trivial bound 0 still certifies exact data (a cost at the rounding level).
+        let raw = match lens_certificate(&used, &x, cost, opts.max_relative_gap) {
+            Ok(bound) => Some(bound.raw_lower_bound),
+            Err(_) => (relative_gap(cost, 0.0) <= opts.max_relative_gap).then_some(0.0),
+        };
+        if let Some(raw) = raw {
+            let lower_bound = raw.min(cost).max(0.0);
             let relative_gap = relative_gap(cost, lower_bound);
             report.certificate = Certificate {
                 lower_bound,
-                raw_lower_bound: bound.raw_lower_bound,
+                raw_lower_bound: raw,
                 relative_gap,
                 certified: relative_gap <= opts.max_relative_gap,
                 kind: CertificateKind::LensConvexityTest,
