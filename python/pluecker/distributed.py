@@ -826,6 +826,9 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     if line_matches is not None:
         inputs.append((str(line_matches), "query", "lines"))
     scratch = str(out / "_buckets")
+    for name in ("poses", "matches"):  # parts of an earlier job (another bucket count) would be read as this one's
+        for stale in (out / name).glob("part-*.parquet"):
+            stale.unlink()
     settings = _pose_settings(ransac, options, seed, model)
     results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
                        threads_per_worker)
