@@ -19,6 +19,7 @@ import pytest
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
+pc = pytest.importorskip("pyarrow.compute")
 pycolmap = pytest.importorskip("pycolmap")
 
 import pluecker  # noqa: E402
@@ -146,7 +147,7 @@ def inliers_by_query(matches) -> dict[int, np.ndarray]:
 
 def sorted_points(point_matches, q: int) -> tuple[np.ndarray, np.ndarray]:
     """Query ``q``'s pixels and world points in the order of the ``matches`` table (sorted by x, y, X, Y, Z)."""
-    rows = point_matches.filter(pa.compute.equal(point_matches.column("query"), q))
+    rows = point_matches.filter(pc.equal(point_matches.column("query"), q))
     values = np.c_[[rows.column(c).to_numpy() for c in dist.POINT_MATCH_COLUMNS[1:]]].T
     values = values[np.lexsort(values.T[::-1])]
     return values[:, :2], values[:, 2:]
@@ -297,7 +298,7 @@ def test_a_bad_camera_is_its_querys_status_and_the_others_are_unaffected():
         104: ("OPENCV", None, r"query 104: queries column params: expected a list of numbers"),
         105: (None, [800.0, 320.0, 240.0], r"query 105: queries column model: None is not a COLMAP camera model"),
     }
-    extra_points = points.filter(pa.compute.equal(points.column("query"), 0))
+    extra_points = points.filter(pc.equal(points.column("query"), 0))
     rows = [extra_points.set_column(0, "query", pa.array(np.full(extra_points.num_rows, q), pa.int64()))
             for q in bad_rows]
     mixed_queries = pa.concat_tables([queries, pa.table({
@@ -308,7 +309,7 @@ def test_a_bad_camera_is_its_querys_status_and_the_others_are_unaffected():
     message = dict(zip(poses.column("query").to_pylist(), poses.column("message").to_pylist()))
     for q, (_, _, pattern) in bad_rows.items():
         assert status[q] == "invalid_input" and re.match(pattern, message[q]), (q, message[q])
-    kept = poses.filter(pa.compute.is_in(poses.column("query"), good.column("query")))
+    kept = poses.filter(pc.is_in(poses.column("query"), good.column("query")))
     assert same(kept, good)
 
 
@@ -416,7 +417,7 @@ def test_an_unknown_camera_id_or_point3D_id_is_named_and_loses_no_other_query(tm
     assert message[second] == (f"query {second}: point_matches column point3D_id: point3D_id {bad_point} is not a "
                                "point of the COLMAP model (2 such matches)")
     others = [q for q in good.column("query").to_pylist() if q not in (first, second)]
-    keep = lambda t: t.filter(pa.compute.is_in(t.column("query"), pa.array(others)))  # noqa: E731
+    keep = lambda t: t.filter(pc.is_in(t.column("query"), pa.array(others)))  # noqa: E731
     assert same(keep(poses), keep(good)) and len(others) == len(rec.images) - 2
     # The command line prints the failed queries' messages and still writes every pose.
     paths = write_tables(tmp_path, queries=queries_bad, matches=matches_bad)
