@@ -390,7 +390,7 @@ def test_colmap_queries_by_camera_id_and_point3D_id_find_the_models_poses(tmp_pa
     # The in-memory function, the Parquet job and the command line give the same bits.
     paths = write_tables(tmp_path, queries=queries, matches=matches)
     rec.write(str(tmp_path))
-    summary = dist.localize(paths["queries"], paths["matches"], tmp_path / "job", model=rec, buckets=3)
+    summary = dist.localize(paths["queries"], paths["matches"], tmp_path / "job", reconstruction=rec, buckets=3)
     assert summary.statuses == {"success": len(rec.images)}
     assert same(dist.read_poses(tmp_path / "job"), poses)
     assert same(dist.read_matches(tmp_path / "job"), out_matches)
@@ -468,8 +468,8 @@ def test_colmap_flag_errors_are_one_line(tmp_path, capsys):
 def test_a_rerun_into_the_same_folder_leaves_no_stale_parts(tmp_path):
     rec, queries, matches = colmap_queries(4)
     paths = write_tables(tmp_path, queries=queries, matches=matches)
-    dist.localize(paths["queries"], paths["matches"], tmp_path / "o", model=rec, buckets=7)
-    dist.localize(paths["queries"], paths["matches"], tmp_path / "o", model=rec, buckets=2)
+    dist.localize(paths["queries"], paths["matches"], tmp_path / "o", reconstruction=rec, buckets=7)
+    dist.localize(paths["queries"], paths["matches"], tmp_path / "o", reconstruction=rec, buckets=2)
     assert dist.read_poses(tmp_path / "o").num_rows == len(rec.images)
 
 

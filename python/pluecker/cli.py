@@ -619,7 +619,7 @@ def _localize(args: argparse.Namespace) -> int:
             return _fail("localize", str(exc))
     try:
         summary = distributed.localize(args.queries, args.points, args.out, line_matches=args.lines, client=client,
-                                       seed=args.seed, ransac=ransac, model=model,
+                                       seed=args.seed, ransac=ransac, reconstruction=model,
                                        progress=client is not None and sys.stderr.isatty())
     except (KeyError, ValueError, OSError) as exc:
         return _fail("localize", f"cannot read the tables: {exc}")

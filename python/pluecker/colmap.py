@@ -488,7 +488,8 @@ def localize_queries(reconstruction: Any, queries: Any, point_matches: Any, line
 
     from .distributed import ColmapModel, localize_tables
 
-    model = reconstruction if isinstance(reconstruction, ColmapModel) else ColmapModel.from_reconstruction(reconstruction)
+    model = (reconstruction if isinstance(reconstruction, ColmapModel)
+             else ColmapModel.from_reconstruction(reconstruction))
     table = lambda t: t if t is None or isinstance(t, pa.Table) else pa.table(t)  # noqa: E731
     return localize_tables(table(queries), table(point_matches), table(line_matches), ransac=ransac, options=options,
-                           seed=seed, threads=threads, model=model)
+                           seed=seed, threads=threads, reconstruction=model)

@@ -59,9 +59,9 @@ import numpy as np
 from . import _core
 from .colmap import _check_sigma
 
-__all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations",
-           "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses", "read_matches",
-           "share_threads"]
+__all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
+           "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
+           "read_matches", "share_threads"]
 
 OBSERVATION_COLUMNS = ("track", "image", "x", "y")
 COVARIANCE_COLUMNS = ("cov_xx", "cov_xy", "cov_yy")
@@ -457,13 +457,13 @@ def _remove_tree(path: Path) -> None:
 
 #: Query tables give each query's camera by one of these column sets: pinhole intrinsics (pixels), a
 #: COLMAP camera model (its name as COLMAP spells it, e.g. ``OPENCV``, and its parameters in COLMAP's
-#: order, a list of numbers; pixels are then the raw, distorted ones), or, with a COLMAP ``model``, the
-#: ``camera_id`` of one of its cameras.
+#: order, a list of numbers; pixels are then the raw, distorted ones), or, with a COLMAP model
+#: (``reconstruction=``), the ``camera_id`` of one of its cameras.
 QUERY_COLUMNS = ("query", "fx", "fy", "cx", "cy")
 LENS_QUERY_COLUMNS = ("query", "model", "params")
 MODEL_QUERY_COLUMNS = ("query", "camera_id")
 POINT_MATCH_COLUMNS = ("query", "x", "y", "X", "Y", "Z")
-#: Point matches with a COLMAP ``model``: the 3-D point is the model's ``point3D_id``.
+#: Point matches with a COLMAP model (``reconstruction=``): the 3-D point is the model's ``point3D_id``.
 MODEL_POINT_MATCH_COLUMNS = ("query", "x", "y", "point3D_id")
 LINE_MATCH_COLUMNS = ("query", "x1", "y1", "x2", "y2", "X1", "Y1", "Z1", "X2", "Y2", "Z2")
 
@@ -532,7 +532,7 @@ def _query_camera_kind(names: Iterable[str], what: str, model: Optional[ColmapMo
                                + " or ".join(", ".join(sets[k][1:]) for k in complete) + ", not both")
     if complete == ["camera_id"] and model is None:
         raise _core.ShapeError(f"{what}: column camera_id names cameras of a COLMAP model: pass the model "
-                               "(model=, or --colmap on the command line), or give model, params per query")
+                               "(reconstruction=, or --colmap on the command line), or give model, params per query")
     if complete:
         return complete[0]
     # None complete: the missing columns of the pinhole set, the documented default, with the others.
@@ -645,18 +645,18 @@ def _point_matches(table: Any, model: Optional[ColmapModel]) -> tuple[dict[int, 
 
 def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, *, ransac: Any = None,
                     options: Optional[_core.PoseOptions] = None, seed: int = 0, threads: Optional[int] = None,
-                    model: Any = None) -> tuple[Any, Any]:
+                    reconstruction: Any = None) -> tuple[Any, Any]:
     """The single-machine kernel of :func:`localize`: one robust pose per row of ``queries`` from its rows
     of ``point_matches`` and ``line_matches``, all ``pyarrow.Table``.
 
     ``queries``: ``query`` (int64 id) and the camera, by one set of columns (:data:`QUERY_COLUMNS`):
     ``fx``, ``fy``, ``cx``, ``cy`` (a pinhole camera), or ``model`` (a COLMAP camera model name, e.g.
-    ``"OPENCV"``) and ``params`` (a list of numbers in COLMAP's order), or with ``model=`` the
-    ``camera_id`` of one of the model's cameras. Pixels are those of the camera: raw, distorted ones
-    for a model with distortion. ``point_matches``: ``query``, pixel ``x``, ``y`` and world ``X``,
-    ``Y``, ``Z``, or with ``model=`` the ``point3D_id`` of one of the model's 3-D points.
-    ``line_matches``: ``query``, segment ``x1 … y2`` in pixels, 3-D segment ``X1 … Z2``. ``model``: a
-    ``pycolmap.Reconstruction`` or a :class:`ColmapModel`.
+    ``"OPENCV"``) and ``params`` (a list of numbers in COLMAP's order), or with ``reconstruction=`` the
+    ``camera_id`` of one of the model's cameras. Pixels are those of the camera: raw, distorted ones for
+    a model with distortion. ``point_matches``: ``query``, pixel ``x``, ``y`` and world ``X``,
+    ``Y``, ``Z``, or with ``reconstruction=`` the ``point3D_id`` of one of the model's 3-D points.
+    ``line_matches``: ``query``, segment ``x1 … y2`` in pixels, 3-D segment ``X1 … Z2``.
+    ``reconstruction``: a COLMAP model, a ``pycolmap.Reconstruction`` or a :class:`ColmapModel`.
 
     Each query runs :func:`pluecker.estimate_pose` with RANSAC (``ransac``: a
     :class:`pluecker.RansacOptions`, ``None``: its defaults, a 4 px point threshold; its thresholds
@@ -664,15 +664,15 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     the partitioning), matches sorted by their values. Returns the ``poses`` table (``query``, ``R`` 9
     values row-major, ``t`` 3, ``status``, ``rms_error_px``, ``point_inliers``, ``line_inliers``,
     ``message``; ``x_cam = R X_world + t``) and the ``matches`` table (``query``, ``kind`` point/line,
-    ``index`` in the sorted order, ``inlier``, and with ``model=`` the ``point3D_id`` of a point
-    match), rows in increasing query id. A query with bad or too few matches, or a bad camera (an unknown
+    ``index`` in the sorted order, ``inlier``, and with ``reconstruction=`` the ``point3D_id`` of a
+    point match), rows in increasing query id. A query with bad or too few matches, or a bad camera (an unknown
     model name, wrong params, a ``camera_id`` or ``point3D_id`` not in the model), gets status
     ``invalid_input`` and a message naming the query, the table and the column; the other queries are
     solved as if it were not there."""
     pa = _pyarrow()
     from concurrent.futures import ThreadPoolExecutor
 
-    model = _model(model)
+    model = _model(reconstruction)
     kind = _query_camera_kind(queries.column_names, "queries", model)
     if point_matches is not None:
         _require_columns(point_matches.column_names,
@@ -701,7 +701,8 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
             if point_ids is not None and not point_ids[1][p_rows].all():
                 unknown = p_rows[~point_ids[1][p_rows]]
                 first = int(unknown[0])
-                shown = point_ids[0][first] if point_ids[2][first] else point_matches.column("point3D_id")[first].as_py()
+                shown = (point_ids[0][first] if point_ids[2][first]
+                         else point_matches.column("point3D_id")[first].as_py())
                 raise _BadQuery(f"query {q}: point_matches column point3D_id: point3D_id {shown} is not a point of "
                                 f"the COLMAP model ({len(unknown)} such match{'es' if len(unknown) > 1 else ''})")
             camera = cameras[i]()
@@ -777,7 +778,7 @@ def _localize_part(out: str, part: int, settings: dict[str, Any], *tables: Any) 
     ransac = _core.RansacOptions(**settings["ransac"]) if settings["ransac"] is not None else None
     options = _core.PoseOptions(**settings["options"]) if settings["options"] is not None else None
     poses, matches = localize_tables(*tables, ransac=ransac, options=options, seed=settings["seed"],
-                                     model=settings.get("model"))
+                                     reconstruction=settings.get("model"))
     _write_part(out, part, poses=poses, matches=matches)
     return poses
 
@@ -798,14 +799,16 @@ def _check_query_inputs(source: str, model: Optional[ColmapModel]) -> None:
 def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
              line_matches: Union[str, Path, None] = None, client: Any = None, buckets: Optional[int] = None,
              ransac: Any = None, options: Optional[_core.PoseOptions] = None, seed: int = 0,
-             progress: bool = False, threads_per_worker: Optional[int] = None, model: Any = None) -> JobSummary:
+             progress: bool = False, threads_per_worker: Optional[int] = None,
+             reconstruction: Any = None) -> JobSummary:
     """Batch localisation: one robust pose per query of the Parquet tables ``queries`` and
     ``point_matches`` (and ``line_matches``), columns of :func:`localize_tables` (cameras as pinhole
-    intrinsics, COLMAP models, or with ``model=`` a COLMAP model's ``camera_id``; 3-D points as ``X, Y, Z``
-    or with ``model=`` its ``point3D_id``), written to ``out/poses`` and ``out/matches``. ``model`` (a
+    intrinsics, COLMAP models, or a COLMAP model's ``camera_id``; 3-D points as ``X, Y, Z`` or the
+    model's ``point3D_id``), written to ``out/poses`` and ``out/matches``. ``reconstruction`` (a
     ``pycolmap.Reconstruction`` or :class:`ColmapModel`) is sent to every worker once. ``ransac``,
-    ``options`` and ``seed`` as for :func:`localize_tables`. The tables are split by a hash of ``query`` (module docs), so a
-    query's matches meet in one task; results equal :func:`localize_tables` on the whole tables.
+    ``options`` and ``seed`` as for :func:`localize_tables`. The tables are split by a hash of
+    ``query`` (module docs), so a query's matches meet in one task; results equal :func:`localize_tables`
+    on the whole tables.
     ``client``: a ``distributed.Client`` (``None``: here, without Dask); ``threads_per_worker`` as for
     :func:`triangulate` (the poses of a task run on that many threads). Returns a :class:`JobSummary`
     (``tracks`` counts queries; ``points``/``observations`` are the poses and matches folders)."""
@@ -813,7 +816,7 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
 
     started = time.perf_counter()
     out = Path(out)
-    model = _model(model)
+    model = _model(reconstruction)
     _check_query_inputs(str(queries), model)
     _check_inputs(str(point_matches), MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS,
                   "point_matches")
@@ -884,7 +887,8 @@ def queries_to_tables(queries: Iterable[dict[str, Any]]) -> tuple[Any, Any, Any]
         query_table = table(np.array([(q, *map(float, c)) for q, c in zip(q_ids, q_cameras)], float), QUERY_COLUMNS)
     else:
         models = [_record_camera(c) for c in q_cameras]
-        query_table = pa.table({"query": np.array(q_ids, np.int64), "model": pa.array([m for m, _ in models], pa.string()),
+        query_table = pa.table({"query": np.array(q_ids, np.int64),
+                                "model": pa.array([m for m, _ in models], pa.string()),
                                 "params": pa.array([p for _, p in models], pa.list_(pa.float64()))})
     return (query_table, table(np.concatenate(p_parts) if p_parts else np.zeros(0), POINT_MATCH_COLUMNS),
             table(np.concatenate(l_parts) if l_parts else np.zeros(0), LINE_MATCH_COLUMNS))
