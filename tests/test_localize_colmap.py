@@ -488,8 +488,9 @@ def test_the_docs_colmap_example_runs_as_written(tmp_path):
     subprocess.run([sys.executable, "make_example.py"], cwd=tmp_path, check=True, capture_output=True)
     words = shlex.split(commands[1])
     assert words[0] == "pluecker"
-    run = subprocess.run([sys.executable, "-m", "pluecker.cli", *words[1:]], cwd=tmp_path, capture_output=True,
-                         text=True)
+    executable = Path(sys.executable).with_name("pluecker")  # the installed command, as a user runs it
+    command = [str(executable)] if executable.exists() else [sys.executable, "-m", "pluecker.cli"]
+    run = subprocess.run([*command, *words[1:]], cwd=tmp_path, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     mask = lambda text: re.sub(r"in \d+\.\d s", "in T s", text)  # noqa: E731
     assert mask(run.stdout) == mask(shown)
@@ -510,3 +511,23 @@ def test_the_localize_flag_table_lists_every_flag():
     assert documented == parser_flags("localize")
     row = next(r for r in table_column(CLI_MD, "| command |") if r.startswith("`pluecker localize "))
     assert documented_flags([row]) == parser_flags("localize")
+
+
+def test_a_colmap_job_on_a_dask_cluster_equals_the_kernel(tmp_path, capsys):
+    """The model goes to the workers once (pickled); the poses are those of the in-process kernel."""
+    distributed = pytest.importorskip("distributed")
+    rec, queries, matches = colmap_queries(5)
+    paths = write_tables(tmp_path, queries=queries, matches=matches)
+    rec.write(str(tmp_path))
+    reference = colmap.localize_queries(rec, queries, matches)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                  silence_logs=40) as cluster, distributed.Client(cluster) as client:
+        summary = dist.localize(paths["queries"], paths["matches"], tmp_path / "dask", client=client, buckets=4,
+                                reconstruction=rec)
+        assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path), "--out",
+                     str(tmp_path / "cli"), "--scheduler", cluster.scheduler_address]) == 0
+    assert summary.workers == 2 and summary.statuses == {"success": len(rec.images)}
+    assert f"{len(rec.images)} queries on 2 Dask workers" in capsys.readouterr().out
+    for folder in ("dask", "cli"):
+        assert same(dist.read_poses(tmp_path / folder), reference[0])
+        assert same(dist.read_matches(tmp_path / folder), reference[1])
