@@ -531,3 +531,22 @@ def test_a_colmap_job_on_a_dask_cluster_equals_the_kernel(tmp_path, capsys):
     for folder in ("dask", "cli"):
         assert same(dist.read_poses(tmp_path / folder), reference[0])
         assert same(dist.read_matches(tmp_path / folder), reference[1])
+
+
+def test_the_documented_ransac_defaults_are_the_options_defaults(monkeypatch):
+    """The defaults in ``--help`` and in docs/cli.md's flag table are ``RansacOptions()``'s."""
+    from pluecker.cli import LOCALIZE_RANSAC_FLAGS
+    from test_cli_docs import help_text, section
+
+    defaults = pluecker.RansacOptions().to_dict()
+    text = help_text("localize", monkeypatch)
+    rows = {line.split("|")[1].strip().split()[0].strip("`"): line.split("|")[2].strip()
+            for line in section(CLI_MD, "## `pluecker localize`").splitlines() if line.startswith("| `--")}
+    for attribute, field in LOCALIZE_RANSAC_FLAGS.items():
+        flag = "--" + attribute.replace("_", "-")
+        shown = re.search(re.escape(flag) + r" \S+ .*?\(default ([^):]+)", text).group(1)
+        value = defaults[field]
+        if value is None:
+            assert shown.startswith("none") and rows[flag] == "none", flag
+        else:
+            assert float(shown) == value and float(rows[flag]) == value, (flag, shown, rows[flag], value)
