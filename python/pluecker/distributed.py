@@ -808,7 +808,8 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     ``pycolmap.Reconstruction`` or :class:`ColmapModel`) is sent to every worker once. ``ransac``,
     ``options`` and ``seed`` as for :func:`localize_tables`. The tables are split by a hash of
     ``query`` (module docs), so a query's matches meet in one task; results equal :func:`localize_tables`
-    on the whole tables.
+    on the whole tables. Without ``client`` and ``buckets``, tables of at most :data:`ROWS_PER_BUCKET`
+    rows in all are solved as one part, without the split.
     ``client``: a ``distributed.Client`` (``None``: here, without Dask); ``threads_per_worker`` as for
     :func:`triangulate` (the poses of a task run on that many threads). Returns a :class:`JobSummary`
     (``tracks`` counts queries; ``points``/``observations`` are the poses and matches folders)."""
@@ -822,20 +823,29 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
                   "point_matches")
     if line_matches is not None:
         _check_inputs(str(line_matches), LINE_MATCH_COLUMNS, "line_matches")
-    n = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(queries)))
+    rows = lambda source: sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(source)))  # noqa: E731
+    n = rows(queries)
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
-    buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
     inputs = [(str(queries), "query", "queries"), (str(point_matches), "query", "points")]
     if line_matches is not None:
         inputs.append((str(line_matches), "query", "lines"))
-    scratch = str(out / "_buckets")
     for name in ("poses", "matches"):  # parts of an earlier job (another bucket count) would be read as this one's
         for stale in (out / name).glob("part-*.parquet"):
             stale.unlink()
     settings = _pose_settings(ransac, options, seed, model)
-    results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
-                       threads_per_worker)
-    _remove_tree(Path(scratch))
+    if client is None and buckets is None and sum(rows(source) for source, _, _ in inputs) <= ROWS_PER_BUCKET:
+        # Here, and small enough for one task: the whole tables in one part, without the split through
+        # storage (the same bits: a query's answer depends on its own rows only).
+        pa = _pyarrow()
+        tables = [pa.concat_tables([pq.read_table(f) for f in _input_files(source)]) for source, _, _ in inputs]
+        poses = _localize_part(str(out), 0, settings, *tables)
+        results, buckets = [{"queries": poses.num_rows, "statuses": _status_counts(poses)}], 1
+    else:
+        buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
+        scratch = str(out / "_buckets")
+        results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings),
+                           progress, threads_per_worker)
+        _remove_tree(Path(scratch))
     if not any(r["queries"] for r in results):
         # No queries: empty ``poses`` and ``matches`` tables, as for :func:`triangulate`.
         tables = [pq.read_schema(_input_files(str(f))[0]).empty_table() for f in (queries, point_matches)]
