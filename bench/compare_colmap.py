@@ -484,7 +484,7 @@ def localize_section(seed: int, public: Path | None, ratios: tuple[float, ...] =
     if public is not None:
         rec = pycolmap.Reconstruction(str(public))
         kinds = sorted({c.model.name for c in rec.cameras.values()})
-        models.append((f"public {public.name} ({len(rec.images)} images, {'/'.join(kinds)})", rec,
+        models.append((f"public model ({len(rec.images)} images, {'/'.join(kinds)})", rec,
                        localize_public(rec)))
     with tempfile.TemporaryDirectory() as scratch:
         for k, (name, rec, queries) in enumerate(models):
