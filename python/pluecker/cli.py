@@ -11,6 +11,9 @@
 ``pluecker triangulate FOLDER``
     Triangulates every point (and with ``--lines`` every line) of a multi-view folder in the Oxford VGG
     format from the chosen views, and writes the 3-D features with their certificates as JSON and PLY.
+``pluecker localize QUERIES POINTS --out DIR``
+    Localises many query images from Parquet tables of 2D-3D matches (pinhole or COLMAP camera models,
+    or a COLMAP model's cameras and point3D_ids with ``--colmap``), here or on a Dask cluster.
 ``pluecker reproduce josephson-kahl-2008``
     Re-runs the experiments of Josephson & Kahl 2008 (section 5) on the VGG data and synthetic conics.
 
@@ -63,6 +66,24 @@ error: one line naming the file, exit status 2.
 The summary counts tracks: "460 of 672 triangulated" means 460 of the 672 rows of nview-corners were
 seen in at least two of the chosen views (the folder's p3d may have another number of rows)."""
 
+#: ``pluecker localize --help``: the tables, as ``pluecker.distributed.localize_tables`` reads them.
+LOCALIZE_DESCRIPTION = """\
+One robust pose per query image (RANSAC with the minimal solvers, then the refinement on the inliers;
+x_cam = R X_world + t) from Parquet tables (a file or a folder of files each). Writes --out/poses and
+--out/matches as Parquet (pluecker.distributed.localize). Needs pyarrow; with --scheduler also Dask:
+pip install 'pluecker[dask]'. Formats: docs/cli.md.
+
+QUERIES: query (int64 id) and the camera, by one of these sets of columns:
+  fx, fy, cx, cy         a pinhole camera, pixels u = K x_cam / z
+  model, params          a COLMAP camera model (e.g. OPENCV) and its parameters in COLMAP's order (a list
+                         of numbers); the pixels are the image's own, distorted ones
+  camera_id              with --colmap: a camera of the model
+POINTS: query, pixel x, y, and the world point X, Y, Z, or with --colmap its point3D_id in the model.
+LINES: query, segment x1, y1, x2, y2 (pixels), world segment X1, Y1, Z1, X2, Y2, Z2.
+A query with a bad camera (unknown model, wrong params, a camera_id or point3D_id not in the model) or
+bad matches gets status invalid_input and a message naming the query, the table and the column; the
+other queries are solved as if it were not there."""
+
 INPUT_KEYS = {"camera", "points2d", "points3d", "lines2d", "lines3d", "point_covariances", "line_covariances",
               "method", "options", "ransac"}
 #: Optional per-observation covariances, pixels², passed to ``estimate_pose`` as they are.
@@ -73,6 +94,10 @@ POSE_FLAGS = {"refine": "refine", "penalty": "penalty", "sigma": "sigma_px", "ce
 #: (and makes the estimate robust).
 RANSAC_FLAGS = {"point_threshold": "point_threshold", "line_threshold": "line_threshold", "seed": "seed",
                 "time_budget": "time_budget"}
+#: Command-line flag (``args`` attribute) → field of ``RansacOptions`` for ``pluecker localize``.
+LOCALIZE_RANSAC_FLAGS = {"point_threshold": "point_threshold", "line_threshold": "line_threshold",
+                         "confidence": "confidence", "max_iterations": "max_iterations",
+                         "min_inliers": "min_inliers", "time_budget": "time_budget"}
 #: Array key → trailing shape of one row.
 ARRAYS = {"points2d": (2,), "points3d": (3,), "lines2d": (2, 2), "lines3d": (2, 3)}
 
@@ -115,6 +140,16 @@ def _positive_float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a positive number, got '{text}'") from None
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"expected a positive number, got {text}")
+    return value
+
+
+def _probability(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1), got '{text}'") from None
+    if not 0 < value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number in (0, 1), got {text}")
     return value
 
 
@@ -204,18 +239,32 @@ def build_parser() -> argparse.ArgumentParser:
 
     loc = commands.add_parser(
         "localize", help="localise many query images from their 2D-3D matches (Parquet tables)",
-        description="One robust pose per query (RANSAC with minimal solvers, then refinement) from Parquet "
-        "tables: QUERIES (query, fx, fy, cx, cy), POINTS (query, x, y, X, Y, Z) and optionally --lines "
-        "(query, x1, y1, x2, y2, X1, Y1, Z1, X2, Y2, Z2); pixels u = K x_cam / z, x_cam = R X_world + t. "
-        "Writes --out/poses and --out/matches as Parquet (pluecker.distributed.localize). Needs pyarrow; "
-        "with --scheduler also Dask: pip install 'pluecker[dask]'.")
+        formatter_class=argparse.RawDescriptionHelpFormatter, description=LOCALIZE_DESCRIPTION)
     loc.add_argument("queries", metavar="QUERIES", type=Path, help="Parquet file or folder of the queries")
     loc.add_argument("points", metavar="POINTS", type=Path, help="Parquet file or folder of the point matches")
     loc.add_argument("--lines", metavar="LINES", type=Path, help="Parquet file or folder of the line matches")
+    loc.add_argument("--colmap", metavar="DIR", type=Path,
+                     help="a COLMAP model (text or binary; needs pycolmap: pip install 'pluecker[colmap]'): POINTS "
+                     "give point3D_id instead of X, Y, Z and QUERIES may give a camera_id of the model")
     loc.add_argument("--out", metavar="DIR", type=Path, required=True, help="output directory")
     loc.add_argument("--scheduler", metavar="ADDRESS", help="run on the Dask cluster of this scheduler")
     loc.add_argument("--seed", type=_non_negative_int, default=0, metavar="N",
                      help="RANSAC seed (query q uses N + q; default 0)")
+    loc.add_argument("--point-threshold", type=_positive_float, metavar="PX",
+                     help="inlier threshold of a point, reprojection distance in the image's own (distorted) "
+                     "pixels (default 4)")
+    loc.add_argument("--line-threshold", type=_positive_float, metavar="PX",
+                     help="inlier threshold of a line, RMS distance of its endpoints to the projected line in "
+                     "pixels (default 4)")
+    loc.add_argument("--confidence", type=_probability, metavar="P",
+                     help="probability of having drawn an all-inlier sample when sampling stops (default 0.9999)")
+    loc.add_argument("--max-iterations", type=_positive_int, metavar="N",
+                     help="cap on the RANSAC samples per query (default 100000)")
+    loc.add_argument("--min-inliers", type=_positive_int, metavar="N",
+                     help="fewest inliers of a usable pose, at least 3 (default 6)")
+    loc.add_argument("--time-budget", type=_positive_float, metavar="S",
+                     help="wall-time budget of each query's RANSAC loop, seconds (default none: the iteration cap "
+                     "bounds it)")
     loc.set_defaults(handler=_localize)
 
     rep = commands.add_parser(
@@ -523,8 +572,27 @@ def _unwritable(folder: Path) -> str | None:
     return None
 
 
+def _localize_model(path: Path) -> Any:
+    """The ``--colmap`` model as a ``pluecker.distributed.ColmapModel`` (an ``InputError`` when pycolmap
+    is missing or the folder holds no readable model)."""
+    from pluecker import colmap, distributed
+
+    try:
+        pycolmap = colmap._pycolmap()
+    except ImportError as exc:
+        raise InputError(str(exc)) from None
+    if not path.is_dir():
+        raise InputError(f"--colmap {path}: not a directory")
+    try:
+        reconstruction = pycolmap.Reconstruction(str(path))
+    except Exception as exc:  # pycolmap raises its own exception types for unreadable models
+        raise InputError(f"--colmap {path}: cannot read a COLMAP model: {exc}") from None
+    return distributed.ColmapModel.from_reconstruction(reconstruction)
+
+
 def _localize(args: argparse.Namespace) -> int:
-    """``pluecker localize QUERIES POINTS --out DIR [--lines L] [--scheduler ADDRESS]``."""
+    """``pluecker localize QUERIES POINTS --out DIR [--colmap DIR] [--lines L] [--scheduler ADDRESS]
+    [RANSAC flags]``."""
     try:
         from pluecker import distributed
 
@@ -534,6 +602,13 @@ def _localize(args: argparse.Namespace) -> int:
     for path in (args.queries, args.points, args.lines):
         if path is not None and not path.exists():
             return _fail("localize", f"{path}: no such file or directory")
+    fields = {field: getattr(args, flag) for flag, field in LOCALIZE_RANSAC_FLAGS.items()
+              if getattr(args, flag) is not None}
+    try:
+        ransac = pluecker.RansacOptions(**fields)
+        model = _localize_model(args.colmap) if args.colmap is not None else None
+    except (InputError, pluecker.PlueckerError) as exc:
+        return _fail("localize", str(exc))
     if (problem := _unwritable(args.out)) is not None:
         return _fail("localize", f"cannot write --out {args.out}: {problem}")
     client = None
@@ -544,16 +619,24 @@ def _localize(args: argparse.Namespace) -> int:
             return _fail("localize", str(exc))
     try:
         summary = distributed.localize(args.queries, args.points, args.out, line_matches=args.lines, client=client,
-                                       seed=args.seed, progress=client is not None and sys.stderr.isatty())
+                                       seed=args.seed, ransac=ransac, reconstruction=model,
+                                       progress=client is not None and sys.stderr.isatty())
     except (KeyError, ValueError, OSError) as exc:
         return _fail("localize", f"cannot read the tables: {exc}")
     finally:
         if client is not None:
             client.close()
     where = f"{summary.workers} Dask workers" if client is not None else "this machine"
-    print(f"{summary.tracks} queries on {where} in {summary.seconds:.1f} s: "
-          + ", ".join(f"{n} {s}" for s, n in sorted(summary.statuses.items())) + f"\nwrote {args.out}/poses and "
-          f"{args.out}/matches")
+    lines = [f"{summary.tracks} queries on {where} in {summary.seconds:.1f} s: "
+             + ", ".join(f"{n} {s}" for s, n in sorted(summary.statuses.items()))]
+    if any(s != "success" for s in summary.statuses):
+        poses = distributed.read_poses(args.out)
+        failed = [(q, s, m) for q, s, m in zip(poses.column("query").to_pylist(), poses.column("status").to_pylist(),
+                                               poses.column("message").to_pylist()) if s != "success"]
+        lines.append("not localised: " + "; ".join(f"{s}: {m or f'query {q}'}" for q, s, m in failed[:3])
+                     + ("; …" if len(failed) > 3 else ""))
+    lines.append(f"wrote {args.out}/poses and {args.out}/matches")
+    print("\n".join(lines))
     return 0
 
 

@@ -432,3 +432,70 @@ def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: A
                                  point_covariances=point_covariances, line_covariances=line_covariances)
     rigid = rigid_from_pose(result.R, result.t) if result.status == "success" else None
     return rigid, result
+
+
+class MatchError(_core.PlueckerError):
+    """Localisation input that names what the COLMAP model does not hold: a ``camera_id`` or a
+    ``point3D_id``. The message names the argument and the id."""
+
+
+def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_ids: Any, *, ransac: Any = True,
+                      options: Any = None, point_covariances: Any = None) -> tuple[Any, Any]:
+    """Localises one image in a COLMAP model from its keypoints matched to the model's 3-D points:
+    ``points2D`` (n, 2), the image's own (distorted) pixels, and ``point3D_ids`` (n,). ``camera``: the
+    ``camera_id`` of one of the model's cameras, a ``pycolmap.Camera`` or a ``pluecker.LensCamera``.
+    ``reconstruction``: a ``pycolmap.Reconstruction`` (or a :class:`pluecker.distributed.ColmapModel`).
+    Returns ``(cam_from_world, PoseResult)`` as :func:`localize` does: robust by default (``ransac=True``,
+    :class:`pluecker.RansacOptions` defaults: 4 px threshold in the image's pixels; pass
+    ``ransac=pluecker.RansacOptions(point_threshold=..., confidence=..., max_iterations=..., seed=...)``).
+    A ``camera_id`` or ``point3D_id`` the model does not hold is a :class:`MatchError` naming it."""
+    from .distributed import ColmapModel
+
+    ids = np.asarray(point3D_ids)
+    if ids.ndim != 1 or not (np.issubdtype(ids.dtype, np.integer) or len(ids) == 0):
+        raise _core.ShapeError(f"point3D_ids: expected a 1-D array of integer ids, got shape {ids.shape} of "
+                               f"{ids.dtype}")
+    ids = ids.astype(np.int64)
+    if isinstance(reconstruction, ColmapModel):
+        points3D, known = reconstruction.lookup(ids)
+        cameras = reconstruction.cameras
+    else:
+        known = np.array([reconstruction.exists_point3D(int(i)) for i in ids], dtype=bool)
+        points3D = np.array([reconstruction.points3D[int(i)].xyz if ok else np.full(3, np.nan)
+                             for i, ok in zip(ids, known)], dtype=float).reshape(-1, 3)
+        cameras = reconstruction.cameras
+    if not known.all():
+        missing = ids[~known]
+        raise MatchError(f"point3D_ids: point3D_id {int(missing[0])} (match {int(np.flatnonzero(~known)[0])}) is not "
+                         f"a point of the model ({len(missing)} such match{'es' if len(missing) > 1 else ''})")
+    if isinstance(camera, (int, np.integer)) and not isinstance(camera, (bool, np.bool_)):
+        if int(camera) not in cameras:
+            raise MatchError(f"camera: camera_id {int(camera)} is not a camera of the model")
+        camera = cameras[int(camera)]
+        if isinstance(camera, tuple):  # a ColmapModel's (model name, params)
+            camera = _core.LensCamera(camera[0], list(camera[1]))
+    return localize(camera, points2D, points3D, ransac=ransac, options=options,
+                    point_covariances=point_covariances)
+
+
+def localize_queries(reconstruction: Any, queries: Any, point_matches: Any, line_matches: Any = None, *,
+                     ransac: Any = None, options: Any = None, seed: int = 0, threads: int | None = None
+                     ) -> tuple[Any, Any]:
+    """``pluecker localize --colmap`` in memory: one robust pose per query of ``queries`` (columns
+    ``query`` and ``camera_id``, or ``model`` and ``params``, or ``fx, fy, cx, cy``) from its
+    ``point_matches`` (``query``, ``x``, ``y``, ``point3D_id``; pixels of the image's own camera) and
+    ``line_matches``, anything ``pyarrow.table`` takes (a dict of columns, a pandas DataFrame, a
+    ``pyarrow.Table``). The 3-D points and cameras come from ``reconstruction`` (a
+    ``pycolmap.Reconstruction`` or :class:`pluecker.distributed.ColmapModel`). Returns the ``poses``
+    and ``matches`` tables of :func:`pluecker.distributed.localize_tables` (a query whose ``camera_id``
+    or ``point3D_id`` the model does not hold gets status ``invalid_input`` and a message naming it;
+    the others are unaffected). ``ransac``: :class:`pluecker.RansacOptions` (``None``: its defaults)."""
+    import pyarrow as pa
+
+    from .distributed import ColmapModel, localize_tables
+
+    model = (reconstruction if isinstance(reconstruction, ColmapModel)
+             else ColmapModel.from_reconstruction(reconstruction))
+    table = lambda t: t if t is None or isinstance(t, pa.Table) else pa.table(t)  # noqa: E731
+    return localize_tables(table(queries), table(point_matches), table(line_matches), ransac=ransac, options=options,
+                           seed=seed, threads=threads, reconstruction=model)

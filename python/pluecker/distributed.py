@@ -59,9 +59,9 @@ import numpy as np
 from . import _core
 from .colmap import _check_sigma
 
-__all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points", "read_observations",
-           "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses", "read_matches",
-           "share_threads"]
+__all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
+           "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
+           "read_matches", "share_threads"]
 
 OBSERVATION_COLUMNS = ("track", "image", "x", "y")
 COVARIANCE_COLUMNS = ("cov_xx", "cov_xy", "cov_yy")
@@ -455,69 +455,267 @@ def _remove_tree(path: Path) -> None:
     path.rmdir()
 
 
+#: Query tables give each query's camera by one of these column sets: pinhole intrinsics (pixels), a
+#: COLMAP camera model (its name as COLMAP spells it, e.g. ``OPENCV``, and its parameters in COLMAP's
+#: order, a list of numbers; pixels are then the raw, distorted ones), or, with a COLMAP model
+#: (``reconstruction=``), the ``camera_id`` of one of its cameras.
 QUERY_COLUMNS = ("query", "fx", "fy", "cx", "cy")
+LENS_QUERY_COLUMNS = ("query", "model", "params")
+MODEL_QUERY_COLUMNS = ("query", "camera_id")
 POINT_MATCH_COLUMNS = ("query", "x", "y", "X", "Y", "Z")
+#: Point matches with a COLMAP model (``reconstruction=``): the 3-D point is the model's ``point3D_id``.
+MODEL_POINT_MATCH_COLUMNS = ("query", "x", "y", "point3D_id")
 LINE_MATCH_COLUMNS = ("query", "x1", "y1", "x2", "y2", "X1", "Y1", "Z1", "X2", "Y2", "Z2")
+
+
+@dataclass(frozen=True)
+class ColmapModel:
+    """What localisation reads of a COLMAP model: its 3-D points by ``point3D_id`` (``point3D_ids`` (n,)
+    sorted, ``xyz`` (n, 3)) and its cameras by ``camera_id`` (``cameras``: ``{camera_id: (model name,
+    params)}``). Plain data, sent to every Dask worker once; :meth:`from_reconstruction` reads a
+    ``pycolmap.Reconstruction``."""
+
+    point3D_ids: np.ndarray
+    xyz: np.ndarray
+    cameras: dict
+
+    def __post_init__(self) -> None:
+        ids = np.asarray(self.point3D_ids, dtype=np.int64).reshape(-1)
+        xyz = np.asarray(self.xyz, dtype=float).reshape(-1, 3) if len(ids) else np.zeros((0, 3))
+        if xyz.shape != (len(ids), 3):
+            raise _core.ShapeError(f"ColmapModel: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
+        order = np.argsort(ids, kind="stable")
+        ids, xyz = ids[order], xyz[order]
+        if np.any(ids[1:] == ids[:-1]):
+            raise _core.ShapeError(f"ColmapModel: point3D_id {int(ids[1:][ids[1:] == ids[:-1]][0])} is listed twice")
+        cameras = {int(k): (str(m), tuple(float(p) for p in params)) for k, (m, params) in dict(self.cameras).items()}
+        object.__setattr__(self, "point3D_ids", ids)
+        object.__setattr__(self, "xyz", xyz)
+        object.__setattr__(self, "cameras", cameras)
+
+    @classmethod
+    def from_reconstruction(cls, reconstruction: Any) -> "ColmapModel":
+        """The points and cameras of a ``pycolmap.Reconstruction``."""
+        points = reconstruction.points3D
+        ids = np.fromiter((int(i) for i in points), dtype=np.int64, count=len(points))
+        xyz = np.array([points[int(i)].xyz for i in ids], dtype=float).reshape(-1, 3)
+        cameras = {int(i): (c.model.name, tuple(c.params)) for i, c in reconstruction.cameras.items()}
+        return cls(ids, xyz, cameras)
+
+    def lookup(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The points (len(ids), 3) of ``point3D_ids`` ``ids`` (NaN for an id not in the model) and the
+        mask of the known ones."""
+        ids = np.asarray(ids, dtype=np.int64)
+        rows = np.minimum(np.searchsorted(self.point3D_ids, ids), max(len(self.point3D_ids) - 1, 0))
+        known = self.point3D_ids[rows] == ids if len(self.point3D_ids) else np.zeros(len(ids), dtype=bool)
+        xyz = np.full((len(ids), 3), np.nan)
+        xyz[known] = self.xyz[rows[known]]
+        return xyz, known
+
+
+def _model(model: Any) -> Optional[ColmapModel]:
+    """``model`` as a :class:`ColmapModel` (a ``pycolmap.Reconstruction`` is read), or ``None``."""
+    if model is None or isinstance(model, ColmapModel):
+        return model
+    return ColmapModel.from_reconstruction(model)
+
+
+def _query_camera_kind(names: Iterable[str], what: str, model: Optional[ColmapModel]) -> str:
+    """Which camera columns a query table holds: ``"pinhole"``, ``"lens"`` or ``"camera_id"``
+    (:data:`QUERY_COLUMNS`). A ``ShapeError`` naming ``what`` when it holds none of the sets, or more
+    than one (which camera would win is not guessed), or ``camera_id`` without a model."""
+    present = set(names)
+    sets = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "camera_id": MODEL_QUERY_COLUMNS}
+    complete = [kind for kind, columns in sets.items() if set(columns) <= present]
+    if len(complete) > 1:
+        raise _core.ShapeError(f"{what}: one camera per query: give the columns of one of "
+                               + " or ".join(", ".join(sets[k][1:]) for k in complete) + ", not both")
+    if complete == ["camera_id"] and model is None:
+        raise _core.ShapeError(f"{what}: column camera_id names cameras of a COLMAP model: pass the model "
+                               "(reconstruction=, or --colmap on the command line), or give model, params per query")
+    if complete:
+        return complete[0]
+    # None complete: the missing columns of the pinhole set, the documented default, with the others.
+    try:
+        _require_columns(present, QUERY_COLUMNS, what)
+    except _core.ShapeError as error:
+        others = "query, model, params (a COLMAP camera model)" + (", or query, camera_id (a camera of the "
+                                                                   "model)" if model is not None else "")
+        raise _core.ShapeError(f"{error}; or {others}") from None
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+class _BadQuery(Exception):
+    """A query whose own rows are bad: its status is ``invalid_input`` with this message."""
+
+
+def _query_cameras(queries: Any, kind: str, model: Optional[ColmapModel]) -> list[Any]:
+    """Per row of ``queries``, a function that returns its camera (``Camera`` or ``LensCamera``) or
+    raises :class:`_BadQuery` naming the table, the column and the query id."""
+    q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
+    if kind == "pinhole":
+        intrinsics = _columns(queries, QUERY_COLUMNS[1:])
+
+        def pinhole(i: int) -> Any:
+            try:
+                return _core.Camera(*intrinsics[i])
+            except _core.PlueckerError as exc:
+                raise _BadQuery(f"query {q_ids[i]}: queries columns fx, fy, cx, cy: {exc}") from None
+        return [lambda i=i: pinhole(i) for i in range(len(q_ids))]
+    if kind == "lens":
+        names, params = queries.column("model").to_pylist(), queries.column("params").to_pylist()
+        return [lambda i=i: _lens(q_ids[i], names[i], params[i]) for i in range(len(q_ids))]
+    camera_ids = queries.column("camera_id").to_pylist()
+    return [lambda i=i: _model_camera(q_ids[i], camera_ids[i], model) for i in range(len(q_ids))]
+
+
+def _lens(query: int, name: Any, params: Any, what: str = "queries") -> _core.LensCamera:
+    """The ``LensCamera`` of one query's ``model`` and ``params`` cells."""
+    if not isinstance(name, str) or name not in _core.LensCamera.MODELS:
+        raise _BadQuery(f"query {query}: {what} column model: {name!r} is not a COLMAP camera model; expected one "
+                        f"of {', '.join(_core.LensCamera.MODELS)}")
+    if not isinstance(params, (list, tuple)) or not all(
+            isinstance(p, (int, float)) and not isinstance(p, bool) for p in params):
+        raise _BadQuery(f"query {query}: {what} column params: expected a list of numbers in COLMAP's order for "
+                        f"{name}, got {params!r}"[:300])
+    try:
+        return _core.LensCamera(name, [float(p) for p in params])
+    except _core.PlueckerError as exc:
+        raise _BadQuery(f"query {query}: {what} column params: {exc}") from None
+
+
+def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.LensCamera:
+    """The ``LensCamera`` of the model's camera ``camera_id`` for one query."""
+    if camera_id is None or int(camera_id) not in model.cameras:
+        raise _BadQuery(f"query {query}: queries column camera_id: camera_id {camera_id} is not a camera of the "
+                        "COLMAP model")
+    name, params = model.cameras[int(camera_id)]
+    try:
+        return _core.LensCamera(name, list(params))
+    except _core.PlueckerError as exc:
+        raise _BadQuery(f"query {query}: queries column camera_id: camera_id {camera_id} of the COLMAP model: "
+                        f"{exc}") from None
 
 
 def _columns(table: Any, names: Iterable[str]) -> np.ndarray:
     return np.stack([np.asarray(table.column(n).to_numpy(), dtype=float) for n in names], axis=1)
 
 
+def _point3D_ids(table: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The ``point3D_id`` column as int64 and the mask of its cells that hold an integer (not null, not
+    a fraction)."""
+    column = table.column("point3D_id")
+    import pyarrow.types as types
+
+    if types.is_integer(column.type) and column.null_count == 0:
+        return np.asarray(column.to_numpy(), dtype=np.int64), np.ones(len(column), dtype=bool)
+    values = np.asarray(column.to_numpy(zero_copy_only=False), dtype=float)
+    valid = np.isfinite(values) & (values == np.round(values))
+    return np.where(valid, values, -1).astype(np.int64), valid
+
+
+def _grouped(table: Any, names: tuple[str, ...]) -> dict[int, np.ndarray]:
+    """Per query id, the rows of ``table`` holding it, in increasing order of the columns ``names``: an
+    order that does not depend on how the rows arrived (the result is the same whatever the
+    partitioning)."""
+    if table is None or table.num_rows == 0:
+        return {}
+    key = np.asarray(table.column("query").to_numpy(), dtype=np.int64)
+    values = [np.asarray(table.column(n).to_numpy(zero_copy_only=False)) for n in names]
+    rows = np.lexsort((*values[::-1], key))
+    key = key[rows]
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    return {int(key[a]): rows[a:b] for a, b in zip(starts, np.r_[starts[1:], len(key)])}
+
+
+def _point_matches(table: Any, model: Optional[ColmapModel]) -> tuple[dict[int, np.ndarray], np.ndarray, Any]:
+    """The point matches: rows per query (:func:`_grouped`), every row as ``(x, y, X, Y, Z)`` (the 3-D
+    point read from the model with a ``model``), and with a model the ``point3D_id`` per row with the
+    mask of those in the model (else ``None``)."""
+    if table is None or table.num_rows == 0:
+        return {}, np.zeros((0, 5)), None
+    if model is None:
+        return _grouped(table, POINT_MATCH_COLUMNS[1:]), _columns(table, POINT_MATCH_COLUMNS[1:]), None
+    ids, valid = _point3D_ids(table)
+    xyz, known = model.lookup(ids)
+    known &= valid
+    groups = _grouped(table, MODEL_POINT_MATCH_COLUMNS[1:])
+    return groups, np.c_[_columns(table, ("x", "y")), xyz], (ids, known, valid)
+
+
 def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, *, ransac: Any = None,
-                    options: Optional[_core.PoseOptions] = None, seed: int = 0, threads: Optional[int] = None
-                    ) -> tuple[Any, Any]:
-    """The single-machine kernel of :func:`localize`: one robust pose per row of ``queries`` (columns
-    ``query``, ``fx``, ``fy``, ``cx``, ``cy``: a pinhole camera) from its rows of ``point_matches``
-    (``query``, pixel ``x``, ``y``, world ``X``, ``Y``, ``Z``) and ``line_matches`` (``query``, segment
-    ``x1 … y2`` in pixels, 3-D segment ``X1 … Z2``), all ``pyarrow.Table``. Each query runs
-    :func:`pluecker.estimate_pose` with RANSAC (``ransac``: :class:`pluecker.RansacOptions`, ``None``:
-    its defaults) seeded ``seed + query`` (reproducible whatever the partitioning), matches sorted by
-    their values. Returns the ``poses`` table (``query``, ``R`` 9 values row-major, ``t`` 3, ``status``,
-    ``rms_error_px``, ``point_inliers``, ``line_inliers``, ``message``; ``x_cam = R X_world + t``) and the
-    ``matches`` table (``query``, ``kind`` point/line, ``index`` in the sorted order, ``inlier``), rows in
-    increasing query id. A query with bad or too few matches gets a status and a message."""
+                    options: Optional[_core.PoseOptions] = None, seed: int = 0, threads: Optional[int] = None,
+                    reconstruction: Any = None) -> tuple[Any, Any]:
+    """The single-machine kernel of :func:`localize`: one robust pose per row of ``queries`` from its rows
+    of ``point_matches`` and ``line_matches``, all ``pyarrow.Table``.
+
+    ``queries``: ``query`` (int64 id) and the camera, by one set of columns (:data:`QUERY_COLUMNS`):
+    ``fx``, ``fy``, ``cx``, ``cy`` (a pinhole camera), or ``model`` (a COLMAP camera model name, e.g.
+    ``"OPENCV"``) and ``params`` (a list of numbers in COLMAP's order), or with ``reconstruction=`` the
+    ``camera_id`` of one of the model's cameras. Pixels are those of the camera: raw, distorted ones for
+    a model with distortion. ``point_matches``: ``query``, pixel ``x``, ``y`` and world ``X``,
+    ``Y``, ``Z``, or with ``reconstruction=`` the ``point3D_id`` of one of the model's 3-D points.
+    ``line_matches``: ``query``, segment ``x1 … y2`` in pixels, 3-D segment ``X1 … Z2``.
+    ``reconstruction``: a COLMAP model, a ``pycolmap.Reconstruction`` or a :class:`ColmapModel`.
+
+    Each query runs :func:`pluecker.estimate_pose` with RANSAC (``ransac``: a
+    :class:`pluecker.RansacOptions`, ``None``: its defaults, a 4 px point threshold; its thresholds
+    are distorted pixels through a lens) seeded ``ransac.seed + seed + query`` (reproducible whatever
+    the partitioning), matches sorted by their values. Returns the ``poses`` table (``query``, ``R`` 9
+    values row-major, ``t`` 3, ``status``, ``rms_error_px``, ``point_inliers``, ``line_inliers``,
+    ``message``; ``x_cam = R X_world + t``) and the ``matches`` table (``query``, ``kind`` point/line,
+    ``index`` in the sorted order, ``inlier``, and with ``reconstruction=`` the ``point3D_id`` of a
+    point match), rows in increasing query id. A query with bad or too few matches, or a bad camera (an unknown
+    model name, wrong params, a ``camera_id`` or ``point3D_id`` not in the model), gets status
+    ``invalid_input`` and a message naming the query, the table and the column; the other queries are
+    solved as if it were not there."""
     pa = _pyarrow()
     from concurrent.futures import ThreadPoolExecutor
 
-    _require_columns(queries.column_names, QUERY_COLUMNS, "queries")
-    for table, names, what in ((point_matches, POINT_MATCH_COLUMNS, "point_matches"),
-                               (line_matches, LINE_MATCH_COLUMNS, "line_matches")):
-        if table is not None:
-            _require_columns(table.column_names, names, what)
+    model = _model(reconstruction)
+    kind = _query_camera_kind(queries.column_names, "queries", model)
+    if point_matches is not None:
+        _require_columns(point_matches.column_names,
+                         MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS, "point_matches")
+    if line_matches is not None:
+        _require_columns(line_matches.column_names, LINE_MATCH_COLUMNS, "line_matches")
     base = (ransac if ransac is not None else _core.RansacOptions()).to_dict()
     q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
-    intrinsics = _columns(queries, QUERY_COLUMNS[1:])
+    cameras = _query_cameras(queries, kind, model)
     order = np.argsort(q_ids, kind="stable")
-    q_ids, intrinsics = q_ids[order], intrinsics[order]
-
-    def grouped(table: Any, names: tuple[str, ...]) -> dict[int, np.ndarray]:
-        if table is None or table.num_rows == 0:
-            return {}
-        key = np.asarray(table.column("query").to_numpy(), dtype=np.int64)
-        values = _columns(table, names[1:])
-        rows = np.lexsort((*values.T[::-1], key))
-        key, values = key[rows], values[rows]
-        starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-        return {int(key[a]): values[a:b] for a, b in zip(starts, np.r_[starts[1:], len(key)])}
-
-    points, lines = grouped(point_matches, POINT_MATCH_COLUMNS), grouped(line_matches, LINE_MATCH_COLUMNS)
+    q_ids = q_ids[order]
+    cameras = [cameras[i] for i in order]
+    points, point_values, point_ids = _point_matches(point_matches, model)
+    lines = _grouped(line_matches, LINE_MATCH_COLUMNS[1:])
+    line_values = _columns(line_matches, LINE_MATCH_COLUMNS[1:]) if lines else np.zeros((0, 10))
+    no_rows = np.zeros(0, dtype=np.int64)
 
     def solve(i: int) -> dict[str, Any]:
         q = int(q_ids[i])
-        p, l = points.get(q, np.zeros((0, 5))), lines.get(q, np.zeros((0, 10)))
+        p_rows, l_rows = points.get(q, no_rows), lines.get(q, no_rows)
+        p, l = point_values[p_rows], line_values[l_rows]
         out: dict[str, Any] = {"R": np.full(9, np.nan), "t": np.full(3, np.nan), "rms": np.nan, "message": "",
-                               "pin": np.zeros(len(p), bool), "lin": np.zeros(len(l), bool)}
+                               "pin": np.zeros(len(p), bool), "lin": np.zeros(len(l), bool),
+                               "ids": point_ids[0][p_rows] if point_ids is not None else None}
         try:
-            camera = _core.Camera(*intrinsics[i])
-            options_q = _core.RansacOptions(**{**base, "seed": (seed + q) % 2**63})
+            if point_ids is not None and not point_ids[1][p_rows].all():
+                unknown = p_rows[~point_ids[1][p_rows]]
+                first = int(unknown[0])
+                shown = (point_ids[0][first] if point_ids[2][first]
+                         else point_matches.column("point3D_id")[first].as_py())
+                raise _BadQuery(f"query {q}: point_matches column point3D_id: point3D_id {shown} is not a point of "
+                                f"the COLMAP model ({len(unknown)} such match{'es' if len(unknown) > 1 else ''})")
+            camera = cameras[i]()
+            options_q = _core.RansacOptions(**{**base, "seed": (base["seed"] + seed + q) % 2**63})
             r = _core.estimate_pose(camera, p[:, :2] if len(p) else None, p[:, 2:] if len(p) else None,
                                     l[:, :4].reshape(-1, 2, 2) if len(l) else None,
                                     l[:, 4:].reshape(-1, 2, 3) if len(l) else None, options=options,
                                     ransac=options_q)
+        except _BadQuery as exc:
+            out["status"], out["message"] = "invalid_input", str(exc)
+            return out
         except (_core.PlueckerError, TypeError) as exc:
-            out["status"] = "invalid_input"
-            out["message"] = f"query {q}: {exc}"
+            out["status"], out["message"] = "invalid_input", f"query {q}: {exc}"
             return out
         out.update(status=r.status, R=np.asarray(r.R).reshape(-1), t=np.asarray(r.t), rms=r.rms_error_px,
                    pin=np.asarray(r.inliers_points, dtype=bool), lin=np.asarray(r.inliers_lines, dtype=bool))
@@ -535,20 +733,26 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
         "line_inliers": np.array([int(s["lin"].sum()) for s in solved], np.int64),
         "message": pa.array([s["message"] for s in solved], pa.string()),
     })
-    kinds, query, index, inlier = [], [], [], []
+    kinds, query, index, inlier, ids = [], [], [], [], []
     for q, s in zip(q_ids, solved):
-        for kind, mask in (("point", s["pin"]), ("line", s["lin"])):
-            kinds += [kind] * len(mask)
+        for k, mask in (("point", s["pin"]), ("line", s["lin"])):
+            kinds += [k] * len(mask)
             query.append(np.full(len(mask), q, np.int64))
             index.append(np.arange(len(mask), dtype=np.int64))
             inlier.append(mask)
-    matches = pa.table({
+            if model is not None:
+                ids.append(s["ids"] if k == "point" else np.full(len(mask), -1, np.int64))
+    columns = {
         "query": np.concatenate(query) if query else np.zeros(0, np.int64),
         "kind": pa.array(kinds, pa.string()),
         "index": np.concatenate(index) if index else np.zeros(0, np.int64),
         "inlier": np.concatenate(inlier) if inlier else np.zeros(0, bool),
-    })
-    return poses, matches
+    }
+    if model is not None:
+        # The point3D_id of each point match (null for a line match).
+        flat = np.concatenate(ids) if ids else np.zeros(0, np.int64)
+        columns["point3D_id"] = pa.array(flat, pa.int64(), mask=np.asarray(kinds, dtype=object) != "point")
+    return poses, pa.table(columns)
 
 
 def _localize_bucket(bucket: int, scratch: str, out: str, settings: dict[str, Any]) -> dict[str, Any]:
@@ -561,10 +765,11 @@ def _localize_bucket(bucket: int, scratch: str, out: str, settings: dict[str, An
     return {"queries": poses.num_rows, "statuses": _status_counts(poses)}
 
 
-def _pose_settings(ransac: Any, options: Optional[_core.PoseOptions], seed: int) -> dict[str, Any]:
-    """The options of a localisation job as plain data, for the tasks."""
+def _pose_settings(ransac: Any, options: Optional[_core.PoseOptions], seed: int,
+                   model: Optional[ColmapModel] = None) -> dict[str, Any]:
+    """The options (and COLMAP model) of a localisation job as plain data, for the tasks."""
     return {"ransac": ransac.to_dict() if ransac is not None else None,
-            "options": options.to_dict() if options is not None else None, "seed": int(seed)}
+            "options": options.to_dict() if options is not None else None, "seed": int(seed), "model": model}
 
 
 def _localize_part(out: str, part: int, settings: dict[str, Any], *tables: Any) -> Any:
@@ -572,19 +777,39 @@ def _localize_part(out: str, part: int, settings: dict[str, Any], *tables: Any) 
     its ``poses`` (and ``matches``) as part ``part``."""
     ransac = _core.RansacOptions(**settings["ransac"]) if settings["ransac"] is not None else None
     options = _core.PoseOptions(**settings["options"]) if settings["options"] is not None else None
-    poses, matches = localize_tables(*tables, ransac=ransac, options=options, seed=settings["seed"])
+    poses, matches = localize_tables(*tables, ransac=ransac, options=options, seed=settings["seed"],
+                                     reconstruction=settings.get("model"))
     _write_part(out, part, poses=poses, matches=matches)
     return poses
+
+
+def _check_query_inputs(source: str, model: Optional[ColmapModel]) -> None:
+    """Before a job: every query file holds the same one set of camera columns
+    (:func:`_query_camera_kind`; the buckets concatenate rows of several files)."""
+    import pyarrow.parquet as pq
+
+    _check_inputs(source, ("query",), "queries")
+    kinds = {f: _query_camera_kind(pq.read_schema(f).names, f"queries {f}", model) for f in _input_files(source)}
+    if len(set(kinds.values())) > 1:
+        shown = "; ".join(f"{f}: {k}" for f, k in list(kinds.items())[:4])
+        raise _core.ShapeError(f"queries {source}: the files give the cameras by different columns ({shown}); "
+                               "use one set of columns in every file")
 
 
 def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
              line_matches: Union[str, Path, None] = None, client: Any = None, buckets: Optional[int] = None,
              ransac: Any = None, options: Optional[_core.PoseOptions] = None, seed: int = 0,
-             progress: bool = False, threads_per_worker: Optional[int] = None) -> JobSummary:
+             progress: bool = False, threads_per_worker: Optional[int] = None,
+             reconstruction: Any = None) -> JobSummary:
     """Batch localisation: one robust pose per query of the Parquet tables ``queries`` and
-    ``point_matches`` (and ``line_matches``), columns of :func:`localize_tables`, written to
-    ``out/poses`` and ``out/matches``. The tables are split by a hash of ``query`` (module docs), so a
-    query's matches meet in one task; results equal :func:`localize_tables` on the whole tables.
+    ``point_matches`` (and ``line_matches``), columns of :func:`localize_tables` (cameras as pinhole
+    intrinsics, COLMAP models, or a COLMAP model's ``camera_id``; 3-D points as ``X, Y, Z`` or the
+    model's ``point3D_id``), written to ``out/poses`` and ``out/matches``. ``reconstruction`` (a
+    ``pycolmap.Reconstruction`` or :class:`ColmapModel`) is sent to every worker once. ``ransac``,
+    ``options`` and ``seed`` as for :func:`localize_tables`. The tables are split by a hash of
+    ``query`` (module docs), so a query's matches meet in one task; results equal :func:`localize_tables`
+    on the whole tables. Without ``client`` and ``buckets``, tables of at most :data:`ROWS_PER_BUCKET`
+    rows in all are solved as one part, without the split.
     ``client``: a ``distributed.Client`` (``None``: here, without Dask); ``threads_per_worker`` as for
     :func:`triangulate` (the poses of a task run on that many threads). Returns a :class:`JobSummary`
     (``tracks`` counts queries; ``points``/``observations`` are the poses and matches folders)."""
@@ -592,21 +817,35 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
 
     started = time.perf_counter()
     out = Path(out)
-    _check_inputs(str(queries), QUERY_COLUMNS, "queries")
-    _check_inputs(str(point_matches), POINT_MATCH_COLUMNS, "point_matches")
+    model = _model(reconstruction)
+    _check_query_inputs(str(queries), model)
+    _check_inputs(str(point_matches), MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS,
+                  "point_matches")
     if line_matches is not None:
         _check_inputs(str(line_matches), LINE_MATCH_COLUMNS, "line_matches")
-    n = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(queries)))
+    rows = lambda source: sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(source)))  # noqa: E731
+    n = rows(queries)
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
-    buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
     inputs = [(str(queries), "query", "queries"), (str(point_matches), "query", "points")]
     if line_matches is not None:
         inputs.append((str(line_matches), "query", "lines"))
-    scratch = str(out / "_buckets")
-    settings = _pose_settings(ransac, options, seed)
-    results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings), progress,
-                       threads_per_worker)
-    _remove_tree(Path(scratch))
+    for name in ("poses", "matches"):  # parts of an earlier job (another bucket count) would be read as this one's
+        for stale in (out / name).glob("part-*.parquet"):
+            stale.unlink()
+    settings = _pose_settings(ransac, options, seed, model)
+    if client is None and buckets is None and sum(rows(source) for source, _, _ in inputs) <= ROWS_PER_BUCKET:
+        # Here, and small enough for one task: the whole tables in one part, without the split through
+        # storage (the same bits: a query's answer depends on its own rows only).
+        pa = _pyarrow()
+        tables = [pa.concat_tables([pq.read_table(f) for f in _input_files(source)]) for source, _, _ in inputs]
+        poses = _localize_part(str(out), 0, settings, *tables)
+        results, buckets = [{"queries": poses.num_rows, "statuses": _status_counts(poses)}], 1
+    else:
+        buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
+        scratch = str(out / "_buckets")
+        results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings),
+                           progress, threads_per_worker)
+        _remove_tree(Path(scratch))
     if not any(r["queries"] for r in results):
         # No queries: empty ``poses`` and ``matches`` tables, as for :func:`triangulate`.
         tables = [pq.read_schema(_input_files(str(f))[0]).empty_table() for f in (queries, point_matches)]
@@ -617,15 +856,31 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
                       buckets=buckets, workers=workers)
 
 
+def _record_camera(camera: Any) -> tuple[str, list[float]]:
+    """A query record's camera as ``(COLMAP model name, params)``: ``(fx, fy, cx, cy)`` is a
+    ``PINHOLE``; a ``pluecker.LensCamera``, a ``pycolmap.Camera`` or ``{"model": ..., "params": ...}``
+    its model."""
+    if isinstance(camera, dict):
+        return camera["model"], list(camera["params"])
+    if isinstance(camera, _core.LensCamera):
+        return camera.model, list(camera.params)
+    if hasattr(camera, "model") and hasattr(camera, "params"):  # pycolmap.Camera
+        return getattr(camera.model, "name", camera.model), list(camera.params)
+    return "PINHOLE", [float(v) for v in camera]
+
+
 def queries_to_tables(queries: Iterable[dict[str, Any]]) -> tuple[Any, Any, Any]:
     """The three tables of :func:`localize_tables` from query records: dicts with ``query`` (int),
-    ``camera`` (``(fx, fy, cx, cy)``), ``points2d`` (n, 2), ``points3d`` (n, 3) and optionally
-    ``lines2d`` (m, 2, 2), ``lines3d`` (m, 2, 3)."""
+    ``camera`` (``(fx, fy, cx, cy)``, or a camera model: a ``pluecker.LensCamera``, a
+    ``pycolmap.Camera`` or ``{"model": name, "params": [...]}``), ``points2d`` (n, 2), ``points3d``
+    (n, 3) and optionally ``lines2d`` (m, 2, 2), ``lines3d`` (m, 2, 3). The queries table has the
+    pinhole columns when every camera is a plain ``(fx, fy, cx, cy)``, else ``model`` and ``params``."""
     pa = _pyarrow()
-    q_rows, p_parts, l_parts = [], [], []
+    q_ids, q_cameras, p_parts, l_parts = [], [], [], []
     for record in queries:
         q = int(record["query"])
-        q_rows.append((q, *map(float, record["camera"])))
+        q_ids.append(q)
+        q_cameras.append(record["camera"])
         p2, p3 = np.asarray(record.get("points2d", np.zeros((0, 2))), float), np.asarray(
             record.get("points3d", np.zeros((0, 3))), float)
         p_parts.append(np.c_[np.full(len(p2), q), p2.reshape(-1, 2), p3.reshape(-1, 3)])
@@ -637,8 +892,16 @@ def queries_to_tables(queries: Iterable[dict[str, Any]]) -> tuple[Any, Any, Any]
         rows = rows.reshape(-1, len(names))
         return pa.table({n: rows[:, i].astype(np.int64) if n == "query" else rows[:, i] for i, n in enumerate(names)})
 
-    return (table(np.array(q_rows, float), QUERY_COLUMNS), table(np.concatenate(p_parts) if p_parts else np.zeros(0),
-            POINT_MATCH_COLUMNS), table(np.concatenate(l_parts) if l_parts else np.zeros(0), LINE_MATCH_COLUMNS))
+    plain = all(not isinstance(c, (dict, _core.LensCamera)) and not hasattr(c, "params") for c in q_cameras)
+    if plain:
+        query_table = table(np.array([(q, *map(float, c)) for q, c in zip(q_ids, q_cameras)], float), QUERY_COLUMNS)
+    else:
+        models = [_record_camera(c) for c in q_cameras]
+        query_table = pa.table({"query": np.array(q_ids, np.int64),
+                                "model": pa.array([m for m, _ in models], pa.string()),
+                                "params": pa.array([p for _, p in models], pa.list_(pa.float64()))})
+    return (query_table, table(np.concatenate(p_parts) if p_parts else np.zeros(0), POINT_MATCH_COLUMNS),
+            table(np.concatenate(l_parts) if l_parts else np.zeros(0), LINE_MATCH_COLUMNS))
 
 
 def localize_bag(bag: Any, out: Union[str, Path], *, ransac: Any = None, options: Optional[_core.PoseOptions] = None,
