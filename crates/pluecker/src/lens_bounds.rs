@@ -1,12 +1,14 @@
 //! Interval enclosures of a lens's distortion Jacobian `∂D/∂n` over a box of normalised coordinates,
 //! for the certificates through a lens ([`crate::triangulation::point::lens`]).
 //!
-//! They cover the radially symmetric models (every model whose tangential and thin-prism terms are
-//! zero), in two families of [`crate::camera_model`]'s table:
+//! They cover three families of [`crate::camera_model`]'s table ([`Distortion`]):
 //! - **polynomial**, `D(n) = n g(s)`, `s = |n|²`, `g(s) = 1 + c₁s + c₂s² + …` (SIMPLE_RADIAL, RADIAL,
-//!   OPENCV, FULL_OPENCV without a denominator): `∂D/∂n = g I + 2g' n nᵀ`;
+//!   OPENCV and FULL_OPENCV without tangential terms or denominator): `∂D/∂n = g I + 2g' n nᵀ`;
+//! - **polynomial with OPENCV's tangential term** `t(n)`, whose Jacobian
+//!   `[2p₁y + 6p₂x, 2p₁x + 2p₂y; 2p₁x + 2p₂y, 6p₁y + 2p₂x]` is linear in `n` and symmetric;
 //! - **fisheye**, `D(n) = m g(θ²)`, `m = n σ(r)`, `σ = θ/r`, `θ = atan r` (`|m| = θ`; the fisheye
-//!   models): `∂D/∂n = (g I + 2g' m mᵀ)(σ I + q n nᵀ)` with `q = σ'(r)/r`.
+//!   models without tangential or thin-prism terms): `∂D/∂n = (g I + 2g' m mᵀ)(σ I + q n nᵀ)` with
+//!   `q = σ'(r)/r`.
 //!
 //! Over a box the enclosure evaluates these formulas in interval arithmetic
 //! ([`crate::global::interval`]), with exact ranges for the one-dimensional pieces: `θ` is increasing
@@ -15,8 +17,22 @@
 //! widened by [`ROUNDING`] of its magnitude for the rounding of its floating-point evaluation (the
 //! interval type does not round outwards).
 //!
-//! Where a box reaches the lens's fold radius ([`LensCamera::fold_radius`]) there is no enclosure:
-//! the certificates work inside it, where the distortion is one-to-one.
+//! **The one-to-one disc** ([`domain`]). The certificates work inside a disc `|n| < R` on which `D` is
+//! proved one-to-one, and need a disc about the principal point, of radius `ρ`, that `D` maps onto
+//! part of its image:
+//! - radially symmetric: `R` is the fold radius ([`LensCamera::fold_radius`]), below which the
+//!   radial map `r ↦ r g` (or `θ g(θ²)`) increases, and the image is the disc of radius `ρ = R g(R²)`
+//!   (`θ_R g(θ_R²)`, `θ_R = atan R`, for the fisheyes);
+//! - with the tangential term: the symmetric part of `∂D/∂n` is positive definite wherever
+//!   `min(g, g + 2sg') > ‖∂t/∂n‖_F`, and `‖∂t/∂n‖_F ≤ 9(|p₁| + |p₂|) r` (its entries are at most
+//!   `(2|p₁| + 6|p₂|) r`, `2(|p₁| + |p₂|) r` twice and `(6|p₁| + 2|p₂|) r`; `80 (|p₁| + |p₂|)² ≤ 81 …`).
+//!   `R` is where a scan of `r` in interval arithmetic first fails that test; on the convex disc a
+//!   positive definite symmetric part makes `D` one-to-one (`(a − b)ᵀ(D(a) − D(b)) > 0`). On its
+//!   boundary circle `|D(n)| ≥ R g(R²) − 4(|p₁| + |p₂|) R²` (`|t(n)| ≤ 4(|p₁| + |p₂|) r²` since
+//!   `2|xy| ≤ r²`), and a one-to-one map of the disc, with `D(0) = 0`, covers every point nearer than
+//!   that to `0` (the image of the circle is a Jordan curve around `0` that stays outside): `ρ`.
+//!
+//! Where a box reaches `R` there is no enclosure.
 
 use crate::camera_model::{CameraModel, LensCamera};
 use crate::global::interval::Interval;
@@ -26,28 +42,36 @@ use nalgebra::{Matrix2, Vector2};
 /// operations of relative error 1.1e-16 each, with room to spare).
 pub const ROUNDING: f64 = 1e-12;
 
-/// A radially symmetric distortion (module docs).
+/// A distortion the enclosures cover (module docs).
 #[derive(Debug, Clone, PartialEq)]
-pub enum RadialProfile {
+pub enum Distortion {
     /// `D(n) = n g(|n|²)` with `g(s) = 1 + c₁s + c₂s² + …`, the coefficients `[c₁, c₂, …]`.
     Polynomial(Vec<f64>),
+    /// `D(n) = n g(|n|²) + t(n)`, OPENCV's tangential term with `p₁`, `p₂`.
+    Tangential(Vec<f64>, f64, f64),
     /// `D(n) = m g(θ²)`, `m = n θ/r`, `θ = atan |n|`, with `g` as above in `θ²`.
     Fisheye(Vec<f64>),
 }
 
-/// The radial profile of `lens`, or `None` when its distortion is not radially symmetric (non-zero
-/// tangential or thin-prism terms, a rational FULL_OPENCV) or is not covered (FOV, the division models,
-/// EUCM).
-pub fn radial_profile(lens: &LensCamera) -> Option<RadialProfile> {
+/// The distortion of `lens`, or `None` when it is not covered: thin-prism or tangential terms of the
+/// fisheyes, a rational FULL_OPENCV, FOV, the division models, EUCM.
+pub fn distortion(lens: &LensCamera) -> Option<Distortion> {
     let p = lens.params();
     let zero = |range: &[f64]| range.iter().all(|&v| v == 0.0);
-    use RadialProfile::{Fisheye, Polynomial};
+    use Distortion::{Fisheye, Polynomial, Tangential};
+    let with_tangential = |radial: Vec<f64>, p1: f64, p2: f64| {
+        if p1 == 0.0 && p2 == 0.0 {
+            Polynomial(radial)
+        } else {
+            Tangential(radial, p1, p2)
+        }
+    };
     match lens.model() {
         CameraModel::SimplePinhole | CameraModel::Pinhole => Some(Polynomial(vec![])),
         CameraModel::SimpleRadial => Some(Polynomial(p[3..4].to_vec())),
         CameraModel::Radial => Some(Polynomial(p[3..5].to_vec())),
-        CameraModel::OpenCv if zero(&p[6..8]) => Some(Polynomial(p[4..6].to_vec())),
-        CameraModel::FullOpenCv if zero(&p[6..8]) && zero(&p[9..12]) => Some(Polynomial(vec![p[4], p[5], p[8]])),
+        CameraModel::OpenCv => Some(with_tangential(p[4..6].to_vec(), p[6], p[7])),
+        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(vec![p[4], p[5], p[8]], p[6], p[7])),
         CameraModel::SimpleFisheye | CameraModel::Fisheye => Some(Fisheye(vec![])),
         CameraModel::SimpleRadialFisheye => Some(Fisheye(p[3..4].to_vec())),
         CameraModel::RadialFisheye => Some(Fisheye(p[3..5].to_vec())),
@@ -116,11 +140,68 @@ fn widened(v: Interval) -> Interval {
     Interval::new(v.lo - pad, v.hi + pad)
 }
 
-/// An enclosure of `∂D/∂n` over the box `[lo, hi]` of normalised coordinates for `profile`, or
-/// `None` when the box is empty or reaches `fold_radius` (module docs).
+/// The one-to-one disc of a distortion (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Domain {
+    /// `R`: `D` is one-to-one on `|n| < R` (normalised units; `∞` for all of the plane).
+    pub radius: f64,
+    /// `ρ`: `D` maps part of that disc onto the disc `|d| < ρ` (distorted normalised units).
+    pub image_radius: f64,
+}
+
+/// Steps of the scan of the tangential test over `[0, min(fold radius, 10)]`.
+const DOMAIN_STEPS: usize = 512;
+
+/// The one-to-one disc of `distortion` whose radial part folds at `fold_radius` (module docs), or
+/// `None` when it is empty.
+pub fn domain(distortion: &Distortion, fold_radius: f64) -> Option<Domain> {
+    let g_at = |c: &[f64], s: f64| polynomial(c, Interval::point(s)).0.lo;
+    let out = match distortion {
+        Distortion::Polynomial(c) => Domain {
+            radius: fold_radius,
+            image_radius: if fold_radius.is_finite() {
+                fold_radius * g_at(c, fold_radius * fold_radius)
+            } else {
+                f64::INFINITY
+            },
+        },
+        Distortion::Fisheye(c) => {
+            let theta = fold_radius.atan();
+            Domain {
+                radius: fold_radius,
+                image_radius: theta * g_at(c, theta * theta),
+            }
+        }
+        Distortion::Tangential(c, p1, p2) => {
+            let p = p1.abs() + p2.abs();
+            let end = fold_radius.min(10.0);
+            let h = end / DOMAIN_STEPS as f64;
+            let mut radius = end;
+            for k in 0..DOMAIN_STEPS {
+                let (r0, r1) = (k as f64 * h, (k + 1) as f64 * h);
+                let s = Interval::new(r0 * r0, r1 * r1);
+                let (g, dg) = polynomial(c, s);
+                let least = widened(g).lo.min(widened(g.add(s.mul(dg).scale(2.0))).lo);
+                if !(least > 9.0 * p * r1) {
+                    radius = r0;
+                    break;
+                }
+            }
+            Domain {
+                radius,
+                image_radius: radius * g_at(c, radius * radius) - 4.0 * p * radius * radius,
+            }
+        }
+    };
+    let image_radius = out.image_radius * (1.0 - ROUNDING);
+    (out.radius > 0.0 && image_radius > 0.0).then_some(Domain { image_radius, ..out })
+}
+
+/// An enclosure of `∂D/∂n` over the box `[lo, hi]` of normalised coordinates for `distortion`, or
+/// `None` when the box is empty or reaches `radius`, the one-to-one radius of its [`domain`].
 pub fn jacobian_enclosure(
-    profile: &RadialProfile,
-    fold_radius: f64,
+    distortion: &Distortion,
+    radius: f64,
     lo: &Vector2<f64>,
     hi: &Vector2<f64>,
 ) -> Option<IntervalMatrix> {
@@ -131,15 +212,28 @@ pub fn jacobian_enclosure(
     // The range of r = |n| over the box: the nearest and the farthest point of the box.
     let r_lo = Vector2::new(x.mig(), y.mig()).norm();
     let r_hi = Vector2::new(x.mag(), y.mag()).norm();
-    if !(r_hi < fold_radius) || !r_hi.is_finite() {
+    if !(r_hi < radius) || !r_hi.is_finite() {
         return None;
     }
-    let j = match profile {
-        RadialProfile::Polynomial(c) => {
+    let j = match distortion {
+        Distortion::Polynomial(c) => {
             let (g, dg) = polynomial(c, x.sqr().add(y.sqr()));
             scaled(g, dg, x, y)
         }
-        RadialProfile::Fisheye(c) => {
+        Distortion::Tangential(c, p1, p2) => {
+            let (g, dg) = polynomial(c, x.sqr().add(y.sqr()));
+            let radial = scaled(g, dg, x, y);
+            let off = x.scale(2.0 * p1).add(y.scale(2.0 * p2));
+            let tangential = [
+                [y.scale(2.0 * p1).add(x.scale(6.0 * p2)), off],
+                [off, y.scale(6.0 * p1).add(x.scale(2.0 * p2))],
+            ];
+            [
+                [radial[0][0].add(tangential[0][0]), radial[0][1].add(tangential[0][1])],
+                [radial[1][0].add(tangential[1][0]), radial[1][1].add(tangential[1][1])],
+            ]
+        }
+        Distortion::Fisheye(c) => {
             let theta = Interval::new(r_lo.atan(), r_hi.atan());
             let s = Interval::new(sigma(r_hi).lo, sigma(r_lo).hi);
             let qr = Interval::new(q(r_lo).lo, q(r_hi).hi);
@@ -173,30 +267,38 @@ mod tests {
             LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap(),
             LensCamera::new(CameraModel::Radial, &[800.0, 320.0, 240.0, 0.2, -0.05]).unwrap(),
             LensCamera::new(CameraModel::OpenCv, &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 0.0, 0.0]).unwrap(),
+            LensCamera::new(CameraModel::OpenCv, &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 2e-3, -1e-3]).unwrap(),
             LensCamera::new(
-                CameraModel::OpenCvFisheye,
-                &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4],
+                CameraModel::FullOpenCv,
+                &[600.0, 610.0, 320.0, 240.0, 0.05, -0.01, -4e-3, 1e-3, 0.002, 0.0, 0.0, 0.0],
             )
             .unwrap(),
+            LensCamera::new(CameraModel::OpenCvFisheye, &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4])
+                .unwrap(),
             LensCamera::new(CameraModel::RadialFisheye, &[300.0, 512.0, 384.0, -0.02, 0.003]).unwrap(),
             LensCamera::new(CameraModel::SimpleFisheye, &[300.0, 512.0, 384.0]).unwrap(),
         ]
     }
 
+    fn domain_of(lens: &LensCamera) -> (Distortion, Domain) {
+        let d = distortion(lens).unwrap();
+        let dom = domain(&d, lens.fold_radius()).unwrap();
+        (d, dom)
+    }
+
     #[test]
     fn the_enclosure_holds_the_jacobian_at_every_sampled_point_of_the_box() {
         // The library's own Jacobian (checked against pycolmap elsewhere) at random points of random
-        // boxes, some containing the principal point, some near the fold: always inside.
+        // boxes, some containing the principal point, some near the edge of the domain: always inside.
         let mut rng = Rng::new(31);
         let mut checked = 0;
         for lens in lenses() {
-            let profile = radial_profile(&lens).unwrap();
-            let fold = lens.fold_radius().min(10.0);
+            let (d, dom) = domain_of(&lens);
+            let reach = dom.radius.min(10.0);
             for _ in 0..400 {
-                let centre = Vector2::new(rng.normal(), rng.normal()) * (0.5 * fold * rng.uniform_in(0.0, 1.0));
-                let half = Vector2::new(rng.uniform_in(0.0, 0.05), rng.uniform_in(0.0, 0.05)) * fold;
-                let Some(j) = jacobian_enclosure(&profile, lens.fold_radius(), &(centre - half), &(centre + half))
-                else {
+                let centre = Vector2::new(rng.normal(), rng.normal()) * (0.5 * reach * rng.uniform_in(0.0, 1.0));
+                let half = Vector2::new(rng.uniform_in(0.0, 0.05), rng.uniform_in(0.0, 0.05)) * reach;
+                let Some(j) = jacobian_enclosure(&d, dom.radius, &(centre - half), &(centre + half)) else {
                     continue;
                 };
                 for _ in 0..20 {
@@ -218,7 +320,7 @@ mod tests {
                 }
             }
         }
-        assert!(checked > 30_000, "{checked}");
+        assert!(checked > 40_000, "{checked}");
     }
 
     #[test]
@@ -226,31 +328,59 @@ mod tests {
         // Not vacuous: a box 1e-6 wide encloses J to about 1e-5 of its size (the dependency effect
         // of interval arithmetic is of the order of the box's width times the second derivative).
         for lens in lenses() {
-            let profile = radial_profile(&lens).unwrap();
-            let n = Vector2::new(0.3, -0.2) * lens.fold_radius().min(2.0);
+            let (d, dom) = domain_of(&lens);
+            let n = Vector2::new(0.3, -0.2) * dom.radius.min(2.0);
             let h = Vector2::repeat(1e-6);
-            let j = jacobian_enclosure(&profile, lens.fold_radius(), &(n - h), &(n + h)).unwrap();
+            let j = jacobian_enclosure(&d, dom.radius, &(n - h), &(n + h)).unwrap();
             let e = radius_about(&j, &lens.distort(&n).1);
             assert!(e.norm() < 1e-4, "{:?}: {e}", lens.model());
         }
     }
 
     #[test]
-    fn boxes_reaching_the_fold_have_no_enclosure() {
-        let lens = LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap();
-        let profile = radial_profile(&lens).unwrap();
-        let r = lens.fold_radius();
-        assert!(jacobian_enclosure(&profile, r, &Vector2::new(0.9 * r, 0.0), &Vector2::new(1.01 * r, 0.01)).is_none());
-        assert!(jacobian_enclosure(&profile, r, &Vector2::new(0.5 * r, 0.0), &Vector2::new(0.6 * r, 0.01)).is_some());
+    fn inside_the_domain_the_distortion_is_one_to_one_and_its_image_covers_the_stated_disc() {
+        // At sampled points of the disc the symmetric part of ∂D/∂n is positive definite (the
+        // injectivity argument), and on its boundary circle |D| ≥ ρ (the covering argument).
+        let mut rng = Rng::new(5);
+        for lens in lenses() {
+            let (_, dom) = domain_of(&lens);
+            let reach = dom.radius.min(50.0);
+            for _ in 0..2000 {
+                let n = Vector2::new(rng.normal(), rng.normal()).normalize() * (reach * rng.uniform().sqrt());
+                let j = lens.distort(&n).1;
+                let sym = (j + j.transpose()) * 0.5;
+                assert!(sym.determinant() > 0.0 && sym.trace() > 0.0, "{:?} at {n:?}: {sym}", lens.model());
+                if dom.radius.is_finite() {
+                    let edge = n.normalize() * dom.radius * (1.0 - 1e-12);
+                    let d = lens.distort(&edge).0.norm();
+                    assert!(d >= dom.image_radius * (1.0 - 1e-9), "{:?}: |D| = {d} < {}", lens.model(), dom.image_radius);
+                }
+            }
+        }
     }
 
     #[test]
-    fn lenses_with_tangential_terms_have_no_profile() {
-        let lens = LensCamera::new(
-            CameraModel::OpenCv,
-            &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 1e-4, 0.0],
-        )
-        .unwrap();
-        assert_eq!(radial_profile(&lens), None);
+    fn a_mild_tangential_term_keeps_most_of_the_radial_domain() {
+        // Not vacuous: the scan finds a disc close to the radial fold for small p₁, p₂.
+        let lens = LensCamera::new(CameraModel::OpenCv, &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 2e-3, -1e-3]).unwrap();
+        let (_, dom) = domain_of(&lens);
+        assert!(dom.radius > 0.8 * lens.fold_radius() && dom.radius < lens.fold_radius(), "{dom:?}");
+    }
+
+    #[test]
+    fn boxes_reaching_the_edge_of_the_domain_have_no_enclosure() {
+        let lens = LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap();
+        let (d, dom) = domain_of(&lens);
+        let r = dom.radius;
+        assert!(jacobian_enclosure(&d, r, &Vector2::new(0.9 * r, 0.0), &Vector2::new(1.01 * r, 0.01)).is_none());
+        assert!(jacobian_enclosure(&d, r, &Vector2::new(0.5 * r, 0.0), &Vector2::new(0.6 * r, 0.01)).is_some());
+    }
+
+    #[test]
+    fn uncovered_distortions_have_none() {
+        let prism =
+            LensCamera::new(CameraModel::ThinPrismFisheye, &[300.0, 300.0, 512.0, 384.0, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0, 0.0, 0.0])
+                .unwrap();
+        assert_eq!(distortion(&prism), None);
     }
 }

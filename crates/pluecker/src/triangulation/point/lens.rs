@@ -47,7 +47,7 @@ use crate::camera_model::LensCamera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
-use crate::lens_bounds::{jacobian_enclosure, radial_profile, radius_about, RadialProfile};
+use crate::lens_bounds::{distortion, domain, jacobian_enclosure, radius_about, Distortion};
 use crate::optim::Termination;
 use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
 use crate::triangulation::point::linear::WorldFrame;
@@ -112,11 +112,6 @@ impl<'a> LensView<'a> {
     pub fn squared_residual(&self, x: &Vector3<f64>) -> f64 {
         self.residual_and_jacobian(x)
             .map_or(f64::INFINITY, |(e, _)| e.norm_squared())
-    }
-
-    /// The `2x2` map `M = L K₂` from distorted normalised coordinates to whitened pixels.
-    fn pixel_map(&self) -> Result<Matrix2<f64>> {
-        Ok(self.whitening * self.camera.pinhole()?.pixel_jacobian())
     }
 }
 
@@ -211,31 +206,41 @@ struct Linearised {
     e: Vector2<f64>,
     n: Vector2<f64>,
     j: Matrix2<f64>,
-    profile: RadialProfile,
-    fold: f64,
+    distortion: Distortion,
+    /// The one-to-one radius of [`crate::lens_bounds::domain`].
+    radius: f64,
     rounding: f64,
 }
 
 impl Linearised {
-    fn new(view: &LensView, x: &Vector3<f64>) -> std::result::Result<Linearised, LensBoundFailure> {
-        let (profile, fold, lens) = match view.camera {
-            AnyCamera::Pinhole(_) => (RadialProfile::Polynomial(vec![]), f64::INFINITY, None),
+    fn new(view: &LensView, x: &Vector3<f64>, cost: f64) -> std::result::Result<Linearised, LensBoundFailure> {
+        let (distortion, fold, lens) = match view.camera {
+            AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY, None),
             AnyCamera::Lens(lens) => (
-                radial_profile(lens).ok_or(LensBoundFailure::Lens)?,
+                distortion(lens).ok_or(LensBoundFailure::Lens)?,
                 lens.fold_radius(),
                 Some(lens),
             ),
         };
+        let domain = domain(&distortion, fold).ok_or(LensBoundFailure::Fold)?;
         let xc = view.x_cam(x);
         if !(xc.z > 0.0) {
             return Err(LensBoundFailure::Fold);
         }
         let n = Vector2::new(xc.x / xc.z, xc.y / xc.z);
-        if !(n.norm() < fold) {
+        if !(n.norm() < domain.radius) {
+            return Err(LensBoundFailure::Fold);
+        }
+        // Step 1's path argument needs the ellipse {‖e‖ ≤ √C} of distorted normalised coordinates
+        // inside the disc that the one-to-one disc maps onto.
+        let pinhole = view.camera.pinhole().map_err(|_| LensBoundFailure::Lens)?;
+        let m = view.whitening * pinhole.pixel_jacobian();
+        let m_inverse_norm = m.try_inverse().ok_or(LensBoundFailure::Lens)?.norm();
+        let observed = pinhole.pixel_to_normalized(&view.pixel);
+        if !(observed.norm() + cost.sqrt() * m_inverse_norm < domain.image_radius) {
             return Err(LensBoundFailure::Fold);
         }
         let j = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
-        let m = view.pixel_map().map_err(|_| LensBoundFailure::Lens)?;
         let w = m * j;
         let w_inverse = w.try_inverse().ok_or(LensBoundFailure::Fold)?;
         let u = view.camera.project(&xc).0;
@@ -249,8 +254,8 @@ impl Linearised {
             e,
             n,
             j,
-            profile,
-            fold,
+            distortion,
+            radius: domain.radius,
             rounding,
         })
     }
@@ -259,7 +264,7 @@ impl Linearised {
     fn epsilon(&self, rho: f64) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
-        let enclosure = jacobian_enclosure(&self.profile, self.fold, &(self.n - half), &(self.n + half))?;
+        let enclosure = jacobian_enclosure(&self.distortion, self.radius, &(self.n - half), &(self.n + half))?;
         let e = radius_about(&enclosure, &self.j);
         let eps = (self.m.abs() * e * self.w_inverse.abs()).norm();
         eps.is_finite().then_some(eps)
@@ -293,7 +298,7 @@ pub fn lens_certificate(
 ) -> std::result::Result<LensBound, LensBoundFailure> {
     let lin: Vec<Linearised> = views
         .iter()
-        .map(|v| Linearised::new(v, x))
+        .map(|v| Linearised::new(v, x, cost))
         .collect::<std::result::Result<_, _>>()?;
     // Step 1.
     let confined: Vec<(f64, f64)> = lin
