@@ -512,7 +512,7 @@ def _estimate_triangulation(rec: Any, obs: Observations) -> tuple[np.ndarray, fl
 
 
 class _CoreTimer:
-    """Times the calls into ``pluecker._core``'s ``triangulate*`` functions made inside ``with`` (the
+    """Times the calls into ``pluecker._core``'s ``*triangulate*`` functions made inside ``with`` (the
     solve of :func:`pluecker.colmap.retriangulate`; the rest of its time is gathering the observations).
     A stopwatch around the public functions, nothing else changed; ``calls`` is 0 if none was seen."""
 
@@ -533,7 +533,7 @@ class _CoreTimer:
             return call
 
         self._saved = {name: getattr(_core, name) for name in dir(_core)
-                       if name.startswith("triangulate") and callable(getattr(_core, name))}
+                       if "triangulate" in name and callable(getattr(_core, name))}
         for name, function in self._saved.items():
             setattr(_core, name, timed(function))
         return self
@@ -691,7 +691,7 @@ def retriangulation_section(seed: int, model_path: str | None) -> None:
         notes += extra
     print("\n" + convention_check(seed))
     print("\n### Time (ms; pluecker and default BA best of 5; gather = retriangulate − solve, solve = the calls "
-          "into pluecker._core; write = colmap.write to a temporary folder)\n")
+          "into pluecker._core's *triangulate* functions; write = colmap.write to a temporary folder)\n")
     print("| model | retriangulate | gather | solve | write | pycolmap BA default | ratio | BA tight | "
           "estimate_triangulation |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
