@@ -38,7 +38,7 @@ lengths around the centre, where no distortion shows). Every observation gets 1 
    points, 26268 observations; not part of this repository).
 
 Run: ``.venv/bin/python bench/compare_colmap.py [--quick] [--model PATH]``; prints Markdown tables.
-``--retriangulation --model PATH`` runs section 5 alone (about 15 s on 2 cores).
+``--retriangulation --model PATH`` runs section 5 alone (about 2 minutes on 2 cores).
 """
 
 from __future__ import annotations
@@ -374,13 +374,13 @@ def _synthetic(model_id: Any, params: list[float], width: int, height: int, spre
     return rec
 
 
-def pinhole_model(seed: int, points: int = 4000) -> Any:
+def pinhole_model(seed: int, points: int = 12000) -> Any:
     """PINHOLE, f = 1000 px, 1024 x 768: no distortion, so pluecker's cost is the pixel cost exactly (the
     cost-convention check: both must agree)."""
     return _synthetic(pycolmap.CameraModelId.PINHOLE, [1000.0, 1000.0, 512.0, 384.0], 1024, 768, 1.5, seed, points)
 
 
-def strong_radial_model(seed: int, points: int = 4000) -> Any:
+def strong_radial_model(seed: int, points: int = 12000) -> Any:
     """SIMPLE_RADIAL (:data:`STRONG_RADIAL`), every pixel inside the distortion's fold; a point is seen only
     when its normalised radius is inside the fold (beyond it the model folds back into the image)."""
     f, k, width, height = STRONG_RADIAL
@@ -399,7 +399,7 @@ def fisheye_angle_px(params: list[float], degrees: float) -> float:
     return params[0] * theta * (1 + k1 * theta**2 + k2 * theta**4 + k3 * theta**6 + k4 * theta**8)
 
 
-def fisheye_model(seed: int, points: int = 4000) -> Any:
+def fisheye_model(seed: int, points: int = 12000) -> Any:
     """OPENCV_FISHEYE (:data:`FISHEYE`), the image's half-diagonal at 80 degrees off axis (4:3); rays
     beyond 80 degrees are not seen."""
     params, degrees = FISHEYE
@@ -410,7 +410,7 @@ def fisheye_model(seed: int, points: int = 4000) -> Any:
     return _synthetic(pycolmap.CameraModelId.OPENCV_FISHEYE, params, width, height, 6.0, seed, points, within)
 
 
-def repeated_model(seed: int, points: int = 4000) -> Any:
+def repeated_model(seed: int, points: int = 12000) -> Any:
     """SIMPLE_RADIAL (f = 1280 px, k = 0.05, 1024 x 768) where :data:`REPEATED_FRACTION` of the tracks
     observe one of their images twice: a second keypoint at the noise-free pixel plus its own 1 px noise,
     as COLMAP allows after merging tracks."""
