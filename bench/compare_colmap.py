@@ -38,7 +38,7 @@ lengths around the centre, where no distortion shows). Every observation gets 1 
    points, 26268 observations; not part of this repository).
 
 Run: ``.venv/bin/python bench/compare_colmap.py [--quick] [--model PATH]``; prints Markdown tables.
-``--retriangulation --model PATH`` runs section 5 alone (about 2 minutes on 2 cores).
+``--retriangulation --model PATH`` runs section 5 alone (about 40 s on 2 cores).
 """
 
 from __future__ import annotations
