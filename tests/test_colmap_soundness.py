@@ -23,7 +23,8 @@ SIGMA_PX = 1.0
 #: ~1e-15 relative. A proved lower bound may not exceed the optimum by more than this.
 BOUND_TOLERANCE = 1e-9
 #: Two minimisers of the same smooth cost: at a minimum the cost is flat, so a position error δ (in units of
-#: the point's standard deviation) costs δ² relative; 1e-6 is a position error of 1e-3 σ.
+#: the point's standard deviation) adds δ² to a cost of about twice the number of observations (≥ 4):
+#: 1e-6 relative allows δ of a few 1e-3 σ, far below any distortion effect and above Ceres' convergence.
 OPTIMUM_TOLERANCE = 1e-6
 #: The reported cost against this file's own sum at the reported point: the same numbers summed in another
 #: order, ~1e-15 relative per term.
