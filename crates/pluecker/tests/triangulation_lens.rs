@@ -342,8 +342,8 @@ fn a_bound_taken_away_from_the_minimum_stays_below_the_oracles_minimum() {
 
 #[test]
 fn out_to_80_degrees_off_axis_every_certificate_is_sound() {
-    // Wide angles: the certificate often fails there (its boxes of normalised coordinates stretch
-    // with the fisheye); whatever it certifies must still be the oracle's minimum.
+    // Wide angles, where the ray chart and the split boxes carry the certificate: whatever it
+    // certifies must be the oracle's minimum, and it certifies most tracks.
     let mut rng = Rng::new(80);
     let mut certified = 0;
     for i in 0..60 {
@@ -363,5 +363,5 @@ fn out_to_80_degrees_off_axis_every_certificate_is_sound() {
             assert!(t.cost(&r.point) <= best * (1.0 + 1e-9) + 1e-12, "track {i}");
         }
     }
-    assert!(certified >= 5, "{certified}");
+    assert!(certified >= 54, "{certified} of 60");
 }

@@ -47,7 +47,7 @@ use crate::camera_model::LensCamera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
-use crate::lens_bounds::{distortion, domain, jacobian_enclosure, radius_about, Distortion};
+use crate::lens_bounds::{distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion};
 use crate::optim::Termination;
 use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
 use crate::triangulation::point::linear::WorldFrame;
@@ -55,7 +55,7 @@ use crate::triangulation::point::PointTriangulation;
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{depth_normalized, View};
 use crate::triangulation::{Certificate, CertificateKind, Method, Status, TriangulationOptions};
-use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, SymmetricEigen, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Rotation3, SymmetricEigen, Vector2, Vector3};
 use std::time::Instant;
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -63,6 +63,10 @@ use std::time::Instant;
 const PIXEL_ROUNDING: f64 = 1e-13;
 /// Rounds of the tightening of step 4.
 const TIGHTENING_ROUNDS: usize = 6;
+/// `εᵢ` above which the box of [`Linearised::epsilon`] is split.
+const SPLIT_EPSILON: f64 = 0.01;
+/// Fisheye projections farther off axis than this (`tan 10°`) use the ray chart.
+const RAY_CHART_TAN: f64 = 0.176;
 /// Growth of a view's confinement radius per retry of step 1.
 const RADIUS_RETRIES: usize = 8;
 
@@ -209,6 +213,9 @@ struct Linearised {
     distortion: Distortion,
     /// The one-to-one radius of [`crate::lens_bounds::domain`].
     radius: f64,
+    /// The ray chart's rotation `R` (camera frame to a frame whose optical axis is the ray of `nᵢ*`),
+    /// for fisheyes off axis; then `n` is `n′ = 0` and `J` is that of `D ∘ h`.
+    ray: Option<Matrix3<f64>>,
     rounding: f64,
 }
 
@@ -240,13 +247,49 @@ impl Linearised {
         if !(observed.norm() + cost.sqrt() * m_inverse_norm < domain.image_radius) {
             return Err(LensBoundFailure::Fold);
         }
-        let j = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
-        let w = m * j;
-        let w_inverse = w.try_inverse().ok_or(LensBoundFailure::Fold)?;
+        let jd = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
         let u = view.camera.project(&xc).0;
         let e = view.whitening * (u - view.pixel);
         // The rounding of e: of u and of the pixel, through L.
         let rounding = view.whitening.norm() * PIXEL_ROUNDING * (u.norm() + view.pixel.norm() + 1.0);
+        let plain = Linearised::in_chart(m, e, n, jd, distortion, domain.radius, None, rounding)?;
+        // A fisheye off axis may do better in the ray chart (module docs): the chart of smaller εᵢ.
+        if let (Distortion::Fisheye(_), true) = (&plain.distortion, n.norm() > RAY_CHART_TAN) {
+            let ray = Rotation3::rotation_between(&xc, &Vector3::z()).map(|r| r.into_inner());
+            let turned = ray.and_then(|r| {
+                let j = jd * homography_jacobian(&r);
+                let d = plain.distortion.clone();
+                Linearised::in_chart(m, e, Vector2::zeros(), j, d, domain.radius, Some(r), rounding).ok()
+            });
+            if let Some(turned) = turned {
+                let rho = (cost.sqrt() + e.norm()) * 1.001;
+                let better = match (turned.epsilon(rho), plain.epsilon(rho)) {
+                    (Some(a), Some(b)) => a < b,
+                    (Some(_), None) => true,
+                    _ => false,
+                };
+                if better {
+                    return Ok(turned);
+                }
+            }
+        }
+        Ok(plain)
+    }
+
+    /// The view in the chart of coordinates `n` (the plain one, or the ray chart of `ray`).
+    #[allow(clippy::too_many_arguments)]
+    fn in_chart(
+        m: Matrix2<f64>,
+        e: Vector2<f64>,
+        n: Vector2<f64>,
+        j: Matrix2<f64>,
+        distortion: Distortion,
+        radius: f64,
+        ray: Option<Matrix3<f64>>,
+        rounding: f64,
+    ) -> std::result::Result<Linearised, LensBoundFailure> {
+        let w = m * j;
+        let w_inverse = w.try_inverse().ok_or(LensBoundFailure::Fold)?;
         Ok(Linearised {
             w,
             w_inverse,
@@ -255,18 +298,40 @@ impl Linearised {
             n,
             j,
             distortion,
-            radius: domain.radius,
+            radius,
+            ray,
             rounding,
         })
     }
 
-    /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the fold.
+    /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the edge of the
+    /// domain or the camera's principal plane. Interval arithmetic overestimates the Jacobian's
+    /// variation by a multiple of the box's width (the dependency effect); where that shows (`εᵢ` above
+    /// [`SPLIT_EPSILON`]) the box is split into 4x4, then 16x16, sub-boxes, and `E` is the largest of
+    /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
     fn epsilon(&self, rho: f64) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
-        let enclosure = jacobian_enclosure(&self.distortion, self.radius, &(self.n - half), &(self.n + half))?;
-        let e = radius_about(&enclosure, &self.j);
-        let eps = (self.m.abs() * e * self.w_inverse.abs()).norm();
+        let mut eps = f64::INFINITY;
+        for pieces in [1usize, 4, 16] {
+            let mut e = Matrix2::zeros();
+            let step = half * (2.0 / pieces as f64);
+            for a in 0..pieces {
+                for b in 0..pieces {
+                    let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
+                    let hi = lo + step;
+                    let enclosure = match (&self.ray, &self.distortion) {
+                        (Some(r), Distortion::Fisheye(c)) => fisheye_ray_enclosure(c, &r.transpose(), &lo, &hi)?,
+                        _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
+                    };
+                    e = e.sup(&radius_about(&enclosure, &self.j));
+                }
+            }
+            eps = eps.min((self.m.abs() * e * self.w_inverse.abs()).norm());
+            if !(eps > SPLIT_EPSILON) {
+                break;
+            }
+        }
         eps.is_finite().then_some(eps)
     }
 
@@ -286,6 +351,14 @@ impl Linearised {
         }
         None
     }
+}
+
+/// `∂h/∂n′` at `n′ = 0` of `h(n′) = (w₁/w₃, w₂/w₃)`, `w = Rᵀ (n′, 1)`: the ray chart's map to `n`.
+fn homography_jacobian(ray: &Matrix3<f64>) -> Matrix2<f64> {
+    let back = ray.transpose();
+    let w = back.column(2);
+    let h = Vector2::new(w.x / w.z, w.y / w.z);
+    Matrix2::from_fn(|r, c| (back[(r, c)] - h[r] * back[(2, c)]) / w.z)
 }
 
 /// The certificate's lower bound of `F` at the local minimiser `x` of cost `cost` (module docs), or
@@ -321,10 +394,12 @@ pub fn lens_certificate(
         .iter()
         .zip(&lin)
         .map(|(v, l)| {
+            // The camera, rotated into the ray chart when the view has one; ℓ = W (n − c) with
+            // c = n* − W⁻¹ e*: ℓ(X*) = e*.
+            let turn = l.ray.unwrap_or_else(Matrix3::identity);
             let mut rt = Matrix3x4::zeros();
-            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&v.rotation);
-            rt.set_column(3, &v.translation);
-            // ℓ = W (n − c) with c = n* − W⁻¹ e*: ℓ(X*) = e*.
+            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&(turn * v.rotation));
+            rt.set_column(3, &(turn * v.translation));
             PointView::new(&depth_normalized(&rt), &(l.n - l.w_inverse * l.e), &l.w)
         })
         .collect();
