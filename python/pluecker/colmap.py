@@ -285,8 +285,10 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     ``sigma_px = 1``), as COLMAP's bundle adjustment counts it. The first stages run on the pixels
     undistorted into each camera's pinhole part; the point is then refined on the exact cost, and a
     certificate (``lens_convexity_test`` through a lens) proves its global minimum over every point whose
-    projections lie inside each lens's fold radius. Where no proof is found the point is
-    ``gap_not_closed``: uncertified, never certified on an approximation.
+    projections lie inside the disc where each lens is proved one-to-one (the fold radius for radially
+    symmetric lenses). Where no proof is found (FOV, the division models, EUCM, a rational FULL_OPENCV,
+    the fisheyes' tangential and thin-prism terms, low parallax) the point is ``gap_not_closed``:
+    uncertified, never certified on an approximation.
 
     ``outlier_threshold_px`` rejects observations farther than that many pixels from the consensus of
     their track (``TriangulationOptions.outlier_threshold``; ``result.inliers`` flags the observations).
@@ -354,7 +356,8 @@ CERTIFIED_MEANING = (
     "squared reprojection residuals whitened by sigma_px, summed over the observations used), within the "
     "relative gap max_relative_gap of cost; the residuals are those of the observed (distorted) pixels "
     "through the exact camera model, and the bound holds over every point whose projection in each image "
-    "lies inside the fold radius of its camera's distortion")
+    "lies inside the disc where its camera's distortion is proved one-to-one (the fold radius for radially "
+    "symmetric lenses); points of cameras the certificate does not cover are left uncertified")
 
 
 def write_ply(path: Any, X: np.ndarray, states: np.ndarray) -> None:

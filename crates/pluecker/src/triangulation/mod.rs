@@ -324,8 +324,8 @@ pub enum CertificateKind {
     TaylorBranchAndBound,
     /// Points through lenses with distortion: the convexity test of the linearisation at the
     /// estimate, carried to the exact cost by interval bounds of the lenses' Jacobians
-    /// ([`point::lens`]), whose domain is every point whose projections lie inside each lens's fold
-    /// radius.
+    /// ([`point::lens`]), whose domain is every point whose projections lie inside the disc where each
+    /// lens is proved one-to-one.
     LensConvexityTest,
 }
 
@@ -358,8 +358,8 @@ impl CertificateKind {
         match (self, primitive) {
             (CertificateKind::None, _) => "none",
             (CertificateKind::LensConvexityTest, _) => {
-                "every point in front of every camera whose projection in each image lies inside the fold radius \
-                 of its lens, where the distortion is one-to-one"
+                "every point in front of every camera whose projection in each image lies inside the disc where \
+                 its lens is proved one-to-one (the fold radius for radially symmetric lenses)"
             }
             (_, Primitive::Point) => "every point in front of every camera",
             (CertificateKind::ConvexityTest, Primitive::Line) => "every line (a cost at the zero bound)",

@@ -11,19 +11,31 @@
 //! **Certificate** ([`lens_certificate`]), at a local minimiser `X*` of cost `C = F(X*)`, with
 //! `eᵢ* = eᵢ(X*)`, `nᵢ*` its normalised projection, `Mᵢ = Lᵢ K₂` (`K₂` the upper-left block of `K`),
 //! `Jᵢ* = ∂D/∂n(nᵢ*)` and `Wᵢ = Mᵢ Jᵢ*`. Its domain is every point in front of the cameras whose
-//! projection in each image lies inside that lens's fold radius, where the (radially symmetric)
-//! distortion maps the disc one-to-one onto a disc ([`crate::lens_bounds`]).
+//! projection in each image lies inside the disc `Dᵢ` where that lens is proved one-to-one
+//! ([`crate::lens_bounds::domain`]: the fold radius for radially symmetric lenses; a scan of the
+//! symmetric part of the Jacobian with OPENCV's tangential terms), which `D` maps onto a set holding
+//! the disc of radius `ρ_Dᵢ` about the principal point.
 //! 1. *Each view's projection is confined.* Let `Bᵢ = {n : ‖Wᵢ(n − nᵢ*)‖ ≤ ρᵢ}` and `Eᵢ` an entrywise
 //!    bound of `|J(n) − Jᵢ*|` over a box holding `Bᵢ` (interval enclosure), `εᵢ = ‖ |Mᵢ| Eᵢ |Wᵢ⁻¹| ‖_F`.
 //!    Along the segment from `nᵢ*` (mean value theorem),
 //!    `eᵢ(n) = eᵢ* + (I + Δ) Wᵢ (n − nᵢ*)`, `‖Δ‖ ≤ εᵢ`, so on the boundary of `Bᵢ`
-//!    `‖eᵢ‖ ≥ (1 − εᵢ)ρᵢ − ‖eᵢ*‖ > √C` for `ρᵢ` chosen so. The projections with `‖eᵢ‖ ≤ √C` inside the
-//!    fold disc `Dᵢ` are the preimage, under the homeomorphism `D|Dᵢ`, of a convex set (an ellipse meets
-//!    the disc `D(Dᵢ)`): a connected set that contains `nᵢ*` and misses `∂Bᵢ`, hence lies in `Bᵢ`.
-//!    So every point of the domain with `F ≤ C` has every projection in its `Bᵢ`.
+//!    `‖eᵢ‖ ≥ (1 − εᵢ)ρᵢ − ‖eᵢ*‖ > √C` for `ρᵢ` chosen so. Let `n ∈ Dᵢ` have `‖eᵢ(n)‖ ≤ √C`: `D(n)` lies
+//!    in the ellipse `{d : ‖Mᵢ(d − dᵢ)‖ ≤ √C}` (`dᵢ` the observation's distorted coordinates), which the
+//!    test requires inside the disc of radius `ρ_Dᵢ`. The segment from `D(nᵢ*)` to `D(n)` lies in that
+//!    ellipse, and its preimage under the homeomorphism `D|Dᵢ` is a path from `nᵢ*` to `n` along which
+//!    `‖eᵢ‖ ≤ √C`: it never meets `∂Bᵢ`, so `n ∈ Bᵢ`. Every point of the domain with `F ≤ C` has every
+//!    projection in its `Bᵢ`.
+//!
+//!    Two devices keep `εᵢ` small. Interval arithmetic overestimates a box's variation by a multiple of
+//!    its width, so a box whose `εᵢ` exceeds 1 % is split into 4x4, then 16x16, sub-boxes. And a fisheye
+//!    projection off axis may use the **ray chart**: the normalised coordinates `n′` of the camera
+//!    rotated so that the ray of `nᵢ*` is its optical axis (`n′* = 0`, `n = h(n′)` a homography), with
+//!    the Jacobian of `D ∘ h` ([`crate::lens_bounds::fisheye_ray_enclosure`]); a box of `n′` stays small
+//!    in angle where one of `n` stretches with `1/cos²θ`. The argument above holds in either chart
+//!    (`h(Bᵢ′)` is a closed set whose boundary is `h(∂Bᵢ′)`), and the chart of the smaller `εᵢ` is used.
 //! 2. *A pinhole problem bounds `F` there.* With `vᵢ = Wᵢ(n − nᵢ*)` and `ℓᵢ = eᵢ* + vᵢ` (the
-//!    linearisation at the estimate, a pinhole residual of the normalised camera `[Rᵢ | tᵢ]` with
-//!    whitening `Wᵢ`), `‖eᵢ‖ ≥ ‖ℓᵢ‖ − δᵢ`, `δᵢ = εᵢ‖vᵢ‖ + sᵢ` (`sᵢ` the rounding of `eᵢ*`), hence
+//!    linearisation at the estimate, a pinhole residual of the normalised camera `[Rᵢ | tᵢ]`, rotated
+//!    into the ray chart when there is one, with whitening `Wᵢ`), `‖eᵢ‖ ≥ ‖ℓᵢ‖ − δᵢ`, `δᵢ = εᵢ‖vᵢ‖ + sᵢ` (`sᵢ` the rounding of `eᵢ*`), hence
 //!    `‖eᵢ‖² ≥ ‖ℓᵢ‖² − 2‖ℓᵢ‖δᵢ` and `F ≥ Q − 2Σ(‖eᵢ*‖ + ‖vᵢ‖)(εᵢ‖vᵢ‖ + sᵢ)`, `Q = Σ‖ℓᵢ‖²`; and
 //!    `F ≤ C` implies `Q ≤ C' = C + Σ 2√C(εᵢρᵢ + sᵢ) + (εᵢρᵢ + sᵢ)²`.
 //! 3. *Convexity.* The test of [`crate::global::convexity`] at the level `C'`, in a whitened chart of
@@ -36,9 +48,11 @@
 //!    `t ≥ t₁`, the rest has `‖vᵢ‖ ≤ k‖Bᵢ‖t₁`: smaller boxes, smaller `εᵢ`, and step 3 again over
 //!    `t ≤ t₁`, a few times.
 //!
-//! The certificate fails (the result is not certified) for a lens that is not radially symmetric,
-//! a projection or box reaching a fold, `εᵢ ≥ 1`, or a failed convexity test (low parallax, large
-//! residuals); there is no branch and bound through a lens.
+//! The certificate fails (the result is not certified, status `gap_not_closed`) for a lens it does not
+//! cover (FOV, the division models, EUCM, a rational FULL_OPENCV, the fisheyes' tangential and
+//! thin-prism terms), a projection or ellipse reaching the edge of its lens's domain, `εᵢ ≥ ½`, or a
+//! failed convexity test (low parallax, large residuals); there is no branch and bound through a lens.
+//! Exact data (a cost at the rounding level) is certified by the trivial bound 0 whatever the lens.
 
 use super::chart::{Chart, ChartKind};
 use super::cost::PointView;
