@@ -213,7 +213,7 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
         track = camera = image_id = point2D_idx = np.zeros(0, dtype=np.int64)
         undistorted, covariances, pixels = np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros((0, 2))
     # Sorted as pluecker.distributed sorts them (track, image id, pixel), so that both give the same bits.
-    order = np.lexsort((undistorted[:, 1], undistorted[:, 0], image_id, track))
+    order = np.lexsort((pixels[:, 1], pixels[:, 0], image_id, track))
     return _Observations(P, np.array([image.image_id for image in images], dtype=np.int64), ids, track[order], camera[order], image_id[order], point2D_idx[order], undistorted[order],
                          covariances[order], skipped, pixels[order],
                          [lenses[image.camera_id] for image in images])
@@ -235,18 +235,19 @@ def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_i
 
 def observation_table(reconstruction: Any, sigma_px: float = 1.0) -> tuple[Any, Any]:
     """A model's observations as the table of :mod:`pluecker.distributed` (``track`` = point3D id,
-    ``image`` = image id, undistorted ``x``, ``y`` and ``cov_*`` as :func:`retriangulate` computes them,
-    ``point2D_idx``) and its :class:`pluecker.distributed.Cameras` (posed images' pinhole cameras)."""
+    ``image`` = image id, the observed pixel ``x``, ``y`` and ``cov_*`` = ``sigma_px²`` I, ``point2D_idx``)
+    and its :class:`pluecker.distributed.Cameras` (each posed image's ``K [R | t]`` and ``LensCamera``):
+    the same solve as :func:`retriangulate`."""
     import pyarrow as pa
 
     from .distributed import Cameras
 
     o = _observations(reconstruction, sigma_px)
     table = pa.table({"track": o.ids[o.track], "image": o.image_id.astype(np.int64),
-                      "x": o.undistorted[:, 0], "y": o.undistorted[:, 1], "cov_xx": o.covariances[:, 0, 0],
-                      "cov_xy": o.covariances[:, 0, 1], "cov_yy": o.covariances[:, 1, 1],
+                      "x": o.pixels[:, 0], "y": o.pixels[:, 1], "cov_xx": np.full(len(o.track), float(sigma_px)**2),
+                      "cov_xy": np.zeros(len(o.track)), "cov_yy": np.full(len(o.track), float(sigma_px)**2),
                       "point2D_idx": o.point2D_idx.astype(np.int64)})
-    return Cameras(o.P_image_ids, o.P), table
+    return Cameras(o.P_image_ids, o.P, tuple(o.lenses)), table
 
 
 class TableResult:

@@ -82,10 +82,14 @@ def _pyarrow() -> Any:
 
 @dataclass(frozen=True)
 class Cameras:
-    """Image ids (v,) and their cameras ``P`` (v, 3, 4) mapping world points to pixels."""
+    """Image ids (v,) and their cameras ``P`` (v, 3, 4) mapping world points to pixels; with ``lenses``
+    (v,), each image's ``Camera`` or ``LensCamera``, ``P`` is ``K [R | t]`` of its pinhole part and the
+    table's pixels are the observed (distorted) ones, as ``triangulate_point_observations(cameras=...)``
+    takes them."""
 
     ids: np.ndarray
     P: np.ndarray
+    lenses: Optional[tuple] = None
 
     def __post_init__(self) -> None:
         ids = np.asarray(self.ids, dtype=np.int64).reshape(-1)
@@ -94,8 +98,12 @@ class Cameras:
             raise _core.ShapeError(f"Cameras: P must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
         if len(np.unique(ids)) != len(ids):
             raise ValueError("Cameras: image ids must be unique")
+        if self.lenses is not None and len(self.lenses) != len(ids):
+            raise _core.ShapeError(f"Cameras: lenses must have one camera per id ({len(ids)}), got {len(self.lenses)}")
         object.__setattr__(self, "ids", ids)
         object.__setattr__(self, "P", P)
+        if self.lenses is not None:
+            object.__setattr__(self, "lenses", tuple(self.lenses))
 
     @classmethod
     def from_dict(cls, cameras: dict[int, Any]) -> "Cameras":
@@ -159,7 +167,8 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
     result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov, method=method,
-                                                  options=options, n_tracks=len(ids))
+                                                  options=options, n_tracks=len(ids),
+                                                  cameras=None if cameras.lenses is None else list(cameras.lenses))
     status = np.asarray(result.status).astype(object)
     messages = np.asarray(result.messages, dtype=object)
     for row in np.flatnonzero(~known):
