@@ -523,3 +523,23 @@ def test_a_track_that_sees_one_image_twice_uses_both_keypoints(tmp_path):
         proj = rec.cameras[im.camera_id].img_from_cam(np.atleast_2d(im.cam_from_world() * X))[0]
         pixel_cost += np.sum((proj - im.points2D[element.point2D_idx].xy) ** 2)
     assert pixel_cost > 0.1 and abs(run.result.cost[row] - pixel_cost) <= 1e-3 * pixel_cost
+
+
+def test_the_distributed_tables_solve_as_retriangulate_does_through_the_lens():
+    """``observation_table`` hands the observed pixels and each image's LensCamera to the distributed
+    kernel: the same exact-cost points, costs and certificates as :func:`colmap.retriangulate`."""
+    from pluecker import distributed
+
+    rec = synthetic_model(pycolmap.CameraModelId.OPENCV, [300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 1e-3, -1e-3], 4)
+    rng = np.random.default_rng(2)
+    for image in rec.images.values():
+        for point2D in image.points2D:
+            point2D.xy = point2D.xy + rng.normal(size=2)
+    run = colmap.retriangulate(rec)
+    cameras, table = colmap.observation_table(rec)
+    points, _ = distributed.triangulate_table(table, cameras)
+    np.testing.assert_array_equal(points.column("track").to_numpy(), run.point3D_ids)
+    np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], run.result.X)
+    np.testing.assert_array_equal(points.column("cost").to_numpy(), run.result.cost)
+    np.testing.assert_array_equal(points.column("certified").to_numpy(), run.result.certified)
+    assert run.result.certified.all()
