@@ -7,7 +7,7 @@ exact within one version. Options are mutable, ``==``, picklable, checked as set
 the Rust ``Default``. A bool is not a number; counts and seeds take integers up to ``2**64 - 1``.
 """
 
-from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict
+from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -713,9 +713,12 @@ def triangulate_point(
     method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
+    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> PointTriangulation:
     """One point from its pixels ``x`` (n, 2) in cameras ``P`` (n, 3, 4), n >= 2, with pixel
-    covariances ``cov`` (n, 2, 2) (sections 2.1, 3-4)."""
+    covariances ``cov`` (n, 2, 2) (sections 2.1, 3-4). With ``cameras`` (each view's ``Camera`` or
+    ``LensCamera``), ``P[i]`` is ``K [R | t]`` of its pinhole part and ``x`` the observed (distorted)
+    pixels: the cost is the reprojection error through the exact projection."""
 
 def triangulate_points(
     P: ArrayLike,
@@ -743,12 +746,15 @@ def triangulate_point_observations(
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
     n_tracks: Optional[int] = None,
+    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> PointTriangulations:
     """Point tracks given one observation per row (memory in the observations): pixel ``x[k]`` (m, 2)
     of track ``track[k]`` in camera ``image[k]`` of ``P`` (v, 3, 4), ``cov[k]`` (m, 2, 2); result row t
     is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m rows given
     (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a negative id,
-    is an ``InvalidOptionError`` naming the argument."""
+    is an ``InvalidOptionError`` naming the argument. With ``cameras`` (v,) (each image's ``Camera`` or
+    ``LensCamera``), ``P[j]`` is ``K [R | t]`` of its pinhole part and ``x`` the observed (distorted)
+    pixels: the cost is the reprojection error through the exact projection."""
 
 def triangulate_line(
     P: ArrayLike,

@@ -30,7 +30,9 @@ use pluecker::triangulation::point::batch::{
     triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into,
     triangulate_points_sparse_views_into, LinearPoints, PointTracks, SparsePointTracks,
 };
-use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
+use pluecker::triangulation::point::{
+    triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
+};
 use pluecker::triangulation::views::View;
 use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
@@ -107,8 +109,13 @@ fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Ve
 }
 
 /// Triangulates one point from its pixels in two or more views (Josephson & Kahl 2008, eq. 19).
+///
+/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models): `P[i]` is
+/// then `K [R | t]` of its pinhole part, `x` the observed (distorted) pixels and `cov` their
+/// covariances, and the cost is the reprojection error in those pixels through the exact projection
+/// (certificate `lens_convexity_test` through a lens).
 #[pyfunction]
-#[pyo3(signature = (P, x, cov = None, method = None, *, options = None))]
+#[pyo3(signature = (P, x, cov = None, method = None, *, options = None, cameras = None))]
 #[allow(non_snake_case)]
 pub fn triangulate_point(
     py: Python<'_>,
@@ -117,14 +124,20 @@ pub fn triangulate_point(
     cov: Option<&Bound<'_, PyAny>>,
     method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulation>> {
     let opts = options_arg(method, options)?;
-    let cams = cameras("P", P)?;
+    let cams = crate::convert::cameras("P", P)?;
     let obs = observations("x", x, cams.len())?;
     let covs = covariances2("cov", cov, cams.len())?;
+    let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
     let outcome = interrupt::run_single(py, move || {
-        core_triangulate_point(&cams, &obs, covs.as_deref(), &opts).map_err(|e| renamed(e, POINT_NAMES))
+        match &views {
+            Some(views) => triangulate_point_views(views, &obs, covs.as_deref(), &opts),
+            None => core_triangulate_point(&cams, &obs, covs.as_deref(), &opts),
+        }
+        .map_err(|e| renamed(e, POINT_NAMES))
     })?;
     interrupt::object_or_partial(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
 }
