@@ -27,7 +27,7 @@
 //!    projection in its `Bᵢ`.
 //!
 //!    Two devices keep `εᵢ` small. Interval arithmetic overestimates a box's variation by a multiple of
-//!    its width, so a box whose `εᵢ` exceeds 1 % is split into 4x4, then 16x16, sub-boxes. And a fisheye
+//!    its width, so a box whose `εᵢ` exceeds 1 % is split into 8x8 sub-boxes. And a fisheye
 //!    projection off axis may use the **ray chart**: the normalised coordinates `n′` of the camera
 //!    rotated so that the ray of `nᵢ*` is its optical axis (`n′* = 0`, `n = h(n′)` a homography), with
 //!    the Jacobian of `D ∘ h` ([`crate::lens_bounds::fisheye_ray_enclosure`]); a box of `n′` stays small
@@ -321,13 +321,13 @@ impl Linearised {
     /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the edge of the
     /// domain or the camera's principal plane. Interval arithmetic overestimates the Jacobian's
     /// variation by a multiple of the box's width (the dependency effect); where that shows (`εᵢ` above
-    /// [`SPLIT_EPSILON`]) the box is split into 4x4, then 16x16, sub-boxes, and `E` is the largest of
+    /// [`SPLIT_EPSILON`]) the box is split into 8x8 sub-boxes, and `E` is the largest of
     /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
     fn epsilon(&self, rho: f64) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
         let mut eps = f64::INFINITY;
-        for pieces in [1usize, 4, 16] {
+        for pieces in [1usize, 8] {
             let mut e = Matrix2::zeros();
             let step = half * (2.0 / pieces as f64);
             for a in 0..pieces {
