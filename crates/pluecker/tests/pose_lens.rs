@@ -10,7 +10,7 @@ use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::quaternion::log_so3;
 use pluecker::pose::{
-    estimate_pose, estimate_pose_lens, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions,
+    estimate_pose, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions,
     Status,
 };
 use pluecker::rng::Rng;
@@ -86,7 +86,7 @@ fn distortion_is_modelled_and_the_covariance_is_right() {
     for lens in [opencv(), fisheye()] {
         let modelled = mean_nees(100, |scene, rng| {
             let corr = observe(scene, &lens, &|_| 1.0, rng);
-            estimate_pose_lens(&lens, &corr, None, &with_sigma(1.0)).unwrap()
+            estimate_pose(&lens, &corr, &with_sigma(1.0)).unwrap()
         });
         assert!(
             (5.0..7.0).contains(&modelled),
@@ -120,7 +120,7 @@ fn the_refined_pose_minimises_the_exact_distorted_pixel_error() {
         for seed in 0..10 {
             let scene = visible_scene(600.0, 30, 0, false, 200 + seed);
             let corr = observe(&scene, &lens, &|_| 1.0, &mut Rng::new(seed));
-            let result = estimate_pose_lens(&lens, &corr, None, &with_sigma(1.0)).unwrap();
+            let result = estimate_pose(&lens, &corr, &with_sigma(1.0)).unwrap();
             let (r, t) = (result.rotation, result.translation);
             let (mut jtj, mut jtr) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
             for (x, u) in corr.points3d.iter().zip(&corr.points2d) {
@@ -171,7 +171,7 @@ fn robust_pose_through_a_lens_rejects_outliers() {
             sigma_px: Some(1.0),
             ..PoseOptions::default()
         };
-        let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
+        let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
         for i in 0..40 {
             if outlier[i] {
@@ -255,14 +255,18 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
     let lens = opencv();
     let corr = observe(&scene, &lens, &|_| 0.0, &mut Rng::new(1));
     let short = ObservationNoise::from_covariances(&[Matrix2::identity(); 9], &[]).unwrap();
-    let err = estimate_pose_lens(&lens, &corr, Some(&short), &PoseOptions::default()).unwrap_err();
+    let with_short = Correspondences {
+        noise: Some(short),
+        ..corr.clone()
+    };
+    let err = estimate_pose(&lens, &with_short, &PoseOptions::default()).unwrap_err();
     assert!(matches!(err, Error::Shape { .. }), "{err}");
     // SIMPLE_RADIAL with k = −0.28 folds at r² = 1 / (3 |k|): no pixel beyond a distorted radius of
     // (2/3) r ≈ 0.73 focal lengths comes from a point in front; 0.8 is outside the invertible region.
     let radial = LensCamera::new(CameraModel::SimpleRadial, &[600.0, 320.0, 240.0, -0.28]).unwrap();
     let mut far = observe(&scene, &radial, &|_| 0.0, &mut Rng::new(1));
     far.points2d[4] = Vector2::new(320.0 + 0.8 * 600.0, 240.0);
-    let err = estimate_pose_lens(&radial, &far, None, &PoseOptions::default()).unwrap_err();
+    let err = estimate_pose(&radial, &far, &PoseOptions::default()).unwrap_err();
     assert!(
         err.to_string().contains("points2d") && err.to_string().contains("pixel 4"),
         "{err}"
@@ -272,7 +276,7 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
         certify: Some(Default::default()),
         ..PoseOptions::default()
     };
-    let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
+    let result = estimate_pose(&lens, &corr, &opts).unwrap();
     assert!(!result.certified);
 }
 
@@ -289,12 +293,12 @@ fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
     let mut corr = observe(&scene, &lens, &|_| 0.5, &mut Rng::new(9));
     corr.points2d[7] = Vector2::new(320.0 + 1.8 * 300.0, 240.0);
     corr.lines2d[1][0] = Vector2::new(320.0, 240.0 - 1.8 * 300.0);
-    assert!(estimate_pose_lens(&lens, &corr, None, &PoseOptions::default()).is_err());
+    assert!(estimate_pose(&lens, &corr, &PoseOptions::default()).is_err());
     let opts = PoseOptions {
         ransac: Some(RansacOptions::default()),
         ..PoseOptions::default()
     };
-    let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
+    let result = estimate_pose(&lens, &corr, &opts).unwrap();
     assert_eq!(result.status, Status::Success);
     assert_eq!(result.inliers_points.len(), 30);
     assert_eq!(result.inliers_lines.len(), 2);
@@ -320,7 +324,7 @@ fn ransac_thresholds_are_distorted_pixels_at_the_fisheye_edge() {
             sigma_px: Some(1.0),
             ..PoseOptions::default()
         };
-        let result = estimate_pose_lens(&lens, &corr, None, &opts).unwrap();
+        let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
         kept += result.inliers_points.iter().filter(|&&k| k).count();
         total += 60;

@@ -22,7 +22,6 @@ pub mod robust;
 pub use certificate::{Certificate, CertificateOptions};
 pub use correspondences::{Conditioning, Correspondences};
 pub use estimate::{algebraic_stage, estimate_pose, Estimate};
-pub use lens::estimate_pose_lens;
 pub use noise::ObservationNoise;
 pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};
