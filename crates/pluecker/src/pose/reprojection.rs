@@ -349,8 +349,7 @@ impl<'a> ReprojectionCost<'a> {
             None => {
                 let p = self.point_lanes::<1, true>(pose, i);
                 let r = Vector2::new(p.ru[0], p.rv[0]);
-                let j =
-                    SMatrix::<f64, 2, 6>::from_fn(|row, col| if row == 0 { p.ju[col][0] } else { p.jv[col][0] });
+                let j = SMatrix::<f64, 2, 6>::from_fn(|row, col| if row == 0 { p.ju[col][0] } else { p.jv[col][0] });
                 (r, j)
             }
         };

@@ -105,7 +105,9 @@ pub(crate) fn assemble(
     // observed pixels. The refinement uses the given camera; the linear method alone is judged at its
     // own intrinsics (for a pinhole camera: through a lens, at the given one).
     let linearization = finite.then(|| match estimated_camera {
-        Some(model) if !opts.refine && observations.lens.is_none() => ReprojectionCost::of(&model, used).linearize(&pose),
+        Some(model) if !opts.refine && observations.lens.is_none() => {
+            ReprojectionCost::of(&model, used).linearize(&pose)
+        }
         _ => observations.cost(used).linearize(&pose),
     });
     let reprojection_cost = linearization.as_ref().map_or(f64::NAN, |l| l.cost);

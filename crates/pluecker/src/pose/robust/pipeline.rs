@@ -3,8 +3,8 @@
 
 use super::super::certificate::{Certificate, Certification};
 use super::super::correspondences::{Conditioning, Correspondences};
-use super::super::refinement::refine_conditioned;
 use super::super::lens::Observations;
+use super::super::refinement::refine_conditioned;
 use super::super::reprojection::Pose;
 use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
