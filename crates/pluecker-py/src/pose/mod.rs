@@ -140,7 +140,8 @@ const SHORT_POSE: usize = 1000;
 /// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
 /// robustly (LO-RANSAC), with its covariance.
 ///
-/// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones).
+/// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones,
+/// and the refinement minimises the exact error in them: core `pose::lens`).
 /// `options`: `PoseOptions` (default `PoseOptions()`); `method`, when given, wins over
 /// `options.method`. `ransac`: `RansacOptions` or `True` (its defaults) estimates robustly.
 /// `point_covariances` (N, 2, 2) and `line_covariances` (M, 2, 2) or (M, 2, 2, 2): pixel² covariances
