@@ -17,9 +17,9 @@ use crate::interrupt::{object_or_partial, run_interruptible, run_single};
 use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
 use options::{PyPoseOptions, PyRansacOptions};
-use pluecker::AnyCamera;
 use pluecker::pose::Correspondences;
 use pluecker::pose::ObservationNoise;
+use pluecker::AnyCamera;
 use pyo3::prelude::*;
 use result::PyPoseResult;
 
@@ -172,7 +172,7 @@ pub fn estimate_pose(
     let mut corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     corr.noise = observation_noise(&corr, point_covariances, line_covariances)?;
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
-    let work = move || pluecker::estimate_pose(camera.clone(), &corr, &opts);
+    let work = move || pluecker::estimate_pose(&camera, &corr, &opts);
     // Fewer correspondences: on this thread, where the polls of RANSAC and of the certificate's
     // rotation search see Ctrl-C (`interrupt::run_single`); the other stages end within milliseconds.
     let outcome = if short {

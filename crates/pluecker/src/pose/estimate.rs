@@ -370,9 +370,9 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// Estimates the pose `x_cam = R X_world + t` of a calibrated camera from point and/or line
 /// correspondences (see [`Method`] and [`PoseOptions`]).
 ///
-/// `camera` is any camera of [`AnyCamera`]: a pinhole [`Camera`] (`&Camera` converts), or a
-/// [`crate::camera_model::LensCamera`] of one of COLMAP's models, whose pixels (`corr`) are the
-/// observed, distorted ones (see [`super::lens`] for what each stage then works on).
+/// `camera` is any camera of [`AnyCamera`], or a reference to one of its two kinds: a pinhole
+/// [`Camera`], or a [`crate::camera_model::LensCamera`] of one of COLMAP's models, whose pixels (`corr`)
+/// are the observed, distorted ones (see [`super::lens`] for what each stage then works on).
 ///
 /// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that
 /// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see
@@ -390,9 +390,13 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// With per-observation noise on `corr` ([`super::noise`], covariances of the observed pixels) every
 /// stage after the algebraic one uses the whitened residuals; user covariances are absolute, so
 /// `sigma_px` defaults to 1 (standard deviations) instead of the estimate from the residuals.
-pub fn estimate_pose(camera: impl Into<AnyCamera>, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult> {
+pub fn estimate_pose<C>(camera: &C, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult>
+where
+    C: ?Sized,
+    for<'c> &'c C: Into<AnyCamera>,
+{
     let started = Instant::now();
-    let camera = camera.into();
+    let camera: AnyCamera = camera.into();
     let pinhole = camera.pinhole()?;
     pinhole.validate()?;
     opts.validate()?;
