@@ -2,7 +2,9 @@
 //!
 //! [`estimate_pose`] runs one of the estimators of Phong & Horaud 1995 and its baselines on points,
 //! lines, or both, and by default refines the answer on the reprojection error so that it is the
-//! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`.
+//! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`. The camera
+//! is any [`crate::AnyCamera`]: through a lens with distortion the refinement minimises the exact error
+//! in the observed pixels ([`lens`] says what each stage works on).
 
 pub mod algebraic;
 pub mod candidates;
