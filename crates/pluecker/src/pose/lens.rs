@@ -1,7 +1,7 @@
 //! Pose through a lens with distortion: the two forms of the observations that the pipeline uses
-//! ([`Observations`]), the observed (distorted) pixels mapped into the pixels of the lens's pinhole
+//! (`Observations`), the observed (distorted) pixels mapped into the pixels of the lens's pinhole
 //! part with first-order noise ([`undistort`]), and the entry of [`super::estimate_pose`] for a camera
-//! that distorts ([`estimate_through`]).
+//! that distorts (`estimate_through`).
 //!
 //! The algebraic methods, the minimal solvers and RANSAC's scoring work on the observations mapped
 //! through the exact unprojection of the [`LensCamera`] into the pixels of its pinhole part

@@ -17,7 +17,7 @@
 //!   standard deviations of `e` (the Mahalanobis distance `min_q √((u(q) − e)ᵀ C⁻¹ (u(q) − e))` over
 //!   the points `q` of `ℓ`, the plain pixel distance without covariances). The minimum over `q` is a 1-D
 //!   Gauss-Newton search along `ℓ` from the foot of the endpoint's unprojection, the nearest point of
-//!   the curve's branch through the observation: see [`nearest_on_curve`]. With `D` the identity this
+//!   the curve's branch through the observation: see `nearest_on_curve`. With `D` the identity this
 //!   is the pinhole residual, sign included.
 //!
 //! The pose is `(R, t)` with `x_cam = R X_world + t`; a tangent step `(ω, τ)` moves it to
