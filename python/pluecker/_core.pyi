@@ -353,10 +353,12 @@ def estimate_pose(
     """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera from points (N, 2) ↔ (N, 3)
     and/or segments (M, 2, 2) ↔ (M, 2, 3) (only the 3-D line through a 3-D segment is used).
 
-    ``camera``: :class:`Camera`, or :class:`LensCamera` whose observed (distorted) pixels are given:
-    every stage runs on exactly undistorted pixels, weighted so that RANSAC's thresholds, the refinement
-    and all reported pixels are the distorted ones (to first order); segments as each endpoint's distance
-    to the tangent of the curved image of the line; with RANSAC a pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
+    ``camera``: :class:`Camera`, or :class:`LensCamera` whose observed (distorted) pixels are given: the
+    minimal solvers, RANSAC and the algebraic methods run on exactly undistorted pixels weighted by the
+    distortion's Jacobian (RANSAC's thresholds are distorted pixels to first order); the refinement and
+    all reported pixels use the exact error in the distorted pixels (segments: each endpoint's distance to
+    the curved image of the line); no certificate through a lens (pinhole cameras only); with RANSAC a
+    pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
     in standard deviations (``sigma_px`` defaults to 1). With either, ``certify`` is refused: ``certified``
     false, ``certificate_message`` says why.

@@ -158,6 +158,12 @@ impl From<&LensCamera> for AnyCamera {
     }
 }
 
+impl From<&AnyCamera> for AnyCamera {
+    fn from(camera: &AnyCamera) -> Self {
+        camera.clone()
+    }
+}
+
 impl AnyCamera {
     /// The pinhole part `K` (the lens's focal lengths and principal point, no skew, for a
     /// [`LensCamera`]).

@@ -17,9 +17,9 @@ use crate::interrupt::{object_or_partial, run_interruptible, run_single};
 use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
 use options::{PyPoseOptions, PyRansacOptions};
-use pluecker::camera_model::LensCamera;
 use pluecker::pose::Correspondences;
 use pluecker::pose::ObservationNoise;
+use pluecker::AnyCamera;
 use pyo3::prelude::*;
 use result::PyPoseResult;
 
@@ -117,12 +117,8 @@ fn observation_noise(
     Ok(Some(noise))
 }
 
-/// The `camera=` argument: a pinhole `Camera` or a `LensCamera` of one of COLMAP's models.
-enum AnyCamera {
-    Pinhole(pluecker::Camera),
-    Lens(LensCamera),
-}
-
+/// The `camera=` argument, a pinhole `Camera` or a `LensCamera` of one of COLMAP's models, as the
+/// core's one camera type.
 fn any_camera(camera: &Bound<'_, PyAny>) -> PyResult<AnyCamera> {
     if let Ok(c) = camera.downcast::<PyCamera>() {
         return Ok(AnyCamera::Pinhole(c.get().inner));
@@ -144,7 +140,8 @@ const SHORT_POSE: usize = 1000;
 /// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
 /// robustly (LO-RANSAC), with its covariance.
 ///
-/// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones).
+/// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones,
+/// and the refinement minimises the exact error in them: core `pose::lens`).
 /// `options`: `PoseOptions` (default `PoseOptions()`); `method`, when given, wins over
 /// `options.method`. `ransac`: `RansacOptions` or `True` (its defaults) estimates robustly.
 /// `point_covariances` (N, 2, 2) and `line_covariances` (M, 2, 2) or (M, 2, 2, 2): pixel² covariances
@@ -173,15 +170,9 @@ pub fn estimate_pose(
     };
     let opts = options.core(ransac_arg(ransac)?);
     let mut corr = correspondences(points2d, points3d, lines2d, lines3d)?;
-    let noise = observation_noise(&corr, point_covariances, line_covariances)?;
+    corr.noise = observation_noise(&corr, point_covariances, line_covariances)?;
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
-    let work = move || match &camera {
-        AnyCamera::Pinhole(camera) => {
-            corr.noise = noise;
-            pluecker::estimate_pose(camera, &corr, &opts)
-        }
-        AnyCamera::Lens(lens) => pluecker::pose::estimate_pose_lens(lens, &corr, noise.as_ref(), &opts),
-    };
+    let work = move || pluecker::estimate_pose(&camera, &corr, &opts);
     // Fewer correspondences: on this thread, where the polls of RANSAC and of the certificate's
     // rotation search see Ctrl-C (`interrupt::run_single`); the other stages end within milliseconds.
     let outcome = if short {

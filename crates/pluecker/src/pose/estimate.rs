@@ -17,12 +17,13 @@ use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
 use super::certificate::{certify, Certificate, Certification};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
+use super::lens::Observations;
 use super::linear::faugeras_toscani;
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
 use super::{stage, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
-use crate::camera::Camera;
+use crate::camera::{AnyCamera, Camera};
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::rotation_distance;
@@ -369,20 +370,35 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// Estimates the pose `x_cam = R X_world + t` of a calibrated camera from point and/or line
 /// correspondences (see [`Method`] and [`PoseOptions`]).
 ///
+/// `camera` is any camera of [`AnyCamera`], or a reference to one of its two kinds: a pinhole
+/// [`Camera`], or a [`crate::camera_model::LensCamera`] of one of COLMAP's models, whose pixels (`corr`)
+/// are the observed, distorted ones (see [`super::lens`] for what each stage then works on).
+///
 /// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that
 /// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see
 /// [`super::refinement`]); the result names the runner-up and says when it is nearly as good
-/// ([`Status::Ambiguous`]), and with [`PoseOptions::certify`] carries a certificate of global optimality.
+/// ([`Status::Ambiguous`]), and with [`PoseOptions::certify`] carries a certificate of global optimality
+/// (pinhole cameras only: through a lens it is refused, with that reason). Through a lens the
+/// reprojection error is the exact one in the observed pixels
+/// ([`super::reprojection::ReprojectionCost::exact`]), and so are the result's cost, errors and
+/// `sigma_px`.
 ///
 /// Errors on invalid input (shapes, NaN/inf, too few correspondences, degenerate configurations,
-/// singular camera, bad options). A solver that fails returns `Ok` with a non-`Success` status.
+/// singular camera, bad options, a pixel outside the invertible region of a lens without RANSAC). A
+/// solver that fails returns `Ok` with a non-`Success` status.
 ///
-/// With per-observation noise on `corr` ([`super::noise`]) every stage after the algebraic one uses
-/// the whitened residuals; user covariances are absolute, so `sigma_px` defaults to 1 (standard
-/// deviations) instead of the estimate from the residuals.
-pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult> {
+/// With per-observation noise on `corr` ([`super::noise`], covariances of the observed pixels) every
+/// stage after the algebraic one uses the whitened residuals; user covariances are absolute, so
+/// `sigma_px` defaults to 1 (standard deviations) instead of the estimate from the residuals.
+pub fn estimate_pose<C>(camera: &C, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult>
+where
+    C: ?Sized,
+    for<'c> &'c C: Into<AnyCamera>,
+{
     let started = Instant::now();
-    camera.validate()?;
+    let camera: AnyCamera = camera.into();
+    let pinhole = camera.pinhole()?;
+    pinhole.validate()?;
     opts.validate()?;
     let absolute;
     let opts = if corr.noise.as_ref().is_some_and(|n| n.absolute) && opts.sigma_px.is_none() {
@@ -394,8 +410,22 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     } else {
         opts
     };
+    match camera.distortion() {
+        Some(lens) => super::lens::estimate_through(lens, corr, opts, started),
+        None => run(&Observations::pinhole(&pinhole, corr), opts, started),
+    }
+}
+
+/// Why a pose through a lens is not certified.
+pub(crate) const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
+    through a lens with distortion the exact cost in the observed pixels has no certificate yet";
+
+/// The pipeline on validated options (`camera` and `opts`), from `started`: robust or not.
+pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: Instant) -> Result<PoseResult> {
+    let camera = &observations.pinhole;
+    let corr = observations.undistorted.as_ref();
     if let Some(robust) = &opts.ransac {
-        return super::robust::pipeline::estimate_robust(camera, corr, opts, robust, started);
+        return super::robust::pipeline::estimate_robust(observations, opts, robust, started);
     }
     let prepared = Prepared::new(corr, corr.validated(opts.method)?, opts);
     let mut tr = opts.trust_region;
@@ -412,7 +442,8 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let (pose, status, second_best, certification, behind_camera_cost) = if opts.refine && is_finite(&pose) {
         let cond = &prepared.cond;
         let conditioned = &prepared.conditioned;
-        let cost = ReprojectionCost::of(camera, conditioned);
+        let observed = observations.conditioned_observed(cond, conditioned);
+        let cost = observations.cost(&observed);
         let to_cond = |p: &Pose| Pose::new(p.rotation, cond.pose_from_world(&p.rotation, &p.translation));
         let to_world = |p: &Pose| Pose::new(p.rotation, cond.pose_to_world(&p.rotation, &p.translation));
         let starts: Vec<Pose> = std::iter::once(&pose).chain(&alternatives).map(to_cond).collect();
@@ -456,6 +487,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             .map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
         let certification = match &opts.certify {
             None => Certification::none(Certificate::NotRequested),
+            Some(_) if observations.lens.is_some() => Certification::none(Certificate::NotProved(PINHOLE_ONLY.into())),
             Some(_) if status != Status::Success => Certification::none(Certificate::NotProved(format!(
                 "not attempted: status {}",
                 status.as_str()
@@ -475,7 +507,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         )
     };
     Ok(assemble(
-        camera,
+        observations,
         opts,
         started,
         Parts {
@@ -483,7 +515,7 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
             stages,
             status,
             estimated_camera,
-            used: corr,
+            used: observations.observed,
             inliers: None,
             ransac: None,
             second_best,

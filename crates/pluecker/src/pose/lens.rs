@@ -1,28 +1,32 @@
-//! Pose through a lens with distortion: the observed (distorted) pixels mapped into the pixels of the
-//! lens's pinhole part, with the noise that keeps residuals in distorted pixels ([`undistort`]), and
-//! [`estimate_pose_lens`].
+//! Pose through a lens with distortion: the two forms of the observations that the pipeline uses
+//! (`Observations`), the observed (distorted) pixels mapped into the pixels of the lens's pinhole
+//! part with first-order noise ([`undistort`]), and the entry of [`super::estimate_pose`] for a camera
+//! that distorts (`estimate_through`).
 //!
-//! The pose stages (minimal solvers, RANSAC, the algebraic methods) work on the observations mapped
+//! The algebraic methods, the minimal solvers and RANSAC's scoring work on the observations mapped
 //! through the exact unprojection of the [`LensCamera`] into the pixels of its pinhole part
 //! `K = [fx 0 cx; 0 fy cy; 0 0 1]` (the *undistorted* pixels ū). A residual `r̄` there is one of
 //! `J r̄` in the observed, distorted pixels to first order, with `J = ∂u/∂ū` the distortion's Jacobian at
-//! the observation. So the noise becomes `W = L⁻¹ J` for a point (with `Σ = L Lᵀ` the observed
-//! covariance, the identity when none is given) and `C_e = J⁻¹ Σ J⁻ᵀ` for an endpoint, and the
-//! refinement minimises the reprojection error in the distorted pixels:
-//! - for points, linearised at the observation; the neglected term is `½ r̄ᵀ ∇²u r̄`, second order in
-//!   the residual (below 1e-3 px for a 1 px residual on the OPENCV and fisheye cameras of the tests);
-//! - for segments, the distance of each observed endpoint to the *curved* image of the 3-D line,
-//!   approximated by the distance to its tangent at the point nearest the endpoint: the distorted image
-//!   of a line is a curve, and a segment's endpoints are the only part of it that is used.
+//! the observation. So their noise becomes `W = L⁻¹ J` for a point (with `Σ = L Lᵀ` the observed
+//! covariance, the identity when none is given) and `C_e = J⁻¹ Σ J⁻ᵀ` for an endpoint: RANSAC's
+//! thresholds are distorted pixels to first order, also where the undistortion stretches the image
+//! tenfold (the edge of a fisheye); with covariances they are standard deviations. (PoseLib and OpenCV
+//! apply one threshold in undistorted, normalised coordinates instead.)
 //!
-//! RANSAC scores hypotheses with the same whitened errors ([`super::robust::scoring`]), so its
-//! thresholds are distorted pixels too (to first order), also where the undistortion stretches the
-//! image tenfold (the edge of a fisheye); with covariances they are standard deviations. (PoseLib and
-//! OpenCV apply one threshold in undistorted, normalised coordinates instead.)
+//! The reprojection refinement, and everything the result reports (cost, errors, `sigma_px`,
+//! covariance), use the exact cost in the observed pixels instead
+//! ([`super::reprojection::ReprojectionCost::exact`]): points through the exact projection
+//! `u = K D(x_cam / z)`, segment endpoints by their distance to the curved image of the projected line.
+//! Only the test for a better pose behind the camera ([`super::candidates::behind_camera_cost`]) keeps
+//! the first-order cost: the projection through a lens is not defined behind the camera, and that test
+//! asks for a factor of 100 between the two costs.
+//!
+//! The certificate of global optimality ([`super::certificate`]) covers pinhole cameras only: through
+//! a lens it is refused, with that reason.
 
-use super::correspondences::Correspondences;
-use super::estimate::estimate_pose;
+use super::correspondences::{Conditioning, Correspondences};
 use super::noise::ObservationNoise;
+use super::reprojection::ReprojectionCost;
 use super::robust::scoring::subset;
 use super::PoseOptions;
 use super::PoseResult;
@@ -30,10 +34,12 @@ use crate::camera::Camera;
 use crate::camera_model::LensCamera;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Vector2};
+use std::borrow::Cow;
+use std::time::Instant;
 
 /// The observations `corr` (distorted pixels of `lens`) as undistorted pixels of [`LensCamera::pinhole`],
 /// with the noise that makes residuals there first-order residuals in the distorted pixels (see the
-/// module docs): the input of [`super::estimate_pose`] for a camera with distortion. `noise`, when
+/// module docs): the input of the stages before the refinement for a camera with distortion. `noise`, when
 /// given, holds the covariances of the observed (distorted) pixels, as
 /// [`ObservationNoise::from_covariances`] makes them. `Error::Degenerate` names an observation outside
 /// the invertible region of the distortion.
@@ -97,28 +103,75 @@ pub fn undistort(
     Ok((camera, undistorted))
 }
 
-/// [`estimate_pose`] for a camera with distortion: `corr` holds the observed (distorted) pixels of
-/// `lens`, and `noise` optionally their covariances ([`ObservationNoise::from_covariances`]). The
-/// stages run on the undistorted pixels and the refinement minimises the error in the distorted ones
-/// ([module docs](self) say how, and what RANSAC's thresholds then mean). The result's pixels
-/// (reprojection errors, `sigma_px`) are distorted pixels, or standard deviations with covariances.
+/// The observations of a pose problem in the two forms the pipeline uses.
+pub(crate) struct Observations<'c> {
+    /// The pinhole camera of the algebraic stages, the minimal solvers and RANSAC's scoring: the
+    /// camera itself, or a lens's pinhole part.
+    pub pinhole: Camera,
+    /// The correspondences in the pixels of `pinhole`: the observed ones for a pinhole camera, else
+    /// undistorted, with the first-order noise of [`undistort`].
+    pub undistorted: Cow<'c, Correspondences>,
+    /// The correspondences as observed (distorted pixels through a lens), with the caller's noise.
+    pub observed: &'c Correspondences,
+    /// The lens, when the camera distorts.
+    pub lens: Option<&'c LensCamera>,
+}
+
+impl<'c> Observations<'c> {
+    /// A pinhole camera's observations: both forms are `corr`.
+    pub fn pinhole(camera: &Camera, corr: &'c Correspondences) -> Self {
+        Observations {
+            pinhole: *camera,
+            undistorted: Cow::Borrowed(corr),
+            observed: corr,
+            lens: None,
+        }
+    }
+
+    /// The exact reprojection cost of `observed`, correspondences in the pixels of [`Self::observed`]
+    /// (the observed ones, conditioned or a subset).
+    pub fn cost<'a>(&'a self, observed: &'a Correspondences) -> ReprojectionCost<'a> {
+        let mut cost = ReprojectionCost::of(&self.pinhole, observed);
+        if let Some(lens) = self.lens {
+            // The pinhole part was built from this lens: `through_lens` cannot fail here.
+            cost = ReprojectionCost::through_lens(lens, observed).unwrap_or(cost);
+        }
+        cost
+    }
+
+    /// `corr` conditioned as `observed`'s form of these observations: `conditioned` itself (the
+    /// conditioned undistorted correspondences) for a pinhole camera, else the observed ones through
+    /// `cond`.
+    pub fn conditioned_observed(
+        &self,
+        cond: &Conditioning,
+        conditioned: &'c Correspondences,
+    ) -> Cow<'c, Correspondences> {
+        match self.lens {
+            None => Cow::Borrowed(conditioned),
+            Some(_) => Cow::Owned(cond.correspondences(self.observed)),
+        }
+    }
+}
+
+/// [`super::estimate_pose`] for a camera with distortion: `corr` holds the observed (distorted) pixels
+/// of `lens`, and `corr.noise` optionally their covariances ([`ObservationNoise::from_covariances`]).
+/// The stages before the refinement run on the undistorted pixels and the refinement minimises the
+/// exact error in the distorted ones ([module docs](self)). The result's pixels (reprojection errors,
+/// `sigma_px`) are distorted pixels, or standard deviations with covariances.
 ///
 /// An observation outside the invertible region of the distortion (a pixel no point in front of the
 /// camera projects to) is an error naming it, except with RANSAC: there it is an outlier (its inlier flag
 /// false, and not counted by the RANSAC report), as a random mismatch at the edge of a fisheye is.
-pub fn estimate_pose_lens(
+pub(crate) fn estimate_through(
     lens: &LensCamera,
     corr: &Correspondences,
-    noise: Option<&ObservationNoise>,
     opts: &PoseOptions,
+    started: Instant,
 ) -> Result<PoseResult> {
-    if lens.is_pinhole() {
-        // No distortion: the pinhole path, with the covariances (if any) as they are.
-        let corr = Correspondences {
-            noise: noise.cloned(),
-            ..corr.clone()
-        };
-        return estimate_pose(&lens.pinhole()?, &corr, opts);
+    let noise = corr.noise.as_ref();
+    if let Some(n) = noise {
+        n.check_counts(corr.n_points(), corr.n_lines())?;
     }
     // Without RANSAC a pixel beyond the lens is an error (from `undistort`); with it, an outlier.
     let (points, lines) = if opts.ransac.is_some() {
@@ -127,16 +180,24 @@ pub fn estimate_pose_lens(
         (vec![], vec![])
     };
     if points.iter().chain(&lines).all(|&ok| ok) {
-        let (camera, undistorted) = undistort(lens, corr, noise)?;
-        return estimate_pose(&camera, &undistorted, opts);
-    }
-    if let Some(n) = noise {
-        n.check_counts(corr.n_points(), corr.n_lines())?;
+        let (pinhole, undistorted) = undistort(lens, corr, noise)?;
+        let observations = Observations {
+            pinhole,
+            undistorted: Cow::Owned(undistorted),
+            observed: corr,
+            lens: Some(lens),
+        };
+        return super::estimate::run(&observations, opts, started);
     }
     let kept = subset(corr, &points, &lines);
-    let kept_noise = noise.map(|n| n.subset(&points, &lines));
-    let (camera, undistorted) = undistort(lens, &kept, kept_noise.as_ref())?;
-    let mut result = estimate_pose(&camera, &undistorted, opts)?;
+    let (pinhole, undistorted) = undistort(lens, &kept, kept.noise.as_ref())?;
+    let observations = Observations {
+        pinhole,
+        undistorted: Cow::Owned(undistorted),
+        observed: &kept,
+        lens: Some(lens),
+    };
+    let mut result = super::estimate::run(&observations, opts, started)?;
     result.inliers_points = expand(&result.inliers_points, &points);
     result.inliers_lines = expand(&result.inliers_lines, &lines);
     Ok(result)

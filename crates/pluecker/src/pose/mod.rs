@@ -2,7 +2,9 @@
 //!
 //! [`estimate_pose`] runs one of the estimators of Phong & Horaud 1995 and its baselines on points,
 //! lines, or both, and by default refines the answer on the reprojection error so that it is the
-//! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`.
+//! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`. The camera
+//! is any [`crate::AnyCamera`]: through a lens with distortion the refinement minimises the exact error
+//! in the observed pixels ([`lens`] says what each stage works on).
 
 pub mod algebraic;
 pub mod candidates;
@@ -22,7 +24,6 @@ pub mod robust;
 pub use certificate::{Certificate, CertificateOptions};
 pub use correspondences::{Conditioning, Correspondences};
 pub use estimate::{algebraic_stage, estimate_pose, Estimate};
-pub use lens::estimate_pose_lens;
 pub use noise::ObservationNoise;
 pub use refinement::refine_pose;
 pub use robust::{RansacOptions, RansacReport, RansacStop};

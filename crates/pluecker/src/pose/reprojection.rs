@@ -9,14 +9,27 @@
 //! With per-observation noise ([`super::noise`]) the residuals are whitened: `W (π(R X + t) − u)` for a
 //! point, the endpoint distance divided by the endpoint's standard deviation across the line.
 //!
+//! Through a lens ([`ReprojectionCost::exact`]) the residuals are in the image's own, distorted pixels,
+//! through the exact projection `π(x_cam) = K D(x/z, y/z)` of the [`LensCamera`] (`D` its distortion):
+//! - a point: `W (π(R X + t) − u)`, exactly as above with the lens's `π`;
+//! - a segment endpoint `e`: its distance to the *curved* image `K D(ℓ)` of the projected line `ℓ` (the
+//!   line through the normalised projections of the two 3-D endpoints, as for a pinhole camera), in
+//!   standard deviations of `e` (the Mahalanobis distance `min_q √((u(q) − e)ᵀ C⁻¹ (u(q) − e))` over
+//!   the points `q` of `ℓ`, the plain pixel distance without covariances). The minimum over `q` is a 1-D
+//!   Gauss-Newton search along `ℓ` from the foot of the endpoint's unprojection, the nearest point of
+//!   the curve's branch through the observation: see `nearest_on_curve`. With `D` the identity this
+//!   is the pinhole residual, sign included.
+//!
 //! The pose is `(R, t)` with `x_cam = R X_world + t`; a tangent step `(ω, τ)` moves it to
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
 
 use super::{Correspondences, CovarianceSource, ObservationNoise};
-use crate::camera::Camera;
+use crate::camera::{AnyCamera, Camera};
+use crate::camera_model::LensCamera;
+use crate::error::Result;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
-use nalgebra::{Matrix2, Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
 
 pub use crate::rigid::Pose;
 
@@ -36,6 +49,78 @@ pub struct ReprojectionCost<'a> {
     lines3d: &'a [[Vector3<f64>; 2]],
     /// Per-observation weights ([`super::noise`]); `None` is the isotropic fast path.
     noise: Option<&'a ObservationNoise>,
+    /// The lens the pixels were observed through ([`ReprojectionCost::exact`]); `None`: the pinhole
+    /// `camera` itself.
+    lens: Option<Lens<'a>>,
+}
+
+/// A lens of [`ReprojectionCost`], and where each segment endpoint's search along its line starts.
+#[derive(Debug, Clone)]
+struct Lens<'a> {
+    camera: &'a LensCamera,
+    /// The undistorted normalised coordinates of each segment endpoint ([`LensCamera::unproject`]),
+    /// `None` outside the invertible region of the distortion (the search then starts from the
+    /// projection of the 3-D endpoint of the same index).
+    starts: Vec<[Option<Vector2<f64>>; 2]>,
+}
+
+/// The 1-D search of [`nearest_on_curve`] stops after a step that moves the point on the curve by at
+/// most this many pixels (its cost is then exact to ~1e-20 px², its derivative to ~1e-10 px), or
+/// after [`NEAREST_MAX_ITERATIONS`] steps (Gauss-Newton contracts by about the residual over the
+/// curve's radius of curvature per step: a few steps for pixel residuals).
+const NEAREST_TOLERANCE_PX: f64 = 1e-10;
+/// See [`NEAREST_TOLERANCE_PX`].
+const NEAREST_MAX_ITERATIONS: usize = 100;
+
+/// The point nearest to the pixel `e`, in the metric `info = C⁻¹`, on the curve
+/// `σ ↦ u(σ) = K D(foot + σ dir)` of `lens` (`dir` a unit vector): the local minimum of
+/// `½ (u(σ) − e)ᵀ C⁻¹ (u(σ) − e)` that Gauss-Newton with step halving reaches from `σ = 0` (the foot on
+/// the undistorted line of the undistorted observation: the branch of the curve through the
+/// observation). Returns the point `foot + σ dir`, its pixel `u(σ)` and the tangent `du/dσ`.
+fn nearest_on_curve(
+    lens: &LensCamera,
+    foot: &Vector2<f64>,
+    dir: &Vector2<f64>,
+    e: &Vector2<f64>,
+    info: &Matrix2<f64>,
+) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
+    let ((fx, fy), (cx, cy)) = (lens.focal(), lens.principal_point());
+    let at = |sigma: f64| {
+        let q = foot + dir * sigma;
+        let (d, jd) = lens.distort(&q);
+        let tangent = jd * dir;
+        (
+            q,
+            Vector2::new(fx * d.x + cx, fy * d.y + cy),
+            Vector2::new(fx * tangent.x, fy * tangent.y),
+        )
+    };
+    let half_square = |u: &Vector2<f64>| 0.5 * (u - e).dot(&(info * (u - e)));
+    let (mut sigma, mut best) = (0.0, at(0.0));
+    let mut cost = half_square(&best.1);
+    for _ in 0..NEAREST_MAX_ITERATIONS {
+        let (_, u, du) = best;
+        let (g, h) = (du.dot(&(info * (u - e))), du.dot(&(info * du)));
+        if !(h > 0.0 && g.is_finite()) {
+            break;
+        }
+        let mut step = -g / h;
+        let small = (du * step).norm() <= NEAREST_TOLERANCE_PX;
+        let mut accepted = false;
+        for _ in 0..60 {
+            let next = at(sigma + step);
+            let c = half_square(&next.1);
+            if c <= cost {
+                (sigma, best, cost, accepted) = (sigma + step, next, c, true);
+                break;
+            }
+            step *= 0.5;
+        }
+        if small || !accepted {
+            break;
+        }
+    }
+    best
 }
 
 /// One residual pair and its 2x6 Jacobian with respect to `(ω, τ)`.
@@ -130,7 +215,31 @@ impl<'a> ReprojectionCost<'a> {
             lines2d,
             lines3d,
             noise: None,
+            lens: None,
         }
+    }
+
+    /// The exact cost of the correspondences of `c` seen by `camera`: their pixels are the observed
+    /// ones (distorted, through a lens), weighted by their noise when they carry one (see the module
+    /// documentation). The pinhole cost [`ReprojectionCost::of`] when the camera does not distort.
+    pub fn exact(camera: &'a AnyCamera, c: &'a Correspondences) -> Result<Self> {
+        match camera.distortion() {
+            Some(lens) => Self::through_lens(lens, c),
+            None => Ok(Self::of(&camera.pinhole()?, c)),
+        }
+    }
+
+    /// [`ReprojectionCost::exact`] for a [`LensCamera`].
+    pub fn through_lens(lens: &'a LensCamera, c: &'a Correspondences) -> Result<Self> {
+        let mut cost = Self::of(&lens.pinhole()?, c);
+        if !lens.is_pinhole() {
+            let start = |e: &Vector2<f64>| lens.unproject(e, 0).ok();
+            cost.lens = Some(Lens {
+                camera: lens,
+                starts: c.lines2d.iter().map(|s| [start(&s[0]), start(&s[1])]).collect(),
+            });
+        }
+        Ok(cost)
     }
 
     /// The cost of all the correspondences of `c`, weighted by their noise when they carry one.
@@ -195,7 +304,7 @@ impl<'a> ReprojectionCost<'a> {
     /// The point terms of the cost and, with `JACOBIAN`, of the gradient and `JᵀJ`: full batches of
     /// [`LANES`] points, then the rest one by one.
     fn point_sums<const JACOBIAN: bool>(&self, pose: &Pose) -> (f64, [f64; 6], [f64; 21]) {
-        if self.noise.is_some() {
+        if self.noise.is_some() || self.lens.is_some() {
             return self.weighted_point_sums::<JACOBIAN>(pose);
         }
         let full = self.n_points - self.n_points % LANES;
@@ -223,7 +332,7 @@ impl<'a> ReprojectionCost<'a> {
         )
     }
 
-    /// [`Self::point_sums`] with per-observation noise: point by point, whitened.
+    /// [`Self::point_sums`] with per-observation noise or a lens: point by point, whitened.
     #[cold]
     fn weighted_point_sums<const JACOBIAN: bool>(&self, pose: &Pose) -> (f64, [f64; 6], [f64; 21]) {
         let mut sums = (0.0, [0.0; 6], [0.0; 21]);
@@ -235,17 +344,44 @@ impl<'a> ReprojectionCost<'a> {
 
     /// Point `i`'s residual `W (π(R X + t) − u)` and its Jacobian, whitened by the noise (if any).
     fn point_block(&self, pose: &Pose, i: usize) -> Block {
-        let p = self.point_lanes::<1, true>(pose, i);
-        let r = Vector2::new(p.ru[0], p.rv[0]);
-        let j = SMatrix::<f64, 2, 6>::from_fn(|row, col| if row == 0 { p.ju[col][0] } else { p.jv[col][0] });
+        let (r, j) = match &self.lens {
+            Some(lens) => self.lens_point_block(lens.camera, pose, i),
+            None => {
+                let p = self.point_lanes::<1, true>(pose, i);
+                let r = Vector2::new(p.ru[0], p.rv[0]);
+                let j = SMatrix::<f64, 2, 6>::from_fn(|row, col| if row == 0 { p.ju[col][0] } else { p.jv[col][0] });
+                (r, j)
+            }
+        };
         let w = self.noise.map_or_else(Matrix2::identity, |n| n.points[i]);
         (w * r, w * j)
+    }
+
+    /// Point `i`'s residual `π(R X + t) − u` through `lens` and its Jacobian (unwhitened): with
+    /// `a = ∂π/∂x_cam`, `∂/∂ω = −a [R X]×` and `∂/∂τ = a`.
+    fn lens_point_block(&self, lens: &LensCamera, pose: &Pose, i: usize) -> Block {
+        let (x, u) = self.point(i);
+        let rx = pose.rotation * x;
+        let (pixel, a) = lens.project(&(rx + pose.translation));
+        let mut j = SMatrix::<f64, 2, 6>::zeros();
+        j.fixed_view_mut::<2, 3>(0, 0).copy_from(&(-a * skew(&rx)));
+        j.fixed_view_mut::<2, 3>(0, 3).copy_from(&a);
+        (pixel - u, j)
+    }
+
+    /// Point `i`: its world coordinates and observed pixel.
+    fn point(&self, i: usize) -> (Vector3<f64>, Vector2<f64>) {
+        let c = |k: usize| self.column(k)[i];
+        (Vector3::new(c(0), c(1), c(2)), Vector2::new(c(3), c(4)))
     }
 
     /// Line `i`'s two endpoint residuals and their Jacobian: `(l·ẽ) / √(l₁₂ᵀ C l₁₂)` with `C` the
     /// endpoint's covariance (the identity without noise: the pixel distance).
     #[inline(always)]
     fn line_block(&self, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
+        if let Some(lens) = &self.lens {
+            return self.curved_line_block(lens, pose, i, with_jacobian);
+        }
         match self.noise {
             None => self.line_block_with::<false>(pose, i, with_jacobian),
             Some(_) => self.line_block_with::<true>(pose, i, with_jacobian),
@@ -292,10 +428,64 @@ impl<'a> ReprojectionCost<'a> {
         (residual, jac)
     }
 
+    /// Line `i`'s two endpoint residuals through a lens and their Jacobian: for each endpoint `e` with
+    /// covariance `C` (the identity without noise), the point `q` of the projected line `ℓ` whose pixel
+    /// `u(q)` is nearest to `e` ([`nearest_on_curve`]), then `ηᵀ (u(q) − e)` with `η = n / √(nᵀ C n)` and
+    /// `n` the normal of the curve at `u(q)`: at the minimum `u(q) − e` is C-orthogonal to the curve,
+    /// so this is `±` the Mahalanobis distance (the pixel distance for `C = I`). The Jacobian is
+    /// `ηᵀ ∂u/∂(ω, τ)` at the fixed world point `X*` of the 3-D line that projects to `q`: the derivative
+    /// of the minimum with respect to the pose is that at the minimiser (the envelope theorem), with the
+    /// search's gradient `ηᵀ(…)`'s part along the curve zero. NaN when the 3-D line passes through the
+    /// camera centre (no projected line), as for a pinhole.
+    fn curved_line_block(&self, lens: &Lens, pose: &Pose, i: usize, with_jacobian: bool) -> Block {
+        let [wa, wb] = self.lines3d[i];
+        let (ra, rb) = (pose.rotation * wa, pose.rotation * wb);
+        let (a, b) = (ra + pose.translation, rb + pose.translation);
+        // ℓ: l₀ x + l₁ y + l₂ = 0 in normalised coordinates, with unit direction `dir`.
+        let l = a.cross(&b);
+        let l12 = Vector2::new(l.x, l.y);
+        let norm2 = l12.norm_squared();
+        let mut residual = Vector2::from_element(f64::NAN);
+        let mut jac = SMatrix::<f64, 2, 6>::from_element(f64::NAN);
+        if !(norm2 > 0.0 && norm2.is_finite()) {
+            return (residual, jac);
+        }
+        let dir = Vector2::new(-l.y, l.x) / norm2.sqrt();
+        let (fx, fy) = lens.camera.focal();
+        for (k, e) in self.lines2d[i].iter().enumerate() {
+            let cov = self.noise.map_or_else(Matrix2::identity, |n| n.lines[i][k]);
+            let Some(info) = cov.try_inverse() else { continue };
+            let start = lens.starts[i][k].unwrap_or_else(|| {
+                let p = if k == 0 { a } else { b };
+                Vector2::new(p.x / p.z, p.y / p.z)
+            });
+            let foot = start - l12 * ((l12.dot(&start) + l.z) / norm2);
+            let (q, u, du) = nearest_on_curve(lens.camera, &foot, &dir, e, &info);
+            // The normal of the pinhole's line for D = I (same sign as `line_block_with`'s residual).
+            let n = Vector2::new(du.y, -du.x);
+            let eta = n / n.dot(&(cov * n)).sqrt();
+            residual[k] = eta.dot(&(u - e));
+            if with_jacobian {
+                // X* = A + s (B − A), with x_cam(X*) = a + s (b − a) parallel to (q, 1).
+                let qh = Vector3::new(q.x, q.y, 1.0);
+                let (c0, c1) = (qh.cross(&a), qh.cross(&(b - a)));
+                let s = -c0.dot(&c1) / c1.norm_squared();
+                let (p, rx) = (a + (b - a) * s, ra + (rb - ra) * s);
+                let z = p.z;
+                let dq_dp = Matrix2x3::new(1.0 / z, 0.0, -q.x / z, 0.0, 1.0 / z, -q.y / z);
+                let (_, jd) = lens.camera.distort(&q);
+                let row = eta.transpose() * Matrix2::new(fx, 0.0, 0.0, fy) * jd * dq_dp;
+                jac.fixed_view_mut::<1, 3>(k, 0).copy_from(&(-row * skew(&rx)));
+                jac.fixed_view_mut::<1, 3>(k, 3).copy_from(&row);
+            }
+        }
+        (residual, jac)
+    }
+
     /// The cost `½ Σ r²` at `pose` when it is below `bound`, else `None`: the points are summed in
     /// batches and the sum abandoned as soon as it reaches `bound` (for ranking many poses cheaply).
     pub fn cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
-        if self.noise.is_some() {
+        if self.noise.is_some() || self.lens.is_some() {
             return self.weighted_cost_below(pose, bound);
         }
         let full = self.n_points - self.n_points % LANES;
@@ -316,7 +506,7 @@ impl<'a> ReprojectionCost<'a> {
         self.lines_below(pose, total, bound)
     }
 
-    /// [`Self::cost_below`] with per-observation noise: the bound checked after every point.
+    /// [`Self::cost_below`] with per-observation noise or a lens: the bound checked after every point.
     #[cold]
     fn weighted_cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
         let mut total = 0.0;
@@ -343,8 +533,16 @@ impl<'a> ReprojectionCost<'a> {
 
     /// Point `i`'s residual, whitened by the noise (if any).
     fn point_residual(&self, pose: &Pose, i: usize) -> Vector2<f64> {
-        let p = self.point_lanes::<1, false>(pose, i);
-        let r = Vector2::new(p.ru[0], p.rv[0]);
+        let r = match &self.lens {
+            Some(lens) => {
+                let (x, u) = self.point(i);
+                lens.camera.project(&pose.transform(&x)).0 - u
+            }
+            None => {
+                let p = self.point_lanes::<1, false>(pose, i);
+                Vector2::new(p.ru[0], p.rv[0])
+            }
+        };
         self.noise.map_or(r, |n| n.points[i] * r)
     }
 

@@ -3,6 +3,7 @@
 
 use super::certificate::Certification;
 use super::correspondences::{object_points, Correspondences};
+use super::lens::Observations;
 use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
 use super::{PoseOptions, PoseResult, StageReport, Status};
@@ -24,7 +25,8 @@ pub(crate) struct Parts<'c> {
     pub status: Status,
     /// Intrinsics estimated by the linear method.
     pub estimated_camera: Option<Camera>,
-    /// The correspondences the pose was fitted to (world frame): all of them, or the inliers.
+    /// The correspondences the pose was fitted to (world frame, observed pixels): all of them, or the
+    /// inliers.
     pub used: &'c Correspondences,
     /// Inlier masks (points, lines) when robust; `None`: all used.
     pub inliers: Option<(Vec<bool>, Vec<bool>)>,
@@ -78,7 +80,12 @@ pub(crate) fn status_of_stages(
 }
 
 /// The [`PoseResult`] of a finished run.
-pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, parts: Parts<'_>) -> PoseResult {
+pub(crate) fn assemble(
+    observations: &Observations<'_>,
+    opts: &PoseOptions,
+    started: Instant,
+    parts: Parts<'_>,
+) -> PoseResult {
     let Parts {
         pose,
         stages,
@@ -94,14 +101,15 @@ pub(crate) fn assemble(camera: &Camera, opts: &PoseOptions, started: Instant, pa
     let last = stages.last().expect("at least one stage").clone();
     let finite = is_finite(&pose);
     let residual_count = 2 * (used.n_points() + used.n_lines());
-    // One linearisation at the returned pose gives the reprojection error and `JᵀJ`.
-    // The refinement uses the given camera; the linear method alone is judged at its own intrinsics.
-    let model = if opts.refine {
-        *camera
-    } else {
-        estimated_camera.unwrap_or(*camera)
-    };
-    let linearization = finite.then(|| ReprojectionCost::of(&model, used).linearize(&pose));
+    // One linearisation at the returned pose gives the reprojection error and `JᵀJ`, exact in the
+    // observed pixels. The refinement uses the given camera; the linear method alone is judged at its
+    // own intrinsics (for a pinhole camera: through a lens, at the given one).
+    let linearization = finite.then(|| match estimated_camera {
+        Some(model) if !opts.refine && observations.lens.is_none() => {
+            ReprojectionCost::of(&model, used).linearize(&pose)
+        }
+        _ => observations.cost(used).linearize(&pose),
+    });
     let reprojection_cost = linearization.as_ref().map_or(f64::NAN, |l| l.cost);
     let rms_error_px = (2.0 * reprojection_cost / residual_count.max(1) as f64).sqrt();
     let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);

@@ -3,13 +3,13 @@
 
 use super::super::certificate::{Certificate, Certification};
 use super::super::correspondences::{Conditioning, Correspondences};
+use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
-use super::super::reprojection::{Pose, ReprojectionCost};
+use super::super::reprojection::Pose;
 use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
-use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::optim::{Summary, Termination};
 use nalgebra::{Matrix3, Vector3};
@@ -66,13 +66,14 @@ fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> Stage
 }
 
 /// [`crate::pose::estimate_pose`] with `opts.ransac = Some(robust)`.
+/// RANSAC runs on `observations`' undistorted form, the refinement on the exact cost of the observed one.
 pub(crate) fn estimate_robust(
-    camera: &Camera,
-    corr: &Correspondences,
+    observations: &Observations<'_>,
     opts: &PoseOptions,
     robust: &RansacOptions,
     started: Instant,
 ) -> Result<PoseResult> {
+    let (camera, corr) = (&observations.pinhole, observations.undistorted.as_ref());
     let shape = validate(corr, robust)?;
     let cond = if opts.normalize {
         Conditioning::of_shape(&shape)
@@ -81,6 +82,7 @@ pub(crate) fn estimate_robust(
     };
     let conditioned = cond.correspondences(corr);
     let outcome = ransac(camera, &conditioned, robust, &opts.refinement)?;
+    let observed = observations.conditioned_observed(&cond, &conditioned);
     let to_world = |p: &Pose| Pose::new(p.rotation, cond.pose_to_world(&p.rotation, &p.translation));
     let nan_pose = Pose::new(Matrix3::from_element(f64::NAN), Vector3::from_element(f64::NAN));
     let ransac_pose = outcome.pose.as_ref().map_or(nan_pose, to_world);
@@ -97,8 +99,8 @@ pub(crate) fn estimate_robust(
     if failure.is_none() && opts.refine {
         let mut refinement: Option<StageReport> = None;
         for _ in 0..FINAL_ROUNDS {
-            let inliers = subset(&conditioned, &points, &lines);
-            let (refined, report) = refine_conditioned(&cond, &ReprojectionCost::of(camera, &inliers), &pose, opts);
+            let inliers = subset(&observed, &points, &lines);
+            let (refined, report) = refine_conditioned(&cond, &observations.cost(&inliers), &pose, opts);
             pose = refined;
             refinement = Some(match refinement {
                 None => report,
@@ -118,7 +120,7 @@ pub(crate) fn estimate_robust(
         }
         stages.extend(refinement);
     }
-    let used = subset(corr, &points, &lines);
+    let used = subset(observations.observed, &points, &lines);
     let required = outcome.report.required_inliers;
     let failure = failure.or_else(|| (count(&points) + count(&lines) < required).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
@@ -129,7 +131,7 @@ pub(crate) fn estimate_robust(
         }
     });
     Ok(assemble(
-        camera,
+        observations,
         opts,
         started,
         Parts {
