@@ -365,3 +365,33 @@ fn out_to_80_degrees_off_axis_every_certificate_is_sound() {
     }
     assert!(certified >= 54, "{certified} of 60");
 }
+
+#[test]
+fn robust_inliers_are_the_observations_within_the_threshold_at_the_exact_optimum() {
+    // One 30 px outlier per track through the strong lens: it is rejected, and the inlier flags are
+    // exactly the observations the oracle finds within τ = 4 whitened px of the returned point.
+    let mut rng = Rng::new(404);
+    let opts = TriangulationOptions {
+        outlier_threshold: Some(4.0),
+        ..optimal()
+    };
+    for i in 0..30 {
+        let mut t = track(strong_radial(), 4 + i % 3, 0.09, false, &mut rng);
+        let bad = i % t.pixels.len();
+        t.pixels[bad] += Vector2::new(30.0, -20.0);
+        let r = triangulate_point_views(&t.views, &t.pixels, None, &opts).unwrap();
+        let flags = r.inliers.clone().unwrap();
+        assert!(!flags[bad], "track {i}: the outlier is an inlier");
+        for (k, ((lens, view), u)) in t.lenses.iter().zip(&t.views).zip(&t.pixels).enumerate() {
+            let e = lens
+                .project(&view.pose.transform(&r.point))
+                .map_or(f64::INFINITY, |p| (p - u).norm());
+            assert_eq!(
+                flags[k],
+                e <= 4.0,
+                "track {i} view {k}: residual {e} at the returned point"
+            );
+        }
+        assert!(r.report.certificate.certified, "track {i}");
+    }
+}

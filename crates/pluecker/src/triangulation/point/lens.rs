@@ -532,7 +532,29 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
         report.test_residuals(2 * used.len(), 3);
         return;
     }
-    let (x, summary) = refine(&used, &x0, &opts.local);
+    let (mut x, mut summary) = refine(&used, &x0, &opts.local);
+    let mut used = used;
+    if let (Some(tau), Some(flags)) = (opts.outlier_threshold, result.inliers.as_mut()) {
+        // The inliers are those within τ at the exact optimum, re-solved while they change (as
+        // `robust` does on the first-order cost).
+        for _ in 0..super::robust::MAX_ROUNDS {
+            let next: Vec<bool> = views.iter().map(|v| v.squared_residual(&x) <= tau * tau).collect();
+            if next == *flags || next.iter().filter(|&&m| m).count() < 2 {
+                break;
+            }
+            *flags = next;
+            used = views
+                .iter()
+                .zip(flags.iter())
+                .filter(|(_, &f)| f)
+                .map(|(v, _)| *v)
+                .collect();
+            let again = refine(&used, &x, &opts.local);
+            summary.iterations += again.1.iterations;
+            summary.termination = again.1.termination;
+            x = again.0;
+        }
+    }
     let cost = exact_cost(&used, &x);
     result.point = x;
     result.covariance = exact_covariance(&used, &x);
