@@ -266,15 +266,23 @@ impl Linearised {
         let e = view.whitening * (u - view.pixel);
         // The rounding of e: of u and of the pixel, through L.
         let rounding = view.whitening.norm() * PIXEL_ROUNDING * (u.norm() + view.pixel.norm() + 1.0);
-        let plain = Linearised::in_chart(m, e, n, jd, distortion, domain.radius, None, rounding)?;
+        let w = m * jd;
+        let plain = Linearised {
+            w,
+            w_inverse: w.try_inverse().ok_or(LensBoundFailure::Fold)?,
+            m,
+            e,
+            n,
+            j: jd,
+            distortion,
+            radius: domain.radius,
+            ray: None,
+            rounding,
+        };
         // A fisheye off axis may do better in the ray chart (module docs): the chart of smaller εᵢ.
         if let (Distortion::Fisheye(_), true) = (&plain.distortion, n.norm() > RAY_CHART_TAN) {
-            let ray = Rotation3::rotation_between(&xc, &Vector3::z()).map(|r| r.into_inner());
-            let turned = ray.and_then(|r| {
-                let j = jd * homography_jacobian(&r);
-                let d = plain.distortion.clone();
-                Linearised::in_chart(m, e, Vector2::zeros(), j, d, domain.radius, Some(r), rounding).ok()
-            });
+            let turned =
+                Rotation3::rotation_between(&xc, &Vector3::z()).and_then(|r| plain.in_ray_chart(r.into_inner()));
             if let Some(turned) = turned {
                 let rho = (cost.sqrt() + e.norm()) * 1.001;
                 let better = match (turned.epsilon(rho), plain.epsilon(rho)) {
@@ -290,31 +298,18 @@ impl Linearised {
         Ok(plain)
     }
 
-    /// The view in the chart of coordinates `n` (the plain one, or the ray chart of `ray`).
-    #[allow(clippy::too_many_arguments)]
-    fn in_chart(
-        m: Matrix2<f64>,
-        e: Vector2<f64>,
-        n: Vector2<f64>,
-        j: Matrix2<f64>,
-        distortion: Distortion,
-        radius: f64,
-        ray: Option<Matrix3<f64>>,
-        rounding: f64,
-    ) -> std::result::Result<Linearised, LensBoundFailure> {
-        let w = m * j;
-        let w_inverse = w.try_inverse().ok_or(LensBoundFailure::Fold)?;
-        Ok(Linearised {
+    /// The same view in the ray chart of `ray` (`n′ = 0` at the estimate, `J` that of `D ∘ h`).
+    fn in_ray_chart(&self, ray: Matrix3<f64>) -> Option<Linearised> {
+        let j = self.j * homography_jacobian(&ray);
+        let w = self.m * j;
+        Some(Linearised {
             w,
-            w_inverse,
-            m,
-            e,
-            n,
+            w_inverse: w.try_inverse()?,
+            n: Vector2::zeros(),
             j,
-            distortion,
-            radius,
-            ray,
-            rounding,
+            ray: Some(ray),
+            distortion: self.distortion.clone(),
+            ..*self
         })
     }
 

@@ -106,17 +106,7 @@ pub fn triangulate_point(
     opts: &TriangulationOptions,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    opts.validate()?;
-    check_track(cameras, observations, opts.method)?;
-    validate_cameras(cameras, "cameras")?;
-    if let Some(row) = observations.iter().position(|x| !(x.x.is_finite() && x.y.is_finite())) {
-        return Err(Error::NonFinite {
-            what: "observations".into(),
-            index: row,
-        });
-    }
-    let whitening = whitenings(covariances, cameras.len(), "covariances")?;
-    check_parallax(cameras, "cameras")?;
+    let whitening = checked_track(cameras, "cameras", observations, covariances, opts)?;
     let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
     Ok(solve_track_views(&views, &frame_of_cameras(cameras), opts, started))
@@ -137,18 +127,8 @@ pub fn triangulate_point_views(
     opts: &TriangulationOptions,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    opts.validate()?;
     let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
-    check_track(&cameras, observations, opts.method)?;
-    validate_cameras(&cameras, "views")?;
-    if let Some(row) = observations.iter().position(|x| !(x.x.is_finite() && x.y.is_finite())) {
-        return Err(Error::NonFinite {
-            what: "observations".into(),
-            index: row,
-        });
-    }
-    let whitening = whitenings(covariances, views.len(), "covariances")?;
-    check_parallax(&cameras, "views")?;
+    let whitening = checked_track(&cameras, "views", observations, covariances, opts)?;
     let lens_views: Vec<LensView> = views
         .iter()
         .zip(observations)
@@ -156,6 +136,29 @@ pub fn triangulate_point_views(
         .map(|((v, x), l)| LensView::new(v, *x, *l))
         .collect();
     lens::solve_lens_track(&lens_views, &frame_of_cameras(&cameras), opts, started)
+}
+
+/// The checks of one track's input (errors of [`triangulate_point`]; `what` names the cameras), and
+/// its whitening factors.
+fn checked_track(
+    cameras: &[Matrix3x4<f64>],
+    what: &str,
+    observations: &[Vector2<f64>],
+    covariances: Option<&[Matrix2<f64>]>,
+    opts: &TriangulationOptions,
+) -> Result<Vec<Matrix2<f64>>> {
+    opts.validate()?;
+    check_track(cameras, observations, opts.method)?;
+    validate_cameras(cameras, what)?;
+    if let Some(row) = observations.iter().position(|x| !(x.x.is_finite() && x.y.is_finite())) {
+        return Err(Error::NonFinite {
+            what: "observations".into(),
+            index: row,
+        });
+    }
+    let whitening = whitenings(covariances, cameras.len(), "covariances")?;
+    check_parallax(cameras, what)?;
+    Ok(whitening)
 }
 
 /// [`solve_views`], or its robust form when `opts.outlier_threshold` is set.
