@@ -618,3 +618,136 @@ pub(crate) fn solve_lens_track(
     }
     Ok(result)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera_model::CameraModel;
+    use crate::rng::Rng;
+
+    /// A view of `x` through `lens` from a camera at distance 5 whose axis is `angle` off the point,
+    /// the pixel displaced by `noise` px.
+    fn view_of(
+        lens: &AnyCamera,
+        x: &Vector3<f64>,
+        angle: f64,
+        noise: Vector2<f64>,
+        rng: &mut Rng,
+    ) -> (Matrix3<f64>, Vector3<f64>, Vector2<f64>) {
+        let centre = x + rng.unit_vector3() * 5.0;
+        let to_point = (x - centre).normalize();
+        let side = to_point.cross(&rng.unit_vector3()).normalize();
+        let axis = to_point * angle.cos() + side * angle.sin();
+        let zx = axis.cross(&rng.unit_vector3()).normalize();
+        let rotation = Matrix3::from_rows(&[zx.transpose(), axis.cross(&zx).transpose(), axis.transpose()]);
+        let translation = -(rotation * centre);
+        let u = lens.project(&(rotation * x + translation)).0 + noise;
+        (rotation, translation, u)
+    }
+
+    /// The chart coordinates of the normalised point `n` (identity, or the ray chart's `n′`).
+    fn chart_of(l: &Linearised, n: &Vector2<f64>) -> Option<Vector2<f64>> {
+        match &l.ray {
+            None => Some(*n),
+            Some(r) => {
+                let w = r * Vector3::new(n.x, n.y, 1.0);
+                (w.z > 0.0).then(|| Vector2::new(w.x / w.z, w.y / w.z))
+            }
+        }
+    }
+
+    #[test]
+    fn step_one_confines_every_projection_within_the_level_and_bounds_the_remainder() {
+        // The claims of steps 1-2 for one view, checked at sampled normalised points with the
+        // library's projection: a point with ‖e‖ ≤ √C lies in B = {‖W n′‖ ≤ ρ}, and inside B
+        // ‖e‖ ≥ ‖ℓ‖ − ε‖v‖ − s and ‖e‖ ≥ (1 − ε)‖v‖ − ‖e*‖ (the mean-value bound).
+        let mut rng = Rng::new(3);
+        let lenses = [
+            AnyCamera::Lens(LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 600.0, 500.0, -14.0]).unwrap()),
+            AnyCamera::Lens(
+                LensCamera::new(
+                    CameraModel::OpenCvFisheye,
+                    &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4],
+                )
+                .unwrap(),
+            ),
+            AnyCamera::Lens(
+                LensCamera::new(
+                    CameraModel::OpenCv,
+                    &[600.0, 610.0, 320.0, 240.0, -0.3, 0.0, 2e-3, -1e-3],
+                )
+                .unwrap(),
+            ),
+        ];
+        let (mut inside, mut checked) = (0, 0);
+        for (k, camera) in lenses.iter().enumerate() {
+            let widest = [0.09, 1.35, 0.6][k];
+            for _ in 0..40 {
+                let x = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.2;
+                let noise = Vector2::new(rng.normal(), rng.normal()) * 2.0;
+                let (rotation, translation, pixel) = view_of(camera, &x, rng.uniform_in(0.0, widest), noise, &mut rng);
+                let view = LensView {
+                    camera,
+                    rotation,
+                    translation,
+                    pixel,
+                    whitening: Matrix2::identity(),
+                };
+                // A level above the view's own cost, as with other views in the track.
+                let cost = view.squared_residual(&x) + rng.uniform_in(0.5, 20.0);
+                let Ok(l) = Linearised::new(&view, &x, cost) else {
+                    continue;
+                };
+                let Some((rho, eps)) = l.confinement(cost) else {
+                    continue;
+                };
+                // Step 1's contract: ε is the bound over B's box, and B's boundary is above the level.
+                assert_eq!(l.epsilon(rho), Some(eps));
+                assert!(
+                    (1.0 - eps) * rho > cost.sqrt() + l.e.norm() + l.rounding,
+                    "{k}: ρ = {rho}, ε = {eps}"
+                );
+                let xc = rotation * x + translation;
+                let n_star = Vector2::new(xc.x / xc.z, xc.y / xc.z);
+                // Sample normalised points around the estimate out to twice B in the chart's metric.
+                let reach = 2.0 * rho * l.w_inverse.norm();
+                for _ in 0..400 {
+                    let offset = Vector2::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0)) * reach;
+                    let n = match &l.ray {
+                        None => n_star + offset,
+                        Some(r) => {
+                            let w = r.transpose() * Vector3::new(offset.x, offset.y, 1.0);
+                            if w.z <= 0.0 {
+                                continue;
+                            }
+                            Vector2::new(w.x / w.z, w.y / w.z)
+                        }
+                    };
+                    let Some(c) = chart_of(&l, &n) else { continue };
+                    // e(n) through the library's projection of the ray (n, 1) in the camera frame.
+                    let u = camera.project(&Vector3::new(n.x, n.y, 1.0)).0;
+                    let e = (u - pixel).norm();
+                    let v = (l.w * (c - l.n)).norm();
+                    checked += 1;
+                    if e <= cost.sqrt() {
+                        assert!(
+                            v <= rho * (1.0 + 1e-9),
+                            "{k}: ‖e‖ = {e} ≤ √C = {} but ‖W n′‖ = {v} > ρ = {rho}",
+                            cost.sqrt()
+                        );
+                    }
+                    if v <= rho {
+                        inside += 1;
+                        let ell = (l.e + l.w * (c - l.n)).norm();
+                        assert!(
+                            e >= ell - eps * v - l.rounding - 1e-9 * ell,
+                            "{k}: ‖e‖ = {e} < ‖ℓ‖ − εv = {}",
+                            ell - eps * v
+                        );
+                    }
+                }
+            }
+        }
+        assert!(checked > 20_000 && inside > 2_000, "{checked} {inside}");
+    }
+}
