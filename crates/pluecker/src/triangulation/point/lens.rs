@@ -479,8 +479,7 @@ fn tightened_bound(
         if bound >= target {
             break;
         }
-        // The bound reaches the target at t₁ and stays above it beyond.
-        let t1 = (a1 + (a1 * a1 - 4.0 * a2 * (a0 - target)).max(0.0).sqrt()) / (2.0 * a2);
+        let t1 = beyond(a0, a1, a2, target);
         if !(t1 < radius) {
             break;
         }
@@ -588,6 +587,16 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
     report.test_residuals(2 * used.len(), 3);
 }
 
+/// The radius `t₁ ≥ 0` beyond which `a0 − a1 t + a2 t² ≥ target` (`a2 > 0`): the larger root, or 0
+/// when the quadratic never falls below the target.
+fn beyond(a0: f64, a1: f64, a2: f64, target: f64) -> f64 {
+    let discriminant = a1 * a1 - 4.0 * a2 * (a0 - target);
+    if discriminant < 0.0 {
+        return 0.0;
+    }
+    ((a1 + discriminant.sqrt()) / (2.0 * a2)).max(0.0)
+}
+
 /// `(Σ JᵢᵀJᵢ)⁻¹` of the exact residuals at `x` ([`crate::triangulation::uncertainty`]).
 fn exact_covariance(views: &[LensView], x: &Vector3<f64>) -> Option<Matrix3<f64>> {
     let mut information = Matrix3::zeros();
@@ -652,6 +661,35 @@ mod tests {
             Some(r) => {
                 let w = r * Vector3::new(n.x, n.y, 1.0);
                 (w.z > 0.0).then(|| Vector2::new(w.x / w.z, w.y / w.z))
+            }
+        }
+    }
+
+    #[test]
+    fn beyond_the_returned_radius_the_quadratic_is_above_the_target() {
+        let mut rng = Rng::new(8);
+        for _ in 0..2000 {
+            let (a0, a1, a2) = (
+                rng.uniform_in(0.0, 10.0),
+                rng.uniform_in(0.0, 5.0),
+                rng.uniform_in(0.01, 3.0),
+            );
+            let target = a0 * rng.uniform_in(0.5, 1.2);
+            let t1 = beyond(a0, a1, a2, target);
+            for k in 0..50 {
+                let t = t1 * (1.0 + 1e-9) + k as f64 * rng.uniform_in(0.0, 1.0);
+                assert!(
+                    a0 - a1 * t + a2 * t * t >= target - 1e-9 * target.abs(),
+                    "{a0} {a1} {a2} {target}: t = {t}"
+                );
+            }
+            // The least such radius: just inside it (when positive) the quadratic is below the target.
+            if t1 > 1e-6 {
+                let t = t1 * (1.0 - 1e-6);
+                assert!(
+                    a0 - a1 * t + a2 * t * t < target,
+                    "{a0} {a1} {a2} {target}: not the least, t1 = {t1}"
+                );
             }
         }
     }
