@@ -53,6 +53,10 @@ CASES = {
     # f = 300 px, the image's corners 80° off axis: f θ_d(80°) = 448 px from the centre, 4:3.
     "fisheye_80": ("OPENCV_FISHEYE", [300.0, 300.0, 358.5, 268.5, 0.05, -0.01, 0.002, -3e-4], 717, 537, 6.0,
                    _within_degrees(80.0)),
+    # The division model (barrel, k = -0.2 at f = 400 px: 32 % at the corners) and EUCM (α = 0.6, β = 1.1,
+    # f = 300 px), whose closed-form distortions the certificate also covers.
+    "division": ("DIVISION", [400.0, 400.0, 512.0, 384.0, -0.2], 1024, 768, 2.0, _within_degrees(60.0)),
+    "eucm": ("EUCM", [300.0, 300.0, 512.0, 384.0, 0.6, 1.1], 1024, 768, 3.0, _within_degrees(75.0)),
 }
 
 

@@ -287,8 +287,8 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
     undistorted into each camera's pinhole part; the point is then refined on the exact cost, and a
     certificate (``lens_convexity_test`` through a lens) proves its global minimum over every point whose
     projections lie inside the disc where each lens is proved one-to-one (the fold radius for radially
-    symmetric lenses). Where no proof is found (FOV, the division models, EUCM, a rational FULL_OPENCV,
-    the fisheyes' tangential and thin-prism terms, low parallax) the point is ``gap_not_closed``:
+    symmetric lenses). Where no proof is found (FOV, a rational FULL_OPENCV, the fisheyes' tangential and
+    thin-prism terms, low parallax) the point is ``gap_not_closed``:
     uncertified, never certified on an approximation.
 
     ``outlier_threshold_px`` rejects observations farther than that many pixels from the consensus of

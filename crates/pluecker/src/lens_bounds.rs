@@ -6,6 +6,7 @@
 //!   OPENCV and FULL_OPENCV without tangential terms or denominator): `∂D/∂n = g I + 2g' n nᵀ`;
 //! - **polynomial with OPENCV's tangential term** `t(n)`, whose Jacobian
 //!   `[2p₁y + 6p₂x, 2p₁x + 2p₂y; 2p₁x + 2p₂y, 6p₁y + 2p₂x]` is linear in `n` and symmetric;
+//! - **division** and **EUCM**, `D(n) = n g(s)` with their closed forms of `g` (see [`Distortion`]);
 //! - **fisheye**, `D(n) = m g(θ²)`, `m = n σ(r)`, `σ = θ/r`, `θ = atan r` (`|m| = θ`; the fisheye
 //!   models without tangential or thin-prism terms): `∂D/∂n = (g I + 2g' m mᵀ)(σ I + q n nᵀ)` with
 //!   `q = σ'(r)/r`.
@@ -22,7 +23,8 @@
 //! part of its image:
 //! - radially symmetric: `R` is the fold radius ([`LensCamera::fold_radius`]), below which the
 //!   radial map `r ↦ r g` (or `θ g(θ²)`) increases, and the image is the disc of radius `ρ = R g(R²)`
-//!   (`θ_R g(θ_R²)`, `θ_R = atan R`, for the fisheyes);
+//!   (`θ_R g(θ_R²)`, `θ_R = atan R`, for the fisheyes; the limit of `r g` for an unbounded disc of the
+//!   division models and EUCM);
 //! - with the tangential term: the symmetric part of `∂D/∂n` is positive definite wherever
 //!   `min(g, g + 2sg') > ‖∂t/∂n‖_F`, and `‖∂t/∂n‖_F ≤ 9(|p₁| + |p₂|) r` (its entries are at most
 //!   `(2|p₁| + 6|p₂|) r`, `2(|p₁| + |p₂|) r` twice and `(6|p₁| + 2|p₂|) r`; `80 (|p₁| + |p₂|)² ≤ 81 …`).
@@ -53,10 +55,14 @@ pub enum Distortion {
     Tangential(Vec<f64>, f64, f64),
     /// `D(n) = m g(θ²)`, `m = n θ/r`, `θ = atan |n|`, with `g` as above in `θ²`.
     Fisheye(Vec<f64>),
+    /// The division models: `D(n) = n g(s)`, `g = 2/(1 + q)`, `q = √(1 − 4ks)`, `g' = 4k/(q(1 + q)²)`.
+    Division(f64),
+    /// EUCM: `D(n) = n g(s)`, `g = 1/(αq + 1 − α)`, `q = √(1 + βs)`, `g' = −αβ g²/(2q)`.
+    Eucm(f64, f64),
 }
 
 /// The distortion of `lens`, or `None` when it is not covered: thin-prism or tangential terms of the
-/// fisheyes, a rational FULL_OPENCV, FOV, the division models, EUCM.
+/// fisheyes, a rational FULL_OPENCV, FOV (whose projection in COLMAP is piecewise, with a jump).
 pub fn distortion(lens: &LensCamera) -> Option<Distortion> {
     let p = lens.params();
     let zero = |range: &[f64]| range.iter().all(|&v| v == 0.0);
@@ -82,6 +88,9 @@ pub fn distortion(lens: &LensCamera) -> Option<Distortion> {
             Some(Fisheye(vec![p[4], p[5], p[8], p[9]]))
         }
         CameraModel::RadTanThinPrismFisheye if zero(&p[10..16]) => Some(Fisheye(p[4..10].to_vec())),
+        CameraModel::SimpleDivision => Some(Distortion::Division(p[3])),
+        CameraModel::Division => Some(Distortion::Division(p[4])),
+        CameraModel::Eucm => Some(Distortion::Eucm(p[4], p[5])),
         _ => None,
     }
 }
@@ -175,6 +184,29 @@ pub fn domain(distortion: &Distortion, fold_radius: f64) -> Option<Domain> {
                 image_radius: theta * g_at(c, theta * theta),
             }
         }
+        Distortion::Division(k) => Domain {
+            radius: fold_radius,
+            // r g(r²) at the fold (q = 0 there: g = 2), or its limit 1/√(−k) at infinity.
+            image_radius: if fold_radius.is_finite() {
+                2.0 * fold_radius
+            } else if *k < 0.0 {
+                1.0 / (-k).sqrt()
+            } else {
+                f64::INFINITY
+            },
+        },
+        Distortion::Eucm(alpha, beta) => Domain {
+            radius: fold_radius,
+            // r g(r²) at the fold, or its limit 1/(α√β) at infinity.
+            image_radius: if fold_radius.is_finite() {
+                let q = (1.0 + beta * fold_radius * fold_radius).sqrt();
+                fold_radius / (alpha * q + 1.0 - alpha)
+            } else if *alpha > 0.0 && *beta > 0.0 {
+                1.0 / (alpha * beta.sqrt())
+            } else {
+                f64::INFINITY
+            },
+        },
         Distortion::Tangential(c, p1, p2) => {
             let p = p1.abs() + p2.abs();
             let end = fold_radius.min(10.0);
@@ -235,6 +267,31 @@ pub fn jacobian_enclosure(
                 [radial[0][0].add(tangential[0][0]), radial[0][1].add(tangential[0][1])],
                 [radial[1][0].add(tangential[1][0]), radial[1][1].add(tangential[1][1])],
             ]
+        }
+        Distortion::Division(k) => {
+            let inner = x.sqr().add(y.sqr()).scale(-4.0 * k).add(Interval::point(1.0));
+            if !(inner.lo > 0.0) {
+                return None;
+            }
+            let q = Interval::new(inner.lo.sqrt(), inner.hi.sqrt());
+            let one_q = q.add(Interval::point(1.0));
+            let g = Interval::point(2.0).div(one_q);
+            let dg = Interval::point(4.0 * k).div(q.mul(one_q.sqr()));
+            scaled(g, dg, x, y)
+        }
+        Distortion::Eucm(alpha, beta) => {
+            let inner = x.sqr().add(y.sqr()).scale(*beta).add(Interval::point(1.0));
+            if !(inner.lo > 0.0) {
+                return None;
+            }
+            let q = Interval::new(inner.lo.sqrt(), inner.hi.sqrt());
+            let den = q.scale(*alpha).add(Interval::point(1.0 - alpha));
+            if !(den.lo > 0.0) {
+                return None;
+            }
+            let g = Interval::point(1.0).div(den);
+            let dg = Interval::point(-alpha * beta / 2.0).div(q).mul(g.sqr());
+            scaled(g, dg, x, y)
         }
         Distortion::Fisheye(c) => {
             let theta = Interval::new(r_lo.atan(), r_hi.atan());
@@ -345,6 +402,9 @@ mod tests {
             .unwrap(),
             LensCamera::new(CameraModel::RadialFisheye, &[300.0, 512.0, 384.0, -0.02, 0.003]).unwrap(),
             LensCamera::new(CameraModel::SimpleFisheye, &[300.0, 512.0, 384.0]).unwrap(),
+            LensCamera::new(CameraModel::SimpleDivision, &[800.0, 320.0, 240.0, -0.2]).unwrap(),
+            LensCamera::new(CameraModel::Division, &[800.0, 790.0, 320.0, 240.0, 0.15]).unwrap(),
+            LensCamera::new(CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]).unwrap(),
         ]
     }
 
@@ -459,10 +519,12 @@ mod tests {
                     lens.model()
                 );
                 if dom.radius.is_finite() {
-                    let edge = n.normalize() * dom.radius * (1.0 - 1e-12);
+                    // The open disc's image reaches ρ only in the limit: at 1e-14 inside the edge, within
+                    // 1e-6 of it (the division model's edge is a square root: √(1e-14) ~ 1e-7).
+                    let edge = n.normalize() * dom.radius * (1.0 - 1e-14);
                     let d = lens.distort(&edge).0.norm();
                     assert!(
-                        d >= dom.image_radius * (1.0 - 1e-9),
+                        d >= dom.image_radius * (1.0 - 1e-6),
                         "{:?}: |D| = {d} < {}",
                         lens.model(),
                         dom.image_radius
@@ -550,6 +612,8 @@ mod tests {
 
     #[test]
     fn uncovered_distortions_have_none() {
+        let fov = LensCamera::new(CameraModel::Fov, &[400.0, 395.0, 320.0, 240.0, 0.9]).unwrap();
+        assert_eq!(distortion(&fov), None);
         let prism = LensCamera::new(
             CameraModel::ThinPrismFisheye,
             &[300.0, 300.0, 512.0, 384.0, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0, 0.0, 0.0],

@@ -49,8 +49,7 @@
 //!    `t ≤ t₁`, a few times.
 //!
 //! The certificate fails (the result is not certified, status `gap_not_closed`) for a lens it does not
-//! cover (FOV, the division models, EUCM, a rational FULL_OPENCV, the fisheyes' tangential and
-//! thin-prism terms), a projection or ellipse reaching the edge of its lens's domain, `εᵢ ≥ ½`, or a
+//! cover (FOV, a rational FULL_OPENCV, the fisheyes' tangential and thin-prism terms), a projection or ellipse reaching the edge of its lens's domain, `εᵢ ≥ ½`, or a
 //! failed convexity test (low parallax, large residuals); there is no branch and bound through a lens.
 //! Exact data (a cost at the rounding level) is certified by the trivial bound 0 whatever the lens.
 
