@@ -543,3 +543,21 @@ def test_the_distributed_tables_solve_as_retriangulate_does_through_the_lens():
     np.testing.assert_array_equal(points.column("cost").to_numpy(), run.result.cost)
     np.testing.assert_array_equal(points.column("certified").to_numpy(), run.result.certified)
     assert run.result.certified.all()
+
+
+def test_the_binary_read_of_the_keypoints_equals_pycolmaps_objects(tmp_path):
+    """``_keypoints`` (one pass over a temporary images.bin) gives every image's observed pixels, point3D
+    ids and point2D indices exactly as pycolmap's per-keypoint objects do, also after observations are
+    deleted and a second keypoint of one image joins a track."""
+    rec = synthetic_model(pycolmap.CameraModelId.OPENCV, RADIAL_OPENCV, 21)
+    image = next(iter(rec.images.values()))
+    rec.delete_observation(image.image_id, int(image.get_observation_point2D_idxs()[0]))
+    point_id, point = next((i, p) for i, p in sorted(rec.points3D.items()) if p.track.length() >= 3)
+    other = rec.images[point.track.elements[0].image_id]
+    u = rec.cameras[other.camera_id].img_from_cam(np.atleast_2d(other.cam_from_world() * point.xyz))[0] + 0.5
+    rec = with_a_second_keypoint(rec, other.image_id, point_id, u, tmp_path / "model")
+    keypoints = colmap._keypoints(rec)
+    assert keypoints is not None and sorted(keypoints) == sorted(rec.images)
+    for image in rec.images.values():
+        for ours, theirs in zip(keypoints[image.image_id], colmap._observed(image)):
+            np.testing.assert_array_equal(ours, theirs)

@@ -191,13 +191,11 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
                  dtype=float).reshape(-1, 3, 4)
     # The observations image by image (pycolmap hands them over per image), then sorted by point.
     parts = []
+    keypoints = _keypoints(reconstruction)
     for j, image in enumerate(images):
-        observed = image.get_observation_points2D()
-        if not observed:
+        xy, point_ids, idx = keypoints[image.image_id] if keypoints else _observed(image)
+        if not len(idx):
             continue
-        xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
-        point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
-        idx = np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
         rows = _point_rows(ids, point_ids, image.image_id, idx)
         kept, undistorted, covariances = _undistort(lenses[image.camera_id], xy,
                                                     np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
@@ -217,6 +215,57 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     return _Observations(P, np.array([image.image_id for image in images], dtype=np.int64), ids, track[order], camera[order], image_id[order], point2D_idx[order], undistorted[order],
                          covariances[order], skipped, pixels[order],
                          [lenses[image.camera_id] for image in images])
+
+
+def _observed(image: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An image's observations of 3-D points through pycolmap's objects: pixels (k, 2), point3D ids (k,)
+    and point2D indices (k,)."""
+    observed = image.get_observation_points2D()
+    xy = np.array([p.xy for p in observed], dtype=float).reshape(-1, 2)
+    point_ids = np.array([p.point3D_id for p in observed], dtype=np.int64)
+    return xy, point_ids, np.asarray(image.get_observation_point2D_idxs(), dtype=np.int64)
+
+
+# COLMAP's `kInvalidPoint3DId` in images.bin: a keypoint that observes no 3-D point.
+_NO_POINT3D = np.iinfo(np.uint64).max
+
+
+def _keypoints(reconstruction: Any) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] | None:
+    """Every image's observations as :func:`_observed` gives them, read in one pass from the model
+    written by pycolmap to a temporary binary ``images.bin`` (per image: id, pose, camera id, name, the
+    keypoint count and ``(x, y, point3D_id)`` records; COLMAP's ``WriteImagesBinary``): per-keypoint
+    Python objects are most of the time otherwise. ``None`` (the caller takes the objects' path) when
+    the file does not read back as exactly the model's images and keypoints."""
+    import tempfile
+
+    try:
+        with tempfile.TemporaryDirectory() as folder:
+            reconstruction.write_binary(folder)
+            with open(f"{folder}/images.bin", "rb") as f:
+                data = f.read()
+        out: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        count = int(np.frombuffer(data, "<u8", 1, 0)[0])
+        at = 8
+        record = np.dtype([("x", "<f8"), ("y", "<f8"), ("id", "<u8")])
+        for _ in range(count):
+            image_id = int(np.frombuffer(data, "<u4", 1, at)[0])
+            at += 4 + 7 * 8 + 4
+            end = data.index(b"\0", at)
+            at = end + 1
+            n = int(np.frombuffer(data, "<u8", 1, at)[0])
+            at += 8
+            points = np.frombuffer(data, record, n, at)
+            at += n * record.itemsize
+            idx = np.flatnonzero(points["id"] != _NO_POINT3D)
+            xy = np.stack([points["x"][idx], points["y"][idx]], axis=1)
+            out[image_id] = (xy, points["id"][idx].astype(np.int64), idx.astype(np.int64))
+        images = reconstruction.images
+        if at != len(data) or sorted(out) != sorted(images) or any(
+                len(out[i][2]) != images[i].num_points3D for i in out):
+            return None
+        return out
+    except (OSError, ValueError, IndexError, TypeError):  # pragma: no cover - a format this reader does not know
+        return None
 
 
 def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> np.ndarray:
