@@ -19,9 +19,9 @@
 //! parallel loop over tracks) are in [`crate::triangulation::tracks`].
 
 use super::cost::PointView;
-use super::lens::{first_order_view, through_lenses, LensView};
+use super::lens::{first_order_view, solve_through_lenses, LensView};
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
-use super::{solve_track_views, PointTriangulation};
+use super::PointTriangulation;
 use crate::error::{Error, Result};
 use crate::interrupt::{current, StopReason};
 use crate::triangulation::covariance::whitening;
@@ -282,12 +282,7 @@ fn solve_track(
     if spread <= SAME_CENTRE {
         return Err(no_parallax(t));
     }
-    let mut result = solve_track_views(&views, &frame, opts, started);
-    if !lens_views.is_empty() {
-        through_lenses(&mut result, &lens_views, opts);
-        result.report.time_seconds = started.elapsed().as_secs_f64();
-    }
-    Ok(result)
+    Ok(solve_through_lenses(&views, &lens_views, &frame, opts, started))
 }
 
 /// Point tracks as a flat list of observations grouped by track ([`Csr`]), for models where each track

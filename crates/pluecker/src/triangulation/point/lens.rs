@@ -619,12 +619,50 @@ pub(crate) fn solve_lens_track(
         .enumerate()
         .map(|(i, v)| first_order_view(v, i))
         .collect::<Result<_>>()?;
-    let mut result = super::solve_track_views(&first, frame, opts, started);
-    if views.iter().any(|v| v.camera.distortion().is_some()) {
-        through_lenses(&mut result, views, opts);
-        result.report.time_seconds = started.elapsed().as_secs_f64();
+    Ok(solve_through_lenses(&first, views, frame, opts, started))
+}
+
+/// The solve of a track whose first-order views `first` (of `views`) are built. With `optimal`
+/// through a lens, the first stages run `local` (a first-order certificate bounds another cost), and
+/// the first-order branch and bound, whose global search may find a better basin, only when the lens
+/// certificate then fails; the certified result, else the cheaper one, is kept.
+pub(crate) fn solve_through_lenses(
+    first: &[PointView],
+    views: &[LensView],
+    frame: &WorldFrame,
+    opts: &TriangulationOptions,
+    started: Instant,
+) -> PointTriangulation {
+    if !views.iter().any(|v| v.camera.distortion().is_some()) {
+        return super::solve_track_views(first, frame, opts, started);
     }
-    Ok(result)
+    let through = |first_opts: &TriangulationOptions| {
+        let mut result = super::solve_track_views(first, frame, first_opts, started);
+        result.report.method = opts.method;
+        through_lenses(&mut result, views, opts);
+        result
+    };
+    let mut result = if opts.method == Method::Optimal {
+        let local = through(&TriangulationOptions {
+            method: Method::Local,
+            ..opts.clone()
+        });
+        if local.report.certificate.certified {
+            local
+        } else {
+            let searched = through(opts);
+            let cheaper = searched.report.cost < local.report.cost || !local.report.cost.is_finite();
+            if searched.report.certificate.certified || cheaper {
+                searched
+            } else {
+                local
+            }
+        }
+    } else {
+        through(opts)
+    };
+    result.report.time_seconds = started.elapsed().as_secs_f64();
+    result
 }
 
 #[cfg(test)]
