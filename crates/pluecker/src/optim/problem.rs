@@ -18,6 +18,24 @@ pub struct Linearization<const N: usize> {
     pub gauss_newton: SMatrix<f64, N, N>,
 }
 
+impl<const N: usize> Linearization<N> {
+    /// The model of an empty sum: zero cost, gradient and Hessian.
+    pub fn zero() -> Self {
+        Linearization {
+            cost: 0.0,
+            gradient: SVector::zeros(),
+            gauss_newton: SMatrix::zeros(),
+        }
+    }
+
+    /// Adds the residuals `Φ` (length `M`) with Jacobian `J` (`M x N`): `½‖Φ‖²`, `JᵀΦ` and `JᵀJ`.
+    pub fn add<const M: usize>(&mut self, residual: &SVector<f64, M>, jacobian: &SMatrix<f64, M, N>) {
+        self.cost += 0.5 * residual.norm_squared();
+        self.gradient += jacobian.transpose() * residual;
+        self.gauss_newton += jacobian.transpose() * jacobian;
+    }
+}
+
 /// A least-squares cost the solvers can minimise.
 pub trait Objective<const N: usize> {
     /// A point of the search space.

@@ -74,17 +74,10 @@ pub(crate) fn linearize<const D: usize, const K: usize, const N: usize>(
     z: &SVector<f64, K>,
     dz: &SMatrix<f64, K, N>,
 ) -> Linearization<N> {
-    let mut lin = Linearization {
-        cost: 0.0,
-        gradient: SVector::zeros(),
-        gauss_newton: SMatrix::zeros(),
-    };
+    let mut lin = Linearization::zero();
     for v in views {
         let (r, j) = v.residual_and_jacobian(z);
-        let jd = j * dz;
-        lin.cost += 0.5 * r.norm_squared();
-        lin.gradient += jd.transpose() * r;
-        lin.gauss_newton += jd.transpose() * jd;
+        lin.add(&r, &(j * dz));
     }
     lin
 }

@@ -146,16 +146,10 @@ impl Objective<3> for PointObjective<'_> {
     }
 
     fn linearize(&self, x: &Vector3<f64>) -> Linearization<3> {
-        let mut lin = Linearization {
-            cost: 0.0,
-            gradient: Vector3::zeros(),
-            gauss_newton: Matrix3::zeros(),
-        };
+        let mut lin = Linearization::zero();
         for v in self.views {
             let (r, j) = v.residual_and_jacobian(x);
-            lin.cost += 0.5 * r.norm_squared();
-            lin.gradient += j.transpose() * r;
-            lin.gauss_newton += j.transpose() * j;
+            lin.add(&r, &j);
         }
         lin
     }

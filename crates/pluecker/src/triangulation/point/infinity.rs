@@ -18,7 +18,7 @@
 
 use super::cost::PointView;
 use crate::optim::{trust_region, Linearization, Objective, TrustRegionOptions};
-use nalgebra::{Matrix2, Matrix3x2, Vector2, Vector3};
+use nalgebra::{Matrix3x2, Vector2, Vector3};
 
 /// `f_∞(d)` (module docs) for the point at infinity in direction `d` or `−d`, whichever is in front
 /// of every camera (`cᵢ·d > 0` in every view); `None` when neither is.
@@ -90,11 +90,7 @@ impl Objective<2> for InfinityObjective<'_> {
 
     fn linearize(&self, d: &Vector3<f64>) -> Linearization<2> {
         let e = tangent_basis(d);
-        let mut lin = Linearization {
-            cost: 0.0,
-            gradient: Vector2::zeros(),
-            gauss_newton: Matrix2::zeros(),
-        };
+        let mut lin = Linearization::zero();
         for v in self.views {
             let z = v.c().dot(d);
             if !(z > 0.0) {
@@ -103,9 +99,7 @@ impl Objective<2> for InfinityObjective<'_> {
             }
             let r = v.a() * d / z;
             let j = (v.a() - r * v.c().transpose()) * e / z;
-            lin.cost += 0.5 * r.norm_squared();
-            lin.gradient += j.transpose() * r;
-            lin.gauss_newton += j.transpose() * j;
+            lin.add(&r, &j);
         }
         lin
     }
@@ -133,7 +127,7 @@ mod tests {
                 depth_normalized(&(k * rt))
             })
             .collect();
-        point_views(&cameras, observations, &[Matrix2::identity(); 3])
+        point_views(&cameras, observations, &[nalgebra::Matrix2::identity(); 3])
     }
 
     #[test]

@@ -169,19 +169,13 @@ impl Objective<3> for ExactObjective<'_, '_> {
     }
 
     fn linearize(&self, x: &Vector3<f64>) -> Linearization<3> {
-        let mut lin = Linearization {
-            cost: 0.0,
-            gradient: Vector3::zeros(),
-            gauss_newton: Matrix3::zeros(),
-        };
+        let mut lin = Linearization::zero();
         for v in self.views {
             let Some((e, j)) = v.residual_and_jacobian(x) else {
                 lin.cost = f64::INFINITY;
                 return lin;
             };
-            lin.cost += 0.5 * e.norm_squared();
-            lin.gradient += j.transpose() * e;
-            lin.gauss_newton += j.transpose() * j;
+            lin.add(&e, &j);
         }
         lin
     }
