@@ -9,9 +9,10 @@ pycolmap objects import it when called and say how to install it when it is miss
   (``images.txt``: ``QW QX QY QZ``) and pluecker's dual quaternions are ``(w, x, y, z)``.
 - **Cameras.** ``pycolmap.Camera(model, width, height, params)`` is ``pluecker.LensCamera(model,
   params)``: the same model names and parameter order. The image size is not part of the model.
-- **Camera matrices.** Triangulation takes ``P = K [R | t]`` of an undistorted camera
-  (``Camera.P(R, t)``). With a distorting model, the pixels are undistorted first
-  (``LensCamera.undistort``) and ``K`` is the model's pinhole part (``LensCamera.pinhole``).
+- **Camera matrices.** Triangulation takes ``P = K [R | t]`` with ``K`` the model's pinhole part
+  (``LensCamera.pinhole``) and, for points, each image's ``LensCamera`` (``cameras=``) with the observed,
+  distorted pixels: the cost is then the reprojection error through the exact model. Lines and quadrics
+  take pixels undistorted first (``LensCamera.undistort``).
 """
 
 from __future__ import annotations
