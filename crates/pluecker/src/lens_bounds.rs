@@ -318,9 +318,11 @@ pub fn jacobian_enclosure(
 /// `D = e θ_d(θ)`, whose Jacobian in `w` is `(θ_d/ρ)[I − eeᵀ | 0] + θ_d'(θ) e [w₃eᵀ | −ρ]/|w|²`
 /// (`θ_d' = g + 2θ²g'`), times the constant `∂w/∂n′` (the first two columns of `Rᵀ`). At wide angles a
 /// box of the ray chart stays small in angle where a box of `n` would not. `None` when the box reaches
-/// the principal plane (`w₃ ≤ 0`) or the optical axis (`ρ = 0`, where the plain chart is the one to use).
+/// the principal plane (`w₃ ≤ 0`), the optical axis (`ρ = 0`, where the plain chart is the one to use)
+/// or the edge of the one-to-one disc `|n| < radius`.
 pub fn fisheye_ray_enclosure(
     c: &[f64],
+    radius: f64,
     back: &nalgebra::Matrix3<f64>,
     lo: &Vector2<f64>,
     hi: &Vector2<f64>,
@@ -338,6 +340,10 @@ pub fn fisheye_ray_enclosure(
         return None;
     }
     let theta = Interval::new(rho.lo.atan2(w3.hi), rho.hi.atan2(w3.lo));
+    // The box's rays must stay inside the one-to-one disc |n| = tan θ < radius.
+    if !(theta.hi < radius.atan()) {
+        return None;
+    }
     let (g, dg) = polynomial(c, theta.sqr());
     let theta_d = theta.mul(g);
     let slope = g.add(theta.sqr().mul(dg).scale(2.0));
@@ -581,7 +587,7 @@ mod tests {
                 .into_inner();
             let back = r.transpose();
             let half = Vector2::repeat(rng.uniform_in(1e-4, 2e-2));
-            let Some(j) = fisheye_ray_enclosure(&c, &back, &-half, &half) else {
+            let Some(j) = fisheye_ray_enclosure(&c, f64::INFINITY, &back, &-half, &half) else {
                 continue;
             };
             let g = |n: &Vector2<f64>| {
@@ -608,6 +614,27 @@ mod tests {
             }
         }
         assert!(checked > 2000, "{checked}");
+    }
+
+    #[test]
+    fn ray_chart_boxes_past_a_fisheyes_fold_have_no_enclosure() {
+        // θ_d = θ (1 − 0.3 θ²) turns at θ² = 1/0.9 (θ = 60.4°): a box of rays around 65° is past it.
+        let lens = LensCamera::new(CameraModel::SimpleRadialFisheye, &[300.0, 512.0, 384.0, -0.3]).unwrap();
+        let (Distortion::Fisheye(c), dom) = domain_of(&lens) else {
+            panic!()
+        };
+        assert!((dom.radius.atan() - (1.0f64 / 0.9).sqrt()).abs() < 1e-6, "{dom:?}");
+        let ray_at = |deg: f64| {
+            let a = deg.to_radians();
+            let ray = nalgebra::Vector3::new(a.sin(), 0.0, a.cos());
+            nalgebra::Rotation3::rotation_between(&ray, &nalgebra::Vector3::z())
+                .unwrap()
+                .into_inner()
+                .transpose()
+        };
+        let half = Vector2::repeat(0.01);
+        assert!(fisheye_ray_enclosure(&c, dom.radius, &ray_at(65.0), &-half, &half).is_none());
+        assert!(fisheye_ray_enclosure(&c, dom.radius, &ray_at(50.0), &-half, &half).is_some());
     }
 
     #[test]

@@ -323,7 +323,9 @@ impl Linearised {
                     let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
                     let hi = lo + step;
                     let enclosure = match (&self.ray, &self.distortion) {
-                        (Some(r), Distortion::Fisheye(c)) => fisheye_ray_enclosure(c, &r.transpose(), &lo, &hi)?,
+                        (Some(r), Distortion::Fisheye(c)) => {
+                            fisheye_ray_enclosure(c, self.radius, &r.transpose(), &lo, &hi)?
+                        }
                         _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
                     };
                     e = e.sup(&radius_about(&enclosure, &self.j));
