@@ -505,14 +505,16 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
     };
     let report = &mut result.report;
     let x0 = result.point;
+    // ∞ behind a camera and for a NaN point (no projection in front).
+    let start_cost = exact_cost(&used, &x0);
     let refinable = matches!(
         report.status,
         Status::Success | Status::GapNotClosed | Status::NotConverged
     ) && opts.method != Method::Linear
-        && exact_cost(&used, &x0).is_finite();
+        && start_cost.is_finite();
     if !refinable {
-        if x0.iter().all(|v| v.is_finite()) && exact_cost(&used, &x0).is_finite() {
-            report.cost = exact_cost(&used, &x0);
+        if start_cost.is_finite() {
+            report.cost = start_cost;
             result.covariance = exact_covariance(&used, &x0);
         }
         if report.certificate.kind != CertificateKind::None {
