@@ -140,41 +140,38 @@ class _Observations(NamedTuple):
     camera: np.ndarray          # (m,) row of P
     image_id: np.ndarray        # (m,) COLMAP image id
     point2D_idx: np.ndarray     # (m,)
-    undistorted: np.ndarray     # (m, 2) pixels of the camera's pinhole part
-    covariances: np.ndarray     # (m, 2, 2) of the undistorted pixels (first order)
     skipped: list               # messages naming the cameras and observations left out, with COLMAP's ids
     pixels: np.ndarray          # (m, 2) the observed (distorted) pixels
     lenses: list                # (v,) the LensCamera of each row of P
 
 
-def _undistort(lens: _core.LensCamera, xy: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``lens.undistort`` of the pixels that have a preimage: (kept mask, undistorted, covariances). The
-    pixels of an image go in one call; only when one of them is refused are they tried one by one."""
+def _has_preimage(lens: _core.LensCamera, xy: np.ndarray) -> np.ndarray:
+    """Which pixels have a preimage through ``lens`` (``lens.unproject`` succeeds). The pixels of an
+    image go in one call; only when one of them is refused are they tried one by one."""
     try:
-        undistorted, covariances = lens.undistort(xy, cov)
-        return np.ones(len(xy), dtype=bool), undistorted, covariances
+        lens.unproject(xy)
+        return np.ones(len(xy), dtype=bool)
     except _core.PlueckerError:
         kept = np.ones(len(xy), dtype=bool)
-        undistorted, covariances = np.full((len(xy), 2), np.nan), np.full((len(xy), 2, 2), np.nan)
         for k in range(len(xy)):
             try:
-                u, c = lens.undistort(xy[k:k + 1], cov[k:k + 1])
-                undistorted[k], covariances[k] = u[0], c[0]
+                lens.unproject(xy[k:k + 1])
             except _core.PlueckerError:
                 kept[k] = False
-        return kept, undistorted, covariances
+        return kept
 
 
 def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
-    """Every observation of a model's 3-D points, undistorted into its camera's pinhole part with the
-    pixel covariance carried there (:func:`retriangulate`), sorted by point. An observation whose camera
-    model is not handled, or whose pixel has no preimage through the camera's distortion, is left out
-    and named in ``skipped``; a dangling ``point3D_id`` or a model without points is a :class:`ModelError`."""
+    """Every observation of a model's 3-D points with its image's camera (:func:`retriangulate`), sorted
+    by point. An observation whose camera model is not handled, or whose pixel has no preimage through
+    the camera's distortion, is left out and named in ``skipped``; a dangling ``point3D_id`` or a model
+    without points is a :class:`ModelError`."""
     _check_sigma(sigma_px)
     if reconstruction.num_points3D() == 0:
         raise ModelError("reconstruction: the model has no 3-D points to re-triangulate")
-    ids = np.array(sorted(reconstruction.point3D_ids()), dtype=np.int64)
-    posed = [image for image in reconstruction.images.values() if image.has_pose]
+    ids = np.sort(np.fromiter(reconstruction.point3D_ids(), dtype=np.int64))
+    posed = sorted((image for image in reconstruction.images.values() if image.has_pose),
+                   key=lambda image: image.image_id)
     lenses, skipped = {}, []
     for camera_id in sorted({image.camera_id for image in posed}):
         camera = reconstruction.cameras[camera_id]
@@ -187,35 +184,47 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     if posed and not lenses:
         raise ModelError("reconstruction: no camera of the model can be used: " + "; ".join(skipped))
     images = [image for image in posed if image.camera_id in lenses]
-    # Each camera's pinhole part K [R | t]: the pixels are undistorted through its model below.
+    image_ids = np.array([image.image_id for image in images], dtype=np.int64)
+    # Each camera's pinhole part K [R | t] (the view's camera for the checks of P).
     P = np.array([lenses[image.camera_id].pinhole.P(*pose_from_rigid(image.cam_from_world())) for image in images],
                  dtype=float).reshape(-1, 3, 4)
-    # The observations image by image (pycolmap hands them over per image), then sorted by point.
-    parts = []
+    # The observations image by image (pycolmap hands them over per image, in increasing image id).
     keypoints = _keypoints(reconstruction)
-    for j, image in enumerate(images):
-        xy, point_ids, idx = keypoints[image.image_id] if keypoints else _observed(image)
-        if not len(idx):
-            continue
-        rows = _point_rows(ids, point_ids, image.image_id, idx)
-        kept, undistorted, covariances = _undistort(lenses[image.camera_id], xy,
-                                                    np.broadcast_to(sigma_px**2 * np.eye(2), (len(xy), 2, 2)))
-        skipped.extend(f"image_id {image.image_id}, point2D_idx {int(idx[k])} (point3D_id {int(point_ids[k])}): "
-                       f"pixel ({xy[k, 0]:.6g}, {xy[k, 1]:.6g}) outside the invertible region of the camera's "
-                       "distortion; not used" for k in np.flatnonzero(~kept))
-        parts.append((rows[kept], np.full(kept.sum(), j), np.full(kept.sum(), image.image_id),
-                      idx[kept], undistorted[kept], covariances[kept], xy[kept]))
-    if parts:
-        track, camera, image_id, point2D_idx, undistorted, covariances, pixels = (np.concatenate(c)
-                                                                                  for c in zip(*parts))
-    else:
-        track = camera = image_id = point2D_idx = np.zeros(0, dtype=np.int64)
-        undistorted, covariances, pixels = np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros((0, 2))
-    # Sorted as pluecker.distributed sorts them (track, image id, pixel), so that both give the same bits.
-    order = np.lexsort((pixels[:, 1], pixels[:, 0], image_id, track))
-    return _Observations(P, np.array([image.image_id for image in images], dtype=np.int64), ids, track[order], camera[order], image_id[order], point2D_idx[order], undistorted[order],
-                         covariances[order], skipped, pixels[order],
-                         [lenses[image.camera_id] for image in images])
+    per_image = [keypoints[image.image_id] if keypoints else _observed(image) for image in images]
+    counts = np.array([len(idx) for _, _, idx in per_image], dtype=np.int64)
+    pixels = np.concatenate([xy for xy, _, _ in per_image]) if per_image else np.zeros((0, 2))
+    point_ids = np.concatenate([p for _, p, _ in per_image]) if per_image else np.zeros(0, dtype=np.int64)
+    point2D_idx = np.concatenate([i for _, _, i in per_image]) if per_image else np.zeros(0, dtype=np.int64)
+    camera = np.repeat(np.arange(len(images), dtype=np.int64), counts)
+    image_id = np.repeat(image_ids, counts)
+    track = _point_rows(ids, point_ids, image_id, point2D_idx)
+    kept = np.concatenate([_has_preimage(lenses[image.camera_id], xy) for image, (xy, _, _) in zip(images, per_image)
+                           ]) if per_image else np.zeros(0, dtype=bool)
+    skipped.extend(f"image_id {int(image_id[k])}, point2D_idx {int(point2D_idx[k])} (point3D_id {int(point_ids[k])}): "
+                   f"pixel ({pixels[k, 0]:.6g}, {pixels[k, 1]:.6g}) outside the invertible region of the camera's "
+                   "distortion; not used" for k in np.flatnonzero(~kept))
+    track, camera, image_id, point2D_idx, pixels = (a[kept] for a in (track, camera, image_id, point2D_idx, pixels))
+    # Sorted by (track, image id, pixel), as pluecker.distributed sorts them, so that both give the same
+    # bits: the observations are in increasing image id, so a stable sort by track leaves only the
+    # pixels of one track seen twice in one image to order.
+    order = np.argsort(track, kind="stable")
+    key = track[order] * (len(images) + 1) + camera[order]
+    for start, stop in _runs(key):
+        run = order[start:stop]
+        order[start:stop] = run[np.lexsort((pixels[run, 1], pixels[run, 0]))]
+    return _Observations(P, image_ids, ids, track[order], camera[order], image_id[order], point2D_idx[order],
+                         skipped, pixels[order], [lenses[image.camera_id] for image in images])
+
+
+def _runs(key: np.ndarray) -> list[tuple[int, int]]:
+    """The ``[start, stop)`` ranges of equal adjacent values of ``key`` longer than one."""
+    if len(key) < 2:
+        return []
+    change = np.flatnonzero(key[1:] != key[:-1]) + 1
+    starts = np.r_[0, change]
+    stops = np.r_[change, len(key)]
+    long = stops - starts > 1
+    return list(zip(starts[long].tolist(), stops[long].tolist()))
 
 
 def _observed(image: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -269,17 +278,18 @@ def _keypoints(reconstruction: Any) -> dict[int, tuple[np.ndarray, np.ndarray, n
         return None
 
 
-def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: int, point2D_idx: np.ndarray) -> np.ndarray:
+def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: np.ndarray, point2D_idx: np.ndarray) -> np.ndarray:
     """The rows of ``point_ids`` in the model's sorted point ids ``ids``; :class:`ModelError` naming the
-    first observation of image ``image_id`` whose ``point3D_id`` is not among them (a dangling id, as a
-    model edited in memory can hold)."""
+    first observation (``image_id``, ``point2D_idx``) whose ``point3D_id`` is not among them (a dangling
+    id, as a model edited in memory can hold)."""
     rows = np.minimum(np.searchsorted(ids, point_ids), max(len(ids) - 1, 0))
     dangling = np.flatnonzero(ids[rows] != point_ids) if len(ids) else np.arange(len(point_ids))
     if len(dangling):
         k = dangling[0]
-        raise ModelError(f"reconstruction: image_id {image_id}, point2D_idx {int(point2D_idx[k])} observes "
-                         f"point3D_id {int(point_ids[k])}, which is not in the model ({len(dangling)} such "
-                         f"observation{'s' if len(dangling) > 1 else ''} in this image)")
+        same = int(np.sum(image_id[dangling] == image_id[k]))
+        raise ModelError(f"reconstruction: image_id {int(image_id[k])}, point2D_idx {int(point2D_idx[k])} observes "
+                         f"point3D_id {int(point_ids[k])}, which is not in the model ({same} such "
+                         f"observation{'s' if same > 1 else ''} in this image)")
     return rows
 
 

@@ -27,7 +27,8 @@
 //!    projection in its `Bᵢ`.
 //!
 //!    Two devices keep `εᵢ` small. Interval arithmetic overestimates a box's variation by a multiple of
-//!    its width, so a box whose `εᵢ` exceeds 1 % is split into 8x8 sub-boxes. And a fisheye
+//!    its width, so a box whose `εᵢ` exceeds 1 % is split into 8x8 sub-boxes (only in a second pass,
+//!    when the whole proof with one box per view has failed: the splits cost 64 enclosures). And a fisheye
 //!    projection off axis may use the **ray chart**: the normalised coordinates `n′` of the camera
 //!    rotated so that the ray of `nᵢ*` is its optical axis (`n′* = 0`, `n = h(n′)` a homography), with
 //!    the Jacobian of `D ∘ h` ([`crate::lens_bounds::fisheye_ray_enclosure`]); a box of `n′` stays small
@@ -68,7 +69,7 @@ use crate::triangulation::point::PointTriangulation;
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{depth_normalized, View};
 use crate::triangulation::{Certificate, CertificateKind, Method, Status, TriangulationOptions};
-use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Rotation3, SymmetricEigen, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Rotation3, Vector2, Vector3};
 use std::time::Instant;
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -78,6 +79,8 @@ const PIXEL_ROUNDING: f64 = 1e-13;
 const TIGHTENING_ROUNDS: usize = 6;
 /// `εᵢ` above which the box of [`Linearised::epsilon`] is split.
 const SPLIT_EPSILON: f64 = 0.01;
+/// Sub-boxes per side of a split box of [`Linearised::epsilon`].
+const SPLITS: usize = 8;
 /// Fisheye projections farther off axis than this (`tan 10°`) use the ray chart.
 const RAY_CHART_TAN: f64 = 0.176;
 /// Growth of a view's confinement radius per retry of step 1.
@@ -224,10 +227,21 @@ struct Linearised {
     /// for fisheyes off axis; then `n` is `n′ = 0` and `J` is that of `D ∘ h`.
     ray: Option<Matrix3<f64>>,
     rounding: f64,
+    /// Sub-boxes per side of the box of [`Linearised::epsilon`] when one box is not enough: 1 (never
+    /// split) or [`SPLITS`].
+    splits: usize,
+    /// `εᵢ` at step 1's first radius ([`Linearised::first_radius`]) when choosing the chart already
+    /// evaluated it (fisheyes off axis), so that [`Linearised::confinement`] does not repeat it.
+    first_epsilon: Option<Option<f64>>,
 }
 
 impl Linearised {
-    fn new(view: &LensView, x: &Vector3<f64>, cost: f64) -> std::result::Result<Linearised, LensBoundFailure> {
+    fn new(
+        view: &LensView,
+        x: &Vector3<f64>,
+        cost: f64,
+        splits: usize,
+    ) -> std::result::Result<Linearised, LensBoundFailure> {
         let (distortion, fold, lens) = match view.camera {
             AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY, None),
             AnyCamera::Lens(lens) => (
@@ -271,21 +285,27 @@ impl Linearised {
             radius: domain.radius,
             ray: None,
             rounding,
+            splits,
+            first_epsilon: None,
         };
         // A fisheye off axis may do better in the ray chart (module docs): the chart of smaller εᵢ.
         if let (Distortion::Fisheye(_), true) = (&plain.distortion, n.norm() > RAY_CHART_TAN) {
             let turned =
                 Rotation3::rotation_between(&xc, &Vector3::z()).and_then(|r| plain.in_ray_chart(r.into_inner()));
             if let Some(turned) = turned {
-                let rho = (cost.sqrt() + e.norm()) * 1.001;
-                let better = match (turned.epsilon(rho), plain.epsilon(rho)) {
+                // Both charts share eᵢ* and sᵢ, hence the first radius.
+                let rho = plain.first_radius(cost);
+                let (a, b) = (turned.epsilon(rho), plain.epsilon(rho));
+                let better = match (a, b) {
                     (Some(a), Some(b)) => a < b,
                     (Some(_), None) => true,
                     _ => false,
                 };
-                if better {
-                    return Ok(turned);
-                }
+                let (chosen, eps) = if better { (turned, a) } else { (plain, b) };
+                return Ok(Linearised {
+                    first_epsilon: Some(eps),
+                    ..chosen
+                });
             }
         }
         Ok(plain)
@@ -302,6 +322,7 @@ impl Linearised {
             j,
             ray: Some(ray),
             distortion: self.distortion.clone(),
+            first_epsilon: None,
             ..*self
         })
     }
@@ -309,13 +330,13 @@ impl Linearised {
     /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the edge of the
     /// domain or the camera's principal plane. Interval arithmetic overestimates the Jacobian's
     /// variation by a multiple of the box's width (the dependency effect); where that shows (`εᵢ` above
-    /// [`SPLIT_EPSILON`]) the box is split into 8x8 sub-boxes, and `E` is the largest of
+    /// [`SPLIT_EPSILON`]) the box is split into `splits` x `splits` sub-boxes, and `E` is the largest of
     /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
     fn epsilon(&self, rho: f64) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
         let mut eps = f64::INFINITY;
-        for pieces in [1usize, 8] {
+        for pieces in [1, self.splits] {
             let mut e = Matrix2::zeros();
             let step = half * (2.0 / pieces as f64);
             for a in 0..pieces {
@@ -332,19 +353,27 @@ impl Linearised {
                 }
             }
             eps = eps.min((self.m.abs() * e * self.w_inverse.abs()).norm());
-            if !(eps > SPLIT_EPSILON) {
+            if !(eps > SPLIT_EPSILON) || self.splits == 1 {
                 break;
             }
         }
         eps.is_finite().then_some(eps)
     }
 
+    /// Step 1's first radius `ρ = 1.001 (√C + ‖eᵢ*‖ + sᵢ)`.
+    fn first_radius(&self, cost: f64) -> f64 {
+        (cost.sqrt() + self.e.norm() + self.rounding) * 1.001
+    }
+
     /// Step 1: `(ρᵢ, εᵢ)` with `(1 − εᵢ)ρᵢ − ‖eᵢ*‖ − sᵢ > √C`.
     fn confinement(&self, cost: f64) -> Option<(f64, f64)> {
         let need = cost.sqrt() + self.e.norm() + self.rounding;
-        let mut rho = need * 1.001;
-        for _ in 0..RADIUS_RETRIES {
-            let eps = self.epsilon(rho)?;
+        let mut rho = self.first_radius(cost);
+        for retry in 0..RADIUS_RETRIES {
+            let eps = match (retry, self.first_epsilon) {
+                (0, Some(known)) => known?,
+                _ => self.epsilon(rho)?,
+            };
             if eps < 1.0 && (1.0 - eps) * rho > need {
                 return Some((rho, eps));
             }
@@ -373,9 +402,25 @@ pub fn lens_certificate(
     cost: f64,
     gap: f64,
 ) -> std::result::Result<LensBound, LensBoundFailure> {
+    // One box per view first; the split boxes, 64 times the enclosures, only where that bound does
+    // not close the gap.
+    match certificate_with_splits(views, x, cost, gap, 1) {
+        Ok(bound) if relative_gap(cost, bound.raw_lower_bound.min(cost).max(0.0)) <= gap => Ok(bound),
+        _ => certificate_with_splits(views, x, cost, gap, SPLITS),
+    }
+}
+
+/// [`lens_certificate`] with the boxes of `εᵢ` split `splits` x `splits` where one box overestimates.
+fn certificate_with_splits(
+    views: &[LensView],
+    x: &Vector3<f64>,
+    cost: f64,
+    gap: f64,
+    splits: usize,
+) -> std::result::Result<LensBound, LensBoundFailure> {
     let lin: Vec<Linearised> = views
         .iter()
-        .map(|v| Linearised::new(v, x, cost))
+        .map(|v| Linearised::new(v, x, cost, splits))
         .collect::<std::result::Result<_, _>>()?;
     // Step 1.
     let confined: Vec<(f64, f64)> = lin
@@ -438,11 +483,11 @@ fn tightened_bound(
     // Σ‖Bᵢy‖² ≤ λ_S ‖y‖² (λ_S = 1 up to the rounding of the whitening), and ‖Bᵢ‖ per view.
     let jacobians: Vec<_> = chart.views.iter().map(|v| v.g - v.a0 * v.d.transpose()).collect();
     let s: Matrix3<f64> = jacobians.iter().map(|b| b.transpose() * b).sum();
-    let lambda_s = SymmetricEigen::new(s).eigenvalues.max();
+    let lambda_s = s.symmetric_eigenvalues().max();
     let b_norms: Vec<f64> = jacobians.iter().map(|b| b.norm()).collect();
     // H = LLᵀ from its Cholesky factor.
     let factor = minorant.hessian.clone().unpack();
-    let lambda_h = SymmetricEigen::new(factor * factor.transpose()).eigenvalues.min();
+    let lambda_h = (factor * factor.transpose()).symmetric_eigenvalues().min();
     let g_norm = minorant.gradient.norm();
     let a0 = minorant.cost - 2.0 * lin.iter().map(|l| l.e.norm() * l.rounding).sum::<f64>();
     // The bound a0 − a1 t + a2 t² over a ball of y where view i has the constant eps[i].
@@ -768,7 +813,7 @@ mod tests {
                 };
                 // A level above the view's own cost, as with other views in the track.
                 let cost = view.squared_residual(&x) + rng.uniform_in(0.5, 20.0);
-                let Ok(l) = Linearised::new(&view, &x, cost) else {
+                let Ok(l) = Linearised::new(&view, &x, cost, SPLITS) else {
                     continue;
                 };
                 let Some((rho, eps)) = l.confinement(cost) else {
