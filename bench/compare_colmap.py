@@ -66,6 +66,7 @@ import pycolmap
 
 import pluecker
 from pluecker import colmap
+from pluecker.scenes import colmap_reconstruction, inside_fold, within_degrees
 
 CAMERAS = {
     "OPENCV narrow": (pycolmap.CameraModelId.OPENCV, [2000.0, 2000.0, 512.0, 384.0, -0.1, 0.02, 1e-4, -1e-4]),
@@ -533,39 +534,12 @@ REPEATED_FRACTION = 0.2
 
 
 def _synthetic(model_id: Any, params: list[float], width: int, height: int, spread: float, seed: int,
-               points: int, visible: Callable[[np.ndarray], np.ndarray] | None = None) -> Any:
-    """``pycolmap.synthesize_dataset`` (2 rigs x 6 frames) with one camera model, the structure enlarged
-    ``spread`` times about its centre, and every observation re-projected through the camera with 1 px
-    Gaussian noise (``numpy`` seed ``seed``). An observation is kept when its noise-free pixel is inside
-    the image, the point is more than 0.5 units in front of the camera, and ``visible(x_cam)`` (the
-    camera's valid domain) holds; points left with fewer than two observations are deleted."""
-    options = pycolmap.SyntheticDatasetOptions()
-    options.num_rigs, options.num_frames_per_rig, options.num_points3D = 2, 6, points
-    options.camera_model_id, options.camera_params = model_id, [float(v) for v in params]
-    options.camera_width, options.camera_height = width, height
-    options.num_points2D_without_point3D = 0
-    pycolmap.set_random_seed(seed)
-    rec = pycolmap.synthesize_dataset(options)
-    centre = np.mean([p.xyz for p in rec.points3D.values()], axis=0)
-    for p in rec.points3D.values():
-        p.xyz = centre + spread * (p.xyz - centre)
-    rng = np.random.default_rng(seed)
-    for image_id in sorted(rec.images):
-        image = rec.images[image_id]
-        camera = rec.cameras[image.camera_id]
-        for idx, point2D in enumerate(image.points2D):
-            if not point2D.has_point3D():
-                continue
-            x_cam = image.cam_from_world() * rec.points3D[point2D.point3D_id].xyz
-            ok = x_cam[2] > 0.5 and (visible is None or bool(visible(np.atleast_2d(x_cam))[0]))
-            u = camera.img_from_cam(np.atleast_2d(x_cam))[0] if ok else np.full(2, -1.0)
-            if not (0 <= u[0] < camera.width and 0 <= u[1] < camera.height):
-                rec.delete_observation(image_id, idx)
-                continue
-            point2D.xy = u + rng.normal(size=2)
-    for point_id in [i for i, p in rec.points3D.items() if p.track.length() < 2]:
-        rec.delete_point3D(point_id)
-    return rec
+               points: int, visible: Callable[[np.ndarray], np.ndarray] | None = None,
+               repeated_fraction: float = 0.0) -> Any:
+    """:func:`pluecker.scenes.colmap_reconstruction` (2 rigs x 6 frames, 1 px noise) with one camera model,
+    the structure enlarged ``spread`` times about its centre."""
+    return colmap_reconstruction(model_id.name, params, width, height, spread=spread, seed=seed, points=points,
+                                 visible=visible, repeated_fraction=repeated_fraction)
 
 
 def pinhole_model(seed: int, points: int = 12000) -> Any:
@@ -581,9 +555,8 @@ def strong_radial_model(seed: int, points: int = 12000) -> Any:
     r_fold = np.sqrt(-1.0 / (3.0 * k))
     corner = np.hypot(width / 2, height / 2) / f
     assert corner < r_fold * (1 + k * r_fold**2), "the image corner must map inside the fold"
-    inside_fold = lambda x: np.hypot(x[:, 0] / x[:, 2], x[:, 1] / x[:, 2]) < r_fold
     return _synthetic(pycolmap.CameraModelId.SIMPLE_RADIAL, [f, width / 2, height / 2, k], width, height,
-                      0.4, seed, points, inside_fold)
+                      0.4, seed, points, inside_fold(k))
 
 
 def fisheye_angle_px(params: list[float], degrees: float) -> float:
@@ -600,28 +573,16 @@ def fisheye_model(seed: int, points: int = 12000) -> Any:
     half_diagonal = fisheye_angle_px(params, degrees)
     width, height = int(2 * 0.8 * half_diagonal), int(2 * 0.6 * half_diagonal)
     params = [params[0], params[1], width / 2, height / 2, *params[4:]]
-    within = lambda x: np.degrees(np.arctan2(np.hypot(x[:, 0], x[:, 1]), x[:, 2])) <= degrees
-    return _synthetic(pycolmap.CameraModelId.OPENCV_FISHEYE, params, width, height, 6.0, seed, points, within)
+    return _synthetic(pycolmap.CameraModelId.OPENCV_FISHEYE, params, width, height, 6.0, seed, points,
+                      within_degrees(degrees))
 
 
 def repeated_model(seed: int, points: int = 12000) -> Any:
     """SIMPLE_RADIAL (f = 1280 px, k = 0.05, 1024 x 768) where :data:`REPEATED_FRACTION` of the tracks
     observe one of their images twice: a second keypoint at the noise-free pixel plus its own 1 px noise,
     as COLMAP allows after merging tracks."""
-    rec = _synthetic(pycolmap.CameraModelId.SIMPLE_RADIAL, [1280.0, 512.0, 384.0, 0.05], 1024, 768, 1.0, seed,
-                     points)
-    rng = np.random.default_rng(seed + 1)
-    ids = sorted(rec.points3D)
-    for point_id in rng.choice(ids, size=int(REPEATED_FRACTION * len(ids)), replace=False):
-        point = rec.points3D[int(point_id)]
-        elements = point.track.elements
-        image = rec.images[elements[rng.integers(len(elements))].image_id]
-        camera = rec.cameras[image.camera_id]
-        u = camera.img_from_cam(np.atleast_2d(image.cam_from_world() * point.xyz))[0]
-        idx = len(image.points2D)
-        image.points2D.append(pycolmap.Point2D(u + rng.normal(size=2)))
-        rec.add_observation(int(point_id), pycolmap.TrackElement(image.image_id, idx))
-    return rec
+    return _synthetic(pycolmap.CameraModelId.SIMPLE_RADIAL, [1280.0, 512.0, 384.0, 0.05], 1024, 768, 1.0, seed,
+                      points, repeated_fraction=REPEATED_FRACTION)
 
 
 class Observations(NamedTuple):

@@ -37,30 +37,13 @@ import numpy as np
 import pycolmap
 
 import pluecker
+from pluecker.scenes import lens_scene
 
 LENSES = {
     "OPENCV": ("OPENCV", [600.0, 600.0, 320.0, 240.0, -0.28, 0.07, 5e-4, -3e-4], 0.55),
     "OPENCV_FISHEYE 80deg": ("OPENCV_FISHEYE", [600.0, 600.0, 320.0, 240.0, 0.05, -0.02, 0.01, -0.002], np.tan(np.radians(80))),
     "SIMPLE_RADIAL k=-14": ("SIMPLE_RADIAL", [5000.0, 2000.0, 1500.0, -14.0], 0.12),
 }
-
-
-def rotation(rng):
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q = q * np.sign(np.diag(r))
-    return q * np.linalg.det(q)
-
-
-def scene(rng, model, r_max, n):
-    phi = rng.uniform(0, 2 * np.pi, n)
-    if model == "OPENCV_FISHEYE":
-        r = np.tan(np.sqrt(rng.uniform(0, 1, n)) * np.arctan(r_max))
-    else:
-        r = np.sqrt(rng.uniform(0, 1, n)) * r_max
-    d = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.ones(n)])
-    x_cam = d / np.linalg.norm(d, axis=1, keepdims=True) * rng.uniform(4, 8, (n, 1))
-    R, t = rotation(rng), rng.normal(size=3)
-    return x_cam, (x_cam - t) @ R
 
 
 def cost(camera, R, t, X, u):
@@ -109,7 +92,7 @@ def main():
         lsq.loss_function_scale = 1e6
         gaps = {k: [] for k in times}
         for _ in range(scenes):
-            x_cam, X = scene(rng, model, r_max, args.points)
+            _, _, x_cam, X = lens_scene(rng, r_max, args.points, fisheye=model == "OPENCV_FISHEYE")
             u = camera.img_from_cam(x_cam) + rng.normal(size=(args.points, 2))
             exact, t_exact = timed(lambda: pluecker.estimate_pose(lens, u, X), repeats)
 

@@ -17,6 +17,7 @@ import pycolmap
 import pytest
 
 from pluecker import colmap
+from pluecker.scenes import colmap_reconstruction, inside_fold, within_degrees
 
 SIGMA_PX = 1.0
 #: The tight BA converges to Ceres tolerances of 1e-16; a per-point cost of ~10 squared residuals rounds at
@@ -31,17 +32,6 @@ OPTIMUM_TOLERANCE = 1e-6
 COST_TOLERANCE = 1e-9
 
 
-def _inside_fold(k: float):
-    """SIMPLE_RADIAL r_d = r (1 + k r²), k < 0, folds at r_fold² = -1 / (3k): a camera sees a point only
-    inside the fold (beyond, the model folds back into the image)."""
-    r_fold = np.sqrt(-1.0 / (3.0 * k))
-    return lambda x: np.hypot(x[0] / x[2], x[1] / x[2]) < r_fold
-
-
-def _within_degrees(degrees: float):
-    return lambda x: np.degrees(np.arctan2(np.hypot(x[0], x[1]), x[2])) <= degrees
-
-
 # model, params, width, height, spread of the structure, valid domain of the camera
 CASES = {
     "pinhole": ("PINHOLE", [1000.0, 1000.0, 512.0, 384.0], 1024, 768, 1.5, None),
@@ -49,56 +39,24 @@ CASES = {
     # one image twice (a second keypoint with its own noise, as COLMAP's track merging leaves).
     "mild_radial_repeated": ("SIMPLE_RADIAL", [1140.0, 512.0, 384.0, 0.06], 1024, 768, 1.0, None),
     # f = 5000 px, k = -14: the fold is at 514.5 px from the centre, the 800 x 600 image's corners at 500 px.
-    "strong_radial": ("SIMPLE_RADIAL", [5000.0, 400.0, 300.0, -14.0], 800, 600, 0.4, _inside_fold(-14.0)),
+    "strong_radial": ("SIMPLE_RADIAL", [5000.0, 400.0, 300.0, -14.0], 800, 600, 0.4, inside_fold(-14.0)),
     # f = 300 px, the image's corners 80° off axis: f θ_d(80°) = 448 px from the centre, 4:3.
     "fisheye_80": ("OPENCV_FISHEYE", [300.0, 300.0, 358.5, 268.5, 0.05, -0.01, 0.002, -3e-4], 717, 537, 6.0,
-                   _within_degrees(80.0)),
+                   within_degrees(80.0)),
     # The division model (barrel, k = -0.2 at f = 400 px: 32 % at the corners) and EUCM (α = 0.6, β = 1.1,
     # f = 300 px), whose closed-form distortions the certificate also covers.
-    "division": ("DIVISION", [400.0, 400.0, 512.0, 384.0, -0.2], 1024, 768, 2.0, _within_degrees(60.0)),
-    "eucm": ("EUCM", [300.0, 300.0, 512.0, 384.0, 0.6, 1.1], 1024, 768, 3.0, _within_degrees(75.0)),
+    "division": ("DIVISION", [400.0, 400.0, 512.0, 384.0, -0.2], 1024, 768, 2.0, within_degrees(60.0)),
+    "eucm": ("EUCM", [300.0, 300.0, 512.0, 384.0, 0.6, 1.1], 1024, 768, 3.0, within_degrees(75.0)),
 }
 
 
 def noisy_model(case: str, seed: int = 5, points: int = 150):
-    """``pycolmap.synthesize_dataset`` (2 rigs x 6 frames) with the case's camera, every observation
-    re-projected with 1 px Gaussian noise; observations outside the image or the camera's domain dropped,
-    and points left with fewer than two."""
+    """The case's camera in :func:`pluecker.scenes.colmap_reconstruction`: 1 px noise, observations outside
+    the image or the camera's domain dropped; a fifth of the tracks observe one image twice for
+    ``*_repeated``."""
     model, params, width, height, spread, visible = CASES[case]
-    options = pycolmap.SyntheticDatasetOptions()
-    options.num_rigs, options.num_frames_per_rig, options.num_points3D = 2, 6, points
-    options.camera_model_id, options.camera_params = getattr(pycolmap.CameraModelId, model), params
-    options.camera_width, options.camera_height = width, height
-    options.num_points2D_without_point3D = 0
-    pycolmap.set_random_seed(seed)
-    rec = pycolmap.synthesize_dataset(options)
-    centre = np.mean([p.xyz for p in rec.points3D.values()], axis=0)
-    for p in rec.points3D.values():
-        p.xyz = centre + spread * (p.xyz - centre)
-    rng = np.random.default_rng(seed)
-    for image_id in sorted(rec.images):
-        image = rec.images[image_id]
-        camera = rec.cameras[image.camera_id]
-        for idx, point2D in enumerate(image.points2D):
-            if not point2D.has_point3D():
-                continue
-            x_cam = image.cam_from_world() * rec.points3D[point2D.point3D_id].xyz
-            seen = x_cam[2] > 0.5 and (visible is None or visible(x_cam))
-            u = camera.img_from_cam(np.atleast_2d(x_cam))[0] if seen else np.full(2, -1.0)
-            if not (0 <= u[0] < width and 0 <= u[1] < height):
-                rec.delete_observation(image_id, idx)
-            else:
-                point2D.xy = u + rng.normal(size=2)
-    for point_id in [i for i, p in rec.points3D.items() if p.track.length() < 2]:
-        rec.delete_point3D(point_id)
-    if case.endswith("_repeated"):
-        for point_id in rng.choice(sorted(rec.points3D), size=len(rec.points3D) // 5, replace=False):
-            point = rec.points3D[int(point_id)]
-            image = rec.images[point.track.elements[rng.integers(point.track.length())].image_id]
-            u = rec.cameras[image.camera_id].img_from_cam(np.atleast_2d(image.cam_from_world() * point.xyz))[0]
-            image.points2D.append(pycolmap.Point2D(u + rng.normal(size=2)))
-            rec.add_observation(int(point_id), pycolmap.TrackElement(image.image_id, len(image.points2D) - 1))
-    return rec
+    return colmap_reconstruction(model, params, width, height, spread=spread, seed=seed, points=points,
+                                 visible=visible, repeated_fraction=0.2 if case.endswith("_repeated") else 0.0)
 
 
 def exact_cost(rec, point_id: int, X, sigma_px: float = SIGMA_PX) -> float:

@@ -11,6 +11,7 @@ import pycolmap
 import pytest
 
 import pluecker
+from pluecker.scenes import lens_scene
 
 LENSES = {
     # model, params, largest normalised radius of the scene
@@ -24,24 +25,10 @@ def colmap_camera(model: str, params) -> pycolmap.Camera:
     return pycolmap.Camera(model=model, width=4000, height=3000, params=params)
 
 
-def rotation(rng: np.random.Generator) -> np.ndarray:
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q = q * np.sign(np.diag(r))
-    return q * np.linalg.det(q)
-
-
 def scene(rng, model: str, r_max: float, n: int):
-    """Camera-frame points uniform over the disc of normalised radius r_max (over the cap to 80 degrees
-    for the fisheye) at depths 4-8, and a random pose."""
-    phi = rng.uniform(0, 2 * np.pi, n)
-    if model == "OPENCV_FISHEYE":
-        r = np.tan(np.sqrt(rng.uniform(0, 1, n)) * np.arctan(r_max))
-    else:
-        r = np.sqrt(rng.uniform(0, 1, n)) * r_max
-    d = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.ones(n)])
-    x_cam = d / np.linalg.norm(d, axis=1, keepdims=True) * rng.uniform(4, 8, (n, 1))
-    R, t = rotation(rng), rng.normal(size=3)
-    return R, t, x_cam, (x_cam - t) @ R  # world points R^T (x - t)
+    """Camera-frame points over the disc of normalised radius r_max (the cap to atan(r_max) for the
+    fisheye) at depths 4-8, and a random pose: (R, t, x_cam, X_world)."""
+    return lens_scene(rng, r_max, n, fisheye=model == "OPENCV_FISHEYE")
 
 
 def exp_so3(w: np.ndarray) -> np.ndarray:
