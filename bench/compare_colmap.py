@@ -1,4 +1,4 @@
-"""pluecker against pycolmap and PoseLib on COLMAP models (issue 12 §6).
+"""pluecker against pycolmap and PoseLib on COLMAP models.
 
 Models come from ``pycolmap.synthesize_dataset`` (2 rigs x 6 frames = 12 images, 500 points) with three
 cameras of 1024 x 768 pixels: a narrow OPENCV (f = 2000 px, about 28 degrees across), a wide OPENCV
