@@ -84,70 +84,24 @@ impl Track {
         total
     }
 
-    /// The oracle's minimisation: Gauss-Newton with a numeric Jacobian and step halving, from `x0`.
-    fn minimise(&self, x0: Vector3<f64>) -> (Vector3<f64>, f64) {
-        let residuals = |x: &Vector3<f64>| -> Option<Vec<f64>> {
-            let mut out = Vec::new();
-            for ((lens, view), (u, l)) in self
-                .lenses
-                .iter()
-                .zip(&self.views)
-                .zip(self.pixels.iter().zip(&self.whitenings))
-            {
-                let r = l * (lens.project(&(view.pose.rotation * x + view.pose.translation))? - u);
-                out.extend([r.x, r.y]);
-            }
-            Some(out)
-        };
-        let (mut x, mut cost) = (x0, self.cost(&x0));
-        for _ in 0..200 {
-            let Some(r) = residuals(&x) else { break };
-            let h = 1e-7 * (1.0 + x.norm());
-            let mut jt_j = Matrix3::zeros();
-            let mut jt_r = Vector3::zeros();
-            let mut columns = Vec::new();
-            for k in 0..3 {
-                let mut xp = x;
-                xp[k] += h;
-                let mut xm = x;
-                xm[k] -= h;
-                let (Some(rp), Some(rm)) = (residuals(&xp), residuals(&xm)) else {
-                    return (x, cost);
-                };
-                columns.push(
-                    rp.iter()
-                        .zip(&rm)
-                        .map(|(a, b)| (a - b) / (2.0 * h))
-                        .collect::<Vec<f64>>(),
-                );
-            }
-            for a in 0..3 {
-                jt_r[a] = columns[a].iter().zip(&r).map(|(j, r)| j * r).sum();
-                for b in 0..3 {
-                    jt_j[(a, b)] = columns[a].iter().zip(&columns[b]).map(|(p, q)| p * q).sum();
-                }
-            }
-            let Some(step) = jt_j.try_inverse().map(|m| -(m * jt_r)) else {
-                break;
-            };
-            let mut scale = 1.0;
-            let mut improved = false;
-            while scale > 1e-6 {
-                let trial = x + step * scale;
-                let c = self.cost(&trial);
-                if c < cost {
-                    x = trial;
-                    cost = c;
-                    improved = true;
-                    break;
-                }
-                scale *= 0.5;
-            }
-            if !improved || step.norm() * scale < 1e-15 * (1.0 + x.norm()) {
-                break;
-            }
+    /// The oracle's whitened residuals `L (u(X) − uᵢ)`, stacked; `None` behind a camera.
+    fn residuals(&self, x: &Vector3<f64>) -> Option<Vec<f64>> {
+        let mut out = Vec::new();
+        for ((lens, view), (u, l)) in self
+            .lenses
+            .iter()
+            .zip(&self.views)
+            .zip(self.pixels.iter().zip(&self.whitenings))
+        {
+            let r = l * (lens.project(&(view.pose.rotation * x + view.pose.translation))? - u);
+            out.extend([r.x, r.y]);
         }
-        (x, cost)
+        Some(out)
+    }
+
+    /// The oracle's minimisation of its exact cost from `x0` ([`gauss_newton`]).
+    fn minimise(&self, x0: Vector3<f64>) -> (Vector3<f64>, f64) {
+        gauss_newton(|x| self.residuals(x), x0)
     }
 
     fn lens_views(&self) -> Vec<LensView<'_>> {
@@ -158,6 +112,61 @@ impl Track {
             .map(|((v, u), l)| LensView::new(v, *u, *l))
             .collect()
     }
+}
+
+/// The oracle's minimisation of `Σ rₖ(X)²`: Gauss-Newton with a numeric Jacobian and step halving,
+/// from `x0` (`residuals` is `None` where the cost is infinite).
+fn gauss_newton(residuals: impl Fn(&Vector3<f64>) -> Option<Vec<f64>>, x0: Vector3<f64>) -> (Vector3<f64>, f64) {
+    let cost = |x: &Vector3<f64>| residuals(x).map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum());
+    let (mut x, mut cost_x) = (x0, cost(&x0));
+    for _ in 0..200 {
+        let Some(r) = residuals(&x) else { break };
+        let h = 1e-7 * (1.0 + x.norm());
+        let mut jt_j = Matrix3::zeros();
+        let mut jt_r = Vector3::zeros();
+        let mut columns = Vec::new();
+        for k in 0..3 {
+            let mut xp = x;
+            xp[k] += h;
+            let mut xm = x;
+            xm[k] -= h;
+            let (Some(rp), Some(rm)) = (residuals(&xp), residuals(&xm)) else {
+                return (x, cost_x);
+            };
+            columns.push(
+                rp.iter()
+                    .zip(&rm)
+                    .map(|(a, b)| (a - b) / (2.0 * h))
+                    .collect::<Vec<f64>>(),
+            );
+        }
+        for a in 0..3 {
+            jt_r[a] = columns[a].iter().zip(&r).map(|(j, r)| j * r).sum();
+            for b in 0..3 {
+                jt_j[(a, b)] = columns[a].iter().zip(&columns[b]).map(|(p, q)| p * q).sum();
+            }
+        }
+        let Some(step) = jt_j.try_inverse().map(|m| -(m * jt_r)) else {
+            break;
+        };
+        let mut scale = 1.0;
+        let mut improved = false;
+        while scale > 1e-6 {
+            let trial = x + step * scale;
+            let c = cost(&trial);
+            if c < cost_x {
+                x = trial;
+                cost_x = c;
+                improved = true;
+                break;
+            }
+            scale *= 0.5;
+        }
+        if !improved || step.norm() * scale < 1e-15 * (1.0 + x.norm()) {
+            break;
+        }
+    }
+    (x, cost_x)
 }
 
 /// A rotation whose optical axis (third row) is `axis`.
@@ -394,4 +403,119 @@ fn robust_inliers_are_the_observations_within_the_threshold_at_the_exact_optimum
         }
         assert!(r.report.certificate.certified, "track {i}");
     }
+}
+
+impl Lens {
+    /// `∂d/∂n` of SIMPLE_RADIAL at the normalised point `n`: `(1 + k|n|²) I + 2k n nᵀ`.
+    fn radial_jacobian(&self, n: &Vector2<f64>) -> Matrix2<f64> {
+        assert!(!self.fisheye);
+        Matrix2::identity() * (1.0 + self.k1 * n.norm_squared()) + n * n.transpose() * (2.0 * self.k1)
+    }
+
+    /// The oracle's undistortion of SIMPLE_RADIAL: the normalised `n` inside the fold with
+    /// `n (1 + k|n|²) = d`, `d` the observed pixel's normalised coordinates (Newton on the radius);
+    /// `None` beyond the fold's image.
+    fn undistort(&self, u: &Vector2<f64>) -> Option<Vector2<f64>> {
+        assert!(!self.fisheye);
+        let d = (u - self.c) / self.f;
+        let target = d.norm();
+        let mut r = target;
+        for _ in 0..100 {
+            r -= (r * (1.0 + self.k1 * r * r) - target) / (1.0 + 3.0 * self.k1 * r * r);
+        }
+        let inside = 3.0 * self.k1 * r * r > -1.0 && (r * (1.0 + self.k1 * r * r) - target).abs() < 1e-12;
+        inside.then(|| d * (r / target))
+    }
+}
+
+impl Track {
+    /// The oracle's first-order residuals of the views `which`: `L J (f n(X) + c − ū)`, with `ū` the
+    /// undistorted observation and `J = ∂d/∂n` there (the library's first-order views, written out
+    /// here); `None` behind a camera.
+    fn first_order_residuals(&self, which: &[usize], x: &Vector3<f64>) -> Option<Vec<f64>> {
+        let mut out = Vec::new();
+        for &i in which {
+            let (lens, view) = (&self.lenses[i], &self.views[i]);
+            let xc = view.pose.rotation * x + view.pose.translation;
+            if xc.z <= 0.0 {
+                return None;
+            }
+            let n_obs = lens.undistort(&self.pixels[i])?;
+            let n = Vector2::new(xc.x / xc.z, xc.y / xc.z);
+            let r = self.whitenings[i] * lens.radial_jacobian(&n_obs) * ((n - n_obs) * lens.f);
+            out.extend([r.x, r.y]);
+        }
+        Some(out)
+    }
+
+    /// The oracle's exact residual norm of view `i` at `x` (`∞` behind it).
+    fn pixel_error(&self, i: usize, x: &Vector3<f64>) -> f64 {
+        self.lenses[i]
+            .project(&self.views[i].pose.transform(x))
+            .map_or(f64::INFINITY, |p| (self.whitenings[i] * (p - self.pixels[i])).norm())
+    }
+
+    /// The sub-track of the views `which`.
+    fn subset(&self, which: &[usize]) -> Track {
+        Track {
+            lenses: which.iter().map(|&i| self.lenses[i]).collect(),
+            views: which.iter().map(|&i| self.views[i].clone()).collect(),
+            pixels: which.iter().map(|&i| self.pixels[i]).collect(),
+            whitenings: which.iter().map(|&i| self.whitenings[i]).collect(),
+            truth: self.truth,
+        }
+    }
+}
+
+/// A view of `truth` from a camera at distance 5 whose optical axis is `off_axis` radians from the
+/// point, through `lens`, the pixel displaced by `noise`.
+fn view_off_axis(lens: Lens, truth: &Vector3<f64>, off_axis: f64, noise: Vector2<f64>, rng: &mut Rng) -> (View, Vector2<f64>) {
+    loop {
+        let centre = truth + rng.unit_vector3() * 5.0;
+        let to_point = (truth - centre).normalize();
+        let side = to_point.cross(&rng.unit_vector3()).normalize();
+        let axis = to_point * off_axis.cos() + side * off_axis.sin();
+        let rotation = looking_along(&axis, rng);
+        let pose = Pose::new(rotation, -(rotation * centre));
+        if let Some(u) = lens.project(&pose.transform(truth)) {
+            return (View::new(AnyCamera::Lens(lens.camera()), pose), u + noise);
+        }
+    }
+}
+
+#[test]
+fn scratch_explore() {
+    let lens = strong_radial();
+    let tau = 4.0;
+    let mut rng = Rng::new(24);
+    let mut found = 0;
+    for i in 0..4000 {
+        let truth = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+        let mut t = Track { lenses: vec![], views: vec![], pixels: vec![], whitenings: vec![], truth };
+        let r0 = rng.uniform_in(0.10, 0.145);
+        let m = rng.uniform_in(2.0, 10.0);
+        for _ in 0..2 {
+            let a = rng.uniform_in(0.0, 6.283);
+            let (v, u) = view_off_axis(lens, &truth, r0.atan(), Vector2::new(a.cos(), a.sin()) * m, &mut rng);
+            t.lenses.push(lens);
+            t.views.push(v);
+            t.pixels.push(u);
+            t.whitenings.push(Matrix2::identity());
+        }
+        if t.first_order_residuals(&[0, 1], &truth).is_none() { continue; }
+        let (x_exact, _) = t.minimise(truth);
+        let ex = [t.pixel_error(0, &x_exact), t.pixel_error(1, &x_exact)];
+        if !(ex[0] <= 0.95 * tau && ex[1] <= 0.95 * tau) { continue; }
+        let (x_fo, _) = gauss_newton(|x| t.first_order_residuals(&[0, 1], x), truth);
+        let fo = t.first_order_residuals(&[0, 1], &x_fo).unwrap();
+        let fo_max = (fo[0].hypot(fo[1])).max(fo[2].hypot(fo[3]));
+        let ex_fo = t.pixel_error(0, &x_fo).max(t.pixel_error(1, &x_fo));
+        if fo_max > 1.05 * tau && ex_fo > 1.05 * tau {
+            found += 1;
+            let opts = TriangulationOptions { outlier_threshold: Some(tau), ..optimal() };
+            let r = triangulate_point_views(&t.views, &t.pixels, None, &opts).unwrap();
+            eprintln!("{i}: r0 {r0:.3} m {m:.2} exact {ex:?} fo {fo_max:.2} exact-at-fo {ex_fo:.2} -> {:?} {:?} cert {}", r.report.status, r.inliers, r.report.certificate.certified);
+        }
+    }
+    eprintln!("found {found}");
 }

@@ -6,16 +6,28 @@
 //!    pair within `τ`, the local minimum of eq. 19 over the pair started from it (the linear point
 //!    weighs the views by depth, so a pair whose optimum fits can look inconsistent at it). Its MSAC
 //!    score is `Σ_j min(r_j², τ²)` over all views, with `r_j` the whitened residual of eq. 18 in view
-//!    `j` (`τ²` for a view the point is behind). The lowest score wins. A single outlier in a track of
+//!    `j` (`τ²` for a view the point is behind). The lowest score among the points with at least two
+//!    views within `τ` wins (any point when none has two). A single outlier in a track of
 //!    3 or more views cannot win: any pair of inliers explains every inlier view. Two observations in
 //!    one image give no two-view point (their linear point is the camera centre) and are skipped.
 //! 2. **Optimum on the inliers.** The views with `r_j ≤ τ` (and in front) are solved by the chosen
 //!    method, certificate included; the inliers are then re-selected at that point, and the solve
 //!    repeated while they change (at most [`MAX_ROUNDS`] times).
 //!
+//! **Through a lens** ([`super::lens`]) the linear and local stages run on the first-order views
+//! (undistorted pixels), but every decision is taken in the images' own pixels: `r_j` is the exact
+//! whitened residual of the observed (distorted) pixel ([`super::lens::LensView`]), in the score, in
+//! "fits" and in the re-selection; and when neither the linear point nor the pair's first-order
+//! minimum fits the pair within `τ` there, the pair's point is refined on the pair's exact cost (a
+//! first-order residual can be off by a factor of the distortion's stretch, 10 at an 80° fisheye edge,
+//! so a pair that fits exactly can look inconsistent to first order). The exact stage of
+//! [`super::lens::through_lenses`] then re-selects the inliers at the exact optimum. Both kinds of
+//! track go through the one routine here, by [`RobustTrack`].
+//!
 //! The certificate then proves the optimum *on the inlier views*: which views those are is a
 //! decision of the consensus, not part of what is certified. Fewer than 2 inliers is
-//! [`Status::TooFewInliers`].
+//! [`Status::TooFewInliers`]: no pair of views has a point among those tried (the linear point and the
+//! pair's minima) that fits both within `τ` or two other views.
 
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
@@ -30,18 +42,43 @@ pub const MAX_PAIRS: usize = 210;
 /// Re-selections of the inliers at the optimum at most.
 pub const MAX_ROUNDS: usize = 3;
 
-/// `(‖r_j‖², in front)` of `x` in `view`.
-fn squared_error(view: &PointView, x: &Vector3<f64>) -> f64 {
-    if view.depth(x) > 0.0 {
-        view.residual(x).norm_squared()
-    } else {
-        f64::INFINITY
+/// A track's views as the consensus sees them (module docs): the first-order views that the linear
+/// and local stages solve, each view's own residual, and the minimum of a pair's own cost. Pinhole
+/// views are their own first order.
+pub(crate) trait RobustTrack {
+    /// The first-order views, one per observation.
+    fn first_order(&self) -> &[PointView];
+    /// `‖r_j(x)‖²`, the whitened residual of view `j` in its own pixels; `∞` behind the camera.
+    fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64;
+    /// The local minimum of the pair `(a, b)`'s own cost from `x0` (finite there), or `None` when that
+    /// cost is the first-order one, whose minimum the consensus already has.
+    fn refine_pair(&self, pair: (usize, usize), x0: &Vector3<f64>, opts: &TriangulationOptions) -> Option<Vector3<f64>>;
+}
+
+impl RobustTrack for [PointView] {
+    fn first_order(&self) -> &[PointView] {
+        self
+    }
+
+    fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64 {
+        let view = &self[j];
+        if view.depth(x) > 0.0 {
+            view.residual(x).norm_squared()
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    fn refine_pair(&self, _: (usize, usize), _: &Vector3<f64>, _: &TriangulationOptions) -> Option<Vector3<f64>> {
+        None
     }
 }
 
 /// The inlier mask of `x`: `‖r_j‖ ≤ τ` and in front.
-fn inliers_at(views: &[PointView], x: &Vector3<f64>, tau2: f64) -> Vec<bool> {
-    views.iter().map(|v| squared_error(v, x) <= tau2).collect()
+fn inliers_at<T: RobustTrack + ?Sized>(track: &T, x: &Vector3<f64>, tau2: f64) -> Vec<bool> {
+    (0..track.first_order().len())
+        .map(|j| track.squared_error(j, x) <= tau2)
+        .collect()
 }
 
 /// The pairs of views the consensus tries: all when there are at most [`MAX_PAIRS`], else that many
@@ -65,16 +102,17 @@ pub(crate) fn pairs(n: usize) -> Vec<(usize, usize)> {
 }
 
 /// The point of the pair of views `(a, b)` for the consensus (module docs): the linear point, or the
-/// pair's local minimum from it when the linear point does not fit both views within `τ`; `None`
-/// when there is no finite point in front of both.
-fn pair_point(
-    views: &[PointView],
+/// pair's local minimum from it (first-order, then, through a lens, exact) when the linear point does
+/// not fit both views within `τ`; `None` when there is no finite point in front of both.
+fn pair_point<T: RobustTrack + ?Sized>(
+    track: &T,
     (a, b): (usize, usize),
     frame: &WorldFrame,
     tau2: f64,
     opts: &TriangulationOptions,
 ) -> Option<Vector3<f64>> {
-    let pair = [views[a], views[b]];
+    let first = track.first_order();
+    let pair = [first[a], first[b]];
     let mut g = Matrix4::zeros();
     accumulate_dlt(&mut g, &pair[0], frame);
     accumulate_dlt(&mut g, &pair[1], frame);
@@ -82,7 +120,8 @@ fn pair_point(
     let LinearPoint::Finite(x) = linear else {
         return None;
     };
-    let fits = |x: &Vector3<f64>| pair.iter().all(|v| squared_error(v, x) <= tau2);
+    let errors = |x: &Vector3<f64>| [track.squared_error(a, x), track.squared_error(b, x)];
+    let fits = |x: &Vector3<f64>| errors(x).iter().all(|&e| e <= tau2);
     if !pair.iter().all(|v| v.depth(&x) > 0.0) {
         return None;
     }
@@ -90,38 +129,54 @@ fn pair_point(
         return Some(x);
     }
     let (optimum, _, _) = local_solution(&pair, frame, linear, opts)?;
-    Some(if pair.iter().all(|v| v.depth(&optimum) > 0.0) && fits(&optimum) {
+    let in_front = pair.iter().all(|v| v.depth(&optimum) > 0.0);
+    if in_front && fits(&optimum) {
+        return Some(optimum);
+    }
+    // Through a lens: the pair's exact minimum, from its first-order one where that is in front.
+    let start = if in_front && errors(&optimum).iter().all(|e| e.is_finite()) {
         optimum
     } else {
         x
-    })
+    };
+    match track.refine_pair((a, b), &start, opts) {
+        Some(exact) if fits(&exact) => Some(exact),
+        _ => Some(x),
+    }
 }
 
 /// The consensus of step 1: the inlier mask of the best two-view point (`None` when no pair gives a
 /// finite point in front of its two views).
-pub(crate) fn consensus(
-    views: &[PointView],
+pub(crate) fn consensus<T: RobustTrack + ?Sized>(
+    track: &T,
     frame: &WorldFrame,
     tau2: f64,
     opts: &TriangulationOptions,
 ) -> Option<Vec<bool>> {
-    let mut best: Option<(f64, Vector3<f64>)> = None;
-    for pair in pairs(views.len()) {
-        let Some(x) = pair_point(views, pair, frame, tau2, opts) else {
+    // (fewer than two inliers, score, point): a point with two inliers beats any with fewer.
+    let mut best: Option<(bool, f64, Vector3<f64>)> = None;
+    for pair in pairs(track.first_order().len()) {
+        let Some(x) = pair_point(track, pair, frame, tau2, opts) else {
             continue;
         };
-        let score: f64 = views.iter().map(|v| squared_error(v, &x).min(tau2)).sum();
-        if best.map_or(true, |(s, _)| score < s) {
-            best = Some((score, x));
+        let (mut score, mut inliers) = (0.0, 0);
+        for j in 0..track.first_order().len() {
+            let e = track.squared_error(j, &x);
+            score += e.min(tau2);
+            inliers += (e <= tau2) as usize;
+        }
+        let few = inliers < 2;
+        if best.map_or(true, |(f, s, _)| (f && !few) || (f == few && score < s)) {
+            best = Some((few, score, x));
         }
     }
-    best.map(|(_, x)| inliers_at(views, &x, tau2))
+    best.map(|(_, _, x)| inliers_at(track, &x, tau2))
 }
 
-/// The track `views` with outliers rejected at the whitened threshold `tau` (module docs); the
-/// result's `inliers` has one flag per view.
-pub(crate) fn solve_views_robust(
-    views: &[PointView],
+/// The track with outliers rejected at the whitened threshold `tau` (module docs), solved on its
+/// first-order views; the result's `inliers` has one flag per view.
+pub(crate) fn solve_views_robust<T: RobustTrack + ?Sized>(
+    track: &T,
     frame: &WorldFrame,
     opts: &TriangulationOptions,
     tau: f64,
@@ -139,7 +194,8 @@ pub(crate) fn solve_views_robust(
             inliers: Some(mask),
         }
     };
-    let mut mask = match consensus(views, frame, tau2, opts) {
+    let views = track.first_order();
+    let mut mask = match consensus(track, frame, tau2, opts) {
         Some(mask) if mask.iter().filter(|&&m| m).count() >= 2 => mask,
         other => return too_few(other.unwrap_or_else(|| vec![false; views.len()])),
     };
@@ -152,7 +208,7 @@ pub(crate) fn solve_views_robust(
         if !result.point.iter().all(|v| v.is_finite()) || rounds == MAX_ROUNDS {
             break;
         }
-        let next = inliers_at(views, &result.point, tau2);
+        let next = inliers_at(track, &result.point, tau2);
         if next == mask || next.iter().filter(|&&m| m).count() < 2 {
             break;
         }
