@@ -3,7 +3,7 @@
 //! SIMPLE_RADIAL and RADIAL_FISHEYE, and its own many-start minimisation), never the library's
 //! residuals.
 
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x4, Matrix3, Matrix3x4, Matrix4, SymmetricEigen, Vector2, Vector3};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::rng::Rng;
 use pluecker::triangulation::point::lens::{lens_certificate, LensView};
@@ -468,6 +468,43 @@ impl Track {
         Some(out)
     }
 
+    /// The oracle's linear point of the first-order views `which`, conditioned as the library
+    /// documents its DLT (`triangulation::point::linear`): the world centred on the cameras' centroid
+    /// and scaled by their RMS distance to it, each view's rows `L J [p₁ − ū p₃; p₂ − v̄ p₃]` divided by
+    /// the Frobenius norm of their 3x3 part; the least eigenvector of the Gram matrix.
+    fn first_order_linear_point(&self, which: &[usize]) -> Option<Vector3<f64>> {
+        let centres: Vec<Vector3<f64>> = which
+            .iter()
+            .map(|&i| -(self.views[i].pose.rotation.transpose() * self.views[i].pose.translation))
+            .collect();
+        let centroid = centres.iter().sum::<Vector3<f64>>() / centres.len() as f64;
+        let scale = (centres.iter().map(|c| (c - centroid).norm_squared()).sum::<f64>() / centres.len() as f64).sqrt();
+        let mut gram = Matrix4::zeros();
+        for &i in which {
+            let (lens, pose) = (&self.lenses[i], &self.views[i].pose);
+            let k = Matrix3::new(lens.f, 0.0, lens.c.x, 0.0, lens.f, lens.c.y, 0.0, 0.0, 1.0);
+            let mut rt = Matrix3x4::zeros();
+            rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&pose.rotation);
+            rt.set_column(3, &pose.translation);
+            let p = k * rt;
+            let n_obs = lens.undistort(&self.pixels[i])?;
+            let u = n_obs * lens.f + lens.c;
+            let rows = self.whitenings[i]
+                * lens.distortion_jacobian(&n_obs)
+                * Matrix2x4::from_rows(&[p.row(0) - p.row(2) * u.x, p.row(1) - p.row(2) * u.y]);
+            let a = rows.fixed_view::<2, 3>(0, 0).norm();
+            let h = Matrix4::new(
+                scale, 0.0, 0.0, centroid.x, 0.0, scale, 0.0, centroid.y, 0.0, 0.0, scale, centroid.z, 0.0, 0.0, 0.0, 1.0,
+            );
+            let b = rows * h / (scale * a);
+            gram += b.transpose() * b;
+        }
+        let eigen = SymmetricEigen::new(gram);
+        let least = (0..4).min_by(|&a, &b| eigen.eigenvalues[a].total_cmp(&eigen.eigenvalues[b]))?;
+        let v = eigen.eigenvectors.column(least);
+        (v[3] != 0.0).then(|| centroid + v.xyz() * (scale / v[3]))
+    }
+
     /// The oracle's exact residual norm of view `i` at `x` (`∞` behind it).
     fn pixel_error(&self, i: usize, x: &Vector3<f64>) -> f64 {
         self.lenses[i]
@@ -518,14 +555,25 @@ fn best_of(residuals: impl Fn(&Vector3<f64>) -> Option<Vec<f64>>, starts: &[Vect
         .unwrap()
 }
 
-/// Two-view tracks through `lens`, the point between `angles` radians off both optical axes, whose
+/// Two-view tracks through `lens`, the point between `angles` radians off both optical axes and the
+/// pixels moved by `noise` px (a range, random directions), whose
 /// exact optimum fits both views within `tau` (with 5 % to spare, the projections where the lens is
 /// one-to-one) while the first-order problem (undistorted pixels, first-order covariances) does not:
-/// at its optimum a view's first-order residual and a view's exact residual both exceed `tau`.
+/// at its linear point and at its optimum a view's first-order residual and a view's exact residual
+/// exceed `tau` (so a consensus that scores only those points, to first order or exactly, finds no
+/// pair that fits).
 /// Checked by the oracle's projections, undistortion and minimisations; the first `count` found.
-fn fitting_only_exactly(lens: Lens, angles: (f64, f64), tau: f64, count: usize, rng: &mut Rng) -> Vec<Track> {
+fn fitting_only_exactly(
+    lens: Lens,
+    angles: (f64, f64),
+    noise: (f64, f64),
+    tau: f64,
+    count: usize,
+    rng: &mut Rng,
+) -> Vec<Track> {
     let mut out = Vec::new();
-    for _ in 0..40_000 {
+    // Such pairs are rare (about 1 in 10,000 draws): the seeds below find them within the budget.
+    for _ in 0..60_000 {
         let truth = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
         let mut t = Track {
             lenses: vec![],
@@ -535,7 +583,7 @@ fn fitting_only_exactly(lens: Lens, angles: (f64, f64), tau: f64, count: usize, 
             truth,
         };
         let off_axis = rng.uniform_in(angles.0, angles.1);
-        let noise = rng.uniform_in(3.0, 12.0);
+        let noise = rng.uniform_in(noise.0, noise.1);
         for _ in 0..2 {
             let a = rng.uniform_in(0.0, std::f64::consts::TAU);
             let (view, u) = view_off_axis(lens, &truth, off_axis, Vector2::new(a.cos(), a.sin()) * noise, rng);
@@ -560,9 +608,13 @@ fn fitting_only_exactly(lens: Lens, angles: (f64, f64), tau: f64, count: usize, 
             xc.z > 0.0 && lens.profile((xc.x / xc.z).hypot(xc.y / xc.z)).1 > 0.0
         });
         let fits_exactly = (0..2).all(|i| t.pixel_error(i, &x_exact) <= 0.95 * tau);
-        let first_misfit = misfit(first(&x_first).unwrap());
-        let exact_misfit_there = (0..2).any(|i| t.pixel_error(i, &x_first) > tau);
-        if one_to_one && fits_exactly && first_misfit && exact_misfit_there {
+        // Neither of the pair's first-order points (its linear point and its minimum) fits both views
+        // within τ, to first order nor exactly.
+        let misfits = |x: &Vector3<f64>| {
+            first(x).is_some_and(|r| misfit(r)) && (0..2).any(|i| t.pixel_error(i, x) > tau)
+        };
+        let linear = t.first_order_linear_point(&[0, 1]);
+        if one_to_one && fits_exactly && misfits(&x_first) && linear.is_some_and(|x| misfits(&x)) {
             out.push(t);
             if out.len() == count {
                 break;
@@ -608,13 +660,18 @@ fn a_pair_that_fits_only_through_the_exact_projection_keeps_both_views() {
     // fit within τ in their own pixels at the exact optimum, not to first order. The consensus must
     // find the exact pair point (a consensus on first-order residuals called them too_few_inliers).
     let tau = 4.0;
-    let mut rng = Rng::new(24);
-    for (name, lens, angles) in [
-        ("SIMPLE_RADIAL f=5000 k=-14 near the fold", strong_radial(), (0.11f64.atan(), 0.15f64.atan())),
-        ("RADIAL_FISHEYE 69-80 degrees", wide_fisheye(), (1.2, 1.4)),
+    for (name, lens, angles, noise, seed) in [
+        (
+            "SIMPLE_RADIAL f=5000 k=-14 near the fold",
+            strong_radial(),
+            (0.125f64.atan(), 0.148f64.atan()),
+            (6.0, 11.0),
+            24,
+        ),
+        ("RADIAL_FISHEYE 69-80 degrees", wide_fisheye(), (1.2, 1.4), (3.0, 12.0), 1),
     ] {
-        let tracks = fitting_only_exactly(lens, angles, tau, 3, &mut rng);
-        assert_eq!(tracks.len(), 3, "{name}: the premise's tracks were not found");
+        let tracks = fitting_only_exactly(lens, angles, noise, tau, 2, &mut Rng::new(seed));
+        assert_eq!(tracks.len(), 2, "{name}: the premise's tracks were not found");
         for (i, t) in tracks.iter().enumerate() {
             let what = format!("{name} track {i}");
             let r = triangulate_point_views(&t.views, &t.pixels, None, &robust(tau)).unwrap();
