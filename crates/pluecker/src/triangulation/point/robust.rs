@@ -217,3 +217,88 @@ pub(crate) fn solve_views_robust<T: RobustTrack + ?Sized>(
     result.inliers = Some(mask);
     result
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2};
+
+    /// A track whose own residuals are its first-order ones whitened by `scale[j]` more (a stand-in
+    /// for lenses whose exact residuals differ from the first-order ones).
+    struct Scaled {
+        first: Vec<PointView>,
+        own: Vec<PointView>,
+    }
+
+    impl RobustTrack for Scaled {
+        fn first_order(&self) -> &[PointView] {
+            &self.first
+        }
+        fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64 {
+            self.own.as_slice().squared_error(j, x)
+        }
+        fn refine_pair(&self, _: (usize, usize), _: &Vector3<f64>, _: &TriangulationOptions) -> Option<Vector3<f64>> {
+            None
+        }
+    }
+
+    /// `K [R | −R C]`, f = 1000 px, the camera at distance 5 from the origin at `angle` about the
+    /// vertical, looking at the origin.
+    fn camera(angle: f64) -> Matrix3x4<f64> {
+        let centre = Vector3::new(angle.sin(), 0.2, angle.cos()) * 5.0;
+        let z = (-centre).normalize();
+        let x = Vector3::y().cross(&z).normalize();
+        let r = Matrix3::from_rows(&[x.transpose(), z.cross(&x).transpose(), z.transpose()]);
+        let k = Matrix3::new(1000.0, 0.0, 500.0, 0.0, 1000.0, 500.0, 0.0, 0.0, 1.0);
+        let mut rt = Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+        rt.set_column(3, &(-(r * centre)));
+        k * rt
+    }
+
+    /// `Σ_j min(‖r_j(x)‖², τ²)`, written out from the views' residuals.
+    fn msac(views: &[PointView], x: &Vector3<f64>, tau2: f64) -> f64 {
+        views.iter().map(|v| v.residual(x).norm_squared().min(tau2)).sum()
+    }
+
+    #[test]
+    fn the_consensus_ranks_by_the_tracks_own_residuals() {
+        // Views 0-1 see X, views 2-3 see Y, 0.5 apart (~100 px): two consensus pairs. X's pair is 5x
+        // less consistent in first-order pixels, but its own residuals are 10x smaller: ranked by the
+        // own residuals X's pair wins, ranked to first order Y's would.
+        let tau2 = 16.0;
+        let (x, y) = (Vector3::zeros(), Vector3::new(0.4, 0.3, -0.2));
+        let cameras: Vec<_> = [0.0f64, 1.2, 2.4, 3.6].iter().map(|&a| camera(a)).collect();
+        let project = |p: &Matrix3x4<f64>, point: &Vector3<f64>| {
+            let h = p * point.push(1.0);
+            Vector2::new(h.x / h.z, h.y / h.z)
+        };
+        let pixels = [
+            project(&cameras[0], &x),
+            project(&cameras[1], &x) + Vector2::new(5.0, -4.0),
+            project(&cameras[2], &y),
+            project(&cameras[3], &y) + Vector2::new(1.0, -0.8),
+        ];
+        let views = |scale: [f64; 4]| -> Vec<PointView> {
+            (0..4)
+                .map(|j| PointView::new(&cameras[j], &pixels[j], &(Matrix2::identity() * scale[j])))
+                .collect()
+        };
+        let track = Scaled {
+            first: views([1.0; 4]),
+            own: views([0.1, 0.1, 1.0, 1.0]),
+        };
+        let centres: Vec<Vector3<f64>> = [0.0f64, 1.2, 2.4, 3.6]
+            .iter()
+            .map(|a| Vector3::new(a.sin(), 0.2, a.cos()) * 5.0)
+            .collect();
+        let frame = WorldFrame::from_centres(&centres);
+        let opts = TriangulationOptions::default();
+        let at_x = pair_point(&track, (0, 1), &frame, tau2, &opts).unwrap();
+        let at_y = pair_point(&track, (2, 3), &frame, tau2, &opts).unwrap();
+        // The premise, from the views' residuals: the rankings disagree.
+        assert!(msac(&track.own, &at_x, tau2) < msac(&track.own, &at_y, tau2));
+        assert!(msac(&track.first, &at_x, tau2) > msac(&track.first, &at_y, tau2));
+        assert_eq!(consensus(&track, &frame, tau2, &opts), Some(vec![true, true, false, false]));
+    }
+}
