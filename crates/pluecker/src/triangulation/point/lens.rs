@@ -528,7 +528,7 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
     let mut used = used;
     if let (Some(tau), Some(flags)) = (opts.outlier_threshold, result.inliers.as_mut()) {
         // The inliers are those within τ at the exact optimum, re-solved while they change (as
-        // `robust` does on the first-order cost).
+        // `robust` does, by the same exact residuals, at the first-order optimum).
         for _ in 0..super::robust::MAX_ROUNDS {
             let next: Vec<bool> = views.iter().map(|v| v.squared_residual(&x) <= tau * tau).collect();
             if next == *flags || next.iter().filter(|&&m| m).count() < 2 {
