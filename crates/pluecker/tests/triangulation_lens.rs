@@ -494,7 +494,8 @@ impl Track {
                 * Matrix2x4::from_rows(&[p.row(0) - p.row(2) * u.x, p.row(1) - p.row(2) * u.y]);
             let a = rows.fixed_view::<2, 3>(0, 0).norm();
             let h = Matrix4::new(
-                scale, 0.0, 0.0, centroid.x, 0.0, scale, 0.0, centroid.y, 0.0, 0.0, scale, centroid.z, 0.0, 0.0, 0.0, 1.0,
+                scale, 0.0, 0.0, centroid.x, 0.0, scale, 0.0, centroid.y, 0.0, 0.0, scale, centroid.z, 0.0, 0.0, 0.0,
+                1.0,
             );
             let b = rows * h / (scale * a);
             gram += b.transpose() * b;
@@ -610,9 +611,8 @@ fn fitting_only_exactly(
         let fits_exactly = (0..2).all(|i| t.pixel_error(i, &x_exact) <= 0.95 * tau);
         // Neither of the pair's first-order points (its linear point and its minimum) fits both views
         // within τ, to first order nor exactly.
-        let misfits = |x: &Vector3<f64>| {
-            first(x).is_some_and(|r| misfit(r)) && (0..2).any(|i| t.pixel_error(i, x) > tau)
-        };
+        let misfits =
+            |x: &Vector3<f64>| first(x).is_some_and(|r| misfit(r)) && (0..2).any(|i| t.pixel_error(i, x) > tau);
         let linear = t.first_order_linear_point(&[0, 1]);
         if one_to_one && fits_exactly && misfits(&x_first) && linear.is_some_and(|x| misfits(&x)) {
             out.push(t);
@@ -627,7 +627,12 @@ fn fitting_only_exactly(
 /// The oracle's check of a robust result on `t` at threshold `tau`: the flags are exactly the views
 /// within `tau` at the returned point, and the point is the oracle's minimum of the exact cost over
 /// its inliers (started from the point and the truth; 1e-9 relative for rounding).
-fn assert_inliers_fit_at_the_exact_optimum(t: &Track, r: &pluecker::triangulation::point::PointTriangulation, tau: f64, what: &str) {
+fn assert_inliers_fit_at_the_exact_optimum(
+    t: &Track,
+    r: &pluecker::triangulation::point::PointTriangulation,
+    tau: f64,
+    what: &str,
+) {
     let flags = r.inliers.as_ref().unwrap();
     for (k, &flag) in flags.iter().enumerate() {
         let e = t.pixel_error(k, &r.point);
@@ -642,8 +647,15 @@ fn assert_inliers_fit_at_the_exact_optimum(t: &Track, r: &pluecker::triangulatio
         "{what}: reported cost {} vs the oracle's {cost}",
         r.report.cost
     );
-    assert!(cost <= best * (1.0 + 1e-9) + 1e-12, "{what}: {cost} above the oracle's minimum {best}");
-    assert_eq!(r.report.certificate.certified, r.report.status == Status::Success, "{what}");
+    assert!(
+        cost <= best * (1.0 + 1e-9) + 1e-12,
+        "{what}: {cost} above the oracle's minimum {best}"
+    );
+    assert_eq!(
+        r.report.certificate.certified,
+        r.report.status == Status::Success,
+        "{what}"
+    );
 }
 
 fn robust(tau: f64) -> TriangulationOptions {
@@ -668,7 +680,13 @@ fn a_pair_that_fits_only_through_the_exact_projection_keeps_both_views() {
             (6.0, 11.0),
             24,
         ),
-        ("RADIAL_FISHEYE 69-80 degrees", wide_fisheye(), (1.2, 1.4), (3.0, 12.0), 1),
+        (
+            "RADIAL_FISHEYE 69-80 degrees",
+            wide_fisheye(),
+            (1.2, 1.4),
+            (3.0, 12.0),
+            1,
+        ),
     ] {
         let tracks = fitting_only_exactly(lens, angles, noise, tau, 2, &mut Rng::new(seed));
         assert_eq!(tracks.len(), 2, "{name}: the premise's tracks were not found");
@@ -699,7 +717,13 @@ fn a_gross_outlier_beside_a_pair_that_fits_only_exactly_is_the_one_rejected() {
             (6.0, 11.0),
             24,
         ),
-        ("RADIAL_FISHEYE 69-80 degrees", wide_fisheye(), (1.2, 1.4), (3.0, 12.0), 1),
+        (
+            "RADIAL_FISHEYE 69-80 degrees",
+            wide_fisheye(),
+            (1.2, 1.4),
+            (3.0, 12.0),
+            1,
+        ),
     ] {
         for (i, pair) in fitting_only_exactly(lens, angles, noise, tau, 2, &mut Rng::new(seed))
             .iter()
@@ -719,7 +743,11 @@ fn a_gross_outlier_beside_a_pair_that_fits_only_exactly_is_the_one_rejected() {
                     Track {
                         lenses: vec![lens; 3],
                         views: vec![view.clone(), pair.views[0].clone(), pair.views[1].clone()],
-                        pixels: vec![u + Vector2::new(a.cos(), a.sin()) * 120.0, pair.pixels[0], pair.pixels[1]],
+                        pixels: vec![
+                            u + Vector2::new(a.cos(), a.sin()) * 120.0,
+                            pair.pixels[0],
+                            pair.pixels[1],
+                        ],
                         whitenings: vec![Matrix2::identity(); 3],
                         truth: pair.truth,
                     }
@@ -727,7 +755,12 @@ fn a_gross_outlier_beside_a_pair_that_fits_only_exactly_is_the_one_rejected() {
                 .find(fits_neither)
                 .unwrap_or_else(|| panic!("{what}: no direction fits neither view"));
             let r = triangulate_point_views(&t.views, &t.pixels, None, &robust(tau)).unwrap();
-            assert_eq!(r.inliers.as_deref(), Some(&[false, true, true][..]), "{what}: {:?}", r.report.status);
+            assert_eq!(
+                r.inliers.as_deref(),
+                Some(&[false, true, true][..]),
+                "{what}: {:?}",
+                r.report.status
+            );
             assert_inliers_fit_at_the_exact_optimum(&t, &r, tau, &what);
         }
     }
@@ -763,7 +796,10 @@ fn gross_outliers_through_an_80_degree_fisheye_are_removed_and_counted_reproduci
     }
     eprintln!("{tracks} tracks: {removed} outliers removed, {dropped} inliers dropped, {too_few} too few, {certified} certified");
     assert_eq!(too_few, 0);
-    assert!(removed >= tracks - 1 && dropped <= 3, "{removed} of {tracks} removed, {dropped} dropped");
+    assert!(
+        removed >= tracks - 1 && dropped <= 3,
+        "{removed} of {tracks} removed, {dropped} dropped"
+    );
     // Not vacuous: the certificate still passes on most of them (as without outliers, 54 of 60).
     assert!(certified >= 50, "{certified}");
 }

@@ -622,7 +622,12 @@ impl RobustTrack for LensTrack<'_, '_> {
         self.views[j].squared_residual(x)
     }
 
-    fn refine_pair(&self, (a, b): (usize, usize), x0: &Vector3<f64>, opts: &TriangulationOptions) -> Option<Vector3<f64>> {
+    fn refine_pair(
+        &self,
+        (a, b): (usize, usize),
+        x0: &Vector3<f64>,
+        opts: &TriangulationOptions,
+    ) -> Option<Vector3<f64>> {
         Some(refine(&[self.views[a], self.views[b]], x0, &opts.local).0)
     }
 }

@@ -109,7 +109,12 @@ pub fn triangulate_point(
     let whitening = checked_track(cameras, "cameras", observations, covariances, opts)?;
     let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
-    Ok(solve_track_views(views.as_slice(), &frame_of_cameras(cameras), opts, started))
+    Ok(solve_track_views(
+        views.as_slice(),
+        &frame_of_cameras(cameras),
+        opts,
+        started,
+    ))
 }
 
 /// Triangulates one point seen in `views` (each a camera, pinhole or any of COLMAP's models, and its

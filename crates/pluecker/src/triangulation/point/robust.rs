@@ -52,7 +52,8 @@ pub(crate) trait RobustTrack {
     fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64;
     /// The local minimum of the pair `(a, b)`'s own cost from `x0` (finite there), or `None` when that
     /// cost is the first-order one, whose minimum the consensus already has.
-    fn refine_pair(&self, pair: (usize, usize), x0: &Vector3<f64>, opts: &TriangulationOptions) -> Option<Vector3<f64>>;
+    fn refine_pair(&self, pair: (usize, usize), x0: &Vector3<f64>, opts: &TriangulationOptions)
+        -> Option<Vector3<f64>>;
 }
 
 impl RobustTrack for [PointView] {
@@ -299,6 +300,9 @@ mod tests {
         // The premise, from the views' residuals: the rankings disagree.
         assert!(msac(&track.own, &at_x, tau2) < msac(&track.own, &at_y, tau2));
         assert!(msac(&track.first, &at_x, tau2) > msac(&track.first, &at_y, tau2));
-        assert_eq!(consensus(&track, &frame, tau2, &opts), Some(vec![true, true, false, false]));
+        assert_eq!(
+            consensus(&track, &frame, tau2, &opts),
+            Some(vec![true, true, false, false])
+        );
     }
 }
