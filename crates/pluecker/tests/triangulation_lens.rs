@@ -439,7 +439,7 @@ impl Lens {
             let (g, dg) = self.profile(r);
             let step = (g - target) / dg;
             r -= step;
-            if !(step.abs() > 1e-16 * r) {
+            if step.abs() <= 1e-16 * r {
                 break;
             }
         }
