@@ -611,8 +611,7 @@ fn fitting_only_exactly(
         let fits_exactly = (0..2).all(|i| t.pixel_error(i, &x_exact) <= 0.95 * tau);
         // Neither of the pair's first-order points (its linear point and its minimum) fits both views
         // within τ, to first order nor exactly.
-        let misfits =
-            |x: &Vector3<f64>| first(x).is_some_and(|r| misfit(r)) && (0..2).any(|i| t.pixel_error(i, x) > tau);
+        let misfits = |x: &Vector3<f64>| first(x).is_some_and(&misfit) && (0..2).any(|i| t.pixel_error(i, x) > tau);
         let linear = t.first_order_linear_point(&[0, 1]);
         if one_to_one && fits_exactly && misfits(&x_first) && linear.is_some_and(|x| misfits(&x)) {
             out.push(t);
