@@ -243,10 +243,15 @@ mod tests {
         }
     }
 
-    /// `K [R | −R C]`, f = 1000 px, the camera at distance 5 from the origin at `angle` about the
+    /// The centre of [`camera`].
+    fn centre(angle: f64, distance: f64) -> Vector3<f64> {
+        Vector3::new(angle.sin(), 0.2, angle.cos()) * distance
+    }
+
+    /// `K [R | −R C]`, f = 1000 px, the camera at `distance` from the origin at `angle` about the
     /// vertical, looking at the origin.
-    fn camera(angle: f64) -> Matrix3x4<f64> {
-        let centre = Vector3::new(angle.sin(), 0.2, angle.cos()) * 5.0;
+    fn camera(angle: f64, distance: f64) -> Matrix3x4<f64> {
+        let centre = centre(angle, distance);
         let z = (-centre).normalize();
         let x = Vector3::y().cross(&z).normalize();
         let r = Matrix3::from_rows(&[x.transpose(), z.cross(&x).transpose(), z.transpose()]);
@@ -255,6 +260,11 @@ mod tests {
         rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
         rt.set_column(3, &(-(r * centre)));
         k * rt
+    }
+
+    fn project(p: &Matrix3x4<f64>, point: &Vector3<f64>) -> Vector2<f64> {
+        let h = p * point.push(1.0);
+        Vector2::new(h.x / h.z, h.y / h.z)
     }
 
     /// `Σ_j min(‖r_j(x)‖², τ²)`, written out from the views' residuals.
@@ -269,11 +279,7 @@ mod tests {
         // own residuals X's pair wins, ranked to first order Y's would.
         let tau2 = 16.0;
         let (x, y) = (Vector3::zeros(), Vector3::new(0.4, 0.3, -0.2));
-        let cameras: Vec<_> = [0.0f64, 1.2, 2.4, 3.6].iter().map(|&a| camera(a)).collect();
-        let project = |p: &Matrix3x4<f64>, point: &Vector3<f64>| {
-            let h = p * point.push(1.0);
-            Vector2::new(h.x / h.z, h.y / h.z)
-        };
+        let cameras: Vec<_> = [0.0f64, 1.2, 2.4, 3.6].iter().map(|&a| camera(a, 5.0)).collect();
         let pixels = [
             project(&cameras[0], &x),
             project(&cameras[1], &x) + Vector2::new(5.0, -4.0),
@@ -289,10 +295,7 @@ mod tests {
             first: views([1.0; 4]),
             own: views([0.1, 0.1, 1.0, 1.0]),
         };
-        let centres: Vec<Vector3<f64>> = [0.0f64, 1.2, 2.4, 3.6]
-            .iter()
-            .map(|a| Vector3::new(a.sin(), 0.2, a.cos()) * 5.0)
-            .collect();
+        let centres: Vec<Vector3<f64>> = [0.0f64, 1.2, 2.4, 3.6].iter().map(|&a| centre(a, 5.0)).collect();
         let frame = WorldFrame::from_centres(&centres);
         let opts = TriangulationOptions::default();
         let at_x = pair_point(&track, (0, 1), &frame, tau2, &opts).unwrap();
@@ -304,5 +307,50 @@ mod tests {
             consensus(&track, &frame, tau2, &opts),
             Some(vec![true, true, false, false])
         );
+    }
+
+    #[test]
+    fn a_pair_that_fits_beats_a_point_with_a_single_inlier() {
+        // Views 0-1 see the origin with residuals near τ: their pair fits, MSAC score ≈ 2·3.6² + τ².
+        // View 2's observation is 800 px off, but its own residuals are 200x smaller than its
+        // first-order ones (`Scaled`): a pair with view 2 gives a point where view 2 alone fits,
+        // scoring ≈ 2τ² + small, below the fitting pair. Preferring two inliers keeps the track.
+        let tau2 = 16.0;
+        let angles = [0.0f64, 1.0, 2.2];
+        let cameras: Vec<_> = angles.iter().map(|&a| camera(a, 5.0)).collect();
+        let pixels = [
+            project(&cameras[0], &Vector3::zeros()) + Vector2::new(0.0, 3.6),
+            project(&cameras[1], &Vector3::zeros()) + Vector2::new(0.0, -3.6),
+            project(&cameras[2], &Vector3::zeros()) + Vector2::new(0.0, 800.0),
+        ];
+        let views = |scale: [f64; 3]| -> Vec<PointView> {
+            (0..3)
+                .map(|j| PointView::new(&cameras[j], &pixels[j], &(Matrix2::identity() * scale[j])))
+                .collect()
+        };
+        let track = Scaled {
+            first: views([1.0; 3]),
+            own: views([1.0, 1.0, 0.005]),
+        };
+        let centres: Vec<Vector3<f64>> = angles.iter().map(|&a| centre(a, 5.0)).collect();
+        let frame = WorldFrame::from_centres(&centres);
+        let opts = TriangulationOptions::default();
+        let inliers = |x: &Vector3<f64>| {
+            track
+                .own
+                .iter()
+                .filter(|v| v.depth(x) > 0.0 && v.residual(x).norm_squared() <= tau2)
+                .count()
+        };
+        // The premise, from the views' residuals: a point with a single inlier scores below the
+        // fitting pair's point.
+        let fitting = pair_point(&track, (0, 1), &frame, tau2, &opts).unwrap();
+        assert_eq!(inliers(&fitting), 2);
+        let lone = [(0, 2), (1, 2)]
+            .iter()
+            .filter_map(|&pair| pair_point(&track, pair, &frame, tau2, &opts))
+            .find(|x| inliers(x) == 1 && msac(&track.own, x, tau2) < msac(&track.own, &fitting, tau2));
+        assert!(lone.is_some(), "no point with a single inlier outscores the pair");
+        assert_eq!(consensus(&track, &frame, tau2, &opts), Some(vec![true, true, false]));
     }
 }
