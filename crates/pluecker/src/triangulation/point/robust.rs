@@ -18,16 +18,17 @@
 //! (undistorted pixels), but every decision is taken in the images' own pixels: `r_j` is the exact
 //! whitened residual of the observed (distorted) pixel ([`super::lens::LensView`]), in the score, in
 //! "fits" and in the re-selection; and when neither the linear point nor the pair's first-order
-//! minimum fits the pair within `τ` there, the pair's point is refined on the pair's exact cost (a
-//! first-order residual can be off by a factor of the distortion's stretch, 10 at an 80° fisheye edge,
-//! so a pair that fits exactly can look inconsistent to first order). The exact stage of
+//! minimum fits the pair within `τ` there, the pair's point is refined on the pair's exact cost (the
+//! undistortion stretches the image up to 10x at an 80° fisheye edge or near a SIMPLE_RADIAL fold, and
+//! the stretch changes across a residual: first-order residuals there are off by 10-30 %, so a pair
+//! that fits exactly can misfit at its first-order points). The exact stage of
 //! [`super::lens::through_lenses`] then re-selects the inliers at the exact optimum. Both kinds of
 //! track go through the one routine here, by [`RobustTrack`].
 //!
 //! The certificate then proves the optimum *on the inlier views*: which views those are is a
 //! decision of the consensus, not part of what is certified. Fewer than 2 inliers is
-//! [`Status::TooFewInliers`]: no pair of views has a point among those tried (the linear point and the
-//! pair's minima) that fits both within `τ` or two other views.
+//! [`Status::TooFewInliers`]: none of the points tried (each pair's linear point and minima) has two
+//! views within `τ`.
 
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
