@@ -56,6 +56,7 @@
 
 use super::chart::{Chart, ChartKind};
 use super::cost::PointView;
+use super::robust::RobustTrack;
 use crate::camera::AnyCamera;
 use crate::camera_model::LensCamera;
 use crate::error::Result;
@@ -572,7 +573,7 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
     let mut used = used;
     if let (Some(tau), Some(flags)) = (opts.outlier_threshold, result.inliers.as_mut()) {
         // The inliers are those within τ at the exact optimum, re-solved while they change (as
-        // `robust` does on the first-order cost).
+        // `robust` does, by the same exact residuals, at the first-order optimum).
         for _ in 0..super::robust::MAX_ROUNDS {
             let next: Vec<bool> = views.iter().map(|v| v.squared_residual(&x) <= tau * tau).collect();
             if next == *flags || next.iter().filter(|&&m| m).count() < 2 {
@@ -649,6 +650,33 @@ fn exact_covariance(views: &[LensView], x: &Vector3<f64>) -> Option<Matrix3<f64>
     covariance_of_information3(&information)
 }
 
+/// A track through lenses as the consensus of [`super::robust`] sees it: the first-order views
+/// `first` of `views` for the linear and local stages, the exact residuals of `views` for every
+/// decision, and [`refine`] for a pair's minimum.
+pub(crate) struct LensTrack<'a, 'b> {
+    pub first: &'a [PointView],
+    pub views: &'a [LensView<'b>],
+}
+
+impl RobustTrack for LensTrack<'_, '_> {
+    fn first_order(&self) -> &[PointView] {
+        self.first
+    }
+
+    fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64 {
+        self.views[j].squared_residual(x)
+    }
+
+    fn refine_pair(
+        &self,
+        (a, b): (usize, usize),
+        x0: &Vector3<f64>,
+        opts: &TriangulationOptions,
+    ) -> Option<Vector3<f64>> {
+        Some(refine(&[self.views[a], self.views[b]], x0, &opts.local).0)
+    }
+}
+
 /// One track seen through `views`: the first-order stages of [`super`] on [`first_order_view`]s,
 /// then, when a camera distorts, [`through_lenses`]. `started` times the whole call.
 pub(crate) fn solve_lens_track(
@@ -679,8 +707,9 @@ pub(crate) fn solve_through_lenses(
     if !views.iter().any(|v| v.camera.distortion().is_some()) {
         return super::solve_track_views(first, frame, opts, started);
     }
+    let track = LensTrack { first, views };
     let through = |first_opts: &TriangulationOptions| {
-        let mut result = super::solve_track_views(first, frame, first_opts, started);
+        let mut result = super::solve_track_views(&track, frame, first_opts, started);
         result.report.method = opts.method;
         through_lenses(&mut result, views, opts);
         result

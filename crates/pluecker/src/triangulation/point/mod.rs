@@ -109,7 +109,12 @@ pub fn triangulate_point(
     let whitening = checked_track(cameras, "cameras", observations, covariances, opts)?;
     let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
-    Ok(solve_track_views(&views, &frame_of_cameras(cameras), opts, started))
+    Ok(solve_track_views(
+        views.as_slice(),
+        &frame_of_cameras(cameras),
+        opts,
+        started,
+    ))
 }
 
 /// Triangulates one point seen in `views` (each a camera, pinhole or any of COLMAP's models, and its
@@ -161,16 +166,17 @@ fn checked_track(
     Ok(whitening)
 }
 
-/// [`solve_views`], or its robust form when `opts.outlier_threshold` is set.
-pub(crate) fn solve_track_views(
-    views: &[PointView],
+/// [`solve_views`] on the track's first-order views, or its robust form when
+/// `opts.outlier_threshold` is set (whose decisions use each view's own residual).
+pub(crate) fn solve_track_views<T: robust::RobustTrack + ?Sized>(
+    track: &T,
     frame: &WorldFrame,
     opts: &TriangulationOptions,
     started: Instant,
 ) -> PointTriangulation {
     match opts.outlier_threshold {
-        None => solve_views(views, frame, opts, started),
-        Some(tau) => robust::solve_views_robust(views, frame, opts, tau, started),
+        None => solve_views(track.first_order(), frame, opts, started),
+        Some(tau) => robust::solve_views_robust(track, frame, opts, tau, started),
     }
 }
 

@@ -6,16 +6,29 @@
 //!    pair within `τ`, the local minimum of eq. 19 over the pair started from it (the linear point
 //!    weighs the views by depth, so a pair whose optimum fits can look inconsistent at it). Its MSAC
 //!    score is `Σ_j min(r_j², τ²)` over all views, with `r_j` the whitened residual of eq. 18 in view
-//!    `j` (`τ²` for a view the point is behind). The lowest score wins. A single outlier in a track of
+//!    `j` (`τ²` for a view the point is behind). The lowest score among the points with at least two
+//!    views within `τ` wins (any point when none has two). A single outlier in a track of
 //!    3 or more views cannot win: any pair of inliers explains every inlier view. Two observations in
 //!    one image give no two-view point (their linear point is the camera centre) and are skipped.
 //! 2. **Optimum on the inliers.** The views with `r_j ≤ τ` (and in front) are solved by the chosen
 //!    method, certificate included; the inliers are then re-selected at that point, and the solve
 //!    repeated while they change (at most [`MAX_ROUNDS`] times).
 //!
+//! **Through a lens** ([`super::lens`]) the linear and local stages run on the first-order views
+//! (undistorted pixels), but every decision is taken in the images' own pixels: `r_j` is the exact
+//! whitened residual of the observed (distorted) pixel ([`super::lens::LensView`]), in the score, in
+//! "fits" and in the re-selection; and when neither the linear point nor the pair's first-order
+//! minimum fits the pair within `τ` there, the pair's point is refined on the pair's exact cost (the
+//! undistortion stretches the image up to 10x at an 80° fisheye edge or near a SIMPLE_RADIAL fold, and
+//! the stretch changes across a residual: first-order residuals there are off by 10-30 %, so a pair
+//! that fits exactly can misfit at its first-order points). The exact stage of
+//! [`super::lens::through_lenses`] then re-selects the inliers at the exact optimum. Both kinds of
+//! track go through the one routine here, by [`RobustTrack`].
+//!
 //! The certificate then proves the optimum *on the inlier views*: which views those are is a
 //! decision of the consensus, not part of what is certified. Fewer than 2 inliers is
-//! [`Status::TooFewInliers`].
+//! [`Status::TooFewInliers`]: none of the points tried (each pair's linear point and minima) has two
+//! views within `τ`.
 
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
@@ -30,18 +43,44 @@ pub const MAX_PAIRS: usize = 210;
 /// Re-selections of the inliers at the optimum at most.
 pub const MAX_ROUNDS: usize = 3;
 
-/// `(‖r_j‖², in front)` of `x` in `view`.
-fn squared_error(view: &PointView, x: &Vector3<f64>) -> f64 {
-    if view.depth(x) > 0.0 {
-        view.residual(x).norm_squared()
-    } else {
-        f64::INFINITY
+/// A track's views as the consensus sees them (module docs): the first-order views that the linear
+/// and local stages solve, each view's own residual, and the minimum of a pair's own cost. Pinhole
+/// views are their own first order.
+pub(crate) trait RobustTrack {
+    /// The first-order views, one per observation.
+    fn first_order(&self) -> &[PointView];
+    /// `‖r_j(x)‖²`, the whitened residual of view `j` in its own pixels; `∞` behind the camera.
+    fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64;
+    /// The local minimum of the pair `(a, b)`'s own cost from `x0` (finite there), or `None` when that
+    /// cost is the first-order one, whose minimum the consensus already has.
+    fn refine_pair(&self, pair: (usize, usize), x0: &Vector3<f64>, opts: &TriangulationOptions)
+        -> Option<Vector3<f64>>;
+}
+
+impl RobustTrack for [PointView] {
+    fn first_order(&self) -> &[PointView] {
+        self
+    }
+
+    fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64 {
+        let view = &self[j];
+        if view.depth(x) > 0.0 {
+            view.residual(x).norm_squared()
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    fn refine_pair(&self, _: (usize, usize), _: &Vector3<f64>, _: &TriangulationOptions) -> Option<Vector3<f64>> {
+        None
     }
 }
 
 /// The inlier mask of `x`: `‖r_j‖ ≤ τ` and in front.
-fn inliers_at(views: &[PointView], x: &Vector3<f64>, tau2: f64) -> Vec<bool> {
-    views.iter().map(|v| squared_error(v, x) <= tau2).collect()
+fn inliers_at<T: RobustTrack + ?Sized>(track: &T, x: &Vector3<f64>, tau2: f64) -> Vec<bool> {
+    (0..track.first_order().len())
+        .map(|j| track.squared_error(j, x) <= tau2)
+        .collect()
 }
 
 /// The pairs of views the consensus tries: all when there are at most [`MAX_PAIRS`], else that many
@@ -65,16 +104,17 @@ pub(crate) fn pairs(n: usize) -> Vec<(usize, usize)> {
 }
 
 /// The point of the pair of views `(a, b)` for the consensus (module docs): the linear point, or the
-/// pair's local minimum from it when the linear point does not fit both views within `τ`; `None`
-/// when there is no finite point in front of both.
-fn pair_point(
-    views: &[PointView],
+/// pair's local minimum from it (first-order, then, through a lens, exact) when the linear point does
+/// not fit both views within `τ`; `None` when there is no finite point in front of both.
+fn pair_point<T: RobustTrack + ?Sized>(
+    track: &T,
     (a, b): (usize, usize),
     frame: &WorldFrame,
     tau2: f64,
     opts: &TriangulationOptions,
 ) -> Option<Vector3<f64>> {
-    let pair = [views[a], views[b]];
+    let first = track.first_order();
+    let pair = [first[a], first[b]];
     let mut g = Matrix4::zeros();
     accumulate_dlt(&mut g, &pair[0], frame);
     accumulate_dlt(&mut g, &pair[1], frame);
@@ -82,7 +122,8 @@ fn pair_point(
     let LinearPoint::Finite(x) = linear else {
         return None;
     };
-    let fits = |x: &Vector3<f64>| pair.iter().all(|v| squared_error(v, x) <= tau2);
+    let errors = |x: &Vector3<f64>| [track.squared_error(a, x), track.squared_error(b, x)];
+    let fits = |x: &Vector3<f64>| errors(x).iter().all(|&e| e <= tau2);
     if !pair.iter().all(|v| v.depth(&x) > 0.0) {
         return None;
     }
@@ -90,38 +131,54 @@ fn pair_point(
         return Some(x);
     }
     let (optimum, _, _) = local_solution(&pair, frame, linear, opts)?;
-    Some(if pair.iter().all(|v| v.depth(&optimum) > 0.0) && fits(&optimum) {
+    let in_front = pair.iter().all(|v| v.depth(&optimum) > 0.0);
+    if in_front && fits(&optimum) {
+        return Some(optimum);
+    }
+    // Through a lens: the pair's exact minimum, from its first-order one where that is in front.
+    let start = if in_front && errors(&optimum).iter().all(|e| e.is_finite()) {
         optimum
     } else {
         x
-    })
+    };
+    match track.refine_pair((a, b), &start, opts) {
+        Some(exact) if fits(&exact) => Some(exact),
+        _ => Some(x),
+    }
 }
 
 /// The consensus of step 1: the inlier mask of the best two-view point (`None` when no pair gives a
 /// finite point in front of its two views).
-pub(crate) fn consensus(
-    views: &[PointView],
+pub(crate) fn consensus<T: RobustTrack + ?Sized>(
+    track: &T,
     frame: &WorldFrame,
     tau2: f64,
     opts: &TriangulationOptions,
 ) -> Option<Vec<bool>> {
-    let mut best: Option<(f64, Vector3<f64>)> = None;
-    for pair in pairs(views.len()) {
-        let Some(x) = pair_point(views, pair, frame, tau2, opts) else {
+    // (fewer than two inliers, score, point): a point with two inliers beats any with fewer.
+    let mut best: Option<(bool, f64, Vector3<f64>)> = None;
+    for pair in pairs(track.first_order().len()) {
+        let Some(x) = pair_point(track, pair, frame, tau2, opts) else {
             continue;
         };
-        let score: f64 = views.iter().map(|v| squared_error(v, &x).min(tau2)).sum();
-        if best.map_or(true, |(s, _)| score < s) {
-            best = Some((score, x));
+        let (mut score, mut inliers) = (0.0, 0);
+        for j in 0..track.first_order().len() {
+            let e = track.squared_error(j, &x);
+            score += e.min(tau2);
+            inliers += (e <= tau2) as usize;
+        }
+        let few = inliers < 2;
+        if best.map_or(true, |(f, s, _)| (f && !few) || (f == few && score < s)) {
+            best = Some((few, score, x));
         }
     }
-    best.map(|(_, x)| inliers_at(views, &x, tau2))
+    best.map(|(_, _, x)| inliers_at(track, &x, tau2))
 }
 
-/// The track `views` with outliers rejected at the whitened threshold `tau` (module docs); the
-/// result's `inliers` has one flag per view.
-pub(crate) fn solve_views_robust(
-    views: &[PointView],
+/// The track with outliers rejected at the whitened threshold `tau` (module docs), solved on its
+/// first-order views; the result's `inliers` has one flag per view.
+pub(crate) fn solve_views_robust<T: RobustTrack + ?Sized>(
+    track: &T,
     frame: &WorldFrame,
     opts: &TriangulationOptions,
     tau: f64,
@@ -139,7 +196,8 @@ pub(crate) fn solve_views_robust(
             inliers: Some(mask),
         }
     };
-    let mut mask = match consensus(views, frame, tau2, opts) {
+    let views = track.first_order();
+    let mut mask = match consensus(track, frame, tau2, opts) {
         Some(mask) if mask.iter().filter(|&&m| m).count() >= 2 => mask,
         other => return too_few(other.unwrap_or_else(|| vec![false; views.len()])),
     };
@@ -152,7 +210,7 @@ pub(crate) fn solve_views_robust(
         if !result.point.iter().all(|v| v.is_finite()) || rounds == MAX_ROUNDS {
             break;
         }
-        let next = inliers_at(views, &result.point, tau2);
+        let next = inliers_at(track, &result.point, tau2);
         if next == mask || next.iter().filter(|&&m| m).count() < 2 {
             break;
         }
@@ -160,4 +218,140 @@ pub(crate) fn solve_views_robust(
     }
     result.inliers = Some(mask);
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2};
+
+    /// A track whose own residuals are its first-order ones whitened by `scale[j]` more (a stand-in
+    /// for lenses whose exact residuals differ from the first-order ones).
+    struct Scaled {
+        first: Vec<PointView>,
+        own: Vec<PointView>,
+    }
+
+    impl RobustTrack for Scaled {
+        fn first_order(&self) -> &[PointView] {
+            &self.first
+        }
+        fn squared_error(&self, j: usize, x: &Vector3<f64>) -> f64 {
+            self.own.as_slice().squared_error(j, x)
+        }
+        fn refine_pair(&self, _: (usize, usize), _: &Vector3<f64>, _: &TriangulationOptions) -> Option<Vector3<f64>> {
+            None
+        }
+    }
+
+    /// The centre of [`camera`].
+    fn centre(angle: f64, distance: f64) -> Vector3<f64> {
+        Vector3::new(angle.sin(), 0.2, angle.cos()) * distance
+    }
+
+    /// `K [R | −R C]`, f = 1000 px, the camera at `distance` from the origin at `angle` about the
+    /// vertical, looking at the origin.
+    fn camera(angle: f64, distance: f64) -> Matrix3x4<f64> {
+        let centre = centre(angle, distance);
+        let z = (-centre).normalize();
+        let x = Vector3::y().cross(&z).normalize();
+        let r = Matrix3::from_rows(&[x.transpose(), z.cross(&x).transpose(), z.transpose()]);
+        let k = Matrix3::new(1000.0, 0.0, 500.0, 0.0, 1000.0, 500.0, 0.0, 0.0, 1.0);
+        let mut rt = Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+        rt.set_column(3, &(-(r * centre)));
+        k * rt
+    }
+
+    fn project(p: &Matrix3x4<f64>, point: &Vector3<f64>) -> Vector2<f64> {
+        let h = p * point.push(1.0);
+        Vector2::new(h.x / h.z, h.y / h.z)
+    }
+
+    /// `Σ_j min(‖r_j(x)‖², τ²)`, written out from the views' residuals.
+    fn msac(views: &[PointView], x: &Vector3<f64>, tau2: f64) -> f64 {
+        views.iter().map(|v| v.residual(x).norm_squared().min(tau2)).sum()
+    }
+
+    #[test]
+    fn the_consensus_ranks_by_the_tracks_own_residuals() {
+        // Views 0-1 see X, views 2-3 see Y, 0.5 apart (~100 px): two consensus pairs. X's pair is 5x
+        // less consistent in first-order pixels, but its own residuals are 10x smaller: ranked by the
+        // own residuals X's pair wins, ranked to first order Y's would.
+        let tau2 = 16.0;
+        let (x, y) = (Vector3::zeros(), Vector3::new(0.4, 0.3, -0.2));
+        let cameras: Vec<_> = [0.0f64, 1.2, 2.4, 3.6].iter().map(|&a| camera(a, 5.0)).collect();
+        let pixels = [
+            project(&cameras[0], &x),
+            project(&cameras[1], &x) + Vector2::new(5.0, -4.0),
+            project(&cameras[2], &y),
+            project(&cameras[3], &y) + Vector2::new(1.0, -0.8),
+        ];
+        let views = |scale: [f64; 4]| -> Vec<PointView> {
+            (0..4)
+                .map(|j| PointView::new(&cameras[j], &pixels[j], &(Matrix2::identity() * scale[j])))
+                .collect()
+        };
+        let track = Scaled {
+            first: views([1.0; 4]),
+            own: views([0.1, 0.1, 1.0, 1.0]),
+        };
+        let centres: Vec<Vector3<f64>> = [0.0f64, 1.2, 2.4, 3.6].iter().map(|&a| centre(a, 5.0)).collect();
+        let frame = WorldFrame::from_centres(&centres);
+        let opts = TriangulationOptions::default();
+        let at_x = pair_point(&track, (0, 1), &frame, tau2, &opts).unwrap();
+        let at_y = pair_point(&track, (2, 3), &frame, tau2, &opts).unwrap();
+        // The premise, from the views' residuals: the rankings disagree.
+        assert!(msac(&track.own, &at_x, tau2) < msac(&track.own, &at_y, tau2));
+        assert!(msac(&track.first, &at_x, tau2) > msac(&track.first, &at_y, tau2));
+        assert_eq!(
+            consensus(&track, &frame, tau2, &opts),
+            Some(vec![true, true, false, false])
+        );
+    }
+
+    #[test]
+    fn a_pair_that_fits_beats_a_point_with_a_single_inlier() {
+        // Views 0-1 see the origin with residuals near τ: their pair fits, MSAC score ≈ 2·3.6² + τ².
+        // View 2's observation is 800 px off, but its own residuals are 200x smaller than its
+        // first-order ones (`Scaled`): a pair with view 2 gives a point where view 2 alone fits,
+        // scoring ≈ 2τ² + small, below the fitting pair. Preferring two inliers keeps the track.
+        let tau2 = 16.0;
+        let angles = [0.0f64, 1.0, 2.2];
+        let cameras: Vec<_> = angles.iter().map(|&a| camera(a, 5.0)).collect();
+        let pixels = [
+            project(&cameras[0], &Vector3::zeros()) + Vector2::new(0.0, 3.6),
+            project(&cameras[1], &Vector3::zeros()) + Vector2::new(0.0, -3.6),
+            project(&cameras[2], &Vector3::zeros()) + Vector2::new(0.0, 800.0),
+        ];
+        let views = |scale: [f64; 3]| -> Vec<PointView> {
+            (0..3)
+                .map(|j| PointView::new(&cameras[j], &pixels[j], &(Matrix2::identity() * scale[j])))
+                .collect()
+        };
+        let track = Scaled {
+            first: views([1.0; 3]),
+            own: views([1.0, 1.0, 0.005]),
+        };
+        let centres: Vec<Vector3<f64>> = angles.iter().map(|&a| centre(a, 5.0)).collect();
+        let frame = WorldFrame::from_centres(&centres);
+        let opts = TriangulationOptions::default();
+        let inliers = |x: &Vector3<f64>| {
+            track
+                .own
+                .iter()
+                .filter(|v| v.depth(x) > 0.0 && v.residual(x).norm_squared() <= tau2)
+                .count()
+        };
+        // The premise, from the views' residuals: a point with a single inlier scores below the
+        // fitting pair's point.
+        let fitting = pair_point(&track, (0, 1), &frame, tau2, &opts).unwrap();
+        assert_eq!(inliers(&fitting), 2);
+        let lone = [(0, 2), (1, 2)]
+            .iter()
+            .filter_map(|&pair| pair_point(&track, pair, &frame, tau2, &opts))
+            .find(|x| inliers(x) == 1 && msac(&track.own, x, tau2) < msac(&track.own, &fitting, tau2));
+        assert!(lone.is_some(), "no point with a single inlier outscores the pair");
+        assert_eq!(consensus(&track, &frame, tau2, &opts), Some(vec![true, true, false]));
+    }
 }
