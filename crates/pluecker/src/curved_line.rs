@@ -1,0 +1,128 @@
+//! The distance of an observed pixel to the curved image of a line through a lens.
+//!
+//! A lens ([`LensCamera`]: `u = K D(n)`, `n = (x/z, y/z)`) maps the straight image `ℓ` of a 3-D line
+//! in normalised coordinates (the line `l₀ x + l₁ y + l₂ = 0`, `l = (l₀, l₁, l₂)` the camera-frame line
+//! of the pinhole model: Josephson & Kahl 2008, eq. 6 with `K = I`) to the curve `K D(ℓ)` in the
+//! image's own, distorted pixels. The residual of an observed segment endpoint `e` with covariance `C`
+//! is its Mahalanobis distance to that curve, `min_q √((u(q) − e)ᵀ C⁻¹ (u(q) − e))` over the points
+//! `q` of `ℓ`, with a sign ([`endpoint_residual`]); for `D` the identity it is the pinhole residual
+//! `(l̄·ẽ) / √(l̄₁₂ᵀ C l̄₁₂)` of the pixel line `l̄ = K⁻ᵀ l`. Both the pose
+//! ([`crate::pose::reprojection`]) and the triangulation of lines through lenses
+//! ([`crate::triangulation::line::lens`]) measure segment endpoints with it.
+
+use crate::camera_model::LensCamera;
+use nalgebra::{Matrix2, RowVector2, Vector2, Vector3};
+
+/// The 1-D search of [`nearest_on_curve`] stops after a step that moves the point on the curve by at
+/// most this many pixels (its cost is then exact to ~1e-20 px², its derivative to ~1e-10 px), or
+/// after [`NEAREST_MAX_ITERATIONS`] steps (Gauss-Newton contracts by about the residual over the
+/// curve's radius of curvature per step: a few steps for pixel residuals).
+const NEAREST_TOLERANCE_PX: f64 = 1e-10;
+/// See [`NEAREST_TOLERANCE_PX`].
+const NEAREST_MAX_ITERATIONS: usize = 100;
+
+/// The point nearest to the pixel `e`, in the metric `info = C⁻¹`, on the curve
+/// `σ ↦ u(σ) = K D(foot + σ dir)` of `lens` (`dir` a unit vector): the local minimum of
+/// `½ (u(σ) − e)ᵀ C⁻¹ (u(σ) − e)` that Gauss-Newton with step halving reaches from `σ = 0` (the foot on
+/// the undistorted line of the undistorted observation: the branch of the curve through the
+/// observation). Returns the point `foot + σ dir`, its pixel `u(σ)` and the tangent `du/dσ`.
+pub fn nearest_on_curve(
+    lens: &LensCamera,
+    foot: &Vector2<f64>,
+    dir: &Vector2<f64>,
+    e: &Vector2<f64>,
+    info: &Matrix2<f64>,
+) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
+    let ((fx, fy), (cx, cy)) = (lens.focal(), lens.principal_point());
+    let at = |sigma: f64| {
+        let q = foot + dir * sigma;
+        let (d, jd) = lens.distort(&q);
+        let tangent = jd * dir;
+        (
+            q,
+            Vector2::new(fx * d.x + cx, fy * d.y + cy),
+            Vector2::new(fx * tangent.x, fy * tangent.y),
+        )
+    };
+    let half_square = |u: &Vector2<f64>| 0.5 * (u - e).dot(&(info * (u - e)));
+    let (mut sigma, mut best) = (0.0, at(0.0));
+    let mut cost = half_square(&best.1);
+    for _ in 0..NEAREST_MAX_ITERATIONS {
+        let (_, u, du) = best;
+        let (g, h) = (du.dot(&(info * (u - e))), du.dot(&(info * du)));
+        if !(h > 0.0 && g.is_finite()) {
+            break;
+        }
+        let mut step = -g / h;
+        let small = (du * step).norm() <= NEAREST_TOLERANCE_PX;
+        let mut accepted = false;
+        for _ in 0..60 {
+            let next = at(sigma + step);
+            let c = half_square(&next.1);
+            if c <= cost {
+                (sigma, best, cost, accepted) = (sigma + step, next, c, true);
+                break;
+            }
+            step *= 0.5;
+        }
+        if small || !accepted {
+            break;
+        }
+    }
+    best
+}
+
+/// The residual of one observed endpoint against the curved image of a line (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EndpointResidual {
+    /// The point `q*` of the normalised line `ℓ` whose pixel is nearest to the endpoint.
+    pub q: Vector2<f64>,
+    /// `η = n / √(nᵀ C n)`, `n` the normal of the curve at `u(q*)`.
+    pub eta: Vector2<f64>,
+    /// `r = ηᵀ (u(q*) − e)`: `±` the Mahalanobis distance (the pixel distance for `C = I`).
+    pub residual: f64,
+}
+
+impl EndpointResidual {
+    /// `∂r/∂q` at `q*` with the endpoint fixed, `ηᵀ diag(fx, fy) ∂D/∂n(q*)`. By the envelope theorem
+    /// (the search's derivative along the curve is zero at its minimum) this is the derivative of the
+    /// residual for any smooth motion of `q*` that keeps it on the moving line `ℓ`, and `r`'s
+    /// derivative with respect to whatever moves `ℓ` is this row times that motion.
+    pub fn gradient(&self, lens: &LensCamera) -> RowVector2<f64> {
+        let (fx, fy) = lens.focal();
+        let (_, jd) = lens.distort(&self.q);
+        self.eta.transpose() * Matrix2::new(fx, 0.0, 0.0, fy) * jd
+    }
+}
+
+/// The residual of the observed pixel `e` (covariance `cov`, pixels²) against the curved image
+/// `K D(ℓ)` of the normalised line `ℓ: l·(x, y, 1) = 0` (module docs), searched from the foot on `ℓ`
+/// of `start` (the endpoint's unprojection, so that the search stays on the curve's branch through the
+/// observation; [`nearest_on_curve`]). The sign is that of the pinhole residual of `l` for `D = I`.
+/// `None` when `ℓ` does not exist (`(l₀, l₁) = 0` or not finite: the 3-D line passes through the
+/// camera centre) or `cov` is singular.
+pub fn endpoint_residual(
+    lens: &LensCamera,
+    l: &Vector3<f64>,
+    start: &Vector2<f64>,
+    e: &Vector2<f64>,
+    cov: &Matrix2<f64>,
+) -> Option<EndpointResidual> {
+    let l12 = Vector2::new(l.x, l.y);
+    let norm2 = l12.norm_squared();
+    if !(norm2 > 0.0 && norm2.is_finite() && l.z.is_finite()) {
+        return None;
+    }
+    let info = cov.try_inverse()?;
+    let dir = Vector2::new(-l.y, l.x) / norm2.sqrt();
+    let foot = start - l12 * ((l12.dot(start) + l.z) / norm2);
+    let (q, u, du) = nearest_on_curve(lens, &foot, &dir, e, &info);
+    // The normal of the pinhole's line for D = I (the sign of the pinhole residual).
+    let n = Vector2::new(du.y, -du.x);
+    let eta = n / n.dot(&(cov * n)).sqrt();
+    Some(EndpointResidual {
+        q,
+        eta,
+        residual: eta.dot(&(u - e)),
+    })
+}
