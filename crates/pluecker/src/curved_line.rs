@@ -11,7 +11,7 @@
 //! ([`crate::triangulation::line::lens`]) measure segment endpoints with it.
 
 use crate::camera_model::LensCamera;
-use nalgebra::{Matrix2, RowVector2, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, RowVector2, RowVector3, Vector2, Vector3};
 
 /// The 1-D search of [`nearest_on_curve`] stops after a step that moves the point on the curve by at
 /// most this many pixels (its cost is then exact to ~1e-20 px², its derivative to ~1e-10 px), or
@@ -93,6 +93,41 @@ impl EndpointResidual {
         let (_, jd) = lens.distort(&self.q);
         self.eta.transpose() * Matrix2::new(fx, 0.0, 0.0, fy) * jd
     }
+
+    /// `∂r/∂l` (the normalised line `l` of [`endpoint_residual`] moving, the endpoint fixed): [`Self::gradient`]
+    /// times the motion of `q*` projected orthogonally onto the moving line,
+    /// `q(l) = q* − l₁₂ (l·q̃*) / ‖l₁₂‖²`, whose derivative at `l` (where `l·q̃* = 0`) is
+    /// `−l₁₂ q̃*ᵀ / ‖l₁₂‖²` (`q̃* = (q*, 1)`).
+    pub fn line_gradient(&self, lens: &LensCamera, l: &Vector3<f64>) -> RowVector3<f64> {
+        let l12 = Vector2::new(l.x, l.y);
+        let qh = Vector3::new(self.q.x, self.q.y, 1.0);
+        let dq_dl = -(l12 * qh.transpose()) / l12.norm_squared();
+        self.gradient(lens) * dq_dl
+    }
+}
+
+/// The residual of the observed pixel `e` (covariance `cov`) against the image of the normalised line
+/// `l` through a camera without distortion, `u = K n` (`K` may have skew): the signed Mahalanobis
+/// distance `(l̄·ẽ) / √(l̄₁₂ᵀ C l̄₁₂)` of the pixel line `l̄ = K⁻ᵀ l` (what [`endpoint_residual`] gives
+/// for `D = I`, in closed form), and `∂r/∂l = K⁻¹ (ẽ − r (C l̄₁₂, 0) / s) / s`, `s = √(l̄₁₂ᵀ C l̄₁₂)`.
+/// `None` when the pixel line does not exist or `cov` is not positive definite.
+pub fn pinhole_endpoint_residual(
+    k_inverse: &Matrix3<f64>,
+    l: &Vector3<f64>,
+    e: &Vector2<f64>,
+    cov: &Matrix2<f64>,
+) -> Option<(f64, RowVector3<f64>)> {
+    let lp = k_inverse.transpose() * l;
+    let lp12 = Vector2::new(lp.x, lp.y);
+    let c_l = cov * lp12;
+    let s = lp12.dot(&c_l).sqrt();
+    if !(s > 0.0 && s.is_finite()) {
+        return None;
+    }
+    let eh = Vector3::new(e.x, e.y, 1.0);
+    let r = lp.dot(&eh) / s;
+    let d_lp = (eh - Vector3::new(c_l.x, c_l.y, 0.0) * (r / s)) / s;
+    Some((r, (k_inverse * d_lp).transpose()))
 }
 
 /// The residual of the observed pixel `e` (covariance `cov`, pixels²) against the curved image
