@@ -9,9 +9,9 @@ use nalgebra::{Matrix2, Matrix3, Vector2, Vector3, Vector4, Vector6};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
+use pluecker::triangulation::fitting::line_from_endpoints;
 use pluecker::triangulation::line::batch::{triangulate_lines_sparse_views, SparseSegmentTracks};
 use pluecker::triangulation::line::lens::{exact_cost, LensSegment};
-use pluecker::triangulation::fitting::line_from_endpoints;
 use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments, triangulate_line_segments_views};
 use pluecker::triangulation::tracks::Csr;
 use pluecker::triangulation::views::View;
@@ -24,7 +24,11 @@ enum Lens {
     /// SIMPLE_RADIAL `(f, cx, cy, k)`.
     Radial { f: f64, c: Vector2<f64>, k: f64 },
     /// OPENCV_FISHEYE `(fx, fy, cx, cy, k1..k4)`.
-    Fisheye { f: Vector2<f64>, c: Vector2<f64>, k: [f64; 4] },
+    Fisheye {
+        f: Vector2<f64>,
+        c: Vector2<f64>,
+        k: [f64; 4],
+    },
 }
 
 impl Lens {
@@ -118,7 +122,10 @@ impl Obs {
         let e = self.ends[k];
         let info = self.covs[k].try_inverse().unwrap();
         let scale = self.pose.transform(&line.0).norm() / (line.1 - line.0).norm();
-        let d2 = |phi: f64| self.at(line, scale, phi).map_or(f64::INFINITY, |u| (u - e).dot(&(info * (u - e))));
+        let d2 = |phi: f64| {
+            self.at(line, scale, phi)
+                .map_or(f64::INFINITY, |u| (u - e).dot(&(info * (u - e))))
+        };
         let half = std::f64::consts::FRAC_PI_2;
         let step = 2.0 * half / SAMPLES as f64;
         let (mut best, mut best_phi) = (f64::INFINITY, 0.0);
@@ -168,7 +175,12 @@ fn oracle_cost(obs: &[Obs], line: &Line) -> f64 {
 /// Two axes orthogonal to `d`.
 fn axes(d: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let d = d.normalize();
-    let e1 = if d.x.abs() < 0.9 { d.cross(&Vector3::x()) } else { d.cross(&Vector3::y()) }.normalize();
+    let e1 = if d.x.abs() < 0.9 {
+        d.cross(&Vector3::x())
+    } else {
+        d.cross(&Vector3::y())
+    }
+    .normalize();
     (e1, d.cross(&e1))
 }
 
@@ -244,7 +256,15 @@ struct Scene {
     truth: Line,
 }
 
-fn scene(lens: Lens, views: usize, off_axis: f64, max_angle: f64, noise: f64, anisotropic: bool, rng: &mut Rng) -> Scene {
+fn scene(
+    lens: Lens,
+    views: usize,
+    off_axis: f64,
+    max_angle: f64,
+    noise: f64,
+    anisotropic: bool,
+    rng: &mut Rng,
+) -> Scene {
     let mid = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
     let dir = rng.unit_vector3();
     let truth = (mid - dir * 0.6, mid + dir * 0.6);
@@ -261,7 +281,10 @@ fn scene(lens: Lens, views: usize, off_axis: f64, max_angle: f64, noise: f64, an
         let s = [rng.uniform_in(-0.6, -0.1), rng.uniform_in(0.1, 0.6)];
         let points = s.map(|s| mid + dir * s);
         let cams = points.map(|p| pose.transform(&p));
-        if cams.iter().any(|x| !(x.z > 0.0) || (x.xy().norm() / x.z).atan() > max_angle) {
+        if cams
+            .iter()
+            .any(|x| !(x.z > 0.0) || (x.xy().norm() / x.z).atan() > max_angle)
+        {
             continue;
         }
         let (Some(a), Some(b)) = (lens.project(&cams[0]), lens.project(&cams[1])) else {
@@ -288,7 +311,9 @@ fn scene(lens: Lens, views: usize, off_axis: f64, max_angle: f64, noise: f64, an
 }
 
 fn views_of(obs: &[Obs]) -> Vec<View> {
-    obs.iter().map(|o| View::new(AnyCamera::Lens(o.lens.camera()), o.pose)).collect()
+    obs.iter()
+        .map(|o| View::new(AnyCamera::Lens(o.lens.camera()), o.pose))
+        .collect()
 }
 
 fn segments_of(obs: &[Obs]) -> Vec<[Vector2<f64>; 2]> {
@@ -322,7 +347,12 @@ fn lenses() -> [(&'static str, Lens, f64, f64); 2] {
     [
         // Within r ≈ 0.12 of the axis (the fold is at 0.154): the image edge of this lens.
         ("SIMPLE_RADIAL f=5000 k=-14", strong_radial(), 0.04, 0.12f64.atan()),
-        ("OPENCV_FISHEYE to 80 degrees", wide_fisheye(), 65f64.to_radians(), 80f64.to_radians()),
+        (
+            "OPENCV_FISHEYE to 80 degrees",
+            wide_fisheye(),
+            65f64.to_radians(),
+            80f64.to_radians(),
+        ),
     ]
 }
 
@@ -452,7 +482,10 @@ fn through_strong_radial_and_80_degree_fisheye_the_line_is_the_oracles_minimum_a
                 assert_eq!(r.report.status, expected, "{name} {method:?}");
                 assert!(!r.report.certificate.certified, "{name}: certified through a lens");
                 assert_eq!(r.report.certificate.kind, CertificateKind::None);
-                assert!(r.report.certificate.raw_lower_bound.is_nan(), "{name}: a bound on another cost");
+                assert!(
+                    r.report.certificate.raw_lower_bound.is_nan(),
+                    "{name}: a bound on another cost"
+                );
                 let line = as_points(&r.point, &r.direction, &sc.truth);
                 let at_result = oracle_cost(&sc.obs, &line);
                 // The reported cost is the oracle's at the returned line (golden-section accuracy).
@@ -494,7 +527,8 @@ fn the_first_order_line_is_not_the_exact_optimum_under_strong_distortion() {
         let (_, lens, off_axis, max_angle) = lenses()[0];
         let sc = scene(lens, 4, off_axis, max_angle, 1.0, false, &mut rng);
         let views = views_of(&sc.obs);
-        let refined = triangulate_line_segments_views(&views, &segments_of(&sc.obs), None, &opts(Method::Local)).unwrap();
+        let refined =
+            triangulate_line_segments_views(&views, &segments_of(&sc.obs), None, &opts(Method::Local)).unwrap();
         let camera = lens.camera();
         let (mut lines, mut covs, mut matrices) = (Vec::new(), Vec::new(), Vec::new());
         for o in &sc.obs {
@@ -616,10 +650,18 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
     let images = [0usize, 1, 2, 1, 2, 3];
     let offsets = [0usize, 3, 6];
     let rows: Vec<&Obs> = a.obs[..3].iter().chain(&b_obs).collect();
-    let mut segments: Vec<f64> = rows.iter().flat_map(|o| [o.ends[0].x, o.ends[0].y, o.ends[1].x, o.ends[1].y]).collect();
+    let mut segments: Vec<f64> = rows
+        .iter()
+        .flat_map(|o| [o.ends[0].x, o.ends[0].y, o.ends[1].x, o.ends[1].y])
+        .collect();
     let covariances: Vec<f64> = rows
         .iter()
-        .flat_map(|o| o.covs.iter().flat_map(|c| [c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)]]).collect::<Vec<_>>())
+        .flat_map(|o| {
+            o.covs
+                .iter()
+                .flat_map(|c| [c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)]])
+                .collect::<Vec<_>>()
+        })
         .collect();
     let csr = Csr {
         offsets: &offsets,
