@@ -267,3 +267,28 @@ def test_observations_with_cameras_solve_each_track_as_the_single_call():
     bad[4, 0, 1] = np.nan
     out = pluecker.triangulate_line_observations(sc.P, track, image, bad, covs, "local", cameras=cams)
     assert out.status[0] == "success" and np.isnan(out.plucker[1]).all()
+
+
+def test_quadrics_refuse_a_distorting_lens_by_name_and_take_a_zero_distortion_one_as_pinhole():
+    """The outline of a quadric through a distorting lens is not a conic: ``cameras`` naming such a lens
+    is an ``InvalidOptionError`` (a ``ValueError``) naming it; without distortion it is the pinhole call."""
+    from triangulation_scenes import ellipsoid, outlines
+
+    rng = np.random.default_rng(17)
+    zero = pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, 0.0])
+    poses = []
+    for k in range(4):
+        a = 2 * np.pi * k / 4
+        centre = np.array([6 * np.cos(a), 0.5 * k - 1, 6 * np.sin(a)])
+        R = _look_along(-centre, rng)
+        poses.append((R, -R @ centre))
+    P = np.stack([zero.pinhole.P(R, t) for R, t in poses])
+    _, _, _, dual = ellipsoid(rng)
+    conics = outlines(P, dual)
+    plain = pluecker.triangulate_quadric(P, conics, method="local")
+    same = pluecker.triangulate_quadric(P, conics, method="local", cameras=[zero] * 4)
+    assert same.status == plain.status == "success" and np.array_equal(same.Q, plain.Q)
+    lens = pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.2])
+    with pytest.raises(pluecker.InvalidOptionError, match=r"cameras: cameras\[2\] \(SIMPLE_RADIAL\) has distortion") as info:
+        pluecker.triangulate_quadric(P, conics, cameras=[zero, zero, lens, zero])
+    assert isinstance(info.value, ValueError)

@@ -821,9 +821,12 @@ def triangulate_quadric(
     method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
+    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> QuadricTriangulation:
     """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views, ``cov`` (n, 5, 5) e.g.
-    :attr:`FittedConic.covariance` (sections 2.3, 3-4)."""
+    :attr:`FittedConic.covariance` (sections 2.3, 3-4). With ``cameras``, ``P[i]`` is ``K [R | t]`` of
+    each camera's pinhole part; a ``LensCamera`` with distortion is refused (``InvalidOptionError``
+    naming ``cameras``): the outline through a lens is not a conic."""
 
 def triangulate_quadrics(
     P: ArrayLike,

@@ -702,3 +702,27 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn quadrics_refuse_a_distorting_lens_by_name() {
+    // The outline of a quadric through a distorting lens is not a conic: the view is named; a lens
+    // without distortion is a pinhole.
+    use pluecker::triangulation::quadric::refuse_distortion;
+    let pose = Pose::new(Matrix3::identity(), Vector3::new(0.0, 0.0, 5.0));
+    let zero = View::new(
+        AnyCamera::Lens(LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, 0.0]).unwrap()),
+        pose,
+    );
+    let fisheye = View::new(AnyCamera::Lens(wide_fisheye().camera()), pose);
+    assert!(refuse_distortion(&[zero.clone(), zero.clone()]).is_ok());
+    match refuse_distortion(&[zero.clone(), fisheye]) {
+        Err(Error::InvalidOption { name, reason }) => {
+            assert_eq!(name, "views");
+            assert!(
+                reason.starts_with("views[1] (OPENCV_FISHEYE) has distortion"),
+                "{reason}"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+}
