@@ -726,3 +726,52 @@ fn quadrics_refuse_a_distorting_lens_by_name() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_pinhole_view_among_lenses_is_measured_by_its_straight_image() {
+    // A track whose second view is a pinhole `Camera` (no lens): its endpoints' distances are to the
+    // straight projected line (the oracle's SIMPLE_RADIAL with k = 0); cost and gradient as the oracle's.
+    let mut rng = Rng::new(39);
+    let (_, lens, off_axis, max_angle) = lenses()[0];
+    for _ in 0..4 {
+        let mut sc = scene(lens, 4, off_axis, max_angle, 1.5, true, &mut rng);
+        let Lens::Radial { f, c, .. } = lens else {
+            unreachable!()
+        };
+        sc.obs[1].lens = Lens::Radial { f, c, k: 0.0 };
+        let mut views = views_of(&sc.obs);
+        views[1] = View::new(Camera::new(f, f, c.x, c.y, 0.0).unwrap(), sc.obs[1].pose);
+        let segments: Vec<LensSegment> = sc
+            .obs
+            .iter()
+            .zip(&views)
+            .enumerate()
+            .map(|(i, (o, v))| LensSegment::new(v, o.ends, o.covs, i).unwrap())
+            .collect();
+        let delta = Vector4::new(rng.normal(), rng.normal(), rng.normal(), rng.normal()) * 0.003;
+        let line = moved(&sc.truth, &delta);
+        let (library, oracle) = (exact_cost(&segments, &world_line(&line)), oracle_cost(&sc.obs, &line));
+        assert!(
+            (library - oracle).abs() <= 1e-7 * oracle + 1e-9,
+            "{library} vs {oracle}"
+        );
+        let r = triangulate_line_segments_views(
+            &views,
+            &segments_of(&sc.obs),
+            Some(&covariances_of(&sc.obs)),
+            &opts(Method::Local),
+        )
+        .unwrap();
+        let found = as_points(&r.point, &r.direction, &sc.truth);
+        let best = [found, sc.truth]
+            .iter()
+            .map(|s| minimise(&sc.obs, s).1)
+            .fold(f64::INFINITY, f64::min);
+        // The oracle's slack, as in the test above.
+        assert!(
+            r.report.cost <= best * (1.0 + 1e-6) + 1e-9,
+            "{} vs {best}",
+            r.report.cost
+        );
+    }
+}
