@@ -775,3 +775,42 @@ fn a_pinhole_view_among_lenses_is_measured_by_its_straight_image() {
         );
     }
 }
+
+#[test]
+fn robust_inliers_are_the_segments_within_the_threshold_at_the_exact_optimum() {
+    // One segment of six moved 40 px across the line: with τ = 4 it is the only outlier, and the
+    // flags are those of the oracle's distances at the returned line (within τ or not).
+    let mut rng = Rng::new(40);
+    for (name, lens, off_axis, max_angle) in lenses() {
+        let mut sc = scene(lens, 6, off_axis, max_angle, 1.0, false, &mut rng);
+        let d = (sc.obs[3].ends[1] - sc.obs[3].ends[0]).normalize();
+        let across = Vector2::new(-d.y, d.x) * 40.0;
+        sc.obs[3].ends = [sc.obs[3].ends[0] + across, sc.obs[3].ends[1] + across];
+        let o = TriangulationOptions {
+            outlier_threshold: Some(4.0),
+            ..opts(Method::Local)
+        };
+        let r = triangulate_line_segments_views(&views_of(&sc.obs), &segments_of(&sc.obs), None, &o).unwrap();
+        let flags = r.inliers.clone().unwrap();
+        assert_eq!(flags, vec![true, true, true, false, true, true], "{name}");
+        let line = as_points(&r.point, &r.direction, &sc.truth);
+        for (j, o) in sc.obs.iter().enumerate() {
+            let e = [o.distance(&line, 0).unwrap(), o.distance(&line, 1).unwrap()];
+            assert_eq!(e[0] * e[0] + e[1] * e[1] <= 16.0, flags[j], "{name}: view {j}: {e:?}");
+        }
+        // The cost is that of the inliers only.
+        let inliers: Vec<Obs> = sc
+            .obs
+            .iter()
+            .zip(&flags)
+            .filter(|(_, &f)| f)
+            .map(|(o, _)| o.clone())
+            .collect();
+        let oracle = oracle_cost(&inliers, &line);
+        assert!(
+            (r.report.cost - oracle).abs() <= 1e-7 * oracle + 1e-9,
+            "{name}: {} vs {oracle}",
+            r.report.cost
+        );
+    }
+}
