@@ -252,8 +252,11 @@ fn exact_covariance(problem: &LineProblem, segments: &[LensSegment], chart: &Lin
     })
 }
 
+/// Image lines and the covariances of their residuals.
+type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
+
 /// The first-order problem of `segments`: their lines and the covariances of their residuals.
-fn first_order(segments: &[LensSegment]) -> Result<(Vec<Vector3<f64>>, Vec<Matrix2<f64>>)> {
+fn first_order(segments: &[LensSegment]) -> Result<LinesAndCovariances> {
     let (mut lines, mut covariances) = (Vec::new(), Vec::new());
     for (i, s) in segments.iter().enumerate() {
         let (line, covariance) = s.first_order(i)?;
