@@ -814,3 +814,36 @@ fn robust_inliers_are_the_segments_within_the_threshold_at_the_exact_optimum() {
         );
     }
 }
+
+#[test]
+fn a_lens_that_does_not_distort_is_the_identity() {
+    // `LensCamera::distorts` decides whether a line goes the pinhole way (with its certificate): it
+    // may say false only where D(n) = n. Every model with its distortion parameters zero (EUCM: α = 0
+    // with β = 1), checked on points out to r = 2.
+    let mut rng = Rng::new(41);
+    let mut identities = Vec::new();
+    for model in CameraModel::ALL {
+        let names = model.parameter_names();
+        let params: Vec<f64> = names
+            .iter()
+            .map(|&n| match n {
+                "f" | "fx" | "fy" => 700.0,
+                "cx" | "cy" => 300.0,
+                "beta" => 1.0,
+                _ => 0.0,
+            })
+            .collect();
+        let Ok(lens) = LensCamera::new(model, &params) else { continue };
+        if lens.distorts() {
+            continue;
+        }
+        identities.push(model.as_str());
+        for _ in 0..50 {
+            let n = Vector2::new(rng.uniform_in(-1.4, 1.4), rng.uniform_in(-1.4, 1.4));
+            let (d, _) = lens.distort(&n);
+            assert!((d - n).norm() <= 1e-15 * (1.0 + n.norm()), "{}: D({n}) = {d}", model.as_str());
+        }
+    }
+    assert!(identities.len() >= 8, "{identities:?}");
+    assert!(!identities.iter().any(|m| m.contains("FISHEYE")), "{identities:?}");
+}
