@@ -292,3 +292,21 @@ def test_quadrics_refuse_a_distorting_lens_by_name_and_take_a_zero_distortion_on
     with pytest.raises(pluecker.InvalidOptionError, match=r"cameras: cameras\[2\] \(SIMPLE_RADIAL\) has distortion") as info:
         pluecker.triangulate_quadric(P, conics, cameras=[zero, zero, lens, zero])
     assert isinstance(info.value, ValueError)
+
+
+def test_sigma_is_isotropic_endpoint_noise_in_both_entry_points():
+    """``sigma`` (px) means the endpoint covariances sigma^2 I, single call and per-row alike; no
+    ``cov`` and no ``sigma`` means 1 px."""
+    sc = Scene(*STRONG_RADIAL, n=3, off_axis=0.04, max_angle=np.arctan(0.12), noise=1.0, anisotropic=False, seed=19)
+    cams = [sc.lens] * 3
+    explicit = np.broadcast_to(4.0 * np.eye(2), (3, 2, 2, 2))
+    a = pluecker.triangulate_line(sc.P, sc.segments, method="local", sigma=2.0, cameras=cams)
+    b = pluecker.triangulate_line(sc.P, sc.segments, explicit, "local", cameras=cams)
+    c = pluecker.triangulate_line(sc.P, sc.segments, method="local", cameras=cams)
+    assert np.array_equal(a.plucker, b.plucker) and a.cost == b.cost
+    # One scale of every covariance moves no minimum: the same line, its cost in units of (2 px)^2
+    # (to the local solver's convergence, 1e-10 relative steps).
+    assert abs(c.cost / a.cost - 4.0) < 1e-6
+    track, image = np.zeros(3, int), np.arange(3)
+    rows = pluecker.triangulate_line_observations(sc.P, track, image, sc.segments, method="local", sigma=2.0, cameras=cams)
+    assert np.array_equal(rows.plucker[0], a.plucker) and rows.cost[0] == a.cost
