@@ -55,7 +55,7 @@ pub fn nearest_on_curve(
         }
         let mut step = -g / h;
         let small = (du * step).norm() <= NEAREST_TOLERANCE_PX;
-        let mut accepted = false;
+        let (before, mut accepted) = (cost, false);
         for _ in 0..60 {
             let next = at(sigma + step);
             let c = half_square(&next.1);
@@ -65,7 +65,9 @@ pub fn nearest_on_curve(
             }
             step *= 0.5;
         }
-        if small || !accepted {
+        // A step that no longer lowers the cost is at its rounding: the search has converged (far off
+        // axis through a fisheye, steps of rounding noise can stay above the tolerance).
+        if small || !accepted || !(cost < before) {
             break;
         }
     }
