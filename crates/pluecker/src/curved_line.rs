@@ -5,8 +5,8 @@
 //! of the pinhole model: Josephson & Kahl 2008, eq. 6 with `K = I`) to the curve `K D(ℓ)` in the
 //! image's own, distorted pixels. The residual of an observed segment endpoint `e` with covariance `C`
 //! is its Mahalanobis distance to that curve, `min_q √((u(q) − e)ᵀ C⁻¹ (u(q) − e))` over the points
-//! `q` of `ℓ`, with a sign ([`endpoint_residual`]); for `D` the identity it is the pinhole residual
-//! `(l̄·ẽ) / √(l̄₁₂ᵀ C l̄₁₂)` of the pixel line `l̄ = K⁻ᵀ l`. Both the pose
+//! `q` of `ℓ`, with a sign ([`endpoint_residual`]); for `D` the identity it is
+//! `−(l̄·ẽ) / √(l̄₁₂ᵀ C l̄₁₂)` with the pixel line `l̄ = K⁻ᵀ l` ([`pinhole_endpoint_residual`]). Both the pose
 //! ([`crate::pose::reprojection`]) and the triangulation of lines through lenses
 //! ([`crate::triangulation::line::lens`]) measure segment endpoints with it.
 
@@ -110,8 +110,9 @@ impl EndpointResidual {
 
 /// The residual of the observed pixel `e` (covariance `cov`) against the image of the normalised line
 /// `l` through a camera without distortion, `u = K n` (`K` may have skew): the signed Mahalanobis
-/// distance `(l̄·ẽ) / √(l̄₁₂ᵀ C l̄₁₂)` of the pixel line `l̄ = K⁻ᵀ l` (what [`endpoint_residual`] gives
-/// for `D = I`, in closed form), and `∂r/∂l = K⁻¹ (ẽ − r (C l̄₁₂, 0) / s) / s`, `s = √(l̄₁₂ᵀ C l̄₁₂)`.
+/// distance `r = −(l̄·ẽ) / s`, `s = √(l̄₁₂ᵀ C l̄₁₂)`, to the pixel line `l̄ = K⁻ᵀ l` (what
+/// [`endpoint_residual`] gives for `D = I`, sign included, in closed form), and
+/// `∂r/∂l = −K⁻¹ (ẽ + r (C l̄₁₂, 0) / s) / s`.
 /// `None` when the pixel line does not exist or `cov` is not positive definite.
 pub fn pinhole_endpoint_residual(
     k_inverse: &Matrix3<f64>,
@@ -127,15 +128,16 @@ pub fn pinhole_endpoint_residual(
         return None;
     }
     let eh = Vector3::new(e.x, e.y, 1.0);
-    let r = lp.dot(&eh) / s;
-    let d_lp = (eh - Vector3::new(c_l.x, c_l.y, 0.0) * (r / s)) / s;
+    let r = -lp.dot(&eh) / s;
+    let d_lp = -(eh + Vector3::new(c_l.x, c_l.y, 0.0) * (r / s)) / s;
     Some((r, (k_inverse * d_lp).transpose()))
 }
 
 /// The residual of the observed pixel `e` (covariance `cov`, pixels²) against the curved image
 /// `K D(ℓ)` of the normalised line `ℓ: l·(x, y, 1) = 0` (module docs), searched from the foot on `ℓ`
 /// of `start` (the endpoint's unprojection, so that the search stays on the curve's branch through the
-/// observation; [`nearest_on_curve`]). The sign is that of the pinhole residual of `l` for `D = I`.
+/// observation; [`nearest_on_curve`]). The sign is the side of the curve, `−(l̄·ẽ)/…` for `D = I`
+/// ([`pinhole_endpoint_residual`]; only its square enters a cost).
 /// `None` when `ℓ` does not exist (`(l₀, l₁) = 0` or not finite: the 3-D line passes through the
 /// camera centre) or `cov` is singular.
 pub fn endpoint_residual(
@@ -154,7 +156,7 @@ pub fn endpoint_residual(
     let dir = Vector2::new(-l.y, l.x) / norm2.sqrt();
     let foot = start - l12 * ((l12.dot(start) + l.z) / norm2);
     let (q, u, du) = nearest_on_curve(lens, &foot, &dir, e, &info);
-    // The normal of the pinhole's line for D = I (the sign of the pinhole residual).
+    // The normal of the curve (for D = I, along the pixel line's (l̄₁, l̄₂) when fx, fy > 0).
     let n = Vector2::new(du.y, -du.x);
     let eta = n / n.dot(&(cov * n)).sqrt();
     Some(EndpointResidual {
@@ -162,4 +164,41 @@ pub fn endpoint_residual(
         eta,
         residual: eta.dot(&(u - e)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera_model::CameraModel;
+    use crate::rng::Rng;
+
+    #[test]
+    fn without_distortion_the_curve_residual_is_the_closed_form_one() {
+        // A PINHOLE lens through the search, and K through the closed form: the same signed residual
+        // and the same ∂r/∂l, for anisotropic covariances (values of ~1e2 px: rounding ~1e-12).
+        let lens = LensCamera::new(CameraModel::Pinhole, &[800.0, 780.0, 320.0, 240.0]).unwrap();
+        let k_inverse = lens.pinhole().unwrap().matrix().try_inverse().unwrap();
+        let mut rng = Rng::new(5);
+        for _ in 0..200 {
+            let l = Vector3::new(rng.normal(), rng.normal(), rng.normal() * 0.3);
+            let e = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+            let a = Matrix2::new(
+                rng.uniform_in(0.5, 2.0),
+                rng.normal() * 0.3,
+                0.0,
+                rng.uniform_in(0.5, 2.0),
+            );
+            let cov = a * a.transpose();
+            let n = (k_inverse * Vector3::new(e.x, e.y, 1.0)).xy();
+            let fit = endpoint_residual(&lens, &l, &n, &e, &cov).unwrap();
+            let (r, grad) = pinhole_endpoint_residual(&k_inverse, &l, &e, &cov).unwrap();
+            assert!(
+                (fit.residual - r).abs() <= 1e-9 * (1.0 + r.abs()),
+                "{} vs {r}",
+                fit.residual
+            );
+            let g = fit.line_gradient(&lens, &l);
+            assert!((g - grad).norm() <= 1e-7 * (1.0 + grad.norm()), "{g} vs {grad}");
+        }
+    }
 }

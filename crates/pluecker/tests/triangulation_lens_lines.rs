@@ -833,7 +833,9 @@ fn a_lens_that_does_not_distort_is_the_identity() {
                 _ => 0.0,
             })
             .collect();
-        let Ok(lens) = LensCamera::new(model, &params) else { continue };
+        let Ok(lens) = LensCamera::new(model, &params) else {
+            continue;
+        };
         if lens.distorts() {
             continue;
         }
@@ -841,7 +843,11 @@ fn a_lens_that_does_not_distort_is_the_identity() {
         for _ in 0..50 {
             let n = Vector2::new(rng.uniform_in(-1.4, 1.4), rng.uniform_in(-1.4, 1.4));
             let (d, _) = lens.distort(&n);
-            assert!((d - n).norm() <= 1e-15 * (1.0 + n.norm()), "{}: D({n}) = {d}", model.as_str());
+            assert!(
+                (d - n).norm() <= 1e-15 * (1.0 + n.norm()),
+                "{}: D({n}) = {d}",
+                model.as_str()
+            );
         }
     }
     assert!(identities.len() >= 8, "{identities:?}");

@@ -19,7 +19,7 @@
 //!   Gauss-Newton search along `ℓ` from the foot of the endpoint's unprojection, the nearest point of
 //!   the curve's branch through the observation: [`crate::curved_line`], shared with the
 //!   triangulation of lines through lenses. With `D` the identity this
-//!   is the pinhole residual, sign included.
+//!   is the pinhole residual up to its sign (only squares enter the cost).
 //!
 //! The pose is `(R, t)` with `x_cam = R X_world + t`; a tangent step `(ω, τ)` moves it to
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
