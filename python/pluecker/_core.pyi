@@ -766,10 +766,15 @@ def triangulate_line(
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
+    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> LineTriangulation:
     """One 3-D line (sections 2.2, 3-4) from (n, 3) homogeneous image lines or (n, 2, 2) segments.
     ``cov`` (n, 2, 2) residual covariances, e.g. :attr:`FittedLine.covariance`; for segments without
-    ``cov``, that of endpoints with noise ``sigma`` px (``None``: 1)."""
+    ``cov``, that of endpoints with noise ``sigma`` px (``None``: 1). With ``cameras`` (each view's
+    ``Camera`` or ``LensCamera``), ``P[i]`` is ``K [R | t]`` of its pinhole part, ``lines`` are (n, 2, 2)
+    segments in the observed (distorted) pixels and ``cov`` (n, 2, 2, 2) their endpoints' covariances:
+    through a distorting lens the cost is the endpoints' distances to the line's curved images, never
+    certified (``optimal`` gives ``gap_not_closed``)."""
 
 def triangulate_lines(
     P: ArrayLike,
@@ -799,12 +804,15 @@ def triangulate_line_observations(
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
     n_tracks: Optional[int] = None,
+    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> LineTriangulations:
     """Line tracks given one observation per row: ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments)
     of track ``track[k]`` in image ``image[k]`` (a row of ``P`` (v, 3, 4)), ``cov[k]`` (m, 2, 2) when given.
     Each track is solved as :func:`triangulate_lines` would; memory grows with the rows.
     Track ids and ``n_tracks`` are at most the m rows given, as for
-    :func:`triangulate_point_observations`."""
+    :func:`triangulate_point_observations`. With ``cameras`` (each image's ``Camera`` or ``LensCamera``),
+    ``lines`` are (m, 2, 2) segments in the observed pixels and ``cov`` (m, 2, 2, 2) their endpoints'
+    covariances; each track is solved as :func:`triangulate_line` with ``cameras`` solves it."""
 
 def triangulate_quadric(
     P: ArrayLike,
@@ -813,9 +821,12 @@ def triangulate_quadric(
     method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
+    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> QuadricTriangulation:
     """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views, ``cov`` (n, 5, 5) e.g.
-    :attr:`FittedConic.covariance` (sections 2.3, 3-4)."""
+    :attr:`FittedConic.covariance` (sections 2.3, 3-4). With ``cameras``, ``P[i]`` is ``K [R | t]`` of
+    each camera's pinhole part; a ``LensCamera`` with distortion is refused (``InvalidOptionError``
+    naming ``cameras``): the outline through a lens is not a conic."""
 
 def triangulate_quadrics(
     P: ArrayLike,

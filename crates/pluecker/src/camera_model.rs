@@ -568,6 +568,41 @@ impl LensCamera {
         Ok((Vector2::new(fx * n.x + cx, fy * n.y + cy), f * jd * f_inv))
     }
 
+    /// [`LensCamera::undistort`] of a pixel `u` with covariance `cov_px` (pixels²): the undistorted
+    /// pixel `ū` and, to first order, the covariance there, `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂ū` (`None` where
+    /// `J` is singular). The first-order form of an observation that the pose and the line
+    /// triangulation through a lens hand to their pinhole stages. Errors as [`LensCamera::unproject`].
+    pub fn undistort_with_covariance(
+        &self,
+        u: &Vector2<f64>,
+        cov_px: &Matrix2<f64>,
+        index: usize,
+    ) -> Result<(Vector2<f64>, Option<Matrix2<f64>>)> {
+        let (ubar, j) = self.undistort(u, index)?;
+        Ok((ubar, j.try_inverse().map(|j_inv| j_inv * cov_px * j_inv.transpose())))
+    }
+
+    /// Whether `D` differs from the identity: false for the pinhole models, and for the radial,
+    /// OPENCV, FULL_OPENCV, division, FOV and EUCM models whose distortion parameters are all zero
+    /// (each is then `D(n) = n`: FOV's series at `ω = 0`, EUCM at `α = 0`). The fisheyes always
+    /// distort (`m = n θ / r` is not `n`).
+    pub fn distorts(&self) -> bool {
+        let pinhole_params = if self.model.has_one_focal_length() { 3 } else { 4 };
+        let zero_params = self.params[pinhole_params..].iter().all(|&p| p == 0.0);
+        let identity_at_zero = matches!(
+            self.model,
+            CameraModel::SimpleRadial
+                | CameraModel::Radial
+                | CameraModel::OpenCv
+                | CameraModel::FullOpenCv
+                | CameraModel::SimpleDivision
+                | CameraModel::Division
+                | CameraModel::Fov
+        );
+        let eucm_identity = self.model == CameraModel::Eucm && self.params[4] == 0.0;
+        !(self.is_pinhole() || (identity_at_zero && zero_params) || eucm_identity)
+    }
+
     /// The 2x2 covariance of the undistorted normalised coordinates of a pixel with covariance `cov_px`,
     /// at the unprojected point `n`: `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂n` (first order; see the module docs for
     /// when that is not enough).

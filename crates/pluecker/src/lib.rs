@@ -32,6 +32,7 @@
 pub mod camera;
 pub mod camera_model;
 pub mod chi_square;
+pub mod curved_line;
 pub mod error;
 pub mod geometry;
 pub mod global;

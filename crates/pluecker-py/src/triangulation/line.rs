@@ -9,11 +9,12 @@
 use super::batch::{
     collect, per_observation, push_covariance, row_major, Cameras, InlierColumns, PyBatchReport, TrackColumns,
 };
+use super::point::views_of;
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, renamed, PyTriangulationOptions};
 use crate::convert::{
-    cameras, check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
+    check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
 use crate::errors::{invalid_argument, shape_error};
 use crate::fields::{result_class, Array, Field};
@@ -22,10 +23,11 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::batch::{
-    triangulate_lines as core_lines, triangulate_lines_sparse, ImageLines, LineTracks, SparseLineTracks,
+    triangulate_lines as core_lines, triangulate_lines_sparse, triangulate_lines_sparse_views, ImageLines, LineTracks,
+    SparseLineTracks, SparseSegmentTracks,
 };
 use pluecker::triangulation::line::{
-    lines_from_segments, triangulate_line as core_triangulate_line, LineTriangulation,
+    lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
 };
 use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
@@ -174,10 +176,83 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
     }
 }
 
+/// The segments `(n, 2, 2)` of a call with `cameras` (the images' own pixels; finiteness is the
+/// core's check, naming the row).
+fn lens_segments(obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<[Vector2<f64>; 2]>> {
+    let (shape, values) = read_any("lines", obj)?;
+    match shape.as_slice() {
+        [n, 2, 2] => {
+            same_count("lines", *n, views)?;
+            Ok(values
+                .chunks_exact(4)
+                .map(|s| [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])])
+                .collect())
+        }
+        _ => Err(shape_error(
+            "lines",
+            "segments of shape (n, 2, 2) with cameras (a line's image through a lens is a curve, not a homogeneous line)",
+            shape_string(&shape),
+        )),
+    }
+}
+
+/// The endpoint covariances of a call with `cameras`: `cov` of shape `(*lead, 2, 2, 2)` (each
+/// segment's two endpoints), or `σ² I` from `sigma` (not both), or `None` (the identity).
+fn endpoint_covariances(
+    cov: Option<&Bound<'_, PyAny>>,
+    sigma: Option<f64>,
+    lead: &[usize],
+) -> PyResult<Option<Vec<[Matrix2<f64>; 2]>>> {
+    if cov.is_some() && sigma.is_some() {
+        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+    }
+    if let Some(sigma) = sigma {
+        if !(sigma.is_finite() && sigma > 0.0) {
+            return Err(invalid_argument(
+                "sigma",
+                format!(
+                    "must be a positive finite number of pixels, got {}",
+                    pluecker::error::number(sigma)
+                ),
+            ));
+        }
+        let n: usize = lead.iter().product();
+        return Ok(Some(vec![[Matrix2::identity() * (sigma * sigma); 2]; n]));
+    }
+    let Some(cov) = cov else { return Ok(None) };
+    let (shape, values) = read_any("cov", cov)?;
+    let mut expected = lead.to_vec();
+    expected.extend([2, 2, 2]);
+    if shape != expected {
+        return Err(shape_error(
+            "cov",
+            &format!(
+                "shape ({}, 2, 2, 2) with cameras (the covariances of each segment's two endpoints)",
+                lead.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
+            ),
+            shape_string(&shape),
+        ));
+    }
+    Ok(Some(
+        values
+            .chunks_exact(8)
+            .map(|c| [Matrix2::from_row_slice(&c[..4]), Matrix2::from_row_slice(&c[4..])])
+            .collect(),
+    ))
+}
+
 /// Triangulates one 3-D line from its images in two or more views (Josephson & Kahl 2008, eq. 19).
+///
+/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models): `P[i]` is
+/// then `K [R | t]` of its pinhole part, `lines` are segments (n, 2, 2) whose endpoints are the observed
+/// (distorted) pixels, and `cov` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
+/// pixels (else `sigma` px per coordinate, 1 by default). Through a distorting lens the cost is the
+/// segments' reprojection error through the exact projection (the endpoints' distances to the line's
+/// curved images), minimised locally and never certified (`optimal` reports `gap_not_closed`); without
+/// distortion it is the pinhole problem of the segments, with its certificate.
 #[pyfunction]
-#[pyo3(signature = (P, lines, cov = None, method = None, *, sigma = None, options = None))]
-#[allow(non_snake_case)]
+#[pyo3(signature = (P, lines, cov = None, method = None, *, sigma = None, options = None, cameras = None))]
+#[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_line(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
@@ -186,10 +261,21 @@ pub fn triangulate_line(
     method: Option<&str>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulation>> {
     let opts = options_arg(method, options)?;
-    let cams = cameras("P", P)?;
+    let cams = crate::convert::cameras("P", P)?;
     let sigma = optional_real("sigma", sigma)?;
+    if let Some(cameras) = cameras {
+        let views = views_of(&cams, cameras)?;
+        let segments = lens_segments(lines, views.len())?;
+        let covariances = endpoint_covariances(cov, sigma, &[views.len()])?;
+        let outcome = interrupt::run_single(py, move || {
+            triangulate_line_segments_views(&views, &segments, covariances.as_deref(), &opts)
+                .map_err(|e| renamed(e, LINE_NAMES))
+        })?;
+        return interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?);
+    }
     let (image, from_segments) = image_lines(lines, cams.len(), cov.is_some(), sigma)?;
     let covs = match covariances2("cov", cov, cams.len())? {
         Some(c) => Some(c),
@@ -356,8 +442,14 @@ pub fn triangulate_lines(
 /// does points: row `k` is the line `lines[k]` ((m, 3) homogeneous, or (m, 2, 2) segments with endpoint
 /// noise `sigma`) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)), with the
 /// covariance `cov[k]` (m, 2, 2) when given. Each track is solved as `triangulate_lines` would.
+///
+/// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `LensCamera` of any of
+/// COLMAP's models: then `P[j]` is `K [R | t]` of that camera's pinhole part at the image's pose,
+/// `lines` are segments (m, 2, 2) in the observed (distorted) pixels, `cov` (m, 2, 2, 2) the covariances
+/// of each segment's two endpoints (else `sigma`), and each track is solved as
+/// `triangulate_line(..., cameras=...)` solves it: never certified through a distorting lens.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, lines, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None))]
+#[pyo3(signature = (P, track, image, lines, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_line_observations(
     py: Python<'_>,
@@ -372,12 +464,53 @@ pub fn triangulate_line_observations(
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
     n_tracks: Option<Integer>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(method, options)?;
     let sigma = optional_real("sigma", sigma)?;
-    let cams = cameras("P", P)?;
+    let cams = crate::convert::cameras("P", P)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
+    if let Some(cameras) = cameras {
+        let views = views_of(&cams, cameras)?;
+        let (shape, _) = read_any("lines", lines)?;
+        if shape.len() != 3 || shape[1..] != [2, 2] {
+            return Err(shape_error(
+                "lines",
+                "segments of shape (m, 2, 2) with cameras (a line's image through a lens is a curve, not a homogeneous line)",
+                shape_string(&shape),
+            ));
+        }
+        let values = rows.per_row("lines", lines, &[2, 2])?;
+        if cov.is_some() && sigma.is_some() {
+            return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+        }
+        let covariances = match (cov, sigma) {
+            (Some(c), _) => Some(rows.per_row("cov", c, &[2, 2, 2])?),
+            (None, Some(sigma)) => endpoint_covariances(None, Some(sigma), &[rows.len()])?.map(|c| {
+                c.iter()
+                    .flat_map(|pair| pair.iter().flat_map(|m| m.transpose().as_slice().to_vec()))
+                    .collect()
+            }),
+            (None, None) => None,
+        };
+        let outcome = run_interruptible(py, progress, budget, false, move |done| {
+            let tracks = SparseSegmentTracks {
+                csr: rows.csr(),
+                segments: &values,
+                covariances: covariances.as_deref(),
+            };
+            let results = triangulate_lines_sparse_views(&views, &tracks, &opts, Some(done))
+                .map_err(|e| renamed(e, LINE_NAMES))?;
+            let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
+            let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
+            if opts.outlier_threshold.is_some() {
+                columns.inliers.scatter(vec![rows.len()], |t| rows.rows_of(t));
+            }
+            Ok((report, columns))
+        })?;
+        return batch_result(py, outcome);
+    }
     let (shape, _) = read_any("lines", lines)?;
     let segments = segments_or_lines(&shape, 1, sigma, cov.is_some())?;
     let values = rows.per_row("lines", lines, &shape[1..])?;

@@ -448,7 +448,7 @@ pub fn triangulate_point_observations(
 /// The views of `cameras` (one `Camera` or `LensCamera` per row of `P`) with the poses
 /// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row whose `P` is not
 /// `K [R | t]` of its camera's pinhole part.
-fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
+pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
     let list: Vec<Bound<'_, PyAny>> = cameras.try_iter()?.collect::<PyResult<_>>()?;
     if list.len() != p.len() {
         return Err(shape_error(

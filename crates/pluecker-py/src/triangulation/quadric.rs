@@ -15,7 +15,9 @@ use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::batch::{
     triangulate_quadrics as core_quadrics, triangulate_quadrics_sparse, QuadricTracks, SparseQuadricTracks,
 };
-use pluecker::triangulation::quadric::{triangulate_quadric as core_triangulate_quadric, QuadricTriangulation};
+use pluecker::triangulation::quadric::{
+    refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
+};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
@@ -94,8 +96,13 @@ result_class! {
 }
 
 /// Triangulates an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008).
+///
+/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (`P[i]` is `K [R | t]` of its
+/// pinhole part): a lens with distortion is refused (`InvalidOptionError` naming `cameras`), since
+/// the outline seen through it is not a conic; pinholes and lenses without distortion are solved as
+/// their `P`.
 #[pyfunction]
-#[pyo3(signature = (P, conics, cov = None, method = None, *, options = None))]
+#[pyo3(signature = (P, conics, cov = None, method = None, *, options = None, cameras = None))]
 #[allow(non_snake_case)]
 pub fn triangulate_quadric(
     py: Python<'_>,
@@ -104,9 +111,20 @@ pub fn triangulate_quadric(
     cov: Option<&Bound<'_, PyAny>>,
     method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
     let opts = options_arg(method, options)?;
-    let cams = cameras("P", P)?;
+    let cams = convert::cameras("P", P)?;
+    if let Some(cameras) = cameras {
+        let views = super::point::views_of(&cams, cameras)?;
+        // A lens with distortion is refused; the other views are the pinhole problem of `P`.
+        if let Err(pluecker::Error::InvalidOption { reason, .. }) = refuse_distortion(&views) {
+            return Err(crate::errors::invalid_argument(
+                "cameras",
+                reason.replace("views[", "cameras["),
+            ));
+        }
+    }
     let observed = convert::conics("conics", conics)?;
     same_count("conics", observed.len(), cams.len())?;
     let covs = match cov {

@@ -52,20 +52,24 @@ pub fn undistort(
     if let Some(n) = noise {
         n.check_counts(corr.n_points(), corr.n_lines())?;
     }
-    // Undistorted pixel ū of a pixel, and J = ∂u/∂ū there, with errors naming the argument.
-    let through = |u: &Vector2<f64>, what: &str, index: usize| -> Result<(Vector2<f64>, Matrix2<f64>)> {
-        if !(u.x.is_finite() && u.y.is_finite()) {
-            return Err(Error::NonFinite {
+    // A finite pixel, else an error naming the argument; errors of the undistortion name it too.
+    let finite = |u: &Vector2<f64>, what: &str, index: usize| -> Result<()> {
+        if u.x.is_finite() && u.y.is_finite() {
+            Ok(())
+        } else {
+            Err(Error::NonFinite {
                 what: what.into(),
                 index,
-            });
+            })
         }
-        lens.undistort(u, index).map_err(|e| match e {
+    };
+    let named = |what: &'static str| {
+        move |e| match e {
             Error::Degenerate { what: why } => Error::Degenerate {
                 what: format!("{what}: {why}"),
             },
             other => other,
-        })
+        }
     };
     let singular = |what: &str, index: usize| Error::Degenerate {
         what: format!("{what}[{index}]: the distortion is singular there"),
@@ -77,22 +81,26 @@ pub fn undistort(
     };
     let mut points = Vec::with_capacity(corr.n_points());
     for (i, u) in corr.points2d.iter().enumerate() {
-        let (ubar, j) = through(u, "points2d", i)?;
+        finite(u, "points2d", i)?;
+        let (ubar, j) = lens.undistort(u, i).map_err(named("points2d"))?;
         undistorted.points2d.push(ubar);
         let w = noise.map_or_else(Matrix2::identity, |n| n.points[i]);
         points.push(w * j);
     }
     let mut lines = Vec::with_capacity(corr.n_lines());
     for (i, s) in corr.lines2d.iter().enumerate() {
-        let (a, ja) = through(&s[0], "lines2d", i)?;
-        let (b, jb) = through(&s[1], "lines2d", i)?;
-        undistorted.lines2d.push([a, b]);
+        let mut ends = [Vector2::zeros(); 2];
         let mut pair = [Matrix2::identity(); 2];
-        for (k, j) in [ja, jb].iter().enumerate() {
-            let j_inv = j.try_inverse().ok_or_else(|| singular("lines2d", i))?;
+        for k in 0..2 {
+            finite(&s[k], "lines2d", i)?;
             let cov = noise.map_or_else(Matrix2::identity, |n| n.lines[i][k]);
-            pair[k] = j_inv * cov * j_inv.transpose();
+            let (ubar, c) = lens
+                .undistort_with_covariance(&s[k], &cov, i)
+                .map_err(named("lines2d"))?;
+            ends[k] = ubar;
+            pair[k] = c.ok_or_else(|| singular("lines2d", i))?;
         }
+        undistorted.lines2d.push(ends);
         lines.push(pair);
     }
     undistorted.noise = Some(ObservationNoise {

@@ -17,8 +17,9 @@
 //!   standard deviations of `e` (the Mahalanobis distance `min_q √((u(q) − e)ᵀ C⁻¹ (u(q) − e))` over
 //!   the points `q` of `ℓ`, the plain pixel distance without covariances). The minimum over `q` is a 1-D
 //!   Gauss-Newton search along `ℓ` from the foot of the endpoint's unprojection, the nearest point of
-//!   the curve's branch through the observation: see `nearest_on_curve`. With `D` the identity this
-//!   is the pinhole residual, sign included.
+//!   the curve's branch through the observation: [`crate::curved_line`], shared with the
+//!   triangulation of lines through lenses. With `D` the identity this
+//!   is the pinhole residual up to its sign (only squares enter the cost).
 //!
 //! The pose is `(R, t)` with `x_cam = R X_world + t`; a tangent step `(ω, τ)` moves it to
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
@@ -26,6 +27,7 @@
 use super::{Correspondences, CovarianceSource, ObservationNoise};
 use crate::camera::{AnyCamera, Camera};
 use crate::camera_model::LensCamera;
+use crate::curved_line::endpoint_residual;
 use crate::error::Result;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
@@ -62,65 +64,6 @@ struct Lens<'a> {
     /// `None` outside the invertible region of the distortion (the search then starts from the
     /// projection of the 3-D endpoint of the same index).
     starts: Vec<[Option<Vector2<f64>>; 2]>,
-}
-
-/// The 1-D search of [`nearest_on_curve`] stops after a step that moves the point on the curve by at
-/// most this many pixels (its cost is then exact to ~1e-20 px², its derivative to ~1e-10 px), or
-/// after [`NEAREST_MAX_ITERATIONS`] steps (Gauss-Newton contracts by about the residual over the
-/// curve's radius of curvature per step: a few steps for pixel residuals).
-const NEAREST_TOLERANCE_PX: f64 = 1e-10;
-/// See [`NEAREST_TOLERANCE_PX`].
-const NEAREST_MAX_ITERATIONS: usize = 100;
-
-/// The point nearest to the pixel `e`, in the metric `info = C⁻¹`, on the curve
-/// `σ ↦ u(σ) = K D(foot + σ dir)` of `lens` (`dir` a unit vector): the local minimum of
-/// `½ (u(σ) − e)ᵀ C⁻¹ (u(σ) − e)` that Gauss-Newton with step halving reaches from `σ = 0` (the foot on
-/// the undistorted line of the undistorted observation: the branch of the curve through the
-/// observation). Returns the point `foot + σ dir`, its pixel `u(σ)` and the tangent `du/dσ`.
-fn nearest_on_curve(
-    lens: &LensCamera,
-    foot: &Vector2<f64>,
-    dir: &Vector2<f64>,
-    e: &Vector2<f64>,
-    info: &Matrix2<f64>,
-) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
-    let ((fx, fy), (cx, cy)) = (lens.focal(), lens.principal_point());
-    let at = |sigma: f64| {
-        let q = foot + dir * sigma;
-        let (d, jd) = lens.distort(&q);
-        let tangent = jd * dir;
-        (
-            q,
-            Vector2::new(fx * d.x + cx, fy * d.y + cy),
-            Vector2::new(fx * tangent.x, fy * tangent.y),
-        )
-    };
-    let half_square = |u: &Vector2<f64>| 0.5 * (u - e).dot(&(info * (u - e)));
-    let (mut sigma, mut best) = (0.0, at(0.0));
-    let mut cost = half_square(&best.1);
-    for _ in 0..NEAREST_MAX_ITERATIONS {
-        let (_, u, du) = best;
-        let (g, h) = (du.dot(&(info * (u - e))), du.dot(&(info * du)));
-        if !(h > 0.0 && g.is_finite()) {
-            break;
-        }
-        let mut step = -g / h;
-        let small = (du * step).norm() <= NEAREST_TOLERANCE_PX;
-        let mut accepted = false;
-        for _ in 0..60 {
-            let next = at(sigma + step);
-            let c = half_square(&next.1);
-            if c <= cost {
-                (sigma, best, cost, accepted) = (sigma + step, next, c, true);
-                break;
-            }
-            step *= 0.5;
-        }
-        if small || !accepted {
-            break;
-        }
-    }
-    best
 }
 
 /// One residual pair and its 2x6 Jacobian with respect to `(ω, τ)`.
@@ -430,7 +373,7 @@ impl<'a> ReprojectionCost<'a> {
 
     /// Line `i`'s two endpoint residuals through a lens and their Jacobian: for each endpoint `e` with
     /// covariance `C` (the identity without noise), the point `q` of the projected line `ℓ` whose pixel
-    /// `u(q)` is nearest to `e` ([`nearest_on_curve`]), then `ηᵀ (u(q) − e)` with `η = n / √(nᵀ C n)` and
+    /// `u(q)` is nearest to `e` ([`crate::curved_line::endpoint_residual`]), then `ηᵀ (u(q) − e)` with `η = n / √(nᵀ C n)` and
     /// `n` the normal of the curve at `u(q)`: at the minimum `u(q) − e` is C-orthogonal to the curve,
     /// so this is `±` the Mahalanobis distance (the pixel distance for `C = I`). The Jacobian is
     /// `ηᵀ ∂u/∂(ω, τ)` at the fixed world point `X*` of the 3-D line that projects to `q`: the derivative
@@ -441,40 +384,30 @@ impl<'a> ReprojectionCost<'a> {
         let [wa, wb] = self.lines3d[i];
         let (ra, rb) = (pose.rotation * wa, pose.rotation * wb);
         let (a, b) = (ra + pose.translation, rb + pose.translation);
-        // ℓ: l₀ x + l₁ y + l₂ = 0 in normalised coordinates, with unit direction `dir`.
+        // ℓ: l₀ x + l₁ y + l₂ = 0 in normalised coordinates (NaN residuals where it does not exist).
         let l = a.cross(&b);
-        let l12 = Vector2::new(l.x, l.y);
-        let norm2 = l12.norm_squared();
         let mut residual = Vector2::from_element(f64::NAN);
         let mut jac = SMatrix::<f64, 2, 6>::from_element(f64::NAN);
-        if !(norm2 > 0.0 && norm2.is_finite()) {
-            return (residual, jac);
-        }
-        let dir = Vector2::new(-l.y, l.x) / norm2.sqrt();
-        let (fx, fy) = lens.camera.focal();
         for (k, e) in self.lines2d[i].iter().enumerate() {
             let cov = self.noise.map_or_else(Matrix2::identity, |n| n.lines[i][k]);
-            let Some(info) = cov.try_inverse() else { continue };
             let start = lens.starts[i][k].unwrap_or_else(|| {
                 let p = if k == 0 { a } else { b };
                 Vector2::new(p.x / p.z, p.y / p.z)
             });
-            let foot = start - l12 * ((l12.dot(&start) + l.z) / norm2);
-            let (q, u, du) = nearest_on_curve(lens.camera, &foot, &dir, e, &info);
-            // The normal of the pinhole's line for D = I (same sign as `line_block_with`'s residual).
-            let n = Vector2::new(du.y, -du.x);
-            let eta = n / n.dot(&(cov * n)).sqrt();
-            residual[k] = eta.dot(&(u - e));
+            let Some(fit) = endpoint_residual(lens.camera, &l, &start, e, &cov) else {
+                continue;
+            };
+            residual[k] = fit.residual;
             if with_jacobian {
                 // X* = A + s (B − A), with x_cam(X*) = a + s (b − a) parallel to (q, 1).
+                let q = fit.q;
                 let qh = Vector3::new(q.x, q.y, 1.0);
                 let (c0, c1) = (qh.cross(&a), qh.cross(&(b - a)));
                 let s = -c0.dot(&c1) / c1.norm_squared();
                 let (p, rx) = (a + (b - a) * s, ra + (rb - ra) * s);
                 let z = p.z;
                 let dq_dp = Matrix2x3::new(1.0 / z, 0.0, -q.x / z, 0.0, 1.0 / z, -q.y / z);
-                let (_, jd) = lens.camera.distort(&q);
-                let row = eta.transpose() * Matrix2::new(fx, 0.0, 0.0, fy) * jd * dq_dp;
+                let row = fit.gradient(lens.camera) * dq_dp;
                 jac.fixed_view_mut::<1, 3>(k, 0).copy_from(&(-row * skew(&rx)));
                 jac.fixed_view_mut::<1, 3>(k, 3).copy_from(&row);
             }

@@ -15,11 +15,12 @@
 //! call (bad options, a bad `sigma`, bad shared cameras, inconsistent array lengths) come first, as the
 //! outer `Result`.
 
-use super::{lines_from_segments, triangulate_line, LineTriangulation};
+use super::{lines_from_segments, triangulate_line, triangulate_line_segments_views, LineTriangulation};
 use crate::error::{Error, Result};
 use crate::triangulation::tracks::{
     check_mask, check_values, dense_observations, in_track, solve_tracks, too_few, track_count, Csr, TrackCameras,
 };
+use crate::triangulation::views::{validate_cameras, View};
 use crate::triangulation::TriangulationOptions;
 use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
 use std::sync::atomic::AtomicUsize;
@@ -205,5 +206,70 @@ pub fn triangulate_lines_sparse(
     Ok(solve_tracks(n, 1, progress, |t| {
         let seen = tracks.csr.distinct_observations(t, cameras.len())?;
         line_track(&shared, &tracks.lines, tracks.covariances, t, &seen, opts)
+    }))
+}
+
+/// Segment tracks seen through [`View`]s, one observation per row ([`Csr`]): row `k` is the segment
+/// `segments[4k..4k + 4]` (`(u₁, v₁, u₂, v₂)`, the image's own, distorted pixels) in image
+/// `csr.images[k]`, with its endpoints' covariances `covariances[8k..8k + 8]` (two row-major 2x2
+/// matrices, pixels²) when given.
+#[derive(Debug, Clone, Copy)]
+pub struct SparseSegmentTracks<'a> {
+    /// Which rows belong to which track, and their images.
+    pub csr: Csr<'a>,
+    /// `m · 4` endpoints, pixels.
+    pub segments: &'a [f64],
+    /// `m · 8` endpoint covariances, or `None` (the identity: costs in squared pixels).
+    pub covariances: Option<&'a [f64]>,
+}
+
+/// Triangulates every track of the sparse `tracks` seen in `views` (a pinhole or any of COLMAP's
+/// models, and a pose, per image), in parallel: each track as
+/// [`super::triangulate_line_segments_views`] solves it on its rows. A track naming an image beyond
+/// the views, or one image twice, is its own error; its other errors name it
+/// (`segments[t][j]`: image `j` of track `t`).
+///
+/// Whole-call errors: [`Error::InvalidOption`] (options), [`Error::Shape`] (array lengths),
+/// [`Error::NonFinite`] / [`Error::SingularCamera`] for the views' cameras.
+pub fn triangulate_lines_sparse_views(
+    views: &[View],
+    tracks: &SparseSegmentTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+) -> Result<Vec<Result<LineTriangulation>>> {
+    opts.validate()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    validate_cameras(&cameras, "views")?;
+    let n = tracks.csr.check()?;
+    tracks
+        .csr
+        .check_values("segments", Some(tracks.segments), 4, "2 endpoints x 2 coordinates")?;
+    tracks
+        .csr
+        .check_values("covariances", tracks.covariances, 8, "2 endpoints x 2 x 2")?;
+    Ok(solve_tracks(n, 1, progress, |t| {
+        let seen = tracks.csr.distinct_observations(t, views.len())?;
+        if seen.len() < 2 {
+            return Err(too_few(opts.method, t, seen.len(), 2));
+        }
+        let images: Vec<usize> = seen.iter().map(|&(j, _)| j).collect();
+        let track_views: Vec<View> = images.iter().map(|&j| views[j].clone()).collect();
+        let segments: Vec<[Vector2<f64>; 2]> = seen
+            .iter()
+            .map(|&(_, k)| {
+                let s = &tracks.segments[4 * k..][..4];
+                [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])]
+            })
+            .collect();
+        let covariances: Option<Vec<[Matrix2<f64>; 2]>> = tracks.covariances.map(|c| {
+            seen.iter()
+                .map(|&(_, k)| {
+                    let c = &c[8 * k..][..8];
+                    [Matrix2::from_row_slice(&c[..4]), Matrix2::from_row_slice(&c[4..])]
+                })
+                .collect()
+        });
+        triangulate_line_segments_views(&track_views, &segments, covariances.as_deref(), opts)
+            .map_err(|e| in_track(e, t, &images, &["segments", "covariances"]))
     }))
 }

@@ -25,12 +25,14 @@
 //! never reported for lines.
 
 pub mod batch;
+pub mod lens;
 pub mod optimal;
 pub mod residual;
 pub mod robust;
 pub mod taylor_search;
 pub mod two_view_chart;
 
+use self::lens::LensSegment;
 use self::optimal::optimal_line;
 use self::residual::{line_view, LineFrame};
 use self::taylor_search::optimal_line_taylor;
@@ -39,6 +41,7 @@ use super::covariance::{whitening, whitenings};
 use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::covariance_of_information;
+use super::views::View;
 use super::{parse_observations, LineBound, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, LineChart, OrthonormalLine, PluckerLine};
@@ -271,6 +274,58 @@ pub fn triangulate_line_segments(
     triangulate_line(cameras, &lines, Some(&covariances), opts)
 }
 
+/// Triangulates one 3-D line seen in `views` (each a camera, pinhole or any of COLMAP's models, and
+/// its pose) as the image segments `segments`, whose endpoints are the images' own (distorted) pixels,
+/// with optional 2x2 covariances of each endpoint in those pixels (identity when `None`). Through a
+/// distorting lens the cost is the segments' reprojection error through the exact projection, the
+/// Mahalanobis distances of the endpoints to the line's curved images, minimised by the local method;
+/// it is never certified there ([`lens`]: `optimal` reports `gap_not_closed`). When no camera distorts
+/// this is [`triangulate_line`] of the views' `K [R | t]` on the segments' lines and covariances
+/// ([`crate::triangulation::fitting::line_from_endpoints`]; [`triangulate_line_segments`] for `σ² I`).
+///
+/// Errors as [`triangulate_line`] (naming `segments`, `covariances` and `views`), and
+/// [`Error::Degenerate`] naming a segment with an endpoint outside its lens's invertible region or of
+/// zero length.
+pub fn triangulate_line_segments_views(
+    views: &[View],
+    segments: &[[Vector2<f64>; 2]],
+    covariances: Option<&[[Matrix2<f64>; 2]]>,
+    opts: &TriangulationOptions,
+) -> Result<LineTriangulation> {
+    let started = Instant::now();
+    opts.validate()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    check_views(&cameras, segments.len(), 2, "segments", opts.method)?;
+    if let Some(c) = covariances {
+        if c.len() != views.len() {
+            return Err(Error::Shape {
+                what: "covariances".into(),
+                expected: format!("{} (one pair of endpoint covariances per view)", views.len()),
+                actual: c.len().to_string(),
+            });
+        }
+    }
+    let identity = [Matrix2::identity(); 2];
+    let mut observed = Vec::with_capacity(views.len());
+    for (i, (view, s)) in views.iter().zip(segments).enumerate() {
+        if !s.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "segments".into(),
+                index: i,
+            });
+        }
+        let pair = covariances.map_or(identity, |c| c[i]);
+        for c in &pair {
+            // A named error for a covariance that is not finite or not positive definite.
+            whitening(c, "covariances", i)?;
+        }
+        observed.push(LensSegment::new(view, *s, pair, i)?);
+    }
+    let mut result = lens::solve_lens_segments(&cameras, &observed, opts)?;
+    result.report.time_seconds = started.elapsed().as_secs_f64();
+    Ok(result)
+}
+
 /// The linear method (module docs), as a world line.
 pub(crate) fn linear_line(problem: &LineProblem) -> Result<Vector6<f64>> {
     let sim = Similarity::of_cameras(&problem.cameras);
@@ -346,6 +401,21 @@ pub(crate) fn local_line(
 /// pivot exactly: from `δ' = (α, t')` there, `δ = (α, ρ t' − s α)` with `s` the signed distance
 /// along the line from `chart`'s pivot to that point ([`LineChart::repivot`]).
 pub(crate) fn line_covariance(problem: &LineProblem, chart: &LineChart) -> Option<Matrix4<f64>> {
+    chart_covariance(problem, chart, |sim, framed| {
+        let views = problem.views(sim);
+        let info = fraction::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
+        covariance_of_information(&info)
+    })
+}
+
+/// The repivoting of [`line_covariance`] for any residuals: `framed_covariance(sim, framed)` is the
+/// covariance in the chart `framed` (pivot at the origin of the frame `sim`, unit `ρ`), moved here to
+/// `chart`'s pivot and world units.
+pub(crate) fn chart_covariance(
+    problem: &LineProblem,
+    chart: &LineChart,
+    framed_covariance: impl Fn(&Similarity, &LineChart) -> Option<Matrix4<f64>>,
+) -> Option<Matrix4<f64>> {
     let world_line = chart.line(&Vector4::zeros());
     if !world_line.iter().all(|v| v.is_finite()) {
         return None;
@@ -358,9 +428,7 @@ pub(crate) fn line_covariance(problem: &LineProblem, chart: &LineChart) -> Optio
         pivot: Vector3::zeros(),
         ..near
     };
-    let views = problem.views(&sim);
-    let info = fraction::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
-    let framed_cov = covariance_of_information(&info)?;
+    let framed_cov = framed_covariance(&sim, &framed)?;
     let s = chart.direction.dot(&(near.pivot - chart.pivot));
     let mut m = Matrix4::identity();
     m[(2, 2)] = rho;

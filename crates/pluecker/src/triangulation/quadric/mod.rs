@@ -39,6 +39,7 @@ use super::covariance::whitenings;
 use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};
+use super::views::View;
 use super::{parse_observations, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{
@@ -114,6 +115,42 @@ impl QuadricProblem {
 /// The dual quadric transformed by the similarity: `H L Hᵀ`.
 pub(crate) fn transform_dual(sim_matrix: &Matrix4<f64>, dual: &Matrix4<f64>) -> Matrix4<f64> {
     sim_matrix * dual * sim_matrix.transpose()
+}
+
+/// [`triangulate_quadric`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models, and a
+/// pose). The outline of a quadric seen through a lens with distortion is not a conic (eq. 8 holds
+/// for the pinhole projection only), so a view whose camera distorts ([`LensCamera::distorts`]) is
+/// refused with [`Error::InvalidOption`] naming it; pinholes and lenses whose distortion is the
+/// identity are solved as [`triangulate_quadric`] of their `K [R | t]`.
+pub fn triangulate_quadric_views(
+    views: &[View],
+    conics: &[Matrix3<f64>],
+    covariances: Option<&[Matrix5]>,
+    opts: &TriangulationOptions,
+) -> Result<QuadricTriangulation> {
+    refuse_distortion(views)?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    triangulate_quadric(&cameras, conics, covariances, opts)
+}
+
+/// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `views` and the
+/// first view whose camera distorts.
+pub fn refuse_distortion(views: &[View]) -> Result<()> {
+    let distorting = views
+        .iter()
+        .enumerate()
+        .find_map(|(j, v)| v.camera.distortion().filter(|l| l.distorts()).map(|l| (j, l)));
+    match distorting {
+        None => Ok(()),
+        Some((j, lens)) => Err(Error::InvalidOption {
+            name: "views".into(),
+            reason: format!(
+                "views[{j}] ({}) has distortion, through which the outline of a quadric is not a conic; \
+                 fit the conics to undistorted points (LensCamera::undistort) and give the pinhole part",
+                lens.model().as_str()
+            ),
+        }),
+    }
 }
 
 /// Triangulates one ellipsoid seen by `cameras` (3x4, world → pixels, any positive scale; in
