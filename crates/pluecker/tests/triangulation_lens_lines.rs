@@ -193,6 +193,17 @@ fn moved(line: &Line, delta: &Vector4<f64>) -> Line {
     )
 }
 
+/// Asserts that `cost` is no higher than the lowest the oracle's own minimiser reaches from `starts`,
+/// up to the oracle's convergence (its steps stop below 1e-14 relative; its numeric Jacobian is exact
+/// to ~1e-9).
+fn assert_at_the_oracles_minimum(cost: f64, obs: &[Obs], starts: &[Line], what: &str) {
+    let best = starts.iter().map(|s| minimise(obs, s).1).fold(f64::INFINITY, f64::min);
+    assert!(
+        cost <= best * (1.0 + 1e-6) + 1e-9,
+        "{what}: library {cost} above the oracle's minimum {best}"
+    );
+}
+
 /// The oracle's minimisation: Levenberg-Marquardt with a numeric Jacobian over the four moves of
 /// [`moved`], from `start`. Returns the line and its oracle cost.
 fn minimise(obs: &[Obs], start: &Line) -> (Line, f64) {
@@ -495,22 +506,13 @@ fn through_strong_radial_and_80_degree_fisheye_the_line_is_the_oracles_minimum_a
                     r.report.cost
                 );
                 // No start of the oracle's own minimiser does better: the truth, the result, and lines
-                // around the truth. The slack is the oracle's convergence (its steps stop below 1e-14
-                // relative; its numeric Jacobian is exact to ~1e-9).
-                let mut best = f64::INFINITY;
+                // around the truth.
                 let mut starts = vec![line, sc.truth];
                 for _ in 0..3 {
                     let d = Vector4::new(rng.normal(), rng.normal(), rng.normal(), rng.normal()) * 0.05;
                     starts.push(moved(&sc.truth, &d));
                 }
-                for s in &starts {
-                    best = best.min(minimise(&sc.obs, s).1);
-                }
-                assert!(
-                    r.report.cost <= best * (1.0 + 1e-6) + 1e-9,
-                    "{name} {method:?}: library {} above the oracle's minimum {best}",
-                    r.report.cost
-                );
+                assert_at_the_oracles_minimum(r.report.cost, &sc.obs, &starts, &format!("{name} {method:?}"));
             }
         }
     }
@@ -763,15 +765,11 @@ fn a_pinhole_view_among_lenses_is_measured_by_its_straight_image() {
         )
         .unwrap();
         let found = as_points(&r.point, &r.direction, &sc.truth);
-        let best = [found, sc.truth]
-            .iter()
-            .map(|s| minimise(&sc.obs, s).1)
-            .fold(f64::INFINITY, f64::min);
-        // The oracle's slack, as in the test above.
-        assert!(
-            r.report.cost <= best * (1.0 + 1e-6) + 1e-9,
-            "{} vs {best}",
-            r.report.cost
+        assert_at_the_oracles_minimum(
+            r.report.cost,
+            &sc.obs,
+            &[found, sc.truth],
+            "a pinhole view among lenses",
         );
     }
 }

@@ -29,7 +29,7 @@ use pluecker::triangulation::line::batch::{
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
 };
-use pluecker::triangulation::{Primitive, Report};
+use pluecker::triangulation::{Primitive, Report, TriangulationOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -500,14 +500,11 @@ pub fn triangulate_line_observations(
                 segments: &values,
                 covariances: covariances.as_deref(),
             };
-            let results = triangulate_lines_sparse_views(&views, &tracks, &opts, Some(done))
-                .map_err(|e| renamed(e, LINE_NAMES))?;
-            let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
-            let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
-            if opts.outlier_threshold.is_some() {
-                columns.inliers.scatter(vec![rows.len()], |t| rows.rows_of(t));
-            }
-            Ok((report, columns))
+            sparse_columns(
+                &rows,
+                &opts,
+                triangulate_lines_sparse_views(&views, &tracks, &opts, Some(done)),
+            )
         })?;
         return batch_result(py, outcome);
     }
@@ -522,16 +519,29 @@ pub fn triangulate_line_observations(
             lines: image_lines_of(&values, segments, sigma),
             covariances: covariances.as_deref(),
         };
-        let results =
-            triangulate_lines_sparse(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
-        let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
-        let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
-        if opts.outlier_threshold.is_some() {
-            columns.inliers.scatter(vec![rows.len()], |t| rows.rows_of(t));
-        }
-        Ok((report, columns))
+        sparse_columns(
+            &rows,
+            &opts,
+            triangulate_lines_sparse(&cams, &tracks, &opts, Some(done)),
+        )
     })?;
     batch_result(py, outcome)
+}
+
+/// The per-track results of a sparse solve as the batch's columns: errors named by the user's rows, and
+/// with an outlier threshold each observation's inlier flag put back on its row.
+fn sparse_columns(
+    rows: &SortedRows,
+    opts: &TriangulationOptions,
+    results: pluecker::Result<Vec<pluecker::Result<LineTriangulation>>>,
+) -> pluecker::Result<(PyBatchReport, PyLineTriangulations)> {
+    let results = results.map_err(|e| renamed(e, LINE_NAMES))?;
+    let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
+    let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
+    if opts.outlier_threshold.is_some() {
+        columns.inliers.scatter(vec![rows.len()], |t| rows.rows_of(t));
+    }
+    Ok((report, columns))
 }
 
 pack_struct!(PyLineTriangulation {
