@@ -156,3 +156,16 @@ def test_the_cost_convention_is_sum_of_squares_over_sigma_squared():
         assert bound <= optimum[int(i)] * (1 + BOUND_TOLERANCE), (int(i), bound, optimum[int(i)])
         # Not vacuous: the bound is within the gap (1e-3) of the optimum, so a factor 2 or 4 would show.
         assert bound >= optimum[int(i)] * (1 - 2e-3), (int(i), bound, optimum[int(i)])
+
+
+def test_an_80_degree_fisheye_is_certified_where_one_box_per_view_is_not_enough():
+    """The lens certificate tries one interval box per view, then the 8x8 split boxes where that bound
+    does not close the gap. Far off axis through the fisheye one box overestimates the lens Jacobian's
+    variation, so the split pass is what certifies most of these points: the goal is ≥ 99.9 % of solved
+    points (measured on 12,000 in bench/compare_colmap.py); here at least 99 % of 600 (≤ 6 misses), which
+    a certificate that stopped at one box, or kept a one-box bound outside the gap, misses by far (about
+    8 % of such points are then uncertified)."""
+    rec = noisy_model("fisheye_80", points=600)
+    result = colmap.retriangulate(rec).result
+    certified = int(np.sum(result.certified))
+    assert certified >= 0.99 * len(result.certified), f"{certified} of {len(result.certified)} certified"
