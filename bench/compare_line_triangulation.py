@@ -1,4 +1,4 @@
-"""Certified line and quadric triangulation (issue 13 §3): certified fraction, median and p99 time, and
+"""Certified line and quadric triangulation : certified fraction, median and p99 time, and
 mean branch-and-bound nodes.
 
 - **Real lines:** every line of every VGG sequence with lines (Model House, Corridor, Merton I-III), all

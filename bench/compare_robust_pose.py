@@ -28,7 +28,7 @@ Per problem, ratio and method:
   that knew the outliers could reach;
 - median and 95th-percentile time per call from Python (fastest of ``--repeats`` calls per scene).
 
-Targets (issue 4): pluecker's success rate ≥ PoseLib's at every ratio, RMS ≤ 1.02 × the bound, median time
+Targets: pluecker's success rate ≥ PoseLib's at every ratio, RMS ≤ 1.02 × the bound, median time
 ≤ PoseLib's. Results go to ``bench/out/compare_robust_pose.json``; a Markdown table and PASS/FAIL lines to
 standard output. Run from the repository root:
 

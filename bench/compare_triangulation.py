@@ -84,7 +84,7 @@ COST_MARGIN = 1e-2  # ... and as "worse by more than 1 %"
 THROUGHPUT_POINTS = 100_000
 OUT = Path(__file__).resolve().parent / "out" / "compare_triangulation.json"
 
-# Targets of issue 3, section 7.
+# Targets (certified fraction and time).
 TARGET_CERTIFIED = 0.999
 TARGET_US = {5: 20.0, 20: 100.0}
 TARGET_BNB_US = 1000.0

@@ -1,5 +1,5 @@
 """Robust pose on all-outlier data and on data with inliers: time, status and accuracy, for this build and,
-optionally, another build of pluecker side by side (issue 10 §4: the SPRT and the ``min_inlier_ratio``
+optionally, another build of pluecker side by side (the SPRT and the ``min_inlier_ratio``
 cap of ``estimate_pose(..., ransac=True)``).
 
 Scenes: ``pluecker.random_scene("general", n_points, n_lines, seed)`` (f = 800 px, 640 x 480), i.i.d.

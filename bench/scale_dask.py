@@ -1,4 +1,4 @@
-"""Triangulation and localisation at scale on Dask (issue 14 §3): throughput, speed-up, memory, overhead.
+"""Triangulation and localisation at scale on Dask: throughput, speed-up, memory, overhead.
 
 - **Tracks:** synthetic tracks of 2-20 observations each (20 cameras 10 units around a unit cloud,
   f = 800 px, 1 px noise), generated *on the workers*, chunk by chunk (`CHUNK` tracks per Parquet file of

@@ -1,4 +1,4 @@
-"""Sparse point tracks at scale (issue 12 §3): ``triangulate_point_observations`` on 1000 images and
+"""Sparse point tracks at scale: ``triangulate_point_observations`` on 1000 images and
 200,000 tracks of 2-20 observations each (one observation per row, as COLMAP lists them), against the
 dense ``(n, v, 2)`` form it replaces, which would need ``n · v · 2`` floats (3.2 GB here).
 
