@@ -27,6 +27,7 @@ import json
 import math
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Any, NoReturn, Sequence
 
@@ -642,8 +643,9 @@ def _localize(args: argparse.Namespace) -> int:
 
 def _triangulate_colmap(args: argparse.Namespace) -> int:
     """``pluecker triangulate --colmap DIR --out DIR``: re-triangulate every track of a COLMAP model."""
+    from tqdm import tqdm
+
     from pluecker import colmap
-    from pluecker.progress import Progress
 
     if args.out is None:
         return _fail("triangulate", "--colmap needs --out DIR (the model is written there, never over the input)")
@@ -669,15 +671,16 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
             return _triangulate_colmap_on_dask(args, reconstruction)
         except pluecker.PlueckerError as exc:
             return _fail("triangulate", str(exc))
-    progress = Progress(max(1, reconstruction.num_points3D()), "points")
-    report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
-    try:
-        run = colmap.retriangulate(reconstruction, sigma_px=args.sigma, method=args.method,
-                                   outlier_threshold_px=args.outlier_threshold, progress=report)
-    except pluecker.PlueckerError as exc:
-        return _fail("triangulate", str(exc))
-    progress.done = progress.total
-    progress.close(f"points: {len(run.point3D_ids)} in {progress.elapsed:.1f} s")
+    started = time.perf_counter()
+    # A bar on a terminal only (tqdm's disable=None); the summary line below goes to logs too.
+    with tqdm(total=reconstruction.num_points3D(), desc="points", unit="pt", disable=None, leave=False) as bar:
+        report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
+        try:
+            run = colmap.retriangulate(reconstruction, sigma_px=args.sigma, method=args.method,
+                                       outlier_threshold_px=args.outlier_threshold, progress=report)
+        except pluecker.PlueckerError as exc:
+            return _fail("triangulate", str(exc))
+    print(f"points: {len(run.point3D_ids)} in {time.perf_counter() - started:.1f} s", file=sys.stderr)
     try:
         files = colmap.write(reconstruction, run, args.out, text=args.text)
     except OSError as exc:

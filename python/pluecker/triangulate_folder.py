@@ -16,6 +16,7 @@ Conventions: cameras map world points to pixels (the folder's ``*.P``, in the ri
 from __future__ import annotations
 
 import math
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -178,17 +179,20 @@ def _segment_extent(point: np.ndarray, direction: np.ndarray, cameras: np.ndarra
 
 
 def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_progress: bool | None) -> Features:
-    from pluecker.progress import Progress
+    from tqdm import tqdm
 
     segments, visible = seq.line_observations(views)
     features = Features("lines", total=len(seq.line_tracks))
     cameras = seq.cameras[views]
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
     # Branch and bound over lines is far slower than over points: a bar on a terminal, nothing in a log.
-    progress = Progress(len(tracks), "lines", enabled=show_progress)
-    report = (lambda done: progress.update(done - progress.done)) if progress.enabled else None
-    result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma, method=method,
-                                        progress=report)
+    started = time.perf_counter()
+    with tqdm(total=len(tracks), desc="lines", unit="line", leave=False,
+              disable=None if show_progress is None else not show_progress) as bar:
+        report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
+        result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma, method=method,
+                                            progress=report)
+        shown = not bar.disable
     columns = _columns(result)
     plucker, points, directions = (np.asarray(a) for a in (result.plucker, result.point, result.direction))
     chart_axes, covariances = np.asarray(result.chart_axes), np.asarray(result.covariance)
@@ -206,8 +210,8 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
         if np.all(np.isfinite(extent)):
             geometry.append(extent)
             certified.append(bool(columns["certified"][k]))
-    if progress.enabled:
-        progress.close(f"lines: {len(tracks)} in {progress.elapsed:.1f} s")
+    if shown:
+        print(f"lines: {len(tracks)} in {time.perf_counter() - started:.1f} s", file=sys.stderr)
     features.geometry = np.array(geometry).reshape(-1, 2, 3)
     features.certified = np.array(certified, dtype=bool)
     return features

@@ -31,6 +31,7 @@ estimator followed by reprojection refinement) is reported beside them.
 from __future__ import annotations
 
 import json
+import sys
 import time
 import zlib
 from dataclasses import dataclass, field, replace
@@ -41,7 +42,7 @@ import numpy as np
 
 import pluecker
 from pluecker.experiments import Report
-from pluecker.progress import Progress
+from tqdm import tqdm
 
 NAME = "phong-horaud-1995"
 DEFAULT_OUT = Path("results") / NAME
@@ -355,19 +356,19 @@ def _sweeps(settings: Settings) -> list[Sweep]:
 Results = dict[str, dict[str, dict[float, Cell]]]  # sweep key -> estimator key -> value -> cell
 
 
-def run_sweeps(truth: Truth, settings: Settings, progress: Progress | None = None) -> Results:
+def run_sweeps(truth: Truth, settings: Settings, progress: tqdm | None = None) -> Results:
     """Every estimator of every sweep on every draw."""
     results: Results = {}
     for sweep in _sweeps(settings):
         cells = results[sweep.key] = {e.key: {v: Cell() for v in sweep.values} for e in sweep.estimators}
         for value in sweep.values:
-            if progress:
-                progress.set_note(f"{sweep.key} {value:g}")
+            if progress is not None:
+                progress.set_postfix_str(f"{sweep.key} {value:g}")
             for trial in range(settings.trials):
                 obs = sweep.observation(truth, settings.seed, value, trial)
                 for est in sweep.estimators:
                     cells[est.key][value].scores.append(run_and_score(truth, obs, est))
-                if progress:
+                if progress is not None:
                     progress.update(len(sweep.estimators))
     return results
 
@@ -634,14 +635,16 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
     truth = Truth.load()
     started = time.perf_counter()
     n_estimates = count_estimates(settings)
-    progress = Progress(n_estimates, NAME, enabled=None if show_progress is None else show_progress)
+    progress = tqdm(total=n_estimates, desc=NAME, unit="estimate", leave=False,
+                    disable=None if show_progress is None else not show_progress)
     results = run_sweeps(truth, settings, progress)
     files = [out / "tables.md"]
     files[0].write_text(render_tables(results, settings), encoding="utf-8")
     if plots:
         files += render_figures(results, out)
     seconds = time.perf_counter() - started
-    progress.close(f"{NAME}: {n_estimates} estimates in {seconds:.1f} s")
+    progress.close()
+    print(f"{NAME}: {n_estimates} estimates in {seconds:.1f} s", file=sys.stderr)
     summary = summarize(results, settings)
     document = {
         "experiment": NAME,

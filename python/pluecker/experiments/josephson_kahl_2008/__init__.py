@@ -20,6 +20,7 @@ Everything but the timings is deterministic (the fitting draws depend on ``seed`
 from __future__ import annotations
 
 import json
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from pluecker.experiments import Report
-from pluecker.progress import Progress
+from tqdm import tqdm
 
 from . import conics, fitting, lines, points
 from .common import LABELS, METHODS, SEQUENCES, clean
@@ -191,25 +192,28 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
     started = time.perf_counter()
     limit = lines.QUICK_LINES if quick else None
     n_conics = trials or (conics.TRIALS_QUICK if quick else conics.TRIALS)
-    progress = Progress(2 + len(SEQUENCES) * (2 * len(METHODS) + 1), NAME,
-                        enabled=None if show_progress is None else show_progress)
+    # Steps of very unequal length (the fitting draws, then each table): a count and the elapsed time,
+    # no estimate of the time left.
+    progress = tqdm(total=2 + len(SEQUENCES) * (2 * len(METHODS) + 1), desc=NAME, leave=False,
+                    bar_format="{desc}: {n_fmt}/{total_fmt} steps [{elapsed}] {postfix}",
+                    disable=None if show_progress is None else not show_progress)
     results = Results()
-    progress.set_note("fitting residuals (Figures 1-2)")
+    progress.set_postfix_str("fitting residuals (Figures 1-2)")
     results.fitting = fitting.run(fitting.DRAWS_QUICK if quick else fitting.DRAWS, seed)
     progress.update()
     for sequence in SEQUENCES:
         results.points[sequence], results.lines[sequence] = {}, {}
         for method in METHODS:
-            progress.set_note(f"points {LABELS[sequence]} {method}")
+            progress.set_postfix_str(f"points {LABELS[sequence]} {method}")
             results.points[sequence][method] = points.run_points(sequence, method)
             progress.update()
-            progress.set_note(f"lines {LABELS[sequence]} {method}")
+            progress.set_postfix_str(f"lines {LABELS[sequence]} {method}")
             results.lines[sequence][method] = lines.run_lines(sequence, method, limit)
             progress.update()
-        progress.set_note(f"lines {LABELS[sequence]} optimal, the paper's gap")
+        progress.set_postfix_str(f"lines {LABELS[sequence]} optimal, the paper's gap")
         results.lines[sequence]["optimal_paper_gap"] = lines.run_lines(sequence, "optimal", limit, lines.PAPER_GAP)
         progress.update()
-    progress.set_note(f"quadrics from {n_conics} synthetic discs")
+    progress.set_postfix_str(f"quadrics from {n_conics} synthetic discs")
     results.conics = conics.run_conics(n_conics, seed)
     progress.update()
     files = [out / "tables.md"]
@@ -218,7 +222,8 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
         files += fitting.figures(results.fitting, out)
         files.append(conics.figure7(seed, out))
     seconds = time.perf_counter() - started
-    progress.close(f"{NAME}: done in {seconds:.1f} s")
+    progress.close()
+    print(f"{NAME}: done in {seconds:.1f} s", file=sys.stderr)
     summary = summarize(results)
     document = {"experiment": NAME, "settings": {"quick": quick, "seed": seed, "frames": list(points.FRAMES),
                                                  "line_sigma_px": lines.SIGMA_PX, "fitting_draws": len(results.fitting["line"]),
