@@ -214,3 +214,13 @@ def test_a_camera_file_without_three_rows_names_the_file(house_copy, tmp_path, c
     path.write_text("\n".join((lines * 2)[:rows]) + "\n")
     assert_one_line_exit_2(["triangulate", str(house_copy), "--out", str(tmp_path / "o")], capsys, "triangulate",
                            "house.002.P", f"3x4 camera matrix (3 rows of 4 numbers), got {rows} rows")
+
+
+@pytest.mark.parametrize("flags", [["--text"], ["--outlier-threshold", "3"]])
+def test_colmap_only_flags_with_a_vgg_folder_are_refused_by_name(tmp_path, capsys, flags):
+    """``--text`` and ``--outlier-threshold`` act on COLMAP models only: with a VGG folder they are an
+    error naming the flag (they used to be ignored without a word), and nothing is written."""
+    out = tmp_path / "out"
+    assert main(["triangulate", str(vgg_root() / "corridor"), *flags, "--out", str(out)]) == 2
+    assert f"{flags[0]} applies to --colmap models" in capsys.readouterr().err
+    assert not out.exists()

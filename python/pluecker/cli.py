@@ -191,7 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="penalty λ on the unit and orthogonality constraints (default 50)")
     pose.add_argument("--robust", action="store_true", default=None,
                       help="robust to outliers: LO-RANSAC over points and lines, then the refinement on the "
-                      "inliers (reported by the output's inliers_points, inliers_lines and ransac_* keys)")
+                      "inliers (reported by the output's inliers_points, inliers_lines and ransac keys)")
     pose.add_argument("--point-threshold", type=_positive_float, metavar="PX",
                       help="inlier threshold of a point, reprojection distance in pixels (default 4)")
     pose.add_argument("--line-threshold", type=_positive_float, metavar="PX",
@@ -716,6 +716,9 @@ def _triangulate(args: argparse.Namespace) -> int:
         return _triangulate_colmap(args)
     if args.folder is None:
         return _fail("triangulate", "give a VGG FOLDER or --colmap DIR")
+    for given, flag in ((args.outlier_threshold is not None, "--outlier-threshold"), (args.text, "--text")):
+        if given:
+            return _fail("triangulate", f"{flag} applies to --colmap models, not to VGG folders")
 
     try:
         run = triangulate_folder.run(args.folder, views=args.views, method=args.method, lines=args.lines,
