@@ -1,5 +1,6 @@
-"""Every Python snippet of the README runs verbatim as its own script (``python snippet.py``) in a fresh
-process from an empty working directory, as a user who copies it would run it."""
+"""Every Python snippet of the README and of the documents under ``docs/`` runs verbatim as its own script
+(``python snippet.py``) in a fresh process from an empty working directory, as a user who copies it would
+run it."""
 
 from __future__ import annotations
 
@@ -10,8 +11,17 @@ from pathlib import Path
 
 import pytest
 
-README = Path(__file__).resolve().parents[1] / "README.md"
-SNIPPETS = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
+DOCUMENTS = [README, *sorted((ROOT / "docs").glob("*.md"))]
+
+
+def python_snippets(path: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", path.read_text(encoding="utf-8"), flags=re.S)
+
+
+SNIPPETS = [(path.relative_to(ROOT).as_posix(), index, snippet)
+            for path in DOCUMENTS for index, snippet in enumerate(python_snippets(path))]
 
 
 def run_script(folder: Path, source: str) -> subprocess.CompletedProcess:
@@ -28,13 +38,13 @@ def run_script(folder: Path, source: str) -> subprocess.CompletedProcess:
 
 
 def test_the_readme_has_python_snippets():
-    assert len(SNIPPETS) >= 2
+    assert len(python_snippets(README)) >= 2
 
 
-@pytest.mark.parametrize("index", range(len(SNIPPETS)))
-def test_readme_snippet_runs_as_a_script(index, tmp_path):
-    done = run_script(tmp_path, SNIPPETS[index])
-    assert done.returncode == 0, f"README snippet {index} exited with {done.returncode}:\n{done.stderr[-3000:]}"
+@pytest.mark.parametrize("document, index, snippet", SNIPPETS, ids=[f"{d}:{i}" for d, i, _ in SNIPPETS])
+def test_readme_snippet_runs_as_a_script(document, index, snippet, tmp_path):
+    done = run_script(tmp_path, snippet)
+    assert done.returncode == 0, f"{document} snippet {index} exited with {done.returncode}:\n{done.stderr[-3000:]}"
     assert done.stdout.strip(), "every snippet prints its result"
 
 
