@@ -67,7 +67,7 @@ def render_tables(results: Results, quick: bool) -> str:
         "",
         points.table1(results.points),
         "",
-        points.TABLE1_CONVENTION,
+        points.table1_convention(results.points),
         "",
         "## Certificates, branch-and-bound nodes and times (points)",
         "",
