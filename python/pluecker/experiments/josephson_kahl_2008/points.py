@@ -140,7 +140,7 @@ def table1_convention(points: dict[str, dict[str, PointRun]]) -> str:
         "are over the distances ‖r‖ or over r's coordinates, nor anything further about how they were computed. "
         "For isotropic Gaussian errors the distance reading is π/2 ≈ 1.57 times the per-coordinate one. Optimal "
         f"method: {'; '.join(where)}."
-        + (" Neither reading gives the paper's values: the reading explains part of the gap, not all of it."
+        + (" Neither reading gives the paper's values, so the convention alone does not account for the difference."
            if all(w.endswith("between the two") for w in where) else "")
     )
 
