@@ -136,10 +136,10 @@ def table1_convention(points: dict[str, dict[str, PointRun]]) -> str:
         "between an observed corner and the projection of its triangulated point, one sample per observation, r "
         f"being the residual of the paper's eq. 15; the `{PER_COORDINATE}` rows are those of the absolute values "
         "|Δu| and |Δv| of r's two coordinates, two samples per observation. The paper's: its text defines r "
-        "(eq. 15) and captions Table 1 \"Reprojection errors for points with three different methods on two data sets\", but does not say whether its mean and std "
-        "are over the distances ‖r‖ or over r's coordinates, nor anything further about how they were computed. "
-        "For isotropic Gaussian errors the distance reading is π/2 ≈ 1.57 times the per-coordinate one. Optimal "
-        f"method: {'; '.join(where)}."
+        "(eq. 15) and captions Table 1 \"Reprojection errors for points with three different methods on two data "
+        "sets\", but does not say whether its mean and std are over the distances ‖r‖ or over r's coordinates, nor "
+        "anything further about how they were computed. For isotropic Gaussian errors the distance reading is "
+        f"π/2 ≈ 1.57 times the per-coordinate one. Optimal method: {'; '.join(where)}."
         + (" Neither reading gives the paper's values, so the convention alone does not account for the difference."
            if all(w.endswith("between the two") for w in where) else "")
     )
