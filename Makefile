@@ -29,7 +29,7 @@ setup: develop
 $(DEPS_STAMP): Makefile
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.5" "pytest>=7" "hypothesis>=6.100" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
+	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "hypothesis>=6.100" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,

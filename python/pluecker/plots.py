@@ -53,7 +53,7 @@ class Panel:
 _DECADES = 6
 
 
-def _draw(ax, panel: Panel, ylabel: str | None, xlabel: bool = True) -> None:
+def _draw(ax, panel: Panel, ylabel: str | None, xlabel: bool = True, legend: bool = True) -> None:
     top = max((y for s in panel.series for y in s.y if y == y and y > 0), default=None)
     floor = top * 10.0**-_DECADES if top else None
     for s in panel.series:
@@ -70,7 +70,8 @@ def _draw(ax, panel: Panel, ylabel: str | None, xlabel: bool = True) -> None:
     if panel.ylabel or ylabel:
         ax.set_ylabel(panel.ylabel or ylabel)
     ax.grid(True, which="major", alpha=0.3)
-    ax.legend(fontsize="small")
+    if legend:
+        ax.legend(fontsize="small")
 
 
 def two_panel_figure(path: Path | str, title: str, ylabel: str, left: Panel, right: Panel) -> Path:
@@ -83,10 +84,14 @@ def two_panel_figure(path: Path | str, title: str, ylabel: str, left: Panel, rig
 
 
 def stacked_figure(path: Path | str, title: str, panels: Sequence[Panel]) -> Path:
-    """Panels stacked vertically, sharing the x axis, as in Figure 9."""
-    fig, axes = plt.subplots(len(panels), 1, figsize=(6, 3 * len(panels)), sharex=True, constrained_layout=True)
+    """Panels stacked vertically, sharing the x axis, as in Figure 9; one legend below them (inside a
+    panel it would cover curves that span the whole axes)."""
+    fig, axes = plt.subplots(len(panels), 1, figsize=(6, 3 * len(panels) + 0.8), sharex=True,
+                             constrained_layout=True)
     for i, (ax, panel) in enumerate(zip(axes, panels)):
-        _draw(ax, panel, None, xlabel=i == len(panels) - 1)
+        _draw(ax, panel, None, xlabel=i == len(panels) - 1, legend=False)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize="small")
     fig.suptitle(title)
     return _save(fig, path)
 

@@ -201,7 +201,9 @@ def figure7(seed: int, out) -> Any:
 
     scene = disc_scene(seed * 100_003)
     P = scene.cameras[0]
-    fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
+    # The figure takes the outline's aspect (equal axes): a square one leaves half of it blank.
+    extent = np.ptp(scene.points[0], axis=0)
+    fig, ax = plt.subplots(figsize=(7, min(7.0, max(2.5, 7 * extent[1] / extent[0])) + 1.2), constrained_layout=True)
     ax.plot(*scene.points[0].T, ".", color="0.5", markersize=3, label=f"{POINTS_PER_CONIC} noisy points ({SIGMA_PX:g} px)")
     styles = {"truth": ("black", "-"), "optimal": ("tab:green", "--"), "linear": ("tab:red", ":")}
     for name, (colour, style) in styles.items():
@@ -214,7 +216,7 @@ def figure7(seed: int, out) -> Any:
     ax.invert_yaxis()
     ax.set_xlabel("u (px)")
     ax.set_ylabel("v (px)")
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="small", loc="center")
     ax.set_title(f"Figure 7 (synthetic): conic #1, view 1 of {VIEWS}", fontsize="small")
     path = out / "figure7_conic_reprojection.png"
     fig.savefig(path, dpi=100)

@@ -96,9 +96,9 @@ def figures(samples: dict[str, np.ndarray], out: Path) -> list[Path]:
                         color="tab:red", lw=1.2, label="Gaussian" if row == 0 else "N(0, 1)")
                 ax.set_xlabel(label)
                 ax.legend(fontsize="x-small")
-        fig.suptitle(f"Figure {number}: residuals of {kind}s fitted to {21 if kind == 'line' else 63} points with "
-                     f"{SIGMA_PX:g} px noise ({len(raw)} draws); top: raw, bottom: whitened by the predicted "
-                     "covariance", fontsize="small")
+        fig.suptitle(f"Figure {number}: residuals of {kind}s fitted to {21 if kind == 'line' else 63} points\n"
+                     f"with {SIGMA_PX:g} px noise ({len(raw)} draws); top: raw,\nbottom: whitened by the "
+                     "predicted covariance", fontsize="small")
         path = out / f"figure{number}_{kind}_residuals.png"
         fig.savefig(path, dpi=100)
         plt.close(fig)
