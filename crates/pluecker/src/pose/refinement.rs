@@ -22,7 +22,8 @@ use super::correspondences::Conditioning;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{stage, PoseOptions, StageReport};
 use crate::camera::Camera;
-use crate::geometry::quaternion::rotation_distance;
+use crate::geometry::quaternion::{exp_so3, log_so3, rotation_distance};
+use crate::optim::Objective;
 use crate::optim::{trust_region, Subproblem, Summary, Termination};
 use crate::pose::Correspondences;
 use std::time::Instant;
@@ -50,6 +51,11 @@ pub const SAME_BASIN_SMALL: f64 = 1e-4;
 /// Two refined minima are the same when their rotations differ by less than this (rad) and their
 /// translations by less than this fraction of the object's size (conditioned units).
 pub const SAME_MINIMUM: f64 = 1e-6;
+/// Two refined minima closer than [`SAME_BASIN_SMALL`] are also the same when no barrier separates
+/// them: the cost at the geodesic midpoint exceeds the larger of the two by at most this fraction. A
+/// flat valley (4-5 planar points, a narrow field of view) leaves the refinement's stopping point
+/// undetermined along it by up to ~1e-5 at costs equal to ~1e-11; distinct minima have a barrier.
+pub const NO_BARRIER: f64 = 1e-9;
 
 /// One local minimum of the reprojection error, in the conditioned frame of the search.
 #[derive(Debug, Clone, Copy)]
@@ -133,16 +139,13 @@ impl Minima {
             .any(|m| rotation_distance(&m.pose.rotation, &pose.rotation) < radius)
     }
 
-    fn add(&mut self, m: LocalMinimum, summary: &Summary) {
+    fn add(&mut self, m: LocalMinimum, summary: &Summary, cost: &ReprojectionCost<'_>) {
         if self.iterations == 0 && self.evaluations == 0 {
             self.initial_cost = summary.initial_cost;
         }
         self.iterations += summary.iterations;
         self.evaluations += summary.evaluations;
-        let same = self.found.iter().position(|f| {
-            rotation_distance(&f.pose.rotation, &m.pose.rotation) < SAME_MINIMUM
-                && (f.pose.translation - m.pose.translation).norm() < SAME_MINIMUM
-        });
+        let same = self.found.iter().position(|f| same_minimum(f, &m, cost));
         match same {
             Some(i) if self.found[i].cost <= m.cost => {}
             Some(i) => self.found[i] = m,
@@ -182,6 +185,28 @@ impl Minima {
             ambiguous,
         })
     }
+}
+
+/// Whether the refined minima `a` and `b` are one minimum ([`SAME_MINIMUM`], or [`NO_BARRIER`]
+/// between two that are closer than [`SAME_BASIN_SMALL`]).
+fn same_minimum(a: &LocalMinimum, b: &LocalMinimum, cost: &ReprojectionCost<'_>) -> bool {
+    let (turn, shift) = (
+        rotation_distance(&a.pose.rotation, &b.pose.rotation),
+        (a.pose.translation - b.pose.translation).norm(),
+    );
+    if turn < SAME_MINIMUM && shift < SAME_MINIMUM {
+        return true;
+    }
+    if !(turn < SAME_BASIN_SMALL && shift < SAME_BASIN_SMALL) {
+        return false;
+    }
+    let half_turn = exp_so3(&(0.5 * log_so3(&(b.pose.rotation * a.pose.rotation.transpose()))));
+    let midpoint = Pose::new(
+        half_turn * a.pose.rotation,
+        0.5 * (a.pose.translation + b.pose.translation),
+    );
+    let higher = a.cost.max(b.cost);
+    cost.cost(&midpoint) <= higher * (1.0 + NO_BARRIER) + 1e-24
 }
 
 /// The refinement's trust-region settings: `opts.refinement` with Hebden steps.
@@ -224,7 +249,7 @@ pub fn search(
     let mut minima = Minima::new();
     for start in starts {
         let (m, s) = refine_once(cost, start, opts);
-        minima.add(m, &s);
+        minima.add(m, &s, cost);
     }
     let basin = if exhaustive { SAME_BASIN_SMALL } else { SAME_BASIN };
     let refine_promising = |minima: &mut Minima, group: &[Pose]| {
@@ -245,7 +270,7 @@ pub fn search(
                 continue;
             }
             let (m, s) = refine_once(cost, &h, opts);
-            minima.add(m, &s);
+            minima.add(m, &s, cost);
         }
     };
     if exhaustive {
