@@ -32,7 +32,7 @@
 //! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19,
 //! not `F`, and its certificate is the one of [`super`].
 
-use super::{finish, triangulate_line, LineProblem, LineTriangulation};
+use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
 use crate::camera::AnyCamera;
 use crate::camera_model::LensCamera;
 use crate::curved_line::{endpoint_residual, pinhole_endpoint_residual};
@@ -251,9 +251,6 @@ fn exact_covariance(problem: &LineProblem, segments: &[LensSegment], chart: &Lin
         covariance_of_information(&information)
     })
 }
-
-/// Image lines and the covariances of their residuals.
-type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
 
 /// The first-order problem of `segments`: their lines and the covariances of their residuals.
 fn first_order(segments: &[LensSegment]) -> Result<LinesAndCovariances> {

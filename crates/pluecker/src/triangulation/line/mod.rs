@@ -226,13 +226,13 @@ fn finish(problem: &LineProblem, line: &Vector6<f64>, mut report: Report) -> Res
     })
 }
 
+/// Image lines (homogeneous, one per segment) and the 2x2 covariances of their endpoint residuals.
+pub type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
+
 /// The image lines and residual covariances of image segments (pixel endpoints, i.i.d. Gaussian
 /// noise of `sigma` px per coordinate): [`line_from_segment`] on each (see [`super::fitting`]).
 /// Errors name the segment index.
-pub fn lines_from_segments(
-    segments: &[[Vector2<f64>; 2]],
-    sigma: f64,
-) -> Result<(Vec<Vector3<f64>>, Vec<Matrix2<f64>>)> {
+pub fn lines_from_segments(segments: &[[Vector2<f64>; 2]], sigma: f64) -> Result<LinesAndCovariances> {
     let mut lines = Vec::with_capacity(segments.len());
     let mut covariances = Vec::with_capacity(segments.len());
     for (i, s) in segments.iter().enumerate() {

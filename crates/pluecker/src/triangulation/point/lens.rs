@@ -487,7 +487,7 @@ fn tightened_bound(
     let lambda_s = s.symmetric_eigenvalues().max();
     let b_norms: Vec<f64> = jacobians.iter().map(|b| b.norm()).collect();
     // H = LLᵀ from its Cholesky factor.
-    let factor = minorant.hessian.clone().unpack();
+    let factor = minorant.hessian.unpack();
     let lambda_h = (factor * factor.transpose()).symmetric_eigenvalues().min();
     let g_norm = minorant.gradient.norm();
     let a0 = minorant.cost - 2.0 * lin.iter().map(|l| l.e.norm() * l.rounding).sum::<f64>();

@@ -384,7 +384,7 @@ impl EllipsoidPoint {
     }
 
     /// The ellipsoid (semi-axes `|s|`, sorted) in the world, from a point in the frame `sim`.
-    pub fn to_world(&self, sim: &Similarity) -> Option<Ellipsoid> {
+    pub fn to_world(self, sim: &Similarity) -> Option<Ellipsoid> {
         Ellipsoid::from_dual(&transform_dual(&sim.inverse_matrix(), &self.dual()))
     }
 }
