@@ -44,7 +44,7 @@ use std::ops::{Add, Div, Mul, Sub};
 /// The relative widening of every enclosure for the rounding of its evaluation (a few hundred
 /// operations of relative error 1.1e-16 each, with room to spare).
 pub const ROUNDING: f64 = 1e-12;
-/// The absolute widening of every enclosed Jacobian entry (module docs of [`widened`]).
+/// The absolute widening of every enclosed Jacobian entry (module docs of `widened`).
 pub const ROUNDING_ABSOLUTE: f64 = 1e-13;
 
 /// A distortion the enclosures cover (module docs).

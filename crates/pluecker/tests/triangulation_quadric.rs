@@ -249,6 +249,10 @@ fn no_ellipsoid_anywhere_costs_less_than_the_certified_bound() {
                 continue;
             }
             certified_here += 1;
+            if regime.bound == QuadricBound::Relaxation {
+                // The relaxation alone: never the convexity test's certificate.
+                assert_eq!(c.kind, CertificateKind::BranchAndBound, "{} seed {seed}", regime.name);
+            }
             let found = search_below(
                 &scene.cameras,
                 &conics,

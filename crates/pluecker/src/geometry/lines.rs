@@ -28,7 +28,7 @@ fn max_scaled(v: &Vector3<f64>) -> Vector3<f64> {
 /// Unit normal of the interpretation plane of the image segment `a`–`b` (pixels), in the camera frame.
 ///
 /// Fails with [`Error::Degenerate`] when the endpoints coincide: their viewing rays are less than
-/// [`MIN_SEGMENT`] radians apart (scale-free, so neither pixels near 1e300 nor subnormal ones fool it).
+/// `MIN_SEGMENT` radians apart (scale-free, so neither pixels near 1e300 nor subnormal ones fool it).
 pub fn interpretation_plane_normal(camera: &Camera, a: &Vector2<f64>, b: &Vector2<f64>) -> Result<Vector3<f64>> {
     let xa = camera.pixel_to_normalized(a);
     let xb = camera.pixel_to_normalized(b);

@@ -16,9 +16,9 @@
 //! undistorted into the pixels of its lens's pinhole part with covariance `J⁻¹ C J⁻ᵀ`
 //! ([`LensCamera::undistort_with_covariance`]), each segment's line and the covariance of its residual
 //! (eq. 18) by [`line_from_endpoints`]. With `optimal`, they run `local` and, as for points, also
-//! `optimal` (whose global search may find another basin), the cheaper exact cost kept. [`refine`]
+//! `optimal` (whose global search may find another basin), the cheaper exact cost kept. `refine`
 //! then minimises `F` itself over the orthonormal representation of Bartoli & Sturm (the 4-parameter
-//! update of [`super::LineObjective`], in the same conditioned frame). Its gradient: by the envelope
+//! update of `super::LineObjective`, in the same conditioned frame). Its gradient: by the envelope
 //! theorem `∂rᵢₖ/∂lᵢ` is the derivative at the nearest point `q*` of the curve moved with the line
 //! ([`crate::curved_line::EndpointResidual::line_gradient`]), and `∂lᵢ/∂𝓛 = P_𝓛`.
 //!

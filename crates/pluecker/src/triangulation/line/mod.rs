@@ -21,7 +21,7 @@
 //! an image line with zero normal, a covariance that is not positive definite, cameras sharing one
 //! centre, or back-projected planes that all coincide (the 3-D line lies in an epipolar plane of every
 //! pair of views, so its images do not determine it). Lines have no cheirality test: every line not
-//! parallel to an image plane crosses that camera's principal plane, so [`Status::BehindCamera`] is
+//! parallel to an image plane crosses that camera's principal plane, so [`super::Status::BehindCamera`] is
 //! never reported for lines.
 
 pub mod batch;
