@@ -226,7 +226,7 @@ fn finish(problem: &LineProblem, line: &Vector6<f64>, mut report: Report) -> Res
     })
 }
 
-/// Image lines (homogeneous, one per segment) and the 2x2 covariances of their endpoint residuals.
+/// Image lines (homogeneous, one per segment) and the 2x2 covariances of their residuals.
 pub type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
 
 /// The image lines and residual covariances of image segments (pixel endpoints, i.i.d. Gaussian
