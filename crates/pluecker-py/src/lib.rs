@@ -1,12 +1,16 @@
 //! Python bindings of [`pluecker`]: the extension module `pluecker._core`.
 //!
-//! This crate holds no geometry. Its layout mirrors the core's: [`pose`] and [`triangulation`], one
+//! This crate holds no geometry. Its layout mirrors the core's: `pose` and `triangulation`, one
 //! module per primitive inside the latter. Around them: numpy arrays to nalgebra and back in one
-//! reader ([`convert`]), the core's errors as Python exceptions ([`errors`]), every property of a
-//! result or options class declared once ([`fields`]), pickling ([`pickle`]) and calls that Ctrl-C
-//! can stop ([`interrupt`]). Every solve runs with the GIL released, and a Rust panic becomes a
+//! reader (`convert`), the core's errors as Python exceptions (`errors`), every property of a
+//! result or options class declared once (`fields`), pickling (`pickle`) and calls that Ctrl-C
+//! can stop (`interrupt`). Every solve runs with the GIL released, and a Rust panic becomes a
 //! Python exception. The Python package `pluecker` (python/pluecker/__init__.py) re-exports
 //! everything defined here; `_core.pyi` types it.
+
+// `!(x > 0.0)` is true for NaN: the NaN guard used throughout (a NaN input or bound must take the
+// failing branch), which the comparison's partial_cmp spelling would hide.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod camera;
 mod convert;

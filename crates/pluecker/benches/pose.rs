@@ -21,6 +21,9 @@
 //! Run: `cargo bench -p pluecker --bench pose` (a few minutes on 2 cores), or append `-- --quick` for a
 //! rough pass, or `-- pipeline/100` to filter.
 
+// `!(x > 0.0)` is true for NaN: the NaN guard used throughout (a NaN must take the failing branch).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::Vector2;
 use pluecker::geometry::quaternion::rotation_distance;

@@ -92,7 +92,7 @@ fn summary(case: &Case, tracks: &[Track]) {
             times.push(r.report.time_seconds * 1e6);
             errors.push((r.point - truth).norm());
             match r.report.certificate.kind {
-                CertificateKind::ConvexityTest => by_test += 1,
+                CertificateKind::ConvexityTest | CertificateKind::LensConvexityTest => by_test += 1,
                 CertificateKind::BranchAndBound | CertificateKind::TaylorBranchAndBound => {
                     by_bnb += 1;
                     nodes.push(r.report.certificate.nodes as f64);

@@ -136,9 +136,12 @@ fn numbers(path: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// A line's track: the views that see it and its segment in each.
+type Track = (Vec<usize>, Vec<[Vector2<f64>; 2]>);
+
 /// The first four views of a VGG sequence (cameras fixed for the mirrored frame, see the data
 /// README) and every line seen in at least two of them: (view indices, segments).
-fn vgg_lines(dir: &Path, prefix: &str) -> (Vec<Matrix3x4<f64>>, Vec<(Vec<usize>, Vec<[Vector2<f64>; 2]>)>) {
+fn vgg_lines(dir: &Path, prefix: &str) -> (Vec<Matrix3x4<f64>>, Vec<Track>) {
     let mirror = Matrix4::from_diagonal(&nalgebra::Vector4::new(-1.0, -1.0, -1.0, 1.0));
     let mut cameras = Vec::new();
     let mut segments = Vec::new();

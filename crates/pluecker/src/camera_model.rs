@@ -937,7 +937,9 @@ mod tests {
             Vector3::new(-0.4, 0.25, 2.0),
             Vector3::new(0.05, 0.1, 1.0),
         ];
-        let cases: [(CameraModel, &[f64], [[f64; 2]; 3]); 3] = [
+        // (model, parameters, expected pixels of the three points).
+        type Case<'a> = (CameraModel, &'a [f64], [[f64; 2]; 3]);
+        let cases: [Case; 3] = [
             (
                 CameraModel::OpenCv,
                 &[800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4],

@@ -154,7 +154,7 @@ fn robust_pose_through_a_lens_rejects_outliers() {
         let mut rng = Rng::new(seed);
         let mut corr = observe(&scene, &lens, &|_| 1.0, &mut rng);
         // 30 % of the points replaced by random pixels at least 40 px from the truth.
-        let mut outlier = vec![false; 40];
+        let mut outlier = [false; 40];
         for i in (0..40).step_by(3) {
             let truth = corr.points2d[i];
             while (corr.points2d[i] - truth).norm() < 40.0 {
@@ -172,10 +172,8 @@ fn robust_pose_through_a_lens_rejects_outliers() {
         };
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
-        for i in 0..40 {
-            if outlier[i] {
-                assert!(!result.inliers_points[i], "seed {seed}: outlier {i} kept");
-            }
+        for (i, _) in outlier.iter().enumerate().filter(|(_, &o)| o) {
+            assert!(!result.inliers_points[i], "seed {seed}: outlier {i} kept");
         }
         let kept = result.inliers_points.iter().filter(|&&k| k).count();
         assert!(kept >= 25, "seed {seed}: {kept} of 26 inliers kept");
@@ -562,8 +560,8 @@ fn oracle_cost(
     let np = corr.n_points();
     for (i, (s3, s2)) in corr.lines3d.iter().zip(&corr.lines2d).enumerate() {
         let (qa, qb) = (normalised(&s3[0]), normalised(&s3[1]));
-        for k in 0..2 {
-            total += 0.5 * oracle_line_distance2(lens, &qa, &qb, &s2[k], &info(np + 2 * i + k));
+        for (k, end) in s2.iter().enumerate() {
+            total += 0.5 * oracle_line_distance2(lens, &qa, &qb, end, &info(np + 2 * i + k));
         }
     }
     total

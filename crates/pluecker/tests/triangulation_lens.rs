@@ -203,6 +203,8 @@ fn track(lens: Lens, views: usize, off_axis: f64, anisotropic: bool, rng: &mut R
         let (sigma, l) = if anisotropic {
             let a = rng.uniform_in(0.5, 2.0);
             let b = rng.uniform_in(0.5, 2.0);
+            // 3.14, not PI: the seeded test data stay those the test was tuned on.
+            #[allow(clippy::approx_constant)]
             let rot = nalgebra::Rotation2::new(rng.uniform_in(0.0, 3.14)).into_inner();
             let chol = rot * Matrix2::new(a, 0.0, 0.0, b);
             (chol, chol.try_inverse().unwrap())

@@ -5,6 +5,9 @@
 //! Levenberg-Marquardt over lines — never the library's residuals. Through a distorting lens the
 //! result is never certified; pinhole views keep the pinhole certificate.
 
+// `!(x > 0.0)` is true for NaN: the NaN guard used throughout (a NaN must take the failing branch).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3, Vector4, Vector6};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
@@ -308,6 +311,8 @@ fn scene(
         let mut covs = [Matrix2::identity(); 2];
         for k in 0..2 {
             let chol = if anisotropic {
+                // 3.14, not PI: the seeded test data stay those the test was tuned on.
+                #[allow(clippy::approx_constant)]
                 let rot = nalgebra::Rotation2::new(rng.uniform_in(0.0, 3.14)).into_inner();
                 rot * Matrix2::new(rng.uniform_in(0.4, 2.0), 0.0, 0.0, rng.uniform_in(0.4, 2.0))
             } else {
@@ -678,7 +683,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
     let results = triangulate_lines_sparse_views(&views, &tracks, &o, None).unwrap();
     for (t, result) in results.iter().enumerate() {
         let seen = &images[offsets[t]..offsets[t + 1]];
-        let track_obs: Vec<&Obs> = rows[offsets[t]..offsets[t + 1]].iter().copied().collect();
+        let track_obs: Vec<&Obs> = rows[offsets[t]..offsets[t + 1]].to_vec();
         let single = triangulate_line_segments_views(
             &seen.iter().map(|&j| views[j].clone()).collect::<Vec<_>>(),
             &track_obs.iter().map(|o| o.ends).collect::<Vec<_>>(),

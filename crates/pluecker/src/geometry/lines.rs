@@ -28,7 +28,7 @@ fn max_scaled(v: &Vector3<f64>) -> Vector3<f64> {
 /// Unit normal of the interpretation plane of the image segment `a`–`b` (pixels), in the camera frame.
 ///
 /// Fails with [`Error::Degenerate`] when the endpoints coincide: their viewing rays are less than
-/// [`MIN_SEGMENT`] radians apart (scale-free, so neither pixels near 1e300 nor subnormal ones fool it).
+/// `MIN_SEGMENT` radians apart (scale-free, so neither pixels near 1e300 nor subnormal ones fool it).
 pub fn interpretation_plane_normal(camera: &Camera, a: &Vector2<f64>, b: &Vector2<f64>) -> Result<Vector3<f64>> {
     let xa = camera.pixel_to_normalized(a);
     let xb = camera.pixel_to_normalized(b);
@@ -73,14 +73,14 @@ impl ObjectLine {
     }
 }
 
+/// Image segments (pixel endpoints) and the matching 3-D segments (world endpoints).
+pub type SegmentPairs = (Vec<[Vector2<f64>; 2]>, Vec<[Vector3<f64>; 2]>);
+
 /// Figure 2: `N` line correspondences from `2N` point correspondences, pairing points `(0,1), (2,3), …`.
 ///
 /// Returns image segments (pixel endpoints) and 3-D segments (world endpoints); an odd last point is
 /// dropped. Any three non-collinear points of the pairs give a well-posed line problem.
-pub fn lines_from_point_pairs(
-    points2d: &[Vector2<f64>],
-    points3d: &[Vector3<f64>],
-) -> (Vec<[Vector2<f64>; 2]>, Vec<[Vector3<f64>; 2]>) {
+pub fn lines_from_point_pairs(points2d: &[Vector2<f64>], points3d: &[Vector3<f64>]) -> SegmentPairs {
     let n = points2d.len().min(points3d.len()) / 2;
     let segs2d = (0..n).map(|i| [points2d[2 * i], points2d[2 * i + 1]]).collect();
     let segs3d = (0..n).map(|i| [points3d[2 * i], points3d[2 * i + 1]]).collect();

@@ -330,7 +330,7 @@ mod tests {
         fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
             self.calls += 1;
             let mut lower = 0.0;
-            for k in 0..region.dim() {
+            for (k, tilt) in TILT.iter().enumerate().take(region.dim()) {
                 let (a, b) = (region.lower[k], region.upper[k]);
                 let sq_lo = if a <= 0.0 && b >= 0.0 { 0.0 } else { (a * a).min(b * b) };
                 let sq_hi = (a * a).max(b * b);
@@ -340,7 +340,7 @@ mod tests {
                 } else {
                     (g_lo * g_lo).min(g_hi * g_hi)
                 };
-                lower += TILT[k] * a;
+                lower += tilt * a;
             }
             let centre = region.centre();
             let cost = double_well(&centre);

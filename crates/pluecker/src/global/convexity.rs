@@ -39,12 +39,12 @@
 //! each `ρᵢ ≤ ε₀` keeps the negative part from growing with the number of views.
 //!
 //! **4. Conclusion.** If `μ < 1`, `f` is strongly convex on the convex `K ∋ 0`; for `y ∈ K`, Taylor
-//! along the segment gives the [`Minorant`] `f(y) ≥ m(y) = f(0) + gᵀy + ½yᵀHy` with `H = (1 − μ)P`
+//! along the segment gives the `Minorant` `f(y) ≥ m(y) = f(0) + gᵀy + ½yᵀHy` with `H = (1 − μ)P`
 //! and `g` the gradient at `0`. Points outside `K` cost more than `ε₀²`, so any lower bound of `m`
 //! over a set containing the feasible part of `K` is, capped at `ε₀²`, a lower bound of `f` over
 //! every feasible chart point: over all of them, `ε₀² − ½gᵀH⁻¹g`
-//! ([`Minorant::unconstrained_minimum`]); under one extra quadratic constraint, the Lagrangian bound
-//! of [`Minorant::minimum_subject_to`].
+//! (`Minorant::unconstrained_minimum`); under one extra quadratic constraint, the Lagrangian bound
+//! of `Minorant::minimum_subject_to`.
 //!
 //! It fails (the caller's branch and bound decides) when `q ≥ 1` without an a-priori bound,
 //! `κ_d ≥ 1` or `μ ≥ 1`: low parallax in an affine chart, large residuals, or a second minimum
@@ -60,9 +60,9 @@ const MU_MARGIN: f64 = 1e-6;
 /// Stage 2 stops when `κ` shrinks by less than this factor, or after `MAX_REFINEMENTS` passes.
 const REFINEMENT_RATIO: f64 = 0.99;
 const MAX_REFINEMENTS: usize = 60;
-/// Golden-section steps of the Lagrange multiplier in [`Minorant::minimum_subject_to`].
+/// Golden-section steps of the Lagrange multiplier in `Minorant::minimum_subject_to`.
 const MULTIPLIER_STEPS: usize = 80;
-/// The bound of [`Minorant::minimum_subject_to`] is lowered by this fraction of the cost.
+/// The bound of `Minorant::minimum_subject_to` is lowered by this fraction of the cost.
 const ROUNDING_MARGIN: f64 = 1e-9;
 
 /// One view in chart coordinates: `a(y) = a0 + G y ∈ ℝᴹ`, `ζ(y) = 1 + dᵀy`, `y ∈ ℝᴺ`.

@@ -39,22 +39,6 @@ impl Interval {
         }
     }
 
-    /// `{a + b}`.
-    pub fn add(self, other: Interval) -> Interval {
-        Interval {
-            lo: self.lo + other.lo,
-            hi: self.hi + other.hi,
-        }
-    }
-
-    /// `{a − b}`.
-    pub fn sub(self, other: Interval) -> Interval {
-        Interval {
-            lo: self.lo - other.hi,
-            hi: self.hi - other.lo,
-        }
-    }
-
     /// `{c a}`.
     pub fn scale(self, c: f64) -> Interval {
         if c >= 0.0 {
@@ -70,21 +54,6 @@ impl Interval {
         }
     }
 
-    /// `{a b}`: the least and greatest of the four end products (`0 · ∞` counts as 0).
-    pub fn mul(self, other: Interval) -> Interval {
-        let p = |a: f64, b: f64| if a == 0.0 || b == 0.0 { 0.0 } else { a * b };
-        let c = [
-            p(self.lo, other.lo),
-            p(self.lo, other.hi),
-            p(self.hi, other.lo),
-            p(self.hi, other.hi),
-        ];
-        Interval {
-            lo: c.iter().copied().fold(f64::INFINITY, f64::min),
-            hi: c.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        }
-    }
-
     /// `{a²}`: tighter than `a · a`, never negative.
     pub fn sqr(self) -> Interval {
         let (a, b) = (self.lo * self.lo, self.hi * self.hi);
@@ -92,15 +61,6 @@ impl Interval {
             Interval::new(a.min(b), a.max(b))
         } else {
             Interval::new(0.0, a.max(b))
-        }
-    }
-
-    /// `{a / b}`; the whole line when `b` contains 0.
-    pub fn div(self, other: Interval) -> Interval {
-        if other.lo > 0.0 || other.hi < 0.0 {
-            self.mul(Interval::new(1.0 / other.hi, 1.0 / other.lo))
-        } else {
-            Interval::entire()
         }
     }
 
@@ -134,10 +94,68 @@ impl Interval {
     }
 }
 
+// The four operations are the std operators (`a + b`, `a.add(b)` with the trait in scope).
+impl std::ops::Add for Interval {
+    type Output = Interval;
+
+    /// `{a + b}`.
+    fn add(self, other: Interval) -> Interval {
+        Interval {
+            lo: self.lo + other.lo,
+            hi: self.hi + other.hi,
+        }
+    }
+}
+
+impl std::ops::Sub for Interval {
+    type Output = Interval;
+
+    /// `{a − b}`.
+    fn sub(self, other: Interval) -> Interval {
+        Interval {
+            lo: self.lo - other.hi,
+            hi: self.hi - other.lo,
+        }
+    }
+}
+
+impl std::ops::Mul for Interval {
+    type Output = Interval;
+
+    /// `{a b}`: the least and greatest of the four end products (`0 · ∞` counts as 0).
+    fn mul(self, other: Interval) -> Interval {
+        let p = |a: f64, b: f64| if a == 0.0 || b == 0.0 { 0.0 } else { a * b };
+        let c = [
+            p(self.lo, other.lo),
+            p(self.lo, other.hi),
+            p(self.hi, other.lo),
+            p(self.hi, other.hi),
+        ];
+        Interval {
+            lo: c.iter().copied().fold(f64::INFINITY, f64::min),
+            hi: c.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        }
+    }
+}
+
+impl std::ops::Div for Interval {
+    type Output = Interval;
+
+    /// `{a / b}`; the whole line when `b` contains 0.
+    fn div(self, other: Interval) -> Interval {
+        if other.lo > 0.0 || other.hi < 0.0 {
+            self * Interval::new(1.0 / other.hi, 1.0 / other.lo)
+        } else {
+            Interval::entire()
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::rng::Rng;
+    use std::ops::{Add, Div, Mul, Sub};
 
     fn random_interval(rng: &mut Rng) -> Interval {
         let (a, b) = (rng.normal() * 3.0, rng.normal() * 3.0);

@@ -12,6 +12,7 @@
 
 pub use super::interval::Interval;
 use super::socp::{Affine, Socp};
+use std::ops::Mul;
 
 /// The range of `xy` over the box: the least and greatest of the four corner products.
 pub fn product_bounds(x: Interval, y: Interval) -> Interval {

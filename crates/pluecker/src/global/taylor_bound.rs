@@ -20,6 +20,7 @@
 
 use super::interval::Interval;
 use nalgebra::{SMatrix, SVector};
+use std::ops::{Add, Div, Mul, Sub};
 
 /// Relative widening of every bound for rounding (module docs of [`super::interval`]).
 pub const ROUNDING_MARGIN: f64 = 1e-9;

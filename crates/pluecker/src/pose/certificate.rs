@@ -32,7 +32,7 @@
 //!    for a point, `D²π[p', p'] = −2 (p'_z / p_z) Dπ[p']`, so `r'' = K₂ Dπ[p''] − 2 (p'_z / p_z) r'`;
 //!    for a line endpoint, `r = n / w` (`n = ēᵀ m`, `w = ‖G m_xy‖`, `m = A × B`) and
 //!    `r'' = (n'' − r w'') / w − 2 (w' / w) r'`, with `n''(0)` an exact quadratic form in `v`. Bounding
-//!    each part over the ball gives `‖r''‖ ≤ K` ([`RayCurvature`]), hence
+//!    each part over the ball gives `‖r''‖ ≤ K` (`RayCurvature`), hence
 //!    `‖r(s)‖ ≥ ‖r̂ + s J T v‖ − ½ K s²` and `‖r̂ + s J T v‖² ≥ 2f̂ − 2‖Tᵀg‖ s + λ_min s²`. The least
 //!    value of the square of the right-hand side over `s ≤ ρ`, halved, is the lower bound.
 //!
@@ -537,7 +537,7 @@ fn gronwall(x0: f64, d: f64, c: f64, s: f64) -> f64 {
     }
 }
 
-/// A point's part of [`RayCurvature`]: what does not depend on the radius.
+/// A point's part of `RayCurvature`: what does not depend on the radius.
 struct PointRay {
     /// `‖y‖ = ‖R̂ X‖` and the camera-frame point `p = y + t̂`.
     y_norm: f64,
@@ -548,7 +548,7 @@ struct PointRay {
     gram: SMatrix<f64, 6, 6>,
 }
 
-/// A line endpoint's part of [`RayCurvature`].
+/// A line endpoint's part of `RayCurvature`.
 struct EndpointRay {
     /// `ē = K⁻¹ ẽ`, its norm, `‖B × ē‖` and `‖ē × A‖`.
     e_norm: f64,
@@ -562,7 +562,7 @@ struct EndpointRay {
     n2_exact: f64,
 }
 
-/// A line's part of [`RayCurvature`].
+/// A line's part of `RayCurvature`.
 struct LineRay {
     /// `‖y_A‖`, `‖y_B‖`, `‖A‖`, `‖B‖`, the segment length, `w₀ = ‖G m_xy‖`.
     ya: f64,
@@ -1135,7 +1135,7 @@ mod tests {
     use crate::rng::Rng;
     use crate::synthetic::visible_scene;
 
-    /// [`RayCurvature`] bounds the second derivative of the residual vector along random whitened
+    /// `RayCurvature` bounds the second derivative of the residual vector along random whitened
     /// rays (central differences), on wide and narrow fields of view, with points and lines, at the
     /// pose and at a perturbed one.
     /// The closed-form largest eigenvalue agrees with nalgebra's and never falls below it.

@@ -2,7 +2,7 @@
 //! first-order account of a lens's distortion. Josephson & Kahl 2008 weight each observation by its
 //! covariance (eq. 18, the Mahalanobis distance); this module applies the same weighting to the pose.
 //!
-//! With an [`ObservationNoise`] on the [`Correspondences`], the residuals of
+//! With an [`ObservationNoise`] on the [`Correspondences`](super::Correspondences), the residuals of
 //! [`super::reprojection::ReprojectionCost`] become:
 //! - a point: `W_i (π(R X + t) − u_i)`, where `W_i` whitens the pixel residual (`W_iᵀ W_i = Σ_i⁻¹`);
 //! - a segment endpoint `e`: `(l·ẽ) / √(l₁₂ᵀ C_e l₁₂)`, where `l` is the projected line in pixels,

@@ -72,7 +72,7 @@ impl Similarity {
 
     /// A conditioned point back in the world (the tests' round trip).
     #[cfg(test)]
-    pub fn to_world(&self, x: &Vector3<f64>) -> Vector3<f64> {
+    pub fn to_world(self, x: &Vector3<f64>) -> Vector3<f64> {
         self.rotation.transpose() * x / self.scale + self.origin
     }
 }

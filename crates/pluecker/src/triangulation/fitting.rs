@@ -132,7 +132,7 @@ pub const PAPER_IMAGE_SIZE: f64 = 1000.0;
 ///
 /// Errors: fewer than 2 points, non-finite values, `sigma ≤ 0`, all points coincident (to the
 /// rounding of their coordinates), or a `σ` for which `σ² Σ₁` overflows or underflows
-/// ([`Error::InvalidOption`] naming `sigma`, see [`scaled_covariance`]).
+/// ([`Error::InvalidOption`] naming `sigma`, see `scaled_covariance`).
 pub fn fit_line(points: &[Vector2<f64>], sigma: f64) -> Result<FittedLine> {
     check_points(points, sigma, 2, "fit_line")?;
     if coincide(points) {
@@ -291,11 +291,11 @@ fn least_eigenvector(m: &SMatrix<f64, 6, 6>) -> Vector6<f64> {
 /// The fit is Sampson's iteratively reweighted algebraic fit on Hartley-normalised points (weights
 /// `1/‖∇Q(xₖ)‖²`, started from the plain algebraic fit). To first order its coefficient vector `θ`
 /// (unit norm) has the covariance of the KCR bound, `σ̄² (P M P)⁺` with `M = Σ m(xₖ) m(xₖ)ᵀ / ‖∇Q(xₖ)‖²`
-/// and `P = I − θθᵀ` (Kanatani 1996, cited as [12] by the paper); it is propagated through the dual
+/// and `P = I − θθᵀ` (Kanatani 1996, cited as \[12\] by the paper); it is propagated through the dual
 /// conic and the normalisation of [`super::quadric::residual`].
 ///
 /// Errors: fewer than 5 points, non-finite values, `sigma ≤ 0`, points that no real ellipse fits, or a
-/// `σ` for which the covariance overflows or underflows (as [`fit_line`], see [`scaled_covariance`]).
+/// `σ` for which the covariance overflows or underflows (as [`fit_line`], see `scaled_covariance`).
 pub fn fit_conic(points: &[Vector2<f64>], sigma: f64) -> Result<FittedConic> {
     check_points(points, sigma, 5, "fit_conic")?;
     if coincide(points) {

@@ -22,16 +22,16 @@
 //! a trigonometric polynomial of degree 4 in `β`. With `τ = tan(β/2)`, `(1 + τ²)⁴ f` is a polynomial of
 //! degree 8 in `τ`, and `cot(β/2)` gives its reversal: the real roots with `|τ| ≤ 1` and those with
 //! `|cot(β/2)| ≤ 1` cover every `β` on bounded intervals (no root escapes to infinity at `β = π`).
-//! They are found by [`real_roots_in`]; each gives `α` from `v`.
+//! They are found by `real_roots_in`; each gives `α` from `v`.
 //!
 //! **At most 8 solutions:** the degree in `τ`. It is attained by three general rank-one constraints
 //! (P3L has 8 solutions, Dhome et al. 1989); special constraints have fewer real ones (see the
 //! solvers). Eight is also the degree of `SO(3)` in `ℝ³ˣ³`, so no elimination can do better for
 //! three general linear constraints.
 //!
-//! **Polishing.** Each candidate takes up to [`POLISH_STEPS`] verified Newton steps on the three
+//! **Polishing.** Each candidate takes up to `POLISH_STEPS` verified Newton steps on the three
 //! constraints themselves (left increments `R ← exp([δ]×) R`; the system is square) and is kept if its
-//! residuals are at most [`RESIDUAL_TOLERANCE`]. This brings the accuracy from that of the polynomial's
+//! residuals are at most `RESIDUAL_TOLERANCE`. This brings the accuracy from that of the polynomial's
 //! coefficients (which lose digits to cancellation) to the conditioning of the constraints.
 //!
 //! **Degenerate cases.** When the constraints leave a continuum of rotations (e.g. three parallel
@@ -207,7 +207,7 @@ impl Constraints {
         ])
     }
 
-    /// Verified Newton steps; the rotation if its residuals end within [`RESIDUAL_TOLERANCE`].
+    /// Verified Newton steps; the rotation if its residuals end within `RESIDUAL_TOLERANCE`.
     fn polish(&self, mut r: Matrix3<f64>) -> Option<Matrix3<f64>> {
         let mut residual = self.residuals(&r);
         let mut size = residual.amax();

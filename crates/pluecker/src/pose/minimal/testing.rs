@@ -243,19 +243,34 @@ pub struct DrawSummary {
     pub worst_residual: f64,
 }
 
-/// Solves `draws` random samples of the mix `kinds` with `solver`, asserting that every returned pose
-/// is valid (constraints within `angle`, at most `max` poses) and that the truth is among them to
+/// Which random samples [`check_random_draws`] solves: `draws` of them from `seed`, in a field of view
+/// of `±half_width`.
+#[derive(Debug, Clone, Copy)]
+pub struct Draws {
+    /// The seed of the draws.
+    pub seed: u64,
+    /// How many samples.
+    pub draws: usize,
+    /// The half-width of the field of view ([`Sample::random`]).
+    pub half_width: f64,
+}
+
+/// Solves the random samples `draws` of the mix `kinds` with `solver`, asserting that every returned
+/// pose is valid (constraints within `angle`, at most `max` poses) and that the truth is among them to
 /// `C κ ε`, and to [`POSE_TOLERANCE`] when `κ ≤ KAPPA_LIMIT`.
 pub fn check_random_draws(
     name: &str,
     solver: impl Fn(&[Feature; 3]) -> Vec<Pose>,
     kinds: [bool; 3],
-    seed: u64,
-    draws: usize,
-    half_width: f64,
+    draws: Draws,
     angle: f64,
     max: usize,
 ) -> DrawSummary {
+    let Draws {
+        seed,
+        draws,
+        half_width,
+    } = draws;
     let mut rng = Rng::new(seed);
     let mut summary = DrawSummary {
         found: 0,

@@ -2,12 +2,12 @@
 //! scoring (Torr & Zisserman 2000).
 //!
 //! Each iteration draws a minimal sample of three correspondences, points and lines together
-//! ([`sampler`]), solves it with [`crate::pose::minimal::solve`] (P3P today; the mixed and line-only
+//! (`sampler`), solves it with [`crate::pose::minimal::solve`] (P3P today; the mixed and line-only
 //! solvers as they exist), and scores every pose it returns whose sample lies in front of the camera by
-//! the truncated squared reprojection error ([`scoring`]: `½ Σ min(eᵢ², τᵢ²)`, points in pixels, lines
+//! the truncated squared reprojection error (`scoring`: `½ Σ min(eᵢ², τᵢ²)`, points in pixels, lines
 //! as the RMS of the two endpoint-to-projected-line distances in pixels, with separate thresholds).
 //! Scoring stops early as soon as a hypothesis cannot beat the best one, or, once a best model exists,
-//! as soon as Wald's sequential probability ratio test (SPRT, [`sprt`]: Matas & Chum, ICCV 2005) finds
+//! as soon as Wald's sequential probability ratio test (SPRT, `sprt`: Matas & Chum, ICCV 2005) finds
 //! it no better than a random pose: with many correspondences and few inliers a bad hypothesis is then
 //! rejected after a few tens of errors instead of all of them.
 //!
@@ -21,7 +21,7 @@
 //! settle on a worse model nearby; the wider rounds bring the accuracy to that of the
 //! maximum-likelihood fit on the true inliers (measured with `bench/compare_robust_pose.py`: the figures
 //! are in `bench/README.md`, "Figures behind the code"). The loop stops when the number of
-//! samples reaches the adaptive bound of [`sampler`] for [`RansacOptions::confidence`], the cap of
+//! samples reaches the adaptive bound of `sampler` for [`RansacOptions::confidence`], the cap of
 //! [`RansacOptions::min_inlier_ratio`], the iteration cap, or the time budget. The caller
 //! ([`crate::pose::estimate_pose`]) then refines the best model on its inliers with the full
 //! reprojection refinement, if it has at least [`RansacReport::required_inliers`].
@@ -42,7 +42,7 @@
 //! only for small `n`: all-outlier data used to end `not_converged` with 6-18 "inliers". The best model
 //! must also beat chance: [`RansacReport::required_inliers`] is `max(min_inliers, min(c + 1, ⌈ρ n⌉))`,
 //! with `c` the most inliers that the best of the `M` hypotheses tried reaches by chance with
-//! probability above [`CHANCE_SIGNIFICANCE`] ([`sprt::chance_inliers`]: the exact binomial tails of
+//! probability above [`CHANCE_SIGNIFICANCE`] (`sprt::chance_inliers`: the exact binomial tails of
 //! the points and the lines, Bonferroni over `M`) and `ρ` = [`RansacOptions::min_inlier_ratio`]: a model with at least the
 //! fraction of inliers the loop is designed to find is never refused, so a threshold wider than the
 //! image (every correspondence an inlier of every pose) still gives an answer. With the defaults and
@@ -81,7 +81,7 @@ pub struct RansacOptions {
     /// the projected 3-D line, pixels. Default `4.0`.
     pub line_threshold: f64,
     /// Probability of having drawn at least one all-inlier sample when the loop stops on its adaptive
-    /// bound (see [`sampler`]). In `(0, 1)`. Default `0.9999`.
+    /// bound (see `sampler`). In `(0, 1)`. Default `0.9999`.
     pub confidence: f64,
     /// Cap on the number of samples drawn. ≥ 1. Default `100_000`.
     pub max_iterations: usize,
@@ -89,7 +89,7 @@ pub struct RansacOptions {
     /// stop the loop. Default `0`.
     pub min_iterations: usize,
     /// `ρ`, the smallest inlier fraction the loop is designed to find. It stops after
-    /// `⌈ln(1 − confidence) / ln(1 − ρ³ (1 − α))⌉` samples (see [`sampler`]) even when the best model so
+    /// `⌈ln(1 − confidence) / ln(1 − ρ³ (1 − α))⌉` samples (see `sampler`) even when the best model so
     /// far has fewer inliers: by then a model with a fraction `ρ` of the points and of the lines as
     /// inliers would have been found with probability `confidence`. It is also the floor of the SPRT's
     /// `ε`, and a model with at least `⌈ρ n⌉` inliers always meets [`RansacReport::required_inliers`].
@@ -97,7 +97,7 @@ pub struct RansacOptions {
     /// loop). Default `0.1` (COLMAP's default): at most 9,206 samples at the default confidence; data
     /// with 90 % outliers or fewer are found with the requested confidence, sparser models only by luck.
     pub min_inlier_ratio: f64,
-    /// Early rejection of bad hypotheses by the sequential probability ratio test ([`sprt`]); `false`
+    /// Early rejection of bad hypotheses by the sequential probability ratio test (`sprt`); `false`
     /// scores every hypothesis until it cannot beat the best one. Default `true`.
     pub sprt: bool,
     /// Wall-time budget of the sampling loop (checked every iteration); `None`: no budget. Default
@@ -125,13 +125,13 @@ pub const LOCAL_ROUNDS: usize = 4;
 /// (Lebeda et al. 2012 use 3 with 4 rounds).
 pub const LO_THRESHOLD_MULTIPLIER: f64 = 3.0;
 
-/// `ψ`: the probability, under the outlier model of [`sprt::chance_probabilities`], that the best of
+/// `ψ`: the probability, under the outlier model of `sprt::chance_probabilities`, that the best of
 /// the hypotheses tried on all-outlier data meets the chance part of [`RansacReport::required_inliers`]
 /// (the 5 % of PROSAC's non-randomness test, Chum & Matas, CVPR 2005, here for the best of `M`).
 pub const CHANCE_SIGNIFICANCE: f64 = 0.05;
 
 /// Seed offset of the second random stream (the verification order and start slots of
-/// [`scoring`]), so that the samples drawn for a seed do not depend on the scoring.
+/// `scoring`), so that the samples drawn for a seed do not depend on the scoring.
 const ORDER_STREAM: u64 = 0x5b7d_3c4e_a1f2_9e07;
 
 impl Default for RansacOptions {

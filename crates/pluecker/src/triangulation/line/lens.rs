@@ -16,9 +16,9 @@
 //! undistorted into the pixels of its lens's pinhole part with covariance `J⁻¹ C J⁻ᵀ`
 //! ([`LensCamera::undistort_with_covariance`]), each segment's line and the covariance of its residual
 //! (eq. 18) by [`line_from_endpoints`]. With `optimal`, they run `local` and, as for points, also
-//! `optimal` (whose global search may find another basin), the cheaper exact cost kept. [`refine`]
+//! `optimal` (whose global search may find another basin), the cheaper exact cost kept. `refine`
 //! then minimises `F` itself over the orthonormal representation of Bartoli & Sturm (the 4-parameter
-//! update of [`super::LineObjective`], in the same conditioned frame). Its gradient: by the envelope
+//! update of `super::LineObjective`, in the same conditioned frame). Its gradient: by the envelope
 //! theorem `∂rᵢₖ/∂lᵢ` is the derivative at the nearest point `q*` of the curve moved with the line
 //! ([`crate::curved_line::EndpointResidual::line_gradient`]), and `∂lᵢ/∂𝓛 = P_𝓛`.
 //!
@@ -32,7 +32,7 @@
 //! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19,
 //! not `F`, and its certificate is the one of [`super`].
 
-use super::{finish, triangulate_line, LineProblem, LineTriangulation};
+use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
 use crate::camera::AnyCamera;
 use crate::camera_model::LensCamera;
 use crate::curved_line::{endpoint_residual, pinhole_endpoint_residual};
@@ -251,9 +251,6 @@ fn exact_covariance(problem: &LineProblem, segments: &[LensSegment], chart: &Lin
         covariance_of_information(&information)
     })
 }
-
-/// Image lines and the covariances of their residuals.
-type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
 
 /// The first-order problem of `segments`: their lines and the covariances of their residuals.
 fn first_order(segments: &[LensSegment]) -> Result<LinesAndCovariances> {

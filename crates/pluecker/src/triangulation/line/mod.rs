@@ -21,7 +21,7 @@
 //! an image line with zero normal, a covariance that is not positive definite, cameras sharing one
 //! centre, or back-projected planes that all coincide (the 3-D line lies in an epipolar plane of every
 //! pair of views, so its images do not determine it). Lines have no cheirality test: every line not
-//! parallel to an image plane crosses that camera's principal plane, so [`Status::BehindCamera`] is
+//! parallel to an image plane crosses that camera's principal plane, so [`super::Status::BehindCamera`] is
 //! never reported for lines.
 
 pub mod batch;
@@ -226,13 +226,13 @@ fn finish(problem: &LineProblem, line: &Vector6<f64>, mut report: Report) -> Res
     })
 }
 
+/// Image lines (homogeneous, one per segment) and the 2x2 covariances of their residuals.
+pub type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
+
 /// The image lines and residual covariances of image segments (pixel endpoints, i.i.d. Gaussian
 /// noise of `sigma` px per coordinate): [`line_from_segment`] on each (see [`super::fitting`]).
 /// Errors name the segment index.
-pub fn lines_from_segments(
-    segments: &[[Vector2<f64>; 2]],
-    sigma: f64,
-) -> Result<(Vec<Vector3<f64>>, Vec<Matrix2<f64>>)> {
+pub fn lines_from_segments(segments: &[[Vector2<f64>; 2]], sigma: f64) -> Result<LinesAndCovariances> {
     let mut lines = Vec::with_capacity(segments.len());
     let mut covariances = Vec::with_capacity(segments.len());
     for (i, s) in segments.iter().enumerate() {

@@ -45,6 +45,7 @@ use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
 use crate::triangulation::{Certificate, Report, Status, TriangulationOptions};
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
+use std::ops::{Add, Sub};
 
 /// Factor between the eq. 27 strip widths and the width implied by `γ` at the local line's points.
 pub const STRIP_MARGIN: f64 = 2.0;
@@ -323,7 +324,6 @@ impl LineOracle<'_> {
                 hi.map_or(old.hi, |v| (-v).min(old.hi)),
             );
         }
-        drop(extreme);
         (Some(region), iterations)
     }
 }
@@ -483,7 +483,7 @@ pub(crate) fn optimal_line(
     };
     let mut result = branch_and_bound(&mut oracle, root, Some((frame_cost, frame_local)), &bb_opts);
     result.solver_iterations += tightening_iterations;
-    let (best_cost, best) = result.best.clone().unwrap_or((frame_cost, frame_local));
+    let (best_cost, best) = result.best.unwrap_or((frame_cost, frame_local));
     let world = plucker::transform(&sim.inverse_matrix(), &best);
     report.cost = best_cost;
     (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);

@@ -499,7 +499,7 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
                 Some(reason) => Err(Error::Interrupted { reason }),
                 None => linear_track(&prepared, tracks, v, t),
             }
-            .and_then(|track| {
+            .map(|track| {
                 let (x, c, cov, status, dof) = track;
                 point.copy_from_slice(x.as_slice());
                 *cost = c;
@@ -508,7 +508,7 @@ pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTrack
                     // Symmetric: column-major storage is the row-major layout.
                     covariance.copy_from_slice(cov.as_slice());
                 }
-                Ok(status)
+                status
             })
         })
         .collect_into_vec(&mut out.outcomes);

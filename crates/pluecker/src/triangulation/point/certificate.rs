@@ -27,7 +27,7 @@ pub struct ConvexityCertificate {
 
 /// The a-priori depth bound of a chart (module docs): `κ = n − 1` in the mean-depth chart.
 pub(crate) fn a_priori_kappa(chart_kind: ChartKind, views: usize) -> Option<f64> {
-    (chart_kind == ChartKind::MeanDepth).then(|| views as f64 - 1.0)
+    (chart_kind == ChartKind::MeanDepth).then_some(views as f64 - 1.0)
 }
 
 /// The sufficient test of the module docs at a local solution `x` (in front of every camera).

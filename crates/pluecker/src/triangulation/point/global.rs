@@ -217,9 +217,9 @@ impl BoundingOracle for PointOracle<'_> {
         };
         let mut p = Socp::new();
         let y = [0, 1, 2].map(|k| p.add_variable(region.lower[k], region.upper[k]));
-        for k in 0..3 {
-            p.nonneg(Affine::var(y[k]).shifted(-region.lower[k]));
-            p.nonneg(Affine::term(y[k], -1.0).shifted(region.upper[k]));
+        for (k, &yk) in y.iter().enumerate() {
+            p.nonneg(Affine::var(yk).shifted(-region.lower[k]));
+            p.nonneg(Affine::term(yk, -1.0).shifted(region.upper[k]));
         }
         let cones = self.view_cones.then_some(self.gamma);
         add_search_set(&mut p, &self.chart, &y, cones, self.enclosure.as_ref());
@@ -326,10 +326,10 @@ fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -
     add_search_set(&mut base, chart, &y, Some(gamma), enclosure);
     let mut iterations = 0;
     let mut solves = Vec::with_capacity(6);
-    for k in 0..3 {
+    for &yk in &y {
         for sign in [1.0, -1.0] {
             let mut p = base.clone();
-            p.minimize(Affine::term(y[k], sign));
+            p.minimize(Affine::term(yk, sign));
             let sol = p.solve();
             iterations += sol.iterations;
             match sol.status {
@@ -370,10 +370,10 @@ fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -
         let (mut lo, hi) = denominator_range(v, &proved);
         if lo < WEAK_DEPTH {
             let mut p = base.clone();
-            for j in 0..3 {
-                p.set_variable_bounds(y[j], proved.lower[j], proved.upper[j]);
-                p.nonneg(Affine::var(y[j]).shifted(-proved.lower[j]));
-                p.nonneg(Affine::term(y[j], -1.0).shifted(proved.upper[j]));
+            for (j, &yj) in y.iter().enumerate() {
+                p.set_variable_bounds(yj, proved.lower[j], proved.upper[j]);
+                p.nonneg(Affine::var(yj).shifted(-proved.lower[j]));
+                p.nonneg(Affine::term(yj, -1.0).shifted(proved.upper[j]));
             }
             p.minimize(denominator(v, &y));
             let sol = p.solve();

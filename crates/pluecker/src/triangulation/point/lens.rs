@@ -6,7 +6,7 @@
 //! The residual is `eᵢ(X) = Lᵢ (u(X) − uᵢ)` through the exact projection, and the cost is
 //! `F(X) = Σ ‖eᵢ(X)‖²` (eq. 19 in the observed pixels). The first stages (DLT, the local and global
 //! searches of [`super`]) run on the first-order problem in the undistorted pixels of each lens's
-//! pinhole part ([`first_order_view`]); [`refine`] then minimises `F` itself from their answer.
+//! pinhole part (`first_order_view`); `refine` then minimises `F` itself from their answer.
 //!
 //! **Certificate** ([`lens_certificate`]), at a local minimiser `X*` of cost `C = F(X*)`, with
 //! `eᵢ* = eᵢ(X*)`, `nᵢ*` its normalised projection, `Mᵢ = Lᵢ K₂` (`K₂` the upper-left block of `K`),
@@ -487,7 +487,7 @@ fn tightened_bound(
     let lambda_s = s.symmetric_eigenvalues().max();
     let b_norms: Vec<f64> = jacobians.iter().map(|b| b.norm()).collect();
     // H = LLᵀ from its Cholesky factor.
-    let factor = minorant.hessian.clone().unpack();
+    let factor = minorant.hessian.unpack();
     let lambda_h = (factor * factor.transpose()).symmetric_eigenvalues().min();
     let g_norm = minorant.gradient.norm();
     let a0 = minorant.cost - 2.0 * lin.iter().map(|l| l.e.norm() * l.rounding).sum::<f64>();
@@ -652,7 +652,7 @@ fn exact_covariance(views: &[LensView], x: &Vector3<f64>) -> Option<Matrix3<f64>
 
 /// A track through lenses as the consensus of [`super::robust`] sees it: the first-order views
 /// `first` of `views` for the linear and local stages, the exact residuals of `views` for every
-/// decision, and [`refine`] for a pair's minimum.
+/// decision, and `refine` for a pair's minimum.
 pub(crate) struct LensTrack<'a, 'b> {
     pub first: &'a [PointView],
     pub views: &'a [LensView<'b>],
@@ -677,7 +677,7 @@ impl RobustTrack for LensTrack<'_, '_> {
     }
 }
 
-/// One track seen through `views`: the first-order stages of [`super`] on [`first_order_view`]s,
+/// One track seen through `views`: the first-order stages of [`super`] on `first_order_view`s,
 /// then, when a camera distorts, [`through_lenses`]. `started` times the whole call.
 pub(crate) fn solve_lens_track(
     views: &[LensView],

@@ -22,8 +22,8 @@
 //! undistortion stretches the image up to 10x at an 80° fisheye edge or near a SIMPLE_RADIAL fold, and
 //! the stretch changes across a residual: first-order residuals there are off by 10-30 %, so a pair
 //! that fits exactly can misfit at its first-order points). The exact stage of
-//! [`super::lens::through_lenses`] then re-selects the inliers at the exact optimum. Both kinds of
-//! track go through the one routine here, by [`RobustTrack`].
+//! `super::lens::through_lenses` then re-selects the inliers at the exact optimum. Both kinds of
+//! track go through the one routine here, by `RobustTrack`.
 //!
 //! The certificate then proves the optimum *on the inlier views*: which views those are is a
 //! decision of the consensus, not part of what is certified. Fewer than 2 inliers is

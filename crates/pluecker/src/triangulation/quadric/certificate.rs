@@ -18,7 +18,7 @@
 //! every ellipsoid: no bound over all quadrics could certify the disc. An ellipsoid has `S ⪰ 0`, so
 //! `vᵀSv ≥ 0` for any unit `v`; with `c(u)` and `Q(u)` affine in `u`,
 //! `φ(u) = vᵀS(u)v = (vᵀc(u))² − vᵀQ(u)v` is the constraint `(c₀ + kᵀy)² − s₀ − pᵀy ≥ 0` of
-//! [`crate::global::convexity::Minorant::minimum_subject_to`], which bounds the cost over the
+//! `crate::global::convexity::Minorant::minimum_subject_to`, which bounds the cost over the
 //! chart points that satisfy it (a superset of the ellipsoids). `v` runs over the eigenvectors of the
 //! local `S`; the best of the three bounds (each valid) is kept. For a disc the eigenvector of its
 //! zero semi-axis makes the constraint active and the bound tight (S-lemma); for a round ellipsoid

@@ -123,7 +123,7 @@ impl QuadricOracle<'_> {
         let objective = QuadricObjective { views: self.views };
         let (x, summary) = trust_region::minimize(&objective, EllipsoidPoint::of(&start), &self.local);
         let e = Ellipsoid::from_dual(&x.dual())?;
-        summary.final_cost.is_finite().then(|| (2.0 * summary.final_cost, e))
+        summary.final_cost.is_finite().then_some((2.0 * summary.final_cost, e))
     }
 }
 
@@ -265,7 +265,7 @@ pub(crate) fn optimal_quadric(
     let start = Ellipsoid::from_dual(&frame_dual).unwrap_or(*local);
     let mut result = branch_and_bound(&mut oracle, root, Some((frame_cost, start)), &bb_opts);
     result.solver_iterations += iterations;
-    let (best_cost, best) = result.best.clone().unwrap_or((frame_cost, start));
+    let (best_cost, best) = result.best.unwrap_or((frame_cost, start));
     let world = Ellipsoid::from_dual(&transform_dual(&sim.inverse_matrix(), &best.dual())).unwrap_or(*local);
     report.cost = best_cost;
     (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);

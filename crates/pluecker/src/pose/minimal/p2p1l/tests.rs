@@ -25,13 +25,35 @@ fn solve(features: &[Feature; 3]) -> Vec<Pose> {
 
 #[test]
 fn random_instances_recover_the_true_pose() {
-    let summary = check_random_draws("p2p1l", solve, KINDS, 6_101, 1000, 1.0, 1e-9, 4);
+    let summary = check_random_draws(
+        "p2p1l",
+        solve,
+        KINDS,
+        Draws {
+            seed: 6_101,
+            draws: 1000,
+            half_width: 1.0,
+        },
+        1e-9,
+        4,
+    );
     assert_eq!(summary.counts[0], 0, "every instance has its true solution");
 }
 
 #[test]
 fn narrow_field_of_view_is_as_accurate_as_its_conditioning() {
-    check_random_draws("p2p1l", solve, KINDS, 6_102, 300, 0.1, 1e-9, 4);
+    check_random_draws(
+        "p2p1l",
+        solve,
+        KINDS,
+        Draws {
+            seed: 6_102,
+            draws: 300,
+            half_width: 0.1,
+        },
+        1e-9,
+        4,
+    );
 }
 
 #[test]

@@ -22,13 +22,35 @@ fn solve(features: &[Feature; 3]) -> Vec<Pose> {
 
 #[test]
 fn random_instances_recover_the_true_pose() {
-    let summary = check_random_draws("p3l", solve, LINES, 6_301, 1000, 1.0, 1e-9, 8);
+    let summary = check_random_draws(
+        "p3l",
+        solve,
+        LINES,
+        Draws {
+            seed: 6_301,
+            draws: 1000,
+            half_width: 1.0,
+        },
+        1e-9,
+        8,
+    );
     assert_eq!(summary.counts[0], 0, "every instance has its true solution");
 }
 
 #[test]
 fn narrow_field_of_view_is_as_accurate_as_its_conditioning() {
-    check_random_draws("p3l", solve, LINES, 6_302, 300, 0.1, 1e-9, 8);
+    check_random_draws(
+        "p3l",
+        solve,
+        LINES,
+        Draws {
+            seed: 6_302,
+            draws: 300,
+            half_width: 0.1,
+        },
+        1e-9,
+        8,
+    );
 }
 
 #[test]
