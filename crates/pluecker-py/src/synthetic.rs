@@ -53,7 +53,7 @@ pub fn random_scene<'py>(
     let n_points = n_points.count("n_points", 0)?;
     let n_lines = n_lines.map_or(Ok(0), |n| n.count("n_lines", 0))?;
     let seed = seed.map_or(Ok(0), |s| s.seed("seed"))?;
-    // Sizes before allocation: a failed allocation aborts the interpreter (issue 10).
+    // Sizes before allocation: a failed allocation aborts the interpreter.
     check_scene_size(n_points, n_lines).map_err(crate::errors::to_py_err)?;
     let scene = py.allow_threads(|| guarded(|| Ok(core_random_scene(kind, n_points, n_lines, seed))))?;
     scene_dict(py, &scene, true)

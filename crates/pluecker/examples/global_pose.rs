@@ -1,4 +1,4 @@
-//! How often the default pose pipeline misses the global minimum of the reprojection error (issue 9),
+//! How often the default pose pipeline misses the global minimum of the reprojection error,
 //! quickly, in Rust: for each row of seeded `visible_scene`s with 1 px noise, the best known minimum is
 //! the cheapest of the default answer, the refinement from the true pose and from `--starts` random
 //! starts. Development tool; the benchmark with peers is `bench/compare_global_pose.py`.

@@ -255,7 +255,7 @@ impl Structure {
     }
 }
 
-/// The scenes of the global-minimum tests and benchmark (issue 9): a 640 x 480 image with
+/// The scenes of the global-minimum tests and benchmark: a 640 x 480 image with
 /// `fx = fy = focal` (px), principal point at the centre, a uniformly random pose, and structure drawn
 /// where the camera sees it: each point (segment endpoint) is a uniform pixel back-projected to a depth
 /// uniform in 6 ± 30 % (4.2-7.8 units) or, for `planar`, to a plane through `(0, 0, 6)` (camera frame)
