@@ -666,14 +666,11 @@ fn robust(tau: f64) -> TriangulationOptions {
     }
 }
 
-#[test]
-fn a_pair_that_fits_only_through_the_exact_projection_keeps_both_views() {
-    // Under strong distortion the first-order residuals are off by the change of the lens's stretch
-    // across a residual (10-30 % near a SIMPLE_RADIAL fold or an 80-degree fisheye edge): these pairs
-    // fit within τ in their own pixels at the exact optimum, not to first order. The consensus must
-    // find the exact pair point (a consensus on first-order residuals called them too_few_inliers).
-    let tau = 4.0;
-    for (name, lens, angles, noise, seed) in [
+/// The lenses and draws of [`fitting_only_exactly`]'s premise: (name, lens, off-axis angles (rad),
+/// noise range (px), seed).
+#[allow(clippy::type_complexity)]
+fn exact_only_cases() -> [(&'static str, Lens, (f64, f64), (f64, f64), u64); 2] {
+    [
         (
             "SIMPLE_RADIAL f=5000 k=-14 near the fold",
             strong_radial(),
@@ -688,7 +685,17 @@ fn a_pair_that_fits_only_through_the_exact_projection_keeps_both_views() {
             (3.0, 12.0),
             1,
         ),
-    ] {
+    ]
+}
+
+#[test]
+fn a_pair_that_fits_only_through_the_exact_projection_keeps_both_views() {
+    // Under strong distortion the first-order residuals are off by the change of the lens's stretch
+    // across a residual (10-30 % near a SIMPLE_RADIAL fold or an 80-degree fisheye edge): these pairs
+    // fit within τ in their own pixels at the exact optimum, not to first order. The consensus must
+    // find the exact pair point (a consensus on first-order residuals called them too_few_inliers).
+    let tau = 4.0;
+    for (name, lens, angles, noise, seed) in exact_only_cases() {
         let tracks = fitting_only_exactly(lens, angles, noise, tau, 2, &mut Rng::new(seed));
         assert_eq!(tracks.len(), 2, "{name}: the premise's tracks were not found");
         for (i, t) in tracks.iter().enumerate() {
@@ -710,22 +717,7 @@ fn a_gross_outlier_beside_a_pair_that_fits_only_exactly_is_the_one_rejected() {
     // views fits, and the outlier's pairs come first in the order tried).
     let tau = 4.0;
     let mut rng = Rng::new(3);
-    for (name, lens, angles, noise, seed) in [
-        (
-            "SIMPLE_RADIAL f=5000 k=-14 near the fold",
-            strong_radial(),
-            (0.125f64.atan(), 0.148f64.atan()),
-            (6.0, 11.0),
-            24,
-        ),
-        (
-            "RADIAL_FISHEYE 69-80 degrees",
-            wide_fisheye(),
-            (1.2, 1.4),
-            (3.0, 12.0),
-            1,
-        ),
-    ] {
+    for (name, lens, angles, noise, seed) in exact_only_cases() {
         for (i, pair) in fitting_only_exactly(lens, angles, noise, tau, 2, &mut Rng::new(seed))
             .iter()
             .enumerate()

@@ -13,15 +13,7 @@ use pyo3::types::{PyDict, PyTuple};
 
 /// The `sigma` argument in pixels (`None`: the core's default), checked.
 fn sigma_arg(sigma: Option<Real>) -> PyResult<f64> {
-    let sigma = sigma.map_or(Ok(DEFAULT_SIGMA_PX), |s| s.get("sigma"))?;
-    if sigma.is_finite() && sigma > 0.0 {
-        Ok(sigma)
-    } else {
-        Err(invalid_argument(
-            "sigma",
-            format!("must be a positive finite number of pixels, got {}", number(sigma)),
-        ))
-    }
+    super::positive_sigma(sigma.map_or(Ok(DEFAULT_SIGMA_PX), |s| s.get("sigma"))?)
 }
 
 /// An image line fitted to points, with the covariance of its 2-entry residual.

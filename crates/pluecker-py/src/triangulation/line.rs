@@ -12,7 +12,7 @@ use super::batch::{
 use super::point::views_of;
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
-use super::{options_arg, renamed, PyTriangulationOptions};
+use super::{options_arg, positive_sigma, renamed, PyTriangulationOptions};
 use crate::convert::{
     check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
@@ -150,16 +150,7 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
             if have_cov && sigma.is_some() {
                 return Err(invalid_argument("sigma", "give cov or sigma, not both"));
             }
-            let sigma = sigma.unwrap_or(1.0);
-            if !(sigma.is_finite() && sigma > 0.0) {
-                return Err(invalid_argument(
-                    "sigma",
-                    format!(
-                        "must be a positive finite number of pixels, got {}",
-                        pluecker::error::number(sigma)
-                    ),
-                ));
-            }
+            let sigma = positive_sigma(sigma.unwrap_or(1.0))?;
             let segments: Vec<[Vector2<f64>; 2]> = values
                 .chunks_exact(4)
                 .map(|s| [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])])
@@ -207,15 +198,7 @@ fn endpoint_covariances(
         return Err(invalid_argument("sigma", "give cov or sigma, not both"));
     }
     if let Some(sigma) = sigma {
-        if !(sigma.is_finite() && sigma > 0.0) {
-            return Err(invalid_argument(
-                "sigma",
-                format!(
-                    "must be a positive finite number of pixels, got {}",
-                    pluecker::error::number(sigma)
-                ),
-            ));
-        }
+        let sigma = positive_sigma(sigma)?;
         let n: usize = lead.iter().product();
         return Ok(Some(vec![[Matrix2::identity() * (sigma * sigma); 2]; n]));
     }

@@ -107,3 +107,18 @@ pub fn renamed(err: Error, names: &[(&str, &str)]) -> Error {
         other => other,
     }
 }
+
+/// `sigma`, a pixel noise, unless it is not a positive finite number: then an error naming `sigma`.
+pub(crate) fn positive_sigma(sigma: f64) -> PyResult<f64> {
+    if sigma.is_finite() && sigma > 0.0 {
+        Ok(sigma)
+    } else {
+        Err(crate::errors::invalid_argument(
+            "sigma",
+            format!(
+                "must be a positive finite number of pixels, got {}",
+                pluecker::error::number(sigma)
+            ),
+        ))
+    }
+}
