@@ -16,13 +16,50 @@
 //! - Known cameras (triangulation) are 3x4 matrices `P = K [R | t]` (any positive scale) mapping world
 //!   points to pixels, `λ (u, v, 1)ᵀ = P (X, 1)ᵀ`; a point is in front when `λ = (P X̃)₃ > 0`.
 //!
-//! ## Example
+//! ## Examples
+//! The pose of a camera from points and lines:
 //! ```
 //! use pluecker::{camera::Camera, pose::{estimate_pose, PoseOptions}, synthetic};
 //! let scene = synthetic::random_scene(synthetic::SceneKind::General, 20, 5, 42);
 //! let result = estimate_pose(&scene.camera, &scene.correspondences, &PoseOptions::default()).unwrap();
 //! assert!((result.rotation - scene.rotation).norm() < 1e-6);
 //! assert!((result.translation - scene.translation).norm() < 1e-6);
+//! ```
+//!
+//! A point triangulated from two known cameras, with its certificate of global optimality:
+//! ```
+//! use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
+//! use pluecker::triangulation::{point::triangulate_point, TriangulationOptions};
+//! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+//! let camera = |cx: f64| k * Matrix3x4::new(1.0, 0.0, 0.0, -cx, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+//! let cameras = [camera(0.0), camera(1.0)];
+//! let x = Vector3::new(0.3, -0.2, 5.0);
+//! let pixels: Vec<Vector2<f64>> = cameras
+//!     .iter()
+//!     .map(|p| { let h = p * x.push(1.0); Vector2::new(h.x / h.z + 0.3, h.y / h.z - 0.2) })
+//!     .collect();
+//! let result = triangulate_point(&cameras, &pixels, None, &TriangulationOptions::default()).unwrap();
+//! assert!(result.report.certificate.certified);
+//! assert!((result.point - x).norm() < 0.05);
+//! ```
+//!
+//! The same through a COLMAP camera model (here SIMPLE_RADIAL), from the raw, distorted pixels: the
+//! point minimises the reprojection error in each image's own pixels.
+//! ```
+//! use nalgebra::{Matrix3, Vector3};
+//! use pluecker::camera_model::{CameraModel, LensCamera};
+//! use pluecker::triangulation::{point::triangulate_point_views, views::View, TriangulationOptions};
+//! use pluecker::Pose;
+//! let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
+//! let views = [
+//!     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::zeros())),
+//!     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::new(-1.0, 0.0, 0.0))),
+//! ];
+//! let x = Vector3::new(0.3, -0.2, 5.0);
+//! let pixels: Vec<_> = views.iter().map(|v| lens.project(&(v.pose.rotation * x + v.pose.translation)).0).collect();
+//! let result = triangulate_point_views(&views, &pixels, None, &TriangulationOptions::default()).unwrap();
+//! assert!((result.point - x).norm() < 1e-6);
+//! assert!(result.report.certificate.certified);
 //! ```
 //!
 //! ## References
