@@ -42,6 +42,7 @@ use crate::optim::{trust_region, Linearization, Objective, Summary, Termination,
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fitting::line_from_endpoints;
 use crate::triangulation::line::residual::LineFrame;
+use crate::triangulation::point::robust::reselect_at_optimum;
 use crate::triangulation::uncertainty::covariance_of_information;
 use crate::triangulation::views::View;
 use crate::triangulation::{Certificate, Method, Status, TriangulationOptions};
@@ -349,20 +350,17 @@ fn through_lenses(
         if let (Some(tau), Some(flags)) = (opts.outlier_threshold, result.inliers.as_mut()) {
             // The inliers are those within τ at the exact optimum, re-solved while they change (as
             // the first-order robust stage does).
-            for _ in 0..crate::triangulation::point::robust::MAX_ROUNDS {
-                let next: Vec<bool> = segments.iter().map(|s| s.squared_residual(&x) <= tau * tau).collect();
-                if next == *flags || next.iter().filter(|&&m| m).count() < 2 {
-                    break;
-                }
-                *flags = next;
-                (problem, used) = pick(flags);
-                let Some(again) = refine(&problem, &used, &x, &opts.local) else {
-                    break;
-                };
-                summary.iterations += again.1.iterations;
-                summary.termination = again.1.termination;
-                x = again.0;
-            }
+            x = reselect_at_optimum(
+                flags,
+                x,
+                tau,
+                &mut summary,
+                |j, x| segments[j].squared_residual(x),
+                |flags, x| {
+                    (problem, used) = pick(flags);
+                    refine(&problem, &used, x, &opts.local)
+                },
+            );
         }
         line = x;
         report.iterations += summary.iterations;

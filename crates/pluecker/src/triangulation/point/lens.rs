@@ -574,23 +574,17 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
     if let (Some(tau), Some(flags)) = (opts.outlier_threshold, result.inliers.as_mut()) {
         // The inliers are those within τ at the exact optimum, re-solved while they change (as
         // `robust` does, by the same exact residuals, at the first-order optimum).
-        for _ in 0..super::robust::MAX_ROUNDS {
-            let next: Vec<bool> = views.iter().map(|v| v.squared_residual(&x) <= tau * tau).collect();
-            if next == *flags || next.iter().filter(|&&m| m).count() < 2 {
-                break;
-            }
-            *flags = next;
-            used = views
-                .iter()
-                .zip(flags.iter())
-                .filter(|(_, &f)| f)
-                .map(|(v, _)| *v)
-                .collect();
-            let again = refine(&used, &x, &opts.local);
-            summary.iterations += again.1.iterations;
-            summary.termination = again.1.termination;
-            x = again.0;
-        }
+        x = super::robust::reselect_at_optimum(
+            flags,
+            x,
+            tau,
+            &mut summary,
+            |j, x| views[j].squared_residual(x),
+            |flags, x| {
+                used = views.iter().zip(flags).filter(|(_, &f)| f).map(|(v, _)| *v).collect();
+                Some(refine(&used, x, &opts.local))
+            },
+        );
     }
     let cost = exact_cost(&used, &x);
     result.point = x;

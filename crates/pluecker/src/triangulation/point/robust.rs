@@ -33,6 +33,7 @@
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{local_solution, solve_views, PointTriangulation};
+use crate::optim::Summary;
 use crate::rng::Rng;
 use crate::triangulation::{Report, Status, TriangulationOptions};
 use nalgebra::{Matrix4, Vector3};
@@ -42,6 +43,35 @@ use std::time::Instant;
 pub const MAX_PAIRS: usize = 210;
 /// Re-selections of the inliers at the optimum at most.
 pub const MAX_ROUNDS: usize = 3;
+
+/// The exact stage's re-selection (points and lines through a lens): the inliers become the views
+/// within `τ` at the optimum `x` (`squared(j, x)` the squared whitened residual of view `j`), and
+/// `solve(flags, x)` re-solves on them from `x` while they change, at most [`MAX_ROUNDS`] times; the
+/// solves' iterations add to `summary`, whose termination becomes the last solve's. Stops early when
+/// fewer than two views would be left or `solve` gives up (`None`). Returns the last optimum.
+pub(crate) fn reselect_at_optimum<X>(
+    flags: &mut Vec<bool>,
+    mut x: X,
+    tau: f64,
+    summary: &mut Summary,
+    squared: impl Fn(usize, &X) -> f64,
+    mut solve: impl FnMut(&[bool], &X) -> Option<(X, Summary)>,
+) -> X {
+    for _ in 0..MAX_ROUNDS {
+        let next: Vec<bool> = (0..flags.len()).map(|j| squared(j, &x) <= tau * tau).collect();
+        if next == *flags || next.iter().filter(|&&m| m).count() < 2 {
+            break;
+        }
+        *flags = next;
+        let Some((again, work)) = solve(flags, &x) else {
+            break;
+        };
+        summary.iterations += work.iterations;
+        summary.termination = work.termination;
+        x = again;
+    }
+    x
+}
 
 /// A track's views as the consensus sees them (module docs): the first-order views that the linear
 /// and local stages solve, each view's own residual, and the minimum of a pair's own cost. Pinhole
