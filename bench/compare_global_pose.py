@@ -26,7 +26,7 @@ is taken as +inf.
   counts, per source, the scenes where it reached the best known minimum).
 
 **Miss**: a method's answer whose cost is above ``best_known × (1 + 1e-6) + 1e-9``; an invalid or
-failed answer (cost +inf) is a miss too. The validity rule is pluecker's ``points_behind_camera``: a
+failed answer (cost +inf) is a miss too. The validity rule is pluecker's ``behind_camera``: a
 pose that puts a segment endpoint behind the camera is invalid even though only the infinite 3-D line
 enters the cost (PoseLib does not check that for lines, hence most of its failures on line rows).
 

@@ -12,7 +12,7 @@ from hypothesis.extra import numpy as hnp
 
 import pluecker
 
-POSE_STATUSES = {"success", "ambiguous", "not_converged", "numerical_failure", "points_behind_camera",
+POSE_STATUSES = {"success", "ambiguous", "not_converged", "numerical_failure", "behind_camera",
                  "too_few_inliers", "no_hypothesis"}
 TRIANGULATION_STATUSES = {"success", "gap_not_closed", "not_converged", "behind_camera", "at_infinity",
                           "infeasible", "numerical_failure"}

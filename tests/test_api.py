@@ -30,7 +30,7 @@ TERMINATIONS = {
     "non_finite_cost",
     "closed_form",
 }
-STATUSES = {"success", "not_converged", "numerical_failure", "points_behind_camera"}
+STATUSES = {"success", "not_converged", "numerical_failure", "behind_camera"}
 
 
 def log_so3(r: np.ndarray) -> np.ndarray:

@@ -185,7 +185,7 @@ def test_a_very_long_segment_is_not_called_zero_length(scene, argument):
     except PlueckerError as e:
         assert "zero-length" not in str(e), e
     else:
-        assert result.status in {"success", "not_converged", "numerical_failure", "points_behind_camera", "ambiguous"}
+        assert result.status in {"success", "not_converged", "numerical_failure", "behind_camera", "ambiguous"}
 
 
 def test_a_zero_length_segment_far_from_the_origin_is_still_zero_length(scene):

@@ -28,7 +28,7 @@ def test_data_from_points_behind_the_camera_is_not_a_success(n):
     for noise in (0.0, 0.5):
         u = project(X) + rng.normal(0, noise, (n, 2))
         r = pluecker.estimate_pose(CAMERA, u, X)
-        assert r.status == "points_behind_camera", (n, noise, r.status, r.rms_error_px)
+        assert r.status == "behind_camera", (n, noise, r.status, r.rms_error_px)
         assert r.behind_camera_cost is not None and r.behind_camera_cost < r.final_cost
         # The pose itself keeps the points in front: it is the best in front, reported as such.
         assert ((X @ r.R.T + r.t)[:, 2] > 0).all()
@@ -58,7 +58,7 @@ def test_noisy_data_in_front_is_not_called_behind_at_any_field_of_view(focal, n)
         X = np.c_[rng.uniform(-half, half, (n, 2)), rng.uniform(-0.3, 0.3, n) * depth] + [0, 0, depth]
         u = X[:, :2] / X[:, 2:] * focal + [320, 240] + rng.normal(0, 2.0, (n, 2))
         r = pluecker.estimate_pose(camera, u, X)
-        assert r.behind_camera_cost is None and r.status != "points_behind_camera", (focal, n, trial, r.status)
+        assert r.behind_camera_cost is None and r.status != "behind_camera", (focal, n, trial, r.status)
 
 
 def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():

@@ -163,6 +163,43 @@ class PoseOptions:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+class CertifyOptions:
+    """Options of every certificate of global optimality, pose and triangulation alike (the core's
+    ``CertifyOptions``)."""
+
+    # fields of CertifyOptions (generated: python -m pluecker._stubgen)
+    def __init__(self, *, max_relative_gap: float = 0.001, max_nodes: Optional[int] = None) -> None: ...
+    max_relative_gap: float
+    """Certified when `(cost − lower_bound) / max(cost, 1e-12)` is at most this, in (0, 1)."""
+    max_nodes: Optional[int]
+    """Cap on the nodes (rotation cells, boxes) a search examines; `None`: each search's own cap (see the docs)."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+class Certificate:
+    """A proved lower bound on the cost (``Σ r²``, squared whitened pixels) over a stated ``domain``
+    (the core's ``Certificate``)."""
+
+    # fields of Certificate (generated: python -m pluecker._stubgen)
+    certified: bool
+    """Whether the estimate is proved globally optimal within `max_relative_gap` over `domain`."""
+    lower_bound: float
+    """Proved lower bound on the cost over `domain`, capped at the cost."""
+    raw_lower_bound: float
+    """The bound as proved, before the cap at the cost (inf when the search set was proved empty)."""
+    relative_gap: float
+    """`(cost − lower_bound) / max(cost, 1e-12)`."""
+    kind: str
+    """How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test`, ..."""
+    domain: str
+    """The set of estimates over which `lower_bound` holds."""
+    nodes: int
+    """Nodes of the search (0 for a convexity test)."""
+    solver_iterations: int
+    """Conic-solver iterations summed over the nodes."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
 class RansacOptions:
     """Options of the robust estimator (LO-RANSAC over points and lines; the core's
     ``RansacOptions``): ``estimate_pose(..., ransac=RansacOptions(...))``."""
@@ -280,7 +317,7 @@ class PoseResult:
     termination: str
     """Why the last iterative stage stopped."""
     status: str
-    """`success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `points_behind_camera`
+    """`success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `behind_camera`
     (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
     (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
     """
@@ -331,7 +368,7 @@ class PoseResult:
     second_best_cost: Optional[float]
     """Its cost `½ Σ r²`, px²."""
     behind_camera_cost: Optional[float]
-    """Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`)."""
+    """Cost of a pose with every point behind the camera that fits far better (status `behind_camera`)."""
     residual_test: Optional[_ResidualTest]
     """χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`."""
     # end of fields

@@ -13,6 +13,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod camera;
+mod certificate;
 mod convert;
 mod errors;
 mod fields;
@@ -52,6 +53,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<lens_camera::PyLensCamera>()?;
+    m.add_class::<certificate::PyCertifyOptions>()?;
+    m.add_class::<certificate::PyCertificate>()?;
     // Pose.
     m.add_class::<PyPoseOptions>()?;
     m.add_class::<PyRansacOptions>()?;
@@ -131,6 +134,7 @@ fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
         "FittedLine" => plain::<PyFittedLine>(py, kind, input)?,
         "FittedConic" => plain::<PyFittedConic>(py, kind, input)?,
         "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input)?,
+        "Certificate" => plain::<certificate::PyCertificate>(py, kind, input)?,
         "PointTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyPointTriangulation),
         "LineTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyLineTriangulation),
         "QuadricTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyQuadricTriangulation),

@@ -10,15 +10,14 @@
 
 use crate::errors::PlueckerError;
 use nalgebra::SMatrix;
+use pluecker::certificate::Primitive;
 use pluecker::chi_square::ResidualTest;
 use pluecker::geometry::dual_quaternion::DualQuaternion;
 use pluecker::geometry::plucker::LineChart;
 use pluecker::geometry::quadric::Ellipse;
 use pluecker::optim::Termination;
 use pluecker::pose::certificate::Certificate as PoseCertificate;
-use pluecker::pose::{
-    CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport, Status as PoseStatus,
-};
+use pluecker::pose::{CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport};
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, Method, Report, Status};
 use pluecker::{Camera, Pose, PoseResult};
@@ -220,14 +219,14 @@ pack_by_name!(Termination: Termination::GradientTolerance, Termination::RadiusTo
     Termination::SingularHessian, Termination::NonFiniteCost, Termination::ClosedForm);
 pack_by_name!(Method: Method::Linear, Method::Local, Method::Optimal);
 pack_by_name!(Status: Status::Success, Status::GapNotClosed, Status::NotConverged, Status::BehindCamera,
-    Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::Interrupted, Status::TimeBudget,
-    Status::TooFewInliers);
+    Status::Ambiguous, Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::TooFewInliers,
+    Status::NoHypothesis, Status::Interrupted, Status::TimeBudget);
 pack_by_name!(CertificateKind: CertificateKind::None, CertificateKind::ConvexityTest,
-    CertificateKind::BranchAndBound, CertificateKind::TaylorBranchAndBound, CertificateKind::LensConvexityTest);
+    CertificateKind::BranchAndBound, CertificateKind::TaylorBranchAndBound, CertificateKind::LensConvexityTest,
+    CertificateKind::SublevelSet);
+pack_by_name!(Primitive: Primitive::Pose, Primitive::Point, Primitive::Line, Primitive::Quadric);
 pack_by_name!(PoseMethod: PoseMethod::TrustRegion, PoseMethod::RotationThenTranslation,
     PoseMethod::TrustRegionExact, PoseMethod::Newton, PoseMethod::LevenbergMarquardt, PoseMethod::Linear);
-pack_by_name!(PoseStatus: PoseStatus::Success, PoseStatus::NotConverged, PoseStatus::NumericalFailure,
-    PoseStatus::PointsBehindCamera, PoseStatus::TooFewInliers, PoseStatus::Ambiguous, PoseStatus::NoHypothesis);
 pack_by_name!(CovarianceSource: CovarianceSource::Given, CovarianceSource::Estimated);
 pack_by_name!(RansacStop: RansacStop::Confidence, RansacStop::IterationCap, RansacStop::TimeBudget,
     RansacStop::NoSolvableSample, RansacStop::MinInlierRatio, RansacStop::Interrupted);

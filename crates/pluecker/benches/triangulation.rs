@@ -93,7 +93,9 @@ fn summary(case: &Case, tracks: &[Track]) {
             errors.push((r.point - truth).norm());
             match r.report.certificate.kind {
                 CertificateKind::ConvexityTest | CertificateKind::LensConvexityTest => by_test += 1,
-                CertificateKind::BranchAndBound | CertificateKind::TaylorBranchAndBound => {
+                CertificateKind::BranchAndBound
+                | CertificateKind::TaylorBranchAndBound
+                | CertificateKind::SublevelSet => {
                     by_bnb += 1;
                     nodes.push(r.report.certificate.nodes as f64);
                 }

@@ -72,6 +72,7 @@
 
 pub mod camera;
 pub mod camera_model;
+pub mod certificate;
 pub mod chi_square;
 pub mod curved_line;
 pub mod error;
@@ -83,6 +84,7 @@ pub mod optim;
 pub mod pose;
 pub mod rigid;
 pub mod rng;
+pub mod status;
 pub mod synthetic;
 pub mod triangulation;
 
@@ -90,7 +92,9 @@ pub use camera::{AnyCamera, Camera};
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Status`, `Method` and certificate
 // stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
+pub use certificate::{Certificate, CertificateKind, CertifyOptions};
 pub use pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacReport, RansacStop,
 };
 pub use rigid::Pose;
+pub use status::Status;

@@ -270,7 +270,7 @@ fn points_behind_the_camera_are_reported() {
     }
     let r = estimate_pose(&scene.camera, &c, &PoseOptions::default()).unwrap();
     assert!(rotation_distance(&r.rotation, &scene.rotation) < 1e-6);
-    assert_eq!(r.status, Status::PointsBehindCamera);
+    assert_eq!(r.status, Status::BehindCamera);
 }
 
 /// Data from a nearly flat object behind the camera, with a small stated noise: the best pose in
@@ -278,7 +278,7 @@ fn points_behind_the_camera_are_reported() {
 /// object's relief), the pose behind the camera fits at the noise level, over a hundred times
 /// better. The comparison is with the margin `½ · ambiguity_threshold · σ²` of the stated
 /// `σ = sigma_px` (here 0.05 px: a margin of 0.011 px²), not with one of a few px², so the answer is
-/// `points_behind_camera`, never a `success` whose residuals are 20σ. The behind-camera fit is checked
+/// `behind_camera`, never a `success` whose residuals are 20σ. The behind-camera fit is checked
 /// with the oracle's cost of the true pose, independently of the library's residuals.
 #[path = "pose_oracle/mod.rs"]
 mod pose_oracle;
@@ -333,7 +333,7 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
         );
         assert_eq!(
             r.status,
-            Status::PointsBehindCamera,
+            Status::BehindCamera,
             "{name}: a fit of {fit} px² in front (σ = {sigma} px) against {behind} px² behind the camera"
         );
         let reported = r.behind_camera_cost.expect("a behind-camera cost with that status");

@@ -215,7 +215,7 @@ result_class! {
         final_cost = |r| r.inner.final_cost;
         /// Why the last iterative stage stopped.
         termination = |r| r.inner.termination.as_str();
-        /// `success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `points_behind_camera`
+        /// `success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `behind_camera`
         /// (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
         /// (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
         status = |r| r.inner.status.as_str();
@@ -263,7 +263,7 @@ result_class! {
         second_best_t = |r| r.inner.second_best.map(|(p, _)| p.translation);
         /// Its cost `½ Σ r²`, px².
         second_best_cost = |r| r.inner.second_best.map(|(_, c)| c);
-        /// Cost of a pose with every point behind the camera that fits far better (status `points_behind_camera`).
+        /// Cost of a pose with every point behind the camera that fits far better (status `behind_camera`).
         behind_camera_cost = |r| r.inner.behind_camera_cost;
         /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.
         residual_test = |r| r.inner.residual_test;

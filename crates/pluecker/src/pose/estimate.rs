@@ -480,7 +480,7 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
             .then(|| behind_camera_cost(camera, conditioned, bound))
             .flatten();
         if behind_cost.is_some() {
-            status = Status::PointsBehindCamera;
+            status = Status::BehindCamera;
         }
         let second_best = choice
             .second

@@ -242,49 +242,7 @@ impl PoseOptions {
     }
 }
 
-/// Whether the answer can be used.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Status {
-    /// Every stage converged and every object point is in front of the camera.
-    Success,
-    /// A stage stopped on its iteration cap; the pose is the last iterate.
-    NotConverged,
-    /// The solver failed numerically (singular Hessian, non-finite cost); the pose is the last iterate.
-    NumericalFailure,
-    /// Some object points or line endpoints are behind the camera at the returned pose (robust: of
-    /// the inliers), or the data are explained better by a pose with every point behind the camera
-    /// ([`PoseResult::behind_camera_cost`]).
-    PointsBehindCamera,
-    /// Robust estimation only: the best model has fewer than [`RansacReport::required_inliers`]
-    /// inliers ([`RansacOptions::min_inliers`], or more when chance alone gives a wrong pose that many
-    /// among many correspondences), e.g. all-outlier data, or thresholds too tight for the noise; the
-    /// pose is that model's, unrefined, and should not be used.
-    TooFewInliers,
-    /// Another local minimum of the reprojection error with every object point in front explains the
-    /// data nearly as well (see [`PoseOptions::ambiguity_threshold`]): the pose is the better of the two,
-    /// and [`PoseResult::second_best`] is the other. Typical of 4-5 correspondences, of lines only and
-    /// of narrow fields of view. Every stage converged.
-    Ambiguous,
-    /// Robust estimation only: no sample gave a pose in front of the camera — every sample was
-    /// degenerate (collinear points, parallel lines, ...) or no mix of the data has a minimal solver
-    /// (see [`RansacReport::stop`]). The pose is NaN.
-    NoHypothesis,
-}
-
-impl Status {
-    /// snake_case name for reports, JSON and Python.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            Status::Success => "success",
-            Status::NotConverged => "not_converged",
-            Status::NumericalFailure => "numerical_failure",
-            Status::PointsBehindCamera => "points_behind_camera",
-            Status::TooFewInliers => "too_few_inliers",
-            Status::NoHypothesis => "no_hypothesis",
-            Status::Ambiguous => "ambiguous",
-        }
-    }
-}
+pub use crate::status::Status;
 
 /// What one stage of the pipeline did and where it ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -389,7 +347,7 @@ pub struct PoseResult {
     /// ([`candidates::behind_camera_cost`]); the cost `½ Σ r²` (px²) of the best one that fits better
     /// than the returned pose by more than `½ ambiguity_threshold σ²` (the ambiguity margin, with the
     /// stated σ) and by a factor of at least 100, if any. Then [`PoseResult::status`] is
-    /// [`Status::PointsBehindCamera`]: the returned pose is the best found with the points in front,
+    /// [`Status::BehindCamera`]: the returned pose is the best found with the points in front,
     /// but the data come from points behind the camera (or a mirrored object). `None` otherwise.
     pub behind_camera_cost: Option<f64>,
     /// The χ² test of the residuals against [`PoseOptions::sigma_px`] ([`crate::chi_square`]):

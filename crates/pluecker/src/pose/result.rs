@@ -73,7 +73,7 @@ pub(crate) fn status_of_stages(
     } else if stages.iter().any(|s| !s.termination.converged()) {
         Status::NotConverged
     } else if behind > 0 {
-        Status::PointsBehindCamera
+        Status::BehindCamera
     } else {
         Status::Success
     }
