@@ -60,22 +60,39 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 /// discriminant is COLMAP's model id.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum CameraModel {
+    /// `f, cx, cy`: one focal length, no distortion.
     SimplePinhole = 0,
+    /// `fx, fy, cx, cy`: no distortion.
     Pinhole = 1,
+    /// `f, cx, cy, k`: one radial term.
     SimpleRadial = 2,
+    /// `f, cx, cy, k1, k2`: two radial terms.
     Radial = 3,
+    /// `fx, fy, cx, cy, k1, k2, p1, p2`: OpenCV's radial and tangential terms.
     OpenCv = 4,
+    /// `fx, fy, cx, cy, k1, k2, k3, k4`: OpenCV's equidistant fisheye.
     OpenCvFisheye = 5,
+    /// `fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6`: OpenCV's rational model.
     FullOpenCv = 6,
+    /// `fx, fy, cx, cy, omega`: the field-of-view model.
     Fov = 7,
+    /// `f, cx, cy, k`: equidistant fisheye with one radial term.
     SimpleRadialFisheye = 8,
+    /// `f, cx, cy, k1, k2`: equidistant fisheye with two radial terms.
     RadialFisheye = 9,
+    /// `fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1`: fisheye with tangential and thin-prism terms.
     ThinPrismFisheye = 10,
+    /// COLMAP's `RAD_TAN_THIN_PRISM_FISHEYE` (16 parameters).
     RadTanThinPrismFisheye = 11,
+    /// `f, cx, cy, k`: one-parameter division model.
     SimpleDivision = 12,
+    /// `fx, fy, cx, cy, k`: division model.
     Division = 13,
+    /// `f, cx, cy`: equidistant fisheye without distortion terms.
     SimpleFisheye = 14,
+    /// `fx, fy, cx, cy`: equidistant fisheye without distortion terms.
     Fisheye = 15,
+    /// `fx, fy, cx, cy, alpha, beta`: the enhanced unified camera model.
     Eucm = 16,
 }
 

@@ -11,26 +11,51 @@ use std::fmt;
 pub enum Error {
     /// An array has the wrong length or two arrays that must match do not.
     Shape {
+        /// The argument (and row, when one row is wrong).
         what: String,
+        /// The expected shape or length.
         expected: String,
+        /// The shape or length given.
         actual: String,
     },
     /// A NaN or infinite value; `what` names the argument and `index` the first offending row.
-    NonFinite { what: String, index: usize },
+    NonFinite {
+        /// The argument.
+        what: String,
+        /// The first row with a NaN or infinite value.
+        index: usize,
+    },
     /// Fewer correspondences than the method needs.
     TooFewCorrespondences {
+        /// The method that needs them.
         method: String,
+        /// What it needs, e.g. "6 points".
         required: String,
+        /// What was given.
         actual: String,
     },
     /// The data cannot determine the pose: collinear points, parallel lines, a zero-length segment, ...
-    Degenerate { what: String },
+    Degenerate {
+        /// What is degenerate, and where.
+        what: String,
+    },
     /// The camera intrinsics cannot be inverted (zero focal length, non-finite values).
-    SingularCamera { what: String },
+    SingularCamera {
+        /// Which camera, and why.
+        what: String,
+    },
     /// An option is out of its documented range.
-    InvalidOption { name: String, reason: String },
+    InvalidOption {
+        /// The option's name, nested as in the options (`certify.max_nodes`).
+        name: String,
+        /// The documented range it is outside of.
+        reason: String,
+    },
     /// The call was stopped ([`crate::interrupt`]) before this problem (a batch track) was solved.
-    Interrupted { reason: crate::interrupt::StopReason },
+    Interrupted {
+        /// Ctrl-C (or a failed progress callback), or the time budget.
+        reason: crate::interrupt::StopReason,
+    },
 }
 
 impl fmt::Display for Error {

@@ -10,6 +10,7 @@ use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 /// A scene with its true pose and noise-free observations.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The intrinsics the observations were made with.
     pub camera: Camera,
     /// True `R` (world → camera).
     pub rotation: Matrix3<f64>,

@@ -100,14 +100,14 @@ pub trait BoundingOracle {
     /// A lower bound of the objective over `region` (and a candidate when one is cheap to find).
     fn bound(&mut self, region: &Region) -> Bound<Self::Candidate>;
 
-    /// The axis to split and the position. Default: the widest axis, at the relaxed minimiser
-    /// moved into the middle half of the interval (or the midpoint without a minimiser).
     /// The search also stops when `upper − lower ≤ absolute_gap()` (for optima at the rounding
     /// level, where a relative gap cannot close). Default `0`.
     fn absolute_gap(&self) -> f64 {
         0.0
     }
 
+    /// The axis to split and the position. Default: the widest axis, at the relaxed minimiser
+    /// moved into the middle half of the interval (or the midpoint without a minimiser).
     fn split(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
         let axis = (0..region.dim())
             .max_by(|&a, &b| region.width(a).total_cmp(&region.width(b)))
