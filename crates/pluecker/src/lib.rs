@@ -88,7 +88,8 @@ pub mod status;
 pub mod synthetic;
 pub mod triangulation;
 
-pub use camera::{AnyCamera, Camera};
+pub use camera::Camera;
+pub use camera_model::AnyCamera;
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Status`, `Method` and certificate
 // stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.

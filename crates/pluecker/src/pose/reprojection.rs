@@ -25,7 +25,8 @@
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
 
 use super::{Correspondences, CovarianceSource, ObservationNoise};
-use crate::camera::{AnyCamera, Camera};
+use crate::camera::Camera;
+use crate::camera_model::AnyCamera;
 use crate::camera_model::LensCamera;
 use crate::curved_line::endpoint_residual;
 use crate::error::Result;

@@ -33,7 +33,7 @@
 //! not `F`, and its certificate is the one of [`super`].
 
 use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
-use crate::camera::AnyCamera;
+use crate::camera_model::AnyCamera;
 use crate::camera_model::LensCamera;
 use crate::curved_line::{endpoint_residual, pinhole_endpoint_residual};
 use crate::error::{Error, Result};

@@ -57,7 +57,7 @@
 use super::chart::{Chart, ChartKind};
 use super::cost::PointView;
 use super::robust::RobustTrack;
-use crate::camera::AnyCamera;
+use crate::camera_model::AnyCamera;
 use crate::camera_model::LensCamera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
