@@ -37,7 +37,8 @@ use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix6, SMatrix, SVector, Vector2, 
 pub use crate::rigid::Pose;
 
 /// Points per batch of the point kernel. The kernel is written lane by lane over fixed-size arrays so
-/// that the compiler turns each batch into vector instructions (the speed-up: `bench/README.md`).
+/// that the compiler turns each batch into vector instructions (the speed-up:
+/// `bench/results/2026-11-23-figures-from-code-comments.md`).
 const LANES: usize = 4;
 
 /// Reprojection-error objective over `SO(3) × ℝ³`.

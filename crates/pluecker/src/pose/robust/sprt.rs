@@ -39,9 +39,10 @@
 //! such models exceeds with probability at most `ψ`.
 
 /// `t_M`: the time of a minimal sample (P3P, the pose checks and the loop's bookkeeping) in units of
-/// one point-error evaluation, measured on 20,000 all-outlier points (the timings: `bench/README.md`,
-/// "Figures behind the code"). It sets how much verification a rejection may cost; the line solvers are
-/// slower, so the constant is set below the measured ratio and errs towards a smaller `A`.
+/// one point-error evaluation, measured on 20,000 all-outlier points (the timings:
+/// `bench/results/2026-11-23-figures-from-code-comments.md`). It sets how much verification a
+/// rejection may cost; the line solvers are slower, so the constant is set below the measured ratio
+/// and errs towards a smaller `A`.
 pub const MODEL_COST: f64 = 200.0;
 
 /// Largest `ε` of a test: with `ε → 1` one inconsistent correspondence would reject a good model.
