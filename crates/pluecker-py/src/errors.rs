@@ -112,7 +112,7 @@ fn panic_message(payload: &(dyn Any + Send)) -> String {
     }
 }
 
-fn internal(payload: Box<dyn Any + Send>) -> PyErr {
+pub(crate) fn internal(payload: Box<dyn Any + Send>) -> PyErr {
     PlueckerError::new_err(format!(
         "internal error: {} (this is a bug in pluecker; please report it with the input that caused it)",
         panic_message(payload.as_ref())
@@ -123,18 +123,6 @@ fn internal(payload: Box<dyn Any + Send>) -> PyErr {
 /// `PlueckerError("internal error: ...")`.
 pub fn guarded<T>(f: impl FnOnce() -> Result<T, Error>) -> PyResult<T> {
     match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(result) => result.map_err(to_py_err),
-        Err(payload) => Err(internal(payload)),
-    }
-}
-
-/// Like [`guarded`], with the GIL released for the duration of the call (every solve goes here).
-pub fn solve<T, F>(py: Python<'_>, f: F) -> PyResult<T>
-where
-    T: Send,
-    F: FnOnce() -> Result<T, Error> + Send,
-{
-    match py.allow_threads(move || crate::threads::install(move || catch_unwind(AssertUnwindSafe(f)))) {
         Ok(result) => result.map_err(to_py_err),
         Err(payload) => Err(internal(payload)),
     }

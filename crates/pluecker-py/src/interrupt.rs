@@ -20,7 +20,8 @@
 //! work rather than after a delay.
 
 use crate::convert::{optional_real, seconds_arg, Real};
-use crate::errors::{guarded, invalid_argument, solve};
+use crate::errors::{guarded, invalid_argument};
+use crate::threads::solve;
 use crate::triangulation::batch::PyBatchReport;
 use pluecker::interrupt::{with_stop, Stop};
 use pluecker::Error;

@@ -156,5 +156,5 @@ fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
 /// arrives as `PlueckerError("internal error: ...")` rather than aborting the interpreter.
 #[pyfunction]
 fn _panic_for_tests(py: Python<'_>, message: String) -> PyResult<()> {
-    errors::solve(py, move || -> Result<(), pluecker::Error> { panic!("{message}") })
+    threads::solve(py, move || -> Result<(), pluecker::Error> { panic!("{message}") })
 }

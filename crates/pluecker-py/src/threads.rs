@@ -4,8 +4,10 @@
 //! Every solve runs inside [`install`].
 
 use crate::convert::Integer;
-use crate::errors::{invalid_argument, InvalidOptionError, PlueckerError};
+use crate::errors::{internal, invalid_argument, to_py_err, InvalidOptionError, PlueckerError};
+use pluecker::Error;
 use pyo3::prelude::*;
+use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::{Arc, RwLock};
 
 /// The pool set by `set_num_threads`; `None`: rayon's global pool.
@@ -80,4 +82,16 @@ pub fn set_num_threads(py: Python<'_>, n: Option<Integer>) -> PyResult<()> {
 #[pyfunction]
 pub fn get_num_threads() -> usize {
     current().map_or_else(rayon::current_num_threads, |p| p.current_num_threads())
+}
+
+/// Like [`crate::errors::guarded`], with the GIL released for the duration of the call (every solve goes here).
+pub fn solve<T, F>(py: Python<'_>, f: F) -> PyResult<T>
+where
+    T: Send,
+    F: FnOnce() -> Result<T, Error> + Send,
+{
+    match py.allow_threads(move || install(move || catch_unwind(AssertUnwindSafe(f)))) {
+        Ok(result) => result.map_err(to_py_err),
+        Err(payload) => Err(internal(payload)),
+    }
 }

@@ -9,11 +9,12 @@
 use crate::camera::PyCamera;
 use crate::convert::pose_from_parts;
 use crate::convert::{points, segments};
-use crate::errors::{shape_error, solve};
+use crate::errors::shape_error;
 use crate::fields::Field;
 use crate::pose::correspondences;
 use crate::pose::options::PyPoseOptions;
 use crate::pose::result::PyPoseStage;
+use crate::threads::solve;
 use nalgebra::{SVector, Vector3};
 use pluecker::pose::minimal;
 use pluecker::pose::refinement::refine_pose as core_refine_pose;

@@ -3,8 +3,9 @@
 use crate::camera::PyCamera;
 use crate::convert::pose_from_parts;
 use crate::convert::{matrix_to_py, Real};
-use crate::errors::{degenerate, invalid_argument, solve};
+use crate::errors::{degenerate, invalid_argument};
 use crate::pose::correspondences;
+use crate::threads::solve;
 use numpy::{PyArray1, PyArray2};
 use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;

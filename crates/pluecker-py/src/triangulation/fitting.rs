@@ -3,9 +3,10 @@
 //! and `triangulate_quadric` take.
 
 use crate::convert::{points as read_points, points_to_py, Integer, Real};
-use crate::errors::{guarded, invalid_argument, solve};
+use crate::errors::{guarded, invalid_argument};
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::threads::solve;
 use pluecker::error::number;
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
 use pyo3::prelude::*;
