@@ -3,7 +3,8 @@
 #                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run; their
 #                examples come from the seed in pytest's header, the UTC date unless
 #                PLUECKER_HYPOTHESIS_SEED=<seed> replays a run or =random draws a fresh one)
-#   make lint    cargo fmt --check, clippy on every target with warnings as errors, rustdoc with warnings as errors
+#   make lint    cargo fmt --check, clippy on every target with warnings as errors, rustdoc with warnings as errors,
+#                ruff on the Python package, the stubs checked against the built module (mypy's stubtest)
 #   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
 #   make bench   compare against OpenCV, PoseLib and pycolmap, then run the criterion benchmarks
 #   make mutants mutation-test the proof code (.cargo/mutants.toml); SHARD=k/n runs round-robin shard k of n
@@ -30,7 +31,7 @@ setup: develop
 $(DEPS_STAMP): Makefile
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "hypothesis>=6.100" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
+	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
@@ -63,6 +64,12 @@ lint: $(DEPS_STAMP)
 	cargo clippy --all-targets -p pluecker -p pluecker-py -- -D warnings
 	@echo "== docs: cargo doc, warnings as errors"
 	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p pluecker
+	@echo "== python: ruff check"
+	$(BIN)/ruff check python/pluecker
+	@echo "== stubs: _core.pyi against the built module (mypy stubtest; PyO3 classes are all disjoint bases)"
+	$(MAKE) --no-print-directory develop
+	$(BIN)/python -m pluecker._stubgen --check
+	$(BIN)/python -m mypy.stubtest pluecker._core --ignore-disjoint-bases --allowlist python/stubtest-allowlist.txt
 
 demo: develop
 	$(BIN)/pluecker reproduce phong-horaud-1995 --out results/phong-horaud-1995

@@ -7,7 +7,7 @@ exact within one version. Options are mutable, ``==``, picklable, checked as set
 the Rust ``Default``. A bool is not a number; counts and seeds take integers up to ``2**64 - 1``.
 """
 
-from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict, Union
+from typing import Any, Callable, ClassVar, Dict, List, Optional, Tuple, TypedDict, Union, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -54,16 +54,18 @@ class _ResidualTest(TypedDict):
 
 # --- Camera ---------------------------------------------------------------------------------------
 
+@final
 class Camera:
     """Pinhole intrinsics in pixels, ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``. Immutable,
     hashable, ``==``, picklable. ``fx``, ``fy`` may be negative (a mirrored axis), never zero."""
 
-    def __init__(self, fx: float, fy: float, cx: float, cy: float, skew: Optional[float] = None) -> None:
+    def __new__(cls, fx: float, fy: float, cx: float, cy: float, skew: Optional[float] = None) -> "Camera":
         """``skew=None``: 0 (orthogonal pixel axes)."""
     @staticmethod
     def from_matrix(K: ArrayLike) -> "Camera":
         """From a (3, 3) calibration matrix, divided by ``K[2, 2]`` first."""
     # fields of Camera (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     fx: float
     """Focal length along u, pixels (negative for a mirrored axis)."""
     fy: float
@@ -92,13 +94,15 @@ class Camera:
         """Pixels (N, 2) of normalised coordinates (N, 2)."""
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class LensCamera:
     """A camera of one of COLMAP's models (:attr:`MODELS`) with lens distortion, parameters in COLMAP's
     order. Immutable, ``==``, picklable. Unprojection inverts the projection to 1e-10 px."""
 
     MODELS: List[str]
-    def __init__(self, model: str, params: List[float]) -> None: ...
+    def __new__(cls, model: str, params: List[float]) -> "LensCamera": ...
     # fields of LensCamera (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     model: str
     """COLMAP's name of the model, e.g. `'OPENCV'`."""
     params: NDArray[np.float64]
@@ -125,13 +129,15 @@ class LensCamera:
 
 # --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
 
+@final
 class PoseOptions:
     """Options of :func:`estimate_pose` (the core's ``PoseOptions``). The ``method=`` keyword of
     :func:`estimate_pose` wins over :attr:`method`. ``certify`` and ``certify_*`` are the core's
     ``certify: Option<CertificateOptions>``; the robust estimator is the separate ``ransac=``."""
 
     # fields of PoseOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, certify: bool = False, certify_gap: float = 0.001, certify_max_nodes: int = 20000) -> None: ...
+    def __new__(cls, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, certify: bool = False, certify_gap: float = 0.001, certify_max_nodes: int = 20000) -> "PoseOptions": ...
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """Estimator, one of `METHODS`."""
     penalty: float
@@ -163,12 +169,14 @@ class PoseOptions:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class CertifyOptions:
     """Options of every certificate of global optimality, pose and triangulation alike (the core's
     ``CertifyOptions``)."""
 
     # fields of CertifyOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, max_relative_gap: float = 0.001, max_nodes: Optional[int] = None) -> None: ...
+    def __new__(cls, *, max_relative_gap: float = 0.001, max_nodes: Optional[int] = None) -> "CertifyOptions": ...
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     max_relative_gap: float
     """Certified when `(cost − lower_bound) / max(cost, 1e-12)` is at most this, in (0, 1)."""
     max_nodes: Optional[int]
@@ -176,11 +184,13 @@ class CertifyOptions:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class Certificate:
     """A proved lower bound on the cost (``Σ r²``, squared whitened pixels) over a stated ``domain``
     (the core's ``Certificate``)."""
 
     # fields of Certificate (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     certified: bool
     """Whether the estimate is proved globally optimal within `max_relative_gap` over `domain`."""
     lower_bound: float
@@ -200,12 +210,14 @@ class Certificate:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class RansacOptions:
     """Options of the robust estimator (LO-RANSAC over points and lines; the core's
     ``RansacOptions``): ``estimate_pose(..., ransac=RansacOptions(...))``."""
 
     # fields of RansacOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, point_threshold: float = 4.0, line_threshold: float = 4.0, confidence: float = 0.9999, max_iterations: int = 100000, min_iterations: int = 0, min_inlier_ratio: float = 0.1, sprt: bool = True, time_budget: Optional[float] = None, seed: int = 0, local_iterations: int = 10, min_inliers: int = 6) -> None: ...
+    def __new__(cls, *, point_threshold: float = 4.0, line_threshold: float = 4.0, confidence: float = 0.9999, max_iterations: int = 100000, min_iterations: int = 0, min_inlier_ratio: float = 0.1, sprt: bool = True, time_budget: Optional[float] = None, seed: int = 0, local_iterations: int = 10, min_inliers: int = 6) -> "RansacOptions": ...
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     point_threshold: float
     """Inlier threshold of a point: reprojection distance, pixels."""
     line_threshold: float
@@ -231,11 +243,13 @@ class RansacOptions:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class PoseStage:
     """One stage of the pose pipeline: the algebraic estimator, the linear solve, the sampling loop
     (``"ransac"``) or the reprojection refinement (``"refinement"``)."""
 
     # fields of PoseStage (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     name: str
     """Name of the stage."""
     cost_kind: str
@@ -261,10 +275,12 @@ class PoseStage:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class RansacReport:
     """What the robust loop did (:attr:`PoseResult.ransac` of a robust estimate)."""
 
     # fields of RansacReport (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     iterations: int
     """Samples drawn."""
     degenerate_samples: int
@@ -294,10 +310,12 @@ class RansacReport:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class PoseResult:
     """The answer of :func:`estimate_pose`: the pose, how it was found, whether it can be used."""
 
     # fields of PoseResult (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     R: NDArray[np.float64]
     """Rotation, `x_cam = R X_world + t`."""
     t: NDArray[np.float64]
@@ -529,12 +547,14 @@ def get_num_threads() -> int:
 # Batches run in parallel without the GIL; ``progress(done)``; ``time_budget`` (s) ends with status
 # ``"time_budget"``; Ctrl-C raises with the finished tracks as ``partial``. A bad track never stops others.
 
+@final
 class TriangulationOptions:
     """Options of every triangulation function (the core's ``TriangulationOptions``). A ``method=``
     given to the function wins over :attr:`method`."""
 
     # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', max_taylor_nodes: int = 50000, local_max_iterations: int = 100) -> None: ...
+    def __new__(cls, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', max_taylor_nodes: int = 50000, local_max_iterations: int = 100) -> "TriangulationOptions": ...
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
     max_relative_gap: float
@@ -560,6 +580,7 @@ class TriangulationReport:
     """What one triangulation did: the base class of the point, line and quadric results."""
 
     # fields of TriangulationReport (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """The method that ran: `linear`, `local` or `optimal`."""
     status: str
@@ -598,10 +619,12 @@ class TriangulationReport:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class PointTriangulation(TriangulationReport):
     """A triangulated point and its report."""
 
     # fields of PointTriangulation (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     certificate_domain: str
     """Which points the certificate's lower bound covers (`'none'` without one): every point in front of the cameras, or the search domain of branch and bound."""
     X: NDArray[np.float64]
@@ -612,10 +635,12 @@ class PointTriangulation(TriangulationReport):
     """With `options.outlier_threshold`: (v,) the views the point was solved from; else `None`."""
     # end of fields
 
+@final
 class LineTriangulation(TriangulationReport):
     """A triangulated 3-D line and its report."""
 
     # fields of LineTriangulation (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     certificate_domain: str
     """Which lines the certificate's lower bound covers (`'none'` without one): every line in front of the cameras, or the search domain of branch and bound."""
     plucker: NDArray[np.float64]
@@ -636,10 +661,12 @@ class LineTriangulation(TriangulationReport):
     def point_direction_covariance(self) -> Optional[NDArray[np.float64]]:
         """The (6, 6) covariance of ``(point, direction)``."""
 
+@final
 class QuadricTriangulation(TriangulationReport):
     """A triangulated ellipsoid (dual quadric) and its report."""
 
     # fields of QuadricTriangulation (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     certificate_domain: str
     """Which quadrics the certificate's lower bound covers (`'none'` without one): every ellipsoid that no camera's principal plane cuts (`convexity_test`), or the search domain of branch and bound."""
     Q: NDArray[np.float64]
@@ -661,6 +688,7 @@ class BatchReport:
     of :class:`PointTriangulations`, :class:`LineTriangulations`, :class:`QuadricTriangulations`."""
 
     # fields of BatchReport (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """The method that ran: `linear`, `local` or `optimal`."""
     status: NDArray[np.str_]
@@ -691,10 +719,12 @@ class BatchReport:
     def to_dict(self) -> Dict[str, Any]: ...
     def __len__(self) -> int: ...
 
+@final
 class PointTriangulations(BatchReport):
     """The points of :func:`triangulate_points` beside the report columns."""
 
     # fields of PointTriangulations (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     X: NDArray[np.float64]
     """Per track: the point, world frame, shape (n, 3) (NaN for a rejected track)."""
     covariance: NDArray[np.float64]
@@ -706,10 +736,12 @@ class PointTriangulations(BatchReport):
     """
     # end of fields
 
+@final
 class LineTriangulations(BatchReport):
     """The lines of :func:`triangulate_lines` beside the report columns."""
 
     # fields of LineTriangulations (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     plucker: NDArray[np.float64]
     """Per track: Plücker coordinates, shape (n, 6) (NaN for a rejected track)."""
     point: NDArray[np.float64]
@@ -727,10 +759,12 @@ class LineTriangulations(BatchReport):
     """
     # end of fields
 
+@final
 class QuadricTriangulations(BatchReport):
     """The ellipsoids of :func:`triangulate_quadrics` beside the report columns."""
 
     # fields of QuadricTriangulations (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     Q: NDArray[np.float64]
     """Per track: the dual quadric, shape (n, 4, 4) (NaN for a rejected track)."""
     primal: NDArray[np.float64]
@@ -899,10 +933,12 @@ def triangulate_quadric_observations(
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 
+@final
 class FittedLine:
     """An image line fitted to points by :func:`fit_line`."""
 
     # fields of FittedLine (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     line: NDArray[np.float64]
     """The image line `(a, b, c)`, `a u + b v + c = 0`, with `a² + b² = 1`."""
     covariance: NDArray[np.float64]
@@ -912,10 +948,12 @@ class FittedLine:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
 class FittedConic:
     """An ellipse fitted to points by :func:`fit_conic`."""
 
     # fields of FittedConic (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     conic: NDArray[np.float64]
     """The conic `C` (3x3, symmetric): `(u, v, 1) C (u, v, 1)ᵀ = 0` on the ellipse."""
     centre: NDArray[np.float64]

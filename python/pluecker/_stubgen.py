@@ -58,7 +58,8 @@ def block(cls_name: str, indent: str = "    ") -> str:
     if _is_options(cls):
         defaults = cls().to_dict()
         params = ", ".join(f"{name}: {kind} = {defaults[name]!r}" for name, kind, _ in fields)
-        out.append(f"{indent}def __init__(self, *, {params}) -> None: ...")
+        out.append(f'{indent}def __new__(cls, *, {params}) -> "{cls_name}": ...')
+    out.append(f"{indent}__fields__: ClassVar[List[Tuple[str, str, str]]]")
     for name, kind, doc in fields:
         out.append(f"{indent}{name}: {kind}")
         out.extend(_docstring(doc, indent))
@@ -66,9 +67,21 @@ def block(cls_name: str, indent: str = "    ") -> str:
     return "\n".join(out) + "\n"
 
 
+# A class that Python code cannot subclass (PyO3's default) is ``@final`` in the stub.
+_BASETYPE = 1 << 10  # Py_TPFLAGS_BASETYPE
+CLASS = re.compile(r"^(?:@final\n)?class (?P<cls>\w+)\b", re.M)
+
+
+def _header(cls_name: str) -> str:
+    cls = getattr(_core, cls_name, None)
+    final = isinstance(cls, type) and not cls.__flags__ & _BASETYPE
+    return f"{'@final' + chr(10) if final else ''}class {cls_name}"
+
+
 def render(text: str) -> str:
-    """``text`` (a ``_core.pyi``) with every generated block rewritten."""
-    return BLOCK.sub(lambda m: block(m["cls"], m["indent"]), text)
+    """``text`` (a ``_core.pyi``) with every generated block rewritten and every class's ``@final`` set."""
+    text = BLOCK.sub(lambda m: block(m["cls"], m["indent"]), text)
+    return CLASS.sub(lambda m: _header(m["cls"]), text)
 
 
 def classes_with_fields() -> list[str]:

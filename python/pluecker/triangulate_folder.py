@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 import pluecker
-from pluecker.jsonio import dumps  # one key per line, every vector on one line
 from pluecker.datasets import VggSequence, load_vgg
+from pluecker.jsonio import dumps  # one key per line, every vector on one line
 
 __all__ = ["FolderError", "Features", "Run", "run", "write", "summary_lines"]
 

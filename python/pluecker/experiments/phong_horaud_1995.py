@@ -41,10 +41,10 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
+from tqdm import tqdm
 
 import pluecker
 from pluecker.experiments import Report
-from tqdm import tqdm
 
 NAME = "phong-horaud-1995"
 DEFAULT_OUT = Path("results") / NAME

@@ -27,9 +27,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from pluecker.experiments import Report
-from tqdm import tqdm
 
 from . import conics, fitting, lines, points
 from .common import LABELS, METHODS, SEQUENCES, clean
