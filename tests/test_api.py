@@ -483,13 +483,13 @@ def _public(names) -> set:
 
 
 def _stub_args(fn: ast.FunctionDef) -> list:
-    """(name, kind, default source) of a stub function's parameters, self excluded."""
+    """(name, kind, default source) of a stub function's parameters, self and cls excluded."""
     a = fn.args
     positional = a.posonlyargs + a.args
     defaults = [None] * (len(positional) - len(a.defaults)) + [ast.unparse(d) for d in a.defaults]
     out = [(p.arg, "positional", d) for p, d in zip(positional, defaults)]
     out += [(p.arg, "keyword", None if d is None else ast.unparse(d)) for p, d in zip(a.kwonlyargs, a.kw_defaults)]
-    return [x for x in out if x[0] != "self"]
+    return [x for x in out if x[0] not in ("self", "cls")]
 
 
 def _runtime_args(obj) -> list:
@@ -524,18 +524,18 @@ def test_stub_signatures_and_class_members_match_the_runtime():
             assert _stub_args(node) == _runtime_args(runtime), node.name
         elif isinstance(node, ast.ClassDef) and not issubclass(runtime, Exception):
             members = {m.name: m for m in node.body if isinstance(m, ast.FunctionDef)}
-            properties = {m.target.id for m in node.body if isinstance(m, ast.AnnAssign)}
+            properties = _public(m.target.id for m in node.body if isinstance(m, ast.AnnAssign))
             # Everything the stub lists exists; everything the class adds to its base is listed.
             base = runtime.__base__
             inherited = _public(dir(base)) if base is not object else set()
             assert _public(dir(runtime)) - inherited <= _public(members) | properties <= _public(dir(runtime)), node.name
             for name, member in members.items():
-                if name == "__init__" and node.name.endswith("Options"):
+                if name == "__new__" and node.name.endswith("Options"):
                     # Options take keywords only, one per field, defaults from the Rust Default.
                     defaults = runtime().to_dict()
                     expected = [(f, "keyword", repr(defaults[f])) for f, _, _ in runtime.__fields__]
                     assert _stub_args(member) == expected, node.name
-                elif name == "__init__":
+                elif name == "__new__":
                     assert _stub_args(member) == _runtime_args(runtime), node.name
                 elif not name.startswith("_") and callable(getattr(runtime, name)):
                     assert _stub_args(member) == _runtime_args(getattr(runtime, name)), f"{node.name}.{name}"
