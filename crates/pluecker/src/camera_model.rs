@@ -59,7 +59,8 @@ use nalgebra::{Matrix2, Matrix2x3, Vector2, Vector3};
 
 /// The camera models, with COLMAP's names (see the module table for their parameters); the
 /// discriminant is COLMAP's model id.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "SCREAMING_SNAKE_CASE")]
 pub enum CameraModel {
     /// `f, cx, cy`: one focal length, no distortion.
     SimplePinhole = 0,
@@ -70,10 +71,13 @@ pub enum CameraModel {
     /// `f, cx, cy, k1, k2`: two radial terms.
     Radial = 3,
     /// `fx, fy, cx, cy, k1, k2, p1, p2`: OpenCV's radial and tangential terms.
+    #[strum(serialize = "OPENCV")]
     OpenCv = 4,
     /// `fx, fy, cx, cy, k1, k2, k3, k4`: OpenCV's equidistant fisheye.
+    #[strum(serialize = "OPENCV_FISHEYE")]
     OpenCvFisheye = 5,
     /// `fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6`: OpenCV's rational model.
+    #[strum(serialize = "FULL_OPENCV")]
     FullOpenCv = 6,
     /// `fx, fy, cx, cy, omega`: the field-of-view model.
     Fov = 7,
@@ -98,48 +102,12 @@ pub enum CameraModel {
 }
 
 impl CameraModel {
-    /// Every model, in COLMAP's order of model ids (0-16: `ALL[i] as usize == i`, COLMAP's ids).
-    pub const ALL: [CameraModel; 17] = [
-        CameraModel::SimplePinhole,
-        CameraModel::Pinhole,
-        CameraModel::SimpleRadial,
-        CameraModel::Radial,
-        CameraModel::OpenCv,
-        CameraModel::OpenCvFisheye,
-        CameraModel::FullOpenCv,
-        CameraModel::Fov,
-        CameraModel::SimpleRadialFisheye,
-        CameraModel::RadialFisheye,
-        CameraModel::ThinPrismFisheye,
-        CameraModel::RadTanThinPrismFisheye,
-        CameraModel::SimpleDivision,
-        CameraModel::Division,
-        CameraModel::SimpleFisheye,
-        CameraModel::Fisheye,
-        CameraModel::Eucm,
-    ];
+    /// Every model, in COLMAP's order of model ids (`ALL[i] as usize == i`, COLMAP's ids).
+    pub const ALL: &'static [CameraModel] = <CameraModel as strum::VariantArray>::VARIANTS;
 
     /// COLMAP's name of the model.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            CameraModel::SimplePinhole => "SIMPLE_PINHOLE",
-            CameraModel::Pinhole => "PINHOLE",
-            CameraModel::SimpleRadial => "SIMPLE_RADIAL",
-            CameraModel::Radial => "RADIAL",
-            CameraModel::OpenCv => "OPENCV",
-            CameraModel::OpenCvFisheye => "OPENCV_FISHEYE",
-            CameraModel::FullOpenCv => "FULL_OPENCV",
-            CameraModel::Fov => "FOV",
-            CameraModel::SimpleRadialFisheye => "SIMPLE_RADIAL_FISHEYE",
-            CameraModel::RadialFisheye => "RADIAL_FISHEYE",
-            CameraModel::ThinPrismFisheye => "THIN_PRISM_FISHEYE",
-            CameraModel::RadTanThinPrismFisheye => "RAD_TAN_THIN_PRISM_FISHEYE",
-            CameraModel::SimpleDivision => "SIMPLE_DIVISION",
-            CameraModel::Division => "DIVISION",
-            CameraModel::SimpleFisheye => "SIMPLE_FISHEYE",
-            CameraModel::Fisheye => "FISHEYE",
-            CameraModel::Eucm => "EUCM",
-        }
+        self.into()
     }
 
     /// The model of a COLMAP name; `Error::InvalidOption` naming the known ones otherwise, and saying
@@ -154,16 +122,7 @@ impl CameraModel {
                     .into(),
             });
         }
-        CameraModel::ALL
-            .into_iter()
-            .find(|m| m.as_str() == name)
-            .ok_or_else(|| Error::InvalidOption {
-                name: "model".into(),
-                reason: format!(
-                    "unknown camera model '{name}'; expected one of {}",
-                    CameraModel::ALL.map(|m| m.as_str()).join(", ")
-                ),
-            })
+        crate::names::parse("model", "camera model", name)
     }
 
     /// The parameter names, in COLMAP's order.
@@ -895,7 +854,7 @@ mod tests {
             (CameraModel::Fisheye, &[400.0, 395.0, 320.0, 240.0]),
             (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]),
         ];
-        assert_eq!(params.map(|(m, _)| m), CameraModel::ALL);
+        assert_eq!(params.map(|(m, _)| m).as_slice(), CameraModel::ALL);
         params.iter().map(|(m, p)| LensCamera::new(*m, p).unwrap()).collect()
     }
 
@@ -1272,7 +1231,7 @@ mod tests {
 
     #[test]
     fn models_parse_by_colmap_name_and_check_their_parameters() {
-        for m in CameraModel::ALL {
+        for &m in CameraModel::ALL {
             assert_eq!(CameraModel::parse(m.as_str()).unwrap(), m);
         }
         assert!(matches!(

@@ -51,7 +51,8 @@ impl CertifyOptions {
 }
 
 /// How global optimality was established.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum CertificateKind {
     /// Not attempted (methods `linear` and `local`).
     None,
@@ -60,12 +61,12 @@ pub enum CertificateKind {
     /// Branch and bound closed the gap (the SOCP relaxations of section 4).
     BranchAndBound,
     /// Lines: interval branch and bound with Taylor bounds over the two-view chart
-    /// ([`line::taylor_search`]), whose domain is every line not within 1 % of the local line's
+    /// ([`crate::triangulation::line::taylor_search`]), whose domain is every line not within 1 % of the local line's
     /// distance from a camera centre.
     TaylorBranchAndBound,
     /// Points through lenses with distortion: the convexity test of the linearisation at the
     /// estimate, carried to the exact cost by interval bounds of the lenses' Jacobians
-    /// ([`point::lens`]), whose domain is every point whose projections lie inside the disc where each
+    /// ([`crate::triangulation::point::lens`]), whose domain is every point whose projections lie inside the disc where each
     /// lens is proved one-to-one.
     LensConvexityTest,
     /// Pose: the sublevel-set test ([`crate::pose::certificate`]): a search over rotation cells that
@@ -76,19 +77,13 @@ pub enum CertificateKind {
 impl CertificateKind {
     /// snake_case name for reports, JSON and Python.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            CertificateKind::None => "none",
-            CertificateKind::ConvexityTest => "convexity_test",
-            CertificateKind::BranchAndBound => "branch_and_bound",
-            CertificateKind::TaylorBranchAndBound => "taylor_branch_and_bound",
-            CertificateKind::LensConvexityTest => "lens_convexity_test",
-            CertificateKind::SublevelSet => "sublevel_set",
-        }
+        self.into()
     }
 }
 
 /// What a certificate is about: a camera pose or a triangulated primitive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum Primitive {
     /// A camera pose (rotation and translation).
     Pose,
@@ -103,12 +98,7 @@ pub enum Primitive {
 impl Primitive {
     /// snake_case name for reports, JSON and Python.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            Primitive::Pose => "pose",
-            Primitive::Point => "point",
-            Primitive::Line => "line",
-            Primitive::Quadric => "quadric",
-        }
+        self.into()
     }
 }
 

@@ -80,6 +80,7 @@ pub mod geometry;
 pub mod global;
 pub mod interrupt;
 pub mod lens_bounds;
+pub mod names;
 pub mod optim;
 pub mod pose;
 pub mod rigid;

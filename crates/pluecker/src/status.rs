@@ -4,7 +4,8 @@
 use crate::interrupt::StopReason;
 
 /// Whether an estimate can be used, and if not why.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum Status {
     /// The method finished: every stage converged (pose: every object point in front of the camera);
     /// with a certificate requested, it holds within the gap.
@@ -47,20 +48,7 @@ pub enum Status {
 impl Status {
     /// snake_case name for reports, JSON and Python.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            Status::Success => "success",
-            Status::GapNotClosed => "gap_not_closed",
-            Status::NotConverged => "not_converged",
-            Status::BehindCamera => "behind_camera",
-            Status::Ambiguous => "ambiguous",
-            Status::AtInfinity => "at_infinity",
-            Status::Infeasible => "infeasible",
-            Status::NumericalFailure => "numerical_failure",
-            Status::TooFewInliers => "too_few_inliers",
-            Status::NoHypothesis => "no_hypothesis",
-            Status::Interrupted => "interrupted",
-            Status::TimeBudget => "time_budget",
-        }
+        self.into()
     }
 
     /// The status of a solve stopped for `reason`.

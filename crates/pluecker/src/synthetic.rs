@@ -103,7 +103,8 @@ pub fn paper_calibration_object() -> Scene {
 }
 
 /// Kinds of random scene used by the benchmarks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum SceneKind {
     /// Points in a box 4-8 units in front of the camera, filling a 640 x 480 image at f = 800.
     General,
@@ -116,11 +117,7 @@ pub enum SceneKind {
 impl SceneKind {
     /// Lower-case name.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            SceneKind::General => "general",
-            SceneKind::Planar => "planar",
-            SceneKind::Far => "far",
-        }
+        self.into()
     }
 }
 

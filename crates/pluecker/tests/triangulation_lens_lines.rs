@@ -825,7 +825,7 @@ fn a_lens_that_does_not_distort_is_the_identity() {
     // with β = 1), checked on points out to r = 2.
     let mut rng = Rng::new(41);
     let mut identities = Vec::new();
-    for model in CameraModel::ALL {
+    for &model in CameraModel::ALL {
         let names = model.parameter_names();
         let params: Vec<f64> = names
             .iter()

@@ -54,7 +54,8 @@ pub trait Objective<const N: usize> {
 }
 
 /// Why a solver stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum Termination {
     /// `‖∇f‖∞ ≤ gradient_tolerance` (step k.2 of section 4.1).
     GradientTolerance,
@@ -89,16 +90,7 @@ impl Termination {
 
     /// A short snake_case name, used in reports, JSON and Python.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            Termination::GradientTolerance => "gradient_tolerance",
-            Termination::RadiusTolerance => "radius_tolerance",
-            Termination::CostTolerance => "cost_tolerance",
-            Termination::StepTolerance => "step_tolerance",
-            Termination::MaxIterations => "max_iterations",
-            Termination::SingularHessian => "singular_hessian",
-            Termination::NonFiniteCost => "non_finite_cost",
-            Termination::ClosedForm => "closed_form",
-        }
+        self.into()
     }
 }
 
