@@ -1,10 +1,12 @@
-"""Robust triangulation outputs, to compare two builds bit for bit (the sampling loop's refactor must
-not change them).
+"""Robust triangulation and robust pose outputs, to compare two builds bit for bit (the sampling loop's
+refactor must not change them).
 
 About 2,000 robust triangulations (``TriangulationOptions(outlier_threshold=4.0)``): points and lines
 with pinhole cameras (the scenes of ``tests/test_triangulation_robust.py``: 3 to 30 views, so that both
 the all-pairs and the seeded-pairs consensus run, one to three outlier views per track) and points and
-lines through lenses (the scenes of ``tests/test_triangulation_lens*.py`` with outlier views added).
+lines through lenses (the scenes of ``tests/test_triangulation_lens*.py`` with outlier views added); and 1,800 robust poses on
+the scenes of ``bench/robust_outliers.py`` (points, points and lines, 0 to 100 % outliers, with and without
+the SPRT): pose, inlier masks and every count of the loop's report (``RansacReport``, time excepted).
 Each build runs in its own process; ``--before DIR`` puts ``DIR`` first on ``sys.path`` (a copy of
 ``python/`` from an older commit with its built ``_core*.so``). Run from the repository root:
 
@@ -116,6 +118,35 @@ def _arrays(pluecker, triangulation_scenes, lens_lines):
     return out
 
 
+REPORT = ("iterations", "degenerate_samples", "models_scored", "sprt_rejections", "errors_evaluated",
+          "local_optimizations", "inliers", "required_inliers", "score", "stop")
+
+
+def _poses(pluecker, robust_outliers):
+    """Robust poses (``estimate_pose(..., ransac=RansacOptions(seed=...))``) on the scenes of
+    ``bench/robust_outliers.py``: the pose, the inlier masks and every count of the loop's report."""
+    out: dict[str, np.ndarray] = {}
+    k = 0
+    for n_points, n_lines, scenes in ((30, 0, 40), (100, 0, 40), (100, 30, 40), (300, 60, 10), (20, 10, 20)):
+        for ratio in (0.0, 0.3, 0.5, 0.75, 0.9, 1.0):
+            for seed in range(scenes):
+                s = robust_outliers.make_scene(pluecker, n_points, n_lines, ratio, seed)
+                for sprt in (True, False):
+                    opts = pluecker.RansacOptions(seed=seed, sprt=sprt)
+                    r = pluecker.estimate_pose(s["camera"], **s["data"], ransac=opts)
+                    name = f"pose{k}"
+                    out[f"{name}.R"], out[f"{name}.t"] = np.asarray(r.R), np.asarray(r.t)
+                    out[f"{name}.status"] = np.asarray(r.status)
+                    out[f"{name}.inliers_points"] = np.asarray(r.inliers_points)
+                    if n_lines:
+                        out[f"{name}.inliers_lines"] = np.asarray(r.inliers_lines)
+                    for f in REPORT:
+                        out[f"{name}.ransac.{f}"] = np.asarray(getattr(r.ransac, f))
+                    k += 1
+    out["pose_count"] = np.array(k)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--before", type=Path, help="a python/ directory to import pluecker from")
@@ -126,9 +157,10 @@ def main() -> None:
         a, b = (np.load(p) for p in args.compare)
         assert sorted(a.files) == sorted(b.files), "different outputs"
         differ = [f for f in a.files if not np.array_equal(a[f], b[f], equal_nan=a[f].dtype.kind == "f")]
-        print(f"{int(a['count'])} triangulations, {len(a.files) - 1} arrays; bit-identical: {not differ}")
+        print(f"{int(a['count'])} triangulations, {int(a['pose_count'])} robust poses, {len(a.files) - 2} arrays; "
+              f"bit-identical: {not differ}")
         for f in differ:
-            print("differs:", f, np.nanmax(np.abs(a[f].astype(float) - b[f].astype(float))))
+            print("differs:", f, a[f], b[f])
         sys.exit(1 if differ else 0)
     if args.before:
         sys.path.insert(0, str(args.before))
@@ -138,10 +170,14 @@ def main() -> None:
     import test_triangulation_lens_lines as lens_lines
     import triangulation_scenes
 
+    sys.path.insert(1, str(root / "bench"))
+    import robust_outliers
+
     print("pluecker from", pluecker.__file__)
     out = _arrays(pluecker, triangulation_scenes, lens_lines)
+    out.update(_poses(pluecker, robust_outliers))
     np.savez(args.out, **out)
-    print(f"{int(out['count'])} triangulations written to {args.out}")
+    print(f"{int(out['count'])} triangulations and {int(out['pose_count'])} robust poses written to {args.out}")
 
 
 if __name__ == "__main__":
