@@ -204,7 +204,11 @@ pub(crate) fn run<E: Estimator>(
     // the best model or `α` changes.
     let mut limit: Option<(usize, Stop, f64)> = None;
     let stop = loop {
-        let alpha_next = if best.is_some() { estimator.rejection_bound() } else { 0.0 };
+        let alpha_next = if best.is_some() {
+            estimator.rejection_bound()
+        } else {
+            0.0
+        };
         if limit.is_some_and(|l| l.2 != alpha_next) {
             limit = None;
         }

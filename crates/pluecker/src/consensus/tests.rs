@@ -86,7 +86,9 @@ impl Estimator for Location {
     /// The sampled value, shifted by 0.1 for each further model (none for a sample of index 0 when
     /// `models_per_sample` is 0: a degenerate sample).
     fn models(&mut self, &k: &usize) -> Vec<f64> {
-        (0..self.models_per_sample).map(|j| self.values[k] + 0.1 * j as f64).collect()
+        (0..self.models_per_sample)
+            .map(|j| self.values[k] + 0.1 * j as f64)
+            .collect()
     }
 
     fn score(&mut self, &m: &f64, _: &usize, _: Option<f64>, _: &Stats) -> Option<f64> {
@@ -131,7 +133,13 @@ fn no_clock() -> Duration {
 #[test]
 fn the_loop_stops_at_the_confidence_bound_computed_independently() {
     // P = w^s for a sample of s from an inlier fraction w, multiplied out here.
-    for (w, s, confidence) in [(0.5, 3, 0.9999), (0.3, 2, 0.99), (0.8, 4, 0.999), (0.6, 5, 0.95), (0.1, 1, 0.9)] {
+    for (w, s, confidence) in [
+        (0.5, 3, 0.9999),
+        (0.3, 2, 0.99),
+        (0.8, 4, 0.999),
+        (0.6, 5, 0.95),
+        (0.1, 1, 0.9),
+    ] {
         let p: f64 = (0..s).map(|_| w).product();
         let n = samples_needed(p, confidence);
         // Not a tie between the loop's logarithms and the product here: the bound is clear by 1e-9.
@@ -182,7 +190,10 @@ fn the_floor_probability_caps_the_loop_and_min_iterations_delays_it() {
     let mut mock = Location::new(1, 30, 0.2);
     mock.probability = 0.2;
     let out = run(&mut mock, &opts, no_clock);
-    assert_eq!((out.stop, out.stats.iterations), (Stop::Confidence, samples_needed(0.2, 0.9999)));
+    assert_eq!(
+        (out.stop, out.stats.iterations),
+        (Stop::Confidence, samples_needed(0.2, 0.9999))
+    );
     opts.min_iterations = cap + 17;
     let out = run(&mut Location::new(1, 30, 0.2), &opts, no_clock);
     assert_eq!((out.stop, out.stats.iterations), (Stop::MinInlierRatio, cap + 17));
@@ -206,7 +217,11 @@ fn the_best_model_is_the_lowest_msac_score_of_all_models_scored() {
         // lowest, recomputed from the data.
         let (best, _) = out.best.unwrap();
         let lowest = mock.scored.iter().cloned().fold(f64::INFINITY, f64::min);
-        assert_eq!(mock.msac_of(best), lowest, "seed {seed}: the best model is not the lowest MSAC score");
+        assert_eq!(
+            mock.msac_of(best),
+            lowest,
+            "seed {seed}: the best model is not the lowest MSAC score"
+        );
         assert_eq!(out.best.unwrap().1, lowest);
         // Every model that beat the best so far, and only those, was refined: the strict records.
         let mut record = f64::INFINITY;

@@ -63,8 +63,8 @@ use super::correspondences::Correspondences;
 use super::minimal::solve;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
-use crate::error::{number, Error, Result};
 use crate::consensus::{self, Estimator, Stats, Stop};
+use crate::error::{number, Error, Result};
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
 use sampler::{solvable, Sampler};
@@ -338,8 +338,13 @@ impl Estimator for PoseEstimator<'_> {
         // The first model is scored in full; the test needs a best model to compare with.
         let test = self.sprt.as_ref().filter(|_| best.is_some()).map(|s| *s.test());
         let (np, nl) = (self.data.n_points(), self.data.n_lines());
-        let start = [scoring::below(&mut self.order_rng, np), scoring::below(&mut self.order_rng, nl)];
-        let (verdict, work) = self.data.evaluate(pose, &self.tau, bound, test.as_ref(), Some(sample), start);
+        let start = [
+            scoring::below(&mut self.order_rng, np),
+            scoring::below(&mut self.order_rng, nl),
+        ];
+        let (verdict, work) = self
+            .data
+            .evaluate(pose, &self.tau, bound, test.as_ref(), Some(sample), start);
         self.errors_evaluated += work;
         match verdict {
             Verdict::Score(score) if score < bound => Some(score),
@@ -359,7 +364,14 @@ impl Estimator for PoseEstimator<'_> {
             return (pose, score);
         }
         self.local_optimizations += 1;
-        let best = local_optimization(self.camera, self.corr, self.data, &self.tau, &self.lo, Best { pose, score });
+        let best = local_optimization(
+            self.camera,
+            self.corr,
+            self.data,
+            &self.tau,
+            &self.lo,
+            Best { pose, score },
+        );
         (best.pose, best.score)
     }
 
@@ -409,7 +421,11 @@ pub fn ransac(
     let rho = opts.min_inlier_ratio;
     let loop_opts = consensus::Options {
         confidence: opts.confidence,
-        floor_probability: if rho > 0.0 { sampler.all_inlier_probability(rho, rho) } else { 0.0 },
+        floor_probability: if rho > 0.0 {
+            sampler.all_inlier_probability(rho, rho)
+        } else {
+            0.0
+        },
         max_iterations: opts.max_iterations,
         min_iterations: opts.min_iterations,
         time_budget: opts.time_budget,

@@ -204,7 +204,13 @@ impl<T: RobustTrack + ?Sized> Estimator for PairConsensus<'_, T> {
             .collect()
     }
 
-    fn score(&mut self, x: &Vector3<f64>, _: &(usize, usize), _: Option<(bool, f64)>, _: &Stats) -> Option<(bool, f64)> {
+    fn score(
+        &mut self,
+        x: &Vector3<f64>,
+        _: &(usize, usize),
+        _: Option<(bool, f64)>,
+        _: &Stats,
+    ) -> Option<(bool, f64)> {
         let errors = (0..self.track.first_order().len()).map(|j| self.track.squared_error(j, x));
         let (score, inliers) = msac(errors, self.tau2);
         Some((inliers < 2, score))
