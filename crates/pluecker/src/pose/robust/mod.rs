@@ -26,6 +26,10 @@
 //! ([`crate::pose::estimate_pose`]) then refines the best model on its inliers with the full
 //! reprojection refinement, if it has at least [`RansacReport::required_inliers`].
 //!
+//! The loop itself (sampling, the best model, the adaptive bound and its cap, the budget and the stop)
+//! is the sampling consensus shared with robust triangulation (`crate::consensus`); this module plugs
+//! into it the mixed samples, the minimal solvers, the scoring with the SPRT and the local optimisation.
+//!
 //! **All-outlier data.** With no model in the data, no inlier fraction is ever found, so the adaptive
 //! bound never comes down: before the SPRT and the `min_inlier_ratio` cap the loop ran to
 //! `max_iterations` (100,000 samples), each hypothesis scored on nearly every correspondence (its

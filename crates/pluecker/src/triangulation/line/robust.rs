@@ -4,7 +4,8 @@
 //! 1. **Consensus.** Every pair of views (or [`MAX_PAIRS`] seeded ones) gives the line where its two
 //!    back-projected planes meet (the linear method on two views); its MSAC score is
 //!    `Σ_j min(‖r_j‖², τ²)` over all views, with `r_j` the whitened residual of eq. 18 in view `j`. The
-//!    lowest score wins; its two views fit it exactly, so at least two inliers always remain.
+//!    lowest score wins; its two views fit it exactly, so at least two inliers always remain. The pairs
+//!    run through the sampling loop shared with the robust pose (`crate::consensus`).
 //! 2. **Optimum on the inliers.** The views with `‖r_j‖ ≤ τ` are solved by the chosen method; the
 //!    inliers are re-selected at that line and the solve repeated while they change (at most
 //!    [`MAX_ROUNDS`] times).

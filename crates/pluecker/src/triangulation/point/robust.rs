@@ -10,6 +10,8 @@
 //!    views within `τ` wins (any point when none has two). A single outlier in a track of
 //!    3 or more views cannot win: any pair of inliers explains every inlier view. Two observations in
 //!    one image give no two-view point (their linear point is the camera centre) and are skipped.
+//!    The pairs run through the sampling loop shared with the robust pose (`crate::consensus`), every
+//!    pair in order, without an adaptive stop.
 //! 2. **Optimum on the inliers.** The views with `r_j ≤ τ` (and in front) are solved by the chosen
 //!    method, certificate included; the inliers are then re-selected at that point, and the solve
 //!    repeated while they change (at most [`MAX_ROUNDS`] times).
