@@ -74,6 +74,7 @@ pub mod camera;
 pub mod camera_model;
 pub mod certificate;
 pub mod chi_square;
+pub(crate) mod consensus;
 pub mod curved_line;
 pub mod error;
 pub mod geometry;

@@ -26,6 +26,10 @@
 //! ([`crate::pose::estimate_pose`]) then refines the best model on its inliers with the full
 //! reprojection refinement, if it has at least [`RansacReport::required_inliers`].
 //!
+//! The loop itself (sampling, the best model, the adaptive bound and its cap, the budget and the stop)
+//! is the sampling consensus shared with robust triangulation (`crate::consensus`); this module plugs
+//! into it the mixed samples, the minimal solvers, the scoring with the SPRT and the local optimisation.
+//!
 //! **All-outlier data.** With no model in the data, no inlier fraction is ever found, so the adaptive
 //! bound never comes down: before the SPRT and the `min_inlier_ratio` cap the loop ran to
 //! `max_iterations` (100,000 samples), each hypothesis scored on nearly every correspondence (its
@@ -64,8 +68,8 @@ use super::correspondences::Correspondences;
 use super::minimal::solve;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
+use crate::consensus::{self, Estimator, Stats, Stop};
 use crate::error::{number, Error, Result};
-use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
 use sampler::{solvable, Sampler};
@@ -293,6 +297,113 @@ struct Best {
     score: f64,
 }
 
+/// The pose's part of the sampling loop ([`crate::consensus`]): mixed point/line samples
+/// (`sampler`), the minimal solvers, the MSAC scoring with the SPRT (`scoring`, `sprt`) and the local
+/// optimisation; it counts what [`RansacReport`] reports beyond the loop's own counts.
+struct PoseEstimator<'a> {
+    camera: &'a Camera,
+    corr: &'a Correspondences,
+    data: &'a Prepared,
+    tau: Thresholds,
+    sampler: Sampler,
+    /// The samples' stream.
+    rng: Rng,
+    /// The verification order's stream (start slots of `scoring`).
+    order_rng: Rng,
+    /// The trust region of the local optimisation.
+    lo: TrustRegionOptions,
+    local_iterations: usize,
+    sprt: Option<Sprt>,
+    errors_evaluated: usize,
+    sprt_rejections: usize,
+    local_optimizations: usize,
+    /// Inliers of the best model.
+    inliers: usize,
+}
+
+impl Estimator for PoseEstimator<'_> {
+    type Sample = [usize; 3];
+    type Model = Pose;
+    type Score = f64;
+
+    fn sample(&mut self) -> Option<[usize; 3]> {
+        self.sampler.can_draw().then(|| self.sampler.draw(&mut self.rng))
+    }
+
+    /// The poses of the sample that put its correspondences in front of the camera.
+    fn models(&mut self, sample: &[usize; 3]) -> Vec<Pose> {
+        let features = sample.map(|k| self.data.features[k]);
+        let mut poses = solve(&features);
+        poses.retain(|pose| self.data.sample_in_front(pose, sample));
+        poses
+    }
+
+    fn score(&mut self, pose: &Pose, sample: &[usize; 3], best: Option<f64>, stats: &Stats) -> Option<f64> {
+        let bound = best.unwrap_or(f64::INFINITY);
+        // The first model is scored in full; the test needs a best model to compare with.
+        let test = self.sprt.as_ref().filter(|_| best.is_some()).map(|s| *s.test());
+        let (np, nl) = (self.data.n_points(), self.data.n_lines());
+        let start = [
+            scoring::below(&mut self.order_rng, np),
+            scoring::below(&mut self.order_rng, nl),
+        ];
+        let (verdict, work) = self
+            .data
+            .evaluate(pose, &self.tau, bound, test.as_ref(), Some(sample), start);
+        self.errors_evaluated += work;
+        match verdict {
+            Verdict::Score(score) if score < bound => Some(score),
+            Verdict::Rejected { evaluated, consistent } => {
+                self.sprt_rejections += 1;
+                if let Some(s) = self.sprt.as_mut() {
+                    s.rejected(evaluated, consistent, models_per_sample(stats));
+                }
+                None
+            }
+            _ => None,
+        }
+    }
+
+    fn refine(&mut self, pose: Pose, score: f64) -> (Pose, f64) {
+        if self.local_iterations == 0 {
+            return (pose, score);
+        }
+        self.local_optimizations += 1;
+        let best = local_optimization(
+            self.camera,
+            self.corr,
+            self.data,
+            &self.tau,
+            &self.lo,
+            Best { pose, score },
+        );
+        (best.pose, best.score)
+    }
+
+    /// `P` of the best model's inlier fractions (points, lines); the SPRT is told of them.
+    fn new_best(&mut self, pose: &Pose, stats: &Stats) -> f64 {
+        let (points, lines) = self.data.inliers(pose, &self.tau);
+        let count = |m: &[bool]| m.iter().filter(|&&v| v).count();
+        let (ip, il) = (count(&points), count(&lines));
+        self.inliers = ip + il;
+        let fraction = |i: usize, n: usize| if n == 0 { 0.0 } else { i as f64 / n as f64 };
+        let f = [fraction(ip, points.len()), fraction(il, lines.len())];
+        if let Some(s) = self.sprt.as_mut() {
+            s.new_best(f, models_per_sample(stats));
+        }
+        self.sampler.all_inlier_probability(f[0], f[1])
+    }
+
+    fn rejection_bound(&self) -> f64 {
+        self.sprt.as_ref().map_or(0.0, Sprt::rejection_bound)
+    }
+}
+
+/// Poses scored per sample drawn so far.
+fn models_per_sample(stats: &Stats) -> f64 {
+    stats.models_scored as f64 / stats.iterations as f64
+}
+
 /// LO-RANSAC on validated correspondences (finite, no zero-length segment), in their frame.
 /// `refinement` sets the trust region of the local optimisation (its cap is replaced by
 /// [`RansacOptions::local_iterations`]).
@@ -308,135 +419,74 @@ pub fn ransac(
     let tau = opts.thresholds();
     let (np, nl) = (data.n_points(), data.n_lines());
     let sampler = Sampler::new(np, nl, solvable());
-    let mut rng = Rng::new(opts.seed);
     let mut lo = *refinement;
     lo.subproblem = Subproblem::Hebden;
     lo.stopping.max_iterations = opts.local_iterations;
-    let mut report = RansacReport {
-        iterations: 0,
-        degenerate_samples: 0,
-        models_scored: 0,
-        sprt_rejections: 0,
+    let chance = chance_probabilities(data.window, opts.point_threshold, opts.line_threshold);
+    let rho = opts.min_inlier_ratio;
+    let loop_opts = consensus::Options {
+        confidence: opts.confidence,
+        floor_probability: if rho > 0.0 {
+            sampler.all_inlier_probability(rho, rho)
+        } else {
+            0.0
+        },
+        max_iterations: opts.max_iterations,
+        min_iterations: opts.min_iterations,
+        time_budget: opts.time_budget,
+        interruptible: true,
+    };
+    let can_draw = sampler.can_draw();
+    let mut estimator = PoseEstimator {
+        camera,
+        corr,
+        data: &data,
+        tau,
+        sampler,
+        rng: Rng::new(opts.seed),
+        order_rng,
+        lo,
+        local_iterations: opts.local_iterations,
+        sprt: opts
+            .sprt
+            .then(|| Sprt::new([np, nl], chance, opts.min_inlier_ratio, 1.0)),
         errors_evaluated: 0,
+        sprt_rejections: 0,
         local_optimizations: 0,
         inliers: 0,
+    };
+    let outcome = if can_draw {
+        consensus::run(&mut estimator, &loop_opts, || started.elapsed())
+    } else {
+        consensus::Outcome {
+            best: None,
+            stats: Stats::default(),
+            stop: Stop::Exhausted,
+        }
+    };
+    let stats = outcome.stats;
+    let mut report = RansacReport {
+        iterations: stats.iterations,
+        degenerate_samples: stats.degenerate_samples,
+        models_scored: stats.models_scored,
+        sprt_rejections: estimator.sprt_rejections,
+        errors_evaluated: estimator.errors_evaluated,
+        local_optimizations: estimator.local_optimizations,
+        inliers: estimator.inliers,
         required_inliers: opts.min_inliers,
         score: data.all_outlier_score(&tau),
-        stop: RansacStop::IterationCap,
+        stop: match outcome.stop {
+            Stop::Confidence => RansacStop::Confidence,
+            Stop::MinInlierRatio => RansacStop::MinInlierRatio,
+            Stop::IterationCap => RansacStop::IterationCap,
+            Stop::TimeBudget => RansacStop::TimeBudget,
+            Stop::Interrupted => RansacStop::Interrupted,
+            Stop::Exhausted => RansacStop::NoSolvableSample,
+        },
         time_seconds: 0.0,
     };
-    let chance = chance_probabilities(data.window, opts.point_threshold, opts.line_threshold);
-    let mut sprt = opts
-        .sprt
-        .then(|| Sprt::new([np, nl], chance, opts.min_inlier_ratio, 1.0));
-    let mut best: Option<Best> = None;
-    // Inlier fractions (points, lines) of the best model.
-    let mut fractions: Option<[f64; 2]> = None;
-    // The samples drawn, counted per `α` (1/A of the test their poses were verified with, 0 without).
-    let mut history: Vec<(f64, usize)> = Vec::new();
-    // The stopping bound, its reason, and the `α` assumed for the samples to come; recomputed when
-    // the best model or the test changes.
-    let mut limit: Option<(usize, RansacStop, f64)> = None;
-    if !sampler.can_draw() {
-        report.stop = RansacStop::NoSolvableSample;
-    }
-    while sampler.can_draw() {
-        let alpha_next = sprt
-            .as_ref()
-            .filter(|_| best.is_some())
-            .map_or(0.0, Sprt::rejection_bound);
-        if limit.is_some_and(|l| l.2 != alpha_next) {
-            limit = None;
-        }
-        let (bound, reason, _) = *limit.get_or_insert_with(|| {
-            let needed = |[p, l]: [f64; 2]| sampler.required_samples_after(p, l, opts.confidence, &history, alpha_next);
-            let required = fractions.map_or(usize::MAX, needed);
-            let rho = opts.min_inlier_ratio;
-            let cap = if rho > 0.0 { needed([rho, rho]) } else { usize::MAX };
-            if required <= cap {
-                (required, RansacStop::Confidence, alpha_next)
-            } else {
-                (cap, RansacStop::MinInlierRatio, alpha_next)
-            }
-        });
-        if report.iterations >= bound.max(opts.min_iterations) {
-            report.stop = reason;
-            break;
-        }
-        if report.iterations >= opts.max_iterations {
-            report.stop = RansacStop::IterationCap;
-            break;
-        }
-        if opts.time_budget.is_some_and(|budget| started.elapsed() >= budget) {
-            report.stop = RansacStop::TimeBudget;
-            break;
-        }
-        if let Some(reason) = stop_reason() {
-            report.stop = match reason {
-                StopReason::Requested => RansacStop::Interrupted,
-                StopReason::TimeBudget => RansacStop::TimeBudget,
-            };
-            break;
-        }
-        report.iterations += 1;
-        let sample = sampler.draw(&mut rng);
-        let features = sample.map(|k| data.features[k]);
-        let mut any = false;
-        let mut alpha = 0.0f64;
-        for pose in solve(&features) {
-            if !data.sample_in_front(&pose, &sample) {
-                continue;
-            }
-            any = true;
-            report.models_scored += 1;
-            let bound = best.as_ref().map_or(f64::INFINITY, |b| b.score);
-            // The first model is scored in full; the test needs a best model to compare with.
-            let test = sprt.as_ref().filter(|_| best.is_some()).map(|s| {
-                alpha = alpha.max(s.rejection_bound());
-                *s.test()
-            });
-            let start = [scoring::below(&mut order_rng, np), scoring::below(&mut order_rng, nl)];
-            let (verdict, work) = data.evaluate(&pose, &tau, bound, test.as_ref(), Some(&sample), start);
-            report.errors_evaluated += work;
-            let score = match verdict {
-                Verdict::Score(score) if score < bound => score,
-                Verdict::Rejected { evaluated, consistent } => {
-                    report.sprt_rejections += 1;
-                    let per_sample = report.models_scored as f64 / report.iterations as f64;
-                    if let Some(s) = sprt.as_mut() {
-                        s.rejected(evaluated, consistent, per_sample);
-                    }
-                    continue;
-                }
-                _ => continue,
-            };
-            let mut candidate = Best { pose, score };
-            if opts.local_iterations > 0 {
-                report.local_optimizations += 1;
-                candidate = local_optimization(camera, corr, &data, &tau, &lo, candidate);
-            }
-            let (points, lines) = data.inliers(&candidate.pose, &tau);
-            let count = |m: &[bool]| m.iter().filter(|&&v| v).count();
-            let (ip, il) = (count(&points), count(&lines));
-            report.inliers = ip + il;
-            let fraction = |i: usize, n: usize| if n == 0 { 0.0 } else { i as f64 / n as f64 };
-            let f = [fraction(ip, np), fraction(il, nl)];
-            fractions = Some(f);
-            if let Some(s) = sprt.as_mut() {
-                s.new_best(f, report.models_scored as f64 / report.iterations as f64);
-            }
-            limit = None;
-            best = Some(candidate);
-        }
-        if !any {
-            report.degenerate_samples += 1;
-        }
-        match history.iter_mut().find(|h| h.0 == alpha) {
-            Some(h) => h.1 += 1,
-            None => history.push((alpha, 1)),
-        }
-    }
     report.required_inliers = required_inliers(opts, &report, chance, np, nl);
+    let best = outcome.best.map(|(pose, score)| Best { pose, score });
     let (inliers_points, inliers_lines) = match &best {
         Some(b) => data.inliers(&b.pose, &tau),
         None => (vec![false; np], vec![false; nl]),

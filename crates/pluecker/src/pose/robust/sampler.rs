@@ -173,6 +173,8 @@ impl Sampler {
     /// The number of samples after which `Σᵢ kᵢ ln(1 − P (1 − αᵢ)) ≤ ln(1 − confidence)` (see the
     /// module documentation), given the samples drawn so far as runs `(αᵢ, kᵢ)` in `history` and
     /// `rejection` = `α` of those still to come; at least the samples drawn. `usize::MAX` if never.
+    /// The bound the sampling loop ([`crate::consensus`]) stops on, at the `P` of these fractions.
+    #[cfg(test)]
     pub fn required_samples_after(
         &self,
         point_fraction: f64,
@@ -182,23 +184,7 @@ impl Sampler {
         rejection: f64,
     ) -> usize {
         let p = self.all_inlier_probability(point_fraction, line_fraction);
-        let log_miss = |alpha: f64| (-(p * (1.0 - alpha.clamp(0.0, 1.0)))).ln_1p();
-        let target = (1.0 - confidence).ln();
-        let drawn: usize = history.iter().map(|h| h.1).sum();
-        let so_far: f64 = history.iter().map(|&(alpha, k)| k as f64 * log_miss(alpha)).sum();
-        if so_far <= target {
-            return drawn.max(1);
-        }
-        let step = log_miss(rejection);
-        if step == f64::NEG_INFINITY {
-            return drawn + 1;
-        }
-        let n = (target - so_far) / step;
-        if n.is_finite() && n < (usize::MAX - drawn) as f64 {
-            drawn + (n.ceil() as usize).max(1)
-        } else {
-            usize::MAX
-        }
+        crate::consensus::required_samples(p, confidence, history, rejection)
     }
 }
 

@@ -4,7 +4,8 @@
 //! 1. **Consensus.** Every pair of views (or [`MAX_PAIRS`] seeded ones) gives the line where its two
 //!    back-projected planes meet (the linear method on two views); its MSAC score is
 //!    `Σ_j min(‖r_j‖², τ²)` over all views, with `r_j` the whitened residual of eq. 18 in view `j`. The
-//!    lowest score wins; its two views fit it exactly, so at least two inliers always remain.
+//!    lowest score wins; its two views fit it exactly, so at least two inliers always remain. The pairs
+//!    run through the sampling loop shared with the robust pose (`crate::consensus`).
 //! 2. **Optimum on the inliers.** The views with `‖r_j‖ ≤ τ` are solved by the chosen method; the
 //!    inliers are re-selected at that line and the solve repeated while they change (at most
 //!    [`MAX_ROUNDS`] times).
@@ -12,12 +13,14 @@
 //! A certificate then proves the optimum on the inlier views.
 
 use super::{linear_line, triangulate_line_views, LineProblem, LineTriangulation};
+use crate::consensus::{self, msac, Estimator, Stats};
 use crate::error::Result;
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
 use crate::triangulation::point::robust::{pairs, MAX_ROUNDS};
 use crate::triangulation::TriangulationOptions;
 use nalgebra::Vector6;
+use std::time::Duration;
 
 pub use crate::triangulation::point::robust::MAX_PAIRS;
 
@@ -39,23 +42,47 @@ fn squared_errors(views: &[FractionalResidual<2, 6>], line: &Vector6<f64>) -> Ve
         .collect()
 }
 
+/// The line track's part of the sampling loop ([`crate::consensus`]): the pairs of [`pairs`] in order,
+/// each pair's line where its two back-projected planes meet, scored by its MSAC score.
+struct PairConsensus<'a> {
+    problem: &'a LineProblem,
+    views: &'a [FractionalResidual<2, 6>],
+    tau2: f64,
+    pairs: std::vec::IntoIter<(usize, usize)>,
+}
+
+impl Estimator for PairConsensus<'_> {
+    type Sample = (usize, usize);
+    type Model = Vector6<f64>;
+    type Score = f64;
+
+    fn sample(&mut self) -> Option<(usize, usize)> {
+        self.pairs.next()
+    }
+
+    fn models(&mut self, &(a, b): &(usize, usize)) -> Vec<Vector6<f64>> {
+        linear_line(&subproblem(self.problem, [a, b].into_iter()))
+            .into_iter()
+            .collect()
+    }
+
+    fn score(&mut self, line: &Vector6<f64>, _: &(usize, usize), _: Option<f64>, _: &Stats) -> Option<f64> {
+        Some(msac(squared_errors(self.views, line), self.tau2).0)
+    }
+}
+
 /// The inlier mask of the best two-view line (step 1); `None` when no pair determines a line.
 fn consensus(problem: &LineProblem, views: &[FractionalResidual<2, 6>], tau2: f64) -> Option<Vec<bool>> {
-    let mut best: Option<(f64, Vec<f64>)> = None;
-    for (a, b) in pairs(problem.cameras.len()) {
-        let Ok(line) = linear_line(&subproblem(problem, [a, b].into_iter())) else {
-            continue;
-        };
-        let errors = squared_errors(views, &line);
-        let score: f64 = errors
-            .iter()
-            .map(|e| if e.is_finite() { e.min(tau2) } else { tau2 })
-            .sum();
-        if best.as_ref().map_or(true, |(s, _)| score < *s) {
-            best = Some((score, errors));
-        }
-    }
-    best.map(|(_, errors)| errors.iter().map(|&e| e <= tau2).collect())
+    let mut estimator = PairConsensus {
+        problem,
+        views,
+        tau2,
+        pairs: pairs(problem.cameras.len()).into_iter(),
+    };
+    let outcome = consensus::run(&mut estimator, &consensus::Options::exhaustive(), || Duration::ZERO);
+    outcome
+        .best
+        .map(|(line, _)| squared_errors(views, &line).iter().map(|&e| e <= tau2).collect())
 }
 
 /// The track of `problem` with outliers rejected at the whitened threshold `tau` (module docs); the

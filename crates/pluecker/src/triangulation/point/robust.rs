@@ -10,6 +10,8 @@
 //!    views within `τ` wins (any point when none has two). A single outlier in a track of
 //!    3 or more views cannot win: any pair of inliers explains every inlier view. Two observations in
 //!    one image give no two-view point (their linear point is the camera centre) and are skipped.
+//!    The pairs run through the sampling loop shared with the robust pose (`crate::consensus`), every
+//!    pair in order, without an adaptive stop.
 //! 2. **Optimum on the inliers.** The views with `r_j ≤ τ` (and in front) are solved by the chosen
 //!    method, certificate included; the inliers are then re-selected at that point, and the solve
 //!    repeated while they change (at most [`MAX_ROUNDS`] times).
@@ -33,11 +35,12 @@
 use super::cost::PointView;
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::{local_solution, solve_views, PointTriangulation};
+use crate::consensus::{self, msac, Estimator, Stats};
 use crate::optim::Summary;
 use crate::rng::Rng;
 use crate::triangulation::{Report, Status, TriangulationOptions};
 use nalgebra::{Matrix4, Vector3};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// Pairs of views tried by the consensus at most: all of them up to 21 views.
 pub const MAX_PAIRS: usize = 210;
@@ -177,6 +180,45 @@ fn pair_point<T: RobustTrack + ?Sized>(
     }
 }
 
+/// The point track's part of the sampling loop ([`crate::consensus`]): the pairs of [`pairs`] in
+/// order, each pair's point ([`pair_point`]), scored by `(fewer than two inliers, MSAC score)` so that
+/// a point with two inliers beats any with fewer.
+struct PairConsensus<'a, T: RobustTrack + ?Sized> {
+    track: &'a T,
+    frame: &'a WorldFrame,
+    tau2: f64,
+    opts: &'a TriangulationOptions,
+    pairs: std::vec::IntoIter<(usize, usize)>,
+}
+
+impl<T: RobustTrack + ?Sized> Estimator for PairConsensus<'_, T> {
+    type Sample = (usize, usize);
+    type Model = Vector3<f64>;
+    type Score = (bool, f64);
+
+    fn sample(&mut self) -> Option<(usize, usize)> {
+        self.pairs.next()
+    }
+
+    fn models(&mut self, &pair: &(usize, usize)) -> Vec<Vector3<f64>> {
+        pair_point(self.track, pair, self.frame, self.tau2, self.opts)
+            .into_iter()
+            .collect()
+    }
+
+    fn score(
+        &mut self,
+        x: &Vector3<f64>,
+        _: &(usize, usize),
+        _: Option<(bool, f64)>,
+        _: &Stats,
+    ) -> Option<(bool, f64)> {
+        let errors = (0..self.track.first_order().len()).map(|j| self.track.squared_error(j, x));
+        let (score, inliers) = msac(errors, self.tau2);
+        Some((inliers < 2, score))
+    }
+}
+
 /// The consensus of step 1: the inlier mask of the best two-view point (`None` when no pair gives a
 /// finite point in front of its two views).
 pub(crate) fn consensus<T: RobustTrack + ?Sized>(
@@ -185,24 +227,15 @@ pub(crate) fn consensus<T: RobustTrack + ?Sized>(
     tau2: f64,
     opts: &TriangulationOptions,
 ) -> Option<Vec<bool>> {
-    // (fewer than two inliers, score, point): a point with two inliers beats any with fewer.
-    let mut best: Option<(bool, f64, Vector3<f64>)> = None;
-    for pair in pairs(track.first_order().len()) {
-        let Some(x) = pair_point(track, pair, frame, tau2, opts) else {
-            continue;
-        };
-        let (mut score, mut inliers) = (0.0, 0);
-        for j in 0..track.first_order().len() {
-            let e = track.squared_error(j, &x);
-            score += e.min(tau2);
-            inliers += (e <= tau2) as usize;
-        }
-        let few = inliers < 2;
-        if best.map_or(true, |(f, s, _)| (f && !few) || (f == few && score < s)) {
-            best = Some((few, score, x));
-        }
-    }
-    best.map(|(_, _, x)| inliers_at(track, &x, tau2))
+    let mut estimator = PairConsensus {
+        track,
+        frame,
+        tau2,
+        opts,
+        pairs: pairs(track.first_order().len()).into_iter(),
+    };
+    let outcome = consensus::run(&mut estimator, &consensus::Options::exhaustive(), || Duration::ZERO);
+    outcome.best.map(|(x, _)| inliers_at(track, &x, tau2))
 }
 
 /// The track with outliers rejected at the whitened threshold `tau` (module docs), solved on its
