@@ -256,7 +256,7 @@ def test_a_given_sigma_whose_covariance_does_not_fit_gives_no_covariance(sigma):
     r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
                                options=pluecker.PoseOptions(sigma_px=sigma))
     assert r.status == "success"
-    assert r.covariance is None and r.covariance_source is None
+    assert r.covariance is None and r.details.covariance_source is None
 
 
 def ellipse_points(n=40):

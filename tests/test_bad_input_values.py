@@ -59,18 +59,19 @@ def test_an_integer_option_up_to_2_64_is_accepted(scene, option):
         options, ransac = (given, pluecker.RansacOptions()) if cls is pluecker.PoseOptions else (None, given)
         if name == "min_inliers":
             with pytest.raises(pluecker.TooFewCorrespondencesError, match=f"min_inliers = {value}"):
-                pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], ransac=ransac)
+                pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(ransac=ransac))
         else:
-            result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options,
-                                            ransac=ransac)
-            assert result.success, result
+            options.ransac = ransac
+            result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
+            assert (result.status == "success"), result
 
 
 def test_numpy_integers_are_integers(scene):
     options = pluecker.PoseOptions(trust_region_max_iterations=np.int64(50))
     ransac = pluecker.RansacOptions(seed=np.uint64(2**64 - 1), min_inliers=np.int32(6))
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options, ransac=ransac)
-    assert result.success
+    options.ransac = ransac
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
+    assert (result.status == "success")
 
 
 @pytest.mark.parametrize("value", [2**64, -1, 10**400])

@@ -40,7 +40,7 @@ def monte_carlo(kind: str, n_points: int, n_lines: int, scene_seed: int, outlier
         assert r.status == "success", f"seed={scene_seed} draw={draw}: {r}"
         errors.append(tangent_error(r, scene))
         covariances.append(r.covariance)
-        sigmas.append(r.sigma_px)
+        sigmas.append(r.details.sigma_px)
     return np.array(errors), np.array(covariances), np.array(sigmas)
 
 
@@ -86,7 +86,7 @@ def test_sources_and_the_cases_without_a_covariance(seed):
     args = (scene["camera"], scene["points2d"], scene["points3d"])
     # Three points: m = 6 residuals, nothing left to estimate σ from.
     r = pluecker.estimate_pose(*args)
-    assert (r.covariance, r.covariance_source, r.sigma_px) == (None, None, None)
+    assert (r.covariance, r.details.covariance_source, r.details.sigma_px) == (None, None, None)
     given = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(sigma_px=0.5))
     assert given.covariance_source == "given" and given.sigma_px == 0.5 and given.covariance.shape == (6, 6)
     # Same as the standalone function at the returned pose.

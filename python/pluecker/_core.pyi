@@ -131,7 +131,7 @@ class PoseOptions:
     ``certify: Option<CertificateOptions>``; the robust estimator is the separate ``ransac=``."""
 
     # fields of PoseOptions (generated: python -m pluecker._stubgen)
-    def __init__(self, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, certify: bool = False, certify_gap: float = 0.001, certify_max_nodes: int = 20000) -> None: ...
+    def __init__(self, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, ransac: Optional[RansacOptions] = None, certify: Optional[CertifyOptions] = None) -> None: ...
     method: str
     """Estimator, one of `METHODS`."""
     penalty: float
@@ -154,12 +154,14 @@ class PoseOptions:
     """Pixel noise σ of every image point and endpoint, for the covariance; `None`: estimated from the residuals."""
     ambiguity_threshold: float
     """Status `ambiguous` when another minimum is within `ambiguity_threshold · σ²` of the answer's cost."""
-    certify: bool
-    """Run the global-optimality certificate (branch and bound over rotations)."""
-    certify_gap: float
-    """Relative gap at or below which the certificate holds."""
-    certify_max_nodes: int
-    """Cap on the rotation cells the certificate examines."""
+    ransac: Optional[RansacOptions]
+    """Robust estimation (LO-RANSAC over points and lines) with these options instead of `method`'s estimator;
+    `None`: every correspondence is an inlier. Held by reference.
+    """
+    certify: Optional[CertifyOptions]
+    """The global-optimality certificate (the sublevel-set test) with these options; `None`: not requested.
+    Held by reference. A requested certificate that does not hold gives status `gap_not_closed`.
+    """
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
@@ -240,12 +242,12 @@ class PoseStage:
     """Name of the stage."""
     cost_kind: str
     """What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
-    (½Σ squared pixel residuals) or `msac` (stage `ransac`: ½Σ min(e², τ²), px²).
+    (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
     """
-    R: NDArray[np.float64]
-    """Rotation at the end of the stage, `x_cam = R X_world + t`."""
-    t: NDArray[np.float64]
-    """Translation at the end of the stage, world units."""
+    rotation: NDArray[np.float64]
+    """Rotation `R` at the end of the stage, `x_cam = R X_world + t`."""
+    translation: NDArray[np.float64]
+    """Translation `t` at the end of the stage, world units."""
     iterations: int
     """Iterations of the stage."""
     initial_cost: float
@@ -298,79 +300,32 @@ class PoseResult:
     """The answer of :func:`estimate_pose`: the pose, how it was found, whether it can be used."""
 
     # fields of PoseResult (generated: python -m pluecker._stubgen)
-    R: NDArray[np.float64]
-    """Rotation, `x_cam = R X_world + t`."""
-    t: NDArray[np.float64]
-    """Translation, world units."""
-    dual_quaternion: NDArray[np.float64]
-    """The same motion as a unit dual quaternion `(r0, rx, ry, rz, s0, sx, sy, sz)` (eqs. 6-7), `r0 ≥ 0`."""
-    axis: NDArray[np.float64]
-    """Unit rotation axis."""
-    angle: float
-    """Rotation angle about `axis`, radians in [0, π]."""
-    method: str
-    """The estimator that ran."""
-    iterations: int
-    """Iterations summed over the stages."""
-    final_cost: float
-    """Cost of the last stage at the returned pose."""
-    termination: str
-    """Why the last iterative stage stopped."""
+    pose: Pose
+    """The pose `x_cam = R X_world + t` (NaN if the solver failed); `R, t = result.pose`."""
     status: str
-    """`success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `behind_camera`
-    (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
-    (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
+    """`success`, or why not: `gap_not_closed` (a requested certificate does not hold), `not_converged` (a
+    stage hit its cap), `numerical_failure`, `behind_camera` (points behind at the pose, or the data fit far
+    better behind: `details.behind_camera_cost`), `ambiguous` (another minimum nearly as good:
+    `details.second_best`); robust: `too_few_inliers`, `no_hypothesis`; `interrupted`, `time_budget`.
     """
-    success: bool
-    """`status == 'success'`."""
-    rms_error_px: float
-    """Root-mean-square reprojection error over all correspondences, pixels."""
-    time_seconds: float
-    """Total wall time, seconds."""
-    stages: List[PoseStage]
-    """Every stage in order; the last one gave the returned pose."""
-    estimated_camera: Optional[Camera]
-    """Intrinsics estimated by method `'linear'` (`None` for the others)."""
+    cost: float
+    """Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels."""
     inliers_points: NDArray[np.bool_]
     """(N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true."""
     inliers_lines: NDArray[np.bool_]
     """(M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true."""
-    ransac: Optional[RansacReport]
-    """What the robust loop did; `None` unless estimated with `ransac=`."""
     covariance: Optional[NDArray[np.float64]]
     """6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
     frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
     """
-    covariance_source: Optional[str]
-    """Where the σ of the covariance came from: `given` or `estimated`."""
-    sigma_px: Optional[float]
-    """The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals."""
-    certified: bool
-    """Proved global minimum of `½ Σ r²` within `certify_gap`, over every pose keeping the points in front
-    (`options.certify` only).
+    certificate: Optional[Certificate]
+    """Proved lower bound on `cost` over every pose keeping the points in front (`options.certify`); `None` when
+    no bound was computed (`details.uncertified_reason` says why).
     """
-    lower_bound: float
-    """The proved lower bound on `½ Σ r²` (px²); NaN when there is none."""
-    raw_lower_bound: float
-    """The bound as proved, before the clamp to the cost that gives `lower_bound`; NaN when there is none."""
-    gap: float
-    """`(cost − lower_bound) / cost`; NaN when there is no bound."""
-    certificate: str
-    """`sublevel_set` (proved), `not_requested` or `not_proved`."""
-    certificate_message: str
-    """The certificate's explanation in words."""
-    ambiguous: bool
-    """`status == 'ambiguous'`: another local minimum explains the data nearly as well."""
-    second_best_R: Optional[NDArray[np.float64]]
-    """Rotation of the cheapest other local minimum with every point in front; `None` if none was found."""
-    second_best_t: Optional[NDArray[np.float64]]
-    """Translation of that minimum."""
-    second_best_cost: Optional[float]
-    """Its cost `½ Σ r²`, px²."""
-    behind_camera_cost: Optional[float]
-    """Cost of a pose with every point behind the camera that fits far better (status `behind_camera`)."""
-    residual_test: Optional[_ResidualTest]
-    """χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`."""
+    details: PoseDetails
+    """How the pose was found: method, stages, timings, noise, runner-up."""
+    certified: bool
+    """`certificate is not None and certificate.certified`."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
