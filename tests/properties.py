@@ -13,7 +13,7 @@ from hypothesis.extra import numpy as hnp
 import pluecker
 
 POSE_STATUSES = {"success", "ambiguous", "not_converged", "numerical_failure", "behind_camera",
-                 "too_few_inliers", "no_hypothesis"}
+                 "too_few_inliers", "no_hypothesis", "gap_not_closed"}
 TRIANGULATION_STATUSES = {"success", "gap_not_closed", "not_converged", "behind_camera", "at_infinity",
                           "infeasible", "numerical_failure"}
 #: Statuses of a batch track the core rejected (``BatchReport.status``).

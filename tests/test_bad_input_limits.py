@@ -185,20 +185,22 @@ def test_a_gap_outside_0_1_is_refused_for_triangulation_as_for_the_pose(gap):
     relative gap is at most 1 for any lower bound ≥ 0, so a threshold ≥ 1 certifies without a bound."""
     with pytest.raises(InvalidOptionError, match=r"max_relative_gap.*must be in \(0, 1\)"):
         pluecker.TriangulationOptions(max_relative_gap=gap)
-    with pytest.raises(InvalidOptionError, match=r"certify_gap.*must be in \(0, 1\)"):
-        pluecker.PoseOptions(certify_gap=gap)
+    with pytest.raises(InvalidOptionError, match=r"certify.max_relative_gap.*must be in \(0, 1\)"):
+        pluecker.CertifyOptions(max_relative_gap=gap)
 
 
 @pytest.mark.parametrize("gap", [1e-12, 0.5, 0.999])
 def test_a_gap_inside_0_1_is_accepted_by_both(gap):
     assert pluecker.TriangulationOptions(max_relative_gap=gap).max_relative_gap == gap
-    assert pluecker.PoseOptions(certify_gap=gap).certify_gap == gap
+    assert pluecker.PoseOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap)).certify.max_relative_gap == gap
 
 
 #: A value of every optional option (``Optional[...]`` in ``__fields__``), to set before resetting it.
 OPTIONAL_VALUES = {
     (pluecker.PoseOptions, "sigma_px"): 2.0,
     (pluecker.PoseOptions, "initial_pose"): (np.eye(3), np.zeros(3)),
+    (pluecker.PoseOptions, "ransac"): pluecker.RansacOptions(),
+    (pluecker.PoseOptions, "certify"): pluecker.CertifyOptions(),
     (pluecker.RansacOptions, "time_budget"): 1.5,
     (pluecker.TriangulationOptions, "outlier_threshold"): 3.0,
     (pluecker.TriangulationOptions, "max_reprojection_error"): 2.0,
@@ -332,7 +334,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
 
 @pytest.mark.parametrize("call", [
     lambda: pluecker.TriangulationOptions(max_relative_gap=1e300),
-    lambda: pluecker.PoseOptions(certify_gap=-1e300),
+    lambda: pluecker.CertifyOptions(max_relative_gap=-1e300),
     lambda: pluecker.RansacOptions(confidence=1e300),
     lambda: pluecker.RansacOptions(point_threshold=-1e300),
     lambda: pluecker.fit_line(np.eye(2), sigma=-1e300),

@@ -100,7 +100,7 @@ def test_covariances_weight_the_pose_and_are_absolute():
         result = pluecker.estimate_pose(camera, u, X, point_covariances=cov)
         assert result.details.sigma_px == 1.0 and result.certified is False
         weighted.append(np.linalg.norm(result.pose.translation - t))
-        plain.append(np.linalg.norm(pluecker.estimate_pose(camera, u, X).t - t))
+        plain.append(np.linalg.norm(pluecker.estimate_pose(camera, u, X).pose.translation - t))
     assert np.sqrt(np.mean(np.square(weighted))) < 0.6 * np.sqrt(np.mean(np.square(plain)))
 
 
@@ -118,8 +118,8 @@ def test_line_covariances_per_segment_equal_per_endpoint():
     # Unit covariances: the same pose as without, now in standard deviations (sigma_px = 1).
     unit = pluecker.estimate_pose(camera, u, X, s, L, point_covariances=np.tile(np.eye(2), (6, 1, 1)))
     plain = pluecker.estimate_pose(camera, u, X, s, L)
-    np.testing.assert_allclose(unit.R, plain.pose.rotation, atol=1e-9)
-    assert unit.sigma_px == 1.0 and plain.details.sigma_px != 1.0
+    np.testing.assert_allclose(unit.pose.rotation, plain.pose.rotation, atol=1e-9)
+    assert unit.details.sigma_px == 1.0 and plain.details.sigma_px != 1.0
 
 
 def test_bad_covariances_and_cameras_are_named_errors():
@@ -168,8 +168,8 @@ def test_command_line_takes_colmap_camera_models_and_covariances(tmp_path, capsy
     out = json.loads(capsys.readouterr().out)
     direct = pluecker.estimate_pose(FISHEYE, u, X, s, L, point_covariances=doc["point_covariances"],
                                     line_covariances=doc["line_covariances"])
-    np.testing.assert_allclose(out["R"], direct.R, atol=1e-12)
-    assert out["status"] == "success" and out["sigma_px"] == 1.0
+    np.testing.assert_allclose(out["pose"]["rotation"], direct.pose.rotation, atol=1e-12)
+    assert out["status"] == "success" and out["details"]["sigma_px"] == 1.0
     assert nees(direct, R, t) < 22.5
     doc["camera"] = {"model": "OPENCV", "params": [600.0, 600.0]}
     path.write_text(json.dumps(doc))

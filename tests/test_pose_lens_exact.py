@@ -135,11 +135,11 @@ def test_the_pose_minimises_the_exact_cost_no_worse_than_pycolmap(name):
         step = newton_step_in_sigmas(oracle_gradient(camera, result.pose.rotation, result.pose.translation, X, u), result.covariance)
         assert step < 1e-3, step
         old = first_order_answer(lens, pinhole, u, X)
-        old_cost = oracle_cost(camera, old.R, old.t, X, u)
+        old_cost = oracle_cost(camera, old.pose.rotation, old.pose.translation, X, u)
         worst_first_order = max(
-            worst_first_order, newton_step_in_sigmas(oracle_gradient(camera, old.R, old.t, X, u), result.covariance)
+            worst_first_order, newton_step_in_sigmas(oracle_gradient(camera, old.pose.rotation, old.pose.translation, X, u), result.covariance)
         )
-        R_c, t_c = pycolmap_refined(camera, old.R, old.t, u, X)
+        R_c, t_c = pycolmap_refined(camera, old.pose.rotation, old.pose.translation, u, X)
         colmap_cost = oracle_cost(camera, R_c, t_c, X, u)
         tolerance = 5e-7 + 1e-12 * cost
         assert cost <= old_cost + tolerance, (cost, old_cost)

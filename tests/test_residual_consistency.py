@@ -67,7 +67,7 @@ def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
     accepted = 0
     for trial in range(50):
         u = project(X) + rng.normal(0, 1.0, (200, 2))
-        test = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0)).residual_test
+        test = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0)).details.residual_test
         assert test["dof"] == 2 * 200 - 6
         accepted += test["consistent"]
     # A level-1e-3 test rejects a correct model once in a thousand: 50 of 50 (seeded) here.
@@ -80,8 +80,8 @@ def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
     r = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0, ransac=pluecker.RansacOptions()))
     assert r.details.residual_test["consistent"] is False
     # Without sigma_px there is no stated noise, hence no test.
-    assert pluecker.estimate_pose(CAMERA, u, X).residual_test is None
-    assert r.to_dict()["residual_test"] == r.details.residual_test
+    assert pluecker.estimate_pose(CAMERA, u, X).details.residual_test is None
+    assert r.to_dict()["details"]["residual_test"] == r.details.residual_test
 
 
 def test_triangulation_chi_square_flags_an_outlier_view_single_and_batch():

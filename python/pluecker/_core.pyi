@@ -7,7 +7,7 @@ exact within one version. Options are mutable, ``==``, picklable, checked as set
 the Rust ``Default``. A bool is not a number; counts and seeds take integers up to ``2**64 - 1``.
 """
 
-from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict, Union
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple, TypedDict, Union
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -126,9 +126,8 @@ class LensCamera:
 # --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
 
 class PoseOptions:
-    """Options of :func:`estimate_pose` (the core's ``PoseOptions``). The ``method=`` keyword of
-    :func:`estimate_pose` wins over :attr:`method`. ``certify`` and ``certify_*`` are the core's
-    ``certify: Option<CertificateOptions>``; the robust estimator is the separate ``ransac=``."""
+    """Options of :func:`estimate_pose` (the core's ``PoseOptions``, same fields and nesting). ``ransac``
+    and ``certify`` are held by reference: ``options.certify.max_nodes = 10`` takes effect."""
 
     # fields of PoseOptions (generated: python -m pluecker._stubgen)
     def __init__(self, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, ransac: Optional[RansacOptions] = None, certify: Optional[CertifyOptions] = None) -> None: ...
@@ -264,7 +263,7 @@ class PoseStage:
     def to_dict(self) -> Dict[str, Any]: ...
 
 class RansacReport:
-    """What the robust loop did (:attr:`PoseResult.ransac` of a robust estimate)."""
+    """What the robust loop did (:attr:`PoseDetails.ransac` of a robust estimate)."""
 
     # fields of RansacReport (generated: python -m pluecker._stubgen)
     iterations: int
@@ -296,8 +295,70 @@ class RansacReport:
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
+class Pose:
+    """A camera pose ``x_cam = R @ X_world + t`` (the core's ``Pose``): ``rotation`` and ``translation``,
+    the rotation's other forms as methods. Unpacks as ``R, t = pose``; accepted wherever a pose ``(R, t)``
+    is (``PoseOptions.initial_pose``)."""
+
+    # fields of Pose (generated: python -m pluecker._stubgen)
+    rotation: NDArray[np.float64]
+    """`R`, world to camera (3x3 rotation matrix)."""
+    translation: NDArray[np.float64]
+    """`t`, world units: the world origin in the camera frame."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+    def dual_quaternion(self) -> NDArray[np.float64]:
+        """(8,) unit dual quaternion ``(r0, rx, ry, rz, s0, sx, sy, sz)`` (eqs. 6-7), ``r0 >= 0``."""
+    def axis_angle(self) -> Tuple[NDArray[np.float64], float]:
+        """``(axis, angle)``: unit axis (3,) and angle in [0, π], radians."""
+    def rotation_vector(self) -> NDArray[np.float64]:
+        """(3,) rotation vector ``angle * axis``, radians."""
+    def centre(self) -> NDArray[np.float64]:
+        """(3,) optical centre in the world frame, ``-R.T @ t``."""
+    def __iter__(self) -> Iterator[NDArray[np.float64]]: ...
+    def __len__(self) -> int: ...
+
+class PoseDetails:
+    """How a :class:`PoseResult` was found (the core's ``PoseDetails``); costs are ``Σ r²``, px²."""
+
+    # fields of PoseDetails (generated: python -m pluecker._stubgen)
+    method: str
+    """The estimator that ran."""
+    iterations: int
+    """Iterations summed over the stages."""
+    termination: str
+    """Why the last iterative stage stopped."""
+    stages: List[PoseStage]
+    """Every stage in order; the last one gave the returned pose."""
+    rms_error_px: float
+    """Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)`."""
+    time_seconds: float
+    """Total wall time, seconds."""
+    estimated_camera: Optional[Camera]
+    """Intrinsics estimated by method `'linear'` (`None` for the others)."""
+    ransac: Optional[RansacReport]
+    """What the robust loop did; `None` unless `options.ransac` is set."""
+    covariance_source: Optional[str]
+    """Where the σ of the covariance came from: `given` or `estimated`."""
+    sigma_px: Optional[float]
+    """The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals."""
+    second_best: Optional[Tuple[Pose, float]]
+    """The cheapest other local minimum with every point in front and its cost `Σ r²` (px²); `None` if none was
+    found. Within `ambiguity_threshold · σ²` of `cost`, the status is `ambiguous`.
+    """
+    behind_camera_cost: Optional[float]
+    """Cost `Σ r²` of a pose with every point behind the camera that fits far better (status `behind_camera`)."""
+    residual_test: Optional[_ResidualTest]
+    """χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`."""
+    uncertified_reason: Optional[str]
+    """Why the pose is not certified, in words; `None` when it is."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
 class PoseResult:
-    """The answer of :func:`estimate_pose`: the pose, how it was found, whether it can be used."""
+    """The answer of :func:`estimate_pose` (the core's ``PoseResult``): the pose, whether it can be used,
+    its cost ``Σ r²``, the correspondences used, its covariance and certificate; how it was found is in
+    :attr:`details`."""
 
     # fields of PoseResult (generated: python -m pluecker._stubgen)
     pose: Pose
@@ -335,10 +396,8 @@ def estimate_pose(
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
     lines3d: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[PoseOptions] = None,
-    ransac: "RansacOptions | bool | None" = None,
     point_covariances: Optional[ArrayLike] = None,
     line_covariances: Optional[ArrayLike] = None,
 ) -> PoseResult:
@@ -352,16 +411,16 @@ def estimate_pose(
     the curved image of the line); no certificate through a lens (pinhole cameras only); with RANSAC a
     pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
-    in standard deviations (``sigma_px`` defaults to 1). With either, ``certify`` is refused: ``certified``
-    false, ``certificate_message`` says why.
+    in standard deviations (``sigma_px`` defaults to 1). With either, a requested certificate is not
+    available: ``certificate`` is ``None``, the status ``gap_not_closed``, ``details.uncertified_reason`` says why.
 
-    ``method``: one of :data:`METHODS` (``None``: ``options.method``): ``"trust-region"`` (eqs. 13 +
-    22, Hebden's step, section 4.1), ``"rotation-then-translation"`` (eq. 14 then 15),
-    ``"trust-region-exact"`` (section 4.2), ``"newton"``, ``"levenberg-marquardt"``, or ``"linear"``
-    (Faugeras-Toscani from >= 6 non-coplanar points, which also estimates the intrinsics).
-    ``options``: :class:`PoseOptions` (``None``: the defaults). ``ransac``: :class:`RansacOptions` or
-    ``True`` (its defaults) estimates robustly (minimal solvers P3P/P2P1L/P1P2L/P3L, MSAC, local
-    optimisation, then the refinement on the inliers; ``method`` is then not used).
+    ``options``: :class:`PoseOptions` (``None``: the defaults). ``options.method``, one of :data:`METHODS`:
+    ``"trust-region"`` (eqs. 13 + 22, Hebden's step, section 4.1), ``"rotation-then-translation"``
+    (eq. 14 then 15), ``"trust-region-exact"`` (section 4.2), ``"newton"``, ``"levenberg-marquardt"``, or
+    ``"linear"`` (Faugeras-Toscani from >= 6 non-coplanar points, which also estimates the intrinsics).
+    ``options.ransac``, a :class:`RansacOptions`, estimates robustly (minimal solvers P3P/P2P1L/P1P2L/P3L,
+    MSAC, local optimisation, then the refinement on the inliers; ``method`` is then not used).
+    ``options.certify``, a :class:`CertifyOptions`, asks for the certificate of global optimality.
 
     With ``options.refine`` (the default) the answer is the cheapest local minimum of the reprojection
     error reached from the algebraic answer and from minimal-solver poses. A solver that runs but fails
