@@ -87,7 +87,8 @@ fn dump(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         let (scene, corr) = problem(kind, seed, lines);
         let r = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
         let values: Vec<String> = r
-            .pose.rotation
+            .pose
+            .rotation
             .iter()
             .chain(r.pose.translation.iter())
             .map(|v| format!("{v:e}"))

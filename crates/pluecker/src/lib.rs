@@ -94,7 +94,8 @@ pub use error::{Error, Result};
 // stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
 pub use certificate::{Certificate, CertificateKind, CertifyOptions};
 pub use pose::{
-    estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions, RansacReport, RansacStop,
+    estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
+    RansacReport, RansacStop,
 };
 pub use rigid::Pose;
 pub use status::Status;

@@ -138,7 +138,9 @@ mod tests {
         // The rotation vector was the input of `pose()`; `from_scaled_axis` is nalgebra's, not ours.
         assert!((p.rotation_vector() - Vector3::new(0.3, -0.2, 0.9)).norm() < 1e-12);
         let (axis, angle) = p.axis_angle();
-        assert!((axis.norm() - 1.0).abs() < 1e-12 && (angle - Vector3::<f64>::new(0.3, -0.2, 0.9).norm()).abs() < 1e-12);
+        assert!(
+            (axis.norm() - 1.0).abs() < 1e-12 && (angle - Vector3::<f64>::new(0.3, -0.2, 0.9).norm()).abs() < 1e-12
+        );
         let (r, t) = p.dual_quaternion().to_rotation_translation();
         assert!((r - p.rotation).norm() < 1e-12 && (t - p.translation).norm() < 1e-12);
         assert!(p.dual_quaternion().r[0] >= 0.0);

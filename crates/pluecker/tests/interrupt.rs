@@ -188,7 +188,11 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
         ..Default::default()
     };
     let plain = estimate_pose(&scene.camera, &scene.correspondences, &certify).unwrap();
-    assert!(plain.certificate.is_some_and(|c| c.certified), "{:?}", plain.details.uncertified_reason);
+    assert!(
+        plain.certificate.is_some_and(|c| c.certified),
+        "{:?}",
+        plain.details.uncertified_reason
+    );
     let stopped = with_stop(requested(), || {
         estimate_pose(&scene.camera, &scene.correspondences, &certify)
     })

@@ -338,7 +338,11 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
             "{name}: a fit of {fit} px² in front (σ = {sigma} px) against {behind} px² behind the camera"
         );
         // Reported in `Σ r²`; the oracle's costs are `½ Σ r²`.
-        let reported = r.details.behind_camera_cost.expect("a behind-camera cost with that status") / 2.0;
+        let reported = r
+            .details
+            .behind_camera_cost
+            .expect("a behind-camera cost with that status")
+            / 2.0;
         assert!(
             reported * 100.0 <= fit,
             "{name}: reported behind-camera cost {reported} vs {fit}"

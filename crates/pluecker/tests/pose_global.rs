@@ -82,7 +82,11 @@ fn the_default_pipeline_reaches_the_best_known_minimum_or_says_it_is_ambiguous()
                 );
                 assert!(second >= cost - 1e-9, "{row}: the runner-up {second} is cheaper");
                 // The reported cost is the oracle's, doubled.
-                assert!((result.cost / 2.0 - cost).abs() <= 1e-9 * cost.max(1.0), "{row}: cost {}", result.cost);
+                assert!(
+                    (result.cost / 2.0 - cost).abs() <= 1e-9 * cost.max(1.0),
+                    "{row}: cost {}",
+                    result.cost
+                );
             }
         }
     }
@@ -178,7 +182,10 @@ fn near_ties_sit_on_each_side_of_the_ambiguity_margin() {
                     (cost - f1).abs() <= 1e-7 * f1.max(1.0),
                     "{row}: the answer's cost is {cost}"
                 );
-                let (pose, _) = result.details.second_best.unwrap_or_else(|| panic!("{row}: no runner-up"));
+                let (pose, _) = result
+                    .details
+                    .second_best
+                    .unwrap_or_else(|| panic!("{row}: no runner-up"));
                 let second = cost_of(&scene.camera, &corr, &pose);
                 assert!(
                     (second - f2).abs() <= 1e-7 * f2.max(1.0),
@@ -245,7 +252,10 @@ fn near_ties_sit_on_each_side_of_the_estimated_noise_margin() {
             } else {
                 Status::Success
             };
-            let (runner_up, _) = result.details.second_best.unwrap_or_else(|| panic!("{row}: no runner-up"));
+            let (runner_up, _) = result
+                .details
+                .second_best
+                .unwrap_or_else(|| panic!("{row}: no runner-up"));
             let second = cost_of(&scene.camera, &corr, &runner_up);
             // The estimator's runner-up is sometimes its own answer again (chart distance ~1e-6, the
             // same cost): a duplicate that the margin cannot judge (it makes the answer `ambiguous`
@@ -304,7 +314,11 @@ fn certified_bounds_are_never_beaten() {
             let result = estimate_pose(&scene.camera, &corr, &opts).unwrap();
             // A requested certificate that does not hold never leaves the status `success`.
             let Some(raw_sum) = certified_raw_bound(&result) else {
-                assert!(result.details.uncertified_reason.as_deref().is_some_and(|why| !why.is_empty()));
+                assert!(result
+                    .details
+                    .uncertified_reason
+                    .as_deref()
+                    .is_some_and(|why| !why.is_empty()));
                 assert_ne!(result.status, Status::Success);
                 continue;
             };
@@ -405,7 +419,10 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
         assert_eq!(plain_raw.is_some(), other_raw.is_some(), "seed {seed}");
         if let (Some(plain_raw), Some(other_raw)) = (plain_raw, other_raw) {
             compared += 1;
-            assert!((plain_raw - other_raw).abs() <= 1e-6 * plain_raw.max(1.0), "seed {seed}");
+            assert!(
+                (plain_raw - other_raw).abs() <= 1e-6 * plain_raw.max(1.0),
+                "seed {seed}"
+            );
             assert!(
                 pluecker::geometry::quaternion::rotation_distance(&plain.pose.rotation, &other.pose.rotation) < 1e-8
             );
@@ -468,7 +485,11 @@ fn the_node_cap_of_certify_options_takes_effect() {
     assert_eq!(free.status, Status::Success);
     assert!(free.details.uncertified_reason.is_none());
     let capped = estimate_pose(&scene.camera, &corr, &certify(Some(1))).unwrap();
-    assert!(capped.certificate.is_none_or(|c| !c.certified), "{:?}", capped.certificate);
+    assert!(
+        capped.certificate.is_none_or(|c| !c.certified),
+        "{:?}",
+        capped.certificate
+    );
     assert_eq!(capped.status, Status::GapNotClosed);
     let why = capped.details.uncertified_reason.expect("a reason");
     assert!(why.contains("max_nodes = 1"), "{why}");
@@ -486,7 +507,11 @@ fn a_requested_certificate_that_does_not_hold_is_gap_not_closed() {
     let plain = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
     assert_eq!(plain.status, Status::Success);
     assert!(plain.certificate.is_none());
-    assert!(plain.details.uncertified_reason.as_deref().is_some_and(|why| why.contains("not requested")));
+    assert!(plain
+        .details
+        .uncertified_reason
+        .as_deref()
+        .is_some_and(|why| why.contains("not requested")));
     let opts = PoseOptions {
         certify: Some(Default::default()),
         ..PoseOptions::default()
@@ -506,7 +531,14 @@ fn a_requested_certificate_that_does_not_hold_is_gap_not_closed() {
     };
     let r = estimate_pose(&scene.camera, &corr, &robust).unwrap();
     assert!(r.certificate.is_none());
-    assert!(matches!(r.status, Status::GapNotClosed | Status::TooFewInliers | Status::NoHypothesis), "{:?}", r.status);
+    assert!(
+        matches!(
+            r.status,
+            Status::GapNotClosed | Status::TooFewInliers | Status::NoHypothesis
+        ),
+        "{:?}",
+        r.status
+    );
 }
 
 /// The reported costs are `Σ r²`: the result's cost and the refinement stage's final cost are the
@@ -518,10 +550,18 @@ fn reported_costs_are_sums_of_squares() {
     let result = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
     let half = cost_of(&scene.camera, &corr, &result.pose);
     // Rounding of two sums of 36 squares: 1e-12 relative.
-    assert!((result.cost - 2.0 * half).abs() <= 1e-12 * half.max(1.0), "{} vs 2 x {half}", result.cost);
+    assert!(
+        (result.cost - 2.0 * half).abs() <= 1e-12 * half.max(1.0),
+        "{} vs 2 x {half}",
+        result.cost
+    );
     let refinement = result.details.stages.last().unwrap();
     assert_eq!(refinement.cost_kind, "reprojection");
-    assert!((refinement.final_cost - 2.0 * half).abs() <= 1e-9 * half.max(1.0), "{}", refinement.final_cost);
+    assert!(
+        (refinement.final_cost - 2.0 * half).abs() <= 1e-9 * half.max(1.0),
+        "{}",
+        refinement.final_cost
+    );
     let m = 2.0 * 18.0;
     assert!((result.details.rms_error_px - (2.0 * half / m).sqrt()).abs() <= 1e-12);
 }

@@ -696,7 +696,13 @@ fn through_a_lens_the_refined_pose_is_a_stationary_point_of_the_exact_cost() {
             let oracle_covs = weighted.then_some(&covs[..]);
             let result = estimate_pose(&lens, &corr, &opts).unwrap();
             assert_eq!(result.status, Status::Success, "{:?} seed {seed}", lens.model());
-            let cost = oracle_cost(&lens, &corr, oracle_covs, &result.pose.rotation, &result.pose.translation);
+            let cost = oracle_cost(
+                &lens,
+                &corr,
+                oracle_covs,
+                &result.pose.rotation,
+                &result.pose.translation,
+            );
             // The reported cost `Σ r²` is the exact one: twice the oracle's `½ Σ r²`, to the
             // golden-section search's precision.
             assert!(
@@ -714,7 +720,13 @@ fn through_a_lens_the_refined_pose_is_a_stationary_point_of_the_exact_cost() {
                 result.details.rms_error_px
             );
             let cov = result.covariance.unwrap();
-            let g = oracle_gradient(&lens, &corr, oracle_covs, &result.pose.rotation, &result.pose.translation);
+            let g = oracle_gradient(
+                &lens,
+                &corr,
+                oracle_covs,
+                &result.pose.rotation,
+                &result.pose.translation,
+            );
             let step = step_in_sigmas(&g, &cov);
             assert!(step < 1e-3, "{:?} seed {seed}: Newton step of {step} σ", lens.model());
             let old = first_order_answer(&lens, &corr, &opts);
@@ -806,7 +818,11 @@ fn no_certificate_is_claimed_through_a_lens() {
             let result = estimate_pose(&lens, &corr, opts).unwrap();
             // Requested and not given: the gap is not closed.
             assert_eq!(result.status, Status::GapNotClosed);
-            assert!(result.certificate.is_none(), "{:?}: a bound through a lens", lens.model());
+            assert!(
+                result.certificate.is_none(),
+                "{:?}: a bound through a lens",
+                lens.model()
+            );
             let why = result.details.uncertified_reason.unwrap_or_default();
             if opts.ransac.is_none() {
                 assert!(why.contains("pinhole cameras only"), "{why}");

@@ -145,7 +145,10 @@ fn same_seed_gives_the_same_result() {
     let (scene, corr) = scene_with_outliers(80, 20, 0.5, 5);
     let a = estimate_pose(&scene.camera, &corr, &robust(17)).unwrap();
     let b = estimate_pose(&scene.camera, &corr, &robust(17)).unwrap();
-    assert_eq!((a.pose.rotation, a.pose.translation), (b.pose.rotation, b.pose.translation));
+    assert_eq!(
+        (a.pose.rotation, a.pose.translation),
+        (b.pose.rotation, b.pose.translation)
+    );
     assert_eq!(
         (&a.inliers_points, &a.inliers_lines),
         (&b.inliers_points, &b.inliers_lines)
@@ -414,7 +417,10 @@ fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
     );
     // Three distinct points: every P3P solution explains all twelve noise-free correspondences.
     assert_eq!(r.status, Status::Success);
-    assert!(r.details.rms_error_px < 1e-6 && r.inliers_points.iter().all(|&m| m), "{r:?}");
+    assert!(
+        r.details.rms_error_px < 1e-6 && r.inliers_points.iter().all(|&m| m),
+        "{r:?}"
+    );
 }
 
 #[test]

@@ -4,11 +4,11 @@
 //! returns a fresh array, so changing it cannot change the result.
 
 use crate::camera::PyCamera;
+use crate::certificate::certificate_of;
 use crate::fields::{result_class, Field};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use pluecker::chi_square::ResidualTest;
-use crate::certificate::certificate_of;
 use pluecker::certificate::Primitive;
+use pluecker::chi_square::ResidualTest;
 use pluecker::pose::{PoseDetails, RansacReport, StageReport};
 use pluecker::{Pose, PoseResult};
 use pyo3::prelude::*;
@@ -269,11 +269,15 @@ struct Runner(Pose, f64);
 impl Field for Runner {
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
         let pose = PyPose { inner: self.0 }.get(py)?;
-        Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?.into_any().unbind())
+        Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?
+            .into_any()
+            .unbind())
     }
     fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
         let pose = PyPose { inner: self.0 }.plain(py)?;
-        Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?.into_any().unbind())
+        Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?
+            .into_any()
+            .unbind())
     }
     fn stub() -> String {
         "Tuple[Pose, float]".into()

@@ -57,7 +57,8 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 pub const MAX_CELLS: usize = 20_000;
 
 /// The certificate stage's outcome, in the units of this module (`f = ½ Σ r²`, px²); the result
-/// assembly turns it into the shared [`crate::certificate::Certificate`] in `Σ r²`.
+/// assembly ([`crate::pose::PoseResult`]) turns it into the shared [`crate::certificate::Certificate`]
+/// in `Σ r²`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Certification {
     /// Whether the gap closed.
@@ -87,20 +88,6 @@ impl Certification {
             nodes: 0,
             reason: Some(reason.into()),
         }
-    }
-
-    /// The shared certificate in `Σ r²` (twice this module's `½ Σ r²`): `None` when no bound was
-    /// computed.
-    pub(crate) fn certificate(&self) -> Option<crate::certificate::Certificate> {
-        (!self.raw_lower_bound.is_nan()).then(|| crate::certificate::Certificate {
-            lower_bound: 2.0 * self.lower_bound,
-            raw_lower_bound: 2.0 * self.raw_lower_bound,
-            relative_gap: self.relative_gap,
-            certified: self.certified,
-            kind: crate::certificate::CertificateKind::SublevelSet,
-            nodes: self.nodes,
-            solver_iterations: 0,
-        })
     }
 }
 
@@ -849,11 +836,11 @@ pub fn certify(
     };
     let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some(target) = BALL_FACTORS
-        .iter()
-        .map(|f| f * unit)
-        .find(|&radius| model.bound(radius).is_some_and(|lower| gap_of(lower) <= options.max_relative_gap))
-    else {
+    let Some(target) = BALL_FACTORS.iter().map(|f| f * unit).find(|&radius| {
+        model
+            .bound(radius)
+            .is_some_and(|lower| gap_of(lower) <= options.max_relative_gap)
+    }) else {
         return Certification::none(format!(
             "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
             (2.0 * cost).sqrt()
@@ -872,9 +859,7 @@ pub fn certify(
         Err(why) => return Certification::none(why),
     };
     let Some(raw_lower_bound) = model.raw_bound(localised.radius.min(target)) else {
-        return Certification::none(
-            "not proved: a depth may vanish within the localised ball",
-        );
+        return Certification::none("not proved: a depth may vanish within the localised ball");
     };
     let lower_bound = raw_lower_bound.min(model.cost);
     let gap = gap_of(lower_bound);

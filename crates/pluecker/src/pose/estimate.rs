@@ -500,13 +500,7 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
     } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
         let why = "no refinement: the pose is not a minimum of the reprojection error";
-        (
-            pose,
-            status,
-            None,
-            Certification::none(why),
-            None,
-        )
+        (pose, status, None, Certification::none(why), None)
     };
     Ok(assemble(
         observations,

@@ -138,7 +138,7 @@ pub struct PoseOptions {
     /// The answer is [`Status::Ambiguous`] when another local minimum with every object point in front
     /// has a sum of squared residuals `Σ r²` within `ambiguity_threshold · σ²` of the answer's (a
     /// likelihood-ratio test: the data cannot tell the two apart at that level). `σ` is `sigma_px`
-    /// when given, else the larger of the estimate `σ̂` (see [`PoseResult::sigma_px`]) and 1 px.
+    /// when given, else the larger of the estimate `σ̂` (see [`PoseDetails::sigma_px`]) and 1 px.
     /// Default `9.0` (three standard deviations of the difference). `0` turns the flag off for exact
     /// ties only.
     pub ambiguity_threshold: f64,

@@ -13,6 +13,7 @@ use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
 use super::{PoseDetails, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
+use crate::certificate::{Certificate, CertificateKind};
 use crate::chi_square::ResidualTest;
 use crate::interrupt::stop_reason;
 use crate::optim::{Objective, Termination};
@@ -87,6 +88,20 @@ fn sum_of_squares(half: f64) -> f64 {
     2.0 * half
 }
 
+/// The shared certificate of the certificate stage's outcome, in `Σ r²`: `None` when no bound was
+/// computed.
+fn certificate_of(certification: &Certification) -> Option<Certificate> {
+    (!certification.raw_lower_bound.is_nan()).then_some(Certificate {
+        lower_bound: sum_of_squares(certification.lower_bound),
+        raw_lower_bound: sum_of_squares(certification.raw_lower_bound),
+        relative_gap: certification.relative_gap,
+        certified: certification.certified,
+        kind: CertificateKind::SublevelSet,
+        nodes: certification.nodes,
+        solver_iterations: 0,
+    })
+}
+
 /// The [`PoseResult`] of a finished run; every cost converted to `Σ r²` (see the module docs), and a
 /// requested certificate that does not hold turning [`Status::Success`] into
 /// [`Status::GapNotClosed`] ([`Status::Interrupted`] or [`Status::TimeBudget`] when its search was
@@ -110,7 +125,10 @@ pub(crate) fn assemble(
         behind_camera_cost,
     } = parts;
     let termination = stages.last().expect("at least one stage").termination;
-    for stage in stages.iter_mut().filter(|s| matches!(s.cost_kind, "reprojection" | "msac")) {
+    for stage in stages
+        .iter_mut()
+        .filter(|s| matches!(s.cost_kind, "reprojection" | "msac"))
+    {
         stage.initial_cost = sum_of_squares(stage.initial_cost);
         stage.final_cost = sum_of_squares(stage.final_cost);
     }
@@ -139,7 +157,7 @@ pub(crate) fn assemble(
         .and_then(|s| ResidualTest::new(cost / (s * s), residual_count.saturating_sub(fitted)));
     let (inliers_points, inliers_lines) =
         inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
-    let certificate = certification.certificate();
+    let certificate = certificate_of(&certification);
     // A requested certificate that does not hold: the gap is not closed, or the search was stopped.
     let status = if opts.certify.is_some() && status == Status::Success && !certification.certified {
         stop_reason().map_or(Status::GapNotClosed, Status::stopped)
