@@ -109,7 +109,7 @@ def main():
             pc, pl = colmap["cam_from_world"], colmap_lsq["cam_from_world"]
             answers = {
                 "exact": (exact.pose.rotation, exact.pose.translation),
-                "first-order": (old.R, old.t),
+                "first-order": tuple(old.pose),
                 "pycolmap": (pc.rotation.matrix(), pc.translation),
                 "pycolmap-lsq": (pl.rotation.matrix(), pl.translation),
             }

@@ -342,7 +342,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
     lambda: pluecker.triangulate_point_observations(stereo()[0], [1e300, 0, 0], [0, 1, 2], stereo()[1]),
     lambda: LENS.unproject(np.array([[1e300, 0.0]])),
     lambda: LENS.undistort(np.array([[300.0, 200.0]]), np.array([[[-1e300, 0.0], [0.0, 1.0]]])),
-], ids=["max_relative_gap", "certify_gap", "confidence", "point_threshold", "sigma", "time_budget", "track",
+], ids=["max_relative_gap", "certify_max_relative_gap", "confidence", "point_threshold", "sigma", "time_budget", "track",
         "pixel", "cov"])
 def test_floats_in_messages_have_six_significant_digits(call):
     """``1e300`` was printed in full, 301 digits."""

@@ -27,7 +27,7 @@ from triangulation_scenes import many_start_point_minimum
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
-GAP = 1e-3  # the default max_relative_gap / certify_gap
+GAP = 1e-3  # the default CertifyOptions.max_relative_gap
 D = 1000.0  # LINE_FRAME_DISTANCE: an observed line sits D px from the origin of its frame
 
 

@@ -239,7 +239,7 @@ def run_and_score(truth: Truth, obs: Observation, est: Estimator) -> Score:
             else {"lines2d": obs.lines2d, "lines3d": obs.lines3d})
     try:
         ransac = pluecker.RansacOptions(seed=0) if est.robust else None
-        res = pluecker.estimate_pose(truth.camera, **data, options=pluecker.PoseOptions(refine=est.refine, method=est.details.method, ransac=ransac))
+        res = pluecker.estimate_pose(truth.camera, **data, options=pluecker.PoseOptions(refine=est.refine, method=est.method, ransac=ransac))
     except pluecker.PlueckerError as exc:
         return Score(nan, failed=True, error=f"{type(exc).__name__}: {exc}")
     R, t = np.asarray(res.pose.rotation), np.asarray(res.pose.translation)
@@ -656,15 +656,15 @@ def render_tables(results: Results, settings: Settings) -> str:
     ]
     for spec in TABLES:
         est = spec.estimator
-        times = f" {PAPER_TIMES}" if est.details.method != "linear" else ""
+        times = f" {PAPER_TIMES}" if est.method != "linear" else ""
         out += ["", f"## Table {spec.number}: {spec.caption}", "",
-                f"Paper's estimator alone (`method=\"{est.details.method}\", refine=False`), {est.data}. Each cell reads "
+                f"Paper's estimator alone (`method=\"{est.method}\", refine=False`), {est.data}. Each cell reads "
                 f"**ours / paper**: our mean over {n} trials ('failures' as defined at the top), then the value of "
                 f"the paper's Table {spec.number} as printed ('–' where a side has no such row). "
                 f"{PAPER_DIFFERENCE.format(n=n)}{times}", "",
                 table_beside_paper(results[spec.sweep][est.key], spec.sweep, est, spec.columns,
                                    PAPER_TABLES[spec.number])]
-        if est.details.method != "linear":
+        if est.method != "linear":
             out += ["", f"Default pipeline: the same estimator followed by reprojection refinement "
                         f"(`refine=True`); iterations include the refinement's. The paper has no such stage. "
                         f"{mean_note}", "",
