@@ -307,6 +307,18 @@ def test_result_fields_have_documented_types_and_shapes():
     assert "PoseStage(" in repr(r.details.stages[0])
 
 
+def test_a_pose_is_accepted_where_a_pair_is():
+    """``result.pose`` starts another estimate as ``(R, t)`` would, and unpacks into that pair."""
+    scene = pluecker.random_scene("general", 10, 0, seed=6)
+    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"])
+    options = pluecker.PoseOptions(initial_pose=r.pose)
+    R, t = options.initial_pose
+    np.testing.assert_array_equal(R, r.pose.rotation)
+    np.testing.assert_array_equal(t, r.pose.translation)
+    assert options == pluecker.PoseOptions(initial_pose=tuple(r.pose))
+    np.testing.assert_allclose(r.pose.centre(), -r.pose.rotation.T @ r.pose.translation, atol=1e-15)
+
+
 def test_result_arrays_are_copies():
     scene = pluecker.random_scene("general", 10, 0, seed=6)
     r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"])
