@@ -12,8 +12,8 @@ is taken as +inf.
 **Best known minimum** of a scene: the lowest valid cost among
 
 - (a) ``estimate_pose(..., options=PoseOptions(initial_pose=(R_true, t_true)))``: pluecker started at the truth;
-- (b) ``estimate_pose(..., ransac=RansacOptions(point_threshold=1e6, line_threshold=1e6, min_inliers=3,
-  seed=scene_seed))``: LO-RANSAC over every minimal sample mix, scoring with the plain squared error,
+- (b) ``estimate_pose(..., options=PoseOptions(ransac=RansacOptions(point_threshold=1e6, line_threshold=1e6, min_inliers=3,
+  seed=scene_seed)))``: LO-RANSAC over every minimal sample mix, scoring with the plain squared error,
   then refined (an exception counts as no candidate);
 - (c) ``S`` random starts ``estimate_pose(..., options=PoseOptions(initial_pose=(R_rand, t_rand)))``, ``R_rand`` uniform on
   SO(3), ``t_rand`` putting the object's centroid at its true depth on the optical axis. ``S`` is
@@ -61,7 +61,7 @@ every image point and endpoint. Mixed data of ``n`` correspondences are ``ceil(n
   follows one of the same code on the same data, which would be warmer, and none follows cvxpnpl,
   after which a call is up to 4 times slower; ``--repeats 3`` gives warm timings as in
   ``bench/compare_pose.py``);
-- ``certify=True``: fraction certified, median and p95 µs of ``estimate_pose(..., options=PoseOptions(certify=True))``, or
+- ``certify=True``: fraction certified, median and p95 µs of ``estimate_pose(..., options=PoseOptions(certify=pluecker.CertifyOptions()))``, or
   ``n/a`` when the keyword is not accepted;
 - ``status``: histogram of the default answers' statuses;
 - per peer: ``misses`` (``k/m`` when it ran on a subset of the scenes; ``[g]``, shown when it differs:
@@ -568,7 +568,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         res, sec, err = call_pluecker(s, args.repeats)
         t_default.append(sec * 1e6)
         if Features.ambiguous_attr is None and res is not None:
-            Features.ambiguous_attr = hasattr(res, "ambiguous")
+            Features.ambiguous_attr = hasattr(res, "ambiguous") or hasattr(res, "details")  # status "ambiguous"
             Features.certified_attr = hasattr(res, "certified")
         status = str(res.status) if res is not None else f"exception: {err}"
         statuses[status] = statuses.get(status, 0) + 1
@@ -576,7 +576,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         ambiguous_flags += flagged
         status_ambiguous += status == "ambiguous"
         certified += getattr(res, "certified", None) is True
-        cost_default = pose_cost(s, res.R, res.t) if res is not None else math.inf
+        cost_default = pose_cost(s, res.pose.rotation, res.pose.translation) if res is not None else math.inf
         candidates = {"default": cost_default}
         lap("default")
 
@@ -602,7 +602,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
 
         if Features.certify_kw is None:
             try:
-                pluecker.estimate_pose(s.camera, **kw, options=pluecker.PoseOptions(certify=True))
+                pluecker.estimate_pose(s.camera, **kw, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
                 Features.certify_kw = True
             except TypeError:
                 Features.certify_kw = False
@@ -610,12 +610,12 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
                 Features.certify_kw = True
         cost_cert = math.nan
         if Features.certify_kw:
-            cres, csec, cerr = call_pluecker(s, args.repeats, options=pluecker.PoseOptions(certify=True))
+            cres, csec, cerr = call_pluecker(s, args.repeats, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
             t_cert.append(csec * 1e6)
             cstatus = str(cres.status) if cres is not None else f"exception: {cerr}"
             cert_statuses[cstatus] = cert_statuses.get(cstatus, 0) + 1
             cert_certified += getattr(cres, "certified", None) is True
-            cost_cert = pose_cost(s, cres.R, cres.t) if cres is not None else math.inf
+            cost_cert = pose_cost(s, cres.pose.rotation, cres.pose.translation) if cres is not None else math.inf
             candidates["certify"] = cost_cert
         lap("certify")
 
@@ -623,14 +623,15 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
 
         # (a) the truth as a start, (b) robust with huge thresholds, (c) random starts
         r, _, _ = call_pluecker(s, 1, options=pluecker.PoseOptions(initial_pose=(s.R, s.t)))
-        candidates["true-start"] = pose_cost(s, r.R, r.t) if r is not None else math.inf
+        candidates["true-start"] = pose_cost(s, r.pose.rotation, r.pose.translation) if r is not None else math.inf
         lap("true-start")
         r, _, err = call_pluecker(
-            s, 1, ransac=pluecker.RansacOptions(point_threshold=HUGE_THRESHOLD, line_threshold=HUGE_THRESHOLD, min_inliers=3, seed=seed)
+            s, 1, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(
+                point_threshold=HUGE_THRESHOLD, line_threshold=HUGE_THRESHOLD, min_inliers=3, seed=seed))
         )
         if r is None:
             robust_errors[err] = robust_errors.get(err, 0) + 1
-        candidates["robust"] = pose_cost(s, r.R, r.t) if r is not None else math.inf
+        candidates["robust"] = pose_cost(s, r.pose.rotation, r.pose.translation) if r is not None else math.inf
         lap("robust")
         srng = np.random.default_rng([seed, 1])
         best_start = math.inf
@@ -639,7 +640,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
             t0 = np.array([0.0, 0.0, s.depth]) - R0 @ s.centroid
             r, _, _ = call_pluecker(s, 1, options=pluecker.PoseOptions(initial_pose=(R0, t0)))
             if r is not None:
-                best_start = min(best_start, pose_cost(s, r.R, r.t))
+                best_start = min(best_start, pose_cost(s, r.pose.rotation, r.pose.translation))
         candidates["random-start"] = best_start
         lap("random-starts")
 

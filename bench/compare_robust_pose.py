@@ -1,4 +1,4 @@
-"""Robust pose with outliers, side by side: pluecker ``estimate_pose(..., ransac=True)`` and PoseLib's
+"""Robust pose with outliers, side by side: pluecker ``estimate_pose(..., options=PoseOptions(ransac=RansacOptions()))`` and PoseLib's
 LO-RANSAC ``estimate_absolute_pose`` (points) / ``estimate_absolute_pose_pnpl`` (points + lines), on the same
 seeded scenes.
 
@@ -153,9 +153,9 @@ Outcome = tuple[np.ndarray, np.ndarray, "np.ndarray | None"]
 
 def _pluecker(s: Scene, with_lines: bool) -> Outcome:
     lines = {"lines2d": s.lines2d, "lines3d": s.lines3d} if with_lines else {}
-    r = pluecker.estimate_pose(s.camera, s.points2d, s.points3d, **lines, ransac=pluecker.RansacOptions(point_threshold=POINT_THRESHOLD_PX, line_threshold=LINE_THRESHOLD_PX, seed=s.seed))
+    r = pluecker.estimate_pose(s.camera, s.points2d, s.points3d, **lines, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(point_threshold=POINT_THRESHOLD_PX, line_threshold=LINE_THRESHOLD_PX, seed=s.seed)))
     mask = np.concatenate([np.asarray(r.inliers_points), np.asarray(r.inliers_lines)]) if with_lines else np.asarray(r.inliers_points)
-    return np.asarray(r.R), np.asarray(r.t), mask
+    return np.asarray(r.pose.rotation), np.asarray(r.pose.translation), mask
 
 
 def _poselib(min_iterations: int | None) -> Callable[[Scene, bool], Outcome]:

@@ -9,7 +9,7 @@ Workloads (each would run for seconds to hours if nothing stopped it):
   reports the peak resident memory the call added (``ru_maxrss``) per track, for the interrupted call
   and for one uninterrupted call;
 - ``lines``: ``triangulate_lines``, 40 noisy segments in 4 views, branch and bound to a 1e-9 gap;
-- ``pose``: ``estimate_pose(ransac=RansacOptions(...))``, 20k all-outlier points, no inlier-ratio cap;
+- ``pose``: ``estimate_pose(options=PoseOptions(ransac=RansacOptions(...)))``, 20k all-outlier points, no inlier-ratio cap;
 - ``line``: one ``triangulate_line``, the paper's relaxation to a 1e-9 gap with ``max_nodes`` nodes
   (``--single-nodes``, about 1.6 ms each on the shared 2-core machine): a build that does not stop single calls runs on to
   the node cap, and the "latency" is the rest of the call;
@@ -65,7 +65,7 @@ def pose_workload():
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = rng.uniform(0, 640, (n, 2))
     ransac = pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12)
-    return lambda: pluecker.estimate_pose(camera, u, X, ransac=ransac)
+    return lambda: pluecker.estimate_pose(camera, u, X, options=pluecker.PoseOptions(ransac=ransac))
 
 
 def single_line_workload(nodes: int):
@@ -84,8 +84,8 @@ def single_quadric_workload(nodes: int):
 def describe(partial) -> str:
     if partial is None:
         return "no partial result: the call was not stopped, it ran to its end"
-    if hasattr(partial, "ransac") and partial.ransac is not None:
-        return f"ransac_stop={partial.ransac.stop}, {partial.ransac.iterations} samples"
+    if hasattr(partial, "details") and partial.details.ransac is not None:
+        return f"ransac_stop={partial.details.ransac.stop}, {partial.details.ransac.iterations} samples"
     if hasattr(partial, "status") and not isinstance(partial.status, str):
         done = int((partial.status != "interrupted").sum())
         return f"{done} of {len(partial)} tracks finished"

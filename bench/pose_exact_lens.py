@@ -108,8 +108,8 @@ def main():
             assert exact.status == "success" and old.status == "success" and colmap is not None and colmap_lsq is not None
             pc, pl = colmap["cam_from_world"], colmap_lsq["cam_from_world"]
             answers = {
-                "exact": (exact.R, exact.t),
-                "first-order": (old.R, old.t),
+                "exact": (exact.pose.rotation, exact.pose.translation),
+                "first-order": tuple(old.pose),
                 "pycolmap": (pc.rotation.matrix(), pc.translation),
                 "pycolmap-lsq": (pl.rotation.matrix(), pl.translation),
             }

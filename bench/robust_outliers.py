@@ -1,6 +1,6 @@
 """Robust pose on all-outlier data and on data with inliers: time, status and accuracy, for this build and,
 optionally, another build of pluecker side by side (the SPRT and the ``min_inlier_ratio``
-cap of ``estimate_pose(..., ransac=True)``).
+cap of ``estimate_pose(..., options=PoseOptions(ransac=RansacOptions()))``).
 
 Scenes: ``pluecker.random_scene("general", n_points, n_lines, seed)`` (f = 800 px, 640 x 480), i.i.d.
 Gaussian noise of 1 px on every image point and segment endpoint, then a fraction ``ratio`` of the points
@@ -107,16 +107,16 @@ def worker(rows: list[tuple], out: Path) -> None:
             best = float("inf")
             for _ in range(repeats):
                 start = time.perf_counter()
-                r = pluecker.estimate_pose(s["camera"], **s["data"], ransac=pluecker.RansacOptions(seed=seed))
+                r = pluecker.estimate_pose(s["camera"], **s["data"], options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(seed=seed)))
                 best = min(best, time.perf_counter() - start)
             cell["times"].append(best)
             cell["status"][r.status] = cell["status"].get(r.status, 0) + 1
-            cell["samples"].append(r.ransac.iterations)
-            cell["errors_evaluated"].append((r.ransac.errors_evaluated if r.ransac else None))
+            cell["samples"].append(r.details.ransac.iterations)
+            cell["errors_evaluated"].append((r.details.ransac.errors_evaluated if r.details.ransac else None))
             if ratio < 1.0:
-                dR = r.R @ s["R"].T
+                dR = r.pose.rotation @ s["R"].T
                 cell["rot_deg"].append(float(np.degrees(np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1)))))
-                cell["trans_pct"].append(float(100 * np.linalg.norm(r.t - s["t"]) / s["depth"]))
+                cell["trans_pct"].append(float(100 * np.linalg.norm(r.pose.translation - s["t"]) / s["depth"]))
                 mask = np.concatenate([r.inliers_points, r.inliers_lines])
                 tp = int(np.sum(mask & s["good"]))
                 cell["recall"].append(tp / max(1, int(s["good"].sum())))

@@ -108,11 +108,11 @@ def rotation_error(r_est: np.ndarray, r_true: np.ndarray) -> float:
 
 
 def assert_pose_close(result, r_true, t_true, tol: float, seed=None) -> None:
-    """``result.R``/``result.t`` within ``tol`` (max abs entry) of the truth."""
-    dr = float(np.max(np.abs(result.R - r_true)))
-    dt = float(np.max(np.abs(result.t - t_true)))
+    """``result.pose.rotation``/``result.pose.translation`` within ``tol`` (max abs entry) of the truth."""
+    dr = float(np.max(np.abs(result.pose.rotation - r_true)))
+    dt = float(np.max(np.abs(result.pose.translation - t_true)))
     assert dr < tol and dt < tol, (
-        f"seed={seed} method={result.method} status={result.status}: |dR|={dr:.3e} |dt|={dt:.3e} (tol {tol:.0e})"
+        f"seed={seed} method={result.details.method} status={result.status}: |dR|={dr:.3e} |dt|={dt:.3e} (tol {tol:.0e})"
     )
 
 

@@ -65,27 +65,27 @@ def test_methods_constant_lists_every_method_default_first():
 @pytest.mark.parametrize("method", pluecker.METHODS)
 def test_noise_free_points_recover_the_pose(method, seed):
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method)
-    assert result.method == method
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method=method))
+    assert result.details.method == method
     assert result.status == "success", f"seed={seed}"
-    assert result.success is True
+    assert (result.status == "success") is True
     assert_pose_close(result, scene["R"], scene["t"], EXACT, seed)
-    assert result.rms_error_px < 1e-6
+    assert result.details.rms_error_px < 1e-6
 
 
 @pytest.mark.parametrize("method", pluecker.METHODS)
 def test_noise_free_points_recover_the_pose_without_refinement(method, seed):
     # The algebraic estimators alone are exact on exact data (their cost is 0 at the truth).
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method, options=pluecker.PoseOptions(refine=False))
-    assert "refinement" not in [s.name for s in result.stages]
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(refine=False, method=method))
+    assert "refinement" not in [s.name for s in result.details.stages]
     assert_pose_close(result, scene["R"], scene["t"], 1e-6, seed)
 
 
 def test_linear_method_estimates_the_intrinsics(seed):
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="linear")
-    cam, est = scene["camera"], result.estimated_camera
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method="linear"))
+    cam, est = scene["camera"], result.details.estimated_camera
     assert isinstance(est, pluecker.Camera)
     # Intrinsics in pixels (f = 800): 1e-6 px is 1e-9 relative.
     np.testing.assert_allclose(est.K, cam.K, rtol=0, atol=1e-6, err_msg=f"seed={seed}")
@@ -95,7 +95,7 @@ def test_linear_method_estimates_the_intrinsics(seed):
 def test_noise_free_lines_only_recover_the_pose(method, seed):
     scene = pluecker.random_scene("general", 0, 10, seed=seed)
     assert scene["points2d"].shape == (0, 2) and scene["lines2d"].shape == (10, 2, 2)
-    result = pluecker.estimate_pose(scene["camera"], lines2d=scene["lines2d"], lines3d=scene["lines3d"], method=method)
+    result = pluecker.estimate_pose(scene["camera"], lines2d=scene["lines2d"], lines3d=scene["lines3d"], options=pluecker.PoseOptions(method=method))
     assert result.status == "success", f"seed={seed}"
     assert_pose_close(result, scene["R"], scene["t"], EXACT, seed)
 
@@ -103,7 +103,7 @@ def test_noise_free_lines_only_recover_the_pose(method, seed):
 @pytest.mark.parametrize("method", pluecker.METHODS)
 def test_noise_free_points_and_lines_recover_the_pose(method, seed):
     scene = pluecker.random_scene("general", 10, 5, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], **correspondences(scene), method=method)
+    result = pluecker.estimate_pose(scene["camera"], **correspondences(scene), options=pluecker.PoseOptions(method=method))
     assert result.status == "success", f"seed={seed}"
     assert_pose_close(result, scene["R"], scene["t"], EXACT, seed)
 
@@ -124,12 +124,12 @@ def test_paper_scene_with_its_negative_focal_length(method):
     assert scene["points3d"].shape == (460, 3) and scene["points2d"].shape == (460, 2)
     # The scene's observations follow the documented projection convention.
     np.testing.assert_allclose(project(cam, scene["R"], scene["t"], scene["points3d"]), scene["points2d"], atol=1e-9)
-    result = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], method=method)
+    result = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method=method))
     assert result.status == "success"
     assert_pose_close(result, scene["R"], scene["t"], EXACT)
     # The paper's ground truth, section 5: angle 2.9512 rad, t = (2.627650, -11.006138, 77.479236) cm.
-    assert result.angle == pytest.approx(2.9512, abs=1e-9)
-    np.testing.assert_allclose(result.t, [2.627650, -11.006138, 77.479236], atol=1e-9)
+    assert result.pose.axis_angle()[1] == pytest.approx(2.9512, abs=1e-9)
+    np.testing.assert_allclose(result.pose.translation, [2.627650, -11.006138, 77.479236], atol=1e-9)
 
 
 @pytest.mark.parametrize("method", pluecker.METHODS)
@@ -137,9 +137,9 @@ def test_success_is_never_claimed_for_a_wrong_pose(method):
     """On noise-free data, the default pipeline's 'success' must mean the true pose."""
     scenes = [pluecker.paper_scene()] + [pluecker.random_scene(k, 12, 0, seed=s) for k in ("general", "far") for s in range(5)]
     for i, scene in enumerate(scenes):
-        result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method)
-        if result.success:
-            assert result.rms_error_px < 1e-6, f"scene {i}: {result}"
+        result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method=method))
+        if (result.status == "success"):
+            assert result.details.rms_error_px < 1e-6, f"scene {i}: {result}"
             assert_pose_close(result, scene["R"], scene["t"], 1e-6, seed=f"scene {i}")
 
 
@@ -147,8 +147,8 @@ def test_newton_stop_at_r_zero_is_not_reported_as_success():
     """Plain Newton (the paper's baseline, which may diverge) stops on the paper scene at the
     stationary point r = 0 of the algebraic cost, whose pose is meaningless (~1e8 px error)."""
     scene = pluecker.paper_scene()
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="newton", options=pluecker.PoseOptions(refine=False))
-    assert result.success is False or np.max(np.abs(result.t - scene["t"])) < 1e-6
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(refine=False, method="newton"))
+    assert (result.status == "success") is False or np.max(np.abs(result.pose.translation - scene["t"])) < 1e-6
 
 
 def test_shared_fixture_matches_rust():
@@ -164,7 +164,7 @@ def test_shared_fixture_matches_rust():
     np.testing.assert_allclose(scene["lines3d"][3, 1], [2.7386643955329504, -4.764093786434271, -2.609206889237841], rtol=0, atol=1e-12)
     np.testing.assert_allclose(scene["R"][0], [0.45397091542994217, -0.6369359292289596, 0.6230754609202178], rtol=0, atol=1e-12)
     for method in pluecker.METHODS:
-        result = pluecker.estimate_pose(scene["camera"], **correspondences(scene), method=method)
+        result = pluecker.estimate_pose(scene["camera"], **correspondences(scene), options=pluecker.PoseOptions(method=method))
         assert result.status == "success", method
         assert_pose_close(result, scene["R"], scene["t"], EXACT)
 
@@ -190,10 +190,10 @@ def test_random_scene_is_deterministic_and_in_front_of_the_camera(seed):
 @pytest.mark.parametrize("method", ALGEBRAIC_METHODS)
 def test_iteration_cap_is_reported_as_not_converged(method, seed):
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method=method, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False))
-    assert result.stages[0].termination == "max_iterations"
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False, method=method))
+    assert result.details.stages[0].termination == "max_iterations"
     assert result.status == "not_converged"
-    assert result.success is False
+    assert (result.status == "success") is False
 
 
 def test_initial_pose_is_used(seed):
@@ -206,18 +206,19 @@ def test_initial_pose_is_used(seed):
     result = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False, initial_pose=(scene["R"], scene["t"])))
     assert result.status == "success", f"seed={seed}"
     # Zero up to the round-off of the Gram-matrix form of the algebraic cost.
-    assert result.final_cost < 1e-12
+    assert result.details.stages[-1].cost_kind == "algebraic" and result.details.stages[-1].final_cost < 1e-12
     assert_pose_close(result, scene["R"], scene["t"], EXACT, seed)
 
 
 def test_refinement_is_the_last_stage_and_reprojection_cost():
     scene = pluecker.random_scene("general", 20, 0, seed=3)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="rotation-then-translation")
-    assert [s.name for s in result.stages] == ["rotation", "translation", "refinement"]
-    assert [s.cost_kind for s in result.stages] == ["algebraic", "algebraic", "reprojection"]
-    assert result.final_cost == result.stages[-1].final_cost
-    assert result.termination == result.stages[-1].termination
-    assert result.iterations == sum(s.iterations for s in result.stages)
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method="rotation-then-translation"))
+    assert [s.name for s in result.details.stages] == ["rotation", "translation", "refinement"]
+    assert [s.cost_kind for s in result.details.stages] == ["algebraic", "algebraic", "reprojection"]
+    # Both Σ r² at the returned pose, one in the conditioned frame of the refinement (rounding 1e-9).
+    assert result.cost == pytest.approx(result.details.stages[-1].final_cost, rel=1e-9)
+    assert result.details.termination == result.details.stages[-1].termination
+    assert result.details.iterations == sum(s.iterations for s in result.details.stages)
 
 
 def test_penalty_and_normalize_are_passed_through(seed):
@@ -229,7 +230,7 @@ def test_penalty_and_normalize_are_passed_through(seed):
     # Without normalisation the algebraic stage sees a different cost, so a different path.
     a = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(refine=False, normalize=True))
     b = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(refine=False, normalize=False))
-    assert a.stages[0].initial_cost != b.stages[0].initial_cost
+    assert a.details.stages[0].initial_cost != b.details.stages[0].initial_cost
 
 
 def test_array_likes_are_accepted():
@@ -250,7 +251,7 @@ def test_solves_from_several_threads_agree():
 
     def work():
         for _ in range(20):
-            out.append(pluecker.estimate_pose(scene["camera"], **correspondences(scene)).t)
+            out.append(pluecker.estimate_pose(scene["camera"], **correspondences(scene)).pose.translation)
 
     threads = [threading.Thread(target=work) for _ in range(4)]
     for th in threads:
@@ -259,7 +260,7 @@ def test_solves_from_several_threads_agree():
         th.join()
     assert len(out) == 80
     for t in out:
-        np.testing.assert_array_equal(t, expected.t)
+        np.testing.assert_array_equal(t, expected.pose.translation)
 
 
 # --- results --------------------------------------------------------------------------------------
@@ -268,68 +269,85 @@ def test_solves_from_several_threads_agree():
 def test_result_fields_have_documented_types_and_shapes():
     scene = pluecker.random_scene("general", 20, 4, seed=5)
     r = pluecker.estimate_pose(scene["camera"], **correspondences(scene))
-    for name, shape in (("R", (3, 3)), ("t", (3,)), ("dual_quaternion", (8,)), ("axis", (3,))):
-        value = getattr(r, name)
-        assert isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == shape, name
-    for name in ("angle", "final_cost", "rms_error_px", "time_seconds"):
-        assert isinstance(getattr(r, name), float), name
-    assert isinstance(r.iterations, int) and r.iterations >= 1
-    assert isinstance(r.method, str) and r.method == "trust-region"
-    assert r.termination in TERMINATIONS and r.status in STATUSES
-    assert isinstance(r.success, bool)
-    assert r.time_seconds >= 0.0
-    assert r.estimated_camera is None
+    axis, angle = r.pose.axis_angle()
+    for value, shape in ((r.pose.rotation, (3, 3)), (r.pose.translation, (3,)), (r.pose.dual_quaternion(), (8,)),
+                         (axis, (3,)), (r.pose.rotation_vector(), (3,))):
+        assert isinstance(value, np.ndarray) and value.dtype == np.float64 and value.shape == shape, shape
+    for value in (angle, r.cost, r.details.rms_error_px, r.details.time_seconds):
+        assert isinstance(value, float), value
+    assert isinstance(r.pose, pluecker.Pose) and isinstance(r.details, pluecker.PoseDetails)
+    assert isinstance(r.details.iterations, int) and r.details.iterations >= 1
+    assert isinstance(r.details.method, str) and r.details.method == "trust-region"
+    assert r.details.termination in TERMINATIONS and r.status in STATUSES
+    assert r.details.time_seconds >= 0.0
+    assert r.details.estimated_camera is None
     # R is a rotation; axis and angle describe it (Rodrigues); the dual quaternion is unit and rigid.
-    np.testing.assert_allclose(r.R @ r.R.T, np.eye(3), atol=1e-12)
-    assert np.linalg.det(r.R) == pytest.approx(1.0, abs=1e-12)
-    assert np.linalg.norm(r.axis) == pytest.approx(1.0, abs=1e-12)
-    assert 0.0 <= r.angle <= np.pi
-    k = np.array([[0, -r.axis[2], r.axis[1]], [r.axis[2], 0, -r.axis[0]], [-r.axis[1], r.axis[0], 0]])
-    rodrigues = np.eye(3) + np.sin(r.angle) * k + (1 - np.cos(r.angle)) * k @ k
-    np.testing.assert_allclose(rodrigues, r.R, atol=1e-12)
-    q = r.dual_quaternion
+    np.testing.assert_allclose(r.pose.rotation @ r.pose.rotation.T, np.eye(3), atol=1e-12)
+    assert np.linalg.det(r.pose.rotation) == pytest.approx(1.0, abs=1e-12)
+    assert np.linalg.norm(axis) == pytest.approx(1.0, abs=1e-12)
+    assert 0.0 <= angle <= np.pi
+    np.testing.assert_allclose(r.pose.rotation_vector(), angle * axis, atol=1e-15)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    rodrigues = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    np.testing.assert_allclose(rodrigues, r.pose.rotation, atol=1e-12)
+    R, t = r.pose
+    assert R is not None and np.array_equal(R, r.pose.rotation) and np.array_equal(t, r.pose.translation)
+    q = r.pose.dual_quaternion()
     assert np.linalg.norm(q[:4]) == pytest.approx(1.0, abs=1e-12) and abs(q[:4] @ q[4:]) < 1e-12
     assert q[0] >= 0.0
-    for stage in r.stages:
+    for stage in r.details.stages:
         assert isinstance(stage, pluecker.PoseStage)
         assert isinstance(stage.name, str) and stage.cost_kind in ("algebraic", "reprojection")
-        assert stage.R.shape == (3, 3) and stage.t.shape == (3,)
+        assert stage.rotation.shape == (3, 3) and stage.translation.shape == (3,)
         assert isinstance(stage.iterations, int) and stage.termination in TERMINATIONS
         assert stage.final_cost <= stage.initial_cost
         assert stage.time_seconds >= 0.0
-    np.testing.assert_array_equal(r.stages[-1].R, r.R)
+    np.testing.assert_array_equal(r.details.stages[-1].rotation, r.pose.rotation)
     assert "PoseResult(" in repr(r) and "status='success'" in repr(r)
-    assert "PoseStage(" in repr(r.stages[0])
+    assert "PoseStage(" in repr(r.details.stages[0])
+
+
+def test_a_pose_is_accepted_where_a_pair_is():
+    """``result.pose`` starts another estimate as ``(R, t)`` would, and unpacks into that pair."""
+    scene = pluecker.random_scene("general", 10, 0, seed=6)
+    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"])
+    options = pluecker.PoseOptions(initial_pose=r.pose)
+    R, t = options.initial_pose
+    np.testing.assert_array_equal(R, r.pose.rotation)
+    np.testing.assert_array_equal(t, r.pose.translation)
+    assert options == pluecker.PoseOptions(initial_pose=tuple(r.pose))
+    np.testing.assert_allclose(r.pose.centre(), -r.pose.rotation.T @ r.pose.translation, atol=1e-15)
 
 
 def test_result_arrays_are_copies():
     scene = pluecker.random_scene("general", 10, 0, seed=6)
     r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"])
-    rot = r.R
+    rot = r.pose.rotation
     rot[:] = 0.0
-    assert np.linalg.det(r.R) == pytest.approx(1.0)
+    assert np.linalg.det(r.pose.rotation) == pytest.approx(1.0)
     with pytest.raises(AttributeError):
         r.status = "success"  # frozen
 
 
 def test_to_dict_is_json_serialisable_and_matches_the_attributes():
     scene = pluecker.random_scene("general", 20, 0, seed=7)
-    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="linear")
+    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method="linear"))
     d = json.loads(json.dumps(r.to_dict()))
-    np.testing.assert_array_equal(np.array(d["R"]), r.R)
-    np.testing.assert_array_equal(np.array(d["t"]), r.t)
-    np.testing.assert_array_equal(np.array(d["dual_quaternion"]), r.dual_quaternion)
-    np.testing.assert_array_equal(np.array(d["axis"]), r.axis)
-    for key in ("angle", "method", "iterations", "final_cost", "termination", "status", "success", "rms_error_px", "time_seconds"):
+    np.testing.assert_array_equal(np.array(d["pose"]["rotation"]), r.pose.rotation)
+    np.testing.assert_array_equal(np.array(d["pose"]["translation"]), r.pose.translation)
+    for key in ("cost", "status", "certified"):
         assert d[key] == getattr(r, key), key
-    assert [s["name"] for s in d["stages"]] == [s.name for s in r.stages]
-    assert d["stages"][0] == json.loads(json.dumps(r.stages[0].to_dict()))
-    cam = r.estimated_camera
-    assert {k: d["estimated_camera"][k] for k in ("fx", "fy", "cx", "cy", "skew")} == \
+    details = d["details"]
+    for key in ("method", "iterations", "termination", "rms_error_px", "time_seconds"):
+        assert details[key] == getattr(r.details, key), key
+    assert [s["name"] for s in details["stages"]] == [s.name for s in r.details.stages]
+    assert details["stages"][0] == json.loads(json.dumps(r.details.stages[0].to_dict()))
+    cam = r.details.estimated_camera
+    assert {k: details["estimated_camera"][k] for k in ("fx", "fy", "cx", "cy", "skew")} == \
         {"fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy, "skew": cam.skew}
-    assert d["estimated_camera"] == json.loads(json.dumps(cam.to_dict()))
+    assert details["estimated_camera"] == json.loads(json.dumps(cam.to_dict()))
     other = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"]).to_dict()
-    assert other["estimated_camera"] is None
+    assert other["details"]["estimated_camera"] is None
 
 
 # --- camera ---------------------------------------------------------------------------------------
@@ -396,7 +414,7 @@ def test_pose_covariance_predicts_the_spread_of_noisy_estimates(n_points, n_line
         noisy["points2d"] = scene["points2d"] + sigma * rng.standard_normal(scene["points2d"].shape)
         noisy["lines2d"] = scene["lines2d"] + sigma * rng.standard_normal(scene["lines2d"].shape)
         r = pluecker.estimate_pose(scene["camera"], **noisy)
-        errors.append(np.r_[log_so3(r.R @ scene["R"].T), r.t - scene["t"]])
+        errors.append(np.r_[log_so3(r.pose.rotation @ scene["R"].T), r.pose.translation - scene["t"]])
     errors = np.array(errors)
     # Each variance estimate has a relative standard deviation sqrt(2 / trials) ~ 3.7 %; allow 5 sigma.
     ratio = np.diag(np.cov(errors.T)) / np.diag(bound)

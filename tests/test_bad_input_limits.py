@@ -185,20 +185,22 @@ def test_a_gap_outside_0_1_is_refused_for_triangulation_as_for_the_pose(gap):
     relative gap is at most 1 for any lower bound ≥ 0, so a threshold ≥ 1 certifies without a bound."""
     with pytest.raises(InvalidOptionError, match=r"max_relative_gap.*must be in \(0, 1\)"):
         pluecker.TriangulationOptions(max_relative_gap=gap)
-    with pytest.raises(InvalidOptionError, match=r"certify_gap.*must be in \(0, 1\)"):
-        pluecker.PoseOptions(certify_gap=gap)
+    with pytest.raises(InvalidOptionError, match=r"certify.max_relative_gap.*must be in \(0, 1\)"):
+        pluecker.CertifyOptions(max_relative_gap=gap)
 
 
 @pytest.mark.parametrize("gap", [1e-12, 0.5, 0.999])
 def test_a_gap_inside_0_1_is_accepted_by_both(gap):
     assert pluecker.TriangulationOptions(max_relative_gap=gap).max_relative_gap == gap
-    assert pluecker.PoseOptions(certify_gap=gap).certify_gap == gap
+    assert pluecker.PoseOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap)).certify.max_relative_gap == gap
 
 
 #: A value of every optional option (``Optional[...]`` in ``__fields__``), to set before resetting it.
 OPTIONAL_VALUES = {
     (pluecker.PoseOptions, "sigma_px"): 2.0,
     (pluecker.PoseOptions, "initial_pose"): (np.eye(3), np.zeros(3)),
+    (pluecker.PoseOptions, "ransac"): pluecker.RansacOptions(),
+    (pluecker.PoseOptions, "certify"): pluecker.CertifyOptions(),
     (pluecker.RansacOptions, "time_budget"): 1.5,
     (pluecker.TriangulationOptions, "outlier_threshold"): 3.0,
     (pluecker.TriangulationOptions, "max_reprojection_error"): 2.0,
@@ -256,7 +258,7 @@ def test_a_given_sigma_whose_covariance_does_not_fit_gives_no_covariance(sigma):
     r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
                                options=pluecker.PoseOptions(sigma_px=sigma))
     assert r.status == "success"
-    assert r.covariance is None and r.covariance_source is None
+    assert r.covariance is None and r.details.covariance_source is None
 
 
 def ellipse_points(n=40):
@@ -332,7 +334,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
 
 @pytest.mark.parametrize("call", [
     lambda: pluecker.TriangulationOptions(max_relative_gap=1e300),
-    lambda: pluecker.PoseOptions(certify_gap=-1e300),
+    lambda: pluecker.CertifyOptions(max_relative_gap=-1e300),
     lambda: pluecker.RansacOptions(confidence=1e300),
     lambda: pluecker.RansacOptions(point_threshold=-1e300),
     lambda: pluecker.fit_line(np.eye(2), sigma=-1e300),
@@ -340,7 +342,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
     lambda: pluecker.triangulate_point_observations(stereo()[0], [1e300, 0, 0], [0, 1, 2], stereo()[1]),
     lambda: LENS.unproject(np.array([[1e300, 0.0]])),
     lambda: LENS.undistort(np.array([[300.0, 200.0]]), np.array([[[-1e300, 0.0], [0.0, 1.0]]])),
-], ids=["max_relative_gap", "certify_gap", "confidence", "point_threshold", "sigma", "time_budget", "track",
+], ids=["max_relative_gap", "certify_max_relative_gap", "confidence", "point_threshold", "sigma", "time_budget", "track",
         "pixel", "cov"])
 def test_floats_in_messages_have_six_significant_digits(call):
     """``1e300`` was printed in full, 301 digits."""

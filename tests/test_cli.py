@@ -33,9 +33,9 @@ def write(tmp_path, doc, name: str = "input.json") -> str:
 
 
 def assert_recovers(out: dict, scene: dict, seed: int, tol: float = 1e-6) -> None:
-    np.testing.assert_allclose(np.array(out["R"]), scene["R"], atol=tol, err_msg=f"seed={seed}")
-    np.testing.assert_allclose(np.array(out["t"]), scene["t"], atol=tol * 10, err_msg=f"seed={seed}")
-    assert out["status"] == "success" and out["success"] is True, f"seed={seed}"
+    np.testing.assert_allclose(np.array(out["pose"]["rotation"]), scene["R"], atol=tol, err_msg=f"seed={seed}")
+    np.testing.assert_allclose(np.array(out["pose"]["translation"]), scene["t"], atol=tol * 10, err_msg=f"seed={seed}")
+    assert out["status"] == "success", f"seed={seed}"
 
 
 def test_pose_recovers_the_pose_of_a_random_scene(tmp_path, capsys, seed):
@@ -43,9 +43,8 @@ def test_pose_recovers_the_pose_of_a_random_scene(tmp_path, capsys, seed):
     assert main(["pose", write(tmp_path, doc)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert_recovers(out, scene, seed)
-    assert out["method"] == "trust-region"
-    assert len(out["dual_quaternion"]) == 8
-    assert [s["name"] for s in out["stages"]][-1] == "refinement"
+    assert out["details"]["method"] == "trust-region"
+    assert [s["name"] for s in out["details"]["stages"]][-1] == "refinement"
 
 
 def test_pose_writes_output_file_and_reads_stdin(tmp_path, capsys, monkeypatch, seed):
@@ -66,8 +65,8 @@ def test_pose_accepts_K_method_and_options(tmp_path, capsys, seed):
     # The command-line flags win over the file.
     assert main(["pose", write(tmp_path, doc), "--method", "rotation-then-translation", "--no-refine"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["method"] == "rotation-then-translation"
-    assert [s["name"] for s in out["stages"]] == ["rotation", "translation"]
+    assert out["details"]["method"] == "rotation-then-translation"
+    assert [s["name"] for s in out["details"]["stages"]] == ["rotation", "translation"]
     assert_recovers(out, scene, seed, tol=1e-5)
 
 
@@ -79,20 +78,28 @@ def test_certify_flag_and_option(tmp_path, capsys, seed):
     doc["points2d"] = (np.array(doc["points2d"]) + rng.normal(size=(30, 2))).tolist()
     assert main(["pose", write(tmp_path, doc)]) == 0
     plain = json.loads(capsys.readouterr().out)
-    assert plain["certified"] is False and plain["certificate"] == "not_requested" and plain["lower_bound"] is None
-    doc["options"] = {"certify": False, "certify_gap": 1e-3}
+    assert plain["certified"] is False and plain["certificate"] is None
+    assert plain["details"]["uncertified_reason"].startswith("not requested")
+    doc["options"] = {"certify": False}
     assert main(["pose", write(tmp_path, doc), "--certify"]) == 0  # the flag wins over the file
     out = json.loads(capsys.readouterr().out)
-    assert out["certificate"] == "sublevel_set", out["certificate"]
-    assert out["certified"] is True and out["gap"] <= 1e-3
-    assert out["lower_bound"] <= out["final_cost"] <= out["lower_bound"] / (1 - 1e-3)
+    cert = out["certificate"]
+    assert cert["kind"] == "sublevel_set", cert
+    assert out["certified"] is True and cert["certified"] is True and cert["relative_gap"] <= 1e-3
+    assert cert["lower_bound"] <= out["cost"] <= cert["lower_bound"] / (1 - 1e-3)
+    # The certificate's options from the file: one rotation cell is not enough, and the status says so.
+    doc["options"] = {"certify": {"max_relative_gap": 1e-3, "max_nodes": 1}}
+    assert main(["pose", write(tmp_path, doc)]) == 0
+    capped = json.loads(capsys.readouterr().out)
+    assert capped["status"] == "gap_not_closed" and capped["certified"] is False
+    assert "max_nodes = 1" in capped["details"]["uncertified_reason"]
 
 
 def test_linear_method_reports_estimated_intrinsics(tmp_path, capsys, seed):
     scene, doc = scene_document(seed, n_points=20, n_lines=0)
     assert main(["pose", write(tmp_path, doc), "--method", "linear", "--no-refine"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["estimated_camera"]["fx"] == pytest.approx(scene["camera"].fx, rel=1e-5), f"seed={seed}"
+    assert out["details"]["estimated_camera"]["fx"] == pytest.approx(scene["camera"].fx, rel=1e-5), f"seed={seed}"
 
 
 @pytest.mark.parametrize(

@@ -105,13 +105,19 @@ def test_the_command_table_lists_every_flag():
 
 
 def test_the_output_table_lists_every_key_of_to_dict():
-    cells = table_column(section(CLI_MD, "### Output"), "| key |")
+    output = section(CLI_MD, "### Output")
+    cells = table_column(output, "| key |")
     documented = {name for cell in cells for name in re.findall(r"`([a-z_A-Z0-9]+)`", cell)}
+    details = output[output.index("`details`:"):]
+    documented_details = {name for cell in table_column(details, "| key |")
+                          for name in re.findall(r"`([a-z_A-Z0-9]+)`", cell)}
     scene = pluecker.random_scene("general", 8, 2, seed=3)
-    for kwargs in ({}, {"ransac": True}, {"options": pluecker.PoseOptions(certify=True, sigma_px=1.0)}):
+    for options in (None, pluecker.PoseOptions(ransac=pluecker.RansacOptions()),
+                    pluecker.PoseOptions(certify=pluecker.CertifyOptions(), sigma_px=1.0)):
         result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
-                                        lines2d=scene["lines2d"], lines3d=scene["lines3d"], **kwargs)
-        assert documented == set(result.to_dict()), kwargs
+                                        lines2d=scene["lines2d"], lines3d=scene["lines3d"], options=options)
+        assert documented == set(result.to_dict()), options
+        assert documented_details == set(result.to_dict()["details"]), options
 
 
 @pytest.mark.parametrize("heading, cls", [("`options` holds fields of", pluecker.PoseOptions),
@@ -140,20 +146,23 @@ def test_the_example_output_is_a_real_run_with_every_key(tmp_path):
     shown = json.loads(re.search(r"`pluecker pose scene.json` prints \(a real run\):\n\n```json\n(.*?)```",
                                  CLI_MD, re.S).group(1))
     real = run_pose(tmp_path, pose_scene())
-    assert list(shown) == list(real)
-    for key in ("R", "t", "dual_quaternion", "angle", "rms_error_px"):
-        np.testing.assert_allclose(shown[key], real[key], rtol=1e-6, atol=1e-9, err_msg=key)
+    assert list(shown) == list(real) and list(shown["details"]) == list(real["details"])
+    for key in ("rotation", "translation"):
+        np.testing.assert_allclose(shown["pose"][key], real["pose"][key], rtol=1e-6, atol=1e-9, err_msg=key)
+    np.testing.assert_allclose(shown["cost"], real["cost"], rtol=1e-6)
+    np.testing.assert_allclose(shown["details"]["rms_error_px"], real["details"]["rms_error_px"], rtol=1e-6)
     assert shown["status"] == real["status"] == "success"
-    assert [s["name"] for s in shown["stages"]] == [s["name"] for s in real["stages"]]
+    assert [s["name"] for s in shown["details"]["stages"]] == [s["name"] for s in real["details"]["stages"]]
 
 
 def test_the_certify_sigma_excerpt_is_a_real_run(tmp_path):
     real = run_pose(tmp_path, pose_scene(), "--certify", "--sigma", "0.005")
     excerpt = re.search(r"--certify --sigma 0.005` the same pose comes back with \(excerpt\):\n\n```json\n(.*?)```",
                         CLI_MD, re.S).group(1)
-    assert real["certified"] and real["certificate"] == "sublevel_set"
-    assert f'"certificate_message": {json.dumps(real["certificate_message"])}' in excerpt
-    assert real["residual_test"]["consistent"] and f'"dof": {real["residual_test"]["dof"]}' in excerpt
+    assert real["certified"] and real["certificate"]["kind"] == "sublevel_set"
+    assert f'"nodes": {real["certificate"]["nodes"]}' in excerpt
+    test = real["details"]["residual_test"]
+    assert test["consistent"] and f'"dof": {test["dof"]}' in excerpt
 
 
 # --- reproduce ------------------------------------------------------------------------------------------

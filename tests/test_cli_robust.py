@@ -31,8 +31,8 @@ def test_robust_flag_finds_the_inliers_and_prints_masks_and_covariance(tmp_path,
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["status"] == "success", out["status"]
-    assert out["ransac"]["stop"] == "confidence" and out["ransac"]["iterations"] >= 1
-    assert out["covariance_source"] == "given" and out["sigma_px"] == 1.0
+    assert out["details"]["ransac"]["stop"] == "confidence" and out["details"]["ransac"]["iterations"] >= 1
+    assert out["details"]["covariance_source"] == "given" and out["details"]["sigma_px"] == 1.0
     assert np.array(out["covariance"]).shape == (6, 6)
 
     class Result:  # the masks as check_masks reads them
@@ -53,11 +53,9 @@ def test_options_in_the_file_equal_the_flags_and_flags_win(tmp_path, capsys, see
                                                                  "min_inliers": 8}), "b.json"),
                  "--robust", "--point-threshold", "3", "--line-threshold", "5", "--seed", "11", "--sigma", "2"]) == 0
     from_flags = json.loads(capsys.readouterr().out)
-    for key in ("R", "t", "inliers_points", "inliers_lines", "ransac", "covariance"):
-        if key == "ransac":
-            assert from_file[key]["iterations"] == from_flags[key]["iterations"]
-        else:
-            assert from_file[key] == from_flags[key], key
+    assert from_file["details"]["ransac"]["iterations"] == from_flags["details"]["ransac"]["iterations"]
+    for key in ("pose", "inliers_points", "inliers_lines", "covariance"):
+        assert from_file[key] == from_flags[key], key
     # A flag overrides the file: another sigma scales the covariance by (σ'/σ)².
     assert main(["pose", write(tmp_path, document(scene, data, ransac, options), "c.json"), "--sigma", "1"]) == 0
     scaled = json.loads(capsys.readouterr().out)
@@ -72,7 +70,7 @@ def test_all_outlier_input_warns_with_the_status(tmp_path, capsys, seed):
     assert main(["pose", write(tmp_path, doc), "--robust"]) == 0
     captured = capsys.readouterr()
     out = json.loads(captured.out)
-    assert out["status"] == "too_few_inliers" and out["ransac"]["stop"] == "iteration_cap"
+    assert out["status"] == "too_few_inliers" and out["details"]["ransac"]["stop"] == "iteration_cap"
     assert "too_few_inliers" in captured.err
 
 

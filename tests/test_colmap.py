@@ -297,8 +297,8 @@ def test_localize_an_image_of_the_model_with_its_camera_model():
     assert result.status == "success" and rigid is not None
     R, t = colmap.pose_from_rigid(image.cam_from_world())
     centre = -R.T @ t
-    assert np.linalg.norm(-result.R.T @ result.t - centre) < 0.05 * np.linalg.norm(centre)
-    np.testing.assert_allclose(np.array(rigid.rotation.matrix()), result.R, atol=1e-12)
+    assert np.linalg.norm(-result.pose.rotation.T @ result.pose.translation - centre) < 0.05 * np.linalg.norm(centre)
+    np.testing.assert_allclose(np.array(rigid.rotation.matrix()), result.pose.rotation, atol=1e-12)
 
 
 def test_an_observation_of_a_missing_point_is_a_named_error_never_another_point():

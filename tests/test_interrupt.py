@@ -132,11 +132,11 @@ def test_ctrl_c_stops_a_robust_pose_and_returns_the_best_so_far():
     # RANSAC polls before each sample: two samples are drawn before Ctrl-C.
     ctrl_c_at_poll(3)
     with pytest.raises(KeyboardInterrupt) as caught:
-        pluecker.estimate_pose(camera, u, X, ransac=pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12, time_budget=SAFETY))
+        pluecker.estimate_pose(camera, u, X, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12, time_budget=SAFETY)))
     partial = caught.value.partial
     assert isinstance(partial, pluecker.PoseResult)
-    assert partial.ransac.stop == "interrupted" and partial.status != "success"
-    assert partial.ransac.iterations >= 2
+    assert partial.details.ransac.stop == "interrupted" and partial.status != "success"
+    assert partial.details.ransac.iterations >= 2
 
 
 def assert_stopped_single(partial, started_nodes: int) -> None:
@@ -169,7 +169,7 @@ def test_ctrl_c_stops_a_single_quadric():
 
 def test_ctrl_c_stops_the_certificate_of_a_single_pose():
     scene = pluecker.random_scene("general", 30, 0, 5)
-    options = pluecker.PoseOptions(certify=True, certify_max_nodes=10**9)
+    options = pluecker.PoseOptions(certify=pluecker.CertifyOptions(max_nodes=10**9))
     plain = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
     assert plain.certified
     # The rotation search polls before each cell: Ctrl-C at its first.
@@ -178,9 +178,10 @@ def test_ctrl_c_stops_the_certificate_of_a_single_pose():
         pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
     partial = caught.value.partial
     assert isinstance(partial, pluecker.PoseResult) and not partial.certified
-    assert partial.certificate == "not_proved" and "interrupted" in partial.certificate_message
+    assert partial.status == "interrupted" and partial.certificate is None
+    assert "interrupted" in partial.details.uncertified_reason
     # The pose itself does not depend on the stop.
-    np.testing.assert_array_equal(partial.R, plain.R)
+    np.testing.assert_array_equal(partial.pose.rotation, plain.pose.rotation)
 
 
 def test_the_test_hook_checks_its_arguments():

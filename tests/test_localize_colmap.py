@@ -444,7 +444,7 @@ def test_localize_in_model_takes_a_camera_id_and_point3D_ids():
     model = dist.ColmapModel.from_reconstruction(rec)
     for args in ((model, image.camera_id), (rec, rec.cameras[image.camera_id])):
         other = colmap.localize_in_model(args[0], args[1], xy, ids)[1]
-        np.testing.assert_array_equal(other.R, result.R)
+        np.testing.assert_array_equal(other.pose.rotation, result.pose.rotation)
     with pytest.raises(colmap.MatchError, match=r"^camera: camera_id 42 is not a camera of the model$"):
         colmap.localize_in_model(rec, 42, xy, ids)
     ids[5] = 10**9

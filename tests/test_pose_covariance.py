@@ -40,7 +40,7 @@ def monte_carlo(kind: str, n_points: int, n_lines: int, scene_seed: int, outlier
         assert r.status == "success", f"seed={scene_seed} draw={draw}: {r}"
         errors.append(tangent_error(r, scene))
         covariances.append(r.covariance)
-        sigmas.append(r.sigma_px)
+        sigmas.append(r.details.sigma_px)
     return np.array(errors), np.array(covariances), np.array(sigmas)
 
 
@@ -77,7 +77,7 @@ def test_estimated_sigma_is_close_to_the_true_one(seed):
 
 def test_robust_covariance_uses_the_inliers(seed):
     s = seed % 1000
-    errors, cov, _ = monte_carlo("general", 60, 15, s, outlier_ratio=0.3, ransac=pluecker.RansacOptions(seed=s), options=pluecker.PoseOptions(sigma_px=1.0))
+    errors, cov, _ = monte_carlo("general", 60, 15, s, outlier_ratio=0.3, options=pluecker.PoseOptions(sigma_px=1.0, ransac=pluecker.RansacOptions(seed=s)))
     assert_matches(errors, cov, f"robust seed={s}")
 
 
@@ -86,10 +86,10 @@ def test_sources_and_the_cases_without_a_covariance(seed):
     args = (scene["camera"], scene["points2d"], scene["points3d"])
     # Three points: m = 6 residuals, nothing left to estimate σ from.
     r = pluecker.estimate_pose(*args)
-    assert (r.covariance, r.covariance_source, r.sigma_px) == (None, None, None)
+    assert (r.covariance, r.details.covariance_source, r.details.sigma_px) == (None, None, None)
     given = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(sigma_px=0.5))
-    assert given.covariance_source == "given" and given.sigma_px == 0.5 and given.covariance.shape == (6, 6)
+    assert given.details.covariance_source == "given" and given.details.sigma_px == 0.5 and given.covariance.shape == (6, 6)
     # Same as the standalone function at the returned pose.
-    expected = pluecker.pose_covariance(scene["camera"], given.R, given.t, scene["points2d"], scene["points3d"],
+    expected = pluecker.pose_covariance(scene["camera"], given.pose.rotation, given.pose.translation, scene["points2d"], scene["points3d"],
                                         sigma_px=0.5)
     np.testing.assert_allclose(given.covariance, expected, rtol=1e-6, atol=1e-12)

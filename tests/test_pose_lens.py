@@ -35,11 +35,11 @@ def observe(lens, R, t, X, sigma, rng):
 
 
 def nees(result, R, t) -> float:
-    dR = R @ result.R.T
+    dR = R @ result.pose.rotation.T
     angle = np.arccos(np.clip((np.trace(dR) - 1) / 2, -1, 1))
     axis = np.array([dR[2, 1] - dR[1, 2], dR[0, 2] - dR[2, 0], dR[1, 0] - dR[0, 1]])
     w = axis / (2 * np.sin(angle)) * angle if angle > 1e-12 else 0.5 * axis
-    e = np.concatenate([w, t - result.t])
+    e = np.concatenate([w, t - result.pose.translation])
     return float(e @ np.linalg.solve(result.covariance, e))
 
 
@@ -69,9 +69,9 @@ def test_reported_errors_are_distorted_pixels():
     u = observe(OPENCV, R, t, X, 0.5, rng)
     result = pluecker.estimate_pose(OPENCV, u, X)
     # The errors at the returned pose, recomputed through the lens.
-    predicted = OPENCV.project(X @ result.R.T + result.t)
+    predicted = OPENCV.project(X @ result.pose.rotation.T + result.pose.translation)
     # rms_error_px is the RMS over the residual coordinates (u and v).
-    assert np.sqrt(np.mean((predicted - u) ** 2)) == pytest.approx(result.rms_error_px, rel=1e-3)
+    assert np.sqrt(np.mean((predicted - u) ** 2)) == pytest.approx(result.details.rms_error_px, rel=1e-3)
 
 
 def test_robust_pose_through_a_lens():
@@ -80,7 +80,7 @@ def test_robust_pose_through_a_lens():
     u = observe(OPENCV, R, t, X, 1.0, rng)
     outliers = np.arange(0, 40, 3)
     u[outliers] += rng.choice([-1, 1], size=(len(outliers), 2)) * rng.uniform(40, 120, size=(len(outliers), 2))
-    result = pluecker.estimate_pose(OPENCV, u, X, ransac=pluecker.RansacOptions(seed=4))
+    result = pluecker.estimate_pose(OPENCV, u, X, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(seed=4)))
     assert result.status == "success"
     assert not result.inliers_points[outliers].any()
     assert result.inliers_points.sum() >= 25
@@ -98,9 +98,9 @@ def test_covariances_weight_the_pose_and_are_absolute():
         cov = sigma[:, None, None] ** 2 * np.eye(2)
         u = observe(pinhole, R, t, X, sigma[:, None], rng)
         result = pluecker.estimate_pose(camera, u, X, point_covariances=cov)
-        assert result.sigma_px == 1.0 and result.certified is False
-        weighted.append(np.linalg.norm(result.t - t))
-        plain.append(np.linalg.norm(pluecker.estimate_pose(camera, u, X).t - t))
+        assert result.details.sigma_px == 1.0 and result.certified is False
+        weighted.append(np.linalg.norm(result.pose.translation - t))
+        plain.append(np.linalg.norm(pluecker.estimate_pose(camera, u, X).pose.translation - t))
     assert np.sqrt(np.mean(np.square(weighted))) < 0.6 * np.sqrt(np.mean(np.square(plain)))
 
 
@@ -114,12 +114,12 @@ def test_line_covariances_per_segment_equal_per_endpoint():
     per_endpoint = np.repeat(per_segment[:, None], 2, axis=1)
     a = pluecker.estimate_pose(camera, u, X, s, L, line_covariances=per_segment)
     b = pluecker.estimate_pose(camera, u, X, s, L, line_covariances=per_endpoint)
-    np.testing.assert_array_equal(a.R, b.R)
+    np.testing.assert_array_equal(a.pose.rotation, b.pose.rotation)
     # Unit covariances: the same pose as without, now in standard deviations (sigma_px = 1).
     unit = pluecker.estimate_pose(camera, u, X, s, L, point_covariances=np.tile(np.eye(2), (6, 1, 1)))
     plain = pluecker.estimate_pose(camera, u, X, s, L)
-    np.testing.assert_allclose(unit.R, plain.R, atol=1e-9)
-    assert unit.sigma_px == 1.0 and plain.sigma_px != 1.0
+    np.testing.assert_allclose(unit.pose.rotation, plain.pose.rotation, atol=1e-9)
+    assert unit.details.sigma_px == 1.0 and plain.details.sigma_px != 1.0
 
 
 def test_bad_covariances_and_cameras_are_named_errors():
@@ -168,8 +168,8 @@ def test_command_line_takes_colmap_camera_models_and_covariances(tmp_path, capsy
     out = json.loads(capsys.readouterr().out)
     direct = pluecker.estimate_pose(FISHEYE, u, X, s, L, point_covariances=doc["point_covariances"],
                                     line_covariances=doc["line_covariances"])
-    np.testing.assert_allclose(out["R"], direct.R, atol=1e-12)
-    assert out["status"] == "success" and out["sigma_px"] == 1.0
+    np.testing.assert_allclose(out["pose"]["rotation"], direct.pose.rotation, atol=1e-12)
+    assert out["status"] == "success" and out["details"]["sigma_px"] == 1.0
     assert nees(direct, R, t) < 22.5
     doc["camera"] = {"model": "OPENCV", "params": [600.0, 600.0]}
     path.write_text(json.dumps(doc))

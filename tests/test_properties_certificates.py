@@ -27,7 +27,7 @@ from triangulation_scenes import many_start_point_minimum
 
 pytestmark = pytest.mark.filterwarnings("ignore::RuntimeWarning")
 
-GAP = 1e-3  # the default max_relative_gap / certify_gap
+GAP = 1e-3  # the default CertifyOptions.max_relative_gap
 D = 1000.0  # LINE_FRAME_DISTANCE: an observed line sits D px from the origin of its frame
 
 
@@ -245,17 +245,19 @@ def test_pose_certificates_are_sound(seed, n_points, n_lines, sigma, focal):
     lines3d = scene["lines3d"]
     lines2d = camera.project(lines3d.reshape(-1, 3) @ R.T + t).reshape(-1, 2, 2) + rng.normal(0, sigma, (n_lines, 2, 2))
     data = dict(points2d=points2d, points3d=scene["points3d"], lines2d=lines2d, lines3d=lines3d)
-    result = pluecker.estimate_pose(camera, **data, options=pluecker.PoseOptions(certify=True))
+    result = pluecker.estimate_pose(camera, **data, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
     event(f"certified={result.certified}")
     assume(result.certified)
     # ½ Σ r² recomputed in numpy (``pose_oracle``: the residuals written again, not the library's),
-    # checked against the reported cost; the bound is the raw, unclamped one and the gap is recomputed.
+    # checked against the reported cost (Σ r², halved); the bound is the raw, unclamped one (halved)
+    # and the gap is recomputed.
     K = pose_oracle.K_of(camera)
     args = (points2d, scene["points3d"], lines2d, lines3d)
-    cost = pose_oracle.cost(K, result.R, result.t, *args)
-    assert np.isclose(cost, result.final_cost, rtol=1e-6, atol=1e-12), result
+    cost = pose_oracle.cost(K, result.pose.rotation, result.pose.translation, *args)
+    assert np.isclose(cost, result.cost / 2, rtol=1e-6, atol=1e-12), result
+    assert result.status == "success" and result.certificate.kind == "sublevel_set"
     eps = 1e-9
-    raw = result.raw_lower_bound
+    raw = result.certificate.raw_lower_bound / 2
     assert (cost - raw) / max(cost, 1e-12) <= GAP + 1e-12, result
     # The oracle's own local minimum from the truth (Levenberg-Marquardt), when every point is in front.
     R1, t1, refined = pose_oracle.minimise(K, R, t, args)

@@ -149,17 +149,20 @@ def pose_problems(draw):
     return camera, arrays, False
 
 
-POSE_FIELDS = ["penalty", "trust_region_max_iterations", "refinement_max_iterations", "sigma_px", "certify_gap",
+POSE_FIELDS = ["penalty", "trust_region_max_iterations", "refinement_max_iterations", "sigma_px",
                "ambiguity_threshold"]
+CERTIFY_FIELDS = ["max_relative_gap", "max_nodes"]
 RANSAC_FIELDS = ["seed", "min_inliers", "point_threshold", "confidence", "time_budget", "max_iterations"]
-INTEGER_FIELDS = {"trust_region_max_iterations", "refinement_max_iterations", "seed", "min_inliers", "max_iterations"}
+INTEGER_FIELDS = {"trust_region_max_iterations", "refinement_max_iterations", "seed", "min_inliers", "max_iterations",
+                  "max_nodes"}
 
 
 @given(pose_problems(), st.sampled_from(pluecker.METHODS), st.booleans(), st.booleans(),
-       st.dictionaries(st.sampled_from(POSE_FIELDS + RANSAC_FIELDS), st.one_of(reals(), integers()), max_size=2))
+       st.dictionaries(st.sampled_from(POSE_FIELDS + RANSAC_FIELDS + CERTIFY_FIELDS), st.one_of(reals(), integers()),
+                       max_size=2))
 def test_estimate_pose(problem, method, robust, certify, fields):
     camera, arrays, well_typed = problem
-    for key in ("trust_region_max_iterations", "refinement_max_iterations", "max_iterations"):
+    for key in ("trust_region_max_iterations", "refinement_max_iterations", "max_iterations", "max_nodes"):
         if isinstance(fields.get(key), int) and fields[key] > 10**4:
             fields[key] = 10**4  # a valid but huge cap only costs time
     if isinstance(fields.get("time_budget"), float) and fields["time_budget"] > 1.0:
@@ -168,9 +171,14 @@ def test_estimate_pose(problem, method, robust, certify, fields):
     typed = well_typed and not any(k in INTEGER_FIELDS and isinstance(v, float) for k, v in fields.items())
 
     def run():
-        options = pluecker.PoseOptions(certify=certify, **{k: v for k, v in fields.items() if k in POSE_FIELDS})
+        certify_options = pluecker.CertifyOptions(**{k: v for k, v in fields.items() if k in CERTIFY_FIELDS})
+        options = pluecker.PoseOptions(certify=certify_options if certify else None,
+                                       **{k: v for k, v in fields.items() if k in POSE_FIELDS})
         ransac = pluecker.RansacOptions(**{k: v for k, v in fields.items() if k in RANSAC_FIELDS})
-        return pluecker.estimate_pose(camera, **arrays, method=method, options=options, ransac=ransac if robust else None)
+        options.ransac = ransac if robust else None
+        if method is not None:
+            options.method = method
+        return pluecker.estimate_pose(camera, **arrays, options=options)
 
     result = outcome(run, type_error_ok=not typed)
     if isinstance(result, pluecker.PoseResult):
@@ -237,7 +245,7 @@ def test_triangulate_point(problem, method, gap, gamma, nodes):
     r = outcome(lambda: pluecker.triangulate_point(P, x, cov, method, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_reprojection_error=gamma, max_nodes=nodes)))
     if isinstance(r, pluecker.PointTriangulation):
         check_report(r, gap_of(gap))
-        if r.success:
+        if (r.status == "success"):
             assert np.all(np.isfinite(r.X))
 
 
@@ -276,7 +284,7 @@ def test_triangulate_line(problem, method, gap, nodes):
     r = outcome(lambda: pluecker.triangulate_line(P, lines, cov, method, sigma=sigma, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_nodes=nodes)))
     if isinstance(r, pluecker.LineTriangulation):
         check_report(r, gap_of(gap))
-        if r.success:
+        if (r.status == "success"):
             assert np.all(np.isfinite(r.plucker)) and np.isclose(np.linalg.norm(r.direction), 1.0)
 
 
@@ -319,7 +327,7 @@ def test_triangulate_quadric(problem, method, gap, nodes):
     r = outcome(lambda: pluecker.triangulate_quadric(P, conics, cov, method, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_nodes=nodes)))
     if isinstance(r, pluecker.QuadricTriangulation):
         check_report(r, gap_of(gap))
-        if r.success:
+        if (r.status == "success"):
             assert np.all(np.isfinite(r.centre)) and np.all(np.isfinite(r.Q))
 
 

@@ -28,12 +28,12 @@ def test_data_from_points_behind_the_camera_is_not_a_success(n):
     for noise in (0.0, 0.5):
         u = project(X) + rng.normal(0, noise, (n, 2))
         r = pluecker.estimate_pose(CAMERA, u, X)
-        assert r.status == "behind_camera", (n, noise, r.status, r.rms_error_px)
-        assert r.behind_camera_cost is not None and r.behind_camera_cost < r.final_cost
+        assert r.status == "behind_camera", (n, noise, r.status, r.details.rms_error_px)
+        assert r.details.behind_camera_cost is not None and r.details.behind_camera_cost < r.cost  # both Σ r²
         # The pose itself keeps the points in front: it is the best in front, reported as such.
-        assert ((X @ r.R.T + r.t)[:, 2] > 0).all()
+        assert ((X @ r.pose.rotation.T + r.pose.translation)[:, 2] > 0).all()
         if noise == 0.0:
-            assert r.behind_camera_cost < 1e-12
+            assert r.details.behind_camera_cost < 1e-12
 
 
 def test_ordinary_data_never_looks_behind_the_camera():
@@ -42,7 +42,7 @@ def test_ordinary_data_never_looks_behind_the_camera():
         rng = np.random.default_rng(seed)
         u = scene["points2d"] + rng.normal(0, 2.0, scene["points2d"].shape)  # residuals above 1 px
         r = pluecker.estimate_pose(scene["camera"], u, scene["points3d"], scene["lines2d"], scene["lines3d"])
-        assert r.status == "success" and r.behind_camera_cost is None, (seed, r.status)
+        assert r.status == "success" and r.details.behind_camera_cost is None, (seed, r.status)
 
 
 @pytest.mark.parametrize("focal", [250.0, 800.0, 4000.0, 15000.0])
@@ -58,7 +58,7 @@ def test_noisy_data_in_front_is_not_called_behind_at_any_field_of_view(focal, n)
         X = np.c_[rng.uniform(-half, half, (n, 2)), rng.uniform(-0.3, 0.3, n) * depth] + [0, 0, depth]
         u = X[:, :2] / X[:, 2:] * focal + [320, 240] + rng.normal(0, 2.0, (n, 2))
         r = pluecker.estimate_pose(camera, u, X)
-        assert r.behind_camera_cost is None and r.status != "behind_camera", (focal, n, trial, r.status)
+        assert r.details.behind_camera_cost is None and r.status != "behind_camera", (focal, n, trial, r.status)
 
 
 def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
@@ -67,7 +67,7 @@ def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
     accepted = 0
     for trial in range(50):
         u = project(X) + rng.normal(0, 1.0, (200, 2))
-        test = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0)).residual_test
+        test = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0)).details.residual_test
         assert test["dof"] == 2 * 200 - 6
         accepted += test["consistent"]
     # A level-1e-3 test rejects a correct model once in a thousand: 50 of 50 (seeded) here.
@@ -75,13 +75,13 @@ def test_pose_chi_square_accepts_the_true_noise_and_rejects_distortion():
     # Radial distortion left in the pixels (k1 = -0.1, about 7 px at the corners): inconsistent.
     u = project(X, k1=-0.1) + rng.normal(0, 1.0, (200, 2))
     r = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0))
-    assert r.residual_test["consistent"] is False and r.residual_test["p_value"] < 1e-3
+    assert r.details.residual_test["consistent"] is False and r.details.residual_test["p_value"] < 1e-3
     # The same through the robust estimator: its inliers are still not explained by 1 px.
-    r = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0), ransac=True)
-    assert r.residual_test["consistent"] is False
+    r = pluecker.estimate_pose(CAMERA, u, X, options=pluecker.PoseOptions(sigma_px=1.0, ransac=pluecker.RansacOptions()))
+    assert r.details.residual_test["consistent"] is False
     # Without sigma_px there is no stated noise, hence no test.
-    assert pluecker.estimate_pose(CAMERA, u, X).residual_test is None
-    assert r.to_dict()["residual_test"] == r.residual_test
+    assert pluecker.estimate_pose(CAMERA, u, X).details.residual_test is None
+    assert r.to_dict()["details"]["residual_test"] == r.details.residual_test
 
 
 def test_triangulation_chi_square_flags_an_outlier_view_single_and_batch():

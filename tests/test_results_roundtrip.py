@@ -41,16 +41,17 @@ def results():
     scene = pluecker.random_scene("general", 12, 3, seed=4)
     cam = scene["camera"]
     out = []
-    ok = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], scene["lines2d"], scene["lines3d"], options=pluecker.PoseOptions(certify=True))
-    out += [("pose", ok), ("pose-stage", ok.stages[-1])]
-    robust = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], ransac=pluecker.RansacOptions(min_inliers=6))
-    out += [("pose-robust", robust), ("pose-ransac", robust.ransac)]
+    ok = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], scene["lines2d"], scene["lines3d"], options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
+    out += [("pose", ok), ("pose-stage", ok.details.stages[-1]), ("pose-pose", ok.pose), ("pose-details", ok.details),
+            ("pose-certificate", ok.certificate)]
+    robust = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(min_inliers=6)))
+    out += [("pose-robust", robust), ("pose-ransac", robust.details.ransac)]
     lines2d = scene["lines2d"].copy()
     lines2d[0, 1] = lines2d[0, 0] + 1e300  # numerical failure: rms_error_px is inf
     failed = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], lines2d, scene["lines3d"])
     assert failed.status == "numerical_failure"
     out.append(("pose-failed", failed))
-    linear = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], method="linear")
+    linear = pluecker.estimate_pose(cam, scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(method="linear"))
     out.append(("pose-linear", linear))
     X = np.array([0.2, -0.1, 5.0])
     out.append(("point", pluecker.triangulate_point(P, project(X))))
@@ -156,12 +157,12 @@ def test_to_dict_is_strict_json(name, result):
 
 def test_failed_results_have_null_where_they_had_nan():
     failed = dict(RESULTS)["pose-failed"]
-    assert np.isinf(failed.rms_error_px) and failed.to_dict()["rms_error_px"] is None
+    assert np.isinf(failed.details.rms_error_px) and failed.to_dict()["details"]["rms_error_px"] is None
     at_infinity = dict(RESULTS)["point-at-infinity"]
     d = at_infinity.to_dict()
     assert d["status"] == "at_infinity" and d["X"] == [None, None, None] and d["cost"] is None
     pose = dict(RESULTS)["pose-linear"]
-    assert np.isnan(pose.lower_bound) and pose.to_dict()["lower_bound"] is None
+    assert pose.certificate is None and pose.to_dict()["certificate"] is None
 
 
 @pytest.mark.parametrize("protocol", [2, pickle.HIGHEST_PROTOCOL])

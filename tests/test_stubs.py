@@ -77,10 +77,11 @@ def test_no_options_means_the_default_options():
     data = (scene["camera"], scene["points2d"] + 0.3, scene["points3d"], scene["lines2d"], scene["lines3d"])
     a = pluecker.estimate_pose(*data)
     b = pluecker.estimate_pose(*data, options=pluecker.PoseOptions())
-    assert np.array_equal(a.R, b.R) and np.array_equal(a.t, b.t) and a.iterations == b.iterations
-    robust = pluecker.estimate_pose(*data, ransac=True)
-    explicit = pluecker.estimate_pose(*data, ransac=pluecker.RansacOptions())
-    assert np.array_equal(robust.R, explicit.R) and robust.ransac.iterations == explicit.ransac.iterations
+    assert np.array_equal(a.pose.rotation, b.pose.rotation) and np.array_equal(a.pose.translation, b.pose.translation) and a.details.iterations == b.details.iterations
+    robust = pluecker.estimate_pose(*data, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions()))
+    explicit = pluecker.estimate_pose(*data, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions()))
+    assert np.array_equal(robust.pose.rotation, explicit.pose.rotation)
+    assert robust.details.ransac.iterations == explicit.details.ransac.iterations
     K = scene["camera"].K
     P = np.stack([K @ np.hstack([np.eye(3), [[-b], [0.0], [0.0]]]) for b in (0.0, 0.5)])
     x = np.array([[320.5, 240.2], [241.0, 240.4]])
@@ -89,13 +90,14 @@ def test_no_options_means_the_default_options():
     assert np.array_equal(p.X, q.X) and p.method == q.method == pluecker.TriangulationOptions().method
 
 
-def test_the_method_keyword_wins_over_the_options():
+def test_the_method_is_set_in_the_options_only():
     scene = pluecker.random_scene("general", 12, 0, seed=6)
-    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], method="newton",
+    r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
                                options=pluecker.PoseOptions(method="levenberg-marquardt"))
-    assert r.method == "newton"
-    assert pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
-                                  options=pluecker.PoseOptions(method="levenberg-marquardt")).method == "levenberg-marquardt"
+    assert r.details.method == "levenberg-marquardt"
+    for keyword in ({"method": "newton"}, {"ransac": pluecker.RansacOptions()}):
+        with pytest.raises(TypeError):
+            pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], **keyword)
 
 
 def test_camera_P_bridges_pose_and_triangulation():

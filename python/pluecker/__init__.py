@@ -22,7 +22,7 @@ Example::
     import pluecker
     scene = pluecker.random_scene("general", n_points=20, seed=1)
     result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"])
-    assert result.success
+    assert (result.status == "success")
 
     import numpy as np
     K = scene["camera"].K
@@ -55,6 +55,8 @@ from ._core import (
     LineTriangulations,
     NonFiniteError,
     PlueckerError,
+    Pose,
+    PoseDetails,
     PointTriangulation,
     PointTriangulations,
     PoseOptions,
@@ -116,6 +118,8 @@ __all__ = [
     "LineTriangulations",
     "NonFiniteError",
     "PlueckerError",
+    "Pose",
+    "PoseDetails",
     "PoseResult",
     "TriangulationOptions",
     "RansacReport",

@@ -7,7 +7,7 @@ exact within one version. Options are mutable, ``==``, picklable, checked as set
 the Rust ``Default``. A bool is not a number; counts and seeds take integers up to ``2**64 - 1``.
 """
 
-from typing import Any, Callable, ClassVar, Dict, List, Optional, Tuple, TypedDict, Union, final
+from typing import Any, Callable, ClassVar, Dict, Iterator, List, Optional, Tuple, TypedDict, Union, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -131,12 +131,11 @@ class LensCamera:
 
 @final
 class PoseOptions:
-    """Options of :func:`estimate_pose` (the core's ``PoseOptions``). The ``method=`` keyword of
-    :func:`estimate_pose` wins over :attr:`method`. ``certify`` and ``certify_*`` are the core's
-    ``certify: Option<CertificateOptions>``; the robust estimator is the separate ``ransac=``."""
+    """Options of :func:`estimate_pose` (the core's ``PoseOptions``, same fields and nesting). ``ransac``
+    and ``certify`` are held by reference: ``options.certify.max_nodes = 10`` takes effect."""
 
     # fields of PoseOptions (generated: python -m pluecker._stubgen)
-    def __new__(cls, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, certify: bool = False, certify_gap: float = 0.001, certify_max_nodes: int = 20000) -> "PoseOptions": ...
+    def __new__(cls, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, ransac: Optional[RansacOptions] = None, certify: Optional[CertifyOptions] = None) -> "PoseOptions": ...
     __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """Estimator, one of `METHODS`."""
@@ -160,12 +159,14 @@ class PoseOptions:
     """Pixel noise σ of every image point and endpoint, for the covariance; `None`: estimated from the residuals."""
     ambiguity_threshold: float
     """Status `ambiguous` when another minimum is within `ambiguity_threshold · σ²` of the answer's cost."""
-    certify: bool
-    """Run the global-optimality certificate (branch and bound over rotations)."""
-    certify_gap: float
-    """Relative gap at or below which the certificate holds."""
-    certify_max_nodes: int
-    """Cap on the rotation cells the certificate examines."""
+    ransac: Optional[RansacOptions]
+    """Robust estimation (LO-RANSAC over points and lines) with these options instead of `method`'s estimator;
+    `None`: every correspondence is an inlier. Held by reference.
+    """
+    certify: Optional[CertifyOptions]
+    """The global-optimality certificate (the sublevel-set test) with these options; `None`: not requested.
+    Held by reference. A requested certificate that does not hold gives status `gap_not_closed`.
+    """
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
@@ -254,12 +255,12 @@ class PoseStage:
     """Name of the stage."""
     cost_kind: str
     """What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
-    (½Σ squared pixel residuals) or `msac` (stage `ransac`: ½Σ min(e², τ²), px²).
+    (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
     """
-    R: NDArray[np.float64]
-    """Rotation at the end of the stage, `x_cam = R X_world + t`."""
-    t: NDArray[np.float64]
-    """Translation at the end of the stage, world units."""
+    rotation: NDArray[np.float64]
+    """Rotation `R` at the end of the stage, `x_cam = R X_world + t`."""
+    translation: NDArray[np.float64]
+    """Translation `t` at the end of the stage, world units."""
     iterations: int
     """Iterations of the stage."""
     initial_cost: float
@@ -277,7 +278,7 @@ class PoseStage:
 
 @final
 class RansacReport:
-    """What the robust loop did (:attr:`PoseResult.ransac` of a robust estimate)."""
+    """What the robust loop did (:attr:`PoseDetails.ransac` of a robust estimate)."""
 
     # fields of RansacReport (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
@@ -311,84 +312,103 @@ class RansacReport:
     def to_dict(self) -> Dict[str, Any]: ...
 
 @final
-class PoseResult:
-    """The answer of :func:`estimate_pose`: the pose, how it was found, whether it can be used."""
+class Pose:
+    """A camera pose ``x_cam = R @ X_world + t`` (the core's ``Pose``): ``rotation`` and ``translation``,
+    the rotation's other forms as methods. Unpacks as ``R, t = pose``; accepted wherever a pose ``(R, t)``
+    is (``PoseOptions.initial_pose``)."""
 
-    # fields of PoseResult (generated: python -m pluecker._stubgen)
+    # fields of Pose (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    R: NDArray[np.float64]
-    """Rotation, `x_cam = R X_world + t`."""
-    t: NDArray[np.float64]
-    """Translation, world units."""
-    dual_quaternion: NDArray[np.float64]
-    """The same motion as a unit dual quaternion `(r0, rx, ry, rz, s0, sx, sy, sz)` (eqs. 6-7), `r0 ≥ 0`."""
-    axis: NDArray[np.float64]
-    """Unit rotation axis."""
-    angle: float
-    """Rotation angle about `axis`, radians in [0, π]."""
+    rotation: NDArray[np.float64]
+    """`R`, world to camera (3x3 rotation matrix)."""
+    translation: NDArray[np.float64]
+    """`t`, world units: the world origin in the camera frame."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+    def dual_quaternion(self) -> NDArray[np.float64]:
+        """(8,) unit dual quaternion ``(r0, rx, ry, rz, s0, sx, sy, sz)`` (eqs. 6-7), ``r0 >= 0``."""
+    def axis_angle(self) -> Tuple[NDArray[np.float64], float]:
+        """``(axis, angle)``: unit axis (3,) and angle in [0, π], radians."""
+    def rotation_vector(self) -> NDArray[np.float64]:
+        """(3,) rotation vector ``angle * axis``, radians."""
+    def centre(self) -> NDArray[np.float64]:
+        """(3,) optical centre in the world frame, ``-R.T @ t``."""
+    def __iter__(self) -> Iterator[NDArray[np.float64]]: ...
+    def __len__(self) -> int: ...
+
+@final
+class PoseDetails:
+    """How a :class:`PoseResult` was found (the core's ``PoseDetails``); costs are ``Σ r²``, px²."""
+
+    # fields of PoseDetails (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """The estimator that ran."""
     iterations: int
     """Iterations summed over the stages."""
-    final_cost: float
-    """Cost of the last stage at the returned pose."""
     termination: str
     """Why the last iterative stage stopped."""
-    status: str
-    """`success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `behind_camera`
-    (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
-    (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
-    """
-    success: bool
-    """`status == 'success'`."""
-    rms_error_px: float
-    """Root-mean-square reprojection error over all correspondences, pixels."""
-    time_seconds: float
-    """Total wall time, seconds."""
     stages: List[PoseStage]
     """Every stage in order; the last one gave the returned pose."""
+    rms_error_px: float
+    """Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)`."""
+    time_seconds: float
+    """Total wall time, seconds."""
     estimated_camera: Optional[Camera]
     """Intrinsics estimated by method `'linear'` (`None` for the others)."""
-    inliers_points: NDArray[np.bool_]
-    """(N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true."""
-    inliers_lines: NDArray[np.bool_]
-    """(M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true."""
     ransac: Optional[RansacReport]
-    """What the robust loop did; `None` unless estimated with `ransac=`."""
-    covariance: Optional[NDArray[np.float64]]
-    """6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
-    frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
-    """
+    """What the robust loop did; `None` unless `options.ransac` is set."""
     covariance_source: Optional[str]
     """Where the σ of the covariance came from: `given` or `estimated`."""
     sigma_px: Optional[float]
     """The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals."""
-    certified: bool
-    """Proved global minimum of `½ Σ r²` within `certify_gap`, over every pose keeping the points in front
-    (`options.certify` only).
+    second_best: Optional[Tuple[Pose, float]]
+    """The cheapest other local minimum with every point in front and its cost `Σ r²` (px²); `None` if none was
+    found. Within `ambiguity_threshold · σ²` of `cost`, the status is `ambiguous`.
     """
-    lower_bound: float
-    """The proved lower bound on `½ Σ r²` (px²); NaN when there is none."""
-    raw_lower_bound: float
-    """The bound as proved, before the clamp to the cost that gives `lower_bound`; NaN when there is none."""
-    gap: float
-    """`(cost − lower_bound) / cost`; NaN when there is no bound."""
-    certificate: str
-    """`sublevel_set` (proved), `not_requested` or `not_proved`."""
-    certificate_message: str
-    """The certificate's explanation in words."""
-    ambiguous: bool
-    """`status == 'ambiguous'`: another local minimum explains the data nearly as well."""
-    second_best_R: Optional[NDArray[np.float64]]
-    """Rotation of the cheapest other local minimum with every point in front; `None` if none was found."""
-    second_best_t: Optional[NDArray[np.float64]]
-    """Translation of that minimum."""
-    second_best_cost: Optional[float]
-    """Its cost `½ Σ r²`, px²."""
     behind_camera_cost: Optional[float]
-    """Cost of a pose with every point behind the camera that fits far better (status `behind_camera`)."""
+    """Cost `Σ r²` of a pose with every point behind the camera that fits far better (status `behind_camera`)."""
     residual_test: Optional[_ResidualTest]
     """χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`."""
+    uncertified_reason: Optional[str]
+    """Why the pose is not certified, in words; `None` when it is."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+@final
+class PoseResult:
+    """The answer of :func:`estimate_pose` (the core's ``PoseResult``): the pose, whether it can be used,
+    its cost ``Σ r²``, the correspondences used, its covariance and certificate; how it was found is in
+    :attr:`details`."""
+
+    # fields of PoseResult (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
+    pose: Pose
+    """The pose `x_cam = R X_world + t` (NaN if the solver failed); `R, t = result.pose`."""
+    status: str
+    """`success`, or why not: `gap_not_closed` (a requested certificate does not hold), `not_converged` (a
+    stage hit its cap), `numerical_failure`, `behind_camera` (points behind at the pose, or the data fit far
+    better behind: `details.behind_camera_cost`), `ambiguous` (another minimum nearly as good:
+    `details.second_best`); robust: `too_few_inliers`, `no_hypothesis`; `interrupted`, `time_budget`.
+    """
+    cost: float
+    """Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels."""
+    inliers_points: NDArray[np.bool_]
+    """(N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true."""
+    inliers_lines: NDArray[np.bool_]
+    """(M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true."""
+    covariance: Optional[NDArray[np.float64]]
+    """6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
+    frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
+    """
+    certificate: Optional[Certificate]
+    """Proved lower bound on `cost` over every pose keeping the points in front (`options.certify`); `None` when
+    no bound was computed (`details.uncertified_reason` says why).
+    """
+    details: PoseDetails
+    """How the pose was found: method, stages, timings, noise, runner-up."""
+    certified: bool
+    """`certificate is not None and certificate.certified`."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 
@@ -398,10 +418,8 @@ def estimate_pose(
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
     lines3d: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[PoseOptions] = None,
-    ransac: "RansacOptions | bool | None" = None,
     point_covariances: Optional[ArrayLike] = None,
     line_covariances: Optional[ArrayLike] = None,
 ) -> PoseResult:
@@ -415,16 +433,16 @@ def estimate_pose(
     the curved image of the line); no certificate through a lens (pinhole cameras only); with RANSAC a
     pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
-    in standard deviations (``sigma_px`` defaults to 1). With either, ``certify`` is refused: ``certified``
-    false, ``certificate_message`` says why.
+    in standard deviations (``sigma_px`` defaults to 1). With either, a requested certificate is not
+    available: ``certificate`` is ``None``, the status ``gap_not_closed``, ``details.uncertified_reason`` says why.
 
-    ``method``: one of :data:`METHODS` (``None``: ``options.method``): ``"trust-region"`` (eqs. 13 +
-    22, Hebden's step, section 4.1), ``"rotation-then-translation"`` (eq. 14 then 15),
-    ``"trust-region-exact"`` (section 4.2), ``"newton"``, ``"levenberg-marquardt"``, or ``"linear"``
-    (Faugeras-Toscani from >= 6 non-coplanar points, which also estimates the intrinsics).
-    ``options``: :class:`PoseOptions` (``None``: the defaults). ``ransac``: :class:`RansacOptions` or
-    ``True`` (its defaults) estimates robustly (minimal solvers P3P/P2P1L/P1P2L/P3L, MSAC, local
-    optimisation, then the refinement on the inliers; ``method`` is then not used).
+    ``options``: :class:`PoseOptions` (``None``: the defaults). ``options.method``, one of :data:`METHODS`:
+    ``"trust-region"`` (eqs. 13 + 22, Hebden's step, section 4.1), ``"rotation-then-translation"``
+    (eq. 14 then 15), ``"trust-region-exact"`` (section 4.2), ``"newton"``, ``"levenberg-marquardt"``, or
+    ``"linear"`` (Faugeras-Toscani from >= 6 non-coplanar points, which also estimates the intrinsics).
+    ``options.ransac``, a :class:`RansacOptions`, estimates robustly (minimal solvers P3P/P2P1L/P1P2L/P3L,
+    MSAC, local optimisation, then the refinement on the inliers; ``method`` is then not used).
+    ``options.certify``, a :class:`CertifyOptions`, asks for the certificate of global optimality.
 
     With ``options.refine`` (the default) the answer is the cheapest local minimum of the reprojection
     error reached from the algebraic answer and from minimal-solver poses. A solver that runs but fails

@@ -191,7 +191,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="penalty λ on the unit and orthogonality constraints (default 50)")
     pose.add_argument("--robust", action="store_true", default=None,
                       help="robust to outliers: LO-RANSAC over points and lines, then the refinement on the "
-                      "inliers (reported by the output's inliers_points, inliers_lines and ransac keys)")
+                      "inliers (reported by the output's inliers_points, inliers_lines and details.ransac keys)")
     pose.add_argument("--point-threshold", type=_positive_float, metavar="PX",
                       help="inlier threshold of a point, reprojection distance in pixels (default 4)")
     pose.add_argument("--line-threshold", type=_positive_float, metavar="PX",
@@ -205,7 +205,8 @@ def build_parser() -> argparse.ArgumentParser:
                       "from the residuals, no test)")
     pose.add_argument("--certify", action="store_true", default=None,
                       help="prove the answer is the global minimum of the reprojection error (the output's "
-                      "certified, lower_bound, gap and certificate; costs extra time, see bench/README.md)")
+                      "certificate; status gap_not_closed when it does not hold; costs extra time, see "
+                      "bench/README.md)")
     pose.set_defaults(handler=_pose)
 
     tri = commands.add_parser(
@@ -464,17 +465,24 @@ def _options_class(cls: type, key: str, fields: dict[str, Any]) -> Any:
 
 
 def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
-    """The keywords of ``estimate_pose``: ``method``, ``options`` (``PoseOptions`` from the file's
-    ``"options"`` object and the flags) and ``ransac`` (``RansacOptions`` from the file's ``"ransac"``,
-    ``true`` or an object, and the flags)."""
+    """The keywords of ``estimate_pose``: ``options``, the ``PoseOptions`` from the file's ``"options"``
+    object, its top-level ``"method"`` and ``"ransac"`` (``true`` or an object of ``RansacOptions``
+    fields), and the flags. ``"certify"`` in ``"options"`` is ``true``/``false`` or an object of
+    ``CertifyOptions`` fields."""
     fields = _object(doc, "options")
     if "initial_pose" in fields:
         fields["initial_pose"] = _initial_pose(fields["initial_pose"])
     for flag, field in POSE_FLAGS.items():
         if getattr(args, flag) is not None:
             fields[field] = getattr(args, flag)
-    options = _options_class(pluecker.PoseOptions, "options", fields)
-    robust = doc.get("ransac")
+    certify = fields.get("certify")
+    if not isinstance(certify, (bool, dict, type(None))):
+        raise InputError(f"'options.certify' must be true, false or a JSON object, got {json.dumps(certify)[:80]}")
+    if isinstance(certify, bool):
+        fields["certify"] = {} if certify else None
+    if isinstance(fields.get("certify"), dict):
+        fields["certify"] = _options_class(pluecker.CertifyOptions, "options.certify", fields["certify"])
+    robust = doc.get("ransac", fields.pop("ransac", None))
     if not isinstance(robust, (bool, dict, type(None))):
         raise InputError(f"'ransac' must be true, false or a JSON object, got {json.dumps(robust)[:80]}")
     ransac_fields = robust if isinstance(robust, dict) else {}
@@ -484,11 +492,14 @@ def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
             robust = robust or True
     if args.robust:
         robust = robust or True
-    ransac = _options_class(pluecker.RansacOptions, "ransac", ransac_fields) if robust else None
-    method = args.method or doc.get("method")
+    if robust:
+        fields["ransac"] = _options_class(pluecker.RansacOptions, "ransac", ransac_fields)
+    method = args.method or doc.get("method") or fields.get("method")
     if method is not None and method not in METHODS:
         raise InputError(f"unknown method {json.dumps(method)}; expected one of {', '.join(METHODS)}")
-    return {"method": method, "options": options, "ransac": ransac}
+    if method is not None:
+        fields["method"] = method
+    return {"options": _options_class(pluecker.PoseOptions, "options", fields)}
 
 
 def _pose(args: argparse.Namespace) -> int:
@@ -509,7 +520,7 @@ def _pose(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(text)
     if result.status != "success":
-        print(f"pluecker pose: warning: status {result.status} (termination {result.termination}); "
+        print(f"pluecker pose: warning: status {result.status} (termination {result.details.termination}); "
               "the pose may be unusable", file=sys.stderr)
     return 0
 

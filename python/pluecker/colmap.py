@@ -17,6 +17,8 @@ pycolmap objects import it when called and say how to install it when it is miss
 
 from __future__ import annotations
 
+import copy
+
 import math
 from typing import Any, NamedTuple
 
@@ -484,17 +486,33 @@ def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = F
     return sorted(out / name for name, stamp in after.items() if before.get(name) != stamp)
 
 
+def robust_options(options: Any = None, ransac: Any = True) -> Any:
+    """A copy of ``options`` (a :class:`pluecker.PoseOptions`, default ``PoseOptions()``) with its
+    ``ransac`` set from ``ransac``: ``True`` keeps ``options.ransac`` or takes the
+    :class:`pluecker.RansacOptions` defaults, a ``RansacOptions`` is used as it is, ``False`` or ``None``
+    turn robust estimation off."""
+    opts = copy.copy(options) if options is not None else _core.PoseOptions()
+    if ransac is True:
+        opts.ransac = opts.ransac if opts.ransac is not None else _core.RansacOptions()
+    elif ransac is False or ransac is None:
+        opts.ransac = None
+    else:
+        opts.ransac = ransac
+    return opts
+
+
 def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: Any = None, lines3D: Any = None,
              *, ransac: Any = True, options: Any = None, point_covariances: Any = None,
              line_covariances: Any = None) -> tuple[Any, Any]:
     """Localises one image from its 2D-3D matches (points and/or segments, distorted pixels of
     ``camera``, a ``pycolmap.Camera`` or ``pluecker.LensCamera``): ``(cam_from_world, PoseResult)``, the
-    first a ``pycolmap.Rigid3d`` (``None`` unless the status is ``success``). Robust by default
-    (``ransac=True``); the rest as :func:`pluecker.estimate_pose`."""
+    first a ``pycolmap.Rigid3d`` (``None`` unless the status is ``success``). Robust by default:
+    ``ransac`` sets ``options.ransac`` as :func:`robust_options` says (``True``: ``options.ransac`` or the
+    :class:`pluecker.RansacOptions` defaults); the rest as :func:`pluecker.estimate_pose`."""
     lens = camera if isinstance(camera, _core.LensCamera) else lens_camera(camera)
-    result = _core.estimate_pose(lens, points2D, points3D, lines2D, lines3D, ransac=ransac, options=options,
+    result = _core.estimate_pose(lens, points2D, points3D, lines2D, lines3D, options=robust_options(options, ransac),
                                  point_covariances=point_covariances, line_covariances=line_covariances)
-    rigid = rigid_from_pose(result.R, result.t) if result.status == "success" else None
+    rigid = rigid_from_pose(result.pose.rotation, result.pose.translation) if result.status == "success" else None
     return rigid, result
 
 

@@ -48,6 +48,8 @@ machine, so that nothing is oversubscribed.
 
 from __future__ import annotations
 
+import copy
+
 import os
 import time
 from dataclasses import dataclass
@@ -688,7 +690,9 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
                          MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS, "point_matches")
     if line_matches is not None:
         _require_columns(line_matches.column_names, LINE_MATCH_COLUMNS, "line_matches")
-    base = (ransac if ransac is not None else _core.RansacOptions()).to_dict()
+    if ransac is None:
+        ransac = options.ransac if options is not None and options.ransac is not None else _core.RansacOptions()
+    base = ransac.to_dict()
     q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
     cameras = _query_cameras(queries, kind, model)
     order = np.argsort(q_ids, kind="stable")
@@ -715,18 +719,19 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
                 raise _BadQuery(f"query {q}: point_matches column point3D_id: point3D_id {shown} is not a point of "
                                 f"the COLMAP model ({len(unknown)} such match{'es' if len(unknown) > 1 else ''})")
             camera = cameras[i]()
-            options_q = _core.RansacOptions(**{**base, "seed": (base["seed"] + seed + q) % 2**63})
+            options_q = copy.copy(options) if options is not None else _core.PoseOptions()
+            options_q.ransac = _core.RansacOptions(**{**base, "seed": (base["seed"] + seed + q) % 2**63})
             r = _core.estimate_pose(camera, p[:, :2] if len(p) else None, p[:, 2:] if len(p) else None,
                                     l[:, :4].reshape(-1, 2, 2) if len(l) else None,
-                                    l[:, 4:].reshape(-1, 2, 3) if len(l) else None, options=options,
-                                    ransac=options_q)
+                                    l[:, 4:].reshape(-1, 2, 3) if len(l) else None, options=options_q)
         except _BadQuery as exc:
             out["status"], out["message"] = "invalid_input", str(exc)
             return out
         except (_core.PlueckerError, TypeError) as exc:
             out["status"], out["message"] = "invalid_input", f"query {q}: {exc}"
             return out
-        out.update(status=r.status, R=np.asarray(r.R).reshape(-1), t=np.asarray(r.t), rms=r.rms_error_px,
+        out.update(status=r.status, R=np.asarray(r.pose.rotation).reshape(-1), t=np.asarray(r.pose.translation),
+                   rms=r.details.rms_error_px,
                    pin=np.asarray(r.inliers_points, dtype=bool), lin=np.asarray(r.inliers_lines, dtype=bool))
         return out
 

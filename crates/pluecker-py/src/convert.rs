@@ -531,9 +531,12 @@ pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
     }
 }
 
-/// A pose `x_cam = R X_world + t` as Python passes it: the pair `(R, t)` of a `(3, 3)` rotation and a
+/// A pose `x_cam = R X_world + t` as Python passes it: a `Pose`, or the pair `(R, t)` of a `(3, 3)` rotation and a
 /// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.
 pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
+    if let Ok(pose) = obj.downcast::<crate::pose::result::PyPose>() {
+        return Ok(pose.get().inner);
+    }
     let pair = obj.downcast::<PyTuple>().map_err(|_| {
         let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
         pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))

@@ -27,7 +27,7 @@ mod triangulation;
 
 use pickle::{finished, part, parts, plain};
 use pose::options::{PyPoseOptions, PyRansacOptions};
-use pose::result::{PyPoseResult, PyPoseStage, PyRansacReport};
+use pose::result::{PyPose, PyPoseDetails, PyPoseResult, PyPoseStage, PyRansacReport};
 use pyo3::prelude::*;
 use triangulation::batch::PyBatchReport;
 use triangulation::fitting::{PyFittedConic, PyFittedLine};
@@ -58,6 +58,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Pose.
     m.add_class::<PyPoseOptions>()?;
     m.add_class::<PyRansacOptions>()?;
+    m.add_class::<PyPose>()?;
+    m.add_class::<PyPoseDetails>()?;
     m.add_class::<PyPoseResult>()?;
     m.add_class::<PyPoseStage>()?;
     m.add_class::<PyRansacReport>()?;
@@ -129,6 +131,8 @@ fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
     let input = &mut parts(kind, data)?;
     let object = match kind {
         "PoseResult" => plain::<PyPoseResult>(py, kind, input)?,
+        "Pose" => plain::<PyPose>(py, kind, input)?,
+        "PoseDetails" => plain::<PyPoseDetails>(py, kind, input)?,
         "PoseStage" => plain::<PyPoseStage>(py, kind, input)?,
         "RansacReport" => plain::<PyRansacReport>(py, kind, input)?,
         "FittedLine" => plain::<PyFittedLine>(py, kind, input)?,

@@ -16,8 +16,7 @@ use pluecker::geometry::dual_quaternion::DualQuaternion;
 use pluecker::geometry::plucker::LineChart;
 use pluecker::geometry::quadric::Ellipse;
 use pluecker::optim::Termination;
-use pluecker::pose::certificate::Certificate as PoseCertificate;
-use pluecker::pose::{CovarianceSource, Method as PoseMethod, RansacReport, RansacStop, StageReport};
+use pluecker::pose::{CovarianceSource, Method as PoseMethod, PoseDetails, RansacReport, RansacStop, StageReport};
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, Method, Report, Status};
 use pluecker::{Camera, Pose, PoseResult};
@@ -277,35 +276,30 @@ pack_struct!(RansacReport {
     time_seconds
 });
 pack_struct!(PoseResult {
-    rotation,
-    translation,
-    dual_quaternion,
-    axis,
-    angle,
-    method,
-    iterations,
-    final_cost,
-    termination,
+    pose,
     status,
-    rms_error_px,
-    time_seconds,
-    stages,
-    estimated_camera,
+    cost,
     inliers_points,
     inliers_lines,
-    ransac,
     covariance,
+    certificate,
+    details
+});
+pack_struct!(PoseDetails {
+    method,
+    iterations,
+    termination,
+    stages,
+    rms_error_px,
+    time_seconds,
+    estimated_camera,
+    ransac,
     covariance_source,
     sigma_px,
-    certified,
-    lower_bound,
-    raw_lower_bound,
-    gap,
-    certificate,
-    ambiguous,
     second_best,
     behind_camera_cost,
-    residual_test
+    residual_test,
+    uncertified_reason
 });
 pack_struct!(ResidualTest {
     chi2,
@@ -349,32 +343,6 @@ pack_struct!(FittedConic {
     covariance,
     iterations
 });
-
-impl Pack for PoseCertificate {
-    fn pack(&self, out: &mut Vec<u8>) {
-        match self {
-            PoseCertificate::NotRequested => 0u64.pack(out),
-            PoseCertificate::SublevelSet { nodes } => {
-                1u64.pack(out);
-                nodes.pack(out);
-            }
-            PoseCertificate::NotProved(why) => {
-                2u64.pack(out);
-                why.pack(out);
-            }
-        }
-    }
-    fn unpack(input: &mut Reader<'_>) -> Option<Self> {
-        match u64::unpack(input)? {
-            0 => Some(PoseCertificate::NotRequested),
-            1 => Some(PoseCertificate::SublevelSet {
-                nodes: usize::unpack(input)?,
-            }),
-            2 => Some(PoseCertificate::NotProved(String::unpack(input)?)),
-            _ => None,
-        }
-    }
-}
 
 /// `(pluecker._core._unpickle, (kind, data))`: what `__reduce__` returns for a result of class `kind`
 /// whose parts pack into `parts` (in the order [`unpickle`] reads them).

@@ -47,8 +47,8 @@ fn shared_fixture_every_method_recovers_the_pose() {
             ..PoseOptions::default()
         };
         let result = estimate_pose(&scene.camera, &scene.correspondences, &opts).expect("valid input");
-        let dr = (result.rotation - scene.rotation).amax();
-        let dt = (result.translation - scene.translation).amax();
+        let dr = (result.pose.rotation - scene.rotation).amax();
+        let dt = (result.pose.translation - scene.translation).amax();
         assert_eq!(result.status, Status::Success, "{}", method.as_str());
         assert!(
             dr < RECOVERY_TOLERANCE && dt < RECOVERY_TOLERANCE,

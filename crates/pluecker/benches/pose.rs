@@ -96,15 +96,15 @@ fn bench_group(c: &mut Criterion, group_name: &str, refine: bool) {
                     continue;
                 }
                 Ok(r) => {
-                    let rotation_error = rotation_distance(&r.rotation, &scene.rotation);
+                    let rotation_error = rotation_distance(&r.pose.rotation, &scene.rotation);
                     let failed =
                         r.status != Status::Success || rotation_error.is_nan() || rotation_error > FAILED_ROTATION_RAD;
                     eprintln!(
                         "setup {id}: {} status {} iterations {} rotation error {rotation_error:.2e} rad translation error {:.2e}",
                         if failed { "FAILED" } else { "ok" },
                         r.status.as_str(),
-                        r.iterations,
-                        (r.translation - scene.translation).norm(),
+                        r.details.iterations,
+                        (r.pose.translation - scene.translation).norm(),
                     );
                 }
             }
@@ -177,8 +177,8 @@ fn robust(c: &mut Criterion) {
             .zip(&mask)
             .filter(|(e, m)| **e > THRESHOLD_PX && **m)
             .count();
-        let rotation_error = rotation_distance(&r.rotation, &scene.rotation);
-        let report = r.ransac.as_ref().expect("robust report");
+        let rotation_error = rotation_distance(&r.pose.rotation, &scene.rotation);
+        let report = r.details.ransac.as_ref().expect("robust report");
         let failed = r.status != Status::Success || !(rotation_error <= FAILED_ROTATION_RAD);
         eprintln!(
             "setup robust/{name}: {} status {} samples {} models {} LO {} inliers {} (true inliers missed {missed}, outliers kept {kept}) rotation error {rotation_error:.2e} rad translation error {:.2e}",
@@ -188,7 +188,7 @@ fn robust(c: &mut Criterion) {
             report.models_scored,
             report.local_optimizations,
             mask.iter().filter(|&&m| m).count(),
-            (r.translation - scene.translation).norm(),
+            (r.pose.translation - scene.translation).norm(),
         );
         group.bench_function(name, |b| {
             b.iter(|| estimate_pose(black_box(&scene.camera), black_box(&corr), &opts))

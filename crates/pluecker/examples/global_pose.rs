@@ -56,7 +56,7 @@ fn main() {
             };
             times.push(started.elapsed().as_secs_f64() * 1e6);
             let cost = ReprojectionCost::of(&scene.camera, &corr);
-            let mine = cost.cost(&result.pose());
+            let mine = cost.cost(&result.pose);
             let mut best = mine;
             let truth = Pose::new(scene.rotation, scene.translation);
             let centroid = corr
@@ -78,13 +78,13 @@ fn main() {
                     best = best.min(c);
                 }
             }
-            if result.certified {
+            if result.certificate.is_some_and(|c| c.certified) {
                 certified += 1;
             } else if std::env::var("WHY").is_ok() {
                 println!(
                     "  seed {seed}: {} {}",
                     result.status.as_str(),
-                    result.certificate.message()
+                    result.details.uncertified_reason.as_deref().unwrap_or("")
                 );
             }
             if mine > best * (1.0 + 1e-6) + 1e-9 {
@@ -92,7 +92,7 @@ fn main() {
                 if result.status.as_str() == "success" {
                     miss_success += 1;
                 }
-                if result.ambiguous {
+                if result.status == pluecker::Status::Ambiguous {
                     miss_ambiguous += 1;
                 }
                 if std::env::var("VERBOSE").is_ok() {

@@ -69,8 +69,8 @@ fn time(kind: SceneKind, calls: usize, lines: bool) {
     for k in 0..calls {
         let (scene, corr) = &problems[k % problems.len()];
         let r = estimate_pose(&scene.camera, corr, &opts).unwrap();
-        iterations[0] += r.stages[0].iterations;
-        iterations[1] += r.stages.last().unwrap().iterations;
+        iterations[0] += r.details.stages[0].iterations;
+        iterations[1] += r.details.stages.last().unwrap().iterations;
     }
     let per_call = started.elapsed().as_secs_f64() / calls as f64;
     println!(
@@ -87,9 +87,10 @@ fn dump(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         let (scene, corr) = problem(kind, seed, lines);
         let r = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
         let values: Vec<String> = r
+            .pose
             .rotation
             .iter()
-            .chain(r.translation.iter())
+            .chain(r.pose.translation.iter())
             .map(|v| format!("{v:e}"))
             .collect();
         writeln!(out, "{}", values.join(" ")).unwrap();
@@ -123,11 +124,11 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
             cov.fixed_view::<3, 3>(3, 3).trace(),
         );
         let (er, et) = (
-            rotation_distance(&r.rotation, &scene.rotation),
-            (r.translation - scene.translation).norm(),
+            rotation_distance(&r.pose.rotation, &scene.rotation),
+            (r.pose.translation - scene.translation).norm(),
         );
-        iterations[0] += r.stages[0].iterations;
-        iterations[1] += r.stages.last().unwrap().iterations;
+        iterations[0] += r.details.stages[0].iterations;
+        iterations[1] += r.details.stages.last().unwrap().iterations;
         if r.status != Status::Success || !(er <= 10.0 * br.sqrt() && et <= 10.0 * bt.sqrt()) {
             failures += 1;
             println!(
@@ -139,8 +140,8 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         }
         (err_r, err_t, bound_r, bound_t) = (err_r + er * er, err_t + et * et, bound_r + br, bound_t + bt);
         if let Some((rot, t)) = reference.get(seed as usize) {
-            worst_r = worst_r.max(rotation_distance(&r.rotation, rot) / br.sqrt());
-            worst_t = worst_t.max((r.translation - t).norm() / bt.sqrt());
+            worst_r = worst_r.max(rotation_distance(&r.pose.rotation, rot) / br.sqrt());
+            worst_t = worst_t.max((r.pose.translation - t).norm() / bt.sqrt());
         }
     }
     println!(

@@ -22,8 +22,8 @@
 //! use pluecker::{camera::Camera, pose::{estimate_pose, PoseOptions}, synthetic};
 //! let scene = synthetic::random_scene(synthetic::SceneKind::General, 20, 5, 42);
 //! let result = estimate_pose(&scene.camera, &scene.correspondences, &PoseOptions::default()).unwrap();
-//! assert!((result.rotation - scene.rotation).norm() < 1e-6);
-//! assert!((result.translation - scene.translation).norm() < 1e-6);
+//! assert!((result.pose.rotation - scene.rotation).norm() < 1e-6);
+//! assert!((result.pose.translation - scene.translation).norm() < 1e-6);
 //! ```
 //!
 //! A point triangulated from two known cameras, with its certificate of global optimality:
@@ -97,7 +97,8 @@ pub use error::{Error, Result};
 // stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
 pub use certificate::{Certificate, CertificateKind, CertifyOptions};
 pub use pose::{
-    estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacReport, RansacStop,
+    estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
+    RansacReport, RansacStop,
 };
 pub use rigid::Pose;
 pub use status::Status;

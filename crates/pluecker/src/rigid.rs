@@ -1,6 +1,8 @@
 //! The pose of a camera: the rigid motion from the world frame to the camera frame.
 
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use crate::geometry::dual_quaternion::DualQuaternion;
+use crate::geometry::quaternion::{axis_angle, from_rotation_matrix};
+use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector4};
 
 /// A camera pose `x_cam = R X_world + t`: `rotation` is `R` (a rotation matrix), `translation` is `t`
 /// (world units, the world origin in the camera frame). The answer of the pose estimators, the input of
@@ -58,6 +60,31 @@ impl Pose {
             .chain(self.translation.iter())
             .all(|v| v.is_finite())
     }
+
+    /// The same motion as a unit dual quaternion (Phong & Horaud 1995, eqs. 6-7), `r₀ ≥ 0`; NaN
+    /// entries when the pose is not finite.
+    pub fn dual_quaternion(&self) -> DualQuaternion {
+        if !self.is_finite() {
+            let nan = Vector4::from_element(f64::NAN);
+            return DualQuaternion { r: nan, s: nan };
+        }
+        DualQuaternion::from_rotation_translation(&self.rotation, &self.translation)
+    }
+
+    /// The rotation as a unit axis and an angle in `[0, π]`, radians; NaN when the pose is not
+    /// finite.
+    pub fn axis_angle(&self) -> (Vector3<f64>, f64) {
+        if !self.is_finite() {
+            return (Vector3::from_element(f64::NAN), f64::NAN);
+        }
+        axis_angle(&from_rotation_matrix(&self.rotation))
+    }
+
+    /// The rotation vector `ω = angle · axis` (`R = exp([ω]ₓ)`), radians.
+    pub fn rotation_vector(&self) -> Vector3<f64> {
+        let (axis, angle) = self.axis_angle();
+        axis * angle
+    }
 }
 
 impl From<(Matrix3<f64>, Vector3<f64>)> for Pose {
@@ -103,6 +130,22 @@ mod tests {
     fn the_centre_maps_to_the_camera_origin() {
         let p = pose();
         assert!(p.transform(&p.centre()).norm() < 1e-12);
+    }
+
+    #[test]
+    fn rotation_forms_agree_with_the_matrix() {
+        let p = pose();
+        // The rotation vector was the input of `pose()`; `from_scaled_axis` is nalgebra's, not ours.
+        assert!((p.rotation_vector() - Vector3::new(0.3, -0.2, 0.9)).norm() < 1e-12);
+        let (axis, angle) = p.axis_angle();
+        assert!(
+            (axis.norm() - 1.0).abs() < 1e-12 && (angle - Vector3::<f64>::new(0.3, -0.2, 0.9).norm()).abs() < 1e-12
+        );
+        let (r, t) = p.dual_quaternion().to_rotation_translation();
+        assert!((r - p.rotation).norm() < 1e-12 && (t - p.translation).norm() < 1e-12);
+        assert!(p.dual_quaternion().r[0] >= 0.0);
+        let nan = Pose::new(Matrix3::from_element(f64::NAN), Vector3::zeros());
+        assert!(nan.rotation_vector().iter().all(|v| v.is_nan()) && nan.dual_quaternion().r[0].is_nan());
     }
 
     #[test]

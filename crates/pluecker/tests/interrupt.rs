@@ -7,7 +7,7 @@ mod common;
 use common::{noisy_segments, project, segment_tracks};
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::interrupt::{with_stop, Stop, StopReason};
-use pluecker::pose::{estimate_pose, CertificateOptions, PoseOptions, RansacOptions, RansacStop};
+use pluecker::pose::{estimate_pose, CertifyOptions, PoseOptions, RansacOptions, RansacStop};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
 use pluecker::triangulation::line::batch::triangulate_lines;
@@ -180,22 +180,27 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
         estimate_pose(&scene.camera, &scene.correspondences, &robust)
     })
     .unwrap();
-    let report = r.ransac.unwrap();
+    let report = r.details.ransac.unwrap();
     assert_eq!((report.stop, report.iterations), (RansacStop::Interrupted, 0));
 
     let certify = PoseOptions {
-        certify: Some(CertificateOptions::default()),
+        certify: Some(CertifyOptions::default()),
         ..Default::default()
     };
     let plain = estimate_pose(&scene.camera, &scene.correspondences, &certify).unwrap();
-    assert!(plain.certified, "{:?}", plain.certificate);
+    assert!(
+        plain.certificate.is_some_and(|c| c.certified),
+        "{:?}",
+        plain.details.uncertified_reason
+    );
     let stopped = with_stop(requested(), || {
         estimate_pose(&scene.camera, &scene.correspondences, &certify)
     })
     .unwrap();
-    assert!(!stopped.certified);
-    let why = stopped.certificate.message();
+    assert!(stopped.certificate.is_none_or(|c| !c.certified));
+    assert_eq!(stopped.status, pluecker::Status::Interrupted);
+    let why = stopped.details.uncertified_reason.unwrap_or_default();
     assert!(why.contains("interrupted"), "{why}");
     // The pose itself does not depend on the stop.
-    assert_eq!(stopped.rotation, plain.rotation);
+    assert_eq!(stopped.pose.rotation, plain.pose.rotation);
 }

@@ -62,8 +62,8 @@ fn scene_with_outliers(n_points: usize, n_lines: usize, ratio: f64, seed: u64) -
 
 /// Pose error in the tangent space of the covariance: `(log(R R₀ᵀ), t − t₀)`.
 fn tangent_error(result: &PoseResult, scene: &Scene) -> Vector6<f64> {
-    let w = log_so3(&(result.rotation * scene.rotation.transpose()));
-    let dt = result.translation - scene.translation;
+    let w = log_so3(&(result.pose.rotation * scene.rotation.transpose()));
+    let dt = result.pose.translation - scene.translation;
     Vector6::new(w.x, w.y, w.z, dt.x, dt.y, dt.z)
 }
 
@@ -111,16 +111,16 @@ fn recovers_the_pose_at_0_50_and_80_percent_outliers_with_points_and_lines() {
             let label = format!("ratio {ratio} seed {seed} {np} points {nl} lines");
             let r = estimate_pose(&scene.camera, &corr, &opts).unwrap();
             assert_eq!(r.status, Status::Success, "{label}: {r:?}");
-            let report = r.ransac.as_ref().unwrap();
+            let report = r.details.ransac.as_ref().unwrap();
             assert_eq!(report.stop, RansacStop::Confidence, "{label}");
             let inliers = check_masks(&r, &scene, &corr, &label);
             assert!(inliers >= (0.15 * (np + nl) as f64) as usize, "{label}");
             // The refined pose is within the covariance's own 1e-6 tail of the truth.
             let d2 = mahalanobis2(&r, &tangent_error(&r, &scene));
             assert!(d2 < CHI2_6_SURE, "{label}: d² = {d2}");
-            assert_eq!(r.covariance_source, Some(CovarianceSource::Given));
+            assert_eq!(r.details.covariance_source, Some(CovarianceSource::Given));
             assert_eq!(
-                r.stages.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
+                r.details.stages.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
                 ["ransac", "refinement"]
             );
         }
@@ -137,7 +137,7 @@ fn lines_heavy_scene_needs_the_line_solvers() {
     assert_eq!(r.status, Status::Success, "{r:?}");
     check_masks(&r, &scene, &corr, "lines-heavy");
     assert!(r.inliers_lines.iter().filter(|&&m| m).count() >= 15);
-    assert!(rotation_distance(&r.rotation, &scene.rotation) < 0.02);
+    assert!(rotation_distance(&r.pose.rotation, &scene.rotation) < 0.02);
 }
 
 #[test]
@@ -145,12 +145,15 @@ fn same_seed_gives_the_same_result() {
     let (scene, corr) = scene_with_outliers(80, 20, 0.5, 5);
     let a = estimate_pose(&scene.camera, &corr, &robust(17)).unwrap();
     let b = estimate_pose(&scene.camera, &corr, &robust(17)).unwrap();
-    assert_eq!((a.rotation, a.translation), (b.rotation, b.translation));
+    assert_eq!(
+        (a.pose.rotation, a.pose.translation),
+        (b.pose.rotation, b.pose.translation)
+    );
     assert_eq!(
         (&a.inliers_points, &a.inliers_lines),
         (&b.inliers_points, &b.inliers_lines)
     );
-    let (ra, rb) = (a.ransac.unwrap(), b.ransac.unwrap());
+    let (ra, rb) = (a.details.ransac.unwrap(), b.details.ransac.unwrap());
     assert_eq!(
         (ra.iterations, ra.models_scored, ra.score),
         (rb.iterations, rb.models_scored, rb.score)
@@ -174,11 +177,11 @@ fn all_outlier_data_gives_a_status_within_the_iteration_cap() {
     opts.ransac.as_mut().unwrap().max_iterations = 2000;
     let r = estimate_pose(&camera, &corr, &opts).unwrap();
     assert_eq!(r.status, Status::TooFewInliers, "{r:?}");
-    let report = r.ransac.unwrap();
+    let report = r.details.ransac.unwrap();
     assert_eq!((report.stop, report.iterations), (RansacStop::IterationCap, 2000));
     // Only the model's own sample (and at most two chance agreements) support it.
     assert!(report.inliers < 6, "{report:?}");
-    assert_eq!(r.stages.len(), 1, "no refinement of a rejected model");
+    assert_eq!(r.details.stages.len(), 1, "no refinement of a rejected model");
 }
 
 /// Issue 10 §4: all-outlier data used to run to `max_iterations` (100,000 samples), each pose scored
@@ -191,7 +194,7 @@ fn all_outlier_data_is_cheap_and_too_few_inliers() {
     for (n, seed) in [(2000, 41u64), (20_000, 42)] {
         let (camera, corr) = all_outliers(n, seed);
         let r = estimate_pose(&camera, &corr, &robust(seed)).unwrap();
-        let report = r.ransac.as_ref().unwrap();
+        let report = r.details.ransac.as_ref().unwrap();
         let label = format!("{n} points, seed {seed}: {report:?}");
         assert_eq!(r.status, Status::TooFewInliers, "{label}");
         assert_eq!(report.stop, RansacStop::MinInlierRatio, "{label}");
@@ -201,7 +204,7 @@ fn all_outlier_data_is_cheap_and_too_few_inliers() {
         assert!(report.errors_evaluated <= 100 * report.models_scored, "{label}");
         assert!(report.sprt_rejections + 10 >= report.models_scored, "{label}");
         assert!(report.inliers < report.required_inliers, "{label}");
-        assert_eq!(r.stages.len(), 1, "no refinement of a rejected model");
+        assert_eq!(r.details.stages.len(), 1, "no refinement of a rejected model");
     }
 }
 
@@ -214,7 +217,7 @@ fn required_inliers_grow_with_chance_only() {
         let (camera, corr) = all_outliers(n, 43);
         let r = estimate_pose(&camera, &corr, &robust(43)).unwrap();
         assert_eq!(r.status, Status::TooFewInliers, "{n}");
-        r.ransac.unwrap().required_inliers
+        r.details.ransac.unwrap().required_inliers
     };
     let (small, medium, large) = (required(60), required(2000), required(20_000));
     // c + 1 for M ≈ 17,000 poses and p = π 4² / (640 · 480): at most 6 at 60 points, 9 at 2,000 and
@@ -226,7 +229,7 @@ fn required_inliers_grow_with_chance_only() {
     for (n, inliers, seed) in [(40, 8, 44u64), (60, 12, 45), (1000, 150, 46)] {
         let (scene, corr) = scene_with_outliers(n, 0, 1.0 - inliers as f64 / n as f64, seed);
         let r = estimate_pose(&scene.camera, &corr, &robust(seed)).unwrap();
-        let report = r.ransac.as_ref().unwrap();
+        let report = r.details.ransac.as_ref().unwrap();
         assert_eq!(r.status, Status::Success, "{n} points, {inliers} inliers: {report:?}");
         assert!(report.required_inliers <= inliers, "{report:?}");
         check_masks(&r, &scene, &corr, &format!("{n} points"));
@@ -237,7 +240,7 @@ fn required_inliers_grow_with_chance_only() {
     let ransac = opts.ransac.as_mut().unwrap();
     (ransac.min_inlier_ratio, ransac.max_iterations) = (0.0, 3000);
     let r = estimate_pose(&camera, &corr, &opts).unwrap();
-    assert_eq!(r.ransac.unwrap().required_inliers, 6);
+    assert_eq!(r.details.ransac.unwrap().required_inliers, 6);
 }
 
 /// The loop as it was before the SPRT and the cap: every pose scored until it cannot beat the best.
@@ -272,7 +275,7 @@ fn sprt_and_cap_keep_the_inliers_and_the_accuracy_of_the_plain_loop() {
         let label = format!("{np} points {nl} lines, {ratio} outliers, seed {seed}");
         let new = estimate_pose(&scene.camera, &corr, &robust(seed)).unwrap();
         let old = estimate_pose(&scene.camera, &corr, &legacy(seed)).unwrap();
-        assert_eq!(new.status, Status::Success, "{label}: {:?}", new.ransac);
+        assert_eq!(new.status, Status::Success, "{label}: {:?}", new.details.ransac);
         assert_eq!(old.status, Status::Success, "{label}");
         let true_inliers = check_masks(&new, &scene, &corr, &label);
         check_masks(&old, &scene, &corr, &label);
@@ -292,8 +295,8 @@ fn sprt_and_cap_keep_the_inliers_and_the_accuracy_of_the_plain_loop() {
         };
         err_new += error(&new);
         err_old += error(&old);
-        work_new += new.ransac.as_ref().unwrap().errors_evaluated;
-        work_old += old.ransac.as_ref().unwrap().errors_evaluated;
+        work_new += new.details.ransac.as_ref().unwrap().errors_evaluated;
+        work_old += old.details.ransac.as_ref().unwrap().errors_evaluated;
     }
     assert!(
         same_masks >= scenes - 1,
@@ -313,7 +316,7 @@ fn the_time_budget_stops_a_loop_whose_cap_would_run_long() {
     ransac.min_inlier_ratio = 0.0; // no cap from the inlier fraction either
     ransac.time_budget = Some(Duration::from_millis(30));
     let r = estimate_pose(&camera, &corr, &opts).unwrap();
-    let report = r.ransac.unwrap();
+    let report = r.details.ransac.unwrap();
     assert_eq!(report.stop, RansacStop::TimeBudget);
     // A sample takes far less than a second: the loop stopped on the budget, not near the cap.
     assert!(report.iterations > 0 && report.iterations < 1_000_000_000, "{report:?}");
@@ -402,7 +405,7 @@ fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
     let ransac = opts.ransac.as_mut().unwrap();
     (ransac.min_iterations, ransac.max_iterations) = (300, 300);
     let r = estimate_pose(&camera, &repeated, &opts).unwrap();
-    let report = r.ransac.as_ref().unwrap();
+    let report = r.details.ransac.as_ref().unwrap();
     assert_eq!(report.iterations, 300);
     // A sample holds two copies with probability p = (C(10,2)·2 + C(10,3)) / C(12,3) = 210/220:
     // binomial count, 5 standard deviations.
@@ -414,7 +417,10 @@ fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
     );
     // Three distinct points: every P3P solution explains all twelve noise-free correspondences.
     assert_eq!(r.status, Status::Success);
-    assert!(r.rms_error_px < 1e-6 && r.inliers_points.iter().all(|&m| m), "{r:?}");
+    assert!(
+        r.details.rms_error_px < 1e-6 && r.inliers_points.iter().all(|&m| m),
+        "{r:?}"
+    );
 }
 
 #[test]
@@ -424,10 +430,10 @@ fn non_robust_results_use_every_correspondence_and_carry_a_covariance() {
     let r = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
     assert!(r.inliers_points.iter().all(|&m| m) && r.inliers_points.len() == 30);
     assert!(r.inliers_lines.iter().all(|&m| m) && r.inliers_lines.len() == 10);
-    assert!(r.ransac.is_none());
-    assert_eq!(r.covariance_source, Some(CovarianceSource::Estimated));
+    assert!(r.details.ransac.is_none());
+    assert_eq!(r.details.covariance_source, Some(CovarianceSource::Estimated));
     // σ̂² ~ σ² χ²₇₄ / 74: within 5 standard deviations √(2/74) of 1.
-    let s2 = r.sigma_px.unwrap().powi(2);
+    let s2 = r.details.sigma_px.unwrap().powi(2);
     assert!((s2 - 1.0).abs() < 5.0 * (2.0f64 / 74.0).sqrt(), "σ̂² = {s2}");
     let given = PoseOptions {
         sigma_px: Some(2.0),
@@ -435,7 +441,7 @@ fn non_robust_results_use_every_correspondence_and_carry_a_covariance() {
     };
     let g = estimate_pose(&scene.camera, &corr, &given).unwrap();
     assert_eq!(
-        (g.covariance_source, g.sigma_px),
+        (g.details.covariance_source, g.details.sigma_px),
         (Some(CovarianceSource::Given), Some(2.0))
     );
     let ratio = g.covariance.unwrap()[(0, 0)] / r.covariance.unwrap()[(0, 0)];
@@ -478,7 +484,7 @@ fn monte_carlo(scene: &Scene, opts: &PoseOptions, outlier_ratio: f64, draws: usi
             sq[k] += e[k] * e[k];
             predicted[k] += cov[(k, k)];
         }
-        sigma2 += r.sigma_px.unwrap().powi(2);
+        sigma2 += r.details.sigma_px.unwrap().powi(2);
     }
     let n = draws as f64;
     MonteCarlo {

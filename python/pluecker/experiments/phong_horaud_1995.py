@@ -14,7 +14,7 @@ projections, and every perturbation is drawn with ``numpy.random.default_rng``:
   (50 lines), uniform noise of maximum amplitude ``a`` in each pixel coordinate.
 * **mismatch sweep** (Figure 9): 400 points (200 lines), 0.1 px noise, and ``k`` point mismatched
   pairs: the image points of two points on two different lines are swapped, which also makes a line
-  mismatched pair (Figure 8). The robust estimator (``estimate_pose(..., ransac=True)``: LO-RANSAC over
+  mismatched pair (Figure 8). The robust estimator (``estimate_pose(..., options=PoseOptions(ransac=RansacOptions()))``: LO-RANSAC over
   minimal samples, then the refinement on the inliers) is the third curve of Figure 9.
 * **outlier sweep** (not in the paper): 100 points, 0.1 px noise, and a fraction ``f`` (0 to 80 %) of the
   image points replaced by points drawn uniformly in the bounding box of the 460 true image points, for the
@@ -239,22 +239,21 @@ def run_and_score(truth: Truth, obs: Observation, est: Estimator) -> Score:
             else {"lines2d": obs.lines2d, "lines3d": obs.lines3d})
     try:
         ransac = pluecker.RansacOptions(seed=0) if est.robust else None
-        res = pluecker.estimate_pose(truth.camera, method=est.method, **data, options=pluecker.PoseOptions(refine=est.refine),
-                                     ransac=ransac)
+        res = pluecker.estimate_pose(truth.camera, **data, options=pluecker.PoseOptions(refine=est.refine, method=est.method, ransac=ransac))
     except pluecker.PlueckerError as exc:
         return Score(nan, failed=True, error=f"{type(exc).__name__}: {exc}")
-    R, t = np.asarray(res.R), np.asarray(res.t)
-    values = dict(nan, iterations=float(res.iterations), time_ms=1000.0 * res.time_seconds)
+    R, t = np.asarray(res.pose.rotation), np.asarray(res.pose.translation)
+    values = dict(nan, iterations=float(res.details.iterations), time_ms=1000.0 * res.details.time_seconds)
     if not (np.all(np.isfinite(R)) and np.all(np.isfinite(t))):
         return Score(values, failed=True, error=f"non-finite pose ({res.status})")
-    camera = res.estimated_camera or truth.camera
-    if res.estimated_camera is not None:
+    camera = res.details.estimated_camera or truth.camera
+    if res.details.estimated_camera is not None:
         values.update(u0=camera.cx, v0=camera.cy, alpha_u=camera.fx, alpha_v=camera.fy)
     projected = camera.project(truth.points3d @ R.T + t)
     distances = np.linalg.norm(projected - truth.points2d, axis=1)
     values.update(
-        axis=float(np.linalg.norm(np.asarray(res.axis) - truth.axis)),
-        angle=abs(float(res.angle) - truth.angle),
+        axis=float(np.linalg.norm(res.pose.axis_angle()[0] - truth.axis)),
+        angle=abs(res.pose.axis_angle()[1] - truth.angle),
         translation=float(np.linalg.norm(t - truth.t)),
         img_max=float(distances.max()),
         img_min=float(distances.min()),

@@ -125,7 +125,7 @@ pub fn refine_pose<'py>(
 ) -> PyResult<(PyObject, PyObject, PyPoseStage)> {
     let camera = camera.get().inner;
     let start = pose_from_parts("R", R, "t", t)?;
-    let opts = options.map_or_else(PyPoseOptions::default, |o| o.clone()).core(None);
+    let opts = options.map_or_else(pluecker::pose::PoseOptions::default, |o| o.core());
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let (pose, stage) = solve(py, move || Ok(core_refine_pose(&camera, &corr, &start, &opts)))?;
     Ok((

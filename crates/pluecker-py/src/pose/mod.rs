@@ -16,9 +16,9 @@ use crate::errors::{guarded, shape_error};
 use crate::interrupt::{object_or_partial, run_interruptible, run_single};
 use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
-use options::{PyPoseOptions, PyRansacOptions};
-use pluecker::pose::Correspondences;
+use options::PyPoseOptions;
 use pluecker::pose::ObservationNoise;
+use pluecker::pose::{Correspondences, PoseOptions};
 use pluecker::AnyCamera;
 use pyo3::prelude::*;
 use result::PyPoseResult;
@@ -46,21 +46,6 @@ pub fn correspondences(
         return Err(shape_error("lines2d / lines3d", "the same number of segments", actual));
     }
     Ok(c)
-}
-
-/// The `ransac=` argument: `RansacOptions`, `True` (the defaults), or `False`/`None` (not robust).
-fn ransac_arg(ransac: Option<&Bound<'_, PyAny>>) -> PyResult<Option<pluecker::pose::RansacOptions>> {
-    let Some(ransac) = ransac else { return Ok(None) };
-    if let Ok(options) = ransac.downcast::<PyRansacOptions>() {
-        return Ok(Some(options.borrow().inner));
-    }
-    match ransac.extract::<bool>() {
-        Ok(robust) => Ok(robust.then(Default::default)),
-        Err(_) => Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "ransac: expected RansacOptions, True, False or None, got {}",
-            ransac.get_type().name()?
-        ))),
-    }
 }
 
 /// The `line_covariances=` argument: one 2x2 covariance per segment for both endpoints `(M, 2, 2)`, or
@@ -142,12 +127,12 @@ const SHORT_POSE: usize = 1000;
 ///
 /// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones,
 /// and the refinement minimises the exact error in them: core `pose::lens`).
-/// `options`: `PoseOptions` (default `PoseOptions()`); `method`, when given, wins over
-/// `options.method`. `ransac`: `RansacOptions` or `True` (its defaults) estimates robustly.
+/// `options`: `PoseOptions` (default `PoseOptions()`): the method, `options.ransac` for robust
+/// estimation and `options.certify` for the certificate are set there.
 /// `point_covariances` (N, 2, 2) and `line_covariances` (M, 2, 2) or (M, 2, 2, 2): pixel² covariances
 /// of the observations (core `pose::noise`).
 #[pyfunction]
-#[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, method = None, *, options = None, ransac = None, point_covariances = None, line_covariances = None))]
+#[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, *, options = None, point_covariances = None, line_covariances = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
     py: Python<'_>,
@@ -156,19 +141,12 @@ pub fn estimate_pose(
     points3d: Option<&Bound<'_, PyAny>>,
     lines2d: Option<&Bound<'_, PyAny>>,
     lines3d: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyPoseOptions>>,
-    ransac: Option<&Bound<'_, PyAny>>,
     point_covariances: Option<&Bound<'_, PyAny>>,
     line_covariances: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPoseResult>> {
     let camera = any_camera(camera)?;
-    let options = options.map_or_else(PyPoseOptions::default, |o| o.clone());
-    let options = match method {
-        Some(m) => options.with_method(m)?,
-        None => options,
-    };
-    let opts = options.core(ransac_arg(ransac)?);
+    let opts = options.map_or_else(PoseOptions::default, |o| o.core());
     let mut corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     corr.noise = observation_noise(&corr, point_covariances, line_covariances)?;
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;

@@ -1,50 +1,123 @@
 //! `pluecker.PoseOptions` and `pluecker.RansacOptions`: the core's `PoseOptions` and `RansacOptions`
-//! with the same names and the same defaults (their `Default`), settable from Python and checked by
-//! the core's `validate` as they are set.
+//! with the same names, the same nesting and the same defaults (their `Default`), settable from
+//! Python and checked by the core's `validate` as they are set.
 //!
-//! Three Python fields have no core field of the same shape: `certify` and `certify_gap` together
-//! are the core's `certify: Option<CertificateOptions>`, and the robust estimator is the separate
-//! `ransac=` argument of `estimate_pose` (the core's `ransac: Option<RansacOptions>`).
+//! `PoseOptions.ransac` (a `RansacOptions` or `None`) and `PoseOptions.certify` (a `CertifyOptions` or
+//! `None`) are held by reference, pycolmap style: `options.certify.max_nodes = 10` changes the options
+//! that `options` uses. They are read into the core's struct when `estimate_pose` is called.
 
+use crate::certificate::PyCertifyOptions;
 use crate::convert::extract_pose;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::options_class;
-use pluecker::pose::{CertificateOptions, Method, PoseOptions, RansacOptions};
+use crate::fields::{options_class, Field};
+use pluecker::pose::{Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
+use pyo3::PyClass;
+
+/// A nested options object held by reference (`None`: not set).
+#[derive(Debug)]
+pub(crate) struct Nested<T: PyClass>(pub Option<Py<T>>);
+
+impl<T: PyClass> Default for Nested<T> {
+    fn default() -> Self {
+        Nested(None)
+    }
+}
+
+impl<T: PyClass> Clone for Nested<T> {
+    /// The same object (a new reference to it).
+    fn clone(&self) -> Self {
+        Nested(self.0.as_ref().map(|o| Python::with_gil(|py| o.clone_ref(py))))
+    }
+}
+
+/// The nested options classes: their stub name and their `to_dict()`.
+pub(crate) trait NestedOptions: PyClass + Clone + PartialEq + Into<PyClassInitializer<Self>> {
+    /// The class name in stubs and messages.
+    const CLASS: &'static str;
+}
+
+impl NestedOptions for PyRansacOptions {
+    const CLASS: &'static str = "RansacOptions";
+}
+
+impl NestedOptions for PyCertifyOptions {
+    const CLASS: &'static str = "CertifyOptions";
+}
+
+impl<T: NestedOptions> Nested<T> {
+    /// The value read now (a copy of the object's current fields).
+    pub(crate) fn read(&self) -> Option<T> {
+        self.0.as_ref().map(|o| Python::with_gil(|py| o.borrow(py).clone()))
+    }
+
+    /// The setter's value: `None`, an object of the class (held by reference), or a dict of its fields
+    /// (`to_dict()` and pickling give one) for a new object.
+    fn from_value(name: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
+        let Some(value) = value else { return Ok(Nested(None)) };
+        if let Ok(object) = value.downcast::<T>() {
+            return Ok(Nested(Some(object.clone().unbind())));
+        }
+        if let Ok(fields) = value.downcast::<pyo3::types::PyDict>() {
+            let class = value.py().import("pluecker")?.getattr(T::CLASS)?;
+            let object = class.call((), Some(fields))?;
+            return Ok(Nested(Some(object.downcast_into::<T>()?.unbind())));
+        }
+        Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name}: expected {} or None, got {}",
+            T::CLASS,
+            value.get_type().name()?
+        )))
+    }
+}
+
+impl<T: NestedOptions> PartialEq for Nested<T> {
+    /// Equal when both are unset or their current fields are equal.
+    fn eq(&self, other: &Self) -> bool {
+        self.read() == other.read()
+    }
+}
+
+impl<T: NestedOptions> Field for Nested<T> {
+    /// The object itself (changing it changes the options that hold it).
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(self.0.map_or_else(|| py.None(), |o| o.into_any()))
+    }
+    /// Its `to_dict()`.
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        match self.0 {
+            None => Ok(py.None()),
+            Some(o) => Ok(o.bind(py).as_any().call_method0("to_dict")?.unbind()),
+        }
+    }
+    fn stub() -> String {
+        format!("Optional[{}]", T::CLASS)
+    }
+}
 
 /// Options of `estimate_pose`, the core's `PoseOptions` (every default is the core's).
-///
-/// A keyword given to `estimate_pose` itself (`method=`) wins over the same field here.
 #[pyclass(name = "PoseOptions", module = "pluecker")]
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PyPoseOptions {
-    /// The core's options; `ransac` and `certify` stay `None` here (see `core`).
+    /// The core's options but `ransac` and `certify` (`None` here: see `core`).
     inner: PoseOptions,
-    certify: bool,
-    certificate: CertificateOptions,
+    ransac: Nested<PyRansacOptions>,
+    certify: Nested<PyCertifyOptions>,
 }
 
 impl PyPoseOptions {
     fn validate(&self) -> PyResult<()> {
-        self.inner.validate().map_err(to_py_err)?;
-        self.certificate.validate().map_err(to_py_err)
+        self.inner.validate().map_err(to_py_err)
     }
 
-    /// The core's options, robust with `ransac` when given.
-    pub(crate) fn core(&self, ransac: Option<RansacOptions>) -> PoseOptions {
+    /// The core's options, with `ransac` and `certify` read from their objects now.
+    pub(crate) fn core(&self) -> PoseOptions {
         PoseOptions {
-            ransac,
-            certify: self.certify.then_some(self.certificate),
+            ransac: self.ransac.read().map(|r| r.inner),
+            certify: self.certify.read().map(|c| c.inner),
             ..self.inner.clone()
         }
-    }
-
-    /// These options with `method` set (the `method=` keyword of `estimate_pose`).
-    pub(crate) fn with_method(&self, method: &str) -> PyResult<Self> {
-        let mut next = self.clone();
-        next.inner.method = Method::parse(method).map_err(to_py_err)?;
-        Ok(next)
     }
 }
 
@@ -77,12 +150,14 @@ options_class! {
         sigma_px: Option<Real> = |o| o.inner.sigma_px, |o, v| v.map(|r| r.get("sigma_px")).transpose().map(|s| o.inner.sigma_px = s);
         /// Status `ambiguous` when another minimum is within `ambiguity_threshold · σ²` of the answer's cost.
         ambiguity_threshold: Real = |o| o.inner.ambiguity_threshold, |o, v| v.get("ambiguity_threshold").map(|x| o.inner.ambiguity_threshold = x);
-        /// Run the global-optimality certificate (branch and bound over rotations).
-        certify: bool = |o| o.certify, |o, v| Ok::<(), PyErr>(o.certify = v);
-        /// Relative gap at or below which the certificate holds.
-        certify_gap: Real = |o| o.certificate.gap, |o, v| v.get("certify_gap").map(|x| o.certificate.gap = x);
-        /// Cap on the rotation cells the certificate examines.
-        certify_max_nodes: Integer = |o| o.certificate.max_nodes, |o, v| v.count("certify_max_nodes", 1).map(|n| o.certificate.max_nodes = n);
+        /// Robust estimation (LO-RANSAC over points and lines) with these options instead of `method`'s estimator;
+        /// `None`: every correspondence is an inlier. Held by reference.
+        ransac: Option<Bound<'_, PyAny>> = |o| o.ransac.clone(),
+            |o, v| Nested::from_value("ransac", v).map(|n| o.ransac = n);
+        /// The global-optimality certificate (the sublevel-set test) with these options; `None`: not requested.
+        /// Held by reference. A requested certificate that does not hold gives status `gap_not_closed`.
+        certify: Option<Bound<'_, PyAny>> = |o| o.certify.clone(),
+            |o, v| Nested::from_value("certify", v).map(|n| o.certify = n);
     }
 }
 

@@ -1,13 +1,16 @@
-//! `pluecker.PoseResult`, `pluecker.PoseStage` and `pluecker.RansacReport`: immutable reports owning
+//! `pluecker.PoseResult`, `pluecker.Pose`, `pluecker.PoseDetails`, `pluecker.PoseStage` and
+//! `pluecker.RansacReport`: immutable reports owning
 //! their data, each property declared once in a table ([`crate::fields`]). Every array property
 //! returns a fresh array, so changing it cannot change the result.
 
 use crate::camera::PyCamera;
+use crate::certificate::certificate_of;
 use crate::fields::{result_class, Field};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use pluecker::certificate::Primitive;
 use pluecker::chi_square::ResidualTest;
-use pluecker::pose::{RansacReport, StageReport, Status};
-use pluecker::PoseResult;
+use pluecker::pose::{PoseDetails, RansacReport, StageReport};
+use pluecker::{Pose, PoseResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -29,12 +32,12 @@ result_class! {
         /// Name of the stage.
         name = |s| s.inner.name.clone();
         /// What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
-        /// (½Σ squared pixel residuals) or `msac` (stage `ransac`: ½Σ min(e², τ²), px²).
+        /// (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
         cost_kind = |s| s.inner.cost_kind;
-        /// Rotation at the end of the stage, `x_cam = R X_world + t`.
-        R = |s| s.inner.rotation;
-        /// Translation at the end of the stage, world units.
-        t = |s| s.inner.translation;
+        /// Rotation `R` at the end of the stage, `x_cam = R X_world + t`.
+        rotation = |s| s.inner.rotation;
+        /// Translation `t` at the end of the stage, world units.
+        translation = |s| s.inner.translation;
         /// Iterations of the stage.
         iterations = |s| s.inner.iterations;
         /// Cost at the stage's start.
@@ -182,7 +185,175 @@ impl Field for pluecker::Camera {
     }
 }
 
-/// The answer of `estimate_pose`: the pose, how it was found, and whether it can be used.
+/// A camera pose `x_cam = R X_world + t`, the core's `Pose`: `rotation` (`R`) and `translation` (`t`,
+/// world units), and the rotation in its other forms as methods. Unpacks as `R, t = pose`.
+#[pyclass(frozen, name = "Pose", module = "pluecker")]
+#[derive(Debug, Clone)]
+pub struct PyPose {
+    pub(crate) inner: Pose,
+}
+
+result_class! {
+    PyPose {
+        /// `R`, world to camera (3x3 rotation matrix).
+        rotation = |p| p.inner.rotation;
+        /// `t`, world units: the world origin in the camera frame.
+        translation = |p| p.inner.translation;
+    }
+
+    /// The same motion as a unit dual quaternion `(r0, rx, ry, rz, s0, sx, sy, sz)` (Phong & Horaud
+    /// 1995, eqs. 6-7), `r0 ≥ 0`; NaN when the pose is not finite.
+    fn dual_quaternion<'py>(&self, py: Python<'py>) -> PyResult<PyObject> {
+        Field::get(self.inner.dual_quaternion().to_vector(), py)
+    }
+
+    /// The rotation as `(axis, angle)`: a unit axis and an angle in [0, π], radians.
+    fn axis_angle(&self, py: Python<'_>) -> PyResult<(PyObject, f64)> {
+        let (axis, angle) = self.inner.axis_angle();
+        Ok((Field::get(axis, py)?, angle))
+    }
+
+    /// The rotation vector `angle · axis`, radians (`R = exp([ω]×)`).
+    fn rotation_vector(&self, py: Python<'_>) -> PyResult<PyObject> {
+        Field::get(self.inner.rotation_vector(), py)
+    }
+
+    /// The optical centre in the world frame, `−Rᵀ t`.
+    fn centre(&self, py: Python<'_>) -> PyResult<PyObject> {
+        Field::get(self.inner.centre(), py)
+    }
+
+    /// `R, t = pose`.
+    fn __iter__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let parts = [Field::get(self.inner.rotation, py)?, Field::get(self.inner.translation, py)?];
+        PyTuple::new(py, parts)?.into_any().try_iter().map(|i| i.into_any())
+    }
+
+    fn __len__(&self) -> usize {
+        2
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "Pose", &[self])
+    }
+
+    fn __repr__(&self) -> String {
+        let t = &self.inner.translation;
+        let w = self.inner.rotation_vector();
+        format!(
+            "Pose(rotation_vector=[{:.6}, {:.6}, {:.6}], translation=[{:.6}, {:.6}, {:.6}])",
+            w.x, w.y, w.z, t.x, t.y, t.z
+        )
+    }
+}
+
+/// A pose as a property: the `Pose` object, and `{"rotation", "translation"}` in `to_dict()`.
+impl Field for PyPose {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(Py::new(py, self)?.into_any())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let d = PyDict::new(py);
+        self.fill_dict(py, &d)?;
+        Ok(d.into_any().unbind())
+    }
+    fn stub() -> String {
+        "Pose".into()
+    }
+}
+
+/// The runner-up of `PoseDetails.second_best`: `(Pose, cost)`.
+struct Runner(Pose, f64);
+
+impl Field for Runner {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        let pose = PyPose { inner: self.0 }.get(py)?;
+        Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?
+            .into_any()
+            .unbind())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let pose = PyPose { inner: self.0 }.plain(py)?;
+        Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?
+            .into_any()
+            .unbind())
+    }
+    fn stub() -> String {
+        "Tuple[Pose, float]".into()
+    }
+}
+
+/// How a `PoseResult` was found: the core's `PoseDetails`. Costs are `Σ r²`, px².
+#[pyclass(frozen, name = "PoseDetails", module = "pluecker")]
+#[derive(Debug, Clone)]
+pub struct PyPoseDetails {
+    inner: PoseDetails,
+}
+
+result_class! {
+    PyPoseDetails {
+        /// The estimator that ran.
+        method = |d| d.inner.method.as_str();
+        /// Iterations summed over the stages.
+        iterations = |d| d.inner.iterations;
+        /// Why the last iterative stage stopped.
+        termination = |d| d.inner.termination.as_str();
+        /// Every stage in order; the last one gave the returned pose.
+        stages = |d| d.inner.stages.clone();
+        /// Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)`.
+        rms_error_px = |d| d.inner.rms_error_px;
+        /// Total wall time, seconds.
+        time_seconds = |d| d.inner.time_seconds;
+        /// Intrinsics estimated by method `'linear'` (`None` for the others).
+        estimated_camera = |d| d.inner.estimated_camera;
+        /// What the robust loop did; `None` unless `options.ransac` is set.
+        ransac = |d| d.inner.ransac.clone();
+        /// Where the σ of the covariance came from: `given` or `estimated`.
+        covariance_source = |d| d.inner.covariance_source.map(|s| s.as_str());
+        /// The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals.
+        sigma_px = |d| d.inner.sigma_px;
+        /// The cheapest other local minimum with every point in front and its cost `Σ r²` (px²); `None` if none was
+        /// found. Within `ambiguity_threshold · σ²` of `cost`, the status is `ambiguous`.
+        second_best = |d| d.inner.second_best.map(|(p, c)| Runner(p, c));
+        /// Cost `Σ r²` of a pose with every point behind the camera that fits far better (status `behind_camera`).
+        behind_camera_cost = |d| d.inner.behind_camera_cost;
+        /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.
+        residual_test = |d| d.inner.residual_test;
+        /// Why the pose is not certified, in words; `None` when it is.
+        uncertified_reason = |d| d.inner.uncertified_reason.clone();
+    }
+
+    /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        reduce(py, "PoseDetails", &[self])
+    }
+
+    fn __repr__(&self) -> String {
+        let d = &self.inner;
+        format!(
+            "PoseDetails(method='{}', iterations={}, termination='{}', rms_error_px={:.3e}, time_seconds={:.3e})",
+            d.method.as_str(), d.iterations, d.termination.as_str(), d.rms_error_px, d.time_seconds
+        )
+    }
+}
+
+impl Field for PoseDetails {
+    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(Py::new(py, PyPoseDetails { inner: self })?.into_any())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        let d = PyDict::new(py);
+        PyPoseDetails { inner: self }.fill_dict(py, &d)?;
+        Ok(d.into_any().unbind())
+    }
+    fn stub() -> String {
+        "PoseDetails".into()
+    }
+}
+
+/// The answer of `estimate_pose`, the core's `PoseResult`: the pose, whether it can be used, its cost
+/// `Σ r²`, the correspondences used, its covariance and certificate; how it was found is in `details`.
 #[pyclass(frozen, name = "PoseResult", module = "pluecker")]
 #[derive(Debug, Clone)]
 pub struct PyPoseResult {
@@ -197,76 +368,29 @@ impl PyPoseResult {
 
 result_class! {
     PyPoseResult {
-        /// Rotation, `x_cam = R X_world + t`.
-        R = |r| r.inner.rotation;
-        /// Translation, world units.
-        t = |r| r.inner.translation;
-        /// The same motion as a unit dual quaternion `(r0, rx, ry, rz, s0, sx, sy, sz)` (eqs. 6-7), `r0 ≥ 0`.
-        dual_quaternion = |r| r.inner.dual_quaternion.to_vector();
-        /// Unit rotation axis.
-        axis = |r| r.inner.axis;
-        /// Rotation angle about `axis`, radians in [0, π].
-        angle = |r| r.inner.angle;
-        /// The estimator that ran.
-        method = |r| r.inner.method.as_str();
-        /// Iterations summed over the stages.
-        iterations = |r| r.inner.iterations;
-        /// Cost of the last stage at the returned pose.
-        final_cost = |r| r.inner.final_cost;
-        /// Why the last iterative stage stopped.
-        termination = |r| r.inner.termination.as_str();
-        /// `success`, or why not: `not_converged` (a stage hit its cap), `numerical_failure`, `behind_camera`
-        /// (points behind at the pose, or the data fit far better behind: `behind_camera_cost`), `ambiguous`
-        /// (another minimum nearly as good: `second_best_*`); robust: `too_few_inliers`, `no_hypothesis`.
+        /// The pose `x_cam = R X_world + t` (NaN if the solver failed); `R, t = result.pose`.
+        pose = |r| PyPose { inner: r.inner.pose };
+        /// `success`, or why not: `gap_not_closed` (a requested certificate does not hold), `not_converged` (a
+        /// stage hit its cap), `numerical_failure`, `behind_camera` (points behind at the pose, or the data fit far
+        /// better behind: `details.behind_camera_cost`), `ambiguous` (another minimum nearly as good:
+        /// `details.second_best`); robust: `too_few_inliers`, `no_hypothesis`; `interrupted`, `time_budget`.
         status = |r| r.inner.status.as_str();
-        /// `status == 'success'`.
-        success = |r| r.inner.status == Status::Success;
-        /// Root-mean-square reprojection error over all correspondences, pixels.
-        rms_error_px = |r| r.inner.rms_error_px;
-        /// Total wall time, seconds.
-        time_seconds = |r| r.inner.time_seconds;
-        /// Every stage in order; the last one gave the returned pose.
-        stages = |r| r.inner.stages.clone();
-        /// Intrinsics estimated by method `'linear'` (`None` for the others).
-        estimated_camera = |r| r.inner.estimated_camera;
+        /// Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels.
+        cost = |r| r.inner.cost;
         /// (N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true.
         inliers_points = |r| r.inner.inliers_points.clone();
         /// (M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true.
         inliers_lines = |r| r.inner.inliers_lines.clone();
-        /// What the robust loop did; `None` unless estimated with `ransac=`.
-        ransac = |r| r.inner.ransac.clone();
         /// 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
         /// frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
         covariance = |r| r.inner.covariance;
-        /// Where the σ of the covariance came from: `given` or `estimated`.
-        covariance_source = |r| r.inner.covariance_source.map(|s| s.as_str());
-        /// The σ of `covariance`: `options.sigma_px`, or `σ̂ = √(Σ r² / (m − 6))` over the m used residuals.
-        sigma_px = |r| r.inner.sigma_px;
-        /// Proved global minimum of `½ Σ r²` within `certify_gap`, over every pose keeping the points in front
-        /// (`options.certify` only).
-        certified = |r| r.inner.certified;
-        /// The proved lower bound on `½ Σ r²` (px²); NaN when there is none.
-        lower_bound = |r| r.inner.lower_bound;
-        /// The bound as proved, before the clamp to the cost that gives `lower_bound`; NaN when there is none.
-        raw_lower_bound = |r| r.inner.raw_lower_bound;
-        /// `(cost − lower_bound) / cost`; NaN when there is no bound.
-        gap = |r| r.inner.gap;
-        /// `sublevel_set` (proved), `not_requested` or `not_proved`.
-        certificate = |r| r.inner.certificate.as_str();
-        /// The certificate's explanation in words.
-        certificate_message = |r| r.inner.certificate.message();
-        /// `status == 'ambiguous'`: another local minimum explains the data nearly as well.
-        ambiguous = |r| r.inner.ambiguous;
-        /// Rotation of the cheapest other local minimum with every point in front; `None` if none was found.
-        second_best_R = |r| r.inner.second_best.map(|(p, _)| p.rotation);
-        /// Translation of that minimum.
-        second_best_t = |r| r.inner.second_best.map(|(p, _)| p.translation);
-        /// Its cost `½ Σ r²`, px².
-        second_best_cost = |r| r.inner.second_best.map(|(_, c)| c);
-        /// Cost of a pose with every point behind the camera that fits far better (status `behind_camera`).
-        behind_camera_cost = |r| r.inner.behind_camera_cost;
-        /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.
-        residual_test = |r| r.inner.residual_test;
+        /// Proved lower bound on `cost` over every pose keeping the points in front (`options.certify`); `None` when
+        /// no bound was computed (`details.uncertified_reason` says why).
+        certificate = |r| certificate_of(r.inner.certificate, Primitive::Pose);
+        /// How the pose was found: method, stages, timings, noise, runner-up.
+        details = |r| r.inner.details.clone();
+        /// `certificate is not None and certificate.certified`.
+        certified = |r| r.inner.certificate.is_some_and(|c| c.certified);
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -276,15 +400,18 @@ result_class! {
 
     fn __repr__(&self) -> String {
         let r = &self.inner;
-        let (t, q) = (&r.translation, &r.dual_quaternion.r);
+        let t = &r.pose.translation;
+        let w = r.pose.rotation_vector();
         format!(
-            "PoseResult(method='{}', status='{}', iterations={}, rms_error_px={:.3e}, angle={:.6}, t=[{:.6}, {:.6}, {:.6}], r=[{:.6}, {:.6}, {:.6}, {:.6}])",
-            r.method.as_str(), r.status.as_str(), r.iterations, r.rms_error_px, r.angle,
-            t.x, t.y, t.z, q[0], q[1], q[2], q[3]
+            "PoseResult(status='{}', cost={:.6e}, rotation_vector=[{:.6}, {:.6}, {:.6}], translation=[{:.6}, {:.6}, {:.6}], certified={})",
+            r.status.as_str(), r.cost, w.x, w.y, w.z, t.x, t.y, t.z,
+            if r.certificate.is_some_and(|c| c.certified) { "True" } else { "False" }
         )
     }
 }
 
 pack_struct!(PyPoseStage { inner });
 pack_struct!(PyRansacReport { inner });
+pack_struct!(PyPose { inner });
+pack_struct!(PyPoseDetails { inner });
 pack_struct!(PyPoseResult { inner });

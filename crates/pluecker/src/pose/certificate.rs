@@ -37,7 +37,7 @@
 //!    value of the square of the right-hand side over `s ≤ ρ`, halved, is the lower bound.
 //!
 //! So `lower_bound ≤ f` for every pose that keeps the points in front; the answer is certified when
-//! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
+//! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
 //! bound here) seen more than `2α` apart. The test fails honestly (`certified = false`, with the
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
 //! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
@@ -45,88 +45,23 @@
 use super::correspondences::Correspondences;
 use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
-use crate::error::{Error, Result};
+use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::global::relative_gap;
 use crate::interrupt::stop_reason;
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 
-/// Options of the certificate. Every field has a documented default.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CertificateOptions {
-    /// Relative gap `(cost − lower_bound) / cost` at or below which the answer is certified. Default
-    /// `1e-3` (as triangulation).
-    pub gap: f64,
-    /// Cap on the rotation cells examined by the search. Default `20_000`.
-    pub max_nodes: usize,
-}
+/// The default cap on the rotation cells the search examines
+/// ([`crate::certificate::CertifyOptions::max_nodes`] `None`).
+pub const MAX_CELLS: usize = 20_000;
 
-impl Default for CertificateOptions {
-    fn default() -> Self {
-        CertificateOptions {
-            gap: 1e-3,
-            max_nodes: 20_000,
-        }
-    }
-}
-
-impl CertificateOptions {
-    /// Checks the ranges stated on each field.
-    pub fn validate(&self) -> Result<()> {
-        if !(self.gap.is_finite() && self.gap > 0.0 && self.gap < 1.0) {
-            return Err(Error::InvalidOption {
-                name: "certify_gap".into(),
-                reason: format!("must be in (0, 1), got {}", crate::error::number(self.gap)),
-            });
-        }
-        if self.max_nodes < 1 {
-            return Err(Error::InvalidOption {
-                name: "certify_max_nodes".into(),
-                reason: "must be at least 1".into(),
-            });
-        }
-        Ok(())
-    }
-}
-
-/// How the answer was certified, or why it was not.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Certificate {
-    /// [`super::PoseOptions::certify`] was `None`.
-    NotRequested,
-    /// Proved by the sublevel-set test after examining `nodes` rotation cells.
-    SublevelSet {
-        /// Rotation cells examined.
-        nodes: usize,
-    },
-    /// Not proved; the reason.
-    NotProved(String),
-}
-
-impl Certificate {
-    /// `"not_requested"`, `"sublevel_set"` or `"not_proved"`.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            Certificate::NotRequested => "not_requested",
-            Certificate::SublevelSet { .. } => "sublevel_set",
-            Certificate::NotProved(_) => "not_proved",
-        }
-    }
-
-    /// A sentence for reports.
-    pub fn message(&self) -> String {
-        match self {
-            Certificate::NotRequested => "not requested (certify=False)".into(),
-            Certificate::SublevelSet { nodes } => format!("proved by the sublevel-set test ({nodes} rotation cells)"),
-            Certificate::NotProved(why) => why.clone(),
-        }
-    }
-}
-
-/// The certificate stage's outcome.
+/// The certificate stage's outcome, in the units of this module (`f = ½ Σ r²`, px²); the result
+/// assembly ([`crate::pose::PoseResult`]) turns it into the shared [`crate::certificate::Certificate`]
+/// in `Σ r²`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Certification {
+    /// Whether the gap closed.
     pub certified: bool,
     /// The proved bound, clamped to the cost (NaN when there is none).
     pub lower_bound: f64,
@@ -134,19 +69,24 @@ pub struct Certification {
     /// bound is at most the cost of every pose that keeps the points in front; `lower_bound` is
     /// `min(raw_lower_bound, cost)`.
     pub raw_lower_bound: f64,
-    pub gap: f64,
-    pub certificate: Certificate,
+    /// `(cost − lower_bound) / max(cost, 1e-12)` (NaN when there is no bound).
+    pub relative_gap: f64,
+    /// Rotation cells examined by the search (0 when it did not run to its end).
+    pub nodes: usize,
+    /// Why the pose is not certified (`None` when it is).
+    pub reason: Option<String>,
 }
 
 impl Certification {
-    /// No certificate, for `reason`.
-    pub fn none(certificate: Certificate) -> Self {
+    /// No bound, for `reason`.
+    pub fn none(reason: impl Into<String>) -> Self {
         Certification {
             certified: false,
             lower_bound: f64::NAN,
             raw_lower_bound: f64::NAN,
-            gap: f64::NAN,
-            certificate,
+            relative_gap: f64::NAN,
+            nodes: 0,
+            reason: Some(reason.into()),
         }
     }
 }
@@ -867,70 +807,75 @@ impl LocalModel {
 const BALL_FACTORS: [f64; 5] = [64.0, 16.0, 6.0, 3.0, 2.0];
 
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
-/// module documentation). Never fails: a certificate that cannot be computed is `certified = false`
-/// with the reason.
+/// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]. Never fails: a
+/// certificate that cannot be computed is `certified = false` with the reason. Every cost and bound
+/// here is `½ Σ r²`; [`crate::pose::PoseResult`] reports them in `Σ r²`.
 pub fn certify(
     camera: &Camera,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
-    options: &CertificateOptions,
+    options: &CertifyOptions,
 ) -> Certification {
     if !(cost.is_finite() && cost >= 0.0) {
-        return Certification::none(Certificate::NotProved("not attempted: the cost is not finite".into()));
+        return Certification::none("not attempted: the cost is not finite");
     }
     if corr.noise.is_some() {
-        return Certification::none(Certificate::NotProved(
+        return Certification::none(
             "not attempted: the relaxation holds for isotropic pixel noise on a pinhole camera; \
-             per-observation covariances and distortion are not covered"
-                .into(),
-        ));
+             per-observation covariances and distortion are not covered",
+        );
     }
     let mut problem = match Problem::new(camera, corr, cost) {
         Ok(p) => p,
-        Err(why) => return Certification::none(Certificate::NotProved(why)),
+        Err(why) => return Certification::none(why),
     };
     let (whitening, model) = match LocalModel::at(&problem, camera, pose) {
         Ok(m) => m,
-        Err(why) => return Certification::none(Certificate::NotProved(why)),
+        Err(why) => return Certification::none(why),
     };
     let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some(target) = BALL_FACTORS
-        .iter()
-        .map(|f| f * unit)
-        .find(|&radius| model.bound(radius).is_some_and(|lower| gap_of(lower) <= options.gap))
-    else {
-        return Certification::none(Certificate::NotProved(format!(
+    let Some(target) = BALL_FACTORS.iter().map(|f| f * unit).find(|&radius| {
+        model
+            .bound(radius)
+            .is_some_and(|lower| gap_of(lower) <= options.max_relative_gap)
+    }) else {
+        return Certification::none(format!(
             "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
             (2.0 * cost).sqrt()
-        )));
+        ));
     };
-    let localised = match localise(&mut problem, &whitening, pose, cost, target, options.max_nodes, None) {
+    let localised = match localise(
+        &mut problem,
+        &whitening,
+        pose,
+        cost,
+        target,
+        options.max_nodes_or(MAX_CELLS),
+        None,
+    ) {
         Ok(l) => l,
-        Err(why) => return Certification::none(Certificate::NotProved(why)),
+        Err(why) => return Certification::none(why),
     };
     let Some(raw_lower_bound) = model.raw_bound(localised.radius.min(target)) else {
-        return Certification::none(Certificate::NotProved(
-            "not proved: a depth may vanish within the localised ball".into(),
-        ));
+        return Certification::none("not proved: a depth may vanish within the localised ball");
     };
     let lower_bound = raw_lower_bound.min(model.cost);
     let gap = gap_of(lower_bound);
-    let certified = gap <= options.gap;
+    let certified = gap <= options.max_relative_gap;
     Certification {
         certified,
         lower_bound,
         raw_lower_bound,
-        gap,
-        certificate: if certified {
-            Certificate::SublevelSet { nodes: localised.nodes }
-        } else {
-            Certificate::NotProved(format!(
+        relative_gap: gap,
+        nodes: localised.nodes,
+        reason: (!certified).then(|| {
+            format!(
                 "not proved: the local bound leaves a gap of {gap:.3e} (whitened radius {:.3e}, {} rotation cells)",
                 localised.radius, localised.nodes
-            ))
-        },
+            )
+        }),
     }
 }
 

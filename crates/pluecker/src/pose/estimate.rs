@@ -14,7 +14,7 @@
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
-use super::certificate::{certify, Certificate, Certification};
+use super::certificate::{certify, Certification};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::lens::Observations;
@@ -417,6 +417,9 @@ where
     }
 }
 
+/// Why a pose is not certified when [`PoseOptions::certify`] is `None`.
+pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
+
 /// Why a pose through a lens is not certified.
 pub(crate) const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
     through a lens with distortion the exact cost in the observed pixels has no certificate yet";
@@ -487,25 +490,18 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
             .second
             .map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
         let certification = match &opts.certify {
-            None => Certification::none(Certificate::NotRequested),
-            Some(_) if observations.lens.is_some() => Certification::none(Certificate::NotProved(PINHOLE_ONLY.into())),
-            Some(_) if status != Status::Success => Certification::none(Certificate::NotProved(format!(
-                "not attempted: status {}",
-                status.as_str()
-            ))),
+            None => Certification::none(NOT_REQUESTED),
+            Some(_) if observations.lens.is_some() => Certification::none(PINHOLE_ONLY),
+            Some(_) if status != Status::Success => {
+                Certification::none(format!("not attempted: status {}", status.as_str()))
+            }
             Some(options) => certify(camera, conditioned, &best.pose, best.cost, options),
         };
         (world, status, second_best, certification, behind_cost)
     } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
         let why = "no refinement: the pose is not a minimum of the reprojection error";
-        (
-            pose,
-            status,
-            None,
-            Certification::none(Certificate::NotProved(why.into())),
-            None,
-        )
+        (pose, status, None, Certification::none(why), None)
     };
     Ok(assemble(
         observations,
@@ -527,7 +523,7 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
 }
 
 /// How many times lower than the returned pose's cost the cost of a pose with every point behind the
-/// camera must be for [`PoseResult::behind_camera_cost`] to count: without a stated noise a mere
+/// camera must be for [`super::PoseDetails::behind_camera_cost`] to count: without a stated noise a mere
 /// margin cannot tell a near-tie (4-5 noisy correspondences, a narrow field of view) from data that
 /// only a pose behind the camera explains, whose in-front fit is worse by orders of magnitude.
 const BEHIND_CAMERA_RATIO: f64 = 100.0;

@@ -21,7 +21,7 @@ pub mod reprojection;
 mod result;
 pub mod robust;
 
-pub use certificate::{Certificate, CertificateOptions};
+pub use crate::certificate::{Certificate, CertifyOptions};
 pub use correspondences::{Conditioning, Correspondences};
 pub use estimate::{algebraic_stage, estimate_pose, Estimate};
 pub use noise::ObservationNoise;
@@ -31,7 +31,6 @@ pub use robust::{RansacOptions, RansacReport, RansacStop};
 use crate::camera::Camera;
 use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
-use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
 use crate::optim::Summary;
 use crate::optim::{StoppingCriteria, Termination, TrustRegionOptions};
@@ -139,13 +138,16 @@ pub struct PoseOptions {
     /// The answer is [`Status::Ambiguous`] when another local minimum with every object point in front
     /// has a sum of squared residuals `Σ r²` within `ambiguity_threshold · σ²` of the answer's (a
     /// likelihood-ratio test: the data cannot tell the two apart at that level). `σ` is `sigma_px`
-    /// when given, else the larger of the estimate `σ̂` (see [`PoseResult::sigma_px`]) and 1 px.
+    /// when given, else the larger of the estimate `σ̂` (see [`PoseDetails::sigma_px`]) and 1 px.
     /// Default `9.0` (three standard deviations of the difference). `0` turns the flag off for exact
     /// ties only.
     pub ambiguity_threshold: f64,
-    /// The global-optimality certificate ([`certificate`]): `None` skips it (the result then has
-    /// `certified = false` and the reason in `certificate`). Default `None`: it is on request.
-    pub certify: Option<CertificateOptions>,
+    /// The global-optimality certificate ([`certificate`], the sublevel-set test): `None` skips it
+    /// ([`PoseResult::certificate`] is then `None`). With `Some`, a pose that is not proved (no bound,
+    /// or a gap above `max_relative_gap`) has status [`Status::GapNotClosed`] where it would have been
+    /// [`Status::Success`]. `max_nodes: None` caps the rotation cells at [`certificate::MAX_CELLS`].
+    /// Default `None`: it is on request.
+    pub certify: Option<CertifyOptions>,
 }
 
 /// The algebraic stage's step tolerance (in the units of the dual quaternion `x = (r, s)`, conditioned
@@ -221,7 +223,7 @@ impl PoseOptions {
             return bad("ambiguity_threshold", "must be a finite number ≥ 0");
         }
         if let Some(certify) = &self.certify {
-            certify.validate()?;
+            certify.validate("certify")?;
         }
         if let Some(crate::Pose {
             rotation: r,
@@ -250,8 +252,8 @@ pub struct StageReport {
     /// `"trust-region"`, `"rotation"`, `"translation"`, `"linear"`, `"ransac"`, `"refinement"`, ...
     pub name: String,
     /// What its cost measures: `"algebraic"` (eqs. 13-15, 22 as `½ΣΦ²`, normalised units),
-    /// `"reprojection"` (`½ Σ` squared pixel residuals) or `"msac"` (the robust loop's truncated
-    /// reprojection cost `½ Σ min(eᵢ², τᵢ²)`, px², over all correspondences; its iterations are the
+    /// `"reprojection"` (`Σ` squared pixel residuals, px²) or `"msac"` (the robust loop's truncated
+    /// reprojection cost `Σ min(eᵢ², τᵢ²)`, px², over all correspondences; its iterations are the
     /// samples drawn, and it ends `closed_form` when stopped by confidence, `max_iterations` on the
     /// iteration cap or the time budget).
     pub cost_kind: &'static str,
@@ -271,81 +273,83 @@ pub struct StageReport {
     pub time_seconds: f64,
 }
 
-/// The result of [`estimate_pose`].
+/// The result of [`estimate_pose`]: the pose, whether it can be used, its cost, the correspondences
+/// used, its covariance and its certificate; how it was found is in [`PoseResult::details`].
+///
+/// Every cost is `Σ r²`, the sum of the squared (whitened) pixel residuals, two per point and two per
+/// line (the endpoints' distances to the projected line), px².
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseResult {
-    /// `R` with `x_cam = R X_world + t`.
-    pub rotation: Matrix3<f64>,
-    /// `t`, world units.
-    pub translation: Vector3<f64>,
-    /// The same motion as a unit dual quaternion (eqs. 6-7), `r₀ ≥ 0`.
-    pub dual_quaternion: DualQuaternion,
-    /// Unit rotation axis.
-    pub axis: Vector3<f64>,
-    /// Rotation angle about `axis`, radians in `[0, π]`.
-    pub angle: f64,
-    /// The estimator that ran.
-    pub method: Method,
-    /// Iterations summed over stages (the `ransac` stage of the robust path counts its samples).
-    pub iterations: usize,
-    /// Cost of the last stage at the returned pose (see [`StageReport::cost_kind`]).
-    pub final_cost: f64,
-    /// Why the last iterative stage stopped.
-    pub termination: Termination,
-    /// Whether the answer can be used, and if not why.
+    /// The returned pose, `x_cam = R X_world + t` (NaN if the solver failed). Its rotation as a dual
+    /// quaternion, an axis and angle, or a rotation vector: [`crate::Pose::dual_quaternion`],
+    /// [`crate::Pose::axis_angle`], [`crate::Pose::rotation_vector`].
+    pub pose: crate::Pose,
+    /// Whether the answer can be used, and if not why. A certificate requested
+    /// ([`PoseOptions::certify`]) that does not hold turns [`Status::Success`] into
+    /// [`Status::GapNotClosed`]; every other status takes precedence over it.
     pub status: Status,
-    /// Root-mean-square reprojection error over all correspondences, pixels.
-    pub rms_error_px: f64,
-    /// Total wall time, seconds.
-    pub time_seconds: f64,
-    /// Every stage in order; the last one gave the returned pose.
-    pub stages: Vec<StageReport>,
-    /// Intrinsics estimated by the linear method (`None` for the others).
-    pub estimated_camera: Option<Camera>,
+    /// The reprojection cost `Σ r²` (px²) of the used correspondences at the returned pose, in the
+    /// observed pixels (for `linear` without refinement: at the estimated intrinsics). NaN when the
+    /// pose is not finite.
+    pub cost: f64,
     /// Which points were used for the returned pose: the final inliers when robust, else all true.
     pub inliers_points: Vec<bool>,
     /// Which lines were used for the returned pose: the final inliers when robust, else all true.
     pub inliers_lines: Vec<bool>,
-    /// What the robust loop did (`None` unless [`PoseOptions::ransac`]).
-    pub ransac: Option<RansacReport>,
     /// Covariance of the pose, 6x6: `σ² (JᵀJ)⁻¹` at the returned pose, `J` the Jacobian of the
     /// reprojection residuals of the used correspondences (the inliers when robust; two per point, two
     /// per line) with respect to `(ω, t)` — the rotation as the tangent vector `ω` of `exp(ω) R`
     /// (radians, camera frame), then the translation (world units). The first-order (Cramér-Rao)
     /// covariance of the maximum-likelihood pose, meaningful after the refinement. `σ` is
-    /// [`PoseOptions::sigma_px`] or, without it, estimated (see [`PoseResult::sigma_px`]). `None` when
+    /// [`PoseOptions::sigma_px`] or, without it, estimated (see [`PoseDetails::sigma_px`]). `None` when
     /// `JᵀJ` is singular (the used data do not fix the pose: see
     /// [`reprojection::RELATIVE_RANK_TOLERANCE`]) or not finite, when σ cannot be estimated (at most 6
     /// residuals), or when the pose is not finite. For `linear`, at the estimated intrinsics taken as
     /// exact.
     pub covariance: Option<Matrix6<f64>>,
+    /// The proved lower bound on [`PoseResult::cost`] over every rotation and translation that keeps
+    /// the object points in front of the camera ([`certificate`], kind `sublevel_set`), in `Σ r²`;
+    /// `certified` when the relative gap is within [`CertifyOptions::max_relative_gap`]. `None` when no
+    /// bound was computed: not requested, or not available (the reason is
+    /// [`PoseDetails::uncertified_reason`]).
+    pub certificate: Option<Certificate>,
+    /// How the pose was found: the method, its stages, timings, noise and ambiguity diagnostics.
+    pub details: PoseDetails,
+}
+
+/// How a [`PoseResult`] was found. Costs are `Σ r²`, px².
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseDetails {
+    /// The estimator that ran.
+    pub method: Method,
+    /// Iterations summed over stages (the `ransac` stage of the robust path counts its samples).
+    pub iterations: usize,
+    /// Why the last iterative stage stopped.
+    pub termination: Termination,
+    /// Every stage in order; the last one gave the returned pose.
+    pub stages: Vec<StageReport>,
+    /// Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)` over
+    /// the `m` residuals.
+    pub rms_error_px: f64,
+    /// Total wall time, seconds.
+    pub time_seconds: f64,
+    /// Intrinsics estimated by the linear method (`None` for the others).
+    pub estimated_camera: Option<Camera>,
+    /// What the robust loop did (`None` unless [`PoseOptions::ransac`]).
+    pub ransac: Option<RansacReport>,
     /// Where the `σ` of [`PoseResult::covariance`] came from; `None` when there is no covariance.
     pub covariance_source: Option<CovarianceSource>,
     /// The pixel noise `σ` used: the given [`PoseOptions::sigma_px`], or the estimate
     /// `σ̂ = √(Σ r² / (m − 6))` over the `m` residuals of the used correspondences (`None` if `m ≤ 6`).
     pub sigma_px: Option<f64>,
-    /// Whether the returned pose is proved to be the global minimum of the reprojection cost, to within
-    /// the relative gap, over every rotation and translation that keeps the object points in front of
-    /// the camera (see [`certificate`]).
-    pub certified: bool,
-    /// The proved lower bound on `½ Σ r²` (px²) over that domain; NaN when there is none.
-    pub lower_bound: f64,
-    /// The bound as the certificate proved it, before the clamp to the cost that gives `lower_bound`
-    /// (NaN when there is none): a test of the proof compares it with the costs of other poses.
-    pub raw_lower_bound: f64,
-    /// `(cost − lower_bound) / cost`, NaN when there is no bound.
-    pub gap: f64,
-    /// How the certificate was proved, or why there is none.
-    pub certificate: Certificate,
-    /// True when [`PoseResult::status`] is [`Status::Ambiguous`].
-    pub ambiguous: bool,
     /// The cheapest other local minimum found with every object point in front (world frame), and its
-    /// cost `½ Σ r²` (px²); `None` when the search found no other.
+    /// cost `Σ r²` (px²); `None` when the search found no other. Within the ambiguity margin of
+    /// [`PoseResult::cost`], the status is [`Status::Ambiguous`].
     pub second_best: Option<(Pose, f64)>,
     /// When the residuals at the returned pose exceed the noise (`σ` = [`PoseOptions::sigma_px`], else
     /// 1 px), the minimal solvers also look for poses with every object point *behind* the camera
-    /// ([`candidates::behind_camera_cost`]); the cost `½ Σ r²` (px²) of the best one that fits better
-    /// than the returned pose by more than `½ ambiguity_threshold σ²` (the ambiguity margin, with the
+    /// ([`candidates::behind_camera_cost`]); the cost `Σ r²` (px²) of the best one that fits better
+    /// than the returned pose by more than `ambiguity_threshold σ²` (the ambiguity margin, with the
     /// stated σ) and by a factor of at least 100, if any. Then [`PoseResult::status`] is
     /// [`Status::BehindCamera`]: the returned pose is the best found with the points in front,
     /// but the data come from points behind the camera (or a mirrored object). `None` otherwise.
@@ -355,13 +359,9 @@ pub struct PoseResult {
     /// `consistent == false` says the residuals are not explained by that noise (distortion left in the
     /// pixels, a wrong camera, noise larger than stated). `None` without `sigma_px` or when `m ≤ 6`.
     pub residual_test: Option<ResidualTest>,
-}
-
-impl PoseResult {
-    /// The returned pose, `x_cam = R X_world + t`.
-    pub fn pose(&self) -> crate::Pose {
-        crate::Pose::new(self.rotation, self.translation)
-    }
+    /// Why the pose is not certified, in words (not requested, not available for this input, the
+    /// search's node cap, the gap left); `None` when it is.
+    pub uncertified_reason: Option<String>,
 }
 
 /// Origin of the pixel noise level in [`PoseResult::covariance`].

@@ -1,18 +1,22 @@
-//! The last stage of every pose pipeline: the status, the reprojection error, the covariance, the
-//! rotation forms, and the search and certificate outcomes, assembled into a [`PoseResult`].
+//! The last stage of every pose pipeline: the status, the reprojection error, the covariance, and the
+//! search and certificate outcomes, assembled into a [`PoseResult`].
+//!
+//! The pipeline's stages measure the reprojection cost as `½ Σ r²` (the form the optimisers and the
+//! certificate's derivation use); [`assemble`] is the one place where every reported cost becomes
+//! `Σ r²`: the result's cost, the stage costs of kind `reprojection` and `msac`, the runner-up's cost,
+//! the cost behind the camera and the certificate's bounds.
 
 use super::certificate::Certification;
 use super::correspondences::{object_points, Correspondences};
 use super::lens::Observations;
 use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
-use super::{PoseOptions, PoseResult, StageReport, Status};
+use super::{PoseDetails, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
+use crate::certificate::{Certificate, CertificateKind};
 use crate::chi_square::ResidualTest;
-use crate::geometry::dual_quaternion::DualQuaternion;
-use crate::geometry::quaternion::{axis_angle, from_rotation_matrix};
+use crate::interrupt::stop_reason;
 use crate::optim::{Objective, Termination};
-use nalgebra::{Vector3, Vector4};
 use std::time::Instant;
 
 /// What a pipeline hands to [`assemble`].
@@ -32,11 +36,11 @@ pub(crate) struct Parts<'c> {
     pub inliers: Option<(Vec<bool>, Vec<bool>)>,
     /// The robust loop's report.
     pub ransac: Option<RansacReport>,
-    /// The runner-up local minimum (world frame) and its cost.
+    /// The runner-up local minimum (world frame) and its cost `½ Σ r²`.
     pub second_best: Option<(Pose, f64)>,
     /// The certificate stage's outcome.
     pub certification: Certification,
-    /// The cost of a pose with every object point behind the camera, when it beats `pose`.
+    /// The cost `½ Σ r²` of a pose with every object point behind the camera, when it beats `pose`.
     pub behind_camera_cost: Option<f64>,
 }
 
@@ -79,7 +83,29 @@ pub(crate) fn status_of_stages(
     }
 }
 
-/// The [`PoseResult`] of a finished run.
+/// A reported cost `Σ r²` from the pipeline's `½ Σ r²`.
+fn sum_of_squares(half: f64) -> f64 {
+    2.0 * half
+}
+
+/// The shared certificate of the certificate stage's outcome, in `Σ r²`: `None` when no bound was
+/// computed.
+fn certificate_of(certification: &Certification) -> Option<Certificate> {
+    (!certification.raw_lower_bound.is_nan()).then_some(Certificate {
+        lower_bound: sum_of_squares(certification.lower_bound),
+        raw_lower_bound: sum_of_squares(certification.raw_lower_bound),
+        relative_gap: certification.relative_gap,
+        certified: certification.certified,
+        kind: CertificateKind::SublevelSet,
+        nodes: certification.nodes,
+        solver_iterations: 0,
+    })
+}
+
+/// The [`PoseResult`] of a finished run; every cost converted to `Σ r²` (see the module docs), and a
+/// requested certificate that does not hold turning [`Status::Success`] into
+/// [`Status::GapNotClosed`] ([`Status::Interrupted`] or [`Status::TimeBudget`] when its search was
+/// stopped).
 pub(crate) fn assemble(
     observations: &Observations<'_>,
     opts: &PoseOptions,
@@ -88,7 +114,7 @@ pub(crate) fn assemble(
 ) -> PoseResult {
     let Parts {
         pose,
-        stages,
+        mut stages,
         status,
         estimated_camera,
         used,
@@ -98,20 +124,26 @@ pub(crate) fn assemble(
         certification,
         behind_camera_cost,
     } = parts;
-    let last = stages.last().expect("at least one stage").clone();
-    let finite = is_finite(&pose);
+    let termination = stages.last().expect("at least one stage").termination;
+    for stage in stages
+        .iter_mut()
+        .filter(|s| matches!(s.cost_kind, "reprojection" | "msac"))
+    {
+        stage.initial_cost = sum_of_squares(stage.initial_cost);
+        stage.final_cost = sum_of_squares(stage.final_cost);
+    }
     let residual_count = 2 * (used.n_points() + used.n_lines());
     // One linearisation at the returned pose gives the reprojection error and `JᵀJ`, exact in the
     // observed pixels. The refinement uses the given camera; the linear method alone is judged at its
     // own intrinsics (for a pinhole camera: through a lens, at the given one).
-    let linearization = finite.then(|| match estimated_camera {
+    let linearization = is_finite(&pose).then(|| match estimated_camera {
         Some(model) if !opts.refine && observations.lens.is_none() => {
             ReprojectionCost::of(&model, used).linearize(&pose)
         }
         _ => observations.cost(used).linearize(&pose),
     });
-    let reprojection_cost = linearization.as_ref().map_or(f64::NAN, |l| l.cost);
-    let rms_error_px = (2.0 * reprojection_cost / residual_count.max(1) as f64).sqrt();
+    let cost = sum_of_squares(linearization.as_ref().map_or(f64::NAN, |l| l.cost));
+    let rms_error_px = (cost / residual_count.max(1) as f64).sqrt();
     let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);
     // The χ² test needs the noise from the caller; without the refinement the linear method also
     // fitted the five intrinsics.
@@ -122,50 +154,39 @@ pub(crate) fn assemble(
     };
     let residual_test = opts
         .sigma_px
-        .and_then(|s| ResidualTest::new(2.0 * reprojection_cost / (s * s), residual_count.saturating_sub(fitted)));
-    let (dual_quaternion, axis, angle) = if finite {
-        let q = DualQuaternion::from_rotation_translation(&pose.rotation, &pose.translation);
-        let (axis, angle) = axis_angle(&from_rotation_matrix(&pose.rotation));
-        (q, axis, angle)
-    } else {
-        let nan4 = Vector4::from_element(f64::NAN);
-        (
-            DualQuaternion { r: nan4, s: nan4 },
-            Vector3::from_element(f64::NAN),
-            f64::NAN,
-        )
-    };
+        .and_then(|s| ResidualTest::new(cost / (s * s), residual_count.saturating_sub(fitted)));
     let (inliers_points, inliers_lines) =
         inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
+    let certificate = certificate_of(&certification);
+    // A requested certificate that does not hold: the gap is not closed, or the search was stopped.
+    let status = if opts.certify.is_some() && status == Status::Success && !certification.certified {
+        stop_reason().map_or(Status::GapNotClosed, Status::stopped)
+    } else {
+        status
+    };
     PoseResult {
-        rotation: pose.rotation,
-        translation: pose.translation,
-        dual_quaternion,
-        axis,
-        angle,
-        method: opts.method,
-        iterations: stages.iter().map(|s| s.iterations).sum(),
-        final_cost: last.final_cost,
-        termination: last.termination,
+        pose,
         status,
-        rms_error_px,
-        time_seconds: started.elapsed().as_secs_f64(),
-        stages,
-        estimated_camera,
+        cost,
         inliers_points,
         inliers_lines,
-        ransac,
         covariance,
-        covariance_source,
-        sigma_px,
-        certified: certification.certified,
-        lower_bound: certification.lower_bound,
-        raw_lower_bound: certification.raw_lower_bound,
-        gap: certification.gap,
-        certificate: certification.certificate,
-        ambiguous: status == Status::Ambiguous,
-        second_best,
-        behind_camera_cost,
-        residual_test,
+        certificate,
+        details: PoseDetails {
+            method: opts.method,
+            iterations: stages.iter().map(|s| s.iterations).sum(),
+            termination,
+            stages,
+            rms_error_px,
+            time_seconds: started.elapsed().as_secs_f64(),
+            estimated_camera,
+            ransac,
+            covariance_source,
+            sigma_px,
+            second_best: second_best.map(|(p, c)| (p, sum_of_squares(c))),
+            behind_camera_cost: behind_camera_cost.map(sum_of_squares),
+            residual_test,
+            uncertified_reason: certification.reason,
+        },
     }
 }

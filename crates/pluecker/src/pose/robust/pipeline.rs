@@ -1,8 +1,9 @@
 //! The robust pipeline of [`crate::pose::estimate_pose`]: validation → LO-RANSAC in the conditioned
 //! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose.
 
-use super::super::certificate::{Certificate, Certification};
+use super::super::certificate::Certification;
 use super::super::correspondences::{Conditioning, Correspondences};
+use super::super::estimate::NOT_REQUESTED;
 use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
 use super::super::reprojection::Pose;
@@ -125,10 +126,8 @@ pub(crate) fn estimate_robust(
     let failure = failure.or_else(|| (count(&points) + count(&lines) < required).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
     let certification = Certification::none(match opts.certify {
-        None => Certificate::NotRequested,
-        Some(_) => {
-            Certificate::NotProved("not available for the robust estimator (the inlier set is not certified)".into())
-        }
+        None => NOT_REQUESTED,
+        Some(_) => "not available for the robust estimator (the inlier set is not certified)",
     });
     Ok(assemble(
         observations,
