@@ -160,6 +160,40 @@ fn same_seed_gives_the_same_result() {
     );
 }
 
+/// The report's MSAC score is the result's cost convention, `Σ min(eᵢ², τ²)` in px², at the pose the
+/// sampling stage ended on: recomputed here from that pose and the pixels (points only, so each `eᵢ`
+/// is a plain reprojection distance), and equal to the `msac` stage's final cost.
+#[test]
+fn the_msac_score_is_a_sum_of_truncated_squares() {
+    let (scene, corr) = scene_with_outliers(60, 0, 0.3, 11);
+    let result = estimate_pose(&scene.camera, &corr, &robust(3)).unwrap();
+    let report = result.details.ransac.unwrap();
+    let stage = result.details.stages.iter().find(|s| s.cost_kind == "msac").unwrap();
+    let tau2 = RansacOptions::default().point_threshold.powi(2);
+    let k = scene.camera.matrix();
+    let oracle: f64 = corr
+        .points2d
+        .iter()
+        .zip(&corr.points3d)
+        .map(|(u, x)| {
+            let p = k * (stage.rotation * x + stage.translation);
+            let e2 = (Vector2::new(p.x / p.z, p.y / p.z) - u).norm_squared();
+            if p.z > 0.0 {
+                e2.min(tau2)
+            } else {
+                tau2
+            }
+        })
+        .sum();
+    // Relative rounding of a sum of 60 terms of at most τ² = 16 px².
+    assert!(
+        (report.score - oracle).abs() <= 1e-9 * oracle.max(1.0),
+        "{} vs {oracle}",
+        report.score
+    );
+    assert_eq!(report.score, stage.final_cost);
+}
+
 fn all_outliers(n_points: usize, seed: u64) -> (Camera, Correspondences) {
     let scene = random_scene(SceneKind::General, n_points, 0, seed);
     let mut rng = Rng::new(seed);

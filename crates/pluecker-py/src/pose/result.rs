@@ -119,7 +119,7 @@ result_class! {
         /// Fewest inliers the best model needed, else status `too_few_inliers`: `max(min_inliers, min(c + 1,
         /// ⌈min_inlier_ratio · n⌉))`, `c` the most inliers a wrong pose plausibly gets by chance among `n`.
         required_inliers = |r| r.inner.required_inliers;
-        /// MSAC score `½ Σ min(e², τ²)` of the best model, px².
+        /// MSAC score `Σ min(e², τ²)` of the best model, px².
         score = |r| r.inner.score;
         /// Why sampling stopped: `confidence`, `min_inlier_ratio` (enough samples to find a model with that
         /// inlier fraction, and none was), `iteration_cap`, `time_budget`, `interrupted` or `no_solvable_sample`.

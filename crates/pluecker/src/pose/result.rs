@@ -180,7 +180,10 @@ pub(crate) fn assemble(
             rms_error_px,
             time_seconds: started.elapsed().as_secs_f64(),
             estimated_camera,
-            ransac,
+            ransac: ransac.map(|r| RansacReport {
+                score: sum_of_squares(r.score),
+                ..r
+            }),
             covariance_source,
             sigma_px,
             second_best: second_best.map(|(p, c)| (p, sum_of_squares(c))),

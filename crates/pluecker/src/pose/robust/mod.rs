@@ -266,7 +266,7 @@ pub struct RansacReport {
     /// `TooFewInliers`: `max(min_inliers, min(c + 1, ⌈ρ n⌉))` with `c` the most inliers a wrong model
     /// plausibly gets by chance (see the module documentation) and `ρ` = `min_inlier_ratio`.
     pub required_inliers: usize,
-    /// MSAC score `½ Σ min(eᵢ², τᵢ²)` of the best model, px².
+    /// MSAC score `Σ min(eᵢ², τᵢ²)` of the best model, px² (the result's cost convention).
     pub score: f64,
     /// Why the loop stopped.
     pub stop: RansacStop,
