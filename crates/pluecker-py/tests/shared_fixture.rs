@@ -41,7 +41,7 @@ fn shared_fixture_scene_is_pinned() {
 #[test]
 fn shared_fixture_every_method_recovers_the_pose() {
     let scene = random_scene(SceneKind::General, N_POINTS, N_LINES, SEED);
-    for method in Method::ALL {
+    for &method in Method::ALL {
         let opts = PoseOptions {
             method,
             ..PoseOptions::default()

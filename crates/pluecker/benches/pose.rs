@@ -83,7 +83,7 @@ fn bench_group(c: &mut Criterion, group_name: &str, refine: bool) {
     for problem in &PROBLEMS {
         let (scene, corr) = noisy_problem(problem);
         let camera = scene.camera;
-        for method in Method::ALL {
+        for &method in Method::ALL {
             let opts = PoseOptions {
                 method,
                 refine,

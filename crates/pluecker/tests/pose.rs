@@ -32,7 +32,7 @@ fn every_method_recovers_noise_free_poses_from_points_lines_and_both() {
     for seed in 0..5u64 {
         for (np, nl) in cases {
             let scene = random_scene(SceneKind::General, np, nl, seed);
-            for method in Method::ALL {
+            for method in Method::ALL.iter().copied() {
                 if method == Method::Linear && (np < 6 || nl > 0) {
                     continue;
                 }
@@ -62,7 +62,7 @@ fn the_papers_camera_with_negative_focal_length_works_for_every_method() {
     let c = subset(&scene.correspondences, 100, &mut rng);
     // Undamped Newton is left out: from starts ≥ 30° away it often diverges, as the paper warns
     // (Figure 3); the default start is only guaranteed to be within 45°.
-    for method in Method::ALL.into_iter().filter(|m| *m != Method::Newton) {
+    for method in Method::ALL.iter().copied().filter(|m| *m != Method::Newton) {
         let r = estimate_pose(&scene.camera, &c, &options(method, true)).unwrap();
         let rot_err = rotation_distance(&r.pose.rotation, &scene.rotation);
         assert!(rot_err < 1e-6, "{method:?}: {rot_err}");

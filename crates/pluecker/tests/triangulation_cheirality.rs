@@ -93,7 +93,7 @@ fn a_point_in_front_of_cameras_with_a_negative_focal_length_is_found_by_every_me
     for p in &cameras {
         assert!((p * truth.push(1.0)).z > 70.0, "λ is the depth, 78 cm");
     }
-    for method in Method::ALL {
+    for method in Method::ALL.iter().copied() {
         let r = triangulate_point(&cameras, &obs, None, &opts(method)).unwrap();
         assert_eq!(r.report.status, Status::Success, "{method:?}: {:?}", r.report);
         assert_consistent(&r.report, method.as_str());
@@ -155,7 +155,7 @@ fn mirrored_images_and_mirrored_worlds_give_the_same_points() {
             .iter()
             .chain(&world_mirrored)
             .all(|p| p.fixed_view::<3, 3>(0, 0).determinant() < 0.0));
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let what = format!("seed {seed} {method:?}");
             let plain = triangulate_point(&scene.cameras, &obs, None, &opts(method)).unwrap();
             assert_eq!(plain.report.status, Status::Success, "{what}");
@@ -183,7 +183,7 @@ fn mirrored_images_give_the_same_lines() {
         let world: Vec<Matrix3x4<f64>> = scene.cameras.iter().map(|p| p * mirror_world()).collect();
         let (lines, covs) = lines_from_segments(&segments, 1.0).unwrap();
         let (mlines, mcovs) = lines_from_segments(&mirrored, 1.0).unwrap();
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let what = format!("seed {seed} {method:?}");
             let plain = triangulate_line(&scene.cameras, &lines, Some(&covs), &opts(method)).unwrap();
             let a = triangulate_line(&cameras, &mlines, Some(&mcovs), &opts(method)).unwrap();
@@ -229,7 +229,7 @@ fn mirrored_images_give_the_same_quadrics() {
     let covs: Vec<_> = fits.iter().map(|f| f.covariance).collect();
     let mconics: Vec<Matrix3<f64>> = mirrored.iter().map(|f| f.conic).collect();
     let mcovs: Vec<_> = mirrored.iter().map(|f| f.covariance).collect();
-    for method in Method::ALL {
+    for method in Method::ALL.iter().copied() {
         let plain = triangulate_quadric(&scene.cameras, &conics, Some(&covs), &opts(method)).unwrap();
         assert_ne!(plain.report.status, Status::BehindCamera, "{method:?}");
         let a = triangulate_quadric(&cameras, &mconics, Some(&mcovs), &opts(method)).unwrap();

@@ -45,7 +45,7 @@ fn noise_free_lines_are_recovered_by_every_method() {
     for (views, seed) in [(2, 1u64), (3, 2), (6, 3)] {
         let scene = line_scene(views, 0.8, seed);
         let lines = exact_lines(&scene);
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let r = triangulate_line(&scene.cameras, &lines, None, &opts(method)).unwrap();
             let (angle, offset) = line_error(&r, &scene.plucker());
             assert!(
@@ -485,7 +485,7 @@ fn reported_cost_is_eq_19() {
     let mut rng = Rng::new(10);
     let segments = scene.noisy_segments(1.0, &mut rng);
     let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
-    for method in Method::ALL {
+    for method in Method::ALL.iter().copied() {
         let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(method)).unwrap();
         let cost = independent_line_cost(&scene.cameras, &lines, &covariances, &r.point, &(r.point + r.direction));
         assert!(
@@ -697,7 +697,7 @@ mod batch {
         let cams_of = |t: usize| -> Vec<Matrix3x4<f64>> { seen(&visible, v, t).iter().map(|&j| cameras[j]).collect() };
 
         // Segments with endpoint noise, every method.
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let tracks = LineTracks {
                 lines: ImageLines::Segments {
                     endpoints: &endpoints,

@@ -48,7 +48,7 @@ fn views_of(cameras: &[Matrix3x4<f64>], obs: &[Vector2<f64>], covs: Option<&[Mat
 fn noise_free_points_are_recovered_exactly_by_every_method() {
     for (views, seed) in [(2, 1), (3, 2), (10, 3)] {
         let scene = triangulation_scene(views, 0.4, seed);
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let r = triangulate_point(&scene.cameras, &scene.observations, None, &options(method)).unwrap();
             assert_eq!(r.report.status, Status::Success, "{views} views {method:?}");
             // Points ~5 units away, pixel-exact data: agreement to ~1e-9 relative (DLT conditioning).

@@ -33,7 +33,7 @@ fn noise_free_ellipsoids_are_recovered_by_every_method() {
     for (views, seed) in [(3, 1u64), (5, 2)] {
         let scene = quadric_scene(views, 0.8, seed);
         let conics = outlines(&scene.cameras, &scene.ellipsoid);
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let r = triangulate_quadric(&scene.cameras, &conics, None, &opts(method)).unwrap();
             let e = &scene.ellipsoid;
             assert!(
@@ -453,7 +453,7 @@ fn an_ellipsoid_behind_a_camera_is_reported() {
         Ellipse::from_primal(&conics[0]).is_some(),
         "the mirrored outline is still an ellipse"
     );
-    for method in Method::ALL {
+    for method in Method::ALL.iter().copied() {
         let r = triangulate_quadric(&cameras, &conics, None, &opts(method)).unwrap();
         assert_eq!(r.report.status, Status::BehindCamera, "{}", method.as_str());
         // Status and certificate agree (issue 10: optimal said behind_camera and certified).
@@ -578,7 +578,7 @@ mod batch {
                 .collect();
             triangulate_quadric(cams, &c, Some(&s), &opts(method)).unwrap()
         };
-        for method in Method::ALL {
+        for method in Method::ALL.iter().copied() {
             let tracks = QuadricTracks {
                 conics: &conics,
                 visible: Some(&visible),

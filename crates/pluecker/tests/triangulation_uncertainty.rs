@@ -189,7 +189,7 @@ fn point_covariance_in_every_method_the_batch_and_at_infinity() {
         visible: None,
         covariances: Some(&flat_cov),
     };
-    for method in Method::ALL {
+    for method in Method::ALL.iter().copied() {
         let single = triangulate_point(&scene.cameras, &obs, Some(&covs), &opts(method)).unwrap();
         let cov = single.covariance.unwrap();
         assert!((cov - cov.transpose()).norm() == 0.0 && cov.symmetric_eigenvalues().min() > 0.0);
@@ -207,7 +207,7 @@ fn point_covariance_in_every_method_the_batch_and_at_infinity() {
     let camera = |tx: f64| k * Matrix3x4::new(1.0, 0.0, 0.0, tx, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 5.0);
     let cams = [camera(0.0), camera(1.0)];
     let same = [Vector2::new(300.0, 200.0); 2];
-    for method in Method::ALL {
+    for method in Method::ALL.iter().copied() {
         let r = triangulate_point(&cams, &same, None, &opts(method)).unwrap();
         // `local` stops on its iteration cap far out along the rays (parallax ~1e-6 rad), where
         // `JᵀJ` is numerically singular too.

@@ -450,7 +450,7 @@ mod tests {
         let line: Vec<Vector3<f64>> = (0..10)
             .map(|i| Vector3::new(0.0, 0.0, 5.0) + direction * (-1.0 + 2.0 * i as f64 / 9.0))
             .collect();
-        for method in Method::ALL {
+        for &method in Method::ALL {
             assert!(
                 matches!(
                     points_only(line.clone()).validate(method),

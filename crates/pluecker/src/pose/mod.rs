@@ -39,7 +39,8 @@ use reprojection::Pose;
 use std::time::Instant;
 
 /// The estimators. All of them accept points, lines, or both (the linear one uses points only).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Method {
     /// Rotation and translation together: eqs. 13 + 22 by the trust region with Hebden's step
     /// (section 4.1). The default.
@@ -60,39 +61,16 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order above.
-    pub const ALL: [Method; 6] = [
-        Method::TrustRegion,
-        Method::RotationThenTranslation,
-        Method::TrustRegionExact,
-        Method::Newton,
-        Method::LevenbergMarquardt,
-        Method::Linear,
-    ];
+    pub const ALL: &'static [Method] = <Method as strum::VariantArray>::VARIANTS;
 
     /// The kebab-case name used by Python and the command line.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            Method::TrustRegion => "trust-region",
-            Method::RotationThenTranslation => "rotation-then-translation",
-            Method::TrustRegionExact => "trust-region-exact",
-            Method::Newton => "newton",
-            Method::LevenbergMarquardt => "levenberg-marquardt",
-            Method::Linear => "linear",
-        }
+        self.into()
     }
 
     /// Parses [`Method::as_str`] names.
     pub fn parse(name: &str) -> Result<Method> {
-        Method::ALL
-            .into_iter()
-            .find(|m| m.as_str() == name)
-            .ok_or_else(|| Error::InvalidOption {
-                name: "method".into(),
-                reason: format!(
-                    "unknown method '{name}'; expected one of {}",
-                    Method::ALL.map(|m| m.as_str()).join(", ")
-                ),
-            })
+        crate::names::parse("method", "method", name)
     }
 }
 
@@ -365,7 +343,8 @@ pub struct PoseDetails {
 }
 
 /// Origin of the pixel noise level in [`PoseResult::covariance`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum CovarianceSource {
     /// [`PoseOptions::sigma_px`] was given.
     Given,
@@ -376,10 +355,7 @@ pub enum CovarianceSource {
 impl CovarianceSource {
     /// `"given"` or `"estimated"`.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            CovarianceSource::Given => "given",
-            CovarianceSource::Estimated => "estimated",
-        }
+        self.into()
     }
 }
 

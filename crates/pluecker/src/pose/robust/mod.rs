@@ -210,7 +210,8 @@ impl RansacOptions {
 }
 
 /// Why the sampling loop stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum RansacStop {
     /// The adaptive bound for the requested confidence was reached.
     Confidence,
@@ -232,14 +233,7 @@ pub enum RansacStop {
 impl RansacStop {
     /// snake_case name for reports, JSON and Python.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            RansacStop::Confidence => "confidence",
-            RansacStop::IterationCap => "iteration_cap",
-            RansacStop::MinInlierRatio => "min_inlier_ratio",
-            RansacStop::TimeBudget => "time_budget",
-            RansacStop::Interrupted => "interrupted",
-            RansacStop::NoSolvableSample => "no_solvable_sample",
-        }
+        self.into()
     }
 }
 
