@@ -17,7 +17,7 @@ use crate::pose::result::PyPoseStage;
 use crate::threads::solve;
 use nalgebra::{SVector, Vector3};
 use pluecker::pose::minimal;
-use pluecker::pose::refinement::refine_pose as core_refine_pose;
+use pluecker::pose::refine_pose as core_refine_pose;
 use pluecker::Pose;
 use pyo3::prelude::*;
 use pyo3::types::PyList;

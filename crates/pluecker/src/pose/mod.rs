@@ -6,17 +6,17 @@
 //! is any [`crate::AnyCamera`]: through a lens with distortion the refinement minimises the exact error
 //! in the observed pixels ([`lens`] says what each stage works on).
 
-pub mod algebraic;
-pub mod candidates;
+pub(crate) mod algebraic;
+pub(crate) mod candidates;
 pub mod certificate;
-pub mod correspondences;
+pub(crate) mod correspondences;
 mod estimate;
-pub mod initialization;
+pub(crate) mod initialization;
 pub mod lens;
-pub mod linear;
+pub(crate) mod linear;
 pub mod minimal;
-pub mod noise;
-pub mod refinement;
+pub(crate) mod noise;
+pub(crate) mod refinement;
 pub mod reprojection;
 mod result;
 pub mod robust;
