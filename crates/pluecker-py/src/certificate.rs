@@ -99,7 +99,6 @@ impl Field for PyCertificate {
 }
 
 /// `Option<Certificate>` of the core as the Python property: `None` when no bound was computed.
-#[allow(dead_code)] // used as results move to the shared certificate
 pub(crate) fn certificate_of(certificate: Option<Certificate>, primitive: Primitive) -> Option<PyCertificate> {
     certificate.map(|inner| PyCertificate { inner, primitive })
 }

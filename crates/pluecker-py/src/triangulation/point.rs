@@ -52,19 +52,16 @@ pub struct PyPointTriangulation {
     point: Vector3<f64>,
     covariance: Option<Matrix3<f64>>,
     inliers: Option<Vec<bool>>,
-    certificate_domain: &'static str,
 }
 
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
-        let certificate_domain = result.report.certificate.kind.domain(Primitive::Point);
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
+        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report, primitive: Primitive::Point }).add_subclass(
             PyPointTriangulation {
                 point: result.point,
                 covariance: result.covariance,
                 inliers: result.inliers,
-                certificate_domain,
             },
         );
         Py::new(py, init)
@@ -73,8 +70,6 @@ impl PyPointTriangulation {
 
 result_class! {
     PyPointTriangulation: PyTriangulationReport {
-        /// Which points the certificate's lower bound covers (`'none'` without one): every point in front of the cameras, or the search domain of branch and bound.
-        certificate_domain = |x| x.certificate_domain;
         /// The point, world frame.
         X = |p| p.point;
         /// Its 3x3 covariance (first order, from the observation covariances); `None` when singular.
@@ -115,18 +110,17 @@ fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Ve
 /// covariances, and the cost is the reprojection error in those pixels through the exact projection
 /// (certificate `lens_convexity_test` through a lens).
 #[pyfunction]
-#[pyo3(signature = (P, x, cov = None, method = None, *, options = None, cameras = None))]
+#[pyo3(signature = (P, x, cov = None, *, options = None, cameras = None))]
 #[allow(non_snake_case)]
 pub fn triangulate_point(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulation>> {
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = crate::convert::cameras("P", P)?;
     let obs = observations("x", x, cams.len())?;
     let covs = covariances2("cov", cov, cams.len())?;
@@ -145,8 +139,7 @@ pub fn triangulate_point(
 pack_struct!(PyPointTriangulation {
     point,
     covariance,
-    inliers,
-    certificate_domain
+    inliers
 });
 
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
@@ -309,7 +302,7 @@ const SHORT_BATCH: usize = 4096;
 
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, x, visible = None, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (P, x, visible = None, cov = None, *, options = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_points(
     py: Python<'_>,
@@ -317,13 +310,12 @@ pub fn triangulate_points(
     x: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = cameras("P", P)?;
     let v = cams.len();
     if v < 2 {
@@ -395,7 +387,7 @@ pub fn triangulate_points(
 /// error in those pixels through the exact projection; `optimal` certifies that cost (certificate
 /// `lens_convexity_test`) where it can prove it, and is `gap_not_closed` where it cannot.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
+#[pyo3(signature = (P, track, image, x, cov = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_point_observations(
     py: Python<'_>,
@@ -404,7 +396,6 @@ pub fn triangulate_point_observations(
     image: &Bound<'_, PyAny>,
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
@@ -412,7 +403,7 @@ pub fn triangulate_point_observations(
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = crate::convert::cameras("P", P)?;
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     let rows = SortedRows::read(track, image, n_tracks)?;
