@@ -558,6 +558,6 @@ def test_triangulation_methods_are_exported_and_each_is_accepted():
     X = np.array([0.1, -0.2, 1.0, 1.0])
     x = np.array([(p @ X)[:2] / (p @ X)[2] for p in P])
     for method in pluecker.TRIANGULATION_METHODS:
-        assert pluecker.triangulate_point(P, x, method=method).method == method
+        assert pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=method)).method == method
     with pytest.raises(pluecker.InvalidOptionError):
-        pluecker.triangulate_point(P, x, method="best")
+        pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method="best"))
