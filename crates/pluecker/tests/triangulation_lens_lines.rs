@@ -13,7 +13,7 @@ use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;
-use pluecker::triangulation::line::batch::{triangulate_lines_sparse_views, SparseSegmentTracks};
+use pluecker::triangulation::line::batch::{triangulate_line_observations_views, SparseSegmentTracks};
 use pluecker::triangulation::line::lens::{exact_cost, LensSegment};
 use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments, triangulate_line_segments_views};
 use pluecker::triangulation::tracks::Csr;
@@ -676,7 +676,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         covariances: Some(&covariances),
     };
     let o = opts(Method::Local);
-    let results = triangulate_lines_sparse_views(&views, &tracks, &o, None).unwrap();
+    let results = triangulate_line_observations_views(&views, &tracks, &o, None).unwrap();
     for (t, result) in results.iter().enumerate() {
         let seen = &images[offsets[t]..offsets[t + 1]];
         let track_obs: Vec<&Obs> = rows[offsets[t]..offsets[t + 1]].to_vec();
@@ -698,7 +698,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         segments: &segments,
         covariances: Some(&covariances),
     };
-    let results = triangulate_lines_sparse_views(&views, &tracks, &o, None).unwrap();
+    let results = triangulate_line_observations_views(&views, &tracks, &o, None).unwrap();
     assert!(results[0].is_ok());
     match &results[1] {
         Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("segments[1]", 2)),

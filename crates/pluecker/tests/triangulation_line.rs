@@ -965,7 +965,7 @@ mod batch {
 
 #[test]
 fn sparse_line_tracks_equal_the_dense_batch() {
-    use pluecker::triangulation::line::batch::{triangulate_lines_sparse, SparseLineTracks};
+    use pluecker::triangulation::line::batch::{triangulate_line_observations, SparseLineTracks};
     use pluecker::triangulation::tracks::Csr;
     // Three views, four tracks seen in all of them; the sparse form lists the same rows track by track.
     let mut rng = pluecker::rng::Rng::new(21);
@@ -999,7 +999,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
     .unwrap();
     let offsets = [0, 3, 6, 9, 12];
     let images: Vec<usize> = (0..4).flat_map(|_| 0..3).collect();
-    let sparse = triangulate_lines_sparse(
+    let sparse = triangulate_line_observations(
         &cameras,
         &SparseLineTracks {
             csr: Csr {

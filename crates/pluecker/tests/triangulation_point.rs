@@ -7,7 +7,7 @@ use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{
-    triangulate_points, triangulate_points_linear, triangulate_points_sparse, PointTracks, SparsePointTracks,
+    triangulate_points, triangulate_points_linear, triangulate_point_observations, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::certificate::convexity_test;
 use pluecker::triangulation::point::cost::{in_front, point_views, PointView};
@@ -751,7 +751,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         covariances: Some(&sparse_cov),
     };
     let a = triangulate_points(&cameras, &d, &opts, None).unwrap();
-    let b = triangulate_points_sparse(&cameras, &s, &opts, None).unwrap();
+    let b = triangulate_point_observations(&cameras, &s, &opts, None).unwrap();
     for (t, (a, b)) in a.into_iter().zip(b).enumerate() {
         let (mut a, mut b) = (a.unwrap(), b.unwrap());
         (a.report.time_seconds, b.report.time_seconds) = (0.0, 0.0);
@@ -774,8 +774,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         observations: &rev_obs,
         covariances: Some(&rev_cov),
     };
-    let c = triangulate_points_sparse(&cameras, &reversed, &opts, None).unwrap();
-    for (t, (b, c)) in triangulate_points_sparse(&cameras, &s, &opts, None)
+    let c = triangulate_point_observations(&cameras, &reversed, &opts, None).unwrap();
+    for (t, (b, c)) in triangulate_point_observations(&cameras, &s, &opts, None)
         .unwrap()
         .into_iter()
         .zip(c)
@@ -805,7 +805,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         },
         ..s
     };
-    let r = triangulate_points_sparse(&cameras, &bad, &opts, None).unwrap();
+    let r = triangulate_point_observations(&cameras, &bad, &opts, None).unwrap();
     assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
@@ -821,7 +821,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_points_sparse(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_point_observations(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
     let mut down = offsets.clone();
     down.swap(1, 2);
@@ -833,6 +833,6 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_points_sparse(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_point_observations(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
 }

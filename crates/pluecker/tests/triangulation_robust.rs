@@ -13,7 +13,7 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use oracle::PointData;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::point::batch::{triangulate_points_sparse, SparsePointTracks};
+use pluecker::triangulation::point::batch::{triangulate_point_observations, SparsePointTracks};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::tracks::Csr;
 use pluecker::triangulation::{Status, TriangulationOptions};
@@ -144,7 +144,7 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
         observations: &observations,
         covariances: None,
     };
-    let batch = triangulate_points_sparse(&cameras, &tracks, &robust(), None).unwrap();
+    let batch = triangulate_point_observations(&cameras, &tracks, &robust(), None).unwrap();
     for (b, s) in batch.iter().zip(&singles) {
         let b = b.as_ref().unwrap();
         assert_eq!(b.inliers, s.inliers);
@@ -333,7 +333,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations,
         covariances: None,
     };
-    let result = triangulate_points_sparse(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let result = triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
     let result = result[0].as_ref().unwrap();
     assert_eq!(result.report.status, Status::Success);
     let cameras: Vec<_> = images.iter().map(|&j| scene.cameras[j]).collect();
@@ -355,7 +355,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations[..4],
         covariances: None,
     };
-    let refused = triangulate_points_sparse(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let refused = triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
     let message = refused[0].as_ref().unwrap_err().to_string();
     assert!(
         message.contains("2 distinct images") && message.contains("all in image 0"),

@@ -23,7 +23,8 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::batch::{
-    triangulate_lines as core_lines, triangulate_lines_sparse, triangulate_lines_sparse_views, ImageLines, LineTracks,
+    triangulate_line_observations as core_line_observations,
+    triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines, LineTracks,
     SparseLineTracks, SparseSegmentTracks,
 };
 use pluecker::triangulation::line::{
@@ -478,7 +479,7 @@ pub fn triangulate_line_observations(
             sparse_columns(
                 &rows,
                 &opts,
-                triangulate_lines_sparse_views(&views, &tracks, &opts, Some(done)),
+                core_line_observations_views(&views, &tracks, &opts, Some(done)),
             )
         })?;
         return batch_result(py, outcome);
@@ -497,7 +498,7 @@ pub fn triangulate_line_observations(
         sparse_columns(
             &rows,
             &opts,
-            triangulate_lines_sparse(&cams, &tracks, &opts, Some(done)),
+            core_line_observations(&cams, &tracks, &opts, Some(done)),
         )
     })?;
     batch_result(py, outcome)

@@ -27,8 +27,8 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::batch::{
-    triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into,
-    triangulate_points_sparse_views_into, LinearPoints, PointTracks, SparsePointTracks,
+    triangulate_points_into as core_points, triangulate_points_linear, triangulate_point_observations_into,
+    triangulate_point_observations_views_into, LinearPoints, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
@@ -422,8 +422,8 @@ pub fn triangulate_point_observations(
         let out = report.rows_mut().zip(columns.rows_mut());
         let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
         let stopped = match &views {
-            Some(views) => triangulate_points_sparse_views_into(views, &sparse, &opts, Some(done), out, write),
-            None => triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write),
+            Some(views) => triangulate_point_observations_views_into(views, &sparse, &opts, Some(done), out, write),
+            None => triangulate_point_observations_into(&cams, &sparse, &opts, Some(done), out, write),
         }
         .map_err(|e| renamed(e, POINT_NAMES))?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);

@@ -13,7 +13,7 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::batch::{
-    triangulate_quadrics as core_quadrics, triangulate_quadrics_sparse, QuadricTracks, SparseQuadricTracks,
+    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics, QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
@@ -268,7 +268,7 @@ pub fn triangulate_quadric_observations(
             covariances: covariances.as_deref(),
         };
         let results =
-            triangulate_quadrics_sparse(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+            core_quadric_observations(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
         let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
         Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;
