@@ -94,7 +94,9 @@ fn summary(case: &Case, tracks: &[Track]) {
             match r.report.certificate.map(|c| (c.kind, c.nodes)) {
                 Some((CertificateKind::ConvexityTest | CertificateKind::LensConvexityTest, _)) => by_test += 1,
                 Some((
-                    CertificateKind::BranchAndBound | CertificateKind::TaylorBranchAndBound | CertificateKind::SublevelSet,
+                    CertificateKind::BranchAndBound
+                    | CertificateKind::TaylorBranchAndBound
+                    | CertificateKind::SublevelSet,
                     n,
                 )) => {
                     by_bnb += 1;
@@ -219,7 +221,10 @@ fn bench_lines(c: &mut Criterion) {
                 .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
                 .collect();
             let certified = results.iter().filter(|r| r.report.certified()).count();
-            let nodes: usize = results.iter().map(|r| r.report.certificate.map_or(0, |c| c.nodes)).sum();
+            let nodes: usize = results
+                .iter()
+                .map(|r| r.report.certificate.map_or(0, |c| c.nodes))
+                .sum();
             let name = format!("{views}-views/optimal-{}", bound.as_str());
             eprintln!("setup line/{name}: {certified}/16 certified, mean nodes {}", nodes / 16);
             let mut k = 0;
@@ -263,7 +268,9 @@ fn bench_quadrics(c: &mut Criterion) {
                 .iter()
                 .map(|(p, x)| triangulate_quadric_points(p, x, SIGMA_PX, &opts).expect("valid"))
                 .filter(|r| {
-                    r.report.certificate.is_some_and(|c| c.kind == CertificateKind::ConvexityTest && c.certified)
+                    r.report
+                        .certificate
+                        .is_some_and(|c| c.kind == CertificateKind::ConvexityTest && c.certified)
                 })
                 .count();
             let name = format!("{views}-views/{}", method.as_str());

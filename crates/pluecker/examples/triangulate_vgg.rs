@@ -94,12 +94,18 @@ fn run(name: &str, data: &Dataset, views: &[usize]) {
         subset.push((cams.clone(), obs.clone()));
         let r = triangulate_point(&cams, &obs, None, &opts).expect("valid VGG track");
         times.push(r.report.time_seconds);
-        *kinds.entry(r.report.certificate.map_or("none", |c| c.kind.as_str())).or_default() += 1;
+        *kinds
+            .entry(r.report.certificate.map_or("none", |c| c.kind.as_str()))
+            .or_default() += 1;
         *statuses.entry(r.report.status.as_str()).or_default() += 1;
         if r.report.certified() {
             certified += 1;
         }
-        if let Some(c) = r.report.certificate.filter(|c| c.kind == CertificateKind::BranchAndBound) {
+        if let Some(c) = r
+            .report
+            .certificate
+            .filter(|c| c.kind == CertificateKind::BranchAndBound)
+        {
             nodes.push(c.nodes as f64);
         }
         // The three methods on the same points: skip a point whose linear or local answer is not

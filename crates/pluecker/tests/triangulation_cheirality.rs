@@ -20,7 +20,10 @@ use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 fn opts(method: Method) -> TriangulationOptions {
     TriangulationOptions {
         method,
-        certify: pluecker::CertifyOptions { max_nodes: Some(300), ..Default::default() },
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(300),
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -57,10 +60,7 @@ fn assert_consistent(report: &Report, what: &str) {
         );
     }
     if report.method == Method::Optimal && report.status == Status::Success {
-        assert!(
-            report.certified(),
-            "{what}: optimal success without a certificate"
-        );
+        assert!(report.certified(), "{what}: optimal success without a certificate");
     }
 }
 
@@ -194,10 +194,7 @@ fn mirrored_images_give_the_same_lines() {
                 (&b.report, b_plucker, "world"),
             ] {
                 assert_eq!(plain.report.status, other.status, "{what}, mirrored {how}");
-                assert_eq!(
-                    plain.report.certified(), other.certified(),
-                    "{what}, mirrored {how}"
-                );
+                assert_eq!(plain.report.certified(), other.certified(), "{what}, mirrored {how}");
                 assert!(
                     (plain.report.cost - other.cost).abs() <= 1e-6 * plain.report.cost,
                     "{what}, mirrored {how}: {} vs {}",
@@ -238,10 +235,7 @@ fn mirrored_images_give_the_same_quadrics() {
         for (other, centre, how) in [(&a, a.centre, "images"), (&b, b_centre, "world")] {
             let what = format!("{method:?}, mirrored {how}");
             assert_eq!(plain.report.status, other.report.status, "{what}");
-            assert_eq!(
-                plain.report.certified(), other.report.certified(),
-                "{what}"
-            );
+            assert_eq!(plain.report.certified(), other.report.certified(), "{what}");
             assert!(
                 (plain.report.cost - other.report.cost).abs() <= 1e-6 * plain.report.cost,
                 "{what}"

@@ -660,11 +660,7 @@ fn assert_inliers_fit_at_the_exact_optimum(
         cost <= best * (1.0 + 1e-9) + 1e-12,
         "{what}: {cost} above the oracle's minimum {best}"
     );
-    assert_eq!(
-        r.report.certified(),
-        r.report.status == Status::Success,
-        "{what}"
-    );
+    assert_eq!(r.report.certified(), r.report.status == Status::Success, "{what}");
 }
 
 fn robust(tau: f64) -> TriangulationOptions {

@@ -580,7 +580,10 @@ fn pinhole_views_and_a_zero_distortion_lens_keep_the_pinhole_certificate() {
             let r = triangulate_line_segments_views(&views, &segments, None, &opts(Method::Optimal)).unwrap();
             assert_eq!(r.report.status, Status::Success);
             assert!(r.report.certified());
-            assert_eq!(r.report.certificate.map(|c| c.kind), today.report.certificate.map(|c| c.kind));
+            assert_eq!(
+                r.report.certificate.map(|c| c.kind),
+                today.report.certificate.map(|c| c.kind)
+            );
             // The same problem up to the rounding of the segments' lines (two fits of one segment).
             assert!(
                 (r.report.cost - today.report.cost).abs() <= 1e-9 * today.report.cost.max(1.0),

@@ -20,7 +20,10 @@ fn opts(method: Method) -> TriangulationOptions {
     // A node cap keeps the tests fast; certificates below are asserted only where the gap closed.
     TriangulationOptions {
         method,
-        certify: pluecker::CertifyOptions { max_nodes: Some(300), ..Default::default() },
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(300),
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -544,7 +547,12 @@ fn too_small_gamma_is_infeasible() {
     assert_eq!(r.report.status, Status::Infeasible);
     assert!(!r.report.certified());
     // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(r.report.certificate.expect("a search ran").raw_lower_bound, f64::INFINITY, "{:?}", r.report);
+    assert_eq!(
+        r.report.certificate.expect("a search ran").raw_lower_bound,
+        f64::INFINITY,
+        "{:?}",
+        r.report
+    );
 }
 
 #[test]
@@ -604,7 +612,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     assert!(matches!(err(cams, &epipolar, None), Error::Degenerate { ref what } if what.contains("epipolar")));
     // Options.
     let bad = TriangulationOptions {
-        certify: pluecker::CertifyOptions { max_relative_gap: -1.0, ..Default::default() },
+        certify: pluecker::CertifyOptions {
+            max_relative_gap: -1.0,
+            ..Default::default()
+        },
         ..o.clone()
     };
     assert!(matches!(
@@ -674,7 +685,10 @@ mod batch {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
         TriangulationOptions {
             method,
-            certify: pluecker::CertifyOptions { max_nodes: Some(40), ..Default::default() },
+            certify: pluecker::CertifyOptions {
+                max_nodes: Some(40),
+                ..Default::default()
+            },
             ..Default::default()
         }
     }
@@ -920,7 +934,10 @@ mod batch {
         assert!(matches!(run(&tracks(0.0), &o), Error::InvalidOption { name, .. } if name == "sigma"));
         assert!(matches!(run(&tracks(f64::NAN), &o), Error::InvalidOption { name, .. } if name == "sigma"));
         let bad = TriangulationOptions {
-            certify: pluecker::CertifyOptions { max_nodes: Some(0), ..Default::default() },
+            certify: pluecker::CertifyOptions {
+                max_nodes: Some(0),
+                ..Default::default()
+            },
             ..o.clone()
         };
         assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "certify.max_nodes"));

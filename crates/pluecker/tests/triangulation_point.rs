@@ -7,7 +7,7 @@ use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{
-    triangulate_points, triangulate_points_linear, triangulate_point_observations, PointTracks, SparsePointTracks,
+    triangulate_point_observations, triangulate_points, triangulate_points_linear, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::certificate::convexity_test;
 use pluecker::triangulation::point::cost::{in_front, point_views, PointView};
@@ -520,7 +520,12 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
     assert!(!r.report.certified());
     // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(r.report.certificate.expect("a search ran").raw_lower_bound, f64::INFINITY, "{:?}", r.report);
+    assert_eq!(
+        r.report.certificate.expect("a search ran").raw_lower_bound,
+        f64::INFINITY,
+        "{:?}",
+        r.report
+    );
     // With a γ every view can meet, the same scene is certified.
     let opts = TriangulationOptions {
         max_reprojection_error: Some(30.0),
@@ -573,7 +578,10 @@ fn bad_input_gives_the_right_error() {
         .collect();
     assert!(matches!(err(&same_centre, obs, None), Error::Degenerate { what } if what.contains("no parallax")));
     let bad_opts = TriangulationOptions {
-        certify: pluecker::CertifyOptions { max_relative_gap: -1.0, ..Default::default() },
+        certify: pluecker::CertifyOptions {
+            max_relative_gap: -1.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     assert!(matches!(

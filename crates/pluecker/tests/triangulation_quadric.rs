@@ -16,7 +16,10 @@ use pluecker::Error;
 fn opts(method: Method) -> TriangulationOptions {
     TriangulationOptions {
         method,
-        certify: pluecker::CertifyOptions { max_nodes: Some(200), ..Default::default() },
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(200),
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -413,7 +416,11 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
         let scene = quadric_scene(3, 0.8, 40 + seed);
         let (conics, covariances) = fitted(&scene, seed)?;
         let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).ok()?;
-        (r.report.certificate.map(|c| c.kind) == Some(CertificateKind::BranchAndBound)).then_some((scene, conics, covariances))
+        (r.report.certificate.map(|c| c.kind) == Some(CertificateKind::BranchAndBound)).then_some((
+            scene,
+            conics,
+            covariances,
+        ))
     });
     let (scene, conics, covariances) = hard.expect("some 3-view scene at 15 px needs branch and bound");
     // The search's work as reported: each node solves at least one conic program (≥ 1 interior-point
@@ -431,7 +438,12 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
     assert!(!r.report.certified());
     // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(r.report.certificate.expect("a search ran").raw_lower_bound, f64::INFINITY, "{:?}", r.report);
+    assert_eq!(
+        r.report.certificate.expect("a search ran").raw_lower_bound,
+        f64::INFINITY,
+        "{:?}",
+        r.report
+    );
 }
 
 #[test]
@@ -493,7 +505,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     cams[2] = Matrix3x4::zeros();
     assert!(matches!(err(&cams, &conics, None), Error::SingularCamera { .. }));
     let bad = TriangulationOptions {
-        certify: pluecker::CertifyOptions { max_nodes: Some(0), ..Default::default() },
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(0),
+            ..Default::default()
+        },
         ..o.clone()
     };
     assert!(matches!(
@@ -522,7 +537,10 @@ mod batch {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
         TriangulationOptions {
             method,
-            certify: pluecker::CertifyOptions { max_nodes: Some(40), ..Default::default() },
+            certify: pluecker::CertifyOptions {
+                max_nodes: Some(40),
+                ..Default::default()
+            },
             ..Default::default()
         }
     }

@@ -333,7 +333,8 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations,
         covariances: None,
     };
-    let result = triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let result =
+        triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
     let result = result[0].as_ref().unwrap();
     assert_eq!(result.report.status, Status::Success);
     let cameras: Vec<_> = images.iter().map(|&j| scene.cameras[j]).collect();
@@ -355,7 +356,8 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations[..4],
         covariances: None,
     };
-    let refused = triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let refused =
+        triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
     let message = refused[0].as_ref().unwrap_err().to_string();
     assert!(
         message.contains("2 distinct images") && message.contains("all in image 0"),

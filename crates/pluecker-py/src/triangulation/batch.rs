@@ -203,7 +203,16 @@ impl ReportRow<'_> {
         // A track without a certificate: NaN bounds and gap, "none", no nodes (the columns' docs).
         let (lower, raw, gap, certified, kind, nodes) = report.certificate.map_or(
             (f64::NAN, f64::NAN, f64::NAN, false, CertificateKind::None.as_str(), 0),
-            |c| (c.lower_bound, c.raw_lower_bound, c.relative_gap, c.certified, c.kind.as_str(), c.nodes),
+            |c| {
+                (
+                    c.lower_bound,
+                    c.raw_lower_bound,
+                    c.relative_gap,
+                    c.certified,
+                    c.kind.as_str(),
+                    c.nodes,
+                )
+            },
         );
         *self.lower_bound = lower;
         *self.raw_lower_bound = raw;

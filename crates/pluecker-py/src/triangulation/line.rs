@@ -24,8 +24,8 @@ use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::batch::{
     triangulate_line_observations as core_line_observations,
-    triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines, LineTracks,
-    SparseLineTracks, SparseSegmentTracks,
+    triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
+    LineTracks, SparseLineTracks, SparseSegmentTracks,
 };
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
@@ -56,16 +56,18 @@ pub struct PyLineTriangulation {
 
 impl PyLineTriangulation {
     pub fn create(py: Python<'_>, result: LineTriangulation) -> PyResult<Py<PyLineTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report, primitive: Primitive::Line }).add_subclass(
-            PyLineTriangulation {
-                plucker: *result.plucker.coordinates(),
-                point: result.point,
-                direction: result.direction,
-                chart: result.chart,
-                covariance: result.covariance,
-                inliers: result.inliers,
-            },
-        );
+        let init = PyClassInitializer::from(PyTriangulationReport {
+            inner: result.report,
+            primitive: Primitive::Line,
+        })
+        .add_subclass(PyLineTriangulation {
+            plucker: *result.plucker.coordinates(),
+            point: result.point,
+            direction: result.direction,
+            chart: result.chart,
+            covariance: result.covariance,
+            inliers: result.inliers,
+        });
         Py::new(py, init)
     }
 }
@@ -495,11 +497,7 @@ pub fn triangulate_line_observations(
             lines: image_lines_of(&values, segments, sigma),
             covariances: covariances.as_deref(),
         };
-        sparse_columns(
-            &rows,
-            &opts,
-            core_line_observations(&cams, &tracks, &opts, Some(done)),
-        )
+        sparse_columns(&rows, &opts, core_line_observations(&cams, &tracks, &opts, Some(done)))
     })?;
     batch_result(py, outcome)
 }

@@ -27,8 +27,8 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::batch::{
-    triangulate_points_into as core_points, triangulate_points_linear, triangulate_point_observations_into,
-    triangulate_point_observations_views_into, LinearPoints, PointTracks, SparsePointTracks,
+    triangulate_point_observations_into, triangulate_point_observations_views_into,
+    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
@@ -57,13 +57,15 @@ pub struct PyPointTriangulation {
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report, primitive: Primitive::Point }).add_subclass(
-            PyPointTriangulation {
-                point: result.point,
-                covariance: result.covariance,
-                inliers: result.inliers,
-            },
-        );
+        let init = PyClassInitializer::from(PyTriangulationReport {
+            inner: result.report,
+            primitive: Primitive::Point,
+        })
+        .add_subclass(PyPointTriangulation {
+            point: result.point,
+            covariance: result.covariance,
+            inliers: result.inliers,
+        });
         Py::new(py, init)
     }
 }

@@ -13,7 +13,8 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::batch::{
-    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics, QuadricTracks, SparseQuadricTracks,
+    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
+    QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
@@ -40,15 +41,18 @@ pub struct PyQuadricTriangulation {
 
 impl PyQuadricTriangulation {
     pub fn create(py: Python<'_>, r: QuadricTriangulation) -> PyResult<Py<PyQuadricTriangulation>> {
-        let init =
-            PyClassInitializer::from(PyTriangulationReport { inner: r.report, primitive: Primitive::Quadric }).add_subclass(PyQuadricTriangulation {
-                dual: r.dual,
-                primal: r.primal,
-                centre: r.centre,
-                axes: r.axes,
-                semi_axes: r.semi_axes,
-                covariance: r.covariance,
-            });
+        let init = PyClassInitializer::from(PyTriangulationReport {
+            inner: r.report,
+            primitive: Primitive::Quadric,
+        })
+        .add_subclass(PyQuadricTriangulation {
+            dual: r.dual,
+            primal: r.primal,
+            centre: r.centre,
+            axes: r.axes,
+            semi_axes: r.semi_axes,
+            covariance: r.covariance,
+        });
         Py::new(py, init)
     }
 }
