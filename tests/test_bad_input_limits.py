@@ -191,7 +191,7 @@ def test_a_gap_outside_0_1_is_refused_for_triangulation_as_for_the_pose(gap):
 
 @pytest.mark.parametrize("gap", [1e-12, 0.5, 0.999])
 def test_a_gap_inside_0_1_is_accepted_by_both(gap):
-    assert pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap)).max_relative_gap == gap
+    assert pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap)).certify.max_relative_gap == gap
     assert pluecker.PoseOptions(certify_gap=gap).certify_gap == gap
 
 
@@ -228,8 +228,10 @@ def test_an_optional_option_can_be_reset_to_none(option):
 
 def test_none_for_a_required_option_is_a_type_error_naming_it():
     options = pluecker.TriangulationOptions()
-    with pytest.raises(TypeError, match="^max_nodes: "):
-        options.max_nodes = None
+    with pytest.raises(TypeError, match="^certify: "):
+        options.certify = None
+    with pytest.raises(TypeError, match="^max_relative_gap: "):
+        options.certify.max_relative_gap = None
     assert options == pluecker.TriangulationOptions()
 
 

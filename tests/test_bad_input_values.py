@@ -104,7 +104,8 @@ NUMBER_OPTIONS = [(pluecker.PoseOptions, name) for name in
                   ("point_threshold", "line_threshold", "confidence", "time_budget", "max_iterations", "seed",
                    "min_inliers")] + \
                  [(pluecker.TriangulationOptions, name) for name in
-                  ("max_relative_gap", "max_reprojection_error", "max_nodes", "local_max_iterations")]
+                  ("max_reprojection_error", "local_max_iterations")] + \
+                 [(pluecker.CertifyOptions, name) for name in ("max_relative_gap", "max_nodes")]
 
 
 @pytest.mark.parametrize("option", NUMBER_OPTIONS, ids=lambda o: f"{o[0].__name__}.{o[1]}")

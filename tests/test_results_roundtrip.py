@@ -60,7 +60,8 @@ def results():
     visible = np.array([[1, 1, 1], [1, 1, 1], [1, 0, 0]], dtype=bool)
     out.append(("points", pluecker.triangulate_points(P, x, visible)))
     out.append(("points-linear", pluecker.triangulate_points(P, x, visible, options=pluecker.TriangulationOptions(method="linear"))))
-    out.append(("line", pluecker.triangulate_line(P, line_images())))
+    line = pluecker.triangulate_line(P, line_images())
+    out += [("line", line), ("line-certificate", line.certificate)]
     out.append(("lines", pluecker.triangulate_lines(P, np.stack([line_images(), np.zeros((3, 3))]))))
     out.append(("quadric", pluecker.triangulate_quadric(P, ellipsoid_outlines())))
     flat = np.tile(np.diag([1.0, 1.0, -100.0**2]), (3, 1, 1))
