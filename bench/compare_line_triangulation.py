@@ -54,7 +54,8 @@ def vgg_rows(gaps: list[float], quick: bool) -> list[str]:
             tracks = tracks[:10]
         for gap in gaps:
             for bound in BOUNDS:
-                options = pluecker.TriangulationOptions(max_relative_gap=gap, line_bound=bound)
+                options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap),
+                                                        line_bound=bound)
                 started = time.perf_counter()
                 batch = pluecker.triangulate_lines(seq.cameras, segments[tracks], visible[tracks], sigma=1.0,
                                                    options=options)
@@ -113,7 +114,8 @@ def disc_rows(quick: bool) -> list[str]:
     rows = []
     for bound in ("convexity", "relaxation"):
         for gap in (1e-3, 0.1):
-            options = pluecker.TriangulationOptions(max_relative_gap=gap, quadric_bound=bound)
+            options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap),
+                                                    quadric_bound=bound)
             batch = pluecker.triangulate_quadrics(P, conics, cov=cov, options=options)
             rows.append(f"| {len(scenes)} discs | {gap:g} | {bound} | " + " | ".join(summary(batch)) + " |")
     return rows

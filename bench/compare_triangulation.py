@@ -241,11 +241,13 @@ def colmap_ransac(s: Scene, repeats: int) -> dict[str, Any]:
 
 
 def pluecker_single(method: str) -> Callable[[Scene, int], dict[str, Any]]:
+    options = pluecker.TriangulationOptions(method=method)
+
     def run(s: Scene, repeats: int) -> dict[str, Any]:
         results = []
 
         def call(i: int) -> Any:
-            r = pluecker.triangulate_point(s.P, s.x[i], method=method)
+            r = pluecker.triangulate_point(s.P, s.x[i], options=options)
             results.append(r)
             return r.X
 
@@ -255,9 +257,10 @@ def pluecker_single(method: str) -> Callable[[Scene, int], dict[str, Any]]:
             "seconds": seconds,
             "core_seconds": np.array([r.time_seconds for r in results]),
             "certified": np.array([r.certified for r in results]),
-            "certificate": np.array([r.certificate for r in results]),
-            "lower_bound": np.array([r.lower_bound for r in results]),
-            "nodes": np.array([r.nodes for r in results]),
+            # The batch's columns: "none", a NaN bound and 0 nodes without a certificate.
+            "certificate": np.array([r.certificate.kind if r.certificate else "none" for r in results]),
+            "lower_bound": np.array([r.certificate.lower_bound if r.certificate else np.nan for r in results]),
+            "nodes": np.array([r.certificate.nodes if r.certificate else 0 for r in results]),
             "status": np.array([r.status for r in results]),
         }
 
@@ -266,7 +269,8 @@ def pluecker_single(method: str) -> Callable[[Scene, int], dict[str, Any]]:
 
 def pluecker_batch(method: str) -> Callable[[Scene, int], dict[str, Any]]:
     def run(s: Scene, repeats: int) -> dict[str, Any]:
-        r, seconds = _best_of(repeats, lambda: pluecker.triangulate_points(s.P, s.x, method=method))
+        options = pluecker.TriangulationOptions(method=method)
+        r, seconds = _best_of(repeats, lambda: pluecker.triangulate_points(s.P, s.x, options=options))
         return {
             "X": np.asarray(r.X),
             "seconds": np.full(len(s.x), seconds / len(s.x)),
@@ -371,7 +375,7 @@ def run_case(case: Case, n_points: int, seed: int, repeats: int) -> list[dict[st
 def run_real(name: str, repeats: int) -> dict[str, Any]:
     seq = load_vgg(vgg_root() / name)
     x, visible = seq.point_observations()
-    result, seconds = _best_of(repeats, lambda: pluecker.triangulate_points(seq.cameras, x, visible, method="optimal"))
+    result, seconds = _best_of(repeats, lambda: pluecker.triangulate_points(seq.cameras, x, visible))
     kinds, counts = np.unique(np.asarray(result.certificate), return_counts=True)
     statuses, status_counts = np.unique(np.asarray(result.status), return_counts=True)
     certified = np.asarray(result.certified)
@@ -399,7 +403,8 @@ def run_real(name: str, repeats: int) -> dict[str, Any]:
 
 def batch_linear_throughput(views: int, n_points: int, seed: int, repeats: int) -> dict[str, Any]:
     scene = make_scene(Case(views, 30.0), n_points, seed)
-    _, seconds = _best_of(max(repeats, 3), lambda: pluecker.triangulate_points(scene.P, scene.x, method="linear"))
+    linear = pluecker.TriangulationOptions(method="linear")
+    _, seconds = _best_of(max(repeats, 3), lambda: pluecker.triangulate_points(scene.P, scene.x, options=linear))
     return {"views": views, "points": n_points, "us_per_point": seconds / n_points * 1e6}
 
 

@@ -55,7 +55,8 @@ def main() -> None:
     P, track, image, x = scene(args.images, args.tracks, args.seed)
     before = peak_mb()
     started = time.perf_counter()
-    result = pluecker.triangulate_point_observations(P, track, image, x, method=args.method)
+    result = pluecker.triangulate_point_observations(P, track, image, x,
+                                                    options=pluecker.TriangulationOptions(method=args.method))
     seconds = time.perf_counter() - started
     print(f"{args.tracks} tracks, {len(track)} observations, {args.images} images, method {args.method}")
     print(f"time {seconds:.2f} s ({args.tracks / seconds:,.0f} tracks/s); "

@@ -122,8 +122,8 @@ def check_report(r, max_relative_gap: float = 1e-3) -> None:
     assert r.success == (r.status == "success")
     if r.certified:
         assert r.success, r
-        assert r.lower_bound <= r.cost * (1 + 1e-9) + 1e-12, r
-        assert r.relative_gap <= max_relative_gap * (1 + 1e-9), r
+        assert r.certificate.lower_bound <= r.cost * (1 + 1e-9) + 1e-12, r
+        assert r.certificate.relative_gap <= max_relative_gap * (1 + 1e-9), r
     if r.success:
         assert np.isfinite(r.cost) and r.cost >= 0, r
     check_strict_json_and_pickle(r)

@@ -374,7 +374,7 @@ def test_a_line_far_from_the_origin_is_a_documented_error_for_every_method():
     lines = lines / np.linalg.norm(lines[:, :2], axis=1)[:, None] + np.array([[0, 0, 0.5], [0, 0, -0.3], [0, 0, 0.2]])
     for method in ("local", "optimal"):
         with raises(DegenerateConfigurationError, match="at infinity"):
-            pluecker.triangulate_line(P, lines, method=method)
+            pluecker.triangulate_line(P, lines, options=pluecker.TriangulationOptions(method=method))
 
 
 # --- types ------------------------------------------------------------------------------------------

@@ -183,15 +183,15 @@ def test_set_num_threads_of_a_float_is_a_type_error():
 def test_a_gap_outside_0_1_is_refused_for_triangulation_as_for_the_pose(gap):
     """``max_relative_gap=1e300`` was accepted and certified a ``gap_not_closed`` quadric at gap 0.98; a
     relative gap is at most 1 for any lower bound ≥ 0, so a threshold ≥ 1 certifies without a bound."""
-    with pytest.raises(InvalidOptionError, match=r"max_relative_gap.*must be in \(0, 1\)"):
-        pluecker.TriangulationOptions(max_relative_gap=gap)
+    with pytest.raises(InvalidOptionError, match=r"certify.max_relative_gap.*must be in \(0, 1\)"):
+        pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap))
     with pytest.raises(InvalidOptionError, match=r"certify.max_relative_gap.*must be in \(0, 1\)"):
         pluecker.CertifyOptions(max_relative_gap=gap)
 
 
 @pytest.mark.parametrize("gap", [1e-12, 0.5, 0.999])
 def test_a_gap_inside_0_1_is_accepted_by_both(gap):
-    assert pluecker.TriangulationOptions(max_relative_gap=gap).max_relative_gap == gap
+    assert pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap)).certify.max_relative_gap == gap
     assert pluecker.PoseOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap)).certify.max_relative_gap == gap
 
 
@@ -230,8 +230,10 @@ def test_an_optional_option_can_be_reset_to_none(option):
 
 def test_none_for_a_required_option_is_a_type_error_naming_it():
     options = pluecker.TriangulationOptions()
-    with pytest.raises(TypeError, match="^max_nodes: "):
-        options.max_nodes = None
+    with pytest.raises(TypeError, match="^certify: "):
+        options.certify = None
+    with pytest.raises(TypeError, match="^max_relative_gap: "):
+        options.certify.max_relative_gap = None
     assert options == pluecker.TriangulationOptions()
 
 
@@ -333,7 +335,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
 
 
 @pytest.mark.parametrize("call", [
-    lambda: pluecker.TriangulationOptions(max_relative_gap=1e300),
+    lambda: pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e300)),
     lambda: pluecker.CertifyOptions(max_relative_gap=-1e300),
     lambda: pluecker.RansacOptions(confidence=1e300),
     lambda: pluecker.RansacOptions(point_threshold=-1e300),

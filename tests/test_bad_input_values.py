@@ -84,9 +84,9 @@ def test_numpy_integers_are_integers(scene):
 @pytest.mark.parametrize("value", [2**64, -1, 10**400])
 def test_max_nodes_out_of_range(value):
     P, x = stereo()
-    for call in (lambda: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_nodes=value)),
-                 lambda: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(max_nodes=value)),
-                 lambda: pluecker.triangulate_quadrics(P, np.tile(np.eye(3), (1, 3, 1, 1)), options=pluecker.TriangulationOptions(max_nodes=value))):
+    for call in (lambda: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=value))),
+                 lambda: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=value))),
+                 lambda: pluecker.triangulate_quadrics(P, np.tile(np.eye(3), (1, 3, 1, 1)), options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=value)))):
         with pytest.raises(InvalidOptionError, match=r"^max_nodes: must be an integer from 1 to "):
             call()
 
@@ -113,7 +113,8 @@ NUMBER_OPTIONS = [(pluecker.PoseOptions, name) for name in
                   ("point_threshold", "line_threshold", "confidence", "time_budget", "max_iterations", "seed",
                    "min_inliers")] + \
                  [(pluecker.TriangulationOptions, name) for name in
-                  ("max_relative_gap", "max_reprojection_error", "max_nodes", "local_max_iterations")]
+                  ("max_reprojection_error", "local_max_iterations")] + \
+                 [(pluecker.CertifyOptions, name) for name in ("max_relative_gap", "max_nodes")]
 
 
 @pytest.mark.parametrize("option", NUMBER_OPTIONS, ids=lambda o: f"{o[0].__name__}.{o[1]}")
@@ -131,8 +132,8 @@ def test_a_bool_is_not_a_number(option, value):
 
 
 @pytest.mark.parametrize("call,name", [
-    (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_nodes=True)), "max_nodes"),
-    (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_relative_gap=True)), "max_relative_gap"),
+    (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=True))), "max_nodes"),
+    (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=True))), "max_relative_gap"),
     (lambda P, x: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(max_reprojection_error=True)), "max_reprojection_error"),
     (lambda P, x: pluecker.triangulate_line(P, np.zeros((3, 2, 2)), sigma=True), "sigma"),
     (lambda P, x: pluecker.fit_line(x, sigma=True), "sigma"),
@@ -265,7 +266,7 @@ def test_a_subnormal_covariance_is_an_error_not_nan(method):
     P, x = stereo()
     cov = np.stack([5e-324 * np.eye(2)] * 3)
     with pytest.raises(DegenerateConfigurationError, match=r"cov\[0\].*too small"):
-        pluecker.triangulate_point(P, x, cov=cov, method=method)
+        pluecker.triangulate_point(P, x, cov=cov, options=pluecker.TriangulationOptions(method=method))
 
 
 @pytest.mark.parametrize("bad", [[[1.0, 2.0], [3.0]], [[True, False], [True]]])

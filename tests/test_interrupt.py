@@ -54,8 +54,8 @@ def endless_lines(n: int | None = None, max_nodes: int = 10**7):
     than the batch has threads: at most one per thread can be started before a stop, none finishes."""
     n = pluecker.get_num_threads() + 1 if n is None else n
     P, segments = line_tracks(0, n=n, views=4, sigma=2.0)
-    options = pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=max_nodes, line_bound="relaxation")
-    return P, segments, dict(method="optimal", options=options)
+    options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e-9, max_nodes=max_nodes), line_bound="relaxation")
+    return P, segments, dict(options=options)
 
 
 def assert_stopped_batch(batch, n: int, status: str) -> None:
@@ -92,17 +92,17 @@ def test_time_budget_ends_a_batch_without_an_exception():
     assert_stopped_batch(batch, len(segments), "time_budget")
     # A zero budget solves nothing, in every batch, and the linear fast path says so too.
     for method in ("linear", "optimal"):
-        lines = pluecker.triangulate_lines(P, segments, method=method, time_budget=0)
+        lines = pluecker.triangulate_lines(P, segments, options=pluecker.TriangulationOptions(method=method), time_budget=0)
         assert set(lines.status) == {"time_budget"} and np.isnan(lines.plucker).all()
     x = np.stack([segments[:, :, 0], segments[:, :, 1]]).reshape(-1, 4, 2)
     for method in ("linear", "local", "optimal"):
-        points = pluecker.triangulate_points(P, x, method=method, time_budget=0.0)
+        points = pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method=method), time_budget=0.0)
         assert set(points.status) == {"time_budget"} and np.isnan(points.X).all()
 
 
 def test_a_failing_progress_callback_stops_the_batch_and_keeps_finished_tracks():
     P, segments = line_tracks(3, n=60, views=4, sigma=1.0)
-    plain = pluecker.triangulate_lines(P, segments, method="optimal", options=pluecker.TriangulationOptions(max_nodes=NODES))
+    plain = pluecker.triangulate_lines(P, segments, options=pluecker.TriangulationOptions(method="optimal", certify=pluecker.CertifyOptions(max_nodes=NODES)))
     seen: list[int] = []
 
     def stop_after_some(done: int) -> None:
@@ -111,7 +111,7 @@ def test_a_failing_progress_callback_stops_the_batch_and_keeps_finished_tracks()
             raise RuntimeError("enough")
 
     with pytest.raises(RuntimeError, match="enough") as caught:
-        pluecker.triangulate_lines(P, segments, method="optimal", progress=stop_after_some, options=pluecker.TriangulationOptions(max_nodes=NODES))
+        pluecker.triangulate_lines(P, segments, progress=stop_after_some, options=pluecker.TriangulationOptions(method="optimal", certify=pluecker.CertifyOptions(max_nodes=NODES)))
     partial = caught.value.partial
     finished = partial.status != "interrupted"
     # The callback is not called again once it raised.
@@ -143,8 +143,8 @@ def assert_stopped_single(partial, started_nodes: int) -> None:
     """A single triangulation stopped in its branch and bound: the estimate reached, uncertified, with a
     bound at most its cost, far below the node cap."""
     assert partial.status == "interrupted" and not partial.certified
-    assert np.isfinite(partial.cost) and partial.lower_bound <= partial.cost
-    assert started_nodes <= partial.nodes < SAFETY_NODES
+    assert np.isfinite(partial.cost) and partial.certificate.lower_bound <= partial.cost
+    assert started_nodes <= partial.certificate.nodes < SAFETY_NODES
 
 
 def test_ctrl_c_stops_a_single_line():
@@ -159,10 +159,10 @@ def test_ctrl_c_stops_a_single_line():
 
 def test_ctrl_c_stops_a_single_quadric():
     scene = disc_scene(3)
-    options = pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=SAFETY_NODES, quadric_bound="relaxation")
+    options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e-9, max_nodes=SAFETY_NODES), quadric_bound="relaxation")
     ctrl_c_at_poll(3)
     with pytest.raises(KeyboardInterrupt) as caught:
-        pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, method="optimal", options=options)
+        pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, options=options)
     assert isinstance(caught.value.partial, pluecker.QuadricTriangulation)
     assert_stopped_single(caught.value.partial, 5)
 

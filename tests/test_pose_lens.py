@@ -204,13 +204,13 @@ def test_lines_triangulated_through_a_lens():
         observed = pixels + rng.normal(size=pixels.shape)
         ubar, C = lens.undistort(observed.reshape(-1, 2))
         lines, cov = pluecker.lines_from_endpoints(ubar.reshape(4, 2, 2), C.reshape(4, 2, 2, 2))
-        r = pluecker.triangulate_line(P, lines, cov, method="local")  # certifying lines is issue 13's
+        r = pluecker.triangulate_line(P, lines, cov, options=pluecker.TriangulationOptions(method="local"))  # certifying lines is issue 13's
         assert r.status == "success"
         costs.append(r.cost)  # eq. 19: Σ r², the χ² statistic
         # Distance of the true endpoints to the estimated line.
         d = r.direction
         errors.append(max(np.linalg.norm(np.cross(e - r.point, d)) for e in ends))
-        naive = pluecker.triangulate_line(P, observed, sigma=1.0, method="local")
+        naive = pluecker.triangulate_line(P, observed, sigma=1.0, options=pluecker.TriangulationOptions(method="local"))
         ignored.append(naive.cost)
         naive_errors.append(max(np.linalg.norm(np.cross(e - naive.point, naive.direction)) for e in ends))
     print(f"lines through a lens: mean cost {np.mean(costs):.2f} (χ²(4): 4), ignored {np.mean(ignored):.1f}; median "

@@ -89,8 +89,8 @@ def assert_sound(opt, own_cost: float, local, truth_cost: float | None, local_co
         return
     eps = 1e-8
     assert opt.success, opt
-    raw = opt.raw_lower_bound
-    assert np.isfinite(raw) and opt.lower_bound == min(raw, opt.cost), opt
+    raw = opt.certificate.raw_lower_bound
+    assert np.isfinite(raw) and opt.certificate.lower_bound == min(raw, opt.cost), opt
     assert raw <= own_cost * (1 + 1e-6) + eps, (opt, own_cost)
     gap = (own_cost - min(raw, own_cost)) / max(own_cost, 1e-12)
     assert gap <= GAP * (1 + 1e-3) or own_cost <= eps, (opt, own_cost, gap)
@@ -124,8 +124,8 @@ def test_point_certificates_are_sound(rig, where, sigma):
     assume(np.all(np.abs(lam) > 1e-9 * np.abs(P[:, 2]).max()))
     x = project(P, X) + rng.normal(0, sigma, (len(P), 2))
     note(f"X={X}, λ={lam}, σ={sigma}")
-    opt = pluecker.triangulate_point(P, x, method="optimal")
-    local = pluecker.triangulate_point(P, x, method="local")
+    opt = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method="optimal"))
+    local = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method="local"))
     if opt.success:
         assert np.all(depths(P, opt.X) > 0), opt
         assert np.isclose(point_cost(P, x, opt.X), opt.cost, rtol=1e-6, atol=1e-9), opt
@@ -167,8 +167,8 @@ def test_line_certificates_are_sound(rig, sigma):
     lines = np.cross(np.c_[ends[:, 0], np.ones(len(P))], np.c_[ends[:, 1], np.ones(len(P))])
     note(f"A={A}, B={B}, σ={sigma}")
     try:
-        opt = pluecker.triangulate_line(P, lines, method="optimal", options=pluecker.TriangulationOptions(max_nodes=300))
-        local = pluecker.triangulate_line(P, lines, method="local")
+        opt = pluecker.triangulate_line(P, lines, options=pluecker.TriangulationOptions(method="optimal", certify=pluecker.CertifyOptions(max_nodes=300)))
+        local = pluecker.triangulate_line(P, lines, options=pluecker.TriangulationOptions(method="local"))
     except pluecker.DegenerateConfigurationError:
         return  # e.g. the line lies in an epipolar plane of every pair of views
     if np.all(np.isfinite(opt.point)):
@@ -219,8 +219,8 @@ def test_quadric_certificates_are_sound(rig, noise):
     conics = np.linalg.inv(duals)
     note(f"centre={T[:3, 3]}, noise={noise}")
     try:
-        opt = pluecker.triangulate_quadric(P, conics, method="optimal", options=pluecker.TriangulationOptions(max_nodes=200))
-        local = pluecker.triangulate_quadric(P, conics, method="local")
+        opt = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="optimal", certify=pluecker.CertifyOptions(max_nodes=200)))
+        local = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="local"))
     except pluecker.DegenerateConfigurationError:
         return  # an outline that is no real ellipse (the ellipsoid crosses a principal plane)
     if np.all(np.isfinite(opt.Q)):

@@ -242,7 +242,7 @@ def point_problems(draw):
 @given(point_problems(), METHODS, GAPS, GAMMAS, NODES)
 def test_triangulate_point(problem, method, gap, gamma, nodes):
     P, x, cov = problem
-    r = outcome(lambda: pluecker.triangulate_point(P, x, cov, method, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_reprojection_error=gamma, max_nodes=nodes)))
+    r = outcome(lambda: pluecker.triangulate_point(P, x, cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_relative_gap=gap, max_nodes=nodes), max_reprojection_error=gamma)))
     if isinstance(r, pluecker.PointTriangulation):
         check_report(r, gap_of(gap))
         if (r.status == "success"):
@@ -258,7 +258,7 @@ def test_triangulate_points(problem, n, method, nodes, data):
                                   array_likes((n, views)).map(lambda a: a if not isinstance(a, np.ndarray)
                                                               else (a != 0) if a.dtype.kind == "f" else a)))
     covs = data.draw(st.one_of(st.none(), float_arrays((n, views, 2, 2))))
-    batch = outcome(lambda: pluecker.triangulate_points(P, xs, visible, covs, method, options=pluecker.TriangulationOptions(max_nodes=nodes)))
+    batch = outcome(lambda: pluecker.triangulate_points(P, xs, visible, covs, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=nodes))))
     if isinstance(batch, pluecker.PointTriangulations):
         check_batch(batch, n)
         X = batch.X
@@ -281,7 +281,7 @@ def line_problems(draw):
 @given(line_problems(), METHODS, GAPS, NODES)
 def test_triangulate_line(problem, method, gap, nodes):
     P, lines, cov, sigma = problem
-    r = outcome(lambda: pluecker.triangulate_line(P, lines, cov, method, sigma=sigma, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_nodes=nodes)))
+    r = outcome(lambda: pluecker.triangulate_line(P, lines, cov, sigma=sigma, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_relative_gap=gap, max_nodes=nodes))))
     if isinstance(r, pluecker.LineTriangulation):
         check_report(r, gap_of(gap))
         if (r.status == "success"):
@@ -296,7 +296,7 @@ def test_triangulate_lines(problem, n, method, data):
     batch_lines = data.draw(st.one_of(float_arrays((n, views, *tail)), array_likes((n, views, *tail))))
     visible = data.draw(st.one_of(st.none(), array_likes((n, views)).map(
         lambda a: (a != 0) if isinstance(a, np.ndarray) and a.dtype.kind == "f" else a)))
-    batch = outcome(lambda: pluecker.triangulate_lines(P, batch_lines, visible, method=method, sigma=sigma, options=pluecker.TriangulationOptions(max_nodes=30)))
+    batch = outcome(lambda: pluecker.triangulate_lines(P, batch_lines, visible, sigma=sigma, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=30))))
     if isinstance(batch, pluecker.LineTriangulations):
         check_batch(batch, n)
 
@@ -324,7 +324,7 @@ def quadric_problems(draw):
 @given(quadric_problems(), METHODS, GAPS, st.one_of(st.none(), st.integers(1, 20)))
 def test_triangulate_quadric(problem, method, gap, nodes):
     P, conics, cov = problem
-    r = outcome(lambda: pluecker.triangulate_quadric(P, conics, cov, method, options=pluecker.TriangulationOptions(max_relative_gap=gap, max_nodes=nodes)))
+    r = outcome(lambda: pluecker.triangulate_quadric(P, conics, cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_relative_gap=gap, max_nodes=nodes))))
     if isinstance(r, pluecker.QuadricTriangulation):
         check_report(r, gap_of(gap))
         if (r.status == "success"):
@@ -341,7 +341,7 @@ def test_triangulate_quadrics(problem, n, method, data):
         stack = np.repeat(one[None], n, axis=0)
     else:
         stack = data.draw(array_likes((n, 2, 3, 3)))
-    batch = outcome(lambda: pluecker.triangulate_quadrics(P, stack, method=method, options=pluecker.TriangulationOptions(max_nodes=10)))
+    batch = outcome(lambda: pluecker.triangulate_quadrics(P, stack, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=10))))
     if isinstance(batch, pluecker.QuadricTriangulations):
         check_batch(batch, n)
 

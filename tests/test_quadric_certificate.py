@@ -160,11 +160,11 @@ SCENES = [("table 3 disc", k) for k in range(6)] + [
 @pytest.mark.parametrize(("regime", "k"), SCENES, ids=[f"{s[0]}-{s[1]}" for s in SCENES])
 def test_no_ellipsoid_of_the_domain_costs_less_than_the_certified_bound(regime, k):
     P, conics, cov = regime_problem(regime, k)
-    r = pluecker.triangulate_quadric(P, conics, cov, method="optimal")
+    r = pluecker.triangulate_quadric(P, conics, cov, options=pluecker.TriangulationOptions(method="optimal"))
     # Every disc of these kinds is certified by the convexity test (30 of 30 in the reproduction, 29 of
     # 29 in the Rust regimes, 96 of 96 at 250-15000 px and mirrored): a failure means certification broke.
-    assert r.certified and r.certificate == "convexity_test" and r.status == "success", r
-    assert "principal plane" in r.certificate_domain
+    assert r.certified and r.certificate.kind == "convexity_test" and r.status == "success", r
+    assert "principal plane" in r.certificate.domain
     x = answer_parameters(r)
     reported = costs(P, conics, cov, dual_quadrics(x[None]))[0]
     assert reported == pytest.approx(r.cost, rel=1e-7), "the independent cost disagrees with the library's"
@@ -172,7 +172,7 @@ def test_no_ellipsoid_of_the_domain_costs_less_than_the_certified_bound(regime, 
     slack = 1e-9 * (1 + r.cost)
     # The raw bound (before the library's cap at its cost) against numpy's costs: of the answer, of
     # everything the search found; the gap recomputed from the answer's cost and the raw bound.
-    raw = r.raw_lower_bound
+    raw = r.certificate.raw_lower_bound
     assert raw <= reported * (1 + 1e-7), (raw, reported)
     assert (reported - min(raw, reported)) / reported <= GAP * (1 + 1e-4), (raw, reported)
     violations = int(np.sum(found < raw - slack))
@@ -197,7 +197,7 @@ def test_the_best_quadric_is_often_no_ellipsoid_which_the_certificate_excludes()
     for k in (0, 2, 4):
         scene = disc_scene(k * 100_003)
         P, conics, cov = scene.cameras, scene.conics, scene.covariances
-        r = pluecker.triangulate_quadric(P, conics, cov, method="optimal")
+        r = pluecker.triangulate_quadric(P, conics, cov, options=pluecker.TriangulationOptions(method="optimal"))
         whiten = [np.linalg.cholesky(np.linalg.inv(s)) for s in cov]
         cost = lambda q: costs(P, conics, cov, quadric_of(q)[None])[0]  # noqa: E731
 
@@ -226,5 +226,5 @@ def test_the_best_quadric_is_often_no_ellipsoid_which_the_certificate_excludes()
         if cost(q) < r.cost * (1 - GAP):
             beaten += 1
             assert np.linalg.eigvalsh(shape)[0] < 0, "a cheaper quadric that is an ellipsoid: the disc was not optimal"
-            assert r.raw_lower_bound > cost(q), "the bound should be over ellipsoids only"
+            assert r.certificate.raw_lower_bound > cost(q), "the bound should be over ellipsoids only"
     assert beaten >= 2, beaten  # measured: all three

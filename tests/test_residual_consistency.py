@@ -99,5 +99,5 @@ def test_triangulation_chi_square_flags_an_outlier_view_single_and_batch():
         assert test["dof"] == 2 * 6 - 3
         assert batch.p_value[i] == test["p_value"]
         assert test["consistent"] == (i >= 10), (i, test)
-    linear = pluecker.triangulate_points(P, x, method="linear")
+    linear = pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method="linear"))
     assert (linear.p_value[:10] < 1e-3).all() and (linear.p_value[10:] >= 1e-3).all()

@@ -29,7 +29,7 @@ import pluecker
          pluecker.InvalidOptionError, "not both"),
         (lambda P, s: pluecker.triangulate_lines(P, np.ones((10, 4, 3)), sigma=1.0), pluecker.InvalidOptionError,
          "segments"),
-        (lambda P, s: pluecker.triangulate_lines(P, s, method="best"), pluecker.InvalidOptionError, "method"),
+        (lambda P, s: pluecker.triangulate_lines(P, s, options=pluecker.TriangulationOptions(method="best")), pluecker.InvalidOptionError, "method"),
         (lambda P, s: pluecker.triangulate_lines(P * np.array([1.0, np.nan, 1.0, 1.0])[:, None, None], s),
          pluecker.NonFiniteError, "P: non-finite value (NaN or inf) in row 1"),
         (lambda P, s: pluecker.triangulate_quadrics(P[:2], np.ones((1, 2, 3, 3))), pluecker.TooFewCorrespondencesError,
@@ -63,8 +63,8 @@ def test_empty_batches(seed):
 def test_progress_counts_finished_tracks(seed):
     P, segments = line_tracks(seed, n=12)
     counts: list[int] = []
-    batch = pluecker.triangulate_lines(P, segments, method="optimal", progress=counts.append, options=pluecker.TriangulationOptions(max_nodes=NODES))
-    plain = pluecker.triangulate_lines(P, segments, method="optimal", options=pluecker.TriangulationOptions(max_nodes=NODES))
+    batch = pluecker.triangulate_lines(P, segments, progress=counts.append, options=pluecker.TriangulationOptions(method="optimal", certify=pluecker.CertifyOptions(max_nodes=NODES)))
+    plain = pluecker.triangulate_lines(P, segments, options=pluecker.TriangulationOptions(method="optimal", certify=pluecker.CertifyOptions(max_nodes=NODES)))
     assert counts and counts == sorted(counts) and counts[-1] == 12 and len(set(counts)) == len(counts)
     np.testing.assert_array_equal(batch.plucker, plain.plucker)
 
@@ -74,7 +74,7 @@ def test_progress_counts_finished_tracks(seed):
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt) as caught:
-        pluecker.triangulate_lines(P, segments, method="local", progress=stop)
+        pluecker.triangulate_lines(P, segments, options=pluecker.TriangulationOptions(method="local"), progress=stop)
     assert len(caught.value.partial) == len(segments)
 
 
@@ -99,8 +99,8 @@ def test_gil_is_released_during_the_batch(seed):
         state["inside"] = True
         start = time.perf_counter()
         # The paper's relaxation: long enough to tell (the default bound finishes in milliseconds).
-        options = pluecker.TriangulationOptions(max_nodes=NODES, line_bound="relaxation")
-        pluecker.triangulate_lines(P, segments, method="optimal", options=options)
+        options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=NODES), line_bound="relaxation")
+        pluecker.triangulate_lines(P, segments, options=options)
         state["seconds"] = time.perf_counter() - start
         state["inside"] = False
 

@@ -14,8 +14,8 @@ from triangulation_scenes import METHODS, cameras, cost_eq19, depths, many_start
 import pluecker
 
 
-REPORT_FIELDS = ("method", "status", "success", "cost", "lower_bound", "raw_lower_bound", "relative_gap", "certified",
-                 "certificate", "nodes", "solver_iterations", "iterations", "termination", "time_seconds", "residual_test")
+REPORT_FIELDS = ("method", "status", "success", "cost", "certificate", "certified", "iterations", "termination",
+                 "time_seconds", "residual_test")
 
 
 def noisy_problem(seed: int, views: int = 4, parallax_deg: float = 30.0, sigma: float = 1.0):
@@ -31,7 +31,7 @@ def test_noise_free_observations_give_the_point(method, views, seed):
     rng = np.random.default_rng(seed)
     P = cameras(views, 30.0, rng)
     X = rng.uniform(-1.0, 1.0, 3)
-    r = pluecker.triangulate_point(P, project(P, X), method=method)
+    r = pluecker.triangulate_point(P, project(P, X), options=pluecker.TriangulationOptions(method=method))
     assert r.method == method and r.status == "success" and r.success, f"seed={seed} {r}"
     # Exact data: only round-off remains (the point is ~10 units away, pixels ~1e2).
     np.testing.assert_allclose(r.X, X, atol=1e-8, err_msg=f"seed={seed}")
@@ -43,7 +43,7 @@ def test_noise_free_observations_give_the_point(method, views, seed):
 def test_reported_cost_is_eq19_at_the_returned_point(method, seed):
     for k in range(10):
         P, _, x = noisy_problem(seed + k, views=5)
-        r = pluecker.triangulate_point(P, x, method=method)
+        r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=method))
         assert r.cost == pytest.approx(cost_eq19(P, r.X, x), rel=1e-9), f"seed={seed + k}"
 
 
@@ -52,7 +52,7 @@ def test_covariance_weights_the_residuals_as_eq18(seed):
     P, _, x = noisy_problem(seed, views=4)
     A = rng.normal(size=(4, 2, 2))
     cov = A @ A.transpose(0, 2, 1) + 0.5 * np.eye(2)
-    r = pluecker.triangulate_point(P, x, cov, method="local")
+    r = pluecker.triangulate_point(P, x, cov, options=pluecker.TriangulationOptions(method="local"))
     assert r.cost == pytest.approx(cost_eq19(P, r.X, x, cov), rel=1e-9)
     # The weighted optimum: the gradient of Σ rᵢᵀ Σᵢ⁻¹ rᵢ vanishes there (central differences, step
     # 1e-6 of a ~10-unit point; the cost is ~1 so a gradient of 1e-4 would be a real error).
@@ -60,7 +60,7 @@ def test_covariance_weights_the_residuals_as_eq18(seed):
     grad = [(cost_eq19(P, r.X + e, x, cov) - cost_eq19(P, r.X - e, x, cov)) / (2 * step) for e in np.eye(3) * step]
     assert np.max(np.abs(grad)) < 1e-4, grad
     # Scaling every covariance by k scales the cost by 1/k and leaves the point.
-    scaled = pluecker.triangulate_point(P, x, 4.0 * cov, method="local")
+    scaled = pluecker.triangulate_point(P, x, 4.0 * cov, options=pluecker.TriangulationOptions(method="local"))
     np.testing.assert_allclose(scaled.X, r.X, atol=1e-7)
     assert scaled.cost == pytest.approx(r.cost / 4.0, rel=1e-9)
 
@@ -78,7 +78,7 @@ def test_a_positive_camera_scale_does_not_matter_and_the_sign_says_which_side_is
     negated = P * np.array([-1.0, 1.0, 1.0])[:, None, None]
     assert depths(negated, base.X)[0] < 0
     for method in METHODS:
-        r = pluecker.triangulate_point(negated, x, method=method)
+        r = pluecker.triangulate_point(negated, x, options=pluecker.TriangulationOptions(method=method))
         assert r.status != "success" and not r.certified, (method, r)
 
 
@@ -91,22 +91,21 @@ def test_optimal_is_certified_and_never_worse_than_the_others(seed):
     rng = np.random.default_rng(seed)
     for k in range(30):
         P, X, x = noisy_problem(seed + k, views=2 + k % 5)
-        results = {m: pluecker.triangulate_point(P, x, method=m) for m in METHODS}
+        results = {m: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=m)) for m in METHODS}
         opt = results["optimal"]
         assert opt.certified and opt.status == "success", f"seed={seed + k} {opt}"
-        assert opt.certificate in ("convexity_test", "branch_and_bound")
+        assert opt.certificate.kind in ("convexity_test", "branch_and_bound")
         # The raw bound against numpy's costs: of the answer, of the other methods' answers, of the
         # truth and of the least cost a many-start search of its own finds; the gap recomputed.
         cost = cost_eq19(P, opt.X, x)
-        raw = opt.raw_lower_bound
+        raw = opt.certificate.raw_lower_bound
         assert 0.0 <= raw <= cost * (1 + 1e-12), f"seed={seed + k}: {opt}"
-        assert opt.lower_bound == min(raw, opt.cost)
+        assert opt.certificate.lower_bound == min(raw, opt.cost)
         assert relative_gap(cost, raw) <= 1e-3 * (1 + 1e-9), f"seed={seed + k}: {opt}"
         assert raw <= cost_eq19(P, X, x) * (1 + 1e-12)
         assert raw <= many_start_point_minimum(P, x, opt.X, rng, starts=10) * (1 + 1e-12), f"seed={seed + k}"
         for m in ("linear", "local"):
-            assert results[m].certificate == "none" and not results[m].certified
-            assert np.isnan(results[m].raw_lower_bound)
+            assert results[m].certificate is None and not results[m].certified
             other = cost_eq19(P, results[m].X, x)
             if np.all(depths(P, results[m].X) > 0):
                 assert other >= raw * (1 - 1e-12), f"seed={seed + k}: {m} beats the bound"
@@ -125,8 +124,8 @@ def test_lower_bound_holds_at_sampled_points_in_front(seed):
         front = np.array([np.all(depths(P, X) > 0) for X in samples])
         costs = np.array([cost_eq19(P, X, x) for X in samples[front]])
         assert front.sum() > 1000
-        assert costs.min() >= r.raw_lower_bound * (1 - 1e-9), f"seed={seed + k}"
-        assert many_start_point_minimum(P, x, r.X, rng, starts=20) >= r.raw_lower_bound * (1 - 1e-12)
+        assert costs.min() >= r.certificate.raw_lower_bound * (1 - 1e-9), f"seed={seed + k}"
+        assert many_start_point_minimum(P, x, r.X, rng, starts=20) >= r.certificate.raw_lower_bound * (1 - 1e-12)
 
 
 def test_tight_gap_and_branch_and_bound_report_nodes(seed):
@@ -134,26 +133,26 @@ def test_tight_gap_and_branch_and_bound_report_nodes(seed):
     # forced tiny gap must still end certified or say that the node budget ran out.
     for k in range(40):
         P, _, x = noisy_problem(seed + k, views=2, parallax_deg=1.0, sigma=5.0)
-        r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_relative_gap=1e-9))
+        r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e-9)))
         assert r.status in ("success", "gap_not_closed"), f"seed={seed + k} {r}"
         # The gap recomputed from numpy's cost and the raw bound; the costs agree to ~1e-13 relative,
         # which moves the recomputed gap by as much.
-        gap = relative_gap(cost_eq19(P, r.X, x), r.raw_lower_bound)
+        gap = relative_gap(cost_eq19(P, r.X, x), r.certificate.raw_lower_bound)
         if r.certified:
             assert gap <= 1e-9 + 1e-12, f"seed={seed + k}: {r}"
-        if r.certificate == "branch_and_bound":
-            assert r.nodes >= 1 and r.solver_iterations >= 1
+        if r.certificate.kind == "branch_and_bound":
+            assert r.certificate.nodes >= 1 and r.certificate.solver_iterations >= 1
         else:
-            assert r.nodes == 0
+            assert r.certificate.nodes == 0
         assert np.all(depths(P, r.X) > 0), f"seed={seed + k}: behind a camera"
 
 
 def test_node_budget_is_respected(seed):
     P, _, x = noisy_problem(seed, views=2, parallax_deg=0.5, sigma=5.0)
-    r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_relative_gap=1e-12, max_nodes=1))
-    assert r.nodes <= 1
+    r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e-12, max_nodes=1)))
+    assert r.certificate.nodes <= 1
     assert r.status in ("success", "gap_not_closed")
-    assert r.certified == (r.status == "success" and r.relative_gap <= 1e-12)
+    assert r.certified == (r.status == "success" and r.certificate.relative_gap <= 1e-12)
 
 
 def test_tiny_gamma_is_infeasible(seed):
@@ -161,7 +160,7 @@ def test_tiny_gamma_is_infeasible(seed):
     r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(max_reprojection_error=1e-6))
     # No point reprojects within 1e-6 px of noisy data in every view, unless the convexity test already
     # certified the local minimum (γ only restricts branch and bound).
-    assert r.status == "infeasible" or r.certificate == "convexity_test", r
+    assert r.status == "infeasible" or r.certificate.kind == "convexity_test", r
 
 
 @pytest.mark.parametrize("parallax_deg", [1.0, 0.2])
@@ -185,8 +184,8 @@ def test_result_is_frozen_and_owns_its_arrays(seed):
     with pytest.raises(AttributeError):
         r.cost = 0.0  # type: ignore[misc]
     d = r.to_dict()
-    assert set(d) == set(REPORT_FIELDS) | {"X", "covariance", "inliers", "certificate_domain"}
-    assert d["X"] == r.X.tolist() and d["certificate"] == r.certificate
+    assert set(d) == set(REPORT_FIELDS) | {"X", "covariance", "inliers"}
+    assert d["X"] == r.X.tolist() and d["certificate"] == r.certificate.to_dict()
     assert "PointTriangulation(" in repr(r) and "certified=True" in repr(r)
 
 
@@ -234,16 +233,16 @@ def test_bad_input_raises_named_errors(change, error, message, seed):
     "kwargs, message",
     [
         ({"method": "bundle"}, "unknown triangulation method 'bundle'"),
-        ({"max_relative_gap": 0.0}, "max_relative_gap"),
-        ({"max_relative_gap": math.nan}, "max_relative_gap"),
+        ({"certify": {"max_relative_gap": 0.0}}, "max_relative_gap"),
+        ({"certify": {"max_relative_gap": math.nan}}, "max_relative_gap"),
         ({"max_reprojection_error": -1.0}, "max_reprojection_error"),
-        ({"max_nodes": 0}, "max_nodes"),
+        ({"certify": {"max_nodes": 0}}, "max_nodes"),
     ],
 )
 def test_bad_options_raise_invalid_option(kwargs, message, seed):
     with pytest.raises(pluecker.InvalidOptionError, match=message):
-        if "method" in kwargs:
-            pluecker.triangulate_point(*good(seed), **kwargs)
+        if "certify" in kwargs:
+            pluecker.CertifyOptions(**kwargs["certify"])
         else:
             pluecker.triangulate_point(*good(seed), options=pluecker.TriangulationOptions(**kwargs))
 
@@ -271,19 +270,26 @@ def scene(seed: int, views: int = 4, n: int = 300, sigma: float = 1.0):
 @pytest.mark.parametrize("method", ["linear", "local", "optimal"])
 def test_batch_equals_single_calls(method, seed):
     P, _, x = scene(seed, n=200)
-    batch = pluecker.triangulate_points(P, x, method=method)
+    batch = pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method=method))
     assert len(batch) == 200 and batch.method == method
     assert batch.X.shape == (200, 3) and batch.status.shape == (200,)
     for i in range(0, 200, 7):
-        single = pluecker.triangulate_point(P, x[i], method=method)
+        single = pluecker.triangulate_point(P, x[i], options=pluecker.TriangulationOptions(method=method))
         # The same equations on the same data; the batch's linear path sums in another order, so the
         # points may differ in the last bits (1e-16 relative), and a local minimisation started there by
         # its step tolerance (1e-10 relative). 1e-9 is well above both and far below the noise (~1e-3).
         np.testing.assert_allclose(batch.X[i], single.X, rtol=1e-9, atol=1e-9)
-        for field in ("cost", "lower_bound", "relative_gap"):
-            assert getattr(batch, field)[i] == pytest.approx(getattr(single, field), rel=1e-9, abs=1e-12), (i, field)
-        assert batch.certified[i] == single.certified and batch.nodes[i] == single.nodes
-        assert batch.status[i] == single.status and batch.certificate[i] == single.certificate
+        assert batch.cost[i] == pytest.approx(single.cost, rel=1e-9, abs=1e-12), i
+        c = single.certificate
+        if c is None:
+            # The batch's columns without a certificate: NaN bounds and gap, "none", no nodes.
+            assert np.isnan(batch.lower_bound[i]) and np.isnan(batch.relative_gap[i]), i
+            assert batch.certificate[i] == "none" and batch.nodes[i] == 0 and not batch.certified[i], i
+        else:
+            for field in ("lower_bound", "relative_gap"):
+                assert getattr(batch, field)[i] == pytest.approx(getattr(c, field), rel=1e-9, abs=1e-12), (i, field)
+            assert batch.certified[i] == c.certified and batch.nodes[i] == c.nodes and batch.certificate[i] == c.kind
+        assert batch.status[i] == single.status
     assert np.all(batch.status == "success")
     assert np.all(batch.certified) == (method == "optimal")
     assert all(m == "" for m in batch.messages)
@@ -312,7 +318,7 @@ def test_covariances_per_observation(seed):
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(40, 3, 2, 2))
     cov = A @ A.transpose(0, 1, 3, 2) + 0.3 * np.eye(2)
-    batch = pluecker.triangulate_points(P, x, cov=cov, method="local")
+    batch = pluecker.triangulate_points(P, x, cov=cov, options=pluecker.TriangulationOptions(method="local"))
     for i in range(0, 40, 5):
         assert batch.cost[i] == pytest.approx(cost_eq19(P, batch.X[i], x[i], cov[i]), rel=1e-9)
 
@@ -382,7 +388,7 @@ def test_gil_is_released_during_the_solve(seed):
     def work():
         state["inside"] = True
         start = time.perf_counter()
-        pluecker.triangulate_points(P, x, method="optimal")
+        pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method="optimal"))
         state["seconds"] = time.perf_counter() - start
         state["inside"] = False
 
@@ -427,7 +433,7 @@ def test_bad_mask_and_cov_shapes(seed):
     with pytest.raises(pluecker.ShapeError, match="cov"):
         pluecker.triangulate_points(P, x, cov=np.ones((5, 3, 2, 2)))
     with pytest.raises(pluecker.InvalidOptionError, match="max_nodes"):
-        pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(max_nodes=0))
+        pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=0)))
 
 
 
@@ -458,9 +464,9 @@ def test_observation_rows_give_the_dense_batch(method, seed):
     visible[np.arange(n), (rng.integers(0, 5, n) + 1 + rng.integers(0, 6, n)) % 6] = True
     s = rng.uniform(0.5, 2.0, (n, 6))
     cov = s[..., None, None] * np.eye(2)
-    dense = pluecker.triangulate_points(P, x, visible, cov, method=method)
+    dense = pluecker.triangulate_points(P, x, visible, cov, options=pluecker.TriangulationOptions(method=method))
     track, image, rows, row_cov = observation_rows(x, visible, cov, rng)
-    sparse = pluecker.triangulate_point_observations(P, track, image, rows, row_cov, method=method)
+    sparse = pluecker.triangulate_point_observations(P, track, image, rows, row_cov, options=pluecker.TriangulationOptions(method=method))
     assert len(sparse) == n
     if method == "linear":
         # The dense linear batch has its own allocation-free DLT; the same sums in another order agree to

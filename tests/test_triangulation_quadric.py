@@ -17,7 +17,7 @@ def test_exact_outlines_give_the_ellipsoid(method, seed):
     rng = np.random.default_rng(seed)
     P = cameras(4, 60.0, rng)
     centre, axes, semi, dual = ellipsoid(rng)
-    r = pluecker.triangulate_quadric(P, outlines(P, dual), method=method)
+    r = pluecker.triangulate_quadric(P, outlines(P, dual), options=pluecker.TriangulationOptions(method=method))
     assert r.method == method and r.status == "success", f"seed={seed} {r}"
     np.testing.assert_allclose(r.centre, centre, atol=1e-6, err_msg=f"seed={seed}")
     np.testing.assert_allclose(r.semi_axes, semi, atol=1e-6)
@@ -33,7 +33,7 @@ def test_exact_outlines_give_the_ellipsoid(method, seed):
 
 def test_fitted_disc_conics_give_a_flat_quadric_and_ordered_costs(seed):
     scene = disc_scene(seed % 1000)
-    results = {m: pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, method=m)
+    results = {m: pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, options=pluecker.TriangulationOptions(method=m))
                for m in METHODS}
     truth_centre = scene.dual[:3, 3] / scene.dual[3, 3]
     for m, r in results.items():
@@ -42,6 +42,9 @@ def test_fitted_disc_conics_give_a_flat_quadric_and_ordered_costs(seed):
         assert np.linalg.norm(r.centre - truth_centre) < 0.05, (m, r)
         assert r.semi_axes[2] < 0.05 * r.semi_axes[0], (m, r.semi_axes)
     opt, local, linear = results["optimal"], results["local"], results["linear"]
+    # No search, no certificate: None, not a placeholder bound.
+    assert local.certificate is None and linear.certificate is None and not local.certified
+    assert local.to_dict()["certificate"] is None
     assert local.cost <= linear.cost * (1 + 1e-9)
     assert opt.cost <= local.cost * (1 + 1e-9)
     # The raw bound against numpy's cost (eq. 19: the image dual conics in the observed ellipse's frame,
@@ -49,7 +52,7 @@ def test_fitted_disc_conics_give_a_flat_quadric_and_ordered_costs(seed):
     # recomputed from them; numpy's cost agrees with the library's to 1e-7.
     cost = {m: quadric_cost(scene.cameras, scene.conics, scene.covariances, r.Q) for m, r in results.items()}
     assert cost["optimal"] == pytest.approx(opt.cost, rel=1e-7)
-    raw = opt.raw_lower_bound
+    raw = opt.certificate.raw_lower_bound
     assert raw <= cost["optimal"] * (1 + 1e-7) and raw <= min(cost.values()) * (1 + 1e-7), (raw, cost)
     assert opt.certified == (opt.status == "success")
     if opt.certified:
@@ -122,11 +125,11 @@ def test_quadric_batch_equals_single_calls_with_cameras_per_track(seed):
     conics = np.stack([s.conics for s in scenes])
     cov = np.stack([s.covariances for s in scenes])
     for method in METHODS:
-        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
+        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES)))
         assert batch.Q.shape == (3, 4, 4) and batch.primal.shape == (3, 4, 4) and batch.axes.shape == (3, 3, 3)
         assert batch.centre.shape == (3, 3) and batch.semi_axes.shape == (3, 3)
         for i, s in enumerate(scenes):
-            single = pluecker.triangulate_quadric(s.cameras, s.conics, s.covariances, method=method, options=pluecker.TriangulationOptions(max_nodes=NODES))
+            single = pluecker.triangulate_quadric(s.cameras, s.conics, s.covariances, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES)))
             for field in ("Q", "centre", "semi_axes", "axes"):
                 np.testing.assert_array_equal(getattr(batch, field)[i], getattr(single, field), err_msg=field)
             if single.primal is None:
@@ -146,12 +149,12 @@ def test_quadric_batch_with_shared_cameras_and_visibility(seed):
     visible[4] = [True, True, False, False, False]  # two views: too few for a quadric
     conics[0, 1] = np.diag([1.0, -1.0, -100.0])  # a hyperbola, in a view the track is seen in
     visible[0, 1] = True
-    batch = pluecker.triangulate_quadrics(P, conics, visible, method="local")
+    batch = pluecker.triangulate_quadrics(P, conics, visible, options=pluecker.TriangulationOptions(method="local"))
     assert batch.status[4] == "too_few_views" and "3 visible views" in batch.messages[4]
     assert batch.status[0] == "degenerate" and "conics[0][1] is not a real ellipse" in batch.messages[0]
     for i in range(1, 4):
         seen = visible[i]
-        single = pluecker.triangulate_quadric(P[seen], conics[i][seen], method="local")
+        single = pluecker.triangulate_quadric(P[seen], conics[i][seen], options=pluecker.TriangulationOptions(method="local"))
         np.testing.assert_array_equal(batch.Q[i], single.Q)
         assert_same_report(batch, i, single)
     assert "QuadricTriangulations(method='local', tracks=5" in repr(batch)

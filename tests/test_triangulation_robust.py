@@ -106,14 +106,14 @@ def test_robust_lines_reject_the_outlier_views():
     np.testing.assert_array_equal(single.inliers, batch.inliers[3])
     kept = single.inliers
     np.testing.assert_allclose(single.plucker, pluecker.triangulate_line(P[kept], segments[3][kept],
-                                                                         method="local").plucker, atol=1e-9)
+                                                                         options=pluecker.TriangulationOptions(method="local")).plucker, atol=1e-9)
     # Sparse rows in any order: the mask follows the rows as given.
     track, image = np.nonzero(np.ones((20, 7), dtype=bool))
     order = np.random.default_rng(9).permutation(len(track))
     track, image = track[order], image[order]
     sparse = pluecker.triangulate_line_observations(P, track, image, segments[track, image], options=options)
     np.testing.assert_array_equal(sparse.inliers, batch.inliers[track, image])
-    assert pluecker.triangulate_lines(P, segments, method="local").inliers is None
+    assert pluecker.triangulate_lines(P, segments, options=pluecker.TriangulationOptions(method="local")).inliers is None
 
 
 def test_too_few_inliers_is_a_status():
@@ -136,22 +136,22 @@ def test_every_result_says_which_domain_its_certificate_covers():
     P = cameras(3, 30.0, rng)
     x = project(P, np.zeros(3)) + rng.normal(size=(3, 2))
     point = pluecker.triangulate_point(P, x)
-    assert point.certified and point.certificate_domain == "every point in front of every camera"
-    assert pluecker.triangulate_point(P, x, method="local").certificate_domain == "none"
+    assert point.certified and point.certificate.domain == "every point in front of every camera"
+    assert pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method="local")).certificate is None
     P4, _, segments, _ = line_tracks_with_outliers(1, 4, 12)
     expected = {"none": "none", "convexity_test": "every line (a cost at the zero bound)",
                 "taylor_branch_and_bound": "every line at least 1/100 of the estimate's distance from each camera "
                                            "centre, in front of the cameras or not"}
     for views in (2, 4):  # two views: the zero-cost certificate; four: the Taylor branch and bound
         line = pluecker.triangulate_line(P4[:views], segments[0][:views])
-        domain = expected.get(line.certificate)
-        if line.certificate == "branch_and_bound":
-            assert "eq. 27 strip widths" in line.certificate_domain and "100 times" in line.certificate_domain
+        domain = expected.get(line.certificate.kind)
+        if line.certificate.kind == "branch_and_bound":
+            assert "eq. 27 strip widths" in line.certificate.domain and "100 times" in line.certificate.domain
         else:
-            assert line.certificate_domain == domain, (views, line.certificate)
-        assert line.to_dict()["certificate_domain"] == line.certificate_domain
-    assert pluecker.triangulate_line(P4[:2], segments[0][:2]).certificate == "convexity_test"
-    assert pluecker.triangulate_line(P4, segments[0]).certificate == "taylor_branch_and_bound"
+            assert line.certificate.domain == domain, (views, line.certificate.kind)
+        assert line.to_dict()["certificate"]["domain"] == line.certificate.domain
+    assert pluecker.triangulate_line(P4[:2], segments[0][:2]).certificate.kind == "convexity_test"
+    assert pluecker.triangulate_line(P4, segments[0]).certificate.kind == "taylor_branch_and_bound"
     paper = pluecker.TriangulationOptions(line_bound="relaxation")
     line = pluecker.triangulate_line(P4, segments[0], options=paper)
-    assert line.certificate == "branch_and_bound" and "eq. 27 strip widths" in line.certificate_domain
+    assert line.certificate.kind == "branch_and_bound" and "eq. 27 strip widths" in line.certificate.domain

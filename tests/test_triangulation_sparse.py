@@ -22,13 +22,13 @@ def test_sparse_lines_equal_the_dense_batch(method, seed):
     P, segments = line_tracks(seed)
     rng = np.random.default_rng(seed)
     visible = random_visibility(rng, len(segments), 4, 2)
-    options = pluecker.TriangulationOptions(max_nodes=NODES)
+    options = pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES))
     dense = pluecker.triangulate_lines(P, np.where(visible[..., None, None], segments, np.nan), visible,
-                                       method=method, sigma=1.5, options=options)
+                                       sigma=1.5, options=options)
     # Rows in the dense order (by track, then image): each track's views in the same order, the same
     # numbers, the same answer to rounding.
     track, image = np.nonzero(visible)
-    sparse = pluecker.triangulate_line_observations(P, track, image, segments[track, image], method=method,
+    sparse = pluecker.triangulate_line_observations(P, track, image, segments[track, image],
                                                     sigma=1.5, options=options)
     np.testing.assert_allclose(sparse.plucker, dense.plucker, atol=1e-12)
     np.testing.assert_array_equal(sparse.status, dense.status)
@@ -37,7 +37,7 @@ def test_sparse_lines_equal_the_dense_batch(method, seed):
     # Rows in any order: a track's views come in another order, and the minimiser, which stops on a step
     # of 1e-10, lands within its tolerance (differences of 1e-9 were seen; 1e-6 allows 1000x that).
     track, image = rows_of(visible, rng)
-    shuffled = pluecker.triangulate_line_observations(P, track, image, segments[track, image], method=method,
+    shuffled = pluecker.triangulate_line_observations(P, track, image, segments[track, image],
                                                       sigma=1.5, options=options)
     np.testing.assert_allclose(shuffled.plucker, dense.plucker, atol=1e-6)
     np.testing.assert_array_equal(shuffled.status, dense.status)
@@ -46,9 +46,9 @@ def test_sparse_lines_equal_the_dense_batch(method, seed):
     homogeneous = np.concatenate([segments, np.ones(segments.shape[:-1] + (1,))], axis=-1)
     lines = np.cross(homogeneous[..., 0, :], homogeneous[..., 1, :])
     cov = np.tile(np.diag([2.0, 0.5]), lines.shape[:2] + (1, 1))
-    dense = pluecker.triangulate_lines(P, lines, visible, cov, method="local")
+    dense = pluecker.triangulate_lines(P, lines, visible, cov, options=pluecker.TriangulationOptions(method="local"))
     sparse = pluecker.triangulate_line_observations(P, track, image, lines[track, image], cov[track, image],
-                                                    method="local")
+                                                    options=pluecker.TriangulationOptions(method="local"))
     np.testing.assert_allclose(sparse.plucker, dense.plucker, atol=1e-12)
 
 
@@ -59,9 +59,9 @@ def test_sparse_quadrics_equal_the_dense_batch(seed):
     conics = np.stack([outlines(P, ellipsoid(rng)[3]) for _ in range(n)])
     conics += rng.normal(0.0, 1e-9, conics.shape) * np.abs(conics)
     visible = random_visibility(rng, n, views, 3)
-    dense = pluecker.triangulate_quadrics(P, conics, visible, method="local")
+    dense = pluecker.triangulate_quadrics(P, conics, visible, options=pluecker.TriangulationOptions(method="local"))
     track, image = rows_of(visible, rng)
-    sparse = pluecker.triangulate_quadric_observations(P, track, image, conics[track, image], method="local")
+    sparse = pluecker.triangulate_quadric_observations(P, track, image, conics[track, image], options=pluecker.TriangulationOptions(method="local"))
     np.testing.assert_allclose(sparse.Q, dense.Q, rtol=1e-9, atol=1e-12)
     np.testing.assert_array_equal(sparse.status, dense.status)
 
@@ -74,7 +74,7 @@ def test_bad_rows_stay_in_their_track(seed):
     image = image.copy()
     image[np.flatnonzero(track == 2)[0]] = 9  # beyond the 4 cameras
     rows[np.flatnonzero(track == 4)[1], 0, 0] = np.nan
-    batch = pluecker.triangulate_line_observations(P, track, image, rows, method="local", n_tracks=7)
+    batch = pluecker.triangulate_line_observations(P, track, image, rows, options=pluecker.TriangulationOptions(method="local"), n_tracks=7)
     assert len(batch) == 7 and batch.status[6] == "too_few_views"  # a track id without rows
     assert batch.status[2] == "invalid_input" and "image[8]: expected an image index below 4" in batch.messages[2]
     assert batch.status[4] == "non_finite", batch.messages[4]

@@ -85,19 +85,19 @@ def test_point_covariance_is_the_same_single_and_batch_and_nan_for_rejected_trac
     P = cameras(3, 20.0, rng)
     x = np.array([project(P, rng.uniform(-1, 1, 3)) + rng.normal(size=(3, 2)) for _ in range(4)])
     x[2, 1] = np.nan
-    batch = pluecker.triangulate_points(P, x, method=method)
+    batch = pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method=method))
     assert batch.covariance.shape == (4, 3, 3)
     for t in (0, 1, 3):
-        single = pluecker.triangulate_point(P, x[t], method=method)
+        single = pluecker.triangulate_point(P, x[t], options=pluecker.TriangulationOptions(method=method))
         np.testing.assert_allclose(batch.covariance[t], single.covariance, rtol=1e-9)
         assert np.all(np.linalg.eigvalsh(single.covariance) > 0)
     assert batch.status[2] == "non_finite" and np.all(np.isnan(batch.covariance[2]))
-    r = pluecker.triangulate_point(P, x[0], method=method)
+    r = pluecker.triangulate_point(P, x[0], options=pluecker.TriangulationOptions(method=method))
     assert r.to_dict()["covariance"] == r.covariance.tolist()
     # Parallel rays: a point at infinity has no covariance.
     K = np.array([[800.0, 0, 320], [0, 800.0, 240], [0, 0, 1]])
     Pp = np.array([K @ np.hstack([np.eye(3), [[tx], [0.0], [5.0]]]) for tx in (0.0, 1.0)])
-    far = pluecker.triangulate_point(Pp, np.array([[300.0, 200.0]] * 2), method=method)
+    far = pluecker.triangulate_point(Pp, np.array([[300.0, 200.0]] * 2), options=pluecker.TriangulationOptions(method=method))
     assert far.covariance is None
 
 
@@ -119,18 +119,18 @@ def test_line_covariance_matches_monte_carlo_and_its_6x6_forms():
     A, B = np.array([0.6, -0.3, 0.2]), np.array([-0.5, 0.4, -0.3])
     segments = np.stack([project(P, A), project(P, B)], axis=1)
     sigma, n = 0.5, 1000
-    exact = pluecker.triangulate_line(P, segments, sigma=sigma, method="local")
+    exact = pluecker.triangulate_line(P, segments, sigma=sigma, options=pluecker.TriangulationOptions(method="local"))
     cov = exact.covariance
     assert cov is not None and cov.shape == (4, 4)
     noisy = segments[None] + sigma * rng.normal(size=(n, *segments.shape))
-    batch = pluecker.triangulate_lines(P, noisy, sigma=sigma, method="local")
+    batch = pluecker.triangulate_lines(P, noisy, sigma=sigma, options=pluecker.TriangulationOptions(method="local"))
     assert np.all(batch.status == "success")
     errors = np.array([chart_coordinates(exact.chart_axes, exact.point, exact.direction, p, d)
                        for p, d in zip(batch.point, batch.direction)])
     check_monte_carlo("line, 4 views", errors, cov)
     # The batch carries the same covariance and axes as the single call.
     np.testing.assert_allclose(batch.covariance[0], pluecker.triangulate_line(P, noisy[0], sigma=sigma,
-                                                                              method="local").covariance, rtol=1e-9)
+                                                                              options=pluecker.TriangulationOptions(method="local")).covariance, rtol=1e-9)
     assert batch.chart_axes.shape == (n, 2, 3) and batch.covariance.shape == (n, 4, 4)
     # 6x6 forms: rank 4; the Plücker one is orthogonal to the unit coordinates; the point closest to the
     # origin (full-rank 3x3 block when that point is not the origin) passes the same test.
@@ -148,14 +148,14 @@ def test_quadric_covariance_is_the_same_single_and_batch_and_has_its_chart():
     P = cameras(4, 60.0, rng)
     centre, axes, semi, dual = ellipsoid(rng)
     conics = outlines(P, dual)
-    r = pluecker.triangulate_quadric(P, conics, method="local")
+    r = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="local"))
     cov = r.covariance
     assert cov is not None and cov.shape == (9, 9)
     np.testing.assert_allclose(cov, cov.T)
     assert np.all(np.linalg.eigvalsh(cov) > 0)
-    batch = pluecker.triangulate_quadrics(P, np.stack([conics, conics]), method="local")
+    batch = pluecker.triangulate_quadrics(P, np.stack([conics, conics]), options=pluecker.TriangulationOptions(method="local"))
     np.testing.assert_allclose(batch.covariance[1], cov, rtol=1e-9)
     assert r.to_dict()["covariance"] == cov.tolist()
     # Unit residual covariances scaled by s² scale the covariance by s² (the given covariances carry it).
-    scaled = pluecker.triangulate_quadric(P, conics, np.broadcast_to(4.0 * np.eye(5), (4, 5, 5)), method="local")
+    scaled = pluecker.triangulate_quadric(P, conics, np.broadcast_to(4.0 * np.eye(5), (4, 5, 5)), options=pluecker.TriangulationOptions(method="local"))
     np.testing.assert_allclose(scaled.covariance, 4.0 * cov, rtol=1e-6)

@@ -301,7 +301,7 @@ class RansacReport:
     ⌈min_inlier_ratio · n⌉))`, `c` the most inliers a wrong pose plausibly gets by chance among `n`.
     """
     score: float
-    """MSAC score `½ Σ min(e², τ²)` of the best model, px²."""
+    """MSAC score `Σ min(e², τ²)` of the best model, px²."""
     stop: str
     """Why sampling stopped: `confidence`, `min_inlier_ratio` (enough samples to find a model with that
     inlier fraction, and none was), `iteration_cap`, `time_budget`, `interrupted` or `no_solvable_sample`.
@@ -571,24 +571,20 @@ class TriangulationOptions:
     given to the function wins over :attr:`method`."""
 
     # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
-    def __new__(cls, *, method: str = 'optimal', max_relative_gap: float = 0.001, max_reprojection_error: Optional[float] = None, max_nodes: int = 2000, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', max_taylor_nodes: int = 50000, local_max_iterations: int = 100) -> "TriangulationOptions": ...
+    def __new__(cls, *, method: str = 'optimal', certify: CertifyOptions = ..., max_reprojection_error: Optional[float] = None, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', local_max_iterations: int = 100) -> "TriangulationOptions": ...
     __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
-    max_relative_gap: float
-    """Branch and bound stops when `(upper − lower) / upper` is at most this."""
+    certify: CertifyOptions
+    """Method `optimal`: the certificate's gap and node cap (`max_nodes=None`: 2000 nodes of the conic branch and bounds, points, quadrics and `line_bound="relaxation"`; 50000 of the Taylor bound of lines), the object itself (`options.certify.max_nodes = 10` takes effect)."""
     max_reprojection_error: Optional[float]
     """The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing."""
-    max_nodes: int
-    """Branch and bound with conic relaxations (points, quadrics, `line_bound="relaxation"`) gives up (status `gap_not_closed`) after this many nodes."""
     outlier_threshold: Optional[float]
     """Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     line_bound: str
     """Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips)."""
     quadric_bound: str
     """Quadrics, method `optimal`: the lower bound, `convexity` (the convexity test, certificate `convexity_test` over every ellipsoid no principal plane cuts; the relaxation when it cannot decide) or `relaxation` (the paper's SOCP relaxation only; certificate `branch_and_bound` over an a-priori box)."""
-    max_taylor_nodes: int
-    """Node cap of the Taylor bound of lines (microseconds per node, so separate from `max_nodes`)."""
     local_max_iterations: int
     """Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`)."""
     # end of fields
@@ -602,7 +598,7 @@ class TriangulationReport:
     method: str
     """The method that ran: `linear`, `local` or `optimal`."""
     status: str
-    """`success`, or why not: `gap_not_closed` (branch and bound hit `max_nodes`), `not_converged`, `behind_camera`,
+    """`success`, or why not: `gap_not_closed` (the certificate's search hit `certify.max_nodes`), `not_converged`, `behind_camera`,
     `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
     `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
     """
@@ -610,20 +606,13 @@ class TriangulationReport:
     """`status == 'success'`."""
     cost: float
     """The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate."""
-    lower_bound: float
-    """Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate)."""
-    raw_lower_bound: float
-    """The bound as proved, before `lower_bound`'s cap at the cost (NaN without a bound, inf for an empty search set)."""
-    relative_gap: float
-    """`(cost − lower_bound) / cost`."""
+    certificate: Optional[Certificate]
+    """The proof of global optimality (`Certificate`: `certified`, `lower_bound`, `raw_lower_bound`, `relative_gap`,
+    `kind`, `domain`, `nodes`); `None` when no bound was computed (methods `linear` and `local`, input refused
+    before the search). A search that did not close the gap gives `certified == False` and status `gap_not_closed`.
+    """
     certified: bool
-    """Whether the estimate is proved globally optimal to within the gap."""
-    certificate: str
-    """How it was proved: `none`, `convexity_test` or `branch_and_bound`."""
-    nodes: int
-    """Branch-and-bound nodes."""
-    solver_iterations: int
-    """Conic-solver iterations summed over the nodes."""
+    """`certificate is not None and certificate.certified`."""
     iterations: int
     """Iterations of the local minimisation."""
     termination: str
@@ -643,8 +632,6 @@ class PointTriangulation(TriangulationReport):
 
     # fields of PointTriangulation (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    certificate_domain: str
-    """Which points the certificate's lower bound covers (`'none'` without one): every point in front of the cameras, or the search domain of branch and bound."""
     X: NDArray[np.float64]
     """The point, world frame."""
     covariance: Optional[NDArray[np.float64]]
@@ -659,8 +646,6 @@ class LineTriangulation(TriangulationReport):
 
     # fields of LineTriangulation (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    certificate_domain: str
-    """Which lines the certificate's lower bound covers (`'none'` without one): every line in front of the cameras, or the search domain of branch and bound."""
     plucker: NDArray[np.float64]
     """Plücker coordinates `(l12, l13, l14, l23, l42, l34)` of the line, unit norm (eq. 4 holds)."""
     point: NDArray[np.float64]
@@ -685,8 +670,6 @@ class QuadricTriangulation(TriangulationReport):
 
     # fields of QuadricTriangulation (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    certificate_domain: str
-    """Which quadrics the certificate's lower bound covers (`'none'` without one): every ellipsoid that no camera's principal plane cuts (`convexity_test`), or the search domain of branch and bound."""
     Q: NDArray[np.float64]
     """The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19."""
     primal: Optional[NDArray[np.float64]]
@@ -714,17 +697,17 @@ class BatchReport:
     cost: NDArray[np.float64]
     """Per track: the cost of eq. 19 at the estimate (NaN for a rejected track)."""
     lower_bound: NDArray[np.float64]
-    """Per track: the proved lower bound on the cost."""
+    """Per track: the proved lower bound on the cost (the single result's `certificate.lower_bound`; NaN: no bound was computed, as for `linear`, `local` or a rejected track)."""
     raw_lower_bound: NDArray[np.float64]
     """Per track: the proved bound before the cap at the cost (NaN without a bound)."""
     relative_gap: NDArray[np.float64]
-    """Per track: `(cost − lower_bound) / cost`."""
+    """Per track: `(cost − lower_bound) / max(cost, 1e-12)` (NaN without a bound)."""
     certified: NDArray[np.bool_]
     """Per track: whether the estimate is certified globally optimal."""
     certificate: NDArray[np.str_]
-    """Per track: `none`, `convexity_test` or `branch_and_bound`."""
+    """Per track: the certificate's `kind` (`convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test`), `none` without one."""
     nodes: NDArray[np.int64]
-    """Per track: branch-and-bound nodes."""
+    """Per track: nodes of the certificate's search (0 without one)."""
     iterations: NDArray[np.int64]
     """Per track: iterations of the local minimisation."""
     time_seconds: NDArray[np.float64]
@@ -801,7 +784,6 @@ def triangulate_point(
     P: ArrayLike,
     x: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
@@ -816,7 +798,6 @@ def triangulate_points(
     x: ArrayLike,
     visible: Optional[ArrayLike] = None,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
@@ -831,7 +812,6 @@ def triangulate_point_observations(
     image: ArrayLike,
     x: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
@@ -851,7 +831,6 @@ def triangulate_line(
     P: ArrayLike,
     lines: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
@@ -870,7 +849,6 @@ def triangulate_lines(
     lines: ArrayLike,
     visible: Optional[ArrayLike] = None,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
@@ -886,7 +864,6 @@ def triangulate_line_observations(
     image: ArrayLike,
     lines: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
@@ -907,7 +884,6 @@ def triangulate_quadric(
     P: ArrayLike,
     conics: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
@@ -922,7 +898,6 @@ def triangulate_quadrics(
     conics: ArrayLike,
     visible: Optional[ArrayLike] = None,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
@@ -936,7 +911,6 @@ def triangulate_quadric_observations(
     image: ArrayLike,
     conics: ArrayLike,
     cov: Optional[ArrayLike] = None,
-    method: Optional[str] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,

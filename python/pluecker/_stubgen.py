@@ -46,6 +46,11 @@ def _docstring(doc: str, indent: str) -> list[str]:
     return [f'{indent}"""{lines[0]}'] + [f"{indent}{line}" if line else "" for line in lines[1:]] + [f'{indent}"""']
 
 
+def _default(value: object) -> str:
+    """A default as the stub writes it: nested options (a dict in ``to_dict``) as ``...``."""
+    return "..." if isinstance(value, dict) else repr(value)
+
+
 def _is_options(cls: type) -> bool:
     return cls.__name__.endswith("Options")
 
@@ -57,7 +62,7 @@ def block(cls_name: str, indent: str = "    ") -> str:
     out = [f"{indent}# fields of {cls_name} (generated: python -m pluecker._stubgen)"]
     if _is_options(cls):
         defaults = cls().to_dict()
-        params = ", ".join(f"{name}: {kind} = {defaults[name]!r}" for name, kind, _ in fields)
+        params = ", ".join(f"{name}: {kind} = {_default(defaults[name])}" for name, kind, _ in fields)
         out.append(f'{indent}def __new__(cls, *, {params}) -> "{cls_name}": ...')
     out.append(f"{indent}__fields__: ClassVar[List[Tuple[str, str, str]]]")
     for name, kind, doc in fields:

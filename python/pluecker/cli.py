@@ -557,10 +557,11 @@ def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -
         job = args.out / "_job"
         (job / "input").mkdir(parents=True, exist_ok=True)
         pq.write_table(table, job / "input" / "observations.parquet", row_group_size=1_000_000)
-        options = (pluecker.TriangulationOptions(outlier_threshold=args.outlier_threshold / args.sigma)
-                   if args.outlier_threshold is not None else None)
+        options = pluecker.TriangulationOptions(method=args.method)
+        if args.outlier_threshold is not None:
+            options.outlier_threshold = args.outlier_threshold / args.sigma
         summary = distributed.triangulate(job / "input" / "observations.parquet", cameras, job, client=client,
-                                          method=args.method, options=options, progress=sys.stderr.isatty())
+                                          options=options, progress=sys.stderr.isatty())
     run = colmap.retriangulation_of_job(distributed.read_points(job), distributed.read_observations(job))
     distributed._remove_tree(job)
     files = colmap.write(reconstruction, run, args.out, text=args.text)
@@ -687,7 +688,8 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
     with tqdm(total=reconstruction.num_points3D(), desc="points", unit="pt", disable=None, leave=False) as bar:
         report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
         try:
-            run = colmap.retriangulate(reconstruction, sigma_px=args.sigma, method=args.method,
+            run = colmap.retriangulate(reconstruction, sigma_px=args.sigma,
+                                       options=pluecker.TriangulationOptions(method=args.method),
                                        outlier_threshold_px=args.outlier_threshold, progress=report)
         except pluecker.PlueckerError as exc:
             return _fail("triangulate", str(exc))

@@ -336,7 +336,7 @@ def retriangulation_of_job(points: Any, observations: Any) -> Retriangulation:
                            observations.column("image").to_numpy(), observations.column("point2D_idx").to_numpy())
 
 
-def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None = None,
+def retriangulate(reconstruction: Any, sigma_px: float = 1.0,
                   options: Any = None, *, outlier_threshold_px: float | None = None,
                   progress: Any = None) -> Retriangulation:
     """Re-triangulates every 3-D point of a ``pycolmap.Reconstruction`` from its track, with the
@@ -355,7 +355,8 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
 
     ``outlier_threshold_px`` rejects observations farther than that many pixels from the consensus of
     their track (``TriangulationOptions.outlier_threshold``; ``result.inliers`` flags the observations).
-    ``method``, ``options`` and ``progress`` are those of :func:`pluecker.triangulate_point_observations`.
+    ``options`` (its ``method`` and ``certify`` too) and ``progress`` are those of
+    :func:`pluecker.triangulate_point_observations`.
     Use :func:`update_points` or :func:`write` to put the points back.
     """
     o = _observations(reconstruction, sigma_px)
@@ -364,7 +365,7 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0, method: str | None
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
     covariances = np.broadcast_to(float(sigma_px)**2 * np.eye(2), (len(o.track), 2, 2))
     result = _core.triangulate_point_observations(o.P, o.track, o.camera, o.pixels, covariances,
-                                                  method=method, options=options, progress=progress,
+                                                  options=options, progress=progress,
                                                   n_tracks=len(o.ids), cameras=o.lenses)
     return Retriangulation(o.ids, result, o.track, o.image_id, o.point2D_idx, o.skipped)
 
@@ -417,7 +418,7 @@ PLY_COLOURS = {
 CERTIFIED_MEANING = (
     "certified: lower_bound is a proved lower bound on the global minimum of the point's cost (eq. 19: the "
     "squared reprojection residuals whitened by sigma_px, summed over the observations used), within the "
-    "relative gap max_relative_gap of cost; the residuals are those of the observed (distorted) pixels "
+    "relative gap certify.max_relative_gap of cost; the residuals are those of the observed (distorted) pixels "
     "through the exact camera model, and the bound holds over every point whose projection in each image "
     "lies inside the disc where its camera's distortion is proved one-to-one (the fold radius for radially "
     "symmetric lenses); points of cameras the certificate does not cover are left uncertified")

@@ -141,7 +141,7 @@ def _canonical_order(track_rank: np.ndarray, image_rank: np.ndarray, images: int
     return order
 
 
-def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = None,
+def triangulate_table(table: Any, cameras: Cameras, *,
                       options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0) -> tuple[Any, Any]:
     """The single-machine kernel: every track of an observation ``table`` (a ``pyarrow.Table`` with the
     columns of the module docs) by :func:`pluecker.triangulate_point_observations`. Returns the
@@ -168,7 +168,7 @@ def triangulate_table(table: Any, cameras: Cameras, *, method: Optional[str] = N
     image, x, cov = image[order], x[order], np.ascontiguousarray(cov[order])
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
-    result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov, method=method,
+    result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov,
                                                   options=options, n_tracks=len(ids),
                                                   cameras=None if cameras.lenses is None else list(cameras.lenses))
     status = np.asarray(result.status).astype(object)
@@ -250,27 +250,27 @@ def _bucket_table(scratch: str, bucket: int, name: str = "part") -> Any:
     return table if table is not None and table.num_rows else None
 
 
-def _solve(bucket: int, scratch: str, out: str, cameras: Cameras, method: Optional[str],
+def _solve(bucket: int, scratch: str, out: str, cameras: Cameras,
            options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
     """Task 2: one bucket solved (module docs). Returns its counts."""
-    return _solve_table(_bucket_table(scratch, bucket), bucket, out, cameras, method, options, sigma_px)
+    return _solve_table(_bucket_table(scratch, bucket), bucket, out, cameras, options, sigma_px)
 
 
-def _solve_file(index: int, source: str, out: str, cameras: Cameras, method: Optional[str],
+def _solve_file(index: int, source: str, out: str, cameras: Cameras,
                 options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
     """Task of a ``partitioned`` job: one input file of whole tracks solved and written."""
     import pyarrow.parquet as pq
 
-    return _solve_table(pq.read_table(_input_files(source)[index]), index, out, cameras, method, options, sigma_px)
+    return _solve_table(pq.read_table(_input_files(source)[index]), index, out, cameras, options, sigma_px)
 
 
-def _solve_table(table: Any, bucket: int, out: str, cameras: Cameras, method: Optional[str],
+def _solve_table(table: Any, bucket: int, out: str, cameras: Cameras,
                  options: Optional[dict[str, Any]], sigma_px: float) -> dict[str, Any]:
     """Solves one bucket's table and writes ``points`` and ``observations`` part ``bucket``."""
     opts = _core.TriangulationOptions(**options) if options is not None else None
     if table is None or table.num_rows == 0:
         return {"tracks": 0, "certified": 0, "statuses": {}}
-    points, observations = triangulate_table(table, cameras, method=method, options=opts, sigma_px=sigma_px)
+    points, observations = triangulate_table(table, cameras, options=opts, sigma_px=sigma_px)
     _write_part(out, bucket, points=points, observations=observations)
     return {"tracks": points.num_rows, "certified": int(np.sum(points.column("certified").to_numpy())),
             "statuses": _status_counts(points)}
@@ -348,7 +348,7 @@ def share_threads(client: Any) -> dict[str, int]:
 
 
 def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path], *, client: Any = None,
-                buckets: Optional[int] = None, method: Optional[str] = None,
+                buckets: Optional[int] = None,
                 options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0,
                 progress: bool = False, partitioned: bool = False,
                 threads_per_worker: Optional[int] = None) -> JobSummary:
@@ -357,7 +357,7 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     ``client``: a ``distributed.Client`` (``None``: run here, without Dask). ``buckets``: the number of
     solve tasks (default: enough for about 2 million observations each, at least 4 per worker).
-    ``method``, ``options``: those of :func:`pluecker.triangulate_point_observations`. ``progress``:
+    ``options``: those of :func:`pluecker.triangulate_point_observations` (method: ``options.method``). ``progress``:
     a progress bar on the terminal (Dask's). ``partitioned``: every input file already holds whole
     tracks (written by track, e.g. one file per chunk of tracks): one solve per file, no split.
     ``threads_per_worker``: pluecker threads of every worker (default: its share of the cores,
@@ -379,16 +379,16 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
         files = _input_files(source)
         buckets = len(files)
         results = _run_tasks(client, _solve_file, [(i, source) for i in range(len(files))],
-                             (str(out), cameras, method, option_fields, sigma_px), progress, threads_per_worker)
+                             (str(out), cameras, option_fields, sigma_px), progress, threads_per_worker)
     else:
         results = _run_job(client, [(source, "track", "part")], buckets, scratch, _solve,
-                           (scratch, str(out), cameras, method, option_fields, sigma_px), progress,
+                           (scratch, str(out), cameras, option_fields, sigma_px), progress,
                            threads_per_worker)
     _remove_tree(Path(scratch))
     if not any(r["tracks"] for r in results):
         # No rows at all: the result tables still exist, empty, with the columns a job writes.
         empty = pq.read_schema(_input_files(source)[0]).empty_table()
-        points, observations = triangulate_table(empty, cameras, method=method, options=options, sigma_px=sigma_px)
+        points, observations = triangulate_table(empty, cameras, options=options, sigma_px=sigma_px)
         _write_part(str(out), 0, points=points, observations=observations)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["tracks"] for r in results), certified=sum(r["certified"] for r in results),

@@ -138,7 +138,8 @@ def _points(seq: VggSequence, views: list[int], method: str) -> Features:
     if len(tracks) == 0:
         return features
     cameras = seq.cameras[views]
-    result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks], method=method)
+    result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks],
+                                         options=pluecker.TriangulationOptions(method=method))
     columns = _columns(result)
     X = np.asarray(result.X)
     covariances = np.asarray(result.covariance)
@@ -190,8 +191,8 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
     with tqdm(total=len(tracks), desc="lines", unit="line", leave=False,
               disable=None if show_progress is None else not show_progress) as bar:
         report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
-        result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma, method=method,
-                                            progress=report)
+        result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma,
+                                            options=pluecker.TriangulationOptions(method=method), progress=report)
         shown = not bar.disable
     columns = _columns(result)
     plucker, points, directions = (np.asarray(a) for a in (result.plucker, result.point, result.direction))

@@ -91,17 +91,20 @@ fn summary(case: &Case, tracks: &[Track]) {
             let r = triangulate_point(cams, obs, None, &opts).unwrap();
             times.push(r.report.time_seconds * 1e6);
             errors.push((r.point - truth).norm());
-            match r.report.certificate.kind {
-                CertificateKind::ConvexityTest | CertificateKind::LensConvexityTest => by_test += 1,
-                CertificateKind::BranchAndBound
-                | CertificateKind::TaylorBranchAndBound
-                | CertificateKind::SublevelSet => {
+            match r.report.certificate.map(|c| (c.kind, c.nodes)) {
+                Some((CertificateKind::ConvexityTest | CertificateKind::LensConvexityTest, _)) => by_test += 1,
+                Some((
+                    CertificateKind::BranchAndBound
+                    | CertificateKind::TaylorBranchAndBound
+                    | CertificateKind::SublevelSet,
+                    n,
+                )) => {
                     by_bnb += 1;
-                    nodes.push(r.report.certificate.nodes as f64);
+                    nodes.push(n as f64);
                 }
-                CertificateKind::None => {}
+                Some((CertificateKind::None, _)) | None => {}
             }
-            certified += r.report.certificate.certified as usize;
+            certified += r.report.certified() as usize;
         }
         let errors_median = percentile(&mut errors, 0.5);
         line += &format!(
@@ -217,8 +220,11 @@ fn bench_lines(c: &mut Criterion) {
                 .iter()
                 .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
                 .collect();
-            let certified = results.iter().filter(|r| r.report.certificate.certified).count();
-            let nodes: usize = results.iter().map(|r| r.report.certificate.nodes).sum();
+            let certified = results.iter().filter(|r| r.report.certified()).count();
+            let nodes: usize = results
+                .iter()
+                .map(|r| r.report.certificate.map_or(0, |c| c.nodes))
+                .sum();
             let name = format!("{views}-views/optimal-{}", bound.as_str());
             eprintln!("setup line/{name}: {certified}/16 certified, mean nodes {}", nodes / 16);
             let mut k = 0;
@@ -262,7 +268,9 @@ fn bench_quadrics(c: &mut Criterion) {
                 .iter()
                 .map(|(p, x)| triangulate_quadric_points(p, x, SIGMA_PX, &opts).expect("valid"))
                 .filter(|r| {
-                    r.report.certificate.kind == CertificateKind::ConvexityTest && r.report.certificate.certified
+                    r.report
+                        .certificate
+                        .is_some_and(|c| c.kind == CertificateKind::ConvexityTest && c.certified)
                 })
                 .count();
             let name = format!("{views}-views/{}", method.as_str());

@@ -19,6 +19,7 @@ use pluecker::triangulation::line::{lines_from_segments, triangulate_line, trian
 use pluecker::triangulation::quadric::triangulate_quadric_points;
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
+use pluecker::CertifyOptions;
 use std::fs;
 use std::path::Path;
 
@@ -39,8 +40,8 @@ impl Tally {
     fn add(&mut self, r: &Report) {
         self.cost.push(r.cost);
         self.time.push(r.time_seconds);
-        self.nodes.push(r.certificate.nodes as f64);
-        self.certified += r.certificate.certified as usize;
+        self.nodes.push(r.certificate.map_or(0, |c| c.nodes) as f64);
+        self.certified += r.certified() as usize;
         self.runs += 1;
     }
 
@@ -80,7 +81,10 @@ fn median(v: &[f64]) -> f64 {
 fn options(method: Method, gap: f64) -> TriangulationOptions {
     TriangulationOptions {
         method,
-        max_relative_gap: gap,
+        certify: CertifyOptions {
+            max_relative_gap: gap,
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -219,12 +223,13 @@ fn main() {
     let data = args.get(1).map_or(SHIPPED_DATA, |s| s.as_str()).to_string();
     let gap = args
         .get(2)
-        .map_or(TriangulationOptions::default().max_relative_gap, |s| {
+        .map_or(TriangulationOptions::default().certify.max_relative_gap, |s| {
             s.parse().expect("GAP must be a number")
         });
     println!(
-        "relative gap {gap:e}, max nodes {}",
-        TriangulationOptions::default().max_nodes
+        "relative gap {gap:e}, max nodes {} (relaxation), {} (Taylor)",
+        pluecker::triangulation::CONIC_MAX_NODES,
+        pluecker::triangulation::line::taylor_search::MAX_NODES
     );
     synthetic(gap);
     real(Path::new(&data), gap);

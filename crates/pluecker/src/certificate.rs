@@ -61,13 +61,13 @@ pub enum CertificateKind {
     /// Branch and bound closed the gap (the SOCP relaxations of section 4).
     BranchAndBound,
     /// Lines: interval branch and bound with Taylor bounds over the two-view chart
-    /// ([`crate::triangulation::line::taylor_search`]), whose domain is every line not within 1 % of the local line's
-    /// distance from a camera centre.
+    /// ([`crate::triangulation::line::taylor_search`]), whose domain is every line not within 1 % of
+    /// the local line's distance from a camera centre.
     TaylorBranchAndBound,
     /// Points through lenses with distortion: the convexity test of the linearisation at the
     /// estimate, carried to the exact cost by interval bounds of the lenses' Jacobians
-    /// ([`crate::triangulation::point::lens`]), whose domain is every point whose projections lie inside the disc where each
-    /// lens is proved one-to-one.
+    /// ([`crate::triangulation::point::lens`]), whose domain is every point whose projections lie
+    /// inside the disc where each lens is proved one-to-one.
     LensConvexityTest,
     /// Pose: the sublevel-set test ([`crate::pose::certificate`]): a search over rotation cells that
     /// confines every pose as good as the estimate to a ball around it, then a bound on that ball.
@@ -141,14 +141,15 @@ impl CertificateKind {
 /// The global-optimality evidence of an estimate.
 #[derive(Debug, Clone, Copy)]
 pub struct Certificate {
-    /// A lower bound on the cost of eq. 19 over every admissible primitive (`0` when not computed),
-    /// capped at the cost: `min(raw_lower_bound, cost)`.
+    /// A lower bound on the cost of eq. 19 over every admissible primitive, capped at the cost:
+    /// `min(raw_lower_bound, cost)` (`0` when the search set was proved empty, status `infeasible`).
+    /// A result without a bound carries no certificate (`Option<Certificate>`).
     pub lower_bound: f64,
-    /// The bound as the search or test proved it, before the cap at the cost (NaN when no bound was
-    /// computed; `+∞` when the search set was proved empty). A bound above the cost of an admissible
+    /// The bound as the search or test proved it, before the cap at the cost (`+∞` when the search
+    /// set was proved empty). A bound above the cost of an admissible
     /// primitive would disprove the certificate: tests check it against independently computed costs.
     pub raw_lower_bound: f64,
-    /// `(cost − lower_bound) / max(cost, 1e-12)` (`1` when not computed).
+    /// `(cost − lower_bound) / max(cost, 1e-12)` (`1` when the search set was proved empty).
     pub relative_gap: f64,
     /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
     pub certified: bool,
@@ -177,27 +178,17 @@ impl PartialEq for Certificate {
 }
 
 impl Certificate {
-    /// The certificate of a method that does not look for one.
-    pub fn none() -> Certificate {
-        Certificate {
-            lower_bound: 0.0,
-            raw_lower_bound: f64::NAN,
-            relative_gap: 1.0,
-            certified: false,
-            kind: CertificateKind::None,
-            nodes: 0,
-            solver_iterations: 0,
-        }
-    }
-
     /// The certificate of a search that proved its domain holds no admissible primitive (every one
     /// breaks `max_reprojection_error` in some view): no bound to cap, a raw bound of `+∞`.
     pub(crate) fn infeasible(solver_iterations: usize) -> Certificate {
         Certificate {
+            lower_bound: 0.0,
             raw_lower_bound: f64::INFINITY,
+            relative_gap: 1.0,
+            certified: false,
             kind: CertificateKind::BranchAndBound,
+            nodes: 0,
             solver_iterations,
-            ..Certificate::none()
         }
     }
 

@@ -39,7 +39,7 @@
 //!     .map(|p| { let h = p * x.push(1.0); Vector2::new(h.x / h.z + 0.3, h.y / h.z - 0.2) })
 //!     .collect();
 //! let result = triangulate_point(&cameras, &pixels, None, &TriangulationOptions::default()).unwrap();
-//! assert!(result.report.certificate.certified);
+//! assert!(result.report.certified());
 //! assert!((result.point - x).norm() < 0.05);
 //! ```
 //!
@@ -59,7 +59,7 @@
 //! let pixels: Vec<_> = views.iter().map(|v| lens.project(&(v.pose.rotation * x + v.pose.translation)).0).collect();
 //! let result = triangulate_point_views(&views, &pixels, None, &TriangulationOptions::default()).unwrap();
 //! assert!((result.point - x).norm() < 1e-6);
-//! assert!(result.report.certificate.certified);
+//! assert!(result.report.certified());
 //! ```
 //!
 //! ## References

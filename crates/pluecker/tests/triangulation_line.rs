@@ -20,7 +20,10 @@ fn opts(method: Method) -> TriangulationOptions {
     // A node cap keeps the tests fast; certificates below are asserted only where the gap closed.
     TriangulationOptions {
         method,
-        max_nodes: 300,
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(300),
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -79,7 +82,7 @@ fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
         let tol = 1e-9 * (1.0 + linear.report.cost);
         assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
         assert!(optimal.report.cost <= local.report.cost + tol, "seed {seed}");
-        let c = optimal.report.certificate;
+        let c = optimal.report.certificate.expect("a search ran");
         assert_eq!(c.kind, CertificateKind::TaylorBranchAndBound, "seed {seed}");
         assert_eq!(optimal.report.status == Status::Success, c.certified);
         certified += c.certified as usize;
@@ -150,15 +153,16 @@ fn the_relaxation_bound_is_below_the_costs_at_every_node_cap() {
             let o = TriangulationOptions {
                 method: Method::Optimal,
                 line_bound: LineBound::Relaxation,
-                max_relative_gap: 1e-9,
-                max_nodes,
+                certify: pluecker::CertifyOptions {
+                    max_relative_gap: 1e-9,
+                    max_nodes: Some(max_nodes),
+                },
                 ..Default::default()
             };
             let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
-            let bound = r.report.certificate.raw_lower_bound;
-            if bound.is_nan() {
+            let Some(bound) = r.report.certificate.map(|c| c.raw_lower_bound) else {
                 continue; // nothing proved, nothing claimed
-            }
+            };
             let at_answer =
                 independent_line_cost(&scene.cameras, &lines, &covariances, &r.point, &(r.point + r.direction));
             assert_bound_below_costs(bound, at_answer, truth, &format!("seed {seed}, {max_nodes} nodes"));
@@ -209,11 +213,14 @@ fn the_relaxation_bound_is_below_the_costs_when_one_view_carries_the_residual() 
             let o = TriangulationOptions {
                 method: Method::Optimal,
                 line_bound: LineBound::Relaxation,
-                max_nodes,
+                certify: pluecker::CertifyOptions {
+                    max_nodes: Some(max_nodes),
+                    ..Default::default()
+                },
                 ..Default::default()
             };
             let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
-            let c = r.report.certificate;
+            let c = r.report.certificate.expect("a search ran");
             if c.raw_lower_bound.is_nan() {
                 continue;
             }
@@ -282,7 +289,7 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
                 ..opts(Method::Optimal)
             };
             let optimal = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
-            let c = optimal.report.certificate;
+            let c = optimal.report.certificate.expect("a search ran");
             if !c.certified {
                 continue;
             }
@@ -538,9 +545,14 @@ fn too_small_gamma_is_infeasible() {
     };
     let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
     assert_eq!(r.report.status, Status::Infeasible);
-    assert!(!r.report.certificate.certified);
+    assert!(!r.report.certified());
     // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(r.report.certificate.raw_lower_bound, f64::INFINITY, "{:?}", r.report);
+    assert_eq!(
+        r.report.certificate.expect("a search ran").raw_lower_bound,
+        f64::INFINITY,
+        "{:?}",
+        r.report
+    );
 }
 
 #[test]
@@ -600,7 +612,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     assert!(matches!(err(cams, &epipolar, None), Error::Degenerate { ref what } if what.contains("epipolar")));
     // Options.
     let bad = TriangulationOptions {
-        max_relative_gap: -1.0,
+        certify: pluecker::CertifyOptions {
+            max_relative_gap: -1.0,
+            ..Default::default()
+        },
         ..o.clone()
     };
     assert!(matches!(
@@ -670,7 +685,10 @@ mod batch {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
         TriangulationOptions {
             method,
-            max_nodes: 40,
+            certify: pluecker::CertifyOptions {
+                max_nodes: Some(40),
+                ..Default::default()
+            },
             ..Default::default()
         }
     }
@@ -916,10 +934,13 @@ mod batch {
         assert!(matches!(run(&tracks(0.0), &o), Error::InvalidOption { name, .. } if name == "sigma"));
         assert!(matches!(run(&tracks(f64::NAN), &o), Error::InvalidOption { name, .. } if name == "sigma"));
         let bad = TriangulationOptions {
-            max_nodes: 0,
+            certify: pluecker::CertifyOptions {
+                max_nodes: Some(0),
+                ..Default::default()
+            },
             ..o.clone()
         };
-        assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "max_nodes"));
+        assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "certify.max_nodes"));
         let short = LineTracks {
             lines: ImageLines::Homogeneous(&endpoints[..8]),
             ..tracks(1.0)
@@ -961,7 +982,7 @@ mod batch {
 
 #[test]
 fn sparse_line_tracks_equal_the_dense_batch() {
-    use pluecker::triangulation::line::batch::{triangulate_lines_sparse, SparseLineTracks};
+    use pluecker::triangulation::line::batch::{triangulate_line_observations, SparseLineTracks};
     use pluecker::triangulation::tracks::Csr;
     // Three views, four tracks seen in all of them; the sparse form lists the same rows track by track.
     let mut rng = pluecker::rng::Rng::new(21);
@@ -995,7 +1016,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
     .unwrap();
     let offsets = [0, 3, 6, 9, 12];
     let images: Vec<usize> = (0..4).flat_map(|_| 0..3).collect();
-    let sparse = triangulate_lines_sparse(
+    let sparse = triangulate_line_observations(
         &cameras,
         &SparseLineTracks {
             csr: Csr {

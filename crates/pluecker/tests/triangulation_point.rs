@@ -7,7 +7,7 @@ use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::point::batch::{
-    triangulate_points, triangulate_points_linear, triangulate_points_sparse, PointTracks, SparsePointTracks,
+    triangulate_point_observations, triangulate_points, triangulate_points_linear, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::certificate::convexity_test;
 use pluecker::triangulation::point::cost::{in_front, point_views, PointView};
@@ -59,7 +59,7 @@ fn noise_free_points_are_recovered_exactly_by_every_method() {
             );
             assert!(r.report.cost < 1e-12);
             if method == Method::Optimal {
-                assert!(r.report.certificate.certified, "{views} views: {:?}", r.report);
+                assert!(r.report.certified(), "{views} views: {:?}", r.report);
             }
         }
     }
@@ -271,7 +271,7 @@ fn low_parallax_goes_to_branch_and_bound_which_certifies_in_front_of_the_cameras
         let obs = scene.noisy(1.0, &mut Rng::new(seed + 1000));
         let r = triangulate_point(&scene.cameras, &obs, None, &options(Method::Optimal)).unwrap();
         assert_eq!(r.report.status, Status::Success, "seed {seed}: {:?}", r.report);
-        let c = r.report.certificate;
+        let c = r.report.certificate.expect("a search ran");
         let data = oracle::PointData::new(&scene.cameras, &obs, None);
         assert!(data.in_front(&r.point));
         let cost = data.cost(&r.point);
@@ -431,7 +431,7 @@ fn certified_points_have_raw_bounds_below_every_cost_found() {
         let covs = random_covariances(views, &mut rng);
         let covs = (seed % 3 == 0).then_some(covs.as_slice());
         let r = triangulate_point(&scene.cameras, &obs, covs, &options(Method::Optimal)).unwrap();
-        let c = r.report.certificate;
+        let c = r.report.certificate.expect("a search ran");
         if !c.certified {
             continue;
         }
@@ -477,7 +477,7 @@ fn a_point_whose_rays_diverge_is_reported_behind_the_cameras() {
     for method in [Method::Local, Method::Optimal] {
         let r = triangulate_point(&scene.cameras, &obs, None, &options(method)).unwrap();
         assert_eq!(r.report.status, Status::BehindCamera, "{method:?}: {:?}", r.report);
-        assert!(!r.report.certificate.certified);
+        assert!(!r.report.certified());
         assert!(
             !in_front(&vs, &r.point) && (r.point - behind).norm() < 1e-8,
             "{method:?}: {}",
@@ -518,16 +518,21 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     };
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
     assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
-    assert!(!r.report.certificate.certified);
+    assert!(!r.report.certified());
     // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(r.report.certificate.raw_lower_bound, f64::INFINITY, "{:?}", r.report);
+    assert_eq!(
+        r.report.certificate.expect("a search ran").raw_lower_bound,
+        f64::INFINITY,
+        "{:?}",
+        r.report
+    );
     // With a γ every view can meet, the same scene is certified.
     let opts = TriangulationOptions {
         max_reprojection_error: Some(30.0),
         ..Default::default()
     };
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
-    assert!(r.report.certificate.certified, "{:?}", r.report);
+    assert!(r.report.certified(), "{:?}", r.report);
 }
 
 #[test]
@@ -573,7 +578,10 @@ fn bad_input_gives_the_right_error() {
         .collect();
     assert!(matches!(err(&same_centre, obs, None), Error::Degenerate { what } if what.contains("no parallax")));
     let bad_opts = TriangulationOptions {
-        max_relative_gap: -1.0,
+        certify: pluecker::CertifyOptions {
+            max_relative_gap: -1.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     assert!(matches!(
@@ -623,7 +631,7 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
     assert!(matches!(&results[4], Err(Error::Degenerate { what }) if what.contains("covariances[4]")));
     for t in [0, 2, 5] {
         let r = results[t].as_ref().unwrap();
-        assert!(r.report.certificate.certified);
+        assert!(r.report.certified());
         let seen: Vec<usize> = (0..v).filter(|&j| visible[t * v + j]).collect();
         let cams: Vec<Matrix3x4<f64>> = seen.iter().map(|&j| cameras[j]).collect();
         let obs: Vec<Vector2<f64>> = seen
@@ -703,7 +711,7 @@ fn optimal_reports_exactly_parallel_rays_at_infinity() {
     assert_eq!(r.report.status, Status::AtInfinity, "{:?}", r.report);
     assert!(r.point.iter().all(|v| v.is_nan()));
     assert!(r.report.cost.abs() < 1e-12);
-    assert!(!r.report.certificate.certified);
+    assert!(!r.report.certified());
 }
 
 #[test]
@@ -751,7 +759,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         covariances: Some(&sparse_cov),
     };
     let a = triangulate_points(&cameras, &d, &opts, None).unwrap();
-    let b = triangulate_points_sparse(&cameras, &s, &opts, None).unwrap();
+    let b = triangulate_point_observations(&cameras, &s, &opts, None).unwrap();
     for (t, (a, b)) in a.into_iter().zip(b).enumerate() {
         let (mut a, mut b) = (a.unwrap(), b.unwrap());
         (a.report.time_seconds, b.report.time_seconds) = (0.0, 0.0);
@@ -774,8 +782,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         observations: &rev_obs,
         covariances: Some(&rev_cov),
     };
-    let c = triangulate_points_sparse(&cameras, &reversed, &opts, None).unwrap();
-    for (t, (b, c)) in triangulate_points_sparse(&cameras, &s, &opts, None)
+    let c = triangulate_point_observations(&cameras, &reversed, &opts, None).unwrap();
+    for (t, (b, c)) in triangulate_point_observations(&cameras, &s, &opts, None)
         .unwrap()
         .into_iter()
         .zip(c)
@@ -788,8 +796,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
             "track {t}"
         );
         assert_eq!(
-            (b.report.status, b.report.certificate.certified),
-            (c.report.status, c.report.certificate.certified)
+            (b.report.status, b.report.certified()),
+            (c.report.status, c.report.certified())
         );
     }
     // Bad tracks: an image index beyond the cameras (track 0), every observation in one image
@@ -805,7 +813,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         },
         ..s
     };
-    let r = triangulate_points_sparse(&cameras, &bad, &opts, None).unwrap();
+    let r = triangulate_point_observations(&cameras, &bad, &opts, None).unwrap();
     assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
@@ -821,7 +829,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_points_sparse(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_point_observations(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
     let mut down = offsets.clone();
     down.swap(1, 2);
@@ -833,6 +841,6 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_points_sparse(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_point_observations(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
 }

@@ -16,7 +16,10 @@ use pluecker::Error;
 fn opts(method: Method) -> TriangulationOptions {
     TriangulationOptions {
         method,
-        max_nodes: 200,
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(200),
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -96,7 +99,7 @@ fn noisy_ellipsoids_are_certified_and_costs_ordered() {
         let tol = 1e-9 * (1.0 + linear.report.cost);
         assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
         assert!(optimal.report.cost <= local.report.cost + tol, "seed {seed}");
-        let c = optimal.report.certificate;
+        let c = optimal.report.certificate.expect("a search ran");
         assert_eq!(c.kind, CertificateKind::ConvexityTest, "seed {seed}");
         assert!(c.certified, "seed {seed}: {:?}", optimal.report);
         assert_eq!(optimal.report.status, Status::Success);
@@ -244,7 +247,7 @@ fn no_ellipsoid_anywhere_costs_less_than_the_certified_bound() {
             let scale = Matrix5::from_diagonal(&nalgebra::SVector::<f64, 5>::from(regime.anisotropy));
             let covariances: Vec<Matrix5> = fits.iter().map(|f| scale * f.covariance * scale).collect();
             let optimal = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &regime_opts).unwrap();
-            let c = optimal.report.certificate;
+            let c = optimal.report.certificate.expect("a search ran");
             if !c.certified {
                 continue;
             }
@@ -413,14 +416,18 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
         let scene = quadric_scene(3, 0.8, 40 + seed);
         let (conics, covariances) = fitted(&scene, seed)?;
         let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).ok()?;
-        (r.report.certificate.kind == CertificateKind::BranchAndBound).then_some((scene, conics, covariances))
+        (r.report.certificate.map(|c| c.kind) == Some(CertificateKind::BranchAndBound)).then_some((
+            scene,
+            conics,
+            covariances,
+        ))
     });
     let (scene, conics, covariances) = hard.expect("some 3-view scene at 15 px needs branch and bound");
     // The search's work as reported: each node solves at least one conic program (≥ 1 interior-point
     // iteration), and no program takes more than clarabel's 200 iterations; the root's bound
     // tightening adds at most 2 passes of 2 solves per each of the 9 entries of the dual's upper block.
     let searched = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).unwrap();
-    let c = searched.report.certificate;
+    let c = searched.report.certificate.expect("a search ran");
     assert!(c.nodes >= 1 && c.solver_iterations >= c.nodes, "{c:?}");
     assert!(c.solver_iterations <= 200 * (4 * c.nodes + 36), "{c:?}");
     let o = TriangulationOptions {
@@ -429,9 +436,14 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     };
     let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &o).unwrap();
     assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
-    assert!(!r.report.certificate.certified);
+    assert!(!r.report.certified());
     // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(r.report.certificate.raw_lower_bound, f64::INFINITY, "{:?}", r.report);
+    assert_eq!(
+        r.report.certificate.expect("a search ran").raw_lower_bound,
+        f64::INFINITY,
+        "{:?}",
+        r.report
+    );
 }
 
 #[test]
@@ -457,7 +469,7 @@ fn an_ellipsoid_behind_a_camera_is_reported() {
         let r = triangulate_quadric(&cameras, &conics, None, &opts(method)).unwrap();
         assert_eq!(r.report.status, Status::BehindCamera, "{}", method.as_str());
         // Status and certificate agree (issue 10: optimal said behind_camera and certified).
-        assert!(!r.report.certificate.certified, "{}", method.as_str());
+        assert!(!r.report.certified(), "{}", method.as_str());
     }
 }
 
@@ -493,7 +505,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     cams[2] = Matrix3x4::zeros();
     assert!(matches!(err(&cams, &conics, None), Error::SingularCamera { .. }));
     let bad = TriangulationOptions {
-        max_nodes: 0,
+        certify: pluecker::CertifyOptions {
+            max_nodes: Some(0),
+            ..Default::default()
+        },
         ..o.clone()
     };
     assert!(matches!(
@@ -522,7 +537,10 @@ mod batch {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
         TriangulationOptions {
             method,
-            max_nodes: 40,
+            certify: pluecker::CertifyOptions {
+                max_nodes: Some(40),
+                ..Default::default()
+            },
             ..Default::default()
         }
     }

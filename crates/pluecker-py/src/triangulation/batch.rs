@@ -199,27 +199,40 @@ pub(crate) struct ReportRow<'a> {
 impl ReportRow<'_> {
     /// A solved track's report.
     pub(crate) fn solved(self, report: &Report) {
-        let c = &report.certificate;
         *self.cost = report.cost;
-        *self.lower_bound = c.lower_bound;
-        *self.raw_lower_bound = c.raw_lower_bound;
-        *self.relative_gap = c.relative_gap;
-        *self.certified = c.certified;
-        *self.certificate = c.kind.as_str();
+        // A track without a certificate: NaN bounds and gap, "none", no nodes (the columns' docs).
+        let (lower, raw, gap, certified, kind, nodes) = report.certificate.map_or(
+            (f64::NAN, f64::NAN, f64::NAN, false, CertificateKind::None.as_str(), 0),
+            |c| {
+                (
+                    c.lower_bound,
+                    c.raw_lower_bound,
+                    c.relative_gap,
+                    c.certified,
+                    c.kind.as_str(),
+                    c.nodes,
+                )
+            },
+        );
+        *self.lower_bound = lower;
+        *self.raw_lower_bound = raw;
+        *self.relative_gap = gap;
+        *self.certified = certified;
+        *self.certificate = kind;
         *self.status = report.status.as_str();
-        *self.nodes = c.nodes as i64;
+        *self.nodes = nodes as i64;
         *self.iterations = report.iterations as i64;
         *self.time_seconds = report.time_seconds;
         *self.residual_dof = report.residual_dof;
     }
 
-    /// A track without a certificate (lower bound 0, relative gap 1, no nodes or iterations): a linear
+    /// A track without a certificate (NaN lower bounds and gap, no nodes or iterations): a linear
     /// estimate of the point fast path, or a rejected track.
     pub(crate) fn uncertified(self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
         *self.cost = cost;
-        *self.lower_bound = 0.0;
+        *self.lower_bound = f64::NAN;
         *self.raw_lower_bound = f64::NAN;
-        *self.relative_gap = 1.0;
+        *self.relative_gap = f64::NAN;
         *self.certified = false;
         *self.certificate = CertificateKind::None.as_str();
         *self.status = status;
@@ -251,9 +264,9 @@ impl PyBatchReport {
         Ok(PyBatchReport {
             method: method.as_str(),
             cost: column(f64::NAN, n)?,
-            lower_bound: column(0.0, n)?,
+            lower_bound: column(f64::NAN, n)?,
             raw_lower_bound: column(f64::NAN, n)?,
-            relative_gap: column(1.0, n)?,
+            relative_gap: column(f64::NAN, n)?,
             certified: column(false, n)?,
             certificate: column(CertificateKind::None.as_str(), n)?,
             status: column(Status::Interrupted.as_str(), n)?,
@@ -444,17 +457,17 @@ result_class! {
         status = |b| b.status.clone();
         /// Per track: the cost of eq. 19 at the estimate (NaN for a rejected track).
         cost = |b| b.cost.clone();
-        /// Per track: the proved lower bound on the cost.
+        /// Per track: the proved lower bound on the cost (the single result's `certificate.lower_bound`; NaN: no bound was computed, as for `linear`, `local` or a rejected track).
         lower_bound = |b| b.lower_bound.clone();
         /// Per track: the proved bound before the cap at the cost (NaN without a bound).
         raw_lower_bound = |b| b.raw_lower_bound.clone();
-        /// Per track: `(cost − lower_bound) / cost`.
+        /// Per track: `(cost − lower_bound) / max(cost, 1e-12)` (NaN without a bound).
         relative_gap = |b| b.relative_gap.clone();
         /// Per track: whether the estimate is certified globally optimal.
         certified = |b| b.certified.clone();
-        /// Per track: `none`, `convexity_test` or `branch_and_bound`.
+        /// Per track: the certificate's `kind` (`convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test`), `none` without one.
         certificate = |b| b.certificate.clone();
-        /// Per track: branch-and-bound nodes.
+        /// Per track: nodes of the certificate's search (0 without one).
         nodes = |b| b.nodes.clone();
         /// Per track: iterations of the local minimisation.
         iterations = |b| b.iterations.clone();

@@ -23,8 +23,9 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::triangulation::line::batch::{
-    triangulate_lines as core_lines, triangulate_lines_sparse, triangulate_lines_sparse_views, ImageLines, LineTracks,
-    SparseLineTracks, SparseSegmentTracks,
+    triangulate_line_observations as core_line_observations,
+    triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
+    LineTracks, SparseLineTracks, SparseSegmentTracks,
 };
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
@@ -51,31 +52,28 @@ pub struct PyLineTriangulation {
     chart: LineChart,
     covariance: Option<Matrix4<f64>>,
     inliers: Option<Vec<bool>>,
-    certificate_domain: &'static str,
 }
 
 impl PyLineTriangulation {
     pub fn create(py: Python<'_>, result: LineTriangulation) -> PyResult<Py<PyLineTriangulation>> {
-        let certificate_domain = result.report.certificate.kind.domain(Primitive::Line);
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
-            PyLineTriangulation {
-                plucker: *result.plucker.coordinates(),
-                point: result.point,
-                direction: result.direction,
-                chart: result.chart,
-                covariance: result.covariance,
-                inliers: result.inliers,
-                certificate_domain,
-            },
-        );
+        let init = PyClassInitializer::from(PyTriangulationReport {
+            inner: result.report,
+            primitive: Primitive::Line,
+        })
+        .add_subclass(PyLineTriangulation {
+            plucker: *result.plucker.coordinates(),
+            point: result.point,
+            direction: result.direction,
+            chart: result.chart,
+            covariance: result.covariance,
+            inliers: result.inliers,
+        });
         Py::new(py, init)
     }
 }
 
 result_class! {
     PyLineTriangulation: PyTriangulationReport {
-        /// Which lines the certificate's lower bound covers (`'none'` without one): every line in front of the cameras, or the search domain of branch and bound.
-        certificate_domain = |x| x.certificate_domain;
         /// Plücker coordinates `(l12, l13, l14, l23, l42, l34)` of the line, unit norm (eq. 4 holds).
         plucker = |l| l.plucker;
         /// The point of the line closest to the world origin.
@@ -234,19 +232,18 @@ fn endpoint_covariances(
 /// curved images), minimised locally and never certified (`optimal` reports `gap_not_closed`); without
 /// distortion it is the pinhole problem of the segments, with its certificate.
 #[pyfunction]
-#[pyo3(signature = (P, lines, cov = None, method = None, *, sigma = None, options = None, cameras = None))]
+#[pyo3(signature = (P, lines, cov = None, *, sigma = None, options = None, cameras = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_line(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulation>> {
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = crate::convert::cameras("P", P)?;
     let sigma = optional_real("sigma", sigma)?;
     if let Some(cameras) = cameras {
@@ -379,7 +376,7 @@ fn image_lines_of(values: &[f64], segments: bool, sigma: f64) -> ImageLines<'_> 
 
 /// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, lines, visible = None, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (P, lines, visible = None, cov = None, *, sigma = None, options = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_lines(
     py: Python<'_>,
@@ -387,14 +384,13 @@ pub fn triangulate_lines(
     lines: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
     let cams = Cameras::read(P, 2, opts.method)?;
     let (shape, values) = read_any("lines", lines)?;
@@ -432,7 +428,7 @@ pub fn triangulate_lines(
 /// of each segment's two endpoints (else `sigma`), and each track is solved as
 /// `triangulate_line(..., cameras=...)` solves it: never certified through a distorting lens.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, lines, cov = None, method = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
+#[pyo3(signature = (P, track, image, lines, cov = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_line_observations(
     py: Python<'_>,
@@ -441,7 +437,6 @@ pub fn triangulate_line_observations(
     image: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
@@ -450,7 +445,7 @@ pub fn triangulate_line_observations(
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
     let cams = crate::convert::cameras("P", P)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
@@ -486,7 +481,7 @@ pub fn triangulate_line_observations(
             sparse_columns(
                 &rows,
                 &opts,
-                triangulate_lines_sparse_views(&views, &tracks, &opts, Some(done)),
+                core_line_observations_views(&views, &tracks, &opts, Some(done)),
             )
         })?;
         return batch_result(py, outcome);
@@ -502,11 +497,7 @@ pub fn triangulate_line_observations(
             lines: image_lines_of(&values, segments, sigma),
             covariances: covariances.as_deref(),
         };
-        sparse_columns(
-            &rows,
-            &opts,
-            triangulate_lines_sparse(&cams, &tracks, &opts, Some(done)),
-        )
+        sparse_columns(&rows, &opts, core_line_observations(&cams, &tracks, &opts, Some(done)))
     })?;
     batch_result(py, outcome)
 }
@@ -533,8 +524,7 @@ pack_struct!(PyLineTriangulation {
     direction,
     chart,
     covariance,
-    inliers,
-    certificate_domain
+    inliers
 });
 pack_struct!(PyLineTriangulations {
     plucker,

@@ -11,24 +11,97 @@ pub mod quadric;
 pub mod report;
 pub mod rows;
 
+use crate::certificate::PyCertifyOptions;
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::options_class;
+use crate::fields::{options_class, Field};
 use pluecker::triangulation::{LineBound, Method, QuadricBound, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 /// Options of every triangulation function, the core's `TriangulationOptions` (every default is the
-/// core's). A `method=` given to the function itself wins over `options.method`.
+/// core's). `certify` is a `CertifyOptions` object held by reference, read at call time.
 #[pyclass(name = "TriangulationOptions", module = "pluecker")]
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PyTriangulationOptions {
+    /// Every option but `certify` (whose copy here is not read).
     inner: TriangulationOptions,
+    certify: CertifyRef,
 }
 
 impl PyTriangulationOptions {
     fn validate(&self) -> PyResult<()> {
-        self.inner.validate().map_err(to_py_err)
+        self.core().validate().map_err(to_py_err)
+    }
+
+    /// The core's options, with `certify` as it is now.
+    pub(crate) fn core(&self) -> TriangulationOptions {
+        TriangulationOptions {
+            certify: self.certify.options(),
+            ..self.inner.clone()
+        }
+    }
+}
+
+/// `TriangulationOptions.certify`: the `CertifyOptions` object itself, so that
+/// `options.certify.max_nodes = 10` changes the options (as in the core, where it is a field).
+/// Assigned from a `CertifyOptions` (kept by reference) or from its `to_dict()` (pickling).
+#[derive(Debug)]
+pub struct CertifyRef(Py<PyCertifyOptions>);
+
+impl CertifyRef {
+    /// The core's options the object holds now.
+    fn options(&self) -> pluecker::CertifyOptions {
+        Python::with_gil(|py| self.0.borrow(py).inner)
+    }
+}
+
+/// Another reference to the same object (a copy of the options shares it, as `copy.copy` would).
+impl Clone for CertifyRef {
+    fn clone(&self) -> Self {
+        Python::with_gil(|py| CertifyRef(self.0.clone_ref(py)))
+    }
+}
+
+impl Default for CertifyRef {
+    fn default() -> Self {
+        Python::with_gil(|py| CertifyRef(Py::new(py, PyCertifyOptions::default()).expect("a Python object")))
+    }
+}
+
+/// Equal options, not the same object.
+impl PartialEq for CertifyRef {
+    fn eq(&self, other: &Self) -> bool {
+        self.options() == other.options()
+    }
+}
+
+impl<'py> FromPyObject<'py> for CertifyRef {
+    fn extract_bound(ob: &Bound<'py, PyAny>) -> PyResult<Self> {
+        if let Ok(c) = ob.downcast::<PyCertifyOptions>() {
+            return Ok(CertifyRef(c.clone().unbind()));
+        }
+        if let Ok(d) = ob.downcast::<PyDict>() {
+            let made = ob.py().get_type::<PyCertifyOptions>().call((), Some(d))?;
+            return Ok(CertifyRef(made.downcast_into::<PyCertifyOptions>()?.unbind()));
+        }
+        Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "expected a CertifyOptions, got {}",
+            ob.get_type().name()?
+        )))
+    }
+}
+
+impl Field for CertifyRef {
+    fn get(self, _py: Python<'_>) -> PyResult<PyObject> {
+        Ok(self.0.into_any())
+    }
+    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
+        Ok(self.0.bind(py).call_method0("to_dict")?.unbind())
+    }
+    fn stub() -> String {
+        "CertifyOptions".into()
     }
 }
 
@@ -36,13 +109,11 @@ options_class! {
     PyTriangulationOptions {
         /// Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified).
         method: String = |o| o.inner.method.as_str(), |o, v| Method::parse(&v).map(|m| o.inner.method = m).map_err(to_py_err);
-        /// Branch and bound stops when `(upper − lower) / upper` is at most this.
-        max_relative_gap: Real = |o| o.inner.max_relative_gap, |o, v| v.get("max_relative_gap").map(|x| o.inner.max_relative_gap = x);
+        /// Method `optimal`: the certificate's gap and node cap (`max_nodes=None`: 2000 nodes of the conic branch and bounds, points, quadrics and `line_bound="relaxation"`; 50000 of the Taylor bound of lines), the object itself (`options.certify.max_nodes = 10` takes effect).
+        certify: CertifyRef = |o| o.certify.clone(), |o, v| { o.certify = v; PyResult::Ok(()) };
         /// The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing.
         max_reprojection_error: Option<Real> = |o| o.inner.max_reprojection_error,
             |o, v| v.map(|r| r.get("max_reprojection_error")).transpose().map(|g| o.inner.max_reprojection_error = g);
-        /// Branch and bound with conic relaxations (points, quadrics, `line_bound="relaxation"`) gives up (status `gap_not_closed`) after this many nodes.
-        max_nodes: Integer = |o| o.inner.max_nodes, |o, v| v.count("max_nodes", 1).map(|n| o.inner.max_nodes = n);
         /// Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
         outlier_threshold: Option<Real> = |o| o.inner.outlier_threshold,
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);
@@ -50,23 +121,17 @@ options_class! {
         line_bound: String = |o| o.inner.line_bound.as_str(), |o, v| LineBound::parse(&v).map(|m| o.inner.line_bound = m).map_err(to_py_err);
         /// Quadrics, method `optimal`: the lower bound, `convexity` (the convexity test, certificate `convexity_test` over every ellipsoid no principal plane cuts; the relaxation when it cannot decide) or `relaxation` (the paper's SOCP relaxation only; certificate `branch_and_bound` over an a-priori box).
         quadric_bound: String = |o| o.inner.quadric_bound.as_str(), |o, v| QuadricBound::parse(&v).map(|m| o.inner.quadric_bound = m).map_err(to_py_err);
-        /// Node cap of the Taylor bound of lines (microseconds per node, so separate from `max_nodes`).
-        max_taylor_nodes: Integer = |o| o.inner.max_taylor_nodes, |o, v| v.count("max_taylor_nodes", 1).map(|n| o.inner.max_taylor_nodes = n);
         /// Iteration cap of the local minimisation (method `local`, and the upper bounds of `optimal`).
         local_max_iterations: Integer = |o| o.inner.local.stopping.max_iterations,
             |o, v| v.count("local_max_iterations", 1).map(|n| o.inner.local.stopping.max_iterations = n);
     }
 }
 
-/// The core's options of a triangulation function's `options=` and `method=` (which wins).
-pub(crate) fn options_arg(
-    method: Option<&str>,
-    options: Option<PyRef<'_, PyTriangulationOptions>>,
-) -> PyResult<TriangulationOptions> {
-    let mut opts = options.map_or_else(TriangulationOptions::default, |o| o.inner.clone());
-    if let Some(method) = method {
-        opts.method = Method::parse(method).map_err(to_py_err)?;
-    }
+/// The core's options of a triangulation function's `options=` (the defaults without one).
+pub(crate) fn options_arg(options: Option<PyRef<'_, PyTriangulationOptions>>) -> PyResult<TriangulationOptions> {
+    let opts = options.map_or_else(TriangulationOptions::default, |o| o.core());
+    // `certify` may have been changed through its own object since it was assigned.
+    opts.validate().map_err(to_py_err)?;
     Ok(opts)
 }
 

@@ -27,8 +27,8 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::batch::{
-    triangulate_points_into as core_points, triangulate_points_linear, triangulate_points_sparse_into,
-    triangulate_points_sparse_views_into, LinearPoints, PointTracks, SparsePointTracks,
+    triangulate_point_observations_into, triangulate_point_observations_views_into,
+    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
@@ -52,29 +52,26 @@ pub struct PyPointTriangulation {
     point: Vector3<f64>,
     covariance: Option<Matrix3<f64>>,
     inliers: Option<Vec<bool>>,
-    certificate_domain: &'static str,
 }
 
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
-        let certificate_domain = result.report.certificate.kind.domain(Primitive::Point);
-        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
-            PyPointTriangulation {
-                point: result.point,
-                covariance: result.covariance,
-                inliers: result.inliers,
-                certificate_domain,
-            },
-        );
+        let init = PyClassInitializer::from(PyTriangulationReport {
+            inner: result.report,
+            primitive: Primitive::Point,
+        })
+        .add_subclass(PyPointTriangulation {
+            point: result.point,
+            covariance: result.covariance,
+            inliers: result.inliers,
+        });
         Py::new(py, init)
     }
 }
 
 result_class! {
     PyPointTriangulation: PyTriangulationReport {
-        /// Which points the certificate's lower bound covers (`'none'` without one): every point in front of the cameras, or the search domain of branch and bound.
-        certificate_domain = |x| x.certificate_domain;
         /// The point, world frame.
         X = |p| p.point;
         /// Its 3x3 covariance (first order, from the observation covariances); `None` when singular.
@@ -115,18 +112,17 @@ fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Ve
 /// covariances, and the cost is the reprojection error in those pixels through the exact projection
 /// (certificate `lens_convexity_test` through a lens).
 #[pyfunction]
-#[pyo3(signature = (P, x, cov = None, method = None, *, options = None, cameras = None))]
+#[pyo3(signature = (P, x, cov = None, *, options = None, cameras = None))]
 #[allow(non_snake_case)]
 pub fn triangulate_point(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulation>> {
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = crate::convert::cameras("P", P)?;
     let obs = observations("x", x, cams.len())?;
     let covs = covariances2("cov", cov, cams.len())?;
@@ -145,8 +141,7 @@ pub fn triangulate_point(
 pack_struct!(PyPointTriangulation {
     point,
     covariance,
-    inliers,
-    certificate_domain
+    inliers
 });
 
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
@@ -309,7 +304,7 @@ const SHORT_BATCH: usize = 4096;
 
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, x, visible = None, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (P, x, visible = None, cov = None, *, options = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_points(
     py: Python<'_>,
@@ -317,13 +312,12 @@ pub fn triangulate_points(
     x: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = cameras("P", P)?;
     let v = cams.len();
     if v < 2 {
@@ -395,7 +389,7 @@ pub fn triangulate_points(
 /// error in those pixels through the exact projection; `optimal` certifies that cost (certificate
 /// `lens_convexity_test`) where it can prove it, and is `gap_not_closed` where it cannot.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, x, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
+#[pyo3(signature = (P, track, image, x, cov = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_point_observations(
     py: Python<'_>,
@@ -404,7 +398,6 @@ pub fn triangulate_point_observations(
     image: &Bound<'_, PyAny>,
     x: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
@@ -412,7 +405,7 @@ pub fn triangulate_point_observations(
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = crate::convert::cameras("P", P)?;
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     let rows = SortedRows::read(track, image, n_tracks)?;
@@ -431,8 +424,8 @@ pub fn triangulate_point_observations(
         let out = report.rows_mut().zip(columns.rows_mut());
         let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
         let stopped = match &views {
-            Some(views) => triangulate_points_sparse_views_into(views, &sparse, &opts, Some(done), out, write),
-            None => triangulate_points_sparse_into(&cams, &sparse, &opts, Some(done), out, write),
+            Some(views) => triangulate_point_observations_views_into(views, &sparse, &opts, Some(done), out, write),
+            None => triangulate_point_observations_into(&cams, &sparse, &opts, Some(done), out, write),
         }
         .map_err(|e| renamed(e, POINT_NAMES))?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);

@@ -13,7 +13,8 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::batch::{
-    triangulate_quadrics as core_quadrics, triangulate_quadrics_sparse, QuadricTracks, SparseQuadricTracks,
+    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
+    QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
@@ -36,30 +37,28 @@ pub struct PyQuadricTriangulation {
     axes: Matrix3<f64>,
     semi_axes: Vector3<f64>,
     covariance: Option<QuadricCovariance>,
-    certificate_domain: &'static str,
 }
 
 impl PyQuadricTriangulation {
     pub fn create(py: Python<'_>, r: QuadricTriangulation) -> PyResult<Py<PyQuadricTriangulation>> {
-        let certificate_domain = r.report.certificate.kind.domain(Primitive::Quadric);
-        let init =
-            PyClassInitializer::from(PyTriangulationReport { inner: r.report }).add_subclass(PyQuadricTriangulation {
-                dual: r.dual,
-                primal: r.primal,
-                centre: r.centre,
-                axes: r.axes,
-                semi_axes: r.semi_axes,
-                covariance: r.covariance,
-                certificate_domain,
-            });
+        let init = PyClassInitializer::from(PyTriangulationReport {
+            inner: r.report,
+            primitive: Primitive::Quadric,
+        })
+        .add_subclass(PyQuadricTriangulation {
+            dual: r.dual,
+            primal: r.primal,
+            centre: r.centre,
+            axes: r.axes,
+            semi_axes: r.semi_axes,
+            covariance: r.covariance,
+        });
         Py::new(py, init)
     }
 }
 
 result_class! {
     PyQuadricTriangulation: PyTriangulationReport {
-        /// Which quadrics the certificate's lower bound covers (`'none'` without one): every ellipsoid that no camera's principal plane cuts (`convexity_test`), or the search domain of branch and bound.
-        certificate_domain = |x| x.certificate_domain;
         /// The dual quadric `Q` (4x4, symmetric), the estimate of eq. 19.
         Q = |q| q.dual;
         /// The primal quadric `Q⁻¹` (4x4); `None` when `Q` is singular.
@@ -102,18 +101,17 @@ result_class! {
 /// the outline seen through it is not a conic; pinholes and lenses without distortion are solved as
 /// their `P`.
 #[pyfunction]
-#[pyo3(signature = (P, conics, cov = None, method = None, *, options = None, cameras = None))]
+#[pyo3(signature = (P, conics, cov = None, *, options = None, cameras = None))]
 #[allow(non_snake_case)]
 pub fn triangulate_quadric(
     py: Python<'_>,
     P: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = convert::cameras("P", P)?;
     if let Some(cameras) = cameras {
         let views = super::point::views_of(&cams, cameras)?;
@@ -209,7 +207,7 @@ result_class! {
 
 /// Triangulates many ellipsoids (tracks) from their outline conics in parallel (Josephson & Kahl 2008).
 #[pyfunction]
-#[pyo3(signature = (P, conics, visible = None, cov = None, method = None, *, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (P, conics, visible = None, cov = None, *, options = None, progress = None, time_budget = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_quadrics(
     py: Python<'_>,
@@ -217,13 +215,12 @@ pub fn triangulate_quadrics(
     conics: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = Cameras::read(P, 3, opts.method)?;
     let spec = [Dim::Free("n"), Dim::Free("v"), Dim::Fixed(3), Dim::Fixed(3)];
     let (shape, values) = read("conics", conics, &spec)?;
@@ -248,7 +245,7 @@ pub fn triangulate_quadrics(
 /// `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)), with the covariance `cov[k]` (m, 5, 5)
 /// when given. Each track is solved as `triangulate_quadrics` would.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, conics, cov = None, method = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
+#[pyo3(signature = (P, track, image, conics, cov = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 pub fn triangulate_quadric_observations(
     py: Python<'_>,
@@ -257,14 +254,13 @@ pub fn triangulate_quadric_observations(
     image: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
     cov: Option<&Bound<'_, PyAny>>,
-    method: Option<&str>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
     n_tracks: Option<Integer>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
-    let opts = options_arg(method, options)?;
+    let opts = options_arg(options)?;
     let cams = cameras("P", P)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let values = rows.per_row("conics", conics, &[3, 3])?;
@@ -276,7 +272,7 @@ pub fn triangulate_quadric_observations(
             covariances: covariances.as_deref(),
         };
         let results =
-            triangulate_quadrics_sparse(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+            core_quadric_observations(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
         let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
         Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;
@@ -289,8 +285,7 @@ pack_struct!(PyQuadricTriangulation {
     centre,
     axes,
     semi_axes,
-    covariance,
-    certificate_domain
+    covariance
 });
 pack_struct!(PyQuadricTriangulations {
     dual,

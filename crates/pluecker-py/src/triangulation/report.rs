@@ -1,9 +1,10 @@
 //! `pluecker.TriangulationReport`: what one triangulation did (`pluecker::triangulation::Report`),
 //! the base class of the point, line and quadric results, which add their estimate.
 
+use crate::certificate::certificate_of;
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use pluecker::triangulation::{Report, Status};
+use pluecker::triangulation::{Primitive, Report, Status};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -13,21 +14,31 @@ use pyo3::types::PyTuple;
 #[derive(Debug, Clone)]
 pub struct PyTriangulationReport {
     pub inner: Report,
+    /// What was triangulated (the certificate's domain depends on it).
+    pub primitive: Primitive,
 }
 
 impl PyTriangulationReport {
     /// `key=value` pairs of the report for the subclasses' `__repr__`.
     pub fn repr_fields(&self) -> String {
         let r = &self.inner;
+        let certificate = r.certificate.map_or_else(
+            || "None".to_string(),
+            |c| {
+                format!(
+                    "Certificate(certified={}, kind='{}', relative_gap={:.3e}, nodes={})",
+                    if c.certified { "True" } else { "False" },
+                    c.kind.as_str(),
+                    c.relative_gap,
+                    c.nodes
+                )
+            },
+        );
         format!(
-            "method='{}', status='{}', cost={:.6e}, certified={}, certificate='{}', relative_gap={:.3e}, nodes={}",
+            "method='{}', status='{}', cost={:.6e}, certificate={certificate}",
             r.method.as_str(),
             r.status.as_str(),
             r.cost,
-            if r.certificate.certified { "True" } else { "False" },
-            r.certificate.kind.as_str(),
-            r.certificate.relative_gap,
-            r.certificate.nodes
         )
     }
 }
@@ -36,7 +47,7 @@ result_class! {
     PyTriangulationReport {
         /// The method that ran: `linear`, `local` or `optimal`.
         method = |r| r.inner.method.as_str();
-        /// `success`, or why not: `gap_not_closed` (branch and bound hit `max_nodes`), `not_converged`, `behind_camera`,
+        /// `success`, or why not: `gap_not_closed` (the certificate's search hit `certify.max_nodes`), `not_converged`, `behind_camera`,
         /// `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
         /// `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
         status = |r| r.inner.status.as_str();
@@ -44,20 +55,12 @@ result_class! {
         success = |r| r.inner.status == Status::Success;
         /// The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate.
         cost = |r| r.inner.cost;
-        /// Proved lower bound on the cost over every estimate in front of the cameras (0 without a certificate).
-        lower_bound = |r| r.inner.certificate.lower_bound;
-        /// The bound as proved, before `lower_bound`'s cap at the cost (NaN without a bound, inf for an empty search set).
-        raw_lower_bound = |r| r.inner.certificate.raw_lower_bound;
-        /// `(cost − lower_bound) / cost`.
-        relative_gap = |r| r.inner.certificate.relative_gap;
-        /// Whether the estimate is proved globally optimal to within the gap.
-        certified = |r| r.inner.certificate.certified;
-        /// How it was proved: `none`, `convexity_test` or `branch_and_bound`.
-        certificate = |r| r.inner.certificate.kind.as_str();
-        /// Branch-and-bound nodes.
-        nodes = |r| r.inner.certificate.nodes;
-        /// Conic-solver iterations summed over the nodes.
-        solver_iterations = |r| r.inner.certificate.solver_iterations;
+        /// The proof of global optimality (`Certificate`: `certified`, `lower_bound`, `raw_lower_bound`, `relative_gap`,
+        /// `kind`, `domain`, `nodes`); `None` when no bound was computed (methods `linear` and `local`, input refused
+        /// before the search). A search that did not close the gap gives `certified == False` and status `gap_not_closed`.
+        certificate = |r| certificate_of(r.inner.certificate, r.primitive);
+        /// `certificate is not None and certificate.certified`.
+        certified = |r| r.inner.certified();
         /// Iterations of the local minimisation.
         iterations = |r| r.inner.iterations;
         /// Why the local minimisation stopped.
@@ -79,4 +82,4 @@ result_class! {
     }
 }
 
-pack_struct!(PyTriangulationReport { inner });
+pack_struct!(PyTriangulationReport { inner, primitive });

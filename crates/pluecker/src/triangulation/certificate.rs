@@ -42,7 +42,10 @@ pub(crate) fn certificate_of<C>(
         // The bound the search proved over its box, before any cap (`lower_bound` also caps it at
         // the incumbent's cost); `+∞` when the box was proved to hold no admissible primitive.
         raw_lower_bound: result.box_lower_bound,
-        ..Certificate::none()
+        // Replaced below unless the box was proved empty (no bound to cap, status infeasible).
+        lower_bound: 0.0,
+        relative_gap: 1.0,
+        certified: false,
     };
     if result.lower_bound == f64::INFINITY {
         return (Status::Infeasible, base);
@@ -76,7 +79,7 @@ pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
         ..local_report.clone()
     };
     if local_report.cost <= NEGLIGIBLE_COST {
-        report.certificate = negligible_cost_certificate();
+        report.certificate = Some(negligible_cost_certificate());
         report.status = Status::Success;
         return Err(report);
     }

@@ -12,7 +12,10 @@
 //! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1) for the matrix as given, so
 //! any positive scale but not any sign ([`views`]: `fx < 0` and left-handed worlds are fine); costs
 //! are in squared (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
-//! A report's `certified` is true only with [`Status::Success`] ([`Report::set_status`]).
+//! A report's certificate is `None` when no bound was computed (methods `linear` and `local`, a
+//! refused input); when a search ran, it is `Some`, and `certified` is true only with
+//! [`Status::Success`] ([`Report::set_status`]): a requested certificate that does not close its
+//! gap turns success into [`Status::GapNotClosed`], and any other failure status keeps precedence.
 
 pub(crate) mod certificate;
 pub mod conditioning;
@@ -147,18 +150,17 @@ impl QuadricBound {
 pub struct TriangulationOptions {
     /// Estimator. Default [`Method::Optimal`].
     pub method: Method,
-    /// Branch and bound stops when `(upper − lower) / max(upper, 1e-12) ≤ max_relative_gap` (the floor
-    /// lets exact, zero-cost data be certified), in (0, 1). Default `1e-3`
-    /// (the paper stopped at 10 %).
-    pub max_relative_gap: f64,
+    /// The certificate of method `optimal`: its gap, and a node cap overriding each search's own
+    /// (branch and bound with conic relaxations for points, quadrics and [`LineBound::Relaxation`]:
+    /// [`CONIC_MAX_NODES`]; the Taylor bound of lines: [`line::taylor_search::MAX_NODES`]). Beyond the
+    /// cap the status is [`Status::GapNotClosed`]. Default [`CertifyOptions::default`] (gap `1e-3`,
+    /// the paper stopped at 10 %; each search's own cap).
+    pub certify: CertifyOptions,
     /// The paper's γ (sections 4.3.1-4.3.2): the search is restricted to primitives whose whitened
     /// reprojection error is at most γ in every view. `None` (the default) uses the square root of the
     /// cost of the local solution, which every better primitive satisfies, so the restriction loses
     /// nothing and the certificate is a certificate over all primitives in front of the cameras.
     pub max_reprojection_error: Option<f64>,
-    /// Branch and bound with conic relaxations (points, quadrics, [`LineBound::Relaxation`]) gives up
-    /// (status [`Status::GapNotClosed`]) after this many nodes. Default 2000.
-    pub max_nodes: usize,
     /// Points and lines: reject outlier observations of a track ([`point::robust`], [`line::robust`]).
     /// A view is an inlier when its whitened residual (pixels without covariances) is at most this;
     /// the result carries the inlier mask and is solved on the inliers only. Default `None`: every
@@ -169,10 +171,6 @@ pub struct TriangulationOptions {
     /// The lower bound of the quadric certificate ([`QuadricBound`]). Default
     /// [`QuadricBound::Convexity`].
     pub quadric_bound: QuadricBound,
-    /// Node cap of the Taylor bound of lines (status [`Status::GapNotClosed`] beyond it); its nodes
-    /// cost microseconds (interval arithmetic, no conic program), so the cap is separate from
-    /// `max_nodes`. Default 50000.
-    pub max_taylor_nodes: usize,
     /// Settings of the local minimisation (method `local`, and the upper bounds of `optimal`).
     /// Default: the trust region of section 4.1 with 100 iterations and a step tolerance of 1e-10.
     pub local: TrustRegionOptions,
@@ -185,19 +183,28 @@ impl Default for TriangulationOptions {
         local.stopping.step_tolerance = 1e-10;
         TriangulationOptions {
             method: Method::Optimal,
-            max_relative_gap: 1e-3,
+            certify: CertifyOptions::default(),
             max_reprojection_error: None,
-            max_nodes: 2000,
             outlier_threshold: None,
             line_bound: LineBound::Taylor,
             quadric_bound: QuadricBound::Convexity,
-            max_taylor_nodes: 50_000,
             local,
         }
     }
 }
 
+/// The node cap of the branch and bounds with conic relaxations (points, quadrics and
+/// [`LineBound::Relaxation`]) when [`CertifyOptions::max_nodes`] is `None`: each node solves a conic
+/// program (about a millisecond).
+pub const CONIC_MAX_NODES: usize = 2_000;
+
 impl TriangulationOptions {
+    /// The node cap of a branch and bound with conic relaxations ([`CONIC_MAX_NODES`] unless
+    /// `certify.max_nodes` says otherwise).
+    pub(crate) fn conic_max_nodes(&self) -> usize {
+        self.certify.max_nodes_or(CONIC_MAX_NODES)
+    }
+
     /// Checks the numeric options.
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, reason: &str| {
@@ -207,13 +214,8 @@ impl TriangulationOptions {
             })
         };
         // A relative gap is (upper − lower) / upper ≤ 1 whenever the lower bound is ≥ 0, so a threshold
-        // of 1 or more would certify without any bound (as `certify_gap` of the pose, in (0, 1)).
-        if !(self.max_relative_gap > 0.0 && self.max_relative_gap < 1.0) {
-            return Err(Error::InvalidOption {
-                name: "max_relative_gap".into(),
-                reason: format!("must be in (0, 1), got {}", crate::error::number(self.max_relative_gap)),
-            });
-        }
+        // of 1 or more would certify without any bound: `validate` keeps it in (0, 1).
+        self.certify.validate("certify")?;
         if let Some(gamma) = self.max_reprojection_error {
             if !(gamma.is_finite() && gamma > 0.0) {
                 return bad(
@@ -221,12 +223,6 @@ impl TriangulationOptions {
                     "must be a positive finite number of (whitened) pixels",
                 );
             }
-        }
-        if self.max_nodes == 0 {
-            return bad("max_nodes", "must be at least 1");
-        }
-        if self.max_taylor_nodes == 0 {
-            return bad("max_taylor_nodes", "must be at least 1");
         }
         if let Some(tau) = self.outlier_threshold {
             if !(tau.is_finite() && tau > 0.0) {
@@ -252,7 +248,7 @@ impl TriangulationOptions {
     }
 }
 
-pub use crate::certificate::{Certificate, CertificateKind, Primitive};
+pub use crate::certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 pub use crate::status::Status;
 
 /// What one triangulation did: shared by every primitive's result.
@@ -264,8 +260,10 @@ pub struct Report {
     pub status: Status,
     /// The cost of eq. 19 at the estimate, squared whitened pixels.
     pub cost: f64,
-    /// Optimality evidence.
-    pub certificate: Certificate,
+    /// Optimality evidence: `None` when no bound was computed (methods `linear` and `local`, an
+    /// input refused before the search); `Some` with `certified == false` when a search ran and did
+    /// not close the gap (or the status is not [`Status::Success`]).
+    pub certificate: Option<Certificate>,
     /// Accepted iterations of the local minimisation (0 for `linear`).
     pub iterations: usize,
     /// Why the last iterative stage stopped ([`Termination::ClosedForm`] for `linear`).
@@ -285,12 +283,18 @@ impl Report {
             method,
             status: Status::Success,
             cost: f64::NAN,
-            certificate: Certificate::none(),
+            certificate: None,
             iterations: 0,
             termination: Termination::ClosedForm,
             time_seconds: 0.0,
             residual_dof: 0,
         }
+    }
+
+    /// Whether a certificate was computed and proves the estimate globally optimal (within
+    /// `certify.max_relative_gap`, over the certificate's domain).
+    pub fn certified(&self) -> bool {
+        self.certificate.is_some_and(|c| c.certified)
     }
 
     /// Sets [`Report::residual_dof`] for `residuals` whitened residuals and `parameters` fitted ones.
@@ -314,7 +318,9 @@ impl Report {
     pub fn set_status(&mut self, status: Status) {
         self.status = status;
         if status != Status::Success {
-            self.certificate.certified = false;
+            if let Some(c) = self.certificate.as_mut() {
+                c.certified = false;
+            }
         }
     }
 

@@ -41,3 +41,14 @@ def clean(value: Any) -> Any:
     if isinstance(value, float) and not np.isfinite(value):
         return None
     return value
+
+
+def triangulation_options(method: str, gap: float | None = None) -> Any:
+    """``TriangulationOptions`` of ``method``, with the certificate's ``max_relative_gap`` when ``gap`` is
+    given (``None``: pluecker's default)."""
+    import pluecker
+
+    options = pluecker.TriangulationOptions(method=method)
+    if gap is not None:
+        options.certify.max_relative_gap = gap
+    return options

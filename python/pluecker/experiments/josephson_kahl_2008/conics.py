@@ -25,7 +25,7 @@ import numpy as np
 
 import pluecker
 
-from .common import METHOD_LABELS, METHODS, markdown_table
+from .common import METHOD_LABELS, METHODS, markdown_table, triangulation_options
 
 VIEWS = 5
 POINTS_PER_CONIC = 63
@@ -120,7 +120,7 @@ def run_conics(trials: int, seed: int) -> list[dict[str, Any]]:
     runs: list[dict[str, Any]] = [{} for _ in scenes]
     for key, method, gap in (*((m, m, None) for m in METHODS), ("optimal_paper_gap", "optimal", PAPER_GAP)):
         start = time.perf_counter()
-        batch = pluecker.triangulate_quadrics(P, conics, cov=covariances, method=method, options=pluecker.TriangulationOptions(**({} if gap is None else {"max_relative_gap": gap})))
+        batch = pluecker.triangulate_quadrics(P, conics, cov=covariances, options=triangulation_options(method, gap))
         wall = (time.perf_counter() - start) / max(trials, 1)
         rejected = [m for m in batch.messages if m]
         if rejected:
@@ -208,7 +208,8 @@ def figure7(seed: int, out) -> Any:
     styles = {"truth": ("black", "-"), "optimal": ("tab:green", "--"), "linear": ("tab:red", ":")}
     for name, (colour, style) in styles.items():
         Q = scene.dual if name == "truth" else np.asarray(
-            pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, method=name).Q)
+            pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances,
+                                         options=pluecker.TriangulationOptions(method=name)).Q)
         curve = ellipse_points(np.linalg.inv(P @ Q @ P.T), 400)
         ax.plot(*np.vstack([curve, curve[:1]]).T, style, color=colour, lw=1.2, label=name if name == "truth" else
                 f"{name} quadric, reprojected")

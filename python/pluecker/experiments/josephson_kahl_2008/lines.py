@@ -20,7 +20,7 @@ import numpy as np
 import pluecker
 from pluecker.datasets import load_vgg, vgg_root
 
-from .common import FRAMES, LABELS, METHOD_LABELS, METHODS, counts, markdown_table
+from .common import FRAMES, LABELS, METHOD_LABELS, METHODS, counts, markdown_table, triangulation_options
 
 SIGMA_PX = 1.0
 #: The distance of an observed line from its frame origin, pixels (pluecker's section 3.1 normalisation).
@@ -106,7 +106,7 @@ def run_lines(sequence: str, method: str, limit: int | None = None, gap: float |
     cameras, segments, visible = line_data(sequence, limit)
     whitened, endpoints, recomputed = [], [], []
     start = time.perf_counter()
-    batch = pluecker.triangulate_lines(cameras, segments, visible, sigma=SIGMA_PX, method=method, options=pluecker.TriangulationOptions(**({} if gap is None else {"max_relative_gap": gap})))
+    batch = pluecker.triangulate_lines(cameras, segments, visible, sigma=SIGMA_PX, options=triangulation_options(method, gap))
     wall = time.perf_counter() - start
     rejected = [m for m in batch.messages if m]
     if rejected:

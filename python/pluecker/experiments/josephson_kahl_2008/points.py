@@ -86,7 +86,7 @@ def point_data(sequence: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def run_points(sequence: str, method: str) -> PointRun:
     cameras, x, visible = point_data(sequence)
     start = time.perf_counter()
-    result = pluecker.triangulate_points(cameras, x, visible, method=method)
+    result = pluecker.triangulate_points(cameras, x, visible, options=pluecker.TriangulationOptions(method=method))
     wall = time.perf_counter() - start
     X = np.asarray(result.X)
     h = np.einsum("vij,nj->nvi", cameras, np.hstack([X, np.ones((len(X), 1))]))

@@ -183,7 +183,7 @@ pub struct SparseLineTracks<'a> {
 /// Triangulates every track of the sparse `tracks` seen by `cameras` (3x4, world → pixels), in
 /// parallel: the same per-track solve and results as [`triangulate_lines`] on the dense form. A track
 /// naming an image beyond the cameras, or one image twice, is its own error.
-pub fn triangulate_lines_sparse(
+pub fn triangulate_line_observations(
     cameras: &[Matrix3x4<f64>],
     tracks: &SparseLineTracks,
     opts: &TriangulationOptions,
@@ -231,7 +231,7 @@ pub struct SparseSegmentTracks<'a> {
 ///
 /// Whole-call errors: [`Error::InvalidOption`] (options), [`Error::Shape`] (array lengths),
 /// [`Error::NonFinite`] / [`Error::SingularCamera`] for the views' cameras.
-pub fn triangulate_lines_sparse_views(
+pub fn triangulate_line_observations_views(
     views: &[View],
     tracks: &SparseSegmentTracks,
     opts: &TriangulationOptions,

@@ -45,7 +45,7 @@ use crate::triangulation::line::residual::LineFrame;
 use crate::triangulation::point::robust::reselect_at_optimum;
 use crate::triangulation::uncertainty::covariance_of_information;
 use crate::triangulation::views::View;
-use crate::triangulation::{Certificate, Method, Status, TriangulationOptions};
+use crate::triangulation::{Method, Status, TriangulationOptions};
 use nalgebra::{Matrix2, Matrix2x3, Matrix3x4, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector6};
 
 /// One segment observed through a camera: the camera, its pose, the observed (distorted) endpoints
@@ -334,7 +334,7 @@ fn through_lenses(
     let start = *result.plucker.coordinates();
     let start_cost = exact_cost(&used, &start);
     let report = &mut result.report;
-    report.certificate = Certificate::none();
+    report.certificate = None;
     let refinable = matches!(
         report.status,
         Status::Success | Status::GapNotClosed | Status::NotConverged

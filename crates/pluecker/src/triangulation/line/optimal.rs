@@ -436,7 +436,7 @@ pub(crate) fn optimal_line(
     }
     let (Some((xlo, xhi)), Some((ylo, yhi))) = (clip_bounds(&x_strips), clip_bounds(&y_strips)) else {
         report.status = Status::Infeasible;
-        report.certificate = Certificate::infeasible(0);
+        report.certificate = Some(Certificate::infeasible(0));
         return (*local, report);
     };
     // The strips' box in p = (x, y), then its bounding box in the branching coordinates z = T⁻¹ p.
@@ -473,12 +473,12 @@ pub(crate) fn optimal_line(
     let (root, tightening_iterations) = oracle.tighten(&root);
     let Some(root) = root else {
         report.status = Status::Infeasible;
-        report.certificate = Certificate::infeasible(tightening_iterations);
+        report.certificate = Some(Certificate::infeasible(tightening_iterations));
         return (*local, report);
     };
     let bb_opts = BranchAndBoundOptions {
-        max_relative_gap: opts.max_relative_gap,
-        max_nodes: opts.max_nodes,
+        max_relative_gap: opts.certify.max_relative_gap,
+        max_nodes: opts.conic_max_nodes(),
         trivial_lower_bound: 0.0,
     };
     let mut result = branch_and_bound(&mut oracle, root, Some((frame_cost, frame_local)), &bb_opts);
@@ -486,7 +486,8 @@ pub(crate) fn optimal_line(
     let (best_cost, best) = result.best.unwrap_or((frame_cost, frame_local));
     let world = plucker::transform(&sim.inverse_matrix(), &best);
     report.cost = best_cost;
-    (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
+    let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
+    (report.status, report.certificate) = (status, Some(certificate));
     (world, report)
 }
 

@@ -41,6 +41,11 @@ use crate::triangulation::fraction::{self, FractionalResidual};
 use crate::triangulation::{CertificateKind, Report, Status, TriangulationOptions};
 use nalgebra::{Vector4, Vector6};
 
+/// The node cap of the Taylor search when `certify.max_nodes` is `None`: its nodes cost
+/// microseconds (interval arithmetic, no conic program), so the cap is 25 times the conic searches'
+/// ([`crate::triangulation::CONIC_MAX_NODES`]).
+pub const MAX_NODES: usize = 50_000;
+
 /// Trust-region iterations of the local step from a region's centre.
 const NODE_LOCAL_ITERATIONS: usize = 20;
 
@@ -157,26 +162,28 @@ pub(crate) fn optimal_line_taylor(
         views: &views,
         restricted,
         incumbent: cost,
-        gap: opts.max_relative_gap,
+        gap: opts.certify.max_relative_gap,
         at_local: cost_and_gradient(&chart.views, &Vector4::zeros()),
         local: local_opts,
     };
     let bb_opts = BranchAndBoundOptions {
-        max_relative_gap: opts.max_relative_gap,
-        max_nodes: opts.max_taylor_nodes,
+        max_relative_gap: opts.certify.max_relative_gap,
+        max_nodes: opts.certify.max_nodes_or(MAX_NODES),
         trivial_lower_bound: 0.0,
     };
     let root = chart.root(radius2.sqrt());
     let result = branch_and_bound(&mut oracle, root, Some((cost, frame_local)), &bb_opts);
     let (best_cost, best) = result.best.unwrap_or((cost, frame_local));
     report.cost = best_cost;
-    (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
-    report.certificate.kind = CertificateKind::TaylorBranchAndBound;
+    let (status, mut certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
+    certificate.kind = CertificateKind::TaylorBranchAndBound;
     if restricted.is_none() {
         // Regions were discarded for holding no stationary point, which only shows that no line
         // there is cheaper than the local one (module docs): the proved bound is at most its cost.
-        report.certificate.raw_lower_bound = report.certificate.raw_lower_bound.min(cost);
+        certificate.raw_lower_bound = certificate.raw_lower_bound.min(cost);
     }
+    report.status = status;
+    report.certificate = Some(certificate);
     if restricted.is_some() && result.box_lower_bound == f64::INFINITY {
         // Every region was proved to hold no line within γ in every view.
         report.set_status(Status::Infeasible);

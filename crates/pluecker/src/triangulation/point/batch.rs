@@ -313,7 +313,7 @@ impl SparsePointTracks<'_> {
 /// Triangulates every track of the sparse `tracks` seen by `cameras` (3x4, world → pixels), in
 /// parallel: the same per-track solve and results as [`triangulate_points`] on the dense form. A track
 /// naming an image beyond the cameras, or one image twice, is its own error.
-pub fn triangulate_points_sparse(
+pub fn triangulate_point_observations(
     cameras: &[Matrix3x4<f64>],
     tracks: &SparsePointTracks,
     opts: &TriangulationOptions,
@@ -323,9 +323,9 @@ pub fn triangulate_points_sparse(
     Ok(solve_tracks(n, 16, progress, one))
 }
 
-/// [`triangulate_points_sparse`] handing each track's result to `write(t, row, result)` as it
+/// [`triangulate_point_observations`] handing each track's result to `write(t, row, result)` as it
 /// finishes, as [`triangulate_points_into`] does.
-pub fn triangulate_points_sparse_into<R: Send>(
+pub fn triangulate_point_observations_into<R: Send>(
     cameras: &[Matrix3x4<f64>],
     tracks: &SparsePointTracks,
     opts: &TriangulationOptions,
@@ -338,11 +338,11 @@ pub fn triangulate_points_sparse_into<R: Send>(
     Ok(solve_tracks_into(rows, 16, progress, one, write))
 }
 
-/// [`triangulate_points_sparse`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models,
+/// [`triangulate_point_observations`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models,
 /// and a pose): the observations are the images' own (distorted) pixels, and each track is solved as
 /// [`super::triangulate_point_views`] solves it. An observation whose pixel has no preimage inside
 /// its lens's fold is an error of its track, naming it.
-pub fn triangulate_points_sparse_views(
+pub fn triangulate_point_observations_views(
     views: &[View],
     tracks: &SparsePointTracks,
     opts: &TriangulationOptions,
@@ -352,9 +352,9 @@ pub fn triangulate_points_sparse_views(
     Ok(solve_tracks(n, 16, progress, one))
 }
 
-/// [`triangulate_points_sparse_views`] handing each track's result to `write(t, row, result)` as
+/// [`triangulate_point_observations_views`] handing each track's result to `write(t, row, result)` as
 /// [`triangulate_points_into`] does.
-pub fn triangulate_points_sparse_views_into<R: Send>(
+pub fn triangulate_point_observations_views_into<R: Send>(
     views: &[View],
     tracks: &SparsePointTracks,
     opts: &TriangulationOptions,

@@ -563,9 +563,7 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
             report.cost = start_cost;
             result.covariance = exact_covariance(&used, &x0);
         }
-        if report.certificate.kind != CertificateKind::None {
-            report.certificate = Certificate::none();
-        }
+        report.certificate = None;
         report.test_residuals(2 * used.len(), 3);
         return;
     }
@@ -597,27 +595,27 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
         Termination::MaxIterations => Status::NotConverged,
         _ => Status::Success,
     };
-    report.certificate = Certificate::none();
+    report.certificate = None;
     if opts.method == Method::Optimal && report.status == Status::Success {
         // Without a proof, the trivial bound 0 still certifies exact data (a cost at the rounding level).
-        let raw = match lens_certificate(&used, &x, cost, opts.max_relative_gap) {
+        let raw = match lens_certificate(&used, &x, cost, opts.certify.max_relative_gap) {
             Ok(bound) => Some(bound.raw_lower_bound),
-            Err(_) => (relative_gap(cost, 0.0) <= opts.max_relative_gap).then_some(0.0),
+            Err(_) => (relative_gap(cost, 0.0) <= opts.certify.max_relative_gap).then_some(0.0),
         };
         if let Some(raw) = raw {
             let lower_bound = raw.min(cost).max(0.0);
             let relative_gap = relative_gap(cost, lower_bound);
-            report.certificate = Certificate {
+            report.certificate = Some(Certificate {
                 lower_bound,
                 raw_lower_bound: raw,
                 relative_gap,
-                certified: relative_gap <= opts.max_relative_gap,
+                certified: relative_gap <= opts.certify.max_relative_gap,
                 kind: CertificateKind::LensConvexityTest,
                 nodes: 0,
                 solver_iterations: 0,
-            };
+            });
         }
-        if !report.certificate.certified {
+        if !report.certified() {
             report.status = Status::GapNotClosed;
         }
     }
@@ -713,12 +711,12 @@ pub(crate) fn solve_through_lenses(
             method: Method::Local,
             ..opts.clone()
         });
-        if local.report.certificate.certified {
+        if local.report.certified() {
             local
         } else {
             let searched = through(opts);
             let cheaper = searched.report.cost < local.report.cost || !local.report.cost.is_finite();
-            if searched.report.certificate.certified || cheaper {
+            if searched.report.certified() || cheaper {
                 searched
             } else {
                 local

@@ -288,7 +288,8 @@ pub(crate) fn solve_views(
     }
     let (x, status, certificate, cost) = certify(views, frame, x, report.cost, linear, opts);
     report.status = status;
-    report.certificate = certificate;
+    // A search that proved nothing (it failed before its first bound) leaves no certificate.
+    report.certificate = (!certificate.raw_lower_bound.is_nan()).then_some(certificate);
     report.cost = cost;
     if certificate.kind == CertificateKind::BranchAndBound && matches!(status, Status::Success | Status::GapNotClosed) {
         // Branch and bound searches the closure of the points in front, infinity included: its best
@@ -303,21 +304,18 @@ pub(crate) fn solve_views(
 
 /// The certificate of branch and bound once [`unreached`] has spoken: never certified; for a point
 /// at infinity the lower bound (valid over the points in front, infinity included) and the gap to
-/// the cost there are kept; a point behind a camera is outside the searched set, so nothing is.
-fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Certificate {
-    let mut out = Certificate {
-        certified: false,
-        ..*certificate
-    };
-    if u.status == Status::AtInfinity {
-        out.lower_bound = certificate.lower_bound.min(u.cost);
-        out.relative_gap = relative_gap(u.cost, out.lower_bound);
-    } else {
-        out.lower_bound = 0.0;
-        out.raw_lower_bound = f64::NAN;
-        out.relative_gap = 1.0;
-    }
-    out
+/// the cost there are kept; a point behind a camera is outside the searched set, so nothing is
+/// (`None`).
+fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Option<Certificate> {
+    (u.status == Status::AtInfinity && !certificate.raw_lower_bound.is_nan()).then(|| {
+        let lower_bound = certificate.lower_bound.min(u.cost);
+        Certificate {
+            certified: false,
+            lower_bound,
+            relative_gap: relative_gap(u.cost, lower_bound),
+            ..*certificate
+        }
+    })
 }
 
 /// The outcome of a solve whose infimum over points in front of every camera is not reached at a
@@ -439,7 +437,7 @@ fn certify(
     let test = convexity_test(views, &x);
     if let Some(certificate) = test
         .passed
-        .then(|| Certificate::of_convexity_test(cost, test.lower_bound, opts.max_relative_gap))
+        .then(|| Certificate::of_convexity_test(cost, test.lower_bound, opts.certify.max_relative_gap))
         .flatten()
     {
         return (x, Status::Success, certificate, cost);
@@ -456,8 +454,8 @@ fn certify(
     }
     let settings = GlobalSettings {
         gamma: opts.max_reprojection_error.unwrap_or_else(|| cost.sqrt()),
-        max_relative_gap: opts.max_relative_gap,
-        max_nodes: opts.max_nodes,
+        max_relative_gap: opts.certify.max_relative_gap,
+        max_nodes: opts.conic_max_nodes(),
         local: opts.local,
         relaxation: DEFAULT_RELAXATION,
     };
@@ -476,7 +474,7 @@ fn certify(
     }
     .min(g.cost);
     let gap = relative_gap(g.cost, lower_bound);
-    let certified = g.status == GlobalStatus::Converged && gap <= opts.max_relative_gap;
+    let certified = g.status == GlobalStatus::Converged && gap <= opts.certify.max_relative_gap;
     // Success exactly when certified: branch and bound's own stopping rule measures the gap against
     // its incumbent, which may differ from `gap` in the last digits.
     let status = match g.status {

@@ -126,7 +126,7 @@ pub struct SparseQuadricTracks<'a> {
 /// Triangulates every track of the sparse `tracks` seen by `cameras`, in parallel: the same per-track
 /// solve and results as [`triangulate_quadrics`] on the dense form. A track naming an image beyond the
 /// cameras, or one image twice, is its own error.
-pub fn triangulate_quadrics_sparse(
+pub fn triangulate_quadric_observations(
     cameras: &[Matrix3x4<f64>],
     tracks: &SparseQuadricTracks,
     opts: &TriangulationOptions,

@@ -181,10 +181,10 @@ pub(crate) fn optimal_quadric(
     let test = (opts.quadric_bound == QuadricBound::Convexity)
         .then(|| convexity_bound(&raw_views, &reference))
         .flatten()
-        .and_then(|lower| Certificate::of_convexity_test(cost, lower, opts.max_relative_gap));
+        .and_then(|lower| Certificate::of_convexity_test(cost, lower, opts.certify.max_relative_gap));
     if let Some(certified) = test {
         report.status = Status::Success;
-        report.certificate = certified;
+        report.certificate = Some(certified);
         return (*local, report);
     }
     let views: Vec<FractionalResidual<5, 10>> = raw_views.iter().map(|v| v.oriented(&reference)).collect();
@@ -217,7 +217,7 @@ pub(crate) fn optimal_quadric(
     };
     let infeasible = |mut report: Report, iterations: usize| {
         report.status = Status::Infeasible;
-        report.certificate = Certificate::infeasible(iterations);
+        report.certificate = Some(Certificate::infeasible(iterations));
         (*local, report)
     };
     // Eq. 26: the denominators' range without the cut, then the variables' and again the
@@ -258,8 +258,8 @@ pub(crate) fn optimal_quadric(
         }
     }
     let bb_opts = BranchAndBoundOptions {
-        max_relative_gap: opts.max_relative_gap,
-        max_nodes: opts.max_nodes,
+        max_relative_gap: opts.certify.max_relative_gap,
+        max_nodes: opts.conic_max_nodes(),
         trivial_lower_bound: 0.0,
     };
     let start = Ellipsoid::from_dual(&frame_dual).unwrap_or(*local);
@@ -268,6 +268,7 @@ pub(crate) fn optimal_quadric(
     let (best_cost, best) = result.best.unwrap_or((frame_cost, start));
     let world = Ellipsoid::from_dual(&transform_dual(&sim.inverse_matrix(), &best.dual())).unwrap_or(*local);
     report.cost = best_cost;
-    (report.status, report.certificate) = certificate_of(&result, best_cost, opts.max_relative_gap);
+    let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
+    (report.status, report.certificate) = (status, Some(certificate));
     (world, report)
 }
