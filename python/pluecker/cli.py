@@ -34,8 +34,8 @@ from typing import Any, NoReturn, Sequence
 import numpy as np
 
 import pluecker
-from pluecker.jsonio import dumps, jsonable
 from pluecker.datasets import DataNotFoundError
+from pluecker.jsonio import dumps, jsonable
 
 __all__ = ["main"]
 

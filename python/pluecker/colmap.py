@@ -18,7 +18,6 @@ pycolmap objects import it when called and say how to install it when it is miss
 from __future__ import annotations
 
 import copy
-
 import math
 from typing import Any, NamedTuple
 

@@ -49,7 +49,6 @@ machine, so that nothing is oversubscribed.
 from __future__ import annotations
 
 import copy
-
 import os
 import time
 from dataclasses import dataclass
@@ -336,7 +335,7 @@ def share_threads(client: Any) -> dict[str, int]:
     cores = client.run(os.cpu_count)
     info = client.scheduler_info()["workers"]
     slots: dict[str, int] = {}
-    for address, w in info.items():
+    for w in info.values():
         slots[w["host"]] = slots.get(w["host"], 0) + int(w["nthreads"])
     # One process-wide pool per worker, shared by its task slots: per slot the machine's cores over
     # the slots of every worker on it.
@@ -706,9 +705,9 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     def solve(i: int) -> dict[str, Any]:
         q = int(q_ids[i])
         p_rows, l_rows = points.get(q, no_rows), lines.get(q, no_rows)
-        p, l = point_values[p_rows], line_values[l_rows]
+        p, segs = point_values[p_rows], line_values[l_rows]
         out: dict[str, Any] = {"R": np.full(9, np.nan), "t": np.full(3, np.nan), "rms": np.nan, "message": "",
-                               "pin": np.zeros(len(p), bool), "lin": np.zeros(len(l), bool),
+                               "pin": np.zeros(len(p), bool), "lin": np.zeros(len(segs), bool),
                                "ids": point_ids[0][p_rows] if point_ids is not None else None}
         try:
             if point_ids is not None and not point_ids[1][p_rows].all():
@@ -722,8 +721,8 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
             options_q = copy.copy(options) if options is not None else _core.PoseOptions()
             options_q.ransac = _core.RansacOptions(**{**base, "seed": (base["seed"] + seed + q) % 2**63})
             r = _core.estimate_pose(camera, p[:, :2] if len(p) else None, p[:, 2:] if len(p) else None,
-                                    l[:, :4].reshape(-1, 2, 2) if len(l) else None,
-                                    l[:, 4:].reshape(-1, 2, 3) if len(l) else None, options=options_q)
+                                    segs[:, :4].reshape(-1, 2, 2) if len(segs) else None,
+                                    segs[:, 4:].reshape(-1, 2, 3) if len(segs) else None, options=options_q)
         except _BadQuery as exc:
             out["status"], out["message"] = "invalid_input", str(exc)
             return out
