@@ -72,6 +72,8 @@ pub fn to_py_err(err: Error) -> PyErr {
         Error::Interrupted {
             reason: StopReason::TimeBudget,
         } => pyo3::exceptions::PyTimeoutError::new_err(message),
+        // `Error` is non-exhaustive: a kind added to the core is at least a `PlueckerError` (a ValueError).
+        _ => PlueckerError::new_err(message),
     }
 }
 

@@ -197,38 +197,31 @@ impl<const R: usize, const C: usize> Pack for SMatrix<f64, R, C> {
     }
 }
 
-/// [`Pack`] for a field-less enum by its `as_str` name; the match makes the list exhaustive.
+/// [`Pack`] for field-less enums by their derived names (`strum`): every variant is covered.
 macro_rules! pack_by_name {
-    ($ty:ty: $($variant:path),+ $(,)?) => {
+    ($($ty:ty),+ $(,)?) => {$(
         impl Pack for $ty {
             fn pack(&self, out: &mut Vec<u8>) {
                 self.as_str().pack(out)
             }
             fn unpack(input: &mut Reader<'_>) -> Option<Self> {
-                let _every_variant_is_listed = |v: &$ty| match v { $($variant)|+ => () };
                 let name = String::unpack(input)?;
-                [$($variant),+].into_iter().find(|v| v.as_str() == name)
+                <$ty as strum::VariantArray>::VARIANTS.iter().copied().find(|v| v.as_str() == name)
             }
         }
-    };
+    )+};
 }
 
-pack_by_name!(Termination: Termination::GradientTolerance, Termination::RadiusTolerance,
-    Termination::CostTolerance, Termination::StepTolerance, Termination::MaxIterations,
-    Termination::SingularHessian, Termination::NonFiniteCost, Termination::ClosedForm);
-pack_by_name!(Method: Method::Linear, Method::Local, Method::Optimal);
-pack_by_name!(Status: Status::Success, Status::GapNotClosed, Status::NotConverged, Status::BehindCamera,
-    Status::Ambiguous, Status::AtInfinity, Status::Infeasible, Status::NumericalFailure, Status::TooFewInliers,
-    Status::NoHypothesis, Status::Interrupted, Status::TimeBudget);
-pack_by_name!(CertificateKind: CertificateKind::None, CertificateKind::ConvexityTest,
-    CertificateKind::BranchAndBound, CertificateKind::TaylorBranchAndBound, CertificateKind::LensConvexityTest,
-    CertificateKind::SublevelSet);
-pack_by_name!(Primitive: Primitive::Pose, Primitive::Point, Primitive::Line, Primitive::Quadric);
-pack_by_name!(PoseMethod: PoseMethod::TrustRegion, PoseMethod::RotationThenTranslation,
-    PoseMethod::TrustRegionExact, PoseMethod::Newton, PoseMethod::LevenbergMarquardt, PoseMethod::Linear);
-pack_by_name!(CovarianceSource: CovarianceSource::Given, CovarianceSource::Estimated);
-pack_by_name!(RansacStop: RansacStop::Confidence, RansacStop::IterationCap, RansacStop::TimeBudget,
-    RansacStop::NoSolvableSample, RansacStop::MinInlierRatio, RansacStop::Interrupted);
+pack_by_name!(
+    Termination,
+    Method,
+    Status,
+    CertificateKind,
+    Primitive,
+    PoseMethod,
+    CovarianceSource,
+    RansacStop
+);
 
 /// [`Pack`] for a struct of packable fields: `pack` destructures it completely (a new field does
 /// not compile until listed) and `unpack` reads the fields back in the same order.

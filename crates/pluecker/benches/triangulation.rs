@@ -80,7 +80,7 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 /// The setup line of a case (see the module docs).
 fn summary(case: &Case, tracks: &[Track]) {
     let mut line = format!("{:>18}:", case.name);
-    for method in Method::ALL {
+    for &method in Method::ALL {
         let opts = TriangulationOptions {
             method,
             ..Default::default()
@@ -138,7 +138,7 @@ fn bench_points(c: &mut Criterion) {
     for case in cases() {
         let tracks = pool(&case);
         summary(&case, &tracks);
-        for method in Method::ALL {
+        for &method in Method::ALL {
             let opts = TriangulationOptions {
                 method,
                 ..Default::default()
@@ -180,7 +180,7 @@ fn bench_batch(c: &mut Criterion) {
     group.bench_function("5-views-10deg/linear-fast-path", |b| {
         b.iter(|| black_box(triangulate_points_linear(&scene.cameras, &tracks).unwrap()))
     });
-    for method in Method::ALL {
+    for &method in Method::ALL {
         let opts = TriangulationOptions {
             method,
             ..Default::default()
@@ -211,7 +211,7 @@ fn bench_lines(c: &mut Criterion) {
                 (scene.cameras, segments)
             })
             .collect();
-        for bound in LineBound::ALL {
+        for &bound in LineBound::ALL {
             let opts = TriangulationOptions {
                 line_bound: bound,
                 ..Default::default()

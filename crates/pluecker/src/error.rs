@@ -8,6 +8,7 @@ use std::fmt;
 
 /// What went wrong, with enough structure to act on.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub enum Error {
     /// An array has the wrong length or two arrays that must match do not.
     Shape {

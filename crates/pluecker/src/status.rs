@@ -6,6 +6,7 @@ use crate::interrupt::StopReason;
 /// Whether an estimate can be used, and if not why.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
 #[strum(serialize_all = "snake_case")]
+#[non_exhaustive]
 pub enum Status {
     /// The method finished: every stage converged (pose: every object point in front of the camera);
     /// with a certificate requested, it holds within the gap.

@@ -34,6 +34,8 @@ pub(crate) fn error_status(err: &Error) -> &'static str {
         Error::Shape { .. } => "invalid_input",
         Error::InvalidOption { .. } => "invalid_option",
         Error::Interrupted { reason } => Status::stopped(*reason).as_str(),
+        // `Error` is non-exhaustive: a kind added to the core rejects the track as invalid input.
+        _ => "invalid_input",
     }
 }
 

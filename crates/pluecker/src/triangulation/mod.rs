@@ -35,7 +35,8 @@ use crate::error::{Error, Result};
 use crate::optim::{Summary, Termination, TrustRegionOptions};
 
 /// The three estimators of every primitive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum Method {
     /// Algebraic least squares on the projection equations (DLT), with Hartley normalisation.
     Linear,
@@ -48,31 +49,22 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order above.
-    pub const ALL: [Method; 3] = [Method::Linear, Method::Local, Method::Optimal];
+    pub const ALL: &'static [Method] = <Method as strum::VariantArray>::VARIANTS;
 
     /// The name used by Python and the command line.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            Method::Linear => "linear",
-            Method::Local => "local",
-            Method::Optimal => "optimal",
-        }
+        self.into()
     }
 
     /// Parses [`Method::as_str`] names.
     pub fn parse(name: &str) -> Result<Method> {
-        Method::ALL
-            .into_iter()
-            .find(|m| m.as_str() == name)
-            .ok_or_else(|| Error::InvalidOption {
-                name: "method".into(),
-                reason: format!("unknown triangulation method '{name}'; expected one of linear, local, optimal"),
-            })
+        crate::names::parse("method", "triangulation method", name)
     }
 }
 
 /// The lower bound of the optimal method for lines.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum LineBound {
     /// Interval Taylor bounds over the chart of the line's images in two views
     /// ([`line::taylor_search`]; certificate kind `taylor_branch_and_bound`, domain: every line but
@@ -87,30 +79,22 @@ pub enum LineBound {
 
 impl LineBound {
     /// Every bound, in the order above.
-    pub const ALL: [LineBound; 2] = [LineBound::Taylor, LineBound::Relaxation];
+    pub const ALL: &'static [LineBound] = <LineBound as strum::VariantArray>::VARIANTS;
 
     /// The name used by Python and the command line.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            LineBound::Taylor => "taylor",
-            LineBound::Relaxation => "relaxation",
-        }
+        self.into()
     }
 
     /// Parses [`LineBound::as_str`] names.
     pub fn parse(name: &str) -> Result<LineBound> {
-        LineBound::ALL
-            .into_iter()
-            .find(|m| m.as_str() == name)
-            .ok_or_else(|| Error::InvalidOption {
-                name: "line_bound".into(),
-                reason: format!("unknown line bound '{name}'; expected taylor or relaxation"),
-            })
+        crate::names::parse("line_bound", "line bound", name)
     }
 }
 
 /// The lower bound of the optimal method for quadrics.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum QuadricBound {
     /// The convexity test of [`quadric::certificate`] (kind `convexity_test`, domain: every ellipsoid
     /// that no camera's principal plane cuts), then the paper's relaxation when the test cannot
@@ -123,25 +107,16 @@ pub enum QuadricBound {
 
 impl QuadricBound {
     /// Every bound, in the order above.
-    pub const ALL: [QuadricBound; 2] = [QuadricBound::Convexity, QuadricBound::Relaxation];
+    pub const ALL: &'static [QuadricBound] = <QuadricBound as strum::VariantArray>::VARIANTS;
 
     /// The name used by Python and the command line.
     pub fn as_str(&self) -> &'static str {
-        match self {
-            QuadricBound::Convexity => "convexity",
-            QuadricBound::Relaxation => "relaxation",
-        }
+        self.into()
     }
 
     /// Parses [`QuadricBound::as_str`] names.
     pub fn parse(name: &str) -> Result<QuadricBound> {
-        QuadricBound::ALL
-            .into_iter()
-            .find(|m| m.as_str() == name)
-            .ok_or_else(|| Error::InvalidOption {
-                name: "quadric_bound".into(),
-                reason: format!("unknown quadric bound '{name}'; expected convexity or relaxation"),
-            })
+        crate::names::parse("quadric_bound", "quadric bound", name)
     }
 }
 
