@@ -18,12 +18,12 @@ pycolmap objects import it when called and say how to install it when it is miss
 from __future__ import annotations
 
 import copy
-import math
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from . import _core
+from ._arguments import check_sigma
 
 
 class ModelError(_core.PlueckerError):
@@ -117,20 +117,6 @@ class Retriangulation:
         return iter((self.point3D_ids, self.result))
 
 
-def _check_sigma(sigma_px: Any) -> None:
-    """``pluecker.InvalidOptionError`` unless ``sigma_px`` is a positive finite number (not a bool): the
-    covariance is ``sigma_px²`` I, so a negative σ would pass as its absolute value and a zero or NaN
-    one would make every cost meaningless."""
-    if isinstance(sigma_px, (bool, np.bool_)) or not isinstance(sigma_px, (int, float, np.integer, np.floating)):
-        raise _core.InvalidOptionError(f"sigma_px: must be a positive finite number of pixels, got {sigma_px!r}")
-    try:
-        value = float(sigma_px)
-    except OverflowError:
-        value = math.inf
-    if not (math.isfinite(value) and value > 0):
-        raise _core.InvalidOptionError(f"sigma_px: must be a positive finite number of pixels, got {value:.6g}")
-
-
 class _Observations(NamedTuple):
     """A model's observations as the triangulation takes them (:func:`_observations`)."""
 
@@ -167,7 +153,7 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     by point. An observation whose camera model is not handled, or whose pixel has no preimage through
     the camera's distortion, is left out and named in ``skipped``; a dangling ``point3D_id`` or a model
     without points is a :class:`ModelError`."""
-    _check_sigma(sigma_px)
+    check_sigma(sigma_px)
     if reconstruction.num_points3D() == 0:
         raise ModelError("reconstruction: the model has no 3-D points to re-triangulate")
     ids = np.sort(np.fromiter(reconstruction.point3D_ids(), dtype=np.int64))

@@ -58,7 +58,7 @@ from typing import Any, Iterable, Optional, Union
 import numpy as np
 
 from . import _core
-from .colmap import _check_sigma
+from ._arguments import check_sigma
 
 __all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
            "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
@@ -148,7 +148,7 @@ def triangulate_table(table: Any, cameras: Cameras, *,
     track, observations in increasing (image, x, y). Without covariance columns every pixel has
     covariance ``sigma_px²`` I."""
     pa = _pyarrow()
-    _check_sigma(sigma_px)
+    check_sigma(sigma_px)
     _require_columns(table.column_names, OBSERVATION_COLUMNS, "observations")
     columns = {name: table.column(name).to_numpy() for name in OBSERVATION_COLUMNS}
     track = np.asarray(columns["track"], dtype=np.int64)
@@ -366,7 +366,7 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     started = time.perf_counter()
     source, out = str(source), Path(out)
-    _check_sigma(sigma_px)
+    check_sigma(sigma_px)
     _check_inputs(source, OBSERVATION_COLUMNS, "observations")
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1
     if buckets is None and not partitioned:

@@ -531,31 +531,6 @@ pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
     }
 }
 
-/// A pose `x_cam = R X_world + t` as Python passes it: a `Pose`, or the pair `(R, t)` of a `(3, 3)` rotation and a
-/// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.
-pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
-    if let Ok(pose) = obj.downcast::<crate::pose::result::PyPose>() {
-        return Ok(pose.get().inner);
-    }
-    let pair = obj.downcast::<PyTuple>().map_err(|_| {
-        let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
-        pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
-    })?;
-    if pair.len() != 2 {
-        return Err(shape_error(
-            name,
-            "a tuple (R, t)",
-            format!("a tuple of length {}", pair.len()),
-        ));
-    }
-    pose_from_parts(
-        &format!("{name} R"),
-        &pair.get_item(0)?,
-        &format!("{name} t"),
-        &pair.get_item(1)?,
-    )
-}
-
 /// The pose of separate arguments `R` (named `r_name`) and `t` (named `t_name`).
 pub fn pose_from_parts(r_name: &str, r: &Bound<'_, PyAny>, t_name: &str, t: &Bound<'_, PyAny>) -> PyResult<Pose> {
     Ok(Pose::new(rotation(r_name, r)?, vector::<3>(t_name, t)?))

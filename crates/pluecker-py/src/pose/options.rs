@@ -7,10 +7,10 @@
 //! that `options` uses. They are read into the core's struct when `estimate_pose` is called.
 
 use crate::certificate::PyCertifyOptions;
-use crate::convert::extract_pose;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::{options_class, Field};
+use crate::pose::result::extract_pose;
 use pluecker::pose::{Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
 use pyo3::PyClass;

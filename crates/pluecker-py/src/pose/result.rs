@@ -415,3 +415,28 @@ pack_struct!(PyRansacReport { inner });
 pack_struct!(PyPose { inner });
 pack_struct!(PyPoseDetails { inner });
 pack_struct!(PyPoseResult { inner });
+
+/// A pose `x_cam = R X_world + t` as Python passes it: a `Pose`, or the pair `(R, t)` of a `(3, 3)` rotation and a
+/// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.
+pub fn extract_pose(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Pose> {
+    if let Ok(pose) = obj.downcast::<PyPose>() {
+        return Ok(pose.get().inner);
+    }
+    let pair = obj.downcast::<PyTuple>().map_err(|_| {
+        let kind = obj.get_type().name().map_or("?".into(), |n| n.to_string());
+        pyo3::exceptions::PyTypeError::new_err(format!("{name}: expected a tuple (R, t), got a {kind}"))
+    })?;
+    if pair.len() != 2 {
+        return Err(crate::errors::shape_error(
+            name,
+            "a tuple (R, t)",
+            format!("a tuple of length {}", pair.len()),
+        ));
+    }
+    crate::convert::pose_from_parts(
+        &format!("{name} R"),
+        &pair.get_item(0)?,
+        &format!("{name} t"),
+        &pair.get_item(1)?,
+    )
+}

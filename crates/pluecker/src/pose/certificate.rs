@@ -56,6 +56,13 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 /// ([`crate::certificate::CertifyOptions::max_nodes`] `None`).
 pub const MAX_CELLS: usize = 20_000;
 
+/// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
+pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
+
+/// Why a pose through a lens is not certified.
+pub(crate) const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
+    through a lens with distortion the exact cost in the observed pixels has no certificate yet";
+
 /// The certificate stage's outcome, in the units of this module (`f = ½ Σ r²`, px²); the result
 /// assembly ([`crate::pose::PoseResult`]) turns it into the shared [`crate::certificate::Certificate`]
 /// in `Σ r²`.

@@ -14,7 +14,7 @@
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
-use super::certificate::{certify, Certification};
+use super::certificate::{certify, Certification, NOT_REQUESTED, PINHOLE_ONLY};
 use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::lens::Observations;
@@ -412,17 +412,10 @@ where
         opts
     };
     match camera.distortion() {
-        Some(lens) => super::lens::estimate_through(lens, corr, opts, started),
+        Some(lens) => super::lens::estimate_through(lens, corr, opts, started, run),
         None => run(&Observations::pinhole(&pinhole, corr), opts, started),
     }
 }
-
-/// Why a pose is not certified when [`PoseOptions::certify`] is `None`.
-pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
-
-/// Why a pose through a lens is not certified.
-pub(crate) const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
-    through a lens with distortion the exact cost in the observed pixels has no certificate yet";
 
 /// The pipeline on validated options (`camera` and `opts`), from `started`: robust or not.
 pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: Instant) -> Result<PoseResult> {

@@ -171,11 +171,15 @@ impl<'c> Observations<'c> {
 /// An observation outside the invertible region of the distortion (a pixel no point in front of the
 /// camera projects to) is an error naming it, except with RANSAC: there it is an outlier (its inlier flag
 /// false, and not counted by the RANSAC report), as a random mismatch at the edge of a fisheye is.
+///
+/// `run` is the pipeline on prepared observations (`estimate::run`), passed in so that this stage
+/// wraps it without the two modules importing each other.
 pub(crate) fn estimate_through(
     lens: &LensCamera,
     corr: &Correspondences,
     opts: &PoseOptions,
     started: Instant,
+    run: impl Fn(&Observations<'_>, &PoseOptions, Instant) -> Result<PoseResult>,
 ) -> Result<PoseResult> {
     let noise = corr.noise.as_ref();
     if let Some(n) = noise {
@@ -195,7 +199,7 @@ pub(crate) fn estimate_through(
             observed: corr,
             lens: Some(lens),
         };
-        return super::estimate::run(&observations, opts, started);
+        return run(&observations, opts, started);
     }
     let kept = subset(corr, &points, &lines);
     let (pinhole, undistorted) = undistort(lens, &kept, kept.noise.as_ref())?;
@@ -205,7 +209,7 @@ pub(crate) fn estimate_through(
         observed: &kept,
         lens: Some(lens),
     };
-    let mut result = super::estimate::run(&observations, opts, started)?;
+    let mut result = run(&observations, opts, started)?;
     result.inliers_points = expand(&result.inliers_points, &points);
     result.inliers_lines = expand(&result.inliers_lines, &lines);
     Ok(result)

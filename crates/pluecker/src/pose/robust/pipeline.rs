@@ -2,8 +2,8 @@
 //! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose.
 
 use super::super::certificate::Certification;
+use super::super::certificate::NOT_REQUESTED;
 use super::super::correspondences::{Conditioning, Correspondences};
-use super::super::estimate::NOT_REQUESTED;
 use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
 use super::super::reprojection::Pose;

@@ -30,8 +30,8 @@
 
 use super::super::minimal::{solve, Feature};
 use crate::geometry::quaternion::{exp_so3, rotation_distance};
+use crate::rigid::Pose;
 use crate::rng::Rng;
-use crate::Pose;
 use nalgebra::Vector3;
 use std::sync::OnceLock;
 
