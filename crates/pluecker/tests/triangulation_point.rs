@@ -2,6 +2,8 @@
 //! soundness of both certificates against sampling and multi-start minimisation, low parallax,
 //! bad input, and the batch.
 
+mod common;
+
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
 use pluecker::error::Error;
 use pluecker::rng::Rng;
@@ -517,15 +519,7 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
         ..Default::default()
     };
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
-    assert_eq!(r.report.status, Status::Infeasible, "{:?}", r.report);
-    assert!(!r.report.certified());
-    // The search proved the box empty: no admissible answer, a raw bound of +∞.
-    assert_eq!(
-        r.report.certificate.expect("a search ran").raw_lower_bound,
-        f64::INFINITY,
-        "{:?}",
-        r.report
-    );
+    common::assert_proved_empty(&r.report);
     // With a γ every view can meet, the same scene is certified.
     let opts = TriangulationOptions {
         max_reprojection_error: Some(30.0),
