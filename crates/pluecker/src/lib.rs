@@ -69,6 +69,8 @@
 // `!(x > 0.0)` is true for NaN: the NaN guard used throughout (a NaN input or bound must take the
 // failing branch), which the comparison's partial_cmp spelling would hide.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Every public item is documented (`make lint` turns this into an error).
+#![warn(missing_docs)]
 
 pub mod camera;
 pub mod camera_model;

@@ -299,7 +299,9 @@ impl Correspondences {
 /// (Hartley-style normalisation). A pose `(R, t')` found there is `(R, scale·t' − R centre)` in the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Conditioning {
+    /// The object's centroid, world frame.
     pub centre: Vector3<f64>,
+    /// Its RMS radius about the centroid, world units.
     pub scale: f64,
 }
 
