@@ -377,7 +377,7 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 ///
 /// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that
 /// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see
-/// [`super::refinement`]); the result names the runner-up and says when it is nearly as good
+/// `pose::refinement`); the result names the runner-up and says when it is nearly as good
 /// ([`Status::Ambiguous`]), and with [`PoseOptions::certify`] carries a certificate of global optimality
 /// (pinhole cameras only: through a lens it is refused, with that reason). Through a lens the
 /// reprojection error is the exact one in the observed pixels
@@ -388,7 +388,7 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// singular camera, bad options, a pixel outside the invertible region of a lens without RANSAC). A
 /// solver that fails returns `Ok` with a non-`Success` status.
 ///
-/// With per-observation noise on `corr` ([`super::noise`], covariances of the observed pixels) every
+/// With per-observation noise on `corr` ([`super::ObservationNoise`], covariances of the observed pixels) every
 /// stage after the algebraic one uses the whitened residuals; user covariances are absolute, so
 /// `sigma_px` defaults to 1 (standard deviations) instead of the estimate from the residuals.
 pub fn estimate_pose<C>(camera: &C, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult>

@@ -17,7 +17,7 @@
 //! covariance), use the exact cost in the observed pixels instead
 //! ([`super::reprojection::ReprojectionCost::exact`]): points through the exact projection
 //! `u = K D(x_cam / z)`, segment endpoints by their distance to the curved image of the projected line.
-//! Only the test for a better pose behind the camera ([`super::candidates::behind_camera_cost`]) keeps
+//! Only the test for a better pose behind the camera (`candidates::behind_camera_cost`) keeps
 //! the first-order cost: the projection through a lens is not defined behind the camera, and that test
 //! asks for a factor of 100 between the two costs.
 //!

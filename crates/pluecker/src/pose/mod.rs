@@ -87,7 +87,7 @@ pub struct PoseOptions {
     /// endpoint-to-projected-line distances for lines). Default true.
     pub refine: bool,
     /// An extra starting pose for the iterative methods, world frame. It is tried first, and
-    /// the default starts too (see [`initialization`]); the cheapest valid answer wins. Default `None`:
+    /// the default starts too (see `pose::initialization`); the cheapest valid answer wins. Default `None`:
     /// no guess from the user is needed.
     pub initial_pose: Option<crate::rigid::Pose>,
     /// Trust-region settings of the algebraic stage: the paper's values (section 4.1), and a step
@@ -326,7 +326,7 @@ pub struct PoseDetails {
     pub second_best: Option<(Pose, f64)>,
     /// When the residuals at the returned pose exceed the noise (`σ` = [`PoseOptions::sigma_px`], else
     /// 1 px), the minimal solvers also look for poses with every object point *behind* the camera
-    /// ([`candidates::behind_camera_cost`]); the cost `Σ r²` (px²) of the best one that fits better
+    /// (`candidates::behind_camera_cost`); the cost `Σ r²` (px²) of the best one that fits better
     /// than the returned pose by more than `ambiguity_threshold σ²` (the ambiguity margin, with the
     /// stated σ) and by a factor of at least 100, if any. Then [`PoseResult::status`] is
     /// [`Status::BehindCamera`]: the returned pose is the best found with the points in front,

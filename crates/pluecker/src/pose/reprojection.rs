@@ -6,7 +6,7 @@
 //! - a line: the signed distances of the two observed segment endpoints to the projection of the
 //!   3-D line (the line through the projections of its two 3-D endpoints), two residuals.
 //!
-//! With per-observation noise ([`super::noise`]) the residuals are whitened: `W (π(R X + t) − u)` for a
+//! With per-observation noise ([`super::ObservationNoise`]) the residuals are whitened: `W (π(R X + t) − u)` for a
 //! point, the endpoint distance divided by the endpoint's standard deviation across the line.
 //!
 //! Through a lens ([`ReprojectionCost::exact`]) the residuals are in the image's own, distorted pixels,
