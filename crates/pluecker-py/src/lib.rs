@@ -19,6 +19,7 @@ mod errors;
 mod fields;
 mod interrupt;
 mod lens_camera;
+mod nested;
 mod pickle;
 mod pose;
 mod synthetic;

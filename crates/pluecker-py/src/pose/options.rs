@@ -9,92 +9,11 @@
 use crate::certificate::PyCertifyOptions;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::{options_class, Field};
+use crate::fields::options_class;
+use crate::nested::Shared;
 use crate::pose::result::extract_pose;
 use pluecker::pose::{Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
-use pyo3::PyClass;
-
-/// A nested options object held by reference (`None`: not set).
-#[derive(Debug)]
-pub(crate) struct Nested<T: PyClass>(pub Option<Py<T>>);
-
-impl<T: PyClass> Default for Nested<T> {
-    fn default() -> Self {
-        Nested(None)
-    }
-}
-
-impl<T: PyClass> Clone for Nested<T> {
-    /// The same object (a new reference to it).
-    fn clone(&self) -> Self {
-        Nested(self.0.as_ref().map(|o| Python::with_gil(|py| o.clone_ref(py))))
-    }
-}
-
-/// The nested options classes: their stub name and their `to_dict()`.
-pub(crate) trait NestedOptions: PyClass + Clone + PartialEq + Into<PyClassInitializer<Self>> {
-    /// The class name in stubs and messages.
-    const CLASS: &'static str;
-}
-
-impl NestedOptions for PyRansacOptions {
-    const CLASS: &'static str = "RansacOptions";
-}
-
-impl NestedOptions for PyCertifyOptions {
-    const CLASS: &'static str = "CertifyOptions";
-}
-
-impl<T: NestedOptions> Nested<T> {
-    /// The value read now (a copy of the object's current fields).
-    pub(crate) fn read(&self) -> Option<T> {
-        self.0.as_ref().map(|o| Python::with_gil(|py| o.borrow(py).clone()))
-    }
-
-    /// The setter's value: `None`, an object of the class (held by reference), or a dict of its fields
-    /// (`to_dict()` and pickling give one) for a new object.
-    fn from_value(name: &str, value: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
-        let Some(value) = value else { return Ok(Nested(None)) };
-        if let Ok(object) = value.downcast::<T>() {
-            return Ok(Nested(Some(object.clone().unbind())));
-        }
-        if let Ok(fields) = value.downcast::<pyo3::types::PyDict>() {
-            let class = value.py().import("pluecker")?.getattr(T::CLASS)?;
-            let object = class.call((), Some(fields))?;
-            return Ok(Nested(Some(object.downcast_into::<T>()?.unbind())));
-        }
-        Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "{name}: expected {} or None, got {}",
-            T::CLASS,
-            value.get_type().name()?
-        )))
-    }
-}
-
-impl<T: NestedOptions> PartialEq for Nested<T> {
-    /// Equal when both are unset or their current fields are equal.
-    fn eq(&self, other: &Self) -> bool {
-        self.read() == other.read()
-    }
-}
-
-impl<T: NestedOptions> Field for Nested<T> {
-    /// The object itself (changing it changes the options that hold it).
-    fn get(self, py: Python<'_>) -> PyResult<PyObject> {
-        Ok(self.0.map_or_else(|| py.None(), |o| o.into_any()))
-    }
-    /// Its `to_dict()`.
-    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
-        match self.0 {
-            None => Ok(py.None()),
-            Some(o) => Ok(o.bind(py).as_any().call_method0("to_dict")?.unbind()),
-        }
-    }
-    fn stub() -> String {
-        format!("Optional[{}]", T::CLASS)
-    }
-}
 
 /// Options of `estimate_pose`, the core's `PoseOptions` (every default is the core's).
 #[pyclass(name = "PoseOptions", module = "pluecker")]
@@ -102,8 +21,8 @@ impl<T: NestedOptions> Field for Nested<T> {
 pub struct PyPoseOptions {
     /// The core's options but `ransac` and `certify` (`None` here: see `core`).
     inner: PoseOptions,
-    ransac: Nested<PyRansacOptions>,
-    certify: Nested<PyCertifyOptions>,
+    ransac: Option<Shared<PyRansacOptions>>,
+    certify: Option<Shared<PyCertifyOptions>>,
 }
 
 impl PyPoseOptions {
@@ -114,8 +33,8 @@ impl PyPoseOptions {
     /// The core's options, with `ransac` and `certify` read from their objects now.
     pub(crate) fn core(&self) -> PoseOptions {
         PoseOptions {
-            ransac: self.ransac.read().map(|r| r.inner),
-            certify: self.certify.read().map(|c| c.inner),
+            ransac: self.ransac.as_ref().map(|r| r.read().inner),
+            certify: self.certify.as_ref().map(|c| c.read().inner),
             ..self.inner.clone()
         }
     }
@@ -152,12 +71,10 @@ options_class! {
         ambiguity_threshold: Real = |o| o.inner.ambiguity_threshold, |o, v| v.get("ambiguity_threshold").map(|x| o.inner.ambiguity_threshold = x);
         /// Robust estimation (LO-RANSAC over points and lines) with these options instead of `method`'s estimator;
         /// `None`: every correspondence is an inlier. Held by reference.
-        ransac: Option<Bound<'_, PyAny>> = |o| o.ransac.clone(),
-            |o, v| Nested::from_value("ransac", v).map(|n| o.ransac = n);
+        ransac: Option<Shared<PyRansacOptions>> = |o| o.ransac.clone(), |o, v| Ok::<(), PyErr>(o.ransac = v);
         /// The global-optimality certificate (the sublevel-set test) with these options; `None`: not requested.
         /// Held by reference. A requested certificate that does not hold gives status `gap_not_closed`.
-        certify: Option<Bound<'_, PyAny>> = |o| o.certify.clone(),
-            |o, v| Nested::from_value("certify", v).map(|n| o.certify = n);
+        certify: Option<Shared<PyCertifyOptions>> = |o| o.certify.clone(), |o, v| Ok::<(), PyErr>(o.certify = v);
     }
 }
 

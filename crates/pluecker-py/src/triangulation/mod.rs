@@ -14,11 +14,11 @@ pub mod rows;
 use crate::certificate::PyCertifyOptions;
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::{options_class, Field};
+use crate::fields::options_class;
+use crate::nested::Shared;
 use pluecker::triangulation::{LineBound, Method, QuadricBound, TriangulationOptions};
 use pluecker::Error;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 /// Options of every triangulation function, the core's `TriangulationOptions` (every default is the
 /// core's). `certify` is a `CertifyOptions` object held by reference, read at call time.
@@ -27,7 +27,7 @@ use pyo3::types::PyDict;
 pub struct PyTriangulationOptions {
     /// Every option but `certify` (whose copy here is not read).
     inner: TriangulationOptions,
-    certify: CertifyRef,
+    certify: Shared<PyCertifyOptions>,
 }
 
 impl PyTriangulationOptions {
@@ -38,70 +38,9 @@ impl PyTriangulationOptions {
     /// The core's options, with `certify` as it is now.
     pub(crate) fn core(&self) -> TriangulationOptions {
         TriangulationOptions {
-            certify: self.certify.options(),
+            certify: self.certify.read().inner,
             ..self.inner.clone()
         }
-    }
-}
-
-/// `TriangulationOptions.certify`: the `CertifyOptions` object itself, so that
-/// `options.certify.max_nodes = 10` changes the options (as in the core, where it is a field).
-/// Assigned from a `CertifyOptions` (kept by reference) or from its `to_dict()` (pickling).
-#[derive(Debug)]
-pub struct CertifyRef(Py<PyCertifyOptions>);
-
-impl CertifyRef {
-    /// The core's options the object holds now.
-    fn options(&self) -> pluecker::CertifyOptions {
-        Python::with_gil(|py| self.0.borrow(py).inner)
-    }
-}
-
-/// Another reference to the same object (a copy of the options shares it, as `copy.copy` would).
-impl Clone for CertifyRef {
-    fn clone(&self) -> Self {
-        Python::with_gil(|py| CertifyRef(self.0.clone_ref(py)))
-    }
-}
-
-impl Default for CertifyRef {
-    fn default() -> Self {
-        Python::with_gil(|py| CertifyRef(Py::new(py, PyCertifyOptions::default()).expect("a Python object")))
-    }
-}
-
-/// Equal options, not the same object.
-impl PartialEq for CertifyRef {
-    fn eq(&self, other: &Self) -> bool {
-        self.options() == other.options()
-    }
-}
-
-impl<'py> FromPyObject<'py> for CertifyRef {
-    fn extract_bound(ob: &Bound<'py, PyAny>) -> PyResult<Self> {
-        if let Ok(c) = ob.downcast::<PyCertifyOptions>() {
-            return Ok(CertifyRef(c.clone().unbind()));
-        }
-        if let Ok(d) = ob.downcast::<PyDict>() {
-            let made = ob.py().get_type::<PyCertifyOptions>().call((), Some(d))?;
-            return Ok(CertifyRef(made.downcast_into::<PyCertifyOptions>()?.unbind()));
-        }
-        Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "expected a CertifyOptions, got {}",
-            ob.get_type().name()?
-        )))
-    }
-}
-
-impl Field for CertifyRef {
-    fn get(self, _py: Python<'_>) -> PyResult<PyObject> {
-        Ok(self.0.into_any())
-    }
-    fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
-        Ok(self.0.bind(py).call_method0("to_dict")?.unbind())
-    }
-    fn stub() -> String {
-        "CertifyOptions".into()
     }
 }
 
@@ -110,7 +49,7 @@ options_class! {
         /// Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified).
         method: String = |o| o.inner.method.as_str(), |o, v| Method::parse(&v).map(|m| o.inner.method = m).map_err(to_py_err);
         /// Method `optimal`: the certificate's gap and node cap (`max_nodes=None`: 2000 nodes of the conic branch and bounds, points, quadrics and `line_bound="relaxation"`; 50000 of the Taylor bound of lines), the object itself (`options.certify.max_nodes = 10` takes effect).
-        certify: CertifyRef = |o| o.certify.clone(), |o, v| { o.certify = v; PyResult::Ok(()) };
+        certify: Shared<PyCertifyOptions> = |o| o.certify.clone(), |o, v| Ok::<(), PyErr>(o.certify = v);
         /// The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing.
         max_reprojection_error: Option<Real> = |o| o.inner.max_reprojection_error,
             |o, v| v.map(|r| r.get("max_reprojection_error")).transpose().map(|g| o.inner.max_reprojection_error = g);
