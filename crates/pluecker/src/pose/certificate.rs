@@ -47,8 +47,8 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
-use crate::global::relative_gap;
-use crate::interrupt::stop_reason;
+use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 
@@ -108,8 +108,8 @@ struct Problem<'c> {
     corr: &'c Correspondences,
     /// Least singular value of the 2x2 block of `K`.
     s_min: f64,
-    /// Upper bounds `Dᵢ` on the distances of the points from the camera over `S` (step 1, then
-    /// tightened by the search).
+    /// Step 1's upper bounds `Dᵢ` on the distances of the points from the camera over `S` (the
+    /// search tightens them cell by cell: [`RotationSearch`]).
     depths: Vec<f64>,
     /// The 2x2 block of `K` and its norm.
     k2: Matrix2<f64>,
@@ -122,10 +122,6 @@ struct Problem<'c> {
     g_norm: f64,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
-    /// `Σ wᵢ ‖Xᵢ‖²` (the growth of the cell perturbation per θ²).
-    eta2: f64,
-    /// The 12x12 Gram matrix of the point minorant in `(vec R row-major, t)`.
-    gram: SMatrix<f64, 12, 12>,
 }
 
 fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
@@ -160,21 +156,6 @@ fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alpha: f64) -
         .collect()
 }
 
-/// `A` (3x9) with `R X = A vec(R)` (row-major `vec`).
-fn lift(x: &Vector3<f64>) -> SMatrix<f64, 3, 9> {
-    let mut a = SMatrix::<f64, 3, 9>::zeros();
-    for r in 0..3 {
-        for c in 0..3 {
-            a[(r, 3 * r + c)] = x[c];
-        }
-    }
-    a
-}
-
-fn vec_row_major(r: &Matrix3<f64>) -> SMatrix<f64, 9, 1> {
-    SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)])
-}
-
 impl<'c> Problem<'c> {
     fn new(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
         if corr.n_points() < 2 {
@@ -199,7 +180,7 @@ impl<'c> Problem<'c> {
             .collect();
         let depths = depth_bounds(corr, &bearings, alpha)
             .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
-        let mut problem = Problem {
+        Ok(Problem {
             corr,
             s_min,
             k2: Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy),
@@ -208,47 +189,60 @@ impl<'c> Problem<'c> {
             g,
             g_norm,
             bearings,
-            depths: vec![],
+            depths,
+        })
+    }
+
+    /// Step 2's minorant at the rotation `r` for the depth bounds `depths` (valid where every
+    /// `‖xᵢ‖ ≤ Dᵢ`, so on `S`): `Q(t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(r Xᵢ + t)‖²`, `wᵢ = s² / Dᵢ²`.
+    fn minorant(&self, r: &Matrix3<f64>, depths: &[f64]) -> Minorant {
+        let mut m = Minorant {
+            c: Matrix3::zeros(),
+            g: Vector3::zeros(),
+            c0: 0.0,
             eta2: 0.0,
-            gram: SMatrix::zeros(),
         };
-        problem.set_depths(depths);
-        Ok(problem)
-    }
-
-    /// Rebuilds the minorant for the depth bounds `depths` (weights `wᵢ = s² / Dᵢ²`).
-    fn set_depths(&mut self, depths: Vec<f64>) {
-        self.gram = SMatrix::zeros();
-        self.eta2 = 0.0;
-        for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(&depths) {
+        for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(depths) {
             let w = self.s_min * self.s_min / (d * d);
-            let p = Matrix3::identity() - b * b.transpose();
-            let mut m = SMatrix::<f64, 3, 12>::zeros();
-            m.fixed_view_mut::<3, 9>(0, 0).copy_from(&lift(x));
-            m.fixed_view_mut::<3, 3>(0, 9).copy_from(&Matrix3::identity());
-            self.gram += (m.transpose() * p * m) * w;
-            self.eta2 += w * x.norm_squared();
+            let y = r * x;
+            // (I − b bᵀ) y, and yᵀ (I − b bᵀ) y = ‖(I − b bᵀ) y‖² (a projector).
+            let off_ray = y - b * b.dot(&y);
+            m.c += (Matrix3::identity() - b * b.transpose()) * w;
+            m.g += off_ray * w;
+            m.c0 += w * off_ray.norm_squared();
+            m.eta2 += w * x.norm_squared();
         }
-        self.depths = depths;
-    }
-
-    /// The minorant at rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀`.
-    fn quadratic(&self, r: &Matrix3<f64>) -> (Matrix3<f64>, Vector3<f64>, f64) {
-        let v = vec_row_major(r);
-        let a = self.gram.fixed_view::<9, 9>(0, 0);
-        let b = self.gram.fixed_view::<9, 3>(0, 9);
-        let c = self.gram.fixed_view::<3, 3>(9, 9).into_owned();
-        let g: Vector3<f64> = b.transpose() * v;
-        let c0 = (v.transpose() * a * v)[0];
-        (c, g, c0)
+        m
     }
 }
 
-/// One cube of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-width.
+/// Step 2's minorant at one rotation as a quadratic in `t`: `Q(t) = tᵀ C t + 2 gᵀ t + c₀`, and
+/// `η² = Σ wᵢ ‖Xᵢ‖²`: over rotations within the angle `θ` of that one, `√Q` moves by at most `θ η`.
+struct Minorant {
+    c: Matrix3<f64>,
+    g: Vector3<f64>,
+    c0: f64,
+    eta2: f64,
+}
+
+/// One box of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-widths. Every rotation of the
+/// box is within the angle `θ = ‖half‖` (half the diagonal) of the centre's: the angle between
+/// `exp(ω) R̂` and `exp(ω_c) R̂` is at most `‖ω − ω_c‖` (Hartley & Kahl 2009, lemma 1).
 #[derive(Clone, Copy)]
 struct Cell {
     centre: Vector3<f64>,
-    half: f64,
+    half: Vector3<f64>,
+}
+
+impl Cell {
+    fn of(region: &Region) -> Self {
+        let lower = Vector3::from_column_slice(&region.lower);
+        let upper = Vector3::from_column_slice(&region.upper);
+        Cell {
+            centre: (lower + upper) * 0.5,
+            half: (upper - lower) * 0.5,
+        }
+    }
 }
 
 /// The local metric `‖Δ‖_W = √(Δᵀ W Δ)`, `W = JᵀJ` at `R̂, t̂` in the chart `(ω, τ) ↦ (exp(ω) R̂, t̂ + τ)`:
@@ -260,9 +254,6 @@ struct Whitening {
     /// Largest rotation and translation per unit whitened step: `‖T_ω‖`, `‖T_τ‖` (row blocks).
     alpha_omega: f64,
     alpha_tau: f64,
-    /// The largest whitened length of a rotation step in the cube `[−1, 1]³`: `max √(sᵀ W_ωω s)` over
-    /// its vertices `s` (a convex function peaks at a vertex).
-    cube_scale: f64,
 }
 
 impl Whitening {
@@ -278,16 +269,22 @@ impl Whitening {
             w: *w,
             alpha_omega: block_norm(0),
             alpha_tau: block_norm(3),
-            cube_scale: [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
-                .iter()
-                .map(|&(b, c)| {
-                    let v = Vector3::new(1.0, b, c);
-                    (v.transpose() * w.fixed_view::<3, 3>(0, 0) * v)[0]
-                })
-                .fold(0.0f64, f64::max)
-                .sqrt(),
             t,
         })
+    }
+
+    /// The largest whitened length `√(sᵀ W_ωω s)` of a rotation step `s` in the box of half-widths
+    /// `half` around 0: a convex function peaks at a vertex, and `±s` give the same length.
+    fn box_spread(&self, half: &Vector3<f64>) -> f64 {
+        let w = self.w.fixed_view::<3, 3>(0, 0);
+        [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+            .iter()
+            .map(|&(b, c)| {
+                let s = half.component_mul(&Vector3::new(1.0, b, c));
+                (s.transpose() * w * s)[0]
+            })
+            .fold(0.0f64, f64::max)
+            .sqrt()
     }
 
     /// `‖Δ‖_W` of the chart step `(ω, τ)`.
@@ -322,8 +319,8 @@ fn largest_eigenvalue(m: &Matrix3<f64>) -> f64 {
     lambda + 1e-9 * (lambda.abs() + p)
 }
 
-/// What [`localise`] records for the test hook: the cells kept, the cells pruned, and the half-width
-/// at which cells stop being split.
+/// What the test hook [`testing::rotation_search`] records: the cells kept, the cells pruned, and the
+/// half-width at which cells stop being split.
 struct Record {
     min_half: f64,
     cells: Vec<testing::KeptCell>,
@@ -331,135 +328,226 @@ struct Record {
     behind: Vec<testing::KeptCell>,
 }
 
-/// What the rotation search proved: every pose of `S` lies within `radius` of `(R̂, t̂)` in the
-/// whitened metric.
+/// Step 4's bound for the cells inside the ball: the local bound over the ball of the largest cell
+/// radius met so far (it holds the cell, so the bound is valid for it), recomputed only when a cell
+/// reaches farther; over the ball of the target radius where that cannot be computed.
+struct BallBound<'m> {
+    model: &'m LocalModel,
+    /// The radius and raw bound last computed (`radius` 0 before the first cell).
+    radius: f64,
+    bound: f64,
+    /// The raw bound over the ball of the target radius (every cell inside the ball lies in it).
+    at_target: f64,
+}
+
+impl BallBound<'_> {
+    /// A valid lower bound of `f` over the whitened ball of `radius` (at most the target).
+    fn at(&mut self, radius: f64) -> f64 {
+        if radius > self.radius {
+            match self.model.raw_bound(radius) {
+                Some(bound) => (self.radius, self.bound) = (radius, bound),
+                None => return self.at_target,
+            }
+        }
+        self.bound
+    }
+}
+
+/// What becomes of a cell inside the whitened ball of the target radius.
+enum InsideBall<'m> {
+    /// The certificate: the cell's bound is step 4's over the ball ([`BallBound`]).
+    Bound(BallBound<'m>),
+    /// The test hook: the cell is recorded and closed at the level `f̂` (no bound is claimed, and the
+    /// hook reports none). So are cells split down to the hook's `min_half`.
+    Record(&'m mut Record),
+}
+
+/// Steps 1-3 of the module documentation as a [`BoundingOracle`] of the shared branch and bound,
+/// over boxes of rotation vectors `ω` (`R = exp(ω) R̂`) inside `[−π, π]³`. The incumbent is the local
+/// answer `(R̂, t̂)` of cost `f̂`; there are no other candidates.
+///
+/// The bound of a box with half-diagonal `θ`, centre rotation `R_c` and minorant `Q` at `R_c` (for
+/// the box's depth bounds `Dᵢ`, valid where `‖xᵢ‖ ≤ Dᵢ`, i.e. on `S`): a pose of `S` in the box has
+/// `√(2f) ≥ √Q_{R}(t) ≥ √q_min − θ η` (Minkowski, `q_min = min_t Q`), so `f ≥ ½ (√q_min − θ η)₊²` on
+/// the poses of `S` in the box, and every other pose has `f > f̂`. That bound is handed to the search
+/// unclamped: a box with bound `≥ f̂` holds no pose of `S` and is pruned, and the least bound over
+/// the leaves (at most `f̂`, the cost of the box holding the answer) is the certificate's raw bound.
+/// A box where some point is behind the camera for every `t` of the translation ellipsoid
+/// `Q(t) ≤ (√(2f̂) + θ η)²` (which holds the translation of every pose of `S` in the box) is empty of
+/// `S`; so is a box wholly outside the ball `‖ω‖ ≤ π`, whose rotations are met elsewhere. A box inside
+/// the whitened ball of radius `target` is bounded by step 4 as well ([`InsideBall`]).
+///
+/// What a box hands down to its halves ([`BoundingOracle::Inherited`]) are its depth bounds: the
+/// largest distance each point reaches over its poses of `S`,
+/// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
+/// They hold on every pose of `S` in the box, so in each half, and tighten the halves' minorants.
+struct RotationSearch<'a, 'c> {
+    problem: &'a Problem<'c>,
+    whitening: &'a Whitening,
+    pose: &'a Pose,
+    f_hat: f64,
+    target: f64,
+    max_relative_gap: f64,
+    inside_ball: InsideBall<'a>,
+    /// The largest whitened radius `‖(ω, t − t̂)‖_W` of the boxes found inside the ball.
+    radius: f64,
+}
+
+impl BoundingOracle for RotationSearch<'_, '_> {
+    type Candidate = ();
+    /// The depth bounds of the box's poses of `S` (`None`: step 1's, for the root).
+    type Inherited = Option<Vec<f64>>;
+
+    fn bound(&mut self, region: &Region) -> Bound<()> {
+        self.bound_with(region, &None).0
+    }
+
+    fn absolute_gap(&self) -> f64 {
+        self.max_relative_gap * CERTIFICATE_COST_FLOOR
+    }
+
+    /// The widest axis at its midpoint.
+    fn split(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
+        let axis = (0..region.dim())
+            .max_by(|&a, &b| region.width(a).total_cmp(&region.width(b)))
+            .unwrap_or(0);
+        (axis, 0.5 * (region.lower[axis] + region.upper[axis]))
+    }
+
+    fn bound_with(&mut self, region: &Region, inherited: &Option<Vec<f64>>) -> (Bound<()>, Option<Vec<f64>>) {
+        let problem = self.problem;
+        let depths = inherited.as_deref().unwrap_or(&problem.depths);
+        let cell = Cell::of(region);
+        let bounded = |lower: f64| Bound::Bounded {
+            lower,
+            relaxed_minimizer: region.centre(),
+            candidate: None,
+            solver_iterations: 0,
+        };
+        let empty = Bound::Empty { solver_iterations: 0 };
+        // The box's nearest point to the origin: boxes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
+        let nearest = cell.centre.zip_map(&cell.half, |c, h| (c.abs() - h).max(0.0)).norm();
+        if nearest > std::f64::consts::PI {
+            return (empty, None);
+        }
+        let theta = cell.half.norm();
+        let r_c = exp_so3(&cell.centre) * self.pose.rotation;
+        let minorant = problem.minorant(&r_c, depths);
+        let Some(c_inv) = minorant.c.try_inverse() else {
+            return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
+        };
+        let t_star = -(c_inv * minorant.g);
+        let q_min = (minorant.c0 - minorant.g.dot(&(c_inv * minorant.g))).max(0.0);
+        let eta = minorant.eta2.sqrt();
+        let lower = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
+        if !lower.is_finite() {
+            return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
+        }
+        if lower >= self.f_hat {
+            // No pose of S: the search prunes the box (its bound is not below the incumbent).
+            if let InsideBall::Record(r) = &mut self.inside_ball {
+                r.pruned += 1;
+            }
+            return (bounded(lower), None);
+        }
+        // The ellipsoid Q(t) ≤ β² holds the translations of the box's poses of S (slack ≥ 0 since
+        // lower < f̂, up to rounding).
+        let beta = (2.0 * self.f_hat).sqrt() + theta * eta;
+        let slack = (beta * beta - q_min).max(0.0);
+        let kept = |inside_ball: bool| testing::KeptCell {
+            centre: cell.centre,
+            half: cell.half,
+            t_star,
+            c: minorant.c,
+            slack,
+            inside_ball,
+        };
+        // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
+        let behind = problem.corr.points3d.iter().zip(&problem.bearings).any(|(x, b)| {
+            let reach = b.dot(&(r_c * x + t_star)) + (slack * b.dot(&(c_inv * b))).max(0.0).sqrt();
+            reach <= -theta * x.norm()
+        });
+        if behind {
+            if let InsideBall::Record(r) = &mut self.inside_ball {
+                r.pruned += 1;
+                r.behind.push(kept(false));
+            }
+            return (empty, None);
+        }
+        // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
+        // inequality over the three parts of the step).
+        if cell.centre.norm() + theta <= 1.0 {
+            if let Some(extent) = self.whitening.ellipsoid_extent(&minorant.c, slack) {
+                let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
+                    + self.whitening.box_spread(&cell.half)
+                    + extent;
+                if radius <= self.target {
+                    self.radius = self.radius.max(radius);
+                    let lower = match &mut self.inside_ball {
+                        InsideBall::Bound(ball) => lower.max(ball.at(radius)),
+                        InsideBall::Record(r) => {
+                            r.cells.push(kept(true));
+                            self.f_hat
+                        }
+                    };
+                    return (bounded(lower), None);
+                }
+            }
+        }
+        if let InsideBall::Record(r) = &mut self.inside_ball {
+            if cell.half.max() <= r.min_half {
+                r.cells.push(kept(false));
+                return (bounded(self.f_hat), None);
+            }
+        }
+        // The depth bounds the halves inherit.
+        let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
+        let reach = problem
+            .corr
+            .points3d
+            .iter()
+            .zip(depths)
+            .map(|(x, d)| ((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d))
+            .collect();
+        (bounded(lower), Some(reach))
+    }
+}
+
+/// What the rotation search proved.
 struct Localised {
+    /// The least bound over the leaves of the search (unclamped; `+∞` when every box was proved
+    /// empty of `S`).
+    raw_lower_bound: f64,
+    /// The largest whitened radius of the boxes inside the ball (0 when there is none).
     radius: f64,
     nodes: usize,
 }
 
-/// Steps 1-3 of the module documentation: cells are split until they are pruned or lie inside the
-/// whitened ball of radius `target`, level by level. After each level the depth bounds are tightened
-/// to the largest distance any point reaches over the cells still to be split (their rotation
-/// cubes and translation ellipsoids hold every pose of `S` left to examine), and the minorant is
-/// rebuilt with them.
-///
-/// `record` (the test hook [`testing::rotation_search`] only) collects the cells that are not pruned,
-/// and stops splitting cells at its `min_half`.
-fn localise(
-    problem: &mut Problem,
-    whitening: &Whitening,
-    pose: &Pose,
-    f_hat: f64,
-    target: f64,
-    max_nodes: usize,
-    mut record: Option<&mut Record>,
-) -> std::result::Result<Localised, String> {
-    let root = (2.0 * f_hat).sqrt();
+/// Runs `search` on the shared branch and bound from the root box `[−π, π]³` with the incumbent
+/// `f̂`, until the gap closes (`Err` when it reaches `max_nodes` or is stopped).
+fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Result<Localised, String> {
     let pi = std::f64::consts::PI;
-    let sqrt3 = 3f64.sqrt();
-    let mut level: Vec<Cell> = vec![Cell {
-        centre: Vector3::zeros(),
-        half: pi,
-    }];
-    let mut out = Localised { radius: 0.0, nodes: 0 };
-    while !level.is_empty() {
-        let mut next = Vec::new();
-        let mut reach = vec![0.0f64; problem.depths.len()];
-        for cell in level {
-            out.nodes += 1;
-            if out.nodes > max_nodes {
-                return Err(format!(
-                    "not proved: the rotation search reached max_nodes = {max_nodes}"
-                ));
-            }
-            if let Some(reason) = stop_reason() {
-                return Err(format!("not proved: {} during the rotation search", reason.describe()));
-            }
-            // The cube's nearest point to the origin: cubes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
-            let nearest = cell.centre.map(|c| (c.abs() - cell.half).max(0.0)).norm();
-            if nearest > pi {
-                continue;
-            }
-            let theta = sqrt3 * cell.half;
-            let r_c = exp_so3(&cell.centre) * pose.rotation;
-            let (c, g, c0) = problem.quadratic(&r_c);
-            let Some(c_inv) = c.try_inverse() else {
-                return Err("not proved: the minorant does not fix the translation".into());
-            };
-            let t_star = -(c_inv * g);
-            let q_min = (c0 - g.dot(&(c_inv * g))).max(0.0);
-            let beta = root + theta * problem.eta2.sqrt();
-            let slack = beta * beta - q_min;
-            if slack < 0.0 {
-                if let Some(r) = record.as_deref_mut() {
-                    r.pruned += 1;
-                }
-                continue;
-            }
-            // Cheirality: a point behind the camera for every t of the ellipsoid.
-            let behind = problem.corr.points3d.iter().zip(&problem.bearings).any(|(x, b)| {
-                let reach = b.dot(&(r_c * x + t_star)) + (slack * b.dot(&(c_inv * b))).max(0.0).sqrt();
-                reach <= -theta * x.norm()
-            });
-            let kept = |inside_ball: bool| testing::KeptCell {
-                centre: cell.centre,
-                half: cell.half,
-                t_star,
-                c,
-                slack,
-                inside_ball,
-            };
-            if behind {
-                if let Some(r) = record.as_deref_mut() {
-                    r.pruned += 1;
-                    r.behind.push(kept(false));
-                }
-                continue;
-            }
-            // Whitened radius of the cell: centre, rotation spread and translation ellipsoid (triangle
-            // inequality over the three parts of the step).
-            if cell.centre.norm() + theta <= 1.0 {
-                let extent = whitening
-                    .ellipsoid_extent(&c, slack)
-                    .ok_or("not proved: the minorant does not fix the translation")?;
-                let radius = whitening.length(&cell.centre, &(t_star - pose.translation))
-                    + cell.half * whitening.cube_scale
-                    + extent;
-                if radius <= target {
-                    out.radius = out.radius.max(radius);
-                    if let Some(r) = record.as_deref_mut() {
-                        r.cells.push(kept(true));
-                    }
-                    continue;
-                }
-            }
-            if let Some(r) = record.as_deref_mut() {
-                if cell.half <= r.min_half {
-                    r.cells.push(kept(false));
-                    continue;
-                }
-            }
-            // ‖R x + t‖ ≤ ‖R_c x + t*‖ + θ ‖x‖ + ‖t − t*‖ over the cell.
-            let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
-            for ((x, r), d) in problem.corr.points3d.iter().zip(reach.iter_mut()).zip(&problem.depths) {
-                *r = r.max(((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d));
-            }
-            let h = 0.5 * cell.half;
-            for i in 0..8 {
-                let s = |k: usize| if i >> k & 1 == 1 { h } else { -h };
-                next.push(Cell {
-                    centre: cell.centre + Vector3::new(s(0), s(1), s(2)),
-                    half: h,
-                });
-            }
-        }
-        if !next.is_empty() && reach.iter().zip(&problem.depths).any(|(r, d)| *r < 0.9 * d) {
-            problem.set_depths(reach);
-        }
-        level = next;
+    let root = Region::new(vec![-pi; 3], vec![pi; 3]);
+    let opts = BranchAndBoundOptions {
+        max_relative_gap: search.max_relative_gap,
+        max_nodes,
+        // f = ½ Σ r² ≥ 0.
+        trivial_lower_bound: 0.0,
+    };
+    let result = branch_and_bound(search, root, Some((search.f_hat, ())), &opts);
+    if let Some(reason) = result.stopped {
+        return Err(format!("not proved: {} during the rotation search", reason.describe()));
     }
-    Ok(out)
+    if !result.converged {
+        return Err(format!(
+            "not proved: the rotation search reached max_nodes = {max_nodes}"
+        ));
+    }
+    Ok(Localised {
+        raw_lower_bound: result.box_lower_bound,
+        radius: search.radius,
+        nodes: result.nodes,
+    })
 }
 
 /// `M` with `aᵀ M a = (a × (a × y)) · c = (a·y)(a·c) − (a·a)(y·c)`.
@@ -796,13 +884,8 @@ impl LocalModel {
         Ok((whitening, model))
     }
 
-    /// The lower bound of step 4 over the whitened ball of `radius`, or `None` where a depth or a
-    /// projected line may vanish.
-    fn bound(&self, radius: f64) -> Option<f64> {
-        self.raw_bound(radius).map(|b| b.min(self.cost))
-    }
-
-    /// [`Self::bound`] before the clamp to the cost.
+    /// The lower bound of step 4 over the whitened ball of `radius` (unclamped: at most the cost when
+    /// sound, since the ball holds the pose), or `None` where a depth or a projected line may vanish.
     fn raw_bound(&self, radius: f64) -> Option<f64> {
         let k = self.curvature.bound(radius)?;
         Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius))
@@ -833,7 +916,7 @@ pub fn certify(
              per-observation covariances and distortion are not covered",
         );
     }
-    let mut problem = match Problem::new(camera, corr, cost) {
+    let problem = match Problem::new(camera, corr, cost) {
         Ok(p) => p,
         Err(why) => return Certification::none(why),
     };
@@ -843,31 +926,37 @@ pub fn certify(
     };
     let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some(target) = BALL_FACTORS.iter().map(|f| f * unit).find(|&radius| {
+    let Some((target, at_target)) = BALL_FACTORS.iter().map(|f| f * unit).find_map(|radius| {
         model
-            .bound(radius)
-            .is_some_and(|lower| gap_of(lower) <= options.max_relative_gap)
+            .raw_bound(radius)
+            .filter(|&raw| gap_of(raw.min(model.cost)) <= options.max_relative_gap)
+            .map(|raw| (radius, raw))
     }) else {
         return Certification::none(format!(
             "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
             (2.0 * cost).sqrt()
         ));
     };
-    let localised = match localise(
-        &mut problem,
-        &whitening,
+    let mut search = RotationSearch {
+        problem: &problem,
+        whitening: &whitening,
         pose,
-        cost,
+        f_hat: cost,
         target,
-        options.max_nodes_or(MAX_CELLS),
-        None,
-    ) {
+        max_relative_gap: options.max_relative_gap,
+        inside_ball: InsideBall::Bound(BallBound {
+            model: &model,
+            radius: 0.0,
+            bound: at_target,
+            at_target,
+        }),
+        radius: 0.0,
+    };
+    let localised = match localise(&mut search, options.max_nodes_or(MAX_CELLS)) {
         Ok(l) => l,
         Err(why) => return Certification::none(why),
     };
-    let Some(raw_lower_bound) = model.raw_bound(localised.radius.min(target)) else {
-        return Certification::none("not proved: a depth may vanish within the localised ball");
-    };
+    let raw_lower_bound = localised.raw_lower_bound;
     let lower_bound = raw_lower_bound.min(model.cost);
     let gap = gap_of(lower_bound);
     let certified = gap <= options.max_relative_gap;
@@ -892,14 +981,15 @@ pub fn certify(
 pub mod testing {
     use super::*;
 
-    /// A rotation cell that the search kept: the cube `‖ω − centre‖_∞ ≤ half` of rotation vectors
-    /// (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the minorant's
-    /// Hessian and minimiser at the cube's centre) that holds the translation of every pose of the
-    /// sublevel set whose rotation lies in the cube.
+    /// A rotation cell that the search kept: the box `|ω − centre| ≤ half` (per axis) of rotation
+    /// vectors (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the
+    /// minorant's Hessian and minimiser at the box's centre, for the box's depth bounds) that holds the
+    /// translation of every pose of the sublevel set whose rotation lies in the box.
     #[derive(Debug, Clone, Copy)]
     pub struct KeptCell {
         pub centre: Vector3<f64>,
-        pub half: f64,
+        /// The half-widths of the box along the three axes.
+        pub half: Vector3<f64>,
         pub t_star: Vector3<f64>,
         pub c: Matrix3<f64>,
         pub slack: f64,
@@ -911,18 +1001,18 @@ pub mod testing {
     /// What [`rotation_search`] proved.
     #[derive(Debug, Clone)]
     pub struct Region {
-        /// Step 1's depth bounds `Dᵢ` (before the search tightens them).
+        /// Step 1's depth bounds `Dᵢ` (the root's: the search tightens them box by box).
         pub depths: Vec<f64>,
         /// The cells neither pruned nor split: every pose of the sublevel set with the points in front
-        /// lies in one of them (rotation in the cube, translation in the ellipsoid).
+        /// lies in one of them (rotation in the box, translation in the ellipsoid).
         pub cells: Vec<KeptCell>,
         /// Cells pruned (by the minorant or by cheirality).
         pub pruned: usize,
         /// The cells pruned by cheirality, with their translation ellipsoids (`inside_ball` false):
         /// the search claims that for each some point `i` has `bᵢ · (R Xᵢ + t) ≤ 0` (`bᵢ` its observed
-        /// ray) for every rotation of the cube and every translation of the ellipsoid.
+        /// ray) for every rotation of the box and every translation of the ellipsoid.
         pub behind: Vec<KeptCell>,
-        /// Cells examined.
+        /// Cells examined (bound computations of the branch and bound).
         pub nodes: usize,
         /// The largest whitened radius `‖(ω, t − t̂)‖_W` (`W = JᵀJ` at the centre) of the cells
         /// inside the ball: a bound on that of every pose of the sublevel set in those cells.
@@ -936,8 +1026,10 @@ pub mod testing {
     }
 
     /// Steps 1-3 around `centre` (any pose, not necessarily a minimum) for the sublevel set of
-    /// `level` (px², any value, e.g. above the optimum): cells are split until they are pruned, lie
-    /// inside the whitened ball of radius `target`, or reach the half-width `min_half`.
+    /// `level` (px², any value, e.g. above the optimum), on the same branch and bound as [`certify`]
+    /// with the incumbent `level` and no gap: boxes are split until they are pruned (bound at least
+    /// `level`, or behind the camera), lie inside the whitened ball of radius `target`, or reach the
+    /// half-width `min_half`; the last two are recorded and closed.
     pub fn rotation_search(
         camera: &Camera,
         corr: &Correspondences,
@@ -947,8 +1039,7 @@ pub mod testing {
         min_half: f64,
         max_nodes: usize,
     ) -> std::result::Result<Region, String> {
-        let mut problem = Problem::new(camera, corr, level)?;
-        let depths = problem.depths.clone();
+        let problem = Problem::new(camera, corr, level)?;
         let lin = ReprojectionCost::of(camera, corr).linearize(centre);
         let whitening = Whitening::new(&lin.gauss_newton).ok_or("JᵀJ is singular at the pose")?;
         let mut record = Record {
@@ -957,17 +1048,19 @@ pub mod testing {
             pruned: 0,
             behind: vec![],
         };
-        let localised = localise(
-            &mut problem,
-            &whitening,
-            centre,
-            level,
+        let mut search = RotationSearch {
+            problem: &problem,
+            whitening: &whitening,
+            pose: centre,
+            f_hat: level,
             target,
-            max_nodes,
-            Some(&mut record),
-        )?;
+            max_relative_gap: 0.0,
+            inside_ball: InsideBall::Record(&mut record),
+            radius: 0.0,
+        };
+        let localised = localise(&mut search, max_nodes)?;
         Ok(Region {
-            depths,
+            depths: problem.depths.clone(),
             cells: record.cells,
             pruned: record.pruned,
             behind: record.behind,

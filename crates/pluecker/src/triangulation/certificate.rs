@@ -175,6 +175,7 @@ mod tests {
 
     impl BoundingOracle for Loose {
         type Candidate = f64;
+        type Inherited = ();
         fn bound(&mut self, region: &Region) -> Bound<f64> {
             let (a, b) = (region.lower[0], region.upper[0]);
             let exact = f(0.3f64.clamp(a, b));

@@ -330,6 +330,7 @@ impl LineOracle<'_> {
 
 impl BoundingOracle for LineOracle<'_> {
     type Candidate = Vector6<f64>;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Vector6<f64>> {
         let Some(Relaxation { mut p, vars, views }) = self.relaxation(region) else {

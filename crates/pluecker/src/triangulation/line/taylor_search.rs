@@ -97,6 +97,7 @@ impl TaylorOracle<'_> {
 
 impl BoundingOracle for TaylorOracle<'_> {
     type Candidate = Vector6<f64>;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Vector6<f64>> {
         let empty = Bound::Empty { solver_iterations: 0 };

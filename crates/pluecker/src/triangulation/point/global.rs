@@ -210,6 +210,7 @@ impl PointOracle<'_> {
 
 impl BoundingOracle for PointOracle<'_> {
     type Candidate = Vector3<f64>;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Vector3<f64>> {
         let Some(intervals) = self.depth_intervals(region) else {

@@ -129,6 +129,7 @@ impl QuadricOracle<'_> {
 
 impl BoundingOracle for QuadricOracle<'_> {
     type Candidate = Ellipsoid;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Ellipsoid> {
         let Relaxation { mut p, q, views } = self.relaxation(Some(region));
