@@ -16,14 +16,21 @@
 //!    rotation. The line residuals are left out of the minorant (it stays a minorant of `f`): their
 //!    moment form moves with the rotation by the camera distance, not the object size, and only
 //!    slowed the search.
-//! 3. **Rotation search.** Over a cube of rotation vectors `ω` (`R = exp(ω) R̂`) of half-width `h`,
-//!    every rotation is within `θ = √3 h` of the centre's `R_c`, so each residual of the minorant moves
-//!    by at most `θ ‖Xᵢ‖`. With `Q(t)` the minorant at `R_c` and `E = θ² Σ wᵢ ‖Xᵢ‖²`, a pose of `S` in
-//!    the cube has `Q(t) ≤ β² = (√(2f̂) + √E)²` (Minkowski). A cube where `min_t Q > β²`, or where some
-//!    point is behind the camera for every `t` of that ellipsoid, holds no pose of `S` and is pruned;
-//!    the others are split until they lie inside the ball `‖Δ‖_W ≤ ρ` of the local metric
-//!    `‖Δ‖²_W = Δᵀ JᵀJ Δ` (`Δ = (ω, t − t̂)`, `J` the Jacobian at the pose), measured by the triangle
-//!    inequality over the cube's centre, its rotation spread and the translation ellipsoid.
+//! 3. **Rotation search** on the shared branch and bound ([`crate::global::branch_and_bound`], the
+//!    search of the triangulation certificates; the oracle is [`RotationSearch`]). Over a box of
+//!    rotation vectors `ω` (`R = exp(ω) R̂`) with half-diagonal `θ`, every rotation is within the angle
+//!    `θ` of the centre's `R_c`, so each residual of the minorant moves by at most `θ ‖Xᵢ‖`. With
+//!    `Q(t)` the minorant at `R_c` and `η² = Σ wᵢ ‖Xᵢ‖²`, a pose of `S` in the box has
+//!    `√Q(t) ≤ √(2f) + θ η` (Minkowski), so `f ≥ ½ (√q_min − θ η)₊²` (`q_min = min_t Q`) on the box's
+//!    poses of `S`, and every other pose has `f > f̂`: that is the box's bound. A box whose bound
+//!    reaches `f̂` holds no pose of `S` and is pruned; so is a box where some point is behind the camera
+//!    for every `t` of the ellipsoid `Q(t) ≤ β² = (√(2f̂) + θ η)²`, which holds the translations of its
+//!    poses of `S`. A box inside the ball `‖Δ‖_W ≤ ρ` of the local metric `‖Δ‖²_W = Δᵀ JᵀJ Δ`
+//!    (`Δ = (ω, t − t̂)`, `J` the Jacobian at the pose), measured by the triangle inequality over its
+//!    centre, its rotation spread and the translation ellipsoid, is bounded by step 4 as well. Boxes are
+//!    split in two along their widest axis, least bound first, until every open box's bound is within
+//!    the gap of `f̂`. Each box hands its halves tighter depth bounds: the largest distance each point
+//!    reaches over the box's poses of `S` (the halves' poses of `S` are among them).
 //! 4. **Local bound along whitened rays.** Write `Δ = s T v` with `‖v‖ = 1` and `Tᵀ JᵀJ T = I`, so that
 //!    `s = ‖Δ‖_W` and the linearised residual moves by one pixel per unit of `s` in every direction.
 //!    Along a ray the rotation is `exp(s a_ω) R̂` (`a = T v`) and a camera-frame point moves as
@@ -36,7 +43,9 @@
 //!    `‖r(s)‖ ≥ ‖r̂ + s J T v‖ − ½ K s²` and `‖r̂ + s J T v‖² ≥ 2f̂ − 2‖Tᵀg‖ s + λ_min s²`. The least
 //!    value of the square of the right-hand side over `s ≤ ρ`, halved, is the lower bound.
 //!
-//! So `lower_bound ≤ f` for every pose that keeps the points in front; the answer is certified when
+//! The least bound over the search's leaves (step 4's over the ball of the largest radius a box inside it
+//! reached, or a box's Minkowski bound) is the raw bound. So `lower_bound ≤ f` for every pose that keeps
+//! the points in front; the answer is certified when
 //! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
 //! bound here) seen more than `2α` apart. The test fails honestly (`certified = false`, with the
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
@@ -51,9 +60,11 @@ use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, B
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
+use std::ops::AddAssign;
+use std::rc::Rc;
 
-/// The default cap on the rotation cells the search examines
-/// ([`crate::certificate::CertifyOptions::max_nodes`] `None`).
+/// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
+/// [`crate::certificate::CertifyOptions::max_nodes`] `None`).
 pub const MAX_CELLS: usize = 20_000;
 
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
@@ -72,13 +83,13 @@ pub struct Certification {
     pub certified: bool,
     /// The proved bound, clamped to the cost (NaN when there is none).
     pub lower_bound: f64,
-    /// The bound as step 4 proved it, before any clamp to the cost (NaN when there is none). A sound
-    /// bound is at most the cost of every pose that keeps the points in front; `lower_bound` is
-    /// `min(raw_lower_bound, cost)`.
+    /// The bound as the search proved it (the least over its leaves, step 4's for the ball), before any
+    /// clamp to the cost (NaN when there is none). A sound bound is at most the cost of every pose that
+    /// keeps the points in front; `lower_bound` is `min(raw_lower_bound, cost)`.
     pub raw_lower_bound: f64,
     /// `(cost − lower_bound) / max(cost, 1e-12)` (NaN when there is no bound).
     pub relative_gap: f64,
-    /// Rotation cells examined by the search (0 when it did not run to its end).
+    /// Boxes of rotations bounded by the search (0 when it did not run to its end).
     pub nodes: usize,
     /// Why the pose is not certified (`None` when it is).
     pub reason: Option<String>,
@@ -108,9 +119,9 @@ struct Problem<'c> {
     corr: &'c Correspondences,
     /// Least singular value of the 2x2 block of `K`.
     s_min: f64,
-    /// Step 1's upper bounds `Dᵢ` on the distances of the points from the camera over `S` (the
-    /// search tightens them cell by cell: [`RotationSearch`]).
-    depths: Vec<f64>,
+    /// The minorant for step 1's upper bounds `Dᵢ` on the distances of the points from the camera
+    /// over `S` (the search tightens them box by box: [`RotationSearch`]).
+    root: Rc<Minorant>,
     /// The 2x2 block of `K` and its norm.
     k2: Matrix2<f64>,
     k_norm: f64,
@@ -180,7 +191,7 @@ impl<'c> Problem<'c> {
             .collect();
         let depths = depth_bounds(corr, &bearings, alpha)
             .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
-        Ok(Problem {
+        let mut problem = Problem {
             corr,
             s_min,
             k2: Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy),
@@ -189,40 +200,62 @@ impl<'c> Problem<'c> {
             g,
             g_norm,
             bearings,
-            depths,
-        })
+            root: Rc::new(Minorant {
+                depths: vec![],
+                gram: SMatrix::zeros(),
+                eta: 0.0,
+            }),
+        };
+        problem.root = Rc::new(problem.minorant(depths));
+        Ok(problem)
     }
 
-    /// Step 2's minorant at the rotation `r` for the depth bounds `depths` (valid where every
-    /// `‖xᵢ‖ ≤ Dᵢ`, so on `S`): `Q(t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(r Xᵢ + t)‖²`, `wᵢ = s² / Dᵢ²`.
-    fn minorant(&self, r: &Matrix3<f64>, depths: &[f64]) -> Minorant {
-        let mut m = Minorant {
-            c: Matrix3::zeros(),
-            g: Vector3::zeros(),
-            c0: 0.0,
-            eta2: 0.0,
-        };
-        for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(depths) {
+    /// Step 2's minorant for the depth bounds `depths` (weights `wᵢ = s² / Dᵢ²`).
+    fn minorant(&self, depths: Vec<f64>) -> Minorant {
+        let mut gram = SMatrix::<f64, 12, 12>::zeros();
+        let mut eta2 = 0.0;
+        for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(&depths) {
             let w = self.s_min * self.s_min / (d * d);
-            let y = r * x;
-            // (I − b bᵀ) y, and yᵀ (I − b bᵀ) y = ‖(I − b bᵀ) y‖² (a projector).
-            let off_ray = y - b * b.dot(&y);
-            m.c += (Matrix3::identity() - b * b.transpose()) * w;
-            m.g += off_ray * w;
-            m.c0 += w * off_ray.norm_squared();
-            m.eta2 += w * x.norm_squared();
+            // With R x = A vec(R) (row-major vec, A = I ⊗ xᵀ) and P = I − b bᵀ, the point's term
+            // ‖P (A vec(R) + t)‖² has the blocks AᵀPA = P ⊗ x xᵀ, AᵀP = P ⊗ x and P.
+            let p = (Matrix3::identity() - b * b.transpose()) * w;
+            gram.fixed_view_mut::<9, 9>(0, 0)
+                .add_assign(&p.kronecker(&(x * x.transpose())));
+            let cross = p.kronecker(x);
+            gram.fixed_view_mut::<9, 3>(0, 9).add_assign(&cross);
+            gram.fixed_view_mut::<3, 9>(9, 0).add_assign(&cross.transpose());
+            gram.fixed_view_mut::<3, 3>(9, 9).add_assign(&p);
+            eta2 += w * x.norm_squared();
         }
-        m
+        Minorant {
+            depths,
+            gram,
+            eta: eta2.sqrt(),
+        }
     }
 }
 
-/// Step 2's minorant at one rotation as a quadratic in `t`: `Q(t) = tᵀ C t + 2 gᵀ t + c₀`, and
-/// `η² = Σ wᵢ ‖Xᵢ‖²`: over rotations within the angle `θ` of that one, `√Q` moves by at most `θ η`.
+/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²`, `wᵢ = s² / Dᵢ²`, for one set of depth
+/// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
+/// (row-major `vec`), and `η = √(Σ wᵢ ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q` moves
+/// by at most `θ η`.
 struct Minorant {
-    c: Matrix3<f64>,
-    g: Vector3<f64>,
-    c0: f64,
-    eta2: f64,
+    depths: Vec<f64>,
+    gram: SMatrix<f64, 12, 12>,
+    eta: f64,
+}
+
+impl Minorant {
+    /// The minorant at the rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀`.
+    fn at(&self, r: &Matrix3<f64>) -> (Matrix3<f64>, Vector3<f64>, f64) {
+        let v = SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]);
+        let a = self.gram.fixed_view::<9, 9>(0, 0);
+        let b = self.gram.fixed_view::<9, 3>(0, 9);
+        let c = self.gram.fixed_view::<3, 3>(9, 9).into_owned();
+        let g: Vector3<f64> = b.transpose() * v;
+        let c0 = (v.transpose() * a * v)[0];
+        (c, g, c0)
+    }
 }
 
 /// One box of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-widths. Every rotation of the
@@ -395,8 +428,8 @@ struct RotationSearch<'a, 'c> {
 
 impl BoundingOracle for RotationSearch<'_, '_> {
     type Candidate = ();
-    /// The depth bounds of the box's poses of `S` (`None`: step 1's, for the root).
-    type Inherited = Option<Vec<f64>>;
+    /// The minorant for the depth bounds of the box's poses of `S` (`None`: step 1's, for the root).
+    type Inherited = Option<Rc<Minorant>>;
 
     fn bound(&mut self, region: &Region) -> Bound<()> {
         self.bound_with(region, &None).0
@@ -414,9 +447,13 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         (axis, 0.5 * (region.lower[axis] + region.upper[axis]))
     }
 
-    fn bound_with(&mut self, region: &Region, inherited: &Option<Vec<f64>>) -> (Bound<()>, Option<Vec<f64>>) {
+    fn bound_with(
+        &mut self,
+        region: &Region,
+        inherited: &Option<Rc<Minorant>>,
+    ) -> (Bound<()>, Option<Rc<Minorant>>) {
         let problem = self.problem;
-        let depths = inherited.as_deref().unwrap_or(&problem.depths);
+        let minorant = inherited.as_ref().unwrap_or(&problem.root);
         let cell = Cell::of(region);
         let bounded = |lower: f64| Bound::Bounded {
             lower,
@@ -432,13 +469,13 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         let theta = cell.half.norm();
         let r_c = exp_so3(&cell.centre) * self.pose.rotation;
-        let minorant = problem.minorant(&r_c, depths);
-        let Some(c_inv) = minorant.c.try_inverse() else {
+        let (c, g, c0) = minorant.at(&r_c);
+        let Some(c_inv) = c.try_inverse() else {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
         };
-        let t_star = -(c_inv * minorant.g);
-        let q_min = (minorant.c0 - minorant.g.dot(&(c_inv * minorant.g))).max(0.0);
-        let eta = minorant.eta2.sqrt();
+        let t_star = -(c_inv * g);
+        let q_min = (c0 - g.dot(&(c_inv * g))).max(0.0);
+        let eta = minorant.eta;
         let lower = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
         if !lower.is_finite() {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
@@ -458,7 +495,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             centre: cell.centre,
             half: cell.half,
             t_star,
-            c: minorant.c,
+            c,
             slack,
             inside_ball,
         };
@@ -477,7 +514,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
         // inequality over the three parts of the step).
         if cell.centre.norm() + theta <= 1.0 {
-            if let Some(extent) = self.whitening.ellipsoid_extent(&minorant.c, slack) {
+            if let Some(extent) = self.whitening.ellipsoid_extent(&c, slack) {
                 let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
                     + self.whitening.box_spread(&cell.half)
                     + extent;
@@ -500,16 +537,23 @@ impl BoundingOracle for RotationSearch<'_, '_> {
                 return (bounded(self.f_hat), None);
             }
         }
-        // The depth bounds the halves inherit.
+        // The depth bounds the halves inherit: the minorant is rebuilt for them when some point's bound
+        // shrinks by a tenth, else the halves share this box's.
         let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
-        let reach = problem
+        let reach: Vec<f64> = problem
             .corr
             .points3d
             .iter()
-            .zip(depths)
+            .zip(&minorant.depths)
             .map(|(x, d)| ((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d))
             .collect();
-        (bounded(lower), Some(reach))
+        let tighter = reach.iter().zip(&minorant.depths).any(|(r, d)| *r < 0.9 * d);
+        let handed_down = if tighter {
+            Rc::new(problem.minorant(reach))
+        } else {
+            Rc::clone(minorant)
+        };
+        (bounded(lower), Some(handed_down))
     }
 }
 
@@ -1022,7 +1066,7 @@ pub mod testing {
     /// Step 1's depth bounds for the level `level` (px²): every pose with cost at most `level` and the
     /// points in front has `‖R Xᵢ + t‖ ≤ Dᵢ`.
     pub fn depth_bounds(camera: &Camera, corr: &Correspondences, level: f64) -> std::result::Result<Vec<f64>, String> {
-        Problem::new(camera, corr, level).map(|p| p.depths)
+        Problem::new(camera, corr, level).map(|p| p.root.depths.clone())
     }
 
     /// Steps 1-3 around `centre` (any pose, not necessarily a minimum) for the sublevel set of
@@ -1060,7 +1104,7 @@ pub mod testing {
         };
         let localised = localise(&mut search, max_nodes)?;
         Ok(Region {
-            depths: problem.depths.clone(),
+            depths: problem.root.depths.clone(),
             cells: record.cells,
             pruned: record.pruned,
             behind: record.behind,
