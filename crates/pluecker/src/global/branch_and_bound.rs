@@ -14,7 +14,8 @@
 //! or after `max_nodes` bound computations, or when the call is stopped ([`crate::interrupt`], polled
 //! before every split; [`BranchAndBoundResult::stopped`]). Splitting (section 4.2): the oracle picks the axis and
 //! the position ([`BoundingOracle::split`]; by default the widest axis at the relaxed minimiser,
-//! kept inside the middle half of the interval so that every split shrinks the region).
+//! kept inside the middle half of the interval so that every split shrinks the region), or cuts
+//! several axes at once ([`BoundingOracle::subdivide`]).
 //!
 //! A region may hand facts it proved down to the two halves it is split into
 //! ([`BoundingOracle::Inherited`], [`BoundingOracle::bound_with`]): what holds on every admissible
@@ -137,6 +138,16 @@ pub trait BoundingOracle {
             .unwrap_or(0);
         let at = relaxed_minimizer.map_or(0.5 * (region.lower[axis] + region.upper[axis]), |m| m[axis]);
         (axis, region.central(axis, at))
+    }
+
+    /// The sub-regions an open region is replaced by; together they must cover it. Default: the two
+    /// halves of the cut [`Self::split`] picks. A problem may cut several axes at once: the pose
+    /// certificate cuts a box of rotations into its eight octants, so that its boxes stay cubes and
+    /// the work done on every split box is shared by eight children.
+    fn subdivide(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
+        let (axis, at) = self.split(region, relaxed_minimizer);
+        let (left, right) = region.split(axis, at);
+        vec![left, right]
     }
 }
 
@@ -340,10 +351,9 @@ pub fn branch_and_bound<O: BoundingOracle>(
             return search.finish(lower, false, Some(reason));
         }
         let open = search.heap.pop().expect("the heap is not empty");
-        let (axis, at) = oracle.split(&open.region, open.hint.as_deref());
-        let (left, right) = open.region.split(axis, at);
-        search.evaluate(oracle, left, open.lower, &open.handed_down);
-        search.evaluate(oracle, right, open.lower, &open.handed_down);
+        for child in oracle.subdivide(&open.region, open.hint.as_deref()) {
+            search.evaluate(oracle, child, open.lower, &open.handed_down);
+        }
     }
 }
 
@@ -489,7 +499,7 @@ mod tests {
         }
     }
 
-    /// What a region hands down reaches exactly its two halves (a hand-down is a fact proved on the
+    /// What a region hands down reaches exactly its halves (a hand-down is a fact proved on the
     /// parent: on a sibling or a cousin it need not hold).
     #[test]
     fn each_region_receives_what_its_parent_handed_down() {

@@ -28,9 +28,9 @@
 //!    poses of `S`. A box inside the ball `‖Δ‖_W ≤ ρ` of the local metric `‖Δ‖²_W = Δᵀ JᵀJ Δ`
 //!    (`Δ = (ω, t − t̂)`, `J` the Jacobian at the pose), measured by the triangle inequality over its
 //!    centre, its rotation spread and the translation ellipsoid, is bounded by step 4 as well. Boxes are
-//!    split in two along their widest axis, least bound first, until every open box's bound is within
-//!    the gap of `f̂`. Each box hands its halves tighter depth bounds: the largest distance each point
-//!    reaches over the box's poses of `S` (the halves' poses of `S` are among them).
+//!    split into their eight octants, least bound first, until every open box's bound is within
+//!    the gap of `f̂`. Each box hands its octants tighter depth bounds: the largest distance each point
+//!    reaches over the box's poses of `S` (the octants' poses of `S` are among them).
 //! 4. **Local bound along whitened rays.** Write `Δ = s T v` with `‖v‖ = 1` and `Tᵀ JᵀJ T = I`, so that
 //!    `s = ‖Δ‖_W` and the linearised residual moves by one pixel per unit of `s` in every direction.
 //!    Along a ray the rotation is `exp(s a_ω) R̂` (`a = T v`) and a camera-frame point moves as
@@ -410,10 +410,10 @@ enum InsideBall<'m> {
 /// `S`; so is a box wholly outside the ball `‖ω‖ ≤ π`, whose rotations are met elsewhere. A box inside
 /// the whitened ball of radius `target` is bounded by step 4 as well ([`InsideBall`]).
 ///
-/// What a box hands down to its halves ([`BoundingOracle::Inherited`]) are its depth bounds: the
+/// What a box hands down to its octants ([`BoundingOracle::Inherited`]) are its depth bounds: the
 /// largest distance each point reaches over its poses of `S`,
 /// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
-/// They hold on every pose of `S` in the box, so in each half, and tighten the halves' minorants.
+/// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants (rebuilt when some bound shrinks by a tenth).
 struct RotationSearch<'a, 'c> {
     problem: &'a Problem<'c>,
     whitening: &'a Whitening,
@@ -439,12 +439,22 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         self.max_relative_gap * CERTIFICATE_COST_FLOOR
     }
 
-    /// The widest axis at its midpoint.
-    fn split(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> (usize, f64) {
-        let axis = (0..region.dim())
-            .max_by(|&a, &b| region.width(a).total_cmp(&region.width(b)))
-            .unwrap_or(0);
-        (axis, 0.5 * (region.lower[axis] + region.upper[axis]))
+    /// The eight octants of the box (every axis cut at its midpoint): boxes stay cubes.
+    fn subdivide(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
+        let centre = region.centre();
+        (0..8)
+            .map(|octant: usize| {
+                let (mut lower, mut upper) = (region.lower.clone(), region.upper.clone());
+                for k in 0..3 {
+                    if octant >> k & 1 == 1 {
+                        lower[k] = centre[k];
+                    } else {
+                        upper[k] = centre[k];
+                    }
+                }
+                Region::new(lower, upper)
+            })
+            .collect()
     }
 
     fn bound_with(
@@ -537,8 +547,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
                 return (bounded(self.f_hat), None);
             }
         }
-        // The depth bounds the halves inherit: the minorant is rebuilt for them when some point's bound
-        // shrinks by a tenth, else the halves share this box's.
+        // The depth bounds the octants inherit: the minorant is rebuilt for them when some point's bound
+        // shrinks by a tenth, else the octants share this box's.
         let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
         let reach: Vec<f64> = problem
             .corr
