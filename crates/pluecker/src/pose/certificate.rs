@@ -60,7 +60,6 @@ use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, B
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
-use std::ops::AddAssign;
 use std::rc::Rc;
 
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
@@ -212,24 +211,36 @@ impl<'c> Problem<'c> {
 
     /// Step 2's minorant for the depth bounds `depths` (weights `wᵢ = s² / Dᵢ²`).
     fn minorant(&self, depths: Vec<f64>) -> Minorant {
-        let mut gram = SMatrix::<f64, 12, 12>::zeros();
+        // With R x = A vec(R) (row-major vec, A = I ⊗ xᵀ) and P = I − b bᵀ, a point's term
+        // ‖P (A vec(R) + t)‖² has the blocks AᵀPA = P ⊗ x xᵀ, AᵀP = P ⊗ x and P.
+        let mut gram = [[0.0f64; 12]; 12];
         let mut eta2 = 0.0;
         for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(&depths) {
             let w = self.s_min * self.s_min / (d * d);
-            // With R x = A vec(R) (row-major vec, A = I ⊗ xᵀ) and P = I − b bᵀ, the point's term
-            // ‖P (A vec(R) + t)‖² has the blocks AᵀPA = P ⊗ x xᵀ, AᵀP = P ⊗ x and P.
             let p = (Matrix3::identity() - b * b.transpose()) * w;
-            gram.fixed_view_mut::<9, 9>(0, 0)
-                .add_assign(&p.kronecker(&(x * x.transpose())));
-            let cross = p.kronecker(x);
-            gram.fixed_view_mut::<9, 3>(0, 9).add_assign(&cross);
-            gram.fixed_view_mut::<3, 9>(9, 0).add_assign(&cross.transpose());
-            gram.fixed_view_mut::<3, 3>(9, 9).add_assign(&p);
+            for r in 0..3 {
+                for c in 0..3 {
+                    let row = &mut gram[3 * r + c];
+                    for r2 in 0..3 {
+                        let prx = p[(r, r2)] * x[c];
+                        for c2 in 0..3 {
+                            row[3 * r2 + c2] += prx * x[c2];
+                        }
+                    }
+                    for k in 0..3 {
+                        row[9 + k] += p[(r, k)] * x[c];
+                    }
+                }
+                for k in 0..3 {
+                    gram[9 + r][9 + k] += p[(r, k)];
+                }
+            }
             eta2 += w * x.norm_squared();
         }
         Minorant {
             depths,
-            gram,
+            // The lower-left block is the transpose of the upper-right one.
+            gram: SMatrix::<f64, 12, 12>::from_fn(|i, j| if i >= 9 && j < 9 { gram[j][i] } else { gram[i][j] }),
             eta: eta2.sqrt(),
         }
     }
@@ -413,7 +424,8 @@ enum InsideBall<'m> {
 /// What a box hands down to its octants ([`BoundingOracle::Inherited`]) are its depth bounds: the
 /// largest distance each point reaches over its poses of `S`,
 /// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
-/// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants (rebuilt when some bound shrinks by a tenth).
+/// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants
+/// (rebuilt when the weights grow by a fifth on average).
 struct RotationSearch<'a, 'c> {
     problem: &'a Problem<'c>,
     whitening: &'a Whitening,
@@ -547,8 +559,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
                 return (bounded(self.f_hat), None);
             }
         }
-        // The depth bounds the octants inherit: the minorant is rebuilt for them when some point's bound
-        // shrinks by a tenth, else the octants share this box's.
+        // The depth bounds the octants inherit, and the minorant for them (else the octants share
+        // this box's).
         let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
         let reach: Vec<f64> = problem
             .corr
@@ -557,7 +569,9 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .zip(&minorant.depths)
             .map(|(x, d)| ((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d))
             .collect();
-        let tighter = reach.iter().zip(&minorant.depths).any(|(r, d)| *r < 0.9 * d);
+        // Rebuilt when the weights wᵢ ∝ 1/Dᵢ² grow by a fifth on average.
+        let gain = reach.iter().zip(&minorant.depths).map(|(r, d)| (d / r).powi(2)).sum::<f64>();
+        let tighter = gain >= 1.2 * reach.len() as f64;
         let handed_down = if tighter {
             Rc::new(problem.minorant(reach))
         } else {
