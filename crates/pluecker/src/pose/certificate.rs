@@ -110,6 +110,9 @@ impl Certification {
 
 /// Partners per point for its depth bound (the widest-apart in the image of a small spread set).
 const DEPTH_PARTNERS: usize = 16;
+/// The rotation search rebuilds a box's minorant for its octants when the tightened depth bounds
+/// raise the weights `wᵢ ∝ 1/Dᵢ²` by this factor on average (a rebuild costs far more than a box).
+const REBUILD_GAIN: f64 = 2.0;
 /// Intervals of the one-dimensional minimisation of the local bound.
 const LOCAL_INTERVALS: usize = 256;
 
@@ -425,7 +428,7 @@ enum InsideBall<'m> {
 /// largest distance each point reaches over its poses of `S`,
 /// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
 /// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants
-/// (rebuilt when the weights grow by a fifth on average).
+/// (rebuilt when the weights grow by [`REBUILD_GAIN`] on average).
 struct RotationSearch<'a, 'c> {
     problem: &'a Problem<'c>,
     whitening: &'a Whitening,
@@ -569,9 +572,9 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .zip(&minorant.depths)
             .map(|(x, d)| ((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d))
             .collect();
-        // Rebuilt when the weights wᵢ ∝ 1/Dᵢ² grow by a fifth on average.
+        // Rebuilt when the weights wᵢ ∝ 1/Dᵢ² grow by REBUILD_GAIN on average.
         let gain = reach.iter().zip(&minorant.depths).map(|(r, d)| (d / r).powi(2)).sum::<f64>();
-        let tighter = gain >= 1.2 * reach.len() as f64;
+        let tighter = gain >= REBUILD_GAIN * reach.len() as f64;
         let handed_down = if tighter {
             Rc::new(problem.minorant(reach))
         } else {
