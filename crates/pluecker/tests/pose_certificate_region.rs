@@ -72,14 +72,38 @@ fn sublevel_poses(
     out
 }
 
-/// Checks that `pose` lies in the region (see the module documentation); `Err` says how it does not.
-fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &OraclePose) -> Result<(), String> {
+/// Checks that `pose` lies in the region (see the module documentation) and that the depth bounds of
+/// the cells whose boxes hold its rotation hold at it; `Err` says how it does not.
+fn check_inside(
+    region: &Region,
+    corr: &Correspondences,
+    centre: &OraclePose,
+    w: &Matrix6<f64>,
+    pose: &OraclePose,
+) -> Result<(), String> {
     let d = centre.chart(pose);
     let omega = Vector3::new(d[0], d[1], d[2]);
+    let in_box = |cell: &KeptCell| {
+        // Rounding of the box test: ω is a log, exact to ~1e-15 rad.
+        (omega - cell.centre).abs().iter().zip(cell.half.iter()).all(|(d, h)| *d <= h + 1e-12)
+    };
+    // The depth bounds of every cell whose box holds the rotation hold at the pose (distances
+    // recomputed here; relative rounding ~1e-15 of the scene's size).
+    for cell in region.cells.iter().filter(|c| in_box(c)) {
+        for (i, (x, d)) in corr.points3d.iter().zip(&cell.depths).enumerate() {
+            let distance = (pose.r * x + pose.t).norm();
+            if distance > d * (1.0 + 1e-12) {
+                return Err(format!(
+                    "point {i} is at distance {distance} from the camera, beyond its depth bound {d} in a kept cell \
+                     (centre {:?}, half {:?})",
+                    cell.centre, cell.half
+                ));
+            }
+        }
+    }
     let mut in_cube = 0;
     for cell in &region.cells {
-        // Rounding of the box test: ω is a log, exact to ~1e-15 rad.
-        if (omega - cell.centre).abs().iter().zip(cell.half.iter()).any(|(d, h)| *d > h + 1e-12) {
+        if !in_box(cell) {
             continue;
         }
         in_cube += 1;
@@ -237,7 +261,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
             );
             for (pose, f) in &poses {
                 assert!(*f <= level * (1.0 + 1e-12));
-                if let Err(why) = check_inside(&region, centre, &w, pose) {
+                if let Err(why) = check_inside(&region, &corr, centre, &w, pose) {
                     panic!(
                         "{name}, level {factor}x the optimum {global:.6}, centre of cost {f_centre:.6}: a pose of cost {f:.6} \
                          is outside the region: {why}"

@@ -524,6 +524,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             c,
             slack,
             inside_ball,
+            depths: minorant.depths.clone(),
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
         let behind = problem.corr.points3d.iter().zip(&problem.bearings).any(|(x, b)| {
@@ -1057,7 +1058,7 @@ pub mod testing {
     /// vectors (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the
     /// minorant's Hessian and minimiser at the box's centre, for the box's depth bounds) that holds the
     /// translation of every pose of the sublevel set whose rotation lies in the box.
-    #[derive(Debug, Clone, Copy)]
+    #[derive(Debug, Clone)]
     pub struct KeptCell {
         pub centre: Vector3<f64>,
         /// The half-widths of the box along the three axes.
@@ -1068,6 +1069,9 @@ pub mod testing {
         /// Whether the cell lies inside the whitened ball of the target radius (else it was left
         /// unsplit at the least half-width).
         pub inside_ball: bool,
+        /// The depth bounds `Dᵢ` of the cell's minorant (handed down by its ancestors): the search
+        /// claims `‖R Xᵢ + t‖ ≤ Dᵢ` for every pose of the sublevel set with its rotation in the box.
+        pub depths: Vec<f64>,
     }
 
     /// What [`rotation_search`] proved.
