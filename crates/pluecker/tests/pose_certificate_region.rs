@@ -85,7 +85,11 @@ fn check_inside(
     let omega = Vector3::new(d[0], d[1], d[2]);
     let in_box = |cell: &KeptCell| {
         // Rounding of the box test: ω is a log, exact to ~1e-15 rad.
-        (omega - cell.centre).abs().iter().zip(cell.half.iter()).all(|(d, h)| *d <= h + 1e-12)
+        (omega - cell.centre)
+            .abs()
+            .iter()
+            .zip(cell.half.iter())
+            .all(|(d, h)| *d <= h + 1e-12)
     };
     // The depth bounds of every cell whose box holds the rotation hold at the pose (distances
     // recomputed here; relative rounding ~1e-15 of the scene's size).
@@ -328,7 +332,11 @@ fn largest_front_reach(cell: &KeptCell, centre: &OraclePose, x: &Vector3<f64>, b
     }
     for axis in 0..6 {
         let mut e = Vector3::zeros();
-        e[axis % 3] = if axis < 3 { cell.half[axis % 3] } else { -cell.half[axis % 3] };
+        e[axis % 3] = if axis < 3 {
+            cell.half[axis % 3]
+        } else {
+            -cell.half[axis % 3]
+        };
         starts.push(cell.centre + e);
     }
     for _ in 0..16 {

@@ -517,7 +517,13 @@ mod tests {
         let result = branch_and_bound(&mut oracle, root, None, &opts);
         assert_eq!(oracle.checked, result.nodes);
         assert!(result.nodes > 100, "only {} regions", result.nodes);
-        assert!(oracle.wrong.is_empty(), "{} of {}: {:?}", oracle.wrong.len(), oracle.checked, &oracle.wrong[..3.min(oracle.wrong.len())]);
+        assert!(
+            oracle.wrong.is_empty(),
+            "{} of {}: {:?}",
+            oracle.wrong.len(),
+            oracle.checked,
+            &oracle.wrong[..3.min(oracle.wrong.len())]
+        );
     }
 
     /// The minimum of the tilted double well: each `x_k` solves `4x(x²−1) + τ_k = 0` near −1, by

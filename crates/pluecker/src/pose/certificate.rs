@@ -473,11 +473,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .collect()
     }
 
-    fn bound_with(
-        &mut self,
-        region: &Region,
-        inherited: &Option<Rc<Minorant>>,
-    ) -> (Bound<()>, Option<Rc<Minorant>>) {
+    fn bound_with(&mut self, region: &Region, inherited: &Option<Rc<Minorant>>) -> (Bound<()>, Option<Rc<Minorant>>) {
         let problem = self.problem;
         let minorant = inherited.as_ref().unwrap_or(&problem.root);
         let cell = Cell::of(region);
@@ -575,7 +571,11 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .map(|(x, d)| ((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d))
             .collect();
         // Rebuilt when the weights wᵢ ∝ 1/Dᵢ² grow by REBUILD_GAIN on average.
-        let gain = reach.iter().zip(&minorant.depths).map(|(r, d)| (d / r).powi(2)).sum::<f64>();
+        let gain = reach
+            .iter()
+            .zip(&minorant.depths)
+            .map(|(r, d)| (d / r).powi(2))
+            .sum::<f64>();
         let tighter = gain >= REBUILD_GAIN * reach.len() as f64;
         let handed_down = if tighter {
             Rc::new(problem.minorant(reach))
