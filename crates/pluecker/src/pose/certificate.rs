@@ -17,7 +17,7 @@
 //!    moment form moves with the rotation by the camera distance, not the object size, and only
 //!    slowed the search.
 //! 3. **Rotation search** on the shared branch and bound ([`crate::global::branch_and_bound`], the
-//!    search of the triangulation certificates; the oracle is [`RotationSearch`]). Over a box of
+//!    search of the triangulation certificates; the oracle is `RotationSearch`). Over a box of
 //!    rotation vectors `ω` (`R = exp(ω) R̂`) with half-diagonal `θ`, every rotation is within the angle
 //!    `θ` of the centre's `R_c`, so each residual of the minorant moves by at most `θ ‖Xᵢ‖`. With
 //!    `Q(t)` the minorant at `R_c` and `η² = Σ wᵢ ‖Xᵢ‖²`, a pose of `S` in the box has
