@@ -58,6 +58,7 @@ use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
+use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 use std::rc::Rc;
@@ -607,9 +608,15 @@ fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Resul
         // f = ½ Σ r² ≥ 0.
         trivial_lower_bound: 0.0,
     };
+    // A stop requested before the search ends it before its first box (the search polls it before
+    // every split; exact data can close the gap at the root).
+    let stopped = |reason: StopReason| format!("not proved: {} during the rotation search", reason.describe());
+    if let Some(reason) = stop_reason() {
+        return Err(stopped(reason));
+    }
     let result = branch_and_bound(search, root, Some((search.f_hat, ())), &opts);
     if let Some(reason) = result.stopped {
-        return Err(format!("not proved: {} during the rotation search", reason.describe()));
+        return Err(stopped(reason));
     }
     if !result.converged {
         return Err(format!(
