@@ -593,7 +593,7 @@ impl Cameras {
         match self.tracks {
             None => TrackCameras::Shared(&self.matrices),
             Some(_) => TrackCameras::PerTrack {
-                cameras: &self.matrices,
+                projections: &self.matrices,
                 views: self.views,
             },
         }

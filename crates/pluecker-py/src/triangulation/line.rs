@@ -475,7 +475,7 @@ pub fn triangulate_line_observations(
         let outcome = run_interruptible(py, progress, budget, false, move |done| {
             let tracks = SparseSegmentTracks {
                 csr: rows.csr(),
-                segments: &values,
+                lines: &values,
                 covariances: covariances.as_deref(),
             };
             sparse_columns(

@@ -243,12 +243,13 @@ fn count(done: Option<&AtomicUsize>) {
 /// by every track, or one set per track (e.g. independent scenes solved together).
 #[derive(Debug, Clone, Copy)]
 pub enum TrackCameras<'a> {
-    /// `v` cameras shared by every track; view `j` of every track is `cameras[j]`.
+    /// `v` projections shared by every track; view `j` of every track is `projections[j]` (errors
+    /// name them `projections`).
     Shared(&'a [Matrix3x4<f64>]),
-    /// `n · views` cameras, track-major: view `j` of track `t` is `cameras[t · views + j]`.
+    /// `n · views` projections, track-major: view `j` of track `t` is `projections[t · views + j]`.
     PerTrack {
-        /// The cameras of all tracks.
-        cameras: &'a [Matrix3x4<f64>],
+        /// The projections of all tracks.
+        projections: &'a [Matrix3x4<f64>],
         /// Views per track, `v`.
         views: usize,
     },
@@ -267,11 +268,11 @@ impl TrackCameras<'_> {
     /// non-singular; per-track cameras must number `n · views` (each track's are checked with it).
     pub(crate) fn check(&self, n: usize) -> Result<()> {
         match *self {
-            TrackCameras::Shared(cameras) => validate_cameras(cameras, "cameras"),
-            TrackCameras::PerTrack { cameras, views } if cameras.len() != n * views => Err(shape(
-                "cameras",
-                format!("{} cameras ({n} tracks x {views} views)", n * views),
-                cameras.len(),
+            TrackCameras::Shared(cameras) => validate_cameras(cameras, "projections"),
+            TrackCameras::PerTrack { projections, views } if projections.len() != n * views => Err(shape(
+                "projections",
+                format!("{} projections ({n} tracks x {views} views)", n * views),
+                projections.len(),
             )),
             TrackCameras::PerTrack { .. } => Ok(()),
         }
@@ -281,7 +282,7 @@ impl TrackCameras<'_> {
     pub(crate) fn of_track(&self, t: usize, seen: &[usize]) -> Vec<Matrix3x4<f64>> {
         match *self {
             TrackCameras::Shared(cameras) => seen.iter().map(|&j| cameras[j]).collect(),
-            TrackCameras::PerTrack { cameras, views } => seen.iter().map(|&j| cameras[t * views + j]).collect(),
+            TrackCameras::PerTrack { projections, views } => seen.iter().map(|&j| projections[t * views + j]).collect(),
         }
     }
 

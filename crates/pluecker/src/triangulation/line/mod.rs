@@ -136,7 +136,7 @@ impl LineProblem {
     }
 }
 
-/// Triangulates one 3-D line seen by `cameras` (3x4, world → pixels, any positive scale; in
+/// Triangulates one 3-D line seen by `projections` (3x4, world → pixels, any positive scale; in
 /// front means `(P X̃)₃ > 0`, [`super::views`]) as the
 /// homogeneous image lines `lines` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
 /// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`]; identity
@@ -148,14 +148,14 @@ impl LineProblem {
 /// cameras with one centre, a line in an epipolar plane of every view pair),
 /// [`Error::InvalidOption`].
 pub fn triangulate_line(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     lines: &[Vector3<f64>],
     covariances: Option<&[Matrix2<f64>]>,
     opts: &TriangulationOptions,
 ) -> Result<LineTriangulation> {
     let started = Instant::now();
     opts.validate()?;
-    check_views(cameras, lines.len(), 2, "lines", opts.method)?;
+    check_views(projections, lines.len(), 2, "lines", opts.method)?;
     let frames = parse_observations(
         lines,
         "lines",
@@ -163,9 +163,9 @@ pub fn triangulate_line(
         LineFrame::of_line,
     )?;
     let problem = LineProblem {
-        cameras: cameras.to_vec(),
+        cameras: projections.to_vec(),
         frames,
-        whitenings: whitenings(covariances, cameras.len(), "covariances")?,
+        whitenings: whitenings(covariances, projections.len(), "covariances")?,
     };
     let mut result = match opts.outlier_threshold {
         None => triangulate_line_views(&problem, opts)?,
@@ -238,20 +238,20 @@ pub fn lines_from_segments(segments: &[[Vector2<f64>; 2]], sigma: f64) -> Result
     for (i, s) in segments.iter().enumerate() {
         if !s.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
             return Err(Error::NonFinite {
-                what: "segments".into(),
+                what: "lines".into(),
                 index: i,
             });
         }
         let fit = line_from_segment(&s[0], &s[1], sigma).map_err(|e| match e {
             Error::Degenerate { what } if what.contains("zero-length") => Error::Degenerate {
-                what: format!("segments[{i}] has zero length"),
+                what: format!("lines[{i}] has zero length"),
             },
             other => other,
         })?;
-        if whitening(&fit.covariance, "segments", i).is_err() {
+        if whitening(&fit.covariance, "lines", i).is_err() {
             return Err(Error::Degenerate {
                 what: format!(
-                    "segments[{i}]: the covariance of its line is numerically singular (a segment far shorter than its distance from the image origin)"
+                    "lines[{i}]: the covariance of its line is numerically singular (a segment far shorter than its distance from the image origin)"
                 ),
             });
         }
@@ -265,13 +265,13 @@ pub fn lines_from_segments(segments: &[[Vector2<f64>; 2]], sigma: f64) -> Result
 /// noise of `sigma` px per coordinate: each segment gives its line and covariance by
 /// [`lines_from_segments`].
 pub fn triangulate_line_segments(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     segments: &[[Vector2<f64>; 2]],
     sigma: f64,
     opts: &TriangulationOptions,
 ) -> Result<LineTriangulation> {
     let (lines, covariances) = lines_from_segments(segments, sigma)?;
-    triangulate_line(cameras, &lines, Some(&covariances), opts)
+    triangulate_line(projections, &lines, Some(&covariances), opts)
 }
 
 /// Triangulates one 3-D line seen in `views` (each a camera, pinhole or any of COLMAP's models, and
@@ -295,7 +295,7 @@ pub fn triangulate_line_segments_views(
     let started = Instant::now();
     opts.validate()?;
     let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
-    check_views(&cameras, segments.len(), 2, "segments", opts.method)?;
+    check_views(&cameras, segments.len(), 2, "lines", opts.method)?;
     if let Some(c) = covariances {
         if c.len() != views.len() {
             return Err(Error::Shape {
@@ -310,7 +310,7 @@ pub fn triangulate_line_segments_views(
     for (i, (view, s)) in views.iter().zip(segments).enumerate() {
         if !s.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
             return Err(Error::NonFinite {
-                what: "segments".into(),
+                what: "lines".into(),
                 index: i,
             });
         }
