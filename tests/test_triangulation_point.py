@@ -251,7 +251,7 @@ def test_unknown_keyword_and_non_numeric_input_are_type_errors(seed):
     P, x = good(seed)
     with pytest.raises(TypeError, match="max_gap"):
         pluecker.triangulate_point(P, x, max_gap=0.1)
-    with pytest.raises(TypeError, match="x: expected an array of real numbers"):
+    with pytest.raises(TypeError, match="observations: expected an array of real numbers"):
         pluecker.triangulate_point(P, [["a", "b"]] * 3)
 
 
@@ -318,7 +318,7 @@ def test_covariances_per_observation(seed):
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(40, 3, 2, 2))
     cov = A @ A.transpose(0, 1, 3, 2) + 0.3 * np.eye(2)
-    batch = pluecker.triangulate_points(P, x, cov=cov, options=pluecker.TriangulationOptions(method="local"))
+    batch = pluecker.triangulate_points(P, x, covariances=cov, options=pluecker.TriangulationOptions(method="local"))
     for i in range(0, 40, 5):
         assert batch.cost[i] == pytest.approx(cost_eq19(P, batch.X[i], x[i], cov[i]), rel=1e-9)
 
@@ -338,8 +338,8 @@ def test_one_bad_track_never_loses_the_others(seed):
         assert batch.messages[i].startswith(f"track {i}: ")
         assert np.all(np.isnan(batch.X[i])) and not batch.certified[i]
     # The messages name the track and the view (as a row of that track's observations).
-    assert "x[3]: non-finite value (NaN or inf) in row 1" in batch.messages[3]
-    assert "cov[11][2] is not positive definite" in batch.messages[11]
+    assert "observations[3]: non-finite value (NaN or inf) in row 1" in batch.messages[3]
+    assert "covariances[11][2] is not positive definite" in batch.messages[11]
     good = np.setdiff1d(np.arange(50), list(expected))
     assert np.all(batch.status[good] == "success") and np.all(batch.certified[good])
     # The same NaN where the view is not visible is no problem.
@@ -430,8 +430,8 @@ def test_bad_mask_and_cov_shapes(seed):
         pluecker.triangulate_points(P, x, np.ones((5, 3), dtype=bool))
     with pytest.raises(TypeError, match="visible: expected a boolean array"):
         pluecker.triangulate_points(P, x, np.ones((5, 4)))
-    with pytest.raises(pluecker.ShapeError, match="cov"):
-        pluecker.triangulate_points(P, x, cov=np.ones((5, 3, 2, 2)))
+    with pytest.raises(pluecker.ShapeError, match="covariances"):
+        pluecker.triangulate_points(P, x, covariances=np.ones((5, 3, 2, 2)))
     with pytest.raises(pluecker.InvalidOptionError, match="max_nodes"):
         pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=0)))
 

@@ -125,7 +125,7 @@ def test_quadric_batch_equals_single_calls_with_cameras_per_track(seed):
     conics = np.stack([s.conics for s in scenes])
     cov = np.stack([s.covariances for s in scenes])
     for method in METHODS:
-        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES)))
+        batch = pluecker.triangulate_quadrics(P, conics, covariances=cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES)))
         assert batch.Q.shape == (3, 4, 4) and batch.primal.shape == (3, 4, 4) and batch.axes.shape == (3, 3, 3)
         assert batch.centre.shape == (3, 3) and batch.semi_axes.shape == (3, 3)
         for i, s in enumerate(scenes):
