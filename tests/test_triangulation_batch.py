@@ -136,7 +136,8 @@ def test_folder_records_a_rejected_line_and_keeps_the_others(tmp_path):
     fields[2:4] = fields[0:2]  # the second endpoint onto the first
     rows[seq.line_tracks[bad, 0]] = " ".join(fields)
     path.write_text("\n".join(rows) + "\n")
-    run = triangulate_folder.run(folder, views=[0, 1, 2, 3], method="linear", lines=True, show_progress=False)
+    options = pluecker.TriangulationOptions(method="linear")
+    run = triangulate_folder.run(folder, views=[0, 1, 2, 3], options=options, lines=True, show_progress=False)
     records = {r["index"]: r for r in run.lines.records}
     assert records[bad]["status"] == "degenerate" and "has zero length" in records[bad]["message"]
     assert np.all(np.isnan(records[bad]["point"])) and np.all(np.isnan(records[bad]["segment"]))
