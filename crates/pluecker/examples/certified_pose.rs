@@ -5,6 +5,10 @@
 //! camera, the relative gap between the two (below the requested 1e-3), `certified: true` and the
 //! status `success`. A pose whose gap stays above `max_relative_gap` gets the status `gap_not_closed`.
 
+// Options are set field by field on their defaults, the form that also works once they are
+// `#[non_exhaustive]` (a struct literal with `..Default::default()` does not).
+#![allow(clippy::field_reassign_with_default)]
+
 use nalgebra::{Rotation3, Vector2, Vector3};
 use pluecker::{estimate_pose, Camera, CertifyOptions, Correspondences, PoseOptions};
 

@@ -6,6 +6,10 @@
 //! inliers, the indices of the rejected points (exactly 3, 8, 13, 18, 23 and 28) and how many samples
 //! RANSAC drew.
 
+// Options are set field by field on their defaults, the form that also works once they are
+// `#[non_exhaustive]` (a struct literal with `..Default::default()` does not).
+#![allow(clippy::field_reassign_with_default)]
+
 use nalgebra::{Rotation3, Vector2, Vector3};
 use pluecker::{estimate_pose, Camera, Correspondences, PoseOptions, RansacOptions};
 

@@ -17,7 +17,7 @@ fn main() -> pluecker::Result<()> {
         .map(|j| {
             let rotation =
                 Rotation3::from_scaled_axis(Vector3::new(0.1 * j as f64, -0.15 * j as f64, 0.0)).into_inner();
-            camera.projection(&Pose::new(rotation, Vector3::new(-1.0 * j as f64, 0.6 * j as f64, 0.0)))
+            camera.projection(&Pose::new(rotation, Vector3::new(-(j as f64), 0.6 * j as f64, 0.0)))
         })
         .collect();
 

@@ -6,6 +6,10 @@
 //! certificate (`convexity_test`, relative gap 0, certified); then a batch of 1000 points solved in
 //! parallel, all certified.
 
+// Options are set field by field on their defaults, the form that also works once they are
+// `#[non_exhaustive]` (a struct literal with `..Default::default()` does not).
+#![allow(clippy::field_reassign_with_default)]
+
 use nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
 use pluecker::triangulation::point::batch::{triangulate_points, PointTracks};
 use pluecker::triangulation::point::triangulate_point;

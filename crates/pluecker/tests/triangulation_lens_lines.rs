@@ -671,7 +671,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         .collect();
     let csr = Csr {
         offsets: &offsets,
-        images: &images,
+        image: &images,
     };
     let tracks = SparseSegmentTracks {
         csr,

@@ -1013,7 +1013,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
         &SparseLineTracks {
             csr: Csr {
                 offsets: &offsets,
-                images: &images,
+                image: &images,
             },
             lines: pluecker::triangulation::line::batch::ImageLines::Segments {
                 endpoints: &endpoints,

@@ -747,7 +747,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     let s = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &sparse,
         covariances: Some(&sparse_cov),
@@ -771,7 +771,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     let reversed = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &rev_images,
+            image: &rev_images,
         },
         observations: &rev_obs,
         covariances: Some(&rev_cov),
@@ -802,13 +802,13 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     bad_images[offsets[1]..offsets[2]].fill(first);
     let bad = SparsePointTracks {
         csr: Csr {
-            images: &bad_images,
+            image: &bad_images,
             ..s.csr
         },
         ..s
     };
     let r = triangulate_point_observations(&cameras, &bad, &opts, None).unwrap();
-    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
+    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("image[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
             if required == "2 distinct images per track" && actual.starts_with("track 1: "))

@@ -579,7 +579,10 @@ impl Cameras {
         let tracks_fit = self.tracks.map_or(true, |n| n == shape[0]);
         if shape[1] != self.views || !tracks_fit {
             let n = self.tracks.map_or("n".to_string(), |n| n.to_string());
-            let expected = format!("shape ({n}, {}, {tail}) (one column per camera in projections)", self.views);
+            let expected = format!(
+                "shape ({n}, {}, {tail}) (one column per camera in projections)",
+                self.views
+            );
             return Err(shape_error(name, &expected, shape_string(shape)));
         }
         Ok(())

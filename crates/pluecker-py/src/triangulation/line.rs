@@ -192,7 +192,9 @@ fn endpoint_covariances(
         let n: usize = lead.iter().product();
         return Ok(Some(vec![[Matrix2::identity() * (sigma * sigma); 2]; n]));
     }
-    let Some(covariances) = covariances else { return Ok(None) };
+    let Some(covariances) = covariances else {
+        return Ok(None);
+    };
     let (shape, values) = read_any("covariances", covariances)?;
     let mut expected = lead.to_vec();
     expected.extend([2, 2, 2]);
@@ -253,9 +255,7 @@ pub fn triangulate_line(
         None => from_segments,
     };
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
-    let outcome = interrupt::run_single(py, move || {
-        core_triangulate_line(&cams, &image, covs.as_deref(), &opts)
-    })?;
+    let outcome = interrupt::run_single(py, move || core_triangulate_line(&cams, &image, covs.as_deref(), &opts))?;
     interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?)
 }
 

@@ -127,11 +127,9 @@ pub fn triangulate_point(
     let covs = covariances2("covariances", covariances, cams.len())?;
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
-    let outcome = interrupt::run_single(py, move || {
-        match &views {
-            Some(views) => triangulate_point_views(views, &obs, covs.as_deref(), &opts),
-            None => core_triangulate_point(&cams, &obs, covs.as_deref(), &opts),
-        }
+    let outcome = interrupt::run_single(py, move || match &views {
+        Some(views) => triangulate_point_views(views, &obs, covs.as_deref(), &opts),
+        None => core_triangulate_point(&cams, &obs, covs.as_deref(), &opts),
     })?;
     interrupt::object_or_partial(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
 }
@@ -324,7 +322,11 @@ pub fn triangulate_points(
             actual: format!("{v} camera(s) in projections"),
         }));
     }
-    let (shape, pixels) = read("observations", observations, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)])?;
+    let (shape, pixels) = read(
+        "observations",
+        observations,
+        &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)],
+    )?;
     if shape[1] != v {
         return Err(shape_error(
             "observations",

@@ -168,7 +168,7 @@ pub fn triangulate_lines(
 }
 
 /// Line tracks given one observation per row ([`Csr`]): row `k` is the line or segment `k` of `lines`
-/// (`m · 3` or `m · 4` values) in image `csr.images[k]`, with the covariance `covariances[4k..]` when
+/// (`m · 3` or `m · 4` values) in image `csr.image[k]`, with the covariance `covariances[4k..]` when
 /// given. Memory grows with the observations, not with tracks × images.
 #[derive(Debug, Clone, Copy)]
 pub struct SparseLineTracks<'a> {
@@ -211,7 +211,7 @@ pub fn triangulate_line_observations(
 
 /// Segment tracks seen through [`View`]s, one observation per row ([`Csr`]): row `k` is the segment
 /// `segments[4k..4k + 4]` (`(u₁, v₁, u₂, v₂)`, the image's own, distorted pixels) in image
-/// `csr.images[k]`, with its endpoints' covariances `covariances[8k..8k + 8]` (two row-major 2x2
+/// `csr.image[k]`, with its endpoints' covariances `covariances[8k..8k + 8]` (two row-major 2x2
 /// matrices, pixels²) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparseSegmentTracks<'a> {

@@ -287,7 +287,7 @@ fn solve_track(
 
 /// Point tracks as a flat list of observations grouped by track ([`Csr`]), for models where each track
 /// is seen in few of many images: memory grows with the observations, not with tracks × images. Row `k`
-/// is the pixel `observations[2k..2k + 2]` in image `csr.images[k]` (an index into the cameras), with the
+/// is the pixel `observations[2k..2k + 2]` in image `csr.image[k]` (an index into the cameras), with the
 /// covariance `covariances[4k..4k + 4]` (row-major 2x2) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparsePointTracks<'a> {

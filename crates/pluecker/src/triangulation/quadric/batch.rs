@@ -112,7 +112,7 @@ pub fn triangulate_quadrics(
 }
 
 /// Quadric tracks given one observation per row ([`Csr`]): row `k` is the conic `conics[9k..]` (row-major
-/// 3x3) in image `csr.images[k]`, with the covariance `covariances[25k..]` (5x5) when given.
+/// 3x3) in image `csr.image[k]`, with the covariance `covariances[25k..]` (5x5) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparseQuadricTracks<'a> {
     /// Which rows belong to which track, and their images.
