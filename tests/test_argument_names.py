@@ -16,9 +16,8 @@ import re
 from typing import Any, Callable, Dict
 
 import numpy as np
-import pytest
-
 import pluecker
+import pytest
 
 K = np.array([[800.0, 0.0, 320.0], [0.0, 800.0, 240.0], [0.0, 0.0, 1.0]])
 VIEWS = 4
