@@ -98,9 +98,9 @@ def test_ellipse_points_lie_on_the_conic(seed):
          "conics: non-finite value (NaN or inf) in row 2"),
         (lambda P, c: (P, np.array([c[0], c[1], np.diag([1.0, -1.0, -1.0]), c[3]]), None),
          pluecker.DegenerateConfigurationError, "conics[2] is not a real ellipse"),
-        (lambda P, c: (P, c, np.eye(5)[None].repeat(3, 0)), pluecker.ShapeError, "cov: expected 4 rows"),
+        (lambda P, c: (P, c, np.eye(5)[None].repeat(3, 0)), pluecker.ShapeError, "covariances: expected 4 rows"),
         (lambda P, c: (P, c, -np.eye(5)[None].repeat(4, 0)), pluecker.DegenerateConfigurationError,
-         "cov[0] is not positive definite"),
+         "covariances[0] is not positive definite"),
     ],
     ids=["two-views", "count", "shape", "nan", "hyperbola", "cov-count", "cov-negative"],
 )

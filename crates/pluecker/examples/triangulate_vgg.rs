@@ -11,12 +11,21 @@ use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::TriangulationOptions;
 use std::path::{Path, PathBuf};
 
-/// The whitespace-separated rows of a text file.
+/// The whitespace-separated words of each line of a text file.
 fn rows(path: &Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    text.lines()
-        .map(|l| l.split_whitespace().map(String::from).collect())
-        .filter(|r: &Vec<String>| !r.is_empty())
+    let words = text
+        .lines()
+        .map(|l| l.split_whitespace().map(String::from).collect::<Vec<_>>());
+    words.filter(|w| !w.is_empty()).collect()
+}
+
+/// Every number of a text file, in reading order.
+fn numbers(path: &Path) -> Vec<f64> {
+    rows(path)
+        .iter()
+        .flatten()
+        .map(|w| w.parse().expect("a number"))
         .collect()
 }
 
@@ -25,29 +34,21 @@ fn main() -> pluecker::Result<()> {
         env!("CARGO_MANIFEST_DIR"),
         "/../../python/pluecker/data/vgg/model_house"
     );
-    let folder = std::env::args()
-        .nth(1)
-        .map_or_else(|| PathBuf::from(shipped), PathBuf::from);
-    let number = |s: &String| -> f64 { s.parse().expect("a number") };
+    let folder = PathBuf::from(std::env::args().nth(1).unwrap_or(shipped.into()));
 
     // The views: each camera's P = K [R | t] (raw, as shipped: in front means (P X̃)₃ > 0) and corners.
-    let views = 10;
-    let mut projections = Vec::new();
-    let mut corners = Vec::new();
-    for j in 0..views {
-        let p: Vec<f64> = rows(&folder.join(format!("house.{j:03}.P")))
-            .iter()
-            .flatten()
-            .map(number)
-            .collect();
-        projections.push(Matrix3x4::from_row_slice(&p));
-        let c = rows(&folder.join(format!("house.{j:03}.corners")));
-        corners.push(
-            c.iter()
-                .map(|r| Vector2::new(number(&r[0]), number(&r[1])))
-                .collect::<Vec<_>>(),
-        );
-    }
+    let file = |j: usize, ext: &str| folder.join(format!("house.{j:03}.{ext}"));
+    let projections: Vec<_> = (0..10)
+        .map(|j| Matrix3x4::from_row_slice(&numbers(&file(j, "P"))))
+        .collect();
+    let corners: Vec<Vec<_>> = (0..10)
+        .map(|j| {
+            numbers(&file(j, "corners"))
+                .chunks(2)
+                .map(Vector2::from_row_slice)
+                .collect()
+        })
+        .collect();
 
     // Each track: a corner index per view, `*` where the point is not seen.
     let options = TriangulationOptions::default();
