@@ -525,7 +525,7 @@ pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
     } else {
         Err(shape_error(
             name,
-            &format!("{views} rows (one per camera in P)"),
+            &format!("{views} rows (one per row of projections)"),
             rows.to_string(),
         ))
     }

@@ -32,13 +32,13 @@
 //! use pluecker::triangulation::{point::triangulate_point, TriangulationOptions};
 //! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
 //! let camera = |cx: f64| k * Matrix3x4::new(1.0, 0.0, 0.0, -cx, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0);
-//! let cameras = [camera(0.0), camera(1.0)];
+//! let projections = [camera(0.0), camera(1.0)];
 //! let x = Vector3::new(0.3, -0.2, 5.0);
-//! let pixels: Vec<Vector2<f64>> = cameras
+//! let pixels: Vec<Vector2<f64>> = projections
 //!     .iter()
 //!     .map(|p| { let h = p * x.push(1.0); Vector2::new(h.x / h.z + 0.3, h.y / h.z - 0.2) })
 //!     .collect();
-//! let result = triangulate_point(&cameras, &pixels, None, &TriangulationOptions::default()).unwrap();
+//! let result = triangulate_point(&projections, &pixels, None, &TriangulationOptions::default()).unwrap();
 //! assert!(result.report.certified());
 //! assert!((result.point - x).norm() < 0.05);
 //! ```

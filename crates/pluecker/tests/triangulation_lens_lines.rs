@@ -609,7 +609,7 @@ fn bad_input_names_the_argument_and_the_row() {
     let mut bad = good.clone();
     bad[2][1].y = f64::NAN;
     match triangulate_line_segments_views(&views, &bad, None, &o) {
-        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), index), ("segments", 2)),
+        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), index), ("lines", 2)),
         other => panic!("{other:?}"),
     }
     // An endpoint beyond the fold of the radial lens (distorted radius above 515 px from the
@@ -617,12 +617,12 @@ fn bad_input_names_the_argument_and_the_row() {
     let mut bad = good.clone();
     bad[1][0] = Vector2::new(600.0 + 700.0, 500.0);
     match triangulate_line_segments_views(&views, &bad, None, &o) {
-        Err(Error::Degenerate { what }) => assert!(what.starts_with("segments[1]: endpoint 0"), "{what}"),
+        Err(Error::Degenerate { what }) => assert!(what.starts_with("lines[1]: endpoint 0"), "{what}"),
         other => panic!("{other:?}"),
     }
     // Wrong counts.
     match triangulate_line_segments_views(&views, &good[..2], None, &o) {
-        Err(Error::Shape { what, .. }) => assert_eq!(what, "segments"),
+        Err(Error::Shape { what, .. }) => assert_eq!(what, "lines"),
         other => panic!("{other:?}"),
     }
     let covs = covariances_of(&sc.obs);
@@ -671,11 +671,11 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         .collect();
     let csr = Csr {
         offsets: &offsets,
-        images: &images,
+        image: &images,
     };
     let tracks = SparseSegmentTracks {
         csr,
-        segments: &segments,
+        lines: &segments,
         covariances: Some(&covariances),
     };
     let o = opts(Method::Local);
@@ -698,13 +698,13 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
     segments[4 * 4 + 1] = f64::NAN;
     let tracks = SparseSegmentTracks {
         csr,
-        segments: &segments,
+        lines: &segments,
         covariances: Some(&covariances),
     };
     let results = triangulate_line_observations_views(&views, &tracks, &o, None).unwrap();
     assert!(results[0].is_ok());
     match &results[1] {
-        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("segments[1]", 2)),
+        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("lines[1]", 2)),
         other => panic!("{other:?}"),
     }
 }
@@ -723,9 +723,9 @@ fn quadrics_refuse_a_distorting_lens_by_name() {
     assert!(refuse_distortion(&[zero.clone(), zero.clone()]).is_ok());
     match refuse_distortion(&[zero.clone(), fisheye]) {
         Err(Error::InvalidOption { name, reason }) => {
-            assert_eq!(name, "views");
+            assert_eq!(name, "cameras");
             assert!(
-                reason.starts_with("views[1] (OPENCV_FISHEYE) has distortion"),
+                reason.starts_with("cameras[1] (OPENCV_FISHEYE) has distortion"),
                 "{reason}"
             );
         }

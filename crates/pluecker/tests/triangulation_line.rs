@@ -618,7 +618,7 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let mut segments = scene.segments.clone();
     segments[2][1] = segments[2][0];
     assert!(
-        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("segments[2]"))
+        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("lines[2]"))
     );
 }
 
@@ -791,7 +791,7 @@ mod batch {
         let tracks = segment_tracks(&endpoints, 1.0);
         let done = AtomicUsize::new(0);
         let per_track = TrackCameras::PerTrack {
-            cameras: &cameras,
+            projections: &cameras,
             views: v,
         };
         let batch = triangulate_lines(per_track, &tracks, &opts(Method::Local), Some(&done)).unwrap();
@@ -806,11 +806,11 @@ mod batch {
         let mut bad = cameras.clone();
         bad[2 * v + 1] = Matrix3x4::zeros();
         let per_track = TrackCameras::PerTrack {
-            cameras: &bad,
+            projections: &bad,
             views: v,
         };
         let batch = triangulate_lines(per_track, &tracks, &opts(Method::Linear), None).unwrap();
-        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("cameras[2][1]")));
+        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("projections[2][1]")));
         assert!(batch.iter().enumerate().all(|(t, r)| r.is_ok() == (t != 2)));
     }
 
@@ -896,8 +896,8 @@ mod batch {
         endpoints[4 * 5 * v + 2..4 * 5 * v + 4].copy_from_slice(p);
         let tracks = segment_tracks(&endpoints, 1.0);
         let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Linear), None).unwrap();
-        assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "segments[2]"));
-        assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "segments[5][0] has zero length"));
+        assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "lines[2]"));
+        assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "lines[5][0] has zero length"));
         assert_eq!(batch.iter().filter(|r| r.is_ok()).count(), n - 2);
     }
 
@@ -954,15 +954,15 @@ mod batch {
         singular[1][(0, 0)] = f64::NAN;
         assert!(matches!(
             triangulate_lines(TrackCameras::Shared(&singular), &tracks(1.0), &o, None),
-            Err(Error::NonFinite { what, index: 1 }) if what == "cameras"
+            Err(Error::NonFinite { what, index: 1 }) if what == "projections"
         ));
         let per_track = TrackCameras::PerTrack {
-            cameras: &cameras,
+            projections: &cameras,
             views: 3,
         };
         assert!(matches!(
             triangulate_lines(per_track, &tracks(1.0), &o, None),
-            Err(Error::Shape { what, .. }) if what == "cameras"
+            Err(Error::Shape { what, .. }) if what == "projections"
         ));
         let empty = LineTracks {
             lines: ImageLines::Homogeneous(&[]),
@@ -1013,7 +1013,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
         &SparseLineTracks {
             csr: Csr {
                 offsets: &offsets,
-                images: &images,
+                image: &images,
             },
             lines: pluecker::triangulation::line::batch::ImageLines::Segments {
                 endpoints: &endpoints,

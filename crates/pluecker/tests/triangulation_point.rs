@@ -547,10 +547,10 @@ fn bad_input_gives_the_right_error() {
     assert!(matches!(err(cams, &nan, None), Error::NonFinite { what, index: 2 } if what == "observations"));
     let mut bad_cams = cams.clone();
     bad_cams[1][(0, 3)] = f64::INFINITY;
-    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "cameras"));
+    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "projections"));
     let mut singular = cams.clone();
     singular[2].fixed_view_mut::<3, 3>(0, 0).fill(0.0);
-    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("cameras[2]")));
+    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("projections[2]")));
     let covs = [
         Matrix2::identity(),
         Matrix2::new(1.0, 2.0, 2.0, 1.0),
@@ -747,7 +747,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     let s = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &sparse,
         covariances: Some(&sparse_cov),
@@ -771,7 +771,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     let reversed = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &rev_images,
+            image: &rev_images,
         },
         observations: &rev_obs,
         covariances: Some(&rev_cov),
@@ -802,13 +802,13 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     bad_images[offsets[1]..offsets[2]].fill(first);
     let bad = SparsePointTracks {
         csr: Csr {
-            images: &bad_images,
+            image: &bad_images,
             ..s.csr
         },
         ..s
     };
     let r = triangulate_point_observations(&cameras, &bad, &opts, None).unwrap();
-    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
+    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("image[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
             if required == "2 distinct images per track" && actual.starts_with("track 1: "))

@@ -615,7 +615,7 @@ mod batch {
         };
         let done = AtomicUsize::new(0);
         let cams = TrackCameras::PerTrack {
-            cameras: &per_track,
+            projections: &per_track,
             views: v,
         };
         let batch = triangulate_quadrics(cams, &tracks, &opts(Method::Local), Some(&done)).unwrap();
@@ -684,7 +684,7 @@ mod batch {
         ));
         assert!(matches!(
             triangulate_quadrics(TrackCameras::Shared(&[]), &tracks, &o, None),
-            Err(Error::Shape { what, .. }) if what == "cameras"
+            Err(Error::Shape { what, .. }) if what == "projections"
         ));
     }
 }

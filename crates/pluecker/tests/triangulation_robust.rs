@@ -139,7 +139,7 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
     let tracks = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &observations,
         covariances: None,
@@ -328,7 +328,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
     let tracks = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &observations,
         covariances: None,
@@ -351,7 +351,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
     let tracks = SparsePointTracks {
         csr: Csr {
             offsets: &[0, 2],
-            images: &one_image,
+            image: &one_image,
         },
         observations: &observations[..4],
         covariances: None,

@@ -91,7 +91,7 @@ pub struct PointTriangulation {
     pub inliers: Option<Vec<bool>>,
 }
 
-/// Triangulates one point seen by `cameras` (3x4, world → pixels, any positive scale; in
+/// Triangulates one point seen by `projections` (3x4, world → pixels, any positive scale; in
 /// front means `(P X̃)₃ > 0`, [`super::views`]) at the pixels
 /// `observations`, with optional 2x2 pixel covariances (one per view; identity when `None`).
 ///
@@ -100,18 +100,18 @@ pub struct PointTriangulation {
 /// [`Error::Degenerate`] for a covariance that is not positive definite or cameras with one common
 /// centre, [`Error::InvalidOption`] for bad options.
 pub fn triangulate_point(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     observations: &[Vector2<f64>],
     covariances: Option<&[Matrix2<f64>]>,
     opts: &TriangulationOptions,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    let whitening = checked_track(cameras, "cameras", observations, covariances, opts)?;
-    let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
+    let whitening = checked_track(projections, "projections", observations, covariances, opts)?;
+    let normalized: Vec<Matrix3x4<f64>> = projections.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
     Ok(solve_track_views(
         views.as_slice(),
-        &frame_of_cameras(cameras),
+        &frame_of_cameras(projections),
         opts,
         started,
     ))

@@ -133,8 +133,9 @@ pub fn triangulate_quadric_views(
     triangulate_quadric(&cameras, conics, covariances, opts)
 }
 
-/// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `views` and the
-/// first view whose camera distorts.
+/// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `cameras` and the
+/// first view whose camera distorts (`cameras[j]`, the camera of `views[j]`, as the Python
+/// `cameras=` argument names it).
 pub fn refuse_distortion(views: &[View]) -> Result<()> {
     let distorting = views
         .iter()
@@ -143,9 +144,9 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
     match distorting {
         None => Ok(()),
         Some((j, lens)) => Err(Error::InvalidOption {
-            name: "views".into(),
+            name: "cameras".into(),
             reason: format!(
-                "views[{j}] ({}) has distortion, through which the outline of a quadric is not a conic; \
+                "cameras[{j}] ({}) has distortion, through which the outline of a quadric is not a conic; \
                  fit the conics to undistorted points (LensCamera::undistort) and give the pinhole part",
                 lens.model().as_str()
             ),
@@ -153,7 +154,7 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
     }
 }
 
-/// Triangulates one ellipsoid seen by `cameras` (3x4, world → pixels, any positive scale; in
+/// Triangulates one ellipsoid seen by `projections` (3x4, world → pixels, any positive scale; in
 /// front means `(P X̃)₃ > 0`, [`super::views`]) as the
 /// primal image conics `conics` (eq. 8, pixels, any scale and sign; each must be a real ellipse), with
 /// optional 5x5 covariances of the conic residuals (one per view, e.g. from
@@ -164,7 +165,7 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
 /// [`Error::Degenerate`] (a conic that is not an ellipse, a covariance that is not positive definite,
 /// cameras with one centre), [`Error::InvalidOption`].
 pub fn triangulate_quadric(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     conics: &[Matrix3<f64>],
     covariances: Option<&[Matrix5]>,
     opts: &TriangulationOptions,
@@ -172,12 +173,12 @@ pub fn triangulate_quadric(
     let started = Instant::now();
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
-    check_views(cameras, conics.len(), 3, "conics", opts.method)?;
+    check_views(projections, conics.len(), 3, "conics", opts.method)?;
     let frames = parse_observations(conics, "conics", "is not a real ellipse", ConicFrame::of_conic)?;
     let problem = QuadricProblem {
-        cameras: cameras.to_vec(),
+        cameras: projections.to_vec(),
         frames,
-        whitenings: whitenings(covariances, cameras.len(), "covariances")?,
+        whitenings: whitenings(covariances, projections.len(), "covariances")?,
     };
     let mut report = Report::new(opts.method);
     let Some(linear) = linear_quadric(&problem) else {
@@ -238,7 +239,7 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
 /// Gaussian noise of `sigma` px per coordinate) gives the conic and its covariance. Errors name the
 /// view index.
 pub fn triangulate_quadric_points(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     points: &[Vec<Vector2<f64>>],
     sigma: f64,
     opts: &TriangulationOptions,
@@ -259,7 +260,7 @@ pub fn triangulate_quadric_points(
         conics.push(fit.conic);
         covariances.push(fit.covariance);
     }
-    triangulate_quadric(cameras, &conics, Some(&covariances), opts)
+    triangulate_quadric(projections, &conics, Some(&covariances), opts)
 }
 
 /// The nearest real ellipsoid of a dual quadric of any scale and sign: normalised so that
