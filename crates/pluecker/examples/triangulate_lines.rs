@@ -19,7 +19,6 @@ use pluecker::triangulation::line::{lines_from_segments, triangulate_line, trian
 use pluecker::triangulation::quadric::triangulate_quadric_points;
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
-use pluecker::CertifyOptions;
 use std::fs;
 use std::path::Path;
 
@@ -79,14 +78,10 @@ fn median(v: &[f64]) -> f64 {
 }
 
 fn options(method: Method, gap: f64) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        certify: CertifyOptions {
-            max_relative_gap: gap,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_relative_gap = gap;
+    options
 }
 
 fn synthetic(gap: f64) {

@@ -112,7 +112,9 @@ fn run(name: &str, data: &Dataset, views: &[usize]) {
         // a finite point in front of the cameras (counted).
         let mut costs = vec![(Method::Optimal, r.report.cost)];
         for method in [Method::Linear, Method::Local] {
-            let m = triangulate_point(&cams, &obs, None, &TriangulationOptions { method, ..opts.clone() }).unwrap();
+            let mut other = opts.clone();
+            other.method = method;
+            let m = triangulate_point(&cams, &obs, None, &other).unwrap();
             if matches!(m.report.status, Status::AtInfinity | Status::BehindCamera) {
                 *statuses
                     .entry("(linear/local not in front: left out of the RMS table)")

@@ -7,6 +7,7 @@
 
 /// Options of every certificate. Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct CertifyOptions {
     /// The answer is certified when `(cost − lower_bound) / max(cost, 1e-12) ≤ max_relative_gap`.
     /// Default `1e-3`.

@@ -61,10 +61,9 @@ fn nees(result: &PoseResult, scene: &Scene) -> Option<f64> {
 }
 
 fn with_sigma(sigma: f64) -> PoseOptions {
-    PoseOptions {
-        sigma_px: Some(sigma),
-        ..PoseOptions::default()
-    }
+    let mut options = PoseOptions::default();
+    options.sigma_px = Some(sigma);
+    options
 }
 
 /// Mean NEES over `trials` seeds of `estimate`.
@@ -162,14 +161,11 @@ fn robust_pose_through_a_lens_rejects_outliers() {
             }
             outlier[i] = true;
         }
-        let opts = PoseOptions {
-            ransac: Some(RansacOptions {
-                seed,
-                ..RansacOptions::default()
-            }),
-            sigma_px: Some(1.0),
-            ..PoseOptions::default()
-        };
+        let mut ransac = RansacOptions::default();
+        ransac.seed = seed;
+        let mut opts = PoseOptions::default();
+        opts.ransac = Some(ransac);
+        opts.sigma_px = Some(1.0);
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
         for (i, _) in outlier.iter().enumerate().filter(|(_, &o)| o) {
@@ -269,10 +265,8 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
         "{err}"
     );
     // With covariances, certification is refused with a reason, not claimed.
-    let opts = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.certify = Some(Default::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
     assert!(result.certificate.is_none_or(|c| !c.certified));
     assert_ne!(result.status, Status::Success);
@@ -292,10 +286,8 @@ fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
     corr.points2d[7] = Vector2::new(320.0 + 1.8 * 300.0, 240.0);
     corr.lines2d[1][0] = Vector2::new(320.0, 240.0 - 1.8 * 300.0);
     assert!(estimate_pose(&lens, &corr, &PoseOptions::default()).is_err());
-    let opts = PoseOptions {
-        ransac: Some(RansacOptions::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.ransac = Some(RansacOptions::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
     assert_eq!(result.status, Status::Success);
     assert_eq!(result.inliers_points.len(), 30);
@@ -314,14 +306,11 @@ fn ransac_thresholds_are_distorted_pixels_at_the_fisheye_edge() {
     for seed in 0..10 {
         let scene = visible_scene(120.0, 60, 0, false, 500 + seed);
         let corr = observe(&scene, &lens, &|_| 1.0, &mut Rng::new(seed));
-        let opts = PoseOptions {
-            ransac: Some(RansacOptions {
-                seed,
-                ..RansacOptions::default()
-            }),
-            sigma_px: Some(1.0),
-            ..PoseOptions::default()
-        };
+        let mut ransac = RansacOptions::default();
+        ransac.seed = seed;
+        let mut opts = PoseOptions::default();
+        opts.ransac = Some(ransac);
+        opts.sigma_px = Some(1.0);
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
         kept += result.inliers_points.iter().filter(|&&k| k).count();
@@ -803,14 +792,10 @@ fn the_exact_cost_weights_each_observation_by_its_own_covariance() {
 fn no_certificate_is_claimed_through_a_lens() {
     // Every path through a lens refuses the certificate and says why; a LensCamera of the PINHOLE model
     // is a pinhole camera and may be certified.
-    let certify = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
-    let robust = PoseOptions {
-        ransac: Some(RansacOptions::default()),
-        ..certify.clone()
-    };
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(Default::default());
+    let mut robust = certify.clone();
+    robust.ransac = Some(RansacOptions::default());
     for (lens, r_max) in strong_lenses() {
         let mut rng = Rng::new(5);
         let (corr, _, _) = lens_scene(&lens, r_max, 20, 2, &[Matrix2::identity() * 0.01; 24], &mut rng);

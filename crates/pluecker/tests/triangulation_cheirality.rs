@@ -18,14 +18,10 @@ use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(300),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_nodes = Some(300);
+    options
 }
 
 fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {

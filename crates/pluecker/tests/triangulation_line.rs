@@ -18,14 +18,10 @@ use pluecker::Error;
 
 fn opts(method: Method) -> TriangulationOptions {
     // A node cap keeps the tests fast; certificates below are asserted only where the gap closed.
-    TriangulationOptions {
-        method,
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(300),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_nodes = Some(300);
+    options
 }
 
 /// Sine of the angle between two lines' directions, and the distance between their closest points
@@ -150,15 +146,11 @@ fn the_relaxation_bound_is_below_the_costs_at_every_node_cap() {
             &scene.endpoints[1],
         );
         for max_nodes in [1, 4, 40, 400] {
-            let o = TriangulationOptions {
-                method: Method::Optimal,
-                line_bound: LineBound::Relaxation,
-                certify: pluecker::CertifyOptions {
-                    max_relative_gap: 1e-9,
-                    max_nodes: Some(max_nodes),
-                },
-                ..Default::default()
-            };
+            let mut o = TriangulationOptions::default();
+            o.method = Method::Optimal;
+            o.line_bound = LineBound::Relaxation;
+            o.certify.max_relative_gap = 1e-9;
+            o.certify.max_nodes = Some(max_nodes);
             let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let Some(bound) = r.report.certificate.map(|c| c.raw_lower_bound) else {
                 continue; // nothing proved, nothing claimed
@@ -210,15 +202,10 @@ fn the_relaxation_bound_is_below_the_costs_when_one_view_carries_the_residual() 
             &scene.endpoints[1],
         );
         for max_nodes in [1, 60] {
-            let o = TriangulationOptions {
-                method: Method::Optimal,
-                line_bound: LineBound::Relaxation,
-                certify: pluecker::CertifyOptions {
-                    max_nodes: Some(max_nodes),
-                    ..Default::default()
-                },
-                ..Default::default()
-            };
+            let mut o = TriangulationOptions::default();
+            o.method = Method::Optimal;
+            o.line_bound = LineBound::Relaxation;
+            o.certify.max_nodes = Some(max_nodes);
             let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let c = r.report.certificate.expect("a search ran");
             if c.raw_lower_bound.is_nan() {
@@ -284,10 +271,8 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
             } else {
                 lines_from_segments(&segments, 1.0).unwrap()
             };
-            let o = TriangulationOptions {
-                line_bound: bound,
-                ..opts(Method::Optimal)
-            };
+            let mut o = opts(Method::Optimal);
+            o.line_bound = bound;
             let optimal = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let c = optimal.report.certificate.expect("a search ran");
             if !c.certified {
@@ -539,10 +524,8 @@ fn too_small_gamma_is_infeasible() {
     let scene = line_scene(4, 0.8, 13);
     let mut rng = Rng::new(14);
     let segments = scene.noisy_segments(1.0, &mut rng);
-    let o = TriangulationOptions {
-        max_reprojection_error: Some(1e-4),
-        ..opts(Method::Optimal)
-    };
+    let mut o = opts(Method::Optimal);
+    o.max_reprojection_error = Some(1e-4);
     let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
     common::assert_proved_empty(&r.report);
 }
@@ -603,13 +586,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
         .collect();
     assert!(matches!(err(cams, &epipolar, None), Error::Degenerate { ref what } if what.contains("epipolar")));
     // Options.
-    let bad = TriangulationOptions {
-        certify: pluecker::CertifyOptions {
-            max_relative_gap: -1.0,
-            ..Default::default()
-        },
-        ..o.clone()
-    };
+    let mut certify = pluecker::CertifyOptions::default();
+    certify.max_relative_gap = -1.0;
+    let mut bad = o.clone();
+    bad.certify = certify;
     assert!(matches!(
         triangulate_line(&scene.cameras, &lines, None, &bad),
         Err(Error::InvalidOption { .. })
@@ -675,14 +655,10 @@ mod batch {
 
     fn opts(method: Method) -> TriangulationOptions {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
-        TriangulationOptions {
-            method,
-            certify: pluecker::CertifyOptions {
-                max_nodes: Some(40),
-                ..Default::default()
-            },
-            ..Default::default()
-        }
+        let mut options = TriangulationOptions::default();
+        options.method = method;
+        options.certify.max_nodes = Some(40);
+        options
     }
 
     /// A result with its wall time zeroed: the one field a batch and a single call may not share.
@@ -925,13 +901,10 @@ mod batch {
         };
         assert!(matches!(run(&tracks(0.0), &o), Error::InvalidOption { name, .. } if name == "sigma"));
         assert!(matches!(run(&tracks(f64::NAN), &o), Error::InvalidOption { name, .. } if name == "sigma"));
-        let bad = TriangulationOptions {
-            certify: pluecker::CertifyOptions {
-                max_nodes: Some(0),
-                ..Default::default()
-            },
-            ..o.clone()
-        };
+        let mut certify = pluecker::CertifyOptions::default();
+        certify.max_nodes = Some(0);
+        let mut bad = o.clone();
+        bad.certify = certify;
         assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "certify.max_nodes"));
         let short = LineTracks {
             lines: ImageLines::Homogeneous(&endpoints[..8]),

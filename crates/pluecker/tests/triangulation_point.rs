@@ -23,10 +23,9 @@ use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOpti
 mod oracle;
 
 fn options(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options
 }
 
 fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
@@ -514,17 +513,13 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
         (!convexity_test(&vs, &local.point).passed).then_some((scene, obs))
     });
     let (scene, obs) = hard.expect("some 20-view scene at 0.2 degrees needs branch and bound");
-    let opts = TriangulationOptions {
-        max_reprojection_error: Some(0.01),
-        ..Default::default()
-    };
+    let mut opts = TriangulationOptions::default();
+    opts.max_reprojection_error = Some(0.01);
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
     common::assert_proved_empty(&r.report);
     // With a γ every view can meet, the same scene is certified.
-    let opts = TriangulationOptions {
-        max_reprojection_error: Some(30.0),
-        ..Default::default()
-    };
+    let mut opts = TriangulationOptions::default();
+    opts.max_reprojection_error = Some(30.0);
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
     assert!(r.report.certified(), "{:?}", r.report);
 }
@@ -571,13 +566,8 @@ fn bad_input_gives_the_right_error() {
         })
         .collect();
     assert!(matches!(err(&same_centre, obs, None), Error::Degenerate { what } if what.contains("no parallax")));
-    let bad_opts = TriangulationOptions {
-        certify: pluecker::CertifyOptions {
-            max_relative_gap: -1.0,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let mut bad_opts = TriangulationOptions::default();
+    bad_opts.certify.max_relative_gap = -1.0;
     assert!(matches!(
         triangulate_point(cams, obs, None, &bad_opts),
         Err(Error::InvalidOption { .. })
@@ -697,10 +687,8 @@ fn optimal_reports_exactly_parallel_rays_at_infinity() {
         })
         .collect();
     let observations = vec![Vector2::new(320.0, 240.0); 3];
-    let opts = TriangulationOptions {
-        method: Method::Optimal,
-        ..Default::default()
-    };
+    let mut opts = TriangulationOptions::default();
+    opts.method = Method::Optimal;
     let r = triangulate_point(&cameras, &observations, None, &opts).unwrap();
     assert_eq!(r.report.status, Status::AtInfinity, "{:?}", r.report);
     assert!(r.point.iter().all(|v| v.is_nan()));

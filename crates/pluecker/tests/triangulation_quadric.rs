@@ -14,14 +14,10 @@ use pluecker::triangulation::{CertificateKind, Method, QuadricBound, Status, Tri
 use pluecker::Error;
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(200),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_nodes = Some(200);
+    options
 }
 
 fn outlines(cameras: &[Matrix3x4<f64>], e: &Ellipsoid) -> Vec<Matrix3<f64>> {
@@ -230,10 +226,8 @@ fn no_ellipsoid_anywhere_costs_less_than_the_certified_bound() {
     ];
     let (mut checked, mut tried, mut violations) = (0, 0, 0);
     for regime in &regimes {
-        let regime_opts = TriangulationOptions {
-            quadric_bound: regime.bound,
-            ..opts(Method::Optimal)
-        };
+        let mut regime_opts = opts(Method::Optimal);
+        regime_opts.quadric_bound = regime.bound;
         let mut certified_here = 0;
         for seed in 0..5u64 {
             let Some(scene) = regime_scene(regime, 30 + seed) else {
@@ -430,10 +424,8 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     let c = searched.report.certificate.expect("a search ran");
     assert!(c.nodes >= 1 && c.solver_iterations >= c.nodes, "{c:?}");
     assert!(c.solver_iterations <= 200 * (4 * c.nodes + 36), "{c:?}");
-    let o = TriangulationOptions {
-        max_reprojection_error: Some(1e-3),
-        ..opts(Method::Optimal)
-    };
+    let mut o = opts(Method::Optimal);
+    o.max_reprojection_error = Some(1e-3);
     let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &o).unwrap();
     common::assert_proved_empty(&r.report);
 }
@@ -496,13 +488,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let mut cams = scene.cameras.clone();
     cams[2] = Matrix3x4::zeros();
     assert!(matches!(err(&cams, &conics, None), Error::SingularCamera { .. }));
-    let bad = TriangulationOptions {
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(0),
-            ..Default::default()
-        },
-        ..o.clone()
-    };
+    let mut certify = pluecker::CertifyOptions::default();
+    certify.max_nodes = Some(0);
+    let mut bad = o.clone();
+    bad.certify = certify;
     assert!(matches!(
         triangulate_quadric(&scene.cameras, &conics, None, &bad),
         Err(Error::InvalidOption { .. })
@@ -527,14 +516,10 @@ mod batch {
 
     fn opts(method: Method) -> TriangulationOptions {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
-        TriangulationOptions {
-            method,
-            certify: pluecker::CertifyOptions {
-                max_nodes: Some(40),
-                ..Default::default()
-            },
-            ..Default::default()
-        }
+        let mut options = TriangulationOptions::default();
+        options.method = method;
+        options.certify.max_nodes = Some(40);
+        options
     }
 
     fn untimed_quadric(mut r: QuadricTriangulation) -> QuadricTriangulation {

@@ -31,10 +31,9 @@ use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options
 }
 
 /// The test of the module docs on `errors` (one chart error per draw) against `predicted`; panics

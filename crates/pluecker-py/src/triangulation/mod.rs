@@ -37,10 +37,9 @@ impl PyTriangulationOptions {
 
     /// The core's options, with `certify` as it is now.
     pub(crate) fn core(&self) -> TriangulationOptions {
-        TriangulationOptions {
-            certify: self.certify.read().inner,
-            ..self.inner.clone()
-        }
+        let mut options = self.inner.clone();
+        options.certify = self.certify.read().inner;
+        options
     }
 }
 

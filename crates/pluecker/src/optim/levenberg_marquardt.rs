@@ -7,6 +7,7 @@ use nalgebra::SMatrix;
 
 /// Options of [`minimize`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct LevenbergMarquardtOptions {
     /// Initial damping, relative to the largest diagonal entry of `JᵀJ`. Default `1e-3`.
     pub initial_damping: f64,

@@ -23,6 +23,7 @@ pub enum Subproblem {
 
 /// Options of [`minimize`]. Defaults are the paper's values.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct TrustRegionOptions {
     /// Subproblem solver. Default [`Subproblem::Hebden`].
     pub subproblem: Subproblem,

@@ -76,6 +76,7 @@ impl Method {
 
 /// Options of [`estimate_pose`]; every field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct PoseOptions {
     /// Estimator. Default [`Method::TrustRegion`].
     pub method: Method,

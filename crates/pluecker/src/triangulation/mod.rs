@@ -122,6 +122,7 @@ impl QuadricBound {
 
 /// Options of every triangulation function; each field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct TriangulationOptions {
     /// Estimator. Default [`Method::Optimal`].
     pub method: Method,

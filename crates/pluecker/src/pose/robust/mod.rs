@@ -79,6 +79,7 @@ use std::time::{Duration, Instant};
 
 /// Options of the robust estimator (`PoseOptions::ransac`). Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct RansacOptions {
     /// Inlier threshold of a point: the reprojection distance in pixels. Default `4.0`.
     pub point_threshold: f64,
