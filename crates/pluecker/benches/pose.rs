@@ -26,8 +26,8 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::Vector2;
-use pluecker::geometry::quaternion::rotation_distance;
-use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::geometry::rotation_distance;
+use pluecker::pose::ReprojectionCost;
 use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, RansacOptions, Status};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, Scene, SceneKind};

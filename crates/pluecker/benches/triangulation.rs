@@ -24,8 +24,8 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::{CertificateKind, LineBound, Method, TriangulationOptions};
 use std::time::Duration;
 

@@ -12,8 +12,8 @@
 //! `P diag(−1, −1, −1, 1)`, which keeps the projections and makes the depths positive.
 
 use nalgebra::{Matrix3x4, Matrix4, Vector2};
-use pluecker::triangulation::point::batch::{triangulate_points, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point::{triangulate_points, PointTracks};
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use std::collections::BTreeMap;
 use std::path::Path;

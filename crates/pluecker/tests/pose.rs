@@ -2,9 +2,9 @@
 //! optimality, and the errors bad input gets. Seeds are fixed per test and printed on failure.
 
 use nalgebra::{Matrix3, Vector2, Vector3};
-use pluecker::geometry::quaternion::{log_so3, rotation_distance};
-use pluecker::pose::reprojection::{pose_covariance, ReprojectionCost};
+use pluecker::geometry::{rotation_distance, testing::log_so3};
 use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, Status};
+use pluecker::pose::{pose_covariance, ReprojectionCost};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, random_scene, SceneKind};
 use pluecker::{Camera, Error, Pose};

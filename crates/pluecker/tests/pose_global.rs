@@ -415,9 +415,7 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
                 (plain_raw - other_raw).abs() <= 1e-6 * plain_raw.max(1.0),
                 "seed {seed}"
             );
-            assert!(
-                pluecker::geometry::quaternion::rotation_distance(&plain.pose.rotation, &other.pose.rotation) < 1e-8
-            );
+            assert!(pluecker::geometry::rotation_distance(&plain.pose.rotation, &other.pose.rotation) < 1e-8);
         }
         // Skew: the same pixels seen through K with skew are certified with a bound below the cost.
         let skewed_camera = pluecker::Camera { skew: 30.0, ..cam };

@@ -8,7 +8,7 @@
 
 use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
 use pluecker::camera_model::{CameraModel, LensCamera};
-use pluecker::geometry::quaternion::log_so3;
+use pluecker::geometry::testing::log_so3;
 use pluecker::pose::{
     estimate_pose, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions, Status,
 };
@@ -128,7 +128,7 @@ fn the_refined_pose_minimises_the_exact_distorted_pixel_error() {
                 // Left perturbation exp(ω) R: ∂x_cam/∂ω = −[R X]×, ∂x_cam/∂t = I.
                 let mut j = nalgebra::SMatrix::<f64, 2, 6>::zeros();
                 j.fixed_view_mut::<2, 3>(0, 0)
-                    .copy_from(&(d * -pluecker::geometry::quaternion::skew(&rx)));
+                    .copy_from(&(d * -pluecker::geometry::testing::skew(&rx)));
                 j.fixed_view_mut::<2, 3>(0, 3).copy_from(&d);
                 jtj += j.transpose() * j;
                 jtr += j.transpose() * res;
@@ -383,7 +383,7 @@ fn undistorted_covariances_match_the_derivative_of_the_distortion() {
             noise: None,
         };
         let noise = ObservationNoise::from_covariances(&point_covs, &line_covs).unwrap();
-        let (_, undistorted) = pluecker::pose::lens::undistort(&lens, &corr, Some(&noise)).unwrap();
+        let (_, undistorted) = pluecker::pose::testing::undistort(&lens, &corr, Some(&noise)).unwrap();
         let out = undistorted.noise.as_ref().unwrap();
         // J = ∂u/∂ū at the undistorted pixel ū, by central differences of the oracle.
         let jacobian = |ubar: &Vector2<f64>| {
@@ -621,7 +621,7 @@ fn oracle_gradient(
             let mut d = Vector6::zeros();
             d[a] = sign * h;
             let w = Vector3::new(d[0], d[1], d[2]);
-            let r = pluecker::geometry::quaternion::exp_so3(&w) * rotation;
+            let r = pluecker::geometry::testing::exp_so3(&w) * rotation;
             oracle_cost(lens, corr, covs, &r, &(translation + Vector3::new(d[3], d[4], d[5])))
         };
         (at(1.0) - at(-1.0)) / (2.0 * h)
@@ -637,7 +637,7 @@ fn step_in_sigmas(g: &Vector6<f64>, cov: &Matrix6<f64>) -> f64 {
 /// The first-order answer the pipeline gave before the exact cost: the observations undistorted with
 /// the noise `W = L⁻¹ J`, on the pinhole part.
 fn first_order_answer(lens: &LensCamera, corr: &Correspondences, opts: &PoseOptions) -> PoseResult {
-    let (pinhole, undistorted) = pluecker::pose::lens::undistort(lens, corr, corr.noise.as_ref()).unwrap();
+    let (pinhole, undistorted) = pluecker::pose::testing::undistort(lens, corr, corr.noise.as_ref()).unwrap();
     estimate_pose(&pinhole, &undistorted, opts).unwrap()
 }
 

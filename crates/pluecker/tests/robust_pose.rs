@@ -8,8 +8,8 @@
 //! which moves each predicted feature by about σ/√(n/6) ≈ 0.3 px here (1 px noise, ≥ 20 inliers).
 
 use nalgebra::{Matrix6, Vector2, Vector3, Vector6};
-use pluecker::geometry::quaternion::{log_so3, rotation_distance};
-use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::geometry::{rotation_distance, testing::log_so3};
+use pluecker::pose::ReprojectionCost;
 use pluecker::pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacStop, Status,
 };

@@ -6,9 +6,9 @@
 use nalgebra::{Matrix2, Matrix2x4, Matrix3, Matrix3x4, Matrix4, SymmetricEigen, Vector2, Vector3};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::rng::Rng;
-use pluecker::triangulation::point::lens::{lens_certificate, LensView};
+use pluecker::triangulation::point::testing::{lens_certificate, LensView};
 use pluecker::triangulation::point::triangulate_point_views;
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::View;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use pluecker::{AnyCamera, Pose};
 

@@ -13,11 +13,11 @@ use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;
-use pluecker::triangulation::line::batch::{triangulate_line_observations_views, SparseSegmentTracks};
-use pluecker::triangulation::line::lens::{exact_cost, LensSegment};
+use pluecker::triangulation::line::testing::{exact_cost, LensSegment};
 use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments, triangulate_line_segments_views};
-use pluecker::triangulation::tracks::Csr;
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::line::{triangulate_line_observations_views, SparseSegmentTracks};
+use pluecker::triangulation::Csr;
+use pluecker::triangulation::View;
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::{AnyCamera, Camera, Error, Pose};
 

@@ -325,7 +325,7 @@ fn tilt_into_epipolar_plane(scene: &mut LineScene, angle: f64) -> bool {
     let centres: Vec<Vector3<f64>> = scene
         .cameras
         .iter()
-        .map(pluecker::triangulation::views::centre)
+        .map(pluecker::triangulation::testing::centre)
         .collect();
     let mid = 0.5 * (scene.endpoints[0] + scene.endpoints[1]);
     let baseline = (centres[1] - centres[0]).normalize();
@@ -370,7 +370,7 @@ fn search_below(
     let centres: Vec<Vector3<f64>> = scene
         .cameras
         .iter()
-        .map(pluecker::triangulation::views::centre)
+        .map(pluecker::triangulation::testing::centre)
         .collect();
     let distance = |c: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| (c - a).cross(&(b - a).normalize()).norm();
     let (p, d) = (optimal.point, optimal.direction);
@@ -577,7 +577,8 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     // A line in the epipolar plane of the two views (parallel to the baseline): the back-projected
     // planes coincide.
     let cams = &scene.cameras[..2];
-    let baseline = pluecker::triangulation::views::centre(&cams[1]) - pluecker::triangulation::views::centre(&cams[0]);
+    let baseline =
+        pluecker::triangulation::testing::centre(&cams[1]) - pluecker::triangulation::testing::centre(&cams[0]);
     let a = Vector3::new(0.1, 0.2, 0.3);
     let b = a + baseline * 0.2;
     let epipolar: Vec<Vector3<f64>> = cams
@@ -643,12 +644,12 @@ mod batch {
     use super::common::{mask, noisy_segments, seen, segment, segment_tracks};
     use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
     use pluecker::rng::Rng;
-    use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
     use pluecker::triangulation::line::{
         lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
     };
+    use pluecker::triangulation::line::{triangulate_lines, ImageLines, LineTracks};
     use pluecker::triangulation::scenes::arc_cameras;
-    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
     use pluecker::Error;
     use std::sync::atomic::{AtomicUsize, Ordering};
@@ -947,8 +948,8 @@ mod batch {
 
 #[test]
 fn sparse_line_tracks_equal_the_dense_batch() {
-    use pluecker::triangulation::line::batch::{triangulate_line_observations, SparseLineTracks};
-    use pluecker::triangulation::tracks::Csr;
+    use pluecker::triangulation::line::{triangulate_line_observations, SparseLineTracks};
+    use pluecker::triangulation::Csr;
     // Three views, four tracks seen in all of them; the sparse form lists the same rows track by track.
     let mut rng = pluecker::rng::Rng::new(21);
     let scene = pluecker::synthetic::triangulation_scene(3, 0.6, 21);
@@ -965,10 +966,10 @@ fn sparse_line_tracks_equal_the_dense_batch() {
         }
     }
     let opts = pluecker::triangulation::TriangulationOptions::default();
-    let dense = pluecker::triangulation::line::batch::triangulate_lines(
-        pluecker::triangulation::tracks::TrackCameras::Shared(&cameras),
-        &pluecker::triangulation::line::batch::LineTracks {
-            lines: pluecker::triangulation::line::batch::ImageLines::Segments {
+    let dense = pluecker::triangulation::line::triangulate_lines(
+        pluecker::triangulation::TrackCameras::Shared(&cameras),
+        &pluecker::triangulation::line::LineTracks {
+            lines: pluecker::triangulation::line::ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
             },
@@ -988,7 +989,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
                 offsets: &offsets,
                 images: &images,
             },
-            lines: pluecker::triangulation::line::batch::ImageLines::Segments {
+            lines: pluecker::triangulation::line::ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
             },

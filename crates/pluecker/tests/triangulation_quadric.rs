@@ -5,7 +5,7 @@
 mod common;
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
-use pluecker::geometry::quadric::{project_dual, Ellipse, Ellipsoid};
+use pluecker::geometry::{project_dual, Ellipse, Ellipsoid};
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::quadric::{triangulate_quadric, triangulate_quadric_points, Matrix5};
@@ -319,7 +319,7 @@ fn search_below(
         candidates.extend(cost(&x).map(|v| (v, x)));
     }
     for p in cameras {
-        let centre = pluecker::triangulation::views::centre(p);
+        let centre = pluecker::triangulation::testing::centre(p);
         let mut added = 0;
         while added < 1000 {
             let x = random(centre, 2.0, 0.5, rng);
@@ -503,13 +503,13 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
 mod batch {
     use super::common::{mask, seen};
     use nalgebra::{Matrix3, Matrix3x4, Vector2};
-    use pluecker::geometry::quadric::{project_dual, Ellipse};
+    use pluecker::geometry::{project_dual, Ellipse};
     use pluecker::rng::Rng;
     use pluecker::triangulation::fitting::fit_conic;
-    use pluecker::triangulation::quadric::batch::{triangulate_quadrics, QuadricTracks};
     use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
+    use pluecker::triangulation::quadric::{triangulate_quadrics, QuadricTracks};
     use pluecker::triangulation::scenes::quadric_scene;
-    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
     use pluecker::Error;
     use std::sync::atomic::{AtomicUsize, Ordering};

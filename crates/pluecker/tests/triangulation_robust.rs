@@ -13,9 +13,9 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use oracle::PointData;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::point::batch::{triangulate_point_observations, SparsePointTracks};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::tracks::Csr;
+use pluecker::triangulation::point::{triangulate_point_observations, SparsePointTracks};
+use pluecker::triangulation::Csr;
 use pluecker::triangulation::{Status, TriangulationOptions};
 
 fn robust() -> TriangulationOptions {

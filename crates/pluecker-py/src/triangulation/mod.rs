@@ -120,7 +120,7 @@ pub(crate) fn positive_sigma(sigma: f64) -> PyResult<f64> {
             "sigma",
             format!(
                 "must be a positive finite number of pixels, got {}",
-                pluecker::error::number(sigma)
+                pluecker::testing::number(sigma)
             ),
         ))
     }

@@ -5,7 +5,7 @@
 use super::problem::{Objective, StoppingCriteria, Summary, Termination};
 use nalgebra::SMatrix;
 
-/// Options of [`minimize`].
+/// Options of the Levenberg-Marquardt solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct LevenbergMarquardtOptions {
