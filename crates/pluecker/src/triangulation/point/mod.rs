@@ -57,9 +57,8 @@ pub use batch::{
 #[doc(hidden)]
 pub mod testing {
     pub use super::certificate::{convexity_test, ConvexityCertificate};
-    pub use super::cost::{in_front, point_cost, point_views, PointObjective, PointView};
+    pub use super::cost::{in_front, point_cost, point_views, PointView};
     pub use super::global::{global_point, GlobalPoint, GlobalSettings, GlobalStatus, Relaxation};
-    pub use super::infinity::cost_at_infinity;
     pub use super::lens::{exact_cost, lens_certificate, LensBound, LensBoundFailure, LensView};
 }
 
