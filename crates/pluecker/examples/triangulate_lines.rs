@@ -224,7 +224,7 @@ fn main() {
     println!(
         "relative gap {gap:e}, max nodes {} (relaxation), {} (Taylor)",
         pluecker::triangulation::CONIC_MAX_NODES,
-        pluecker::triangulation::line::testing::MAX_NODES
+        pluecker::triangulation::line::TAYLOR_MAX_NODES
     );
     synthetic(gap);
     real(Path::new(&data), gap);

@@ -19,7 +19,7 @@
 //! ## Examples
 //! The pose of a camera from points and lines:
 //! ```
-//! use pluecker::{camera::Camera, pose::{estimate_pose, PoseOptions}, synthetic};
+//! use pluecker::{pose::{estimate_pose, PoseOptions}, synthetic};
 //! let scene = synthetic::random_scene(synthetic::SceneKind::General, 20, 5, 42);
 //! let result = estimate_pose(&scene.camera, &scene.correspondences, &PoseOptions::default()).unwrap();
 //! assert!((result.pose.rotation - scene.rotation).norm() < 1e-6);
@@ -48,7 +48,7 @@
 //! ```
 //! use nalgebra::{Matrix3, Vector3};
 //! use pluecker::camera_model::{CameraModel, LensCamera};
-//! use pluecker::triangulation::{point::triangulate_point_views, views::View, TriangulationOptions};
+//! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
 //! use pluecker::Pose;
 //! let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
 //! let views = [

@@ -25,7 +25,7 @@ pub(crate) mod robust;
 
 #[doc(no_inline)]
 pub use crate::certificate::{Certificate, CertifyOptions};
-pub use correspondences::{Conditioning, Correspondences};
+pub use correspondences::Correspondences;
 pub use estimate::estimate_pose;
 pub use noise::ObservationNoise;
 pub use refinement::refine_pose;

@@ -36,6 +36,7 @@ pub use batch::{
     triangulate_line_observations, triangulate_line_observations_views, triangulate_lines, ImageLines, LineTracks,
     SparseLineTracks, SparseSegmentTracks,
 };
+pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;
 
 /// The stages of the line solvers that the integration tests check directly; not part of the
 /// user-facing API.
@@ -43,7 +44,6 @@ pub use batch::{
 pub mod testing {
     pub use super::lens::{exact_cost, LensSegment};
     pub use super::residual::{endpoint_distances, LineFrame};
-    pub use super::taylor_search::MAX_NODES;
 }
 
 use self::lens::LensSegment;

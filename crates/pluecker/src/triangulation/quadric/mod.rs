@@ -144,6 +144,7 @@ pub fn triangulate_quadric_views(
 
 /// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `views` and the
 /// first view whose camera distorts.
+#[doc(hidden)]
 pub fn refuse_distortion(views: &[View]) -> Result<()> {
     let distorting = views
         .iter()
