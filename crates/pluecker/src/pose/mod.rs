@@ -94,7 +94,7 @@ pub struct PoseOptions {
     pub method: Method,
     /// Penalty λ on `r·r = 1` and `r·s = 0` (eqs. 13-15, 22). Paper: 50. Default `50.0`.
     pub penalty: f64,
-    /// Solve the algebraic stage in a centred, unit-scale object frame ([`Conditioning`]). Default true.
+    /// Solve the algebraic stage in a centred, unit-scale object frame. Default true.
     pub normalize: bool,
     /// Follow the estimator with a minimisation of the reprojection error (pixel distances for points,
     /// endpoint-to-projected-line distances for lines). Default true.
