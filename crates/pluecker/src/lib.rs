@@ -71,6 +71,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // Every public item is documented (`make lint` turns this into an error).
 #![warn(missing_docs)]
+// Every type a public signature names is itself reachable (re-exported) from a public path.
 #![warn(unnameable_types)]
 
 pub(crate) mod camera;
