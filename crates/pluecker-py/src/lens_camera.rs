@@ -9,7 +9,7 @@ use numpy::ndarray::Array3;
 use numpy::PyArray2;
 use numpy::{IntoPyArray, PyArray3};
 use pluecker::camera_model::{CameraModel, LensCamera};
-use pluecker::error::number;
+use pluecker::testing::number;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 

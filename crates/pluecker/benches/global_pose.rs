@@ -7,7 +7,7 @@
 
 use nalgebra::Vector3;
 use pluecker::optim::Objective;
-use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::pose::ReprojectionCost;
 use pluecker::pose::{estimate_pose, refine_pose, PoseOptions};
 use pluecker::rng::Rng;
 use pluecker::synthetic::visible_scene;

@@ -21,9 +21,9 @@
 //! its step tolerance is at least `STEP_TOLERANCE_BEFORE_REFINEMENT`), `REFINE_RADIUS`, `REFINE_STEP`.
 
 use nalgebra::{Matrix3, Vector3};
-use pluecker::geometry::quaternion::rotation_distance;
-use pluecker::pose::reprojection::{pose_covariance, ReprojectionCost};
+use pluecker::geometry::rotation_distance;
 use pluecker::pose::{estimate_pose, Correspondences, PoseOptions, Status};
+use pluecker::pose::{pose_covariance, ReprojectionCost};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, Scene, SceneKind};
 use std::io::Write;

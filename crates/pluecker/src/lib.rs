@@ -19,7 +19,7 @@
 //! ## Examples
 //! The pose of a camera from points and lines:
 //! ```
-//! use pluecker::{camera::Camera, pose::{estimate_pose, PoseOptions}, synthetic};
+//! use pluecker::{pose::{estimate_pose, PoseOptions}, synthetic};
 //! let scene = synthetic::random_scene(synthetic::SceneKind::General, 20, 5, 42);
 //! let result = estimate_pose(&scene.camera, &scene.correspondences, &PoseOptions::default()).unwrap();
 //! assert!((result.pose.rotation - scene.rotation).norm() < 1e-6);
@@ -48,7 +48,7 @@
 //! ```
 //! use nalgebra::{Matrix3, Vector3};
 //! use pluecker::camera_model::{CameraModel, LensCamera};
-//! use pluecker::triangulation::{point::triangulate_point_views, views::View, TriangulationOptions};
+//! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
 //! use pluecker::Pose;
 //! let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
 //! let views = [
@@ -71,36 +71,44 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // Every public item is documented (`make lint` turns this into an error).
 #![warn(missing_docs)]
+// Every type a public signature names is itself reachable (re-exported) from a public path.
+#![warn(unnameable_types)]
 
-pub mod camera;
+pub(crate) mod camera;
 pub mod camera_model;
-pub mod certificate;
+pub(crate) mod certificate;
 pub mod chi_square;
 pub(crate) mod consensus;
-pub mod curved_line;
-pub mod error;
+pub(crate) mod curved_line;
+pub(crate) mod error;
 pub mod geometry;
-pub mod global;
+pub(crate) mod global;
 pub mod interrupt;
-pub mod lens_bounds;
-pub mod names;
+pub(crate) mod lens_bounds;
+pub(crate) mod names;
 pub mod optim;
 pub mod pose;
-pub mod rigid;
+pub(crate) mod rigid;
 pub mod rng;
-pub mod status;
+pub(crate) mod status;
 pub mod synthetic;
 pub mod triangulation;
 
 pub use camera::Camera;
 pub use camera_model::AnyCamera;
 pub use error::{Error, Result};
-// The crate root holds no two things of one name: each primitive's `Status`, `Method` and certificate
-// stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
-pub use certificate::{Certificate, CertificateKind, CertifyOptions};
+// The crate root holds no two things of one name: each primitive's `Method` and result stay in their
+// module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.
+pub use certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 pub use pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
     RansacReport, RansacStop,
 };
 pub use rigid::Pose;
 pub use status::Status;
+
+/// Items the Python bindings and the integration tests use that are not part of the user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use crate::error::number;
+}

@@ -13,11 +13,11 @@ use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;
-use pluecker::triangulation::line::batch::{triangulate_line_observations_views, SparseSegmentTracks};
-use pluecker::triangulation::line::lens::{exact_cost, LensSegment};
+use pluecker::triangulation::line::testing::{exact_cost, LensSegment};
 use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments, triangulate_line_segments_views};
-use pluecker::triangulation::tracks::Csr;
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::line::{triangulate_line_observations_views, SparseSegmentTracks};
+use pluecker::triangulation::Csr;
+use pluecker::triangulation::View;
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::{AnyCamera, Camera, Error, Pose};
 
@@ -341,10 +341,9 @@ fn covariances_of(obs: &[Obs]) -> Vec<[Matrix2<f64>; 2]> {
 }
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        ..TriangulationOptions::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options
 }
 
 fn world_line(line: &Line) -> Vector6<f64> {
@@ -788,10 +787,8 @@ fn robust_inliers_are_the_segments_within_the_threshold_at_the_exact_optimum() {
         let d = (sc.obs[3].ends[1] - sc.obs[3].ends[0]).normalize();
         let across = Vector2::new(-d.y, d.x) * 40.0;
         sc.obs[3].ends = [sc.obs[3].ends[0] + across, sc.obs[3].ends[1] + across];
-        let o = TriangulationOptions {
-            outlier_threshold: Some(4.0),
-            ..opts(Method::Local)
-        };
+        let mut o = opts(Method::Local);
+        o.outlier_threshold = Some(4.0);
         let r = triangulate_line_segments_views(&views_of(&sc.obs), &segments_of(&sc.obs), None, &o).unwrap();
         let flags = r.inliers.clone().unwrap();
         assert_eq!(flags, vec![true, true, true, false, true, true], "{name}");

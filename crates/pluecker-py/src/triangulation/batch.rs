@@ -15,7 +15,7 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;
-use pluecker::triangulation::tracks::TrackCameras;
+use pluecker::triangulation::TrackCameras;
 use pluecker::triangulation::{CertificateKind, Method, Report, Status};
 use pluecker::Error;
 use pyo3::exceptions::PyMemoryError;

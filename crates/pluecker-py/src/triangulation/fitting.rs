@@ -7,7 +7,7 @@ use crate::errors::{guarded, invalid_argument};
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::threads::solve;
-use pluecker::error::number;
+use pluecker::testing::number;
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};

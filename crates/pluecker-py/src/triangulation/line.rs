@@ -22,13 +22,13 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
-use pluecker::triangulation::line::batch::{
+use pluecker::triangulation::line::{
+    lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
+};
+use pluecker::triangulation::line::{
     triangulate_line_observations as core_line_observations,
     triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
     LineTracks, SparseLineTracks, SparseSegmentTracks,
-};
-use pluecker::triangulation::line::{
-    lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
 };
 use pluecker::triangulation::{Primitive, Report, TriangulationOptions};
 use pyo3::prelude::*;

@@ -36,10 +36,9 @@ impl PyTriangulationOptions {
 
     /// The core's options, with `certify` as it is now.
     pub(crate) fn core(&self) -> TriangulationOptions {
-        TriangulationOptions {
-            certify: self.certify.read().inner,
-            ..self.inner.clone()
-        }
+        let mut options = self.inner.clone();
+        options.certify = self.certify.read().inner;
+        options
     }
 }
 
@@ -82,7 +81,7 @@ pub(crate) fn positive_sigma(sigma: f64) -> PyResult<f64> {
             "sigma",
             format!(
                 "must be a positive finite number of pixels, got {}",
-                pluecker::error::number(sigma)
+                pluecker::testing::number(sigma)
             ),
         ))
     }

@@ -26,14 +26,14 @@ use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
-use pluecker::triangulation::point::batch::{
-    triangulate_point_observations_into, triangulate_point_observations_views_into,
-    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
-};
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
 };
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::point::{
+    triangulate_point_observations_into, triangulate_point_observations_views_into,
+    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
+};
+use pluecker::triangulation::View;
 use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
 use pluecker::{AnyCamera, Pose};

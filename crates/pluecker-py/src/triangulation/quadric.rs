@@ -12,12 +12,12 @@ use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
-use pluecker::triangulation::quadric::batch::{
-    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
-    QuadricTracks, SparseQuadricTracks,
-};
 use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
+};
+use pluecker::triangulation::quadric::{
+    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
+    QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{Primitive, Report};

@@ -5,8 +5,8 @@
 
 use crate::convert::{read, Dim, Integer};
 use crate::errors::{invalid_argument, shape_error};
-use pluecker::error::number;
-use pluecker::triangulation::tracks::Csr;
+use pluecker::testing::number;
+use pluecker::triangulation::Csr;
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyBool;

@@ -240,7 +240,7 @@ fn count(done: Option<&AtomicUsize>) {
 }
 
 /// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means
-/// `(P X̃)₃ > 0`, [`crate::triangulation::views`]): one set seen
+/// `(P X̃)₃ > 0`, `views`): one set seen
 /// by every track, or one set per track (e.g. independent scenes solved together).
 #[derive(Debug, Clone, Copy)]
 pub enum TrackCameras<'a> {

@@ -3,7 +3,7 @@
 //!
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(𝓛)‖²`, over 3-D lines `𝓛` (Plücker coordinates, eq. 3,
 //! satisfying eq. 4), with `rᵢ` the residual of the observed image line `lᵢ` (eq. 17 with the
-//! normalisation of section 3.1, see [`self::residual`]) and `Lᵢ` the whitening of its 2x2
+//! normalisation of section 3.1, see `residual`) and `Lᵢ` the whitening of its 2x2
 //! covariance (eq. 18; identity without covariances). The three [`Method`]s:
 //! - `linear`: the line common to the back-projected planes `πᵢ = Pᵢᵀ lᵢ` in the least-squares sense
 //!   (conditioned world frame, planes scaled to unit normals): the two right singular vectors `A`, `B`
@@ -13,8 +13,8 @@
 //!   the orthonormal representation of Bartoli & Sturm ([`OrthonormalLine`]): a minimal 4-parameter
 //!   update that keeps eq. 4 exactly;
 //! - `optimal`: the local line, then branch and bound: by default with interval Taylor bounds over
-//!   the two-view chart ([`self::taylor_search`], [`self::two_view_chart`]), whose certificate covers
-//!   every line; or with the paper's SOCP relaxation (section 4, [`self::optimal`]), selected by
+//!   the two-view chart (`taylor_search`, `two_view_chart`), whose certificate covers
+//!   every line; or with the paper's SOCP relaxation (section 4, `optimal`), selected by
 //!   [`TriangulationOptions::line_bound`] and used when the chart has no pair of views.
 //!
 //! Degenerate input is an error: fewer than 2 views, mismatched lengths, NaN/inf, a singular camera,
@@ -24,13 +24,27 @@
 //! parallel to an image plane crosses that camera's principal plane, so [`super::Status::BehindCamera`] is
 //! never reported for lines.
 
-pub mod batch;
-pub mod lens;
-pub mod optimal;
-pub mod residual;
-pub mod robust;
-pub mod taylor_search;
-pub mod two_view_chart;
+pub(crate) mod batch;
+pub(crate) mod lens;
+pub(crate) mod optimal;
+pub(crate) mod residual;
+pub(crate) mod robust;
+pub(crate) mod taylor_search;
+pub(crate) mod two_view_chart;
+
+pub use batch::{
+    triangulate_line_observations, triangulate_line_observations_views, triangulate_lines, ImageLines, LineTracks,
+    SparseLineTracks, SparseSegmentTracks,
+};
+pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;
+
+/// The stages of the line solvers that the integration tests check directly; not part of the
+/// user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use super::lens::{exact_cost, LensSegment};
+    pub use super::residual::{endpoint_distances, LineFrame};
+}
 
 use self::lens::LensSegment;
 use self::optimal::optimal_line;
@@ -76,7 +90,7 @@ pub struct LineTriangulation {
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
     /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
-    /// order): the observations the line was solved from ([`robust`]). `None` otherwise.
+    /// order): the observations the line was solved from (`robust`). `None` otherwise.
     pub inliers: Option<Vec<bool>>,
 }
 
@@ -137,7 +151,7 @@ impl LineProblem {
 }
 
 /// Triangulates one 3-D line seen by `projections` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, [`super::views`]) as the
+/// front means `(P X̃)₃ > 0`, `views`) as the
 /// homogeneous image lines `lines` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
 /// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`]; identity
 /// when `None`).
@@ -280,7 +294,7 @@ pub fn triangulate_line_segments(
 /// with optional 2x2 covariances of each endpoint in those pixels (identity when `None`). Through a
 /// distorting lens the cost is the segments' reprojection error through the exact projection, the
 /// Mahalanobis distances of the endpoints to the line's curved images, minimised by the local method;
-/// it is never certified there ([`lens`]: `optimal` reports `gap_not_closed`). When no camera distorts
+/// it is never certified there (`lens`: `optimal` reports `gap_not_closed`). When no camera distorts
 /// this is [`triangulate_line`] of the views' `K [R | t]` on the segments' lines and covariances
 /// ([`crate::triangulation::fitting::line_from_endpoints`]; [`triangulate_line_segments`] for `σ² I`).
 ///
