@@ -14,7 +14,7 @@
 use nalgebra::{Matrix3x4, Matrix4, Vector2};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
-use pluecker::triangulation::line::residual::endpoint_distances;
+use pluecker::triangulation::line::testing::endpoint_distances;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line, triangulate_line_segments};
 use pluecker::triangulation::quadric::triangulate_quadric_points;
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
@@ -79,14 +79,12 @@ fn median(v: &[f64]) -> f64 {
 }
 
 fn options(method: Method, gap: f64) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        certify: CertifyOptions {
-            max_relative_gap: gap,
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut certify = CertifyOptions::default();
+    certify.max_relative_gap = gap;
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify = certify;
+    options
 }
 
 fn synthetic(gap: f64) {
@@ -230,7 +228,7 @@ fn main() {
     println!(
         "relative gap {gap:e}, max nodes {} (relaxation), {} (Taylor)",
         pluecker::triangulation::CONIC_MAX_NODES,
-        pluecker::triangulation::line::taylor_search::MAX_NODES
+        pluecker::triangulation::line::TAYLOR_MAX_NODES
     );
     synthetic(gap);
     real(Path::new(&data), gap);

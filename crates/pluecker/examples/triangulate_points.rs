@@ -11,7 +11,7 @@
 #![allow(clippy::field_reassign_with_default)]
 
 use nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
-use pluecker::triangulation::point::batch::{triangulate_points, PointTracks};
+use pluecker::triangulation::point::{triangulate_points, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::{Method, TriangulationOptions};
 use pluecker::{Camera, Pose};
