@@ -11,8 +11,8 @@
 #![allow(clippy::field_reassign_with_default)]
 
 use nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
-use pluecker::triangulation::point::{triangulate_points, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point::{triangulate_points, PointTracks};
 use pluecker::triangulation::{Method, TriangulationOptions};
 use pluecker::{Camera, Pose};
 
