@@ -42,15 +42,7 @@ fn main() -> pluecker::Result<()> {
     let options = PoseOptions::default();
     let result = estimate_pose(&camera, &data, &options)?;
 
-    for (i, row) in result.pose.rotation.row_iter().enumerate() {
-        println!(
-            "{} [{:8.4} {:8.4} {:8.4}]",
-            if i == 0 { "R =" } else { "   " },
-            row[0],
-            row[1],
-            row[2]
-        );
-    }
+    println!("R = {:.4}", result.pose.rotation);
     println!("t = {:.4?}", result.pose.translation.as_slice());
     println!("status: {}", result.status.as_str());
     println!("cost: {:.3} px² (8 points, 4 segments)", result.cost);

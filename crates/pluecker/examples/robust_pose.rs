@@ -41,15 +41,7 @@ fn main() -> pluecker::Result<()> {
     let result = estimate_pose(&camera, &data, &options)?;
 
     let rejected: Vec<usize> = (0..30).filter(|&k| !result.inliers_points[k]).collect();
-    for (i, row) in result.pose.rotation.row_iter().enumerate() {
-        println!(
-            "{} [{:8.4} {:8.4} {:8.4}]",
-            if i == 0 { "R =" } else { "   " },
-            row[0],
-            row[1],
-            row[2]
-        );
-    }
+    println!("R = {:.4}", result.pose.rotation);
     println!("t = {:.4?}", result.pose.translation.as_slice());
     println!(
         "status: {}, cost of the inliers: {:.3} px²",

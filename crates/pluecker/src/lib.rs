@@ -62,6 +62,33 @@
 //! assert!(result.report.certified());
 //! ```
 //!
+//! Tracks as COLMAP stores them, one observation per row: image ids index the projections, a point
+//! track may see one image twice (two keypoints, as COLMAP's track merging leaves them), and a bad
+//! track is its own error, never the batch's:
+//! ```
+//! use nalgebra::{Matrix3, Matrix3x4, Vector3};
+//! use pluecker::triangulation::{point::{triangulate_point_observations, SparsePointTracks}, Csr, TriangulationOptions};
+//! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+//! let projections: Vec<Matrix3x4<f64>> = (0..4)
+//!     .map(|j| k * Matrix3x4::new(1.0, 0.0, 0.0, -(j as f64), 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0))
+//!     .collect();
+//! let pixel = |x: &Vector3<f64>, j: usize| { let h = projections[j] * x.push(1.0); [h.x / h.z, h.y / h.z] };
+//! let (a, b) = (Vector3::new(0.3, -0.2, 6.0), Vector3::new(-0.5, 0.4, 7.0));
+//! // Track 0 is seen in images 0, 2, 3; track 1 in image 1 twice and image 3; track 2 names image 7.
+//! let image = [0, 2, 3, 1, 1, 3, 0, 7];
+//! let points = [&a, &a, &a, &b, &b, &b, &a, &a];
+//! let observations: Vec<f64> = image.iter().zip(points).flat_map(|(&j, x)| pixel(x, j.min(3))).collect();
+//! let tracks = SparsePointTracks {
+//!     csr: Csr { offsets: &[0, 3, 6, 8], image: &image },
+//!     observations: &observations,
+//!     covariances: None,
+//! };
+//! let results = triangulate_point_observations(&projections, &tracks, &TriangulationOptions::default(), None).unwrap();
+//! assert!((results[0].as_ref().unwrap().point - a).norm() < 1e-6);
+//! assert!((results[1].as_ref().unwrap().point - b).norm() < 1e-6);
+//! assert!(results[2].is_err()); // image[7]: an image index below 4 (the cameras)
+//! ```
+//!
 //! ## References
 //! - T. Q. Phong, R. Horaud, A. Yassine, P. D. Tao, *Object pose from 2-D to 3-D point and line
 //!   correspondences*, IJCV 15(3), 1995. Equation numbers in doc comments refer to this paper.

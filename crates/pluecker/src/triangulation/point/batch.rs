@@ -312,7 +312,7 @@ impl SparsePointTracks<'_> {
 
 /// Triangulates every track of the sparse `tracks` seen by `projections` (3x4, world → pixels), in
 /// parallel: the same per-track solve and results as [`triangulate_points`] on the dense form. A track
-/// naming an image beyond the cameras, or one image twice, is its own error.
+/// naming an image beyond the cameras is its own error; one image seen twice is used twice.
 pub fn triangulate_point_observations(
     projections: &[Matrix3x4<f64>],
     tracks: &SparsePointTracks,
