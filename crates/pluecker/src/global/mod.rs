@@ -14,8 +14,6 @@
 //! - [`branch_and_bound`]: a generic best-first branch and bound over an axis-aligned box, driven by a
 //!   problem-specific [`branch_and_bound::BoundingOracle`].
 
-// `BranchAndBoundResult::failed_nodes` is counted but read by no caller yet.
-#[allow(dead_code)]
 pub mod branch_and_bound;
 pub mod convexity;
 pub mod envelopes;
