@@ -62,6 +62,8 @@ lint: $(DEPS_STAMP)
 	cargo fmt --all -- --check
 	@echo "== lints: cargo clippy on every target, warnings as errors"
 	cargo clippy --all-targets -p pluecker -p pluecker-py -- -D warnings
+	@echo "== lints: the development tools of crates/pluecker/benches (bench = false: not in --all-targets)"
+	cargo clippy -p pluecker --bench global_pose --bench profile_pose --bench lines_and_quadrics -- -D warnings
 	@echo "== docs: cargo doc, warnings as errors"
 	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p pluecker
 	@echo "== python: ruff check"

@@ -116,7 +116,7 @@ def disc_rows(quick: bool) -> list[str]:
         for gap in (1e-3, 0.1):
             options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=gap),
                                                     quadric_bound=bound)
-            batch = pluecker.triangulate_quadrics(P, conics, cov=cov, options=options)
+            batch = pluecker.triangulate_quadrics(P, conics, covariances=cov, options=options)
             rows.append(f"| {len(scenes)} discs | {gap:g} | {bound} | " + " | ".join(summary(batch)) + " |")
     return rows
 

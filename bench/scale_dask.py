@@ -62,7 +62,7 @@ def generate_tracks(chunk: int, n: int, folder: str) -> int:
     ranks = np.argsort(rng.random((n, VIEWS)), axis=1)
     starts = np.r_[0, np.cumsum(counts)[:-1]]
     views = ranks[track, np.arange(len(track)) - starts[track]]
-    h = np.einsum("kij,kj->ki", cameras.P[views], np.c_[X[track], np.ones(len(track))])
+    h = np.einsum("kij,kj->ki", cameras.projections[views], np.c_[X[track], np.ones(len(track))])
     xy = h[:, :2] / h[:, 2:] + rng.normal(0, 1, (len(track), 2))
     table = pa.table({"track": track.astype(np.int64) + chunk * CHUNK, "image": cameras.ids[views],
                       "x": xy[:, 0], "y": xy[:, 1]})

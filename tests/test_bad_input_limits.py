@@ -288,10 +288,10 @@ LENS = pluecker.LensCamera("OPENCV", [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e
                          ids=["-I", "negative-variance", "indefinite", "asymmetric"])
 @pytest.mark.parametrize("method", ["undistort", "normalized_covariances"])
 def test_a_pixel_covariance_that_is_not_a_covariance_is_refused(bad, method):
-    """``LensCamera.undistort(px, cov=-I)`` returned negative-definite covariances."""
+    """``LensCamera.undistort(px, covariances=-I)`` returned negative-definite covariances."""
     pixels = np.array([[300.0, 200.0], [350.0, 260.0]])
     cov = np.stack([np.eye(2), np.asarray(bad, dtype=float)])
-    with pytest.raises(DegenerateConfigurationError, match=r"cov\[1\] is not a covariance"):
+    with pytest.raises(DegenerateConfigurationError, match=r"covariances\[1\] is not a covariance"):
         getattr(LENS, method)(pixels, cov)
 
 
@@ -345,7 +345,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
     lambda: LENS.unproject(np.array([[1e300, 0.0]])),
     lambda: LENS.undistort(np.array([[300.0, 200.0]]), np.array([[[-1e300, 0.0], [0.0, 1.0]]])),
 ], ids=["max_relative_gap", "certify_max_relative_gap", "confidence", "point_threshold", "sigma", "time_budget", "track",
-        "pixel", "cov"])
+        "pixel", "covariances"])
 def test_floats_in_messages_have_six_significant_digits(call):
     """``1e300`` was printed in full, 301 digits."""
     with pytest.raises(PlueckerError) as info:

@@ -265,8 +265,8 @@ def test_a_subnormal_covariance_is_an_error_not_nan(method):
     """``cov = 5e-324 I`` gave status at_infinity with a NaN point."""
     P, x = stereo()
     cov = np.stack([5e-324 * np.eye(2)] * 3)
-    with pytest.raises(DegenerateConfigurationError, match=r"cov\[0\].*too small"):
-        pluecker.triangulate_point(P, x, cov=cov, options=pluecker.TriangulationOptions(method=method))
+    with pytest.raises(DegenerateConfigurationError, match=r"covariances\[0\].*too small"):
+        pluecker.triangulate_point(P, x, covariances=cov, options=pluecker.TriangulationOptions(method=method))
 
 
 @pytest.mark.parametrize("bad", [[[1.0, 2.0], [3.0]], [[True, False], [True]]])

@@ -20,22 +20,22 @@ import pluecker
         (lambda P, s: pluecker.triangulate_lines(P[:1], s[:, :1]), pluecker.TooFewCorrespondencesError, "2 cameras"),
         (lambda P, s: pluecker.triangulate_lines(P, s[:, :3]), pluecker.ShapeError, "lines: expected shape (n, 4, 2, 2)"),
         (lambda P, s: pluecker.triangulate_lines(P, s[..., 0]), pluecker.ShapeError, "(n, v, 3) (homogeneous lines)"),
-        (lambda P, s: pluecker.triangulate_lines(P[:, :2], s), pluecker.ShapeError, "P: expected shape (v, 3, 4)"),
+        (lambda P, s: pluecker.triangulate_lines(P[:, :2], s), pluecker.ShapeError, "projections: expected shape (v, 3, 4)"),
         (lambda P, s: pluecker.triangulate_lines(np.stack([P, P]), s), pluecker.ShapeError, "lines: expected shape (2, 4"),
         (lambda P, s: pluecker.triangulate_lines(P, s, np.ones((5, 4), bool)), pluecker.ShapeError, "visible"),
-        (lambda P, s: pluecker.triangulate_lines(P, s, cov=np.ones((10, 4, 3, 3))), pluecker.ShapeError, "cov"),
+        (lambda P, s: pluecker.triangulate_lines(P, s, covariances=np.ones((10, 4, 3, 3))), pluecker.ShapeError, "covariances"),
         (lambda P, s: pluecker.triangulate_lines(P, s, sigma=-1.0), pluecker.InvalidOptionError, "sigma"),
-        (lambda P, s: pluecker.triangulate_lines(P, s, cov=np.tile(np.eye(2), (10, 4, 1, 1)), sigma=1.0),
+        (lambda P, s: pluecker.triangulate_lines(P, s, covariances=np.tile(np.eye(2), (10, 4, 1, 1)), sigma=1.0),
          pluecker.InvalidOptionError, "not both"),
         (lambda P, s: pluecker.triangulate_lines(P, np.ones((10, 4, 3)), sigma=1.0), pluecker.InvalidOptionError,
          "segments"),
         (lambda P, s: pluecker.triangulate_lines(P, s, options=pluecker.TriangulationOptions(method="best")), pluecker.InvalidOptionError, "method"),
         (lambda P, s: pluecker.triangulate_lines(P * np.array([1.0, np.nan, 1.0, 1.0])[:, None, None], s),
-         pluecker.NonFiniteError, "P: non-finite value (NaN or inf) in row 1"),
+         pluecker.NonFiniteError, "projections: non-finite value (NaN or inf) in row 1"),
         (lambda P, s: pluecker.triangulate_quadrics(P[:2], np.ones((1, 2, 3, 3))), pluecker.TooFewCorrespondencesError,
          "3 cameras"),
-        (lambda P, s: pluecker.triangulate_quadrics(P, np.ones((1, 4, 3, 3)), cov=np.ones((1, 4, 2, 2))),
-         pluecker.ShapeError, "cov"),
+        (lambda P, s: pluecker.triangulate_quadrics(P, np.ones((1, 4, 3, 3)), covariances=np.ones((1, 4, 2, 2))),
+         pluecker.ShapeError, "covariances"),
     ],
 )
 def test_whole_call_errors(call, error, message, seed):
@@ -136,7 +136,8 @@ def test_folder_records_a_rejected_line_and_keeps_the_others(tmp_path):
     fields[2:4] = fields[0:2]  # the second endpoint onto the first
     rows[seq.line_tracks[bad, 0]] = " ".join(fields)
     path.write_text("\n".join(rows) + "\n")
-    run = triangulate_folder.run(folder, views=[0, 1, 2, 3], method="linear", lines=True, show_progress=False)
+    options = pluecker.TriangulationOptions(method="linear")
+    run = triangulate_folder.run(folder, views=[0, 1, 2, 3], options=options, lines=True, show_progress=False)
     records = {r["index"]: r for r in run.lines.records}
     assert records[bad]["status"] == "degenerate" and "has zero length" in records[bad]["message"]
     assert np.all(np.isnan(records[bad]["point"])) and np.all(np.isnan(records[bad]["segment"]))

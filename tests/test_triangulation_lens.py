@@ -65,7 +65,7 @@ def test_the_first_order_answer_costs_more_than_the_exact_one():
 
 def test_a_camera_list_that_does_not_match_P_is_named():
     P, x, cameras, *_ = _views([5000.0, 600.0, 500.0, -14.0])
-    with pytest.raises(pluecker.InvalidOptionError, match=r"P: row 1 is not K \[R \| t\]"):
+    with pytest.raises(pluecker.InvalidOptionError, match=r"projections: row 1 is not K \[R \| t\]"):
         pluecker.triangulate_point(P, x, cameras=[cameras[0], pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 600.0, 500.0, 0.0]), *cameras[2:]])
     with pytest.raises(pluecker.ShapeError, match="cameras"):
         pluecker.triangulate_point(P, x, cameras=cameras[:2])

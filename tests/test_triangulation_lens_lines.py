@@ -238,15 +238,15 @@ def test_bad_input_names_the_argument_and_the_row():
         pluecker.triangulate_line(sc.P, sc.segments[:2], cameras=cams)
     with pytest.raises(pluecker.ShapeError, match="lines.*segments"):
         pluecker.triangulate_line(sc.P, np.ones((3, 3)), cameras=cams)
-    with pytest.raises(pluecker.ShapeError, match="cov"):
+    with pytest.raises(pluecker.ShapeError, match="covariances"):
         pluecker.triangulate_line(sc.P, sc.segments, sc.covs[:, 0], cameras=cams)
     covs = sc.covs.copy()
     covs[1, 1] = [[1.0, 2.0], [2.0, 1.0]]
-    with pytest.raises(pluecker.DegenerateConfigurationError, match=r"cov\[1\]"):
+    with pytest.raises(pluecker.DegenerateConfigurationError, match=r"covariances\[1\]"):
         pluecker.triangulate_line(sc.P, sc.segments, covs, cameras=cams)
     with pytest.raises(pluecker.InvalidOptionError, match="sigma"):
         pluecker.triangulate_line(sc.P, sc.segments, sc.covs, sigma=2.0, cameras=cams)
-    with pytest.raises(pluecker.InvalidOptionError, match=r"P: row 1 is not K \[R \| t\]"):
+    with pytest.raises(pluecker.InvalidOptionError, match=r"projections: row 1 is not K \[R \| t\]"):
         pluecker.triangulate_line(sc.P, sc.segments, cameras=[cams[0], pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 600.0, 500.0, 0.0]), cams[2]])
 
 

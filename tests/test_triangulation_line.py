@@ -222,7 +222,7 @@ def test_bad_input(change, kwargs, error, message, seed):
 
 def test_cov_and_sigma_together_is_an_error(seed):
     P, _, _, segments = line_problem(seed)
-    with pytest.raises(pluecker.InvalidOptionError, match="cov or sigma"):
+    with pytest.raises(pluecker.InvalidOptionError, match="covariances or sigma"):
         pluecker.triangulate_line(P, segments, np.eye(2)[None].repeat(4, 0), sigma=1.0)
 
 
@@ -288,13 +288,13 @@ def test_homogeneous_lines_with_covariances_and_cameras_per_track(seed):
     lines += rng.normal(0.0, 1e-3, lines.shape) * np.abs(lines)
     A = rng.normal(size=(n, views, 2, 2))
     cov = A @ A.transpose(0, 1, 3, 2) + 0.5 * np.eye(2)
-    batch = pluecker.triangulate_lines(P, lines, cov=cov, options=pluecker.TriangulationOptions(method="local"))
+    batch = pluecker.triangulate_lines(P, lines, covariances=cov, options=pluecker.TriangulationOptions(method="local"))
     for i in range(n):
         assert_same_line(batch, i, pluecker.triangulate_line(P[i], lines[i], cov[i], options=pluecker.TriangulationOptions(method="local")))
     # Segments whose covariances are given: the segments give only the lines.
     P1, segments = line_tracks(seed, n=4, views=3)
     cov = np.tile(np.diag([4.0, 0.25]), (4, 3, 1, 1))
-    batch = pluecker.triangulate_lines(P1, segments, cov=cov, options=pluecker.TriangulationOptions(method="local"))
+    batch = pluecker.triangulate_lines(P1, segments, covariances=cov, options=pluecker.TriangulationOptions(method="local"))
     for i in range(4):
         assert_same_line(batch, i, pluecker.triangulate_line(P1, segments[i], cov[i], options=pluecker.TriangulationOptions(method="local")))
 
@@ -324,6 +324,6 @@ def test_one_bad_line_track_never_loses_the_others(seed):
     cov = np.tile(np.eye(2), (8, 4, 1, 1))
     cov[6, 0] = [[1.0, 2.0], [2.0, 1.0]]
     batch = pluecker.triangulate_lines(P, lines, visible, cov, options=pluecker.TriangulationOptions(method="linear"))
-    assert batch.status[6] == "degenerate" and "cov[6][0] is not positive definite" in batch.messages[6]
+    assert batch.status[6] == "degenerate" and "covariances[6][0] is not positive definite" in batch.messages[6]
     assert batch.status[0] == "success" and batch.status[5] == "success"
 

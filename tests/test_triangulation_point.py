@@ -204,17 +204,17 @@ def good(seed: int):
     "change, error, message",
     [
         (lambda P, x: (P[:1], x[:1], None), pluecker.TooFewCorrespondencesError, "2 views"),
-        (lambda P, x: (P, x[:2], None), pluecker.ShapeError, "x: expected 3 rows"),
-        (lambda P, x: (P[:, :, :3], x, None), pluecker.ShapeError, "P: expected shape (n, 3, 4)"),
-        (lambda P, x: (P, x[:, :1], None), pluecker.ShapeError, "x: expected shape (n, 2)"),
+        (lambda P, x: (P, x[:2], None), pluecker.ShapeError, "observations: expected 3 rows"),
+        (lambda P, x: (P[:, :, :3], x, None), pluecker.ShapeError, "projections: expected shape (n, 3, 4)"),
+        (lambda P, x: (P, x[:, :1], None), pluecker.ShapeError, "observations: expected shape (n, 2)"),
         (lambda P, x: (P, np.where(np.arange(6).reshape(3, 2) == 3, np.nan, x), None), pluecker.NonFiniteError,
-         "x: non-finite value (NaN or inf) in row 1"),
+         "observations: non-finite value (NaN or inf) in row 1"),
         (lambda P, x: (np.where(np.arange(36).reshape(3, 3, 4) == 30, np.inf, P), x, None), pluecker.NonFiniteError,
-         "P: non-finite value (NaN or inf) in row 2"),
-        (lambda P, x: (P * np.array([1, 0, 1])[:, None, None], x, None), pluecker.SingularCameraError, "P[1]"),
+         "projections: non-finite value (NaN or inf) in row 2"),
+        (lambda P, x: (P * np.array([1, 0, 1])[:, None, None], x, None), pluecker.SingularCameraError, "projections[1]"),
         (lambda P, x: (P, x, np.array([np.eye(2), [[1.0, 2.0], [2.0, 1.0]], np.eye(2)])),
-         pluecker.DegenerateConfigurationError, "cov[1] is not positive definite"),
-        (lambda P, x: (P, x, np.eye(2)[None].repeat(2, 0)), pluecker.ShapeError, "cov: expected 3 rows"),
+         pluecker.DegenerateConfigurationError, "covariances[1] is not positive definite"),
+        (lambda P, x: (P, x, np.eye(2)[None].repeat(2, 0)), pluecker.ShapeError, "covariances: expected 3 rows"),
         (lambda P, x: (np.array([P[0], P[0] * 2.0, P[0]]), x, None), pluecker.DegenerateConfigurationError,
          "no parallax"),
     ],
@@ -251,7 +251,7 @@ def test_unknown_keyword_and_non_numeric_input_are_type_errors(seed):
     P, x = good(seed)
     with pytest.raises(TypeError, match="max_gap"):
         pluecker.triangulate_point(P, x, max_gap=0.1)
-    with pytest.raises(TypeError, match="x: expected an array of real numbers"):
+    with pytest.raises(TypeError, match="observations: expected an array of real numbers"):
         pluecker.triangulate_point(P, [["a", "b"]] * 3)
 
 
@@ -318,7 +318,7 @@ def test_covariances_per_observation(seed):
     rng = np.random.default_rng(seed)
     A = rng.normal(size=(40, 3, 2, 2))
     cov = A @ A.transpose(0, 1, 3, 2) + 0.3 * np.eye(2)
-    batch = pluecker.triangulate_points(P, x, cov=cov, options=pluecker.TriangulationOptions(method="local"))
+    batch = pluecker.triangulate_points(P, x, covariances=cov, options=pluecker.TriangulationOptions(method="local"))
     for i in range(0, 40, 5):
         assert batch.cost[i] == pytest.approx(cost_eq19(P, batch.X[i], x[i], cov[i]), rel=1e-9)
 
@@ -338,8 +338,8 @@ def test_one_bad_track_never_loses_the_others(seed):
         assert batch.messages[i].startswith(f"track {i}: ")
         assert np.all(np.isnan(batch.X[i])) and not batch.certified[i]
     # The messages name the track and the view (as a row of that track's observations).
-    assert "x[3]: non-finite value (NaN or inf) in row 1" in batch.messages[3]
-    assert "cov[11][2] is not positive definite" in batch.messages[11]
+    assert "observations[3]: non-finite value (NaN or inf) in row 1" in batch.messages[3]
+    assert "covariances[11][2] is not positive definite" in batch.messages[11]
     good = np.setdiff1d(np.arange(50), list(expected))
     assert np.all(batch.status[good] == "success") and np.all(batch.certified[good])
     # The same NaN where the view is not visible is no problem.
@@ -410,10 +410,10 @@ def test_gil_is_released_during_the_solve(seed):
     [
         (lambda P, x: (P[:1], x[:, :1]), pluecker.TooFewCorrespondencesError, "2 cameras"),
         (lambda P, x: (P, x[:, :3]), pluecker.ShapeError, "one column per camera"),
-        (lambda P, x: (P, x[:, :, :1]), pluecker.ShapeError, "x: expected shape (n, v, 2)"),
+        (lambda P, x: (P, x[:, :, :1]), pluecker.ShapeError, "observations: expected shape (n, v, 2)"),
         (lambda P, x: (np.where(np.arange(48).reshape(4, 3, 4) == 20, np.nan, P), x), pluecker.NonFiniteError,
-         "P: non-finite value (NaN or inf) in row 1"),
-        (lambda P, x: (P * np.array([1, 1, 0, 1])[:, None, None], x), pluecker.SingularCameraError, "P[2]"),
+         "projections: non-finite value (NaN or inf) in row 1"),
+        (lambda P, x: (P * np.array([1, 1, 0, 1])[:, None, None], x), pluecker.SingularCameraError, "projections[2]"),
     ],
     ids=["one-camera", "columns", "x-shape", "P-nan", "P-singular"],
 )
@@ -430,8 +430,8 @@ def test_bad_mask_and_cov_shapes(seed):
         pluecker.triangulate_points(P, x, np.ones((5, 3), dtype=bool))
     with pytest.raises(TypeError, match="visible: expected a boolean array"):
         pluecker.triangulate_points(P, x, np.ones((5, 4)))
-    with pytest.raises(pluecker.ShapeError, match="cov"):
-        pluecker.triangulate_points(P, x, cov=np.ones((5, 3, 2, 2)))
+    with pytest.raises(pluecker.ShapeError, match="covariances"):
+        pluecker.triangulate_points(P, x, covariances=np.ones((5, 3, 2, 2)))
     with pytest.raises(pluecker.InvalidOptionError, match="max_nodes"):
         pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=0)))
 

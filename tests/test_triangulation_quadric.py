@@ -98,9 +98,9 @@ def test_ellipse_points_lie_on_the_conic(seed):
          "conics: non-finite value (NaN or inf) in row 2"),
         (lambda P, c: (P, np.array([c[0], c[1], np.diag([1.0, -1.0, -1.0]), c[3]]), None),
          pluecker.DegenerateConfigurationError, "conics[2] is not a real ellipse"),
-        (lambda P, c: (P, c, np.eye(5)[None].repeat(3, 0)), pluecker.ShapeError, "cov: expected 4 rows"),
+        (lambda P, c: (P, c, np.eye(5)[None].repeat(3, 0)), pluecker.ShapeError, "covariances: expected 4 rows"),
         (lambda P, c: (P, c, -np.eye(5)[None].repeat(4, 0)), pluecker.DegenerateConfigurationError,
-         "cov[0] is not positive definite"),
+         "covariances[0] is not positive definite"),
     ],
     ids=["two-views", "count", "shape", "nan", "hyperbola", "cov-count", "cov-negative"],
 )
@@ -125,7 +125,7 @@ def test_quadric_batch_equals_single_calls_with_cameras_per_track(seed):
     conics = np.stack([s.conics for s in scenes])
     cov = np.stack([s.covariances for s in scenes])
     for method in METHODS:
-        batch = pluecker.triangulate_quadrics(P, conics, cov=cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES)))
+        batch = pluecker.triangulate_quadrics(P, conics, covariances=cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=NODES)))
         assert batch.Q.shape == (3, 4, 4) and batch.primal.shape == (3, 4, 4) and batch.axes.shape == (3, 3, 3)
         assert batch.centre.shape == (3, 3) and batch.semi_axes.shape == (3, 3)
         for i, s in enumerate(scenes):

@@ -81,7 +81,7 @@ def test_bad_rows_stay_in_their_track(seed):
     assert all(batch.status[i] == "success" for i in (0, 1, 3, 5))
     with pytest.raises(pluecker.ShapeError, match="lines"):
         pluecker.triangulate_line_observations(P, track, image, rows[:, 0])
-    with pytest.raises(pluecker.ShapeError, match="cov"):
+    with pytest.raises(pluecker.ShapeError, match="covariances"):
         pluecker.triangulate_line_observations(P, track, image, rows, np.ones((3, 2, 2)))
     with pytest.raises(pluecker.InvalidOptionError, match="n_tracks"):
         pluecker.triangulate_line_observations(P, track, image, rows, n_tracks=3)

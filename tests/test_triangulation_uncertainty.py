@@ -60,7 +60,7 @@ def test_point_covariance_matches_monte_carlo(views, parallax):
     assert exact.covariance is not None and np.linalg.norm(exact.X - X) < 1e-9
     n = 2000
     noise = np.einsum("vij,nvj->nvi", np.linalg.cholesky(cov), rng.normal(size=(n, views, 2)))
-    batch = pluecker.triangulate_points(P, x[None] + noise, cov=np.broadcast_to(cov, (n, views, 2, 2)))
+    batch = pluecker.triangulate_points(P, x[None] + noise, covariances=np.broadcast_to(cov, (n, views, 2, 2)))
     assert np.all(batch.status == "success")
     check_monte_carlo(f"point, {views} views, {parallax}°", batch.X - X, exact.covariance)
 

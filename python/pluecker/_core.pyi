@@ -119,12 +119,13 @@ class LensCamera:
     @property
     def pinhole(self) -> Camera:
         """The pinhole part ``K = [fx 0 cx; 0 fy cy; 0 0 1]``: the camera of undistorted pixels."""
-    def undistort(self, pixels: ArrayLike, cov: Optional[ArrayLike] = None) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def undistort(self, pixels: ArrayLike, covariances: Optional[ArrayLike] = None) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Undistorted pixels (N, 2) (exact to 1e-10 px) and their covariances (N, 2, 2) for pixel
-        covariances ``cov`` (N, 2, 2) (``None``: 1 px²), first order: the input of ``triangulate_*`` with
-        ``P = pinhole.P(R, t)``; segments go through :func:`lines_from_endpoints`."""
-    def normalized_covariances(self, pixels: ArrayLike, cov: Optional[ArrayLike] = None) -> NDArray[np.float64]:
-        """First-order (N, 2, 2) covariances of the normalised coordinates for pixel covariances ``cov`` (N, 2, 2) (``None``: 1 px)."""
+        covariances ``covariances`` (N, 2, 2) (``None``: 1 px²), first order: the input of
+        ``triangulate_*`` with ``projections = pinhole.P(R, t)``; segments go through
+        :func:`lines_from_endpoints`."""
+    def normalized_covariances(self, pixels: ArrayLike, covariances: Optional[ArrayLike] = None) -> NDArray[np.float64]:
+        """First-order (N, 2, 2) covariances of the normalised coordinates for pixel covariances ``covariances`` (N, 2, 2) (``None``: 1 px)."""
     def to_dict(self) -> Dict[str, Any]: ...
 
 # --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
@@ -559,8 +560,8 @@ def get_num_threads() -> int:
     """The number of threads the batches of this process use (see :func:`set_num_threads`)."""
 
 # --- Triangulation (Josephson & Kahl 2008) --------------------------------------------------------
-# Cameras P (n, 3, 4) map world points to pixels, λ (u, v, 1) = P (X, 1), λ > 0 in front (eq. 1). Every
-# method minimises eq. 19 (residuals of eq. 17 whitened by ``cov``; identity when None): ``"linear"``,
+# Projections P = K [R | t] (n, 3, 4) map world points to pixels, λ (u, v, 1) = P (X, 1), λ > 0 in front
+# (eq. 1). Every method minimises eq. 19 (residuals of eq. 17 whitened by ``covariances``; identity when None): ``"linear"``,
 # ``"local"``, or ``"optimal"`` (default: certified by a convexity test or branch and bound, eqs. 21-22).
 # Batches run in parallel without the GIL; ``progress(done)``; ``time_budget`` (s) ends with status
 # ``"time_budget"``; Ctrl-C raises with the finished tracks as ``partial``. A bad track never stops others.
@@ -580,7 +581,7 @@ class TriangulationOptions:
     max_reprojection_error: Optional[float]
     """The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing."""
     outlier_threshold: Optional[float]
-    """Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
+    """Points and lines: reject observations whose whitened error (pixels without `covariances`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     line_bound: str
     """Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips)."""
     quadric_bound: str
@@ -781,37 +782,39 @@ class QuadricTriangulations(BatchReport):
     # end of fields
 
 def triangulate_point(
-    P: ArrayLike,
-    x: ArrayLike,
-    cov: Optional[ArrayLike] = None,
+    projections: ArrayLike,
+    observations: ArrayLike,
+    covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> PointTriangulation:
-    """One point from its pixels ``x`` (n, 2) in cameras ``P`` (n, 3, 4), n >= 2, with pixel
-    covariances ``cov`` (n, 2, 2) (sections 2.1, 3-4). With ``cameras`` (each view's ``Camera`` or
-    ``LensCamera``), ``P[i]`` is ``K [R | t]`` of its pinhole part and ``x`` the observed (distorted)
-    pixels: the cost is the reprojection error through the exact projection."""
+    """One point from its pixels ``observations`` (n, 2) in the views ``projections`` (n, 3, 4), n >= 2,
+    with pixel covariances ``covariances`` (n, 2, 2) (sections 2.1, 3-4). With ``cameras`` (each view's
+    ``Camera`` or ``LensCamera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part and
+    ``observations`` the observed (distorted) pixels: the cost is the reprojection error through the
+    exact projection."""
 
 def triangulate_points(
-    P: ArrayLike,
-    x: ArrayLike,
+    projections: ArrayLike,
+    observations: ArrayLike,
     visible: Optional[ArrayLike] = None,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
 ) -> PointTriangulations:
-    """Many points seen by the same cameras ``P`` (v, 3, 4): pixels ``x`` (n, v, 2), ``visible`` (n, v)
-    booleans (``None``: every view; NaN is fine where not visible), ``cov`` (n, v, 2, 2)."""
+    """Many points seen by the same views ``projections`` (v, 3, 4): pixels ``observations`` (n, v, 2),
+    ``visible`` (n, v) booleans (``None``: every view; NaN is fine where not visible), ``covariances``
+    (n, v, 2, 2)."""
 
 def triangulate_point_observations(
-    P: ArrayLike,
+    projections: ArrayLike,
     track: ArrayLike,
     image: ArrayLike,
-    x: ArrayLike,
-    cov: Optional[ArrayLike] = None,
+    observations: ArrayLike,
+    covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
@@ -819,51 +822,53 @@ def triangulate_point_observations(
     n_tracks: Optional[int] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> PointTriangulations:
-    """Point tracks given one observation per row (memory in the observations): pixel ``x[k]`` (m, 2)
-    of track ``track[k]`` in camera ``image[k]`` of ``P`` (v, 3, 4), ``cov[k]`` (m, 2, 2); result row t
+    """Point tracks given one observation per row (memory in the observations): pixel ``observations[k]``
+    (m, 2) of track ``track[k]`` in view ``image[k]`` of ``projections`` (v, 3, 4), ``covariances[k]``
+    (m, 2, 2); result row t
     is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m rows given
     (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a negative id,
     is an ``InvalidOptionError`` naming the argument. With ``cameras`` (v,) (each image's ``Camera`` or
-    ``LensCamera``), ``P[j]`` is ``K [R | t]`` of its pinhole part and ``x`` the observed (distorted)
-    pixels: the cost is the reprojection error through the exact projection."""
+    ``LensCamera``), ``projections[j]`` is ``K [R | t]`` of its pinhole part and ``observations`` the
+    observed (distorted) pixels: the cost is the reprojection error through the exact projection."""
 
 def triangulate_line(
-    P: ArrayLike,
+    projections: ArrayLike,
     lines: ArrayLike,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> LineTriangulation:
     """One 3-D line (sections 2.2, 3-4) from (n, 3) homogeneous image lines or (n, 2, 2) segments.
-    ``cov`` (n, 2, 2) residual covariances, e.g. :attr:`FittedLine.covariance`; for segments without
-    ``cov``, that of endpoints with noise ``sigma`` px (``None``: 1). With ``cameras`` (each view's
-    ``Camera`` or ``LensCamera``), ``P[i]`` is ``K [R | t]`` of its pinhole part, ``lines`` are (n, 2, 2)
-    segments in the observed (distorted) pixels and ``cov`` (n, 2, 2, 2) their endpoints' covariances:
+    ``covariances`` (n, 2, 2) residual covariances, e.g. :attr:`FittedLine.covariance`; for segments
+    without ``covariances``, that of endpoints with noise ``sigma`` px (``None``: 1). With ``cameras``
+    (each view's ``Camera`` or ``LensCamera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part,
+    ``lines`` are (n, 2, 2) segments in the observed (distorted) pixels and ``covariances`` (n, 2, 2, 2)
+    their endpoints' covariances:
     through a distorting lens the cost is the endpoints' distances to the line's curved images, never
     certified (``optimal`` gives ``gap_not_closed``)."""
 
 def triangulate_lines(
-    P: ArrayLike,
+    projections: ArrayLike,
     lines: ArrayLike,
     visible: Optional[ArrayLike] = None,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
 ) -> LineTriangulations:
-    """Many 3-D lines: ``P`` (v, 3, 4) shared or (n, v, 3, 4) per track; ``lines`` (n, v, 3) or
-    (n, v, 2, 2); ``visible`` (n, v); ``cov`` (n, v, 2, 2)."""
+    """Many 3-D lines: ``projections`` (v, 3, 4) shared or (n, v, 3, 4) per track; ``lines`` (n, v, 3)
+    or (n, v, 2, 2); ``visible`` (n, v); ``covariances`` (n, v, 2, 2)."""
 
 def triangulate_line_observations(
-    P: ArrayLike,
+    projections: ArrayLike,
     track: ArrayLike,
     image: ArrayLike,
     lines: ArrayLike,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
@@ -873,44 +878,46 @@ def triangulate_line_observations(
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> LineTriangulations:
     """Line tracks given one observation per row: ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments)
-    of track ``track[k]`` in image ``image[k]`` (a row of ``P`` (v, 3, 4)), ``cov[k]`` (m, 2, 2) when given.
+    of track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]``
+    (m, 2, 2) when given.
     Each track is solved as :func:`triangulate_lines` would; memory grows with the rows.
     Track ids and ``n_tracks`` are at most the m rows given, as for
     :func:`triangulate_point_observations`. With ``cameras`` (each image's ``Camera`` or ``LensCamera``),
-    ``lines`` are (m, 2, 2) segments in the observed pixels and ``cov`` (m, 2, 2, 2) their endpoints'
-    covariances; each track is solved as :func:`triangulate_line` with ``cameras`` solves it."""
+    ``lines`` are (m, 2, 2) segments in the observed pixels and ``covariances`` (m, 2, 2, 2) their
+    endpoints' covariances; each track is solved as :func:`triangulate_line` with ``cameras`` solves it."""
 
 def triangulate_quadric(
-    P: ArrayLike,
+    projections: ArrayLike,
     conics: ArrayLike,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> QuadricTriangulation:
-    """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views, ``cov`` (n, 5, 5) e.g.
-    :attr:`FittedConic.covariance` (sections 2.3, 3-4). With ``cameras``, ``P[i]`` is ``K [R | t]`` of
-    each camera's pinhole part; a ``LensCamera`` with distortion is refused (``InvalidOptionError``
+    """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views ``projections`` (n, 3, 4),
+    ``covariances`` (n, 5, 5) e.g. :attr:`FittedConic.covariance` (sections 2.3, 3-4). With ``cameras``,
+    ``projections[i]`` is ``K [R | t]`` of each camera's pinhole part; a ``LensCamera`` with distortion is refused (``InvalidOptionError``
     naming ``cameras``): the outline through a lens is not a conic."""
 
 def triangulate_quadrics(
-    P: ArrayLike,
+    projections: ArrayLike,
     conics: ArrayLike,
     visible: Optional[ArrayLike] = None,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
 ) -> QuadricTriangulations:
-    """Many ellipsoids: ``P`` (v, 3, 4) or (n, v, 3, 4); ``conics`` (n, v, 3, 3); ``cov`` (n, v, 5, 5)."""
+    """Many ellipsoids: ``projections`` (v, 3, 4) or (n, v, 3, 4); ``conics`` (n, v, 3, 3);
+    ``covariances`` (n, v, 5, 5)."""
 
 def triangulate_quadric_observations(
-    P: ArrayLike,
+    projections: ArrayLike,
     track: ArrayLike,
     image: ArrayLike,
     conics: ArrayLike,
-    cov: Optional[ArrayLike] = None,
+    covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
@@ -918,7 +925,7 @@ def triangulate_quadric_observations(
     n_tracks: Optional[int] = None,
 ) -> QuadricTriangulations:
     """Ellipsoid tracks given one outline conic per row: ``conics[k]`` (m, 3, 3) of track ``track[k]`` in
-    image ``image[k]``, ``cov[k]`` (m, 5, 5) when given. Each track is solved as
+    image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]`` (m, 5, 5) when given. Each track is solved as
     :func:`triangulate_quadrics` would.
     Track ids and ``n_tracks`` are at most the m rows given, as for
     :func:`triangulate_point_observations`."""
@@ -965,9 +972,10 @@ def fit_line(points: ArrayLike, sigma: Optional[float] = None) -> FittedLine:
     """Total-least-squares line through points (N, 2), N >= 2, with its residual covariance for
     point noise ``sigma`` px (``None``: 1)."""
 
-def lines_from_endpoints(segments: ArrayLike, cov: ArrayLike) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Lines (M, 3) through segments (M, 2, 2) whose endpoints have covariances ``cov`` (M, 2, 2, 2), px², and
-    the covariances (M, 2, 2) of their residuals: the ``lines`` and ``cov`` of :func:`triangulate_line`."""
+def lines_from_endpoints(segments: ArrayLike, covariances: ArrayLike) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Lines (M, 3) through segments (M, 2, 2) whose endpoints have covariances ``covariances``
+    (M, 2, 2, 2), px², and the covariances (M, 2, 2) of their residuals: the ``lines`` and
+    ``covariances`` of :func:`triangulate_line`."""
 
 def fit_conic(points: ArrayLike, sigma: Optional[float] = None) -> FittedConic:
     """Ellipse through points (N, 2), N >= 5, with its residual covariance for point noise ``sigma``

@@ -734,8 +734,9 @@ def _triangulate(args: argparse.Namespace) -> int:
             return _fail("triangulate", f"{flag} applies to --colmap models, not to VGG folders")
 
     try:
-        run = triangulate_folder.run(args.folder, views=args.views, method=args.method, lines=args.lines,
-                                 sigma=args.sigma)
+        options = pluecker.TriangulationOptions(method=args.method)
+        run = triangulate_folder.run(args.folder, views=args.views, options=options, lines=args.lines,
+                                     sigma=args.sigma)
     except (InputError, pluecker.PlueckerError, triangulate_folder.FolderError) as exc:
         return _fail("triangulate", str(exc))
     out = args.out if args.out is not None else Path("results") / "triangulate" / run.name

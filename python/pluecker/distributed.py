@@ -83,26 +83,27 @@ def _pyarrow() -> Any:
 
 @dataclass(frozen=True)
 class Cameras:
-    """Image ids (v,) and their cameras ``P`` (v, 3, 4) mapping world points to pixels; with ``lenses``
-    (v,), each image's ``Camera`` or ``LensCamera``, ``P`` is ``K [R | t]`` of its pinhole part and the
+    """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``lenses``
+    (v,), each image's ``Camera`` or ``LensCamera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
     table's pixels are the observed (distorted) ones, as ``triangulate_point_observations(cameras=...)``
     takes them."""
 
     ids: np.ndarray
-    P: np.ndarray
+    projections: np.ndarray
     lenses: Optional[tuple] = None
 
     def __post_init__(self) -> None:
         ids = np.asarray(self.ids, dtype=np.int64).reshape(-1)
-        P = np.asarray(self.P, dtype=float)
+        P = np.asarray(self.projections, dtype=float)
         if P.shape != (len(ids), 3, 4):
-            raise _core.ShapeError(f"Cameras: P must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
+            raise _core.ShapeError(
+                f"Cameras: projections must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
         if len(np.unique(ids)) != len(ids):
             raise ValueError("Cameras: image ids must be unique")
         if self.lenses is not None and len(self.lenses) != len(ids):
             raise _core.ShapeError(f"Cameras: lenses must have one camera per id ({len(ids)}), got {len(self.lenses)}")
         object.__setattr__(self, "ids", ids)
-        object.__setattr__(self, "P", P)
+        object.__setattr__(self, "projections", P)
         if self.lenses is not None:
             object.__setattr__(self, "lenses", tuple(self.lenses))
 
@@ -114,7 +115,7 @@ class Cameras:
                    np.zeros((0, 3, 4)))
 
     def lookup(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For each image id: its rank among the sorted ids, whether it is known, and its row of ``P``
+        """For each image id: its rank among the sorted ids, whether it is known, and its row of ``projections``
         (an unknown id gets rank and row ``v``, one past the cameras)."""
         v = len(self.ids)
         order = np.argsort(self.ids)
@@ -167,7 +168,7 @@ def triangulate_table(table: Any, cameras: Cameras, *,
     image, x, cov = image[order], x[order], np.ascontiguousarray(cov[order])
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
-    result = _core.triangulate_point_observations(cameras.P, track_index, camera_index, x, cov,
+    result = _core.triangulate_point_observations(cameras.projections, track_index, camera_index, x, cov,
                                                   options=options, n_tracks=len(ids),
                                                   cameras=None if cameras.lenses is None else list(cameras.lenses))
     status = np.asarray(result.status).astype(object)

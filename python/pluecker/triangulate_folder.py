@@ -69,7 +69,7 @@ class Run:
     name: str
     folder: Path
     views: list[int]
-    method: str
+    method: str  # ``options.method`` of the run
     sigma: float
     points: Features
     lines: Features | None
@@ -131,15 +131,14 @@ def _matrix_or_none(m: np.ndarray) -> Any:
     return m.tolist() if np.all(np.isfinite(m)) else None
 
 
-def _points(seq: VggSequence, views: list[int], method: str) -> Features:
+def _points(seq: VggSequence, views: list[int], options: pluecker.TriangulationOptions) -> Features:
     x, visible = seq.point_observations(views)
     tracks = np.flatnonzero(visible.sum(axis=1) >= 2)
     features = Features("points", total=len(seq.point_tracks))
     if len(tracks) == 0:
         return features
     cameras = seq.cameras[views]
-    result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks],
-                                         options=pluecker.TriangulationOptions(method=method))
+    result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks], options=options)
     columns = _columns(result)
     X = np.asarray(result.X)
     covariances = np.asarray(result.covariance)
@@ -179,7 +178,8 @@ def _segment_extent(point: np.ndarray, direction: np.ndarray, cameras: np.ndarra
     return np.stack([point + min(params) * direction, point + max(params) * direction])
 
 
-def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_progress: bool | None) -> Features:
+def _lines(seq: VggSequence, views: list[int], options: pluecker.TriangulationOptions, sigma: float,
+           show_progress: bool | None) -> Features:
     from tqdm import tqdm
 
     segments, visible = seq.line_observations(views)
@@ -192,7 +192,7 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
               disable=None if show_progress is None else not show_progress) as bar:
         report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
         result = pluecker.triangulate_lines(cameras, segments[tracks], visible[tracks], sigma=sigma,
-                                            options=pluecker.TriangulationOptions(method=method), progress=report)
+                                            options=options, progress=report)
         shown = not bar.disable
     columns = _columns(result)
     plucker, points, directions = (np.asarray(a) for a in (result.plucker, result.point, result.direction))
@@ -218,20 +218,22 @@ def _lines(seq: VggSequence, views: list[int], method: str, sigma: float, show_p
     return features
 
 
-def run(folder: str | Path, views: list[int] | None = None, method: str = "optimal", lines: bool = False,
-        sigma: float = 1.0, show_progress: bool | None = None) -> Run:
-    """Triangulates the folder's points (and lines) from ``views`` (default all). Raises
+def run(folder: str | Path, views: list[int] | None = None, options: pluecker.TriangulationOptions | None = None,
+        lines: bool = False, sigma: float = 1.0, show_progress: bool | None = None) -> Run:
+    """Triangulates the folder's points (and lines) from ``views`` (default all) with ``options``
+    (``None``: the defaults, method ``optimal``), as every triangulation call takes them. Raises
     :class:`FolderError` for an unreadable folder or a view that does not exist, and a
-    :class:`pluecker.PlueckerError` for arguments the triangulation rejects as a whole (a bad ``method``
-    or ``sigma``); a rejected feature is recorded with its status and message. ``show_progress`` draws a
-    progress bar over the lines (None: when standard error is a terminal)."""
+    :class:`pluecker.PlueckerError` for arguments the triangulation rejects as a whole (e.g. ``sigma``); a
+    rejected feature is recorded with its status and message. ``show_progress`` draws a progress bar over
+    the lines (None: when standard error is a terminal)."""
+    options = options if options is not None else pluecker.TriangulationOptions()
     folder = Path(folder)
     seq = _load(folder)
     views = _check_views(seq, views)
     started = time.perf_counter()
-    points = _points(seq, views, method)
-    line_features = _lines(seq, views, method, sigma, show_progress) if lines else None
-    return Run(seq.name, folder, views, method, sigma, points, line_features, time.perf_counter() - started)
+    points = _points(seq, views, options)
+    line_features = _lines(seq, views, options, sigma, show_progress) if lines else None
+    return Run(seq.name, folder, views, options.method, sigma, points, line_features, time.perf_counter() - started)
 
 
 # --------------------------------------------------------------------------------------------------

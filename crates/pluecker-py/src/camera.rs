@@ -6,7 +6,7 @@ use crate::errors::guarded;
 use crate::fields::{result_class, Field};
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
-use pluecker::geometry::lines::interpretation_plane_normal;
+use pluecker::geometry::testing::interpretation_plane_normal;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use std::collections::hash_map::DefaultHasher;

@@ -5,7 +5,7 @@ use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::{options_class, result_class, Field};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use pluecker::certificate::{Certificate, CertifyOptions, Primitive};
+use pluecker::{Certificate, CertifyOptions, Primitive};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 

@@ -239,7 +239,7 @@ pub fn seconds_arg(name: &str, seconds: f64) -> PyResult<Duration> {
             name,
             format!(
                 "must be None or a finite number of seconds ≥ 0, got {}",
-                pluecker::error::number(seconds)
+                pluecker::testing::number(seconds)
             ),
         ));
     }
@@ -248,7 +248,7 @@ pub fn seconds_arg(name: &str, seconds: f64) -> PyResult<Duration> {
             name,
             format!(
                 "must be below 2**64 seconds (the longest duration the clock holds), got {}",
-                pluecker::error::number(seconds)
+                pluecker::testing::number(seconds)
             ),
         )
     })
@@ -525,7 +525,7 @@ pub fn same_count(name: &str, rows: usize, views: usize) -> PyResult<()> {
     } else {
         Err(shape_error(
             name,
-            &format!("{views} rows (one per camera in P)"),
+            &format!("{views} rows (one per row of projections)"),
             rows.to_string(),
         ))
     }

@@ -9,7 +9,7 @@ use numpy::ndarray::Array3;
 use numpy::PyArray2;
 use numpy::{IntoPyArray, PyArray3};
 use pluecker::camera_model::{CameraModel, LensCamera};
-use pluecker::error::number;
+use pluecker::testing::number;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -76,18 +76,18 @@ result_class! {
     }
 
     /// The (N, 2, 2) covariances of the undistorted normalised coordinates of pixels (N, 2) whose pixel
-    /// covariances are `cov` (N, 2, 2), or `sigma_px`² I (`None`: 1 px): first order, `J⁻¹ Σ J⁻ᵀ` with
-    /// `J` the Jacobian of the projection at the unprojected point.
-    /// A `cov[k]` that is not symmetric positive semidefinite is a `DegenerateConfigurationError` naming it.
-    #[pyo3(signature = (pixels, cov = None))]
+    /// covariances are `covariances` (N, 2, 2) (`None`: 1 px² isotropic): first order, `J⁻¹ Σ J⁻ᵀ`
+    /// with `J` the Jacobian of the projection at the unprojected point.
+    /// A `covariances[k]` that is not symmetric positive semidefinite is a `DegenerateConfigurationError` naming it.
+    #[pyo3(signature = (pixels, covariances = None))]
     fn normalized_covariances<'py>(
         &self,
         py: Python<'py>,
         pixels: &Bound<'py, PyAny>,
-        cov: Option<&Bound<'py, PyAny>>,
+        covariances: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
         let us = points::<2>("pixels", Some(pixels))?;
-        let covs = pixel_covariances(cov, us.len())?;
+        let covs = pixel_covariances(covariances, us.len())?;
         let cam = &self.inner;
         let out = guarded(|| {
             us.iter()
@@ -111,18 +111,19 @@ result_class! {
     }
 
     /// Undistorted pixels (N, 2) of pixels (N, 2) (the image of the pinhole part, exact to 1e-10 px) and
-    /// their covariances (N, 2, 2) for pixel covariances `cov` (N, 2, 2) (`None`: 1 px² isotropic), to
-    /// first order `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂ū`: the input of `triangulate_*` with `P = pinhole.P(R, t)`.
-    /// A `cov[k]` that is not symmetric positive semidefinite is a `DegenerateConfigurationError` naming it.
-    #[pyo3(signature = (pixels, cov = None))]
+    /// their covariances (N, 2, 2) for pixel covariances `covariances` (N, 2, 2) (`None`: 1 px²
+    /// isotropic), to first order `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂ū`: the input of `triangulate_*` with
+    /// `projections = pinhole.P(R, t)`.
+    /// A `covariances[k]` that is not symmetric positive semidefinite is a `DegenerateConfigurationError` naming it.
+    #[pyo3(signature = (pixels, covariances = None))]
     fn undistort<'py>(
         &self,
         py: Python<'py>,
         pixels: &Bound<'py, PyAny>,
-        cov: Option<&Bound<'py, PyAny>>,
+        covariances: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Undistorted<'py>> {
         let us = points::<2>("pixels", Some(pixels))?;
-        let covs = pixel_covariances(cov, us.len())?;
+        let covs = pixel_covariances(covariances, us.len())?;
         let cam = &self.inner;
         let out = guarded(|| {
             us.iter()
@@ -156,17 +157,18 @@ result_class! {
 /// `LensCamera.undistort`'s answer: undistorted pixels (N, 2) and their covariances (N, 2, 2).
 type Undistorted<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray3<f64>>);
 
-/// The `cov=` argument of the pixel methods: (N, 2, 2), or the identity (1 px²) for each of `n` pixels.
-fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Matrix2<f64>>> {
+/// The `covariances=` argument of the pixel methods: (N, 2, 2), or the identity (1 px²) for each of
+/// `n` pixels.
+fn pixel_covariances(covariances: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<Matrix2<f64>>> {
     use crate::convert::{check_finite, matrices, read, shape_string, Dim};
-    let Some(c) = cov else {
+    let Some(c) = covariances else {
         return Ok(vec![Matrix2::identity(); n]);
     };
-    let (shape, values) = read("cov", c, &[Dim::Free("N"), Dim::Fixed(2), Dim::Fixed(2)])?;
-    check_finite("cov", &values, 4)?;
+    let (shape, values) = read("covariances", c, &[Dim::Free("N"), Dim::Fixed(2), Dim::Fixed(2)])?;
+    check_finite("covariances", &values, 4)?;
     if shape[0] != n {
         return Err(shape_error(
-            "cov",
+            "covariances",
             &format!("shape ({n}, 2, 2) (one per pixel)"),
             shape_string(&shape),
         ));
@@ -174,7 +176,7 @@ fn pixel_covariances(cov: Option<&Bound<'_, PyAny>>, n: usize) -> PyResult<Vec<M
     let covs = matrices::<2, 2>(&values);
     if let Some(k) = covs.iter().position(|c| !symmetric_psd(c)) {
         return Err(degenerate(format!(
-            "cov[{k}] is not a covariance (symmetric positive semidefinite): [[{}, {}], [{}, {}]]",
+            "covariances[{k}] is not a covariance (symmetric positive semidefinite): [[{}, {}], [{}, {}]]",
             number(values[4 * k]),
             number(values[4 * k + 1]),
             number(values[4 * k + 2]),

@@ -10,15 +10,15 @@
 
 use crate::errors::PlueckerError;
 use nalgebra::SMatrix;
-use pluecker::certificate::Primitive;
 use pluecker::chi_square::ResidualTest;
 use pluecker::geometry::dual_quaternion::DualQuaternion;
 use pluecker::geometry::plucker::LineChart;
-use pluecker::geometry::quadric::Ellipse;
+use pluecker::geometry::Ellipse;
 use pluecker::optim::Termination;
 use pluecker::pose::{CovarianceSource, Method as PoseMethod, PoseDetails, RansacReport, RansacStop, StageReport};
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, Method, Report, Status};
+use pluecker::Primitive;
 use pluecker::{Camera, Pose, PoseResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};

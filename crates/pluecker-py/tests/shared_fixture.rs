@@ -42,10 +42,8 @@ fn shared_fixture_scene_is_pinned() {
 fn shared_fixture_every_method_recovers_the_pose() {
     let scene = random_scene(SceneKind::General, N_POINTS, N_LINES, SEED);
     for &method in Method::ALL {
-        let opts = PoseOptions {
-            method,
-            ..PoseOptions::default()
-        };
+        let mut opts = PoseOptions::default();
+        opts.method = method;
         let result = estimate_pose(&scene.camera, &scene.correspondences, &opts).expect("valid input");
         let dr = (result.pose.rotation - scene.rotation).amax();
         let dt = (result.pose.translation - scene.translation).amax();

@@ -26,8 +26,8 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::Vector2;
-use pluecker::geometry::quaternion::rotation_distance;
-use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::geometry::rotation_distance;
+use pluecker::pose::ReprojectionCost;
 use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, RansacOptions, Status};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, Scene, SceneKind};
@@ -84,11 +84,9 @@ fn bench_group(c: &mut Criterion, group_name: &str, refine: bool) {
         let (scene, corr) = noisy_problem(problem);
         let camera = scene.camera;
         for &method in Method::ALL {
-            let opts = PoseOptions {
-                method,
-                refine,
-                ..Default::default()
-            };
+            let mut opts = PoseOptions::default();
+            opts.method = method;
+            opts.refine = refine;
             let id = format!("{group_name}/{}/{}", problem.name, method.as_str());
             match estimate_pose(&camera, &corr, &opts) {
                 Err(e) => {
@@ -156,10 +154,8 @@ fn robust(c: &mut Criterion) {
         .sample_size(30)
         .measurement_time(Duration::from_secs(3))
         .warm_up_time(Duration::from_millis(500));
-    let opts = PoseOptions {
-        ransac: Some(RansacOptions::default()),
-        ..Default::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.ransac = Some(RansacOptions::default());
     for ratio in OUTLIER_RATIOS {
         let (scene, corr) = outlier_problem(ratio, 14);
         let name = format!("100-points-30-lines-{}pct-outliers", (100.0 * ratio).round());

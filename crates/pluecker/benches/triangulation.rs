@@ -24,8 +24,8 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::{CertificateKind, LineBound, Method, TriangulationOptions};
 use std::time::Duration;
 
@@ -81,10 +81,8 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 fn summary(case: &Case, tracks: &[Track]) {
     let mut line = format!("{:>18}:", case.name);
     for &method in Method::ALL {
-        let opts = TriangulationOptions {
-            method,
-            ..Default::default()
-        };
+        let mut opts = TriangulationOptions::default();
+        opts.method = method;
         let (mut times, mut errors, mut nodes) = (Vec::new(), Vec::new(), Vec::new());
         let (mut by_test, mut by_bnb, mut certified) = (0, 0, 0);
         for (cams, obs, truth) in tracks {
@@ -139,10 +137,8 @@ fn bench_points(c: &mut Criterion) {
         let tracks = pool(&case);
         summary(&case, &tracks);
         for &method in Method::ALL {
-            let opts = TriangulationOptions {
-                method,
-                ..Default::default()
-            };
+            let mut opts = TriangulationOptions::default();
+            opts.method = method;
             let mut k = 0;
             group.bench_function(format!("{}/{}", case.name, method.as_str()), |b| {
                 b.iter(|| {
@@ -181,10 +177,8 @@ fn bench_batch(c: &mut Criterion) {
         b.iter(|| black_box(triangulate_points_linear(&scene.cameras, &tracks).unwrap()))
     });
     for &method in Method::ALL {
-        let opts = TriangulationOptions {
-            method,
-            ..Default::default()
-        };
+        let mut opts = TriangulationOptions::default();
+        opts.method = method;
         group.bench_function(format!("5-views-10deg/{}", method.as_str()), |b| {
             b.iter(|| black_box(triangulate_points(&scene.cameras, &tracks, &opts, None).unwrap()))
         });
@@ -212,10 +206,8 @@ fn bench_lines(c: &mut Criterion) {
             })
             .collect();
         for &bound in LineBound::ALL {
-            let opts = TriangulationOptions {
-                line_bound: bound,
-                ..Default::default()
-            };
+            let mut opts = TriangulationOptions::default();
+            opts.line_bound = bound;
             let results: Vec<_> = problems
                 .iter()
                 .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
@@ -260,10 +252,8 @@ fn bench_quadrics(c: &mut Criterion) {
             })
             .collect();
         for method in [Method::Local, Method::Optimal] {
-            let opts = TriangulationOptions {
-                method,
-                ..Default::default()
-            };
+            let mut opts = TriangulationOptions::default();
+            opts.method = method;
             let certified = problems
                 .iter()
                 .map(|(p, x)| triangulate_quadric_points(p, x, SIGMA_PX, &opts).expect("valid"))

@@ -7,6 +7,7 @@
 
 /// Options of every certificate. Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct CertifyOptions {
     /// The answer is certified when `(cost − lower_bound) / max(cost, 1e-12) ≤ max_relative_gap`.
     /// Default `1e-3`.
@@ -61,12 +62,12 @@ pub enum CertificateKind {
     /// Branch and bound closed the gap (the SOCP relaxations of section 4).
     BranchAndBound,
     /// Lines: interval branch and bound with Taylor bounds over the two-view chart
-    /// ([`crate::triangulation::line::taylor_search`]), whose domain is every line not within 1 % of
+    /// (`line::taylor_search`), whose domain is every line not within 1 % of
     /// the local line's distance from a camera centre.
     TaylorBranchAndBound,
     /// Points through lenses with distortion: the convexity test of the linearisation at the
     /// estimate, carried to the exact cost by interval bounds of the lenses' Jacobians
-    /// ([`crate::triangulation::point::lens`]), whose domain is every point whose projections lie
+    /// (`point::lens`), whose domain is every point whose projections lie
     /// inside the disc where each lens is proved one-to-one.
     LensConvexityTest,
     /// Pose: the sublevel-set test ([`crate::pose::certificate`]): a search over rotation cells that

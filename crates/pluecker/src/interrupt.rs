@@ -3,13 +3,13 @@
 //!
 //! A [`Stop`] is installed for the duration of a call with [`with_stop`]; the long loops of the crate
 //! poll it through [`stop_reason`]:
-//! - the batches ([`crate::triangulation::point::batch`], line and quadric batches), before each track: a
+//! - the batches (`point::batch`, line and quadric batches), before each track: a
 //!   track not yet started when the stop arrives is not solved
 //!   ([`crate::Error::Interrupted`]);
-//! - the node loop of [`crate::global::branch_and_bound`]: a track being solved keeps the best
+//! - the node loop of `global::branch_and_bound`: a track being solved keeps the best
 //!   estimate and the lower bound reached, uncertified, with status
 //!   [`crate::triangulation::Status::Interrupted`] or [`crate::triangulation::Status::TimeBudget`];
-//! - the RANSAC loop ([`crate::pose::robust`], stop reason [`crate::RansacStop::Interrupted`]) and the
+//! - the RANSAC loop (`pose::robust`, stop reason [`crate::RansacStop::Interrupted`]) and the
 //!   rotation search of the pose certificate ([`crate::pose::certificate`], not proved).
 //!
 //! The stop is ambient (a thread-local) rather than a parameter of every solver, so that adding a

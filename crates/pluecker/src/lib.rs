@@ -19,7 +19,7 @@
 //! ## Examples
 //! The pose of a camera from points and lines:
 //! ```
-//! use pluecker::{camera::Camera, pose::{estimate_pose, PoseOptions}, synthetic};
+//! use pluecker::{pose::{estimate_pose, PoseOptions}, synthetic};
 //! let scene = synthetic::random_scene(synthetic::SceneKind::General, 20, 5, 42);
 //! let result = estimate_pose(&scene.camera, &scene.correspondences, &PoseOptions::default()).unwrap();
 //! assert!((result.pose.rotation - scene.rotation).norm() < 1e-6);
@@ -32,13 +32,13 @@
 //! use pluecker::triangulation::{point::triangulate_point, TriangulationOptions};
 //! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
 //! let camera = |cx: f64| k * Matrix3x4::new(1.0, 0.0, 0.0, -cx, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0);
-//! let cameras = [camera(0.0), camera(1.0)];
+//! let projections = [camera(0.0), camera(1.0)];
 //! let x = Vector3::new(0.3, -0.2, 5.0);
-//! let pixels: Vec<Vector2<f64>> = cameras
+//! let pixels: Vec<Vector2<f64>> = projections
 //!     .iter()
 //!     .map(|p| { let h = p * x.push(1.0); Vector2::new(h.x / h.z + 0.3, h.y / h.z - 0.2) })
 //!     .collect();
-//! let result = triangulate_point(&cameras, &pixels, None, &TriangulationOptions::default()).unwrap();
+//! let result = triangulate_point(&projections, &pixels, None, &TriangulationOptions::default()).unwrap();
 //! assert!(result.report.certified());
 //! assert!((result.point - x).norm() < 0.05);
 //! ```
@@ -48,7 +48,7 @@
 //! ```
 //! use nalgebra::{Matrix3, Vector3};
 //! use pluecker::camera_model::{CameraModel, LensCamera};
-//! use pluecker::triangulation::{point::triangulate_point_views, views::View, TriangulationOptions};
+//! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
 //! use pluecker::Pose;
 //! let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
 //! let views = [
@@ -62,6 +62,33 @@
 //! assert!(result.report.certified());
 //! ```
 //!
+//! Tracks as COLMAP stores them, one observation per row: image ids index the projections, a point
+//! track may see one image twice (two keypoints, as COLMAP's track merging leaves them), and a bad
+//! track is its own error, never the batch's:
+//! ```
+//! use nalgebra::{Matrix3, Matrix3x4, Vector3};
+//! use pluecker::triangulation::{point::{triangulate_point_observations, SparsePointTracks}, Csr, TriangulationOptions};
+//! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
+//! let projections: Vec<Matrix3x4<f64>> = (0..4)
+//!     .map(|j| k * Matrix3x4::new(1.0, 0.0, 0.0, -(j as f64), 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0))
+//!     .collect();
+//! let pixel = |x: &Vector3<f64>, j: usize| { let h = projections[j] * x.push(1.0); [h.x / h.z, h.y / h.z] };
+//! let (a, b) = (Vector3::new(0.3, -0.2, 6.0), Vector3::new(-0.5, 0.4, 7.0));
+//! // Track 0 is seen in images 0, 2, 3; track 1 in image 1 twice and image 3; track 2 names image 7.
+//! let image = [0, 2, 3, 1, 1, 3, 0, 7];
+//! let points = [&a, &a, &a, &b, &b, &b, &a, &a];
+//! let observations: Vec<f64> = image.iter().zip(points).flat_map(|(&j, x)| pixel(x, j.min(3))).collect();
+//! let tracks = SparsePointTracks {
+//!     csr: Csr { offsets: &[0, 3, 6, 8], image: &image },
+//!     observations: &observations,
+//!     covariances: None,
+//! };
+//! let results = triangulate_point_observations(&projections, &tracks, &TriangulationOptions::default(), None).unwrap();
+//! assert!((results[0].as_ref().unwrap().point - a).norm() < 1e-6);
+//! assert!((results[1].as_ref().unwrap().point - b).norm() < 1e-6);
+//! assert!(results[2].is_err()); // image[7]: an image index below 4 (the cameras)
+//! ```
+//!
 //! ## References
 //! - T. Q. Phong, R. Horaud, A. Yassine, P. D. Tao, *Object pose from 2-D to 3-D point and line
 //!   correspondences*, IJCV 15(3), 1995. Equation numbers in doc comments refer to this paper.
@@ -71,36 +98,44 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // Every public item is documented (`make lint` turns this into an error).
 #![warn(missing_docs)]
+// Every type a public signature names is itself reachable (re-exported) from a public path.
+#![warn(unnameable_types)]
 
-pub mod camera;
+pub(crate) mod camera;
 pub mod camera_model;
-pub mod certificate;
+pub(crate) mod certificate;
 pub mod chi_square;
 pub(crate) mod consensus;
-pub mod curved_line;
-pub mod error;
+pub(crate) mod curved_line;
+pub(crate) mod error;
 pub mod geometry;
-pub mod global;
+pub(crate) mod global;
 pub mod interrupt;
-pub mod lens_bounds;
-pub mod names;
+pub(crate) mod lens_bounds;
+pub(crate) mod names;
 pub mod optim;
 pub mod pose;
-pub mod rigid;
+pub(crate) mod rigid;
 pub mod rng;
-pub mod status;
+pub(crate) mod status;
 pub mod synthetic;
 pub mod triangulation;
 
 pub use camera::Camera;
 pub use camera_model::AnyCamera;
 pub use error::{Error, Result};
-// The crate root holds no two things of one name: each primitive's `Status`, `Method` and certificate
-// stay in their module (`pose::Status`, `triangulation::Status`), as `io::Error` and `fmt::Error` do in std.
-pub use certificate::{Certificate, CertificateKind, CertifyOptions};
+// The crate root holds no two things of one name: each primitive's `Method` and result stay in their
+// module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.
+pub use certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 pub use pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
     RansacReport, RansacStop,
 };
 pub use rigid::Pose;
 pub use status::Status;
+
+/// Items the Python bindings and the integration tests use that are not part of the user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use crate::error::number;
+}

@@ -10,11 +10,11 @@ use pluecker::interrupt::{with_stop, Stop, StopReason};
 use pluecker::pose::{estimate_pose, CertifyOptions, PoseOptions, RansacOptions, RansacStop};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
-use pluecker::triangulation::line::batch::triangulate_lines;
+use pluecker::triangulation::line::triangulate_lines;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::scenes::arc_cameras;
-use pluecker::triangulation::tracks::TrackCameras;
+use pluecker::triangulation::TrackCameras;
 use pluecker::triangulation::{LineBound, Method, Status, TriangulationOptions};
 use pluecker::Error;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -32,15 +32,12 @@ fn segments(n: usize, seed: u64) -> (Vec<Matrix3x4<f64>>, Vec<f64>) {
 /// Branch and bound to a 1e-9 gap with the paper's relaxation: minutes per line, unless stopped (the
 /// default Taylor bound closes this gap in milliseconds).
 fn endless() -> TriangulationOptions {
-    TriangulationOptions {
-        method: Method::Optimal,
-        certify: pluecker::CertifyOptions {
-            max_relative_gap: 1e-9,
-            max_nodes: Some(usize::MAX),
-        },
-        line_bound: LineBound::Relaxation,
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = Method::Optimal;
+    options.certify.max_relative_gap = 1e-9;
+    options.certify.max_nodes = Some(usize::MAX);
+    options.line_bound = LineBound::Relaxation;
+    options
 }
 
 /// A stop that another thread requests once the first poll has been reached, and that thread: the
@@ -148,10 +145,8 @@ fn an_expired_budget_solves_nothing_in_every_point_path() {
         reason: StopReason::TimeBudget,
     };
     for method in [Method::Local, Method::Optimal] {
-        let opts = TriangulationOptions {
-            method,
-            ..Default::default()
-        };
+        let mut opts = TriangulationOptions::default();
+        opts.method = method;
         let batch = with_stop(expired(), || triangulate_points(&cameras, &tracks, &opts, None)).unwrap();
         assert!(batch.iter().all(|r| r.as_ref().err() == Some(&budget)));
     }
@@ -171,14 +166,11 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
         stop.request();
         stop
     };
-    let robust = PoseOptions {
-        ransac: Some(RansacOptions {
-            max_iterations: usize::MAX,
-            min_inlier_ratio: 0.0,
-            ..Default::default()
-        }),
-        ..Default::default()
-    };
+    let mut ransac = RansacOptions::default();
+    ransac.max_iterations = usize::MAX;
+    ransac.min_inlier_ratio = 0.0;
+    let mut robust = PoseOptions::default();
+    robust.ransac = Some(ransac);
     let r = with_stop(requested(), || {
         estimate_pose(&scene.camera, &scene.correspondences, &robust)
     })
@@ -186,10 +178,8 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
     let report = r.details.ransac.unwrap();
     assert_eq!((report.stop, report.iterations), (RansacStop::Interrupted, 0));
 
-    let certify = PoseOptions {
-        certify: Some(CertifyOptions::default()),
-        ..Default::default()
-    };
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(CertifyOptions::default());
     let plain = estimate_pose(&scene.camera, &scene.correspondences, &certify).unwrap();
     assert!(
         plain.certificate.is_some_and(|c| c.certified),

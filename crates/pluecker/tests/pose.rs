@@ -2,19 +2,18 @@
 //! optimality, and the errors bad input gets. Seeds are fixed per test and printed on failure.
 
 use nalgebra::{Matrix3, Vector2, Vector3};
-use pluecker::geometry::quaternion::{log_so3, rotation_distance};
-use pluecker::pose::reprojection::{pose_covariance, ReprojectionCost};
+use pluecker::geometry::{rotation_distance, testing::log_so3};
 use pluecker::pose::{estimate_pose, Correspondences, Method, PoseOptions, Status};
+use pluecker::pose::{pose_covariance, ReprojectionCost};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, random_scene, SceneKind};
 use pluecker::{Camera, Error, Pose};
 
 fn options(method: Method, refine: bool) -> PoseOptions {
-    PoseOptions {
-        method,
-        refine,
-        ..PoseOptions::default()
-    }
+    let mut options = PoseOptions::default();
+    options.method = method;
+    options.refine = refine;
+    options
 }
 
 fn subset(c: &Correspondences, n: usize, rng: &mut Rng) -> Correspondences {
@@ -240,21 +239,15 @@ fn bad_input_gets_a_clear_error() {
         estimate_pose(&singular, &good, &default).unwrap_err(),
         Error::SingularCamera { .. }
     ));
-    let bad = PoseOptions {
-        penalty: -1.0,
-        ..PoseOptions::default()
-    };
+    let mut bad = PoseOptions::default();
+    bad.penalty = -1.0;
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
-    let bad = PoseOptions {
-        initial_pose: Some(Pose::new(Matrix3::zeros(), Vector3::zeros())),
-        ..PoseOptions::default()
-    };
+    let mut bad = PoseOptions::default();
+    bad.initial_pose = Some(Pose::new(Matrix3::zeros(), Vector3::zeros()));
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
     let reflection = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
-    let bad = PoseOptions {
-        initial_pose: Some(Pose::new(reflection, Vector3::zeros())),
-        ..PoseOptions::default()
-    };
+    let mut bad = PoseOptions::default();
+    bad.initial_pose = Some(Pose::new(reflection, Vector3::zeros()));
     assert!(matches!(err(&good, &bad), Error::InvalidOption { .. }));
 }
 
@@ -314,10 +307,8 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
             &corr,
             &pose_oracle::OraclePose::new(Matrix3::identity(), Vector3::zeros()),
         );
-        let opts = PoseOptions {
-            sigma_px: Some(sigma),
-            ..PoseOptions::default()
-        };
+        let mut opts = PoseOptions::default();
+        opts.sigma_px = Some(sigma);
         let r = estimate_pose(&camera, &corr, &opts).unwrap();
         let name = format!("f={focal} n={n} seed {seed}");
         let front = pose_oracle::OraclePose::new(r.pose.rotation, r.pose.translation);

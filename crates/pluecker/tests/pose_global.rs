@@ -132,10 +132,8 @@ fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
     let (_, descended) = pose_oracle::minimise(&camera, &corr, &OraclePose::of(&pose));
     assert!(descended >= oracle * (1.0 - 1e-6), "{descended} below {oracle}");
     // Told that the noise is 0.01 px, the data do tell the two apart.
-    let sure = PoseOptions {
-        sigma_px: Some(0.01),
-        ..PoseOptions::default()
-    };
+    let mut sure = PoseOptions::default();
+    sure.sigma_px = Some(0.01);
     assert_eq!(estimate_pose(&camera, &corr, &sure).unwrap().status, Status::Success);
 }
 
@@ -170,10 +168,8 @@ fn near_ties_sit_on_each_side_of_the_ambiguity_margin() {
             let row = format!("f={f} {n}p planar={planar} seed {seed}: minima {f1:.6} and {f2:.6}");
             for (ratio, expected) in [(0.75, Status::Ambiguous), (1.33, Status::Success)] {
                 let sigma = (delta / ratio / (0.5 * threshold)).sqrt();
-                let opts = PoseOptions {
-                    sigma_px: Some(sigma),
-                    ..PoseOptions::default()
-                };
+                let mut opts = PoseOptions::default();
+                opts.sigma_px = Some(sigma);
                 let result = estimate_pose(&scene.camera, &corr, &opts).unwrap();
                 let cost = cost_of(&scene.camera, &corr, &result.pose);
                 // Both costs from the oracle, to its rounding (~1e-12 relative; 1e-7 for the
@@ -292,10 +288,8 @@ fn near_ties_sit_on_each_side_of_the_estimated_noise_margin() {
 /// the certificate is given only where it holds: the relative gap is at most the requested one.
 #[test]
 fn certified_bounds_are_never_beaten() {
-    let opts = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.certify = Some(Default::default());
     let mut certified = 0;
     let rows = [
         (800.0, 10, 0, false),
@@ -395,10 +389,8 @@ fn a_wrong_local_minimum_is_not_certified() {
 /// cost unchanged, and the certificate, lower bound and pose come out the same.
 #[test]
 fn certificate_holds_for_mirrored_and_skewed_cameras() {
-    let opts = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.certify = Some(Default::default());
     let mut compared = 0;
     for seed in 0..12 {
         let (np, nl) = if seed % 2 == 0 { (20, 0) } else { (30, 10) };
@@ -423,9 +415,7 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
                 (plain_raw - other_raw).abs() <= 1e-6 * plain_raw.max(1.0),
                 "seed {seed}"
             );
-            assert!(
-                pluecker::geometry::quaternion::rotation_distance(&plain.pose.rotation, &other.pose.rotation) < 1e-8
-            );
+            assert!(pluecker::geometry::rotation_distance(&plain.pose.rotation, &other.pose.rotation) < 1e-8);
         }
         // Skew: the same pixels seen through K with skew are certified with a bound below the cost.
         let skewed_camera = pluecker::Camera { skew: 30.0, ..cam };
@@ -472,12 +462,12 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
 fn the_node_cap_of_certify_options_takes_effect() {
     let scene = visible_scene(800.0, 30, 0, false, 3);
     let corr = scene.noisy(1.0, true, &mut Rng::new(3));
-    let certify = |max_nodes| PoseOptions {
-        certify: Some(pluecker::CertifyOptions {
-            max_nodes,
-            ..Default::default()
-        }),
-        ..PoseOptions::default()
+    let certify = |max_nodes| {
+        let mut certify = pluecker::CertifyOptions::default();
+        certify.max_nodes = max_nodes;
+        let mut options = PoseOptions::default();
+        options.certify = Some(certify);
+        options
     };
     let free = estimate_pose(&scene.camera, &corr, &certify(None)).unwrap();
     let certificate = free.certificate.expect("a bound");
@@ -512,10 +502,8 @@ fn a_requested_certificate_that_does_not_hold_is_gap_not_closed() {
         .uncertified_reason
         .as_deref()
         .is_some_and(|why| why.contains("not requested")));
-    let opts = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.certify = Some(Default::default());
     let requested = estimate_pose(&scene.camera, &corr, &opts).unwrap();
     assert_eq!(requested.status, Status::GapNotClosed);
     assert!(requested.certificate.is_none(), "{:?}", requested.certificate);
@@ -525,10 +513,8 @@ fn a_requested_certificate_that_does_not_hold_is_gap_not_closed() {
     // A status other than success keeps precedence: the robust estimator has no certificate either,
     // and its status is not replaced when it failed for another reason. Here it succeeds, so the
     // unheld request shows.
-    let robust = PoseOptions {
-        ransac: Some(Default::default()),
-        ..opts.clone()
-    };
+    let mut robust = opts.clone();
+    robust.ransac = Some(Default::default());
     let r = estimate_pose(&scene.camera, &corr, &robust).unwrap();
     assert!(r.certificate.is_none());
     assert!(

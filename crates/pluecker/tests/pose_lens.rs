@@ -8,7 +8,7 @@
 
 use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
 use pluecker::camera_model::{CameraModel, LensCamera};
-use pluecker::geometry::quaternion::log_so3;
+use pluecker::geometry::testing::log_so3;
 use pluecker::pose::{
     estimate_pose, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions, Status,
 };
@@ -61,10 +61,9 @@ fn nees(result: &PoseResult, scene: &Scene) -> Option<f64> {
 }
 
 fn with_sigma(sigma: f64) -> PoseOptions {
-    PoseOptions {
-        sigma_px: Some(sigma),
-        ..PoseOptions::default()
-    }
+    let mut options = PoseOptions::default();
+    options.sigma_px = Some(sigma);
+    options
 }
 
 /// Mean NEES over `trials` seeds of `estimate`.
@@ -129,7 +128,7 @@ fn the_refined_pose_minimises_the_exact_distorted_pixel_error() {
                 // Left perturbation exp(ω) R: ∂x_cam/∂ω = −[R X]×, ∂x_cam/∂t = I.
                 let mut j = nalgebra::SMatrix::<f64, 2, 6>::zeros();
                 j.fixed_view_mut::<2, 3>(0, 0)
-                    .copy_from(&(d * -pluecker::geometry::quaternion::skew(&rx)));
+                    .copy_from(&(d * -pluecker::geometry::testing::skew(&rx)));
                 j.fixed_view_mut::<2, 3>(0, 3).copy_from(&d);
                 jtj += j.transpose() * j;
                 jtr += j.transpose() * res;
@@ -162,14 +161,11 @@ fn robust_pose_through_a_lens_rejects_outliers() {
             }
             outlier[i] = true;
         }
-        let opts = PoseOptions {
-            ransac: Some(RansacOptions {
-                seed,
-                ..RansacOptions::default()
-            }),
-            sigma_px: Some(1.0),
-            ..PoseOptions::default()
-        };
+        let mut ransac = RansacOptions::default();
+        ransac.seed = seed;
+        let mut opts = PoseOptions::default();
+        opts.ransac = Some(ransac);
+        opts.sigma_px = Some(1.0);
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
         for (i, _) in outlier.iter().enumerate().filter(|(_, &o)| o) {
@@ -269,10 +265,8 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
         "{err}"
     );
     // With covariances, certification is refused with a reason, not claimed.
-    let opts = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.certify = Some(Default::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
     assert!(result.certificate.is_none_or(|c| !c.certified));
     assert_ne!(result.status, Status::Success);
@@ -292,10 +286,8 @@ fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
     corr.points2d[7] = Vector2::new(320.0 + 1.8 * 300.0, 240.0);
     corr.lines2d[1][0] = Vector2::new(320.0, 240.0 - 1.8 * 300.0);
     assert!(estimate_pose(&lens, &corr, &PoseOptions::default()).is_err());
-    let opts = PoseOptions {
-        ransac: Some(RansacOptions::default()),
-        ..PoseOptions::default()
-    };
+    let mut opts = PoseOptions::default();
+    opts.ransac = Some(RansacOptions::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
     assert_eq!(result.status, Status::Success);
     assert_eq!(result.inliers_points.len(), 30);
@@ -314,14 +306,11 @@ fn ransac_thresholds_are_distorted_pixels_at_the_fisheye_edge() {
     for seed in 0..10 {
         let scene = visible_scene(120.0, 60, 0, false, 500 + seed);
         let corr = observe(&scene, &lens, &|_| 1.0, &mut Rng::new(seed));
-        let opts = PoseOptions {
-            ransac: Some(RansacOptions {
-                seed,
-                ..RansacOptions::default()
-            }),
-            sigma_px: Some(1.0),
-            ..PoseOptions::default()
-        };
+        let mut ransac = RansacOptions::default();
+        ransac.seed = seed;
+        let mut opts = PoseOptions::default();
+        opts.ransac = Some(ransac);
+        opts.sigma_px = Some(1.0);
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
         assert_eq!(result.status, Status::Success, "seed {seed}");
         kept += result.inliers_points.iter().filter(|&&k| k).count();
@@ -394,7 +383,7 @@ fn undistorted_covariances_match_the_derivative_of_the_distortion() {
             noise: None,
         };
         let noise = ObservationNoise::from_covariances(&point_covs, &line_covs).unwrap();
-        let (_, undistorted) = pluecker::pose::lens::undistort(&lens, &corr, Some(&noise)).unwrap();
+        let (_, undistorted) = pluecker::pose::testing::undistort(&lens, &corr, Some(&noise)).unwrap();
         let out = undistorted.noise.as_ref().unwrap();
         // J = ∂u/∂ū at the undistorted pixel ū, by central differences of the oracle.
         let jacobian = |ubar: &Vector2<f64>| {
@@ -632,7 +621,7 @@ fn oracle_gradient(
             let mut d = Vector6::zeros();
             d[a] = sign * h;
             let w = Vector3::new(d[0], d[1], d[2]);
-            let r = pluecker::geometry::quaternion::exp_so3(&w) * rotation;
+            let r = pluecker::geometry::testing::exp_so3(&w) * rotation;
             oracle_cost(lens, corr, covs, &r, &(translation + Vector3::new(d[3], d[4], d[5])))
         };
         (at(1.0) - at(-1.0)) / (2.0 * h)
@@ -648,7 +637,7 @@ fn step_in_sigmas(g: &Vector6<f64>, cov: &Matrix6<f64>) -> f64 {
 /// The first-order answer the pipeline gave before the exact cost: the observations undistorted with
 /// the noise `W = L⁻¹ J`, on the pinhole part.
 fn first_order_answer(lens: &LensCamera, corr: &Correspondences, opts: &PoseOptions) -> PoseResult {
-    let (pinhole, undistorted) = pluecker::pose::lens::undistort(lens, corr, corr.noise.as_ref()).unwrap();
+    let (pinhole, undistorted) = pluecker::pose::testing::undistort(lens, corr, corr.noise.as_ref()).unwrap();
     estimate_pose(&pinhole, &undistorted, opts).unwrap()
 }
 
@@ -803,14 +792,10 @@ fn the_exact_cost_weights_each_observation_by_its_own_covariance() {
 fn no_certificate_is_claimed_through_a_lens() {
     // Every path through a lens refuses the certificate and says why; a LensCamera of the PINHOLE model
     // is a pinhole camera and may be certified.
-    let certify = PoseOptions {
-        certify: Some(Default::default()),
-        ..PoseOptions::default()
-    };
-    let robust = PoseOptions {
-        ransac: Some(RansacOptions::default()),
-        ..certify.clone()
-    };
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(Default::default());
+    let mut robust = certify.clone();
+    robust.ransac = Some(RansacOptions::default());
     for (lens, r_max) in strong_lenses() {
         let mut rng = Rng::new(5);
         let (corr, _, _) = lens_scene(&lens, r_max, 20, 2, &[Matrix2::identity() * 0.01; 24], &mut rng);

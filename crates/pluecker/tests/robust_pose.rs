@@ -8,8 +8,8 @@
 //! which moves each predicted feature by about σ/√(n/6) ≈ 0.3 px here (1 px noise, ≥ 20 inliers).
 
 use nalgebra::{Matrix6, Vector2, Vector3, Vector6};
-use pluecker::geometry::quaternion::{log_so3, rotation_distance};
-use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::geometry::{rotation_distance, testing::log_so3};
+use pluecker::pose::ReprojectionCost;
 use pluecker::pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseOptions, PoseResult, RansacOptions, RansacStop, Status,
 };
@@ -23,13 +23,11 @@ const MASK_MARGIN_PX: f64 = 1.5;
 const THRESHOLD_PX: f64 = 4.0;
 
 fn robust(seed: u64) -> PoseOptions {
-    PoseOptions {
-        ransac: Some(RansacOptions {
-            seed,
-            ..RansacOptions::default()
-        }),
-        ..PoseOptions::default()
-    }
+    let mut ransac = RansacOptions::default();
+    ransac.seed = seed;
+    let mut options = PoseOptions::default();
+    options.ransac = Some(ransac);
+    options
 }
 
 /// A random segment of the image at least 40 px long.
@@ -104,10 +102,8 @@ fn recovers_the_pose_at_0_50_and_80_percent_outliers_with_points_and_lines() {
     for (ratio, seed) in [(0.0, 1u64), (0.5, 2), (0.8, 3)] {
         for (np, nl) in [(100, 0), (100, 30)] {
             let (scene, corr) = scene_with_outliers(np, nl, ratio, seed);
-            let opts = PoseOptions {
-                sigma_px: Some(1.0),
-                ..robust(seed)
-            };
+            let mut opts = robust(seed);
+            opts.sigma_px = Some(1.0);
             let label = format!("ratio {ratio} seed {seed} {np} points {nl} lines");
             let r = estimate_pose(&scene.camera, &corr, &opts).unwrap();
             assert_eq!(r.status, Status::Success, "{label}: {r:?}");
@@ -381,10 +377,8 @@ fn bad_options_and_bad_data_are_errors() {
             "{name}: {result:?}"
         );
     }
-    let sigma = PoseOptions {
-        sigma_px: Some(0.0),
-        ..robust(0)
-    };
+    let mut sigma = robust(0);
+    sigma.sigma_px = Some(0.0);
     assert!(matches!(
         estimate_pose(&scene.camera, &corr, &sigma),
         Err(Error::InvalidOption { .. })
@@ -469,10 +463,8 @@ fn non_robust_results_use_every_correspondence_and_carry_a_covariance() {
     // σ̂² ~ σ² χ²₇₄ / 74: within 5 standard deviations √(2/74) of 1.
     let s2 = r.details.sigma_px.unwrap().powi(2);
     assert!((s2 - 1.0).abs() < 5.0 * (2.0f64 / 74.0).sqrt(), "σ̂² = {s2}");
-    let given = PoseOptions {
-        sigma_px: Some(2.0),
-        ..PoseOptions::default()
-    };
+    let mut given = PoseOptions::default();
+    given.sigma_px = Some(2.0);
     let g = estimate_pose(&scene.camera, &corr, &given).unwrap();
     assert_eq!(
         (g.details.covariance_source, g.details.sigma_px),
@@ -551,10 +543,8 @@ const DRAWS: usize = 500;
 
 #[test]
 fn covariance_matches_monte_carlo_errors_in_a_general_and_a_low_parallax_scene() {
-    let given = PoseOptions {
-        sigma_px: Some(1.0),
-        ..PoseOptions::default()
-    };
+    let mut given = PoseOptions::default();
+    given.sigma_px = Some(1.0);
     let general = random_scene(SceneKind::General, 30, 10, 31);
     let mc_general = monte_carlo(&general, &given, 0.0, DRAWS, 31);
     assert_covariance_matches(&mc_general, DRAWS, "general");
@@ -587,10 +577,8 @@ fn estimated_sigma_is_close_to_the_true_one() {
 
 #[test]
 fn robust_covariance_matches_monte_carlo_errors_on_the_inliers() {
-    let opts = PoseOptions {
-        sigma_px: Some(1.0),
-        ..robust(34)
-    };
+    let mut opts = robust(34);
+    opts.sigma_px = Some(1.0);
     let scene = random_scene(SceneKind::General, 60, 15, 34);
     let mc = monte_carlo(&scene, &opts, 0.3, DRAWS, 34);
     assert_covariance_matches(&mc, DRAWS, "robust, 30 % outliers");

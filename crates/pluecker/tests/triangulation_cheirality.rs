@@ -11,21 +11,17 @@ use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, paper_pose, triangulation_scene};
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::{triangulate_point, PointTriangulation};
+use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::quadric::triangulate_quadric;
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(300),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_nodes = Some(300);
+    options
 }
 
 fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
@@ -304,7 +300,7 @@ fn a_certificate_of_negligible_cost_comes_with_a_success() {
         .cameras
         .iter()
         .map(|p| {
-            pluecker::geometry::quadric::project_dual(p, &scene.ellipsoid.dual())
+            pluecker::geometry::project_dual(p, &scene.ellipsoid.dual())
                 .try_inverse()
                 .unwrap()
         })

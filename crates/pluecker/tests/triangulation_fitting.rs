@@ -12,10 +12,10 @@
 
 use nalgebra::{SMatrix, SVector, Vector2};
 use pluecker::rng::Rng;
-use pluecker::triangulation::covariance::whitening;
 use pluecker::triangulation::fitting::{fit_conic, fit_line, random_image_primitives, residual_samples};
-use pluecker::triangulation::line::residual::LineFrame;
-use pluecker::triangulation::quadric::residual::ConicFrame;
+use pluecker::triangulation::line::testing::LineFrame;
+use pluecker::triangulation::quadric::testing::ConicFrame;
+use pluecker::triangulation::testing::whitening;
 
 /// Checks that the sample mean and covariance of `samples` whitened by `predicted` are those of a
 /// standard normal vector (see the module docs), printing the seed on failure.

@@ -6,9 +6,9 @@
 use nalgebra::{Matrix2, Matrix2x4, Matrix3, Matrix3x4, Matrix4, SymmetricEigen, Vector2, Vector3};
 use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::rng::Rng;
-use pluecker::triangulation::point::lens::{lens_certificate, LensView};
+use pluecker::triangulation::point::testing::{lens_certificate, LensView};
 use pluecker::triangulation::point::triangulate_point_views;
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::View;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use pluecker::{AnyCamera, Pose};
 
@@ -242,10 +242,9 @@ fn wide_fisheye() -> Lens {
 }
 
 fn optimal() -> TriangulationOptions {
-    TriangulationOptions {
-        method: Method::Optimal,
-        ..TriangulationOptions::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = Method::Optimal;
+    options
 }
 
 /// The oracle's best of many starts: the library's point, the truth, and points around them.
@@ -390,10 +389,8 @@ fn robust_inliers_are_the_observations_within_the_threshold_at_the_exact_optimum
     // One 30 px outlier per track through the strong lens: it is rejected, and the inlier flags are
     // exactly the observations the oracle finds within τ = 4 whitened px of the returned point.
     let mut rng = Rng::new(404);
-    let opts = TriangulationOptions {
-        outlier_threshold: Some(4.0),
-        ..optimal()
-    };
+    let mut opts = optimal();
+    opts.outlier_threshold = Some(4.0);
     for i in 0..30 {
         let mut t = track(strong_radial(), 4 + i % 3, 0.09, false, &mut rng);
         let bad = i % t.pixels.len();
@@ -664,10 +661,9 @@ fn assert_inliers_fit_at_the_exact_optimum(
 }
 
 fn robust(tau: f64) -> TriangulationOptions {
-    TriangulationOptions {
-        outlier_threshold: Some(tau),
-        ..optimal()
-    }
+    let mut options = optimal();
+    options.outlier_threshold = Some(tau);
+    options
 }
 
 /// The lenses and draws of [`fitting_only_exactly`]'s premise: (name, lens, off-axis angles (rad),

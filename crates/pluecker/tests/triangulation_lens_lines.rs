@@ -13,11 +13,11 @@ use pluecker::camera_model::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;
-use pluecker::triangulation::line::batch::{triangulate_line_observations_views, SparseSegmentTracks};
-use pluecker::triangulation::line::lens::{exact_cost, LensSegment};
+use pluecker::triangulation::line::testing::{exact_cost, LensSegment};
 use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments, triangulate_line_segments_views};
-use pluecker::triangulation::tracks::Csr;
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::line::{triangulate_line_observations_views, SparseSegmentTracks};
+use pluecker::triangulation::Csr;
+use pluecker::triangulation::View;
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 use pluecker::{AnyCamera, Camera, Error, Pose};
 
@@ -341,10 +341,9 @@ fn covariances_of(obs: &[Obs]) -> Vec<[Matrix2<f64>; 2]> {
 }
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        ..TriangulationOptions::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options
 }
 
 fn world_line(line: &Line) -> Vector6<f64> {
@@ -609,7 +608,7 @@ fn bad_input_names_the_argument_and_the_row() {
     let mut bad = good.clone();
     bad[2][1].y = f64::NAN;
     match triangulate_line_segments_views(&views, &bad, None, &o) {
-        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), index), ("segments", 2)),
+        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), index), ("lines", 2)),
         other => panic!("{other:?}"),
     }
     // An endpoint beyond the fold of the radial lens (distorted radius above 515 px from the
@@ -617,12 +616,12 @@ fn bad_input_names_the_argument_and_the_row() {
     let mut bad = good.clone();
     bad[1][0] = Vector2::new(600.0 + 700.0, 500.0);
     match triangulate_line_segments_views(&views, &bad, None, &o) {
-        Err(Error::Degenerate { what }) => assert!(what.starts_with("segments[1]: endpoint 0"), "{what}"),
+        Err(Error::Degenerate { what }) => assert!(what.starts_with("lines[1]: endpoint 0"), "{what}"),
         other => panic!("{other:?}"),
     }
     // Wrong counts.
     match triangulate_line_segments_views(&views, &good[..2], None, &o) {
-        Err(Error::Shape { what, .. }) => assert_eq!(what, "segments"),
+        Err(Error::Shape { what, .. }) => assert_eq!(what, "lines"),
         other => panic!("{other:?}"),
     }
     let covs = covariances_of(&sc.obs);
@@ -671,11 +670,11 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         .collect();
     let csr = Csr {
         offsets: &offsets,
-        images: &images,
+        image: &images,
     };
     let tracks = SparseSegmentTracks {
         csr,
-        segments: &segments,
+        lines: &segments,
         covariances: Some(&covariances),
     };
     let o = opts(Method::Local);
@@ -698,13 +697,13 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
     segments[4 * 4 + 1] = f64::NAN;
     let tracks = SparseSegmentTracks {
         csr,
-        segments: &segments,
+        lines: &segments,
         covariances: Some(&covariances),
     };
     let results = triangulate_line_observations_views(&views, &tracks, &o, None).unwrap();
     assert!(results[0].is_ok());
     match &results[1] {
-        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("segments[1]", 2)),
+        Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("lines[1]", 2)),
         other => panic!("{other:?}"),
     }
 }
@@ -723,9 +722,9 @@ fn quadrics_refuse_a_distorting_lens_by_name() {
     assert!(refuse_distortion(&[zero.clone(), zero.clone()]).is_ok());
     match refuse_distortion(&[zero.clone(), fisheye]) {
         Err(Error::InvalidOption { name, reason }) => {
-            assert_eq!(name, "views");
+            assert_eq!(name, "cameras");
             assert!(
-                reason.starts_with("views[1] (OPENCV_FISHEYE) has distortion"),
+                reason.starts_with("cameras[1] (OPENCV_FISHEYE) has distortion"),
                 "{reason}"
             );
         }
@@ -788,10 +787,8 @@ fn robust_inliers_are_the_segments_within_the_threshold_at_the_exact_optimum() {
         let d = (sc.obs[3].ends[1] - sc.obs[3].ends[0]).normalize();
         let across = Vector2::new(-d.y, d.x) * 40.0;
         sc.obs[3].ends = [sc.obs[3].ends[0] + across, sc.obs[3].ends[1] + across];
-        let o = TriangulationOptions {
-            outlier_threshold: Some(4.0),
-            ..opts(Method::Local)
-        };
+        let mut o = opts(Method::Local);
+        o.outlier_threshold = Some(4.0);
         let r = triangulate_line_segments_views(&views_of(&sc.obs), &segments_of(&sc.obs), None, &o).unwrap();
         let flags = r.inliers.clone().unwrap();
         assert_eq!(flags, vec![true, true, true, false, true, true], "{name}");

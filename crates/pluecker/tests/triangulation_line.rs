@@ -18,14 +18,10 @@ use pluecker::Error;
 
 fn opts(method: Method) -> TriangulationOptions {
     // A node cap keeps the tests fast; certificates below are asserted only where the gap closed.
-    TriangulationOptions {
-        method,
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(300),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_nodes = Some(300);
+    options
 }
 
 /// Sine of the angle between two lines' directions, and the distance between their closest points
@@ -150,15 +146,11 @@ fn the_relaxation_bound_is_below_the_costs_at_every_node_cap() {
             &scene.endpoints[1],
         );
         for max_nodes in [1, 4, 40, 400] {
-            let o = TriangulationOptions {
-                method: Method::Optimal,
-                line_bound: LineBound::Relaxation,
-                certify: pluecker::CertifyOptions {
-                    max_relative_gap: 1e-9,
-                    max_nodes: Some(max_nodes),
-                },
-                ..Default::default()
-            };
+            let mut o = TriangulationOptions::default();
+            o.method = Method::Optimal;
+            o.line_bound = LineBound::Relaxation;
+            o.certify.max_relative_gap = 1e-9;
+            o.certify.max_nodes = Some(max_nodes);
             let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let Some(bound) = r.report.certificate.map(|c| c.raw_lower_bound) else {
                 continue; // nothing proved, nothing claimed
@@ -210,15 +202,10 @@ fn the_relaxation_bound_is_below_the_costs_when_one_view_carries_the_residual() 
             &scene.endpoints[1],
         );
         for max_nodes in [1, 60] {
-            let o = TriangulationOptions {
-                method: Method::Optimal,
-                line_bound: LineBound::Relaxation,
-                certify: pluecker::CertifyOptions {
-                    max_nodes: Some(max_nodes),
-                    ..Default::default()
-                },
-                ..Default::default()
-            };
+            let mut o = TriangulationOptions::default();
+            o.method = Method::Optimal;
+            o.line_bound = LineBound::Relaxation;
+            o.certify.max_nodes = Some(max_nodes);
             let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let c = r.report.certificate.expect("a search ran");
             if c.raw_lower_bound.is_nan() {
@@ -284,10 +271,8 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
             } else {
                 lines_from_segments(&segments, 1.0).unwrap()
             };
-            let o = TriangulationOptions {
-                line_bound: bound,
-                ..opts(Method::Optimal)
-            };
+            let mut o = opts(Method::Optimal);
+            o.line_bound = bound;
             let optimal = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
             let c = optimal.report.certificate.expect("a search ran");
             if !c.certified {
@@ -340,7 +325,7 @@ fn tilt_into_epipolar_plane(scene: &mut LineScene, angle: f64) -> bool {
     let centres: Vec<Vector3<f64>> = scene
         .cameras
         .iter()
-        .map(pluecker::triangulation::views::centre)
+        .map(pluecker::triangulation::testing::centre)
         .collect();
     let mid = 0.5 * (scene.endpoints[0] + scene.endpoints[1]);
     let baseline = (centres[1] - centres[0]).normalize();
@@ -385,7 +370,7 @@ fn search_below(
     let centres: Vec<Vector3<f64>> = scene
         .cameras
         .iter()
-        .map(pluecker::triangulation::views::centre)
+        .map(pluecker::triangulation::testing::centre)
         .collect();
     let distance = |c: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>| (c - a).cross(&(b - a).normalize()).norm();
     let (p, d) = (optimal.point, optimal.direction);
@@ -539,10 +524,8 @@ fn too_small_gamma_is_infeasible() {
     let scene = line_scene(4, 0.8, 13);
     let mut rng = Rng::new(14);
     let segments = scene.noisy_segments(1.0, &mut rng);
-    let o = TriangulationOptions {
-        max_reprojection_error: Some(1e-4),
-        ..opts(Method::Optimal)
-    };
+    let mut o = opts(Method::Optimal);
+    o.max_reprojection_error = Some(1e-4);
     let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
     common::assert_proved_empty(&r.report);
 }
@@ -594,7 +577,8 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     // A line in the epipolar plane of the two views (parallel to the baseline): the back-projected
     // planes coincide.
     let cams = &scene.cameras[..2];
-    let baseline = pluecker::triangulation::views::centre(&cams[1]) - pluecker::triangulation::views::centre(&cams[0]);
+    let baseline =
+        pluecker::triangulation::testing::centre(&cams[1]) - pluecker::triangulation::testing::centre(&cams[0]);
     let a = Vector3::new(0.1, 0.2, 0.3);
     let b = a + baseline * 0.2;
     let epipolar: Vec<Vector3<f64>> = cams
@@ -603,13 +587,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
         .collect();
     assert!(matches!(err(cams, &epipolar, None), Error::Degenerate { ref what } if what.contains("epipolar")));
     // Options.
-    let bad = TriangulationOptions {
-        certify: pluecker::CertifyOptions {
-            max_relative_gap: -1.0,
-            ..Default::default()
-        },
-        ..o.clone()
-    };
+    let mut certify = pluecker::CertifyOptions::default();
+    certify.max_relative_gap = -1.0;
+    let mut bad = o.clone();
+    bad.certify = certify;
     assert!(matches!(
         triangulate_line(&scene.cameras, &lines, None, &bad),
         Err(Error::InvalidOption { .. })
@@ -618,7 +599,7 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let mut segments = scene.segments.clone();
     segments[2][1] = segments[2][0];
     assert!(
-        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("segments[2]"))
+        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("lines[2]"))
     );
 }
 
@@ -663,26 +644,22 @@ mod batch {
     use super::common::{mask, noisy_segments, seen, segment, segment_tracks};
     use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
     use pluecker::rng::Rng;
-    use pluecker::triangulation::line::batch::{triangulate_lines, ImageLines, LineTracks};
     use pluecker::triangulation::line::{
         lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
     };
+    use pluecker::triangulation::line::{triangulate_lines, ImageLines, LineTracks};
     use pluecker::triangulation::scenes::arc_cameras;
-    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
     use pluecker::Error;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     fn opts(method: Method) -> TriangulationOptions {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
-        TriangulationOptions {
-            method,
-            certify: pluecker::CertifyOptions {
-                max_nodes: Some(40),
-                ..Default::default()
-            },
-            ..Default::default()
-        }
+        let mut options = TriangulationOptions::default();
+        options.method = method;
+        options.certify.max_nodes = Some(40);
+        options
     }
 
     /// A result with its wall time zeroed: the one field a batch and a single call may not share.
@@ -791,7 +768,7 @@ mod batch {
         let tracks = segment_tracks(&endpoints, 1.0);
         let done = AtomicUsize::new(0);
         let per_track = TrackCameras::PerTrack {
-            cameras: &cameras,
+            projections: &cameras,
             views: v,
         };
         let batch = triangulate_lines(per_track, &tracks, &opts(Method::Local), Some(&done)).unwrap();
@@ -806,11 +783,11 @@ mod batch {
         let mut bad = cameras.clone();
         bad[2 * v + 1] = Matrix3x4::zeros();
         let per_track = TrackCameras::PerTrack {
-            cameras: &bad,
+            projections: &bad,
             views: v,
         };
         let batch = triangulate_lines(per_track, &tracks, &opts(Method::Linear), None).unwrap();
-        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("cameras[2][1]")));
+        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("projections[2][1]")));
         assert!(batch.iter().enumerate().all(|(t, r)| r.is_ok() == (t != 2)));
     }
 
@@ -896,8 +873,8 @@ mod batch {
         endpoints[4 * 5 * v + 2..4 * 5 * v + 4].copy_from_slice(p);
         let tracks = segment_tracks(&endpoints, 1.0);
         let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Linear), None).unwrap();
-        assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "segments[2]"));
-        assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "segments[5][0] has zero length"));
+        assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "lines[2]"));
+        assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "lines[5][0] has zero length"));
         assert_eq!(batch.iter().filter(|r| r.is_ok()).count(), n - 2);
     }
 
@@ -925,13 +902,10 @@ mod batch {
         };
         assert!(matches!(run(&tracks(0.0), &o), Error::InvalidOption { name, .. } if name == "sigma"));
         assert!(matches!(run(&tracks(f64::NAN), &o), Error::InvalidOption { name, .. } if name == "sigma"));
-        let bad = TriangulationOptions {
-            certify: pluecker::CertifyOptions {
-                max_nodes: Some(0),
-                ..Default::default()
-            },
-            ..o.clone()
-        };
+        let mut certify = pluecker::CertifyOptions::default();
+        certify.max_nodes = Some(0);
+        let mut bad = o.clone();
+        bad.certify = certify;
         assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "certify.max_nodes"));
         let short = LineTracks {
             lines: ImageLines::Homogeneous(&endpoints[..8]),
@@ -954,15 +928,15 @@ mod batch {
         singular[1][(0, 0)] = f64::NAN;
         assert!(matches!(
             triangulate_lines(TrackCameras::Shared(&singular), &tracks(1.0), &o, None),
-            Err(Error::NonFinite { what, index: 1 }) if what == "cameras"
+            Err(Error::NonFinite { what, index: 1 }) if what == "projections"
         ));
         let per_track = TrackCameras::PerTrack {
-            cameras: &cameras,
+            projections: &cameras,
             views: 3,
         };
         assert!(matches!(
             triangulate_lines(per_track, &tracks(1.0), &o, None),
-            Err(Error::Shape { what, .. }) if what == "cameras"
+            Err(Error::Shape { what, .. }) if what == "projections"
         ));
         let empty = LineTracks {
             lines: ImageLines::Homogeneous(&[]),
@@ -974,8 +948,8 @@ mod batch {
 
 #[test]
 fn sparse_line_tracks_equal_the_dense_batch() {
-    use pluecker::triangulation::line::batch::{triangulate_line_observations, SparseLineTracks};
-    use pluecker::triangulation::tracks::Csr;
+    use pluecker::triangulation::line::{triangulate_line_observations, SparseLineTracks};
+    use pluecker::triangulation::Csr;
     // Three views, four tracks seen in all of them; the sparse form lists the same rows track by track.
     let mut rng = pluecker::rng::Rng::new(21);
     let scene = pluecker::synthetic::triangulation_scene(3, 0.6, 21);
@@ -992,10 +966,10 @@ fn sparse_line_tracks_equal_the_dense_batch() {
         }
     }
     let opts = pluecker::triangulation::TriangulationOptions::default();
-    let dense = pluecker::triangulation::line::batch::triangulate_lines(
-        pluecker::triangulation::tracks::TrackCameras::Shared(&cameras),
-        &pluecker::triangulation::line::batch::LineTracks {
-            lines: pluecker::triangulation::line::batch::ImageLines::Segments {
+    let dense = pluecker::triangulation::line::triangulate_lines(
+        pluecker::triangulation::TrackCameras::Shared(&cameras),
+        &pluecker::triangulation::line::LineTracks {
+            lines: pluecker::triangulation::line::ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
             },
@@ -1013,9 +987,9 @@ fn sparse_line_tracks_equal_the_dense_batch() {
         &SparseLineTracks {
             csr: Csr {
                 offsets: &offsets,
-                images: &images,
+                image: &images,
             },
-            lines: pluecker::triangulation::line::batch::ImageLines::Segments {
+            lines: pluecker::triangulation::line::ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
             },

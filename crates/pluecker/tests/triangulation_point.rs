@@ -5,28 +5,27 @@
 mod common;
 
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
-use pluecker::error::Error;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::point::batch::{
+use pluecker::triangulation::point::testing::convexity_test;
+use pluecker::triangulation::point::testing::{global_point, GlobalSettings, GlobalStatus, Relaxation};
+use pluecker::triangulation::point::testing::{in_front, point_views, PointView};
+use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point::{
     triangulate_point_observations, triangulate_points, triangulate_points_linear, PointTracks, SparsePointTracks,
 };
-use pluecker::triangulation::point::certificate::convexity_test;
-use pluecker::triangulation::point::cost::{in_front, point_views, PointView};
-use pluecker::triangulation::point::global::{global_point, GlobalSettings, GlobalStatus, Relaxation};
-use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::tracks::Csr;
-use pluecker::triangulation::views::depth_normalized;
+use pluecker::triangulation::testing::depth_normalized;
+use pluecker::triangulation::Csr;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
+use pluecker::Error;
 
 #[path = "common/oracle_triangulation.rs"]
 mod oracle;
 
 fn options(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options
 }
 
 fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
@@ -187,7 +186,7 @@ fn convexity_certificate_is_never_contradicted_by_sampling_or_multistart() {
         assert!(test.lower_bound <= at_answer * (1.0 + 1e-12), "seed {seed}");
         // Random points around the estimate (scaled by its distance to the first camera) in front
         // of every camera never beat the bound.
-        let scale = (r.point - pluecker::triangulation::views::centre(&scene.cameras[0])).norm();
+        let scale = (r.point - pluecker::triangulation::testing::centre(&scene.cameras[0])).norm();
         for _ in 0..400 {
             let step =
                 Vector3::new(rng.normal(), rng.normal(), rng.normal()) * scale * 10f64.powf(rng.uniform_in(-5.0, -0.5));
@@ -229,12 +228,12 @@ fn convexity_test_centred_away_from_the_minimiser_bounds_the_global_minimum() {
         let data = oracle::PointData::new(&scene.cameras, &obs, covs);
         let (x_min, f_min) = data.many_start_minimum(&scene.point, 200, &mut rng);
         let vs = views_of(&scene.cameras, &obs, covs);
-        let ray = (x_min - pluecker::triangulation::views::centre(&scene.cameras[0])).normalize();
+        let ray = (x_min - pluecker::triangulation::testing::centre(&scene.cameras[0])).normalize();
         for k in 0..12 {
             let along = rng.normal() * 10f64.powf(rng.uniform_in(-3.0, -0.5));
             let across =
                 Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 10f64.powf(rng.uniform_in(-4.0, -1.5));
-            let depth = (x_min - pluecker::triangulation::views::centre(&scene.cameras[0])).norm();
+            let depth = (x_min - pluecker::triangulation::testing::centre(&scene.cameras[0])).norm();
             let x = x_min + (ray * along + across) * depth;
             if !data.in_front(&x) {
                 continue;
@@ -337,7 +336,7 @@ fn both_relaxations_give_valid_bounds_below_random_feasible_points() {
             "{relaxation:?}: {g:?}"
         );
         // Points along the poorly determined depth direction and around it.
-        let ray = local.point - pluecker::triangulation::views::centre(&scene.cameras[0]);
+        let ray = local.point - pluecker::triangulation::testing::centre(&scene.cameras[0]);
         for _ in 0..2000 {
             let x = local.point
                 + ray * rng.uniform_in(-0.9, 20.0)
@@ -365,7 +364,7 @@ fn branch_and_bound_from_a_point_that_is_not_a_minimum_finds_and_bounds_the_glob
         let obs = scene.noisy(1.0, &mut rng);
         let data = oracle::PointData::new(&scene.cameras, &obs, None);
         let (x_min, f_min) = data.many_start_minimum(&scene.point, 200, &mut rng);
-        let ray = x_min - pluecker::triangulation::views::centre(&scene.cameras[0]);
+        let ray = x_min - pluecker::triangulation::testing::centre(&scene.cameras[0]);
         let ratio = [1.2, 2.0, 10.0][seed as usize % 3];
         // The first point along the ray (outwards) whose cost reaches `ratio` times the minimum.
         let Some(start) = (1..4000)
@@ -471,7 +470,7 @@ fn a_point_whose_rays_diverge_is_reported_behind_the_cameras() {
     // behind. Every point in front costs more than the best point at infinity, so local and
     // optimal say so (issue 10: they used to return a far point, optimal a certified success).
     let scene = triangulation_scene(3, 0.3, 21);
-    let behind = scene.point + (scene.point - pluecker::triangulation::views::centre(&scene.cameras[0])) * -2.0;
+    let behind = scene.point + (scene.point - pluecker::triangulation::testing::centre(&scene.cameras[0])) * -2.0;
     let obs: Vec<Vector2<f64>> = scene.cameras.iter().map(|p| project(p, &behind)).collect();
     let vs = views_of(&scene.cameras, &obs, None);
     let linear = triangulate_point(&scene.cameras, &obs, None, &options(Method::Linear)).unwrap();
@@ -514,17 +513,13 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
         (!convexity_test(&vs, &local.point).passed).then_some((scene, obs))
     });
     let (scene, obs) = hard.expect("some 20-view scene at 0.2 degrees needs branch and bound");
-    let opts = TriangulationOptions {
-        max_reprojection_error: Some(0.01),
-        ..Default::default()
-    };
+    let mut opts = TriangulationOptions::default();
+    opts.max_reprojection_error = Some(0.01);
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
     common::assert_proved_empty(&r.report);
     // With a γ every view can meet, the same scene is certified.
-    let opts = TriangulationOptions {
-        max_reprojection_error: Some(30.0),
-        ..Default::default()
-    };
+    let mut opts = TriangulationOptions::default();
+    opts.max_reprojection_error = Some(30.0);
     let r = triangulate_point(&scene.cameras, &obs, None, &opts).unwrap();
     assert!(r.report.certified(), "{:?}", r.report);
 }
@@ -547,10 +542,10 @@ fn bad_input_gives_the_right_error() {
     assert!(matches!(err(cams, &nan, None), Error::NonFinite { what, index: 2 } if what == "observations"));
     let mut bad_cams = cams.clone();
     bad_cams[1][(0, 3)] = f64::INFINITY;
-    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "cameras"));
+    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "projections"));
     let mut singular = cams.clone();
     singular[2].fixed_view_mut::<3, 3>(0, 0).fill(0.0);
-    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("cameras[2]")));
+    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("projections[2]")));
     let covs = [
         Matrix2::identity(),
         Matrix2::new(1.0, 2.0, 2.0, 1.0),
@@ -571,13 +566,8 @@ fn bad_input_gives_the_right_error() {
         })
         .collect();
     assert!(matches!(err(&same_centre, obs, None), Error::Degenerate { what } if what.contains("no parallax")));
-    let bad_opts = TriangulationOptions {
-        certify: pluecker::CertifyOptions {
-            max_relative_gap: -1.0,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let mut bad_opts = TriangulationOptions::default();
+    bad_opts.certify.max_relative_gap = -1.0;
     assert!(matches!(
         triangulate_point(cams, obs, None, &bad_opts),
         Err(Error::InvalidOption { .. })
@@ -697,10 +687,8 @@ fn optimal_reports_exactly_parallel_rays_at_infinity() {
         })
         .collect();
     let observations = vec![Vector2::new(320.0, 240.0); 3];
-    let opts = TriangulationOptions {
-        method: Method::Optimal,
-        ..Default::default()
-    };
+    let mut opts = TriangulationOptions::default();
+    opts.method = Method::Optimal;
     let r = triangulate_point(&cameras, &observations, None, &opts).unwrap();
     assert_eq!(r.report.status, Status::AtInfinity, "{:?}", r.report);
     assert!(r.point.iter().all(|v| v.is_nan()));
@@ -747,7 +735,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     let s = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &sparse,
         covariances: Some(&sparse_cov),
@@ -771,7 +759,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     let reversed = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &rev_images,
+            image: &rev_images,
         },
         observations: &rev_obs,
         covariances: Some(&rev_cov),
@@ -802,13 +790,13 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
     bad_images[offsets[1]..offsets[2]].fill(first);
     let bad = SparsePointTracks {
         csr: Csr {
-            images: &bad_images,
+            image: &bad_images,
             ..s.csr
         },
         ..s
     };
     let r = triangulate_point_observations(&cameras, &bad, &opts, None).unwrap();
-    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("images[{}]", offsets[0])));
+    assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("image[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
             if required == "2 distinct images per track" && actual.starts_with("track 1: "))

@@ -5,7 +5,7 @@
 mod common;
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
-use pluecker::geometry::quadric::{project_dual, Ellipse, Ellipsoid};
+use pluecker::geometry::{project_dual, Ellipse, Ellipsoid};
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::quadric::{triangulate_quadric, triangulate_quadric_points, Matrix5};
@@ -14,14 +14,10 @@ use pluecker::triangulation::{CertificateKind, Method, QuadricBound, Status, Tri
 use pluecker::Error;
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(200),
-            ..Default::default()
-        },
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options.certify.max_nodes = Some(200);
+    options
 }
 
 fn outlines(cameras: &[Matrix3x4<f64>], e: &Ellipsoid) -> Vec<Matrix3<f64>> {
@@ -230,10 +226,8 @@ fn no_ellipsoid_anywhere_costs_less_than_the_certified_bound() {
     ];
     let (mut checked, mut tried, mut violations) = (0, 0, 0);
     for regime in &regimes {
-        let regime_opts = TriangulationOptions {
-            quadric_bound: regime.bound,
-            ..opts(Method::Optimal)
-        };
+        let mut regime_opts = opts(Method::Optimal);
+        regime_opts.quadric_bound = regime.bound;
         let mut certified_here = 0;
         for seed in 0..5u64 {
             let Some(scene) = regime_scene(regime, 30 + seed) else {
@@ -325,7 +319,7 @@ fn search_below(
         candidates.extend(cost(&x).map(|v| (v, x)));
     }
     for p in cameras {
-        let centre = pluecker::triangulation::views::centre(p);
+        let centre = pluecker::triangulation::testing::centre(p);
         let mut added = 0;
         while added < 1000 {
             let x = random(centre, 2.0, 0.5, rng);
@@ -430,10 +424,8 @@ fn a_tiny_gamma_is_infeasible_when_branch_and_bound_must_decide() {
     let c = searched.report.certificate.expect("a search ran");
     assert!(c.nodes >= 1 && c.solver_iterations >= c.nodes, "{c:?}");
     assert!(c.solver_iterations <= 200 * (4 * c.nodes + 36), "{c:?}");
-    let o = TriangulationOptions {
-        max_reprojection_error: Some(1e-3),
-        ..opts(Method::Optimal)
-    };
+    let mut o = opts(Method::Optimal);
+    o.max_reprojection_error = Some(1e-3);
     let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &o).unwrap();
     common::assert_proved_empty(&r.report);
 }
@@ -496,13 +488,10 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let mut cams = scene.cameras.clone();
     cams[2] = Matrix3x4::zeros();
     assert!(matches!(err(&cams, &conics, None), Error::SingularCamera { .. }));
-    let bad = TriangulationOptions {
-        certify: pluecker::CertifyOptions {
-            max_nodes: Some(0),
-            ..Default::default()
-        },
-        ..o.clone()
-    };
+    let mut certify = pluecker::CertifyOptions::default();
+    certify.max_nodes = Some(0);
+    let mut bad = o.clone();
+    bad.certify = certify;
     assert!(matches!(
         triangulate_quadric(&scene.cameras, &conics, None, &bad),
         Err(Error::InvalidOption { .. })
@@ -514,27 +503,23 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
 mod batch {
     use super::common::{mask, seen};
     use nalgebra::{Matrix3, Matrix3x4, Vector2};
-    use pluecker::geometry::quadric::{project_dual, Ellipse};
+    use pluecker::geometry::{project_dual, Ellipse};
     use pluecker::rng::Rng;
     use pluecker::triangulation::fitting::fit_conic;
-    use pluecker::triangulation::quadric::batch::{triangulate_quadrics, QuadricTracks};
     use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
+    use pluecker::triangulation::quadric::{triangulate_quadrics, QuadricTracks};
     use pluecker::triangulation::scenes::quadric_scene;
-    use pluecker::triangulation::tracks::TrackCameras;
+    use pluecker::triangulation::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
     use pluecker::Error;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     fn opts(method: Method) -> TriangulationOptions {
         // A node cap keeps branch and bound short; equality with the single call holds at any cap.
-        TriangulationOptions {
-            method,
-            certify: pluecker::CertifyOptions {
-                max_nodes: Some(40),
-                ..Default::default()
-            },
-            ..Default::default()
-        }
+        let mut options = TriangulationOptions::default();
+        options.method = method;
+        options.certify.max_nodes = Some(40);
+        options
     }
 
     fn untimed_quadric(mut r: QuadricTriangulation) -> QuadricTriangulation {
@@ -615,7 +600,7 @@ mod batch {
         };
         let done = AtomicUsize::new(0);
         let cams = TrackCameras::PerTrack {
-            cameras: &per_track,
+            projections: &per_track,
             views: v,
         };
         let batch = triangulate_quadrics(cams, &tracks, &opts(Method::Local), Some(&done)).unwrap();
@@ -684,7 +669,7 @@ mod batch {
         ));
         assert!(matches!(
             triangulate_quadrics(TrackCameras::Shared(&[]), &tracks, &o, None),
-            Err(Error::Shape { what, .. }) if what == "cameras"
+            Err(Error::Shape { what, .. }) if what == "projections"
         ));
     }
 }

@@ -13,16 +13,15 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use oracle::PointData;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
-use pluecker::triangulation::point::batch::{triangulate_point_observations, SparsePointTracks};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::tracks::Csr;
+use pluecker::triangulation::point::{triangulate_point_observations, SparsePointTracks};
+use pluecker::triangulation::Csr;
 use pluecker::triangulation::{Status, TriangulationOptions};
 
 fn robust() -> TriangulationOptions {
-    TriangulationOptions {
-        outlier_threshold: Some(4.0),
-        ..TriangulationOptions::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.outlier_threshold = Some(4.0);
+    options
 }
 
 /// One 40 px outlier in a random direction in a random view.
@@ -139,7 +138,7 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
     let tracks = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &observations,
         covariances: None,
@@ -157,10 +156,8 @@ fn quadrics_refuse_the_threshold() {
     let opts = robust();
     let err = opts.reject_outlier_threshold("quadrics").unwrap_err();
     assert!(err.to_string().contains("outlier_threshold"), "{err}");
-    let bad = TriangulationOptions {
-        outlier_threshold: Some(f64::NAN),
-        ..TriangulationOptions::default()
-    };
+    let mut bad = TriangulationOptions::default();
+    bad.outlier_threshold = Some(f64::NAN);
     assert!(bad.validate().is_err());
 }
 
@@ -195,10 +192,8 @@ fn one_outlier_line_per_track_is_rejected() {
         let across = Vector2::new(-(s1 - s0).y, (s1 - s0).x).normalize() * 40.0;
         segments[outlier] = [s0 + across, s1 + across];
         let (lines, covs) = lines_from_segments(&segments, 1.0).unwrap();
-        let opts = TriangulationOptions {
-            method: pluecker::triangulation::Method::Local,
-            ..robust()
-        };
+        let mut opts = robust();
+        opts.method = pluecker::triangulation::Method::Local;
         let result = triangulate_line(&scene.cameras, &lines, Some(&covs), &opts).unwrap();
         let mask = result.inliers.clone().unwrap();
         tracks += 1;
@@ -207,23 +202,18 @@ fn one_outlier_line_per_track_is_rejected() {
         fn pick<T: Copy>(v: &[T], keep: &[usize]) -> Vec<T> {
             keep.iter().map(|&j| v[j]).collect()
         }
+        let mut local = TriangulationOptions::default();
+        local.method = pluecker::triangulation::Method::Local;
         let oracle = triangulate_line(
             &pick(&scene.cameras, &keep),
             &pick(&lines, &keep),
             Some(&pick(&covs, &keep)),
-            &TriangulationOptions {
-                method: pluecker::triangulation::Method::Local,
-                ..TriangulationOptions::default()
-            },
+            &local,
         )
         .unwrap();
         // Error: the distance of the true endpoints from the estimated line.
         let distance = |r: &pluecker::triangulation::line::LineTriangulation, x: &nalgebra::Vector3<f64>| {
             (x - r.point).cross(&r.direction).norm_squared()
-        };
-        let local = TriangulationOptions {
-            method: pluecker::triangulation::Method::Local,
-            ..TriangulationOptions::default()
         };
         let naive = triangulate_line(&scene.cameras, &lines, Some(&covs), &local).unwrap();
         naive_error2 += distance(&naive, &a) + distance(&naive, &b);
@@ -328,7 +318,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
     let tracks = SparsePointTracks {
         csr: Csr {
             offsets: &offsets,
-            images: &images,
+            image: &images,
         },
         observations: &observations,
         covariances: None,
@@ -351,7 +341,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
     let tracks = SparsePointTracks {
         csr: Csr {
             offsets: &[0, 2],
-            images: &one_image,
+            image: &one_image,
         },
         observations: &observations[..4],
         covariances: None,

@@ -19,22 +19,21 @@
 
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Matrix3x4, SMatrix, Vector2};
 use pluecker::geometry::plucker::LineChart;
-use pluecker::geometry::quadric::centre_shape;
+use pluecker::geometry::testing::centre_shape;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::fitting::fit_conic;
 use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
-use pluecker::triangulation::point::batch::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::point::triangulate_point;
+use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
 use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5};
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 
 fn opts(method: Method) -> TriangulationOptions {
-    TriangulationOptions {
-        method,
-        ..Default::default()
-    }
+    let mut options = TriangulationOptions::default();
+    options.method = method;
+    options
 }
 
 /// The test of the module docs on `errors` (one chart error per draw) against `predicted`; panics

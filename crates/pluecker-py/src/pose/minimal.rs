@@ -1,5 +1,5 @@
 //! The minimal solvers and the reprojection refinement, callable one by one as PoseLib's are
-//! (`pluecker::pose::minimal`, `pluecker::pose::refinement::refine_pose`).
+//! (`pluecker::pose::minimal`, `pluecker::pose::refine_pose`).
 //!
 //! The solvers take camera-frame quantities: unit bearings of image points and unit normals of the
 //! interpretation planes of image segments, which `Camera.bearings` and `Camera.plane_normals` give

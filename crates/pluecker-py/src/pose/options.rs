@@ -32,11 +32,10 @@ impl PyPoseOptions {
 
     /// The core's options, with `ransac` and `certify` read from their objects now.
     pub(crate) fn core(&self) -> PoseOptions {
-        PoseOptions {
-            ransac: self.ransac.as_ref().map(|r| r.read().inner),
-            certify: self.certify.as_ref().map(|c| c.read().inner),
-            ..self.inner.clone()
-        }
+        let mut options = self.inner.clone();
+        options.ransac = self.ransac.as_ref().map(|r| r.read().inner);
+        options.certify = self.certify.as_ref().map(|c| c.read().inner);
+        options
     }
 }
 

@@ -7,7 +7,8 @@ use crate::errors::{degenerate, invalid_argument};
 use crate::pose::correspondences;
 use crate::threads::solve;
 use numpy::{PyArray1, PyArray2};
-use pluecker::pose::reprojection::{covariance_from_information, pose_covariance as covariance, ReprojectionCost};
+use pluecker::pose::testing::covariance_from_information;
+use pluecker::pose::{pose_covariance as covariance, ReprojectionCost};
 use pyo3::prelude::*;
 
 /// The pixel noise `pose_covariance` assumes when `sigma_px` is not given: the covariance per px².
@@ -38,7 +39,7 @@ pub fn pose_covariance<'py>(
             "sigma_px",
             format!(
                 "must be a positive finite number, got {}",
-                pluecker::error::number(sigma_px)
+                pluecker::testing::number(sigma_px)
             ),
         ));
     }
@@ -60,7 +61,7 @@ pub fn pose_covariance<'py>(
                 format!(
                     "σ² (JᵀJ)⁻¹ {} double precision at σ = {} px (its largest entry at σ = 1 px is {:.3e})",
                     if sigma_px > 1.0 { "overflows" } else { "underflows" },
-                    pluecker::error::number(sigma_px),
+                    pluecker::testing::number(sigma_px),
                     unit.amax()
                 ),
             );

@@ -12,11 +12,10 @@ use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{shape_error, to_py_err};
 use crate::fields::{result_class, Mask};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use crate::triangulation::renamed;
 use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;
-use pluecker::triangulation::tracks::TrackCameras;
+use pluecker::triangulation::TrackCameras;
 use pluecker::triangulation::{CertificateKind, Method, Report, Status};
 use pluecker::Error;
 use pyo3::exceptions::PyMemoryError;
@@ -58,8 +57,6 @@ fn not_started(status: &str, cost: f64) -> Option<StopReason> {
 pub(crate) trait TrackColumns: Default {
     /// The core's result of one track.
     type Track;
-    /// Core argument names and the Python names they are reported under (see [`renamed`]).
-    const NAMES: &'static [(&'static str, &'static str)];
 
     /// Appends the estimate of a solved track and hands back its report.
     fn push(&mut self, track: Self::Track) -> Report;
@@ -244,7 +241,7 @@ impl ReportRow<'_> {
         *self.residual_dof = residual_dof;
     }
 
-    /// Track `t`, rejected by the core with `err` (its core argument names renamed by `C::NAMES`): NaN
+    /// Track `t`, rejected by the core with `err` (which names the arguments as Python does): NaN
     /// cost, the error's status, time 0; the message to keep, except for a track the call was stopped
     /// before (`Error::Interrupted`): `messages` says it from the status, so that stopping a batch of
     /// millions of tracks stays cheap.
@@ -253,7 +250,6 @@ impl ReportRow<'_> {
             self.uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, 0);
             return None;
         }
-        let err = renamed(err, C::NAMES);
         self.uncertified(f64::NAN, error_status(&err), 0.0, 0);
         Some((t, C::message(t, &err)))
     }
@@ -550,13 +546,13 @@ pub(crate) struct Cameras {
 
 impl Cameras {
     pub(crate) fn read(obj: &Bound<'_, PyAny>, min_views: usize, method: Method) -> PyResult<Cameras> {
-        let (shape, values) = read_any("P", obj)?;
+        let (shape, values) = read_any("projections", obj)?;
         let (tracks, views) = match shape.as_slice() {
             [v, 3, 4] => (None, *v),
             [n, v, 3, 4] => (Some(*n), *v),
             _ => {
                 return Err(shape_error(
-                    "P",
+                    "projections",
                     "shape (v, 3, 4) (shared cameras) or (n, v, 3, 4) (cameras per track)",
                     shape_string(&shape),
                 ))
@@ -566,7 +562,7 @@ impl Cameras {
             return Err(to_py_err(Error::TooFewCorrespondences {
                 method: method.as_str().into(),
                 required: format!("{min_views} cameras"),
-                actual: format!("{views} camera(s) in P"),
+                actual: format!("{views} camera(s) in projections"),
             }));
         }
         let matrices = values.chunks_exact(12).map(Matrix3x4::from_row_slice).collect();
@@ -583,7 +579,10 @@ impl Cameras {
         let tracks_fit = self.tracks.map_or(true, |n| n == shape[0]);
         if shape[1] != self.views || !tracks_fit {
             let n = self.tracks.map_or("n".to_string(), |n| n.to_string());
-            let expected = format!("shape ({n}, {}, {tail}) (one column per camera in P)", self.views);
+            let expected = format!(
+                "shape ({n}, {}, {tail}) (one column per camera in projections)",
+                self.views
+            );
             return Err(shape_error(name, &expected, shape_string(shape)));
         }
         Ok(())
@@ -593,14 +592,14 @@ impl Cameras {
         match self.tracks {
             None => TrackCameras::Shared(&self.matrices),
             Some(_) => TrackCameras::PerTrack {
-                cameras: &self.matrices,
+                projections: &self.matrices,
                 views: self.views,
             },
         }
     }
 }
 
-/// `(n, v, ...)` per-observation values of `obj` (`cov`), checked against `n` tracks and `v` views.
+/// `(n, v, ...)` per-observation values of `obj` (`covariances`), checked against `n` tracks and `v` views.
 pub(crate) fn per_observation(
     name: &str,
     obj: &Bound<'_, PyAny>,

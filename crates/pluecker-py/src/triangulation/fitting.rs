@@ -7,7 +7,7 @@ use crate::errors::{guarded, invalid_argument};
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::threads::solve;
-use pluecker::error::number;
+use pluecker::testing::number;
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -96,27 +96,27 @@ pub fn fit_line(points: &Bound<'_, PyAny>, sigma: Option<Real>) -> PyResult<PyFi
 }
 
 /// The image lines `(M, 3)` (unit normal, pixels) through segments `(M, 2, 2)` whose two endpoints have
-/// the covariances `cov` `(M, 2, 2, 2)` (pixels²; e.g. from `LensCamera.undistort`), and the covariances
-/// `(M, 2, 2)` of their residuals: the `lines` and `cov` of `triangulate_line(s)`
+/// the covariances `covariances` `(M, 2, 2, 2)` (pixels²; e.g. from `LensCamera.undistort`), and the
+/// covariances `(M, 2, 2)` of their residuals: the `lines` and `covariances` of `triangulate_line(s)`
 /// (core `fitting::line_from_endpoints`).
 #[pyfunction]
 pub fn lines_from_endpoints<'py>(
     py: Python<'py>,
     segments: &Bound<'py, PyAny>,
-    cov: &Bound<'py, PyAny>,
+    covariances: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     use crate::convert::{check_finite, read, Dim};
     let (shape, ends) = read("segments", segments, &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(2)])?;
     let (cshape, covs) = read(
-        "cov",
-        cov,
+        "covariances",
+        covariances,
         &[Dim::Free("M"), Dim::Fixed(2), Dim::Fixed(2), Dim::Fixed(2)],
     )?;
     check_finite("segments", &ends, 4)?;
-    check_finite("cov", &covs, 8)?;
+    check_finite("covariances", &covs, 8)?;
     if cshape[0] != shape[0] {
         return Err(crate::errors::shape_error(
-            "cov",
+            "covariances",
             &format!("shape ({}, 2, 2, 2) (two endpoints per segment)", shape[0]),
             crate::convert::shape_string(&cshape),
         ));

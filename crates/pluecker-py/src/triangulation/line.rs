@@ -12,7 +12,7 @@ use super::batch::{
 use super::point::views_of;
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
-use super::{options_arg, positive_sigma, renamed, PyTriangulationOptions};
+use super::{options_arg, positive_sigma, PyTriangulationOptions};
 use crate::convert::{
     check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
@@ -22,25 +22,17 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
-use pluecker::triangulation::line::batch::{
+use pluecker::triangulation::line::{
+    lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
+};
+use pluecker::triangulation::line::{
     triangulate_line_observations as core_line_observations,
     triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
     LineTracks, SparseLineTracks, SparseSegmentTracks,
 };
-use pluecker::triangulation::line::{
-    lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
-};
 use pluecker::triangulation::{Primitive, Report, TriangulationOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-
-/// Core argument names → Python argument names of `triangulate_line`.
-pub(crate) const LINE_NAMES: &[(&str, &str)] = &[
-    ("cameras", "P"),
-    ("lines", "lines"),
-    ("segments", "lines"),
-    ("covariances", "cov"),
-];
 
 /// A triangulated 3-D line: Plücker coordinates, a point, a unit direction, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "LineTriangulation", module = "pluecker")]
@@ -124,11 +116,12 @@ pub(crate) fn chart_axes(chart: &LineChart) -> Matrix2x3<f64> {
     Matrix2x3::from_rows(&[chart.axes[0].transpose(), chart.axes[1].transpose()])
 }
 
-/// Homogeneous image lines and, when they come from segments without `cov`, their covariances.
+/// Homogeneous image lines and, when they come from segments without `covariances`, their covariances.
 type HomogeneousLines = (Vec<Vector3<f64>>, Option<Vec<Matrix2<f64>>>);
 
 /// The image lines of `triangulate_line`: `(n, 3)` homogeneous lines, or `(n, 2, 2)` segments whose
-/// lines (and, without `cov`, covariances from endpoint noise `sigma`) come from `lines_from_segments`.
+/// lines (and, without `covariances`, covariances from endpoint noise `sigma`) come from
+/// `lines_from_segments`.
 fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Option<f64>) -> PyResult<HomogeneousLines> {
     let (shape, values) = read_any("lines", obj)?;
     match shape.as_slice() {
@@ -137,7 +130,7 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
             if sigma.is_some() {
                 return Err(invalid_argument(
                     "sigma",
-                    "applies to segments (n, 2, 2) only; give cov for homogeneous lines",
+                    "applies to segments (n, 2, 2) only; give covariances for homogeneous lines",
                 ));
             }
             check_finite("lines", &values, 3)?;
@@ -146,15 +139,14 @@ fn image_lines(obj: &Bound<'_, PyAny>, views: usize, have_cov: bool, sigma: Opti
         [n, 2, 2] => {
             same_count("lines", *n, views)?;
             if have_cov && sigma.is_some() {
-                return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+                return Err(invalid_argument("sigma", "give covariances or sigma, not both"));
             }
             let sigma = positive_sigma(sigma.unwrap_or(1.0))?;
             let segments: Vec<[Vector2<f64>; 2]> = values
                 .chunks_exact(4)
                 .map(|s| [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])])
                 .collect();
-            let (lines, covs) =
-                lines_from_segments(&segments, sigma).map_err(|e| crate::errors::to_py_err(renamed(e, LINE_NAMES)))?;
+            let (lines, covs) = lines_from_segments(&segments, sigma).map_err(crate::errors::to_py_err)?;
             Ok((lines, if have_cov { None } else { Some(covs) }))
         }
         _ => Err(shape_error(
@@ -185,28 +177,30 @@ fn lens_segments(obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<[Vector2<
     }
 }
 
-/// The endpoint covariances of a call with `cameras`: `cov` of shape `(*lead, 2, 2, 2)` (each
+/// The endpoint covariances of a call with `cameras`: `covariances` of shape `(*lead, 2, 2, 2)` (each
 /// segment's two endpoints), or `σ² I` from `sigma` (not both), or `None` (the identity).
 fn endpoint_covariances(
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     sigma: Option<f64>,
     lead: &[usize],
 ) -> PyResult<Option<Vec<[Matrix2<f64>; 2]>>> {
-    if cov.is_some() && sigma.is_some() {
-        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+    if covariances.is_some() && sigma.is_some() {
+        return Err(invalid_argument("sigma", "give covariances or sigma, not both"));
     }
     if let Some(sigma) = sigma {
         let sigma = positive_sigma(sigma)?;
         let n: usize = lead.iter().product();
         return Ok(Some(vec![[Matrix2::identity() * (sigma * sigma); 2]; n]));
     }
-    let Some(cov) = cov else { return Ok(None) };
-    let (shape, values) = read_any("cov", cov)?;
+    let Some(covariances) = covariances else {
+        return Ok(None);
+    };
+    let (shape, values) = read_any("covariances", covariances)?;
     let mut expected = lead.to_vec();
     expected.extend([2, 2, 2]);
     if shape != expected {
         return Err(shape_error(
-            "cov",
+            "covariances",
             &format!(
                 "shape ({}, 2, 2, 2) with cameras (the covariances of each segment's two endpoints)",
                 lead.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")
@@ -224,47 +218,44 @@ fn endpoint_covariances(
 
 /// Triangulates one 3-D line from its images in two or more views (Josephson & Kahl 2008, eq. 19).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models): `P[i]` is
-/// then `K [R | t]` of its pinhole part, `lines` are segments (n, 2, 2) whose endpoints are the observed
-/// (distorted) pixels, and `cov` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
+/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models):
+/// `projections[i]` is then `K [R | t]` of its pinhole part, `lines` are segments (n, 2, 2) whose
+/// endpoints are the observed (distorted) pixels, and `covariances` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
 /// pixels (else `sigma` px per coordinate, 1 by default). Through a distorting lens the cost is the
 /// segments' reprojection error through the exact projection (the endpoints' distances to the line's
 /// curved images), minimised locally and never certified (`optimal` reports `gap_not_closed`); without
 /// distortion it is the pinhole problem of the segments, with its certificate.
 #[pyfunction]
-#[pyo3(signature = (P, lines, cov = None, *, sigma = None, options = None, cameras = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, lines, covariances = None, *, sigma = None, options = None, cameras = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_line(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulation>> {
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("P", P)?;
+    let cams = crate::convert::cameras("projections", projections)?;
     let sigma = optional_real("sigma", sigma)?;
     if let Some(cameras) = cameras {
         let views = views_of(&cams, cameras)?;
         let segments = lens_segments(lines, views.len())?;
-        let covariances = endpoint_covariances(cov, sigma, &[views.len()])?;
+        let covariances = endpoint_covariances(covariances, sigma, &[views.len()])?;
         let outcome = interrupt::run_single(py, move || {
             triangulate_line_segments_views(&views, &segments, covariances.as_deref(), &opts)
-                .map_err(|e| renamed(e, LINE_NAMES))
         })?;
         return interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?);
     }
-    let (image, from_segments) = image_lines(lines, cams.len(), cov.is_some(), sigma)?;
-    let covs = match covariances2("cov", cov, cams.len())? {
+    let (image, from_segments) = image_lines(lines, cams.len(), covariances.is_some(), sigma)?;
+    let covs = match covariances2("covariances", covariances, cams.len())? {
         Some(c) => Some(c),
         None => from_segments,
     };
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
-    let outcome = interrupt::run_single(py, move || {
-        core_triangulate_line(&cams, &image, covs.as_deref(), &opts).map_err(|e| renamed(e, LINE_NAMES))
-    })?;
+    let outcome = interrupt::run_single(py, move || core_triangulate_line(&cams, &image, covs.as_deref(), &opts))?;
     interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?)
 }
 
@@ -283,7 +274,6 @@ pub struct PyLineTriangulations {
 
 impl TrackColumns for PyLineTriangulations {
     type Track = LineTriangulation;
-    const NAMES: &'static [(&'static str, &'static str)] = LINE_NAMES;
 
     fn push(&mut self, track: LineTriangulation) -> Report {
         self.plucker.extend_from_slice(track.plucker.coordinates().as_slice());
@@ -335,7 +325,7 @@ result_class! {
 
 /// Whether the `lines` of a batch (shape `(*lead, 3)` or `(*lead, 2, 2)` with `lead` leading axes:
 /// 2 for `(n, v, ...)`, 1 for one row per observation) are segments, with the checks of `sigma`: it
-/// applies to segments only, and not together with `cov`.
+/// applies to segments only, and not together with `covariances`.
 fn segments_or_lines(shape: &[usize], lead: usize, sigma: Option<f64>, have_cov: bool) -> PyResult<bool> {
     let axes = if lead == 2 { "n, v" } else { "m" };
     let tail = shape.get(lead..).unwrap_or(&[]);
@@ -353,11 +343,11 @@ fn segments_or_lines(shape: &[usize], lead: usize, sigma: Option<f64>, have_cov:
     if sigma.is_some() && !segments {
         return Err(invalid_argument(
             "sigma",
-            format!("applies to segments ({axes}, 2, 2) only; give cov for homogeneous lines"),
+            format!("applies to segments ({axes}, 2, 2) only; give covariances for homogeneous lines"),
         ));
     }
     if sigma.is_some() && have_cov {
-        return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+        return Err(invalid_argument("sigma", "give covariances or sigma, not both"));
     }
     Ok(segments)
 }
@@ -376,14 +366,14 @@ fn image_lines_of(values: &[f64], segments: bool, sigma: f64) -> ImageLines<'_> 
 
 /// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, lines, visible = None, cov = None, *, sigma = None, options = None, progress = None, time_budget = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, lines, visible = None, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_lines(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
@@ -392,13 +382,15 @@ pub fn triangulate_lines(
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
-    let cams = Cameras::read(P, 2, opts.method)?;
+    let cams = Cameras::read(projections, 2, opts.method)?;
     let (shape, values) = read_any("lines", lines)?;
-    let segments = segments_or_lines(&shape, 2, sigma, cov.is_some())?;
+    let segments = segments_or_lines(&shape, 2, sigma, covariances.is_some())?;
     cams.check_observations("lines", &shape, if segments { "2, 2" } else { "3" })?;
     let (n, v) = (shape[0], shape[1]);
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
-    let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
+    let covariances = covariances
+        .map(|c| per_observation("covariances", c, n, v, [2, 2]))
+        .transpose()?;
     let sigma = sigma.unwrap_or(1.0);
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = LineTracks {
@@ -406,7 +398,7 @@ pub fn triangulate_lines(
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let results = core_lines(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, LINE_NAMES))?;
+        let results = core_lines(cams.core(), &tracks, &opts, Some(done))?;
         let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
         if opts.outlier_threshold.is_some() {
             let visible = mask.as_deref();
@@ -419,24 +411,24 @@ pub fn triangulate_lines(
 
 /// Triangulates the line tracks of observations given one per row, as `triangulate_point_observations`
 /// does points: row `k` is the line `lines[k]` ((m, 3) homogeneous, or (m, 2, 2) segments with endpoint
-/// noise `sigma`) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)), with the
-/// covariance `cov[k]` (m, 2, 2) when given. Each track is solved as `triangulate_lines` would.
+/// noise `sigma`) of track `track[k]` in image `image[k]` (an index into `projections` (v, 3, 4)), with
+/// the covariance `covariances[k]` (m, 2, 2) when given. Each track is solved as `triangulate_lines` would.
 ///
 /// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `LensCamera` of any of
-/// COLMAP's models: then `P[j]` is `K [R | t]` of that camera's pinhole part at the image's pose,
-/// `lines` are segments (m, 2, 2) in the observed (distorted) pixels, `cov` (m, 2, 2, 2) the covariances
+/// COLMAP's models: then `projections[j]` is `K [R | t]` of that camera's pinhole part at the image's
+/// pose, `lines` are segments (m, 2, 2) in the observed (distorted) pixels, `covariances` (m, 2, 2, 2) the covariances
 /// of each segment's two endpoints (else `sigma`), and each track is solved as
 /// `triangulate_line(..., cameras=...)` solves it: never certified through a distorting lens.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, lines, cov = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, track, image, lines, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_line_observations(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
@@ -447,7 +439,7 @@ pub fn triangulate_line_observations(
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
-    let cams = crate::convert::cameras("P", P)?;
+    let cams = crate::convert::cameras("projections", projections)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     if let Some(cameras) = cameras {
         let views = views_of(&cams, cameras)?;
@@ -460,11 +452,11 @@ pub fn triangulate_line_observations(
             ));
         }
         let values = rows.per_row("lines", lines, &[2, 2])?;
-        if cov.is_some() && sigma.is_some() {
-            return Err(invalid_argument("sigma", "give cov or sigma, not both"));
+        if covariances.is_some() && sigma.is_some() {
+            return Err(invalid_argument("sigma", "give covariances or sigma, not both"));
         }
-        let covariances = match (cov, sigma) {
-            (Some(c), _) => Some(rows.per_row("cov", c, &[2, 2, 2])?),
+        let covariances = match (covariances, sigma) {
+            (Some(c), _) => Some(rows.per_row("covariances", c, &[2, 2, 2])?),
             (None, Some(sigma)) => endpoint_covariances(None, Some(sigma), &[rows.len()])?.map(|c| {
                 c.iter()
                     .flat_map(|pair| pair.iter().flat_map(|m| m.transpose().as_slice().to_vec()))
@@ -475,7 +467,7 @@ pub fn triangulate_line_observations(
         let outcome = run_interruptible(py, progress, budget, false, move |done| {
             let tracks = SparseSegmentTracks {
                 csr: rows.csr(),
-                segments: &values,
+                lines: &values,
                 covariances: covariances.as_deref(),
             };
             sparse_columns(
@@ -487,9 +479,11 @@ pub fn triangulate_line_observations(
         return batch_result(py, outcome);
     }
     let (shape, _) = read_any("lines", lines)?;
-    let segments = segments_or_lines(&shape, 1, sigma, cov.is_some())?;
+    let segments = segments_or_lines(&shape, 1, sigma, covariances.is_some())?;
     let values = rows.per_row("lines", lines, &shape[1..])?;
-    let covariances = cov.map(|c| rows.per_row("cov", c, &[2, 2])).transpose()?;
+    let covariances = covariances
+        .map(|c| rows.per_row("covariances", c, &[2, 2]))
+        .transpose()?;
     let sigma = sigma.unwrap_or(1.0);
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = SparseLineTracks {
@@ -509,7 +503,7 @@ fn sparse_columns(
     opts: &TriangulationOptions,
     results: pluecker::Result<Vec<pluecker::Result<LineTriangulation>>>,
 ) -> pluecker::Result<(PyBatchReport, PyLineTriangulations)> {
-    let results = results.map_err(|e| renamed(e, LINE_NAMES))?;
+    let results = results?;
     let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
     let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
     if opts.outlier_threshold.is_some() {

@@ -17,7 +17,6 @@ use crate::errors::to_py_err;
 use crate::fields::options_class;
 use crate::nested::Shared;
 use pluecker::triangulation::{LineBound, Method, QuadricBound, TriangulationOptions};
-use pluecker::Error;
 use pyo3::prelude::*;
 
 /// Options of every triangulation function, the core's `TriangulationOptions` (every default is the
@@ -37,10 +36,9 @@ impl PyTriangulationOptions {
 
     /// The core's options, with `certify` as it is now.
     pub(crate) fn core(&self) -> TriangulationOptions {
-        TriangulationOptions {
-            certify: self.certify.read().inner,
-            ..self.inner.clone()
-        }
+        let mut options = self.inner.clone();
+        options.certify = self.certify.read().inner;
+        options
     }
 }
 
@@ -53,7 +51,7 @@ options_class! {
         /// The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing.
         max_reprojection_error: Option<Real> = |o| o.inner.max_reprojection_error,
             |o, v| v.map(|r| r.get("max_reprojection_error")).transpose().map(|g| o.inner.max_reprojection_error = g);
-        /// Points and lines: reject observations whose whitened error (pixels without `cov`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
+        /// Points and lines: reject observations whose whitened error (pixels without `covariances`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
         outlier_threshold: Option<Real> = |o| o.inner.outlier_threshold,
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);
         /// Lines, method `optimal`: the lower bound, `taylor` (interval Taylor bounds over the two-view chart; certificate `taylor_branch_and_bound` over every line) or `relaxation` (the paper's SOCP relaxation, eqs. 21-27; certificate `branch_and_bound` over the eq. 27 strips).
@@ -74,44 +72,6 @@ pub(crate) fn options_arg(options: Option<PyRef<'_, PyTriangulationOptions>>) ->
     Ok(opts)
 }
 
-/// Core argument names → Python argument names of the point functions.
-pub const POINT_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("observations", "x"), ("covariances", "cov")];
-
-/// `name` with a leading core argument name replaced by its Python name (`"cameras[2]: ..."` →
-/// `"P[2]: ..."`), so that errors raised by the core name what the Python caller passed.
-fn rename(text: &str, names: &[(&str, &str)]) -> String {
-    for (core, python) in names {
-        if let Some(rest) = text.strip_prefix(core) {
-            if rest.is_empty() || rest.starts_with(['[', ':', ' ']) {
-                return format!("{python}{rest}");
-            }
-        }
-    }
-    text.to_string()
-}
-
-/// A core error with its argument names translated by `names` (see [`rename`]).
-pub fn renamed(err: Error, names: &[(&str, &str)]) -> Error {
-    match err {
-        Error::Shape { what, expected, actual } => Error::Shape {
-            what: rename(&what, names),
-            expected,
-            actual,
-        },
-        Error::NonFinite { what, index } => Error::NonFinite {
-            what: rename(&what, names),
-            index,
-        },
-        Error::Degenerate { what } => Error::Degenerate {
-            what: rename(&what, names),
-        },
-        Error::SingularCamera { what } => Error::SingularCamera {
-            what: rename(&what, names),
-        },
-        other => other,
-    }
-}
-
 /// `sigma`, a pixel noise, unless it is not a positive finite number: then an error naming `sigma`.
 pub(crate) fn positive_sigma(sigma: f64) -> PyResult<f64> {
     if sigma.is_finite() && sigma > 0.0 {
@@ -121,7 +81,7 @@ pub(crate) fn positive_sigma(sigma: f64) -> PyResult<f64> {
             "sigma",
             format!(
                 "must be a positive finite number of pixels, got {}",
-                pluecker::error::number(sigma)
+                pluecker::testing::number(sigma)
             ),
         ))
     }

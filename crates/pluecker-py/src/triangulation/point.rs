@@ -13,7 +13,7 @@ use super::batch::{
 };
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
-use super::{options_arg, renamed, PyTriangulationOptions, POINT_NAMES};
+use super::{options_arg, PyTriangulationOptions};
 use crate::camera::PyCamera;
 use crate::convert::{
     cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real,
@@ -26,14 +26,14 @@ use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::interrupt::StopReason;
-use pluecker::triangulation::point::batch::{
-    triangulate_point_observations_into, triangulate_point_observations_views_into,
-    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
-};
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
 };
-use pluecker::triangulation::views::View;
+use pluecker::triangulation::point::{
+    triangulate_point_observations_into, triangulate_point_observations_views_into,
+    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
+};
+use pluecker::triangulation::View;
 use pluecker::triangulation::{Method, Primitive, Report};
 use pluecker::Error;
 use pluecker::{AnyCamera, Pose};
@@ -98,7 +98,7 @@ result_class! {
 }
 
 /// `(n, 2)` finite pixels, one row per camera.
-fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vector2<f64>>> {
+fn pixels(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vector2<f64>>> {
     let (shape, values) = read(name, obj, &[Dim::Free("n"), Dim::Fixed(2)])?;
     same_count(name, shape[0], views)?;
     check_finite(name, &values, 2)?;
@@ -107,33 +107,29 @@ fn observations(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Ve
 
 /// Triangulates one point from its pixels in two or more views (Josephson & Kahl 2008, eq. 19).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models): `P[i]` is
-/// then `K [R | t]` of its pinhole part, `x` the observed (distorted) pixels and `cov` their
-/// covariances, and the cost is the reprojection error in those pixels through the exact projection
+/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models):
+/// `projections[i]` is then `K [R | t]` of its pinhole part, `observations` the observed (distorted)
+/// pixels and `covariances` their covariances, and the cost is the reprojection error in those pixels through the exact projection
 /// (certificate `lens_convexity_test` through a lens).
 #[pyfunction]
-#[pyo3(signature = (P, x, cov = None, *, options = None, cameras = None))]
-#[allow(non_snake_case)]
+#[pyo3(signature = (projections, observations, covariances = None, *, options = None, cameras = None))]
 pub fn triangulate_point(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
-    x: &Bound<'_, PyAny>,
-    cov: Option<&Bound<'_, PyAny>>,
+    projections: &Bound<'_, PyAny>,
+    observations: &Bound<'_, PyAny>,
+    covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulation>> {
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("P", P)?;
-    let obs = observations("x", x, cams.len())?;
-    let covs = covariances2("cov", cov, cams.len())?;
+    let cams = crate::convert::cameras("projections", projections)?;
+    let obs = pixels("observations", observations, cams.len())?;
+    let covs = covariances2("covariances", covariances, cams.len())?;
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
-    let outcome = interrupt::run_single(py, move || {
-        match &views {
-            Some(views) => triangulate_point_views(views, &obs, covs.as_deref(), &opts),
-            None => core_triangulate_point(&cams, &obs, covs.as_deref(), &opts),
-        }
-        .map_err(|e| renamed(e, POINT_NAMES))
+    let outcome = interrupt::run_single(py, move || match &views {
+        Some(views) => triangulate_point_views(views, &obs, covs.as_deref(), &opts),
+        None => core_triangulate_point(&cams, &obs, covs.as_deref(), &opts),
     })?;
     interrupt::object_or_partial(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
 }
@@ -159,7 +155,6 @@ pub struct PyPointTriangulations {
 
 impl TrackColumns for PyPointTriangulations {
     type Track = PointTriangulation;
-    const NAMES: &'static [(&'static str, &'static str)] = POINT_NAMES;
 
     fn push(&mut self, track: PointTriangulation) -> Report {
         self.x.extend_from_slice(track.point.as_slice());
@@ -304,40 +299,46 @@ const SHORT_BATCH: usize = 4096;
 
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (P, x, visible = None, cov = None, *, options = None, progress = None, time_budget = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, observations, visible = None, covariances = None, *, options = None, progress = None, time_budget = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_points(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
-    x: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
+    observations: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = cameras("P", P)?;
+    let cams = cameras("projections", projections)?;
     let v = cams.len();
     if v < 2 {
         return Err(to_py_err(Error::TooFewCorrespondences {
             method: opts.method.as_str().into(),
             required: "2 cameras".into(),
-            actual: format!("{v} camera(s) in P"),
+            actual: format!("{v} camera(s) in projections"),
         }));
     }
-    let (shape, observations) = read("x", x, &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)])?;
+    let (shape, pixels) = read(
+        "observations",
+        observations,
+        &[Dim::Free("n"), Dim::Free("v"), Dim::Fixed(2)],
+    )?;
     if shape[1] != v {
         return Err(shape_error(
-            "x",
-            &format!("shape (n, {v}, 2) (one column per camera in P)"),
+            "observations",
+            &format!("shape (n, {v}, 2) (one column per camera in projections)"),
             shape_string(&shape),
         ));
     }
     let n = shape[0];
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
-    let covariances = cov.map(|c| per_observation("cov", c, n, v, [2, 2])).transpose()?;
+    let covariances = covariances
+        .map(|c| per_observation("covariances", c, n, v, [2, 2]))
+        .transpose()?;
     // The linear and local solves of a few thousand observations end within milliseconds.
     let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
     let written = match opts.method {
@@ -346,13 +347,13 @@ pub fn triangulate_points(
     };
     let outcome = run_interruptible(py, progress, budget, short, move |done| {
         let tracks = PointTracks {
-            observations: &observations,
+            observations: &pixels,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
         if opts.method == Method::Linear {
             let started = Instant::now();
-            let linear = triangulate_points_linear(&cams, &tracks).map_err(|e| renamed(e, POINT_NAMES))?;
+            let linear = triangulate_points_linear(&cams, &tracks)?;
             // The fast path does not time tracks one by one: each gets the batch's mean.
             let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
             done.store(n, Ordering::Relaxed);
@@ -362,8 +363,7 @@ pub fn triangulate_points(
         let sink = PointSink::default();
         let rows = report.rows_mut().zip(columns.rows_mut());
         let write = |t, row, r| sink.write(t, row, r);
-        let stopped =
-            core_points(&cams, &tracks, &opts, Some(done), rows, write).map_err(|e| renamed(e, POINT_NAMES))?;
+        let stopped = core_points(&cams, &tracks, &opts, Some(done), rows, write)?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
@@ -376,28 +376,28 @@ pub fn triangulate_points(
 }
 
 /// Triangulates the point tracks of observations given one per row, as COLMAP lists them: observation
-/// `k` is the pixel `x[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)),
-/// with the covariance `cov[k]` (m, 2, 2) when given. Memory grows with the observations, not with
+/// `k` is the pixel `observations[k]` (m, 2) of track `track[k]` in image `image[k]` (an index into
+/// `projections` (v, 3, 4)), with the covariance `covariances[k]` (m, 2, 2) when given. Memory grows with the observations, not with
 /// tracks × images. Track `t` of the result is `t` of `track` (`0..n_tracks`, by default
 /// `max(track) + 1`, both below or at the `m` rows given, else `InvalidOptionError`: the result never
 /// outgrows the input; a track id without observations is rejected as too few views); each is solved as
 /// `triangulate_points` would.
 ///
 /// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `LensCamera` of any of
-/// COLMAP's models: then `P[j]` is `K [R | t]` of that camera's pinhole part at the image's pose, `x`
-/// are the observed (distorted) pixels and `cov` their covariances, and the cost is the reprojection
+/// COLMAP's models: then `projections[j]` is `K [R | t]` of that camera's pinhole part at the image's
+/// pose, `observations` are the observed (distorted) pixels and `covariances` their covariances, and the cost is the reprojection
 /// error in those pixels through the exact projection; `optimal` certifies that cost (certificate
 /// `lens_convexity_test`) where it can prove it, and is `gap_not_closed` where it cannot.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, x, cov = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, track, image, observations, covariances = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_point_observations(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
-    x: &Bound<'_, PyAny>,
-    cov: Option<&Bound<'_, PyAny>>,
+    observations: &Bound<'_, PyAny>,
+    covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
@@ -406,12 +406,14 @@ pub fn triangulate_point_observations(
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("P", P)?;
+    let cams = crate::convert::cameras("projections", projections)?;
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let m = rows.len();
-    let pixels = rows.per_row("x", x, &[2])?;
-    let covariances = cov.map(|c| rows.per_row("cov", c, &[2, 2])).transpose()?;
+    let pixels = rows.per_row("observations", observations, &[2])?;
+    let covariances = covariances
+        .map(|c| rows.per_row("covariances", c, &[2, 2]))
+        .transpose()?;
     let n = rows.offsets.len() - 1;
     let (mut report, mut columns) = unstarted(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
@@ -426,8 +428,7 @@ pub fn triangulate_point_observations(
         let stopped = match &views {
             Some(views) => triangulate_point_observations_views_into(views, &sparse, &opts, Some(done), out, write),
             None => triangulate_point_observations_into(&cams, &sparse, &opts, Some(done), out, write),
-        }
-        .map_err(|e| renamed(e, POINT_NAMES))?;
+        }?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's observations are its sorted rows, each back at its row as given.
@@ -438,15 +439,15 @@ pub fn triangulate_point_observations(
     batch_result(py, outcome)
 }
 
-/// The views of `cameras` (one `Camera` or `LensCamera` per row of `P`) with the poses
-/// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row whose `P` is not
-/// `K [R | t]` of its camera's pinhole part.
+/// The views of `cameras` (one `Camera` or `LensCamera` per row of `projections`) with the poses
+/// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row of `projections`
+/// that is not `K [R | t]` of its camera's pinhole part.
 pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
     let list: Vec<Bound<'_, PyAny>> = cameras.try_iter()?.collect::<PyResult<_>>()?;
     if list.len() != p.len() {
         return Err(shape_error(
             "cameras",
-            &format!("one camera per row of P ({})", p.len()),
+            &format!("one camera per row of projections ({})", p.len()),
             list.len().to_string(),
         ));
     }
@@ -474,7 +475,7 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
             });
             pose.map(|pose| View::new(camera, pose)).ok_or_else(|| {
                 invalid_argument(
-                    "P",
+                    "projections",
                     format!("row {j} is not K [R | t] of the pinhole part of cameras[{j}]"),
                 )
             })

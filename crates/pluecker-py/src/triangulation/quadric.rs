@@ -6,26 +6,23 @@
 use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
-use super::{options_arg, renamed, PyTriangulationOptions};
+use super::{options_arg, PyTriangulationOptions};
 use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
 use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
-use pluecker::triangulation::quadric::batch::{
-    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
-    QuadricTracks, SparseQuadricTracks,
-};
 use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
+};
+use pluecker::triangulation::quadric::{
+    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
+    QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-
-/// Core argument names → Python argument names of the quadric functions.
-pub(crate) const QUADRIC_NAMES: &[(&str, &str)] = &[("cameras", "P"), ("conics", "conics"), ("covariances", "cov")];
 
 /// A triangulated ellipsoid: dual and primal quadric, centre, axes, semi-axes, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "QuadricTriangulation", module = "pluecker")]
@@ -96,46 +93,42 @@ result_class! {
 
 /// Triangulates an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (`P[i]` is `K [R | t]` of its
-/// pinhole part): a lens with distortion is refused (`InvalidOptionError` naming `cameras`), since
-/// the outline seen through it is not a conic; pinholes and lenses without distortion are solved as
-/// their `P`.
+/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (`projections[i]` is `K [R | t]`
+/// of its pinhole part): a lens with distortion is refused (`InvalidOptionError` naming `cameras`),
+/// since the outline seen through it is not a conic; pinholes and lenses without distortion are solved
+/// as their `projections`.
 #[pyfunction]
-#[pyo3(signature = (P, conics, cov = None, *, options = None, cameras = None))]
-#[allow(non_snake_case)]
+#[pyo3(signature = (projections, conics, covariances = None, *, options = None, cameras = None))]
 pub fn triangulate_quadric(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
     let opts = options_arg(options)?;
-    let cams = convert::cameras("P", P)?;
+    let cams = convert::cameras("projections", projections)?;
     if let Some(cameras) = cameras {
         let views = super::point::views_of(&cams, cameras)?;
-        // A lens with distortion is refused; the other views are the pinhole problem of `P`.
-        if let Err(pluecker::Error::InvalidOption { reason, .. }) = refuse_distortion(&views) {
-            return Err(crate::errors::invalid_argument(
-                "cameras",
-                reason.replace("views[", "cameras["),
-            ));
+        // A lens with distortion is refused; the other views are the pinhole problem of `projections`.
+        if let Err(pluecker::Error::InvalidOption { name, reason }) = refuse_distortion(&views) {
+            return Err(crate::errors::invalid_argument(&name, reason));
         }
     }
     let observed = convert::conics("conics", conics)?;
     same_count("conics", observed.len(), cams.len())?;
-    let covs = match cov {
+    let covs = match covariances {
         Some(c) => {
-            let covs = matrix_stack::<5, 5>("cov", c)?;
-            same_count("cov", covs.len(), cams.len())?;
+            let covs = matrix_stack::<5, 5>("covariances", c)?;
+            same_count("covariances", covs.len(), cams.len())?;
             Some(covs)
         }
         None => None,
     };
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
     let outcome = interrupt::run_single(py, move || {
-        core_triangulate_quadric(&cams, &observed, covs.as_deref(), &opts).map_err(|e| renamed(e, QUADRIC_NAMES))
+        core_triangulate_quadric(&cams, &observed, covs.as_deref(), &opts)
     })?;
     interrupt::object_or_partial(py, outcome.pending, PyQuadricTriangulation::create(py, outcome.value)?)
 }
@@ -154,7 +147,6 @@ pub struct PyQuadricTriangulations {
 
 impl TrackColumns for PyQuadricTriangulations {
     type Track = QuadricTriangulation;
-    const NAMES: &'static [(&'static str, &'static str)] = QUADRIC_NAMES;
 
     fn push(&mut self, track: QuadricTriangulation) -> Report {
         self.dual.extend(row_major(&track.dual));
@@ -207,34 +199,36 @@ result_class! {
 
 /// Triangulates many ellipsoids (tracks) from their outline conics in parallel (Josephson & Kahl 2008).
 #[pyfunction]
-#[pyo3(signature = (P, conics, visible = None, cov = None, *, options = None, progress = None, time_budget = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, conics, visible = None, covariances = None, *, options = None, progress = None, time_budget = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_quadrics(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = Cameras::read(P, 3, opts.method)?;
+    let cams = Cameras::read(projections, 3, opts.method)?;
     let spec = [Dim::Free("n"), Dim::Free("v"), Dim::Fixed(3), Dim::Fixed(3)];
     let (shape, values) = read("conics", conics, &spec)?;
     cams.check_observations("conics", &shape, "3, 3")?;
     let (n, v) = (shape[0], shape[1]);
     let mask = visible.map(|m| read_mask("visible", m, &[n, v])).transpose()?;
-    let covariances = cov.map(|c| per_observation("cov", c, n, v, [5, 5])).transpose()?;
+    let covariances = covariances
+        .map(|c| per_observation("covariances", c, n, v, [5, 5]))
+        .transpose()?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = QuadricTracks {
             conics: &values,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let results = core_quadrics(cams.core(), &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+        let results = core_quadrics(cams.core(), &tracks, &opts, Some(done))?;
         Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;
     batch_result(py, outcome)
@@ -242,18 +236,18 @@ pub fn triangulate_quadrics(
 
 /// Triangulates the ellipsoid tracks of outline conics given one per row, as
 /// `triangulate_point_observations` does points: row `k` is the conic `conics[k]` (m, 3, 3) of track
-/// `track[k]` in image `image[k]` (an index into `P` (v, 3, 4)), with the covariance `cov[k]` (m, 5, 5)
-/// when given. Each track is solved as `triangulate_quadrics` would.
+/// `track[k]` in image `image[k]` (an index into `projections` (v, 3, 4)), with the covariance
+/// `covariances[k]` (m, 5, 5) when given. Each track is solved as `triangulate_quadrics` would.
 #[pyfunction]
-#[pyo3(signature = (P, track, image, conics, cov = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
-#[allow(non_snake_case, clippy::too_many_arguments)]
+#[pyo3(signature = (projections, track, image, conics, covariances = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
+#[allow(clippy::too_many_arguments)]
 pub fn triangulate_quadric_observations(
     py: Python<'_>,
-    P: &Bound<'_, PyAny>,
+    projections: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
-    cov: Option<&Bound<'_, PyAny>>,
+    covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
@@ -261,18 +255,19 @@ pub fn triangulate_quadric_observations(
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = cameras("P", P)?;
+    let cams = cameras("projections", projections)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let values = rows.per_row("conics", conics, &[3, 3])?;
-    let covariances = cov.map(|c| rows.per_row("cov", c, &[5, 5])).transpose()?;
+    let covariances = covariances
+        .map(|c| rows.per_row("covariances", c, &[5, 5]))
+        .transpose()?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = SparseQuadricTracks {
             csr: rows.csr(),
             conics: &values,
             covariances: covariances.as_deref(),
         };
-        let results =
-            core_quadric_observations(&cams, &tracks, &opts, Some(done)).map_err(|e| renamed(e, QUADRIC_NAMES))?;
+        let results = core_quadric_observations(&cams, &tracks, &opts, Some(done))?;
         let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
         Ok(collect::<PyQuadricTriangulations>(opts.method, results))
     })?;

@@ -5,8 +5,8 @@
 
 use crate::convert::{read, Dim, Integer};
 use crate::errors::{invalid_argument, shape_error};
-use pluecker::error::number;
-use pluecker::triangulation::tracks::Csr;
+use pluecker::testing::number;
+use pluecker::triangulation::Csr;
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyBool;
@@ -154,7 +154,7 @@ impl SortedRows {
     pub fn csr(&self) -> Csr<'_> {
         Csr {
             offsets: &self.offsets,
-            images: &self.images,
+            image: &self.images,
         }
     }
 
@@ -171,12 +171,13 @@ impl SortedRows {
         self.order[self.offsets[t]..self.offsets[t + 1]].to_vec()
     }
 
-    /// A track's error as the caller knows the rows: `images[k']` (sorted) becomes `image[k]` (given).
+    /// A track's error as the caller knows the rows: the core's `image[k']` (row `k'` of the rows sorted by
+    /// track) becomes `image[k]`, the row as given.
     pub fn restate(&self, e: Error) -> Error {
         match e {
             Error::Shape { what, expected, actual } => Error::Shape {
                 what: what
-                    .strip_prefix("images[")
+                    .strip_prefix("image[")
                     .and_then(|k| k.strip_suffix(']'))
                     .and_then(|k| k.parse::<usize>().ok())
                     .map_or(what.clone(), |k| format!("image[{}]", self.order[k])),

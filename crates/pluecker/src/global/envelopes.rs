@@ -44,21 +44,10 @@ impl FractionBox {
             ..*self
         }
     }
-
-    /// True when the box is valid: finite, `0 ≤ l ≤ u`, `0 < L ≤ U`.
-    pub fn is_valid(&self) -> bool {
-        let finite = [self.t_lower, self.t_upper, self.s_lower, self.s_upper]
-            .iter()
-            .all(|v| v.is_finite());
-        finite
-            && self.t_lower >= 0.0
-            && self.t_lower <= self.t_upper
-            && self.s_lower > 0.0
-            && self.s_lower <= self.s_upper
-    }
 }
 
 /// `convenv(t/s)` over the box at `(t, s)` inside it, in closed form (see the module docs).
+#[cfg(test)]
 pub fn fraction_envelope(t: f64, s: f64, b: &FractionBox) -> f64 {
     let b = b.widened();
     let (l, u, lo, hi) = (b.t_lower, b.t_upper, b.s_lower, b.s_upper);

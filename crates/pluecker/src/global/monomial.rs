@@ -20,11 +20,13 @@ pub fn product_bounds(x: Interval, y: Interval) -> Interval {
 }
 
 /// Eq. 24 at `(x, y)`.
+#[cfg(test)]
 pub fn convex_envelope(x: f64, y: f64, xb: Interval, yb: Interval) -> f64 {
     (x * yb.hi + xb.hi * y - xb.hi * yb.hi).max(x * yb.lo + xb.lo * y - xb.lo * yb.lo)
 }
 
 /// Eq. 25 at `(x, y)`.
+#[cfg(test)]
 pub fn concave_envelope(x: f64, y: f64, xb: Interval, yb: Interval) -> f64 {
     (x * yb.lo + xb.hi * y - xb.hi * yb.lo).min(x * yb.hi + xb.lo * y - xb.lo * yb.hi)
 }

@@ -100,6 +100,7 @@ pub struct QuadraticRatio<const D: usize, const N: usize> {
     pub denominator: Quadratic<N>,
 }
 
+#[cfg(test)]
 impl<const D: usize, const N: usize> QuadraticRatio<D, N> {
     /// `r(w)`.
     pub fn residual(&self, w: &SVector<f64, N>) -> SVector<f64, D> {

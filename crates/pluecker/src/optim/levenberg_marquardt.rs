@@ -5,8 +5,9 @@
 use super::problem::{Objective, StoppingCriteria, Summary, Termination};
 use nalgebra::SMatrix;
 
-/// Options of [`minimize`].
+/// Options of the Levenberg-Marquardt solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct LevenbergMarquardtOptions {
     /// Initial damping, relative to the largest diagonal entry of `JᵀJ`. Default `1e-3`.
     pub initial_damping: f64,

@@ -1,11 +1,12 @@
 //! Non-linear least-squares solvers sharing one problem interface ([`problem::Objective`]):
 //! the paper's trust region (Hebden or Moré-Sorensen steps), Levenberg-Marquardt and Newton.
 
-pub mod levenberg_marquardt;
-pub mod newton;
-pub mod problem;
-pub mod subproblem;
-pub mod trust_region;
+pub(crate) mod levenberg_marquardt;
+pub(crate) mod newton;
+pub(crate) mod problem;
+pub(crate) mod subproblem;
+pub(crate) mod trust_region;
 
+pub use levenberg_marquardt::LevenbergMarquardtOptions;
 pub use problem::{Linearization, Objective, StoppingCriteria, Summary, Termination};
 pub use trust_region::{Subproblem, TrustRegionOptions};

@@ -111,6 +111,7 @@ pub struct Summary {
 
 /// Stopping tests shared by every solver (the k.2 tests of section 4.1, plus a step-size test).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct StoppingCriteria {
     /// Stop when `‖∇f‖∞ ≤ gradient_tolerance`. Default `1e-12`.
     pub gradient_tolerance: f64,

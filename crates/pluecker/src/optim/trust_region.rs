@@ -21,8 +21,9 @@ pub enum Subproblem {
     MoreSorensen,
 }
 
-/// Options of [`minimize`]. Defaults are the paper's values.
+/// Options of the trust-region solver. Defaults are the paper's values.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct TrustRegionOptions {
     /// Subproblem solver. Default [`Subproblem::Hebden`].
     pub subproblem: Subproblem,

@@ -15,7 +15,7 @@
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
 use super::certificate::{certify, Certification, NOT_REQUESTED, PINHOLE_ONLY};
-use super::correspondences::{constraints, object_points, principal_axes, Conditioning, Correspondences, PointSpread};
+use super::correspondences::{constraints, object_points, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::lens::Observations;
 use super::linear::faugeras_toscani;
@@ -193,13 +193,6 @@ fn select(
     (best, summary, alternatives, best_valid)
 }
 
-/// Runs the estimator named by `opts.method` without refinement. Inputs are assumed validated.
-pub fn algebraic_stage(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<Estimate> {
-    let started = Instant::now();
-    let prepared = Prepared::new(corr, principal_axes(object_points(corr)), opts);
-    estimator(camera, corr, &prepared, opts, &opts.trust_region, started)
-}
-
 /// The data every stage shares, computed once per call: the world points' shape, the conditioning
 /// and the conditioned correspondences.
 struct Prepared {
@@ -223,8 +216,9 @@ impl Prepared {
     }
 }
 
-/// [`algebraic_stage`] on prepared data with the trust-region settings `tr` (`opts.trust_region`, or
-/// looser before a refinement); `started` is when the caller's clock started.
+/// The estimator named by `opts.method`, without refinement, on prepared data (inputs validated) with
+/// the trust-region settings `tr` (`opts.trust_region`, or looser before a refinement); `started` is
+/// when the caller's clock started.
 fn estimator(
     camera: &Camera,
     corr: &Correspondences,
@@ -373,7 +367,7 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 ///
 /// `camera` is any camera of [`AnyCamera`], or a reference to one of its two kinds: a pinhole
 /// [`Camera`], or a [`crate::camera_model::LensCamera`] of one of COLMAP's models, whose pixels (`corr`)
-/// are the observed, distorted ones (see [`super::lens`] for what each stage then works on).
+/// are the observed, distorted ones (see `lens` for what each stage then works on).
 ///
 /// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that
 /// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see

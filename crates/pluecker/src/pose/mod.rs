@@ -4,29 +4,41 @@
 //! lines, or both, and by default refines the answer on the reprojection error so that it is the
 //! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`. The camera
 //! is any [`crate::AnyCamera`]: through a lens with distortion the refinement minimises the exact error
-//! in the observed pixels ([`lens`] says what each stage works on).
+//! in the observed pixels (`lens` says what each stage works on).
 
 pub(crate) mod algebraic;
 pub(crate) mod candidates;
+// The certificate is requested through `PoseOptions::certify`; the module is public for its test hooks.
+#[doc(hidden)]
 pub mod certificate;
 pub(crate) mod correspondences;
 mod estimate;
 pub(crate) mod initialization;
-pub mod lens;
+pub(crate) mod lens;
 pub(crate) mod linear;
 pub mod minimal;
 pub(crate) mod noise;
 pub(crate) mod refinement;
-pub mod reprojection;
+pub(crate) mod reprojection;
 mod result;
-pub mod robust;
+pub(crate) mod robust;
 
+#[doc(no_inline)]
 pub use crate::certificate::{Certificate, CertifyOptions};
-pub use correspondences::{Conditioning, Correspondences};
-pub use estimate::{algebraic_stage, estimate_pose, Estimate};
+pub use correspondences::Correspondences;
+pub use estimate::estimate_pose;
 pub use noise::ObservationNoise;
 pub use refinement::refine_pose;
+pub use reprojection::{pose_covariance, ReprojectionCost};
 pub use robust::{RansacOptions, RansacReport, RansacStop};
+
+/// Stages and helpers the Python bindings and the integration tests call directly; not part of the
+/// user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use super::lens::undistort;
+    pub use super::reprojection::covariance_from_information;
+}
 
 use crate::camera::Camera;
 use crate::chi_square::ResidualTest;
@@ -76,12 +88,13 @@ impl Method {
 
 /// Options of [`estimate_pose`]; every field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct PoseOptions {
     /// Estimator. Default [`Method::TrustRegion`].
     pub method: Method,
     /// Penalty λ on `r·r = 1` and `r·s = 0` (eqs. 13-15, 22). Paper: 50. Default `50.0`.
     pub penalty: f64,
-    /// Solve the algebraic stage in a centred, unit-scale object frame ([`Conditioning`]). Default true.
+    /// Solve the algebraic stage in a centred, unit-scale object frame. Default true.
     pub normalize: bool,
     /// Follow the estimator with a minimisation of the reprojection error (pixel distances for points,
     /// endpoint-to-projected-line distances for lines). Default true.
@@ -105,7 +118,7 @@ pub struct PoseOptions {
     /// short step is taken, and Gauss-Newton's next one on a small-residual problem would be shorter
     /// still by about the ratio of noise to signal.
     pub refinement: TrustRegionOptions,
-    /// Robust estimation: `Some` runs LO-RANSAC over points and lines ([`robust`]) instead of `method`'s
+    /// Robust estimation: `Some` runs LO-RANSAC over points and lines (`robust`) instead of `method`'s
     /// estimator, then the reprojection refinement (when `refine`) on the final inliers. The minimal
     /// solvers generate the hypotheses, so `method` is not used (it is echoed in the result). Default
     /// `None`: every correspondence is an inlier.
@@ -222,6 +235,7 @@ impl PoseOptions {
     }
 }
 
+#[doc(no_inline)]
 pub use crate::status::Status;
 
 /// What one stage of the pipeline did and where it ended.
@@ -281,7 +295,7 @@ pub struct PoseResult {
     /// covariance of the maximum-likelihood pose, meaningful after the refinement. `σ` is
     /// [`PoseOptions::sigma_px`] or, without it, estimated (see [`PoseDetails::sigma_px`]). `None` when
     /// `JᵀJ` is singular (the used data do not fix the pose: see
-    /// [`reprojection::RELATIVE_RANK_TOLERANCE`]) or not finite, when σ cannot be estimated (at most 6
+    /// `reprojection::RELATIVE_RANK_TOLERANCE`) or not finite, when σ cannot be estimated (at most 6
     /// residuals), or when the pose is not finite. For `linear`, at the estimated intrinsics taken as
     /// exact.
     pub covariance: Option<Matrix6<f64>>,

@@ -34,7 +34,7 @@ use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
 
-pub use crate::rigid::Pose;
+pub(crate) use crate::rigid::Pose;
 
 /// Points per batch of the point kernel. The kernel is written lane by lane over fixed-size arrays so
 /// that the compiler turns each batch into vector instructions (the speed-up:
@@ -594,7 +594,7 @@ pub fn pose_covariance(cost: &ReprojectionCost<'_>, pose: &Pose, sigma_px: f64) 
 /// `σ² (JᵀJ)⁻¹`, symmetrised, from the normal matrix `A = JᵀJ`. `None` when `σ² A⁻¹` overflows or
 /// (for `σ > 0`) underflows a variance below the smallest normal double, or `A` is not finite, not
 /// positive definite (its Cholesky factorisation fails), or too close to singular:
-/// `1 / tr(A⁻¹) ≤ ` [`RELATIVE_RANK_TOLERANCE`] `· tr(A)`. Since `λ_min ≥ 1 / tr(A⁻¹)` and
+/// `1 / tr(A⁻¹) ≤ ` `RELATIVE_RANK_TOLERANCE` `· tr(A)`. Since `λ_min ≥ 1 / tr(A⁻¹)` and
 /// `λ_max ≤ tr(A)`, an accepted `A` has `λ_min > 1e-12 λ_max`, and a rejected one has
 /// `λ_min ≤ 36e-12 λ_max` (each bound is within a factor 6 of the eigenvalue it bounds): the
 /// eigenvalue test to within a factor 36, at the price of one Cholesky factorisation.

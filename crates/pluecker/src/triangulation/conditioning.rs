@@ -100,11 +100,11 @@ pub(crate) fn check_views(
             actual: format!("{observations}"),
         });
     }
-    validate_cameras(cameras, "cameras")?;
+    validate_cameras(cameras, "projections")?;
     let scale = cameras.iter().map(|p| centre(p).norm()).fold(1.0, f64::max);
     if baseline(cameras) <= SAME_CENTRE * scale {
         return Err(Error::Degenerate {
-            what: "cameras: all camera centres coincide (no parallax)".into(),
+            what: "projections: all camera centres coincide (no parallax)".into(),
         });
     }
     Ok(())

@@ -4,7 +4,7 @@
 //! The triangulation cost (eq. 19) weights each view by the inverse covariance of its residual
 //! (eq. 18). For a primitive fitted to edge points with i.i.d. Gaussian pixel noise of standard
 //! deviation σ, the residual of the true primitive in the frame of the fitted one (see
-//! [`super::line::residual`] and [`super::quadric::residual`]) is, to first order, `r = −J δ`, with `δ`
+//! `line::residual` and `quadric::residual`) is, to first order, `r = −J δ`, with `δ`
 //! the error of the fit and `J` the Jacobian of the residual with the frame held fixed (the frame's own
 //! dependence on the fit cancels to first order, because the residual of the fit in its own frame is
 //! identically 0). These functions return the fit and that covariance `J Cov(δ) Jᵀ`.
@@ -28,7 +28,7 @@ pub struct FittedLine {
     /// Homogeneous image line `(n, c₀)`, unit normal, `c₀ ≤ 0` (the sign convention of
     /// [`LineFrame`]); pixels.
     pub line: Vector3<f64>,
-    /// Covariance of the residual of [`super::line::residual`] (pixels²), for `triangulate_line`.
+    /// Covariance of the residual of `line::residual` (pixels²), for `triangulate_line`.
     pub covariance: Matrix2<f64>,
     /// Root-mean-square distance of the points from the line, pixels.
     pub rms_distance: f64,
@@ -41,7 +41,7 @@ pub struct FittedConic {
     pub conic: Matrix3<f64>,
     /// The same ellipse: centre, axes, semi-axes.
     pub ellipse: Ellipse,
-    /// Covariance of the 5-entry residual of [`super::quadric::residual`], for `triangulate_quadric`.
+    /// Covariance of the 5-entry residual of `quadric::residual`, for `triangulate_quadric`.
     pub covariance: SMatrix<f64, 5, 5>,
     /// Reweighting iterations used.
     pub iterations: usize,
@@ -292,7 +292,7 @@ fn least_eigenvector(m: &SMatrix<f64, 6, 6>) -> Vector6<f64> {
 /// `1/‖∇Q(xₖ)‖²`, started from the plain algebraic fit). To first order its coefficient vector `θ`
 /// (unit norm) has the covariance of the KCR bound, `σ̄² (P M P)⁺` with `M = Σ m(xₖ) m(xₖ)ᵀ / ‖∇Q(xₖ)‖²`
 /// and `P = I − θθᵀ` (Kanatani 1996, cited as \[12\] by the paper); it is propagated through the dual
-/// conic and the normalisation of [`super::quadric::residual`].
+/// conic and the normalisation of `quadric::residual`.
 ///
 /// Errors: fewer than 5 points, non-finite values, `sigma ≤ 0`, points that no real ellipse fits, or a
 /// `σ` for which the covariance overflows or underflows (as [`fit_line`], see `scaled_covariance`).
@@ -421,7 +421,7 @@ pub struct ResidualSamples {
     pub line: Vec<Vector2<f64>>,
     /// The same whitened by the covariance predicted by [`fit_line`]: standard normal to first order.
     pub line_whitened: Vec<Vector2<f64>>,
-    /// Conic residuals (5 entries, module [`super::quadric::residual`] order).
+    /// Conic residuals (5 entries, module `quadric::residual` order).
     pub conic: Vec<Vector5>,
     /// The same whitened by the covariance predicted by [`fit_conic`].
     pub conic_whitened: Vec<Vector5>,

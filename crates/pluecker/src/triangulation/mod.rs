@@ -10,7 +10,7 @@
 //!
 //! Conventions: cameras are 3x4 matrices `P` that map world points straight to pixels,
 //! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1) for the matrix as given, so
-//! any positive scale but not any sign ([`views`]: `fx < 0` and left-handed worlds are fine); costs
+//! any positive scale but not any sign (`views`: `fx < 0` and left-handed worlds are fine); costs
 //! are in squared (whitened) pixels, without the ½ of the least-squares solvers in [`crate::optim`].
 //! A report's certificate is `None` when no bound was computed (methods `linear` and `local`, a
 //! refused input); when a search ran, it is `Some`, and `certified` is true only with
@@ -18,17 +18,28 @@
 //! gap turns success into [`Status::GapNotClosed`], and any other failure status keeps precedence.
 
 pub(crate) mod certificate;
-pub mod conditioning;
-pub mod covariance;
+pub(crate) mod conditioning;
+pub(crate) mod covariance;
 pub mod fitting;
-pub mod fraction;
+pub(crate) mod fraction;
 pub mod line;
 pub mod point;
 pub mod quadric;
 pub mod scenes;
-pub mod tracks;
+pub(crate) mod tracks;
 pub mod uncertainty;
-pub mod views;
+pub(crate) mod views;
+
+pub use tracks::{Csr, TrackCameras};
+pub use views::View;
+
+/// Helpers the Python bindings and the integration tests call directly; not part of the user-facing
+/// API.
+#[doc(hidden)]
+pub mod testing {
+    pub use super::covariance::whitening;
+    pub use super::views::{baseline, centre, depth, depth_normalized};
+}
 
 use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
@@ -67,12 +78,12 @@ impl Method {
 #[strum(serialize_all = "snake_case")]
 pub enum LineBound {
     /// Interval Taylor bounds over the chart of the line's images in two views
-    /// ([`line::taylor_search`]; certificate kind `taylor_branch_and_bound`, domain: every line but
+    /// (`line::taylor_search`; certificate kind `taylor_branch_and_bound`, domain: every line but
     /// those within 1 % of the local line's distance from a camera centre). The
     /// default. When no pair of views charts every cheaper line (a line near an epipolar plane of
     /// every pair), [`LineBound::Relaxation`] is used instead.
     Taylor,
-    /// The paper's SOCP relaxation of eqs. 21-27 ([`line::optimal`]; kind `branch_and_bound`, domain:
+    /// The paper's SOCP relaxation of eqs. 21-27 (`line::optimal`; kind `branch_and_bound`, domain:
     /// the eq. 27 strips).
     Relaxation,
 }
@@ -96,11 +107,11 @@ impl LineBound {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
 #[strum(serialize_all = "snake_case")]
 pub enum QuadricBound {
-    /// The convexity test of [`quadric::certificate`] (kind `convexity_test`, domain: every ellipsoid
+    /// The convexity test of `quadric::certificate` (kind `convexity_test`, domain: every ellipsoid
     /// that no camera's principal plane cuts), then the paper's relaxation when the test cannot
     /// decide. The default.
     Convexity,
-    /// The paper's SOCP relaxation of eqs. 21-22, 26 only ([`quadric::optimal`]; kind
+    /// The paper's SOCP relaxation of eqs. 21-22, 26 only (`quadric::optimal`; kind
     /// `branch_and_bound`, domain: an a-priori box).
     Relaxation,
 }
@@ -122,6 +133,7 @@ impl QuadricBound {
 
 /// Options of every triangulation function; each field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
 pub struct TriangulationOptions {
     /// Estimator. Default [`Method::Optimal`].
     pub method: Method,
@@ -136,7 +148,7 @@ pub struct TriangulationOptions {
     /// cost of the local solution, which every better primitive satisfies, so the restriction loses
     /// nothing and the certificate is a certificate over all primitives in front of the cameras.
     pub max_reprojection_error: Option<f64>,
-    /// Points and lines: reject outlier observations of a track ([`point::robust`], [`line::robust`]).
+    /// Points and lines: reject outlier observations of a track (`point::robust`, `line::robust`).
     /// A view is an inlier when its whitened residual (pixels without covariances) is at most this;
     /// the result carries the inlier mask and is solved on the inliers only. Default `None`: every
     /// observation is used. Quadrics reject it with [`Error::InvalidOption`].
@@ -223,7 +235,9 @@ impl TriangulationOptions {
     }
 }
 
+#[doc(no_inline)]
 pub use crate::certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
+#[doc(no_inline)]
 pub use crate::status::Status;
 
 /// What one triangulation did: shared by every primitive's result.

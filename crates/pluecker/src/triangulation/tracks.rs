@@ -72,20 +72,21 @@ pub(crate) fn visible_views(mask: Option<&[bool]>, v: usize, t: usize) -> impl I
 
 /// Tracks given one observation per row, grouped by track (compressed sparse rows), for models where a
 /// track is seen in few of many images: track `t` owns rows `offsets[t]..offsets[t + 1]`, and row `k`
-/// is an observation in image `images[k]` (an index into the cameras). The per-observation arrays of a
+/// is an observation in image `image[k]` (an index into the projections; `image`, as the Python
+/// argument of the same rows). The per-observation arrays of a
 /// sparse batch hold one entry per row.
 #[derive(Debug, Clone, Copy)]
 pub struct Csr<'a> {
     /// `n + 1` non-decreasing offsets, from 0 to the number of rows `m`.
     pub offsets: &'a [usize],
-    /// `m` image indices.
-    pub images: &'a [usize],
+    /// `m` image indices, one per row.
+    pub image: &'a [usize],
 }
 
 impl Csr<'_> {
     /// The number of tracks, after checking the offsets against the `m` rows (an error of the call).
     pub(crate) fn check(&self) -> Result<usize> {
-        let m = self.images.len();
+        let m = self.image.len();
         match (self.offsets.first(), self.offsets.last()) {
             (Some(0), Some(&last)) if last == m => {}
             _ => {
@@ -108,7 +109,7 @@ impl Csr<'_> {
 
     /// Checks that a per-observation array holds `m · per_row` values (`unit`: one entry's shape).
     pub(crate) fn check_values(&self, what: &str, values: Option<&[f64]>, per_row: usize, unit: &str) -> Result<()> {
-        let m = self.images.len();
+        let m = self.image.len();
         match values {
             Some(values) if values.len() != per_row * m => Err(shape(
                 what,
@@ -124,10 +125,10 @@ impl Csr<'_> {
     /// COLMAP's track merging leaves them): see [`Csr::distinct_observations`] for the kinds that refuse it.
     pub(crate) fn observations(&self, t: usize, v: usize) -> Result<Vec<(usize, usize)>> {
         let rows = self.offsets[t]..self.offsets[t + 1];
-        let images = &self.images[rows.clone()];
+        let images = &self.image[rows.clone()];
         if let Some(i) = images.iter().position(|&j| j >= v) {
             return Err(Error::Shape {
-                what: format!("images[{}]", rows.start + i),
+                what: format!("image[{}]", rows.start + i),
                 expected: format!("an image index below {v} (the cameras)"),
                 actual: images[i].to_string(),
             });
@@ -239,16 +240,17 @@ fn count(done: Option<&AtomicUsize>) {
 }
 
 /// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means
-/// `(P X̃)₃ > 0`, [`crate::triangulation::views`]): one set seen
+/// `(P X̃)₃ > 0`, `views`): one set seen
 /// by every track, or one set per track (e.g. independent scenes solved together).
 #[derive(Debug, Clone, Copy)]
 pub enum TrackCameras<'a> {
-    /// `v` cameras shared by every track; view `j` of every track is `cameras[j]`.
+    /// `v` projections shared by every track; view `j` of every track is `projections[j]` (errors
+    /// name them `projections`).
     Shared(&'a [Matrix3x4<f64>]),
-    /// `n · views` cameras, track-major: view `j` of track `t` is `cameras[t · views + j]`.
+    /// `n · views` projections, track-major: view `j` of track `t` is `projections[t · views + j]`.
     PerTrack {
-        /// The cameras of all tracks.
-        cameras: &'a [Matrix3x4<f64>],
+        /// The projections of all tracks.
+        projections: &'a [Matrix3x4<f64>],
         /// Views per track, `v`.
         views: usize,
     },
@@ -267,11 +269,11 @@ impl TrackCameras<'_> {
     /// non-singular; per-track cameras must number `n · views` (each track's are checked with it).
     pub(crate) fn check(&self, n: usize) -> Result<()> {
         match *self {
-            TrackCameras::Shared(cameras) => validate_cameras(cameras, "cameras"),
-            TrackCameras::PerTrack { cameras, views } if cameras.len() != n * views => Err(shape(
-                "cameras",
-                format!("{} cameras ({n} tracks x {views} views)", n * views),
-                cameras.len(),
+            TrackCameras::Shared(cameras) => validate_cameras(cameras, "projections"),
+            TrackCameras::PerTrack { projections, views } if projections.len() != n * views => Err(shape(
+                "projections",
+                format!("{} projections ({n} tracks x {views} views)", n * views),
+                projections.len(),
             )),
             TrackCameras::PerTrack { .. } => Ok(()),
         }
@@ -281,7 +283,7 @@ impl TrackCameras<'_> {
     pub(crate) fn of_track(&self, t: usize, seen: &[usize]) -> Vec<Matrix3x4<f64>> {
         match *self {
             TrackCameras::Shared(cameras) => seen.iter().map(|&j| cameras[j]).collect(),
-            TrackCameras::PerTrack { cameras, views } => seen.iter().map(|&j| cameras[t * views + j]).collect(),
+            TrackCameras::PerTrack { projections, views } => seen.iter().map(|&j| projections[t * views + j]).collect(),
         }
     }
 

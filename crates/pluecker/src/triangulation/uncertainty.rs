@@ -3,7 +3,7 @@
 //!
 //! **What is computed.** Observation `i` has the covariance `Σᵢ` of its residual `rᵢ` of eq. 17: 2x2
 //! pixels² for a point, 2x2 for an image line and 5x5 for a conic (in the units of
-//! [`super::line::residual`] / [`super::quadric::residual`], e.g. from [`super::fitting`]). Its whitening
+//! `line::residual` / `quadric::residual`, e.g. from [`super::fitting`]). Its whitening
 //! `Lᵢ` (eq. 18, `LᵢᵀLᵢ = Σᵢ⁻¹`) makes the stacked whitened residuals `ρ = (L₁r₁, …, Lₙrₙ)` of identity
 //! covariance. At the returned estimate `θ̂`, with a minimal chart `δ ↦ θ(δ)`, `θ(0) = θ̂`, and
 //! `J = ∂ρ/∂δ` at `δ = 0`, the covariance of the estimate in the chart is the first-order
@@ -13,7 +13,7 @@
 //! the inverse of the Gauss-Newton Hessian of `½` eq. 19. The given covariances carry the scale: the
 //! result is not rescaled by the cost reached (no a-posteriori variance factor). **Without
 //! covariances** every `Σᵢ = I`: 1 px isotropic noise for points; for lines 1 px of offset and
-//! `1/D` rad (`D` = [`super::line::residual::LINE_FRAME_DISTANCE`]) of angle; for conics unit variance
+//! `1/D` rad (`D` = `line::residual::LINE_FRAME_DISTANCE`) of angle; for conics unit variance
 //! on each of the 5 residual entries (px² and px) — give covariances for lines and conics. It is
 //! evaluated at whatever estimate the method returned: for `linear` that is the maximum-likelihood
 //! covariance at the linear answer, not the covariance of the linear estimator itself. First-order
@@ -29,7 +29,7 @@
 //! - line: [`LineChart`](crate::geometry::plucker::LineChart) `(α₁, α₂, t₁, t₂)` pivoted at the point of the line closest to the world
 //!   origin, 4x4 (`α` dimensionless, `t` world units); [`LineChart::plucker_covariance`](crate::geometry::plucker::LineChart::plucker_covariance) and
 //!   [`LineChart::point_direction_covariance`](crate::geometry::plucker::LineChart::point_direction_covariance) map it to 6x6 forms;
-//! - quadric: [`CentreShape`](crate::geometry::quadric::CentreShape) `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`, 9x9 (world units, units²):
+//! - quadric: [`CentreShape`](crate::geometry::CentreShape) `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`, 9x9 (world units, units²):
 //!   the ellipsoid is estimated as a real ellipsoid (9 dof); this chart of the normalised dual quadric
 //!   stays regular for spheres and spheroids (where axes and semi-axes are not), and for flat ones.
 //!   For a flat estimate (a semi-axis 0) the estimate lies on the boundary `S ⪰ 0` of the set searched,
@@ -49,7 +49,7 @@ use nalgebra::{Matrix3, SMatrix};
 /// number and `N` times it).
 pub const MAX_CONDITION: f64 = 1e12;
 
-/// The 9x9 covariance of a quadric in the [`CentreShape`](crate::geometry::quadric::CentreShape) chart.
+/// The 9x9 covariance of a quadric in the [`CentreShape`](crate::geometry::CentreShape) chart.
 pub type QuadricCovariance = SMatrix<f64, 9, 9>;
 
 /// `H⁻¹` for a symmetric information matrix `H = JᵀJ`, or `None` when it is not finite, not positive

@@ -4,7 +4,7 @@
 
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;
-use pluecker::triangulation::line::batch::{ImageLines, LineTracks};
+use pluecker::triangulation::line::{ImageLines, LineTracks};
 
 /// The pixel of the world point `x` in the camera `p`.
 pub fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {

@@ -1,6 +1,6 @@
 //! An independent oracle of the pose cost for the tests of the pose certificate: the reprojection
 //! cost `½ Σ r²` written again from its definition (Phong & Horaud 1995; the library's
-//! `pose::reprojection` documents the same residuals), and a plain Levenberg-Marquardt with numeric
+//! `pose::ReprojectionCost` documents the same residuals), and a plain Levenberg-Marquardt with numeric
 //! Jacobians to find local minima from many starts. Nothing here calls the library's residuals,
 //! refinement or certificate; only its data types (`Camera`, `Correspondences`) and its seeded `Rng`.
 //!

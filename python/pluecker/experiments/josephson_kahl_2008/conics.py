@@ -120,7 +120,7 @@ def run_conics(trials: int, seed: int) -> list[dict[str, Any]]:
     runs: list[dict[str, Any]] = [{} for _ in scenes]
     for key, method, gap in (*((m, m, None) for m in METHODS), ("optimal_paper_gap", "optimal", PAPER_GAP)):
         start = time.perf_counter()
-        batch = pluecker.triangulate_quadrics(P, conics, cov=covariances, options=triangulation_options(method, gap))
+        batch = pluecker.triangulate_quadrics(P, conics, covariances=covariances, options=triangulation_options(method, gap))
         wall = (time.perf_counter() - start) / max(trials, 1)
         rejected = [m for m in batch.messages if m]
         if rejected:

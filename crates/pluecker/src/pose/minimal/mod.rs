@@ -14,7 +14,7 @@
 //! | [`p1p2l()`] | 1 point + 2 lines | 4              | degree-8 polynomial in `tan(β/2)`      | Ramalingam, Bouaziz & Sturm, ICRA 2011             |
 //! | [`p3l()`]   | 3 lines           | 8              | degree-8 polynomial in `tan(β/2)`      | Dhome et al., IEEE PAMI 1989; Chen, ICCV 1990      |
 //!
-//! The three solvers with lines share one kernel ([`rotation_constraints`]): the rotation from three
+//! The three solvers with lines share one kernel (`rotation_constraints`): the rotation from three
 //! linear constraints on `R` (one of them a line's `nᵀ R d = 0`), the translation and depths then
 //! being linear; the counts of 4 for the mixed solvers are the up-to-8 algebraic rotations less those
 //! that put a point behind the camera (see each solver's documentation).
@@ -22,12 +22,12 @@
 //! [`solve`] dispatches a sample of any mix of three [`Feature`]s to the solver for that mix.
 
 mod input;
-pub mod p1p2l;
-pub mod p2p1l;
-pub mod p3l;
-pub mod p3p;
+mod p1p2l;
+mod p2p1l;
+mod p3l;
+mod p3p;
 mod polynomial;
-pub mod rotation_constraints;
+mod rotation_constraints;
 
 pub use p1p2l::p1p2l;
 pub use p2p1l::p2p1l;
@@ -36,6 +36,7 @@ pub use p3p::p3p;
 
 use nalgebra::Vector3;
 
+#[doc(no_inline)]
 pub use crate::rigid::Pose;
 
 /// One 2-D/3-D correspondence as a minimal solver sees it (camera-frame image data, world-frame

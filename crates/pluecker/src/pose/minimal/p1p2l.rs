@@ -39,7 +39,7 @@ use nalgebra::Vector3;
 /// Every real pose `(R, t)`, `x_cam = R X_world + t`, that puts the world `point` on the ray of the
 /// camera-frame `bearing` at positive depth and each object line `i` (through the two world points
 /// `endpoints[i]`) on the interpretation plane with camera-frame normal `normals[i]`: zero to four poses
-/// (see the [module documentation](self)).
+/// (see the [module documentation](super)).
 ///
 /// `bearing` and `normals` are any non-zero multiples (see [`super::p3p()`] and [`super::p3l()`] for
 /// how to get them from pixels). Invalid or degenerate input gives an empty vector, never a panic.

@@ -43,7 +43,7 @@ use nalgebra::Vector3;
 /// Every real pose `(R, t)`, `x_cam = R X_world + t`, that puts each world `points[j]` on the ray of
 /// the camera-frame `bearings[j]` at positive depth and the object line through the two world points
 /// `endpoints` on the interpretation plane with camera-frame normal `normal`: zero to four poses (see
-/// the [module documentation](self)).
+/// the [module documentation](super)).
 ///
 /// `bearings` and `normal` are any non-zero multiples (see [`super::p3p()`] and [`super::p3l()`] for
 /// how to get them from pixels). Invalid or degenerate input gives an empty vector, never a panic.

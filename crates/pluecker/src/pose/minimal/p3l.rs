@@ -41,7 +41,7 @@ use nalgebra::{Matrix3, Vector3};
 
 /// Every real pose `(R, t)`, `x_cam = R X_world + t`, that puts each object line `i` (through the two
 /// world points `endpoints[i]`) on the interpretation plane whose camera-frame normal is `normals[i]`:
-/// zero to eight poses (see the [module documentation](self)).
+/// zero to eight poses (see the [module documentation](super)).
 ///
 /// A normal is any non-zero multiple of `(u₁, v₁, 1) × (u₂, v₂, 1)` for two normalised image points of
 /// the image line (`(uᵢ, vᵢ)` from [`crate::camera::Camera::pixel_to_normalized`]), e.g.

@@ -47,7 +47,7 @@
 use super::polynomial::{binary_quadratic_roots, cubic_real_roots};
 use nalgebra::{Matrix3, Vector3};
 
-pub use super::Pose;
+pub(crate) use super::Pose;
 
 /// Gauss-Newton steps on eq. 4 (the paper's implementation takes 5; each is kept only if it lowers the
 /// sum of squared residuals).
@@ -74,7 +74,7 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 
 /// Every real pose `(R, t)` with `x_cam = R X_world + t` that puts the three world `points` on the rays
 /// of the three camera-frame `bearings`, at positive depth: zero to four of them (eq. 4 of Persson &
-/// Nordberg 2018; see the [module documentation](self) for the method and the degenerate cases).
+/// Nordberg 2018; see the [module documentation](super) for the method and the degenerate cases).
 ///
 /// `bearings[i]` is the direction of the ray to `points[i]` in the camera frame; it is normalised here,
 /// so any positive multiple works. From a pixel `u` of a [`crate::camera::Camera`] `cam`:

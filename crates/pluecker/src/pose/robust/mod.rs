@@ -79,6 +79,7 @@ use std::time::{Duration, Instant};
 
 /// Options of the robust estimator (`PoseOptions::ransac`). Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
 pub struct RansacOptions {
     /// Inlier threshold of a point: the reprojection distance in pixels. Default `4.0`.
     pub point_threshold: f64,
@@ -252,7 +253,7 @@ pub struct RansacReport {
     /// Reprojection errors evaluated while scoring the poses (early exits included; not those of the
     /// local optimisation or of the inlier masks): the work of the scoring.
     pub errors_evaluated: usize,
-    /// Local optimisations run (one per new best model, each up to [`LOCAL_ROUNDS`] rounds).
+    /// Local optimisations run (one per new best model, each up to `LOCAL_ROUNDS` rounds).
     pub local_optimizations: usize,
     /// Inliers (points + lines) of the best model before the final refinement.
     pub inliers: usize,

@@ -62,7 +62,7 @@ fn check_batch(cameras: &TrackCameras, tracks: &LineTracks) -> Result<usize> {
     let v = cameras.views();
     if v == 0 {
         return Err(Error::Shape {
-            what: "cameras".into(),
+            what: "projections".into(),
             expected: "at least 2 views".into(),
             actual: "0".into(),
         });
@@ -71,7 +71,7 @@ fn check_batch(cameras: &TrackCameras, tracks: &LineTracks) -> Result<usize> {
     let n = match tracks.lines {
         ImageLines::Homogeneous(lines) => track_count("lines", lines.len(), v, 3, "3 line coordinates")?,
         ImageLines::Segments { endpoints, .. } => {
-            track_count("segments", endpoints.len(), v, 4, "2 endpoints x 2 coordinates")?
+            track_count("lines", endpoints.len(), v, 4, "2 endpoints x 2 coordinates")?
         }
     };
     cameras.check(n)?;
@@ -122,9 +122,9 @@ fn line_track(
         }
     };
     let arrays: &[&str] = if cameras.per_track() {
-        &["lines", "segments", "covariances", "cameras"]
+        &["lines", "covariances", "projections"]
     } else {
-        &["lines", "segments", "covariances"]
+        &["lines", "covariances"]
     };
     result.map_err(|e| in_track(e, t, &views, arrays))
 }
@@ -143,7 +143,7 @@ fn check_sigma(lines: &ImageLines) -> Result<()> {
     }
 }
 
-/// Triangulates every line track of `tracks` seen by `cameras` with `opts`, in parallel; each track
+/// Triangulates every line track of `tracks` seen by `projections` with `opts`, in parallel; each track
 /// gets the result [`triangulate_line`] gives on its visible views (module docs). `progress`, when
 /// given, counts the finished tracks, for another thread to poll.
 ///
@@ -152,23 +152,23 @@ fn check_sigma(lines: &ImageLines) -> Result<()> {
 /// shared cameras. Per track: the errors of [`triangulate_line`] and [`lines_from_segments`], and
 /// [`Error::TooFewCorrespondences`] for fewer than 2 visible views.
 pub fn triangulate_lines(
-    cameras: TrackCameras,
+    projections: TrackCameras,
     tracks: &LineTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
     opts.validate()?;
-    let n = check_batch(&cameras, tracks)?;
-    let v = cameras.views();
+    let n = check_batch(&projections, tracks)?;
+    let v = projections.views();
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
     Ok(solve_tracks(n, 1, progress, |t| {
         let seen = dense_observations(tracks.visible, v, t);
-        line_track(&cameras, &tracks.lines, tracks.covariances, t, &seen, opts)
+        line_track(&projections, &tracks.lines, tracks.covariances, t, &seen, opts)
     }))
 }
 
 /// Line tracks given one observation per row ([`Csr`]): row `k` is the line or segment `k` of `lines`
-/// (`m · 3` or `m · 4` values) in image `csr.images[k]`, with the covariance `covariances[4k..]` when
+/// (`m · 3` or `m · 4` values) in image `csr.image[k]`, with the covariance `covariances[4k..]` when
 /// given. Memory grows with the observations, not with tracks × images.
 #[derive(Debug, Clone, Copy)]
 pub struct SparseLineTracks<'a> {
@@ -180,18 +180,18 @@ pub struct SparseLineTracks<'a> {
     pub covariances: Option<&'a [f64]>,
 }
 
-/// Triangulates every track of the sparse `tracks` seen by `cameras` (3x4, world → pixels), in
+/// Triangulates every track of the sparse `tracks` seen by `projections` (3x4, world → pixels), in
 /// parallel: the same per-track solve and results as [`triangulate_lines`] on the dense form. A track
 /// naming an image beyond the cameras, or one image twice, is its own error.
 pub fn triangulate_line_observations(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     tracks: &SparseLineTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
     opts.validate()?;
     check_sigma(&tracks.lines)?;
-    let shared = TrackCameras::Shared(cameras);
+    let shared = TrackCameras::Shared(projections);
     shared.check(0)?;
     let n = tracks.csr.check()?;
     match tracks.lines {
@@ -199,26 +199,26 @@ pub fn triangulate_line_observations(
         ImageLines::Segments { endpoints, .. } => {
             tracks
                 .csr
-                .check_values("segments", Some(endpoints), 4, "2 endpoints x 2 coordinates")?
+                .check_values("lines", Some(endpoints), 4, "2 endpoints x 2 coordinates")?
         }
     }
     tracks.csr.check_values("covariances", tracks.covariances, 4, "2 x 2")?;
     Ok(solve_tracks(n, 1, progress, |t| {
-        let seen = tracks.csr.distinct_observations(t, cameras.len())?;
+        let seen = tracks.csr.distinct_observations(t, projections.len())?;
         line_track(&shared, &tracks.lines, tracks.covariances, t, &seen, opts)
     }))
 }
 
 /// Segment tracks seen through [`View`]s, one observation per row ([`Csr`]): row `k` is the segment
 /// `segments[4k..4k + 4]` (`(u₁, v₁, u₂, v₂)`, the image's own, distorted pixels) in image
-/// `csr.images[k]`, with its endpoints' covariances `covariances[8k..8k + 8]` (two row-major 2x2
+/// `csr.image[k]`, with its endpoints' covariances `covariances[8k..8k + 8]` (two row-major 2x2
 /// matrices, pixels²) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparseSegmentTracks<'a> {
     /// Which rows belong to which track, and their images.
     pub csr: Csr<'a>,
-    /// `m · 4` endpoints, pixels.
-    pub segments: &'a [f64],
+    /// `m · 4` segment endpoints `(u₁, v₁, u₂, v₂)`, pixels: the image lines as segments.
+    pub lines: &'a [f64],
     /// `m · 8` endpoint covariances, or `None` (the identity: costs in squared pixels).
     pub covariances: Option<&'a [f64]>,
 }
@@ -243,7 +243,7 @@ pub fn triangulate_line_observations_views(
     let n = tracks.csr.check()?;
     tracks
         .csr
-        .check_values("segments", Some(tracks.segments), 4, "2 endpoints x 2 coordinates")?;
+        .check_values("lines", Some(tracks.lines), 4, "2 endpoints x 2 coordinates")?;
     tracks
         .csr
         .check_values("covariances", tracks.covariances, 8, "2 endpoints x 2 x 2")?;
@@ -257,7 +257,7 @@ pub fn triangulate_line_observations_views(
         let segments: Vec<[Vector2<f64>; 2]> = seen
             .iter()
             .map(|&(_, k)| {
-                let s = &tracks.segments[4 * k..][..4];
+                let s = &tracks.lines[4 * k..][..4];
                 [Vector2::new(s[0], s[1]), Vector2::new(s[2], s[3])]
             })
             .collect();
@@ -270,6 +270,6 @@ pub fn triangulate_line_observations_views(
                 .collect()
         });
         triangulate_line_segments_views(&track_views, &segments, covariances.as_deref(), opts)
-            .map_err(|e| in_track(e, t, &images, &["segments", "covariances"]))
+            .map_err(|e| in_track(e, t, &images, &["lines", "covariances"]))
     }))
 }

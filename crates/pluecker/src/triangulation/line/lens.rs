@@ -88,12 +88,12 @@ impl<'a> LensSegment<'a> {
                         .undistort_with_covariance(&endpoints[end], &covariances[end], index)
                         .map_err(|e| match e {
                             Error::Degenerate { what } => Error::Degenerate {
-                                what: format!("segments[{index}]: endpoint {end}: {what}"),
+                                what: format!("lines[{index}]: endpoint {end}: {what}"),
                             },
                             other => other,
                         })?;
                     let cov = cov.ok_or_else(|| Error::Degenerate {
-                        what: format!("segments[{index}]: endpoint {end}: the distortion is singular there"),
+                        what: format!("lines[{index}]: endpoint {end}: the distortion is singular there"),
                     })?;
                     (ubar, cov)
                 }
@@ -120,10 +120,10 @@ impl<'a> LensSegment<'a> {
         let [(a, ca), (b, cb)] = self.undistorted;
         let fit = line_from_endpoints(&a, &b, &ca, &cb).map_err(|e| match e {
             Error::Degenerate { what } if what.contains("zero-length") => Error::Degenerate {
-                what: format!("segments[{index}] has zero length"),
+                what: format!("lines[{index}] has zero length"),
             },
             Error::Degenerate { .. } | Error::NonFinite { .. } => Error::Degenerate {
-                what: format!("segments[{index}]: no line through its undistorted endpoints"),
+                what: format!("lines[{index}]: no line through its undistorted endpoints"),
             },
             other => other,
         })?;

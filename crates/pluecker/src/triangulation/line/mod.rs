@@ -3,7 +3,7 @@
 //!
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(𝓛)‖²`, over 3-D lines `𝓛` (Plücker coordinates, eq. 3,
 //! satisfying eq. 4), with `rᵢ` the residual of the observed image line `lᵢ` (eq. 17 with the
-//! normalisation of section 3.1, see [`self::residual`]) and `Lᵢ` the whitening of its 2x2
+//! normalisation of section 3.1, see `residual`) and `Lᵢ` the whitening of its 2x2
 //! covariance (eq. 18; identity without covariances). The three [`Method`]s:
 //! - `linear`: the line common to the back-projected planes `πᵢ = Pᵢᵀ lᵢ` in the least-squares sense
 //!   (conditioned world frame, planes scaled to unit normals): the two right singular vectors `A`, `B`
@@ -13,8 +13,8 @@
 //!   the orthonormal representation of Bartoli & Sturm ([`OrthonormalLine`]): a minimal 4-parameter
 //!   update that keeps eq. 4 exactly;
 //! - `optimal`: the local line, then branch and bound: by default with interval Taylor bounds over
-//!   the two-view chart ([`self::taylor_search`], [`self::two_view_chart`]), whose certificate covers
-//!   every line; or with the paper's SOCP relaxation (section 4, [`self::optimal`]), selected by
+//!   the two-view chart (`taylor_search`, `two_view_chart`), whose certificate covers
+//!   every line; or with the paper's SOCP relaxation (section 4, `optimal`), selected by
 //!   [`TriangulationOptions::line_bound`] and used when the chart has no pair of views.
 //!
 //! Degenerate input is an error: fewer than 2 views, mismatched lengths, NaN/inf, a singular camera,
@@ -24,13 +24,27 @@
 //! parallel to an image plane crosses that camera's principal plane, so [`super::Status::BehindCamera`] is
 //! never reported for lines.
 
-pub mod batch;
-pub mod lens;
-pub mod optimal;
-pub mod residual;
-pub mod robust;
-pub mod taylor_search;
-pub mod two_view_chart;
+pub(crate) mod batch;
+pub(crate) mod lens;
+pub(crate) mod optimal;
+pub(crate) mod residual;
+pub(crate) mod robust;
+pub(crate) mod taylor_search;
+pub(crate) mod two_view_chart;
+
+pub use batch::{
+    triangulate_line_observations, triangulate_line_observations_views, triangulate_lines, ImageLines, LineTracks,
+    SparseLineTracks, SparseSegmentTracks,
+};
+pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;
+
+/// The stages of the line solvers that the integration tests check directly; not part of the
+/// user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use super::lens::{exact_cost, LensSegment};
+    pub use super::residual::{endpoint_distances, LineFrame};
+}
 
 use self::lens::LensSegment;
 use self::optimal::optimal_line;
@@ -76,7 +90,7 @@ pub struct LineTriangulation {
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
     /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
-    /// order): the observations the line was solved from ([`robust`]). `None` otherwise.
+    /// order): the observations the line was solved from (`robust`). `None` otherwise.
     pub inliers: Option<Vec<bool>>,
 }
 
@@ -136,8 +150,8 @@ impl LineProblem {
     }
 }
 
-/// Triangulates one 3-D line seen by `cameras` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, [`super::views`]) as the
+/// Triangulates one 3-D line seen by `projections` (3x4, world → pixels, any positive scale; in
+/// front means `(P X̃)₃ > 0`, `views`) as the
 /// homogeneous image lines `lines` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
 /// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`]; identity
 /// when `None`).
@@ -148,14 +162,14 @@ impl LineProblem {
 /// cameras with one centre, a line in an epipolar plane of every view pair),
 /// [`Error::InvalidOption`].
 pub fn triangulate_line(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     lines: &[Vector3<f64>],
     covariances: Option<&[Matrix2<f64>]>,
     opts: &TriangulationOptions,
 ) -> Result<LineTriangulation> {
     let started = Instant::now();
     opts.validate()?;
-    check_views(cameras, lines.len(), 2, "lines", opts.method)?;
+    check_views(projections, lines.len(), 2, "lines", opts.method)?;
     let frames = parse_observations(
         lines,
         "lines",
@@ -163,9 +177,9 @@ pub fn triangulate_line(
         LineFrame::of_line,
     )?;
     let problem = LineProblem {
-        cameras: cameras.to_vec(),
+        cameras: projections.to_vec(),
         frames,
-        whitenings: whitenings(covariances, cameras.len(), "covariances")?,
+        whitenings: whitenings(covariances, projections.len(), "covariances")?,
     };
     let mut result = match opts.outlier_threshold {
         None => triangulate_line_views(&problem, opts)?,
@@ -231,71 +245,72 @@ pub type LinesAndCovariances = (Vec<Vector3<f64>>, Vec<Matrix2<f64>>);
 
 /// The image lines and residual covariances of image segments (pixel endpoints, i.i.d. Gaussian
 /// noise of `sigma` px per coordinate): [`line_from_segment`] on each (see [`super::fitting`]).
-/// Errors name the segment index.
-pub fn lines_from_segments(segments: &[[Vector2<f64>; 2]], sigma: f64) -> Result<LinesAndCovariances> {
-    let mut lines = Vec::with_capacity(segments.len());
-    let mut covariances = Vec::with_capacity(segments.len());
-    for (i, s) in segments.iter().enumerate() {
+/// `lines` are the image lines given as segments; errors name `lines[i]`, the argument of the
+/// triangulation functions (and of the Python package) the segments come in.
+pub fn lines_from_segments(lines: &[[Vector2<f64>; 2]], sigma: f64) -> Result<LinesAndCovariances> {
+    let mut homogeneous = Vec::with_capacity(lines.len());
+    let mut covariances = Vec::with_capacity(lines.len());
+    for (i, s) in lines.iter().enumerate() {
         if !s.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
             return Err(Error::NonFinite {
-                what: "segments".into(),
+                what: "lines".into(),
                 index: i,
             });
         }
         let fit = line_from_segment(&s[0], &s[1], sigma).map_err(|e| match e {
             Error::Degenerate { what } if what.contains("zero-length") => Error::Degenerate {
-                what: format!("segments[{i}] has zero length"),
+                what: format!("lines[{i}] has zero length"),
             },
             other => other,
         })?;
-        if whitening(&fit.covariance, "segments", i).is_err() {
+        if whitening(&fit.covariance, "lines", i).is_err() {
             return Err(Error::Degenerate {
                 what: format!(
-                    "segments[{i}]: the covariance of its line is numerically singular (a segment far shorter than its distance from the image origin)"
+                    "lines[{i}]: the covariance of its line is numerically singular (a segment far shorter than its distance from the image origin)"
                 ),
             });
         }
-        lines.push(fit.line);
+        homogeneous.push(fit.line);
         covariances.push(fit.covariance);
     }
-    Ok((lines, covariances))
+    Ok((homogeneous, covariances))
 }
 
-/// [`triangulate_line`] from image segments (pixel endpoints) whose endpoints have i.i.d. Gaussian
-/// noise of `sigma` px per coordinate: each segment gives its line and covariance by
-/// [`lines_from_segments`].
+/// [`triangulate_line`] from the image lines `lines` given as segments (pixel endpoints) whose
+/// endpoints have i.i.d. Gaussian noise of `sigma` px per coordinate: each segment gives its line and
+/// covariance by [`lines_from_segments`].
 pub fn triangulate_line_segments(
-    cameras: &[Matrix3x4<f64>],
-    segments: &[[Vector2<f64>; 2]],
+    projections: &[Matrix3x4<f64>],
+    lines: &[[Vector2<f64>; 2]],
     sigma: f64,
     opts: &TriangulationOptions,
 ) -> Result<LineTriangulation> {
-    let (lines, covariances) = lines_from_segments(segments, sigma)?;
-    triangulate_line(cameras, &lines, Some(&covariances), opts)
+    let (homogeneous, covariances) = lines_from_segments(lines, sigma)?;
+    triangulate_line(projections, &homogeneous, Some(&covariances), opts)
 }
 
 /// Triangulates one 3-D line seen in `views` (each a camera, pinhole or any of COLMAP's models, and
-/// its pose) as the image segments `segments`, whose endpoints are the images' own (distorted) pixels,
+/// its pose) as the image segments `lines`, whose endpoints are the images' own (distorted) pixels,
 /// with optional 2x2 covariances of each endpoint in those pixels (identity when `None`). Through a
 /// distorting lens the cost is the segments' reprojection error through the exact projection, the
 /// Mahalanobis distances of the endpoints to the line's curved images, minimised by the local method;
-/// it is never certified there ([`lens`]: `optimal` reports `gap_not_closed`). When no camera distorts
+/// it is never certified there (`lens`: `optimal` reports `gap_not_closed`). When no camera distorts
 /// this is [`triangulate_line`] of the views' `K [R | t]` on the segments' lines and covariances
 /// ([`crate::triangulation::fitting::line_from_endpoints`]; [`triangulate_line_segments`] for `σ² I`).
 ///
-/// Errors as [`triangulate_line`] (naming `segments`, `covariances` and `views`), and
+/// Errors as [`triangulate_line`] (naming `lines`, `covariances` and `projections`), and
 /// [`Error::Degenerate`] naming a segment with an endpoint outside its lens's invertible region or of
 /// zero length.
 pub fn triangulate_line_segments_views(
     views: &[View],
-    segments: &[[Vector2<f64>; 2]],
+    lines: &[[Vector2<f64>; 2]],
     covariances: Option<&[[Matrix2<f64>; 2]]>,
     opts: &TriangulationOptions,
 ) -> Result<LineTriangulation> {
     let started = Instant::now();
     opts.validate()?;
     let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
-    check_views(&cameras, segments.len(), 2, "segments", opts.method)?;
+    check_views(&cameras, lines.len(), 2, "lines", opts.method)?;
     if let Some(c) = covariances {
         if c.len() != views.len() {
             return Err(Error::Shape {
@@ -307,10 +322,10 @@ pub fn triangulate_line_segments_views(
     }
     let identity = [Matrix2::identity(); 2];
     let mut observed = Vec::with_capacity(views.len());
-    for (i, (view, s)) in views.iter().zip(segments).enumerate() {
+    for (i, (view, s)) in views.iter().zip(lines).enumerate() {
         if !s.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
             return Err(Error::NonFinite {
-                what: "segments".into(),
+                what: "lines".into(),
                 index: i,
             });
         }

@@ -17,12 +17,12 @@ use crate::consensus::{self, msac, Estimator, Stats};
 use crate::error::Result;
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
+#[cfg(doc)]
+use crate::triangulation::point::robust::MAX_PAIRS;
 use crate::triangulation::point::robust::{pairs, MAX_ROUNDS};
 use crate::triangulation::TriangulationOptions;
 use nalgebra::Vector6;
 use std::time::Duration;
-
-pub use crate::triangulation::point::robust::MAX_PAIRS;
 
 /// The problem of the views `keep` of `problem`.
 fn subproblem(problem: &LineProblem, keep: impl Iterator<Item = usize> + Clone) -> LineProblem {

@@ -74,11 +74,11 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usiz
 
 /// The checked, depth-normalised cameras and their centres, shared by every track.
 fn prepare(cameras: &[Matrix3x4<f64>]) -> Result<Prepared> {
-    validate_cameras(cameras, "cameras")?;
+    validate_cameras(cameras, "projections")?;
     let v = cameras.len();
     if v == 0 {
         return Err(Error::Shape {
-            what: "cameras".into(),
+            what: "projections".into(),
             expected: "at least 2 cameras".into(),
             actual: "0".into(),
         });
@@ -173,16 +173,16 @@ fn no_parallax(t: usize) -> Error {
     }
 }
 
-/// Triangulates every track of `tracks` seen by `cameras` (3x4, world → pixels) with `opts`, in
+/// Triangulates every track of `tracks` seen by `projections` (3x4, world → pixels) with `opts`, in
 /// parallel. The outer error is about the whole call; each track has its own result (module docs).
 /// `progress`, when given, counts the finished tracks, for another thread to poll.
 pub fn triangulate_points(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     tracks: &PointTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
-    let (n, one) = dense_solver(cameras, tracks, opts)?;
+    let (n, one) = dense_solver(projections, tracks, opts)?;
     Ok(solve_tracks(n, 16, progress, one))
 }
 
@@ -195,14 +195,14 @@ pub fn triangulate_points(
 /// (their rows stay as they were, and it ends without a pass over them): `Ok(Some(reason))` then
 /// says why; `Ok(None)`: every track was written. `progress` counts the tracks written.
 pub fn triangulate_points_into<R: Send>(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     tracks: &PointTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
-    let (n, one) = dense_solver(cameras, tracks, opts)?;
+    let (n, one) = dense_solver(projections, tracks, opts)?;
     check_rows(rows.len(), n)?;
     Ok(solve_tracks_into(rows, 16, progress, one, write))
 }
@@ -287,7 +287,7 @@ fn solve_track(
 
 /// Point tracks as a flat list of observations grouped by track ([`Csr`]), for models where each track
 /// is seen in few of many images: memory grows with the observations, not with tracks × images. Row `k`
-/// is the pixel `observations[2k..2k + 2]` in image `csr.images[k]` (an index into the cameras), with the
+/// is the pixel `observations[2k..2k + 2]` in image `csr.image[k]` (an index into the cameras), with the
 /// covariance `covariances[4k..4k + 4]` (row-major 2x2) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparsePointTracks<'a> {
@@ -310,30 +310,30 @@ impl SparsePointTracks<'_> {
     }
 }
 
-/// Triangulates every track of the sparse `tracks` seen by `cameras` (3x4, world → pixels), in
+/// Triangulates every track of the sparse `tracks` seen by `projections` (3x4, world → pixels), in
 /// parallel: the same per-track solve and results as [`triangulate_points`] on the dense form. A track
-/// naming an image beyond the cameras, or one image twice, is its own error.
+/// naming an image beyond the cameras is its own error; one image seen twice is used twice.
 pub fn triangulate_point_observations(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     tracks: &SparsePointTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
-    let (n, one) = sparse_solver(prepare(cameras), tracks, opts)?;
+    let (n, one) = sparse_solver(prepare(projections), tracks, opts)?;
     Ok(solve_tracks(n, 16, progress, one))
 }
 
 /// [`triangulate_point_observations`] handing each track's result to `write(t, row, result)` as it
 /// finishes, as [`triangulate_points_into`] does.
 pub fn triangulate_point_observations_into<R: Send>(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     tracks: &SparsePointTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
-    let (n, one) = sparse_solver(prepare(cameras), tracks, opts)?;
+    let (n, one) = sparse_solver(prepare(projections), tracks, opts)?;
     check_rows(rows.len(), n)?;
     Ok(solve_tracks_into(rows, 16, progress, one, write))
 }
@@ -476,9 +476,9 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
 }
 
 /// The linear (DLT) point of every track, in parallel, without allocating per track (module docs).
-pub fn triangulate_points_linear(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<LinearPoints> {
-    let (n, prepared) = check_batch(cameras, tracks)?;
-    let v = cameras.len();
+pub fn triangulate_points_linear(projections: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<LinearPoints> {
+    let (n, prepared) = check_batch(projections, tracks)?;
+    let v = projections.len();
     let mut out = LinearPoints {
         points: vec![f64::NAN; 3 * n],
         costs: vec![f64::NAN; n],

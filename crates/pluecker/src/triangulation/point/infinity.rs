@@ -22,6 +22,7 @@ use nalgebra::{Matrix3x2, Vector2, Vector3};
 
 /// `f_∞(d)` (module docs) for the point at infinity in direction `d` or `−d`, whichever is in front
 /// of every camera (`cᵢ·d > 0` in every view); `None` when neither is.
+#[cfg(test)]
 pub fn cost_at_infinity(views: &[PointView], d: &Vector3<f64>) -> Option<f64> {
     oriented(views, d).and_then(|d| cost_in_direction(views, &d))
 }

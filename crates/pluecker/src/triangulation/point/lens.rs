@@ -205,7 +205,7 @@ pub struct LensBound {
 /// Why [`lens_certificate`] found no bound.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LensBoundFailure {
-    /// A lens that is not radially symmetric, or not covered by [`crate::lens_bounds`].
+    /// A lens that is not radially symmetric, or not covered by `lens_bounds`.
     Lens,
     /// A projection, or the box about it, reaches a lens's fold radius, or `εᵢ ≥ 1`.
     Fold,

@@ -3,13 +3,13 @@
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(X)‖²`, the reprojection error of eq. 15 whitened by the
 //! observation covariances (eq. 18; squared pixels without covariances), over points in front of
 //! every camera (`λ > 0` in eq. 1). The three [`Method`]s:
-//! - `linear`: the DLT with conditioning ([`self::linear`]);
+//! - `linear`: the DLT with conditioning (`linear`);
 //! - `local`: the trust region of [`crate::optim`] on eq. 19 from the linear point
-//!   ([`self::cost`]); when that start is behind a camera (or at infinity), from the best point
+//!   (`cost`); when that start is behind a camera (or at infinity), from the best point
 //!   in front of every camera on one of the back-projected rays instead;
 //! - `optimal`: the local solution, certified by the convexity test of
-//!   [`self::certificate`] when it passes, else by branch and bound
-//!   ([`self::global`]; the relaxation of each fraction is the secant envelope by default,
+//!   `certificate` when it passes, else by branch and bound
+//!   (`global`; the relaxation of each fraction is the secant envelope by default,
 //!   eqs. 21-22 on request), which may also return a better point than the local one.
 //!
 //! **Statuses of `optimal`.** `Success` when certified (the gap closed, whatever the local stage's
@@ -25,7 +25,7 @@
 //! The DLT cannot see that a point lies behind the cameras; the other methods search in front of
 //! every camera only. When the observations are best explained behind the cameras (the rays diverge
 //! in front) or by parallel rays, the infimum over the points in front is approached only at
-//! infinity and the minimisation runs off towards it. Then ([`self::infinity`]: a point at
+//! infinity and the minimisation runs off towards it. Then (`infinity`: a point at
 //! infinity costs no more than the estimate) `local` and `optimal` report `BehindCamera` with the DLT
 //! point when that point is behind a camera and cheaper than every point at infinity, else
 //! `AtInfinity` with a NaN point and the cost at infinity — never a far point as a success.
@@ -36,15 +36,31 @@
 //! camera, a covariance that is not positive definite, or cameras sharing one centre (no parallax).
 //! A solve that runs but fails reports it in [`Report::status`].
 
-pub mod batch;
-pub mod certificate;
-pub mod chart;
-pub mod cost;
-pub mod global;
-pub mod infinity;
-pub mod lens;
-pub mod linear;
-pub mod robust;
+pub(crate) mod batch;
+pub(crate) mod certificate;
+pub(crate) mod chart;
+pub(crate) mod cost;
+pub(crate) mod global;
+pub(crate) mod infinity;
+pub(crate) mod lens;
+pub(crate) mod linear;
+pub(crate) mod robust;
+
+pub use batch::{
+    triangulate_point_observations, triangulate_point_observations_into, triangulate_point_observations_views,
+    triangulate_point_observations_views_into, triangulate_points, triangulate_points_into, triangulate_points_linear,
+    LinearPoints, PointTracks, SparsePointTracks,
+};
+
+/// The stages of the point solvers that the integration tests check directly; not part of the
+/// user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use super::certificate::{convexity_test, ConvexityCertificate};
+    pub use super::cost::{in_front, point_cost, point_views, PointView};
+    pub use super::global::{global_point, GlobalPoint, GlobalSettings, GlobalStatus, Relaxation};
+    pub use super::lens::{exact_cost, lens_certificate, LensBound, LensBoundFailure, LensView};
+}
 
 use self::certificate::convexity_test;
 use self::chart::{Chart, ChartKind};
@@ -87,12 +103,12 @@ pub struct PointTriangulation {
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
     pub report: Report,
     /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
-    /// order): the observations the point was solved from ([`robust`]). `None` otherwise.
+    /// order): the observations the point was solved from (`robust`). `None` otherwise.
     pub inliers: Option<Vec<bool>>,
 }
 
-/// Triangulates one point seen by `cameras` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, [`super::views`]) at the pixels
+/// Triangulates one point seen by `projections` (3x4, world → pixels, any positive scale; in
+/// front means `(P X̃)₃ > 0`, `views`) at the pixels
 /// `observations`, with optional 2x2 pixel covariances (one per view; identity when `None`).
 ///
 /// Errors: [`Error::TooFewCorrespondences`] for fewer than 2 views, [`Error::Shape`] for mismatched
@@ -100,18 +116,18 @@ pub struct PointTriangulation {
 /// [`Error::Degenerate`] for a covariance that is not positive definite or cameras with one common
 /// centre, [`Error::InvalidOption`] for bad options.
 pub fn triangulate_point(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     observations: &[Vector2<f64>],
     covariances: Option<&[Matrix2<f64>]>,
     opts: &TriangulationOptions,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    let whitening = checked_track(cameras, "cameras", observations, covariances, opts)?;
-    let normalized: Vec<Matrix3x4<f64>> = cameras.iter().map(depth_normalized).collect();
+    let whitening = checked_track(projections, "projections", observations, covariances, opts)?;
+    let normalized: Vec<Matrix3x4<f64>> = projections.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
     Ok(solve_track_views(
         views.as_slice(),
-        &frame_of_cameras(cameras),
+        &frame_of_cameras(projections),
         opts,
         started,
     ))
@@ -120,7 +136,7 @@ pub fn triangulate_point(
 /// Triangulates one point seen in `views` (each a camera, pinhole or any of COLMAP's models, and its
 /// pose) at the observed pixels `observations` (the images' own, distorted pixels), with optional 2x2
 /// covariances of those pixels. The cost is the reprojection error in those pixels through the exact
-/// projection, and `optimal` certifies it with [`lens::lens_certificate`] (module docs of [`lens`]).
+/// projection, and `optimal` certifies it with `lens::lens_certificate` (interval bounds of the lenses' Jacobians).
 /// With pinhole cameras only it is [`triangulate_point`] of their matrices `K [R | t]`.
 ///
 /// Errors as [`triangulate_point`], and [`Error::Degenerate`] naming an observation whose pixel has

@@ -42,7 +42,7 @@ fn check_batch(cameras: &TrackCameras, tracks: &QuadricTracks) -> Result<usize> 
     let v = cameras.views();
     if v == 0 {
         return Err(Error::Shape {
-            what: "cameras".into(),
+            what: "projections".into(),
             expected: "at least 3 views".into(),
             actual: "0".into(),
         });
@@ -79,14 +79,14 @@ fn quadric_track(
             .collect()
     });
     let arrays: &[&str] = if cameras.per_track() {
-        &["conics", "covariances", "cameras"]
+        &["conics", "covariances", "projections"]
     } else {
         &["conics", "covariances"]
     };
     triangulate_quadric(&cams, &conics, covariances.as_deref(), opts).map_err(|e| in_track(e, t, &views, arrays))
 }
 
-/// Triangulates every quadric track of `tracks` seen by `cameras` with `opts`, in parallel; each
+/// Triangulates every quadric track of `tracks` seen by `projections` with `opts`, in parallel; each
 /// track gets the result [`triangulate_quadric`] gives on its visible views (module docs).
 /// `progress`, when given, counts the finished tracks, for another thread to poll.
 ///
@@ -95,24 +95,24 @@ fn quadric_track(
 /// track: the errors of [`triangulate_quadric`], and [`Error::TooFewCorrespondences`] for fewer than
 /// 3 visible views.
 pub fn triangulate_quadrics(
-    cameras: TrackCameras,
+    projections: TrackCameras,
     tracks: &QuadricTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<QuadricTriangulation>>> {
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
-    let n = check_batch(&cameras, tracks)?;
+    let n = check_batch(&projections, tracks)?;
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
-    let v = cameras.views();
+    let v = projections.views();
     Ok(solve_tracks(n, 1, progress, |t| {
         let seen = dense_observations(tracks.visible, v, t);
-        quadric_track(&cameras, tracks.conics, tracks.covariances, t, &seen, opts)
+        quadric_track(&projections, tracks.conics, tracks.covariances, t, &seen, opts)
     }))
 }
 
 /// Quadric tracks given one observation per row ([`Csr`]): row `k` is the conic `conics[9k..]` (row-major
-/// 3x3) in image `csr.images[k]`, with the covariance `covariances[25k..]` (5x5) when given.
+/// 3x3) in image `csr.image[k]`, with the covariance `covariances[25k..]` (5x5) when given.
 #[derive(Debug, Clone, Copy)]
 pub struct SparseQuadricTracks<'a> {
     /// Which rows belong to which track, and their images.
@@ -123,18 +123,18 @@ pub struct SparseQuadricTracks<'a> {
     pub covariances: Option<&'a [f64]>,
 }
 
-/// Triangulates every track of the sparse `tracks` seen by `cameras`, in parallel: the same per-track
+/// Triangulates every track of the sparse `tracks` seen by `projections`, in parallel: the same per-track
 /// solve and results as [`triangulate_quadrics`] on the dense form. A track naming an image beyond the
 /// cameras, or one image twice, is its own error.
 pub fn triangulate_quadric_observations(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     tracks: &SparseQuadricTracks,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<QuadricTriangulation>>> {
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
-    let shared = TrackCameras::Shared(cameras);
+    let shared = TrackCameras::Shared(projections);
     shared.check(0)?;
     let n = tracks.csr.check()?;
     tracks.csr.check_values("conics", Some(tracks.conics), 9, "3 x 3")?;
@@ -142,7 +142,7 @@ pub fn triangulate_quadric_observations(
         .csr
         .check_values("covariances", tracks.covariances, 25, "5 x 5")?;
     Ok(solve_tracks(n, 1, progress, |t| {
-        let seen = tracks.csr.distinct_observations(t, cameras.len())?;
+        let seen = tracks.csr.distinct_observations(t, projections.len())?;
         quadric_track(&shared, tracks.conics, tracks.covariances, t, &seen, opts)
     }))
 }

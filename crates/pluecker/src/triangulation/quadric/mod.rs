@@ -3,7 +3,7 @@
 //!
 //! The estimate minimises eq. 19, `Σᵢ ‖Lᵢ rᵢ(L)‖²`, over dual quadrics `L` (eq. 10), with `rᵢ` the
 //! 5-entry residual of the observed image ellipse (eq. 17 with the normalisation of
-//! [`self::residual`]) and `Lᵢ` the whitening of its 5x5 covariance (eq. 18; identity without
+//! `residual`) and `Lᵢ` the whitening of its 5x5 covariance (eq. 18; identity without
 //! covariances — then the shape entries, in px², dominate: pass covariances from
 //! [`super::fitting::fit_conic`]). The three [`Method`]s:
 //! - `linear`: Lemma 2.1 stacked over the views with the unknown scales eliminated — each view gives
@@ -17,9 +17,9 @@
 //!   iterate is a real ellipsoid (flat when a semi-axis reaches 0), so the result is always proper;
 //!   A run that ends flat is tried again from a thin ellipsoid when the cost decreases with the
 //!   zero semi-axis (a flat start is a stationary point of the signed semi-axes, see `unflattened`);
-//! - `optimal`: the local ellipsoid, certified by the convexity test of [`self::certificate`] (every
+//! - `optimal`: the local ellipsoid, certified by the convexity test of `certificate` (every
 //!   ellipsoid that no principal plane cuts), or, when the test cannot decide, by branch and bound
-//!   (section 4, [`self::optimal`], over an a-priori box).
+//!   (section 4, `optimal`, over an a-priori box).
 //!
 //! Degenerate input is an error: fewer than 3 views (two views leave a one-parameter family of
 //! quadrics tangent to both viewing cones), mismatched lengths, NaN/inf, a singular camera, a conic
@@ -27,10 +27,19 @@
 //! cameras sharing one centre. An estimate whose centre is behind a camera, or that crosses a
 //! camera's principal plane, has status [`Status::BehindCamera`].
 
-pub mod batch;
-pub mod certificate;
-pub mod optimal;
-pub mod residual;
+pub(crate) mod batch;
+pub(crate) mod certificate;
+pub(crate) mod optimal;
+pub(crate) mod residual;
+
+pub use batch::{triangulate_quadric_observations, triangulate_quadrics, QuadricTracks, SparseQuadricTracks};
+
+/// The stages of the quadric solver that the integration tests check directly; not part of the
+/// user-facing API.
+#[doc(hidden)]
+pub mod testing {
+    pub use super::residual::ConicFrame;
+}
 
 use self::optimal::optimal_quadric;
 use self::residual::{quadric_view, ConicFrame};
@@ -65,7 +74,7 @@ pub struct QuadricTriangulation {
     pub semi_axes: Vector3<f64>,
     /// Unit axes as columns, in the order of `semi_axes`.
     pub axes: Matrix3<f64>,
-    /// The first-order 9x9 covariance of the ellipsoid in the [`crate::geometry::quadric::CentreShape`]
+    /// The first-order 9x9 covariance of the ellipsoid in the [`crate::geometry::CentreShape`]
     /// chart `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`: centre (world units) and upper triangle of
     /// the shape matrix `S = axes diag(semi_axes²) axesᵀ` (world units²), so that `dual` is
     /// `[S − c cᵀ, −c; −cᵀ, −1]`. `(JᵀJ)⁻¹` with `J` the Jacobian of the whitened residuals of eq. 18
@@ -133,8 +142,10 @@ pub fn triangulate_quadric_views(
     triangulate_quadric(&cameras, conics, covariances, opts)
 }
 
-/// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `views` and the
-/// first view whose camera distorts.
+/// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `cameras` and the
+/// first view whose camera distorts (`cameras[j]`, the camera of `views[j]`, as the Python
+/// `cameras=` argument names it).
+#[doc(hidden)]
 pub fn refuse_distortion(views: &[View]) -> Result<()> {
     let distorting = views
         .iter()
@@ -143,9 +154,9 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
     match distorting {
         None => Ok(()),
         Some((j, lens)) => Err(Error::InvalidOption {
-            name: "views".into(),
+            name: "cameras".into(),
             reason: format!(
-                "views[{j}] ({}) has distortion, through which the outline of a quadric is not a conic; \
+                "cameras[{j}] ({}) has distortion, through which the outline of a quadric is not a conic; \
                  fit the conics to undistorted points (LensCamera::undistort) and give the pinhole part",
                 lens.model().as_str()
             ),
@@ -153,8 +164,8 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
     }
 }
 
-/// Triangulates one ellipsoid seen by `cameras` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, [`super::views`]) as the
+/// Triangulates one ellipsoid seen by `projections` (3x4, world → pixels, any positive scale; in
+/// front means `(P X̃)₃ > 0`, `views`) as the
 /// primal image conics `conics` (eq. 8, pixels, any scale and sign; each must be a real ellipse), with
 /// optional 5x5 covariances of the conic residuals (one per view, e.g. from
 /// [`super::fitting::fit_conic`]; identity when `None`).
@@ -164,7 +175,7 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
 /// [`Error::Degenerate`] (a conic that is not an ellipse, a covariance that is not positive definite,
 /// cameras with one centre), [`Error::InvalidOption`].
 pub fn triangulate_quadric(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     conics: &[Matrix3<f64>],
     covariances: Option<&[Matrix5]>,
     opts: &TriangulationOptions,
@@ -172,12 +183,12 @@ pub fn triangulate_quadric(
     let started = Instant::now();
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
-    check_views(cameras, conics.len(), 3, "conics", opts.method)?;
+    check_views(projections, conics.len(), 3, "conics", opts.method)?;
     let frames = parse_observations(conics, "conics", "is not a real ellipse", ConicFrame::of_conic)?;
     let problem = QuadricProblem {
-        cameras: cameras.to_vec(),
+        cameras: projections.to_vec(),
         frames,
-        whitenings: whitenings(covariances, cameras.len(), "covariances")?,
+        whitenings: whitenings(covariances, projections.len(), "covariances")?,
     };
     let mut report = Report::new(opts.method);
     let Some(linear) = linear_quadric(&problem) else {
@@ -238,7 +249,7 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
 /// Gaussian noise of `sigma` px per coordinate) gives the conic and its covariance. Errors name the
 /// view index.
 pub fn triangulate_quadric_points(
-    cameras: &[Matrix3x4<f64>],
+    projections: &[Matrix3x4<f64>],
     points: &[Vec<Vector2<f64>>],
     sigma: f64,
     opts: &TriangulationOptions,
@@ -259,7 +270,7 @@ pub fn triangulate_quadric_points(
         conics.push(fit.conic);
         covariances.push(fit.covariance);
     }
-    triangulate_quadric(cameras, &conics, Some(&covariances), opts)
+    triangulate_quadric(projections, &conics, Some(&covariances), opts)
 }
 
 /// The nearest real ellipsoid of a dual quadric of any scale and sign: normalised so that

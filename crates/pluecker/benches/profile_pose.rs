@@ -12,7 +12,8 @@
 //! `bench/compare_pose.py`. `check` prints the largest difference from the dumped poses in units of
 //! the Cramér-Rao bound (a pure speed change should leave it far below 1), the failures (status other
 //! than success, or an error above 10 bounds) and the RMS errors over the RMS bounds.
-//! Build with `CARGO_PROFILE_RELEASE_DEBUG=true cargo build --release --example profile_pose` for
+//! Run with `cargo bench -p pluecker --bench profile_pose -- time general`; build with
+//! `CARGO_PROFILE_BENCH_DEBUG=true cargo bench -p pluecker --bench profile_pose --no-run` for
 //! `perf record -g`.
 //!
 //! For experiments, environment variables override the default options: `ALGEBRAIC_RADIUS` and
@@ -20,9 +21,9 @@
 //! its step tolerance is at least `STEP_TOLERANCE_BEFORE_REFINEMENT`), `REFINE_RADIUS`, `REFINE_STEP`.
 
 use nalgebra::{Matrix3, Vector3};
-use pluecker::geometry::quaternion::rotation_distance;
-use pluecker::pose::reprojection::{pose_covariance, ReprojectionCost};
+use pluecker::geometry::rotation_distance;
 use pluecker::pose::{estimate_pose, Correspondences, PoseOptions, Status};
+use pluecker::pose::{pose_covariance, ReprojectionCost};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, Scene, SceneKind};
 use std::io::Write;
@@ -155,7 +156,8 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
+    // `cargo bench` appends `--bench` to the arguments.
+    let args: Vec<String> = std::env::args().filter(|a| a != "--bench").collect();
     let arg = |i: usize| args.get(i).map(String::as_str);
     let lines = args.iter().any(|a| a == "lines");
     match (arg(1), arg(2)) {

@@ -3,11 +3,11 @@
 //! the cheapest of the default answer, the refinement from the true pose and from `--starts` random
 //! starts. Development tool; the benchmark with peers is `bench/compare_global_pose.py`.
 //!
-//!     cargo run --release -p pluecker --example global_pose -- [scenes] [starts]
+//!     cargo bench -p pluecker --bench global_pose -- [scenes] [starts] [row filter]
 
 use nalgebra::Vector3;
 use pluecker::optim::Objective;
-use pluecker::pose::reprojection::ReprojectionCost;
+use pluecker::pose::ReprojectionCost;
 use pluecker::pose::{estimate_pose, refine_pose, PoseOptions};
 use pluecker::rng::Rng;
 use pluecker::synthetic::visible_scene;
@@ -15,10 +15,12 @@ use pluecker::Pose;
 use std::time::Instant;
 
 fn main() {
-    let args: Vec<usize> = std::env::args().skip(1).filter_map(|a| a.parse().ok()).collect();
+    // `cargo bench` appends `--bench` to the arguments.
+    let given: Vec<String> = std::env::args().skip(1).filter(|a| a != "--bench").collect();
+    let args: Vec<usize> = given.iter().filter_map(|a| a.parse().ok()).collect();
     let scenes = args.first().copied().unwrap_or(150);
     let starts = args.get(1).copied().unwrap_or(30);
-    let filter = std::env::args().skip(1).find(|a| a.parse::<usize>().is_err());
+    let filter = given.into_iter().find(|a| a.parse::<usize>().is_err());
     let mut rows: Vec<(f64, usize, usize, bool)> = vec![];
     for f in [250.0, 800.0, 4000.0, 15000.0] {
         for n in [4usize, 6, 10, 100] {
