@@ -24,21 +24,29 @@
 
 use crate::interrupt::{stop_reason, StopReason};
 use std::cmp::Ordering;
+use smallvec::SmallVec;
 use std::collections::BinaryHeap;
+
+/// The coordinates of a corner: held inline up to four dimensions (the pose certificate's boxes of
+/// rotations have three, and a search bounds thousands of them), on the heap beyond.
+pub type Corner = SmallVec<[f64; 4]>;
 
 /// An axis-aligned box `[lower, upper]` in `ℝᵈ`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Region {
     /// Lower corner.
-    pub lower: Vec<f64>,
+    pub lower: Corner,
     /// Upper corner.
-    pub upper: Vec<f64>,
+    pub upper: Corner,
 }
 
 impl Region {
     /// The box `[lower, upper]`.
-    pub fn new(lower: Vec<f64>, upper: Vec<f64>) -> Region {
-        Region { lower, upper }
+    pub fn new(lower: impl Into<Corner>, upper: impl Into<Corner>) -> Region {
+        Region {
+            lower: lower.into(),
+            upper: upper.into(),
+        }
     }
 
     /// The dimension `d`.
@@ -84,8 +92,9 @@ pub enum Bound<C> {
     Bounded {
         /// The bound (valid, not merely approximate: see [`crate::global::socp`]).
         lower: f64,
-        /// The minimiser of the relaxation, a point of the region (a splitting hint).
-        relaxed_minimizer: Vec<f64>,
+        /// The minimiser of the relaxation, a point of the region (a splitting hint), if the
+        /// problem has one.
+        relaxed_minimizer: Option<Vec<f64>>,
         /// A solution found from the relaxed minimiser, with its true cost (an upper bound).
         candidate: Option<(f64, C)>,
         /// Conic-solver iterations spent.
@@ -197,35 +206,78 @@ pub struct BranchAndBoundResult<C> {
     pub solver_iterations: usize,
 }
 
+/// An open region: its box, its splitting hint, and what its bound handed down to its halves.
 struct Open<I> {
-    lower: f64,
     region: Region,
     hint: Option<Vec<f64>>,
-    /// What the region's bound handed down to its halves.
     handed_down: I,
 }
 
-impl<I> PartialEq for Open<I> {
+/// An open region in the queue: its bound and the slot of its [`Open`] data (the heap moves these
+/// sixteen bytes, not the regions).
+struct Queued {
+    lower: f64,
+    slot: usize,
+}
+
+impl PartialEq for Queued {
     fn eq(&self, other: &Self) -> bool {
         self.lower.total_cmp(&other.lower) == Ordering::Equal
     }
 }
-impl<I> Eq for Open<I> {}
-impl<I> PartialOrd for Open<I> {
+impl Eq for Queued {}
+impl PartialOrd for Queued {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }
 }
-impl<I> Ord for Open<I> {
+impl Ord for Queued {
     // A max-heap on the reversed order: the least lower bound first.
     fn cmp(&self, other: &Self) -> Ordering {
         other.lower.total_cmp(&self.lower)
     }
 }
 
+/// The open regions, least bound first.
+struct Queue<I> {
+    heap: BinaryHeap<Queued>,
+    /// The data of the queued regions, by slot; `None` in the free slots.
+    slots: Vec<Option<Open<I>>>,
+    free: Vec<usize>,
+}
+
+impl<I> Queue<I> {
+    fn push(&mut self, lower: f64, open: Open<I>) {
+        let slot = match self.free.pop() {
+            Some(slot) => {
+                self.slots[slot] = Some(open);
+                slot
+            }
+            None => {
+                self.slots.push(Some(open));
+                self.slots.len() - 1
+            }
+        };
+        self.heap.push(Queued { lower, slot });
+    }
+
+    /// The least bound in the queue.
+    fn least(&self) -> Option<f64> {
+        self.heap.peek().map(|top| top.lower)
+    }
+
+    /// Removes the region with the least bound.
+    fn pop(&mut self) -> Option<(f64, Open<I>)> {
+        let Queued { lower, slot } = self.heap.pop()?;
+        self.free.push(slot);
+        let open = self.slots[slot].take().expect("a queued slot holds its region");
+        Some((lower, open))
+    }
+}
+
 /// The state of one search.
 struct Search<C, I> {
-    heap: BinaryHeap<Open<I>>,
+    queue: Queue<I>,
     best: Option<(f64, C)>,
     /// Least bound of the regions discarded because they could not improve the incumbent by more
     /// than the gap: they still count in the global lower bound.
@@ -280,7 +332,7 @@ impl<C, I> Search<C, I> {
                     }
                 }
                 // The region lies inside its parent, whose bound holds for it too.
-                (lower.max(parent_lower), Some(relaxed_minimizer))
+                (lower.max(parent_lower), relaxed_minimizer)
             }
         };
         let upper = self.upper();
@@ -292,16 +344,18 @@ impl<C, I> Search<C, I> {
             self.pruned_floor = self.pruned_floor.min(lower);
             return;
         }
-        self.heap.push(Open {
+        self.queue.push(
             lower,
-            region,
-            hint,
-            handed_down,
-        });
+            Open {
+                region,
+                hint,
+                handed_down,
+            },
+        );
     }
 
     fn finish(self, lower_bound: f64, converged: bool, stopped: Option<StopReason>) -> BranchAndBoundResult<C> {
-        let open = self.heap.iter().map(|o| o.lower).fold(f64::INFINITY, f64::min);
+        let open = self.queue.least().unwrap_or(f64::INFINITY);
         BranchAndBoundResult {
             box_lower_bound: open.min(self.pruned_floor),
             best: self.best,
@@ -323,7 +377,11 @@ pub fn branch_and_bound<O: BoundingOracle>(
     opts: &BranchAndBoundOptions,
 ) -> BranchAndBoundResult<O::Candidate> {
     let mut search = Search {
-        heap: BinaryHeap::new(),
+        queue: Queue {
+            heap: BinaryHeap::new(),
+            slots: vec![],
+            free: vec![],
+        },
         best: incumbent,
         pruned_floor: f64::INFINITY,
         nodes: 0,
@@ -336,13 +394,13 @@ pub fn branch_and_bound<O: BoundingOracle>(
     loop {
         let upper = search.upper();
         // Drop regions the incumbent has overtaken since they were queued.
-        while let Some(top) = search.heap.peek().filter(|top| top.lower >= upper) {
-            search.pruned_floor = search.pruned_floor.min(top.lower);
-            search.heap.pop();
+        while let Some(least) = search.queue.least().filter(|&least| least >= upper) {
+            search.pruned_floor = search.pruned_floor.min(least);
+            search.queue.pop();
         }
-        let open_lower = search.heap.peek().map_or(f64::INFINITY, |top| top.lower);
+        let open_lower = search.queue.least().unwrap_or(f64::INFINITY);
         let lower = open_lower.min(search.pruned_floor).min(upper);
-        if search.heap.is_empty() || search.closed(upper, lower) {
+        if search.queue.heap.is_empty() || search.closed(upper, lower) {
             return search.finish(lower, true, None);
         }
         if search.nodes >= opts.max_nodes {
@@ -351,9 +409,9 @@ pub fn branch_and_bound<O: BoundingOracle>(
         if let Some(reason) = stop_reason() {
             return search.finish(lower, false, Some(reason));
         }
-        let open = search.heap.pop().expect("the heap is not empty");
+        let (open_lower, open) = search.queue.pop().expect("the queue is not empty");
         for child in oracle.subdivide(&open.region, open.hint.as_deref()) {
-            search.evaluate(oracle, child, open.lower, &open.handed_down);
+            search.evaluate(oracle, child, open_lower, &open.handed_down);
         }
     }
 }
@@ -396,7 +454,7 @@ mod tests {
             let cost = double_well(&centre);
             Bound::Bounded {
                 lower,
-                relaxed_minimizer: centre.clone(),
+                relaxed_minimizer: Some(centre.clone()),
                 candidate: Some((cost, centre)),
                 solver_iterations: 1,
             }

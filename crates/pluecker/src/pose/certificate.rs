@@ -56,11 +56,12 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
-use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
+use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Corner, Region};
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
+use std::cell::OnceCell;
 use std::rc::Rc;
 
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
@@ -137,6 +138,8 @@ struct Problem<'c> {
     g_norm: f64,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
+    /// `‖Xᵢ‖` (object coordinates).
+    norms: Vec<f64>,
 }
 
 fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
@@ -195,7 +198,8 @@ impl<'c> Problem<'c> {
             .collect();
         let depths = depth_bounds(corr, &bearings, alpha)
             .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
-        let mut problem = Problem {
+        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, s_min, depths));
+        Ok(Problem {
             corr,
             s_min,
             k2: Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy),
@@ -204,50 +208,14 @@ impl<'c> Problem<'c> {
             g,
             g_norm,
             bearings,
-            root: Rc::new(Minorant {
-                depths: vec![],
-                gram: SMatrix::zeros(),
-                eta: 0.0,
-            }),
-        };
-        problem.root = Rc::new(problem.minorant(depths));
-        Ok(problem)
+            norms: corr.points3d.iter().map(|x| x.norm()).collect(),
+            root,
+        })
     }
 
-    /// Step 2's minorant for the depth bounds `depths` (weights `wᵢ = s² / Dᵢ²`).
+    /// Step 2's minorant for the depth bounds `depths`.
     fn minorant(&self, depths: Vec<f64>) -> Minorant {
-        // With R x = A vec(R) (row-major vec, A = I ⊗ xᵀ) and P = I − b bᵀ, a point's term
-        // ‖P (A vec(R) + t)‖² has the blocks AᵀPA = P ⊗ x xᵀ, AᵀP = P ⊗ x and P.
-        let mut gram = [[0.0f64; 12]; 12];
-        let mut eta2 = 0.0;
-        for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(&depths) {
-            let w = self.s_min * self.s_min / (d * d);
-            let p = (Matrix3::identity() - b * b.transpose()) * w;
-            for r in 0..3 {
-                for c in 0..3 {
-                    let row = &mut gram[3 * r + c];
-                    for r2 in 0..3 {
-                        let prx = p[(r, r2)] * x[c];
-                        for c2 in 0..3 {
-                            row[3 * r2 + c2] += prx * x[c2];
-                        }
-                    }
-                    for k in 0..3 {
-                        row[9 + k] += p[(r, k)] * x[c];
-                    }
-                }
-                for k in 0..3 {
-                    gram[9 + r][9 + k] += p[(r, k)];
-                }
-            }
-            eta2 += w * x.norm_squared();
-        }
-        Minorant {
-            depths,
-            // The lower-left block is the transpose of the upper-right one.
-            gram: SMatrix::<f64, 12, 12>::from_fn(|i, j| if i >= 9 && j < 9 { gram[j][i] } else { gram[i][j] }),
-            eta: eta2.sqrt(),
-        }
+        Minorant::build(&self.corr.points3d, &self.bearings, self.s_min, depths)
     }
 }
 
@@ -255,22 +223,89 @@ impl<'c> Problem<'c> {
 /// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
 /// (row-major `vec`), and `η = √(Σ wᵢ ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q` moves
 /// by at most `θ η`.
+///
+/// The Hessian `C` in `t` does not depend on the rotation: `C⁻¹`, its largest eigenvalue, the
+/// `bᵢᵀ C⁻¹ bᵢ` and the ellipsoid's whitened extent are computed once per minorant, not per box.
 struct Minorant {
     depths: Vec<f64>,
     gram: SMatrix<f64, 12, 12>,
     eta: f64,
+    /// The lower-right block `C` and its inverse (`None`: the minorant does not fix `t`).
+    c: Matrix3<f64>,
+    c_inv: Option<Matrix3<f64>>,
+    /// `λ_max(C⁻¹)`: the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` reaches `‖t − t*‖ ≤ √(slack λ_max)`.
+    c_inv_max: f64,
+    /// `bᵢᵀ C⁻¹ bᵢ`: over that ellipsoid `bᵢ · t` moves by at most `√(slack bᵢᵀ C⁻¹ bᵢ)`.
+    bearing_spread: Vec<f64>,
+    /// [`Whitening::ellipsoid_factor`] of `C`, once it is needed.
+    extent: OnceCell<Option<f64>>,
 }
 
 impl Minorant {
-    /// The minorant at the rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀`.
-    fn at(&self, r: &Matrix3<f64>) -> (Matrix3<f64>, Vector3<f64>, f64) {
+    /// The minorant for the depth bounds `depths` of the points `points` seen along the unit
+    /// bearings `bearings` (weights `wᵢ = s² / Dᵢ²`, `s` the least singular value of `K`'s 2x2 block).
+    fn build(points: &[Vector3<f64>], bearings: &[Vector3<f64>], s_min: f64, depths: Vec<f64>) -> Minorant {
+        // With z = (vec R, t) (row-major vec), R Xᵢ + t = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, I], and with
+        // Pᵢ = I − bᵢbᵢᵀ a point's term is wᵢ zᵀ Lᵢᵀ Pᵢ Lᵢ z, where Lᵢᵀ Pᵢ Lᵢ = Lᵢᵀ Lᵢ − uᵢ uᵢᵀ,
+        // uᵢ = Lᵢᵀ bᵢ = (bᵢ ⊗ Xᵢ, bᵢ). The blocks of Σ wᵢ Lᵢᵀ Lᵢ are I ⊗ M, I ⊗ s and (Σ wᵢ) I with
+        // M = Σ wᵢ XᵢXᵢᵀ and s = Σ wᵢ Xᵢ; the upper triangle of Σ wᵢ uᵢ uᵢᵀ is accumulated by hand
+        // (a search rebuilds the minorant about once every ten boxes).
+        let mut outer = [[0.0f64; 12]; 12];
+        let (mut m, mut s, mut w_sum, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0, 0.0);
+        for ((x, b), d) in points.iter().zip(bearings).zip(&depths) {
+            let w = s_min * s_min / (d * d);
+            m += x * x.transpose() * w;
+            s += x * w;
+            w_sum += w;
+            eta2 += w * x.norm_squared();
+            let u: [f64; 12] = std::array::from_fn(|i| if i < 9 { b[i / 3] * x[i % 3] } else { b[i - 9] });
+            for (i, row) in outer.iter_mut().enumerate() {
+                let wu = w * u[i];
+                for (entry, uj) in row[i..].iter_mut().zip(&u[i..]) {
+                    *entry += wu * uj;
+                }
+            }
+        }
+        let mut gram = SMatrix::<f64, 12, 12>::zeros();
+        for (i, row) in outer.iter().enumerate() {
+            for (j, entry) in row.iter().enumerate().skip(i) {
+                gram[(i, j)] = -entry;
+                gram[(j, i)] = -entry;
+            }
+        }
+        for r in 0..3 {
+            let mut block = gram.fixed_view_mut::<3, 3>(3 * r, 3 * r);
+            block += m;
+            let mut column = gram.fixed_view_mut::<3, 1>(3 * r, 9 + r);
+            column += s;
+            let mut row = gram.fixed_view_mut::<1, 3>(9 + r, 3 * r);
+            row += s.transpose();
+            gram[(9 + r, 9 + r)] += w_sum;
+        }
+        // What the bound of a box needs of `C` (the same for every box that shares the minorant).
+        let c = gram.fixed_view::<3, 3>(9, 9).into_owned();
+        let c_inv = c.try_inverse();
+        Minorant {
+            depths,
+            gram,
+            eta: eta2.sqrt(),
+            c,
+            c_inv,
+            c_inv_max: c_inv.map_or(f64::NAN, |c_inv| largest_eigenvalue(&c_inv)),
+            bearing_spread: c_inv.map_or_else(Vec::new, |c_inv| bearings.iter().map(|b| b.dot(&(c_inv * b))).collect()),
+            extent: OnceCell::new(),
+        }
+    }
+
+    /// The minorant at the rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀` (`C` is
+    /// [`Self::c`]).
+    fn at(&self, r: &Matrix3<f64>) -> (Vector3<f64>, f64) {
         let v = SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]);
         let a = self.gram.fixed_view::<9, 9>(0, 0);
         let b = self.gram.fixed_view::<9, 3>(0, 9);
-        let c = self.gram.fixed_view::<3, 3>(9, 9).into_owned();
         let g: Vector3<f64> = b.transpose() * v;
         let c0 = (v.transpose() * a * v)[0];
-        (c, g, c0)
+        (g, c0)
     }
 }
 
@@ -342,13 +377,12 @@ impl Whitening {
         (d.transpose() * self.w * d)[0].max(0.0).sqrt()
     }
 
-    /// The largest `‖(0, τ)‖_W` over the ellipsoid `τᵀ C τ ≤ slack`: `√(slack λ_max(L⁻¹ W_ττ L⁻ᵀ))`
-    /// with `C = L Lᵀ`.
-    fn ellipsoid_extent(&self, c: &Matrix3<f64>, slack: f64) -> Option<f64> {
+    /// The largest `‖(0, τ)‖_W` over the ellipsoid `τᵀ C τ ≤ slack` is `√(slack λ)`, with this
+    /// `λ = λ_max(L⁻¹ W_ττ L⁻ᵀ)` and `C = L Lᵀ`.
+    fn ellipsoid_factor(&self, c: &Matrix3<f64>) -> Option<f64> {
         let l_inv = c.cholesky()?.l().try_inverse()?;
         let w_tt = self.w.fixed_view::<3, 3>(3, 3).into_owned();
-        let lambda = largest_eigenvalue(&(l_inv * w_tt * l_inv.transpose()));
-        Some((slack * lambda).max(0.0).sqrt())
+        Some(largest_eigenvalue(&(l_inv * w_tt * l_inv.transpose())))
     }
 }
 
@@ -458,18 +492,19 @@ impl BoundingOracle for RotationSearch<'_, '_> {
 
     /// The eight octants of the box (every axis cut at its midpoint): boxes stay cubes.
     fn subdivide(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
-        let mid = |k: usize| 0.5 * (region.lower[k] + region.upper[k]);
+        let (lo, hi) = (&region.lower, &region.upper);
+        let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
+        // Corners built in place (a clone of the parent's would cost more than the bound of a box).
+        let corner = |pick: [f64; 3]| Corner::from_buf_and_len([pick[0], pick[1], pick[2], 0.0], 3);
         (0..8)
             .map(|octant: usize| {
-                let (mut lower, mut upper) = (region.lower.clone(), region.upper.clone());
-                for k in 0..3 {
-                    if octant >> k & 1 == 1 {
-                        lower[k] = mid(k);
-                    } else {
-                        upper[k] = mid(k);
-                    }
+                let upper_half = |k: usize| octant >> k & 1 == 1;
+                let lower = std::array::from_fn(|k| if upper_half(k) { mid[k] } else { lo[k] });
+                let upper = std::array::from_fn(|k| if upper_half(k) { hi[k] } else { mid[k] });
+                Region {
+                    lower: corner(lower),
+                    upper: corner(upper),
                 }
-                Region::new(lower, upper)
             })
             .collect()
     }
@@ -480,7 +515,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         let cell = Cell::of(region);
         let bounded = |lower: f64| Bound::Bounded {
             lower,
-            relaxed_minimizer: region.centre(),
+            relaxed_minimizer: None,
             candidate: None,
             solver_iterations: 0,
         };
@@ -492,8 +527,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         let theta = cell.half.norm();
         let r_c = exp_so3(&cell.centre) * self.pose.rotation;
-        let (c, g, c0) = minorant.at(&r_c);
-        let Some(c_inv) = c.try_inverse() else {
+        let (g, c0) = minorant.at(&r_c);
+        let (c, Some(c_inv)) = (minorant.c, minorant.c_inv) else {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
         };
         let t_star = -(c_inv * g);
@@ -524,10 +559,12 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             depths: minorant.depths.clone(),
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
-        let behind = problem.corr.points3d.iter().zip(&problem.bearings).any(|(x, b)| {
-            let reach = b.dot(&(r_c * x + t_star)) + (slack * b.dot(&(c_inv * b))).max(0.0).sqrt();
-            reach <= -theta * x.norm()
-        });
+        let behind = (problem.corr.points3d.iter().zip(&problem.bearings))
+            .zip(problem.norms.iter().zip(&minorant.bearing_spread))
+            .any(|((x, b), (norm, spread))| {
+                let reach = b.dot(&(r_c * x + t_star)) + (slack * spread).max(0.0).sqrt();
+                reach <= -theta * norm
+            });
         if behind {
             if let InsideBall::Record(r) = &mut self.inside_ball {
                 r.pruned += 1;
@@ -538,7 +575,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
         // inequality over the three parts of the step).
         if cell.centre.norm() + theta <= 1.0 {
-            if let Some(extent) = self.whitening.ellipsoid_extent(&c, slack) {
+            let factor = minorant.extent.get_or_init(|| self.whitening.ellipsoid_factor(&c));
+            if let Some(extent) = factor.map(|lambda| (slack * lambda).max(0.0).sqrt()) {
                 let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
                     + self.whitening.box_spread(&cell.half)
                     + extent;
@@ -563,20 +601,13 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
-        let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
-        let reach: Vec<f64> = problem
-            .corr
-            .points3d
-            .iter()
+        let spread = (slack * minorant.c_inv_max).max(0.0).sqrt();
+        let reach: Vec<f64> = (problem.corr.points3d.iter().zip(&problem.norms))
             .zip(&minorant.depths)
-            .map(|(x, d)| ((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d))
+            .map(|((x, norm), d)| ((r_c * x + t_star).norm() + theta * norm + spread).min(*d))
             .collect();
         // Rebuilt when the weights wᵢ ∝ 1/Dᵢ² grow by REBUILD_GAIN on average.
-        let gain = reach
-            .iter()
-            .zip(&minorant.depths)
-            .map(|(r, d)| (d / r).powi(2))
-            .sum::<f64>();
+        let gain = reach.iter().zip(&minorant.depths).map(|(r, d)| (d / r).powi(2)).sum::<f64>();
         let tighter = gain >= REBUILD_GAIN * reach.len() as f64;
         let handed_down = if tighter {
             Rc::new(problem.minorant(reach))

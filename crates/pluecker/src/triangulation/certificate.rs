@@ -182,7 +182,7 @@ mod tests {
             let centre = 0.5 * (a + b);
             Bound::Bounded {
                 lower: exact - self.slack,
-                relaxed_minimizer: vec![centre],
+                relaxed_minimizer: Some(vec![centre]),
                 candidate: Some((f(centre), centre)),
                 solver_iterations: 0,
             }

@@ -128,7 +128,7 @@ impl BoundingOracle for TaylorOracle<'_> {
         };
         Bound::Bounded {
             lower,
-            relaxed_minimizer: centre,
+            relaxed_minimizer: Some(centre),
             candidate,
             solver_iterations: 0,
         }
