@@ -113,8 +113,9 @@ impl Certification {
 /// Partners per point for its depth bound (the widest-apart in the image of a small spread set).
 const DEPTH_PARTNERS: usize = 16;
 /// The rotation search rebuilds a box's minorant for its octants when the tightened depth bounds
-/// raise the weights `wᵢ ∝ 1/Dᵢ²` by this factor on average (a rebuild costs O(n) against O(1) for
-/// the bound of a box; without rebuilds the f = 15000 px scenes lose certificates).
+/// raise the weights `wᵢ ∝ 1/Dᵢ²` on average by this factor more than the least of them, which a
+/// scale of the minorant takes up ([`Scaled`]): a rebuild costs O(n) against O(1) for the bound of a
+/// box, and without rebuilds the f = 15000 px scenes lose certificates.
 const REBUILD_GAIN: f64 = 1.2;
 /// Intervals of the one-dimensional minimisation of the local bound.
 const LOCAL_INTERVALS: usize = 256;
@@ -309,6 +310,43 @@ impl Minorant {
     }
 }
 
+/// A minorant for tighter depth bounds without a rebuild: if every weight may grow at least by the
+/// factor `κ` (`Dᵢ' ≤ Dᵢ / √κ` for all `i`), then `κ Q` is a minorant for the depth bounds `Dᵢ'`, as
+/// every term of `Q` is. `κ Q` is `Q` for the depth bounds `Dᵢ / √κ` ([`Self::depths`]).
+#[derive(Clone)]
+struct Scaled {
+    minorant: Rc<Minorant>,
+    scale: f64,
+}
+
+impl Scaled {
+    /// The depth bounds `Dᵢ / √κ` for which `κ Q` is the minorant.
+    fn depths(&self) -> impl Iterator<Item = f64> + '_ {
+        let shrink = self.scale.sqrt();
+        self.minorant.depths.iter().map(move |d| d / shrink)
+    }
+
+    /// What a box whose poses of `S` keep the points within `reach` hands down: the scale that takes
+    /// up the least growth of the weights, or a rebuilt minorant when the weights grow on average
+    /// by [`REBUILD_GAIN`] more than that.
+    fn tightened(&self, problem: &Problem, reach: Vec<f64>) -> Scaled {
+        let growth = |(d, r): (f64, &f64)| (d / r).powi(2);
+        let least = self.depths().zip(&reach).map(growth).fold(f64::INFINITY, f64::min);
+        let mean = self.depths().zip(&reach).map(growth).sum::<f64>() / reach.len() as f64;
+        if mean >= REBUILD_GAIN * least {
+            Scaled {
+                minorant: Rc::new(problem.minorant(reach)),
+                scale: 1.0,
+            }
+        } else {
+            Scaled {
+                minorant: Rc::clone(&self.minorant),
+                scale: self.scale * least.max(1.0),
+            }
+        }
+    }
+}
+
 /// One box of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-widths. Every rotation of the
 /// box is within the angle `θ = ‖half‖` (half the diagonal) of the centre's: the angle between
 /// `exp(ω) R̂` and `exp(ω_c) R̂` is at most `‖ω − ω_c‖` (Hartley & Kahl 2009, lemma 1).
@@ -464,7 +502,7 @@ enum InsideBall<'m> {
 /// largest distance each point reaches over its poses of `S`,
 /// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
 /// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants
-/// (rebuilt when the weights grow by [`REBUILD_GAIN`] on average).
+/// ([`Scaled`]).
 struct RotationSearch<'a, 'c> {
     problem: &'a Problem<'c>,
     whitening: &'a Whitening,
@@ -480,7 +518,7 @@ struct RotationSearch<'a, 'c> {
 impl BoundingOracle for RotationSearch<'_, '_> {
     type Candidate = ();
     /// The minorant for the depth bounds of the box's poses of `S` (`None`: step 1's, for the root).
-    type Inherited = Option<Rc<Minorant>>;
+    type Inherited = Option<Scaled>;
 
     fn bound(&mut self, region: &Region) -> Bound<()> {
         self.bound_with(region, &None).0
@@ -509,9 +547,14 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .collect()
     }
 
-    fn bound_with(&mut self, region: &Region, inherited: &Option<Rc<Minorant>>) -> (Bound<()>, Option<Rc<Minorant>>) {
+    fn bound_with(&mut self, region: &Region, inherited: &Option<Scaled>) -> (Bound<()>, Option<Scaled>) {
         let problem = self.problem;
-        let minorant = inherited.as_ref().unwrap_or(&problem.root);
+        let root = Scaled {
+            minorant: Rc::clone(&problem.root),
+            scale: 1.0,
+        };
+        let scaled = inherited.as_ref().unwrap_or(&root);
+        let (minorant, scale) = (&scaled.minorant, scaled.scale);
         let cell = Cell::of(region);
         let bounded = |lower: f64| Bound::Bounded {
             lower,
@@ -527,13 +570,14 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         let theta = cell.half.norm();
         let r_c = exp_so3(&cell.centre) * self.pose.rotation;
+        // κ Q: C, g, c₀ and q_min scale by κ, η by √κ, C⁻¹ by 1/κ; t* does not move.
         let (g, c0) = minorant.at(&r_c);
-        let (c, Some(c_inv)) = (minorant.c, minorant.c_inv) else {
+        let Some(c_inv) = minorant.c_inv else {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
         };
         let t_star = -(c_inv * g);
-        let q_min = (c0 - g.dot(&(c_inv * g))).max(0.0);
-        let eta = minorant.eta;
+        let q_min = (scale * (c0 - g.dot(&(c_inv * g)))).max(0.0);
+        let eta = minorant.eta * scale.sqrt();
         let lower = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
         if !lower.is_finite() {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
@@ -553,16 +597,16 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             centre: cell.centre,
             half: cell.half,
             t_star,
-            c,
+            c: minorant.c * scale,
             slack,
             inside_ball,
-            depths: minorant.depths.clone(),
+            depths: scaled.depths().collect(),
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
         let behind = (problem.corr.points3d.iter().zip(&problem.bearings))
             .zip(problem.norms.iter().zip(&minorant.bearing_spread))
             .any(|((x, b), (norm, spread))| {
-                let reach = b.dot(&(r_c * x + t_star)) + (slack * spread).max(0.0).sqrt();
+                let reach = b.dot(&(r_c * x + t_star)) + (slack * spread / scale).max(0.0).sqrt();
                 reach <= -theta * norm
             });
         if behind {
@@ -575,8 +619,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
         // inequality over the three parts of the step).
         if cell.centre.norm() + theta <= 1.0 {
-            let factor = minorant.extent.get_or_init(|| self.whitening.ellipsoid_factor(&c));
-            if let Some(extent) = factor.map(|lambda| (slack * lambda).max(0.0).sqrt()) {
+            let factor = minorant.extent.get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
+            if let Some(extent) = factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt()) {
                 let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
                     + self.whitening.box_spread(&cell.half)
                     + extent;
@@ -601,19 +645,12 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
-        let spread = (slack * minorant.c_inv_max).max(0.0).sqrt();
+        let spread = (slack * minorant.c_inv_max / scale).max(0.0).sqrt();
         let reach: Vec<f64> = (problem.corr.points3d.iter().zip(&problem.norms))
-            .zip(&minorant.depths)
-            .map(|((x, norm), d)| ((r_c * x + t_star).norm() + theta * norm + spread).min(*d))
+            .zip(scaled.depths())
+            .map(|((x, norm), d)| ((r_c * x + t_star).norm() + theta * norm + spread).min(d))
             .collect();
-        // Rebuilt when the weights wᵢ ∝ 1/Dᵢ² grow by REBUILD_GAIN on average.
-        let gain = reach.iter().zip(&minorant.depths).map(|(r, d)| (d / r).powi(2)).sum::<f64>();
-        let tighter = gain >= REBUILD_GAIN * reach.len() as f64;
-        let handed_down = if tighter {
-            Rc::new(problem.minorant(reach))
-        } else {
-            Rc::clone(minorant)
-        };
+        let handed_down = scaled.tightened(problem, reach);
         (bounded(lower), Some(handed_down))
     }
 }
