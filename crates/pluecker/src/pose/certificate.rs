@@ -358,8 +358,10 @@ struct Cell {
 
 impl Cell {
     fn of(region: &Region) -> Self {
-        let lower = Vector3::from_column_slice(&region.lower);
-        let upper = Vector3::from_column_slice(&region.upper);
+        // Element by element: a slice copy of three numbers would call memcpy for every box.
+        let (l, u) = (&region.lower, &region.upper);
+        let lower = Vector3::new(l[0], l[1], l[2]);
+        let upper = Vector3::new(u[0], u[1], u[2]);
         Cell {
             centre: (lower + upper) * 0.5,
             half: (upper - lower) * 0.5,
