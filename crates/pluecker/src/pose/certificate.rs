@@ -330,9 +330,11 @@ impl Scaled {
     /// up the least growth of the weights, or a rebuilt minorant when the weights grow on average
     /// by [`REBUILD_GAIN`] more than that.
     fn tightened(&self, problem: &Problem, reach: Vec<f64>) -> Scaled {
-        let growth = |(d, r): (f64, &f64)| (d / r).powi(2);
-        let least = self.depths().zip(&reach).map(growth).fold(f64::INFINITY, f64::min);
-        let mean = self.depths().zip(&reach).map(growth).sum::<f64>() / reach.len() as f64;
+        let (least, sum) = self.depths().zip(&reach).fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
+            let growth = (d / r).powi(2);
+            (least.min(growth), sum + growth)
+        });
+        let mean = sum / reach.len() as f64;
         if mean >= REBUILD_GAIN * least {
             Scaled {
                 minorant: Rc::new(problem.minorant(reach)),
