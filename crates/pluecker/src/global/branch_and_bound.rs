@@ -23,8 +23,8 @@
 //! certificate hands down depth bounds this way; the triangulation problems hand down nothing (`()`).
 
 use crate::interrupt::{stop_reason, StopReason};
-use std::cmp::Ordering;
 use smallvec::SmallVec;
+use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 /// The coordinates of a corner: held inline up to four dimensions (the pose certificate's boxes of

@@ -30,7 +30,9 @@
 //!    centre, its rotation spread and the translation ellipsoid, is bounded by step 4 as well. Boxes are
 //!    split into their eight octants, least bound first, until every open box's bound is within
 //!    the gap of `f̂`. Each box hands its octants tighter depth bounds: the largest distance each point
-//!    reaches over the box's poses of `S` (the octants' poses of `S` are among them).
+//!    reaches over the box's poses of `S` (the octants' poses of `S` are among them). If they raise
+//!    every weight at least by `κ`, then `κ Q` is a minorant for them (`Scaled`); the form is rebuilt
+//!    only when the weights grow unevenly.
 //! 4. **Local bound along whitened rays.** Write `Δ = s T v` with `‖v‖ = 1` and `Tᵀ JᵀJ T = I`, so that
 //!    `s = ‖Δ‖_W` and the linearised residual moves by one pixel per unit of `s` in every direction.
 //!    Along a ray the rotation is `exp(s a_ω) R̂` (`a = T v`) and a camera-frame point moves as
@@ -330,10 +332,13 @@ impl Scaled {
     /// up the least growth of the weights, or a rebuilt minorant when the weights grow on average
     /// by [`REBUILD_GAIN`] more than that.
     fn tightened(&self, problem: &Problem, reach: Vec<f64>) -> Scaled {
-        let (least, sum) = self.depths().zip(&reach).fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
-            let growth = (d / r).powi(2);
-            (least.min(growth), sum + growth)
-        });
+        let (least, sum) = self
+            .depths()
+            .zip(&reach)
+            .fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
+                let growth = (d / r).powi(2);
+                (least.min(growth), sum + growth)
+            });
         let mean = sum / reach.len() as f64;
         if mean >= REBUILD_GAIN * least {
             Scaled {
@@ -623,7 +628,9 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
         // inequality over the three parts of the step).
         if cell.centre.norm() + theta <= 1.0 {
-            let factor = minorant.extent.get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
+            let factor = minorant
+                .extent
+                .get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
             if let Some(extent) = factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt()) {
                 let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
                     + self.whitening.box_spread(&cell.half)

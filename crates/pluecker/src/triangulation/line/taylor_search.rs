@@ -312,10 +312,10 @@ mod tests {
                     let region = Region::new(
                         (0..4)
                             .map(|i| (w_min[i] - half * rng.uniform_in(0.2, 1.0)).max(root.lower[i]))
-                            .collect(),
+                            .collect::<Vec<f64>>(),
                         (0..4)
                             .map(|i| (w_min[i] + half * rng.uniform_in(0.2, 1.0)).min(root.upper[i]))
-                            .collect(),
+                            .collect::<Vec<f64>>(),
                     );
                     let bound = oracle.hull_bound(&region);
                     let minimum = box_minimum(&chart, &region.lower, &region.upper)

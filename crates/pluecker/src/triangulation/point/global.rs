@@ -459,7 +459,10 @@ pub fn global_point(
     let from_enclosure = enclosure.as_ref().and_then(|k| {
         let (lo, hi) = k.bounding_box()?;
         Some(Root {
-            region: Region::new(lo.iter().copied().collect::<Vec<f64>>(), hi.iter().copied().collect::<Vec<f64>>()),
+            region: Region::new(
+                lo.iter().copied().collect::<Vec<f64>>(),
+                hi.iter().copied().collect::<Vec<f64>>(),
+            ),
             depths: vec![(1.0 - k.kappa_d, 1.0 + k.kappa_d); views.len()],
             solver_iterations: 0,
         })
