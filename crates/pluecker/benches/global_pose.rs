@@ -80,11 +80,6 @@ fn main() {
                     best = best.min(c);
                 }
             }
-            if std::env::var("NODES").is_ok() {
-                if let Some(c) = result.certificate.as_ref() {
-                    println!("  nodes {seed} {}", c.nodes);
-                }
-            }
             if result.certificate.is_some_and(|c| c.certified) {
                 certified += 1;
             } else if std::env::var("WHY").is_ok() {
