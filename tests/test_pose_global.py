@@ -280,18 +280,18 @@ def _sublevel_poses(K, data, minima, level, rays, rng):
 
 def _outside(region, Rc, tc, W, R, t):
     """Why the pose (R, t) is not in the region the search proved (None when it is): its rotation
-    ``exp(ω) Rc`` must lie in a kept cube and its translation in that cube's ellipsoid; in a cube inside
+    ``exp(ω) Rc`` must lie in a kept box and its translation in that box's ellipsoid; in a box inside
     the ball it must be within the whitened radius."""
     w = oracle.log_so3(R @ Rc.T)
-    cube = np.max(np.abs(w - region["centres"]), axis=1) <= region["halves"] + 1e-12
+    cube = np.all(np.abs(w - region["centres"]) <= region["halves"] + 1e-12, axis=1)
     if not cube.any():
-        return f"its rotation (ω = {w}) lies in no kept cube: its cell was pruned"
+        return f"its rotation (ω = {w}) lies in no kept box: its cell was pruned"
     e = t - region["t_star"]
     q = np.einsum("ki,kij,kj->k", e, region["C"], e)
     # The ellipsoid's quadratic form, rounded at ~1e-12 of its size.
     kept = cube & (q <= region["slack"] * (1 + 1e-9) + 1e-12 * (np.abs(region["slack"]) + 1))
     if not kept.any():
-        return "its translation lies in none of its cubes' ellipsoids"
+        return "its translation lies in none of its boxes' ellipsoids"
     d = np.concatenate([w, t - tc])
     length = math.sqrt(d @ W @ d)
     # W by central differences (relative error ~1e-8).
@@ -373,7 +373,7 @@ def test_near_ties_sit_on_each_side_of_the_ambiguity_margin(which):
 
 
 def _largest_front_reach(Rc, X, b, centre, half, t_star, C, slack, rng):
-    """The largest ``b · (exp(ω) Rc X + t)`` found over a pruned cell: ``ω`` at the cube's corners, face
+    """The largest ``b · (exp(ω) Rc X + t)`` found over a pruned cell: ``ω`` at the box's corners, face
     centres, centre and random points, ``t`` anywhere in the ellipsoid ``(t − t*)ᵀ C (t − t*) ≤ slack``
     (largest ``b · t = b · t* + √slack ‖L⁻¹ b‖``, ``C = L Lᵀ``). A lower estimate of the maximum: a
     positive value is a pose of the cell with the point in front of the camera."""
@@ -388,7 +388,7 @@ def _largest_front_reach(Rc, X, b, centre, half, t_star, C, slack, rng):
 def test_cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere():
     """Cheirality pruning in steps 1-3 (``_pose_rotation_search``): a cell is pruned as behind the
     camera only if some point has ``b · (R X + t) ≤ 0`` (``b`` its observed ray) for every rotation of
-    its cube and translation of its ellipsoid. The oracle maximises that over each pruned cell for every
+    its box and translation of its ellipsoid. The oracle maximises that over each pruned cell for every
     point: a cell where every point reaches in front was pruned on a false premise (a pose of the
     sublevel set there would have been dropped). Wide fields of view and points from 0.4 to 12 units
     deep, far nearer the camera than the object is large, at levels up to 100x the optimum."""

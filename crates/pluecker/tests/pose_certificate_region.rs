@@ -3,8 +3,8 @@
 //! and Levenberg-Marquardt (`pose_oracle`), never the library's residuals or refinement.
 //!
 //! The claim under test: every pose `(R, t)` with the object points in front and cost at most `level`
-//! has its rotation `exp(ω) R̂` in a cube the search kept (never pruned) and its translation in that
-//! cube's ellipsoid; when the cube lies inside the whitened ball, the pose is within the search's
+//! has its rotation `exp(ω) R̂` in a box the search kept (never pruned) and its translation in that
+//! box's ellipsoid; when the box lies inside the whitened ball, the pose is within the search's
 //! radius of `(R̂, t̂)` in the metric `JᵀJ` at the centre.
 
 mod pose_oracle;
@@ -72,14 +72,42 @@ fn sublevel_poses(
     out
 }
 
-/// Checks that `pose` lies in the region (see the module documentation); `Err` says how it does not.
-fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &OraclePose) -> Result<(), String> {
+/// Checks that `pose` lies in the region (see the module documentation) and that the depth bounds of
+/// the cells whose boxes hold its rotation hold at it; `Err` says how it does not.
+fn check_inside(
+    region: &Region,
+    corr: &Correspondences,
+    centre: &OraclePose,
+    w: &Matrix6<f64>,
+    pose: &OraclePose,
+) -> Result<(), String> {
     let d = centre.chart(pose);
     let omega = Vector3::new(d[0], d[1], d[2]);
+    let in_box = |cell: &KeptCell| {
+        // Rounding of the box test: ω is a log, exact to ~1e-15 rad.
+        (omega - cell.centre)
+            .abs()
+            .iter()
+            .zip(cell.half.iter())
+            .all(|(d, h)| *d <= h + 1e-12)
+    };
+    // The depth bounds of every cell whose box holds the rotation hold at the pose (distances
+    // recomputed here; relative rounding ~1e-15 of the scene's size).
+    for cell in region.cells.iter().filter(|c| in_box(c)) {
+        for (i, (x, d)) in corr.points3d.iter().zip(&cell.depths).enumerate() {
+            let distance = (pose.r * x + pose.t).norm();
+            if distance > d * (1.0 + 1e-12) {
+                return Err(format!(
+                    "point {i} is at distance {distance} from the camera, beyond its depth bound {d} in a kept cell \
+                     (centre {:?}, half {:?})",
+                    cell.centre, cell.half
+                ));
+            }
+        }
+    }
     let mut in_cube = 0;
     for cell in &region.cells {
-        // Rounding of the cube test: ω is a log, exact to ~1e-15 rad.
-        if (omega - cell.centre).amax() > cell.half + 1e-12 {
+        if !in_box(cell) {
             continue;
         }
         in_cube += 1;
@@ -102,9 +130,9 @@ fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &O
         return Ok(());
     }
     let what = if in_cube == 0 {
-        "its rotation lies in no kept cube (its cell was pruned)".to_string()
+        "its rotation lies in no kept box (its cell was pruned)".to_string()
     } else {
-        format!("its rotation lies in {in_cube} kept cubes but its translation in none of their ellipsoids")
+        format!("its rotation lies in {in_cube} kept boxes but its translation in none of their ellipsoids")
     };
     Err(format!(
         "ω = {omega:?} (‖ω‖ = {:.3e}): {what} ({} cells kept, {} pruned)",
@@ -114,7 +142,7 @@ fn check_inside(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, pose: &O
     ))
 }
 
-/// The largest whitened length `‖(ω, t − t̂)‖_W` over the corners of each kept cube inside the ball and
+/// The largest whitened length `‖(ω, t − t̂)‖_W` over the corners of each kept box inside the ball and
 /// points of its ellipsoid (its principal axes and random boundary points): the search claims that
 /// every pose of such a cell, not only those of the sublevel set, is within its radius.
 fn widest_cell_point(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, rng: &mut Rng) -> f64 {
@@ -139,7 +167,7 @@ fn widest_cell_point(region: &Region, centre: &OraclePose, w: &Matrix6<f64>, rng
         }
         for corner in 0..8 {
             let sign = |b: usize| if corner >> b & 1 == 1 { 1.0 } else { -1.0 };
-            let omega = cell.centre + Vector3::new(sign(0), sign(1), sign(2)) * cell.half;
+            let omega = cell.centre + Vector3::new(sign(0), sign(1), sign(2)).component_mul(&cell.half);
             for e in &offsets {
                 let tau = cell.t_star + e - centre.t;
                 let d = Vector6::new(omega.x, omega.y, omega.z, tau.x, tau.y, tau.z);
@@ -237,7 +265,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
             );
             for (pose, f) in &poses {
                 assert!(*f <= level * (1.0 + 1e-12));
-                if let Err(why) = check_inside(&region, centre, &w, pose) {
+                if let Err(why) = check_inside(&region, &corr, centre, &w, pose) {
                     panic!(
                         "{name}, level {factor}x the optimum {global:.6}, centre of cost {f_centre:.6}: a pose of cost {f:.6} \
                          is outside the region: {why}"
@@ -281,7 +309,7 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
     assert!(second >= 5, "only {second} second minima below a level");
 }
 
-/// The largest `b · (R X + t)` over the cell: rotations `exp(ω) R̂` with `ω` in the cube (its corners,
+/// The largest `b · (R X + t)` over the cell: rotations `exp(ω) R̂` with `ω` in the box (its corners,
 /// face centres, centre and random points, then a hill climb from the best) and translations in its
 /// ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack`, whose largest `b · t` is `b · t* + √slack ‖L⁻¹ b‖`
 /// (`C = L Lᵀ`, `t = t* + √slack L⁻ᵀ u`, `‖u‖ ≤ 1`). A lower estimate of the true maximum: a positive
@@ -295,25 +323,30 @@ fn largest_front_reach(cell: &KeptCell, centre: &OraclePose, x: &Vector3<f64>, b
     let l_inv_b = l.solve_lower_triangular(b).expect("L is invertible");
     let t_reach = b.dot(&cell.t_star) + cell.slack.max(0.0).sqrt() * l_inv_b.norm();
     let reach = |w: &Vector3<f64>| b.dot(&(pose_oracle::exp(w) * centre.r * x)) + t_reach;
-    let clamp = |w: Vector3<f64>| w.zip_map(&cell.centre, |v, c| v.clamp(c - cell.half, c + cell.half));
+    let (lo, hi) = (cell.centre - cell.half, cell.centre + cell.half);
+    let clamp = |w: Vector3<f64>| Vector3::from_fn(|k, _| w[k].clamp(lo[k], hi[k]));
     let mut starts: Vec<Vector3<f64>> = vec![cell.centre];
     for corner in 0..8 {
         let sign = |k: usize| if corner >> k & 1 == 1 { 1.0 } else { -1.0 };
-        starts.push(cell.centre + Vector3::new(sign(0), sign(1), sign(2)) * cell.half);
+        starts.push(cell.centre + Vector3::new(sign(0), sign(1), sign(2)).component_mul(&cell.half));
     }
     for axis in 0..6 {
         let mut e = Vector3::zeros();
-        e[axis % 3] = if axis < 3 { cell.half } else { -cell.half };
+        e[axis % 3] = if axis < 3 {
+            cell.half[axis % 3]
+        } else {
+            -cell.half[axis % 3]
+        };
         starts.push(cell.centre + e);
     }
     for _ in 0..16 {
-        starts.push(cell.centre + Vector3::from_fn(|_, _| rng.uniform_in(-1.0, 1.0)) * cell.half);
+        starts.push(cell.centre + Vector3::from_fn(|_, _| rng.uniform_in(-1.0, 1.0)).component_mul(&cell.half));
     }
     let mut best = starts
         .iter()
         .map(|w| (reach(w), *w))
         .fold((f64::NEG_INFINITY, cell.centre), |a, b| if b.0 > a.0 { b } else { a });
-    let mut step = 0.3 * cell.half;
+    let mut step = 0.3 * cell.half.max();
     for _ in 0..60 {
         let w = clamp(best.1 + Vector3::from_fn(|_, _| rng.normal()) * step);
         let value = reach(&w);
@@ -327,8 +360,8 @@ fn largest_front_reach(cell: &KeptCell, centre: &OraclePose, x: &Vector3<f64>, b
 }
 
 /// Cheirality pruning: a cell is pruned as "behind the camera" only if some point `i` has
-/// `bᵢ · (R Xᵢ + t) ≤ 0` for every rotation of its cube and every translation of its ellipsoid (which
-/// holds the translation of every pose of the sublevel set with its rotation in the cube). The oracle
+/// `bᵢ · (R Xᵢ + t) ≤ 0` for every rotation of its box and every translation of its ellipsoid (which
+/// holds the translation of every pose of the sublevel set with its rotation in the box). The oracle
 /// maximises `bᵢ · (R Xᵢ + t)` over each pruned cell for every point; a cell where every point reaches
 /// in front was pruned on a false premise (had a pose of the sublevel set been there, it would have
 /// been dropped). Scenes with points much nearer the camera than the object is large, wide fields of
@@ -371,7 +404,7 @@ fn cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere() {
                 let least = reaches.iter().copied().fold(f64::INFINITY, f64::min);
                 assert!(
                     least <= 1e-12,
-                    "f={focal} {n}p seed {seed}, level {factor}x: a cell (centre {:?}, half {}) pruned as behind \
+                    "f={focal} {n}p seed {seed}, level {factor}x: a cell (centre {:?}, half {:?}) pruned as behind \
                      the camera has a pose with each point in front (largest reaches {reaches:?})",
                     cell.centre,
                     cell.half

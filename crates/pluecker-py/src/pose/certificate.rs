@@ -13,13 +13,13 @@ use pyo3::types::PyDict;
 
 /// Runs the rotation search of the pose certificate around the pose `(R, t)` for the sublevel set
 /// `{½ Σ r² ≤ level}` (px²) of the given correspondences (their frame as given; centre the object
-/// for a small search). Cells are split until pruned, inside the whitened ball of radius `target`,
-/// or of half-width `min_half` (rad). Returns a dict: `depths` (step 1's bounds), the kept cells as
-/// `centres` (K, 3) (rotation vectors `ω`, `R' = exp(ω) R`), `halves` (K,), `t_star` (K, 3), `C`
-/// (K, 3, 3), `slack` (K,) (the translation ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack`), `inside_ball`
+/// for a small search). Boxes of rotation vectors are split until pruned, inside the whitened ball of
+/// radius `target`, or of half-width `min_half` (rad). Returns a dict: `depths` (step 1's bounds), the
+/// kept cells as `centres` (K, 3) (rotation vectors `ω`, `R' = exp(ω) R`), `halves` (K, 3) (half-widths
+/// per axis), `t_star` (K, 3), `C` (K, 3, 3), `slack` (K,) (the translation ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack`), `inside_ball`
 /// (K,), `radius`, `pruned`, `nodes`; and the cells pruned by cheirality as `behind_centres`,
 /// `behind_halves`, `behind_t_star`, `behind_C`, `behind_slack` (the search claims that in each some
-/// point has `b · (R' X + t) ≤ 0`, `b` its observed ray, over the whole cube and ellipsoid). A refusal of the proof (`not proved: ...`) is a `ValueError`.
+/// point has `b · (R' X + t) ≤ 0`, `b` its observed ray, over the whole box and ellipsoid). A refusal of the proof (`not proved: ...`) is a `ValueError`.
 #[pyfunction]
 #[pyo3(signature = (camera, R, t, level, points2d = None, points3d = None, lines2d = None, lines3d = None, *, target = Real::new(f64::INFINITY), min_half = Real::new(2e-3), max_nodes = 400_000))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
@@ -61,8 +61,8 @@ pub fn _pose_rotation_search<'py>(
     Ok(out)
 }
 
-/// The cubes and translation ellipsoids of `cells` as arrays `{prefix}centres` (K, 3),
-/// `{prefix}halves` (K,), `{prefix}t_star` (K, 3), `{prefix}C` (K, 3, 3), `{prefix}slack` (K,).
+/// The boxes and translation ellipsoids of `cells` as arrays `{prefix}centres` (K, 3),
+/// `{prefix}halves` (K, 3), `{prefix}t_star` (K, 3), `{prefix}C` (K, 3, 3), `{prefix}slack` (K,).
 fn set_cells(out: &Bound<'_, PyDict>, prefix: &str, cells: &[KeptCell]) -> PyResult<()> {
     let py = out.py();
     let n = cells.len();
@@ -79,7 +79,7 @@ fn set_cells(out: &Bound<'_, PyDict>, prefix: &str, cells: &[KeptCell]) -> PyRes
     out.set_item(format!("{prefix}C"), PyArray1::from_vec(py, c).reshape([n, 3, 3])?)?;
     out.set_item(
         format!("{prefix}halves"),
-        PyArray1::from_vec(py, cells.iter().map(|c| c.half).collect()),
+        PyArray1::from_vec(py, flat(&|c| c.half.as_slice().to_vec())).reshape([n, 3])?,
     )?;
     out.set_item(
         format!("{prefix}slack"),

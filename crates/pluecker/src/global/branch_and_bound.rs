@@ -4,8 +4,9 @@
 //! a lower bound of the objective over the admissible points of that region (a convex relaxation,
 //! section 4.1), the relaxation's minimiser, and optionally a candidate solution whose cost is an
 //! upper bound (the paper's local step, section 5). The box coordinates are the problem's choice —
-//! the denominators of the fractions, line parameters (section 4.2), coordinates of a point — and
-//! their number need not be the number of views.
+//! the denominators of the fractions, line parameters (section 4.2), coordinates of a point, the
+//! rotation vectors of the pose certificate ([`crate::pose::certificate`]) — and their number need
+//! not be the number of views.
 //!
 //! The search always expands the open region with the least lower bound; its bound is the global
 //! lower bound (every admissible point lies in an open region, in a pruned one whose bound is
@@ -13,25 +14,39 @@
 //! or after `max_nodes` bound computations, or when the call is stopped ([`crate::interrupt`], polled
 //! before every split; [`BranchAndBoundResult::stopped`]). Splitting (section 4.2): the oracle picks the axis and
 //! the position ([`BoundingOracle::split`]; by default the widest axis at the relaxed minimiser,
-//! kept inside the middle half of the interval so that every split shrinks the region).
+//! kept inside the middle half of the interval so that every split shrinks the region), or cuts
+//! several axes at once ([`BoundingOracle::subdivide`]).
+//!
+//! A region may hand facts it proved down to the two halves it is split into
+//! ([`BoundingOracle::Inherited`], [`BoundingOracle::bound_with`]): what holds on every admissible
+//! point of a region holds on those of its halves, and can tighten their bounds. The pose
+//! certificate hands down depth bounds this way; the triangulation problems hand down nothing (`()`).
 
 use crate::interrupt::{stop_reason, StopReason};
+use smallvec::SmallVec;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+
+/// The coordinates of a corner: held inline up to four dimensions (the pose certificate's boxes of
+/// rotations have three, and a search bounds thousands of them), on the heap beyond.
+pub type Corner = SmallVec<[f64; 4]>;
 
 /// An axis-aligned box `[lower, upper]` in `ℝᵈ`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Region {
     /// Lower corner.
-    pub lower: Vec<f64>,
+    pub lower: Corner,
     /// Upper corner.
-    pub upper: Vec<f64>,
+    pub upper: Corner,
 }
 
 impl Region {
     /// The box `[lower, upper]`.
-    pub fn new(lower: Vec<f64>, upper: Vec<f64>) -> Region {
-        Region { lower, upper }
+    pub fn new(lower: impl Into<Corner>, upper: impl Into<Corner>) -> Region {
+        Region {
+            lower: lower.into(),
+            upper: upper.into(),
+        }
     }
 
     /// The dimension `d`.
@@ -77,8 +92,9 @@ pub enum Bound<C> {
     Bounded {
         /// The bound (valid, not merely approximate: see [`crate::global::socp`]).
         lower: f64,
-        /// The minimiser of the relaxation, a point of the region (a splitting hint).
-        relaxed_minimizer: Vec<f64>,
+        /// The minimiser of the relaxation, a point of the region (a splitting hint), if the
+        /// problem has one.
+        relaxed_minimizer: Option<Vec<f64>>,
         /// A solution found from the relaxed minimiser, with its true cost (an upper bound).
         candidate: Option<(f64, C)>,
         /// Conic-solver iterations spent.
@@ -97,8 +113,25 @@ pub trait BoundingOracle {
     /// A solution of the problem (e.g. a 3-D point).
     type Candidate: Clone;
 
+    /// What the bound of a region hands down to the two halves it is split into: a fact proved for
+    /// every admissible point of the region (so valid on each half), e.g. the pose certificate's
+    /// depth bounds. The root gets `Default::default()` (nothing proved yet); `()` for a problem that
+    /// hands nothing down.
+    type Inherited: Clone + Default;
+
     /// A lower bound of the objective over `region` (and a candidate when one is cheap to find).
     fn bound(&mut self, region: &Region) -> Bound<Self::Candidate>;
+
+    /// [`Self::bound`] for a region whose parent handed down `inherited` (the default for the root),
+    /// and what this region hands down to its halves. The search passes each region exactly what its
+    /// own parent handed down. Default: [`Self::bound`], handing `inherited` on unchanged.
+    fn bound_with(
+        &mut self,
+        region: &Region,
+        inherited: &Self::Inherited,
+    ) -> (Bound<Self::Candidate>, Self::Inherited) {
+        (self.bound(region), inherited.clone())
+    }
 
     /// The search also stops when `upper − lower ≤ absolute_gap()` (for optima at the rounding
     /// level, where a relative gap cannot close). Default `0`.
@@ -114,6 +147,16 @@ pub trait BoundingOracle {
             .unwrap_or(0);
         let at = relaxed_minimizer.map_or(0.5 * (region.lower[axis] + region.upper[axis]), |m| m[axis]);
         (axis, region.central(axis, at))
+    }
+
+    /// The sub-regions an open region is replaced by; together they must cover it. Default: the two
+    /// halves of the cut [`Self::split`] picks. A problem may cut several axes at once: the pose
+    /// certificate cuts a box of rotations into its eight octants, so that its boxes stay cubes and
+    /// the work done on every split box is shared by eight children.
+    fn subdivide(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
+        let (axis, at) = self.split(region, relaxed_minimizer);
+        let (left, right) = region.split(axis, at);
+        vec![left, right]
     }
 }
 
@@ -163,33 +206,78 @@ pub struct BranchAndBoundResult<C> {
     pub solver_iterations: usize,
 }
 
-struct Open {
-    lower: f64,
+/// An open region: its box, its splitting hint, and what its bound handed down to its halves.
+struct Open<I> {
     region: Region,
     hint: Option<Vec<f64>>,
+    handed_down: I,
 }
 
-impl PartialEq for Open {
+/// An open region in the queue: its bound and the slot of its [`Open`] data (the heap moves these
+/// sixteen bytes, not the regions).
+struct Queued {
+    lower: f64,
+    slot: usize,
+}
+
+impl PartialEq for Queued {
     fn eq(&self, other: &Self) -> bool {
         self.lower.total_cmp(&other.lower) == Ordering::Equal
     }
 }
-impl Eq for Open {}
-impl PartialOrd for Open {
+impl Eq for Queued {}
+impl PartialOrd for Queued {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
         Some(self.cmp(other))
     }
 }
-impl Ord for Open {
+impl Ord for Queued {
     // A max-heap on the reversed order: the least lower bound first.
     fn cmp(&self, other: &Self) -> Ordering {
         other.lower.total_cmp(&self.lower)
     }
 }
 
+/// The open regions, least bound first.
+struct Queue<I> {
+    heap: BinaryHeap<Queued>,
+    /// The data of the queued regions, by slot; `None` in the free slots.
+    slots: Vec<Option<Open<I>>>,
+    free: Vec<usize>,
+}
+
+impl<I> Queue<I> {
+    fn push(&mut self, lower: f64, open: Open<I>) {
+        let slot = match self.free.pop() {
+            Some(slot) => {
+                self.slots[slot] = Some(open);
+                slot
+            }
+            None => {
+                self.slots.push(Some(open));
+                self.slots.len() - 1
+            }
+        };
+        self.heap.push(Queued { lower, slot });
+    }
+
+    /// The least bound in the queue.
+    fn least(&self) -> Option<f64> {
+        self.heap.peek().map(|top| top.lower)
+    }
+
+    /// Removes the region with the least bound.
+    fn pop(&mut self) -> Option<(f64, Open<I>)> {
+        let Queued { lower, slot } = self.heap.pop()?;
+        self.free.push(slot);
+        let open = self.slots[slot].take().expect("a queued slot holds its region");
+        Some((lower, open))
+    }
+}
+
 /// The state of one search.
-struct Search<C> {
-    heap: BinaryHeap<Open>,
+struct Search<C, I> {
+    queue: Queue<I>,
     best: Option<(f64, C)>,
     /// Least bound of the regions discarded because they could not improve the incumbent by more
     /// than the gap: they still count in the global lower bound.
@@ -201,7 +289,7 @@ struct Search<C> {
     absolute_gap: f64,
 }
 
-impl<C> Search<C> {
+impl<C, I> Search<C, I> {
     fn closed(&self, upper: f64, lower: f64) -> bool {
         upper - lower <= (self.gap * upper.abs()).max(self.absolute_gap)
     }
@@ -210,10 +298,18 @@ impl<C> Search<C> {
         self.best.as_ref().map_or(f64::INFINITY, |b| b.0)
     }
 
-    /// Bounds `region` and queues it unless it is empty or cannot improve on the incumbent.
-    fn evaluate<O: BoundingOracle<Candidate = C>>(&mut self, oracle: &mut O, region: Region, parent_lower: f64) {
+    /// Bounds `region` (given what its parent handed down) and queues it unless it is empty or
+    /// cannot improve on the incumbent.
+    fn evaluate<O: BoundingOracle<Candidate = C, Inherited = I>>(
+        &mut self,
+        oracle: &mut O,
+        region: Region,
+        parent_lower: f64,
+        inherited: &I,
+    ) {
         self.nodes += 1;
-        let (lower, hint) = match oracle.bound(&region) {
+        let (bound, handed_down) = oracle.bound_with(&region, inherited);
+        let (lower, hint) = match bound {
             Bound::Empty { solver_iterations } => {
                 self.solver_iterations += solver_iterations;
                 return;
@@ -236,7 +332,7 @@ impl<C> Search<C> {
                     }
                 }
                 // The region lies inside its parent, whose bound holds for it too.
-                (lower.max(parent_lower), Some(relaxed_minimizer))
+                (lower.max(parent_lower), relaxed_minimizer)
             }
         };
         let upper = self.upper();
@@ -248,11 +344,18 @@ impl<C> Search<C> {
             self.pruned_floor = self.pruned_floor.min(lower);
             return;
         }
-        self.heap.push(Open { lower, region, hint });
+        self.queue.push(
+            lower,
+            Open {
+                region,
+                hint,
+                handed_down,
+            },
+        );
     }
 
     fn finish(self, lower_bound: f64, converged: bool, stopped: Option<StopReason>) -> BranchAndBoundResult<C> {
-        let open = self.heap.iter().map(|o| o.lower).fold(f64::INFINITY, f64::min);
+        let open = self.queue.least().unwrap_or(f64::INFINITY);
         BranchAndBoundResult {
             box_lower_bound: open.min(self.pruned_floor),
             best: self.best,
@@ -274,7 +377,11 @@ pub fn branch_and_bound<O: BoundingOracle>(
     opts: &BranchAndBoundOptions,
 ) -> BranchAndBoundResult<O::Candidate> {
     let mut search = Search {
-        heap: BinaryHeap::new(),
+        queue: Queue {
+            heap: BinaryHeap::new(),
+            slots: vec![],
+            free: vec![],
+        },
         best: incumbent,
         pruned_floor: f64::INFINITY,
         nodes: 0,
@@ -283,17 +390,17 @@ pub fn branch_and_bound<O: BoundingOracle>(
         gap: opts.max_relative_gap,
         absolute_gap: oracle.absolute_gap(),
     };
-    search.evaluate(oracle, root, opts.trivial_lower_bound);
+    search.evaluate(oracle, root, opts.trivial_lower_bound, &O::Inherited::default());
     loop {
         let upper = search.upper();
         // Drop regions the incumbent has overtaken since they were queued.
-        while let Some(top) = search.heap.peek().filter(|top| top.lower >= upper) {
-            search.pruned_floor = search.pruned_floor.min(top.lower);
-            search.heap.pop();
+        while let Some(least) = search.queue.least().filter(|&least| least >= upper) {
+            search.pruned_floor = search.pruned_floor.min(least);
+            search.queue.pop();
         }
-        let open_lower = search.heap.peek().map_or(f64::INFINITY, |top| top.lower);
+        let open_lower = search.queue.least().unwrap_or(f64::INFINITY);
         let lower = open_lower.min(search.pruned_floor).min(upper);
-        if search.heap.is_empty() || search.closed(upper, lower) {
+        if search.queue.heap.is_empty() || search.closed(upper, lower) {
             return search.finish(lower, true, None);
         }
         if search.nodes >= opts.max_nodes {
@@ -302,11 +409,10 @@ pub fn branch_and_bound<O: BoundingOracle>(
         if let Some(reason) = stop_reason() {
             return search.finish(lower, false, Some(reason));
         }
-        let open = search.heap.pop().expect("the heap is not empty");
-        let (axis, at) = oracle.split(&open.region, open.hint.as_deref());
-        let (left, right) = open.region.split(axis, at);
-        search.evaluate(oracle, left, open.lower);
-        search.evaluate(oracle, right, open.lower);
+        let (open_lower, open) = search.queue.pop().expect("the queue is not empty");
+        for child in oracle.subdivide(&open.region, open.hint.as_deref()) {
+            search.evaluate(oracle, child, open_lower, &open.handed_down);
+        }
     }
 }
 
@@ -328,6 +434,7 @@ mod tests {
 
     impl BoundingOracle for DoubleWell {
         type Candidate = Vec<f64>;
+        type Inherited = ();
         fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
             self.calls += 1;
             let mut lower = 0.0;
@@ -347,7 +454,7 @@ mod tests {
             let cost = double_well(&centre);
             Bound::Bounded {
                 lower,
-                relaxed_minimizer: centre.clone(),
+                relaxed_minimizer: Some(centre.clone()),
                 candidate: Some((cost, centre)),
                 solver_iterations: 1,
             }
@@ -408,6 +515,76 @@ mod tests {
         assert!(result.lower_bound <= result.best.unwrap().0);
     }
 
+    /// The double well, each region handing down itself: the search must give every region exactly
+    /// what its own parent handed down (the root the default), never a sibling's or a grandparent's.
+    struct Lineage {
+        inner: DoubleWell,
+        /// Regions that did not receive their parent's hand-down, and regions checked.
+        wrong: Vec<String>,
+        checked: usize,
+    }
+
+    /// Whether `child` is one of the two halves of `parent`: equal on every axis but one, where it
+    /// keeps one end of the parent's interval and cuts the other strictly inside.
+    fn is_half_of(child: &Region, parent: &Region) -> bool {
+        let differing: Vec<usize> = (0..parent.dim())
+            .filter(|&k| child.lower[k] != parent.lower[k] || child.upper[k] != parent.upper[k])
+            .collect();
+        let [k] = differing[..] else {
+            return false;
+        };
+        let inside = |v: f64| v > parent.lower[k] && v < parent.upper[k];
+        (child.lower[k] == parent.lower[k] && inside(child.upper[k]))
+            || (child.upper[k] == parent.upper[k] && inside(child.lower[k]))
+    }
+
+    impl BoundingOracle for Lineage {
+        type Candidate = Vec<f64>;
+        type Inherited = Option<Region>;
+        fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
+            self.inner.bound(region)
+        }
+        fn bound_with(&mut self, region: &Region, inherited: &Option<Region>) -> (Bound<Vec<f64>>, Option<Region>) {
+            self.checked += 1;
+            let root = self.checked == 1;
+            let right = match inherited {
+                None => root,
+                Some(parent) => !root && is_half_of(region, parent),
+            };
+            if !right {
+                self.wrong.push(format!("{region:?} received {inherited:?}"));
+            }
+            (self.inner.bound(region), Some(region.clone()))
+        }
+    }
+
+    /// What a region hands down reaches exactly its halves (a hand-down is a fact proved on the
+    /// parent: on a sibling or a cousin it need not hold).
+    #[test]
+    fn each_region_receives_what_its_parent_handed_down() {
+        let mut oracle = Lineage {
+            inner: DoubleWell { calls: 0 },
+            wrong: vec![],
+            checked: 0,
+        };
+        let root = Region::new(vec![-2.0; 3], vec![2.5; 3]);
+        let opts = BranchAndBoundOptions {
+            max_relative_gap: 1e-6,
+            max_nodes: 3000,
+            ..Default::default()
+        };
+        let result = branch_and_bound(&mut oracle, root, None, &opts);
+        assert_eq!(oracle.checked, result.nodes);
+        assert!(result.nodes > 100, "only {} regions", result.nodes);
+        assert!(
+            oracle.wrong.is_empty(),
+            "{} of {}: {:?}",
+            oracle.wrong.len(),
+            oracle.checked,
+            &oracle.wrong[..3.min(oracle.wrong.len())]
+        );
+    }
+
     /// The minimum of the tilted double well: each `x_k` solves `4x(x²−1) + τ_k = 0` near −1, by
     /// Newton's method (an oracle of its own: no branch and bound involved).
     fn double_well_minimum(dim: usize) -> f64 {
@@ -434,6 +611,7 @@ mod tests {
 
     impl BoundingOracle for Failing {
         type Candidate = Vec<f64>;
+        type Inherited = ();
         fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
             self.calls += 1;
             let holds_minimiser = (0..region.dim()).all(|k| region.lower[k] <= -0.95 && region.upper[k] >= -1.05);
@@ -487,6 +665,7 @@ mod tests {
 
     impl BoundingOracle for NoCandidates {
         type Candidate = Vec<f64>;
+        type Inherited = ();
         fn bound(&mut self, region: &Region) -> Bound<Vec<f64>> {
             match self.0.bound(region) {
                 Bound::Bounded {

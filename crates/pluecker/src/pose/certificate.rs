@@ -16,14 +16,23 @@
 //!    rotation. The line residuals are left out of the minorant (it stays a minorant of `f`): their
 //!    moment form moves with the rotation by the camera distance, not the object size, and only
 //!    slowed the search.
-//! 3. **Rotation search.** Over a cube of rotation vectors `ω` (`R = exp(ω) R̂`) of half-width `h`,
-//!    every rotation is within `θ = √3 h` of the centre's `R_c`, so each residual of the minorant moves
-//!    by at most `θ ‖Xᵢ‖`. With `Q(t)` the minorant at `R_c` and `E = θ² Σ wᵢ ‖Xᵢ‖²`, a pose of `S` in
-//!    the cube has `Q(t) ≤ β² = (√(2f̂) + √E)²` (Minkowski). A cube where `min_t Q > β²`, or where some
-//!    point is behind the camera for every `t` of that ellipsoid, holds no pose of `S` and is pruned;
-//!    the others are split until they lie inside the ball `‖Δ‖_W ≤ ρ` of the local metric
-//!    `‖Δ‖²_W = Δᵀ JᵀJ Δ` (`Δ = (ω, t − t̂)`, `J` the Jacobian at the pose), measured by the triangle
-//!    inequality over the cube's centre, its rotation spread and the translation ellipsoid.
+//! 3. **Rotation search** on the shared branch and bound ([`crate::global::branch_and_bound`], the
+//!    search of the triangulation certificates; the oracle is `RotationSearch`). Over a box of
+//!    rotation vectors `ω` (`R = exp(ω) R̂`) with half-diagonal `θ`, every rotation is within the angle
+//!    `θ` of the centre's `R_c`, so each residual of the minorant moves by at most `θ ‖Xᵢ‖`. With
+//!    `Q(t)` the minorant at `R_c` and `η² = Σ wᵢ ‖Xᵢ‖²`, a pose of `S` in the box has
+//!    `√Q(t) ≤ √(2f) + θ η` (Minkowski), so `f ≥ ½ (√q_min − θ η)₊²` (`q_min = min_t Q`) on the box's
+//!    poses of `S`, and every other pose has `f > f̂`: that is the box's bound. A box whose bound
+//!    reaches `f̂` holds no pose of `S` and is pruned; so is a box where some point is behind the camera
+//!    for every `t` of the ellipsoid `Q(t) ≤ β² = (√(2f̂) + θ η)²`, which holds the translations of its
+//!    poses of `S`. A box inside the ball `‖Δ‖_W ≤ ρ` of the local metric `‖Δ‖²_W = Δᵀ JᵀJ Δ`
+//!    (`Δ = (ω, t − t̂)`, `J` the Jacobian at the pose), measured by the triangle inequality over its
+//!    centre, its rotation spread and the translation ellipsoid, is bounded by step 4 as well. Boxes are
+//!    split into their eight octants, least bound first, until every open box's bound is within
+//!    the gap of `f̂`. Each box hands its octants tighter depth bounds: the largest distance each point
+//!    reaches over the box's poses of `S` (the octants' poses of `S` are among them). If they raise
+//!    every weight at least by `κ`, then `κ Q` is a minorant for them (`Scaled`); the form is rebuilt
+//!    only when the weights grow unevenly.
 //! 4. **Local bound along whitened rays.** Write `Δ = s T v` with `‖v‖ = 1` and `Tᵀ JᵀJ T = I`, so that
 //!    `s = ‖Δ‖_W` and the linearised residual moves by one pixel per unit of `s` in every direction.
 //!    Along a ray the rotation is `exp(s a_ω) R̂` (`a = T v`) and a camera-frame point moves as
@@ -36,7 +45,9 @@
 //!    `‖r(s)‖ ≥ ‖r̂ + s J T v‖ − ½ K s²` and `‖r̂ + s J T v‖² ≥ 2f̂ − 2‖Tᵀg‖ s + λ_min s²`. The least
 //!    value of the square of the right-hand side over `s ≤ ρ`, halved, is the lower bound.
 //!
-//! So `lower_bound ≤ f` for every pose that keeps the points in front; the answer is certified when
+//! The least bound over the search's leaves (step 4's over the ball of the largest radius a box inside it
+//! reached, or a box's Minkowski bound) is the raw bound. So `lower_bound ≤ f` for every pose that keeps
+//! the points in front; the answer is certified when
 //! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
 //! bound here) seen more than `2α` apart. The test fails honestly (`certified = false`, with the
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
@@ -47,13 +58,16 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
-use crate::global::relative_gap;
-use crate::interrupt::stop_reason;
+use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Corner, Region};
+use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
+use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
+use std::cell::OnceCell;
+use std::rc::Rc;
 
-/// The default cap on the rotation cells the search examines
-/// ([`crate::certificate::CertifyOptions::max_nodes`] `None`).
+/// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
+/// [`crate::certificate::CertifyOptions::max_nodes`] `None`).
 pub const MAX_CELLS: usize = 20_000;
 
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
@@ -72,13 +86,13 @@ pub struct Certification {
     pub certified: bool,
     /// The proved bound, clamped to the cost (NaN when there is none).
     pub lower_bound: f64,
-    /// The bound as step 4 proved it, before any clamp to the cost (NaN when there is none). A sound
-    /// bound is at most the cost of every pose that keeps the points in front; `lower_bound` is
-    /// `min(raw_lower_bound, cost)`.
+    /// The bound as the search proved it (the least over its leaves, step 4's for the ball), before any
+    /// clamp to the cost (NaN when there is none). A sound bound is at most the cost of every pose that
+    /// keeps the points in front; `lower_bound` is `min(raw_lower_bound, cost)`.
     pub raw_lower_bound: f64,
     /// `(cost − lower_bound) / max(cost, 1e-12)` (NaN when there is no bound).
     pub relative_gap: f64,
-    /// Rotation cells examined by the search (0 when it did not run to its end).
+    /// Boxes of rotations bounded by the search (0 when it did not run to its end).
     pub nodes: usize,
     /// Why the pose is not certified (`None` when it is).
     pub reason: Option<String>,
@@ -100,6 +114,11 @@ impl Certification {
 
 /// Partners per point for its depth bound (the widest-apart in the image of a small spread set).
 const DEPTH_PARTNERS: usize = 16;
+/// The rotation search rebuilds a box's minorant for its octants when the tightened depth bounds
+/// raise the weights `wᵢ ∝ 1/Dᵢ²` on average by this factor more than the least of them, which a
+/// scale of the minorant takes up ([`Scaled`]): a rebuild costs O(n) against O(1) for the bound of a
+/// box, and without rebuilds the f = 15000 px scenes lose certificates.
+const REBUILD_GAIN: f64 = 1.2;
 /// Intervals of the one-dimensional minimisation of the local bound.
 const LOCAL_INTERVALS: usize = 256;
 
@@ -108,9 +127,9 @@ struct Problem<'c> {
     corr: &'c Correspondences,
     /// Least singular value of the 2x2 block of `K`.
     s_min: f64,
-    /// Upper bounds `Dᵢ` on the distances of the points from the camera over `S` (step 1, then
-    /// tightened by the search).
-    depths: Vec<f64>,
+    /// The minorant for step 1's upper bounds `Dᵢ` on the distances of the points from the camera
+    /// over `S` (the search tightens them box by box: [`RotationSearch`]).
+    root: Rc<Minorant>,
     /// The 2x2 block of `K` and its norm.
     k2: Matrix2<f64>,
     k_norm: f64,
@@ -122,10 +141,8 @@ struct Problem<'c> {
     g_norm: f64,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
-    /// `Σ wᵢ ‖Xᵢ‖²` (the growth of the cell perturbation per θ²).
-    eta2: f64,
-    /// The 12x12 Gram matrix of the point minorant in `(vec R row-major, t)`.
-    gram: SMatrix<f64, 12, 12>,
+    /// `‖Xᵢ‖` (object coordinates).
+    norms: Vec<f64>,
 }
 
 fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
@@ -160,21 +177,6 @@ fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alpha: f64) -
         .collect()
 }
 
-/// `A` (3x9) with `R X = A vec(R)` (row-major `vec`).
-fn lift(x: &Vector3<f64>) -> SMatrix<f64, 3, 9> {
-    let mut a = SMatrix::<f64, 3, 9>::zeros();
-    for r in 0..3 {
-        for c in 0..3 {
-            a[(r, 3 * r + c)] = x[c];
-        }
-    }
-    a
-}
-
-fn vec_row_major(r: &Matrix3<f64>) -> SMatrix<f64, 9, 1> {
-    SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)])
-}
-
 impl<'c> Problem<'c> {
     fn new(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
         if corr.n_points() < 2 {
@@ -199,7 +201,8 @@ impl<'c> Problem<'c> {
             .collect();
         let depths = depth_bounds(corr, &bearings, alpha)
             .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
-        let mut problem = Problem {
+        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, s_min, depths));
+        Ok(Problem {
             corr,
             s_min,
             k2: Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy),
@@ -208,47 +211,169 @@ impl<'c> Problem<'c> {
             g,
             g_norm,
             bearings,
-            depths: vec![],
-            eta2: 0.0,
-            gram: SMatrix::zeros(),
-        };
-        problem.set_depths(depths);
-        Ok(problem)
+            norms: corr.points3d.iter().map(|x| x.norm()).collect(),
+            root,
+        })
     }
 
-    /// Rebuilds the minorant for the depth bounds `depths` (weights `wᵢ = s² / Dᵢ²`).
-    fn set_depths(&mut self, depths: Vec<f64>) {
-        self.gram = SMatrix::zeros();
-        self.eta2 = 0.0;
-        for ((x, b), d) in self.corr.points3d.iter().zip(&self.bearings).zip(&depths) {
-            let w = self.s_min * self.s_min / (d * d);
-            let p = Matrix3::identity() - b * b.transpose();
-            let mut m = SMatrix::<f64, 3, 12>::zeros();
-            m.fixed_view_mut::<3, 9>(0, 0).copy_from(&lift(x));
-            m.fixed_view_mut::<3, 3>(0, 9).copy_from(&Matrix3::identity());
-            self.gram += (m.transpose() * p * m) * w;
-            self.eta2 += w * x.norm_squared();
-        }
-        self.depths = depths;
-    }
-
-    /// The minorant at rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀`.
-    fn quadratic(&self, r: &Matrix3<f64>) -> (Matrix3<f64>, Vector3<f64>, f64) {
-        let v = vec_row_major(r);
-        let a = self.gram.fixed_view::<9, 9>(0, 0);
-        let b = self.gram.fixed_view::<9, 3>(0, 9);
-        let c = self.gram.fixed_view::<3, 3>(9, 9).into_owned();
-        let g: Vector3<f64> = b.transpose() * v;
-        let c0 = (v.transpose() * a * v)[0];
-        (c, g, c0)
+    /// Step 2's minorant for the depth bounds `depths`.
+    fn minorant(&self, depths: Vec<f64>) -> Minorant {
+        Minorant::build(&self.corr.points3d, &self.bearings, self.s_min, depths)
     }
 }
 
-/// One cube of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-width.
+/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²`, `wᵢ = s² / Dᵢ²`, for one set of depth
+/// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
+/// (row-major `vec`), and `η = √(Σ wᵢ ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q` moves
+/// by at most `θ η`.
+///
+/// The Hessian `C` in `t` does not depend on the rotation: `C⁻¹`, its largest eigenvalue, the
+/// `bᵢᵀ C⁻¹ bᵢ` and the ellipsoid's whitened extent are computed once per minorant, not per box.
+struct Minorant {
+    depths: Vec<f64>,
+    gram: SMatrix<f64, 12, 12>,
+    eta: f64,
+    /// The lower-right block `C` and its inverse (`None`: the minorant does not fix `t`).
+    c: Matrix3<f64>,
+    c_inv: Option<Matrix3<f64>>,
+    /// `λ_max(C⁻¹)`: the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` reaches `‖t − t*‖ ≤ √(slack λ_max)`.
+    c_inv_max: f64,
+    /// `bᵢᵀ C⁻¹ bᵢ`: over that ellipsoid `bᵢ · t` moves by at most `√(slack bᵢᵀ C⁻¹ bᵢ)`.
+    bearing_spread: Vec<f64>,
+    /// [`Whitening::ellipsoid_factor`] of `C`, once it is needed.
+    extent: OnceCell<Option<f64>>,
+}
+
+impl Minorant {
+    /// The minorant for the depth bounds `depths` of the points `points` seen along the unit
+    /// bearings `bearings` (weights `wᵢ = s² / Dᵢ²`, `s` the least singular value of `K`'s 2x2 block).
+    fn build(points: &[Vector3<f64>], bearings: &[Vector3<f64>], s_min: f64, depths: Vec<f64>) -> Minorant {
+        // With z = (vec R, t) (row-major vec), R Xᵢ + t = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, I], and with
+        // Pᵢ = I − bᵢbᵢᵀ a point's term is wᵢ zᵀ Lᵢᵀ Pᵢ Lᵢ z, where Lᵢᵀ Pᵢ Lᵢ = Lᵢᵀ Lᵢ − uᵢ uᵢᵀ,
+        // uᵢ = Lᵢᵀ bᵢ = (bᵢ ⊗ Xᵢ, bᵢ). The blocks of Σ wᵢ Lᵢᵀ Lᵢ are I ⊗ M, I ⊗ s and (Σ wᵢ) I with
+        // M = Σ wᵢ XᵢXᵢᵀ and s = Σ wᵢ Xᵢ; the upper triangle of Σ wᵢ uᵢ uᵢᵀ is accumulated by hand
+        // (a search rebuilds the minorant about once every ten boxes).
+        let mut outer = [[0.0f64; 12]; 12];
+        let (mut m, mut s, mut w_sum, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0, 0.0);
+        for ((x, b), d) in points.iter().zip(bearings).zip(&depths) {
+            let w = s_min * s_min / (d * d);
+            m += x * x.transpose() * w;
+            s += x * w;
+            w_sum += w;
+            eta2 += w * x.norm_squared();
+            let u: [f64; 12] = std::array::from_fn(|i| if i < 9 { b[i / 3] * x[i % 3] } else { b[i - 9] });
+            for (i, row) in outer.iter_mut().enumerate() {
+                let wu = w * u[i];
+                for (entry, uj) in row[i..].iter_mut().zip(&u[i..]) {
+                    *entry += wu * uj;
+                }
+            }
+        }
+        let mut gram = SMatrix::<f64, 12, 12>::zeros();
+        for (i, row) in outer.iter().enumerate() {
+            for (j, entry) in row.iter().enumerate().skip(i) {
+                gram[(i, j)] = -entry;
+                gram[(j, i)] = -entry;
+            }
+        }
+        for r in 0..3 {
+            let mut block = gram.fixed_view_mut::<3, 3>(3 * r, 3 * r);
+            block += m;
+            let mut column = gram.fixed_view_mut::<3, 1>(3 * r, 9 + r);
+            column += s;
+            let mut row = gram.fixed_view_mut::<1, 3>(9 + r, 3 * r);
+            row += s.transpose();
+            gram[(9 + r, 9 + r)] += w_sum;
+        }
+        // What the bound of a box needs of `C` (the same for every box that shares the minorant).
+        let c = gram.fixed_view::<3, 3>(9, 9).into_owned();
+        let c_inv = c.try_inverse();
+        Minorant {
+            depths,
+            gram,
+            eta: eta2.sqrt(),
+            c,
+            c_inv,
+            c_inv_max: c_inv.map_or(f64::NAN, |c_inv| largest_eigenvalue(&c_inv)),
+            bearing_spread: c_inv.map_or_else(Vec::new, |c_inv| bearings.iter().map(|b| b.dot(&(c_inv * b))).collect()),
+            extent: OnceCell::new(),
+        }
+    }
+
+    /// The minorant at the rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀` (`C` is
+    /// [`Self::c`]).
+    fn at(&self, r: &Matrix3<f64>) -> (Vector3<f64>, f64) {
+        let v = SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]);
+        let a = self.gram.fixed_view::<9, 9>(0, 0);
+        let b = self.gram.fixed_view::<9, 3>(0, 9);
+        let g: Vector3<f64> = b.transpose() * v;
+        let c0 = (v.transpose() * a * v)[0];
+        (g, c0)
+    }
+}
+
+/// A minorant for tighter depth bounds without a rebuild: if every weight may grow at least by the
+/// factor `κ` (`Dᵢ' ≤ Dᵢ / √κ` for all `i`), then `κ Q` is a minorant for the depth bounds `Dᵢ'`, as
+/// every term of `Q` is. `κ Q` is `Q` for the depth bounds `Dᵢ / √κ` ([`Self::depths`]).
+#[derive(Clone)]
+struct Scaled {
+    minorant: Rc<Minorant>,
+    scale: f64,
+}
+
+impl Scaled {
+    /// The depth bounds `Dᵢ / √κ` for which `κ Q` is the minorant.
+    fn depths(&self) -> impl Iterator<Item = f64> + '_ {
+        let shrink = self.scale.sqrt();
+        self.minorant.depths.iter().map(move |d| d / shrink)
+    }
+
+    /// What a box whose poses of `S` keep the points within `reach` hands down: the scale that takes
+    /// up the least growth of the weights, or a rebuilt minorant when the weights grow on average
+    /// by [`REBUILD_GAIN`] more than that.
+    fn tightened(&self, problem: &Problem, reach: Vec<f64>) -> Scaled {
+        let (least, sum) = self
+            .depths()
+            .zip(&reach)
+            .fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
+                let growth = (d / r).powi(2);
+                (least.min(growth), sum + growth)
+            });
+        let mean = sum / reach.len() as f64;
+        if mean >= REBUILD_GAIN * least {
+            Scaled {
+                minorant: Rc::new(problem.minorant(reach)),
+                scale: 1.0,
+            }
+        } else {
+            Scaled {
+                minorant: Rc::clone(&self.minorant),
+                scale: self.scale * least.max(1.0),
+            }
+        }
+    }
+}
+
+/// One box of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-widths. Every rotation of the
+/// box is within the angle `θ = ‖half‖` (half the diagonal) of the centre's: the angle between
+/// `exp(ω) R̂` and `exp(ω_c) R̂` is at most `‖ω − ω_c‖` (Hartley & Kahl 2009, lemma 1).
 #[derive(Clone, Copy)]
 struct Cell {
     centre: Vector3<f64>,
-    half: f64,
+    half: Vector3<f64>,
+}
+
+impl Cell {
+    fn of(region: &Region) -> Self {
+        // Element by element: a slice copy of three numbers would call memcpy for every box.
+        let (l, u) = (&region.lower, &region.upper);
+        let lower = Vector3::new(l[0], l[1], l[2]);
+        let upper = Vector3::new(u[0], u[1], u[2]);
+        Cell {
+            centre: (lower + upper) * 0.5,
+            half: (upper - lower) * 0.5,
+        }
+    }
 }
 
 /// The local metric `‖Δ‖_W = √(Δᵀ W Δ)`, `W = JᵀJ` at `R̂, t̂` in the chart `(ω, τ) ↦ (exp(ω) R̂, t̂ + τ)`:
@@ -260,9 +385,6 @@ struct Whitening {
     /// Largest rotation and translation per unit whitened step: `‖T_ω‖`, `‖T_τ‖` (row blocks).
     alpha_omega: f64,
     alpha_tau: f64,
-    /// The largest whitened length of a rotation step in the cube `[−1, 1]³`: `max √(sᵀ W_ωω s)` over
-    /// its vertices `s` (a convex function peaks at a vertex).
-    cube_scale: f64,
 }
 
 impl Whitening {
@@ -278,16 +400,22 @@ impl Whitening {
             w: *w,
             alpha_omega: block_norm(0),
             alpha_tau: block_norm(3),
-            cube_scale: [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
-                .iter()
-                .map(|&(b, c)| {
-                    let v = Vector3::new(1.0, b, c);
-                    (v.transpose() * w.fixed_view::<3, 3>(0, 0) * v)[0]
-                })
-                .fold(0.0f64, f64::max)
-                .sqrt(),
             t,
         })
+    }
+
+    /// The largest whitened length `√(sᵀ W_ωω s)` of a rotation step `s` in the box of half-widths
+    /// `half` around 0: a convex function peaks at a vertex, and `±s` give the same length.
+    fn box_spread(&self, half: &Vector3<f64>) -> f64 {
+        let w = self.w.fixed_view::<3, 3>(0, 0);
+        [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+            .iter()
+            .map(|&(b, c)| {
+                let s = half.component_mul(&Vector3::new(1.0, b, c));
+                (s.transpose() * w * s)[0]
+            })
+            .fold(0.0f64, f64::max)
+            .sqrt()
     }
 
     /// `‖Δ‖_W` of the chart step `(ω, τ)`.
@@ -296,13 +424,12 @@ impl Whitening {
         (d.transpose() * self.w * d)[0].max(0.0).sqrt()
     }
 
-    /// The largest `‖(0, τ)‖_W` over the ellipsoid `τᵀ C τ ≤ slack`: `√(slack λ_max(L⁻¹ W_ττ L⁻ᵀ))`
-    /// with `C = L Lᵀ`.
-    fn ellipsoid_extent(&self, c: &Matrix3<f64>, slack: f64) -> Option<f64> {
+    /// The largest `‖(0, τ)‖_W` over the ellipsoid `τᵀ C τ ≤ slack` is `√(slack λ)`, with this
+    /// `λ = λ_max(L⁻¹ W_ττ L⁻ᵀ)` and `C = L Lᵀ`.
+    fn ellipsoid_factor(&self, c: &Matrix3<f64>) -> Option<f64> {
         let l_inv = c.cholesky()?.l().try_inverse()?;
         let w_tt = self.w.fixed_view::<3, 3>(3, 3).into_owned();
-        let lambda = largest_eigenvalue(&(l_inv * w_tt * l_inv.transpose()));
-        Some((slack * lambda).max(0.0).sqrt())
+        Some(largest_eigenvalue(&(l_inv * w_tt * l_inv.transpose())))
     }
 }
 
@@ -322,8 +449,8 @@ fn largest_eigenvalue(m: &Matrix3<f64>) -> f64 {
     lambda + 1e-9 * (lambda.abs() + p)
 }
 
-/// What [`localise`] records for the test hook: the cells kept, the cells pruned, and the half-width
-/// at which cells stop being split.
+/// What the test hook [`testing::rotation_search`] records: the cells kept, the cells pruned, and the
+/// half-width at which cells stop being split.
 struct Record {
     min_half: f64,
     cells: Vec<testing::KeptCell>,
@@ -331,135 +458,255 @@ struct Record {
     behind: Vec<testing::KeptCell>,
 }
 
-/// What the rotation search proved: every pose of `S` lies within `radius` of `(R̂, t̂)` in the
-/// whitened metric.
+/// Step 4's bound for the cells inside the ball: the local bound over the ball of the largest cell
+/// radius met so far (it holds the cell, so the bound is valid for it), recomputed only when a cell
+/// reaches farther; over the ball of the target radius where that cannot be computed.
+struct BallBound<'m> {
+    model: &'m LocalModel,
+    /// The radius and raw bound last computed (`radius` 0 before the first cell).
+    radius: f64,
+    bound: f64,
+    /// The raw bound over the ball of the target radius (every cell inside the ball lies in it).
+    at_target: f64,
+}
+
+impl BallBound<'_> {
+    /// A valid lower bound of `f` over the whitened ball of `radius` (at most the target).
+    fn at(&mut self, radius: f64) -> f64 {
+        if radius > self.radius {
+            match self.model.raw_bound(radius) {
+                Some(bound) => (self.radius, self.bound) = (radius, bound),
+                None => return self.at_target,
+            }
+        }
+        self.bound
+    }
+}
+
+/// What becomes of a cell inside the whitened ball of the target radius.
+enum InsideBall<'m> {
+    /// The certificate: the cell's bound is step 4's over the ball ([`BallBound`]).
+    Bound(BallBound<'m>),
+    /// The test hook: the cell is recorded and closed at the level `f̂` (no bound is claimed, and the
+    /// hook reports none). So are cells split down to the hook's `min_half`.
+    Record(&'m mut Record),
+}
+
+/// Steps 1-3 of the module documentation as a [`BoundingOracle`] of the shared branch and bound,
+/// over boxes of rotation vectors `ω` (`R = exp(ω) R̂`) inside `[−π, π]³`. The incumbent is the local
+/// answer `(R̂, t̂)` of cost `f̂`; there are no other candidates.
+///
+/// The bound of a box with half-diagonal `θ`, centre rotation `R_c` and minorant `Q` at `R_c` (for
+/// the box's depth bounds `Dᵢ`, valid where `‖xᵢ‖ ≤ Dᵢ`, i.e. on `S`): a pose of `S` in the box has
+/// `√(2f) ≥ √Q_{R}(t) ≥ √q_min − θ η` (Minkowski, `q_min = min_t Q`), so `f ≥ ½ (√q_min − θ η)₊²` on
+/// the poses of `S` in the box, and every other pose has `f > f̂`. That bound is handed to the search
+/// unclamped: a box with bound `≥ f̂` holds no pose of `S` and is pruned, and the least bound over
+/// the leaves (at most `f̂`, the cost of the box holding the answer) is the certificate's raw bound.
+/// A box where some point is behind the camera for every `t` of the translation ellipsoid
+/// `Q(t) ≤ (√(2f̂) + θ η)²` (which holds the translation of every pose of `S` in the box) is empty of
+/// `S`; so is a box wholly outside the ball `‖ω‖ ≤ π`, whose rotations are met elsewhere. A box inside
+/// the whitened ball of radius `target` is bounded by step 4 as well ([`InsideBall`]).
+///
+/// What a box hands down to its octants ([`BoundingOracle::Inherited`]) are its depth bounds: the
+/// largest distance each point reaches over its poses of `S`,
+/// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
+/// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants
+/// ([`Scaled`]).
+struct RotationSearch<'a, 'c> {
+    problem: &'a Problem<'c>,
+    whitening: &'a Whitening,
+    pose: &'a Pose,
+    f_hat: f64,
+    target: f64,
+    max_relative_gap: f64,
+    inside_ball: InsideBall<'a>,
+    /// The largest whitened radius `‖(ω, t − t̂)‖_W` of the boxes found inside the ball.
+    radius: f64,
+}
+
+impl BoundingOracle for RotationSearch<'_, '_> {
+    type Candidate = ();
+    /// The minorant for the depth bounds of the box's poses of `S` (`None`: step 1's, for the root).
+    type Inherited = Option<Scaled>;
+
+    fn bound(&mut self, region: &Region) -> Bound<()> {
+        self.bound_with(region, &None).0
+    }
+
+    fn absolute_gap(&self) -> f64 {
+        self.max_relative_gap * CERTIFICATE_COST_FLOOR
+    }
+
+    /// The eight octants of the box (every axis cut at its midpoint): boxes stay cubes.
+    fn subdivide(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
+        let (lo, hi) = (&region.lower, &region.upper);
+        let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
+        // Corners built in place (a clone of the parent's would cost more than the bound of a box).
+        let corner = |pick: [f64; 3]| Corner::from_buf_and_len([pick[0], pick[1], pick[2], 0.0], 3);
+        (0..8)
+            .map(|octant: usize| {
+                let upper_half = |k: usize| octant >> k & 1 == 1;
+                let lower = std::array::from_fn(|k| if upper_half(k) { mid[k] } else { lo[k] });
+                let upper = std::array::from_fn(|k| if upper_half(k) { hi[k] } else { mid[k] });
+                Region {
+                    lower: corner(lower),
+                    upper: corner(upper),
+                }
+            })
+            .collect()
+    }
+
+    fn bound_with(&mut self, region: &Region, inherited: &Option<Scaled>) -> (Bound<()>, Option<Scaled>) {
+        let problem = self.problem;
+        let root = Scaled {
+            minorant: Rc::clone(&problem.root),
+            scale: 1.0,
+        };
+        let scaled = inherited.as_ref().unwrap_or(&root);
+        let (minorant, scale) = (&scaled.minorant, scaled.scale);
+        let cell = Cell::of(region);
+        let bounded = |lower: f64| Bound::Bounded {
+            lower,
+            relaxed_minimizer: None,
+            candidate: None,
+            solver_iterations: 0,
+        };
+        let empty = Bound::Empty { solver_iterations: 0 };
+        // The box's nearest point to the origin: boxes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
+        let nearest = cell.centre.zip_map(&cell.half, |c, h| (c.abs() - h).max(0.0)).norm();
+        if nearest > std::f64::consts::PI {
+            return (empty, None);
+        }
+        let theta = cell.half.norm();
+        let r_c = exp_so3(&cell.centre) * self.pose.rotation;
+        // κ Q: C, g, c₀ and q_min scale by κ, η by √κ, C⁻¹ by 1/κ; t* does not move.
+        let (g, c0) = minorant.at(&r_c);
+        let Some(c_inv) = minorant.c_inv else {
+            return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
+        };
+        let t_star = -(c_inv * g);
+        let q_min = (scale * (c0 - g.dot(&(c_inv * g)))).max(0.0);
+        let eta = minorant.eta * scale.sqrt();
+        let lower = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
+        if !lower.is_finite() {
+            return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
+        }
+        if lower >= self.f_hat {
+            // No pose of S: the search prunes the box (its bound is not below the incumbent).
+            if let InsideBall::Record(r) = &mut self.inside_ball {
+                r.pruned += 1;
+            }
+            return (bounded(lower), None);
+        }
+        // The ellipsoid Q(t) ≤ β² holds the translations of the box's poses of S (slack ≥ 0 since
+        // lower < f̂, up to rounding).
+        let beta = (2.0 * self.f_hat).sqrt() + theta * eta;
+        let slack = (beta * beta - q_min).max(0.0);
+        let kept = |inside_ball: bool| testing::KeptCell {
+            centre: cell.centre,
+            half: cell.half,
+            t_star,
+            c: minorant.c * scale,
+            slack,
+            inside_ball,
+            depths: scaled.depths().collect(),
+        };
+        // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
+        let behind = (problem.corr.points3d.iter().zip(&problem.bearings))
+            .zip(problem.norms.iter().zip(&minorant.bearing_spread))
+            .any(|((x, b), (norm, spread))| {
+                let reach = b.dot(&(r_c * x + t_star)) + (slack * spread / scale).max(0.0).sqrt();
+                reach <= -theta * norm
+            });
+        if behind {
+            if let InsideBall::Record(r) = &mut self.inside_ball {
+                r.pruned += 1;
+                r.behind.push(kept(false));
+            }
+            return (empty, None);
+        }
+        // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
+        // inequality over the three parts of the step).
+        if cell.centre.norm() + theta <= 1.0 {
+            let factor = minorant
+                .extent
+                .get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
+            if let Some(extent) = factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt()) {
+                let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
+                    + self.whitening.box_spread(&cell.half)
+                    + extent;
+                if radius <= self.target {
+                    self.radius = self.radius.max(radius);
+                    let lower = match &mut self.inside_ball {
+                        InsideBall::Bound(ball) => lower.max(ball.at(radius)),
+                        InsideBall::Record(r) => {
+                            r.cells.push(kept(true));
+                            self.f_hat
+                        }
+                    };
+                    return (bounded(lower), None);
+                }
+            }
+        }
+        if let InsideBall::Record(r) = &mut self.inside_ball {
+            if cell.half.max() <= r.min_half {
+                r.cells.push(kept(false));
+                return (bounded(self.f_hat), None);
+            }
+        }
+        // The depth bounds the octants inherit, and the minorant for them (else the octants share
+        // this box's).
+        let spread = (slack * minorant.c_inv_max / scale).max(0.0).sqrt();
+        let reach: Vec<f64> = (problem.corr.points3d.iter().zip(&problem.norms))
+            .zip(scaled.depths())
+            .map(|((x, norm), d)| ((r_c * x + t_star).norm() + theta * norm + spread).min(d))
+            .collect();
+        let handed_down = scaled.tightened(problem, reach);
+        (bounded(lower), Some(handed_down))
+    }
+}
+
+/// What the rotation search proved.
 struct Localised {
+    /// The least bound over the leaves of the search (unclamped; `+∞` when every box was proved
+    /// empty of `S`).
+    raw_lower_bound: f64,
+    /// The largest whitened radius of the boxes inside the ball (0 when there is none).
     radius: f64,
     nodes: usize,
 }
 
-/// Steps 1-3 of the module documentation: cells are split until they are pruned or lie inside the
-/// whitened ball of radius `target`, level by level. After each level the depth bounds are tightened
-/// to the largest distance any point reaches over the cells still to be split (their rotation
-/// cubes and translation ellipsoids hold every pose of `S` left to examine), and the minorant is
-/// rebuilt with them.
-///
-/// `record` (the test hook [`testing::rotation_search`] only) collects the cells that are not pruned,
-/// and stops splitting cells at its `min_half`.
-fn localise(
-    problem: &mut Problem,
-    whitening: &Whitening,
-    pose: &Pose,
-    f_hat: f64,
-    target: f64,
-    max_nodes: usize,
-    mut record: Option<&mut Record>,
-) -> std::result::Result<Localised, String> {
-    let root = (2.0 * f_hat).sqrt();
+/// Runs `search` on the shared branch and bound from the root box `[−π, π]³` with the incumbent
+/// `f̂`, until the gap closes (`Err` when it reaches `max_nodes` or is stopped).
+fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Result<Localised, String> {
     let pi = std::f64::consts::PI;
-    let sqrt3 = 3f64.sqrt();
-    let mut level: Vec<Cell> = vec![Cell {
-        centre: Vector3::zeros(),
-        half: pi,
-    }];
-    let mut out = Localised { radius: 0.0, nodes: 0 };
-    while !level.is_empty() {
-        let mut next = Vec::new();
-        let mut reach = vec![0.0f64; problem.depths.len()];
-        for cell in level {
-            out.nodes += 1;
-            if out.nodes > max_nodes {
-                return Err(format!(
-                    "not proved: the rotation search reached max_nodes = {max_nodes}"
-                ));
-            }
-            if let Some(reason) = stop_reason() {
-                return Err(format!("not proved: {} during the rotation search", reason.describe()));
-            }
-            // The cube's nearest point to the origin: cubes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
-            let nearest = cell.centre.map(|c| (c.abs() - cell.half).max(0.0)).norm();
-            if nearest > pi {
-                continue;
-            }
-            let theta = sqrt3 * cell.half;
-            let r_c = exp_so3(&cell.centre) * pose.rotation;
-            let (c, g, c0) = problem.quadratic(&r_c);
-            let Some(c_inv) = c.try_inverse() else {
-                return Err("not proved: the minorant does not fix the translation".into());
-            };
-            let t_star = -(c_inv * g);
-            let q_min = (c0 - g.dot(&(c_inv * g))).max(0.0);
-            let beta = root + theta * problem.eta2.sqrt();
-            let slack = beta * beta - q_min;
-            if slack < 0.0 {
-                if let Some(r) = record.as_deref_mut() {
-                    r.pruned += 1;
-                }
-                continue;
-            }
-            // Cheirality: a point behind the camera for every t of the ellipsoid.
-            let behind = problem.corr.points3d.iter().zip(&problem.bearings).any(|(x, b)| {
-                let reach = b.dot(&(r_c * x + t_star)) + (slack * b.dot(&(c_inv * b))).max(0.0).sqrt();
-                reach <= -theta * x.norm()
-            });
-            let kept = |inside_ball: bool| testing::KeptCell {
-                centre: cell.centre,
-                half: cell.half,
-                t_star,
-                c,
-                slack,
-                inside_ball,
-            };
-            if behind {
-                if let Some(r) = record.as_deref_mut() {
-                    r.pruned += 1;
-                    r.behind.push(kept(false));
-                }
-                continue;
-            }
-            // Whitened radius of the cell: centre, rotation spread and translation ellipsoid (triangle
-            // inequality over the three parts of the step).
-            if cell.centre.norm() + theta <= 1.0 {
-                let extent = whitening
-                    .ellipsoid_extent(&c, slack)
-                    .ok_or("not proved: the minorant does not fix the translation")?;
-                let radius = whitening.length(&cell.centre, &(t_star - pose.translation))
-                    + cell.half * whitening.cube_scale
-                    + extent;
-                if radius <= target {
-                    out.radius = out.radius.max(radius);
-                    if let Some(r) = record.as_deref_mut() {
-                        r.cells.push(kept(true));
-                    }
-                    continue;
-                }
-            }
-            if let Some(r) = record.as_deref_mut() {
-                if cell.half <= r.min_half {
-                    r.cells.push(kept(false));
-                    continue;
-                }
-            }
-            // ‖R x + t‖ ≤ ‖R_c x + t*‖ + θ ‖x‖ + ‖t − t*‖ over the cell.
-            let spread = (slack * largest_eigenvalue(&c_inv)).max(0.0).sqrt();
-            for ((x, r), d) in problem.corr.points3d.iter().zip(reach.iter_mut()).zip(&problem.depths) {
-                *r = r.max(((r_c * x + t_star).norm() + theta * x.norm() + spread).min(*d));
-            }
-            let h = 0.5 * cell.half;
-            for i in 0..8 {
-                let s = |k: usize| if i >> k & 1 == 1 { h } else { -h };
-                next.push(Cell {
-                    centre: cell.centre + Vector3::new(s(0), s(1), s(2)),
-                    half: h,
-                });
-            }
-        }
-        if !next.is_empty() && reach.iter().zip(&problem.depths).any(|(r, d)| *r < 0.9 * d) {
-            problem.set_depths(reach);
-        }
-        level = next;
+    let root = Region::new(vec![-pi; 3], vec![pi; 3]);
+    let opts = BranchAndBoundOptions {
+        max_relative_gap: search.max_relative_gap,
+        max_nodes,
+        // f = ½ Σ r² ≥ 0.
+        trivial_lower_bound: 0.0,
+    };
+    // A stop requested before the search ends it before its first box (the search polls it before
+    // every split; exact data can close the gap at the root).
+    let stopped = |reason: StopReason| format!("not proved: {} during the rotation search", reason.describe());
+    if let Some(reason) = stop_reason() {
+        return Err(stopped(reason));
     }
-    Ok(out)
+    let result = branch_and_bound(search, root, Some((search.f_hat, ())), &opts);
+    if let Some(reason) = result.stopped {
+        return Err(stopped(reason));
+    }
+    if !result.converged {
+        return Err(format!(
+            "not proved: the rotation search reached max_nodes = {max_nodes}"
+        ));
+    }
+    Ok(Localised {
+        raw_lower_bound: result.box_lower_bound,
+        radius: search.radius,
+        nodes: result.nodes,
+    })
 }
 
 /// `M` with `aᵀ M a = (a × (a × y)) · c = (a·y)(a·c) − (a·a)(y·c)`.
@@ -796,13 +1043,8 @@ impl LocalModel {
         Ok((whitening, model))
     }
 
-    /// The lower bound of step 4 over the whitened ball of `radius`, or `None` where a depth or a
-    /// projected line may vanish.
-    fn bound(&self, radius: f64) -> Option<f64> {
-        self.raw_bound(radius).map(|b| b.min(self.cost))
-    }
-
-    /// [`Self::bound`] before the clamp to the cost.
+    /// The lower bound of step 4 over the whitened ball of `radius` (unclamped: at most the cost when
+    /// sound, since the ball holds the pose), or `None` where a depth or a projected line may vanish.
     fn raw_bound(&self, radius: f64) -> Option<f64> {
         let k = self.curvature.bound(radius)?;
         Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius))
@@ -833,7 +1075,7 @@ pub fn certify(
              per-observation covariances and distortion are not covered",
         );
     }
-    let mut problem = match Problem::new(camera, corr, cost) {
+    let problem = match Problem::new(camera, corr, cost) {
         Ok(p) => p,
         Err(why) => return Certification::none(why),
     };
@@ -843,31 +1085,37 @@ pub fn certify(
     };
     let gap_of = |lower: f64| relative_gap(model.cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some(target) = BALL_FACTORS.iter().map(|f| f * unit).find(|&radius| {
+    let Some((target, at_target)) = BALL_FACTORS.iter().map(|f| f * unit).find_map(|radius| {
         model
-            .bound(radius)
-            .is_some_and(|lower| gap_of(lower) <= options.max_relative_gap)
+            .raw_bound(radius)
+            .filter(|&raw| gap_of(raw.min(model.cost)) <= options.max_relative_gap)
+            .map(|raw| (radius, raw))
     }) else {
         return Certification::none(format!(
             "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
             (2.0 * cost).sqrt()
         ));
     };
-    let localised = match localise(
-        &mut problem,
-        &whitening,
+    let mut search = RotationSearch {
+        problem: &problem,
+        whitening: &whitening,
         pose,
-        cost,
+        f_hat: cost,
         target,
-        options.max_nodes_or(MAX_CELLS),
-        None,
-    ) {
+        max_relative_gap: options.max_relative_gap,
+        inside_ball: InsideBall::Bound(BallBound {
+            model: &model,
+            radius: 0.0,
+            bound: at_target,
+            at_target,
+        }),
+        radius: 0.0,
+    };
+    let localised = match localise(&mut search, options.max_nodes_or(MAX_CELLS)) {
         Ok(l) => l,
         Err(why) => return Certification::none(why),
     };
-    let Some(raw_lower_bound) = model.raw_bound(localised.radius.min(target)) else {
-        return Certification::none("not proved: a depth may vanish within the localised ball");
-    };
+    let raw_lower_bound = localised.raw_lower_bound;
     let lower_bound = raw_lower_bound.min(model.cost);
     let gap = gap_of(lower_bound);
     let certified = gap <= options.max_relative_gap;
@@ -892,37 +1140,41 @@ pub fn certify(
 pub mod testing {
     use super::*;
 
-    /// A rotation cell that the search kept: the cube `‖ω − centre‖_∞ ≤ half` of rotation vectors
-    /// (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the minorant's
-    /// Hessian and minimiser at the cube's centre) that holds the translation of every pose of the
-    /// sublevel set whose rotation lies in the cube.
-    #[derive(Debug, Clone, Copy)]
+    /// A rotation cell that the search kept: the box `|ω − centre| ≤ half` (per axis) of rotation
+    /// vectors (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the
+    /// minorant's Hessian and minimiser at the box's centre, for the box's depth bounds) that holds the
+    /// translation of every pose of the sublevel set whose rotation lies in the box.
+    #[derive(Debug, Clone)]
     pub struct KeptCell {
         pub centre: Vector3<f64>,
-        pub half: f64,
+        /// The half-widths of the box along the three axes.
+        pub half: Vector3<f64>,
         pub t_star: Vector3<f64>,
         pub c: Matrix3<f64>,
         pub slack: f64,
         /// Whether the cell lies inside the whitened ball of the target radius (else it was left
         /// unsplit at the least half-width).
         pub inside_ball: bool,
+        /// The depth bounds `Dᵢ` of the cell's minorant (handed down by its ancestors): the search
+        /// claims `‖R Xᵢ + t‖ ≤ Dᵢ` for every pose of the sublevel set with its rotation in the box.
+        pub depths: Vec<f64>,
     }
 
     /// What [`rotation_search`] proved.
     #[derive(Debug, Clone)]
     pub struct Region {
-        /// Step 1's depth bounds `Dᵢ` (before the search tightens them).
+        /// Step 1's depth bounds `Dᵢ` (the root's: the search tightens them box by box).
         pub depths: Vec<f64>,
         /// The cells neither pruned nor split: every pose of the sublevel set with the points in front
-        /// lies in one of them (rotation in the cube, translation in the ellipsoid).
+        /// lies in one of them (rotation in the box, translation in the ellipsoid).
         pub cells: Vec<KeptCell>,
         /// Cells pruned (by the minorant or by cheirality).
         pub pruned: usize,
         /// The cells pruned by cheirality, with their translation ellipsoids (`inside_ball` false):
         /// the search claims that for each some point `i` has `bᵢ · (R Xᵢ + t) ≤ 0` (`bᵢ` its observed
-        /// ray) for every rotation of the cube and every translation of the ellipsoid.
+        /// ray) for every rotation of the box and every translation of the ellipsoid.
         pub behind: Vec<KeptCell>,
-        /// Cells examined.
+        /// Cells examined (bound computations of the branch and bound).
         pub nodes: usize,
         /// The largest whitened radius `‖(ω, t − t̂)‖_W` (`W = JᵀJ` at the centre) of the cells
         /// inside the ball: a bound on that of every pose of the sublevel set in those cells.
@@ -932,12 +1184,14 @@ pub mod testing {
     /// Step 1's depth bounds for the level `level` (px²): every pose with cost at most `level` and the
     /// points in front has `‖R Xᵢ + t‖ ≤ Dᵢ`.
     pub fn depth_bounds(camera: &Camera, corr: &Correspondences, level: f64) -> std::result::Result<Vec<f64>, String> {
-        Problem::new(camera, corr, level).map(|p| p.depths)
+        Problem::new(camera, corr, level).map(|p| p.root.depths.clone())
     }
 
     /// Steps 1-3 around `centre` (any pose, not necessarily a minimum) for the sublevel set of
-    /// `level` (px², any value, e.g. above the optimum): cells are split until they are pruned, lie
-    /// inside the whitened ball of radius `target`, or reach the half-width `min_half`.
+    /// `level` (px², any value, e.g. above the optimum), on the same branch and bound as [`certify`]
+    /// with the incumbent `level` and no gap: boxes are split until they are pruned (bound at least
+    /// `level`, or behind the camera), lie inside the whitened ball of radius `target`, or reach the
+    /// half-width `min_half`; the last two are recorded and closed.
     pub fn rotation_search(
         camera: &Camera,
         corr: &Correspondences,
@@ -947,8 +1201,7 @@ pub mod testing {
         min_half: f64,
         max_nodes: usize,
     ) -> std::result::Result<Region, String> {
-        let mut problem = Problem::new(camera, corr, level)?;
-        let depths = problem.depths.clone();
+        let problem = Problem::new(camera, corr, level)?;
         let lin = ReprojectionCost::of(camera, corr).linearize(centre);
         let whitening = Whitening::new(&lin.gauss_newton).ok_or("JᵀJ is singular at the pose")?;
         let mut record = Record {
@@ -957,17 +1210,19 @@ pub mod testing {
             pruned: 0,
             behind: vec![],
         };
-        let localised = localise(
-            &mut problem,
-            &whitening,
-            centre,
-            level,
+        let mut search = RotationSearch {
+            problem: &problem,
+            whitening: &whitening,
+            pose: centre,
+            f_hat: level,
             target,
-            max_nodes,
-            Some(&mut record),
-        )?;
+            max_relative_gap: 0.0,
+            inside_ball: InsideBall::Record(&mut record),
+            radius: 0.0,
+        };
+        let localised = localise(&mut search, max_nodes)?;
         Ok(Region {
-            depths,
+            depths: problem.root.depths.clone(),
             cells: record.cells,
             pruned: record.pruned,
             behind: record.behind,

@@ -175,13 +175,14 @@ mod tests {
 
     impl BoundingOracle for Loose {
         type Candidate = f64;
+        type Inherited = ();
         fn bound(&mut self, region: &Region) -> Bound<f64> {
             let (a, b) = (region.lower[0], region.upper[0]);
             let exact = f(0.3f64.clamp(a, b));
             let centre = 0.5 * (a + b);
             Bound::Bounded {
                 lower: exact - self.slack,
-                relaxed_minimizer: vec![centre],
+                relaxed_minimizer: Some(vec![centre]),
                 candidate: Some((f(centre), centre)),
                 solver_iterations: 0,
             }

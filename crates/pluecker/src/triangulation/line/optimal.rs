@@ -330,6 +330,7 @@ impl LineOracle<'_> {
 
 impl BoundingOracle for LineOracle<'_> {
     type Candidate = Vector6<f64>;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Vector6<f64>> {
         let Some(Relaxation { mut p, vars, views }) = self.relaxation(region) else {
@@ -351,7 +352,7 @@ impl BoundingOracle for LineOracle<'_> {
                 let (x, y) = (Vector2::new(p[0], p[1]), Vector2::new(p[2], p[3]));
                 Bound::Bounded {
                     lower: s.lower_bound.max(0.0),
-                    relaxed_minimizer: minimizer,
+                    relaxed_minimizer: Some(minimizer),
                     candidate: self.local_step(&x, &y),
                     solver_iterations: s.iterations,
                 }
@@ -452,8 +453,8 @@ pub(crate) fn optimal_line(
         })
     };
     let root = Region::new(
-        (0..4).map(|k| z_range(k).lo).collect(),
-        (0..4).map(|k| z_range(k).hi).collect(),
+        (0..4).map(|k| z_range(k).lo).collect::<Vec<f64>>(),
+        (0..4).map(|k| z_range(k).hi).collect::<Vec<f64>>(),
     );
     let mut node_local = opts.local;
     node_local.stopping.max_iterations = NODE_LOCAL_ITERATIONS;

@@ -97,6 +97,7 @@ impl TaylorOracle<'_> {
 
 impl BoundingOracle for TaylorOracle<'_> {
     type Candidate = Vector6<f64>;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Vector6<f64>> {
         let empty = Bound::Empty { solver_iterations: 0 };
@@ -127,7 +128,7 @@ impl BoundingOracle for TaylorOracle<'_> {
         };
         Bound::Bounded {
             lower,
-            relaxed_minimizer: centre,
+            relaxed_minimizer: Some(centre),
             candidate,
             solver_iterations: 0,
         }
@@ -311,10 +312,10 @@ mod tests {
                     let region = Region::new(
                         (0..4)
                             .map(|i| (w_min[i] - half * rng.uniform_in(0.2, 1.0)).max(root.lower[i]))
-                            .collect(),
+                            .collect::<Vec<f64>>(),
                         (0..4)
                             .map(|i| (w_min[i] + half * rng.uniform_in(0.2, 1.0)).min(root.upper[i]))
-                            .collect(),
+                            .collect::<Vec<f64>>(),
                     );
                     let bound = oracle.hull_bound(&region);
                     let minimum = box_minimum(&chart, &region.lower, &region.upper)

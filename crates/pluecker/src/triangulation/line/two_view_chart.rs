@@ -295,7 +295,7 @@ impl TwoViewChart {
         // w = M⁻¹ (z − z*): row i of M⁻¹ dotted with the ball.
         let inv = self.map.try_inverse().unwrap_or_else(Matrix4::identity);
         let offset = -(inv * self.centre);
-        let (lower, upper) = (0..4)
+        let (lower, upper): (Vec<f64>, Vec<f64>) = (0..4)
             .map(|i| {
                 let half = radius * inv.row(i).norm();
                 (offset[i] - half, offset[i] + half)

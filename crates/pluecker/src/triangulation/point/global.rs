@@ -210,6 +210,7 @@ impl PointOracle<'_> {
 
 impl BoundingOracle for PointOracle<'_> {
     type Candidate = Vector3<f64>;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Vector3<f64>> {
         let Some(intervals) = self.depth_intervals(region) else {
@@ -271,7 +272,7 @@ impl BoundingOracle for PointOracle<'_> {
                 let candidate = self.polish(&relaxed);
                 Bound::Bounded {
                     lower: sol.lower_bound.max(0.0),
-                    relaxed_minimizer: relaxed,
+                    relaxed_minimizer: Some(relaxed),
                     candidate,
                     solver_iterations,
                 }
@@ -458,7 +459,10 @@ pub fn global_point(
     let from_enclosure = enclosure.as_ref().and_then(|k| {
         let (lo, hi) = k.bounding_box()?;
         Some(Root {
-            region: Region::new(lo.iter().copied().collect(), hi.iter().copied().collect()),
+            region: Region::new(
+                lo.iter().copied().collect::<Vec<f64>>(),
+                hi.iter().copied().collect::<Vec<f64>>(),
+            ),
             depths: vec![(1.0 - k.kappa_d, 1.0 + k.kappa_d); views.len()],
             solver_iterations: 0,
         })

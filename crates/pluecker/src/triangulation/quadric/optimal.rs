@@ -129,6 +129,7 @@ impl QuadricOracle<'_> {
 
 impl BoundingOracle for QuadricOracle<'_> {
     type Candidate = Ellipsoid;
+    type Inherited = ();
 
     fn bound(&mut self, region: &Region) -> Bound<Ellipsoid> {
         let Relaxation { mut p, q, views } = self.relaxation(Some(region));
@@ -147,7 +148,7 @@ impl BoundingOracle for QuadricOracle<'_> {
                     .collect();
                 Bound::Bounded {
                     lower: s.lower_bound.max(0.0),
-                    relaxed_minimizer: minimizer,
+                    relaxed_minimizer: Some(minimizer),
                     candidate: self.local_step(&qv),
                     solver_iterations: s.iterations,
                 }
