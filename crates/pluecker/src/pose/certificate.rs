@@ -1362,6 +1362,99 @@ mod tests {
         assert_eq!(largest_eigenvalue(&(Matrix3::identity() * 2.0)), 2.0 * (1.0 + 1e-9));
     }
 
+    /// Step 2's minorant summed point by point, the oracle of [`Minorant`]:
+    /// `Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²` with `wᵢ = s² / Dᵢ²`.
+    fn minorant_by_points(problem: &Problem, depths: &[f64], r: &Matrix3<f64>, t: &Vector3<f64>) -> f64 {
+        let s2 = problem.s_min * problem.s_min;
+        (problem.corr.points3d.iter().zip(&problem.bearings).zip(depths))
+            .map(|((x, b), d)| {
+                let y = r * x + t;
+                s2 / (d * d) * (y - b * b.dot(&y)).norm_squared()
+            })
+            .sum()
+    }
+
+    /// The minorant's form (`at`, `C`, `C⁻¹`, `bᵢᵀ C⁻¹ bᵢ`, `λ_max(C⁻¹)`) agrees with the per-point sum
+    /// at random poses; and what a box hands down ([`Scaled::tightened`]: a scale, or a rebuild) is,
+    /// at every pose, at most the minorant of the tighter depth bounds it was given, and claims depth
+    /// bounds no tighter than those. Cases: uneven shrinking (a rebuild), even shrinking (a scale
+    /// `κ > 1`), one bound that does not shrink (`κ = 1`), and shrinking by a hair.
+    #[test]
+    fn minorant_and_its_scale_against_the_per_point_sum() {
+        let mut rng = Rng::new(11);
+        let (mut rebuilt, mut scaled_up) = (0, 0);
+        for (f, n, seed) in [(250.0, 6, 1), (800.0, 10, 2), (15000.0, 10, 3), (4000.0, 40, 4)] {
+            let scene = visible_scene(f, n, 0, false, seed);
+            let corr = scene.noisy(1.0, true, &mut rng);
+            let truth = Pose::new(scene.rotation, scene.translation);
+            let f_hat = ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
+            let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+            let root = Scaled {
+                minorant: Rc::clone(&problem.root),
+                scale: 1.0,
+            };
+            let depths = problem.root.depths.clone();
+            let random_pose = |rng: &mut Rng| {
+                let r = exp_so3(&(rng.unit_vector3() * rng.uniform_in(0.0, 0.5))) * truth.rotation;
+                (
+                    r,
+                    truth.translation + rng.unit_vector3() * rng.uniform_in(0.0, 2.0) * truth.translation.norm(),
+                )
+            };
+            // The form against the sum.
+            let m = &problem.root;
+            let c_inv = m.c_inv.unwrap();
+            assert!((m.c * c_inv - Matrix3::identity()).norm() < 1e-9);
+            let c_inv_max = c_inv.symmetric_eigenvalues().max();
+            assert!(m.c_inv_max >= c_inv_max && m.c_inv_max <= c_inv_max * (1.0 + 1e-7));
+            for (b, spread) in problem.bearings.iter().zip(&m.bearing_spread) {
+                assert!((b.dot(&(c_inv * b)) - spread).abs() <= 1e-12 * spread.abs().max(1e-300));
+            }
+            for _ in 0..50 {
+                let (r, t) = random_pose(&mut rng);
+                let (g, c0) = m.at(&r);
+                let form = t.dot(&(m.c * t)) + 2.0 * g.dot(&t) + c0;
+                let sum = minorant_by_points(&problem, &depths, &r, &t);
+                assert!((form - sum).abs() <= 1e-9 * sum.max(1e-300), "{form} vs {sum}");
+            }
+            // What a box hands down, for four kinds of tighter depth bounds.
+            let shrinks: [Box<dyn Fn(usize, &mut Rng) -> f64>; 4] = [
+                Box::new(|_, rng| rng.uniform_in(0.3, 1.0)),
+                Box::new(|_, _| 0.7),
+                Box::new(|i, _| if i == 0 { 1.0 } else { 0.5 }),
+                Box::new(|_, _| 1.0 - 1e-9),
+            ];
+            for shrink in &shrinks {
+                let reach: Vec<f64> = depths
+                    .iter()
+                    .enumerate()
+                    .map(|(i, d)| d * shrink(i, &mut rng))
+                    .collect();
+                let handed = root.tightened(&problem, reach.clone());
+                if handed.scale == 1.0 && !Rc::ptr_eq(&handed.minorant, &problem.root) {
+                    rebuilt += 1;
+                } else if handed.scale > 1.0 {
+                    scaled_up += 1;
+                }
+                for (claimed, r) in handed.depths().zip(&reach) {
+                    assert!(
+                        claimed >= r * (1.0 - 1e-12),
+                        "claimed depth {claimed} below the reach {r}"
+                    );
+                }
+                for _ in 0..50 {
+                    let (r, t) = random_pose(&mut rng);
+                    let (g, c0) = handed.minorant.at(&r);
+                    let form = handed.scale * (t.dot(&(handed.minorant.c * t)) + 2.0 * g.dot(&t) + c0);
+                    let tighter = minorant_by_points(&problem, &reach, &r, &t);
+                    assert!(form <= tighter * (1.0 + 1e-9) + 1e-300, "{form} > {tighter}");
+                }
+            }
+        }
+        // Every branch of `tightened` was taken.
+        assert!(rebuilt > 0 && scaled_up > 0, "{rebuilt} rebuilt, {scaled_up} scaled");
+    }
+
     #[test]
     fn ray_curvature_bounds_the_second_derivative() {
         let mut checked = 0;
