@@ -1455,6 +1455,108 @@ mod tests {
         assert!(rebuilt > 0 && scaled_up > 0, "{rebuilt} rebuilt, {scaled_up} scaled");
     }
 
+    /// `κ Q` for the depth bounds `D` is `Q` for `D / √κ`: a box bounded with a scaled minorant gets the
+    /// bound, the emptiness verdict, the whitened radius and the hand-down of the minorant rebuilt for
+    /// `D / √κ`, to rounding (random boxes near and far from the answer, inside and outside the unit
+    /// ball of rotation vectors, some with a point behind the camera; `κ` = 1, 1.7 and 4).
+    #[test]
+    fn a_scaled_minorant_bounds_a_box_as_the_minorant_rebuilt_for_its_depths() {
+        let mut rng = Rng::new(12);
+        let mut kinds = [0usize; 4]; // split, pruned, inside the ball, behind the camera
+        for (f, n, seed) in [(800.0, 10, 5), (4000.0, 30, 6), (250.0, 6, 7)] {
+            let scene = visible_scene(f, n, 0, false, seed);
+            let corr = scene.noisy(1.0, true, &mut rng);
+            let truth = Pose::new(scene.rotation, scene.translation);
+            let cost = ReprojectionCost::of(&scene.camera, &corr);
+            // A raised level keeps more boxes open.
+            let f_hat = 4.0 * cost.cost(&truth);
+            let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+            let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
+            let mut record = Record {
+                min_half: 0.0,
+                cells: vec![],
+                pruned: 0,
+                behind: vec![],
+            };
+            let mut search = RotationSearch {
+                problem: &problem,
+                whitening: &whitening,
+                pose: &truth,
+                f_hat,
+                target: f64::INFINITY,
+                max_relative_gap: 0.0,
+                inside_ball: InsideBall::Record(&mut record),
+                radius: 0.0,
+            };
+            for kappa in [1.0, 1.7, 4.0] {
+                let scaled = Scaled {
+                    minorant: Rc::clone(&problem.root),
+                    scale: kappa,
+                };
+                let depths: Vec<f64> = scaled.depths().collect();
+                let rebuilt = Scaled {
+                    minorant: Rc::new(Minorant::build(
+                        &corr.points3d,
+                        &problem.bearings,
+                        problem.s_min,
+                        depths,
+                    )),
+                    scale: 1.0,
+                };
+                for _ in 0..300 {
+                    let centre = rng.unit_vector3() * rng.uniform_in(0.0, 3.0);
+                    let half = Vector3::from_fn(|_, _| rng.uniform_in(0.002, 0.2));
+                    let region = Region::new(
+                        (centre - half).iter().copied().collect::<Vec<f64>>(),
+                        (centre + half).iter().copied().collect::<Vec<f64>>(),
+                    );
+                    let mut run = |given: &Scaled| {
+                        search.radius = 0.0;
+                        let (bound, handed) = search.bound_with(&region, &Some(given.clone()));
+                        let lower = match bound {
+                            Bound::Bounded { lower, .. } => lower,
+                            Bound::Empty { .. } => f64::NAN,
+                            Bound::Failed { .. } => panic!("the minorant fixes t"),
+                        };
+                        let depths: Option<Vec<f64>> = handed.map(|h| h.depths().collect());
+                        (lower, search.radius, depths)
+                    };
+                    let (lower_s, radius_s, handed_s) = run(&scaled);
+                    let (lower_r, radius_r, handed_r) = run(&rebuilt);
+                    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-300);
+                    assert!(lower_s.is_nan() == lower_r.is_nan(), "κ = {kappa}: emptiness differs");
+                    if lower_s.is_nan() {
+                        kinds[3] += 1;
+                    }
+                    if !lower_s.is_nan() {
+                        assert!(close(lower_s, lower_r), "κ = {kappa}: bound {lower_s} vs {lower_r}");
+                    }
+                    assert!(
+                        close(radius_s, radius_r),
+                        "κ = {kappa}: radius {radius_s} vs {radius_r}"
+                    );
+                    match (handed_s, handed_r) {
+                        (Some(a), Some(b)) => {
+                            assert!(
+                                a.iter().zip(&b).all(|(x, y)| close(*x, *y)),
+                                "κ = {kappa}: {a:?} vs {b:?}"
+                            );
+                            kinds[0] += 1;
+                        }
+                        (None, None) if radius_s > 0.0 => kinds[2] += 1,
+                        (None, None) if lower_s >= f_hat => kinds[1] += 1,
+                        (None, None) => {}
+                        _ => panic!("κ = {kappa}: one hands down, the other does not"),
+                    }
+                }
+            }
+        }
+        assert!(
+            kinds.iter().all(|&k| k > 0),
+            "split / pruned / inside the ball / behind: {kinds:?}"
+        );
+    }
+
     #[test]
     fn ray_curvature_bounds_the_second_derivative() {
         let mut checked = 0;
