@@ -1424,13 +1424,25 @@ mod tests {
                 Box::new(|i, _| if i == 0 { 1.0 } else { 0.5 }),
                 Box::new(|_, _| 1.0 - 1e-9),
             ];
-            for shrink in &shrinks {
+            for (case, shrink) in shrinks.iter().enumerate() {
                 let reach: Vec<f64> = depths
                     .iter()
                     .enumerate()
                     .map(|(i, d)| d * shrink(i, &mut rng))
                     .collect();
                 let handed = root.tightened(&problem, reach.clone());
+                let is_rebuilt = !Rc::ptr_eq(&handed.minorant, &problem.root);
+                match case {
+                    // Even shrinking is a scale, `1 / 0.7²`; one bound that stays, with the others
+                    // halved, raises the weights on average far more than the least: a rebuild.
+                    1 => assert!(
+                        !is_rebuilt && (handed.scale * 0.49 - 1.0).abs() < 1e-12,
+                        "{}",
+                        handed.scale
+                    ),
+                    2 => assert!(is_rebuilt && handed.scale == 1.0),
+                    _ => {}
+                }
                 if handed.scale == 1.0 && !Rc::ptr_eq(&handed.minorant, &problem.root) {
                     rebuilt += 1;
                 } else if handed.scale > 1.0 {
