@@ -1569,6 +1569,97 @@ mod tests {
         );
     }
 
+    /// The depth bounds a box hands down hold, point by point, at the farthest pose of the box the
+    /// proof covers: the rotation at each corner of the box and at its centre, with the translation
+    /// on the ellipsoid `Q(t) ≤ β²` farthest along the point's direction. The ellipsoid comes from an
+    /// oracle of its own (the minorant summed point by point, minimised over `t` in closed form), not
+    /// from the search's quadratic form.
+    #[test]
+    fn handed_down_depths_hold_at_the_corners_of_the_box_and_the_ellipsoid() {
+        let mut rng = Rng::new(13);
+        let mut checked = 0;
+        for (f, n, seed) in [(800.0, 10, 8), (4000.0, 30, 9), (250.0, 6, 10)] {
+            let scene = visible_scene(f, n, 0, false, seed);
+            let corr = scene.noisy(1.0, true, &mut rng);
+            let truth = Pose::new(scene.rotation, scene.translation);
+            let cost = ReprojectionCost::of(&scene.camera, &corr);
+            let f_hat = 4.0 * cost.cost(&truth);
+            let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+            let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
+            let mut record = Record {
+                min_half: 0.0,
+                cells: vec![],
+                pruned: 0,
+                behind: vec![],
+            };
+            let mut search = RotationSearch {
+                problem: &problem,
+                whitening: &whitening,
+                pose: &truth,
+                f_hat,
+                target: 0.0,
+                max_relative_gap: 0.0,
+                inside_ball: InsideBall::Record(&mut record),
+                radius: 0.0,
+            };
+            let depths = problem.root.depths.clone();
+            let s2 = problem.s_min * problem.s_min;
+            let weights: Vec<f64> = depths.iter().map(|d| s2 / (d * d)).collect();
+            for _ in 0..1000 {
+                let centre = rng.unit_vector3() * rng.uniform_in(0.0, 1.0);
+                let half = Vector3::from_fn(|_, _| rng.uniform_in(0.002, 0.1));
+                let region = Region::new(
+                    (centre - half).iter().copied().collect::<Vec<f64>>(),
+                    (centre + half).iter().copied().collect::<Vec<f64>>(),
+                );
+                let (_, Some(handed)) = search.bound_with(&region, &None) else {
+                    continue;
+                };
+                // The oracle's ellipsoid at the centre rotation: Q(t) = Σ wᵢ ‖Pᵢ (R_c Xᵢ + t)‖².
+                let r_c = exp_so3(&centre) * truth.rotation;
+                let mut c = Matrix3::zeros();
+                let mut g = Vector3::zeros();
+                for ((x, b), w) in corr.points3d.iter().zip(&problem.bearings).zip(&weights) {
+                    let p = (Matrix3::identity() - b * b.transpose()) * *w;
+                    c += p;
+                    g += p * (r_c * x);
+                }
+                let c_inv = c.try_inverse().unwrap();
+                let t_star = -(c_inv * g);
+                let q_min = minorant_by_points(&problem, &depths, &r_c, &t_star);
+                let eta = corr
+                    .points3d
+                    .iter()
+                    .zip(&weights)
+                    .map(|(x, w)| w * x.norm_squared())
+                    .sum::<f64>()
+                    .sqrt();
+                let beta = (2.0 * f_hat).sqrt() + half.norm() * eta;
+                let slack = beta * beta - q_min;
+                for ((i, x), claimed) in corr.points3d.iter().enumerate().zip(handed.depths()) {
+                    if claimed >= depths[i] * (1.0 - 1e-12) {
+                        continue; // capped by the inherited bound, which the ellipsoid may exceed
+                    }
+                    for corner in 0..9 {
+                        let sign = |k: usize| if corner >> k & 1 == 1 { 1.0 } else { -1.0 };
+                        let omega = if corner == 8 {
+                            centre
+                        } else {
+                            centre + Vector3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z)
+                        };
+                        let y = exp_so3(&omega) * truth.rotation * x;
+                        let d = (y + t_star).normalize();
+                        let t = t_star + c_inv * d * (slack / d.dot(&(c_inv * d))).sqrt();
+                        let distance = (y + t).norm();
+                        assert!(distance <= claimed * (1.0 + 1e-9), "point {i}: {distance} > {claimed}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 1000, "{checked} checks");
+    }
+
     #[test]
     fn ray_curvature_bounds_the_second_derivative() {
         let mut checked = 0;
