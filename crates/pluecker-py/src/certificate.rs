@@ -4,6 +4,7 @@
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::{options_class, result_class, Field};
+use crate::nested::NestedOptions;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use pluecker::{Certificate, CertifyOptions, Primitive};
 use pyo3::prelude::*;
@@ -14,6 +15,10 @@ use pyo3::types::PyTuple;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PyCertifyOptions {
     pub(crate) inner: CertifyOptions,
+}
+
+impl NestedOptions for PyCertifyOptions {
+    const CLASS: &'static str = "CertifyOptions";
 }
 
 impl PyCertifyOptions {

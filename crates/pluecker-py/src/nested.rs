@@ -2,9 +2,7 @@
 //! options class, pycolmap style: `options.certify.max_nodes = 10` changes the options that hold it.
 //! Its fields are read into the core's struct when a function is called.
 
-use crate::certificate::PyCertifyOptions;
 use crate::fields::Field;
-use crate::pose::options::PyRansacOptions;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use pyo3::PyClass;
@@ -13,14 +11,6 @@ use pyo3::PyClass;
 pub(crate) trait NestedOptions: PyClass + Clone + Default + PartialEq + Into<PyClassInitializer<Self>> {
     /// The class name in stubs and messages.
     const CLASS: &'static str;
-}
-
-impl NestedOptions for PyRansacOptions {
-    const CLASS: &'static str = "RansacOptions";
-}
-
-impl NestedOptions for PyCertifyOptions {
-    const CLASS: &'static str = "CertifyOptions";
 }
 
 /// One nested options object, held by reference (`Option<Shared<T>>` when it may be unset).

@@ -10,7 +10,7 @@ use crate::certificate::PyCertifyOptions;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
 use crate::fields::options_class;
-use crate::nested::Shared;
+use crate::nested::{NestedOptions, Shared};
 use crate::pose::result::extract_pose;
 use pluecker::pose::{Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
@@ -83,6 +83,10 @@ options_class! {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct PyRansacOptions {
     pub(crate) inner: RansacOptions,
+}
+
+impl NestedOptions for PyRansacOptions {
+    const CLASS: &'static str = "RansacOptions";
 }
 
 impl PyRansacOptions {

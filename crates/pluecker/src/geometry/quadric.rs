@@ -398,7 +398,8 @@ mod tests {
             // The image conic from eqs. 12-13: c = (P L Pᵀ)⁻¹.
             let c = project_dual(&p, &e.dual()).try_inverse().unwrap();
             let ellipse = Ellipse::from_primal(&c).expect("an ellipsoid in front of a camera images as an ellipse");
-            let eye = crate::triangulation::views::centre(&p);
+            // The camera centre: P (eye, 1) = 0.
+            let eye = -(p.fixed_view::<3, 3>(0, 0).try_inverse().unwrap() * p.column(3));
             let points = e.contour_generator(&eye, 24);
             assert_eq!(points.len(), 24);
             for x in &points {
