@@ -6,7 +6,6 @@ use crate::errors::guarded;
 use crate::fields::{result_class, Field};
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
-use pluecker::geometry::testing::interpretation_plane_normal;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use std::collections::hash_map::DefaultHasher;
@@ -89,7 +88,7 @@ result_class! {
             segs.iter()
                 .enumerate()
                 .map(|(i, [a, b])| {
-                    interpretation_plane_normal(&cam, a, b).map_err(|_| pluecker::Error::Degenerate {
+                    cam.interpretation_plane_normal(a, b).map_err(|_| pluecker::Error::Degenerate {
                         what: format!("segments[{i}]: zero-length image segment"),
                     })
                 })

@@ -97,6 +97,15 @@ impl Camera {
         Vector2::new(x, y)
     }
 
+    /// Unit normal of the interpretation plane of the image segment `a`–`b` (pixels), in the camera
+    /// frame: the plane through the centre of projection and the segment (Phong & Horaud 1995, eq. 3).
+    ///
+    /// Fails with [`Error::Degenerate`] when the endpoints coincide (their viewing rays less than
+    /// 1e-12 rad apart, scale-free).
+    pub fn interpretation_plane_normal(&self, a: &Vector2<f64>, b: &Vector2<f64>) -> Result<Vector3<f64>> {
+        crate::geometry::lines::interpretation_plane_normal(self.pixel_to_normalized(a), self.pixel_to_normalized(b))
+    }
+
     /// Normalised `(x, y)` → pixel `(u, v)`.
     pub fn normalized_to_pixel(&self, x: &Vector2<f64>) -> Vector2<f64> {
         Vector2::new(self.fx * x.x + self.skew * x.y + self.cx, self.fy * x.y + self.cy)
@@ -126,6 +135,23 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn interpretation_plane_contains_the_3d_line_and_the_centre() {
+        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 0.0).unwrap();
+        let (pa, pb) = (Vector3::new(1.0, -2.0, 60.0), Vector3::new(-3.0, 4.0, 80.0));
+        let n = cam
+            .interpretation_plane_normal(&cam.project(&pa), &cam.project(&pb))
+            .unwrap();
+        assert!((n.norm() - 1.0).abs() < 1e-12);
+        // Eq. 3: n · FM = 0 for every point M of the line (F is the origin of the camera frame).
+        for s in [-1.0, 0.0, 0.3, 2.0] {
+            let m = pa + s * (pb - pa);
+            assert!(n.dot(&m).abs() < 1e-9 * m.norm());
+        }
+        let px = cam.project(&pa);
+        assert!(cam.interpretation_plane_normal(&px, &px).is_err());
+    }
 
     #[test]
     fn pixel_normalized_round_trip_with_negative_focal_and_skew() {

@@ -13,7 +13,6 @@ pub use quaternion::rotation_distance;
 /// API.
 #[doc(hidden)]
 pub mod testing {
-    pub use super::lines::interpretation_plane_normal;
     pub use super::quadric::centre_shape;
     pub use super::quaternion::{exp_so3, log_so3, skew};
 }

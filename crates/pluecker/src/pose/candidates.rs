@@ -20,7 +20,6 @@ use super::minimal::{solve, Feature};
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::error::Result;
-use crate::geometry::lines::interpretation_plane_normal;
 use crate::rng::Rng;
 use nalgebra::{Matrix3, Vector2, Vector3};
 
@@ -52,7 +51,7 @@ pub fn feature(camera: &Camera, k_inv: &Matrix3<f64>, corr: &Correspondences, k:
     let l = k - corr.n_points();
     let s2 = &corr.lines2d[l];
     Ok(Feature::Line {
-        normal: interpretation_plane_normal(camera, &s2[0], &s2[1])?,
+        normal: camera.interpretation_plane_normal(&s2[0], &s2[1])?,
         endpoints: corr.lines3d[l],
     })
 }

@@ -5,7 +5,7 @@ use super::noise::ObservationNoise;
 use super::Method;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::geometry::lines::{interpretation_plane_normal, lines_from_point_pairs, ObjectLine};
+use crate::geometry::lines::{lines_from_point_pairs, ObjectLine};
 use nalgebra::{DMatrix, Matrix3, SVector, Vector2, Vector3};
 
 /// 2-D/3-D correspondences. Image quantities are pixels, object quantities world coordinates
@@ -408,7 +408,9 @@ pub fn constraints(
         .map(|(i, (s2, s3))| {
             let short = |kind: &str| short_segment(kind, i, c.lines2d.len());
             Ok(LineConstraint {
-                normal: interpretation_plane_normal(camera, &s2[0], &s2[1]).map_err(|_| short("2d"))?,
+                normal: camera
+                    .interpretation_plane_normal(&s2[0], &s2[1])
+                    .map_err(|_| short("2d"))?,
                 object: ObjectLine::from_endpoints(&s3[0], &s3[1]).map_err(|_| short("3d"))?,
             })
         })
