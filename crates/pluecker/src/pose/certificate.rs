@@ -458,6 +458,18 @@ struct Record {
     behind: Vec<testing::KeptCell>,
 }
 
+impl Record {
+    /// Nothing recorded yet; cells stop being split at `min_half`.
+    fn new(min_half: f64) -> Self {
+        Record {
+            min_half,
+            cells: vec![],
+            pruned: 0,
+            behind: vec![],
+        }
+    }
+}
+
 /// Step 4's bound for the cells inside the ball: the local bound over the ball of the largest cell
 /// radius met so far (it holds the cell, so the bound is valid for it), recomputed only when a cell
 /// reaches farther; over the ball of the target radius where that cannot be computed.
@@ -1204,12 +1216,7 @@ pub mod testing {
         let problem = Problem::new(camera, corr, level)?;
         let lin = ReprojectionCost::of(camera, corr).linearize(centre);
         let whitening = Whitening::new(&lin.gauss_newton).ok_or("JᵀJ is singular at the pose")?;
-        let mut record = Record {
-            min_half,
-            cells: vec![],
-            pruned: 0,
-            behind: vec![],
-        };
+        let mut record = Record::new(min_half);
         let mut search = RotationSearch {
             problem: &problem,
             whitening: &whitening,
@@ -1469,6 +1476,38 @@ mod tests {
         assert!(rebuilt > 0 && scaled_up > 0, "{rebuilt} rebuilt, {scaled_up} scaled");
     }
 
+    /// Runs `body` on a rotation search (recording, not bounding, inside the whitened ball of
+    /// `target`) around the true pose of a seeded scene with 1 px noise, at a level raised to 4× the
+    /// true pose's cost so that more boxes stay open.
+    fn with_rotation_search(
+        f: f64,
+        n: usize,
+        seed: u64,
+        rng: &mut Rng,
+        target: f64,
+        body: impl FnOnce(&mut RotationSearch, &mut Rng),
+    ) {
+        let scene = visible_scene(f, n, 0, false, seed);
+        let corr = scene.noisy(1.0, true, rng);
+        let truth = Pose::new(scene.rotation, scene.translation);
+        let cost = ReprojectionCost::of(&scene.camera, &corr);
+        let f_hat = 4.0 * cost.cost(&truth);
+        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
+        let mut record = Record::new(0.0);
+        let mut search = RotationSearch {
+            problem: &problem,
+            whitening: &whitening,
+            pose: &truth,
+            f_hat,
+            target,
+            max_relative_gap: 0.0,
+            inside_ball: InsideBall::Record(&mut record),
+            radius: 0.0,
+        };
+        body(&mut search, rng);
+    }
+
     /// `κ Q` for the depth bounds `D` is `Q` for `D / √κ`: a box bounded with a scaled minorant gets the
     /// bound, the emptiness verdict, the whitened radius and the hand-down of the minorant rebuilt for
     /// `D / √κ`, to rounding (random boxes near and far from the answer, inside and outside the unit
@@ -1478,92 +1517,72 @@ mod tests {
         let mut rng = Rng::new(12);
         let mut kinds = [0usize; 4]; // split, pruned, inside the ball, behind the camera
         for (f, n, seed) in [(800.0, 10, 5), (4000.0, 30, 6), (250.0, 6, 7)] {
-            let scene = visible_scene(f, n, 0, false, seed);
-            let corr = scene.noisy(1.0, true, &mut rng);
-            let truth = Pose::new(scene.rotation, scene.translation);
-            let cost = ReprojectionCost::of(&scene.camera, &corr);
-            // A raised level keeps more boxes open.
-            let f_hat = 4.0 * cost.cost(&truth);
-            let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-            let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
-            let mut record = Record {
-                min_half: 0.0,
-                cells: vec![],
-                pruned: 0,
-                behind: vec![],
-            };
-            let mut search = RotationSearch {
-                problem: &problem,
-                whitening: &whitening,
-                pose: &truth,
-                f_hat,
-                target: f64::INFINITY,
-                max_relative_gap: 0.0,
-                inside_ball: InsideBall::Record(&mut record),
-                radius: 0.0,
-            };
-            for kappa in [1.0, 1.7, 4.0] {
-                let scaled = Scaled {
-                    minorant: Rc::clone(&problem.root),
-                    scale: kappa,
-                };
-                let depths: Vec<f64> = scaled.depths().collect();
-                let rebuilt = Scaled {
-                    minorant: Rc::new(Minorant::build(
-                        &corr.points3d,
-                        &problem.bearings,
-                        problem.s_min,
-                        depths,
-                    )),
-                    scale: 1.0,
-                };
-                for _ in 0..300 {
-                    let centre = rng.unit_vector3() * rng.uniform_in(0.0, 3.0);
-                    let half = Vector3::from_fn(|_, _| rng.uniform_in(0.002, 0.2));
-                    let region = Region::new(
-                        (centre - half).iter().copied().collect::<Vec<f64>>(),
-                        (centre + half).iter().copied().collect::<Vec<f64>>(),
-                    );
-                    let mut run = |given: &Scaled| {
-                        search.radius = 0.0;
-                        let (bound, handed) = search.bound_with(&region, &Some(given.clone()));
-                        let lower = match bound {
-                            Bound::Bounded { lower, .. } => lower,
-                            Bound::Empty { .. } => f64::NAN,
-                            Bound::Failed { .. } => panic!("the minorant fixes t"),
-                        };
-                        let depths: Option<Vec<f64>> = handed.map(|h| h.depths().collect());
-                        (lower, search.radius, depths)
+            with_rotation_search(f, n, seed, &mut rng, f64::INFINITY, |search, rng| {
+                let (problem, f_hat) = (search.problem, search.f_hat);
+                let corr = problem.corr;
+                for kappa in [1.0, 1.7, 4.0] {
+                    let scaled = Scaled {
+                        minorant: Rc::clone(&problem.root),
+                        scale: kappa,
                     };
-                    let (lower_s, radius_s, handed_s) = run(&scaled);
-                    let (lower_r, radius_r, handed_r) = run(&rebuilt);
-                    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-300);
-                    assert!(lower_s.is_nan() == lower_r.is_nan(), "κ = {kappa}: emptiness differs");
-                    if lower_s.is_nan() {
-                        kinds[3] += 1;
-                    }
-                    if !lower_s.is_nan() {
-                        assert!(close(lower_s, lower_r), "κ = {kappa}: bound {lower_s} vs {lower_r}");
-                    }
-                    assert!(
-                        close(radius_s, radius_r),
-                        "κ = {kappa}: radius {radius_s} vs {radius_r}"
-                    );
-                    match (handed_s, handed_r) {
-                        (Some(a), Some(b)) => {
-                            assert!(
-                                a.iter().zip(&b).all(|(x, y)| close(*x, *y)),
-                                "κ = {kappa}: {a:?} vs {b:?}"
-                            );
-                            kinds[0] += 1;
+                    let depths: Vec<f64> = scaled.depths().collect();
+                    let rebuilt = Scaled {
+                        minorant: Rc::new(Minorant::build(
+                            &corr.points3d,
+                            &problem.bearings,
+                            problem.s_min,
+                            depths,
+                        )),
+                        scale: 1.0,
+                    };
+                    for _ in 0..300 {
+                        let centre = rng.unit_vector3() * rng.uniform_in(0.0, 3.0);
+                        let half = Vector3::from_fn(|_, _| rng.uniform_in(0.002, 0.2));
+                        let region = Region::new(
+                            (centre - half).iter().copied().collect::<Vec<f64>>(),
+                            (centre + half).iter().copied().collect::<Vec<f64>>(),
+                        );
+                        let mut run = |given: &Scaled| {
+                            search.radius = 0.0;
+                            let (bound, handed) = search.bound_with(&region, &Some(given.clone()));
+                            let lower = match bound {
+                                Bound::Bounded { lower, .. } => lower,
+                                Bound::Empty { .. } => f64::NAN,
+                                Bound::Failed { .. } => panic!("the minorant fixes t"),
+                            };
+                            let depths: Option<Vec<f64>> = handed.map(|h| h.depths().collect());
+                            (lower, search.radius, depths)
+                        };
+                        let (lower_s, radius_s, handed_s) = run(&scaled);
+                        let (lower_r, radius_r, handed_r) = run(&rebuilt);
+                        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1e-300);
+                        assert!(lower_s.is_nan() == lower_r.is_nan(), "κ = {kappa}: emptiness differs");
+                        if lower_s.is_nan() {
+                            kinds[3] += 1;
                         }
-                        (None, None) if radius_s > 0.0 => kinds[2] += 1,
-                        (None, None) if lower_s >= f_hat => kinds[1] += 1,
-                        (None, None) => {}
-                        _ => panic!("κ = {kappa}: one hands down, the other does not"),
+                        if !lower_s.is_nan() {
+                            assert!(close(lower_s, lower_r), "κ = {kappa}: bound {lower_s} vs {lower_r}");
+                        }
+                        assert!(
+                            close(radius_s, radius_r),
+                            "κ = {kappa}: radius {radius_s} vs {radius_r}"
+                        );
+                        match (handed_s, handed_r) {
+                            (Some(a), Some(b)) => {
+                                assert!(
+                                    a.iter().zip(&b).all(|(x, y)| close(*x, *y)),
+                                    "κ = {kappa}: {a:?} vs {b:?}"
+                                );
+                                kinds[0] += 1;
+                            }
+                            (None, None) if radius_s > 0.0 => kinds[2] += 1,
+                            (None, None) if lower_s >= f_hat => kinds[1] += 1,
+                            (None, None) => {}
+                            _ => panic!("κ = {kappa}: one hands down, the other does not"),
+                        }
                     }
                 }
-            }
+            });
         }
         assert!(
             kinds.iter().all(|&k| k > 0),
@@ -1581,83 +1600,64 @@ mod tests {
         let mut rng = Rng::new(13);
         let mut checked = 0;
         for (f, n, seed) in [(800.0, 10, 8), (4000.0, 30, 9), (250.0, 6, 10)] {
-            let scene = visible_scene(f, n, 0, false, seed);
-            let corr = scene.noisy(1.0, true, &mut rng);
-            let truth = Pose::new(scene.rotation, scene.translation);
-            let cost = ReprojectionCost::of(&scene.camera, &corr);
-            let f_hat = 4.0 * cost.cost(&truth);
-            let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-            let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
-            let mut record = Record {
-                min_half: 0.0,
-                cells: vec![],
-                pruned: 0,
-                behind: vec![],
-            };
-            let mut search = RotationSearch {
-                problem: &problem,
-                whitening: &whitening,
-                pose: &truth,
-                f_hat,
-                target: 0.0,
-                max_relative_gap: 0.0,
-                inside_ball: InsideBall::Record(&mut record),
-                radius: 0.0,
-            };
-            let depths = problem.root.depths.clone();
-            let s2 = problem.s_min * problem.s_min;
-            let weights: Vec<f64> = depths.iter().map(|d| s2 / (d * d)).collect();
-            for _ in 0..1000 {
-                let centre = rng.unit_vector3() * rng.uniform_in(0.0, 1.0);
-                let half = Vector3::from_fn(|_, _| rng.uniform_in(0.002, 0.1));
-                let region = Region::new(
-                    (centre - half).iter().copied().collect::<Vec<f64>>(),
-                    (centre + half).iter().copied().collect::<Vec<f64>>(),
-                );
-                let (_, Some(handed)) = search.bound_with(&region, &None) else {
-                    continue;
-                };
-                // The oracle's ellipsoid at the centre rotation: Q(t) = Σ wᵢ ‖Pᵢ (R_c Xᵢ + t)‖².
-                let r_c = exp_so3(&centre) * truth.rotation;
-                let mut c = Matrix3::zeros();
-                let mut g = Vector3::zeros();
-                for ((x, b), w) in corr.points3d.iter().zip(&problem.bearings).zip(&weights) {
-                    let p = (Matrix3::identity() - b * b.transpose()) * *w;
-                    c += p;
-                    g += p * (r_c * x);
-                }
-                let c_inv = c.try_inverse().unwrap();
-                let t_star = -(c_inv * g);
-                let q_min = minorant_by_points(&problem, &depths, &r_c, &t_star);
-                let eta = corr
-                    .points3d
-                    .iter()
-                    .zip(&weights)
-                    .map(|(x, w)| w * x.norm_squared())
-                    .sum::<f64>()
-                    .sqrt();
-                let beta = (2.0 * f_hat).sqrt() + half.norm() * eta;
-                let slack = beta * beta - q_min;
-                for ((i, x), claimed) in corr.points3d.iter().enumerate().zip(handed.depths()) {
-                    if claimed >= depths[i] * (1.0 - 1e-12) {
-                        continue; // capped by the inherited bound, which the ellipsoid may exceed
+            with_rotation_search(f, n, seed, &mut rng, 0.0, |search, rng| {
+                let (problem, f_hat) = (search.problem, search.f_hat);
+                let (corr, truth) = (problem.corr, *search.pose);
+                let depths = problem.root.depths.clone();
+                let s2 = problem.s_min * problem.s_min;
+                let weights: Vec<f64> = depths.iter().map(|d| s2 / (d * d)).collect();
+                for _ in 0..1000 {
+                    let centre = rng.unit_vector3() * rng.uniform_in(0.0, 1.0);
+                    let half = Vector3::from_fn(|_, _| rng.uniform_in(0.002, 0.1));
+                    let region = Region::new(
+                        (centre - half).iter().copied().collect::<Vec<f64>>(),
+                        (centre + half).iter().copied().collect::<Vec<f64>>(),
+                    );
+                    let (_, Some(handed)) = search.bound_with(&region, &None) else {
+                        continue;
+                    };
+                    // The oracle's ellipsoid at the centre rotation: Q(t) = Σ wᵢ ‖Pᵢ (R_c Xᵢ + t)‖².
+                    let r_c = exp_so3(&centre) * truth.rotation;
+                    let mut c = Matrix3::zeros();
+                    let mut g = Vector3::zeros();
+                    for ((x, b), w) in corr.points3d.iter().zip(&problem.bearings).zip(&weights) {
+                        let p = (Matrix3::identity() - b * b.transpose()) * *w;
+                        c += p;
+                        g += p * (r_c * x);
                     }
-                    for corner in 0..9 {
-                        let sign = |k: usize| if corner >> k & 1 == 1 { 1.0 } else { -1.0 };
-                        let omega = if corner == 8 {
-                            centre
-                        } else {
-                            centre + Vector3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z)
-                        };
-                        let y = exp_so3(&omega) * truth.rotation * x;
-                        let d = (y + t_star).normalize();
-                        let t = t_star + c_inv * d * (slack / d.dot(&(c_inv * d))).sqrt();
-                        let distance = (y + t).norm();
-                        assert!(distance <= claimed * (1.0 + 1e-9), "point {i}: {distance} > {claimed}");
-                        checked += 1;
+                    let c_inv = c.try_inverse().unwrap();
+                    let t_star = -(c_inv * g);
+                    let q_min = minorant_by_points(&problem, &depths, &r_c, &t_star);
+                    let eta = corr
+                        .points3d
+                        .iter()
+                        .zip(&weights)
+                        .map(|(x, w)| w * x.norm_squared())
+                        .sum::<f64>()
+                        .sqrt();
+                    let beta = (2.0 * f_hat).sqrt() + half.norm() * eta;
+                    let slack = beta * beta - q_min;
+                    for ((i, x), claimed) in corr.points3d.iter().enumerate().zip(handed.depths()) {
+                        if claimed >= depths[i] * (1.0 - 1e-12) {
+                            continue; // capped by the inherited bound, which the ellipsoid may exceed
+                        }
+                        for corner in 0..9 {
+                            let sign = |k: usize| if corner >> k & 1 == 1 { 1.0 } else { -1.0 };
+                            let omega = if corner == 8 {
+                                centre
+                            } else {
+                                centre + Vector3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z)
+                            };
+                            let y = exp_so3(&omega) * truth.rotation * x;
+                            let d = (y + t_star).normalize();
+                            let t = t_star + c_inv * d * (slack / d.dot(&(c_inv * d))).sqrt();
+                            let distance = (y + t).norm();
+                            assert!(distance <= claimed * (1.0 + 1e-9), "point {i}: {distance} > {claimed}");
+                            checked += 1;
+                        }
                     }
                 }
-            }
+            });
         }
         assert!(checked > 1000, "{checked} checks");
     }
