@@ -17,9 +17,9 @@
 //! kept inside the middle half of the interval so that every split shrinks the region), or cuts
 //! several axes at once ([`BoundingOracle::subdivide`]).
 //!
-//! A region may hand facts it proved down to the two halves it is split into
+//! A region may hand facts it proved down to the sub-regions it is split into
 //! ([`BoundingOracle::Inherited`], [`BoundingOracle::bound_with`]): what holds on every admissible
-//! point of a region holds on those of its halves, and can tighten their bounds. The pose
+//! point of a region holds on those of its sub-regions, and can tighten their bounds. The pose
 //! certificate hands down depth bounds this way; the triangulation problems hand down nothing (`()`).
 
 use crate::interrupt::{stop_reason, StopReason};
@@ -113,8 +113,8 @@ pub trait BoundingOracle {
     /// A solution of the problem (e.g. a 3-D point).
     type Candidate: Clone;
 
-    /// What the bound of a region hands down to the two halves it is split into: a fact proved for
-    /// every admissible point of the region (so valid on each half), e.g. the pose certificate's
+    /// What the bound of a region hands down to the sub-regions it is split into: a fact proved for
+    /// every admissible point of the region (so valid on each sub-region), e.g. the pose certificate's
     /// depth bounds. The root gets `Default::default()` (nothing proved yet); `()` for a problem that
     /// hands nothing down.
     type Inherited: Clone + Default;
@@ -123,7 +123,7 @@ pub trait BoundingOracle {
     fn bound(&mut self, region: &Region) -> Bound<Self::Candidate>;
 
     /// [`Self::bound`] for a region whose parent handed down `inherited` (the default for the root),
-    /// and what this region hands down to its halves. The search passes each region exactly what its
+    /// and what this region hands down to its sub-regions. The search passes each region exactly what its
     /// own parent handed down. Default: [`Self::bound`], handing `inherited` on unchanged.
     fn bound_with(
         &mut self,
@@ -206,7 +206,7 @@ pub struct BranchAndBoundResult<C> {
     pub solver_iterations: usize,
 }
 
-/// An open region: its box, its splitting hint, and what its bound handed down to its halves.
+/// An open region: its box, its splitting hint, and what its bound hands down to its sub-regions.
 struct Open<I> {
     region: Region,
     hint: Option<Vec<f64>>,
