@@ -1627,7 +1627,7 @@ mod tests {
                     }
                     let c_inv = c.try_inverse().unwrap();
                     let t_star = -(c_inv * g);
-                    let q_min = minorant_by_points(&problem, &depths, &r_c, &t_star);
+                    let q_min = minorant_by_points(problem, &depths, &r_c, &t_star);
                     let eta = corr
                         .points3d
                         .iter()
