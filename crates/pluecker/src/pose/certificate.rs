@@ -16,7 +16,7 @@
 //!    rotation. The line residuals are left out of the minorant (it stays a minorant of `f`): their
 //!    moment form moves with the rotation by the camera distance, not the object size, and only
 //!    slowed the search.
-//! 3. **Rotation search** on the shared branch and bound ([`crate::global::branch_and_bound`], the
+//! 3. **Rotation search** on the shared branch and bound (`global::branch_and_bound`, the
 //!    search of the triangulation certificates; the oracle is `RotationSearch`). Over a box of
 //!    rotation vectors `ω` (`R = exp(ω) R̂`) with half-diagonal `θ`, every rotation is within the angle
 //!    `θ` of the centre's `R_c`, so each residual of the minorant moves by at most `θ ‖Xᵢ‖`. With
