@@ -57,6 +57,9 @@ fn main() {
                 continue;
             };
             times.push(started.elapsed().as_secs_f64() * 1e6);
+            if std::env::var("NODES").is_ok() {
+                eprintln!("nodes {seed} {:?}", result.certificate.as_ref().map(|c| c.nodes));
+            }
             let cost = ReprojectionCost::of(&scene.camera, &corr);
             let mine = cost.cost(&result.pose);
             let mut best = mine;

@@ -143,7 +143,10 @@ pub fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
     if theta < 1e-12 {
         return Matrix3::identity() + skew(w);
     }
-    to_rotation_matrix(&from_axis_angle(w, theta))
+    // The unit quaternion (cos θ/2, sin θ/2 · w/θ), unit to rounding: no normalisation needed.
+    let (s, c) = (0.5 * theta).sin_cos();
+    let v = w * (s / theta);
+    scaled_rotation(&Vector4::new(c, v.x, v.y, v.z))
 }
 
 /// Rotation matrix → rotation vector (axis × angle, angle in `[0, π]`).

@@ -31,6 +31,10 @@ use std::collections::BinaryHeap;
 /// rotations have three, and a search bounds thousands of them), on the heap beyond.
 pub type Corner = SmallVec<[f64; 4]>;
 
+/// The sub-regions a region is cut into: held inline up to eight (the octants of the pose
+/// certificate's boxes), so that a split allocates nothing.
+pub type SubRegions = SmallVec<[Region; 8]>;
+
 /// An axis-aligned box `[lower, upper]` in `ℝᵈ`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Region {
@@ -153,10 +157,10 @@ pub trait BoundingOracle {
     /// halves of the cut [`Self::split`] picks. A problem may cut several axes at once: the pose
     /// certificate cuts a box of rotations into its eight octants, so that its boxes stay cubes and
     /// the work done on every split box is shared by eight children.
-    fn subdivide(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
+    fn subdivide(&self, region: &Region, relaxed_minimizer: Option<&[f64]>) -> SubRegions {
         let (axis, at) = self.split(region, relaxed_minimizer);
         let (left, right) = region.split(axis, at);
-        vec![left, right]
+        SubRegions::from_iter([left, right])
     }
 }
 

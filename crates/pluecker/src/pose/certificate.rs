@@ -58,11 +58,14 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
-use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Corner, Region};
+use crate::global::branch_and_bound::{
+    branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Corner, Region, SubRegions,
+};
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
+use smallvec::SmallVec;
 use std::cell::OnceCell;
 use std::rc::Rc;
 
@@ -323,26 +326,27 @@ struct Scaled {
 
 impl Scaled {
     /// The depth bounds `Dᵢ / √κ` for which `κ Q` is the minorant.
-    fn depths(&self) -> impl Iterator<Item = f64> + '_ {
+    fn depths(&self) -> impl Iterator<Item = f64> + Clone + '_ {
         let shrink = self.scale.sqrt();
         self.minorant.depths.iter().map(move |d| d / shrink)
     }
 
-    /// What a box whose poses of `S` keep the points within `reach` hands down: the scale that takes
-    /// up the least growth of the weights, or a rebuilt minorant when the weights grow on average
-    /// by [`REBUILD_GAIN`] more than that.
-    fn tightened(&self, problem: &Problem, reach: Vec<f64>) -> Scaled {
-        let (least, sum) = self
-            .depths()
-            .zip(&reach)
-            .fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
-                let growth = (d / r).powi(2);
+    /// What a box whose poses of `S` keep the points within `reach` hands down: the depth bounds
+    /// `min(reachᵢ, Dᵢ / √κ)`, met by the scale that takes up the least growth of the weights, or
+    /// by a rebuilt minorant when the weights grow on average by [`REBUILD_GAIN`] more than that.
+    /// (`reach` is read twice when the minorant is rebuilt, and is not stored otherwise.)
+    fn tightened(&self, problem: &Problem, reach: impl Iterator<Item = f64> + Clone) -> Scaled {
+        // A weight grows by (Dᵢ / √κ)² / reachᵢ² where the reach is the tighter bound, else by 1.
+        let (least, sum) =
+            (self.minorant.depths.iter().zip(reach.clone())).fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
+                let (d2, r2) = (d * d, self.scale * r * r);
+                let growth = if r2 < d2 { d2 / r2 } else { 1.0 };
                 (least.min(growth), sum + growth)
             });
-        let mean = sum / reach.len() as f64;
+        let mean = sum / self.minorant.depths.len() as f64;
         if mean >= REBUILD_GAIN * least {
             Scaled {
-                minorant: Rc::new(problem.minorant(reach)),
+                minorant: Rc::new(problem.minorant(self.depths().zip(reach).map(|(d, r)| r.min(d)).collect())),
                 scale: 1.0,
             }
         } else {
@@ -550,7 +554,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
     }
 
     /// The eight octants of the box (every axis cut at its midpoint): boxes stay cubes.
-    fn subdivide(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> Vec<Region> {
+    fn subdivide(&self, region: &Region, _relaxed_minimizer: Option<&[f64]>) -> SubRegions {
         let (lo, hi) = (&region.lower, &region.upper);
         let mid = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
         // Corners built in place (a clone of the parent's would cost more than the bound of a box).
@@ -624,11 +628,15 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             depths: scaled.depths().collect(),
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
-        let behind = (problem.corr.points3d.iter().zip(&problem.bearings))
+        // (Only a point with `b · (R_c x + t*) ≤ −θ ‖x‖` can be: the ellipsoid's term is not negative.)
+        let slack_per_scale = slack / scale;
+        // The points in the camera frame at (R_c, t*), read again for the depth bounds.
+        let centred: SmallVec<[Vector3<f64>; 16]> = problem.corr.points3d.iter().map(|x| r_c * x + t_star).collect();
+        let behind = (centred.iter().zip(&problem.bearings))
             .zip(problem.norms.iter().zip(&minorant.bearing_spread))
-            .any(|((x, b), (norm, spread))| {
-                let reach = b.dot(&(r_c * x + t_star)) + (slack * spread / scale).max(0.0).sqrt();
-                reach <= -theta * norm
+            .any(|((y, b), (norm, spread))| {
+                let depth = b.dot(y);
+                depth <= -theta * norm && depth + (slack_per_scale * spread).max(0.0).sqrt() <= -theta * norm
             });
         if behind {
             if let InsideBall::Record(r) = &mut self.inside_ball {
@@ -668,11 +676,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
-        let spread = (slack * minorant.c_inv_max / scale).max(0.0).sqrt();
-        let reach: Vec<f64> = (problem.corr.points3d.iter().zip(&problem.norms))
-            .zip(scaled.depths())
-            .map(|((x, norm), d)| ((r_c * x + t_star).norm() + theta * norm + spread).min(d))
-            .collect();
+        let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
+        let reach = (centred.iter().zip(&problem.norms)).map(|(y, norm)| y.norm() + theta * norm + spread);
         let handed_down = scaled.tightened(problem, reach);
         (bounded(lower), Some(handed_down))
     }
@@ -1439,7 +1444,7 @@ mod tests {
                     .enumerate()
                     .map(|(i, d)| d * shrink(case, i, &mut rng))
                     .collect();
-                let handed = root.tightened(&problem, reach.clone());
+                let handed = root.tightened(&problem, reach.iter().copied());
                 let is_rebuilt = !Rc::ptr_eq(&handed.minorant, &problem.root);
                 match case {
                     // Even shrinking is a scale, `1 / 0.7²`; one bound that stays, with the others
