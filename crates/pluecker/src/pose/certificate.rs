@@ -331,11 +331,41 @@ impl Scaled {
         self.minorant.depths.iter().map(move |d| d / shrink)
     }
 
+    /// The minorant `κ Q` at the rotation `r`: the minimiser `t*` of `κ Q(r, ·)`, its minimum
+    /// `q_min` and `√κ η` (`None` when `Q` does not fix the translation). `C`, `g`, `c₀` and `q_min`
+    /// scale by `κ`, `η` by `√κ`; `t*` does not move.
+    fn at(&self, r: &Matrix3<f64>) -> Option<(Vector3<f64>, f64, f64)> {
+        let c_inv = self.minorant.c_inv?;
+        let (g, c0) = self.minorant.at(r);
+        let t_star = -(c_inv * g);
+        let q_min = (self.scale * (c0 - g.dot(&(c_inv * g)))).max(0.0);
+        Some((t_star, q_min, self.minorant.eta * self.scale.sqrt()))
+    }
+
+    /// The Minkowski bound `½ (√q_min − θ η)₊²` of the poses at the rotation `r` and those within the
+    /// angle `θ` of it (`−∞` when `Q` does not fix the translation).
+    fn bound_near(&self, r: &Matrix3<f64>, theta: f64) -> f64 {
+        self.at(r).map_or(f64::NEG_INFINITY, |(_, q_min, eta)| {
+            0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2)
+        })
+    }
+
     /// What a box whose poses of `S` keep the points within `reach` hands down: the depth bounds
     /// `min(reachᵢ, Dᵢ / √κ)`, met by the scale that takes up the least growth of the weights, or
     /// by a rebuilt minorant when the weights grow on average by [`REBUILD_GAIN`] more than that.
     /// (`reach` is read twice when the minorant is rebuilt, and is not stored otherwise.)
-    fn tightened(&self, problem: &Problem, reach: impl Iterator<Item = f64> + Clone) -> Scaled {
+    ///
+    /// A rebuilt minorant weighs most the points that came closest: that raises `q_min` but also `η`,
+    /// and where one point came much closer than the others it can weaken the bound. The rebuilt
+    /// minorant is handed down only where it bounds at least as well at the box's centre rotation
+    /// `r_c` over the octants' half-diagonal `θ_octant` (both are valid minorants).
+    fn tightened(
+        &self,
+        problem: &Problem,
+        reach: impl Iterator<Item = f64> + Clone,
+        r_c: &Matrix3<f64>,
+        theta_octant: f64,
+    ) -> Scaled {
         // A weight grows by (Dᵢ / √κ)² / reachᵢ² where the reach is the tighter bound, else by 1.
         let (least, sum) =
             (self.minorant.depths.iter().zip(reach.clone())).fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
@@ -344,16 +374,21 @@ impl Scaled {
                 (least.min(growth), sum + growth)
             });
         let mean = sum / self.minorant.depths.len() as f64;
-        if mean >= REBUILD_GAIN * least {
-            Scaled {
-                minorant: Rc::new(problem.minorant(self.depths().zip(reach).map(|(d, r)| r.min(d)).collect())),
-                scale: 1.0,
-            }
+        let scaled = Scaled {
+            minorant: Rc::clone(&self.minorant),
+            scale: self.scale * least.max(1.0),
+        };
+        if mean < REBUILD_GAIN * least {
+            return scaled;
+        }
+        let rebuilt = Scaled {
+            minorant: Rc::new(problem.minorant(self.depths().zip(reach).map(|(d, r)| r.min(d)).collect())),
+            scale: 1.0,
+        };
+        if rebuilt.bound_near(r_c, theta_octant) >= scaled.bound_near(r_c, theta_octant) {
+            rebuilt
         } else {
-            Scaled {
-                minorant: Rc::clone(&self.minorant),
-                scale: self.scale * least.max(1.0),
-            }
+            scaled
         }
     }
 }
@@ -595,14 +630,9 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         let theta = cell.half.norm();
         let r_c = exp_so3(&cell.centre) * self.pose.rotation;
-        // κ Q: C, g, c₀ and q_min scale by κ, η by √κ, C⁻¹ by 1/κ; t* does not move.
-        let (g, c0) = minorant.at(&r_c);
-        let Some(c_inv) = minorant.c_inv else {
+        let Some((t_star, q_min, eta)) = scaled.at(&r_c) else {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
         };
-        let t_star = -(c_inv * g);
-        let q_min = (scale * (c0 - g.dot(&(c_inv * g)))).max(0.0);
-        let eta = minorant.eta * scale.sqrt();
         let lower = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
         if !lower.is_finite() {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
@@ -678,7 +708,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         // this box's).
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         let reach = (centred.iter().zip(&problem.norms)).map(|(y, norm)| y.norm() + theta * norm + spread);
-        let handed_down = scaled.tightened(problem, reach);
+        let handed_down = scaled.tightened(problem, reach, &r_c, 0.5 * theta);
         (bounded(lower), Some(handed_down))
     }
 }
@@ -1386,15 +1416,35 @@ mod tests {
             .sum()
     }
 
+    /// The Minkowski bound `½ (√q_min − θ η)₊²` at the rotation `r` of the minorant of the depth
+    /// bounds `depths` scaled by `κ`, point by point (the oracle of [`Scaled::bound_near`]): `q_min` from
+    /// the normal equations `Σ wᵢ Pᵢ (R Xᵢ + t) = 0`, `η² = Σ wᵢ ‖Xᵢ‖²`.
+    fn bound_near_by_points(problem: &Problem, depths: &[f64], kappa: f64, r: &Matrix3<f64>, theta: f64) -> f64 {
+        let s2 = problem.s_min * problem.s_min;
+        let (mut lhs, mut rhs, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
+        for ((x, b), d) in problem.corr.points3d.iter().zip(&problem.bearings).zip(depths) {
+            let w = kappa * s2 / (d * d);
+            let p = Matrix3::identity() - b * b.transpose();
+            lhs += p * w;
+            rhs -= p * (r * x) * w;
+            eta2 += w * x.norm_squared();
+        }
+        let t = lhs.lu().solve(&rhs).unwrap();
+        let q_min = kappa * minorant_by_points(problem, depths, r, &t);
+        0.5 * (q_min.sqrt() - theta * eta2.sqrt()).max(0.0).powi(2)
+    }
+
     /// The minorant's form (`at`, `C`, `C⁻¹`, `bᵢᵀ C⁻¹ bᵢ`, `λ_max(C⁻¹)`) agrees with the per-point sum
     /// at random poses; and what a box hands down ([`Scaled::tightened`]: a scale, or a rebuild) is,
     /// at every pose, at most the minorant of the tighter depth bounds it was given, and claims depth
-    /// bounds no tighter than those. Cases: uneven shrinking (a rebuild), even shrinking (a scale
+    /// bounds no tighter than those; a rebuilt minorant is handed down only where it bounds at least
+    /// as well as the scale (point by point). Cases: uneven shrinking, even shrinking (a scale
     /// `κ > 1`), one bound that does not shrink (`κ = 1`), and shrinking by a hair.
     #[test]
     fn minorant_and_its_scale_against_the_per_point_sum() {
         let mut rng = Rng::new(11);
         let (mut rebuilt, mut scaled_up) = (0, 0);
+        let mut choices = [0usize; 2];
         for (f, n, seed) in [(250.0, 6, 1), (800.0, 10, 2), (15000.0, 10, 3), (4000.0, 40, 4)] {
             let scene = visible_scene(f, n, 0, false, seed);
             let corr = scene.noisy(1.0, true, &mut rng);
@@ -1430,31 +1480,53 @@ mod tests {
                 assert!((form - sum).abs() <= 1e-9 * sum.max(1e-300), "{form} vs {sum}");
             }
             // What a box hands down, for four kinds of tighter depth bounds.
-            // Uneven, even, all but one, by a hair.
+            // Uneven, even, all but one, by a hair, one by far.
             let shrink = |case: usize, i: usize, rng: &mut Rng| match case {
                 0 => rng.uniform_in(0.3, 1.0),
                 1 => 0.7,
                 2 if i == 0 => 1.0,
                 2 => 0.5,
-                _ => 1.0 - 1e-9,
+                3 => 1.0 - 1e-9,
+                _ if i == 0 => 0.05,
+                _ => 1.0,
             };
-            for case in 0..4 {
+            // Cases 2 and 4 ten times each, at ten boxes: the choice of the rebuilt minorant.
+            let repeats = |case: usize| if case == 2 || case == 4 { 10 } else { 1 };
+            for case in (0..5).flat_map(|case| std::iter::repeat_n(case, repeats(case))) {
                 let reach: Vec<f64> = depths
                     .iter()
                     .enumerate()
                     .map(|(i, d)| d * shrink(case, i, &mut rng))
                     .collect();
-                let handed = root.tightened(&problem, reach.iter().copied());
+                // A box of the search: its centre rotation some angle away from the truth, its
+                // half-diagonal a fraction of that angle (where the bounds are not all 0).
+                let angle = rng.uniform_in(0.01, 0.5);
+                let r_c = exp_so3(&(rng.unit_vector3() * angle)) * truth.rotation;
+                let theta = angle * rng.uniform_in(0.01, 0.3);
+                let handed = root.tightened(&problem, reach.iter().copied(), &r_c, theta);
                 let is_rebuilt = !Rc::ptr_eq(&handed.minorant, &problem.root);
                 match case {
-                    // Even shrinking is a scale, `1 / 0.7²`; one bound that stays, with the others
-                    // halved, raises the weights on average far more than the least: a rebuild.
+                    // Even shrinking is a scale, `1 / 0.7²`.
                     1 => assert!(
                         !is_rebuilt && (handed.scale * 0.49 - 1.0).abs() < 1e-12,
                         "{}",
                         handed.scale
                     ),
-                    2 => assert!(is_rebuilt && handed.scale == 1.0),
+                    // One bound that stays, with the others halved (or one cut to a twentieth),
+                    // raises the weights on average far more than the least: rebuilt, unless the
+                    // scale `κ = 1` bounds better.
+                    2 | 4 => {
+                        let kept = bound_near_by_points(&problem, &depths, 1.0, &r_c, theta);
+                        let rebuilt = bound_near_by_points(&problem, &reach, 1.0, &r_c, theta);
+                        let tolerance = 1e-9 * kept.max(rebuilt);
+                        if rebuilt > kept + tolerance {
+                            assert!(is_rebuilt && handed.scale == 1.0, "{rebuilt} > {kept}, not rebuilt");
+                            choices[0] += 1;
+                        } else if kept > rebuilt + tolerance {
+                            assert!(!is_rebuilt && handed.scale == 1.0, "{kept} > {rebuilt}, rebuilt");
+                            choices[1] += 1;
+                        }
+                    }
                     _ => {}
                 }
                 if handed.scale == 1.0 && !Rc::ptr_eq(&handed.minorant, &problem.root) {
@@ -1477,8 +1549,9 @@ mod tests {
                 }
             }
         }
-        // Every branch of `tightened` was taken.
+        // Every branch of `tightened` was taken, and both choices of case 2 met.
         assert!(rebuilt > 0 && scaled_up > 0, "{rebuilt} rebuilt, {scaled_up} scaled");
+        assert!(choices[0] > 0 && choices[1] > 0, "rebuilt / kept chosen {choices:?}");
     }
 
     /// Runs `body` on a rotation search (recording, not bounding, inside the whitened ball of
