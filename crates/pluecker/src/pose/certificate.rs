@@ -1,5 +1,6 @@
-//! Certification of the pose: a proved lower bound on the reprojection cost `f = ½ Σ r²` (px²) over
-//! every rotation and translation that keeps the object points in front of the camera.
+//! Certification of the pose: a proved lower bound on the reprojection cost over every rotation and
+//! translation that keeps the object points in front of the camera. This module works with
+//! `f = ½ Σ r²` (px²); the result reports `Σ r² = 2f`.
 //!
 //! The *sublevel-set test*. Let `f̂` be the cost of the returned local minimum `(R̂, t̂)` and `S` the
 //! set of poses, points in front, with `f ≤ f̂`. Every pose of `S` has every residual `‖rᵢ‖ ≤ ε₀ = √(2f̂)`.
@@ -32,7 +33,8 @@
 //!    the gap of `f̂`. Each box hands its octants tighter depth bounds: the largest distance each point
 //!    reaches over the box's poses of `S` (the octants' poses of `S` are among them). If they raise
 //!    every weight at least by `κ`, then `κ Q` is a minorant for them (`Scaled`); the form is rebuilt
-//!    only when the weights grow unevenly.
+//!    only when the weights grow unevenly, and handed down only where it bounds at least as well as
+//!    `κ Q` (a point that came much closer than the others raises `η` more than `√q_min`).
 //! 4. **Local bound along whitened rays.** Write `Δ = s T v` with `‖v‖ = 1` and `Tᵀ JᵀJ T = I`, so that
 //!    `s = ‖Δ‖_W` and the linearised residual moves by one pixel per unit of `s` in every direction.
 //!    Along a ray the rotation is `exp(s a_ω) R̂` (`a = T v`) and a camera-frame point moves as
@@ -119,8 +121,8 @@ impl Certification {
 const DEPTH_PARTNERS: usize = 16;
 /// The rotation search rebuilds a box's minorant for its octants when the tightened depth bounds
 /// raise the weights `wᵢ ∝ 1/Dᵢ²` on average by this factor more than the least of them, which a
-/// scale of the minorant takes up ([`Scaled`]): a rebuild costs O(n) against O(1) for the bound of a
-/// box, and without rebuilds the f = 15000 px scenes lose certificates.
+/// scale of the minorant takes up ([`Scaled`]): a rebuild costs about as much as ten boxes' bounds,
+/// and without rebuilds the f = 15000 px scenes lose certificates.
 const REBUILD_GAIN: f64 = 1.2;
 /// Intervals of the one-dimensional minimisation of the local bound.
 const LOCAL_INTERVALS: usize = 256;
