@@ -171,11 +171,46 @@ def test_bad_ambiguity_threshold_is_an_option_error():
         pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=pluecker.PoseOptions(ambiguity_threshold=-1.0))
 
 
-def test_robust_path_says_why_it_is_not_certified():
-    scene, p2, _ = _noisy("general", 30, 0, 3)
-    res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=pluecker.PoseOptions(certify=pluecker.CertifyOptions(), ransac=pluecker.RansacOptions()))
-    assert res.certified is False and res.certificate is None and "robust" in res.details.uncertified_reason
-    assert res.status == "gap_not_closed"
+def test_robust_answer_is_certified_on_its_inliers():
+    """A robust result's certificate bounds the cost over its final inliers: the oracle's cost over
+    the inliers the result names is the reported cost, the outliers are not among them, and no pose
+    found by the oracle's many-start search on those inliers beats the raw bound."""
+    certified = 0
+    for seed in range(4):
+        scene, p2, _ = _noisy("general", 40, 0, seed)
+        rng = np.random.default_rng(100 + seed)
+        bad = rng.choice(40, 10, replace=False)
+        p2 = p2.copy()
+        p2[bad] += rng.uniform(50.0, 200.0, (10, 2)) * rng.choice([-1.0, 1.0], (10, 2))
+        options = pluecker.PoseOptions(certify=pluecker.CertifyOptions(), ransac=pluecker.RansacOptions(seed=seed))
+        res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=options)
+        mask = np.asarray(res.inliers_points)
+        assert not mask[bad].any() and mask.sum() >= 25
+        K = oracle.K_of(scene["camera"])
+        data = (p2[mask], scene["points3d"][mask], None, None)
+        cost = oracle.cost(K, res.pose.rotation, res.pose.translation, *data)
+        assert cost == pytest.approx(res.cost / 2, rel=1e-9)
+        cert = res.certificate
+        if res.certified:
+            certified += 1
+            assert res.status == "success" and cert.kind == "sublevel_set"
+            raw = cert.raw_lower_bound / 2
+            assert (cost - raw) / cost <= 1e-3 + 1e-12
+            minima = oracle.many_start(K, scene["R"], scene["t"], data, 8, np.random.default_rng(seed))
+            assert raw <= minima[0][2] * (1 + 1e-9), (raw, minima[0][2])
+        else:
+            assert res.status == "gap_not_closed" and res.details.uncertified_reason.startswith("not ")
+    assert certified >= 3
+
+
+def test_robust_answer_that_is_not_a_success_is_not_certified():
+    """Too few inliers: no certificate is attempted, and the status says why."""
+    scene, p2, _ = _noisy("general", 12, 0, 5)
+    p2 = p2 + np.random.default_rng(5).uniform(-300.0, 300.0, p2.shape)
+    options = pluecker.PoseOptions(certify=pluecker.CertifyOptions(), ransac=pluecker.RansacOptions(seed=5))
+    res = pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=options)
+    assert res.status != "success" and not res.certified and res.certificate is None
+    assert res.details.uncertified_reason.startswith("not attempted: status")
 
 
 def test_narrow_lines_without_a_pose_in_front_use_the_reserve_samples():

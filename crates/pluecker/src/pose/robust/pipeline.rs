@@ -1,18 +1,18 @@
 //! The robust pipeline of [`crate::pose::estimate_pose`]: validation → LO-RANSAC in the conditioned
-//! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose.
+//! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose → on
+//! request, the certificate of global optimality of the cost over the final inliers.
 
-use super::super::certificate::Certification;
-use super::super::certificate::NOT_REQUESTED;
+use super::super::certificate::{certify, Certification, NOT_REQUESTED, PINHOLE_ONLY};
 use super::super::correspondences::{Conditioning, Correspondences};
 use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
-use super::super::reprojection::Pose;
+use super::super::reprojection::{Pose, ReprojectionCost};
 use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
 use crate::error::{Error, Result};
-use crate::optim::{Summary, Termination};
+use crate::optim::{Objective, Summary, Termination};
 use nalgebra::{Matrix3, Vector3};
 use std::time::Instant;
 
@@ -125,10 +125,20 @@ pub(crate) fn estimate_robust(
     let required = outcome.report.required_inliers;
     let failure = failure.or_else(|| (count(&points) + count(&lines) < required).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
-    let certification = Certification::none(match opts.certify {
-        None => NOT_REQUESTED,
-        Some(_) => "not available for the robust estimator (the inlier set is not certified)",
-    });
+    // The certificate, as for the non-robust pipeline, of the cost over the final inliers.
+    let certification = match &opts.certify {
+        None => Certification::none(NOT_REQUESTED),
+        Some(_) if observations.lens.is_some() => Certification::none(PINHOLE_ONLY),
+        Some(_) if status != Status::Success => {
+            Certification::none(format!("not attempted: status {}", status.as_str()))
+        }
+        Some(options) => {
+            let inliers = subset(&conditioned, &points, &lines);
+            let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
+            let cost = ReprojectionCost::of(camera, &inliers).cost(&at);
+            certify(camera, &inliers, &at, cost, options)
+        }
+    };
     Ok(assemble(
         observations,
         opts,
