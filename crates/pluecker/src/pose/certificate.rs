@@ -57,6 +57,7 @@
 
 use super::correspondences::Correspondences;
 use super::reprojection::{Pose, ReprojectionCost};
+use super::Status;
 use crate::camera::Camera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
@@ -79,8 +80,27 @@ pub const MAX_CELLS: usize = 20_000;
 pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
 
 /// Why a pose through a lens is not certified.
-pub(crate) const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
+const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
     through a lens with distortion the exact cost in the observed pixels has no certificate yet";
+
+/// The certificate stage of both pipelines (with and without RANSAC): not requested without
+/// `certify`, not attempted through a lens or for a pose whose `status` is not a success, else
+/// `run` with the options (it calls [`certify`] on the data the pose was fitted to).
+pub(crate) fn stage(
+    certify: Option<&CertifyOptions>,
+    through_lens: bool,
+    status: Status,
+    run: impl FnOnce(&CertifyOptions) -> Certification,
+) -> Certification {
+    match certify {
+        None => Certification::none(NOT_REQUESTED),
+        Some(_) if through_lens => Certification::none(PINHOLE_ONLY),
+        Some(_) if status != Status::Success => {
+            Certification::none(format!("not attempted: status {}", status.as_str()))
+        }
+        Some(options) => run(options),
+    }
+}
 
 /// The certificate stage's outcome, in the units of this module (`f = ½ Σ r²`, px²); the result
 /// assembly ([`crate::pose::PoseResult`]) turns it into the shared [`crate::certificate::Certificate`]

@@ -14,7 +14,7 @@
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
-use super::certificate::{certify, Certification, NOT_REQUESTED, PINHOLE_ONLY};
+use super::certificate::{self, certify, Certification};
 use super::correspondences::{constraints, object_points, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::lens::Observations;
@@ -476,14 +476,9 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
         let second_best = choice
             .second
             .map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
-        let certification = match &opts.certify {
-            None => Certification::none(NOT_REQUESTED),
-            Some(_) if observations.lens.is_some() => Certification::none(PINHOLE_ONLY),
-            Some(_) if status != Status::Success => {
-                Certification::none(format!("not attempted: status {}", status.as_str()))
-            }
-            Some(options) => certify(camera, conditioned, &best.pose, best.cost, options),
-        };
+        let certification = certificate::stage(opts.certify.as_ref(), observations.lens.is_some(), status, |options| {
+            certify(camera, conditioned, &best.pose, best.cost, options)
+        });
         (world, status, second_best, certification, behind_cost)
     } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);

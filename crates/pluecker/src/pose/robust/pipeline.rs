@@ -2,7 +2,7 @@
 //! frame → reprojection refinement on the inliers, re-selecting the inliers at the refined pose → on
 //! request, the certificate of global optimality of the cost over the final inliers.
 
-use super::super::certificate::{certify, Certification, NOT_REQUESTED, PINHOLE_ONLY};
+use super::super::certificate::{self, certify};
 use super::super::correspondences::{Conditioning, Correspondences};
 use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
@@ -126,19 +126,12 @@ pub(crate) fn estimate_robust(
     let failure = failure.or_else(|| (count(&points) + count(&lines) < required).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
     // The certificate, as for the non-robust pipeline, of the cost over the final inliers.
-    let certification = match &opts.certify {
-        None => Certification::none(NOT_REQUESTED),
-        Some(_) if observations.lens.is_some() => Certification::none(PINHOLE_ONLY),
-        Some(_) if status != Status::Success => {
-            Certification::none(format!("not attempted: status {}", status.as_str()))
-        }
-        Some(options) => {
-            let inliers = subset(&conditioned, &points, &lines);
-            let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
-            let cost = ReprojectionCost::of(camera, &inliers).cost(&at);
-            certify(camera, &inliers, &at, cost, options)
-        }
-    };
+    let certification = certificate::stage(opts.certify.as_ref(), observations.lens.is_some(), status, |options| {
+        let inliers = subset(&conditioned, &points, &lines);
+        let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
+        let cost = ReprojectionCost::of(camera, &inliers).cost(&at);
+        certify(camera, &inliers, &at, cost, options)
+    });
     Ok(assemble(
         observations,
         opts,
