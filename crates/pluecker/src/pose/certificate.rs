@@ -390,11 +390,13 @@ impl Scaled {
     /// effect is taken exactly and only the second-order rest costs, where the Minkowski bound
     /// ([`Self::bound_near`]) pays `θ η` for all of it.
     ///
-    /// `q_min` is [`Self::at`]'s at `r`: the minimum over the ball is at most that, so there is no bound
-    /// above 0 (and nothing is computed) unless the rest is below `√q_min`.
-    fn linear_bound(&self, r: &Matrix3<f64>, theta: f64, q_min: f64) -> f64 {
+    /// `q_min` is [`Self::at`]'s at `r`: the minimum over the ball is at most that, so the bound is at
+    /// most `½ (√q_min − rest)₊²`. Where that is below `wanted` (the level at which the bound would
+    /// close the box), nothing is computed and the answer is 0.
+    fn linear_bound(&self, r: &Matrix3<f64>, theta: f64, q_min: f64, wanted: f64) -> f64 {
         let rest = rotation_rest(theta) * self.minorant.eta * self.scale.sqrt();
-        if self.minorant.c_inv.is_none() || !(rest * rest < q_min) {
+        let ceiling = 0.5 * (q_min.sqrt() - rest).max(0.0).powi(2);
+        if self.minorant.c_inv.is_none() || ceiling == 0.0 || ceiling < wanted {
             return 0.0;
         }
         let s = &self.minorant.schur;
@@ -759,10 +761,12 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         let Some((t_star, q_min, eta)) = scaled.at(&r_c) else {
             return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
         };
-        // The Minkowski bound, and the linearised one where the first can still fall short of f̂.
+        // The Minkowski bound, and the linearised one where the first falls short of f̂ and the
+        // second could close the box.
         let minkowski = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
         let lower = if minkowski < self.f_hat {
-            minkowski.max(scaled.linear_bound(&r_c, theta, q_min))
+            let wanted = self.f_hat * (1.0 - self.max_relative_gap);
+            minkowski.max(scaled.linear_bound(&r_c, theta, q_min, wanted))
         } else {
             minkowski
         };
@@ -1611,7 +1615,7 @@ mod tests {
                     let r_c = exp_so3(&(rng.unit_vector3() * away)) * truth.rotation;
                     let theta = 1e-3 * 500f64.powf(rng.uniform_in(0.0, 1.0));
                     let q_min = scaled.at(&r_c).unwrap().1;
-                    let bound = scaled.linear_bound(&r_c, theta, q_min);
+                    let bound = scaled.linear_bound(&r_c, theta, q_min, 0.0);
                     let oracle =
                         |phi: &Vector3<f64>| bound_near_by_points(&problem, &depths, kappa, &(exp_so3(phi) * r_c), 0.0);
                     let mut best = (Vector3::zeros(), oracle(&Vector3::zeros()));
