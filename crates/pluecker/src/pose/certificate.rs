@@ -377,7 +377,7 @@ impl Scaled {
     }
 
     /// A lower bound of `f` on the poses of `S` whose rotation is within the angle `θ` of `r`, from the
-    /// minorant linearised in the rotation (`−∞` when `Q` does not fix the translation). Such a
+    /// minorant linearised in the rotation (0 when `Q` does not fix the translation). Such a
     /// rotation is `exp(φ) r` with `‖φ‖ ≤ θ`, and `exp(φ) r = r + [φ]ₓ r + E` with
     /// `‖E y‖ ≤ (e^θ − 1 − θ) ‖y‖` (the exponential series from its third term). `√Q` is a seminorm
     /// of `(vec R, t)`, so `√Q(exp(φ) r, t) ≥ √Q(r + [φ]ₓ r, t) − (e^θ − 1 − θ) η`, and the first
