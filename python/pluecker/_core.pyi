@@ -434,8 +434,8 @@ def estimate_pose(
     the curved image of the line); no certificate through a lens (pinhole cameras only); with RANSAC a
     pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
-    in standard deviations (``sigma_px`` defaults to 1). With either, a requested certificate is not
-    available: ``certificate`` is ``None``, the status ``gap_not_closed``, ``details.uncertified_reason`` says why.
+    in standard deviations (``sigma_px`` defaults to 1), and a requested certificate bounds that
+    whitened cost.
 
     ``options``: :class:`PoseOptions` (``None``: the defaults). ``options.method``, one of :data:`METHODS`:
     ``"trust-region"`` (eqs. 13 + 22, Hebden's step, section 4.1), ``"rotation-then-translation"``

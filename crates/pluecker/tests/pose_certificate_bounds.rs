@@ -9,13 +9,37 @@
 
 mod pose_oracle;
 
-use nalgebra::{Rotation3, Unit, Vector2, Vector3, Vector6};
+use nalgebra::{Matrix2, Rotation3, Unit, Vector2, Vector3, Vector6};
 use pluecker::pose::certificate::testing::{depth_bounds, local_bound, local_lower_bound, LocalBound};
-use pluecker::pose::Correspondences;
+use pluecker::pose::{Correspondences, ObservationNoise};
 use pluecker::rng::Rng;
 use pluecker::synthetic::visible_scene;
 use pluecker::Camera;
 use pose_oracle::{centred, cost, many_start, pixel, residuals, OraclePose};
+
+/// `M` with `‖M m_xy‖` the standard deviation scale of line `line`'s endpoint `end`: with `G` the
+/// upper-left 2x2 block of `K⁻ᵀ` (`G m_xy` is the normal of the pixel line of the moment `m`) and `C`
+/// the endpoint's covariance, `M = C^½ G` (`‖M v‖² = vᵀ Gᵀ C G v`; the symmetric square root, from the
+/// eigen-decomposition), `G` without covariances.
+fn endpoint_map(k: &Camera, corr: &Correspondences, line: usize, end: usize) -> Matrix2<f64> {
+    let g = k
+        .matrix()
+        .try_inverse()
+        .unwrap()
+        .transpose()
+        .fixed_view::<2, 2>(0, 0)
+        .into_owned();
+    match &corr.noise {
+        None => g,
+        Some(noise) => {
+            let eigen = noise.lines[line][end].symmetric_eigen();
+            let root = eigen.eigenvectors
+                * Matrix2::from_diagonal(&eigen.eigenvalues.map(f64::sqrt))
+                * eigen.eigenvectors.transpose();
+            root * g
+        }
+    }
+}
 
 /// The unit ray of pixel `u` (camera frame).
 fn bearing(k: &Camera, u: &Vector2<f64>) -> Vector3<f64> {
@@ -177,6 +201,34 @@ fn step4_scenes() -> Vec<(Camera, Correspondences, OraclePose, String)> {
             ));
         }
     }
+    // Per-observation covariances: anisotropic, standard deviations 0.3-3 px, random orientations.
+    for (f, np, nl, planar) in [(800.0, 20, 6, false), (4000.0, 12, 4, true), (250.0, 10, 3, false)] {
+        for seed in 0..2u64 {
+            let scene = visible_scene(f, np, nl, planar, 50 + seed);
+            let mut rng = Rng::new(850 + seed);
+            let (mut corr, c) = centred(&scene.noisy(1.0, true, &mut rng));
+            let mut covariance = || {
+                let (s1, s2, phi) = (
+                    rng.uniform_in(0.3, 3.0),
+                    rng.uniform_in(0.3, 3.0),
+                    rng.uniform_in(0.0, 3.2),
+                );
+                let r = Matrix2::new(phi.cos(), -phi.sin(), phi.sin(), phi.cos());
+                r * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * r.transpose()
+            };
+            let points: Vec<Matrix2<f64>> = (0..np).map(|_| covariance()).collect();
+            let lines: Vec<[Matrix2<f64>; 2]> = (0..nl).map(|_| [covariance(), covariance()]).collect();
+            corr.noise = Some(ObservationNoise::from_covariances(&points, &lines).unwrap());
+            let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
+            let minimum = many_start(&scene.camera, &corr, &truth, 0, &mut rng)[0].0;
+            out.push((
+                scene.camera,
+                corr,
+                minimum,
+                format!("f={f} {np}p+{nl}l planar={planar} covariances seed {seed}"),
+            ));
+        }
+    }
     out
 }
 
@@ -222,7 +274,7 @@ fn scaled_world(corr: &Correspondences, pose: &OraclePose, lambda: f64) -> (Corr
 fn the_curvature_bound_holds_along_whitened_rays() {
     let mut rng = Rng::new(43);
     let mut worst: f64 = 0.0;
-    let mut checked = 0;
+    let (mut checked, mut with_covariances) = (0, 0);
     for (k, corr, minimum, name) in step4_scenes() {
         for (shift, scale) in [(0.0, 3.0), (2.0, 6.0), (0.0, 16.0)] {
             let Some((pose, radius, b)) = ball_off_the_minimum(&k, &corr, &minimum, shift, scale, &mut rng) else {
@@ -298,9 +350,13 @@ fn the_curvature_bound_holds_along_whitened_rays() {
             }
             worst = worst.max(best.0 / b.curvature);
             checked += 1;
+            with_covariances += usize::from(corr.noise.is_some());
         }
     }
-    eprintln!("curvature: {checked} balls, the largest ‖r''‖ reaches {worst:.3} of K");
+    eprintln!(
+        "curvature: {checked} balls ({with_covariances} with covariances), the largest ‖r''‖ reaches {worst:.3} of K"
+    );
+    assert!(with_covariances >= 8, "only {with_covariances} balls with covariances");
     assert!(checked >= 20, "only {checked} balls");
 }
 
@@ -310,7 +366,7 @@ fn the_curvature_bound_holds_along_whitened_rays() {
 #[test]
 fn the_local_bound_is_below_the_least_cost_in_the_ball() {
     let mut rng = Rng::new(44);
-    let mut checked = 0;
+    let (mut checked, mut with_covariances) = (0, 0);
     let mut closest: f64 = f64::INFINITY;
     for (k, corr, minimum, name) in step4_scenes() {
         let unit = residual_unit(&k, &corr, &minimum);
@@ -359,10 +415,17 @@ fn the_local_bound_is_below_the_least_cost_in_the_ball() {
             );
             closest = closest.min((least - b.raw_bound) / least.max(1e-12));
             checked += 1;
+            with_covariances += usize::from(corr.noise.is_some());
         }
     }
-    eprintln!("local bound: {checked} balls, the closest bound is within {closest:.3e} (relative) of the least cost");
-    assert!(checked >= 30, "only {checked} balls");
+    eprintln!(
+        "local bound: {checked} balls ({with_covariances} with covariances), the closest bound is within \
+         {closest:.3e} (relative) of the least cost"
+    );
+    assert!(
+        checked >= 30 && with_covariances >= 12,
+        "only {checked} balls, {with_covariances} with covariances"
+    );
 }
 
 /// The largest value of `f(v, s)` found over unit directions `v` and `s ≤ radius`: random directions
@@ -409,7 +472,6 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
     let (mut checked, mut worst) = (0usize, 0.0f64);
     for (k, corr, minimum, name) in step4_scenes() {
         let k_inv = k.matrix().try_inverse().unwrap();
-        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
         for (shift, scale) in [(0.0, 6.0), (2.0, 16.0), (0.0, 32.0)] {
             let Some((pose0, radius, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, scale, &mut rng) else {
                 continue;
@@ -454,29 +516,30 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
                     );
                     check("|p_z'/p_z|".into(), rate, pp.rate);
                 }
-                for ((seen, ends), lp) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines) {
+                for (line, ((seen, ends), lp)) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines).enumerate() {
                     let moment = |v: &Vector6<f64>, s: f64| {
                         let p = at(v, s);
                         (p.r * ends[0] + p.t).cross(&(p.r * ends[1] + p.t))
                     };
-                    let w = |v: &Vector6<f64>, s: f64| (g * moment(v, s).xy()).norm();
-                    let least = -climb(&|v, s| -w(v, s), radius, &mut rng);
-                    check(format!("w lower bound (least w {least})"), lp.w_lo, least);
-                    let w2 = climb(&|v, s| diff(&|u| w(v, u), s).1.abs(), radius, &mut rng);
-                    check("|w''|".into(), w2, lp.w2);
-                    let rate = climb(
-                        &|v, s| {
-                            let (d1, _, value) = diff(&|u| w(v, u), s);
-                            (d1 / value).abs()
-                        },
-                        radius,
-                        &mut rng,
-                    );
-                    check("|w'/w|".into(), rate, lp.rate);
-                    for (e, n2) in seen.iter().zip(lp.n2) {
+                    for (end, (e, ep)) in seen.iter().zip(&lp.endpoints).enumerate() {
+                        let g = endpoint_map(&k, &c, line, end);
+                        let w = |v: &Vector6<f64>, s: f64| (g * moment(v, s).xy()).norm();
+                        let least = -climb(&|v, s| -w(v, s), radius, &mut rng);
+                        check(format!("w lower bound (least w {least})"), ep.w_lo, least);
+                        let w2 = climb(&|v, s| diff(&|u| w(v, u), s).1.abs(), radius, &mut rng);
+                        check("|w''|".into(), w2, ep.w2);
+                        let rate = climb(
+                            &|v, s| {
+                                let (d1, _, value) = diff(&|u| w(v, u), s);
+                                (d1 / value).abs()
+                            },
+                            radius,
+                            &mut rng,
+                        );
+                        check("|w'/w|".into(), rate, ep.rate);
                         let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
                         let n = climb(&|v, s| diff(&|u| e_bar.dot(&moment(v, u)), s).1.abs(), radius, &mut rng);
-                        check("|n''|".into(), n, n2);
+                        check("|n''|".into(), n, ep.n2);
                     }
                 }
             }
@@ -522,7 +585,7 @@ fn the_exact_moment_curvature_at_the_pose_matches_a_numeric_hessian() {
                     .fold(f64::INFINITY, f64::min);
                 let h = 1e-3 / alpha_w.max(alpha_t / depth);
                 for ((seen, ends), lp) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines) {
-                    for (e, n2_exact) in seen.iter().zip(lp.n2_exact) {
+                    for (e, n2_exact) in seen.iter().zip(lp.endpoints.map(|ep| ep.n2_exact)) {
                         let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
                         let n = |x: &Vector6<f64>| {
                             let p = pose.step(&(t * x));
@@ -601,8 +664,6 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
             continue;
         }
         let k_inv = k.matrix().try_inverse().unwrap();
-        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
-        let g_norm = g.singular_values().max();
         let unit = residual_unit(&k, &corr, &minimum);
         for shift in [0.0, 2.0] {
             let Some((pose0, _, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, 1.0, &mut rng) else {
@@ -630,14 +691,15 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                         continue;
                     };
                     let t = parts.whitening;
-                    for ((seen, ends), lp) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines) {
+                    for (line, ((seen, ends), lp)) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines).enumerate() {
                         let jets = |v: &Vector6<f64>, s: f64| {
                             let a = t * v;
                             let (ja, jb) = (point_jet(&pose, &a, s, &ends[0]), point_jet(&pose, &a, s, &ends[1]));
                             (ja, jb, moment_jet(&ja, &jb))
                         };
-                        // |w''| = |(‖q'‖² + q·q'' − w'²) / w| with w' = q·q' / w.
-                        let w2 = |v: &Vector6<f64>, s: f64| {
+                        // |w''| = |(‖q'‖² + q·q'' − w'²) / w| with w' = q·q' / w, for endpoint `end`.
+                        let maps = [0, 1].map(|end| endpoint_map(&k, &c, line, end));
+                        let w2_of = |g: &Matrix2<f64>, v: &Vector6<f64>, s: f64| {
                             let m = jets(v, s).2;
                             let (q, q1, q2) = (g * m[0].xy(), g * m[1].xy(), g * m[2].xy());
                             let w = q.norm();
@@ -645,7 +707,7 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                             ((q1.norm_squared() + q.dot(&q2) - w1 * w1) / w).abs()
                         };
                         // The closed forms against central differences of the oracle's pose step.
-                        for _ in 0..3 {
+                        for (g, ep) in maps.iter().zip(&lp.endpoints) {
                             let v = Vector6::from_fn(|_, _| rng.normal()).normalize();
                             let s = rng.uniform_in(0.1, 0.9) * radius;
                             let h = 1e-2 * radius;
@@ -654,11 +716,11 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                                 (g * (p.r * ends[0] + p.t).cross(&(p.r * ends[1] + p.t)).xy()).norm()
                             };
                             let numeric = ((w(s + h) - 2.0 * w(s) + w(s - h)) / (h * h)).abs();
-                            let exact = w2(&v, s);
+                            let exact = w2_of(g, &v, s);
                             // Second differences err by O(h² w'''') + O(ε w / h²); 1% still catches a
                             // wrong term or factor in the closed forms.
                             assert!(
-                                (numeric - exact).abs() <= 1e-2 * exact.max(lp.w2 * 1e-3),
+                                (numeric - exact).abs() <= 1e-2 * exact.max(ep.w2 * 1e-3),
                                 "{name}: closed-form |w''| {exact} vs differences {numeric}"
                             );
                         }
@@ -733,21 +795,24 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                             // The subtraction rounds to ~1e-16 drift: 1e-12 drift of room.
                             check(what, found, lp.drift - others + 1e-12 * lp.drift);
                         }
-                        let q1 = climb(&|v, s| (g * jets(v, s).2[1].xy()).norm(), radius, &mut rng);
-                        check("‖q'‖", q1, lp.q1);
-                        check("|w''|", climb(&w2, radius, &mut rng), lp.w2);
-                        // Within w2 = q1² / w_lo + ‖G‖ m2: ‖m''‖ ≤ m2 and ‖q'‖² / w ≤ w2 − ‖G‖ m2 (the
-                        // difference rounds to ~1e-16 w2, hence the absolute 1e-12 w2).
                         check("‖m''‖", climb(&|v, s| jets(v, s).2[2].norm(), radius, &mut rng), lp.m2);
-                        let q1_over_w = climb(
-                            &|v, s| {
-                                let m = jets(v, s).2;
-                                (g * m[1].xy()).norm_squared() / (g * m[0].xy()).norm()
-                            },
-                            radius,
-                            &mut rng,
-                        );
-                        check("‖q'‖² / w", q1_over_w, lp.w2 - g_norm * lp.m2 + 1e-12 * lp.w2);
+                        for (g, ep) in maps.iter().zip(&lp.endpoints) {
+                            let q1 = climb(&|v, s| (g * jets(v, s).2[1].xy()).norm(), radius, &mut rng);
+                            check("‖q'‖", q1, ep.q1);
+                            check("|w''|", climb(&|v, s| w2_of(g, v, s), radius, &mut rng), ep.w2);
+                            // Within w2 = q1² / w_lo + ‖G_e‖ m2: ‖q'‖² / w ≤ w2 − ‖G_e‖ m2 (the
+                            // difference rounds to ~1e-16 w2, hence the absolute 1e-12 w2).
+                            let q1_over_w = climb(
+                                &|v, s| {
+                                    let m = jets(v, s).2;
+                                    (g * m[1].xy()).norm_squared() / (g * m[0].xy()).norm()
+                                },
+                                radius,
+                                &mut rng,
+                            );
+                            let g_norm = g.singular_values().max();
+                            check("‖q'‖² / w", q1_over_w, ep.w2 - g_norm * lp.m2 + 1e-12 * ep.w2);
+                        }
                         // m''' less its two ends' third derivatives: 3 (A'' × B' + A' × B'').
                         let mixed = climb(
                             &|v, s| {
@@ -758,10 +823,10 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                             &mut rng,
                         );
                         check("‖3 (A'' × B' + A' × B'')‖", mixed, lp.mixed3);
-                        for (i, e) in seen.iter().enumerate() {
+                        for (e, ep) in seen.iter().zip(&lp.endpoints) {
                             let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
                             let n3 = climb(&|v, s| e_bar.dot(&jets(v, s).2[3]).abs(), radius, &mut rng);
-                            check("|n'''|", n3, lp.n3[i]);
+                            check("|n'''|", n3, ep.n3);
                             let ends3 = climb(
                                 &|v, s| {
                                     let (ja, jb, _) = jets(v, s);
@@ -770,10 +835,10 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                                 radius,
                                 &mut rng,
                             );
-                            let rest = lp.n3[i] - e_bar.norm() * lp.mixed3;
-                            check("|ēᵀ (A''' × B + A × B''')|", ends3, rest + 1e-12 * lp.n3[i]);
+                            let rest = ep.n3 - e_bar.norm() * lp.mixed3;
+                            check("|ēᵀ (A''' × B + A × B''')|", ends3, rest + 1e-12 * ep.n3);
                             let n2 = climb(&|v, s| e_bar.dot(&jets(v, s).2[2]).abs(), radius, &mut rng);
-                            check("|n''|", n2, lp.n2[i]);
+                            check("|n''|", n2, ep.n2);
                         }
                     }
                 }

@@ -9,9 +9,9 @@
 
 mod pose_oracle;
 
-use nalgebra::{Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix2, Matrix6, Vector3, Vector6};
 use pluecker::pose::certificate::testing::{rotation_search, KeptCell, Region};
-use pluecker::pose::Correspondences;
+use pluecker::pose::{Correspondences, ObservationNoise};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{visible_scene, Scene};
 use pluecker::Camera;
@@ -188,6 +188,26 @@ struct Case {
     /// Depths from 0.4 to 12 units (log-uniform) instead of `visible_scene`'s 4.2-7.8: points much
     /// nearer the camera than the object is large, where the cheirality test matters.
     deep: bool,
+    /// Per-observation covariances: anisotropic, standard deviations 0.2-4 px (whitened scales 20
+    /// times apart), random orientations.
+    covariances: bool,
+}
+
+/// `corr` with random per-observation covariances ([`Case::covariances`]).
+fn with_covariances(mut corr: Correspondences, rng: &mut Rng) -> Correspondences {
+    let mut covariance = || {
+        let (s1, s2, phi) = (
+            rng.uniform_in(0.2, 4.0),
+            rng.uniform_in(0.2, 4.0),
+            rng.uniform_in(0.0, 3.2),
+        );
+        let r = Matrix2::new(phi.cos(), -phi.sin(), phi.sin(), phi.cos());
+        r * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * r.transpose()
+    };
+    let points: Vec<Matrix2<f64>> = corr.points2d.iter().map(|_| covariance()).collect();
+    let lines: Vec<[Matrix2<f64>; 2]> = corr.lines2d.iter().map(|_| [covariance(), covariance()]).collect();
+    corr.noise = Some(ObservationNoise::from_covariances(&points, &lines).unwrap());
+    corr
 }
 
 /// `n` points seen in a 640 x 480 image at `fx = fy = focal`, at depths log-uniform in [0.4, 12],
@@ -230,14 +250,17 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
     };
     let mut rng = Rng::new(7000 + case.seed);
     let noisy = scene.noisy(1.0, true, &mut rng);
-    let (corr, c) = centred(&noisy);
+    let (mut corr, c) = centred(&noisy);
+    if case.covariances {
+        corr = with_covariances(corr, &mut rng);
+    }
     let k = scene.camera;
     let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
     let minima = many_start(&k, &corr, &truth, 40, &mut rng);
     let global = minima[0].1;
     let name = format!(
-        "f={} {}p+{}l planar={} seed {}",
-        case.focal, case.points, case.lines, case.planar, case.seed
+        "f={} {}p+{}l planar={} seed {} covariances={}",
+        case.focal, case.points, case.lines, case.planar, case.seed, case.covariances
     );
     let (mut checked, mut second) = (0, 0);
     for &factor in factors {
@@ -286,26 +309,36 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
     // levels 3x and 10x include.
     #[rustfmt::skip]
     let cases = [
-        Case { focal: 800.0, points: 20, lines: 0, planar: false, seed: 1, deep: false },
-        Case { focal: 800.0, points: 10, lines: 4, planar: false, seed: 2, deep: false },
-        Case { focal: 15000.0, points: 6, lines: 0, planar: false, seed: 6, deep: false },
-        Case { focal: 250.0, points: 4, lines: 0, planar: false, seed: 2, deep: false },
-        Case { focal: 4000.0, points: 6, lines: 0, planar: true, seed: 4, deep: false },
-        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 3, deep: false },
-        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 4, deep: false },
-        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 9, deep: false },
-        Case { focal: 250.0, points: 6, lines: 0, planar: false, seed: 1, deep: true },
-        Case { focal: 250.0, points: 8, lines: 0, planar: false, seed: 2, deep: true },
-        Case { focal: 120.0, points: 6, lines: 0, planar: false, seed: 3, deep: true },
+        Case { focal: 800.0, points: 20, lines: 0, planar: false, seed: 1, deep: false, covariances: false },
+        Case { focal: 800.0, points: 10, lines: 4, planar: false, seed: 2, deep: false, covariances: false },
+        Case { focal: 15000.0, points: 6, lines: 0, planar: false, seed: 6, deep: false, covariances: false },
+        Case { focal: 250.0, points: 4, lines: 0, planar: false, seed: 2, deep: false, covariances: false },
+        Case { focal: 4000.0, points: 6, lines: 0, planar: true, seed: 4, deep: false, covariances: false },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 3, deep: false, covariances: false },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 4, deep: false, covariances: false },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 9, deep: false, covariances: false },
+        Case { focal: 250.0, points: 6, lines: 0, planar: false, seed: 1, deep: true, covariances: false },
+        Case { focal: 250.0, points: 8, lines: 0, planar: false, seed: 2, deep: true, covariances: false },
+        Case { focal: 120.0, points: 6, lines: 0, planar: false, seed: 3, deep: true, covariances: false },
+        Case { focal: 800.0, points: 20, lines: 0, planar: false, seed: 1, deep: false, covariances: true },
+        Case { focal: 800.0, points: 10, lines: 4, planar: false, seed: 2, deep: false, covariances: true },
+        Case { focal: 250.0, points: 4, lines: 0, planar: false, seed: 2, deep: false, covariances: true },
+        Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 4, deep: false, covariances: true },
+        Case { focal: 250.0, points: 6, lines: 0, planar: false, seed: 1, deep: true, covariances: true },
     ];
-    let (mut checked, mut second) = (0, 0);
+    let (mut checked, mut second, mut with_covariances) = (0, 0, 0);
     for case in &cases {
         let (c, s) = run_case(case, &[1.5, 3.0, 10.0]);
         checked += c;
         second += s;
+        with_covariances += if case.covariances { c } else { 0 };
     }
-    eprintln!("{checked} poses checked, {second} other minima below a level");
+    eprintln!("{checked} poses checked ({with_covariances} with covariances), {second} other minima below a level");
     assert!(checked > 500, "only {checked} poses checked");
+    assert!(
+        with_covariances > 150,
+        "only {with_covariances} poses checked with covariances"
+    );
     assert!(second >= 5, "only {second} second minima below a level");
 }
 

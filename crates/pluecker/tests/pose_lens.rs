@@ -264,7 +264,7 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
         err.to_string().contains("points2d") && err.to_string().contains("pixel 4"),
         "{err}"
     );
-    // With covariances, certification is refused with a reason, not claimed.
+    // Through a lens, certification is refused with a reason, not claimed.
     let mut opts = PoseOptions::default();
     opts.certify = Some(Default::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();

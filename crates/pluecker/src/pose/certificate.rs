@@ -1,19 +1,23 @@
 //! Certification of the pose: a proved lower bound on the reprojection cost over every rotation and
 //! translation that keeps the object points in front of the camera. This module works with
-//! `f = ½ Σ r²` (px²); the result reports `Σ r² = 2f`.
+//! `f = ½ Σ r²` (px²); the result reports `Σ r² = 2f`. With per-observation covariances
+//! ([`super::ObservationNoise`]) the residuals are whitened (in standard deviations) and every step
+//! below holds for that cost: a point's whitening `Wᵢ` enters through `Wᵢ K₂` in place of `K₂`, a
+//! segment endpoint's covariance `C = L Lᵀ` through `G_e = Lᵀ G` in place of `G`.
 //!
 //! The *sublevel-set test*. Let `f̂` be the cost of the returned local minimum `(R̂, t̂)` and `S` the
 //! set of poses, points in front, with `f ≤ f̂`. Every pose of `S` has every residual `‖rᵢ‖ ≤ ε₀ = √(2f̂)`.
 //! Steps 1-3 show that `S` lies in a small ball around `(R̂, t̂)`; step 4 bounds `f` from below on
 //! that ball.
 //!
-//! 1. **Depth bounds.** A pixel error `e` is a normalised-plane error of at least `e / s` (`s` the
-//!    least singular value of the 2x2 block of `K`), and the gnomonic projection only stretches
-//!    distances, so on `S` every object point is within the angle `α = ε₀ / s` of its observed ray
-//!    `bᵢ`. Two points `i, j` seen `γᵢⱼ` apart are then at distances `‖xᵢ‖ ≤ dᵢⱼ / sin(γᵢⱼ ∓ 2α)` from
-//!    the camera (law of sines); `Dᵢ` is the least such bound over a few partners `j`.
-//! 2. **A quadratic minorant.** A point's squared pixel error is at least `wᵢ ‖(I − bᵢbᵢᵀ) xᵢ‖²` with
-//!    `wᵢ = s² / Dᵢ²` (the sine of its angle to the ray, times `s`), quadratic in `t` for a fixed
+//! 1. **Depth bounds.** A residual `e` of point `i` is a normalised-plane error of at least `e / sᵢ`
+//!    (`sᵢ` the least singular value of `Wᵢ K₂`, `K₂` the 2x2 block of `K`, `Wᵢ = I` without
+//!    covariances), and the gnomonic projection only stretches distances, so on `S` every object point
+//!    is within the angle `αᵢ = ε₀ / sᵢ` of its observed ray `bᵢ`. Two points `i, j` seen `γᵢⱼ` apart
+//!    are then at distances `‖xᵢ‖ ≤ dᵢⱼ / sin(γᵢⱼ ∓ (αᵢ + αⱼ))` from the camera (law of sines); `Dᵢ`
+//!    is the least such bound over a few partners `j`.
+//! 2. **A quadratic minorant.** A point's squared residual is at least `wᵢ ‖(I − bᵢbᵢᵀ) xᵢ‖²` with
+//!    `wᵢ = sᵢ² / Dᵢ²` (the sine of its angle to the ray, times `sᵢ`), quadratic in `t` for a fixed
 //!    rotation. The line residuals are left out of the minorant (it stays a minorant of `f`): their
 //!    moment form moves with the rotation by the camera distance, not the object size, and only
 //!    slowed the search.
@@ -45,8 +49,8 @@
 //!    Along a ray the rotation is `exp(s a_ω) R̂` (`a = T v`) and a camera-frame point moves as
 //!    `p' = a_ω × R_s y + a_τ`, `p'' = a_ω × (a_ω × R_s y)`. Two identities keep the second derivative
 //!    small in whitened steps, where the naive bound is dominated by the well-determined directions:
-//!    for a point, `D²π[p', p'] = −2 (p'_z / p_z) Dπ[p']`, so `r'' = K₂ Dπ[p''] − 2 (p'_z / p_z) r'`;
-//!    for a line endpoint, `r = n / w` (`n = ēᵀ m`, `w = ‖G m_xy‖`, `m = A × B`) and
+//!    for a point, `D²π[p', p'] = −2 (p'_z / p_z) Dπ[p']`, so `r'' = W K₂ Dπ[p''] − 2 (p'_z / p_z) r'`;
+//!    for a line endpoint, `r = n / w` (`n = ēᵀ m`, `w = ‖G_e m_xy‖`, `m = A × B`) and
 //!    `r'' = (n'' − r w'') / w − 2 (w' / w) r'`, with `n''(0)` an exact quadratic form in `v`. Bounding
 //!    each part over the ball gives `‖r''‖ ≤ K` (`RayCurvature`), hence
 //!    `‖r(s)‖ ≥ ‖r̂ + s J T v‖ − ½ K s²` and `‖r̂ + s J T v‖² ≥ 2f̂ − 2‖Tᵀg‖ s + λ_min s²`. The least
@@ -56,7 +60,7 @@
 //! reached, or a box's Minkowski bound) is the raw bound. So `lower_bound ≤ f` for every pose that keeps
 //! the points in front; the answer is certified when
 //! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
-//! bound here) seen more than `2α` apart. The test fails honestly (`certified = false`, with the
+//! bound here) seen more than `αᵢ + αⱼ` apart. The test fails honestly (`certified = false`, with the
 //! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
 //! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
 
@@ -155,20 +159,21 @@ const LOCAL_INTERVALS: usize = 256;
 /// The data of the test, prepared once (conditioned frame, centred on the object).
 struct Problem<'c> {
     corr: &'c Correspondences,
-    /// Least singular value of the 2x2 block of `K`.
-    s_min: f64,
+    /// Per point, `W K₂`: the whitening `W` of its noise (the identity without covariances) times
+    /// the 2x2 block `K₂` of `K`, which maps a normalised-plane error to the whitened residual.
+    point_maps: Vec<Matrix2<f64>>,
+    /// Per point, `sᵢ`, the least singular value of `Wᵢ K₂`.
+    scales: Vec<f64>,
     /// The minorant for step 1's upper bounds `Dᵢ` on the distances of the points from the camera
     /// over `S` (the search tightens them box by box: [`RotationSearch`]).
     root: Rc<Minorant>,
-    /// The 2x2 block of `K` and its norm.
-    k2: Matrix2<f64>,
-    k_norm: f64,
     /// `K⁻¹` (normalised endpoints `ē = K⁻¹ ẽ`).
     k_inv: Matrix3<f64>,
-    /// `G`, the upper-left 2x2 block of `K⁻ᵀ` (a line moment `m` projects to a pixel line whose normal
-    /// is `G m_xy`), and its norm.
-    g: Matrix2<f64>,
-    g_norm: f64,
+    /// Per segment endpoint, `G_e = Lᵀ G` and its norm: `G` is the upper-left 2x2 block of `K⁻ᵀ` (a
+    /// line moment `m` projects to a pixel line whose normal is `G m_xy`) and `L Lᵀ` the endpoint's
+    /// covariance (the identity without covariances), so that the endpoint's residual is
+    /// `ēᵀ m / ‖G_e m_xy‖`.
+    endpoint_maps: Vec<[(Matrix2<f64>, f64); 2]>,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
     /// `‖Xᵢ‖` (object coordinates).
@@ -180,16 +185,16 @@ fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
     (s.min(), s.max())
 }
 
-/// `α` for the angle bounds; the depth bound of every point (`None` when some point has no partner
+/// The depth bound of every point for its angle bound `αᵢ` (`None` when some point has no partner
 /// seen far enough apart).
-fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alpha: f64) -> Option<Vec<f64>> {
+fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Option<Vec<f64>> {
     let n = bearings.len();
     // Partners: an even spread of the points.
     let step = (n / DEPTH_PARTNERS).max(1);
     let partners: Vec<usize> = (0..n).step_by(step).take(DEPTH_PARTNERS).collect();
     let pair = |i: usize, j: usize| -> f64 {
         let gamma = bearings[i].angle(&bearings[j]);
-        let (lo, hi) = (gamma - 2.0 * alpha, gamma + 2.0 * alpha);
+        let (lo, hi) = (gamma - alphas[i] - alphas[j], gamma + alphas[i] + alphas[j]);
         if i == j || lo <= 0.0 || hi >= std::f64::consts::PI {
             return f64::INFINITY;
         }
@@ -213,13 +218,43 @@ impl<'c> Problem<'c> {
             return Err("not attempted: the depth bounds need at least two points".into());
         }
         let k = camera.matrix();
-        let (s_min, k_norm) = norm2x2(&Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy));
+        let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
         let k_inv = k.try_inverse().ok_or("singular camera")?;
         let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
-        let g_norm = 1.0 / s_min;
+        let (point_maps, endpoint_maps): (Vec<Matrix2<f64>>, Vec<[(Matrix2<f64>, f64); 2]>) = match &corr.noise {
+            None => {
+                let g_norm = norm2x2(&g).1;
+                (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
+            }
+            Some(noise) if !noise.absolute => {
+                return Err("not attempted: the certificate covers pinhole cameras only".into());
+            }
+            Some(noise) => {
+                let endpoint = |c: &Matrix2<f64>| -> std::result::Result<(Matrix2<f64>, f64), String> {
+                    // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
+                    let l = (0.5 * (c + c.transpose()))
+                        .cholesky()
+                        .ok_or("not attempted: a covariance is not positive definite")?
+                        .l();
+                    let map = l.transpose() * g;
+                    Ok((map, norm2x2(&map).1))
+                };
+                (
+                    noise.points.iter().map(|w| w * k2).collect(),
+                    noise
+                        .lines
+                        .iter()
+                        .map(|[c0, c1]| Ok([endpoint(c0)?, endpoint(c1)?]))
+                        .collect::<std::result::Result<_, String>>()?,
+                )
+            }
+        };
+        let scales: Vec<f64> = point_maps.iter().map(|m| norm2x2(m).0).collect();
+        // A whitened error e is a normalised-plane error of at least e / sᵢ (sᵢ the least singular
+        // value of Wᵢ K₂): the angle bound of point i.
         let eps0 = (2.0 * f_hat).sqrt();
-        let alpha = eps0 / s_min;
-        if !(alpha < 0.25) {
+        let alphas: Vec<f64> = scales.iter().map(|s| eps0 / s).collect();
+        if !alphas.iter().all(|alpha| *alpha < 0.25) {
             return Err(format!(
                 "not proved: residuals too large ({eps0:.3e} px) for the angle bounds"
             ));
@@ -229,17 +264,15 @@ impl<'c> Problem<'c> {
             .iter()
             .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
             .collect();
-        let depths = depth_bounds(corr, &bearings, alpha)
+        let depths = depth_bounds(corr, &bearings, &alphas)
             .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
-        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, s_min, depths));
+        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, &scales, depths));
         Ok(Problem {
             corr,
-            s_min,
-            k2: Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy),
-            k_norm,
+            point_maps,
+            scales,
             k_inv,
-            g,
-            g_norm,
+            endpoint_maps,
             bearings,
             norms: corr.points3d.iter().map(|x| x.norm()).collect(),
             root,
@@ -248,11 +281,11 @@ impl<'c> Problem<'c> {
 
     /// Step 2's minorant for the depth bounds `depths`.
     fn minorant(&self, depths: Vec<f64>) -> Minorant {
-        Minorant::build(&self.corr.points3d, &self.bearings, self.s_min, depths)
+        Minorant::build(&self.corr.points3d, &self.bearings, &self.scales, depths)
     }
 }
 
-/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²`, `wᵢ = s² / Dᵢ²`, for one set of depth
+/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²`, `wᵢ = sᵢ² / Dᵢ²`, for one set of depth
 /// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
 /// (row-major `vec`), and `η = √(Σ wᵢ ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q` moves
 /// by at most `θ η`.
@@ -279,8 +312,8 @@ struct Minorant {
 
 impl Minorant {
     /// The minorant for the depth bounds `depths` of the points `points` seen along the unit
-    /// bearings `bearings` (weights `wᵢ = s² / Dᵢ²`, `s` the least singular value of `K`'s 2x2 block).
-    fn build(points: &[Vector3<f64>], bearings: &[Vector3<f64>], s_min: f64, depths: Vec<f64>) -> Minorant {
+    /// bearings `bearings` (weights `wᵢ = sᵢ² / Dᵢ²`, `sᵢ` from `scales`: [`Problem::scales`]).
+    fn build(points: &[Vector3<f64>], bearings: &[Vector3<f64>], scales: &[f64], depths: Vec<f64>) -> Minorant {
         // With z = (vec R, t) (row-major vec), R Xᵢ + t = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, I], and with
         // Pᵢ = I − bᵢbᵢᵀ a point's term is wᵢ zᵀ Lᵢᵀ Pᵢ Lᵢ z, where Lᵢᵀ Pᵢ Lᵢ = Lᵢᵀ Lᵢ − uᵢ uᵢᵀ,
         // uᵢ = Lᵢᵀ bᵢ = (bᵢ ⊗ Xᵢ, bᵢ). The blocks of Σ wᵢ Lᵢᵀ Lᵢ are I ⊗ M, I ⊗ s and (Σ wᵢ) I with
@@ -288,8 +321,8 @@ impl Minorant {
         // (a search rebuilds the minorant about once every ten boxes).
         let mut outer = [[0.0f64; 12]; 12];
         let (mut m, mut s, mut w_sum, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0, 0.0);
-        for ((x, b), d) in points.iter().zip(bearings).zip(&depths) {
-            let w = s_min * s_min / (d * d);
+        for (((x, b), d), scale) in points.iter().zip(bearings).zip(&depths).zip(scales) {
+            let w = scale * scale / (d * d);
             m += x * x.transpose() * w;
             s += x * w;
             w_sum += w;
@@ -921,12 +954,19 @@ struct PointRay {
     p: Vector3<f64>,
     /// `‖e_zᵀ P T‖`: the largest depth rate at `s = 0` per unit whitened step.
     depth_rate: f64,
-    /// `gᵀ g` of the residual's whitened gradient `g = K₂ Dπ P T` (2x6).
+    /// `gᵀ g` of the residual's whitened gradient `g = W K₂ Dπ P T` (2x6), and `‖W K₂‖`.
     gram: SMatrix<f64, 6, 6>,
+    map_norm: f64,
 }
 
-/// A line endpoint's part of `RayCurvature`.
+/// A line endpoint's part of `RayCurvature`: its residual is `n / w` with `n = ēᵀ m` and
+/// `w = ‖G_e m_xy‖` ([`Problem::endpoint_maps`]).
 struct EndpointRay {
+    /// `w₀ = ‖G_e m_xy‖`, `‖G_e‖`, `‖G_e N(0)_xy T‖` and `|w'(0)|` per unit whitened step.
+    w0: f64,
+    g_norm: f64,
+    q1_0: f64,
+    w1_0: f64,
     /// `ē = K⁻¹ ẽ`, its norm, `‖B × ē‖` and `‖ē × A‖`.
     e_norm: f64,
     cross_b: f64,
@@ -941,16 +981,12 @@ struct EndpointRay {
 
 /// A line's part of `RayCurvature`.
 struct LineRay {
-    /// `‖y_A‖`, `‖y_B‖`, `‖A‖`, `‖B‖`, the segment length, `w₀ = ‖G m_xy‖`.
+    /// `‖y_A‖`, `‖y_B‖`, `‖A‖`, `‖B‖`, the segment length.
     ya: f64,
     yb: f64,
     a: f64,
     b: f64,
     length: f64,
-    w0: f64,
-    /// `‖G N(0)_xy T‖` and `|w'(0)|` per unit whitened step.
-    q1_0: f64,
-    w1_0: f64,
     endpoints: [EndpointRay; 2],
 }
 
@@ -960,7 +996,7 @@ struct LineRay {
 ///
 /// Along a ray the rotation is the one-parameter group `exp(s a_ω) R̂` (`a = T v`), so a camera-frame
 /// point moves as `p' = a_ω × R_s y + a_τ`, `p'' = a_ω × (a_ω × R_s y)`. For a point residual
-/// `r = K₂ π(p)`, `D²π[p', p'] = −2 (p'_z / p_z) Dπ[p']`, hence `r'' = K₂ Dπ[p''] − 2 (p'_z / p_z) r'`;
+/// `r = W K₂ π(p)`, `D²π[p', p'] = −2 (p'_z / p_z) Dπ[p']`, hence `r'' = W K₂ Dπ[p''] − 2 (p'_z / p_z) r'`;
 /// a line residual `n / w` (`n = ēᵀ m`, `w = ‖G m_xy‖`, `m = A × B`) obeys the same identity,
 /// `r'' = (n'' − r w'') / w − 2 (w' / w) r'`. With `c₂` the norm of the first parts and `ρ` the rates
 /// `|p'_z / p_z|` or `|w' / w|`, `‖r''‖ ≤ c₂ + 2 ‖diag(ρ) r'‖`, bounded two ways: by
@@ -971,8 +1007,6 @@ struct LineRay {
 struct RayCurvature {
     alpha_omega: f64,
     alpha_tau: f64,
-    k_norm: f64,
-    g_norm: f64,
     mu: f64,
     points: Vec<PointRay>,
     lines: Vec<LineRay>,
@@ -985,18 +1019,20 @@ impl RayCurvature {
             .corr
             .points3d
             .iter()
-            .map(|x| {
+            .zip(&problem.point_maps)
+            .map(|(x, map)| {
                 let y = pose.rotation * x;
                 let p = y + pose.translation;
                 let d_pi =
                     SMatrix::<f64, 2, 3>::new(1.0 / p.z, 0.0, -p.x / (p.z * p.z), 0.0, 1.0 / p.z, -p.y / (p.z * p.z));
                 let pt = tangent_map(&y) * t;
-                let g = problem.k2 * d_pi * pt;
+                let g = map * d_pi * pt;
                 PointRay {
                     y_norm: y.norm(),
                     p,
                     depth_rate: pt.row(2).norm(),
                     gram: g.transpose() * g,
+                    map_norm: norm2x2(map).1,
                 }
             })
             .collect();
@@ -1005,24 +1041,26 @@ impl RayCurvature {
             .lines2d
             .iter()
             .zip(&problem.corr.lines3d)
-            .map(|(s2, s3)| {
+            .zip(&problem.endpoint_maps)
+            .map(|((s2, s3), maps)| {
                 // Endpoints A = R_s y_A + t: A' = a_ω × R_s y_A + a_τ = P_A a.
                 let (y_a, y_b) = (pose.rotation * s3[0], pose.rotation * s3[1]);
                 let (a, b) = (y_a + pose.translation, y_b + pose.translation);
                 let m0 = a.cross(&b);
-                let w0 = (problem.g * m0.xy()).norm();
                 // m = A × B moves as m' = N a, N = [[B]×[y_A]× − [A]×[y_B]×, [A]× − [B]×].
                 let mut n0 = SMatrix::<f64, 3, 6>::zeros();
                 n0.fixed_view_mut::<3, 3>(0, 0)
                     .copy_from(&(skew(&b) * skew(&y_a) - skew(&a) * skew(&y_b)));
                 n0.fixed_view_mut::<3, 3>(0, 3).copy_from(&(skew(&a) - skew(&b)));
                 let nt = n0 * t;
-                let q_t = problem.g * nt.fixed_view::<2, 6>(0, 0);
-                // w' = q̂·q' with q̂ = G m_xy / w.
-                let q_hat = problem.g * m0.xy() / w0;
-                let w1 = q_hat.transpose() * q_t;
                 let (p_a, p_b) = (tangent_map(&y_a), tangent_map(&y_b));
-                let endpoints = s2.map(|e| {
+                let endpoints = std::array::from_fn(|k| {
+                    let (e, (g_e, g_norm)) = (s2[k], maps[k]);
+                    let w0 = (g_e * m0.xy()).norm();
+                    let q_t = g_e * nt.fixed_view::<2, 6>(0, 0);
+                    // w' = q̂·q' with q̂ = G_e m_xy / w.
+                    let q_hat = g_e * m0.xy() / w0;
+                    let w1 = q_hat.transpose() * q_t;
                     let e_bar = problem.k_inv * Vector3::new(e.x, e.y, 1.0);
                     let r0 = e_bar.dot(&m0) / w0;
                     // r' = (n' − r w') / w at s = 0.
@@ -1035,6 +1073,10 @@ impl RayCurvature {
                     let cross = p_a.transpose() * skew(&e_bar) * p_b;
                     h -= cross + cross.transpose();
                     EndpointRay {
+                        w0,
+                        g_norm,
+                        q1_0: q_t.singular_values().max(),
+                        w1_0: w1.norm(),
                         e_norm: e_bar.norm(),
                         cross_b: b.cross(&e_bar).norm(),
                         cross_a: e_bar.cross(&a).norm(),
@@ -1050,21 +1092,17 @@ impl RayCurvature {
                     a: a.norm(),
                     b: b.norm(),
                     length: (b - a).norm(),
-                    w0,
-                    q1_0: q_t.singular_values().max(),
-                    w1_0: w1.norm(),
                     endpoints,
                 }
             })
             .collect::<Vec<_>>();
         lines
             .iter()
-            .all(|l: &LineRay| l.w0 > 0.0 && l.w0.is_finite())
+            .flat_map(|l: &LineRay| &l.endpoints)
+            .all(|end| end.w0 > 0.0 && end.w0.is_finite())
             .then_some(RayCurvature {
                 alpha_omega: whitening.alpha_omega,
                 alpha_tau: whitening.alpha_tau,
-                k_norm: problem.k_norm,
-                g_norm: problem.g_norm,
                 mu,
                 points,
                 lines,
@@ -1092,8 +1130,8 @@ impl RayCurvature {
                 return None;
             }
             let pi_max = (pt.p.xy().norm() + s * (a_w * pt.y_norm + a_t)) / z_lo;
-            // ‖K₂ Dπ p''‖ ≤ ‖K₂‖ √(1 + ‖π‖²) / z · α_ω² ‖y‖.
-            let direct = self.k_norm * (1.0 + pi_max * pi_max).sqrt() / z_lo * a_w * a_w * pt.y_norm;
+            // ‖W K₂ Dπ p''‖ ≤ ‖W K₂‖ √(1 + ‖π‖²) / z · α_ω² ‖y‖.
+            let direct = pt.map_norm * (1.0 + pi_max * pi_max).sqrt() / z_lo * a_w * a_w * pt.y_norm;
             direct2 += direct * direct;
             let rho = depth_rate / z_lo;
             if let Some(p) = parts.as_deref_mut() {
@@ -1110,28 +1148,34 @@ impl RayCurvature {
             // (a_ω × y_A)' × B + (a_ω × y_A) × B' (and A's twin), with ‖B(σ)‖ ≤ b_max, not ‖B(0)‖.
             let drift = a_w * (v_b * line.ya + b_max * a_w * line.ya + v_a * line.yb + a_max * a_w * line.yb)
                 + a_t * a_w * line.length;
-            let q1 = line.q1_0 + s * self.g_norm * drift;
-            let w_lo = line.w0 - s * q1;
-            if !(w_lo > 0.0) {
-                return None;
-            }
             // ‖m''‖: m'' = A'' × B + A × B'' + 2 A' × (a_ω × D), D = B − A = R_s (y_B − y_A).
             let m2 = a_w * a_w * (line.ya * b_max + a_max * line.yb) + 2.0 * v_a.min(v_b) * a_w * line.length;
             // m''' = A''' × B + A × B''' + 3 (A'' × (a_ω × D) + A' × (a_ω × (a_ω × D))).
             let mixed3 = 3.0 * a_w * a_w * line.length * (v_a + a_w * line.ya).min(v_b + a_w * line.yb);
-            // |w''| ≤ ‖q'‖² / w + ‖q''‖; |w'| ≤ |w'(0)| + s |w''|.
-            let w2 = q1 * q1 / w_lo + self.g_norm * m2;
-            let rho = (line.w1_0 + s * w2) / w_lo;
-            rate = rate.max(rho);
-            let mut n2_bounds = [0.0; 2];
-            let mut n3_bounds = [0.0; 2];
-            for ((end, n2_bound), n3_bound) in line.endpoints.iter().zip(&mut n2_bounds).zip(&mut n3_bounds) {
+            let mut ends = [testing::EndpointParts::default(); 2];
+            for (end, found) in line.endpoints.iter().zip(&mut ends) {
+                let q1 = end.q1_0 + s * end.g_norm * drift;
+                let w_lo = end.w0 - s * q1;
+                if !(w_lo > 0.0) {
+                    return None;
+                }
+                // |w''| ≤ ‖q'‖² / w + ‖q''‖; |w'| ≤ |w'(0)| + s |w''|.
+                let w2 = q1 * q1 / w_lo + end.g_norm * m2;
+                let rho = (end.w1_0 + s * w2) / w_lo;
+                rate = rate.max(rho);
                 let n3 = a_w.powi(3)
                     * (line.ya * (end.cross_b + s * v_b * end.e_norm) + line.yb * (end.cross_a + s * v_a * end.e_norm))
                     + end.e_norm * mixed3;
                 let n2 = end.n2_exact + s * n3;
-                *n2_bound = n2;
-                *n3_bound = n3;
+                *found = testing::EndpointParts {
+                    w_lo,
+                    w2,
+                    rate: rho,
+                    q1,
+                    n2,
+                    n2_exact: end.n2_exact,
+                    n3,
+                };
                 // |r(s)| ≤ |r(0)| + s σ with σ a bound on |r'| along the ray, confirmed by Grönwall
                 // on |r''| ≤ d + 2ρ |r'|, d = (|n''| + |r| |w''|) / w.
                 let mut sigma = 1.2 * end.slope0 + 1e-12;
@@ -1151,17 +1195,11 @@ impl RayCurvature {
             }
             if let Some(p) = parts.as_deref_mut() {
                 p.lines.push(testing::LineParts {
-                    w_lo,
-                    w2,
-                    rate: rho,
-                    n2: n2_bounds,
                     speed: [v_a, v_b],
                     drift,
-                    q1,
-                    n2_exact: line.endpoints.each_ref().map(|end| end.n2_exact),
-                    n3: n3_bounds,
                     m2,
                     mixed3,
+                    endpoints: ends,
                 });
             }
         }
@@ -1251,12 +1289,6 @@ pub fn certify(
 ) -> Certification {
     if !(cost.is_finite() && cost >= 0.0) {
         return Certification::none("not attempted: the cost is not finite");
-    }
-    if corr.noise.is_some() {
-        return Certification::none(
-            "not attempted: the relaxation holds for isotropic pixel noise on a pinhole camera; \
-             per-observation covariances and distortion are not covered",
-        );
     }
     let problem = match Problem::new(camera, corr, cost) {
         Ok(p) => p,
@@ -1434,29 +1466,35 @@ pub mod testing {
         pub rate: f64,
     }
 
-    /// A line's part of `K` on the ball, along the same rays: with `m = A × B` (camera-frame endpoints
-    /// of the object segment) and `w = ‖G m_xy‖` (`G` the upper-left 2x2 block of `K⁻ᵀ`), `w ≥ w_lo`,
-    /// `|w''| ≤ w2`, `|w' / w| ≤ rate`, and for each observed endpoint `ē = K⁻¹ ẽ`, `|(ēᵀ m)''| ≤ n2`.
-    ///
-    /// The terms these are built from, each a claim of its own: `speed` bounds `‖A'‖` and `‖B'‖`,
-    /// `drift` bounds `‖m'(s) − m'(0)‖ / s`, `q1` bounds `‖q'‖` (`q = G m_xy`), `n3` bounds
-    /// `|(ēᵀ m)'''|` per endpoint (all over the ball), and `n2_exact` is `max |(ēᵀ m)''(0)|` over the
-    /// unit whitened directions, exactly. Within them: `m2` bounds `‖m''‖`, `w2 − ‖G‖ m2` bounds
-    /// `‖q'‖² / w`, `mixed3` bounds `‖3 (A'' × B' + A' × B'')‖` and `n3 − ‖ē‖ mixed3` bounds
-    /// `|ēᵀ (A''' × B + A × B''')|`.
-    #[derive(Debug, Clone, Copy)]
-    pub struct LineParts {
+    /// One observed endpoint's part of `K` on the ball, along the same rays: with `m = A × B`
+    /// (camera-frame endpoints of the object segment) and `w = ‖G_e m_xy‖` (`G_e = Lᵀ G`, `G` the
+    /// upper-left 2x2 block of `K⁻ᵀ`, `L Lᵀ` the endpoint's covariance, the identity without one),
+    /// `w ≥ w_lo`, `|w''| ≤ w2`, `|w' / w| ≤ rate`, `‖q'‖ ≤ q1` (`q = G_e m_xy`), and with
+    /// `ē = K⁻¹ ẽ`, `|(ēᵀ m)''| ≤ n2` and `|(ēᵀ m)'''| ≤ n3`; `n2_exact` is `max |(ēᵀ m)''(0)|` over
+    /// the unit whitened directions, exactly. Within them, `w2 − ‖G_e‖ m2` bounds `‖q'‖² / w` and
+    /// `n3 − ‖ē‖ mixed3` bounds `|ēᵀ (A''' × B + A × B''')|`.
+    #[derive(Debug, Clone, Copy, Default)]
+    pub struct EndpointParts {
         pub w_lo: f64,
         pub w2: f64,
         pub rate: f64,
-        pub n2: [f64; 2],
+        pub q1: f64,
+        pub n2: f64,
+        pub n2_exact: f64,
+        pub n3: f64,
+    }
+
+    /// A line's part of `K` on the ball, along the same rays, each a claim of its own: `speed`
+    /// bounds `‖A'‖` and `‖B'‖`, `drift` bounds `‖m'(s) − m'(0)‖ / s`, `m2` bounds `‖m''‖` and
+    /// `mixed3` bounds `‖3 (A'' × B' + A' × B'')‖` (all over the ball); `endpoints` are the parts of
+    /// the two observed endpoints.
+    #[derive(Debug, Clone, Copy)]
+    pub struct LineParts {
         pub speed: [f64; 2],
         pub drift: f64,
-        pub q1: f64,
-        pub n2_exact: [f64; 2],
-        pub n3: [f64; 2],
         pub m2: f64,
         pub mixed3: f64,
+        pub endpoints: [EndpointParts; 2],
     }
 
     /// The parts of `K` (see [`PointParts`], [`LineParts`]) and the whitening `T` of the rays.
@@ -1541,25 +1579,36 @@ mod tests {
     }
 
     /// Step 2's minorant summed point by point, the oracle of [`Minorant`]:
-    /// `Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²` with `wᵢ = s² / Dᵢ²`.
+    /// `Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²` with `wᵢ = sᵢ² / Dᵢ²`.
     fn minorant_by_points(problem: &Problem, depths: &[f64], r: &Matrix3<f64>, t: &Vector3<f64>) -> f64 {
-        let s2 = problem.s_min * problem.s_min;
-        (problem.corr.points3d.iter().zip(&problem.bearings).zip(depths))
-            .map(|((x, b), d)| {
-                let y = r * x + t;
-                s2 / (d * d) * (y - b * b.dot(&y)).norm_squared()
-            })
-            .sum()
+        (problem
+            .corr
+            .points3d
+            .iter()
+            .zip(&problem.bearings)
+            .zip(depths)
+            .zip(&problem.scales))
+        .map(|(((x, b), d), s)| {
+            let y = r * x + t;
+            s * s / (d * d) * (y - b * b.dot(&y)).norm_squared()
+        })
+        .sum()
     }
 
     /// The Minkowski bound `½ (√q_min − θ η)₊²` at the rotation `r` of the minorant of the depth
     /// bounds `depths` scaled by `κ`, point by point (the oracle of [`Scaled::bound_near`]): `q_min` from
     /// the normal equations `Σ wᵢ Pᵢ (R Xᵢ + t) = 0`, `η² = Σ wᵢ ‖Xᵢ‖²`.
     fn bound_near_by_points(problem: &Problem, depths: &[f64], kappa: f64, r: &Matrix3<f64>, theta: f64) -> f64 {
-        let s2 = problem.s_min * problem.s_min;
         let (mut lhs, mut rhs, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
-        for ((x, b), d) in problem.corr.points3d.iter().zip(&problem.bearings).zip(depths) {
-            let w = kappa * s2 / (d * d);
+        for (((x, b), d), s) in problem
+            .corr
+            .points3d
+            .iter()
+            .zip(&problem.bearings)
+            .zip(depths)
+            .zip(&problem.scales)
+        {
+            let w = kappa * s * s / (d * d);
             let p = Matrix3::identity() - b * b.transpose();
             lhs += p * w;
             rhs -= p * (r * x) * w;
@@ -1838,7 +1887,7 @@ mod tests {
                         minorant: Rc::new(Minorant::build(
                             &corr.points3d,
                             &problem.bearings,
-                            problem.s_min,
+                            &problem.scales,
                             depths,
                         )),
                         scale: 1.0,
@@ -1922,8 +1971,11 @@ mod tests {
                 let (problem, f_hat) = (search.problem, search.f_hat);
                 let (corr, truth) = (problem.corr, *search.pose);
                 let depths = problem.root.depths.clone();
-                let s2 = problem.s_min * problem.s_min;
-                let weights: Vec<f64> = depths.iter().map(|d| s2 / (d * d)).collect();
+                let weights: Vec<f64> = depths
+                    .iter()
+                    .zip(&problem.scales)
+                    .map(|(d, s)| s * s / (d * d))
+                    .collect();
                 for _ in 0..1000 {
                     // Most near the answer, where boxes are split rather than pruned.
                     let centre = rng.unit_vector3() * rng.uniform_in(0.0, 1.0).powi(3);

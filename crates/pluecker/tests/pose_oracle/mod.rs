@@ -68,21 +68,31 @@ pub fn pixel(k: &Camera, x: &Vector3<f64>) -> Vector2<f64> {
     Vector2::new((k.fx * x.x + k.skew * x.y) / x.z + k.cx, k.fy * x.y / x.z + k.cy)
 }
 
-/// The residuals, two per point, then two per segment.
+/// The residuals, two per point, then two per segment. With per-observation noise
+/// (`corr.noise`), a point's pixel error is multiplied by its whitening `W` and a segment endpoint's
+/// distance to the projected line is divided by the standard deviation `√(nᵀ C n)` of its
+/// covariance `C` across the line (`n` the line's unit normal).
 pub fn residuals(k: &Camera, corr: &Correspondences, pose: &OraclePose) -> Vec<f64> {
     let mut out = Vec::with_capacity(2 * (corr.points2d.len() + corr.lines2d.len()));
-    for (u, x) in corr.points2d.iter().zip(&corr.points3d) {
-        let p = pixel(k, &(pose.r * x + pose.t));
-        out.push(p.x - u.x);
-        out.push(p.y - u.y);
+    for (i, (u, x)) in corr.points2d.iter().zip(&corr.points3d).enumerate() {
+        let mut e = pixel(k, &(pose.r * x + pose.t)) - u;
+        if let Some(noise) = &corr.noise {
+            e = noise.points[i] * e;
+        }
+        out.push(e.x);
+        out.push(e.y);
     }
-    for (seen, ends) in corr.lines2d.iter().zip(&corr.lines3d) {
+    for (i, (seen, ends)) in corr.lines2d.iter().zip(&corr.lines3d).enumerate() {
         let [a, b] = ends.map(|e| pixel(k, &(pose.r * e + pose.t)));
         // The line through a and b: n · (x − a) = 0 with n ⟂ (b − a).
         let d = b - a;
         let n = Vector2::new(-d.y, d.x) / d.norm();
-        for e in seen {
-            out.push(n.dot(&(e - a)));
+        for (j, e) in seen.iter().enumerate() {
+            let sigma = corr
+                .noise
+                .as_ref()
+                .map_or(1.0, |noise| n.dot(&(noise.lines[i][j] * n)).sqrt());
+            out.push(n.dot(&(e - a)) / sigma);
         }
     }
     out
