@@ -173,12 +173,15 @@ struct Problem<'c> {
     /// line moment `m` projects to a pixel line whose normal is `G m_xy`) and `L Lᵀ` the endpoint's
     /// covariance (the identity without covariances), so that the endpoint's residual is
     /// `ēᵀ m / ‖G_e m_xy‖`.
-    endpoint_maps: Vec<[(Matrix2<f64>, f64); 2]>,
+    endpoint_maps: Vec<[EndpointMap; 2]>,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
     /// `‖Xᵢ‖` (object coordinates).
     norms: Vec<f64>,
 }
+
+/// A segment endpoint's `G_e` and `‖G_e‖` ([`Problem::endpoint_maps`]).
+type EndpointMap = (Matrix2<f64>, f64);
 
 fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
     let s = m.singular_values();
@@ -221,7 +224,7 @@ impl<'c> Problem<'c> {
         let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
         let k_inv = k.try_inverse().ok_or("singular camera")?;
         let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
-        let (point_maps, endpoint_maps): (Vec<Matrix2<f64>>, Vec<[(Matrix2<f64>, f64); 2]>) = match &corr.noise {
+        let (point_maps, endpoint_maps): (Vec<Matrix2<f64>>, Vec<[EndpointMap; 2]>) = match &corr.noise {
             None => {
                 let g_norm = norm2x2(&g).1;
                 (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
@@ -230,7 +233,7 @@ impl<'c> Problem<'c> {
                 return Err("not attempted: the certificate covers pinhole cameras only".into());
             }
             Some(noise) => {
-                let endpoint = |c: &Matrix2<f64>| -> std::result::Result<(Matrix2<f64>, f64), String> {
+                let endpoint = |c: &Matrix2<f64>| -> std::result::Result<EndpointMap, String> {
                     // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
                     let l = (0.5 * (c + c.transpose()))
                         .cholesky()
