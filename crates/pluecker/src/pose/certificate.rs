@@ -16,16 +16,19 @@
 //!    is within the angle `αᵢ = ε₀ / sᵢ` of its observed ray `bᵢ`. Two points `i, j` seen `γᵢⱼ` apart
 //!    are then at distances `‖xᵢ‖ ≤ dᵢⱼ / sin(γᵢⱼ ∓ (αᵢ + αⱼ))` from the camera (law of sines); `Dᵢ`
 //!    is the least such bound over a few partners `j`.
-//! 2. **A quadratic minorant.** A point's squared residual is at least `wᵢ ‖(I − bᵢbᵢᵀ) xᵢ‖²` with
-//!    `wᵢ = sᵢ² / Dᵢ²` (the sine of its angle to the ray, times `sᵢ`), quadratic in `t` for a fixed
-//!    rotation. The line residuals are left out of the minorant (it stays a minorant of `f`): their
+//! 2. **A quadratic minorant.** A point's residual is `rᵢ = Wᵢ K₂ (π(xᵢ) − ūᵢ) = Aᵢ xᵢ / x_z` exactly,
+//!    with `Aᵢ = Wᵢ K₂ [1 0 −ū₁; 0 1 −ū₂]` (`ūᵢ` the normalised observed point), so where the point is
+//!    in front and `x_z ≤ ‖xᵢ‖ ≤ Dᵢ` its squared residual is at least `wᵢ ‖Aᵢ xᵢ‖²`, `wᵢ = 1 / Dᵢ²`:
+//!    the whitened residual itself, anisotropy and the gnomonic stretch included, only the depth
+//!    replaced by its bound. It is quadratic in `t` for a fixed rotation. The line residuals are left
+//!    out of the minorant (it stays a minorant of `f`): their
 //!    moment form moves with the rotation by the camera distance, not the object size, and only
 //!    slowed the search.
 //! 3. **Rotation search** on the shared branch and bound (`global::branch_and_bound`, the
 //!    search of the triangulation certificates; the oracle is `RotationSearch`). Over a box of
 //!    rotation vectors `ω` (`R = exp(ω) R̂`) with half-diagonal `θ`, every rotation is within the angle
-//!    `θ` of the centre's `R_c`, so each residual of the minorant moves by at most `θ ‖Xᵢ‖`. With
-//!    `Q(t)` the minorant at `R_c` and `η² = Σ wᵢ ‖Xᵢ‖²`, a pose of `S` in the box has
+//!    `θ` of the centre's `R_c`, so each residual `Aᵢ xᵢ` of the minorant moves by at most
+//!    `‖Aᵢ‖ θ ‖Xᵢ‖`. With `Q(t)` the minorant at `R_c` and `η² = Σ wᵢ ‖Aᵢ‖² ‖Xᵢ‖²`, a pose of `S` in the box has
 //!    `√Q(t) ≤ √(2f) + θ η` (Minkowski), so `f ≥ ½ (√q_min − θ η)₊²` (`q_min = min_t Q`) on the box's
 //!    poses of `S`, and every other pose has `f > f̂`. Where that falls short of `f̂`, the minorant
 //!    linearised in the rotation gives a second bound: a rotation of the box is `exp(φ) R_c` with
@@ -162,8 +165,8 @@ struct Problem<'c> {
     /// Per point, `W K₂`: the whitening `W` of its noise (the identity without covariances) times
     /// the 2x2 block `K₂` of `K`, which maps a normalised-plane error to the whitened residual.
     point_maps: Vec<Matrix2<f64>>,
-    /// Per point, `sᵢ`, the least singular value of `Wᵢ K₂`.
-    scales: Vec<f64>,
+    /// Per point, the map `Aᵢ` of step 2's minorant ([`PointForm`]).
+    forms: Vec<PointForm>,
     /// The minorant for step 1's upper bounds `Dᵢ` on the distances of the points from the camera
     /// over `S` (the search tightens them box by box: [`RotationSearch`]).
     root: Rc<Minorant>,
@@ -178,6 +181,14 @@ struct Problem<'c> {
     bearings: Vec<Vector3<f64>>,
     /// `‖Xᵢ‖` (object coordinates).
     norms: Vec<f64>,
+}
+
+/// A point's part of step 2's minorant: `H = AᵀA` for the 2x3 map `A` with `r = A x / x_z` (the
+/// point's whitened residual at the camera-frame position `x`), and `λ_max(H) = ‖A‖²`.
+struct PointForm {
+    /// `H = AᵀA`.
+    h: Matrix3<f64>,
+    norm2: f64,
 }
 
 /// A segment endpoint's `G_e` and `‖G_e‖` ([`Problem::endpoint_maps`]).
@@ -269,11 +280,25 @@ impl<'c> Problem<'c> {
             .collect();
         let depths = depth_bounds(corr, &bearings, &alphas)
             .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
-        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, &scales, depths));
+        // A point's residual is Wᵢ K₂ (π(x) − ūᵢ) = Aᵢ x / x_z with Aᵢ = Wᵢ K₂ Eᵢ,
+        // Eᵢ = [1 0 −ū₁; 0 1 −ū₂] (ūᵢ the normalised observed point).
+        let forms: Vec<PointForm> = (point_maps.iter().zip(&corr.points2d))
+            .map(|(map, u)| {
+                let n = k_inv * Vector3::new(u.x, u.y, 1.0);
+                let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -n.x / n.z, 0.0, 1.0, -n.y / n.z);
+                let a = map * e;
+                let h = a.transpose() * a;
+                PointForm {
+                    h,
+                    norm2: largest_eigenvalue(&h),
+                }
+            })
+            .collect();
+        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths));
         Ok(Problem {
             corr,
             point_maps,
-            scales,
+            forms,
             k_inv,
             endpoint_maps,
             bearings,
@@ -284,14 +309,14 @@ impl<'c> Problem<'c> {
 
     /// Step 2's minorant for the depth bounds `depths`.
     fn minorant(&self, depths: Vec<f64>) -> Minorant {
-        Minorant::build(&self.corr.points3d, &self.bearings, &self.scales, depths)
+        Minorant::build(&self.corr.points3d, &self.bearings, &self.forms, depths)
     }
 }
 
-/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²`, `wᵢ = sᵢ² / Dᵢ²`, for one set of depth
+/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t)‖²`, `wᵢ = 1 / Dᵢ²`, for one set of depth
 /// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
-/// (row-major `vec`), and `η = √(Σ wᵢ ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q` moves
-/// by at most `θ η`.
+/// (row-major `vec`), and `η = √(Σ wᵢ ‖Aᵢ‖² ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q`
+/// moves by at most `θ η`.
 ///
 /// The Hessian `C` in `t` does not depend on the rotation: `C⁻¹`, its largest eigenvalue, the
 /// `bᵢᵀ C⁻¹ bᵢ` and the ellipsoid's whitened extent are computed once per minorant, not per box.
@@ -314,45 +339,51 @@ struct Minorant {
 }
 
 impl Minorant {
-    /// The minorant for the depth bounds `depths` of the points `points` seen along the unit
-    /// bearings `bearings` (weights `wᵢ = sᵢ² / Dᵢ²`, `sᵢ` from `scales`: [`Problem::scales`]).
-    fn build(points: &[Vector3<f64>], bearings: &[Vector3<f64>], scales: &[f64], depths: Vec<f64>) -> Minorant {
-        // With z = (vec R, t) (row-major vec), R Xᵢ + t = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, I], and with
-        // Pᵢ = I − bᵢbᵢᵀ a point's term is wᵢ zᵀ Lᵢᵀ Pᵢ Lᵢ z, where Lᵢᵀ Pᵢ Lᵢ = Lᵢᵀ Lᵢ − uᵢ uᵢᵀ,
-        // uᵢ = Lᵢᵀ bᵢ = (bᵢ ⊗ Xᵢ, bᵢ). The blocks of Σ wᵢ Lᵢᵀ Lᵢ are I ⊗ M, I ⊗ s and (Σ wᵢ) I with
-        // M = Σ wᵢ XᵢXᵢᵀ and s = Σ wᵢ Xᵢ; the upper triangle of Σ wᵢ uᵢ uᵢᵀ is accumulated by hand
-        // (a search rebuilds the minorant about once every ten boxes).
-        let mut outer = [[0.0f64; 12]; 12];
-        let (mut m, mut s, mut w_sum, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0, 0.0);
-        for (((x, b), d), scale) in points.iter().zip(bearings).zip(&depths).zip(scales) {
-            let w = scale * scale / (d * d);
-            m += x * x.transpose() * w;
-            s += x * w;
-            w_sum += w;
-            eta2 += w * x.norm_squared();
-            let u: [f64; 12] = std::array::from_fn(|i| if i < 9 { b[i / 3] * x[i % 3] } else { b[i - 9] });
-            for (i, row) in outer.iter_mut().enumerate() {
-                let wu = w * u[i];
-                for (entry, uj) in row[i..].iter_mut().zip(&u[i..]) {
-                    *entry += wu * uj;
+    /// The minorant for the depth bounds `depths` of the points `points` with the residual maps
+    /// `forms` ([`Problem::forms`]): a point's term is `‖Aᵢ (R Xᵢ + t)‖² / Dᵢ²`.
+    fn build(points: &[Vector3<f64>], bearings: &[Vector3<f64>], forms: &[PointForm], depths: Vec<f64>) -> Minorant {
+        // With z = (vec R, t) (row-major vec), R Xᵢ + t = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, I], a point's term is
+        // wᵢ zᵀ Lᵢᵀ Hᵢ Lᵢ z (Hᵢ = AᵢᵀAᵢ), whose blocks are Hᵢ ⊗ XᵢXᵢᵀ, Hᵢ ⊗ Xᵢ and Hᵢ. Both H and
+        // XXᵀ are symmetric: six entries each, accumulated by hand (a search rebuilds the minorant
+        // about once every ten boxes).
+        const PAIRS: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+        let mut outer = [[0.0f64; 6]; 6];
+        let mut linear = [[0.0f64; 3]; 6];
+        let mut constant = [0.0f64; 6];
+        let mut eta2 = 0.0;
+        for ((x, form), d) in points.iter().zip(forms).zip(&depths) {
+            let w = 1.0 / (d * d);
+            eta2 += w * form.norm2 * x.norm_squared();
+            let wx = [w * x.x, w * x.y, w * x.z];
+            let wxx = PAIRS.map(|(i, j)| wx[i] * x[j]);
+            for (k, &(a, b)) in PAIRS.iter().enumerate() {
+                let h = form.h[(a, b)];
+                for (entry, v) in outer[k].iter_mut().zip(&wxx) {
+                    *entry += h * v;
                 }
+                for (entry, v) in linear[k].iter_mut().zip(&wx) {
+                    *entry += h * v;
+                }
+                constant[k] += h * w;
             }
         }
         let mut gram = SMatrix::<f64, 12, 12>::zeros();
-        for (i, row) in outer.iter().enumerate() {
-            for (j, entry) in row.iter().enumerate().skip(i) {
-                gram[(i, j)] = -entry;
-                gram[(j, i)] = -entry;
+        for (k, &(a, b)) in PAIRS.iter().enumerate() {
+            for (l, &(i, j)) in PAIRS.iter().enumerate() {
+                // Block (a, b) is Σ w H_ab XXᵀ, and block (b, a) the same (both symmetric).
+                for (p, q) in [(a, b), (b, a)] {
+                    gram[(3 * p + i, 3 * q + j)] = outer[k][l];
+                    gram[(3 * p + j, 3 * q + i)] = outer[k][l];
+                }
             }
-        }
-        for r in 0..3 {
-            let mut block = gram.fixed_view_mut::<3, 3>(3 * r, 3 * r);
-            block += m;
-            let mut column = gram.fixed_view_mut::<3, 1>(3 * r, 9 + r);
-            column += s;
-            let mut row = gram.fixed_view_mut::<1, 3>(9 + r, 3 * r);
-            row += s.transpose();
-            gram[(9 + r, 9 + r)] += w_sum;
+            for i in 0..3 {
+                for (p, q) in [(a, b), (b, a)] {
+                    gram[(3 * p + i, 9 + q)] = linear[k][i];
+                    gram[(9 + q, 3 * p + i)] = linear[k][i];
+                }
+            }
+            gram[(9 + a, 9 + b)] = constant[k];
+            gram[(9 + b, 9 + a)] = constant[k];
         }
         // What the bound of a box needs of `C` (the same for every box that shares the minorant).
         let c = gram.fixed_view::<3, 3>(9, 9).into_owned();
@@ -1581,41 +1612,48 @@ mod tests {
         assert_eq!(largest_eigenvalue(&(Matrix3::identity() * 2.0)), 2.0 * (1.0 + 1e-9));
     }
 
-    /// Step 2's minorant summed point by point, the oracle of [`Minorant`]:
-    /// `Σ wᵢ ‖(I − bᵢbᵢᵀ)(R Xᵢ + t)‖²` with `wᵢ = sᵢ² / Dᵢ²`.
+    /// Step 2's minorant summed point by point, the oracle of [`Minorant`]: `Σ (y_z / Dᵢ)² ‖rᵢ(y)‖²`
+    /// at `y = R Xᵢ + t`, with the residual `rᵢ(y) = Wᵢ K₂ (π(y) − ūᵢ)` projected here.
     fn minorant_by_points(problem: &Problem, depths: &[f64], r: &Matrix3<f64>, t: &Vector3<f64>) -> f64 {
         (problem
             .corr
             .points3d
             .iter()
-            .zip(&problem.bearings)
+            .zip(&problem.corr.points2d)
             .zip(depths)
-            .zip(&problem.scales))
-        .map(|(((x, b), d), s)| {
+            .zip(&problem.point_maps))
+        .map(|(((x, u), d), map)| {
             let y = r * x + t;
-            s * s / (d * d) * (y - b * b.dot(&y)).norm_squared()
+            let seen = problem.k_inv * Vector3::new(u.x, u.y, 1.0);
+            let residual = map * (y.xy() / y.z - seen.xy() / seen.z);
+            (y.z / d).powi(2) * residual.norm_squared()
         })
         .sum()
     }
 
+    /// Per point, `H = Aᵀ A` of the oracle's minorant `‖A y‖² = y_z² ‖rᵢ(y)‖²` (`A = Wᵢ K₂ E`,
+    /// `E = [1 0 −ū₁; 0 1 −ū₂]`), and `λ_max(H)`.
+    fn forms_by_points(problem: &Problem) -> Vec<(Matrix3<f64>, f64)> {
+        (problem.corr.points2d.iter().zip(&problem.point_maps))
+            .map(|(u, map)| {
+                let seen = problem.k_inv * Vector3::new(u.x, u.y, 1.0);
+                let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -seen.x / seen.z, 0.0, 1.0, -seen.y / seen.z);
+                let h = e.transpose() * map.transpose() * map * e;
+                (h, h.symmetric_eigenvalues().max())
+            })
+            .collect()
+    }
+
     /// The Minkowski bound `½ (√q_min − θ η)₊²` at the rotation `r` of the minorant of the depth
     /// bounds `depths` scaled by `κ`, point by point (the oracle of [`Scaled::bound_near`]): `q_min` from
-    /// the normal equations `Σ wᵢ Pᵢ (R Xᵢ + t) = 0`, `η² = Σ wᵢ ‖Xᵢ‖²`.
+    /// the normal equations `Σ wᵢ Hᵢ (R Xᵢ + t) = 0`, `η² = Σ wᵢ λ_max(Hᵢ) ‖Xᵢ‖²`, `wᵢ = κ / Dᵢ²`.
     fn bound_near_by_points(problem: &Problem, depths: &[f64], kappa: f64, r: &Matrix3<f64>, theta: f64) -> f64 {
         let (mut lhs, mut rhs, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
-        for (((x, b), d), s) in problem
-            .corr
-            .points3d
-            .iter()
-            .zip(&problem.bearings)
-            .zip(depths)
-            .zip(&problem.scales)
-        {
-            let w = kappa * s * s / (d * d);
-            let p = Matrix3::identity() - b * b.transpose();
-            lhs += p * w;
-            rhs -= p * (r * x) * w;
-            eta2 += w * x.norm_squared();
+        for ((x, d), (h, norm2)) in problem.corr.points3d.iter().zip(depths).zip(forms_by_points(problem)) {
+            let w = kappa / (d * d);
+            lhs += h * w;
+            rhs -= h * (r * x) * w;
+            eta2 += w * norm2 * x.norm_squared();
         }
         let t = lhs.lu().solve(&rhs).unwrap();
         let q_min = kappa * minorant_by_points(problem, depths, r, &t);
@@ -1890,7 +1928,7 @@ mod tests {
                         minorant: Rc::new(Minorant::build(
                             &corr.points3d,
                             &problem.bearings,
-                            &problem.scales,
+                            &problem.forms,
                             depths,
                         )),
                         scale: 1.0,
@@ -1974,11 +2012,8 @@ mod tests {
                 let (problem, f_hat) = (search.problem, search.f_hat);
                 let (corr, truth) = (problem.corr, *search.pose);
                 let depths = problem.root.depths.clone();
-                let weights: Vec<f64> = depths
-                    .iter()
-                    .zip(&problem.scales)
-                    .map(|(d, s)| s * s / (d * d))
-                    .collect();
+                let weights: Vec<f64> = depths.iter().map(|d| 1.0 / (d * d)).collect();
+                let forms = forms_by_points(problem);
                 for _ in 0..1000 {
                     // Most near the answer, where boxes are split rather than pruned.
                     let centre = rng.unit_vector3() * rng.uniform_in(0.0, 1.0).powi(3);
@@ -1990,23 +2025,19 @@ mod tests {
                     let (_, Some(handed)) = search.bound_with(&region, &None) else {
                         continue;
                     };
-                    // The oracle's ellipsoid at the centre rotation: Q(t) = Σ wᵢ ‖Pᵢ (R_c Xᵢ + t)‖².
+                    // The oracle's ellipsoid at the centre rotation: Q(t) = Σ wᵢ (R_c Xᵢ + t)ᵀ Hᵢ (R_c Xᵢ + t).
                     let r_c = exp_so3(&centre) * truth.rotation;
                     let mut c = Matrix3::zeros();
                     let mut g = Vector3::zeros();
-                    for ((x, b), w) in corr.points3d.iter().zip(&problem.bearings).zip(&weights) {
-                        let p = (Matrix3::identity() - b * b.transpose()) * *w;
-                        c += p;
-                        g += p * (r_c * x);
+                    for ((x, (h, _)), w) in corr.points3d.iter().zip(&forms).zip(&weights) {
+                        c += h * *w;
+                        g += h * (r_c * x) * *w;
                     }
                     let c_inv = c.try_inverse().unwrap();
                     let t_star = -(c_inv * g);
                     let q_min = minorant_by_points(problem, &depths, &r_c, &t_star);
-                    let eta = corr
-                        .points3d
-                        .iter()
-                        .zip(&weights)
-                        .map(|(x, w)| w * x.norm_squared())
+                    let eta = (corr.points3d.iter().zip(&weights).zip(&forms))
+                        .map(|((x, w), (_, norm2))| w * norm2 * x.norm_squared())
                         .sum::<f64>()
                         .sqrt();
                     let beta = (2.0 * f_hat).sqrt() + half.norm() * eta;
