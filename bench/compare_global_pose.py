@@ -5,9 +5,13 @@ cvxpnpl on the same seeded scenes.
 **Cost.** The cost of a pose ``(R, t)`` (``x_cam = R X + t``) is the maximum-likelihood cost under
 Gaussian pixel noise, ``½ (Σ_points e² + Σ_lines 2 e²)``, from ``pluecker.reprojection_errors``: ``e``
 of a point is its pixel distance, ``e`` of a line the RMS of the distances of its two observed
-endpoints to the projected 3-D line (so ``2 e²`` is the sum of the two squared distances). A pose with
-a non-finite entry, or with a 3-D point or segment endpoint at depth ``<= 0``, is not valid: its cost
-is taken as +inf.
+endpoints to the projected 3-D line (so ``2 e²`` is the sum of the two squared distances). On the
+``cov-`` rows (per-observation covariances) it is the whitened cost ``½ Σ r²`` that ``estimate_pose``
+minimises with ``point_covariances`` / ``line_covariances``, computed here in numpy
+(``reprojection_errors`` takes no covariances): a point's ``r·r = eᵀ Σ⁻¹ e``, ``e = π(R X + t) − u``;
+an endpoint's ``r = d / √(n̂ᵀ Σ n̂)``, ``d`` its signed pixel distance to the projected line and ``n̂``
+that line's unit normal. A pose with a non-finite entry, or with a 3-D point or segment endpoint at
+depth ``<= 0``, is not valid: its cost is taken as +inf.
 
 **Best known minimum** of a scene: the lowest valid cost among
 
@@ -45,7 +49,17 @@ every image point and endpoint. Mixed data of ``n`` correspondences are ``ceil(n
 - ``f{250,800,4000,15000}-n{4,6,10,100}-{points,lines,mixed}``: general objects;
 - ``planar-f{800,4000}-n{4,6,10,100}-{points,mixed}``: planar objects;
 - ``rs-{general,planar,far}-{100p,50p20l}``: the scenes of ``bench/compare_pose.py``,
-  ``pluecker.random_scene(kind, n_points, n_lines, seed)`` (f = 800) with the noise added as there.
+  ``pluecker.random_scene(kind, n_points, n_lines, seed)`` (f = 800) with the noise added as there;
+- ``cov-f{800,4000,15000}-n{10,100}-{points,mixed}``: per-observation covariances. The general object
+  of the row without ``cov-`` (the same draws, so the same geometry), then, instead of the 1 px
+  noise, every image point and segment endpoint its own covariance ``Σ = R(φ) diag(σ₁², σ₂²) R(φ)ᵀ``,
+  ``σ₁, σ₂`` uniform in 0.5 .. 2.0 px and ``φ`` uniform in [0, π) (all drawn after the geometry, points
+  then endpoints), and noise ``R(φ) diag(σ₁, σ₂) z``, ``z ~ N(0, I)``, drawn from it. Every pluecker
+  call on these rows passes ``point_covariances`` (N, 2, 2) and ``line_covariances`` (M, 2, 2, 2); the
+  peers take no covariances and do not run on them; targets (3) and (4) leave them out.
+
+``--rows`` selects by substring: ``--rows f800-n10`` also selects ``cov-f800-n10-points`` and
+``cov-f800-n10-mixed``.
 
 **Columns** of the Markdown table (one line per row; the JSON holds more):
 
@@ -99,7 +113,9 @@ with 4-5 correspondences every miss is flagged ambiguous or has a non-success st
 ≥ 99 % on the 100-correspondence rows and ≥ 95 % on the 10-correspondence rows (the ``certify=True``
 answers when that keyword exists, else the default's ``certified``; n/a without either); (4) median
 time of a certified answer (``certify=True``, else the default) ≤ 1 ms on the 100-point rows; (5) on
-``f800-n100-points`` the default's median time ≤ OpenCV SQPnP's in the same run.
+``f800-n100-points`` the default's median time ≤ OpenCV SQPnP's in the same run. Targets (3) and (4)
+are on the rows without covariances (the ``cov-`` rows' certified fraction and times are in the
+table and the JSON).
 
 Results go to ``bench/out/compare_global_pose.json`` (every number of the table, the misses' seeds and
 relative excess cost, ``reached_best`` per source, the peers' failure reasons, the wall time per part
@@ -108,15 +124,20 @@ and an extrapolation of the same rows to the default settings. Run from the repo
 venv (``.venv/bin/pip install opencv-python-headless poselib cvxpnpl``; a peer that is missing is
 reported as not available and skipped):
 
-    .venv/bin/python bench/compare_global_pose.py          # 70 rows x 1000 scenes: about 20 min on 2 cores
-    .venv/bin/python bench/compare_global_pose.py --quick  # 20 scenes per row, 10 starts: about 16 s
+    .venv/bin/python bench/compare_global_pose.py          # 82 rows x 1000 scenes (times below)
+    .venv/bin/python bench/compare_global_pose.py --quick  # 20 scenes per row, 10 starts
+    .venv/bin/python bench/compare_global_pose.py --rows cov- --quick   # the 12 rows with covariances
     .venv/bin/python bench/compare_global_pose.py --rows f800-n4 rs- --scenes 200   # rows by substring
     .venv/bin/python bench/compare_global_pose.py --list-rows
 
 The full-run time is the extrapolation of a ``--quick`` run of 2026-11-23 (15.9 s; the extension as
 built around commit ``4529260``, 20-200 µs per default call): random starts about 8 min, cvxpnpl
 about 8 min, PoseLib (1000 samples a call) about 3.5 min. A slower pluecker lengthens the random starts in
-proportion. The machine is shared and noisy: compare times taken in the same run only.
+proportion. Those times are of the 70 rows without covariances. The 12 ``cov-`` rows took 108 s with
+``--quick`` on 2026-11-27 (the extension as built after commit ``a81504d``), extrapolated to about
+90 min with the defaults, nearly all of it the robust candidate (b) (0.15 s a call on the points rows,
+0.75 s on the mixed ones: it runs to its iteration cap, as on the rows without covariances with that
+build). The machine is shared and noisy: compare times taken in the same run only.
 """
 
 from __future__ import annotations
@@ -165,6 +186,7 @@ except Exception as exc:  # pragma: no cover - ImportError or an error of its SC
     PEER_STATE["cvxpnpl"] = f"not available: {type(exc).__name__}: {exc}"
 
 SIGMA_PX = 1.0
+COV_SIGMA_PX = (0.5, 2.0)  # cov- rows: range of each axis's standard deviation, px
 WIDTH, HEIGHT = 640, 480
 CX, CY = 320.0, 240.0
 DEPTH_RANGE = (4.2, 7.8)
@@ -209,6 +231,7 @@ class Row:
     f: float = 800.0
     planar: bool = False
     kind: str = ""  # random_scene kind
+    covariances: bool = False  # per-observation covariances (the cov- rows)
 
     @property
     def n(self) -> int:
@@ -234,6 +257,10 @@ def all_rows() -> list[Row]:
     for kind in ("general", "planar", "far"):
         rows.append(Row(f"rs-{kind}-100p", "random_scene", 100, 0, kind=kind))
         rows.append(Row(f"rs-{kind}-50p20l", "random_scene", 50, 20, kind=kind))
+    for f in (800.0, 4000.0, 15000.0):
+        for n in (10, 100):
+            for data, (npt, nln) in (("points", (n, 0)), ("mixed", ((n + 1) // 2, n // 2))):
+                rows.append(Row(f"cov-f{f:g}-n{n}-{data}", "synthetic", npt, nln, f=f, covariances=True))
     return rows
 
 
@@ -251,6 +278,8 @@ class Scene:
     lines2d: np.ndarray  # (M, 2, 2) noisy endpoints
     lines3d: np.ndarray  # (M, 2, 3) world endpoints
     planar: bool
+    point_covariances: np.ndarray | None = None  # (N, 2, 2) px², cov- rows only (both or neither)
+    line_covariances: np.ndarray | None = None  # (M, 2, 2, 2) px², per endpoint, cov- rows only
     all3d: np.ndarray = field(init=False, repr=False)  # every point and endpoint, (N + 2M, 3)
     centroid: np.ndarray = field(init=False, repr=False)
     depth: float = field(init=False)
@@ -270,6 +299,16 @@ class Scene:
             "lines2d": self.lines2d if has_l else None,
             "lines3d": self.lines3d if has_l else None,
         }
+
+    @property
+    def noise_kwargs(self) -> dict[str, Any]:
+        """The covariances as ``estimate_pose`` keywords (empty without them)."""
+        out: dict[str, Any] = {}
+        if self.point_covariances is not None and len(self.points3d):
+            out["point_covariances"] = self.point_covariances
+        if self.line_covariances is not None and len(self.lines3d):
+            out["line_covariances"] = self.line_covariances
+        return out
 
 
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
@@ -338,10 +377,26 @@ def make_synthetic(row: Row, seed: int) -> Scene:
     l3 = (seg_cam_a - c) @ R + o
     p2 = np.array(pts_px).reshape(-1, 2)
     l2 = np.array(seg_px).reshape(-1, 2, 2)
+    camera = pluecker.Camera(row.f, row.f, CX, CY)
+    if row.covariances:
+        (pn, pc), (ln, lc) = _anisotropic_noise(rng, len(p2)), _anisotropic_noise(rng, 2 * len(l2))
+        p2, l2, lc = p2 + pn, l2 + ln.reshape(l2.shape), lc.reshape(-1, 2, 2, 2)
+        return Scene(seed, camera, np.asarray(camera.K, float), R, t, p2, p3, l2, l3, row.planar, pc, lc)
     p2 = p2 + rng.normal(0.0, SIGMA_PX, p2.shape)
     l2 = l2 + rng.normal(0.0, SIGMA_PX, l2.shape)
-    camera = pluecker.Camera(row.f, row.f, CX, CY)
     return Scene(seed, camera, np.asarray(camera.K, float), R, t, p2, p3, l2, l3, row.planar)
+
+
+def _anisotropic_noise(rng: np.random.Generator, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """``k`` covariances ``Σ = R(φ) diag(σ₁², σ₂²) R(φ)ᵀ`` (σ uniform in ``COV_SIGMA_PX``, φ uniform in
+    [0, π)) and a noise vector drawn from each, ``R(φ) diag(σ₁, σ₂) z``: ``((k, 2), (k, 2, 2))``."""
+    sig = rng.uniform(*COV_SIGMA_PX, size=(k, 2))
+    phi = rng.uniform(0.0, math.pi, size=k)
+    c, s = np.cos(phi), np.sin(phi)
+    rot = np.stack([np.stack([c, -s], axis=-1), np.stack([s, c], axis=-1)], axis=-2)  # (k, 2, 2)
+    half = rot * sig[:, None, :]  # R diag(σ): Σ = half halfᵀ
+    noise = np.einsum("kij,kj->ki", half, rng.normal(size=(k, 2)))
+    return noise, half @ np.swapaxes(half, 1, 2)
 
 
 def make_random_scene(row: Row, seed: int) -> Scene:
@@ -376,8 +431,9 @@ def make_scene(row: Row, seed: int) -> Scene:
 
 
 def pose_cost(scene: Scene, R: Any, t: Any) -> float:
-    """``½ (Σ_points e² + Σ_lines 2 e²)`` px² at ``(R, t)``; +inf for an invalid pose (non-finite, a
-    point or endpoint at depth <= 0, or a matrix ``reprojection_errors`` does not take as a rotation)."""
+    """``½ (Σ_points e² + Σ_lines 2 e²)`` px² at ``(R, t)`` (the whitened ``½ Σ r²`` on a scene with
+    covariances); +inf for an invalid pose (non-finite, a point or endpoint at depth <= 0, or a matrix
+    ``reprojection_errors`` does not take as a rotation)."""
     try:
         R = np.asarray(R, dtype=float).reshape(3, 3)
         t = np.asarray(t, dtype=float).reshape(3)
@@ -387,6 +443,9 @@ def pose_cost(scene: Scene, R: Any, t: Any) -> float:
         return math.inf
     if np.any(scene.all3d @ R[2] + t[2] <= 0.0):
         return math.inf
+    if scene.point_covariances is not None:
+        c = _whitened_cost(scene, R, t)
+        return c if math.isfinite(c) else math.inf
     try:
         e = np.asarray(pluecker.reprojection_errors(scene.camera, R, t, **scene.kwargs), dtype=float)
     except pluecker.PlueckerError:
@@ -394,6 +453,27 @@ def pose_cost(scene: Scene, R: Any, t: Any) -> float:
     n = len(scene.points3d)
     c = 0.5 * (float(np.sum(e[:n] ** 2)) + 2.0 * float(np.sum(e[n:] ** 2)))
     return c if math.isfinite(c) else math.inf
+
+
+def _whitened_cost(scene: Scene, R: np.ndarray, t: np.ndarray) -> float:
+    """``½ Σ r²`` with the scene's covariances (see the module docstring), at a valid pose: a point's
+    ``eᵀ Σ⁻¹ e``, an endpoint's ``d² / (n̂ᵀ Σ n̂)``."""
+
+    def pixels(X: np.ndarray) -> np.ndarray:
+        x = (X @ R.T + t) @ scene.K.T
+        return x[:, :2] / x[:, 2:3]
+
+    total = 0.0
+    if len(scene.points3d):
+        e = pixels(scene.points3d) - scene.points2d
+        total += float(np.einsum("ni,ni->", e, np.linalg.solve(scene.point_covariances, e[..., None])[..., 0]))
+    if len(scene.lines3d):
+        ends = pixels(scene.lines3d.reshape(-1, 3)).reshape(-1, 2, 2)
+        d = ends[:, 1] - ends[:, 0]
+        n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]
+        dist = np.einsum("mkj,mj->mk", scene.lines2d - ends[:, :1], n)
+        total += float(np.sum(dist**2 / np.einsum("mi,mkij,mj->mk", n, scene.line_covariances, n)))
+    return 0.5 * total
 
 
 # --------------------------------------------------------------------------------------------------
@@ -463,17 +543,19 @@ def _cvxpnpl(s: Scene) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def call_pluecker(s: Scene, repeats: int, **extra: Any) -> tuple[Any, float, str | None]:
-    """``estimate_pose`` on the scene: (result or None, fastest of ``repeats`` calls in seconds, the
-    exception's class name or None). A PlueckerError (e.g. TooFewCorrespondencesError) is reported,
-    not raised."""
+    """``estimate_pose`` on the scene, with its covariances when it has them: (result or None, fastest
+    of ``repeats`` calls in seconds, the exception's class name or None). A PlueckerError (e.g.
+    TooFewCorrespondencesError) is reported, not raised."""
     try:
-        res, sec = timed(lambda: pluecker.estimate_pose(s.camera, **s.kwargs, **extra), repeats)
+        res, sec = timed(lambda: pluecker.estimate_pose(s.camera, **s.kwargs, **s.noise_kwargs, **extra), repeats)
         return res, sec, None
     except pluecker.PlueckerError as e:
         return None, math.nan, type(e).__name__
 
 
 def peer_applies(peer: str, row: Row) -> bool:
+    if row.covariances:  # no peer takes per-observation covariances
+        return False
     if peer in ("sqpnp", "sqpnp+lm", "iter"):
         return cv2 is not None and row.data == "points"
     if peer in ("poselib", "poselib-1"):
@@ -584,7 +666,10 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         # another of the same code on the same data (the first call on a scene is cache-cold)
         peer_costs: dict[str, float] = {}
 
-        def run_peers(names: tuple[str, ...]) -> None:
+        # (this scene's i, s and peer_costs bound as defaults: the function is called in this iteration only)
+        def run_peers(
+            names: tuple[str, ...], i: int = i, s: Scene = s, peer_costs: dict[str, float] = peer_costs
+        ) -> None:
             for p in names:
                 if p not in peers or (p == "cvxpnpl" and i >= cvx_limit):
                     continue
@@ -602,7 +687,9 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
 
         if Features.certify_kw is None:
             try:
-                pluecker.estimate_pose(s.camera, **kw, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
+                pluecker.estimate_pose(
+                    s.camera, **kw, **s.noise_kwargs, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions())
+                )
                 Features.certify_kw = True
             except TypeError:
                 Features.certify_kw = False
@@ -610,7 +697,9 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
                 Features.certify_kw = True
         cost_cert = math.nan
         if Features.certify_kw:
-            cres, csec, cerr = call_pluecker(s, args.repeats, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
+            cres, csec, cerr = call_pluecker(
+                s, args.repeats, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions())
+            )
             t_cert.append(csec * 1e6)
             cstatus = str(cres.status) if cres is not None else f"exception: {cerr}"
             cert_statuses[cstatus] = cert_statuses.get(cstatus, 0) + 1
@@ -626,8 +715,13 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         candidates["true-start"] = pose_cost(s, r.pose.rotation, r.pose.translation) if r is not None else math.inf
         lap("true-start")
         r, _, err = call_pluecker(
-            s, 1, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(
-                point_threshold=HUGE_THRESHOLD, line_threshold=HUGE_THRESHOLD, min_inliers=3, seed=seed))
+            s,
+            1,
+            options=pluecker.PoseOptions(
+                ransac=pluecker.RansacOptions(
+                    point_threshold=HUGE_THRESHOLD, line_threshold=HUGE_THRESHOLD, min_inliers=3, seed=seed
+                )
+            ),
         )
         if r is None:
             robust_errors[err] = robust_errors.get(err, 0) + 1
@@ -697,6 +791,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         "n_lines": row.n_lines,
         "correspondences": row.n,
         "data": row.data,
+        "covariances": row.covariances,
         "scenes": n_scenes,
         "random_starts": starts,
         "misses": misses,
@@ -796,7 +891,7 @@ def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool | None]]:
         text = f"(2) every miss flagged ambiguous or non-success in the {len(small)} rows with 4-5 correspondences"
         checks.append((text + note + (f"; unflagged success misses: {', '.join(bad)}" if bad else ""), not bad))
     for n, goal in CERT_TARGET.items():
-        sel = [r for r in rows if r["correspondences"] == n]
+        sel = [r for r in rows if r["correspondences"] == n and not r["covariances"]]
         if not sel:
             continue
         fracs = [
@@ -808,7 +903,7 @@ def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool | None]]:
             continue
         worst = min(fracs, key=lambda x: x[1])
         checks.append((f"{text} (lowest {worst[1]:.3f}, {worst[0]})", worst[1] >= goal))
-    sel = [r for r in rows if r["n_points"] == 100 and r["n_lines"] == 0]
+    sel = [r for r in rows if r["n_points"] == 100 and r["n_lines"] == 0 and not r["covariances"]]
     if sel:
         times: list[tuple[str, float]] = []
         if Features.certify_kw:
@@ -995,6 +1090,7 @@ def main(argv: list[str] | None = None) -> int:
             "quick": args.quick,
             "rows_filter": args.rows,
             "sigma_px": SIGMA_PX,
+            "cov_sigma_px": COV_SIGMA_PX,
             "miss_rel": MISS_REL,
             "miss_abs": MISS_ABS,
             "wall_seconds": wall,

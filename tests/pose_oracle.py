@@ -5,7 +5,14 @@ with numeric Jacobians, many-start search, and scenes. Nothing here calls ``plue
 
 Residuals, in pixels: a point ``X`` seen at ``u``: ``π(R X + t) − u``; a segment ``(A, B)`` seen with
 endpoints ``e₁, e₂``: the signed distances of ``e₁`` and ``e₂`` to the image line through the pixels
-of ``R A + t`` and ``R B + t``."""
+of ``R A + t`` and ``R B + t``.
+
+With per-observation covariances (``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) for
+both endpoints or (M, 2, 2, 2) per endpoint, px²) the residuals are whitened as ``pose::noise`` defines
+them: a point's ``W (π(R X + t) − u)`` with ``Wᵀ W = Σ⁻¹``, an endpoint's signed distance divided by
+``√(n̂ᵀ C n̂)``, ``n̂`` the projected line's unit normal and ``C`` the endpoint's covariance. The
+Levenberg-Marquardt and the many-start search take them as entries 5 and 6 of their ``data`` tuple
+``(p2, p3, l2, l3, point_covariances, line_covariances)``."""
 
 from __future__ import annotations
 
@@ -51,19 +58,34 @@ def pixels(K, X):
     return x[:, :2] / x[:, 2:3]
 
 
-def residuals(K, R, t, p2, p3, l2=None, l3=None) -> np.ndarray:
-    out = [(pixels(K, p3 @ R.T + t) - p2).ravel()]
+def whitening(covariances) -> np.ndarray:
+    """Per 2x2 covariance ``Σ = L Lᵀ`` (Cholesky), ``W = L⁻¹``: ``Wᵀ W = Σ⁻¹``."""
+    return np.linalg.inv(np.linalg.cholesky(np.asarray(covariances, dtype=float)))
+
+
+def residuals(K, R, t, p2, p3, l2=None, l3=None, point_covariances=None, line_covariances=None) -> np.ndarray:
+    """The residuals in pixels, or in standard deviations where covariances are given."""
+    e = pixels(K, p3 @ R.T + t) - p2
+    if point_covariances is not None:
+        e = np.einsum("nij,nj->ni", whitening(point_covariances), e)
+    out = [e.ravel()]
     if l3 is not None and len(l3):
         ends = pixels(K, l3.reshape(-1, 3) @ R.T + t).reshape(-1, 2, 2)
         a, b = ends[:, 0], ends[:, 1]
         d = b - a
         n = np.column_stack([-d[:, 1], d[:, 0]]) / np.linalg.norm(d, axis=1)[:, None]
-        out.append(np.einsum("mkj,mj->mk", l2 - a[:, None, :], n).ravel())
+        dist = np.einsum("mkj,mj->mk", l2 - a[:, None, :], n)
+        if line_covariances is not None:
+            C = np.asarray(line_covariances, dtype=float)
+            C = C if C.ndim == 4 else np.repeat(C[:, None], 2, axis=1)  # (M, 2, 2): both endpoints
+            dist = dist / np.sqrt(np.einsum("mi,mkij,mj->mk", n, C, n))
+        out.append(dist.ravel())
     return np.concatenate(out)
 
 
-def cost(K, R, t, p2, p3, l2=None, l3=None) -> float:
-    r = residuals(K, R, t, p2, p3, l2, l3)
+def cost(K, R, t, p2, p3, l2=None, l3=None, point_covariances=None, line_covariances=None) -> float:
+    """``½ Σ r²`` (the library reports ``Σ r²``)."""
+    r = residuals(K, R, t, p2, p3, l2, l3, point_covariances, line_covariances)
     return 0.5 * float(r @ r)
 
 
@@ -113,7 +135,8 @@ def random_rotation(rng) -> np.ndarray:
 
 def many_start(K, R0, t0, data, starts, rng):
     """Distinct local minima with every object point in front, cheapest first: ``[(R, t, cost)]``,
-    from ``(R0, t0)`` and ``starts`` random rotations with the object's centroid at its depth."""
+    from ``(R0, t0)`` and ``starts`` random rotations with the object's centroid at its depth. ``data`` is
+    ``(p2, p3, l2, l3)``, or with the covariances ``(p2, p3, l2, l3, pc, lc)`` (either may be None)."""
     p3 = data[1]
     allx = np.concatenate([p3, data[3].reshape(-1, 3)]) if data[3] is not None and len(data[3]) else p3
     c = allx.mean(axis=0)
@@ -125,8 +148,11 @@ def many_start(K, R0, t0, data, starts, rng):
         R, t, f = minimise(K, R, t, data)
         if not (np.isfinite(f) and points_in_front(R, t, p3)):
             continue
-        same = [i for i, (Rm, tm, _) in enumerate(found)
-                if np.linalg.norm(log_so3(R @ Rm.T)) < 1e-5 and np.linalg.norm(t - tm) < 1e-5 * np.ptp(allx)]
+        same = [
+            i
+            for i, (Rm, tm, _) in enumerate(found)
+            if np.linalg.norm(log_so3(R @ Rm.T)) < 1e-5 and np.linalg.norm(t - tm) < 1e-5 * np.ptp(allx)
+        ]
         if same:
             i = same[0]
             if f < found[i][2]:
