@@ -325,6 +325,13 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
         Case { focal: 250.0, points: 4, lines: 0, planar: false, seed: 2, deep: false, covariances: true },
         Case { focal: 4000.0, points: 4, lines: 0, planar: true, seed: 4, deep: false, covariances: true },
         Case { focal: 250.0, points: 6, lines: 0, planar: false, seed: 1, deep: true, covariances: true },
+        // Few points and several segments, where the segments' residuals prune most boxes.
+        Case { focal: 800.0, points: 3, lines: 3, planar: false, seed: 1, deep: false, covariances: false },
+        Case { focal: 800.0, points: 3, lines: 3, planar: false, seed: 5, deep: false, covariances: true },
+        Case { focal: 250.0, points: 2, lines: 4, planar: false, seed: 2, deep: false, covariances: false },
+        Case { focal: 4000.0, points: 3, lines: 5, planar: true, seed: 3, deep: false, covariances: false },
+        Case { focal: 15000.0, points: 5, lines: 5, planar: false, seed: 4, deep: false, covariances: false },
+        Case { focal: 800.0, points: 5, lines: 5, planar: true, seed: 6, deep: false, covariances: false },
     ];
     let (mut checked, mut second, mut with_covariances) = (0, 0, 0);
     for case in &cases {
