@@ -1885,7 +1885,7 @@ mod tests {
                     };
                     for index in 0..terms.len() {
                         ratios(&Vector3::zeros(), &Vector3::zeros(), index);
-                        for claim in 0..2 {
+                        for (claim, closest) in closest.iter_mut().enumerate() {
                             let value = |x: &(Vector3<f64>, Vector3<f64>)| ratios(&x.0, &x.1, index)[claim];
                             let mut best = (Vector3::zeros(), Vector3::zeros());
                             let mut best_value = value(&best);
@@ -1907,7 +1907,7 @@ mod tests {
                                 best_value <= 1.0 + 1e-9,
                                 "f = {f}, θ = {theta}: claim {claim} of endpoint {index} reaches {best_value}"
                             );
-                            closest[claim] = closest[claim].max(best_value);
+                            *closest = closest.max(best_value);
                             checked += 1;
                         }
                     }
