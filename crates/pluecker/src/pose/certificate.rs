@@ -1876,8 +1876,10 @@ mod tests {
                             );
                         }
                         let projected = residual(line, end, &a, &b);
+                        // Both round to ~1e-16 of the sizes they cancel: ‖ē‖ ‖m‖ / w and the pixels.
+                        let sizes = e.norm() * m.norm() / w + corr.lines2d[line][end].norm();
                         assert!(
-                            (n.abs() / w - projected).abs() <= 1e-9 * projected.max(1e-3),
+                            (n.abs() / w - projected).abs() <= 1e-9 * projected + 1e-12 * sizes,
                             "|n| / w = {} against the projected residual {projected}",
                             n.abs() / w
                         );
