@@ -20,10 +20,8 @@
 //!    with `Aᵢ = Wᵢ K₂ [1 0 −ū₁; 0 1 −ū₂]` (`ūᵢ` the normalised observed point), so where the point is
 //!    in front and `x_z ≤ ‖xᵢ‖ ≤ Dᵢ` its squared residual is at least `wᵢ ‖Aᵢ xᵢ‖²`, `wᵢ = 1 / Dᵢ²`:
 //!    the whitened residual itself, anisotropy and the gnomonic stretch included, only the depth
-//!    replaced by its bound. It is quadratic in `t` for a fixed rotation. The line residuals are left
-//!    out of the minorant (it stays a minorant of `f`): their
-//!    moment form moves with the rotation by the camera distance, not the object size, and only
-//!    slowed the search.
+//!    replaced by its bound. It is quadratic in `t` for a fixed rotation. The segments enter box by
+//!    box (step 3).
 //! 3. **Rotation search** on the shared branch and bound (`global::branch_and_bound`, the
 //!    search of the triangulation certificates; the oracle is `RotationSearch`). Over a box of
 //!    rotation vectors `ω` (`R = exp(ω) R̂`) with half-diagonal `θ`, every rotation is within the angle
@@ -35,7 +33,12 @@
 //!    `‖φ‖ ≤ θ`, its first-order part `[φ]ₓ R_c` enters the minorant exactly (a convex quadratic in
 //!    `φ` once `t` is minimised out, bounded below over the ball `‖φ‖ ≤ θ` by its Lagrangian dual),
 //!    and only the rest costs `(e^θ − 1 − θ) η` (`Scaled::linear_bound`). The larger of the two is
-//!    the box's bound: small boxes pay `O(θ²)` instead of `O(θ)`. A box whose bound
+//!    the box's bound: small boxes pay `O(θ²)` instead of `O(θ)`. Where both fall short, the
+//!    segments' residuals join the minorant at `R_c` (`Problem::lines_bound`): an endpoint's residual
+//!    `n / w` has the numerator `n = ēᵀ R_c (a × d) + tᵀ (R_c d × ē)`, linear in `t`, and `w` is at most
+//!    `‖G_e‖ ‖d‖` times the line's largest distance from the camera over the box, so `n² / W²` adds to
+//!    `Q`; over the box `n` moves by at most `θ (‖ē‖ ‖a × d‖ + ‖d‖ ‖ē × t‖)`, with `t` within the
+//!    points' ellipsoid below. A box whose bound
 //!    reaches `f̂` holds no pose of `S` and is pruned; so is a box where some point is behind the camera
 //!    for every `t` of the ellipsoid `Q(t) ≤ β² = (√(2f̂) + θ η)²`, which holds the translations of its
 //!    poses of `S`. A box inside the ball `‖Δ‖_W ≤ ρ` of the local metric `‖Δ‖²_W = Δᵀ JᵀJ Δ`
