@@ -419,7 +419,7 @@ impl<'c> Problem<'c> {
             return 0.0;
         };
         let q_min = (c0 - g.dot(&(c_inv * g))).max(0.0);
-        0.5 * (q_min.sqrt() - theta * eta2.sqrt()).max(0.0).powi(2)
+        minkowski(q_min, theta * eta2.sqrt())
     }
 }
 
@@ -572,7 +572,7 @@ impl Scaled {
     /// close the box), nothing is computed and the answer is 0.
     fn linear_bound(&self, r: &Matrix3<f64>, theta: f64, q_min: f64, wanted: f64) -> f64 {
         let rest = rotation_rest(theta) * self.minorant.eta * self.scale.sqrt();
-        let ceiling = 0.5 * (q_min.sqrt() - rest).max(0.0).powi(2);
+        let ceiling = minkowski(q_min, rest);
         if self.minorant.c_inv.is_none() || ceiling == 0.0 || ceiling < wanted {
             return 0.0;
         }
@@ -597,15 +597,14 @@ impl Scaled {
         let g: Vector3<f64> = m.transpose() * sv;
         let h: Matrix3<f64> = m.transpose() * (s * m);
         let m_min = self.scale * ball_minimum_lower_bound(q0, &g, &h, theta);
-        0.5 * (m_min.max(0.0).sqrt() - rest).max(0.0).powi(2)
+        minkowski(m_min.max(0.0), rest)
     }
 
     /// The Minkowski bound `½ (√q_min − θ η)₊²` of the poses at the rotation `r` and those within the
     /// angle `θ` of it (`−∞` when `Q` does not fix the translation).
     fn bound_near(&self, r: &Matrix3<f64>, theta: f64) -> f64 {
-        self.at(r).map_or(f64::NEG_INFINITY, |(_, q_min, eta)| {
-            0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2)
-        })
+        self.at(r)
+            .map_or(f64::NEG_INFINITY, |(_, q_min, eta)| minkowski(q_min, theta * eta))
     }
 
     /// What a box whose poses of `S` keep the points within `reach` hands down: the depth bounds
@@ -687,6 +686,12 @@ fn ball_minimum_lower_bound(q0: f64, g: &Vector3<f64>, h: &Matrix3<f64>, theta: 
         lambda += (norm * norm / curvature) * (norm - theta) / theta;
     }
     best
+}
+
+/// `½ (√q − rest)₊²`: a lower bound of `½ ‖v‖²` for every `v` within `rest` of a vector whose norm is
+/// at least `√q` (Minkowski), the form of every box bound of the rotation search.
+fn minkowski(q: f64, rest: f64) -> f64 {
+    0.5 * (q.sqrt() - rest).max(0.0).powi(2)
 }
 
 /// `e^θ − 1 − θ`: `‖(exp(φ) − I − [φ]ₓ) y‖ ≤ (e^θ − 1 − θ) ‖y‖` for `‖φ‖ ≤ θ` (the exponential series
@@ -940,12 +945,12 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         };
         // The Minkowski bound, and the linearised one where the first falls short of f̂ and the
         // second could close the box.
-        let minkowski = 0.5 * (q_min.sqrt() - theta * eta).max(0.0).powi(2);
-        let lower = if minkowski < self.f_hat {
+        let by_minkowski = minkowski(q_min, theta * eta);
+        let lower = if by_minkowski < self.f_hat {
             let wanted = self.f_hat * (1.0 - self.max_relative_gap);
-            minkowski.max(scaled.linear_bound(&r_c, theta, q_min, wanted))
+            by_minkowski.max(scaled.linear_bound(&r_c, theta, q_min, wanted))
         } else {
-            minkowski
+            by_minkowski
         };
         // The ellipsoid Q(t) ≤ β² holds the translations of the box's poses of S (slack ≥ 0 where
         // lower < f̂, up to rounding): they are within `spread` of t*.
