@@ -3,9 +3,9 @@
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::quaternion::{from_axis_angle, to_rotation_matrix};
-use crate::pose::Correspondences;
+use crate::pose::{Correspondences, ObservationNoise};
 use crate::rng::Rng;
-use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 
 /// A scene with its true pose and noise-free observations.
 #[derive(Debug, Clone)]
@@ -251,6 +251,24 @@ impl Structure {
             correspondences,
         }
     }
+}
+
+/// Per-observation noise for `n_points` points and `n_lines` segments (one covariance per endpoint):
+/// anisotropic covariances `R(φ) diag(σ₁², σ₂²) R(φ)ᵀ`, `σ₁, σ₂` uniform in `sigma` (px), `φ` uniform,
+/// drawn from `rng` (points first). Only the weights: the pixels keep the noise they were drawn with.
+pub fn random_observation_noise(rng: &mut Rng, n_points: usize, n_lines: usize, sigma: (f64, f64)) -> ObservationNoise {
+    let mut covariance = || {
+        let (s1, s2, phi) = (
+            rng.uniform_in(sigma.0, sigma.1),
+            rng.uniform_in(sigma.0, sigma.1),
+            rng.uniform_in(0.0, std::f64::consts::PI),
+        );
+        let r = Matrix2::new(phi.cos(), -phi.sin(), phi.sin(), phi.cos());
+        r * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * r.transpose()
+    };
+    let points: Vec<Matrix2<f64>> = (0..n_points).map(|_| covariance()).collect();
+    let lines: Vec<[Matrix2<f64>; 2]> = (0..n_lines).map(|_| [covariance(), covariance()]).collect();
+    ObservationNoise::from_covariances(&points, &lines).expect("positive definite by construction")
 }
 
 /// The scenes of the global-minimum tests and benchmark: a 640 x 480 image with

@@ -11,9 +11,9 @@ mod pose_oracle;
 
 use nalgebra::{Matrix2, Rotation3, Unit, Vector2, Vector3, Vector6};
 use pluecker::pose::certificate::testing::{depth_bounds, local_bound, local_lower_bound, LocalBound};
-use pluecker::pose::{Correspondences, ObservationNoise};
+use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
-use pluecker::synthetic::visible_scene;
+use pluecker::synthetic::{random_observation_noise, visible_scene};
 use pluecker::Camera;
 use pose_oracle::{centred, cost, many_start, pixel, residuals, OraclePose};
 
@@ -207,18 +207,7 @@ fn step4_scenes() -> Vec<(Camera, Correspondences, OraclePose, String)> {
             let scene = visible_scene(f, np, nl, planar, 50 + seed);
             let mut rng = Rng::new(850 + seed);
             let (mut corr, c) = centred(&scene.noisy(1.0, true, &mut rng));
-            let mut covariance = || {
-                let (s1, s2, phi) = (
-                    rng.uniform_in(0.3, 3.0),
-                    rng.uniform_in(0.3, 3.0),
-                    rng.uniform_in(0.0, 3.2),
-                );
-                let r = Matrix2::new(phi.cos(), -phi.sin(), phi.sin(), phi.cos());
-                r * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * r.transpose()
-            };
-            let points: Vec<Matrix2<f64>> = (0..np).map(|_| covariance()).collect();
-            let lines: Vec<[Matrix2<f64>; 2]> = (0..nl).map(|_| [covariance(), covariance()]).collect();
-            corr.noise = Some(ObservationNoise::from_covariances(&points, &lines).unwrap());
+            corr.noise = Some(random_observation_noise(&mut rng, np, nl, (0.3, 3.0)));
             let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
             let minimum = many_start(&scene.camera, &corr, &truth, 0, &mut rng)[0].0;
             out.push((

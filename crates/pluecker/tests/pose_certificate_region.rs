@@ -9,11 +9,11 @@
 
 mod pose_oracle;
 
-use nalgebra::{Matrix2, Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix6, Vector3, Vector6};
 use pluecker::pose::certificate::testing::{rotation_search, KeptCell, Region};
-use pluecker::pose::{Correspondences, ObservationNoise};
+use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
-use pluecker::synthetic::{visible_scene, Scene};
+use pluecker::synthetic::{random_observation_noise, visible_scene, Scene};
 use pluecker::Camera;
 use pose_oracle::{centred, cost, information, many_start, points_in_front, OraclePose};
 
@@ -193,23 +193,6 @@ struct Case {
     covariances: bool,
 }
 
-/// `corr` with random per-observation covariances ([`Case::covariances`]).
-fn with_covariances(mut corr: Correspondences, rng: &mut Rng) -> Correspondences {
-    let mut covariance = || {
-        let (s1, s2, phi) = (
-            rng.uniform_in(0.2, 4.0),
-            rng.uniform_in(0.2, 4.0),
-            rng.uniform_in(0.0, 3.2),
-        );
-        let r = Matrix2::new(phi.cos(), -phi.sin(), phi.sin(), phi.cos());
-        r * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * r.transpose()
-    };
-    let points: Vec<Matrix2<f64>> = corr.points2d.iter().map(|_| covariance()).collect();
-    let lines: Vec<[Matrix2<f64>; 2]> = corr.lines2d.iter().map(|_| [covariance(), covariance()]).collect();
-    corr.noise = Some(ObservationNoise::from_covariances(&points, &lines).unwrap());
-    corr
-}
-
 /// `n` points seen in a 640 x 480 image at `fx = fy = focal`, at depths log-uniform in [0.4, 12],
 /// from a random pose.
 fn deep_scene(focal: f64, n: usize, seed: u64) -> Scene {
@@ -252,7 +235,12 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
     let noisy = scene.noisy(1.0, true, &mut rng);
     let (mut corr, c) = centred(&noisy);
     if case.covariances {
-        corr = with_covariances(corr, &mut rng);
+        corr.noise = Some(random_observation_noise(
+            &mut rng,
+            corr.n_points(),
+            corr.n_lines(),
+            (0.2, 4.0),
+        ));
     }
     let k = scene.camera;
     let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);

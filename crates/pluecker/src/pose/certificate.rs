@@ -1795,7 +1795,7 @@ mod tests {
     /// without covariances, f from 250 to 15000 px.
     #[test]
     fn the_segments_terms_of_the_box_bound_hold_over_the_box() {
-        use crate::pose::ObservationNoise;
+        use crate::synthetic::random_observation_noise;
         let mut rng = Rng::new(16);
         let (mut checked, mut closest) = (0usize, [0.0f64; 2]);
         for (f, np, nl, seed, with_covariances) in [
@@ -1807,18 +1807,7 @@ mod tests {
             let scene = visible_scene(f, np, nl, false, seed);
             let mut corr = scene.noisy(1.0, true, &mut rng);
             if with_covariances {
-                let mut covariance = || {
-                    let (s1, s2, phi) = (
-                        rng.uniform_in(0.3, 3.0),
-                        rng.uniform_in(0.3, 3.0),
-                        rng.uniform_in(0.0, 3.2),
-                    );
-                    let r = Matrix2::new(phi.cos(), -phi.sin(), phi.sin(), phi.cos());
-                    r * Matrix2::new(s1 * s1, 0.0, 0.0, s2 * s2) * r.transpose()
-                };
-                let points: Vec<Matrix2<f64>> = (0..np).map(|_| covariance()).collect();
-                let lines: Vec<[Matrix2<f64>; 2]> = (0..nl).map(|_| [covariance(), covariance()]).collect();
-                corr.noise = Some(ObservationNoise::from_covariances(&points, &lines).unwrap());
+                corr.noise = Some(random_observation_noise(&mut rng, np, nl, (0.3, 3.0)));
             }
             let truth = Pose::new(scene.rotation, scene.translation);
             let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
@@ -1922,65 +1911,43 @@ mod tests {
                         }
                     }
                     // The assembly, from the per-point forms and the terms.
-                    let (mut c, mut gv, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
+                    // The Minkowski bound of `κ Q + Σ weight (α + βᵀ t)²` over a rotation spread `th`,
+                    // t from the normal equations, and the rounding of `c₀ − gᵀ C⁻¹ g` (~1e-16 of the
+                    // form at t = 0 times the condition of C, up to ~1e6 here).
                     let depths: Vec<f64> = scaled.depths().collect();
-                    for ((x, d), (h, norm2)) in corr.points3d.iter().zip(&depths).zip(&forms) {
-                        c += h / (d * d);
-                        gv += h * (r_c * x) / (d * d);
-                        eta2 += norm2 * x.norm_squared() / (d * d);
-                    }
-                    for term in &terms {
-                        c += term.beta * term.beta.transpose() * term.weight;
-                        gv += term.beta * term.alpha * term.weight;
-                        eta2 += term.weight * term.drift * term.drift;
-                    }
-                    let t_min = -(c.lu().solve(&gv).unwrap());
-                    let q = minorant_by_points(&problem, &depths, &r_c, &t_min)
-                        + terms
-                            .iter()
-                            .map(|term| term.weight * (term.alpha + term.beta.dot(&t_min)).powi(2))
-                            .sum::<f64>();
-                    // q_min is computed as c₀ − gᵀ C⁻¹ g: it rounds to ~1e-16 of the form at t = 0
-                    // times the condition of C (up to ~1e6 here).
-                    let at_origin = minorant_by_points(&problem, &depths, &r_c, &Vector3::zeros())
-                        + terms
-                            .iter()
-                            .map(|term| term.weight * term.alpha * term.alpha)
-                            .sum::<f64>();
-                    let rounding = 1e-9 * (q + at_origin);
-                    for th in [0.0, theta] {
-                        let expected = 0.5 * (q.sqrt() - th * eta2.sqrt()).max(0.0).powi(2);
-                        let found = problem.lines_bound(&scaled, &r_c, th, &t_star, spread);
-                        // A line's distance bound grows with θ, so at θ = 0 the terms are the same only
-                        // through `spread` and the centre: recompute them for θ = 0.
-                        if th == 0.0 {
-                            let zero: Vec<LineTerm> = problem.line_terms(&r_c, 0.0, &t_star, spread).collect();
-                            let (mut c0m, mut g0) = (Matrix3::zeros(), Vector3::zeros());
-                            for ((x, d), (h, _)) in corr.points3d.iter().zip(&depths).zip(&forms) {
-                                c0m += h / (d * d);
-                                g0 += h * (r_c * x) / (d * d);
-                            }
-                            for term in &zero {
-                                c0m += term.beta * term.beta.transpose() * term.weight;
-                                g0 += term.beta * term.alpha * term.weight;
-                            }
-                            let t0 = -(c0m.lu().solve(&g0).unwrap());
-                            let q0 = minorant_by_points(&problem, &depths, &r_c, &t0)
-                                + zero
-                                    .iter()
-                                    .map(|term| term.weight * (term.alpha + term.beta.dot(&t0)).powi(2))
-                                    .sum::<f64>();
-                            assert!(
-                                (found - 0.5 * q0).abs() <= rounding,
-                                "θ = 0: {found} against {}",
-                                0.5 * q0
-                            );
-                        } else {
-                            assert!(
-                                (found - expected).abs() <= rounding,
-                                "θ = {theta}: {found} against {expected}"
-                            );
+                    let assembled = |terms: &[LineTerm], th: f64| {
+                        let (mut c, mut gv, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
+                        for ((x, d), (h, norm2)) in corr.points3d.iter().zip(&depths).zip(&forms) {
+                            c += h / (d * d);
+                            gv += h * (r_c * x) / (d * d);
+                            eta2 += norm2 * x.norm_squared() / (d * d);
                         }
+                        for term in terms {
+                            c += term.beta * term.beta.transpose() * term.weight;
+                            gv += term.beta * term.alpha * term.weight;
+                            eta2 += term.weight * term.drift * term.drift;
+                        }
+                        let lines_at = |t: &Vector3<f64>| {
+                            (terms.iter())
+                                .map(|term| term.weight * (term.alpha + term.beta.dot(t)).powi(2))
+                                .sum::<f64>()
+                        };
+                        let t_min = -(c.lu().solve(&gv).unwrap());
+                        let q = minorant_by_points(&problem, &depths, &r_c, &t_min) + lines_at(&t_min);
+                        let origin = Vector3::zeros();
+                        let at_origin = minorant_by_points(&problem, &depths, &r_c, &origin) + lines_at(&origin);
+                        let bound = 0.5 * (q.sqrt() - th * eta2.sqrt()).max(0.0).powi(2);
+                        (bound, 1e-9 * (q + at_origin))
+                    };
+                    // A line's distance bound grows with θ: at θ = 0 its terms are those for θ = 0.
+                    let at_zero: Vec<LineTerm> = problem.line_terms(&r_c, 0.0, &t_star, spread).collect();
+                    for (th, terms) in [(0.0, &at_zero), (theta, &terms)] {
+                        let (expected, rounding) = assembled(terms, th);
+                        let found = problem.lines_bound(&scaled, &r_c, th, &t_star, spread);
+                        assert!(
+                            (found - expected).abs() <= rounding,
+                            "θ = {th}: {found} against {expected}"
+                        );
                     }
                 }
             }
