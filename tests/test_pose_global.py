@@ -349,9 +349,11 @@ def test_rotation_search_keeps_every_pose_below_a_raised_level(factor):
     rng_w = np.random.default_rng(100)
     _, Rw, tw, Xw, uw = oracle.visible_scene(rng_w, 250.0, 5)
     scenes.append((pluecker.Camera(250.0, 250.0, 320.0, 240.0), dict(points2d=uw + rng_w.normal(0, 1.0, uw.shape), points3d=Xw), (Rw, tw)))
-    scene, p2, l2 = _noisy("general", 12, 3, 4)
-    scenes.append((scene["camera"], dict(points2d=p2, points3d=scene["points3d"], lines2d=l2, lines3d=scene["lines3d"]),
-                   (scene["R"], scene["t"])))
+    # Points and segments; few points and more segments, where the segments prune most boxes.
+    for n_points, n_lines, seed in [(12, 3, 4), (3, 4, 5)]:
+        scene, p2, l2 = _noisy("general", n_points, n_lines, seed)
+        scenes.append((scene["camera"], dict(points2d=p2, points3d=scene["points3d"], lines2d=l2, lines3d=scene["lines3d"]),
+                       (scene["R"], scene["t"])))
     for camera, d, truth in scenes:
         K = oracle.K_of(camera)
         minima = _minima(camera, d, truth)
