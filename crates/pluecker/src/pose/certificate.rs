@@ -82,7 +82,7 @@ use crate::global::branch_and_bound::{
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
-use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 use smallvec::SmallVec;
 use std::cell::OnceCell;
 use std::rc::Rc;
@@ -159,6 +159,22 @@ const DEPTH_PARTNERS: usize = 16;
 /// scale of the minorant takes up ([`Scaled`]): a rebuild costs about as much as ten boxes' bounds,
 /// and without rebuilds the f = 15000 px scenes lose certificates.
 const REBUILD_GAIN: f64 = 1.2;
+/// At most this many segments, the longest in the image, enter the box bound
+/// ([`Problem::lines_bound`]): each costs per box about as much as the rest of the bound, a few
+/// already constrain the rotation where the points are few, and fewer terms only weaken the minorant.
+/// (With all 50 segments of the 50-point + 50-segment benchmark rows, the searches that fail took
+/// 2.5-3.3 times as long for one or two more certificates in 50.)
+const BOX_BOUND_SEGMENTS: usize = 8;
+
+/// The indices of the (at most) `count` longest observed segments, longest first.
+fn longest_segments(corr: &Correspondences, count: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..corr.n_lines()).collect();
+    let length = |i: usize| (corr.lines2d[i][1] - corr.lines2d[i][0]).norm();
+    order.sort_by(|&i, &j| length(j).total_cmp(&length(i)));
+    order.truncate(count);
+    order
+}
+
 /// Intervals of the one-dimensional minimisation of the local bound.
 const LOCAL_INTERVALS: usize = 256;
 
@@ -209,8 +225,10 @@ struct LineForm {
 }
 
 impl LineForm {
-    fn new(ends: &[Vector3<f64>; 2], seen: &[Vector2<f64>; 2], maps: &[EndpointMap; 2], k_inv: &Matrix3<f64>) -> Self {
-        let (a, b) = (ends[0], ends[1]);
+    /// Segment `index` of `corr`.
+    fn new(corr: &Correspondences, index: usize, maps: &[EndpointMap; 2], k_inv: &Matrix3<f64>) -> Self {
+        let (a, b) = (corr.lines3d[index][0], corr.lines3d[index][1]);
+        let seen = corr.lines2d[index];
         let d = b - a;
         let moment = a.cross(&d);
         LineForm {
@@ -346,8 +364,9 @@ impl<'c> Problem<'c> {
             point_maps,
             forms,
             k_inv,
-            lines: (corr.lines3d.iter().zip(&corr.lines2d).zip(&endpoint_maps))
-                .map(|((ends, seen), maps)| LineForm::new(ends, seen, maps, &k_inv))
+            lines: longest_segments(corr, BOX_BOUND_SEGMENTS)
+                .into_iter()
+                .map(|i| LineForm::new(corr, i, &endpoint_maps[i], &k_inv))
                 .collect(),
             endpoint_maps,
             bearings,
@@ -1796,6 +1815,7 @@ mod tests {
     #[test]
     fn the_segments_terms_of_the_box_bound_hold_over_the_box() {
         use crate::synthetic::random_observation_noise;
+        use nalgebra::Vector2;
         let mut rng = Rng::new(16);
         let (mut checked, mut closest) = (0usize, [0.0f64; 2]);
         for (f, np, nl, seed, with_covariances) in [
@@ -1843,6 +1863,7 @@ mod tests {
                 normal.dot(&(e - pa)).abs() / sigma
             };
             let forms = forms_by_points(&problem);
+            let segments = longest_segments(&corr, BOX_BOUND_SEGMENTS);
             for kappa in [1.0, 2.0] {
                 let scaled = Scaled {
                     minorant: Rc::clone(&problem.root),
@@ -1857,7 +1878,7 @@ mod tests {
                     let terms: Vec<LineTerm> = problem.line_terms(&r_c, theta, &t_star, spread).collect();
                     // Per endpoint: w √weight and |n − n_c| / (θ drift), each at most 1.
                     let ratios = |phi: &Vector3<f64>, u: &Vector3<f64>, index: usize| -> [f64; 2] {
-                        let (line, end) = (index / 2, index % 2);
+                        let (line, end) = (segments[index / 2], index % 2);
                         let (rotation, t) = (exp_so3(phi) * r_c, t_star + u);
                         let [a, b] = corr.lines3d[line].map(|x| rotation * x + t);
                         let m = a.cross(&b);
