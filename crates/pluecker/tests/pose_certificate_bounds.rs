@@ -488,21 +488,26 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
                     worst = worst.max(found / bound);
                     checked += 1;
                 };
+                // The least value of a positive quantity q over the ball, and the largest |q' / q|.
+                let least_and_rate = |q: &dyn Fn(&Vector6<f64>, f64) -> f64, rng: &mut Rng| {
+                    let least = -climb(&|v, s| -q(v, s), radius, rng);
+                    let rate = climb(
+                        &|v, s| {
+                            let (d1, _, value) = diff(&|u| q(v, u), s);
+                            (d1 / value).abs()
+                        },
+                        radius,
+                        rng,
+                    );
+                    (least, rate)
+                };
                 for (x, pp) in c.points3d.iter().zip(&parts.points) {
                     let depth = |v: &Vector6<f64>, s: f64| {
                         let p = at(v, s);
                         (p.r * x + p.t).z
                     };
-                    let least = -climb(&|v, s| -depth(v, s), radius, &mut rng);
+                    let (least, rate) = least_and_rate(&depth, &mut rng);
                     check(format!("depth lower bound (least depth {least})"), pp.z_lo, least);
-                    let rate = climb(
-                        &|v, s| {
-                            let (d1, _, z) = diff(&|u| depth(v, u), s);
-                            (d1 / z).abs()
-                        },
-                        radius,
-                        &mut rng,
-                    );
                     check("|p_z'/p_z|".into(), rate, pp.rate);
                 }
                 for (line, ((seen, ends), lp)) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines).enumerate() {
@@ -513,18 +518,10 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
                     for (end, (e, ep)) in seen.iter().zip(&lp.endpoints).enumerate() {
                         let g = endpoint_map(&k, &c, line, end);
                         let w = |v: &Vector6<f64>, s: f64| (g * moment(v, s).xy()).norm();
-                        let least = -climb(&|v, s| -w(v, s), radius, &mut rng);
+                        let (least, rate) = least_and_rate(&w, &mut rng);
                         check(format!("w lower bound (least w {least})"), ep.w_lo, least);
                         let w2 = climb(&|v, s| diff(&|u| w(v, u), s).1.abs(), radius, &mut rng);
                         check("|w''|".into(), w2, ep.w2);
-                        let rate = climb(
-                            &|v, s| {
-                                let (d1, _, value) = diff(&|u| w(v, u), s);
-                                (d1 / value).abs()
-                            },
-                            radius,
-                            &mut rng,
-                        );
                         check("|w'/w|".into(), rate, ep.rate);
                         let e_bar = k_inv * Vector3::new(e.x, e.y, 1.0);
                         let n = climb(&|v, s| diff(&|u| e_bar.dot(&moment(v, u)), s).1.abs(), radius, &mut rng);
