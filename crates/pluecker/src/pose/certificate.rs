@@ -184,7 +184,7 @@ struct Problem<'c> {
     /// Per point, `W K₂`: the whitening `W` of its noise (the identity without covariances) times
     /// the 2x2 block `K₂` of `K`, which maps a normalised-plane error to the whitened residual.
     point_maps: Vec<Matrix2<f64>>,
-    /// Per point, the map `Aᵢ` of step 2's minorant ([`PointForm`]).
+    /// Per point, its part `Aᵢᵀ Aᵢ` of step 2's minorant ([`PointForm`]).
     forms: Vec<PointForm>,
     /// The minorant for step 1's upper bounds `Dᵢ` on the distances of the points from the camera
     /// over `S` (the search tightens them box by box: [`RotationSearch`]).
@@ -196,7 +196,8 @@ struct Problem<'c> {
     /// covariance (the identity without covariances), so that the endpoint's residual is
     /// `ēᵀ m / ‖G_e m_xy‖`.
     endpoint_maps: Vec<[EndpointMap; 2]>,
-    /// The segments' parts of the box bound with lines ([`LineForm`]).
+    /// The parts of the box bound with segments ([`LineForm`]), for the [`BOX_BOUND_SEGMENTS`]
+    /// longest segments.
     lines: Vec<LineForm>,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
