@@ -305,9 +305,8 @@ impl<'c> Problem<'c> {
                 let g_norm = norm2x2(&g).1;
                 (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
             }
-            Some(noise) if !noise.absolute => {
-                return Err("not attempted: the certificate covers pinhole cameras only".into());
-            }
+            // Noise that carries a lens's Jacobians: the cost is in the distorted pixels.
+            Some(noise) if !noise.absolute => return Err(PINHOLE_ONLY.into()),
             Some(noise) => {
                 let endpoint = |c: &Matrix2<f64>| -> std::result::Result<EndpointMap, String> {
                     // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
@@ -412,22 +411,24 @@ impl<'c> Problem<'c> {
     }
 
     /// A lower bound of `f` on the poses of `S` whose rotation is within the angle `θ` of `r` and
-    /// whose translation is within `spread` of `t_star` (0 when the minorant does not fix the
-    /// translation), from the minorant `scaled` with the segments' residuals added
+    /// whose translation is within `spread` of `t_star`, from the minorant `scaled` (its minimiser
+    /// `t_star` and minimum `q_min` at `r`, [`Scaled::at`]'s, so that `κ Q(r, t) = q_min +
+    /// (t − t*)ᵀ κ C (t − t*)`) with the segments' residuals added
     /// ([`Self::line_terms`]): `Q_total(R, t) = κ Q(R, t) + Σ (α + βᵀ t)² / W²` at `r` is a minorant
     /// of `2f` quadratic in `t`, and over the rotations its square root moves by at most
     /// `θ η_total`, `η_total² = κ η² + Σ drift² / W²` (Minkowski over all the terms), so
     /// `f ≥ ½ (√q_min − θ η_total)₊²` as for the points alone.
-    fn lines_bound(&self, scaled: &Scaled, r: &Matrix3<f64>, theta: f64, t_star: &Vector3<f64>, spread: f64) -> f64 {
-        if scaled.minorant.c_inv.is_none() {
-            return 0.0;
-        }
-        let (g_points, c0_points) = scaled.minorant.at(r);
-        let (mut c, mut g, mut c0) = (
-            scaled.minorant.c * scaled.scale,
-            g_points * scaled.scale,
-            c0_points * scaled.scale,
-        );
+    fn lines_bound(
+        &self,
+        scaled: &Scaled,
+        r: &Matrix3<f64>,
+        theta: f64,
+        (t_star, q_min): (&Vector3<f64>, f64),
+        spread: f64,
+    ) -> f64 {
+        let mut c = scaled.minorant.c * scaled.scale;
+        let mut g = -(c * t_star);
+        let mut c0 = q_min + t_star.dot(&(c * t_star));
         let mut eta2 = scaled.minorant.eta.powi(2) * scaled.scale;
         for term in self.line_terms(r, theta, t_star, spread) {
             c += term.beta * term.beta.transpose() * term.weight;
@@ -980,7 +981,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         // The segments' residuals added to the minorant, where the points' alone fall short.
         let lower = if lower < self.f_hat && !problem.lines.is_empty() {
-            lower.max(problem.lines_bound(scaled, &r_c, theta, &t_star, spread))
+            lower.max(problem.lines_bound(scaled, &r_c, theta, (&t_star, q_min), spread))
         } else {
             lower
         };
@@ -1965,7 +1966,7 @@ mod tests {
                     let at_zero: Vec<LineTerm> = problem.line_terms(&r_c, 0.0, &t_star, spread).collect();
                     for (th, terms) in [(0.0, &at_zero), (theta, &terms)] {
                         let (expected, rounding) = assembled(terms, th);
-                        let found = problem.lines_bound(&scaled, &r_c, th, &t_star, spread);
+                        let found = problem.lines_bound(&scaled, &r_c, th, (&t_star, q_min), spread);
                         assert!(
                             (found - expected).abs() <= rounding,
                             "θ = {th}: {found} against {expected}"
