@@ -111,7 +111,8 @@ impl CertificateKind {
         match (self, primitive) {
             (CertificateKind::None, _) => "none",
             (_, Primitive::Pose) | (CertificateKind::SublevelSet, _) => {
-                "every rotation and translation that keeps the object points in front of the camera"
+                "every rotation and translation that keeps the object points and the segments' object \
+                 endpoints in front of the camera"
             }
             (CertificateKind::LensConvexityTest, _) => {
                 "every point in front of every camera whose projection in each image lies inside the disc where \

@@ -5,26 +5,30 @@
 //! The claim under test: every pose `(R, t)` with the object points in front and cost at most `level`
 //! has its rotation `exp(ω) R̂` in a box the search kept (never pruned) and its translation in that
 //! box's ellipsoid; when the box lies inside the whitened ball, the pose is within the search's
-//! radius of `(R̂, t̂)` in the metric `JᵀJ` at the centre.
+//! radius of `(R̂, t̂)` in the metric `JᵀJ` at the centre. Where the search starts from the object's
+//! distance (lines alone, or fewer than two points), the claim covers the poses with the segments'
+//! endpoints in front as well, and the distance bound holds at each of them.
 
 mod pose_oracle;
 
 use nalgebra::{Matrix6, Vector3, Vector6};
-use pluecker::pose::certificate::testing::{rotation_search, KeptCell, Region};
+use pluecker::pose::certificate::testing::{object_distance, rotation_search, KeptCell, Region};
 use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_observation_noise, visible_scene, Scene};
+
 use pluecker::Camera;
-use pose_oracle::{centred, cost, information, many_start, points_in_front, OraclePose};
+use pose_oracle::{all_in_front, centred, cost, information, many_start, points_in_front, OraclePose};
 
 /// Poses of the sublevel set `{f ≤ level}` found with the oracle: the minima below the level, and
 /// from each, along `rays` random whitened directions, the farthest pose of the ray still at or below
-/// the level (bisection on the first crossing), and the midpoint towards it.
+/// the level (bisection on the first crossing), and the midpoint towards it. With `endpoints`, the
+/// segments' endpoints are kept in front as well as the points.
 fn sublevel_poses(
     k: &Camera,
     corr: &Correspondences,
     minima: &[(OraclePose, f64)],
-    level: f64,
+    (level, endpoints): (f64, bool),
     rays: usize,
     rng: &mut Rng,
 ) -> Vec<(OraclePose, f64)> {
@@ -41,7 +45,12 @@ fn sublevel_poses(
             let at = |s: f64| m.step(&(dir * s));
             let inside = |s: f64| {
                 let p = at(s);
-                points_in_front(corr, &p) && cost(k, corr, &p) <= level
+                let in_front = if endpoints {
+                    all_in_front(corr, &p)
+                } else {
+                    points_in_front(corr, &p)
+                };
+                in_front && cost(k, corr, &p) <= level
             };
             // Grow until outside (the level set is bounded along every whitened ray in practice).
             let mut hi = (2.0 * (level - f)).max(1e-12).sqrt();
@@ -224,8 +233,9 @@ fn deep_scene(focal: f64, n: usize, seed: u64) -> Scene {
 }
 
 /// Runs the rotation search around each minimum below each level and checks every sublevel pose.
-/// Returns (poses checked, second minima below a level that were checked).
-fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
+/// Returns (poses checked, second minima below a level that were checked, poses at which a distance
+/// bound was checked).
+fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize) {
     let scene = if case.deep {
         deep_scene(case.focal, case.points, case.seed)
     } else {
@@ -250,10 +260,22 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
         "f={} {}p+{}l planar={} seed {} covariances={}",
         case.focal, case.points, case.lines, case.planar, case.seed, case.covariances
     );
-    let (mut checked, mut second) = (0, 0);
+    let (mut checked, mut second, mut distances) = (0, 0, 0);
     for &factor in factors {
         let level = factor * global;
-        let poses = sublevel_poses(&k, &corr, &minima, level, 12, &mut rng);
+        let distance = object_distance(&k, &corr, level).ok().flatten();
+        let poses = sublevel_poses(&k, &corr, &minima, (level, distance.is_some()), 12, &mut rng);
+        if let Some((pivot, bound)) = distance {
+            for (pose, f) in &poses {
+                let reach = (pose.r * pivot + pose.t).norm();
+                // Rounding: ~1e-15 of the scene's size.
+                assert!(
+                    reach <= bound * (1.0 + 1e-12),
+                    "{name}, level {factor}x: a pose of cost {f:.6} has the pivot at {reach} > the bound {bound}"
+                );
+            }
+            distances += poses.len();
+        }
         for (centre, f_centre) in minima.iter().filter(|(_, f)| *f <= level) {
             let w = information(&k, &corr, centre);
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
@@ -267,6 +289,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
                 }
             };
             assert!(region.pruned > 0, "{name}: nothing pruned: the test would be vacuous");
+            assert_eq!(region.from_distance, distance.is_some(), "{name}");
             let widest = widest_cell_point(&region, centre, &w, &mut rng);
             // W is the oracle's (central differences, relative error ~1e-8).
             assert!(
@@ -287,7 +310,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize) {
             second += minima.iter().filter(|(_, f)| *f <= level).count() - 1;
         }
     }
-    (checked, second)
+    (checked, second, distances)
 }
 
 #[test]
@@ -320,15 +343,31 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
         Case { focal: 4000.0, points: 3, lines: 5, planar: true, seed: 3, deep: false, covariances: false },
         Case { focal: 15000.0, points: 5, lines: 5, planar: false, seed: 4, deep: false, covariances: false },
         Case { focal: 800.0, points: 5, lines: 5, planar: true, seed: 6, deep: false, covariances: false },
+        // Lines alone, and one point with segments: the search starts from the object's distance.
+        Case { focal: 800.0, points: 0, lines: 6, planar: false, seed: 1, deep: false, covariances: false },
+        Case { focal: 250.0, points: 0, lines: 8, planar: false, seed: 2, deep: false, covariances: false },
+        Case { focal: 4000.0, points: 0, lines: 10, planar: false, seed: 3, deep: false, covariances: false },
+        Case { focal: 800.0, points: 0, lines: 6, planar: true, seed: 4, deep: false, covariances: false },
+        Case { focal: 800.0, points: 1, lines: 5, planar: false, seed: 5, deep: false, covariances: false },
+        Case { focal: 800.0, points: 0, lines: 8, planar: false, seed: 6, deep: false, covariances: true },
+        Case { focal: 250.0, points: 1, lines: 6, planar: false, seed: 7, deep: false, covariances: true },
     ];
-    let (mut checked, mut second, mut with_covariances) = (0, 0, 0);
+    let (mut checked, mut second, mut with_covariances, mut distances) = (0, 0, 0, 0);
     for case in &cases {
-        let (c, s) = run_case(case, &[1.5, 3.0, 10.0]);
+        let (c, s, d) = run_case(case, &[1.5, 3.0, 10.0]);
         checked += c;
         second += s;
+        distances += d;
         with_covariances += if case.covariances { c } else { 0 };
     }
-    eprintln!("{checked} poses checked ({with_covariances} with covariances), {second} other minima below a level");
+    eprintln!(
+        "{checked} poses checked ({with_covariances} with covariances), {second} other minima below a level, \
+         {distances} against a distance bound"
+    );
+    assert!(
+        distances > 150,
+        "only {distances} poses checked against a distance bound"
+    );
     assert!(checked > 500, "only {checked} poses checked");
     assert!(
         with_covariances > 150,
@@ -438,6 +477,52 @@ fn cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere() {
                     cell.half
                 );
                 // Pruned with little to spare: the oracle's reach within θ‖X‖ of zero.
+                if least > -0.1 {
+                    near += 1;
+                }
+                cells_checked += 1;
+            }
+        }
+    }
+    eprintln!("{cells_checked} cells pruned by cheirality checked, {near} within 0.1 of the boundary");
+    assert!(cells_checked >= 100, "only {cells_checked} cells pruned by cheirality");
+}
+
+/// Cheirality pruning where the search starts from the object's distance (lines alone): a cell is
+/// pruned as behind the camera only if some point or segment endpoint has `z ≤ 0` for every rotation
+/// of its box and every translation of its ellipsoid. The oracle maximises `z` over each pruned cell
+/// for every point and endpoint ([`largest_front_reach`] with `b = (0, 0, 1)`).
+#[test]
+fn cells_pruned_as_behind_the_camera_without_depth_bounds_have_an_endpoint_behind_everywhere() {
+    let (mut cells_checked, mut near) = (0usize, 0usize);
+    for (focal, np, nl, seed) in [(250.0, 0, 8, 1u64), (800.0, 0, 6, 2), (250.0, 1, 6, 3)] {
+        let scene = visible_scene(focal, np, nl, false, seed);
+        let mut rng = Rng::new(9100 + seed);
+        let noisy = scene.noisy(1.0, true, &mut rng);
+        let (corr, c) = centred(&noisy);
+        let k = scene.camera;
+        let truth = OraclePose::new(scene.rotation, scene.translation + scene.rotation * c);
+        let minimum = many_start(&k, &corr, &truth, 0, &mut rng)[0];
+        let front = Vector3::new(0.0, 0.0, 1.0);
+        for factor in [1.5, 10.0, 100.0] {
+            let level = factor * minimum.1;
+            let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
+            let Ok(region) = rotation_search(&k, &corr, &minimum.0.to_library(), level, target, 2e-3, 400_000) else {
+                continue;
+            };
+            assert!(region.from_distance);
+            for cell in region.behind.iter().take(300) {
+                let reaches: Vec<f64> = (corr.points3d.iter().chain(corr.lines3d.iter().flatten()))
+                    .map(|x| largest_front_reach(cell, &minimum.0, x, &front, &mut rng))
+                    .collect();
+                let least = reaches.iter().copied().fold(f64::INFINITY, f64::min);
+                assert!(
+                    least <= 1e-12,
+                    "f={focal} {np}p+{nl}l seed {seed}, level {factor}x: a cell (centre {:?}, half {:?}) pruned as \
+                     behind the camera has a pose with every point and endpoint in front (largest z {reaches:?})",
+                    cell.centre,
+                    cell.half
+                );
                 if least > -0.1 {
                     near += 1;
                 }

@@ -1,5 +1,7 @@
 //! Certification of the pose: a proved lower bound on the reprojection cost over every rotation and
-//! translation that keeps the object points in front of the camera. This module works with
+//! translation that keeps the object points and the segments' object endpoints in front of the
+//! camera (steps 1-4 below need only the points in front; the search without depth bounds uses the
+//! endpoints too). This module works with
 //! `f = ½ Σ r²` (px²); the result reports `Σ r² = 2f`. With per-observation covariances
 //! ([`super::ObservationNoise`]) the residuals are whitened (in standard deviations) and every step
 //! below holds for that cost: a point's whitening `Wᵢ` enters through `Wᵢ K₂` in place of `K₂`, a
@@ -71,6 +73,7 @@
 //! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
 
 use super::correspondences::Correspondences;
+use super::object_distance::{distance_bound, Sight};
 use super::reprojection::{Pose, ReprojectionCost};
 use super::Status;
 use crate::camera::Camera;
@@ -90,6 +93,10 @@ use std::rc::Rc;
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
 /// [`crate::certificate::CertifyOptions::max_nodes`] `None`).
 pub const MAX_CELLS: usize = 20_000;
+/// The default cap where the search starts from the object's distance ([`Start::Ball`]: lines alone,
+/// or too few points): its boxes are pruned later (20 000-90 000 boxes on the 10-segment benchmark
+/// scenes, 2-8 µs each).
+pub const MAX_CELLS_FROM_DISTANCE: usize = 100_000;
 
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
 pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
@@ -165,6 +172,12 @@ const REBUILD_GAIN: f64 = 1.2;
 /// (With all 50 segments of the 50-point + 50-segment benchmark rows, the searches that fail took
 /// 2.5-3.3 times as long for one or two more certificates in 50.)
 const BOX_BOUND_SEGMENTS: usize = 8;
+/// Boxes of rotations within this angle of the answer's are bounded with every segment where there
+/// are no depth bounds ([`Start::Ball`]).
+const NEAR_ANSWER: f64 = 0.5;
+/// At most this many segments, the longest in the image, enter the bound of a box where there are no
+/// depth bounds ([`Start::Ball`]): there they are the bound, not an addition to it.
+const BALL_SEGMENTS: usize = 32;
 
 /// The indices of the (at most) `count` longest observed segments, longest first.
 fn longest_segments(corr: &Correspondences, count: usize) -> Vec<usize> {
@@ -186,9 +199,8 @@ struct Problem<'c> {
     point_maps: Vec<Matrix2<f64>>,
     /// Per point, its part `Aᵢᵀ Aᵢ` of step 2's minorant ([`PointForm`]).
     forms: Vec<PointForm>,
-    /// The minorant for step 1's upper bounds `Dᵢ` on the distances of the points from the camera
-    /// over `S` (the search tightens them box by box: [`RotationSearch`]).
-    root: Rc<Minorant>,
+    /// What the rotation search starts from: step 1's depth bounds, or the object's distance.
+    start: Start,
     /// `K⁻¹` (normalised endpoints `ē = K⁻¹ ẽ`).
     k_inv: Matrix3<f64>,
     /// Per segment endpoint, `G_e = Lᵀ G` and its norm: `G` is the upper-left 2x2 block of `K⁻ᵀ` (a
@@ -196,13 +208,50 @@ struct Problem<'c> {
     /// covariance (the identity without covariances), so that the endpoint's residual is
     /// `ēᵀ m / ‖G_e m_xy‖`.
     endpoint_maps: Vec<[EndpointMap; 2]>,
-    /// The parts of the box bound with segments ([`LineForm`]), for the [`BOX_BOUND_SEGMENTS`]
-    /// longest segments.
+    /// The parts of the box bound with segments ([`LineForm`]), longest segment first: the first
+    /// `box_segments` enter every box's bound ([`BOX_BOUND_SEGMENTS`], or [`BALL_SEGMENTS`] without
+    /// depth bounds), all of them the bounds of boxes near the answer without depth bounds.
     lines: Vec<LineForm>,
+    box_segments: usize,
     /// Unit bearings of the points.
     bearings: Vec<Vector3<f64>>,
     /// `‖Xᵢ‖` (object coordinates).
     norms: Vec<f64>,
+}
+
+/// What the rotation search starts from.
+enum Start {
+    /// Step 1's depth bounds, and the minorant for them (the search tightens them box by box:
+    /// [`RotationSearch`]).
+    Points(Rc<Minorant>),
+    /// Without depth bounds (lines alone, or fewer than two points seen far enough apart): the
+    /// pivot `c` (an object point) is at most `distance` from the camera on `S`
+    /// ([`super::object_distance`]), so the translation of a pose of `S` whose rotation is within
+    /// `θ` of `R_c` lies in the ball of centre `−R_c c` and radius `distance + θ ‖c‖`; every box is
+    /// bounded from the residuals at its centre rotation ([`Problem::ball_quadratic`]) and hands its
+    /// octants a smaller ball ([`Ball`]).
+    Ball { pivot: Vector3<f64>, distance: f64 },
+}
+
+/// An ellipsoid `{centre + L z : ‖z‖ ≤ 1}` (`shape = L Lᵀ`) that holds the translation of every pose
+/// of `S` in a box (the search without depth bounds hands it down box by box), and its largest
+/// semi-axis `radius = √λ_max(shape)`.
+#[derive(Clone)]
+struct Ball {
+    centre: Vector3<f64>,
+    shape: Matrix3<f64>,
+    radius: f64,
+}
+
+impl Ball {
+    /// The ball of centre `centre` and radius `radius`.
+    fn round(centre: Vector3<f64>, radius: f64) -> Ball {
+        Ball {
+            centre,
+            shape: Matrix3::identity() * (radius * radius),
+            radius,
+        }
+    }
 }
 
 /// A point's part of step 2's minorant: `H = AᵀA` for the 2x3 map `A` with `r = A x / x_z` (the
@@ -249,11 +298,27 @@ impl LineForm {
 /// A segment endpoint's term of [`Problem::lines_bound`] for a box: the weight `1 / W²`, the residual
 /// numerator `n = α + βᵀ t` at the box's centre rotation, and `drift` with `|Δn| ≤ θ drift` over the
 /// box ([`Problem::line_terms`]).
+#[derive(Clone)]
 struct LineTerm {
     weight: f64,
     alpha: f64,
     beta: Vector3<f64>,
     drift: f64,
+    /// `ē`, and the parts of `drift` for another translation: `‖ē‖ ‖a × d‖` and `‖d‖`.
+    e: Vector3<f64>,
+    moment_part: f64,
+    d_norm: f64,
+    /// `r (a × d)` and `r d` at the box's centre rotation `r`.
+    rm: Vector3<f64>,
+    rd: Vector3<f64>,
+}
+
+impl LineTerm {
+    /// `γ = r m × ē + r d × (ē × t)`: the numerator's first-order change `φᵀ γ` under the rotation
+    /// `exp(φ) r` at the translation `t` ([`Problem::linear_ball_bound`]).
+    fn gamma(&self, t: &Vector3<f64>) -> Vector3<f64> {
+        self.rm.cross(&self.e) + self.rd.cross(&self.e.cross(t))
+    }
 }
 
 /// A segment endpoint's `G_e` and `‖G_e‖` ([`Problem::endpoint_maps`]).
@@ -293,9 +358,6 @@ fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64
 
 impl<'c> Problem<'c> {
     fn new(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
-        if corr.n_points() < 2 {
-            return Err("not attempted: the depth bounds need at least two points".into());
-        }
         let k = camera.matrix();
         let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
         let k_inv = k.try_inverse().ok_or("singular camera")?;
@@ -327,23 +389,23 @@ impl<'c> Problem<'c> {
                 )
             }
         };
-        let scales: Vec<f64> = point_maps.iter().map(|m| norm2x2(m).0).collect();
         // A whitened error e is a normalised-plane error of at least e / sᵢ (sᵢ the least singular
         // value of Wᵢ K₂): the angle bound of point i.
         let eps0 = (2.0 * f_hat).sqrt();
-        let alphas: Vec<f64> = scales.iter().map(|s| eps0 / s).collect();
-        if !alphas.iter().all(|alpha| *alpha < 0.25) {
-            return Err(format!(
-                "not proved: residuals too large ({eps0:.3e} px) for the angle bounds"
-            ));
-        }
+        let alphas: Vec<f64> = point_maps.iter().map(|m| eps0 / norm2x2(m).0).collect();
         let bearings: Vec<Vector3<f64>> = corr
             .points2d
             .iter()
             .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
             .collect();
-        let depths = depth_bounds(corr, &bearings, &alphas)
-            .ok_or("not proved: no two points are seen far enough apart to bound the depths")?;
+        let depths = if corr.n_points() < 2 {
+            Err("the depth bounds need at least two points".to_string())
+        } else if !alphas.iter().all(|alpha| *alpha < 0.25) {
+            Err(format!("residuals too large ({eps0:.3e} px) for the angle bounds"))
+        } else {
+            depth_bounds(corr, &bearings, &alphas)
+                .ok_or_else(|| "no two points are seen far enough apart to bound the depths".to_string())
+        };
         // A point's residual is Wᵢ K₂ (π(x) − ūᵢ) = Aᵢ x / x_z with Aᵢ = Wᵢ K₂ Eᵢ,
         // Eᵢ = [1 0 −ū₁; 0 1 −ū₂] (ūᵢ the normalised observed point).
         let forms: Vec<PointForm> = (point_maps.iter().zip(&corr.points2d))
@@ -358,21 +420,42 @@ impl<'c> Problem<'c> {
                 }
             })
             .collect();
-        let root = Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths));
+        let (start, segments) = match depths {
+            Ok(depths) => (
+                Start::Points(Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths))),
+                BOX_BOUND_SEGMENTS,
+            ),
+            Err(why) => {
+                let (pivot, distance) = object_distance(corr, &bearings, &alphas, &endpoint_maps, &k_inv, eps0)
+                    .ok_or_else(|| {
+                        format!("not proved: {why}, and the observations do not bound the object's distance")
+                    })?;
+                (Start::Ball { pivot, distance }, BALL_SEGMENTS)
+            }
+        };
         Ok(Problem {
             corr,
             point_maps,
             forms,
             k_inv,
-            lines: longest_segments(corr, BOX_BOUND_SEGMENTS)
+            lines: longest_segments(corr, corr.n_lines())
                 .into_iter()
                 .map(|i| LineForm::new(corr, i, &endpoint_maps[i], &k_inv))
                 .collect(),
+            box_segments: segments,
             endpoint_maps,
             bearings,
             norms: corr.points3d.iter().map(|x| x.norm()).collect(),
-            root,
+            start,
         })
+    }
+
+    /// Step 1's minorant (`None` without depth bounds).
+    fn root(&self) -> Option<&Rc<Minorant>> {
+        match &self.start {
+            Start::Points(root) => Some(root),
+            Start::Ball { .. } => None,
+        }
     }
 
     /// Step 2's minorant for the depth bounds `depths`.
@@ -381,32 +464,59 @@ impl<'c> Problem<'c> {
     }
 
     /// The segments' terms of [`Self::lines_bound`] for the rotations within the angle `θ` of `r`
-    /// and the translations within `spread` of `t_star`. A segment endpoint's residual is
+    /// and the translations within `spread` of `t_star` (and, given `shape`, in the ellipsoid
+    /// `{t* + L z : ‖z‖ ≤ 1}`, `shape = L Lᵀ`, whose largest semi-axis is `spread`). A segment endpoint's residual is
     /// `r_e = n / w` with `n = ēᵀ ((R a + t) × R d) = ēᵀ R (a × d) + tᵀ (R d × ē)` (`d = b − a`),
     /// linear in `t` for a fixed rotation, and
-    /// `w = ‖G_e m_xy‖ ≤ ‖G_e‖ ‖d‖ min(‖R a + t‖, ‖R b + t‖) ≤ W` (the moment `m` of the camera-frame
-    /// line is at most its distance from the camera times `‖d‖`; the distances are bounded over the
-    /// rotations and translations as the points' are), so `r_e² ≥ n² / W²`. Between `r` and a rotation
+    /// `w = ‖G_e m_xy‖ ≤ ‖G_e‖ ‖m‖ ≤ W`, with two bounds on the moment `m = R (a × d) + t × R d` of the
+    /// camera-frame line: it is at most its distance from the camera times `‖d‖`, and
+    /// `‖d‖ min(‖R a + t‖, ‖R b + t‖)` is bounded over the rotations and translations as the points'
+    /// distances are; and it moves from its value `m_c` at `(r, t*)` by at most
+    /// `θ (‖a × d‖ + ‖d‖ ‖t‖) + ‖(t − t*) × r d‖`. So `r_e² ≥ n² / W²`. Between `r` and a rotation
     /// `R'`, `n` moves by at most `θ (‖ē‖ ‖a × d‖ + ‖d‖ ‖ē × t‖)` (`‖(R' − r) y‖ ≤ θ ‖y‖`), with
-    /// `‖ē × t‖ ≤ ‖ē × t*‖ + ‖ē‖ spread`.
+    /// `‖ē × t‖ ≤ ‖ē × t*‖ + ‖ē‖ spread`, or `‖ē × t*‖ + ‖[ē]ₓ L‖` with the spectral norm below the
+    /// Frobenius norm `√(‖ē‖² tr(shape) − ēᵀ shape ē)` (an ellipsoid elongated along the line of
+    /// sight moves `ē × t` little).
     fn line_terms<'s>(
         &'s self,
+        segments: usize,
         r: &'s Matrix3<f64>,
         theta: f64,
         t_star: &'s Vector3<f64>,
         spread: f64,
+        shape: Option<&'s Matrix3<f64>>,
     ) -> impl Iterator<Item = LineTerm> + 's {
-        self.lines.iter().flat_map(move |line| {
+        self.lines.iter().take(segments).flat_map(move |line| {
             let [a_norm, b_norm, d_norm, m_norm] = line.norms;
             let reach = |x: &Vector3<f64>, norm: f64| (r * x + t_star).norm() + theta * norm + spread;
             let distance = reach(&line.a, a_norm).min(reach(&line.b, b_norm));
             let (rd, rm) = (r * line.d, r * line.moment);
+            let moment = (d_norm * distance).min(
+                (rm + t_star.cross(&rd)).norm()
+                    + theta * (m_norm + d_norm * (t_star.norm() + spread))
+                    + Self::cross_extent(&rd, d_norm, spread, shape),
+            );
             line.ends.map(|(e, e_norm, g_norm)| LineTerm {
-                weight: (g_norm * d_norm * distance).powi(-2),
+                weight: (g_norm * moment).powi(-2),
                 alpha: e.dot(&rm),
                 beta: rd.cross(&e),
-                drift: e_norm * m_norm + d_norm * (e.cross(t_star).norm() + e_norm * spread),
+                drift: e_norm * m_norm
+                    + d_norm * (e.cross(t_star).norm() + Self::cross_extent(&e, e_norm, spread, shape)),
+                e,
+                moment_part: e_norm * m_norm,
+                d_norm,
+                rm,
+                rd,
             })
+        })
+    }
+
+    /// The largest `‖ē × Δt‖` over the translation steps `Δt` of [`Self::line_terms`]'s set.
+    fn cross_extent(e: &Vector3<f64>, e_norm: f64, spread: f64, shape: Option<&Matrix3<f64>>) -> f64 {
+        let round = e_norm * spread;
+        shape.map_or(round, |shape| {
+            let frobenius2 = e_norm * e_norm * shape.trace() - e.dot(&(shape * e));
+            round.min(frobenius2.max(0.0).sqrt() * (1.0 + 1e-12))
         })
     }
 
@@ -426,22 +536,308 @@ impl<'c> Problem<'c> {
         (t_star, q_min): (&Vector3<f64>, f64),
         spread: f64,
     ) -> f64 {
-        let mut c = scaled.minorant.c * scaled.scale;
-        let mut g = -(c * t_star);
-        let mut c0 = q_min + t_star.dot(&(c * t_star));
-        let mut eta2 = scaled.minorant.eta.powi(2) * scaled.scale;
-        for term in self.line_terms(r, theta, t_star, spread) {
-            c += term.beta * term.beta.transpose() * term.weight;
-            g += term.beta * (term.alpha * term.weight);
-            c0 += term.alpha * term.alpha * term.weight;
-            eta2 += term.weight * term.drift * term.drift;
-        }
-        let Some(c_inv) = c.try_inverse() else {
-            return 0.0;
+        let c = scaled.minorant.c * scaled.scale;
+        let mut quadratic = Quadratic {
+            c,
+            g: -(c * t_star),
+            c0: q_min + t_star.dot(&(c * t_star)),
+            eta2: scaled.minorant.eta.powi(2) * scaled.scale,
         };
-        let q_min = (c0 - g.dot(&(c_inv * g))).max(0.0);
-        minkowski(q_min, theta * eta2.sqrt())
+        quadratic.add_lines(self.line_terms(self.box_segments, r, theta, t_star, spread, None));
+        quadratic
+            .minimum()
+            .map_or(0.0, |(_, q_min, _)| minkowski(q_min, theta * quadratic.eta2.sqrt()))
     }
+
+    /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
+    /// rotations within `θ` of `r` and their translations in `ball`.
+    ///
+    /// Every point is at most `Dᵢ = ‖r Xᵢ + centre‖ + θ ‖Xᵢ‖ + radius` from the camera, so its term
+    /// `‖Aᵢ (R Xᵢ + t)‖² / Dᵢ²` (step 2) and the segments' terms `(α + βᵀ t)² / W²`
+    /// ([`Self::line_terms`]) are a minorant of `2f`; at `r` it is the quadratic
+    /// `Q(t) = q_min + Δᵀ C Δ`, `Δ = t − t*`. Over the rotations a point's term moves by at most
+    /// `θ ‖Aᵢ‖ ‖Xᵢ‖ / Dᵢ`, and a segment endpoint's by `θ (‖ē‖ ‖a × d‖ + ‖d‖ ‖ē × t‖) / W` with
+    /// `‖ē × t‖ ≤ ‖ē × t*‖ + ‖ē × Δ‖`. By Minkowski over all the terms,
+    /// `√(2f) ≥ √(q_min + Δᵀ C Δ) − θ (η₀ + √(Δᵀ N Δ))` with `η₀` the terms' drifts at `t*` and
+    /// `N = Σ ‖d‖² [ē]ₓᵀ [ē]ₓ / W²`. With `μ` the least eigenvalue of `C` relative to `N`
+    /// (`Δᵀ C Δ ≥ μ x²`, `x = √(Δᵀ N Δ)`), `√(2f) ≥ v(x) − θ η₀`, `v(x) = √(q_min + μ x²) − θ x`, a
+    /// convex function whose least value over `x ≤ x_ball` (the ball's reach) is the bound. The
+    /// translations of the box's poses of `S` have `v(x) ≤ β = √(2f̂) + θ η₀`, so `x ≤ x_max` and
+    /// `Δᵀ C Δ ≤ (β + θ x_max)² − q_min`: an ellipsoid. The drift of the segments is paid against the
+    /// quadratic's own growth, not against the ball, which only weighs the terms.
+    fn ball_bound(&self, segments: usize, r: &Matrix3<f64>, theta: f64, ball: &Ball, f_hat: f64) -> Option<BoxBound> {
+        let mut quadratic = Quadratic {
+            c: Matrix3::zeros(),
+            g: Vector3::zeros(),
+            c0: 0.0,
+            eta2: 0.0,
+        };
+        let mut depths = Vec::with_capacity(self.forms.len());
+        let mut rotated = Vec::with_capacity(self.forms.len());
+        for ((x, form), norm) in self.corr.points3d.iter().zip(&self.forms).zip(&self.norms) {
+            let y = r * x;
+            let depth = (y + ball.centre).norm() + theta * norm + ball.radius;
+            let w = 1.0 / (depth * depth);
+            let hy = form.h * y;
+            quadratic.c += form.h * w;
+            quadratic.g += hy * w;
+            quadratic.c0 += w * y.dot(&hy);
+            quadratic.eta2 += w * form.norm2 * norm * norm;
+            depths.push(depth);
+            rotated.push((y, w));
+        }
+        let points_eta2 = quadratic.eta2;
+        let terms: SmallVec<[LineTerm; 64]> = self
+            .line_terms(segments, r, theta, &ball.centre, ball.radius, Some(&ball.shape))
+            .collect();
+        quadratic.add_lines(terms.iter().cloned());
+        let (t_star, q_min, c_inv) = quadratic.minimum()?;
+        // Per segment endpoint, its drift at t*: θ aₖ with aₖ = ‖ē‖ ‖m‖ + ‖d‖ ‖ē × t*‖, or
+        // θ ‖γₖ‖ + ρ aₖ with the exact first-order part γₖ ([`Self::linear_ball_bound`]); the lesser.
+        let rho = rotation_rest(theta);
+        let mut eta0_2 = points_eta2;
+        let mut spin2 = points_eta2 * theta * theta;
+        let mut n = Matrix3::zeros();
+        for term in &terms {
+            let drift = term.moment_part + term.d_norm * term.e.cross(&t_star).norm();
+            eta0_2 += term.weight * drift * drift;
+            let first_order = term.gamma(&t_star).norm();
+            let spin = (theta * drift).min(theta * first_order + rho * drift);
+            spin2 += term.weight * spin * spin;
+            let e = &term.e;
+            n += (Matrix3::identity() * e.norm_squared() - e * e.transpose())
+                * (term.weight * term.d_norm * term.d_norm);
+        }
+        let eta0 = eta0_2.sqrt();
+        // μ = λ_min(L⁻¹ C L⁻ᵀ) = 1 / λ_max(Lᵀ C⁻¹ L) for N = L Lᵀ (+∞ without segments: no x).
+        let (mu, n_max) = match n.cholesky() {
+            Some(chol) => {
+                let l = chol.l();
+                (
+                    1.0 / largest_eigenvalue(&(l.transpose() * c_inv * l)),
+                    largest_eigenvalue(&n),
+                )
+            }
+            None => (f64::INFINITY, 0.0),
+        };
+        // The ball's reach in x: ‖Δ‖ ≤ ‖t* − centre‖ + radius.
+        let x_ball = n_max.max(0.0).sqrt() * ((t_star - ball.centre).norm() + ball.radius);
+        // x's coefficient: θ + ρ (θ where the first bound of each drift is the lesser, so θ + ρ
+        // holds for both).
+        let step = theta + rho;
+        let spin = spin2.sqrt();
+        let v = |x: f64| (q_min + mu * x * x).sqrt() - step * x;
+        let x_least = if step * step < mu {
+            (q_min * step * step / (mu * (mu - step * step))).sqrt().min(x_ball)
+        } else {
+            x_ball
+        };
+        let least = if mu.is_finite() { v(x_least) } else { q_min.sqrt() };
+        let by_growth = 0.5 * (least - spin).max(0.0).powi(2);
+        let mut by_linear = 0.0;
+        if by_growth < f_hat {
+            let linear = Linearised {
+                terms: &terms,
+                points: &rotated,
+                t_star: &t_star,
+                c_inv: &c_inv,
+                n: &n,
+                mu,
+                eta0,
+            };
+            by_linear = self.linear_ball_bound(&linear, theta);
+        }
+        // The largest x with v(x) ≤ β: the larger root of (μ − s²) x² − 2 β s x + q_min − β²
+        // (s = θ + ρ; x_ball where that does not bound x).
+        let beta = (2.0 * f_hat).sqrt() + spin;
+        let x_max = if !mu.is_finite() {
+            0.0
+        } else if step * step < mu {
+            let (a, b) = (mu - step * step, beta * step);
+            let disc = (b * b - a * (q_min - beta * beta)).max(0.0);
+            ((b + disc.sqrt()) / a).min(x_ball)
+        } else {
+            x_ball
+        };
+        let slack = ((beta + step * x_max).powi(2) - q_min).max(0.0);
+        Some(BoxBound {
+            lower: by_growth.max(by_linear),
+            by_growth,
+            by_linear,
+            t_star,
+            c: quadratic.c,
+            c_inv,
+            slack,
+            depths,
+        })
+    }
+}
+
+/// What [`Problem::linear_ball_bound`] reads of [`Problem::ball_bound`]'s work: the segments'
+/// terms, the points' `r Xᵢ` and weights, the quadratic's minimiser and `C⁻¹`, `N`, `μ` and `η₀`.
+struct Linearised<'a> {
+    terms: &'a [LineTerm],
+    points: &'a [(Vector3<f64>, f64)],
+    t_star: &'a Vector3<f64>,
+    c_inv: &'a Matrix3<f64>,
+    n: &'a Matrix3<f64>,
+    mu: f64,
+    eta0: f64,
+}
+
+/// [`Problem::ball_bound`]'s result: the bound (the larger of the two: the minorant's growth against
+/// the drift, and the linearised minorant, computed only where the first falls short of `f̂`), the
+/// ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C⁻¹` given) that holds the translations of the box's
+/// poses of `S`, and the points' depth bounds.
+struct BoxBound {
+    lower: f64,
+    // The two bounds apart: read by the unit tests, which check each.
+    #[cfg_attr(not(test), allow(dead_code))]
+    by_growth: f64,
+    #[cfg_attr(not(test), allow(dead_code))]
+    by_linear: f64,
+    t_star: Vector3<f64>,
+    c: Matrix3<f64>,
+    c_inv: Matrix3<f64>,
+    slack: f64,
+    depths: Vec<f64>,
+}
+
+impl Problem<'_> {
+    /// [`Problem::ball_bound`]'s minorant linearised in the rotation, as [`Scaled::linear_bound`] does
+    /// with depth bounds (0 where it cannot be computed). A rotation of the box is `exp(φ) r`,
+    /// `‖φ‖ ≤ θ`, `exp(φ) = I + [φ]ₓ + E` with `‖E y‖ ≤ ρ ‖y‖`, `ρ = e^θ − 1 − θ`; write `t = t* + Δ`.
+    /// A segment endpoint's numerator is then
+    /// `n = α + βᵀ t + φᵀ γ + ēᵀ (Δ × (φ × r d)) + ēᵀ E r m + ēᵀ (t × E r d)` with
+    /// `γ = r m × ē + r d × (ē × t*)` (`m = a × d`), so it is within
+    /// `(θ + ρ) ‖d‖ ‖ē × Δ‖ + ρ (‖ē‖ ‖m‖ + ‖d‖ ‖ē × t*‖)` of the linear `α + βᵀ t + φᵀ γ`; a point's
+    /// `Aᵢ (exp(φ) yᵢ + t)` (`yᵢ = r Xᵢ`) is within `ρ ‖Aᵢ‖ ‖Xᵢ‖` of `Aᵢ (yᵢ + t − [yᵢ]ₓ φ)`. With
+    /// `L(φ, Δ)` the weighted sum of squares of the linear parts (a quadratic in `(φ, Δ)`), Minkowski
+    /// gives `√(2f) ≥ √L − (θ + ρ) √(Δᵀ N Δ) − ρ η₀`. Minimised over `Δ`,
+    /// `L = L_min(φ) + (Δ − Δ*(φ))ᵀ C (Δ − Δ*(φ))` with `Δ*(φ) = −C⁻¹ (B φ + h_Δ)` linear in `φ`, and
+    /// `√(Δᵀ N Δ) ≤ y + s`, `y = √((Δ − Δ*)ᵀ N (Δ − Δ*))`, `s ≤ ‖N^½ C⁻¹ B‖ θ + ‖N^½ C⁻¹ h_Δ‖`; as in
+    /// [`Problem::ball_bound`], `√(L_min + μ y²) − (θ + ρ) y ≥ √L_min √(1 − (θ + ρ)² / μ)`. `L_min(φ)`
+    /// is a convex quadratic, bounded below over the ball `‖φ‖ ≤ θ` by
+    /// [`ball_minimum_lower_bound`]. So
+    /// `√(2f) ≥ √(min L_min) √(1 − (θ + ρ)² / μ) − (θ + ρ) s − ρ η₀`.
+    fn linear_ball_bound(&self, lin: &Linearised, theta: f64) -> f64 {
+        let rho = rotation_rest(theta);
+        let step = theta + rho;
+        if !(step * step < lin.mu) {
+            return 0.0;
+        }
+        // L(z) = L₀ + 2 hᵀ z + zᵀ M z, z = (φ, Δ).
+        let mut m = SMatrix::<f64, 6, 6>::zeros();
+        let mut h = SVector::<f64, 6>::zeros();
+        let mut l0 = 0.0;
+        for term in lin.terms {
+            let gamma = term.gamma(lin.t_star);
+            let row = SVector::<f64, 6>::new(gamma.x, gamma.y, gamma.z, term.beta.x, term.beta.y, term.beta.z);
+            let value = term.alpha + term.beta.dot(lin.t_star);
+            m += row * row.transpose() * term.weight;
+            h += row * (value * term.weight);
+            l0 += value * value * term.weight;
+        }
+        for ((y, w), form) in lin.points.iter().zip(&self.forms) {
+            // J = [−[y]ₓ | I]: the camera-frame point's linear part in z.
+            let mut j = SMatrix::<f64, 3, 6>::zeros();
+            j.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-skew(y)));
+            j.fixed_view_mut::<3, 3>(0, 3).copy_from(&Matrix3::identity());
+            let p = y + lin.t_star;
+            let hp = form.h * p;
+            m += j.transpose() * form.h * j * *w;
+            h += j.transpose() * hp * *w;
+            l0 += p.dot(&hp) * w;
+        }
+        let m_pp = m.fixed_view::<3, 3>(0, 0).into_owned();
+        let b = m.fixed_view::<3, 3>(3, 0).into_owned();
+        let (h_p, h_d) = (h.fixed_rows::<3>(0).into_owned(), h.fixed_rows::<3>(3).into_owned());
+        // C is M's Δ block: the quadratic's own, whose inverse is given.
+        let c_inv = lin.c_inv;
+        let schur = m_pp - b.transpose() * c_inv * b;
+        let g = h_p - b.transpose() * (c_inv * h_d);
+        let q0 = l0 - h_d.dot(&(c_inv * h_d));
+        let least = ball_minimum_lower_bound(q0, &g, &(0.5 * (schur + schur.transpose())), theta);
+        // s: ‖N^½ C⁻¹ B‖ θ + ‖N^½ C⁻¹ h_Δ‖ (norms through N: ‖N^½ v‖² = vᵀ N v).
+        let cb = c_inv * b;
+        let coupling = largest_eigenvalue(&(cb.transpose() * lin.n * cb)).max(0.0).sqrt();
+        let offset = c_inv * h_d;
+        let s = coupling * theta + offset.dot(&(lin.n * offset)).max(0.0).sqrt();
+        let root = least.max(0.0).sqrt() * (1.0 - step * step / lin.mu).sqrt();
+        0.5 * (root - step * s - rho * lin.eta0).max(0.0).powi(2)
+    }
+}
+
+/// A minorant of `2f` at a box's centre rotation as a quadratic `tᵀ C t + 2 gᵀ t + c₀` in the
+/// translation, and `η²`: over the box's rotations (within `θ` of the centre's) its square root moves
+/// by at most `θ η` (Minkowski over its terms).
+struct Quadratic {
+    c: Matrix3<f64>,
+    g: Vector3<f64>,
+    c0: f64,
+    eta2: f64,
+}
+
+impl Quadratic {
+    /// Adds the segments' terms `(α + βᵀ t)² / W²` ([`Problem::line_terms`]).
+    fn add_lines(&mut self, terms: impl Iterator<Item = LineTerm>) {
+        for term in terms {
+            self.c += term.beta * term.beta.transpose() * term.weight;
+            self.g += term.beta * (term.alpha * term.weight);
+            self.c0 += term.alpha * term.alpha * term.weight;
+            self.eta2 += term.weight * term.drift * term.drift;
+        }
+    }
+
+    /// The minimiser `t*`, the minimum `q_min` (clamped at 0) and `C⁻¹` (`None` when `C` is singular:
+    /// the quadratic does not fix the translation).
+    fn minimum(&self) -> Option<(Vector3<f64>, f64, Matrix3<f64>)> {
+        let c_inv = self.c.try_inverse()?;
+        let t_star = -(c_inv * self.g);
+        Some((t_star, (self.c0 + self.g.dot(&t_star)).max(0.0), c_inv))
+    }
+}
+
+/// The pivot of the object (the mean of its points and segment midpoints) and the bound on its
+/// distance from the camera on `S` ([`super::object_distance`]; `None` without one). A point is
+/// within its angle bound `αᵢ` of its observed ray (step 1). A segment endpoint `ē` whose residual
+/// `ēᵀ m / ‖G_e m_xy‖` is at most `ε₀` is within the angle whose sine is `ε₀ ‖G_e‖ / ‖ē‖` of the
+/// interpretation plane (normal `m`), as `‖G_e m_xy‖ ≤ ‖G_e‖ ‖m‖`.
+fn object_distance(
+    corr: &Correspondences,
+    bearings: &[Vector3<f64>],
+    alphas: &[f64],
+    endpoint_maps: &[[EndpointMap; 2]],
+    k_inv: &Matrix3<f64>,
+    eps0: f64,
+) -> Option<(Vector3<f64>, f64)> {
+    let count = corr.n_points() + corr.n_lines();
+    if count == 0 {
+        return None;
+    }
+    let pivot = (corr.points3d.iter().sum::<Vector3<f64>>()
+        + corr.lines3d.iter().map(|[a, b]| (a + b) * 0.5).sum::<Vector3<f64>>())
+        / count as f64;
+    let rays = (corr.points3d.iter().zip(bearings).zip(alphas))
+        .filter(|(_, alpha)| **alpha < std::f64::consts::FRAC_PI_2)
+        .map(|((x, b), alpha)| Sight::Ray {
+            direction: *b,
+            tolerance: *alpha,
+            offset: (x - pivot).norm(),
+        });
+    let planes = (corr.lines3d.iter().zip(&corr.lines2d).zip(endpoint_maps))
+        .filter(|(([a, b], _), _)| (b - a).norm() > 0.0)
+        .map(|(([a, b], seen), maps)| {
+            let d = b - a;
+            let ends = [0, 1].map(|k| k_inv * Vector3::new(seen[k].x, seen[k].y, 1.0));
+            Sight::Plane {
+                ends,
+                sines: [0, 1].map(|k| (eps0 * maps[k].1 / ends[k].norm()).min(1.0)),
+                offset: (a - pivot).cross(&d).norm() / d.norm(),
+            }
+        });
+    let sights: Vec<Sight> = rays.chain(planes).collect();
+    distance_bound(&sights).map(|distance| (pivot, distance))
 }
 
 /// Step 2's minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t)‖²`, `wᵢ = 1 / Dᵢ²`, for one set of depth
@@ -908,8 +1304,9 @@ struct RotationSearch<'a, 'c> {
 
 impl BoundingOracle for RotationSearch<'_, '_> {
     type Candidate = ();
-    /// The minorant for the depth bounds of the box's poses of `S` (`None`: step 1's, for the root).
-    type Inherited = Option<Scaled>;
+    /// The minorant for the depth bounds of the box's poses of `S`, or the ball of their translations
+    /// (`None`: the root's).
+    type Inherited = Option<Handed>;
 
     fn bound(&mut self, region: &Region) -> Bound<()> {
         self.bound_with(region, &None).0
@@ -938,38 +1335,137 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .collect()
     }
 
-    fn bound_with(&mut self, region: &Region, inherited: &Option<Scaled>) -> (Bound<()>, Option<Scaled>) {
-        let problem = self.problem;
-        let root = Scaled {
-            minorant: Rc::clone(&problem.root),
-            scale: 1.0,
-        };
-        let scaled = inherited.as_ref().unwrap_or(&root);
-        let (minorant, scale) = (&scaled.minorant, scaled.scale);
+    fn bound_with(&mut self, region: &Region, inherited: &Option<Handed>) -> (Bound<()>, Option<Handed>) {
         let cell = Cell::of(region);
-        let bounded = |lower: f64| Bound::Bounded {
-            lower,
-            relaxed_minimizer: None,
-            candidate: None,
-            solver_iterations: 0,
-        };
-        let empty = Bound::Empty { solver_iterations: 0 };
         // The box's nearest point to the origin: boxes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
         let nearest = cell.centre.zip_map(&cell.half, |c, h| (c.abs() - h).max(0.0)).norm();
         if nearest > std::f64::consts::PI {
-            return (empty, None);
+            return (Bound::Empty { solver_iterations: 0 }, None);
         }
-        let theta = cell.half.norm();
         let r_c = exp_so3(&cell.centre) * self.pose.rotation;
-        let Some((t_star, q_min, eta)) = scaled.at(&r_c) else {
-            return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
+        match (&self.problem.start, inherited) {
+            (Start::Points(_), Some(Handed::Minorant(scaled))) => self.points_box(&cell, &r_c, scaled),
+            (Start::Points(root), _) => {
+                let root = Scaled {
+                    minorant: Rc::clone(root),
+                    scale: 1.0,
+                };
+                self.points_box(&cell, &r_c, &root)
+            }
+            (Start::Ball { pivot, distance }, inherited) => {
+                // The translations of the box's poses of S: t = P − R c with ‖P‖ ≤ distance, and those
+                // of the parent's ball; the smaller ball is kept.
+                let from_pivot = Ball::round(-(r_c * pivot), distance + cell.half.norm() * pivot.norm());
+                let ball = match inherited {
+                    Some(Handed::Ball(ball)) if ball.shape.trace() <= from_pivot.shape.trace() => ball.clone(),
+                    _ => from_pivot,
+                };
+                self.ball_box(&cell, &r_c, ball)
+            }
+        }
+    }
+}
+
+/// What a box hands down to its octants ([`BoundingOracle::Inherited`]).
+#[derive(Clone)]
+enum Handed {
+    /// The minorant for the depth bounds of the box's poses of `S` ([`Start::Points`]).
+    Minorant(Scaled),
+    /// A ball that holds the translations of the box's poses of `S` ([`Start::Ball`]).
+    Ball(Ball),
+}
+
+#[cfg(test)]
+impl Handed {
+    /// The minorant handed down (the unit tests of the search with depth bounds).
+    fn minorant(&self) -> &Scaled {
+        match self {
+            Handed::Minorant(scaled) => scaled,
+            Handed::Ball(_) => panic!("a ball, not a minorant"),
+        }
+    }
+}
+
+/// A box's bound, with no candidate.
+fn bounded(lower: f64) -> Bound<()> {
+    Bound::Bounded {
+        lower,
+        relaxed_minimizer: None,
+        candidate: None,
+        solver_iterations: 0,
+    }
+}
+
+impl RotationSearch<'_, '_> {
+    /// The box's bound `lower` when it proves the box empty of `S` (`lower ≥ f̂`): the search prunes it.
+    fn pruned(&mut self, lower: f64) -> Option<Bound<()>> {
+        if lower < self.f_hat {
+            return None;
+        }
+        if let InsideBall::Record(r) = &mut self.inside_ball {
+            r.pruned += 1;
+        }
+        Some(bounded(lower))
+    }
+
+    /// The bound of a box that is not split further: one inside the whitened ball of the target
+    /// radius (step 4's bound joins `lower`), or, for the test hook, one at its least half-width.
+    /// The box's poses of `S` have their translations within `extent` (in the local metric) of `t_star`
+    /// (computed only for boxes near the answer). `None`: the box is split.
+    fn settled(
+        &mut self,
+        cell: &Cell,
+        lower: f64,
+        t_star: &Vector3<f64>,
+        extent: impl FnOnce() -> Option<f64>,
+        kept: impl Fn(bool) -> testing::KeptCell,
+    ) -> Option<Bound<()>> {
+        // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
+        // inequality over the three parts of the step).
+        if cell.centre.norm() + cell.half.norm() <= 1.0 {
+            if let Some(extent) = extent() {
+                let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
+                    + self.whitening.box_spread(&cell.half)
+                    + extent;
+                if radius <= self.target {
+                    self.radius = self.radius.max(radius);
+                    let lower = match &mut self.inside_ball {
+                        InsideBall::Bound(ball) => lower.max(ball.at(radius)),
+                        InsideBall::Record(r) => {
+                            r.cells.push(kept(true));
+                            self.f_hat
+                        }
+                    };
+                    return Some(bounded(lower));
+                }
+            }
+        }
+        if let InsideBall::Record(r) = &mut self.inside_ball {
+            if cell.half.max() <= r.min_half {
+                r.cells.push(kept(false));
+                return Some(bounded(self.f_hat));
+            }
+        }
+        None
+    }
+
+    /// The bound of a box with step 1's depth bounds ([`Start::Points`]; [`RotationSearch`]).
+    fn points_box(&mut self, cell: &Cell, r_c: &Matrix3<f64>, scaled: &Scaled) -> (Bound<()>, Option<Handed>) {
+        let problem = self.problem;
+        let (minorant, scale) = (&scaled.minorant, scaled.scale);
+        let theta = cell.half.norm();
+        let Some((t_star, q_min, eta)) = scaled.at(r_c) else {
+            return (
+                Bound::Failed { solver_iterations: 0 },
+                Some(Handed::Minorant(scaled.clone())),
+            );
         };
         // The Minkowski bound, and the linearised one where the first falls short of f̂ and the
         // second could close the box.
         let by_minkowski = minkowski(q_min, theta * eta);
         let lower = if by_minkowski < self.f_hat {
             let wanted = self.f_hat * (1.0 - self.max_relative_gap);
-            by_minkowski.max(scaled.linear_bound(&r_c, theta, q_min, wanted))
+            by_minkowski.max(scaled.linear_bound(r_c, theta, q_min, wanted))
         } else {
             by_minkowski
         };
@@ -980,20 +1476,19 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         let slack_per_scale = slack / scale;
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         // The segments' residuals added to the minorant, where the points' alone fall short.
-        let lower = if lower < self.f_hat && !problem.lines.is_empty() {
-            lower.max(problem.lines_bound(scaled, &r_c, theta, (&t_star, q_min), spread))
+        let lower = if lower < self.f_hat && problem.box_segments > 0 && !problem.lines.is_empty() {
+            lower.max(problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread))
         } else {
             lower
         };
         if !lower.is_finite() {
-            return (Bound::Failed { solver_iterations: 0 }, inherited.clone());
+            return (
+                Bound::Failed { solver_iterations: 0 },
+                Some(Handed::Minorant(scaled.clone())),
+            );
         }
-        if lower >= self.f_hat {
-            // No pose of S: the search prunes the box (its bound is not below the incumbent).
-            if let InsideBall::Record(r) = &mut self.inside_ball {
-                r.pruned += 1;
-            }
-            return (bounded(lower), None);
+        if let Some(pruned) = self.pruned(lower) {
+            return (pruned, None);
         }
         let kept = |inside_ball: bool| testing::KeptCell {
             centre: cell.centre,
@@ -1019,42 +1514,99 @@ impl BoundingOracle for RotationSearch<'_, '_> {
                 r.pruned += 1;
                 r.behind.push(kept(false));
             }
-            return (empty, None);
+            return (Bound::Empty { solver_iterations: 0 }, None);
         }
-        // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
-        // inequality over the three parts of the step).
-        if cell.centre.norm() + theta <= 1.0 {
+        let extent = || {
             let factor = minorant
                 .extent
                 .get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
-            if let Some(extent) = factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt()) {
-                let radius = self.whitening.length(&cell.centre, &(t_star - self.pose.translation))
-                    + self.whitening.box_spread(&cell.half)
-                    + extent;
-                if radius <= self.target {
-                    self.radius = self.radius.max(radius);
-                    let lower = match &mut self.inside_ball {
-                        InsideBall::Bound(ball) => lower.max(ball.at(radius)),
-                        InsideBall::Record(r) => {
-                            r.cells.push(kept(true));
-                            self.f_hat
-                        }
-                    };
-                    return (bounded(lower), None);
-                }
-            }
-        }
-        if let InsideBall::Record(r) = &mut self.inside_ball {
-            if cell.half.max() <= r.min_half {
-                r.cells.push(kept(false));
-                return (bounded(self.f_hat), None);
-            }
+            factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt())
+        };
+        if let Some(bound) = self.settled(cell, lower, &t_star, extent, kept) {
+            return (bound, None);
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
         let reach = (centred.iter().zip(&problem.norms)).map(|(y, norm)| y.norm() + theta * norm + spread);
-        let handed_down = scaled.tightened(problem, reach, &r_c, 0.5 * theta);
-        (bounded(lower), Some(handed_down))
+        let handed_down = scaled.tightened(problem, reach, r_c, 0.5 * theta);
+        (bounded(lower), Some(Handed::Minorant(handed_down)))
+    }
+
+    /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
+    /// translations in `ball`: `Q` the minorant at `R_c` ([`Problem::ball_quadratic`]), a pose of `S`
+    /// in the box has `√(2f) ≥ √q_min − θ η` (Minkowski, as with depth bounds), and its translation
+    /// lies in the ellipsoid `Q(t) ≤ (√(2f̂) + θ η)²`, whose bounding ball the octants inherit where it
+    /// is smaller than `ball`.
+    fn ball_box(&mut self, cell: &Cell, r_c: &Matrix3<f64>, ball: Ball) -> (Bound<()>, Option<Handed>) {
+        let theta = cell.half.norm();
+        // Every segment near the answer, where the translation ellipsoid decides whether the box lies
+        // inside the whitened ball; the longest elsewhere.
+        let segments = if cell.centre.norm() + theta <= NEAR_ANSWER {
+            self.problem.lines.len()
+        } else {
+            self.problem.box_segments
+        };
+        let Some(BoxBound {
+            lower,
+            t_star,
+            c,
+            c_inv,
+            slack,
+            depths,
+            ..
+        }) = self.problem.ball_bound(segments, r_c, theta, &ball, self.f_hat)
+        else {
+            // The terms do not fix the translation: no bound, the octants are bounded again.
+            return (bounded(0.0), Some(Handed::Ball(ball)));
+        };
+        if !lower.is_finite() {
+            return (Bound::Failed { solver_iterations: 0 }, Some(Handed::Ball(ball)));
+        }
+        if let Some(pruned) = self.pruned(lower) {
+            return (pruned, None);
+        }
+        let kept = |inside_ball: bool| testing::KeptCell {
+            centre: cell.centre,
+            half: cell.half,
+            t_star,
+            c,
+            slack,
+            inside_ball,
+            depths: depths.clone(),
+        };
+        let extent = || {
+            self.whitening
+                .ellipsoid_factor(&c)
+                .map(|lambda| (slack * lambda).max(0.0).sqrt())
+        };
+        // Cheirality: an object point or segment endpoint behind the camera (z ≤ 0) for every rotation
+        // of the box and translation of the ellipsoid, whose largest t_z is t*_z + √(slack (C⁻¹)_zz).
+        let t_z = t_star.z + (slack * c_inv[(2, 2)]).max(0.0).sqrt();
+        let behind = (self.problem.corr.points3d.iter())
+            .chain(self.problem.corr.lines3d.iter().flatten())
+            .any(|x| (r_c * x).z + theta * x.norm() + t_z <= 0.0);
+        if behind {
+            if let InsideBall::Record(r) = &mut self.inside_ball {
+                r.pruned += 1;
+                r.behind.push(kept(false));
+            }
+            return (Bound::Empty { solver_iterations: 0 }, None);
+        }
+        if let Some(bound) = self.settled(cell, lower, &t_star, extent, kept) {
+            return (bound, None);
+        }
+        // Of two ellipsoids that hold the translations, the one of least trace.
+        let shape = c_inv * slack;
+        let handed_down = if shape.trace() < ball.shape.trace() {
+            Ball {
+                centre: t_star,
+                radius: largest_eigenvalue(&shape).max(0.0).sqrt(),
+                shape,
+            }
+        } else {
+            ball
+        };
+        (bounded(lower), Some(Handed::Ball(handed_down)))
     }
 }
 
@@ -1453,7 +2005,8 @@ impl LocalModel {
 const BALL_FACTORS: [f64; 5] = [64.0, 16.0, 6.0, 3.0, 2.0];
 
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
-/// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]. Never fails: a
+/// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
+/// ([`MAX_CELLS_FROM_DISTANCE`] without depth bounds). Never fails: a
 /// certificate that cannot be computed is `certified = false` with the reason. Every cost and bound
 /// here is `½ Σ r²`; [`crate::pose::PoseResult`] reports them in `Σ r²`.
 pub fn certify(
@@ -1502,7 +2055,11 @@ pub fn certify(
         }),
         radius: 0.0,
     };
-    let localised = match localise(&mut search, options.max_nodes_or(MAX_CELLS)) {
+    let cap = match problem.start {
+        Start::Points(_) => MAX_CELLS,
+        Start::Ball { .. } => MAX_CELLS_FROM_DISTANCE,
+    };
+    let localised = match localise(&mut search, options.max_nodes_or(cap)) {
         Ok(l) => l,
         Err(why) => return Certification::none(why),
     };
@@ -1554,8 +2111,14 @@ pub mod testing {
     /// What [`rotation_search`] proved.
     #[derive(Debug, Clone)]
     pub struct Region {
-        /// Step 1's depth bounds `Dᵢ` (the root's: the search tightens them box by box).
+        /// Step 1's depth bounds `Dᵢ` (the root's: the search tightens them box by box; empty when
+        /// the search starts from the object's distance).
         pub depths: Vec<f64>,
+        /// Whether the search started from the object's distance (no depth bounds: lines alone, or
+        /// too few points). Its claims then cover the poses with the segments' object endpoints in
+        /// front of the camera as well as the points, and its cells pruned as behind the camera have
+        /// a point or endpoint with `z ≤ 0` (not `bᵢ · x ≤ 0`) for every pose of the cell.
+        pub from_distance: bool,
         /// The cells neither pruned nor split: every pose of the sublevel set with the points in front
         /// lies in one of them (rotation in the box, translation in the ellipsoid).
         pub cells: Vec<KeptCell>,
@@ -1575,7 +2138,24 @@ pub mod testing {
     /// Step 1's depth bounds for the level `level` (px²): every pose with cost at most `level` and the
     /// points in front has `‖R Xᵢ + t‖ ≤ Dᵢ`.
     pub fn depth_bounds(camera: &Camera, corr: &Correspondences, level: f64) -> std::result::Result<Vec<f64>, String> {
-        Problem::new(camera, corr, level).map(|p| p.root.depths.clone())
+        Problem::new(camera, corr, level)?
+            .root()
+            .map(|root| root.depths.clone())
+            .ok_or_else(|| "no depth bounds: the search starts from the object's distance".into())
+    }
+
+    /// Where the search starts from the object's distance at the level `level` (px²): the pivot `c`
+    /// and the bound `D` with `‖R c + t‖ ≤ D` on every pose with cost at most `level` and the points in
+    /// front (`None`: the search starts from step 1's depth bounds).
+    pub fn object_distance(
+        camera: &Camera,
+        corr: &Correspondences,
+        level: f64,
+    ) -> std::result::Result<Option<(Vector3<f64>, f64)>, String> {
+        Ok(match Problem::new(camera, corr, level)?.start {
+            Start::Ball { pivot, distance } => Some((pivot, distance)),
+            Start::Points(_) => None,
+        })
     }
 
     /// Steps 1-3 around `centre` (any pose, not necessarily a minimum) for the sublevel set of
@@ -1608,7 +2188,8 @@ pub mod testing {
         };
         let localised = localise(&mut search, max_nodes)?;
         Ok(Region {
-            depths: problem.root.depths.clone(),
+            depths: problem.root().map_or_else(Vec::new, |root| root.depths.clone()),
+            from_distance: problem.root().is_none(),
             cells: record.cells,
             pruned: record.pruned,
             behind: record.behind,
@@ -1802,6 +2383,129 @@ mod tests {
         0.5 * (q_min.sqrt() - theta * eta2.sqrt()).max(0.0).powi(2)
     }
 
+    /// The bounds of a box without depth bounds ([`Problem::ball_bound`]: the minorant's growth
+    /// against the drift, and the linearised minorant, both computed here at every box) against the
+    /// least reprojection cost over the box, rotations `exp(φ) r_c` (`‖φ‖ ≤ θ`) and translations in
+    /// the ellipsoid `{centre + L z : ‖z‖ ≤ 1}` with every point and segment endpoint in front, found by
+    /// sampling then a hill climb on the test's own cost (pixels projected here, an endpoint's residual
+    /// its pixel distance to the line through the two projected endpoints). Boxes from 1e-3 to 0.5 rad,
+    /// near the answer and far from it; round and elongated translation sets holding the true
+    /// translation or not. Neither bound may exceed the least cost found; each must be useful (above
+    /// half of it) on some boxes, or the test could not fail.
+    #[test]
+    fn the_bounds_without_depth_bounds_hold_over_the_box() {
+        use nalgebra::Vector2;
+        let mut rng = Rng::new(31);
+        let (mut checked, mut useful) = (0usize, [0usize; 2]);
+        for (f, np, nl, seed) in [
+            (800.0, 0, 8, 31),
+            (250.0, 0, 6, 32),
+            (4000.0, 0, 10, 33),
+            (800.0, 1, 5, 34),
+        ] {
+            let scene = visible_scene(f, np, nl, false, seed);
+            let corr = scene.noisy(1.0, true, &mut rng);
+            let truth = Pose::new(scene.rotation, scene.translation);
+            let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
+            let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+            assert!(problem.root().is_none(), "f = {f}: the search starts from depth bounds");
+            let k = scene.camera.matrix();
+            let pixel = |x: &Vector3<f64>| {
+                let p = k * x;
+                Vector2::new(p.x / p.z, p.y / p.z)
+            };
+            // ½ Σ r², +∞ with a point or endpoint behind the camera.
+            let cost = |rotation: &Matrix3<f64>, t: &Vector3<f64>| -> f64 {
+                let mut sum = 0.0;
+                for (x, u) in corr.points3d.iter().zip(&corr.points2d) {
+                    let y = rotation * x + t;
+                    if y.z <= 0.0 {
+                        return f64::INFINITY;
+                    }
+                    sum += (pixel(&y) - u).norm_squared();
+                }
+                for (segment, seen) in corr.lines3d.iter().zip(&corr.lines2d) {
+                    let [a, b] = segment.map(|x| rotation * x + t);
+                    if a.z <= 0.0 || b.z <= 0.0 {
+                        return f64::INFINITY;
+                    }
+                    let (pa, pb) = (pixel(&a), pixel(&b));
+                    let dir = (pb - pa).normalize();
+                    let normal = Vector2::new(-dir.y, dir.x);
+                    sum += seen.iter().map(|e| normal.dot(&(e - pa)).powi(2)).sum::<f64>();
+                }
+                0.5 * sum
+            };
+            for case in 0..32 {
+                // Half the boxes small and near the truth, where the bounds are tight.
+                let near = case % 2 == 0;
+                let away = if near { 0.02 } else { 0.6 } * rng.uniform_in(0.0, 1.0).powi(2);
+                let r_c = exp_so3(&(rng.unit_vector3() * away)) * truth.rotation;
+                let (least, span) = if near { (1e-4, 100.0f64) } else { (1e-3, 500.0) };
+                let theta = least * span.powf(rng.uniform_in(0.0, 1.0));
+                // The translation set: round or elongated along a random axis, its centre near the
+                // truth (the truth inside it or not).
+                let radius =
+                    scene.translation.norm() * 0.5f64.powf(rng.uniform_in(0.0, 6.0) + if near { 4.0 } else { 0.0 });
+                let centre = scene.translation + rng.unit_vector3() * radius * rng.uniform_in(0.0, 1.5);
+                let axis = rng.unit_vector3();
+                let thin = if rng.uniform() < 0.5 {
+                    1.0
+                } else {
+                    rng.uniform_in(0.05, 0.5)
+                };
+                let shape = (axis * axis.transpose() * (1.0 - thin * thin) + Matrix3::identity() * (thin * thin))
+                    * (radius * radius);
+                let l = shape.cholesky().unwrap().l();
+                let ball = Ball { centre, shape, radius };
+                let Some(bounds) = problem.ball_bound(problem.lines.len(), &r_c, theta, &ball, f64::INFINITY) else {
+                    continue;
+                };
+                let at = |(phi, z): &(Vector3<f64>, Vector3<f64>)| cost(&(exp_so3(phi) * r_c), &(centre + l * z));
+                let clamp = |v: Vector3<f64>, r: f64| v * (r / v.norm()).min(1.0);
+                let mut best = (Vector3::zeros(), Vector3::zeros());
+                let mut best_value = at(&best);
+                for step in 0..400 {
+                    let candidate = if step < 150 {
+                        (
+                            rng.unit_vector3() * theta * rng.uniform().cbrt(),
+                            rng.unit_vector3() * rng.uniform().cbrt(),
+                        )
+                    } else {
+                        let shrink = 0.98f64.powi(step - 150);
+                        (
+                            clamp(best.0 + rng.unit_vector3() * theta * 0.3 * shrink, theta),
+                            clamp(best.1 + rng.unit_vector3() * 0.3 * shrink, 1.0),
+                        )
+                    };
+                    let value = at(&candidate);
+                    if value < best_value {
+                        (best, best_value) = (candidate, value);
+                    }
+                }
+                if !best_value.is_finite() {
+                    continue;
+                }
+                for (which, bound) in [bounds.by_growth, bounds.by_linear].into_iter().enumerate() {
+                    assert!(
+                        bound <= best_value * (1.0 + 1e-9),
+                        "f = {f}, θ = {theta}, {away:.3} rad from the truth: bound {which} = {bound} above the cost \
+                         {best_value} of a pose of the box"
+                    );
+                    if bound > 0.5 * best_value {
+                        useful[which] += 1;
+                    }
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked >= 60, "only {checked} boxes checked");
+        assert!(
+            useful.iter().all(|&u| u >= 5),
+            "bounds above half the least cost on only {useful:?} of {checked} boxes"
+        );
+    }
+
     /// The segments' terms of the box bound ([`Problem::line_terms`]), each claim against an oracle
     /// of its own at poses of the box (rotations `exp(φ) r_c`, `‖φ‖ ≤ θ`; translations within
     /// `spread` of `t*`), found by random sampling then a hill climb towards where each claim is
@@ -1868,7 +2572,7 @@ mod tests {
             let segments = longest_segments(&corr, BOX_BOUND_SEGMENTS);
             for kappa in [1.0, 2.0] {
                 let scaled = Scaled {
-                    minorant: Rc::clone(&problem.root),
+                    minorant: Rc::clone(problem.root().expect("depth bounds")),
                     scale: kappa,
                 };
                 for _ in 0..12 {
@@ -1876,8 +2580,10 @@ mod tests {
                     let theta = 1e-3 * 300f64.powf(rng.uniform_in(0.0, 1.0));
                     let (t_star, q_min, eta) = scaled.at(&r_c).unwrap();
                     let slack = (((2.0 * f_hat).sqrt() + theta * eta).powi(2) - q_min).max(0.0);
-                    let spread = (slack / kappa * problem.root.c_inv_max).sqrt();
-                    let terms: Vec<LineTerm> = problem.line_terms(&r_c, theta, &t_star, spread).collect();
+                    let spread = (slack / kappa * problem.root().expect("depth bounds").c_inv_max).sqrt();
+                    let terms: Vec<LineTerm> = problem
+                        .line_terms(problem.box_segments, &r_c, theta, &t_star, spread, None)
+                        .collect();
                     // Per endpoint: w √weight and |n − n_c| / (θ drift), each at most 1.
                     let ratios = |phi: &Vector3<f64>, u: &Vector3<f64>, index: usize| -> [f64; 2] {
                         let (line, end) = (segments[index / 2], index % 2);
@@ -1963,7 +2669,9 @@ mod tests {
                         (bound, 1e-9 * (q + at_origin))
                     };
                     // A line's distance bound grows with θ: at θ = 0 its terms are those for θ = 0.
-                    let at_zero: Vec<LineTerm> = problem.line_terms(&r_c, 0.0, &t_star, spread).collect();
+                    let at_zero: Vec<LineTerm> = problem
+                        .line_terms(problem.box_segments, &r_c, 0.0, &t_star, spread, None)
+                        .collect();
                     for (th, terms) in [(0.0, &at_zero), (theta, &terms)] {
                         let (expected, rounding) = assembled(terms, th);
                         let found = problem.lines_bound(&scaled, &r_c, th, (&t_star, q_min), spread);
@@ -2018,10 +2726,10 @@ mod tests {
             let truth = Pose::new(scene.rotation, scene.translation);
             let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
             let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-            let depths = problem.root.depths.clone();
+            let depths = problem.root().expect("depth bounds").depths.clone();
             for kappa in [1.0, 2.5] {
                 let scaled = Scaled {
-                    minorant: Rc::clone(&problem.root),
+                    minorant: Rc::clone(problem.root().expect("depth bounds")),
                     scale: kappa,
                 };
                 for _ in 0..40 {
@@ -2096,10 +2804,10 @@ mod tests {
             let f_hat = ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
             let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
             let root = Scaled {
-                minorant: Rc::clone(&problem.root),
+                minorant: Rc::clone(problem.root().expect("depth bounds")),
                 scale: 1.0,
             };
-            let depths = problem.root.depths.clone();
+            let depths = problem.root().expect("depth bounds").depths.clone();
             let random_pose = |rng: &mut Rng| {
                 let r = exp_so3(&(rng.unit_vector3() * rng.uniform_in(0.0, 0.5))) * truth.rotation;
                 (
@@ -2108,7 +2816,7 @@ mod tests {
                 )
             };
             // The form against the sum.
-            let m = &problem.root;
+            let m = problem.root().expect("depth bounds");
             let c_inv = m.c_inv.unwrap();
             assert!((m.c * c_inv - Matrix3::identity()).norm() < 1e-9);
             let c_inv_max = c_inv.symmetric_eigenvalues().max();
@@ -2148,7 +2856,7 @@ mod tests {
                 let r_c = exp_so3(&(rng.unit_vector3() * angle)) * truth.rotation;
                 let theta = angle * rng.uniform_in(0.01, 0.3);
                 let handed = root.tightened(&problem, reach.iter().copied(), &r_c, theta);
-                let is_rebuilt = !Rc::ptr_eq(&handed.minorant, &problem.root);
+                let is_rebuilt = !Rc::ptr_eq(&handed.minorant, problem.root().expect("depth bounds"));
                 match case {
                     // Even shrinking is a scale, `1 / 0.7²`.
                     1 => assert!(
@@ -2173,7 +2881,7 @@ mod tests {
                     }
                     _ => {}
                 }
-                if handed.scale == 1.0 && !Rc::ptr_eq(&handed.minorant, &problem.root) {
+                if handed.scale == 1.0 && !Rc::ptr_eq(&handed.minorant, problem.root().expect("depth bounds")) {
                     rebuilt += 1;
                 } else if handed.scale > 1.0 {
                     scaled_up += 1;
@@ -2244,7 +2952,7 @@ mod tests {
                 let corr = problem.corr;
                 for kappa in [1.0, 1.7, 4.0] {
                     let scaled = Scaled {
-                        minorant: Rc::clone(&problem.root),
+                        minorant: Rc::clone(problem.root().expect("depth bounds")),
                         scale: kappa,
                     };
                     let depths: Vec<f64> = scaled.depths().collect();
@@ -2276,13 +2984,13 @@ mod tests {
                         );
                         let mut run = |given: &Scaled| {
                             search.radius = 0.0;
-                            let (bound, handed) = search.bound_with(&region, &Some(given.clone()));
+                            let (bound, handed) = search.bound_with(&region, &Some(Handed::Minorant(given.clone())));
                             let lower = match bound {
                                 Bound::Bounded { lower, .. } => lower,
                                 Bound::Empty { .. } => f64::NAN,
                                 Bound::Failed { .. } => panic!("the minorant fixes t"),
                             };
-                            let depths: Option<Vec<f64>> = handed.map(|h| h.depths().collect());
+                            let depths: Option<Vec<f64>> = handed.map(|h| h.minorant().depths().collect());
                             (lower, search.radius, depths)
                         };
                         let (lower_s, radius_s, handed_s) = run(&scaled);
@@ -2335,7 +3043,7 @@ mod tests {
             with_rotation_search(f, n, seed, &mut rng, 0.0, |search, rng| {
                 let (problem, f_hat) = (search.problem, search.f_hat);
                 let (corr, truth) = (problem.corr, *search.pose);
-                let depths = problem.root.depths.clone();
+                let depths = problem.root().expect("depth bounds").depths.clone();
                 let weights: Vec<f64> = depths.iter().map(|d| 1.0 / (d * d)).collect();
                 let forms = forms_by_points(problem);
                 for _ in 0..1000 {
@@ -2366,7 +3074,7 @@ mod tests {
                         .sqrt();
                     let beta = (2.0 * f_hat).sqrt() + half.norm() * eta;
                     let slack = beta * beta - q_min;
-                    for ((i, x), claimed) in corr.points3d.iter().enumerate().zip(handed.depths()) {
+                    for ((i, x), claimed) in corr.points3d.iter().enumerate().zip(handed.minorant().depths()) {
                         if claimed >= depths[i] * (1.0 - 1e-12) {
                             continue; // capped by the inherited bound, which the ellipsoid may exceed
                         }

@@ -18,6 +18,7 @@ pub(crate) mod lens;
 pub(crate) mod linear;
 pub mod minimal;
 pub(crate) mod noise;
+pub(crate) mod object_distance;
 pub(crate) mod refinement;
 pub(crate) mod reprojection;
 mod result;
@@ -136,7 +137,8 @@ pub struct PoseOptions {
     /// The global-optimality certificate ([`certificate`], the sublevel-set test): `None` skips it
     /// ([`PoseResult::certificate`] is then `None`). With `Some`, a pose that is not proved (no bound,
     /// or a gap above `max_relative_gap`) has status [`Status::GapNotClosed`] where it would have been
-    /// [`Status::Success`]. `max_nodes: None` caps the rotation cells at [`certificate::MAX_CELLS`].
+    /// [`Status::Success`]. `max_nodes: None` caps the rotation cells at [`certificate::MAX_CELLS`]
+    /// ([`certificate::MAX_CELLS_FROM_DISTANCE`] for lines alone or fewer than two points).
     /// Default `None`: it is on request.
     pub certify: Option<CertifyOptions>,
 }
