@@ -93,17 +93,24 @@ def test_certify_options_are_held_by_reference():
         pluecker.estimate_pose(scene["camera"], p2, scene["points3d"], options=robust)
 
 
-def test_a_requested_certificate_on_lines_alone_is_gap_not_closed():
-    """Lines alone give the certificate no depth bound: requested, it does not hold, and the status
-    says so (``gap_not_closed``, no certificate); not requested, the same pose is ``success``."""
+def test_lines_alone_are_certified_over_the_stated_domain():
+    """Lines alone: the certificate starts from the object's distance and certifies the pose, over a
+    domain that names the segments' endpoints; not requested, the same pose is ``success`` with no
+    certificate; with a node cap of 1 the request does not hold (``gap_not_closed``, the reason)."""
     scene, _, l2 = _noisy("general", 0, 12, 5)
     kw = dict(lines2d=l2, lines3d=scene["lines3d"])
     plain = pluecker.estimate_pose(scene["camera"], **kw)
     assert plain.status == "success" and plain.certificate is None
     res = pluecker.estimate_pose(scene["camera"], **kw, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
-    assert res.status == "gap_not_closed" and res.certificate is None and not res.certified
-    assert "two points" in res.details.uncertified_reason
+    assert res.status == "success" and res.certified, res.details.uncertified_reason
+    assert res.certificate.raw_lower_bound <= res.cost * (1 + 1e-12)
+    assert "endpoints in front" in res.certificate.domain
     assert np.array_equal(res.pose.rotation, plain.pose.rotation)
+    capped = pluecker.estimate_pose(
+        scene["camera"], **kw, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions(max_nodes=1))
+    )
+    assert capped.status == "gap_not_closed" and not capped.certified
+    assert "max_nodes = 1" in capped.details.uncertified_reason
 
 
 def test_near_tie_is_ambiguous_with_its_runner_up():

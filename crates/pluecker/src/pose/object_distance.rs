@@ -280,3 +280,153 @@ mod tests {
         assert!(distance_bound(&star).is_none());
     }
 }
+
+#[cfg(test)]
+mod properties {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// A unit vector within the angle `angle` of the unit `v` (at exactly that angle).
+    fn tilted(v: &Vector3<f64>, angle: f64, rng: &mut Rng) -> Vector3<f64> {
+        let side = v.cross(&rng.unit_vector3()).normalize();
+        (v * angle.cos() + side * angle.sin()).normalize()
+    }
+
+    /// Each sight's `h` against its claim, with tolerances far above a pixel's so that every term
+    /// counts: for a ray, `h(u) ≤ sin(angle(u, x))` for every `x` within the tolerance of the ray;
+    /// for a plane, `h(u) ≤ |u · m̂|` for every plane whose normal `m̂` is within `asin(sₖ)` of
+    /// perpendicular to each end (normals found by sampling, then a hill climb on `h(u) − |u · m̂|`);
+    /// and `|h(u) − h(u')| ≤ L ‖u − u'‖` at random nearby pairs.
+    #[test]
+    fn each_sight_is_below_its_claim_and_lipschitz() {
+        let mut rng = Rng::new(41);
+        let (mut checked, mut tight) = (0usize, 0usize);
+        for _ in 0..300 {
+            let ray = rng.uniform() < 0.3;
+            let sight = if ray {
+                Sight::Ray {
+                    direction: rng.unit_vector3(),
+                    tolerance: rng.uniform_in(0.0, 0.3),
+                    offset: 1.0,
+                }
+            } else {
+                let e0 = rng.unit_vector3();
+                let e1 = tilted(&e0, rng.uniform_in(0.05, 1.5), &mut rng);
+                Sight::Plane {
+                    ends: [e0 * rng.uniform_in(0.5, 2.0), e1],
+                    sines: [rng.uniform_in(0.0, 0.1), rng.uniform_in(0.0, 0.1)],
+                    offset: 1.0,
+                }
+            };
+            let Some(prepared) = Prepared::of(&sight) else {
+                continue;
+            };
+            for _ in 0..20 {
+                let u = rng.unit_vector3();
+                let near = tilted(&u, rng.uniform_in(0.0, 0.2), &mut rng);
+                let slope = (prepared.h(&u) - prepared.h(&near)).abs() / (u - near).norm();
+                assert!(
+                    slope <= prepared.lipschitz * (1.0 + 1e-9),
+                    "slope {slope} > {}",
+                    prepared.lipschitz
+                );
+                // The claim's side: the largest h(u) − claim over the admissible truths.
+                let excess = |truth: &Vector3<f64>| match sight {
+                    Sight::Ray {
+                        direction, tolerance, ..
+                    } => {
+                        // The worst truth: the direction within the tolerance of the ray nearest u,
+                        // on the great circle from the ray to u (`truth` unused).
+                        let _ = truth;
+                        let b = direction.normalize();
+                        let apart = u.cross(&b).norm().atan2(u.dot(&b));
+                        let angle = (apart - tolerance).max(0.0);
+                        prepared.h(&u) - angle.min(std::f64::consts::FRAC_PI_2).sin()
+                    }
+                    Sight::Plane { ends, sines, .. } => {
+                        let m = truth.normalize();
+                        let admissible = ends.iter().zip(sines).all(|(e, s)| m.dot(&e.normalize()).abs() <= s);
+                        if admissible {
+                            prepared.h(&u) - u.dot(&m).abs()
+                        } else {
+                            f64::NEG_INFINITY
+                        }
+                    }
+                };
+                let start = match sight {
+                    Sight::Ray { .. } => Vector3::new(1.0, 0.0, 0.0),
+                    Sight::Plane { ends, .. } => ends[0].cross(&ends[1]).normalize(),
+                };
+                let mut best = (start, excess(&start));
+                for step in 0..300 {
+                    let scale = 0.05 * 0.99f64.powi(step);
+                    let candidate = (best.0 + rng.unit_vector3() * scale).normalize();
+                    let value = excess(&candidate);
+                    if value > best.1 {
+                        best = (candidate, value);
+                    }
+                }
+                assert!(best.1 <= 1e-12, "{sight:?} at {u:?}: h exceeds its claim by {}", best.1);
+                if best.1 > -1e-3 {
+                    tight += 1;
+                }
+                checked += 1;
+            }
+        }
+        assert!(
+            checked > 3000 && tight > 100,
+            "{checked} checked, {tight} within 1e-3 of the claim"
+        );
+    }
+
+    /// The distance bound against scenes built here: a pivot `D` from the camera, points and lines
+    /// around it, each observed at the edge of its tolerance (rays tilted by exactly their
+    /// tolerance, segment ends on a plane tilted by the largest angle the sines allow); the bound is at
+    /// least `D`, and not absurdly above it.
+    #[test]
+    fn the_distance_bound_holds_with_observations_at_their_tolerance() {
+        let mut rng = Rng::new(42);
+        let mut bounded = 0;
+        for case in 0..200 {
+            let distance = 10f64.powf(rng.uniform_in(0.0, 2.0));
+            let u = Vector3::new(rng.uniform_in(-0.3, 0.3), rng.uniform_in(-0.3, 0.3), 1.0).normalize();
+            let pivot = u * distance;
+            let size = distance * rng.uniform_in(0.05, 0.5);
+            let tolerance = 10f64.powf(rng.uniform_in(-4.0, -1.5));
+            let mut sights = Vec::new();
+            for _ in 0..(case % 3) {
+                let x = pivot + rng.unit_vector3() * size * rng.uniform();
+                sights.push(Sight::Ray {
+                    direction: tilted(&x.normalize(), tolerance, &mut rng),
+                    tolerance,
+                    offset: (x - pivot).norm(),
+                });
+            }
+            for _ in 0..(3 + case % 5) {
+                let a = pivot + rng.unit_vector3() * size * rng.uniform();
+                let b = pivot + rng.unit_vector3() * size * rng.uniform();
+                let d = b - a;
+                let offset = (a - pivot).cross(&d).norm() / d.norm();
+                // The observed ends: the true ends' rays turned about the segment's mid-ray so that
+                // the observed plane is as far from the true one as the sines let it be.
+                let normal = a.cross(&b).normalize();
+                let (ea, eb) = (a.normalize(), b.normalize());
+                let s = tolerance;
+                let tilt = |e: Vector3<f64>, sign: f64| (e + normal * (sign * s)).normalize();
+                sights.push(Sight::Plane {
+                    ends: [tilt(ea, 1.0), tilt(eb, -1.0)],
+                    sines: [s * 1.001, s * 1.001],
+                    offset,
+                });
+            }
+            if let Some(bound) = distance_bound(&sights) {
+                assert!(
+                    bound >= distance * (1.0 - 1e-9),
+                    "case {case}: bound {bound} below the true distance {distance}"
+                );
+                bounded += 1;
+            }
+        }
+        assert!(bounded > 100, "only {bounded} of 200 scenes bounded");
+    }
+}
