@@ -403,8 +403,8 @@ class PoseResult:
     frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
     """
     certificate: Optional[Certificate]
-    """Proved lower bound on `cost` over every pose keeping the points in front (`options.certify`); `None` when
-    no bound was computed (`details.uncertified_reason` says why).
+    """Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
+    (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
     """
     details: PoseDetails
     """How the pose was found: method, stages, timings, noise, runner-up."""

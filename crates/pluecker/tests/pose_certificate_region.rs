@@ -426,6 +426,40 @@ fn largest_front_reach(cell: &KeptCell, centre: &OraclePose, x: &Vector3<f64>, b
     best.0
 }
 
+/// Checks that each cell pruned as behind the camera has some object `x` with `b · (R x + t) ≤ 0` for
+/// every pose of the cell (`objects` the pairs `(x, b)`): the least over the objects of the largest
+/// reach ([`largest_front_reach`]) is not positive. Returns the cells checked and those pruned with
+/// little to spare (the least reach above −0.1).
+fn check_behind(
+    cells: &[KeptCell],
+    centre: &OraclePose,
+    objects: &[(Vector3<f64>, Vector3<f64>)],
+    name: &str,
+    rng: &mut Rng,
+) -> (usize, usize) {
+    let mut near = 0;
+    for cell in cells {
+        let reaches: Vec<f64> = objects
+            .iter()
+            .map(|(x, b)| largest_front_reach(cell, centre, x, b, rng))
+            .collect();
+        // Rounding: the reaches are sums of terms of the size of the scene (~10 units), exact to
+        // ~1e-14.
+        let least = reaches.iter().copied().fold(f64::INFINITY, f64::min);
+        assert!(
+            least <= 1e-12,
+            "{name}: a cell (centre {:?}, half {:?}) pruned as behind the camera has a pose with every object in \
+             front (largest reaches {reaches:?})",
+            cell.centre,
+            cell.half
+        );
+        if least > -0.1 {
+            near += 1;
+        }
+    }
+    (cells.len(), near)
+}
+
 /// Cheirality pruning: a cell is pruned as "behind the camera" only if some point `i` has
 /// `bᵢ · (R Xᵢ + t) ≤ 0` for every rotation of its box and every translation of its ellipsoid (which
 /// holds the translation of every pose of the sublevel set with its rotation in the box). The oracle
@@ -459,29 +493,18 @@ fn cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere() {
             let Ok(region) = rotation_search(&k, &corr, &minimum.0.to_library(), level, target, 2e-3, 200_000) else {
                 continue;
             };
-            for cell in region.behind.iter().take(400) {
-                let reaches: Vec<f64> = corr
-                    .points3d
-                    .iter()
-                    .zip(&bearings)
-                    .map(|(x, b)| largest_front_reach(cell, &minimum.0, x, b, &mut rng))
-                    .collect();
-                // The least of the largest reaches: ≤ 0 where the pruning holds. Rounding: the
-                // reaches are sums of terms of the size of the scene (~10 units), exact to ~1e-14.
-                let least = reaches.iter().copied().fold(f64::INFINITY, f64::min);
-                assert!(
-                    least <= 1e-12,
-                    "f={focal} {n}p seed {seed}, level {factor}x: a cell (centre {:?}, half {:?}) pruned as behind \
-                     the camera has a pose with each point in front (largest reaches {reaches:?})",
-                    cell.centre,
-                    cell.half
-                );
-                // Pruned with little to spare: the oracle's reach within θ‖X‖ of zero.
-                if least > -0.1 {
-                    near += 1;
-                }
-                cells_checked += 1;
-            }
+            let objects: Vec<(Vector3<f64>, Vector3<f64>)> =
+                corr.points3d.iter().copied().zip(bearings.iter().copied()).collect();
+            let name = format!("f={focal} {n}p seed {seed}, level {factor}x");
+            let (c, close) = check_behind(
+                &region.behind[..region.behind.len().min(400)],
+                &minimum.0,
+                &objects,
+                &name,
+                &mut rng,
+            );
+            cells_checked += c;
+            near += close;
         }
     }
     eprintln!("{cells_checked} cells pruned by cheirality checked, {near} within 0.1 of the boundary");
@@ -511,23 +534,20 @@ fn cells_pruned_as_behind_the_camera_without_depth_bounds_have_an_endpoint_behin
                 continue;
             };
             assert!(region.from_distance);
-            for cell in region.behind.iter().take(300) {
-                let reaches: Vec<f64> = (corr.points3d.iter().chain(corr.lines3d.iter().flatten()))
-                    .map(|x| largest_front_reach(cell, &minimum.0, x, &front, &mut rng))
+            let objects: Vec<(Vector3<f64>, Vector3<f64>)> =
+                (corr.points3d.iter().chain(corr.lines3d.iter().flatten()))
+                    .map(|x| (*x, front))
                     .collect();
-                let least = reaches.iter().copied().fold(f64::INFINITY, f64::min);
-                assert!(
-                    least <= 1e-12,
-                    "f={focal} {np}p+{nl}l seed {seed}, level {factor}x: a cell (centre {:?}, half {:?}) pruned as \
-                     behind the camera has a pose with every point and endpoint in front (largest z {reaches:?})",
-                    cell.centre,
-                    cell.half
-                );
-                if least > -0.1 {
-                    near += 1;
-                }
-                cells_checked += 1;
-            }
+            let name = format!("f={focal} {np}p+{nl}l seed {seed}, level {factor}x");
+            let (c, close) = check_behind(
+                &region.behind[..region.behind.len().min(300)],
+                &minimum.0,
+                &objects,
+                &name,
+                &mut rng,
+            );
+            cells_checked += c;
+            near += close;
         }
     }
     eprintln!("{cells_checked} cells pruned by cheirality checked, {near} within 0.1 of the boundary");

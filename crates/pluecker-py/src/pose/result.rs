@@ -384,8 +384,8 @@ result_class! {
         /// 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
         /// frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
         covariance = |r| r.inner.covariance;
-        /// Proved lower bound on `cost` over every pose keeping the points in front (`options.certify`); `None` when
-        /// no bound was computed (`details.uncertified_reason` says why).
+        /// Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
+        /// (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
         certificate = |r| certificate_of(r.inner.certificate, Primitive::Pose);
         /// How the pose was found: method, stages, timings, noise, runner-up.
         details = |r| r.inner.details.clone();

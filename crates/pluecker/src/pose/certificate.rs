@@ -2467,6 +2467,23 @@ mod tests {
         0.5 * (q_min.sqrt() - theta * eta2.sqrt()).max(0.0).powi(2)
     }
 
+    /// A translation set for the tests of the bound without depth bounds: largest semi-axis `radius`,
+    /// round or thin (a random axis and the others 0.05-0.5 of it), its centre within `off` radii of
+    /// `truth`; and its `L` (`shape = L Lᵀ`).
+    fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -> (Ball, Matrix3<f64>) {
+        let centre = truth + rng.unit_vector3() * radius * rng.uniform_in(0.0, off);
+        let axis = rng.unit_vector3();
+        let thin = if rng.uniform() < 0.5 {
+            1.0
+        } else {
+            rng.uniform_in(0.05, 0.5)
+        };
+        let shape =
+            (axis * axis.transpose() * (1.0 - thin * thin) + Matrix3::identity() * (thin * thin)) * (radius * radius);
+        let l = shape.cholesky().unwrap().l();
+        (Ball { centre, shape, radius }, l)
+    }
+
     /// The bounds of a box without depth bounds ([`Problem::ball_bound`]: the minorant's growth
     /// against the drift, and the linearised minorant, both computed here at every box) against the
     /// least reprojection cost over the box, rotations `exp(φ) r_c` (`‖φ‖ ≤ θ`) and translations in
@@ -2531,17 +2548,8 @@ mod tests {
                 // truth (the truth inside it or not).
                 let radius =
                     scene.translation.norm() * 0.5f64.powf(rng.uniform_in(0.0, 6.0) + if near { 4.0 } else { 0.0 });
-                let centre = scene.translation + rng.unit_vector3() * radius * rng.uniform_in(0.0, 1.5);
-                let axis = rng.unit_vector3();
-                let thin = if rng.uniform() < 0.5 {
-                    1.0
-                } else {
-                    rng.uniform_in(0.05, 0.5)
-                };
-                let shape = (axis * axis.transpose() * (1.0 - thin * thin) + Matrix3::identity() * (thin * thin))
-                    * (radius * radius);
-                let l = shape.cholesky().unwrap().l();
-                let ball = Ball { centre, shape, radius };
+                let (ball, l) = translation_set(&scene.translation, radius, 1.5, &mut rng);
+                let Ball { centre, shape, .. } = ball;
                 let Some(bounds) = problem.ball_bound(problem.lines.len(), &r_c, theta, &ball, f64::INFINITY) else {
                     continue;
                 };
@@ -2672,17 +2680,8 @@ mod tests {
                 let theta = 0.005 * 40f64.powf(rng.uniform_in(0.0, 1.0));
                 let r_c = exp_so3(&(rng.unit_vector3() * theta * rng.uniform_in(2.0, 8.0))) * truth.rotation;
                 let radius = scene.translation.norm() * 0.5f64.powf(rng.uniform_in(2.0, 6.0));
-                let centre = scene.translation + rng.unit_vector3() * radius * rng.uniform();
-                let axis = rng.unit_vector3();
-                let thin = if rng.uniform() < 0.5 {
-                    1.0
-                } else {
-                    rng.uniform_in(0.05, 0.5)
-                };
-                let shape = (axis * axis.transpose() * (1.0 - thin * thin) + Matrix3::identity() * (thin * thin))
-                    * (radius * radius);
-                let l = shape.cholesky().unwrap().l();
-                let ball = Ball { centre, shape, radius };
+                let (ball, l) = translation_set(&scene.translation, radius, 1.0, &mut rng);
+                let Ball { centre, shape, .. } = ball;
                 let segments = problem.lines.len();
                 let (Some(open), Some(level)) = (
                     problem.ball_bound(segments, &r_c, theta, &ball, f64::INFINITY),

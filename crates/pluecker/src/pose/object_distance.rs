@@ -382,7 +382,7 @@ mod properties {
     /// The distance bound against scenes built here: a pivot `D` from the camera, points and lines
     /// around it, each observed at the edge of its tolerance (rays tilted by exactly their
     /// tolerance, segment ends on a plane tilted by the largest angle the sines allow); the bound is at
-    /// least `D`, and not absurdly above it.
+    /// least `D` (and exists on most scenes).
     #[test]
     fn the_distance_bound_holds_with_observations_at_their_tolerance() {
         let mut rng = Rng::new(42);
