@@ -93,7 +93,7 @@ use std::rc::Rc;
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
 /// [`crate::certificate::CertifyOptions::max_nodes`] `None`).
 pub const MAX_CELLS: usize = 20_000;
-/// The default cap where the search starts from the object's distance ([`Start::Ball`]: lines alone,
+/// The default cap where the search starts from the object's distance (lines alone,
 /// or too few points): its boxes are pruned later (20 000-90 000 boxes on the 10-segment benchmark
 /// scenes, 2-8 µs each).
 pub const MAX_CELLS_FROM_DISTANCE: usize = 100_000;
