@@ -379,6 +379,21 @@ fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64
 
 impl<'c> Problem<'c> {
     fn new(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
+        Self::build(camera, corr, f_hat, true)
+    }
+
+    /// The data of the test without depth bounds ([`Start::Ball`]) even where the points give them.
+    fn without_depths(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
+        Self::build(camera, corr, f_hat, false)
+    }
+
+    /// The data of the test, with step 1's depth bounds where `use_depths` and the points give them.
+    fn build(
+        camera: &Camera,
+        corr: &'c Correspondences,
+        f_hat: f64,
+        use_depths: bool,
+    ) -> std::result::Result<Self, String> {
         let k = camera.matrix();
         let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
         let k_inv = k.try_inverse().ok_or("singular camera")?;
@@ -419,7 +434,9 @@ impl<'c> Problem<'c> {
             .iter()
             .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
             .collect();
-        let depths = if corr.n_points() < 2 {
+        let depths = if !use_depths {
+            Err("the search without depth bounds was asked for".to_string())
+        } else if corr.n_points() < 2 {
             Err("the depth bounds need at least two points".to_string())
         } else if !alphas.iter().all(|alpha| *alpha < 0.25) {
             Err(format!("residuals too large ({eps0:.3e} px) for the angle bounds"))
@@ -2107,7 +2124,41 @@ pub fn certify(
         Ok(p) => p,
         Err(why) => return Certification::none(why),
     };
-    let (whitening, model) = match LocalModel::at(&problem, camera, pose) {
+    let first = certify_problem(&problem, camera, pose, cost, options);
+    // With segments, a search with depth bounds that did not close its gap is followed by the one
+    // without them (bounded at each box's rotation, segments and points alike): where the points are
+    // few it certifies scenes the first cannot. Both bounds are proved; the better is kept.
+    if first.certified || problem.root().is_none() || corr.n_lines() == 0 {
+        return first;
+    }
+    let second = match Problem::without_depths(camera, corr, cost) {
+        Ok(p) => certify_problem(&p, camera, pose, cost, options),
+        Err(why) => Certification::none(why),
+    };
+    let nodes = first.nodes + second.nodes;
+    if second.certified || second.raw_lower_bound > first.raw_lower_bound {
+        return Certification { nodes, ..second };
+    }
+    Certification {
+        nodes,
+        reason: Some(format!(
+            "{}; without depth bounds: {}",
+            first.reason.unwrap_or_default(),
+            second.reason.unwrap_or_default()
+        )),
+        ..first
+    }
+}
+
+/// [`certify`] on prepared data.
+fn certify_problem(
+    problem: &Problem,
+    camera: &Camera,
+    pose: &Pose,
+    cost: f64,
+    options: &CertifyOptions,
+) -> Certification {
+    let (whitening, model) = match LocalModel::at(problem, camera, pose) {
         Ok(m) => m,
         Err(why) => return Certification::none(why),
     };
@@ -2125,7 +2176,7 @@ pub fn certify(
         ));
     };
     let mut search = RotationSearch {
-        problem: &problem,
+        problem,
         whitening: &whitening,
         pose,
         f_hat: cost,
