@@ -67,10 +67,19 @@
 //! The least bound over the search's leaves (step 4's over the ball of the largest radius a box inside it
 //! reached, or a box's Minkowski bound) is the raw bound. So `lower_bound ≤ f` for every pose that keeps
 //! the points in front; the answer is certified when
-//! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level, counts as exact). What is needed: at least two points (lines alone give no depth
-//! bound here) seen more than `αᵢ + αⱼ` apart. The test fails honestly (`certified = false`, with the
-//! reason) when the residuals are too large for the curvature (`K` too large on every ball tried),
-//! when the search hits `max_nodes` (another minimum nearly as good, or weak data), or without points.
+//! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level,
+//! counts as exact).
+//!
+//! **Without depth bounds** (lines alone, or fewer than two points seen more than `αᵢ + αⱼ` apart;
+//! [`Start::Ball`]) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
+//! the directions of the observations ([`super::object_distance`]), and each box of rotations is bounded
+//! from the residuals at its centre rotation with the translations in an ellipsoid handed down box by box
+//! ([`Problem::ball_bound`]); boxes with a point or segment endpoint behind the camera are pruned. With
+//! points and segments, a search with depth bounds that does not close its gap is followed by this one,
+//! and the better proved bound is kept. The test fails honestly (`certified = false`, with the reason)
+//! when the residuals are too large for the curvature (`K` too large on every ball tried), when the
+//! search hits `max_nodes` (another minimum nearly as good, or weak data), or when the observations bound
+//! neither the depths nor the object's distance (image lines that all meet in one point).
 
 use super::correspondences::Correspondences;
 use super::object_distance::{distance_bound, Sight};
