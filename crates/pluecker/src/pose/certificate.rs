@@ -71,10 +71,10 @@
 //! counts as exact).
 //!
 //! **Without depth bounds** (lines alone, or fewer than two points seen more than `αᵢ + αⱼ` apart;
-//! [`Start::Ball`]) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
-//! the directions of the observations ([`super::object_distance`]), and each box of rotations is bounded
+//! `Start::Ball`) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
+//! the directions of the observations (`pose::object_distance`), and each box of rotations is bounded
 //! from the residuals at its centre rotation with the translations in an ellipsoid handed down box by box
-//! ([`Problem::ball_bound`]); boxes with a point or segment endpoint behind the camera are pruned. With
+//! (`Problem::ball_bound`); boxes with a point or segment endpoint behind the camera are pruned. With
 //! points and segments, a search with depth bounds that does not close its gap is followed by this one,
 //! and the better proved bound is kept. The test fails honestly (`certified = false`, with the reason)
 //! when the residuals are too large for the curvature (`K` too large on every ball tried), when the
