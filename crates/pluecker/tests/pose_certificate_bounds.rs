@@ -817,8 +817,40 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
                                 radius,
                                 &mut rng,
                             );
-                            let rest = ep.n3 - e_bar.norm() * lp.mixed3;
-                            check("|ēᵀ (A''' × B + A × B''')|", ends3, rest + 1e-12 * ep.n3);
+                            let rest = ep.leibniz - e_bar.norm() * lp.mixed3;
+                            check("|ēᵀ (A''' × B + A × B''')|", ends3, rest + 1e-12 * ep.leibniz);
+                            // About either end X: n = Dᵀ u, D = B − A, u = ē × X; each Leibniz term
+                            // of n''' against its piece, u' against `speed`, n''' against the sum.
+                            for (x, sight) in ep.sights.iter().enumerate() {
+                                let terms = |v: &Vector6<f64>, s: f64| {
+                                    let (ja, jb, _) = jets(v, s);
+                                    let jx = [ja, jb][x];
+                                    let d: [Vector3<f64>; 4] = std::array::from_fn(|k| jb[k] - ja[k]);
+                                    let u: [Vector3<f64>; 4] = std::array::from_fn(|k| e_bar.cross(&jx[k]));
+                                    [
+                                        u[1].norm(),
+                                        d[3].dot(&u[0]).abs(),
+                                        3.0 * d[2].dot(&u[1]).abs(),
+                                        3.0 * d[1].dot(&u[2]).abs(),
+                                        d[0].dot(&u[3]).abs(),
+                                    ]
+                                };
+                                let bounds = [
+                                    sight.speed,
+                                    sight.pieces[0],
+                                    sight.pieces[1],
+                                    sight.pieces[2],
+                                    sight.pieces[3],
+                                ];
+                                for (i, what) in ["‖(ē × X)'‖", "|D'''ᵀ u|", "|3 D''ᵀ u'|", "|3 D'ᵀ u''|", "|Dᵀ u'''|"]
+                                    .into_iter()
+                                    .enumerate()
+                                {
+                                    check(what, climb(&|v, s| terms(v, s)[i], radius, &mut rng), bounds[i]);
+                                }
+                                check("|n'''| about an end", n3, sight.pieces.iter().sum());
+                            }
+                            assert!(ep.n3 <= ep.leibniz && ep.sights.iter().all(|p| ep.n3 <= p.pieces.iter().sum()));
                             let n2 = climb(&|v, s| e_bar.dot(&jets(v, s).2[2]).abs(), radius, &mut rng);
                             check("|n''|", n2, ep.n2);
                         }

@@ -1738,6 +1738,25 @@ fn tangent_map(y: &Vector3<f64>) -> SMatrix<f64, 3, 6> {
     p
 }
 
+/// A bound on `|n'''|` along whitened rays of length `s` from an endpoint's sight: with `X` one end
+/// of the segment (`‖R̂ X‖ = y`), `u = ē × X` (`‖u(0)‖ = cross`, `max ‖u'(0)‖ = speed` per unit step)
+/// and `D = B − A` (`‖D‖ = length`, `D⁽ᵏ⁾ = a_ω × D⁽ᵏ⁻¹⁾`), `n = ēᵀ (A × B) = Dᵀ u` and by Leibniz
+/// `n''' = D'''ᵀ u + 3 D''ᵀ u' + 3 D'ᵀ u'' + Dᵀ u'''` (one piece each), with `‖u''‖ ≤ ‖ē‖ α_ω² y`, `‖u'''‖ ≤ ‖ē‖ α_ω³ y`.
+/// `u` and `u'` see only the motion across the sight, so a step along it (the depth) costs nothing.
+fn sight_parts(a_w: f64, length: f64, e_norm: f64, y: f64, cross: f64, speed: f64, s: f64) -> testing::SightParts {
+    // ‖u'‖ grows by at most ‖ē‖ ‖X''‖ ≤ ‖ē‖ α_ω² y per unit of s.
+    let speed = speed + s * e_norm * a_w * a_w * y;
+    testing::SightParts {
+        speed,
+        pieces: [
+            a_w.powi(3) * length * (cross + s * speed),
+            3.0 * a_w * a_w * length * speed,
+            3.0 * a_w.powi(3) * length * e_norm * y,
+            a_w.powi(3) * length * e_norm * y,
+        ],
+    }
+}
+
 /// `sup |x'|` on `[0, s]` for `|x''| ≤ d + c |x'|`, `|x'(0)| ≤ x0` (Grönwall).
 fn gronwall(x0: f64, d: f64, c: f64, s: f64) -> f64 {
     if c > 0.0 {
@@ -1771,6 +1790,10 @@ struct EndpointRay {
     e_norm: f64,
     cross_b: f64,
     cross_a: f64,
+    /// `‖[ē]× P_A T‖` and `‖[ē]× P_B T‖`: the largest `‖ē × A'(0)‖`, `‖ē × B'(0)‖` per unit whitened
+    /// step. Far smaller than `‖ē‖ ‖A'‖` where the step moves the endpoint along its sight
+    /// (the depth, poorly determined in a narrow field of view).
+    sight_speed: [f64; 2],
     /// Residual and whitened gradient norm at `s = 0`, and `gᵀ g`.
     r0: f64,
     slope0: f64,
@@ -1880,6 +1903,7 @@ impl RayCurvature {
                         e_norm: e_bar.norm(),
                         cross_b: b.cross(&e_bar).norm(),
                         cross_a: e_bar.cross(&a).norm(),
+                        sight_speed: [&p_a, &p_b].map(|p| (skew(&e_bar) * p * t).singular_values().max()),
                         r0,
                         slope0: g.norm(),
                         gram: g.transpose() * g,
@@ -1969,6 +1993,17 @@ impl RayCurvature {
                 let n3 = a_w.powi(3)
                     * (line.ya * (end.cross_b + s * v_b * end.e_norm) + line.yb * (end.cross_a + s * v_a * end.e_norm))
                     + end.e_norm * mixed3;
+                // The same n''' about either end X: n = ēᵀ (A × B) = Dᵀ u with D = B − A, u = ē × X.
+                let ends = [(line.ya, end.cross_a), (line.yb, end.cross_b)];
+                let sights = std::array::from_fn(|x| {
+                    let (y, cross) = ends[x];
+                    sight_parts(a_w, line.length, end.e_norm, y, cross, end.sight_speed[x], s)
+                });
+                let leibniz = n3;
+                let n3 = sights
+                    .iter()
+                    .map(|p: &testing::SightParts| p.pieces.iter().sum())
+                    .fold(leibniz, f64::min);
                 let n2 = end.n2_exact + s * n3;
                 *found = testing::EndpointParts {
                     w_lo,
@@ -1978,6 +2013,8 @@ impl RayCurvature {
                     n2,
                     n2_exact: end.n2_exact,
                     n3,
+                    leibniz,
+                    sights,
                 };
                 // |r(s)| ≤ |r(0)| + s σ with σ a bound on |r'| along the ray, confirmed by Grönwall
                 // on |r''| ≤ d + 2ρ |r'|, d = (|n''| + |r| |w''|) / w.
@@ -2112,7 +2149,7 @@ impl LocalModel {
 
 /// Radii of the whitened ball tried for the localisation, in units of `√(2f̂) + 0.1` px: the largest
 /// whose local bound already closes the gap is used (a larger ball stops the search sooner).
-const BALL_FACTORS: [f64; 5] = [64.0, 16.0, 6.0, 3.0, 2.0];
+const BALL_FACTORS: [f64; 8] = [64.0, 16.0, 6.0, 3.0, 2.0, 1.5, 1.0, 0.7];
 
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
@@ -2383,6 +2420,20 @@ pub mod testing {
         pub n2: f64,
         pub n2_exact: f64,
         pub n3: f64,
+        /// The bound on `|n'''|` from `m''' = A''' × B + A × B''' + mixed`.
+        pub leibniz: f64,
+        /// The bounds on `|n'''|` about the ends `A` and `B` (see [`SightParts`]); `n3` is the least
+        /// of theirs and `leibniz`.
+        pub sights: [SightParts; 2],
+    }
+
+    /// `|n'''|` about one end `X` of the segment: `n = Dᵀ u` with `D = B − A` and `u = ē × X`, so
+    /// `n''' = D'''ᵀ u + 3 D''ᵀ u' + 3 D'ᵀ u'' + Dᵀ u'''`. Along the rays, `speed` bounds `‖u'‖`
+    /// and `pieces` bound the four terms in that order.
+    #[derive(Debug, Clone, Copy, Default)]
+    pub struct SightParts {
+        pub speed: f64,
+        pub pieces: [f64; 4],
     }
 
     /// A line's part of `K` on the ball, along the same rays, each a claim of its own: `speed`
