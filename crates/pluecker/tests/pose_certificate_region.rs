@@ -151,6 +151,28 @@ fn check_inside(
     ))
 }
 
+/// Each cell inside the ball claims the largest `‖(0, τ)‖_W` over its ellipsoid `τᵀ C τ ≤ slack` as
+/// its `extent`. Recomputed here: `slack · λ_max(C^(-1/2) W_ττ C^(-1/2))` from `C`'s own eigen-
+/// decomposition and the oracle's `W` (central differences, relative error ~1e-8 of its norm, which
+/// the ellipsoid's narrow axes amplify by the condition of `W`, up to ~1e5 on the planar scenes at
+/// f = 4000 px: 1e-3 of room). An extent 0.1 % too small, or too large, fails.
+fn check_extents(region: &Region, w: &Matrix6<f64>, name: &str) {
+    let w_tt = w.fixed_view::<3, 3>(3, 3).into_owned();
+    for cell in region.cells.iter().filter(|c| c.inside_ball) {
+        let extent = cell.extent.expect("a cell inside the ball has its extent");
+        let eigen = cell.c.symmetric_eigen();
+        let root_inv = eigen.eigenvectors
+            * nalgebra::Matrix3::from_diagonal(&eigen.eigenvalues.map(|l| 1.0 / l.sqrt()))
+            * eigen.eigenvectors.transpose();
+        let exact = (cell.slack.max(0.0) * (root_inv * w_tt * root_inv).symmetric_eigenvalues().max()).sqrt();
+        assert!(
+            (extent - exact).abs() <= 1e-3 * exact + 1e-12,
+            "{name}: a cell's extent {extent} is not the ellipsoid's largest whitened length {exact} (with segments: {})",
+            cell.with_segments
+        );
+    }
+}
+
 /// The largest whitened length `‖(ω, t − t̂)‖_W` over the corners of each kept box inside the ball and
 /// points of its ellipsoid (its principal axes and random boundary points): the search claims that
 /// every pose of such a cell, not only those of the sublevel set, is within its radius.
@@ -234,8 +256,9 @@ fn deep_scene(focal: f64, n: usize, seed: u64) -> Scene {
 
 /// Runs the rotation search around each minimum below each level and checks every sublevel pose.
 /// Returns (poses checked, second minima below a level that were checked, poses at which a distance
-/// bound was checked).
-fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize) {
+/// bound was checked, poses checked in a search with depth bounds that kept a cell whose ellipsoid
+/// comes from the segments' terms).
+fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize, usize) {
     let scene = if case.deep {
         deep_scene(case.focal, case.points, case.seed)
     } else {
@@ -260,7 +283,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize) {
         "f={} {}p+{}l planar={} seed {} covariances={}",
         case.focal, case.points, case.lines, case.planar, case.seed, case.covariances
     );
-    let (mut checked, mut second, mut distances) = (0, 0, 0);
+    let (mut checked, mut second, mut distances, mut with_segments) = (0, 0, 0, 0);
     for &factor in factors {
         let level = factor * global;
         let distance = object_distance(&k, &corr, level).ok().flatten();
@@ -291,6 +314,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize) {
             assert!(region.pruned > 0, "{name}: nothing pruned: the test would be vacuous");
             assert_eq!(region.from_distance, distance.is_some(), "{name}");
             let widest = widest_cell_point(&region, centre, &w, &mut rng);
+            check_extents(&region, &w, &name);
             // W is the oracle's (central differences, relative error ~1e-8).
             assert!(
                 widest <= region.radius * (1.0 + 1e-6),
@@ -308,9 +332,12 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize) {
                 checked += 1;
             }
             second += minima.iter().filter(|(_, f)| *f <= level).count() - 1;
+            if !region.from_distance && region.cells.iter().any(|c| c.with_segments) {
+                with_segments += poses.len();
+            }
         }
     }
-    (checked, second, distances)
+    (checked, second, distances, with_segments)
 }
 
 #[test]
@@ -352,17 +379,23 @@ fn every_pose_below_a_raised_level_lies_in_a_kept_cell() {
         Case { focal: 800.0, points: 0, lines: 8, planar: false, seed: 6, deep: false, covariances: true },
         Case { focal: 250.0, points: 1, lines: 6, planar: false, seed: 7, deep: false, covariances: true },
     ];
-    let (mut checked, mut second, mut with_covariances, mut distances) = (0, 0, 0, 0);
+    let (mut checked, mut second, mut with_covariances, mut distances, mut with_segments) = (0, 0, 0, 0, 0);
     for case in &cases {
-        let (c, s, d) = run_case(case, &[1.5, 3.0, 10.0]);
+        let (c, s, d, l) = run_case(case, &[1.5, 3.0, 10.0]);
         checked += c;
         second += s;
         distances += d;
+        with_segments += l;
         with_covariances += if case.covariances { c } else { 0 };
     }
     eprintln!(
         "{checked} poses checked ({with_covariances} with covariances), {second} other minima below a level, \
-         {distances} against a distance bound"
+         {distances} against a distance bound, {with_segments} in searches with depth bounds that kept cells with \
+         the segments' ellipsoid"
+    );
+    assert!(
+        with_segments > 100,
+        "only {with_segments} poses checked against cells with the segments' ellipsoid"
     );
     assert!(
         distances > 150,

@@ -106,6 +106,10 @@ pub const MAX_CELLS: usize = 20_000;
 /// or too few points): its boxes are pruned later (20 000-90 000 boxes on the 10-segment benchmark
 /// scenes, 2-8 µs each).
 pub const MAX_CELLS_FROM_DISTANCE: usize = 100_000;
+/// The default cap of the search with depth bounds on a scene with segments, which the search
+/// without them follows where it fails ([`certify`]): the first certifies most of the scenes it
+/// can within a few thousand boxes, and a longer failing search only delays the second.
+pub const MAX_CELLS_BEFORE_FALLBACK: usize = 4_000;
 
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
 pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
@@ -524,16 +528,36 @@ impl<'c> Problem<'c> {
     /// `‖ē × t‖ ≤ ‖ē × t*‖ + ‖ē‖ spread`, or `‖ē × t*‖ + ‖[ē]ₓ L‖` with the spectral norm below the
     /// Frobenius norm `√(‖ē‖² tr(shape) − ēᵀ shape ē)` (an ellipsoid elongated along the line of
     /// sight moves `ē × t` little).
-    fn line_terms<'s>(
-        &'s self,
+    fn line_terms(
+        &self,
         segments: usize,
-        r: &'s Matrix3<f64>,
+        r: &Matrix3<f64>,
         theta: f64,
-        t_star: &'s Vector3<f64>,
+        t_star: &Vector3<f64>,
         spread: f64,
-        shape: Option<&'s Matrix3<f64>>,
-    ) -> impl Iterator<Item = LineTerm> + 's {
-        self.lines.iter().take(segments).flat_map(move |line| {
+        shape: Option<&Matrix3<f64>>,
+    ) -> Vec<LineTerm> {
+        let mut terms = Vec::with_capacity(2 * segments.min(self.lines.len()));
+        self.each_line_term(segments, r, theta, t_star, spread, shape, |term| {
+            terms.push(term.clone())
+        });
+        terms
+    }
+
+    /// [`Self::line_terms`] handed one by one to `visit`, built in place (the search's inner loop:
+    /// no term is moved or stored).
+    #[allow(clippy::too_many_arguments)]
+    fn each_line_term(
+        &self,
+        segments: usize,
+        r: &Matrix3<f64>,
+        theta: f64,
+        t_star: &Vector3<f64>,
+        spread: f64,
+        shape: Option<&Matrix3<f64>>,
+        mut visit: impl FnMut(&LineTerm),
+    ) {
+        for line in self.lines.iter().take(segments) {
             let [a_norm, b_norm, d_norm, m_norm] = line.norms;
             let reach = |x: &Vector3<f64>, norm: f64| (r * x + t_star).norm() + theta * norm + spread;
             let distance = reach(&line.a, a_norm).min(reach(&line.b, b_norm));
@@ -543,19 +567,21 @@ impl<'c> Problem<'c> {
                     + theta * (m_norm + d_norm * (t_star.norm() + spread))
                     + Self::cross_extent(&rd, d_norm, spread, shape),
             );
-            line.ends.map(|(e, e_norm, g_norm)| LineTerm {
-                weight: (g_norm * moment).powi(-2),
-                alpha: e.dot(&rm),
-                beta: rd.cross(&e),
-                drift: e_norm * m_norm
-                    + d_norm * (e.cross(t_star).norm() + Self::cross_extent(&e, e_norm, spread, shape)),
-                e,
-                moment_part: e_norm * m_norm,
-                d_norm,
-                rm,
-                rd,
-            })
-        })
+            for &(e, e_norm, g_norm) in &line.ends {
+                visit(&LineTerm {
+                    weight: (g_norm * moment).powi(-2),
+                    alpha: e.dot(&rm),
+                    beta: rd.cross(&e),
+                    drift: e_norm * m_norm
+                        + d_norm * (e.cross(t_star).norm() + Self::cross_extent(&e, e_norm, spread, shape)),
+                    e,
+                    moment_part: e_norm * m_norm,
+                    d_norm,
+                    rm,
+                    rd,
+                });
+            }
+        }
     }
 
     /// The largest `‖ē × Δt‖` over the translation steps `Δt` of [`Self::line_terms`]'s set.
@@ -574,7 +600,8 @@ impl<'c> Problem<'c> {
     /// ([`Self::line_terms`]): `Q_total(R, t) = κ Q(R, t) + Σ (α + βᵀ t)² / W²` at `r` is a minorant
     /// of `2f` quadratic in `t`, and over the rotations its square root moves by at most
     /// `θ η_total`, `η_total² = κ η² + Σ drift² / W²` (Minkowski over all the terms), so
-    /// `f ≥ ½ (√q_min − θ η_total)₊²` as for the points alone.
+    /// `f ≥ ½ (√q_min − θ η_total)₊²` as for the points alone. The first `segments` segments enter.
+    /// `None` where the quadratic does not fix the translation.
     fn lines_bound(
         &self,
         scaled: &Scaled,
@@ -582,7 +609,8 @@ impl<'c> Problem<'c> {
         theta: f64,
         (t_star, q_min): (&Vector3<f64>, f64),
         spread: f64,
-    ) -> f64 {
+        segments: usize,
+    ) -> Option<LinesBound> {
         let c = scaled.minorant.c * scaled.scale;
         let mut quadratic = Quadratic {
             c,
@@ -590,10 +618,19 @@ impl<'c> Problem<'c> {
             c0: q_min + t_star.dot(&(c * t_star)),
             eta2: scaled.minorant.eta.powi(2) * scaled.scale,
         };
-        quadratic.add_lines(self.line_terms(self.box_segments, r, theta, t_star, spread, None));
-        quadratic
-            .minimum()
-            .map_or(0.0, |(_, q_min, _)| minkowski(q_min, theta * quadratic.eta2.sqrt()))
+        self.each_line_term(segments, r, theta, t_star, spread, None, |term| {
+            quadratic.add_line(term)
+        });
+        let (t_star, q_min, c_inv) = quadratic.minimum()?;
+        let eta = quadratic.eta2.sqrt();
+        Some(LinesBound {
+            lower: minkowski(q_min, theta * eta),
+            t_star,
+            q_min,
+            c: quadratic.c,
+            c_inv,
+            eta,
+        })
     }
 
     /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
@@ -634,10 +671,8 @@ impl<'c> Problem<'c> {
             rotated.push((y, w));
         }
         let points_eta2 = quadratic.eta2;
-        let terms: SmallVec<[LineTerm; 64]> = self
-            .line_terms(segments, r, theta, &ball.centre, ball.radius, Some(&ball.shape))
-            .collect();
-        quadratic.add_lines(terms.iter().cloned());
+        let terms = self.line_terms(segments, r, theta, &ball.centre, ball.radius, Some(&ball.shape));
+        terms.iter().for_each(|term| quadratic.add_line(term));
         let (t_star, q_min, c_inv) = quadratic.minimum()?;
         // Per segment endpoint, its drift at t*: θ aₖ with aₖ = ‖ē‖ ‖m‖ + ‖d‖ ‖ē × t*‖, or
         // θ ‖γₖ‖ + ρ aₖ with the exact first-order part γₖ ([`Self::linear_ball_bound`]); the lesser.
@@ -702,6 +737,29 @@ impl<'c> Problem<'c> {
             depths,
             growth: Growth { q_min, n, spin, eta0 },
         })
+    }
+}
+
+/// [`Problem::lines_bound`]: the bound, and the quadratic `Q_total(t) = q_min + (t − t*)ᵀ C (t − t*)`
+/// at the box's centre rotation with `η_total` (`eta`). The poses of `S` in the box (their
+/// translations within the points' ellipsoid) have `√Q_total ≤ √(2f̂) + θ η_total`: a second
+/// ellipsoid that holds their translations.
+struct LinesBound {
+    lower: f64,
+    t_star: Vector3<f64>,
+    q_min: f64,
+    c: Matrix3<f64>,
+    c_inv: Matrix3<f64>,
+    eta: f64,
+}
+
+impl LinesBound {
+    /// The ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` of the translations with
+    /// `√Q_total(t) ≤ √(2f̂) + θ η_total`, and its reach `spread = max ‖t − t*‖` over it.
+    fn ellipsoid(&self, f_hat: f64, theta: f64) -> (f64, f64) {
+        let beta = (2.0 * f_hat).sqrt() + theta * self.eta;
+        let slack = (beta * beta - self.q_min).max(0.0);
+        (slack, (slack * largest_eigenvalue(&self.c_inv)).sqrt())
     }
 }
 
@@ -839,14 +897,12 @@ struct Quadratic {
 }
 
 impl Quadratic {
-    /// Adds the segments' terms `(α + βᵀ t)² / W²` ([`Problem::line_terms`]).
-    fn add_lines(&mut self, terms: impl Iterator<Item = LineTerm>) {
-        for term in terms {
-            self.c += term.beta * term.beta.transpose() * term.weight;
-            self.g += term.beta * (term.alpha * term.weight);
-            self.c0 += term.alpha * term.alpha * term.weight;
-            self.eta2 += term.weight * term.drift * term.drift;
-        }
+    /// Adds a segment endpoint's term `(α + βᵀ t)² / W²` ([`Problem::line_terms`]).
+    fn add_line(&mut self, term: &LineTerm) {
+        self.c += term.beta * term.beta.transpose() * term.weight;
+        self.g += term.beta * (term.alpha * term.weight);
+        self.c0 += term.alpha * term.alpha * term.weight;
+        self.eta2 += term.weight * term.drift * term.drift;
     }
 
     /// The minimiser `t*`, the minimum `q_min` (clamped at 0) and `C⁻¹` (`None` when `C` is singular:
@@ -1504,7 +1560,10 @@ impl RotationSearch<'_, '_> {
                     let lower = match &mut self.inside_ball {
                         InsideBall::Bound(ball) => lower.max(ball.at(radius)),
                         InsideBall::Record(r) => {
-                            r.cells.push(kept(true));
+                            r.cells.push(testing::KeptCell {
+                                extent: Some(extent),
+                                ..kept(true)
+                            });
                             self.f_hat
                         }
                     };
@@ -1548,11 +1607,21 @@ impl RotationSearch<'_, '_> {
         let slack_per_scale = slack / scale;
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         // The segments' residuals added to the minorant, where the points' alone fall short.
-        let lower = if lower < self.f_hat && problem.box_segments > 0 && !problem.lines.is_empty() {
-            lower.max(problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread))
+        let with_lines = if lower < self.f_hat && problem.box_segments > 0 && !problem.lines.is_empty() {
+            problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread, problem.box_segments)
         } else {
-            lower
+            None
         };
+        let lower = with_lines.as_ref().map_or(lower, |l| lower.max(l.lower));
+        // The translations of the box's poses of S lie in the points' ellipsoid and in the one with
+        // the segments: the one with the lesser reach is kept (centre, C, slack, spread).
+        let mut ellipsoid = (t_star, minorant.c * scale, slack, spread, None);
+        if let Some(l) = &with_lines {
+            let (slack, spread) = l.ellipsoid(self.f_hat, theta);
+            if spread < ellipsoid.3 {
+                ellipsoid = (l.t_star, l.c, slack, spread, Some(l.c));
+            }
+        }
         if !lower.is_finite() {
             return (
                 Bound::Failed { solver_iterations: 0 },
@@ -1565,11 +1634,13 @@ impl RotationSearch<'_, '_> {
         let kept = |inside_ball: bool| testing::KeptCell {
             centre: cell.centre,
             half: cell.half,
-            t_star,
-            c: minorant.c * scale,
-            slack,
+            t_star: ellipsoid.0,
+            c: ellipsoid.1,
+            slack: ellipsoid.2,
             inside_ball,
             depths: scaled.depths().collect(),
+            with_segments: ellipsoid.4.is_some(),
+            extent: None,
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
         // (Only a point with `b · (R_c x + t*) ≤ −θ ‖x‖` can be: the ellipsoid's term is not negative.)
@@ -1588,18 +1659,26 @@ impl RotationSearch<'_, '_> {
             }
             return (Bound::Empty { solver_iterations: 0 }, None);
         }
-        let extent = || {
-            let factor = minorant
-                .extent
-                .get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
-            factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt())
+        let extent = || match &ellipsoid.4 {
+            Some(c) => self
+                .whitening
+                .ellipsoid_factor(c)
+                .map(|lambda| (ellipsoid.2 * lambda).max(0.0).sqrt()),
+            None => {
+                let factor = minorant
+                    .extent
+                    .get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
+                factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt())
+            }
         };
-        if let Some(bound) = self.settled(cell, lower, &t_star, extent, kept) {
+        if let Some(bound) = self.settled(cell, lower, &ellipsoid.0, extent, kept) {
             return (bound, None);
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
-        let reach = (centred.iter().zip(&problem.norms)).map(|(y, norm)| y.norm() + theta * norm + spread);
+        let (centre, spread) = (ellipsoid.0, ellipsoid.3);
+        let reach = (problem.corr.points3d.iter().zip(&problem.norms))
+            .map(|(x, norm)| (r_c * x + centre).norm() + theta * norm + spread);
         let handed_down = scaled.tightened(problem, reach, r_c, 0.5 * theta);
         (bounded(lower), Some(Handed::Minorant(handed_down)))
     }
@@ -1645,6 +1724,8 @@ impl RotationSearch<'_, '_> {
             slack,
             inside_ball,
             depths: depths.clone(),
+            with_segments: true,
+            extent: None,
         };
         let extent = || {
             self.whitening
@@ -2153,7 +2234,8 @@ const BALL_FACTORS: [f64; 8] = [64.0, 16.0, 6.0, 3.0, 2.0, 1.5, 1.0, 0.7];
 
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
-/// ([`MAX_CELLS_FROM_DISTANCE`] without depth bounds). Never fails: a
+/// ([`MAX_CELLS_BEFORE_FALLBACK`] with segments, [`MAX_CELLS_FROM_DISTANCE`] without depth bounds;
+/// each search has its own cap). Never fails: a
 /// certificate that cannot be computed is `certified = false` with the reason. Every cost and bound
 /// here is `½ Σ r²`; [`crate::pose::PoseResult`] reports them in `Σ r²`.
 pub fn certify(
@@ -2237,6 +2319,7 @@ fn certify_problem(
         radius: 0.0,
     };
     let cap = match problem.start {
+        Start::Points(_) if problem.corr.n_lines() > 0 => MAX_CELLS_BEFORE_FALLBACK,
         Start::Points(_) => MAX_CELLS,
         Start::Ball { .. } => MAX_CELLS_FROM_DISTANCE,
     };
@@ -2287,6 +2370,12 @@ pub mod testing {
         /// The depth bounds `Dᵢ` of the cell's minorant (handed down by its ancestors): the search
         /// claims `‖R Xᵢ + t‖ ≤ Dᵢ` for every pose of the sublevel set with its rotation in the box.
         pub depths: Vec<f64>,
+        /// Whether the ellipsoid comes from a quadratic with the segments' terms (with depth bounds:
+        /// where it reaches less far than the points' alone).
+        pub with_segments: bool,
+        /// For a cell inside the ball: the largest whitened length `‖(0, t − t*)‖_W` over its
+        /// ellipsoid (`W = JᵀJ` at the centre), a part of the radius the search claims for the cell.
+        pub extent: Option<f64>,
     }
 
     /// What [`rotation_search`] proved.
@@ -2704,9 +2793,8 @@ mod tests {
                 // translation solved exactly (least squares), least over the rotations by sampling
                 // then a hill climb. The weights are the box's (from its ellipsoid), the numerators
                 // recomputed here: n = ēᵀ ((R a + t) × (R b + t)) = ēᵀ (R a × R b) + tᵀ ((R b − R a) × ē).
-                let terms: Vec<LineTerm> = problem
-                    .line_terms(problem.lines.len(), &r_c, theta, &centre, radius, Some(&shape))
-                    .collect();
+                let terms: Vec<LineTerm> =
+                    problem.line_terms(problem.lines.len(), &r_c, theta, &centre, radius, Some(&shape));
                 let depths = bounds.depths.clone();
                 let minorant = |phi: &Vector3<f64>| -> f64 {
                     let rotation = exp_so3(phi) * r_c;
@@ -2802,9 +2890,7 @@ mod tests {
                 };
                 let g = &open.growth;
                 let (t_star, rho) = (open.t_star, rotation_rest(theta));
-                let terms: Vec<LineTerm> = problem
-                    .line_terms(segments, &r_c, theta, &centre, radius, Some(&shape))
-                    .collect();
+                let terms: Vec<LineTerm> = problem.line_terms(segments, &r_c, theta, &centre, radius, Some(&shape));
                 let x_of = |d: &Vector3<f64>| d.dot(&(g.n * d)).max(0.0).sqrt();
                 let q_of = |d: &Vector3<f64>| (g.q_min + d.dot(&(open.c * d))).sqrt();
                 let clamp = |v: Vector3<f64>, r: f64| v * (r / v.norm()).min(1.0);
@@ -3007,9 +3093,7 @@ mod tests {
                 let theta = 1e-2 * 100f64.powf(rng.uniform_in(0.0, 1.0));
                 let t_star = scene.translation + rng.unit_vector3() * rng.uniform_in(0.0, 1.0);
                 let spread = rng.uniform_in(0.0, 1.0);
-                let terms: Vec<LineTerm> = problem
-                    .line_terms(problem.lines.len(), &r_c, theta, &t_star, spread, None)
-                    .collect();
+                let terms: Vec<LineTerm> = problem.line_terms(problem.lines.len(), &r_c, theta, &t_star, spread, None);
                 for (index, term) in terms.iter().enumerate() {
                     let line = &problem.lines[index / 2];
                     let e = line.ends[index % 2].0;
@@ -3102,7 +3186,7 @@ mod tests {
         use crate::synthetic::random_observation_noise;
         use nalgebra::Vector2;
         let mut rng = Rng::new(16);
-        let (mut checked, mut closest) = (0usize, [0.0f64; 2]);
+        let (mut checked, mut closest, mut ellipsoids) = (0usize, [0.0f64; 2], 0usize);
         for (f, np, nl, seed, with_covariances) in [
             (800.0, 3, 3, 21, false),
             (250.0, 3, 4, 22, true),
@@ -3160,9 +3244,8 @@ mod tests {
                     let (t_star, q_min, eta) = scaled.at(&r_c).unwrap();
                     let slack = (((2.0 * f_hat).sqrt() + theta * eta).powi(2) - q_min).max(0.0);
                     let spread = (slack / kappa * problem.root().expect("depth bounds").c_inv_max).sqrt();
-                    let terms: Vec<LineTerm> = problem
-                        .line_terms(problem.box_segments, &r_c, theta, &t_star, spread, None)
-                        .collect();
+                    let terms: Vec<LineTerm> =
+                        problem.line_terms(problem.box_segments, &r_c, theta, &t_star, spread, None);
                     // Per endpoint: w √weight and |n − n_c| / (θ drift), each at most 1.
                     let ratios = |phi: &Vector3<f64>, u: &Vector3<f64>, index: usize| -> [f64; 2] {
                         let (line, end) = (segments[index / 2], index % 2);
@@ -3248,22 +3331,75 @@ mod tests {
                         (bound, 1e-9 * (q + at_origin))
                     };
                     // A line's distance bound grows with θ: at θ = 0 its terms are those for θ = 0.
-                    let at_zero: Vec<LineTerm> = problem
-                        .line_terms(problem.box_segments, &r_c, 0.0, &t_star, spread, None)
-                        .collect();
+                    let at_zero: Vec<LineTerm> =
+                        problem.line_terms(problem.box_segments, &r_c, 0.0, &t_star, spread, None);
                     for (th, terms) in [(0.0, &at_zero), (theta, &terms)] {
                         let (expected, rounding) = assembled(terms, th);
-                        let found = problem.lines_bound(&scaled, &r_c, th, (&t_star, q_min), spread);
+                        let found = problem
+                            .lines_bound(&scaled, &r_c, th, (&t_star, q_min), spread, problem.box_segments)
+                            .map_or(0.0, |l| l.lower);
                         assert!(
                             (found - expected).abs() <= rounding,
                             "θ = {th}: {found} against {expected}"
                         );
                     }
+                    // The ellipsoid of the translations: on its boundary Q_total(t) = (√(2f̂) + θ η_total)²
+                    // exactly (Q_total and η_total recomputed from the per-point forms and the terms,
+                    // rounding as above), and its reach is attained along C's least axis and never
+                    // exceeded: a slack or a reach too small (or too large) fails.
+                    let q_total = |t: &Vector3<f64>| {
+                        minorant_by_points(&problem, &depths, &r_c, t)
+                            + (terms.iter())
+                                .map(|term| term.weight * (term.alpha + term.beta.dot(t)).powi(2))
+                                .sum::<f64>()
+                    };
+                    let eta_total = ((corr.points3d.iter().zip(&depths).zip(&forms))
+                        .map(|((x, d), (_, norm2))| norm2 * x.norm_squared() / (d * d))
+                        .sum::<f64>()
+                        + terms
+                            .iter()
+                            .map(|term| term.weight * term.drift * term.drift)
+                            .sum::<f64>())
+                    .sqrt();
+                    let l = problem
+                        .lines_bound(&scaled, &r_c, theta, (&t_star, q_min), spread, problem.box_segments)
+                        .expect("the terms fix the translation");
+                    let (slack_l, reach) = l.ellipsoid(f_hat, theta);
+                    let level = ((2.0 * f_hat).sqrt() + theta * eta_total).powi(2);
+                    if slack_l <= 0.0 {
+                        // No translation: the box is pruned (checked above through the bound).
+                        continue;
+                    }
+                    let eigen = l.c.symmetric_eigen();
+                    let least = eigen.eigenvalues.imin();
+                    // The points' minorant enters the library's quadratic through its own minimum and
+                    // minimiser at r_c, each rounded to ~1e-9 of the form's size (as in the bound
+                    // above): 1e-8 of it leaves room, and a slack or reach 1 % off is far outside.
+                    let rounding = 1e-8 * (level + q_total(&Vector3::zeros()));
+                    let axis: Vector3<f64> = eigen.eigenvectors.column(least).into();
+                    let mut boundary = vec![l.t_star + axis * reach];
+                    for _ in 0..8 {
+                        let u = rng.unit_vector3();
+                        boundary.push(l.t_star + u * (slack_l / u.dot(&(l.c * u))).sqrt());
+                    }
+                    for t in &boundary {
+                        let q = q_total(t);
+                        assert!(
+                            (q - level).abs() <= rounding,
+                            "f = {f}, θ = {theta}: Q_total = {q} on the ellipsoid's boundary, not {level}"
+                        );
+                        assert!(
+                            (t - l.t_star).norm() <= reach * (1.0 + 1e-9),
+                            "f = {f}: beyond the reach"
+                        );
+                    }
+                    ellipsoids += 1;
                 }
             }
         }
         eprintln!("segment terms: {checked} claims, the closest reach {closest:?} of their bounds");
         assert!(checked >= 500, "only {checked} claims");
+        assert!(ellipsoids >= 50, "only {ellipsoids} ellipsoids");
         // The claims are nearly reached (else a bound twice too strong would pass).
         assert!(
             closest[0] > 0.5 && closest[1] > 0.5,

@@ -138,7 +138,9 @@ pub struct PoseOptions {
     /// ([`PoseResult::certificate`] is then `None`). With `Some`, a pose that is not proved (no bound,
     /// or a gap above `max_relative_gap`) has status [`Status::GapNotClosed`] where it would have been
     /// [`Status::Success`]. `max_nodes: None` caps the rotation cells at [`certificate::MAX_CELLS`]
-    /// ([`certificate::MAX_CELLS_FROM_DISTANCE`] for lines alone or fewer than two points).
+    /// ([`certificate::MAX_CELLS_FROM_DISTANCE`] for lines alone or fewer than two points; with points
+    /// and segments, [`certificate::MAX_CELLS_BEFORE_FALLBACK`] for the search with depth bounds, then
+    /// `MAX_CELLS_FROM_DISTANCE` for the one without them where the first fails).
     /// Default `None`: it is on request.
     pub certify: Option<CertifyOptions>,
 }
