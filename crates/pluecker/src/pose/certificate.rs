@@ -95,7 +95,6 @@ use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
-use smallvec::SmallVec;
 use std::cell::OnceCell;
 use std::rc::Rc;
 
@@ -230,6 +229,9 @@ struct Problem<'c> {
     bearings: Vec<Vector3<f64>>,
     /// `‖Xᵢ‖` (object coordinates).
     norms: Vec<f64>,
+    /// A cone of the bearings: their normalised mean `a`, `δ = max ‖bᵢ − a‖` and `max ‖Xᵢ‖`. Every
+    /// `bᵢ · (R Xᵢ + t) ≥ a · t − δ ‖t‖ − max ‖Xᵢ‖`: where that is positive no point is behind.
+    bearing_cone: (Vector3<f64>, f64, f64),
 }
 
 /// What the rotation search starts from.
@@ -495,6 +497,7 @@ impl<'c> Problem<'c> {
                 .collect(),
             box_segments: segments,
             endpoint_maps,
+            bearing_cone: bearing_cone(&bearings, &corr.points3d),
             bearings,
             norms: corr.points3d.iter().map(|x| x.norm()).collect(),
             start,
@@ -1644,14 +1647,15 @@ impl RotationSearch<'_, '_> {
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
         // (Only a point with `b · (R_c x + t*) ≤ −θ ‖x‖` can be: the ellipsoid's term is not negative.)
-        // The points in the camera frame at (R_c, t*), read again for the depth bounds.
-        let centred: SmallVec<[Vector3<f64>; 16]> = problem.corr.points3d.iter().map(|x| r_c * x + t_star).collect();
-        let behind = (centred.iter().zip(&problem.bearings))
-            .zip(problem.norms.iter().zip(&minorant.bearing_spread))
-            .any(|((y, b), (norm, spread))| {
-                let depth = b.dot(y);
-                depth <= -theta * norm && depth + (slack_per_scale * spread).max(0.0).sqrt() <= -theta * norm
-            });
+        let (axis, reach, largest) = problem.bearing_cone;
+        let surely_in_front = axis.dot(&t_star) - reach * t_star.norm() > largest;
+        let behind = !surely_in_front
+            && (problem.corr.points3d.iter().zip(&problem.bearings))
+                .zip(problem.norms.iter().zip(&minorant.bearing_spread))
+                .any(|((x, b), (norm, spread))| {
+                    let depth = b.dot(&(r_c * x + t_star));
+                    depth <= -theta * norm && depth + (slack_per_scale * spread).max(0.0).sqrt() <= -theta * norm
+                });
         if behind {
             if let InsideBall::Record(r) = &mut self.inside_ball {
                 r.pruned += 1;
@@ -1804,6 +1808,16 @@ fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Resul
         radius: search.radius,
         nodes: result.nodes,
     })
+}
+
+/// [`Problem::bearing_cone`] (an empty cone, `δ = ∞`, without points or where the bearings' mean
+/// vanishes).
+fn bearing_cone(bearings: &[Vector3<f64>], points: &[Vector3<f64>]) -> (Vector3<f64>, f64, f64) {
+    let Some(axis) = bearings.iter().sum::<Vector3<f64>>().try_normalize(1e-12) else {
+        return (Vector3::z(), f64::INFINITY, 0.0);
+    };
+    let reach = bearings.iter().map(|b| (b - axis).norm()).fold(0.0, f64::max);
+    (axis, reach, points.iter().map(|x| x.norm()).fold(0.0, f64::max))
 }
 
 /// `M` with `aᵀ M a = (a × (a × y)) · c = (a·y)(a·c) − (a·a)(y·c)`.
@@ -2602,6 +2616,65 @@ mod tests {
     /// `RayCurvature` bounds the second derivative of the residual vector along random whitened
     /// rays (central differences), on wide and narrow fields of view, with points and lines, at the
     /// pose and at a perturbed one.
+    /// The bearing cone's claim, `bᵢ · (R Xᵢ + t) ≥ a · t − δ ‖t‖ − max ‖X‖`, at random rotations and
+    /// translations (and translations that make it nearly tight: along the bearing farthest from
+    /// the axis, and against it), on wide and narrow fields of view.
+    #[test]
+    fn the_bearing_cone_bounds_every_depth_from_below() {
+        let mut rng = Rng::new(17);
+        // How close each of the claim's two parts comes: `bᵢ · t ≥ a · t − δ ‖t‖` and
+        // `bᵢ · R Xᵢ ≥ −max ‖X‖` (per unit of their scale).
+        let (mut closest_t, mut closest_x) = (f64::INFINITY, f64::INFINITY);
+        for (seed, f) in [(1, 250.0), (2, 800.0), (3, 15000.0)] {
+            let scene = visible_scene(f, 12, 0, false, seed);
+            let corr = scene.noisy(1.0, true, &mut rng);
+            let k_inv = scene.camera.matrix().try_inverse().unwrap();
+            let bearings: Vec<Vector3<f64>> = corr
+                .points2d
+                .iter()
+                .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
+                .collect();
+            let (axis, reach, largest) = bearing_cone(&bearings, &corr.points3d);
+            let farthest = bearings
+                .iter()
+                .max_by(|a, b| (*a - axis).norm().total_cmp(&(*b - axis).norm()))
+                .unwrap();
+            let biggest = (0..corr.n_points())
+                .max_by(|&i, &j| corr.points3d[i].norm().total_cmp(&corr.points3d[j].norm()))
+                .unwrap();
+            for trial in 0..400 {
+                let mut r = exp_so3(&(rng.unit_vector3() * rng.uniform_in(0.0, 3.0)));
+                let t = match trial % 4 {
+                    0 => rng.unit_vector3() * rng.uniform_in(0.0, 20.0),
+                    1 => farthest * rng.uniform_in(0.0, 20.0),
+                    // (b − a) · t = −δ ‖t‖ for the farthest bearing.
+                    2 => (axis - farthest) * rng.uniform_in(0.0, 20.0),
+                    // The largest point turned against its own bearing: b · R X = −max ‖X‖.
+                    _ => {
+                        let (x, b) = (corr.points3d[biggest], bearings[biggest]);
+                        r = nalgebra::Rotation3::rotation_between(&x, &-b).unwrap().into_inner();
+                        rng.unit_vector3() * rng.uniform_in(0.0, 20.0)
+                    }
+                };
+                let claim = axis.dot(&t) - reach * t.norm() - largest;
+                for (x, b) in corr.points3d.iter().zip(&bearings) {
+                    let depth = b.dot(&(r * x + t));
+                    assert!(
+                        depth >= claim - 1e-12 * (1.0 + t.norm()),
+                        "f = {f}: depth {depth} < {claim}"
+                    );
+                    closest_t = closest_t.min((b.dot(&t) - axis.dot(&t) + reach * t.norm()) / t.norm().max(1e-300));
+                    closest_x = closest_x.min((b.dot(&(r * x)) + largest) / largest);
+                }
+            }
+        }
+        // Each part is reached, up to rounding (a cone too narrow, or a smaller largest point, fails).
+        assert!(
+            closest_t < 1e-12 && closest_x < 1e-12,
+            "the parts come within {closest_t}, {closest_x}"
+        );
+    }
+
     /// The closed-form largest eigenvalue agrees with nalgebra's and never falls below it.
     #[test]
     fn closed_form_largest_eigenvalue() {
