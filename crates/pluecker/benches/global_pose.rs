@@ -5,7 +5,8 @@
 //!
 //!     cargo bench -p pluecker --bench global_pose -- [scenes] [starts] [row filter]
 //!
-//! `CERTIFY=1` certifies every answer; `NODES=1` prints each scene's certificate nodes to stderr.
+//! `CERTIFY=1` certifies every answer (`MAX_NODES=n` sets the node cap); `NODES=1` prints each scene's
+//! certificate nodes to stderr, `WHY=1` the reason of each uncertified answer.
 
 use nalgebra::Vector3;
 use pluecker::optim::Objective;
@@ -41,7 +42,9 @@ fn main() {
     println!("|---|---|---|---|---|---|---|");
     let mut opts = PoseOptions::default();
     if std::env::var("CERTIFY").is_ok() {
-        opts.certify = Some(Default::default());
+        let mut certify = pluecker::CertifyOptions::default();
+        certify.max_nodes = std::env::var("MAX_NODES").ok().and_then(|v| v.parse().ok());
+        opts.certify = Some(certify);
     }
     for (f, np, nl, planar) in rows {
         let name = format!("f={f} {np}p+{nl}l{}", if planar { " planar" } else { "" });

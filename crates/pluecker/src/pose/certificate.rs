@@ -244,7 +244,7 @@ enum Start {
     /// ([`super::object_distance`]), so the translation of a pose of `S` whose rotation is within
     /// `θ` of `R_c` lies in the ball of centre `−R_c c` and radius `distance + θ ‖c‖`; every box is
     /// bounded from the residuals at its centre rotation ([`Problem::ball_quadratic`]) and hands its
-    /// octants a smaller ball ([`Ball`]).
+    /// octants a smaller ellipsoid of translations ([`Translations`]).
     Ball { pivot: Vector3<f64>, distance: f64 },
 }
 
@@ -252,16 +252,16 @@ enum Start {
 /// of `S` in a box (the search without depth bounds hands it down box by box), and its largest
 /// semi-axis `radius = √λ_max(shape)`.
 #[derive(Clone)]
-struct Ball {
+struct Translations {
     centre: Vector3<f64>,
     shape: Matrix3<f64>,
     radius: f64,
 }
 
-impl Ball {
+impl Translations {
     /// The ball of centre `centre` and radius `radius`.
-    fn round(centre: Vector3<f64>, radius: f64) -> Ball {
-        Ball {
+    fn round(centre: Vector3<f64>, radius: f64) -> Translations {
+        Translations {
             centre,
             shape: Matrix3::identity() * (radius * radius),
             radius,
@@ -652,7 +652,14 @@ impl<'c> Problem<'c> {
     /// translations of the box's poses of `S` have `v(x) ≤ β = √(2f̂) + θ η₀`, so `x ≤ x_max` and
     /// `Δᵀ C Δ ≤ (β + θ x_max)² − q_min`: an ellipsoid. The drift of the segments is paid against the
     /// quadratic's own growth, not against the ball, which only weighs the terms.
-    fn ball_bound(&self, segments: usize, r: &Matrix3<f64>, theta: f64, ball: &Ball, f_hat: f64) -> Option<BoxBound> {
+    fn ball_bound(
+        &self,
+        segments: usize,
+        r: &Matrix3<f64>,
+        theta: f64,
+        ball: &Translations,
+        f_hat: f64,
+    ) -> Option<BoxBound> {
         let mut quadratic = Quadratic {
             c: Matrix3::zeros(),
             g: Vector3::zeros(),
@@ -1486,9 +1493,9 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             (Start::Ball { pivot, distance }, inherited) => {
                 // The translations of the box's poses of S: t = P − R c with ‖P‖ ≤ distance, and those
                 // of the parent's ball; the smaller ball is kept.
-                let from_pivot = Ball::round(-(r_c * pivot), distance + cell.half.norm() * pivot.norm());
+                let from_pivot = Translations::round(-(r_c * pivot), distance + cell.half.norm() * pivot.norm());
                 let ball = match inherited {
-                    Some(Handed::Ball(ball)) if ball.shape.trace() <= from_pivot.shape.trace() => ball.clone(),
+                    Some(Handed::Translations(ball)) if ball.shape.trace() <= from_pivot.shape.trace() => ball.clone(),
                     _ => from_pivot,
                 };
                 self.ball_box(&cell, &r_c, ball)
@@ -1502,8 +1509,8 @@ impl BoundingOracle for RotationSearch<'_, '_> {
 enum Handed {
     /// The minorant for the depth bounds of the box's poses of `S` ([`Start::Points`]).
     Minorant(Scaled),
-    /// A ball that holds the translations of the box's poses of `S` ([`Start::Ball`]).
-    Ball(Ball),
+    /// An ellipsoid that holds the translations of the box's poses of `S` ([`Start::Ball`]).
+    Translations(Translations),
 }
 
 #[cfg(test)]
@@ -1512,7 +1519,7 @@ impl Handed {
     fn minorant(&self) -> &Scaled {
         match self {
             Handed::Minorant(scaled) => scaled,
-            Handed::Ball(_) => panic!("a ball, not a minorant"),
+            Handed::Translations(_) => panic!("translations, not a minorant"),
         }
     }
 }
@@ -1692,7 +1699,7 @@ impl RotationSearch<'_, '_> {
     /// in the box has `√(2f) ≥ √q_min − θ η` (Minkowski, as with depth bounds), and its translation
     /// lies in the ellipsoid `Q(t) ≤ (√(2f̂) + θ η)²`, whose bounding ball the octants inherit where it
     /// is smaller than `ball`.
-    fn ball_box(&mut self, cell: &Cell, r_c: &Matrix3<f64>, ball: Ball) -> (Bound<()>, Option<Handed>) {
+    fn ball_box(&mut self, cell: &Cell, r_c: &Matrix3<f64>, ball: Translations) -> (Bound<()>, Option<Handed>) {
         let theta = cell.half.norm();
         // Every segment near the answer, where the translation ellipsoid decides whether the box lies
         // inside the whitened ball; the longest elsewhere.
@@ -1712,10 +1719,10 @@ impl RotationSearch<'_, '_> {
         }) = self.problem.ball_bound(segments, r_c, theta, &ball, self.f_hat)
         else {
             // The terms do not fix the translation: no bound, the octants are bounded again.
-            return (bounded(0.0), Some(Handed::Ball(ball)));
+            return (bounded(0.0), Some(Handed::Translations(ball)));
         };
         if !lower.is_finite() {
-            return (Bound::Failed { solver_iterations: 0 }, Some(Handed::Ball(ball)));
+            return (Bound::Failed { solver_iterations: 0 }, Some(Handed::Translations(ball)));
         }
         if let Some(pruned) = self.pruned(lower) {
             return (pruned, None);
@@ -1755,7 +1762,7 @@ impl RotationSearch<'_, '_> {
         // Of two ellipsoids that hold the translations, the one of least trace.
         let shape = c_inv * slack;
         let handed_down = if shape.trace() < ball.shape.trace() {
-            Ball {
+            Translations {
                 centre: t_star,
                 radius: largest_eigenvalue(&shape).max(0.0).sqrt(),
                 shape,
@@ -1763,7 +1770,7 @@ impl RotationSearch<'_, '_> {
         } else {
             ball
         };
-        (bounded(lower), Some(Handed::Ball(handed_down)))
+        (bounded(lower), Some(Handed::Translations(handed_down)))
     }
 }
 
@@ -1779,7 +1786,8 @@ struct Localised {
 
 /// Runs `search` on the shared branch and bound from the root box `[−π, π]³` with the incumbent
 /// `f̂`, until the gap closes (`Err` when it reaches `max_nodes` or is stopped).
-fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Result<Localised, String> {
+/// Runs the rotation search; `Err` says why nothing is proved and how many boxes it bounded.
+fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Result<Localised, (String, usize)> {
     let pi = std::f64::consts::PI;
     let root = Region::new(vec![-pi; 3], vec![pi; 3]);
     let opts = BranchAndBoundOptions {
@@ -1792,15 +1800,16 @@ fn localise(search: &mut RotationSearch, max_nodes: usize) -> std::result::Resul
     // every split; exact data can close the gap at the root).
     let stopped = |reason: StopReason| format!("not proved: {} during the rotation search", reason.describe());
     if let Some(reason) = stop_reason() {
-        return Err(stopped(reason));
+        return Err((stopped(reason), 0));
     }
     let result = branch_and_bound(search, root, Some((search.f_hat, ())), &opts);
     if let Some(reason) = result.stopped {
-        return Err(stopped(reason));
+        return Err((stopped(reason), result.nodes));
     }
     if !result.converged {
-        return Err(format!(
-            "not proved: the rotation search reached max_nodes = {max_nodes}"
+        return Err((
+            format!("not proved: the rotation search reached max_nodes = {max_nodes}"),
+            result.nodes,
         ));
     }
     Ok(Localised {
@@ -2339,7 +2348,12 @@ fn certify_problem(
     };
     let localised = match localise(&mut search, options.max_nodes_or(cap)) {
         Ok(l) => l,
-        Err(why) => return Certification::none(why),
+        Err((why, nodes)) => {
+            return Certification {
+                nodes,
+                ..Certification::none(why)
+            }
+        }
     };
     let raw_lower_bound = localised.raw_lower_bound;
     let lower_bound = raw_lower_bound.min(model.cost);
@@ -2470,7 +2484,7 @@ pub mod testing {
             inside_ball: InsideBall::Record(&mut record),
             radius: 0.0,
         };
-        let localised = localise(&mut search, max_nodes)?;
+        let localised = localise(&mut search, max_nodes).map_err(|(why, _)| why)?;
         Ok(Region {
             depths: problem.root().map_or_else(Vec::new, |root| root.depths.clone()),
             from_distance: problem.root().is_none(),
@@ -2743,7 +2757,7 @@ mod tests {
     /// A translation set for the tests of the bound without depth bounds: largest semi-axis `radius`,
     /// round or thin (a random axis and the others 0.05-0.5 of it), its centre within `off` radii of
     /// `truth`; and its `L` (`shape = L Lᵀ`).
-    fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -> (Ball, Matrix3<f64>) {
+    fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -> (Translations, Matrix3<f64>) {
         let centre = truth + rng.unit_vector3() * radius * rng.uniform_in(0.0, off);
         let axis = rng.unit_vector3();
         let thin = if rng.uniform() < 0.5 {
@@ -2754,7 +2768,7 @@ mod tests {
         let shape =
             (axis * axis.transpose() * (1.0 - thin * thin) + Matrix3::identity() * (thin * thin)) * (radius * radius);
         let l = shape.cholesky().unwrap().l();
-        (Ball { centre, shape, radius }, l)
+        (Translations { centre, shape, radius }, l)
     }
 
     /// The bounds of a box without depth bounds ([`Problem::ball_bound`]: the minorant's growth
@@ -2822,7 +2836,7 @@ mod tests {
                 let radius =
                     scene.translation.norm() * 0.5f64.powf(rng.uniform_in(0.0, 6.0) + if near { 4.0 } else { 0.0 });
                 let (ball, l) = translation_set(&scene.translation, radius, 1.5, &mut rng);
-                let Ball { centre, shape, .. } = ball;
+                let Translations { centre, shape, .. } = ball;
                 let Some(bounds) = problem.ball_bound(problem.lines.len(), &r_c, theta, &ball, f64::INFINITY) else {
                     continue;
                 };
@@ -2953,7 +2967,7 @@ mod tests {
                 let r_c = exp_so3(&(rng.unit_vector3() * theta * rng.uniform_in(2.0, 8.0))) * truth.rotation;
                 let radius = scene.translation.norm() * 0.5f64.powf(rng.uniform_in(2.0, 6.0));
                 let (ball, l) = translation_set(&scene.translation, radius, 1.0, &mut rng);
-                let Ball { centre, shape, .. } = ball;
+                let Translations { centre, shape, .. } = ball;
                 let segments = problem.lines.len();
                 let (Some(open), Some(level)) = (
                     problem.ball_bound(segments, &r_c, theta, &ball, f64::INFINITY),
