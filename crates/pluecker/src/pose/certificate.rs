@@ -106,9 +106,12 @@ pub const MAX_CELLS: usize = 20_000;
 /// scenes, 2-8 µs each).
 pub const MAX_CELLS_FROM_DISTANCE: usize = 100_000;
 /// The default cap of the search with depth bounds on a scene with segments, which the search
-/// without them follows where it fails ([`certify`]): the first certifies most of the scenes it
-/// can within a few thousand boxes, and a longer failing search only delays the second.
-pub const MAX_CELLS_BEFORE_FALLBACK: usize = 4_000;
+/// without them follows where it fails ([`certify`]). A failing first search only delays the
+/// second, whose boxes cost more: planar scenes with 100 correspondences need up to ~10 000 boxes of
+/// the first (Rust benchmark, f = 800 px, 50 points + 50 segments: 6 ms at 10 000 or 20 000, 23 ms at
+/// 4 000), while scenes whose first search fails lose ~10 % (f = 15000 px, 5 + 5: 12 ms at 4 000,
+/// 16 ms at 10 000, 28 ms at 20 000).
+pub const MAX_CELLS_BEFORE_FALLBACK: usize = 10_000;
 
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
 pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
