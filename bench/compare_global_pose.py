@@ -113,7 +113,9 @@ with 4-5 correspondences every miss is flagged ambiguous or has a non-success st
 ≥ 99 % on the 100-correspondence rows and ≥ 95 % on the 10-correspondence rows (the ``certify=True``
 answers when that keyword exists, else the default's ``certified``; n/a without either); (4) median
 time of a certified answer (``certify=True``, else the default) ≤ 1 ms on the 100-point rows; (5) on
-``f800-n100-points`` the default's median time ≤ OpenCV SQPnP's in the same run. Targets (3) and (4)
+``f800-n100-points`` the default's median time ≤ OpenCV SQPnP's in the same run; (6) soundness: no
+certified answer's ``raw_lower_bound`` above the least cost any candidate reached (every cost here is
+this script's own code, not the library's residuals). Targets (3) and (4)
 are on the rows without covariances (the ``cov-`` rows' certified fraction and times are in the
 table and the JSON).
 
@@ -443,21 +445,14 @@ def pose_cost(scene: Scene, R: Any, t: Any) -> float:
         return math.inf
     if np.any(scene.all3d @ R[2] + t[2] <= 0.0):
         return math.inf
-    if scene.point_covariances is not None:
-        c = _whitened_cost(scene, R, t)
-        return c if math.isfinite(c) else math.inf
-    try:
-        e = np.asarray(pluecker.reprojection_errors(scene.camera, R, t, **scene.kwargs), dtype=float)
-    except pluecker.PlueckerError:
-        return math.inf
-    n = len(scene.points3d)
-    c = 0.5 * (float(np.sum(e[:n] ** 2)) + 2.0 * float(np.sum(e[n:] ** 2)))
+    c = _whitened_cost(scene, R, t)
     return c if math.isfinite(c) else math.inf
 
 
 def _whitened_cost(scene: Scene, R: np.ndarray, t: np.ndarray) -> float:
-    """``½ Σ r²`` with the scene's covariances (see the module docstring), at a valid pose: a point's
-    ``eᵀ Σ⁻¹ e``, an endpoint's ``d² / (n̂ᵀ Σ n̂)``."""
+    """``½ Σ r²`` with the scene's covariances (see the module docstring; the identity without them), at
+    a valid pose: a point's ``eᵀ Σ⁻¹ e``, an endpoint's ``d² / (n̂ᵀ Σ n̂)``. This script's own code, not
+    the library's residuals: the certified bounds are checked against it."""
 
     def pixels(X: np.ndarray) -> np.ndarray:
         x = (X @ R.T + t) @ scene.K.T
@@ -466,13 +461,19 @@ def _whitened_cost(scene: Scene, R: np.ndarray, t: np.ndarray) -> float:
     total = 0.0
     if len(scene.points3d):
         e = pixels(scene.points3d) - scene.points2d
-        total += float(np.einsum("ni,ni->", e, np.linalg.solve(scene.point_covariances, e[..., None])[..., 0]))
+        if scene.point_covariances is None:
+            total += float(np.sum(e**2))
+        else:
+            total += float(np.einsum("ni,ni->", e, np.linalg.solve(scene.point_covariances, e[..., None])[..., 0]))
     if len(scene.lines3d):
         ends = pixels(scene.lines3d.reshape(-1, 3)).reshape(-1, 2, 2)
         d = ends[:, 1] - ends[:, 0]
         n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]
         dist = np.einsum("mkj,mj->mk", scene.lines2d - ends[:, :1], n)
-        total += float(np.sum(dist**2 / np.einsum("mi,mkij,mj->mk", n, scene.line_covariances, n)))
+        if scene.line_covariances is None:
+            total += float(np.sum(dist**2))
+        else:
+            total += float(np.sum(dist**2 / np.einsum("mi,mkij,mj->mk", n, scene.line_covariances, n)))
     return 0.5 * total
 
 
@@ -621,6 +622,10 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
     cert_statuses: dict[str, int] = {}
     misses = misses_gross = miss_success = miss_ambiguous = ambiguous_flags = status_ambiguous = 0
     certified = cert_certified = cert_misses = 0
+    # Certified lower bounds against the best cost found (this script's own cost code): how many were
+    # checked, how many lie above it (a wrong certificate), and the least relative margin.
+    bounds_checked = bound_violations = 0
+    bound_margin = math.inf
     small_miss_unflagged = 0  # misses that are neither flagged ambiguous nor non-success
     reached_best: dict[str, int] = {}  # per source: scenes where it reached the best known minimum
     peer_lowered_best: dict[str, int] = {}  # per peer: scenes where it was below every pluecker candidate
@@ -696,6 +701,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
             except pluecker.PlueckerError:
                 Features.certify_kw = True
         cost_cert = math.nan
+        cert_bound = None
         if Features.certify_kw:
             cres, csec, cerr = call_pluecker(
                 s, args.repeats, options=pluecker.PoseOptions(certify=pluecker.CertifyOptions())
@@ -706,6 +712,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
             cert_certified += getattr(cres, "certified", None) is True
             cost_cert = pose_cost(s, cres.pose.rotation, cres.pose.translation) if cres is not None else math.inf
             candidates["certify"] = cost_cert
+            cert_bound = cres.certificate.raw_lower_bound if getattr(cres, "certified", None) is True else None
         lap("certify")
 
         run_peers(LAST_PEERS)
@@ -761,6 +768,12 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
                 miss_invalid += 1
         if Features.certify_kw and not cost_cert <= limit:
             cert_misses += 1
+        if Features.certify_kw and cert_bound is not None:
+            # raw_lower_bound is in Σ r², the costs here ½ Σ r²; 1e-9 of rounding between the two codes.
+            bounds_checked += 1
+            bound_violations += cert_bound > 2.0 * best * (1 + 1e-9) + 1e-12
+            if best > 0:
+                bound_margin = min(bound_margin, 1.0 - cert_bound / (2.0 * best))
         for p, c in peer_costs.items():
             peer_stats[p]["misses"] += not c <= limit
             peer_stats[p]["gross"] += not c <= best * (1 + GROSS_REL) + MISS_ABS
@@ -813,6 +826,9 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
             {
                 "certified_fraction": cert_certified / n_scenes,
                 "misses": cert_misses,
+                "bounds_checked": bounds_checked,
+                "bound_violations": bound_violations,
+                "least_bound_margin": bound_margin if math.isfinite(bound_margin) else None,
                 "median_us": cmed,
                 "p95_us": cp95,
                 "status_histogram": cert_statuses,
@@ -929,6 +945,18 @@ def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool | None]]:
                 f"{sq['median_us']:.1f} µs (ratio {r['median_us'] / sq['median_us']:.2f})"
             )
             checks.append((text, r["median_us"] <= sq["median_us"]))
+    checked = [r for r in rows if r["certify"] and r["certify"].get("bounds_checked")]
+    if checked:
+        bad = [f"{r['row']} {r['certify']['bound_violations']}" for r in checked if r["certify"]["bound_violations"]]
+        total = sum(r["certify"]["bounds_checked"] for r in checked)
+        margins = [
+            r["certify"]["least_bound_margin"] for r in checked if r["certify"]["least_bound_margin"] is not None
+        ]
+        text = (
+            f"(6) no certified lower bound above the best cost found (this script's cost code) in {total} "
+            f"certified answers over {len(checked)} rows (least margin {min(margins):.2e})"
+        )
+        checks.append((text + (f"; violations: {', '.join(bad)}" if bad else ""), not bad))
     return checks
 
 
