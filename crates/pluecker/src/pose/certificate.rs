@@ -40,7 +40,9 @@
 //!    `n / w` has the numerator `n = ēᵀ R_c (a × d) + tᵀ (R_c d × ē)`, linear in `t`, and `w` is at most
 //!    `‖G_e‖ ‖d‖` times the line's largest distance from the camera over the box, so `n² / W²` adds to
 //!    `Q`; over the box `n` moves by at most `θ (‖ē‖ ‖a × d‖ + ‖d‖ ‖ē × t‖)`, with `t` within the
-//!    points' ellipsoid below. A box whose bound
+//!    points' ellipsoid below. The quadratic with the segments' terms gives a second ellipsoid of the
+//!    box's translations, `Q_total(t) ≤ (√(2f̂) + θ η_total)²`; the one that reaches less far is kept
+//!    (`LinesBound::ellipsoid`). A box whose bound
 //!    reaches `f̂` holds no pose of `S` and is pruned; so is a box where some point is behind the camera
 //!    for every `t` of the ellipsoid `Q(t) ≤ β² = (√(2f̂) + θ η)²`, which holds the translations of its
 //!    poses of `S`. A box inside the ball `‖Δ‖_W ≤ ρ` of the local metric `‖Δ‖²_W = Δᵀ JᵀJ Δ`
@@ -59,7 +61,10 @@
 //!    small in whitened steps, where the naive bound is dominated by the well-determined directions:
 //!    for a point, `D²π[p', p'] = −2 (p'_z / p_z) Dπ[p']`, so `r'' = W K₂ Dπ[p''] − 2 (p'_z / p_z) r'`;
 //!    for a line endpoint, `r = n / w` (`n = ēᵀ m`, `w = ‖G_e m_xy‖`, `m = A × B`) and
-//!    `r'' = (n'' − r w'') / w − 2 (w' / w) r'`, with `n''(0)` an exact quadratic form in `v`. Bounding
+//!    `r'' = (n'' − r w'') / w − 2 (w' / w) r'`, with `n''(0)` an exact quadratic form in `v` and
+//!    `n'''` bounded also about either end `X` of the segment, `n = Dᵀ (ē × X)` (`D = B − A`), where a
+//!    step along the line of sight (the depth, poorly determined on narrow fields of view) does not
+//!    move `ē × X` (`sight_parts`). Bounding
 //!    each part over the ball gives `‖r''‖ ≤ K` (`RayCurvature`), hence
 //!    `‖r(s)‖ ≥ ‖r̂ + s J T v‖ − ½ K s²` and `‖r̂ + s J T v‖² ≥ 2f̂ − 2‖Tᵀg‖ s + λ_min s²`. The least
 //!    value of the square of the right-hand side over `s ≤ ρ`, halved, is the lower bound.
