@@ -758,6 +758,18 @@ impl<'c> Problem<'c> {
     }
 }
 
+/// A box's ellipsoid `(t − centre)ᵀ C (t − centre) ≤ slack` that holds the translations of its poses
+/// of `S`, its reach `spread ≥ max ‖t − centre‖` over it, and whether it comes from the quadratic with
+/// the segments' terms ([`LinesBound::ellipsoid`]) rather than the points' minorant.
+#[derive(Clone, Copy)]
+struct Ellipsoid {
+    centre: Vector3<f64>,
+    c: Matrix3<f64>,
+    slack: f64,
+    spread: f64,
+    with_segments: bool,
+}
+
 /// [`Problem::lines_bound`]: the bound, and the quadratic `Q_total(t) = q_min + (t − t*)ᵀ C (t − t*)`
 /// at the box's centre rotation with `η_total` (`eta`). The poses of `S` in the box (their
 /// translations within the points' ellipsoid) have `√Q_total ≤ √(2f̂) + θ η_total`: a second
@@ -1632,14 +1644,27 @@ impl RotationSearch<'_, '_> {
         };
         let lower = with_lines.as_ref().map_or(lower, |l| lower.max(l.lower));
         // The translations of the box's poses of S lie in the points' ellipsoid and in the one with
-        // the segments: the one with the lesser reach is kept (centre, C, slack, spread).
-        let mut ellipsoid = (t_star, minorant.c * scale, slack, spread, None);
-        if let Some(l) = &with_lines {
-            let (slack, spread) = l.ellipsoid(self.f_hat, theta);
-            if spread < ellipsoid.3 {
-                ellipsoid = (l.t_star, l.c, slack, spread, Some(l.c));
-            }
-        }
+        // the segments: the one with the lesser reach is kept.
+        let points_ellipsoid = Ellipsoid {
+            centre: t_star,
+            c: minorant.c * scale,
+            slack,
+            spread,
+            with_segments: false,
+        };
+        let ellipsoid = match &with_lines {
+            Some(l) => match l.ellipsoid(self.f_hat, theta) {
+                (slack, spread) if spread < points_ellipsoid.spread => Ellipsoid {
+                    centre: l.t_star,
+                    c: l.c,
+                    slack,
+                    spread,
+                    with_segments: true,
+                },
+                _ => points_ellipsoid,
+            },
+            None => points_ellipsoid,
+        };
         if !lower.is_finite() {
             return (
                 Bound::Failed { solver_iterations: 0 },
@@ -1649,15 +1674,15 @@ impl RotationSearch<'_, '_> {
         if let Some(pruned) = self.pruned(lower) {
             return (pruned, None);
         }
-        let kept = |inside_ball: bool| testing::KeptCell {
+        let kept = |inside_ball: bool, ellipsoid: &Ellipsoid| testing::KeptCell {
             centre: cell.centre,
             half: cell.half,
-            t_star: ellipsoid.0,
-            c: ellipsoid.1,
-            slack: ellipsoid.2,
+            t_star: ellipsoid.centre,
+            c: ellipsoid.c,
+            slack: ellipsoid.slack,
             inside_ball,
             depths: scaled.depths().collect(),
-            with_segments: ellipsoid.4.is_some(),
+            with_segments: ellipsoid.with_segments,
             extent: None,
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
@@ -1674,30 +1699,32 @@ impl RotationSearch<'_, '_> {
         if behind {
             if let InsideBall::Record(r) = &mut self.inside_ball {
                 r.pruned += 1;
-                r.behind.push(kept(false));
+                // The test above is on the points' ellipsoid.
+                r.behind.push(kept(false, &points_ellipsoid));
             }
             return (Bound::Empty { solver_iterations: 0 }, None);
         }
-        let extent = || match &ellipsoid.4 {
-            Some(c) => self
-                .whitening
-                .ellipsoid_factor(c)
-                .map(|lambda| (ellipsoid.2 * lambda).max(0.0).sqrt()),
-            None => {
+        let extent = || {
+            if ellipsoid.with_segments {
+                self.whitening.ellipsoid_factor(&ellipsoid.c)
+            } else {
+                // The points' C is the minorant's times `scale`: its factor once per minorant.
                 let factor = minorant
                     .extent
                     .get_or_init(|| self.whitening.ellipsoid_factor(&minorant.c));
-                factor.map(|lambda| (slack * lambda / scale).max(0.0).sqrt())
+                factor.map(|lambda| lambda / scale)
             }
+            .map(|lambda| (ellipsoid.slack * lambda).max(0.0).sqrt())
         };
-        if let Some(bound) = self.settled(cell, lower, &ellipsoid.0, extent, kept) {
+        if let Some(bound) = self.settled(cell, lower, &ellipsoid.centre, extent, |inside| {
+            kept(inside, &ellipsoid)
+        }) {
             return (bound, None);
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
-        let (centre, spread) = (ellipsoid.0, ellipsoid.3);
         let reach = (problem.corr.points3d.iter().zip(&problem.norms))
-            .map(|(x, norm)| (r_c * x + centre).norm() + theta * norm + spread);
+            .map(|(x, norm)| (r_c * x + ellipsoid.centre).norm() + theta * norm + ellipsoid.spread);
         let handed_down = scaled.tightened(problem, reach, r_c, 0.5 * theta);
         (bounded(lower), Some(Handed::Minorant(handed_down)))
     }
