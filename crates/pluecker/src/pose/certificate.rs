@@ -318,6 +318,15 @@ impl LineForm {
     }
 }
 
+/// The translations of [`Problem::line_terms`]: within `spread` of `t_star` and, given `shape`, in
+/// the ellipsoid `{t* + L z : ‖z‖ ≤ 1}` (`shape = L Lᵀ`, largest semi-axis `spread`).
+#[derive(Clone, Copy)]
+struct TranslationSet<'a> {
+    t_star: &'a Vector3<f64>,
+    spread: f64,
+    shape: Option<&'a Matrix3<f64>>,
+}
+
 /// A segment endpoint's term of [`Problem::lines_bound`] for a box: the weight `1 / W²`, the residual
 /// numerator `n = α + βᵀ t` at the box's centre rotation, and `drift` with `|Δn| ≤ θ drift` over the
 /// box ([`Problem::line_terms`]).
@@ -539,33 +548,19 @@ impl<'c> Problem<'c> {
     /// `‖ē × t‖ ≤ ‖ē × t*‖ + ‖ē‖ spread`, or `‖ē × t*‖ + ‖[ē]ₓ L‖` with the spectral norm below the
     /// Frobenius norm `√(‖ē‖² tr(shape) − ēᵀ shape ē)` (an ellipsoid elongated along the line of
     /// sight moves `ē × t` little).
-    fn line_terms(
-        &self,
-        segments: usize,
-        r: &Matrix3<f64>,
-        theta: f64,
-        t_star: &Vector3<f64>,
-        spread: f64,
-        shape: Option<&Matrix3<f64>>,
-    ) -> Vec<LineTerm> {
+    fn line_terms(&self, segments: usize, (r, theta): (&Matrix3<f64>, f64), set: TranslationSet) -> Vec<LineTerm> {
         let mut terms = Vec::with_capacity(2 * segments.min(self.lines.len()));
-        self.each_line_term(segments, r, theta, t_star, spread, shape, |term| {
-            terms.push(term.clone())
-        });
+        self.each_line_term(segments, (r, theta), set, |term| terms.push(term.clone()));
         terms
     }
 
     /// [`Self::line_terms`] handed one by one to `visit`, built in place (the search's inner loop:
     /// no term is moved or stored).
-    #[allow(clippy::too_many_arguments)]
     fn each_line_term(
         &self,
         segments: usize,
-        r: &Matrix3<f64>,
-        theta: f64,
-        t_star: &Vector3<f64>,
-        spread: f64,
-        shape: Option<&Matrix3<f64>>,
+        (r, theta): (&Matrix3<f64>, f64),
+        TranslationSet { t_star, spread, shape }: TranslationSet,
         mut visit: impl FnMut(&LineTerm),
     ) {
         for line in self.lines.iter().take(segments) {
@@ -629,9 +624,12 @@ impl<'c> Problem<'c> {
             c0: q_min + t_star.dot(&(c * t_star)),
             eta2: scaled.minorant.eta.powi(2) * scaled.scale,
         };
-        self.each_line_term(segments, r, theta, t_star, spread, None, |term| {
-            quadratic.add_line(term)
-        });
+        let set = TranslationSet {
+            t_star,
+            spread,
+            shape: None,
+        };
+        self.each_line_term(segments, (r, theta), set, |term| quadratic.add_line(term));
         let (t_star, q_min, c_inv) = quadratic.minimum()?;
         let eta = quadratic.eta2.sqrt();
         Some(LinesBound {
@@ -689,7 +687,12 @@ impl<'c> Problem<'c> {
             rotated.push((y, w));
         }
         let points_eta2 = quadratic.eta2;
-        let terms = self.line_terms(segments, r, theta, &ball.centre, ball.radius, Some(&ball.shape));
+        let set = TranslationSet {
+            t_star: &ball.centre,
+            spread: ball.radius,
+            shape: Some(&ball.shape),
+        };
+        let terms = self.line_terms(segments, (r, theta), set);
         terms.iter().for_each(|term| quadratic.add_line(term));
         let (t_star, q_min, c_inv) = quadratic.minimum()?;
         // Per segment endpoint, its drift at t*: θ aₖ with aₖ = ‖ē‖ ‖m‖ + ‖d‖ ‖ē × t*‖, or
@@ -2915,8 +2918,15 @@ mod tests {
                 // translation solved exactly (least squares), least over the rotations by sampling
                 // then a hill climb. The weights are the box's (from its ellipsoid), the numerators
                 // recomputed here: n = ēᵀ ((R a + t) × (R b + t)) = ēᵀ (R a × R b) + tᵀ ((R b − R a) × ē).
-                let terms: Vec<LineTerm> =
-                    problem.line_terms(problem.lines.len(), &r_c, theta, &centre, radius, Some(&shape));
+                let terms: Vec<LineTerm> = problem.line_terms(
+                    problem.lines.len(),
+                    (&r_c, theta),
+                    TranslationSet {
+                        t_star: &centre,
+                        spread: radius,
+                        shape: Some(&shape),
+                    },
+                );
                 let depths = bounds.depths.clone();
                 let minorant = |phi: &Vector3<f64>| -> f64 {
                     let rotation = exp_so3(phi) * r_c;
@@ -3012,7 +3022,15 @@ mod tests {
                 };
                 let g = &open.growth;
                 let (t_star, rho) = (open.t_star, rotation_rest(theta));
-                let terms: Vec<LineTerm> = problem.line_terms(segments, &r_c, theta, &centre, radius, Some(&shape));
+                let terms: Vec<LineTerm> = problem.line_terms(
+                    segments,
+                    (&r_c, theta),
+                    TranslationSet {
+                        t_star: &centre,
+                        spread: radius,
+                        shape: Some(&shape),
+                    },
+                );
                 let x_of = |d: &Vector3<f64>| d.dot(&(g.n * d)).max(0.0).sqrt();
                 let q_of = |d: &Vector3<f64>| (g.q_min + d.dot(&(open.c * d))).sqrt();
                 let clamp = |v: Vector3<f64>, r: f64| v * (r / v.norm()).min(1.0);
@@ -3215,7 +3233,15 @@ mod tests {
                 let theta = 1e-2 * 100f64.powf(rng.uniform_in(0.0, 1.0));
                 let t_star = scene.translation + rng.unit_vector3() * rng.uniform_in(0.0, 1.0);
                 let spread = rng.uniform_in(0.0, 1.0);
-                let terms: Vec<LineTerm> = problem.line_terms(problem.lines.len(), &r_c, theta, &t_star, spread, None);
+                let terms: Vec<LineTerm> = problem.line_terms(
+                    problem.lines.len(),
+                    (&r_c, theta),
+                    TranslationSet {
+                        t_star: &t_star,
+                        spread,
+                        shape: None,
+                    },
+                );
                 for (index, term) in terms.iter().enumerate() {
                     let line = &problem.lines[index / 2];
                     let e = line.ends[index % 2].0;
@@ -3366,8 +3392,15 @@ mod tests {
                     let (t_star, q_min, eta) = scaled.at(&r_c).unwrap();
                     let slack = (((2.0 * f_hat).sqrt() + theta * eta).powi(2) - q_min).max(0.0);
                     let spread = (slack / kappa * problem.root().expect("depth bounds").c_inv_max).sqrt();
-                    let terms: Vec<LineTerm> =
-                        problem.line_terms(problem.box_segments, &r_c, theta, &t_star, spread, None);
+                    let terms: Vec<LineTerm> = problem.line_terms(
+                        problem.box_segments,
+                        (&r_c, theta),
+                        TranslationSet {
+                            t_star: &t_star,
+                            spread,
+                            shape: None,
+                        },
+                    );
                     // Per endpoint: w √weight and |n − n_c| / (θ drift), each at most 1.
                     let ratios = |phi: &Vector3<f64>, u: &Vector3<f64>, index: usize| -> [f64; 2] {
                         let (line, end) = (segments[index / 2], index % 2);
@@ -3453,8 +3486,15 @@ mod tests {
                         (bound, 1e-9 * (q + at_origin))
                     };
                     // A line's distance bound grows with θ: at θ = 0 its terms are those for θ = 0.
-                    let at_zero: Vec<LineTerm> =
-                        problem.line_terms(problem.box_segments, &r_c, 0.0, &t_star, spread, None);
+                    let at_zero: Vec<LineTerm> = problem.line_terms(
+                        problem.box_segments,
+                        (&r_c, 0.0),
+                        TranslationSet {
+                            t_star: &t_star,
+                            spread,
+                            shape: None,
+                        },
+                    );
                     for (th, terms) in [(0.0, &at_zero), (theta, &terms)] {
                         let (expected, rounding) = assembled(terms, th);
                         let found = problem
