@@ -3,15 +3,16 @@ test) of the default, non-robust pipeline against the best minimum known, with O
 cvxpnpl on the same seeded scenes.
 
 **Cost.** The cost of a pose ``(R, t)`` (``x_cam = R X + t``) is the maximum-likelihood cost under
-Gaussian pixel noise, ``½ (Σ_points e² + Σ_lines 2 e²)``, from ``pluecker.reprojection_errors``: ``e``
-of a point is its pixel distance, ``e`` of a line the RMS of the distances of its two observed
-endpoints to the projected 3-D line (so ``2 e²`` is the sum of the two squared distances). On the
-``cov-`` rows (per-observation covariances) it is the whitened cost ``½ Σ r²`` that ``estimate_pose``
-minimises with ``point_covariances`` / ``line_covariances``, computed here in numpy
-(``reprojection_errors`` takes no covariances): a point's ``r·r = eᵀ Σ⁻¹ e``, ``e = π(R X + t) − u``;
-an endpoint's ``r = d / √(n̂ᵀ Σ n̂)``, ``d`` its signed pixel distance to the projected line and ``n̂``
-that line's unit normal. A pose with a non-finite entry, or with a 3-D point or segment endpoint at
-depth ``<= 0``, is not valid: its cost is taken as +inf.
+Gaussian pixel noise, ``½ (Σ_points e² + Σ_endpoints d²)``: ``e`` of a point is its pixel distance,
+``d`` of a segment endpoint its pixel distance to the projected 3-D line. On the ``cov-`` rows
+(per-observation covariances) it is the whitened cost ``½ Σ r²`` that ``estimate_pose`` minimises with
+``point_covariances`` / ``line_covariances``: a point's ``r·r = eᵀ Σ⁻¹ e``, ``e = π(R X + t) − u``; an
+endpoint's ``r = d / √(n̂ᵀ Σ n̂)``, ``d`` its signed pixel distance to the projected line and ``n̂``
+that line's unit normal. Both are computed here in numpy, not by the library, so that the certified
+bounds are checked against a cost of the script's own. A pose with a non-finite entry, a matrix that is
+not a rotation (``max |R Rᵀ − I| > 1e-6`` or ``det R ≤ 0``, the library's own tolerance for a rotation
+argument), or a 3-D point or segment endpoint at depth ``<= 0`` is not valid: its cost is taken as
++inf.
 
 **Best known minimum** of a scene: the lowest valid cost among
 
@@ -207,6 +208,7 @@ DEFAULT_STARTS_LARGE = 20
 QUICK_STARTS = 10
 DEFAULT_CVX_SCENES: int | None = None  # None: every scene of the row (a call takes 3-50 ms, under 100 ms)
 CVX_MAX_CORRESPONDENCES = 10
+ROTATION_TOLERANCE = 1e-6  # max |R Rᵀ − I| of a valid rotation (the library's for a rotation argument)
 LARGE_ROW = 10  # rows with more correspondences than this use --starts-large
 CERT_TARGET = {100: 0.99, 10: 0.95}
 CERT_TIME_TARGET_US = 1000.0
@@ -433,15 +435,17 @@ def make_scene(row: Row, seed: int) -> Scene:
 
 
 def pose_cost(scene: Scene, R: Any, t: Any) -> float:
-    """``½ (Σ_points e² + Σ_lines 2 e²)`` px² at ``(R, t)`` (the whitened ``½ Σ r²`` on a scene with
-    covariances); +inf for an invalid pose (non-finite, a point or endpoint at depth <= 0, or a matrix
-    ``reprojection_errors`` does not take as a rotation)."""
+    """``½ (Σ_points e² + Σ_endpoints d²)`` px² at ``(R, t)`` (the whitened ``½ Σ r²`` on a scene with
+    covariances); +inf for an invalid pose (non-finite, not a rotation, or a point or endpoint at depth
+    <= 0)."""
     try:
         R = np.asarray(R, dtype=float).reshape(3, 3)
         t = np.asarray(t, dtype=float).reshape(3)
     except (TypeError, ValueError):
         return math.inf
     if not (np.all(np.isfinite(R)) and np.all(np.isfinite(t))):
+        return math.inf
+    if np.max(np.abs(R @ R.T - np.eye(3))) > ROTATION_TOLERANCE or np.linalg.det(R) <= 0.0:
         return math.inf
     if np.any(scene.all3d @ R[2] + t[2] <= 0.0):
         return math.inf
