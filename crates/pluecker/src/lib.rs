@@ -112,6 +112,7 @@ pub mod geometry;
 pub(crate) mod global;
 pub mod interrupt;
 pub(crate) mod lens_bounds;
+pub(crate) mod lens_linearisation;
 pub(crate) mod names;
 pub mod optim;
 pub mod pose;

@@ -58,11 +58,11 @@ use super::chart::{Chart, ChartKind};
 use super::cost::PointView;
 use super::robust::RobustTrack;
 use crate::camera_model::AnyCamera;
-use crate::camera_model::LensCamera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
-use crate::lens_bounds::{distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion};
+use crate::lens_linearisation::{Linearised, SPLITS};
+pub use crate::lens_linearisation::LensBoundFailure;
 use crate::optim::Termination;
 use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
 use crate::triangulation::point::linear::WorldFrame;
@@ -70,22 +70,11 @@ use crate::triangulation::point::PointTriangulation;
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{depth_normalized, View};
 use crate::triangulation::{Certificate, CertificateKind, Method, Status, TriangulationOptions};
-use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Rotation3, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
 
-/// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
-/// 1e5 computed through a few dozen operations).
-const PIXEL_ROUNDING: f64 = 1e-13;
 /// Rounds of the tightening of step 4.
 const TIGHTENING_ROUNDS: usize = 6;
-/// `εᵢ` above which the box of [`Linearised::epsilon`] is split.
-const SPLIT_EPSILON: f64 = 0.01;
-/// Sub-boxes per side of a split box of [`Linearised::epsilon`].
-const SPLITS: usize = 8;
-/// Fisheye projections farther off axis than this (`tan 10°`) use the ray chart.
-const RAY_CHART_TAN: f64 = 0.176;
-/// Growth of a view's confinement radius per retry of step 1.
-const RADIUS_RETRIES: usize = 8;
 
 /// One observation through a camera: the camera, its pose, the observed pixel and the whitening `L`
 /// of its covariance (`Lᵀ L = Σ⁻¹`).
@@ -202,199 +191,6 @@ pub struct LensBound {
     pub raw_lower_bound: f64,
 }
 
-/// Why [`lens_certificate`] found no bound.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum LensBoundFailure {
-    /// A lens that is not radially symmetric, or not covered by `lens_bounds`.
-    Lens,
-    /// A projection, or the box about it, reaches a lens's fold radius, or `εᵢ ≥ 1`.
-    Fold,
-    /// The convexity test failed (low parallax, large residuals, a second minimum nearby).
-    Convexity,
-}
-
-/// Per view: `Wᵢ`, `Mᵢ`, `eᵢ*`, `nᵢ*`, `Jᵢ*`, the profile and fold radius, `sᵢ`.
-struct Linearised {
-    w: Matrix2<f64>,
-    w_inverse: Matrix2<f64>,
-    m: Matrix2<f64>,
-    e: Vector2<f64>,
-    n: Vector2<f64>,
-    j: Matrix2<f64>,
-    distortion: Distortion,
-    /// The one-to-one radius of [`crate::lens_bounds::domain`].
-    radius: f64,
-    /// The ray chart's rotation `R` (camera frame to a frame whose optical axis is the ray of `nᵢ*`),
-    /// for fisheyes off axis; then `n` is `n′ = 0` and `J` is that of `D ∘ h`.
-    ray: Option<Matrix3<f64>>,
-    rounding: f64,
-    /// Sub-boxes per side of the box of [`Linearised::epsilon`] when one box is not enough: 1 (never
-    /// split) or [`SPLITS`].
-    splits: usize,
-    /// `εᵢ` at step 1's first radius ([`Linearised::first_radius`]) when choosing the chart already
-    /// evaluated it (fisheyes off axis), so that [`Linearised::confinement`] does not repeat it.
-    first_epsilon: Option<Option<f64>>,
-}
-
-impl Linearised {
-    fn new(
-        view: &LensView,
-        x: &Vector3<f64>,
-        cost: f64,
-        splits: usize,
-    ) -> std::result::Result<Linearised, LensBoundFailure> {
-        let (distortion, fold, lens) = match view.camera {
-            AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY, None),
-            AnyCamera::Lens(lens) => (
-                distortion(lens).ok_or(LensBoundFailure::Lens)?,
-                lens.fold_radius(),
-                Some(lens),
-            ),
-        };
-        let domain = domain(&distortion, fold).ok_or(LensBoundFailure::Fold)?;
-        let xc = view.x_cam(x);
-        if !(xc.z > 0.0) {
-            return Err(LensBoundFailure::Fold);
-        }
-        let n = Vector2::new(xc.x / xc.z, xc.y / xc.z);
-        if !(n.norm() < domain.radius) {
-            return Err(LensBoundFailure::Fold);
-        }
-        // Step 1's path argument needs the ellipse {‖e‖ ≤ √C} of distorted normalised coordinates
-        // inside the disc that the one-to-one disc maps onto.
-        let pinhole = view.camera.pinhole().map_err(|_| LensBoundFailure::Lens)?;
-        let m = view.whitening * pinhole.pixel_jacobian();
-        let m_inverse_norm = m.try_inverse().ok_or(LensBoundFailure::Lens)?.norm();
-        let observed = pinhole.pixel_to_normalized(&view.pixel);
-        if !(observed.norm() + cost.sqrt() * m_inverse_norm < domain.image_radius) {
-            return Err(LensBoundFailure::Fold);
-        }
-        let jd = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
-        let u = view.camera.project(&xc).0;
-        let e = view.whitening * (u - view.pixel);
-        // The rounding of e: of u and of the pixel, through L.
-        let rounding = view.whitening.norm() * PIXEL_ROUNDING * (u.norm() + view.pixel.norm() + 1.0);
-        let w = m * jd;
-        let plain = Linearised {
-            w,
-            w_inverse: w.try_inverse().ok_or(LensBoundFailure::Fold)?,
-            m,
-            e,
-            n,
-            j: jd,
-            distortion,
-            radius: domain.radius,
-            ray: None,
-            rounding,
-            splits,
-            first_epsilon: None,
-        };
-        // A fisheye off axis may do better in the ray chart (module docs): the chart of smaller εᵢ.
-        if let (Distortion::Fisheye(_), true) = (&plain.distortion, n.norm() > RAY_CHART_TAN) {
-            let turned =
-                Rotation3::rotation_between(&xc, &Vector3::z()).and_then(|r| plain.in_ray_chart(r.into_inner()));
-            if let Some(turned) = turned {
-                // Both charts share eᵢ* and sᵢ, hence the first radius.
-                let rho = plain.first_radius(cost);
-                let (a, b) = (turned.epsilon(rho), plain.epsilon(rho));
-                let better = match (a, b) {
-                    (Some(a), Some(b)) => a < b,
-                    (Some(_), None) => true,
-                    _ => false,
-                };
-                let (chosen, eps) = if better { (turned, a) } else { (plain, b) };
-                return Ok(Linearised {
-                    first_epsilon: Some(eps),
-                    ..chosen
-                });
-            }
-        }
-        Ok(plain)
-    }
-
-    /// The same view in the ray chart of `ray` (`n′ = 0` at the estimate, `J` that of `D ∘ h`).
-    fn in_ray_chart(&self, ray: Matrix3<f64>) -> Option<Linearised> {
-        let j = self.j * homography_jacobian(&ray);
-        let w = self.m * j;
-        Some(Linearised {
-            w,
-            w_inverse: w.try_inverse()?,
-            n: Vector2::zeros(),
-            j,
-            ray: Some(ray),
-            distortion: self.distortion.clone(),
-            first_epsilon: None,
-            ..*self
-        })
-    }
-
-    /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the edge of the
-    /// domain or the camera's principal plane. Interval arithmetic overestimates the Jacobian's
-    /// variation by a multiple of the box's width (the dependency effect); where that shows (`εᵢ` above
-    /// [`SPLIT_EPSILON`]) the box is split into `splits` x `splits` sub-boxes, and `E` is the largest of
-    /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
-    fn epsilon(&self, rho: f64) -> Option<f64> {
-        let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
-        let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
-        let mut eps = f64::INFINITY;
-        for pieces in [1, self.splits] {
-            let mut e = Matrix2::zeros();
-            let step = half * (2.0 / pieces as f64);
-            for a in 0..pieces {
-                for b in 0..pieces {
-                    let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
-                    let hi = lo + step;
-                    let enclosure = match (&self.ray, &self.distortion) {
-                        (Some(r), Distortion::Fisheye(c)) => {
-                            fisheye_ray_enclosure(c, self.radius, &r.transpose(), &lo, &hi)?
-                        }
-                        _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
-                    };
-                    e = e.sup(&radius_about(&enclosure, &self.j));
-                }
-            }
-            eps = eps.min((self.m.abs() * e * self.w_inverse.abs()).norm());
-            if !(eps > SPLIT_EPSILON) || self.splits == 1 {
-                break;
-            }
-        }
-        eps.is_finite().then_some(eps)
-    }
-
-    /// Step 1's first radius `ρ = 1.001 (√C + ‖eᵢ*‖ + sᵢ)`.
-    fn first_radius(&self, cost: f64) -> f64 {
-        (cost.sqrt() + self.e.norm() + self.rounding) * 1.001
-    }
-
-    /// Step 1: `(ρᵢ, εᵢ)` with `(1 − εᵢ)ρᵢ − ‖eᵢ*‖ − sᵢ > √C`.
-    fn confinement(&self, cost: f64) -> Option<(f64, f64)> {
-        let need = cost.sqrt() + self.e.norm() + self.rounding;
-        let mut rho = self.first_radius(cost);
-        for retry in 0..RADIUS_RETRIES {
-            let eps = match (retry, self.first_epsilon) {
-                (0, Some(known)) => known?,
-                _ => self.epsilon(rho)?,
-            };
-            if eps < 1.0 && (1.0 - eps) * rho > need {
-                return Some((rho, eps));
-            }
-            if !(eps < 0.5) {
-                return None;
-            }
-            rho = need / (1.0 - eps) * 1.01;
-        }
-        None
-    }
-}
-
-/// `∂h/∂n′` at `n′ = 0` of `h(n′) = (w₁/w₃, w₂/w₃)`, `w = Rᵀ (n′, 1)`: the ray chart's map to `n`.
-fn homography_jacobian(ray: &Matrix3<f64>) -> Matrix2<f64> {
-    let back = ray.transpose();
-    let w = back.column(2);
-    let h = Vector2::new(w.x / w.z, w.y / w.z);
-    Matrix2::from_fn(|r, c| (back[(r, c)] - h[r] * back[(2, c)]) / w.z)
-}
-
 /// The certificate's lower bound of `F` at the local minimiser `x` of cost `cost` (module docs), or
 /// why there is none. `gap` is the relative gap the caller will ask for (the tightening aims at half of it).
 pub fn lens_certificate(
@@ -421,7 +217,7 @@ fn certificate_with_splits(
 ) -> std::result::Result<LensBound, LensBoundFailure> {
     let lin: Vec<Linearised> = views
         .iter()
-        .map(|v| Linearised::new(v, x, cost, splits))
+        .map(|v| Linearised::new(v.camera, &v.whitening, &v.pixel, &v.x_cam(x), cost, splits, true))
         .collect::<std::result::Result<_, _>>()?;
     // Step 1.
     let confined: Vec<(f64, f64)> = lin
@@ -732,7 +528,7 @@ pub(crate) fn solve_through_lenses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_model::CameraModel;
+    use crate::camera_model::{CameraModel, LensCamera};
     use crate::rng::Rng;
 
     /// A view of `x` through `lens` from a camera at distance 5 whose axis is `angle` off the point,
@@ -834,7 +630,7 @@ mod tests {
                 };
                 // A level above the view's own cost, as with other views in the track.
                 let cost = view.squared_residual(&x) + rng.uniform_in(0.5, 20.0);
-                let Ok(l) = Linearised::new(&view, &x, cost, SPLITS) else {
+                let Ok(l) = Linearised::new(view.camera, &view.whitening, &view.pixel, &view.x_cam(&x), cost, SPLITS, true) else {
                     continue;
                 };
                 let Some((rho, eps)) = l.confinement(cost) else {

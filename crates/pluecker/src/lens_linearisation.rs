@@ -1,0 +1,243 @@
+//! An observation linearised through a lens at a point of its image, for the certificates through a
+//! lens (the triangulated point's, [`crate::triangulation::point::lens`], and the pose's,
+//! [`crate::pose::certificate`]).
+//!
+//! An observation is the observed pixel `u₀` of a camera `u = K D(n)` (`n` normalised coordinates),
+//! whitened by `L` (`Lᵀ L = Σ⁻¹`): its residual at `n` is `e(n) = L (K D(n) − u₀) = M (D(n) − d₀)`
+//! with `M = L K₂` (`K₂` the upper-left block of `K`) and `d₀` the observation's distorted normalised
+//! coordinates. Linearised at `n*` (`e* = e(n*)`, `J* = ∂D/∂n(n*)`, `W = M J*`):
+//! `e(n) = e* + (I + Δ) W (n − n*)` along the segment from `n*` (mean value theorem), with
+//! `‖Δ‖ ≤ ε` for `n` in a box `B` about `n*` where `E` bounds `|J(n) − J*|` entrywise (interval
+//! enclosures of [`crate::lens_bounds`]) and `ε = ‖ |M| E |W⁻¹| ‖_F` ([`Linearised::epsilon`]).
+//!
+//! **Confinement** ([`Linearised::confinement`]). On the boundary of `B = {n : ‖W (n − n*)‖ ≤ ρ}`,
+//! `‖e‖ ≥ (1 − ε) ρ − ‖e*‖ − s` (`s` the rounding of `e*`), which exceeds `√C` for `ρ` chosen so.
+//! Let `n` lie in the disc where `D` is one-to-one ([`crate::lens_bounds::domain`]) with
+//! `‖e(n)‖ ≤ √C`: `D(n)` lies in the ellipse `{d : ‖M (d − d₀)‖ ≤ √C}`, which the constructor requires
+//! inside the disc of radius `ρ_D` that `D` maps onto. The segment from `D(n*)` to `D(n)` lies in that
+//! ellipse, and its preimage under the homeomorphism `D` is a path from `n*` to `n` along which
+//! `‖e‖ ≤ √C`: it never meets `∂B`, so `n ∈ B`.
+//!
+//! A fisheye projection off axis may use the **ray chart**: the normalised coordinates `n′` of the
+//! camera rotated so that the ray of `n*` is its optical axis (`n′* = 0`, `n = h(n′)` a homography),
+//! with the Jacobian of `D ∘ h`; a box of `n′` stays small in angle where one of `n` stretches with
+//! `1/cos²θ`. The argument holds in either chart.
+
+use crate::camera_model::{AnyCamera, LensCamera};
+use crate::lens_bounds::{distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion};
+use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
+
+/// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
+/// 1e5 computed through a few dozen operations).
+pub(crate) const PIXEL_ROUNDING: f64 = 1e-13;
+/// `εᵢ` above which the box of [`Linearised::epsilon`] is split.
+const SPLIT_EPSILON: f64 = 0.01;
+/// Sub-boxes per side of a split box of [`Linearised::epsilon`].
+pub(crate) const SPLITS: usize = 8;
+/// Fisheye projections farther off axis than this (`tan 10°`) use the ray chart.
+const RAY_CHART_TAN: f64 = 0.176;
+/// Growth of a view's confinement radius per retry of step 1.
+const RADIUS_RETRIES: usize = 8;
+
+/// Why a certificate through a lens found no bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LensBoundFailure {
+    /// A lens that is not radially symmetric, or not covered by `lens_bounds`.
+    Lens,
+    /// A projection, or the box about it, reaches a lens's fold radius, or `εᵢ ≥ 1`.
+    Fold,
+    /// The convexity test failed (low parallax, large residuals, a second minimum nearby).
+    Convexity,
+}
+
+/// One observation linearised at `n*` (module docs): `W`, `M`, `e*`, `n*`, `J*`, the distortion and
+/// its one-to-one radius, `s`.
+pub(crate) struct Linearised {
+    pub(crate) w: Matrix2<f64>,
+    pub(crate) w_inverse: Matrix2<f64>,
+    pub(crate) m: Matrix2<f64>,
+    pub(crate) e: Vector2<f64>,
+    pub(crate) n: Vector2<f64>,
+    pub(crate) j: Matrix2<f64>,
+    pub(crate) distortion: Distortion,
+    /// The one-to-one radius of [`crate::lens_bounds::domain`].
+    pub(crate) radius: f64,
+    /// The ray chart's rotation `R` (camera frame to a frame whose optical axis is the ray of `nᵢ*`),
+    /// for fisheyes off axis; then `n` is `n′ = 0` and `J` is that of `D ∘ h`.
+    pub(crate) ray: Option<Matrix3<f64>>,
+    pub(crate) rounding: f64,
+    /// Sub-boxes per side of the box of [`Linearised::epsilon`] when one box is not enough: 1 (never
+    /// split) or [`SPLITS`].
+    pub(crate) splits: usize,
+    /// `εᵢ` at step 1's first radius ([`Linearised::first_radius`]) when choosing the chart already
+    /// evaluated it (fisheyes off axis), so that [`Linearised::confinement`] does not repeat it.
+    pub(crate) first_epsilon: Option<Option<f64>>,
+}
+
+impl Linearised {
+    /// The observation `pixel` of `camera`, whitened by `whitening`, linearised at the camera-frame
+    /// point `xc` (`n* = (x/z, y/z)`), for the level `cost` (`Σ ‖e‖²` over every observation; the
+    /// path argument of the module docs needs the observation's ellipse of that level inside the
+    /// lens's image disc). `splits`: sub-boxes per side where one box of [`Self::epsilon`]
+    /// overestimates (1: never split). `ray_chart`: a fisheye off axis may use the ray chart.
+    pub(crate) fn new(
+        camera: &AnyCamera,
+        whitening: &Matrix2<f64>,
+        pixel: &Vector2<f64>,
+        xc: &Vector3<f64>,
+        cost: f64,
+        splits: usize,
+        ray_chart: bool,
+    ) -> std::result::Result<Linearised, LensBoundFailure> {
+        let xc = *xc;
+        let (distortion, fold, lens) = match camera {
+            AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY, None),
+            AnyCamera::Lens(lens) => (
+                distortion(lens).ok_or(LensBoundFailure::Lens)?,
+                lens.fold_radius(),
+                Some(lens),
+            ),
+        };
+        let domain = domain(&distortion, fold).ok_or(LensBoundFailure::Fold)?;
+        if !(xc.z > 0.0) {
+            return Err(LensBoundFailure::Fold);
+        }
+        let n = Vector2::new(xc.x / xc.z, xc.y / xc.z);
+        if !(n.norm() < domain.radius) {
+            return Err(LensBoundFailure::Fold);
+        }
+        // Step 1's path argument needs the ellipse {‖e‖ ≤ √C} of distorted normalised coordinates
+        // inside the disc that the one-to-one disc maps onto.
+        let pinhole = camera.pinhole().map_err(|_| LensBoundFailure::Lens)?;
+        let m = whitening * pinhole.pixel_jacobian();
+        let m_inverse_norm = m.try_inverse().ok_or(LensBoundFailure::Lens)?.norm();
+        let observed = pinhole.pixel_to_normalized(pixel);
+        if !(observed.norm() + cost.sqrt() * m_inverse_norm < domain.image_radius) {
+            return Err(LensBoundFailure::Fold);
+        }
+        let jd = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
+        let u = camera.project(&xc).0;
+        let e = whitening * (u - pixel);
+        // The rounding of e: of u and of the pixel, through L.
+        let rounding = whitening.norm() * PIXEL_ROUNDING * (u.norm() + pixel.norm() + 1.0);
+        let w = m * jd;
+        let plain = Linearised {
+            w,
+            w_inverse: w.try_inverse().ok_or(LensBoundFailure::Fold)?,
+            m,
+            e,
+            n,
+            j: jd,
+            distortion,
+            radius: domain.radius,
+            ray: None,
+            rounding,
+            splits,
+            first_epsilon: None,
+        };
+        // A fisheye off axis may do better in the ray chart (module docs): the chart of smaller εᵢ.
+        if let (Distortion::Fisheye(_), true) = (&plain.distortion, ray_chart && n.norm() > RAY_CHART_TAN) {
+            let turned =
+                Rotation3::rotation_between(&xc, &Vector3::z()).and_then(|r| plain.in_ray_chart(r.into_inner()));
+            if let Some(turned) = turned {
+                // Both charts share eᵢ* and sᵢ, hence the first radius.
+                let rho = plain.first_radius(cost);
+                let (a, b) = (turned.epsilon(rho), plain.epsilon(rho));
+                let better = match (a, b) {
+                    (Some(a), Some(b)) => a < b,
+                    (Some(_), None) => true,
+                    _ => false,
+                };
+                let (chosen, eps) = if better { (turned, a) } else { (plain, b) };
+                return Ok(Linearised {
+                    first_epsilon: Some(eps),
+                    ..chosen
+                });
+            }
+        }
+        Ok(plain)
+    }
+
+    /// The same view in the ray chart of `ray` (`n′ = 0` at the estimate, `J` that of `D ∘ h`).
+    fn in_ray_chart(&self, ray: Matrix3<f64>) -> Option<Linearised> {
+        let j = self.j * homography_jacobian(&ray);
+        let w = self.m * j;
+        Some(Linearised {
+            w,
+            w_inverse: w.try_inverse()?,
+            n: Vector2::zeros(),
+            j,
+            ray: Some(ray),
+            distortion: self.distortion.clone(),
+            first_epsilon: None,
+            ..*self
+        })
+    }
+
+    /// `εᵢ` over the box holding `{n : ‖W(n − n*)‖ ≤ ρ}`; `None` where the box reaches the edge of the
+    /// domain or the camera's principal plane. Interval arithmetic overestimates the Jacobian's
+    /// variation by a multiple of the box's width (the dependency effect); where that shows (`εᵢ` above
+    /// [`SPLIT_EPSILON`]) the box is split into `splits` x `splits` sub-boxes, and `E` is the largest of
+    /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
+    pub(crate) fn epsilon(&self, rho: f64) -> Option<f64> {
+        let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
+        let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
+        let mut eps = f64::INFINITY;
+        for pieces in [1, self.splits] {
+            let mut e = Matrix2::zeros();
+            let step = half * (2.0 / pieces as f64);
+            for a in 0..pieces {
+                for b in 0..pieces {
+                    let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
+                    let hi = lo + step;
+                    let enclosure = match (&self.ray, &self.distortion) {
+                        (Some(r), Distortion::Fisheye(c)) => {
+                            fisheye_ray_enclosure(c, self.radius, &r.transpose(), &lo, &hi)?
+                        }
+                        _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
+                    };
+                    e = e.sup(&radius_about(&enclosure, &self.j));
+                }
+            }
+            eps = eps.min((self.m.abs() * e * self.w_inverse.abs()).norm());
+            if !(eps > SPLIT_EPSILON) || self.splits == 1 {
+                break;
+            }
+        }
+        eps.is_finite().then_some(eps)
+    }
+
+    /// Step 1's first radius `ρ = 1.001 (√C + ‖eᵢ*‖ + sᵢ)`.
+    pub(crate) fn first_radius(&self, cost: f64) -> f64 {
+        (cost.sqrt() + self.e.norm() + self.rounding) * 1.001
+    }
+
+    /// Step 1: `(ρᵢ, εᵢ)` with `(1 − εᵢ)ρᵢ − ‖eᵢ*‖ − sᵢ > √C`.
+    pub(crate) fn confinement(&self, cost: f64) -> Option<(f64, f64)> {
+        let need = cost.sqrt() + self.e.norm() + self.rounding;
+        let mut rho = self.first_radius(cost);
+        for retry in 0..RADIUS_RETRIES {
+            let eps = match (retry, self.first_epsilon) {
+                (0, Some(known)) => known?,
+                _ => self.epsilon(rho)?,
+            };
+            if eps < 1.0 && (1.0 - eps) * rho > need {
+                return Some((rho, eps));
+            }
+            if !(eps < 0.5) {
+                return None;
+            }
+            rho = need / (1.0 - eps) * 1.01;
+        }
+        None
+    }
+}
+
+/// `∂h/∂n′` at `n′ = 0` of `h(n′) = (w₁/w₃, w₂/w₃)`, `w = Rᵀ (n′, 1)`: the ray chart's map to `n`.
+fn homography_jacobian(ray: &Matrix3<f64>) -> Matrix2<f64> {
+    let back = ray.transpose();
+    let w = back.column(2);
+    let h = Vector2::new(w.x / w.z, w.y / w.z);
+    Matrix2::from_fn(|r, c| (back[(r, c)] - h[r] * back[(2, c)]) / w.z)
+}
+
