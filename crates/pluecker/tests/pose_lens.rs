@@ -824,3 +824,30 @@ fn no_certificate_is_claimed_through_a_lens() {
         result.details.uncertified_reason
     );
 }
+
+#[test]
+#[ignore]
+fn experiment_certificate_through_a_lens() {
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(Default::default());
+    for (lens, r_max) in strong_lenses() {
+        for (n, m, sigma) in [(20, 0, 1.0), (100, 0, 1.0), (50, 50, 1.0), (5, 5, 1.0), (0, 10, 1.0), (20, 2, 0.1)] {
+            let mut got = 0;
+            let mut reasons = vec![];
+            for seed in 0..5 {
+                let mut rng = Rng::new(seed);
+                let covs = vec![Matrix2::identity() * sigma * sigma; n + 2 * m];
+                let (corr, _, _) = lens_scene(&lens, r_max, n, m, &covs, &mut rng);
+                let t0 = std::time::Instant::now();
+                let result = estimate_pose(&lens, &corr, &certify).unwrap();
+                let dt = t0.elapsed().as_secs_f64();
+                if result.certificate.as_ref().is_some_and(|c| c.certified) {
+                    got += 1;
+                } else {
+                    reasons.push(format!("{:?} {:.0}ms", result.details.uncertified_reason, dt * 1e3));
+                }
+            }
+            eprintln!("{:?} n={n} m={m} σ={sigma}: {got}/5 {:?}", lens.model(), reasons);
+        }
+    }
+}

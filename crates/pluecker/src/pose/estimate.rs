@@ -476,8 +476,8 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
         let second_best = choice
             .second
             .map(|i| (to_world(&minima.found[i].pose), minima.found[i].cost));
-        let certification = certificate::stage(opts.certify.as_ref(), observations.lens.is_some(), status, |options| {
-            certify(camera, conditioned, &best.pose, best.cost, options)
+        let certification = certificate::stage(opts.certify.as_ref(), status, |options| {
+            certify(camera, observations.lens, &observed, &best.pose, best.cost, options)
         });
         (world, status, second_best, certification, behind_cost)
     } else {

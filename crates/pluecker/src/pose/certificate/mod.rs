@@ -86,11 +86,15 @@
 //! search hits `max_nodes` (another minimum nearly as good, or weak data), or when the observations bound
 //! neither the depths nor the object's distance (image lines that all meet in one point).
 
+mod lens;
+
 use super::correspondences::Correspondences;
+use lens::{Slack, Surrogate};
 use super::object_distance::{distance_bound, Sight};
 use super::reprojection::{Pose, ReprojectionCost};
 use super::Status;
 use crate::camera::Camera;
+use crate::camera_model::LensCamera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::global::branch_and_bound::{
@@ -121,22 +125,21 @@ pub const MAX_CELLS_BEFORE_FALLBACK: usize = 10_000;
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
 pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
 
-/// Why a pose through a lens is not certified.
-const PINHOLE_ONLY: &str = "not attempted: the certificate covers pinhole cameras only; \
-    through a lens with distortion the exact cost in the observed pixels has no certificate yet";
+/// Why noise that carries a lens's Jacobians (the first-order noise of undistorted pixels) is not
+/// certified: the cost is in the distorted pixels, which [`certify`] is given with the lens.
+const FIRST_ORDER_NOISE: &str = "not attempted: the noise is the first-order noise of undistorted pixels; \
+    the certificate bounds the cost in the observed pixels, through the lens";
 
 /// The certificate stage of both pipelines (with and without RANSAC): not requested without
-/// `certify`, not attempted through a lens or for a pose whose `status` is not a success, else
-/// `run` with the options (it calls [`certify`] on the data the pose was fitted to).
+/// `certify`, not attempted for a pose whose `status` is not a success, else `run` with the options
+/// (it calls [`certify`] on the data the pose was fitted to).
 pub(crate) fn stage(
     certify: Option<&CertifyOptions>,
-    through_lens: bool,
     status: Status,
     run: impl FnOnce(&CertifyOptions) -> Certification,
 ) -> Certification {
     match certify {
         None => Certification::none(NOT_REQUESTED),
-        Some(_) if through_lens => Certification::none(PINHOLE_ONLY),
         Some(_) if status != Status::Success => {
             Certification::none(format!("not attempted: status {}", status.as_str()))
         }
@@ -436,7 +439,7 @@ impl<'c> Problem<'c> {
                 (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
             }
             // Noise that carries a lens's Jacobians: the cost is in the distorted pixels.
-            Some(noise) if !noise.absolute => return Err(PINHOLE_ONLY.into()),
+            Some(noise) if !noise.absolute => return Err(FIRST_ORDER_NOISE.into()),
             Some(noise) => {
                 let endpoint = |c: &Matrix2<f64>| -> std::result::Result<EndpointMap, String> {
                     // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
@@ -1401,7 +1404,7 @@ impl Record {
 /// radius met so far (it holds the cell, so the bound is valid for it), recomputed only when a cell
 /// reaches farther; over the ball of the target radius where that cannot be computed.
 struct BallBound<'m> {
-    model: &'m LocalModel,
+    model: &'m LocalModel<'m>,
     /// The radius and raw bound last computed (`radius` 0 before the first cell).
     radius: f64,
     bound: f64,
@@ -1458,6 +1461,9 @@ struct RotationSearch<'a, 'c> {
     f_hat: f64,
     target: f64,
     max_relative_gap: f64,
+    /// The slack of a lens's surrogate ([`lens`]): the boxes are bounded, and `f_hat` is a level, of
+    /// the surrogate; step 4's bounds, of the cost, enter through [`Slack::to_surrogate`].
+    slack: Slack,
     inside_ball: InsideBall<'a>,
     /// The largest whitened radius `‖(ω, t − t̂)‖_W` of the boxes found inside the ball.
     radius: f64,
@@ -1591,7 +1597,7 @@ impl RotationSearch<'_, '_> {
                 if radius <= self.target {
                     self.radius = self.radius.max(radius);
                     let lower = match &mut self.inside_ball {
-                        InsideBall::Bound(ball) => lower.max(ball.at(radius)),
+                        InsideBall::Bound(ball) => lower.max(self.slack.to_surrogate(ball.at(radius))),
                         InsideBall::Record(r) => {
                             r.cells.push(testing::KeptCell {
                                 extent: Some(extent),
@@ -2234,10 +2240,11 @@ impl RayCurvature {
 
 /// Step 4: the least of `½ (√q(d) − ½ K d²)₊²` over `d ≤ rho`, `q(d) = 2f̂ − 2‖g‖d + λ d²`, by
 /// [`LOCAL_INTERVALS`] intervals on each of which `q` takes its exact minimum and `d²` its maximum.
-fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64) -> f64 {
+fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64, slacks: &[(f64, RaySlack)]) -> f64 {
     let q = |d: f64| 2.0 * f_hat - 2.0 * gradient * d + lambda * d * d;
     let vertex = if lambda > 0.0 { gradient / lambda } else { f64::INFINITY };
     let mut least = f64::INFINITY;
+    let mut slack = slacks.iter().peekable();
     for i in 0..LOCAL_INTERVALS {
         let (a, b) = (
             rho * i as f64 / LOCAL_INTERVALS as f64,
@@ -2248,24 +2255,61 @@ fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64) -
         } else {
             q(a).min(q(b))
         };
-        let h = q_min.max(0.0).sqrt() - 0.5 * k * b * b;
+        // The slack of the least ball that holds this interval's steps.
+        while slack.next_if(|(radius, _)| *radius < b).is_some() {}
+        let Some((_, slack)) = slack.peek() else {
+            return 0.0;
+        };
+        let h = slack.kappa * (q_min.max(0.0).sqrt() - 0.5 * k * b * b)
+            - slack.eps * (b + 0.5 * k * b * b + b * slack.phi + slack.offset)
+            - slack.rounding;
         least = least.min(0.5 * h.max(0.0).powi(2));
     }
     least
 }
 
+/// Step 4 through a lens ([`lens`], step 2): along a whitened ray of length `s` the cost through the
+/// lens has `√(2f) ≥ κ √(2q) − ε (s + ½ K s² + s Φ + offset) − rounding` (`q` the surrogate's cost);
+/// [`RaySlack::NONE`] for a pinhole camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct RaySlack {
+    kappa: f64,
+    eps: f64,
+    phi: f64,
+    offset: f64,
+    rounding: f64,
+}
+
+impl RaySlack {
+    /// The pinhole certificate: no slack.
+    const NONE: RaySlack = RaySlack {
+        kappa: 1.0,
+        eps: 0.0,
+        phi: 0.0,
+        offset: 0.0,
+        rounding: 0.0,
+    };
+}
+
 /// The local model at the pose, in whitened steps: cost, gradient norm `‖Tᵀ g‖`, the least
-/// eigenvalue of `Tᵀ JᵀJ T` (1 up to rounding) and the curvature bound.
-struct LocalModel {
+/// eigenvalue of `Tᵀ JᵀJ T` (1 up to rounding) and the curvature bound; through a lens, the
+/// surrogate whose cost they describe ([`lens`]).
+struct LocalModel<'s> {
     cost: f64,
     gradient: f64,
     lambda_min: f64,
     curvature: RayCurvature,
+    lens: Option<&'s Surrogate>,
 }
 
-impl LocalModel {
+impl<'s> LocalModel<'s> {
     /// The local model at `pose` (frame of `problem`) and the whitening it is expressed in.
-    fn at(problem: &Problem, camera: &Camera, pose: &Pose) -> std::result::Result<(Whitening, Self), String> {
+    fn at(
+        problem: &Problem,
+        camera: &Camera,
+        pose: &Pose,
+        lens: Option<&'s Surrogate>,
+    ) -> std::result::Result<(Whitening, Self), String> {
         let lin = ReprojectionCost::of(camera, problem.corr).linearize(pose);
         let whitening = Whitening::new(&lin.gauss_newton).ok_or("not proved: JᵀJ is singular at the pose")?;
         let whitened = whitening.t.transpose() * lin.gauss_newton * whitening.t;
@@ -2277,6 +2321,7 @@ impl LocalModel {
             gradient: (whitening.t.transpose() * lin.gradient).norm(),
             lambda_min: eigen.min(),
             curvature,
+            lens,
         };
         Ok((whitening, model))
     }
@@ -2284,10 +2329,39 @@ impl LocalModel {
     /// The lower bound of step 4 over the whitened ball of `radius` (unclamped: at most the cost when
     /// sound, since the ball holds the pose), or `None` where a depth or a projected line may vanish.
     fn raw_bound(&self, radius: f64) -> Option<f64> {
-        let k = self.curvature.bound(radius)?;
-        Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius))
+        let (k, slacks) = match self.lens {
+            None => (self.curvature.bound(radius)?, vec![(radius, RaySlack::NONE)]),
+            Some(lens) => {
+                let mut parts = testing::CurvatureParts::default();
+                let k = self.curvature.bound_with_parts(radius, Some(&mut parts))?;
+                // The turn rate ‖q′‖ / w of each endpoint's whitened line normal over the ball.
+                let turns: Vec<f64> = parts
+                    .lines
+                    .iter()
+                    .flat_map(|line| line.endpoints.iter().map(|end| end.q1 / end.w_lo))
+                    .collect();
+                debug_assert_eq!(turns.len(), lens.n_endpoints());
+                // The distortion's variation over nested balls: the steps near the answer, where
+                // the bound is least, pay only that of a small ball.
+                let mut slacks = vec![(radius, lens.ball(radius, k, &turns)?)];
+                for j in 1..=NESTED_BALLS {
+                    let r = radius * 0.5f64.powf(j as f64 / 2.0);
+                    match lens.ball(r, k, &turns) {
+                        Some(slack) => slacks.push((r, slack)),
+                        None => break,
+                    }
+                }
+                slacks.reverse();
+                (k, slacks)
+            }
+        };
+        Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius, &slacks))
     }
 }
+
+/// Through a lens, step 4 takes the distortion's variation over balls of the radius and of this many
+/// smaller ones, each `1/√2` of the last.
+const NESTED_BALLS: usize = 24;
 
 /// Radii of the whitened ball tried for the localisation, in units of `√(2f̂) + 0.1` px: the largest
 /// whose local bound already closes the gap is used (a larger ball stops the search sooner).
@@ -2296,11 +2370,13 @@ const BALL_FACTORS: [f64; 8] = [64.0, 16.0, 6.0, 3.0, 2.0, 1.5, 1.0, 0.7];
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
 /// ([`MAX_CELLS_BEFORE_FALLBACK`] with segments, [`MAX_CELLS_FROM_DISTANCE`] without depth bounds;
-/// each search has its own cap). Never fails: a
-/// certificate that cannot be computed is `certified = false` with the reason. Every cost and bound
-/// here is `½ Σ r²`; [`crate::pose::PoseResult`] reports them in `Σ r²`.
+/// each search has its own cap). Through `lens` (`Some`), `corr` holds the observed (distorted) pixels
+/// and the certificate is that of [`lens`]. Never fails: a certificate that cannot be computed is
+/// `certified = false` with the reason. Every cost and bound here is `½ Σ r²`;
+/// [`crate::pose::PoseResult`] reports them in `Σ r²`.
 pub fn certify(
     camera: &Camera,
+    lens: Option<&LensCamera>,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -2309,19 +2385,37 @@ pub fn certify(
     if !(cost.is_finite() && cost >= 0.0) {
         return Certification::none("not attempted: the cost is not finite");
     }
-    let problem = match Problem::new(camera, corr, cost) {
+    match lens.filter(|l| !l.is_pinhole()) {
+        Some(lens) => lens::certify(lens, corr, pose, cost, options),
+        None => certify_pinhole(camera, corr, pose, cost, options, None),
+    }
+}
+
+/// [`certify`] of a pinhole problem, or of a lens's surrogate (`lens`; `camera` and `corr` are then
+/// the surrogate's, and `cost` the cost through the lens).
+fn certify_pinhole(
+    camera: &Camera,
+    corr: &Correspondences,
+    pose: &Pose,
+    cost: f64,
+    options: &CertifyOptions,
+    lens: Option<&Surrogate>,
+) -> Certification {
+    // The level of the sublevel set that the search localises (the surrogate's, through a lens).
+    let level = lens.map_or(cost, |l| l.slack.to_surrogate(cost));
+    let problem = match Problem::new(camera, corr, level) {
         Ok(p) => p,
         Err(why) => return Certification::none(why),
     };
-    let first = certify_problem(&problem, camera, pose, cost, options);
+    let first = certify_problem(&problem, camera, pose, cost, options, lens);
     // With segments, a search with depth bounds that did not close its gap is followed by the one
     // without them (bounded at each box's rotation, segments and points alike): where the points are
     // few it certifies scenes the first cannot. Both bounds are proved; the better is kept.
     if first.certified || problem.root().is_none() || corr.n_lines() == 0 {
         return first;
     }
-    let second = match Problem::without_depths(camera, corr, cost) {
-        Ok(p) => certify_problem(&p, camera, pose, cost, options),
+    let second = match Problem::without_depths(camera, corr, level) {
+        Ok(p) => certify_problem(&p, camera, pose, cost, options, lens),
         Err(why) => Certification::none(why),
     };
     let nodes = first.nodes + second.nodes;
@@ -2339,38 +2433,57 @@ pub fn certify(
     }
 }
 
-/// [`certify`] on prepared data.
+/// [`certify`] on prepared data (`cost` the cost at `pose`, through the lens of `lens` when given).
 fn certify_problem(
     problem: &Problem,
     camera: &Camera,
     pose: &Pose,
     cost: f64,
     options: &CertifyOptions,
+    lens: Option<&Surrogate>,
 ) -> Certification {
-    let (whitening, model) = match LocalModel::at(problem, camera, pose) {
+    let (whitening, model) = match LocalModel::at(problem, camera, pose, lens) {
         Ok(m) => m,
         Err(why) => return Certification::none(why),
     };
-    let gap_of = |lower: f64| relative_gap(model.cost, lower);
+    let slack = lens.map_or(Slack::NONE, |l| l.slack);
+    let gap_of = |lower: f64| relative_gap(cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
     let Some((target, at_target)) = BALL_FACTORS.iter().map(|f| f * unit).find_map(|radius| {
         model
             .raw_bound(radius)
-            .filter(|&raw| gap_of(raw.min(model.cost)) <= options.max_relative_gap)
+            .filter(|&raw| gap_of(raw.min(cost)) <= options.max_relative_gap)
             .map(|raw| (radius, raw))
     }) else {
-        return Certification::none(format!(
-            "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
-            (2.0 * cost).sqrt()
-        ));
+        return Certification::none(match lens {
+            None => format!(
+                "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
+                (2.0 * cost).sqrt()
+            ),
+            Some(_) => format!(
+                "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost and \
+                 the variation of the distortion",
+                (2.0 * cost).sqrt()
+            ),
+        });
+    };
+    // The search's level and gap are the surrogate's: a box closes when its bound, as a bound of the
+    // cost, is within the gap of the cost.
+    let level = slack.to_surrogate(cost);
+    let closed = slack.to_surrogate(cost * (1.0 - options.max_relative_gap));
+    let search_gap = if level > 0.0 {
+        (1.0 - closed / level).clamp(0.0, options.max_relative_gap)
+    } else {
+        options.max_relative_gap
     };
     let mut search = RotationSearch {
         problem,
         whitening: &whitening,
         pose,
-        f_hat: cost,
+        f_hat: level,
         target,
-        max_relative_gap: options.max_relative_gap,
+        max_relative_gap: search_gap,
+        slack,
         inside_ball: InsideBall::Bound(BallBound {
             model: &model,
             radius: 0.0,
@@ -2393,8 +2506,8 @@ fn certify_problem(
             }
         }
     };
-    let raw_lower_bound = localised.raw_lower_bound;
-    let lower_bound = raw_lower_bound.min(model.cost);
+    let raw_lower_bound = slack.to_cost(localised.raw_lower_bound);
+    let lower_bound = raw_lower_bound.min(cost);
     let gap = gap_of(lower_bound);
     let certified = gap <= options.max_relative_gap;
     Certification {
@@ -2519,6 +2632,7 @@ pub mod testing {
             f_hat: level,
             target,
             max_relative_gap: 0.0,
+            slack: Slack::NONE,
             inside_ball: InsideBall::Record(&mut record),
             radius: 0.0,
         };
@@ -2537,7 +2651,7 @@ pub mod testing {
     /// Step 4's one-dimensional bound: the least of `½ (√q(d) − ½ k d²)₊²` over `d ≤ rho`,
     /// `q(d) = 2f̂ − 2 gradient d + lambda d²`.
     pub fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64) -> f64 {
-        super::local_lower_bound(f_hat, gradient, lambda, k, rho)
+        super::local_lower_bound(f_hat, gradient, lambda, k, rho, &[(rho, RaySlack::NONE)])
     }
 
     /// Step 4 at `pose` (any pose) over the whitened ball of `radius`.
@@ -2623,7 +2737,7 @@ pub mod testing {
     ) -> std::result::Result<CurvatureParts, String> {
         let cost = ReprojectionCost::of(camera, corr).cost(pose);
         let problem = Problem::new(camera, corr, cost.max(level))?;
-        let (whitening, model) = LocalModel::at(&problem, camera, pose)?;
+        let (whitening, model) = LocalModel::at(&problem, camera, pose, None)?;
         let mut parts = CurvatureParts {
             whitening: whitening.t,
             ..Default::default()
@@ -2646,7 +2760,7 @@ pub mod testing {
     ) -> std::result::Result<LocalBound, String> {
         let cost = ReprojectionCost::of(camera, corr).cost(pose);
         let problem = Problem::new(camera, corr, cost.max(level))?;
-        let (whitening, model) = LocalModel::at(&problem, camera, pose)?;
+        let (whitening, model) = LocalModel::at(&problem, camera, pose, None)?;
         let curvature = model
             .curvature
             .bound(radius)
@@ -2654,7 +2768,7 @@ pub mod testing {
         Ok(LocalBound {
             whitening: whitening.t,
             curvature,
-            raw_bound: super::local_lower_bound(model.cost, model.gradient, model.lambda_min, curvature, radius),
+            raw_bound: super::local_lower_bound(model.cost, model.gradient, model.lambda_min, curvature, radius, &[(radius, RaySlack::NONE)]),
         })
     }
 }
@@ -3808,6 +3922,7 @@ mod tests {
             f_hat,
             target,
             max_relative_gap: 0.0,
+            slack: Slack::NONE,
             inside_ball: InsideBall::Record(&mut record),
             radius: 0.0,
         };

@@ -6,7 +6,7 @@ use super::super::certificate::{self, certify};
 use super::super::correspondences::{Conditioning, Correspondences};
 use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
-use super::super::reprojection::{Pose, ReprojectionCost};
+use super::super::reprojection::Pose;
 use super::super::result::{assemble, status_of_stages, Parts};
 use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
@@ -126,11 +126,11 @@ pub(crate) fn estimate_robust(
     let failure = failure.or_else(|| (count(&points) + count(&lines) < required).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_of_stages(&pose, &stages, &used, true, opts.refine));
     // The certificate, as for the non-robust pipeline, of the cost over the final inliers.
-    let certification = certificate::stage(opts.certify.as_ref(), observations.lens.is_some(), status, |options| {
-        let inliers = subset(&conditioned, &points, &lines);
+    let certification = certificate::stage(opts.certify.as_ref(), status, |options| {
+        let inliers = subset(&observed, &points, &lines);
         let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
-        let cost = ReprojectionCost::of(camera, &inliers).cost(&at);
-        certify(camera, &inliers, &at, cost, options)
+        let cost = observations.cost(&inliers).cost(&at);
+        certify(camera, observations.lens, &inliers, &at, cost, options)
     });
     Ok(assemble(
         observations,

@@ -1,0 +1,318 @@
+//! The certificate through a lens: the exact cost in the observed (distorted) pixels bounded from
+//! below by a whitened pinhole problem, the *surrogate*, that the search of [`super`] localises.
+//!
+//! **The cost.** A point's residual is `eᵢ(n) = Lᵢ (K D(n) − uᵢ) = Mᵢ (D(n) − dᵢ)` (`n` its normalised
+//! projection, `Mᵢ = Lᵢ K₂`); a segment endpoint's is `r = min_q ‖M (D(q) − d)‖` over the points `q` of the
+//! projected line `ℓ` ([`crate::curved_line`]; the reported residual is a local minimum of it, so at
+//! least this). `C = Σ r²` is the cost at the answer `P̂`.
+//!
+//! **The domain.** Poses with the object points and the segments' object endpoints in front of the
+//! camera whose point projections, and the points of the curves that the endpoint residuals are
+//! measured to, lie in the disc where the lens is proved one-to-one
+//! ([`crate::lens_bounds::domain`]).
+//!
+//! **The surrogate.** Each observation is linearised at the answer ([`crate::lens_linearisation`]): a
+//! point at its projection `nᵢ*` (`Wᵢ = Mᵢ Jᵢ*`, `eᵢ* = eᵢ(nᵢ*)`), an endpoint at the point `q*` of
+//! `ℓ̂` nearest to it through the lens (`W`, `ê`). The surrogate observes the point at
+//! `n̄ᵢ = nᵢ* − Wᵢ⁻¹ eᵢ*` with whitening `Wᵢ`, and the endpoint at `ē = q* − W⁻¹ ê` with covariance
+//! `(WᵀW)⁻¹` (normalised coordinates; in the pixels of `K` for [`super`]), so that its residuals are
+//! `ℓᵢ = eᵢ* + Wᵢ (n − nᵢ*)` and `ρ = min_q ‖W (q − ē)‖`; at `P̂` they equal the lens residuals, and so
+//! do their first derivatives.
+//!
+//! 1. **Confinement** (module docs of [`crate::lens_linearisation`]): a ball `Bᵢ = {‖Wᵢ (n − nᵢ*)‖ ≤ Rᵢ}`
+//!    with `(1 − εᵢ) Rᵢ > √C + ‖eᵢ*‖ + sᵢ` holds every projection (every minimising `q` for an endpoint)
+//!    of a pose of the domain with cost at most `C`. Inside it `‖eᵢ − ℓᵢ‖ ≤ εᵢ ‖Wᵢ (n − nᵢ*)‖ + sᵢ ≤ δᵢ`,
+//!    `δᵢ = εᵢ Rᵢ + sᵢ`; for an endpoint `r ≥ ‖ê + u‖ − ε ‖u‖ ≥ ρ − δ` (`u = W (q − q*)`). So every pose
+//!    with `F ≤ C` has `√Q ≤ √F + ‖δ‖` (Minkowski): the search of [`super`] localises the surrogate's
+//!    sublevel set at the level `C' = (√C + ‖δ‖)²`, and a box bound `q` of the surrogate is one of
+//!    `(√q − ‖δ‖)₊²` on `F` ([`Slack`]).
+//! 2. **The ball.** Along a whitened ray of length `s` the surrogate's residuals move by at most
+//!    `Δ(s) = s + ½ K s²` (stacked), so a point's `vᵢ = Wᵢ (n − nᵢ*)` has `‖vᵢ‖ ≤ Δ`, and `εᵢ` is taken
+//!    over the ball of that radius. For an endpoint, write `ê + u = ρ ν + a τ` (`ν`, `τ` the unit normal
+//!    and direction of the whitened line `W ℓ`); then `‖u‖ ≤ |a| + c` with `c = ‖ρ ν − ê‖` the motion of
+//!    the residual's foot, `c ≤ |ρ − ρ̂| + ‖ê‖ φ + c₀` (`φ ≤ s ‖q′‖ / w` the turn of `ν`, from the
+//!    curvature bound's parts; `c₀` the foot's offset at `P̂`, rounding), and
+//!    `r ≥ √(ρ² + a²) − ε (|a| + c) ≥ √(1 − ε²) ρ − ε c`. The minimiser has
+//!    `√(ρ² + a²) ≤ ρ + ε |a| + 2 ε c` (its residual is at most the foot's), which bounds `|a|`; `ε` is
+//!    then taken over the ball of radius `|a| + c`. With `κ = minₑ √(1 − εₑ²)` and `ε` the largest,
+//!    `√F ≥ κ √Q − ε (Δ(s) + s Φ + ‖c₀‖) − ‖s‖`, `Φ = ‖(‖êₑ‖ ‖q′ₑ‖ / wₑ)ₑ‖`, which step 4 of [`super`]
+//!    bounds along each ray ([`super::local_lower_bound`]).
+//!
+//! The certificate fails, with the reason, for a lens that [`crate::lens_bounds`] does not cover, where
+//! an observation or a confinement ball reaches the edge of the one-to-one disc, or where `ε` is too
+//! large for the gap (strong distortion with large residuals).
+
+use super::{Certification, RaySlack};
+use crate::camera::Camera;
+use crate::camera_model::{AnyCamera, LensCamera};
+use crate::curved_line::endpoint_residual;
+use crate::lens_linearisation::{Linearised, SPLITS};
+use crate::pose::correspondences::Correspondences;
+use crate::pose::noise::ObservationNoise;
+use crate::pose::reprojection::Pose;
+use nalgebra::{Matrix2, Vector2, Vector3};
+use std::cell::RefCell;
+
+/// Why a lens is not covered.
+const NOT_COVERED: &str = "not attempted: the certificate through a lens covers the radial, OpenCV \
+    (radial and tangential), fisheye (radial), division and EUCM models; not this one";
+
+/// The slack between the surrogate and the cost through the lens in the search of [`super`]: every
+/// pose of the domain with `f ≤ f̂` (`f = ½ Σ r²`) has `√(2q) ≤ σ √(2f) + δ` (`q = ½ Σ ℓ²` the
+/// surrogate's cost; step 1), so a bound `q` of the surrogate on a box is one of
+/// `½ ((√(2q) − δ)₊ / σ)²` on the cost, and the sublevel set `{f ≤ f̂}` lies in the surrogate's at the
+/// level `½ (σ √(2f̂) + δ)²`. `σ = 1`, `δ = 0` for a pinhole camera (the identity).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Slack {
+    pub scale: f64,
+    pub delta: f64,
+}
+
+impl Slack {
+    /// No slack: the pinhole certificate.
+    pub const NONE: Slack = Slack { scale: 1.0, delta: 0.0 };
+
+    /// The cost bound of a surrogate bound `q`.
+    pub fn to_cost(&self, q: f64) -> f64 {
+        if *self == Self::NONE {
+            return q;
+        }
+        0.5 * (((2.0 * q.max(0.0)).sqrt() - self.delta).max(0.0) / self.scale).powi(2)
+    }
+
+    /// The least surrogate bound whose cost bound is `f` (the inverse of [`Self::to_cost`] above 0).
+    pub fn to_surrogate(&self, f: f64) -> f64 {
+        if *self == Self::NONE {
+            return f;
+        }
+        0.5 * (self.scale * (2.0 * f.max(0.0)).sqrt() + self.delta).powi(2)
+    }
+}
+
+/// `εᵢ` over whitened balls about the observation's linearisation point, memoised on the radii
+/// `top 2^(−j/2)` (the least of them at least the one asked for): step 4 asks for many radii.
+struct Variation {
+    lin: Linearised,
+    top: f64,
+    memo: RefCell<Vec<Option<Option<f64>>>>,
+}
+
+/// Radii of [`Variation`]'s memo: `top` down to `top 2^(−20)`.
+const MEMO_RADII: usize = 41;
+
+impl Variation {
+    fn new(lin: Linearised, top: f64) -> Self {
+        Variation {
+            lin,
+            top,
+            memo: RefCell::new(vec![None; MEMO_RADII]),
+        }
+    }
+
+    /// A bound of `ε` over the ball of `radius` (`None` where a box reaches the edge of the disc).
+    fn epsilon(&self, radius: f64) -> Option<f64> {
+        if !(radius <= self.top) {
+            return self.lin.epsilon(radius);
+        }
+        let steps = (2.0 * (self.top / radius.max(f64::MIN_POSITIVE)).log2()).floor();
+        let j = (steps.max(0.0) as usize).min(MEMO_RADII - 1);
+        let at = self.top * 0.5f64.powf(j as f64 / 2.0);
+        // The memo's radius must hold the ball asked for.
+        if at < radius {
+            return self.lin.epsilon(radius);
+        }
+        *self.memo.borrow_mut()[j].get_or_insert_with(|| self.lin.epsilon(at))
+    }
+}
+
+/// One segment endpoint linearised at its nearest curve point `q*`, with its confinement.
+struct Endpoint {
+    lin: Variation,
+    /// Step 1's ball `(R, ε)` about `q*`.
+    confined: (f64, f64),
+    /// `c₀ = ‖W (foot − q*)‖`: the foot of `ē` on `ℓ̂` (exactly `q*` up to rounding).
+    c0: f64,
+}
+
+/// The surrogate of a problem through a lens (module docs) and what step 4 needs of it.
+pub(super) struct Surrogate {
+    /// The lens's pinhole part `K`.
+    pub camera: Camera,
+    /// The surrogate's observations, in the pixels of `K`, with their whitenings (`absolute` noise).
+    pub corr: Correspondences,
+    pub slack: Slack,
+    points: Vec<Variation>,
+    endpoints: Vec<[Endpoint; 2]>,
+    /// `‖(sᵢ)‖`: the rounding of every `eᵢ*`.
+    rounding: f64,
+}
+
+/// `Lᵀ` with `L Lᵀ = C⁻¹`: a whitening of the covariance `C` (`None` unless positive definite).
+fn whitening_of(cov: &Matrix2<f64>) -> Option<Matrix2<f64>> {
+    let info = (0.5 * (cov + cov.transpose())).try_inverse()?;
+    Some(info.cholesky()?.l().transpose())
+}
+
+impl Surrogate {
+    /// The surrogate of `corr` (observed pixels of `lens`, conditioned frame, with the caller's noise)
+    /// at `pose`, of cost `cost` (`½ Σ r²`).
+    pub fn new(lens: &LensCamera, corr: &Correspondences, pose: &Pose, cost: f64) -> Result<Self, String> {
+        let level = 2.0 * cost;
+        let camera = lens.pinhole().map_err(|e| e.to_string())?;
+        let k = camera.matrix();
+        let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
+        let k2_inverse = k2.try_inverse().ok_or("singular camera")?;
+        let any = AnyCamera::from(lens);
+        if crate::lens_bounds::distortion(lens).is_none() {
+            return Err(NOT_COVERED.into());
+        }
+        let noise = corr.noise.as_ref();
+        let pixel_of = |n: &Vector2<f64>| (k * Vector3::new(n.x, n.y, 1.0)).xy();
+        let edge = |what: &str, i: usize| {
+            format!(
+                "not proved: {what}[{i}] or the ball that confines it reaches the edge of the disc where \
+                 the lens is proved one-to-one, or the distortion varies too much over it"
+            )
+        };
+        let mut surrogate = Correspondences {
+            points3d: corr.points3d.clone(),
+            lines3d: corr.lines3d.clone(),
+            ..Default::default()
+        };
+        let mut noise_out = ObservationNoise {
+            points: Vec::with_capacity(corr.n_points()),
+            lines: Vec::with_capacity(corr.n_lines()),
+            absolute: true,
+        };
+        // Step 1: δ² and the largest ε of the confinement balls; ‖(sᵢ)‖².
+        let (mut delta2, mut eps_max, mut rounding2): (f64, f64, f64) = (0.0, 0.0, 0.0);
+        let mut confine = |lin: &Linearised, (radius, eps): (f64, f64)| {
+            eps_max = eps_max.max(eps);
+            delta2 += (eps * (lin.e.norm() + lin.rounding) / (1.0 - eps) + lin.rounding).powi(2);
+            rounding2 += lin.rounding.powi(2);
+            radius
+        };
+        let mut points = Vec::with_capacity(corr.n_points());
+        for (i, (x, u)) in corr.points3d.iter().zip(&corr.points2d).enumerate() {
+            let whitening = noise.map_or_else(Matrix2::identity, |n| n.points[i]);
+            let xc = pose.transform(x);
+            let lin = Linearised::new(&any, &whitening, u, &xc, level, SPLITS, false).map_err(|_| edge("points2d", i))?;
+            let radius = confine(&lin, lin.confinement(level).ok_or_else(|| edge("points2d", i))?);
+            surrogate.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
+            noise_out.points.push(lin.w * k2_inverse);
+            points.push(Variation::new(lin, radius));
+        }
+        let mut endpoints = Vec::with_capacity(corr.n_lines());
+        for (i, (s3, s2)) in corr.lines3d.iter().zip(&corr.lines2d).enumerate() {
+            let (a, b) = (pose.transform(&s3[0]), pose.transform(&s3[1]));
+            let l = a.cross(&b);
+            let mut pair = Vec::with_capacity(2);
+            let mut observed = [Vector2::zeros(); 2];
+            let mut covariances = [Matrix2::identity(); 2];
+            for k in 0..2 {
+                let e = s2[k];
+                let cov = noise.map_or_else(Matrix2::identity, |n| n.lines[i][k]);
+                let whitening = whitening_of(&cov).ok_or("not attempted: a covariance is not positive definite")?;
+                let start = lens.unproject(&e, i).map_err(|_| edge("lines2d", i))?;
+                let fit = endpoint_residual(lens, &l, &start, &e, &cov).ok_or_else(|| edge("lines2d", i))?;
+                let xc = Vector3::new(fit.q.x, fit.q.y, 1.0);
+                let lin =
+                    Linearised::new(&any, &whitening, &e, &xc, level, SPLITS, false).map_err(|_| edge("lines2d", i))?;
+                let confined = lin.confinement(level).ok_or_else(|| edge("lines2d", i))?;
+                let e_bar = lin.n - lin.w_inverse * lin.e;
+                // The foot of ē on ℓ̂ in the metric WᵀW: ē − C l₁₂ (l·ē) / (l₁₂ᵀ C l₁₂), C = (WᵀW)⁻¹.
+                let c = lin.w_inverse * lin.w_inverse.transpose();
+                let l12 = l.xy();
+                let foot = e_bar - c * l12 * (l12.dot(&e_bar) + l.z) / l12.dot(&(c * l12));
+                let c0 = (lin.w * (foot - lin.n)).norm();
+                if !c0.is_finite() {
+                    return Err(edge("lines2d", i));
+                }
+                confine(&lin, confined);
+                observed[k] = pixel_of(&e_bar);
+                covariances[k] = k2 * c * k2.transpose();
+                pair.push(Endpoint {
+                    lin: Variation::new(lin, confined.0),
+                    confined,
+                    c0,
+                });
+            }
+            surrogate.lines2d.push(observed);
+            noise_out.lines.push(covariances);
+            let [p0, p1]: [Endpoint; 2] = pair.try_into().map_err(|_| edge("lines2d", i))?;
+            endpoints.push([p0, p1]);
+        }
+        surrogate.noise = Some(noise_out);
+        Ok(Surrogate {
+            camera,
+            corr: surrogate,
+            slack: Slack {
+                scale: 1.0 / (1.0 - eps_max),
+                delta: delta2.sqrt(),
+            },
+            points,
+            endpoints,
+            rounding: rounding2.sqrt(),
+        })
+    }
+
+    /// Step 2's constants over the whitened ball of `radius` with the curvature bound `k`:
+    /// `(κ, ε, Φ, ‖c₀‖ , ‖s‖)`, or `None` where a ball reaches the edge of the disc or leaves step 1's.
+    /// `turns[e]` bounds `‖q′ₑ‖ / wₑ` over the ball, endpoint by endpoint in the order of `corr`.
+    pub fn ball(&self, radius: f64, k: f64, turns: &[f64]) -> Option<RaySlack> {
+        let moved = radius + 0.5 * k * radius * radius;
+        let mut eps: f64 = 0.0;
+        for lin in &self.points {
+            eps = eps.max(lin.epsilon(moved)?);
+        }
+        let (mut kappa, mut phi2, mut c0_2): (f64, f64, f64) = (1.0, 0.0, 0.0);
+        for (end, &turn) in self.endpoints.iter().flatten().zip(turns) {
+            let (big, eps_big) = end.confined;
+            let e_hat = end.lin.lin.e.norm() + end.lin.lin.rounding;
+            let c_max = moved + e_hat * radius * turn + end.c0;
+            let rho_max = e_hat + moved;
+            if !(c_max <= big && eps_big < 1.0) {
+                return None;
+            }
+            // |a| from √(ρ² + a²) ≤ ρ + ε|a| + 2εc at ρ = ρ_max, c = c_max (increasing in both).
+            let b = rho_max + 2.0 * eps_big * c_max;
+            let (e2, rest) = (eps_big * eps_big, b * b - rho_max * rho_max);
+            let a_max = (b * eps_big + (b * b * e2 + (1.0 - e2) * rest).sqrt()) / (1.0 - e2);
+            let small = end.lin.epsilon((a_max + c_max).min(big))?;
+            if !(small < 1.0) {
+                return None;
+            }
+            eps = eps.max(small);
+            kappa = kappa.min((1.0 - small * small).sqrt());
+            phi2 += (e_hat * turn).powi(2);
+            c0_2 += end.c0 * end.c0;
+        }
+        Some(RaySlack {
+            kappa,
+            eps,
+            phi: phi2.sqrt(),
+            offset: c0_2.sqrt(),
+            rounding: self.rounding,
+        })
+    }
+
+    /// Endpoints, for [`Self::ball`]'s `turns`.
+    pub fn n_endpoints(&self) -> usize {
+        2 * self.endpoints.len()
+    }
+}
+
+/// [`super::certify`] through `lens`: `corr` holds the observed (distorted) pixels and the caller's
+/// noise, conditioned frame; `pose` is the local minimum of cost `cost` (`½ Σ r²`).
+pub(super) fn certify(
+    lens: &LensCamera,
+    corr: &Correspondences,
+    pose: &Pose,
+    cost: f64,
+    options: &crate::certificate::CertifyOptions,
+) -> Certification {
+    match Surrogate::new(lens, corr, pose, cost) {
+        Ok(surrogate) => super::certify_pinhole(&surrogate.camera, &surrogate.corr, pose, cost, options, Some(&surrogate)),
+        Err(why) => Certification::none(why),
+    }
+}
