@@ -240,4 +240,3 @@ fn homography_jacobian(ray: &Matrix3<f64>) -> Matrix2<f64> {
     let h = Vector2::new(w.x / w.z, w.y / w.z);
     Matrix2::from_fn(|r, c| (back[(r, c)] - h[r] * back[(2, c)]) / w.z)
 }
-

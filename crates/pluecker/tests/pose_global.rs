@@ -370,7 +370,14 @@ fn a_wrong_local_minimum_is_not_certified() {
         let best = minima[0].1;
         for (pose, cost) in minima.iter().skip(1).filter(|(_, c)| *c > best * (1.0 + 1e-6) + 1e-9) {
             tried += 1;
-            let verdict = certify(&scene.camera, None, &corr, &pose.to_library(), *cost, &Default::default());
+            let verdict = certify(
+                &scene.camera,
+                None,
+                &corr,
+                &pose.to_library(),
+                *cost,
+                &Default::default(),
+            );
             assert!(
                 !verdict.certified,
                 "f={f} seed {seed}: certified a minimum of cost {cost} above {best}"

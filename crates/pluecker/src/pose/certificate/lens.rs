@@ -132,6 +132,8 @@ struct Endpoint {
     confined: (f64, f64),
     /// `c₀ = ‖W (foot − q*)‖`: the foot of `ē` on `ℓ̂` (exactly `q*` up to rounding).
     c0: f64,
+    /// `√C + ‖ê‖ + s`: what a confinement radius `R` must leave, `(1 − ε) R` above it.
+    need: f64,
 }
 
 /// The surrogate of a problem through a lens (module docs) and what step 4 needs of it.
@@ -196,7 +198,8 @@ impl Surrogate {
         for (i, (x, u)) in corr.points3d.iter().zip(&corr.points2d).enumerate() {
             let whitening = noise.map_or_else(Matrix2::identity, |n| n.points[i]);
             let xc = pose.transform(x);
-            let lin = Linearised::new(&any, &whitening, u, &xc, level, SPLITS, false).map_err(|_| edge("points2d", i))?;
+            let lin =
+                Linearised::new(&any, &whitening, u, &xc, level, SPLITS, false).map_err(|_| edge("points2d", i))?;
             let radius = confine(&lin, lin.confinement(level).ok_or_else(|| edge("points2d", i))?);
             surrogate.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
             noise_out.points.push(lin.w * k2_inverse);
@@ -231,10 +234,12 @@ impl Surrogate {
                 confine(&lin, confined);
                 observed[k] = pixel_of(&e_bar);
                 covariances[k] = k2 * c * k2.transpose();
+                let need = level.sqrt() + lin.e.norm() + lin.rounding;
                 pair.push(Endpoint {
                     lin: Variation::new(lin, confined.0),
                     confined,
                     c0,
+                    need,
                 });
             }
             surrogate.lines2d.push(observed);
@@ -267,11 +272,22 @@ impl Surrogate {
         }
         let (mut kappa, mut phi2, mut c0_2): (f64, f64, f64) = (1.0, 0.0, 0.0);
         for (end, &turn) in self.endpoints.iter().flatten().zip(turns) {
-            let (big, eps_big) = end.confined;
             let e_hat = end.lin.lin.e.norm() + end.lin.lin.rounding;
             let c_max = moved + e_hat * radius * turn + end.c0;
             let rho_max = e_hat + moved;
-            if !(c_max <= big && eps_big < 1.0) {
+            // The foot lies within c_max of q*: a confinement ball that holds it (step 1's, or a
+            // larger one, which confines as well where (1 − ε) R still exceeds √C + ‖ê‖ + s).
+            let (big, eps_big) = if c_max <= end.confined.0 {
+                end.confined
+            } else {
+                let big = c_max * 1.001;
+                let eps = end.lin.epsilon(big)?;
+                if !((1.0 - eps) * big > end.need) {
+                    return None;
+                }
+                (big, eps)
+            };
+            if !(eps_big < 1.0) {
                 return None;
             }
             // |a| from √(ρ² + a²) ≤ ρ + ε|a| + 2εc at ρ = ρ_max, c = c_max (increasing in both).
@@ -312,7 +328,14 @@ pub(super) fn certify(
     options: &crate::certificate::CertifyOptions,
 ) -> Certification {
     match Surrogate::new(lens, corr, pose, cost) {
-        Ok(surrogate) => super::certify_pinhole(&surrogate.camera, &surrogate.corr, pose, cost, options, Some(&surrogate)),
+        Ok(surrogate) => super::certify_pinhole(
+            &surrogate.camera,
+            &surrogate.corr,
+            pose,
+            cost,
+            options,
+            Some(&surrogate),
+        ),
         Err(why) => Certification::none(why),
     }
 }

@@ -89,7 +89,6 @@
 mod lens;
 
 use super::correspondences::Correspondences;
-use lens::{Slack, Surrogate};
 use super::object_distance::{distance_bound, Sight};
 use super::reprojection::{Pose, ReprojectionCost};
 use super::Status;
@@ -103,6 +102,7 @@ use crate::global::branch_and_bound::{
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
 use crate::optim::Objective;
+use lens::{Slack, Surrogate};
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 use std::cell::OnceCell;
 use std::rc::Rc;
@@ -2355,7 +2355,14 @@ impl<'s> LocalModel<'s> {
                 (k, slacks)
             }
         };
-        Some(local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius, &slacks))
+        Some(local_lower_bound(
+            self.cost,
+            self.gradient,
+            self.lambda_min,
+            k,
+            radius,
+            &slacks,
+        ))
     }
 }
 
@@ -2467,6 +2474,9 @@ fn certify_problem(
             ),
         });
     };
+    if std::env::var("LENS_DEBUG").is_ok() {
+        eprintln!("DEBUG cost {cost:.4e} slack {slack:?} target {target:.3e} unit {unit:.3e} at_target {at_target:.6e} model.cost {:.6e}", model.cost);
+    }
     // The search's level and gap are the surrogate's: a box closes when its bound, as a bound of the
     // cost, is within the gap of the cost.
     let level = slack.to_surrogate(cost);
@@ -2749,6 +2759,59 @@ pub mod testing {
         Ok(parts)
     }
 
+    /// The surrogate of a problem through a lens ([`lens`]) at `pose`, for the level `cost`
+    /// (`½ Σ r²`): its camera (the lens's pinhole part) and observations, and step 1's slack: every
+    /// pose of the domain with cost `f ≤ cost` has `√(2q) ≤ scale √(2f) + delta` (`q` the surrogate's
+    /// cost).
+    #[derive(Debug, Clone)]
+    pub struct LensSurrogate {
+        pub camera: Camera,
+        pub corr: Correspondences,
+        pub scale: f64,
+        pub delta: f64,
+    }
+
+    /// [`LensSurrogate`] of `corr` (observed pixels of `lens`) at `pose` for the level `cost`.
+    pub fn lens_surrogate(
+        lens: &LensCamera,
+        corr: &Correspondences,
+        pose: &Pose,
+        cost: f64,
+    ) -> std::result::Result<LensSurrogate, String> {
+        let s = Surrogate::new(lens, corr, pose, cost)?;
+        Ok(LensSurrogate {
+            scale: s.slack.scale,
+            delta: s.slack.delta,
+            camera: s.camera,
+            corr: s.corr,
+        })
+    }
+
+    /// Step 4 through `lens` at any `pose` (cost `½ Σ r²` through the lens, computed here): the bound
+    /// of that cost over the ball of whitened `radius` (the whitening of the surrogate at `pose`).
+    pub fn lens_local_bound(
+        lens: &LensCamera,
+        corr: &Correspondences,
+        pose: &Pose,
+        radius: f64,
+    ) -> std::result::Result<LocalBound, String> {
+        let cost = ReprojectionCost::through_lens(lens, corr)
+            .map_err(|e| e.to_string())?
+            .cost(pose);
+        let surrogate = Surrogate::new(lens, corr, pose, cost)?;
+        let problem = Problem::new(&surrogate.camera, &surrogate.corr, surrogate.slack.to_surrogate(cost))?;
+        let (whitening, model) = LocalModel::at(&problem, &surrogate.camera, pose, Some(&surrogate))?;
+        let curvature = model
+            .curvature
+            .bound(radius)
+            .ok_or("a depth or a projected line may vanish in the ball")?;
+        Ok(LocalBound {
+            whitening: whitening.t,
+            curvature,
+            raw_bound: model.raw_bound(radius).ok_or("no bound over the ball")?,
+        })
+    }
+
     /// [`LocalBound`] at `pose` for the ball of whitened `radius`; the depth bounds are those of the
     /// level `max(cost at pose, level)`.
     pub fn local_bound(
@@ -2768,7 +2831,14 @@ pub mod testing {
         Ok(LocalBound {
             whitening: whitening.t,
             curvature,
-            raw_bound: super::local_lower_bound(model.cost, model.gradient, model.lambda_min, curvature, radius, &[(radius, RaySlack::NONE)]),
+            raw_bound: super::local_lower_bound(
+                model.cost,
+                model.gradient,
+                model.lambda_min,
+                curvature,
+                radius,
+                &[(radius, RaySlack::NONE)],
+            ),
         })
     }
 }

@@ -61,8 +61,8 @@ use crate::camera_model::AnyCamera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
-use crate::lens_linearisation::{Linearised, SPLITS};
 pub use crate::lens_linearisation::LensBoundFailure;
+use crate::lens_linearisation::{Linearised, SPLITS};
 use crate::optim::Termination;
 use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
 use crate::triangulation::point::linear::WorldFrame;
@@ -630,7 +630,15 @@ mod tests {
                 };
                 // A level above the view's own cost, as with other views in the track.
                 let cost = view.squared_residual(&x) + rng.uniform_in(0.5, 20.0);
-                let Ok(l) = Linearised::new(view.camera, &view.whitening, &view.pixel, &view.x_cam(&x), cost, SPLITS, true) else {
+                let Ok(l) = Linearised::new(
+                    view.camera,
+                    &view.whitening,
+                    &view.pixel,
+                    &view.x_cam(&x),
+                    cost,
+                    SPLITS,
+                    true,
+                ) else {
                     continue;
                 };
                 let Some((rho, eps)) = l.confinement(cost) else {
