@@ -8,11 +8,21 @@ Gaussian pixel noise, ``½ (Σ_points e² + Σ_endpoints d²)``: ``e`` of a poin
 (per-observation covariances) it is the whitened cost ``½ Σ r²`` that ``estimate_pose`` minimises with
 ``point_covariances`` / ``line_covariances``: a point's ``r·r = eᵀ Σ⁻¹ e``, ``e = π(R X + t) − u``; an
 endpoint's ``r = d / √(n̂ᵀ Σ n̂)``, ``d`` its signed pixel distance to the projected line and ``n̂``
-that line's unit normal. Both are computed here in numpy, not by the library, so that the certified
-bounds are checked against a cost of the script's own. A pose with a non-finite entry, a matrix that is
-not a rotation (``max |R Rᵀ − I| > 1e-6`` or ``det R ≤ 0``, the library's own tolerance for a rotation
-argument), or a 3-D point or segment endpoint at depth ``<= 0`` is not valid: its cost is taken as
-+inf.
+that line's unit normal. On the ``lens-`` rows (a distorting camera) the pixels are the observed,
+distorted ones, as ``estimate_pose`` measures them through a ``LensCamera``: a point's ``e`` is to the
+lens projection ``K D(x/z, y/z)`` of ``R X + t`` (``D`` the COLMAP model's distortion, the script's own
+``Lens``); an endpoint's ``d`` is its distance to the *curved* image ``K D(ℓ)`` of the projected line
+``ℓ`` (the line through the normalised projections of the 3-D endpoints), ``min_q |K D(q) − e|`` over
+the points ``q`` of ``ℓ`` inside the lens's fold radius (the branch through the observation; the whole
+line for the lenses here). ``curve_distance2`` finds it by 256 viewing angles along ``ℓ`` (they cover
+the whole line), then 6 Newton steps from the best one; the answer is the least value met, never below
+the true minimum, and agrees with the library's search (1-D Gauss-Newton from the foot of the
+undistorted observation, ``crates/pluecker/src/curved_line.rs``) to ~1e-12 relative where the branch has
+one minimum, as on these scenes (target (8)). All of these are computed here in numpy, not by the
+library, so that the certified bounds are checked against a cost of the script's own. A pose with a
+non-finite entry, a matrix that is not a rotation (``max |R Rᵀ − I| > 1e-6`` or ``det R ≤ 0``, the
+library's own tolerance for a rotation argument), or a 3-D point or segment endpoint at depth ``<= 0``
+is not valid: its cost is taken as +inf.
 
 **Best known minimum** of a scene: the lowest valid cost among
 
@@ -57,10 +67,27 @@ every image point and endpoint. Mixed data of ``n`` correspondences are ``ceil(n
   ``σ₁, σ₂`` uniform in 0.5 .. 2.0 px and ``φ`` uniform in [0, π) (all drawn after the geometry, points
   then endpoints), and noise ``R(φ) diag(σ₁, σ₂) z``, ``z ~ N(0, I)``, drawn from it. Every pluecker
   call on these rows passes ``point_covariances`` (N, 2, 2) and ``line_covariances`` (M, 2, 2, 2); the
-  peers take no covariances and do not run on them; targets (3) and (4) leave them out.
+  peers take no covariances and do not run on them; targets (3) and (4) leave them out;
+- ``lens-{mild,strong}-f{250,800,4000,15000}-{n100-points,n10-points,n10-mixed,n100-mixed,n10-lines}``
+  and ``lens-fisheye-f{250,800}-n100-{points,mixed}``: a distorting camera (``LENSES``), COLMAP's
+  ``OPENCV`` with ``fx = fy = f``, ``cx = 320``, ``cy = 240`` and ``k1, k2, p1, p2`` = -0.05, 0.01, 1e-4,
+  -1e-4 (mild) or -0.3, 0.1, 1e-3, -5e-4 (strong: 11 % barrel at the corner of the f = 250 image), or
+  ``OPENCV_FISHEYE`` with ``k1..k4`` = 0.05, -0.01, 0.002, -0.0005. The general object of the row
+  without ``lens-<lens>-`` (its *pinhole pair*, same f and composition), each pixel drawn in the image
+  of the lens's pinhole part as there, then distorted by the script's own projection (``Lens.pixels``):
+  a point whose distorted pixel leaves the image, or whose normalised radius is beyond the lens's fold
+  radius (where the distortion stops increasing: infinite for these three lenses), is drawn again, as
+  is a segment shorter than 20 px once distorted. These lenses move pixels inwards: a scene's geometry
+  is its pinhole pair's but where a segment was drawn again (6 and 8 of the first 50 scenes of
+  ``lens-strong-f250-n100-mixed`` and ``lens-fisheye-f250-n100-mixed``, none at f ≥ 800). Then the
+  1 px noise on the distorted pixels. Every pluecker call gets ``pluecker.LensCamera``; the peers do
+  not run on them; targets (3) and (4) leave them out, target (7) compares them with their pinhole
+  pairs. The library does not certify through a lens yet (``uncertified_reason`` "not attempted: the
+  certificate covers pinhole cameras only"): their certified fraction is 0 until it does, and target (6)
+  covers them from then on.
 
-``--rows`` selects by substring: ``--rows f800-n10`` also selects ``cov-f800-n10-points`` and
-``cov-f800-n10-mixed``.
+``--rows`` selects by substring: ``--rows f800-n10`` also selects ``cov-f800-n10-points``,
+``cov-f800-n10-mixed`` and the ``lens-*-f800-n10-*`` rows; ``--rows lens`` selects the 44 lens rows.
 
 **Columns** of the Markdown table (one line per row; the JSON holds more):
 
@@ -116,20 +143,30 @@ answers when that keyword exists, else the default's ``certified``; n/a without 
 time of a certified answer (``certify=True``, else the default) ≤ 1 ms on the 100-point rows; (5) on
 ``f800-n100-points`` the default's median time ≤ OpenCV SQPnP's in the same run; (6) soundness: no
 certified answer's ``raw_lower_bound`` above the least cost any candidate reached (every cost here is
-this script's own code, not the library's residuals). Targets (3) and (4)
-are on the rows without covariances (the ``cov-`` rows' certified fraction and times are in the
-table and the JSON).
+this script's own code, not the library's residuals; n/a when nothing was certified); (7) lens cameras at
+the pinhole rates: each ``lens-`` row's certified fraction at most 0.06 below its pinhole pair's (one
+scene of 50 is 0.02; n/a for a lens row whose pair is not in the run, e.g. with ``--rows lens``); (8)
+when lens rows run, the script's lens code against the library's (``lens_self_test``, before the rows):
+``Lens.pixels`` = ``LensCamera.project`` and ``LensCamera.unproject`` of the drawn pixels back to their
+points, both to 1e-9 px, on 500 points drawn as the scenes draw them per lens and f; the own cost
+(``2 pose_cost``) = ``result.cost`` at the default answer to 1e-8 relative, on the first 2 scenes of each
+lens row. Targets (3) and (4) are on the rows without covariances or lens (the ``cov-`` and ``lens-``
+rows' certified fraction and times are in the table and the JSON). After the table the script lists,
+per row, why ``certify=True`` answers were not certified (``details.uncertified_reason`` up to its first
+``;``, numbers shown as ``#``).
 
 Results go to ``bench/out/compare_global_pose.json`` (every number of the table, the misses' seeds and
-relative excess cost, ``reached_best`` per source, the peers' failure reasons, the wall time per part
-of the work, machine, versions and arguments). At the end the script prints, to stderr, its wall time
-and an extrapolation of the same rows to the default settings. Run from the repository root with the
+relative excess cost, ``reached_best`` per source, the peers' failure reasons, the uncertified reasons,
+the lens self-test's numbers, the wall time per part of the work, machine, versions and arguments). At
+the end the script prints, to stderr, its wall time and an extrapolation of the same rows to the default
+settings. Run from the repository root with the
 venv (``.venv/bin/pip install opencv-python-headless poselib cvxpnpl``; a peer that is missing is
 reported as not available and skipped):
 
-    .venv/bin/python bench/compare_global_pose.py          # 82 rows x 1000 scenes (times below)
+    .venv/bin/python bench/compare_global_pose.py          # 126 rows x 1000 scenes (times below)
     .venv/bin/python bench/compare_global_pose.py --quick  # 20 scenes per row, 10 starts
     .venv/bin/python bench/compare_global_pose.py --rows cov- --quick   # the 12 rows with covariances
+    .venv/bin/python bench/compare_global_pose.py --rows lens --quick   # the 44 rows through a lens
     .venv/bin/python bench/compare_global_pose.py --rows f800-n4 rs- --scenes 200   # rows by substring
     .venv/bin/python bench/compare_global_pose.py --list-rows
 
@@ -140,7 +177,10 @@ proportion. Those times are of the 70 rows without covariances. The 12 ``cov-`` 
 ``--quick`` on 2026-11-27 (the extension as built after commit ``a81504d``), extrapolated to about
 90 min with the defaults, nearly all of it the robust candidate (b) (0.15 s a call on the points rows,
 0.75 s on the mixed ones: it runs to its iteration cap, as on the rows without covariances with that
-build). The machine is shared and noisy: compare times taken in the same run only.
+build). The 44 ``lens-`` rows took 80 s with ``--scenes 4 --starts 3 --starts-large 2`` on 2026-11-27,
+extrapolated to about 6.3 h with the defaults: 5.3 h the robust candidate (b) (0.2-1 s a call on most
+rows), 1 h the random starts (the script's curved-line cost takes 1-3 ms a call with 10-50 segments).
+The machine is shared and noisy: compare times taken in the same run only.
 """
 
 from __future__ import annotations
@@ -151,10 +191,12 @@ import json
 import math
 import os
 import platform
+import re
 import sys
 import time
 import warnings
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Any, Callable
 
@@ -212,6 +254,20 @@ ROTATION_TOLERANCE = 1e-6  # max |R Rᵀ − I| of a valid rotation (the library
 LARGE_ROW = 10  # rows with more correspondences than this use --starts-large
 CERT_TARGET = {100: 0.99, 10: 0.95}
 CERT_TIME_TARGET_US = 1000.0
+# Distorting cameras of the lens- rows: COLMAP model and its distortion parameters (the camera's are f, f,
+# CX, CY before them). mild and strong: OPENCV k1, k2, p1, p2; fisheye: OPENCV_FISHEYE k1..k4.
+LENSES: dict[str, tuple[str, tuple[float, ...]]] = {
+    "mild": ("OPENCV", (-0.05, 0.01, 1e-4, -1e-4)),
+    "strong": ("OPENCV", (-0.3, 0.1, 1e-3, -5e-4)),
+    "fisheye": ("OPENCV_FISHEYE", (0.05, -0.01, 0.002, -0.0005)),
+}
+CURVE_SAMPLES = 256  # viewing angles sampled along a projected line for the curved endpoint distance
+CURVE_NEWTON_STEPS = 6  # Newton steps along the line from the best sample
+CURVE_DIFF_STEP = 1e-5  # radians: the central differences of the Newton steps
+LENS_RATE_SLACK = 0.06  # target (7): a lens row's certified fraction at most this below its pinhole row's
+LENS_SELF_TEST_SCENES = 2  # scenes per selected lens row on which the own cost is checked against the library's
+LENS_PROJECTION_TOL_PX = 1e-9  # own projection against LensCamera.project
+LENS_COST_TOL = 1e-8  # own lens cost against the library's result.cost, relative
 OUT = Path(__file__).resolve().parent / "out" / "compare_global_pose.json"
 
 PEERS = ("sqpnp", "sqpnp+lm", "iter", "poselib", "poselib-1", "cvxpnpl")  # the table's order
@@ -236,6 +292,7 @@ class Row:
     planar: bool = False
     kind: str = ""  # random_scene kind
     covariances: bool = False  # per-observation covariances (the cov- rows)
+    lens: str = ""  # a key of LENSES: the camera distorts (the lens- rows); "": pinhole
 
     @property
     def n(self) -> int:
@@ -247,25 +304,106 @@ class Row:
             return "points"
         return "lines" if self.n_points == 0 else "mixed"
 
+    @property
+    def pinhole_pair(self) -> str | None:
+        """A lens row's pinhole row, same f and composition (its name without ``lens-<lens>-``)."""
+        return self.name.removeprefix(f"lens-{self.lens}-") if self.lens else None
+
+
+def _split(n: int, data: str) -> tuple[int, int]:
+    """(points, segments) of ``n`` correspondences of kind ``data``: mixed is ``ceil(n/2)`` + ``floor(n/2)``."""
+    return {"points": (n, 0), "lines": (0, n), "mixed": ((n + 1) // 2, n // 2)}[data]
+
 
 def all_rows() -> list[Row]:
     rows = []
     for f in (250.0, 800.0, 4000.0, 15000.0):
         for n in (4, 6, 10, 100):
-            for data, (npt, nln) in (("points", (n, 0)), ("lines", (0, n)), ("mixed", ((n + 1) // 2, n // 2))):
-                rows.append(Row(f"f{f:g}-n{n}-{data}", "synthetic", npt, nln, f=f))
+            for data in ("points", "lines", "mixed"):
+                rows.append(Row(f"f{f:g}-n{n}-{data}", "synthetic", *_split(n, data), f=f))
     for f in (800.0, 4000.0):
         for n in (4, 6, 10, 100):
-            for data, (npt, nln) in (("points", (n, 0)), ("mixed", ((n + 1) // 2, n // 2))):
-                rows.append(Row(f"planar-f{f:g}-n{n}-{data}", "synthetic", npt, nln, f=f, planar=True))
+            for data in ("points", "mixed"):
+                rows.append(Row(f"planar-f{f:g}-n{n}-{data}", "synthetic", *_split(n, data), f=f, planar=True))
     for kind in ("general", "planar", "far"):
         rows.append(Row(f"rs-{kind}-100p", "random_scene", 100, 0, kind=kind))
         rows.append(Row(f"rs-{kind}-50p20l", "random_scene", 50, 20, kind=kind))
     for f in (800.0, 4000.0, 15000.0):
         for n in (10, 100):
-            for data, (npt, nln) in (("points", (n, 0)), ("mixed", ((n + 1) // 2, n // 2))):
-                rows.append(Row(f"cov-f{f:g}-n{n}-{data}", "synthetic", npt, nln, f=f, covariances=True))
+            for data in ("points", "mixed"):
+                rows.append(Row(f"cov-f{f:g}-n{n}-{data}", "synthetic", *_split(n, data), f=f, covariances=True))
+    lens_mixes = ((100, "points"), (10, "points"), (10, "mixed"), (100, "mixed"), (10, "lines"))
+    for lens, focals, mixes in (
+        ("mild", (250.0, 800.0, 4000.0, 15000.0), lens_mixes),
+        ("strong", (250.0, 800.0, 4000.0, 15000.0), lens_mixes),
+        ("fisheye", (250.0, 800.0), ((100, "points"), (100, "mixed"))),
+    ):
+        for f in focals:
+            for n, data in mixes:
+                rows.append(Row(f"lens-{lens}-f{f:g}-n{n}-{data}", "synthetic", *_split(n, data), f=f, lens=lens))
     return rows
+
+
+@dataclass(frozen=True)
+class Lens:
+    """A distorting camera of COLMAP's ``model`` (OPENCV, RADIAL or OPENCV_FISHEYE), ``fx = fy = f``,
+    principal point (CX, CY), distortion ``k`` in COLMAP's order, in this script's own numpy code: the
+    pixel of normalised coordinates ``n = (x/z, y/z)`` is ``K D(n)``. OPENCV:
+    ``D(n) = n (1 + k1 r² + k2 r⁴) + (2 p1 x y + p2 (r² + 2 x²), p1 (r² + 2 y²) + 2 p2 x y)``, ``r = |n|``;
+    RADIAL: the same without p1, p2; OPENCV_FISHEYE: ``D(n) = n θ_d / r``, ``θ = atan r``,
+    ``θ_d = θ (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸)``."""
+
+    model: str
+    k: tuple[float, ...]
+    f: float
+
+    @property
+    def params(self) -> list[float]:
+        """The camera's parameters in COLMAP's order (RADIAL has one focal length)."""
+        return [self.f, CX, CY, *self.k] if self.model == "RADIAL" else [self.f, self.f, CX, CY, *self.k]
+
+    def camera(self) -> Any:
+        return pluecker.LensCamera(self.model, self.params)
+
+    def distort(self, n: np.ndarray) -> np.ndarray:
+        """``D(n)`` of normalised coordinates ``n`` (..., 2)."""
+        x, y = n[..., 0], n[..., 1]
+        r2 = x * x + y * y
+        if self.model == "OPENCV_FISHEYE":
+            r = np.sqrt(r2)
+            theta = np.arctan(r)
+            t2 = theta * theta
+            k1, k2, k3, k4 = self.k
+            theta_d = theta * (1.0 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
+            tiny = r < 1e-12  # θ_d / r → 1 on the axis
+            return n * np.where(tiny, 1.0, theta_d / np.where(tiny, 1.0, r))[..., None]
+        k1, k2 = self.k[:2]
+        radial = 1.0 + r2 * (k1 + k2 * r2)
+        xd, yd = x * radial, y * radial
+        if self.model == "OPENCV":
+            p1, p2 = self.k[2:]
+            xd = xd + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x)
+            yd = yd + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y
+        return np.stack([xd, yd], axis=-1)
+
+    def pixels(self, n: np.ndarray) -> np.ndarray:
+        """Distorted pixels ``K D(n)`` (..., 2) of normalised coordinates ``n`` (..., 2)."""
+        return self.distort(n) * self.f + np.array([CX, CY])
+
+    @cached_property
+    def fold_radius(self) -> float:
+        """``|n|`` where the radial distortion stops increasing (inf when it never does; the library's
+        invertible region): the first positive root ``s`` of ``1 + 3 k1 s + 5 k2 s² (+ 7 k3 s³ + 9 k4 s⁴)``,
+        ``s = r²`` (fisheye: ``θ²``, the radius then ``tan θ``, inf beyond 90°)."""
+        k = self.k if self.model == "OPENCV_FISHEYE" else self.k[:2]
+        roots = np.roots([(2 * i + 3) * c for i, c in reversed(list(enumerate(k)))] + [1.0])
+        real = [z.real for z in roots if abs(z.imag) <= 1e-12 * abs(z) and z.real > 0.0]
+        if not real:
+            return math.inf
+        if self.model == "OPENCV_FISHEYE":
+            theta = math.sqrt(min(real))
+            return math.tan(theta) if theta < math.pi / 2 else math.inf
+        return math.sqrt(min(real))
 
 
 @dataclass
@@ -284,6 +422,7 @@ class Scene:
     planar: bool
     point_covariances: np.ndarray | None = None  # (N, 2, 2) px², cov- rows only (both or neither)
     line_covariances: np.ndarray | None = None  # (M, 2, 2, 2) px², per endpoint, cov- rows only
+    lens: Lens | None = None  # lens- rows: the observations are distorted pixels through this lens
     all3d: np.ndarray = field(init=False, repr=False)  # every point and endpoint, (N + 2M, 3)
     centroid: np.ndarray = field(init=False, repr=False)
     depth: float = field(init=False)
@@ -329,9 +468,11 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
 
 
 def _draw_point(
-    rng: np.random.Generator, f: float, plane: tuple[np.ndarray, float] | None
+    rng: np.random.Generator, f: float, plane: tuple[np.ndarray, float] | None, lens: Lens | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """A camera-frame point visible in the image, and its clean pixel."""
+    """A camera-frame point visible in the image, and its clean pixel. Through a lens the pixel is drawn
+    in the image of its pinhole part (undistorted) and distorted by ``Lens.pixels``; drawn again when the
+    distorted pixel leaves the image or the point lies beyond the lens's fold radius."""
     while True:
         uv = np.array([rng.uniform(0.0, WIDTH), rng.uniform(0.0, HEIGHT)])
         ray = np.array([(uv[0] - CX) / f, (uv[1] - CY) / f, 1.0])
@@ -345,11 +486,18 @@ def _draw_point(
             z = offset / denom
             if not PLANE_DEPTH_RANGE[0] <= z <= PLANE_DEPTH_RANGE[1]:
                 continue
+        if lens is not None:
+            if not math.hypot(ray[0], ray[1]) < lens.fold_radius:
+                continue
+            uv = lens.pixels(ray[:2])
+            if not (0.0 <= uv[0] <= WIDTH and 0.0 <= uv[1] <= HEIGHT):
+                continue
         return z * ray, uv
 
 
 def make_synthetic(row: Row, seed: int) -> Scene:
     rng = np.random.default_rng(seed)
+    lens = Lens(*LENSES[row.lens], row.f) if row.lens else None
     R = random_rotation(rng)
     plane = None
     if row.planar:
@@ -359,14 +507,14 @@ def make_synthetic(row: Row, seed: int) -> Scene:
         plane = (normal, float(normal @ np.array([0.0, 0.0, PLANE_DEPTH])))
     pts_cam, pts_px = [], []
     for _ in range(row.n_points):
-        x, uv = _draw_point(rng, row.f, plane)
+        x, uv = _draw_point(rng, row.f, plane, lens)
         pts_cam.append(x)
         pts_px.append(uv)
     seg_cam, seg_px = [], []
     for _ in range(row.n_lines):
         while True:
-            a, ua = _draw_point(rng, row.f, plane)
-            b, ub = _draw_point(rng, row.f, plane)
+            a, ua = _draw_point(rng, row.f, plane, lens)
+            b, ub = _draw_point(rng, row.f, plane, lens)
             if np.linalg.norm(ua - ub) >= MIN_SEGMENT_PX:
                 break
         seg_cam.append([a, b])
@@ -381,14 +529,16 @@ def make_synthetic(row: Row, seed: int) -> Scene:
     l3 = (seg_cam_a - c) @ R + o
     p2 = np.array(pts_px).reshape(-1, 2)
     l2 = np.array(seg_px).reshape(-1, 2, 2)
-    camera = pluecker.Camera(row.f, row.f, CX, CY)
+    pinhole = pluecker.Camera(row.f, row.f, CX, CY)  # the lens's pinhole part too
+    camera = lens.camera() if lens else pinhole
+    K = np.asarray(pinhole.K, float)
     if row.covariances:
         (pn, pc), (ln, lc) = _anisotropic_noise(rng, len(p2)), _anisotropic_noise(rng, 2 * len(l2))
         p2, l2, lc = p2 + pn, l2 + ln.reshape(l2.shape), lc.reshape(-1, 2, 2, 2)
-        return Scene(seed, camera, np.asarray(camera.K, float), R, t, p2, p3, l2, l3, row.planar, pc, lc)
+        return Scene(seed, camera, K, R, t, p2, p3, l2, l3, row.planar, pc, lc, lens)
     p2 = p2 + rng.normal(0.0, SIGMA_PX, p2.shape)
     l2 = l2 + rng.normal(0.0, SIGMA_PX, l2.shape)
-    return Scene(seed, camera, np.asarray(camera.K, float), R, t, p2, p3, l2, l3, row.planar)
+    return Scene(seed, camera, K, R, t, p2, p3, l2, l3, row.planar, lens=lens)
 
 
 def _anisotropic_noise(rng: np.random.Generator, k: int) -> tuple[np.ndarray, np.ndarray]:
@@ -455,10 +605,15 @@ def pose_cost(scene: Scene, R: Any, t: Any) -> float:
 
 def _whitened_cost(scene: Scene, R: np.ndarray, t: np.ndarray) -> float:
     """``½ Σ r²`` with the scene's covariances (see the module docstring; the identity without them), at
-    a valid pose: a point's ``eᵀ Σ⁻¹ e``, an endpoint's ``d² / (n̂ᵀ Σ n̂)``. This script's own code, not
-    the library's residuals: the certified bounds are checked against it."""
+    a valid pose: a point's ``eᵀ Σ⁻¹ e``, an endpoint's ``d² / (n̂ᵀ Σ n̂)``; through a lens a point's
+    ``e`` is to ``Lens.pixels`` and an endpoint's ``r²`` its squared distance to the curved image of the
+    projected line (``curve_distance2``). This script's own code, not the library's residuals: the
+    certified bounds are checked against it."""
 
     def pixels(X: np.ndarray) -> np.ndarray:
+        if scene.lens is not None:
+            x = X @ R.T + t
+            return scene.lens.pixels(x[:, :2] / x[:, 2:3])
         x = (X @ R.T + t) @ scene.K.T
         return x[:, :2] / x[:, 2:3]
 
@@ -469,7 +624,12 @@ def _whitened_cost(scene: Scene, R: np.ndarray, t: np.ndarray) -> float:
             total += float(np.sum(e**2))
         else:
             total += float(np.einsum("ni,ni->", e, np.linalg.solve(scene.point_covariances, e[..., None])[..., 0]))
-    if len(scene.lines3d):
+    if len(scene.lines3d) and scene.lens is not None:
+        x = scene.lines3d @ R.T + t  # (M, 2, 3) camera frame
+        lines = np.repeat(np.cross(x[:, 0], x[:, 1]), 2, axis=0)  # ℓ of each endpoint, normalised coordinates
+        info = None if scene.line_covariances is None else np.linalg.inv(scene.line_covariances.reshape(-1, 2, 2))
+        total += float(np.sum(curve_distance2(scene.lens, lines, scene.lines2d.reshape(-1, 2), info)))
+    elif len(scene.lines3d):
         ends = pixels(scene.lines3d.reshape(-1, 3)).reshape(-1, 2, 2)
         d = ends[:, 1] - ends[:, 0]
         n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.linalg.norm(d, axis=1)[:, None]
@@ -479,6 +639,91 @@ def _whitened_cost(scene: Scene, R: np.ndarray, t: np.ndarray) -> float:
         else:
             total += float(np.sum(dist**2 / np.einsum("mi,mkij,mj->mk", n, scene.line_covariances, n)))
     return 0.5 * total
+
+
+def curve_distance2(lens: Lens, lines: np.ndarray, e: np.ndarray, info: np.ndarray | None = None) -> np.ndarray:
+    """Squared distance (K,), px² (``(u − e)ᵀ info (u − e)`` with ``info`` (K, 2, 2), ``C⁻¹``), of each
+    observed pixel ``e`` (K, 2) to the curved image ``u(q) = K D(q)`` of its line ``ℓ`` of normalised
+    coordinates, ``l·(q, 1) = 0``, ``lines`` (K, 3): the least over the points ``q`` of ``ℓ`` inside the
+    lens's fold radius (the branch of the curve through the observation, the whole of ``ℓ`` for the
+    lenses here). ``ℓ`` is parametrised by the viewing angle ``φ`` within its plane through the camera
+    centre, ``q(φ) = q₀ + √(1 + l₂²) tan φ · d`` (``l`` scaled to ``|(l₀, l₁)| = 1``, ``q₀ = −l₂ (l₀, l₁)``
+    the foot of the principal point on ``ℓ``, ``d`` its direction), which covers the whole line;
+    ``CURVE_SAMPLES`` angles spread evenly over the branch, then ``CURVE_NEWTON_STEPS`` Newton steps
+    (derivatives of ``u(φ)`` by central differences; Gauss-Newton where the curvature is not positive)
+    from the best sample, kept within its two neighbours. The answer is the least value met, so never
+    below the true minimum. NaN where ``ℓ`` does not exist or misses the fold radius."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        h = lines / np.linalg.norm(lines[:, :2], axis=1, keepdims=True)
+        foot = -h[:, 2:3] * h[:, :2]
+        direction = np.stack([-h[:, 1], h[:, 0]], axis=1)
+        scale = np.sqrt(1.0 + h[:, 2] ** 2)
+        reach = np.sqrt(lens.fold_radius**2 - h[:, 2] ** 2)  # |τ| inside the fold (inf without one, NaN: missed)
+        phi_max = np.arctan2(reach, scale)
+
+        def pixels(phi: np.ndarray) -> np.ndarray:  # (K, S) angles -> (K, S, 2) pixels
+            return lens.pixels(foot[:, None] + (scale[:, None] * np.tan(phi))[..., None] * direction[:, None])
+
+        def dist2(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # aᵀ info b over the last axis
+            return np.sum(a * b, axis=-1) if info is None else np.einsum("ksi,kij,ksj->ks", a, info, b)
+
+        grid = phi_max[:, None] * ((2.0 * np.arange(CURVE_SAMPLES) + 1.0 - CURVE_SAMPLES) / CURVE_SAMPLES)
+        r = pixels(grid) - e[:, None]
+        values = dist2(r, r)
+        values = np.where(np.isfinite(values), values, np.inf)
+        pick = np.argmin(values, axis=1)
+        rows = np.arange(len(h))
+        phi, least = grid[rows, pick], values[rows, pick]
+        step = 2.0 * phi_max / CURVE_SAMPLES
+        lo, hi = np.maximum(phi - step, -phi_max), np.minimum(phi + step, phi_max)
+        hd = CURVE_DIFF_STEP
+        for _ in range(CURVE_NEWTON_STEPS):
+            u = pixels(phi[:, None] + np.array([-hd, 0.0, hd]))
+            r, du = u[:, 1:2] - e[:, None], (u[:, 2:] - u[:, :1]) / (2.0 * hd)
+            ddu = (u[:, 2:] - 2.0 * u[:, 1:2] + u[:, :1]) / hd**2
+            value, grad, gauss = dist2(r, r)[:, 0], dist2(du, r)[:, 0], dist2(du, du)[:, 0]
+            least = np.minimum(least, np.where(np.isfinite(value), value, np.inf))
+            curvature = gauss + dist2(ddu, r)[:, 0]
+            phi = np.clip(phi - grad / np.where(curvature > 0.0, curvature, gauss), lo, hi)
+        r = pixels(phi[:, None]) - e[:, None]
+        value = dist2(r, r)[:, 0]
+        least = np.minimum(least, np.where(np.isfinite(value), value, np.inf))
+    return np.where(np.isfinite(phi_max) & np.isfinite(least), least, np.nan)
+
+
+def lens_self_test(rows: list[Row], seed: int) -> dict[str, Any]:
+    """This script's lens code against the library's, for the selected lens rows: ``Lens.pixels``
+    against ``LensCamera.project`` at 500 points per lens and focal length drawn as the scenes draw them
+    (``_draw_point``), ``LensCamera.unproject`` of their pixels against their normalised coordinates (px:
+    the pixels are inside the lens's invertible region), and the cost, ``2 pose_cost``, against
+    ``result.cost`` at the default answer on the first ``LENS_SELF_TEST_SCENES`` scenes of each row.
+    Raises AssertionError when the projections differ by more than ``LENS_PROJECTION_TOL_PX``: the
+    scenes and costs would then not be those of the library's lens."""
+    projection = unprojection = cost_relative = 0.0
+    for lens in {Lens(*LENSES[r.lens], r.f) for r in rows if r.lens}:
+        rng = np.random.default_rng([seed, 2])
+        x = np.array([_draw_point(rng, lens.f, None, lens)[0] for _ in range(500)])
+        n = x[:, :2] / x[:, 2:]
+        camera = lens.camera()
+        projection = max(projection, float(np.max(np.abs(lens.pixels(n) - camera.project(x)))))
+        unprojection = max(unprojection, lens.f * float(np.max(np.abs(camera.unproject(lens.pixels(n)) - n))))
+    assert projection <= LENS_PROJECTION_TOL_PX, f"own lens projection off LensCamera.project by {projection:.2e} px"
+    worst_at, scenes = None, 0
+    for row in rows:
+        for i in range(LENS_SELF_TEST_SCENES if row.lens else 0):
+            s = make_scene(row, seed + i)
+            res, _, err = call_pluecker(s, 1)
+            rel = math.nan if res is None else abs(2.0 * pose_cost(s, *res.pose) - res.cost) / max(res.cost, 1e-12)
+            scenes += 1
+            if not rel <= cost_relative:  # NaN (an exception or a non-finite cost) counts as the worst
+                cost_relative, worst_at = rel, f"{row.name} seed {seed + i}" + (f" ({err})" if err else "")
+    return {
+        "projection_px": projection,
+        "unprojection_px": unprojection,
+        "cost_relative": cost_relative,
+        "cost_worst_at": worst_at,
+        "scenes": scenes,
+    }
 
 
 # --------------------------------------------------------------------------------------------------
@@ -559,7 +804,7 @@ def call_pluecker(s: Scene, repeats: int, **extra: Any) -> tuple[Any, float, str
 
 
 def peer_applies(peer: str, row: Row) -> bool:
-    if row.covariances:  # no peer takes per-observation covariances
+    if row.covariances or row.lens:  # no peer here takes per-observation covariances or distortion
         return False
     if peer in ("sqpnp", "sqpnp+lm", "iter"):
         return cv2 is not None and row.data == "points"
@@ -607,6 +852,15 @@ def _quantiles(us: list[float]) -> tuple[float, float]:
     return float(np.median(a)), float(np.percentile(a, 95))
 
 
+def _reason(res: Any, err: str | None) -> str:
+    """Why a certify=True answer is not certified: ``details.uncertified_reason`` up to its first ``;``,
+    numbers replaced by ``#`` so that the reasons make a histogram."""
+    if res is None:
+        return f"exception: {err}"
+    why = getattr(getattr(res, "details", None), "uncertified_reason", None) or "no reason given"
+    return re.sub(r"[-+]?\d+(\.\d*)?([eE][-+]?\d+)?", "#", why.split(";")[0])
+
+
 class Features:
     """What the installed pluecker offers, found on the first call."""
 
@@ -624,6 +878,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
     t_cert: list[float] = []
     statuses: dict[str, int] = {}
     cert_statuses: dict[str, int] = {}
+    uncertified_reasons: dict[str, int] = {}  # certify=True answers not certified, by reason (numbers elided)
     misses = misses_gross = miss_success = miss_ambiguous = ambiguous_flags = status_ambiguous = 0
     certified = cert_certified = cert_misses = 0
     # Certified lower bounds against the best cost found (this script's own cost code): how many were
@@ -714,6 +969,9 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
             cstatus = str(cres.status) if cres is not None else f"exception: {cerr}"
             cert_statuses[cstatus] = cert_statuses.get(cstatus, 0) + 1
             cert_certified += getattr(cres, "certified", None) is True
+            if getattr(cres, "certified", None) is not True:
+                why = _reason(cres, cerr)
+                uncertified_reasons[why] = uncertified_reasons.get(why, 0) + 1
             cost_cert = pose_cost(s, cres.pose.rotation, cres.pose.translation) if cres is not None else math.inf
             candidates["certify"] = cost_cert
             cert_bound = cres.certificate.raw_lower_bound if getattr(cres, "certified", None) is True else None
@@ -809,6 +1067,8 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
         "correspondences": row.n,
         "data": row.data,
         "covariances": row.covariances,
+        "lens": dict(zip(("name", "model", "distortion"), (row.lens, *LENSES[row.lens]))) if row.lens else None,
+        "pinhole_pair": row.pinhole_pair,
         "scenes": n_scenes,
         "random_starts": starts,
         "misses": misses,
@@ -836,6 +1096,7 @@ def run_row(row: Row, args: argparse.Namespace) -> dict[str, Any]:
                 "median_us": cmed,
                 "p95_us": cp95,
                 "status_histogram": cert_statuses,
+                "uncertified_reasons": uncertified_reasons,
             }
             if Features.certify_kw
             else None
@@ -896,8 +1157,13 @@ def markdown(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool | None]]:
-    """(text, True/False, or None for n/a)."""
+def _cert_fraction(r: dict[str, Any]) -> float | None:
+    """A row's certified fraction: of the certify=True answers, else of the default answers (None: n/a)."""
+    return r["certify"]["certified_fraction"] if r["certify"] else r["certified_fraction"]
+
+
+def targets(rows: list[dict[str, Any]], self_test: dict[str, Any] | None = None) -> list[tuple[str, bool | None]]:
+    """(text, True/False, or None for n/a). ``self_test``: ``lens_self_test``'s numbers, when it ran."""
     checks: list[tuple[str, bool | None]] = []
     big = [r for r in rows if r["correspondences"] >= 6]
     if big:
@@ -911,19 +1177,18 @@ def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool | None]]:
         text = f"(2) every miss flagged ambiguous or non-success in the {len(small)} rows with 4-5 correspondences"
         checks.append((text + note + (f"; unflagged success misses: {', '.join(bad)}" if bad else ""), not bad))
     for n, goal in CERT_TARGET.items():
-        sel = [r for r in rows if r["correspondences"] == n and not r["covariances"]]
+        sel = [r for r in rows if r["correspondences"] == n and not r["covariances"] and not r["lens"]]
         if not sel:
             continue
-        fracs = [
-            (r["row"], r["certify"]["certified_fraction"] if r["certify"] else r["certified_fraction"]) for r in sel
-        ]
+        fracs = [(r["row"], _cert_fraction(r)) for r in sel]
+        known = [(name, f) for name, f in fracs if f is not None]
         text = f"(3) certified ≥ {goal:.0%} on the {len(sel)} {n}-correspondence rows"
-        if any(f is None for _, f in fracs):
+        if len(known) < len(fracs):
             checks.append((f"{text}: n/a (no certification)", None))
             continue
-        worst = min(fracs, key=lambda x: x[1])
+        worst = min(known, key=lambda x: x[1])
         checks.append((f"{text} (lowest {worst[1]:.3f}, {worst[0]})", worst[1] >= goal))
-    sel = [r for r in rows if r["n_points"] == 100 and r["n_lines"] == 0 and not r["covariances"]]
+    sel = [r for r in rows if r["n_points"] == 100 and r["n_lines"] == 0 and not r["covariances"] and not r["lens"]]
     if sel:
         times: list[tuple[str, float]] = []
         if Features.certify_kw:
@@ -961,6 +1226,41 @@ def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool | None]]:
             f"certified answers over {len(checked)} rows (least margin {min(margins):.2e})"
         )
         checks.append((text + (f"; violations: {', '.join(bad)}" if bad else ""), not bad))
+    elif Features.certify_kw:
+        checks.append(("(6) no certified lower bound above the best cost found: n/a (no certified answer)", None))
+    lens_rows = [r for r in rows if r["lens"]]
+    if lens_rows:
+        by_name = {r["row"]: r for r in rows}
+        pairs = [(r, by_name.get(r["pinhole_pair"])) for r in lens_rows]
+        absent = [r["pinhole_pair"] for r, q in pairs if q is None]
+        text = f"(7) lens cameras at the pinhole rates: certified fraction ≥ the pinhole row's − {LENS_RATE_SLACK:.2f}"
+        note = f"; pinhole rows not in this run: {', '.join(absent)}" if absent else ""
+        fractions = [(r, q, _cert_fraction(r), _cert_fraction(q)) for r, q in pairs if q is not None]
+        compared = [(r, q, a, b) for r, q, a, b in fractions if a is not None and b is not None]
+        if not compared or len(compared) < len(fractions):
+            why = "no certification" if fractions else "no pinhole row of the same f and composition in this run"
+            checks.append((f"{text}: n/a ({why}){note}", None))
+        else:
+            below = [
+                f"{r['row']} {a:.3f} vs {q['row']} {b:.3f}"
+                for r, q, a, b in compared
+                if a < b - LENS_RATE_SLACK - 1e-12
+            ]
+            text += f" on {len(compared)} pairs"
+            checks.append((text + (f"; below: {', '.join(below)}" if below else "") + note, not below))
+    if self_test:
+        text = (
+            f"(8) own lens code = the library's: projection ≤ {LENS_PROJECTION_TOL_PX:.0e} px (max "
+            f"{self_test['projection_px']:.1e}), unprojection of the drawn pixels ≤ {LENS_PROJECTION_TOL_PX:.0e} px "
+            f"(max {self_test['unprojection_px']:.1e}), cost = result.cost to {LENS_COST_TOL:.0e} relative "
+            f"(max {self_test['cost_relative']:.1e}, {self_test['cost_worst_at']}; {self_test['scenes']} scenes)"
+        )
+        ok = (
+            self_test["projection_px"] <= LENS_PROJECTION_TOL_PX
+            and self_test["unprojection_px"] <= LENS_PROJECTION_TOL_PX
+            and self_test["cost_relative"] <= LENS_COST_TOL
+        )
+        checks.append((text, ok))
     return checks
 
 
@@ -1057,6 +1357,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{peer}: {state}", file=sys.stderr)
 
     started = time.perf_counter()
+    self_test = lens_self_test(rows_def, args.seed) if any(r.lens for r in rows_def) else None
+    if self_test:
+        print(f"lens self-test: {self_test}", file=sys.stderr)
     rows: list[dict[str, Any]] = []
     for row in rows_def:
         t0 = time.perf_counter()
@@ -1066,7 +1369,7 @@ def main(argv: list[str] | None = None) -> int:
         progress = f"{row.name}: {args.scenes} scenes, {done['wall_seconds']:.1f} s, {done['misses']} misses"
         print(progress, file=sys.stderr)
     wall = time.perf_counter() - started
-    checks = targets(rows)
+    checks = targets(rows, self_test)
     full_estimate = extrapolate_seconds(rows)
 
     print(markdown(rows))
@@ -1089,6 +1392,11 @@ def main(argv: list[str] | None = None) -> int:
                 f"{_na(r['miss_excess_median'], '.2e')} / {_na(r['miss_excess_max'], '.2e')}; "
                 f"reached by {r['reached_best']}"
             )
+    uncertified = [r for r in rows if r["certify"] and r["certify"]["uncertified_reasons"]]
+    if uncertified:
+        print("\nNot certified (certify=True answers, by reason; numbers shown as #):")
+        for r in uncertified:
+            print(f"  {r['row']}: {_hist(r['certify']['uncertified_reasons'])}")
     print()
     for text, ok in checks:
         print(f"{'n/a ' if ok is None else ('PASS' if ok else 'FAIL')} {text}")
@@ -1123,11 +1431,15 @@ def main(argv: list[str] | None = None) -> int:
             "rows_filter": args.rows,
             "sigma_px": SIGMA_PX,
             "cov_sigma_px": COV_SIGMA_PX,
+            "lenses": LENSES,
+            "curve_samples": CURVE_SAMPLES,
+            "curve_newton_steps": CURVE_NEWTON_STEPS,
             "miss_rel": MISS_REL,
             "miss_abs": MISS_ABS,
             "wall_seconds": wall,
             "extrapolated_default_seconds": full_estimate,
         },
+        "lens_self_test": self_test,
         "results": rows,
         "targets": [{"check": text, "pass": ok} for text, ok in checks],
     }

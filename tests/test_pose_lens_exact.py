@@ -191,20 +191,42 @@ def test_anisotropic_covariances_and_segments_are_exact(name):
 
 
 @pytest.mark.parametrize("name", list(LENSES))
-def test_no_certificate_through_a_lens(name):
+def test_a_certificate_through_a_lens_is_never_above_a_cheaper_pose(name):
+    """Through a lens the certificate bounds the exact cost in the observed pixels. Its raw bound never
+    exceeds the oracle's cost at poses sampled about the answer, nor at the minima that pycolmap's own
+    refinement (Ceres) reaches from starts moved by ~0.05 rad and ~0.2 units.
+    OPENCV and SIMPLE_RADIAL are certified; the fisheye 80 degrees off axis is not (its confinement
+    boxes of normalised coordinates reach the edge of the lens's one-to-one disc), and says why."""
     model, params, r_max = LENSES[name]
     lens = pluecker.LensCamera(model, params)
     camera = colmap_camera(model, params)
-    rng = np.random.default_rng(13)
-    R, t, x_cam, X = scene(rng, model, r_max, 20)
-    u = camera.img_from_cam(x_cam) + 0.1 * rng.normal(size=(20, 2))
-    options = pluecker.PoseOptions(certify=pluecker.CertifyOptions())
-    for ransac in (None, pluecker.RansacOptions(seed=1)):
-        options.ransac = ransac
+    certified = 0
+    for seed in range(3):
+        rng = np.random.default_rng(40 + seed)
+        R, t, x_cam, X = scene(rng, model, r_max, 20)
+        u = camera.img_from_cam(x_cam) + rng.normal(size=(20, 2))
+        options = pluecker.PoseOptions(certify=pluecker.CertifyOptions())
         result = pluecker.estimate_pose(lens, u, X, options=options)
-        # Requested and not available through a lens: no bound, and the status says the gap is open.
-        assert result.status == "gap_not_closed"
-        assert result.certified is False and result.certificate is None
-    options.ransac = None
-    result = pluecker.estimate_pose(lens, u, X, options=options)
-    assert "pinhole cameras only" in result.details.uncertified_reason
+        if result.certificate is None:
+            assert result.status == "gap_not_closed" and result.details.uncertified_reason
+            continue
+        certified += result.certificate.certified
+        raw = result.certificate.raw_lower_bound / 2.0  # Σ r² → ½ Σ r², the oracle's unit
+        R0, t0 = result.pose.rotation, result.pose.translation
+        assert raw <= oracle_cost(camera, R0, t0, X, u) * (1 + 1e-9)
+
+        def cost(z):
+            return oracle_cost(camera, exp_so3(z[:3]) @ R0, t0 + z[3:], X, u)
+
+        for _ in range(5):
+            z0 = np.concatenate([rng.normal(scale=0.05, size=3), rng.normal(scale=0.2, size=3)])
+            R1, t1 = pycolmap_refined(camera, exp_so3(z0[:3]) @ R0, t0 + z0[3:], u, X)
+            found = oracle_cost(camera, R1, t1, X, u)
+            assert raw <= found * (1 + 1e-9) + 1e-12, (name, seed, raw, found)
+            for scale in (1e-4, 1e-3, 1e-2):
+                z = np.concatenate([rng.normal(scale=scale, size=3), rng.normal(scale=4 * scale, size=3)])
+                assert raw <= cost(z) * (1 + 1e-9) + 1e-12
+    if name == "OPENCV_FISHEYE":
+        assert certified == 0
+    else:
+        assert certified == 3

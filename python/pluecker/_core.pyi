@@ -431,7 +431,8 @@ def estimate_pose(
     minimal solvers, RANSAC and the algebraic methods run on exactly undistorted pixels weighted by the
     distortion's Jacobian (RANSAC's thresholds are distorted pixels to first order); the refinement and
     all reported pixels use the exact error in the distorted pixels (segments: each endpoint's distance to
-    the curved image of the line); no certificate through a lens (pinhole cameras only); with RANSAC a
+    the curved image of the line); a requested certificate bounds that exact cost (kind ``lens_sublevel_set``, over
+    the poses whose projections stay inside the disc where the lens is proved one-to-one); with RANSAC a
     pixel beyond the lens is an outlier. ``point_covariances`` (N, 2, 2), ``line_covariances`` (M, 2, 2) or
     (M, 2, 2, 2), px²: per-observation noise (unit when left out); residuals and ``sigma_px`` are then
     in standard deviations (``sigma_px`` defaults to 1), and a requested certificate bounds that

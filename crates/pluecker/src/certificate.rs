@@ -73,6 +73,10 @@ pub enum CertificateKind {
     /// Pose: the sublevel-set test ([`crate::pose::certificate`]): a search over rotation cells that
     /// confines every pose as good as the estimate to a ball around it, then a bound on that ball.
     SublevelSet,
+    /// Pose through a lens with distortion: the sublevel-set test on the whitened pinhole problem of
+    /// the linearisation at the estimate, carried to the exact cost by interval bounds of the lens's
+    /// Jacobian (`pose::certificate::lens`).
+    LensSublevelSet,
 }
 
 impl CertificateKind {
@@ -110,6 +114,12 @@ impl CertificateKind {
     pub fn domain(&self, primitive: Primitive) -> &'static str {
         match (self, primitive) {
             (CertificateKind::None, _) => "none",
+            (CertificateKind::LensSublevelSet, _) => {
+                "every rotation and translation that keeps the object points and the segments' object \
+                 endpoints in front of the camera, with every point's projection, and every point of a \
+                 projected line that a segment endpoint's residual is measured to, inside the disc where the \
+                 lens is proved one-to-one (the fold radius for radially symmetric lenses)"
+            }
             (_, Primitive::Pose) | (CertificateKind::SublevelSet, _) => {
                 "every rotation and translation that keeps the object points and the segments' object \
                  endpoints in front of the camera"

@@ -924,23 +924,36 @@ fn oracle_surrogate_cost(surrogate: &certificate::testing::LensSurrogate, pose: 
 fn every_pose_below_the_level_is_below_the_surrogates_level() {
     // Step 1 through a lens: every pose with cost f ≤ the level has √(2q) ≤ scale √(2f) + delta for the
     // surrogate's cost q, both computed here. Checked at poses sampled about the answer out to
-    // several residual units and kept where the oracle's cost is below levels 1.2-5 times the answer's.
+    // several residual units and kept where the oracle's cost is below the level: 1.2-5 times the
+    // answer's with 1 px noise, and the answer's plus 2-200 px² with 0.05 px noise, where the points'
+    // residuals are far larger than at the answer (there `scale` carries the slack, not `delta`).
     let mut certify = PoseOptions::default();
     certify.certify = Some(Default::default());
     let (mut checked, mut tightest) = (0, f64::INFINITY);
     for (lens, r_max) in certified_lenses() {
-        for (n, m) in [(20, 0), (5, 5), (0, 10)] {
+        for (n, m, sigma) in [
+            (20, 0, 1.0),
+            (5, 5, 1.0),
+            (0, 10, 1.0),
+            (20, 0, 0.05),
+            (5, 5, 0.05),
+            (0, 10, 0.05),
+        ] {
             for seed in 0..3 {
                 let mut rng = Rng::new(200 + seed);
-                let covs = vec![Matrix2::identity(); n + 2 * m];
+                let covs = vec![Matrix2::identity() * (sigma * sigma); n + 2 * m];
                 let (corr, _, _) = lens_scene(&lens, r_max, n, m, &covs, &mut rng);
                 let answer = estimate_pose(&lens, &corr, &certify).unwrap();
                 let best = oracle_cost(&lens, &corr, None, &answer.pose.rotation, &answer.pose.translation);
                 let Ok(local) = certificate::testing::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
                     continue;
                 };
-                for ratio in [1.2, 2.0, 5.0] {
-                    let level = best * ratio;
+                let levels = if sigma < 1.0 {
+                    [best + 2.0, best + 20.0, best + 200.0]
+                } else {
+                    [best * 1.2, best * 2.0, best * 5.0]
+                };
+                for level in levels {
                     let Ok(surrogate) = certificate::testing::lens_surrogate(&lens, &corr, &answer.pose, level) else {
                         continue;
                     };
@@ -967,5 +980,5 @@ fn every_pose_below_the_level_is_below_the_surrogates_level() {
         }
     }
     eprintln!("{checked} poses below the level checked; least margin {tightest:.3e}");
-    assert!(checked >= 500, "only {checked} poses below the level");
+    assert!(checked >= 1000, "only {checked} poses below the level");
 }

@@ -373,7 +373,7 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see
 /// `pose::refinement`); the result names the runner-up and says when it is nearly as good
 /// ([`Status::Ambiguous`]), and with [`PoseOptions::certify`] carries a certificate of global optimality
-/// (pinhole cameras only: through a lens it is refused, with that reason). Through a lens the
+/// (through a lens, of the exact cost in the observed pixels). Through a lens the
 /// reprojection error is the exact one in the observed pixels
 /// ([`super::reprojection::ReprojectionCost::exact`]), and so are the result's cost, errors and
 /// `sigma_px`.

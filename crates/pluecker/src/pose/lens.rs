@@ -21,8 +21,10 @@
 //! the first-order cost: the projection through a lens is not defined behind the camera, and that test
 //! asks for a factor of 100 between the two costs.
 //!
-//! The certificate of global optimality ([`super::certificate`]) covers pinhole cameras only: through
-//! a lens it is refused, with that reason.
+//! The certificate of global optimality bounds the exact cost in the observed pixels too
+//! ([`super::certificate`], through a whitened pinhole problem linearised at the answer whose error is
+//! bounded by interval enclosures of the distortion's Jacobian), over the poses whose projections stay
+//! inside the disc where the lens is proved one-to-one.
 
 use super::correspondences::{Conditioning, Correspondences};
 use super::noise::ObservationNoise;

@@ -89,14 +89,18 @@ fn sum_of_squares(half: f64) -> f64 {
 }
 
 /// The shared certificate of the certificate stage's outcome, in `Σ r²`: `None` when no bound was
-/// computed.
-fn certificate_of(certification: &Certification) -> Option<Certificate> {
+/// computed. `through_lens`: the certificate through a lens with distortion (its own domain).
+fn certificate_of(certification: &Certification, through_lens: bool) -> Option<Certificate> {
     (!certification.raw_lower_bound.is_nan()).then_some(Certificate {
         lower_bound: sum_of_squares(certification.lower_bound),
         raw_lower_bound: sum_of_squares(certification.raw_lower_bound),
         relative_gap: certification.relative_gap,
         certified: certification.certified,
-        kind: CertificateKind::SublevelSet,
+        kind: if through_lens {
+            CertificateKind::LensSublevelSet
+        } else {
+            CertificateKind::SublevelSet
+        },
         nodes: certification.nodes,
         solver_iterations: 0,
     })
@@ -157,7 +161,7 @@ pub(crate) fn assemble(
         .and_then(|s| ResidualTest::new(cost / (s * s), residual_count.saturating_sub(fitted)));
     let (inliers_points, inliers_lines) =
         inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
-    let certificate = certificate_of(&certification);
+    let certificate = certificate_of(&certification, observations.lens.is_some_and(|l| !l.is_pinhole()));
     // A requested certificate that does not hold: the gap is not closed, or the search was stopped.
     let status = if opts.certify.is_some() && status == Status::Success && !certification.certified {
         stop_reason().map_or(Status::GapNotClosed, Status::stopped)

@@ -21,11 +21,13 @@
 //!
 //! 1. **Confinement** (module docs of [`crate::lens_linearisation`]): a ball `Bᵢ = {‖Wᵢ (n − nᵢ*)‖ ≤ Rᵢ}`
 //!    with `(1 − εᵢ) Rᵢ > √C + ‖eᵢ*‖ + sᵢ` holds every projection (every minimising `q` for an endpoint)
-//!    of a pose of the domain with cost at most `C`. Inside it `‖eᵢ − ℓᵢ‖ ≤ εᵢ ‖Wᵢ (n − nᵢ*)‖ + sᵢ ≤ δᵢ`,
-//!    `δᵢ = εᵢ Rᵢ + sᵢ`; for an endpoint `r ≥ ‖ê + u‖ − ε ‖u‖ ≥ ρ − δ` (`u = W (q − q*)`). So every pose
-//!    with `F ≤ C` has `√Q ≤ √F + ‖δ‖` (Minkowski): the search of [`super`] localises the surrogate's
-//!    sublevel set at the level `C' = (√C + ‖δ‖)²`, and a box bound `q` of the surrogate is one of
-//!    `(√q − ‖δ‖)₊²` on `F` ([`Slack`]).
+//!    of a pose of the domain with cost at most `C`. Inside it `eᵢ = eᵢ* + (I + Δ) vᵢ` (`vᵢ = Wᵢ (n − nᵢ*)`,
+//!    `‖Δ‖ ≤ εᵢ`), so `‖vᵢ‖ ≤ (‖eᵢ‖ + ‖eᵢ*‖ + sᵢ) / (1 − εᵢ)` and
+//!    `‖ℓᵢ‖ ≤ ‖eᵢ‖ + εᵢ ‖vᵢ‖ + sᵢ ≤ ‖eᵢ‖ / (1 − εᵢ) + δᵢ`, `δᵢ = εᵢ (‖eᵢ*‖ + sᵢ) / (1 − εᵢ) + sᵢ`; for an
+//!    endpoint the same with `r ≥ ‖ê + u‖ − ε ‖u‖ − s` (`u = W (q − q*)`) and `ρ ≤ ‖ê + u‖`. So every pose
+//!    with `F ≤ C` has `√Q ≤ σ √F + ‖δ‖`, `σ = 1 / (1 − maxᵢ εᵢ)` (Minkowski): the search of [`super`]
+//!    localises the surrogate's sublevel set at the level `C' = (σ √C + ‖δ‖)²`, and a box bound `q` of
+//!    the surrogate is one of `((√q − ‖δ‖)₊ / σ)²` on `F` ([`Slack`]).
 //! 2. **The ball.** Along a whitened ray of length `s` the surrogate's residuals move by at most
 //!    `Δ(s) = s + ½ K s²` (stacked), so a point's `vᵢ = Wᵢ (n − nᵢ*)` has `‖vᵢ‖ ≤ Δ`, and `εᵢ` is taken
 //!    over the ball of that radius. For an endpoint, write `ê + u = ρ ν + a τ` (`ν`, `τ` the unit normal
@@ -34,9 +36,13 @@
 //!    curvature bound's parts; `c₀` the foot's offset at `P̂`, rounding), and
 //!    `r ≥ √(ρ² + a²) − ε (|a| + c) ≥ √(1 − ε²) ρ − ε c`. The minimiser has
 //!    `√(ρ² + a²) ≤ ρ + ε |a| + 2 ε c` (its residual is at most the foot's), which bounds `|a|`; `ε` is
-//!    then taken over the ball of radius `|a| + c`. With `κ = minₑ √(1 − εₑ²)` and `ε` the largest,
-//!    `√F ≥ κ √Q − ε (Δ(s) + s Φ + ‖c₀‖) − ‖s‖`, `Φ = ‖(‖êₑ‖ ‖q′ₑ‖ / wₑ)ₑ‖`, which step 4 of [`super`]
-//!    bounds along each ray ([`super::local_lower_bound`]).
+//!    then taken over the ball of radius `|a| + c` (the foot must lie in a confinement ball: step 1's,
+//!    or a larger one where `(1 − ε) R` still exceeds `√C + ‖ê‖ + s`). With `κ = minₑ √(1 − εₑ²)` and `ε`
+//!    the largest, `√F ≥ κ √Q − ε (Δ(s) + s Φ + ‖c₀‖) − ‖s‖` (Minkowski),
+//!    `Φ = ‖(‖êₑ‖ ‖q′ₑ‖ / wₑ)ₑ‖`, which step 4 of [`super`] bounds along each ray
+//!    ([`super::local_lower_bound`]), with `ε` and `κ` of the least of nested balls (radii `1/√2` apart)
+//!    that holds the ray's step: near the answer, where the bound is least, only a small ball's
+//!    variation is paid.
 //!
 //! The certificate fails, with the reason, for a lens that [`crate::lens_bounds`] does not cover, where
 //! an observation or a confinement ball reaches the edge of the one-to-one disc, or where `ε` is too

@@ -75,6 +75,11 @@
 //! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level,
 //! counts as exact).
 //!
+//! **Through a lens** ([`lens`]) the steps above run on a whitened pinhole problem, the linearisation
+//! of each observation at the answer, whose sublevel set at a slightly higher level holds every pose
+//! as good as the answer; step 4 then bounds the exact cost through the lens, its difference from the
+//! pinhole problem bounded by interval enclosures of the distortion's Jacobian over nested balls.
+//!
 //! **Without depth bounds** (lines alone, or fewer than two points seen more than `αᵢ + αⱼ` apart;
 //! `Start::Ball`) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
 //! the directions of the observations (`pose::object_distance`), and each box of rotations is bounded
