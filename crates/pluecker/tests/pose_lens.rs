@@ -982,3 +982,71 @@ fn every_pose_below_the_level_is_below_the_surrogates_level() {
     eprintln!("{checked} poses below the level checked; least margin {tightest:.3e}");
     assert!(checked >= 1000, "only {checked} poses below the level");
 }
+
+#[test]
+fn step_one_holds_point_by_point_where_the_lens_residual_vanishes() {
+    // Step 1 for one point at a time (the surrogate of a single correspondence, at the answer of the
+    // whole problem and at its level C): every pose whose point residual f (½ ‖e‖², the oracle's) is at
+    // most C has √(2q) ≤ scale √(2f) + delta. Sampled along the path that moves the projection from
+    // the answer's to the undistorted observation and beyond (at the observation e = 0, so the whole
+    // claim rests on `delta`), and in random directions.
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(Default::default());
+    let (mut checked, mut at_zero) = (0, 0);
+    for (lens, r_max) in certified_lenses() {
+        for seed in 0..3 {
+            let mut rng = Rng::new(300 + seed);
+            let sigma = 2.0;
+            let covs = vec![Matrix2::identity() * (sigma * sigma); 20];
+            let (corr, _, _) = lens_scene(&lens, r_max, 20, 0, &covs, &mut rng);
+            let answer = estimate_pose(&lens, &corr, &certify).unwrap();
+            let (r, t) = (answer.pose.rotation, answer.pose.translation);
+            let level = oracle_cost(&lens, &corr, None, &r, &t);
+            for i in 0..corr.n_points() {
+                let one = Correspondences {
+                    points2d: vec![corr.points2d[i]],
+                    points3d: vec![corr.points3d[i]],
+                    ..Default::default()
+                };
+                let Ok(surrogate) = certificate::testing::lens_surrogate(&lens, &one, &answer.pose, level) else {
+                    continue;
+                };
+                let x = r * corr.points3d[i] + t;
+                let n_star = Vector2::new(x.x / x.z, x.y / x.z);
+                let n_obs = lens.unproject(&corr.points2d[i], 0).unwrap();
+                let mut targets: Vec<(Vector2<f64>, bool)> = [0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.5]
+                    .iter()
+                    .map(|&s| (n_star + (n_obs - n_star) * s, s == 1.0))
+                    .collect();
+                for _ in 0..20 {
+                    let dir = Vector2::new(rng.normal(), rng.normal()).normalize();
+                    targets.push((n_star + dir * rng.uniform_in(0.0, 8.0) * sigma / 600.0, false));
+                }
+                for (n, zero) in targets {
+                    // The pose (R, t + τ) that moves the point, at its depth, onto the ray of n.
+                    let pose = pluecker::Pose::new(r, t + Vector3::new(n.x, n.y, 1.0) * x.z - x);
+                    let f = oracle_cost(&lens, &one, None, &pose.rotation, &pose.translation);
+                    if f > level {
+                        continue;
+                    }
+                    let q = oracle_surrogate_cost(&surrogate, &pose);
+                    let allowed = surrogate.scale * (2.0 * f).sqrt() + surrogate.delta;
+                    checked += 1;
+                    at_zero += zero as usize;
+                    assert!(
+                        (2.0 * q).sqrt() <= allowed * (1.0 + 1e-9) + 1e-12,
+                        "{:?} seed {seed} point {i}: √(2q) = {:.6e} > {allowed:.6e} (f = {f:.3e}{})",
+                        lens.model(),
+                        (2.0 * q).sqrt(),
+                        if zero { ", at the observation" } else { "" }
+                    );
+                }
+            }
+        }
+    }
+    eprintln!("{checked} poses checked, {at_zero} at the observation");
+    assert!(
+        checked >= 1500 && at_zero >= 80,
+        "{checked} poses, {at_zero} at the observation"
+    );
+}
