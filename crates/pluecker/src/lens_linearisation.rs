@@ -24,14 +24,16 @@
 //! `1/cos²θ`. The argument holds in either chart.
 
 use crate::camera_model::{AnyCamera, LensCamera};
-use crate::lens_bounds::{distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion};
+use crate::lens_bounds::{
+    distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion, Domain,
+};
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
 /// 1e5 computed through a few dozen operations).
 pub(crate) const PIXEL_ROUNDING: f64 = 1e-13;
 /// `εᵢ` above which the box of [`Linearised::epsilon`] is split.
-const SPLIT_EPSILON: f64 = 0.01;
+pub(crate) const SPLIT_EPSILON: f64 = 0.01;
 /// Sub-boxes per side of a split box of [`Linearised::epsilon`].
 pub(crate) const SPLITS: usize = 8;
 /// Fisheye projections farther off axis than this (`tan 10°`) use the ray chart.
@@ -89,16 +91,28 @@ impl Linearised {
         splits: usize,
         ray_chart: bool,
     ) -> std::result::Result<Linearised, LensBoundFailure> {
+        let known = lens_domain(camera)?;
+        Self::new_in(camera, &known, whitening, pixel, xc, cost, splits, ray_chart)
+    }
+
+    /// [`Self::new`] with the camera's [`lens_domain`] computed once for all its observations.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new_in(
+        camera: &AnyCamera,
+        (distortion, domain): &(Distortion, Domain),
+        whitening: &Matrix2<f64>,
+        pixel: &Vector2<f64>,
+        xc: &Vector3<f64>,
+        cost: f64,
+        splits: usize,
+        ray_chart: bool,
+    ) -> std::result::Result<Linearised, LensBoundFailure> {
         let xc = *xc;
-        let (distortion, fold, lens) = match camera {
-            AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY, None),
-            AnyCamera::Lens(lens) => (
-                distortion(lens).ok_or(LensBoundFailure::Lens)?,
-                lens.fold_radius(),
-                Some(lens),
-            ),
+        let (distortion, domain) = (distortion.clone(), *domain);
+        let lens = match camera {
+            AnyCamera::Pinhole(_) => None,
+            AnyCamera::Lens(lens) => Some(lens),
         };
-        let domain = domain(&distortion, fold).ok_or(LensBoundFailure::Fold)?;
         if !(xc.z > 0.0) {
             return Err(LensBoundFailure::Fold);
         }
@@ -180,30 +194,34 @@ impl Linearised {
     /// [`SPLIT_EPSILON`]) the box is split into `splits` x `splits` sub-boxes, and `E` is the largest of
     /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
     pub(crate) fn epsilon(&self, rho: f64) -> Option<f64> {
+        let single = self.epsilon_in(rho, 1)?;
+        if !(single > SPLIT_EPSILON) || self.splits == 1 {
+            return Some(single);
+        }
+        Some(single.min(self.epsilon_in(rho, self.splits)?))
+    }
+
+    /// `εᵢ` over the box of [`Self::epsilon`] cut into `pieces` x `pieces` sub-boxes (each sub-box's
+    /// enclosure holds the Jacobian on it; `E` is the largest of their radii about `J*`).
+    pub(crate) fn epsilon_in(&self, rho: f64, pieces: usize) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
-        let mut eps = f64::INFINITY;
-        for pieces in [1, self.splits] {
-            let mut e = Matrix2::zeros();
-            let step = half * (2.0 / pieces as f64);
-            for a in 0..pieces {
-                for b in 0..pieces {
-                    let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
-                    let hi = lo + step;
-                    let enclosure = match (&self.ray, &self.distortion) {
-                        (Some(r), Distortion::Fisheye(c)) => {
-                            fisheye_ray_enclosure(c, self.radius, &r.transpose(), &lo, &hi)?
-                        }
-                        _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
-                    };
-                    e = e.sup(&radius_about(&enclosure, &self.j));
-                }
-            }
-            eps = eps.min((self.m.abs() * e * self.w_inverse.abs()).norm());
-            if !(eps > SPLIT_EPSILON) || self.splits == 1 {
-                break;
+        let mut e = Matrix2::zeros();
+        let step = half * (2.0 / pieces as f64);
+        for a in 0..pieces {
+            for b in 0..pieces {
+                let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
+                let hi = lo + step;
+                let enclosure = match (&self.ray, &self.distortion) {
+                    (Some(r), Distortion::Fisheye(c)) => {
+                        fisheye_ray_enclosure(c, self.radius, &r.transpose(), &lo, &hi)?
+                    }
+                    _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
+                };
+                e = e.sup(&radius_about(&enclosure, &self.j));
             }
         }
+        let eps = (self.m.abs() * e * self.w_inverse.abs()).norm();
         eps.is_finite().then_some(eps)
     }
 
@@ -231,6 +249,17 @@ impl Linearised {
         }
         None
     }
+}
+
+/// The distortion of `camera` that [`crate::lens_bounds`] covers and the disc where it is proved
+/// one-to-one (the identity and the whole plane for a pinhole camera).
+pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(Distortion, Domain), LensBoundFailure> {
+    let (distortion, fold) = match camera {
+        AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY),
+        AnyCamera::Lens(lens) => (distortion(lens).ok_or(LensBoundFailure::Lens)?, lens.fold_radius()),
+    };
+    let domain = domain(&distortion, fold).ok_or(LensBoundFailure::Fold)?;
+    Ok((distortion, domain))
 }
 
 /// `∂h/∂n′` at `n′ = 0` of `h(n′) = (w₁/w₃, w₂/w₃)`, `w = Rᵀ (n′, 1)`: the ray chart's map to `n`.

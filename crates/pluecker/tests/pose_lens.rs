@@ -266,12 +266,13 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
         err.to_string().contains("points2d") && err.to_string().contains("pixel 4"),
         "{err}"
     );
-    // Through a lens, certification is refused with a reason, not claimed.
+    // Through a lens, exact data are certified by the certificate through the lens, of its own kind.
     let mut opts = PoseOptions::default();
     opts.certify = Some(Default::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
-    assert!(result.certificate.is_none_or(|c| !c.certified));
-    assert_ne!(result.status, Status::Success);
+    let certificate = result.certificate.expect("a bound on exact data");
+    assert!(certificate.certified && certificate.kind == pluecker::CertificateKind::LensSublevelSet);
+    assert_eq!(result.status, Status::Success);
 }
 
 #[test]

@@ -52,7 +52,7 @@ use super::{Certification, RaySlack};
 use crate::camera::Camera;
 use crate::camera_model::{AnyCamera, LensCamera};
 use crate::curved_line::endpoint_residual;
-use crate::lens_linearisation::{Linearised, SPLITS};
+use crate::lens_linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;
 use crate::pose::reprojection::Pose;
@@ -96,11 +96,12 @@ impl Slack {
 }
 
 /// `εᵢ` over whitened balls about the observation's linearisation point, memoised on the radii
-/// `top 2^(−j/2)` (the least of them at least the one asked for): step 4 asks for many radii.
+/// `top 2^(−j/2)` (the least of them at least the one asked for): step 4 asks for many radii. Per
+/// radius, the bound of one box and that of the box split ([`SPLITS`] x [`SPLITS`]).
 struct Variation {
     lin: Linearised,
     top: f64,
-    memo: RefCell<Vec<Option<Option<f64>>>>,
+    memo: RefCell<Vec<[Option<Option<f64>>; 2]>>,
 }
 
 /// Radii of [`Variation`]'s memo: `top` down to `top 2^(−20)`.
@@ -111,24 +112,59 @@ impl Variation {
         Variation {
             lin,
             top,
-            memo: RefCell::new(vec![None; MEMO_RADII]),
+            memo: RefCell::new(vec![[None; 2]; MEMO_RADII]),
         }
     }
 
-    /// A bound of `ε` over the ball of `radius` (`None` where a box reaches the edge of the disc).
-    fn epsilon(&self, radius: f64) -> Option<f64> {
+    /// A bound of `ε` over the ball of `radius` from one box (`split` false) or from the box split
+    /// (`None` where a box reaches the edge of the disc).
+    fn epsilon_in(&self, radius: f64, split: bool) -> Option<f64> {
+        let pieces = if split { SPLITS } else { 1 };
         if !(radius <= self.top) {
-            return self.lin.epsilon(radius);
+            return self.lin.epsilon_in(radius, pieces);
         }
         let steps = (2.0 * (self.top / radius.max(f64::MIN_POSITIVE)).log2()).floor();
         let j = (steps.max(0.0) as usize).min(MEMO_RADII - 1);
         let at = self.top * 0.5f64.powf(j as f64 / 2.0);
         // The memo's radius must hold the ball asked for.
         if at < radius {
-            return self.lin.epsilon(radius);
+            return self.lin.epsilon_in(radius, pieces);
         }
-        *self.memo.borrow_mut()[j].get_or_insert_with(|| self.lin.epsilon(at))
+        *self.memo.borrow_mut()[j][split as usize].get_or_insert_with(|| self.lin.epsilon_in(at, pieces))
     }
+
+    /// A bound of `ε` over the ball of `radius`: one box's, or the split box's where one box's exceeds
+    /// [`SPLIT_EPSILON`] (`None` where a box reaches the edge of the disc).
+    fn epsilon(&self, radius: f64) -> Option<f64> {
+        let single = self.epsilon_in(radius, false)?;
+        if !(single > SPLIT_EPSILON) {
+            return Some(single);
+        }
+        Some(single.min(self.epsilon_in(radius, true)?))
+    }
+}
+
+/// The largest [`Variation::epsilon`] of `all` over the ball of `radius`, splitting boxes only where
+/// that can change the largest: every one box's bound first, then, from the largest down, the split
+/// bound until the next one box's bound is below the largest found (the split bound is at most the
+/// one box's).
+fn largest_epsilon<'v>(all: impl Iterator<Item = &'v Variation>, radius: f64) -> Option<f64> {
+    let mut singles = all
+        .map(|v| Some((v.epsilon_in(radius, false)?, v)))
+        .collect::<Option<Vec<_>>>()?;
+    singles.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut largest: f64 = 0.0;
+    for (single, v) in singles {
+        if single <= largest {
+            break;
+        }
+        largest = largest.max(if single > SPLIT_EPSILON {
+            v.epsilon(radius)?
+        } else {
+            single
+        });
+    }
+    Some(largest)
 }
 
 /// One segment endpoint linearised at its nearest curve point `q*`, with its confinement.
@@ -171,9 +207,11 @@ impl Surrogate {
         let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
         let k2_inverse = k2.try_inverse().ok_or("singular camera")?;
         let any = AnyCamera::from(lens);
-        if crate::lens_bounds::distortion(lens).is_none() {
-            return Err(NOT_COVERED.into());
-        }
+        let known = match lens_domain(&any) {
+            Ok(known) => known,
+            Err(LensBoundFailure::Lens) => return Err(NOT_COVERED.into()),
+            Err(_) => return Err("not proved: the lens has no disc where it is proved one-to-one".into()),
+        };
         let noise = corr.noise.as_ref();
         let pixel_of = |n: &Vector2<f64>| (k * Vector3::new(n.x, n.y, 1.0)).xy();
         let edge = |what: &str, i: usize| {
@@ -204,8 +242,8 @@ impl Surrogate {
         for (i, (x, u)) in corr.points3d.iter().zip(&corr.points2d).enumerate() {
             let whitening = noise.map_or_else(Matrix2::identity, |n| n.points[i]);
             let xc = pose.transform(x);
-            let lin =
-                Linearised::new(&any, &whitening, u, &xc, level, SPLITS, false).map_err(|_| edge("points2d", i))?;
+            let lin = Linearised::new_in(&any, &known, &whitening, u, &xc, level, SPLITS, false)
+                .map_err(|_| edge("points2d", i))?;
             let radius = confine(&lin, lin.confinement(level).ok_or_else(|| edge("points2d", i))?);
             surrogate.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
             noise_out.points.push(lin.w * k2_inverse);
@@ -225,8 +263,8 @@ impl Surrogate {
                 let start = lens.unproject(&e, i).map_err(|_| edge("lines2d", i))?;
                 let fit = endpoint_residual(lens, &l, &start, &e, &cov).ok_or_else(|| edge("lines2d", i))?;
                 let xc = Vector3::new(fit.q.x, fit.q.y, 1.0);
-                let lin =
-                    Linearised::new(&any, &whitening, &e, &xc, level, SPLITS, false).map_err(|_| edge("lines2d", i))?;
+                let lin = Linearised::new_in(&any, &known, &whitening, &e, &xc, level, SPLITS, false)
+                    .map_err(|_| edge("lines2d", i))?;
                 let confined = lin.confinement(level).ok_or_else(|| edge("lines2d", i))?;
                 let e_bar = lin.n - lin.w_inverse * lin.e;
                 // The foot of ē on ℓ̂ in the metric WᵀW: ē − C l₁₂ (l·ē) / (l₁₂ᵀ C l₁₂), C = (WᵀW)⁻¹.
@@ -272,10 +310,7 @@ impl Surrogate {
     /// `turns[e]` bounds `‖q′ₑ‖ / wₑ` over the ball, endpoint by endpoint in the order of `corr`.
     pub fn ball(&self, radius: f64, k: f64, turns: &[f64]) -> Option<RaySlack> {
         let moved = radius + 0.5 * k * radius * radius;
-        let mut eps: f64 = 0.0;
-        for lin in &self.points {
-            eps = eps.max(lin.epsilon(moved)?);
-        }
+        let mut eps = largest_epsilon(self.points.iter(), moved)?;
         let (mut kappa, mut phi2, mut c0_2): (f64, f64, f64) = (1.0, 0.0, 0.0);
         for (end, &turn) in self.endpoints.iter().flatten().zip(turns) {
             let e_hat = end.lin.lin.e.norm() + end.lin.lin.rounding;

@@ -1418,10 +1418,15 @@ struct BallBound<'m> {
 }
 
 impl BallBound<'_> {
-    /// A valid lower bound of `f` over the whitened ball of `radius` (at most the target).
+    /// A valid lower bound of `f` over the whitened ball of `radius` (at most the target). Through a
+    /// lens, the target's (it already closes the gap; a smaller ball's would cost its enclosures of
+    /// the distortion's variation again).
     fn at(&mut self, radius: f64) -> f64 {
+        if self.model.lens.is_some() {
+            return self.at_target;
+        }
         if radius > self.radius {
-            match self.model.raw_bound(radius) {
+            match self.model.raw_bound(radius, None) {
                 Some(bound) => (self.radius, self.bound) = (radius, bound),
                 None => return self.at_target,
             }
@@ -2333,7 +2338,9 @@ impl<'s> LocalModel<'s> {
 
     /// The lower bound of step 4 over the whitened ball of `radius` (unclamped: at most the cost when
     /// sound, since the ball holds the pose), or `None` where a depth or a projected line may vanish.
-    fn raw_bound(&self, radius: f64) -> Option<f64> {
+    /// Through a lens, the bound with the distortion's variation over the whole ball comes first, and
+    /// the nested balls only where it falls short of `wanted`.
+    fn raw_bound(&self, radius: f64, wanted: Option<f64>) -> Option<f64> {
         let (k, slacks) = match self.lens {
             None => (self.curvature.bound(radius)?, vec![(radius, RaySlack::NONE)]),
             Some(lens) => {
@@ -2346,11 +2353,16 @@ impl<'s> LocalModel<'s> {
                     .flat_map(|line| line.endpoints.iter().map(|end| end.q1 / end.w_lo))
                     .collect();
                 debug_assert_eq!(turns.len(), lens.n_endpoints());
+                let whole = (radius, lens.ball(radius, k, &turns)?);
+                let coarse = local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius, &[whole]);
+                if wanted.is_some_and(|w| coarse >= w) {
+                    return Some(coarse);
+                }
                 // The distortion's variation over nested balls: the steps near the answer, where
                 // the bound is least, pay only that of a small ball.
-                let mut slacks = vec![(radius, lens.ball(radius, k, &turns)?)];
+                let mut slacks = vec![whole];
                 for j in 1..=NESTED_BALLS {
-                    let r = radius * 0.5f64.powf(j as f64 / 2.0);
+                    let r = radius * 0.5f64.powi(j as i32);
                     match lens.ball(r, k, &turns) {
                         Some(slack) => slacks.push((r, slack)),
                         None => break,
@@ -2372,8 +2384,8 @@ impl<'s> LocalModel<'s> {
 }
 
 /// Through a lens, step 4 takes the distortion's variation over balls of the radius and of this many
-/// smaller ones, each `1/√2` of the last.
-const NESTED_BALLS: usize = 24;
+/// smaller ones, each half the last.
+const NESTED_BALLS: usize = 12;
 
 /// Radii of the whitened ball tried for the localisation, in units of `√(2f̂) + 0.1` px: the largest
 /// whose local bound already closes the gap is used (a larger ball stops the search sooner).
@@ -2463,7 +2475,10 @@ fn certify_problem(
     let unit = (2.0 * cost).sqrt() + 0.1;
     let Some((target, at_target)) = BALL_FACTORS.iter().map(|f| f * unit).find_map(|radius| {
         model
-            .raw_bound(radius)
+            .raw_bound(
+                radius,
+                Some(cost - options.max_relative_gap * cost.max(CERTIFICATE_COST_FLOOR)),
+            )
             .filter(|&raw| gap_of(raw.min(cost)) <= options.max_relative_gap)
             .map(|raw| (radius, raw))
     }) else {
@@ -2813,7 +2828,7 @@ pub mod testing {
         Ok(LocalBound {
             whitening: whitening.t,
             curvature,
-            raw_bound: model.raw_bound(radius).ok_or("no bound over the ball")?,
+            raw_bound: model.raw_bound(radius, None).ok_or("no bound over the ball")?,
         })
     }
 
