@@ -94,7 +94,8 @@ fn summary(case: &Case, tracks: &[Track]) {
                 Some((
                     CertificateKind::BranchAndBound
                     | CertificateKind::TaylorBranchAndBound
-                    | CertificateKind::SublevelSet,
+                    | CertificateKind::SublevelSet
+                    | CertificateKind::LensSublevelSet,
                     n,
                 )) => {
                     by_bnb += 1;

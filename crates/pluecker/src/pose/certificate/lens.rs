@@ -79,16 +79,16 @@ impl Slack {
     pub const NONE: Slack = Slack { scale: 1.0, delta: 0.0 };
 
     /// The cost bound of a surrogate bound `q`.
-    pub fn to_cost(&self, q: f64) -> f64 {
-        if *self == Self::NONE {
+    pub fn to_cost(self, q: f64) -> f64 {
+        if self == Self::NONE {
             return q;
         }
         0.5 * (((2.0 * q.max(0.0)).sqrt() - self.delta).max(0.0) / self.scale).powi(2)
     }
 
     /// The least surrogate bound whose cost bound is `f` (the inverse of [`Self::to_cost`] above 0).
-    pub fn to_surrogate(&self, f: f64) -> f64 {
-        if *self == Self::NONE {
+    pub fn to_surrogate(self, f: f64) -> f64 {
+        if self == Self::NONE {
             return f;
         }
         0.5 * (self.scale * (2.0 * f.max(0.0)).sqrt() + self.delta).powi(2)

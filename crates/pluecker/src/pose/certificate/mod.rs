@@ -75,7 +75,7 @@
 //! `(f̂ − lower_bound) / max(f̂, 1e-12 px²) ≤ max_relative_gap` (exact data, at the rounding level,
 //! counts as exact).
 //!
-//! **Through a lens** ([`lens`]) the steps above run on a whitened pinhole problem, the linearisation
+//! **Through a lens** (`lens`) the steps above run on a whitened pinhole problem, the linearisation
 //! of each observation at the answer, whose sublevel set at a slightly higher level holds every pose
 //! as good as the answer; step 4 then bounds the exact cost through the lens, its difference from the
 //! pinhole problem bounded by interval enclosures of the distortion's Jacobian over nested balls.
@@ -1471,7 +1471,7 @@ struct RotationSearch<'a, 'c> {
     f_hat: f64,
     target: f64,
     max_relative_gap: f64,
-    /// The slack of a lens's surrogate ([`lens`]): the boxes are bounded, and `f_hat` is a level, of
+    /// The slack of a lens's surrogate (`lens`): the boxes are bounded, and `f_hat` is a level, of
     /// the surrogate; step 4's bounds, of the cost, enter through [`Slack::to_surrogate`].
     slack: Slack,
     inside_ball: InsideBall<'a>,
@@ -2278,7 +2278,7 @@ fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64, s
     least
 }
 
-/// Step 4 through a lens ([`lens`], step 2): along a whitened ray of length `s` the cost through the
+/// Step 4 through a lens (`lens`, step 2): along a whitened ray of length `s` the cost through the
 /// lens has `√(2f) ≥ κ √(2q) − ε (s + ½ K s² + s Φ + offset) − rounding` (`q` the surrogate's cost);
 /// [`RaySlack::NONE`] for a pinhole camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -2303,7 +2303,7 @@ impl RaySlack {
 
 /// The local model at the pose, in whitened steps: cost, gradient norm `‖Tᵀ g‖`, the least
 /// eigenvalue of `Tᵀ JᵀJ T` (1 up to rounding) and the curvature bound; through a lens, the
-/// surrogate whose cost they describe ([`lens`]).
+/// surrogate whose cost they describe (`lens`).
 struct LocalModel<'s> {
     cost: f64,
     gradient: f64,
@@ -2395,7 +2395,7 @@ const BALL_FACTORS: [f64; 8] = [64.0, 16.0, 6.0, 3.0, 2.0, 1.5, 1.0, 0.7];
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
 /// ([`MAX_CELLS_BEFORE_FALLBACK`] with segments, [`MAX_CELLS_FROM_DISTANCE`] without depth bounds;
 /// each search has its own cap). Through `lens` (`Some`), `corr` holds the observed (distorted) pixels
-/// and the certificate is that of [`lens`]. Never fails: a certificate that cannot be computed is
+/// and the certificate is that of `lens`. Never fails: a certificate that cannot be computed is
 /// `certified = false` with the reason. Every cost and bound here is `½ Σ r²`;
 /// [`crate::pose::PoseResult`] reports them in `Σ r²`.
 pub fn certify(
@@ -2779,7 +2779,7 @@ pub mod testing {
         Ok(parts)
     }
 
-    /// The surrogate of a problem through a lens ([`lens`]) at `pose`, for the level `cost`
+    /// The surrogate of a problem through a lens (`lens`) at `pose`, for the level `cost`
     /// (`½ Σ r²`): its camera (the lens's pinhole part) and observations, and step 1's slack: every
     /// pose of the domain with cost `f ≤ cost` has `√(2q) ≤ scale √(2f) + delta` (`q` the surrogate's
     /// cost).
