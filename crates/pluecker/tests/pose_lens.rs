@@ -826,20 +826,47 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
     // The bounds of the certificate through a lens (step 4 over a ball, and the whole certificate)
     // claimed at poses that are NOT minima (the answer moved by whitened steps of 0.001-6 residual
     // units), checked against the oracle's cost at the answer: a pose of the domain inside the ball,
-    // cheaper than the moved pose. A bound above it disproves the certificate.
+    // cheaper than the moved pose. A bound above it disproves the certificate. With unit noise and
+    // with anisotropic covariances (each observation its own, up to 3:1 in standard deviation).
     let mut certify = PoseOptions::default();
     certify.certify = Some(Default::default());
     let (mut checked, mut balls, mut certified) = (0, 0, 0);
     for (lens, r_max) in certified_lenses() {
         let pinhole = lens.pinhole().unwrap();
-        for (n, m) in [(20, 0), (5, 5), (0, 10)] {
+        for (n, m, anisotropic) in [
+            (20, 0, false),
+            (5, 5, false),
+            (0, 10, false),
+            (20, 0, true),
+            (5, 5, true),
+            (0, 10, true),
+        ] {
             for seed in 0..4 {
                 let mut rng = Rng::new(100 + seed);
-                let covs = vec![Matrix2::identity(); n + 2 * m];
-                let (corr, _, _) = lens_scene(&lens, r_max, n, m, &covs, &mut rng);
+                let covs: Vec<Matrix2<f64>> = (0..n + 2 * m)
+                    .map(|_| {
+                        if !anisotropic {
+                            return Matrix2::identity();
+                        }
+                        let (a, b, phi) = (
+                            rng.uniform_in(0.5, 1.5),
+                            rng.uniform_in(0.5, 1.5),
+                            rng.uniform_in(0.0, 3.2),
+                        );
+                        let r = nalgebra::Rotation2::new(phi).into_inner();
+                        r * Matrix2::new(a * a, 0.0, 0.0, b * b) * r.transpose()
+                    })
+                    .collect();
+                let (mut corr, _, _) = lens_scene(&lens, r_max, n, m, &covs, &mut rng);
+                if anisotropic {
+                    let lines: Vec<[Matrix2<f64>; 2]> =
+                        (0..m).map(|i| [covs[n + 2 * i], covs[n + 2 * i + 1]]).collect();
+                    corr.noise = Some(ObservationNoise::from_covariances(&covs[..n], &lines).unwrap());
+                }
+                let covs_of = anisotropic.then_some(&covs[..]);
                 let answer = estimate_pose(&lens, &corr, &certify).unwrap();
                 certified += answer.certificate.as_ref().is_some_and(|c| c.certified) as usize;
-                let best = oracle_cost(&lens, &corr, None, &answer.pose.rotation, &answer.pose.translation);
+                let best = oracle_cost(&lens, &corr, covs_of, &answer.pose.rotation, &answer.pose.translation);
                 let Ok(at_answer) = certificate::testing::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
                     continue;
                 };
@@ -848,7 +875,7 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
                 // ones test step 4's bound over balls that reach the answer.
                 for factor in [1e-3, 1e-2, 3e-2, 0.3, 1.0, 2.0, 6.0] {
                     let pose = moved(&answer.pose, &at_answer.whitening, factor * unit, &mut rng);
-                    let cost = oracle_cost(&lens, &corr, None, &pose.rotation, &pose.translation);
+                    let cost = oracle_cost(&lens, &corr, covs_of, &pose.rotation, &pose.translation);
                     let within = 1e-9 * best + 1e-12;
                     if let Ok(local) = certificate::testing::lens_local_bound(&lens, &corr, &pose, 1.0) {
                         let reach = whitened_length(&pose, &answer.pose, &local.whitening);
@@ -891,9 +918,11 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
         }
     }
     eprintln!("{certified} answers certified; {balls} ball bounds and {checked} certificates at moved poses checked");
-    assert!(certified >= 16, "only {certified} of 24 answers certified");
+    // A floor on what the test exercises (37 of 48 certified when written: with anisotropic covariances
+    // the distortion's variation, taken in each observation's whitened metric, leaves more gaps open).
+    assert!(certified >= 30, "only {certified} of 48 answers certified");
     assert!(
-        balls >= 100 && checked >= 40,
+        balls >= 200 && checked >= 50,
         "{balls} ball bounds, {checked} certificates"
     );
 }
