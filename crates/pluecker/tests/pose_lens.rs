@@ -1080,3 +1080,130 @@ fn step_one_holds_point_by_point_where_the_lens_residual_vanishes() {
         "{checked} poses, {at_zero} at the observation"
     );
 }
+
+#[test]
+fn the_distortions_variation_bounds_the_sampled_jacobians() {
+    // Each point's ε over the whitened ball {‖W (n − n*)‖ ≤ r} (through the memo, after other radii were
+    // asked for) against the oracle: ‖M (J(n) − J*) W⁻¹‖ at sampled n of the ball, J by central
+    // differences of this file's own distortion (error ~1e-8). And the largest ε, as step 4 takes it,
+    // is the largest of the points'.
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(Default::default());
+    let (mut sampled, mut balls, mut least_ratio) = (0, 0, f64::INFINITY);
+    for (lens, r_max) in certified_lenses() {
+        let (fx, fy) = lens.focal();
+        let jacobian = |n: &Vector2<f64>| {
+            let h = 1e-6;
+            let d = |dx: f64, dy: f64| oracle_distort(lens.model(), lens.params(), &(n + Vector2::new(dx, dy)));
+            let (cx, cy) = (
+                (d(h, 0.0) - d(-h, 0.0)) / (2.0 * h),
+                (d(0.0, h) - d(0.0, -h)) / (2.0 * h),
+            );
+            Matrix2::from_columns(&[cx, cy])
+        };
+        for seed in 0..2 {
+            let mut rng = Rng::new(400 + seed);
+            let (corr, _, _) = lens_scene(&lens, r_max, 12, 0, &[Matrix2::identity(); 12], &mut rng);
+            let answer = estimate_pose(&lens, &corr, &certify).unwrap();
+            let cost = 0.5 * answer.cost;
+            for radius in [1.0, 5.0, 20.0, 80.0] {
+                let Ok((points, largest)) =
+                    certificate::testing::lens_point_variations(&lens, &corr, &answer.pose, cost, radius)
+                else {
+                    continue;
+                };
+                let found: Option<Vec<f64>> = points.iter().map(|p| p.epsilon).collect();
+                assert_eq!(largest, found.map(|e| e.into_iter().fold(0.0, f64::max)), "{radius}");
+                for p in points {
+                    let Some(eps) = p.epsilon else { continue };
+                    balls += 1;
+                    let w_inv = p.w.try_inverse().unwrap();
+                    let j_star = jacobian(&p.n);
+                    // M = L K₂ with L = I here: the oracle's own K₂.
+                    assert!((p.m - Matrix2::new(fx, 0.0, 0.0, fy)).norm() <= 1e-9 * fx);
+                    for k in 0..200 {
+                        let dir = Vector2::new(rng.normal(), rng.normal()).normalize();
+                        let u = dir
+                            * if k % 4 == 0 {
+                                radius
+                            } else {
+                                radius * rng.uniform_in(0.0, 1.0).sqrt()
+                            };
+                        let n = p.n + w_inv * u;
+                        let deviation = (p.m * (jacobian(&n) - j_star) * w_inv).norm();
+                        sampled += 1;
+                        least_ratio = least_ratio.min(eps / deviation.max(1e-300));
+                        assert!(
+                            deviation <= eps + 1e-6,
+                            "{:?} radius {radius}: sampled ‖M ΔJ W⁻¹‖ = {deviation:.6e} > ε = {eps:.6e}",
+                            lens.model()
+                        );
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("{sampled} samples over {balls} balls; least ε / sampled deviation {least_ratio:.2}");
+    assert!(balls >= 100, "only {balls} balls");
+}
+
+#[test]
+fn step_fours_variation_covers_every_projection_of_the_ball() {
+    // Step 4 through a lens takes ε over the ball that holds every point's whitened displacement along
+    // the rays of the whitened radius s: ‖v‖ ≤ s + ½ K s². With K = 1/s that is 1.5 s, checked against
+    // the oracle's Jacobians sampled over the ball of 1.5 s.
+    let mut certify = PoseOptions::default();
+    certify.certify = Some(Default::default());
+    let (mut checked, mut least_ratio) = (0, f64::INFINITY);
+    for (lens, r_max) in certified_lenses() {
+        let jacobian = |n: &Vector2<f64>| {
+            let h = 1e-6;
+            let d = |dx: f64, dy: f64| oracle_distort(lens.model(), lens.params(), &(n + Vector2::new(dx, dy)));
+            Matrix2::from_columns(&[
+                (d(h, 0.0) - d(-h, 0.0)) / (2.0 * h),
+                (d(0.0, h) - d(0.0, -h)) / (2.0 * h),
+            ])
+        };
+        for seed in 0..2 {
+            let mut rng = Rng::new(500 + seed);
+            let (corr, _, _) = lens_scene(&lens, r_max, 12, 0, &[Matrix2::identity(); 12], &mut rng);
+            let answer = estimate_pose(&lens, &corr, &certify).unwrap();
+            let cost = 0.5 * answer.cost;
+            for s in [2.0, 10.0, 40.0] {
+                let Ok(Some((_, eps))) =
+                    certificate::testing::lens_ball(&lens, &corr, &answer.pose, cost, s, 1.0 / s, &[])
+                else {
+                    continue;
+                };
+                let (points, _) =
+                    certificate::testing::lens_point_variations(&lens, &corr, &answer.pose, cost, s).unwrap();
+                let mut deviation: f64 = 0.0;
+                for p in points {
+                    let w_inv = p.w.try_inverse().unwrap();
+                    let j_star = jacobian(&p.n);
+                    for k in 0..100 {
+                        let dir = Vector2::new(rng.normal(), rng.normal()).normalize();
+                        let u = dir
+                            * 1.5
+                            * s
+                            * if k % 4 == 0 {
+                                1.0
+                            } else {
+                                rng.uniform_in(0.0, 1.0).sqrt()
+                            };
+                        deviation = deviation.max((p.m * (jacobian(&(p.n + w_inv * u)) - j_star) * w_inv).norm());
+                    }
+                }
+                checked += 1;
+                least_ratio = least_ratio.min(eps / deviation);
+                assert!(
+                    deviation <= eps + 1e-6,
+                    "{:?} s = {s}: sampled {deviation:.6e} > ε = {eps:.6e}",
+                    lens.model()
+                );
+            }
+        }
+    }
+    eprintln!("{checked} balls; least ε / sampled deviation {least_ratio:.2}");
+    assert!(checked >= 8, "only {checked} balls");
+}

@@ -357,6 +357,38 @@ impl Surrogate {
     pub fn n_endpoints(&self) -> usize {
         2 * self.endpoints.len()
     }
+
+    /// Per point, what a test needs to check its `ε` over the ball of `radius` independently:
+    /// `(ε, W, M, n*)`, `ε` through the memo (after the radii `radius · 2^(±k/3)` were asked for), and
+    /// the largest `ε` as step 4 takes it.
+    pub fn point_variations(&self, radius: f64) -> (Vec<PointVariation>, Option<f64>) {
+        for k in [-3, 2, -1, 1, 3] {
+            let _ = largest_epsilon(self.points.iter(), radius * 2f64.powf(k as f64 / 3.0));
+        }
+        let each = self
+            .points
+            .iter()
+            .map(|v| PointVariation {
+                epsilon: v.epsilon(radius),
+                w: v.lin.w,
+                m: v.lin.m,
+                n: v.lin.n,
+            })
+            .collect();
+        (each, largest_epsilon(self.points.iter(), radius))
+    }
+}
+
+/// A point's `ε` over a whitened ball and what defines the ball (the test hook
+/// [`super::testing::lens_point_variations`]).
+#[derive(Debug, Clone, Copy)]
+pub struct PointVariation {
+    /// The bound of `‖M (J(n) − J*) W⁻¹‖` over the ball (`None` where it reaches the edge of the disc).
+    pub epsilon: Option<f64>,
+    /// `W = M J*`, `M = L K₂`, and the centre `n*`: the ball is `{n : ‖W (n − n*)‖ ≤ radius}`.
+    pub w: Matrix2<f64>,
+    pub m: Matrix2<f64>,
+    pub n: Vector2<f64>,
 }
 
 /// [`super::certify`] through `lens`: `corr` holds the observed (distorted) pixels and the caller's

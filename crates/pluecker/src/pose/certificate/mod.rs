@@ -2807,6 +2807,37 @@ pub mod testing {
         })
     }
 
+    pub use super::lens::PointVariation;
+
+    /// Each point's bound of the distortion's variation over the whitened ball of `radius` about its
+    /// projection at `pose` (the surrogate at `pose` for the level `cost`), and the largest as step 4
+    /// takes it (`None` where a ball reaches the edge of the disc).
+    pub fn lens_point_variations(
+        lens: &LensCamera,
+        corr: &Correspondences,
+        pose: &Pose,
+        cost: f64,
+        radius: f64,
+    ) -> std::result::Result<(Vec<PointVariation>, Option<f64>), String> {
+        Ok(Surrogate::new(lens, corr, pose, cost)?.point_variations(radius))
+    }
+
+    /// Step 4's `(κ, ε)` through `lens` over the whitened ball of `radius` with the curvature bound `k`
+    /// (the surrogate at `pose` for the level `cost`; segment endpoints turning at the rates `turns`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn lens_ball(
+        lens: &LensCamera,
+        corr: &Correspondences,
+        pose: &Pose,
+        cost: f64,
+        radius: f64,
+        k: f64,
+        turns: &[f64],
+    ) -> std::result::Result<Option<(f64, f64)>, String> {
+        let surrogate = Surrogate::new(lens, corr, pose, cost)?;
+        Ok(surrogate.ball(radius, k, turns).map(|s| (s.kappa, s.eps)))
+    }
+
     /// Step 4 through `lens` at any `pose` (cost `½ Σ r²` through the lens, computed here): the bound
     /// of that cost over the ball of whitened `radius` (the whitening of the surrogate at `pose`).
     pub fn lens_local_bound(
