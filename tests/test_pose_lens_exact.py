@@ -211,6 +211,7 @@ def test_a_certificate_through_a_lens_is_never_above_a_cheaper_pose(name):
             assert result.status == "gap_not_closed" and result.details.uncertified_reason
             continue
         certified += result.certificate.certified
+        assert result.certificate.kind == "lens_sublevel_set" and "one-to-one" in result.certificate.domain
         raw = result.certificate.raw_lower_bound / 2.0  # Σ r² → ½ Σ r², the oracle's unit
         R0, t0 = result.pose.rotation, result.pose.translation
         assert raw <= oracle_cost(camera, R0, t0, X, u) * (1 + 1e-9)

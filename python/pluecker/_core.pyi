@@ -202,7 +202,7 @@ class Certificate:
     relative_gap: float
     """`(cost − lower_bound) / max(cost, 1e-12)`."""
     kind: str
-    """How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test`, ..."""
+    """How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test` (triangulation); `sublevel_set`, `lens_sublevel_set` (pose)"""
     domain: str
     """The set of estimates over which `lower_bound` holds."""
     nodes: int

@@ -58,7 +58,7 @@ result_class! {
         raw_lower_bound = |c| c.inner.raw_lower_bound;
         /// `(cost − lower_bound) / max(cost, 1e-12)`.
         relative_gap = |c| c.inner.relative_gap;
-        /// How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test`, ...
+        /// How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test` (triangulation); `sublevel_set`, `lens_sublevel_set` (pose)
         kind = |c| c.inner.kind.as_str();
         /// The set of estimates over which `lower_bound` holds.
         domain = |c| c.inner.kind.domain(c.primitive);
