@@ -29,8 +29,8 @@
 //!    localises the surrogate's sublevel set at the level `C' = (σ √C + ‖δ‖)²`, and a box bound `q` of
 //!    the surrogate is one of `((√q − ‖δ‖)₊ / σ)²` on `F` ([`Slack`]).
 //! 2. **The ball.** Along a whitened ray of length `s` the surrogate's residuals move by at most
-//!    `Δ(s) = s + ½ K s²` (stacked), so a point's `vᵢ = Wᵢ (n − nᵢ*)` has `‖vᵢ‖ ≤ Δ`, and `εᵢ` is taken
-//!    over the ball of that radius. For an endpoint, write `ê + u = ρ ν + a τ` (`ν`, `τ` the unit normal
+//!    `Δ(s) = μ s + ½ K s²` (stacked; `μ ≥ ‖J T v‖`, 1 up to rounding), so a point's
+//!    `vᵢ = Wᵢ (n − nᵢ*)` has `‖vᵢ‖ ≤ Δ`, and `εᵢ` is taken over the ball of that radius. For an endpoint, write `ê + u = ρ ν + a τ` (`ν`, `τ` the unit normal
 //!    and direction of the whitened line `W ℓ`); then `‖u‖ ≤ |a| + c` with `c = ‖ρ ν − ê‖` the motion of
 //!    the residual's foot, `c ≤ |ρ − ρ̂| + ‖ê‖ φ + c₀` (`φ ≤ s ‖q′‖ / w` the turn of `ν`, from the
 //!    curvature bound's parts; `c₀` the foot's offset at `P̂`, rounding), and
@@ -308,8 +308,8 @@ impl Surrogate {
     /// Step 2's constants over the whitened ball of `radius` with the curvature bound `k`:
     /// `(κ, ε, Φ, ‖c₀‖ , ‖s‖)`, or `None` where a ball reaches the edge of the disc or leaves step 1's.
     /// `turns[e]` bounds `‖q′ₑ‖ / wₑ` over the ball, endpoint by endpoint in the order of `corr`.
-    pub fn ball(&self, radius: f64, k: f64, turns: &[f64]) -> Option<RaySlack> {
-        let moved = radius + 0.5 * k * radius * radius;
+    pub fn ball(&self, radius: f64, k: f64, mu: f64, turns: &[f64]) -> Option<RaySlack> {
+        let moved = mu * radius + 0.5 * k * radius * radius;
         let mut eps = largest_epsilon(self.points.iter(), moved)?;
         let (mut kappa, mut phi2, mut c0_2): (f64, f64, f64) = (1.0, 0.0, 0.0);
         for (end, &turn) in self.endpoints.iter().flatten().zip(turns) {
@@ -346,6 +346,7 @@ impl Surrogate {
         }
         Some(RaySlack {
             kappa,
+            rate: mu,
             eps,
             phi: phi2.sqrt(),
             offset: c0_2.sqrt(),

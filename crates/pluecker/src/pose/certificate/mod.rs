@@ -2271,7 +2271,7 @@ fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64, s
             return 0.0;
         };
         let h = slack.kappa * (q_min.max(0.0).sqrt() - 0.5 * k * b * b)
-            - slack.eps * (b + 0.5 * k * b * b + b * slack.phi + slack.offset)
+            - slack.eps * (slack.rate * b + 0.5 * k * b * b + b * slack.phi + slack.offset)
             - slack.rounding;
         least = least.min(0.5 * h.max(0.0).powi(2));
     }
@@ -2279,11 +2279,13 @@ fn local_lower_bound(f_hat: f64, gradient: f64, lambda: f64, k: f64, rho: f64, s
 }
 
 /// Step 4 through a lens (`lens`, step 2): along a whitened ray of length `s` the cost through the
-/// lens has `√(2f) ≥ κ √(2q) − ε (s + ½ K s² + s Φ + offset) − rounding` (`q` the surrogate's cost);
+/// lens has `√(2f) ≥ κ √(2q) − ε (μ s + ½ K s² + s Φ + offset) − rounding` (`q` the surrogate's cost);
 /// [`RaySlack::NONE`] for a pinhole camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct RaySlack {
     kappa: f64,
+    /// `μ ≥ ‖J T v‖`, the rate of the residuals along a unit whitened ray (1 up to rounding).
+    rate: f64,
     eps: f64,
     phi: f64,
     offset: f64,
@@ -2294,6 +2296,7 @@ impl RaySlack {
     /// The pinhole certificate: no slack.
     const NONE: RaySlack = RaySlack {
         kappa: 1.0,
+        rate: 1.0,
         eps: 0.0,
         phi: 0.0,
         offset: 0.0,
@@ -2353,7 +2356,8 @@ impl<'s> LocalModel<'s> {
                     .flat_map(|line| line.endpoints.iter().map(|end| end.q1 / end.w_lo))
                     .collect();
                 debug_assert_eq!(turns.len(), lens.n_endpoints());
-                let whole = (radius, lens.ball(radius, k, &turns)?);
+                let mu = self.curvature.mu;
+                let whole = (radius, lens.ball(radius, k, mu, &turns)?);
                 let coarse = local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius, &[whole]);
                 if wanted.is_some_and(|w| coarse >= w) {
                     return Some(coarse);
@@ -2363,7 +2367,7 @@ impl<'s> LocalModel<'s> {
                 let mut slacks = vec![whole];
                 for j in 1..=NESTED_BALLS {
                     let r = radius * 0.5f64.powf(j as f64 / 2.0);
-                    match lens.ball(r, k, &turns) {
+                    match lens.ball(r, k, mu, &turns) {
                         Some(slack) => slacks.push((r, slack)),
                         None => break,
                     }
@@ -2836,7 +2840,7 @@ pub mod testing {
         turns: &[f64],
     ) -> std::result::Result<Option<(f64, f64)>, String> {
         let surrogate = Surrogate::new(lens, corr, pose, cost)?;
-        Ok(surrogate.ball(radius, k, turns).map(|s| (s.kappa, s.eps)))
+        Ok(surrogate.ball(radius, k, 1.0, turns).map(|s| (s.kappa, s.eps)))
     }
 
     /// Step 4 through `lens` at any `pose` (cost `½ Σ r²` through the lens, computed here): the bound
