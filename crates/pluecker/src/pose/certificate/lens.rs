@@ -331,16 +331,13 @@ impl Surrogate {
             if !(eps_big < 1.0) {
                 return None;
             }
-            // |a| from √(ρ² + a²) ≤ ρ + ε|a| + 2εc at ρ = ρ_max, c = c_max (increasing in both).
-            let b = rho_max + 2.0 * eps_big * c_max;
-            let (e2, rest) = (eps_big * eps_big, b * b - rho_max * rho_max);
-            let a_max = (b * eps_big + (b * b * e2 + (1.0 - e2) * rest).sqrt()) / (1.0 - e2);
+            let a_max = along_line_reach(eps_big, rho_max, c_max);
             let small = end.lin.epsilon((a_max + c_max).min(big))?;
             if !(small < 1.0) {
                 return None;
             }
             eps = eps.max(small);
-            kappa = kappa.min((1.0 - small * small).sqrt());
+            kappa = kappa.min(along_line_factor(small));
             phi2 += (e_hat * turn).powi(2);
             c0_2 += end.c0 * end.c0;
         }
@@ -392,6 +389,22 @@ pub struct PointVariation {
     pub n: Vector2<f64>,
 }
 
+/// Step 2's lemma for an endpoint (module docs): where `r(u) ≥ ‖ê + u‖ − ε ‖u‖` on the whitened line
+/// `{νᵀ (ê + u) = ρ}` and `c = ‖ρ ν − ê‖`, every `u` of the line has `r ≥ κ |ρ| − ε c` with this `κ`,
+/// `√(1 − ε²)` (the least of `√(ρ² + a²) − ε |a|` over the line's coordinate `a`).
+fn along_line_factor(eps: f64) -> f64 {
+    (1.0 - eps * eps).sqrt()
+}
+
+/// The reach `|a| ≤ a_max` along the line of a minimiser of `r` (module docs): its residual is at most
+/// the foot's, `r ≤ |ρ| + ε c`, so `√(ρ² + a²) − ε (|a| + c) ≤ |ρ| + ε c`; solved for `|a|` at the largest
+/// `|ρ|` and `c` (the bound increases in both).
+fn along_line_reach(eps: f64, rho_max: f64, c_max: f64) -> f64 {
+    let b = rho_max + 2.0 * eps * c_max;
+    let (e2, rest) = (eps * eps, b * b - rho_max * rho_max);
+    (b * eps + (b * b * e2 + (1.0 - e2) * rest).sqrt()) / (1.0 - e2)
+}
+
 /// [`super::certify`] through `lens`: `corr` holds the observed (distorted) pixels and the caller's
 /// noise, conditioned frame; `pose` is the local minimum of cost `cost` (`½ Σ r²`).
 pub(super) fn certify(
@@ -411,5 +424,75 @@ pub(super) fn certify(
             Some(&surrogate),
         ),
         Err(why) => Certification::none(why),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    #[test]
+    fn the_along_line_lemma_holds_for_the_worst_perturbation() {
+        // The worst r the lemma allows, r(u) = ‖ê + u‖ − ε ‖u‖, minimised along the line
+        // {νᵀ (ê + u) = ρ} by a fine scan and golden sections: the minimum is at least κ |ρ| − ε c, and
+        // the minimiser's |a| is within the reach. Where c = 0 (the line through the foot at the
+        // answer) the minimum is κ |ρ| itself: a κ any larger would fail.
+        let mut rng = Rng::new(21);
+        let mut tightest = f64::INFINITY;
+        for _ in 0..400 {
+            let eps = rng.uniform_in(0.0, 0.6);
+            let e_hat = Vector2::new(rng.normal(), rng.normal()) * rng.uniform_in(0.1, 5.0);
+            let nu = Vector2::new(rng.normal(), rng.normal()).normalize();
+            let tau = Vector2::new(-nu.y, nu.x);
+            let rho = if rng.uniform_in(0.0, 1.0) < 0.3 {
+                nu.dot(&e_hat)
+            } else {
+                rng.uniform_in(-6.0, 6.0)
+            };
+            let foot = nu * rho;
+            let c = (foot - e_hat).norm();
+            let r = |a: f64| {
+                let y = foot + tau * a;
+                y.norm() - eps * (y - e_hat).norm()
+            };
+            let scan = 200.0 * (1.0 + rho.abs() + c);
+            let steps = 20_000;
+            let (mut best_a, mut best) = (0.0, r(0.0));
+            for i in 0..=steps {
+                let a = -scan + 2.0 * scan * i as f64 / steps as f64;
+                if r(a) < best {
+                    (best_a, best) = (a, r(a));
+                }
+            }
+            let h = 2.0 * scan / steps as f64;
+            let (mut lo, mut hi) = (best_a - h, best_a + h);
+            let g = (5f64.sqrt() - 1.0) / 2.0;
+            while hi - lo > 1e-12 * (1.0 + scan) {
+                let (x, y) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                if r(x) < r(y) {
+                    hi = y;
+                } else {
+                    lo = x;
+                }
+            }
+            let (a_min, least) = (0.5 * (lo + hi), r(0.5 * (lo + hi)).min(best));
+            let bound = along_line_factor(eps) * rho.abs() - eps * c;
+            tightest = tightest.min(least - bound);
+            assert!(
+                least >= bound - 1e-9 * (1.0 + rho.abs()),
+                "ε {eps}, ρ {rho}, c {c}: {least} < {bound}"
+            );
+            let reach = along_line_reach(eps, rho.abs(), c);
+            assert!(
+                a_min.abs() <= reach * (1.0 + 1e-9) + 1e-9,
+                "ε {eps}, ρ {rho}, c {c}: |a| {a_min} > {reach}"
+            );
+        }
+        // The lemma is tight: some line with c = 0 reaches its bound.
+        assert!(
+            tightest.abs() < 1e-6,
+            "the least margin {tightest} (the lemma should be tight at c = 0)"
+        );
     }
 }
