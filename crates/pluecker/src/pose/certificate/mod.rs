@@ -2499,9 +2499,6 @@ fn certify_problem(
             ),
         });
     };
-    if std::env::var("LENS_DEBUG").is_ok() {
-        eprintln!("DEBUG cost {cost:.4e} slack {slack:?} target {target:.3e} unit {unit:.3e} at_target {at_target:.6e} model.cost {:.6e}", model.cost);
-    }
     // The search's level and gap are the surrogate's: a box closes when its bound, as a bound of the
     // cost, is within the gap of the cost.
     let level = slack.to_surrogate(cost);
