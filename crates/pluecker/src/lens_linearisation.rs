@@ -225,14 +225,19 @@ impl Linearised {
         eps.is_finite().then_some(eps)
     }
 
+    /// `√C + ‖eᵢ*‖ + sᵢ`: what step 1's radius `ρ` must leave, `(1 − εᵢ) ρ` above it.
+    pub(crate) fn need(&self, cost: f64) -> f64 {
+        cost.sqrt() + self.e.norm() + self.rounding
+    }
+
     /// Step 1's first radius `ρ = 1.001 (√C + ‖eᵢ*‖ + sᵢ)`.
     pub(crate) fn first_radius(&self, cost: f64) -> f64 {
-        (cost.sqrt() + self.e.norm() + self.rounding) * 1.001
+        self.need(cost) * 1.001
     }
 
     /// Step 1: `(ρᵢ, εᵢ)` with `(1 − εᵢ)ρᵢ − ‖eᵢ*‖ − sᵢ > √C`.
     pub(crate) fn confinement(&self, cost: f64) -> Option<(f64, f64)> {
-        let need = cost.sqrt() + self.e.norm() + self.rounding;
+        let need = self.need(cost);
         let mut rho = self.first_radius(cost);
         for retry in 0..RADIUS_RETRIES {
             let eps = match (retry, self.first_epsilon) {

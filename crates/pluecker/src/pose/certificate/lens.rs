@@ -56,6 +56,7 @@ use crate::lens_linearisation::{lens_domain, LensBoundFailure, Linearised, SPLIT
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;
 use crate::pose::reprojection::Pose;
+use crate::triangulation::covariance::whitening;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use std::cell::RefCell;
 
@@ -169,13 +170,11 @@ fn largest_epsilon<'v>(all: impl Iterator<Item = &'v Variation>, radius: f64) ->
 
 /// One segment endpoint linearised at its nearest curve point `q*`, with its confinement.
 struct Endpoint {
-    lin: Variation,
+    variation: Variation,
     /// Step 1's ball `(R, ε)` about `q*`.
     confined: (f64, f64),
     /// `c₀ = ‖W (foot − q*)‖`: the foot of `ē` on `ℓ̂` (exactly `q*` up to rounding).
     c0: f64,
-    /// `√C + ‖ê‖ + s`: what a confinement radius `R` must leave, `(1 − ε) R` above it.
-    need: f64,
 }
 
 /// The surrogate of a problem through a lens (module docs) and what step 4 needs of it.
@@ -187,14 +186,10 @@ pub(super) struct Surrogate {
     pub slack: Slack,
     points: Vec<Variation>,
     endpoints: Vec<[Endpoint; 2]>,
+    /// `C = Σ r²` at the answer: the level of step 1's confinement.
+    level: f64,
     /// `‖(sᵢ)‖`: the rounding of every `eᵢ*`.
     rounding: f64,
-}
-
-/// `Lᵀ` with `L Lᵀ = C⁻¹`: a whitening of the covariance `C` (`None` unless positive definite).
-fn whitening_of(cov: &Matrix2<f64>) -> Option<Matrix2<f64>> {
-    let info = (0.5 * (cov + cov.transpose())).try_inverse()?;
-    Some(info.cholesky()?.l().transpose())
 }
 
 impl Surrogate {
@@ -259,7 +254,7 @@ impl Surrogate {
             for k in 0..2 {
                 let e = s2[k];
                 let cov = noise.map_or_else(Matrix2::identity, |n| n.lines[i][k]);
-                let whitening = whitening_of(&cov).ok_or("not attempted: a covariance is not positive definite")?;
+                let whitening = whitening(&cov, "line_covariances", i).map_err(|e| format!("not attempted: {e}"))?;
                 let start = lens.unproject(&e, i).map_err(|_| edge("lines2d", i))?;
                 let fit = endpoint_residual(lens, &l, &start, &e, &cov).ok_or_else(|| edge("lines2d", i))?;
                 let xc = Vector3::new(fit.q.x, fit.q.y, 1.0);
@@ -278,12 +273,10 @@ impl Surrogate {
                 confine(&lin, confined);
                 observed[k] = pixel_of(&e_bar);
                 covariances[k] = k2 * c * k2.transpose();
-                let need = level.sqrt() + lin.e.norm() + lin.rounding;
                 pair.push(Endpoint {
-                    lin: Variation::new(lin, confined.0),
+                    variation: Variation::new(lin, confined.0),
                     confined,
                     c0,
-                    need,
                 });
             }
             surrogate.lines2d.push(observed);
@@ -301,6 +294,7 @@ impl Surrogate {
             },
             points,
             endpoints,
+            level,
             rounding: rounding2.sqrt(),
         })
     }
@@ -313,7 +307,8 @@ impl Surrogate {
         let mut eps = largest_epsilon(self.points.iter(), moved)?;
         let (mut kappa, mut phi2, mut c0_2): (f64, f64, f64) = (1.0, 0.0, 0.0);
         for (end, &turn) in self.endpoints.iter().flatten().zip(turns) {
-            let e_hat = end.lin.lin.e.norm() + end.lin.lin.rounding;
+            let lin = &end.variation.lin;
+            let e_hat = lin.e.norm() + lin.rounding;
             let c_max = moved + e_hat * radius * turn + end.c0;
             let rho_max = e_hat + moved;
             // The foot lies within c_max of q*: a confinement ball that holds it (step 1's, or a
@@ -322,8 +317,8 @@ impl Surrogate {
                 end.confined
             } else {
                 let big = c_max * 1.001;
-                let eps = end.lin.epsilon(big)?;
-                if !((1.0 - eps) * big > end.need) {
+                let eps = end.variation.epsilon(big)?;
+                if !((1.0 - eps) * big > lin.need(self.level)) {
                     return None;
                 }
                 (big, eps)
@@ -332,7 +327,7 @@ impl Surrogate {
                 return None;
             }
             let a_max = along_line_reach(eps_big, rho_max, c_max);
-            let small = end.lin.epsilon((a_max + c_max).min(big))?;
+            let small = end.variation.epsilon((a_max + c_max).min(big))?;
             if !(small < 1.0) {
                 return None;
             }
