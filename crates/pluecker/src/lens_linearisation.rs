@@ -7,8 +7,10 @@
 //! with `M = L K₂` (`K₂` the upper-left block of `K`) and `d₀` the observation's distorted normalised
 //! coordinates. Linearised at `n*` (`e* = e(n*)`, `J* = ∂D/∂n(n*)`, `W = M J*`):
 //! `e(n) = e* + (I + Δ) W (n − n*)` along the segment from `n*` (mean value theorem), with
-//! `‖Δ‖ ≤ ε` for `n` in a box `B` about `n*` where `E` bounds `|J(n) − J*|` entrywise (interval
-//! enclosures of [`crate::lens_bounds`]) and `ε = ‖ |M| E |W⁻¹| ‖_F` ([`Linearised::epsilon`]).
+//! `Δ = M (J̄ − J*) W⁻¹`, `J̄` the mean of `J` along the segment. Interval enclosures of
+//! [`crate::lens_bounds`] hold `J` in a box of matrices on each of a few boxes covering the ball, so
+//! `J̄` lies in the convex hull of their union, and `‖Δ‖₂ ≤ ε`, the largest `‖M (V − J*) W⁻¹‖₂` over the
+//! vertices `V` of those boxes (a convex function's largest value on a hull; [`Linearised::epsilon`]).
 //!
 //! **Confinement** ([`Linearised::confinement`]). On the boundary of `B = {n : ‖W (n − n*)‖ ≤ ρ}`,
 //! `‖e‖ ≥ (1 − ε) ρ − ‖e*‖ − s` (`s` the rounding of `e*`), which exceeds `√C` for `ρ` chosen so.
@@ -24,9 +26,7 @@
 //! `1/cos²θ`. The argument holds in either chart.
 
 use crate::camera_model::{AnyCamera, LensCamera};
-use crate::lens_bounds::{
-    distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion, Domain,
-};
+use crate::lens_bounds::{distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, Distortion, Domain};
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -201,28 +201,66 @@ impl Linearised {
         Some(single.min(self.epsilon_in(rho, self.splits)?))
     }
 
-    /// `εᵢ` over the box of [`Self::epsilon`] cut into `pieces` x `pieces` sub-boxes (each sub-box's
-    /// enclosure holds the Jacobian on it; `E` is the largest of their radii about `J*`).
+    /// `εᵢ` over the box of [`Self::epsilon`] cut into `pieces` x `pieces` sub-boxes. Each sub-box that
+    /// meets the ball (the ellipse `{‖W(n − n*)‖ ≤ ρ}`; the others are skipped) has an enclosure, a box
+    /// of matrices holding `J` on it, so the mean `J̄` of `J` along a segment of the ball lies in the
+    /// convex hull of their union; `‖M (J̄ − J*) W⁻¹‖₂` is convex in `J̄`, so its largest value there is
+    /// at a vertex of one of the enclosures (16 each).
     pub(crate) fn epsilon_in(&self, rho: f64, pieces: usize) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
-        let mut e = Matrix2::zeros();
         let step = half * (2.0 / pieces as f64);
+        let mut eps: f64 = 0.0;
         for a in 0..pieces {
             for b in 0..pieces {
                 let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
                 let hi = lo + step;
+                if pieces > 1 && !(self.least_whitened_distance(&lo, &hi) <= rho * (1.0 + 1e-9)) {
+                    continue;
+                }
                 let enclosure = match (&self.ray, &self.distortion) {
                     (Some(r), Distortion::Fisheye(c)) => {
                         fisheye_ray_enclosure(c, self.radius, &r.transpose(), &lo, &hi)?
                     }
                     _ => jacobian_enclosure(&self.distortion, self.radius, &lo, &hi)?,
                 };
-                e = e.sup(&radius_about(&enclosure, &self.j));
+                for vertex in 0..16 {
+                    let corner = Matrix2::from_fn(|r, c| {
+                        let entry = enclosure[r][c];
+                        if vertex & (1 << (2 * r + c)) == 0 {
+                            entry.lo
+                        } else {
+                            entry.hi
+                        }
+                    });
+                    eps = eps.max(spectral_norm(&(self.m * (corner - self.j) * self.w_inverse)));
+                }
             }
         }
-        let eps = (self.m.abs() * e * self.w_inverse.abs()).norm();
+        // The rounding of the products above (relative, far below the enclosures' own widening).
+        let eps = eps * (1.0 + 1e-12);
         eps.is_finite().then_some(eps)
+    }
+
+    /// The least `‖W (n − n*)‖` over the box `[lo, hi]` (0 when it holds `n*`; else on an edge, where the
+    /// quadratic's least value has a closed form).
+    fn least_whitened_distance(&self, lo: &Vector2<f64>, hi: &Vector2<f64>) -> f64 {
+        if (lo.x..=hi.x).contains(&self.n.x) && (lo.y..=hi.y).contains(&self.n.y) {
+            return 0.0;
+        }
+        let corners = [*lo, Vector2::new(hi.x, lo.y), *hi, Vector2::new(lo.x, hi.y)];
+        (0..4)
+            .map(|k| {
+                let (p, q) = (corners[k], corners[(k + 1) % 4]);
+                let (a, d) = (self.w * (p - self.n), self.w * (q - p));
+                let t = if d.norm_squared() > 0.0 {
+                    (-a.dot(&d) / d.norm_squared()).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (a + d * t).norm()
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// `√C + ‖eᵢ*‖ + sᵢ`: what step 1's radius `ρ` must leave, `(1 − εᵢ) ρ` above it.
@@ -267,10 +305,69 @@ pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(Distortion
     Ok((distortion, domain))
 }
 
+/// The largest singular value of a 2 x 2 matrix: `(√((a + d)² + (b − c)²) + √((a − d)² + (b + c)²)) / 2`.
+fn spectral_norm(m: &Matrix2<f64>) -> f64 {
+    let (a, b, c, d) = (m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]);
+    0.5 * ((a + d).hypot(b - c) + (a - d).hypot(b + c))
+}
+
 /// `∂h/∂n′` at `n′ = 0` of `h(n′) = (w₁/w₃, w₂/w₃)`, `w = Rᵀ (n′, 1)`: the ray chart's map to `n`.
 fn homography_jacobian(ray: &Matrix3<f64>) -> Matrix2<f64> {
     let back = ray.transpose();
     let w = back.column(2);
     let h = Vector2::new(w.x / w.z, w.y / w.z);
     Matrix2::from_fn(|r, c| (back[(r, c)] - h[r] * back[(2, c)]) / w.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera_model::CameraModel;
+    use crate::rng::Rng;
+
+    #[test]
+    fn the_spectral_norm_is_the_largest_singular_value() {
+        let mut rng = Rng::new(5);
+        for _ in 0..200 {
+            let m = Matrix2::from_fn(|_, _| rng.normal() * 10f64.powf(rng.uniform_in(-3.0, 3.0)));
+            let svd = m.singular_values();
+            let largest = svd[0].max(svd[1]);
+            assert!((spectral_norm(&m) - largest).abs() <= 1e-13 * largest, "{m}");
+        }
+    }
+
+    #[test]
+    fn the_least_whitened_distance_of_a_box_is_its_sampled_least() {
+        // Against a dense grid of the box: never above its least value, and within the grid's spacing.
+        let lens = LensCamera::new(
+            CameraModel::OpenCv,
+            &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
+        )
+        .unwrap();
+        let camera = AnyCamera::from(&lens);
+        let mut rng = Rng::new(8);
+        for _ in 0..100 {
+            let l = Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0));
+            let xc = Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 1.0);
+            let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
+            let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, false) else {
+                continue;
+            };
+            let lo = lin.n + Vector2::new(rng.uniform_in(-0.2, 0.2), rng.uniform_in(-0.2, 0.2));
+            let hi = lo + Vector2::new(rng.uniform_in(0.0, 0.1), rng.uniform_in(0.0, 0.1));
+            let least = lin.least_whitened_distance(&lo, &hi);
+            let steps = 200;
+            let mut sampled = f64::INFINITY;
+            for a in 0..=steps {
+                for b in 0..=steps {
+                    let t = Vector2::new(a as f64, b as f64) / steps as f64;
+                    let n = lo + (hi - lo).component_mul(&t);
+                    sampled = sampled.min((lin.w * (n - lin.n)).norm());
+                }
+            }
+            let spacing = (lin.w * (hi - lo)).norm() / steps as f64;
+            assert!(least <= sampled * (1.0 + 1e-12) + 1e-15, "{least} > {sampled}");
+            assert!(least >= sampled - spacing, "{least} < {sampled} − {spacing}");
+        }
+    }
 }

@@ -15,8 +15,8 @@
 //! ([`crate::lens_bounds::domain`]: the fold radius for radially symmetric lenses; a scan of the
 //! symmetric part of the Jacobian with OPENCV's tangential terms), which `D` maps onto a set holding
 //! the disc of radius `ρ_Dᵢ` about the principal point.
-//! 1. *Each view's projection is confined.* Let `Bᵢ = {n : ‖Wᵢ(n − nᵢ*)‖ ≤ ρᵢ}` and `Eᵢ` an entrywise
-//!    bound of `|J(n) − Jᵢ*|` over a box holding `Bᵢ` (interval enclosure), `εᵢ = ‖ |Mᵢ| Eᵢ |Wᵢ⁻¹| ‖_F`.
+//! 1. *Each view's projection is confined.* Let `Bᵢ = {n : ‖Wᵢ(n − nᵢ*)‖ ≤ ρᵢ}` and `εᵢ` a bound
+//!    of `‖Mᵢ (J(n) − Jᵢ*) Wᵢ⁻¹‖₂` over `Bᵢ` (interval enclosures; [`crate::lens_linearisation`]).
 //!    Along the segment from `nᵢ*` (mean value theorem),
 //!    `eᵢ(n) = eᵢ* + (I + Δ) Wᵢ (n − nᵢ*)`, `‖Δ‖ ≤ εᵢ`, so on the boundary of `Bᵢ`
 //!    `‖eᵢ‖ ≥ (1 − εᵢ)ρᵢ − ‖eᵢ*‖ > √C` for `ρᵢ` chosen so. Let `n ∈ Dᵢ` have `‖eᵢ(n)‖ ≤ √C`: `D(n)` lies
