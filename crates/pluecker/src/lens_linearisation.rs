@@ -337,6 +337,75 @@ mod tests {
     }
 
     #[test]
+    fn epsilon_bounds_the_sampled_variation_of_the_jacobian_on_the_ball() {
+        // ‖M (J(n) − J*) W⁻¹‖₂ at points of the ball {‖W (n − n*)‖ ≤ ρ}, J by central differences of the
+        // distortion map, never exceeds ε (one box and split). Points on the axes too, where one entry of
+        // J varies most (a bound that left out an entry's extreme would show there).
+        let lenses = [
+            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, 0.3, 0.05]).unwrap(),
+            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, -0.2, 0.02]).unwrap(),
+            LensCamera::new(
+                CameraModel::OpenCv,
+                &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
+            )
+            .unwrap(),
+        ];
+        let mut rng = Rng::new(13);
+        let mut tightest = f64::INFINITY;
+        for lens in &lenses {
+            let camera = AnyCamera::from(lens);
+            for k in 0..24 {
+                let xc = match k % 3 {
+                    0 => Vector3::new(0.0, rng.uniform_in(-1.0, 1.0), 1.0),
+                    1 => Vector3::new(rng.uniform_in(-1.0, 1.0), 0.0, 1.0),
+                    _ => Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 1.0),
+                };
+                let l = if k % 2 == 0 {
+                    Matrix2::identity()
+                } else {
+                    Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0))
+                };
+                let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
+                let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, false) else {
+                    continue;
+                };
+                let jacobian = |n: Vector2<f64>| {
+                    let h = 1e-6;
+                    let column = |d: Vector2<f64>| (lens.distort(&(n + d)).0 - lens.distort(&(n - d)).0) / (2.0 * h);
+                    Matrix2::from_columns(&[column(Vector2::new(h, 0.0)), column(Vector2::new(0.0, h))])
+                };
+                let j_star = jacobian(lin.n);
+                for rho in [2.0, 8.0, 20.0] {
+                    for pieces in [1, SPLITS] {
+                        let Some(eps) = lin.epsilon_in(rho, pieces) else {
+                            continue;
+                        };
+                        let mut sampled: f64 = 0.0;
+                        for a in 0..64 {
+                            let angle = a as f64 * std::f64::consts::TAU / 64.0;
+                            for t in [0.25, 0.5, 0.75, 1.0] {
+                                let v = Vector2::new(angle.cos(), angle.sin()) * rho * t;
+                                let n = lin.n + lin.w_inverse * v;
+                                sampled = sampled.max(spectral_norm(&(lin.m * (jacobian(n) - j_star) * lin.w_inverse)));
+                            }
+                        }
+                        // Central differences: error O(h²) relative, far below the 1e-6 allowed here.
+                        assert!(
+                            eps >= sampled * (1.0 - 1e-6),
+                            "ρ {rho}, {pieces} pieces: ε {eps} < sampled {sampled}"
+                        );
+                        if sampled > 1e-3 {
+                            tightest = tightest.min(eps / sampled);
+                        }
+                    }
+                }
+            }
+        }
+        assert!(tightest.is_finite(), "no ball was checked");
+        eprintln!("least ε / sampled variation {tightest:.3}");
+    }
+
+    #[test]
     fn the_least_whitened_distance_of_a_box_is_its_sampled_least() {
         // Against a dense grid of the box: never above its least value, and within the grid's spacing.
         let lens = LensCamera::new(
