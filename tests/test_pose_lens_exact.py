@@ -195,8 +195,9 @@ def test_a_certificate_through_a_lens_is_never_above_a_cheaper_pose(name):
     """Through a lens the certificate bounds the exact cost in the observed pixels. Its raw bound never
     exceeds the oracle's cost at poses sampled about the answer, nor at the minima that pycolmap's own
     refinement (Ceres) reaches from starts moved by ~0.05 rad and ~0.2 units.
-    OPENCV and SIMPLE_RADIAL are certified; the fisheye 80 degrees off axis is not (its confinement
-    boxes of normalised coordinates reach the edge of the lens's one-to-one disc), and says why."""
+    OPENCV and SIMPLE_RADIAL are certified. The fisheye 80 degrees off axis is certified where the
+    points whose confinement boxes reach the edge of the lens's one-to-one disc can be left out of the
+    rotation search (1 of the 3 scenes); where not, the result says why."""
     model, params, r_max = LENSES[name]
     lens = pluecker.LensCamera(model, params)
     camera = colmap_camera(model, params)
@@ -211,6 +212,8 @@ def test_a_certificate_through_a_lens_is_never_above_a_cheaper_pose(name):
             assert result.status == "gap_not_closed" and result.details.uncertified_reason
             continue
         certified += result.certificate.certified
+        if not result.certificate.certified:
+            assert result.status == "gap_not_closed" and result.details.uncertified_reason
         assert result.certificate.kind == "lens_sublevel_set" and "one-to-one" in result.certificate.domain
         raw = result.certificate.raw_lower_bound / 2.0  # Σ r² → ½ Σ r², the oracle's unit
         R0, t0 = result.pose.rotation, result.pose.translation
@@ -228,6 +231,6 @@ def test_a_certificate_through_a_lens_is_never_above_a_cheaper_pose(name):
                 z = np.concatenate([rng.normal(scale=scale, size=3), rng.normal(scale=4 * scale, size=3)])
                 assert raw <= cost(z) * (1 + 1e-9) + 1e-12
     if name == "OPENCV_FISHEYE":
-        assert certified == 0
+        assert certified >= 1
     else:
         assert certified == 3

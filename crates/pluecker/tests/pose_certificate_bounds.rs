@@ -506,6 +506,23 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
                     check(format!("depth lower bound (least depth {least})"), pp.z_lo, least);
                     check("|p_z'/p_z|".into(), rate, pp.rate);
                 }
+                // Each point's whitened residual moves at the pose at most at its own rate, along any
+                // unit whitened direction (the largest over random directions, here by differences).
+                for (i, (x, pp)) in c.points3d.iter().zip(&parts.points).enumerate() {
+                    let map = c.noise.as_ref().map_or_else(Matrix2::identity, |n| n.points[i])
+                        * Matrix2::new(k.fx, k.skew, 0.0, k.fy);
+                    let residual = |v: &Vector6<f64>, s: f64| {
+                        let p = at(v, s);
+                        let y = p.r * x + p.t;
+                        map * Vector2::new(y.x / y.z, y.y / y.z)
+                    };
+                    let mut fastest: f64 = 0.0;
+                    for _ in 0..200 {
+                        let v = Vector6::from_fn(|_, _| rng.normal()).normalize();
+                        fastest = fastest.max(((residual(&v, h) - residual(&v, -h)) / (2.0 * h)).norm());
+                    }
+                    check("‖r_i'(0)‖".into(), fastest, pp.residual_rate);
+                }
                 for (line, ((seen, ends), lp)) in c.lines2d.iter().zip(&c.lines3d).zip(&parts.lines).enumerate() {
                     let moment = |v: &Vector6<f64>, s: f64| {
                         let p = at(v, s);

@@ -952,11 +952,11 @@ fn oracle_surrogate_cost(surrogate: &certificate::testing::LensSurrogate, pose: 
 
 #[test]
 fn every_pose_below_the_level_is_below_the_surrogates_level() {
-    // Step 1 through a lens: every pose with cost f ≤ the level has √(2q) ≤ scale √(2f) + delta for the
+    // Step 1 through a lens: every pose with cost f ≤ the level has √(2q) ≤ √(2f) + delta for the
     // surrogate's cost q, both computed here. Checked at poses sampled about the answer out to
     // several residual units and kept where the oracle's cost is below the level: 1.2-5 times the
     // answer's with 1 px noise, and the answer's plus 2-200 px² with 0.05 px noise, where the points'
-    // residuals are far larger than at the answer (there `scale` carries the slack, not `delta`).
+    // residuals are far larger than at the answer (there the weights 1 − εᵢ carry the slack, not `delta`).
     let mut certify = PoseOptions::default();
     certify.certify = Some(Default::default());
     let (mut checked, mut tightest) = (0, f64::INFINITY);
@@ -995,7 +995,7 @@ fn every_pose_below_the_level_is_below_the_surrogates_level() {
                             continue;
                         }
                         let q = oracle_surrogate_cost(&surrogate, &pose);
-                        let allowed = surrogate.scale * (2.0 * f).sqrt() + surrogate.delta;
+                        let allowed = (2.0 * f).sqrt() + surrogate.delta;
                         checked += 1;
                         tightest = tightest.min(allowed - (2.0 * q).sqrt());
                         assert!(
@@ -1017,7 +1017,7 @@ fn every_pose_below_the_level_is_below_the_surrogates_level() {
 fn step_one_holds_point_by_point_where_the_lens_residual_vanishes() {
     // Step 1 for one point at a time (the surrogate of a single correspondence, at the answer of the
     // whole problem and at its level C): every pose whose point residual f (½ ‖e‖², the oracle's) is at
-    // most C has √(2q) ≤ scale √(2f) + delta. Sampled along the path that moves the projection from
+    // most C has √(2q) ≤ √(2f) + delta. Sampled along the path that moves the projection from
     // the answer's to the undistorted observation and beyond (at the observation e = 0, so the whole
     // claim rests on `delta`), and in random directions.
     let mut certify = PoseOptions::default();
@@ -1060,7 +1060,7 @@ fn step_one_holds_point_by_point_where_the_lens_residual_vanishes() {
                         continue;
                     }
                     let q = oracle_surrogate_cost(&surrogate, &pose);
-                    let allowed = surrogate.scale * (2.0 * f).sqrt() + surrogate.delta;
+                    let allowed = (2.0 * f).sqrt() + surrogate.delta;
                     checked += 1;
                     at_zero += zero as usize;
                     assert!(

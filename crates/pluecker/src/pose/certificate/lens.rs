@@ -24,14 +24,21 @@
 //!    of a pose of the domain with cost at most `C`. Inside it `eᵢ = eᵢ* + (I + Δ) vᵢ` (`vᵢ = Wᵢ (n − nᵢ*)`,
 //!    `‖Δ‖ ≤ εᵢ`), so `‖vᵢ‖ ≤ (‖eᵢ‖ + ‖eᵢ*‖ + sᵢ) / (1 − εᵢ)` and
 //!    `‖ℓᵢ‖ ≤ ‖eᵢ‖ + εᵢ ‖vᵢ‖ + sᵢ ≤ ‖eᵢ‖ / (1 − εᵢ) + δᵢ`, `δᵢ = εᵢ (‖eᵢ*‖ + sᵢ) / (1 − εᵢ) + sᵢ`; for an
-//!    endpoint the same with `r ≥ ‖ê + u‖ − ε ‖u‖ − s` (`u = W (q − q*)`) and `ρ ≤ ‖ê + u‖`. So every pose
-//!    with `F ≤ C` has `√Q ≤ σ √F + ‖δ‖`, `σ = 1 / (1 − maxᵢ εᵢ)` (Minkowski): the search of [`super`]
-//!    localises the surrogate's sublevel set at the level `C' = (σ √C + ‖δ‖)²`, and a box bound `q` of
-//!    the surrogate is one of `((√q − ‖δ‖)₊ / σ)²` on `F` ([`Slack`]).
+//!    endpoint the same with `r ≥ ‖ê + u‖ − ε ‖u‖ − s` (`u = W (q − q*)`) and `ρ ≤ ‖ê + u‖`. Weighted,
+//!    `(1 − εᵢ) ‖ℓᵢ‖ ≤ ‖eᵢ‖ + (1 − εᵢ) δᵢ`: the rotation search of [`super`] runs on the surrogate with
+//!    each observation's whitening scaled by `1 − εᵢ` (its cost `Q̃`), where every pose with `F ≤ C`
+//!    has `√Q̃ ≤ √F + δ̃`, `δ̃ = ‖((1 − εᵢ) δᵢ)‖` (Minkowski). The search localises `Q̃`'s sublevel set at
+//!    the level `(√C + δ̃)²`, and a box bound `q̃` of `Q̃` is one of `(√q̃ − δ̃)₊²` on `F` ([`Slack`]).
+//!    An observation far off the linear model pays only its own `εᵢ` (a common factor
+//!    `1 / (1 − maxᵢ εᵢ)` would let the worst one loosen every other). A point that is not confined
+//!    (its ball reaches the edge of the disc, or `εᵢ` stays too large) is left out of the search:
+//!    `F ≥` the cost of the others, which the search bounds; step 4 takes every observation.
 //! 2. **The ball.** Along a whitened ray of length `s` the surrogate's residuals move by at most
-//!    `Δ(s) = μ s + ½ K s²` (stacked; `μ ≥ ‖J T v‖`, 1 up to rounding), so a point's
-//!    `vᵢ = Wᵢ (n − nᵢ*)` has `‖vᵢ‖ ≤ Δ`, and `εᵢ` is taken over the ball of that radius. For an endpoint, write `ê + u = ρ ν + a τ` (`ν`, `τ` the unit normal
-//!    and direction of the whitened line `W ℓ`); then `‖u‖ ≤ |a| + c` with `c = ‖ρ ν − ê‖` the motion of
+//!    `Δ(s) = μ s + ½ K s²` (stacked; `μ ≥ ‖J T v‖`, 1 up to rounding), and a point's
+//!    `vᵢ = Wᵢ (n − nᵢ*)` by at most `μᵢ s + ½ K s²` (`μᵢ ≥ ‖gᵢ‖` the rate of its own rows `gᵢ` of
+//!    `J T`; with many points far below 1), and `εᵢ` is taken over the ball of that radius. For an
+//!    endpoint, write `ê + u = ρ ν + a τ` (`ν`, `τ` the unit normal and direction of the whitened line
+//!    `W ℓ`); then `‖u‖ ≤ |a| + c` with `c = ‖ρ ν − ê‖` the motion of
 //!    the residual's foot, `c ≤ |ρ − ρ̂| + ‖ê‖ φ + c₀` (`φ ≤ s ‖q′‖ / w` the turn of `ν`, from the
 //!    curvature bound's parts; `c₀` the foot's offset at `P̂`, rounding), and
 //!    `r ≥ √(ρ² + a²) − ε (|a| + c) ≥ √(1 − ε²) ρ − ε c`. The minimiser has
@@ -64,27 +71,26 @@ use std::cell::RefCell;
 const NOT_COVERED: &str = "not attempted: the certificate through a lens covers the radial, OpenCV \
     (radial and tangential), fisheye (radial), division and EUCM models; not this one";
 
-/// The slack between the surrogate and the cost through the lens in the search of [`super`]: every
-/// pose of the domain with `f ≤ f̂` (`f = ½ Σ r²`) has `√(2q) ≤ σ √(2f) + δ` (`q = ½ Σ ℓ²` the
-/// surrogate's cost; step 1), so a bound `q` of the surrogate on a box is one of
-/// `½ ((√(2q) − δ)₊ / σ)²` on the cost, and the sublevel set `{f ≤ f̂}` lies in the surrogate's at the
-/// level `½ (σ √(2f̂) + δ)²`. `σ = 1`, `δ = 0` for a pinhole camera (the identity).
+/// The slack between the search's surrogate and the cost through the lens (step 1): every pose of the
+/// domain with `f ≤ f̂` (`f = ½ Σ r²`) has `√(2q) ≤ √(2f) + δ` (`q = ½ Σ (1 − εᵢ)² ℓᵢ²` the weighted
+/// surrogate's cost), so a bound `q` of that surrogate on a box is one of `½ (√(2q) − δ)₊²` on the cost,
+/// and the sublevel set `{f ≤ f̂}` lies in the surrogate's at the level `½ (√(2f̂) + δ)²`. `δ = 0` for a
+/// pinhole camera (the identity).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Slack {
-    pub scale: f64,
     pub delta: f64,
 }
 
 impl Slack {
     /// No slack: the pinhole certificate.
-    pub const NONE: Slack = Slack { scale: 1.0, delta: 0.0 };
+    pub const NONE: Slack = Slack { delta: 0.0 };
 
     /// The cost bound of a surrogate bound `q`.
     pub fn to_cost(self, q: f64) -> f64 {
         if self == Self::NONE {
             return q;
         }
-        0.5 * (((2.0 * q.max(0.0)).sqrt() - self.delta).max(0.0) / self.scale).powi(2)
+        0.5 * ((2.0 * q.max(0.0)).sqrt() - self.delta).max(0.0).powi(2)
     }
 
     /// The least surrogate bound whose cost bound is `f` (the inverse of [`Self::to_cost`] above 0).
@@ -92,7 +98,7 @@ impl Slack {
         if self == Self::NONE {
             return f;
         }
-        0.5 * (self.scale * (2.0 * f.max(0.0)).sqrt() + self.delta).powi(2)
+        0.5 * ((2.0 * f.max(0.0)).sqrt() + self.delta).powi(2)
     }
 }
 
@@ -145,17 +151,17 @@ impl Variation {
     }
 }
 
-/// The largest [`Variation::epsilon`] of `all` over the ball of `radius`, splitting boxes only where
+/// The largest [`Variation::epsilon`] of `all`, each over the ball of its radius, splitting boxes only where
 /// that can change the largest: every one box's bound first, then, from the largest down, the split
 /// bound until the next one box's bound is below the largest found (the split bound is at most the
 /// one box's).
-fn largest_epsilon<'v>(all: impl Iterator<Item = &'v Variation>, radius: f64) -> Option<f64> {
+fn largest_epsilon<'v>(all: impl Iterator<Item = (&'v Variation, f64)>) -> Option<f64> {
     let mut singles = all
-        .map(|v| Some((v.epsilon_in(radius, false)?, v)))
+        .map(|(v, radius)| Some((v.epsilon_in(radius, false)?, v, radius)))
         .collect::<Option<Vec<_>>>()?;
     singles.sort_by(|a, b| b.0.total_cmp(&a.0));
     let mut largest: f64 = 0.0;
-    for (single, v) in singles {
+    for (single, v, radius) in singles {
         if single <= largest {
             break;
         }
@@ -183,6 +189,10 @@ pub(super) struct Surrogate {
     pub camera: Camera,
     /// The surrogate's observations, in the pixels of `K`, with their whitenings (`absolute` noise).
     pub corr: Correspondences,
+    /// The rotation search's observations (step 1): those of `corr`, each weighted by `1 − εᵢ` of its
+    /// confinement ball, less the points that are not confined.
+    search: Correspondences,
+    /// Step 1's slack of the search's observations.
     pub slack: Slack,
     points: Vec<Variation>,
     endpoints: Vec<[Endpoint; 2]>,
@@ -225,24 +235,53 @@ impl Surrogate {
             lines: Vec::with_capacity(corr.n_lines()),
             absolute: true,
         };
-        // Step 1: δ² and the largest ε of the confinement balls; ‖(sᵢ)‖².
-        let (mut delta2, mut eps_max, mut rounding2): (f64, f64, f64) = (0.0, 0.0, 0.0);
-        let mut confine = |lin: &Linearised, (radius, eps): (f64, f64)| {
-            eps_max = eps_max.max(eps);
-            delta2 += (eps * (lin.e.norm() + lin.rounding) / (1.0 - eps) + lin.rounding).powi(2);
-            rounding2 += lin.rounding.powi(2);
-            radius
+        // The search's observations: the surrogate's, each weighted by 1 − εᵢ of its confinement
+        // ball (step 1), less the points that are not confined.
+        let mut search = Correspondences {
+            points3d: Vec::with_capacity(corr.n_points()),
+            lines3d: corr.lines3d.clone(),
+            ..Default::default()
+        };
+        let mut search_noise = ObservationNoise {
+            points: Vec::with_capacity(corr.n_points()),
+            lines: Vec::with_capacity(corr.n_lines()),
+            absolute: true,
+        };
+        // Step 1: ‖((1 − εᵢ) δᵢ)‖² over the search's observations; ‖(sᵢ)‖² over all.
+        let (mut delta2, mut rounding2): (f64, f64) = (0.0, 0.0);
+        let mut confine = |lin: &Linearised, eps: f64| {
+            delta2 += (eps * (lin.e.norm() + lin.rounding) + (1.0 - eps) * lin.rounding).powi(2);
+            1.0 - eps
         };
         let mut points = Vec::with_capacity(corr.n_points());
         for (i, (x, u)) in corr.points3d.iter().zip(&corr.points2d).enumerate() {
             let whitening = noise.map_or_else(Matrix2::identity, |n| n.points[i]);
             let xc = pose.transform(x);
-            let lin = Linearised::new_in(&any, &known, &whitening, u, &xc, level, SPLITS, false)
-                .map_err(|_| edge("points2d", i))?;
-            let radius = confine(&lin, lin.confinement(level).ok_or_else(|| edge("points2d", i))?);
+            // A point that is not confined enters step 4 only (linearised without the level's path
+            // argument, which step 4 does not need).
+            let confined = Linearised::new_in(&any, &known, &whitening, u, &xc, level, SPLITS, false)
+                .ok()
+                .and_then(|lin| Some((lin.confinement(level)?, lin)));
+            let lin = match confined {
+                Some(((radius, eps), lin)) => {
+                    let weight = confine(&lin, eps);
+                    search.points3d.push(*x);
+                    search.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
+                    search_noise.points.push(lin.w * k2_inverse * weight);
+                    points.push(Variation::new(lin, radius));
+                    &points[points.len() - 1].lin
+                }
+                None => {
+                    let lin = Linearised::new_in(&any, &known, &whitening, u, &xc, 0.0, SPLITS, false)
+                        .map_err(|_| edge("points2d", i))?;
+                    let radius = lin.first_radius(level);
+                    points.push(Variation::new(lin, radius));
+                    &points[points.len() - 1].lin
+                }
+            };
+            rounding2 += lin.rounding.powi(2);
             surrogate.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
             noise_out.points.push(lin.w * k2_inverse);
-            points.push(Variation::new(lin, radius));
         }
         let mut endpoints = Vec::with_capacity(corr.n_lines());
         for (i, (s3, s2)) in corr.lines3d.iter().zip(&corr.lines2d).enumerate() {
@@ -251,6 +290,7 @@ impl Surrogate {
             let mut pair = Vec::with_capacity(2);
             let mut observed = [Vector2::zeros(); 2];
             let mut covariances = [Matrix2::identity(); 2];
+            let mut weighted = [Matrix2::identity(); 2];
             for k in 0..2 {
                 let e = s2[k];
                 let cov = noise.map_or_else(Matrix2::identity, |n| n.lines[i][k]);
@@ -270,9 +310,11 @@ impl Surrogate {
                 if !c0.is_finite() {
                     return Err(edge("lines2d", i));
                 }
-                confine(&lin, confined);
+                let weight = confine(&lin, confined.1);
+                rounding2 += lin.rounding.powi(2);
                 observed[k] = pixel_of(&e_bar);
                 covariances[k] = k2 * c * k2.transpose();
+                weighted[k] = covariances[k] / (weight * weight);
                 pair.push(Endpoint {
                     variation: Variation::new(lin, confined.0),
                     confined,
@@ -281,17 +323,18 @@ impl Surrogate {
             }
             surrogate.lines2d.push(observed);
             noise_out.lines.push(covariances);
+            search.lines2d.push(observed);
+            search_noise.lines.push(weighted);
             let [p0, p1]: [Endpoint; 2] = pair.try_into().map_err(|_| edge("lines2d", i))?;
             endpoints.push([p0, p1]);
         }
         surrogate.noise = Some(noise_out);
+        search.noise = Some(search_noise);
         Ok(Surrogate {
+            search,
             camera,
             corr: surrogate,
-            slack: Slack {
-                scale: 1.0 / (1.0 - eps_max),
-                delta: delta2.sqrt(),
-            },
+            slack: Slack { delta: delta2.sqrt() },
             points,
             endpoints,
             level,
@@ -301,10 +344,14 @@ impl Surrogate {
 
     /// Step 2's constants over the whitened ball of `radius` with the curvature bound `k`:
     /// `(κ, ε, Φ, ‖c₀‖ , ‖s‖)`, or `None` where a ball reaches the edge of the disc or leaves step 1's.
+    /// `mu` bounds the rate of the stacked residuals, `rates[i]` that of point `i`'s alone;
     /// `turns[e]` bounds `‖q′ₑ‖ / wₑ` over the ball, endpoint by endpoint in the order of `corr`.
-    pub fn ball(&self, radius: f64, k: f64, mu: f64, turns: &[f64]) -> Option<RaySlack> {
-        let moved = mu * radius + 0.5 * k * radius * radius;
-        let mut eps = largest_epsilon(self.points.iter(), moved)?;
+    pub fn ball(&self, radius: f64, k: f64, mu: f64, rates: &[f64], turns: &[f64]) -> Option<RaySlack> {
+        let curve = 0.5 * k * radius * radius;
+        let moved = mu * radius + curve;
+        debug_assert_eq!(rates.len(), self.points.len());
+        let each = rates.iter().map(|rate| rate.min(mu) * radius + curve);
+        let mut eps = largest_epsilon(self.points.iter().zip(each))?;
         let (mut kappa, mut phi2, mut c0_2): (f64, f64, f64) = (1.0, 0.0, 0.0);
         for (end, &turn) in self.endpoints.iter().flatten().zip(turns) {
             let lin = &end.variation.lin;
@@ -346,6 +393,11 @@ impl Surrogate {
         })
     }
 
+    /// The observations of the rotation search (step 1).
+    pub fn search_corr(&self) -> &Correspondences {
+        &self.search
+    }
+
     /// Endpoints, for [`Self::ball`]'s `turns`.
     pub fn n_endpoints(&self) -> usize {
         2 * self.endpoints.len()
@@ -356,7 +408,7 @@ impl Surrogate {
     /// the largest `ε` as step 4 takes it.
     pub fn point_variations(&self, radius: f64) -> (Vec<PointVariation>, Option<f64>) {
         for k in [-3, 2, -1, 1, 3] {
-            let _ = largest_epsilon(self.points.iter(), radius * 2f64.powf(k as f64 / 3.0));
+            let _ = largest_epsilon(self.points.iter().map(|v| (v, radius * 2f64.powf(k as f64 / 3.0))));
         }
         let each = self
             .points
@@ -368,7 +420,7 @@ impl Surrogate {
                 n: v.lin.n,
             })
             .collect();
-        (each, largest_epsilon(self.points.iter(), radius))
+        (each, largest_epsilon(self.points.iter().map(|v| (v, radius))))
     }
 }
 

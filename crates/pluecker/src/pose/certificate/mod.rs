@@ -1934,6 +1934,8 @@ struct PointRay {
     /// `gᵀ g` of the residual's whitened gradient `g = W K₂ Dπ P T` (2x6), and `‖W K₂‖`.
     gram: SMatrix<f64, 6, 6>,
     map_norm: f64,
+    /// `‖g‖₂` (up to rounding, above): the residual's own rate at `s = 0` per unit whitened step.
+    rate: f64,
 }
 
 /// A line endpoint's part of `RayCurvature`: its residual is `n / w` with `n = ēᵀ m` and
@@ -2008,12 +2010,15 @@ impl RayCurvature {
                     SMatrix::<f64, 2, 3>::new(1.0 / p.z, 0.0, -p.x / (p.z * p.z), 0.0, 1.0 / p.z, -p.y / (p.z * p.z));
                 let pt = tangent_map(&y) * t;
                 let g = map * d_pi * pt;
+                let gg = g * g.transpose();
+                let (mean, half) = (0.5 * (gg[(0, 0)] + gg[(1, 1)]), 0.5 * (gg[(0, 0)] - gg[(1, 1)]));
                 PointRay {
                     y_norm: y.norm(),
                     p,
                     depth_rate: pt.row(2).norm(),
                     gram: g.transpose() * g,
                     map_norm: norm2x2(map).1,
+                    rate: (mean + half.hypot(gg[(0, 1)])).max(0.0).sqrt() * (1.0 + 1e-12),
                 }
             })
             .collect();
@@ -2120,7 +2125,11 @@ impl RayCurvature {
             direct2 += direct * direct;
             let rho = depth_rate / z_lo;
             if let Some(p) = parts.as_deref_mut() {
-                p.points.push(testing::PointParts { z_lo, rate: rho });
+                p.points.push(testing::PointParts {
+                    z_lo,
+                    rate: rho,
+                    residual_rate: pt.rate,
+                });
             }
             rate = rate.max(rho);
             weighted += pt.gram * (rho * rho);
@@ -2234,6 +2243,12 @@ impl RayCurvature {
             }
         }
         Some(k)
+    }
+
+    /// Per point, its residual's rate `‖g‖₂` at the pose: along a whitened ray of length `s` the
+    /// residual moves by at most `‖g‖₂ s + ½ K s²` (`K` of [`Self::bound`]).
+    fn point_rates(&self) -> Vec<f64> {
+        self.points.iter().map(|pt| pt.rate).collect()
     }
 
     /// The largest rate `|p_z' / p_z|` of the points over the ball of radius `s` (0 without points).
@@ -2357,7 +2372,8 @@ impl<'s> LocalModel<'s> {
                     .collect();
                 debug_assert_eq!(turns.len(), lens.n_endpoints());
                 let mu = self.curvature.mu;
-                let whole = (radius, lens.ball(radius, k, mu, &turns)?);
+                let rates = self.curvature.point_rates();
+                let whole = (radius, lens.ball(radius, k, mu, &rates, &turns)?);
                 let coarse = local_lower_bound(self.cost, self.gradient, self.lambda_min, k, radius, &[whole]);
                 if wanted.is_some_and(|w| coarse >= w) {
                     return Some(coarse);
@@ -2367,7 +2383,7 @@ impl<'s> LocalModel<'s> {
                 let mut slacks = vec![whole];
                 for j in 1..=NESTED_BALLS {
                     let r = radius * 0.5f64.powf(j as f64 / 2.0);
-                    match lens.ball(r, k, mu, &turns) {
+                    match lens.ball(r, k, mu, &rates, &turns) {
                         Some(slack) => slacks.push((r, slack)),
                         None => break,
                     }
@@ -2432,19 +2448,27 @@ fn certify_pinhole(
 ) -> Certification {
     // The level of the sublevel set that the search localises (the surrogate's, through a lens).
     let level = lens.map_or(cost, |l| l.slack.to_surrogate(cost));
-    let problem = match Problem::new(camera, corr, level) {
+    // Through a lens the search runs on step 1's weighted observations, step 4 on the surrogate's.
+    let search_corr = lens.map_or(corr, |l| l.search_corr());
+    let whole = match lens.map(|_| Problem::without_depths(camera, corr, level)) {
+        None => None,
+        Some(Ok(p)) => Some(p),
+        Some(Err(why)) => return Certification::none(why),
+    };
+    let problem = match Problem::new(camera, search_corr, level) {
         Ok(p) => p,
         Err(why) => return Certification::none(why),
     };
-    let first = certify_problem(&problem, camera, pose, cost, options, lens);
+    let local = whole.as_ref().unwrap_or(&problem);
+    let first = certify_problem(&problem, local, camera, pose, cost, options, lens);
     // With segments, a search with depth bounds that did not close its gap is followed by the one
     // without them (bounded at each box's rotation, segments and points alike): where the points are
     // few it certifies scenes the first cannot. Both bounds are proved; the better is kept.
     if first.certified || problem.root().is_none() || corr.n_lines() == 0 {
         return first;
     }
-    let second = match Problem::without_depths(camera, corr, level) {
-        Ok(p) => certify_problem(&p, camera, pose, cost, options, lens),
+    let second = match Problem::without_depths(camera, search_corr, level) {
+        Ok(p) => certify_problem(&p, whole.as_ref().unwrap_or(&p), camera, pose, cost, options, lens),
         Err(why) => Certification::none(why),
     };
     let nodes = first.nodes + second.nodes;
@@ -2462,16 +2486,19 @@ fn certify_pinhole(
     }
 }
 
-/// [`certify`] on prepared data (`cost` the cost at `pose`, through the lens of `lens` when given).
+/// [`certify`] on prepared data (`cost` the cost at `pose`, through the lens of `lens` when given):
+/// the search over `problem`, step 4 over `local` (the same but where a lens's search leaves out
+/// points).
 fn certify_problem(
     problem: &Problem,
+    local: &Problem,
     camera: &Camera,
     pose: &Pose,
     cost: f64,
     options: &CertifyOptions,
     lens: Option<&Surrogate>,
 ) -> Certification {
-    let (whitening, model) = match LocalModel::at(problem, camera, pose, lens) {
+    let (whitening, model) = match LocalModel::at(local, camera, pose, lens) {
         Ok(m) => m,
         Err(why) => return Certification::none(why),
     };
@@ -2703,6 +2730,8 @@ pub mod testing {
     pub struct PointParts {
         pub z_lo: f64,
         pub rate: f64,
+        /// `‖g‖₂` at the pose: the rate of the point's whitened residual per unit whitened step.
+        pub residual_rate: f64,
     }
 
     /// One observed endpoint's part of `K` on the ball, along the same rays: with `m = A × B`
@@ -2782,14 +2811,13 @@ pub mod testing {
     }
 
     /// The surrogate of a problem through a lens (`lens`) at `pose`, for the level `cost`
-    /// (`½ Σ r²`): its camera (the lens's pinhole part) and observations, and step 1's slack: every
-    /// pose of the domain with cost `f ≤ cost` has `√(2q) ≤ scale √(2f) + delta` (`q` the surrogate's
-    /// cost).
+    /// (`½ Σ r²`): its camera (the lens's pinhole part), the rotation search's observations (weighted
+    /// by step 1) and step 1's slack: every pose of the domain with cost `f ≤ cost` has
+    /// `√(2q) ≤ √(2f) + delta` (`q` the cost of those observations).
     #[derive(Debug, Clone)]
     pub struct LensSurrogate {
         pub camera: Camera,
         pub corr: Correspondences,
-        pub scale: f64,
         pub delta: f64,
     }
 
@@ -2802,10 +2830,9 @@ pub mod testing {
     ) -> std::result::Result<LensSurrogate, String> {
         let s = Surrogate::new(lens, corr, pose, cost)?;
         Ok(LensSurrogate {
-            scale: s.slack.scale,
             delta: s.slack.delta,
+            corr: s.search_corr().clone(),
             camera: s.camera,
-            corr: s.corr,
         })
     }
 
@@ -2837,7 +2864,8 @@ pub mod testing {
         turns: &[f64],
     ) -> std::result::Result<Option<(f64, f64)>, String> {
         let surrogate = Surrogate::new(lens, corr, pose, cost)?;
-        Ok(surrogate.ball(radius, k, 1.0, turns).map(|s| (s.kappa, s.eps)))
+        let rates = vec![1.0; surrogate.corr.n_points()];
+        Ok(surrogate.ball(radius, k, 1.0, &rates, turns).map(|s| (s.kappa, s.eps)))
     }
 
     /// Step 4 through `lens` at any `pose` (cost `½ Σ r²` through the lens, computed here): the bound
