@@ -82,9 +82,7 @@ every image point and endpoint. Mixed data of ``n`` correspondences are ``ceil(n
   ``lens-strong-f250-n100-mixed`` and ``lens-fisheye-f250-n100-mixed``, none at f ≥ 800). Then the
   1 px noise on the distorted pixels. Every pluecker call gets ``pluecker.LensCamera``; the peers do
   not run on them; targets (3) and (4) leave them out, target (7) compares them with their pinhole
-  pairs. The library does not certify through a lens yet (``uncertified_reason`` "not attempted: the
-  certificate covers pinhole cameras only"): their certified fraction is 0 until it does, and target (6)
-  covers them from then on.
+  pairs, and target (6) covers them (the certificate through a lens, kind ``lens_sublevel_set``).
 
 ``--rows`` selects by substring: ``--rows f800-n10`` also selects ``cov-f800-n10-points``,
 ``cov-f800-n10-mixed`` and the ``lens-*-f800-n10-*`` rows; ``--rows lens`` selects the 44 lens rows.
