@@ -368,9 +368,16 @@ mod tests {
                 &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
             )
             .unwrap(),
+            // Off axis, in the ray chart: there J (of D ∘ h) is not symmetric, so an enclosure whose
+            // off-diagonal entries were swapped would show.
+            LensCamera::new(
+                CameraModel::OpenCvFisheye,
+                &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0005],
+            )
+            .unwrap(),
         ];
         let mut rng = Rng::new(13);
-        let mut tightest = f64::INFINITY;
+        let (mut tightest, mut charted) = (f64::INFINITY, 0);
         for lens in &lenses {
             let camera = AnyCamera::from(lens);
             for k in 0..24 {
@@ -385,12 +392,26 @@ mod tests {
                     Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0))
                 };
                 let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
-                let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, false) else {
+                let xc = if lens.model() == CameraModel::OpenCvFisheye {
+                    xc * 2.0 - Vector3::z()
+                } else {
+                    xc
+                };
+                let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
                     continue;
+                };
+                // The chart's map to normalised coordinates: n′ ↦ (w₁/w₃, w₂/w₃), w = Rᵀ (n′, 1).
+                let chart = |n: Vector2<f64>| match lin.ray {
+                    Some(r) => {
+                        let w = r.transpose() * Vector3::new(n.x, n.y, 1.0);
+                        Vector2::new(w.x / w.z, w.y / w.z)
+                    }
+                    None => n,
                 };
                 let jacobian = |n: Vector2<f64>| {
                     let h = 1e-6;
-                    let column = |d: Vector2<f64>| (lens.distort(&(n + d)).0 - lens.distort(&(n - d)).0) / (2.0 * h);
+                    let column =
+                        |d: Vector2<f64>| (lens.distort(&chart(n + d)).0 - lens.distort(&chart(n - d)).0) / (2.0 * h);
                     Matrix2::from_columns(&[column(Vector2::new(h, 0.0)), column(Vector2::new(0.0, h))])
                 };
                 let j_star = jacobian(lin.n);
@@ -416,11 +437,13 @@ mod tests {
                         if sampled > 1e-3 {
                             tightest = tightest.min(eps / sampled);
                         }
+                        charted += lin.ray.is_some() as usize;
                     }
                 }
             }
         }
         assert!(tightest.is_finite(), "no ball was checked");
+        assert!(charted > 0, "no ball in the ray chart was checked");
         eprintln!("least ε / sampled variation {tightest:.3}");
     }
 
