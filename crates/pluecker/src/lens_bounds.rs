@@ -38,7 +38,7 @@
 
 use crate::camera_model::{CameraModel, LensCamera};
 use crate::global::interval::Interval;
-use nalgebra::Vector2;
+use nalgebra::{Matrix2, Vector2};
 use std::ops::{Add, Div, Mul, Sub};
 
 /// The relative widening of every enclosure for the rounding of its evaluation (a few hundred
@@ -374,17 +374,16 @@ pub fn fisheye_ray_enclosure(
         .then_some(out)
 }
 
+/// The entrywise radius `E` of the enclosure `j` about the matrix `j0`: `|J − j0| ≤ E` entrywise for
+/// every `J` in `j` (`j0` need not be its centre).
+pub fn radius_about(j: &IntervalMatrix, j0: &Matrix2<f64>) -> Matrix2<f64> {
+    Matrix2::from_fn(|r, c| (j[r][c].hi - j0[(r, c)]).max(j0[(r, c)] - j[r][c].lo).max(0.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::rng::Rng;
-    use nalgebra::Matrix2;
-
-    /// The entrywise radius `E` of the enclosure `j` about the matrix `j0`: `|J − j0| ≤ E` entrywise for
-    /// every `J` in `j` (`j0` need not be its centre).
-    fn radius_about(j: &IntervalMatrix, j0: &Matrix2<f64>) -> Matrix2<f64> {
-        Matrix2::from_fn(|r, c| (j[r][c].hi - j0[(r, c)]).max(j0[(r, c)] - j[r][c].lo).max(0.0))
-    }
 
     fn lenses() -> Vec<LensCamera> {
         vec![

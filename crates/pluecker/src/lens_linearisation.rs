@@ -26,7 +26,9 @@
 //! `1/cos²θ`. The argument holds in either chart.
 
 use crate::camera_model::{AnyCamera, LensCamera};
-use crate::lens_bounds::{distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, Distortion, Domain};
+use crate::lens_bounds::{
+    distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion, Domain,
+};
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -211,13 +213,14 @@ impl Linearised {
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
         let step = half * (2.0 / pieces as f64);
         let (m_abs, w_inverse_abs) = (self.m.abs(), self.w_inverse.abs());
+        // M (V − J*) W⁻¹ = Σ (V_rc − J*_rc) M e_r e_cᵀ W⁻¹ is linear in V: its four directions.
+        let basis = |r: usize, c: usize| self.m.column(r) * self.w_inverse.row(c);
+        let basis = [[basis(0, 0), basis(0, 1)], [basis(1, 0), basis(1, 1)]];
         let mut eps: f64 = 0.0;
         // Outer sub-boxes first (their variation is the largest), so that the skip below skips most.
-        let order: Vec<usize> = (0..pieces)
-            .map(|k| if k % 2 == 0 { k / 2 } else { pieces - 1 - k / 2 })
-            .collect();
-        for &a in &order {
-            for &b in &order {
+        let outer_first = |k: usize| if k % 2 == 0 { k / 2 } else { pieces - 1 - k / 2 };
+        for a in (0..pieces).map(outer_first) {
+            for b in (0..pieces).map(outer_first) {
                 let lo = self.n - half + Vector2::new(step.x * a as f64, step.y * b as f64);
                 let hi = lo + step;
                 if pieces > 1 && !(self.least_whitened_distance(&lo, &hi) <= rho * (1.0 + 1e-9)) {
@@ -231,17 +234,11 @@ impl Linearised {
                 };
                 // ‖|M| E |W⁻¹|‖_F (E the enclosure's entrywise radius about J*) bounds every vertex's
                 // value: a sub-box below the largest so far cannot raise it.
-                let radius = Matrix2::from_fn(|r, c| {
-                    let entry = enclosure[r][c];
-                    (entry.hi - self.j[(r, c)]).max(self.j[(r, c)] - entry.lo).max(0.0)
-                });
-                if (m_abs * radius * w_inverse_abs).norm() <= eps {
+                if (m_abs * radius_about(&enclosure, &self.j) * w_inverse_abs).norm() <= eps {
                     continue;
                 }
-                // M (V − J*) W⁻¹ = Σ (V_rc − J*_rc) M e_r e_cᵀ W⁻¹ is linear in V: the vertices are the
-                // 16 sums of one end's term per entry, pairs of entries summed first.
-                let term =
-                    |r: usize, c: usize, end: f64| (self.m.column(r) * self.w_inverse.row(c)) * (end - self.j[(r, c)]);
+                // The vertices are the 16 sums of one end's term per entry, pairs of entries summed first.
+                let term = |r: usize, c: usize, end: f64| basis[r][c] * (end - self.j[(r, c)]);
                 let ends = |r: usize, c: usize| [term(r, c, enclosure[r][c].lo), term(r, c, enclosure[r][c].hi)];
                 let (e00, e01, e10, e11) = (ends(0, 0), ends(0, 1), ends(1, 0), ends(1, 1));
                 let first = [e00[0] + e01[0], e00[0] + e01[1], e00[1] + e01[0], e00[1] + e01[1]];
@@ -322,7 +319,7 @@ pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(Distortion
 }
 
 /// The largest singular value of a 2 x 2 matrix: `(√((a + d)² + (b − c)²) + √((a − d)² + (b + c)²)) / 2`.
-fn spectral_norm(m: &Matrix2<f64>) -> f64 {
+pub(crate) fn spectral_norm(m: &Matrix2<f64>) -> f64 {
     let (a, b, c, d) = (m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]);
     // sqrt of the sum of squares rather than hypot (several times slower): the entries are far from
     // overflow, and the relative rounding is covered by the callers' allowance.

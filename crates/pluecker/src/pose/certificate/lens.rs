@@ -262,26 +262,28 @@ impl Surrogate {
             let confined = Linearised::new_in(&any, &known, &whitening, u, &xc, level, SPLITS, false)
                 .ok()
                 .and_then(|lin| Some((lin.confinement(level)?, lin)));
-            let lin = match confined {
+            let (lin, radius, weight) = match confined {
                 Some(((radius, eps), lin)) => {
                     let weight = confine(&lin, eps);
-                    search.points3d.push(*x);
-                    search.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
-                    search_noise.points.push(lin.w * k2_inverse * weight);
-                    points.push(Variation::new(lin, radius));
-                    &points[points.len() - 1].lin
+                    (lin, radius, Some(weight))
                 }
                 None => {
                     let lin = Linearised::new_in(&any, &known, &whitening, u, &xc, 0.0, SPLITS, false)
                         .map_err(|_| edge("points2d", i))?;
                     let radius = lin.first_radius(level);
-                    points.push(Variation::new(lin, radius));
-                    &points[points.len() - 1].lin
+                    (lin, radius, None)
                 }
             };
             rounding2 += lin.rounding.powi(2);
-            surrogate.points2d.push(pixel_of(&(lin.n - lin.w_inverse * lin.e)));
-            noise_out.points.push(lin.w * k2_inverse);
+            let (observed, map) = (pixel_of(&(lin.n - lin.w_inverse * lin.e)), lin.w * k2_inverse);
+            surrogate.points2d.push(observed);
+            noise_out.points.push(map);
+            if let Some(weight) = weight {
+                search.points3d.push(*x);
+                search.points2d.push(observed);
+                search_noise.points.push(map * weight);
+            }
+            points.push(Variation::new(lin, radius));
         }
         let mut endpoints = Vec::with_capacity(corr.n_lines());
         for (i, (s3, s2)) in corr.lines3d.iter().zip(&corr.lines2d).enumerate() {

@@ -106,6 +106,7 @@ use crate::global::branch_and_bound::{
 };
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
+use crate::lens_linearisation::spectral_norm;
 use crate::optim::Objective;
 use lens::{Slack, Surrogate};
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
@@ -2010,15 +2011,13 @@ impl RayCurvature {
                     SMatrix::<f64, 2, 3>::new(1.0 / p.z, 0.0, -p.x / (p.z * p.z), 0.0, 1.0 / p.z, -p.y / (p.z * p.z));
                 let pt = tangent_map(&y) * t;
                 let g = map * d_pi * pt;
-                let gg = g * g.transpose();
-                let (mean, half) = (0.5 * (gg[(0, 0)] + gg[(1, 1)]), 0.5 * (gg[(0, 0)] - gg[(1, 1)]));
                 PointRay {
                     y_norm: y.norm(),
                     p,
                     depth_rate: pt.row(2).norm(),
                     gram: g.transpose() * g,
                     map_norm: norm2x2(map).1,
-                    rate: (mean + half.hypot(gg[(0, 1)])).max(0.0).sqrt() * (1.0 + 1e-12),
+                    rate: spectral_norm(&(g * g.transpose())).sqrt() * (1.0 + 1e-12),
                 }
             })
             .collect();
@@ -2450,10 +2449,9 @@ fn certify_pinhole(
     let level = lens.map_or(cost, |l| l.slack.to_surrogate(cost));
     // Through a lens the search runs on step 1's weighted observations, step 4 on the surrogate's.
     let search_corr = lens.map_or(corr, |l| l.search_corr());
-    let whole = match lens.map(|_| Problem::without_depths(camera, corr, level)) {
-        None => None,
-        Some(Ok(p)) => Some(p),
-        Some(Err(why)) => return Certification::none(why),
+    let whole = match lens.map(|_| Problem::without_depths(camera, corr, level)).transpose() {
+        Ok(whole) => whole,
+        Err(why) => return Certification::none(why),
     };
     let problem = match Problem::new(camera, search_corr, level) {
         Ok(p) => p,
@@ -2487,8 +2485,8 @@ fn certify_pinhole(
 }
 
 /// [`certify`] on prepared data (`cost` the cost at `pose`, through the lens of `lens` when given):
-/// the search over `problem`, step 4 over `local` (the same but where a lens's search leaves out
-/// points).
+/// the search over `problem`, step 4 over `local` (the same problem; through a lens the surrogate's,
+/// where the search's observations are step 1's weighted ones).
 fn certify_problem(
     problem: &Problem,
     local: &Problem,
