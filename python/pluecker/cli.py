@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -34,6 +33,7 @@ from typing import Any, NoReturn, Sequence
 import numpy as np
 
 import pluecker
+from pluecker import _paths
 from pluecker.datasets import DataNotFoundError
 from pluecker.jsonio import dumps, jsonable
 
@@ -314,6 +314,18 @@ def _fail(command: str, message: str) -> int:
     return 2
 
 
+def _check_output(flag: str, out: str | Path, inputs: dict[str, Any], replaced: Sequence[str] = (),
+                  folder: bool = True) -> None:
+    """An ``InputError`` before any work when the output ``out`` (given as ``flag``) would overwrite,
+    replace or write into an input (:func:`pluecker._paths.output_conflict`: symlinks, ``.`` and ``..``
+    resolved), or cannot be written (:func:`pluecker._paths.output_problem`); nothing is made."""
+    if (conflict := _paths.output_conflict(out, inputs, replaced)) is not None:
+        raise InputError(f"{flag} {conflict}: give another {'folder' if folder else 'file'} (the inputs are never "
+                         "overwritten)")
+    if (problem := _paths.output_problem(out, folder=folder)) is not None:
+        raise InputError(f"cannot write {flag} {out}: {problem}")
+
+
 # --------------------------------------------------------------------------------------------------
 # pose
 
@@ -468,13 +480,12 @@ def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
     """The keywords of ``estimate_pose``: ``options``, the ``PoseOptions`` from the file's ``"options"``
     object, its top-level ``"method"`` and ``"ransac"`` (``true`` or an object of ``RansacOptions``
     fields), and the flags. ``"certify"`` in ``"options"`` is ``true``/``false`` or an object of
-    ``CertifyOptions`` fields."""
+    ``CertifyOptions`` fields. The file's options are checked first, as they are: a flag then overrides
+    a valid setting but never hides an invalid one (``--certify`` turns the certificate on and keeps the
+    file's ``certify`` settings, such as its ``max_nodes``)."""
     fields = _object(doc, "options")
     if "initial_pose" in fields:
         fields["initial_pose"] = _initial_pose(fields["initial_pose"])
-    for flag, field in POSE_FLAGS.items():
-        if getattr(args, flag) is not None:
-            fields[field] = getattr(args, flag)
     certify = fields.get("certify")
     if not isinstance(certify, (bool, dict, type(None))):
         raise InputError(f"'options.certify' must be true, false or a JSON object, got {json.dumps(certify)[:80]}")
@@ -485,25 +496,34 @@ def _options(doc: dict[str, Any], args: argparse.Namespace) -> dict[str, Any]:
     robust = doc.get("ransac", fields.pop("ransac", None))
     if not isinstance(robust, (bool, dict, type(None))):
         raise InputError(f"'ransac' must be true, false or a JSON object, got {json.dumps(robust)[:80]}")
-    ransac_fields = robust if isinstance(robust, dict) else {}
-    for flag, field in RANSAC_FLAGS.items():
-        if getattr(args, flag) is not None:
-            ransac_fields[field] = getattr(args, flag)
-            robust = robust or True
-    if args.robust:
-        robust = robust or True
+    ransac_fields = dict(robust) if isinstance(robust, dict) else {}
     if robust:
         fields["ransac"] = _options_class(pluecker.RansacOptions, "ransac", ransac_fields)
-    method = args.method or doc.get("method") or fields.get("method")
-    if method is not None and method not in METHODS:
-        raise InputError(f"unknown method {json.dumps(method)}; expected one of {', '.join(METHODS)}")
+    method = doc.get("method") or fields.get("method")
+    for given in (method, args.method):
+        if given is not None and given not in METHODS:
+            raise InputError(f"unknown method {json.dumps(given)}; expected one of {', '.join(METHODS)}")
     if method is not None:
         fields["method"] = method
-    return {"options": _options_class(pluecker.PoseOptions, "options", fields)}
+    options = _options_class(pluecker.PoseOptions, "options", fields)
+    # The flags, over the file's checked options.
+    for flag, field in POSE_FLAGS.items():
+        if getattr(args, flag) is not None and field != "certify":
+            setattr(options, field, getattr(args, flag))
+    if args.certify and options.certify is None:
+        options.certify = pluecker.CertifyOptions()
+    flagged = {field: getattr(args, flag) for flag, field in RANSAC_FLAGS.items() if getattr(args, flag) is not None}
+    if flagged or args.robust:
+        options.ransac = _options_class(pluecker.RansacOptions, "ransac", {**ransac_fields, **flagged})
+    if args.method is not None:
+        options.method = args.method
+    return {"options": options}
 
 
 def _pose(args: argparse.Namespace) -> int:
     try:
+        if args.output:
+            _check_output("-o", args.output, {"INPUT": None if args.input == "-" else args.input}, folder=False)
         doc = _read_document(args.input)
         camera = _camera(doc)
         arrays = _correspondences(doc)
@@ -514,7 +534,7 @@ def _pose(args: argparse.Namespace) -> int:
     text = dumps(jsonable(result.to_dict())) + "\n"
     if args.output:
         try:
-            Path(args.output).write_text(text, encoding="utf-8")
+            _paths.write_text(args.output, text)
         except OSError as exc:
             return _fail("pose", f"cannot write {args.output}: {exc.strerror or exc}")
     else:
@@ -541,66 +561,46 @@ def _client(command: str, address: str) -> Any:
         raise InputError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
-def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -> int:
-    """``--colmap --scheduler``: the observations to Parquet under --out, the job on the cluster
-    (pluecker.distributed.triangulate), the tables back into the model, written as without Dask."""
+def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -> Any:
+    """``--colmap --scheduler``: the observations to Parquet in a scratch folder beside --out, the job on
+    the cluster (pluecker.distributed.triangulate), the tables back as a ``Retriangulation`` (written as
+    without Dask). Returns it and the summary line."""
     import pyarrow.parquet as pq
 
     from pluecker import colmap, distributed
 
-    try:
-        client = _client("triangulate", args.scheduler)
-    except InputError as exc:
-        return _fail("triangulate", str(exc))
-    with client:
+    client = _client("triangulate", args.scheduler)
+    # Scratch space on the storage of --out (the workers see it), removed whatever happens.
+    with client, _paths.staged(args.out, publish=False) as scratch:
+        job = scratch.path
         cameras, table = colmap.observation_table(reconstruction, args.sigma)
-        job = args.out / "_job"
-        (job / "input").mkdir(parents=True, exist_ok=True)
+        (job / "input").mkdir()
         pq.write_table(table, job / "input" / "observations.parquet", row_group_size=1_000_000)
         options = pluecker.TriangulationOptions(method=args.method)
         if args.outlier_threshold is not None:
             options.outlier_threshold = args.outlier_threshold / args.sigma
-        summary = distributed.triangulate(job / "input" / "observations.parquet", cameras, job, client=client,
-                                          options=options, progress=sys.stderr.isatty())
-    run = colmap.retriangulation_of_job(distributed.read_points(job), distributed.read_observations(job))
-    distributed._remove_tree(job)
-    files = colmap.write(reconstruction, run, args.out, text=args.text)
-    print(f"{args.colmap}: {summary.tracks} points on {summary.workers} Dask workers in {summary.seconds:.1f} s, "
-          f"{summary.statuses.get('success', 0)} triangulated, {summary.certified} certified ({args.method})\n"
-          f"wrote {len(files)} files to {args.out}: " + ", ".join(f.name for f in files))
-    return 0
+        summary = distributed.triangulate(job / "input" / "observations.parquet", cameras, job / "output",
+                                          client=client, options=options, progress=sys.stderr.isatty())
+        run = colmap.retriangulation_of_job(distributed.read_points(job / "output"),
+                                            distributed.read_observations(job / "output"))
+    line = (f"{args.colmap}: {summary.tracks} points on {summary.workers} Dask workers in {summary.seconds:.1f} s, "
+            f"{summary.statuses.get('success', 0)} triangulated, {summary.certified} certified ({args.method})")
+    return run, line
 
 
-def _unwritable(folder: Path) -> str | None:
-    """Why the output folder ``folder`` cannot be written (made if missing), or ``None`` when it can: so
-    that the error says so before any work, not as a failure to read the inputs."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        return exc.strerror or str(exc)
-    if not folder.is_dir():
-        return "not a folder"
-    if not os.access(folder, os.W_OK | os.X_OK):
-        return "permission denied"
-    return None
-
-
-def _localize_model(path: Path) -> Any:
-    """The ``--colmap`` model as a ``pluecker.distributed.ColmapModel`` (an ``InputError`` when pycolmap
-    is missing or the folder holds no readable model)."""
-    from pluecker import colmap, distributed
+def _read_model(flag: str, path: Path) -> Any:
+    """The COLMAP model of ``flag`` (``--colmap``) as a ``pycolmap.Reconstruction``: an ``InputError``
+    naming what is missing or broken (:func:`pluecker.colmap.read`), or that pycolmap is missing."""
+    from pluecker import colmap
 
     try:
-        pycolmap = colmap._pycolmap()
+        return colmap.read(path)
     except ImportError as exc:
         raise InputError(str(exc)) from None
-    if not path.is_dir():
-        raise InputError(f"--colmap {path}: not a directory")
-    try:
-        reconstruction = pycolmap.Reconstruction(str(path))
-    except Exception as exc:  # pycolmap raises its own exception types for unreadable models
-        raise InputError(f"--colmap {path}: cannot read a COLMAP model: {exc}") from None
-    return distributed.ColmapModel.from_reconstruction(reconstruction)
+    except OSError as exc:
+        raise InputError(f"{flag} {exc}") from None
+    except colmap.ModelError as exc:
+        raise InputError(f"{flag} {exc}") from None
 
 
 def _localize(args: argparse.Namespace) -> int:
@@ -612,18 +612,22 @@ def _localize(args: argparse.Namespace) -> int:
         distributed._pyarrow()
     except ImportError as exc:
         return _fail("localize", str(exc))
-    for path in (args.queries, args.points, args.lines):
+    for flag, path in (("QUERIES", args.queries), ("POINTS", args.points), ("--lines", args.lines)):
         if path is not None and not path.exists():
-            return _fail("localize", f"{path}: no such file or directory")
+            return _fail("localize", f"{flag} {path}: no such file or directory")
+    if args.colmap is not None and (problem := _paths.folder_problem(args.colmap)) is not None:
+        return _fail("localize", f"--colmap {args.colmap}: {problem}")
     fields = {field: getattr(args, flag) for flag, field in LOCALIZE_RANSAC_FLAGS.items()
               if getattr(args, flag) is not None}
     try:
+        _check_output("--out", args.out, {"QUERIES": args.queries, "POINTS": args.points, "--lines": args.lines,
+                                          "--colmap": args.colmap}, replaced=("poses", "matches"))
         ransac = pluecker.RansacOptions(**fields)
-        model = _localize_model(args.colmap) if args.colmap is not None else None
+        model = None
+        if args.colmap is not None:
+            model = distributed.ColmapModel.from_reconstruction(_read_model("--colmap", args.colmap))
     except (InputError, pluecker.PlueckerError) as exc:
         return _fail("localize", str(exc))
-    if (problem := _unwritable(args.out)) is not None:
-        return _fail("localize", f"cannot write --out {args.out}: {problem}")
     client = None
     if args.scheduler is not None:
         try:
@@ -634,6 +638,8 @@ def _localize(args: argparse.Namespace) -> int:
         summary = distributed.localize(args.queries, args.points, args.out, line_matches=args.lines, client=client,
                                        seed=args.seed, ransac=ransac, reconstruction=model,
                                        progress=client is not None and sys.stderr.isatty())
+    except pluecker.PlueckerError as exc:  # a table without its columns, of the wrong types, a query twice
+        return _fail("localize", str(exc))
     except (KeyError, ValueError, OSError) as exc:
         return _fail("localize", f"cannot read the tables: {exc}")
     finally:
@@ -653,6 +659,13 @@ def _localize(args: argparse.Namespace) -> int:
     return 0
 
 
+#: The files ``pluecker triangulate --colmap`` writes into --out (either format of the model).
+COLMAP_OUTPUT_FILES = tuple(f"{name}.{ext}" for name in ("rigs", "cameras", "frames", "images", "points3D")
+                            for ext in ("bin", "txt")) + ("points3D.ply", "points3D_triangulation.npz")
+#: The files ``pluecker triangulate FOLDER`` writes into --out.
+VGG_OUTPUT_FILES = ("points.json", "points.ply", "lines.json", "lines.ply")
+
+
 def _triangulate_colmap(args: argparse.Namespace) -> int:
     """``pluecker triangulate --colmap DIR --out DIR``: re-triangulate every track of a COLMAP model."""
     from tqdm import tqdm
@@ -664,44 +677,44 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
     if args.lines or args.views:
         return _fail("triangulate", "--lines and --views apply to VGG folders, not to --colmap")
     try:
-        pycolmap = colmap._pycolmap()
+        colmap._pycolmap()
     except ImportError as exc:
         return _fail("triangulate", str(exc))
-    if not args.colmap.is_dir():
-        return _fail("triangulate", f"{args.colmap}: not a directory")
-    if args.out.resolve() == args.colmap.resolve():
-        return _fail("triangulate", f"--out {args.out} is the input model's folder: give another folder (the "
-                     "input model is never overwritten)")
+    if (problem := _paths.folder_problem(args.colmap)) is not None:
+        return _fail("triangulate", f"--colmap {args.colmap}: {problem}")
     try:
-        reconstruction = pycolmap.Reconstruction(str(args.colmap))
-    except Exception as exc:  # pycolmap raises its own exception types for unreadable models
-        return _fail("triangulate", f"{args.colmap}: cannot read a COLMAP model: {exc}")
+        _check_output("--out", args.out, {"--colmap": args.colmap}, replaced=COLMAP_OUTPUT_FILES)
+        reconstruction = _read_model("--colmap", args.colmap)
+    except InputError as exc:
+        return _fail("triangulate", str(exc))
     if reconstruction.num_points3D() == 0:
         return _fail("triangulate", f"{args.colmap}: the model has no 3-D points to re-triangulate")
-    if args.scheduler is not None:
-        try:
-            return _triangulate_colmap_on_dask(args, reconstruction)
-        except pluecker.PlueckerError as exc:
-            return _fail("triangulate", str(exc))
     started = time.perf_counter()
-    # A bar on a terminal only (tqdm's disable=None); the summary line below goes to logs too.
-    with tqdm(total=reconstruction.num_points3D(), desc="points", unit="pt", disable=None, leave=False) as bar:
-        report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
-        try:
-            run = colmap.retriangulate(reconstruction, sigma_px=args.sigma,
-                                       options=pluecker.TriangulationOptions(method=args.method),
-                                       outlier_threshold_px=args.outlier_threshold, progress=report)
-        except pluecker.PlueckerError as exc:
-            return _fail("triangulate", str(exc))
-    print(f"points: {len(run.point3D_ids)} in {time.perf_counter() - started:.1f} s", file=sys.stderr)
+    try:
+        if args.scheduler is not None:
+            run, first = _triangulate_colmap_on_dask(args, reconstruction)
+        else:
+            # A bar on a terminal only (tqdm's disable=None); the summary line below goes to logs too.
+            with tqdm(total=reconstruction.num_points3D(), desc="points", unit="pt", disable=None,
+                      leave=False) as bar:
+                report = (lambda done: bar.update(done - bar.n)) if not bar.disable else None
+                run = colmap.retriangulate(reconstruction, sigma_px=args.sigma,
+                                           options=pluecker.TriangulationOptions(method=args.method),
+                                           outlier_threshold_px=args.outlier_threshold, progress=report)
+            print(f"points: {len(run.point3D_ids)} in {time.perf_counter() - started:.1f} s", file=sys.stderr)
+            status = np.asarray(run.result.status)
+            first = (f"{args.colmap}: {len(status)} points, {int((status == 'success').sum())} triangulated, "
+                     f"{int(np.sum(run.result.certified))} certified ({args.method})")
+    except (InputError, pluecker.PlueckerError) as exc:
+        return _fail("triangulate", str(exc))
+    stale = colmap.stale_model_files(args.out, args.text)
     try:
         files = colmap.write(reconstruction, run, args.out, text=args.text)
     except OSError as exc:
         return _fail("triangulate", f"cannot write to {args.out}: {exc.strerror or exc}")
     result = run.result
     status = np.asarray(result.status)
-    lines = [f"{args.colmap}: {len(status)} points, {int((status == 'success').sum())} triangulated, "
-             f"{int(np.sum(result.certified))} certified ({args.method})"]
+    lines = [first]
     if run.skipped:
         lines.append(f"left out: {len(run.skipped)} (" + "; ".join(run.skipped[:3])
                      + ("; …" if len(run.skipped) > 3 else "") + ")")
@@ -714,6 +727,9 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
             f"{len(ids)} {s} (point3D_id {', '.join(map(str, ids[:5]))}{', …' if len(ids) > 5 else ''})"
             for s, ids in others.items()))
     lines.append(f"wrote {len(files)} files to {args.out}: " + ", ".join(f.name for f in files))
+    if stale:
+        lines.append(f"removed the {'binary' if args.text else 'text'} model of an earlier run from {args.out}: "
+                     + ", ".join(f.name for f in stale))
     print("\n".join(lines))
     return 0
 
@@ -734,12 +750,16 @@ def _triangulate(args: argparse.Namespace) -> int:
             return _fail("triangulate", f"{flag} applies to --colmap models, not to VGG folders")
 
     try:
+        if args.out is not None and _paths.folder_problem(args.folder) is None:
+            _check_output("--out", args.out, {"FOLDER": args.folder}, replaced=VGG_OUTPUT_FILES)
         options = pluecker.TriangulationOptions(method=args.method)
         run = triangulate_folder.run(args.folder, views=args.views, options=options, lines=args.lines,
                                      sigma=args.sigma)
+        out = args.out if args.out is not None else Path("results") / "triangulate" / run.name
+        if args.out is None:  # the default, named after the sequence once it is read
+            _check_output("--out", out, {"FOLDER": args.folder}, replaced=VGG_OUTPUT_FILES)
     except (InputError, pluecker.PlueckerError, triangulate_folder.FolderError) as exc:
         return _fail("triangulate", str(exc))
-    out = args.out if args.out is not None else Path("results") / "triangulate" / run.name
     try:
         files = triangulate_folder.write(run, out)
     except OSError as exc:
@@ -756,6 +776,11 @@ def _reproduce(args: argparse.Namespace) -> int:
     from pluecker import experiments
 
     module = experiments.load(args.name)
+    out = args.out if args.out is not None else module.DEFAULT_OUT
+    try:
+        _check_output("--out", out, {})
+    except InputError as exc:
+        return _fail("reproduce", str(exc))
     try:
         import matplotlib  # noqa: F401
         plots = True
@@ -763,7 +788,6 @@ def _reproduce(args: argparse.Namespace) -> int:
         plots = False
         print("pluecker reproduce: warning: matplotlib is not installed; writing tables without figures "
               "(pip install pluecker[plots] provides it)", file=sys.stderr)
-    out = args.out if args.out is not None else module.DEFAULT_OUT
     try:
         report = module.reproduce(out, trials=args.trials, seed=args.seed, quick=args.quick,
                                   show_progress=False if args.quiet else None, plots=plots)

@@ -18,17 +18,21 @@ pycolmap objects import it when called and say how to install it when it is miss
 from __future__ import annotations
 
 import copy
+import struct
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from . import _core
-from ._arguments import check_sigma
+from ._arguments import check_sigma, number
+from ._paths import require_folder, staged
 
 
 class ModelError(_core.PlueckerError):
-    """A COLMAP model that cannot be re-triangulated as it stands: no 3-D points, or an observation whose
-    ``point3D_id`` names no point of the model. The message names COLMAP's ids."""
+    """A COLMAP model that cannot be read or re-triangulated as it stands: a folder without a model or
+    with a broken file (:func:`read`, naming the file), no 3-D points, no camera or image that can be
+    used, or an observation whose ``point3D_id`` names no point of the model. The message names COLMAP's
+    ids."""
 
 
 def _pycolmap() -> Any:
@@ -79,18 +83,184 @@ def rigid_from_pose(R: Any, t: Any) -> Any:
 
 def lens_camera(camera: Any) -> _core.LensCamera:
     """The ``pluecker.LensCamera`` of a ``pycolmap.Camera``: same model, same parameters. A camera that
-    is not one (``EQUIRECTANGULAR``, wrong parameters) raises the error of ``LensCamera`` naming its
-    ``camera_id``."""
+    is not one (``EQUIRECTANGULAR``, wrong parameters, a zero focal length) raises the error of
+    ``LensCamera`` naming its ``camera_id``; anything else than a camera ``InvalidOptionError``."""
+    if isinstance(camera, _core.LensCamera):
+        return camera
+    if not (hasattr(camera, "model") and hasattr(camera, "params") and hasattr(camera, "camera_id")):
+        raise _core.InvalidOptionError(f"camera: expected a pycolmap.Camera or a pluecker.LensCamera, got "
+                                       f"{_shown(camera)}")
     try:
         return _core.LensCamera(camera.model.name, list(camera.params))
     except _core.PlueckerError as error:
         raise type(error)(f"camera_id {camera.camera_id}: {error}") from error
 
 
+def _shown(value: Any) -> str:
+    """A value as a message shows it: its repr, cut to 60 characters."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def colmap_camera(camera: _core.LensCamera, width: int, height: int) -> Any:
     """The ``pycolmap.Camera`` of a ``pluecker.LensCamera``, for an image of ``width`` x ``height`` pixels."""
     pycolmap = _pycolmap()
     return pycolmap.Camera(model=camera.model, width=width, height=height, params=list(camera.params))
+
+
+#: The files of a COLMAP model, in the order COLMAP reads them; ``rigs`` and ``frames`` are optional
+#: (a model written before COLMAP 3.12 has neither), each in binary (``.bin``) or text (``.txt``).
+MODEL_FILES = ("rigs", "cameras", "frames", "images", "points3D")
+REQUIRED_MODEL_FILES = ("cameras", "images", "points3D")
+
+
+def model_format(folder: Any) -> str | None:
+    """``"bin"`` or ``"txt"``: the format COLMAP reads the model in ``folder`` in (binary when its three
+    required ``.bin`` files are there, as COLMAP decides), or ``None`` when neither is complete."""
+    from pathlib import Path
+
+    for ext in ("bin", "txt"):
+        if all((Path(folder) / f"{name}.{ext}").is_file() for name in REQUIRED_MODEL_FILES):
+            return ext
+    return None
+
+
+def read(path: Any) -> Any:
+    """The COLMAP model (binary or text, rigs and frames optional) in the folder ``path``, as a
+    ``pycolmap.Reconstruction``. ``FileNotFoundError`` / ``NotADirectoryError`` when ``path`` is not a
+    folder; :class:`ModelError` saying what is missing (the model's files by name) or broken (the file,
+    and where a binary one ends or goes wrong), never pycolmap's own words for it."""
+    pycolmap = _pycolmap()
+    folder = require_folder(path)
+    ext = model_format(folder)
+    if ext is None:
+        present = sorted(p.name for p in folder.iterdir() if p.stem in MODEL_FILES and p.suffix in (".bin", ".txt"))
+        if not present:
+            raise ModelError(f"{path}: not a COLMAP model: no cameras, images and points3D files (.bin or .txt) "
+                             "in the folder")
+        missing = [f"{name}.{e}" for e in ("bin", "txt") for name in REQUIRED_MODEL_FILES
+                   if any(p.endswith(f".{e}") for p in present) and not (folder / f"{name}.{e}").is_file()]
+        raise ModelError(f"{path}: not a complete COLMAP model: {', '.join(missing)} missing (found "
+                         f"{', '.join(present)}; a model needs cameras, images and points3D, rigs and frames are "
+                         "optional)")
+    # A binary model is checked first: pycolmap reads past the end of a truncated file, and then gives
+    # std::bad_alloc, loops without end or reads the zeros as a model.
+    problem = _binary_model_problem(folder) if ext == "bin" else None
+    if problem is not None:
+        raise ModelError(problem)
+    try:
+        return pycolmap.Reconstruction(str(folder))
+    except Exception as exc:  # pycolmap raises its own types (RuntimeError, ValueError, MemoryError, ...)
+        words = " ".join(str(exc).split()) or type(exc).__name__
+        raise ModelError(f"{path}: cannot read the COLMAP {'binary' if ext == 'bin' else 'text'} model: "
+                         f"{words[:300]}") from None
+
+
+class _Truncated(Exception):
+    """A binary model file ends inside a record."""
+
+
+class _Bytes:
+    """A little-endian reader over ``data`` that raises :class:`_Truncated` instead of reading past it."""
+
+    def __init__(self, data: bytes) -> None:
+        self.data, self.at = data, 0
+
+    def skip(self, size: int) -> None:
+        if size < 0 or self.at + size > len(self.data):
+            raise _Truncated
+        self.at += size
+
+    def read(self, fmt: struct.Struct) -> tuple:
+        if self.at + fmt.size > len(self.data):
+            raise _Truncated
+        values = fmt.unpack_from(self.data, self.at)
+        self.at += fmt.size
+        return values
+
+    def name(self) -> None:
+        end = self.data.find(b"\0", self.at)
+        if end < 0:
+            raise _Truncated
+        self.at = end + 1
+
+
+_U8, _U32, _U64 = struct.Struct("<B"), struct.Struct("<I"), struct.Struct("<Q")
+_I32_U32, _U32_I32, _U32_U32 = struct.Struct("<iI"), struct.Struct("<Ii"), struct.Struct("<II")
+#: COLMAP's sensor types (``SensorType``: invalid, camera, IMU).
+_SENSOR_TYPES = (-1, 0, 1)
+
+
+def _camera_parameter_counts() -> dict[int, int]:
+    """COLMAP's camera model ids and their number of parameters."""
+    pycolmap = _pycolmap()
+    return {int(m): len(pycolmap.Camera.create_from_model_id(0, m, 1.0, 1, 1).params)
+            for m in pycolmap.CameraModelId.__members__.values() if int(m) >= 0}
+
+
+def _record(kind: str, f: _Bytes, counts: dict[int, int]) -> tuple[int, str | None]:
+    """Reads one record of a binary model file of ``kind`` (COLMAP's ``Write*Binary``); returns its id
+    and what is wrong with it beyond its length (an unknown camera model or sensor type), else ``None``."""
+    if kind == "rigs":
+        rig_id, sensors = f.read(_U32_U32)
+        for k in range(sensors):
+            sensor_type, _ = f.read(_I32_U32)
+            if sensor_type not in _SENSOR_TYPES:
+                return rig_id, f"an unknown sensor type {sensor_type}"
+            if k > 0:  # a sensor other than the reference one: whether it has a pose, and the pose
+                (has_pose,) = f.read(_U8)
+                f.skip(7 * 8 if has_pose else 0)
+        return rig_id, None
+    if kind == "cameras":
+        camera_id, model = f.read(_U32_I32)
+        if model not in counts:
+            return camera_id, f"an unknown camera model id {model}"
+        f.skip(16 + 8 * counts[model])
+        return camera_id, None
+    if kind == "frames":
+        (frame_id,) = f.read(_U32)
+        f.skip(4 + 7 * 8)
+        f.skip(16 * f.read(_U32)[0])
+        return frame_id, None
+    if kind == "images":
+        (image_id,) = f.read(_U32)
+        f.skip(7 * 8 + 4)
+        f.name()
+        f.skip(24 * f.read(_U64)[0])
+        return image_id, None
+    (point_id,) = f.read(_U64)  # points3D
+    f.skip(3 * 8 + 3 + 8)
+    f.skip(8 * f.read(_U64)[0])
+    return point_id, None
+
+
+def _binary_model_problem(folder: Any) -> str | None:
+    """What is wrong with the first binary model file of ``folder`` that does not read as COLMAP writes
+    it (one line naming the file: where it ends inside a record, bytes after its last one, an unknown
+    camera model or sensor type, an id listed twice), or ``None``. Checked before pycolmap reads the
+    files, which reads past the end of a truncated one (and may then loop or allocate without end)."""
+    counts = _camera_parameter_counts()
+    for kind in MODEL_FILES:
+        path = folder / f"{kind}.bin"
+        if not path.is_file():
+            continue
+        f = _Bytes(path.read_bytes())
+        n, k, seen = 0, 0, set()
+        try:
+            (n,) = f.read(_U64)
+            for k in range(n):
+                key, wrong = _record(kind, f, counts)
+                if wrong is not None:
+                    return f"{path}: record {k + 1} of {n} has {wrong}: not a COLMAP model file"
+                if key in seen:
+                    return f"{path}: record {k + 1} of {n}: its id {key} is listed twice"
+                seen.add(key)
+        except _Truncated:
+            where = f"record {k + 1} of {n}" if f.at >= 8 else "its record count"
+            return f"{path}: truncated: the file ({len(f.data)} bytes) ends inside {where}"
+        if f.at != len(f.data):
+            return f"{path}: {len(f.data) - f.at} bytes after its {n} records: not a COLMAP model file"
+    return None
 
 
 class Retriangulation:
@@ -100,8 +270,10 @@ class Retriangulation:
     ``point3D_ids[i]``), and the observations as ``observation_point`` (m,) (a row of
     ``point3D_ids``), ``observation_image`` (m,) and ``observation_point2D`` (m,) (COLMAP's image id and
     ``point2D_idx``); with an outlier threshold, ``result.inliers`` (m,) flags them. ``skipped`` lists,
-    with COLMAP's ids, what was left out: a camera whose model is not handled (its observations), or
-    a pixel outside the invertible region of its camera's distortion.
+    with COLMAP's ids, what was left out: the cameras that cannot be used (a model that is not handled,
+    a zero focal length; one message per reason, naming every camera_id) and the images whose pose
+    cannot be used (likewise), with their observations; a pixel that is not finite or lies outside the
+    invertible region of its camera's distortion (one message each).
     """
 
     def __init__(self, point3D_ids: np.ndarray, result: Any, observation_point: np.ndarray,
@@ -133,8 +305,8 @@ class _Observations(NamedTuple):
 
 
 def _has_preimage(lens: _core.LensCamera, xy: np.ndarray) -> np.ndarray:
-    """Which pixels have a preimage through ``lens`` (``lens.unproject`` succeeds). The pixels of an
-    image go in one call; only when one of them is refused are they tried one by one."""
+    """Which (finite) pixels have a preimage through ``lens`` (``lens.unproject`` succeeds). The pixels
+    of an image go in one call; only when one of them is refused are they tried one by one."""
     try:
         lens.unproject(xy)
         return np.ones(len(xy), dtype=bool)
@@ -148,33 +320,89 @@ def _has_preimage(lens: _core.LensCamera, xy: np.ndarray) -> np.ndarray:
         return kept
 
 
+def _ids(name: str, ids: list[int]) -> str:
+    """``camera_id 3`` or ``camera_id 3, 5, 8`` (the first 20, then how many more)."""
+    shown = ", ".join(map(str, ids[:20])) + (f", … ({len(ids)} in all)" if len(ids) > 20 else "")
+    return f"{name} {shown}"
+
+
+def _grouped(name: str, problems: list[tuple[int, str, int]]) -> list[str]:
+    """One message per reason of ``problems`` (id, reason, observations lost): the ids that share it,
+    the reason once, and the observations not used. A reason may start with a label for the ids, such as
+    ``(OPENCV): ``."""
+    by_reason: dict[str, list[tuple[int, int]]] = {}
+    for key, reason, count in problems:
+        by_reason.setdefault(reason, []).append((key, count))
+    return [f"{_ids(name, [k for k, _ in items])}{'' if reason.startswith(' (') else ': '}{reason}; "
+            f"{'its' if len(items) == 1 else 'their'} {sum(c for _, c in items)} observations not used"
+            for reason, items in by_reason.items()]
+
+
+def _camera_problem(camera: Any) -> tuple[_core.LensCamera | None, str]:
+    """The ``LensCamera`` of a model's camera, or ``None`` and why it cannot be used (its model and the
+    error of ``LensCamera``: a model pluecker does not handle, a zero focal length, ...)."""
+    try:
+        return lens_camera(camera), ""
+    except _core.PlueckerError as exc:
+        reason = exc.__cause__ or exc  # lens_camera's own error, without its camera_id prefix
+        return None, f" ({camera.model.name}): {reason}"
+
+
+def _image_problem(lens: _core.LensCamera, image: Any) -> tuple[np.ndarray | None, str]:
+    """The camera matrix ``K [R | t]`` (3, 4) of a posed image through its camera's pinhole part, or
+    ``None`` and why it cannot be used (a pose that is not finite, a matrix that overflows)."""
+    R, t = pose_from_rigid(image.cam_from_world())
+    if not (np.all(np.isfinite(R)) and np.all(np.isfinite(t))):
+        return None, "its pose cam_from_world is not finite"
+    with np.errstate(over="ignore", invalid="ignore"):
+        try:
+            P = np.asarray(lens.pinhole.P(R, t), dtype=float)
+        except _core.PlueckerError as exc:
+            return None, f"its pose cam_from_world is not usable: {exc}"
+    if not np.all(np.isfinite(P)):
+        return None, f"K [R | t] overflows double precision (|t| = {number(np.linalg.norm(t))})"
+    return P, ""
+
+
 def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     """Every observation of a model's 3-D points with its image's camera (:func:`retriangulate`), sorted
-    by point. An observation whose camera model is not handled, or whose pixel has no preimage through
-    the camera's distortion, is left out and named in ``skipped``; a dangling ``point3D_id`` or a model
-    without points is a :class:`ModelError`."""
+    by point. A camera that cannot be used (a model that is not handled, a zero focal length), an image
+    whose pose is not usable, and a pixel that is not finite or has no preimage through the camera's
+    distortion are left out and named in ``skipped`` (cameras and images grouped by reason); a model
+    without points or without a usable camera or image, or a dangling ``point3D_id``, is a
+    :class:`ModelError`."""
     check_sigma(sigma_px)
     if reconstruction.num_points3D() == 0:
         raise ModelError("reconstruction: the model has no 3-D points to re-triangulate")
     ids = np.sort(np.fromiter(reconstruction.point3D_ids(), dtype=np.int64))
     posed = sorted((image for image in reconstruction.images.values() if image.has_pose),
                    key=lambda image: image.image_id)
-    lenses, skipped = {}, []
+    lenses, bad_cameras = {}, []
     for camera_id in sorted({image.camera_id for image in posed}):
-        camera = reconstruction.cameras[camera_id]
-        try:
-            lenses[camera_id] = lens_camera(camera)
-        except _core.PlueckerError as exc:
+        lens, reason = _camera_problem(reconstruction.cameras[camera_id])
+        if lens is None:
             count = sum(image.num_points3D for image in posed if image.camera_id == camera_id)
-            reason = exc.__cause__ or exc  # lens_camera's own error, without its camera_id prefix
-            skipped.append(f"camera_id {camera_id} ({camera.model.name}): {reason}; its {count} observations not used")
+            bad_cameras.append((camera_id, reason, count))
+        else:
+            lenses[camera_id] = lens
+    skipped = _grouped("camera_id", bad_cameras)
     if posed and not lenses:
         raise ModelError("reconstruction: no camera of the model can be used: " + "; ".join(skipped))
-    images = [image for image in posed if image.camera_id in lenses]
+    images, matrices, bad_images = [], [], []
+    for image in posed:
+        if image.camera_id not in lenses:
+            continue
+        P, reason = _image_problem(lenses[image.camera_id], image)
+        if P is None:
+            bad_images.append((image.image_id, reason, image.num_points3D))
+        else:
+            images.append(image)
+            matrices.append(P)
+    skipped += _grouped("image_id", bad_images)
+    if bad_images and not images:
+        raise ModelError("reconstruction: no image of the model can be used: " + "; ".join(skipped))
     image_ids = np.array([image.image_id for image in images], dtype=np.int64)
-    # Each camera's pinhole part K [R | t] (the view's camera for the checks of P).
-    P = np.array([lenses[image.camera_id].pinhole.P(*pose_from_rigid(image.cam_from_world())) for image in images],
-                 dtype=float).reshape(-1, 3, 4)
+    P = np.array(matrices, dtype=float).reshape(-1, 3, 4)
     # The observations image by image (pycolmap hands them over per image, in increasing image id).
     keypoints = _keypoints(reconstruction)
     per_image = [keypoints[image.image_id] if keypoints else _observed(image) for image in images]
@@ -185,11 +413,16 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     camera = np.repeat(np.arange(len(images), dtype=np.int64), counts)
     image_id = np.repeat(image_ids, counts)
     track = _point_rows(ids, point_ids, image_id, point2D_idx)
-    kept = np.concatenate([_has_preimage(lenses[image.camera_id], xy) for image, (xy, _, _) in zip(images, per_image)
-                           ]) if per_image else np.zeros(0, dtype=bool)
+    finite = np.all(np.isfinite(pixels), axis=1)
+    kept = finite.copy()
+    for image, start, stop in zip(images, np.cumsum(counts) - counts, np.cumsum(counts)):
+        rows = start + np.flatnonzero(finite[start:stop])
+        if len(rows):
+            kept[rows] = _has_preimage(lenses[image.camera_id], pixels[rows])
     skipped.extend(f"image_id {int(image_id[k])}, point2D_idx {int(point2D_idx[k])} (point3D_id {int(point_ids[k])}): "
-                   f"pixel ({pixels[k, 0]:.6g}, {pixels[k, 1]:.6g}) outside the invertible region of the camera's "
-                   "distortion; not used" for k in np.flatnonzero(~kept))
+                   f"pixel ({number(pixels[k, 0])}, {number(pixels[k, 1])}) "
+                   + ("is not finite" if not finite[k] else "outside the invertible region of the camera's distortion")
+                   + "; not used" for k in np.flatnonzero(~kept))
     track, camera, image_id, point2D_idx, pixels = (a[kept] for a in (track, camera, image_id, point2D_idx, pixels))
     # Sorted by (track, image id, pixel), as pluecker.distributed sorts them, so that both give the same
     # bits: the observations are in increasing image id, so a stable sort by track leaves only the
@@ -424,10 +657,14 @@ def write_ply(path: Any, X: np.ndarray, states: np.ndarray) -> None:
         f.write("\n".join([*header, *rows]) + "\n")
 
 
-def _stamps(folder: Any) -> dict[str, tuple[int, int, int]]:
-    """Each file of ``folder`` by name: (inode, size, mtime in ns), to tell which files a write touched."""
-    return {p.name: (st.st_ino, st.st_size, st.st_mtime_ns) for p in folder.iterdir() if p.is_file()
-            for st in [p.stat()]}
+def stale_model_files(out: Any, text: bool) -> list[Any]:
+    """The model files of the other format than the one :func:`write` writes (``.bin`` when ``text``,
+    else ``.txt``) that ``out`` holds, sorted: a COLMAP reader would take them for the model (it reads
+    the binary files when there are three, else the text ones), so :func:`write` removes them."""
+    from pathlib import Path
+
+    other = "bin" if text else "txt"
+    return sorted(p for name in MODEL_FILES for p in [Path(out) / f"{name}.{other}"] if p.is_file())
 
 
 def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = False) -> list[Any]:
@@ -440,36 +677,39 @@ def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = F
     ``observation_point3D_id``, ``observation_image_id``, ``observation_point2D_idx``,
     ``observation_inlier`` and ``observation_state`` (``"inlier"``, ``"outlier"`` (removed from the
     model), or ``"unknown"`` for the observations of a point that was not re-triangulated); and
-    ``certified_meaning``, what ``certified`` proves. Returns the paths of
-    the files written, sorted."""
-    from pathlib import Path
+    ``certified_meaning``, what ``certified`` proves. Returns the paths of the files written, sorted.
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    before = _stamps(out)
+    The files are written into a temporary folder and then moved into ``out`` (made when missing): an
+    interrupted or failed write leaves ``out`` as it was. Other files of ``out`` are kept, except the
+    model files of the other format (:func:`stale_model_files`), which a COLMAP reader would otherwise
+    take for this model."""
     result = run.result
     update_points(reconstruction, run.point3D_ids, result)
     remove_outliers(reconstruction, run)
     reconstruction.update_point_3d_errors()
-    (reconstruction.write_text if text else reconstruction.write)(str(out))
     certified = np.asarray(result.certified, dtype=bool)
     solved = np.asarray(result.status) == "success"
     state = dict(zip(run.point3D_ids.tolist(), np.where(certified, "certified", np.where(solved, "solved",
                                                                                              "unsolved"))))
     ply_ids = sorted(reconstruction.point3D_ids())  # points that lost their track to outliers are gone
     ply_X = np.array([reconstruction.points3D[i].xyz for i in ply_ids], dtype=float).reshape(-1, 3)
-    write_ply(out / "points3D.ply", ply_X, np.array([state.get(i, "unsolved") for i in ply_ids]))
     inliers = result.inliers if result.inliers is not None else np.ones(len(run.observation_point), dtype=bool)
     observation_state = np.where(~solved[run.observation_point], "unknown", np.where(inliers, "inlier", "outlier"))
-    # Not savez_compressed: Python's zlib aborts the process when pycolmap was imported before it.
-    np.savez(
-        out / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.X, covariance=result.covariance,
-        cost=result.cost, lower_bound=result.lower_bound, certified=certified,
-        status=np.asarray(result.status, dtype=str), observation_point3D_id=run.point3D_ids[run.observation_point],
-        observation_image_id=run.observation_image, observation_point2D_idx=run.observation_point2D,
-        observation_inlier=inliers, observation_state=observation_state, certified_meaning=np.array(CERTIFIED_MEANING))
-    after = _stamps(out)
-    return sorted(out / name for name, stamp in after.items() if before.get(name) != stamp)
+    with staged(out) as stage:
+        folder = stage.path
+        (reconstruction.write_text if text else reconstruction.write)(str(folder))
+        write_ply(folder / "points3D.ply", ply_X, np.array([state.get(i, "unsolved") for i in ply_ids]))
+        # Not savez_compressed: Python's zlib aborts the process when pycolmap was imported before it.
+        np.savez(
+            folder / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.X,
+            covariance=result.covariance, cost=result.cost, lower_bound=result.lower_bound, certified=certified,
+            status=np.asarray(result.status, dtype=str), observation_point3D_id=run.point3D_ids[run.observation_point],
+            observation_image_id=run.observation_image, observation_point2D_idx=run.observation_point2D,
+            observation_inlier=inliers, observation_state=observation_state,
+            certified_meaning=np.array(CERTIFIED_MEANING))
+    for stale in stale_model_files(out, text):
+        stale.unlink()
+    return stage.written
 
 
 def robust_options(options: Any = None, ransac: Any = True) -> Any:
@@ -495,7 +735,7 @@ def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: A
     first a ``pycolmap.Rigid3d`` (``None`` unless the status is ``success``). Robust by default:
     ``ransac`` sets ``options.ransac`` as :func:`robust_options` says (``True``: ``options.ransac`` or the
     :class:`pluecker.RansacOptions` defaults); the rest as :func:`pluecker.estimate_pose`."""
-    lens = camera if isinstance(camera, _core.LensCamera) else lens_camera(camera)
+    lens = lens_camera(camera)
     result = _core.estimate_pose(lens, points2D, points3D, lines2D, lines3D, options=robust_options(options, ransac),
                                  point_covariances=point_covariances, line_covariances=line_covariances)
     rigid = rigid_from_pose(result.pose.rotation, result.pose.translation) if result.status == "success" else None
@@ -516,32 +756,42 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
     Returns ``(cam_from_world, PoseResult)`` as :func:`localize` does: robust by default (``ransac=True``,
     :class:`pluecker.RansacOptions` defaults: 4 px threshold in the image's pixels; pass
     ``ransac=pluecker.RansacOptions(point_threshold=..., confidence=..., max_iterations=..., seed=...)``).
-    A ``camera_id`` or ``point3D_id`` the model does not hold is a :class:`MatchError` naming it."""
+    A ``camera_id`` or ``point3D_id`` the model does not hold (a negative one included) is a
+    :class:`MatchError` naming it; a ``camera`` of another type (a bool, say) ``InvalidOptionError``."""
     from .distributed import ColmapModel
 
     ids = np.asarray(point3D_ids)
     if ids.ndim != 1 or not (np.issubdtype(ids.dtype, np.integer) or len(ids) == 0):
         raise _core.ShapeError(f"point3D_ids: expected a 1-D array of integer ids, got shape {ids.shape} of "
                                f"{ids.dtype}")
-    ids = ids.astype(np.int64)
+    # COLMAP's ids are unsigned; a negative id, or one beyond int64, names no point of a model.
+    values = [int(i) for i in ids]
+    in_range = np.array([0 <= v < 2**63 for v in values], dtype=bool)
+    lookup = np.where(in_range, ids if ids.dtype != np.uint64 else np.minimum(ids, 2**63 - 1), 0).astype(np.int64)
     if isinstance(reconstruction, ColmapModel):
-        points3D, known = reconstruction.lookup(ids)
+        points3D, known = reconstruction.lookup(lookup)
         cameras = reconstruction.cameras
     else:
-        known = np.array([reconstruction.exists_point3D(int(i)) for i in ids], dtype=bool)
+        known = np.array([ok and reconstruction.exists_point3D(int(i)) for i, ok in zip(lookup, in_range)], dtype=bool)
         points3D = np.array([reconstruction.points3D[int(i)].xyz if ok else np.full(3, np.nan)
-                             for i, ok in zip(ids, known)], dtype=float).reshape(-1, 3)
+                             for i, ok in zip(lookup, known)], dtype=float).reshape(-1, 3)
         cameras = reconstruction.cameras
+    known &= in_range
     if not known.all():
-        missing = ids[~known]
-        raise MatchError(f"point3D_ids: point3D_id {int(missing[0])} (match {int(np.flatnonzero(~known)[0])}) is not "
-                         f"a point of the model ({len(missing)} such match{'es' if len(missing) > 1 else ''})")
+        first = int(np.flatnonzero(~known)[0])
+        missing = int((~known).sum())
+        raise MatchError(f"point3D_ids: point3D_id {values[first]} (match {first}) is not a point of the model "
+                         f"({missing} such match{'es' if missing > 1 else ''})")
     if isinstance(camera, (int, np.integer)) and not isinstance(camera, (bool, np.bool_)):
-        if int(camera) not in cameras:
-            raise MatchError(f"camera: camera_id {int(camera)} is not a camera of the model")
-        camera = cameras[int(camera)]
+        camera_id = int(camera)
+        if not (0 <= camera_id < 2**32 and camera_id in cameras):
+            raise MatchError(f"camera: camera_id {camera_id} is not a camera of the model")
+        camera = cameras[camera_id]
         if isinstance(camera, tuple):  # a ColmapModel's (model name, params)
             camera = _core.LensCamera(camera[0], list(camera[1]))
+    elif not isinstance(camera, _core.LensCamera) and not hasattr(camera, "params"):
+        raise _core.InvalidOptionError(f"camera: expected a camera_id (an int), a pycolmap.Camera or a "
+                                       f"pluecker.LensCamera, got {_shown(camera)}")
     return localize(camera, points2D, points3D, ransac=ransac, options=options,
                     point_covariances=point_covariances)
 

@@ -58,7 +58,8 @@ from typing import Any, Iterable, Optional, Union
 import numpy as np
 
 from . import _core
-from ._arguments import check_sigma
+from ._arguments import check_sigma, number
+from ._paths import require_folder, staged
 
 __all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
            "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
@@ -151,11 +152,12 @@ def triangulate_table(table: Any, cameras: Cameras, *,
     pa = _pyarrow()
     check_sigma(sigma_px)
     _require_columns(table.column_names, OBSERVATION_COLUMNS, "observations")
-    columns = {name: table.column(name).to_numpy() for name in OBSERVATION_COLUMNS}
-    track = np.asarray(columns["track"], dtype=np.int64)
-    image = np.asarray(columns["image"], dtype=np.int64)
-    x = np.stack([np.asarray(columns["x"], dtype=float), np.asarray(columns["y"], dtype=float)], axis=1)
     has_cov = all(name in table.column_names for name in COVARIANCE_COLUMNS)
+    _check_column_types(table.schema, OBSERVATION_COLUMNS + (COVARIANCE_COLUMNS if has_cov else ()), "observations",
+                        table.column)
+    track = _check_ids([("observations", table.column("track"))], "track", unique=False)
+    image = _check_ids([("observations", table.column("image"))], "image", unique=False)
+    x = np.stack([np.asarray(table.column(n).to_numpy(), dtype=float) for n in ("x", "y")], axis=1)
     if has_cov:
         cxx, cxy, cyy = (np.asarray(table.column(n).to_numpy(), dtype=float) for n in COVARIANCE_COLUMNS)
         cov = np.stack([np.stack([cxx, cxy], -1), np.stack([cxy, cyy], -1)], axis=1)
@@ -309,16 +311,120 @@ def _require_columns(names: Iterable[str], required: Iterable[str], what: str) -
                                f"{', '.join(required)}")
 
 
+#: What a column holds when it is not a number (pixels, coordinates, intrinsics, covariances): ids
+#: (an integer type, or floats that are whole numbers), text, or lists of numbers.
+ID_COLUMNS = ("query", "track", "image", "camera_id", "point3D_id", "point2D_idx")
+TEXT_COLUMNS = ("model",)
+LIST_COLUMNS = ("params",)
+
+
+def _type_fits(name: str, t: Any) -> bool:
+    """Whether a column ``name`` of Arrow type ``t`` holds what it should (:data:`ID_COLUMNS` ...);
+    bools and text are never numbers, and numbers are never converted from text. An all-null column
+    fits (its rows are then bad one by one)."""
+    import pyarrow.types as pat
+
+    number = lambda t: pat.is_integer(t) or pat.is_floating(t) or pat.is_null(t)  # noqa: E731
+    if name in TEXT_COLUMNS:
+        return pat.is_string(t) or pat.is_large_string(t) or pat.is_null(t)
+    if name in LIST_COLUMNS:
+        return pat.is_null(t) or ((pat.is_list(t) or pat.is_large_list(t) or pat.is_fixed_size_list(t))
+                                  and number(t.value_type))
+    return number(t)
+
+
+def _expected(name: str) -> str:
+    return ("text" if name in TEXT_COLUMNS else "a list of numbers" if name in LIST_COLUMNS
+            else "an integer id" if name in ID_COLUMNS else "a number")
+
+
+def _check_column_types(schema: Any, names: Iterable[str], what: str, read: Any) -> None:
+    """``InvalidOptionError`` naming ``what`` (the table), the column and its first row unless each
+    column of ``names`` has a type that holds what it should (:func:`_type_fits`): a bool or text column
+    of pixels is refused, never read as numbers. ``read(name)`` gives the column, read only to name the
+    row."""
+    for name in names:
+        t = schema.field(name).type
+        if _type_fits(name, t):
+            continue
+        cells = read(name).to_pylist()
+        row = next((k for k, v in enumerate(cells) if v is not None), 0)
+        value = _shown(cells[row]) if cells else "nothing"
+        raise _core.InvalidOptionError(f"{what} column {name}, row {row}: {value} is {_described(t)}, expected "
+                                       f"{_expected(name)} (column type {t})")
+
+
+def _described(t: Any) -> str:
+    import pyarrow.types as pat
+
+    if pat.is_boolean(t):
+        return "a bool"
+    if pat.is_string(t) or pat.is_large_string(t):
+        return "text"
+    if pat.is_list(t) or pat.is_large_list(t) or pat.is_fixed_size_list(t):
+        return f"a list of {_described(t.value_type).removeprefix('a ')}"
+    return f"of type {t}"
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _check_ids(parts: list[tuple[str, Any]], name: str, *, unique: bool) -> np.ndarray:
+    """The id column ``name`` of one table given as ``parts`` (``(what, column)`` per file, rows
+    counted in each) as int64; ``InvalidOptionError`` naming the table, the column and the row of the
+    first cell that is not a whole number (a fraction, NaN, null), and with ``unique`` the two rows of
+    the first id listed twice."""
+    import pyarrow.types as pat
+
+    values, where = [], []
+    for what, column in parts:
+        if pat.is_integer(column.type) and column.null_count == 0:
+            ids = np.asarray(column.to_numpy(), dtype=np.int64)
+        else:
+            cells = np.asarray(column.to_numpy(zero_copy_only=False), dtype=float)
+            whole = np.isfinite(cells) & (cells == np.round(cells)) & (np.abs(cells) < 2.0**63)
+            if not whole.all():
+                row = int(np.flatnonzero(~whole)[0])
+                shown = "null" if column[row].as_py() is None else number(cells[row])
+                raise _core.InvalidOptionError(f"{what} column {name}, row {row}: {shown} is not an integer id")
+            ids = cells.astype(np.int64)
+        values.append(ids)
+        where += [(what, k) for k in range(len(ids))] if unique else []
+    ids = np.concatenate(values) if values else np.zeros(0, dtype=np.int64)
+    if unique and len(ids) > 1:
+        order = np.argsort(ids, kind="stable")
+        twice = np.flatnonzero(ids[order][1:] == ids[order][:-1])
+        if len(twice):
+            (what_a, a), (what_b, b) = where[order[twice[0]]], where[order[twice[0] + 1]]
+            rows = f"rows {a} and {b}" if what_a == what_b else f"row {a}, and {what_b} row {b}"
+            raise _core.InvalidOptionError(
+                f"{what_a} column {name}, {rows}: {name} {ids[order[twice[0]]]} is listed twice; the {name} ids "
+                "must be unique (one row, one camera per query)")
+    return ids
+
+
 def _check_inputs(source: str, required: Iterable[str], what: str) -> None:
     """Before a job: ``source`` must hold Parquet files, each with the ``required`` columns (a
-    ``ShapeError`` naming the file otherwise), so that a bad input fails here, not in every task."""
+    ``ShapeError`` naming the file otherwise) of the types they need (:func:`_check_column_types`), so
+    that a bad input fails here, not in every task."""
     import pyarrow.parquet as pq
 
     files = _input_files(source)
     if not files:
         raise _core.ShapeError(f"{what} {source}: no Parquet files (*.parquet) in the folder")
+    import pyarrow.types as pat
+
     for f in files:
-        _require_columns(pq.read_schema(f).names, required, f"{what} {f}")
+        schema = pq.read_schema(f)
+        _require_columns(schema.names, required, f"{what} {f}")
+        read = lambda name, f=f: pq.read_table(f, columns=[name]).column(name)  # noqa: E731
+        _check_column_types(schema, required, f"{what} {f}", read)
+        # Ids given as floats must be whole numbers (the split would truncate 0.5 to 0).
+        for name in required:
+            if name in ID_COLUMNS and name != "point3D_id" and not pat.is_integer(schema.field(name).type):
+                _check_ids([(f"{what} {f}", read(name))], name, unique=False)
 
 
 def _row_groups(source: str) -> list[tuple[int, int]]:
@@ -373,23 +479,27 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
     if buckets is None and not partitioned:
         rows = sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(source))
         buckets = max(4 * workers, -(-rows // ROWS_PER_BUCKET), 1)
-    scratch = str(out / "_buckets")
     option_fields = options.to_dict() if options is not None else None
-    if partitioned:
-        files = _input_files(source)
-        buckets = len(files)
-        results = _run_tasks(client, _solve_file, [(i, source) for i in range(len(files))],
-                             (str(out), cameras, option_fields, sigma_px), progress, threads_per_worker)
-    else:
-        results = _run_job(client, [(source, "track", "part")], buckets, scratch, _solve,
-                           (scratch, str(out), cameras, option_fields, sigma_px), progress,
-                           threads_per_worker)
-    _remove_tree(Path(scratch))
-    if not any(r["tracks"] for r in results):
-        # No rows at all: the result tables still exist, empty, with the columns a job writes.
-        empty = pq.read_schema(_input_files(source)[0]).empty_table()
-        points, observations = triangulate_table(empty, cameras, options=options, sigma_px=sigma_px)
-        _write_part(str(out), 0, points=points, observations=observations)
+    # Written into a temporary folder, then ``points`` and ``observations`` replace those of ``out``
+    # whole (module docs of :mod:`pluecker._paths`).
+    with staged(out) as stage:
+        target = stage.path
+        scratch = str(target / "_buckets")
+        if partitioned:
+            files = _input_files(source)
+            buckets = len(files)
+            results = _run_tasks(client, _solve_file, [(i, source) for i in range(len(files))],
+                                 (str(target), cameras, option_fields, sigma_px), progress, threads_per_worker)
+        else:
+            results = _run_job(client, [(source, "track", "part")], buckets, scratch, _solve,
+                               (scratch, str(target), cameras, option_fields, sigma_px), progress,
+                               threads_per_worker)
+        _remove_tree(Path(scratch))
+        if not any(r["tracks"] for r in results):
+            # No rows at all: the result tables still exist, empty, with the columns a job writes.
+            empty = pq.read_schema(_input_files(source)[0]).empty_table()
+            points, observations = triangulate_table(empty, cameras, options=options, sigma_px=sigma_px)
+            _write_part(str(target), 0, points=points, observations=observations)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["tracks"] for r in results), certified=sum(r["certified"] for r in results),
                       statuses=statuses, seconds=time.perf_counter() - started, points=out / "points",
@@ -531,12 +641,16 @@ def _model(model: Any) -> Optional[ColmapModel]:
     return ColmapModel.from_reconstruction(model)
 
 
+#: The columns of a query table by the way it gives its cameras (:func:`_query_camera_kind`).
+CAMERA_COLUMN_SETS = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "camera_id": MODEL_QUERY_COLUMNS}
+
+
 def _query_camera_kind(names: Iterable[str], what: str, model: Optional[ColmapModel]) -> str:
     """Which camera columns a query table holds: ``"pinhole"``, ``"lens"`` or ``"camera_id"``
     (:data:`QUERY_COLUMNS`). A ``ShapeError`` naming ``what`` when it holds none of the sets, or more
     than one (which camera would win is not guessed), or ``camera_id`` without a model."""
     present = set(names)
-    sets = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "camera_id": MODEL_QUERY_COLUMNS}
+    sets = CAMERA_COLUMN_SETS
     complete = [kind for kind, columns in sets.items() if set(columns) <= present]
     if len(complete) > 1:
         raise _core.ShapeError(f"{what}: one camera per query: give the columns of one of "
@@ -597,7 +711,11 @@ def _lens(query: int, name: Any, params: Any, what: str = "queries") -> _core.Le
 
 def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.LensCamera:
     """The ``LensCamera`` of the model's camera ``camera_id`` for one query."""
-    if camera_id is None or int(camera_id) not in model.cameras:
+    if isinstance(camera_id, float) and camera_id.is_integer():
+        camera_id = int(camera_id)
+    if not isinstance(camera_id, int):
+        raise _BadQuery(f"query {query}: queries column camera_id: {_shown(camera_id)} is not an integer camera_id")
+    if camera_id not in model.cameras:
         raise _BadQuery(f"query {query}: queries column camera_id: camera_id {camera_id} is not a camera of the "
                         "COLMAP model")
     name, params = model.cameras[int(camera_id)]
@@ -685,15 +803,18 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
 
     model = _model(reconstruction)
     kind = _query_camera_kind(queries.column_names, "queries", model)
-    if point_matches is not None:
-        _require_columns(point_matches.column_names,
-                         MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS, "point_matches")
-    if line_matches is not None:
-        _require_columns(line_matches.column_names, LINE_MATCH_COLUMNS, "line_matches")
+    _check_column_types(queries.schema, CAMERA_COLUMN_SETS[kind], "queries", queries.column)
+    q_ids = _check_ids([("queries", queries.column("query"))], "query", unique=True)
+    for table, columns, what in ((point_matches, MODEL_POINT_MATCH_COLUMNS if model is not None
+                                  else POINT_MATCH_COLUMNS, "point_matches"),
+                                 (line_matches, LINE_MATCH_COLUMNS, "line_matches")):
+        if table is not None:
+            _require_columns(table.column_names, columns, what)
+            _check_column_types(table.schema, columns, what, table.column)
+            _check_ids([(what, table.column("query"))], "query", unique=False)
     if ransac is None:
         ransac = options.ransac if options is not None and options.ransac is not None else _core.RansacOptions()
     base = ransac.to_dict()
-    q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
     cameras = _query_cameras(queries, kind, model)
     order = np.argsort(q_ids, kind="stable")
     q_ids = q_ids[order]
@@ -808,6 +929,11 @@ def _check_query_inputs(source: str, model: Optional[ColmapModel]) -> None:
         shown = "; ".join(f"{f}: {k}" for f, k in list(kinds.items())[:4])
         raise _core.ShapeError(f"queries {source}: the files give the cameras by different columns ({shown}); "
                                "use one set of columns in every file")
+    for f, kind in kinds.items():
+        _check_inputs(f, CAMERA_COLUMN_SETS[kind], "queries")
+    # One row per query over every file (the buckets would meet the duplicates only after the split).
+    _check_ids([(f"queries {f}", pq.read_table(f, columns=["query"]).column("query")) for f in kinds], "query",
+               unique=True)
 
 
 def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
@@ -843,27 +969,29 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     inputs = [(str(queries), "query", "queries"), (str(point_matches), "query", "points")]
     if line_matches is not None:
         inputs.append((str(line_matches), "query", "lines"))
-    for name in ("poses", "matches"):  # parts of an earlier job (another bucket count) would be read as this one's
-        for stale in (out / name).glob("part-*.parquet"):
-            stale.unlink()
     settings = _pose_settings(ransac, options, seed, model)
-    if client is None and buckets is None and sum(rows(source) for source, _, _ in inputs) <= ROWS_PER_BUCKET:
-        # Here, and small enough for one task: the whole tables in one part, without the split through
-        # storage (the same bits: a query's answer depends on its own rows only).
-        pa = _pyarrow()
-        tables = [pa.concat_tables([pq.read_table(f) for f in _input_files(source)]) for source, _, _ in inputs]
-        poses = _localize_part(str(out), 0, settings, *tables)
-        results, buckets = [{"queries": poses.num_rows, "statuses": _status_counts(poses)}], 1
-    else:
-        buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
-        scratch = str(out / "_buckets")
-        results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(out), settings),
-                           progress, threads_per_worker)
-        _remove_tree(Path(scratch))
-    if not any(r["queries"] for r in results):
-        # No queries: empty ``poses`` and ``matches`` tables, as for :func:`triangulate`.
-        tables = [pq.read_schema(_input_files(str(f))[0]).empty_table() for f in (queries, point_matches)]
-        _localize_part(str(out), 0, settings, *tables)
+    # Written into a temporary folder, then ``poses`` and ``matches`` replace those of ``out`` whole:
+    # no part of an earlier job (another bucket count) is left among them, and a job that fails or is
+    # interrupted leaves ``out`` as it was.
+    with staged(out) as stage:
+        target = stage.path
+        if client is None and buckets is None and sum(rows(source) for source, _, _ in inputs) <= ROWS_PER_BUCKET:
+            # Here, and small enough for one task: the whole tables in one part, without the split through
+            # storage (the same bits: a query's answer depends on its own rows only).
+            pa = _pyarrow()
+            tables = [pa.concat_tables([pq.read_table(f) for f in _input_files(source)]) for source, _, _ in inputs]
+            poses = _localize_part(str(target), 0, settings, *tables)
+            results, buckets = [{"queries": poses.num_rows, "statuses": _status_counts(poses)}], 1
+        else:
+            buckets = buckets or max(4 * workers, -(-n // 20_000), 1)
+            scratch = str(target / "_buckets")
+            results = _run_job(client, inputs, buckets, scratch, _localize_bucket, (scratch, str(target), settings),
+                               progress, threads_per_worker)
+            _remove_tree(Path(scratch))
+        if not any(r["queries"] for r in results):
+            # No queries: empty ``poses`` and ``matches`` tables, as for :func:`triangulate`.
+            tables = [pq.read_schema(_input_files(str(f))[0]).empty_table() for f in (queries, point_matches)]
+            _localize_part(str(target), 0, settings, *tables)
     statuses = _tally(results)
     return JobSummary(tracks=sum(r["queries"] for r in results), certified=0, statuses=statuses,
                       seconds=time.perf_counter() - started, points=out / "poses", observations=out / "matches",
@@ -956,9 +1084,15 @@ def read_observations(out: Union[str, Path]) -> Any:
 
 
 def _read_sorted(folder: Path, keys: Iterable[str]) -> Any:
+    """Every part of a job's table ``folder``; ``FileNotFoundError`` (or ``NotADirectoryError``) naming
+    it when the job wrote none there."""
     pa = _pyarrow()
     import pyarrow.parquet as pq
 
+    require_folder(folder.parent, "job output ")
+    require_folder(folder, f"no {folder.name} table of a job: ")
     files = sorted(folder.glob("*.parquet"))
+    if not files:
+        raise FileNotFoundError(f"{folder}: no Parquet files (*.parquet): not the {folder.name} table of a job")
     table = pa.concat_tables([pq.read_table(f) for f in files])
     return table.sort_by([(k, "ascending") for k in keys])

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 import pluecker
+from pluecker._paths import folder_problem, staged
 from pluecker.datasets import VggSequence, load_vgg
 from pluecker.jsonio import dumps  # one key per line, every vector on one line
 
@@ -87,10 +88,8 @@ TRACK_FILES = {"points": "nview-corners", "lines": "nview-lines"}
 
 
 def _load(folder: Path) -> VggSequence:
-    if not folder.exists():
-        raise FolderError(f"{folder}: no such directory")
-    if not folder.is_dir():
-        raise FolderError(f"{folder}: not a directory")
+    if (problem := folder_problem(folder)) is not None:
+        raise FolderError(f"{folder}: {problem}")
     try:
         return load_vgg(folder)
     except OSError as exc:
@@ -302,18 +301,19 @@ def _ply(path: Path, run: Run, features: Features) -> Path:
 
 
 def write(run: Run, out: str | Path) -> list[Path]:
-    """Writes ``points.json`` and ``points.ply`` (and ``lines.json``, ``lines.ply``) into ``out``."""
-
+    """Writes ``points.json`` and ``points.ply`` (and ``lines.json``, ``lines.ply``) into ``out`` (made
+    when missing), through a temporary folder: an interrupted or failed write leaves ``out`` as it was."""
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    files = []
-    for features in (run.points, run.lines):
-        if features is None:
-            continue
-        path = out / f"{features.kind}.json"
-        path.write_text(dumps(_clean(_header(run, features))) + "\n", encoding="utf-8")
-        files += [path, _ply(out / f"{features.kind}.ply", run, features)]
-    return files
+    names = []
+    with staged(out) as stage:
+        for features in (run.points, run.lines):
+            if features is None:
+                continue
+            (stage.path / f"{features.kind}.json").write_text(dumps(_clean(_header(run, features))) + "\n",
+                                                               encoding="utf-8")
+            _ply(stage.path / f"{features.kind}.ply", run, features)
+            names += [f"{features.kind}.json", f"{features.kind}.ply"]
+    return [out / name for name in names]
 
 
 def _summary_line(features: Features) -> str:

@@ -33,10 +33,14 @@ pub const MAX_THREADS_PER_CORE: usize = 4;
 /// pool the size of a larger one (to reproduce its scheduling, say).
 pub const MIN_THREAD_CAP: usize = 64;
 
+/// The cores available to this process (`std::thread::available_parallelism`, 1 when unknown).
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// The largest `n` that `set_num_threads` accepts: `max(MIN_THREAD_CAP, MAX_THREADS_PER_CORE × cores)`.
 pub fn thread_cap() -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    MIN_THREAD_CAP.max(MAX_THREADS_PER_CORE.saturating_mul(cores))
+    MIN_THREAD_CAP.max(MAX_THREADS_PER_CORE.saturating_mul(cores()))
 }
 
 /// set_num_threads(n, /)
@@ -55,9 +59,13 @@ pub fn set_num_threads(py: Python<'_>, n: Option<Integer>) -> PyResult<()> {
         Some(n) => {
             let cap = thread_cap();
             let n = n.in_range("n", 1, cap as i128).map_err(|e| {
+                // The limit as it is on this machine, from its own core count.
+                let cores = cores();
                 InvalidOptionError::new_err(format!(
-                    "set_num_threads: {} (at most {MAX_THREADS_PER_CORE} threads per core, and {MIN_THREAD_CAP} on any machine), or None for the default",
-                    e.value(py)
+                    "set_num_threads: {} (the limit on this machine, with {cores} core{}: the larger of \
+                     {MIN_THREAD_CAP} and {MAX_THREADS_PER_CORE} per core), or None for the default",
+                    e.value(py),
+                    if cores == 1 { "" } else { "s" }
                 ))
             })? as usize;
             Some(Arc::new(

@@ -10,7 +10,7 @@
 //! The paper's own camera (Phong & Horaud 1995, section 2 and Table 1) has `α_u = fx < 0`: a mirrored
 //! image axis. Nothing here assumes positive focal lengths; only a zero (singular) one is rejected.
 
-use crate::error::{Error, Result};
+use crate::error::{number, Error, Result};
 use crate::rigid::Pose;
 use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 
@@ -69,17 +69,24 @@ impl Camera {
         Camera::new(k[(0, 0)], k[(1, 1)], k[(0, 2)], k[(1, 2)], k[(0, 1)])
     }
 
-    /// Checks that the intrinsics are finite and invertible.
+    /// Checks that the intrinsics are finite and invertible: `|fx|, |fy| ≥ 1e-9` px, and
+    /// `det K = fx fy` finite, so that `K⁻¹` is representable in double precision.
     pub fn validate(&self) -> Result<()> {
         let p = [self.fx, self.fy, self.cx, self.cy, self.skew];
         if p.iter().any(|v| !v.is_finite()) {
             return Err(Error::SingularCamera {
-                what: format!("non-finite intrinsics {p:?}"),
+                what: format!("non-finite intrinsics [{}]", p.map(number).join(", ")),
             });
         }
+        let (fx, fy) = (number(self.fx), number(self.fy));
         if self.fx.abs() < MIN_FOCAL || self.fy.abs() < MIN_FOCAL {
             return Err(Error::SingularCamera {
-                what: format!("focal lengths must be non-zero, got fx={}, fy={}", self.fx, self.fy),
+                what: format!("focal lengths must be non-zero (at least {MIN_FOCAL:e} px), got fx={fx}, fy={fy}"),
+            });
+        }
+        if !(self.fx * self.fy).is_finite() {
+            return Err(Error::SingularCamera {
+                what: format!("focal lengths too large: det K = fx fy overflows double precision, got fx={fx}, fy={fy}"),
             });
         }
         Ok(())

@@ -300,7 +300,8 @@ fn eucm(n: &Vector2<f64>, alpha: f64, beta: f64) -> (Vector2<f64>, Matrix2<f64>)
 
 impl LensCamera {
     /// The camera of `model` with `params` in COLMAP's order. `Error::Shape` for a wrong count,
-    /// `Error::NonFinite` for NaN/inf, `Error::SingularCamera` for a zero focal length.
+    /// `Error::NonFinite` for NaN/inf, `Error::SingularCamera` when its pinhole part is not a
+    /// [`Camera`] (a zero focal length, `fx fy` overflowing).
     pub fn new(model: CameraModel, params: &[f64]) -> Result<LensCamera> {
         let names = model.parameter_names();
         if params.len() != names.len() {
@@ -321,12 +322,13 @@ impl LensCamera {
             params: params.to_vec(),
             fold_radius: fold_radius(model, params),
         };
-        let (fx, fy) = camera.focal();
-        if fx == 0.0 || fy == 0.0 {
-            return Err(Error::SingularCamera {
-                what: format!("{}: zero focal length", model.as_str()),
-            });
-        }
+        // Its pinhole part must be a camera (non-zero focal lengths, `K` invertible).
+        camera.pinhole().map_err(|e| match e {
+            Error::SingularCamera { what } => Error::SingularCamera {
+                what: format!("{}: {what}", model.as_str()),
+            },
+            other => other,
+        })?;
         Ok(camera)
     }
 

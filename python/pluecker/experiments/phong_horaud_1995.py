@@ -44,6 +44,7 @@ import numpy as np
 from tqdm import tqdm
 
 import pluecker
+from pluecker._paths import staged
 from pluecker.experiments import Report
 
 NAME = "phong-horaud-1995"
@@ -806,34 +807,38 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
     ``plots=False`` skips the figures (they need matplotlib)."""
     settings = Settings.create(trials=trials, seed=seed, quick=quick)
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     truth = Truth.load()
     started = time.perf_counter()
     n_estimates = count_estimates(settings)
     progress = tqdm(total=n_estimates, desc=NAME, unit="estimate", leave=False,
                     disable=None if show_progress is None else not show_progress)
     results = run_sweeps(truth, settings, progress)
-    files = [out / "tables.md"]
-    files[0].write_text(render_tables(results, settings), encoding="utf-8")
-    if plots:
-        files += render_figures(results, out)
-    seconds = time.perf_counter() - started
-    progress.close()
-    print(f"{NAME}: {n_estimates} estimates in {seconds:.1f} s", file=sys.stderr)
-    summary = summarize(results, settings)
-    document = {
-        "experiment": NAME,
-        "settings": {"trials": settings.trials, "seed": settings.seed, "quick": settings.quick,
-                     "point_counts": settings.point_counts, "noise_levels": settings.noise_levels,
-                     "mismatch_counts": settings.mismatch_counts, "outlier_fractions": settings.outlier_fractions,
-                     "outlier_sweep_points": OUTLIER_SWEEP_POINTS, "count_sweep_noise_px": COUNT_SWEEP_NOISE_PX,
-                     "noise_sweep_points": NOISE_SWEEP_POINTS, "mismatch_points": MISMATCH_POINTS},
-        "truth": {"axis": truth.axis.tolist(), "angle": truth.angle, "t": truth.t.tolist()},
-        "seconds": seconds,
-        "summary": summary,
-        "sweeps": {sweep: {key: {f"{v:g}": cell.to_dict() for v, cell in cells.items()}
-                           for key, cells in by_est.items()} for sweep, by_est in results.items()},
-    }
-    files.append(out / "summary.json")
-    files[-1].write_text(json.dumps(_json_clean(document), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    # Every file into a temporary folder, moved into ``out`` at the end: an interrupted or failed run
+    # leaves ``out`` as it was (no new empty or half-written folder).
+    with staged(out) as stage:
+        folder = stage.path
+        files = [folder / "tables.md"]
+        files[0].write_text(render_tables(results, settings), encoding="utf-8")
+        if plots:
+            files += render_figures(results, folder)
+        seconds = time.perf_counter() - started
+        progress.close()
+        print(f"{NAME}: {n_estimates} estimates in {seconds:.1f} s", file=sys.stderr)
+        summary = summarize(results, settings)
+        document = {
+            "experiment": NAME,
+            "settings": {"trials": settings.trials, "seed": settings.seed, "quick": settings.quick,
+                         "point_counts": settings.point_counts, "noise_levels": settings.noise_levels,
+                         "mismatch_counts": settings.mismatch_counts, "outlier_fractions": settings.outlier_fractions,
+                         "outlier_sweep_points": OUTLIER_SWEEP_POINTS, "count_sweep_noise_px": COUNT_SWEEP_NOISE_PX,
+                         "noise_sweep_points": NOISE_SWEEP_POINTS, "mismatch_points": MISMATCH_POINTS},
+            "truth": {"axis": truth.axis.tolist(), "angle": truth.angle, "t": truth.t.tolist()},
+            "seconds": seconds,
+            "summary": summary,
+            "sweeps": {sweep: {key: {f"{v:g}": cell.to_dict() for v, cell in cells.items()}
+                               for key, cells in by_est.items()} for sweep, by_est in results.items()},
+        }
+        files.append(folder / "summary.json")
+        files[-1].write_text(json.dumps(_json_clean(document), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    files = [out / f.name for f in files]
     return Report(out, files, summary, summary_lines(summary, settings, n_estimates, seconds, out), seconds)

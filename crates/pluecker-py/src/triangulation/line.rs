@@ -12,7 +12,7 @@ use super::batch::{
 use super::point::views_of;
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
-use super::{options_arg, positive_sigma, PyTriangulationOptions};
+use super::{options_arg, positive_sigma, sigma_variance, PyTriangulationOptions};
 use crate::convert::{
     check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
@@ -188,9 +188,9 @@ fn endpoint_covariances(
         return Err(invalid_argument("sigma", "give covariances or sigma, not both"));
     }
     if let Some(sigma) = sigma {
-        let sigma = positive_sigma(sigma)?;
+        let variance = sigma_variance(sigma)?;
         let n: usize = lead.iter().product();
-        return Ok(Some(vec![[Matrix2::identity() * (sigma * sigma); 2]; n]));
+        return Ok(Some(vec![[Matrix2::identity() * variance; 2]; n]));
     }
     let Some(covariances) = covariances else {
         return Ok(None);

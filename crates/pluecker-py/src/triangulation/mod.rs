@@ -72,6 +72,25 @@ pub(crate) fn options_arg(options: Option<PyRef<'_, PyTriangulationOptions>>) ->
     Ok(opts)
 }
 
+/// `σ²` of the pixel noise `sigma` for a covariance `σ² I`, unless `sigma` is not a positive finite
+/// number or `σ²` is not a normal double (it overflows, or underflows to a subnormal or zero, whose
+/// inverse, the information, overflows): then an error naming `sigma`.
+pub(crate) fn sigma_variance(sigma: f64) -> PyResult<f64> {
+    let sigma = positive_sigma(sigma)?;
+    let variance = sigma * sigma;
+    if variance.is_normal() {
+        return Ok(variance);
+    }
+    let flow = if variance.is_finite() { "underflows" } else { "overflows" };
+    Err(crate::errors::invalid_argument(
+        "sigma",
+        format!(
+            "σ = {} px: the covariance σ² I {flow} double precision",
+            pluecker::testing::number(sigma)
+        ),
+    ))
+}
+
 /// `sigma`, a pixel noise, unless it is not a positive finite number: then an error naming `sigma`.
 pub(crate) fn positive_sigma(sigma: f64) -> PyResult<f64> {
     if sigma.is_finite() && sigma > 0.0 {

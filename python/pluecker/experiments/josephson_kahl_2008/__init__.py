@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from pluecker._paths import staged
 from pluecker.experiments import Report
 
 from . import conics, fitting, lines, points
@@ -192,7 +193,6 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
     real-data tables have no random draws; the fitting draws are 100,000 as the paper, 2,000 with ``quick``. ``show_progress=None`` draws a progress bar when standard error is a
     terminal; ``False`` never. ``plots=False`` skips the figures (they need matplotlib)."""
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     limit = lines.QUICK_LINES if quick else None
     n_conics = trials or (conics.TRIALS_QUICK if quick else conics.TRIALS)
@@ -220,19 +220,24 @@ def reproduce(out: Path | str = DEFAULT_OUT, *, trials: int | None = None, seed:
     progress.set_postfix_str(f"quadrics from {n_conics} synthetic discs")
     results.conics = conics.run_conics(n_conics, seed)
     progress.update()
-    files = [out / "tables.md"]
-    files[0].write_text(render_tables(results, quick), encoding="utf-8")
-    if plots:
-        files += fitting.figures(results.fitting, out)
-        files.append(conics.figure7(seed, out))
-    seconds = time.perf_counter() - started
-    progress.close()
-    print(f"{NAME}: done in {seconds:.1f} s", file=sys.stderr)
-    summary = summarize(results)
-    document = {"experiment": NAME, "settings": {"quick": quick, "seed": seed, "frames": list(points.FRAMES),
-                                                 "line_sigma_px": lines.SIGMA_PX, "fitting_draws": len(results.fitting["line"]),
-                                                 "conic_scenes": n_conics},
-                "seconds": seconds, "summary": summary}
-    files.append(out / "summary.json")
-    files[-1].write_text(json.dumps(clean(document), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    # Every file into a temporary folder, moved into ``out`` at the end: an interrupted or failed run
+    # leaves ``out`` as it was (no new empty or half-written folder).
+    with staged(out) as stage:
+        folder = stage.path
+        files = [folder / "tables.md"]
+        files[0].write_text(render_tables(results, quick), encoding="utf-8")
+        if plots:
+            files += fitting.figures(results.fitting, folder)
+            files.append(conics.figure7(seed, folder))
+        seconds = time.perf_counter() - started
+        progress.close()
+        print(f"{NAME}: done in {seconds:.1f} s", file=sys.stderr)
+        summary = summarize(results)
+        document = {"experiment": NAME, "settings": {"quick": quick, "seed": seed, "frames": list(points.FRAMES),
+                                                     "line_sigma_px": lines.SIGMA_PX, "fitting_draws": len(results.fitting["line"]),
+                                                     "conic_scenes": n_conics},
+                    "seconds": seconds, "summary": summary}
+        files.append(folder / "summary.json")
+        files[-1].write_text(json.dumps(clean(document), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    files = [out / f.name for f in files]
     return Report(out, files, summary, summary_lines(summary, seconds, out, quick), seconds)
