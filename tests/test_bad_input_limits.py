@@ -353,3 +353,34 @@ def test_floats_in_messages_have_six_significant_digits(call):
     message = str(info.value)
     assert re.search(r"e\+300|e-300|1e\+300", message), message
     assert not re.search(r"\d{12}", message), message
+
+
+def test_the_thread_cap_message_states_this_machines_limit():
+    """The message said "at most 4 threads per core, and 64 on any machine" on every machine; it states
+    the limit here, with the cores it was computed from."""
+    import os
+
+    with pytest.raises(InvalidOptionError) as error:
+        pluecker.set_num_threads(10**6)
+    message = str(error.value)
+    cap = int(re.search(r"from 1 to (\d+),", message).group(1))
+    cores = int(re.search(r"the limit on this machine, with (\d+) cores?: the larger of 64 and 4 per core\)",
+                          message).group(1))
+    assert cap == max(64, 4 * cores) and 1 <= cores <= len(os.sched_getaffinity(0)), message
+
+
+@pytest.mark.parametrize("sigma, flow", [(1e300, "overflows"), (1e-300, "underflows")])
+def test_a_segment_sigma_through_a_lens_blames_sigma_not_covariances(sigma, flow):
+    """``triangulate_line(..., sigma=1e300, cameras=...)`` raised ``NonFiniteError: covariances: ...``
+    although no covariances were given."""
+    R = np.eye(3)
+    P = np.stack([LENS.pinhole.P(R, np.array([-b, 0.0, 0.0])) for b in (0.0, 0.5, 1.0)])
+    ends = np.array([[-0.5, 0.2, 5.0], [0.6, -0.1, 6.0]])
+    segments = np.stack([LENS.project(ends - [b, 0.0, 0.0]) for b in (0.0, 0.5, 1.0)])
+    message = rf"^sigma: σ = {re.escape(f'{sigma:g}')} px: the covariance σ² I {flow} double precision"
+    with pytest.raises(InvalidOptionError, match=message):
+        pluecker.triangulate_line(P, segments, sigma=sigma, cameras=[LENS] * 3)
+    with pytest.raises(InvalidOptionError, match=message):
+        pluecker.triangulate_line_observations(P, [0, 0, 0], [0, 1, 2], segments, sigma=sigma, cameras=[LENS] * 3)
+    # Through a distorting lens a line is never certified: gap_not_closed, at the exact line (cost ~ 0).
+    assert pluecker.triangulate_line(P, segments, sigma=1e-3, cameras=[LENS] * 3).cost < 1e-12

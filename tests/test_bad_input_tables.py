@@ -6,6 +6,7 @@ with a σ that is not a positive number (``sigma_px=-1`` certified every track).
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -149,3 +150,98 @@ def test_a_job_on_a_table_without_rows_writes_empty_result_tables(tmp_path):
     summary = dist.localize(*paths, tmp_path / "poses")
     assert summary.tracks == 0
     assert dist.read_poses(tmp_path / "poses").num_rows == dist.read_matches(tmp_path / "poses").num_rows == 0
+
+
+# --- column types and query ids ------------------------------------------------------------------------------
+
+
+def query_scene(n: int = 30):
+    """A pinhole query with ``n`` exact matches: its queries and point-match columns."""
+    scene = pluecker.random_scene("general", n_points=n, n_lines=0, seed=0)
+    cam, p2, p3 = scene["camera"], np.asarray(scene["points2d"]), np.asarray(scene["points3d"])
+    queries = {"query": [4], "fx": [cam.fx], "fy": [cam.fy], "cx": [cam.cx], "cy": [cam.cy]}
+    matches = {"query": np.full(n, 4, np.int64), "x": p2[:, 0], "y": p2[:, 1], "X": p3[:, 0], "Y": p3[:, 1],
+               "Z": p3[:, 2]}
+    return queries, matches
+
+
+BAD_TABLES = {
+    # A boolean pixel column was read as 0/1 and gave "success" with 7 of 30 inliers.
+    "bool x": ("point_matches", lambda q, m: (q, {**m, "x": m["x"] > 300}),
+               r"point_matches column x, row 0: (True|False) is a bool, expected a number"),
+    "text x": ("point_matches", lambda q, m: (q, {**m, "x": pa.array([str(float(v)) for v in m["x"]])}),
+               r"point_matches column x, row 0: '.*' is text, expected a number"),
+    "text fx": ("queries", lambda q, m: ({**q, "fx": ["400"]}, m),
+                r"queries column fx, row 0: '400' is text, expected a number"),
+    "float query": ("queries", lambda q, m: ({**q, "query": [0.5]}, {**m, "query": np.full(len(m["x"]), 0.5)}),
+                    r"queries column query, row 0: 0.5 is not an integer id"),
+    "null query": ("queries", lambda q, m: ({**q, "query": pa.array([None], pa.int64())}, m),
+                   r"queries column query, row 0: null is not an integer id"),
+    "float match query": ("point_matches", lambda q, m: (q, {**m, "query": np.r_[4.0, np.full(len(m["x"]) - 1, 4.5)]}),
+                          r"point_matches column query, row 1: 4.5 is not an integer id"),
+    "duplicate query": ("queries", lambda q, m: ({k: v * 2 for k, v in q.items()}, m),
+                        r"queries column query, rows 0 and 1: query 4 is listed twice"),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_TABLES))
+def test_localisation_tables_of_the_wrong_types_or_ids_are_refused_naming_table_column_and_row(tmp_path, capsys, case):
+    """Each of these was converted silently (text and bools to numbers, 0.5 to query 0) or solved twice
+    (two poses for one query)."""
+    _, edit, message = BAD_TABLES[case]
+    queries, matches = edit(*query_scene())
+    with pytest.raises(InvalidOptionError, match="^" + message):
+        dist.localize_tables(pa.table(queries), pa.table(matches))
+    paths = []
+    for name, columns in (("queries", queries), ("points", matches)):
+        pq.write_table(pa.table(columns), tmp_path / f"{name}.parquet")
+        paths.append(str(tmp_path / f"{name}.parquet"))
+    # The job checks before it starts, naming the file: here and split into buckets.
+    for buckets in (None, 3):
+        with pytest.raises(InvalidOptionError, match=r"^(queries|point_matches) .*\.parquet column "):
+            dist.localize(*paths, tmp_path / "job", buckets=buckets)
+    assert not (tmp_path / "job").exists()
+    assert main(["localize", *paths, "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    # The command line reads files: the message names the file after the table.
+    assert err.count("\n") == 1 and re.search(message.replace(" column ", " .*column ", 1), err), err
+    assert "cannot read" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_well_typed_tables_still_localise_integer_valued_float_ids_included():
+    queries, matches = query_scene()
+    poses, _ = dist.localize_tables(pa.table({**queries, "query": [4.0]}), pa.table({**matches, "query": 4.0 + 0 * matches["x"]}))
+    assert poses.column("query").to_pylist() == [4] and poses.column("status").to_pylist() == ["success"]
+    assert poses.column("point_inliers").to_pylist() == [30]
+
+
+def test_duplicate_queries_in_two_files_are_named_with_both_files(tmp_path):
+    queries, matches = query_scene()
+    (tmp_path / "q").mkdir()
+    for name in ("a", "b"):
+        pq.write_table(pa.table(queries), tmp_path / "q" / f"{name}.parquet")
+    pq.write_table(pa.table(matches), tmp_path / "m.parquet")
+    with pytest.raises(InvalidOptionError, match=r"^queries .*a\.parquet column query, row 0, and queries .*b\.parquet "
+                                                 r"row 0: query 4 is listed twice"):
+        dist.localize(tmp_path / "q", tmp_path / "m.parquet", tmp_path / "out")
+
+
+def test_an_observation_table_of_the_wrong_types_is_refused():
+    """The same for the observations of ``pluecker.distributed.triangulate``."""
+    with pytest.raises(InvalidOptionError, match=r"^observations column x, row 0: True is a bool"):
+        dist.triangulate_table(observations().set_column(2, "x", pa.array([True, False])), CAMERAS)
+    with pytest.raises(InvalidOptionError, match=r"^observations column image, row 1: 13.5 is not an integer id"):
+        dist.triangulate_table(observations().set_column(1, "image", pa.array([3.0, 13.5])), CAMERAS)
+
+
+def test_reading_a_job_that_is_not_there_names_the_folder(tmp_path):
+    """``read_poses("missing")`` raised pyarrow's ``ArrowInvalid: Must pass at least one table``."""
+    for read in (dist.read_poses, dist.read_matches, dist.read_points, dist.read_observations):
+        with pytest.raises(FileNotFoundError, match=r"missing: no such directory"):
+            read(tmp_path / "missing")
+        with pytest.raises(FileNotFoundError, match=r"no such directory"):
+            read(tmp_path)
+    (tmp_path / "poses").mkdir()
+    with pytest.raises(FileNotFoundError, match=r"poses: no Parquet files"):
+        dist.read_poses(tmp_path)

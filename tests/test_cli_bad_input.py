@@ -224,3 +224,65 @@ def test_colmap_only_flags_with_a_vgg_folder_are_refused_by_name(tmp_path, capsy
     assert main(["triangulate", str(vgg_root() / "corridor"), *flags, "--out", str(out)]) == 2
     assert f"{flags[0]} applies to --colmap models" in capsys.readouterr().err
     assert not out.exists()
+
+
+# --- the file's options are checked before the flags override them -------------------------------------------
+
+
+@pytest.mark.parametrize("certify, words", [
+    ({"max_relative_gap": float("nan")}, "max_relative_gap"),
+    ("yes", "'options.certify' must be true, false or a JSON object"),
+    ({"max_nodes": -5}, "max_nodes"),
+    ({"max_nodes": 2**70}, "max_nodes"),
+    ({"max_gap": 0.1}, "options.certify"),
+])
+def test_an_invalid_certify_object_is_refused_with_and_without_the_flag(tmp_path, capsys, certify, words):
+    """``--certify`` replaced an invalid ``options.certify`` object by the defaults and reported
+    ``success``; without the flag the same file was refused."""
+    doc = pose_document()
+    doc["options"] = {"certify": certify}
+    path = tmp_path / "in.json"
+    path.write_text(json.dumps(doc))
+    for flags in ([], ["--certify"]):
+        assert_one_line_exit_2(["pose", str(path), *flags], capsys, "pose", words)
+
+
+@pytest.mark.parametrize("options, flag", [
+    ({"options": {"sigma_px": -1.0}}, ["--sigma", "2"]),
+    ({"options": {"penalty": 0}}, ["--penalty", "10"]),
+    ({"ransac": {"point_threshold": -1.0}}, ["--point-threshold", "2"]),
+    ({"ransac": {"seed": -1}}, ["--seed", "3"]),
+])
+def test_a_flag_does_not_hide_an_invalid_setting_of_the_file(tmp_path, capsys, options, flag):
+    doc = {**pose_document(), **options}
+    path = tmp_path / "in.json"
+    path.write_text(json.dumps(doc))
+    for flags in ([], flag):
+        assert_one_line_exit_2(["pose", str(path), *flags], capsys, "pose")
+
+
+def test_the_certify_flag_keeps_the_files_certify_settings(tmp_path, capsys):
+    """``--certify`` replaced ``{"max_nodes": 100}`` of the file by the defaults (1201 nodes, certified);
+    it turns the certificate on and keeps the file's settings: the same result as without the flag."""
+    # The six points of docs/cli.md's example (rounded to 0.01 px): the certificate needs about 1200 nodes.
+    doc = {"camera": {"fx": 800.0, "fy": 800.0, "cx": 320.0, "cy": 240.0},
+           "points2d": [[167.79, 118.6], [485.55, 226.3], [349.02, 322.91], [88.87, 99.2], [277.86, 202.3],
+                        [394.4, 282.73]],
+           "points3d": [[2.5124, 1.7405, -6.4687], [5.0523, 0.8626, -5.4563], [4.8769, -0.0934, -7.5085],
+                        [2.0987, 2.07, -7.5823], [3.8452, 1.1438, -7.1353], [4.2382, 0.3731, -5.6591]],
+           "options": {"certify": {"max_nodes": 100, "max_relative_gap": 1e-3}}}
+    path = tmp_path / "in.json"
+    path.write_text(json.dumps(doc))
+    results = []
+    for flags in ([], ["--certify"]):
+        assert main(["pose", str(path), *flags]) == 0
+        result = json.loads(capsys.readouterr().out)
+        results.append((result["status"], result["certified"], result["details"]["uncertified_reason"],
+                        (result["certificate"] or {}).get("nodes")))
+    assert results[0] == results[1]
+    assert results[0][0] == "gap_not_closed" and results[0][1] is False, results
+    # With certify off in the file, the flag turns it on with the defaults.
+    doc["options"] = {"certify": False}
+    path.write_text(json.dumps(doc))
+    assert main(["pose", str(path), "--certify"]) == 0
+    assert json.loads(capsys.readouterr().out)["certificate"] is not None

@@ -389,12 +389,13 @@ def test_colmap_queries_by_camera_id_and_point3D_id_find_the_models_poses(tmp_pa
     assert sorted(out_matches.column("point3D_id").to_pylist()) == sorted(matches.column("point3D_id").to_pylist())
     # The in-memory function, the Parquet job and the command line give the same bits.
     paths = write_tables(tmp_path, queries=queries, matches=matches)
-    rec.write(str(tmp_path))
+    (tmp_path / "model").mkdir()
+    rec.write(str(tmp_path / "model"))
     summary = dist.localize(paths["queries"], paths["matches"], tmp_path / "job", reconstruction=rec, buckets=3)
     assert summary.statuses == {"success": len(rec.images)}
     assert same(dist.read_poses(tmp_path / "job"), poses)
     assert same(dist.read_matches(tmp_path / "job"), out_matches)
-    assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path), "--out",
+    assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path / "model"), "--out",
                  str(tmp_path / "cli")]) == 0
     assert same(dist.read_poses(tmp_path / "cli"), poses)
 
@@ -421,8 +422,9 @@ def test_an_unknown_camera_id_or_point3D_id_is_named_and_loses_no_other_query(tm
     assert same(keep(poses), keep(good)) and len(others) == len(rec.images) - 2
     # The command line prints the failed queries' messages and still writes every pose.
     paths = write_tables(tmp_path, queries=queries_bad, matches=matches_bad)
-    rec.write(str(tmp_path))
-    assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path), "--out",
+    (tmp_path / "model").mkdir()
+    rec.write(str(tmp_path / "model"))
+    assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path / "model"), "--out",
                  str(tmp_path / "o")]) == 0
     out = capsys.readouterr().out
     assert f"{len(others)} success" in out and "2 invalid_input" in out
@@ -518,13 +520,14 @@ def test_a_colmap_job_on_a_dask_cluster_equals_the_kernel(tmp_path, capsys):
     distributed = pytest.importorskip("distributed")
     rec, queries, matches = colmap_queries(5)
     paths = write_tables(tmp_path, queries=queries, matches=matches)
-    rec.write(str(tmp_path))
+    (tmp_path / "model").mkdir()
+    rec.write(str(tmp_path / "model"))
     reference = colmap.localize_queries(rec, queries, matches)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=40) as cluster, distributed.Client(cluster) as client:
         summary = dist.localize(paths["queries"], paths["matches"], tmp_path / "dask", client=client, buckets=4,
                                 reconstruction=rec)
-        assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path), "--out",
+        assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path / "model"), "--out",
                      str(tmp_path / "cli"), "--scheduler", cluster.scheduler_address]) == 0
     assert summary.workers == 2 and summary.statuses == {"success": len(rec.images)}
     assert f"{len(rec.images)} queries on 2 Dask workers" in capsys.readouterr().out

@@ -34,6 +34,7 @@ import numpy as np
 
 import pluecker
 from pluecker import _paths
+from pluecker._arguments import number
 from pluecker.datasets import DataNotFoundError
 from pluecker.jsonio import dumps, jsonable
 
@@ -720,7 +721,7 @@ def _triangulate_colmap(args: argparse.Namespace) -> int:
                      + ("; …" if len(run.skipped) > 3 else "") + ")")
     if result.inliers is not None:
         lines.append(f"observations: {int(colmap.removed_observations(run).sum())} of {len(result.inliers)} "
-                     f"removed as outliers (threshold {args.outlier_threshold} px)")
+                     f"removed as outliers (threshold {number(args.outlier_threshold)} px)")
     others = {s: run.point3D_ids[status == s] for s in sorted(set(status)) if s != "success"}
     if others:
         lines.append("not updated: " + "; ".join(

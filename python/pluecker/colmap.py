@@ -97,8 +97,9 @@ def lens_camera(camera: Any) -> _core.LensCamera:
 
 
 def _shown(value: Any) -> str:
-    """A value as a message shows it: its repr, cut to 60 characters."""
-    text = repr(value)
+    """A value as a message shows it: a float with 6 significant digits, else its repr, cut to 60
+    characters."""
+    text = number(value) if isinstance(value, float) else repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 

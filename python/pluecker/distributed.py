@@ -39,7 +39,14 @@ worker sees (a shared file system, or an object store URI pyarrow can write).
 
 **Bad rows.** A non-finite pixel or covariance, or an image id that is not among the cameras, gives
 its track a status (``non_finite``, ``invalid_input``) and a message in ``points``; it never fails
-the job or loses other tracks.
+the job or loses other tracks. A bad *table* fails before the job starts, with an
+``InvalidOptionError`` naming the file, the column and the row: a column of the wrong type (bools or
+text where numbers are expected are never converted), an id that is not a whole number, or (for
+:func:`localize`) a query listed twice.
+
+**Output.** A job writes into a temporary folder beside ``out`` (inside it when it exists) and then
+moves its tables into ``out``, replacing those of an earlier job whole (:func:`pluecker._paths.staged`):
+a job that fails or is interrupted leaves ``out`` as it was.
 
 **Threads.** Before the job each worker sets its pluecker threads (:func:`pluecker.set_num_threads`)
 to its share of its machine's cores: the cores divided by the task slots of all workers on that
@@ -367,7 +374,9 @@ def _described(t: Any) -> str:
 
 
 def _shown(value: Any) -> str:
-    text = repr(value)
+    """A value as a message shows it: a float with 6 significant digits, else its repr, cut to 60
+    characters."""
+    text = number(value) if isinstance(value, float) else repr(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 
