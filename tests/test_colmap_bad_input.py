@@ -177,12 +177,23 @@ def test_a_folder_without_a_model_says_what_is_missing(tmp_path, capsys):
     """pycolmap said ``rigs, cameras, frames, images, points3D files do not exist`` (rigs and frames are
     optional)."""
     (tmp_path / "empty").mkdir()
-    with pytest.raises(colmap.ModelError, match=r"not a COLMAP model: no cameras, images and points3D files"):
-        colmap.read(tmp_path / "empty")
     rec = model(points=10)
     (tmp_path / "partial").mkdir()
     rec.write(str(tmp_path / "partial"))
     (tmp_path / "partial" / "points3D.bin").unlink()
+    (tmp_path / "q.parquet").touch()
+    (tmp_path / "m.parquet").touch()
+    for argv, words in (
+            (["triangulate", "--colmap", tmp_path / "empty", "--out", tmp_path / "o"],
+             "empty: not a COLMAP model: no cameras, images and points3D files (.bin or .txt) in the folder"),
+            (["localize", tmp_path / "q.parquet", tmp_path / "m.parquet", "--colmap", tmp_path / "partial", "--out",
+              tmp_path / "o"], "partial: not a complete COLMAP model: points3D.bin missing")):
+        assert main([str(a) for a in argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and words in err and "do not exist" not in err, err
+        assert not (tmp_path / "o").exists()
+    with pytest.raises(colmap.ModelError, match=r"not a COLMAP model: no cameras, images and points3D files"):
+        colmap.read(tmp_path / "empty")
     with pytest.raises(colmap.ModelError, match=r"not a complete COLMAP model: points3D.bin missing .*rigs and "
                                                 r"frames are optional"):
         colmap.read(tmp_path / "partial")
@@ -192,15 +203,6 @@ def test_a_folder_without_a_model_says_what_is_missing(tmp_path, capsys):
     for name in ("rigs.bin", "frames.bin"):
         (tmp_path / "old" / name).unlink()
     assert colmap.read(tmp_path / "old").num_points3D() == 10
-    for argv in (["triangulate", "--colmap", str(tmp_path / "empty"), "--out", str(tmp_path / "o")],
-                 ["localize", str(tmp_path / "q.parquet"), str(tmp_path / "m.parquet"), "--colmap",
-                  str(tmp_path / "partial"), "--out", str(tmp_path / "o")]):
-        (tmp_path / "q.parquet").touch()
-        (tmp_path / "m.parquet").touch()
-        assert main(argv) == 2
-        err = capsys.readouterr().err
-        assert err.count("\n") == 1 and "not a" in err and "do not exist" not in err, err
-        assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.parametrize("name", ["rigs", "cameras", "frames", "images", "points3D"])

@@ -336,3 +336,28 @@ def test_localisation_of_a_dask_bag_of_query_records(client, tmp_path):
     counts = dask.compute(*dist.localize_bag(db.from_sequence(records, npartitions=3), tmp_path / "out", seed=2))
     assert sum(counts) == 10
     assert_same_table(dist.read_poses(tmp_path / "out"), reference[0])
+
+
+def test_command_line_on_a_scheduler_names_what_it_left_out(client, tmp_path, capsys):
+    """The Dask path of ``triangulate --colmap`` dropped the names of the cameras it left out (the local
+    path printed them); its scratch folder and an unreachable scheduler leave nothing behind."""
+    pycolmap = pytest.importorskip("pycolmap")
+    from test_colmap_bad_input import model
+
+    from pluecker.cli import main
+
+    rec = model()
+    odd = sorted(rec.cameras)[1]
+    rec.cameras[odd] = pycolmap.Camera(camera_id=odd, model="PINHOLE", width=1024, height=768,
+                                       params=[0.0, 0.0, 512.0, 384.0])
+    (tmp_path / "in").mkdir()
+    rec.write(str(tmp_path / "in"))
+    common = ["triangulate", "--colmap", str(tmp_path / "in")]
+    for out, flags in (("here", []), ("dask", ["--scheduler", client.scheduler.address])):
+        assert main([*common, "--out", str(tmp_path / out), *flags]) == 0
+        printed = capsys.readouterr().out
+        assert f"left out: 1 (camera_id {odd} (PINHOLE): singular camera: " in printed, printed
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dask", "here", "in"]
+    assert not [p for p in (tmp_path / "dask").iterdir() if p.name.startswith(".")]
+    assert main([*common, "--out", str(tmp_path / "x"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
+    assert not (tmp_path / "x").exists()

@@ -574,7 +574,8 @@ def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -
     # Scratch space on the storage of --out (the workers see it), removed whatever happens.
     with client, _paths.staged(args.out, publish=False) as scratch:
         job = scratch.path
-        cameras, table = colmap.observation_table(reconstruction, args.sigma)
+        skipped: list = []
+        cameras, table = colmap.observation_table(reconstruction, args.sigma, skipped=skipped)
         (job / "input").mkdir()
         pq.write_table(table, job / "input" / "observations.parquet", row_group_size=1_000_000)
         options = pluecker.TriangulationOptions(method=args.method)
@@ -583,7 +584,7 @@ def _triangulate_colmap_on_dask(args: argparse.Namespace, reconstruction: Any) -
         summary = distributed.triangulate(job / "input" / "observations.parquet", cameras, job / "output",
                                           client=client, options=options, progress=sys.stderr.isatty())
         run = colmap.retriangulation_of_job(distributed.read_points(job / "output"),
-                                            distributed.read_observations(job / "output"))
+                                            distributed.read_observations(job / "output"), skipped)
     line = (f"{args.colmap}: {summary.tracks} points on {summary.workers} Dask workers in {summary.seconds:.1f} s, "
             f"{summary.statuses.get('success', 0)} triangulated, {summary.certified} certified ({args.method})")
     return run, line

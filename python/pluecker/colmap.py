@@ -514,16 +514,19 @@ def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: np.ndarray, po
     return rows
 
 
-def observation_table(reconstruction: Any, sigma_px: float = 1.0) -> tuple[Any, Any]:
+def observation_table(reconstruction: Any, sigma_px: float = 1.0, *, skipped: list | None = None) -> tuple[Any, Any]:
     """A model's observations as the table of :mod:`pluecker.distributed` (``track`` = point3D id,
     ``image`` = image id, the observed pixel ``x``, ``y`` and ``cov_*`` = ``sigma_px²`` I, ``point2D_idx``)
     and its :class:`pluecker.distributed.Cameras` (each posed image's ``K [R | t]`` and ``LensCamera``):
-    the same solve as :func:`retriangulate`."""
+    the same solve as :func:`retriangulate`. What is left out (cameras, images, pixels) is named as in
+    ``Retriangulation.skipped``, appended to the list ``skipped`` when one is given."""
     import pyarrow as pa
 
     from .distributed import Cameras
 
     o = _observations(reconstruction, sigma_px)
+    if skipped is not None:
+        skipped.extend(o.skipped)
     table = pa.table({"track": o.ids[o.track], "image": o.image_id.astype(np.int64),
                       "x": o.pixels[:, 0], "y": o.pixels[:, 1], "cov_xx": np.full(len(o.track), float(sigma_px)**2),
                       "cov_xy": np.zeros(len(o.track)), "cov_yy": np.full(len(o.track), float(sigma_px)**2),
@@ -545,14 +548,16 @@ class TableResult:
         self.inliers = inliers
 
 
-def retriangulation_of_job(points: Any, observations: Any) -> Retriangulation:
+def retriangulation_of_job(points: Any, observations: Any, skipped: Any = ()) -> Retriangulation:
     """A :class:`Retriangulation` from the ``points`` and ``observations`` tables of
-    :func:`pluecker.distributed.triangulate` run on :func:`observation_table` (for :func:`write`)."""
+    :func:`pluecker.distributed.triangulate` run on :func:`observation_table` (for :func:`write`), with
+    the ``skipped`` messages of :func:`observation_table`."""
     ids = points.column("track").to_numpy()
     obs_track = observations.column("track").to_numpy()
     inliers = observations.column("inlier").to_numpy(zero_copy_only=False).astype(bool)
     return Retriangulation(ids, TableResult(points, inliers), np.searchsorted(ids, obs_track),
-                           observations.column("image").to_numpy(), observations.column("point2D_idx").to_numpy())
+                           observations.column("image").to_numpy(), observations.column("point2D_idx").to_numpy(),
+                           list(skipped))
 
 
 def retriangulate(reconstruction: Any, sigma_px: float = 1.0,
