@@ -86,7 +86,9 @@ impl Camera {
         }
         if !(self.fx * self.fy).is_finite() {
             return Err(Error::SingularCamera {
-                what: format!("focal lengths too large: det K = fx fy overflows double precision, got fx={fx}, fy={fy}"),
+                what: format!(
+                    "focal lengths too large: det K = fx fy overflows double precision, got fx={fx}, fy={fy}"
+                ),
             });
         }
         Ok(())
@@ -158,6 +160,24 @@ mod tests {
         }
         let px = cam.project(&pa);
         assert!(cam.interpretation_plane_normal(&px, &px).is_err());
+    }
+
+    #[test]
+    fn a_camera_whose_k_cannot_be_inverted_is_refused_with_short_numbers() {
+        // Zero or tiny focal lengths, and focal lengths whose product det K = fx fy overflows.
+        for (fx, fy) in [(0.0, 800.0), (1e-300, 1e-300), (1e300, 1e300), (1e200, -1e109)] {
+            let err = Camera::new(fx, fy, 320.0, 240.0, 0.0).unwrap_err();
+            let text = err.to_string();
+            assert!(matches!(err, Error::SingularCamera { .. }), "{text}");
+            // %g-style numbers: no run of seven digits (1e-300 printed in full had 300 zeros).
+            assert!(
+                !text.as_bytes().windows(7).any(|w| w.iter().all(u8::is_ascii_digit)),
+                "{text}"
+            );
+        }
+        // The largest that fit: det K = 1e300.
+        assert!(Camera::new(1e150, -1e150, 0.0, 0.0, 0.0).is_ok());
+        assert!(Camera::new(1e-9, 1e-9, 0.0, 0.0, 0.0).is_ok());
     }
 
     #[test]

@@ -812,6 +812,22 @@ mod tests {
     use super::*;
     use crate::rng::Rng;
 
+    #[test]
+    fn a_lens_whose_pinhole_part_is_not_a_camera_is_refused() {
+        // Its pinhole part must be a `Camera`: `pinhole()` never fails on a lens that was made.
+        for f in [0.0, 1e-300, 1e300] {
+            let err = LensCamera::new(CameraModel::SimpleRadial, &[f, 320.0, 240.0, -0.1]).unwrap_err();
+            assert!(matches!(err, Error::SingularCamera { .. }), "{err}");
+            assert!(
+                err.to_string()
+                    .starts_with("singular camera: SIMPLE_RADIAL: focal lengths"),
+                "{err}"
+            );
+        }
+        let lens = LensCamera::new(CameraModel::Pinhole, &[1e-9, 1e150, 0.0, 0.0]).unwrap();
+        assert!(lens.pinhole().is_ok());
+    }
+
     /// A camera of each model, in COLMAP's id order, with COLMAP-like distortion (moderate barrel, small
     /// tangential and thin-prism terms; the fisheyes' distortion is 5-10 % at 80° off axis).
     fn cameras() -> Vec<LensCamera> {

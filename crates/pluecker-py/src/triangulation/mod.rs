@@ -81,7 +81,11 @@ pub(crate) fn sigma_variance(sigma: f64) -> PyResult<f64> {
     if variance.is_normal() {
         return Ok(variance);
     }
-    let flow = if variance.is_finite() { "underflows" } else { "overflows" };
+    let flow = if variance.is_finite() {
+        "underflows"
+    } else {
+        "overflows"
+    };
     Err(crate::errors::invalid_argument(
         "sigma",
         format!(
