@@ -236,3 +236,18 @@ def test_the_command_line_names_a_truncated_file(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err == f"pluecker triangulate: error: --colmap {points}: truncated: the file (100 bytes) ends inside " \
                   "record 1 of 30\n"
+
+
+def test_an_id_listed_twice_in_a_model_file_is_named(tmp_path):
+    """pycolmap said ``[reconstruction.cc:424] Check failed: cameras_.emplace(camera_id, ...)``."""
+    rec = model(cameras=2, points=10)
+    rec.write(str(tmp_path))
+    path = tmp_path / "cameras.bin"
+    data = bytearray(path.read_bytes())
+    first = int.from_bytes(data[8:12], "little")
+    record = 4 + 4 + 8 + 8 + 8 * 8  # camera_id, model id, width, height, the 8 OPENCV parameters
+    data[8 + record:8 + record + 4] = data[8:12]
+    path.write_bytes(bytes(data))
+    with pytest.raises(colmap.ModelError, match=rf"^{re.escape(str(path))}: record 2 of 2: its id {first} is listed "
+                                                r"twice$"):
+        colmap.read(tmp_path)

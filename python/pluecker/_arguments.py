@@ -20,6 +20,13 @@ def number(value: Any) -> str:
         return repr(value)
 
 
+def shown(value: Any) -> str:
+    """A value as a message shows it: a float as :func:`number` prints it, else its repr, cut to 60
+    characters."""
+    text = number(value) if isinstance(value, float) else repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 def check_sigma(sigma_px: Any) -> None:
     """``pluecker.InvalidOptionError`` naming ``sigma_px`` unless it is a positive finite number (not a
     bool) whose square is a normal double: the covariance is ``sigma_px²`` I, so a negative σ would pass

@@ -24,7 +24,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from . import _core
-from ._arguments import check_sigma, number
+from ._arguments import check_sigma, number, shown
 from ._paths import require_folder, staged
 
 
@@ -89,18 +89,11 @@ def lens_camera(camera: Any) -> _core.LensCamera:
         return camera
     if not (hasattr(camera, "model") and hasattr(camera, "params") and hasattr(camera, "camera_id")):
         raise _core.InvalidOptionError(f"camera: expected a pycolmap.Camera or a pluecker.LensCamera, got "
-                                       f"{_shown(camera)}")
+                                       f"{shown(camera)}")
     try:
         return _core.LensCamera(camera.model.name, list(camera.params))
     except _core.PlueckerError as error:
         raise type(error)(f"camera_id {camera.camera_id}: {error}") from error
-
-
-def _shown(value: Any) -> str:
-    """A value as a message shows it: a float with 6 significant digits, else its repr, cut to 60
-    characters."""
-    text = number(value) if isinstance(value, float) else repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def colmap_camera(camera: _core.LensCamera, width: int, height: int) -> Any:
@@ -797,7 +790,7 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
             camera = _core.LensCamera(camera[0], list(camera[1]))
     elif not isinstance(camera, _core.LensCamera) and not hasattr(camera, "params"):
         raise _core.InvalidOptionError(f"camera: expected a camera_id (an int), a pycolmap.Camera or a "
-                                       f"pluecker.LensCamera, got {_shown(camera)}")
+                                       f"pluecker.LensCamera, got {shown(camera)}")
     return localize(camera, points2D, points3D, ransac=ransac, options=options,
                     point_covariances=point_covariances)
 

@@ -65,7 +65,7 @@ from typing import Any, Iterable, Optional, Union
 import numpy as np
 
 from . import _core
-from ._arguments import check_sigma, number
+from ._arguments import check_sigma, number, shown
 from ._paths import require_folder, staged
 
 __all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
@@ -356,7 +356,7 @@ def _check_column_types(schema: Any, names: Iterable[str], what: str, read: Any)
             continue
         cells = read(name).to_pylist()
         row = next((k for k, v in enumerate(cells) if v is not None), 0)
-        value = _shown(cells[row]) if cells else "nothing"
+        value = shown(cells[row]) if cells else "nothing"
         raise _core.InvalidOptionError(f"{what} column {name}, row {row}: {value} is {_described(t)}, expected "
                                        f"{_expected(name)} (column type {t})")
 
@@ -371,13 +371,6 @@ def _described(t: Any) -> str:
     if pat.is_list(t) or pat.is_large_list(t) or pat.is_fixed_size_list(t):
         return f"a list of {_described(t.value_type).removeprefix('a ')}"
     return f"of type {t}"
-
-
-def _shown(value: Any) -> str:
-    """A value as a message shows it: a float with 6 significant digits, else its repr, cut to 60
-    characters."""
-    text = number(value) if isinstance(value, float) else repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def _check_ids(parts: list[tuple[str, Any]], name: str, *, unique: bool) -> np.ndarray:
@@ -723,7 +716,7 @@ def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.LensC
     if isinstance(camera_id, float) and camera_id.is_integer():
         camera_id = int(camera_id)
     if not isinstance(camera_id, int):
-        raise _BadQuery(f"query {query}: queries column camera_id: {_shown(camera_id)} is not an integer camera_id")
+        raise _BadQuery(f"query {query}: queries column camera_id: {shown(camera_id)} is not an integer camera_id")
     if camera_id not in model.cameras:
         raise _BadQuery(f"query {query}: queries column camera_id: camera_id {camera_id} is not a camera of the "
                         "COLMAP model")
