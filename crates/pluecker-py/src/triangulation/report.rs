@@ -48,8 +48,7 @@ result_class! {
         /// The method that ran: `linear`, `local` or `optimal`.
         method = |r| r.inner.method.as_str();
         /// `success`, or why not: `gap_not_closed` (the certificate's search hit `certify.max_nodes`), `not_converged`, `behind_camera`,
-        /// `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
-        /// `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
+        /// `at_infinity` (no finite estimate: NaN), `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
         status = |r| r.inner.status.as_str();
         /// `status == 'success'`.
         success = |r| r.inner.status == Status::Success;

@@ -6,7 +6,11 @@
 //! identity when no covariance is given, so that the cost of a point is its squared pixel error).
 //! Three methods ([`Method`]): a linear (DLT-style) solution, a local minimisation from it, and the
 //! globally optimal answer of branch and bound (section 4) whose [`Certificate`] carries a lower
-//! bound on the cost of every 3-D primitive.
+//! bound on the cost of every 3-D primitive. The paper bounds its initial search domain with a
+//! user-given largest reprojection error `γ` (sections 4.3.1-4.3.2); here every search takes
+//! `γ = ε₀ = √(cost of the local solution)`, which every primitive at least as cheap satisfies in
+//! each view, so no primitive that could improve on the estimate is left out and there is no option
+//! for it.
 //!
 //! Conventions: cameras are 3x4 matrices `P` that map world points straight to pixels,
 //! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1) for the matrix as given, so
@@ -143,11 +147,6 @@ pub struct TriangulationOptions {
     /// cap the status is [`Status::GapNotClosed`]. Default [`CertifyOptions::default`] (gap `1e-3`,
     /// the paper stopped at 10 %; each search's own cap).
     pub certify: CertifyOptions,
-    /// The paper's γ (sections 4.3.1-4.3.2): the search is restricted to primitives whose whitened
-    /// reprojection error is at most γ in every view. `None` (the default) uses the square root of the
-    /// cost of the local solution, which every better primitive satisfies, so the restriction loses
-    /// nothing and the certificate is a certificate over all primitives in front of the cameras.
-    pub max_reprojection_error: Option<f64>,
     /// Points and lines: reject outlier observations of a track (`point::robust`, `line::robust`).
     /// A view is an inlier when its whitened residual (pixels without covariances) is at most this;
     /// the result carries the inlier mask and is solved on the inliers only. Default `None`: every
@@ -171,7 +170,6 @@ impl Default for TriangulationOptions {
         TriangulationOptions {
             method: Method::Optimal,
             certify: CertifyOptions::default(),
-            max_reprojection_error: None,
             outlier_threshold: None,
             line_bound: LineBound::Taylor,
             quadric_bound: QuadricBound::Convexity,
@@ -203,14 +201,6 @@ impl TriangulationOptions {
         // A relative gap is (upper − lower) / upper ≤ 1 whenever the lower bound is ≥ 0, so a threshold
         // of 1 or more would certify without any bound: `validate` keeps it in (0, 1).
         self.certify.validate("certify")?;
-        if let Some(gamma) = self.max_reprojection_error {
-            if !(gamma.is_finite() && gamma > 0.0) {
-                return bad(
-                    "max_reprojection_error",
-                    "must be a positive finite number of (whitened) pixels",
-                );
-            }
-        }
         if let Some(tau) = self.outlier_threshold {
             if !(tau.is_finite() && tau > 0.0) {
                 return bad(

@@ -231,7 +231,7 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
         let row = p.row(2).transpose();
         (p * e.centre.push(1.0)).z > 0.0 && row.dot(&(dual * row)) < 0.0
     });
-    if !in_front && e.centre.iter().all(|v| v.is_finite()) && report.status != Status::Infeasible {
+    if !in_front && e.centre.iter().all(|v| v.is_finite()) {
         report.set_status(Status::BehindCamera);
     }
     QuadricTriangulation {
