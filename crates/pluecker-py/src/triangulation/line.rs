@@ -30,7 +30,7 @@ use pluecker::triangulation::line::{
     triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
     LineTracks, SparseLineTracks, SparseSegmentTracks,
 };
-use pluecker::triangulation::{Primitive, Report, TriangulationOptions};
+use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -274,6 +274,7 @@ pub struct PyLineTriangulations {
 
 impl TrackColumns for PyLineTriangulations {
     type Track = LineTriangulation;
+    const COST_KIND: CostKind = CostKind::LineResidual;
 
     fn push(&mut self, track: LineTriangulation) -> Report {
         self.plucker.extend_from_slice(track.plucker.coordinates().as_slice());

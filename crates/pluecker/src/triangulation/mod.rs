@@ -228,6 +228,8 @@ impl TriangulationOptions {
 #[doc(no_inline)]
 pub use crate::certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 #[doc(no_inline)]
+pub use crate::cost_kind::CostKind;
+#[doc(no_inline)]
 pub use crate::status::Status;
 
 /// What one triangulation did: shared by every primitive's result.
@@ -237,8 +239,13 @@ pub struct Report {
     pub method: Method,
     /// Whether the estimate can be used.
     pub status: Status,
-    /// The cost of eq. 19 at the estimate, squared whitened pixels.
+    /// The cost at the estimate, of kind `cost_kind`: eq. 19 (squared whitened pixels for points), or
+    /// the segments' reprojection cost for lines seen through a lens that distorts.
     pub cost: f64,
+    /// What `cost` measures, and what the certificate bounds: [`CostKind::Reprojection`] for points
+    /// and for lines from segments through a lens that distorts, [`CostKind::LineResidual`] for other
+    /// lines, [`CostKind::ConicResidual`] for quadrics.
+    pub cost_kind: CostKind,
     /// Optimality evidence: `None` when no bound was computed (methods `linear` and `local`, an
     /// input refused before the search); `Some` with `certified == false` when a search ran and did
     /// not close the gap (or the status is not [`Status::Success`]).
@@ -256,12 +263,14 @@ pub struct Report {
 }
 
 impl Report {
-    /// The report a method starts from: status success, no cost yet, no certificate, no iterations.
-    pub fn new(method: Method) -> Report {
+    /// The report a method starts from: status success, no cost yet (of kind `cost_kind`), no
+    /// certificate, no iterations.
+    pub fn new(method: Method, cost_kind: CostKind) -> Report {
         Report {
             method,
             status: Status::Success,
             cost: f64::NAN,
+            cost_kind,
             certificate: None,
             iterations: 0,
             termination: Termination::ClosedForm,
@@ -303,9 +312,9 @@ impl Report {
         }
     }
 
-    /// The report of a local minimisation that ended as `summary` says (`summary.final_cost` is the
-    /// solvers' `½ Σ`, so the cost of eq. 19 is twice it).
-    pub(crate) fn of_local(summary: &Summary) -> Report {
+    /// The report of a local minimisation of a cost of kind `cost_kind` that ended as `summary` says
+    /// (`summary.final_cost` is the solvers' `½ Σ`, so the cost is twice it).
+    pub(crate) fn of_local(summary: &Summary, cost_kind: CostKind) -> Report {
         Report {
             status: if summary.termination.converged() {
                 Status::Success
@@ -315,7 +324,7 @@ impl Report {
             cost: 2.0 * summary.final_cost,
             iterations: summary.iterations,
             termination: summary.termination,
-            ..Report::new(Method::Local)
+            ..Report::new(Method::Local, cost_kind)
         }
     }
 }

@@ -45,7 +45,7 @@ use crate::triangulation::line::residual::LineFrame;
 use crate::triangulation::point::robust::reselect_at_optimum;
 use crate::triangulation::uncertainty::covariance_of_information;
 use crate::triangulation::views::View;
-use crate::triangulation::{Method, Status, TriangulationOptions};
+use crate::triangulation::{CostKind, Method, Status, TriangulationOptions};
 use nalgebra::{Matrix2, Matrix2x3, Matrix3x4, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector6};
 
 /// One segment observed through a camera: the camera, its pose, the observed (distorted) endpoints
@@ -376,6 +376,7 @@ fn through_lenses(
     }
     let mut record = finish(&problem, &line, result.report.clone())?;
     record.report.cost = exact_cost(&used, record.plucker.coordinates());
+    record.report.cost_kind = CostKind::Reprojection;
     record.covariance = exact_covariance(&problem, &used, &record.chart);
     record.inliers = result.inliers.take();
     *result = record;

@@ -71,7 +71,7 @@ use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::covariance::whitenings;
 use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras, View};
-use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use super::{Certificate, CertificateKind, CostKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::global::relative_gap;
 use crate::optim::{trust_region, Termination};
@@ -233,7 +233,7 @@ pub(crate) fn solve_views(
     started: Instant,
 ) -> PointTriangulation {
     let linear = linear_point(views, frame);
-    let mut report = Report::new(opts.method);
+    let mut report = Report::new(opts.method, CostKind::Reprojection);
     let finish = |point: Vector3<f64>, mut report: Report| {
         let covariance = point_covariance(views, &point);
         report.test_residuals(2 * views.len(), 3);
