@@ -14,7 +14,7 @@ from triangulation_scenes import METHODS, cameras, cost_eq19, depths, many_start
 import pluecker
 
 
-REPORT_FIELDS = ("method", "status", "success", "cost", "certificate", "certified", "iterations", "termination",
+REPORT_FIELDS = ("method", "status", "success", "cost", "cost_kind", "certificate", "certified", "iterations", "termination",
                  "time_seconds", "residual_test")
 
 
