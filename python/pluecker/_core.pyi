@@ -856,8 +856,9 @@ def triangulate_line(
     (each view's ``Camera`` or ``LensCamera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part,
     ``lines`` are (n, 2, 2) segments in the observed (distorted) pixels and ``covariances`` (n, 2, 2, 2)
     their endpoints' covariances:
-    through a distorting lens the cost is the endpoints' distances to the line's curved images, never
-    certified (``optimal`` gives ``gap_not_closed``)."""
+    through a distorting lens the cost is the endpoints' distances to the line's curved images
+    (``cost_kind`` ``'reprojection'``), never certified (``optimal`` gives ``gap_not_closed``); without
+    distortion it is eq. 19 on the segments' line residuals (``'line_residual'``), certified."""
 
 def triangulate_lines(
     projections: ArrayLike,

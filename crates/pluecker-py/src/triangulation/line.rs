@@ -223,8 +223,9 @@ fn endpoint_covariances(
 /// endpoints are the observed (distorted) pixels, and `covariances` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
 /// pixels (else `sigma` px per coordinate, 1 by default). Through a distorting lens the cost is the
 /// segments' reprojection error through the exact projection (the endpoints' distances to the line's
-/// curved images), minimised locally and never certified (`optimal` reports `gap_not_closed`); without
-/// distortion it is the pinhole problem of the segments, with its certificate.
+/// curved images, `cost_kind` `reprojection`), minimised locally and never certified (`optimal` reports
+/// `gap_not_closed`); without distortion it is the pinhole problem of the segments, eq. 19 on their line
+/// residuals (`line_residual`), with its certificate.
 #[pyfunction]
 #[pyo3(signature = (projections, lines, covariances = None, *, sigma = None, options = None, cameras = None))]
 #[allow(clippy::too_many_arguments)]

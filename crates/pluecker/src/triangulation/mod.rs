@@ -4,6 +4,8 @@
 //! `Σᵢ ‖Lᵢ rᵢ‖²`, with `rᵢ` the residual of eq. 17 in view `i` (2 entries for points and lines, 5 for
 //! conics) and `Lᵢ` the Cholesky factor of the inverse covariance of that observation (eq. 18; the
 //! identity when no covariance is given, so that the cost of a point is its squared pixel error).
+//! Lines from segments seen through a lens that distorts minimise the segments' reprojection cost
+//! instead (`line::lens`); every result says which cost it reports ([`Report::cost_kind`]).
 //! Three methods ([`Method`]): a linear (DLT-style) solution, a local minimisation from it, and the
 //! globally optimal answer of branch and bound (section 4) whose [`Certificate`] carries a lower
 //! bound on the cost of every 3-D primitive. The paper bounds its initial search domain with a

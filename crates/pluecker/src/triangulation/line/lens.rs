@@ -29,7 +29,8 @@
 //! `F`. When no camera distorts (pinholes, or lenses whose distortion is the identity:
 //! [`LensCamera::distorts`]) the first-order problem is the pinhole problem of
 //! [`super::triangulate_line_segments`] (eq. 19 with each segment's line and the covariance of its
-//! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19,
+//! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19
+//! ([`crate::CostKind::LineResidual`]),
 //! not `F`, and its certificate is the one of [`super`].
 
 use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
