@@ -203,7 +203,6 @@ OPTIONAL_VALUES = {
     (pluecker.PoseOptions, "certify"): pluecker.CertifyOptions(),
     (pluecker.RansacOptions, "time_budget"): 1.5,
     (pluecker.TriangulationOptions, "outlier_threshold"): 3.0,
-    (pluecker.TriangulationOptions, "max_reprojection_error"): 2.0,
 }
 
 

@@ -113,7 +113,7 @@ NUMBER_OPTIONS = [(pluecker.PoseOptions, name) for name in
                   ("point_threshold", "line_threshold", "confidence", "time_budget", "max_iterations", "seed",
                    "min_inliers")] + \
                  [(pluecker.TriangulationOptions, name) for name in
-                  ("max_reprojection_error", "local_max_iterations")] + \
+                  ("outlier_threshold", "local_max_iterations")] + \
                  [(pluecker.CertifyOptions, name) for name in ("max_relative_gap", "max_nodes")]
 
 
@@ -134,7 +134,7 @@ def test_a_bool_is_not_a_number(option, value):
 @pytest.mark.parametrize("call,name", [
     (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_nodes=True))), "max_nodes"),
     (lambda P, x: pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=True))), "max_relative_gap"),
-    (lambda P, x: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(max_reprojection_error=True)), "max_reprojection_error"),
+    (lambda P, x: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(outlier_threshold=True)), "outlier_threshold"),
     (lambda P, x: pluecker.triangulate_line(P, np.zeros((3, 2, 2)), sigma=True), "sigma"),
     (lambda P, x: pluecker.fit_line(x, sigma=True), "sigma"),
     (lambda P, x: pluecker.Camera(True, 800, 320, 240), "fx"),

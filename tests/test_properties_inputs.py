@@ -221,7 +221,7 @@ def cameras_of(draw, views: int):
 
 GAPS = st.one_of(st.none(), st.sampled_from([1e-6, 1e-3, 0.1, 0.0, -1.0, np.nan, True]))
 NODES = st.one_of(st.none(), st.integers(-2, 30), st.sampled_from([2**64, True]))
-GAMMAS = st.one_of(st.none(), st.sampled_from([0.5, 10.0, 0.0, np.inf]))
+THRESHOLDS = st.one_of(st.none(), st.sampled_from([0.5, 10.0, 0.0, np.inf]))
 METHODS = st.sampled_from(["linear", "local", "optimal", "best"])
 
 
@@ -239,10 +239,10 @@ def point_problems(draw):
     return P, x, cov
 
 
-@given(point_problems(), METHODS, GAPS, GAMMAS, NODES)
-def test_triangulate_point(problem, method, gap, gamma, nodes):
+@given(point_problems(), METHODS, GAPS, THRESHOLDS, NODES)
+def test_triangulate_point(problem, method, gap, threshold, nodes):
     P, x, cov = problem
-    r = outcome(lambda: pluecker.triangulate_point(P, x, cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_relative_gap=gap, max_nodes=nodes), max_reprojection_error=gamma)))
+    r = outcome(lambda: pluecker.triangulate_point(P, x, cov, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_relative_gap=gap, max_nodes=nodes), outlier_threshold=threshold)))
     if isinstance(r, pluecker.PointTriangulation):
         check_report(r, gap_of(gap))
         if (r.status == "success"):

@@ -51,7 +51,7 @@ def test_options_round_trip(cls):
     (pluecker.PoseOptions, "penalty", 7.5), (pluecker.PoseOptions, "method", "newton"),
     (pluecker.PoseOptions, "sigma_px", 0.5), (pluecker.RansacOptions, "seed", 12),
     (pluecker.RansacOptions, "time_budget", 0.25), (pluecker.TriangulationOptions, "line_bound", "relaxation"),
-    (pluecker.TriangulationOptions, "max_reprojection_error", 3.0),
+    (pluecker.TriangulationOptions, "outlier_threshold", 3.0),
 ])
 def test_an_option_set_is_kept_and_compared(cls, field, value):
     options = cls(**{field: value})

@@ -223,6 +223,92 @@ def test_pinhole_cameras_and_a_zero_distortion_lens_keep_the_pinhole_certificate
         assert min(np.linalg.norm(r.plucker - today.plucker), np.linalg.norm(r.plucker + today.plucker)) < 1e-8
 
 
+#: The distance ``D`` (px) from an observed image line to the origin of its frame (Josephson & Kahl section 3.1,
+#: ``pluecker.triangulation::line::residual::LINE_FRAME_DISTANCE``), stated in docs/triangulation.md.
+FRAME_DISTANCE = 1000.0
+
+
+def _reprojection_and_line_residual_terms(sc, line):
+    """Per view, this file's own reprojection term (the endpoints' squared Mahalanobis distances to the straight
+    image of ``line``, unit normal ``m``) and the line-residual term of docs/triangulation.md,
+    ``(D/δ)² (x²/(nᵀC_a n) + y²/(nᵀC_b n))`` with ``n`` the observed line's normal and ``δ`` the distance of its
+    frame's origin to the image line."""
+    A, B = line
+    out = []
+    for (R, t), ends, cov in zip(sc.poses, sc.segments, sc.covs):
+        P = sc.lens.pinhole.P(R, t)
+        image = np.cross(P @ np.append(A, 1.0), P @ np.append(B, 1.0))
+        image = image / np.linalg.norm(image[:2])
+        m = image[:2]
+        a, b = ends
+        n = np.array([a[1] - b[1], b[0] - a[0]]) / np.linalg.norm(b - a)
+        offset = -n @ (a + b) / 2
+        if offset > 0:
+            n, offset = -n, -offset
+        origin = n * (FRAME_DISTANCE - offset)
+        x, y, delta = (image @ np.append(p, 1.0) for p in (a, b, origin))
+        reprojection = x * x / (m @ cov[0] @ m) + y * y / (m @ cov[1] @ m)
+        line_residual = (FRAME_DISTANCE / delta) ** 2 * (x * x / (n @ cov[0] @ n) + y * y / (n @ cov[1] @ n))
+        out.append((reprojection, line_residual))
+    return np.array(out)
+
+
+def test_segments_say_which_cost_they_report_as_the_distortion_goes_to_zero():
+    """One OPENCV camera, f = 300 px, at k1 = 0 and k1 = 1e-12. Without distortion a line from segments is the
+    pinhole problem: eq. 19 on the segments' line residuals (``line_residual``), certified. With any distortion it
+    is the endpoints' distances to the curved images (``reprojection``), not certified. The two are different
+    functions — their minima differ by 0.85 % here — so the result names its ``cost_kind``; each kind is continuous
+    as k1 goes to 0: the k1 = 1e-12 answer's cost is this file's pixel cost (pycolmap, k1 = 0) of it. The
+    relation between the two costs stated in docs/triangulation.md holds at the certified line, with isotropic and
+    with anisotropic endpoint covariances."""
+    params = [300.0, 300.0, 320.0, 240.0, 0.0, 0.0, 0.0, 0.0]
+    sc = Scene("OPENCV", params, n=3, off_axis=0.3, max_angle=0.9, noise=1.0, anisotropic=False, seed=3)
+
+    def solve(k1):
+        lens = pluecker.LensCamera("OPENCV", [*params[:4], k1, 0.0, 0.0, 0.0])
+        return pluecker.triangulate_line(sc.P, sc.segments, sc.covs, cameras=[lens] * 3)
+
+    plain_lens = pluecker.LensCamera("OPENCV", params)
+    pinhole, tiny = solve(0.0), solve(1e-12)
+    assert (pinhole.cost_kind, pinhole.status, pinhole.certified) == ("line_residual", "success", True), pinhole
+    assert (tiny.cost_kind, tiny.status, tiny.certified) == ("reprojection", "gap_not_closed", False), tiny
+    assert tiny.certificate is None
+    line_pinhole, line_tiny = _as_points(pinhole, sc.truth), _as_points(tiny, sc.truth)
+    # The reprojection cost, continuous in k1: a distortion of 1e-12 moves a pixel by < 1e-9 px here.
+    assert abs(sc.cost(line_tiny) - tiny.cost) <= 1e-7 * tiny.cost
+    # The certified line's reported cost is eq. 19, not its reprojection cost, and it does not minimise the latter.
+    terms = _reprojection_and_line_residual_terms(sc, line_pinhole)
+    assert abs(terms[:, 0].sum() - sc.cost(line_pinhole)) <= 1e-7 * pinhole.cost
+    assert abs(terms[:, 1].sum() - pinhole.cost) <= 1e-7 * pinhole.cost
+    assert abs(pinhole.cost - sc.cost(line_pinhole)) > 1e-3 * pinhole.cost
+    assert sc.cost(line_pinhole) > tiny.cost * (1 + 1e-4)
+    skewed = Scene("OPENCV", params, n=3, off_axis=0.3, max_angle=0.9, noise=1.0, anisotropic=True, seed=3)
+    r = pluecker.triangulate_line(skewed.P, skewed.segments, skewed.covs, cameras=[plain_lens] * 3)
+    assert r.cost_kind == "line_residual" and r.certified, r
+    terms = _reprojection_and_line_residual_terms(skewed, _as_points(r, skewed.truth))
+    assert abs(terms[:, 0].sum() - skewed.cost(_as_points(r, skewed.truth))) <= 1e-7 * r.cost
+    assert abs(terms[:, 1].sum() - r.cost) <= 1e-7 * r.cost
+    print(f"k1 = 0: {pinhole.cost_kind} {pinhole.cost:.5f} ({pinhole.status}; reprojection cost of that line "
+          f"{sc.cost(line_pinhole):.5f}); k1 = 1e-12: {tiny.cost_kind} {tiny.cost:.5f} ({tiny.status})")
+
+
+def test_a_batch_names_each_tracks_cost_kind():
+    """A batch with ``cameras`` where one track is seen through a fisheye and one through lenses that do not distort:
+    each track's ``cost_kind`` is its single call's (``reprojection``, ``line_residual``), as are its cost and status."""
+    fish = Scene(*FISHEYE, n=3, off_axis=np.radians(65), max_angle=np.radians(80), noise=1.0, anisotropic=False, seed=13)
+    params = [300.0, 300.0, 320.0, 240.0, 0.0, 0.0, 0.0, 0.0]
+    plain = Scene("OPENCV", params, n=3, off_axis=0.3, max_angle=0.9, noise=1.0, anisotropic=False, seed=3)
+    P = np.concatenate([fish.P, plain.P])
+    cams = [fish.lens] * 3 + [plain.lens] * 3
+    segments, covs = np.concatenate([fish.segments, plain.segments]), np.concatenate([fish.covs, plain.covs])
+    track, image = np.array([0, 0, 0, 1, 1, 1]), np.arange(6)
+    batch = pluecker.triangulate_line_observations(P, track, image, segments, covs, cameras=cams)
+    assert list(batch.cost_kind) == ["reprojection", "line_residual"]
+    for t, rows in enumerate((slice(0, 3), slice(3, 6))):
+        single = pluecker.triangulate_line(P[rows], segments[rows], covs[rows], cameras=cams[rows])
+        assert (batch.cost_kind[t], batch.status[t], batch.cost[t]) == (single.cost_kind, single.status, single.cost)
+
+
 def test_bad_input_names_the_argument_and_the_row():
     sc = Scene(*STRONG_RADIAL, n=3, off_axis=0.04, max_angle=np.arctan(0.12), noise=1.0, anisotropic=False, seed=11)
     cams = [sc.lens] * 3

@@ -17,7 +17,7 @@ METHODS = pluecker.TRIANGULATION_METHODS
 #: Branch and bound is capped so that the optimal runs of the batch tests stay short; the equality of a
 #: batch with single calls holds at any cap.
 NODES = 30
-REPORT = ("cost", "certified", "status", "iterations")
+REPORT = ("cost", "cost_kind", "certified", "status", "iterations")
 #: The batch columns of a single result's `certificate` (NaN bounds, "none" and 0 nodes without one).
 CERTIFICATE_COLUMNS = ("lower_bound", "raw_lower_bound", "relative_gap", "nodes")
 

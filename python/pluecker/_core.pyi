@@ -255,8 +255,8 @@ class PoseStage:
     name: str
     """Name of the stage."""
     cost_kind: str
-    """What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
-    (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
+    """What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²),
+    `reprojection` (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
     """
     rotation: NDArray[np.float64]
     """Rotation `R` at the end of the stage, `x_cam = R X_world + t`."""
@@ -573,14 +573,12 @@ class TriangulationOptions:
     given to the function wins over :attr:`method`."""
 
     # fields of TriangulationOptions (generated: python -m pluecker._stubgen)
-    def __new__(cls, *, method: str = 'optimal', certify: CertifyOptions = ..., max_reprojection_error: Optional[float] = None, outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', local_max_iterations: int = 100) -> "TriangulationOptions": ...
+    def __new__(cls, *, method: str = 'optimal', certify: CertifyOptions = ..., outlier_threshold: Optional[float] = None, line_bound: str = 'taylor', quadric_bound: str = 'convexity', local_max_iterations: int = 100) -> "TriangulationOptions": ...
     __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """Estimator, one of `TRIANGULATION_METHODS`: `linear`, `local` or `optimal` (certified)."""
     certify: CertifyOptions
     """Method `optimal`: the certificate's gap and node cap (`max_nodes=None`: 2000 nodes of the conic branch and bounds, points, quadrics and `line_bound="relaxation"`; 50000 of the Taylor bound of lines), the object itself (`options.certify.max_nodes = 10` takes effect)."""
-    max_reprojection_error: Optional[float]
-    """The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing."""
     outlier_threshold: Optional[float]
     """Points and lines: reject observations whose whitened error (pixels without `covariances`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation."""
     line_bound: str
@@ -601,13 +599,19 @@ class TriangulationReport:
     """The method that ran: `linear`, `local` or `optimal`."""
     status: str
     """`success`, or why not: `gap_not_closed` (the certificate's search hit `certify.max_nodes`), `not_converged`, `behind_camera`,
-    `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
-    `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
+    `at_infinity` (no finite estimate: NaN), `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
     """
     success: bool
     """`status == 'success'`."""
     cost: float
-    """The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate."""
+    """The cost at the estimate, of kind `cost_kind`: eq. 19 (sum of squared whitened residuals; for points the
+    reprojection errors), or for segments seen through a lens that distorts their reprojection cost.
+    """
+    cost_kind: str
+    """What `cost` measures, and what the certificate bounds: `reprojection` (points; segments
+    through a lens that distorts: Σ squared distances of the endpoints to the curved images), `line_residual`
+    (other lines: eq. 19 on the image lines' residuals) or `conic_residual` (quadrics).
+    """
     certificate: Optional[Certificate]
     """The proof of global optimality (`Certificate`: `certified`, `lower_bound`, `raw_lower_bound`, `relative_gap`,
     `kind`, `domain`, `nodes`); `None` when no bound was computed (methods `linear` and `local`, input refused
@@ -697,7 +701,12 @@ class BatchReport:
     status: NDArray[np.str_]
     """Per track: `success`, or why not (the statuses of `TriangulationReport`, and `too_few_views`, `non_finite`, `degenerate`, ... for a rejected track)."""
     cost: NDArray[np.float64]
-    """Per track: the cost of eq. 19 at the estimate (NaN for a rejected track)."""
+    """Per track: the cost at the estimate, of kind `cost_kind` (NaN for a rejected track)."""
+    cost_kind: NDArray[np.str_]
+    """Per track: what `cost` measures, as `TriangulationReport.cost_kind`: `reprojection` (points; lines from
+    segments through a lens that distorts), `line_residual` (other lines) or `conic_residual` (quadrics); for a
+    rejected track the primitive's own (`line_residual` for lines).
+    """
     lower_bound: NDArray[np.float64]
     """Per track: the proved lower bound on the cost (the single result's `certificate.lower_bound`; NaN: no bound was computed, as for `linear`, `local` or a rejected track)."""
     raw_lower_bound: NDArray[np.float64]
@@ -847,8 +856,9 @@ def triangulate_line(
     (each view's ``Camera`` or ``LensCamera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part,
     ``lines`` are (n, 2, 2) segments in the observed (distorted) pixels and ``covariances`` (n, 2, 2, 2)
     their endpoints' covariances:
-    through a distorting lens the cost is the endpoints' distances to the line's curved images, never
-    certified (``optimal`` gives ``gap_not_closed``)."""
+    through a distorting lens the cost is the endpoints' distances to the line's curved images
+    (``cost_kind`` ``'reprojection'``), never certified (``optimal`` gives ``gap_not_closed``); without
+    distortion it is eq. 19 on the segments' line residuals (``'line_residual'``), certified."""
 
 def triangulate_lines(
     projections: ArrayLike,

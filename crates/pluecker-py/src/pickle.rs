@@ -17,7 +17,7 @@ use pluecker::geometry::Ellipse;
 use pluecker::optim::Termination;
 use pluecker::pose::{CovarianceSource, Method as PoseMethod, PoseDetails, RansacReport, RansacStop, StageReport};
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
-use pluecker::triangulation::{Certificate, CertificateKind, Method, Report, Status};
+use pluecker::triangulation::{Certificate, CertificateKind, CostKind, Method, Report, Status};
 use pluecker::Primitive;
 use pluecker::{Camera, Pose, PoseResult};
 use pyo3::prelude::*;
@@ -217,6 +217,7 @@ pack_by_name!(
     Method,
     Status,
     CertificateKind,
+    CostKind,
     Primitive,
     PoseMethod,
     CovarianceSource,
@@ -313,6 +314,7 @@ pack_struct!(Report {
     method,
     status,
     cost,
+    cost_kind,
     certificate,
     iterations,
     termination,

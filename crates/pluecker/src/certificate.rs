@@ -154,14 +154,14 @@ impl CertificateKind {
 #[derive(Debug, Clone, Copy)]
 pub struct Certificate {
     /// A lower bound on the cost of eq. 19 over every admissible primitive, capped at the cost:
-    /// `min(raw_lower_bound, cost)` (`0` when the search set was proved empty, status `infeasible`).
-    /// A result without a bound carries no certificate (`Option<Certificate>`).
+    /// `min(raw_lower_bound, cost)`. A result without a bound carries no certificate
+    /// (`Option<Certificate>`).
     pub lower_bound: f64,
-    /// The bound as the search or test proved it, before the cap at the cost (`+∞` when the search
-    /// set was proved empty). A bound above the cost of an admissible
-    /// primitive would disprove the certificate: tests check it against independently computed costs.
+    /// The bound as the search or test proved it, before the cap at the cost (`+∞` when a search
+    /// proved that its domain holds no admissible answer). A bound above the cost of an admissible
+    /// answer would disprove the certificate: tests check it against independently computed costs.
     pub raw_lower_bound: f64,
-    /// `(cost − lower_bound) / max(cost, 1e-12)` (`1` when the search set was proved empty).
+    /// `(cost − lower_bound) / max(cost, 1e-12)`.
     pub relative_gap: f64,
     /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
     pub certified: bool,
@@ -190,20 +190,6 @@ impl PartialEq for Certificate {
 }
 
 impl Certificate {
-    /// The certificate of a search that proved its domain holds no admissible primitive (every one
-    /// breaks `max_reprojection_error` in some view): no bound to cap, a raw bound of `+∞`.
-    pub(crate) fn infeasible(solver_iterations: usize) -> Certificate {
-        Certificate {
-            lower_bound: 0.0,
-            raw_lower_bound: f64::INFINITY,
-            relative_gap: 1.0,
-            certified: false,
-            kind: CertificateKind::BranchAndBound,
-            nodes: 0,
-            solver_iterations,
-        }
-    }
-
     /// The certificate of a convexity test whose (raw) lower bound on the cost is `raw_lower_bound`,
     /// when it closes the gap (`relative_gap(cost, min(raw_lower_bound, cost)) ≤ max_relative_gap`);
     /// `None` otherwise.

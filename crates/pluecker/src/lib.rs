@@ -106,6 +106,7 @@ pub mod camera_model;
 pub(crate) mod certificate;
 pub mod chi_square;
 pub(crate) mod consensus;
+pub(crate) mod cost_kind;
 pub(crate) mod curved_line;
 pub(crate) mod error;
 pub mod geometry;
@@ -128,6 +129,7 @@ pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Method` and result stay in their
 // module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.
 pub use certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
+pub use cost_kind::CostKind;
 pub use pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
     RansacReport, RansacStop,

@@ -28,8 +28,6 @@ pub enum Status {
     /// Triangulation: the estimate is a point at infinity: parallel rays, or every point in front of
     /// the cameras costs more than a point at infinity. No finite point is returned.
     AtInfinity,
-    /// Triangulation: no primitive has every reprojection error below the user's γ.
-    Infeasible,
     /// The solver failed numerically (a singular system, a non-finite cost, a conic solver failure).
     NumericalFailure,
     /// Robust estimation: too few observations or correspondences agree on one answer (pose: fewer

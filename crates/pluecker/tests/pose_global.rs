@@ -556,7 +556,7 @@ fn reported_costs_are_sums_of_squares() {
         result.cost
     );
     let refinement = result.details.stages.last().unwrap();
-    assert_eq!(refinement.cost_kind, "reprojection");
+    assert_eq!(refinement.cost_kind, pluecker::CostKind::Reprojection);
     assert!(
         (refinement.final_cost - 2.0 * half).abs() <= 1e-9 * half.max(1.0),
         "{}",

@@ -164,7 +164,12 @@ fn the_msac_score_is_a_sum_of_truncated_squares() {
     let (scene, corr) = scene_with_outliers(60, 0, 0.3, 11);
     let result = estimate_pose(&scene.camera, &corr, &robust(3)).unwrap();
     let report = result.details.ransac.unwrap();
-    let stage = result.details.stages.iter().find(|s| s.cost_kind == "msac").unwrap();
+    let stage = result
+        .details
+        .stages
+        .iter()
+        .find(|s| s.cost_kind == pluecker::CostKind::Msac)
+        .unwrap();
     let tau2 = RansacOptions::default().point_threshold.powi(2);
     let k = scene.camera.matrix();
     let oracle: f64 = corr

@@ -18,7 +18,7 @@ use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments,
 use pluecker::triangulation::line::{triangulate_line_observations_views, SparseSegmentTracks};
 use pluecker::triangulation::Csr;
 use pluecker::triangulation::View;
-use pluecker::triangulation::{Method, Status, TriangulationOptions};
+use pluecker::triangulation::{CostKind, Method, Status, TriangulationOptions};
 use pluecker::{AnyCamera, Camera, Error, Pose};
 
 /// The oracle's lenses.
@@ -497,6 +497,7 @@ fn through_strong_radial_and_80_degree_fisheye_the_line_is_the_oracles_minimum_a
                 assert_eq!(r.report.status, expected, "{name} {method:?}");
                 assert!(!r.report.certified(), "{name}: certified through a lens");
                 assert!(r.report.certificate.is_none(), "{name}: a bound on another cost");
+                assert_eq!(r.report.cost_kind, CostKind::Reprojection, "{name}");
                 let line = as_points(&r.point, &r.direction, &sc.truth);
                 let at_result = oracle_cost(&sc.obs, &line);
                 // The reported cost is the oracle's at the returned line (golden-section accuracy).
@@ -572,6 +573,7 @@ fn pinhole_views_and_a_zero_distortion_lens_keep_the_pinhole_certificate() {
         let matrices: Vec<_> = sc.obs.iter().map(|o| pinhole.projection(&o.pose)).collect();
         let today = triangulate_line_segments(&matrices, &segments, 1.0, &opts(Method::Optimal)).unwrap();
         assert!(today.report.certified());
+        assert_eq!(today.report.cost_kind, CostKind::LineResidual);
         for views in [
             sc.obs.iter().map(|o| View::new(pinhole, o.pose)).collect::<Vec<_>>(),
             views_of(&sc.obs),
@@ -579,6 +581,8 @@ fn pinhole_views_and_a_zero_distortion_lens_keep_the_pinhole_certificate() {
             let r = triangulate_line_segments_views(&views, &segments, None, &opts(Method::Optimal)).unwrap();
             assert_eq!(r.report.status, Status::Success);
             assert!(r.report.certified());
+            // The certificate bounds eq. 19 on the segments' line residuals, the cost reported.
+            assert_eq!(r.report.cost_kind, CostKind::LineResidual);
             assert_eq!(
                 r.report.certificate.map(|c| c.kind),
                 today.report.certificate.map(|c| c.kind)

@@ -520,17 +520,6 @@ fn a_view_with_huge_covariance_is_ignored() {
 }
 
 #[test]
-fn too_small_gamma_is_infeasible() {
-    let scene = line_scene(4, 0.8, 13);
-    let mut rng = Rng::new(14);
-    let segments = scene.noisy_segments(1.0, &mut rng);
-    let mut o = opts(Method::Optimal);
-    o.max_reprojection_error = Some(1e-4);
-    let r = triangulate_line_segments(&scene.cameras, &segments, 1.0, &o).unwrap();
-    common::assert_proved_empty(&r.report);
-}
-
-#[test]
 fn bad_input_is_rejected_with_the_argument_and_index() {
     let scene = line_scene(3, 0.8, 15);
     let lines = exact_lines(&scene);

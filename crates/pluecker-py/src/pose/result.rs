@@ -31,9 +31,9 @@ result_class! {
     PyPoseStage {
         /// Name of the stage.
         name = |s| s.inner.name.clone();
-        /// What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²), `reprojection`
-        /// (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
-        cost_kind = |s| s.inner.cost_kind;
+        /// What `initial_cost` and `final_cost` measure: `algebraic` (eqs. 13-15, 22 as ½ΣΦ²),
+        /// `reprojection` (Σ squared pixel residuals, px²) or `msac` (stage `ransac`: Σ min(e², τ²), px²).
+        cost_kind = |s| s.inner.cost_kind.as_str();
         /// Rotation `R` at the end of the stage, `x_cam = R X_world + t`.
         rotation = |s| s.inner.rotation;
         /// Translation `t` at the end of the stage, world units.
@@ -60,7 +60,7 @@ result_class! {
         let s = &self.inner;
         format!(
             "PoseStage(name='{}', cost_kind='{}', iterations={}, initial_cost={:e}, final_cost={:e}, termination='{}')",
-            s.name, s.cost_kind, s.iterations, s.initial_cost, s.final_cost, s.termination.as_str()
+            s.name, s.cost_kind.as_str(), s.iterations, s.initial_cost, s.final_cost, s.termination.as_str()
         )
     }
 }

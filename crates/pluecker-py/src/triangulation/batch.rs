@@ -16,7 +16,7 @@ use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;
 use pluecker::triangulation::TrackCameras;
-use pluecker::triangulation::{CertificateKind, Method, Report, Status};
+use pluecker::triangulation::{CertificateKind, CostKind, Method, Report, Status};
 use pluecker::Error;
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
@@ -57,6 +57,9 @@ fn not_started(status: &str, cost: f64) -> Option<StopReason> {
 pub(crate) trait TrackColumns: Default {
     /// The core's result of one track.
     type Track;
+    /// What a track's cost measures unless its report says otherwise (lines from segments through a
+    /// lens that distorts): the `cost_kind` of a track rejected or not started.
+    const COST_KIND: CostKind;
 
     /// Appends the estimate of a solved track and hands back its report.
     fn push(&mut self, track: Self::Track) -> Report;
@@ -147,7 +150,7 @@ pack_struct!(InlierColumns {
 /// The report columns and the estimate columns of the core's per-track `results` (track `t` is
 /// `results[t]`), solved with `method`.
 pub(crate) fn collect<C: TrackColumns>(method: Method, results: Vec<pluecker::Result<C::Track>>) -> (PyBatchReport, C) {
-    let mut report = PyBatchReport::with_capacity(method, results.len());
+    let mut report = PyBatchReport::with_capacity(method, C::COST_KIND, results.len());
     let mut columns = C::default();
     for (t, result) in results.into_iter().enumerate() {
         match result {
@@ -164,6 +167,10 @@ pub(crate) fn collect<C: TrackColumns>(method: Method, results: Vec<pluecker::Re
 pub struct PyBatchReport {
     method: &'static str,
     cost: Vec<f64>,
+    /// What each track's cost measures.
+    cost_kind: Vec<&'static str>,
+    /// The `cost_kind` of a track without a report (rejected or not started).
+    default_cost_kind: CostKind,
     lower_bound: Vec<f64>,
     raw_lower_bound: Vec<f64>,
     relative_gap: Vec<f64>,
@@ -183,6 +190,7 @@ pub struct PyBatchReport {
 /// as they finish, [`PyBatchReport::rows_mut`]).
 pub(crate) struct ReportRow<'a> {
     cost: &'a mut f64,
+    cost_kind: &'a mut &'static str,
     lower_bound: &'a mut f64,
     raw_lower_bound: &'a mut f64,
     relative_gap: &'a mut f64,
@@ -199,6 +207,7 @@ impl ReportRow<'_> {
     /// A solved track's report.
     pub(crate) fn solved(self, report: &Report) {
         *self.cost = report.cost;
+        *self.cost_kind = report.cost_kind.as_str();
         // A track without a certificate: NaN bounds and gap, "none", no nodes (the columns' docs).
         let (lower, raw, gap, certified, kind, nodes) = report.certificate.map_or(
             (f64::NAN, f64::NAN, f64::NAN, false, CertificateKind::None.as_str(), 0),
@@ -256,12 +265,14 @@ impl ReportRow<'_> {
 }
 
 impl PyBatchReport {
-    /// Columns for `n` tracks solved with `method`, each not started (`interrupted`) until its row
-    /// is written ([`PyBatchReport::rows_mut`]).
-    pub(crate) fn unstarted(method: Method, n: usize) -> PyResult<Self> {
+    /// Columns for `n` tracks solved with `method`, costs of kind `cost_kind`, each not started
+    /// (`interrupted`) until its row is written ([`PyBatchReport::rows_mut`]).
+    pub(crate) fn unstarted(method: Method, cost_kind: CostKind, n: usize) -> PyResult<Self> {
         Ok(PyBatchReport {
             method: method.as_str(),
             cost: column(f64::NAN, n)?,
+            cost_kind: column(cost_kind.as_str(), n)?,
+            default_cost_kind: cost_kind,
             lower_bound: column(f64::NAN, n)?,
             raw_lower_bound: column(f64::NAN, n)?,
             relative_gap: column(f64::NAN, n)?,
@@ -292,14 +303,16 @@ impl PyBatchReport {
             self.certified.par_iter_mut(),
             self.certificate.par_iter_mut(),
             self.status.par_iter_mut(),
+            self.cost_kind.par_iter_mut(),
         );
         numbers.into_par_iter().zip(labels.into_par_iter()).map(
             |(
                 (cost, lower_bound, relative_gap, time_seconds, nodes, iterations, residual_dof),
-                (raw_lower_bound, certified, certificate, status),
+                (raw_lower_bound, certified, certificate, status, cost_kind),
             )| {
                 ReportRow {
                     cost,
+                    cost_kind,
                     lower_bound,
                     raw_lower_bound,
                     relative_gap,
@@ -334,11 +347,13 @@ impl PyBatchReport {
         self.errors = errors;
     }
 
-    /// Empty columns for `n` tracks solved with `method`.
-    pub(crate) fn with_capacity(method: Method, n: usize) -> Self {
+    /// Empty columns for `n` tracks solved with `method`, costs of kind `cost_kind`.
+    pub(crate) fn with_capacity(method: Method, cost_kind: CostKind, n: usize) -> Self {
         PyBatchReport {
             method: method.as_str(),
             cost: Vec::with_capacity(n),
+            cost_kind: Vec::with_capacity(n),
+            default_cost_kind: cost_kind,
             lower_bound: Vec::with_capacity(n),
             raw_lower_bound: Vec::with_capacity(n),
             relative_gap: Vec::with_capacity(n),
@@ -356,6 +371,7 @@ impl PyBatchReport {
     /// A new last row, to write.
     fn push_row(&mut self) -> ReportRow<'_> {
         self.cost.push(f64::NAN);
+        self.cost_kind.push(self.default_cost_kind.as_str());
         self.lower_bound.push(0.0);
         self.raw_lower_bound.push(f64::NAN);
         self.relative_gap.push(1.0);
@@ -369,6 +385,7 @@ impl PyBatchReport {
         let last = self.cost.len() - 1;
         ReportRow {
             cost: &mut self.cost[last],
+            cost_kind: &mut self.cost_kind[last],
             lower_bound: &mut self.lower_bound[last],
             raw_lower_bound: &mut self.raw_lower_bound[last],
             relative_gap: &mut self.relative_gap[last],
@@ -453,8 +470,12 @@ result_class! {
         method = |b| b.method;
         /// Per track: `success`, or why not (the statuses of `TriangulationReport`, and `too_few_views`, `non_finite`, `degenerate`, ... for a rejected track).
         status = |b| b.status.clone();
-        /// Per track: the cost of eq. 19 at the estimate (NaN for a rejected track).
+        /// Per track: the cost at the estimate, of kind `cost_kind` (NaN for a rejected track).
         cost = |b| b.cost.clone();
+        /// Per track: what `cost` measures, as `TriangulationReport.cost_kind`: `reprojection` (points; lines from
+        /// segments through a lens that distorts), `line_residual` (other lines) or `conic_residual` (quadrics); for a
+        /// rejected track the primitive's own (`line_residual` for lines).
+        cost_kind = |b| b.cost_kind.clone();
         /// Per track: the proved lower bound on the cost (the single result's `certificate.lower_bound`; NaN: no bound was computed, as for `linear`, `local` or a rejected track).
         lower_bound = |b| b.lower_bound.clone();
         /// Per track: the proved bound before the cap at the cost (NaN without a bound).
@@ -494,6 +515,8 @@ result_class! {
 pack_struct!(PyBatchReport {
     method,
     cost,
+    cost_kind,
+    default_cost_kind,
     lower_bound,
     raw_lower_bound,
     relative_gap,

@@ -30,7 +30,7 @@ use pluecker::triangulation::line::{
     triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
     LineTracks, SparseLineTracks, SparseSegmentTracks,
 };
-use pluecker::triangulation::{Primitive, Report, TriangulationOptions};
+use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -223,8 +223,9 @@ fn endpoint_covariances(
 /// endpoints are the observed (distorted) pixels, and `covariances` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
 /// pixels (else `sigma` px per coordinate, 1 by default). Through a distorting lens the cost is the
 /// segments' reprojection error through the exact projection (the endpoints' distances to the line's
-/// curved images), minimised locally and never certified (`optimal` reports `gap_not_closed`); without
-/// distortion it is the pinhole problem of the segments, with its certificate.
+/// curved images, `cost_kind` `reprojection`), minimised locally and never certified (`optimal` reports
+/// `gap_not_closed`); without distortion it is the pinhole problem of the segments, eq. 19 on their line
+/// residuals (`line_residual`), with its certificate.
 #[pyfunction]
 #[pyo3(signature = (projections, lines, covariances = None, *, sigma = None, options = None, cameras = None))]
 #[allow(clippy::too_many_arguments)]
@@ -274,6 +275,7 @@ pub struct PyLineTriangulations {
 
 impl TrackColumns for PyLineTriangulations {
     type Track = LineTriangulation;
+    const COST_KIND: CostKind = CostKind::LineResidual;
 
     fn push(&mut self, track: LineTriangulation) -> Report {
         self.plucker.extend_from_slice(track.plucker.coordinates().as_slice());

@@ -48,9 +48,6 @@ options_class! {
         method: String = |o| o.inner.method.as_str(), |o, v| Method::parse(&v).map(|m| o.inner.method = m).map_err(to_py_err);
         /// Method `optimal`: the certificate's gap and node cap (`max_nodes=None`: 2000 nodes of the conic branch and bounds, points, quadrics and `line_bound="relaxation"`; 50000 of the Taylor bound of lines), the object itself (`options.certify.max_nodes = 10` takes effect).
         certify: Shared<PyCertifyOptions> = |o| o.certify.clone(), |o, v| Ok::<(), PyErr>(o.certify = v);
-        /// The paper's γ: search only where the whitened error is at most γ in every view; `None`: from the local solution, losing nothing.
-        max_reprojection_error: Option<Real> = |o| o.inner.max_reprojection_error,
-            |o, v| v.map(|r| r.get("max_reprojection_error")).transpose().map(|g| o.inner.max_reprojection_error = g);
         /// Points and lines: reject observations whose whitened error (pixels without `covariances`) exceeds this, by a consensus over view pairs, and solve on the rest (`inliers` of the result); `None`: use every observation.
         outlier_threshold: Option<Real> = |o| o.inner.outlier_threshold,
             |o, v| v.map(|r| r.get("outlier_threshold")).transpose().map(|g| o.inner.outlier_threshold = g);

@@ -34,7 +34,7 @@ use pluecker::triangulation::point::{
     triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
 };
 use pluecker::triangulation::View;
-use pluecker::triangulation::{Method, Primitive, Report};
+use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;
 use pluecker::{AnyCamera, Pose};
 use pyo3::exceptions::PyMemoryError;
@@ -155,6 +155,7 @@ pub struct PyPointTriangulations {
 
 impl TrackColumns for PyPointTriangulations {
     type Track = PointTriangulation;
+    const COST_KIND: CostKind = CostKind::Reprojection;
 
     fn push(&mut self, track: PointTriangulation) -> Report {
         self.x.extend_from_slice(track.point.as_slice());
@@ -249,7 +250,7 @@ impl PyPointTriangulations {
     /// track timed at the batch's mean `seconds`.
     fn linear(points: LinearPoints, seconds: f64) -> (PyBatchReport, Self) {
         let n = points.outcomes.len();
-        let mut report = PyBatchReport::with_capacity(Method::Linear, n);
+        let mut report = PyBatchReport::with_capacity(Method::Linear, Self::COST_KIND, n);
         let mut columns = PyPointTriangulations {
             x: Vec::with_capacity(3 * n),
             covariance: Vec::with_capacity(9 * n),
@@ -488,7 +489,7 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
 fn unstarted(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, PyPointTriangulations)> {
     py.allow_threads(|| {
         Ok((
-            PyBatchReport::unstarted(method, n)?,
+            PyBatchReport::unstarted(method, PyPointTriangulations::COST_KIND, n)?,
             PyPointTriangulations::unstarted(n)?,
         ))
     })

@@ -20,7 +20,7 @@ use pluecker::triangulation::quadric::{
     QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::uncertainty::QuadricCovariance;
-use pluecker::triangulation::{Primitive, Report};
+use pluecker::triangulation::{CostKind, Primitive, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -147,6 +147,7 @@ pub struct PyQuadricTriangulations {
 
 impl TrackColumns for PyQuadricTriangulations {
     type Track = QuadricTriangulation;
+    const COST_KIND: CostKind = CostKind::ConicResidual;
 
     fn push(&mut self, track: QuadricTriangulation) -> Report {
         self.dual.extend(row_major(&track.dual));

@@ -35,10 +35,11 @@ impl PyTriangulationReport {
             },
         );
         format!(
-            "method='{}', status='{}', cost={:.6e}, certificate={certificate}",
+            "method='{}', status='{}', cost={:.6e}, cost_kind='{}', certificate={certificate}",
             r.method.as_str(),
             r.status.as_str(),
             r.cost,
+            r.cost_kind.as_str(),
         )
     }
 }
@@ -48,13 +49,17 @@ result_class! {
         /// The method that ran: `linear`, `local` or `optimal`.
         method = |r| r.inner.method.as_str();
         /// `success`, or why not: `gap_not_closed` (the certificate's search hit `certify.max_nodes`), `not_converged`, `behind_camera`,
-        /// `at_infinity` (no finite estimate: NaN), `infeasible` (nothing within `max_reprojection_error`),
-        /// `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
+        /// `at_infinity` (no finite estimate: NaN), `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
         status = |r| r.inner.status.as_str();
         /// `status == 'success'`.
         success = |r| r.inner.status == Status::Success;
-        /// The cost of eq. 19 (sum of squared whitened reprojection errors) at the estimate.
+        /// The cost at the estimate, of kind `cost_kind`: eq. 19 (sum of squared whitened residuals; for points the
+        /// reprojection errors), or for segments seen through a lens that distorts their reprojection cost.
         cost = |r| r.inner.cost;
+        /// What `cost` measures, and what the certificate bounds: `reprojection` (points; segments
+        /// through a lens that distorts: Σ squared distances of the endpoints to the curved images), `line_residual`
+        /// (other lines: eq. 19 on the image lines' residuals) or `conic_residual` (quadrics).
+        cost_kind = |r| r.inner.cost_kind.as_str();
         /// The proof of global optimality (`Certificate`: `certified`, `lower_bound`, `raw_lower_bound`, `relative_gap`,
         /// `kind`, `domain`, `nodes`); `None` when no bound was computed (methods `linear` and `local`, input refused
         /// before the search). A search that did not close the gap gives `certified == False` and status `gap_not_closed`.

@@ -22,7 +22,7 @@ use super::linear::faugeras_toscani;
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
-use super::{stage, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
+use super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::Camera;
 use crate::camera_model::AnyCamera;
 use crate::error::Result;
@@ -240,7 +240,7 @@ fn estimator(
         };
         return Ok(Estimate {
             pose,
-            stages: vec![stage("linear", "reprojection", &pose, &summary, started)],
+            stages: vec![stage("linear", CostKind::Reprojection, &pose, &summary, started)],
             camera: Some(cal.camera),
             alternatives: vec![],
             valid: true,
@@ -288,7 +288,7 @@ fn estimator(
         };
         let (x, summary, others, valid) = select(runs, |x, _| joint.cost(x));
         let pose = to_world(&x, &cond);
-        let rotation_report = stage("rotation", "algebraic", &pose, &summary, started);
+        let rotation_report = stage("rotation", CostKind::Algebraic, &pose, &summary, started);
         let t_started = Instant::now();
         let translation_cost = JointCost {
             gram: translation_gram,
@@ -302,7 +302,7 @@ fn estimator(
             final_cost: translation_cost,
             termination: Termination::ClosedForm,
         };
-        let translation_report = stage("translation", "algebraic", &pose, &closed, t_started);
+        let translation_report = stage("translation", CostKind::Algebraic, &pose, &closed, t_started);
         let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
         return Ok(Estimate {
             pose,
@@ -346,7 +346,13 @@ fn estimator(
     let alternatives = others.iter().map(|x| to_world(x, &cond)).collect();
     Ok(Estimate {
         pose,
-        stages: vec![stage(opts.method.as_str(), "algebraic", &pose, &summary, started)],
+        stages: vec![stage(
+            opts.method.as_str(),
+            CostKind::Algebraic,
+            &pose,
+            &summary,
+            started,
+        )],
         camera: None,
         alternatives,
         valid,

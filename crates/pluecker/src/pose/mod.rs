@@ -26,6 +26,8 @@ pub(crate) mod robust;
 
 #[doc(no_inline)]
 pub use crate::certificate::{Certificate, CertifyOptions};
+#[doc(no_inline)]
+pub use crate::cost_kind::CostKind;
 pub use correspondences::Correspondences;
 pub use estimate::estimate_pose;
 pub use noise::ObservationNoise;
@@ -247,12 +249,12 @@ pub use crate::status::Status;
 pub struct StageReport {
     /// `"trust-region"`, `"rotation"`, `"translation"`, `"linear"`, `"ransac"`, `"refinement"`, ...
     pub name: String,
-    /// What its cost measures: `"algebraic"` (eqs. 13-15, 22 as `½ΣΦ²`, normalised units),
-    /// `"reprojection"` (`Σ` squared pixel residuals, px²) or `"msac"` (the robust loop's truncated
-    /// reprojection cost `Σ min(eᵢ², τᵢ²)`, px², over all correspondences; its iterations are the
-    /// samples drawn, and it ends `closed_form` when stopped by confidence, `max_iterations` on the
-    /// iteration cap or the time budget).
-    pub cost_kind: &'static str,
+    /// What its cost measures: [`CostKind::Algebraic`] (eqs. 13-15, 22 as `½ΣΦ²`, normalised units),
+    /// [`CostKind::Reprojection`] (`Σ` squared pixel residuals, px²) or [`CostKind::Msac`] (the robust
+    /// loop's truncated reprojection cost `Σ min(eᵢ², τᵢ²)`, px², over all correspondences; its
+    /// iterations are the samples drawn, and it ends `closed_form` when stopped by confidence,
+    /// `max_iterations` on the iteration cap or the time budget).
+    pub cost_kind: CostKind,
     /// Rotation at the end of the stage (world → camera).
     pub rotation: Matrix3<f64>,
     /// Translation at the end of the stage (world units).
@@ -378,13 +380,7 @@ impl CovarianceSource {
 }
 
 /// A stage report from a solver's summary; `started` is when the stage's clock started.
-pub(crate) fn stage(
-    name: &str,
-    cost_kind: &'static str,
-    pose: &Pose,
-    summary: &Summary,
-    started: Instant,
-) -> StageReport {
+pub(crate) fn stage(name: &str, cost_kind: CostKind, pose: &Pose, summary: &Summary, started: Instant) -> StageReport {
     StageReport {
         name: name.into(),
         cost_kind,

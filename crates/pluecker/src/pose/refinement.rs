@@ -20,7 +20,7 @@
 use super::candidates::SPREAD_SAMPLES;
 use super::correspondences::Conditioning;
 use super::reprojection::{Pose, ReprojectionCost};
-use super::{stage, PoseOptions, StageReport};
+use super::{stage, CostKind, PoseOptions, StageReport};
 use crate::camera::Camera;
 use crate::geometry::quaternion::{exp_so3, log_so3, rotation_distance};
 use crate::optim::Objective;
@@ -125,7 +125,7 @@ impl Minima {
             final_cost: m.cost,
             termination: m.termination,
         };
-        stage("refinement", "reprojection", &world, &total, self.started)
+        stage("refinement", CostKind::Reprojection, &world, &total, self.started)
     }
 
     /// The best cost found so far (infinite when none).
@@ -328,5 +328,8 @@ pub(crate) fn refine_conditioned(
     );
     let (x, summary) = trust_region::minimize(cost, x0, &settings(opts));
     let pose = Pose::new(x.rotation, cond.pose_to_world(&x.rotation, &x.translation));
-    (pose, stage("refinement", "reprojection", &pose, &summary, started))
+    (
+        pose,
+        stage("refinement", CostKind::Reprojection, &pose, &summary, started),
+    )
 }

@@ -11,7 +11,7 @@ use super::correspondences::{object_points, Correspondences};
 use super::lens::Observations;
 use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
-use super::{PoseDetails, PoseOptions, PoseResult, StageReport, Status};
+use super::{CostKind, PoseDetails, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
 use crate::certificate::{Certificate, CertificateKind};
 use crate::chi_square::ResidualTest;
@@ -131,7 +131,7 @@ pub(crate) fn assemble(
     let termination = stages.last().expect("at least one stage").termination;
     for stage in stages
         .iter_mut()
-        .filter(|s| matches!(s.cost_kind, "reprojection" | "msac"))
+        .filter(|s| matches!(s.cost_kind, CostKind::Reprojection | CostKind::Msac))
     {
         stage.initial_cost = sum_of_squares(stage.initial_cost);
         stage.final_cost = sum_of_squares(stage.final_cost);

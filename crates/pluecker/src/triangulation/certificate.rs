@@ -26,29 +26,19 @@ pub(crate) fn minimum(program: &Socp, e: Affine) -> (Option<Option<f64>>, usize)
     (value, s.iterations)
 }
 
-/// The certificate of a finished branch and bound whose best cost is `best_cost`: certified when the
-/// relative gap is at most `max_relative_gap`; [`Status::Infeasible`] when the whole box was proved
-/// empty (no primitive in the domain); [`Status::Interrupted`] or [`Status::TimeBudget`] when the
-/// call was stopped before the gap closed.
+/// The certificate of a finished branch and bound whose best cost is `best_cost` (its incumbent, a
+/// primitive of the searched domain): certified when the relative gap is at most `max_relative_gap`;
+/// [`Status::Interrupted`] or [`Status::TimeBudget`] when the call was stopped before the gap
+/// closed. A search that proved every region of its box empty although the box holds the incumbent
+/// has proved nothing (an artefact of the conic solver's infeasibility certificates):
+/// [`Status::NumericalFailure`] and no certificate.
 pub(crate) fn certificate_of<C>(
     result: &BranchAndBoundResult<C>,
     best_cost: f64,
     max_relative_gap: f64,
-) -> (Status, Certificate) {
-    let base = Certificate {
-        kind: CertificateKind::BranchAndBound,
-        nodes: result.nodes,
-        solver_iterations: result.solver_iterations,
-        // The bound the search proved over its box, before any cap (`lower_bound` also caps it at
-        // the incumbent's cost); `+∞` when the box was proved to hold no admissible primitive.
-        raw_lower_bound: result.box_lower_bound,
-        // Replaced below unless the box was proved empty (no bound to cap, status infeasible).
-        lower_bound: 0.0,
-        relative_gap: 1.0,
-        certified: false,
-    };
-    if result.lower_bound == f64::INFINITY {
-        return (Status::Infeasible, base);
+) -> (Status, Option<Certificate>) {
+    if result.box_lower_bound == f64::INFINITY {
+        return (Status::NumericalFailure, None);
     }
     let lower = result.lower_bound.min(best_cost);
     // The one gap formula of every certificate (points too): relative to max(cost, 1e-12).
@@ -61,12 +51,17 @@ pub(crate) fn certificate_of<C>(
     };
     (
         status,
-        Certificate {
+        Some(Certificate {
+            kind: CertificateKind::BranchAndBound,
+            nodes: result.nodes,
+            solver_iterations: result.solver_iterations,
+            // The bound the search proved over its box, before any cap (`lower_bound` also caps it
+            // at the incumbent's cost).
+            raw_lower_bound: result.box_lower_bound,
             lower_bound: lower,
             relative_gap,
             certified,
-            ..base
-        },
+        }),
     )
 }
 
@@ -212,6 +207,7 @@ mod tests {
                 "slack {slack}: the test needs a gap in (1e-3, 2e-3): {true_gap}"
             );
             let (status, c) = certificate_of(&result, cost, 1e-3);
+            let c = c.expect("a bound");
             assert!(!c.certified, "slack {slack}: certified with a true gap of {true_gap}");
             assert_eq!(status, Status::GapNotClosed);
             assert_eq!(c.raw_lower_bound, raw);
@@ -222,6 +218,7 @@ mod tests {
                 c.relative_gap
             );
             let (status, c) = certificate_of(&result, cost, 2e-3);
+            let c = c.expect("a bound");
             assert!(c.certified && status == Status::Success, "slack {slack}");
             // The convexity test's certificate: the same boundary.
             assert!(
@@ -231,6 +228,30 @@ mod tests {
             let c = Certificate::of_convexity_test(cost, raw, 2e-3).expect("certified at 2e-3");
             assert!((c.relative_gap - true_gap).abs() <= 1e-12 && c.raw_lower_bound == raw);
         }
+    }
+
+    /// Every region proved empty.
+    struct Nothing;
+
+    impl BoundingOracle for Nothing {
+        type Candidate = f64;
+        type Inherited = ();
+        fn bound(&mut self, _: &Region) -> Bound<f64> {
+            Bound::Empty { solver_iterations: 1 }
+        }
+    }
+
+    /// A search that proves its whole box empty although the box holds its incumbent (the local
+    /// solution, inside every domain of the line and quadric searches) has proved nothing: no
+    /// certificate and a numerical failure, never a certified answer with a raw bound of +∞.
+    #[test]
+    fn a_box_proved_empty_around_the_incumbent_certifies_nothing() {
+        let root = Region::new(vec![-1.0], vec![1.0]);
+        let result = branch_and_bound(&mut Nothing, root, Some((0.9, 0.3)), &BranchAndBoundOptions::default());
+        assert_eq!(result.box_lower_bound, f64::INFINITY);
+        let (status, c) = certificate_of(&result, 0.9, 1e-3);
+        assert_eq!(status, Status::NumericalFailure);
+        assert!(c.is_none(), "{c:?}");
     }
 
     /// The raw bound is reported unclamped: a bound above the best cost (which only a wrong proof
@@ -243,6 +264,7 @@ mod tests {
         let mut oracle = Loose { slack: 0.0 };
         let result = branch_and_bound(&mut oracle, root, Some((0.9, 0.3)), &opts);
         let (_, c) = certificate_of(&result, 0.9, 1e-3);
+        let c = c.expect("a bound");
         assert!(c.raw_lower_bound >= 1.0 - 1e-12 && c.lower_bound == 0.9, "{c:?}");
     }
 }

@@ -4,9 +4,15 @@
 //! `Σᵢ ‖Lᵢ rᵢ‖²`, with `rᵢ` the residual of eq. 17 in view `i` (2 entries for points and lines, 5 for
 //! conics) and `Lᵢ` the Cholesky factor of the inverse covariance of that observation (eq. 18; the
 //! identity when no covariance is given, so that the cost of a point is its squared pixel error).
+//! Lines from segments seen through a lens that distorts minimise the segments' reprojection cost
+//! instead (`line::lens`); every result says which cost it reports ([`Report::cost_kind`]).
 //! Three methods ([`Method`]): a linear (DLT-style) solution, a local minimisation from it, and the
 //! globally optimal answer of branch and bound (section 4) whose [`Certificate`] carries a lower
-//! bound on the cost of every 3-D primitive.
+//! bound on the cost of every 3-D primitive. The paper bounds its initial search domain with a
+//! user-given largest reprojection error `γ` (sections 4.3.1-4.3.2); here every search takes
+//! `γ = ε₀ = √(cost of the local solution)`, which every primitive at least as cheap satisfies in
+//! each view, so no primitive that could improve on the estimate is left out and there is no option
+//! for it.
 //!
 //! Conventions: cameras are 3x4 matrices `P` that map world points straight to pixels,
 //! `λ (u, v, 1)ᵀ = P (X, 1)ᵀ` with `λ > 0` in front of the camera (eq. 1) for the matrix as given, so
@@ -143,11 +149,6 @@ pub struct TriangulationOptions {
     /// cap the status is [`Status::GapNotClosed`]. Default [`CertifyOptions::default`] (gap `1e-3`,
     /// the paper stopped at 10 %; each search's own cap).
     pub certify: CertifyOptions,
-    /// The paper's γ (sections 4.3.1-4.3.2): the search is restricted to primitives whose whitened
-    /// reprojection error is at most γ in every view. `None` (the default) uses the square root of the
-    /// cost of the local solution, which every better primitive satisfies, so the restriction loses
-    /// nothing and the certificate is a certificate over all primitives in front of the cameras.
-    pub max_reprojection_error: Option<f64>,
     /// Points and lines: reject outlier observations of a track (`point::robust`, `line::robust`).
     /// A view is an inlier when its whitened residual (pixels without covariances) is at most this;
     /// the result carries the inlier mask and is solved on the inliers only. Default `None`: every
@@ -171,7 +172,6 @@ impl Default for TriangulationOptions {
         TriangulationOptions {
             method: Method::Optimal,
             certify: CertifyOptions::default(),
-            max_reprojection_error: None,
             outlier_threshold: None,
             line_bound: LineBound::Taylor,
             quadric_bound: QuadricBound::Convexity,
@@ -203,14 +203,6 @@ impl TriangulationOptions {
         // A relative gap is (upper − lower) / upper ≤ 1 whenever the lower bound is ≥ 0, so a threshold
         // of 1 or more would certify without any bound: `validate` keeps it in (0, 1).
         self.certify.validate("certify")?;
-        if let Some(gamma) = self.max_reprojection_error {
-            if !(gamma.is_finite() && gamma > 0.0) {
-                return bad(
-                    "max_reprojection_error",
-                    "must be a positive finite number of (whitened) pixels",
-                );
-            }
-        }
         if let Some(tau) = self.outlier_threshold {
             if !(tau.is_finite() && tau > 0.0) {
                 return bad(
@@ -238,6 +230,8 @@ impl TriangulationOptions {
 #[doc(no_inline)]
 pub use crate::certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 #[doc(no_inline)]
+pub use crate::cost_kind::CostKind;
+#[doc(no_inline)]
 pub use crate::status::Status;
 
 /// What one triangulation did: shared by every primitive's result.
@@ -247,8 +241,13 @@ pub struct Report {
     pub method: Method,
     /// Whether the estimate can be used.
     pub status: Status,
-    /// The cost of eq. 19 at the estimate, squared whitened pixels.
+    /// The cost at the estimate, of kind `cost_kind`: eq. 19 (squared whitened pixels for points), or
+    /// the segments' reprojection cost for lines seen through a lens that distorts.
     pub cost: f64,
+    /// What `cost` measures, and what the certificate bounds: [`CostKind::Reprojection`] for points
+    /// and for lines from segments through a lens that distorts, [`CostKind::LineResidual`] for other
+    /// lines, [`CostKind::ConicResidual`] for quadrics.
+    pub cost_kind: CostKind,
     /// Optimality evidence: `None` when no bound was computed (methods `linear` and `local`, an
     /// input refused before the search); `Some` with `certified == false` when a search ran and did
     /// not close the gap (or the status is not [`Status::Success`]).
@@ -266,12 +265,14 @@ pub struct Report {
 }
 
 impl Report {
-    /// The report a method starts from: status success, no cost yet, no certificate, no iterations.
-    pub fn new(method: Method) -> Report {
+    /// The report a method starts from: status success, no cost yet (of kind `cost_kind`), no
+    /// certificate, no iterations.
+    pub fn new(method: Method, cost_kind: CostKind) -> Report {
         Report {
             method,
             status: Status::Success,
             cost: f64::NAN,
+            cost_kind,
             certificate: None,
             iterations: 0,
             termination: Termination::ClosedForm,
@@ -313,9 +314,9 @@ impl Report {
         }
     }
 
-    /// The report of a local minimisation that ended as `summary` says (`summary.final_cost` is the
-    /// solvers' `½ Σ`, so the cost of eq. 19 is twice it).
-    pub(crate) fn of_local(summary: &Summary) -> Report {
+    /// The report of a local minimisation of a cost of kind `cost_kind` that ended as `summary` says
+    /// (`summary.final_cost` is the solvers' `½ Σ`, so the cost is twice it).
+    pub(crate) fn of_local(summary: &Summary, cost_kind: CostKind) -> Report {
         Report {
             status: if summary.termination.converged() {
                 Status::Success
@@ -325,7 +326,7 @@ impl Report {
             cost: 2.0 * summary.final_cost,
             iterations: summary.iterations,
             termination: summary.termination,
-            ..Report::new(Method::Local)
+            ..Report::new(Method::Local, cost_kind)
         }
     }
 }

@@ -59,12 +59,3 @@ pub fn mask(n: usize, v: usize, min: usize, rng: &mut Rng) -> Vec<bool> {
     }
     visible
 }
-
-/// A search with a γ no primitive meets: status `infeasible`, uncertified, and a certificate whose raw
-/// bound is +∞ (the search proved its box empty: no admissible answer).
-pub fn assert_proved_empty(report: &pluecker::triangulation::Report) {
-    assert_eq!(report.status, pluecker::Status::Infeasible, "{report:?}");
-    assert!(!report.certified());
-    let certificate = report.certificate.expect("a search ran");
-    assert_eq!(certificate.raw_lower_bound, f64::INFINITY, "{report:?}");
-}

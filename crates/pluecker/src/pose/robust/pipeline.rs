@@ -8,7 +8,7 @@ use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
 use super::super::reprojection::Pose;
 use super::super::result::{assemble, status_of_stages, Parts};
-use super::super::{stage, Method, PoseOptions, PoseResult, StageReport, Status};
+use super::super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
 use crate::error::{Error, Result};
@@ -47,7 +47,7 @@ fn count(mask: &[bool]) -> usize {
     mask.iter().filter(|&&m| m).count()
 }
 
-/// The report of the sampling stage: cost kind `"msac"` (`½ Σ min(eᵢ², τᵢ²)`, px²) from the empty
+/// The report of the sampling stage: cost kind `msac` (`½ Σ min(eᵢ², τᵢ²)`, px²) from the empty
 /// model's score to the best one's; closed form when stopped by confidence, else an iteration cap.
 fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> StageReport {
     let r = &outcome.report;
@@ -61,7 +61,7 @@ fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> Stage
             _ => Termination::MaxIterations,
         },
     };
-    let mut report = stage("ransac", "msac", pose, &summary, started);
+    let mut report = stage("ransac", CostKind::Msac, pose, &summary, started);
     report.time_seconds = r.time_seconds;
     report
 }

@@ -29,7 +29,8 @@
 //! `F`. When no camera distorts (pinholes, or lenses whose distortion is the identity:
 //! [`LensCamera::distorts`]) the first-order problem is the pinhole problem of
 //! [`super::triangulate_line_segments`] (eq. 19 with each segment's line and the covariance of its
-//! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19,
+//! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19
+//! ([`crate::CostKind::LineResidual`]),
 //! not `F`, and its certificate is the one of [`super`].
 
 use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
@@ -45,7 +46,7 @@ use crate::triangulation::line::residual::LineFrame;
 use crate::triangulation::point::robust::reselect_at_optimum;
 use crate::triangulation::uncertainty::covariance_of_information;
 use crate::triangulation::views::View;
-use crate::triangulation::{Method, Status, TriangulationOptions};
+use crate::triangulation::{CostKind, Method, Status, TriangulationOptions};
 use nalgebra::{Matrix2, Matrix2x3, Matrix3x4, Matrix4, SMatrix, SVector, Vector2, Vector3, Vector6};
 
 /// One segment observed through a camera: the camera, its pose, the observed (distorted) endpoints
@@ -376,6 +377,7 @@ fn through_lenses(
     }
     let mut record = finish(&problem, &line, result.report.clone())?;
     record.report.cost = exact_cost(&used, record.plucker.coordinates());
+    record.report.cost_kind = CostKind::Reprojection;
     record.covariance = exact_covariance(&problem, &used, &record.chart);
     record.inliers = result.inliers.take();
     *result = record;

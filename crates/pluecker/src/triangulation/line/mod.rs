@@ -56,7 +56,7 @@ use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::covariance_of_information;
 use super::views::View;
-use super::{parse_observations, LineBound, Method, Report, TriangulationOptions};
+use super::{parse_observations, CostKind, LineBound, Method, Report, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, LineChart, OrthonormalLine, PluckerLine};
 use crate::optim::{trust_region, Linearization, Objective};
@@ -194,7 +194,7 @@ pub(crate) fn triangulate_line_views(problem: &LineProblem, opts: &Triangulation
     let linear = linear_line(problem)?;
     let mut report = Report {
         cost: problem.cost(&linear),
-        ..Report::new(opts.method)
+        ..Report::new(opts.method, CostKind::LineResidual)
     };
     let estimate = match opts.method {
         Method::Linear => linear,
@@ -407,7 +407,7 @@ pub(crate) fn local_line(
     let x0 = OrthonormalLine::from_plucker(&plucker::transform(&h, start)).expect("a finite line");
     let (x, summary) = trust_region::minimize(&objective, x0, &opts.local);
     let world = plucker::transform(&sim.inverse_matrix(), &x.to_plucker());
-    (world, Report::of_local(&summary))
+    (world, Report::of_local(&summary, CostKind::LineResidual))
 }
 
 /// The 4x4 covariance of a line in `chart` (pivoted anywhere on the line; [`super::uncertainty`]). Computed in

@@ -11,9 +11,8 @@
 //! **Domain.** Branch and bound searches the lines whose points `X`, `Y` satisfy the eq. 27 strips in
 //! every view, `|l̂ᵢᵀ Pᵢ X̃| ≤ γᵢ depthᵢ(X)` (the projection lies within `γᵢ` px of the observed line,
 //! in front of the camera) and `depthᵢ(X) ≤ z_max`, and whose whitened residual is at most `γ` in every
-//! view (`‖Lᵢ rᵢ‖ ≤ γ`, with the denominator of eq. 17 positive). `γ` is
-//! `opts.max_reprojection_error`, by default `sqrt(local cost)`: every line cheaper than the local
-//! line satisfies it. The strip widths `γᵢ` are derived from `γ`: an image line `ℓ` with
+//! view (`‖Lᵢ rᵢ‖ ≤ γ`, with the denominator of eq. 17 positive). `γ` is `sqrt(local cost)`: every
+//! line cheaper than the local line satisfies it. The strip widths `γᵢ` are derived from `γ`: an image line `ℓ` with
 //! `‖Lᵢ rᵢ(ℓ)‖ ≤ γ` passes within `(γ/D) ‖Lᵢ⁻ᵀ (u − oᵢ)‖` px of the observed line at the pixel `u`
 //! (see [`super::residual`]); `γᵢ` is [`STRIP_MARGIN`] times that width at the images of the
 //! local line's points `X̂`, `Ŷ`, and `z_max` is [`DEPTH_FACTOR`] times their largest depth. The
@@ -43,7 +42,7 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::{Certificate, Report, Status, TriangulationOptions};
+use crate::triangulation::{Report, Status, TriangulationOptions};
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 use std::ops::{Add, Sub};
 
@@ -402,7 +401,7 @@ pub(crate) fn optimal_line(
         Err(certified) => return (*local, certified),
     };
     let cost = local_report.cost;
-    let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());
+    let gamma = cost.sqrt();
     let Some(sim) = plane_frame(problem, local) else {
         // No frame for eq. 23, so no search: the local line, uncertified (the caller turns a line
         // at infinity into the same error as for `local`).
@@ -435,9 +434,10 @@ pub(crate) fn optimal_line(
         x_strips.extend(strip(p, &l, STRIP_MARGIN * width, z_max, 1.0));
         y_strips.extend(strip(p, &l, STRIP_MARGIN * width, z_max, 0.0));
     }
+    // The strips and the cones hold the local line: a domain found empty is a numerical artefact,
+    // which proves nothing.
     let (Some((xlo, xhi)), Some((ylo, yhi))) = (clip_bounds(&x_strips), clip_bounds(&y_strips)) else {
-        report.status = Status::Infeasible;
-        report.certificate = Some(Certificate::infeasible(0));
+        report.set_status(Status::NumericalFailure);
         return (*local, report);
     };
     // The strips' box in p = (x, y), then its bounding box in the branching coordinates z = T⁻¹ p.
@@ -473,8 +473,7 @@ pub(crate) fn optimal_line(
     };
     let (root, tightening_iterations) = oracle.tighten(&root);
     let Some(root) = root else {
-        report.status = Status::Infeasible;
-        report.certificate = Some(Certificate::infeasible(tightening_iterations));
+        report.set_status(Status::NumericalFailure);
         return (*local, report);
     };
     let bb_opts = BranchAndBoundOptions {
@@ -488,7 +487,7 @@ pub(crate) fn optimal_line(
     let world = plucker::transform(&sim.inverse_matrix(), &best);
     report.cost = best_cost;
     let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
-    (report.status, report.certificate) = (status, Some(certificate));
+    (report.status, report.certificate) = (status, certificate);
     (world, report)
 }
 

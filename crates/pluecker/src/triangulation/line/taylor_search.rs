@@ -8,9 +8,7 @@
 //! image in that view can be any line through one point, so eq. 19 there reaches values that no line
 //! seen as a segment has (regions proved inside that tube are discarded; a local step ending there
 //! is not an upper bound). The estimate is `𝓛̂` unless a cheaper line of the domain is found; the
-//! certificate's domain is reported ([`crate::triangulation::CertificateKind::domain`]). With a user `γ` (`max_reprojection_error`) below
-//! `√f(𝓛̂)` the ball has radius `min(√f(𝓛̂), √2 γ)` (`‖z_a‖, ‖z_b‖ ≤ γ`), regions where some view's error
-//! exceeds `γ` are discarded, and when every region is, the status is `infeasible`.
+//! certificate's domain is reported ([`crate::triangulation::CertificateKind::domain`]).
 //!
 //! **Bound per region** ([`crate::global::taylor_bound`]): the larger of the zeroth-order interval
 //! bound `Σ mig([rᵥₖ])²` (with the projective test near a view's pole) and the second-order Taylor
@@ -19,11 +17,13 @@
 //! (`w = 0`), `f ≥ f(0) − ‖∇f(0)‖²/(2μ)` on the region. Often the whole search box is convex and the
 //! certificate is proved at the root.
 //!
-//! **Stationarity.** Without a user `γ`, a global minimiser is cheaper than `𝓛̂` (or is `𝓛̂`), so it
-//! lies strictly inside the ball where the cost is smooth (denominators non-zero); off the boundary
-//! of the centre tubes it is a stationary point. A region proved clear of every tube whose interval
-//! gradient excludes 0 in some coordinate holds none and is discarded (Hansen's monotonicity test). Regions where a denominator may vanish keep infinite
-//! derivative enclosures and are never discarded this way.
+//! **Stationarity.** A global minimiser is cheaper than `𝓛̂` (or is `𝓛̂`), so it lies strictly inside
+//! the ball where the cost is smooth (denominators non-zero); off the boundary of the centre tubes it
+//! is a stationary point. A region proved clear of every tube whose interval gradient excludes 0 in
+//! some coordinate holds none and is discarded (Hansen's monotonicity test). Regions where a
+//! denominator may vanish keep infinite derivative enclosures and are never discarded this way. So
+//! a search that discards every region has proved that no line of the domain is cheaper than `𝓛̂`:
+//! the bound is then `f(𝓛̂)`.
 //!
 //! **Upper bounds.** A region whose centre is cheaper than the incumbent starts a short local
 //! minimisation there; a cheaper line found replaces the incumbent (the local method stopped in a
@@ -38,7 +38,7 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, optimal_start};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fraction::{self, FractionalResidual};
-use crate::triangulation::{CertificateKind, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, CertificateKind, Report, TriangulationOptions};
 use nalgebra::{Vector4, Vector6};
 
 /// The node cap of the Taylor search when `certify.max_nodes` is `None`: its nodes cost
@@ -53,8 +53,6 @@ struct TaylorOracle<'a> {
     chart: &'a TwoViewChart,
     /// Every view's residual in the conditioned frame (for the local steps).
     views: &'a [FractionalResidual<2, 6>],
-    /// `γ²` when the user's γ restricts the domain (then no stationarity test), else `None`.
-    restricted: Option<f64>,
     incumbent: f64,
     /// The relative gap at which regions are discarded.
     gap: f64,
@@ -106,11 +104,9 @@ impl BoundingOracle for TaylorOracle<'_> {
             return empty;
         }
         let b = bound_over_box(&self.chart.views, &region.lower, &region.upper, self.target());
-        match self.restricted {
-            Some(gamma2) if b.worst_view > gamma2 => return empty,
-            // A minimiser of the domain off its boundary is stationary (module docs).
-            None if !b.may_be_stationary && clearance == Clearance::Clear => return empty,
-            _ => {}
+        // A minimiser of the domain off its boundary is stationary (module docs).
+        if !b.may_be_stationary && clearance == Clearance::Clear {
+            return empty;
         }
         let mut lower = b.lower;
         if lower < self.incumbent {
@@ -152,16 +148,13 @@ pub(crate) fn optimal_line_taylor(
     let views = problem.views(&sim);
     let frame_local = plucker::transform(&sim.matrix(), local);
     let cost = fraction::cost(&views, &frame_local);
-    let restricted = opts.max_reprojection_error.filter(|g| g * g < cost).map(|g| g * g);
-    // Lines of the domain: ‖z_a‖, ‖z_b‖ ≤ γ, or ‖z‖² ≤ f(𝓛̂) for lines that can improve on 𝓛̂.
-    let radius2 = restricted.map_or(cost, |g2| cost.min(2.0 * g2));
-    let chart = TwoViewChart::new(problem, &sim, &views, &frame_local, radius2)?;
+    // Every line that can improve on 𝓛̂ has ‖z‖² ≤ f(𝓛̂) (module docs).
+    let chart = TwoViewChart::new(problem, &sim, &views, &frame_local, cost)?;
     let mut local_opts = opts.local;
     local_opts.stopping.max_iterations = NODE_LOCAL_ITERATIONS;
     let mut oracle = TaylorOracle {
         chart: &chart,
         views: &views,
-        restricted,
         incumbent: cost,
         gap: opts.certify.max_relative_gap,
         at_local: cost_and_gradient(&chart.views, &Vector4::zeros()),
@@ -172,23 +165,20 @@ pub(crate) fn optimal_line_taylor(
         max_nodes: opts.certify.max_nodes_or(MAX_NODES),
         trivial_lower_bound: 0.0,
     };
-    let root = chart.root(radius2.sqrt());
-    let result = branch_and_bound(&mut oracle, root, Some((cost, frame_local)), &bb_opts);
+    let root = chart.root(cost.sqrt());
+    let mut result = branch_and_bound(&mut oracle, root, Some((cost, frame_local)), &bb_opts);
+    // Regions were discarded for holding no stationary point, which only shows that no line there
+    // is cheaper than the local one (module docs): the proved bound is at most its cost (and is
+    // that cost when every region was discarded).
+    result.box_lower_bound = result.box_lower_bound.min(cost);
     let (best_cost, best) = result.best.unwrap_or((cost, frame_local));
     report.cost = best_cost;
-    let (status, mut certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
-    certificate.kind = CertificateKind::TaylorBranchAndBound;
-    if restricted.is_none() {
-        // Regions were discarded for holding no stationary point, which only shows that no line
-        // there is cheaper than the local one (module docs): the proved bound is at most its cost.
-        certificate.raw_lower_bound = certificate.raw_lower_bound.min(cost);
-    }
+    let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
     report.status = status;
-    report.certificate = Some(certificate);
-    if restricted.is_some() && result.box_lower_bound == f64::INFINITY {
-        // Every region was proved to hold no line within γ in every view.
-        report.set_status(Status::Infeasible);
-    }
+    report.certificate = certificate.map(|c| Certificate {
+        kind: CertificateKind::TaylorBranchAndBound,
+        ..c
+    });
     Some((plucker::transform(&sim.inverse_matrix(), &best), report))
 }
 
@@ -277,7 +267,6 @@ mod tests {
                 let oracle = TaylorOracle {
                     chart: &chart,
                     views: &views,
-                    restricted: None,
                     incumbent: cost,
                     gap: 1e-3,
                     at_local,

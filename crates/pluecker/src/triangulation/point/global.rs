@@ -11,10 +11,11 @@
 //! the split is at the relaxed minimiser kept inside the middle half of the interval.
 //!
 //! **Search set.** Every point at least as good as `X̂` lies in `S_{ε₀}` (each view's error is at
-//! most `ε₀ = √f(X̂)`) and in the enclosure `K` of `crate::global::convexity::enclosure`
+//! most `ε₀ = √f(X̂)`: the paper's γ of section 4.3.1, taken from the incumbent so that nothing
+//! cheaper is left out) and in the enclosure `K` of `crate::global::convexity::enclosure`
 //! (`S_{ε₀}` cut by an ellipsoid); points outside cost more than `f(X̂)`. The search runs over
-//! `K ∩ S_γ ∩ {w ≥ 0}` (`γ` the user's `max_reprojection_error`, by default `ε₀`), so a lower bound
-//! below `f(X̂)` is a lower bound over every point in front of the cameras within `γ`.
+//! `K ∩ S_{ε₀} ∩ {w ≥ 0}`, so a lower bound below `f(X̂)` is a lower bound over every point in front
+//! of the cameras.
 //!
 //! **Initial box (sections 4.3.1, eq. 26).** The bounding box of `K` and its depth bounds
 //! `ζᵢ ∈ [1 − κ_d, 1 + κ_d]` when the enclosure exists; otherwise six SOCPs give the extent of the
@@ -25,10 +26,10 @@
 //!
 //! **Bound (section 4.1).** One SOCP per node over `y` and per view a variable `rᵢ ≥ ‖rᵢ(y)‖²`'s
 //! relaxation, minimising `Σ rᵢ` under the search-set constraints (`w ≥ 0`, the ellipsoid of `K`,
-//! and the per-view cones of `S_γ` only when there is no ellipsoid or the user's γ is below `ε₀`:
-//! dropping constraints keeps a relaxation valid), with [`Relaxation`] choosing
+//! and the per-view cones of `S_{ε₀}` only when there is no ellipsoid: dropping constraints keeps a
+//! relaxation valid), with [`Relaxation`] choosing
 //! the relaxation of each fraction: the paper's eqs. 21-22 (`‖aᵢ‖² ≤ tᵢζᵢ`, `rᵢ ≥ convenv(tᵢ/ζᵢ)` over
-//! `tᵢ ∈ [0, uᵢ]`, `ζᵢ ∈ [Lᵢ, Uᵢ]`, `uᵢ = min(γ'²Uᵢ, max over the box corners of ‖aᵢ‖²/ζᵢ)`), or the
+//! `tᵢ ∈ [0, uᵢ]`, `ζᵢ ∈ [Lᵢ, Uᵢ]`, `uᵢ = min(ε₀²Uᵢ, max over the box corners of ‖aᵢ‖²/ζᵢ)`), or the
 //! secant `‖aᵢ‖² ≤ rᵢ((Uᵢ + Lᵢ)ζᵢ − UᵢLᵢ)`, which is the convex envelope of `‖a‖²/ζ²` over the slab
 //! `ζ ∈ [L, U]` (`ζ² ≤ (U + L)ζ − UL` there, with equality at both ends; its relative gap is
 //! `(ζ − L)(U − ζ)/ζ²`, quadratic in the interval), or both. The bound is the dual bound of
@@ -78,13 +79,10 @@ pub enum GlobalStatus {
     NodeLimit,
     /// The call was stopped first ([`crate::interrupt`]).
     Stopped(StopReason),
-    /// The search set is empty (the conic solver's infeasibility certificates): no point within
-    /// the user's γ.
-    Infeasible,
     /// The search set is unbounded or reaches a camera's principal plane: no box, no certificate.
     Unbounded,
     /// A conic solve of the initial box failed, the chart is singular, or the solver declared
-    /// empty a search set that holds the incumbent.
+    /// empty a search set that holds the incumbent (a numerical artefact: nothing is proved).
     Failed,
 }
 
@@ -97,8 +95,7 @@ pub struct GlobalPoint {
     pub cost: f64,
     /// A valid lower bound of the cost over the search set (0 when none was proved), capped at `cost`.
     pub lower_bound: f64,
-    /// The bound the search proved over its box, before the cap (NaN when there was no search,
-    /// `+∞` when the search set was proved empty).
+    /// The bound the search proved over its box, before the cap (NaN when nothing was proved).
     pub raw_lower_bound: f64,
     /// How it ended.
     pub status: GlobalStatus,
@@ -152,7 +149,7 @@ fn numerator_peak(v: &ChartView, region: &Region) -> f64 {
 }
 
 /// The constraints of the search set (module docs) on the variables `y`: `w ≥ 0`, the per-view
-/// cones of `S_γ` when `gamma` is given, the ellipsoid of `K` when `enclosure` is.
+/// cones of `S_γ` when `gamma` is given (`γ = ε₀`), the ellipsoid of `K` when `enclosure` is.
 fn add_search_set(p: &mut Socp, chart: &Chart, y: &[usize; 3], gamma: Option<f64>, enclosure: Option<&Enclosure<3>>) {
     let w = Affine {
         terms: (0..3).map(|j| (y[j], -chart.w_gradient[j])).collect(),
@@ -179,9 +176,9 @@ struct PointOracle<'a> {
     relaxation: Relaxation,
     local: TrustRegionOptions,
     max_relative_gap: f64,
-    /// Whether the nodes carry the per-view cones of `S_γ` (needed without the enclosure and under
-    /// a user γ below `ε₀`; otherwise the ellipsoid of `K` bounds every view and the cones are left
-    /// out of the relaxation, which stays valid and is measured 30 % cheaper at 20 views).
+    /// Whether the nodes carry the per-view cones of `S_γ` (needed without the enclosure; otherwise
+    /// the ellipsoid of `K` bounds every view and the cones are left out of the relaxation, which
+    /// stays valid and is measured 30 % cheaper at 20 views).
     view_cones: bool,
 }
 
@@ -335,9 +332,9 @@ fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -
             iterations += sol.iterations;
             match sol.status {
                 SocpStatus::Solved => solves.push((p, sol)),
-                SocpStatus::Infeasible => return Err(GlobalStatus::Infeasible),
+                // The set holds the incumbent: an infeasibility certificate is an artefact.
+                SocpStatus::Infeasible | SocpStatus::Failed => return Err(GlobalStatus::Failed),
                 SocpStatus::Unbounded => return Err(GlobalStatus::Unbounded),
-                SocpStatus::Failed => return Err(GlobalStatus::Failed),
             }
         }
     }
@@ -399,8 +396,6 @@ fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -
 /// Settings of [`global_point`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct GlobalSettings {
-    /// Per-view radius `γ` of the search set (the user's `max_reprojection_error`, else `ε₀`).
-    pub gamma: f64,
     /// Stop when `(upper − lower) ≤ max_relative_gap · upper`.
     pub max_relative_gap: f64,
     /// Node cap.
@@ -423,7 +418,6 @@ pub fn global_point(
     settings: &GlobalSettings,
 ) -> GlobalPoint {
     let GlobalSettings {
-        gamma,
         max_relative_gap,
         max_nodes,
         local,
@@ -433,12 +427,7 @@ pub fn global_point(
         point: *x_local,
         cost: cost_local,
         lower_bound: 0.0,
-        // Proved empty: nothing admissible, so no cost below +∞; otherwise nothing proved.
-        raw_lower_bound: if status == GlobalStatus::Infeasible {
-            f64::INFINITY
-        } else {
-            f64::NAN
-        },
+        raw_lower_bound: f64::NAN,
         status,
         nodes: 0,
         solver_iterations: 0,
@@ -449,11 +438,12 @@ pub fn global_point(
     let Some(chart) = chart else {
         return finish(GlobalStatus::Failed);
     };
-    // Every point at least as good as the incumbent lies in S_γ ∩ K when γ ≥ ε₀ (module docs).
+    // Every point at least as good as the incumbent lies in S_γ ∩ K for γ = ε₀ (module docs).
+    let gamma = cost_local.sqrt();
     let enclosure = enclosure(
         &chart.views,
         cost_local,
-        gamma.max(cost_local.sqrt()),
+        gamma,
         a_priori_kappa(ChartKind::MeanDepth, chart.views.len()),
     );
     let from_enclosure = enclosure.as_ref().and_then(|k| {
@@ -474,7 +464,7 @@ pub fn global_point(
             Err(status) => return finish(status),
         },
     };
-    let view_cones = enclosure.is_none() || gamma < cost_local.sqrt();
+    let view_cones = enclosure.is_none();
     let mut oracle = PointOracle {
         views,
         chart,
@@ -493,14 +483,10 @@ pub fn global_point(
     };
     let result = branch_and_bound(&mut oracle, root.region, Some((cost_local, *x_local)), &opts);
     let (cost, point) = result.best.unwrap_or((cost_local, *x_local));
-    // An empty search set: no point within the user's γ, or (when γ ≥ ε₀, so that the incumbent
-    // itself lies in it) a numerical artefact of the infeasibility certificate.
+    // An empty search set although it holds the incumbent: a numerical artefact of the
+    // infeasibility certificates, which proves nothing.
     let status = if result.box_lower_bound == f64::INFINITY {
-        if gamma < cost_local.sqrt() {
-            GlobalStatus::Infeasible
-        } else {
-            GlobalStatus::Failed
-        }
+        GlobalStatus::Failed
     } else if result.converged {
         GlobalStatus::Converged
     } else if let Some(reason) = result.stopped {
@@ -508,6 +494,13 @@ pub fn global_point(
     } else {
         GlobalStatus::NodeLimit
     };
+    if status == GlobalStatus::Failed {
+        return GlobalPoint {
+            nodes: result.nodes,
+            solver_iterations: result.solver_iterations + root.solver_iterations,
+            ..finish(status)
+        };
+    }
     GlobalPoint {
         point,
         cost,

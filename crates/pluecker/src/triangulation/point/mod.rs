@@ -14,13 +14,12 @@
 //!
 //! **Statuses of `optimal`.** `Success` when certified (the gap closed, whatever the local stage's
 //! termination); `GapNotClosed` at the node cap or when the search set could not be boxed;
-//! `Infeasible` when no point is within the user's `max_reprojection_error` of every observation;
-//! `NumericalFailure` when a conic solve of the initial box failed; `BehindCamera`/`AtInfinity`
+//! `NumericalFailure` when a conic solve of the initial box failed (no certificate);
+//! `BehindCamera`/`AtInfinity`
 //! when no start in front of every camera was found or when the infimum over the points in front
 //! is not reached at a finite point (below). The certificate's relative gap is
 //! `(cost − lower_bound) / max(cost, 1e-12)`: a cost at the rounding level (exact data) counts as
-//! certified by the trivial bound 0. With a user γ the bound covers the points within γ in every
-//! view; with the default it covers every point in front of the cameras.
+//! certified by the trivial bound 0. The bound covers every point in front of the cameras.
 //!
 //! The DLT cannot see that a point lies behind the cameras; the other methods search in front of
 //! every camera only. When the observations are best explained behind the cameras (the rays diverge
@@ -72,7 +71,7 @@ use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::covariance::whitenings;
 use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras, View};
-use super::{Certificate, CertificateKind, Method, Report, Status, TriangulationOptions};
+use super::{Certificate, CertificateKind, CostKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::global::relative_gap;
 use crate::optim::{trust_region, Termination};
@@ -234,7 +233,7 @@ pub(crate) fn solve_views(
     started: Instant,
 ) -> PointTriangulation {
     let linear = linear_point(views, frame);
-    let mut report = Report::new(opts.method);
+    let mut report = Report::new(opts.method, CostKind::Reprojection);
     let finish = |point: Vector3<f64>, mut report: Report| {
         let covariance = point_covariance(views, &point);
         report.test_residuals(2 * views.len(), 3);
@@ -469,14 +468,13 @@ fn certify(
         origins.extend(ray_start(views, frame, FARTHEST_ORIGIN));
     }
     let settings = GlobalSettings {
-        gamma: opts.max_reprojection_error.unwrap_or_else(|| cost.sqrt()),
         max_relative_gap: opts.certify.max_relative_gap,
         max_nodes: opts.conic_max_nodes(),
         local: opts.local,
         relaxation: DEFAULT_RELAXATION,
     };
     let g = global_point(views, &x, cost, &origins, &settings);
-    // Both bounds hold over every point in front of the cameras (within γ): the better one, before
+    // Both bounds hold over every point in front of the cameras: the better one, before
     // and after the cap at the cost.
     let raw_lower_bound = if test.passed {
         g.raw_lower_bound.max(test.lower_bound)
@@ -497,7 +495,6 @@ fn certify(
         GlobalStatus::Converged if certified => Status::Success,
         GlobalStatus::Converged | GlobalStatus::NodeLimit | GlobalStatus::Unbounded => Status::GapNotClosed,
         GlobalStatus::Stopped(reason) => Status::stopped(reason),
-        GlobalStatus::Infeasible => Status::Infeasible,
         GlobalStatus::Failed => Status::NumericalFailure,
     };
     let certificate = Certificate {

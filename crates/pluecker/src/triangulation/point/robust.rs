@@ -38,7 +38,7 @@ use super::{local_solution, solve_views, PointTriangulation};
 use crate::consensus::{self, msac, Estimator, Stats};
 use crate::optim::Summary;
 use crate::rng::Rng;
-use crate::triangulation::{Report, Status, TriangulationOptions};
+use crate::triangulation::{CostKind, Report, Status, TriangulationOptions};
 use nalgebra::{Matrix4, Vector3};
 use std::time::{Duration, Instant};
 
@@ -249,7 +249,7 @@ pub(crate) fn solve_views_robust<T: RobustTrack + ?Sized>(
 ) -> PointTriangulation {
     let tau2 = tau * tau;
     let too_few = |mask: Vec<bool>| {
-        let mut report = Report::new(opts.method);
+        let mut report = Report::new(opts.method, CostKind::Reprojection);
         report.status = Status::TooFewInliers;
         report.time_seconds = started.elapsed().as_secs_f64();
         PointTriangulation {

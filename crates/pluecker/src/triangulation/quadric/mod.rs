@@ -49,7 +49,7 @@ use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};
 use super::views::View;
-use super::{parse_observations, Method, Report, Status, TriangulationOptions};
+use super::{parse_observations, CostKind, Method, Report, Status, TriangulationOptions};
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{
     centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, vec_to_sym4, CentreShape, Ellipsoid,
@@ -190,7 +190,7 @@ pub fn triangulate_quadric(
         frames,
         whitenings: whitenings(covariances, projections.len(), "covariances")?,
     };
-    let mut report = Report::new(opts.method);
+    let mut report = Report::new(opts.method, CostKind::ConicResidual);
     let Some(linear) = linear_quadric(&problem) else {
         report.status = Status::NumericalFailure;
         report.time_seconds = started.elapsed().as_secs_f64();
@@ -231,7 +231,7 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
         let row = p.row(2).transpose();
         (p * e.centre.push(1.0)).z > 0.0 && row.dot(&(dual * row)) < 0.0
     });
-    if !in_front && e.centre.iter().all(|v| v.is_finite()) && report.status != Status::Infeasible {
+    if !in_front && e.centre.iter().all(|v| v.is_finite()) {
         report.set_status(Status::BehindCamera);
     }
     QuadricTriangulation {
@@ -450,7 +450,7 @@ pub(crate) fn local_quadric(
         };
     }
     let world = x.to_world(&sim).unwrap_or(*start);
-    (world, Report::of_local(&summary))
+    (world, Report::of_local(&summary, CostKind::ConicResidual))
 }
 
 /// Semi-axes at most this fraction of the largest count as zero for [`unflattened`].

@@ -13,7 +13,7 @@
 //! `γ` in every view with positive denominators, and whose entries lie in the a-priori box
 //! `|cₖ| ≤ B`, `|(ccᵀ − S)ⱼₖ| ≤ 2B²` with `B` = [`CENTRE_FACTOR`] times the largest distance from the
 //! local centre to a camera (centres within that distance, semi-axes up to `B`). `γ` is
-//! `opts.max_reprojection_error`, by default `sqrt(local cost)`.
+//! `sqrt(local cost)`: every quadric cheaper than the local one satisfies it.
 //!
 //! **Bound.** As for points (eq. 21-22): per view `‖Aᵢ L̃‖² ≤ tᵢ gᵢ`, the fraction envelope of
 //! `tᵢ/gᵢ` over `tᵢ ∈ [0, min(γ², U) Gᵢᵁ]`, `gᵢ ∈ [Gᵢᴸ, Gᵢᵁ]` (a view whose interval starts at 0
@@ -173,7 +173,7 @@ pub(crate) fn optimal_quadric(
         Err(certified) => return (*local, certified),
     };
     let cost = local_report.cost;
-    let gamma = opts.max_reprojection_error.unwrap_or(cost.sqrt());
+    let gamma = cost.sqrt();
     let sim = problem.frame_of(local);
     let frame_dual = transform_dual(&sim.matrix(), &local.dual());
     let reference = sym4_to_vec(&(-frame_dual / frame_dual[(3, 3)].abs()));
@@ -216,9 +216,10 @@ pub(crate) fn optimal_quadric(
         incumbent: frame_cost * (1.0 + 1e-9),
         local: node_local,
     };
-    let infeasible = |mut report: Report, iterations: usize| {
-        report.status = Status::Infeasible;
-        report.certificate = Some(Certificate::infeasible(iterations));
+    // The cones and the box hold the local ellipsoid: a relaxation found infeasible is a numerical
+    // artefact, which proves nothing.
+    let artefact = |mut report: Report| {
+        report.set_status(Status::NumericalFailure);
         (*local, report)
     };
     // Eq. 26: the denominators' range without the cut, then the variables' and again the
@@ -233,7 +234,7 @@ pub(crate) fn optimal_quadric(
                 let ((lo, a), (hi, b2)) = (minimum(&relax.p, var.clone()), minimum(&relax.p, var.scaled(-1.0)));
                 iterations += a + b2;
                 let (Some(lo), Some(hi)) = (lo, hi) else {
-                    return infeasible(report, iterations);
+                    return artefact(report);
                 };
                 oracle.q_lower[k] = lo.map_or(oracle.q_lower[k], |v| v.max(oracle.q_lower[k]));
                 oracle.q_upper[k] = hi.map_or(oracle.q_upper[k], |v| (-v).min(oracle.q_upper[k]));
@@ -244,7 +245,7 @@ pub(crate) fn optimal_quadric(
             let ((lo, a), (hi, b2)) = (minimum(&relax.p, g.clone()), minimum(&relax.p, g.clone().scaled(-1.0)));
             iterations += a + b2;
             let (Some(lo), Some(hi)) = (lo, hi) else {
-                return infeasible(report, iterations);
+                return artefact(report);
             };
             let (old_lo, old_hi) = if pass == 0 {
                 (0.0, f64::INFINITY)
@@ -254,7 +255,7 @@ pub(crate) fn optimal_quadric(
             root.lower[i] = lo.map_or(old_lo, |v| v.max(old_lo));
             root.upper[i] = hi.map_or(old_hi, |v| (-v).min(old_hi));
             if !root.upper[i].is_finite() || root.lower[i] > root.upper[i] {
-                return infeasible(report, iterations);
+                return artefact(report);
             }
         }
     }
@@ -270,6 +271,6 @@ pub(crate) fn optimal_quadric(
     let world = Ellipsoid::from_dual(&transform_dual(&sim.inverse_matrix(), &best.dual())).unwrap_or(*local);
     report.cost = best_cost;
     let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
-    (report.status, report.certificate) = (status, Some(certificate));
+    (report.status, report.certificate) = (status, certificate);
     (world, report)
 }
