@@ -190,6 +190,75 @@ fn the_msac_score_is_a_sum_of_truncated_squares() {
     assert_eq!(report.score, stage.final_cost);
 }
 
+/// 20 points uniform in [-1, 1]² × [4, 6] seen by `Camera(400, 400, 320, 240)` at the identity pose,
+/// with `sigma` px of Gaussian noise: clean data.
+fn clean_points(sigma: f64, seed: u64) -> (Camera, Correspondences) {
+    let camera = Camera::new(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
+    let mut rng = Rng::new(seed);
+    let points3d: Vec<Vector3<f64>> = (0..20)
+        .map(|_| {
+            Vector3::new(
+                rng.uniform_in(-1.0, 1.0),
+                rng.uniform_in(-1.0, 1.0),
+                rng.uniform_in(4.0, 6.0),
+            )
+        })
+        .collect();
+    let points2d = points3d
+        .iter()
+        .map(|x| {
+            let (u, v) = (400.0 * x.x / x.z + 320.0, 400.0 * x.y / x.z + 240.0);
+            Vector2::new(u + sigma * rng.normal(), v + sigma * rng.normal())
+        })
+        .collect();
+    let corr = Correspondences {
+        points2d,
+        points3d,
+        ..Default::default()
+    };
+    (camera, corr)
+}
+
+/// Clean data and a threshold far above the noise: every point an inlier of every reasonable pose.
+/// A point threshold of 100 px (the window of the 20 points is about 200 px wide, so a random pixel
+/// agrees with any pose by chance: δ = 1) used to run 100,000 samples to the iteration cap and end
+/// `not_converged` with the right pose; a line threshold of 1e300 without any line did the same (it
+/// widened the points' chance window to p = 0). The sequential test could not reject anything, but
+/// its `α = 1 / A = 1` told the stopping rule that every sample was a miss.
+#[test]
+fn clean_data_with_a_wide_threshold_stops_at_once() {
+    let (camera, corr) = clean_points(0.5, 7);
+    let wide: [(f64, f64); 6] = [
+        (100.0, 4.0),
+        (50.0, 4.0),
+        (4.0, 1e300),
+        (1e300, 4.0),
+        (1e6, 1e6),
+        (4.0, 4.0),
+    ];
+    for (point_threshold, line_threshold) in wide {
+        let mut opts = robust(0);
+        let ransac = opts.ransac.as_mut().unwrap();
+        ransac.point_threshold = point_threshold;
+        ransac.line_threshold = line_threshold;
+        let r = estimate_pose(&camera, &corr, &opts).unwrap();
+        let report = r.details.ransac.as_ref().unwrap();
+        let label = format!("thresholds {point_threshold} / {line_threshold}: {report:?}");
+        assert_eq!(r.status, Status::Success, "{label}");
+        assert_eq!(report.stop, RansacStop::Confidence, "{label}");
+        // Every point an inlier: P = 1, one sample suffices (two when the first is degenerate).
+        assert!(report.iterations <= 3, "{label}");
+        assert!(report.score.is_finite(), "{label}");
+        assert_eq!(r.inliers_points.iter().filter(|&&m| m).count(), 20, "{label}");
+        // The pose of 20 points at 0.5 px: within a few milliradians and hundredths of a unit.
+        assert!(
+            rotation_distance(&r.pose.rotation, &nalgebra::Matrix3::identity()) < 0.01,
+            "{label}"
+        );
+        assert!(r.pose.translation.norm() < 0.05, "{label}");
+    }
+}
+
 fn all_outliers(n_points: usize, seed: u64) -> (Camera, Correspondences) {
     let scene = random_scene(SceneKind::General, n_points, 0, seed);
     let mut rng = Rng::new(seed);

@@ -69,7 +69,7 @@ struct Lens<'a> {
 }
 
 /// One residual pair and its 2x6 Jacobian with respect to `(ω, τ)`.
-type Block = (Vector2<f64>, SMatrix<f64, 2, 6>);
+pub(crate) type Block = (Vector2<f64>, SMatrix<f64, 2, 6>);
 
 /// Residuals and Jacobian rows of `L` points, lane `l` being point `i₀ + l`.
 struct PointLanes<const L: usize> {
@@ -506,6 +506,16 @@ impl<'a> ReprojectionCost<'a> {
     /// The stacked Jacobian's normal matrix `JᵀJ` at `pose` (pixels per radian / per length unit).
     pub fn information(&self, pose: &Pose) -> SMatrix<f64, 6, 6> {
         self.linearize(pose).gauss_newton
+    }
+
+    /// Correspondence `k`'s residual pair and its 2x6 Jacobian at `pose` (points first, then lines, as
+    /// in [`ReprojectionCost::residuals`]), whitened by the noise (if any).
+    pub(crate) fn block(&self, pose: &Pose, k: usize) -> Block {
+        if k < self.n_points {
+            self.point_block(pose, k)
+        } else {
+            self.line_block(pose, k - self.n_points, true)
+        }
     }
 
     /// The number of 3-D points and line endpoints with `z ≤ 0` in the camera frame at `pose`.

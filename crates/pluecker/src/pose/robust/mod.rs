@@ -59,6 +59,7 @@
 //! Conventions: `x_cam = R X + t` in the frame of the correspondences given (the pipeline passes its
 //! centred, unit-scale frame); pixel errors do not depend on that frame.
 
+pub(crate) mod guided;
 pub(crate) mod pipeline;
 pub(crate) mod sampler;
 pub(crate) mod scoring;
@@ -333,10 +334,10 @@ impl Estimator for PoseEstimator<'_> {
         poses
     }
 
-    fn score(&mut self, pose: &Pose, sample: &[usize; 3], best: Option<f64>, stats: &Stats) -> Option<f64> {
-        let bound = best.unwrap_or(f64::INFINITY);
-        // The first model is scored in full; the test needs a best model to compare with.
-        let test = self.sprt.as_ref().filter(|_| best.is_some()).map(|s| *s.test());
+    fn score(&mut self, pose: &Pose, sample: &[usize; 3], record: Option<f64>, stats: &Stats) -> Option<f64> {
+        let bound = record.unwrap_or(f64::INFINITY);
+        // The first model is scored in full; the test needs a model to compare with.
+        let test = self.sprt.as_ref().filter(|_| record.is_some()).map(|s| *s.test());
         let (np, nl) = (self.data.n_points(), self.data.n_lines());
         let start = [
             scoring::below(&mut self.order_rng, np),
@@ -481,13 +482,22 @@ pub fn ransac(
         time_seconds: 0.0,
     };
     report.required_inliers = required_inliers(opts, &report, chance, np, nl);
-    let best = outcome.best.map(|(pose, score)| Best { pose, score });
+    let mut best = outcome.best.map(|(pose, score)| Best { pose, score });
+    // The final consensus (`guided`), for a model that will be accepted, unless the call is stopping.
+    let stopping = matches!(outcome.stop, Stop::Interrupted | Stop::TimeBudget);
+    if opts.local_iterations > 0 && !stopping && report.inliers >= report.required_inliers {
+        best = best.map(|b| guided::settle(camera, corr, &data, &tau, &lo, b));
+    }
     let (inliers_points, inliers_lines) = match &best {
         Some(b) => data.inliers(&b.pose, &tau),
         None => (vec![false; np], vec![false; nl]),
     };
     if let Some(b) = &best {
         report.score = b.score;
+        report.inliers = [&inliers_points, &inliers_lines]
+            .iter()
+            .map(|m| m.iter().filter(|&&v| v).count())
+            .sum();
     }
     report.time_seconds = started.elapsed().as_secs_f64();
     Ok(RansacOutcome {

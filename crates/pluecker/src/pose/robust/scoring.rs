@@ -537,9 +537,11 @@ impl Prepared {
         (Verdict::Score(0.5 * sum), np + nl)
     }
 
-    /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`.
+    /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`, a
+    /// kind without correspondences adding nothing (also when its `τ²` overflows to infinity).
     pub fn all_outlier_score(&self, tau: &Thresholds) -> f64 {
-        0.5 * (self.points.len() as f64 * tau.point2 + self.lines.len() as f64 * tau.line2)
+        let term = |n: usize, tau2: f64| if n == 0 { 0.0 } else { n as f64 * tau2 };
+        0.5 * (term(self.points.len(), tau.point2) + term(self.lines.len(), tau.line2))
     }
 
     /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).
