@@ -288,9 +288,9 @@ pub struct RansacOutcome {
 }
 
 /// The best model so far.
-struct Best {
-    pose: Pose,
-    score: f64,
+pub(crate) struct Best {
+    pub pose: Pose,
+    pub score: f64,
 }
 
 /// The pose's part of the sampling loop ([`crate::consensus`]): mixed point/line samples
