@@ -518,6 +518,29 @@ impl<'a> ReprojectionCost<'a> {
         }
     }
 
+    /// Point `i`'s squared (whitened) residual `‖r‖²` at `pose` and a bound `b ≥ ‖J‖₂²` on its
+    /// Jacobian (the block of [`ReprojectionCost::block`]), cheaper than the Jacobian itself: with
+    /// `J = W a [−[R X]×, I]`, `a = ∂π/∂x_cam`, `‖J‖₂² ≤ ‖W‖_F² ‖a‖_F² (‖X‖² + 1)`. Behind the camera:
+    /// `(∞, 0)`. Through a lens: `(0, ∞)` (no bound: the caller must take the block).
+    pub(crate) fn point_jacobian_bound(&self, pose: &Pose, i: usize) -> (f64, f64) {
+        if self.lens.is_some() {
+            return (0.0, f64::INFINITY);
+        }
+        let (x, u) = self.point(i);
+        let c = &self.camera;
+        let p = pose.rotation * x;
+        let cam = p + pose.translation;
+        if !(cam.z > 0.0) {
+            return (f64::INFINITY, 0.0);
+        }
+        let (xn, yn) = (cam.x / cam.z, cam.y / cam.z);
+        let r = Vector2::new(c.fx * xn + c.skew * yn + c.cx - u.x, c.fy * yn + c.cy - u.y);
+        let w = self.noise.map_or_else(Matrix2::identity, |n| n.points[i]);
+        let du = c.fx * xn + c.skew * yn;
+        let a2 = (c.fx * c.fx + c.skew * c.skew + du * du + c.fy * c.fy + c.fy * c.fy * yn * yn) / (cam.z * cam.z);
+        ((w * r).norm_squared(), w.norm_squared() * a2 * (x.norm_squared() + 1.0))
+    }
+
     /// The number of 3-D points and line endpoints with `z ≤ 0` in the camera frame at `pose`.
     pub fn points_behind(&self, pose: &Pose) -> usize {
         let (x, y, z) = (self.column(0), self.column(1), self.column(2));

@@ -39,25 +39,37 @@ use nalgebra::{Matrix2, SMatrix};
 pub const SETTLE_ROUNDS: usize = 4;
 
 /// The candidates (points, lines; see the module documentation) at `pose`, with the normal matrix of
-/// the plain inliers `fitted`; the plain inliers themselves when that matrix is singular.
+/// the plain inliers `fitted`. `None` when that matrix is singular, or when the gate would more than
+/// double the inlier set: a pose that uncertain predicts nothing (a model of a few chance inliers
+/// admits every correspondence), and a fit to everything would only cost time.
 pub(crate) fn candidates(
     cost: &ReprojectionCost<'_>,
     pose: &Pose,
     fitted: &(Vec<bool>, Vec<bool>),
     tau: &Thresholds,
-) -> (Vec<bool>, Vec<bool>) {
+) -> Option<(Vec<bool>, Vec<bool>)> {
     let np = fitted.0.len();
     let in_fit = |k: usize| if k < np { fitted.0[k] } else { fitted.1[k - np] };
     let n = np + fitted.1.len();
     let mut information = SMatrix::<f64, 6, 6>::zeros();
+    let mut plain = 0;
     for k in (0..n).filter(|&k| in_fit(k)) {
         let (_, j) = cost.block(pose, k);
         information += j.transpose() * j;
+        plain += 1;
     }
-    let Some(inverse) = information.cholesky().map(|c| c.inverse()) else {
-        return fitted.clone();
-    };
+    let inverse = information.cholesky()?.inverse();
+    // λ_max(H) ≤ ‖J‖₂² λ_max((JᵀJ)⁻¹) ≤ ‖J‖₂² tr((JᵀJ)⁻¹), and rᵀ (I + H)⁻¹ r ≥ ‖r‖² / (1 + λ_max(H)):
+    // a point whose plain error exceeds τ² (1 + that bound) cannot pass the gate, and most
+    // outliers are ruled out without their Jacobian.
+    let spread_bound = inverse.trace();
     let gate = |k: usize| {
+        if k < np {
+            let (e2, jacobian2) = cost.point_jacobian_bound(pose, k);
+            if e2 > tau.point2 * (1.0 + spread_bound * jacobian2) {
+                return false;
+            }
+        }
         let (r, j) = cost.block(pose, k);
         let spread = Matrix2::identity() + j * inverse * j.transpose();
         let whitened = spread.cholesky().map_or(f64::INFINITY, |c| r.dot(&c.solve(&r)));
@@ -68,8 +80,22 @@ pub(crate) fn candidates(
         }
     };
     // A plain inlier passes the gate: only the others need their leverage.
-    let mask = |k: usize| in_fit(k) || gate(k);
-    ((0..np).map(mask).collect(), (np..n).map(mask).collect())
+    let (mut points, mut lines) = fitted.clone();
+    let mut added = 0;
+    for k in (0..n).filter(|&k| !in_fit(k)) {
+        if gate(k) {
+            added += 1;
+            if added > plain {
+                return None;
+            }
+            if k < np {
+                points[k] = true;
+            } else {
+                lines[k - np] = true;
+            }
+        }
+    }
+    Some((points, lines))
 }
 
 /// Guided re-selection and re-fitting of `best` until its candidate set is stable (module
@@ -91,7 +117,9 @@ pub(crate) fn settle(
             break;
         }
         let plain = data.inliers(&best.pose, tau);
-        let proposed = candidates(&cost, &best.pose, &plain, tau);
+        let Some(proposed) = candidates(&cost, &best.pose, &plain, tau) else {
+            break;
+        };
         if proposed == plain || fitted_to.as_ref() == Some(&proposed) {
             break; // nothing to add, or the fit to these candidates is the current model
         }

@@ -71,6 +71,7 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::consensus::{self, Estimator, Stats, Stop};
 use crate::error::{number, Error, Result};
+use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
 use sampler::{solvable, Sampler};
@@ -328,7 +329,7 @@ impl Estimator for PoseEstimator<'_> {
 
     /// The poses of the sample that put its correspondences in front of the camera.
     fn models(&mut self, sample: &[usize; 3]) -> Vec<Pose> {
-        let features = sample.map(|k| self.data.features[k]);
+        let features = sample.map(|k| self.data.feature(k));
         let mut poses = solve(&features);
         poses.retain(|pose| self.data.sample_in_front(pose, sample));
         poses
@@ -536,6 +537,11 @@ fn local_optimization(
     let mut current = best.pose;
     let mut fitted: Option<(Vec<bool>, Vec<bool>)> = None;
     for round in 0..LOCAL_ROUNDS {
+        // A round re-fits all the inliers (tens of milliseconds at 10⁵): a stopped call ends here,
+        // with the best fit so far, rather than at the loop's next sample.
+        if round > 0 && stop_reason().is_some() {
+            break;
+        }
         let exponent = (LOCAL_ROUNDS - 1 - round) as f64 / (LOCAL_ROUNDS - 1) as f64;
         let m2 = LO_THRESHOLD_MULTIPLIER.powf(2.0 * exponent);
         let wide = Thresholds {
