@@ -133,3 +133,167 @@ pub(crate) fn settle(
     }
     best
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::quaternion::exp_so3;
+    use crate::pose::noise::ObservationNoise;
+    use crate::rng::Rng;
+    use crate::synthetic::{random_scene, SceneKind};
+    use nalgebra::{Matrix2, Vector2, Vector3};
+
+    /// Correspondence `k`'s two residuals at `pose`, written out here: the pixel error of a point, the
+    /// signed distances of a segment's endpoints to the line through the projections of its 3-D
+    /// endpoints (pinhole, no noise).
+    fn residual(camera: &Camera, corr: &Correspondences, pose: &Pose, k: usize) -> Vector2<f64> {
+        let project = |x: &Vector3<f64>| camera.matrix() * (pose.rotation * x + pose.translation);
+        let np = corr.n_points();
+        if k < np {
+            let p = project(&corr.points3d[k]);
+            return Vector2::new(p.x / p.z, p.y / p.z) - corr.points2d[k];
+        }
+        let [a, b] = corr.lines3d[k - np];
+        let l = project(&a).cross(&project(&b));
+        let scale = l.x.hypot(l.y);
+        let e = corr.lines2d[k - np];
+        Vector2::new(l.dot(&e[0].push(1.0)), l.dot(&e[1].push(1.0))) / scale
+    }
+
+    /// Its 2x6 Jacobian in `(ω, τ)` (`R ← exp(ω) R`, `t ← t + τ`) by central differences.
+    fn jacobian(camera: &Camera, corr: &Correspondences, pose: &Pose, k: usize) -> SMatrix<f64, 2, 6> {
+        let h = 1e-6;
+        let moved = |j: usize, s: f64| {
+            let mut d = [0.0; 6];
+            d[j] = s * h;
+            let p = Pose::new(
+                exp_so3(&Vector3::new(d[0], d[1], d[2])) * pose.rotation,
+                pose.translation + Vector3::new(d[3], d[4], d[5]),
+            );
+            residual(camera, corr, &p, k)
+        };
+        SMatrix::<f64, 2, 6>::from_fn(|i, j| (moved(j, 1.0)[i] - moved(j, -1.0)[i]) / (2.0 * h))
+    }
+
+    /// A general scene (40 points, 6 lines, 1 px noise) with a point moved to depth 0.3 (the others
+    /// at about 6: a high-leverage one), a pose near the truth, and a third of the points and two
+    /// lines displaced by 3-25 px, so that some non-inliers fall inside their widened gate and others
+    /// do not.
+    fn scene(seed: u64) -> (Camera, Correspondences, Pose) {
+        let s = random_scene(SceneKind::General, 40, 6, seed);
+        let mut rng = Rng::new(seed ^ 0xa11);
+        let mut corr = s.noisy(1.0, true, &mut rng);
+        // Point 0 slid along its ray to depth 0.3 in the camera frame: the same pixel.
+        let c = s.rotation * corr.points3d[0] + s.translation;
+        corr.points3d[0] = s.rotation.transpose() * (c * (0.3 / c.z) - s.translation);
+        let mut displace = |u: &mut Vector2<f64>| {
+            let angle = rng.uniform_in(0.0, std::f64::consts::TAU);
+            *u += rng.uniform_in(3.0, 25.0) * Vector2::new(angle.cos(), angle.sin());
+        };
+        for k in (0..40).step_by(3) {
+            displace(&mut corr.points2d[k]);
+        }
+        for k in [1, 4] {
+            displace(&mut corr.lines2d[k][0]);
+        }
+        let pose = Pose::new(
+            exp_so3(&Vector3::new(4e-4, -3e-4, 2e-4)) * s.rotation,
+            s.translation + Vector3::new(0.004, -0.003, 0.002),
+        );
+        (s.camera, corr, pose)
+    }
+
+    #[test]
+    fn the_gate_is_the_prediction_interval_of_each_correspondence() {
+        let tau = Thresholds {
+            point2: 16.0,
+            line2: 16.0,
+        };
+        let (mut widened, mut refused) = (0, 0);
+        for seed in 0..8 {
+            let (camera, corr, pose) = scene(seed);
+            let n = corr.n_points() + corr.n_lines();
+            let np = corr.n_points();
+            let limit = |k: usize| if k < np { tau.point2 } else { 2.0 * tau.line2 };
+            let r: Vec<_> = (0..n).map(|k| residual(&camera, &corr, &pose, k)).collect();
+            let j: Vec<_> = (0..n).map(|k| jacobian(&camera, &corr, &pose, k)).collect();
+            let plain: Vec<bool> = (0..n).map(|k| r[k].norm_squared() <= limit(k)).collect();
+            let fitted = (plain[..np].to_vec(), plain[np..].to_vec());
+            let information: SMatrix<f64, 6, 6> = (0..n).filter(|&k| plain[k]).map(|k| j[k].transpose() * j[k]).sum();
+            let inverse = information.try_inverse().unwrap();
+            let statistic = |k: usize| {
+                let spread = Matrix2::identity() + j[k] * inverse * j[k].transpose();
+                r[k].dot(&(spread.try_inverse().unwrap() * r[k]))
+            };
+            let cost = ReprojectionCost::of(&camera, &corr);
+            let (points, lines) = candidates(&cost, &pose, &fitted, &tau).expect("a well-posed fit");
+            let ours: Vec<bool> = points.into_iter().chain(lines).collect();
+            for k in 0..n {
+                let s = statistic(k);
+                // Differences are accurate to about 1e-6 of the statistic: closer calls are ties.
+                if (s - limit(k)).abs() > 1e-5 * limit(k) {
+                    assert_eq!(
+                        ours[k],
+                        plain[k] || s <= limit(k),
+                        "seed {seed}, feature {k}: {s} vs {}",
+                        limit(k)
+                    );
+                }
+                widened += (ours[k] && !plain[k]) as usize;
+                refused += (!ours[k] && r[k].norm_squared() <= limit(k) * 4.0) as usize;
+            }
+            assert!(ours[0], "seed {seed}: the near point, {:.1} px off", r[0].norm());
+        }
+        // Not vacuous: the gate admitted non-inliers, and refused some within twice the threshold.
+        assert!(widened > 0 && refused > 0, "{widened} widened, {refused} refused");
+        // A singular fit proposes nothing.
+        let (camera, corr, pose) = scene(0);
+        let none = (vec![false; corr.n_points()], vec![false; corr.n_lines()]);
+        assert_eq!(
+            candidates(&ReprojectionCost::of(&camera, &corr), &pose, &none, &tau),
+            None
+        );
+    }
+
+    #[test]
+    fn the_cheap_bound_holds_the_jacobian_and_the_residual_is_the_blocks() {
+        let (camera, mut corr, pose) = scene(3);
+        let mut rng = Rng::new(5);
+        // Correlated covariances of 0.3-3 px: the whitening enters both the residual and the bound.
+        let covariances: Vec<Matrix2<f64>> = (0..corr.n_points())
+            .map(|_| {
+                let a = Matrix2::new(
+                    rng.uniform_in(0.3, 3.0),
+                    rng.uniform_in(-1.0, 1.0),
+                    0.0,
+                    rng.uniform_in(0.3, 3.0),
+                );
+                a * a.transpose()
+            })
+            .collect();
+        let lines = vec![[Matrix2::identity(); 2]; corr.n_lines()];
+        for noise in [
+            None,
+            Some(ObservationNoise::from_covariances(&covariances, &lines).unwrap()),
+        ] {
+            corr.noise = noise;
+            let cost = ReprojectionCost::of(&camera, &corr);
+            for i in 0..corr.n_points() {
+                let (r, j) = cost.block(&pose, i);
+                let (e2, bound) = cost.point_jacobian_bound(&pose, i);
+                assert!((e2 - r.norm_squared()).abs() <= 1e-9 * (1.0 + e2), "point {i}");
+                let largest = (j * j.transpose()).symmetric_eigenvalues().max();
+                assert!(
+                    bound >= largest && bound <= 1e3 * largest,
+                    "point {i}: {bound} vs {largest}"
+                );
+            }
+        }
+        // Behind the camera: an infinite error, nothing to bound.
+        let behind = Pose::new(pose.rotation, pose.translation - Vector3::new(0.0, 0.0, 1e3));
+        assert_eq!(
+            ReprojectionCost::of(&camera, &corr).point_jacobian_bound(&behind, 0),
+            (f64::INFINITY, 0.0)
+        );
+    }
+}
