@@ -330,6 +330,41 @@ fn a_near_high_leverage_inlier_joins_the_consensus() {
     }
 }
 
+/// A local optimisation re-fits all the inliers in each of its rounds (tens of milliseconds at 10⁵
+/// correspondences), so a stop of the call is polled between them and not only before each sample:
+/// Ctrl-C during the set-up and the first local optimisations of a 200k-point pose took up to 0.2-0.4 s
+/// to be seen (bench/interrupt_latency.py). One sample here: one poll before it, then one before
+/// each of its local optimisation's 3 later rounds (before: the one poll only); with two samples
+/// allowed, a stop requested at the second poll ends the local optimisation there and the loop before
+/// its second sample.
+#[test]
+fn a_stop_is_polled_between_the_rounds_of_a_local_optimisation() {
+    use pluecker::interrupt::{with_stop, Stop};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let (scene, corr) = scene_with_outliers(2000, 0, 0.5, 9);
+    let opts = robust(9);
+    let run = |request_at: usize, samples: usize| {
+        let mut opts = opts.clone();
+        opts.ransac.as_mut().unwrap().max_iterations = samples;
+        let polls = Arc::new(AtomicUsize::new(0));
+        let counted = Arc::clone(&polls);
+        let stop = Stop::new().with_check(move || counted.fetch_add(1, Ordering::Relaxed) + 1 == request_at);
+        let r = with_stop(Arc::new(stop), || estimate_pose(&scene.camera, &corr, &opts).unwrap());
+        (r, polls.load(Ordering::Relaxed))
+    };
+    let (r, polls) = run(usize::MAX, 1);
+    assert_eq!(r.details.ransac.as_ref().unwrap().local_optimizations, 1);
+    assert!(polls >= 4, "{polls} polls");
+    let (r, polls) = run(2, 2);
+    let report = r.details.ransac.unwrap();
+    assert_eq!(
+        (report.stop, report.iterations, polls),
+        (RansacStop::Interrupted, 1, 2),
+        "{report:?}"
+    );
+}
+
 fn all_outliers(n_points: usize, seed: u64) -> (Camera, Correspondences) {
     let scene = random_scene(SceneKind::General, n_points, 0, seed);
     let mut rng = Rng::new(seed);
