@@ -23,10 +23,9 @@ import statistics
 import time
 
 import numpy as np
+import pluecker
 import poselib
 import pycolmap
-
-import pluecker
 from pluecker import colmap
 
 THRESHOLD_PX = 4.0

@@ -14,10 +14,9 @@ double. A threshold of 100 px used to run 100,000 samples to the iteration cap (
 from __future__ import annotations
 
 import numpy as np
+import pluecker
 from hypothesis import given, note
 from hypothesis import strategies as st
-
-import pluecker
 from test_properties_certificates import rotation
 
 #: Samples the loop may draw on clean data: the adaptive bound at an inlier fraction of 0.9 and the
