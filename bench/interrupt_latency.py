@@ -3,6 +3,7 @@ from the signal to the ``KeyboardInterrupt`` reaching Python is measured; for th
 memory the call takes per track.
 
     .venv/bin/python bench/interrupt_latency.py [--repeats 3] [--points 2000000] [--only points line ...]
+    .venv/bin/python bench/interrupt_latency.py --only ransac200k [--signals 20] [--window 0.5] [--seed 0]
 
 Workloads (each would run for seconds to hours if nothing stopped it):
 - ``points``: ``triangulate_points``, 2M tracks in 3 views, ``optimal``; each run in a fresh process, which
@@ -10,6 +11,9 @@ Workloads (each would run for seconds to hours if nothing stopped it):
   and for one uninterrupted call;
 - ``lines``: ``triangulate_lines``, 40 noisy segments in 4 views, branch and bound to a 1e-9 gap;
 - ``pose``: ``estimate_pose(options=PoseOptions(ransac=RansacOptions(...)))``, 20k all-outlier points, no inlier-ratio cap;
+- ``ransac200k``: the robust pose on 200k points, ``--inliers`` (0.5) of them true, sampling without end
+  (``min_iterations`` 10¹²); SIGINT at ``--signals`` (20) seeded random moments in the first ``--window`` (0.5) s of
+  the call: the set-up (the data's checks and preparation) and the first local optimisations;
 - ``line``: one ``triangulate_line``, the paper's relaxation to a 1e-9 gap with ``max_nodes`` nodes
   (``--single-nodes``, about 1.6 ms each on the shared 2-core machine): a build that does not stop single calls runs on to
   the node cap, and the "latency" is the rest of the call;
@@ -68,6 +72,34 @@ def pose_workload():
     return lambda: pluecker.estimate_pose(camera, u, X, options=pluecker.PoseOptions(ransac=ransac))
 
 
+def pose_200k_workload(inliers: float):
+    """The robust pose on 200k points, a fraction ``inliers`` of them true (1 px noise), the others random
+    pixels; ``min_iterations`` = ``max_iterations`` = 10¹², so that only a stop ends the sampling."""
+    rng = np.random.default_rng(0)
+    n = 200_000
+    camera = pluecker.Camera(800, 800, 320, 240)
+    X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
+    u = X[:, :2] / X[:, 2:] * 800 + [320, 240] + rng.normal(0, 1, (n, 2))
+    wrong = rng.random(n) >= inliers
+    u[wrong] = rng.uniform(0, [640, 480], (int(wrong.sum()), 2))
+    ransac = pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, min_iterations=10**12)
+    return lambda: pluecker.estimate_pose(camera, u, X, options=pluecker.PoseOptions(ransac=ransac))
+
+
+def run_ransac_200k(signals: int, window: float, seed: int, inliers: float) -> None:
+    """Ctrl-C latency of the 200k robust pose, SIGINT at ``signals`` moments drawn uniformly in the first
+    ``window`` seconds of the call (seeded): median and largest, and the moments of the three slowest."""
+    call = pose_200k_workload(inliers)
+    moments = np.random.default_rng(seed).uniform(0.0, window, signals)
+    runs = [latency(call, float(delay)) for delay in moments]
+    seconds = np.array([r[0] for r in runs])
+    slowest = np.argsort(seconds)[::-1][:3]
+    print(f"estimate_pose robust (200k points, {100 * inliers:.0f} % inliers), {signals} signals in the first {window} s (seed {seed}): "
+          f"median {1e3 * np.median(seconds):.1f} ms, max {1e3 * seconds.max():.1f} ms; slowest at "
+          + ", ".join(f"{1e3 * moments[k]:.0f} ms -> {1e3 * seconds[k]:.0f} ms" for k in slowest)
+          + f" ({runs[-1][1]})", flush=True)
+
+
 def single_line_workload(nodes: int):
     P, segments = line_tracks(0, n=1, views=4, sigma=2.0)
     options = pluecker.TriangulationOptions(max_relative_gap=1e-9, max_nodes=nodes, line_bound="relaxation")
@@ -102,8 +134,8 @@ def latency(call, delay: float) -> tuple[float, str]:
         os.kill(os.getpid(), signal.SIGINT)
 
     timer = threading.Timer(delay, fire)
-    timer.start()
     try:
+        timer.start()  # inside the try: a SIGINT due at once may arrive while the timer starts
         call()
     except KeyboardInterrupt as stopped:
         arrived = time.perf_counter()
@@ -167,7 +199,11 @@ def main() -> None:
     parser.add_argument("--points", type=int, default=2_000_000)
     parser.add_argument("--delay", type=float, default=0.5, help="seconds from the call's start to SIGINT")
     parser.add_argument("--single-nodes", type=int, default=10_000, help="node cap of the single calls")
-    parser.add_argument("--only", nargs="*", choices=["points", "lines", "pose", "line", "quadric"])
+    parser.add_argument("--signals", type=int, default=20, help="SIGINTs of the ransac200k workload")
+    parser.add_argument("--window", type=float, default=0.5, help="ransac200k: seconds after the start the SIGINTs fall in")
+    parser.add_argument("--seed", type=int, default=0, help="ransac200k: seed of the SIGINT moments")
+    parser.add_argument("--inliers", type=float, default=0.5, help="ransac200k: fraction of true correspondences")
+    parser.add_argument("--only", nargs="*", choices=["points", "lines", "pose", "line", "quadric", "ransac200k"])
     parser.add_argument("--child-points", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     # Python's own handler, also when started in the background (SIGINT then inherited as ignored).
@@ -175,11 +211,13 @@ def main() -> None:
     if args.child_points:
         points_child(args.child_points, args.delay if "--delay" in sys.argv else None)
         return
-    chosen = set(args.only or ["points", "lines", "pose", "line", "quadric"])
+    chosen = set(args.only or ["points", "lines", "pose", "line", "quadric", "ransac200k"])
     print(f"SIGINT {args.delay} s after the start; {args.repeats} runs each; {pluecker.get_num_threads()} threads",
           flush=True)
     if "points" in chosen:
         run_points(args.points, args.repeats, args.delay)
+    if "ransac200k" in chosen:
+        run_ransac_200k(args.signals, args.window, args.seed, args.inliers)
     workloads = {
         "lines": ("triangulate_lines (40 lines, gap 1e-9)", lines_workload),
         "pose": ("estimate_pose robust (20k all-outlier points)", pose_workload),

@@ -129,14 +129,15 @@ def test_ctrl_c_stops_a_robust_pose_and_returns_the_best_so_far():
     camera = pluecker.Camera(800, 800, 320, 240)
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = rng.uniform(0, 640, (n, 2))  # all outliers, and no inlier-ratio cap: it would sample for hours
-    # RANSAC polls before each sample: two samples are drawn before Ctrl-C.
+    # RANSAC polls before each sample and between the rounds of a local optimisation: the third poll
+    # comes after the first sample at the earliest.
     ctrl_c_at_poll(3)
     with pytest.raises(KeyboardInterrupt) as caught:
         pluecker.estimate_pose(camera, u, X, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12, time_budget=SAFETY)))
     partial = caught.value.partial
     assert isinstance(partial, pluecker.PoseResult)
     assert partial.details.ransac.stop == "interrupted" and partial.status != "success"
-    assert partial.details.ransac.iterations >= 2
+    assert partial.details.ransac.iterations >= 1
 
 
 def assert_stopped_single(partial, started_nodes: int) -> None:

@@ -294,7 +294,7 @@ class RansacReport:
     errors_evaluated: int
     """Reprojection errors evaluated while scoring: the work of the scoring."""
     local_optimizations: int
-    """Local optimisations run (one per new best model)."""
+    """Local optimisations run (one per sample whose pose beat every sample's before it)."""
     inliers: int
     """Inliers (points + lines) of the best model before the final refinement."""
     required_inliers: int

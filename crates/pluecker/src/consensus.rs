@@ -6,8 +6,15 @@
 //! Each iteration draws a minimal sample ([`Estimator::sample`]), solves it for its models
 //! ([`Estimator::models`]; none: a degenerate sample) and scores each model
 //! ([`Estimator::score`], typically the MSAC cost `Σ min(eᵢ², τ²)` of Torr & Zisserman 2000, see
-//! [`truncated`]). A model scoring strictly below the best so far is handed to the local optimisation
-//! ([`Estimator::refine`], Chum, Matas & Kittler 2003) and becomes the best model.
+//! [`truncated`]). A model scoring strictly below every model scored before it *as solved from its
+//! sample* (the record) is handed to the local optimisation ([`Estimator::refine`], applied to each
+//! so-far-the-best sample, Chum, Matas & Kittler 2003), and the refined model becomes the best model
+//! when its score is strictly below the best refined score so far: the answer is the best of all the
+//! local optimisations. Comparing a raw sample's score with a refined one instead would refine almost
+//! nothing after the first local optimisation (a fit to all the inliers scores far below any minimal
+//! sample's model), so a sample in the basin of a better consensus, e.g. one holding a high-leverage
+//! inlier that the first fit left out, would never be refined. The records of `k` samples number
+//! about `ln k`, so this costs a few local optimisations more.
 //!
 //! **Stopping.** The loop stops, checked in this order before each sample:
 //! 1. on the adaptive bound: with `P` the probability that a sample is all-inlier for the best model
@@ -44,24 +51,25 @@ pub(crate) trait Estimator {
     /// The models `sample` determines; none when it is degenerate.
     fn models(&mut self, sample: &Self::Sample) -> Vec<Self::Model>;
 
-    /// The score of `model` (solved from `sample`), or `None` when it cannot beat `best` (an early
-    /// exit of the scoring, or a rejection by a sequential test).
+    /// The score of `model` (solved from `sample`), or `None` when it cannot beat `record`, the best
+    /// score of a sample's model so far (an early exit of the scoring, or a rejection by a sequential
+    /// test once a record exists).
     fn score(
         &mut self,
         model: &Self::Model,
         sample: &Self::Sample,
-        best: Option<Self::Score>,
+        record: Option<Self::Score>,
         stats: &Stats,
     ) -> Option<Self::Score>;
 
-    /// Local optimisation of a model that beats the best: returns a model scoring no worse (by default
-    /// the model itself).
+    /// Local optimisation of a model that beats the record: returns a model scoring no worse (by
+    /// default the model itself).
     fn refine(&mut self, model: Self::Model, score: Self::Score) -> (Self::Model, Self::Score) {
         (model, score)
     }
 
-    /// `model` is the new best: the probability `P` that a sample is all-inlier for it (for the adaptive
-    /// bound; by default 0, no adaptive bound).
+    /// `model` (refined) is the new best: the probability `P` that a sample is all-inlier for it (for
+    /// the adaptive bound; by default 0, no adaptive bound).
     fn new_best(&mut self, _model: &Self::Model, _stats: &Stats) -> f64 {
         0.0
     }
@@ -132,7 +140,9 @@ pub(crate) struct Stats {
     pub degenerate_samples: usize,
     /// Models scored (fully or until an early exit).
     pub models_scored: usize,
-    /// Models that beat the best (each refined once).
+    /// Models that beat the record (each refined once).
+    pub records: usize,
+    /// Refined models that beat the best refined model.
     pub new_bests: usize,
 }
 
@@ -195,7 +205,9 @@ pub(crate) fn run<E: Estimator>(
     mut elapsed: impl FnMut() -> Duration,
 ) -> Outcome<E::Model, E::Score> {
     let mut stats = Stats::default();
+    // The best refined model, and the best score of a model as solved from its sample.
     let mut best: Option<(E::Model, E::Score)> = None;
+    let mut record: Option<E::Score> = None;
     // `P` of the best model.
     let mut probability: Option<f64> = None;
     // The samples drawn, counted per `α` of the test their models were verified with (0 without).
@@ -254,18 +266,22 @@ pub(crate) fn run<E: Estimator>(
         let mut alpha = 0.0f64;
         for model in models {
             stats.models_scored += 1;
-            let bound = best.as_ref().map(|b| b.1);
-            if bound.is_some() {
+            if best.is_some() {
                 alpha = alpha.max(estimator.rejection_bound());
             }
-            let Some(score) = estimator.score(&model, &sample, bound, &stats) else {
+            let Some(score) = estimator.score(&model, &sample, record, &stats) else {
                 continue;
             };
-            if bound.is_some_and(|b| !(score < b)) {
+            if record.is_some_and(|b| !(score < b)) {
+                continue;
+            }
+            record = Some(score);
+            stats.records += 1;
+            let (model, score) = estimator.refine(model, score);
+            if best.as_ref().is_some_and(|b| !(score < b.1)) {
                 continue;
             }
             stats.new_bests += 1;
-            let (model, score) = estimator.refine(model, score);
             probability = Some(estimator.new_best(&model, &stats));
             limit = None;
             best = Some((model, score));

@@ -9,8 +9,10 @@
 //! - the node loop of `global::branch_and_bound`: a track being solved keeps the best
 //!   estimate and the lower bound reached, uncertified, with status
 //!   [`crate::triangulation::Status::Interrupted`] or [`crate::triangulation::Status::TimeBudget`];
-//! - the RANSAC loop (`pose::robust`, stop reason [`crate::RansacStop::Interrupted`]) and the
-//!   rotation search of the pose certificate ([`crate::pose::certificate`], not proved).
+//! - the RANSAC loop (`pose::robust`, stop reason [`crate::RansacStop::Interrupted`]: before each
+//!   sample, between the rounds of a local optimisation, and before each fit of the final
+//!   consensus) and the rotation search of the pose certificate ([`crate::pose::certificate`], not
+//!   proved).
 //!
 //! The stop is ambient (a thread-local) rather than a parameter of every solver, so that adding a
 //! polled loop does not change any signature; the batches carry it into their rayon tasks. Without an

@@ -195,6 +195,181 @@ fn the_msac_score_is_a_sum_of_truncated_squares() {
     assert_eq!(report.score, stage.final_cost);
 }
 
+/// 20 points uniform in [-1, 1]² × [4, 6] seen by `Camera(400, 400, 320, 240)` at the identity pose,
+/// with `sigma` px of Gaussian noise: clean data.
+fn clean_points(sigma: f64, seed: u64) -> (Camera, Correspondences) {
+    let camera = Camera::new(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
+    let mut rng = Rng::new(seed);
+    let points3d: Vec<Vector3<f64>> = (0..20)
+        .map(|_| {
+            Vector3::new(
+                rng.uniform_in(-1.0, 1.0),
+                rng.uniform_in(-1.0, 1.0),
+                rng.uniform_in(4.0, 6.0),
+            )
+        })
+        .collect();
+    let points2d = points3d
+        .iter()
+        .map(|x| {
+            let (u, v) = (400.0 * x.x / x.z + 320.0, 400.0 * x.y / x.z + 240.0);
+            Vector2::new(u + sigma * rng.normal(), v + sigma * rng.normal())
+        })
+        .collect();
+    let corr = Correspondences {
+        points2d,
+        points3d,
+        ..Default::default()
+    };
+    (camera, corr)
+}
+
+/// Clean data and a threshold far above the noise: every point an inlier of every reasonable pose.
+/// A point threshold of 100 px (the window of the 20 points is about 200 px wide, so a random pixel
+/// agrees with any pose by chance: δ = 1) used to run 100,000 samples to the iteration cap and end
+/// `not_converged` with the right pose; a line threshold of 1e300 without any line did the same (it
+/// widened the points' chance window to p = 0). The sequential test could not reject anything, but
+/// its `α = 1 / A = 1` told the stopping rule that every sample was a miss.
+#[test]
+fn clean_data_with_a_wide_threshold_stops_at_once() {
+    let (camera, corr) = clean_points(0.5, 7);
+    let wide: [(f64, f64); 6] = [
+        (100.0, 4.0),
+        (50.0, 4.0),
+        (4.0, 1e300),
+        (1e300, 4.0),
+        (1e6, 1e6),
+        (4.0, 4.0),
+    ];
+    for (point_threshold, line_threshold) in wide {
+        let mut opts = robust(0);
+        let ransac = opts.ransac.as_mut().unwrap();
+        ransac.point_threshold = point_threshold;
+        ransac.line_threshold = line_threshold;
+        let r = estimate_pose(&camera, &corr, &opts).unwrap();
+        let report = r.details.ransac.as_ref().unwrap();
+        let label = format!("thresholds {point_threshold} / {line_threshold}: {report:?}");
+        assert_eq!(r.status, Status::Success, "{label}");
+        assert_eq!(report.stop, RansacStop::Confidence, "{label}");
+        // Every point an inlier: P = 1, one sample suffices (two when the first is degenerate).
+        assert!(report.iterations <= 3, "{label}");
+        assert!(report.score.is_finite(), "{label}");
+        assert_eq!(r.inliers_points.iter().filter(|&&m| m).count(), 20, "{label}");
+        // The pose of 20 points at 0.5 px: within a few milliradians and hundredths of a unit.
+        assert!(
+            rotation_distance(&r.pose.rotation, &nalgebra::Matrix3::identity()) < 0.01,
+            "{label}"
+        );
+        assert!(r.pose.translation.norm() < 0.05, "{label}");
+    }
+}
+
+/// Pixel error of each point at `(rotation, translation)`, written out here (`u = K (R X + t) / z`,
+/// f = 400 px, principal point (320, 240), no skew); infinite behind the camera.
+fn pixel_errors(rotation: &nalgebra::Matrix3<f64>, translation: &Vector3<f64>, corr: &Correspondences) -> Vec<f64> {
+    corr.points3d
+        .iter()
+        .zip(&corr.points2d)
+        .map(|(x, u)| {
+            let c = rotation * x + translation;
+            let projected = Vector2::new(400.0 * c.x / c.z + 320.0, 400.0 * c.y / c.z + 240.0);
+            if c.z > 0.0 {
+                (projected - u).norm()
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect()
+}
+
+/// One near point (depth 0.05, at pixel (450, 330)) among 179 far ones (depth 5-30, uniform in the
+/// 640 x 480 image) seen at the identity pose with 1 px noise, then 77 wrong matches (30 %): random
+/// pixels of random far points. The near point alone fixes the camera centre along a direction that
+/// the far points barely constrain (it moves by 400 δc / 0.05 px when the centre moves by δc).
+fn near_point_scene(seed: u64) -> (Camera, Correspondences) {
+    let camera = Camera::new(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
+    let mut rng = Rng::new(seed);
+    let mut pixel = || Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+    let pixels: Vec<Vector2<f64>> = std::iter::once(Vector2::new(450.0, 330.0))
+        .chain((0..179 + 77).map(|_| pixel()))
+        .collect();
+    let mut corr = Correspondences::default();
+    for (i, u) in pixels.iter().enumerate() {
+        let depth = if i == 0 { 0.05 } else { rng.uniform_in(5.0, 30.0) };
+        corr.points3d
+            .push(Vector3::new((u.x - 320.0) / 400.0, (u.y - 240.0) / 400.0, 1.0) * depth);
+        corr.points2d.push(if i < 180 {
+            u + Vector2::new(rng.normal(), rng.normal())
+        } else {
+            Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0))
+        });
+    }
+    (camera, corr)
+}
+
+/// The robust pose keeps a high-leverage inlier. On the scene of [`near_point_scene`] a fit to the far
+/// points alone leaves the near point 26-75 px off (the camera centre 0.005-0.01 away), so the
+/// threshold dropped it, on every seed: no minimal sample with the near point was drawn in the ~23
+/// samples, and a sample's raw score had to beat the refined best to be refined at all. The final
+/// consensus now proposes each correspondence within the threshold of its *prediction* uncertainty
+/// (guided matching), and the fit with the near point scores lower (MSAC) than the fit without.
+#[test]
+fn a_near_high_leverage_inlier_joins_the_consensus() {
+    for seed in 0..6u64 {
+        let (camera, corr) = near_point_scene(seed);
+        let truth = pixel_errors(&nalgebra::Matrix3::identity(), &Vector3::zeros(), &corr);
+        let r = estimate_pose(&camera, &corr, &robust(seed)).unwrap();
+        let errors = pixel_errors(&r.pose.rotation, &r.pose.translation, &corr);
+        let label = format!(
+            "seed {seed}: near point {:.1} px off, {:?}",
+            errors[0], r.details.ransac
+        );
+        assert_eq!(r.status, Status::Success, "{label}");
+        assert!(r.inliers_points[0] && errors[0] <= THRESHOLD_PX, "{label}");
+        // Every other feature is classified as at the true pose, but within the margin.
+        for (k, (&t, &inlier)) in truth.iter().zip(&r.inliers_points).enumerate() {
+            if (t - THRESHOLD_PX).abs() > MASK_MARGIN_PX {
+                assert_eq!(inlier, t <= THRESHOLD_PX, "{label}: point {k}, {t:.1} px at the truth");
+            }
+        }
+    }
+}
+
+/// A local optimisation re-fits all the inliers in each of its rounds (tens of milliseconds at 10⁵
+/// correspondences), so a stop of the call is polled between them and not only before each sample:
+/// Ctrl-C during the set-up and the first local optimisations of a 200k-point pose took up to 0.2-0.4 s
+/// to be seen (bench/interrupt_latency.py). One sample here: one poll before it, then one before
+/// each of its local optimisation's 3 later rounds (before: the one poll only); with two samples
+/// allowed, a stop requested at the second poll ends the local optimisation there and the loop before
+/// its second sample.
+#[test]
+fn a_stop_is_polled_between_the_rounds_of_a_local_optimisation() {
+    use pluecker::interrupt::{with_stop, Stop};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::sync::Arc;
+    let (scene, corr) = scene_with_outliers(2000, 0, 0.5, 9);
+    let opts = robust(9);
+    let run = |request_at: usize, samples: usize| {
+        let mut opts = opts.clone();
+        opts.ransac.as_mut().unwrap().max_iterations = samples;
+        let polls = Arc::new(AtomicUsize::new(0));
+        let counted = Arc::clone(&polls);
+        let stop = Stop::new().with_check(move || counted.fetch_add(1, Ordering::Relaxed) + 1 == request_at);
+        let r = with_stop(Arc::new(stop), || estimate_pose(&scene.camera, &corr, &opts).unwrap());
+        (r, polls.load(Ordering::Relaxed))
+    };
+    let (r, polls) = run(usize::MAX, 1);
+    assert_eq!(r.details.ransac.as_ref().unwrap().local_optimizations, 1);
+    assert!(polls >= 4, "{polls} polls");
+    let (r, polls) = run(2, 2);
+    let report = r.details.ransac.unwrap();
+    assert_eq!(
+        (report.stop, report.iterations, polls),
+        (RansacStop::Interrupted, 1, 2),
+        "{report:?}"
+    );
+}
+
 fn all_outliers(n_points: usize, seed: u64) -> (Camera, Correspondences) {
     let scene = random_scene(SceneKind::General, n_points, 0, seed);
     let mut rng = Rng::new(seed);

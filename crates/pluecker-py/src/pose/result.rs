@@ -112,7 +112,7 @@ result_class! {
         sprt_rejections = |r| r.inner.sprt_rejections;
         /// Reprojection errors evaluated while scoring: the work of the scoring.
         errors_evaluated = |r| r.inner.errors_evaluated;
-        /// Local optimisations run (one per new best model).
+        /// Local optimisations run (one per sample whose pose beat every sample's before it).
         local_optimizations = |r| r.inner.local_optimizations;
         /// Inliers (points + lines) of the best model before the final refinement.
         inliers = |r| r.inner.inliers;

@@ -69,7 +69,7 @@ struct Lens<'a> {
 }
 
 /// One residual pair and its 2x6 Jacobian with respect to `(ω, τ)`.
-type Block = (Vector2<f64>, SMatrix<f64, 2, 6>);
+pub(crate) type Block = (Vector2<f64>, SMatrix<f64, 2, 6>);
 
 /// Residuals and Jacobian rows of `L` points, lane `l` being point `i₀ + l`.
 struct PointLanes<const L: usize> {
@@ -506,6 +506,39 @@ impl<'a> ReprojectionCost<'a> {
     /// The stacked Jacobian's normal matrix `JᵀJ` at `pose` (pixels per radian / per length unit).
     pub fn information(&self, pose: &Pose) -> SMatrix<f64, 6, 6> {
         self.linearize(pose).gauss_newton
+    }
+
+    /// Correspondence `k`'s residual pair and its 2x6 Jacobian at `pose` (points first, then lines, as
+    /// in [`ReprojectionCost::residuals`]), whitened by the noise (if any).
+    pub(crate) fn block(&self, pose: &Pose, k: usize) -> Block {
+        if k < self.n_points {
+            self.point_block(pose, k)
+        } else {
+            self.line_block(pose, k - self.n_points, true)
+        }
+    }
+
+    /// Point `i`'s squared (whitened) residual `‖r‖²` at `pose` and a bound `b ≥ ‖J‖₂²` on its
+    /// Jacobian (the block of [`ReprojectionCost::block`]), cheaper than the Jacobian itself: with
+    /// `J = W a [−[R X]×, I]`, `a = ∂π/∂x_cam`, `‖J‖₂² ≤ ‖W‖_F² ‖a‖_F² (‖X‖² + 1)`. Behind the camera:
+    /// `(∞, 0)`. Through a lens: `(0, ∞)` (no bound: the caller must take the block).
+    pub(crate) fn point_jacobian_bound(&self, pose: &Pose, i: usize) -> (f64, f64) {
+        if self.lens.is_some() {
+            return (0.0, f64::INFINITY);
+        }
+        let (x, u) = self.point(i);
+        let c = &self.camera;
+        let p = pose.rotation * x;
+        let cam = p + pose.translation;
+        if !(cam.z > 0.0) {
+            return (f64::INFINITY, 0.0);
+        }
+        let (xn, yn) = (cam.x / cam.z, cam.y / cam.z);
+        let r = Vector2::new(c.fx * xn + c.skew * yn + c.cx - u.x, c.fy * yn + c.cy - u.y);
+        let w = self.noise.map_or_else(Matrix2::identity, |n| n.points[i]);
+        let du = c.fx * xn + c.skew * yn;
+        let a2 = (c.fx * c.fx + c.skew * c.skew + du * du + c.fy * c.fy + c.fy * c.fy * yn * yn) / (cam.z * cam.z);
+        ((w * r).norm_squared(), w.norm_squared() * a2 * (x.norm_squared() + 1.0))
     }
 
     /// The number of 3-D points and line endpoints with `z ≤ 0` in the camera frame at `pose`.

@@ -11,7 +11,8 @@
 //! it no better than a random pose: with many correspondences and few inliers a bad hypothesis is then
 //! rejected after a few tens of errors instead of all of them.
 //!
-//! When a hypothesis beats the best model, *local optimisation* re-fits it by iterated least squares with a
+//! When a hypothesis beats every hypothesis scored before it (as solved from its sample: the loop's
+//! record, see [`crate::consensus`]), *local optimisation* re-fits it by iterated least squares with a
 //! shrinking threshold (the "LO+" of Lebeda, Matas & Chum, BMVC 2012): the inliers within
 //! [`LO_THRESHOLD_MULTIPLIER`] times the thresholds are re-fitted by the trust region of the refinement
 //! (at most [`RansacOptions::local_iterations`] iterations), then those within a smaller multiple at the
@@ -20,11 +21,16 @@
 //! the scene, so inliers selected at the thresholds alone can miss part of the true inlier set and
 //! settle on a worse model nearby; the wider rounds bring the accuracy to that of the
 //! maximum-likelihood fit on the true inliers (measured with `bench/compare_robust_pose.py`: the figures
-//! are in `bench/results/2026-11-23-figures-from-code-comments.md`). The loop stops when the number of
+//! are in `bench/results/2026-11-23-figures-from-code-comments.md`). The best model is the best-scoring
+//! of all the local optimisations. The loop stops when the number of
 //! samples reaches the adaptive bound of `sampler` for [`RansacOptions::confidence`], the cap of
-//! [`RansacOptions::min_inlier_ratio`], the iteration cap, or the time budget. The caller
+//! [`RansacOptions::min_inlier_ratio`], the iteration cap, or the time budget. A best model with at
+//! least [`RansacReport::required_inliers`] then settles on its final consensus (`guided`): the
+//! correspondences within the threshold of their *prediction* uncertainty (a high-leverage inlier,
+//! e.g. a point much nearer than the rest of the scene, can lie tens of pixels off a fit that left it
+//! out) are re-fitted until the set is stable, a fit kept only when it scores better. The caller
 //! ([`crate::pose::estimate_pose`]) then refines the best model on its inliers with the full
-//! reprojection refinement, if it has at least [`RansacReport::required_inliers`].
+//! reprojection refinement.
 //!
 //! The loop itself (sampling, the best model, the adaptive bound and its cap, the budget and the stop)
 //! is the sampling consensus shared with robust triangulation (`crate::consensus`); this module plugs
@@ -59,6 +65,7 @@
 //! Conventions: `x_cam = R X + t` in the frame of the correspondences given (the pipeline passes its
 //! centred, unit-scale frame); pixel errors do not depend on that frame.
 
+pub(crate) mod guided;
 pub(crate) mod pipeline;
 pub(crate) mod sampler;
 pub(crate) mod scoring;
@@ -70,6 +77,7 @@ use super::reprojection::{Pose, ReprojectionCost};
 use crate::camera::Camera;
 use crate::consensus::{self, Estimator, Stats, Stop};
 use crate::error::{number, Error, Result};
+use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, Subproblem, TrustRegionOptions};
 use crate::rng::Rng;
 use sampler::{solvable, Sampler};
@@ -253,7 +261,8 @@ pub struct RansacReport {
     /// Reprojection errors evaluated while scoring the poses (early exits included; not those of the
     /// local optimisation or of the inlier masks): the work of the scoring.
     pub errors_evaluated: usize,
-    /// Local optimisations run (one per new best model, each up to `LOCAL_ROUNDS` rounds).
+    /// Local optimisations run (one per sample whose pose beat every sample's before it, each up to
+    /// `LOCAL_ROUNDS` rounds).
     pub local_optimizations: usize,
     /// Inliers (points + lines) of the best model before the final refinement.
     pub inliers: usize,
@@ -287,9 +296,9 @@ pub struct RansacOutcome {
 }
 
 /// The best model so far.
-struct Best {
-    pose: Pose,
-    score: f64,
+pub(crate) struct Best {
+    pub pose: Pose,
+    pub score: f64,
 }
 
 /// The pose's part of the sampling loop ([`crate::consensus`]): mixed point/line samples
@@ -312,8 +321,9 @@ struct PoseEstimator<'a> {
     errors_evaluated: usize,
     sprt_rejections: usize,
     local_optimizations: usize,
-    /// Inliers of the best model.
+    /// Inliers of the best model, and its masks (points, lines).
     inliers: usize,
+    best_inliers: Option<(Vec<bool>, Vec<bool>)>,
 }
 
 impl Estimator for PoseEstimator<'_> {
@@ -327,16 +337,16 @@ impl Estimator for PoseEstimator<'_> {
 
     /// The poses of the sample that put its correspondences in front of the camera.
     fn models(&mut self, sample: &[usize; 3]) -> Vec<Pose> {
-        let features = sample.map(|k| self.data.features[k]);
+        let features = sample.map(|k| self.data.feature(k));
         let mut poses = solve(&features);
         poses.retain(|pose| self.data.sample_in_front(pose, sample));
         poses
     }
 
-    fn score(&mut self, pose: &Pose, sample: &[usize; 3], best: Option<f64>, stats: &Stats) -> Option<f64> {
-        let bound = best.unwrap_or(f64::INFINITY);
-        // The first model is scored in full; the test needs a best model to compare with.
-        let test = self.sprt.as_ref().filter(|_| best.is_some()).map(|s| *s.test());
+    fn score(&mut self, pose: &Pose, sample: &[usize; 3], record: Option<f64>, stats: &Stats) -> Option<f64> {
+        let bound = record.unwrap_or(f64::INFINITY);
+        // The first model is scored in full; the test needs a model to compare with.
+        let test = self.sprt.as_ref().filter(|_| record.is_some()).map(|s| *s.test());
         let (np, nl) = (self.data.n_points(), self.data.n_lines());
         let start = [
             scoring::below(&mut self.order_rng, np),
@@ -359,9 +369,19 @@ impl Estimator for PoseEstimator<'_> {
         }
     }
 
+    /// The local optimisation of a record sample, unless every inlier of its pose is an inlier of the
+    /// best model: its fits would then start from a subset of the best model's inliers, in the basin
+    /// the best model has settled in (with no outliers, every record after the first).
     fn refine(&mut self, pose: Pose, score: f64) -> (Pose, f64) {
         if self.local_iterations == 0 {
             return (pose, score);
+        }
+        if let Some((best_points, best_lines)) = &self.best_inliers {
+            let (points, lines) = self.data.inliers(&pose, &self.tau);
+            let within = |mask: &[bool], best: &[bool]| mask.iter().zip(best).all(|(&m, &b)| !m || b);
+            if within(&points, best_points) && within(&lines, best_lines) {
+                return (pose, score);
+            }
         }
         self.local_optimizations += 1;
         let best = local_optimization(
@@ -381,8 +401,10 @@ impl Estimator for PoseEstimator<'_> {
         let count = |m: &[bool]| m.iter().filter(|&&v| v).count();
         let (ip, il) = (count(&points), count(&lines));
         self.inliers = ip + il;
+        let (np, nl) = (points.len(), lines.len());
+        self.best_inliers = Some((points, lines));
         let fraction = |i: usize, n: usize| if n == 0 { 0.0 } else { i as f64 / n as f64 };
-        let f = [fraction(ip, points.len()), fraction(il, lines.len())];
+        let f = [fraction(ip, np), fraction(il, nl)];
         if let Some(s) = self.sprt.as_mut() {
             s.new_best(f, models_per_sample(stats));
         }
@@ -449,6 +471,7 @@ pub fn ransac(
         sprt_rejections: 0,
         local_optimizations: 0,
         inliers: 0,
+        best_inliers: None,
     };
     let outcome = if can_draw {
         consensus::run(&mut estimator, &loop_opts, || started.elapsed())
@@ -481,13 +504,22 @@ pub fn ransac(
         time_seconds: 0.0,
     };
     report.required_inliers = required_inliers(opts, &report, chance, np, nl);
-    let best = outcome.best.map(|(pose, score)| Best { pose, score });
+    let mut best = outcome.best.map(|(pose, score)| Best { pose, score });
+    // The final consensus (`guided`), for a model that will be accepted, unless the call is stopping.
+    let stopping = matches!(outcome.stop, Stop::Interrupted | Stop::TimeBudget);
+    if opts.local_iterations > 0 && !stopping && report.inliers >= report.required_inliers {
+        best = best.map(|b| guided::settle(camera, corr, &data, &tau, &lo, b));
+    }
     let (inliers_points, inliers_lines) = match &best {
         Some(b) => data.inliers(&b.pose, &tau),
         None => (vec![false; np], vec![false; nl]),
     };
     if let Some(b) = &best {
         report.score = b.score;
+        report.inliers = [&inliers_points, &inliers_lines]
+            .iter()
+            .map(|m| m.iter().filter(|&&v| v).count())
+            .sum();
     }
     report.time_seconds = started.elapsed().as_secs_f64();
     Ok(RansacOutcome {
@@ -526,6 +558,11 @@ fn local_optimization(
     let mut current = best.pose;
     let mut fitted: Option<(Vec<bool>, Vec<bool>)> = None;
     for round in 0..LOCAL_ROUNDS {
+        // A round re-fits all the inliers (tens of milliseconds at 10⁵): a stopped call ends here,
+        // with the best fit so far, rather than at the loop's next sample.
+        if round > 0 && stop_reason().is_some() {
+            break;
+        }
         let exponent = (LOCAL_ROUNDS - 1 - round) as f64 / (LOCAL_ROUNDS - 1) as f64;
         let m2 = LO_THRESHOLD_MULTIPLIER.powf(2.0 * exponent);
         let wide = Thresholds {

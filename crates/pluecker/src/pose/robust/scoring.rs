@@ -199,8 +199,11 @@ pub(crate) struct Prepared {
     line_order: Order,
     /// `[u₀, v₀, u₁, v₁]`: the bounding box of the observed pixels (points and segment endpoints).
     pub window: [f64; 4],
-    /// Features for [`super::super::minimal::solve`]: points first, then lines, in the order given.
-    pub features: Vec<Feature>,
+    /// `K⁻¹`: a pixel's bearing, for the points' features ([`Prepared::feature`]).
+    k_inv: Matrix3<f64>,
+    /// The lines' features, computed once (a segment's interpretation plane can fail; a point's
+    /// bearing cannot, and is computed when a sample needs it: most points never are).
+    line_features: Vec<Feature>,
 }
 
 impl Prepared {
@@ -247,7 +250,8 @@ impl Prepared {
         };
         let points = point_order.index.iter().map(|&i| points_given[i]).collect();
         let lines = line_order.index.iter().map(|&i| lines_given[i]).collect();
-        let features = (0..corr.n_points() + corr.n_lines())
+        let np = corr.n_points();
+        let line_features = (np..np + corr.n_lines())
             .map(|k| feature(camera, &k_inv, corr, k))
             .collect::<Result<Vec<Feature>>>()?;
         let mut window = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
@@ -274,8 +278,21 @@ impl Prepared {
             point_order,
             line_order,
             window,
-            features,
+            k_inv,
+            line_features,
         })
+    }
+
+    /// Feature `k` for [`super::super::minimal::solve`] (points first, then lines, in the order
+    /// given), as [`feature`] makes it.
+    pub fn feature(&self, k: usize) -> Feature {
+        match self.points_given.get(k) {
+            Some(p) => Feature::Point {
+                bearing: self.k_inv * Vector3::new(p.pixel[0], p.pixel[1], 1.0),
+                point: Vector3::from(p.object),
+            },
+            None => self.line_features[k - self.points_given.len()],
+        }
     }
 
     pub fn n_points(&self) -> usize {
@@ -537,9 +554,11 @@ impl Prepared {
         (Verdict::Score(0.5 * sum), np + nl)
     }
 
-    /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`.
+    /// The score of the empty model (every correspondence an outlier): `½ (n_p τ_p² + n_l τ_l²)`, a
+    /// kind without correspondences adding nothing (also when its `τ²` overflows to infinity).
     pub fn all_outlier_score(&self, tau: &Thresholds) -> f64 {
-        0.5 * (self.points.len() as f64 * tau.point2 + self.lines.len() as f64 * tau.line2)
+        let term = |n: usize, tau2: f64| if n == 0 { 0.0 } else { n as f64 * tau2 };
+        0.5 * (term(self.points.len(), tau.point2) + term(self.lines.len(), tau.line2))
     }
 
     /// Inlier masks at `pose`: `eᵢ² ≤ τᵢ²` (points, lines, in the order given).

@@ -175,7 +175,13 @@ impl Sprt {
     }
 }
 
-/// The test for `ε`, `δ` per kind (see the module documentation).
+/// The test for `ε`, `δ` per kind (see the module documentation); [`SprtTest::NONE`] when it cannot
+/// save work: no kind carries evidence (`δ ≥ ε`, e.g. a threshold so wide that every correspondence
+/// agrees with any pose by chance), or a bad model would on average be verified on all `n`
+/// correspondences before its rejection (`ln A / C ≥ n`, Wald's expected length under the bad
+/// hypothesis). The design of eq. 11 assumes a verification of unbounded length, so as `C → 0` it
+/// drives `A → 1` and `α = 1 / A → 1`: a test that saves nothing would then make the stopping rule
+/// count every sample as a near-certain miss, and the loop would run to `max_iterations`.
 fn design(counts: [usize; 2], epsilon: [f64; 2], delta: [f64; 2], models_per_sample: f64) -> SprtTest {
     let mut test = SprtTest {
         consistent: [0.0; 2],
@@ -206,27 +212,37 @@ fn design(counts: [usize; 2], epsilon: [f64; 2], delta: [f64; 2], models_per_sam
         a = next;
     }
     test.log_a = a.max(1.0 + f64::EPSILON).ln();
+    if !(c > 0.0 && test.log_a / c < total) {
+        return SprtTest::NONE;
+    }
     test
 }
 
 /// Probability that an outlier is consistent with a given wrong pose by chance (points, lines), under
 /// the model of observations uniform in the axis-aligned window `[u₀, u₁] × [v₀, v₁]` of the observed
-/// pixels (points and segment endpoints), of width `W` and height `H`, each at least the larger
-/// threshold (a window of zero area would make every agreement certain):
-/// - a point lies within `τ_p` of its predicted pixel with probability at most `π τ_p² / (W H)`;
+/// pixels (points and segment endpoints), of width `W` and height `H`, each taken at least the
+/// threshold `τ` of the kind (a window of zero area would make every agreement certain):
+/// - a point lies within `τ_p` of its predicted pixel with probability at most
+///   `π τ_p² / (W H) = π (τ_p / W) (τ_p / H)`;
 /// - a segment's two endpoints have signed distances `d₁, d₂` to the predicted line, each of density at
 ///   most `√(W² + H²) / (W H)` (the largest density of a projection of the uniform window), so
-///   `(d₁² + d₂²) / 2 ≤ τ_l²` holds with probability at most `2 π τ_l² (W² + H²) / (W H)²`.
+///   `(d₁² + d₂²) / 2 ≤ τ_l²` holds with probability at most
+///   `2 π τ_l² (W² + H²) / (W H)² = 2 π (τ_l / W) (τ_l / H) (W / H + H / W)`.
 ///
-/// Both are clamped to `[0, 1]`. `window` is `[u₀, v₀, u₁, v₁]`.
+/// Each kind has its own window, so a huge threshold of one kind does not change the other's; the
+/// ratios keep thresholds up to `f64::MAX` finite. Both are clamped to `[0, 1]`. `window` is
+/// `[u₀, v₀, u₁, v₁]`.
 pub(crate) fn chance_probabilities(window: [f64; 4], point_threshold: f64, line_threshold: f64) -> [f64; 2] {
-    let least = point_threshold.max(line_threshold);
-    let w = (window[2] - window[0]).max(least);
-    let h = (window[3] - window[1]).max(least);
-    let area = w * h;
     let pi = std::f64::consts::PI;
-    let p = pi * point_threshold * point_threshold / area;
-    let l = 2.0 * pi * line_threshold * line_threshold * (w * w + h * h) / (area * area);
+    let sides = |tau: f64| {
+        let w = (window[2] - window[0]).max(tau);
+        let h = (window[3] - window[1]).max(tau);
+        (tau / w, tau / h, w / h + h / w)
+    };
+    let (pw, ph, _) = sides(point_threshold);
+    let (lw, lh, aspect) = sides(line_threshold);
+    let p = pi * pw * ph;
+    let l = 2.0 * pi * lw * lh * aspect;
     [p, l].map(|x| if x.is_finite() { x.clamp(0.0, 1.0) } else { 1.0 })
 }
 
@@ -354,6 +370,67 @@ mod tests {
         );
         // A threshold larger than the window: every correspondence agrees with every pose.
         assert_eq!(chance_probabilities([0.0, 0.0, 10.0, 10.0], 1e6, 1e6), [1.0, 1.0]);
+        // Each kind has its own window: a huge line threshold leaves the points' probability as it
+        // is (it used to widen the points' window too, to p = 0: no evidence from the points), and a
+        // threshold whose square overflows still gives 1, not NaN.
+        assert_eq!(chance_probabilities([0.0, 0.0, 640.0, 480.0], 4.0, 1e300)[0], p);
+        assert_eq!(chance_probabilities([0.0, 0.0, 640.0, 480.0], 4.0, 1e300)[1], 1.0);
+        assert_eq!(chance_probabilities([0.0, 0.0, 640.0, 480.0], 1e300, 4.0), [1.0, l]);
+    }
+
+    #[test]
+    fn a_test_that_cannot_save_work_is_no_test_and_never_rejects() {
+        // Every correspondence agrees with any pose by chance (δ = 1 ≥ ε): no evidence. The design
+        // of eq. 11 gave A = 1, so α = 1 / A = 1, and the stopping rule never came down.
+        for delta in [[1.0, 1.0], [0.995, 0.0], [0.0, 0.0]] {
+            let test = design([20, 0], [0.99, 0.99], delta, 1.0);
+            assert_eq!(test, SprtTest::NONE, "δ = {delta:?}");
+            let sprt = Sprt::new([20, 0], delta, 0.99, 1.0);
+            assert_eq!(sprt.rejection_bound(), 0.0);
+        }
+        // Evidence, but too little for 20 correspondences: a bad model would on average be verified on
+        // all of them before its rejection (ln A / C ≥ n), so the test saves nothing; α here would
+        // be 1 / A ≈ 0.87. The same rates on 10,000 correspondences do make a test.
+        let (epsilon, delta) = ([0.99, 0.99], [0.989, 0.0]);
+        let c = kl(delta[0], epsilon[0]);
+        let a = fixed_point(MODEL_COST * c + 1.0);
+        assert!(
+            a.ln() / c > 20.0 && a.ln() / c < 10_000.0 && 1.0 / a > 0.8,
+            "A {a}, C {c}"
+        );
+        assert_eq!(design([20, 0], epsilon, delta, 1.0), SprtTest::NONE);
+        // (The design iterates A ← K + ln A from K, which rises towards the fixed point but slowly
+        // when A is near 1: its ln A lies between ln K and the fixed point's.)
+        let big = design([10_000, 0], epsilon, delta, 1.0);
+        let k = MODEL_COST * c + 1.0;
+        assert!(
+            big.log_a > k.ln() && big.log_a <= a.ln() + 1e-12,
+            "{big:?}, K {k}, A {a}"
+        );
+        // The usual case, 20 correspondences, half of them inliers and chance agreements rare: a test.
+        let usual = design([20, 0], [0.5, 0.5], [1e-3, 0.0], 1.0);
+        let (c, a) = (kl(1e-3, 0.5), fixed_point(MODEL_COST * kl(1e-3, 0.5) + 1.0));
+        assert!(a.ln() / c < 20.0);
+        assert!((usual.log_a - a.ln()).abs() < 1e-9 * a.ln());
+    }
+
+    /// `C` of one kind: the Kullback-Leibler divergence of Bernoulli(δ) from Bernoulli(ε), written out.
+    fn kl(delta: f64, epsilon: f64) -> f64 {
+        (1.0 - delta) * ((1.0 - delta) / (1.0 - epsilon)).ln() + delta * (delta / epsilon).ln()
+    }
+
+    /// `A = K + ln A` by bisection on `[1, 2K + 2]` (not the design's iteration).
+    fn fixed_point(k: f64) -> f64 {
+        let (mut lo, mut hi) = (1.0f64, 2.0 * k + 2.0);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid - mid.ln() < k {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
     }
 
     #[test]
