@@ -12,13 +12,16 @@ use super::super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
 use crate::error::{Error, Result};
+use crate::interrupt::stop_reason;
 use crate::optim::{Objective, Summary, Termination};
 use nalgebra::{Matrix3, Vector3};
 use std::time::Instant;
 
 /// At most this many refinements on the inliers: after each, the inliers are re-selected at the
-/// refined pose, and the refinement is repeated only if they changed.
-pub const FINAL_ROUNDS: usize = 3;
+/// refined pose, and the refinement is repeated on the new set until it no longer changes (or comes
+/// back to a set already refined on). Of the refined candidates (a pose and the set it was refined
+/// on) the one with the least MSAC score is kept, so a later round never makes the answer worse.
+pub const FINAL_ROUNDS: usize = 10;
 
 /// Checks the data for the robust path: the generic checks of every method (shapes, finite values,
 /// zero-length segments, collinear points without lines, parallel or concurrent lines without points),
@@ -66,6 +69,33 @@ fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> Stage
     report
 }
 
+/// The final rounds of the robust pipeline ([`FINAL_ROUNDS`]): `round(set)` refines on `set` and
+/// returns the refined pose, its MSAC score and the inliers re-selected there. Rounds go on while the
+/// re-selected set is new (not one already refined on), holds at least 3 correspondences, and the
+/// call is not stopped. Returns the candidate with the least score, with the set it was refined on:
+/// on a stable set that no earlier round beat, the last pose and its own inliers.
+fn best_refinement<P: Copy>(
+    first: (Vec<bool>, Vec<bool>),
+    mut round: impl FnMut(&(Vec<bool>, Vec<bool>)) -> (P, f64, (Vec<bool>, Vec<bool>)),
+) -> (P, (Vec<bool>, Vec<bool>)) {
+    let mut refined_on = vec![first];
+    let (mut best_pose, mut best_score, mut next) = round(&refined_on[0]);
+    let mut best = 0;
+    while refined_on.len() < FINAL_ROUNDS
+        && !refined_on.contains(&next)
+        && count(&next.0) + count(&next.1) >= 3
+        && stop_reason().is_none()
+    {
+        refined_on.push(next);
+        let (pose, score, reselected) = round(refined_on.last().expect("just pushed"));
+        if score < best_score {
+            (best_pose, best_score, best) = (pose, score, refined_on.len() - 1);
+        }
+        next = reselected;
+    }
+    (best_pose, refined_on.swap_remove(best))
+}
+
 /// [`crate::pose::estimate_pose`] with `opts.ransac = Some(robust)`.
 /// RANSAC runs on `observations`' undistorted form, the refinement on the exact cost of the observed one.
 pub(crate) fn estimate_robust(
@@ -96,14 +126,14 @@ pub(crate) fn estimate_robust(
     } else {
         None
     };
+    let conditioned_pose = |p: &Pose| Pose::new(p.rotation, cond.pose_from_world(&p.rotation, &p.translation));
     let mut pose = ransac_pose;
     if failure.is_none() && opts.refine {
         let mut refinement: Option<StageReport> = None;
-        for _ in 0..FINAL_ROUNDS {
-            let inliers = subset(&observed, &points, &lines);
+        let settled = best_refinement((points, lines), |(points, lines)| {
+            let inliers = subset(&observed, points, lines);
             let (refined, report) = refine_conditioned(&cond, &observations.cost(&inliers), &pose, opts);
-            pose = refined;
-            refinement = Some(match refinement {
+            refinement = Some(match refinement.take() {
                 None => report,
                 Some(previous) => StageReport {
                     iterations: previous.iterations + report.iterations,
@@ -111,14 +141,15 @@ pub(crate) fn estimate_robust(
                     ..report
                 },
             });
-            let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
-            let (new_points, new_lines) = outcome.data.inliers(&at, &outcome.thresholds);
-            let unchanged = new_points == points && new_lines == lines;
-            (points, lines) = (new_points, new_lines);
-            if unchanged || count(&points) + count(&lines) < 3 {
-                break;
-            }
-        }
+            pose = refined;
+            let at = conditioned_pose(&refined);
+            let score = outcome
+                .data
+                .score(&at, &outcome.thresholds, f64::INFINITY)
+                .unwrap_or(f64::INFINITY);
+            (refined, score, outcome.data.inliers(&at, &outcome.thresholds))
+        });
+        (pose, (points, lines)) = settled;
         stages.extend(refinement);
     }
     let used = subset(observations.observed, &points, &lines);
@@ -128,7 +159,7 @@ pub(crate) fn estimate_robust(
     // The certificate, as for the non-robust pipeline, of the cost over the final inliers.
     let certification = certificate::stage(opts.certify.as_ref(), status, |options| {
         let inliers = subset(&observed, &points, &lines);
-        let at = Pose::new(pose.rotation, cond.pose_from_world(&pose.rotation, &pose.translation));
+        let at = conditioned_pose(&pose);
         let cost = observations.cost(&inliers).cost(&at);
         certify(camera, observations.lens, &inliers, &at, cost, options)
     });
@@ -149,4 +180,66 @@ pub(crate) fn estimate_robust(
             behind_camera_cost: None,
         },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(points: &[bool]) -> (Vec<bool>, Vec<bool>) {
+        (points.to_vec(), Vec::new())
+    }
+
+    /// A scripted run of rounds: `moves[k]` is the (score, re-selected set) of the k-th round, the
+    /// "pose" the round's index; also records the sets refined on.
+    fn run(first: &[bool], moves: &[(f64, &[bool])]) -> (usize, (Vec<bool>, Vec<bool>), Vec<Vec<bool>>) {
+        let mut seen = Vec::new();
+        let (pose, kept) = best_refinement(set(first), |s| {
+            let k = seen.len();
+            seen.push(s.0.clone());
+            (k, moves[k].0, set(moves[k].1))
+        });
+        (pose, kept, seen)
+    }
+
+    const A: &[bool] = &[true, true, true, false];
+    const B: &[bool] = &[true, true, true, true];
+    const C: &[bool] = &[true, true, false, true];
+
+    #[test]
+    fn a_stable_set_ends_the_rounds_with_the_last_pose_and_its_own_inliers() {
+        let (pose, kept, seen) = run(A, &[(5.0, B), (4.0, B)]);
+        assert_eq!((pose, kept, seen), (1, set(B), vec![A.to_vec(), B.to_vec()]));
+    }
+
+    #[test]
+    fn a_later_round_that_scores_worse_does_not_replace_the_best() {
+        // A → B (score 3) → C (score 4) → back to B: a cycle; the best candidate is B's refinement.
+        let (pose, kept, seen) = run(A, &[(5.0, B), (3.0, C), (4.0, B)]);
+        assert_eq!(seen, vec![A.to_vec(), B.to_vec(), C.to_vec()]);
+        assert_eq!((pose, kept), (1, set(B)));
+    }
+
+    #[test]
+    fn the_first_refinement_is_kept_when_no_later_one_beats_it() {
+        let (pose, kept, _) = run(A, &[(2.0, B), (3.0, C), (3.5, A)]);
+        assert_eq!((pose, kept), (0, set(A)));
+    }
+
+    #[test]
+    fn the_rounds_stop_at_the_cap_and_below_three_inliers() {
+        // Sets that never repeat: one more correspondence each round, scores falling.
+        let sets: Vec<Vec<bool>> = (0..FINAL_ROUNDS + 2)
+            .map(|k| (0..40).map(|i| i < 3 + k).collect())
+            .collect();
+        let moves: Vec<(f64, &[bool])> = (0..FINAL_ROUNDS + 1)
+            .map(|k| (10.0 - k as f64, &sets[k + 1][..]))
+            .collect();
+        let (pose, kept, seen) = run(&sets[0], &moves);
+        assert_eq!(seen.len(), FINAL_ROUNDS);
+        assert_eq!((pose, kept), (FINAL_ROUNDS - 1, set(&sets[FINAL_ROUNDS - 1])));
+        let two: &[bool] = &[true, true, false, false];
+        let (pose, kept, seen) = run(A, &[(1.0, two), (0.0, A)]);
+        assert_eq!((pose, kept, seen.len()), (0, set(A), 1));
+    }
 }
