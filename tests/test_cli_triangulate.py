@@ -170,3 +170,11 @@ def test_unwritable_output_exits_2(tmp_path, capsys):
     blocker.write_text("")
     assert main(["triangulate", str(HOUSE), "--views", "0,1", "--out", str(blocker)]) == 2
     assert capsys.readouterr().err.startswith("pluecker triangulate: error: cannot write")
+
+
+def test_each_feature_says_what_its_cost_measures(house_run):
+    _, out, _ = house_run
+    points = json.loads((out / "points.json").read_text())["points"]
+    lines = json.loads((out / "lines.json").read_text())["lines"]
+    assert {p["cost_kind"] for p in points} == {"reprojection"}
+    assert {line["cost_kind"] for line in lines} == {"line_residual"}

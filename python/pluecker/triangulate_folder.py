@@ -32,7 +32,7 @@ from pluecker.jsonio import dumps  # one key per line, every vector on one line
 __all__ = ["FolderError", "Features", "Run", "run", "write", "summary_lines"]
 
 #: Report fields of every result, copied per feature into the JSON.
-REPORT_FIELDS = ("status", "certified", "certificate", "cost", "lower_bound", "relative_gap", "nodes",
+REPORT_FIELDS = ("status", "certified", "certificate", "cost", "cost_kind", "lower_bound", "relative_gap", "nodes",
                  "iterations", "time_seconds")
 
 
