@@ -395,3 +395,14 @@ def test_sigma_is_isotropic_endpoint_noise_in_both_entry_points():
     track, image = np.zeros(3, int), np.arange(3)
     rows = pluecker.triangulate_line_observations(sc.P, track, image, sc.segments, options=pluecker.TriangulationOptions(method="local"), sigma=2.0, cameras=cams)
     assert np.array_equal(rows.plucker[0], a.plucker) and rows.cost[0] == a.cost
+
+
+@pytest.mark.parametrize("method", ["linear", "local", "optimal"])
+def test_a_cost_that_overflows_is_a_numerical_failure_not_an_answer(method):
+    """Endpoint noise of 1e-100 px: the squared residuals in its units leave double precision
+    through the lens. No status that says the line can be used comes with a cost that is not finite."""
+    sc = Scene(*STRONG_RADIAL, n=3, off_axis=0.04, max_angle=np.arctan(0.12), noise=1.0, anisotropic=False, seed=19)
+    r = pluecker.triangulate_line(sc.P, sc.segments, sigma=1e-100, cameras=[sc.lens] * 3,
+                                  options=pluecker.TriangulationOptions(method=method))
+    assert np.isfinite(r.cost) or r.status == "numerical_failure", (r.status, r.cost)
+    assert not r.certified

@@ -378,6 +378,16 @@ fn through_lenses(
     let mut record = finish(&problem, &line, result.report.clone())?;
     record.report.cost = exact_cost(&used, record.plucker.coordinates());
     record.report.cost_kind = CostKind::Reprojection;
+    if !record.report.cost.is_finite()
+        && matches!(
+            record.report.status,
+            Status::Success | Status::GapNotClosed | Status::NotConverged
+        )
+    {
+        // The exact cost overflowed (covariances near the smallest doubles) or a view has no image
+        // of the line: nothing says this line is good.
+        record.report.status = Status::NumericalFailure;
+    }
     record.covariance = exact_covariance(&problem, &used, &record.chart);
     record.inliers = result.inliers.take();
     *result = record;

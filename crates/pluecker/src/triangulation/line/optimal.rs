@@ -456,6 +456,11 @@ pub(crate) fn optimal_line(
         (0..4).map(|k| z_range(k).lo).collect::<Vec<f64>>(),
         (0..4).map(|k| z_range(k).hi).collect::<Vec<f64>>(),
     );
+    if !(0..4).all(|k| root.lower[k].is_finite() && root.upper[k].is_finite()) {
+        // The strips overflowed (a cost or whitening beyond double precision): no box to search.
+        report.set_status(Status::NumericalFailure);
+        return (*local, report);
+    }
     let mut node_local = opts.local;
     node_local.stopping.max_iterations = NODE_LOCAL_ITERATIONS;
     let g_bounds = vec![Interval::new(f64::NEG_INFINITY, f64::INFINITY); views.len()];
