@@ -114,6 +114,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(pose::certificate::_pose_rotation_search, m)?)?;
     m.add_function(wrap_pyfunction!(interrupt::_on_poll_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(interrupt::_setup_polls_for_tests, m)?)?;
     Ok(())
 }
 

@@ -11,6 +11,7 @@
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{shape_error, to_py_err};
 use crate::fields::{result_class, Mask};
+use crate::interrupt::in_chunks;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
@@ -257,21 +258,21 @@ impl ReportRow<'_> {
 
 impl PyBatchReport {
     /// Columns for `n` tracks solved with `method`, each not started (`interrupted`) until its row
-    /// is written ([`PyBatchReport::rows_mut`]).
-    pub(crate) fn unstarted(method: Method, n: usize) -> PyResult<Self> {
+    /// is written ([`PyBatchReport::rows_mut`]); allocated as [`column`] does.
+    pub(crate) fn unstarted(py: Python<'_>, method: Method, n: usize) -> PyResult<Self> {
         Ok(PyBatchReport {
             method: method.as_str(),
-            cost: column(f64::NAN, n)?,
-            lower_bound: column(f64::NAN, n)?,
-            raw_lower_bound: column(f64::NAN, n)?,
-            relative_gap: column(f64::NAN, n)?,
-            certified: column(false, n)?,
-            certificate: column(CertificateKind::None.as_str(), n)?,
-            status: column(Status::Interrupted.as_str(), n)?,
-            nodes: column(0, n)?,
-            iterations: column(0, n)?,
-            time_seconds: column(0.0, n)?,
-            residual_dof: column(0, n)?,
+            cost: column(py, f64::NAN, n)?,
+            lower_bound: column(py, f64::NAN, n)?,
+            raw_lower_bound: column(py, f64::NAN, n)?,
+            relative_gap: column(py, f64::NAN, n)?,
+            certified: column(py, false, n)?,
+            certificate: column(py, CertificateKind::None.as_str(), n)?,
+            status: column(py, Status::Interrupted.as_str(), n)?,
+            nodes: column(py, 0, n)?,
+            iterations: column(py, 0, n)?,
+            time_seconds: column(py, 0.0, n)?,
+            residual_dof: column(py, 0, n)?,
             errors: Vec::new(),
         })
     }
@@ -508,13 +509,17 @@ pack_struct!(PyBatchReport {
 });
 
 /// An output column of `n` copies of `value`; a `MemoryError` rather than an abort when it cannot be
-/// allocated.
-pub(crate) fn column<T: Clone>(value: T, n: usize) -> PyResult<Vec<T>> {
+/// allocated. Filled (its pages touched) a chunk at a time with the GIL released, Python's signal
+/// handlers running between chunks ([`crate::interrupt::in_chunks`]).
+pub(crate) fn column<T: Clone + Send + Sync>(py: Python<'_>, value: T, n: usize) -> PyResult<Vec<T>> {
     let mut entries = Vec::new();
     entries
         .try_reserve_exact(n)
         .map_err(|_| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))?;
-    entries.resize(n, value);
+    in_chunks(py, n, |chunk| {
+        py.allow_threads(|| entries.resize(chunk.end, value.clone()));
+        Ok(())
+    })?;
     Ok(entries)
 }
 

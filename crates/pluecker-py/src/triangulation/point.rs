@@ -230,11 +230,11 @@ fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 
 impl PyPointTriangulations {
     /// Columns for `n` tracks, NaN until written ([`PyPointTriangulations::rows_mut`]).
-    fn unstarted(n: usize) -> PyResult<Self> {
+    fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
         let too_many = || PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks"));
         Ok(PyPointTriangulations {
-            x: column(f64::NAN, n.checked_mul(3).ok_or_else(too_many)?)?,
-            covariance: column(f64::NAN, n.checked_mul(9).ok_or_else(too_many)?)?,
+            x: column(py, f64::NAN, n.checked_mul(3).ok_or_else(too_many)?)?,
+            covariance: column(py, f64::NAN, n.checked_mul(9).ok_or_else(too_many)?)?,
             inliers: InlierColumns::default(),
         })
     }
@@ -483,15 +483,14 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
         .collect()
 }
 
-/// The report and point columns of `n` tracks not started yet (allocated and filled with the GIL
-/// released), for the core to write each track into as it finishes ([`PointSink`]).
+/// The report and point columns of `n` tracks not started yet (filled with the GIL released, Ctrl-C
+/// seen between chunks: [`column`]), for the core to write each track into as it finishes
+/// ([`PointSink`]).
 fn unstarted(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, PyPointTriangulations)> {
-    py.allow_threads(|| {
-        Ok((
-            PyBatchReport::unstarted(method, n)?,
-            PyPointTriangulations::unstarted(n)?,
-        ))
-    })
+    Ok((
+        PyBatchReport::unstarted(py, method, n)?,
+        PyPointTriangulations::unstarted(py, n)?,
+    ))
 }
 
 pack_struct!(PyPointTriangulations { x, covariance, inliers });

@@ -30,6 +30,7 @@ use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::add_quadratic_over_linear;
 use crate::global::socp::{Affine, Socp, SocpStatus};
+use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fraction::{self, FractionalResidual};
@@ -253,8 +254,14 @@ pub(crate) fn optimal_quadric(
             };
             root.lower[i] = lo.map_or(old_lo, |v| v.max(old_lo));
             root.upper[i] = hi.map_or(old_hi, |v| (-v).min(old_hi));
-            if !root.upper[i].is_finite() || root.lower[i] > root.upper[i] {
+            if root.lower[i] > root.upper[i] {
                 return infeasible(report, iterations);
+            }
+            if !root.upper[i].is_finite() {
+                // No bound on this denominator: a solve failed or was stopped, which proves nothing
+                // (in particular not that the domain is empty). No box to search, no certificate.
+                report.set_status(stop_reason().map_or(Status::NumericalFailure, Status::stopped));
+                return (*local, report);
             }
         }
     }
