@@ -5,7 +5,7 @@ is measured; for the point batch also the memory the call takes per track.
     .venv/bin/python bench/interrupt_latency.py [--signals 20] [--seed 0] [--only points line30 cli ...]
 
 Each workload gets ``--signals`` signals, each at a moment drawn uniformly (numpy seed ``--seed``) from the
-workload's window, measured from the call's start (the command line: from the start of ``cli.main``), so
+workload's window, measured from the call's start (the command line: from the start of ``cli.run``), so
 that the set-up stages (argument conversion, allocation, sorting, reading a model) are hit as often as
 their share of the window. Workloads (each would run for seconds to hours if nothing stopped it):
 
@@ -194,8 +194,9 @@ def run_points(n: int, delays: list[float], verbose: bool) -> None:
 # --------------------------------------------------------------------------------------------------
 # The command line on a synthetic COLMAP model
 
-#: Runs ``cli.main(argv)`` in a fresh process after printing ``ready`` (imports done); with ``--probe``,
-#: the batch entry point prints ``batch`` and ends the process instead of running (the set-up's length).
+#: Runs the ``pluecker`` program (``cli.run``) in a fresh process after printing ``ready`` (imports done);
+#: with ``--probe``, the batch entry point prints ``batch`` and ends the process instead of running (the
+#: set-up's length).
 CLI_CHILD = """\
 import os, signal, sys, time
 signal.signal(signal.SIGINT, signal.default_int_handler)  # as in an interactive shell
@@ -207,8 +208,9 @@ if probe:
         os.write(1, f"batch {time.monotonic()}\\n".encode())
         os._exit(0)
     _core.triangulate_point_observations = _core.estimate_pose = reached
+sys.argv = ["pluecker", *argv]
 print("ready", time.monotonic(), flush=True)
-sys.exit(cli.main(argv))
+cli.run()
 """
 
 
@@ -245,7 +247,7 @@ def cli_model(folder: Path, points: int) -> Path:
 
 def cli_run(argv: list[str], delay: float | None) -> tuple[float, int, str]:
     """Runs the command line in a fresh process; with ``delay``, SIGINT that many seconds after
-    ``cli.main`` starts. Returns (seconds from SIGINT to the process's exit, or with ``delay=None``
+    ``cli.run`` starts. Returns (seconds from SIGINT to the process's exit, or with ``delay=None``
     the seconds from ``cli.main``'s start to the batch, the exit status, the last line of stderr)."""
     probe = ["--probe"] if delay is None else []
     child = subprocess.Popen([sys.executable, "-c", CLI_CHILD, *probe, *argv], stdout=subprocess.PIPE,
@@ -274,6 +276,9 @@ def run_cli(name: str, argv: list[str], signals: int, rng: np.random.Generator, 
     codes = sorted({code for _, code, _ in runs})
     summary(f"{name} (set-up {setup:.2f} s)", delays, [s for s, _, _ in runs],
             f"exit status {codes}, last line {runs[-1][2]!r}", verbose)
+    for d, (_, code, line) in zip(delays, runs):
+        if code != 130:
+            print(f"  SIGINT at {d:.3f} s: exit status {code}, last line of stderr {line!r}", flush=True)
 
 
 def main() -> None:

@@ -16,6 +16,8 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -295,3 +297,76 @@ def test_command_line_ctrl_c_is_one_line_and_exit_130(monkeypatch, capsys, tmp_p
     assert cli.main(["pose", str(path)]) == 130
     captured = capsys.readouterr()
     assert captured.err == "pluecker pose: interrupted\n" and captured.out == ""
+
+
+#: A ``pluecker pose`` process whose command runs ``BODY`` instead of the pose (``fd``: a file
+#: descriptor for ``_hold_gil_for_tests``); a ``finally`` around the command prints ``clean-up ran``.
+COMMAND = """
+import signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as in an interactive shell
+from pluecker import cli, _core
+fd = int(sys.argv[1])
+def command(args):
+    try:
+        BODY
+    finally:
+        print("clean-up ran", flush=True)
+    return 0
+cli._pose = command
+sys.argv = ["pluecker", "pose", "unused.json"]
+cli.run()
+"""
+
+
+def run_command(body: str):
+    """Starts the ``COMMAND`` process with ``body``; returns it and the read end of its descriptor."""
+    read, write = os.pipe()
+    child = subprocess.Popen([sys.executable, "-c", COMMAND.replace("BODY", body), str(write)], pass_fds=(write,),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    os.close(write)
+    return child, read
+
+
+def test_the_command_ends_after_ctrl_c_while_a_call_holds_the_interpreter():
+    """A library call that holds the GIL for ten minutes (as pycolmap holds it while it reads a model):
+    Python cannot raise KeyboardInterrupt before it returns, so the command's deadline ends the process
+    itself, status 130 and the one line, without its clean-up."""
+    child, ready = run_command("_core._hold_gil_for_tests(fd, 600.0)")
+    try:
+        # The byte is written inside the call: from here the main thread holds the GIL.
+        assert os.read(ready, 1) == b"x"
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err, out) == (130, "pluecker pose: interrupted\n", "")
+
+
+def test_the_command_answers_ctrl_c_itself_when_python_can():
+    """Ctrl-C that Python turns into KeyboardInterrupt: the command's own clean-up runs, and the line is
+    printed once (the deadline stands down, or, had Python been slower than it, printed it instead)."""
+    child, ready = run_command("signal.raise_signal(signal.SIGINT)")
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err) == (130, "pluecker pose: interrupted\n")
+    # A library that turns the KeyboardInterrupt into an error of its own (pycolmap interrupted while it
+    # loads its C++ module raises RuntimeError): still Ctrl-C, not a traceback.
+    child, ready = run_command("raise RuntimeError('cannot import the backend') from KeyboardInterrupt()")
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err) == (130, "pluecker pose: interrupted\n")
+    # And a command that ends normally gives the wakeup descriptor back and exits with its status.
+    child, ready = run_command("import signal as s; assert s.set_wakeup_fd(-1) != -1")
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err, out) == (0, "", "clean-up ran\n")

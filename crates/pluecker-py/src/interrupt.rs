@@ -4,16 +4,16 @@
 //! [`Stop`] ([`pluecker::interrupt`]) that the core's long loops poll. The calling thread wakes every
 //! [`POLL`]: it takes the GIL, runs Python's signal handlers (`PyErr_CheckSignals`) and calls the
 //! progress callback. A `KeyboardInterrupt` (or any exception from a handler or the callback)
-//! raises the stop; the worker ends at its next poll, within a track's branch-and-bound node or a
-//! RANSAC iteration, and the work's value (for a batch: the finished tracks, the others with status
-//! `interrupted`) comes back together with the pending exception, for the caller to attach as
-//! `exception.partial` and raise ([`object_or_partial`]).
+//! raises the stop; the worker ends at its next poll, within a track, an interior-point iteration of
+//! a conic solve or a RANSAC iteration, and the work's value (for a batch: the finished tracks, the
+//! others with status `interrupted`) comes back together with the pending exception, for the caller
+//! to attach as `exception.partial` and raise ([`object_or_partial`]).
 //!
 //! [`run_single`] runs a single call (one point, line, quadric or pose) on the calling thread itself,
 //! sparing the worker thread's start: the stop's own check ([`Stop::with_check`]) runs Python's
-//! signal handlers from the core's polls (branch-and-bound nodes, rotation cells, RANSAC samples), at
-//! most once per [`POLL`], when the caller is Python's main thread (the only one that runs them).
-//! A call that never reaches a poll is short and sees a signal when it ends.
+//! signal handlers from the core's polls (branch-and-bound nodes, conic-solver iterations, rotation
+//! cells, RANSAC samples), at most once per [`POLL`], when the caller is Python's main thread (the
+//! only one that runs them). A call that never reaches a poll is short and sees a signal when it ends.
 //!
 //! Before that, a call sets up on the calling thread with the GIL held: it reads its arrays, sorts
 //! its rows and allocates its results, a chunk of [`SETUP_CHUNK`] values at a time, and runs Python's
