@@ -219,11 +219,14 @@ def test_ctrl_c_stops_the_set_up_of_a_point_batch():
     P, _ = line_tracks(0, n=1, views=2)
     n = 600_000
     x = rng.uniform(0, 640, (n, 2, 2))
-    # A zero budget ends the batch as soon as its solving starts: only the set-up runs.
-    polls = setup_polls(lambda: pluecker.triangulate_points(P, x, time_budget=0))
-    assert polls >= (x.size + n * (11 + 3 + 9)) / SETUP_CHUNK
-    batch = pluecker.triangulate_points(P, x, time_budget=0)
-    assert set(batch.status) == {"time_budget"}
+    # A zero budget ends the batch as soon as its solving starts: only the set-up runs. The linear fast
+    # path writes into the same preallocated columns, so that a stop never waits for their assembly.
+    for method in ("optimal", "linear"):
+        options = pluecker.TriangulationOptions(method=method)
+        polls = setup_polls(lambda: pluecker.triangulate_points(P, x, options=options, time_budget=0))
+        assert polls >= (x.size + n * (11 + 3 + 9)) / SETUP_CHUNK, method
+        batch = pluecker.triangulate_points(P, x, options=options, time_budget=0)
+        assert set(batch.status) == {"time_budget"} and np.isnan(batch.X).all()
 
 
 def test_ctrl_c_stops_the_set_up_of_an_observation_batch():

@@ -329,6 +329,16 @@ impl PyBatchReport {
             .for_each(|(s, _)| *s = status);
     }
 
+    /// Every track the linear fast path solved (status `success`, `behind_camera` or `at_infinity`),
+    /// which it does not time one by one, takes `seconds`, the batch's mean.
+    pub(crate) fn time_solved(&mut self, seconds: f64) {
+        let solved = [Status::Success, Status::BehindCamera, Status::AtInfinity].map(|s| s.as_str());
+        (self.time_seconds.par_iter_mut())
+            .zip(self.status.par_iter())
+            .filter(|(_, status)| solved.contains(status))
+            .for_each(|(time, _)| *time = seconds);
+    }
+
     /// The messages of the rejected tracks, `(track, message)` in any order.
     pub(crate) fn set_errors(&mut self, mut errors: Vec<(usize, String)>) {
         errors.sort_unstable_by_key(|(t, _)| *t);
@@ -386,11 +396,6 @@ impl PyBatchReport {
     /// Appends a solved track's report.
     pub(crate) fn push(&mut self, report: &Report) {
         self.push_row().solved(report);
-    }
-
-    /// Appends a track without a certificate ([`ReportRow::uncertified`]).
-    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
-        self.push_row().uncertified(cost, status, seconds, residual_dof);
     }
 
     /// Appends track `t`, rejected by the core with `err` ([`ReportRow::rejected`]), and NaN

@@ -6,7 +6,8 @@
 //! The batch's numpy arrays go to the core as flat row-major slices (`PointTracks`), one copy each.
 //! A track the core rejects (NaN in a visible view, fewer than two visible views, a covariance that
 //! is not positive definite, ...) gets an error status and a message and never stops the others.
-//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear`).
+//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear_into`), written
+//! into the same preallocated columns.
 
 use super::batch::{
     column, per_observation, push_covariance, row_major, InlierColumns, PyBatchReport, ReportRow, TrackColumns,
@@ -31,7 +32,8 @@ use pluecker::triangulation::point::{
 };
 use pluecker::triangulation::point::{
     triangulate_point_observations_into, triangulate_point_observations_views_into,
-    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
+    triangulate_points_into as core_points, triangulate_points_linear_into, LinearTrack, PointTracks,
+    SparsePointTracks,
 };
 use pluecker::triangulation::View;
 use pluecker::triangulation::{Method, Primitive, Report};
@@ -176,6 +178,16 @@ struct PointRow<'a> {
     covariance: &'a mut [f64],
 }
 
+impl PointRow<'_> {
+    /// The point and its covariance (left NaN when there is none).
+    fn write(self, x: &Vector3<f64>, covariance: Option<&Matrix3<f64>>) {
+        self.x.copy_from_slice(x.as_slice());
+        if let Some(c) = covariance {
+            self.covariance.iter_mut().zip(row_major(c)).for_each(|(e, v)| *e = v);
+        }
+    }
+}
+
 /// Where the core writes each finished track of a point batch ([`triangulate_points_into`]): the
 /// report and point columns in place, the messages of rejected tracks and the inlier masks of a
 /// robust batch aside, until [`PointSink::finish`].
@@ -189,20 +201,30 @@ impl PointSink {
     fn write(&self, t: usize, (report, point): (ReportRow, PointRow), result: Result<PointTriangulation, Error>) {
         match result {
             Ok(track) => {
-                point.x.copy_from_slice(track.point.as_slice());
-                if let Some(c) = &track.covariance {
-                    point.covariance.iter_mut().zip(row_major(c)).for_each(|(e, v)| *e = v);
-                }
+                point.write(&track.point, track.covariance.as_ref());
                 if let Some(mask) = track.inliers {
                     lock(&self.masks).push((t, mask));
                 }
                 report.solved(&track.report);
             }
-            Err(e) => {
-                if let Some(message) = report.rejected::<PyPointTriangulations>(t, e) {
-                    lock(&self.errors).push(message);
-                }
+            Err(e) => self.reject(t, report, e),
+        }
+    }
+
+    /// A track of the linear fast path: no certificate, timed later ([`PyBatchReport::time_solved`]).
+    fn write_linear(&self, t: usize, (report, point): (ReportRow, PointRow), result: Result<LinearTrack, Error>) {
+        match result {
+            Ok(track) => {
+                point.write(&track.point, track.covariance.as_ref());
+                report.uncertified(track.cost, track.status.as_str(), 0.0, track.residual_dof);
             }
+            Err(e) => self.reject(t, report, e),
+        }
+    }
+
+    fn reject(&self, t: usize, report: ReportRow, e: Error) {
+        if let Some(message) = report.rejected::<PyPointTriangulations>(t, e) {
+            lock(&self.errors).push(message);
         }
     }
 
@@ -243,31 +265,6 @@ impl PyPointTriangulations {
         (self.x.par_chunks_mut(3))
             .zip(self.covariance.par_chunks_mut(9))
             .map(|(x, covariance)| PointRow { x, covariance })
-    }
-
-    /// The report and point columns of the core's linear fast path: no certificates, and every
-    /// track timed at the batch's mean `seconds`.
-    fn linear(points: LinearPoints, seconds: f64) -> (PyBatchReport, Self) {
-        let n = points.outcomes.len();
-        let mut report = PyBatchReport::with_capacity(Method::Linear, n);
-        let mut columns = PyPointTriangulations {
-            x: Vec::with_capacity(3 * n),
-            covariance: Vec::with_capacity(9 * n),
-            ..Default::default()
-        };
-        for (t, outcome) in points.outcomes.into_iter().enumerate() {
-            match outcome {
-                Ok(status) => {
-                    report.push_uncertified(points.costs[t], status.as_str(), seconds, points.residual_dofs[t]);
-                    columns.x.extend_from_slice(&points.points[3 * t..3 * t + 3]);
-                    columns
-                        .covariance
-                        .extend_from_slice(&points.covariances[9 * t..9 * t + 9]);
-                }
-                Err(e) => report.reject(&mut columns, t, e),
-            }
-        }
-        (report, columns)
     }
 }
 
@@ -341,26 +338,24 @@ pub fn triangulate_points(
         .transpose()?;
     // The linear and local solves of a few thousand observations end within milliseconds.
     let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
-    let written = match opts.method {
-        Method::Linear => None,
-        _ => Some(unstarted(py, opts.method, n)?),
-    };
+    let (mut report, mut columns) = unstarted(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, short, move |done| {
         let tracks = PointTracks {
             observations: &pixels,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
+        let sink = PointSink::default();
         if opts.method == Method::Linear {
             let started = Instant::now();
-            let linear = triangulate_points_linear(&cams, &tracks)?;
-            // The fast path does not time tracks one by one: each gets the batch's mean.
-            let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
-            done.store(n, Ordering::Relaxed);
-            return Ok(PyPointTriangulations::linear(linear, mean));
+            let rows = report.rows_mut().zip(columns.rows_mut());
+            let write = |t, row, r| sink.write_linear(t, row, r);
+            let stopped = triangulate_points_linear_into(&cams, &tracks, Some(done), rows, write)?;
+            // The fast path does not time tracks one by one: each solved one gets the batch's mean.
+            let written = done.load(Ordering::Relaxed).max(1);
+            report.time_solved(started.elapsed().as_secs_f64() / written as f64);
+            return Ok(sink.finish(report, columns, n, stopped));
         }
-        let (mut report, mut columns) = written.expect("allocated for every method but linear");
-        let sink = PointSink::default();
         let rows = report.rows_mut().zip(columns.rows_mut());
         let write = |t, row, r| sink.write(t, row, r);
         let stopped = core_points(&cams, &tracks, &opts, Some(done), rows, write)?;
