@@ -67,9 +67,10 @@ def caused_by_ctrl_c(error: BaseException) -> bool:
     ``__cause__`` / ``__context__`` holds one): pycolmap, interrupted while it loads its C++ module,
     raises ``RuntimeError`` from the ``ImportError`` that Python made of the ``KeyboardInterrupt``."""
     seen: set[int] = set()
-    while error is not None and id(error) not in seen:
-        if isinstance(error, KeyboardInterrupt):
+    link: BaseException | None = error
+    while link is not None and id(link) not in seen:
+        if isinstance(link, KeyboardInterrupt):
             return True
-        seen.add(id(error))
-        error = error.__cause__ or error.__context__
+        seen.add(id(link))
+        link = link.__cause__ or link.__context__
     return False
