@@ -210,7 +210,8 @@ if probe:
     _core.triangulate_point_observations = _core.estimate_pose = reached
 sys.argv = ["pluecker", *argv]
 print("ready", time.monotonic(), flush=True)
-cli.run()
+run = getattr(cli, "run", None)  # builds before the command's Ctrl-C deadline have main only
+run() if run is not None else sys.exit(cli.main())
 """
 
 
