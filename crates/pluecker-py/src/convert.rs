@@ -19,9 +19,9 @@ use numpy::{
     PyUntypedArrayMethods,
 };
 use pluecker::Pose;
-use pyo3::exceptions::{PyOverflowError, PyTypeError};
+use pyo3::exceptions::{PyMemoryError, PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PyTuple};
+use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PySlice, PyTuple};
 use std::time::Duration;
 
 /// One axis of an expected shape: a named free length (`N` rows) or a fixed one.
@@ -84,39 +84,43 @@ fn row_major<T: Element + Copy>(name: &str, array: &Bound<'_, PyUntypedArray>, d
     let len = array.len();
     let mut out = Vec::new();
     out.try_reserve_exact(len)
-        .map_err(|_| pyo3::exceptions::PyMemoryError::new_err(format!("{name}: cannot allocate {len} values")))?;
-    let borrow_error = |e: numpy::BorrowError| PyTypeError::new_err(format!("{name}: {e}"));
+        .map_err(|_| PyMemoryError::new_err(format!("{name}: cannot allocate {len} values")))?;
+    // The entries of a C-contiguous array of `T`, borrowed only while they are copied: the signal
+    // handlers between chunks run Python code.
+    let slice_of = |typed: &Bound<'_, PyArrayDyn<T>>, out: &mut Vec<T>, range: Option<std::ops::Range<usize>>| {
+        let values = typed
+            .try_readonly()
+            .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+        let all = values
+            .as_slice()
+            .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+        out.extend_from_slice(range.map_or(all, |r| &all[r]));
+        PyResult::Ok(())
+    };
     if let Ok(typed) = array.downcast::<PyArrayDyn<T>>() {
         if typed.is_c_contiguous() {
-            // Borrowed per chunk: the signal handlers between chunks run Python code.
-            in_chunks(py, len, |range| {
-                let values = typed.try_readonly().map_err(borrow_error)?;
-                out.extend_from_slice(&values.as_slice().expect("C-contiguous")[range]);
-                Ok(())
-            })?;
+            in_chunks(py, len, |range| slice_of(typed, &mut out, Some(range)))?;
             return Ok(out);
         }
     }
     let np = py.import("numpy")?;
     let kwargs = [("dtype", dtype), ("order", "C")].into_py_dict(py)?;
-    let convert = |block: &Bound<'_, PyAny>| -> PyResult<Vec<T>> {
+    let mut append = |block: &Bound<'_, PyAny>| {
         let converted = np.call_method("asarray", (block,), Some(&kwargs))?;
-        let typed = converted.downcast_into::<PyArrayDyn<T>>()?;
-        let values = typed.try_readonly().map_err(borrow_error)?;
-        Ok(values.as_slice().expect("C-contiguous").to_vec())
+        slice_of(converted.downcast::<PyArrayDyn<T>>()?, &mut out, None)
     };
-    let shape = array.shape();
+    let shape = array.shape().to_vec();
     let row = shape.iter().skip(1).product::<usize>();
     if shape.is_empty() || row == 0 {
         // A 0-d array (one value) or no values: one conversion (`asarray` keeps a 0-d shape).
-        return convert(array.as_any());
+        append(array.as_any())?;
+        return Ok(out);
     }
     let rows_per_block = (SETUP_CHUNK / row).max(1);
     let mut first = 0;
     while first < shape[0] {
         let last = shape[0].min(first + rows_per_block);
-        let block = array.get_item(pyo3::types::PySlice::new(py, first as isize, last as isize, 1))?;
-        out.extend(convert(&block)?);
+        append(&array.get_item(PySlice::new(py, first as isize, last as isize, 1))?)?;
         setup_poll(py)?;
         first = last;
     }
