@@ -229,6 +229,27 @@ def test_ctrl_c_stops_the_set_up_of_a_point_batch():
         assert set(batch.status) == {"time_budget"} and np.isnan(batch.X).all()
 
 
+def test_ctrl_c_stops_the_set_up_of_line_and_quadric_batches():
+    """Line and quadric batches allocate their result columns before they solve, as point batches do
+    (so that a stopped batch hands them back without a pass over millions of tracks): their set-up
+    polls at least every ``SETUP_CHUNK`` values read or allocated."""
+    rng = np.random.default_rng(0)
+    P, _ = line_tracks(0, n=1, views=3)
+    n = 300_000
+    segments = rng.uniform(0, 640, (n, 2, 2, 2))
+    polls = setup_polls(lambda: pluecker.triangulate_lines(P[:2], segments, time_budget=0))
+    # Report columns (11 per track), Plücker coordinates 6, point 3, direction 3, chart axes 6,
+    # covariance 16.
+    assert polls >= (segments.size + n * (11 + 6 + 3 + 3 + 6 + 16)) / SETUP_CHUNK
+    n = 100_000
+    conics = np.broadcast_to(np.diag([1.0, 1.0, -1.0]), (n, 3, 3, 3))
+    polls = setup_polls(lambda: pluecker.triangulate_quadrics(P, conics, time_budget=0))
+    # Report columns 11, dual and primal quadrics 16 each, centre 3, semi-axes 3, axes 9, covariance 81.
+    assert polls >= (conics.size + n * (11 + 16 + 16 + 3 + 3 + 9 + 81)) / SETUP_CHUNK
+    batch = pluecker.triangulate_quadrics(P, conics, time_budget=0)
+    assert set(batch.status) == {"time_budget"} and np.isnan(batch.Q).all()
+
+
 def test_ctrl_c_stops_the_set_up_of_an_observation_batch():
     """One observation per row (1.5 M rows, 500,000 tracks): the conversions of ``track`` and ``image``
     (int64) and of the broadcast covariances, the sort by track and the gathering of the rows all

@@ -10,7 +10,8 @@
 //! into the same preallocated columns.
 
 use super::batch::{
-    column, per_observation, push_covariance, row_major, InlierColumns, PyBatchReport, ReportRow, TrackColumns,
+    self, column, per_observation, rows, unstarted, write_row_major, EstimateColumns, InlierColumns, PyBatchReport,
+    ReportRow, Sink,
 };
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
@@ -26,7 +27,6 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
-use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
 };
@@ -44,7 +44,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
-use std::sync::Mutex;
 use std::time::Instant;
 
 /// A triangulated point: the estimate `X` and the report fields of `TriangulationReport`.
@@ -155,25 +154,8 @@ pub struct PyPointTriangulations {
     inliers: InlierColumns,
 }
 
-impl TrackColumns for PyPointTriangulations {
-    type Track = PointTriangulation;
-
-    fn push(&mut self, track: PointTriangulation) -> Report {
-        self.x.extend_from_slice(track.point.as_slice());
-        push_covariance(&mut self.covariance, track.covariance.as_ref());
-        self.inliers.push(track.inliers);
-        track.report
-    }
-
-    fn push_missing(&mut self) {
-        self.x.extend([f64::NAN; 3]);
-        push_covariance::<3>(&mut self.covariance, None);
-        self.inliers.push_missing();
-    }
-}
-
 /// One track's entries of the point columns, written in place.
-struct PointRow<'a> {
+pub(crate) struct PointRow<'a> {
     x: &'a mut [f64],
     covariance: &'a mut [f64],
 }
@@ -182,76 +164,14 @@ impl PointRow<'_> {
     /// The point and its covariance (left NaN when there is none).
     fn write(self, x: &Vector3<f64>, covariance: Option<&Matrix3<f64>>) {
         self.x.copy_from_slice(x.as_slice());
-        if let Some(c) = covariance {
-            self.covariance.iter_mut().zip(row_major(c)).for_each(|(e, v)| *e = v);
-        }
+        write_row_major(self.covariance, covariance);
     }
 }
 
-/// Where the core writes each finished track of a point batch ([`triangulate_points_into`]): the
-/// report and point columns in place, the messages of rejected tracks and the inlier masks of a
-/// robust batch aside, until [`PointSink::finish`].
-#[derive(Default)]
-struct PointSink {
-    errors: Mutex<Vec<(usize, String)>>,
-    masks: Mutex<Vec<(usize, Vec<bool>)>>,
-}
+impl EstimateColumns for PyPointTriangulations {
+    type Track = PointTriangulation;
+    type Row<'a> = PointRow<'a>;
 
-impl PointSink {
-    fn write(&self, t: usize, (report, point): (ReportRow, PointRow), result: Result<PointTriangulation, Error>) {
-        match result {
-            Ok(track) => {
-                point.write(&track.point, track.covariance.as_ref());
-                if let Some(mask) = track.inliers {
-                    lock(&self.masks).push((t, mask));
-                }
-                report.solved(&track.report);
-            }
-            Err(e) => self.reject(t, report, e),
-        }
-    }
-
-    /// A track of the linear fast path: no certificate, timed later ([`PyBatchReport::time_solved`]).
-    fn write_linear(&self, t: usize, (report, point): (ReportRow, PointRow), result: Result<LinearTrack, Error>) {
-        match result {
-            Ok(track) => {
-                point.write(&track.point, track.covariance.as_ref());
-                report.uncertified(track.cost, track.status.as_str(), 0.0, track.residual_dof);
-            }
-            Err(e) => self.reject(t, report, e),
-        }
-    }
-
-    fn reject(&self, t: usize, report: ReportRow, e: Error) {
-        if let Some(message) = report.rejected::<PyPointTriangulations>(t, e) {
-            lock(&self.errors).push(message);
-        }
-    }
-
-    /// The columns of the `n` tracks, those not written not started because of `stopped`.
-    fn finish(
-        self,
-        mut report: PyBatchReport,
-        mut columns: PyPointTriangulations,
-        n: usize,
-        stopped: Option<StopReason>,
-    ) -> (PyBatchReport, PyPointTriangulations) {
-        if let Some(reason) = stopped {
-            report.not_started_because(reason);
-        }
-        report.set_errors(self.errors.into_inner().unwrap_or_else(|p| p.into_inner()));
-        columns.inliers = InlierColumns::from_masks(n, self.masks.into_inner().unwrap_or_else(|p| p.into_inner()));
-        (report, columns)
-    }
-}
-
-/// The vector behind `mutex`, also if a panicking writer poisoned it (the panic is reported anyway).
-fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    mutex.lock().unwrap_or_else(|p| p.into_inner())
-}
-
-impl PyPointTriangulations {
-    /// Columns for `n` tracks, NaN until written ([`PyPointTriangulations::rows_mut`]).
     fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
         let too_many = || PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks"));
         Ok(PyPointTriangulations {
@@ -265,6 +185,27 @@ impl PyPointTriangulations {
         (self.x.par_chunks_mut(3))
             .zip(self.covariance.par_chunks_mut(9))
             .map(|(x, covariance)| PointRow { x, covariance })
+    }
+
+    fn write(row: PointRow<'_>, track: PointTriangulation) -> (Report, Option<Vec<bool>>) {
+        row.write(&track.point, track.covariance.as_ref());
+        (track.report, track.inliers)
+    }
+
+    fn set_inliers(&mut self, inliers: InlierColumns) {
+        self.inliers = inliers;
+    }
+}
+
+/// A track of the linear fast path into its rows: no certificate, timed later
+/// ([`PyBatchReport::time_solved`]).
+fn write_linear(sink: &Sink, t: usize, (report, point): (ReportRow, PointRow), result: Result<LinearTrack, Error>) {
+    match result {
+        Ok(track) => {
+            point.write(&track.point, track.covariance.as_ref());
+            report.uncertified(track.cost, track.status.as_str(), 0.0, track.residual_dof);
+        }
+        Err(e) => sink.reject(t, report, e),
     }
 }
 
@@ -338,27 +279,33 @@ pub fn triangulate_points(
         .transpose()?;
     // The linear and local solves of a few thousand observations end within milliseconds.
     let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
-    let (mut report, mut columns) = unstarted(py, opts.method, n)?;
+    let (mut report, mut columns) = unstarted::<PyPointTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, short, move |done| {
         let tracks = PointTracks {
             observations: &pixels,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let sink = PointSink::default();
+        let sink = Sink::default();
         if opts.method == Method::Linear {
             let started = Instant::now();
-            let rows = report.rows_mut().zip(columns.rows_mut());
-            let write = |t, row, r| sink.write_linear(t, row, r);
-            let stopped = triangulate_points_linear_into(&cams, &tracks, Some(done), rows, write)?;
+            let write = |t, row, r| write_linear(&sink, t, row, r);
+            let stopped =
+                triangulate_points_linear_into(&cams, &tracks, Some(done), rows(&mut report, &mut columns), write)?;
             // The fast path does not time tracks one by one: each solved one gets the batch's mean.
             let written = done.load(Ordering::Relaxed).max(1);
             report.time_solved(started.elapsed().as_secs_f64() / written as f64);
             return Ok(sink.finish(report, columns, n, stopped));
         }
-        let rows = report.rows_mut().zip(columns.rows_mut());
-        let write = |t, row, r| sink.write(t, row, r);
-        let stopped = core_points(&cams, &tracks, &opts, Some(done), rows, write)?;
+        let write = |t, row, r| sink.write::<PyPointTriangulations>(t, row, r);
+        let stopped = core_points(
+            &cams,
+            &tracks,
+            &opts,
+            Some(done),
+            rows(&mut report, &mut columns),
+            write,
+        )?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
@@ -409,17 +356,18 @@ pub fn triangulate_point_observations(
     let covariances = covariances
         .map(|c| rows.per_row("covariances", c, &[2, 2]))
         .transpose()?;
-    let n = rows.offsets.len() - 1;
-    let (mut report, mut columns) = unstarted(py, opts.method, n)?;
+    let n = rows.tracks();
+    let (mut report, mut columns) = unstarted::<PyPointTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let sparse = SparsePointTracks {
             csr: rows.csr(),
             observations: &pixels,
             covariances: covariances.as_deref(),
         };
-        let sink = PointSink::default();
-        let out = report.rows_mut().zip(columns.rows_mut());
-        let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
+        let sink = Sink::default();
+        let out = batch::rows(&mut report, &mut columns);
+        let write =
+            |t, row, r: Result<_, Error>| sink.write::<PyPointTriangulations>(t, row, r.map_err(|e| rows.restate(e)));
         let stopped = match &views {
             Some(views) => triangulate_point_observations_views_into(views, &sparse, &opts, Some(done), out, write),
             None => triangulate_point_observations_into(&cams, &sparse, &opts, Some(done), out, write),
@@ -476,16 +424,6 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
             })
         })
         .collect()
-}
-
-/// The report and point columns of `n` tracks not started yet (filled with the GIL released, Ctrl-C
-/// seen between chunks: [`column`]), for the core to write each track into as it finishes
-/// ([`PointSink`]).
-fn unstarted(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, PyPointTriangulations)> {
-    Ok((
-        PyBatchReport::unstarted(py, method, n)?,
-        PyPointTriangulations::unstarted(py, n)?,
-    ))
 }
 
 pack_struct!(PyPointTriangulations { x, covariance, inliers });

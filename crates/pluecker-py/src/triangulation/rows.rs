@@ -167,6 +167,11 @@ impl SortedRows {
         self.order.len()
     }
 
+    /// The number of tracks, `n`.
+    pub fn tracks(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
     /// The core's view of the sorted rows.
     pub fn csr(&self) -> Csr<'_> {
         Csr {

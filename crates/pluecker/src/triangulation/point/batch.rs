@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::interrupt::{current, StopReason};
 use crate::triangulation::covariance::whitening;
 use crate::triangulation::tracks::{
-    check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
+    check_mask, check_rows, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{centre, depth_normalized, validate_cameras, View};
@@ -222,18 +222,6 @@ fn dense_solver<'a>(
         solve_track(&prepared, opts, t, views)
     };
     Ok((n, one))
-}
-
-/// The output rows of a batch of `n` tracks number `rows`: an error of the caller's, not the data's.
-fn check_rows(rows: usize, n: usize) -> Result<()> {
-    if rows == n {
-        return Ok(());
-    }
-    Err(Error::Shape {
-        what: "rows".into(),
-        expected: format!("one output row per track ({n})"),
-        actual: rows.to_string(),
-    })
 }
 
 /// Track `t` from its observations `(image, (pixel, whitening))`: at least two, with parallax.
