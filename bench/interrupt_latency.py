@@ -21,6 +21,8 @@ their share of the window. Workloads (each would run for seconds to hours if not
   up to the batch's first poll), measured by a first run; latency to the process's exit;
 - ``cli-localize``: ``pluecker localize QUERIES POINTS --colmap MODEL --out DIR``, the model's 12 images as
   queries matched to its points by ``point3D_id``; window: its set-up (up to the first pose);
+- ``line-batch``: ``triangulate_lines``, 500,000 noisy segments in 2 views, ``local``, window 0-1 s (set-up and
+  the first tracks; what a stop costs a batch of that many tracks);
 - ``lines``: ``triangulate_lines``, 40 noisy segments in 4 views, branch and bound to a 1e-9 gap, window 0-1 s;
 - ``pose``: ``estimate_pose`` with RANSAC, 20k all-outlier points, no inlier-ratio cap, window 0-1 s;
 - ``line``: one ``triangulate_line`` in 4 views, the relaxation to a 1e-9 gap with ``--single-nodes`` nodes,
@@ -74,6 +76,13 @@ def relaxation(nodes: int = 10**7, **fields):
 def lines_workload():
     P, segments = line_tracks(0, n=40, views=4, sigma=2.0)
     options = relaxation(line_bound="relaxation")
+    return lambda: pluecker.triangulate_lines(P, segments, options=options)
+
+
+def line_batch_workload():
+    P, segments = line_tracks(0, n=20_000, views=2, sigma=1.0)
+    segments = np.tile(segments, (25, 1, 1, 1))
+    options = pluecker.TriangulationOptions(method="local")
     return lambda: pluecker.triangulate_lines(P, segments, options=options)
 
 
@@ -293,7 +302,7 @@ def main() -> None:
                         "a folder under the temporary directory named by --model-points)")
     parser.add_argument("--verbose", action="store_true", help="print every signal's moment and latency")
     parser.add_argument("--only", nargs="*", choices=["points", "line30", "cli-triangulate", "cli-localize",
-                                                      "lines", "pose", "line", "quadric"])
+                                                      "line-batch", "lines", "pose", "line", "quadric"])
     parser.add_argument("--child-points", type=int, help=argparse.SUPPRESS)
     parser.add_argument("--delay", type=float, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -310,6 +319,7 @@ def main() -> None:
     workloads = {
         "line30": ("triangulate_line (30 views, relaxation, gap 1e-9)", 1.5,
                    lambda: single_line_workload(args.single_nodes, views=30)),
+        "line-batch": ("triangulate_lines (500,000 lines, 2 views, local)", 1.0, line_batch_workload),
         "lines": ("triangulate_lines (40 lines, relaxation, gap 1e-9)", 1.0, lines_workload),
         "pose": ("estimate_pose robust (20k all-outlier points)", 1.0, pose_workload),
         "line": (f"triangulate_line (4 views, relaxation, gap 1e-9, max_nodes {args.single_nodes})", 0.5,
