@@ -3,9 +3,10 @@ batch's ``progress`` callback, and a batch's ``time_budget``. Stopped batches ke
 (bit-exact with an uninterrupted run) and say ``interrupted`` / ``time_budget`` for the others.
 
 No test waits a fixed delay: a hook of the extension (``_on_poll_for_tests``) simulates Ctrl-C (what
-Python's SIGINT handler does) at a given poll of the call's stop, that is once a given track or
-branch-and-bound node has been reached, or holds that poll until the time budget has run out; the
-call then has to notice it by itself. The workloads run for minutes if nothing stops them (branch and
+Python's SIGINT handler does) at a given poll of the call's stop, that is once a given track,
+branch-and-bound node or interior-point iteration of a conic solve has been reached, or at a given
+poll of the call's set-up (reading its arrays, sorting its rows, allocating its results), or holds a
+poll until the time budget has run out; the call then has to notice it by itself. The workloads run for minutes if nothing stops them (branch and
 bound with a 1e-9 gap), and a batch has one track more than the extension has threads, so that
 whatever the number of cores some tracks have started and some cannot have. A ``time_budget`` (or a
 node cap) far beyond what a working build needs keeps a broken one from hanging the suite."""
@@ -15,6 +16,8 @@ from __future__ import annotations
 import json
 import os
 import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -140,32 +143,131 @@ def test_ctrl_c_stops_a_robust_pose_and_returns_the_best_so_far():
     assert partial.details.ransac.iterations >= 1
 
 
-def assert_stopped_single(partial, started_nodes: int) -> None:
-    """A single triangulation stopped in its branch and bound: the estimate reached, uncertified, with a
-    bound at most its cost, far below the node cap."""
+def assert_stopped_single(partial, most_iterations: int) -> None:
+    """A single triangulation stopped while bounding its root: the estimate reached, uncertified, with a
+    bound at most its cost; no node split and at most ``most_iterations`` interior-point iterations."""
     assert partial.status == "interrupted" and not partial.certified
     assert np.isfinite(partial.cost) and partial.certificate.lower_bound <= partial.cost
-    assert started_nodes <= partial.certificate.nodes < SAFETY_NODES
+    assert partial.certificate.nodes == 1
+    assert partial.certificate.solver_iterations <= most_iterations
 
 
-def test_ctrl_c_stops_a_single_line():
+def test_ctrl_c_stops_a_single_line_inside_a_conic_solve():
     P, segments, options = endless_lines(n=1, max_nodes=SAFETY_NODES)
-    # Branch and bound polls before each split: Ctrl-C after its fifth node (root and two splits).
+    # A conic solve polls before it starts and at every iteration: the third poll is inside the
+    # first solve of the root's bound tightening, at most two iterations in; no solve runs after it.
     ctrl_c_at_poll(3)
     with pytest.raises(KeyboardInterrupt) as caught:
         pluecker.triangulate_line(P, segments[0], **options)
     assert isinstance(caught.value.partial, pluecker.LineTriangulation)
-    assert_stopped_single(caught.value.partial, 5)
+    assert_stopped_single(caught.value.partial, 2)
 
 
-def test_ctrl_c_stops_a_single_quadric():
+def test_ctrl_c_stops_the_root_of_a_line_seen_in_30_views():
+    """The root of a line in 30 views (its bound tightening solves about 70 programs of 30 cones, most
+    of a second) stops at the first poll: no conic solve runs after Ctrl-C."""
+    P, segments = line_tracks(0, n=1, views=30, sigma=2.0)
+    options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e-9, max_nodes=SAFETY_NODES),
+                                            line_bound="relaxation")
+    ctrl_c_at_poll(1)
+    with pytest.raises(KeyboardInterrupt) as caught:
+        pluecker.triangulate_line(P, segments[0], options=options)
+    assert isinstance(caught.value.partial, pluecker.LineTriangulation)
+    assert_stopped_single(caught.value.partial, 0)
+
+
+def test_ctrl_c_stops_a_single_quadric_inside_a_conic_solve():
+    """The third poll is inside the first solve of the root's denominator ranges: without those
+    ranges there is no box to search and no bound; the stop must say so, not that the domain was
+    proved empty (``infeasible``)."""
     scene = disc_scene(3)
     options = pluecker.TriangulationOptions(certify=pluecker.CertifyOptions(max_relative_gap=1e-9, max_nodes=SAFETY_NODES), quadric_bound="relaxation")
     ctrl_c_at_poll(3)
     with pytest.raises(KeyboardInterrupt) as caught:
         pluecker.triangulate_quadric(scene.cameras, scene.conics, scene.covariances, options=options)
-    assert isinstance(caught.value.partial, pluecker.QuadricTriangulation)
-    assert_stopped_single(caught.value.partial, 5)
+    partial = caught.value.partial
+    assert isinstance(partial, pluecker.QuadricTriangulation)
+    assert partial.status == "interrupted" and not partial.certified
+    assert partial.certificate is None and np.isfinite(partial.cost)
+
+
+#: Values a call's set-up handles between two polls (``SETUP_CHUNK`` of crates/pluecker-py/src/interrupt.rs).
+SETUP_CHUNK = 2**20
+
+
+def setup_polls(call) -> int:
+    """The polls of ``call``'s set-up, counted (by a set-up hook that never acts); Ctrl-C at the first,
+    the middle and the last of them stops the call with ``KeyboardInterrupt`` and ``partial = None``,
+    nothing solved, and a hook armed one poll beyond them never acts (the call runs)."""
+    _core._on_poll_for_tests(2**62, "interrupt_setup")
+    call()
+    polls = _core._setup_polls_for_tests()
+    for poll in sorted({1, (polls + 1) // 2, polls}):
+        _core._on_poll_for_tests(poll, "interrupt_setup")
+        with pytest.raises(KeyboardInterrupt) as stopped:
+            call()
+        assert stopped.value.partial is None
+    _core._on_poll_for_tests(polls + 1, "interrupt_setup")
+    call()
+    assert _core._setup_polls_for_tests() == polls
+    return polls
+
+
+def test_ctrl_c_stops_the_set_up_of_a_point_batch():
+    """A batch of 600,000 tracks reads 2.4 M pixel values and allocates 13.8 M result entries before it
+    solves anything: a poll at least every ``SETUP_CHUNK`` values, each able to stop it."""
+    rng = np.random.default_rng(0)
+    P, _ = line_tracks(0, n=1, views=2)
+    n = 600_000
+    x = rng.uniform(0, 640, (n, 2, 2))
+    # A zero budget ends the batch as soon as its solving starts: only the set-up runs. The linear fast
+    # path writes into the same preallocated columns, so that a stop never waits for their assembly.
+    for method in ("optimal", "linear"):
+        options = pluecker.TriangulationOptions(method=method)
+        polls = setup_polls(lambda: pluecker.triangulate_points(P, x, options=options, time_budget=0))
+        assert polls >= (x.size + n * (11 + 3 + 9)) / SETUP_CHUNK, method
+        batch = pluecker.triangulate_points(P, x, options=options, time_budget=0)
+        assert set(batch.status) == {"time_budget"} and np.isnan(batch.X).all()
+
+
+def test_ctrl_c_stops_the_set_up_of_line_and_quadric_batches():
+    """Line and quadric batches allocate their result columns before they solve, as point batches do
+    (so that a stopped batch hands them back without a pass over millions of tracks): their set-up
+    polls at least every ``SETUP_CHUNK`` values read or allocated."""
+    rng = np.random.default_rng(0)
+    P, _ = line_tracks(0, n=1, views=3)
+    n = 300_000
+    segments = rng.uniform(0, 640, (n, 2, 2, 2))
+    polls = setup_polls(lambda: pluecker.triangulate_lines(P[:2], segments, time_budget=0))
+    # Report columns (11 per track), Plücker coordinates 6, point 3, direction 3, chart axes 6,
+    # covariance 16.
+    assert polls >= (segments.size + n * (11 + 6 + 3 + 3 + 6 + 16)) / SETUP_CHUNK
+    n = 100_000
+    conics = np.broadcast_to(np.diag([1.0, 1.0, -1.0]), (n, 3, 3, 3))
+    polls = setup_polls(lambda: pluecker.triangulate_quadrics(P, conics, time_budget=0))
+    # Report columns 11, dual and primal quadrics 16 each, centre 3, semi-axes 3, axes 9, covariance 81.
+    assert polls >= (conics.size + n * (11 + 16 + 16 + 3 + 3 + 9 + 81)) / SETUP_CHUNK
+    batch = pluecker.triangulate_quadrics(P, conics, time_budget=0)
+    assert set(batch.status) == {"time_budget"} and np.isnan(batch.Q).all()
+
+
+def test_ctrl_c_stops_the_set_up_of_an_observation_batch():
+    """One observation per row (1.5 M rows, 500,000 tracks): the conversions of ``track`` and ``image``
+    (int64) and of the broadcast covariances, the sort by track and the gathering of the rows all
+    poll, at least every ``SETUP_CHUNK`` values."""
+    rng = np.random.default_rng(0)
+    P, _ = line_tracks(0, n=1, views=3)
+    m, n = 1_500_000, 500_000
+    track = np.repeat(np.arange(n), 3)
+    rng.shuffle(track)
+    image = rng.integers(0, 3, m)
+    x = rng.uniform(0, 640, (m, 2))
+    covariances = np.broadcast_to(np.eye(2), (m, 2, 2))
+    polls = setup_polls(lambda: pluecker.triangulate_point_observations(P, track, image, x, covariances,
+                                                                        time_budget=0))
+    # Read: track, image (m each), x (2m), covariances (4m); sorted: three passes over the rows and
+    # the gathering of the rows of x and of the covariances; allocated: 23 result entries per track.
+    assert polls >= (8 * m + 3 * m + 2 * m + 23 * n) / SETUP_CHUNK
 
 
 def test_ctrl_c_stops_the_certificate_of_a_single_pose():
@@ -220,3 +322,76 @@ def test_command_line_ctrl_c_is_one_line_and_exit_130(monkeypatch, capsys, tmp_p
     assert cli.main(["pose", str(path)]) == 130
     captured = capsys.readouterr()
     assert captured.err == "pluecker pose: interrupted\n" and captured.out == ""
+
+
+#: A ``pluecker pose`` process whose command runs ``BODY`` instead of the pose (``fd``: a file
+#: descriptor for ``_hold_gil_for_tests``); a ``finally`` around the command prints ``clean-up ran``.
+COMMAND = """
+import signal, sys
+signal.signal(signal.SIGINT, signal.default_int_handler)  # as in an interactive shell
+from pluecker import cli, _core
+fd = int(sys.argv[1])
+def command(args):
+    try:
+        BODY
+    finally:
+        print("clean-up ran", flush=True)
+    return 0
+cli._pose = command
+sys.argv = ["pluecker", "pose", "unused.json"]
+cli.run()
+"""
+
+
+def run_command(body: str):
+    """Starts the ``COMMAND`` process with ``body``; returns it and the read end of its descriptor."""
+    read, write = os.pipe()
+    child = subprocess.Popen([sys.executable, "-c", COMMAND.replace("BODY", body), str(write)], pass_fds=(write,),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    os.close(write)
+    return child, read
+
+
+def test_the_command_ends_after_ctrl_c_while_a_call_holds_the_interpreter():
+    """A library call that holds the GIL for ten minutes (as pycolmap holds it while it reads a model):
+    Python cannot raise KeyboardInterrupt before it returns, so the command's deadline ends the process
+    itself, status 130 and the one line, without its clean-up."""
+    child, ready = run_command("_core._hold_gil_for_tests(fd, 600.0)")
+    try:
+        # The byte is written inside the call: from here the main thread holds the GIL.
+        assert os.read(ready, 1) == b"x"
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err, out) == (130, "pluecker pose: interrupted\n", "")
+
+
+def test_the_command_answers_ctrl_c_itself_when_python_can():
+    """Ctrl-C that Python turns into KeyboardInterrupt: the command's own clean-up runs, and the line is
+    printed once (the deadline stands down, or, had Python been slower than it, printed it instead)."""
+    child, ready = run_command("signal.raise_signal(signal.SIGINT)")
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err) == (130, "pluecker pose: interrupted\n")
+    # A library that turns the KeyboardInterrupt into an error of its own (pycolmap interrupted while it
+    # loads its C++ module raises RuntimeError): still Ctrl-C, not a traceback.
+    child, ready = run_command("raise RuntimeError('cannot import the backend') from KeyboardInterrupt()")
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err) == (130, "pluecker pose: interrupted\n")
+    # And a command that ends normally gives the wakeup descriptor back and exits with its status.
+    child, ready = run_command("import signal as s; assert s.set_wakeup_fd(-1) != -1")
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err, out) == (0, "", "clean-up ran\n")

@@ -565,7 +565,8 @@ def get_num_threads() -> int:
 # (eq. 1). Every method minimises eq. 19 (residuals of eq. 17 whitened by ``covariances``; identity when None): ``"linear"``,
 # ``"local"``, or ``"optimal"`` (default: certified by a convexity test or branch and bound, eqs. 21-22).
 # Batches run in parallel without the GIL; ``progress(done)``; ``time_budget`` (s) ends with status
-# ``"time_budget"``; Ctrl-C raises with the finished tracks as ``partial``. A bad track never stops others.
+# ``"time_budget"``; Ctrl-C raises with the finished tracks as ``partial`` (``None`` if it came while the
+# batch read its arrays or allocated its results). A bad track never stops others.
 
 @final
 class TriangulationOptions:

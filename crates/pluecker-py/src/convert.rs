@@ -2,19 +2,26 @@
 //! the expected one and every row checked for NaN/inf, each failure naming the argument (and row).
 //! Outputs: fresh row-major float64 arrays the caller owns.
 //!
-//! Every array argument of the module is read here, in one pass from a contiguous float64 buffer
-//! when the caller hands one over (the batch functions must cost well under a microsecond per
-//! track), otherwise after one `numpy.asarray(obj, dtype=float64, order="C")`. Shapes are checked
-//! against the expected one and reported as `"x: expected shape (n, 2), got (4, 3)"`.
+//! Every array argument of the module is read here, copied from a contiguous float64 buffer when the
+//! caller hands one over (the batch functions must cost well under a microsecond per track),
+//! otherwise converted by `numpy.asarray(rows, dtype=float64, order="C")` a block of rows at a
+//! time; either way a chunk of [`crate::interrupt::SETUP_CHUNK`] values at a time, Python's signal
+//! handlers running between chunks, so that Ctrl-C is not held up by a large argument
+//! ([`crate::interrupt::setup_poll`]). Shapes are checked against the expected one and reported as
+//! `"x: expected shape (n, 2), got (4, 3)"`.
 
 use crate::errors::{invalid_argument, non_finite, shape_error};
+use crate::interrupt::{in_chunks, setup_poll, SETUP_CHUNK};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector};
 use numpy::ndarray::{Array2, Array3};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{
+    Element, IntoPyArray, PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
 use pluecker::Pose;
-use pyo3::exceptions::{PyOverflowError, PyTypeError};
+use pyo3::exceptions::{PyMemoryError, PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PyTuple};
+use pyo3::types::{IntoPyDict, PyBool, PyDict, PyFloat, PyList, PySlice, PyTuple};
 use std::time::Duration;
 
 /// One axis of an expected shape: a named free length (`N` rows) or a fixed one.
@@ -48,14 +55,9 @@ pub fn shape_string(shape: &[usize]) -> String {
     python_tuple(&shape.iter().map(|n| n.to_string()).collect::<Vec<_>>())
 }
 
-/// `obj` as a C-contiguous float64 ndarray (the array itself when it already is one); a `TypeError`
-/// naming `name` if it is not an array of real numbers.
-pub fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    if let Ok(array) = obj.downcast::<PyArrayDyn<f64>>() {
-        if array.is_c_contiguous() {
-            return Ok(array.clone());
-        }
-    }
+/// `obj` as a numpy array of real numbers (the array itself when it is one); a `TypeError` naming
+/// `name` if it is not one.
+fn real_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyUntypedArray>> {
     let np = obj.py().import("numpy")?;
     let array = np.call_method1("asarray", (obj,)).map_err(|e| {
         PyTypeError::new_err(format!(
@@ -69,22 +71,60 @@ pub fn float_array<'py>(name: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'
             "{name}: expected an array of real numbers, got dtype {dtype}"
         )));
     }
-    // `asarray(order="C")` rather than `ascontiguousarray`, which would turn a 0-d input into shape (1,).
-    let kwargs = [("dtype", "float64"), ("order", "C")].into_py_dict(obj.py())?;
-    Ok(np
-        .call_method("asarray", (array,), Some(&kwargs))?
-        .downcast_into::<PyArrayDyn<f64>>()?)
+    Ok(array.downcast_into::<PyUntypedArray>()?)
 }
 
-/// The values of a float64 array in row-major order, copied as one slice when it is C-contiguous.
-pub fn row_major_values(name: &str, array: &Bound<'_, PyArrayDyn<f64>>) -> PyResult<Vec<f64>> {
-    let readonly = array
-        .try_readonly()
-        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
-    Ok(match readonly.as_slice() {
-        Ok(slice) if readonly.is_c_contiguous() => slice.to_vec(),
-        _ => readonly.as_array().iter().copied().collect(),
-    })
+/// The entries of `array` in row-major order as `T` (numpy's `dtype`), copied a chunk of
+/// [`SETUP_CHUNK`] values at a time with a [`setup_poll`] after each: straight from the buffer of a
+/// C-contiguous array of `T`, otherwise through `numpy.asarray(array[a:b], dtype, order="C")` of
+/// blocks of rows along the first axis. A `MemoryError` rather than an abort when the copy cannot
+/// be allocated.
+fn row_major<T: Element + Copy>(name: &str, array: &Bound<'_, PyUntypedArray>, dtype: &str) -> PyResult<Vec<T>> {
+    let py = array.py();
+    let len = array.len();
+    let mut out = Vec::new();
+    out.try_reserve_exact(len)
+        .map_err(|_| PyMemoryError::new_err(format!("{name}: cannot allocate {len} values")))?;
+    // The entries of a C-contiguous array of `T`, borrowed only while they are copied: the signal
+    // handlers between chunks run Python code.
+    let slice_of = |typed: &Bound<'_, PyArrayDyn<T>>, out: &mut Vec<T>, range: Option<std::ops::Range<usize>>| {
+        let values = typed
+            .try_readonly()
+            .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+        let all = values
+            .as_slice()
+            .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
+        out.extend_from_slice(range.map_or(all, |r| &all[r]));
+        PyResult::Ok(())
+    };
+    if let Ok(typed) = array.downcast::<PyArrayDyn<T>>() {
+        if typed.is_c_contiguous() {
+            in_chunks(py, len, |range| slice_of(typed, &mut out, Some(range)))?;
+            return Ok(out);
+        }
+    }
+    let np = py.import("numpy")?;
+    let kwargs = [("dtype", dtype), ("order", "C")].into_py_dict(py)?;
+    let mut append = |block: &Bound<'_, PyAny>| {
+        let converted = np.call_method("asarray", (block,), Some(&kwargs))?;
+        slice_of(converted.downcast::<PyArrayDyn<T>>()?, &mut out, None)
+    };
+    let shape = array.shape().to_vec();
+    let row = shape.iter().skip(1).product::<usize>();
+    if shape.is_empty() || row == 0 {
+        // A 0-d array (one value) or no values: one conversion (`asarray` keeps a 0-d shape).
+        append(array.as_any())?;
+        return Ok(out);
+    }
+    let rows_per_block = (SETUP_CHUNK / row).max(1);
+    let mut first = 0;
+    while first < shape[0] {
+        let last = shape[0].min(first + rows_per_block);
+        append(&array.get_item(PySlice::new(py, first as isize, last as isize, 1))?)?;
+        setup_poll(py)?;
+        first = last;
+    }
+    Ok(out)
 }
 
 /// The shape and the row-major values of `obj`, after checking the shape against `spec`. NaN and
@@ -110,9 +150,9 @@ fn check_shape(name: &str, shape: &[usize], spec: &[Dim]) -> PyResult<()> {
 
 /// The shape and row-major values of `obj`, any shape (the caller dispatches on it).
 pub fn read_any(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
-    let array = float_array(name, obj)?;
+    let array = real_array(name, obj)?;
     let shape = array.shape().to_vec();
-    Ok((shape, row_major_values(name, &array)?))
+    Ok((shape, row_major(name, &array, "float64")?))
 }
 
 /// `NonFiniteError` naming `name` and the first row (of `row_len` values) holding NaN or inf.
@@ -451,15 +491,7 @@ pub fn read_mask(name: &str, obj: &Bound<'_, PyAny>, shape: &[usize]) -> PyResul
     if kind != "b" {
         check_zero_one(name, &array)?;
     }
-    let array = np.call_method1("ascontiguousarray", (array, "bool"))?;
-    let array = array.downcast_into::<PyArrayDyn<bool>>()?;
-    let readonly = array
-        .try_readonly()
-        .map_err(|e| PyTypeError::new_err(format!("{name}: {e}")))?;
-    Ok(match readonly.as_slice() {
-        Ok(slice) => slice.to_vec(),
-        Err(_) => readonly.as_array().iter().copied().collect(),
-    })
+    row_major(name, array.downcast::<PyUntypedArray>()?, "bool")
 }
 
 /// `InvalidOptionError` unless the integer array `array` holds only 0 and 1.

@@ -4,20 +4,26 @@
 //! [`Stop`] ([`pluecker::interrupt`]) that the core's long loops poll. The calling thread wakes every
 //! [`POLL`]: it takes the GIL, runs Python's signal handlers (`PyErr_CheckSignals`) and calls the
 //! progress callback. A `KeyboardInterrupt` (or any exception from a handler or the callback)
-//! raises the stop; the worker ends at its next poll, within a track's branch-and-bound node or a
-//! RANSAC iteration, and the work's value (for a batch: the finished tracks, the others with status
-//! `interrupted`) comes back together with the pending exception, for the caller to attach as
-//! `exception.partial` and raise ([`object_or_partial`]).
+//! raises the stop; the worker ends at its next poll, within a track, an interior-point iteration of
+//! a conic solve or a RANSAC iteration, and the work's value (for a batch: the finished tracks, the
+//! others with status `interrupted`) comes back together with the pending exception, for the caller
+//! to attach as `exception.partial` and raise ([`object_or_partial`]).
 //!
 //! [`run_single`] runs a single call (one point, line, quadric or pose) on the calling thread itself,
 //! sparing the worker thread's start: the stop's own check ([`Stop::with_check`]) runs Python's
-//! signal handlers from the core's polls (branch-and-bound nodes, rotation cells, RANSAC samples), at
-//! most once per [`POLL`], when the caller is Python's main thread (the only one that runs them).
-//! A call that never reaches a poll is short and sees a signal when it ends.
+//! signal handlers from the core's polls (branch-and-bound nodes, conic-solver iterations, rotation
+//! cells, RANSAC samples), at most once per [`POLL`], when the caller is Python's main thread (the
+//! only one that runs them). A call that never reaches a poll is short and sees a signal when it ends.
+//!
+//! Before that, a call sets up on the calling thread with the GIL held: it reads its arrays, sorts
+//! its rows and allocates its results, a chunk of [`SETUP_CHUNK`] values at a time, and runs Python's
+//! signal handlers between chunks ([`setup_poll`]): Ctrl-C while a batch of millions of tracks is
+//! converted or allocated raises `KeyboardInterrupt` at once, with `partial = None` (nothing was
+//! solved).
 //!
 //! `_on_poll_for_tests` arms a test hook for the next call: at a given poll it simulates Ctrl-C, or
 //! waits until the time budget has run out, so that the tests stop a call at a known point of its
-//! work rather than after a delay.
+//! work rather than after a delay; or it simulates Ctrl-C at a given poll of the set-up.
 
 use crate::convert::{optional_real, seconds_arg, Real};
 use crate::errors::{guarded, invalid_argument};
@@ -44,12 +50,17 @@ enum HookAction {
     Interrupt,
     /// Waits until the call's time budget has run out (the poll itself still goes ahead).
     AwaitDeadline,
+    /// [`HookAction::Interrupt`] at a poll of the set-up ([`setup_poll`]), counted over every call
+    /// until the next stop is made (which discards the hook if it has not acted).
+    InterruptSetup,
 }
 
 /// The hook armed by `_on_poll_for_tests`, for the next call that makes a stop.
 static ARMED: Mutex<Option<(usize, HookAction)>> = Mutex::new(None);
 /// Whether [`ARMED`] may hold a hook (spares every call the lock).
 static MAYBE_ARMED: AtomicBool = AtomicBool::new(false);
+/// Set-up polls since the hook was armed ([`HookAction::InterruptSetup`]).
+static SETUP_POLLS: AtomicUsize = AtomicUsize::new(0);
 
 /// The test hook of one call: acts at the `at`-th poll of its stop, counted over every thread.
 struct Hook {
@@ -66,6 +77,9 @@ impl Hook {
             return None;
         }
         let (at, action) = ARMED.lock().ok()?.take()?;
+        if let HookAction::InterruptSetup = action {
+            return None; // the set-up it was armed for is over
+        }
         Some(Hook {
             at,
             action,
@@ -91,22 +105,87 @@ impl Hook {
                 }
                 false
             }
+            HookAction::InterruptSetup => false,
         }
     }
+
+    /// Counts a poll of the set-up ([`setup_poll`]) for a hook armed with
+    /// [`HookAction::InterruptSetup`], and simulates Ctrl-C at its poll.
+    fn setup_poll() {
+        if !MAYBE_ARMED.load(Ordering::Relaxed) {
+            return;
+        }
+        let Ok(mut armed) = ARMED.lock() else { return };
+        if let Some((at, HookAction::InterruptSetup)) = *armed {
+            if SETUP_POLLS.fetch_add(1, Ordering::Relaxed) + 1 == at {
+                *armed = None;
+                MAYBE_ARMED.store(false, Ordering::Relaxed);
+                // Safe from any thread, with or without the GIL (CPython's documentation).
+                unsafe { pyo3::ffi::PyErr_SetInterrupt() };
+            }
+        }
+    }
+}
+
+/// _setup_polls_for_tests()
+/// --
+///
+/// Test hook: the polls of the set-up counted since ``_on_poll_for_tests(poll, "interrupt_setup")``
+/// was last called (until the hook acted or the set-up it was armed for ended).
+#[pyfunction]
+pub(crate) fn _setup_polls_for_tests() -> usize {
+    SETUP_POLLS.load(Ordering::Relaxed)
+}
+
+/// Values (array entries, rows, result entries) a call's set-up handles between two polls
+/// ([`setup_poll`]): 8 MB of float64, a few milliseconds of copying.
+pub(crate) const SETUP_CHUNK: usize = 1 << 20;
+
+/// The poll of a call's set-up, between two chunks of [`SETUP_CHUNK`] values: runs Python's signal
+/// handlers (on the main thread; elsewhere nothing). Ctrl-C raises `KeyboardInterrupt` with
+/// `partial = None`: the call has not solved anything yet.
+pub(crate) fn setup_poll(py: Python<'_>) -> PyResult<()> {
+    Hook::setup_poll();
+    py.check_signals().map_err(|e| with_partial(py, e, py.None()))
+}
+
+/// `step(range)` for the chunks of [`SETUP_CHUNK`] values of `0..len`, in order, with a
+/// [`setup_poll`] after each; the first error ends it.
+pub(crate) fn in_chunks(
+    py: Python<'_>,
+    len: usize,
+    mut step: impl FnMut(std::ops::Range<usize>) -> PyResult<()>,
+) -> PyResult<()> {
+    let mut start = 0;
+    while start < len {
+        let end = len.min(start + SETUP_CHUNK);
+        step(start..end)?;
+        setup_poll(py)?;
+        start = end;
+    }
+    Ok(())
 }
 
 /// _on_poll_for_tests(poll, action, /)
 /// --
 ///
 /// Test hook: the next interruptible call, at the ``poll``-th poll of its stop (1 is the first: before
-/// the first track of a batch, the first split of branch and bound, ...), ``"interrupt"``s as Ctrl-C
-/// does or ``"await_deadline"``s until its time budget has run out.
+/// the first track of a batch, the first conic solve of branch and bound, ...), ``"interrupt"``s as
+/// Ctrl-C does or ``"await_deadline"``s until its time budget has run out; or ``"interrupt_setup"``:
+/// Ctrl-C at the ``poll``-th poll of the set-up (reading, sorting, allocating) of the calls to come,
+/// until one of them makes its stop.
 #[pyfunction]
 pub(crate) fn _on_poll_for_tests(poll: usize, action: &str) -> PyResult<()> {
     let action = match action {
         "interrupt" => HookAction::Interrupt,
         "await_deadline" => HookAction::AwaitDeadline,
-        _ => return Err(invalid_argument("action", "'interrupt' or 'await_deadline'")),
+        "interrupt_setup" => HookAction::InterruptSetup,
+        _ => {
+            return Err(invalid_argument(
+                "action",
+                "'interrupt', 'await_deadline' or 'interrupt_setup'",
+            ))
+        }
     };
     if poll == 0 {
         return Err(invalid_argument("poll", "must be at least 1"));
@@ -114,6 +193,7 @@ pub(crate) fn _on_poll_for_tests(poll: usize, action: &str) -> PyResult<()> {
     *ARMED
         .lock()
         .map_err(|_| invalid_argument("poll", "the hook's lock is poisoned"))? = Some((poll, action));
+    SETUP_POLLS.store(0, Ordering::Relaxed);
     MAYBE_ARMED.store(true, Ordering::Relaxed);
     Ok(())
 }

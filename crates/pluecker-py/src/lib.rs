@@ -16,6 +16,8 @@ mod camera;
 mod certificate;
 mod convert;
 mod errors;
+#[cfg(unix)]
+mod exit_deadline;
 mod fields;
 mod interrupt;
 mod lens_camera;
@@ -114,6 +116,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     m.add_function(wrap_pyfunction!(pose::certificate::_pose_rotation_search, m)?)?;
     m.add_function(wrap_pyfunction!(interrupt::_on_poll_for_tests, m)?)?;
+    m.add_function(wrap_pyfunction!(interrupt::_setup_polls_for_tests, m)?)?;
+    #[cfg(unix)]
+    {
+        m.add_class::<exit_deadline::ExitDeadline>()?;
+        m.add_function(wrap_pyfunction!(exit_deadline::_hold_gil_for_tests, m)?)?;
+    }
     Ok(())
 }
 

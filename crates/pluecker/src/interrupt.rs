@@ -9,6 +9,9 @@
 //! - the node loop of `global::branch_and_bound`: a track being solved keeps the best
 //!   estimate and the lower bound reached, uncertified, with status
 //!   [`crate::triangulation::Status::Interrupted`] or [`crate::triangulation::Status::TimeBudget`];
+//! - every conic solve (`global::socp`), before it starts and at each interior-point iteration: a
+//!   stopped solve gives no bound, so that one large program (the root of a line seen in 30 views)
+//!   does not hold the stop up;
 //! - the RANSAC loop (`pose::robust`, stop reason [`crate::RansacStop::Interrupted`]: before each
 //!   sample, between the rounds of a local optimisation, and before each fit of the final
 //!   consensus) and the rotation search of the pose certificate ([`crate::pose::certificate`], not
@@ -98,9 +101,9 @@ impl Stop {
 
     /// This stop, with `check` run by every poll that neither a request nor the deadline has
     /// answered, on the polling thread: `true` requests the stop (that poll already answers
-    /// [`StopReason::Requested`]). Polls come once per track, branch-and-bound node, RANSAC sample or
-    /// rotation cell, from every solving thread: `check` must be cheap (rate-limit anything costly)
-    /// and thread-safe.
+    /// [`StopReason::Requested`]). Polls come once per track, branch-and-bound node, conic-solver
+    /// iteration, RANSAC sample or rotation cell, from every solving thread: `check` must be cheap
+    /// (rate-limit anything costly) and thread-safe.
     pub fn with_check(self, check: impl Fn() -> bool + Send + Sync + UnwindSafe + RefUnwindSafe + 'static) -> Self {
         Stop {
             check: Some(Box::new(check)),

@@ -107,7 +107,8 @@ fn a_request_from_another_thread_stops_a_single_line() {
         .map(|e| [Vector2::new(e[0], e[1]), Vector2::new(e[2], e[3])])
         .collect();
     let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
-    // Polls come before each split of the branch and bound: the request follows its third node.
+    // A conic solve polls before it starts and at each iteration: the request follows the third poll,
+    // after the first iteration of the root's first solve, whenever it comes.
     let (stop, requester) = requested_after_poll(3);
     let line = with_stop(stop, || {
         triangulate_line(&cameras, &lines, Some(&covariances), &endless())
@@ -118,7 +119,7 @@ fn a_request_from_another_thread_stops_a_single_line() {
     assert_eq!(report.status, Status::Interrupted);
     assert!(!report.certified() && report.cost.is_finite());
     let c = report.certificate.expect("the search ran");
-    assert!(c.nodes >= 3, "{} nodes", c.nodes);
+    assert!(c.nodes >= 1 && c.solver_iterations >= 1, "{c:?}");
     assert!(c.lower_bound <= report.cost);
 }
 

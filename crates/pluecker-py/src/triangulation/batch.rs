@@ -1,6 +1,9 @@
 //! `pluecker.BatchReport`: the per-track report columns shared by every batch result
 //! (`PointTriangulations`, `LineTriangulations`, `QuadricTriangulations` extend it), and the one way
-//! these results are filled from the core's per-track results ([`collect`]).
+//! these results are filled from the core's per-track results: every column is allocated for every
+//! track before the solve ([`unstarted`], not started: `interrupted`, NaN), and the core's `_into`
+//! batches write each track's row as it finishes ([`Sink`]), so that a stopped batch of millions of
+//! tracks hands its results back without a pass over them.
 //!
 //! A track the core rejected gets a NaN cost, no certificate, a status naming the error kind
 //! ([`error_status`]) and a message; its estimate columns are NaN.
@@ -11,6 +14,7 @@
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{shape_error, to_py_err};
 use crate::fields::{result_class, Mask};
+use crate::interrupt::in_chunks;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
@@ -22,6 +26,7 @@ use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
+use std::sync::Mutex;
 
 /// The status of a track the core rejected, by error kind (shared by every batch result).
 pub(crate) fn error_status(err: &Error) -> &'static str {
@@ -52,26 +57,107 @@ fn not_started(status: &str, cost: f64) -> Option<StopReason> {
     }
 }
 
-/// The estimate columns of a batch result class (its fields beside the [`PyBatchReport`] columns),
-/// filled track by track by [`collect`].
-pub(crate) trait TrackColumns: Default {
+/// The estimate columns of a batch result class (its fields beside the [`PyBatchReport`] columns):
+/// allocated for every track, NaN until a track's row is written ([`Sink`]).
+pub(crate) trait EstimateColumns: Sized {
     /// The core's result of one track.
     type Track;
     /// What a track's cost measures unless its report says otherwise (lines from segments through a
     /// lens that distorts): the `cost_kind` of a track rejected or not started.
     const COST_KIND: CostKind;
+    /// One track's entries of the columns.
+    type Row<'a>: Send
+    where
+        Self: 'a;
 
-    /// Appends the estimate of a solved track and hands back its report.
-    fn push(&mut self, track: Self::Track) -> Report;
-    /// Appends NaN estimates for a rejected track.
-    fn push_missing(&mut self);
+    /// Columns for `n` tracks, NaN ([`column`]: Ctrl-C is seen while they are filled).
+    fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self>;
+    /// The rows of every track, to write in parallel.
+    fn rows_mut(&mut self) -> impl IndexedParallelIterator<Item = Self::Row<'_>>;
+    /// Writes a solved track's estimate into its row; hands back its report and, with an outlier
+    /// threshold, its inlier flags.
+    fn write(row: Self::Row<'_>, track: Self::Track) -> (Report, Option<Vec<bool>>);
+    /// The inlier masks of the tracks (a class without them ignores them).
+    fn set_inliers(&mut self, _inliers: InlierColumns) {}
+}
 
-    /// The message of rejected track `t`: `"track t: ..."`, the core's own `"track t: "` not repeated.
-    fn message(t: usize, err: &Error) -> String {
-        let prefix = format!("track {t}: ");
-        let text = err.to_string().replacen(&prefix, "", 1);
-        format!("{prefix}{text}")
+/// The message of rejected track `t`: `"track t: ..."`, the core's own `"track t: "` not repeated.
+fn track_message(t: usize, err: &Error) -> String {
+    let prefix = format!("track {t}: ");
+    let text = err.to_string().replacen(&prefix, "", 1);
+    format!("{prefix}{text}")
+}
+
+/// The report and estimate columns of `n` tracks solved with `method`, not started yet.
+pub(crate) fn unstarted<C: EstimateColumns>(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, C)> {
+    Ok((PyBatchReport::unstarted(py, method, C::COST_KIND, n)?, C::unstarted(py, n)?))
+}
+
+/// The rows of every track of `report` and `columns`, for the core's `_into` batches.
+pub(crate) fn rows<'a, C: EstimateColumns>(
+    report: &'a mut PyBatchReport,
+    columns: &'a mut C,
+) -> impl IndexedParallelIterator<Item = (ReportRow<'a>, C::Row<'a>)> {
+    report.rows_mut().zip(columns.rows_mut())
+}
+
+/// Where the core writes each finished track of a batch: its rows of the report and estimate columns
+/// in place, the messages of rejected tracks and the inlier masks of a robust batch aside, until
+/// [`Sink::finish`].
+#[derive(Default)]
+pub(crate) struct Sink {
+    errors: Mutex<Vec<(usize, String)>>,
+    masks: Mutex<Vec<(usize, Vec<bool>)>>,
+}
+
+impl Sink {
+    /// Track `t`'s result into its rows.
+    pub(crate) fn write<C: EstimateColumns>(
+        &self,
+        t: usize,
+        (report, row): (ReportRow, C::Row<'_>),
+        result: pluecker::Result<C::Track>,
+    ) {
+        match result {
+            Ok(track) => {
+                let (solved, mask) = C::write(row, track);
+                if let Some(mask) = mask {
+                    lock(&self.masks).push((t, mask));
+                }
+                report.solved(&solved);
+            }
+            Err(e) => self.reject(t, report, e),
+        }
     }
+
+    /// Track `t`, rejected by the core with `err` ([`ReportRow::rejected`]); its estimate stays NaN.
+    pub(crate) fn reject(&self, t: usize, report: ReportRow, err: Error) {
+        if let Some(message) = report.rejected(t, err) {
+            lock(&self.errors).push(message);
+        }
+    }
+
+    /// The columns of the `n` tracks, those not written not started because of `stopped`.
+    pub(crate) fn finish<C: EstimateColumns>(
+        self,
+        mut report: PyBatchReport,
+        mut columns: C,
+        n: usize,
+        stopped: Option<StopReason>,
+    ) -> (PyBatchReport, C) {
+        if let Some(reason) = stopped {
+            report.not_started_because(reason);
+        }
+        report.set_errors(self.errors.into_inner().unwrap_or_else(|p| p.into_inner()));
+        let masks = self.masks.into_inner().unwrap_or_else(|p| p.into_inner());
+        columns.set_inliers(InlierColumns::from_masks(n, masks));
+        (report, columns)
+    }
+}
+
+/// The vector behind `mutex`, also if a panicking writer poisoned it (the panic is reported anyway).
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|p| p.into_inner())
 }
 
 /// The inlier masks of a robust batch (`TriangulationOptions.outlier_threshold`): each solved track's
@@ -85,18 +171,6 @@ pub(crate) struct InlierColumns {
 }
 
 impl InlierColumns {
-    /// A solved track's mask (`None` when not robust).
-    pub fn push(&mut self, mask: Option<Vec<bool>>) {
-        let mask = mask.unwrap_or_default();
-        self.counts.push(mask.len());
-        self.flags.extend(mask);
-    }
-
-    /// A rejected track: none of its observations is an inlier.
-    pub fn push_missing(&mut self) {
-        self.counts.push(0);
-    }
-
     /// The columns of `n` tracks from the masks of the solved ones, `(track, mask)` in any order.
     pub fn from_masks(n: usize, mut masks: Vec<(usize, Vec<bool>)>) -> InlierColumns {
         masks.sort_unstable_by_key(|(t, _)| *t);
@@ -147,20 +221,6 @@ pack_struct!(InlierColumns {
     laid_out
 });
 
-/// The report columns and the estimate columns of the core's per-track `results` (track `t` is
-/// `results[t]`), solved with `method`.
-pub(crate) fn collect<C: TrackColumns>(method: Method, results: Vec<pluecker::Result<C::Track>>) -> (PyBatchReport, C) {
-    let mut report = PyBatchReport::with_capacity(method, C::COST_KIND, results.len());
-    let mut columns = C::default();
-    for (t, result) in results.into_iter().enumerate() {
-        match result {
-            Ok(track) => report.push(&columns.push(track)),
-            Err(e) => report.reject(&mut columns, t, e),
-        }
-    }
-    (report, columns)
-}
-
 /// The per-track report columns of a batch: the fields of `TriangulationReport`, one entry per track.
 #[pyclass(frozen, subclass, name = "BatchReport", module = "pluecker")]
 #[derive(Debug)]
@@ -169,8 +229,6 @@ pub struct PyBatchReport {
     cost: Vec<f64>,
     /// What each track's cost measures.
     cost_kind: Vec<&'static str>,
-    /// The `cost_kind` of a track without a report (rejected or not started).
-    default_cost_kind: CostKind,
     lower_bound: Vec<f64>,
     raw_lower_bound: Vec<f64>,
     relative_gap: Vec<f64>,
@@ -254,35 +312,34 @@ impl ReportRow<'_> {
     /// cost, the error's status, time 0; the message to keep, except for a track the call was stopped
     /// before (`Error::Interrupted`): `messages` says it from the status, so that stopping a batch of
     /// millions of tracks stays cheap.
-    pub(crate) fn rejected<C: TrackColumns>(self, t: usize, err: Error) -> Option<(usize, String)> {
+    pub(crate) fn rejected(self, t: usize, err: Error) -> Option<(usize, String)> {
         if let Error::Interrupted { reason } = err {
             self.uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, 0);
             return None;
         }
         self.uncertified(f64::NAN, error_status(&err), 0.0, 0);
-        Some((t, C::message(t, &err)))
+        Some((t, track_message(t, &err)))
     }
 }
 
 impl PyBatchReport {
     /// Columns for `n` tracks solved with `method`, costs of kind `cost_kind`, each not started
-    /// (`interrupted`) until its row is written ([`PyBatchReport::rows_mut`]).
-    pub(crate) fn unstarted(method: Method, cost_kind: CostKind, n: usize) -> PyResult<Self> {
+    /// (`interrupted`) until its row is written ([`PyBatchReport::rows_mut`]); allocated as [`column`] does.
+    pub(crate) fn unstarted(py: Python<'_>, method: Method, cost_kind: CostKind, n: usize) -> PyResult<Self> {
         Ok(PyBatchReport {
             method: method.as_str(),
-            cost: column(f64::NAN, n)?,
-            cost_kind: column(cost_kind.as_str(), n)?,
-            default_cost_kind: cost_kind,
-            lower_bound: column(f64::NAN, n)?,
-            raw_lower_bound: column(f64::NAN, n)?,
-            relative_gap: column(f64::NAN, n)?,
-            certified: column(false, n)?,
-            certificate: column(CertificateKind::None.as_str(), n)?,
-            status: column(Status::Interrupted.as_str(), n)?,
-            nodes: column(0, n)?,
-            iterations: column(0, n)?,
-            time_seconds: column(0.0, n)?,
-            residual_dof: column(0, n)?,
+            cost: column(py, f64::NAN, n)?,
+            cost_kind: column(py, cost_kind.as_str(), n)?,
+            lower_bound: column(py, f64::NAN, n)?,
+            raw_lower_bound: column(py, f64::NAN, n)?,
+            relative_gap: column(py, f64::NAN, n)?,
+            certified: column(py, false, n)?,
+            certificate: column(py, CertificateKind::None.as_str(), n)?,
+            status: column(py, Status::Interrupted.as_str(), n)?,
+            nodes: column(py, 0, n)?,
+            iterations: column(py, 0, n)?,
+            time_seconds: column(py, 0.0, n)?,
+            residual_dof: column(py, 0, n)?,
             errors: Vec::new(),
         })
     }
@@ -341,81 +398,20 @@ impl PyBatchReport {
             .for_each(|(s, _)| *s = status);
     }
 
+    /// Every track the linear fast path solved (status `success`, `behind_camera` or `at_infinity`),
+    /// which it does not time one by one, takes `seconds`, the batch's mean.
+    pub(crate) fn time_solved(&mut self, seconds: f64) {
+        let solved = [Status::Success, Status::BehindCamera, Status::AtInfinity].map(|s| s.as_str());
+        (self.time_seconds.par_iter_mut())
+            .zip(self.status.par_iter())
+            .filter(|(_, status)| solved.contains(status))
+            .for_each(|(time, _)| *time = seconds);
+    }
+
     /// The messages of the rejected tracks, `(track, message)` in any order.
     pub(crate) fn set_errors(&mut self, mut errors: Vec<(usize, String)>) {
         errors.sort_unstable_by_key(|(t, _)| *t);
         self.errors = errors;
-    }
-
-    /// Empty columns for `n` tracks solved with `method`, costs of kind `cost_kind`.
-    pub(crate) fn with_capacity(method: Method, cost_kind: CostKind, n: usize) -> Self {
-        PyBatchReport {
-            method: method.as_str(),
-            cost: Vec::with_capacity(n),
-            cost_kind: Vec::with_capacity(n),
-            default_cost_kind: cost_kind,
-            lower_bound: Vec::with_capacity(n),
-            raw_lower_bound: Vec::with_capacity(n),
-            relative_gap: Vec::with_capacity(n),
-            certified: Vec::with_capacity(n),
-            certificate: Vec::with_capacity(n),
-            status: Vec::with_capacity(n),
-            nodes: Vec::with_capacity(n),
-            iterations: Vec::with_capacity(n),
-            time_seconds: Vec::with_capacity(n),
-            residual_dof: Vec::with_capacity(n),
-            errors: Vec::new(),
-        }
-    }
-
-    /// A new last row, to write.
-    fn push_row(&mut self) -> ReportRow<'_> {
-        self.cost.push(f64::NAN);
-        self.cost_kind.push(self.default_cost_kind.as_str());
-        self.lower_bound.push(0.0);
-        self.raw_lower_bound.push(f64::NAN);
-        self.relative_gap.push(1.0);
-        self.certified.push(false);
-        self.certificate.push(CertificateKind::None.as_str());
-        self.status.push(Status::Interrupted.as_str());
-        self.nodes.push(0);
-        self.iterations.push(0);
-        self.time_seconds.push(0.0);
-        self.residual_dof.push(0);
-        let last = self.cost.len() - 1;
-        ReportRow {
-            cost: &mut self.cost[last],
-            cost_kind: &mut self.cost_kind[last],
-            lower_bound: &mut self.lower_bound[last],
-            raw_lower_bound: &mut self.raw_lower_bound[last],
-            relative_gap: &mut self.relative_gap[last],
-            certified: &mut self.certified[last],
-            certificate: &mut self.certificate[last],
-            status: &mut self.status[last],
-            nodes: &mut self.nodes[last],
-            iterations: &mut self.iterations[last],
-            time_seconds: &mut self.time_seconds[last],
-            residual_dof: &mut self.residual_dof[last],
-        }
-    }
-
-    /// Appends a solved track's report.
-    pub(crate) fn push(&mut self, report: &Report) {
-        self.push_row().solved(report);
-    }
-
-    /// Appends a track without a certificate ([`ReportRow::uncertified`]).
-    pub(crate) fn push_uncertified(&mut self, cost: f64, status: &'static str, seconds: f64, residual_dof: usize) {
-        self.push_row().uncertified(cost, status, seconds, residual_dof);
-    }
-
-    /// Appends track `t`, rejected by the core with `err` ([`ReportRow::rejected`]), and NaN
-    /// estimates.
-    pub(crate) fn reject<C: TrackColumns>(&mut self, columns: &mut C, t: usize, err: Error) {
-        if let Some(message) = self.push_row().rejected::<C>(t, err) {
-            self.errors.push(message);
-        }
-        columns.push_missing();
     }
 
     pub(crate) fn len(&self) -> usize {
@@ -516,7 +512,6 @@ pack_struct!(PyBatchReport {
     method,
     cost,
     cost_kind,
-    default_cost_kind,
     lower_bound,
     raw_lower_bound,
     relative_gap,
@@ -531,13 +526,17 @@ pack_struct!(PyBatchReport {
 });
 
 /// An output column of `n` copies of `value`; a `MemoryError` rather than an abort when it cannot be
-/// allocated.
-pub(crate) fn column<T: Clone>(value: T, n: usize) -> PyResult<Vec<T>> {
+/// allocated. Filled (its pages touched) a chunk at a time with the GIL released, Python's signal
+/// handlers running between chunks ([`crate::interrupt::in_chunks`]).
+pub(crate) fn column<T: Clone + Send + Sync>(py: Python<'_>, value: T, n: usize) -> PyResult<Vec<T>> {
     let mut entries = Vec::new();
     entries
         .try_reserve_exact(n)
         .map_err(|_| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))?;
-    entries.resize(n, value);
+    in_chunks(py, n, |chunk| {
+        py.allow_threads(|| entries.resize(chunk.end, value.clone()));
+        Ok(())
+    })?;
     Ok(entries)
 }
 
@@ -548,15 +547,14 @@ pub(crate) fn row_major<const R: usize, const C: usize>(
     (0..R).flat_map(move |i| (0..C).map(move |j| m[(i, j)]))
 }
 
-/// Appends one track's `N x N` covariance in row-major order to a batch column, or `N²` NaNs when the
-/// track has none.
-pub(crate) fn push_covariance<const N: usize>(
-    column: &mut Vec<f64>,
-    covariance: Option<&nalgebra::SMatrix<f64, N, N>>,
+/// A matrix's entries in row-major order into `entries` (a track's part of a column); left as they are
+/// (NaN) when there is none.
+pub(crate) fn write_row_major<const R: usize, const C: usize>(
+    entries: &mut [f64],
+    matrix: Option<&nalgebra::SMatrix<f64, R, C>>,
 ) {
-    match covariance {
-        Some(c) => column.extend(row_major(c)),
-        None => column.extend(std::iter::repeat(f64::NAN).take(N * N)),
+    if let Some(m) = matrix {
+        entries.iter_mut().zip(row_major(m)).for_each(|(e, v)| *e = v);
     }
 }
 

@@ -7,7 +7,8 @@
 //! shared `(v, 3, 4)` or per track `(n, v, 3, 4)` ([`super::batch::Cameras`]).
 
 use super::batch::{
-    collect, per_observation, push_covariance, row_major, Cameras, InlierColumns, PyBatchReport, TrackColumns,
+    self, column, per_observation, rows, unstarted, write_row_major, Cameras, EstimateColumns, InlierColumns,
+    PyBatchReport, Sink,
 };
 use super::point::views_of;
 use super::report::PyTriangulationReport;
@@ -22,17 +23,20 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
+use pluecker::interrupt::StopReason;
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
 };
 use pluecker::triangulation::line::{
-    triangulate_line_observations as core_line_observations,
-    triangulate_line_observations_views as core_line_observations_views, triangulate_lines as core_lines, ImageLines,
-    LineTracks, SparseLineTracks, SparseSegmentTracks,
+    triangulate_line_observations_into as core_line_observations,
+    triangulate_line_observations_views_into as core_line_observations_views, triangulate_lines_into as core_lines,
+    ImageLines, LineTracks, SparseLineTracks, SparseSegmentTracks,
 };
 use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
+use rayon::prelude::*;
 
 /// A triangulated 3-D line: Plücker coordinates, a point, a unit direction, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "LineTriangulation", module = "pluecker")]
@@ -273,27 +277,62 @@ pub struct PyLineTriangulations {
     inliers: InlierColumns,
 }
 
-impl TrackColumns for PyLineTriangulations {
+/// One track's entries of the line columns, written in place.
+pub(crate) struct LineRow<'a> {
+    plucker: &'a mut [f64],
+    point: &'a mut [f64],
+    direction: &'a mut [f64],
+    chart_axes: &'a mut [f64],
+    covariance: &'a mut [f64],
+}
+
+impl EstimateColumns for PyLineTriangulations {
     type Track = LineTriangulation;
     const COST_KIND: CostKind = CostKind::LineResidual;
+    type Row<'a> = LineRow<'a>;
 
-    fn push(&mut self, track: LineTriangulation) -> Report {
-        self.plucker.extend_from_slice(track.plucker.coordinates().as_slice());
-        self.point.extend_from_slice(track.point.as_slice());
-        self.direction.extend_from_slice(track.direction.as_slice());
-        self.chart_axes.extend(row_major(&chart_axes(&track.chart)));
-        push_covariance(&mut self.covariance, track.covariance.as_ref());
-        self.inliers.push(track.inliers);
-        track.report
+    fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
+        let entries = |per_track: usize| {
+            let total = n.checked_mul(per_track);
+            total.ok_or_else(|| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))
+        };
+        Ok(PyLineTriangulations {
+            plucker: column(py, f64::NAN, entries(6)?)?,
+            point: column(py, f64::NAN, entries(3)?)?,
+            direction: column(py, f64::NAN, entries(3)?)?,
+            chart_axes: column(py, f64::NAN, entries(6)?)?,
+            covariance: column(py, f64::NAN, entries(16)?)?,
+            inliers: InlierColumns::default(),
+        })
     }
 
-    fn push_missing(&mut self) {
-        self.plucker.extend([f64::NAN; 6]);
-        self.point.extend([f64::NAN; 3]);
-        self.direction.extend([f64::NAN; 3]);
-        self.chart_axes.extend([f64::NAN; 6]);
-        push_covariance::<4>(&mut self.covariance, None);
-        self.inliers.push_missing();
+    fn rows_mut(&mut self) -> impl IndexedParallelIterator<Item = LineRow<'_>> {
+        let lines = (self.plucker.par_chunks_mut(6))
+            .zip(self.point.par_chunks_mut(3))
+            .zip(self.direction.par_chunks_mut(3));
+        let uncertainty = (self.chart_axes.par_chunks_mut(6)).zip(self.covariance.par_chunks_mut(16));
+        lines
+            .zip(uncertainty)
+            .map(|(((plucker, point), direction), (chart_axes, covariance))| LineRow {
+                plucker,
+                point,
+                direction,
+                chart_axes,
+                covariance,
+            })
+    }
+
+    fn write(row: LineRow<'_>, track: LineTriangulation) -> (Report, Option<Vec<bool>>) {
+        row.plucker.copy_from_slice(track.plucker.coordinates().as_slice());
+        row.point.copy_from_slice(track.point.as_slice());
+        row.direction.copy_from_slice(track.direction.as_slice());
+        write_row_major(row.chart_axes, Some(&chart_axes(&track.chart)));
+        write_row_major(row.covariance, track.covariance.as_ref());
+        (track.report, track.inliers)
+    }
+
+    fn set_inliers(&mut self, inliers: InlierColumns) {
+        self.inliers = inliers;
     }
 }
 
@@ -394,14 +433,24 @@ pub fn triangulate_lines(
         .map(|c| per_observation("covariances", c, n, v, [2, 2]))
         .transpose()?;
     let sigma = sigma.unwrap_or(1.0);
+    let (mut report, mut columns) = unstarted::<PyLineTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = LineTracks {
             lines: image_lines_of(&values, segments, sigma),
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let results = core_lines(cams.core(), &tracks, &opts, Some(done))?;
-        let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
+        let sink = Sink::default();
+        let write = |t, row, r| sink.write::<PyLineTriangulations>(t, row, r);
+        let stopped = core_lines(
+            cams.core(),
+            &tracks,
+            &opts,
+            Some(done),
+            rows(&mut report, &mut columns),
+            write,
+        )?;
+        let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             let visible = mask.as_deref();
             (columns.inliers).scatter(vec![n, v], |t| InlierColumns::dense_positions(visible, v, t));
@@ -466,17 +515,20 @@ pub fn triangulate_line_observations(
             }),
             (None, None) => None,
         };
+        let (mut report, mut columns) = unstarted::<PyLineTriangulations>(py, opts.method, rows.tracks())?;
         let outcome = run_interruptible(py, progress, budget, false, move |done| {
             let tracks = SparseSegmentTracks {
                 csr: rows.csr(),
                 lines: &values,
                 covariances: covariances.as_deref(),
             };
-            sparse_columns(
-                &rows,
-                &opts,
-                core_line_observations_views(&views, &tracks, &opts, Some(done)),
-            )
+            let sink = Sink::default();
+            let write = |t, row, r: pluecker::Result<_>| {
+                sink.write::<PyLineTriangulations>(t, row, r.map_err(|e| rows.restate(e)))
+            };
+            let out = batch::rows(&mut report, &mut columns);
+            let stopped = core_line_observations_views(&views, &tracks, &opts, Some(done), out, write)?;
+            Ok(sparse_finish(&rows, &opts, sink, report, columns, stopped))
         })?;
         return batch_result(py, outcome);
     }
@@ -487,31 +539,38 @@ pub fn triangulate_line_observations(
         .map(|c| rows.per_row("covariances", c, &[2, 2]))
         .transpose()?;
     let sigma = sigma.unwrap_or(1.0);
+    let (mut report, mut columns) = unstarted::<PyLineTriangulations>(py, opts.method, rows.tracks())?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = SparseLineTracks {
             csr: rows.csr(),
             lines: image_lines_of(&values, segments, sigma),
             covariances: covariances.as_deref(),
         };
-        sparse_columns(&rows, &opts, core_line_observations(&cams, &tracks, &opts, Some(done)))
+        let sink = Sink::default();
+        let write =
+            |t, row, r: pluecker::Result<_>| sink.write::<PyLineTriangulations>(t, row, r.map_err(|e| rows.restate(e)));
+        let out = batch::rows(&mut report, &mut columns);
+        let stopped = core_line_observations(&cams, &tracks, &opts, Some(done), out, write)?;
+        Ok(sparse_finish(&rows, &opts, sink, report, columns, stopped))
     })?;
     batch_result(py, outcome)
 }
 
-/// The per-track results of a sparse solve as the batch's columns: errors named by the user's rows, and
-/// with an outlier threshold each observation's inlier flag put back on its row.
-fn sparse_columns(
+/// The columns of a sparse batch written through `sink`: with an outlier threshold each observation's
+/// inlier flag put back on its row.
+fn sparse_finish(
     rows: &SortedRows,
     opts: &TriangulationOptions,
-    results: pluecker::Result<Vec<pluecker::Result<LineTriangulation>>>,
-) -> pluecker::Result<(PyBatchReport, PyLineTriangulations)> {
-    let results = results?;
-    let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
-    let (report, mut columns) = collect::<PyLineTriangulations>(opts.method, results);
+    sink: Sink,
+    report: PyBatchReport,
+    columns: PyLineTriangulations,
+    stopped: Option<StopReason>,
+) -> (PyBatchReport, PyLineTriangulations) {
+    let (report, mut columns) = sink.finish(report, columns, rows.tracks(), stopped);
     if opts.outlier_threshold.is_some() {
         columns.inliers.scatter(vec![rows.len()], |t| rows.rows_of(t));
     }
-    Ok((report, columns))
+    (report, columns)
 }
 
 pack_struct!(PyLineTriangulation {

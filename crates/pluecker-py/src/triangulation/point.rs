@@ -6,10 +6,12 @@
 //! The batch's numpy arrays go to the core as flat row-major slices (`PointTracks`), one copy each.
 //! A track the core rejects (NaN in a visible view, fewer than two visible views, a covariance that
 //! is not positive definite, ...) gets an error status and a message and never stops the others.
-//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear`).
+//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear_into`), written
+//! into the same preallocated columns.
 
 use super::batch::{
-    column, per_observation, push_covariance, row_major, InlierColumns, PyBatchReport, ReportRow, TrackColumns,
+    self, column, per_observation, rows, unstarted, write_row_major, EstimateColumns, InlierColumns, PyBatchReport,
+    ReportRow, Sink,
 };
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
@@ -25,13 +27,13 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
-use pluecker::interrupt::StopReason;
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
 };
 use pluecker::triangulation::point::{
     triangulate_point_observations_into, triangulate_point_observations_views_into,
-    triangulate_points_into as core_points, triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
+    triangulate_points_into as core_points, triangulate_points_linear_into, LinearTrack, PointTracks,
+    SparsePointTracks,
 };
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
@@ -42,7 +44,6 @@ use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
-use std::sync::Mutex;
 use std::time::Instant;
 
 /// A triangulated point: the estimate `X` and the report fields of `TriangulationReport`.
@@ -153,89 +154,30 @@ pub struct PyPointTriangulations {
     inliers: InlierColumns,
 }
 
-impl TrackColumns for PyPointTriangulations {
-    type Track = PointTriangulation;
-    const COST_KIND: CostKind = CostKind::Reprojection;
-
-    fn push(&mut self, track: PointTriangulation) -> Report {
-        self.x.extend_from_slice(track.point.as_slice());
-        push_covariance(&mut self.covariance, track.covariance.as_ref());
-        self.inliers.push(track.inliers);
-        track.report
-    }
-
-    fn push_missing(&mut self) {
-        self.x.extend([f64::NAN; 3]);
-        push_covariance::<3>(&mut self.covariance, None);
-        self.inliers.push_missing();
-    }
-}
-
 /// One track's entries of the point columns, written in place.
-struct PointRow<'a> {
+pub(crate) struct PointRow<'a> {
     x: &'a mut [f64],
     covariance: &'a mut [f64],
 }
 
-/// Where the core writes each finished track of a point batch ([`triangulate_points_into`]): the
-/// report and point columns in place, the messages of rejected tracks and the inlier masks of a
-/// robust batch aside, until [`PointSink::finish`].
-#[derive(Default)]
-struct PointSink {
-    errors: Mutex<Vec<(usize, String)>>,
-    masks: Mutex<Vec<(usize, Vec<bool>)>>,
-}
-
-impl PointSink {
-    fn write(&self, t: usize, (report, point): (ReportRow, PointRow), result: Result<PointTriangulation, Error>) {
-        match result {
-            Ok(track) => {
-                point.x.copy_from_slice(track.point.as_slice());
-                if let Some(c) = &track.covariance {
-                    point.covariance.iter_mut().zip(row_major(c)).for_each(|(e, v)| *e = v);
-                }
-                if let Some(mask) = track.inliers {
-                    lock(&self.masks).push((t, mask));
-                }
-                report.solved(&track.report);
-            }
-            Err(e) => {
-                if let Some(message) = report.rejected::<PyPointTriangulations>(t, e) {
-                    lock(&self.errors).push(message);
-                }
-            }
-        }
-    }
-
-    /// The columns of the `n` tracks, those not written not started because of `stopped`.
-    fn finish(
-        self,
-        mut report: PyBatchReport,
-        mut columns: PyPointTriangulations,
-        n: usize,
-        stopped: Option<StopReason>,
-    ) -> (PyBatchReport, PyPointTriangulations) {
-        if let Some(reason) = stopped {
-            report.not_started_because(reason);
-        }
-        report.set_errors(self.errors.into_inner().unwrap_or_else(|p| p.into_inner()));
-        columns.inliers = InlierColumns::from_masks(n, self.masks.into_inner().unwrap_or_else(|p| p.into_inner()));
-        (report, columns)
+impl PointRow<'_> {
+    /// The point and its covariance (left NaN when there is none).
+    fn write(self, x: &Vector3<f64>, covariance: Option<&Matrix3<f64>>) {
+        self.x.copy_from_slice(x.as_slice());
+        write_row_major(self.covariance, covariance);
     }
 }
 
-/// The vector behind `mutex`, also if a panicking writer poisoned it (the panic is reported anyway).
-fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    mutex.lock().unwrap_or_else(|p| p.into_inner())
-}
+impl EstimateColumns for PyPointTriangulations {
+    type Track = PointTriangulation;
+    const COST_KIND: CostKind = CostKind::Reprojection;
+    type Row<'a> = PointRow<'a>;
 
-impl PyPointTriangulations {
-    /// Columns for `n` tracks, NaN until written ([`PyPointTriangulations::rows_mut`]).
-    fn unstarted(n: usize) -> PyResult<Self> {
+    fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
         let too_many = || PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks"));
         Ok(PyPointTriangulations {
-            x: column(f64::NAN, n.checked_mul(3).ok_or_else(too_many)?)?,
-            covariance: column(f64::NAN, n.checked_mul(9).ok_or_else(too_many)?)?,
+            x: column(py, f64::NAN, n.checked_mul(3).ok_or_else(too_many)?)?,
+            covariance: column(py, f64::NAN, n.checked_mul(9).ok_or_else(too_many)?)?,
             inliers: InlierColumns::default(),
         })
     }
@@ -246,29 +188,25 @@ impl PyPointTriangulations {
             .map(|(x, covariance)| PointRow { x, covariance })
     }
 
-    /// The report and point columns of the core's linear fast path: no certificates, and every
-    /// track timed at the batch's mean `seconds`.
-    fn linear(points: LinearPoints, seconds: f64) -> (PyBatchReport, Self) {
-        let n = points.outcomes.len();
-        let mut report = PyBatchReport::with_capacity(Method::Linear, Self::COST_KIND, n);
-        let mut columns = PyPointTriangulations {
-            x: Vec::with_capacity(3 * n),
-            covariance: Vec::with_capacity(9 * n),
-            ..Default::default()
-        };
-        for (t, outcome) in points.outcomes.into_iter().enumerate() {
-            match outcome {
-                Ok(status) => {
-                    report.push_uncertified(points.costs[t], status.as_str(), seconds, points.residual_dofs[t]);
-                    columns.x.extend_from_slice(&points.points[3 * t..3 * t + 3]);
-                    columns
-                        .covariance
-                        .extend_from_slice(&points.covariances[9 * t..9 * t + 9]);
-                }
-                Err(e) => report.reject(&mut columns, t, e),
-            }
+    fn write(row: PointRow<'_>, track: PointTriangulation) -> (Report, Option<Vec<bool>>) {
+        row.write(&track.point, track.covariance.as_ref());
+        (track.report, track.inliers)
+    }
+
+    fn set_inliers(&mut self, inliers: InlierColumns) {
+        self.inliers = inliers;
+    }
+}
+
+/// A track of the linear fast path into its rows: no certificate, timed later
+/// ([`PyBatchReport::time_solved`]).
+fn write_linear(sink: &Sink, t: usize, (report, point): (ReportRow, PointRow), result: Result<LinearTrack, Error>) {
+    match result {
+        Ok(track) => {
+            point.write(&track.point, track.covariance.as_ref());
+            report.uncertified(track.cost, track.status.as_str(), 0.0, track.residual_dof);
         }
-        (report, columns)
+        Err(e) => sink.reject(t, report, e),
     }
 }
 
@@ -342,29 +280,33 @@ pub fn triangulate_points(
         .transpose()?;
     // The linear and local solves of a few thousand observations end within milliseconds.
     let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
-    let written = match opts.method {
-        Method::Linear => None,
-        _ => Some(unstarted(py, opts.method, n)?),
-    };
+    let (mut report, mut columns) = unstarted::<PyPointTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, short, move |done| {
         let tracks = PointTracks {
             observations: &pixels,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
+        let sink = Sink::default();
         if opts.method == Method::Linear {
             let started = Instant::now();
-            let linear = triangulate_points_linear(&cams, &tracks)?;
-            // The fast path does not time tracks one by one: each gets the batch's mean.
-            let mean = started.elapsed().as_secs_f64() / n.max(1) as f64;
-            done.store(n, Ordering::Relaxed);
-            return Ok(PyPointTriangulations::linear(linear, mean));
+            let write = |t, row, r| write_linear(&sink, t, row, r);
+            let stopped =
+                triangulate_points_linear_into(&cams, &tracks, Some(done), rows(&mut report, &mut columns), write)?;
+            // The fast path does not time tracks one by one: each solved one gets the batch's mean.
+            let written = done.load(Ordering::Relaxed).max(1);
+            report.time_solved(started.elapsed().as_secs_f64() / written as f64);
+            return Ok(sink.finish(report, columns, n, stopped));
         }
-        let (mut report, mut columns) = written.expect("allocated for every method but linear");
-        let sink = PointSink::default();
-        let rows = report.rows_mut().zip(columns.rows_mut());
-        let write = |t, row, r| sink.write(t, row, r);
-        let stopped = core_points(&cams, &tracks, &opts, Some(done), rows, write)?;
+        let write = |t, row, r| sink.write::<PyPointTriangulations>(t, row, r);
+        let stopped = core_points(
+            &cams,
+            &tracks,
+            &opts,
+            Some(done),
+            rows(&mut report, &mut columns),
+            write,
+        )?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
@@ -415,17 +357,18 @@ pub fn triangulate_point_observations(
     let covariances = covariances
         .map(|c| rows.per_row("covariances", c, &[2, 2]))
         .transpose()?;
-    let n = rows.offsets.len() - 1;
-    let (mut report, mut columns) = unstarted(py, opts.method, n)?;
+    let n = rows.tracks();
+    let (mut report, mut columns) = unstarted::<PyPointTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let sparse = SparsePointTracks {
             csr: rows.csr(),
             observations: &pixels,
             covariances: covariances.as_deref(),
         };
-        let sink = PointSink::default();
-        let out = report.rows_mut().zip(columns.rows_mut());
-        let write = |t, row, r: Result<_, Error>| sink.write(t, row, r.map_err(|e| rows.restate(e)));
+        let sink = Sink::default();
+        let out = batch::rows(&mut report, &mut columns);
+        let write =
+            |t, row, r: Result<_, Error>| sink.write::<PyPointTriangulations>(t, row, r.map_err(|e| rows.restate(e)));
         let stopped = match &views {
             Some(views) => triangulate_point_observations_views_into(views, &sparse, &opts, Some(done), out, write),
             None => triangulate_point_observations_into(&cams, &sparse, &opts, Some(done), out, write),
@@ -482,17 +425,6 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
             })
         })
         .collect()
-}
-
-/// The report and point columns of `n` tracks not started yet (allocated and filled with the GIL
-/// released), for the core to write each track into as it finishes ([`PointSink`]).
-fn unstarted(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, PyPointTriangulations)> {
-    py.allow_threads(|| {
-        Ok((
-            PyBatchReport::unstarted(method, PyPointTriangulations::COST_KIND, n)?,
-            PyPointTriangulations::unstarted(n)?,
-        ))
-    })
 }
 
 pack_struct!(PyPointTriangulations { x, covariance, inliers });

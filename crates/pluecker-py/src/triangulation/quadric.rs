@@ -3,7 +3,9 @@
 //! batch with the GIL released) with `pluecker.QuadricTriangulations`, column arrays beside the
 //! per-track report columns of `pluecker.BatchReport` ([`super::batch`]).
 
-use super::batch::{collect, per_observation, push_covariance, row_major, Cameras, PyBatchReport, TrackColumns};
+use super::batch::{
+    self, column, per_observation, rows, unstarted, write_row_major, Cameras, EstimateColumns, PyBatchReport, Sink,
+};
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, PyTriangulationOptions};
@@ -16,13 +18,15 @@ use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
 };
 use pluecker::triangulation::quadric::{
-    triangulate_quadric_observations as core_quadric_observations, triangulate_quadrics as core_quadrics,
+    triangulate_quadric_observations_into as core_quadric_observations, triangulate_quadrics_into as core_quadrics,
     QuadricTracks, SparseQuadricTracks,
 };
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{CostKind, Primitive, Report};
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
+use rayon::prelude::*;
 
 /// A triangulated ellipsoid: dual and primal quadric, centre, axes, semi-axes, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "QuadricTriangulation", module = "pluecker")]
@@ -145,30 +149,61 @@ pub struct PyQuadricTriangulations {
     covariance: Vec<f64>,
 }
 
-impl TrackColumns for PyQuadricTriangulations {
+/// One track's entries of the quadric columns, written in place.
+pub(crate) struct QuadricRow<'a> {
+    dual: &'a mut [f64],
+    primal: &'a mut [f64],
+    centre: &'a mut [f64],
+    semi_axes: &'a mut [f64],
+    axes: &'a mut [f64],
+    covariance: &'a mut [f64],
+}
+
+impl EstimateColumns for PyQuadricTriangulations {
     type Track = QuadricTriangulation;
     const COST_KIND: CostKind = CostKind::ConicResidual;
+    type Row<'a> = QuadricRow<'a>;
 
-    fn push(&mut self, track: QuadricTriangulation) -> Report {
-        self.dual.extend(row_major(&track.dual));
-        match &track.primal {
-            Some(p) => self.primal.extend(row_major(p)),
-            None => self.primal.extend([f64::NAN; 16]),
-        }
-        self.centre.extend_from_slice(track.centre.as_slice());
-        self.semi_axes.extend_from_slice(track.semi_axes.as_slice());
-        self.axes.extend(row_major(&track.axes));
-        push_covariance(&mut self.covariance, track.covariance.as_ref());
-        track.report
+    fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
+        let entries = |per_track: usize| {
+            let total = n.checked_mul(per_track);
+            total.ok_or_else(|| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))
+        };
+        Ok(PyQuadricTriangulations {
+            dual: column(py, f64::NAN, entries(16)?)?,
+            primal: column(py, f64::NAN, entries(16)?)?,
+            centre: column(py, f64::NAN, entries(3)?)?,
+            semi_axes: column(py, f64::NAN, entries(3)?)?,
+            axes: column(py, f64::NAN, entries(9)?)?,
+            covariance: column(py, f64::NAN, entries(81)?)?,
+        })
     }
 
-    fn push_missing(&mut self) {
-        self.dual.extend([f64::NAN; 16]);
-        self.primal.extend([f64::NAN; 16]);
-        self.centre.extend([f64::NAN; 3]);
-        self.semi_axes.extend([f64::NAN; 3]);
-        self.axes.extend([f64::NAN; 9]);
-        push_covariance::<9>(&mut self.covariance, None);
+    fn rows_mut(&mut self) -> impl IndexedParallelIterator<Item = QuadricRow<'_>> {
+        let quadrics = (self.dual.par_chunks_mut(16)).zip(self.primal.par_chunks_mut(16));
+        let shapes = (self.centre.par_chunks_mut(3))
+            .zip(self.semi_axes.par_chunks_mut(3))
+            .zip(self.axes.par_chunks_mut(9));
+        (quadrics.zip(shapes)).zip(self.covariance.par_chunks_mut(81)).map(
+            |(((dual, primal), ((centre, semi_axes), axes)), covariance)| QuadricRow {
+                dual,
+                primal,
+                centre,
+                semi_axes,
+                axes,
+                covariance,
+            },
+        )
+    }
+
+    fn write(row: QuadricRow<'_>, track: QuadricTriangulation) -> (Report, Option<Vec<bool>>) {
+        write_row_major(row.dual, Some(&track.dual));
+        write_row_major(row.primal, track.primal.as_ref());
+        row.centre.copy_from_slice(track.centre.as_slice());
+        row.semi_axes.copy_from_slice(track.semi_axes.as_slice());
+        write_row_major(row.axes, Some(&track.axes));
+        write_row_major(row.covariance, track.covariance.as_ref());
+        (track.report, None)
     }
 }
 
@@ -223,14 +258,24 @@ pub fn triangulate_quadrics(
     let covariances = covariances
         .map(|c| per_observation("covariances", c, n, v, [5, 5]))
         .transpose()?;
+    let (mut report, mut columns) = unstarted::<PyQuadricTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = QuadricTracks {
             conics: &values,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
         };
-        let results = core_quadrics(cams.core(), &tracks, &opts, Some(done))?;
-        Ok(collect::<PyQuadricTriangulations>(opts.method, results))
+        let sink = Sink::default();
+        let write = |t, row, r| sink.write::<PyQuadricTriangulations>(t, row, r);
+        let stopped = core_quadrics(
+            cams.core(),
+            &tracks,
+            &opts,
+            Some(done),
+            rows(&mut report, &mut columns),
+            write,
+        )?;
+        Ok(sink.finish(report, columns, n, stopped))
     })?;
     batch_result(py, outcome)
 }
@@ -262,15 +307,21 @@ pub fn triangulate_quadric_observations(
     let covariances = covariances
         .map(|c| rows.per_row("covariances", c, &[5, 5]))
         .transpose()?;
+    let n = rows.tracks();
+    let (mut report, mut columns) = unstarted::<PyQuadricTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
         let tracks = SparseQuadricTracks {
             csr: rows.csr(),
             conics: &values,
             covariances: covariances.as_deref(),
         };
-        let results = core_quadric_observations(&cams, &tracks, &opts, Some(done))?;
-        let results = results.into_iter().map(|r| r.map_err(|e| rows.restate(e))).collect();
-        Ok(collect::<PyQuadricTriangulations>(opts.method, results))
+        let sink = Sink::default();
+        let write = |t, row, r: pluecker::Result<_>| {
+            sink.write::<PyQuadricTriangulations>(t, row, r.map_err(|e| rows.restate(e)))
+        };
+        let out = batch::rows(&mut report, &mut columns);
+        let stopped = core_quadric_observations(&cams, &tracks, &opts, Some(done), out, write)?;
+        Ok(sink.finish(report, columns, n, stopped))
     })?;
     batch_result(py, outcome)
 }

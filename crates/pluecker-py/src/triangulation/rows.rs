@@ -1,10 +1,12 @@
 //! Observations given one per row, as COLMAP lists them (`track`, `image` and the row's data): the
 //! shared reading and the stable counting sort into the core's compressed rows ([`Csr`]), used by
 //! `triangulate_point_observations`, `triangulate_line_observations` and
-//! `triangulate_quadric_observations`.
+//! `triangulate_quadric_observations`. The sort and the gathering of the rows run a chunk of rows at
+//! a time, Python's signal handlers running between chunks ([`crate::interrupt::setup_poll`]).
 
 use crate::convert::{read, Dim, Integer};
 use crate::errors::{invalid_argument, shape_error};
+use crate::interrupt::in_chunks;
 use pluecker::testing::number;
 use pluecker::triangulation::Csr;
 use pluecker::Error;
@@ -132,22 +134,42 @@ impl SortedRows {
             Some(n) => n,
             None => used,
         };
+        let py = track.py();
         let mut offsets = vec![0usize; n + 1];
-        tracks.iter().for_each(|&t| offsets[t + 1] += 1);
+        in_chunks(py, m, |rows| {
+            tracks[rows].iter().for_each(|&t| offsets[t + 1] += 1);
+            Ok(())
+        })?;
         (0..n).for_each(|t| offsets[t + 1] += offsets[t]);
         let mut next = offsets.clone();
         let mut order = vec![0usize; m];
-        for (k, &t) in tracks.iter().enumerate() {
-            order[next[t]] = k;
-            next[t] += 1;
-        }
-        let images = order.iter().map(|&k| images[k]).collect();
-        Ok(SortedRows { offsets, images, order })
+        in_chunks(py, m, |rows| {
+            for k in rows {
+                order[next[tracks[k]]] = k;
+                next[tracks[k]] += 1;
+            }
+            Ok(())
+        })?;
+        let mut sorted_images = Vec::with_capacity(m);
+        in_chunks(py, m, |rows| {
+            sorted_images.extend(order[rows].iter().map(|&k| images[k]));
+            Ok(())
+        })?;
+        Ok(SortedRows {
+            offsets,
+            images: sorted_images,
+            order,
+        })
     }
 
     /// The number of rows, `m`.
     pub fn len(&self) -> usize {
         self.order.len()
+    }
+
+    /// The number of tracks, `n`.
+    pub fn tracks(&self) -> usize {
+        self.offsets.len() - 1
     }
 
     /// The core's view of the sorted rows.
@@ -159,11 +181,15 @@ impl SortedRows {
     }
 
     /// `values` (`per_row` per row as given) in sorted order.
-    pub fn gather(&self, values: &[f64], per_row: usize) -> Vec<f64> {
-        self.order
-            .iter()
-            .flat_map(|&k| values[per_row * k..per_row * (k + 1)].iter().copied())
-            .collect()
+    fn gather(&self, py: Python<'_>, values: &[f64], per_row: usize) -> PyResult<Vec<f64>> {
+        let mut sorted = Vec::with_capacity(values.len());
+        in_chunks(py, self.order.len(), |rows| {
+            for &k in &self.order[rows] {
+                sorted.extend_from_slice(&values[per_row * k..per_row * (k + 1)]);
+            }
+            Ok(())
+        })?;
+        Ok(sorted)
     }
 
     /// The rows as given of track `t`, in its order.
@@ -194,6 +220,6 @@ impl SortedRows {
         spec.extend(tail.iter().map(|&d| Dim::Fixed(d)));
         let (shape, values) = read(name, obj, &spec)?;
         same_count_as(name, shape[0], self.len())?;
-        Ok(self.gather(&values, tail.iter().product()))
+        self.gather(obj.py(), &values, tail.iter().product())
     }
 }

@@ -225,6 +225,18 @@ where
         .err()
 }
 
+/// The output rows of a batch of `n` tracks number `rows`: an error of the caller's, not the data's.
+pub(crate) fn check_rows(rows: usize, n: usize) -> Result<()> {
+    if rows == n {
+        return Ok(());
+    }
+    Err(Error::Shape {
+        what: "rows".into(),
+        expected: format!("one output row per track ({n})"),
+        actual: rows.to_string(),
+    })
+}
+
 /// `one(t)`, or `Err(Error::Interrupted)` when the installed stop has fired.
 fn unless_stopped<X>(t: usize, one: impl Fn(usize) -> Result<X>) -> Result<X> {
     match stop_reason() {

@@ -17,12 +17,15 @@
 
 use super::{lines_from_segments, triangulate_line, triangulate_line_segments_views, LineTriangulation};
 use crate::error::{Error, Result};
+use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{
-    check_mask, check_values, dense_observations, in_track, solve_tracks, too_few, track_count, Csr, TrackCameras,
+    check_mask, check_rows, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few,
+    track_count, Csr, TrackCameras,
 };
 use crate::triangulation::views::{validate_cameras, View};
 use crate::triangulation::TriangulationOptions;
 use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
+use rayon::prelude::*;
 use std::sync::atomic::AtomicUsize;
 
 /// The image lines of a batch, one entry per track and view (row-major, track-major: the entry of
@@ -157,14 +160,42 @@ pub fn triangulate_lines(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
+    let (n, one) = dense_solver(projections, tracks, opts)?;
+    // A track takes from a millisecond to seconds: one track per rayon task balances the load.
+    Ok(solve_tracks(n, 1, progress, one))
+}
+
+/// [`triangulate_lines`] handing each track's result to `write(t, row, result)` as it finishes, with
+/// row `t` of `rows` (one per track), instead of collecting them: a stopped batch does not hand the
+/// tracks it had not started to `write` and returns why (`Ok(None)`: every track was written), as
+/// [`crate::triangulation::point::triangulate_points_into`] does.
+pub fn triangulate_lines_into<R: Send>(
+    projections: TrackCameras,
+    tracks: &LineTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<LineTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = dense_solver(projections, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 1, progress, one, write))
+}
+
+/// The number of tracks of a dense batch, checked, and the solve of track `t`.
+fn dense_solver<'a>(
+    projections: TrackCameras<'a>,
+    tracks: &'a LineTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<LineTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     let n = check_batch(&projections, tracks)?;
     let v = projections.views();
-    // A track takes from a millisecond to seconds: one track per rayon task balances the load.
-    Ok(solve_tracks(n, 1, progress, |t| {
+    let one = move |t| {
         let seen = dense_observations(tracks.visible, v, t);
         line_track(&projections, &tracks.lines, tracks.covariances, t, &seen, opts)
-    }))
+    };
+    Ok((n, one))
 }
 
 /// Line tracks given one observation per row ([`Csr`]): row `k` is the line or segment `k` of `lines`
@@ -189,6 +220,31 @@ pub fn triangulate_line_observations(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
+    let (n, one) = sparse_solver(projections, tracks, opts)?;
+    Ok(solve_tracks(n, 1, progress, one))
+}
+
+/// [`triangulate_line_observations`] handing each track's result to `write(t, row, result)` as
+/// [`triangulate_lines_into`] does.
+pub fn triangulate_line_observations_into<R: Send>(
+    projections: &[Matrix3x4<f64>],
+    tracks: &SparseLineTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<LineTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = sparse_solver(projections, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 1, progress, one, write))
+}
+
+/// The number of tracks of a sparse batch, checked, and the solve of track `t`.
+fn sparse_solver<'a>(
+    projections: &'a [Matrix3x4<f64>],
+    tracks: &'a SparseLineTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<LineTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     check_sigma(&tracks.lines)?;
     let shared = TrackCameras::Shared(projections);
@@ -203,10 +259,11 @@ pub fn triangulate_line_observations(
         }
     }
     tracks.csr.check_values("covariances", tracks.covariances, 4, "2 x 2")?;
-    Ok(solve_tracks(n, 1, progress, |t| {
+    let one = move |t| {
         let seen = tracks.csr.distinct_observations(t, projections.len())?;
         line_track(&shared, &tracks.lines, tracks.covariances, t, &seen, opts)
-    }))
+    };
+    Ok((n, one))
 }
 
 /// Segment tracks seen through [`View`]s, one observation per row ([`Csr`]): row `k` is the segment
@@ -237,6 +294,31 @@ pub fn triangulate_line_observations_views(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<LineTriangulation>>> {
+    let (n, one) = views_solver(views, tracks, opts)?;
+    Ok(solve_tracks(n, 1, progress, one))
+}
+
+/// [`triangulate_line_observations_views`] handing each track's result to `write(t, row, result)` as
+/// [`triangulate_lines_into`] does.
+pub fn triangulate_line_observations_views_into<R: Send>(
+    views: &[View],
+    tracks: &SparseSegmentTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<LineTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = views_solver(views, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 1, progress, one, write))
+}
+
+/// The number of tracks of a sparse batch through views, checked, and the solve of track `t`.
+fn views_solver<'a>(
+    views: &'a [View],
+    tracks: &'a SparseSegmentTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<LineTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
     validate_cameras(&cameras, "views")?;
@@ -247,7 +329,7 @@ pub fn triangulate_line_observations_views(
     tracks
         .csr
         .check_values("covariances", tracks.covariances, 8, "2 endpoints x 2 x 2")?;
-    Ok(solve_tracks(n, 1, progress, |t| {
+    let one = move |t| {
         let seen = tracks.csr.distinct_observations(t, views.len())?;
         if seen.len() < 2 {
             return Err(too_few(opts.method, t, seen.len(), 2));
@@ -271,5 +353,6 @@ pub fn triangulate_line_observations_views(
         });
         triangulate_line_segments_views(&track_views, &segments, covariances.as_deref(), opts)
             .map_err(|e| in_track(e, t, &images, &["lines", "covariances"]))
-    }))
+    };
+    Ok((n, one))
 }

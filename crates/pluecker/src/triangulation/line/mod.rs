@@ -33,7 +33,8 @@ pub(crate) mod taylor_search;
 pub(crate) mod two_view_chart;
 
 pub use batch::{
-    triangulate_line_observations, triangulate_line_observations_views, triangulate_lines, ImageLines, LineTracks,
+    triangulate_line_observations, triangulate_line_observations_into, triangulate_line_observations_views,
+    triangulate_line_observations_views_into, triangulate_lines, triangulate_lines_into, ImageLines, LineTracks,
     SparseLineTracks, SparseSegmentTracks,
 };
 pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;

@@ -9,7 +9,8 @@
 //! options, bad cameras, inconsistent array lengths) come first, as the outer `Result`.
 //!
 //! [`triangulate_points_linear`] is the fast path of [`Method::Linear`]: no allocation per track,
-//! the results written straight into flat arrays.
+//! the results written straight into flat arrays ([`triangulate_points_linear_into`]: into the
+//! caller's rows).
 //!
 //! Every batch polls the stop of [`crate::interrupt`] before each track: tracks not started when it
 //! fires are rejected with [`Error::Interrupted`] (the others keep their results), and a track being
@@ -26,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::interrupt::{current, StopReason};
 use crate::triangulation::covariance::whitening;
 use crate::triangulation::tracks::{
-    check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
+    check_mask, check_rows, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{centre, depth_normalized, validate_cameras, View};
@@ -223,18 +224,6 @@ fn dense_solver<'a>(
     Ok((n, one))
 }
 
-/// The output rows of a batch of `n` tracks number `rows`: an error of the caller's, not the data's.
-fn check_rows(rows: usize, n: usize) -> Result<()> {
-    if rows == n {
-        return Ok(());
-    }
-    Err(Error::Shape {
-        what: "rows".into(),
-        expected: format!("one output row per track ({n})"),
-        actual: rows.to_string(),
-    })
-}
-
 /// Track `t` from its observations `(image, (pixel, whitening))`: at least two, with parallax.
 fn solve_track(
     prepared: &Prepared,
@@ -405,9 +394,20 @@ pub struct LinearPoints {
     pub outcomes: Vec<Result<Status>>,
 }
 
-/// One track of the linear fast path: point, cost of eq. 19, covariance, status, and the degrees of
-/// freedom of the cost (see [`crate::triangulation::Report::residual_dof`]).
-type LinearTrack = (Vector3<f64>, f64, Option<Matrix3<f64>>, Status, usize);
+/// One track of the linear fast path ([`triangulate_points_linear_into`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearTrack {
+    /// The world point; NaN at infinity.
+    pub point: Vector3<f64>,
+    /// The cost of eq. 19 at the point (squared whitened pixels); NaN at infinity.
+    pub cost: f64,
+    /// The point's covariance ([`crate::triangulation::uncertainty`]), `None` when singular.
+    pub covariance: Option<Matrix3<f64>>,
+    /// `Success`, `BehindCamera` or `AtInfinity`.
+    pub status: Status,
+    /// The degrees of freedom of the cost (see [`crate::triangulation::Report::residual_dof`]).
+    pub residual_dof: usize,
+}
 
 /// The DLT of one track with no allocation: its point, cost and covariance, or its status / error.
 /// Three passes over the views: checks and the spread of the centres, the Gram matrix, the cost and
@@ -452,9 +452,14 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
     for j in visible() {
         accumulate_dlt(&mut g, &view(j)?, &frame);
     }
-    let nan = Vector3::repeat(f64::NAN);
     let LinearPoint::Finite(x) = solve_dlt(&g, &frame) else {
-        return Ok((nan, f64::NAN, None, Status::AtInfinity, 0));
+        return Ok(LinearTrack {
+            point: Vector3::repeat(f64::NAN),
+            cost: f64::NAN,
+            covariance: None,
+            status: Status::AtInfinity,
+            residual_dof: 0,
+        });
     };
     let (mut cost, mut front, mut information) = (0.0, true, Matrix3::zeros());
     for j in visible() {
@@ -464,15 +469,13 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
         information += h;
         front &= pv.depth(&x) > 0.0;
     }
-    let covariance = covariance_of_information3(&information);
-    let dof = (2 * count).saturating_sub(3);
-    Ok((
-        x,
+    Ok(LinearTrack {
+        point: x,
         cost,
-        covariance,
-        if front { Status::Success } else { Status::BehindCamera },
-        dof,
-    ))
+        covariance: covariance_of_information3(&information),
+        status: if front { Status::Success } else { Status::BehindCamera },
+        residual_dof: (2 * count).saturating_sub(3),
+    })
 }
 
 /// The linear (DLT) point of every track, in parallel, without allocating per track (module docs).
@@ -500,17 +503,34 @@ pub fn triangulate_points_linear(projections: &[Matrix3x4<f64>], tracks: &PointT
                 None => linear_track(&prepared, tracks, v, t),
             }
             .map(|track| {
-                let (x, c, cov, status, dof) = track;
-                point.copy_from_slice(x.as_slice());
-                *cost = c;
-                *residual_dof = dof;
-                if let Some(cov) = cov {
+                point.copy_from_slice(track.point.as_slice());
+                *cost = track.cost;
+                *residual_dof = track.residual_dof;
+                if let Some(cov) = track.covariance {
                     // Symmetric: column-major storage is the row-major layout.
                     covariance.copy_from_slice(cov.as_slice());
                 }
-                status
+                track.status
             })
         })
         .collect_into_vec(&mut out.outcomes);
     Ok(out)
+}
+
+/// [`triangulate_points_linear`] handing each track's estimate to `write(t, row, result)` as it
+/// finishes, with row `t` of `rows` (one per track), as [`triangulate_points_into`] does: a stopped
+/// batch does not hand the tracks it had not started to `write` and returns why (`Ok(None)`: every
+/// track was written). `progress` counts the tracks written. No allocation per track.
+pub fn triangulate_points_linear_into<R: Send>(
+    projections: &[Matrix3x4<f64>],
+    tracks: &PointTracks,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<LinearTrack>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, prepared) = check_batch(projections, tracks)?;
+    check_rows(rows.len(), n)?;
+    let v = projections.len();
+    let one = |t| linear_track(&prepared, tracks, v, t);
+    Ok(solve_tracks_into(rows, 256, progress, one, write))
 }

@@ -335,6 +335,7 @@ fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -
                 // The set holds the incumbent: an infeasibility certificate is an artefact.
                 SocpStatus::Infeasible | SocpStatus::Failed => return Err(GlobalStatus::Failed),
                 SocpStatus::Unbounded => return Err(GlobalStatus::Unbounded),
+                SocpStatus::Stopped(reason) => return Err(GlobalStatus::Stopped(reason)),
             }
         }
     }
@@ -376,8 +377,10 @@ fn root_by_solves(chart: &Chart, gamma: f64, enclosure: Option<&Enclosure<3>>) -
             p.minimize(denominator(v, &y));
             let sol = p.solve();
             iterations += sol.iterations;
-            if sol.status != SocpStatus::Solved {
-                return Err(GlobalStatus::Failed);
+            match sol.status {
+                SocpStatus::Solved => {}
+                SocpStatus::Stopped(reason) => return Err(GlobalStatus::Stopped(reason)),
+                _ => return Err(GlobalStatus::Failed),
             }
             lo = lo.max(sol.lower_bound);
         }
@@ -509,5 +512,38 @@ pub fn global_point(
         status,
         nodes: result.nodes,
         solver_iterations: result.solver_iterations + root.solver_iterations,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interrupt::{with_stop, Stop};
+    use crate::rng::Rng;
+    use crate::synthetic::triangulation_scene;
+    use crate::triangulation::point::cost::point_views;
+    use crate::triangulation::views::depth_normalized;
+    use nalgebra::{Matrix2, Matrix3x4};
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    /// The initial box by conic solves, stopped (Ctrl-C, or the time budget): its solves end at once
+    /// and the search says it was stopped, not that a solve failed (`numerical_failure`).
+    #[test]
+    fn a_stop_during_the_solves_of_the_initial_box_is_reported_as_a_stop() {
+        let scene = triangulation_scene(4, 0.3, 9);
+        let obs = scene.noisy(1.0, &mut Rng::new(9));
+        let ps: Vec<Matrix3x4<f64>> = scene.cameras.iter().map(depth_normalized).collect();
+        let views = point_views(&ps, &obs, &[Matrix2::identity(); 4]);
+        let chart = Chart::new(&views, &scene.point, ChartKind::MeanDepth).unwrap();
+        let gamma = 10.0;
+        assert!(root_by_solves(&chart, gamma, None).is_ok());
+        let requested = Arc::new(Stop::new());
+        requested.request();
+        let stopped = with_stop(requested, || root_by_solves(&chart, gamma, None).err());
+        assert_eq!(stopped, Some(GlobalStatus::Stopped(StopReason::Requested)));
+        let expired = Arc::new(Stop::with_time_budget(Some(Duration::ZERO)));
+        let stopped = with_stop(expired, || root_by_solves(&chart, gamma, None).err());
+        assert_eq!(stopped, Some(GlobalStatus::Stopped(StopReason::TimeBudget)));
     }
 }

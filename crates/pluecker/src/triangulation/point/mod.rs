@@ -48,7 +48,7 @@ pub(crate) mod robust;
 pub use batch::{
     triangulate_point_observations, triangulate_point_observations_into, triangulate_point_observations_views,
     triangulate_point_observations_views_into, triangulate_points, triangulate_points_into, triangulate_points_linear,
-    LinearPoints, PointTracks, SparsePointTracks,
+    triangulate_points_linear_into, LinearPoints, LinearTrack, PointTracks, SparsePointTracks,
 };
 
 /// The stages of the point solvers that the integration tests check directly; not part of the

@@ -16,11 +16,14 @@
 
 use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
 use crate::error::{Error, Result};
+use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{
-    check_mask, check_values, dense_observations, in_track, solve_tracks, too_few, track_count, Csr, TrackCameras,
+    check_mask, check_rows, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few,
+    track_count, Csr, TrackCameras,
 };
 use crate::triangulation::TriangulationOptions;
 use nalgebra::{Matrix3, Matrix3x4};
+use rayon::prelude::*;
 use std::sync::atomic::AtomicUsize;
 
 /// The quadric tracks of one batch (see the module docs). With `v` views, the entry of track `t` in
@@ -100,15 +103,43 @@ pub fn triangulate_quadrics(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<QuadricTriangulation>>> {
+    let (n, one) = dense_solver(projections, tracks, opts)?;
+    // A track takes from a millisecond to seconds: one track per rayon task balances the load.
+    Ok(solve_tracks(n, 1, progress, one))
+}
+
+/// [`triangulate_quadrics`] handing each track's result to `write(t, row, result)` as it finishes,
+/// with row `t` of `rows` (one per track), instead of collecting them: a stopped batch does not hand
+/// the tracks it had not started to `write` and returns why (`Ok(None)`: every track was written), as
+/// [`crate::triangulation::point::triangulate_points_into`] does.
+pub fn triangulate_quadrics_into<R: Send>(
+    projections: TrackCameras,
+    tracks: &QuadricTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<QuadricTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = dense_solver(projections, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 1, progress, one, write))
+}
+
+/// The number of tracks of a dense batch, checked, and the solve of track `t`.
+fn dense_solver<'a>(
+    projections: TrackCameras<'a>,
+    tracks: &'a QuadricTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<QuadricTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
     let n = check_batch(&projections, tracks)?;
-    // A track takes from a millisecond to seconds: one track per rayon task balances the load.
     let v = projections.views();
-    Ok(solve_tracks(n, 1, progress, |t| {
+    let one = move |t| {
         let seen = dense_observations(tracks.visible, v, t);
         quadric_track(&projections, tracks.conics, tracks.covariances, t, &seen, opts)
-    }))
+    };
+    Ok((n, one))
 }
 
 /// Quadric tracks given one observation per row ([`Csr`]): row `k` is the conic `conics[9k..]` (row-major
@@ -132,6 +163,31 @@ pub fn triangulate_quadric_observations(
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<QuadricTriangulation>>> {
+    let (n, one) = sparse_solver(projections, tracks, opts)?;
+    Ok(solve_tracks(n, 1, progress, one))
+}
+
+/// [`triangulate_quadric_observations`] handing each track's result to `write(t, row, result)` as
+/// [`triangulate_quadrics_into`] does.
+pub fn triangulate_quadric_observations_into<R: Send>(
+    projections: &[Matrix3x4<f64>],
+    tracks: &SparseQuadricTracks,
+    opts: &TriangulationOptions,
+    progress: Option<&AtomicUsize>,
+    rows: impl IndexedParallelIterator<Item = R>,
+    write: impl Fn(usize, R, Result<QuadricTriangulation>) + Sync + Send,
+) -> Result<Option<StopReason>> {
+    let (n, one) = sparse_solver(projections, tracks, opts)?;
+    check_rows(rows.len(), n)?;
+    Ok(solve_tracks_into(rows, 1, progress, one, write))
+}
+
+/// The number of tracks of a sparse batch, checked, and the solve of track `t`.
+fn sparse_solver<'a>(
+    projections: &'a [Matrix3x4<f64>],
+    tracks: &'a SparseQuadricTracks<'a>,
+    opts: &'a TriangulationOptions,
+) -> Result<(usize, impl Fn(usize) -> Result<QuadricTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
     let shared = TrackCameras::Shared(projections);
@@ -141,8 +197,9 @@ pub fn triangulate_quadric_observations(
     tracks
         .csr
         .check_values("covariances", tracks.covariances, 25, "5 x 5")?;
-    Ok(solve_tracks(n, 1, progress, |t| {
+    let one = move |t| {
         let seen = tracks.csr.distinct_observations(t, projections.len())?;
         quadric_track(&shared, tracks.conics, tracks.covariances, t, &seen, opts)
-    }))
+    };
+    Ok((n, one))
 }

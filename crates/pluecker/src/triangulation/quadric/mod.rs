@@ -32,7 +32,10 @@ pub(crate) mod certificate;
 pub(crate) mod optimal;
 pub(crate) mod residual;
 
-pub use batch::{triangulate_quadric_observations, triangulate_quadrics, QuadricTracks, SparseQuadricTracks};
+pub use batch::{
+    triangulate_quadric_observations, triangulate_quadric_observations_into, triangulate_quadrics,
+    triangulate_quadrics_into, QuadricTracks, SparseQuadricTracks,
+};
 
 /// The stages of the quadric solver that the integration tests check directly; not part of the
 /// user-facing API.

@@ -30,6 +30,7 @@ use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::add_quadratic_over_linear;
 use crate::global::socp::{Affine, Socp, SocpStatus};
+use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fraction::{self, FractionalResidual};
@@ -216,10 +217,10 @@ pub(crate) fn optimal_quadric(
         incumbent: frame_cost * (1.0 + 1e-9),
         local: node_local,
     };
-    // The cones and the box hold the local ellipsoid: a relaxation found infeasible is a numerical
-    // artefact, which proves nothing.
+    // The cones and the box hold the local ellipsoid: a relaxation found infeasible, or a denominator
+    // left unbounded (a solve failed or was stopped), proves nothing: no box to search, no certificate.
     let artefact = |mut report: Report| {
-        report.set_status(Status::NumericalFailure);
+        report.set_status(stop_reason().map_or(Status::NumericalFailure, Status::stopped));
         (*local, report)
     };
     // Eq. 26: the denominators' range without the cut, then the variables' and again the
