@@ -90,7 +90,10 @@ fn track_message(t: usize, err: &Error) -> String {
 
 /// The report and estimate columns of `n` tracks solved with `method`, not started yet.
 pub(crate) fn unstarted<C: EstimateColumns>(py: Python<'_>, method: Method, n: usize) -> PyResult<(PyBatchReport, C)> {
-    Ok((PyBatchReport::unstarted(py, method, C::COST_KIND, n)?, C::unstarted(py, n)?))
+    Ok((
+        PyBatchReport::unstarted(py, method, C::COST_KIND, n)?,
+        C::unstarted(py, n)?,
+    ))
 }
 
 /// The rows of every track of `report` and `columns`, for the core's `_into` batches.

@@ -24,14 +24,14 @@ use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::interrupt::StopReason;
+use pluecker::triangulation::line::testing::{
+    triangulate_line_observations_into as core_line_observations,
+    triangulate_line_observations_views_into as core_line_observations_views, triangulate_lines_into as core_lines,
+};
 use pluecker::triangulation::line::{
     lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
 };
-use pluecker::triangulation::line::{
-    triangulate_line_observations_into as core_line_observations,
-    triangulate_line_observations_views_into as core_line_observations_views, triangulate_lines_into as core_lines,
-    ImageLines, LineTracks, SparseLineTracks, SparseSegmentTracks,
-};
+use pluecker::triangulation::line::{ImageLines, LineTracks, SparseLineTracks, SparseSegmentTracks};
 use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
 use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;

@@ -27,14 +27,14 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Vector2, Vector3};
+use pluecker::triangulation::point::testing::{
+    triangulate_point_observations_into, triangulate_point_observations_views_into,
+    triangulate_points_into as core_points, triangulate_points_linear_into, LinearTrack,
+};
 use pluecker::triangulation::point::{
     triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
 };
-use pluecker::triangulation::point::{
-    triangulate_point_observations_into, triangulate_point_observations_views_into,
-    triangulate_points_into as core_points, triangulate_points_linear_into, LinearTrack, PointTracks,
-    SparsePointTracks,
-};
+use pluecker::triangulation::point::{PointTracks, SparsePointTracks};
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;

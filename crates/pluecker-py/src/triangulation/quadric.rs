@@ -14,13 +14,13 @@ use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use nalgebra::{Matrix3, Matrix4, Vector3};
+use pluecker::triangulation::quadric::testing::{
+    triangulate_quadric_observations_into as core_quadric_observations, triangulate_quadrics_into as core_quadrics,
+};
 use pluecker::triangulation::quadric::{
     refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
 };
-use pluecker::triangulation::quadric::{
-    triangulate_quadric_observations_into as core_quadric_observations, triangulate_quadrics_into as core_quadrics,
-    QuadricTracks, SparseQuadricTracks,
-};
+use pluecker::triangulation::quadric::{QuadricTracks, SparseQuadricTracks};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{CostKind, Primitive, Report};
 use pyo3::exceptions::PyMemoryError;

@@ -69,15 +69,15 @@ fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> Stage
     report
 }
 
+/// The inlier flags of the points and of the lines.
+type Inliers = (Vec<bool>, Vec<bool>);
+
 /// The final rounds of the robust pipeline ([`FINAL_ROUNDS`]): `round(set)` refines on `set` and
 /// returns the refined pose, its MSAC score and the inliers re-selected there. Rounds go on while the
 /// re-selected set is new (not one already refined on), holds at least 3 correspondences, and the
 /// call is not stopped. Returns the candidate with the least score, with the set it was refined on:
 /// on a stable set that no earlier round beat, the last pose and its own inliers.
-fn best_refinement<P: Copy>(
-    first: (Vec<bool>, Vec<bool>),
-    mut round: impl FnMut(&(Vec<bool>, Vec<bool>)) -> (P, f64, (Vec<bool>, Vec<bool>)),
-) -> (P, (Vec<bool>, Vec<bool>)) {
+fn best_refinement<P: Copy>(first: Inliers, mut round: impl FnMut(&Inliers) -> (P, f64, Inliers)) -> (P, Inliers) {
     let mut refined_on = vec![first];
     let (mut best_pose, mut best_score, mut next) = round(&refined_on[0]);
     let mut best = 0;
@@ -186,13 +186,13 @@ pub(crate) fn estimate_robust(
 mod tests {
     use super::*;
 
-    fn set(points: &[bool]) -> (Vec<bool>, Vec<bool>) {
+    fn set(points: &[bool]) -> Inliers {
         (points.to_vec(), Vec::new())
     }
 
     /// A scripted run of rounds: `moves[k]` is the (score, re-selected set) of the k-th round, the
     /// "pose" the round's index; also records the sets refined on.
-    fn run(first: &[bool], moves: &[(f64, &[bool])]) -> (usize, (Vec<bool>, Vec<bool>), Vec<Vec<bool>>) {
+    fn run(first: &[bool], moves: &[(f64, &[bool])]) -> (usize, Inliers, Vec<Vec<bool>>) {
         let mut seen = Vec::new();
         let (pose, kept) = best_refinement(set(first), |s| {
             let k = seen.len();

@@ -168,7 +168,7 @@ pub fn triangulate_lines(
 /// [`triangulate_lines`] handing each track's result to `write(t, row, result)` as it finishes, with
 /// row `t` of `rows` (one per track), instead of collecting them: a stopped batch does not hand the
 /// tracks it had not started to `write` and returns why (`Ok(None)`: every track was written), as
-/// [`crate::triangulation::point::triangulate_points_into`] does.
+/// [`crate::triangulation::point::testing::triangulate_points_into`] does.
 pub fn triangulate_lines_into<R: Send>(
     projections: TrackCameras,
     tracks: &LineTracks,

@@ -33,8 +33,7 @@ pub(crate) mod taylor_search;
 pub(crate) mod two_view_chart;
 
 pub use batch::{
-    triangulate_line_observations, triangulate_line_observations_into, triangulate_line_observations_views,
-    triangulate_line_observations_views_into, triangulate_lines, triangulate_lines_into, ImageLines, LineTracks,
+    triangulate_line_observations, triangulate_line_observations_views, triangulate_lines, ImageLines, LineTracks,
     SparseLineTracks, SparseSegmentTracks,
 };
 pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;
@@ -43,6 +42,10 @@ pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;
 /// user-facing API.
 #[doc(hidden)]
 pub mod testing {
+    /// The batches that write each track into the caller's rows as it finishes (the bindings' columns).
+    pub use super::batch::{
+        triangulate_line_observations_into, triangulate_line_observations_views_into, triangulate_lines_into,
+    };
     pub use super::lens::{exact_cost, LensSegment};
     pub use super::residual::{endpoint_distances, LineFrame};
 }

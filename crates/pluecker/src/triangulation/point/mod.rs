@@ -46,15 +46,19 @@ pub(crate) mod linear;
 pub(crate) mod robust;
 
 pub use batch::{
-    triangulate_point_observations, triangulate_point_observations_into, triangulate_point_observations_views,
-    triangulate_point_observations_views_into, triangulate_points, triangulate_points_into, triangulate_points_linear,
-    triangulate_points_linear_into, LinearPoints, LinearTrack, PointTracks, SparsePointTracks,
+    triangulate_point_observations, triangulate_point_observations_views, triangulate_points,
+    triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
 };
 
 /// The stages of the point solvers that the integration tests check directly; not part of the
 /// user-facing API.
 #[doc(hidden)]
 pub mod testing {
+    /// The batches that write each track into the caller's rows as it finishes (the bindings' columns).
+    pub use super::batch::{
+        triangulate_point_observations_into, triangulate_point_observations_views_into, triangulate_points_into,
+        triangulate_points_linear_into, LinearTrack,
+    };
     pub use super::certificate::{convexity_test, ConvexityCertificate};
     pub use super::cost::{in_front, point_cost, point_views, PointView};
     pub use super::global::{global_point, GlobalPoint, GlobalSettings, GlobalStatus, Relaxation};

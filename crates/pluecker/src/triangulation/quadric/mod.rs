@@ -32,15 +32,14 @@ pub(crate) mod certificate;
 pub(crate) mod optimal;
 pub(crate) mod residual;
 
-pub use batch::{
-    triangulate_quadric_observations, triangulate_quadric_observations_into, triangulate_quadrics,
-    triangulate_quadrics_into, QuadricTracks, SparseQuadricTracks,
-};
+pub use batch::{triangulate_quadric_observations, triangulate_quadrics, QuadricTracks, SparseQuadricTracks};
 
 /// The stages of the quadric solver that the integration tests check directly; not part of the
 /// user-facing API.
 #[doc(hidden)]
 pub mod testing {
+    /// The batches that write each track into the caller's rows as it finishes (the bindings' columns).
+    pub use super::batch::{triangulate_quadric_observations_into, triangulate_quadrics_into};
     pub use super::residual::ConicFrame;
 }
 
