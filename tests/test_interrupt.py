@@ -368,6 +368,31 @@ def test_the_command_ends_after_ctrl_c_while_a_call_holds_the_interpreter():
     assert (child.returncode, err, out) == (130, "pluecker pose: interrupted\n", "")
 
 
+def test_a_forced_exit_leaves_no_output_behind(tmp_path):
+    """The deadline's exit runs no ``finally``, but what the command was writing goes with it: Ctrl-C
+    while a call holds the GIL inside an output being staged (in parent folders made for it) leaves
+    neither the output, nor its temporary folder, nor those parents. Files the user had stay."""
+    kept = tmp_path / "kept.txt"
+    kept.write_text("mine")
+    out = tmp_path / "new" / "deeper" / "out"
+    body = (f"from pluecker import _paths\n"
+            f"        with _paths.staged({str(out)!r}) as stage:\n"
+            f"            (stage.path / 'points.json').write_text('half')\n"
+            f"            _core._hold_gil_for_tests(fd, 600.0)")
+    child, ready = run_command(body)
+    try:
+        assert os.read(ready, 1) == b"x"
+        assert len(list((tmp_path / "new" / "deeper").iterdir())) == 1  # the temporary folder
+        child.send_signal(signal.SIGINT)
+        out_text, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    assert (child.returncode, err, out_text) == (130, "pluecker pose: interrupted\n", "")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.txt"]
+    assert kept.read_text() == "mine"
+
+
 def test_the_command_answers_ctrl_c_itself_when_python_can():
     """Ctrl-C that Python turns into KeyboardInterrupt: the command's own clean-up runs, and the line is
     printed once (the deadline stands down, or, had Python been slower than it, printed it instead)."""

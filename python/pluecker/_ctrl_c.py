@@ -8,15 +8,20 @@ thread) holds Ctrl-C up as long. :func:`arm` makes Python's C-level handler also
 number to a pipe (``signal.set_wakeup_fd``) read by a native thread that never takes the GIL
 (``_core._ExitDeadline``); unless the command :meth:`Deadline.stand_down` first (it caught the
 ``KeyboardInterrupt`` in time and prints the line itself), that thread prints the line and ends the
-process with ``_exit``: no ``finally`` block or temporary-folder clean-up runs then. Only the program
-arms it (``pluecker.cli.run``), never a library call.
+process with ``_exit``: no ``finally`` block runs then. What the command was writing is removed first:
+the temporary folders and files of its outputs and the parent folders made for them, registered with
+:func:`removed_on_forced_exit` (``pluecker._paths`` does it for every output). Only the program arms
+the deadline (``pluecker.cli.run``), never a library call; without it the registrations do nothing.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import threading
+from pathlib import Path
+from typing import Iterator
 
 from . import _core
 
@@ -38,6 +43,8 @@ class Deadline:
 
     def close(self) -> None:
         """Stands down, gives the wakeup fd back and ends the native thread (the pipe's end)."""
+        global _armed
+        _armed = None
         self._native.stand_down()
         signal.set_wakeup_fd(self._previous)
         os.close(self._write)
@@ -59,7 +66,30 @@ def arm(command: str) -> Deadline | None:
         signal.set_wakeup_fd(previous)
         os.close(write)
         raise
-    return Deadline(guard, write, previous)
+    global _armed
+    _armed = Deadline(guard, write, previous)
+    return _armed
+
+
+#: The deadline armed in this process, if any.
+_armed: Deadline | None = None
+
+
+@contextlib.contextmanager
+def removed_on_forced_exit(path: str | os.PathLike, *, whole: bool = True) -> Iterator[None]:
+    """Within the block, a forced exit of the armed deadline removes ``path`` first: whole (a temporary
+    folder or file of an unfinished output) or, with ``whole=False``, only if empty (a parent folder
+    made for an output). Register before creating the path: a path that is not there is skipped."""
+    deadline = _armed
+    if deadline is None:
+        yield
+        return
+    key = str(Path(path).absolute())
+    deadline._native.remove_on_exit(key, whole)
+    try:
+        yield
+    finally:
+        deadline._native.keep(key)
 
 
 def caused_by_ctrl_c(error: BaseException) -> bool:

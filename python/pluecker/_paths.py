@@ -17,6 +17,8 @@ import shutil
 from pathlib import Path
 from typing import Iterable, Iterator, Mapping
 
+from pluecker import _ctrl_c
+
 #: Suffix of the temporary folders and files that :func:`staged` and :func:`write_text` write into.
 PARTIAL = ".partial"
 
@@ -110,13 +112,15 @@ def _temporary_name(folder: Path, name: str) -> Path:
     return folder / f".{name}.{os.getpid()}-{secrets.token_hex(4)}{PARTIAL}"
 
 
-def _make_parents(folder: Path) -> list[Path]:
-    """Makes ``folder`` and its missing parents; returns those it made, innermost first."""
+def _make_parents(folder: Path, forced_exit: contextlib.ExitStack) -> list[Path]:
+    """Makes ``folder`` and its missing parents, each removed (if empty) by a forced exit within
+    ``forced_exit`` (:mod:`pluecker._ctrl_c`); returns those it made, innermost first."""
     made = []
     while not folder.exists():
         made.append(folder)
         folder = folder.parent
     for path in reversed(made):
+        forced_exit.enter_context(_ctrl_c.removed_on_forced_exit(path, whole=False))
         path.mkdir()
     return made
 
@@ -168,28 +172,30 @@ def staged(out: str | os.PathLike, *, publish: bool = True) -> Iterator[Stage]:
     instead (scratch space). When the block raises (an error, Ctrl-C), the temporary folder and the
     parents of ``out`` it had to make are removed: ``out`` is as it was."""
     out = Path(out)
-    made = [] if out.exists() else _make_parents(out.parent)
-    try:
-        path = _temporary_name(out if out.exists() else out.parent, out.name)
-        path.mkdir()
-    except BaseException:
-        for folder in made:
-            with contextlib.suppress(OSError):
-                folder.rmdir()
-        raise
-    stage = Stage(path)
-    try:
-        yield stage
-        if publish:
-            stage.written = _publish(path, out)
-        else:
+    with contextlib.ExitStack() as forced_exit:
+        made = [] if out.exists() else _make_parents(out.parent, forced_exit)
+        try:
+            path = _temporary_name(out if out.exists() else out.parent, out.name)
+            forced_exit.enter_context(_ctrl_c.removed_on_forced_exit(path))
+            path.mkdir()
+        except BaseException:
+            for folder in made:
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
+            raise
+        stage = Stage(path)
+        try:
+            yield stage
+            if publish:
+                stage.written = _publish(path, out)
+            else:
+                _remove(path)
+        except BaseException:
             _remove(path)
-    except BaseException:
-        _remove(path)
-        for folder in made:
-            with contextlib.suppress(OSError):
-                folder.rmdir()
-        raise
+            for folder in made:
+                with contextlib.suppress(OSError):
+                    folder.rmdir()
+            raise
 
 
 def write_text(path: str | os.PathLike, text: str) -> None:
@@ -198,8 +204,9 @@ def write_text(path: str | os.PathLike, text: str) -> None:
     path = Path(path)
     temporary = _temporary_name(path.parent, path.name)
     try:
-        temporary.write_text(text, encoding="utf-8")
-        os.replace(temporary, path)
+        with _ctrl_c.removed_on_forced_exit(temporary):
+            temporary.write_text(text, encoding="utf-8")
+            os.replace(temporary, path)
     except BaseException:
         with contextlib.suppress(OSError):
             temporary.unlink()

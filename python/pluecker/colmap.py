@@ -23,7 +23,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from . import _core
+from . import _core, _ctrl_c
 from ._arguments import check_sigma, number, shown
 from ._paths import require_folder, staged
 
@@ -463,7 +463,7 @@ def _keypoints(reconstruction: Any) -> dict[int, tuple[np.ndarray, np.ndarray, n
     import tempfile
 
     try:
-        with tempfile.TemporaryDirectory() as folder:
+        with tempfile.TemporaryDirectory() as folder, _ctrl_c.removed_on_forced_exit(folder):
             reconstruction.write_binary(folder)
             with open(f"{folder}/images.bin", "rb") as f:
                 data = f.read()
