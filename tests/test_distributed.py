@@ -361,3 +361,38 @@ def test_command_line_on_a_scheduler_names_what_it_left_out(client, tmp_path, ca
     assert not [p for p in (tmp_path / "dask").iterdir() if p.name.startswith(".")]
     assert main([*common, "--out", str(tmp_path / "x"), "--scheduler", "tcp://127.0.0.1:1"]) == 2
     assert not (tmp_path / "x").exists()
+
+
+def test_ctrl_c_in_localize_tables_returns_without_waiting_for_the_running_queries(monkeypatch):
+    """A KeyboardInterrupt while queries are solved on the thread pool ends the call at once: the
+    queries not started are dropped, and the call does not wait for the one still running (a long
+    robust pose) before it raises."""
+    import threading
+
+    from test_bad_input_tables import query_scene
+
+    queries, matches = query_scene()
+    n = 40
+    many_queries = {k: v * n for k, v in queries.items()}
+    many_queries["query"] = list(range(n))
+    many_matches = {k: np.tile(v, n) for k, v in matches.items()}
+    many_matches["query"] = np.repeat(np.arange(n), len(matches["x"]))
+    calls, released = [], []
+    interrupted, finished = threading.Event(), threading.Event()
+
+    def estimate_pose(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+        # Runs until the test releases it, which it does once the call has raised (the timeout is a
+        # safety bound: a call that waits for this query gets it back False).
+        released.append(interrupted.wait(timeout=30))
+        finished.set()
+        raise pluecker.PlueckerError("not solved in this test")
+
+    monkeypatch.setattr(dist._core, "estimate_pose", estimate_pose)
+    with pytest.raises(KeyboardInterrupt):
+        dist.localize_tables(pa.table(many_queries), pa.table(many_matches), threads=1)
+    interrupted.set()
+    assert finished.wait(timeout=30)
+    assert released == [True] and len(calls) == 2

@@ -858,8 +858,12 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
                    pin=np.asarray(r.inliers_points, dtype=bool), lin=np.asarray(r.inliers_lines, dtype=bool))
         return out
 
-    with ThreadPoolExecutor(max_workers=threads or _core.get_num_threads()) as pool:
+    pool = ThreadPoolExecutor(max_workers=threads or _core.get_num_threads())
+    try:
         solved = list(pool.map(solve, range(len(q_ids))))
+    finally:
+        # On Ctrl-C (or any error) the queries not started are dropped, not run to the end first.
+        pool.shutdown(wait=False, cancel_futures=True)
     poses = pa.table({
         "query": q_ids,
         "R": pa.FixedSizeListArray.from_arrays(np.concatenate([s["R"] for s in solved]) if solved else np.zeros(0), 9),
