@@ -377,22 +377,36 @@ def test_ctrl_c_in_localize_tables_returns_without_waiting_for_the_running_queri
     many_queries["query"] = list(range(n))
     many_matches = {k: np.tile(v, n) for k, v in matches.items()}
     many_matches["query"] = np.repeat(np.arange(n), len(matches["x"]))
-    calls, released = [], []
-    interrupted, finished = threading.Event(), threading.Event()
+    # Two workers: the first query raises KeyboardInterrupt only once the second is running, so one
+    # query is always in flight when the call is interrupted (no timing assumed).
+    state = {"calls": 0, "running": 0}
+    changed = threading.Condition()
+    interrupted = threading.Event()
+    released = []
 
     def estimate_pose(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 1:
-            raise KeyboardInterrupt
+        with changed:
+            state["calls"] += 1
+            if state["calls"] == 1:
+                assert changed.wait_for(lambda: state["running"] >= 1, timeout=30)
+                raise KeyboardInterrupt
+            state["running"] += 1
+            changed.notify_all()
         # Runs until the test releases it, which it does once the call has raised (the timeout is a
         # safety bound: a call that waits for this query gets it back False).
         released.append(interrupted.wait(timeout=30))
-        finished.set()
+        with changed:
+            state["running"] -= 1
+            changed.notify_all()
         raise pluecker.PlueckerError("not solved in this test")
 
     monkeypatch.setattr(dist._core, "estimate_pose", estimate_pose)
     with pytest.raises(KeyboardInterrupt):
-        dist.localize_tables(pa.table(many_queries), pa.table(many_matches), threads=1)
+        dist.localize_tables(pa.table(many_queries), pa.table(many_matches), threads=2)
     interrupted.set()
-    assert finished.wait(timeout=30)
-    assert released == [True] and len(calls) == 2
+    with changed:
+        assert changed.wait_for(lambda: state["running"] == 0, timeout=30)
+    # Every query still running when the call raised was still blocked then; at most one more query
+    # (taken by the freed worker before the cancel) started after the interrupt, of the 40.
+    assert released and all(released)
+    assert state["calls"] <= 3
