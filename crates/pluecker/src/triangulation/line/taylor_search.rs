@@ -405,14 +405,13 @@ mod tests {
     /// where the cost has several minima): the gradient vanishes at the origin, so a bound from a box
     /// around the other minimum alone would be about `f(0)`, above that minimum's cost; between the
     /// two the hull's Hessian is not positive. And on charts at the global minimum (small errors),
-    /// where the root box is convex and its bound is `f(0)` less the rounding margin (1e-9 `f(0)`;
-    /// the written-out cost agrees with the chart's to ~1e-13). Every box's bound is compared with the
-    /// least written-out cost over it ([`least_over_box`]).
+    /// where the root box is convex and its bound is `f(0)` less the rounding margin (1e-9 `f(0)`).
+    /// Every box's bound is compared with the least written-out cost over it ([`least_over_box`]).
     #[test]
     fn the_hull_bound_holds_on_boxes_that_leave_out_the_local_line() {
         let opts = TriangulationOptions::default();
-        let (mut second_minima, mut teeth, mut convex_roots) = (0, 0, 0);
-        for seed in 0..200u64 {
+        let (mut second_minima, mut teeth, mut convex_roots) = (0, [0; 3], 0);
+        for seed in 0..1000u64 {
             let n = 3 + seed as usize % 2;
             let noise = 10f64.powf(-2.0 + 0.5 * (seed % 5) as f64);
             let (problem, (a, b)) = problem(n, 370 + seed, noise);
@@ -449,11 +448,17 @@ mod tests {
                     continue;
                 };
                 let f0 = independent_cost(&problem, &sim, &chart.line(&Vector4::zeros()));
-                assert!(
-                    (f0 - cost).abs() <= 1e-9 * cost,
-                    "the written-out cost {f0} is not the chart's {cost}"
-                );
                 let at_local = cost_and_gradient(&chart.views, &Vector4::zeros());
+                // The two evaluations of the cost at the origin agree to ~1e-13 on most charts and to
+                // ~1e-7 at the worst (errors of hundreds of pixels, where eq. 19 is ill-conditioned):
+                // the comparisons below allow twice their disagreement.
+                let disagreement = (f0 - at_local.0).abs() / f0;
+                assert!(
+                    disagreement <= 1e-6,
+                    "the written-out cost {f0} is not the chart's {}",
+                    at_local.0
+                );
+                let tol = 1e-12 + 2.0 * disagreement;
                 let oracle = TaylorOracle {
                     chart: &chart,
                     views: &views,
@@ -469,7 +474,7 @@ mod tests {
                     let bound = oracle.hull_bound(&root);
                     convex_roots += usize::from(bound > 0.0);
                     assert!(
-                        bound <= f0 * (1.0 + 1e-12),
+                        bound <= f0 * (1.0 + tol),
                         "seed {seed}: the root's hull bound {bound} above the cost {f0} at the global minimum"
                     );
                     continue;
@@ -504,36 +509,72 @@ mod tests {
                     continue;
                 }
                 second_minima += 1;
-                for k in 0..6 {
-                    let half = 10f64.powf(-6.0 + k as f64) * w_star.norm();
+                // Boxes around the other minimum, of every size, and small boxes around points of its
+                // basin cheaper than the origin with every coordinate of one sign (there a box widened
+                // towards 0 on one side only leaves out the origin as well).
+                let mut centres: Vec<(Vector4<f64>, f64)> = (0..6)
+                    .map(|k| (w_star, 10f64.powf(-6.0 + k as f64) * w_star.norm()))
+                    .collect();
+                for _ in 0..3000 {
+                    let p = Vector4::from_fn(|i, _| rng.uniform_in(root.lower[i], root.upper[i]));
+                    let one_sign = p.iter().all(|&v| v > 0.0) || p.iter().all(|&v| v < 0.0);
+                    if one_sign && cost_and_gradient(&chart.views, &p).0 < f0 * (1.0 - 1e-3) {
+                        centres.extend([(p, 1e-3 * p.norm()), (p, 1e-2 * p.norm())]);
+                    }
+                }
+                for (k, &(centre, half)) in centres.iter().enumerate() {
                     let region = Region::new(
                         (0..4)
-                            .map(|i| (w_star[i] - half).max(root.lower[i]))
+                            .map(|i| (centre[i] - half).max(root.lower[i]))
                             .collect::<Vec<f64>>(),
                         (0..4)
-                            .map(|i| (w_star[i] + half).min(root.upper[i]))
+                            .map(|i| (centre[i] + half).min(root.upper[i]))
                             .collect::<Vec<f64>>(),
                     );
                     if (0..4).all(|i| region.lower[i] <= 0.0 && 0.0 <= region.upper[i]) {
                         continue;
                     }
                     let bound = oracle.hull_bound(&region);
-                    let least = least_over_box(&problem, &sim, &chart, &region, &w_star);
+                    let least = least_over_box(&problem, &sim, &chart, &region, &centre);
                     assert!(
-                        bound <= least * (1.0 + 1e-12),
+                        bound <= least * (1.0 + tol),
                         "seed {seed}, box {k}: hull bound {bound} above the box's least cost {least} (f(0) {f0})"
                     );
                     // Teeth: the same bound from the box's own curvature (without the origin) would
                     // exceed the box's least cost here.
-                    let own = bound_over_box(&chart.views, &region.lower, &region.upper, f64::INFINITY).curvature;
-                    teeth += usize::from(own > 0.0 && at_local.0 - at_local.1.norm_squared() / (2.0 * own) > least);
+                    let one_side = |lower: bool| -> (Vec<f64>, Vec<f64>) {
+                        let lo = region
+                            .lower
+                            .iter()
+                            .map(|&v| if lower { v.min(0.0) } else { v })
+                            .collect();
+                        let hi = region
+                            .upper
+                            .iter()
+                            .map(|&v| if lower { v } else { v.max(0.0) })
+                            .collect();
+                        (lo, hi)
+                    };
+                    let boxes = [
+                        (region.lower.to_vec(), region.upper.to_vec()),
+                        one_side(true),
+                        one_side(false),
+                    ];
+                    for (count, (lo, hi)) in teeth.iter_mut().zip(&boxes) {
+                        let own = bound_over_box(&chart.views, lo, hi, f64::INFINITY).curvature;
+                        *count +=
+                            usize::from(own > 0.0 && at_local.0 - at_local.1.norm_squared() / (2.0 * own) > least);
+                    }
                 }
             }
         }
         eprintln!(
-            "{second_minima} charts at a costlier minimum, {teeth} boxes with teeth, {convex_roots} convex roots"
+            "{second_minima} charts at a costlier minimum, {teeth:?} boxes with teeth, {convex_roots} convex roots"
         );
-        assert!(teeth >= 3, "only {teeth} boxes where leaving out the origin would show");
+        assert!(
+            teeth.iter().all(|&n| n >= 3),
+            "too few boxes where leaving out the origin would show: {teeth:?}"
+        );
         assert!(
             convex_roots >= 20,
             "only {convex_roots} root boxes with a positive bound at the global minimum"
