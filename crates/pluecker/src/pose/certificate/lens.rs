@@ -555,7 +555,8 @@ mod tests {
     /// bisection) must lie within the reach, for `|ρ|` and `c` at or below the bounds passed. The
     /// worst cases push the foot's residual up by `ε c` (the term a one-sided perturbation,
     /// `r = ‖ê + u‖ − ε ‖u‖`, never exercises) and have `ê` off the line's normal so that `‖u(a)‖`
-    /// nears `|a| + c` on one side.
+    /// nears `|a| + c` on one side. The reach is also the root of the lemma's own inequality, so a
+    /// looser one fails as well.
     #[test]
     fn the_reach_holds_every_minimiser_of_a_residual_within_the_lemma() {
         let mut rng = Rng::new(23);
@@ -627,6 +628,13 @@ mod tests {
             if farthest > 0.0 {
                 tightest = tightest.min(reach / farthest);
             }
+            // And no looser than the lemma: the reach is the root of its inequality
+            // √(ρ² + a²) − ε (a + c) = |ρ| + ε c (at the bounds passed), which only grows past it.
+            let lemma = |a: f64| (rho_max * rho_max + a * a).sqrt() - eps * (a + c_max) - rho_max - eps * c_max;
+            assert!(
+                lemma(reach).abs() <= 1e-9 * (rho_max + reach + c_max) && lemma(reach * (1.0 + 1e-6) + 1e-12) > 0.0,
+                "ε {eps}, ρ {rho_max}, c {c_max}: the reach {reach} is not the root of the lemma's inequality"
+            );
         }
         // Not vacuous: some case comes within 10 % of the reach.
         assert!(
