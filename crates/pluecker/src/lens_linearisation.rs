@@ -478,4 +478,144 @@ mod tests {
             assert!(least >= sampled - spacing, "{least} < {sampled} − {spacing}");
         }
     }
+
+    /// `ε` against its own claim, vertex by vertex: the box of the ball `{‖W (n − n*)‖ ≤ ρ}` (half-widths
+    /// `ρ ‖row k of W⁻¹‖`, written out here) cut into `p` x `p` sub-boxes; every sub-box that holds a
+    /// point of the ball (a 9 x 9 grid of it, strictly inside) has its enclosure of `J` (the enclosures
+    /// themselves are [`crate::lens_bounds`]'s, tested there), and `ε` is at least
+    /// `‖M (V − J*) W⁻¹‖₂` (nalgebra's singular values) at each of its 16 vertices `V`. So is the
+    /// certificate's `ε` ([`Linearised::epsilon`], one box or the split one) the smaller of the two
+    /// oracles at most; and `ε` is no more than the largest vertex over all the sub-boxes (the documented
+    /// value, not a looser one). The sampled test above never gets near a vertex (the enclosures are wider than
+    /// the Jacobian's variation), so a vertex left out, a sub-box skipped that meets the ball, or a box
+    /// narrower than the ball passes it; here each fails. Rounding: sums of four 2x2 products and the
+    /// closed-form norm, ~1e-15 relative to the terms, which at the largest vertex are at most its size.
+    #[test]
+    fn epsilon_is_at_least_every_vertex_of_every_enclosure_of_the_ball() {
+        let lenses = [
+            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, 0.3, 0.05]).unwrap(),
+            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, -0.2, 0.02]).unwrap(),
+            LensCamera::new(
+                CameraModel::OpenCv,
+                &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
+            )
+            .unwrap(),
+            LensCamera::new(
+                CameraModel::OpenCvFisheye,
+                &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0005],
+            )
+            .unwrap(),
+        ];
+        let mut rng = Rng::new(17);
+        let (mut vertices, mut charted, mut split_won) = (0, 0, 0);
+        for lens in &lenses {
+            let camera = AnyCamera::from(lens);
+            for k in 0..12 {
+                let xc = match k % 3 {
+                    0 => Vector3::new(0.0, rng.uniform_in(-1.0, 1.0), 1.0),
+                    1 => Vector3::new(rng.uniform_in(-1.0, 1.0), 0.0, 1.0),
+                    _ => Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 1.0),
+                };
+                let xc = if lens.model() == CameraModel::OpenCvFisheye {
+                    xc * 2.0 - Vector3::z()
+                } else {
+                    xc
+                };
+                let l = if k % 2 == 0 {
+                    Matrix2::identity()
+                } else {
+                    Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0))
+                };
+                let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
+                let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
+                    continue;
+                };
+                let w_inverse = lin.w.try_inverse().expect("W is invertible");
+                let half = Vector2::new(w_inverse.row(0).norm(), w_inverse.row(1).norm());
+                let inside = |n: Vector2<f64>, rho: f64| (lin.w * (n - lin.n)).norm() < rho * (1.0 - 1e-9);
+                // The largest vertex over the enclosures of the p x p sub-boxes that meet the ball.
+                let oracle = |rho: f64, p: usize, all: bool, vertices: &mut usize| -> Option<f64> {
+                    let mut largest: f64 = 0.0;
+                    for a in 0..p {
+                        for b in 0..p {
+                            let corner = |i: usize, j: usize| {
+                                lin.n
+                                    + Vector2::new(
+                                        half.x * rho * (2.0 * i as f64 / p as f64 - 1.0),
+                                        half.y * rho * (2.0 * j as f64 / p as f64 - 1.0),
+                                    )
+                            };
+                            let (lo, hi) = (corner(a, b), corner(a + 1, b + 1));
+                            let meets = (0..81).any(|g| {
+                                let t = Vector2::new((g % 9) as f64 / 8.0, (g / 9) as f64 / 8.0);
+                                inside(lo + (hi - lo).component_mul(&t), rho)
+                            });
+                            if !meets && !all {
+                                continue;
+                            }
+                            let enclosure = match (&lin.ray, &lin.distortion) {
+                                (Some(r), Distortion::Fisheye(c)) => {
+                                    fisheye_ray_enclosure(c, lin.radius, &r.transpose(), &lo, &hi)?
+                                }
+                                _ => jacobian_enclosure(&lin.distortion, lin.radius, &lo, &hi)?,
+                            };
+                            for v in 0..16 {
+                                let vertex = Matrix2::from_fn(|r, c| {
+                                    let entry = enclosure[r][c];
+                                    if v >> (2 * r + c) & 1 == 1 {
+                                        entry.hi
+                                    } else {
+                                        entry.lo
+                                    }
+                                });
+                                let value = (lin.m * (vertex - lin.j) * w_inverse).singular_values().max();
+                                largest = largest.max(value);
+                                *vertices += 1;
+                            }
+                        }
+                    }
+                    Some(largest)
+                };
+                for rho in [0.5, 2.0, 8.0, 20.0] {
+                    let mut least: Option<f64> = None;
+                    for pieces in [1, 2, 3, SPLITS] {
+                        let (Some(eps), Some(largest)) =
+                            (lin.epsilon_in(rho, pieces), oracle(rho, pieces, false, &mut vertices))
+                        else {
+                            continue;
+                        };
+                        // No larger than the largest vertex of every sub-box, met or not (the code skips
+                        // some that miss the ball): the documented ε, not a looser one.
+                        if let Some(every) = oracle(rho, pieces, true, &mut 0) {
+                            assert!(
+                                eps <= every * (1.0 + 1e-11),
+                                "{:?}, ρ {rho}, {pieces} x {pieces} pieces: ε {eps} above every vertex's {every}",
+                                lens.model()
+                            );
+                        }
+                        assert!(
+                            eps >= largest * (1.0 - 1e-12),
+                            "{:?}, ρ {rho}, {pieces} x {pieces} pieces: ε {eps} below a vertex's {largest}",
+                            lens.model()
+                        );
+                        if pieces == 1 || pieces == SPLITS {
+                            least = Some(least.map_or(largest, |l: f64| l.min(largest)));
+                            split_won += usize::from(pieces == SPLITS && least == Some(largest));
+                        }
+                        charted += usize::from(lin.ray.is_some());
+                    }
+                    if let (Some(eps), Some(least)) = (lin.epsilon(rho), least) {
+                        assert!(
+                            eps >= least * (1.0 - 1e-12),
+                            "{:?}, ρ {rho}: the certificate's ε {eps} below both oracles' {least}",
+                            lens.model()
+                        );
+                    }
+                }
+            }
+        }
+        assert!(vertices > 100_000, "only {vertices} vertices checked");
+        assert!(charted > 0, "no ball in the ray chart was checked");
+        assert!(split_won > 0, "the split box never gave the smaller ε");
+    }
 }

@@ -791,4 +791,254 @@ mod tests {
         }
         assert!(compared >= 200, "{compared}");
     }
+
+    /// A random minorant `m(y) = f₀ + gᵀy + ½yᵀHy` in `N` unknowns (`H` of condition up to ~1e3) and a
+    /// random constraint `φ(y) = (c₀ + kᵀy)² − s₀ − pᵀy ≥ 0`, in the regimes that matter: the
+    /// unconstrained minimiser infeasible (the constraint active) or feasible, `k = 0` (a half-space),
+    /// `p = 0`, and `s₀` of either sign.
+    fn random_constrained<const N: usize>(
+        rng: &mut Rng,
+        case: usize,
+    ) -> (Minorant<N>, f64, SVector<f64, N>, f64, SVector<f64, N>) {
+        let a = SMatrix::<f64, N, N>::from_fn(|_, _| rng.normal());
+        let h = a.transpose() * a + SMatrix::<f64, N, N>::identity() * 10f64.powf(rng.uniform_in(-1.5, 0.5));
+        let cost = 10f64.powf(rng.uniform_in(-1.0, 1.0));
+        let hessian = h.cholesky().expect("positive definite");
+        // The unconstrained decrease ½gᵀH⁻¹g from 0.05 f₀ to 1.2 f₀ (the cap at 0 rarely decides).
+        let direction = SVector::<f64, N>::from_fn(|_, _| rng.normal());
+        let decrease = 0.5 * direction.dot(&hessian.solve(&direction));
+        let gradient = direction * (cost * rng.uniform_in(0.05, 1.2) / decrease).sqrt();
+        let m = Minorant {
+            cost,
+            gradient,
+            hessian,
+        };
+        let scale = 10f64.powf(rng.uniform_in(-1.0, 1.0));
+        let k = if case % 7 == 0 {
+            SVector::<f64, N>::zeros()
+        } else {
+            SVector::<f64, N>::from_fn(|_, _| rng.normal()) * scale
+        };
+        let p = if case % 5 == 0 {
+            SVector::<f64, N>::zeros()
+        } else {
+            SVector::<f64, N>::from_fn(|_, _| rng.normal()) * scale
+        };
+        // s₀ puts the unconstrained minimiser y* on either side of the boundary (φ(y*) = −δ), about as
+        // often inside as outside, or anywhere.
+        let c0 = rng.normal() * 0.5;
+        let free = -m.hessian.solve(&m.gradient);
+        let s0 = if case % 3 == 0 {
+            rng.normal()
+        } else {
+            (c0 + k.dot(&free)).powi(2) - p.dot(&free) + rng.normal() * (1.0 + scale * scale)
+        };
+        (m, c0, k, s0, p)
+    }
+
+    /// `m(y)` written out.
+    fn minorant_value<const N: usize>(m: &Minorant<N>, y: &SVector<f64, N>) -> f64 {
+        let h = m.hessian.l() * m.hessian.l().transpose();
+        m.cost + m.gradient.dot(y) + 0.5 * y.dot(&(h * y))
+    }
+
+    /// The S-lemma step against the exact constrained minimum in one unknown: `φ` is a convex
+    /// quadratic in `y`, so the feasible set is the line less an open interval (the roots of `φ`,
+    /// closed form), and the least `m` there is at the unconstrained minimiser when it is feasible and
+    /// at a root otherwise. The bound (which the code caps at `f₀`, part of the proof) must not exceed
+    /// that minimum; with its rounding margin of 1e-9 `f₀` it sits below it, so a margin added instead
+    /// of subtracted fails here, while the rounding of this oracle is ~1e-15 `f₀`. And it is the
+    /// S-lemma's exact value (the gap closes for one constraint) within 1e-6 on most of them.
+    #[test]
+    fn the_constrained_minimum_is_below_the_exact_minimum_in_one_unknown() {
+        let mut rng = Rng::new(41);
+        let (mut active, mut tight, mut checked) = (0, 0, 0);
+        for case in 0..20_000 {
+            let (m, c0, k, s0, p) = random_constrained::<1>(&mut rng, case);
+            let bound = m.minimum_subject_to(c0, &k, s0, &p);
+            let h = (m.hessian.l() * m.hessian.l().transpose())[(0, 0)];
+            let phi = |y: f64| (c0 + k[0] * y).powi(2) - s0 - p[0] * y;
+            let model = |y: f64| m.cost + m.gradient[0] * y + 0.5 * h * y * y;
+            let free = -m.gradient[0] / h;
+            // φ(y) = A y² + B y + C.
+            let (qa, qb, qc) = (k[0] * k[0], 2.0 * c0 * k[0] - p[0], c0 * c0 - s0);
+            let exact = if phi(free) >= 0.0 {
+                model(free)
+            } else if qa == 0.0 && qb == 0.0 {
+                // φ a negative constant: nothing is feasible.
+                f64::INFINITY
+            } else if qa == 0.0 {
+                // A half-line: its end.
+                model(-qc / qb)
+            } else {
+                let disc = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
+                let roots = [(-qb - disc) / (2.0 * qa), (-qb + disc) / (2.0 * qa)];
+                active += 1;
+                roots.map(model).into_iter().fold(f64::INFINITY, f64::min)
+            };
+            // The cost is never negative: the bound is capped at 0 below as well as at f₀ above.
+            let target = exact.min(m.cost).max(0.0);
+            assert!(
+                bound <= target + 1e-12 * m.cost,
+                "case {case}: bound {bound} above the least feasible value {target} (f₀ {})",
+                m.cost
+            );
+            tight += usize::from(bound >= target - 1e-6 * m.cost);
+            checked += 1;
+        }
+        eprintln!("{active} active constraints; the bound exact on {tight} of {checked}");
+        assert!(active >= 5000, "only {active} active constraints");
+        assert!(
+            tight * 10 >= checked * 9,
+            "the bound is the exact minimum on only {tight} of {checked}"
+        );
+    }
+
+    /// The same in two unknowns against the exact minimum on the feasible set's boundary: with `e`
+    /// along `k` and `e⊥` across it, `φ` is linear in the `e⊥` coordinate, so the boundary `φ = 0` is
+    /// the graph of a quadratic over the `e` coordinate, minimised by a scan and golden sections (an
+    /// upper estimate of the minimum, so it cannot fail wrongly); and at random feasible points.
+    #[test]
+    fn the_constrained_minimum_is_below_the_minimum_on_the_boundary_in_two_unknowns() {
+        let mut rng = Rng::new(43);
+        let (mut active, mut tight) = (0, 0);
+        let cases = 3000;
+        for case in 0..cases {
+            let (m, c0, k, s0, p) = random_constrained::<2>(&mut rng, case + 1);
+            let bound = m.minimum_subject_to(c0, &k, s0, &p);
+            let phi = |y: &Vector2<f64>| (c0 + k.dot(y)).powi(2) - s0 - p.dot(y);
+            let free = -m.hessian.solve(&m.gradient);
+            let mut least = m.cost;
+            if phi(&free) >= 0.0 {
+                least = least.min(minorant_value(&m, &free));
+            } else if k.norm() > 0.0 && p.norm() > 0.0 {
+                active += 1;
+                let e = k.normalize();
+                let across = Vector2::new(-e.y, e.x);
+                let (kn, pe, pa) = (k.norm(), p.dot(&e), p.dot(&across));
+                if pa.abs() < 1e-3 * p.norm() {
+                    continue;
+                }
+                // φ(α e + β e⊥) = (c₀ + ‖k‖α)² − s₀ − p_e α − p_⊥ β = 0.
+                let point = |alpha: f64| {
+                    let beta = ((c0 + kn * alpha).powi(2) - s0 - pe * alpha) / pa;
+                    e * alpha + across * beta
+                };
+                let along = |alpha: f64| minorant_value(&m, &point(alpha));
+                let reach = 10.0 * (1.0 + free.norm() + (s0.abs() + c0 * c0).sqrt() / kn);
+                let steps = 4000;
+                let h = 2.0 * reach / steps as f64;
+                let (mut best_alpha, mut best) = (0.0, f64::INFINITY);
+                for i in 0..=steps {
+                    let alpha = -reach + h * i as f64;
+                    if along(alpha) < best {
+                        (best_alpha, best) = (alpha, along(alpha));
+                    }
+                }
+                let (mut lo, mut hi) = (best_alpha - h, best_alpha + h);
+                let g = (5f64.sqrt() - 1.0) / 2.0;
+                for _ in 0..120 {
+                    let (x, y) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                    if along(x) < along(y) {
+                        hi = y;
+                    } else {
+                        lo = x;
+                    }
+                }
+                least = least.min(best).min(along(0.5 * (lo + hi)));
+            } else {
+                continue;
+            }
+            // Random feasible points near the minimiser: none below the bound either.
+            for _ in 0..50 {
+                let y = free + Vector2::new(rng.normal(), rng.normal()) * (1.0 + free.norm());
+                if phi(&y) >= 0.0 {
+                    least = least.min(minorant_value(&m, &y));
+                }
+            }
+            let least = least.max(0.0);
+            assert!(
+                bound <= least + 1e-12 * m.cost,
+                "case {case}: bound {bound} above the feasible value {least} (f₀ {})",
+                m.cost
+            );
+            tight += usize::from(bound >= least - 1e-6 * m.cost);
+        }
+        eprintln!("{active} active constraints; the bound exact on {tight} of {cases}");
+        assert!(active >= 600, "only {active} active constraints");
+        assert!(
+            tight * 10 >= cases * 8,
+            "the bound is the exact minimum on only {tight} of {cases}"
+        );
+    }
+
+    /// In the quadric's nine unknowns, against the constrained minimiser found from the primal side:
+    /// `y(λ)` minimises `m − λφ` (a linear solve of the full `H − 2λkkᵀ` by LU, not the code's
+    /// Sherman-Morrison), `φ(y(λ))` increases with `λ` (the dual is concave), and bisection on its sign
+    /// gives a feasible point with `φ ≥ 0` at which `m` is the constrained minimum up to the
+    /// bisection's width. `m` there, and at random feasible points, is at least the bound.
+    #[test]
+    fn the_constrained_minimum_is_below_the_feasible_minimiser_in_nine_unknowns() {
+        let mut rng = Rng::new(47);
+        let (mut active, mut tight) = (0, 0);
+        let cases = 3000;
+        for case in 0..cases {
+            let (m, c0, k, s0, p) = random_constrained::<9>(&mut rng, case);
+            let bound = m.minimum_subject_to(c0, &k, s0, &p);
+            let h = m.hessian.l() * m.hessian.l().transpose();
+            let phi = |y: &SVector<f64, 9>| (c0 + k.dot(y)).powi(2) - s0 - p.dot(y);
+            let stationary = |lambda: f64| {
+                let a = h - k * k.transpose() * (2.0 * lambda);
+                let rhs = -(m.gradient - k * (2.0 * lambda * c0) + p * lambda);
+                a.lu().solve(&rhs)
+            };
+            let free = stationary(0.0).expect("H is invertible");
+            let mut least = m.cost;
+            if phi(&free) >= 0.0 {
+                least = least.min(minorant_value(&m, &free));
+            } else {
+                // λ below 1/(2 kᵀH⁻¹k), where H − 2λkkᵀ stays positive definite.
+                let kk = k.dot(&m.hessian.solve(&k));
+                let top = if kk > 0.0 { 0.5 / kk } else { 1e12 };
+                let (mut lo, mut hi) = (0.0, top);
+                let mut feasible = None;
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    match stationary(mid) {
+                        Some(y) if phi(&y) >= 0.0 => {
+                            feasible = Some(y);
+                            hi = mid;
+                        }
+                        _ => lo = mid,
+                    }
+                }
+                if let Some(y) = feasible {
+                    active += 1;
+                    least = least.min(minorant_value(&m, &y));
+                }
+            }
+            for _ in 0..50 {
+                let y = free + SVector::<f64, 9>::from_fn(|_, _| rng.normal()) * (1.0 + free.norm());
+                if phi(&y) >= 0.0 {
+                    least = least.min(minorant_value(&m, &y));
+                }
+            }
+            let least = least.max(0.0);
+            assert!(
+                bound <= least + 1e-12 * m.cost,
+                "case {case}: bound {bound} above the feasible value {least} (f₀ {})",
+                m.cost
+            );
+            tight += usize::from(bound >= least - 1e-6 * m.cost);
+        }
+        eprintln!("{active} active constraints; the bound exact on {tight} of {cases}");
+        assert!(
+            active >= 1000,
+            "only {active} active constraints with a feasible minimiser"
+        );
+        assert!(
+            tight * 10 >= cases * 8,
+            "the bound is the exact minimum on only {tight} of {cases}"
+        );
+    }
 }

@@ -44,6 +44,7 @@ pub use views::View;
 #[doc(hidden)]
 pub mod testing {
     pub use super::covariance::whitening;
+    pub use super::quadric::certificate::convexity_bound_at as quadric_convexity_bound;
     pub use super::views::{baseline, centre, depth, depth_normalized};
 }
 

@@ -544,4 +544,103 @@ mod tests {
             "the least margin {tightest} (the lemma should be tight at c = 0)"
         );
     }
+
+    /// The reach of the endpoint lemma (`along_line_reach`) against the residuals the lemma allows,
+    /// both ways: inside a confinement ball `r = ‖ê + u + Δ u‖` with `‖Δ‖ ≤ ε`, so `r(a)` can be anything
+    /// between `√(ρ² + a²) ∓ ε ‖u(a)‖` along the line (`u(a) = ρ ν + a τ − ê`, `‖u(a)‖` here the exact
+    /// distance, not the lemma's `|a| + c`). A minimiser can then sit at any `a` whose least possible
+    /// residual is at most the least of the largest possible ones, `U = min (√(ρ² + a′²) + ε ‖u(a′)‖)`
+    /// (take `r` at the lower envelope there and at the upper one elsewhere); the farthest such `a`
+    /// (a scan of `|a| ≤ (U + ε c)/(1 − ε)`, beyond which the lower envelope exceeds `U`, then
+    /// bisection) must lie within the reach, for `|ρ|` and `c` at or below the bounds passed. The
+    /// worst cases push the foot's residual up by `ε c` (the term a one-sided perturbation,
+    /// `r = ‖ê + u‖ − ε ‖u‖`, never exercises) and have `ê` off the line's normal so that `‖u(a)‖`
+    /// nears `|a| + c` on one side. The reach is also the root of the lemma's own inequality, so a
+    /// looser one fails as well.
+    #[test]
+    fn the_reach_holds_every_minimiser_of_a_residual_within_the_lemma() {
+        let mut rng = Rng::new(23);
+        let mut tightest = f64::INFINITY;
+        for case in 0..3000 {
+            let eps = match case % 3 {
+                0 => rng.uniform_in(0.0, 0.2),
+                1 => rng.uniform_in(0.2, 0.6),
+                _ => rng.uniform_in(0.6, 0.95),
+            };
+            let e_hat = Vector2::new(rng.normal(), rng.normal()) * 10f64.powf(rng.uniform_in(-1.0, 1.0));
+            let nu = Vector2::new(rng.normal(), rng.normal()).normalize();
+            let tau = Vector2::new(-nu.y, nu.x);
+            // The foot ρ ν: at the answer (ρ = νᵀê, c along τ), near it, or anywhere.
+            let rho = match case % 4 {
+                0 => nu.dot(&e_hat),
+                1 => nu.dot(&e_hat) + rng.normal() * 1e-2 * e_hat.norm(),
+                _ => rng.uniform_in(-2.0, 2.0) * e_hat.norm(),
+            };
+            let foot = nu * rho;
+            let c = (foot - e_hat).norm();
+            let distance = |a: f64| (foot + tau * a - e_hat).norm();
+            let upper = |a: f64| (rho * rho + a * a).sqrt() + eps * distance(a);
+            let lower = |a: f64| (rho * rho + a * a).sqrt() - eps * distance(a);
+            // U: the upper envelope is convex in a, and at least |a|, so its minimum lies in |a| ≤ upper(0).
+            let (mut lo, mut hi) = (-upper(0.0), upper(0.0));
+            let g = (5f64.sqrt() - 1.0) / 2.0;
+            for _ in 0..200 {
+                let (x, y) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                if upper(x) < upper(y) {
+                    hi = y;
+                } else {
+                    lo = x;
+                }
+            }
+            let least_upper = upper(0.5 * (lo + hi)).min(upper(0.0));
+            // The farthest a with lower(a) ≤ U, on each side.
+            let limit = (least_upper + eps * c) / (1.0 - eps) * (1.0 + 1e-9) + 1e-12;
+            let steps = 4000;
+            let mut farthest: f64 = 0.0;
+            for side in [-1.0, 1.0] {
+                let at = |i: usize| side * limit * i as f64 / steps as f64;
+                let Some(i) = (0..=steps).rev().find(|&i| lower(at(i)) <= least_upper) else {
+                    continue;
+                };
+                let (mut inside, mut outside) = (at(i), at((i + 1).min(steps)));
+                for _ in 0..100 {
+                    let mid = 0.5 * (inside + outside);
+                    if lower(mid) <= least_upper {
+                        inside = mid;
+                    } else {
+                        outside = mid;
+                    }
+                }
+                farthest = farthest.max(inside.abs());
+            }
+            // The reach at bounds of |ρ| and c: the values themselves, or above them.
+            let (rho_max, c_max) = if case % 5 == 0 {
+                (rho.abs() * rng.uniform_in(1.0, 2.0), c * rng.uniform_in(1.0, 2.0))
+            } else {
+                (rho.abs(), c)
+            };
+            let reach = along_line_reach(eps, rho_max, c_max);
+            // Rounding: the envelopes are sums of a few square roots, ~1e-15 relative to their size.
+            assert!(
+                farthest <= reach * (1.0 + 1e-9) + 1e-12 * (1.0 + e_hat.norm()),
+                "ε {eps}, ρ {rho}, c {c}: a minimiser may sit at |a| = {farthest}, beyond the reach {reach}"
+            );
+            if farthest > 0.0 {
+                tightest = tightest.min(reach / farthest);
+            }
+            // And no looser than the lemma: the reach is the root of its inequality
+            // √(ρ² + a²) − ε (a + c) = |ρ| + ε c (at the bounds passed), which only grows past it.
+            let lemma = |a: f64| (rho_max * rho_max + a * a).sqrt() - eps * (a + c_max) - rho_max - eps * c_max;
+            assert!(
+                lemma(reach).abs() <= 1e-9 * (rho_max + reach + c_max) && lemma(reach * (1.0 + 1e-6) + 1e-12) > 0.0,
+                "ε {eps}, ρ {rho_max}, c {c_max}: the reach {reach} is not the root of the lemma's inequality"
+            );
+        }
+        // Not vacuous: some case comes within 10 % of the reach.
+        assert!(
+            tightest < 1.1,
+            "the reach is at least {tightest}x the farthest minimiser"
+        );
+        eprintln!("least reach / farthest minimiser {tightest:.4}");
+    }
 }

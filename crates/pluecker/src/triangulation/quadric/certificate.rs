@@ -102,6 +102,30 @@ pub(crate) fn convexity_bound(views: &[FractionalResidual<5, 10>], reference: &S
     Some(bound)
 }
 
+/// The test hook [`crate::triangulation::testing::quadric_convexity_bound`]: [`convexity_bound`] at
+/// the world ellipsoid `at` (any, not only a local minimum), in the frame and with the reference that
+/// [`super::optimal`] uses; `None` when the conics or covariances are not valid or the test fails.
+pub fn convexity_bound_at(
+    projections: &[nalgebra::Matrix3x4<f64>],
+    conics: &[Matrix3<f64>],
+    covariances: Option<&[super::Matrix5]>,
+    at: &crate::geometry::quadric::Ellipsoid,
+) -> Option<f64> {
+    let frames = conics
+        .iter()
+        .map(super::residual::ConicFrame::of_conic)
+        .collect::<Option<Vec<_>>>()?;
+    let problem = super::QuadricProblem {
+        cameras: projections.to_vec(),
+        frames,
+        whitenings: crate::triangulation::covariance::whitenings(covariances, projections.len(), "covariances").ok()?,
+    };
+    let sim = problem.frame_of(at);
+    let frame_dual = super::transform_dual(&sim.matrix(), &at.dual());
+    let reference = crate::geometry::quadric::sym4_to_vec(&(-frame_dual / frame_dual[(3, 3)].abs()));
+    convexity_bound(&problem.views(&sim), &reference)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
