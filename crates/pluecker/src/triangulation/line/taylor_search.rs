@@ -451,7 +451,6 @@ mod tests {
                 let oracle = TaylorOracle {
                     chart: &chart,
                     views: &views,
-                    restricted: None,
                     incumbent: cost,
                     gap: 1e-3,
                     at_local,
