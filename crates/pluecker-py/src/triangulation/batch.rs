@@ -331,18 +331,18 @@ impl PyBatchReport {
     pub(crate) fn unstarted(py: Python<'_>, method: Method, cost_kind: CostKind, n: usize) -> PyResult<Self> {
         Ok(PyBatchReport {
             method: method.as_str(),
-            cost: column(py, f64::NAN, n)?,
-            cost_kind: column(py, cost_kind.as_str(), n)?,
-            lower_bound: column(py, f64::NAN, n)?,
-            raw_lower_bound: column(py, f64::NAN, n)?,
-            relative_gap: column(py, f64::NAN, n)?,
-            certified: column(py, false, n)?,
-            certificate: column(py, CertificateKind::None.as_str(), n)?,
-            status: column(py, Status::Interrupted.as_str(), n)?,
-            nodes: column(py, 0, n)?,
-            iterations: column(py, 0, n)?,
-            time_seconds: column(py, 0.0, n)?,
-            residual_dof: column(py, 0, n)?,
+            cost: column(py, f64::NAN, n, 1)?,
+            cost_kind: column(py, cost_kind.as_str(), n, 1)?,
+            lower_bound: column(py, f64::NAN, n, 1)?,
+            raw_lower_bound: column(py, f64::NAN, n, 1)?,
+            relative_gap: column(py, f64::NAN, n, 1)?,
+            certified: column(py, false, n, 1)?,
+            certificate: column(py, CertificateKind::None.as_str(), n, 1)?,
+            status: column(py, Status::Interrupted.as_str(), n, 1)?,
+            nodes: column(py, 0, n, 1)?,
+            iterations: column(py, 0, n, 1)?,
+            time_seconds: column(py, 0.0, n, 1)?,
+            residual_dof: column(py, 0, n, 1)?,
             errors: Vec::new(),
         })
     }
@@ -528,14 +528,19 @@ pack_struct!(PyBatchReport {
     errors
 });
 
-/// An output column of `n` copies of `value`; a `MemoryError` rather than an abort when it cannot be
-/// allocated. Filled (its pages touched) a chunk at a time with the GIL released, Python's signal
-/// handlers running between chunks ([`crate::interrupt::in_chunks`]).
-pub(crate) fn column<T: Clone + Send + Sync>(py: Python<'_>, value: T, n: usize) -> PyResult<Vec<T>> {
+/// An output column of `tracks` rows of `per_track` copies of `value` each; a `MemoryError` rather
+/// than an abort when it cannot be allocated. Filled (its pages touched) a chunk at a time with the GIL
+/// released, Python's signal handlers running between chunks ([`crate::interrupt::in_chunks`]).
+pub(crate) fn column<T: Clone + Send + Sync>(
+    py: Python<'_>,
+    value: T,
+    tracks: usize,
+    per_track: usize,
+) -> PyResult<Vec<T>> {
+    let too_many = || PyMemoryError::new_err(format!("cannot allocate the results of {tracks} tracks"));
+    let n = tracks.checked_mul(per_track).ok_or_else(too_many)?;
     let mut entries = Vec::new();
-    entries
-        .try_reserve_exact(n)
-        .map_err(|_| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))?;
+    entries.try_reserve_exact(n).map_err(|_| too_many())?;
     in_chunks(py, n, |chunk| {
         py.allow_threads(|| entries.resize(chunk.end, value.clone()));
         Ok(())

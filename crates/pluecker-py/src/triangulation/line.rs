@@ -33,7 +33,6 @@ use pluecker::triangulation::line::{
 };
 use pluecker::triangulation::line::{ImageLines, LineTracks, SparseLineTracks, SparseSegmentTracks};
 use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
-use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -292,16 +291,12 @@ impl EstimateColumns for PyLineTriangulations {
     type Row<'a> = LineRow<'a>;
 
     fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
-        let entries = |per_track: usize| {
-            let total = n.checked_mul(per_track);
-            total.ok_or_else(|| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))
-        };
         Ok(PyLineTriangulations {
-            plucker: column(py, f64::NAN, entries(6)?)?,
-            point: column(py, f64::NAN, entries(3)?)?,
-            direction: column(py, f64::NAN, entries(3)?)?,
-            chart_axes: column(py, f64::NAN, entries(6)?)?,
-            covariance: column(py, f64::NAN, entries(16)?)?,
+            plucker: column(py, f64::NAN, n, 6)?,
+            point: column(py, f64::NAN, n, 3)?,
+            direction: column(py, f64::NAN, n, 3)?,
+            chart_axes: column(py, f64::NAN, n, 6)?,
+            covariance: column(py, f64::NAN, n, 16)?,
             inliers: InlierColumns::default(),
         })
     }

@@ -39,7 +39,6 @@ use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;
 use pluecker::{AnyCamera, Pose};
-use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -174,10 +173,9 @@ impl EstimateColumns for PyPointTriangulations {
     type Row<'a> = PointRow<'a>;
 
     fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
-        let too_many = || PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks"));
         Ok(PyPointTriangulations {
-            x: column(py, f64::NAN, n.checked_mul(3).ok_or_else(too_many)?)?,
-            covariance: column(py, f64::NAN, n.checked_mul(9).ok_or_else(too_many)?)?,
+            x: column(py, f64::NAN, n, 3)?,
+            covariance: column(py, f64::NAN, n, 9)?,
             inliers: InlierColumns::default(),
         })
     }

@@ -23,7 +23,6 @@ use pluecker::triangulation::quadric::{
 use pluecker::triangulation::quadric::{QuadricTracks, SparseQuadricTracks};
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{CostKind, Primitive, Report};
-use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -165,17 +164,13 @@ impl EstimateColumns for PyQuadricTriangulations {
     type Row<'a> = QuadricRow<'a>;
 
     fn unstarted(py: Python<'_>, n: usize) -> PyResult<Self> {
-        let entries = |per_track: usize| {
-            let total = n.checked_mul(per_track);
-            total.ok_or_else(|| PyMemoryError::new_err(format!("cannot allocate the results of {n} tracks")))
-        };
         Ok(PyQuadricTriangulations {
-            dual: column(py, f64::NAN, entries(16)?)?,
-            primal: column(py, f64::NAN, entries(16)?)?,
-            centre: column(py, f64::NAN, entries(3)?)?,
-            semi_axes: column(py, f64::NAN, entries(3)?)?,
-            axes: column(py, f64::NAN, entries(9)?)?,
-            covariance: column(py, f64::NAN, entries(81)?)?,
+            dual: column(py, f64::NAN, n, 16)?,
+            primal: column(py, f64::NAN, n, 16)?,
+            centre: column(py, f64::NAN, n, 3)?,
+            semi_axes: column(py, f64::NAN, n, 3)?,
+            axes: column(py, f64::NAN, n, 9)?,
+            covariance: column(py, f64::NAN, n, 81)?,
         })
     }
 
