@@ -86,7 +86,7 @@ bench: develop
 	cargo bench -p pluecker --bench pose
 	cargo bench -p pluecker --bench triangulation
 
-# About 5,000 mutants: a whole run takes days on two cores, so it is split into shards, e.g.
+# About 9,000 mutants: a whole run takes days on two cores, so it is split into shards, e.g.
 # `make mutants SHARD=0/100` (a 1 % sample, round-robin over every file). Results in mutants.out/.
 CARGO_MUTANTS_VERSION := 27.1.0
 mutants: develop
