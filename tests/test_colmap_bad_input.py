@@ -226,6 +226,43 @@ def test_a_truncated_model_file_is_named(tmp_path, name):
     assert colmap.read(tmp_path).num_points3D() == 30
 
 
+@pytest.mark.parametrize("name", ["rigs", "cameras", "frames", "images", "points3D"])
+def test_a_truncated_text_model_file_is_named(tmp_path, name):
+    """A text model cut short read as a smaller model (points3D.txt cut inside its last line gave 30
+    points, the last one's track short) or failed in pycolmap's words without the file. Cut anywhere
+    (inside the header, inside a line, or after a whole record), each file is named; a file written
+    by hand (no stated count, no final line end) still reads."""
+    rec = model(cameras=2, points=30)
+    rec.write_text(str(tmp_path))
+    path = tmp_path / f"{name}.txt"
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    header = sum(1 for line in lines if line.startswith(b"#"))
+    per_record = 2 if name == "images" else 1
+    n = (len(lines) - 1 - header) // per_record
+    rng = np.random.default_rng(len(name))
+    inside = sorted({*rng.integers(1, len(data) - 1, 8).tolist(), len(data) - 2, 3})
+    for cut in inside:
+        path.write_bytes(data[:cut])
+        if data[cut - 1:cut] == b"\n":  # a cut after a whole line is the other case below
+            continue
+        with pytest.raises(colmap.ModelError, match=rf"^{re.escape(str(path))}: truncated: the file \({cut} bytes\) "
+                                                    r"ends inside (its header|record \d+ of \d+ \(COLMAP ends every "
+                                                    r"line\))$"):
+            colmap.read(tmp_path)
+    kept = max(n - 1, 0)
+    path.write_bytes(b"\n".join(lines[:header + kept * per_record]) + b"\n")
+    with pytest.raises(colmap.ModelError, match=rf"^{re.escape(str(path))}: truncated: the file \(\d+ bytes\) ends "
+                                                rf"after record {kept} of the {n} its header states$"):
+        colmap.read(tmp_path)
+    # Without the stated count and the final line end (as a person may write it), pycolmap decides.
+    body = [line for line in lines if not line.startswith(b"#")]
+    path.write_bytes(b"\n".join(body).rstrip(b"\n"))
+    assert colmap.read(tmp_path).num_points3D() == 30
+    path.write_bytes(data)
+    assert colmap.read(tmp_path).num_points3D() == 30
+
+
 def test_the_command_line_names_a_truncated_file(tmp_path, capsys):
     rec = model(points=30)
     (tmp_path / "in").mkdir()

@@ -18,6 +18,7 @@ pycolmap objects import it when called and say how to install it when it is miss
 from __future__ import annotations
 
 import copy
+import re
 import struct
 from typing import Any, NamedTuple
 
@@ -138,8 +139,9 @@ def read(path: Any) -> Any:
                          f"{', '.join(present)}; a model needs cameras, images and points3D, rigs and frames are "
                          "optional)")
     # A binary model is checked first: pycolmap reads past the end of a truncated file, and then gives
-    # std::bad_alloc, loops without end or reads the zeros as a model.
-    problem = _binary_model_problem(folder) if ext == "bin" else None
+    # std::bad_alloc, loops without end or reads the zeros as a model. A text model cut short may read
+    # as a smaller model, or fail with pycolmap's words for the line it stopped at.
+    problem = _binary_model_problem(folder) if ext == "bin" else _text_model_problem(folder)
     if problem is not None:
         raise ModelError(problem)
     try:
@@ -254,6 +256,41 @@ def _binary_model_problem(folder: Any) -> str | None:
             return f"{path}: truncated: the file ({len(f.data)} bytes) ends inside {where}"
         if f.at != len(f.data):
             return f"{path}: {len(f.data) - f.at} bytes after its {n} records: not a COLMAP model file"
+    return None
+
+
+#: The header line in which COLMAP states a text model file's number of records.
+_TEXT_COUNT = re.compile(rb"# Number of (?:rigs|cameras|frames|images|points): (\d+)")
+
+
+def _text_model_problem(folder: Any) -> str | None:
+    """What is wrong with the first text model file of ``folder`` that COLMAP wrote (its header states
+    the number of records; COLMAP ends every line) but that is cut short: it ends inside its header or
+    a line, or holds fewer records than its header says (one line naming the file); else ``None``. A file without
+    that header line (written by hand) is left to pycolmap, as are records beyond the stated number."""
+    for kind in MODEL_FILES:
+        path = folder / f"{kind}.txt"
+        if not path.is_file():
+            continue
+        data = path.read_bytes()
+        lines = data.split(b"\n")
+        header = 0
+        while header < len(lines) and lines[header].startswith(b"#"):
+            header += 1
+        stated = [m for m in map(_TEXT_COUNT.match, lines[:header]) if m]
+        if header == len(lines) and data and not data.endswith(b"\n"):
+            return f"{path}: truncated: the file ({len(data)} bytes) ends inside its header"
+        if not stated:
+            continue
+        n = int(stated[0].group(1))
+        per_record = 2 if kind == "images" else 1  # an image's pose line, then its points line
+        complete = (len(lines) - 1 - header) // per_record  # the part after the last "\n" is no line
+        if not data.endswith(b"\n"):
+            return (f"{path}: truncated: the file ({len(data)} bytes) ends inside record {complete + 1} of {n} "
+                    "(COLMAP ends every line)")
+        if complete < n:
+            return (f"{path}: truncated: the file ({len(data)} bytes) ends after record {complete} of the {n} "
+                    "its header states")
     return None
 
 
