@@ -352,12 +352,11 @@ mod tests {
         }
     }
 
-    #[test]
-    fn epsilon_bounds_the_sampled_variation_of_the_jacobian_on_the_ball() {
-        // ‖M (J(n) − J*) W⁻¹‖₂ at points of the ball {‖W (n − n*)‖ ≤ ρ}, J by central differences of the
-        // distortion map, never exceeds ε (one box and split). Points on the axes too, where one entry of
-        // J varies most (a bound that left out an entry's extreme would show there).
-        let lenses = [
+    /// Two radial lenses (barrel and pincushion), a strong OPENCV one and an OPENCV_FISHEYE one. The
+    /// fisheye's points lie off axis, in the ray chart: there J (of D ∘ h) is not symmetric, so an
+    /// enclosure whose off-diagonal entries were swapped would show.
+    fn test_lenses() -> [LensCamera; 4] {
+        [
             LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, 0.3, 0.05]).unwrap(),
             LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, -0.2, 0.02]).unwrap(),
             LensCamera::new(
@@ -365,14 +364,20 @@ mod tests {
                 &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
             )
             .unwrap(),
-            // Off axis, in the ray chart: there J (of D ∘ h) is not symmetric, so an enclosure whose
-            // off-diagonal entries were swapped would show.
             LensCamera::new(
                 CameraModel::OpenCvFisheye,
                 &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0005],
             )
             .unwrap(),
-        ];
+        ]
+    }
+
+    #[test]
+    fn epsilon_bounds_the_sampled_variation_of_the_jacobian_on_the_ball() {
+        // ‖M (J(n) − J*) W⁻¹‖₂ at points of the ball {‖W (n − n*)‖ ≤ ρ}, J by central differences of the
+        // distortion map, never exceeds ε (one box and split). Points on the axes too, where one entry of
+        // J varies most (a bound that left out an entry's extreme would show there).
+        let lenses = test_lenses();
         let mut rng = Rng::new(13);
         let (mut tightest, mut charted) = (f64::INFINITY, 0);
         for lens in &lenses {
@@ -492,20 +497,7 @@ mod tests {
     /// closed-form norm, ~1e-15 relative to the terms, which at the largest vertex are at most its size.
     #[test]
     fn epsilon_is_at_least_every_vertex_of_every_enclosure_of_the_ball() {
-        let lenses = [
-            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, 0.3, 0.05]).unwrap(),
-            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, -0.2, 0.02]).unwrap(),
-            LensCamera::new(
-                CameraModel::OpenCv,
-                &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
-            )
-            .unwrap(),
-            LensCamera::new(
-                CameraModel::OpenCvFisheye,
-                &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0005],
-            )
-            .unwrap(),
-        ];
+        let lenses = test_lenses();
         let mut rng = Rng::new(17);
         let (mut vertices, mut charted, mut split_won) = (0, 0, 0);
         for lens in &lenses {
