@@ -102,9 +102,10 @@ pub(crate) fn convexity_bound(views: &[FractionalResidual<5, 10>], reference: &S
     Some(bound)
 }
 
-/// The test hook [`crate::triangulation::testing::quadric_convexity_bound`]: [`convexity_bound`] at
-/// the world ellipsoid `at` (any, not only a local minimum), in the frame and with the reference that
-/// [`super::optimal`] uses; `None` when the conics or covariances are not valid or the test fails.
+/// The test hook `triangulation::testing::quadric_convexity_bound`: `convexity_bound` (this module)
+/// at the world ellipsoid `at` (any, not only a local minimum), in the frame and with the reference
+/// that the quadric's `optimal` search uses; `None` when the conics or covariances are not valid or
+/// the test fails.
 pub fn convexity_bound_at(
     projections: &[nalgebra::Matrix3x4<f64>],
     conics: &[Matrix3<f64>],
