@@ -568,4 +568,79 @@ mod tests {
             "only {convex_roots} root boxes with a positive bound at the global minimum"
         );
     }
+
+    /// The step from the curvature to the hull bound, on charts centred at lines off the minimum, where
+    /// the gradient term `‖∇f(0)‖²/(2μ)` decides (at a local minimum it is ~0, so a bug in it passes
+    /// every other test). With `μ` the curvature lower bound over the box (the Taylor bound's claim,
+    /// tested with it), `f(w) ≥ f(0) + ∇f(0)·w + ½μ‖w‖²` there, so the bound is no more than that
+    /// quadratic's least value over the box, computed here coordinate by coordinate (each coordinate's
+    /// minimiser `−gᵢ/μ` clamped to the box), less the rounding margin 1e-9 `f(0)` that the bound keeps
+    /// (half of it allowed for the rounding of these few operations); and no more than the written-out
+    /// cost at points of the box.
+    #[test]
+    fn the_hull_bound_is_below_the_curvature_minorant_off_the_minimum() {
+        let opts = TriangulationOptions::default();
+        let (mut checked, mut inside) = (0, 0);
+        for seed in 0..300u64 {
+            let (problem, (a, b)) = problem(3 + seed as usize % 2, 900 + seed, 0.01);
+            let sim = Similarity::of_cameras(&problem.cameras);
+            let views = problem.views(&sim);
+            let truth = plucker::transform(&sim.matrix(), &plucker::from_points(&a, &b));
+            let Some(start) = OrthonormalLine::from_plucker(&truth) else {
+                continue;
+            };
+            let best = trust_region::minimize(&LineObjective { views: &views }, start, &opts.local)
+                .0
+                .to_plucker();
+            let Some(at_minimum) = TwoViewChart::new(&problem, &sim, &views, &best, fraction::cost(&views, &best))
+            else {
+                continue;
+            };
+            let mut rng = Rng::new(seed);
+            let step = Vector4::from_fn(|_, _| rng.normal()) * 10f64.powf(rng.uniform_in(-3.0, 0.0));
+            let line = at_minimum.line(&step);
+            let cost = fraction::cost(&views, &line);
+            let Some(chart) = TwoViewChart::new(&problem, &sim, &views, &line, cost) else {
+                continue;
+            };
+            let (f0, g0) = cost_and_gradient(&chart.views, &Vector4::zeros());
+            let oracle = TaylorOracle {
+                chart: &chart,
+                views: &views,
+                incumbent: cost,
+                gap: 1e-3,
+                at_local: (f0, g0),
+                local: opts.local,
+            };
+            let root = chart.root(cost.sqrt());
+            for scale in [1e-3, 1e-2, 1e-1, 1.0] {
+                let lower: Vec<f64> = (0..4).map(|i| root.lower[i].min(0.0) * scale).collect();
+                let upper: Vec<f64> = (0..4).map(|i| root.upper[i].max(0.0) * scale).collect();
+                let bound = oracle.hull_bound(&Region::new(lower.clone(), upper.clone()));
+                if !(bound > 0.0) {
+                    continue;
+                }
+                let mu = bound_over_box(&chart.views, &lower, &upper, f64::INFINITY).curvature;
+                let minimiser = Vector4::from_fn(|i, _| (-g0[i] / mu).clamp(lower[i], upper[i]));
+                let least = f0 + g0.dot(&minimiser) + 0.5 * mu * minimiser.norm_squared();
+                inside += usize::from((0..4).all(|i| minimiser[i] == -g0[i] / mu));
+                assert!(
+                    bound <= least - 0.5e-9 * f0,
+                    "seed {seed}, scale {scale}: hull bound {bound} not below the minorant's least {least} \
+                     less the margin (f0 {f0}, μ {mu})"
+                );
+                for _ in 0..100 {
+                    let w = Vector4::from_fn(|i, _| rng.uniform_in(lower[i], upper[i]));
+                    let f = independent_cost(&problem, &sim, &chart.line(&w));
+                    assert!(
+                        bound <= f * (1.0 + 1e-9),
+                        "seed {seed}, scale {scale}: hull bound {bound} above the cost {f} at {w}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        eprintln!("{checked} boxes with a positive bound, {inside} with the minorant's minimiser inside");
+        assert!(checked >= 200 && inside >= 50, "{checked} boxes, {inside} inside");
+    }
 }
