@@ -243,6 +243,35 @@ mod tests {
         f
     }
 
+    /// Projected gradient descent of the chart's cost in `region` from `start` (steps doubled after a
+    /// decrease, halved after an increase), at most `iterations` steps: the least cost reached and its
+    /// point.
+    fn projected_descent(
+        chart: &TwoViewChart,
+        region: &Region,
+        start: Vector4<f64>,
+        iterations: usize,
+    ) -> (f64, Vector4<f64>) {
+        let project = |w: Vector4<f64>| Vector4::from_fn(|i, _| w[i].clamp(region.lower[i], region.upper[i]));
+        let mut w = start;
+        let (mut f, mut g) = cost_and_gradient(&chart.views, &w);
+        let mut step = 1.0;
+        for _ in 0..iterations {
+            let trial = project(w - g * (step / g.norm().max(1e-300)));
+            let (ft, gt) = cost_and_gradient(&chart.views, &trial);
+            if ft < f {
+                (w, f, g) = (trial, ft, gt);
+                step *= 2.0;
+            } else {
+                step *= 0.5;
+                if step < 1e-15 {
+                    break;
+                }
+            }
+        }
+        (f, w)
+    }
+
     /// The convex-hull bound of a chart centred on a line that is not a minimum (the chart's origin
     /// has a gradient, so the bound `f(0) − ‖∇f(0)‖²/(2μ)` is not the origin's cost): over boxes around
     /// the minimiser, of every size, it stays below the box's minimum reached by descent.
@@ -275,27 +304,9 @@ mod tests {
                 let root = chart.root(cost.sqrt());
                 // The minimiser over the root box, then boxes of every size around it.
                 let least = box_minimum(&chart, &root.lower, &root.upper);
-                let mut w_min = Vector4::zeros();
-                {
-                    // Recover the minimiser by the same descent, keeping the point.
-                    let project = |w: Vector4<f64>| Vector4::from_fn(|i, _| w[i].clamp(root.lower[i], root.upper[i]));
-                    let (mut f, mut g) = cost_and_gradient(&chart.views, &w_min);
-                    let mut step = 1.0;
-                    for _ in 0..5000 {
-                        let trial = project(w_min - g * (step / g.norm().max(1e-300)));
-                        let (ft, gt) = cost_and_gradient(&chart.views, &trial);
-                        if ft < f {
-                            (w_min, f, g) = (trial, ft, gt);
-                            step *= 2.0;
-                        } else {
-                            step *= 0.5;
-                            if step < 1e-15 {
-                                break;
-                            }
-                        }
-                    }
-                    assert!(f <= least * (1.0 + 1e-6) + 1e-12);
-                }
+                // Recover the minimiser by descent from the origin, keeping the point.
+                let (f, w_min) = projected_descent(&chart, &root, Vector4::zeros(), 5000);
+                assert!(f <= least * (1.0 + 1e-6) + 1e-12);
                 for k in 0..8 {
                     let half = 10f64.powf(-4.0 + 0.5 * k as f64) * cost.sqrt();
                     let region = Region::new(
@@ -471,23 +482,7 @@ mod tests {
                 let mut global = (f64::INFINITY, Vector4::zeros());
                 for _ in 0..20 {
                     let start = Vector4::from_fn(|i, _| rng.uniform_in(root.lower[i], root.upper[i]));
-                    let mut w = start;
-                    let (mut f, mut g) = cost_and_gradient(&chart.views, &w);
-                    let mut step = 1.0;
-                    let clamp = |w: Vector4<f64>| Vector4::from_fn(|i, _| w[i].clamp(root.lower[i], root.upper[i]));
-                    for _ in 0..3000 {
-                        let trial = clamp(w - g * (step / g.norm().max(1e-300)));
-                        let (ft, gt) = cost_and_gradient(&chart.views, &trial);
-                        if ft < f {
-                            (w, f, g) = (trial, ft, gt);
-                            step *= 2.0;
-                        } else {
-                            step *= 0.5;
-                            if step < 1e-15 {
-                                break;
-                            }
-                        }
-                    }
+                    let (f, w) = projected_descent(&chart, &root, start, 3000);
                     if f < global.0 {
                         global = (f, w);
                     }
