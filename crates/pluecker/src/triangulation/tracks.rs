@@ -191,25 +191,29 @@ where
 
 /// [`solve_tracks`] handing each track's result to `write(t, row, result)` as it finishes, with
 /// row `t` of `rows` (one per track), instead of collecting them: a binding writes them straight into
-/// its output columns. `rows.len()` is the number of tracks; `done` counts the tracks written.
+/// its output columns. `rows` must number the `n` tracks (else [`Error::Shape`], the caller's error,
+/// not the data's); `done` counts the tracks written.
 ///
 /// Once the installed stop fires, the tracks not started are not handed to `write` at all (their rows
 /// stay as they were, and the loop ends without a pass over them): the reason is returned, `None`
 /// when every track was written.
 pub(crate) fn solve_tracks_into<X, R, F, W>(
+    n: usize,
     rows: impl IndexedParallelIterator<Item = R>,
     min_len: usize,
     done: Option<&AtomicUsize>,
     one: F,
     write: W,
-) -> Option<StopReason>
+) -> Result<Option<StopReason>>
 where
     R: Send,
     F: Fn(usize) -> Result<X> + Sync + Send,
     W: Fn(usize, R, Result<X>) + Sync + Send,
 {
+    check_rows(rows.len(), n)?;
     let stop = current();
-    rows.enumerate()
+    Ok(rows
+        .enumerate()
         .with_min_len(min_len.max(1))
         .try_for_each_init(
             || Installed::new(stop.clone()),
@@ -222,11 +226,11 @@ where
                 Ok(())
             },
         )
-        .err()
+        .err())
 }
 
 /// The output rows of a batch of `n` tracks number `rows`: an error of the caller's, not the data's.
-pub(crate) fn check_rows(rows: usize, n: usize) -> Result<()> {
+fn check_rows(rows: usize, n: usize) -> Result<()> {
     if rows == n {
         return Ok(());
     }
@@ -360,5 +364,30 @@ pub(crate) fn in_track(err: Error, t: usize, seen: &[usize], arrays: &[&str]) ->
             actual: format!("track {t}: {actual}"),
         },
         other @ (Error::InvalidOption { .. } | Error::Interrupted { .. }) => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_that_do_not_number_the_tracks_are_refused_before_any_is_solved() {
+        let solved = AtomicUsize::new(0);
+        let one = |t: usize| -> Result<usize> {
+            solved.fetch_add(1, Ordering::Relaxed);
+            Ok(t)
+        };
+        let refused = solve_tracks_into(3, (0..2usize).into_par_iter(), 1, None, one, |_, _, _| {});
+        assert!(matches!(refused, Err(Error::Shape { .. })), "{refused:?}");
+        assert_eq!(solved.load(Ordering::Relaxed), 0);
+        let written = std::sync::Mutex::new(Vec::new());
+        let done = solve_tracks_into(3, (0..3usize).into_par_iter(), 1, None, one, |t, row, r| {
+            written.lock().unwrap().push((t, row, r.unwrap()))
+        });
+        assert!(matches!(done, Ok(None)), "{done:?}");
+        let mut written = written.into_inner().unwrap();
+        written.sort();
+        assert_eq!(written, vec![(0, 0, 0), (1, 1, 1), (2, 2, 2)]);
     }
 }

@@ -19,8 +19,8 @@ use super::{lines_from_segments, triangulate_line, triangulate_line_segments_vie
 use crate::error::{Error, Result};
 use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{
-    check_mask, check_rows, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few,
-    track_count, Csr, TrackCameras,
+    check_mask, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few, track_count, Csr,
+    TrackCameras,
 };
 use crate::triangulation::views::{validate_cameras, View};
 use crate::triangulation::TriangulationOptions;
@@ -178,8 +178,7 @@ pub fn triangulate_lines_into<R: Send>(
     write: impl Fn(usize, R, Result<LineTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = dense_solver(projections, tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 1, progress, one, write))
+    solve_tracks_into(n, rows, 1, progress, one, write)
 }
 
 /// The number of tracks of a dense batch, checked, and the solve of track `t`.
@@ -235,8 +234,7 @@ pub fn triangulate_line_observations_into<R: Send>(
     write: impl Fn(usize, R, Result<LineTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = sparse_solver(projections, tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 1, progress, one, write))
+    solve_tracks_into(n, rows, 1, progress, one, write)
 }
 
 /// The number of tracks of a sparse batch, checked, and the solve of track `t`.
@@ -309,8 +307,7 @@ pub fn triangulate_line_observations_views_into<R: Send>(
     write: impl Fn(usize, R, Result<LineTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = views_solver(views, tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 1, progress, one, write))
+    solve_tracks_into(n, rows, 1, progress, one, write)
 }
 
 /// The number of tracks of a sparse batch through views, checked, and the solve of track `t`.

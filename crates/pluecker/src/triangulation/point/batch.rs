@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::interrupt::{current, StopReason};
 use crate::triangulation::covariance::whitening;
 use crate::triangulation::tracks::{
-    check_mask, check_rows, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
+    check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{centre, depth_normalized, validate_cameras, View};
@@ -204,8 +204,7 @@ pub fn triangulate_points_into<R: Send>(
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = dense_solver(projections, tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 16, progress, one, write))
+    solve_tracks_into(n, rows, 16, progress, one, write)
 }
 
 /// The number of tracks of a dense batch, checked, and the solve of track `t`.
@@ -323,8 +322,7 @@ pub fn triangulate_point_observations_into<R: Send>(
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = sparse_solver(prepare(projections), tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 16, progress, one, write))
+    solve_tracks_into(n, rows, 16, progress, one, write)
 }
 
 /// [`triangulate_point_observations`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models,
@@ -352,8 +350,7 @@ pub fn triangulate_point_observations_views_into<R: Send>(
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = sparse_solver(prepare_views(views), tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 16, progress, one, write))
+    solve_tracks_into(n, rows, 16, progress, one, write)
 }
 
 /// The number of tracks of a sparse batch, checked, and the solve of track `t`.
@@ -529,8 +526,7 @@ pub fn triangulate_points_linear_into<R: Send>(
     write: impl Fn(usize, R, Result<LinearTrack>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, prepared) = check_batch(projections, tracks)?;
-    check_rows(rows.len(), n)?;
     let v = projections.len();
     let one = |t| linear_track(&prepared, tracks, v, t);
-    Ok(solve_tracks_into(rows, 256, progress, one, write))
+    solve_tracks_into(n, rows, 256, progress, one, write)
 }

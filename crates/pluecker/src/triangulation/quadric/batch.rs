@@ -18,8 +18,8 @@ use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
 use crate::error::{Error, Result};
 use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{
-    check_mask, check_rows, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few,
-    track_count, Csr, TrackCameras,
+    check_mask, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few, track_count, Csr,
+    TrackCameras,
 };
 use crate::triangulation::TriangulationOptions;
 use nalgebra::{Matrix3, Matrix3x4};
@@ -121,8 +121,7 @@ pub fn triangulate_quadrics_into<R: Send>(
     write: impl Fn(usize, R, Result<QuadricTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = dense_solver(projections, tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 1, progress, one, write))
+    solve_tracks_into(n, rows, 1, progress, one, write)
 }
 
 /// The number of tracks of a dense batch, checked, and the solve of track `t`.
@@ -178,8 +177,7 @@ pub fn triangulate_quadric_observations_into<R: Send>(
     write: impl Fn(usize, R, Result<QuadricTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
     let (n, one) = sparse_solver(projections, tracks, opts)?;
-    check_rows(rows.len(), n)?;
-    Ok(solve_tracks_into(rows, 1, progress, one, write))
+    solve_tracks_into(n, rows, 1, progress, one, write)
 }
 
 /// The number of tracks of a sparse batch, checked, and the solve of track `t`.
