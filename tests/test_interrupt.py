@@ -393,30 +393,25 @@ def test_a_forced_exit_leaves_no_output_behind(tmp_path):
     assert kept.read_text() == "mine"
 
 
+def command_run_to_its_end(code: str) -> tuple[int, str, str]:
+    """The exit status, standard output and standard error of ``run_command(code)`` left to finish."""
+    child, ready = run_command(code)
+    try:
+        out, err = child.communicate(timeout=SAFETY)
+    finally:
+        os.close(ready)
+        child.kill()
+    return child.returncode, out, err
+
+
 def test_the_command_answers_ctrl_c_itself_when_python_can():
     """Ctrl-C that Python turns into KeyboardInterrupt: the command's own clean-up runs, and the line is
     printed once (the deadline stands down, or, had Python been slower than it, printed it instead)."""
-    child, ready = run_command("signal.raise_signal(signal.SIGINT)")
-    try:
-        out, err = child.communicate(timeout=SAFETY)
-    finally:
-        os.close(ready)
-        child.kill()
-    assert (child.returncode, err) == (130, "pluecker pose: interrupted\n")
+    status, _, err = command_run_to_its_end("signal.raise_signal(signal.SIGINT)")
+    assert (status, err) == (130, "pluecker pose: interrupted\n")
     # A library that turns the KeyboardInterrupt into an error of its own (pycolmap interrupted while it
     # loads its C++ module raises RuntimeError): still Ctrl-C, not a traceback.
-    child, ready = run_command("raise RuntimeError('cannot import the backend') from KeyboardInterrupt()")
-    try:
-        out, err = child.communicate(timeout=SAFETY)
-    finally:
-        os.close(ready)
-        child.kill()
-    assert (child.returncode, err) == (130, "pluecker pose: interrupted\n")
+    status, _, err = command_run_to_its_end("raise RuntimeError('cannot import the backend') from KeyboardInterrupt()")
+    assert (status, err) == (130, "pluecker pose: interrupted\n")
     # And a command that ends normally gives the wakeup descriptor back and exits with its status.
-    child, ready = run_command("import signal as s; assert s.set_wakeup_fd(-1) != -1")
-    try:
-        out, err = child.communicate(timeout=SAFETY)
-    finally:
-        os.close(ready)
-        child.kill()
-    assert (child.returncode, err, out) == (0, "", "clean-up ran\n")
+    assert command_run_to_its_end("import signal as s; assert s.set_wakeup_fd(-1) != -1") == (0, "clean-up ran\n", "")
