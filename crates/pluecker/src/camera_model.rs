@@ -55,6 +55,7 @@
 
 use crate::camera::Camera;
 use crate::error::{number, Error, Result};
+use crate::lens_bounds::{domain, Distortion, Domain};
 use nalgebra::{Matrix2, Matrix2x3, Vector2, Vector3};
 
 /// The camera models, with COLMAP's names (see the module table for their parameters); the
@@ -195,6 +196,44 @@ pub struct LensCamera {
     params: Vec<f64>,
     /// The radius `|n|` where the radial distortion stops increasing ([`fold_radius`]); `∞` when it never does.
     fold_radius: f64,
+    /// The distortion the certificates' enclosures cover ([`covered_distortion`]) and the disc where it
+    /// is proved one-to-one ([`crate::lens_bounds::domain`], a scan for the tangential terms): computed
+    /// once here, as they depend on the camera alone, and read by every observation's bound.
+    bounds: Option<(Distortion, Option<Domain>)>,
+}
+
+/// The distortion of `model` with `params` in the form of [`crate::lens_bounds`], or `None` when its
+/// enclosures do not cover it: thin-prism or tangential terms of the fisheyes, a rational FULL_OPENCV,
+/// FOV (whose projection in COLMAP is piecewise, with a jump).
+fn covered_distortion(model: CameraModel, p: &[f64]) -> Option<Distortion> {
+    let zero = |range: &[f64]| range.iter().all(|&v| v == 0.0);
+    use Distortion::{Fisheye, Polynomial, Tangential};
+    let with_tangential = |radial: Vec<f64>, p1: f64, p2: f64| {
+        if p1 == 0.0 && p2 == 0.0 {
+            Polynomial(radial)
+        } else {
+            Tangential(radial, p1, p2)
+        }
+    };
+    match model {
+        CameraModel::SimplePinhole | CameraModel::Pinhole => Some(Polynomial(vec![])),
+        CameraModel::SimpleRadial => Some(Polynomial(p[3..4].to_vec())),
+        CameraModel::Radial => Some(Polynomial(p[3..5].to_vec())),
+        CameraModel::OpenCv => Some(with_tangential(p[4..6].to_vec(), p[6], p[7])),
+        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(vec![p[4], p[5], p[8]], p[6], p[7])),
+        CameraModel::SimpleFisheye | CameraModel::Fisheye => Some(Fisheye(vec![])),
+        CameraModel::SimpleRadialFisheye => Some(Fisheye(p[3..4].to_vec())),
+        CameraModel::RadialFisheye => Some(Fisheye(p[3..5].to_vec())),
+        CameraModel::OpenCvFisheye => Some(Fisheye(p[4..8].to_vec())),
+        CameraModel::ThinPrismFisheye if zero(&p[6..8]) && zero(&p[10..12]) => {
+            Some(Fisheye(vec![p[4], p[5], p[8], p[9]]))
+        }
+        CameraModel::RadTanThinPrismFisheye if zero(&p[10..16]) => Some(Fisheye(p[4..10].to_vec())),
+        CameraModel::SimpleDivision => Some(Distortion::Division(p[3])),
+        CameraModel::Division => Some(Distortion::Division(p[4])),
+        CameraModel::Eucm => Some(Distortion::Eucm(p[4], p[5])),
+        _ => None,
+    }
 }
 
 /// `v g` and its Jacobian `g I + 2 g' v vᵀ`, for a radial factor `g(|v|²)` with derivative `g' = dg/d|v|²`.
@@ -317,10 +356,16 @@ impl LensCamera {
                 index,
             });
         }
+        let fold = fold_radius(model, params);
+        let bounds = covered_distortion(model, params).map(|d| {
+            let one_to_one = domain(&d, fold);
+            (d, one_to_one)
+        });
         let camera = LensCamera {
             model,
             params: params.to_vec(),
-            fold_radius: fold_radius(model, params),
+            fold_radius: fold,
+            bounds,
         };
         // Its pinhole part must be a camera (non-zero focal lengths, `K` invertible).
         camera.pinhole().map_err(|e| match e {
@@ -366,6 +411,19 @@ impl LensCamera {
     /// ([`fold_radius`]; `∞` when it never does): inside it the lens maps one-to-one.
     pub fn fold_radius(&self) -> f64 {
         self.fold_radius
+    }
+
+    /// The distortion in the form the certificates' interval enclosures cover ([`crate::lens_bounds`]),
+    /// or `None` when they do not cover it (thin-prism or tangential terms of the fisheyes, a rational
+    /// FULL_OPENCV, FOV).
+    pub(crate) fn covered_distortion(&self) -> Option<&Distortion> {
+        self.bounds.as_ref().map(|(d, _)| d)
+    }
+
+    /// The disc where the covered distortion is proved one-to-one ([`crate::lens_bounds::domain`]);
+    /// `None` when it is not covered or the disc is empty.
+    pub(crate) fn one_to_one_domain(&self) -> Option<Domain> {
+        self.bounds.as_ref().and_then(|(_, domain)| *domain)
     }
 
     /// The pinhole part: the focal lengths and principal point, no skew (the camera of undistorted pixels).

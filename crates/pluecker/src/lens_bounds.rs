@@ -21,7 +21,7 @@
 //! **The one-to-one disc** ([`domain`]). The certificates work inside a disc `|n| < R` on which `D` is
 //! proved one-to-one, and need a disc about the principal point, of radius `ρ`, that `D` maps onto
 //! part of its image:
-//! - radially symmetric: `R` is the fold radius ([`LensCamera::fold_radius`]), below which the
+//! - radially symmetric: `R` is the fold radius ([`crate::camera_model::LensCamera::fold_radius`]), below which the
 //!   radial map `r ↦ r g` (or `θ g(θ²)`) increases, and the image is the disc of radius `ρ = R g(R²)`
 //!   (`θ_R g(θ_R²)`, `θ_R = atan R`, for the fisheyes; the limit of `r g` for an unbounded disc of the
 //!   division models and EUCM);
@@ -36,7 +36,6 @@
 //!
 //! Where a box reaches `R` there is no enclosure.
 
-use crate::camera_model::{CameraModel, LensCamera};
 use crate::global::interval::Interval;
 use nalgebra::{Matrix2, Vector2};
 use std::ops::{Add, Div, Mul, Sub};
@@ -60,40 +59,6 @@ pub enum Distortion {
     Division(f64),
     /// EUCM: `D(n) = n g(s)`, `g = 1/(αq + 1 − α)`, `q = √(1 + βs)`, `g' = −αβ g²/(2q)`.
     Eucm(f64, f64),
-}
-
-/// The distortion of `lens`, or `None` when it is not covered: thin-prism or tangential terms of the
-/// fisheyes, a rational FULL_OPENCV, FOV (whose projection in COLMAP is piecewise, with a jump).
-pub fn distortion(lens: &LensCamera) -> Option<Distortion> {
-    let p = lens.params();
-    let zero = |range: &[f64]| range.iter().all(|&v| v == 0.0);
-    use Distortion::{Fisheye, Polynomial, Tangential};
-    let with_tangential = |radial: Vec<f64>, p1: f64, p2: f64| {
-        if p1 == 0.0 && p2 == 0.0 {
-            Polynomial(radial)
-        } else {
-            Tangential(radial, p1, p2)
-        }
-    };
-    match lens.model() {
-        CameraModel::SimplePinhole | CameraModel::Pinhole => Some(Polynomial(vec![])),
-        CameraModel::SimpleRadial => Some(Polynomial(p[3..4].to_vec())),
-        CameraModel::Radial => Some(Polynomial(p[3..5].to_vec())),
-        CameraModel::OpenCv => Some(with_tangential(p[4..6].to_vec(), p[6], p[7])),
-        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(vec![p[4], p[5], p[8]], p[6], p[7])),
-        CameraModel::SimpleFisheye | CameraModel::Fisheye => Some(Fisheye(vec![])),
-        CameraModel::SimpleRadialFisheye => Some(Fisheye(p[3..4].to_vec())),
-        CameraModel::RadialFisheye => Some(Fisheye(p[3..5].to_vec())),
-        CameraModel::OpenCvFisheye => Some(Fisheye(p[4..8].to_vec())),
-        CameraModel::ThinPrismFisheye if zero(&p[6..8]) && zero(&p[10..12]) => {
-            Some(Fisheye(vec![p[4], p[5], p[8], p[9]]))
-        }
-        CameraModel::RadTanThinPrismFisheye if zero(&p[10..16]) => Some(Fisheye(p[4..10].to_vec())),
-        CameraModel::SimpleDivision => Some(Distortion::Division(p[3])),
-        CameraModel::Division => Some(Distortion::Division(p[4])),
-        CameraModel::Eucm => Some(Distortion::Eucm(p[4], p[5])),
-        _ => None,
-    }
 }
 
 /// A 2x2 matrix of intervals, row-major.
@@ -383,6 +348,11 @@ pub fn radius_about(j: &IntervalMatrix, j0: &Matrix2<f64>) -> Matrix2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera_model::{CameraModel, LensCamera};
+
+    fn distortion(lens: &LensCamera) -> Option<Distortion> {
+        lens.covered_distortion().cloned()
+    }
     use crate::rng::Rng;
 
     fn lenses() -> Vec<LensCamera> {

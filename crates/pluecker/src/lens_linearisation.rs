@@ -26,9 +26,7 @@
 //! `1/cos²θ`. The argument holds in either chart.
 
 use crate::camera_model::{AnyCamera, LensCamera};
-use crate::lens_bounds::{
-    distortion, domain, fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion, Domain,
-};
+use crate::lens_bounds::{fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion, Domain};
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -101,7 +99,7 @@ impl Linearised {
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new_in(
         camera: &AnyCamera,
-        (distortion, domain): &(Distortion, Domain),
+        (distortion, domain): &(&Distortion, Domain),
         whitening: &Matrix2<f64>,
         pixel: &Vector2<f64>,
         xc: &Vector3<f64>,
@@ -110,7 +108,7 @@ impl Linearised {
         ray_chart: bool,
     ) -> std::result::Result<Linearised, LensBoundFailure> {
         let xc = *xc;
-        let (distortion, domain) = (distortion.clone(), *domain);
+        let (distortion, domain) = ((*distortion).clone(), *domain);
         let lens = match camera {
             AnyCamera::Pinhole(_) => None,
             AnyCamera::Lens(lens) => Some(lens),
@@ -308,14 +306,22 @@ impl Linearised {
 }
 
 /// The distortion of `camera` that [`crate::lens_bounds`] covers and the disc where it is proved
-/// one-to-one (the identity and the whole plane for a pinhole camera).
-pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(Distortion, Domain), LensBoundFailure> {
-    let (distortion, fold) = match camera {
-        AnyCamera::Pinhole(_) => (Distortion::Polynomial(vec![]), f64::INFINITY),
-        AnyCamera::Lens(lens) => (distortion(lens).ok_or(LensBoundFailure::Lens)?, lens.fold_radius()),
-    };
-    let domain = domain(&distortion, fold).ok_or(LensBoundFailure::Fold)?;
-    Ok((distortion, domain))
+/// one-to-one (the identity and the whole plane for a pinhole camera), as the camera computed them once.
+pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(&Distortion, Domain), LensBoundFailure> {
+    static IDENTITY: Distortion = Distortion::Polynomial(Vec::new());
+    match camera {
+        AnyCamera::Pinhole(_) => Ok((
+            &IDENTITY,
+            Domain {
+                radius: f64::INFINITY,
+                image_radius: f64::INFINITY,
+            },
+        )),
+        AnyCamera::Lens(lens) => {
+            let distortion = lens.covered_distortion().ok_or(LensBoundFailure::Lens)?;
+            Ok((distortion, lens.one_to_one_domain().ok_or(LensBoundFailure::Fold)?))
+        }
+    }
 }
 
 /// The largest singular value of a 2 x 2 matrix: `(√((a + d)² + (b − c)²) + √((a − d)² + (b + c)²)) / 2`.
