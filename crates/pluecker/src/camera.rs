@@ -78,13 +78,16 @@ impl Camera {
                 what: format!("non-finite intrinsics [{}]", p.map(number).join(", ")),
             });
         }
-        let (fx, fy) = (number(self.fx), number(self.fy));
+        // Formatted only for an error: this check runs for every camera built on a hot path.
+        let shown = || (number(self.fx), number(self.fy));
         if self.fx.abs() < MIN_FOCAL || self.fy.abs() < MIN_FOCAL {
+            let (fx, fy) = shown();
             return Err(Error::SingularCamera {
                 what: format!("focal lengths must be non-zero (at least {MIN_FOCAL:e} px), got fx={fx}, fy={fy}"),
             });
         }
         if !(self.fx * self.fy).is_finite() {
+            let (fx, fy) = shown();
             return Err(Error::SingularCamera {
                 what: format!(
                     "focal lengths too large: det K = fx fy overflows double precision, got fx={fx}, fy={fy}"
