@@ -55,7 +55,7 @@
 
 use crate::camera::Camera;
 use crate::error::{number, Error, Result};
-use crate::lens_bounds::{domain, Distortion, Domain};
+use crate::lens_bounds::{domain, Coefficients, Distortion, Domain};
 use nalgebra::{Matrix2, Matrix2x3, Vector2, Vector3};
 
 /// The camera models, with COLMAP's names (see the module table for their parameters); the
@@ -194,6 +194,8 @@ const FOV_SERIES_BOUND: f64 = 1e-4;
 pub struct LensCamera {
     model: CameraModel,
     params: Vec<f64>,
+    /// The pinhole part, checked once ([`LensCamera::pinhole`]).
+    pinhole: Camera,
     /// The radius `|n|` where the radial distortion stops increasing ([`fold_radius`]); `∞` when it never does.
     fold_radius: f64,
     /// The distortion the certificates' enclosures cover ([`covered_distortion`]) and the disc where it
@@ -208,7 +210,7 @@ pub struct LensCamera {
 fn covered_distortion(model: CameraModel, p: &[f64]) -> Option<Distortion> {
     let zero = |range: &[f64]| range.iter().all(|&v| v == 0.0);
     use Distortion::{Fisheye, Polynomial, Tangential};
-    let with_tangential = |radial: Vec<f64>, p1: f64, p2: f64| {
+    let with_tangential = |radial: Coefficients, p1: f64, p2: f64| {
         if p1 == 0.0 && p2 == 0.0 {
             Polynomial(radial)
         } else {
@@ -216,19 +218,19 @@ fn covered_distortion(model: CameraModel, p: &[f64]) -> Option<Distortion> {
         }
     };
     match model {
-        CameraModel::SimplePinhole | CameraModel::Pinhole => Some(Polynomial(vec![])),
-        CameraModel::SimpleRadial => Some(Polynomial(p[3..4].to_vec())),
-        CameraModel::Radial => Some(Polynomial(p[3..5].to_vec())),
-        CameraModel::OpenCv => Some(with_tangential(p[4..6].to_vec(), p[6], p[7])),
-        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(vec![p[4], p[5], p[8]], p[6], p[7])),
-        CameraModel::SimpleFisheye | CameraModel::Fisheye => Some(Fisheye(vec![])),
-        CameraModel::SimpleRadialFisheye => Some(Fisheye(p[3..4].to_vec())),
-        CameraModel::RadialFisheye => Some(Fisheye(p[3..5].to_vec())),
-        CameraModel::OpenCvFisheye => Some(Fisheye(p[4..8].to_vec())),
+        CameraModel::SimplePinhole | CameraModel::Pinhole => Some(Polynomial(Coefficients::new())),
+        CameraModel::SimpleRadial => Some(Polynomial(Coefficients::from_slice(&p[3..4]))),
+        CameraModel::Radial => Some(Polynomial(Coefficients::from_slice(&p[3..5]))),
+        CameraModel::OpenCv => Some(with_tangential(Coefficients::from_slice(&p[4..6]), p[6], p[7])),
+        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(Coefficients::from_slice(&[p[4], p[5], p[8]]), p[6], p[7])),
+        CameraModel::SimpleFisheye | CameraModel::Fisheye => Some(Fisheye(Coefficients::new())),
+        CameraModel::SimpleRadialFisheye => Some(Fisheye(Coefficients::from_slice(&p[3..4]))),
+        CameraModel::RadialFisheye => Some(Fisheye(Coefficients::from_slice(&p[3..5]))),
+        CameraModel::OpenCvFisheye => Some(Fisheye(Coefficients::from_slice(&p[4..8]))),
         CameraModel::ThinPrismFisheye if zero(&p[6..8]) && zero(&p[10..12]) => {
-            Some(Fisheye(vec![p[4], p[5], p[8], p[9]]))
+            Some(Fisheye(Coefficients::from_slice(&[p[4], p[5], p[8], p[9]])))
         }
-        CameraModel::RadTanThinPrismFisheye if zero(&p[10..16]) => Some(Fisheye(p[4..10].to_vec())),
+        CameraModel::RadTanThinPrismFisheye if zero(&p[10..16]) => Some(Fisheye(Coefficients::from_slice(&p[4..10]))),
         CameraModel::SimpleDivision => Some(Distortion::Division(p[3])),
         CameraModel::Division => Some(Distortion::Division(p[4])),
         CameraModel::Eucm => Some(Distortion::Eucm(p[4], p[5])),
@@ -356,6 +358,18 @@ impl LensCamera {
                 index,
             });
         }
+        // Its pinhole part must be a camera (non-zero focal lengths, `K` invertible).
+        let (fx, fy, cx, cy) = if model.has_one_focal_length() {
+            (params[0], params[0], params[1], params[2])
+        } else {
+            (params[0], params[1], params[2], params[3])
+        };
+        let pinhole = Camera::new(fx, fy, cx, cy, 0.0).map_err(|e| match e {
+            Error::SingularCamera { what } => Error::SingularCamera {
+                what: format!("{}: {what}", model.as_str()),
+            },
+            other => other,
+        })?;
         let fold = fold_radius(model, params);
         let bounds = covered_distortion(model, params).map(|d| {
             let one_to_one = domain(&d, fold);
@@ -364,16 +378,10 @@ impl LensCamera {
         let camera = LensCamera {
             model,
             params: params.to_vec(),
+            pinhole,
             fold_radius: fold,
             bounds,
         };
-        // Its pinhole part must be a camera (non-zero focal lengths, `K` invertible).
-        camera.pinhole().map_err(|e| match e {
-            Error::SingularCamera { what } => Error::SingularCamera {
-                what: format!("{}: {what}", model.as_str()),
-            },
-            other => other,
-        })?;
         Ok(camera)
     }
 
@@ -428,8 +436,7 @@ impl LensCamera {
 
     /// The pinhole part: the focal lengths and principal point, no skew (the camera of undistorted pixels).
     pub fn pinhole(&self) -> Result<Camera> {
-        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
-        Camera::new(fx, fy, cx, cy, 0.0)
+        Ok(self.pinhole)
     }
 
     /// Whether the model has no distortion (the pinhole fast path applies).
@@ -563,7 +570,9 @@ impl LensCamera {
                 self.model.as_str()
             ),
         };
-        let pixel_error = |e: &Vector2<f64>| (e.x * fx).hypot(e.y * fy);
+        // sqrt of the sum of squares rather than hypot (several times slower): a diverging step's
+        // overflow to ∞ fails the tolerance all the same.
+        let pixel_error = |e: &Vector2<f64>| ((e.x * fx).powi(2) + (e.y * fy).powi(2)).sqrt();
         let mut n = self.newton_start(&d);
         for _ in 0..MAX_UNPROJECTION_ITERATIONS {
             let (dn, j) = self.distort(&n);

@@ -46,15 +46,18 @@ pub const ROUNDING: f64 = 1e-12;
 /// The absolute widening of every enclosed Jacobian entry (module docs of `widened`).
 pub const ROUNDING_ABSOLUTE: f64 = 1e-13;
 
+/// The coefficients `[c₁, c₂, …]` of a radial factor `g` (at most six in COLMAP's models), inline.
+pub type Coefficients = smallvec::SmallVec<[f64; 6]>;
+
 /// A distortion the enclosures cover (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Distortion {
     /// `D(n) = n g(|n|²)` with `g(s) = 1 + c₁s + c₂s² + …`, the coefficients `[c₁, c₂, …]`.
-    Polynomial(Vec<f64>),
+    Polynomial(Coefficients),
     /// `D(n) = n g(|n|²) + t(n)`, OPENCV's tangential term with `p₁`, `p₂`.
-    Tangential(Vec<f64>, f64, f64),
+    Tangential(Coefficients, f64, f64),
     /// `D(n) = m g(θ²)`, `m = n θ/r`, `θ = atan |n|`, with `g` as above in `θ²`.
-    Fisheye(Vec<f64>),
+    Fisheye(Coefficients),
     /// The division models: `D(n) = n g(s)`, `g = 2/(1 + q)`, `q = √(1 − 4ks)`, `g' = 4k/(q(1 + q)²)`.
     Division(f64),
     /// EUCM: `D(n) = n g(s)`, `g = 1/(αq + 1 − α)`, `q = √(1 + βs)`, `g' = −αβ g²/(2q)`.

@@ -26,7 +26,7 @@
 //! `1/cos²θ`. The argument holds in either chart.
 
 use crate::camera_model::{AnyCamera, LensCamera};
-use crate::lens_bounds::{fisheye_ray_enclosure, jacobian_enclosure, radius_about, Distortion, Domain};
+use crate::lens_bounds::{fisheye_ray_enclosure, jacobian_enclosure, radius_about, Coefficients, Distortion, Domain};
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -308,7 +308,7 @@ impl Linearised {
 /// The distortion of `camera` that [`crate::lens_bounds`] covers and the disc where it is proved
 /// one-to-one (the identity and the whole plane for a pinhole camera), as the camera computed them once.
 pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(&Distortion, Domain), LensBoundFailure> {
-    static IDENTITY: Distortion = Distortion::Polynomial(Vec::new());
+    static IDENTITY: Distortion = Distortion::Polynomial(Coefficients::new_const());
     match camera {
         AnyCamera::Pinhole(_) => Ok((
             &IDENTITY,

@@ -231,9 +231,10 @@ fn solve_track(
     observations: impl Iterator<Item = Result<(usize, (Vector2<f64>, Matrix2<f64>))>>,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    let mut views = Vec::new();
-    let mut seen = Vec::new();
-    let mut lens_views = Vec::new();
+    let count = observations.size_hint().0;
+    let mut views = Vec::with_capacity(count);
+    let mut seen = Vec::with_capacity(count);
+    let mut lens_views = Vec::with_capacity(if prepared.views.is_some() { count } else { 0 });
     for o in observations {
         let (j, (x, l)) = o?;
         match &prepared.views {
