@@ -220,16 +220,33 @@ def main() -> None:
     if searched.any():
         print(f"\nTracks with a search (nodes > 0): {int(searched.sum())}, {fmt_ms(float(t_opt[searched].sum()))} ms "
               f"({100 * t_opt[searched].sum() / t_opt.sum():.1f} % of the summed time)")
+    # Where the time goes against how far off axis a track is seen: its largest |pixel − principal point| / f.
+    K = np.array([np.asarray(lens.pinhole.K, dtype=float) for lens in o.lenses])[o.camera]
+    radius = np.hypot((o.pixels[:, 0] - K[:, 0, 2]) / K[:, 0, 0], (o.pixels[:, 1] - K[:, 1, 2]) / K[:, 1, 1])
+    off_axis = np.zeros(n)
+    np.maximum.at(off_axis, o.track, radius)
+    edges = np.quantile(off_axis, [0.0, 0.25, 0.5, 0.75, 0.9, 1.0])
+    print("\nPer-track time by the track's largest distorted radius |u − c| / f over its observations (quantile bins):\n")
+    radius_rows = []
+    for k, (a, b) in enumerate(zip(edges[:-1], edges[1:])):
+        sel = (off_axis >= a) & ((off_axis < b) if k < len(edges) - 2 else (off_axis <= b))
+        if sel.any():
+            radius_rows.append([f"{a:.3f} – {b:.3f}", int(sel.sum()), fmt_ms(float(np.median(t_opt[sel]))),
+                                fmt_ms(float(np.median(stage["certify"][sel]))),
+                                f"{100 * t_opt[sel].sum() / t_opt.sum():.1f} %"])
+    print("\n".join(table(["max radius / f", "tracks", "median ms", "median certify ms", "share of time"], radius_rows)))
     failed = ~certified
     if failed.any():
         print(f"Uncertified tracks: {int(failed.sum())}, {fmt_ms(float(t_opt[failed].sum()))} ms "
               f"({100 * t_opt[failed].sum() / t_opt.sum():.1f} % of the summed time)")
 
     print(f"\n## The {args.top} slowest tracks (by the batch's optimal time; stage ms: the track alone, fastest of "
-          f"{ALONE_REPEATS} per method)\n")
-    slowest = np.argsort(t_opt)[::-1][:args.top]
+          f"{ALONE_REPEATS} per method; last line: the median track, the same way, for reference)\n")
+    order = np.argsort(t_opt)
+    slowest = order[::-1][:args.top]
+    median_track = int(order[len(order) // 2])
     top_rows = []
-    for t in slowest:
+    for t in [*slowest, median_track]:
         rows_t = np.flatnonzero(o.track == t)
         alone = {}
         for method in METHODS:
@@ -238,7 +255,8 @@ def main() -> None:
                 r, _seconds = solve(pluecker, o, method, rows_t)
                 times.append(float(np.asarray(r.time_seconds)[0]))
             alone[method] = min(times)
-        top_rows.append([int(o.ids[t]), len(rows_t), int(images[t]), status[t], bool(certified[t]), kinds[t], int(nodes[t]),
+        label = f"{int(o.ids[t])}" if t != median_track else f"median track: {int(o.ids[t])}"
+        top_rows.append([label, len(rows_t), int(images[t]), status[t], bool(certified[t]), kinds[t], int(nodes[t]),
                          int(iterations[t]), fmt_ms(float(t_opt[t])), fmt_ms(alone["optimal"]), fmt_ms(alone["linear"]),
                          fmt_ms(alone["local"] - alone["linear"]), fmt_ms(alone["optimal"] - alone["local"]),
                          f"{float(np.asarray(final.relative_gap)[t]):.1e}"])
