@@ -27,7 +27,9 @@ cap). The scene's time is the certified call's ``details.time_seconds``.
   result objects).
 
 **Counts** printed: status, certified, certificate kind, ``nodes`` and ``solver_iterations`` of the
-certificate, iterations per stage, ``details.uncertified_reason`` of the uncertified scenes.
+certificate, iterations per stage, ``details.uncertified_reason`` of the uncertified scenes. A search that
+reached its node cap returns no certificate (``certificate is None``); its kind is shown as ``none: node
+cap`` and its nodes as the cap, read from the reason's text (``max_nodes = N``).
 
 **Printed**: per row (scenes, certified, statuses, p50 / p90 / max of the certified time, the summed stage
 shares, mean / max nodes), a log-spaced histogram of the per-scene certified time over all rows, p50 / p90
@@ -44,6 +46,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 import time
 from collections import Counter
@@ -106,14 +109,19 @@ def profile_scene(row: Any, seed: int, repeats: int) -> Profile:
     stage = {s.name: s.time_seconds for s in c.stages}
     refine = stage.pop("refinement", 0.0)
     cert = certified.certificate
+    reason = c.uncertified_reason or ""
+    # A search that hit its node cap returns no certificate: its nodes are only in the reason's text.
+    capped = re.search(r"max_nodes = (\d+)", reason)
+    kind = cert.kind if cert is not None else ("none: node cap" if capped else "none")
+    nodes = cert.nodes if cert is not None else (int(capped.group(1)) if capped else 0)
     return Profile(
         row=row.name, seed=seed, status=certified.status, certified=bool(certified.certified),
-        kind=cert.kind if cert is not None else "none", nodes=cert.nodes if cert is not None else 0,
+        kind=kind, nodes=nodes,
         solver_iterations=cert.solver_iterations if cert is not None else 0,
         iterations="+".join(str(s.iterations) for s in c.stages), total=c.time_seconds,
         algebraic=sum(stage.values()), refine=refine,
         other=d.time_seconds - sum(s.time_seconds for s in d.stages), certify=c.time_seconds - d.time_seconds,
-        boundary=wall - c.time_seconds, reason=c.uncertified_reason or "")
+        boundary=wall - c.time_seconds, reason=reason)
 
 
 def main() -> None:
@@ -162,7 +170,7 @@ def main() -> None:
         f"{k} {fmt_ms(sum(getattr(p, k) for p in profiles))} ms ({100 * sum(getattr(p, k) for p in profiles) / t.sum():.1f} %)"
         for k in ("algebraic", "refine", "other", "certify")) + f" of {fmt_ms(float(t.sum()))} ms; Python boundary "
         f"{fmt_ms(sum(p.boundary for p in profiles))} ms on top")
-    reasons = Counter(p.reason for p in profiles if not p.certified)
+    reasons = Counter(re.sub(r"(lines2d|points2d)\[\d+\]", r"\1[k]", p.reason) for p in profiles if not p.certified)
     if reasons:
         print("\nUncertified scenes, by reason:")
         for reason, count in reasons.most_common():
@@ -175,7 +183,7 @@ def main() -> None:
                           [[p.row, p.seed, p.status, p.certified, p.kind, p.nodes, p.solver_iterations, p.iterations,
                             fmt_ms(p.total), fmt_ms(p.algebraic), fmt_ms(p.refine), fmt_ms(p.other),
                             fmt_ms(p.certify), fmt_ms(p.boundary)] for p in top])))
-    print("\nCertificate time per node, by kind (summed certify / summed nodes; a fixed part per call included):")
+    print("\nCertificate time per node, by kind (summed certify / summed nodes; a fixed part per call included):\n")
     for kind in sorted({p.kind for p in profiles}):
         ps = [p for p in profiles if p.kind == kind]
         n_nodes = sum(p.nodes for p in ps)
