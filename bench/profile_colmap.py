@@ -96,7 +96,13 @@ def gs_data_folder() -> Path:
         GS_DATA_CACHE.mkdir(parents=True, exist_ok=True)
         for name in GS_DATA_FILES:
             print(f"downloading {GS_DATA_URL}{name} -> {GS_DATA_CACHE}", file=sys.stderr)
-            urllib.request.urlretrieve(GS_DATA_URL + name, GS_DATA_CACHE / name)
+            try:
+                urllib.request.urlretrieve(GS_DATA_URL + name, GS_DATA_CACHE / name)
+            except OSError as exc:
+                (GS_DATA_CACHE / name).unlink(missing_ok=True)
+                sys.exit(f"could not download {GS_DATA_URL}{name} ({exc}); put cameras.bin, images.bin and "
+                         f"points3D.bin of mamechun/gs_data's distorted/sparse/0 in {GS_DATA_CACHE} or set "
+                         "PLUECKER_GS_DATA to their folder")
     return GS_DATA_CACHE
 
 
