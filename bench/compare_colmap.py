@@ -529,6 +529,9 @@ STRONG_RADIAL = (5000.0, -14.0, 800, 600)
 #: The fisheye camera: OPENCV_FISHEYE, f = 300 px, mild coefficients; the image is sized so that its
 #: corners are 80 degrees off axis (`fisheye_model`).
 FISHEYE = ([300.0, 300.0, 0.0, 0.0, 0.05, -0.01, 0.002, -3e-4], 80.0)
+#: A small-distortion OPENCV camera like a real two-camera model's: 300 x 600 px, fx = 385, fy = 430,
+#: k1 = -0.008, k2 = 0.0015, p1 = 0.005, p2 = -0.003 (`opencv_model`).
+OPENCV_SMALL = ([385.0, 430.0, 150.0, 300.0, -0.008, 0.0015, 0.005, -0.003], 300, 600)
 #: Repeated-image tracks: this fraction of the tracks gets a second keypoint in one of its images.
 REPEATED_FRACTION = 0.2
 
@@ -546,6 +549,13 @@ def pinhole_model(seed: int, points: int = 12000) -> Any:
     """PINHOLE, f = 1000 px, 1024 x 768: no distortion, so pluecker's cost is the pixel cost exactly (the
     cost-convention check: both must agree)."""
     return _synthetic(pycolmap.CameraModelId.PINHOLE, [1000.0, 1000.0, 512.0, 384.0], 1024, 768, 1.5, seed, points)
+
+
+def opencv_model(seed: int, points: int = 12000) -> Any:
+    """OPENCV with small radial and tangential terms (:data:`OPENCV_SMALL`); every image sees every point (tracks
+    of 12 observations)."""
+    params, width, height = OPENCV_SMALL
+    return _synthetic(pycolmap.CameraModelId.OPENCV, params, width, height, 1.0, seed, points)
 
 
 def strong_radial_model(seed: int, points: int = 12000) -> Any:
@@ -823,6 +833,7 @@ def retriangulation_section(seed: int, model_path: str | None) -> None:
     f, k, width, height = STRONG_RADIAL
     models += [
         ("PINHOLE f=1000", lambda: pinhole_model(seed)),
+        ("OPENCV small distortion", lambda: opencv_model(seed)),
         (f"SIMPLE_RADIAL f={f:.0f} k={k:.0f}", lambda: strong_radial_model(seed)),
         (f"OPENCV_FISHEYE to {FISHEYE[1]:.0f}°", lambda: fisheye_model(seed)),
         (f"repeated images ({100 * REPEATED_FRACTION:.0f} % of tracks)", lambda: repeated_model(seed)),

@@ -324,6 +324,22 @@ def test_an_observation_of_a_missing_point_is_a_named_error_never_another_point(
         colmap.retriangulate(rec)
 
 
+@pytest.mark.parametrize("ids", [[1, 2, 5, 9], [7, 10**9, 3 * 10**9, 2**62]], ids=["dense ids: a table", "sparse ids: a search"])
+def test_observations_find_the_rows_of_their_points_and_name_a_missing_one(ids):
+    """Both ways of finding an observation's point (a lookup table for COLMAP's dense ids, a search
+    otherwise) give the same rows, and both name an id that is not in the model: below, between and above
+    the model's ids, and negative."""
+    ids = np.array(ids, dtype=np.int64)
+    wanted = np.array([3, 0, 0, 2, 1, 3])
+    rows = colmap._point_rows(ids, ids[wanted], np.arange(6) + 100, np.arange(6))
+    np.testing.assert_array_equal(rows, wanted)
+    for missing in (ids[0] - 1, ids[1] + 1, ids[-1] + 1, -5):
+        point_ids = ids[wanted].copy()
+        point_ids[4] = missing
+        with pytest.raises(colmap.ModelError, match=rf"image_id 104, point2D_idx 4 observes point3D_id {missing}, "):
+            colmap._point_rows(ids, point_ids, np.arange(6) + 100, np.arange(6))
+
+
 def test_an_empty_model_is_a_named_error_and_one_line_on_the_command_line(tmp_path, capsys):
     from pluecker.cli import main
 

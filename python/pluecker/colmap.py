@@ -533,8 +533,16 @@ def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: np.ndarray, po
     """The rows of ``point_ids`` in the model's sorted point ids ``ids``; :class:`ModelError` naming the
     first observation (``image_id``, ``point2D_idx``) whose ``point3D_id`` is not among them (a dangling
     id, as a model edited in memory can hold)."""
-    rows = np.minimum(np.searchsorted(ids, point_ids), max(len(ids) - 1, 0))
-    dangling = np.flatnonzero(ids[rows] != point_ids) if len(ids) else np.arange(len(point_ids))
+    if len(ids) and 0 <= ids[0] and ids[-1] < 4 * len(ids) + 4096:
+        # COLMAP numbers its points densely: a lookup table is several times faster than a search.
+        table = np.full(int(ids[-1]) + 2, -1, dtype=np.int64)  # the last entry: every id out of range
+        table[ids] = np.arange(len(ids))
+        found = table[np.where((point_ids >= 0) & (point_ids <= ids[-1]), point_ids, len(table) - 1)]
+        dangling = np.flatnonzero(found < 0)
+        rows = np.maximum(found, 0)
+    else:
+        rows = np.minimum(np.searchsorted(ids, point_ids), max(len(ids) - 1, 0))
+        dangling = np.flatnonzero(ids[rows] != point_ids) if len(ids) else np.arange(len(point_ids))
     if len(dangling):
         k = dangling[0]
         same = int(np.sum(image_id[dangling] == image_id[k]))
