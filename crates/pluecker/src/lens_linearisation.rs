@@ -156,7 +156,10 @@ impl Linearised {
             if let Some(turned) = turned {
                 // Both charts share eᵢ* and sᵢ, hence the first radius.
                 let rho = plain.first_radius(cost);
-                let (a, b) = (turned.epsilon(rho), plain.epsilon(rho));
+                // The plain chart is chosen only where its εᵢ is at most the ray chart's: its
+                // enclosures stop as soon as they show that it is not.
+                let a = turned.epsilon(rho);
+                let b = plain.epsilon_unless_above(rho, a.unwrap_or(f64::INFINITY));
                 let better = match (a, b) {
                     (Some(a), Some(b)) => a < b,
                     (Some(_), None) => true,
@@ -194,11 +197,18 @@ impl Linearised {
     /// [`SPLIT_EPSILON`]) the box is split into `splits` x `splits` sub-boxes, and `E` is the largest of
     /// their radii about `J*` (each sub-box's enclosure holds the Jacobian on it).
     pub(crate) fn epsilon(&self, rho: f64) -> Option<f64> {
-        let single = self.epsilon_in(rho, 1)?;
+        self.epsilon_unless_above(rho, f64::INFINITY)
+    }
+
+    /// [`Self::epsilon`], or, once the sub-boxes show that it exceeds `cap`, some value above `cap`
+    /// (the enclosures of the other sub-boxes are then not computed): enough to compare two charts.
+    fn epsilon_unless_above(&self, rho: f64, cap: f64) -> Option<f64> {
+        let single = self.epsilon_in_unless_above(rho, 1, cap)?;
         if !(single > SPLIT_EPSILON) || self.splits == 1 {
             return Some(single);
         }
-        Some(single.min(self.epsilon_in(rho, self.splits)?))
+        // min(single, split) is exact whenever it is at most `cap`.
+        Some(single.min(self.epsilon_in_unless_above(rho, self.splits, cap)?))
     }
 
     /// `εᵢ` over the box of [`Self::epsilon`] cut into `pieces` x `pieces` sub-boxes. Each sub-box that
@@ -207,6 +217,12 @@ impl Linearised {
     /// convex hull of their union; `‖M (J̄ − J*) W⁻¹‖₂` is convex in `J̄`, so its largest value there is
     /// at a vertex of one of the enclosures (16 each).
     pub(crate) fn epsilon_in(&self, rho: f64, pieces: usize) -> Option<f64> {
+        self.epsilon_in_unless_above(rho, pieces, f64::INFINITY)
+    }
+
+    /// [`Self::epsilon_in`], returned as soon as it exceeds `cap` (then a value above `cap`, at most
+    /// that of every sub-box).
+    fn epsilon_in_unless_above(&self, rho: f64, pieces: usize, cap: f64) -> Option<f64> {
         let wtw_inverse = self.w_inverse * self.w_inverse.transpose();
         let half = Vector2::new(wtw_inverse[(0, 0)].sqrt(), wtw_inverse[(1, 1)].sqrt()) * rho;
         let step = half * (2.0 / pieces as f64);
@@ -245,6 +261,9 @@ impl Linearised {
                     for y in &second {
                         eps = eps.max(spectral_norm(&(x + y)));
                     }
+                }
+                if eps > cap {
+                    return Some(eps);
                 }
             }
         }
