@@ -222,7 +222,11 @@ fn covered_distortion(model: CameraModel, p: &[f64]) -> Option<Distortion> {
         CameraModel::SimpleRadial => Some(Polynomial(Coefficients::from_slice(&p[3..4]))),
         CameraModel::Radial => Some(Polynomial(Coefficients::from_slice(&p[3..5]))),
         CameraModel::OpenCv => Some(with_tangential(Coefficients::from_slice(&p[4..6]), p[6], p[7])),
-        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(Coefficients::from_slice(&[p[4], p[5], p[8]]), p[6], p[7])),
+        CameraModel::FullOpenCv if zero(&p[9..12]) => Some(with_tangential(
+            Coefficients::from_slice(&[p[4], p[5], p[8]]),
+            p[6],
+            p[7],
+        )),
         CameraModel::SimpleFisheye | CameraModel::Fisheye => Some(Fisheye(Coefficients::new())),
         CameraModel::SimpleRadialFisheye => Some(Fisheye(Coefficients::from_slice(&p[3..4]))),
         CameraModel::RadialFisheye => Some(Fisheye(Coefficients::from_slice(&p[3..5]))),
