@@ -651,6 +651,17 @@ impl<'c> Problem<'c> {
         })
     }
 
+    /// The segments that enter the bound of `cell`: every one near the answer, where the translation
+    /// ellipsoid decides whether the box lies inside the whitened ball; the longest `box_segments`
+    /// elsewhere.
+    fn segments_in(&self, cell: &Cell) -> usize {
+        if cell.centre.norm() + cell.half.norm() <= NEAR_ANSWER {
+            self.lines.len()
+        } else {
+            self.box_segments
+        }
+    }
+
     /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
     /// rotations within `θ` of `r` and their translations in `ball`.
     ///
@@ -1658,7 +1669,7 @@ impl RotationSearch<'_, '_> {
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         // The segments' residuals added to the minorant, where the points' alone fall short.
         let with_lines = if lower < self.f_hat && problem.box_segments > 0 && !problem.lines.is_empty() {
-            problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread, problem.box_segments)
+            problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread, problem.segments_in(cell))
         } else {
             None
         };
@@ -1756,13 +1767,7 @@ impl RotationSearch<'_, '_> {
     /// is smaller than `ball`.
     fn ball_box(&mut self, cell: &Cell, r_c: &Matrix3<f64>, ball: Translations) -> (Bound<()>, Option<Handed>) {
         let theta = cell.half.norm();
-        // Every segment near the answer, where the translation ellipsoid decides whether the box lies
-        // inside the whitened ball; the longest elsewhere.
-        let segments = if cell.centre.norm() + theta <= NEAR_ANSWER {
-            self.problem.lines.len()
-        } else {
-            self.problem.box_segments
-        };
+        let segments = self.problem.segments_in(cell);
         let Some(BoxBound {
             lower,
             t_star,
@@ -2411,6 +2416,10 @@ const NESTED_BALLS: usize = 24;
 /// whose local bound already closes the gap is used (a larger ball stops the search sooner).
 const BALL_FACTORS: [f64; 8] = [64.0, 16.0, 6.0, 3.0, 2.0, 1.5, 1.0, 0.7];
 
+/// Bisections (geometric) between the first of [`BALL_FACTORS`] whose local bound closes the gap and
+/// the one before it.
+const BALL_BISECTIONS: usize = 3;
+
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
 /// ([`MAX_CELLS_BEFORE_FALLBACK`] with segments, [`MAX_CELLS_FROM_DISTANCE`] without depth bounds;
@@ -2503,7 +2512,7 @@ fn certify_problem(
     let slack = lens.map_or(Slack::NONE, |l| l.slack);
     let gap_of = |lower: f64| relative_gap(cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some((target, at_target)) = BALL_FACTORS.iter().map(|f| f * unit).find_map(|radius| {
+    let closing = |radius: f64| {
         model
             .raw_bound(
                 radius,
@@ -2511,7 +2520,28 @@ fn certify_problem(
             )
             .filter(|&raw| gap_of(raw.min(cost)) <= options.max_relative_gap)
             .map(|raw| (radius, raw))
-    }) else {
+    };
+    let found = BALL_FACTORS
+        .iter()
+        .enumerate()
+        .find_map(|(k, f)| closing(f * unit).map(|at| (k, at)));
+    // Between the first factor that closes and the one before it, which does not, a larger ball that
+    // closes is sought by bisection (every ball whose bound closes will do; a larger one stops the
+    // search sooner).
+    let found = found.map(|(k, mut best)| {
+        if k > 0 {
+            let mut above = BALL_FACTORS[k - 1] * unit;
+            for _ in 0..BALL_BISECTIONS {
+                let radius = (best.0 * above).sqrt();
+                match closing(radius) {
+                    Some(at) => best = at,
+                    None => above = radius,
+                }
+            }
+        }
+        best
+    });
+    let Some((target, at_target)) = found else {
         return Certification::none(match lens {
             None => format!(
                 "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
