@@ -40,9 +40,16 @@
 //!    `n / w` has the numerator `n = ēᵀ R_c (a × d) + tᵀ (R_c d × ē)`, linear in `t`, and `w` is at most
 //!    `‖G_e‖ ‖d‖` times the line's largest distance from the camera over the box, so `n² / W²` adds to
 //!    `Q`; over the box `n` moves by at most `θ (‖ē‖ ‖a × d‖ + ‖d‖ ‖ē × t‖)`, with `t` within the
-//!    points' ellipsoid below. The quadratic with the segments' terms gives a second ellipsoid of the
-//!    box's translations, `Q_total(t) ≤ (√(2f̂) + θ η_total)²`; the one that reaches less far is kept
-//!    (`LinesBound::ellipsoid`). A box whose bound
+//!    points' ellipsoid below. Where that Minkowski bound falls short too, the quadratic with the
+//!    segments is linearised in the rotation as the points' alone are: with `R = exp(φ) R_c` and
+//!    `t = t* + Δ` (`‖Δ‖` within the points' ellipsoid's reach), an endpoint's numerator is within
+//!    `θ ‖d‖ ‖ē × Δ‖ + (e^θ − 1 − θ)(‖ē‖ ‖a × d‖ + ‖d‖ ‖ē × t*‖)` of its part linear in `(φ, Δ)`, a
+//!    point's within `(e^θ − 1 − θ) ‖Aᵢ‖ ‖Xᵢ‖`, and the weighted sum of squares of the linear parts,
+//!    minimised over `Δ` and bounded below over `‖φ‖ ≤ θ` by its Lagrangian dual, less those rests
+//!    (Minkowski), bounds `√(2f)` (`Problem::linear_lines_bound`): the segments' large first-order
+//!    drifts, which partly cancel, enter exactly. The quadratic with the segments' terms gives a
+//!    second ellipsoid of the box's translations, `Q_total(t) ≤ (√(2f̂) + θ η_total)²`; the one that
+//!    reaches less far is kept (`LinesBound::ellipsoid`). A box whose bound
 //!    reaches `f̂` holds no pose of `S` and is pruned; so is a box where some point is behind the camera
 //!    for every `t` of the ellipsoid `Q(t) ≤ β² = (√(2f̂) + θ η)²`, which holds the translations of its
 //!    poses of `S`. A box inside the ball `‖Δ‖_W ≤ ρ` of the local metric `‖Δ‖²_W = Δᵀ JᵀJ Δ`
@@ -201,8 +208,10 @@ const REBUILD_GAIN: f64 = 1.2;
 /// (With all 50 segments of the 50-point + 50-segment benchmark rows, the searches that fail took
 /// 2.5-3.3 times as long for one or two more certificates in 50.)
 const BOX_BOUND_SEGMENTS: usize = 8;
-/// Boxes of rotations within this angle of the answer's are bounded with every segment where there
-/// are no depth bounds ([`Start::Ball`]).
+/// Boxes of rotations within this angle of the answer's are bounded with every segment
+/// ([`Problem::segments_in`]): there the translation ellipsoid decides whether a box lies inside the
+/// whitened ball of step 4 (with depth bounds, keeping [`BOX_BOUND_SEGMENTS`] there too left 7 of 20
+/// scenes of the f = 250 px, 50-point + 50-segment benchmark row to the search without them).
 const NEAR_ANSWER: f64 = 0.5;
 /// At most this many segments, the longest in the image, enter the bound of a box where there are no
 /// depth bounds ([`Start::Ball`]): there they are the bound, not an addition to it.
@@ -373,6 +382,14 @@ impl LineTerm {
         let drift = self.moment_part + self.d_norm * self.e.cross(t_star).norm();
         let first_order = self.gamma(t_star).norm();
         (drift, (theta * drift).min(theta * first_order + rho * drift), theta)
+    }
+
+    /// The bound `θ ‖d‖ cross + ρ (‖ē‖ ‖m‖ + ‖d‖ ‖ē × t*‖)` (`ρ = e^θ − 1 − θ`) on
+    /// `|n − (α + βᵀ t + φᵀ γ(t*))|` at the rotation `exp(φ) r`, `‖φ‖ ≤ θ`, and the translation
+    /// `t = t* + Δ` with `‖ē × Δ‖ ≤ cross` ([`Problem::linear_lines_bound`]).
+    fn linear_rest(&self, theta: f64, t_star: &Vector3<f64>, cross: f64) -> f64 {
+        theta * self.d_norm * cross
+            + rotation_rest(theta) * (self.moment_part + self.d_norm * self.e.cross(t_star).norm())
     }
 
     /// `‖d‖² [ē]ₓᵀ [ē]ₓ`: `Δᵀ (this) Δ = ‖d‖² ‖ē × Δ‖²`, the square of the drift's part in `Δ` per unit
@@ -557,21 +574,13 @@ impl<'c> Problem<'c> {
     /// `‖ē × t‖ ≤ ‖ē × t*‖ + ‖ē‖ spread`, or `‖ē × t*‖ + ‖[ē]ₓ L‖` with the spectral norm below the
     /// Frobenius norm `√(‖ē‖² tr(shape) − ēᵀ shape ē)` (an ellipsoid elongated along the line of
     /// sight moves `ē × t` little).
-    fn line_terms(&self, segments: usize, (r, theta): (&Matrix3<f64>, f64), set: TranslationSet) -> Vec<LineTerm> {
-        let mut terms = Vec::with_capacity(2 * segments.min(self.lines.len()));
-        self.each_line_term(segments, (r, theta), set, |term| terms.push(term.clone()));
-        terms
-    }
-
-    /// [`Self::line_terms`] handed one by one to `visit`, built in place (the search's inner loop:
-    /// no term is moved or stored).
-    fn each_line_term(
+    fn line_terms(
         &self,
         segments: usize,
         (r, theta): (&Matrix3<f64>, f64),
         TranslationSet { t_star, spread, shape }: TranslationSet,
-        mut visit: impl FnMut(&LineTerm),
-    ) {
+    ) -> Vec<LineTerm> {
+        let mut terms = Vec::with_capacity(2 * segments.min(self.lines.len()));
         for line in self.lines.iter().take(segments) {
             let [a_norm, b_norm, d_norm, m_norm] = line.norms;
             let reach = |x: &Vector3<f64>, norm: f64| (r * x + t_star).norm() + theta * norm + spread;
@@ -583,7 +592,7 @@ impl<'c> Problem<'c> {
                     + Self::cross_extent(&rd, d_norm, spread, shape),
             );
             for &(e, e_norm, g_norm) in &line.ends {
-                visit(&LineTerm {
+                terms.push(LineTerm {
                     weight: (g_norm * moment).powi(-2),
                     alpha: e.dot(&rm),
                     beta: rd.cross(&e),
@@ -597,6 +606,7 @@ impl<'c> Problem<'c> {
                 });
             }
         }
+        terms
     }
 
     /// The largest `‖ē × Δt‖` over the translation steps `Δt` of [`Self::line_terms`]'s set.
@@ -615,8 +625,23 @@ impl<'c> Problem<'c> {
     /// ([`Self::line_terms`]): `Q_total(R, t) = κ Q(R, t) + Σ (α + βᵀ t)² / W²` at `r` is a minorant
     /// of `2f` quadratic in `t`, and over the rotations its square root moves by at most
     /// `θ η_total`, `η_total² = κ η² + Σ drift² / W²` (Minkowski over all the terms), so
-    /// `f ≥ ½ (√q_min − θ η_total)₊²` as for the points alone. The first `segments` segments enter.
-    /// `None` where the quadratic does not fix the translation.
+    /// `f ≥ ½ (√q_min − θ η_total)₊²` as for the points alone (`by_growth`). The first `segments`
+    /// segments enter. `None` where the quadratic does not fix the translation.
+    ///
+    /// Where that falls short of `wanted`, the quadratic linearised in the rotation gives a second
+    /// bound (`by_linear`), as [`Self::linear_ball_bound`] does without depth bounds: a rotation of
+    /// the box is `exp(φ) r` (`‖φ‖ ≤ θ`, `exp(φ) = I + [φ]ₓ + E`, `‖E y‖ ≤ ρ ‖y‖`,
+    /// `ρ = e^θ − 1 − θ`) and a translation `t* + Δ` with `‖Δ‖ ≤ spread`. A point's
+    /// `Aᵢ (exp(φ) yᵢ + t)` is within `ρ ‖Aᵢ‖ ‖Xᵢ‖` of its linear part (the points' rest `ρ √κ η`),
+    /// and a segment endpoint's numerator
+    /// `n = α + βᵀ t + φᵀ γ + ēᵀ E r m + ēᵀ (t* × E r d) + ēᵀ (Δ × (R − r) d)` within
+    /// `θ ‖d‖ ‖ē × Δ‖ + ρ (‖ē‖ ‖m‖ + ‖d‖ ‖ē × t*‖)` of `α + βᵀ t + φᵀ γ` (`‖ē × Δ‖` at most the
+    /// set's [`Self::cross_extent`]). Minkowski over all the weighted terms gives
+    /// `√(2f) ≥ √L(φ, Δ) − rest` with `L` the weighted sum of squares of the linear parts, and
+    /// `√L ≥ √least` with [`Self::linear_part`]'s bound of its minimum over `Δ` and `‖φ‖ ≤ θ`. So
+    /// `f ≥ ½ (√least − rest)₊²`: the rotation's first-order effect, in which the segments' drifts
+    /// are large and partly cancel, enters exactly.
+    #[allow(clippy::too_many_arguments)]
     fn lines_bound(
         &self,
         scaled: &Scaled,
@@ -625,6 +650,7 @@ impl<'c> Problem<'c> {
         (t_star, q_min): (&Vector3<f64>, f64),
         spread: f64,
         segments: usize,
+        wanted: f64,
     ) -> Option<LinesBound> {
         let c = scaled.minorant.c * scaled.scale;
         let mut quadratic = Quadratic {
@@ -638,17 +664,69 @@ impl<'c> Problem<'c> {
             spread,
             shape: None,
         };
-        self.each_line_term(segments, (r, theta), set, |term| quadratic.add_line(term));
-        let (t_star, q_min, c_inv) = quadratic.minimum()?;
+        let terms = self.line_terms(segments, (r, theta), set);
+        terms.iter().for_each(|term| quadratic.add_line(term));
+        let (t_lines, q_lines, c_inv) = quadratic.minimum()?;
         let eta = quadratic.eta2.sqrt();
+        let by_growth = minkowski(q_lines, theta * eta);
+        let by_linear = if by_growth < wanted {
+            self.linear_lines_bound(scaled, (r, theta), set, &terms, &c_inv, (q_lines, wanted))
+        } else {
+            0.0
+        };
         Some(LinesBound {
-            lower: minkowski(q_min, theta * eta),
-            t_star,
-            q_min,
+            lower: by_growth.max(by_linear),
+            by_growth,
+            by_linear,
+            t_star: t_lines,
+            q_min: q_lines,
             c: quadratic.c,
             c_inv,
             eta,
         })
+    }
+
+    /// [`Self::lines_bound`]'s linearised bound (`by_linear`) for the translation set `set` (its
+    /// points' `t*` and `spread`), the segments' `terms` and the quadratic's `C⁻¹` and minimum
+    /// `q_lines`; 0 where even
+    /// `½ (√q_lines − rest)₊²`, which it cannot exceed, falls short of `wanted`.
+    fn linear_lines_bound(
+        &self,
+        scaled: &Scaled,
+        (r, theta): (&Matrix3<f64>, f64),
+        set: TranslationSet,
+        terms: &[LineTerm],
+        c_inv: &Matrix3<f64>,
+        (q_lines, wanted): (f64, f64),
+    ) -> f64 {
+        let rho = rotation_rest(theta);
+        let lines_rest2: f64 = (terms.iter())
+            .map(|term| {
+                let cross = Self::cross_extent(&term.e, term.e.norm(), set.spread, None);
+                term.weight * term.linear_rest(theta, set.t_star, cross).powi(2)
+            })
+            .sum();
+        let points_rest = rho * scaled.minorant.eta * scaled.scale.sqrt();
+        let rest = (points_rest * points_rest + lines_rest2).sqrt();
+        if minkowski(q_lines, rest) < wanted {
+            return 0.0;
+        }
+        let points: Vec<(Vector3<f64>, f64)> = (self.corr.points3d.iter().zip(scaled.depths()))
+            .map(|(x, d)| (r * x, 1.0 / (d * d)))
+            .collect();
+        let least = self.linear_part(terms, &points, set.t_star, c_inv, theta).least;
+        minkowski(least.max(0.0), rest)
+    }
+
+    /// The segments that enter the bound of `cell`: every one near the answer, where the translation
+    /// ellipsoid decides whether the box lies inside the whitened ball; the longest `box_segments`
+    /// elsewhere.
+    fn segments_in(&self, cell: &Cell) -> usize {
+        if cell.centre.norm() + cell.half.norm() <= NEAR_ANSWER {
+            self.lines.len()
+        } else {
+            self.box_segments
+        }
     }
 
     /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
@@ -788,6 +866,11 @@ struct Ellipsoid {
 /// ellipsoid that holds their translations.
 struct LinesBound {
     lower: f64,
+    // The two bounds apart: read by the unit tests, which check each.
+    #[cfg_attr(not(test), allow(dead_code))]
+    by_growth: f64,
+    #[cfg_attr(not(test), allow(dead_code))]
+    by_linear: f64,
     t_star: Vector3<f64>,
     q_min: f64,
     c: Matrix3<f64>,
@@ -886,46 +969,76 @@ impl Problem<'_> {
         if !(step * step < lin.mu) {
             return 0.0;
         }
-        // L(z) = L₀ + 2 hᵀ z + zᵀ M z, z = (φ, Δ).
-        let mut m = SMatrix::<f64, 6, 6>::zeros();
-        let mut h = SVector::<f64, 6>::zeros();
+        let linear = self.linear_part(lin.terms, lin.points, lin.t_star, lin.c_inv, theta);
+        // s: ‖N^½ C⁻¹ B‖ θ + ‖N^½ C⁻¹ h_Δ‖ (norms through N: ‖N^½ v‖² = vᵀ N v).
+        let coupling = largest_eigenvalue(&(linear.cb.transpose() * lin.n * linear.cb))
+            .max(0.0)
+            .sqrt();
+        let s = coupling * theta + linear.offset.dot(&(lin.n * linear.offset)).max(0.0).sqrt();
+        let root = linear.least.max(0.0).sqrt() * (1.0 - step * step / lin.mu).sqrt();
+        0.5 * (root - step * s - rho * lin.eta0).max(0.0).powi(2)
+    }
+
+    /// The linear parts of a box's minorant at its centre rotation `r` ([`Self::linear_ball_bound`],
+    /// [`Self::lines_bound`]): a rotation of the box is `exp(φ) r`, `‖φ‖ ≤ θ`, and a translation
+    /// `t_ref + Δ`; a segment endpoint's numerator has the linear part `α + βᵀ t_ref + βᵀ Δ + φᵀ γ`
+    /// (`γ` at `t_ref`, [`LineTerm::gamma`]) and a point's `Aᵢ (yᵢ + t)` (`yᵢ = r Xᵢ`) the linear
+    /// part `Aᵢ (yᵢ + t_ref + Δ − [yᵢ]ₓ φ)`. Their weighted sum of squares is a convex quadratic
+    /// `L(φ, Δ)`; `C⁻¹` is the inverse of its `Δ` block (the quadratic's own). Minimised over `Δ`,
+    /// `L = L_min(φ) + (Δ − Δ*(φ))ᵀ C (Δ − Δ*(φ))`, `Δ*(φ) = −C⁻¹ (B φ + h_Δ)`, and `least` bounds
+    /// `L_min` from below over the ball `‖φ‖ ≤ θ` ([`ball_minimum_lower_bound`]).
+    fn linear_part(
+        &self,
+        terms: &[LineTerm],
+        points: &[(Vector3<f64>, f64)],
+        t_ref: &Vector3<f64>,
+        c_inv: &Matrix3<f64>,
+        theta: f64,
+    ) -> LinearPart {
+        // L(z) = L₀ + 2 hᵀ z + zᵀ M z, z = (φ, Δ), M = [M_φφ Bᵀ; B C]: C is the quadratic's own
+        // (its inverse given), so only M_φφ, B, h and L₀ are summed.
+        let (mut m_pp, mut b) = (Matrix3::zeros(), Matrix3::zeros());
+        let (mut h_p, mut h_d) = (Vector3::zeros(), Vector3::zeros());
         let mut l0 = 0.0;
-        for term in lin.terms {
-            let gamma = term.gamma(lin.t_star);
-            let row = SVector::<f64, 6>::new(gamma.x, gamma.y, gamma.z, term.beta.x, term.beta.y, term.beta.z);
-            let value = term.alpha + term.beta.dot(lin.t_star);
-            m += row * row.transpose() * term.weight;
-            h += row * (value * term.weight);
+        for term in terms {
+            let gamma = term.gamma(t_ref);
+            let value = term.alpha + term.beta.dot(t_ref);
+            let (w_gamma, w_beta) = (gamma * term.weight, term.beta * term.weight);
+            m_pp += w_gamma * gamma.transpose();
+            b += w_beta * gamma.transpose();
+            h_p += w_gamma * value;
+            h_d += w_beta * value;
             l0 += value * value * term.weight;
         }
-        for ((y, w), form) in lin.points.iter().zip(&self.forms) {
-            // J = [−[y]ₓ | I]: the camera-frame point's linear part in z.
-            let mut j = SMatrix::<f64, 3, 6>::zeros();
-            j.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-skew(y)));
-            j.fixed_view_mut::<3, 3>(0, 3).copy_from(&Matrix3::identity());
-            let p = y + lin.t_star;
-            let hp = form.h * p;
-            m += j.transpose() * form.h * j * *w;
-            h += j.transpose() * hp * *w;
-            l0 += p.dot(&hp) * w;
+        for ((y, w), form) in points.iter().zip(&self.forms) {
+            // The camera-frame point's linear part is J z with J = [−[y]ₓ | I]: JᵀHJ has the blocks
+            // [y]ₓᵀ H [y]ₓ, −H [y]ₓ (B) and H, and JᵀH p the parts [y]ₓ H p and H p.
+            let (y_cross, wh) = (skew(y), form.h * *w);
+            let wh_cross = wh * y_cross;
+            let hp = wh * (y + t_ref);
+            m_pp -= y_cross * wh_cross;
+            b -= wh_cross;
+            h_p += y_cross * hp;
+            h_d += hp;
+            l0 += (y + t_ref).dot(&hp);
         }
-        let m_pp = m.fixed_view::<3, 3>(0, 0).into_owned();
-        let b = m.fixed_view::<3, 3>(3, 0).into_owned();
-        let (h_p, h_d) = (h.fixed_rows::<3>(0).into_owned(), h.fixed_rows::<3>(3).into_owned());
-        // C is M's Δ block: the quadratic's own, whose inverse is given.
-        let c_inv = lin.c_inv;
         let schur = m_pp - b.transpose() * c_inv * b;
         let g = h_p - b.transpose() * (c_inv * h_d);
         let q0 = l0 - h_d.dot(&(c_inv * h_d));
-        let least = ball_minimum_lower_bound(q0, &g, &(0.5 * (schur + schur.transpose())), theta);
-        // s: ‖N^½ C⁻¹ B‖ θ + ‖N^½ C⁻¹ h_Δ‖ (norms through N: ‖N^½ v‖² = vᵀ N v).
-        let cb = c_inv * b;
-        let coupling = largest_eigenvalue(&(cb.transpose() * lin.n * cb)).max(0.0).sqrt();
-        let offset = c_inv * h_d;
-        let s = coupling * theta + offset.dot(&(lin.n * offset)).max(0.0).sqrt();
-        let root = least.max(0.0).sqrt() * (1.0 - step * step / lin.mu).sqrt();
-        0.5 * (root - step * s - rho * lin.eta0).max(0.0).powi(2)
+        LinearPart {
+            least: ball_minimum_lower_bound(q0, &g, &(0.5 * (schur + schur.transpose())), theta),
+            cb: c_inv * b,
+            offset: c_inv * h_d,
+        }
     }
+}
+
+/// [`Problem::linear_part`]: the lower bound `least` of `L_min(φ)` over `‖φ‖ ≤ θ`, and the parts of
+/// `Δ*(φ) = −(C⁻¹ B φ + C⁻¹ h_Δ)`.
+struct LinearPart {
+    least: f64,
+    cb: Matrix3<f64>,
+    offset: Vector3<f64>,
 }
 
 /// A minorant of `2f` at a box's centre rotation as a quadratic `tᵀ C t + 2 gᵀ t + c₀` in the
@@ -1658,7 +1771,9 @@ impl RotationSearch<'_, '_> {
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         // The segments' residuals added to the minorant, where the points' alone fall short.
         let with_lines = if lower < self.f_hat && problem.box_segments > 0 && !problem.lines.is_empty() {
-            problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread, problem.box_segments)
+            let wanted = self.f_hat * (1.0 - self.max_relative_gap);
+            let segments = problem.segments_in(cell);
+            problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread, segments, wanted)
         } else {
             None
         };
@@ -1756,13 +1871,7 @@ impl RotationSearch<'_, '_> {
     /// is smaller than `ball`.
     fn ball_box(&mut self, cell: &Cell, r_c: &Matrix3<f64>, ball: Translations) -> (Bound<()>, Option<Handed>) {
         let theta = cell.half.norm();
-        // Every segment near the answer, where the translation ellipsoid decides whether the box lies
-        // inside the whitened ball; the longest elsewhere.
-        let segments = if cell.centre.norm() + theta <= NEAR_ANSWER {
-            self.problem.lines.len()
-        } else {
-            self.problem.box_segments
-        };
+        let segments = self.problem.segments_in(cell);
         let Some(BoxBound {
             lower,
             t_star,
@@ -2411,6 +2520,10 @@ const NESTED_BALLS: usize = 24;
 /// whose local bound already closes the gap is used (a larger ball stops the search sooner).
 const BALL_FACTORS: [f64; 8] = [64.0, 16.0, 6.0, 3.0, 2.0, 1.5, 1.0, 0.7];
 
+/// Bisections (geometric) between the first of [`BALL_FACTORS`] whose local bound closes the gap and
+/// the one before it.
+const BALL_BISECTIONS: usize = 3;
+
 /// Certifies `pose` (conditioned frame of `corr`), a local minimum of cost `cost` = `½ Σ r²` (see the
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
 /// ([`MAX_CELLS_BEFORE_FALLBACK`] with segments, [`MAX_CELLS_FROM_DISTANCE`] without depth bounds;
@@ -2503,7 +2616,7 @@ fn certify_problem(
     let slack = lens.map_or(Slack::NONE, |l| l.slack);
     let gap_of = |lower: f64| relative_gap(cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
-    let Some((target, at_target)) = BALL_FACTORS.iter().map(|f| f * unit).find_map(|radius| {
+    let closing = |radius: f64| {
         model
             .raw_bound(
                 radius,
@@ -2511,7 +2624,28 @@ fn certify_problem(
             )
             .filter(|&raw| gap_of(raw.min(cost)) <= options.max_relative_gap)
             .map(|raw| (radius, raw))
-    }) else {
+    };
+    let found = BALL_FACTORS
+        .iter()
+        .enumerate()
+        .find_map(|(k, f)| closing(f * unit).map(|at| (k, at)));
+    // Between the first factor that closes and the one before it, which does not, a larger ball that
+    // closes is sought by bisection (every ball whose bound closes will do; a larger one stops the
+    // search sooner).
+    let found = found.map(|(k, mut best)| {
+        if k > 0 {
+            let mut above = BALL_FACTORS[k - 1] * unit;
+            for _ in 0..BALL_BISECTIONS {
+                let radius = (best.0 * above).sqrt();
+                match closing(radius) {
+                    Some(at) => best = at,
+                    None => above = radius,
+                }
+            }
+        }
+        best
+    });
+    let Some((target, at_target)) = found else {
         return Certification::none(match lens {
             None => format!(
                 "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
