@@ -9,7 +9,7 @@
 # writes mutants.out/ under bench/out/mutants-PLACE (not in git). Tests: the core crate's unit tests
 # and the integration tests named for the place (`TESTS="..."` names others; `TESTS=` runs the unit tests only).
 set -euo pipefail
-place=${1:?place: hull, spread, reach, eps, slemma or quadric}
+place=${1:?place: hull, spread, reach, eps, slemma, quadric or lines}
 names=${2:-}
 case $place in
   hull)    file=crates/pluecker/src/triangulation/line/taylor_search.rs
@@ -30,6 +30,9 @@ case $place in
   quadric) file=crates/pluecker/src/triangulation/quadric/certificate.rs
            re='in convexity_bound$|replace convexity_bound ->'
            tests="triangulation_quadric" ;;
+  lines)   file=crates/pluecker/src/pose/certificate/mod.rs
+           re='in Problem<.*>::linear_lines_bound|replace Problem<.*>::linear_lines_bound ->|in LineTerm::linear_rest|replace LineTerm::linear_rest ->'
+           tests="pose_certificate_bounds pose_global" ;;
   *) echo "unknown place $place" >&2; exit 2 ;;
 esac
 if [ -n "$names" ]; then

@@ -208,10 +208,14 @@ const REBUILD_GAIN: f64 = 1.2;
 /// (With all 50 segments of the 50-point + 50-segment benchmark rows, the searches that fail took
 /// 2.5-3.3 times as long for one or two more certificates in 50.)
 const BOX_BOUND_SEGMENTS: usize = 8;
-/// Boxes of rotations within this angle of the answer's are bounded with every segment
-/// ([`Problem::segments_in`]): there the translation ellipsoid decides whether a box lies inside the
-/// whitened ball of step 4 (with depth bounds, keeping [`BOX_BOUND_SEGMENTS`] there too left 7 of 20
-/// scenes of the f = 250 px, 50-point + 50-segment benchmark row to the search without them).
+/// Boxes of rotations within this angle of the answer's are bounded with every segment where there
+/// are no depth bounds ([`Start::Ball`], [`Problem::segments_in`]): there the translation ellipsoid
+/// decides whether a box lies inside the whitened ball of step 4. With depth bounds every box keeps
+/// [`BOX_BOUND_SEGMENTS`]: every segment near the answer there saved nodes at f = 250-800 px but cost
+/// 3.5 times as much per node at f = 15000 px (50 points + 50 segments, 20 scenes of
+/// `bench/profile_pose.py`: median 10 → 17-22 ms for the same nodes), and the linearised bound
+/// ([`Problem::linear_lines_bound`]) with the longest segments alone already did better than before
+/// on every row.
 const NEAR_ANSWER: f64 = 0.5;
 /// At most this many segments, the longest in the image, enter the bound of a box where there are no
 /// depth bounds ([`Start::Ball`]): there they are the bound, not an addition to it.
@@ -628,8 +632,8 @@ impl<'c> Problem<'c> {
     /// `f ≥ ½ (√q_min − θ η_total)₊²` as for the points alone (`by_growth`). The first `segments`
     /// segments enter. `None` where the quadratic does not fix the translation.
     ///
-    /// Where that falls short of `wanted`, the quadratic linearised in the rotation gives a second
-    /// bound (`by_linear`), as [`Self::linear_ball_bound`] does without depth bounds: a rotation of
+    /// Where that falls short of `wanted` (`None`: not tried), the quadratic linearised in the
+    /// rotation gives a second bound (`by_linear`), as [`Self::linear_ball_bound`] does without depth bounds: a rotation of
     /// the box is `exp(φ) r` (`‖φ‖ ≤ θ`, `exp(φ) = I + [φ]ₓ + E`, `‖E y‖ ≤ ρ ‖y‖`,
     /// `ρ = e^θ − 1 − θ`) and a translation `t* + Δ` with `‖Δ‖ ≤ spread`. A point's
     /// `Aᵢ (exp(φ) yᵢ + t)` is within `ρ ‖Aᵢ‖ ‖Xᵢ‖` of its linear part (the points' rest `ρ √κ η`),
@@ -650,7 +654,7 @@ impl<'c> Problem<'c> {
         (t_star, q_min): (&Vector3<f64>, f64),
         spread: f64,
         segments: usize,
-        wanted: f64,
+        wanted: Option<f64>,
     ) -> Option<LinesBound> {
         let c = scaled.minorant.c * scaled.scale;
         let mut quadratic = Quadratic {
@@ -669,10 +673,11 @@ impl<'c> Problem<'c> {
         let (t_lines, q_lines, c_inv) = quadratic.minimum()?;
         let eta = quadratic.eta2.sqrt();
         let by_growth = minkowski(q_lines, theta * eta);
-        let by_linear = if by_growth < wanted {
-            self.linear_lines_bound(scaled, (r, theta), set, &terms, &c_inv, (q_lines, wanted))
-        } else {
-            0.0
+        let by_linear = match wanted {
+            Some(wanted) if by_growth < wanted => {
+                self.linear_lines_bound(scaled, (r, theta), set, &terms, &c_inv, (q_lines, wanted))
+            }
+            _ => 0.0,
         };
         Some(LinesBound {
             lower: by_growth.max(by_linear),
@@ -1589,6 +1594,12 @@ struct RotationSearch<'a, 'c> {
     /// the surrogate; step 4's bounds, of the cost, enter through [`Slack::to_surrogate`].
     slack: Slack,
     inside_ball: InsideBall<'a>,
+    /// Whether the box bound with segments tries the rotation's linearisation
+    /// ([`Problem::linear_lines_bound`]) where its Minkowski bound falls short. Not through a lens:
+    /// there it cost more than it saved on every 50-point + 50-segment row of `bench/profile_pose.py`
+    /// (the strong OPENCV lens at f = 800 / 4000 / 15000 px: median 25 / 5.4 / 10 ms → 31 / 8.4 /
+    /// 20 ms for about the same nodes), where without a lens it halves the time at f = 250-800 px.
+    linearise_lines: bool,
     /// The largest whitened radius `‖(ω, t − t̂)‖_W` of the boxes found inside the ball.
     radius: f64,
 }
@@ -1771,9 +1782,18 @@ impl RotationSearch<'_, '_> {
         let spread = (slack_per_scale * minorant.c_inv_max).max(0.0).sqrt();
         // The segments' residuals added to the minorant, where the points' alone fall short.
         let with_lines = if lower < self.f_hat && problem.box_segments > 0 && !problem.lines.is_empty() {
-            let wanted = self.f_hat * (1.0 - self.max_relative_gap);
-            let segments = problem.segments_in(cell);
-            problem.lines_bound(scaled, r_c, theta, (&t_star, q_min), spread, segments, wanted)
+            let wanted = self
+                .linearise_lines
+                .then_some(self.f_hat * (1.0 - self.max_relative_gap));
+            problem.lines_bound(
+                scaled,
+                r_c,
+                theta,
+                (&t_star, q_min),
+                spread,
+                problem.box_segments,
+                wanted,
+            )
         } else {
             None
         };
@@ -2684,6 +2704,7 @@ fn certify_problem(
             bound: at_target,
             at_target,
         }),
+        linearise_lines: lens.is_none(),
         radius: 0.0,
     };
     let cap = match problem.start {
@@ -2828,6 +2849,7 @@ pub mod testing {
             max_relative_gap: 0.0,
             slack: Slack::NONE,
             inside_ball: InsideBall::Record(&mut record),
+            linearise_lines: true,
             radius: 0.0,
         };
         let localised = localise(&mut search, max_nodes).map_err(|(why, _)| why)?;

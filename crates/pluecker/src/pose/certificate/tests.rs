@@ -838,7 +838,7 @@ fn the_segments_terms_of_the_box_bound_hold_over_the_box() {
                     let (expected, rounding) = assembled(terms, th);
                     // (`wanted` 0: the linearised bound is not computed; it has its own test.)
                     let found = problem
-                        .lines_bound(&scaled, &r_c, th, (&t_star, q_min), spread, problem.box_segments, 0.0)
+                        .lines_bound(&scaled, &r_c, th, (&t_star, q_min), spread, problem.box_segments, None)
                         .map_or(0.0, |l| l.lower);
                     assert!(
                         (found - expected).abs() <= rounding,
@@ -871,7 +871,7 @@ fn the_segments_terms_of_the_box_bound_hold_over_the_box() {
                         (&t_star, q_min),
                         spread,
                         problem.box_segments,
-                        0.0,
+                        None,
                     )
                     .expect("the terms fix the translation");
                 let (slack_l, reach) = l.ellipsoid(f_hat, theta);
@@ -1053,7 +1053,7 @@ fn the_linearised_bound_with_segments_holds_over_the_box() {
                 // `wanted` and its ceiling does not: `wanted` just above the Minkowski bound.
                 let bounds_for = |wanted: f64| {
                     let (segments, set) = (problem.box_segments, (&t_star, q_min));
-                    problem.lines_bound(&scaled, &r_c, theta, set, spread, segments, wanted)
+                    problem.lines_bound(&scaled, &r_c, theta, set, spread, segments, Some(wanted))
                 };
                 let Some(growth) = bounds_for(0.0).map(|b| b.by_growth) else {
                     continue;
@@ -1341,6 +1341,7 @@ fn with_rotation_search(
         max_relative_gap: 0.0,
         slack: Slack::NONE,
         inside_ball: InsideBall::Record(&mut record),
+        linearise_lines: true,
         radius: 0.0,
     };
     body(&mut search, rng);
