@@ -135,6 +135,42 @@ fn bound_near_by_points(problem: &Problem, depths: &[f64], kappa: f64, r: &Matri
 /// A translation set for the tests of the bound without depth bounds: largest semi-axis `radius`,
 /// round or thin (a random axis and the others 0.05-0.5 of it), its centre within `off` radii of
 /// `truth`; and its `L` (`shape = L Lᵀ`).
+/// The least value of `f` found over the rotation ball `‖φ‖ ≤ θ`: `samples` random points (every other
+/// one on the sphere), then `steps` of a random local search whose step shrinks where it fails. An
+/// upper estimate of the minimum, which a lower bound must not exceed.
+fn least_over_ball(
+    rng: &mut Rng,
+    theta: f64,
+    (samples, steps): (usize, usize),
+    f: impl Fn(&Vector3<f64>) -> f64,
+) -> f64 {
+    let mut best = (Vector3::zeros(), f(&Vector3::zeros()));
+    for k in 0..samples {
+        let radius = if k % 2 == 0 {
+            theta
+        } else {
+            theta * rng.uniform_in(0.0, 1.0)
+        };
+        let phi = rng.unit_vector3() * radius;
+        let value = f(&phi);
+        if value < best.1 {
+            best = (phi, value);
+        }
+    }
+    let mut step = 0.25 * theta;
+    for _ in 0..steps {
+        let phi = best.0 + rng.unit_vector3() * step;
+        let phi = phi * (theta / phi.norm()).min(1.0);
+        let value = f(&phi);
+        if value < best.1 {
+            best = (phi, value);
+        } else {
+            step *= 0.95;
+        }
+    }
+    best.1
+}
+
 fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -> (Translations, Matrix3<f64>) {
     let centre = truth + rng.unit_vector3() * radius * rng.uniform_in(0.0, off);
     let axis = rng.unit_vector3();
@@ -965,38 +1001,10 @@ fn the_linearised_bound_holds_over_the_ball_of_rotations() {
                 let bound = scaled.linear_bound(&r_c, theta, q_min, 0.0);
                 let oracle =
                     |phi: &Vector3<f64>| bound_near_by_points(&problem, &depths, kappa, &(exp_so3(phi) * r_c), 0.0);
-                let mut best = (Vector3::zeros(), oracle(&Vector3::zeros()));
-                for k in 0..60 {
-                    let radius = if k % 2 == 0 {
-                        theta
-                    } else {
-                        theta * rng.uniform_in(0.0, 1.0)
-                    };
-                    let phi = rng.unit_vector3() * radius;
-                    let value = oracle(&phi);
-                    if value < best.1 {
-                        best = (phi, value);
-                    }
-                }
-                let mut step = 0.25 * theta;
-                for _ in 0..100 {
-                    let phi = best.0 + rng.unit_vector3() * step;
-                    let phi = if phi.norm() > theta {
-                        phi * (theta / phi.norm())
-                    } else {
-                        phi
-                    };
-                    let value = oracle(&phi);
-                    if value < best.1 {
-                        best = (phi, value);
-                    } else {
-                        step *= 0.95;
-                    }
-                }
+                let least = least_over_ball(&mut rng, theta, (60, 100), oracle);
                 assert!(
-                    bound <= best.1 * (1.0 + 1e-9) + 1e-300,
-                    "θ = {theta}: bound {bound} above {}",
-                    best.1
+                    bound <= least * (1.0 + 1e-9) + 1e-300,
+                    "θ = {theta}: bound {bound} above {least}"
                 );
                 if bound > scaled.bound_near(&r_c, theta) {
                     better += 1;
@@ -1141,35 +1149,11 @@ fn the_linearised_bound_with_segments_holds_over_the_box() {
                     }
                     0.5 * value(&t)
                 };
-                let mut best = (Vector3::zeros(), at_rotation(&Vector3::zeros()));
-                for k in 0..40 {
-                    let radius = if k % 2 == 0 {
-                        theta
-                    } else {
-                        theta * rng.uniform_in(0.0, 1.0)
-                    };
-                    let phi = rng.unit_vector3() * radius;
-                    let value = at_rotation(&phi);
-                    if value < best.1 {
-                        best = (phi, value);
-                    }
-                }
-                let mut step = 0.25 * theta;
-                for _ in 0..60 {
-                    let phi = best.0 + rng.unit_vector3() * step;
-                    let phi = phi * (theta / phi.norm()).min(1.0);
-                    let value = at_rotation(&phi);
-                    if value < best.1 {
-                        best = (phi, value);
-                    } else {
-                        step *= 0.95;
-                    }
-                }
+                let least = least_over_ball(&mut rng, theta, (40, 60), at_rotation);
                 assert!(
-                    bounds.by_linear <= best.1 * (1.0 + 1e-9) + 1e-12,
-                    "f = {f}, θ = {theta}: linearised bound {} above the minorant's least {}",
+                    bounds.by_linear <= least * (1.0 + 1e-9) + 1e-12,
+                    "f = {f}, θ = {theta}: linearised bound {} above the minorant's least {least}",
                     bounds.by_linear,
-                    best.1
                 );
                 checked += 1;
                 if theta < 1e-3 {
