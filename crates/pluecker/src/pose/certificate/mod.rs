@@ -704,15 +704,13 @@ impl<'c> Problem<'c> {
         c_inv: &Matrix3<f64>,
         (q_lines, wanted): (f64, f64),
     ) -> f64 {
-        let rho = rotation_rest(theta);
         let lines_rest2: f64 = (terms.iter())
             .map(|term| {
                 let cross = Self::cross_extent(&term.e, term.e.norm(), set.spread, None);
                 term.weight * term.linear_rest(theta, set.t_star, cross).powi(2)
             })
             .sum();
-        let points_rest = rho * scaled.minorant.eta * scaled.scale.sqrt();
-        let rest = (points_rest * points_rest + lines_rest2).sqrt();
+        let rest = (scaled.second_order_rest(theta).powi(2) + lines_rest2).sqrt();
         if minkowski(q_lines, rest) < wanted {
             return 0.0;
         }
@@ -1254,6 +1252,14 @@ impl Scaled {
         Some((t_star, q_min, self.minorant.eta * self.scale.sqrt()))
     }
 
+    /// `(e^θ − 1 − θ) √κ η`: over the rotations `exp(φ) r`, `‖φ‖ ≤ θ`, the points' whitened residuals
+    /// `√(κ wᵢ) Aᵢ (exp(φ) yᵢ + t)` (`yᵢ = r Xᵢ`) are within this of their part linear in `φ`, in the
+    /// norm of the stacked vector: `exp(φ) = I + [φ]ₓ + E` with `‖E y‖ ≤ (e^θ − 1 − θ) ‖y‖`, and
+    /// `η² = Σ wᵢ λ_max(Hᵢ) ‖Xᵢ‖²` ([`Self::linear_bound`], [`Problem::linear_lines_bound`]).
+    fn second_order_rest(&self, theta: f64) -> f64 {
+        rotation_rest(theta) * self.minorant.eta * self.scale.sqrt()
+    }
+
     /// A lower bound of `f` on the poses of `S` whose rotation is within the angle `θ` of `r`, from the
     /// minorant linearised in the rotation (0 when `Q` does not fix the translation). Such a
     /// rotation is `exp(φ) r` with `‖φ‖ ≤ θ`, and `exp(φ) r = r + [φ]ₓ r + E` with
@@ -1272,7 +1278,7 @@ impl Scaled {
     /// most `½ (√q_min − rest)₊²`. Where that is below `wanted` (the level at which the bound would
     /// close the box), nothing is computed and the answer is 0.
     fn linear_bound(&self, r: &Matrix3<f64>, theta: f64, q_min: f64, wanted: f64) -> f64 {
-        let rest = rotation_rest(theta) * self.minorant.eta * self.scale.sqrt();
+        let rest = self.second_order_rest(theta);
         let ceiling = minkowski(q_min, rest);
         if self.minorant.c_inv.is_none() || ceiling == 0.0 || ceiling < wanted {
             return 0.0;

@@ -1177,6 +1177,51 @@ fn the_linearised_bound_with_segments_holds_over_the_box() {
     );
 }
 
+/// The points' second-order rest ([`Scaled::second_order_rest`], the rest of both linearised bounds)
+/// against the points one by one: at rotations `exp(φ) r` with `‖φ‖ = θ`, the whitened residuals'
+/// distance from their part linear in `φ`, `√(Σ κ/Dᵢ² eᵢᵀ Hᵢ eᵢ)` with `eᵢ = (exp(φ) − I − [φ]ₓ) r Xᵢ`
+/// (`Hᵢ` and `Dᵢ` from the points, [`forms_by_points`]), never exceeds it, and comes near it on some
+/// rotation (a rest too small for `κ > 1` or for large `η` would show).
+#[test]
+fn the_points_second_order_rest_holds_over_the_ball() {
+    let mut rng = Rng::new(41);
+    let mut closest = 0.0f64;
+    for (f, n, seed) in [(250.0, 6, 1), (800.0, 10, 2), (15000.0, 10, 3), (4000.0, 40, 4)] {
+        let scene = visible_scene(f, n, 0, false, seed);
+        let corr = scene.noisy(1.0, true, &mut rng);
+        let truth = Pose::new(scene.rotation, scene.translation);
+        let f_hat = ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let root = problem.root().expect("depth bounds");
+        let forms = forms_by_points(&problem);
+        for kappa in [1.0, 2.5] {
+            let scaled = Scaled {
+                minorant: Rc::clone(root),
+                scale: kappa,
+            };
+            for _ in 0..100 {
+                let r = exp_so3(&(rng.unit_vector3() * rng.uniform_in(0.0, 0.5))) * truth.rotation;
+                let theta = 1e-3 * 1000f64.powf(rng.uniform_in(0.0, 1.0));
+                let phi = rng.unit_vector3() * theta;
+                let second = exp_so3(&phi) - Matrix3::identity() - skew(&phi);
+                let rest2: f64 = (corr.points3d.iter().zip(&root.depths).zip(&forms))
+                    .map(|((x, d), (h, _))| {
+                        let e = second * (r * x);
+                        kappa / (d * d) * e.dot(&(h * e))
+                    })
+                    .sum();
+                let ratio = rest2.sqrt() / scaled.second_order_rest(theta);
+                assert!(
+                    ratio <= 1.0 + 1e-9,
+                    "f = {f}, κ = {kappa}, θ = {theta}: the points' rest reaches {ratio} of its bound"
+                );
+                closest = closest.max(ratio);
+            }
+        }
+    }
+    assert!(closest > 0.5, "the points' rest reaches at most {closest} of its bound");
+}
+
 /// The minorant's form (`at`, `C`, `C⁻¹`, `bᵢᵀ C⁻¹ bᵢ`, `λ_max(C⁻¹)`) agrees with the per-point sum
 /// at random poses; and what a box hands down ([`Scaled::tightened`]: a scale, or a rebuild) is,
 /// at every pose, at most the minorant of the tighter depth bounds it was given, and claims depth
