@@ -31,7 +31,7 @@ case $place in
            re='in convexity_bound$|replace convexity_bound ->'
            tests="triangulation_quadric" ;;
   lines)   file=crates/pluecker/src/pose/certificate/mod.rs
-           re='in Problem<.*>::linear_lines_bound|replace Problem<.*>::linear_lines_bound ->|in LineTerm::linear_rest|replace LineTerm::linear_rest ->'
+           re='in Problem<.*>::linear_lines_bound|replace Problem<.*>::linear_lines_bound ->|in LineTerm::linear_rest|replace LineTerm::linear_rest ->|in Scaled::second_order_rest|replace Scaled::second_order_rest ->'
            tests="pose_certificate_bounds pose_global" ;;
   *) echo "unknown place $place" >&2; exit 2 ;;
 esac
