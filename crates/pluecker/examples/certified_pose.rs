@@ -9,7 +9,7 @@
 // `#[non_exhaustive]` (a struct literal with `..Default::default()` does not).
 #![allow(clippy::field_reassign_with_default)]
 
-use nalgebra::{Rotation3, Vector2, Vector3};
+use pluecker::nalgebra::{Rotation3, Vector2, Vector3};
 use pluecker::{estimate_pose, Camera, CertifyOptions, Correspondences, PoseOptions};
 
 fn main() -> pluecker::Result<()> {

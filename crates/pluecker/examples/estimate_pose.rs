@@ -5,7 +5,7 @@
 //! (t ≈ (0.1, -0.2, 6.0)), the status `success` and the cost Σ r² in px²: a few px² for the ±0.5 px
 //! of noise added to the pixels.
 
-use nalgebra::{Rotation3, Vector2, Vector3};
+use pluecker::nalgebra::{Rotation3, Vector2, Vector3};
 use pluecker::{estimate_pose, Camera, Correspondences, PoseOptions};
 
 fn main() -> pluecker::Result<()> {

@@ -5,7 +5,7 @@
 //! the data were made from), its Plücker coordinates, the status `success`, the cost Σ r² (whitened
 //! px², about 0.6 for the ±0.5 px of noise) and its certificate (`taylor_branch_and_bound`, certified).
 
-use nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
+use pluecker::nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
 use pluecker::triangulation::line::triangulate_line_segments;
 use pluecker::triangulation::TriangulationOptions;
 use pluecker::{Camera, Pose};

@@ -10,7 +10,7 @@
 // `#[non_exhaustive]` (a struct literal with `..Default::default()` does not).
 #![allow(clippy::field_reassign_with_default)]
 
-use nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
+use pluecker::nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::point::{triangulate_points, PointTracks};
 use pluecker::triangulation::{Method, TriangulationOptions};

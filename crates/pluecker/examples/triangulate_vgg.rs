@@ -6,7 +6,7 @@
 //! the 10 views, how many are certified globally optimal (all of them), and the median reprojection
 //! cost Σ r² per point (px²).
 
-use nalgebra::{Matrix3x4, Vector2};
+use pluecker::nalgebra::{Matrix3x4, Vector2};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::TriangulationOptions;
 use std::path::{Path, PathBuf};

@@ -28,7 +28,7 @@
 //!
 //! A point triangulated from two known cameras, with its certificate of global optimality:
 //! ```
-//! use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
+//! use pluecker::nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 //! use pluecker::triangulation::{point::triangulate_point, TriangulationOptions};
 //! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
 //! let camera = |cx: f64| k * Matrix3x4::new(1.0, 0.0, 0.0, -cx, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0);
@@ -46,7 +46,7 @@
 //! The same through a COLMAP camera model (here SIMPLE_RADIAL), from the raw, distorted pixels: the
 //! point minimises the reprojection error in each image's own pixels.
 //! ```
-//! use nalgebra::{Matrix3, Vector3};
+//! use pluecker::nalgebra::{Matrix3, Vector3};
 //! use pluecker::camera_model::{CameraModel, LensCamera};
 //! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
 //! use pluecker::Pose;
@@ -66,7 +66,7 @@
 //! track may see one image twice (two keypoints, as COLMAP's track merging leaves them), and a bad
 //! track is its own error, never the batch's:
 //! ```
-//! use nalgebra::{Matrix3, Matrix3x4, Vector3};
+//! use pluecker::nalgebra::{Matrix3, Matrix3x4, Vector3};
 //! use pluecker::triangulation::{point::{triangulate_point_observations, SparsePointTracks}, Csr, TriangulationOptions};
 //! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
 //! let projections: Vec<Matrix3x4<f64>> = (0..4)
@@ -136,6 +136,12 @@ pub use pose::{
 };
 pub use rigid::Pose;
 pub use status::Status;
+
+/// The linear-algebra crate whose types the API takes and returns (`Vector3`, `Matrix3x4`, ...),
+/// re-exported so that a project uses the same version: `use pluecker::nalgebra::Vector3;` needs no
+/// `nalgebra` entry of its own in `Cargo.toml` (a second, other version would make its types
+/// different types).
+pub use nalgebra;
 
 /// Items the Python bindings and the integration tests use that are not part of the user-facing API.
 #[doc(hidden)]
