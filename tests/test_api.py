@@ -533,6 +533,17 @@ def test_stub_names_match_the_extension_module():
     assert set(pluecker.__all__) == _public(dir(core))
 
 
+def test_the_package_namespace_holds_only_its_api():
+    """Every public name of ``pluecker`` is in ``__all__`` or is one of its own submodules: an import of the
+    package (``zlib``, loaded early for pycolmap's sake) does not become part of the API."""
+    import types
+
+    public = _public(dir(pluecker))
+    own = {n for n in public if isinstance(getattr(pluecker, n), types.ModuleType)
+           and getattr(pluecker, n).__name__ == f"pluecker.{n}"}
+    assert public - own == set(pluecker.__all__)
+
+
 def test_stub_signatures_and_class_members_match_the_runtime():
     for node in _stub_tree().body:
         if not isinstance(node, (ast.FunctionDef, ast.ClassDef)) or node.name.startswith("_"):

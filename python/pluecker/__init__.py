@@ -37,7 +37,7 @@ Example::
 # compression through the module aborts the process. Loading zlib here, before pluecker.colmap can import
 # pycolmap, avoids it for every import order that imports pluecker first; pluecker itself never compresses
 # with zlib, so the order pycolmap-then-pluecker is safe too.
-import zlib  # noqa: F401  (isort: skip)
+import zlib as _zlib  # noqa: F401  (isort: skip; private: not part of the API)
 
 from ._core import (
     METHODS,
