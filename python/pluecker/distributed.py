@@ -801,7 +801,7 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     ``invalid_input`` and a message naming the query, the table and the column; the other queries are
     solved as if it were not there."""
     pa = _pyarrow()
-    from concurrent.futures import ThreadPoolExecutor
+    from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
     model = _model(reconstruction)
     kind = _query_camera_kind(queries.column_names, "queries", model)
@@ -860,7 +860,14 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
 
     pool = ThreadPoolExecutor(max_workers=threads or _core.get_num_threads())
     try:
-        solved = list(pool.map(solve, range(len(q_ids))))
+        futures = [pool.submit(solve, i) for i in range(len(q_ids))]
+        # The first query that raises ends the call at once, whatever the queries before it are doing
+        # (results taken in order would wait for each earlier query first).
+        done, _ = wait(futures, return_when=FIRST_EXCEPTION)
+        failed = [f for f in futures if f in done and f.exception() is not None]
+        if failed:
+            raise failed[0].exception()
+        solved = [f.result() for f in futures]
     finally:
         # On Ctrl-C (or any error) the queries not started are dropped, not run to the end first.
         pool.shutdown(wait=False, cancel_futures=True)
