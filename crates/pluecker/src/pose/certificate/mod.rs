@@ -714,10 +714,8 @@ impl<'c> Problem<'c> {
         if minkowski(q_lines, rest) < wanted {
             return 0.0;
         }
-        let points: Vec<(Vector3<f64>, f64)> = (self.corr.points3d.iter().zip(scaled.depths()))
-            .map(|(x, d)| (r * x, 1.0 / (d * d)))
-            .collect();
-        let least = self.linear_part(terms, &points, set.t_star, c_inv, theta).least;
+        let points = (self.corr.points3d.iter().zip(scaled.depths())).map(|(x, d)| (r * x, 1.0 / (d * d)));
+        let least = self.linear_part(terms, points, set.t_star, c_inv, theta).least;
         minkowski(least.max(0.0), rest)
     }
 
@@ -972,7 +970,7 @@ impl Problem<'_> {
         if !(step * step < lin.mu) {
             return 0.0;
         }
-        let linear = self.linear_part(lin.terms, lin.points, lin.t_star, lin.c_inv, theta);
+        let linear = self.linear_part(lin.terms, lin.points.iter().copied(), lin.t_star, lin.c_inv, theta);
         // s: ‖N^½ C⁻¹ B‖ θ + ‖N^½ C⁻¹ h_Δ‖ (norms through N: ‖N^½ v‖² = vᵀ N v).
         let coupling = largest_eigenvalue(&(linear.cb.transpose() * lin.n * linear.cb))
             .max(0.0)
@@ -993,7 +991,7 @@ impl Problem<'_> {
     fn linear_part(
         &self,
         terms: &[LineTerm],
-        points: &[(Vector3<f64>, f64)],
+        points: impl Iterator<Item = (Vector3<f64>, f64)>,
         t_ref: &Vector3<f64>,
         c_inv: &Matrix3<f64>,
         theta: f64,
@@ -1013,10 +1011,10 @@ impl Problem<'_> {
             h_d += w_beta * value;
             l0 += value * value * term.weight;
         }
-        for ((y, w), form) in points.iter().zip(&self.forms) {
+        for ((y, w), form) in points.zip(&self.forms) {
             // The camera-frame point's linear part is J z with J = [−[y]ₓ | I]: JᵀHJ has the blocks
             // [y]ₓᵀ H [y]ₓ, −H [y]ₓ (B) and H, and JᵀH p the parts [y]ₓ H p and H p.
-            let (y_cross, wh) = (skew(y), form.h * *w);
+            let (y_cross, wh) = (skew(&y), form.h * w);
             let wh_cross = wh * y_cross;
             let hp = wh * (y + t_ref);
             m_pp -= y_cross * wh_cross;
