@@ -340,14 +340,18 @@ def test_observations_find_the_rows_of_their_points_and_name_a_missing_one(ids):
             colmap._point_rows(ids, point_ids, np.arange(6) + 100, np.arange(6))
 
 
-@pytest.mark.parametrize("high", [50, 2**61], ids=["unique keys", "keys too large: the stable sort"])
-def test_the_observations_order_is_numpys_stable_sort(high):
-    """The gather's sort of the observations by track is numpy's stable argsort, ties in row order, for
-    small ids (the fast unique-key sort) and for ids whose keys would overflow (the stable sort itself)."""
-    track = np.random.default_rng(3).integers(0, high, size=2000, dtype=np.int64)
+@pytest.mark.parametrize("low, high", [(0, 50), (0, 2**61), (-20, 30)],
+                         ids=["unique keys", "keys too large: the stable sort", "negative: the stable sort"])
+def test_the_observations_order_is_numpys_stable_sort(low, high):
+    """The sort of the table code (the gather's observations by track, Dask's rows and ids) is numpy's
+    stable argsort, ties in row order, for small ids (the fast unique-key sort), for ids whose keys would
+    overflow and for negative ids (the stable sort itself)."""
+    from pluecker._sorting import stable_order
+
+    track = np.random.default_rng(3).integers(low, high, size=2000, dtype=np.int64)
     track[::7] = track[0]  # many ties
-    np.testing.assert_array_equal(colmap._stable_order(track), np.argsort(track, kind="stable"))
-    assert len(colmap._stable_order(np.zeros(0, dtype=np.int64))) == 0
+    np.testing.assert_array_equal(stable_order(track), np.argsort(track, kind="stable"))
+    assert len(stable_order(np.zeros(0, dtype=np.int64))) == 0
 
 
 def test_an_empty_model_is_a_named_error_and_one_line_on_the_command_line(tmp_path, capsys):

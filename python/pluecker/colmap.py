@@ -27,6 +27,7 @@ import numpy as np
 from . import _core, _ctrl_c
 from ._arguments import check_sigma, number, shown
 from ._paths import require_folder, staged
+from ._sorting import stable_order
 
 
 class ModelError(_core.PlueckerError):
@@ -459,23 +460,13 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     # Sorted by (track, image id, pixel), as pluecker.distributed sorts them, so that both give the same
     # bits: the observations are in increasing image id, so a stable sort by track leaves only the
     # pixels of one track seen twice in one image to order.
-    order = _stable_order(track)
+    order = stable_order(track)
     key = track[order] * (len(images) + 1) + camera[order]
     for start, stop in _runs(key):
         run = order[start:stop]
         order[start:stop] = run[np.lexsort((pixels[run, 1], pixels[run, 0]))]
     return _Observations(P, image_ids, ids, track[order], camera[order], image_id[order], point2D_idx[order],
                          skipped, pixels[order], [lenses[image.camera_id] for image in images])
-
-
-def _stable_order(values: np.ndarray) -> np.ndarray:
-    """``np.argsort(values, kind="stable")`` for non-negative integers: the default sort of the unique
-    keys ``value * len + row`` gives the same order 3-4 times faster (144,000 rows: 4 ms against 14 ms)
-    where the keys fit in 62 bits."""
-    n = len(values)
-    if n == 0 or values.min() < 0 or int(values.max()) >= (1 << 62) // n:
-        return np.argsort(values, kind="stable")
-    return np.argsort(values * n + np.arange(n, dtype=values.dtype))
 
 
 def _runs(key: np.ndarray) -> list[tuple[int, int]]:

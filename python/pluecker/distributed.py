@@ -67,6 +67,7 @@ import numpy as np
 from . import _core
 from ._arguments import check_sigma, number, shown
 from ._paths import require_folder, staged
+from ._sorting import stable_order
 
 __all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
            "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
@@ -142,7 +143,7 @@ def _canonical_order(track_rank: np.ndarray, image_rank: np.ndarray, images: int
     rows arrived. One stable sort of the integer key (track rank, image rank among ``images`` ids, the
     unknown ones last); the full four-key sort only when a track has two rows of one image rank."""
     key = track_rank.astype(np.int64) * (images + 1) + image_rank
-    order = np.argsort(key, kind="stable")
+    order = stable_order(key)
     ordered = key[order]
     if np.any(ordered[1:] == ordered[:-1]):
         order = np.lexsort((x[:, 1], x[:, 0], image, track))
@@ -239,7 +240,7 @@ def _split(source: str, fragment: int, row_group: int, buckets: int, scratch: st
     path = _input_files(source)[fragment]
     part = pq.ParquetFile(path).read_row_group(row_group)
     bucket = _bucket_of(np.asarray(part.column(key).to_numpy(), dtype=np.int64), buckets)
-    order = np.argsort(bucket, kind="stable")
+    order = stable_order(bucket)
     edges = np.searchsorted(bucket[order], np.arange(buckets + 1))
     for b in range(buckets):
         rows = part.take(pa.array(order[edges[b]:edges[b + 1]]))
@@ -396,7 +397,7 @@ def _check_ids(parts: list[tuple[str, Any]], name: str, *, unique: bool) -> np.n
         where += [(what, k) for k in range(len(ids))] if unique else []
     ids = np.concatenate(values) if values else np.zeros(0, dtype=np.int64)
     if unique and len(ids) > 1:
-        order = np.argsort(ids, kind="stable")
+        order = stable_order(ids)
         twice = np.flatnonzero(ids[order][1:] == ids[order][:-1])
         if len(twice):
             (what_a, a), (what_b, b) = where[order[twice[0]]], where[order[twice[0] + 1]]
@@ -607,7 +608,7 @@ class ColmapModel:
         xyz = np.asarray(self.xyz, dtype=float).reshape(-1, 3) if len(ids) else np.zeros((0, 3))
         if xyz.shape != (len(ids), 3):
             raise _core.ShapeError(f"ColmapModel: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
-        order = np.argsort(ids, kind="stable")
+        order = stable_order(ids)
         ids, xyz = ids[order], xyz[order]
         if np.any(ids[1:] == ids[:-1]):
             raise _core.ShapeError(f"ColmapModel: point3D_id {int(ids[1:][ids[1:] == ids[:-1]][0])} is listed twice")
@@ -818,7 +819,7 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
         ransac = options.ransac if options is not None and options.ransac is not None else _core.RansacOptions()
     base = ransac.to_dict()
     cameras = _query_cameras(queries, kind, model)
-    order = np.argsort(q_ids, kind="stable")
+    order = stable_order(q_ids)
     q_ids = q_ids[order]
     cameras = [cameras[i] for i in order]
     points, point_values, point_ids = _point_matches(point_matches, model)
