@@ -529,8 +529,17 @@ def test_stub_names_match_the_extension_module():
         elif isinstance(node, ast.AnnAssign):
             stub_names.add(node.target.id)
     assert _public(stub_names) == _public(dir(core))
-    # The package re-exports exactly the public names of the extension module.
-    assert set(pluecker.__all__) == _public(dir(core))
+    # The package re-exports exactly the public names of the extension module, and adds the one enum
+    # built from them (``Status``, from ``STATUSES``).
+    assert set(pluecker.__all__) == _public(dir(core)) | {"Status"}
+
+
+def test_status_members_are_the_cores_statuses():
+    """``pluecker.Status`` is the core's list, in its order; a member is its name as a ``str``."""
+    assert [s.value for s in pluecker.Status] == list(core.STATUSES)
+    assert core.STATUSES[0] == "success" and "invalid_input" in core.STATUSES and "too_few_views" in core.STATUSES
+    assert pluecker.Status.SUCCESS == "success" and f"{pluecker.Status.TOO_FEW_VIEWS}" == "too_few_views"
+    assert str(pluecker.Status.INVALID_INPUT) == "invalid_input"
 
 
 def test_the_package_namespace_holds_only_its_api():

@@ -41,6 +41,7 @@ import zlib as _zlib  # noqa: F401  (isort: skip; private: not part of the API)
 
 from ._core import (
     METHODS,
+    STATUSES,
     TRIANGULATION_METHODS,
     BatchReport,
     Camera,
@@ -101,11 +102,14 @@ from ._core import (
     triangulate_quadric_observations,
     triangulate_quadrics,
 )
+from ._status import Status
 
 __all__ = [
     "get_num_threads",
     "set_num_threads",
     "METHODS",
+    "STATUSES",
+    "Status",
     "TRIANGULATION_METHODS",
     "BatchReport",
     "Camera",

@@ -21,6 +21,9 @@ METHODS: Tuple[str, ...]
 TRIANGULATION_METHODS: Tuple[str, ...]
 """Every ``method`` of the triangulation functions: ``("linear", "local", "optimal")``."""
 
+STATUSES: Tuple[str, ...]
+"""Every ``status`` of a result, ``"success"`` first (the members of :class:`pluecker.Status`)."""
+
 # --- Exceptions (all ValueError) ------------------------------------------------------------------
 
 class PlueckerError(ValueError):

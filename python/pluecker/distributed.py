@@ -68,6 +68,7 @@ from . import _core
 from ._arguments import check_sigma, number, shown
 from ._paths import require_folder, staged
 from ._sorting import stable_order
+from ._status import Status
 
 __all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
            "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
@@ -185,7 +186,7 @@ def triangulate_table(table: Any, cameras: Cameras, *,
     messages = np.asarray(result.messages, dtype=object)
     for row in np.flatnonzero(~known):
         t = track_index[row]
-        status[t] = "invalid_input"
+        status[t] = Status.INVALID_INPUT.value
         messages[t] = f"track {ids[t]}: image id {image[row]} is not among the cameras"
     X = np.asarray(result.X)
     points = pa.table({
@@ -849,10 +850,10 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
                                     segs[:, :4].reshape(-1, 2, 2) if len(segs) else None,
                                     segs[:, 4:].reshape(-1, 2, 3) if len(segs) else None, options=options_q)
         except _BadQuery as exc:
-            out["status"], out["message"] = "invalid_input", str(exc)
+            out["status"], out["message"] = Status.INVALID_INPUT.value, str(exc)
             return out
         except (_core.PlueckerError, TypeError) as exc:
-            out["status"], out["message"] = "invalid_input", f"query {q}: {exc}"
+            out["status"], out["message"] = Status.INVALID_INPUT.value, f"query {q}: {exc}"
             return out
         out.update(status=r.status, R=np.asarray(r.pose.rotation).reshape(-1), t=np.asarray(r.pose.translation),
                    rms=r.details.rms_error_px,

@@ -53,6 +53,12 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         "TRIANGULATION_METHODS",
         pyo3::types::PyTuple::new(m.py(), triangulation)?,
     )?;
+    // Every status an estimate can have, in the core's order: `pluecker.Status` is built from it.
+    let statuses: Vec<&str> = <pluecker::Status as strum::VariantArray>::VARIANTS
+        .iter()
+        .map(|s| s.as_str())
+        .collect();
+    m.add("STATUSES", pyo3::types::PyTuple::new(m.py(), statuses)?)?;
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<lens_camera::PyLensCamera>()?;

@@ -1,6 +1,7 @@
 //! One status for every estimate, pose or triangulated primitive: whether the answer can be used,
 //! and if not why. Each estimator's docs say which variants it returns.
 
+use crate::error::Error;
 use crate::interrupt::StopReason;
 
 /// Whether an estimate can be used, and if not why.
@@ -42,6 +43,21 @@ pub enum Status {
     Interrupted,
     /// Like [`Status::Interrupted`], stopped because the call's time budget ran out.
     TimeBudget,
+    /// A batch track (or a distributed query) rejected before any solve: fewer views than the
+    /// primitive needs ([`Error::TooFewCorrespondences`]).
+    TooFewViews,
+    /// Rejected: a NaN or infinite input value ([`Error::NonFinite`]).
+    NonFinite,
+    /// Rejected: the data cannot determine the estimate, e.g. a zero-length segment
+    /// ([`Error::Degenerate`]).
+    Degenerate,
+    /// Rejected: a camera that cannot be inverted ([`Error::SingularCamera`]).
+    SingularCamera,
+    /// Rejected: an input of the wrong shape or naming something that does not exist, e.g. an image id
+    /// that is not among the cameras ([`Error::Shape`]).
+    InvalidInput,
+    /// Rejected: an option outside its documented range ([`Error::InvalidOption`]).
+    InvalidOption,
 }
 
 impl Status {
@@ -55,6 +71,20 @@ impl Status {
         match reason {
             StopReason::Requested => Status::Interrupted,
             StopReason::TimeBudget => Status::TimeBudget,
+        }
+    }
+
+    /// The status of a problem rejected with `err` before any solve (one bad track of a batch, one
+    /// bad query of a distributed job): the error's kind, named.
+    pub fn rejected(err: &Error) -> Status {
+        match err {
+            Error::TooFewCorrespondences { .. } => Status::TooFewViews,
+            Error::NonFinite { .. } => Status::NonFinite,
+            Error::Degenerate { .. } => Status::Degenerate,
+            Error::SingularCamera { .. } => Status::SingularCamera,
+            Error::Shape { .. } => Status::InvalidInput,
+            Error::InvalidOption { .. } => Status::InvalidOption,
+            Error::Interrupted { reason } => Status::stopped(*reason),
         }
     }
 }

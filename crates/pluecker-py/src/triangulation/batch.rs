@@ -6,7 +6,7 @@
 //! tracks hands its results back without a pass over them.
 //!
 //! A track the core rejected gets a NaN cost, no certificate, a status naming the error kind
-//! ([`error_status`]) and a message; its estimate columns are NaN.
+//! ([`Status::rejected`]) and a message; its estimate columns are NaN.
 //!
 //! Also the inputs every batch shares: cameras `(v, 3, 4)` for all tracks or `(n, v, 3, 4)` per
 //! track ([`Cameras`]) and per-observation arrays ([`per_observation`]).
@@ -28,20 +28,6 @@ use pyo3::types::PyTuple;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
-/// The status of a track the core rejected, by error kind (shared by every batch result).
-pub(crate) fn error_status(err: &Error) -> &'static str {
-    match err {
-        Error::TooFewCorrespondences { .. } => "too_few_views",
-        Error::NonFinite { .. } => "non_finite",
-        Error::Degenerate { .. } => "degenerate",
-        Error::SingularCamera { .. } => "singular_camera",
-        Error::Shape { .. } => "invalid_input",
-        Error::InvalidOption { .. } => "invalid_option",
-        Error::Interrupted { reason } => Status::stopped(*reason).as_str(),
-        // `Error` is non-exhaustive: a kind added to the core rejects the track as invalid input.
-        _ => "invalid_input",
-    }
-}
 
 /// Why track of `status` and `cost` was not started, if the batch was stopped before it (its cost is
 /// NaN; a track stopped while being solved keeps the cost it reached).
@@ -320,7 +306,7 @@ impl ReportRow<'_> {
             self.uncertified(f64::NAN, Status::stopped(reason).as_str(), 0.0, 0);
             return None;
         }
-        self.uncertified(f64::NAN, error_status(&err), 0.0, 0);
+        self.uncertified(f64::NAN, Status::rejected(&err).as_str(), 0.0, 0);
         Some((t, track_message(t, &err)))
     }
 }
