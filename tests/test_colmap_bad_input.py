@@ -156,7 +156,7 @@ def test_localize_in_model_names_a_negative_id_and_refuses_a_bool_camera():
     bad[3] = -7
     with pytest.raises(colmap.MatchError, match=r"^point3D_ids: point3D_id -7 \(match 3\) is not a point of the model"):
         colmap.localize_in_model(rec, image.camera_id, xy, bad)
-    from pluecker.distributed import ColmapModel
+    from pluecker.colmap import ColmapModel
     with pytest.raises(colmap.MatchError, match=r"point3D_id -7 \(match 3\)"):
         colmap.localize_in_model(ColmapModel.from_reconstruction(rec), image.camera_id, xy, bad)
     for camera in (-1, 2**40):

@@ -443,7 +443,7 @@ def test_localize_in_model_takes_a_camera_id_and_point3D_ids():
     np.testing.assert_allclose(colmap.pose_from_rigid(rigid)[0], R, atol=1e-7)
     np.testing.assert_allclose(colmap.pose_from_rigid(rigid)[1], t, atol=1e-6)
     # The same from a ColmapModel, and with the pycolmap camera instead of its id.
-    model = dist.ColmapModel.from_reconstruction(rec)
+    model = colmap.ColmapModel.from_reconstruction(rec)
     for args in ((model, image.camera_id), (rec, rec.cameras[image.camera_id])):
         other = colmap.localize_in_model(args[0], args[1], xy, ids)[1]
         np.testing.assert_array_equal(other.pose.rotation, result.pose.rotation)

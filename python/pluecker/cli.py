@@ -636,7 +636,7 @@ def _localize(args: argparse.Namespace) -> int:
     """``pluecker localize QUERIES POINTS --out DIR [--colmap DIR] [--lines L] [--scheduler ADDRESS]
     [RANSAC flags]``."""
     try:
-        from pluecker import distributed
+        from pluecker import colmap, distributed
 
         distributed._pyarrow()
     except ImportError as exc:
@@ -654,7 +654,7 @@ def _localize(args: argparse.Namespace) -> int:
         ransac = pluecker.RansacOptions(**fields)
         model = None
         if args.colmap is not None:
-            model = distributed.ColmapModel.from_reconstruction(_read_model("--colmap", args.colmap))
+            model = colmap.ColmapModel.from_reconstruction(_read_model("--colmap", args.colmap))
     except (InputError, pluecker.PlueckerError) as exc:
         return _fail("localize", str(exc))
     client = None

@@ -20,12 +20,14 @@ from __future__ import annotations
 import copy
 import re
 import struct
+from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
 
 from . import _core, _ctrl_c
 from ._arguments import check_sigma, number, shown
+from ._cameras import Cameras
 from ._paths import require_folder, staged
 from ._sorting import stable_order
 
@@ -295,6 +297,58 @@ def _text_model_problem(folder: Any) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class ColmapModel:
+    """What localisation reads of a COLMAP model: its 3-D points by ``point3D_id`` (``point3D_ids`` (n,)
+    sorted, ``xyz`` (n, 3)) and its cameras by ``camera_id`` (``cameras``: ``{camera_id: (model name,
+    params)}``). Plain data, sent to every Dask worker once; :meth:`from_reconstruction` reads a
+    ``pycolmap.Reconstruction``."""
+
+    point3D_ids: np.ndarray
+    xyz: np.ndarray
+    cameras: dict
+
+    def __post_init__(self) -> None:
+        ids = np.asarray(self.point3D_ids, dtype=np.int64).reshape(-1)
+        xyz = np.asarray(self.xyz, dtype=float).reshape(-1, 3) if len(ids) else np.zeros((0, 3))
+        if xyz.shape != (len(ids), 3):
+            raise _core.ShapeError(f"ColmapModel: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
+        order = stable_order(ids)
+        ids, xyz = ids[order], xyz[order]
+        if np.any(ids[1:] == ids[:-1]):
+            raise _core.ShapeError(f"ColmapModel: point3D_id {int(ids[1:][ids[1:] == ids[:-1]][0])} is listed twice")
+        cameras = {int(k): (str(m), tuple(float(p) for p in params)) for k, (m, params) in dict(self.cameras).items()}
+        object.__setattr__(self, "point3D_ids", ids)
+        object.__setattr__(self, "xyz", xyz)
+        object.__setattr__(self, "cameras", cameras)
+
+    @classmethod
+    def from_reconstruction(cls, reconstruction: Any) -> "ColmapModel":
+        """The points and cameras of a ``pycolmap.Reconstruction``."""
+        points = reconstruction.points3D
+        ids = np.fromiter((int(i) for i in points), dtype=np.int64, count=len(points))
+        xyz = np.array([points[int(i)].xyz for i in ids], dtype=float).reshape(-1, 3)
+        cameras = {int(i): (c.model.name, tuple(c.params)) for i, c in reconstruction.cameras.items()}
+        return cls(ids, xyz, cameras)
+
+    def lookup(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The points (len(ids), 3) of ``point3D_ids`` ``ids`` (NaN for an id not in the model) and the
+        mask of the known ones."""
+        ids = np.asarray(ids, dtype=np.int64)
+        rows = np.minimum(np.searchsorted(self.point3D_ids, ids), max(len(self.point3D_ids) - 1, 0))
+        known = self.point3D_ids[rows] == ids if len(self.point3D_ids) else np.zeros(len(ids), dtype=bool)
+        xyz = np.full((len(ids), 3), np.nan)
+        xyz[known] = self.xyz[rows[known]]
+        return xyz, known
+
+
+def as_model(model: Any) -> ColmapModel | None:
+    """``model`` as a :class:`ColmapModel` (a ``pycolmap.Reconstruction`` is read), or ``None``."""
+    if model is None or isinstance(model, ColmapModel):
+        return model
+    return ColmapModel.from_reconstruction(model)
+
+
 class Retriangulation:
     """What :func:`retriangulate` found: one row per 3-D point of the model and one per observation.
 
@@ -562,8 +616,6 @@ def observation_table(reconstruction: Any, sigma_px: float = 1.0, *, skipped: li
     ``Retriangulation.skipped``, appended to the list ``skipped`` when one is given."""
     import pyarrow as pa
 
-    from .distributed import Cameras
-
     o = _observations(reconstruction, sigma_px)
     if skipped is not None:
         skipped.extend(o.skipped)
@@ -798,14 +850,12 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
     """Localises one image in a COLMAP model from its keypoints matched to the model's 3-D points:
     ``points2D`` (n, 2), the image's own (distorted) pixels, and ``point3D_ids`` (n,). ``camera``: the
     ``camera_id`` of one of the model's cameras, a ``pycolmap.Camera`` or a ``pluecker.LensCamera``.
-    ``reconstruction``: a ``pycolmap.Reconstruction`` (or a :class:`pluecker.distributed.ColmapModel`).
+    ``reconstruction``: a ``pycolmap.Reconstruction`` (or a :class:`ColmapModel`).
     Returns ``(cam_from_world, PoseResult)`` as :func:`localize` does: robust by default (``ransac=True``,
     :class:`pluecker.RansacOptions` defaults: 4 px threshold in the image's pixels; pass
     ``ransac=pluecker.RansacOptions(point_threshold=..., confidence=..., max_iterations=..., seed=...)``).
     A ``camera_id`` or ``point3D_id`` the model does not hold (a negative one included) is a
     :class:`MatchError` naming it; a ``camera`` of another type (a bool, say) ``InvalidOptionError``."""
-    from .distributed import ColmapModel
-
     ids = np.asarray(point3D_ids)
     if ids.ndim != 1 or not (np.issubdtype(ids.dtype, np.integer) or len(ids) == 0):
         raise _core.ShapeError(f"point3D_ids: expected a 1-D array of integer ids, got shape {ids.shape} of "
@@ -850,13 +900,13 @@ def localize_queries(reconstruction: Any, queries: Any, point_matches: Any, line
     ``point_matches`` (``query``, ``x``, ``y``, ``point3D_id``; pixels of the image's own camera) and
     ``line_matches``, anything ``pyarrow.table`` takes (a dict of columns, a pandas DataFrame, a
     ``pyarrow.Table``). The 3-D points and cameras come from ``reconstruction`` (a
-    ``pycolmap.Reconstruction`` or :class:`pluecker.distributed.ColmapModel`). Returns the ``poses``
+    ``pycolmap.Reconstruction`` or :class:`ColmapModel`). Returns the ``poses``
     and ``matches`` tables of :func:`pluecker.distributed.localize_tables` (a query whose ``camera_id``
     or ``point3D_id`` the model does not hold gets status ``invalid_input`` and a message naming it;
     the others are unaffected). ``ransac``: :class:`pluecker.RansacOptions` (``None``: its defaults)."""
     import pyarrow as pa
 
-    from .distributed import ColmapModel, localize_tables
+    from .distributed import localize_tables
 
     model = (reconstruction if isinstance(reconstruction, ColmapModel)
              else ColmapModel.from_reconstruction(reconstruction))

@@ -66,11 +66,13 @@ import numpy as np
 
 from . import _core
 from ._arguments import check_sigma, number, shown
+from ._cameras import Cameras
 from ._paths import require_folder, staged
 from ._sorting import stable_order
 from ._status import Status
+from .colmap import ColmapModel, as_model
 
-__all__ = ["Cameras", "ColmapModel", "JobSummary", "triangulate", "triangulate_table", "read_points",
+__all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points",
            "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
            "read_matches", "share_threads"]
 
@@ -89,53 +91,6 @@ def _pyarrow() -> Any:
     except ImportError as exc:  # pragma: no cover - the extra is installed in the test environment
         raise ImportError("pluecker.distributed needs pyarrow: pip install 'pluecker[dask]'") from exc
     return pyarrow
-
-
-@dataclass(frozen=True)
-class Cameras:
-    """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``lenses``
-    (v,), each image's ``Camera`` or ``LensCamera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
-    table's pixels are the observed (distorted) ones, as ``triangulate_point_observations(cameras=...)``
-    takes them."""
-
-    ids: np.ndarray
-    projections: np.ndarray
-    lenses: Optional[tuple] = None
-
-    def __post_init__(self) -> None:
-        ids = np.asarray(self.ids, dtype=np.int64).reshape(-1)
-        P = np.asarray(self.projections, dtype=float)
-        if P.shape != (len(ids), 3, 4):
-            raise _core.ShapeError(
-                f"Cameras: projections must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
-        if len(np.unique(ids)) != len(ids):
-            raise ValueError("Cameras: image ids must be unique")
-        if self.lenses is not None and len(self.lenses) != len(ids):
-            raise _core.ShapeError(f"Cameras: lenses must have one camera per id ({len(ids)}), got {len(self.lenses)}")
-        object.__setattr__(self, "ids", ids)
-        object.__setattr__(self, "projections", P)
-        if self.lenses is not None:
-            object.__setattr__(self, "lenses", tuple(self.lenses))
-
-    @classmethod
-    def from_dict(cls, cameras: dict[int, Any]) -> "Cameras":
-        """From ``{image id: P (3, 4)}``."""
-        ids = np.array(sorted(cameras), dtype=np.int64)
-        return cls(ids, np.stack([np.asarray(cameras[int(i)], dtype=float) for i in ids]) if len(ids) else
-                   np.zeros((0, 3, 4)))
-
-    def lookup(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """For each image id: its rank among the sorted ids, whether it is known, and its row of ``projections``
-        (an unknown id gets rank and row ``v``, one past the cameras)."""
-        v = len(self.ids)
-        order = np.argsort(self.ids)
-        rank = np.searchsorted(self.ids[order], image)
-        known = rank < v
-        known[known] = self.ids[order][rank[known]] == image[known]
-        rank = np.where(known, rank, v)
-        row = np.full(len(image), v, dtype=np.int64)
-        row[known] = order[rank[known]]
-        return rank.astype(np.int64), known, row
 
 
 def _canonical_order(track_rank: np.ndarray, image_rank: np.ndarray, images: int, track: np.ndarray,
@@ -593,58 +548,6 @@ MODEL_POINT_MATCH_COLUMNS = ("query", "x", "y", "point3D_id")
 LINE_MATCH_COLUMNS = ("query", "x1", "y1", "x2", "y2", "X1", "Y1", "Z1", "X2", "Y2", "Z2")
 
 
-@dataclass(frozen=True)
-class ColmapModel:
-    """What localisation reads of a COLMAP model: its 3-D points by ``point3D_id`` (``point3D_ids`` (n,)
-    sorted, ``xyz`` (n, 3)) and its cameras by ``camera_id`` (``cameras``: ``{camera_id: (model name,
-    params)}``). Plain data, sent to every Dask worker once; :meth:`from_reconstruction` reads a
-    ``pycolmap.Reconstruction``."""
-
-    point3D_ids: np.ndarray
-    xyz: np.ndarray
-    cameras: dict
-
-    def __post_init__(self) -> None:
-        ids = np.asarray(self.point3D_ids, dtype=np.int64).reshape(-1)
-        xyz = np.asarray(self.xyz, dtype=float).reshape(-1, 3) if len(ids) else np.zeros((0, 3))
-        if xyz.shape != (len(ids), 3):
-            raise _core.ShapeError(f"ColmapModel: xyz must have shape ({len(ids)}, 3), got {xyz.shape}")
-        order = stable_order(ids)
-        ids, xyz = ids[order], xyz[order]
-        if np.any(ids[1:] == ids[:-1]):
-            raise _core.ShapeError(f"ColmapModel: point3D_id {int(ids[1:][ids[1:] == ids[:-1]][0])} is listed twice")
-        cameras = {int(k): (str(m), tuple(float(p) for p in params)) for k, (m, params) in dict(self.cameras).items()}
-        object.__setattr__(self, "point3D_ids", ids)
-        object.__setattr__(self, "xyz", xyz)
-        object.__setattr__(self, "cameras", cameras)
-
-    @classmethod
-    def from_reconstruction(cls, reconstruction: Any) -> "ColmapModel":
-        """The points and cameras of a ``pycolmap.Reconstruction``."""
-        points = reconstruction.points3D
-        ids = np.fromiter((int(i) for i in points), dtype=np.int64, count=len(points))
-        xyz = np.array([points[int(i)].xyz for i in ids], dtype=float).reshape(-1, 3)
-        cameras = {int(i): (c.model.name, tuple(c.params)) for i, c in reconstruction.cameras.items()}
-        return cls(ids, xyz, cameras)
-
-    def lookup(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The points (len(ids), 3) of ``point3D_ids`` ``ids`` (NaN for an id not in the model) and the
-        mask of the known ones."""
-        ids = np.asarray(ids, dtype=np.int64)
-        rows = np.minimum(np.searchsorted(self.point3D_ids, ids), max(len(self.point3D_ids) - 1, 0))
-        known = self.point3D_ids[rows] == ids if len(self.point3D_ids) else np.zeros(len(ids), dtype=bool)
-        xyz = np.full((len(ids), 3), np.nan)
-        xyz[known] = self.xyz[rows[known]]
-        return xyz, known
-
-
-def _model(model: Any) -> Optional[ColmapModel]:
-    """``model`` as a :class:`ColmapModel` (a ``pycolmap.Reconstruction`` is read), or ``None``."""
-    if model is None or isinstance(model, ColmapModel):
-        return model
-    return ColmapModel.from_reconstruction(model)
-
-
 #: The columns of a query table by the way it gives its cameras (:func:`_query_camera_kind`).
 CAMERA_COLUMN_SETS = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "camera_id": MODEL_QUERY_COLUMNS}
 
@@ -789,7 +692,7 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     a model with distortion. ``point_matches``: ``query``, pixel ``x``, ``y`` and world ``X``,
     ``Y``, ``Z``, or with ``reconstruction=`` the ``point3D_id`` of one of the model's 3-D points.
     ``line_matches``: ``query``, segment ``x1 … y2`` in pixels, 3-D segment ``X1 … Z2``.
-    ``reconstruction``: a COLMAP model, a ``pycolmap.Reconstruction`` or a :class:`ColmapModel`.
+    ``reconstruction``: a COLMAP model, a ``pycolmap.Reconstruction`` or a :class:`pluecker.colmap.ColmapModel`.
 
     Each query runs :func:`pluecker.estimate_pose` with RANSAC (``ransac``: a
     :class:`pluecker.RansacOptions`, ``None``: its defaults, a 4 px point threshold; its thresholds
@@ -805,7 +708,7 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     pa = _pyarrow()
     from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
-    model = _model(reconstruction)
+    model = as_model(reconstruction)
     kind = _query_camera_kind(queries.column_names, "queries", model)
     _check_column_types(queries.schema, CAMERA_COLUMN_SETS[kind], "queries", queries.column)
     q_ids = _check_ids([("queries", queries.column("query"))], "query", unique=True)
@@ -960,7 +863,7 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     ``point_matches`` (and ``line_matches``), columns of :func:`localize_tables` (cameras as pinhole
     intrinsics, COLMAP models, or a COLMAP model's ``camera_id``; 3-D points as ``X, Y, Z`` or the
     model's ``point3D_id``), written to ``out/poses`` and ``out/matches``. ``reconstruction`` (a
-    ``pycolmap.Reconstruction`` or :class:`ColmapModel`) is sent to every worker once. ``ransac``,
+    ``pycolmap.Reconstruction`` or :class:`pluecker.colmap.ColmapModel`) is sent to every worker once. ``ransac``,
     ``options`` and ``seed`` as for :func:`localize_tables`. The tables are split by a hash of
     ``query`` (module docs), so a query's matches meet in one task; results equal :func:`localize_tables`
     on the whole tables. Without ``client`` and ``buckets``, tables of at most :data:`ROWS_PER_BUCKET`
@@ -972,7 +875,7 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
 
     started = time.perf_counter()
     out = Path(out)
-    model = _model(reconstruction)
+    model = as_model(reconstruction)
     _check_query_inputs(str(queries), model)
     _check_inputs(str(point_matches), MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS,
                   "point_matches")

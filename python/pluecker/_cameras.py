@@ -1,0 +1,60 @@
+"""The known cameras of a set of images, as the triangulation of tracks takes them: image ids and their
+3x4 matrices, with each image's lens when the pixels are the observed (distorted) ones. Shared by the
+COLMAP adapter (:func:`pluecker.colmap.observation_table`) and :mod:`pluecker.distributed`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Optional
+
+import numpy as np
+
+from . import _core
+
+
+@dataclass(frozen=True)
+class Cameras:
+    """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``lenses``
+    (v,), each image's ``Camera`` or ``LensCamera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
+    table's pixels are the observed (distorted) ones, as ``triangulate_point_observations(cameras=...)``
+    takes them."""
+
+    ids: np.ndarray
+    projections: np.ndarray
+    lenses: Optional[tuple] = None
+
+    def __post_init__(self) -> None:
+        ids = np.asarray(self.ids, dtype=np.int64).reshape(-1)
+        P = np.asarray(self.projections, dtype=float)
+        if P.shape != (len(ids), 3, 4):
+            raise _core.ShapeError(
+                f"Cameras: projections must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
+        if len(np.unique(ids)) != len(ids):
+            raise ValueError("Cameras: image ids must be unique")
+        if self.lenses is not None and len(self.lenses) != len(ids):
+            raise _core.ShapeError(f"Cameras: lenses must have one camera per id ({len(ids)}), got {len(self.lenses)}")
+        object.__setattr__(self, "ids", ids)
+        object.__setattr__(self, "projections", P)
+        if self.lenses is not None:
+            object.__setattr__(self, "lenses", tuple(self.lenses))
+
+    @classmethod
+    def from_dict(cls, cameras: dict[int, Any]) -> "Cameras":
+        """From ``{image id: P (3, 4)}``."""
+        ids = np.array(sorted(cameras), dtype=np.int64)
+        return cls(ids, np.stack([np.asarray(cameras[int(i)], dtype=float) for i in ids]) if len(ids) else
+                   np.zeros((0, 3, 4)))
+
+    def lookup(self, image: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For each image id: its rank among the sorted ids, whether it is known, and its row of ``projections``
+        (an unknown id gets rank and row ``v``, one past the cameras)."""
+        v = len(self.ids)
+        order = np.argsort(self.ids)
+        rank = np.searchsorted(self.ids[order], image)
+        known = rank < v
+        known[known] = self.ids[order][rank[known]] == image[known]
+        rank = np.where(known, rank, v)
+        row = np.full(len(image), v, dtype=np.int64)
+        row[known] = order[rank[known]]
+        return rank.astype(np.int64), known, row
