@@ -374,7 +374,7 @@ def colmap_queries(seed: int = 0):
 
 def test_colmap_queries_by_camera_id_and_point3D_id_find_the_models_poses(tmp_path):
     rec, queries, matches = colmap_queries()
-    poses, out_matches = colmap.localize_queries(rec, queries, matches)
+    poses, out_matches = dist.localize_tables(queries, matches, reconstruction=rec)
     found = poses_by_query(poses)
     for image in rec.images.values():
         R, t = colmap.pose_from_rigid(image.cam_from_world())
@@ -402,7 +402,7 @@ def test_colmap_queries_by_camera_id_and_point3D_id_find_the_models_poses(tmp_pa
 
 def test_an_unknown_camera_id_or_point3D_id_is_named_and_loses_no_other_query(tmp_path, capsys):
     rec, queries, matches = colmap_queries(1)
-    good, _ = colmap.localize_queries(rec, queries, matches)
+    good, _ = dist.localize_tables(queries, matches, reconstruction=rec)
     first = queries.column("query")[0].as_py()
     ids = matches.column("point3D_id").to_numpy().copy()
     bad_point = int(np.max(ids)) + 1000
@@ -412,7 +412,7 @@ def test_an_unknown_camera_id_or_point3D_id_is_named_and_loses_no_other_query(tm
     camera_ids[0] = 99
     queries_bad = queries.set_column(1, "camera_id", pa.array(camera_ids))
     matches_bad = matches.set_column(3, "point3D_id", pa.array(ids))
-    poses, _ = colmap.localize_queries(rec, queries_bad, matches_bad)
+    poses, _ = dist.localize_tables(queries_bad, matches_bad, reconstruction=rec)
     message = dict(zip(poses.column("query").to_pylist(), poses.column("message").to_pylist()))
     assert message[first] == f"query {first}: queries column camera_id: camera_id 99 is not a camera of the COLMAP model"
     assert message[second] == (f"query {second}: point_matches column point3D_id: point3D_id {bad_point} is not a "
@@ -522,7 +522,7 @@ def test_a_colmap_job_on_a_dask_cluster_equals_the_kernel(tmp_path, capsys):
     paths = write_tables(tmp_path, queries=queries, matches=matches)
     (tmp_path / "model").mkdir()
     rec.write(str(tmp_path / "model"))
-    reference = colmap.localize_queries(rec, queries, matches)
+    reference = dist.localize_tables(queries, matches, reconstruction=rec)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0",
                                   silence_logs=40) as cluster, distributed.Client(cluster) as client:
         summary = dist.localize(paths["queries"], paths["matches"], tmp_path / "dask", client=client, buckets=4,

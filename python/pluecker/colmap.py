@@ -890,26 +890,3 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
                                        f"pluecker.LensCamera, got {shown(camera)}")
     return localize(camera, points2D, points3D, ransac=ransac, options=options,
                     point_covariances=point_covariances)
-
-
-def localize_queries(reconstruction: Any, queries: Any, point_matches: Any, line_matches: Any = None, *,
-                     ransac: Any = None, options: Any = None, seed: int = 0, threads: int | None = None
-                     ) -> tuple[Any, Any]:
-    """``pluecker localize --colmap`` in memory: one robust pose per query of ``queries`` (columns
-    ``query`` and ``camera_id``, or ``model`` and ``params``, or ``fx, fy, cx, cy``) from its
-    ``point_matches`` (``query``, ``x``, ``y``, ``point3D_id``; pixels of the image's own camera) and
-    ``line_matches``, anything ``pyarrow.table`` takes (a dict of columns, a pandas DataFrame, a
-    ``pyarrow.Table``). The 3-D points and cameras come from ``reconstruction`` (a
-    ``pycolmap.Reconstruction`` or :class:`ColmapModel`). Returns the ``poses``
-    and ``matches`` tables of :func:`pluecker.distributed.localize_tables` (a query whose ``camera_id``
-    or ``point3D_id`` the model does not hold gets status ``invalid_input`` and a message naming it;
-    the others are unaffected). ``ransac``: :class:`pluecker.RansacOptions` (``None``: its defaults)."""
-    import pyarrow as pa
-
-    from .distributed import localize_tables
-
-    model = (reconstruction if isinstance(reconstruction, ColmapModel)
-             else ColmapModel.from_reconstruction(reconstruction))
-    table = lambda t: t if t is None or isinstance(t, pa.Table) else pa.table(t)  # noqa: E731
-    return localize_tables(table(queries), table(point_matches), table(line_matches), ransac=ransac, options=options,
-                           seed=seed, threads=threads, reconstruction=model)

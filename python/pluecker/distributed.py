@@ -683,7 +683,8 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
                     options: Optional[_core.PoseOptions] = None, seed: int = 0, threads: Optional[int] = None,
                     reconstruction: Any = None) -> tuple[Any, Any]:
     """The single-machine kernel of :func:`localize`: one robust pose per row of ``queries`` from its rows
-    of ``point_matches`` and ``line_matches``, all ``pyarrow.Table``.
+    of ``point_matches`` and ``line_matches``: ``pyarrow.Table`` or anything ``pyarrow.table`` takes (a
+    dict of columns, a pandas DataFrame).
 
     ``queries``: ``query`` (int64 id) and the camera, by one set of columns (:data:`QUERY_COLUMNS`):
     ``fx``, ``fy``, ``cx``, ``cy`` (a pinhole camera), or ``model`` (a COLMAP camera model name, e.g.
@@ -708,6 +709,8 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     pa = _pyarrow()
     from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
+    queries, point_matches, line_matches = (t if t is None or isinstance(t, pa.Table) else pa.table(t)
+                                            for t in (queries, point_matches, line_matches))
     model = as_model(reconstruction)
     kind = _query_camera_kind(queries.column_names, "queries", model)
     _check_column_types(queries.schema, CAMERA_COLUMN_SETS[kind], "queries", queries.column)

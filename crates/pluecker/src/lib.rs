@@ -106,6 +106,7 @@ pub mod camera_model;
 pub(crate) mod certificate;
 pub mod chi_square;
 pub(crate) mod consensus;
+pub(crate) mod covariance;
 pub(crate) mod cost_kind;
 pub(crate) mod curved_line;
 pub(crate) mod error;

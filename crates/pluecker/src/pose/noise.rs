@@ -12,7 +12,7 @@
 //! Through a lens ([`super::lens`]) the noise also carries the distortion's Jacobians.
 
 use crate::error::{Error, Result};
-use crate::triangulation::covariance::whitening;
+use crate::covariance::whitening;
 use nalgebra::Matrix2;
 
 /// Per-observation noise, in the pixels of the correspondences it belongs to.
@@ -32,7 +32,7 @@ pub struct ObservationNoise {
 impl ObservationNoise {
     /// The noise of covariances (pixels², in the frame of the correspondences): one 2x2 per point and
     /// one per segment endpoint, checked and whitened as triangulation's are
-    /// ([`crate::triangulation::covariance::whitening`]). Errors name the argument
+    /// ([`crate::covariance::whitening`]). Errors name the argument
     /// (`point_covariances`, `line_covariances`) and the index.
     pub fn from_covariances(points: &[Matrix2<f64>], lines: &[[Matrix2<f64>; 2]]) -> Result<ObservationNoise> {
         let points = points

@@ -9,7 +9,7 @@
 //! dependence on the fit cancels to first order, because the residual of the fit in its own frame is
 //! identically 0). These functions return the fit and that covariance `J Cov(δ) Jᵀ`.
 
-use super::covariance::whitening;
+use crate::covariance::whitening;
 use super::line::residual::{LineFrame, LINE_FRAME_DISTANCE};
 use super::quadric::residual::{ConicFrame, Vector5};
 use crate::error::{Error, Result};
@@ -452,7 +452,7 @@ pub fn random_image_primitives(size: f64, rng: &mut Rng) -> (Vec<Vector2<f64>>, 
 }
 
 fn whiten<const D: usize>(cov: &SMatrix<f64, D, D>, r: &SVector<f64, D>) -> SVector<f64, D> {
-    super::covariance::whitening(cov, "covariance", 0)
+    crate::covariance::whitening(cov, "covariance", 0)
         .map(|l| l * r)
         .unwrap_or_else(|_| SVector::repeat(f64::NAN))
 }

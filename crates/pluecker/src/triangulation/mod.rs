@@ -25,7 +25,6 @@
 
 pub(crate) mod certificate;
 pub(crate) mod conditioning;
-pub(crate) mod covariance;
 pub mod fitting;
 pub(crate) mod fraction;
 pub mod line;
@@ -43,7 +42,7 @@ pub use views::View;
 /// API.
 #[doc(hidden)]
 pub mod testing {
-    pub use super::covariance::whitening;
+    pub use crate::covariance::whitening;
     pub use super::quadric::certificate::convexity_bound_at as quadric_convexity_bound;
     pub use super::views::{baseline, centre, depth, depth_normalized};
 }

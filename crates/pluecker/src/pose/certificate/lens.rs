@@ -63,7 +63,7 @@ use crate::lens_linearisation::{lens_domain, LensBoundFailure, Linearised, SPLIT
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;
 use crate::pose::reprojection::Pose;
-use crate::triangulation::covariance::whitening;
+use crate::covariance::whitening;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use std::cell::RefCell;
 

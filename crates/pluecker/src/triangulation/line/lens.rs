@@ -323,7 +323,7 @@ fn through_lenses(
             whitenings: keep
                 .iter()
                 .map(|&i| {
-                    crate::triangulation::covariance::whitening(&covariances[i], "covariances", i)
+                    crate::covariance::whitening(&covariances[i], "covariances", i)
                         .expect("a checked covariance")
                 })
                 .collect(),

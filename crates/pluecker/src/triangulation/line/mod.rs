@@ -55,7 +55,7 @@ use self::optimal::optimal_line;
 use self::residual::{line_view, LineFrame};
 use self::taylor_search::optimal_line_taylor;
 use super::conditioning::{check_views, Similarity};
-use super::covariance::{whitening, whitenings};
+use crate::covariance::{whitening, whitenings};
 use super::fitting::line_from_segment;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::covariance_of_information;

@@ -25,7 +25,7 @@ use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::PointTriangulation;
 use crate::error::{Error, Result};
 use crate::interrupt::{current, StopReason};
-use crate::triangulation::covariance::whitening;
+use crate::covariance::whitening;
 use crate::triangulation::tracks::{
     check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };

@@ -119,7 +119,7 @@ pub fn convexity_bound_at(
     let problem = super::QuadricProblem {
         cameras: projections.to_vec(),
         frames,
-        whitenings: crate::triangulation::covariance::whitenings(covariances, projections.len(), "covariances").ok()?,
+        whitenings: crate::covariance::whitenings(covariances, projections.len(), "covariances").ok()?,
     };
     let sim = problem.frame_of(at);
     let frame_dual = super::transform_dual(&sim.matrix(), &at.dual());

@@ -46,7 +46,7 @@ pub mod testing {
 use self::optimal::optimal_quadric;
 use self::residual::{quadric_view, ConicFrame};
 use super::conditioning::{check_views, Similarity};
-use super::covariance::whitenings;
+use crate::covariance::whitenings;
 use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};

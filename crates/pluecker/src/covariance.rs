@@ -1,4 +1,5 @@
-//! Covariance weighting of the residuals (Josephson & Kahl 2008, section 3.2, eq. 18).
+//! Covariance weighting of residuals (Josephson & Kahl 2008, section 3.2, eq. 18), shared by pose and
+//! triangulation.
 //!
 //! An observation with covariance `Σ` (2x2 for points and lines, 5x5 for conics) contributes
 //! `‖L r‖² = rᵀ Σ⁻¹ r` to the cost of eq. 19. With the Cholesky factorisation `Σ = C Cᵀ` (`C` lower
