@@ -1,8 +1,9 @@
 # pluecker developer entry points. Everything goes into ./.venv; nothing is installed globally.
 #   make test    build the extension, run the Rust and Python tests (property tests: the hypothesis
 #                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run; their
-#                examples come from the seed in pytest's header, the UTC date unless
-#                PLUECKER_HYPOTHESIS_SEED=<seed> replays a run or =random draws a fresh one)
+#                examples come from one seed, printed on the "property tests: ... seed" line at the end
+#                of the run: the UTC date unless PLUECKER_HYPOTHESIS_SEED=<seed> replays a run or
+#                =random draws a fresh one)
 #   make lint    cargo fmt --check, clippy on every target with warnings as errors, rustdoc with warnings as errors,
 #                ruff on the Python package, the stubs checked against the built module (mypy's stubtest)
 #   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
