@@ -36,13 +36,16 @@ $(DEPS_STAMP): Makefile
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
-# or when the built module is missing from python/pluecker/.
+# or when the built module is missing from python/pluecker/. maturin passes every dependency, the
+# optional extras' too, to `pip install`, which then prints "Ignoring <package>: markers 'extra == ...'
+# don't match your environment" for each; PIP_QUIET=1 leaves out these information lines and keeps
+# pip's warnings and errors.
 develop: $(DEPS_STAMP)
 	@ls python/pluecker/_core*.so >/dev/null 2>&1 || rm -f $(DEVELOP_STAMP)
 	@$(MAKE) --no-print-directory $(DEVELOP_STAMP)
 
 $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
-	VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
+	PIP_QUIET=1 VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
 	touch $@
 
 test: test-rust test-python
