@@ -1,8 +1,9 @@
 # pluecker developer entry points. Everything goes into ./.venv; nothing is installed globally.
 #   make test    build the extension, run the Rust and Python tests (property tests: the hypothesis
 #                profile "ci"; PLUECKER_HYPOTHESIS=nightly make test-python for the deep run; their
-#                examples come from the seed in pytest's header, the UTC date unless
-#                PLUECKER_HYPOTHESIS_SEED=<seed> replays a run or =random draws a fresh one)
+#                examples come from one seed, printed on the "property tests: ... seed" line at the end
+#                of the run: the UTC date unless PLUECKER_HYPOTHESIS_SEED=<seed> replays a run or
+#                =random draws a fresh one)
 #   make lint    cargo fmt --check, clippy on every target with warnings as errors, rustdoc with warnings as errors,
 #                ruff on the Python package, the stubs checked against the built module (mypy's stubtest)
 #   make demo    reproduce both papers' experiments into results/phong-horaud-1995 and results/josephson-kahl-2008
@@ -35,13 +36,16 @@ $(DEPS_STAMP): Makefile
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
-# or when the built module is missing from python/pluecker/.
+# or when the built module is missing from python/pluecker/. maturin passes every dependency, the
+# optional extras' too, to `pip install`, which then prints "Ignoring <package>: markers 'extra == ...'
+# don't match your environment" for each; PIP_QUIET=1 leaves out these information lines and keeps
+# pip's warnings and errors.
 develop: $(DEPS_STAMP)
 	@ls python/pluecker/_core*.so >/dev/null 2>&1 || rm -f $(DEVELOP_STAMP)
 	@$(MAKE) --no-print-directory $(DEVELOP_STAMP)
 
 $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
-	VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
+	PIP_QUIET=1 VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
 	touch $@
 
 test: test-rust test-python

@@ -33,7 +33,7 @@ lengths around the centre, where no distortion shows). Every observation gets 1 
    from two or more distinct images), certified, solved points above the optimum by more than 1e-6
    relative (or below it), certified ``lower_bound`` / ``raw_lower_bound`` above the optimum, and the time
    of ``colmap.retriangulate`` (gather / solve / ``colmap.write``) against the points-only BA at pycolmap's
-   default tolerances and ``estimate_triangulation``. The real model used in ``bench/results``: folder
+   default tolerances and ``estimate_triangulation``. The real model of the recorded runs (docs/benchmarks.md): folder
    ``distorted/sparse/0`` of the GitHub repository ``mamechun/gs_data`` (128 SIMPLE_RADIAL cameras, 5751
    points, 26268 observations; not part of this repository).
 

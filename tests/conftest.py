@@ -22,9 +22,9 @@ import pluecker
 # PLUECKER_HYPOTHESIS=nightly explores 40x more examples. Both draw their examples from one seed per
 # run (HYPOTHESIS_SEED below): the UTC date by default, so that the examples change every day and
 # every run of one day sees the same ones; PLUECKER_HYPOTHESIS_SEED=<integer> replays a run, and
-# PLUECKER_HYPOTHESIS_SEED=random draws a fresh seed. The seed is printed in pytest's header and
-# beside every failure (with hypothesis's own @reproduce_failure blob). No example database: a run
-# depends on its seed alone.
+# PLUECKER_HYPOTHESIS_SEED=random draws a fresh seed. The seed is printed in pytest's header (with
+# -q, which prints no header: at the end of the run) and beside every failure (with hypothesis's own
+# @reproduce_failure blob). No example database: a run depends on its seed alone.
 settings.register_profile("ci", max_examples=60, deadline=None, database=None, print_blob=True,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 settings.register_profile("nightly", max_examples=2500, deadline=None, database=None, print_blob=True,
@@ -57,9 +57,19 @@ def pytest_configure(config):
                                                    datetime.datetime.now(datetime.timezone.utc).date())
 
 
-def pytest_report_header(config):
+def _seed_line() -> str:
     return (f"property tests: hypothesis profile {settings.get_current_profile_name()!r}, seed {HYPOTHESIS_SEED} "
             f"({SEED_SOURCE}; PLUECKER_HYPOTHESIS_SEED={HYPOTHESIS_SEED} replays it)")
+
+
+def pytest_report_header(config):
+    return _seed_line()
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    """The seed again at the end of the run: ``pytest -q`` (``make test``) prints no header."""
+    if config.get_verbosity() < 0:
+        terminalreporter.write_line(_seed_line())
 
 
 def _property_test(item):

@@ -38,6 +38,31 @@ def test_writes_tables_figures_and_summary(quick_run):
     assert doc["settings"]["conic_scenes"] == jk.conics.TRIALS_QUICK
 
 
+def test_the_printed_summary_says_why_points_are_not_certified(quick_run):
+    """The printed line of each sequence counts the certified points and names, from the results' own
+    statuses, why the others are not (Corridor has one point best explained behind a camera)."""
+    _, _, printed, doc = quick_run
+    for sequence, label in jk.LABELS.items():
+        opt = doc["summary"]["points"][sequence]["optimal"]
+        line = next(row for row in printed.splitlines() if row.strip().startswith(f"{label}: "))
+        assert f"{opt['certified']}/{opt['points']} certified" in line
+        missing = opt["points"] - opt["certified"]
+        assert sum(opt["uncertified_statuses"].values()) == missing
+        assert (f"; {missing} not: " in line) == (missing > 0)
+        for status in opt["uncertified_statuses"]:
+            assert status in line and status != "success"
+        assert "{" not in line
+
+
+def test_the_certified_sentence_lists_every_reason():
+    stats = {"points": 5, "certified": 2, "certificates": {"convexity_test": 1, "branch_and_bound": 1, "none": 3},
+             "uncertified_statuses": {"behind_camera": 2, "gap_not_closed": 1}}
+    assert jk.certified_sentence(stats) == ("2/5 certified (convexity_test 1, branch_and_bound 1); "
+                                            "3 not: behind_camera 2, gap_not_closed 1")
+    stats = {"points": 3, "certified": 3, "certificates": {"convexity_test": 3}, "uncertified_statuses": {}}
+    assert jk.certified_sentence(stats) == "3/3 certified (convexity_test 3)"
+
+
 def test_points_have_the_papers_counts_and_are_certified(quick_run):
     _, _, _, doc = quick_run
     points = doc["summary"]["points"]

@@ -146,6 +146,19 @@ def summarize(results: Results) -> dict[str, Any]:
             "conics": conics.summary(results.conics), "fitting": fitting.summary(results.fitting)}
 
 
+def certified_sentence(stats: dict[str, Any]) -> str:
+    """``489/490 certified (convexity_test 489); 1 not: behind_camera``: how many points were certified
+    and by which certificate, then how many were not and their statuses (the reason)."""
+    kinds = ", ".join(f"{kind} {n}" for kind, n in stats["certificates"].items() if kind != "none")
+    text = f"{stats['certified']}/{stats['points']} certified" + (f" ({kinds})" if kinds else "")
+    missing = stats["points"] - stats["certified"]
+    if missing:
+        reasons = stats["uncertified_statuses"]
+        why = next(iter(reasons)) if len(reasons) == 1 else ", ".join(f"{status} {n}" for status, n in reasons.items())
+        text += f"; {missing} not: {why}"
+    return text
+
+
 def summary_lines(summary: dict[str, Any], seconds: float, out: Path, quick: bool) -> list[str]:
     out_lines = [f"{NAME}{' (quick)' if quick else ''} in {seconds:.1f} s -> {out}",
                  "Table 1, points, reprojection distance ‖r‖ mean / std (px):"]
@@ -157,7 +170,7 @@ def summary_lines(summary: dict[str, Any], seconds: float, out: Path, quick: boo
                          f"{paper[0]:.2f}/{paper[1]:.2f}, convention unstated)")
     for sequence, by_method in summary["points"].items():
         s = by_method["optimal"]
-        out_lines.append(f"  {LABELS[sequence]}: {s['certified']}/{s['points']} certified ({s['certificates']}), "
+        out_lines.append(f"  {LABELS[sequence]}: {certified_sentence(s)}; "
                          f"nodes mean {s['mean_nodes']:.2f} max {s['max_nodes']}, median {s['median_core_us']:.1f} "
                          f"µs/point; local above optimal on {by_method['local_minima']['local_above_optimal']} points")
     out_lines.append("Table 2, lines, whitened residual ‖L r‖ mean / std:")

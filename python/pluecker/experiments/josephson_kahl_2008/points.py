@@ -67,6 +67,7 @@ class PointRun:
             "certified": int(np.sum(self.certified)),
             "certificates": counts(self.certificate),
             "statuses": counts(self.status),
+            "uncertified_statuses": counts(self.status[~np.asarray(self.certified, dtype=bool)]),
             "mean_nodes": float(np.mean(self.nodes)),
             "max_nodes": int(np.max(self.nodes)),
             "median_core_us": float(np.median(self.core_seconds) * 1e6),

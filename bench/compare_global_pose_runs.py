@@ -1,4 +1,9 @@
-"""Compare two compare_global_pose JSON runs: certified fractions (certify=True) and medians per row."""
+"""Compare two compare_global_pose JSON runs: certified fractions (certify=True) and medians per row.
+
+    python bench/compare_global_pose_runs.py bench/out/OLD.json bench/out/NEW.json
+
+prints a Markdown table (rows of NEW; certified count and median time with certify in each run, their
+ratio), the rows whose misses differ, and how many rows certify more, fewer or the same."""
 import json, sys, statistics
 a = {r["row"]: r for r in json.load(open(sys.argv[1]))["results"]}
 b = {r["row"]: r for r in json.load(open(sys.argv[2]))["results"]}
