@@ -232,7 +232,7 @@ if probe:
     def reached(*args, **kwargs):  # also from several threads at once (localize's queries): one line each
         os.write(1, f"batch {time.monotonic()}\\n".encode())
         os._exit(0)
-    _core.triangulate_point_observations = _core.estimate_pose = reached
+    _core.triangulate_points = _core.estimate_pose = reached
 sys.argv = ["pluecker", *argv]
 print("ready", time.monotonic(), flush=True)
 run = getattr(cli, "run", None)  # builds before the command's Ctrl-C deadline have main only

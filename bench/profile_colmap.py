@@ -1,5 +1,5 @@
 """Profile of the certified re-triangulation of a COLMAP model with the cameras fixed
-(``pluecker.colmap.retriangulate(rec, sigma_px=1.0)``, i.e. ``pluecker._core.triangulate_point_observations``
+(``pluecker.colmap.retriangulate(rec, sigma_px=1.0)``, i.e. ``pluecker._core.triangulate_points`` in the rows form
 with ``cameras=`` the images' ``LensCamera``): where the time goes, per stage and per track.
 
 **What runs.**
@@ -8,7 +8,7 @@ with ``cameras=`` the images' ``LensCamera``): where the time goes, per stage an
    tiny model, timed by ``time.perf_counter`` (wall; the first column of the summary). ``gather`` is one
    separate call of ``pluecker.colmap._observations`` (reading the model's observations into arrays, the
    Python part of ``retriangulate``); ``solve`` = wall − gather.
-2. **Stage runs**: the gathered observations are solved again by ``triangulate_point_observations`` with
+2. **Stage runs**: the gathered observations are solved again by ``triangulate_points`` (rows form) with
    ``TriangulationOptions(method=...)`` ``linear``, ``local`` and ``optimal`` (the default, what
    ``retriangulate`` runs), ``--repeats`` times each, in the order linear, local, optimal, linear, ...
    Per track the fastest of the repeats of each method is kept (its ``time_seconds``, measured by the Rust
@@ -124,7 +124,7 @@ def load_model(name: str, points: int, seed: int) -> Any:
 
 
 def solve(pluecker: Any, o: Any, method: str, rows: np.ndarray | None = None) -> tuple[Any, float]:
-    """``triangulate_point_observations`` of the gathered observations ``o`` (only the observations ``rows``
+    """``triangulate_points`` (rows form) of the gathered observations ``o`` (only the observations ``rows``
     of one track, renumbered 0, if given) with ``method``: (result, wall seconds)."""
     track, camera, pixels = o.track, o.camera, o.pixels
     n_tracks = len(o.ids)
@@ -133,8 +133,7 @@ def solve(pluecker: Any, o: Any, method: str, rows: np.ndarray | None = None) ->
     covariances = np.broadcast_to(SIGMA_PX**2 * np.eye(2), (len(track), 2, 2))
     options = pluecker.TriangulationOptions(method=method)
     started = time.perf_counter()
-    result = pluecker.triangulate_point_observations(o.P, track, camera, pixels, covariances, options=options,
-                                                     n_tracks=n_tracks, cameras=o.lenses)
+    result = pluecker.triangulate_points(o.P, pixels, covariances=covariances, track=track, image=camera, options=options, n_tracks=n_tracks, cameras=o.lenses)
     return result, time.perf_counter() - started
 
 

@@ -1,4 +1,4 @@
-"""Sparse point tracks at scale: ``triangulate_point_observations`` on 1000 images and
+"""Sparse point tracks at scale: ``triangulate_points(track=, image=)`` on 1000 images and
 200,000 tracks of 2-20 observations each (one observation per row, as COLMAP lists them), against the
 dense ``(n, v, 2)`` form it replaces, which would need ``n · v · 2`` floats (3.2 GB here).
 
@@ -55,8 +55,7 @@ def main() -> None:
     P, track, image, x = scene(args.images, args.tracks, args.seed)
     before = peak_mb()
     started = time.perf_counter()
-    result = pluecker.triangulate_point_observations(P, track, image, x,
-                                                    options=pluecker.TriangulationOptions(method=args.method))
+    result = pluecker.triangulate_points(P, x, track=track, image=image, options=pluecker.TriangulationOptions(method=args.method))
     seconds = time.perf_counter() - started
     print(f"{args.tracks} tracks, {len(track)} observations, {args.images} images, method {args.method}")
     print(f"time {seconds:.2f} s ({args.tracks / seconds:,.0f} tracks/s); "

@@ -79,13 +79,13 @@ def singular(p: np.ndarray) -> np.ndarray:
 ENTRY_POINTS = [
     (pluecker.triangulate_point, "observations", "single"),
     (pluecker.triangulate_points, "observations", "dense"),
-    (pluecker.triangulate_point_observations, "observations", "rows"),
+    (pluecker.triangulate_points, "observations", "rows"),
     (pluecker.triangulate_line, "lines", "single"),
     (pluecker.triangulate_lines, "lines", "dense"),
-    (pluecker.triangulate_line_observations, "lines", "rows"),
+    (pluecker.triangulate_lines, "lines", "rows"),
     (pluecker.triangulate_quadric, "conics", "single"),
     (pluecker.triangulate_quadrics, "conics", "dense"),
-    (pluecker.triangulate_quadric_observations, "conics", "rows"),
+    (pluecker.triangulate_quadrics, "conics", "rows"),
 ]
 
 BAD_TRACK, BAD_VIEW = 1, 2  # the bad entry: track 1 (batches), view 2
@@ -136,7 +136,7 @@ def named(message: str) -> str:
     return match.group(1)
 
 
-@pytest.mark.parametrize("function, primitive, layout", ENTRY_POINTS, ids=[e[0].__name__ for e in ENTRY_POINTS])
+@pytest.mark.parametrize("function, primitive, layout", ENTRY_POINTS, ids=[f"{e[0].__name__}-{e[2]}" for e in ENTRY_POINTS])
 @pytest.mark.parametrize("bad", ["projections", "primitive", "covariances"])
 def test_a_bad_row_is_named_by_the_python_keyword(function, primitive, layout, bad):
     argument = primitive if bad == "primitive" else bad

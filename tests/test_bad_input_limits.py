@@ -51,9 +51,9 @@ def stereo():
 # --- sizes come from the rows given ------------------------------------------------------------------------
 
 SPARSE_CALLS = {
-    "point": "pluecker.triangulate_point_observations(P, track, image, x{extra})",
-    "line": "pluecker.triangulate_line_observations(P, track, image, segments{extra})",
-    "quadric": "pluecker.triangulate_quadric_observations(P, track, image, conics{extra})",
+    "point": "pluecker.triangulate_points(P, x, track=track, image=image{extra})",
+    "line": "pluecker.triangulate_lines(P, segments, track=track, image=image{extra})",
+    "quadric": "pluecker.triangulate_quadrics(P, conics, track=track, image=image{extra})",
 }
 
 
@@ -97,26 +97,26 @@ def test_sparse_ids_out_of_range_are_named(argument, value, k):
     P, x = stereo()
     args = {"track": [0, 0, 0], "image": [0, 1, 2], argument: value}
     with pytest.raises(InvalidOptionError, match=rf"^{argument}: entry {k} is "):
-        pluecker.triangulate_point_observations(P, args["track"], args["image"], x)
+        pluecker.triangulate_points(P, x, track=args["track"], image=args["image"])
 
 
 @pytest.mark.parametrize("n_tracks", [-1, 2**63, 2**64, 10**400, True, 4])
 def test_n_tracks_out_of_range_names_n_tracks(n_tracks):
     P, x = stereo()
     with pytest.raises(InvalidOptionError, match=r"^n_tracks: "):
-        pluecker.triangulate_point_observations(P, [0, 0, 0], [0, 1, 2], x, n_tracks=n_tracks)
+        pluecker.triangulate_points(P, x, track=[0, 0, 0], image=[0, 1, 2], n_tracks=n_tracks)
 
 
 def test_tracks_up_to_the_rows_given_are_solved_and_empty_ones_reported():
     """The bound leaves every sensible call alone: ``n_tracks`` up to the rows, ids 0..m-1, numpy ints."""
     P, x = stereo()
-    r = pluecker.triangulate_point_observations(P, np.zeros(3, np.uint64), np.arange(3), x, n_tracks=np.int64(3))
+    r = pluecker.triangulate_points(P, x, track=np.zeros(3, np.uint64), image=np.arange(3), n_tracks=np.int64(3))
     assert list(r.status) == ["success", "too_few_views", "too_few_views"]
     np.testing.assert_allclose(r.X[0], [0.2, -0.1, 5.0], atol=1e-9)
-    r = pluecker.triangulate_point_observations(P, [2, 2, 2], [0, 1, 2], x)  # id 2 < 3 rows
+    r = pluecker.triangulate_points(P, x, track=[2, 2, 2], image=[0, 1, 2])  # id 2 < 3 rows
     assert len(r) == 3 and r.status[2] == "success"
     with pytest.raises(InvalidOptionError, match=r"^track: entry 0 is 3, not a track id below the 3 rows"):
-        pluecker.triangulate_point_observations(P, [3, 3, 3], [0, 1, 2], x)
+        pluecker.triangulate_points(P, x, track=[3, 3, 3], image=[0, 1, 2])
 
 
 # --- threads ---------------------------------------------------------------------------------------------------
@@ -340,7 +340,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
     lambda: pluecker.RansacOptions(point_threshold=-1e300),
     lambda: pluecker.fit_line(np.eye(2), sigma=-1e300),
     lambda: pluecker.RansacOptions(time_budget=-1e300),
-    lambda: pluecker.triangulate_point_observations(stereo()[0], [1e300, 0, 0], [0, 1, 2], stereo()[1]),
+    lambda: pluecker.triangulate_points(stereo()[0], stereo()[1], track=[1e300, 0, 0], image=[0, 1, 2]),
     lambda: LENS.unproject(np.array([[1e300, 0.0]])),
     lambda: LENS.undistort(np.array([[300.0, 200.0]]), np.array([[[-1e300, 0.0], [0.0, 1.0]]])),
 ], ids=["max_relative_gap", "certify_max_relative_gap", "confidence", "point_threshold", "sigma", "time_budget", "track",
@@ -380,6 +380,6 @@ def test_a_segment_sigma_through_a_lens_blames_sigma_not_covariances(sigma, flow
     with pytest.raises(InvalidOptionError, match=message):
         pluecker.triangulate_line(P, segments, sigma=sigma, cameras=[LENS] * 3)
     with pytest.raises(InvalidOptionError, match=message):
-        pluecker.triangulate_line_observations(P, [0, 0, 0], [0, 1, 2], segments, sigma=sigma, cameras=[LENS] * 3)
+        pluecker.triangulate_lines(P, segments, track=[0, 0, 0], image=[0, 1, 2], sigma=sigma, cameras=[LENS] * 3)
     # Through a distorting lens a line is never certified: gap_not_closed, at the exact line (cost ~ 0).
     assert pluecker.triangulate_line(P, segments, sigma=1e-3, cameras=[LENS] * 3).cost < 1e-12

@@ -82,7 +82,7 @@ def test_the_kernel_is_the_batch_and_independent_of_row_order():
     x = np.c_[table.column("x").to_numpy(), table.column("y").to_numpy()]
     order = np.lexsort((x[:, 1], x[:, 0], image, track))
     ids, index = np.unique(track[order], return_inverse=True)
-    batch = pluecker.triangulate_point_observations(cameras.projections, index, (image[order] - 3) // 10, x[order])
+    batch = pluecker.triangulate_points(cameras.projections, x[order], track=index, image=(image[order] - 3) // 10)
     np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], batch.X)
     np.testing.assert_array_equal(points.column("cost").to_numpy(), batch.cost)
     assert points.column("certified").to_numpy().all()

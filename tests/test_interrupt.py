@@ -263,8 +263,7 @@ def test_ctrl_c_stops_the_set_up_of_an_observation_batch():
     image = rng.integers(0, 3, m)
     x = rng.uniform(0, 640, (m, 2))
     covariances = np.broadcast_to(np.eye(2), (m, 2, 2))
-    polls = setup_polls(lambda: pluecker.triangulate_point_observations(P, track, image, x, covariances,
-                                                                        time_budget=0))
+    polls = setup_polls(lambda: pluecker.triangulate_points(P, x, covariances=covariances, track=track, image=image, time_budget=0))
     # Read: track, image (m each), x (2m), covariances (4m); sorted: three passes over the rows and
     # the gathering of the rows of x and of the covariances; allocated: 23 result entries per track.
     assert polls >= (8 * m + 3 * m + 2 * m + 23 * n) / SETUP_CHUNK

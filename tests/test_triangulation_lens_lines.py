@@ -302,7 +302,7 @@ def test_a_batch_names_each_tracks_cost_kind():
     cams = [fish.lens] * 3 + [plain.lens] * 3
     segments, covs = np.concatenate([fish.segments, plain.segments]), np.concatenate([fish.covs, plain.covs])
     track, image = np.array([0, 0, 0, 1, 1, 1]), np.arange(6)
-    batch = pluecker.triangulate_line_observations(P, track, image, segments, covs, cameras=cams)
+    batch = pluecker.triangulate_lines(P, segments, covariances=covs, track=track, image=image, cameras=cams)
     assert list(batch.cost_kind) == ["reprojection", "line_residual"]
     for t, rows in enumerate((slice(0, 3), slice(3, 6))):
         single = pluecker.triangulate_line(P[rows], segments[rows], covs[rows], cameras=cams[rows])
@@ -344,13 +344,13 @@ def test_observations_with_cameras_solve_each_track_as_the_single_call():
     segments = np.concatenate([sc.segments[:3], sc.segments[1:] + shift])
     covs = np.concatenate([sc.covs[:3], sc.covs[1:]])
     track, image = np.array([0, 0, 0, 1, 1, 1]), np.array([0, 1, 2, 1, 2, 3])
-    batch = pluecker.triangulate_line_observations(sc.P, track, image, segments, covs, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
+    batch = pluecker.triangulate_lines(sc.P, segments, covariances=covs, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
     for t, rows in enumerate((slice(0, 3), slice(3, 6))):
         single = pluecker.triangulate_line(sc.P[image[rows]], segments[rows], covs[rows], options=pluecker.TriangulationOptions(method="local"), cameras=[sc.lens] * 3)
         assert np.array_equal(batch.plucker[t], single.plucker) and batch.cost[t] == single.cost
     bad = segments.copy()
     bad[4, 0, 1] = np.nan
-    out = pluecker.triangulate_line_observations(sc.P, track, image, bad, covs, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
+    out = pluecker.triangulate_lines(sc.P, bad, covariances=covs, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
     assert out.status[0] == "success" and np.isnan(out.plucker[1]).all()
 
 
@@ -393,7 +393,7 @@ def test_sigma_is_isotropic_endpoint_noise_in_both_entry_points():
     # (to the local solver's convergence, 1e-10 relative steps).
     assert abs(c.cost / a.cost - 4.0) < 1e-6
     track, image = np.zeros(3, int), np.arange(3)
-    rows = pluecker.triangulate_line_observations(sc.P, track, image, sc.segments, options=pluecker.TriangulationOptions(method="local"), sigma=2.0, cameras=cams)
+    rows = pluecker.triangulate_lines(sc.P, sc.segments, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), sigma=2.0, cameras=cams)
     assert np.array_equal(rows.plucker[0], a.plucker) and rows.cost[0] == a.cost
 
 

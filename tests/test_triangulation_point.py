@@ -438,7 +438,7 @@ def test_bad_mask_and_cov_shapes(seed):
 
 
 
-# --- the batch from observations: triangulate_point_observations ------------------------------------
+# --- the batch from observations: triangulate_points(track=, image=) ---------------------------------
 
 
 def observation_rows(x, visible, cov, rng):
@@ -467,7 +467,7 @@ def test_observation_rows_give_the_dense_batch(method, seed):
     cov = s[..., None, None] * np.eye(2)
     dense = pluecker.triangulate_points(P, x, visible, cov, options=pluecker.TriangulationOptions(method=method))
     track, image, rows, row_cov = observation_rows(x, visible, cov, rng)
-    sparse = pluecker.triangulate_point_observations(P, track, image, rows, row_cov, options=pluecker.TriangulationOptions(method=method))
+    sparse = pluecker.triangulate_points(P, rows, covariances=row_cov, track=track, image=image, options=pluecker.TriangulationOptions(method=method))
     assert len(sparse) == n
     if method == "linear":
         # The dense linear batch has its own allocation-free DLT; the same sums in another order agree to
@@ -489,10 +489,10 @@ def test_observation_rows_name_their_bad_rows_and_keep_the_others():
     image = np.tile(np.arange(4), 3)
     x = np.concatenate([project(P, Xi) for Xi in X])
     image[5] = 9  # track 1 names a camera that does not exist
-    r = pluecker.triangulate_point_observations(P, track, image, x)
+    r = pluecker.triangulate_points(P, x, track=track, image=image)
     assert r.status[1] == "invalid_input" and "image[5]" in r.messages[1]
     assert r.status[0] == r.status[2] == "success"
     with pytest.raises(pluecker.ShapeError, match="^image: expected 12 rows"):
-        pluecker.triangulate_point_observations(P, track, image[:5], x)
+        pluecker.triangulate_points(P, x, track=track, image=image[:5])
     with pytest.raises(pluecker.InvalidOptionError, match="^track: entry 2 is -1"):
-        pluecker.triangulate_point_observations(P, np.where(np.arange(12) == 2, -1, track), image, x)
+        pluecker.triangulate_points(P, x, track=np.where(np.arange(12) == 2, -1, track), image=image)

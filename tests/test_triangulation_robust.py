@@ -61,7 +61,7 @@ def test_sparse_batch_masks_follow_the_rows_as_given():
     track, image = np.meshgrid(np.arange(25), np.arange(6), indexing="ij")
     rows = np.random.default_rng(4).permutation(25 * 6)  # rows in any order
     t, i, px = track.ravel()[rows], image.ravel()[rows], x.reshape(-1, 2)[rows]
-    r = pluecker.triangulate_point_observations(P, t, i, px, options=ROBUST)
+    r = pluecker.triangulate_points(P, px, track=t, image=i, options=ROBUST)
     assert r.inliers.shape == (150,)
     is_outlier = i == outlier[t]
     assert not r.inliers[is_outlier].any()
@@ -111,7 +111,7 @@ def test_robust_lines_reject_the_outlier_views():
     track, image = np.nonzero(np.ones((20, 7), dtype=bool))
     order = np.random.default_rng(9).permutation(len(track))
     track, image = track[order], image[order]
-    sparse = pluecker.triangulate_line_observations(P, track, image, segments[track, image], options=options)
+    sparse = pluecker.triangulate_lines(P, segments[track, image], track=track, image=image, options=options)
     np.testing.assert_array_equal(sparse.inliers, batch.inliers[track, image])
     assert pluecker.triangulate_lines(P, segments, options=pluecker.TriangulationOptions(method="local")).inliers is None
 

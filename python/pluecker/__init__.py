@@ -93,13 +93,10 @@ from ._core import (
     reprojection_errors,
     set_num_threads,
     triangulate_line,
-    triangulate_line_observations,
     triangulate_lines,
     triangulate_point,
-    triangulate_point_observations,
     triangulate_points,
     triangulate_quadric,
-    triangulate_quadric_observations,
     triangulate_quadrics,
 )
 from ._status import Status
@@ -159,12 +156,9 @@ __all__ = [
     "random_scene",
     "reprojection_errors",
     "triangulate_line",
-    "triangulate_line_observations",
     "triangulate_lines",
     "triangulate_point",
-    "triangulate_point_observations",
     "triangulate_points",
     "triangulate_quadric",
-    "triangulate_quadric_observations",
     "triangulate_quadrics",
 ]

@@ -17,7 +17,7 @@ from . import _core
 class Cameras:
     """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``lenses``
     (v,), each image's ``Camera`` or ``LensCamera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
-    table's pixels are the observed (distorted) ones, as ``triangulate_point_observations(cameras=...)``
+    table's pixels are the observed (distorted) ones, as ``triangulate_points(track=..., image=..., cameras=...)``
     takes them."""
 
     ids: np.ndarray

@@ -395,6 +395,8 @@ class PoseResult:
     better behind: `details.behind_camera_cost`), `ambiguous` (another minimum nearly as good:
     `details.second_best`); robust: `too_few_inliers`, `no_hypothesis`; `interrupted`, `time_budget`.
     """
+    success: bool
+    """`status == 'success'`."""
     cost: float
     """Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels."""
     inliers_points: NDArray[np.bool_]
@@ -747,8 +749,8 @@ class PointTriangulations(BatchReport):
     """Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none)."""
     inliers: Optional[NDArray[np.bool_]]
     """With `options.outlier_threshold`: which observations each point was solved from, shaped as
-    the observations were given ((n, v) for `triangulate_points`, (m,) for
-    `triangulate_point_observations`; false where not visible or rejected); else `None`.
+    the observations were given ((n, v) dense, (m,) in the rows form with `track=`, `image=`; false
+    where not visible or rejected); else `None`.
     """
     # end of fields
 
@@ -770,8 +772,8 @@ class LineTriangulations(BatchReport):
     """Per track: 4x4 covariance in the chart, shape (n, 4, 4) (NaN where there is none)."""
     inliers: Optional[NDArray[np.bool_]]
     """With `options.outlier_threshold`: which observations each line was solved from, shaped as the
-    observations were given ((n, v) for `triangulate_lines`, (m,) for
-    `triangulate_line_observations`; false where not visible or rejected); else `None`.
+    observations were given ((n, v) dense, (m,) in the rows form with `track=`, `image=`; false
+    where not visible or rejected); else `None`.
     """
     # end of fields
 
@@ -818,32 +820,24 @@ def triangulate_points(
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
-) -> PointTriangulations:
-    """Many points seen by the same views ``projections`` (v, 3, 4): pixels ``observations`` (n, v, 2),
-    ``visible`` (n, v) booleans (``None``: every view; NaN is fine where not visible), ``covariances``
-    (n, v, 2, 2)."""
-
-def triangulate_point_observations(
-    projections: ArrayLike,
-    track: ArrayLike,
-    image: ArrayLike,
-    observations: ArrayLike,
-    covariances: Optional[ArrayLike] = None,
-    *,
-    options: Optional[TriangulationOptions] = None,
-    progress: Optional[Callable[[int], Any]] = None,
-    time_budget: Optional[float] = None,
+    track: Optional[ArrayLike] = None,
+    image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> PointTriangulations:
-    """Point tracks given one observation per row (memory in the observations): pixel ``observations[k]``
-    (m, 2) of track ``track[k]`` in view ``image[k]`` of ``projections`` (v, 3, 4), ``covariances[k]``
-    (m, 2, 2); result row t
-    is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m rows given
-    (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a negative id,
-    is an ``InvalidOptionError`` naming the argument. With ``cameras`` (v,) (each image's ``Camera`` or
-    ``LensCamera``), ``projections[j]`` is ``K [R | t]`` of its pinhole part and ``observations`` the
-    observed (distorted) pixels: the cost is the reprojection error through the exact projection."""
+    """Many points seen by the views ``projections`` (v, 3, 4), in one of two forms.
+
+    Dense: pixels ``observations`` (n, v, 2), ``visible`` (n, v) booleans (``None``: every view; NaN is
+    fine where not visible), ``covariances`` (n, v, 2, 2).
+
+    Rows (memory in the observations, as COLMAP lists them): with ``track`` and ``image`` (m,), pixel
+    ``observations[k]`` (m, 2) of track ``track[k]`` in view ``image[k]``, ``covariances[k]`` (m, 2, 2);
+    result row t is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m
+    rows given (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a
+    negative id, is an ``InvalidOptionError`` naming the argument. With ``cameras`` (v,) (each image's
+    ``Camera`` or ``LensCamera``), ``projections[j]`` is ``K [R | t]`` of its pinhole part and
+    ``observations`` the observed (distorted) pixels: the cost is the reprojection error through the
+    exact projection."""
 
 def triangulate_line(
     projections: ArrayLike,
@@ -874,32 +868,20 @@ def triangulate_lines(
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
-) -> LineTriangulations:
-    """Many 3-D lines: ``projections`` (v, 3, 4) shared or (n, v, 3, 4) per track; ``lines`` (n, v, 3)
-    or (n, v, 2, 2); ``visible`` (n, v); ``covariances`` (n, v, 2, 2)."""
-
-def triangulate_line_observations(
-    projections: ArrayLike,
-    track: ArrayLike,
-    image: ArrayLike,
-    lines: ArrayLike,
-    covariances: Optional[ArrayLike] = None,
-    *,
-    sigma: Optional[float] = None,
-    options: Optional[TriangulationOptions] = None,
-    progress: Optional[Callable[[int], Any]] = None,
-    time_budget: Optional[float] = None,
+    track: Optional[ArrayLike] = None,
+    image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
     cameras: Optional[List[Union[Camera, LensCamera]]] = None,
 ) -> LineTriangulations:
-    """Line tracks given one observation per row: ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments)
-    of track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]``
-    (m, 2, 2) when given.
-    Each track is solved as :func:`triangulate_lines` would; memory grows with the rows.
-    Track ids and ``n_tracks`` are at most the m rows given, as for
-    :func:`triangulate_point_observations`. With ``cameras`` (each image's ``Camera`` or ``LensCamera``),
-    ``lines`` are (m, 2, 2) segments in the observed pixels and ``covariances`` (m, 2, 2, 2) their
-    endpoints' covariances; each track is solved as :func:`triangulate_line` with ``cameras`` solves it."""
+    """Many 3-D lines, in one of two forms. Dense: ``projections`` (v, 3, 4) shared or (n, v, 3, 4) per
+    track; ``lines`` (n, v, 3) or (n, v, 2, 2); ``visible`` (n, v); ``covariances`` (n, v, 2, 2).
+
+    Rows: with ``track`` and ``image`` (m,), ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments) of
+    track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]``
+    (m, 2, 2); track ids and ``n_tracks`` as for :func:`triangulate_points`. With ``cameras`` (each
+    image's ``Camera`` or ``LensCamera``), ``lines`` are (m, 2, 2) segments in the observed pixels and
+    ``covariances`` (m, 2, 2, 2) their endpoints' covariances; each track is solved as
+    :func:`triangulate_line` with ``cameras`` solves it."""
 
 def triangulate_quadric(
     projections: ArrayLike,
@@ -923,27 +905,14 @@ def triangulate_quadrics(
     options: Optional[TriangulationOptions] = None,
     progress: Optional[Callable[[int], Any]] = None,
     time_budget: Optional[float] = None,
-) -> QuadricTriangulations:
-    """Many ellipsoids: ``projections`` (v, 3, 4) or (n, v, 3, 4); ``conics`` (n, v, 3, 3);
-    ``covariances`` (n, v, 5, 5)."""
-
-def triangulate_quadric_observations(
-    projections: ArrayLike,
-    track: ArrayLike,
-    image: ArrayLike,
-    conics: ArrayLike,
-    covariances: Optional[ArrayLike] = None,
-    *,
-    options: Optional[TriangulationOptions] = None,
-    progress: Optional[Callable[[int], Any]] = None,
-    time_budget: Optional[float] = None,
+    track: Optional[ArrayLike] = None,
+    image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
 ) -> QuadricTriangulations:
-    """Ellipsoid tracks given one outline conic per row: ``conics[k]`` (m, 3, 3) of track ``track[k]`` in
-    image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]`` (m, 5, 5) when given. Each track is solved as
-    :func:`triangulate_quadrics` would.
-    Track ids and ``n_tracks`` are at most the m rows given, as for
-    :func:`triangulate_point_observations`."""
+    """Many ellipsoids, in one of two forms. Dense: ``projections`` (v, 3, 4) or (n, v, 3, 4); ``conics``
+    (n, v, 3, 3); ``covariances`` (n, v, 5, 5). Rows: with ``track`` and ``image`` (m,), ``conics[k]``
+    (m, 3, 3) of track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)),
+    ``covariances[k]`` (m, 5, 5); track ids and ``n_tracks`` as for :func:`triangulate_points`."""
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------
 

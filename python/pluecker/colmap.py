@@ -672,7 +672,7 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0,
     ``outlier_threshold_px`` rejects observations farther than that many pixels from the consensus of
     their track (``TriangulationOptions.outlier_threshold``; ``result.inliers`` flags the observations).
     ``options`` (its ``method`` and ``certify`` too) and ``progress`` are those of
-    :func:`pluecker.triangulate_point_observations`.
+    :func:`pluecker.triangulate_points` (rows form).
     Use :func:`update_points` or :func:`write` to put the points back.
     """
     o = _observations(reconstruction, sigma_px)
@@ -680,9 +680,7 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0,
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
     covariances = np.broadcast_to(float(sigma_px)**2 * np.eye(2), (len(o.track), 2, 2))
-    result = _core.triangulate_point_observations(o.P, o.track, o.camera, o.pixels, covariances,
-                                                  options=options, progress=progress,
-                                                  n_tracks=len(o.ids), cameras=o.lenses)
+    result = _core.triangulate_points(o.P, o.pixels, covariances=covariances, track=o.track, image=o.camera, options=options, progress=progress, n_tracks=len(o.ids), cameras=o.lenses)
     return Retriangulation(o.ids, result, o.track, o.image_id, o.point2D_idx, o.skipped)
 
 

@@ -109,7 +109,7 @@ def _canonical_order(track_rank: np.ndarray, image_rank: np.ndarray, images: int
 def triangulate_table(table: Any, cameras: Cameras, *,
                       options: Optional[_core.TriangulationOptions] = None, sigma_px: float = 1.0) -> tuple[Any, Any]:
     """The single-machine kernel: every track of an observation ``table`` (a ``pyarrow.Table`` with the
-    columns of the module docs) by :func:`pluecker.triangulate_point_observations`. Returns the
+    columns of the module docs) by :func:`pluecker.triangulate_points` (rows form). Returns the
     ``points`` and ``observations`` tables of the module docs, rows in increasing track id and, per
     track, observations in increasing (image, x, y). Without covariance columns every pixel has
     covariance ``sigma_px²`` I."""
@@ -134,9 +134,7 @@ def triangulate_table(table: Any, cameras: Cameras, *,
     image, x, cov = image[order], x[order], np.ascontiguousarray(cov[order])
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
-    result = _core.triangulate_point_observations(cameras.projections, track_index, camera_index, x, cov,
-                                                  options=options, n_tracks=len(ids),
-                                                  cameras=None if cameras.lenses is None else list(cameras.lenses))
+    result = _core.triangulate_points(cameras.projections, x, covariances=cov, track=track_index, image=camera_index, options=options, n_tracks=len(ids), cameras=None if cameras.lenses is None else list(cameras.lenses))
     status = np.asarray(result.status).astype(object)
     messages = np.asarray(result.messages, dtype=object)
     for row in np.flatnonzero(~known):
@@ -422,7 +420,7 @@ def triangulate(source: Union[str, Path], cameras: Cameras, out: Union[str, Path
 
     ``client``: a ``distributed.Client`` (``None``: run here, without Dask). ``buckets``: the number of
     solve tasks (default: enough for about 2 million observations each, at least 4 per worker).
-    ``options``: those of :func:`pluecker.triangulate_point_observations` (method: ``options.method``). ``progress``:
+    ``options``: those of :func:`pluecker.triangulate_points` (method: ``options.method``). ``progress``:
     a progress bar on the terminal (Dask's). ``partitioned``: every input file already holds whole
     tracks (written by track, e.g. one file per chunk of tracks): one solve per file, no split.
     ``threads_per_worker``: pluecker threads of every worker (default: its share of the cores,

@@ -95,23 +95,14 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyPointTriangulations>()?;
     m.add_function(wrap_pyfunction!(triangulation::point::triangulate_point, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::point::triangulate_points, m)?)?;
-    m.add_function(wrap_pyfunction!(
-        triangulation::point::triangulate_point_observations,
-        m
-    )?)?;
     m.add_class::<PyLineTriangulation>()?;
     m.add_class::<PyLineTriangulations>()?;
     m.add_function(wrap_pyfunction!(triangulation::line::triangulate_line, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::line::triangulate_lines, m)?)?;
-    m.add_function(wrap_pyfunction!(triangulation::line::triangulate_line_observations, m)?)?;
     m.add_class::<PyQuadricTriangulation>()?;
     m.add_class::<PyQuadricTriangulations>()?;
     m.add_function(wrap_pyfunction!(triangulation::quadric::triangulate_quadric, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::quadric::triangulate_quadrics, m)?)?;
-    m.add_function(wrap_pyfunction!(
-        triangulation::quadric::triangulate_quadric_observations,
-        m
-    )?)?;
     m.add_class::<PyFittedLine>()?;
     m.add_class::<PyFittedConic>()?;
     m.add_function(wrap_pyfunction!(triangulation::fitting::fit_line, m)?)?;

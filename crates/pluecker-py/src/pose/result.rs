@@ -375,6 +375,8 @@ result_class! {
         /// better behind: `details.behind_camera_cost`), `ambiguous` (another minimum nearly as good:
         /// `details.second_best`); robust: `too_few_inliers`, `no_hypothesis`; `interrupted`, `time_budget`.
         status = |r| r.inner.status.as_str();
+        /// `status == 'success'`.
+        success = |r| r.inner.success();
         /// Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels.
         cost = |r| r.inner.cost;
         /// (N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true.
@@ -390,7 +392,7 @@ result_class! {
         /// How the pose was found: method, stages, timings, noise, runner-up.
         details = |r| r.inner.details.clone();
         /// `certificate is not None and certificate.certified`.
-        certified = |r| r.inner.certificate.is_some_and(|c| c.certified);
+        certified = |r| r.inner.certified();
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -405,7 +407,7 @@ result_class! {
         format!(
             "PoseResult(status='{}', cost={:.6e}, rotation_vector=[{:.6}, {:.6}, {:.6}], translation=[{:.6}, {:.6}, {:.6}], certified={})",
             r.status.as_str(), r.cost, w.x, w.y, w.z, t.x, t.y, t.z,
-            if r.certificate.is_some_and(|c| c.certified) { "True" } else { "False" }
+            if r.certified() { "True" } else { "False" }
         )
     }
 }

@@ -12,7 +12,7 @@
 //! track ([`Cameras`]) and per-observation arrays ([`per_observation`]).
 
 use crate::convert::{read, read_any, shape_string, Dim};
-use crate::errors::{shape_error, to_py_err};
+use crate::errors::{invalid_argument, shape_error, to_py_err};
 use crate::fields::{result_class, Mask};
 use crate::interrupt::in_chunks;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
@@ -28,6 +28,35 @@ use pyo3::types::PyTuple;
 use rayon::prelude::*;
 use std::sync::Mutex;
 
+/// Which form a batch's tracks take: dense arrays `(n, v, ...)` with an optional `visible` mask, or
+/// one observation per row with `track=` and `image=` (both, and no `visible`): the rows, when given.
+/// `n_tracks=` and `cameras=` (`has_cameras`) belong to the rows form; errors name the argument.
+pub(crate) fn sparse_form<'a, 'py>(
+    track: Option<&'a Bound<'py, PyAny>>,
+    image: Option<&'a Bound<'py, PyAny>>,
+    visible: Option<&Bound<'py, PyAny>>,
+    n_tracks: Option<crate::convert::Integer>,
+    has_cameras: bool,
+) -> PyResult<Option<(&'a Bound<'py, PyAny>, &'a Bound<'py, PyAny>)>> {
+    match (track, image) {
+        (Some(track), Some(image)) if visible.is_none() => Ok(Some((track, image))),
+        (Some(_), Some(_)) => Err(invalid_argument(
+            "visible",
+            "the rows form (track=, image=) lists only what is seen: leave visible out",
+        )),
+        (Some(_), None) => Err(invalid_argument("image", "track= needs image= (the image of each row)")),
+        (None, Some(_)) => Err(invalid_argument("track", "image= needs track= (the track of each row)")),
+        (None, None) if n_tracks.is_some() => Err(invalid_argument(
+            "n_tracks",
+            "n_tracks= counts the tracks of the rows form: pass track= and image=",
+        )),
+        (None, None) if has_cameras => Err(invalid_argument(
+            "cameras",
+            "cameras= takes the rows form: pass track= and image= (one observation per row)",
+        )),
+        (None, None) => Ok(None),
+    }
+}
 
 /// Why track of `status` and `cost` was not started, if the batch was stopped before it (its cost is
 /// NaN; a track stopped while being solved keeps the cost it reached).

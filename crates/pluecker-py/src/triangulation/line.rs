@@ -7,8 +7,8 @@
 //! shared `(v, 3, 4)` or per track `(n, v, 3, 4)` ([`super::batch::Cameras`]).
 
 use super::batch::{
-    self, column, per_observation, rows, unstarted, write_row_major, Cameras, EstimateColumns, InlierColumns,
-    PyBatchReport, Sink,
+    self, column, per_observation, rows, sparse_form, unstarted, write_row_major, Cameras, EstimateColumns,
+    InlierColumns, PyBatchReport, Sink,
 };
 use super::point::views_of;
 use super::report::PyTriangulationReport;
@@ -344,8 +344,8 @@ result_class! {
         /// Per track: 4x4 covariance in the chart, shape (n, 4, 4) (NaN where there is none).
         covariance = |b| Array::rows(b.covariance.clone(), &[4, 4]);
         /// With `options.outlier_threshold`: which observations each line was solved from, shaped as the
-        /// observations were given ((n, v) for `triangulate_lines`, (m,) for
-        /// `triangulate_line_observations`; false where not visible or rejected); else `None`.
+        /// observations were given ((n, v) dense, (m,) in the rows form with `track=`, `image=`; false
+        /// where not visible or rejected); else `None`.
         inliers = |b| b.inliers.mask();
     }
 
@@ -402,7 +402,7 @@ fn image_lines_of(values: &[f64], segments: bool, sigma: f64) -> ImageLines<'_> 
 
 /// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (projections, lines, visible = None, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (projections, lines, visible = None, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None, cameras = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_lines(
     py: Python<'_>,
@@ -414,7 +414,27 @@ pub fn triangulate_lines(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
+    track: Option<&Bound<'_, PyAny>>,
+    image: Option<&Bound<'_, PyAny>>,
+    n_tracks: Option<Integer>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
+    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, cameras.is_some())? {
+        return line_observations(
+            py,
+            projections,
+            track,
+            image,
+            lines,
+            covariances,
+            sigma,
+            options,
+            progress,
+            time_budget,
+            n_tracks,
+            cameras,
+        );
+    }
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
@@ -455,7 +475,7 @@ pub fn triangulate_lines(
     batch_result(py, outcome)
 }
 
-/// Triangulates the line tracks of observations given one per row, as `triangulate_point_observations`
+/// Triangulates the line tracks of observations given one per row, as the rows form of `triangulate_points`
 /// does points: row `k` is the line `lines[k]` ((m, 3) homogeneous, or (m, 2, 2) segments with endpoint
 /// noise `sigma`) of track `track[k]` in image `image[k]` (an index into `projections` (v, 3, 4)), with
 /// the covariance `covariances[k]` (m, 2, 2) when given. Each track is solved as `triangulate_lines` would.
@@ -465,10 +485,8 @@ pub fn triangulate_lines(
 /// pose, `lines` are segments (m, 2, 2) in the observed (distorted) pixels, `covariances` (m, 2, 2, 2) the covariances
 /// of each segment's two endpoints (else `sigma`), and each track is solved as
 /// `triangulate_line(..., cameras=...)` solves it: never certified through a distorting lens.
-#[pyfunction]
-#[pyo3(signature = (projections, track, image, lines, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(clippy::too_many_arguments)]
-pub fn triangulate_line_observations(
+pub(crate) fn line_observations(
     py: Python<'_>,
     projections: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,

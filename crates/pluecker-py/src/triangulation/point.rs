@@ -10,16 +10,14 @@
 //! into the same preallocated columns.
 
 use super::batch::{
-    self, column, per_observation, rows, unstarted, write_row_major, EstimateColumns, InlierColumns, PyBatchReport,
-    ReportRow, Sink,
+    self, column, per_observation, rows, sparse_form, unstarted, write_row_major, EstimateColumns, InlierColumns,
+    PyBatchReport, ReportRow, Sink,
 };
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
 use super::{options_arg, PyTriangulationOptions};
 use crate::camera::PyCamera;
-use crate::convert::{
-    cameras, check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real,
-};
+use crate::convert::{check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real};
 use crate::errors::invalid_argument;
 use crate::errors::{shape_error, to_py_err};
 use crate::fields::{result_class, Array};
@@ -215,8 +213,8 @@ result_class! {
         /// Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none).
         covariance = |b| Array::rows(b.covariance.clone(), &[3, 3]);
         /// With `options.outlier_threshold`: which observations each point was solved from, shaped as
-        /// the observations were given ((n, v) for `triangulate_points`, (m,) for
-        /// `triangulate_point_observations`; false where not visible or rejected); else `None`.
+        /// the observations were given ((n, v) dense, (m,) in the rows form with `track=`, `image=`; false
+        /// where not visible or rejected); else `None`.
         inliers = |b| b.inliers.mask();
     }
 
@@ -236,7 +234,7 @@ const SHORT_BATCH: usize = 4096;
 
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (projections, observations, visible = None, covariances = None, *, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (projections, observations, visible = None, covariances = None, *, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None, cameras = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_points(
     py: Python<'_>,
@@ -247,10 +245,29 @@ pub fn triangulate_points(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
+    track: Option<&Bound<'_, PyAny>>,
+    image: Option<&Bound<'_, PyAny>>,
+    n_tracks: Option<Integer>,
+    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
+    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, cameras.is_some())? {
+        return point_observations(
+            py,
+            projections,
+            track,
+            image,
+            observations,
+            covariances,
+            options,
+            progress,
+            time_budget,
+            n_tracks,
+            cameras,
+        );
+    }
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = cameras("projections", projections)?;
+    let cams = crate::convert::cameras("projections", projections)?;
     let v = cams.len();
     if v < 2 {
         return Err(to_py_err(Error::TooFewCorrespondences {
@@ -329,10 +346,8 @@ pub fn triangulate_points(
 /// pose, `observations` are the observed (distorted) pixels and `covariances` their covariances, and the cost is the reprojection
 /// error in those pixels through the exact projection; `optimal` certifies that cost (certificate
 /// `lens_convexity_test`) where it can prove it, and is `gap_not_closed` where it cannot.
-#[pyfunction]
-#[pyo3(signature = (projections, track, image, observations, covariances = None, *, options = None, progress = None, time_budget = None, n_tracks = None, cameras = None))]
 #[allow(clippy::too_many_arguments)]
-pub fn triangulate_point_observations(
+pub(crate) fn point_observations(
     py: Python<'_>,
     projections: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,

@@ -4,7 +4,8 @@
 //! per-track report columns of `pluecker.BatchReport` ([`super::batch`]).
 
 use super::batch::{
-    self, column, per_observation, rows, unstarted, write_row_major, Cameras, EstimateColumns, PyBatchReport, Sink,
+    self, column, per_observation, rows, sparse_form, unstarted, write_row_major, Cameras, EstimateColumns,
+    PyBatchReport, Sink,
 };
 use super::report::PyTriangulationReport;
 use super::rows::SortedRows;
@@ -230,7 +231,7 @@ result_class! {
 
 /// Triangulates many ellipsoids (tracks) from their outline conics in parallel (Josephson & Kahl 2008).
 #[pyfunction]
-#[pyo3(signature = (projections, conics, visible = None, covariances = None, *, options = None, progress = None, time_budget = None))]
+#[pyo3(signature = (projections, conics, visible = None, covariances = None, *, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_quadrics(
     py: Python<'_>,
@@ -241,7 +242,24 @@ pub fn triangulate_quadrics(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
+    track: Option<&Bound<'_, PyAny>>,
+    image: Option<&Bound<'_, PyAny>>,
+    n_tracks: Option<Integer>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
+    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, false)? {
+        return quadric_observations(
+            py,
+            projections,
+            track,
+            image,
+            conics,
+            covariances,
+            options,
+            progress,
+            time_budget,
+            n_tracks,
+        );
+    }
     let budget = interrupt::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let cams = Cameras::read(projections, 3, opts.method)?;
@@ -276,13 +294,11 @@ pub fn triangulate_quadrics(
 }
 
 /// Triangulates the ellipsoid tracks of outline conics given one per row, as
-/// `triangulate_point_observations` does points: row `k` is the conic `conics[k]` (m, 3, 3) of track
+/// the rows form of `triangulate_points` does points: row `k` is the conic `conics[k]` (m, 3, 3) of track
 /// `track[k]` in image `image[k]` (an index into `projections` (v, 3, 4)), with the covariance
 /// `covariances[k]` (m, 5, 5) when given. Each track is solved as `triangulate_quadrics` would.
-#[pyfunction]
-#[pyo3(signature = (projections, track, image, conics, covariances = None, *, options = None, progress = None, time_budget = None, n_tracks = None))]
 #[allow(clippy::too_many_arguments)]
-pub fn triangulate_quadric_observations(
+pub(crate) fn quadric_observations(
     py: Python<'_>,
     projections: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,

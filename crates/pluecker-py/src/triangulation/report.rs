@@ -4,7 +4,7 @@
 use crate::certificate::certificate_of;
 use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
-use pluecker::triangulation::{Primitive, Report, Status};
+use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -52,7 +52,7 @@ result_class! {
         /// `at_infinity` (no finite estimate: NaN), `numerical_failure`; in batches also `interrupted`, `time_budget` and the rejection statuses.
         status = |r| r.inner.status.as_str();
         /// `status == 'success'`.
-        success = |r| r.inner.status == Status::Success;
+        success = |r| r.inner.success();
         /// The cost at the estimate, of kind `cost_kind`: eq. 19 (sum of squared whitened residuals; for points the
         /// reprojection errors), or for segments seen through a lens that distorts their reprojection cost.
         cost = |r| r.inner.cost;

@@ -1,7 +1,7 @@
 //! Observations given one per row, as COLMAP lists them (`track`, `image` and the row's data): the
 //! shared reading and the stable counting sort into the core's compressed rows ([`Csr`]), used by
-//! `triangulate_point_observations`, `triangulate_line_observations` and
-//! `triangulate_quadric_observations`. The sort and the gathering of the rows run a chunk of rows at
+//! the rows form (`track=`, `image=`) of `triangulate_points`, `triangulate_lines` and
+//! `triangulate_quadrics`. The sort and the gathering of the rows run a chunk of rows at
 //! a time, Python's signal handlers running between chunks ([`crate::interrupt::setup_poll`]).
 
 use crate::convert::{read, Dim, Integer};

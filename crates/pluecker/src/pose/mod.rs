@@ -315,6 +315,20 @@ pub struct PoseResult {
     pub details: PoseDetails,
 }
 
+impl PoseResult {
+    /// `status == Status::Success`: the answer can be used (the same meaning as a triangulation
+    /// [`crate::triangulation::Report::success`]).
+    pub fn success(&self) -> bool {
+        self.status == Status::Success
+    }
+
+    /// Whether a certificate was computed and proves the pose globally optimal (within
+    /// `certify.max_relative_gap`, over the certificate's domain).
+    pub fn certified(&self) -> bool {
+        self.certificate.is_some_and(|c| c.certified)
+    }
+}
+
 /// How a [`PoseResult`] was found. Costs are `Σ r²`, px².
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseDetails {

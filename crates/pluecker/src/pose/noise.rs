@@ -11,8 +11,8 @@
 //!
 //! Through a lens ([`super::lens`]) the noise also carries the distortion's Jacobians.
 
-use crate::error::{Error, Result};
 use crate::covariance::whitening;
+use crate::error::{Error, Result};
 use nalgebra::Matrix2;
 
 /// Per-observation noise, in the pixels of the correspondences it belongs to.

@@ -9,9 +9,9 @@
 //! dependence on the fit cancels to first order, because the residual of the fit in its own frame is
 //! identically 0). These functions return the fit and that covariance `J Cov(δ) Jᵀ`.
 
-use crate::covariance::whitening;
 use super::line::residual::{LineFrame, LINE_FRAME_DISTANCE};
 use super::quadric::residual::{ConicFrame, Vector5};
+use crate::covariance::whitening;
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{sym3_to_vec, Ellipse};
 use crate::rng::Rng;

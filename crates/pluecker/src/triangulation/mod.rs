@@ -42,9 +42,9 @@ pub use views::View;
 /// API.
 #[doc(hidden)]
 pub mod testing {
-    pub use crate::covariance::whitening;
     pub use super::quadric::certificate::convexity_bound_at as quadric_convexity_bound;
     pub use super::views::{baseline, centre, depth, depth_normalized};
+    pub use crate::covariance::whitening;
 }
 
 use crate::chi_square::ResidualTest;
@@ -279,6 +279,12 @@ impl Report {
             time_seconds: 0.0,
             residual_dof: 0,
         }
+    }
+
+    /// `status == Status::Success`: the estimate can be used (the same meaning as
+    /// [`crate::PoseResult::success`]).
+    pub fn success(&self) -> bool {
+        self.status == Status::Success
     }
 
     /// Whether a certificate was computed and proves the estimate globally optimal (within

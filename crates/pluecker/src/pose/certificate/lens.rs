@@ -58,12 +58,12 @@
 use super::{Certification, RaySlack};
 use crate::camera::Camera;
 use crate::camera_model::{AnyCamera, LensCamera};
+use crate::covariance::whitening;
 use crate::curved_line::endpoint_residual;
 use crate::lens_linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;
 use crate::pose::reprojection::Pose;
-use crate::covariance::whitening;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use std::cell::RefCell;
 

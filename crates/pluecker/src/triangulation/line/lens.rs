@@ -323,8 +323,7 @@ fn through_lenses(
             whitenings: keep
                 .iter()
                 .map(|&i| {
-                    crate::covariance::whitening(&covariances[i], "covariances", i)
-                        .expect("a checked covariance")
+                    crate::covariance::whitening(&covariances[i], "covariances", i).expect("a checked covariance")
                 })
                 .collect(),
         };

@@ -23,9 +23,9 @@ use super::cost::PointView;
 use super::lens::{first_order_view, solve_through_lenses, LensView};
 use super::linear::{accumulate_dlt, solve_dlt, LinearPoint, WorldFrame};
 use super::PointTriangulation;
+use crate::covariance::whitening;
 use crate::error::{Error, Result};
 use crate::interrupt::{current, StopReason};
-use crate::covariance::whitening;
 use crate::triangulation::tracks::{
     check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };

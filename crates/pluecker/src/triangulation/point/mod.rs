@@ -72,10 +72,10 @@ use self::global::{global_point, GlobalSettings, GlobalStatus, DEFAULT_RELAXATIO
 use self::infinity::best_at_infinity;
 use self::lens::LensView;
 use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
-use crate::covariance::whitenings;
 use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras, View};
 use super::{Certificate, CertificateKind, CostKind, Method, Report, Status, TriangulationOptions};
+use crate::covariance::whitenings;
 use crate::error::{Error, Result};
 use crate::global::relative_gap;
 use crate::optim::{trust_region, Termination};

@@ -46,12 +46,12 @@ pub mod testing {
 use self::optimal::optimal_quadric;
 use self::residual::{quadric_view, ConicFrame};
 use super::conditioning::{check_views, Similarity};
-use crate::covariance::whitenings;
 use super::fitting::fit_conic;
 use super::fraction::{self, FractionalResidual};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};
 use super::views::View;
 use super::{parse_observations, CostKind, Method, Report, Status, TriangulationOptions};
+use crate::covariance::whitenings;
 use crate::error::{Error, Result};
 use crate::geometry::quadric::{
     centre_shape, centre_shape_tangent, dual_of_centre_shape, sym4_to_vec, vec_to_sym4, CentreShape, Ellipsoid,
