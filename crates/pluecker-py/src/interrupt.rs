@@ -341,7 +341,7 @@ pub(crate) struct Outcome<T> {
 ///
 /// `short`: the caller knows the work takes well under [`POLL`] (a small linear batch). Without
 /// `progress` and `time_budget` it then runs on this thread, sparing the worker thread's start (its
-/// cost: `bench/results/2026-11-23-figures-from-code-comments.md`), and sees Ctrl-C only when it ends.
+/// cost: docs/benchmarks.md, "Figures behind code comments"), and sees Ctrl-C only when it ends.
 pub(crate) fn run_interruptible<T, F>(
     py: Python<'_>,
     progress: Option<&Bound<'_, PyAny>>,

@@ -187,7 +187,7 @@ fn bench_batch(c: &mut Criterion) {
     group.finish();
 }
 
-/// `line/<views>-views/optimal-<bound>`: one certified line (recorded runs: bench/results/), on a pool of 16
+/// `line/<views>-views/optimal-<bound>`: one certified line (latest numbers: docs/benchmarks.md), on a pool of 16
 /// seeded scenes of [`line_scene`] (46° of parallax) with 1 px endpoint noise; the fraction certified
 /// and the nodes go to stderr at setup.
 fn bench_lines(c: &mut Criterion) {

@@ -231,7 +231,7 @@ impl Socp {
 
     /// Solves with clarabel's default tolerances (1e-8), silently, without presolve (no infinite
     /// bounds arise here) and without iterative refinement of the KKT solves (faster on the
-    /// branch-and-bound nodes, see `bench/results/2026-11-23-figures-from-code-comments.md`;
+    /// branch-and-bound nodes, see docs/benchmarks.md, "Figures behind code comments";
     /// the bound below does not rely on the solver's accuracy).
     pub fn solve(&self) -> SocpSolution {
         self.solve_with(DefaultSettings::<f64> {

@@ -38,7 +38,7 @@ pub(crate) use crate::rigid::Pose;
 
 /// Points per batch of the point kernel. The kernel is written lane by lane over fixed-size arrays so
 /// that the compiler turns each batch into vector instructions (the speed-up:
-/// `bench/results/2026-11-23-figures-from-code-comments.md`).
+/// docs/benchmarks.md, "Figures behind code comments").
 const LANES: usize = 4;
 
 /// Reprojection-error objective over `SO(3) × ℝ³`.

@@ -21,7 +21,7 @@
 //! the scene, so inliers selected at the thresholds alone can miss part of the true inlier set and
 //! settle on a worse model nearby; the wider rounds bring the accuracy to that of the
 //! maximum-likelihood fit on the true inliers (measured with `bench/compare_robust_pose.py`: the figures
-//! are in `bench/results/2026-11-23-figures-from-code-comments.md`). The best model is the best-scoring
+//! are in docs/benchmarks.md, "Figures behind code comments"). The best model is the best-scoring
 //! of all the local optimisations. The loop stops when the number of
 //! samples reaches the adaptive bound of `sampler` for [`RansacOptions::confidence`], the cap of
 //! [`RansacOptions::min_inlier_ratio`], the iteration cap, or the time budget. A best model with at
@@ -42,7 +42,7 @@
 //! partial MSAC sum stays below the best's until the end). Now it draws about 9,800 samples (the cap of
 //! the default 0.1: 9,206, a few % more for the SPRT's `α`) and rejects each hypothesis after about 30
 //! errors (the times before and after, from `bench/robust_outliers.py`:
-//! `bench/results/2026-11-23-figures-from-code-comments.md`).
+//! docs/benchmarks.md, "Figures behind code comments").
 //!
 //! **Inliers by chance.** A wrong pose still agrees with some outliers: each falls within the threshold
 //! of its prediction with probability `p ≈ π τ² / (W H)` for observations spread over a `W × H` window

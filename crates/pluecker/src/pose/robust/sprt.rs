@@ -40,7 +40,7 @@
 
 /// `t_M`: the time of a minimal sample (P3P, the pose checks and the loop's bookkeeping) in units of
 /// one point-error evaluation, measured on 20,000 all-outlier points (the timings:
-/// `bench/results/2026-11-23-figures-from-code-comments.md`). It sets how much verification a
+/// docs/benchmarks.md, "Figures behind code comments"). It sets how much verification a
 /// rejection may cost; the line solvers are slower, so the constant is set below the measured ratio
 /// and errs towards a smaller `A`.
 pub const MODEL_COST: f64 = 200.0;
