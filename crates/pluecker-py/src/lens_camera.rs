@@ -1,5 +1,5 @@
 //! `pluecker.LensCamera`: a camera of one of COLMAP's models, with lens distortion
-//! (`pluecker::camera_model`): projection, and unprojection exact to 1e-10 px.
+//! (`pluecker::camera`): projection, and unprojection exact to 1e-10 px.
 
 use crate::convert::{points, points_to_py, Real};
 use crate::errors::{degenerate, guarded, shape_error};
@@ -8,7 +8,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 use numpy::ndarray::Array3;
 use numpy::PyArray2;
 use numpy::{IntoPyArray, PyArray3};
-use pluecker::camera_model::{CameraModel, LensCamera};
+use pluecker::camera::{CameraModel, LensCamera};
 use pluecker::testing::number;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;

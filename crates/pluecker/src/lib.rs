@@ -47,7 +47,7 @@
 //! point minimises the reprojection error in each image's own pixels.
 //! ```
 //! use pluecker::nalgebra::{Matrix3, Vector3};
-//! use pluecker::camera_model::{CameraModel, LensCamera};
+//! use pluecker::camera::{CameraModel, LensCamera};
 //! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
 //! use pluecker::Pose;
 //! let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
@@ -101,20 +101,16 @@
 // Every type a public signature names is itself reachable (re-exported) from a public path.
 #![warn(unnameable_types)]
 
-pub(crate) mod camera;
-pub mod camera_model;
+pub mod camera;
 pub(crate) mod certificate;
 pub mod chi_square;
 pub(crate) mod consensus;
 pub(crate) mod cost_kind;
 pub(crate) mod covariance;
-pub(crate) mod curved_line;
 pub(crate) mod error;
 pub mod geometry;
 pub(crate) mod global;
 pub mod interrupt;
-pub(crate) mod lens_bounds;
-pub(crate) mod lens_linearisation;
 pub(crate) mod names;
 pub mod optim;
 pub mod pose;
@@ -124,8 +120,7 @@ pub(crate) mod status;
 pub mod synthetic;
 pub mod triangulation;
 
-pub use camera::Camera;
-pub use camera_model::AnyCamera;
+pub use camera::{AnyCamera, Camera};
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Method` and result stay in their
 // module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.

@@ -7,7 +7,7 @@
 //! estimator with a correct covariance, and the mean of `n` trials has standard deviation `√(12 / n)`.
 
 use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
-use pluecker::camera_model::{CameraModel, LensCamera};
+use pluecker::camera::{CameraModel, LensCamera};
 use pluecker::geometry::testing::log_so3;
 use pluecker::optim::Objective;
 use pluecker::pose::{

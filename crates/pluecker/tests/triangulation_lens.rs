@@ -4,7 +4,7 @@
 //! residuals.
 
 use nalgebra::{Matrix2, Matrix2x4, Matrix3, Matrix3x4, Matrix4, SymmetricEigen, Vector2, Vector3};
-use pluecker::camera_model::{CameraModel, LensCamera};
+use pluecker::camera::{CameraModel, LensCamera};
 use pluecker::rng::Rng;
 use pluecker::triangulation::point::testing::{lens_certificate, LensView};
 use pluecker::triangulation::point::triangulate_point_views;

@@ -9,7 +9,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3, Vector4, Vector6};
-use pluecker::camera_model::{CameraModel, LensCamera};
+use pluecker::camera::{CameraModel, LensCamera};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;

@@ -23,8 +23,8 @@ use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, Parts};
 use super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
+use crate::camera::AnyCamera;
 use crate::camera::Camera;
-use crate::camera_model::AnyCamera;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::rotation_distance;
@@ -372,7 +372,7 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// correspondences (see [`Method`] and [`PoseOptions`]).
 ///
 /// `camera` is any camera of [`AnyCamera`], or a reference to one of its two kinds: a pinhole
-/// [`Camera`], or a [`crate::camera_model::LensCamera`] of one of COLMAP's models, whose pixels (`corr`)
+/// [`Camera`], or a [`crate::camera::LensCamera`] of one of COLMAP's models, whose pixels (`corr`)
 /// are the observed, distorted ones (see `lens` for what each stage then works on).
 ///
 /// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that

@@ -33,7 +33,7 @@ use super::robust::scoring::subset;
 use super::PoseOptions;
 use super::PoseResult;
 use crate::camera::Camera;
-use crate::camera_model::LensCamera;
+use crate::camera::LensCamera;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Vector2};
 use std::borrow::Cow;
@@ -235,7 +235,7 @@ fn expand(flags: &[bool], kept: &[bool]) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_model::CameraModel;
+    use crate::camera::CameraModel;
 
     #[test]
     fn undistorted_residuals_are_distorted_pixels_to_first_order() {

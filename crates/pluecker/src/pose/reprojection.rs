@@ -17,7 +17,7 @@
 //!   standard deviations of `e` (the Mahalanobis distance `min_q √((u(q) − e)ᵀ C⁻¹ (u(q) − e))` over
 //!   the points `q` of `ℓ`, the plain pixel distance without covariances). The minimum over `q` is a 1-D
 //!   Gauss-Newton search along `ℓ` from the foot of the endpoint's unprojection, the nearest point of
-//!   the curve's branch through the observation: [`crate::curved_line`], shared with the
+//!   the curve's branch through the observation: [`crate::camera::curved_line`], shared with the
 //!   triangulation of lines through lenses. With `D` the identity this
 //!   is the pinhole residual up to its sign (only squares enter the cost).
 //!
@@ -25,10 +25,10 @@
 //! `(exp(ω) R, t + τ)` (rotation perturbed on the left, in the camera frame).
 
 use super::{Correspondences, CovarianceSource, ObservationNoise};
+use crate::camera::curved_line::endpoint_residual;
+use crate::camera::AnyCamera;
 use crate::camera::Camera;
-use crate::camera_model::AnyCamera;
-use crate::camera_model::LensCamera;
-use crate::curved_line::endpoint_residual;
+use crate::camera::LensCamera;
 use crate::error::Result;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
@@ -375,7 +375,7 @@ impl<'a> ReprojectionCost<'a> {
 
     /// Line `i`'s two endpoint residuals through a lens and their Jacobian: for each endpoint `e` with
     /// covariance `C` (the identity without noise), the point `q` of the projected line `ℓ` whose pixel
-    /// `u(q)` is nearest to `e` ([`crate::curved_line::endpoint_residual`]), then `ηᵀ (u(q) − e)` with `η = n / √(nᵀ C n)` and
+    /// `u(q)` is nearest to `e` ([`crate::camera::curved_line::endpoint_residual`]), then `ηᵀ (u(q) − e)` with `η = n / √(nᵀ C n)` and
     /// `n` the normal of the curve at `u(q)`: at the minimum `u(q) − e` is C-orthogonal to the curve,
     /// so this is `±` the Mahalanobis distance (the pixel distance for `C = I`). The Jacobian is
     /// `ηᵀ ∂u/∂(ω, τ)` at the fixed world point `X*` of the 3-D line that projects to `q`: the derivative

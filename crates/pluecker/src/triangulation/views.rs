@@ -14,7 +14,7 @@
 //! of COLMAP's models) and its pose. Through a lens with distortion the observations are the image's
 //! own (distorted) pixels; `P = K [R | t]` is the view of a pinhole camera.
 
-use crate::camera_model::AnyCamera;
+use crate::camera::AnyCamera;
 use crate::error::{Error, Result};
 use crate::rigid::Pose;
 use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};

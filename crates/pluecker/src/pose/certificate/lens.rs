@@ -3,15 +3,15 @@
 //!
 //! **The cost.** A point's residual is `eᵢ(n) = Lᵢ (K D(n) − uᵢ) = Mᵢ (D(n) − dᵢ)` (`n` its normalised
 //! projection, `Mᵢ = Lᵢ K₂`); a segment endpoint's is `r = min_q ‖M (D(q) − d)‖` over the points `q` of the
-//! projected line `ℓ` ([`crate::curved_line`]; the reported residual is a local minimum of it, so at
+//! projected line `ℓ` ([`crate::camera::curved_line`]; the reported residual is a local minimum of it, so at
 //! least this). `C = Σ r²` is the cost at the answer `P̂`.
 //!
 //! **The domain.** Poses with the object points and the segments' object endpoints in front of the
 //! camera whose point projections, and the points of the curves that the endpoint residuals are
 //! measured to, lie in the disc where the lens is proved one-to-one
-//! ([`crate::lens_bounds::domain`]).
+//! ([`crate::camera::bounds::domain`]).
 //!
-//! **The surrogate.** Each observation is linearised at the answer ([`crate::lens_linearisation`]): a
+//! **The surrogate.** Each observation is linearised at the answer ([`crate::camera::linearisation`]): a
 //! point at its projection `nᵢ*` (`Wᵢ = Mᵢ Jᵢ*`, `eᵢ* = eᵢ(nᵢ*)`), an endpoint at the point `q*` of
 //! `ℓ̂` nearest to it through the lens (`W`, `ê`). The surrogate observes the point at
 //! `n̄ᵢ = nᵢ* − Wᵢ⁻¹ eᵢ*` with whitening `Wᵢ`, and the endpoint at `ē = q* − W⁻¹ ê` with covariance
@@ -19,7 +19,7 @@
 //! `ℓᵢ = eᵢ* + Wᵢ (n − nᵢ*)` and `ρ = min_q ‖W (q − ē)‖`; at `P̂` they equal the lens residuals, and so
 //! do their first derivatives.
 //!
-//! 1. **Confinement** (module docs of [`crate::lens_linearisation`]): a ball `Bᵢ = {‖Wᵢ (n − nᵢ*)‖ ≤ Rᵢ}`
+//! 1. **Confinement** (module docs of [`crate::camera::linearisation`]): a ball `Bᵢ = {‖Wᵢ (n − nᵢ*)‖ ≤ Rᵢ}`
 //!    with `(1 − εᵢ) Rᵢ > √C + ‖eᵢ*‖ + sᵢ` holds every projection (every minimising `q` for an endpoint)
 //!    of a pose of the domain with cost at most `C`. Inside it `eᵢ = eᵢ* + (I + Δ) vᵢ` (`vᵢ = Wᵢ (n − nᵢ*)`,
 //!    `‖Δ‖ ≤ εᵢ`), so `‖vᵢ‖ ≤ (‖eᵢ‖ + ‖eᵢ*‖ + sᵢ) / (1 − εᵢ)` and
@@ -51,16 +51,16 @@
 //!    that holds the ray's step: near the answer, where the bound is least, only a small ball's
 //!    variation is paid.
 //!
-//! The certificate fails, with the reason, for a lens that [`crate::lens_bounds`] does not cover, where
+//! The certificate fails, with the reason, for a lens that [`crate::camera::bounds`] does not cover, where
 //! an observation or a confinement ball reaches the edge of the one-to-one disc, or where `ε` is too
 //! large for the gap (strong distortion with large residuals).
 
 use super::{Certification, RaySlack};
+use crate::camera::curved_line::endpoint_residual;
+use crate::camera::linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
 use crate::camera::Camera;
-use crate::camera_model::{AnyCamera, LensCamera};
+use crate::camera::{AnyCamera, LensCamera};
 use crate::covariance::whitening;
-use crate::curved_line::endpoint_residual;
-use crate::lens_linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;
 use crate::pose::reprojection::Pose;

@@ -104,8 +104,9 @@ use super::correspondences::Correspondences;
 use super::object_distance::{distance_bound, Sight};
 use super::reprojection::{Pose, ReprojectionCost};
 use super::Status;
+use crate::camera::linearisation::spectral_norm;
 use crate::camera::Camera;
-use crate::camera_model::LensCamera;
+use crate::camera::LensCamera;
 use crate::certificate::CertifyOptions;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::global::branch_and_bound::{
@@ -113,7 +114,6 @@ use crate::global::branch_and_bound::{
 };
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use crate::interrupt::{stop_reason, StopReason};
-use crate::lens_linearisation::spectral_norm;
 use crate::optim::Objective;
 use lens::{Slack, Surrogate};
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};

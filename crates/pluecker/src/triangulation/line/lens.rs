@@ -7,7 +7,7 @@
 //! covariances `Cᵢₖ` (pixels²; the identity when none are given). A 3-D line `𝓛` (Plücker coordinates,
 //! eq. 3) has in view `i` the normalised image line `lᵢ = P_𝓛 𝓛` (eqs. 6-7 for the camera `[Rᵢ | tᵢ]`),
 //! whose image in the pixels is the curve `K D(ℓᵢ)`. Each endpoint's residual `rᵢₖ(𝓛)` is its signed
-//! Mahalanobis distance to that curve ([`crate::curved_line`]), and the cost is
+//! Mahalanobis distance to that curve ([`crate::camera::curved_line`]), and the cost is
 //! `F(𝓛) = Σᵢ Σₖ rᵢₖ²`, the reprojection error of the segments through the exact projection: the
 //! statistically optimal cost for Gaussian noise of the endpoints across the line. Without distortion
 //! it is the squared distance of the endpoints to the projected line (Table 2's error).
@@ -20,7 +20,7 @@
 //! then minimises `F` itself over the orthonormal representation of Bartoli & Sturm (the 4-parameter
 //! update of `super::LineObjective`, in the same conditioned frame). Its gradient: by the envelope
 //! theorem `∂rᵢₖ/∂lᵢ` is the derivative at the nearest point `q*` of the curve moved with the line
-//! ([`crate::curved_line::EndpointResidual::line_gradient`]), and `∂lᵢ/∂𝓛 = P_𝓛`.
+//! ([`crate::camera::curved_line::EndpointResidual::line_gradient`]), and `∂lᵢ/∂𝓛 = P_𝓛`.
 //!
 //! **No certificate.** No proof of a lower bound of `F` exists yet through a distorting lens (the
 //! Taylor and relaxation bounds of [`super`] bound eq. 19 of the first-order problem, another cost).
@@ -34,9 +34,9 @@
 //! not `F`, and its certificate is the one of [`super`].
 
 use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
-use crate::camera_model::AnyCamera;
-use crate::camera_model::LensCamera;
-use crate::curved_line::{endpoint_residual, pinhole_endpoint_residual};
+use crate::camera::curved_line::{endpoint_residual, pinhole_endpoint_residual};
+use crate::camera::AnyCamera;
+use crate::camera::LensCamera;
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, LineChart, OrthonormalLine, PluckerCamera};
 use crate::optim::{trust_region, Linearization, Objective, Summary, Termination, TrustRegionOptions};

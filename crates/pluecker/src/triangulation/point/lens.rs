@@ -12,11 +12,11 @@
 //! `eᵢ* = eᵢ(X*)`, `nᵢ*` its normalised projection, `Mᵢ = Lᵢ K₂` (`K₂` the upper-left block of `K`),
 //! `Jᵢ* = ∂D/∂n(nᵢ*)` and `Wᵢ = Mᵢ Jᵢ*`. Its domain is every point in front of the cameras whose
 //! projection in each image lies inside the disc `Dᵢ` where that lens is proved one-to-one
-//! ([`crate::lens_bounds::domain`]: the fold radius for radially symmetric lenses; a scan of the
+//! ([`crate::camera::bounds::domain`]: the fold radius for radially symmetric lenses; a scan of the
 //! symmetric part of the Jacobian with OPENCV's tangential terms), which `D` maps onto a set holding
 //! the disc of radius `ρ_Dᵢ` about the principal point.
 //! 1. *Each view's projection is confined.* Let `Bᵢ = {n : ‖Wᵢ(n − nᵢ*)‖ ≤ ρᵢ}` and `εᵢ` a bound
-//!    of `‖Mᵢ (J(n) − Jᵢ*) Wᵢ⁻¹‖₂` over `Bᵢ` (interval enclosures; [`crate::lens_linearisation`]).
+//!    of `‖Mᵢ (J(n) − Jᵢ*) Wᵢ⁻¹‖₂` over `Bᵢ` (interval enclosures; [`crate::camera::linearisation`]).
 //!    Along the segment from `nᵢ*` (mean value theorem),
 //!    `eᵢ(n) = eᵢ* + (I + Δ) Wᵢ (n − nᵢ*)`, `‖Δ‖ ≤ εᵢ`, so on the boundary of `Bᵢ`
 //!    `‖eᵢ‖ ≥ (1 − εᵢ)ρᵢ − ‖eᵢ*‖ > √C` for `ρᵢ` chosen so. Let `n ∈ Dᵢ` have `‖eᵢ(n)‖ ≤ √C`: `D(n)` lies
@@ -31,7 +31,7 @@
 //!    when the whole proof with one box per view has failed: the splits cost 64 enclosures). And a fisheye
 //!    projection off axis may use the **ray chart**: the normalised coordinates `n′` of the camera
 //!    rotated so that the ray of `nᵢ*` is its optical axis (`n′* = 0`, `n = h(n′)` a homography), with
-//!    the Jacobian of `D ∘ h` ([`crate::lens_bounds::fisheye_ray_enclosure`]); a box of `n′` stays small
+//!    the Jacobian of `D ∘ h` ([`crate::camera::bounds::fisheye_ray_enclosure`]); a box of `n′` stays small
 //!    in angle where one of `n` stretches with `1/cos²θ`. The argument above holds in either chart
 //!    (`h(Bᵢ′)` is a closed set whose boundary is `h(∂Bᵢ′)`), and the chart of the smaller `εᵢ` is used.
 //! 2. *A pinhole problem bounds `F` there.* With `vᵢ = Wᵢ(n − nᵢ*)` and `ℓᵢ = eᵢ* + vᵢ` (the
@@ -57,12 +57,12 @@
 use super::chart::{Chart, ChartKind};
 use super::cost::PointView;
 use super::robust::RobustTrack;
-use crate::camera_model::AnyCamera;
+pub use crate::camera::linearisation::LensBoundFailure;
+use crate::camera::linearisation::{Linearised, SPLITS};
+use crate::camera::AnyCamera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
-pub use crate::lens_linearisation::LensBoundFailure;
-use crate::lens_linearisation::{Linearised, SPLITS};
 use crate::optim::Termination;
 use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
 use crate::triangulation::point::linear::WorldFrame;
@@ -528,7 +528,7 @@ pub(crate) fn solve_through_lenses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_model::{CameraModel, LensCamera};
+    use crate::camera::{CameraModel, LensCamera};
     use crate::rng::Rng;
 
     /// A view of `x` through `lens` from a camera at distance 5 whose axis is `angle` off the point,

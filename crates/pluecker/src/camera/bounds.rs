@@ -1,7 +1,7 @@
 //! Interval enclosures of a lens's distortion Jacobian `∂D/∂n` over a box of normalised coordinates,
 //! for the certificates through a lens ([`crate::triangulation::point::lens`]).
 //!
-//! They cover three families of [`crate::camera_model`]'s table ([`Distortion`]):
+//! They cover three families of [`crate::camera`]'s table ([`Distortion`]):
 //! - **polynomial**, `D(n) = n g(s)`, `s = |n|²`, `g(s) = 1 + c₁s + c₂s² + …` (SIMPLE_RADIAL, RADIAL,
 //!   OPENCV and FULL_OPENCV without tangential terms or denominator): `∂D/∂n = g I + 2g' n nᵀ`;
 //! - **polynomial with OPENCV's tangential term** `t(n)`, whose Jacobian
@@ -21,7 +21,7 @@
 //! **The one-to-one disc** ([`domain`]). The certificates work inside a disc `|n| < R` on which `D` is
 //! proved one-to-one, and need a disc about the principal point, of radius `ρ`, that `D` maps onto
 //! part of its image:
-//! - radially symmetric: `R` is the fold radius ([`crate::camera_model::LensCamera::fold_radius`]), below which the
+//! - radially symmetric: `R` is the fold radius ([`crate::camera::LensCamera::fold_radius`]), below which the
 //!   radial map `r ↦ r g` (or `θ g(θ²)`) increases, and the image is the disc of radius `ρ = R g(R²)`
 //!   (`θ_R g(θ_R²)`, `θ_R = atan R`, for the fisheyes; the limit of `r g` for an unbounded disc of the
 //!   division models and EUCM);
@@ -351,7 +351,7 @@ pub fn radius_about(j: &IntervalMatrix, j0: &Matrix2<f64>) -> Matrix2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_model::{CameraModel, LensCamera};
+    use crate::camera::{CameraModel, LensCamera};
 
     fn distortion(lens: &LensCamera) -> Option<Distortion> {
         lens.covered_distortion().cloned()
@@ -436,7 +436,7 @@ mod tests {
         // Boxes within r < 0.15 use the series of σ and q (module docs): sampled points of boxes about
         // the principal point, and degenerate boxes (a point, where only the rounding allowance makes
         // the interval hold the value), are inside. The reference J has its own rounding: its
-        // equidistant factor cancels to an absolute error of a few ε (camera_model's `equidistant`).
+        // equidistant factor cancels to an absolute error of a few ε (`camera::distortion::equidistant`).
         let mut rng = Rng::new(12);
         for lens in lenses()
             .into_iter()

@@ -8,13 +8,13 @@
 //! coordinates. Linearised at `n*` (`e* = e(n*)`, `J* = ∂D/∂n(n*)`, `W = M J*`):
 //! `e(n) = e* + (I + Δ) W (n − n*)` along the segment from `n*` (mean value theorem), with
 //! `Δ = M (J̄ − J*) W⁻¹`, `J̄` the mean of `J` along the segment. Interval enclosures of
-//! [`crate::lens_bounds`] hold `J` in a box of matrices on each of a few boxes covering the ball, so
+//! [`crate::camera::bounds`] hold `J` in a box of matrices on each of a few boxes covering the ball, so
 //! `J̄` lies in the convex hull of their union, and `‖Δ‖₂ ≤ ε`, the largest `‖M (V − J*) W⁻¹‖₂` over the
 //! vertices `V` of those boxes (a convex function's largest value on a hull; [`Linearised::epsilon`]).
 //!
 //! **Confinement** ([`Linearised::confinement`]). On the boundary of `B = {n : ‖W (n − n*)‖ ≤ ρ}`,
 //! `‖e‖ ≥ (1 − ε) ρ − ‖e*‖ − s` (`s` the rounding of `e*`), which exceeds `√C` for `ρ` chosen so.
-//! Let `n` lie in the disc where `D` is one-to-one ([`crate::lens_bounds::domain`]) with
+//! Let `n` lie in the disc where `D` is one-to-one ([`crate::camera::bounds::domain`]) with
 //! `‖e(n)‖ ≤ √C`: `D(n)` lies in the ellipse `{d : ‖M (d − d₀)‖ ≤ √C}`, which the constructor requires
 //! inside the disc of radius `ρ_D` that `D` maps onto. The segment from `D(n*)` to `D(n)` lies in that
 //! ellipse, and its preimage under the homeomorphism `D` is a path from `n*` to `n` along which
@@ -25,8 +25,10 @@
 //! with the Jacobian of `D ∘ h`; a box of `n′` stays small in angle where one of `n` stretches with
 //! `1/cos²θ`. The argument holds in either chart.
 
-use crate::camera_model::{AnyCamera, LensCamera};
-use crate::lens_bounds::{fisheye_ray_enclosure, jacobian_enclosure, radius_about, Coefficients, Distortion, Domain};
+use crate::camera::bounds::{
+    fisheye_ray_enclosure, jacobian_enclosure, radius_about, Coefficients, Distortion, Domain,
+};
+use crate::camera::{AnyCamera, LensCamera};
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -62,7 +64,7 @@ pub(crate) struct Linearised {
     pub(crate) n: Vector2<f64>,
     pub(crate) j: Matrix2<f64>,
     pub(crate) distortion: Distortion,
-    /// The one-to-one radius of [`crate::lens_bounds::domain`].
+    /// The one-to-one radius of [`crate::camera::bounds::domain`].
     pub(crate) radius: f64,
     /// The ray chart's rotation `R` (camera frame to a frame whose optical axis is the ray of `nᵢ*`),
     /// for fisheyes off axis; then `n` is `n′ = 0` and `J` is that of `D ∘ h`.
@@ -324,7 +326,7 @@ impl Linearised {
     }
 }
 
-/// The distortion of `camera` that [`crate::lens_bounds`] covers and the disc where it is proved
+/// The distortion of `camera` that [`crate::camera::bounds`] covers and the disc where it is proved
 /// one-to-one (the identity and the whole plane for a pinhole camera), as the camera computed them once.
 pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(&Distortion, Domain), LensBoundFailure> {
     static IDENTITY: Distortion = Distortion::Polynomial(Coefficients::new_const());
@@ -363,7 +365,7 @@ fn homography_jacobian(ray: &Matrix3<f64>) -> Matrix2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_model::CameraModel;
+    use crate::camera::CameraModel;
     use crate::rng::Rng;
 
     #[test]
@@ -512,7 +514,7 @@ mod tests {
     /// `ε` against its own claim, vertex by vertex: the box of the ball `{‖W (n − n*)‖ ≤ ρ}` (half-widths
     /// `ρ ‖row k of W⁻¹‖`, written out here) cut into `p` x `p` sub-boxes; every sub-box that holds a
     /// point of the ball (a 9 x 9 grid of it, strictly inside) has its enclosure of `J` (the enclosures
-    /// themselves are [`crate::lens_bounds`]'s, tested there), and `ε` is at least
+    /// themselves are [`crate::camera::bounds`]'s, tested there), and `ε` is at least
     /// `‖M (V − J*) W⁻¹‖₂` (nalgebra's singular values) at each of its 16 vertices `V`. So is the
     /// certificate's `ε` ([`Linearised::epsilon`], one box or the split one) the smaller of the two
     /// oracles at most; and `ε` is no more than the largest vertex over all the sub-boxes (the documented

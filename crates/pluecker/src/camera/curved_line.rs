@@ -10,7 +10,7 @@
 //! ([`crate::pose::reprojection`]) and the triangulation of lines through lenses
 //! ([`crate::triangulation::line::lens`]) measure segment endpoints with it.
 
-use crate::camera_model::LensCamera;
+use crate::camera::LensCamera;
 use nalgebra::{Matrix2, Matrix3, RowVector2, RowVector3, Vector2, Vector3};
 
 /// The 1-D search of [`nearest_on_curve`] stops after a step that moves the point on the curve by at
@@ -169,7 +169,7 @@ pub fn endpoint_residual(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera_model::CameraModel;
+    use crate::camera::CameraModel;
     use crate::rng::Rng;
 
     #[test]
