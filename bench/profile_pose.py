@@ -1,7 +1,7 @@
 """Profile of the certified pose (``pluecker.estimate_pose`` with ``PoseOptions(certify=CertifyOptions())``),
 pinhole and through a ``LensCamera``: where the time goes, per stage and per scene.
 
-**Scenes**: those of ``bench/compare_global_pose.py``, by import (``all_rows`` / ``make_synthetic``):
+**Scenes**: those of ``bench/compare_global_pose.py`` (``bench/global_pose_scenes.py``), by import (``all_rows`` / ``make_synthetic``):
 640 x 480, ``fx = fy = f``, a random pose, object 4.2-7.8 units deep, 1 px Gaussian noise; scene ``i`` of a
 row is ``make_synthetic(row, --seed + i)``. Rows (``--rows`` selects by substring):
 
@@ -58,7 +58,7 @@ import numpy as np
 from profile_stats import fmt_ms, histogram, table, tail_line
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import compare_global_pose as cgp  # noqa: E402  (the scene generator of the global-minimum benchmark)
+import global_pose_scenes as cgp  # noqa: E402  (the scene generator of the global-minimum benchmark)
 import pluecker  # noqa: E402
 
 ROW_NAMES = ([f"f{f}-n100-{d}" for f in (250, 800, 4000, 15000) for d in ("points", "mixed")]
