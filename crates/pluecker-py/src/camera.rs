@@ -3,7 +3,7 @@
 use crate::convert::pose_from_parts;
 use crate::convert::{matrix3_allow_non_finite, points, points_to_py, Real};
 use crate::errors::guarded;
-use crate::fields::{result_class, Field};
+use crate::properties::{result_class, Field};
 use nalgebra::{Vector2, Vector3};
 use numpy::PyArray2;
 use pyo3::prelude::*;

@@ -3,9 +3,9 @@
 
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::{options_class, result_class, Field};
 use crate::nested::NestedOptions;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::{options_class, result_class, Field};
 use pluecker::{Certificate, CertifyOptions, Primitive};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;

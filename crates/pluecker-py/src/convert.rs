@@ -568,7 +568,7 @@ pub fn pose_from_parts(r_name: &str, r: &Bound<'_, PyAny>, t_name: &str, t: &Bou
     Ok(Pose::new(rotation(r_name, r)?, vector::<3>(t_name, t)?))
 }
 
-impl crate::fields::Field for Pose {
+impl crate::properties::Field for Pose {
     /// `(R, t)` as numpy arrays.
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
         let parts = [self.rotation.get(py)?, self.translation.get(py)?];

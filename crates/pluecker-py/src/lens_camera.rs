@@ -3,7 +3,7 @@
 
 use crate::convert::{points, points_to_py, Real};
 use crate::errors::{degenerate, guarded, shape_error};
-use crate::fields::result_class;
+use crate::properties::result_class;
 use nalgebra::{Matrix2, Vector2, Vector3};
 use numpy::ndarray::Array3;
 use numpy::PyArray2;

@@ -18,12 +18,12 @@ mod convert;
 mod errors;
 #[cfg(unix)]
 mod exit_deadline;
-mod fields;
 mod interrupt;
 mod lens_camera;
 mod nested;
 mod pickle;
 mod pose;
+mod properties;
 mod synthetic;
 mod threads;
 mod triangulation;

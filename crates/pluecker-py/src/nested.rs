@@ -2,7 +2,7 @@
 //! options class, pycolmap style: `options.certify.max_nodes = 10` changes the options that hold it.
 //! Its fields are read into the core's struct when a function is called.
 
-use crate::fields::Field;
+use crate::properties::Field;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use pyo3::PyClass;

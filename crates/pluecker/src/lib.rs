@@ -102,6 +102,7 @@
 #![warn(unnameable_types)]
 
 pub mod camera;
+pub(crate) mod camera_pose;
 pub(crate) mod certificate;
 pub mod chi_square;
 pub(crate) mod consensus;
@@ -114,7 +115,6 @@ pub mod interrupt;
 pub(crate) mod names;
 pub mod optim;
 pub mod pose;
-pub(crate) mod rigid;
 pub mod rng;
 pub(crate) mod status;
 pub mod synthetic;
@@ -124,13 +124,13 @@ pub use camera::{AnyCamera, Camera};
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Method` and result stay in their
 // module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.
+pub use camera_pose::Pose;
 pub use certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 pub use cost_kind::CostKind;
 pub use pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
     RansacReport, RansacStop,
 };
-pub use rigid::Pose;
 pub use status::Status;
 
 /// The linear-algebra crate whose types the API takes and returns (`Vector3`, `Matrix3x4`, ...),

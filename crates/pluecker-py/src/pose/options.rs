@@ -9,9 +9,9 @@
 use crate::certificate::PyCertifyOptions;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::options_class;
 use crate::nested::{NestedOptions, Shared};
 use crate::pose::result::extract_pose;
+use crate::properties::options_class;
 use pluecker::pose::{Method, PoseOptions, RansacOptions};
 use pyo3::prelude::*;
 

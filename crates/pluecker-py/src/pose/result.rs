@@ -5,8 +5,8 @@
 
 use crate::camera::PyCamera;
 use crate::certificate::certificate_of;
-use crate::fields::{result_class, Field};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::{result_class, Field};
 use pluecker::chi_square::ResidualTest;
 use pluecker::pose::{PoseDetails, RansacReport, StageReport};
 use pluecker::Primitive;
@@ -264,9 +264,9 @@ impl Field for PyPose {
 }
 
 /// The runner-up of `PoseDetails.second_best`: `(Pose, cost)`.
-struct Runner(Pose, f64);
+struct RunnerUp(Pose, f64);
 
-impl Field for Runner {
+impl Field for RunnerUp {
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
         let pose = PyPose { inner: self.0 }.get(py)?;
         Ok(PyTuple::new(py, [pose, self.1.into_pyobject(py)?.into_any().unbind()])?
@@ -315,7 +315,7 @@ result_class! {
         sigma_px = |d| d.inner.sigma_px;
         /// The cheapest other local minimum with every point in front and its cost `Σ r²` (px²); `None` if none was
         /// found. Within `ambiguity_threshold · σ²` of `cost`, the status is `ambiguous`.
-        second_best = |d| d.inner.second_best.map(|(p, c)| Runner(p, c));
+        second_best = |d| d.inner.second_best.map(|(p, c)| RunnerUp(p, c));
         /// Cost `Σ r²` of a pose with every point behind the camera that fits far better (status `behind_camera`).
         behind_camera_cost = |d| d.inner.behind_camera_cost;
         /// χ² test of the residuals against `sigma_px`; `None` without `options.sigma_px`.

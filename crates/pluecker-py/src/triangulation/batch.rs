@@ -13,9 +13,9 @@
 
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{invalid_argument, shape_error, to_py_err};
-use crate::fields::{result_class, Mask};
 use crate::interrupt::in_chunks;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::{result_class, Mask};
 use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;

@@ -4,8 +4,8 @@
 
 use crate::convert::{points as read_points, points_to_py, Integer, Real};
 use crate::errors::{guarded, invalid_argument};
-use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::result_class;
 use crate::threads::solve;
 use pluecker::testing::number;
 use pluecker::triangulation::fitting::{self, FittedConic, FittedLine, DEFAULT_SIGMA_PX, PAPER_IMAGE_SIZE};
@@ -152,9 +152,11 @@ pub fn lines_from_endpoints<'py>(
             ]
         })
         .collect();
-    use crate::fields::Field;
-    let lines = crate::fields::Array::rows(lines, &[3]).get(py)?.into_bound(py);
-    let covariances = crate::fields::Array::rows(covariances, &[2, 2]).get(py)?.into_bound(py);
+    use crate::properties::Field;
+    let lines = crate::properties::Array::rows(lines, &[3]).get(py)?.into_bound(py);
+    let covariances = crate::properties::Array::rows(covariances, &[2, 2])
+        .get(py)?
+        .into_bound(py);
     Ok((lines, covariances))
 }
 

@@ -10,17 +10,17 @@ use super::batch::{
     self, column, per_observation, rows, sparse_form, unstarted, write_row_major, Cameras, EstimateColumns,
     InlierColumns, PyBatchReport, Sink,
 };
+use super::observation_rows::SortedRows;
 use super::point::views_of;
 use super::report::PyTriangulationReport;
-use super::rows::SortedRows;
 use super::{options_arg, positive_sigma, sigma_variance, PyTriangulationOptions};
 use crate::convert::{
     check_finite, covariances2, optional_real, read_any, read_mask, same_count, shape_string, Integer, Real,
 };
 use crate::errors::{invalid_argument, shape_error};
-use crate::fields::{result_class, Array, Field};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::{result_class, Array, Field};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::interrupt::StopReason;

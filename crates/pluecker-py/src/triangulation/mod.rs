@@ -6,16 +6,16 @@
 pub mod batch;
 pub mod fitting;
 pub mod line;
+pub mod observation_rows;
 pub mod point;
 pub mod quadric;
 pub mod report;
-pub mod rows;
 
 use crate::certificate::PyCertifyOptions;
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
-use crate::fields::options_class;
 use crate::nested::Shared;
+use crate::properties::options_class;
 use pluecker::triangulation::{LineBound, Method, QuadricBound, TriangulationOptions};
 use pyo3::prelude::*;
 

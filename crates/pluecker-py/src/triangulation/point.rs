@@ -13,17 +13,17 @@ use super::batch::{
     self, column, per_observation, rows, sparse_form, unstarted, write_row_major, EstimateColumns, InlierColumns,
     PyBatchReport, ReportRow, Sink,
 };
+use super::observation_rows::SortedRows;
 use super::report::PyTriangulationReport;
-use super::rows::SortedRows;
 use super::{options_arg, PyTriangulationOptions};
 use crate::camera::PyCamera;
 use crate::convert::{check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real};
 use crate::errors::invalid_argument;
 use crate::errors::{shape_error, to_py_err};
-use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::triangulation::point::testing::{
     triangulate_point_observations_into, triangulate_point_observations_views_into,

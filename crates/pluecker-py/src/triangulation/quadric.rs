@@ -7,13 +7,13 @@ use super::batch::{
     self, column, per_observation, rows, sparse_form, unstarted, write_row_major, Cameras, EstimateColumns,
     PyBatchReport, Sink,
 };
+use super::observation_rows::SortedRows;
 use super::report::PyTriangulationReport;
-use super::rows::SortedRows;
 use super::{options_arg, PyTriangulationOptions};
 use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
-use crate::fields::{result_class, Array};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::testing::{
     triangulate_quadric_observations_into as core_quadric_observations, triangulate_quadrics_into as core_quadrics,

@@ -2,8 +2,8 @@
 //! the base class of the point, line and quadric results, which add their estimate.
 
 use crate::certificate::certificate_of;
-use crate::fields::result_class;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::properties::result_class;
 use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;

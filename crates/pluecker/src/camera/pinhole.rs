@@ -10,8 +10,8 @@
 //! The paper's own camera (Phong & Horaud 1995, section 2 and Table 1) has `α_u = fx < 0`: a mirrored
 //! image axis. Nothing here assumes positive focal lengths; only a zero (singular) one is rejected.
 
+use crate::camera_pose::Pose;
 use crate::error::{number, Error, Result};
-use crate::rigid::Pose;
 use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 
 /// Pinhole intrinsics in pixels. `fx` and `fy` may be negative (mirrored axes), never zero.

@@ -21,7 +21,7 @@ use super::lens::Observations;
 use super::linear::faugeras_toscani;
 use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
-use super::result::{assemble, is_finite, status_of_stages, Parts};
+use super::result::{assemble, is_finite, status_of_stages, PipelineOutcome};
 use super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
 use crate::camera::AnyCamera;
 use crate::camera::Camera;
@@ -495,7 +495,7 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
         observations,
         opts,
         started,
-        Parts {
+        PipelineOutcome {
             pose,
             stages,
             status,

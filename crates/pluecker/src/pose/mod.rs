@@ -105,7 +105,7 @@ pub struct PoseOptions {
     /// An extra starting pose for the iterative methods, world frame. It is tried first, and
     /// the default starts too (see `pose::initialization`); the cheapest valid answer wins. Default `None`:
     /// no guess from the user is needed.
-    pub initial_pose: Option<crate::rigid::Pose>,
+    pub initial_pose: Option<crate::camera_pose::Pose>,
     /// Trust-region settings of the algebraic stage: the paper's values (section 4.1), and a step
     /// tolerance of 1e-10 on top of its k.2 tests. When the refinement follows (`refine`), the stage
     /// also stops at steps shorter than [`STEP_TOLERANCE_BEFORE_REFINEMENT`]. `subproblem` is set by
@@ -222,7 +222,7 @@ impl PoseOptions {
         if let Some(certify) = &self.certify {
             certify.validate("certify")?;
         }
-        if let Some(crate::rigid::Pose {
+        if let Some(crate::camera_pose::Pose {
             rotation: r,
             translation: t,
         }) = &self.initial_pose
@@ -279,9 +279,9 @@ pub struct StageReport {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseResult {
     /// The returned pose, `x_cam = R X_world + t` (NaN if the solver failed). Its rotation as a dual
-    /// quaternion, an axis and angle, or a rotation vector: [`crate::rigid::Pose::dual_quaternion`],
-    /// [`crate::rigid::Pose::axis_angle`], [`crate::rigid::Pose::rotation_vector`].
-    pub pose: crate::rigid::Pose,
+    /// quaternion, an axis and angle, or a rotation vector: [`crate::camera_pose::Pose::dual_quaternion`],
+    /// [`crate::camera_pose::Pose::axis_angle`], [`crate::camera_pose::Pose::rotation_vector`].
+    pub pose: crate::camera_pose::Pose,
     /// Whether the answer can be used, and if not why. A certificate requested
     /// ([`PoseOptions::certify`]) that does not hold turns [`Status::Success`] into
     /// [`Status::GapNotClosed`]; every other status takes precedence over it.

@@ -34,7 +34,7 @@ use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix6, SMatrix, SVector, Vector2, Vector3};
 
-pub(crate) use crate::rigid::Pose;
+pub(crate) use crate::camera_pose::Pose;
 
 /// Points per batch of the point kernel. The kernel is written lane by lane over fixed-size arrays so
 /// that the compiler turns each batch into vector instructions (the speed-up:

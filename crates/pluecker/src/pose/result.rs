@@ -20,7 +20,7 @@ use crate::optim::{Objective, Termination};
 use std::time::Instant;
 
 /// What a pipeline hands to [`assemble`].
-pub(crate) struct Parts<'c> {
+pub(crate) struct PipelineOutcome<'c> {
     /// The returned pose, world frame (NaN if the solver failed).
     pub pose: Pose,
     /// Stage reports in order; the last one gave `pose`.
@@ -114,9 +114,9 @@ pub(crate) fn assemble(
     observations: &Observations<'_>,
     opts: &PoseOptions,
     started: Instant,
-    parts: Parts<'_>,
+    parts: PipelineOutcome<'_>,
 ) -> PoseResult {
-    let Parts {
+    let PipelineOutcome {
         pose,
         mut stages,
         status,

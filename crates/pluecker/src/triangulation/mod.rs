@@ -26,7 +26,7 @@
 pub(crate) mod certificate;
 pub(crate) mod conditioning;
 pub mod fitting;
-pub(crate) mod fraction;
+pub(crate) mod fractional_residual;
 pub mod line;
 pub mod point;
 pub mod quadric;

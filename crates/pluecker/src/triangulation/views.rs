@@ -15,8 +15,8 @@
 //! own (distorted) pixels; `P = K [R | t]` is the view of a pinhole camera.
 
 use crate::camera::AnyCamera;
+use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
-use crate::rigid::Pose;
 use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};
 
 /// A known camera with its pose, `x_cam = R X_world + t` (module docs).

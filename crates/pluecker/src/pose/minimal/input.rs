@@ -2,7 +2,7 @@
 //! vectors from "any non-zero multiple" inputs, an object line from its two world points, and the
 //! final check that a pose satisfies the original constraints.
 
-use crate::rigid::Pose;
+use crate::camera_pose::Pose;
 use nalgebra::Vector3;
 
 /// `v / ‖v‖`, or `None` when `v` is zero or not finite.

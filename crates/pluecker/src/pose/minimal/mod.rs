@@ -37,7 +37,7 @@ pub use p3p::p3p;
 use nalgebra::Vector3;
 
 #[doc(no_inline)]
-pub use crate::rigid::Pose;
+pub use crate::camera_pose::Pose;
 
 /// One 2-D/3-D correspondence as a minimal solver sees it (camera-frame image data, world-frame
 /// object data).

@@ -7,7 +7,7 @@ use super::super::correspondences::{Conditioning, Correspondences};
 use super::super::lens::Observations;
 use super::super::refinement::refine_conditioned;
 use super::super::reprojection::Pose;
-use super::super::result::{assemble, status_of_stages, Parts};
+use super::super::result::{assemble, status_of_stages, PipelineOutcome};
 use super::super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport, Status};
 use super::scoring::subset;
 use super::{ransac, RansacOptions, RansacOutcome, RansacStop};
@@ -167,7 +167,7 @@ pub(crate) fn estimate_robust(
         observations,
         opts,
         started,
-        Parts {
+        PipelineOutcome {
             pose,
             stages,
             status,

@@ -29,8 +29,8 @@
 //! model at all (every correspondence an outlier) would run to `max_iterations`.
 
 use super::super::minimal::{solve, Feature};
+use crate::camera_pose::Pose;
 use crate::geometry::quaternion::{exp_so3, rotation_distance};
-use crate::rigid::Pose;
 use crate::rng::Rng;
 use nalgebra::Vector3;
 use std::sync::OnceLock;

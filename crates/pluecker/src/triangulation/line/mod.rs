@@ -56,7 +56,7 @@ use self::residual::{line_view, LineFrame};
 use self::taylor_search::optimal_line_taylor;
 use super::conditioning::{check_views, Similarity};
 use super::fitting::line_from_segment;
-use super::fraction::{self, FractionalResidual};
+use super::fractional_residual::{self, FractionalResidual};
 use super::uncertainty::covariance_of_information;
 use super::views::View;
 use super::{parse_observations, CostKind, LineBound, Method, Report, TriangulationOptions};
@@ -118,7 +118,7 @@ impl LineProblem {
 
     /// Eq. 19 at a world line.
     pub fn cost(&self, world_line: &Vector6<f64>) -> f64 {
-        fraction::cost(&self.views(&Similarity::identity()), world_line)
+        fractional_residual::cost(&self.views(&Similarity::identity()), world_line)
     }
 
     /// The point of a world line closest to the centroid of the camera centres, and the distance `ρ`
@@ -386,11 +386,11 @@ impl Objective<4> for LineObjective<'_> {
     type Point = OrthonormalLine;
 
     fn cost(&self, x: &OrthonormalLine) -> f64 {
-        0.5 * fraction::cost(self.views, &x.to_plucker())
+        0.5 * fractional_residual::cost(self.views, &x.to_plucker())
     }
 
     fn linearize(&self, x: &OrthonormalLine) -> Linearization<4> {
-        fraction::linearize(self.views, &x.to_plucker(), &x.tangent())
+        fractional_residual::linearize(self.views, &x.to_plucker(), &x.tangent())
     }
 
     fn retract(&self, x: &OrthonormalLine, d: &SVector<f64, 4>) -> OrthonormalLine {
@@ -422,7 +422,8 @@ pub(crate) fn local_line(
 pub(crate) fn line_covariance(problem: &LineProblem, chart: &LineChart) -> Option<Matrix4<f64>> {
     chart_covariance(problem, chart, |sim, framed| {
         let views = problem.views(sim);
-        let info = fraction::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
+        let info =
+            fractional_residual::linearize(&views, &framed.line(&Vector4::zeros()), &framed.tangent()).gauss_newton;
         covariance_of_information(&info)
     })
 }

@@ -41,7 +41,7 @@ use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::conditioning::Similarity;
-use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{Report, Status, TriangulationOptions};
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 use std::ops::{Add, Sub};
@@ -377,7 +377,7 @@ fn branching_map(views: &[FractionalResidual<2, 6>]) -> Matrix4<f64> {
     dl[(2, 2)] = -1.0;
     dl[(3, 3)] = -1.0;
     dl[(4, 3)] = 1.0;
-    let h = fraction::linearize(views, &reference, &dl).gauss_newton;
+    let h = fractional_residual::linearize(views, &reference, &dl).gauss_newton;
     match h.cholesky() {
         Some(c) => c
             .l()
@@ -464,7 +464,7 @@ pub(crate) fn optimal_line(
     let mut node_local = opts.local;
     node_local.stopping.max_iterations = NODE_LOCAL_ITERATIONS;
     let g_bounds = vec![Interval::new(f64::NEG_INFINITY, f64::INFINITY); views.len()];
-    let frame_cost = fraction::cost(&views, &frame_local);
+    let frame_cost = fractional_residual::cost(&views, &frame_local);
     let incumbent = frame_cost * (1.0 + 1e-9);
     let mut oracle = LineOracle {
         views: &views,

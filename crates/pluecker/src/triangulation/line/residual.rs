@@ -20,7 +20,7 @@
 //! Without covariances the identity is used, weighing an angle of 1/D rad like 1 px.
 
 use crate::geometry::plucker;
-use crate::triangulation::fraction::FractionalResidual;
+use crate::triangulation::fractional_residual::FractionalResidual;
 use nalgebra::{Matrix2, Matrix2x3, Matrix3x4, SMatrix, Vector2, Vector3, Vector6};
 
 /// `D`: the distance in pixels between an observed line and the origin of its frame (module docs).

@@ -16,7 +16,7 @@ use super::{linear_line, triangulate_line_views, LineProblem, LineTriangulation}
 use crate::consensus::{self, msac, Estimator, Stats};
 use crate::error::Result;
 use crate::triangulation::conditioning::Similarity;
-use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::fractional_residual::{self, FractionalResidual};
 #[cfg(doc)]
 use crate::triangulation::point::robust::MAX_PAIRS;
 use crate::triangulation::point::robust::{pairs, MAX_ROUNDS};
@@ -38,7 +38,7 @@ fn subproblem(problem: &LineProblem, keep: impl Iterator<Item = usize> + Clone) 
 fn squared_errors(views: &[FractionalResidual<2, 6>], line: &Vector6<f64>) -> Vec<f64> {
     views
         .iter()
-        .map(|v| fraction::cost(std::slice::from_ref(v), line))
+        .map(|v| fractional_residual::cost(std::slice::from_ref(v), line))
         .collect()
 }
 

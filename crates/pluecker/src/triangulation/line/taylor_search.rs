@@ -37,7 +37,7 @@ use crate::global::taylor_bound::{bound_over_box, cost_and_gradient, ROUNDING_MA
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, optimal_start};
 use crate::triangulation::conditioning::Similarity;
-use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{Certificate, CertificateKind, Report, TriangulationOptions};
 use nalgebra::{Vector4, Vector6};
 
@@ -66,7 +66,7 @@ impl TaylorOracle<'_> {
         let start = OrthonormalLine::from_plucker(&self.chart.line(w))?;
         let objective = LineObjective { views: self.views };
         let line = trust_region::minimize(&objective, start, &self.local).0.to_plucker();
-        let cost = fraction::cost(self.views, &line);
+        let cost = fractional_residual::cost(self.views, &line);
         (cost.is_finite() && self.chart.is_clear(&line)).then_some((cost, line))
     }
 }
@@ -147,7 +147,7 @@ pub(crate) fn optimal_line_taylor(
     let sim = Similarity::of_cameras(&problem.cameras);
     let views = problem.views(&sim);
     let frame_local = plucker::transform(&sim.matrix(), local);
-    let cost = fraction::cost(&views, &frame_local);
+    let cost = fractional_residual::cost(&views, &frame_local);
     // Every line that can improve on 𝓛̂ has ‖z‖² ≤ f(𝓛̂) (module docs).
     let chart = TwoViewChart::new(problem, &sim, &views, &frame_local, cost)?;
     let mut local_opts = opts.local;
@@ -288,7 +288,7 @@ mod tests {
                     Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 10f64.powf(rng.uniform_in(-3.0, -1.5));
                 let world = plucker::from_points(&a, &(b + off));
                 let frame_line = plucker::transform(&sim.matrix(), &world);
-                let cost = fraction::cost(&views, &frame_line);
+                let cost = fractional_residual::cost(&views, &frame_line);
                 let Some(chart) = TwoViewChart::new(&problem, &sim, &views, &frame_line, cost) else {
                     continue;
                 };
@@ -433,7 +433,7 @@ mod tests {
                 let line = trust_region::minimize(&LineObjective { views: &views }, start, &opts.local)
                     .0
                     .to_plucker();
-                let cost = fraction::cost(&views, &line);
+                let cost = fractional_residual::cost(&views, &line);
                 if cost.is_finite() {
                     minima.push((cost, line));
                 }
@@ -587,14 +587,15 @@ mod tests {
             let best = trust_region::minimize(&LineObjective { views: &views }, start, &opts.local)
                 .0
                 .to_plucker();
-            let Some(at_minimum) = TwoViewChart::new(&problem, &sim, &views, &best, fraction::cost(&views, &best))
+            let Some(at_minimum) =
+                TwoViewChart::new(&problem, &sim, &views, &best, fractional_residual::cost(&views, &best))
             else {
                 continue;
             };
             let mut rng = Rng::new(seed);
             let step = Vector4::from_fn(|_, _| rng.normal()) * 10f64.powf(rng.uniform_in(-3.0, 0.0));
             let line = at_minimum.line(&step);
-            let cost = fraction::cost(&views, &line);
+            let cost = fractional_residual::cost(&views, &line);
             let Some(chart) = TwoViewChart::new(&problem, &sim, &views, &line, cost) else {
                 continue;
             };

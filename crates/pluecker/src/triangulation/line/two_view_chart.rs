@@ -34,7 +34,7 @@ use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::Region;
 use crate::global::taylor_bound::{Quadratic, QuadraticRatio};
 use crate::triangulation::conditioning::Similarity;
-use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::line::residual::LINE_FRAME_DISTANCE;
 use crate::triangulation::views;
 use nalgebra::{Matrix3x4, Matrix4, Matrix4x2, SMatrix, Vector4, Vector6};
@@ -317,7 +317,7 @@ fn select_pair(
     let tangent = x.tangent();
     let info: Vec<Matrix4<f64>> = residuals
         .iter()
-        .map(|r| fraction::linearize(std::slice::from_ref(r), line, &tangent).gauss_newton)
+        .map(|r| fractional_residual::linearize(std::slice::from_ref(r), line, &tangent).gauss_newton)
         .collect();
     let total: Matrix4<f64> = info.iter().sum();
     let mut candidates: Vec<usize> = (0..info.len()).collect();
@@ -389,7 +389,7 @@ mod tests {
             let sim = Similarity::of_cameras(&problem.cameras);
             let line = plucker::transform(&sim.matrix(), &plucker::from_points(&a, &b));
             let residuals = problem.views(&sim);
-            let bound = 4.0 * fraction::cost(&residuals, &line);
+            let bound = 4.0 * fractional_residual::cost(&residuals, &line);
             let Some(chart) = TwoViewChart::new(&problem, &sim, &residuals, &line, bound) else {
                 continue;
             };
@@ -397,7 +397,7 @@ mod tests {
             let tangent = OrthonormalLine::from_plucker(&line).unwrap().tangent();
             let info: Vec<Matrix4<f64>> = residuals
                 .iter()
-                .map(|r| fraction::linearize(std::slice::from_ref(r), &line, &tangent).gauss_newton)
+                .map(|r| fractional_residual::linearize(std::slice::from_ref(r), &line, &tangent).gauss_newton)
                 .collect();
             let total: Matrix4<f64> = info.iter().sum();
             let score = |i: usize, j: usize| ((info[i] + info[j]).try_inverse().unwrap() * total).trace();
@@ -434,7 +434,7 @@ mod tests {
         let sim = Similarity::of_cameras(&cameras);
         let truth = plucker::transform(&sim.matrix(), &plucker::from_points(&a, &b));
         let residuals = problem.views(&sim);
-        let cost = fraction::cost(&residuals, &truth);
+        let cost = fractional_residual::cost(&residuals, &truth);
         let chart = TwoViewChart::new(&problem, &sim, &residuals, &truth, 4.0 * cost).expect("a pair");
         assert!(chart.line(&Vector4::zeros()).normalize().dot(&truth.normalize()).abs() > 1.0 - 1e-10);
         // The clearance is CENTRE_CLEARANCE times the local line's distance from each centre.

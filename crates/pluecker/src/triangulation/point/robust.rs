@@ -290,12 +290,12 @@ mod tests {
 
     /// A track whose own residuals are its first-order ones whitened by `scale[j]` more (a stand-in
     /// for lenses whose exact residuals differ from the first-order ones).
-    struct Scaled {
+    struct RewhitenedTrack {
         first: Vec<PointView>,
         own: Vec<PointView>,
     }
 
-    impl RobustTrack for Scaled {
+    impl RobustTrack for RewhitenedTrack {
         fn first_order(&self) -> &[PointView] {
             &self.first
         }
@@ -355,7 +355,7 @@ mod tests {
                 .map(|j| PointView::new(&cameras[j], &pixels[j], &(Matrix2::identity() * scale[j])))
                 .collect()
         };
-        let track = Scaled {
+        let track = RewhitenedTrack {
             first: views([1.0; 4]),
             own: views([0.1, 0.1, 1.0, 1.0]),
         };
@@ -377,7 +377,7 @@ mod tests {
     fn a_pair_that_fits_beats_a_point_with_a_single_inlier() {
         // Views 0-1 see the origin with residuals near τ: their pair fits, MSAC score ≈ 2·3.6² + τ².
         // View 2's observation is 800 px off, but its own residuals are 200x smaller than its
-        // first-order ones (`Scaled`): a pair with view 2 gives a point where view 2 alone fits,
+        // first-order ones (`RewhitenedTrack`): a pair with view 2 gives a point where view 2 alone fits,
         // scoring ≈ 2τ² + small, below the fitting pair. Preferring two inliers keeps the track.
         let tau2 = 16.0;
         let angles = [0.0f64, 1.0, 2.2];
@@ -392,7 +392,7 @@ mod tests {
                 .map(|j| PointView::new(&cameras[j], &pixels[j], &(Matrix2::identity() * scale[j])))
                 .collect()
         };
-        let track = Scaled {
+        let track = RewhitenedTrack {
             first: views([1.0; 3]),
             own: views([1.0, 1.0, 0.005]),
         };

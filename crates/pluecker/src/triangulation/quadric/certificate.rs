@@ -30,7 +30,7 @@
 
 use crate::geometry::quadric::vec_to_sym4;
 use crate::global::convexity::{minorant, whitening, RatioView};
-use crate::triangulation::fraction::FractionalResidual;
+use crate::triangulation::fractional_residual::FractionalResidual;
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
 
 /// The whitened chart of the module docs around the stacked frame dual quadric `reference`

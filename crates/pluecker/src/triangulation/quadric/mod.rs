@@ -47,7 +47,7 @@ use self::optimal::optimal_quadric;
 use self::residual::{quadric_view, ConicFrame};
 use super::conditioning::{check_views, Similarity};
 use super::fitting::fit_conic;
-use super::fraction::{self, FractionalResidual};
+use super::fractional_residual::{self, FractionalResidual};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};
 use super::views::View;
 use super::{parse_observations, CostKind, Method, Report, Status, TriangulationOptions};
@@ -108,7 +108,7 @@ impl QuadricProblem {
 
     /// Eq. 19 at a world dual quadric.
     pub fn cost(&self, dual: &Matrix4<f64>) -> f64 {
-        fraction::cost(&self.views(&Similarity::identity()), &sym4_to_vec(dual))
+        fractional_residual::cost(&self.views(&Similarity::identity()), &sym4_to_vec(dual))
     }
 
     /// The conditioned frame of an ellipsoid: origin at its centre, unit its largest semi-axis (at
@@ -411,11 +411,11 @@ impl Objective<9> for QuadricObjective<'_> {
     type Point = EllipsoidPoint;
 
     fn cost(&self, x: &EllipsoidPoint) -> f64 {
-        0.5 * fraction::cost(self.views, &sym4_to_vec(&x.dual()))
+        0.5 * fractional_residual::cost(self.views, &sym4_to_vec(&x.dual()))
     }
 
     fn linearize(&self, x: &EllipsoidPoint) -> Linearization<9> {
-        fraction::linearize(self.views, &sym4_to_vec(&x.dual()), &x.tangent())
+        fractional_residual::linearize(self.views, &sym4_to_vec(&x.dual()), &x.tangent())
     }
 
     fn retract(&self, x: &EllipsoidPoint, d: &SVector<f64, 9>) -> EllipsoidPoint {
@@ -470,7 +470,7 @@ fn unflattened(views: &[FractionalResidual<5, 10>], x: &EllipsoidPoint) -> Optio
     (0..3).filter(|&k| x.s[k].abs() <= FLAT * largest).find_map(|k| {
         let column = x.h().column(k).into_owned();
         let tangent = SMatrix::<f64, 10, 1>::from_column_slice(sym4_to_vec(&(column * column.transpose())).as_slice());
-        let lin = fraction::linearize(views, &z, &tangent);
+        let lin = fractional_residual::linearize(views, &z, &tangent);
         let (slope, curvature) = (lin.gradient[0], lin.gauss_newton[(0, 0)]);
         (slope < 0.0 && curvature > 0.0).then(|| {
             let mut thin = *x;
@@ -492,7 +492,8 @@ pub(crate) fn quadric_covariance(problem: &QuadricProblem, e: &Ellipsoid) -> Opt
     let framed: CentreShape = centre_shape(&transform_dual(&sim.matrix(), &dual))?;
     let views = problem.views(&sim);
     let tangent = centre_shape_tangent(&Vector3::new(framed[0], framed[1], framed[2]));
-    let info = fraction::linearize(&views, &sym4_to_vec(&dual_of_centre_shape(&framed)), &tangent).gauss_newton;
+    let info =
+        fractional_residual::linearize(&views, &sym4_to_vec(&dual_of_centre_shape(&framed)), &tangent).gauss_newton;
     let framed_cov = covariance_of_information(&info)?;
     let unit = 1.0 / sim.scale;
     let d = CentreShape::from_fn(|k, _| if k < 3 { unit } else { unit * unit });

@@ -33,7 +33,7 @@ use crate::global::socp::{Affine, Socp, SocpStatus};
 use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
-use crate::triangulation::fraction::{self, FractionalResidual};
+use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{Certificate, QuadricBound, Report, Status, TriangulationOptions};
 use nalgebra::SVector;
 
@@ -190,7 +190,7 @@ pub(crate) fn optimal_quadric(
         return (*local, report);
     }
     let views: Vec<FractionalResidual<5, 10>> = raw_views.iter().map(|v| v.oriented(&reference)).collect();
-    let frame_cost = fraction::cost(&views, &reference);
+    let frame_cost = fractional_residual::cost(&views, &reference);
     let reach = problem
         .cameras
         .iter()

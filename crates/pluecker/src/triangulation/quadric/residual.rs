@@ -13,7 +13,7 @@
 //! [`crate::triangulation::fitting::fit_conic`]'s; without covariances the identity is used.
 
 use crate::geometry::quadric::{conic_camera, sym3_to_vec, vec_to_sym3, Ellipse};
-use crate::triangulation::fraction::FractionalResidual;
+use crate::triangulation::fractional_residual::FractionalResidual;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector, Vector2, Vector6};
 
 /// A 5-vector: the conic residual.

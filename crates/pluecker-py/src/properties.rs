@@ -181,7 +181,7 @@ macro_rules! result_class {
             /// Puts this class's own properties into `d`, in their `to_dict` form.
             #[allow(unused_variables)]
             pub(crate) fn fill_dict(&self, py: Python<'_>, d: &Bound<'_, pyo3::types::PyDict>) -> PyResult<()> {
-                $( { let $this = self; d.set_item(stringify!($name), $crate::fields::Field::plain($value, py)?)?; } )*
+                $( { let $this = self; d.set_item(stringify!($name), $crate::properties::Field::plain($value, py)?)?; } )*
                 Ok(())
             }
         }
@@ -194,7 +194,7 @@ macro_rules! result_class {
                 #[allow(non_snake_case)]
                 fn $name(&self, py: Python<'_>) -> PyResult<PyObject> {
                     let $this = self;
-                    $crate::fields::Field::get($value, py)
+                    $crate::properties::Field::get($value, py)
                 }
             )*
 
@@ -209,11 +209,11 @@ macro_rules! result_class {
 
             /// `(name, type, doc)` of this class's own properties (the stub is generated from them).
             #[classattr]
-            fn __fields__() -> Vec<$crate::fields::FieldDoc> {
+            fn __fields__() -> Vec<$crate::properties::FieldDoc> {
                 vec![$((
                     stringify!($name),
-                    $crate::fields::stub_of(|$this: &$class| $value),
-                    $crate::fields::doc(&[$($doc),+]),
+                    $crate::properties::stub_of(|$this: &$class| $value),
+                    $crate::properties::doc(&[$($doc),+]),
                 )),*]
             }
 
@@ -256,7 +256,7 @@ macro_rules! options_class {
                 #[getter]
                 fn $name(&self, py: Python<'_>) -> PyResult<PyObject> {
                     let $o = self;
-                    $crate::fields::Field::get($get, py)
+                    $crate::properties::Field::get($get, py)
                 }
 
                 #[setter($name)]
@@ -279,17 +279,17 @@ macro_rules! options_class {
             /// Plain-Python form: every option by name (`type(self)(**options.to_dict())` is equal to it).
             fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
                 let d = pyo3::types::PyDict::new(py);
-                $( { let $o = self; d.set_item(stringify!($name), $crate::fields::Field::plain($get, py)?)?; } )*
+                $( { let $o = self; d.set_item(stringify!($name), $crate::properties::Field::plain($get, py)?)?; } )*
                 Ok(d)
             }
 
             /// `(name, type, doc)` of the options (the stub is generated from them).
             #[classattr]
-            fn __fields__() -> Vec<$crate::fields::FieldDoc> {
+            fn __fields__() -> Vec<$crate::properties::FieldDoc> {
                 vec![$((
                     stringify!($name),
-                    $crate::fields::stub_of(|$o: &$class| $get),
-                    $crate::fields::doc(&[$($doc),+]),
+                    $crate::properties::stub_of(|$o: &$class| $get),
+                    $crate::properties::doc(&[$($doc),+]),
                 )),*]
             }
 
