@@ -190,7 +190,7 @@ def test_random_scene_is_deterministic_and_in_front_of_the_camera(seed):
 @pytest.mark.parametrize("method", ALGEBRAIC_METHODS)
 def test_iteration_cap_is_reported_as_not_converged(method, seed):
     scene = pluecker.random_scene("general", 30, 0, seed=seed)
-    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False, method=method))
+    result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(trust_region={"stopping": {"max_iterations": 1}}, levenberg_marquardt={"stopping": {"max_iterations": 1}}, newton={"max_iterations": 1}, refine=False, method=method))
     assert result.details.stages[0].termination == "max_iterations"
     assert result.status == "not_converged"
     assert (result.status == "success") is False
@@ -201,9 +201,9 @@ def test_initial_pose_is_used(seed):
     # and the user's start is one of the runs the pipeline picks the best answer from.
     scene = pluecker.random_scene("general", 20, 0, seed=seed)
     args = (scene["camera"], scene["points2d"], scene["points3d"])
-    capped = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False))
+    capped = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region={"stopping": {"max_iterations": 1}}, levenberg_marquardt={"stopping": {"max_iterations": 1}}, newton={"max_iterations": 1}, refine=False))
     assert capped.status == "not_converged"
-    result = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region_max_iterations=1, levenberg_marquardt_max_iterations=1, newton_max_iterations=1, refine=False, initial_pose=(scene["R"], scene["t"])))
+    result = pluecker.estimate_pose(*args, options=pluecker.PoseOptions(trust_region={"stopping": {"max_iterations": 1}}, levenberg_marquardt={"stopping": {"max_iterations": 1}}, newton={"max_iterations": 1}, refine=False, initial_pose=(scene["R"], scene["t"])))
     assert result.status == "success", f"seed={seed}"
     # Zero up to the round-off of the Gram-matrix form of the algebraic cost.
     assert result.details.stages[-1].cost_kind == "algebraic" and result.details.stages[-1].final_cost < 1e-12

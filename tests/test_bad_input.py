@@ -258,12 +258,16 @@ def test_bad_penalty(scene, penalty):
         pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=pluecker.PoseOptions(penalty=penalty))
 
 
-@pytest.mark.parametrize("option", ["trust_region_max_iterations", "levenberg_marquardt_max_iterations",
-                                    "newton_max_iterations", "refinement_max_iterations"])
+@pytest.mark.parametrize("cls, option", [(pluecker.StoppingCriteria, "max_iterations"),
+                                         (pluecker.LevenbergMarquardtOptions, "max_rejections")])
 @pytest.mark.parametrize("value", [0, -3])
-def test_bad_iteration_caps(option, value):
+def test_bad_iteration_caps(cls, option, value):
     with raises(InvalidOptionError, match=f"{option}: must be an integer from 1 to 18446744073709551615, got {value}"):
-        pluecker.PoseOptions(**{option: value})
+        cls(**{option: value})
+    # Nested as in the core: the pose's solvers hold their stopping tests.
+    with raises(InvalidOptionError, match=f"{option}: must be an integer from 1"):
+        pluecker.PoseOptions(**({"refinement": {"stopping": {option: value}}} if option == "max_iterations"
+                                else {"levenberg_marquardt": {option: value}}))
 
 
 def test_rotation_arguments_must_be_rotations(scene):

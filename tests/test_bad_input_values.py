@@ -30,9 +30,8 @@ def stereo(X=(0.2, -0.1, 5.0)):
 
 #: Integer options of the pose: (options class, field) → smallest value.
 POSE_INTEGERS = {
-    (pluecker.PoseOptions, "trust_region_max_iterations"): 1,
-    (pluecker.PoseOptions, "newton_max_iterations"): 1,
-    (pluecker.PoseOptions, "refinement_max_iterations"): 1,
+    (pluecker.StoppingCriteria, "max_iterations"): 1,
+    (pluecker.LevenbergMarquardtOptions, "max_rejections"): 1,
     (pluecker.CertifyOptions, "max_nodes"): 1,
     (pluecker.RansacOptions, "max_iterations"): 1,
     (pluecker.RansacOptions, "seed"): 0,
@@ -56,8 +55,10 @@ def test_an_integer_option_up_to_2_64_is_accepted(scene, option):
     for value in (2**63, 2**64 - 1):
         given = cls(**{name: value})
         assert getattr(given, name) == value
-        if cls is pluecker.PoseOptions:
-            options, ransac = given, pluecker.RansacOptions()
+        if cls is pluecker.StoppingCriteria:
+            options, ransac = pluecker.PoseOptions(newton=given, refinement={"stopping": given.to_dict()}), None
+        elif cls is pluecker.LevenbergMarquardtOptions:
+            options, ransac = pluecker.PoseOptions(levenberg_marquardt=given, method="levenberg-marquardt"), None
         elif cls is pluecker.CertifyOptions:
             options, ransac = pluecker.PoseOptions(certify=given), None
         else:
@@ -74,7 +75,7 @@ def test_an_integer_option_up_to_2_64_is_accepted(scene, option):
 
 
 def test_numpy_integers_are_integers(scene):
-    options = pluecker.PoseOptions(trust_region_max_iterations=np.int64(50))
+    options = pluecker.PoseOptions(trust_region={"stopping": {"max_iterations": np.int64(50)}})
     ransac = pluecker.RansacOptions(seed=np.uint64(2**64 - 1), min_inliers=np.int32(6))
     options.ransac = ransac
     result = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], options=options)
@@ -106,8 +107,10 @@ def test_other_integer_arguments_out_of_range(scene, call):
 
 
 NUMBER_OPTIONS = [(pluecker.PoseOptions, name) for name in
-                  ("penalty", "sigma_px", "ambiguity_threshold", "trust_region_max_iterations",
-                   "refinement_max_iterations")] + \
+                  ("penalty", "sigma_px", "ambiguity_threshold")] + \
+                 [(pluecker.StoppingCriteria, name) for name in ("max_iterations", "step_tolerance")] + \
+                 [(pluecker.TrustRegionOptions, name) for name in ("initial_radius", "accept_ratio")] + \
+                 [(pluecker.LevenbergMarquardtOptions, name) for name in ("initial_damping", "max_rejections")] + \
                  [(pluecker.CertifyOptions, name) for name in ("max_relative_gap", "max_nodes")] + \
                  [(pluecker.RansacOptions, name) for name in
                   ("point_threshold", "line_threshold", "confidence", "time_budget", "max_iterations", "seed",
@@ -148,8 +151,8 @@ def test_a_bool_is_not_a_number_anywhere(call, name):
 
 
 def test_a_float_is_not_an_integer(scene):
-    with pytest.raises(TypeError, match="^trust_region_max_iterations: "):
-        pluecker.PoseOptions(trust_region_max_iterations=5.0)
+    with pytest.raises(TypeError, match="^max_iterations: "):
+        pluecker.StoppingCriteria(max_iterations=5.0)
 
 
 # --- visible: a boolean mask ----------------------------------------------------------------------

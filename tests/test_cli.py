@@ -61,7 +61,7 @@ def test_pose_accepts_K_method_and_options(tmp_path, capsys, seed):
     doc["camera"] = {"K": scene["camera"].K.tolist()}
     del doc["lines2d"], doc["lines3d"]
     doc["method"] = "levenberg-marquardt"
-    doc["options"] = {"penalty": 50.0, "normalize": True, "levenberg_marquardt_max_iterations": 100}
+    doc["options"] = {"penalty": 50.0, "normalize": True, "levenberg_marquardt": {"stopping": {"max_iterations": 100}}}
     # The command-line flags win over the file.
     assert main(["pose", write(tmp_path, doc), "--method", "rotation-then-translation", "--no-refine"]) == 0
     out = json.loads(capsys.readouterr().out)

@@ -149,20 +149,21 @@ def pose_problems(draw):
     return camera, arrays, False
 
 
-POSE_FIELDS = ["penalty", "trust_region_max_iterations", "refinement_max_iterations", "sigma_px",
-               "ambiguity_threshold"]
+POSE_FIELDS = ["penalty", "sigma_px", "ambiguity_threshold"]
+#: Fields of the refinement's stopping tests (``options.refinement.stopping``), nested as in the core.
+STOPPING_FIELDS = ["step_tolerance"]
 CERTIFY_FIELDS = ["max_relative_gap", "max_nodes"]
 RANSAC_FIELDS = ["seed", "min_inliers", "point_threshold", "confidence", "time_budget", "max_iterations"]
-INTEGER_FIELDS = {"trust_region_max_iterations", "refinement_max_iterations", "seed", "min_inliers", "max_iterations",
+INTEGER_FIELDS = {"seed", "min_inliers", "max_iterations",
                   "max_nodes"}
 
 
 @given(pose_problems(), st.sampled_from(pluecker.METHODS), st.booleans(), st.booleans(),
-       st.dictionaries(st.sampled_from(POSE_FIELDS + RANSAC_FIELDS + CERTIFY_FIELDS), st.one_of(reals(), integers()),
+       st.dictionaries(st.sampled_from(POSE_FIELDS + RANSAC_FIELDS + CERTIFY_FIELDS + STOPPING_FIELDS), st.one_of(reals(), integers()),
                        max_size=2))
 def test_estimate_pose(problem, method, robust, certify, fields):
     camera, arrays, well_typed = problem
-    for key in ("trust_region_max_iterations", "refinement_max_iterations", "max_iterations", "max_nodes"):
+    for key in ("max_iterations", "max_nodes"):
         if isinstance(fields.get(key), int) and fields[key] > 10**4:
             fields[key] = 10**4  # a valid but huge cap only costs time
     if isinstance(fields.get("time_budget"), float) and fields["time_budget"] > 1.0:
@@ -174,6 +175,9 @@ def test_estimate_pose(problem, method, robust, certify, fields):
         certify_options = pluecker.CertifyOptions(**{k: v for k, v in fields.items() if k in CERTIFY_FIELDS})
         options = pluecker.PoseOptions(certify=certify_options if certify else None,
                                        **{k: v for k, v in fields.items() if k in POSE_FIELDS})
+        stopping = {k: v for k, v in fields.items() if k in STOPPING_FIELDS}
+        if stopping:
+            options.refinement.stopping = pluecker.StoppingCriteria(**stopping)
         ransac = pluecker.RansacOptions(**{k: v for k, v in fields.items() if k in RANSAC_FIELDS})
         options.ransac = ransac if robust else None
         if method is not None:

@@ -139,7 +139,7 @@ class PoseOptions:
     and ``certify`` are held by reference: ``options.certify.max_nodes = 10`` takes effect."""
 
     # fields of PoseOptions (generated: python -m pluecker._stubgen)
-    def __new__(cls, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region_max_iterations: int = 200, levenberg_marquardt_max_iterations: int = 200, newton_max_iterations: int = 50, refinement_max_iterations: int = 50, sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, ransac: Optional[RansacOptions] = None, certify: Optional[CertifyOptions] = None) -> "PoseOptions": ...
+    def __new__(cls, *, method: str = 'trust-region', penalty: float = 50.0, normalize: bool = True, refine: bool = True, initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]] = None, trust_region: TrustRegionOptions = ..., levenberg_marquardt: LevenbergMarquardtOptions = ..., newton: StoppingCriteria = ..., refinement: TrustRegionOptions = ..., sigma_px: Optional[float] = None, ambiguity_threshold: float = 9.0, ransac: Optional[RansacOptions] = None, certify: Optional[CertifyOptions] = None) -> "PoseOptions": ...
     __fields__: ClassVar[List[Tuple[str, str, str]]]
     method: str
     """Estimator, one of `METHODS`."""
@@ -151,14 +151,14 @@ class PoseOptions:
     """Follow the estimator with a minimisation of the reprojection error in pixels."""
     initial_pose: Optional[Tuple[NDArray[np.float64], NDArray[np.float64]]]
     """An extra starting pose `(R, t)`, tried first besides the default starts; `None`: no guess needed."""
-    trust_region_max_iterations: int
-    """Iteration cap of the trust-region methods' algebraic stage."""
-    levenberg_marquardt_max_iterations: int
-    """Iteration cap of method `'levenberg-marquardt'`."""
-    newton_max_iterations: int
-    """Iteration cap of method `'newton'`."""
-    refinement_max_iterations: int
-    """Iteration cap of the reprojection refinement."""
+    trust_region: TrustRegionOptions
+    """The trust-region solver of the algebraic stage (methods `trust-region`, `trust-region-exact`). Held by reference."""
+    levenberg_marquardt: LevenbergMarquardtOptions
+    """The solver of method `'levenberg-marquardt'`. Held by reference."""
+    newton: StoppingCriteria
+    """The stopping tests of method `'newton'`. Held by reference."""
+    refinement: TrustRegionOptions
+    """The trust-region minimisation of the reprojection error (`refine`). Held by reference."""
     sigma_px: Optional[float]
     """Pixel noise σ of every image point and endpoint, for the covariance; `None`: estimated from the residuals."""
     ambiguity_threshold: float
@@ -212,6 +212,68 @@ class Certificate:
     """Nodes of the search (0 for a convexity test)."""
     solver_iterations: int
     """Conic-solver iterations summed over the nodes."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+@final
+class StoppingCriteria:
+    """Stopping tests and iteration cap of a solver (the core's ``StoppingCriteria``), nested in
+    :class:`TrustRegionOptions`, :class:`LevenbergMarquardtOptions` and ``PoseOptions.newton``."""
+
+    # fields of StoppingCriteria (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
+    gradient_tolerance: float
+    """Stop when the gradient's largest entry is at most this."""
+    cost_tolerance: float
+    """Stop when the cost is at most this."""
+    step_tolerance: float
+    """Stop when an accepted step is this small relative to the tangent step size."""
+    max_iterations: int
+    """Iteration cap."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+@final
+class TrustRegionOptions:
+    """Options of the trust-region solver (Phong & Horaud 1995, section 4.1; the core's
+    ``TrustRegionOptions``): ``PoseOptions.trust_region`` and ``PoseOptions.refinement``."""
+
+    # fields of TrustRegionOptions (generated: python -m pluecker._stubgen)
+    def __new__(cls, *, subproblem: str = 'hebden', hessian_shift: float = 0.001, initial_radius: float = 1.0, accept_ratio: float = 0.25, expand_ratio: float = 0.75, radius_tolerance: float = 1e-12, stopping: StoppingCriteria = ...) -> "TrustRegionOptions": ...
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
+    subproblem: str
+    """Subproblem solver: `hebden` (Gauss-Newton Hessian shifted by `hessian_shift`, the paper's
+    step, Appendix A) or `more_sorensen` (exact Hessian, section 4.2).
+    """
+    hessian_shift: float
+    """α in `H' = JᵀJ + αI` (step k.3)."""
+    initial_radius: float
+    """Initial trust radius δ₀."""
+    accept_ratio: float
+    """Acceptance threshold r on the ratio of eq. 28 (paper: r ∈ [0.1, 0.3])."""
+    expand_ratio: float
+    """Expansion threshold s (paper: s ∈ [0.5, 0.8])."""
+    radius_tolerance: float
+    """Stop when the trust radius δ is at most this (the ε_δ of step k.2)."""
+    stopping: StoppingCriteria
+    """The other stopping tests of step k.2 and the iteration cap. Held by reference."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+@final
+class LevenbergMarquardtOptions:
+    """Options of the Levenberg-Marquardt solver (Phong & Horaud 1995, section 4.2; the core's
+    ``LevenbergMarquardtOptions``): ``PoseOptions.levenberg_marquardt``."""
+
+    # fields of LevenbergMarquardtOptions (generated: python -m pluecker._stubgen)
+    def __new__(cls, *, initial_damping: float = 0.001, max_rejections: int = 40, stopping: StoppingCriteria = ...) -> "LevenbergMarquardtOptions": ...
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
+    initial_damping: float
+    """Initial damping, relative to the largest diagonal entry of `JᵀJ`."""
+    max_rejections: int
+    """Failed steps in a row after which the method gives up."""
+    stopping: StoppingCriteria
+    """Stopping tests and iteration cap. Held by reference."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 

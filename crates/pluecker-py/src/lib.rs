@@ -21,6 +21,7 @@ mod exit_deadline;
 mod interrupt;
 mod lens_camera;
 mod nested;
+mod optim;
 mod pickle;
 mod pose;
 mod properties;
@@ -67,6 +68,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // Pose.
     m.add_class::<PyPoseOptions>()?;
     m.add_class::<PyRansacOptions>()?;
+    m.add_class::<optim::PyTrustRegionOptions>()?;
+    m.add_class::<optim::PyLevenbergMarquardtOptions>()?;
+    m.add_class::<optim::PyStoppingCriteria>()?;
     m.add_class::<PyPose>()?;
     m.add_class::<PyPoseDetails>()?;
     m.add_class::<PyPoseResult>()?;

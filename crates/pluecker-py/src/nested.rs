@@ -18,6 +18,11 @@ pub(crate) trait NestedOptions: PyClass + Clone + Default + PartialEq + Into<PyC
 pub(crate) struct Shared<T: PyClass>(Py<T>);
 
 impl<T: NestedOptions> Shared<T> {
+    /// A new object holding `value`.
+    pub(crate) fn new(value: T) -> Self {
+        Python::with_gil(|py| Shared(Py::new(py, value).expect("a Python object")))
+    }
+
     /// The object's fields now (a copy).
     pub(crate) fn read(&self) -> T {
         Python::with_gil(|py| self.0.borrow(py).clone())

@@ -263,7 +263,15 @@ macro_rules! options_class {
                 // `del options.x` is pyo3's AttributeError; `options.x = None` resets an optional field.
                 fn [<set_ $name>](&mut self, value: &Bound<'_, PyAny>) -> PyResult<()> {
                     let $v: $ty = value.extract().map_err(|e: PyErr| {
-                        pyo3::exceptions::PyTypeError::new_err(format!("{}: {}", stringify!($name), e.value(value.py())))
+                        let py = value.py();
+                        let message = format!("{}: {}", stringify!($name), e.value(py));
+                        // A nested options object given as a dict keeps its own error's kind
+                        // (`InvalidOptionError` for a value out of range), named from the outside in.
+                        if e.is_instance_of::<$crate::errors::PlueckerError>(py) {
+                            PyErr::from_type(e.get_type(py), message)
+                        } else {
+                            pyo3::exceptions::PyTypeError::new_err(message)
+                        }
                     })?;
                     let mut next = self.clone();
                     {

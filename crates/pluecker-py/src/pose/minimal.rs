@@ -108,7 +108,7 @@ pub fn p3l<'py>(
 /// Minimises the reprojection error (pixels for points, endpoint-to-line distances for segments) from
 /// the pose `(R, t)` with the trust region of Phong & Horaud 1995, section 4.1, and returns the pose
 /// reached and its stage report: `(R, t, PoseStage)`. `options`: `PoseOptions` (its `normalize` and
-/// `refinement_max_iterations` are used; `None`: the defaults).
+/// `refinement` are used; `None`: the defaults).
 #[pyfunction]
 #[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, *, options = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]

@@ -2,14 +2,17 @@
 //! with the same names, the same nesting and the same defaults (their `Default`), settable from
 //! Python and checked by the core's `validate` as they are set.
 //!
-//! `PoseOptions.ransac` (a `RansacOptions` or `None`) and `PoseOptions.certify` (a `CertifyOptions` or
-//! `None`) are held by reference, pycolmap style: `options.certify.max_nodes = 10` changes the options
-//! that `options` uses. They are read into the core's struct when `estimate_pose` is called.
+//! `PoseOptions.ransac` (a `RansacOptions` or `None`), `PoseOptions.certify` (a `CertifyOptions` or
+//! `None`) and the solvers' options (`trust_region`, `refinement`, `levenberg_marquardt`, `newton`) are
+//! held by reference, pycolmap style: `options.certify.max_nodes = 10` or
+//! `options.refinement.stopping.max_iterations = 20` changes the options that `options` uses. They are
+//! read into the core's struct when `estimate_pose` is called.
 
 use crate::certificate::PyCertifyOptions;
 use crate::convert::{seconds_arg, Integer, Real};
 use crate::errors::to_py_err;
 use crate::nested::{NestedOptions, Shared};
+use crate::optim::{PyLevenbergMarquardtOptions, PyStoppingCriteria, PyTrustRegionOptions};
 use crate::pose::result::extract_pose;
 use crate::properties::options_class;
 use pluecker::pose::{Method, PoseOptions, RansacOptions};
@@ -17,24 +20,50 @@ use pyo3::prelude::*;
 
 /// Options of `estimate_pose`, the core's `PoseOptions` (every default is the core's).
 #[pyclass(name = "PoseOptions", module = "pluecker")]
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PyPoseOptions {
-    /// The core's options but `ransac` and `certify` (`None` here: see `core`).
+    /// The core's options but the nested ones (`ransac`, `certify` and the solvers': their values here
+    /// stay the defaults, never read; see `core`).
     inner: PoseOptions,
     ransac: Option<Shared<PyRansacOptions>>,
     certify: Option<Shared<PyCertifyOptions>>,
+    trust_region: Shared<PyTrustRegionOptions>,
+    levenberg_marquardt: Shared<PyLevenbergMarquardtOptions>,
+    newton: Shared<PyStoppingCriteria>,
+    refinement: Shared<PyTrustRegionOptions>,
+}
+
+/// The core's defaults, the nested objects included (the refinement's differ from a plain
+/// `TrustRegionOptions()`).
+impl Default for PyPoseOptions {
+    fn default() -> Self {
+        let inner = PoseOptions::default();
+        PyPoseOptions {
+            ransac: None,
+            certify: None,
+            trust_region: Shared::new(PyTrustRegionOptions::from_core(inner.trust_region)),
+            levenberg_marquardt: Shared::new(PyLevenbergMarquardtOptions::from_core(inner.levenberg_marquardt)),
+            newton: Shared::new(PyStoppingCriteria { inner: inner.newton }),
+            refinement: Shared::new(PyTrustRegionOptions::from_core(inner.refinement)),
+            inner,
+        }
+    }
 }
 
 impl PyPoseOptions {
     fn validate(&self) -> PyResult<()> {
-        self.inner.validate().map_err(to_py_err)
+        self.core().validate().map_err(to_py_err)
     }
 
-    /// The core's options, with `ransac` and `certify` read from their objects now.
+    /// The core's options, with the nested ones read from their objects now.
     pub(crate) fn core(&self) -> PoseOptions {
         let mut options = self.inner.clone();
         options.ransac = self.ransac.as_ref().map(|r| r.read().inner);
         options.certify = self.certify.as_ref().map(|c| c.read().inner);
+        options.trust_region = self.trust_region.read().core();
+        options.levenberg_marquardt = self.levenberg_marquardt.read().core();
+        options.newton = self.newton.read().inner;
+        options.refinement = self.refinement.read().core();
         options
     }
 }
@@ -52,18 +81,15 @@ options_class! {
         /// An extra starting pose `(R, t)`, tried first besides the default starts; `None`: no guess needed.
         initial_pose: Option<Bound<'_, PyAny>> = |o| o.inner.initial_pose,
             |o, v| v.map(|p| extract_pose("initial_pose", &p)).transpose().map(|p| o.inner.initial_pose = p);
-        /// Iteration cap of the trust-region methods' algebraic stage.
-        trust_region_max_iterations: Integer = |o| o.inner.trust_region.stopping.max_iterations,
-            |o, v| v.count("trust_region_max_iterations", 1).map(|n| o.inner.trust_region.stopping.max_iterations = n);
-        /// Iteration cap of method `'levenberg-marquardt'`.
-        levenberg_marquardt_max_iterations: Integer = |o| o.inner.levenberg_marquardt.stopping.max_iterations,
-            |o, v| v.count("levenberg_marquardt_max_iterations", 1).map(|n| o.inner.levenberg_marquardt.stopping.max_iterations = n);
-        /// Iteration cap of method `'newton'`.
-        newton_max_iterations: Integer = |o| o.inner.newton.max_iterations,
-            |o, v| v.count("newton_max_iterations", 1).map(|n| o.inner.newton.max_iterations = n);
-        /// Iteration cap of the reprojection refinement.
-        refinement_max_iterations: Integer = |o| o.inner.refinement.stopping.max_iterations,
-            |o, v| v.count("refinement_max_iterations", 1).map(|n| o.inner.refinement.stopping.max_iterations = n);
+        /// The trust-region solver of the algebraic stage (methods `trust-region`, `trust-region-exact`). Held by reference.
+        trust_region: Shared<PyTrustRegionOptions> = |o| o.trust_region.clone(), |o, v| Ok::<(), PyErr>(o.trust_region = v);
+        /// The solver of method `'levenberg-marquardt'`. Held by reference.
+        levenberg_marquardt: Shared<PyLevenbergMarquardtOptions> = |o| o.levenberg_marquardt.clone(),
+            |o, v| Ok::<(), PyErr>(o.levenberg_marquardt = v);
+        /// The stopping tests of method `'newton'`. Held by reference.
+        newton: Shared<PyStoppingCriteria> = |o| o.newton.clone(), |o, v| Ok::<(), PyErr>(o.newton = v);
+        /// The trust-region minimisation of the reprojection error (`refine`). Held by reference.
+        refinement: Shared<PyTrustRegionOptions> = |o| o.refinement.clone(), |o, v| Ok::<(), PyErr>(o.refinement = v);
         /// Pixel noise σ of every image point and endpoint, for the covariance; `None`: estimated from the residuals.
         sigma_px: Option<Real> = |o| o.inner.sigma_px, |o, v| v.map(|r| r.get("sigma_px")).transpose().map(|s| o.inner.sigma_px = s);
         /// Status `ambiguous` when another minimum is within `ambiguity_threshold · σ²` of the answer's cost.

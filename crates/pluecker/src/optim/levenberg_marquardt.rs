@@ -27,6 +27,26 @@ impl Default for LevenbergMarquardtOptions {
     }
 }
 
+impl LevenbergMarquardtOptions {
+    /// Checks the options (errors name `name.field`): a positive finite initial damping, at least one
+    /// rejection, valid stopping tests.
+    pub fn validate(&self, name: &str) -> crate::error::Result<()> {
+        let bad = |field: &str, reason: &str| {
+            Err(crate::error::Error::InvalidOption {
+                name: format!("{name}.{field}"),
+                reason: reason.into(),
+            })
+        };
+        if !(self.initial_damping.is_finite() && self.initial_damping > 0.0) {
+            return bad("initial_damping", "must be a positive finite number");
+        }
+        if self.max_rejections < 1 {
+            return bad("max_rejections", "must be at least 1");
+        }
+        self.stopping.validate(&format!("{name}.stopping"))
+    }
+}
+
 /// Minimises `obj` from `x0` by Levenberg-Marquardt.
 pub fn minimize<const N: usize, O: Objective<N>>(
     obj: &O,

@@ -136,6 +136,30 @@ impl Default for StoppingCriteria {
 }
 
 impl StoppingCriteria {
+    /// Checks the options of a solver named `name` (errors name `name.field`): tolerances are numbers
+    /// ≥ 0, the iteration cap at least 1.
+    pub fn validate(&self, name: &str) -> crate::error::Result<()> {
+        let bad = |field: &str, reason: &str| {
+            Err(crate::error::Error::InvalidOption {
+                name: format!("{name}.{field}"),
+                reason: reason.into(),
+            })
+        };
+        for (field, value) in [
+            ("gradient_tolerance", self.gradient_tolerance),
+            ("cost_tolerance", self.cost_tolerance),
+            ("step_tolerance", self.step_tolerance),
+        ] {
+            if !(value >= 0.0) {
+                return bad(field, "must be a number ≥ 0");
+            }
+        }
+        if self.max_iterations < 1 {
+            return bad("max_iterations", "must be at least 1");
+        }
+        Ok(())
+    }
+
     /// The k.2 tests that depend only on the current point.
     pub fn check<const N: usize>(&self, lin: &Linearization<N>) -> Option<Termination> {
         if !lin.cost.is_finite() || lin.gradient.iter().any(|g| !g.is_finite()) {

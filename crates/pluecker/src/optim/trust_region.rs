@@ -12,8 +12,9 @@ use super::problem::{Objective, StoppingCriteria, Summary, Termination};
 use super::subproblem::{hebden_step, more_sorensen_step, Step};
 use nalgebra::SMatrix;
 
-/// How the trust-region subproblem (eq. 27) is solved.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// How the trust-region subproblem (eq. 27) is solved; named `hebden`, `more_sorensen`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
+#[strum(serialize_all = "snake_case")]
 pub enum Subproblem {
     /// Gauss-Newton Hessian shifted by `hessian_shift`, Hebden's algorithm (section 4.1, Appendix A).
     Hebden,
@@ -52,6 +53,33 @@ impl Default for TrustRegionOptions {
             radius_tolerance: 1e-12,
             stopping: StoppingCriteria::default(),
         }
+    }
+}
+
+impl TrustRegionOptions {
+    /// Checks the options (errors name `name.field`): a positive finite initial radius,
+    /// `0 < accept_ratio < expand_ratio < 1`, `hessian_shift ≥ 0`, `radius_tolerance ≥ 0`, valid stopping
+    /// tests.
+    pub fn validate(&self, name: &str) -> crate::error::Result<()> {
+        let bad = |field: &str, reason: &str| {
+            Err(crate::error::Error::InvalidOption {
+                name: format!("{name}.{field}"),
+                reason: reason.into(),
+            })
+        };
+        if !(self.initial_radius.is_finite() && self.initial_radius > 0.0) {
+            return bad("initial_radius", "must be a positive finite number");
+        }
+        if !(0.0 < self.accept_ratio && self.accept_ratio < self.expand_ratio && self.expand_ratio < 1.0) {
+            return bad("accept_ratio", "need 0 < accept_ratio < expand_ratio < 1");
+        }
+        if !(self.hessian_shift >= 0.0 && self.hessian_shift.is_finite()) {
+            return bad("hessian_shift", "must be a finite number ≥ 0");
+        }
+        if !(self.radius_tolerance >= 0.0) {
+            return bad("radius_tolerance", "must be a number ≥ 0");
+        }
+        self.stopping.validate(&format!("{name}.stopping"))
     }
 }
 

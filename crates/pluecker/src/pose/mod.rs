@@ -197,17 +197,10 @@ impl PoseOptions {
         if !(self.penalty.is_finite() && self.penalty > 0.0) {
             return bad("penalty", "must be a positive finite number");
         }
-        for (name, tr) in [("trust_region", &self.trust_region), ("refinement", &self.refinement)] {
-            if !(tr.initial_radius.is_finite() && tr.initial_radius > 0.0) {
-                return bad(name, "initial_radius must be positive");
-            }
-            if !(0.0 < tr.accept_ratio && tr.accept_ratio < tr.expand_ratio && tr.expand_ratio < 1.0) {
-                return bad(name, "need 0 < accept_ratio < expand_ratio < 1");
-            }
-            if !(tr.hessian_shift >= 0.0) {
-                return bad(name, "hessian_shift must be ≥ 0");
-            }
-        }
+        self.trust_region.validate("trust_region")?;
+        self.refinement.validate("refinement")?;
+        self.levenberg_marquardt.validate("levenberg_marquardt")?;
+        self.newton.validate("newton")?;
         if let Some(sigma) = self.sigma_px {
             if !(sigma.is_finite() && sigma > 0.0) {
                 return bad("sigma_px", "must be a positive finite number of pixels");
