@@ -4,7 +4,7 @@
 //! residuals at its centre rotation with the translations in an ellipsoid handed down box by box
 //! (`Problem::ball_bound`); each with the quadratic linearised in the rotation.
 
-use super::minorant::{ball_minimum_lower_bound, minkowski, rotation_rest, Scaled};
+use super::minorant::{ball_minimum_lower_bound, minkowski, rotation_rest, ScaledMinorant};
 use super::problem::{largest_eigenvalue, Problem, NEAR_ANSWER};
 use super::search::Cell;
 use crate::geometry::quaternion::skew;
@@ -14,16 +14,16 @@ use nalgebra::{Matrix3, Vector3};
 /// of `S` in a box (the search without depth bounds hands it down box by box), and its largest
 /// semi-axis `radius = √λ_max(shape)`.
 #[derive(Clone)]
-pub(super) struct Translations {
+pub(super) struct TranslationEllipsoid {
     pub(super) centre: Vector3<f64>,
     pub(super) shape: Matrix3<f64>,
     pub(super) radius: f64,
 }
 
-impl Translations {
+impl TranslationEllipsoid {
     /// The ball of centre `centre` and radius `radius`.
-    pub(super) fn round(centre: Vector3<f64>, radius: f64) -> Translations {
-        Translations {
+    pub(super) fn round(centre: Vector3<f64>, radius: f64) -> TranslationEllipsoid {
+        TranslationEllipsoid {
             centre,
             shape: Matrix3::identity() * (radius * radius),
             radius,
@@ -156,7 +156,7 @@ impl Problem<'_> {
 
     /// A lower bound of `f` on the poses of `S` whose rotation is within the angle `θ` of `r` and
     /// whose translation is within `spread` of `t_star`, from the minorant `scaled` (its minimiser
-    /// `t_star` and minimum `q_min` at `r`, [`Scaled::at`]'s, so that `κ Q(r, t) = q_min +
+    /// `t_star` and minimum `q_min` at `r`, [`ScaledMinorant::at`]'s, so that `κ Q(r, t) = q_min +
     /// (t − t*)ᵀ κ C (t − t*)`) with the segments' residuals added
     /// ([`Self::line_terms`]): `Q_total(R, t) = κ Q(R, t) + Σ (α + βᵀ t)² / W²` at `r` is a minorant
     /// of `2f` quadratic in `t`, and over the rotations its square root moves by at most
@@ -180,7 +180,7 @@ impl Problem<'_> {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn lines_bound(
         &self,
-        scaled: &Scaled,
+        scaled: &ScaledMinorant,
         r: &Matrix3<f64>,
         theta: f64,
         (t_star, q_min): (&Vector3<f64>, f64),
@@ -229,7 +229,7 @@ impl Problem<'_> {
     /// `½ (√q_lines − rest)₊²`, which it cannot exceed, falls short of `wanted`.
     pub(super) fn linear_lines_bound(
         &self,
-        scaled: &Scaled,
+        scaled: &ScaledMinorant,
         (r, theta): (&Matrix3<f64>, f64),
         set: TranslationSet,
         terms: &[LineTerm],
@@ -262,7 +262,7 @@ impl Problem<'_> {
         }
     }
 
-    /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
+    /// The bound of a box without depth bounds ([`SearchStart::ObjectDistance`]) whose poses of `S` have their
     /// rotations within `θ` of `r` and their translations in `ball`.
     ///
     /// Every point is at most `Dᵢ = ‖r Xᵢ + centre‖ + θ ‖Xᵢ‖ + radius` from the camera, so its term
@@ -283,7 +283,7 @@ impl Problem<'_> {
         segments: usize,
         r: &Matrix3<f64>,
         theta: f64,
-        ball: &Translations,
+        ball: &TranslationEllipsoid,
         f_hat: f64,
     ) -> Option<BoxBound> {
         let mut quadratic = Quadratic {
@@ -343,7 +343,7 @@ impl Problem<'_> {
         let by_growth = 0.5 * (least - spin).max(0.0).powi(2);
         let mut by_linear = 0.0;
         if by_growth < f_hat {
-            let linear = Linearised {
+            let linear = MinorantAtCentre {
                 terms: &terms,
                 points: &rotated,
                 t_star: &t_star,
@@ -376,7 +376,7 @@ impl Problem<'_> {
             c_inv,
             slack,
             depths,
-            growth: Growth { q_min, n, spin, eta0 },
+            parts: BallBoundParts { q_min, n, spin, eta0 },
         })
     }
 }
@@ -437,9 +437,10 @@ pub(super) fn relative_floor(c_inv: &Matrix3<f64>, n: &Matrix3<f64>) -> (f64, f6
     }
 }
 
-/// What [`Problem::linear_ball_bound`] reads of [`Problem::ball_bound`]'s work: the segments'
+/// The minorant of a box without depth bounds at its centre rotation `r`, as [`Problem::ball_bound`]
+/// assembled it and [`Problem::linear_ball_bound`] linearises it in the rotation: the segments'
 /// terms, the points' `r Xᵢ` and weights, the quadratic's minimiser and `C⁻¹`, `N`, `μ` and `η₀`.
-pub(super) struct Linearised<'a> {
+pub(super) struct MinorantAtCentre<'a> {
     pub(super) terms: &'a [LineTerm],
     pub(super) points: &'a [(Vector3<f64>, f64)],
     pub(super) t_star: &'a Vector3<f64>,
@@ -466,13 +467,13 @@ pub(super) struct BoxBound {
     pub(super) slack: f64,
     pub(super) depths: Vec<f64>,
     #[cfg_attr(not(test), allow(dead_code))]
-    pub(super) growth: Growth,
+    pub(super) parts: BallBoundParts,
 }
 
 /// The parts of [`Problem::ball_bound`]'s bounds that the unit tests check the algebra on: `q_min`,
 /// `N` and the drifts at `t*` (`spin` for the growth bound, `η₀` the linearised one's rest per `ρ`).
 #[cfg_attr(not(test), allow(dead_code))]
-pub(super) struct Growth {
+pub(super) struct BallBoundParts {
     pub(super) q_min: f64,
     pub(super) n: Matrix3<f64>,
     pub(super) spin: f64,
@@ -480,7 +481,7 @@ pub(super) struct Growth {
 }
 
 impl Problem<'_> {
-    /// [`Problem::ball_bound`]'s minorant linearised in the rotation, as [`Scaled::linear_bound`] does
+    /// [`Problem::ball_bound`]'s minorant linearised in the rotation, as [`ScaledMinorant::linear_bound`] does
     /// with depth bounds (0 where it cannot be computed). A rotation of the box is `exp(φ) r`,
     /// `‖φ‖ ≤ θ`, `exp(φ) = I + [φ]ₓ + E` with `‖E y‖ ≤ ρ ‖y‖`, `ρ = e^θ − 1 − θ`; write `t = t* + Δ`.
     /// A segment endpoint's numerator is then
@@ -496,7 +497,7 @@ impl Problem<'_> {
     /// is a convex quadratic, bounded below over the ball `‖φ‖ ≤ θ` by
     /// [`ball_minimum_lower_bound`]. So
     /// `√(2f) ≥ √(min L_min) √(1 − θ² / μ) − θ s − ρ η₀`.
-    pub(super) fn linear_ball_bound(&self, lin: &Linearised, theta: f64) -> f64 {
+    pub(super) fn linear_ball_bound(&self, lin: &MinorantAtCentre, theta: f64) -> f64 {
         let rho = rotation_rest(theta);
         let step = theta;
         if !(step * step < lin.mu) {

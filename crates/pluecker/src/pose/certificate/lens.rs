@@ -47,7 +47,7 @@
 //!    or a larger one where `(1 − ε) R` still exceeds `√C + ‖ê‖ + s`). With `κ = minₑ √(1 − εₑ²)` and `ε`
 //!    the largest, `√F ≥ κ √Q − ε (Δ(s) + s Φ + ‖c₀‖) − ‖s‖` (Minkowski),
 //!    `Φ = ‖(‖êₑ‖ ‖q′ₑ‖ / wₑ)ₑ‖`, which step 4 of [`super`] bounds along each ray
-//!    ([`super::local_lower_bound`]), with `ε` and `κ` of the least of nested balls (radii `1/√2` apart)
+//!    ([`super::local_bound::local_lower_bound`]), with `ε` and `κ` of the least of nested balls (radii `1/√2` apart)
 //!    that holds the ray's step: near the answer, where the bound is least, only a small ball's
 //!    variation is paid.
 //!

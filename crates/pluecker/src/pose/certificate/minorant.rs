@@ -11,7 +11,7 @@ use std::rc::Rc;
 
 /// The rotation search rebuilds a box's minorant for its octants when the tightened depth bounds
 /// raise the weights `wᵢ ∝ 1/Dᵢ²` on average by this factor more than the least of them, which a
-/// scale of the minorant takes up ([`Scaled`]): a rebuild costs about as much as ten boxes' bounds,
+/// scale of the minorant takes up ([`ScaledMinorant`]): a rebuild costs about as much as ten boxes' bounds,
 /// and without rebuilds the f = 15000 px scenes lose certificates.
 pub(super) const REBUILD_GAIN: f64 = 1.2;
 
@@ -33,7 +33,7 @@ pub(super) struct Minorant {
     pub(super) c_inv_max: f64,
     /// `bᵢᵀ C⁻¹ bᵢ`: over that ellipsoid `bᵢ · t` moves by at most `√(slack bᵢᵀ C⁻¹ bᵢ)`.
     pub(super) bearing_spread: Vec<f64>,
-    /// [`Whitening::ellipsoid_factor`] of `C`, once it is needed.
+    /// [`super::local_bound::Whitening::ellipsoid_factor`] of `C`, once it is needed.
     pub(super) extent: OnceCell<Option<f64>>,
     /// The form minimised over `t`: `min_t Q(R, t) = vec(R)ᵀ S vec(R)` with the Schur complement
     /// `S = A − B C⁻¹ Bᵀ` of the blocks `[A B; Bᵀ C]` (zero when `C` is singular; unused then).
@@ -127,12 +127,12 @@ impl Minorant {
 /// factor `κ` (`Dᵢ' ≤ Dᵢ / √κ` for all `i`), then `κ Q` is a minorant for the depth bounds `Dᵢ'`, as
 /// every term of `Q` is. `κ Q` is `Q` for the depth bounds `Dᵢ / √κ` ([`Self::depths`]).
 #[derive(Clone)]
-pub(super) struct Scaled {
+pub(super) struct ScaledMinorant {
     pub(super) minorant: Rc<Minorant>,
     pub(super) scale: f64,
 }
 
-impl Scaled {
+impl ScaledMinorant {
     /// The depth bounds `Dᵢ / √κ` for which `κ Q` is the minorant.
     pub(super) fn depths(&self) -> impl Iterator<Item = f64> + Clone + '_ {
         let shrink = self.scale.sqrt();
@@ -227,7 +227,7 @@ impl Scaled {
         reach: impl Iterator<Item = f64> + Clone,
         r_c: &Matrix3<f64>,
         theta_octant: f64,
-    ) -> Scaled {
+    ) -> ScaledMinorant {
         // A weight grows by (Dᵢ / √κ)² / reachᵢ² where the reach is the tighter bound, else by 1.
         let (least, sum) =
             (self.minorant.depths.iter().zip(reach.clone())).fold((f64::INFINITY, 0.0), |(least, sum), (d, r)| {
@@ -236,14 +236,14 @@ impl Scaled {
                 (least.min(growth), sum + growth)
             });
         let mean = sum / self.minorant.depths.len() as f64;
-        let scaled = Scaled {
+        let scaled = ScaledMinorant {
             minorant: Rc::clone(&self.minorant),
             scale: self.scale * least.max(1.0),
         };
         if mean < REBUILD_GAIN * least {
             return scaled;
         }
-        let rebuilt = Scaled {
+        let rebuilt = ScaledMinorant {
             minorant: Rc::new(problem.minorant(self.depths().zip(reach).map(|(d, r)| r.min(d)).collect())),
             scale: 1.0,
         };

@@ -34,7 +34,7 @@
 //!    linearised in the rotation gives a second bound: a rotation of the box is `exp(φ) R_c` with
 //!    `‖φ‖ ≤ θ`, its first-order part `[φ]ₓ R_c` enters the minorant exactly (a convex quadratic in
 //!    `φ` once `t` is minimised out, bounded below over the ball `‖φ‖ ≤ θ` by its Lagrangian dual),
-//!    and only the rest costs `(e^θ − 1 − θ) η` (`Scaled::linear_bound`). The larger of the two is
+//!    and only the rest costs `(e^θ − 1 − θ) η` (`ScaledMinorant::linear_bound`). The larger of the two is
 //!    the box's bound: small boxes pay `O(θ²)` instead of `O(θ)`. Where both fall short, the
 //!    segments' residuals join the minorant at `R_c` (`Problem::lines_bound`): an endpoint's residual
 //!    `n / w` has the numerator `n = ēᵀ R_c (a × d) + tᵀ (R_c d × ē)`, linear in `t`, and `w` is at most
@@ -58,7 +58,7 @@
 //!    split into their eight octants, least bound first, until every open box's bound is within
 //!    the gap of `f̂`. Each box hands its octants tighter depth bounds: the largest distance each point
 //!    reaches over the box's poses of `S` (the octants' poses of `S` are among them). If they raise
-//!    every weight at least by `κ`, then `κ Q` is a minorant for them (`Scaled`); the form is rebuilt
+//!    every weight at least by `κ`, then `κ Q` is a minorant for them (`ScaledMinorant`); the form is rebuilt
 //!    only when the weights grow unevenly, and handed down only where it bounds at least as well as
 //!    `κ Q` (a point that came much closer than the others raises `η` more than `√q_min`).
 //! 4. **Local bound along whitened rays.** Write `Δ = s T v` with `‖v‖ = 1` and `Tᵀ JᵀJ T = I`, so that
@@ -88,7 +88,7 @@
 //! pinhole problem bounded by interval enclosures of the distortion's Jacobian over nested balls.
 //!
 //! **Without depth bounds** (lines alone, or fewer than two points seen more than `αᵢ + αⱼ` apart;
-//! `Start::Ball`) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
+//! `SearchStart::ObjectDistance`) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
 //! the directions of the observations (`pose::object_distance`), and each box of rotations is bounded
 //! from the residuals at its centre rotation with the translations in an ellipsoid handed down box by box
 //! (`Problem::ball_bound`); boxes with a point or segment endpoint behind the camera are pruned. With
@@ -116,7 +116,7 @@ use crate::certificate::CertifyOptions;
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use lens::{Slack, Surrogate};
 use local_bound::{LocalModel, RaySlack};
-use problem::{Problem, Start};
+use problem::{Problem, SearchStart};
 use search::{localise, BallBound, InsideBall, RotationSearch};
 
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
@@ -361,9 +361,9 @@ fn certify_problem(
         radius: 0.0,
     };
     let cap = match problem.start {
-        Start::Points(_) if problem.corr.n_lines() > 0 => MAX_CELLS_BEFORE_FALLBACK,
-        Start::Points(_) => MAX_CELLS,
-        Start::Ball { .. } => MAX_CELLS_FROM_DISTANCE,
+        SearchStart::DepthBounds(_) if problem.corr.n_lines() > 0 => MAX_CELLS_BEFORE_FALLBACK,
+        SearchStart::DepthBounds(_) => MAX_CELLS,
+        SearchStart::ObjectDistance { .. } => MAX_CELLS_FROM_DISTANCE,
     };
     let localised = match localise(&mut search, options.max_nodes_or(cap)) {
         Ok(l) => l,

@@ -12,7 +12,7 @@ use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
 use std::rc::Rc;
 
 /// Why noise that carries a lens's Jacobians (the first-order noise of undistorted pixels) is not
-/// certified: the cost is in the distorted pixels, which [`certify`] is given with the lens.
+/// certified: the cost is in the distorted pixels, which [`super::certify`] is given with the lens.
 pub(super) const FIRST_ORDER_NOISE: &str = "not attempted: the noise is the first-order noise of undistorted pixels; \
     the certificate bounds the cost in the observed pixels, through the lens";
 
@@ -25,7 +25,7 @@ pub(super) const DEPTH_PARTNERS: usize = 16;
 /// 2.5-3.3 times as long for one or two more certificates in 50.)
 pub(super) const BOX_BOUND_SEGMENTS: usize = 8;
 /// Boxes of rotations within this angle of the answer's are bounded with every segment where there
-/// are no depth bounds ([`Start::Ball`], [`Problem::segments_in`]): there the translation ellipsoid
+/// are no depth bounds ([`SearchStart::ObjectDistance`], [`Problem::segments_in`]): there the translation ellipsoid
 /// decides whether a box lies inside the whitened ball of step 4. With depth bounds every box keeps
 /// [`BOX_BOUND_SEGMENTS`]: every segment near the answer there saved nodes at f = 250-800 px but cost
 /// 3.5 times as much per node at f = 15000 px (50 points + 50 segments, 20 scenes of
@@ -34,7 +34,7 @@ pub(super) const BOX_BOUND_SEGMENTS: usize = 8;
 /// on every row.
 pub(super) const NEAR_ANSWER: f64 = 0.5;
 /// At most this many segments, the longest in the image, enter the bound of a box where there are no
-/// depth bounds ([`Start::Ball`]): there they are the bound, not an addition to it.
+/// depth bounds ([`SearchStart::ObjectDistance`]): there they are the bound, not an addition to it.
 pub(super) const BALL_SEGMENTS: usize = 32;
 
 /// The indices of the (at most) `count` longest observed segments, longest first.
@@ -55,7 +55,7 @@ pub(super) struct Problem<'c> {
     /// Per point, its part `Aᵢᵀ Aᵢ` of step 2's minorant ([`PointForm`]).
     pub(super) forms: Vec<PointForm>,
     /// What the rotation search starts from: step 1's depth bounds, or the object's distance.
-    pub(super) start: Start,
+    pub(super) start: SearchStart,
     /// `K⁻¹` (normalised endpoints `ē = K⁻¹ ẽ`).
     pub(super) k_inv: Matrix3<f64>,
     /// Per segment endpoint, `G_e = Lᵀ G` and its norm: `G` is the upper-left 2x2 block of `K⁻ᵀ` (a
@@ -78,17 +78,17 @@ pub(super) struct Problem<'c> {
 }
 
 /// What the rotation search starts from.
-pub(super) enum Start {
+pub(super) enum SearchStart {
     /// Step 1's depth bounds, and the minorant for them (the search tightens them box by box:
-    /// [`RotationSearch`]).
-    Points(Rc<Minorant>),
+    /// [`super::search::RotationSearch`]).
+    DepthBounds(Rc<Minorant>),
     /// Without depth bounds (lines alone, or fewer than two points seen far enough apart): the
     /// pivot `c` (an object point) is at most `distance` from the camera on `S`
-    /// ([`super::object_distance`]), so the translation of a pose of `S` whose rotation is within
+    /// ([`crate::pose::object_distance`]), so the translation of a pose of `S` whose rotation is within
     /// `θ` of `R_c` lies in the ball of centre `−R_c c` and radius `distance + θ ‖c‖`; every box is
-    /// bounded from the residuals at its centre rotation ([`Problem::ball_quadratic`]) and hands its
-    /// octants a smaller ellipsoid of translations ([`Translations`]).
-    Ball { pivot: Vector3<f64>, distance: f64 },
+    /// bounded from the residuals at its centre rotation ([`Problem::ball_bound`]) and hands its
+    /// octants a smaller ellipsoid of translations ([`super::box_bound::TranslationEllipsoid`]).
+    ObjectDistance { pivot: Vector3<f64>, distance: f64 },
 }
 
 /// A point's part of step 2's minorant: `H = AᵀA` for the 2x3 map `A` with `r = A x / x_z` (the
@@ -172,7 +172,7 @@ impl<'c> Problem<'c> {
         Self::build(camera, corr, f_hat, true)
     }
 
-    /// The data of the test without depth bounds ([`Start::Ball`]) even where the points give them.
+    /// The data of the test without depth bounds ([`SearchStart::ObjectDistance`]) even where the points give them.
     pub(super) fn without_depths(
         camera: &Camera,
         corr: &'c Correspondences,
@@ -254,7 +254,7 @@ impl<'c> Problem<'c> {
             .collect();
         let (start, segments) = match depths {
             Ok(depths) => (
-                Start::Points(Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths))),
+                SearchStart::DepthBounds(Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths))),
                 BOX_BOUND_SEGMENTS,
             ),
             Err(why) => {
@@ -262,7 +262,7 @@ impl<'c> Problem<'c> {
                     .ok_or_else(|| {
                         format!("not proved: {why}, and the observations do not bound the object's distance")
                     })?;
-                (Start::Ball { pivot, distance }, BALL_SEGMENTS)
+                (SearchStart::ObjectDistance { pivot, distance }, BALL_SEGMENTS)
             }
         };
         Ok(Problem {
@@ -286,8 +286,8 @@ impl<'c> Problem<'c> {
     /// Step 1's minorant (`None` without depth bounds).
     pub(super) fn root(&self) -> Option<&Rc<Minorant>> {
         match &self.start {
-            Start::Points(root) => Some(root),
-            Start::Ball { .. } => None,
+            SearchStart::DepthBounds(root) => Some(root),
+            SearchStart::ObjectDistance { .. } => None,
         }
     }
 
@@ -306,7 +306,7 @@ pub(super) fn endpoint_sine(residual: f64, g_norm: f64, e: &Vector3<f64>) -> f64
 }
 
 /// The pivot of the object (the mean of its points and segment midpoints) and the bound on its
-/// distance from the camera on `S` ([`super::object_distance`]; `None` without one). A point is
+/// distance from the camera on `S` ([`crate::pose::object_distance`]; `None` without one). A point is
 /// within its angle bound `αᵢ` of its observed ray (step 1). A segment endpoint `ē` whose residual
 /// `ēᵀ m / ‖G_e m_xy‖` is at most `ε₀` is within the angle whose sine is `ε₀ ‖G_e‖ / ‖ē‖` of the
 /// interpretation plane (normal `m`), as `‖G_e m_xy‖ ≤ ‖G_e‖ ‖m‖`.

@@ -3,11 +3,11 @@
 //! minorant, or a smaller ellipsoid of translations); and the boxes inside the whitened ball, which
 //! step 4 bounds.
 
-use super::box_bound::{BoxBound, Ellipsoid, Translations};
+use super::box_bound::{BoxBound, Ellipsoid, TranslationEllipsoid};
 use super::lens::Slack;
 use super::local_bound::{LocalModel, Whitening};
-use super::minorant::{minkowski, Scaled};
-use super::problem::{largest_eigenvalue, Problem, Start};
+use super::minorant::{minkowski, ScaledMinorant};
+use super::problem::{largest_eigenvalue, Problem, SearchStart};
 use super::testing;
 use crate::geometry::quaternion::exp_so3;
 use crate::global::branch_and_bound::{
@@ -43,17 +43,17 @@ impl Cell {
 
 /// What the test hook [`testing::rotation_search`] records: the cells kept, the cells pruned, and the
 /// half-width at which cells stop being split.
-pub(super) struct Record {
+pub(super) struct RecordedCells {
     pub(super) min_half: f64,
     pub(super) cells: Vec<testing::KeptCell>,
     pub(super) pruned: usize,
     pub(super) behind: Vec<testing::KeptCell>,
 }
 
-impl Record {
+impl RecordedCells {
     /// Nothing recorded yet; cells stop being split at `min_half`.
     pub(super) fn new(min_half: f64) -> Self {
-        Record {
+        RecordedCells {
             min_half,
             cells: vec![],
             pruned: 0,
@@ -98,7 +98,7 @@ pub(super) enum InsideBall<'m> {
     Bound(BallBound<'m>),
     /// The test hook: the cell is recorded and closed at the level `f̂` (no bound is claimed, and the
     /// hook reports none). So are cells split down to the hook's `min_half`.
-    Record(&'m mut Record),
+    Record(&'m mut RecordedCells),
 }
 
 /// Steps 1-3 of the module documentation as a [`BoundingOracle`] of the shared branch and bound,
@@ -120,7 +120,7 @@ pub(super) enum InsideBall<'m> {
 /// largest distance each point reaches over its poses of `S`,
 /// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
 /// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants
-/// ([`Scaled`]).
+/// ([`ScaledMinorant`]).
 pub(super) struct RotationSearch<'a, 'c> {
     pub(super) problem: &'a Problem<'c>,
     pub(super) whitening: &'a Whitening,
@@ -146,7 +146,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
     type Candidate = ();
     /// The minorant for the depth bounds of the box's poses of `S`, or the ball of their translations
     /// (`None`: the root's).
-    type Inherited = Option<Handed>;
+    type Inherited = Option<HandedDown>;
 
     fn bound(&mut self, region: &Region) -> Bound<()> {
         self.bound_with(region, &None).0
@@ -175,7 +175,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
             .collect()
     }
 
-    fn bound_with(&mut self, region: &Region, inherited: &Option<Handed>) -> (Bound<()>, Option<Handed>) {
+    fn bound_with(&mut self, region: &Region, inherited: &Option<HandedDown>) -> (Bound<()>, Option<HandedDown>) {
         let cell = Cell::of(region);
         // The box's nearest point to the origin: boxes wholly outside the ball ‖ω‖ ≤ π repeat rotations.
         let nearest = cell.centre.zip_map(&cell.half, |c, h| (c.abs() - h).max(0.0)).norm();
@@ -184,20 +184,23 @@ impl BoundingOracle for RotationSearch<'_, '_> {
         }
         let r_c = exp_so3(&cell.centre) * self.pose.rotation;
         match (&self.problem.start, inherited) {
-            (Start::Points(_), Some(Handed::Minorant(scaled))) => self.points_box(&cell, &r_c, scaled),
-            (Start::Points(root), _) => {
-                let root = Scaled {
+            (SearchStart::DepthBounds(_), Some(HandedDown::Minorant(scaled))) => self.points_box(&cell, &r_c, scaled),
+            (SearchStart::DepthBounds(root), _) => {
+                let root = ScaledMinorant {
                     minorant: Rc::clone(root),
                     scale: 1.0,
                 };
                 self.points_box(&cell, &r_c, &root)
             }
-            (Start::Ball { pivot, distance }, inherited) => {
+            (SearchStart::ObjectDistance { pivot, distance }, inherited) => {
                 // The translations of the box's poses of S: t = P − R c with ‖P‖ ≤ distance, and those
                 // of the parent's ball; the smaller ball is kept.
-                let from_pivot = Translations::round(-(r_c * pivot), distance + cell.half.norm() * pivot.norm());
+                let from_pivot =
+                    TranslationEllipsoid::round(-(r_c * pivot), distance + cell.half.norm() * pivot.norm());
                 let ball = match inherited {
-                    Some(Handed::Translations(ball)) if ball.shape.trace() <= from_pivot.shape.trace() => ball.clone(),
+                    Some(HandedDown::Translations(ball)) if ball.shape.trace() <= from_pivot.shape.trace() => {
+                        ball.clone()
+                    }
                     _ => from_pivot,
                 };
                 self.ball_box(&cell, &r_c, ball)
@@ -208,20 +211,20 @@ impl BoundingOracle for RotationSearch<'_, '_> {
 
 /// What a box hands down to its octants ([`BoundingOracle::Inherited`]).
 #[derive(Clone)]
-pub(super) enum Handed {
-    /// The minorant for the depth bounds of the box's poses of `S` ([`Start::Points`]).
-    Minorant(Scaled),
-    /// An ellipsoid that holds the translations of the box's poses of `S` ([`Start::Ball`]).
-    Translations(Translations),
+pub(super) enum HandedDown {
+    /// The minorant for the depth bounds of the box's poses of `S` ([`SearchStart::DepthBounds`]).
+    Minorant(ScaledMinorant),
+    /// An ellipsoid that holds the translations of the box's poses of `S` ([`SearchStart::ObjectDistance`]).
+    Translations(TranslationEllipsoid),
 }
 
 #[cfg(test)]
-impl Handed {
+impl HandedDown {
     /// The minorant handed down (the unit tests of the search with depth bounds).
-    pub(super) fn minorant(&self) -> &Scaled {
+    pub(super) fn minorant(&self) -> &ScaledMinorant {
         match self {
-            Handed::Minorant(scaled) => scaled,
-            Handed::Translations(_) => panic!("translations, not a minorant"),
+            HandedDown::Minorant(scaled) => scaled,
+            HandedDown::Translations(_) => panic!("translations, not a minorant"),
         }
     }
 }
@@ -292,20 +295,20 @@ impl RotationSearch<'_, '_> {
         None
     }
 
-    /// The bound of a box with step 1's depth bounds ([`Start::Points`]; [`RotationSearch`]).
+    /// The bound of a box with step 1's depth bounds ([`SearchStart::DepthBounds`]; [`RotationSearch`]).
     pub(super) fn points_box(
         &mut self,
         cell: &Cell,
         r_c: &Matrix3<f64>,
-        scaled: &Scaled,
-    ) -> (Bound<()>, Option<Handed>) {
+        scaled: &ScaledMinorant,
+    ) -> (Bound<()>, Option<HandedDown>) {
         let problem = self.problem;
         let (minorant, scale) = (&scaled.minorant, scaled.scale);
         let theta = cell.half.norm();
         let Some((t_star, q_min, eta)) = scaled.at(r_c) else {
             return (
                 Bound::Failed { solver_iterations: 0 },
-                Some(Handed::Minorant(scaled.clone())),
+                Some(HandedDown::Minorant(scaled.clone())),
             );
         };
         // The Minkowski bound, and the linearised one where the first falls short of f̂ and the
@@ -366,7 +369,7 @@ impl RotationSearch<'_, '_> {
         if !lower.is_finite() {
             return (
                 Bound::Failed { solver_iterations: 0 },
-                Some(Handed::Minorant(scaled.clone())),
+                Some(HandedDown::Minorant(scaled.clone())),
             );
         }
         if let Some(pruned) = self.pruned(lower) {
@@ -424,10 +427,10 @@ impl RotationSearch<'_, '_> {
         let reach = (problem.corr.points3d.iter().zip(&problem.norms))
             .map(|(x, norm)| (r_c * x + ellipsoid.centre).norm() + theta * norm + ellipsoid.spread);
         let handed_down = scaled.tightened(problem, reach, r_c, 0.5 * theta);
-        (bounded(lower), Some(Handed::Minorant(handed_down)))
+        (bounded(lower), Some(HandedDown::Minorant(handed_down)))
     }
 
-    /// The bound of a box without depth bounds ([`Start::Ball`]) whose poses of `S` have their
+    /// The bound of a box without depth bounds ([`SearchStart::ObjectDistance`]) whose poses of `S` have their
     /// translations in `ball`: `Q` the minorant at `R_c` ([`Problem::ball_quadratic`]), a pose of `S`
     /// in the box has `√(2f) ≥ √q_min − θ η` (Minkowski, as with depth bounds), and its translation
     /// lies in the ellipsoid `Q(t) ≤ (√(2f̂) + θ η)²`, whose bounding ball the octants inherit where it
@@ -436,8 +439,8 @@ impl RotationSearch<'_, '_> {
         &mut self,
         cell: &Cell,
         r_c: &Matrix3<f64>,
-        ball: Translations,
-    ) -> (Bound<()>, Option<Handed>) {
+        ball: TranslationEllipsoid,
+    ) -> (Bound<()>, Option<HandedDown>) {
         let theta = cell.half.norm();
         let segments = self.problem.segments_in(cell);
         let Some(BoxBound {
@@ -451,10 +454,13 @@ impl RotationSearch<'_, '_> {
         }) = self.problem.ball_bound(segments, r_c, theta, &ball, self.f_hat)
         else {
             // The terms do not fix the translation: no bound, the octants are bounded again.
-            return (bounded(0.0), Some(Handed::Translations(ball)));
+            return (bounded(0.0), Some(HandedDown::Translations(ball)));
         };
         if !lower.is_finite() {
-            return (Bound::Failed { solver_iterations: 0 }, Some(Handed::Translations(ball)));
+            return (
+                Bound::Failed { solver_iterations: 0 },
+                Some(HandedDown::Translations(ball)),
+            );
         }
         if let Some(pruned) = self.pruned(lower) {
             return (pruned, None);
@@ -494,7 +500,7 @@ impl RotationSearch<'_, '_> {
         // Of two ellipsoids that hold the translations, the one of least trace.
         let shape = c_inv * slack;
         let handed_down = if shape.trace() < ball.shape.trace() {
-            Translations {
+            TranslationEllipsoid {
                 centre: t_star,
                 radius: largest_eigenvalue(&shape).max(0.0).sqrt(),
                 shape,
@@ -502,7 +508,7 @@ impl RotationSearch<'_, '_> {
         } else {
             ball
         };
-        (bounded(lower), Some(Handed::Translations(handed_down)))
+        (bounded(lower), Some(HandedDown::Translations(handed_down)))
     }
 }
 

@@ -3,8 +3,8 @@
 
 use super::lens::{Slack, Surrogate};
 use super::local_bound::{LocalModel, RaySlack, Whitening};
-use super::problem::{Problem, Start};
-use super::search::{localise, InsideBall, Record, RotationSearch};
+use super::problem::{Problem, SearchStart};
+use super::search::{localise, InsideBall, RecordedCells, RotationSearch};
 use crate::camera::Camera;
 use crate::camera_model::LensCamera;
 use crate::optim::Objective;
@@ -83,8 +83,8 @@ pub fn object_distance(
     level: f64,
 ) -> std::result::Result<Option<(Vector3<f64>, f64)>, String> {
     Ok(match Problem::new(camera, corr, level)?.start {
-        Start::Ball { pivot, distance } => Some((pivot, distance)),
-        Start::Points(_) => None,
+        SearchStart::ObjectDistance { pivot, distance } => Some((pivot, distance)),
+        SearchStart::DepthBounds(_) => None,
     })
 }
 
@@ -105,7 +105,7 @@ pub fn rotation_search(
     let problem = Problem::new(camera, corr, level)?;
     let lin = ReprojectionCost::of(camera, corr).linearize(centre);
     let whitening = Whitening::new(&lin.gauss_newton).ok_or("JᵀJ is singular at the pose")?;
-    let mut record = Record::new(min_half);
+    let mut record = RecordedCells::new(min_half);
     let mut search = RotationSearch {
         problem: &problem,
         whitening: &whitening,

@@ -68,7 +68,7 @@ fn the_bounds_without_depth_bounds_hold_over_the_box() {
             let radius =
                 scene.translation.norm() * 0.5f64.powf(rng.uniform_in(0.0, 6.0) + if near { 4.0 } else { 0.0 });
             let (ball, l) = translation_set(&scene.translation, radius, 1.5, &mut rng);
-            let Translations { centre, shape, .. } = ball;
+            let TranslationEllipsoid { centre, shape, .. } = ball;
             let Some(bounds) = problem.ball_bound(problem.lines.len(), &r_c, theta, &ball, f64::INFINITY) else {
                 continue;
             };
@@ -206,7 +206,7 @@ fn the_algebra_of_the_bounds_without_depth_bounds_holds() {
             let r_c = exp_so3(&(rng.unit_vector3() * theta * rng.uniform_in(2.0, 8.0))) * truth.rotation;
             let radius = scene.translation.norm() * 0.5f64.powf(rng.uniform_in(2.0, 6.0));
             let (ball, l) = translation_set(&scene.translation, radius, 1.0, &mut rng);
-            let Translations { centre, shape, .. } = ball;
+            let TranslationEllipsoid { centre, shape, .. } = ball;
             let segments = problem.lines.len();
             let (Some(open), Some(level)) = (
                 problem.ball_bound(segments, &r_c, theta, &ball, f64::INFINITY),
@@ -214,7 +214,7 @@ fn the_algebra_of_the_bounds_without_depth_bounds_holds() {
             ) else {
                 continue;
             };
-            let g = &open.growth;
+            let g = &open.parts;
             let (t_star, rho) = (open.t_star, rotation_rest(theta));
             let terms: Vec<LineTerm> = problem.line_terms(
                 segments,
@@ -318,7 +318,7 @@ fn the_algebra_of_the_bounds_without_depth_bounds_holds() {
                 tight[2] += 1;
             }
             // The ellipsoid: the largest Δᵀ C Δ / slack where the growth allows a pose of S.
-            let beta = (2.0 * f_hat).sqrt() + level.growth.spin;
+            let beta = (2.0 * f_hat).sqrt() + level.parts.spin;
             let inside = |_: &Vector3<f64>, z: &Vector3<f64>| {
                 let d = delta(z);
                 if q_of(&d) - theta * x_of(&d) <= beta {
@@ -514,7 +514,7 @@ fn the_segments_terms_of_the_box_bound_hold_over_the_box() {
         let forms = forms_by_points(&problem);
         let segments = longest_segments(&corr, BOX_BOUND_SEGMENTS);
         for kappa in [1.0, 2.0] {
-            let scaled = Scaled {
+            let scaled = ScaledMinorant {
                 minorant: Rc::clone(problem.root().expect("depth bounds")),
                 scale: kappa,
             };
@@ -736,7 +736,7 @@ fn the_linearised_bound_with_segments_holds_over_the_box() {
         let forms = forms_by_points(&problem);
         let segments = longest_segments(&corr, problem.box_segments);
         for kappa in [1.0, 2.0] {
-            let scaled = Scaled {
+            let scaled = ScaledMinorant {
                 minorant: Rc::clone(problem.root().expect("depth bounds")),
                 scale: kappa,
             };

@@ -22,7 +22,7 @@ fn rotation_rest_bounds_the_second_order_of_a_rotation() {
     }
 }
 
-/// The linearised bound ([`Scaled::linear_bound`]) against the oracle: at rotations within the angle
+/// The linearised bound ([`ScaledMinorant::linear_bound`]) against the oracle: at rotations within the angle
 /// `θ` of `r_c` (random ones inside the ball and on its sphere, then a descent from the least), half
 /// the scaled minorant, summed point by point and minimised over `t` by its normal equations, is
 /// never below it. Centres near the answer and away from it, `θ` from 1e-3 to 0.5, `κ` = 1 and
@@ -39,7 +39,7 @@ fn the_linearised_bound_holds_over_the_ball_of_rotations() {
         let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
         let depths = problem.root().expect("depth bounds").depths.clone();
         for kappa in [1.0, 2.5] {
-            let scaled = Scaled {
+            let scaled = ScaledMinorant {
                 minorant: Rc::clone(problem.root().expect("depth bounds")),
                 scale: kappa,
             };
@@ -69,7 +69,7 @@ fn the_linearised_bound_holds_over_the_ball_of_rotations() {
     );
 }
 
-/// The points' second-order rest ([`Scaled::second_order_rest`], the rest of both linearised bounds)
+/// The points' second-order rest ([`ScaledMinorant::second_order_rest`], the rest of both linearised bounds)
 /// against the points one by one: at rotations `exp(φ) r` with `‖φ‖ = θ`, the whitened residuals'
 /// distance from their part linear in `φ`, `√(Σ κ/Dᵢ² eᵢᵀ Hᵢ eᵢ)` with `eᵢ = (exp(φ) − I − [φ]ₓ) r Xᵢ`
 /// (`Hᵢ` and `Dᵢ` from the points, [`forms_by_points`]), never exceeds it, and comes near it on some
@@ -87,7 +87,7 @@ fn the_points_second_order_rest_holds_over_the_ball() {
         let root = problem.root().expect("depth bounds");
         let forms = forms_by_points(&problem);
         for kappa in [1.0, 2.5] {
-            let scaled = Scaled {
+            let scaled = ScaledMinorant {
                 minorant: Rc::clone(root),
                 scale: kappa,
             };
@@ -115,7 +115,7 @@ fn the_points_second_order_rest_holds_over_the_ball() {
 }
 
 /// The minorant's form (`at`, `C`, `C⁻¹`, `bᵢᵀ C⁻¹ bᵢ`, `λ_max(C⁻¹)`) agrees with the per-point sum
-/// at random poses; and what a box hands down ([`Scaled::tightened`]: a scale, or a rebuild) is,
+/// at random poses; and what a box hands down ([`ScaledMinorant::tightened`]: a scale, or a rebuild) is,
 /// at every pose, at most the minorant of the tighter depth bounds it was given, and claims depth
 /// bounds no tighter than those; a rebuilt minorant is handed down only where it bounds at least
 /// as well as the scale (point by point). Cases: uneven shrinking, even shrinking (a scale
@@ -131,7 +131,7 @@ fn minorant_and_its_scale_against_the_per_point_sum() {
         let truth = Pose::new(scene.rotation, scene.translation);
         let f_hat = ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
         let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-        let root = Scaled {
+        let root = ScaledMinorant {
             minorant: Rc::clone(problem.root().expect("depth bounds")),
             scale: 1.0,
         };

@@ -55,7 +55,7 @@ fn forms_by_points(problem: &Problem) -> Vec<(Matrix3<f64>, f64)> {
 }
 
 /// The Minkowski bound `½ (√q_min − θ η)₊²` at the rotation `r` of the minorant of the depth
-/// bounds `depths` scaled by `κ`, point by point (the oracle of [`Scaled::bound_near`]): `q_min` from
+/// bounds `depths` scaled by `κ`, point by point (the oracle of [`ScaledMinorant::bound_near`]): `q_min` from
 /// the normal equations `Σ wᵢ Hᵢ (R Xᵢ + t) = 0`, `η² = Σ wᵢ λ_max(Hᵢ) ‖Xᵢ‖²`, `wᵢ = κ / Dᵢ²`.
 fn bound_near_by_points(problem: &Problem, depths: &[f64], kappa: f64, r: &Matrix3<f64>, theta: f64) -> f64 {
     let (mut lhs, mut rhs, mut eta2) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
@@ -109,7 +109,7 @@ fn least_over_ball(
 /// A translation set for the tests of the bound without depth bounds: largest semi-axis `radius`,
 /// round or thin (a random axis and the others 0.05-0.5 of it), its centre within `off` radii of
 /// `truth`; and its `L` (`shape = L Lᵀ`).
-fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -> (Translations, Matrix3<f64>) {
+fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -> (TranslationEllipsoid, Matrix3<f64>) {
     let centre = truth + rng.unit_vector3() * radius * rng.uniform_in(0.0, off);
     let axis = rng.unit_vector3();
     let thin = if rng.uniform() < 0.5 {
@@ -120,7 +120,7 @@ fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -
     let shape =
         (axis * axis.transpose() * (1.0 - thin * thin) + Matrix3::identity() * (thin * thin)) * (radius * radius);
     let l = shape.cholesky().unwrap().l();
-    (Translations { centre, shape, radius }, l)
+    (TranslationEllipsoid { centre, shape, radius }, l)
 }
 
 /// Runs `body` on a rotation search (recording, not bounding, inside the whitened ball of
@@ -141,7 +141,7 @@ fn with_rotation_search(
     let f_hat = 4.0 * cost.cost(&truth);
     let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
     let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
-    let mut record = Record::new(0.0);
+    let mut record = RecordedCells::new(0.0);
     let mut search = RotationSearch {
         problem: &problem,
         whitening: &whitening,

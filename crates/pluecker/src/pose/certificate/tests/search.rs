@@ -15,12 +15,12 @@ fn a_scaled_minorant_bounds_a_box_as_the_minorant_rebuilt_for_its_depths() {
             let (problem, f_hat) = (search.problem, search.f_hat);
             let corr = problem.corr;
             for kappa in [1.0, 1.7, 4.0] {
-                let scaled = Scaled {
+                let scaled = ScaledMinorant {
                     minorant: Rc::clone(problem.root().expect("depth bounds")),
                     scale: kappa,
                 };
                 let depths: Vec<f64> = scaled.depths().collect();
-                let rebuilt = Scaled {
+                let rebuilt = ScaledMinorant {
                     minorant: Rc::new(Minorant::build(
                         &corr.points3d,
                         &problem.bearings,
@@ -46,9 +46,9 @@ fn a_scaled_minorant_bounds_a_box_as_the_minorant_rebuilt_for_its_depths() {
                         (centre - half).iter().copied().collect::<Vec<f64>>(),
                         (centre + half).iter().copied().collect::<Vec<f64>>(),
                     );
-                    let mut run = |given: &Scaled| {
+                    let mut run = |given: &ScaledMinorant| {
                         search.radius = 0.0;
-                        let (bound, handed) = search.bound_with(&region, &Some(Handed::Minorant(given.clone())));
+                        let (bound, handed) = search.bound_with(&region, &Some(HandedDown::Minorant(given.clone())));
                         let lower = match bound {
                             Bound::Bounded { lower, .. } => lower,
                             Bound::Empty { .. } => f64::NAN,
