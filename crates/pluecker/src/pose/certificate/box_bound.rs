@@ -262,7 +262,7 @@ impl Problem<'_> {
         }
     }
 
-    /// The bound of a box without depth bounds ([`SearchStart::ObjectDistance`]) whose poses of `S` have their
+    /// The bound of a box without depth bounds ([`super::problem::SearchStart::ObjectDistance`]) whose poses of `S` have their
     /// rotations within `θ` of `r` and their translations in `ball`.
     ///
     /// Every point is at most `Dᵢ = ‖r Xᵢ + centre‖ + θ ‖Xᵢ‖ + radius` from the camera, so its term

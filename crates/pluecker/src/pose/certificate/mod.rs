@@ -112,7 +112,7 @@ use super::reprojection::Pose;
 use super::Status;
 use crate::camera::Camera;
 use crate::camera_model::LensCamera;
-use crate::certificate::CertifyOptions;
+use crate::certificate::{Certificate, CertificateKind, CertifyOptions};
 use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
 use lens::{Slack, Surrogate};
 use local_bound::{LocalModel, RaySlack};
@@ -121,21 +121,21 @@ use search::{localise, BallBound, InsideBall, RotationSearch};
 
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
 /// [`crate::certificate::CertifyOptions::max_nodes`] `None`).
-pub const MAX_CELLS: usize = 20_000;
+pub(crate) const MAX_CELLS: usize = 20_000;
 /// The default cap where the search starts from the object's distance (lines alone,
 /// or too few points): its boxes are pruned later (20 000-90 000 boxes on the 10-segment benchmark
 /// scenes, 2-8 µs each).
-pub const MAX_CELLS_FROM_DISTANCE: usize = 100_000;
+pub(crate) const MAX_CELLS_FROM_DISTANCE: usize = 100_000;
 /// The default cap of the search with depth bounds on a scene with segments, which the search
 /// without them follows where it fails ([`certify`]). A failing first search only delays the
 /// second, whose boxes cost more: planar scenes with 100 correspondences need up to ~10 000 boxes of
 /// the first (Rust benchmark, f = 800 px, 50 points + 50 segments: 6 ms at 10 000 or 20 000, 23 ms at
 /// 4 000), while scenes whose first search fails lose ~10 % (f = 15000 px, 5 + 5: 12 ms at 4 000,
 /// 16 ms at 10 000, 28 ms at 20 000).
-pub const MAX_CELLS_BEFORE_FALLBACK: usize = 10_000;
+pub(crate) const MAX_CELLS_BEFORE_FALLBACK: usize = 10_000;
 
 /// Why a pose is not certified when [`crate::pose::PoseOptions::certify`] is `None`.
-pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
+const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is None)";
 
 /// The certificate stage of both pipelines (with and without RANSAC): not requested without
 /// `certify`, not attempted for a pose whose `status` is not a success, else `run` with the options
@@ -143,22 +143,45 @@ pub(crate) const NOT_REQUESTED: &str = "not requested (PoseOptions.certify is No
 pub(crate) fn stage(
     certify: Option<&CertifyOptions>,
     status: Status,
-    run: impl FnOnce(&CertifyOptions) -> Certification,
-) -> Certification {
+    run: impl FnOnce(&CertifyOptions) -> Verdict,
+) -> Verdict {
     match certify {
-        None => Certification::none(NOT_REQUESTED),
-        Some(_) if status != Status::Success => {
-            Certification::none(format!("not attempted: status {}", status.as_str()))
-        }
+        None => Verdict::none(NOT_REQUESTED),
+        Some(_) if status != Status::Success => Verdict::none(format!("not attempted: status {}", status.as_str())),
         Some(options) => run(options),
     }
 }
 
-/// The certificate stage's outcome, in the units of this module (`f = ½ Σ r²`, px²); the result
-/// assembly ([`crate::pose::PoseResult`]) turns it into the shared [`crate::certificate::Certificate`]
-/// in `Σ r²`.
+/// The certificate stage's outcome in the crate's convention (`Σ r²`, [`crate::certificate`]): what
+/// the pose's result reports.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Certification {
+pub(crate) struct Verdict {
+    /// The shared certificate, in `Σ r²`; `None` when no bound was computed.
+    pub(crate) certificate: Option<Certificate>,
+    /// Why the pose is not certified (`None` when it is).
+    pub(crate) uncertified_reason: Option<String>,
+}
+
+impl Verdict {
+    /// No bound, for `reason`.
+    pub(crate) fn none(reason: impl Into<String>) -> Self {
+        Verdict {
+            certificate: None,
+            uncertified_reason: Some(reason.into()),
+        }
+    }
+
+    /// Whether a certificate closed its gap.
+    pub(crate) fn certified(&self) -> bool {
+        self.certificate.is_some_and(|c| c.certified)
+    }
+}
+
+/// What the sublevel-set test proved, in this module's units (`f = ½ Σ r²`, px²). `certify` turns
+/// it into the shared certificate in `Σ r²` (`SublevelSetOutcome::into_verdict`, the one
+/// conversion); the test hooks ([`testing::certify`]) read it as it is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SublevelSetOutcome {
     /// Whether the gap closed.
     pub certified: bool,
     /// The proved bound, clamped to the cost (NaN when there is none).
@@ -175,16 +198,36 @@ pub struct Certification {
     pub reason: Option<String>,
 }
 
-impl Certification {
+impl SublevelSetOutcome {
     /// No bound, for `reason`.
-    pub fn none(reason: impl Into<String>) -> Self {
-        Certification {
+    pub(crate) fn none(reason: impl Into<String>) -> Self {
+        SublevelSetOutcome {
             certified: false,
             lower_bound: f64::NAN,
             raw_lower_bound: f64::NAN,
             relative_gap: f64::NAN,
             nodes: 0,
             reason: Some(reason.into()),
+        }
+    }
+
+    /// The outcome in the crate's convention: the shared certificate of `kind` with the bounds in
+    /// `Σ r² = 2f` (`None` without a bound) and the relative gap as proved (a ratio: the same in either
+    /// unit, but for the floor `1e-12`, which the test applies to `f`).
+    fn into_verdict(self, kind: CertificateKind) -> Verdict {
+        let sum_of_squares = |half: f64| 2.0 * half;
+        Verdict {
+            certificate: (!self.raw_lower_bound.is_nan()).then(|| {
+                Certificate::new(
+                    kind,
+                    sum_of_squares(self.lower_bound),
+                    sum_of_squares(self.raw_lower_bound),
+                    self.relative_gap,
+                    self.certified,
+                )
+                .with_effort(self.nodes, 0)
+            }),
+            uncertified_reason: self.reason,
         }
     }
 }
@@ -201,19 +244,36 @@ const BALL_BISECTIONS: usize = 3;
 /// module documentation), with the node cap `options.max_nodes` or [`MAX_CELLS`]
 /// ([`MAX_CELLS_BEFORE_FALLBACK`] with segments, [`MAX_CELLS_FROM_DISTANCE`] without depth bounds;
 /// each search has its own cap). Through `lens` (`Some`), `corr` holds the observed (distorted) pixels
-/// and the certificate is that of `lens`. Never fails: a certificate that cannot be computed is
-/// `certified = false` with the reason. Every cost and bound here is `½ Σ r²`;
-/// [`crate::pose::PoseResult`] reports them in `Σ r²`.
-pub fn certify(
+/// and the certificate is that of `lens` (kind `lens_sublevel_set`). Never fails: a certificate that
+/// cannot be computed is a verdict without one, with the reason. The cost is `½ Σ r²`, as the pose's
+/// solvers measure it; the verdict's certificate is in `Σ r²`.
+pub(crate) fn certify(
     camera: &Camera,
     lens: Option<&LensCamera>,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
     options: &CertifyOptions,
-) -> Certification {
+) -> Verdict {
+    let kind = if lens.is_some_and(|l| !l.is_pinhole()) {
+        CertificateKind::LensSublevelSet
+    } else {
+        CertificateKind::SublevelSet
+    };
+    sublevel_set_test(camera, lens, corr, pose, cost, options).into_verdict(kind)
+}
+
+/// [`certify`] in this module's units: every cost and bound is `½ Σ r²`.
+fn sublevel_set_test(
+    camera: &Camera,
+    lens: Option<&LensCamera>,
+    corr: &Correspondences,
+    pose: &Pose,
+    cost: f64,
+    options: &CertifyOptions,
+) -> SublevelSetOutcome {
     if !(cost.is_finite() && cost >= 0.0) {
-        return Certification::none("not attempted: the cost is not finite");
+        return SublevelSetOutcome::none("not attempted: the cost is not finite");
     }
     match lens.filter(|l| !l.is_pinhole()) {
         Some(lens) => lens::certify(lens, corr, pose, cost, options),
@@ -230,18 +290,18 @@ fn certify_pinhole(
     cost: f64,
     options: &CertifyOptions,
     lens: Option<&Surrogate>,
-) -> Certification {
+) -> SublevelSetOutcome {
     // The level of the sublevel set that the search localises (the surrogate's, through a lens).
     let level = lens.map_or(cost, |l| l.slack.to_surrogate(cost));
     // Through a lens the search runs on step 1's weighted observations, step 4 on the surrogate's.
     let search_corr = lens.map_or(corr, |l| l.search_corr());
     let whole = match lens.map(|_| Problem::without_depths(camera, corr, level)).transpose() {
         Ok(whole) => whole,
-        Err(why) => return Certification::none(why),
+        Err(why) => return SublevelSetOutcome::none(why),
     };
     let problem = match Problem::new(camera, search_corr, level) {
         Ok(p) => p,
-        Err(why) => return Certification::none(why),
+        Err(why) => return SublevelSetOutcome::none(why),
     };
     let local = whole.as_ref().unwrap_or(&problem);
     let first = certify_problem(&problem, local, camera, pose, cost, options, lens);
@@ -253,13 +313,13 @@ fn certify_pinhole(
     }
     let second = match Problem::without_depths(camera, search_corr, level) {
         Ok(p) => certify_problem(&p, whole.as_ref().unwrap_or(&p), camera, pose, cost, options, lens),
-        Err(why) => Certification::none(why),
+        Err(why) => SublevelSetOutcome::none(why),
     };
     let nodes = first.nodes + second.nodes;
     if second.certified || second.raw_lower_bound > first.raw_lower_bound {
-        return Certification { nodes, ..second };
+        return SublevelSetOutcome { nodes, ..second };
     }
-    Certification {
+    SublevelSetOutcome {
         nodes,
         reason: Some(format!(
             "{}; without depth bounds: {}",
@@ -281,10 +341,10 @@ fn certify_problem(
     cost: f64,
     options: &CertifyOptions,
     lens: Option<&Surrogate>,
-) -> Certification {
+) -> SublevelSetOutcome {
     let (whitening, model) = match LocalModel::at(local, camera, pose, lens) {
         Ok(m) => m,
-        Err(why) => return Certification::none(why),
+        Err(why) => return SublevelSetOutcome::none(why),
     };
     let slack = lens.map_or(Slack::NONE, |l| l.slack);
     let gap_of = |lower: f64| relative_gap(cost, lower);
@@ -322,7 +382,7 @@ fn certify_problem(
         best
     });
     let Some((target, at_target)) = found else {
-        return Certification::none(match lens {
+        return SublevelSetOutcome::none(match lens {
             None => format!(
                 "not proved: the residuals ({:.3e} px) are too large for the curvature of the cost",
                 (2.0 * cost).sqrt()
@@ -368,9 +428,9 @@ fn certify_problem(
     let localised = match localise(&mut search, options.max_nodes_or(cap)) {
         Ok(l) => l,
         Err((why, nodes)) => {
-            return Certification {
+            return SublevelSetOutcome {
                 nodes,
-                ..Certification::none(why)
+                ..SublevelSetOutcome::none(why)
             }
         }
     };
@@ -378,7 +438,7 @@ fn certify_problem(
     let lower_bound = raw_lower_bound.min(cost);
     let gap = gap_of(lower_bound);
     let certified = gap <= options.max_relative_gap;
-    Certification {
+    SublevelSetOutcome {
         certified,
         lower_bound,
         raw_lower_bound,

@@ -431,7 +431,7 @@ impl RotationSearch<'_, '_> {
     }
 
     /// The bound of a box without depth bounds ([`SearchStart::ObjectDistance`]) whose poses of `S` have their
-    /// translations in `ball`: `Q` the minorant at `R_c` ([`Problem::ball_quadratic`]), a pose of `S`
+    /// translations in `ball`: `Q` the minorant at `R_c` ([`Problem::ball_bound`]), a pose of `S`
     /// in the box has `√(2f) ≥ √q_min − θ η` (Minkowski, as with depth bounds), and its translation
     /// lies in the ellipsoid `Q(t) ≤ (√(2f̂) + θ η)²`, whose bounding ball the octants inherit where it
     /// is smaller than `ball`.

@@ -1,4 +1,4 @@
-//! Hooks for the tests of the proof (not part of the API): the steps of [`super::certify`] one by one, on
+//! Hooks for the tests of the proof (not part of the API): the steps of `certify` one by one, on
 //! any pose and at any level, so that the tests can check each against an independent oracle.
 
 use super::lens::{Slack, Surrogate};
@@ -7,10 +7,26 @@ use super::problem::{Problem, SearchStart};
 use super::search::{localise, InsideBall, RecordedCells, RotationSearch};
 use crate::camera::Camera;
 use crate::camera_model::LensCamera;
+use crate::certificate::CertifyOptions;
 use crate::optim::Objective;
 use crate::pose::correspondences::Correspondences;
 use crate::pose::reprojection::{Pose, ReprojectionCost};
 use nalgebra::{Matrix3, SMatrix, Vector3};
+
+pub use super::SublevelSetOutcome;
+
+/// The whole test in its own units (`f = ½ Σ r²`, px²), at any `pose` and cost `cost` (`½ Σ r²`):
+/// what `certify` proves before its outcome becomes the shared certificate in `Σ r²`.
+pub fn certify(
+    camera: &Camera,
+    lens: Option<&LensCamera>,
+    corr: &Correspondences,
+    pose: &Pose,
+    cost: f64,
+    options: &CertifyOptions,
+) -> SublevelSetOutcome {
+    super::sublevel_set_test(camera, lens, corr, pose, cost, options)
+}
 
 /// A rotation cell that the search kept: the box `|ω − centre| ≤ half` (per axis) of rotation
 /// vectors (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the
@@ -89,7 +105,7 @@ pub fn object_distance(
 }
 
 /// Steps 1-3 around `centre` (any pose, not necessarily a minimum) for the sublevel set of
-/// `level` (px², any value, e.g. above the optimum), on the same branch and bound as [`super::certify`]
+/// `level` (px², any value, e.g. above the optimum), on the same branch and bound as `certify`
 /// with the incumbent `level` and no gap: boxes are split until they are pruned (bound at least
 /// `level`, or behind the camera), lie inside the whitened ball of radius `target`, or reach the
 /// half-width `min_half`; the last two are recorded and closed.
