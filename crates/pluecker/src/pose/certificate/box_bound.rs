@@ -4,11 +4,33 @@
 //! residuals at its centre rotation with the translations in an ellipsoid handed down box by box
 //! (`Problem::ball_bound`); each with the quadratic linearised in the rotation.
 
-use super::minorant::{ball_minimum_lower_bound, minkowski, rotation_rest, ScaledMinorant};
-use super::problem::{largest_eigenvalue, Problem, NEAR_ANSWER};
-use super::search::Cell;
+use super::minorant::{ball_minimum_lower_bound, largest_eigenvalue, minkowski, rotation_rest, ScaledMinorant};
+use super::problem::{Problem, NEAR_ANSWER};
 use crate::geometry::quaternion::skew;
+use crate::global::branch_and_bound::Region;
 use nalgebra::{Matrix3, Vector3};
+
+/// One box of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-widths. Every rotation of the
+/// box is within the angle `θ = ‖half‖` (half the diagonal) of the centre's: the angle between
+/// `exp(ω) R̂` and `exp(ω_c) R̂` is at most `‖ω − ω_c‖` (Hartley & Kahl 2009, lemma 1).
+#[derive(Clone, Copy)]
+pub(super) struct Cell {
+    pub(super) centre: Vector3<f64>,
+    pub(super) half: Vector3<f64>,
+}
+
+impl Cell {
+    pub(super) fn of(region: &Region) -> Self {
+        // Element by element: a slice copy of three numbers would call memcpy for every box.
+        let (l, u) = (&region.lower, &region.upper);
+        let lower = Vector3::new(l[0], l[1], l[2]);
+        let upper = Vector3::new(u[0], u[1], u[2]);
+        Cell {
+            centre: (lower + upper) * 0.5,
+            half: (upper - lower) * 0.5,
+        }
+    }
+}
 
 /// An ellipsoid `{centre + L z : ‖z‖ ≤ 1}` (`shape = L Lᵀ`) that holds the translation of every pose
 /// of `S` in a box (the search without depth bounds hands it down box by box), and its largest

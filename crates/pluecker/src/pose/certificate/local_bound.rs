@@ -5,8 +5,8 @@
 //! variation ([`RaySlack`]).
 
 use super::lens::Surrogate;
-use super::problem::{largest_eigenvalue, norm2x2, Problem};
-use super::testing;
+use super::minorant::largest_eigenvalue;
+use super::problem::{norm2x2, Problem};
 use crate::camera::Camera;
 use crate::geometry::quaternion::skew;
 use crate::lens_linearisation::spectral_norm;
@@ -96,18 +96,10 @@ pub(super) fn tangent_map(y: &Vector3<f64>) -> SMatrix<f64, 3, 6> {
 /// and `D = B − A` (`‖D‖ = length`, `D⁽ᵏ⁾ = a_ω × D⁽ᵏ⁻¹⁾`), `n = ēᵀ (A × B) = Dᵀ u` and by Leibniz
 /// `n''' = D'''ᵀ u + 3 D''ᵀ u' + 3 D'ᵀ u'' + Dᵀ u'''` (one piece each), with `‖u''‖ ≤ ‖ē‖ α_ω² y`, `‖u'''‖ ≤ ‖ē‖ α_ω³ y`.
 /// `u` and `u'` see only the motion across the sight, so a step along it (the depth) costs nothing.
-pub(super) fn sight_parts(
-    a_w: f64,
-    length: f64,
-    e_norm: f64,
-    y: f64,
-    cross: f64,
-    speed: f64,
-    s: f64,
-) -> testing::SightParts {
+pub(super) fn sight_parts(a_w: f64, length: f64, e_norm: f64, y: f64, cross: f64, speed: f64, s: f64) -> SightParts {
     // ‖u'‖ grows by at most ‖ē‖ ‖X''‖ ≤ ‖ē‖ α_ω² y per unit of s.
     let speed = speed + s * e_norm * a_w * a_w * y;
-    testing::SightParts {
+    SightParts {
         speed,
         pieces: [
             a_w.powi(3) * length * (cross + s * speed),
@@ -304,8 +296,8 @@ impl RayCurvature {
     }
 
     /// [`Self::bound`], recording its per-residual parts in `parts` (the test hook
-    /// [`testing::curvature_parts`] only).
-    pub(super) fn bound_with_parts(&self, s: f64, mut parts: Option<&mut testing::CurvatureParts>) -> Option<f64> {
+    /// [`super::testing::curvature_parts`] only).
+    pub(super) fn bound_with_parts(&self, s: f64, mut parts: Option<&mut CurvatureParts>) -> Option<f64> {
         let (a_w, a_t) = (self.alpha_omega, self.alpha_tau);
         let mut direct2 = 0.0;
         let mut rate: f64 = 0.0;
@@ -326,7 +318,7 @@ impl RayCurvature {
             direct2 += direct * direct;
             let rho = depth_rate / z_lo;
             if let Some(p) = parts.as_deref_mut() {
-                p.points.push(testing::PointParts {
+                p.points.push(PointParts {
                     z_lo,
                     rate: rho,
                     residual_rate: pt.rate,
@@ -347,7 +339,7 @@ impl RayCurvature {
             let m2 = a_w * a_w * (line.ya * b_max + a_max * line.yb) + 2.0 * v_a.min(v_b) * a_w * line.length;
             // m''' = A''' × B + A × B''' + 3 (A'' × (a_ω × D) + A' × (a_ω × (a_ω × D))).
             let mixed3 = 3.0 * a_w * a_w * line.length * (v_a + a_w * line.ya).min(v_b + a_w * line.yb);
-            let mut ends = [testing::EndpointParts::default(); 2];
+            let mut ends = [EndpointParts::default(); 2];
             for (end, found) in line.endpoints.iter().zip(&mut ends) {
                 let q1 = end.q1_0 + s * end.g_norm * drift;
                 let w_lo = end.w0 - s * q1;
@@ -370,10 +362,10 @@ impl RayCurvature {
                 let leibniz = n3;
                 let n3 = sights
                     .iter()
-                    .map(|p: &testing::SightParts| p.pieces.iter().sum())
+                    .map(|p: &SightParts| p.pieces.iter().sum())
                     .fold(leibniz, f64::min);
                 let n2 = end.n2_exact + s * n3;
-                *found = testing::EndpointParts {
+                *found = EndpointParts {
                     w_lo,
                     w2,
                     rate: rho,
@@ -403,7 +395,7 @@ impl RayCurvature {
                 endpoints.push((rho, direct, direct + 2.0 * rho * speed, end.gram * (rho * rho)));
             }
             if let Some(p) = parts.as_deref_mut() {
-                p.lines.push(testing::LineParts {
+                p.lines.push(LineParts {
                     speed: [v_a, v_b],
                     drift,
                     m2,
@@ -570,7 +562,7 @@ impl<'s> LocalModel<'s> {
         let (k, slacks) = match self.lens {
             None => (self.curvature.bound(radius)?, vec![(radius, RaySlack::NONE)]),
             Some(lens) => {
-                let mut parts = testing::CurvatureParts::default();
+                let mut parts = CurvatureParts::default();
                 let k = self.curvature.bound_with_parts(radius, Some(&mut parts))?;
                 // The turn rate ‖q′‖ / w of each endpoint's whitened line normal over the ball.
                 let turns: Vec<f64> = parts
@@ -615,3 +607,72 @@ impl<'s> LocalModel<'s> {
 /// smaller ones, each `1/√2` of the last (halving instead lost 8 of 28 certificates on the
 /// bench's strong lens at f = 250 px with 10 correspondences).
 pub(super) const NESTED_BALLS: usize = 24;
+
+/// A point's part of `K` on the ball: along every whitened ray `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`
+/// (`a = T v`, `‖v‖ = 1`, `s ≤ radius`) its camera-frame depth `p_z ≥ z_lo` and `|p_z' / p_z| ≤ rate`.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy)]
+pub struct PointParts {
+    pub z_lo: f64,
+    pub rate: f64,
+    /// `‖g‖₂` at the pose: the rate of the point's whitened residual per unit whitened step.
+    pub residual_rate: f64,
+}
+
+/// One observed endpoint's part of `K` on the ball, along the same rays: with `m = A × B`
+/// (camera-frame endpoints of the object segment) and `w = ‖G_e m_xy‖` (`G_e = Lᵀ G`, `G` the
+/// upper-left 2x2 block of `K⁻ᵀ`, `L Lᵀ` the endpoint's covariance, the identity without one),
+/// `w ≥ w_lo`, `|w''| ≤ w2`, `|w' / w| ≤ rate`, `‖q'‖ ≤ q1` (`q = G_e m_xy`), and with
+/// `ē = K⁻¹ ẽ`, `|(ēᵀ m)''| ≤ n2` and `|(ēᵀ m)'''| ≤ n3`; `n2_exact` is `max |(ēᵀ m)''(0)|` over
+/// the unit whitened directions, exactly. Within them, `w2 − ‖G_e‖ m2` bounds `‖q'‖² / w` and
+/// `n3 − ‖ē‖ mixed3` bounds `|ēᵀ (A''' × B + A × B''')|`.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct EndpointParts {
+    pub w_lo: f64,
+    pub w2: f64,
+    pub rate: f64,
+    pub q1: f64,
+    pub n2: f64,
+    pub n2_exact: f64,
+    pub n3: f64,
+    /// The bound on `|n'''|` from `m''' = A''' × B + A × B''' + mixed`.
+    pub leibniz: f64,
+    /// The bounds on `|n'''|` about the ends `A` and `B` (see [`SightParts`]); `n3` is the least
+    /// of theirs and `leibniz`.
+    pub sights: [SightParts; 2],
+}
+
+/// `|n'''|` about one end `X` of the segment: `n = Dᵀ u` with `D = B − A` and `u = ē × X`, so
+/// `n''' = D'''ᵀ u + 3 D''ᵀ u' + 3 D'ᵀ u'' + Dᵀ u'''`. Along the rays, `speed` bounds `‖u'‖`
+/// and `pieces` bound the four terms in that order.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SightParts {
+    pub speed: f64,
+    pub pieces: [f64; 4],
+}
+
+/// A line's part of `K` on the ball, along the same rays, each a claim of its own: `speed`
+/// bounds `‖A'‖` and `‖B'‖`, `drift` bounds `‖m'(s) − m'(0)‖ / s`, `m2` bounds `‖m''‖` and
+/// `mixed3` bounds `‖3 (A'' × B' + A' × B'')‖` (all over the ball); `endpoints` are the parts of
+/// the two observed endpoints.
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy)]
+pub struct LineParts {
+    pub speed: [f64; 2],
+    pub drift: f64,
+    pub m2: f64,
+    pub mixed3: f64,
+    pub endpoints: [EndpointParts; 2],
+}
+
+/// The parts of `K` (see [`PointParts`], [`LineParts`]; a record of the test hook
+/// `testing::curvature_parts`, hidden from the docs) and the whitening `T` of the rays.
+#[doc(hidden)]
+#[derive(Debug, Clone, Default)]
+pub struct CurvatureParts {
+    pub whitening: SMatrix<f64, 6, 6>,
+    pub points: Vec<PointParts>,
+    pub lines: Vec<LineParts>,
+}

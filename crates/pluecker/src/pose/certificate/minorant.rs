@@ -4,7 +4,6 @@
 //! `½ (√q_min − θ η)₊²`, and the minorant linearised in the rotation, whose minimum over the ball of
 //! rotations is bounded by its Lagrangian dual.
 
-use super::problem::{largest_eigenvalue, PointForm, Problem};
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use std::cell::OnceCell;
 use std::rc::Rc;
@@ -14,6 +13,14 @@ use std::rc::Rc;
 /// scale of the minorant takes up ([`ScaledMinorant`]): a rebuild costs about as much as ten boxes' bounds,
 /// and without rebuilds the f = 15000 px scenes lose certificates.
 pub(super) const REBUILD_GAIN: f64 = 1.2;
+
+/// A point's part of step 2's minorant: `H = AᵀA` for the 2x3 map `A` with `r = A x / x_z` (the
+/// point's whitened residual at the camera-frame position `x`), and `λ_max(H) = ‖A‖²`.
+pub(super) struct PointForm {
+    /// `H = AᵀA`.
+    pub(super) h: Matrix3<f64>,
+    pub(super) norm2: f64,
+}
 
 /// Step 2's minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t)‖²`, `wᵢ = 1 / Dᵢ²`, for one set of depth
 /// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
@@ -42,7 +49,7 @@ pub(super) struct Minorant {
 
 impl Minorant {
     /// The minorant for the depth bounds `depths` of the points `points` with the residual maps
-    /// `forms` ([`Problem::forms`]): a point's term is `‖Aᵢ (R Xᵢ + t)‖² / Dᵢ²`.
+    /// `forms` ([`super::problem::Problem::forms`]): a point's term is `‖Aᵢ (R Xᵢ + t)‖² / Dᵢ²`.
     pub(super) fn build(
         points: &[Vector3<f64>],
         bearings: &[Vector3<f64>],
@@ -153,7 +160,7 @@ impl ScaledMinorant {
     /// `(e^θ − 1 − θ) √κ η`: over the rotations `exp(φ) r`, `‖φ‖ ≤ θ`, the points' whitened residuals
     /// `√(κ wᵢ) Aᵢ (exp(φ) yᵢ + t)` (`yᵢ = r Xᵢ`) are within this of their part linear in `φ`, in the
     /// norm of the stacked vector: `exp(φ) = I + [φ]ₓ + E` with `‖E y‖ ≤ (e^θ − 1 − θ) ‖y‖`, and
-    /// `η² = Σ wᵢ λ_max(Hᵢ) ‖Xᵢ‖²` ([`Self::linear_bound`], [`Problem::linear_lines_bound`]).
+    /// `η² = Σ wᵢ λ_max(Hᵢ) ‖Xᵢ‖²` ([`Self::linear_bound`], [`super::problem::Problem::linear_lines_bound`]).
     pub(super) fn second_order_rest(&self, theta: f64) -> f64 {
         rotation_rest(theta) * self.minorant.eta * self.scale.sqrt()
     }
@@ -223,7 +230,7 @@ impl ScaledMinorant {
     /// `r_c` over the octants' half-diagonal `θ_octant` (both are valid minorants).
     pub(super) fn tightened(
         &self,
-        problem: &Problem,
+        rebuild: impl FnOnce(Vec<f64>) -> Minorant,
         reach: impl Iterator<Item = f64> + Clone,
         r_c: &Matrix3<f64>,
         theta_octant: f64,
@@ -244,7 +251,7 @@ impl ScaledMinorant {
             return scaled;
         }
         let rebuilt = ScaledMinorant {
-            minorant: Rc::new(problem.minorant(self.depths().zip(reach).map(|(d, r)| r.min(d)).collect())),
+            minorant: Rc::new(rebuild(self.depths().zip(reach).map(|(d, r)| r.min(d)).collect())),
             scale: 1.0,
         };
         if rebuilt.bound_near(r_c, theta_octant) >= scaled.bound_near(r_c, theta_octant) {
@@ -307,3 +314,19 @@ pub(super) fn rotation_rest(theta: f64) -> f64 {
 
 /// Newton steps of [`ball_minimum_lower_bound`] (every step's dual value is a valid bound).
 pub(super) const NEWTON_STEPS: usize = 8;
+
+/// The largest eigenvalue of a symmetric 3x3 matrix, in closed form (trigonometric solution of the
+/// characteristic cubic), raised by a relative `1e-9` to cover its rounding.
+pub(super) fn largest_eigenvalue(m: &Matrix3<f64>) -> f64 {
+    let q = m.trace() / 3.0;
+    let off = m[(0, 1)].powi(2) + m[(0, 2)].powi(2) + m[(1, 2)].powi(2);
+    let p2 = (m[(0, 0)] - q).powi(2) + (m[(1, 1)] - q).powi(2) + (m[(2, 2)] - q).powi(2) + 2.0 * off;
+    let p = (p2 / 6.0).sqrt();
+    if !(p > 1e-300) {
+        return q + q.abs() * 1e-9;
+    }
+    let b = (m - Matrix3::identity() * q) / p;
+    let phi = (0.5 * b.determinant()).clamp(-1.0, 1.0).acos() / 3.0;
+    let lambda = q + 2.0 * p * phi.cos();
+    lambda + 1e-9 * (lambda.abs() + p)
+}

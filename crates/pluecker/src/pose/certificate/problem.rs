@@ -4,7 +4,7 @@
 //! pairs of points), or, without them, the object's distance from the camera
 //! ([`crate::pose::object_distance`]).
 
-use super::minorant::Minorant;
+use super::minorant::{largest_eigenvalue, Minorant, PointForm};
 use crate::camera::Camera;
 use crate::pose::correspondences::Correspondences;
 use crate::pose::object_distance::{distance_bound, Sight};
@@ -89,14 +89,6 @@ pub(super) enum SearchStart {
     /// bounded from the residuals at its centre rotation ([`Problem::ball_bound`]) and hands its
     /// octants a smaller ellipsoid of translations ([`super::box_bound::TranslationEllipsoid`]).
     ObjectDistance { pivot: Vector3<f64>, distance: f64 },
-}
-
-/// A point's part of step 2's minorant: `H = AᵀA` for the 2x3 map `A` with `r = A x / x_z` (the
-/// point's whitened residual at the camera-frame position `x`), and `λ_max(H) = ‖A‖²`.
-pub(super) struct PointForm {
-    /// `H = AᵀA`.
-    pub(super) h: Matrix3<f64>,
-    pub(super) norm2: f64,
 }
 
 /// A segment's part of the box bound with lines ([`Problem::lines_bound`]): its object endpoint `a`,
@@ -345,22 +337,6 @@ pub(super) fn object_distance(
         });
     let sights: Vec<Sight> = rays.chain(planes).collect();
     distance_bound(&sights).map(|distance| (pivot, distance))
-}
-
-/// The largest eigenvalue of a symmetric 3x3 matrix, in closed form (trigonometric solution of the
-/// characteristic cubic), raised by a relative `1e-9` to cover its rounding.
-pub(super) fn largest_eigenvalue(m: &Matrix3<f64>) -> f64 {
-    let q = m.trace() / 3.0;
-    let off = m[(0, 1)].powi(2) + m[(0, 2)].powi(2) + m[(1, 2)].powi(2);
-    let p2 = (m[(0, 0)] - q).powi(2) + (m[(1, 1)] - q).powi(2) + (m[(2, 2)] - q).powi(2) + 2.0 * off;
-    let p = (p2 / 6.0).sqrt();
-    if !(p > 1e-300) {
-        return q + q.abs() * 1e-9;
-    }
-    let b = (m - Matrix3::identity() * q) / p;
-    let phi = (0.5 * b.determinant()).clamp(-1.0, 1.0).acos() / 3.0;
-    let lambda = q + 2.0 * p * phi.cos();
-    lambda + 1e-9 * (lambda.abs() + p)
 }
 
 /// [`Problem::bearing_cone`] (an empty cone, `δ = ∞`, without points or where the bearings' mean

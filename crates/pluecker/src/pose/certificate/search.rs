@@ -3,12 +3,11 @@
 //! minorant, or a smaller ellipsoid of translations); and the boxes inside the whitened ball, which
 //! step 4 bounds.
 
-use super::box_bound::{BoxBound, Ellipsoid, TranslationEllipsoid};
+use super::box_bound::{BoxBound, Cell, Ellipsoid, TranslationEllipsoid};
 use super::lens::Slack;
 use super::local_bound::{LocalModel, Whitening};
-use super::minorant::{minkowski, ScaledMinorant};
-use super::problem::{largest_eigenvalue, Problem, SearchStart};
-use super::testing;
+use super::minorant::{largest_eigenvalue, minkowski, ScaledMinorant};
+use super::problem::{Problem, SearchStart};
 use crate::geometry::quaternion::exp_so3;
 use crate::global::branch_and_bound::{
     branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Corner, Region, SubRegions,
@@ -19,35 +18,41 @@ use crate::pose::reprojection::Pose;
 use nalgebra::{Matrix3, Vector3};
 use std::rc::Rc;
 
-/// One box of rotation vectors `ω` (`R = exp(ω) R̂`): centre and half-widths. Every rotation of the
-/// box is within the angle `θ = ‖half‖` (half the diagonal) of the centre's: the angle between
-/// `exp(ω) R̂` and `exp(ω_c) R̂` is at most `‖ω − ω_c‖` (Hartley & Kahl 2009, lemma 1).
-#[derive(Clone, Copy)]
-pub(super) struct Cell {
-    pub(super) centre: Vector3<f64>,
-    pub(super) half: Vector3<f64>,
+/// A rotation cell that the search kept: the box `|ω − centre| ≤ half` (per axis) of rotation
+/// vectors (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the
+/// minorant's Hessian and minimiser at the box's centre, for the box's depth bounds) that holds the
+/// translation of every pose of the sublevel set whose rotation lies in the box.
+/// A record of the test hook `testing::rotation_search` (hidden from the docs).
+#[doc(hidden)]
+#[derive(Debug, Clone)]
+pub struct KeptCell {
+    pub centre: Vector3<f64>,
+    /// The half-widths of the box along the three axes.
+    pub half: Vector3<f64>,
+    pub t_star: Vector3<f64>,
+    pub c: Matrix3<f64>,
+    pub slack: f64,
+    /// Whether the cell lies inside the whitened ball of the target radius (else it was left
+    /// unsplit at the least half-width).
+    pub inside_ball: bool,
+    /// The depth bounds `Dᵢ` of the cell's minorant (handed down by its ancestors): the search
+    /// claims `‖R Xᵢ + t‖ ≤ Dᵢ` for every pose of the sublevel set with its rotation in the box.
+    pub depths: Vec<f64>,
+    /// Whether the ellipsoid comes from a quadratic with the segments' terms (with depth bounds:
+    /// where it reaches less far than the points' alone).
+    pub with_segments: bool,
+    /// For a cell inside the ball: the largest whitened length `‖(0, t − t*)‖_W` over its
+    /// ellipsoid (`W = JᵀJ` at the centre), a part of the radius the search claims for the cell.
+    pub extent: Option<f64>,
 }
 
-impl Cell {
-    pub(super) fn of(region: &Region) -> Self {
-        // Element by element: a slice copy of three numbers would call memcpy for every box.
-        let (l, u) = (&region.lower, &region.upper);
-        let lower = Vector3::new(l[0], l[1], l[2]);
-        let upper = Vector3::new(u[0], u[1], u[2]);
-        Cell {
-            centre: (lower + upper) * 0.5,
-            half: (upper - lower) * 0.5,
-        }
-    }
-}
-
-/// What the test hook [`testing::rotation_search`] records: the cells kept, the cells pruned, and the
+/// What the test hook [`super::testing::rotation_search`] records: the cells kept, the cells pruned, and the
 /// half-width at which cells stop being split.
 pub(super) struct RecordedCells {
     pub(super) min_half: f64,
-    pub(super) cells: Vec<testing::KeptCell>,
+    pub(super) cells: Vec<KeptCell>,
     pub(super) pruned: usize,
-    pub(super) behind: Vec<testing::KeptCell>,
+    pub(super) behind: Vec<KeptCell>,
 }
 
 impl RecordedCells {
@@ -261,7 +266,7 @@ impl RotationSearch<'_, '_> {
         lower: f64,
         t_star: &Vector3<f64>,
         extent: impl FnOnce() -> Option<f64>,
-        kept: impl Fn(bool) -> testing::KeptCell,
+        kept: impl Fn(bool) -> KeptCell,
     ) -> Option<Bound<()>> {
         // Whitened radius of the box: centre, rotation spread and translation ellipsoid (triangle
         // inequality over the three parts of the step).
@@ -275,7 +280,7 @@ impl RotationSearch<'_, '_> {
                     let lower = match &mut self.inside_ball {
                         InsideBall::Bound(ball) => lower.max(self.slack.to_surrogate(ball.at(radius))),
                         InsideBall::Record(r) => {
-                            r.cells.push(testing::KeptCell {
+                            r.cells.push(KeptCell {
                                 extent: Some(extent),
                                 ..kept(true)
                             });
@@ -375,7 +380,7 @@ impl RotationSearch<'_, '_> {
         if let Some(pruned) = self.pruned(lower) {
             return (pruned, None);
         }
-        let kept = |inside_ball: bool, ellipsoid: &Ellipsoid| testing::KeptCell {
+        let kept = |inside_ball: bool, ellipsoid: &Ellipsoid| KeptCell {
             centre: cell.centre,
             half: cell.half,
             t_star: ellipsoid.centre,
@@ -426,7 +431,7 @@ impl RotationSearch<'_, '_> {
         // this box's).
         let reach = (problem.corr.points3d.iter().zip(&problem.norms))
             .map(|(x, norm)| (r_c * x + ellipsoid.centre).norm() + theta * norm + ellipsoid.spread);
-        let handed_down = scaled.tightened(problem, reach, r_c, 0.5 * theta);
+        let handed_down = scaled.tightened(|depths| problem.minorant(depths), reach, r_c, 0.5 * theta);
         (bounded(lower), Some(HandedDown::Minorant(handed_down)))
     }
 
@@ -465,7 +470,7 @@ impl RotationSearch<'_, '_> {
         if let Some(pruned) = self.pruned(lower) {
             return (pruned, None);
         }
-        let kept = |inside_ball: bool| testing::KeptCell {
+        let kept = |inside_ball: bool| KeptCell {
             centre: cell.centre,
             half: cell.half,
             t_star,

@@ -11,8 +11,10 @@ use crate::certificate::CertifyOptions;
 use crate::optim::Objective;
 use crate::pose::correspondences::Correspondences;
 use crate::pose::reprojection::{Pose, ReprojectionCost};
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{SMatrix, Vector3};
 
+pub use super::local_bound::{CurvatureParts, EndpointParts, LineParts, PointParts, SightParts};
+pub use super::search::KeptCell;
 pub use super::SublevelSetOutcome;
 
 /// The whole test in its own units (`f = ½ Σ r²`, px²), at any `pose` and cost `cost` (`½ Σ r²`):
@@ -26,32 +28,6 @@ pub fn certify(
     options: &CertifyOptions,
 ) -> SublevelSetOutcome {
     super::sublevel_set_test(camera, lens, corr, pose, cost, options)
-}
-
-/// A rotation cell that the search kept: the box `|ω − centre| ≤ half` (per axis) of rotation
-/// vectors (`R = exp(ω) R̂`), and the ellipsoid `(t − t*)ᵀ C (t − t*) ≤ slack` (`C`, `t*` the
-/// minorant's Hessian and minimiser at the box's centre, for the box's depth bounds) that holds the
-/// translation of every pose of the sublevel set whose rotation lies in the box.
-#[derive(Debug, Clone)]
-pub struct KeptCell {
-    pub centre: Vector3<f64>,
-    /// The half-widths of the box along the three axes.
-    pub half: Vector3<f64>,
-    pub t_star: Vector3<f64>,
-    pub c: Matrix3<f64>,
-    pub slack: f64,
-    /// Whether the cell lies inside the whitened ball of the target radius (else it was left
-    /// unsplit at the least half-width).
-    pub inside_ball: bool,
-    /// The depth bounds `Dᵢ` of the cell's minorant (handed down by its ancestors): the search
-    /// claims `‖R Xᵢ + t‖ ≤ Dᵢ` for every pose of the sublevel set with its rotation in the box.
-    pub depths: Vec<f64>,
-    /// Whether the ellipsoid comes from a quadratic with the segments' terms (with depth bounds:
-    /// where it reaches less far than the points' alone).
-    pub with_segments: bool,
-    /// For a cell inside the ball: the largest whitened length `‖(0, t − t*)‖_W` over its
-    /// ellipsoid (`W = JᵀJ` at the centre), a part of the radius the search claims for the cell.
-    pub extent: Option<f64>,
 }
 
 /// What [`rotation_search`] proved.
@@ -161,69 +137,6 @@ pub struct LocalBound {
     pub curvature: f64,
     /// The bound on the cost over the ball, unclamped.
     pub raw_bound: f64,
-}
-
-/// A point's part of `K` on the ball: along every whitened ray `s ↦ (exp(s a_ω) R̂, t̂ + s a_τ)`
-/// (`a = T v`, `‖v‖ = 1`, `s ≤ radius`) its camera-frame depth `p_z ≥ z_lo` and `|p_z' / p_z| ≤ rate`.
-#[derive(Debug, Clone, Copy)]
-pub struct PointParts {
-    pub z_lo: f64,
-    pub rate: f64,
-    /// `‖g‖₂` at the pose: the rate of the point's whitened residual per unit whitened step.
-    pub residual_rate: f64,
-}
-
-/// One observed endpoint's part of `K` on the ball, along the same rays: with `m = A × B`
-/// (camera-frame endpoints of the object segment) and `w = ‖G_e m_xy‖` (`G_e = Lᵀ G`, `G` the
-/// upper-left 2x2 block of `K⁻ᵀ`, `L Lᵀ` the endpoint's covariance, the identity without one),
-/// `w ≥ w_lo`, `|w''| ≤ w2`, `|w' / w| ≤ rate`, `‖q'‖ ≤ q1` (`q = G_e m_xy`), and with
-/// `ē = K⁻¹ ẽ`, `|(ēᵀ m)''| ≤ n2` and `|(ēᵀ m)'''| ≤ n3`; `n2_exact` is `max |(ēᵀ m)''(0)|` over
-/// the unit whitened directions, exactly. Within them, `w2 − ‖G_e‖ m2` bounds `‖q'‖² / w` and
-/// `n3 − ‖ē‖ mixed3` bounds `|ēᵀ (A''' × B + A × B''')|`.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct EndpointParts {
-    pub w_lo: f64,
-    pub w2: f64,
-    pub rate: f64,
-    pub q1: f64,
-    pub n2: f64,
-    pub n2_exact: f64,
-    pub n3: f64,
-    /// The bound on `|n'''|` from `m''' = A''' × B + A × B''' + mixed`.
-    pub leibniz: f64,
-    /// The bounds on `|n'''|` about the ends `A` and `B` (see [`SightParts`]); `n3` is the least
-    /// of theirs and `leibniz`.
-    pub sights: [SightParts; 2],
-}
-
-/// `|n'''|` about one end `X` of the segment: `n = Dᵀ u` with `D = B − A` and `u = ē × X`, so
-/// `n''' = D'''ᵀ u + 3 D''ᵀ u' + 3 D'ᵀ u'' + Dᵀ u'''`. Along the rays, `speed` bounds `‖u'‖`
-/// and `pieces` bound the four terms in that order.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct SightParts {
-    pub speed: f64,
-    pub pieces: [f64; 4],
-}
-
-/// A line's part of `K` on the ball, along the same rays, each a claim of its own: `speed`
-/// bounds `‖A'‖` and `‖B'‖`, `drift` bounds `‖m'(s) − m'(0)‖ / s`, `m2` bounds `‖m''‖` and
-/// `mixed3` bounds `‖3 (A'' × B' + A' × B'')‖` (all over the ball); `endpoints` are the parts of
-/// the two observed endpoints.
-#[derive(Debug, Clone, Copy)]
-pub struct LineParts {
-    pub speed: [f64; 2],
-    pub drift: f64,
-    pub m2: f64,
-    pub mixed3: f64,
-    pub endpoints: [EndpointParts; 2],
-}
-
-/// The parts of `K` (see [`PointParts`], [`LineParts`]) and the whitening `T` of the rays.
-#[derive(Debug, Clone, Default)]
-pub struct CurvatureParts {
-    pub whitening: SMatrix<f64, 6, 6>,
-    pub points: Vec<PointParts>,
-    pub lines: Vec<LineParts>,
 }
 
 /// [`CurvatureParts`] at `pose` for the ball of whitened `radius` (depth bounds as in

@@ -183,7 +183,7 @@ fn minorant_and_its_scale_against_the_per_point_sum() {
             let angle = rng.uniform_in(0.01, 0.5);
             let r_c = exp_so3(&(rng.unit_vector3() * angle)) * truth.rotation;
             let theta = angle * rng.uniform_in(0.01, 0.3);
-            let handed = root.tightened(&problem, reach.iter().copied(), &r_c, theta);
+            let handed = root.tightened(|depths| problem.minorant(depths), reach.iter().copied(), &r_c, theta);
             let is_rebuilt = !Rc::ptr_eq(&handed.minorant, problem.root().expect("depth bounds"));
             match case {
                 // Even shrinking is a scale, `1 / 0.7²`.
