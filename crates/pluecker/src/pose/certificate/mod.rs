@@ -97,6 +97,14 @@
 //! when the residuals are too large for the curvature (`K` too large on every ball tried), when the
 //! search hits `max_nodes` (another minimum nearly as good, or weak data), or when the observations bound
 //! neither the depths nor the object's distance (image lines that all meet in one point).
+//!
+//! **Where each step lives.** [`problem`]: the data and step 1 (depth bounds, or the object's
+//! distance); [`minorant`]: step 2 and its bounds over a box; [`box_bound`]: step 3's bounds of a box
+//! with the segments and without depth bounds; [`search`]: step 3's rotation search; [`local_bound`]:
+//! step 4; [`lens`]: the certificate through a lens; this file: the entry point [`certify`], which
+//! hands the pipelines the crate's [`Certificate`] in `Σ r²` (every cost and bound inside is
+//! `f = ½ Σ r²`); [`testing`]: the steps one by one for the tests of the proof
+//! (`pluecker::testing::pose_certificate`).
 
 mod box_bound;
 mod lens;
