@@ -3,7 +3,8 @@
 //! proved ([`CertificateKind`]) and over which set ([`CertificateKind::domain`]).
 //!
 //! Costs are sums of squared (whitened) pixel residuals, `Σ r²`, for pose and triangulation alike.
-//! The gap is `(cost − lower_bound) / max(cost, 1e-12)` ([`crate::global::relative_gap`]).
+//! The gap is `(cost − lower_bound) / max(cost, 1e-12)` ([`crate::global::relative_gap`]; `1e-12` is
+//! [`crate::global::CERTIFICATE_COST_FLOOR`]).
 
 /// Options of every certificate. Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -70,7 +71,7 @@ pub enum CertificateKind {
     /// (`point::lens`), whose domain is every point whose projections lie
     /// inside the disc where each lens is proved one-to-one.
     LensConvexityTest,
-    /// Pose: the sublevel-set test ([`crate::pose::certificate`]): a search over rotation cells that
+    /// Pose: the sublevel-set test (`pose::certificate`): a search over rotation cells that
     /// confines every pose as good as the estimate to a ball around it, then a bound on that ball.
     SublevelSet,
     /// Pose through a lens with distortion: the sublevel-set test on the whitened pinhole problem of
@@ -190,20 +191,64 @@ impl PartialEq for Certificate {
 }
 
 impl Certificate {
+    /// The one way a certificate is made: of `kind`, with the proved bound `raw_lower_bound`, the bound
+    /// capped at the answer's cost `lower_bound`, their `relative_gap` and whether it closed
+    /// (`certified`), and no search effort ([`Self::with_effort`] adds it). The fields' docs say what
+    /// each must be; [`Self::of_bound`] computes the last three from the cost.
+    pub(crate) fn new(
+        kind: CertificateKind,
+        lower_bound: f64,
+        raw_lower_bound: f64,
+        relative_gap: f64,
+        certified: bool,
+    ) -> Certificate {
+        Certificate {
+            lower_bound,
+            raw_lower_bound,
+            relative_gap,
+            certified,
+            kind,
+            nodes: 0,
+            solver_iterations: 0,
+        }
+    }
+
+    /// The certificate of `kind` of a proved bound `raw_lower_bound` on the cost `cost`: the bound
+    /// capped at the cost (`min(raw_lower_bound, cost)`), its relative gap
+    /// ([`crate::global::relative_gap`]), certified when that is at most `max_relative_gap`.
+    pub(crate) fn of_bound(
+        kind: CertificateKind,
+        cost: f64,
+        raw_lower_bound: f64,
+        max_relative_gap: f64,
+    ) -> Certificate {
+        let lower_bound = raw_lower_bound.min(cost);
+        let relative_gap = crate::global::relative_gap(cost, lower_bound);
+        Certificate::new(
+            kind,
+            lower_bound,
+            raw_lower_bound,
+            relative_gap,
+            relative_gap <= max_relative_gap,
+        )
+    }
+
+    /// The same certificate, with the branch-and-bound nodes whose bound was computed and the conic
+    /// solver's iterations.
+    pub(crate) fn with_effort(self, nodes: usize, solver_iterations: usize) -> Certificate {
+        Certificate {
+            nodes,
+            solver_iterations,
+            ..self
+        }
+    }
+
     /// The certificate of a convexity test whose (raw) lower bound on the cost is `raw_lower_bound`,
     /// when it closes the gap (`relative_gap(cost, min(raw_lower_bound, cost)) ≤ max_relative_gap`);
     /// `None` otherwise.
     pub(crate) fn of_convexity_test(cost: f64, raw_lower_bound: f64, max_relative_gap: f64) -> Option<Certificate> {
-        let lower_bound = raw_lower_bound.min(cost);
-        let relative_gap = crate::global::relative_gap(cost, lower_bound);
-        (relative_gap <= max_relative_gap).then_some(Certificate {
-            lower_bound,
-            raw_lower_bound,
-            relative_gap,
-            certified: true,
-            kind: CertificateKind::ConvexityTest,
-            nodes: 0,
-            solver_iterations: 0,
-        })
+        let certificate =
+            Certificate::of_bound(CertificateKind::ConvexityTest, cost, raw_lower_bound, max_relative_gap);
+        certificate.certified.then_some(certificate)
     }
 }

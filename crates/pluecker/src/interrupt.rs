@@ -14,7 +14,7 @@
 //!   does not hold the stop up;
 //! - the RANSAC loop (`pose::robust`, stop reason [`crate::RansacStop::Interrupted`]: before each
 //!   sample, between the rounds of a local optimisation, and before each fit of the final
-//!   consensus) and the rotation search of the pose certificate ([`crate::pose::certificate`], not
+//!   consensus) and the rotation search of the pose certificate (`pose::certificate`, not
 //!   proved).
 //!
 //! The stop is ambient (a thread-local) rather than a parameter of every solver, so that adding a

@@ -143,4 +143,7 @@ pub use nalgebra;
 #[doc(hidden)]
 pub mod testing {
     pub use crate::error::number;
+    /// The pose certificate's steps one by one, for the tests of the proof (the test hooks of the
+    /// module `pose::certificate`, whose costs are `½ Σ r²`).
+    pub use crate::pose::certificate::testing as pose_certificate;
 }

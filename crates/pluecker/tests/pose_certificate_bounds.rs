@@ -10,10 +10,10 @@
 mod pose_oracle;
 
 use nalgebra::{Matrix2, Rotation3, Unit, Vector2, Vector3, Vector6};
-use pluecker::pose::certificate::testing::{depth_bounds, local_bound, local_lower_bound, LocalBound};
 use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_observation_noise, visible_scene};
+use pluecker::testing::pose_certificate::{depth_bounds, local_bound, local_lower_bound, LocalBound};
 use pluecker::Camera;
 use pose_oracle::{centred, cost, many_start, pixel, residuals, OraclePose};
 
@@ -452,7 +452,7 @@ fn climb(f: &dyn Fn(&Vector6<f64>, f64) -> f64, radius: f64, rng: &mut Rng) -> f
 /// the wrong units, or a `%` for a `/`, falls below the truth).
 #[test]
 fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
-    use pluecker::pose::certificate::testing::curvature_parts;
+    use pluecker::testing::pose_certificate::curvature_parts;
     let mut rng = Rng::new(45);
     let (mut checked, mut worst) = (0usize, 0.0f64);
     for (k, corr, minimum, name) in step4_scenes() {
@@ -555,7 +555,7 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
 #[test]
 fn the_exact_moment_curvature_at_the_pose_matches_a_numeric_hessian() {
     use nalgebra::Matrix6;
-    use pluecker::pose::certificate::testing::curvature_parts;
+    use pluecker::testing::pose_certificate::curvature_parts;
     let mut rng = Rng::new(46);
     let (mut checked, mut worst) = (0usize, 0.0f64);
     for (k, corr, minimum, name) in step4_scenes() {
@@ -655,7 +655,7 @@ fn moment_jet(jet_a: &[Vector3<f64>; 4], jet_b: &[Vector3<f64>; 4]) -> [Vector3<
 /// group motion ([`point_jet`], [`moment_jet`]), themselves checked against central differences here.
 #[test]
 fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
-    use pluecker::pose::certificate::testing::curvature_parts;
+    use pluecker::testing::pose_certificate::curvature_parts;
     let mut rng = Rng::new(47);
     let (mut checked, mut worst) = (0usize, std::collections::BTreeMap::<&str, f64>::new());
     for (k, corr, minimum, name) in step4_scenes() {

@@ -12,10 +12,10 @@
 mod pose_oracle;
 
 use nalgebra::{Matrix6, Vector3, Vector6};
-use pluecker::pose::certificate::testing::{object_distance, rotation_search, KeptCell, Region};
 use pluecker::pose::Correspondences;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_observation_noise, visible_scene, Scene};
+use pluecker::testing::pose_certificate::{object_distance, rotation_search, KeptCell, Region};
 
 use pluecker::Camera;
 use pose_oracle::{all_in_front, centred, cost, information, many_start, points_in_front, OraclePose};

@@ -7,10 +7,10 @@
 mod pose_oracle;
 
 use nalgebra::Vector3;
-use pluecker::pose::certificate::certify;
 use pluecker::pose::{estimate_pose, Correspondences, PoseOptions, Status};
 use pluecker::rng::Rng;
 use pluecker::synthetic::{visible_scene, Scene};
+use pluecker::testing::pose_certificate::certify;
 use pose_oracle::{centred, cost, many_start, OraclePose};
 
 /// The lowest cost with every object point in front that the oracle's Levenberg-Marquardt reaches

@@ -11,11 +11,11 @@ use pluecker::camera::{CameraModel, LensCamera};
 use pluecker::geometry::testing::log_so3;
 use pluecker::optim::Objective;
 use pluecker::pose::{
-    certificate, estimate_pose, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions,
-    ReprojectionCost, Status,
+    estimate_pose, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions, ReprojectionCost, Status,
 };
 use pluecker::rng::Rng;
 use pluecker::synthetic::{visible_scene, Scene};
+use pluecker::testing::pose_certificate;
 use pluecker::Error;
 
 fn opencv() -> LensCamera {
@@ -867,7 +867,7 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
                 let answer = estimate_pose(&lens, &corr, &certify).unwrap();
                 certified += answer.certificate.as_ref().is_some_and(|c| c.certified) as usize;
                 let best = oracle_cost(&lens, &corr, covs_of, &answer.pose.rotation, &answer.pose.translation);
-                let Ok(at_answer) = certificate::testing::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
+                let Ok(at_answer) = pose_certificate::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
                     continue;
                 };
                 let unit = (2.0 * best).sqrt() + 0.1;
@@ -877,10 +877,10 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
                     let pose = moved(&answer.pose, &at_answer.whitening, factor * unit, &mut rng);
                     let cost = oracle_cost(&lens, &corr, covs_of, &pose.rotation, &pose.translation);
                     let within = 1e-9 * best + 1e-12;
-                    if let Ok(local) = certificate::testing::lens_local_bound(&lens, &corr, &pose, 1.0) {
+                    if let Ok(local) = pose_certificate::lens_local_bound(&lens, &corr, &pose, 1.0) {
                         let reach = whitened_length(&pose, &answer.pose, &local.whitening);
                         let radius = 1.5 * reach;
-                        if let Ok(ball) = certificate::testing::lens_local_bound(&lens, &corr, &pose, radius) {
+                        if let Ok(ball) = pose_certificate::lens_local_bound(&lens, &corr, &pose, radius) {
                             balls += 1;
                             assert!(
                                 ball.raw_bound <= best + within,
@@ -896,7 +896,7 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
                         "{lib_cost} vs the oracle's {cost}"
                     );
                     let verdict =
-                        certificate::certify(&pinhole, Some(&lens), &corr, &pose, lib_cost, &Default::default());
+                        pose_certificate::certify(&pinhole, Some(&lens), &corr, &pose, lib_cost, &Default::default());
                     if verdict.raw_lower_bound.is_finite() {
                         checked += 1;
                         assert!(
@@ -930,7 +930,7 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
 /// The surrogate's cost `½ Σ ℓ²` at `pose`, written here: points `‖W (K π(x) − ū)‖²` with the
 /// surrogate's pixel whitening `W`, endpoints the squared Mahalanobis distance `(l̄·ẽ)² / (l̄₁₂ᵀ C l̄₁₂)`
 /// of the observation `ẽ` to the pixel line `l̄ = K⁻ᵀ (a × b)`.
-fn oracle_surrogate_cost(surrogate: &certificate::testing::LensSurrogate, pose: &pluecker::Pose) -> f64 {
+fn oracle_surrogate_cost(surrogate: &pose_certificate::LensSurrogate, pose: &pluecker::Pose) -> f64 {
     let k = surrogate.camera.matrix();
     let noise = surrogate.corr.noise.as_ref().unwrap();
     let mut total = 0.0;
@@ -975,7 +975,7 @@ fn every_pose_below_the_level_is_below_the_surrogates_level() {
                 let (corr, _, _) = lens_scene(&lens, r_max, n, m, &covs, &mut rng);
                 let answer = estimate_pose(&lens, &corr, &certify).unwrap();
                 let best = oracle_cost(&lens, &corr, None, &answer.pose.rotation, &answer.pose.translation);
-                let Ok(local) = certificate::testing::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
+                let Ok(local) = pose_certificate::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
                     continue;
                 };
                 let levels = if sigma < 1.0 {
@@ -984,7 +984,7 @@ fn every_pose_below_the_level_is_below_the_surrogates_level() {
                     [best * 1.2, best * 2.0, best * 5.0]
                 };
                 for level in levels {
-                    let Ok(surrogate) = certificate::testing::lens_surrogate(&lens, &corr, &answer.pose, level) else {
+                    let Ok(surrogate) = pose_certificate::lens_surrogate(&lens, &corr, &answer.pose, level) else {
                         continue;
                     };
                     for _ in 0..60 {
@@ -1038,7 +1038,7 @@ fn step_one_holds_point_by_point_where_the_lens_residual_vanishes() {
                     points3d: vec![corr.points3d[i]],
                     ..Default::default()
                 };
-                let Ok(surrogate) = certificate::testing::lens_surrogate(&lens, &one, &answer.pose, level) else {
+                let Ok(surrogate) = pose_certificate::lens_surrogate(&lens, &one, &answer.pose, level) else {
                     continue;
                 };
                 let x = r * corr.points3d[i] + t;
@@ -1095,7 +1095,7 @@ fn oracle_jacobian(lens: &LensCamera, n: &Vector2<f64>) -> Matrix2<f64> {
 /// `{‖W (n − n*)‖ ≤ radius}` of `p` (every fourth on its boundary), `J` the oracle's.
 fn sampled_deviation(
     lens: &LensCamera,
-    p: &certificate::testing::PointVariation,
+    p: &pose_certificate::PointVariation,
     radius: f64,
     samples: usize,
     rng: &mut Rng,
@@ -1135,7 +1135,7 @@ fn the_distortions_variation_bounds_the_sampled_jacobians() {
             let cost = 0.5 * answer.cost;
             for radius in [1.0, 5.0, 20.0, 80.0] {
                 let Ok((points, largest)) =
-                    certificate::testing::lens_point_variations(&lens, &corr, &answer.pose, cost, radius)
+                    pose_certificate::lens_point_variations(&lens, &corr, &answer.pose, cost, radius)
                 else {
                     continue;
                 };
@@ -1177,13 +1177,11 @@ fn step_fours_variation_covers_every_projection_of_the_ball() {
             let answer = estimate_pose(&lens, &corr, &certify).unwrap();
             let cost = 0.5 * answer.cost;
             for s in [2.0, 10.0, 40.0] {
-                let Ok(Some((_, eps))) =
-                    certificate::testing::lens_ball(&lens, &corr, &answer.pose, cost, s, 1.0 / s, &[])
+                let Ok(Some((_, eps))) = pose_certificate::lens_ball(&lens, &corr, &answer.pose, cost, s, 1.0 / s, &[])
                 else {
                     continue;
                 };
-                let (points, _) =
-                    certificate::testing::lens_point_variations(&lens, &corr, &answer.pose, cost, s).unwrap();
+                let (points, _) = pose_certificate::lens_point_variations(&lens, &corr, &answer.pose, cost, s).unwrap();
                 let deviation = points
                     .iter()
                     .map(|p| sampled_deviation(&lens, p, 1.5 * s, 100, &mut rng))

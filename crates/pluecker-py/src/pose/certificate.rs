@@ -7,7 +7,7 @@ use crate::convert::{pose_from_parts, Real};
 use crate::errors::{guarded, invalid_argument};
 use crate::pose::correspondences;
 use numpy::{PyArray1, PyArrayMethods};
-use pluecker::pose::certificate::testing::{rotation_search, KeptCell};
+use pluecker::testing::pose_certificate::{rotation_search, KeptCell};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

@@ -46,7 +46,7 @@ const RADIUS_RETRIES: usize = 8;
 /// Why a certificate through a lens found no bound.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LensBoundFailure {
-    /// A lens that is not radially symmetric, or not covered by `lens_bounds`.
+    /// A lens that is not radially symmetric, or not covered by `camera::bounds`.
     Lens,
     /// A projection, or the box about it, reaches a lens's fold radius, or `εᵢ ≥ 1`.
     Fold,

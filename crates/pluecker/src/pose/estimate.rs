@@ -14,7 +14,7 @@
 
 use super::algebraic::{gram, solve_translation, JointCost, RotationCost};
 use super::candidates::{behind_camera_cost, is_exhaustive, minimal_hypotheses};
-use super::certificate::{self, certify, Certification};
+use super::certificate::{self, certify, Verdict};
 use super::correspondences::{constraints, object_points, Conditioning, Correspondences, PointSpread};
 use super::initialization::{joint_starts, mirrored, rotation_starts};
 use super::lens::Observations;
@@ -489,7 +489,7 @@ pub(crate) fn run(observations: &Observations<'_>, opts: &PoseOptions, started: 
     } else {
         let status = status_of_stages(&pose, &stages, corr, valid, opts.refine);
         let why = "no refinement: the pose is not a minimum of the reprojection error";
-        (pose, status, None, Certification::none(why), None)
+        (pose, status, None, Verdict::none(why), None)
     };
     Ok(assemble(
         observations,

@@ -8,9 +8,9 @@
 
 pub(crate) mod algebraic;
 pub(crate) mod candidates;
-// The certificate is requested through `PoseOptions::certify`; the module is public for its test hooks.
-#[doc(hidden)]
-pub mod certificate;
+// The certificate is requested through `PoseOptions::certify` and reported as the crate's
+// `Certificate`; its test hooks are `crate::testing::pose_certificate`.
+pub(crate) mod certificate;
 pub(crate) mod correspondences;
 mod estimate;
 pub(crate) mod initialization;
@@ -136,13 +136,12 @@ pub struct PoseOptions {
     /// Default `9.0` (three standard deviations of the difference). `0` turns the flag off for exact
     /// ties only.
     pub ambiguity_threshold: f64,
-    /// The global-optimality certificate ([`certificate`], the sublevel-set test): `None` skips it
-    /// ([`PoseResult::certificate`] is then `None`). With `Some`, a pose that is not proved (no bound,
-    /// or a gap above `max_relative_gap`) has status [`Status::GapNotClosed`] where it would have been
-    /// [`Status::Success`]. `max_nodes: None` caps the rotation cells at [`certificate::MAX_CELLS`]
-    /// ([`certificate::MAX_CELLS_FROM_DISTANCE`] for lines alone or fewer than two points; with points
-    /// and segments, [`certificate::MAX_CELLS_BEFORE_FALLBACK`] for the search with depth bounds, then
-    /// `MAX_CELLS_FROM_DISTANCE` for the one without them where the first fails).
+    /// The global-optimality certificate (the sublevel-set test, [`crate::CertificateKind::SublevelSet`]):
+    /// `None` skips it ([`PoseResult::certificate`] is then `None`). With `Some`, a pose that is not
+    /// proved (no bound, or a gap above `max_relative_gap`) has status [`Status::GapNotClosed`] where
+    /// it would have been [`Status::Success`]. `max_nodes: None` caps the rotation cells at 20 000
+    /// (100 000 for lines alone or fewer than two points; with points and segments, 10 000 for the
+    /// search with depth bounds, then 100 000 for the one without them where the first fails).
     /// Default `None`: it is on request.
     pub certify: Option<CertifyOptions>,
 }
@@ -299,7 +298,7 @@ pub struct PoseResult {
     /// exact.
     pub covariance: Option<Matrix6<f64>>,
     /// The proved lower bound on [`PoseResult::cost`] over every rotation and translation that keeps
-    /// the object points in front of the camera ([`certificate`], kind `sublevel_set`), in `Σ r²`;
+    /// the object points in front of the camera (kind `sublevel_set`), in `Σ r²`;
     /// `certified` when the relative gap is within [`CertifyOptions::max_relative_gap`]. `None` when no
     /// bound was computed: not requested, or not available (the reason is
     /// [`PoseDetails::uncertified_reason`]).

@@ -3,17 +3,17 @@
 //!
 //! The pipeline's stages measure the reprojection cost as `½ Σ r²` (the form the optimisers and the
 //! certificate's derivation use); [`assemble`] is the one place where every reported cost becomes
-//! `Σ r²`: the result's cost, the stage costs of kind `reprojection` and `msac`, the runner-up's cost,
-//! the cost behind the camera and the certificate's bounds.
+//! `Σ r²`: the result's cost, the stage costs of kind `reprojection` and `msac`, the runner-up's cost
+//! and the cost behind the camera. The certificate arrives in `Σ r²` already: the certificate
+//! module converts its bounds where they leave it (`certificate::certify`).
 
-use super::certificate::Certification;
+use super::certificate::Verdict;
 use super::correspondences::{object_points, Correspondences};
 use super::lens::Observations;
 use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
 use super::{CostKind, PoseDetails, PoseOptions, PoseResult, StageReport, Status};
 use crate::camera::Camera;
-use crate::certificate::{Certificate, CertificateKind};
 use crate::chi_square::ResidualTest;
 use crate::interrupt::stop_reason;
 use crate::optim::{Objective, Termination};
@@ -38,8 +38,8 @@ pub(crate) struct PipelineOutcome<'c> {
     pub ransac: Option<RansacReport>,
     /// The runner-up local minimum (world frame) and its cost `½ Σ r²`.
     pub second_best: Option<(Pose, f64)>,
-    /// The certificate stage's outcome.
-    pub certification: Certification,
+    /// The certificate stage's outcome (its certificate already in `Σ r²`).
+    pub certification: Verdict,
     /// The cost `½ Σ r²` of a pose with every object point behind the camera, when it beats `pose`.
     pub behind_camera_cost: Option<f64>,
 }
@@ -86,24 +86,6 @@ pub(crate) fn status_of_stages(
 /// A reported cost `Σ r²` from the pipeline's `½ Σ r²`.
 fn sum_of_squares(half: f64) -> f64 {
     2.0 * half
-}
-
-/// The shared certificate of the certificate stage's outcome, in `Σ r²`: `None` when no bound was
-/// computed. `through_lens`: the certificate through a lens with distortion (its own domain).
-fn certificate_of(certification: &Certification, through_lens: bool) -> Option<Certificate> {
-    (!certification.raw_lower_bound.is_nan()).then_some(Certificate {
-        lower_bound: sum_of_squares(certification.lower_bound),
-        raw_lower_bound: sum_of_squares(certification.raw_lower_bound),
-        relative_gap: certification.relative_gap,
-        certified: certification.certified,
-        kind: if through_lens {
-            CertificateKind::LensSublevelSet
-        } else {
-            CertificateKind::SublevelSet
-        },
-        nodes: certification.nodes,
-        solver_iterations: 0,
-    })
 }
 
 /// The [`PoseResult`] of a finished run; every cost converted to `Σ r²` (see the module docs), and a
@@ -161,9 +143,8 @@ pub(crate) fn assemble(
         .and_then(|s| ResidualTest::new(cost / (s * s), residual_count.saturating_sub(fitted)));
     let (inliers_points, inliers_lines) =
         inliers.unwrap_or_else(|| (vec![true; used.n_points()], vec![true; used.n_lines()]));
-    let certificate = certificate_of(&certification, observations.lens.is_some_and(|l| !l.is_pinhole()));
     // A requested certificate that does not hold: the gap is not closed, or the search was stopped.
-    let status = if opts.certify.is_some() && status == Status::Success && !certification.certified {
+    let status = if opts.certify.is_some() && status == Status::Success && !certification.certified() {
         stop_reason().map_or(Status::GapNotClosed, Status::stopped)
     } else {
         status
@@ -175,7 +156,7 @@ pub(crate) fn assemble(
         inliers_points,
         inliers_lines,
         covariance,
-        certificate,
+        certificate: certification.certificate,
         details: PoseDetails {
             method: opts.method,
             iterations: stages.iter().map(|s| s.iterations).sum(),
@@ -193,7 +174,7 @@ pub(crate) fn assemble(
             second_best: second_best.map(|(p, c)| (p, sum_of_squares(c))),
             behind_camera_cost: behind_camera_cost.map(sum_of_squares),
             residual_test,
-            uncertified_reason: certification.reason,
+            uncertified_reason: certification.uncertified_reason,
         },
     }
 }

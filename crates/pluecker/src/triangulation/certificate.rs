@@ -7,9 +7,7 @@ use super::{Certificate, CertificateKind, Method, Report, Status};
 use crate::global::branch_and_bound::BranchAndBoundResult;
 use crate::global::envelopes::{add_fraction_envelope, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpSolution, SocpStatus};
-
-/// A cost at most this (squared whitened pixels) is certified by the bound 0 of a sum of squares.
-pub(crate) const NEGLIGIBLE_COST: f64 = 1e-12;
+use crate::global::CERTIFICATE_COST_FLOOR;
 
 /// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
 /// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the
@@ -26,8 +24,8 @@ pub(crate) fn minimum(program: &Socp, e: Affine) -> (Option<Option<f64>>, usize)
     (value, s.iterations)
 }
 
-/// The certificate of a finished branch and bound whose best cost is `best_cost` (its incumbent, a
-/// primitive of the searched domain): certified when the relative gap is at most `max_relative_gap`;
+/// The certificate of `kind` of a finished branch and bound whose best cost is `best_cost` (its
+/// incumbent, a primitive of the searched domain): certified when the relative gap is at most `max_relative_gap`;
 /// [`Status::Interrupted`] or [`Status::TimeBudget`] when the call was stopped before the gap
 /// closed. A search that proved every region of its box empty although the box holds the incumbent
 /// has proved nothing (an artefact of the conic solver's infeasibility certificates):
@@ -36,6 +34,7 @@ pub(crate) fn certificate_of<C>(
     result: &BranchAndBoundResult<C>,
     best_cost: f64,
     max_relative_gap: f64,
+    kind: CertificateKind,
 ) -> (Status, Option<Certificate>) {
     if result.box_lower_bound == f64::INFINITY {
         return (Status::NumericalFailure, None);
@@ -51,29 +50,25 @@ pub(crate) fn certificate_of<C>(
     };
     (
         status,
-        Some(Certificate {
-            kind: CertificateKind::BranchAndBound,
-            nodes: result.nodes,
-            solver_iterations: result.solver_iterations,
-            // The bound the search proved over its box, before any cap (`lower_bound` also caps it
-            // at the incumbent's cost).
-            raw_lower_bound: result.box_lower_bound,
-            lower_bound: lower,
-            relative_gap,
-            certified,
-        }),
+        // The raw bound is the one the search proved over its box, before any cap (`lower` also
+        // caps it at the incumbent's cost).
+        Some(
+            Certificate::new(kind, lower, result.box_lower_bound, relative_gap, certified)
+                .with_effort(result.nodes, result.solver_iterations),
+        ),
     )
 }
 
 /// The report the optimal method of a line or quadric starts from: the local stage's, as `optimal`.
-/// `Err` holds the finished report when the local cost is at most [`NEGLIGIBLE_COST`]: certified
+/// `Err` holds the finished report when the local cost is at most [`CERTIFICATE_COST_FLOOR`] (a cost at
+/// the rounding level, squared whitened pixels): certified
 /// whatever stopped the local stage, a sum of squares being never negative, with no search.
 pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
     let mut report = Report {
         method: Method::Optimal,
         ..local_report.clone()
     };
-    if local_report.cost <= NEGLIGIBLE_COST {
+    if local_report.cost <= CERTIFICATE_COST_FLOOR {
         report.certificate = Some(negligible_cost_certificate());
         report.status = Status::Success;
         return Err(report);
@@ -81,17 +76,9 @@ pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
     Ok(report)
 }
 
-/// The certificate of a cost at most [`NEGLIGIBLE_COST`]: the bound 0 of a sum of squares.
+/// The certificate of a cost at most [`CERTIFICATE_COST_FLOOR`]: the bound 0 of a sum of squares.
 fn negligible_cost_certificate() -> Certificate {
-    Certificate {
-        lower_bound: 0.0,
-        raw_lower_bound: 0.0,
-        relative_gap: 0.0,
-        certified: true,
-        kind: CertificateKind::ConvexityTest,
-        nodes: 0,
-        solver_iterations: 0,
-    }
+    Certificate::new(CertificateKind::ConvexityTest, 0.0, 0.0, 0.0, true)
 }
 
 /// Minimises the relaxation of eq. 19 in `p` (eq. 22): the sum, over the `views` `(tᵢ, gᵢ, lo, hi)`
@@ -206,7 +193,7 @@ mod tests {
                 true_gap > 1e-3 && true_gap < 2e-3,
                 "slack {slack}: the test needs a gap in (1e-3, 2e-3): {true_gap}"
             );
-            let (status, c) = certificate_of(&result, cost, 1e-3);
+            let (status, c) = certificate_of(&result, cost, 1e-3, CertificateKind::BranchAndBound);
             let c = c.expect("a bound");
             assert!(!c.certified, "slack {slack}: certified with a true gap of {true_gap}");
             assert_eq!(status, Status::GapNotClosed);
@@ -217,7 +204,7 @@ mod tests {
                 "{} vs {true_gap}",
                 c.relative_gap
             );
-            let (status, c) = certificate_of(&result, cost, 2e-3);
+            let (status, c) = certificate_of(&result, cost, 2e-3, CertificateKind::BranchAndBound);
             let c = c.expect("a bound");
             assert!(c.certified && status == Status::Success, "slack {slack}");
             // The convexity test's certificate: the same boundary.
@@ -249,7 +236,7 @@ mod tests {
         let root = Region::new(vec![-1.0], vec![1.0]);
         let result = branch_and_bound(&mut Nothing, root, Some((0.9, 0.3)), &BranchAndBoundOptions::default());
         assert_eq!(result.box_lower_bound, f64::INFINITY);
-        let (status, c) = certificate_of(&result, 0.9, 1e-3);
+        let (status, c) = certificate_of(&result, 0.9, 1e-3, CertificateKind::BranchAndBound);
         assert_eq!(status, Status::NumericalFailure);
         assert!(c.is_none(), "{c:?}");
     }
@@ -263,7 +250,7 @@ mod tests {
         let opts = BranchAndBoundOptions::default();
         let mut oracle = Loose { slack: 0.0 };
         let result = branch_and_bound(&mut oracle, root, Some((0.9, 0.3)), &opts);
-        let (_, c) = certificate_of(&result, 0.9, 1e-3);
+        let (_, c) = certificate_of(&result, 0.9, 1e-3, CertificateKind::BranchAndBound);
         let c = c.expect("a bound");
         assert!(c.raw_lower_bound >= 1.0 - 1e-12 && c.lower_bound == 0.9, "{c:?}");
     }

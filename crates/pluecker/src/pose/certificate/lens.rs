@@ -47,7 +47,7 @@
 //!    or a larger one where `(1 − ε) R` still exceeds `√C + ‖ê‖ + s`). With `κ = minₑ √(1 − εₑ²)` and `ε`
 //!    the largest, `√F ≥ κ √Q − ε (Δ(s) + s Φ + ‖c₀‖) − ‖s‖` (Minkowski),
 //!    `Φ = ‖(‖êₑ‖ ‖q′ₑ‖ / wₑ)ₑ‖`, which step 4 of [`super`] bounds along each ray
-//!    ([`super::local_lower_bound`]), with `ε` and `κ` of the least of nested balls (radii `1/√2` apart)
+//!    ([`super::local_bound::local_lower_bound`]), with `ε` and `κ` of the least of nested balls (radii `1/√2` apart)
 //!    that holds the ray's step: near the answer, where the bound is least, only a small ball's
 //!    variation is paid.
 //!
@@ -55,7 +55,7 @@
 //! an observation or a confinement ball reaches the edge of the one-to-one disc, or where `ε` is too
 //! large for the gap (strong distortion with large residuals).
 
-use super::{Certification, RaySlack};
+use super::{RaySlack, SublevelSetOutcome};
 use crate::camera::curved_line::endpoint_residual;
 use crate::camera::linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
 use crate::camera::Camera;
@@ -432,9 +432,11 @@ impl Surrogate {
 pub struct PointVariation {
     /// The bound of `‖M (J(n) − J*) W⁻¹‖` over the ball (`None` where it reaches the edge of the disc).
     pub epsilon: Option<f64>,
-    /// `W = M J*`, `M = L K₂`, and the centre `n*`: the ball is `{n : ‖W (n − n*)‖ ≤ radius}`.
+    /// `W = M J*`: the ball is `{n : ‖W (n − n*)‖ ≤ radius}`.
     pub w: Matrix2<f64>,
+    /// `M = L K₂`.
     pub m: Matrix2<f64>,
+    /// The ball's centre `n*`.
     pub n: Vector2<f64>,
 }
 
@@ -462,7 +464,7 @@ pub(super) fn certify(
     pose: &Pose,
     cost: f64,
     options: &crate::certificate::CertifyOptions,
-) -> Certification {
+) -> SublevelSetOutcome {
     match Surrogate::new(lens, corr, pose, cost) {
         Ok(surrogate) => super::certify_pinhole(
             &surrogate.camera,
@@ -472,7 +474,7 @@ pub(super) fn certify(
             options,
             Some(&surrogate),
         ),
-        Err(why) => Certification::none(why),
+        Err(why) => SublevelSetOutcome::none(why),
     }
 }
 

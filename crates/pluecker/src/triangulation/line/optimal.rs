@@ -42,7 +42,7 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
-use crate::triangulation::{Report, Status, TriangulationOptions};
+use crate::triangulation::{CertificateKind, Report, Status, TriangulationOptions};
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 use std::ops::{Add, Sub};
 
@@ -491,7 +491,12 @@ pub(crate) fn optimal_line(
     let (best_cost, best) = result.best.unwrap_or((frame_cost, frame_local));
     let world = plucker::transform(&sim.inverse_matrix(), &best);
     report.cost = best_cost;
-    let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
+    let (status, certificate) = certificate_of(
+        &result,
+        best_cost,
+        opts.certify.max_relative_gap,
+        CertificateKind::BranchAndBound,
+    );
     (report.status, report.certificate) = (status, certificate);
     (world, report)
 }

@@ -38,7 +38,7 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, optimal_start};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
-use crate::triangulation::{Certificate, CertificateKind, Report, TriangulationOptions};
+use crate::triangulation::{CertificateKind, Report, TriangulationOptions};
 use nalgebra::{Vector4, Vector6};
 
 /// The node cap of the Taylor search when `certify.max_nodes` is `None`: its nodes cost
@@ -173,12 +173,14 @@ pub(crate) fn optimal_line_taylor(
     result.box_lower_bound = result.box_lower_bound.min(cost);
     let (best_cost, best) = result.best.unwrap_or((cost, frame_local));
     report.cost = best_cost;
-    let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
+    let (status, certificate) = certificate_of(
+        &result,
+        best_cost,
+        opts.certify.max_relative_gap,
+        CertificateKind::TaylorBranchAndBound,
+    );
     report.status = status;
-    report.certificate = certificate.map(|c| Certificate {
-        kind: CertificateKind::TaylorBranchAndBound,
-        ..c
-    });
+    report.certificate = certificate;
     Some((plucker::transform(&sim.inverse_matrix(), &best), report))
 }
 

@@ -401,15 +401,13 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
         if let Some(raw) = raw {
             let lower_bound = raw.min(cost).max(0.0);
             let relative_gap = relative_gap(cost, lower_bound);
-            report.certificate = Some(Certificate {
+            report.certificate = Some(Certificate::new(
+                CertificateKind::LensConvexityTest,
                 lower_bound,
-                raw_lower_bound: raw,
+                raw,
                 relative_gap,
-                certified: relative_gap <= opts.certify.max_relative_gap,
-                kind: CertificateKind::LensConvexityTest,
-                nodes: 0,
-                solver_iterations: 0,
-            });
+                relative_gap <= opts.certify.max_relative_gap,
+            ));
         }
         if !report.certified() {
             report.status = Status::GapNotClosed;

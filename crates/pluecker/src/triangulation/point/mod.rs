@@ -328,12 +328,14 @@ pub(crate) fn solve_views(
 fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Option<Certificate> {
     (u.status == Status::AtInfinity && !certificate.raw_lower_bound.is_nan()).then(|| {
         let lower_bound = certificate.lower_bound.min(u.cost);
-        Certificate {
-            certified: false,
+        Certificate::new(
+            certificate.kind,
             lower_bound,
-            relative_gap: relative_gap(u.cost, lower_bound),
-            ..*certificate
-        }
+            certificate.raw_lower_bound,
+            relative_gap(u.cost, lower_bound),
+            false,
+        )
+        .with_effort(certificate.nodes, certificate.solver_iterations)
     })
 }
 
@@ -501,15 +503,14 @@ fn certify(
         GlobalStatus::Stopped(reason) => Status::stopped(reason),
         GlobalStatus::Failed => Status::NumericalFailure,
     };
-    let certificate = Certificate {
+    let certificate = Certificate::new(
+        CertificateKind::BranchAndBound,
         lower_bound,
         raw_lower_bound,
-        relative_gap: gap,
+        gap,
         certified,
-        kind: CertificateKind::BranchAndBound,
-        nodes: g.nodes,
-        solver_iterations: g.solver_iterations,
-    };
+    )
+    .with_effort(g.nodes, g.solver_iterations);
     (g.point, status, certificate, g.cost)
 }
 

@@ -34,7 +34,7 @@ use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
-use crate::triangulation::{Certificate, QuadricBound, Report, Status, TriangulationOptions};
+use crate::triangulation::{Certificate, CertificateKind, QuadricBound, Report, Status, TriangulationOptions};
 use nalgebra::SVector;
 
 /// `B` of the a-priori box (module docs) as a multiple of the largest camera distance.
@@ -271,7 +271,12 @@ pub(crate) fn optimal_quadric(
     let (best_cost, best) = result.best.unwrap_or((frame_cost, start));
     let world = Ellipsoid::from_dual(&transform_dual(&sim.inverse_matrix(), &best.dual())).unwrap_or(*local);
     report.cost = best_cost;
-    let (status, certificate) = certificate_of(&result, best_cost, opts.certify.max_relative_gap);
+    let (status, certificate) = certificate_of(
+        &result,
+        best_cost,
+        opts.certify.max_relative_gap,
+        CertificateKind::BranchAndBound,
+    );
     (report.status, report.certificate) = (status, certificate);
     (world, report)
 }

@@ -1,0 +1,350 @@
+//! The problem of the test, prepared once ([`super`]'s module docs): per point its whitened residual
+//! map `Wᵢ K₂` and its part `AᵢᵀAᵢ` of step 2's minorant, per segment endpoint its `G_e`, the
+//! bearings; and what the rotation search starts from: step 1's depth bounds `Dᵢ` (law of sines over
+//! pairs of points), or, without them, the object's distance from the camera
+//! ([`crate::pose::object_distance`]).
+
+use super::minorant::{largest_eigenvalue, Minorant, PointForm};
+use crate::camera::Camera;
+use crate::pose::correspondences::Correspondences;
+use crate::pose::object_distance::{distance_bound, Sight};
+use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
+use std::rc::Rc;
+
+/// Why noise that carries a lens's Jacobians (the first-order noise of undistorted pixels) is not
+/// certified: the cost is in the distorted pixels, which [`super::certify`] is given with the lens.
+pub(super) const FIRST_ORDER_NOISE: &str = "not attempted: the noise is the first-order noise of undistorted pixels; \
+    the certificate bounds the cost in the observed pixels, through the lens";
+
+/// Partners per point for its depth bound (the widest-apart in the image of a small spread set).
+pub(super) const DEPTH_PARTNERS: usize = 16;
+/// At most this many segments, the longest in the image, enter the box bound
+/// ([`Problem::lines_bound`]): each costs per box about as much as the rest of the bound, a few
+/// already constrain the rotation where the points are few, and fewer terms only weaken the minorant.
+/// (With all 50 segments of the 50-point + 50-segment benchmark rows, the searches that fail took
+/// 2.5-3.3 times as long for one or two more certificates in 50.)
+pub(super) const BOX_BOUND_SEGMENTS: usize = 8;
+/// Boxes of rotations within this angle of the answer's are bounded with every segment where there
+/// are no depth bounds ([`SearchStart::ObjectDistance`], [`Problem::segments_in`]): there the translation ellipsoid
+/// decides whether a box lies inside the whitened ball of step 4. With depth bounds every box keeps
+/// [`BOX_BOUND_SEGMENTS`]: every segment near the answer there saved nodes at f = 250-800 px but cost
+/// 3.5 times as much per node at f = 15000 px (50 points + 50 segments, 20 scenes of
+/// `bench/profile_pose.py`: median 10 → 17-22 ms for the same nodes), and the linearised bound
+/// ([`Problem::linear_lines_bound`]) with the longest segments alone already did better than before
+/// on every row.
+pub(super) const NEAR_ANSWER: f64 = 0.5;
+/// At most this many segments, the longest in the image, enter the bound of a box where there are no
+/// depth bounds ([`SearchStart::ObjectDistance`]): there they are the bound, not an addition to it.
+pub(super) const BALL_SEGMENTS: usize = 32;
+
+/// The indices of the (at most) `count` longest observed segments, longest first.
+pub(super) fn longest_segments(corr: &Correspondences, count: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..corr.n_lines()).collect();
+    let length = |i: usize| (corr.lines2d[i][1] - corr.lines2d[i][0]).norm();
+    order.sort_by(|&i, &j| length(j).total_cmp(&length(i)));
+    order.truncate(count);
+    order
+}
+
+/// The data of the test, prepared once (conditioned frame, centred on the object).
+pub(super) struct Problem<'c> {
+    pub(super) corr: &'c Correspondences,
+    /// Per point, `W K₂`: the whitening `W` of its noise (the identity without covariances) times
+    /// the 2x2 block `K₂` of `K`, which maps a normalised-plane error to the whitened residual.
+    pub(super) point_maps: Vec<Matrix2<f64>>,
+    /// Per point, its part `Aᵢᵀ Aᵢ` of step 2's minorant ([`PointForm`]).
+    pub(super) forms: Vec<PointForm>,
+    /// What the rotation search starts from: step 1's depth bounds, or the object's distance.
+    pub(super) start: SearchStart,
+    /// `K⁻¹` (normalised endpoints `ē = K⁻¹ ẽ`).
+    pub(super) k_inv: Matrix3<f64>,
+    /// Per segment endpoint, `G_e = Lᵀ G` and its norm: `G` is the upper-left 2x2 block of `K⁻ᵀ` (a
+    /// line moment `m` projects to a pixel line whose normal is `G m_xy`) and `L Lᵀ` the endpoint's
+    /// covariance (the identity without covariances), so that the endpoint's residual is
+    /// `ēᵀ m / ‖G_e m_xy‖`.
+    pub(super) endpoint_maps: Vec<[EndpointMap; 2]>,
+    /// The parts of the box bound with segments ([`LineForm`]), longest segment first: the first
+    /// `box_segments` enter every box's bound ([`BOX_BOUND_SEGMENTS`], or [`BALL_SEGMENTS`] without
+    /// depth bounds), all of them the bounds of boxes near the answer without depth bounds.
+    pub(super) lines: Vec<LineForm>,
+    pub(super) box_segments: usize,
+    /// Unit bearings of the points.
+    pub(super) bearings: Vec<Vector3<f64>>,
+    /// `‖Xᵢ‖` (object coordinates).
+    pub(super) norms: Vec<f64>,
+    /// A cone of the bearings: their normalised mean `a`, `δ = max ‖bᵢ − a‖` and `max ‖Xᵢ‖`. Every
+    /// `bᵢ · (R Xᵢ + t) ≥ a · t − δ ‖t‖ − max ‖Xᵢ‖`: where that is positive no point is behind.
+    pub(super) bearing_cone: (Vector3<f64>, f64, f64),
+}
+
+/// What the rotation search starts from.
+pub(super) enum SearchStart {
+    /// Step 1's depth bounds, and the minorant for them (the search tightens them box by box:
+    /// [`super::search::RotationSearch`]).
+    DepthBounds(Rc<Minorant>),
+    /// Without depth bounds (lines alone, or fewer than two points seen far enough apart): the
+    /// pivot `c` (an object point) is at most `distance` from the camera on `S`
+    /// ([`crate::pose::object_distance`]), so the translation of a pose of `S` whose rotation is within
+    /// `θ` of `R_c` lies in the ball of centre `−R_c c` and radius `distance + θ ‖c‖`; every box is
+    /// bounded from the residuals at its centre rotation ([`Problem::ball_bound`]) and hands its
+    /// octants a smaller ellipsoid of translations ([`super::box_bound::TranslationEllipsoid`]).
+    ObjectDistance { pivot: Vector3<f64>, distance: f64 },
+}
+
+/// A segment's part of the box bound with lines ([`Problem::lines_bound`]): its object endpoint `a`,
+/// direction `d = b − a` and moment `a × d` (with norms), and per observed endpoint `ē = K⁻¹ ẽ`,
+/// `‖ē‖` and `‖G_e‖`.
+pub(super) struct LineForm {
+    pub(super) a: Vector3<f64>,
+    pub(super) b: Vector3<f64>,
+    pub(super) d: Vector3<f64>,
+    pub(super) moment: Vector3<f64>,
+    pub(super) norms: [f64; 4],
+    pub(super) ends: [(Vector3<f64>, f64, f64); 2],
+}
+
+impl LineForm {
+    /// Segment `index` of `corr`.
+    pub(super) fn new(corr: &Correspondences, index: usize, maps: &[EndpointMap; 2], k_inv: &Matrix3<f64>) -> Self {
+        let (a, b) = (corr.lines3d[index][0], corr.lines3d[index][1]);
+        let seen = corr.lines2d[index];
+        let d = b - a;
+        let moment = a.cross(&d);
+        LineForm {
+            a,
+            b,
+            d,
+            moment,
+            norms: [a.norm(), b.norm(), d.norm(), moment.norm()],
+            ends: std::array::from_fn(|k| {
+                let e = k_inv * Vector3::new(seen[k].x, seen[k].y, 1.0);
+                (e, e.norm(), maps[k].1)
+            }),
+        }
+    }
+}
+
+/// A segment endpoint's `G_e` and `‖G_e‖` ([`Problem::endpoint_maps`]).
+pub(super) type EndpointMap = (Matrix2<f64>, f64);
+
+pub(super) fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
+    let s = m.singular_values();
+    (s.min(), s.max())
+}
+
+/// The depth bound of every point for its angle bound `αᵢ` (`None` when some point has no partner
+/// seen far enough apart).
+pub(super) fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Option<Vec<f64>> {
+    let n = bearings.len();
+    // Partners: an even spread of the points.
+    let step = (n / DEPTH_PARTNERS).max(1);
+    let partners: Vec<usize> = (0..n).step_by(step).take(DEPTH_PARTNERS).collect();
+    let pair = |i: usize, j: usize| -> f64 {
+        let gamma = bearings[i].angle(&bearings[j]);
+        let (lo, hi) = (gamma - alphas[i] - alphas[j], gamma + alphas[i] + alphas[j]);
+        if i == j || lo <= 0.0 || hi >= std::f64::consts::PI {
+            return f64::INFINITY;
+        }
+        (corr.points3d[i] - corr.points3d[j]).norm() / lo.sin().min(hi.sin())
+    };
+    (0..n)
+        .map(|i| {
+            let mut best = partners.iter().map(|&j| pair(i, j)).fold(f64::INFINITY, f64::min);
+            // Every point as a partner when the spread set did not give a bound.
+            if !best.is_finite() {
+                best = (0..n).map(|j| pair(i, j)).fold(f64::INFINITY, f64::min);
+            }
+            best.is_finite().then_some(best)
+        })
+        .collect()
+}
+
+impl<'c> Problem<'c> {
+    pub(super) fn new(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
+        Self::build(camera, corr, f_hat, true)
+    }
+
+    /// The data of the test without depth bounds ([`SearchStart::ObjectDistance`]) even where the points give them.
+    pub(super) fn without_depths(
+        camera: &Camera,
+        corr: &'c Correspondences,
+        f_hat: f64,
+    ) -> std::result::Result<Self, String> {
+        Self::build(camera, corr, f_hat, false)
+    }
+
+    /// The data of the test, with step 1's depth bounds where `use_depths` and the points give them.
+    pub(super) fn build(
+        camera: &Camera,
+        corr: &'c Correspondences,
+        f_hat: f64,
+        use_depths: bool,
+    ) -> std::result::Result<Self, String> {
+        let k = camera.matrix();
+        let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
+        let k_inv = k.try_inverse().ok_or("singular camera")?;
+        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
+        let (point_maps, endpoint_maps): (Vec<Matrix2<f64>>, Vec<[EndpointMap; 2]>) = match &corr.noise {
+            None => {
+                let g_norm = norm2x2(&g).1;
+                (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
+            }
+            // Noise that carries a lens's Jacobians: the cost is in the distorted pixels.
+            Some(noise) if !noise.absolute => return Err(FIRST_ORDER_NOISE.into()),
+            Some(noise) => {
+                let endpoint = |c: &Matrix2<f64>| -> std::result::Result<EndpointMap, String> {
+                    // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
+                    let l = (0.5 * (c + c.transpose()))
+                        .cholesky()
+                        .ok_or("not attempted: a covariance is not positive definite")?
+                        .l();
+                    let map = l.transpose() * g;
+                    Ok((map, norm2x2(&map).1))
+                };
+                (
+                    noise.points.iter().map(|w| w * k2).collect(),
+                    noise
+                        .lines
+                        .iter()
+                        .map(|[c0, c1]| Ok([endpoint(c0)?, endpoint(c1)?]))
+                        .collect::<std::result::Result<_, String>>()?,
+                )
+            }
+        };
+        // A whitened error e is a normalised-plane error of at least e / sᵢ (sᵢ the least singular
+        // value of Wᵢ K₂): the angle bound of point i.
+        let eps0 = (2.0 * f_hat).sqrt();
+        let alphas: Vec<f64> = point_maps.iter().map(|m| eps0 / norm2x2(m).0).collect();
+        let bearings: Vec<Vector3<f64>> = corr
+            .points2d
+            .iter()
+            .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
+            .collect();
+        let depths = if !use_depths {
+            Err("the search without depth bounds was asked for".to_string())
+        } else if corr.n_points() < 2 {
+            Err("the depth bounds need at least two points".to_string())
+        } else if !alphas.iter().all(|alpha| *alpha < 0.25) {
+            Err(format!("residuals too large ({eps0:.3e} px) for the angle bounds"))
+        } else {
+            depth_bounds(corr, &bearings, &alphas)
+                .ok_or_else(|| "no two points are seen far enough apart to bound the depths".to_string())
+        };
+        // A point's residual is Wᵢ K₂ (π(x) − ūᵢ) = Aᵢ x / x_z with Aᵢ = Wᵢ K₂ Eᵢ,
+        // Eᵢ = [1 0 −ū₁; 0 1 −ū₂] (ūᵢ the normalised observed point).
+        let forms: Vec<PointForm> = (point_maps.iter().zip(&corr.points2d))
+            .map(|(map, u)| {
+                let n = k_inv * Vector3::new(u.x, u.y, 1.0);
+                let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -n.x / n.z, 0.0, 1.0, -n.y / n.z);
+                let a = map * e;
+                let h = a.transpose() * a;
+                PointForm {
+                    h,
+                    norm2: largest_eigenvalue(&h),
+                }
+            })
+            .collect();
+        let (start, segments) = match depths {
+            Ok(depths) => (
+                SearchStart::DepthBounds(Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths))),
+                BOX_BOUND_SEGMENTS,
+            ),
+            Err(why) => {
+                let (pivot, distance) = object_distance(corr, &bearings, &alphas, &endpoint_maps, &k_inv, eps0)
+                    .ok_or_else(|| {
+                        format!("not proved: {why}, and the observations do not bound the object's distance")
+                    })?;
+                (SearchStart::ObjectDistance { pivot, distance }, BALL_SEGMENTS)
+            }
+        };
+        Ok(Problem {
+            corr,
+            point_maps,
+            forms,
+            k_inv,
+            lines: longest_segments(corr, corr.n_lines())
+                .into_iter()
+                .map(|i| LineForm::new(corr, i, &endpoint_maps[i], &k_inv))
+                .collect(),
+            box_segments: segments,
+            endpoint_maps,
+            bearing_cone: bearing_cone(&bearings, &corr.points3d),
+            bearings,
+            norms: corr.points3d.iter().map(|x| x.norm()).collect(),
+            start,
+        })
+    }
+
+    /// Step 1's minorant (`None` without depth bounds).
+    pub(super) fn root(&self) -> Option<&Rc<Minorant>> {
+        match &self.start {
+            SearchStart::DepthBounds(root) => Some(root),
+            SearchStart::ObjectDistance { .. } => None,
+        }
+    }
+
+    /// Step 2's minorant for the depth bounds `depths`.
+    pub(super) fn minorant(&self, depths: Vec<f64>) -> Minorant {
+        Minorant::build(&self.corr.points3d, &self.bearings, &self.forms, depths)
+    }
+}
+
+/// A bound on the sine of the angle between the ray of an observed segment endpoint `ē = K⁻¹ ẽ` and
+/// the interpretation plane (normal `m`) of every pose where the endpoint's residual
+/// `ēᵀ m / ‖G_e m_xy‖` is at most `residual` in magnitude: `|ēᵀ m| ≤ residual ‖G_e‖ ‖m‖`, so the sine
+/// `|ēᵀ m| / (‖ē‖ ‖m‖)` is at most `residual ‖G_e‖ / ‖ē‖` (`g_norm = ‖G_e‖`), and at most 1.
+pub(super) fn endpoint_sine(residual: f64, g_norm: f64, e: &Vector3<f64>) -> f64 {
+    (residual * g_norm / e.norm()).min(1.0)
+}
+
+/// The pivot of the object (the mean of its points and segment midpoints) and the bound on its
+/// distance from the camera on `S` ([`crate::pose::object_distance`]; `None` without one). A point is
+/// within its angle bound `αᵢ` of its observed ray (step 1). A segment endpoint `ē` whose residual
+/// `ēᵀ m / ‖G_e m_xy‖` is at most `ε₀` is within the angle whose sine is `ε₀ ‖G_e‖ / ‖ē‖` of the
+/// interpretation plane (normal `m`), as `‖G_e m_xy‖ ≤ ‖G_e‖ ‖m‖`.
+pub(super) fn object_distance(
+    corr: &Correspondences,
+    bearings: &[Vector3<f64>],
+    alphas: &[f64],
+    endpoint_maps: &[[EndpointMap; 2]],
+    k_inv: &Matrix3<f64>,
+    eps0: f64,
+) -> Option<(Vector3<f64>, f64)> {
+    let count = corr.n_points() + corr.n_lines();
+    if count == 0 {
+        return None;
+    }
+    let pivot = (corr.points3d.iter().sum::<Vector3<f64>>()
+        + corr.lines3d.iter().map(|[a, b]| (a + b) * 0.5).sum::<Vector3<f64>>())
+        / count as f64;
+    let rays = (corr.points3d.iter().zip(bearings).zip(alphas))
+        .filter(|(_, alpha)| **alpha < std::f64::consts::FRAC_PI_2)
+        .map(|((x, b), alpha)| Sight::Ray {
+            direction: *b,
+            tolerance: *alpha,
+            offset: (x - pivot).norm(),
+        });
+    let planes = (corr.lines3d.iter().zip(&corr.lines2d).zip(endpoint_maps))
+        .filter(|(([a, b], _), _)| (b - a).norm() > 0.0)
+        .map(|(([a, b], seen), maps)| {
+            let d = b - a;
+            let ends = [0, 1].map(|k| k_inv * Vector3::new(seen[k].x, seen[k].y, 1.0));
+            Sight::Plane {
+                ends,
+                sines: [0, 1].map(|k| endpoint_sine(eps0, maps[k].1, &ends[k])),
+                offset: (a - pivot).cross(&d).norm() / d.norm(),
+            }
+        });
+    let sights: Vec<Sight> = rays.chain(planes).collect();
+    distance_bound(&sights).map(|distance| (pivot, distance))
+}
+
+/// [`Problem::bearing_cone`] (an empty cone, `δ = ∞`, without points or where the bearings' mean
+/// vanishes).
+pub(super) fn bearing_cone(bearings: &[Vector3<f64>], points: &[Vector3<f64>]) -> (Vector3<f64>, f64, f64) {
+    let Some(axis) = bearings.iter().sum::<Vector3<f64>>().try_normalize(1e-12) else {
+        return (Vector3::z(), f64::INFINITY, 0.0);
+    };
+    let reach = bearings.iter().map(|b| (b - axis).norm()).fold(0.0, f64::max);
+    (axis, reach, points.iter().map(|x| x.norm()).fold(0.0, f64::max))
+}
