@@ -308,8 +308,8 @@ pub struct PoseResult {
 }
 
 impl PoseResult {
-    /// `status == Status::Success`: the answer can be used (the same meaning as a triangulation
-    /// [`crate::triangulation::Report::success`]).
+    /// `status == Status::Success`: the answer can be used (the same meaning as
+    /// a triangulation `Report::success`).
     pub fn success(&self) -> bool {
         self.status == Status::Success
     }
