@@ -35,13 +35,15 @@ $(DEPS_STAMP): Makefile
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
-# or when the built module is missing from python/pluecker/.
+# or when the built module is missing from python/pluecker/. The development build has the test hooks
+# that tests/ calls (cargo feature `test-hooks`; inert until a test calls one), and demo, bench and lint
+# use that same build rather than rebuild; the wheel (`pip install .`, `maturin build`) has none.
 develop: $(DEPS_STAMP)
 	@ls python/pluecker/_core*.so >/dev/null 2>&1 || rm -f $(DEVELOP_STAMP)
 	@$(MAKE) --no-print-directory $(DEVELOP_STAMP)
 
 $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
-	VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
+	VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --features test-hooks --quiet
 	touch $@
 
 test: test-rust test-python
@@ -62,6 +64,8 @@ lint: $(DEPS_STAMP)
 	cargo fmt --all -- --check
 	@echo "== lints: cargo clippy on every target, warnings as errors"
 	cargo clippy --all-targets -p pluecker -p pluecker-py -- -D warnings
+	@echo "== lints: the extension with its test hooks (cargo feature test-hooks, as make develop builds it)"
+	cargo clippy --all-targets -p pluecker-py --features test-hooks -- -D warnings
 	@echo "== lints: the development tools of crates/pluecker/benches (bench = false: not in --all-targets)"
 	cargo clippy -p pluecker --bench global_pose --bench profile_pose --bench lines_and_quadrics -- -D warnings
 	@echo "== docs: cargo doc, warnings as errors"
