@@ -49,8 +49,8 @@ $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
 test: test-rust test-python
 
 # The unit, integration and doc tests. The examples are not built here (a plain `cargo test` builds the six in
-# release, thin LTO: about a sixth of a cold test build) but by `make lint`'s clippy --all-targets, which
-# compiles them as well; `.ci/rust_newcomer.sh` builds and runs the README's Rust example.
+# release, thin LTO: about a sixth of a cold test build); `make lint`'s clippy --all-targets type-checks
+# them, and `.ci/rust_newcomer.sh` builds and runs the README's Rust example.
 test-rust: develop
 	cargo test --workspace --release --lib --tests
 	cargo test --workspace --release --doc
