@@ -48,10 +48,10 @@ $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
 
 test: test-rust test-python
 
-# The unit, integration and doc tests (`--tests`: the targets with test = true, so not the extension's lib,
-# which `--lib` would build as an empty test harness). The examples are not built here (a plain `cargo test` builds the six in
-# release, thin LTO: about a sixth of a cold test build); `make lint`'s clippy --all-targets type-checks
-# them, and `.ci/rust_newcomer.sh` builds and runs the README's Rust example.
+# The unit, integration and doc tests (`--tests`: the targets with test = true, so not the extension's
+# lib, which `--lib` would build as an empty test harness). The examples are not built here (a plain
+# `cargo test` builds the six in release, thin LTO: about a sixth of a cold test build); `make lint`'s
+# clippy --all-targets type-checks them, and `.ci/rust_newcomer.sh` builds and runs the README's example.
 test-rust: develop
 	cargo test --workspace --release --tests
 	cargo test --workspace --release --doc
