@@ -39,19 +39,26 @@ $(DEPS_STAMP): Makefile
 # or when the built module is missing from python/pluecker/. maturin passes every dependency, the
 # optional extras' too, to `pip install`, which then prints "Ignoring <package>: markers 'extra == ...'
 # don't match your environment" for each; PIP_QUIET=1 leaves out these information lines and keeps
-# pip's warnings and errors.
+# pip's warnings and errors. The development build has the test hooks that tests/ calls (cargo feature
+# `test-hooks`; inert until a test calls one), and demo, bench and lint use that same build rather than
+# rebuild; the wheel (`pip install .`, `maturin build`) has none.
 develop: $(DEPS_STAMP)
 	@ls python/pluecker/_core*.so >/dev/null 2>&1 || rm -f $(DEVELOP_STAMP)
 	@$(MAKE) --no-print-directory $(DEVELOP_STAMP)
 
 $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
-	PIP_QUIET=1 VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --quiet
+	PIP_QUIET=1 VIRTUAL_ENV=$(CURDIR)/$(VENV) $(BIN)/maturin develop --release --features test-hooks --quiet
 	touch $@
 
 test: test-rust test-python
 
+# The unit, integration and doc tests (`--tests`: the targets with test = true, so not the extension's
+# lib, which `--lib` would build as an empty test harness). The examples are not built here (a plain
+# `cargo test` builds the six in release, thin LTO: about a sixth of a cold test build); `make lint`'s
+# clippy --all-targets type-checks them, and `.ci/rust_newcomer.sh` builds and runs the README's example.
 test-rust: develop
-	cargo test --workspace --release
+	cargo test --workspace --release --tests
+	cargo test --workspace --release --doc
 
 test-python: develop
 	$(BIN)/python -m pytest -q tests
@@ -66,6 +73,8 @@ lint: $(DEPS_STAMP)
 	cargo fmt --all -- --check
 	@echo "== lints: cargo clippy on every target, warnings as errors"
 	cargo clippy --all-targets -p pluecker -p pluecker-py -- -D warnings
+	@echo "== lints: the extension with its test hooks (cargo feature test-hooks, as make develop builds it)"
+	cargo clippy --all-targets -p pluecker-py --features test-hooks -- -D warnings
 	@echo "== lints: the development tools of crates/pluecker/benches (bench = false: not in --all-targets)"
 	cargo clippy -p pluecker --bench global_pose --bench profile_pose --bench lines_and_quadrics -- -D warnings
 	@echo "== docs: cargo doc, warnings as errors"

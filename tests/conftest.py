@@ -100,6 +100,35 @@ def pytest_runtest_makereport(item, call):
                                                     f"reruns this test with the same examples"))
 
 
+#: The test hooks of the extension: ``cargo`` feature ``test-hooks`` of crates/pluecker-py, which the
+#: development build (``make develop``) turns on and the wheel (``pip install .``, ``maturin build``) leaves out.
+TEST_HOOKS = ("_panic_for_tests", "_on_poll_for_tests", "_setup_polls_for_tests", "_pose_rotation_search",
+              *(("_hold_gil_for_tests",) if os.name == "posix" else ()))
+
+
+def missing_hook_message(name: str) -> str:
+    return (f"pluecker._core has no test hook {name}: this extension ({pluecker._core.__file__}) was built without "
+            f"the cargo feature `test-hooks` (as the wheel is); build the development one with `make develop` "
+            f"(maturin develop --release --features test-hooks)")
+
+
+class _Hooks:
+    """The extension's test hooks as attributes (``hooks._on_poll_for_tests(1, "interrupt")``). In a build
+    without them the test that needs one fails, with a message that says how to build them in: nothing is
+    skipped."""
+
+    def __getattr__(self, name: str):
+        if name not in TEST_HOOKS:
+            raise AttributeError(name)
+        hook = getattr(pluecker._core, name, None)
+        if hook is None:
+            pytest.fail(missing_hook_message(name), pytrace=False)
+        return hook
+
+
+hooks = _Hooks()
+
+
 def seed_for(name: str) -> int:
     """A stable 32-bit seed from a test name."""
     return zlib.crc32(name.encode())

@@ -21,10 +21,10 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import hooks
 from triangulation_scenes import NODES, line_tracks
 
 import pluecker
-from pluecker import _core
 from pluecker.experiments.josephson_kahl_2008.conics import disc_scene
 
 #: The safety budget of an interrupted batch (seconds), and the time budget of the budget test.
@@ -48,7 +48,7 @@ def sigint_raises_keyboard_interrupt():
 
 def ctrl_c_at_poll(poll: int) -> None:
     """Ctrl-C (as Python's SIGINT handler records it) at the ``poll``-th poll of the next call's stop."""
-    _core._on_poll_for_tests(poll, "interrupt")
+    hooks._on_poll_for_tests(poll, "interrupt")
 
 
 def endless_lines(n: int | None = None, max_nodes: int = 10**7):
@@ -90,7 +90,7 @@ def test_ctrl_c_stops_a_line_batch_and_keeps_what_it_had():
 def test_time_budget_ends_a_batch_without_an_exception():
     P, segments, options = endless_lines()
     # The first track starts, its poll held until the budget has run out.
-    _core._on_poll_for_tests(1, "await_deadline")
+    hooks._on_poll_for_tests(1, "await_deadline")
     batch = pluecker.triangulate_lines(P, segments, time_budget=BUDGET, **options)
     assert_stopped_batch(batch, len(segments), "time_budget")
     # A zero budget solves nothing, in every batch, and the linear fast path says so too.
@@ -199,17 +199,17 @@ def setup_polls(call) -> int:
     """The polls of ``call``'s set-up, counted (by a set-up hook that never acts); Ctrl-C at the first,
     the middle and the last of them stops the call with ``KeyboardInterrupt`` and ``partial = None``,
     nothing solved, and a hook armed one poll beyond them never acts (the call runs)."""
-    _core._on_poll_for_tests(2**62, "interrupt_setup")
+    hooks._on_poll_for_tests(2**62, "interrupt_setup")
     call()
-    polls = _core._setup_polls_for_tests()
+    polls = hooks._setup_polls_for_tests()
     for poll in sorted({1, (polls + 1) // 2, polls}):
-        _core._on_poll_for_tests(poll, "interrupt_setup")
+        hooks._on_poll_for_tests(poll, "interrupt_setup")
         with pytest.raises(KeyboardInterrupt) as stopped:
             call()
         assert stopped.value.partial is None
-    _core._on_poll_for_tests(polls + 1, "interrupt_setup")
+    hooks._on_poll_for_tests(polls + 1, "interrupt_setup")
     call()
-    assert _core._setup_polls_for_tests() == polls
+    assert hooks._setup_polls_for_tests() == polls
     return polls
 
 
@@ -288,9 +288,9 @@ def test_ctrl_c_stops_the_certificate_of_a_single_pose():
 
 def test_the_test_hook_checks_its_arguments():
     with pytest.raises(pluecker.InvalidOptionError, match="action"):
-        _core._on_poll_for_tests(1, "explode")
+        hooks._on_poll_for_tests(1, "explode")
     with pytest.raises(pluecker.InvalidOptionError, match="poll"):
-        _core._on_poll_for_tests(0, "interrupt")
+        hooks._on_poll_for_tests(0, "interrupt")
 
 
 @pytest.mark.parametrize("budget", [-1.0, float("nan"), float("inf"), 1e20])
@@ -344,6 +344,7 @@ cli.run()
 
 def run_command(body: str):
     """Starts the ``COMMAND`` process with ``body``; returns it and the read end of its descriptor."""
+    hooks._hold_gil_for_tests  # noqa: B018 (the child calls it: a build without it fails here, saying so)
     read, write = os.pipe()
     child = subprocess.Popen([sys.executable, "-c", COMMAND.replace("BODY", body), str(write)], pass_fds=(write,),
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from hypothesis import given, note
+from conftest import hooks
 from hypothesis import strategies as st
 from properties import (
     array_likes,
@@ -394,10 +395,8 @@ def test_fitting_residual_samples(draws, size, sigma, seed):
 
 
 def test_the_error_check_rejects_internal_errors():
-    import pluecker._core as core
-
     try:
-        core._panic_for_tests("boom")
+        hooks._panic_for_tests("boom")
     except pluecker.PlueckerError as error:
         try:
             check_error(error)

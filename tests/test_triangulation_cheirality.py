@@ -3,7 +3,7 @@
 Cameras with a negative focal length (the pose paper's ``α_u = −1730.3``) and the raw VGG ``.P`` files
 (a left-handed world: ``det P[:, :3] < 0`` with every point at ``λ > 0``) used to make every method call the
 right point ``behind_camera`` and ``optimal`` certify a point 1e10 away. The same data are checked from
-Rust in ``crates/pluecker/tests/triangulation_cheirality.rs``.
+Rust in ``crates/pluecker/tests/it/triangulation_cheirality.rs``.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@
 use pyo3::prelude::*;
 use std::fs::File;
 use std::io::{ErrorKind, Read, Write};
+#[cfg(feature = "test-hooks")]
 use std::mem::ManuallyDrop;
 use std::os::fd::FromRawFd;
 use std::path::{Path, PathBuf};
@@ -151,6 +152,7 @@ fn watch(
 ///
 /// Test hook: writes one byte to the file descriptor ``fd`` (left open), then holds the GIL for
 /// ``seconds`` without checking signals, as a long call into a library does.
+#[cfg(feature = "test-hooks")]
 #[pyfunction]
 pub(crate) fn _hold_gil_for_tests(_py: Python<'_>, fd: i32, seconds: Real) -> PyResult<()> {
     let seconds = seconds_arg("seconds", seconds.get("seconds")?)?;

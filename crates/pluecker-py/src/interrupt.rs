@@ -26,7 +26,9 @@
 //! work rather than after a delay; or it simulates Ctrl-C at a given poll of the set-up.
 
 use crate::convert::{optional_real, seconds_arg, Real};
-use crate::errors::{guarded, invalid_argument};
+use crate::errors::guarded;
+#[cfg(feature = "test-hooks")]
+use crate::errors::invalid_argument;
 use crate::threads::solve;
 use crate::triangulation::batch::PyBatchReport;
 use pluecker::interrupt::{with_stop, Stop};
@@ -42,8 +44,10 @@ use std::time::{Duration, Instant};
 /// How often the calling thread checks for signals and reports progress.
 const POLL: Duration = Duration::from_millis(50);
 
-/// What the test hook does at its poll.
+/// What the test hook does at its poll. Without the feature `test-hooks` nothing arms a hook: the calls
+/// still look for one ([`MAYBE_ARMED`], one relaxed load), and never find it.
 #[derive(Debug, Clone, Copy)]
+#[cfg_attr(not(feature = "test-hooks"), allow(dead_code))]
 enum HookAction {
     /// What Python's SIGINT handler does (`PyErr_SetInterrupt`): the call then sees a
     /// `KeyboardInterrupt` exactly as after Ctrl-C.
@@ -132,6 +136,7 @@ impl Hook {
 ///
 /// Test hook: the polls of the set-up counted since ``_on_poll_for_tests(poll, "interrupt_setup")``
 /// was last called (until the hook acted or the set-up it was armed for ended).
+#[cfg(feature = "test-hooks")]
 #[pyfunction]
 pub(crate) fn _setup_polls_for_tests() -> usize {
     SETUP_POLLS.load(Ordering::Relaxed)
@@ -174,6 +179,7 @@ pub(crate) fn in_chunks(
 /// Ctrl-C does or ``"await_deadline"``s until its time budget has run out; or ``"interrupt_setup"``:
 /// Ctrl-C at the ``poll``-th poll of the set-up (reading, sorting, allocating) of the calls to come,
 /// until one of them makes its stop.
+#[cfg(feature = "test-hooks")]
 #[pyfunction]
 pub(crate) fn _on_poll_for_tests(poll: usize, action: &str) -> PyResult<()> {
     let action = match action {

@@ -114,15 +114,18 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(triangulation::fitting::lines_from_endpoints, m)?)?;
     m.add_function(wrap_pyfunction!(triangulation::fitting::fitting_residual_samples, m)?)?;
     m.add_function(wrap_pyfunction!(_unpickle, m)?)?;
-    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
-    m.add_function(wrap_pyfunction!(pose::certificate::_pose_rotation_search, m)?)?;
-    m.add_function(wrap_pyfunction!(interrupt::_on_poll_for_tests, m)?)?;
-    m.add_function(wrap_pyfunction!(interrupt::_setup_polls_for_tests, m)?)?;
-    #[cfg(unix)]
+    // The test hooks: only in a build with the feature `test-hooks` (`make develop`), never in the wheel.
+    #[cfg(feature = "test-hooks")]
     {
-        m.add_class::<exit_deadline::ExitDeadline>()?;
+        m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
+        m.add_function(wrap_pyfunction!(pose::certificate::_pose_rotation_search, m)?)?;
+        m.add_function(wrap_pyfunction!(interrupt::_on_poll_for_tests, m)?)?;
+        m.add_function(wrap_pyfunction!(interrupt::_setup_polls_for_tests, m)?)?;
+        #[cfg(unix)]
         m.add_function(wrap_pyfunction!(exit_deadline::_hold_gil_for_tests, m)?)?;
     }
+    #[cfg(unix)]
+    m.add_class::<exit_deadline::ExitDeadline>()?;
     Ok(())
 }
 
@@ -168,6 +171,7 @@ fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
 
 /// Panics inside the guarded, GIL-released section every solve uses: the tests check that this
 /// arrives as `PlueckerError("internal error: ...")` rather than aborting the interpreter.
+#[cfg(feature = "test-hooks")]
 #[pyfunction]
 fn _panic_for_tests(py: Python<'_>, message: String) -> PyResult<()> {
     threads::solve(py, move || -> Result<(), pluecker::Error> { panic!("{message}") })

@@ -3,6 +3,8 @@
 //! error and covariance at a given pose ([`reprojection`]), and the dual-quaternion forms of a pose
 //! ([`geometry`]).
 
+// A test hook (`_pose_rotation_search`), in builds with the feature `test-hooks` only.
+#[cfg(feature = "test-hooks")]
 pub mod certificate;
 pub mod geometry;
 pub mod minimal;

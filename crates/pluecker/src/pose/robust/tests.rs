@@ -1,4 +1,4 @@
-//! Tests of the sampling loop on its own (the whole pipeline is tested in `tests/robust_pose.rs`).
+//! Tests of the sampling loop on its own (the whole pipeline is tested in `tests/it/robust_pose.rs`).
 
 use super::*;
 use crate::synthetic::{random_scene, SceneKind};

@@ -4,7 +4,7 @@
 // `!(x > 0.0)` is true for NaN: the NaN guard used throughout (a NaN must take the failing branch).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod common;
+use crate::common;
 
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker;

@@ -4,7 +4,7 @@
 //! never the library's residuals or refinement; the certificate's bound is the raw (unclamped) one,
 //! and gaps are recomputed here from the oracle's cost and that bound.
 
-mod pose_oracle;
+use crate::pose_oracle;
 
 use nalgebra::Vector3;
 use pluecker::pose::{estimate_pose, Correspondences, PoseOptions, Status};

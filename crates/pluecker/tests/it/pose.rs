@@ -9,6 +9,8 @@ use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, random_scene, SceneKind};
 use pluecker::{Camera, Error, Pose};
 
+use crate::pose_oracle;
+
 fn options(method: Method, refine: bool) -> PoseOptions {
     let mut options = PoseOptions::default();
     options.method = method;
@@ -274,9 +276,6 @@ fn points_behind_the_camera_are_reported() {
 /// `σ = sigma_px` (here 0.05 px: a margin of 0.011 px²), not with one of a few px², so the answer is
 /// `behind_camera`, never a `success` whose residuals are 20σ. The behind-camera fit is checked
 /// with the oracle's cost of the true pose, independently of the library's residuals.
-#[path = "pose_oracle/mod.rs"]
-mod pose_oracle;
-
 #[test]
 fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
     let sigma = 0.05;

@@ -2,7 +2,7 @@
 //! quadric, the paper's real-data case), cost ordering and certificates, the soundness of the bound,
 //! cheirality and bad input.
 
-mod common;
+use crate::common;
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
 use pluecker::geometry::{project_dual, Ellipse, Ellipsoid};

@@ -6,8 +6,7 @@
 //! more when it is one of the two views farthest apart: the reference for the rejection itself is an
 //! oracle that removes exactly the outlier's view.
 
-#[path = "common/oracle_triangulation.rs"]
-mod oracle;
+use crate::common::oracle_triangulation as oracle;
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use oracle::PointData;

@@ -7,7 +7,7 @@
 //!   whitened rays;
 //! - step 4's bound over a whitened ball against the least cost found in the ball.
 
-mod pose_oracle;
+use crate::pose_oracle;
 
 use nalgebra::{Matrix2, Rotation3, Unit, Vector2, Vector3, Vector6};
 use pluecker::pose::Correspondences;

@@ -2,7 +2,7 @@
 //! keep the others, branch and bound ends with an honest bound and status `Interrupted`, the RANSAC
 //! loop and the pose certificate stop at their next poll.
 
-mod common;
+use crate::common;
 
 use common::{noisy_segments, project, segment_tracks};
 use nalgebra::{Matrix3x4, Vector2, Vector3};

@@ -2,8 +2,6 @@
 //! soundness of both certificates against sampling and multi-start minimisation, low parallax,
 //! bad input, and the batch.
 
-mod common;
-
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector4};
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
@@ -19,8 +17,7 @@ use pluecker::triangulation::Csr;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use pluecker::Error;
 
-#[path = "common/oracle_triangulation.rs"]
-mod oracle;
+use crate::common::oracle_triangulation as oracle;
 
 fn options(method: Method) -> TriangulationOptions {
     let mut options = TriangulationOptions::default();

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: projections, noisy segments and visibility masks of the
-//! batch tests (`mod common;` in each test file that uses them).
+//! batch tests (`use crate::common;` in each test module that uses them), and the triangulation oracle.
 #![allow(dead_code)]
+
+pub mod oracle_triangulation;
 
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;

@@ -9,7 +9,7 @@
 //! distance (lines alone, or fewer than two points), the claim covers the poses with the segments'
 //! endpoints in front as well, and the distance bound holds at each of them.
 
-mod pose_oracle;
+use crate::pose_oracle;
 
 use nalgebra::{Matrix6, Vector3, Vector6};
 use pluecker::pose::Correspondences;

@@ -2,7 +2,7 @@
 //! `point_cost`, `PointView`, `trust_region` or chart): eq. 19 from the camera matrices, the pixels
 //! and the covariances, cheirality from the sign of the depth, and a Levenberg-Marquardt search of
 //! its own from many starts. Certificates are checked against these numbers, never against the
-//! library's residuals. Included with `#[path = "common/oracle_triangulation.rs"] mod oracle;`.
+//! library's residuals. Used as `use crate::common::oracle_triangulation as oracle;`.
 #![allow(dead_code)]
 
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
