@@ -14,6 +14,7 @@ mod pose_certificate_bounds;
 mod pose_certificate_region;
 mod pose_global;
 mod pose_lens;
+mod pose_lens_exact;
 mod robust_pose;
 mod triangulation_cheirality;
 mod triangulation_fitting;
