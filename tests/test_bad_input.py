@@ -270,6 +270,26 @@ def test_bad_iteration_caps(cls, option, value):
                                 else {"levenberg_marquardt": {option: value}}))
 
 
+@pytest.mark.parametrize("make, pattern", [
+    (lambda: pluecker.StoppingCriteria(step_tolerance=-1.0), "^invalid option 'step_tolerance'"),
+    (lambda: pluecker.StoppingCriteria(gradient_tolerance=float("nan")), "^invalid option 'gradient_tolerance'"),
+    (lambda: pluecker.TrustRegionOptions(accept_ratio=0.9), "^invalid option 'accept_ratio'"),
+    (lambda: pluecker.TrustRegionOptions(initial_radius=0.0), "^invalid option 'initial_radius'"),
+    (lambda: pluecker.TrustRegionOptions(hessian_shift=-1e-3), "^invalid option 'hessian_shift'"),
+    (lambda: pluecker.LevenbergMarquardtOptions(initial_damping=0.0), "^invalid option 'initial_damping'"),
+    (lambda: pluecker.PoseOptions(refinement={"initial_radius": float("inf")}),
+     "^refinement: invalid option 'initial_radius'"),
+    (lambda: pluecker.PoseOptions(newton={"cost_tolerance": -1.0}), "^newton: invalid option 'cost_tolerance'"),
+    (lambda: pluecker.PoseOptions(trust_region={"stopping": {"step_tolerance": -1.0}}),
+     "^trust_region: stopping: invalid option 'step_tolerance'"),
+])
+def test_solver_options_out_of_range_name_their_nested_field(make, pattern):
+    """The solvers' options are checked by the core as they are set, the error naming the field from
+    the outside in (``PoseOptions(refinement={...})`` → ``refinement: ... 'initial_radius'``)."""
+    with raises(InvalidOptionError, match=pattern):
+        make()
+
+
 def test_rotation_arguments_must_be_rotations(scene):
     reflection = np.diag([1.0, 1.0, -1.0])
     for bad in (2.0 * np.eye(3), reflection, np.ones((3, 3))):

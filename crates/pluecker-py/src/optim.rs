@@ -25,7 +25,7 @@ impl NestedOptions for PyStoppingCriteria {
 
 impl PyStoppingCriteria {
     fn validate(&self) -> PyResult<()> {
-        self.inner.validate("stopping").map_err(to_py_err)
+        self.inner.validate("").map_err(to_py_err)
     }
 }
 
@@ -67,7 +67,7 @@ impl NestedOptions for PyTrustRegionOptions {
 
 impl PyTrustRegionOptions {
     fn validate(&self) -> PyResult<()> {
-        self.core().validate("trust_region").map_err(to_py_err)
+        self.core().validate("").map_err(to_py_err)
     }
 
     /// The core's options, with `stopping` read from its object now.
@@ -136,7 +136,7 @@ impl NestedOptions for PyLevenbergMarquardtOptions {
 
 impl PyLevenbergMarquardtOptions {
     fn validate(&self) -> PyResult<()> {
-        self.core().validate("levenberg_marquardt").map_err(to_py_err)
+        self.core().validate("").map_err(to_py_err)
     }
 
     /// Options whose fields and stopping tests are `options`'.

@@ -2,7 +2,7 @@
 //! `(JᵀJ + νI) d = −JᵀΦ`, with ν divided by 10 after a successful step and multiplied by 10 after a
 //! failed one (Marquardt's original rule). Same cost and stopping tests as the trust region.
 
-use super::problem::{Objective, StoppingCriteria, Summary, Termination};
+use super::problem::{invalid_option, nested_name, Objective, StoppingCriteria, Summary, Termination};
 use nalgebra::SMatrix;
 
 /// Options of the Levenberg-Marquardt solver.
@@ -28,22 +28,16 @@ impl Default for LevenbergMarquardtOptions {
 }
 
 impl LevenbergMarquardtOptions {
-    /// Checks the options (errors name `name.field`): a positive finite initial damping, at least one
+    /// Checks the options (errors name `name.field`, or `field` when `name` is empty): a positive finite initial damping, at least one
     /// rejection, valid stopping tests.
     pub fn validate(&self, name: &str) -> crate::error::Result<()> {
-        let bad = |field: &str, reason: &str| {
-            Err(crate::error::Error::InvalidOption {
-                name: format!("{name}.{field}"),
-                reason: reason.into(),
-            })
-        };
         if !(self.initial_damping.is_finite() && self.initial_damping > 0.0) {
-            return bad("initial_damping", "must be a positive finite number");
+            return invalid_option(name, "initial_damping", "must be a positive finite number");
         }
         if self.max_rejections < 1 {
-            return bad("max_rejections", "must be at least 1");
+            return invalid_option(name, "max_rejections", "must be at least 1");
         }
-        self.stopping.validate(&format!("{name}.stopping"))
+        self.stopping.validate(&nested_name(name, "stopping"))
     }
 }
 

@@ -109,6 +109,24 @@ pub struct Summary {
     pub termination: Termination,
 }
 
+/// The name of option `field` of the solver options named `name`: `name.field`, or `field` alone when
+/// `name` is empty (options checked on their own).
+pub(crate) fn nested_name(name: &str, field: &str) -> String {
+    if name.is_empty() {
+        field.into()
+    } else {
+        format!("{name}.{field}")
+    }
+}
+
+/// The error of option `field` of the solver options named `name` ([`nested_name`]), out of its range.
+pub(crate) fn invalid_option<T>(name: &str, field: &str, reason: &str) -> crate::error::Result<T> {
+    Err(crate::error::Error::InvalidOption {
+        name: nested_name(name, field),
+        reason: reason.into(),
+    })
+}
+
 /// Stopping tests shared by every solver (the k.2 tests of section 4.1, plus a step-size test).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -136,26 +154,20 @@ impl Default for StoppingCriteria {
 }
 
 impl StoppingCriteria {
-    /// Checks the options of a solver named `name` (errors name `name.field`): tolerances are numbers
-    /// ≥ 0, the iteration cap at least 1.
+    /// Checks the options of a solver named `name` (errors name `name.field`, or `field` when `name` is
+    /// empty): tolerances are numbers ≥ 0, the iteration cap at least 1.
     pub fn validate(&self, name: &str) -> crate::error::Result<()> {
-        let bad = |field: &str, reason: &str| {
-            Err(crate::error::Error::InvalidOption {
-                name: format!("{name}.{field}"),
-                reason: reason.into(),
-            })
-        };
         for (field, value) in [
             ("gradient_tolerance", self.gradient_tolerance),
             ("cost_tolerance", self.cost_tolerance),
             ("step_tolerance", self.step_tolerance),
         ] {
             if !(value >= 0.0) {
-                return bad(field, "must be a number ≥ 0");
+                return invalid_option(name, field, "must be a number ≥ 0");
             }
         }
         if self.max_iterations < 1 {
-            return bad("max_iterations", "must be at least 1");
+            return invalid_option(name, "max_iterations", "must be at least 1");
         }
         Ok(())
     }

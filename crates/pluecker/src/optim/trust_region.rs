@@ -8,7 +8,7 @@
 //! - `MoreSorensen`: `H` = the exact Hessian with the Moré-Sorensen safeguarded step, which section 4.2
 //!   recommends for large-residual problems.
 
-use super::problem::{Objective, StoppingCriteria, Summary, Termination};
+use super::problem::{invalid_option, nested_name, Objective, StoppingCriteria, Summary, Termination};
 use super::subproblem::{hebden_step, more_sorensen_step, Step};
 use nalgebra::SMatrix;
 
@@ -57,29 +57,23 @@ impl Default for TrustRegionOptions {
 }
 
 impl TrustRegionOptions {
-    /// Checks the options (errors name `name.field`): a positive finite initial radius,
+    /// Checks the options (errors name `name.field`, or `field` when `name` is empty): a positive finite initial radius,
     /// `0 < accept_ratio < expand_ratio < 1`, `hessian_shift ≥ 0`, `radius_tolerance ≥ 0`, valid stopping
     /// tests.
     pub fn validate(&self, name: &str) -> crate::error::Result<()> {
-        let bad = |field: &str, reason: &str| {
-            Err(crate::error::Error::InvalidOption {
-                name: format!("{name}.{field}"),
-                reason: reason.into(),
-            })
-        };
         if !(self.initial_radius.is_finite() && self.initial_radius > 0.0) {
-            return bad("initial_radius", "must be a positive finite number");
+            return invalid_option(name, "initial_radius", "must be a positive finite number");
         }
         if !(0.0 < self.accept_ratio && self.accept_ratio < self.expand_ratio && self.expand_ratio < 1.0) {
-            return bad("accept_ratio", "need 0 < accept_ratio < expand_ratio < 1");
+            return invalid_option(name, "accept_ratio", "need 0 < accept_ratio < expand_ratio < 1");
         }
         if !(self.hessian_shift >= 0.0 && self.hessian_shift.is_finite()) {
-            return bad("hessian_shift", "must be a finite number ≥ 0");
+            return invalid_option(name, "hessian_shift", "must be a finite number ≥ 0");
         }
         if !(self.radius_tolerance >= 0.0) {
-            return bad("radius_tolerance", "must be a number ≥ 0");
+            return invalid_option(name, "radius_tolerance", "must be a number ≥ 0");
         }
-        self.stopping.validate(&format!("{name}.stopping"))
+        self.stopping.validate(&nested_name(name, "stopping"))
     }
 }
 
