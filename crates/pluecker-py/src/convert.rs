@@ -5,13 +5,13 @@
 //! Every array argument of the module is read here, copied from a contiguous float64 buffer when the
 //! caller hands one over (the batch functions must cost well under a microsecond per track),
 //! otherwise converted by `numpy.asarray(rows, dtype=float64, order="C")` a block of rows at a
-//! time; either way a chunk of [`crate::interrupt::SETUP_CHUNK`] values at a time, Python's signal
+//! time; either way a chunk of [`crate::setup_poll::SETUP_CHUNK`] values at a time, Python's signal
 //! handlers running between chunks, so that Ctrl-C is not held up by a large argument
-//! ([`crate::interrupt::setup_poll`]). Shapes are checked against the expected one and reported as
+//! ([`crate::setup_poll::setup_poll`]). Shapes are checked against the expected one and reported as
 //! `"x: expected shape (n, 2), got (4, 3)"`.
 
 use crate::errors::{invalid_argument, non_finite, shape_error};
-use crate::interrupt::{in_chunks, setup_poll, SETUP_CHUNK};
+use crate::setup_poll::{in_chunks, setup_poll, SETUP_CHUNK};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, SMatrix, SVector};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -581,4 +581,11 @@ impl crate::properties::Field for Pose {
     fn stub() -> String {
         "Tuple[NDArray[np.float64], NDArray[np.float64]]".into()
     }
+}
+
+/// The `time_budget` argument of a batch (seconds, `None` for none), checked.
+pub(crate) fn time_budget(arg: Option<Real>) -> PyResult<Option<Duration>> {
+    optional_real("time_budget", arg)?
+        .map(|s| seconds_arg("time_budget", s))
+        .transpose()
 }

@@ -148,3 +148,10 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("InvalidOptionError", py.get_type::<InvalidOptionError>())?;
     Ok(())
 }
+
+/// Sets `error.partial = partial` (the results of an interrupted batch) and returns `error`.
+pub(crate) fn with_partial(py: Python<'_>, error: PyErr, partial: PyObject) -> PyErr {
+    // An exception instance without a writable `__dict__` keeps its message; the results are lost.
+    let _ = error.value(py).setattr("partial", partial);
+    error
+}

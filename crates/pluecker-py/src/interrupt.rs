@@ -15,20 +15,11 @@
 //! cells, RANSAC samples), at most once per [`POLL`], when the caller is Python's main thread (the
 //! only one that runs them). A call that never reaches a poll is short and sees a signal when it ends.
 //!
-//! Before that, a call sets up on the calling thread with the GIL held: it reads its arrays, sorts
-//! its rows and allocates its results, a chunk of [`SETUP_CHUNK`] values at a time, and runs Python's
-//! signal handlers between chunks ([`setup_poll`]): Ctrl-C while a batch of millions of tracks is
-//! converted or allocated raises `KeyboardInterrupt` at once, with `partial = None` (nothing was
-//! solved).
-//!
-//! `_on_poll_for_tests` arms a test hook for the next call: at a given poll it simulates Ctrl-C, or
-//! waits until the time budget has run out, so that the tests stop a call at a known point of its
-//! work rather than after a delay; or it simulates Ctrl-C at a given poll of the set-up.
+//! Before that, a call sets up on the calling thread with the GIL held, polling Ctrl-C between chunks
+//! ([`crate::setup_poll`]); the tests stop a call at a known poll with [`crate::test_hook`].
 
-use crate::convert::{optional_real, seconds_arg, Real};
-use crate::errors::guarded;
-#[cfg(feature = "test-hooks")]
-use crate::errors::invalid_argument;
+use crate::errors::{guarded, with_partial};
+use crate::test_hook::Hook;
 use crate::threads::solve;
 use crate::triangulation::batch::PyBatchReport;
 use pluecker::interrupt::{with_stop, Stop};
@@ -36,173 +27,13 @@ use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::sync::GILOnceCell;
 use std::panic::{catch_unwind, resume_unwind, AssertUnwindSafe};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 /// How often the calling thread checks for signals and reports progress.
 const POLL: Duration = Duration::from_millis(50);
-
-/// What the test hook does at its poll. Without the feature `test-hooks` nothing arms a hook: the calls
-/// still look for one ([`MAYBE_ARMED`], one relaxed load), and never find it.
-#[derive(Debug, Clone, Copy)]
-#[cfg_attr(not(feature = "test-hooks"), allow(dead_code))]
-enum HookAction {
-    /// What Python's SIGINT handler does (`PyErr_SetInterrupt`): the call then sees a
-    /// `KeyboardInterrupt` exactly as after Ctrl-C.
-    Interrupt,
-    /// Waits until the call's time budget has run out (the poll itself still goes ahead).
-    AwaitDeadline,
-    /// [`HookAction::Interrupt`] at a poll of the set-up ([`setup_poll`]), counted over every call
-    /// until the next stop is made (which discards the hook if it has not acted).
-    InterruptSetup,
-}
-
-/// The hook armed by `_on_poll_for_tests`, for the next call that makes a stop.
-static ARMED: Mutex<Option<(usize, HookAction)>> = Mutex::new(None);
-/// Whether [`ARMED`] may hold a hook (spares every call the lock).
-static MAYBE_ARMED: AtomicBool = AtomicBool::new(false);
-/// Set-up polls since the hook was armed ([`HookAction::InterruptSetup`]).
-static SETUP_POLLS: AtomicUsize = AtomicUsize::new(0);
-
-/// The test hook of one call: acts at the `at`-th poll of its stop, counted over every thread.
-struct Hook {
-    at: usize,
-    action: HookAction,
-    polls: AtomicUsize,
-    deadline: Option<Instant>,
-}
-
-impl Hook {
-    /// The armed hook, if any (disarmed: it serves one call).
-    fn take(deadline: Option<Instant>) -> Option<Hook> {
-        if !MAYBE_ARMED.swap(false, Ordering::Relaxed) {
-            return None;
-        }
-        let (at, action) = ARMED.lock().ok()?.take()?;
-        if let HookAction::InterruptSetup = action {
-            return None; // the set-up it was armed for is over
-        }
-        Some(Hook {
-            at,
-            action,
-            polls: AtomicUsize::new(0),
-            deadline,
-        })
-    }
-
-    /// Counts a poll and acts at the `at`-th; `true` when it just simulated Ctrl-C.
-    fn poll(&self) -> bool {
-        if self.polls.fetch_add(1, Ordering::Relaxed) + 1 != self.at {
-            return false;
-        }
-        match self.action {
-            HookAction::Interrupt => {
-                // Safe from any thread, with or without the GIL (CPython's documentation).
-                unsafe { pyo3::ffi::PyErr_SetInterrupt() };
-                true
-            }
-            HookAction::AwaitDeadline => {
-                while let Some(left) = self.deadline.and_then(|d| d.checked_duration_since(Instant::now())) {
-                    std::thread::sleep(left);
-                }
-                false
-            }
-            HookAction::InterruptSetup => false,
-        }
-    }
-
-    /// Counts a poll of the set-up ([`setup_poll`]) for a hook armed with
-    /// [`HookAction::InterruptSetup`], and simulates Ctrl-C at its poll.
-    fn setup_poll() {
-        if !MAYBE_ARMED.load(Ordering::Relaxed) {
-            return;
-        }
-        let Ok(mut armed) = ARMED.lock() else { return };
-        if let Some((at, HookAction::InterruptSetup)) = *armed {
-            if SETUP_POLLS.fetch_add(1, Ordering::Relaxed) + 1 == at {
-                *armed = None;
-                MAYBE_ARMED.store(false, Ordering::Relaxed);
-                // Safe from any thread, with or without the GIL (CPython's documentation).
-                unsafe { pyo3::ffi::PyErr_SetInterrupt() };
-            }
-        }
-    }
-}
-
-/// _setup_polls_for_tests()
-/// --
-///
-/// Test hook: the polls of the set-up counted since ``_on_poll_for_tests(poll, "interrupt_setup")``
-/// was last called (until the hook acted or the set-up it was armed for ended).
-#[cfg(feature = "test-hooks")]
-#[pyfunction]
-pub(crate) fn _setup_polls_for_tests() -> usize {
-    SETUP_POLLS.load(Ordering::Relaxed)
-}
-
-/// Values (array entries, rows, result entries) a call's set-up handles between two polls
-/// ([`setup_poll`]): 8 MB of float64, a few milliseconds of copying.
-pub(crate) const SETUP_CHUNK: usize = 1 << 20;
-
-/// The poll of a call's set-up, between two chunks of [`SETUP_CHUNK`] values: runs Python's signal
-/// handlers (on the main thread; elsewhere nothing). Ctrl-C raises `KeyboardInterrupt` with
-/// `partial = None`: the call has not solved anything yet.
-pub(crate) fn setup_poll(py: Python<'_>) -> PyResult<()> {
-    Hook::setup_poll();
-    py.check_signals().map_err(|e| with_partial(py, e, py.None()))
-}
-
-/// `step(range)` for the chunks of [`SETUP_CHUNK`] values of `0..len`, in order, with a
-/// [`setup_poll`] after each; the first error ends it.
-pub(crate) fn in_chunks(
-    py: Python<'_>,
-    len: usize,
-    mut step: impl FnMut(std::ops::Range<usize>) -> PyResult<()>,
-) -> PyResult<()> {
-    let mut start = 0;
-    while start < len {
-        let end = len.min(start + SETUP_CHUNK);
-        step(start..end)?;
-        setup_poll(py)?;
-        start = end;
-    }
-    Ok(())
-}
-
-/// _on_poll_for_tests(poll, action, /)
-/// --
-///
-/// Test hook: the next interruptible call, at the ``poll``-th poll of its stop (1 is the first: before
-/// the first track of a batch, the first conic solve of branch and bound, ...), ``"interrupt"``s as
-/// Ctrl-C does or ``"await_deadline"``s until its time budget has run out; or ``"interrupt_setup"``:
-/// Ctrl-C at the ``poll``-th poll of the set-up (reading, sorting, allocating) of the calls to come,
-/// until one of them makes its stop.
-#[cfg(feature = "test-hooks")]
-#[pyfunction]
-pub(crate) fn _on_poll_for_tests(poll: usize, action: &str) -> PyResult<()> {
-    let action = match action {
-        "interrupt" => HookAction::Interrupt,
-        "await_deadline" => HookAction::AwaitDeadline,
-        "interrupt_setup" => HookAction::InterruptSetup,
-        _ => {
-            return Err(invalid_argument(
-                "action",
-                "'interrupt', 'await_deadline' or 'interrupt_setup'",
-            ))
-        }
-    };
-    if poll == 0 {
-        return Err(invalid_argument("poll", "must be at least 1"));
-    }
-    *ARMED
-        .lock()
-        .map_err(|_| invalid_argument("poll", "the hook's lock is poisoned"))? = Some((poll, action));
-    SETUP_POLLS.store(0, Ordering::Relaxed);
-    MAYBE_ARMED.store(true, Ordering::Relaxed);
-    Ok(())
-}
 
 /// Python's signal handlers run from the polls of a single call on the calling thread ([`run_single`]).
 struct SignalWatch {
@@ -413,20 +244,6 @@ where
         (Err(_), Some(e)) => Err(e),
         (value, pending) => value.map(|value| Outcome { value, pending }),
     }
-}
-
-/// Sets `error.partial = partial` (the results of an interrupted batch) and returns `error`.
-fn with_partial(py: Python<'_>, error: PyErr, partial: PyObject) -> PyErr {
-    // An exception instance without a writable `__dict__` keeps its message; the results are lost.
-    let _ = error.value(py).setattr("partial", partial);
-    error
-}
-
-/// The `time_budget` argument of a batch (seconds, `None` for none), checked.
-pub(crate) fn time_budget(arg: Option<Real>) -> PyResult<Option<Duration>> {
-    optional_real("time_budget", arg)?
-        .map(|s| seconds_arg("time_budget", s))
-        .transpose()
 }
 
 /// The Python object of a batch's results; raised as `exception.partial` instead when the batch was

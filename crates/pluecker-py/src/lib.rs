@@ -25,7 +25,9 @@ mod optim;
 mod pickle;
 mod pose;
 mod properties;
+mod setup_poll;
 mod synthetic;
+mod test_hook;
 mod threads;
 mod triangulation;
 
@@ -119,8 +121,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     {
         m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
         m.add_function(wrap_pyfunction!(pose::certificate::_pose_rotation_search, m)?)?;
-        m.add_function(wrap_pyfunction!(interrupt::_on_poll_for_tests, m)?)?;
-        m.add_function(wrap_pyfunction!(interrupt::_setup_polls_for_tests, m)?)?;
+        m.add_function(wrap_pyfunction!(test_hook::_on_poll_for_tests, m)?)?;
+        m.add_function(wrap_pyfunction!(test_hook::_setup_polls_for_tests, m)?)?;
         #[cfg(unix)]
         m.add_function(wrap_pyfunction!(exit_deadline::_hold_gil_for_tests, m)?)?;
     }

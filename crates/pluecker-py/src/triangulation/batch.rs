@@ -13,9 +13,9 @@
 
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{invalid_argument, shape_error, to_py_err};
-use crate::interrupt::in_chunks;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::properties::{result_class, Mask};
+use crate::setup_poll::in_chunks;
 use nalgebra::Matrix3x4;
 use pluecker::chi_square::ResidualTest;
 use pluecker::interrupt::StopReason;
@@ -545,7 +545,7 @@ pack_struct!(PyBatchReport {
 
 /// An output column of `tracks` rows of `per_track` copies of `value` each; a `MemoryError` rather
 /// than an abort when it cannot be allocated. Filled (its pages touched) a chunk at a time with the GIL
-/// released, Python's signal handlers running between chunks ([`crate::interrupt::in_chunks`]).
+/// released, Python's signal handlers running between chunks ([`crate::setup_poll::in_chunks`]).
 pub(crate) fn column<T: Clone + Send + Sync>(
     py: Python<'_>,
     value: T,

@@ -435,7 +435,7 @@ pub fn triangulate_lines(
             cameras,
         );
     }
-    let budget = interrupt::time_budget(time_budget)?;
+    let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
     let cams = Cameras::read(projections, 2, opts.method)?;
@@ -500,7 +500,7 @@ pub(crate) fn line_observations(
     n_tracks: Option<Integer>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
-    let budget = interrupt::time_budget(time_budget)?;
+    let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
     let cams = crate::convert::cameras("projections", projections)?;

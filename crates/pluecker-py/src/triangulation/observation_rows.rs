@@ -2,11 +2,11 @@
 //! shared reading and the stable counting sort into the core's compressed rows ([`Csr`]), used by
 //! the rows form (`track=`, `image=`) of `triangulate_points`, `triangulate_lines` and
 //! `triangulate_quadrics`. The sort and the gathering of the rows run a chunk of rows at
-//! a time, Python's signal handlers running between chunks ([`crate::interrupt::setup_poll`]).
+//! a time, Python's signal handlers running between chunks ([`crate::setup_poll::setup_poll`]).
 
 use crate::convert::{read, Dim, Integer};
 use crate::errors::{invalid_argument, shape_error};
-use crate::interrupt::in_chunks;
+use crate::setup_poll::in_chunks;
 use pluecker::testing::number;
 use pluecker::triangulation::Csr;
 use pluecker::Error;

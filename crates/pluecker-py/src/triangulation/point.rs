@@ -265,7 +265,7 @@ pub fn triangulate_points(
             cameras,
         );
     }
-    let budget = interrupt::time_budget(time_budget)?;
+    let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let cams = crate::convert::cameras("projections", projections)?;
     let v = cams.len();
@@ -360,7 +360,7 @@ pub(crate) fn point_observations(
     n_tracks: Option<Integer>,
     cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
-    let budget = interrupt::time_budget(time_budget)?;
+    let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let cams = crate::convert::cameras("projections", projections)?;
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;

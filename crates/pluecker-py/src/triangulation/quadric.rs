@@ -260,7 +260,7 @@ pub fn triangulate_quadrics(
             n_tracks,
         );
     }
-    let budget = interrupt::time_budget(time_budget)?;
+    let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let cams = Cameras::read(projections, 3, opts.method)?;
     let spec = [Dim::Free("n"), Dim::Free("v"), Dim::Fixed(3), Dim::Fixed(3)];
@@ -310,7 +310,7 @@ pub(crate) fn quadric_observations(
     time_budget: Option<Real>,
     n_tracks: Option<Integer>,
 ) -> PyResult<Py<PyQuadricTriangulations>> {
-    let budget = interrupt::time_budget(time_budget)?;
+    let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let cams = cameras("projections", projections)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
