@@ -26,6 +26,31 @@ def _noisy(kind, n_points, n_lines, seed, sigma=1.0):
     return scene, p2, l2
 
 
+def test_the_gap_of_a_near_exact_pose_is_the_documented_one():
+    """At a cost between 1e-12 and 2e-12 px² (data exact to 1e-7 px), the pose's relative gap is
+    ``(cost − lower_bound) / max(cost, 1e-12)`` recomputed here from the reported numbers, and
+    ``certified`` agrees with it. The two costs (the result's and the certificate's own) agree to about
+    1e-7 relative at this level (pixel coordinates of 1e3 px carry 1e-13 px of rounding into residuals of
+    1e-7 px), hence the absolute tolerance of 1e-6 on the gap. (The floor itself is checked on its own by
+    the crate's unit test of ``half_cost_gap``.)"""
+    scene = pluecker.random_scene("general", 20, 0, seed=4)
+    noise = np.random.default_rng(4).normal(0.0, 1.0, scene["points2d"].shape)
+    options = pluecker.PoseOptions(certify=pluecker.CertifyOptions())
+
+    def solve(scale):
+        return pluecker.estimate_pose(scene["camera"], scene["points2d"] + scale * noise, scene["points3d"],
+                                      options=options)
+
+    # The cost grows as the square of the noise: one rescaling puts it at 1.5e-12 (to a few %).
+    first = solve(2e-7)
+    res = solve(2e-7 * np.sqrt(1.5e-12 / first.cost))
+    cert = res.certificate
+    assert 1e-12 < res.cost < 2e-12 and cert is not None, (res.cost, cert)
+    gap = max(0.0, (res.cost - cert.lower_bound) / max(res.cost, 1e-12))
+    assert abs(cert.relative_gap - gap) <= 1e-6, (cert.relative_gap, gap)
+    assert cert.certified == (cert.relative_gap <= options.certify.max_relative_gap)
+
+
 def test_certified_answer_carries_a_bound_below_every_cost_found():
     certified = 0
     for seed in range(5):

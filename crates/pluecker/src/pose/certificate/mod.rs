@@ -121,7 +121,7 @@ use super::Status;
 use crate::camera::Camera;
 use crate::camera::LensCamera;
 use crate::certificate::{Certificate, CertificateKind, CertifyOptions};
-use crate::global::{relative_gap, CERTIFICATE_COST_FLOOR};
+use crate::global::CERTIFICATE_COST_FLOOR;
 use lens::{Slack, Surrogate};
 use local_bound::{LocalModel, RaySlack};
 use problem::{Problem, SearchStart};
@@ -220,8 +220,8 @@ impl SublevelSetOutcome {
     }
 
     /// The outcome in the crate's convention: the shared certificate of `kind` with the bounds in
-    /// `Σ r² = 2f` (`None` without a bound) and the relative gap as proved (a ratio: the same in either
-    /// unit, but for the floor `1e-12`, which the test applies to `f`).
+    /// `Σ r² = 2f` (`None` without a bound) and the relative gap as proved (a ratio, the same in either
+    /// unit: the test's floor on `f` is [`HALF_COST_FLOOR`]).
     fn into_verdict(self, kind: CertificateKind) -> Verdict {
         let sum_of_squares = |half: f64| 2.0 * half;
         Verdict {
@@ -238,6 +238,17 @@ impl SublevelSetOutcome {
             uncertified_reason: self.reason,
         }
     }
+}
+
+/// The cost floor of the relative gap in the test's unit `f = ½ Σ r²`: the crate's gap is
+/// `(cost − lower_bound) / max(cost, CERTIFICATE_COST_FLOOR)` in `Σ r² = 2f`, so the floor on `f` is
+/// half of it, and the gap proved here is the one a user recomputes from the reported bounds.
+pub(super) const HALF_COST_FLOOR: f64 = 0.5 * CERTIFICATE_COST_FLOOR;
+
+/// The relative gap `(f − lower) / max(f, HALF_COST_FLOOR)` of costs in `½ Σ r²`, at least 0: the
+/// crate's [`crate::global::relative_gap`] of `2f` and `2 lower`.
+fn half_cost_gap(f: f64, lower: f64) -> f64 {
+    ((f - lower) / f.max(HALF_COST_FLOOR)).max(0.0)
 }
 
 /// Radii of the whitened ball tried for the localisation, in units of `√(2f̂) + 0.1` px: the largest
@@ -355,13 +366,13 @@ fn certify_problem(
         Err(why) => return SublevelSetOutcome::none(why),
     };
     let slack = lens.map_or(Slack::NONE, |l| l.slack);
-    let gap_of = |lower: f64| relative_gap(cost, lower);
+    let gap_of = |lower: f64| half_cost_gap(cost, lower);
     let unit = (2.0 * cost).sqrt() + 0.1;
     let closing = |radius: f64| {
         model
             .raw_bound(
                 radius,
-                Some(cost - options.max_relative_gap * cost.max(CERTIFICATE_COST_FLOOR)),
+                Some(cost - options.max_relative_gap * cost.max(HALF_COST_FLOOR)),
             )
             .filter(|&raw| gap_of(raw.min(cost)) <= options.max_relative_gap)
             .map(|raw| (radius, raw))

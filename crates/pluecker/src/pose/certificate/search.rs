@@ -8,11 +8,11 @@ use super::lens::Slack;
 use super::local_bound::{LocalModel, Whitening};
 use super::minorant::{largest_eigenvalue, minkowski, ScaledMinorant};
 use super::problem::{Problem, SearchStart};
+use super::HALF_COST_FLOOR;
 use crate::geometry::quaternion::exp_so3;
 use crate::global::branch_and_bound::{
     branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Corner, Region, SubRegions,
 };
-use crate::global::CERTIFICATE_COST_FLOOR;
 use crate::interrupt::{stop_reason, StopReason};
 use crate::pose::reprojection::Pose;
 use nalgebra::{Matrix3, Vector3};
@@ -158,7 +158,7 @@ impl BoundingOracle for RotationSearch<'_, '_> {
     }
 
     fn absolute_gap(&self) -> f64 {
-        self.max_relative_gap * CERTIFICATE_COST_FLOOR
+        self.max_relative_gap * HALF_COST_FLOOR
     }
 
     /// The eight octants of the box (every axis cut at its midpoint): boxes stay cubes.
