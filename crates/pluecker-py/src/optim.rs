@@ -5,12 +5,11 @@
 //! = 50` changes the options that hold it), read into the core's structs when a function is called.
 
 use crate::convert::{Integer, Real};
-use crate::errors::{invalid_argument, to_py_err};
+use crate::errors::to_py_err;
 use crate::nested::{NestedOptions, Shared};
 use crate::properties::options_class;
 use pluecker::optim::{LevenbergMarquardtOptions, StoppingCriteria, Subproblem, TrustRegionOptions};
 use pyo3::prelude::*;
-use std::str::FromStr;
 
 /// Stopping tests and iteration cap of a solver, the core's `StoppingCriteria`.
 #[pyclass(name = "StoppingCriteria", module = "pluecker")]
@@ -93,10 +92,8 @@ options_class! {
     PyTrustRegionOptions {
         /// Subproblem solver: `hebden` (Gauss-Newton Hessian shifted by `hessian_shift`, the paper's
         /// step, Appendix A) or `more_sorensen` (exact Hessian, section 4.2).
-        subproblem: String = |o| <&str>::from(o.inner.subproblem).to_string(),
-            |o, v| Subproblem::from_str(&v)
-                .map(|s| o.inner.subproblem = s)
-                .map_err(|_| invalid_argument("subproblem", format!("{v:?} is not one of hebden, more_sorensen")));
+        subproblem: String = |o| o.inner.subproblem.as_str(),
+            |o, v| Subproblem::parse(&v).map(|s| o.inner.subproblem = s).map_err(to_py_err);
         /// α in `H' = JᵀJ + αI` (step k.3).
         hessian_shift: Real = |o| o.inner.hessian_shift, |o, v| v.get("hessian_shift").map(|x| o.inner.hessian_shift = x);
         /// Initial trust radius δ₀.

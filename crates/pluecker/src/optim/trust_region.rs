@@ -22,6 +22,18 @@ pub enum Subproblem {
     MoreSorensen,
 }
 
+impl Subproblem {
+    /// The name used by Python and the command line.
+    pub fn as_str(&self) -> &'static str {
+        self.into()
+    }
+
+    /// Parses [`Subproblem::as_str`] names (errors name the option `subproblem`).
+    pub fn parse(name: &str) -> crate::error::Result<Subproblem> {
+        crate::names::parse("subproblem", "subproblem", name)
+    }
+}
+
 /// Options of the trust-region solver. Defaults are the paper's values.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
