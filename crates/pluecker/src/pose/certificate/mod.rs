@@ -245,10 +245,10 @@ impl SublevelSetOutcome {
 /// half of it, and the gap proved here is the one a user recomputes from the reported bounds.
 pub(super) const HALF_COST_FLOOR: f64 = 0.5 * CERTIFICATE_COST_FLOOR;
 
-/// The relative gap `(f − lower) / max(f, HALF_COST_FLOOR)` of costs in `½ Σ r²`, at least 0: the
-/// crate's [`crate::global::relative_gap`] of `2f` and `2 lower`.
+/// The relative gap of costs in `½ Σ r²`: the crate's [`crate::global::relative_gap`] of `2f` and
+/// `2 lower` (doubling is exact), i.e. `(f − lower) / max(f, HALF_COST_FLOOR)`.
 fn half_cost_gap(f: f64, lower: f64) -> f64 {
-    ((f - lower) / f.max(HALF_COST_FLOOR)).max(0.0)
+    crate::global::relative_gap(2.0 * f, 2.0 * lower)
 }
 
 /// Radii of the whitened ball tried for the localisation, in units of `√(2f̂) + 0.1` px: the largest

@@ -157,20 +157,29 @@ fn with_rotation_search(
     body(&mut search, rng);
 }
 
-/// The test's gap on `f = ½ Σ r²` is the crate's gap on `Σ r² = 2f`, the floor included: a floor of
-/// `1e-12` on `f` (twice the crate's on `Σ r²`) would report a gap up to 2x smaller for costs below
-/// `2e-12`, and certify where the documented gap does not close.
+/// The test's gap on `f = ½ Σ r²` is the documented gap on `Σ r² = 2f`, `(cost − lower) / max(cost,
+/// 1e-12)` (written out here, not taken from the crate), and the level a bound must reach to close the
+/// gap (`f − gap · max(f, HALF_COST_FLOOR)`, the local bound's target) closes it exactly: a floor of
+/// `1e-12` on `f` (twice the documented one) would report gaps up to 2x smaller for costs below
+/// `2e-12` and certify where the documented gap does not close.
 #[test]
-fn the_gap_of_half_costs_is_the_crates_gap_of_the_sums_of_squares() {
+fn the_gap_of_half_costs_is_the_documented_gap_of_the_sums_of_squares() {
+    let documented = |cost: f64, lower: f64| ((cost - lower) / cost.max(1e-12)).max(0.0);
     for f in [1e-14, 3e-13, 0.5e-12, 0.7e-12, 1e-12, 1.5e-12, 1e-3, 10.0] {
         for fraction in [0.0, 1e-4, 0.5, 1.0] {
             let lower = f * (1.0 - fraction);
-            let documented = crate::global::relative_gap(2.0 * f, 2.0 * lower);
-            let proved = super::half_cost_gap(f, lower);
+            let (proved, want) = (super::half_cost_gap(f, lower), documented(2.0 * f, 2.0 * lower));
             assert!(
-                (proved - documented).abs() <= 1e-15 * documented.max(1.0),
-                "f {f:e}, lower {lower:e}: {proved:e} against {documented:e}"
+                (proved - want).abs() <= 1e-15 * want.max(1.0),
+                "f {f:e}, lower {lower:e}: {proved:e} against {want:e}"
             );
         }
+        let gap = 1e-3;
+        let target = f - gap * f.max(super::HALF_COST_FLOOR);
+        let closes = documented(2.0 * f, 2.0 * target);
+        assert!(
+            (closes - gap).abs() <= 1e-9 * gap,
+            "f {f:e}: the target closes a gap of {closes:e}"
+        );
     }
 }
