@@ -19,7 +19,6 @@ mod errors;
 #[cfg(unix)]
 mod exit_deadline;
 mod interrupt;
-mod lens_camera;
 mod nested;
 mod optim;
 mod pickle;
@@ -64,7 +63,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("STATUSES", pyo3::types::PyTuple::new(m.py(), statuses)?)?;
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
-    m.add_class::<lens_camera::PyLensCamera>()?;
     m.add_class::<certificate::PyCertifyOptions>()?;
     m.add_class::<certificate::PyCertificate>()?;
     // Pose.

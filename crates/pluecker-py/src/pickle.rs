@@ -19,7 +19,8 @@ use pluecker::pose::{CovarianceSource, Method as PoseMethod, PoseDetails, Ransac
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, CostKind, Method, Report, Status};
 use pluecker::Primitive;
-use pluecker::{Camera, Pose, PoseResult};
+use pluecker::camera::Intrinsics;
+use pluecker::{Pose, PoseResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 use pyo3::PyClass;
@@ -242,7 +243,7 @@ macro_rules! pack_struct {
 }
 pub(crate) use pack_struct;
 
-pack_struct!(Camera { fx, fy, cx, cy, skew });
+pack_struct!(Intrinsics { fx, fy, cx, cy, skew });
 pack_struct!(Pose { rotation, translation });
 pack_struct!(DualQuaternion { r, s });
 pack_struct!(StageReport {

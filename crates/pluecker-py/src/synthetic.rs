@@ -14,7 +14,7 @@ const KINDS: [SceneKind; 3] = [SceneKind::General, SceneKind::Planar, SceneKind:
 fn scene_dict<'py>(py: Python<'py>, scene: &Scene, with_lines: bool) -> PyResult<Bound<'py, PyDict>> {
     let c = &scene.correspondences;
     let d = PyDict::new(py);
-    d.set_item("camera", PyCamera::wrap(scene.camera))?;
+    d.set_item("camera", PyCamera::wrap(scene.camera.clone()))?;
     d.set_item("R", matrix_to_py(py, &scene.rotation))?;
     d.set_item("t", vector_to_py(py, &scene.translation))?;
     d.set_item("points2d", points_to_py(py, &c.points2d))?;

@@ -10,7 +10,7 @@ use pluecker::{estimate_pose, Camera, Correspondences, PoseOptions};
 
 fn main() -> pluecker::Result<()> {
     // The intrinsics: fx, fy, cx, cy, skew (pixels).
-    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0)?;
+    let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0)?;
 
     // Data made with a known pose, plus a deterministic ±0.5 px of noise. With real data, fill the
     // correspondences from your detections and your 3-D model instead.

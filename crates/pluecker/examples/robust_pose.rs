@@ -14,7 +14,7 @@ use pluecker::nalgebra::{Rotation3, Vector2, Vector3};
 use pluecker::{estimate_pose, Camera, Correspondences, PoseOptions, RansacOptions};
 
 fn main() -> pluecker::Result<()> {
-    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0)?;
+    let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0)?;
     let rotation = Rotation3::from_scaled_axis(Vector3::new(-0.1, 0.25, 0.1)).into_inner();
     let translation = Vector3::new(0.3, 0.0, 7.0);
 

@@ -12,7 +12,7 @@ use pluecker::{Camera, Pose};
 
 fn main() -> pluecker::Result<()> {
     // Three views' projections P = K [R | t].
-    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0)?;
+    let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0)?;
     let projections: Vec<Matrix3x4<f64>> = (0..3)
         .map(|j| {
             let rotation =

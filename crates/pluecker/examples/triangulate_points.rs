@@ -18,7 +18,7 @@ use pluecker::{Camera, Pose};
 
 fn main() -> pluecker::Result<()> {
     // The views' projections P = K [R | t] (3x4, world to pixels); here three poses on an arc.
-    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0)?;
+    let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0)?;
     let projections: Vec<Matrix3x4<f64>> = (0..3)
         .map(|j| {
             let rotation = Rotation3::from_scaled_axis(Vector3::new(0.0, -0.1 * j as f64, 0.0)).into_inner();

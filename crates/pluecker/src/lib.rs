@@ -47,10 +47,10 @@
 //! point minimises the reprojection error in each image's own pixels.
 //! ```
 //! use pluecker::nalgebra::{Matrix3, Vector3};
-//! use pluecker::camera::{CameraModel, LensCamera};
+//! use pluecker::camera::{CameraModel, Camera};
 //! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
 //! use pluecker::Pose;
-//! let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
+//! let lens = Camera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
 //! let views = [
 //!     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::zeros())),
 //!     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::new(-1.0, 0.0, 0.0))),
@@ -120,7 +120,7 @@ pub(crate) mod status;
 pub mod synthetic;
 pub mod triangulation;
 
-pub use camera::{AnyCamera, Camera};
+pub use camera::Camera;
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Method` and result stay in their
 // module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.

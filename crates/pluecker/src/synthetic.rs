@@ -1,6 +1,6 @@
 //! Seeded synthetic scenes for tests, benchmarks and the paper's experiments.
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Intrinsics};
 use crate::error::{Error, Result};
 use crate::geometry::quaternion::{from_axis_angle, to_rotation_matrix};
 use crate::pose::{Correspondences, ObservationNoise};
@@ -53,13 +53,14 @@ impl Scene {
 
 /// The ground truth of Phong & Horaud 1995, section 5: axis, angle (rad), translation (cm), intrinsics.
 pub fn paper_pose() -> (Camera, Matrix3<f64>, Vector3<f64>) {
-    let camera = Camera {
+    let k = Intrinsics {
         fx: -1730.3,
         fy: 1220.7,
         cx: 243.8,
         cy: 241.2,
         skew: 0.0,
     };
+    let camera = Camera::pinhole(k.fx, k.fy, k.cx, k.cy, k.skew).expect("the paper's camera");
     let axis = Vector3::new(-0.185148, -0.973420, -0.156567);
     let rotation = to_rotation_matrix(&from_axis_angle(&axis, 2.9512));
     (camera, rotation, Vector3::new(2.627650, -11.006138, 77.479236))
@@ -70,6 +71,7 @@ pub fn paper_pose() -> (Camera, Matrix3<f64>, Vector3<f64>) {
 /// The paper does not describe its object beyond its size; this one fills the image the same way.
 pub fn paper_calibration_object() -> Scene {
     let (camera, rotation, translation) = paper_pose();
+    let k = camera.intrinsics();
     let depth = translation.z;
     let mut points3d = Vec::with_capacity(460);
     for face in [-1.0, 1.0] {
@@ -86,7 +88,7 @@ pub fn paper_calibration_object() -> Scene {
     }
     let points2d = points3d
         .iter()
-        .map(|x| camera.project(&(rotation * x + translation)))
+        .map(|x| k.project(&(rotation * x + translation)))
         .collect();
     Scene {
         camera,
@@ -147,7 +149,7 @@ pub fn check_scene_size(n_points: usize, n_lines: usize) -> Result<()> {
 /// Every point and endpoint is in front of the camera and inside the 640 x 480 image.
 pub fn random_scene(kind: SceneKind, n_points: usize, n_lines: usize, seed: u64) -> Scene {
     let mut rng = Rng::new(seed);
-    let camera = Camera {
+    let camera = Intrinsics {
         fx: 800.0,
         fy: 800.0,
         cx: 320.0,
@@ -227,7 +229,7 @@ impl Structure {
 
     /// The scene of this structure seen by `camera` at the pose `(rotation, translation)` (world
     /// points `Rᵀ (x_cam − t)`), with exact pixels.
-    fn seen(&self, camera: Camera, rotation: Matrix3<f64>, translation: Vector3<f64>) -> Scene {
+    fn seen(&self, camera: Intrinsics, rotation: Matrix3<f64>, translation: Vector3<f64>) -> Scene {
         let to_world = |x_cam: &Vector3<f64>| rotation.transpose() * (x_cam - translation);
         let correspondences = Correspondences {
             points2d: self.points.iter().map(|x| camera.project(x)).collect(),
@@ -245,7 +247,8 @@ impl Structure {
             noise: None,
         };
         Scene {
-            camera,
+            camera: Camera::pinhole(camera.fx, camera.fy, camera.cx, camera.cy, camera.skew)
+                .expect("a scene's focal length is non-zero"),
             rotation,
             translation,
             correspondences,
@@ -279,7 +282,7 @@ pub fn random_observation_noise(rng: &mut Rng, n_points: usize, n_lines: usize, 
 /// Noise-free; add noise with [`Scene::noisy`].
 pub fn visible_scene(focal: f64, n_points: usize, n_lines: usize, planar: bool, seed: u64) -> Scene {
     let mut rng = Rng::new(seed);
-    let camera = Camera {
+    let camera = Intrinsics {
         fx: focal,
         fy: focal,
         cx: 320.0,
@@ -343,7 +346,7 @@ impl TriangulationScene {
 /// a random roll and the point at a random pixel at least 40 px inside the 640 x 480 image.
 pub fn triangulation_scene(views: usize, parallax: f64, seed: u64) -> TriangulationScene {
     let mut rng = Rng::new(seed);
-    let camera = Camera {
+    let camera = Intrinsics {
         fx: 800.0,
         fy: 800.0,
         cx: 320.0,

@@ -37,7 +37,7 @@ pub fn _pose_rotation_search<'py>(
     min_half: Real,
     max_nodes: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let camera = camera.get().inner;
+    let camera = crate::camera::pinhole_only("camera", camera.get())?;
     let pose = pose_from_parts("R", R, "t", t)?;
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let (level, target, min_half) = (level.get("level")?, target.get("target")?, min_half.get("min_half")?);

@@ -6,7 +6,7 @@
 //! from pixels. Each returns every real pose `x_cam = R X_world + t` that explains its sample exactly,
 //! as a list of `(R, t)`: possibly empty (a degenerate sample), never an error for valid arrays.
 
-use crate::camera::PyCamera;
+use crate::camera::{pinhole_only, PyCamera};
 use crate::convert::pose_from_parts;
 use crate::convert::{points, segments};
 use crate::errors::shape_error;
@@ -123,7 +123,7 @@ pub fn refine_pose<'py>(
     lines3d: Option<&Bound<'py, PyAny>>,
     options: Option<PyRef<'py, PyPoseOptions>>,
 ) -> PyResult<(PyObject, PyObject, PyPoseStage)> {
-    let camera = camera.get().inner;
+    let camera = pinhole_only("camera", camera.get())?;
     let start = pose_from_parts("R", R, "t", t)?;
     let opts = options.map_or_else(pluecker::pose::PoseOptions::default, |o| o.core());
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;

@@ -12,16 +12,14 @@ pub mod options;
 pub mod reprojection;
 pub mod result;
 
-use crate::camera::PyCamera;
 use crate::convert::{check_finite, matrix_stack, points, read_any, segments, shape_string};
 use crate::errors::{guarded, shape_error};
 use crate::interrupt::{object_or_partial, run_interruptible, run_single};
-use crate::lens_camera::PyLensCamera;
 use nalgebra::Matrix2;
 use options::PyPoseOptions;
 use pluecker::pose::ObservationNoise;
 use pluecker::pose::{Correspondences, PoseOptions};
-use pluecker::AnyCamera;
+use pluecker::Camera;
 use pyo3::prelude::*;
 use result::PyPoseResult;
 
@@ -104,19 +102,9 @@ fn observation_noise(
     Ok(Some(noise))
 }
 
-/// The `camera=` argument, a pinhole `Camera` or a `LensCamera` of one of COLMAP's models, as the
-/// core's one camera type.
-fn any_camera(camera: &Bound<'_, PyAny>) -> PyResult<AnyCamera> {
-    if let Ok(c) = camera.downcast::<PyCamera>() {
-        return Ok(AnyCamera::Pinhole(c.get().inner));
-    }
-    if let Ok(c) = camera.downcast::<PyLensCamera>() {
-        return Ok(AnyCamera::Lens(c.get().inner.clone()));
-    }
-    Err(pyo3::exceptions::PyTypeError::new_err(format!(
-        "camera: expected Camera or LensCamera, got {}",
-        camera.get_type().name()?
-    )))
+/// The `camera=` argument: a `Camera` (any model), or a `pycolmap.Camera` taken as it is.
+fn any_camera(camera: &Bound<'_, PyAny>) -> PyResult<Camera> {
+    crate::camera::coerce("camera", camera)
 }
 
 /// Correspondences from which `estimate_pose` runs on a worker thread, so that Ctrl-C stops it
@@ -127,7 +115,7 @@ const SHORT_POSE: usize = 1000;
 /// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
 /// robustly (LO-RANSAC), with its covariance.
 ///
-/// `camera`: `Camera` (pinhole) or `LensCamera` (distortion; pixels are the observed, distorted ones,
+/// `camera`: `Camera` (pinhole) or `Camera` (distortion; pixels are the observed, distorted ones,
 /// and the refinement minimises the exact error in them: core `pose::lens`).
 /// `options`: `PoseOptions` (default `PoseOptions()`): the method, `options.ransac` for robust
 /// estimation and `options.certify` for the certificate are set there.

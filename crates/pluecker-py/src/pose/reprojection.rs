@@ -32,7 +32,7 @@ pub fn pose_covariance<'py>(
     sigma_px: Option<Real>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let sigma_px = sigma_px.map_or(Ok(UNIT_SIGMA_PX), |s| s.get("sigma_px"))?;
-    let camera = camera.get().inner;
+    let camera = camera.get().inner.clone();
     let pose = pose_from_parts("R", R, "t", t)?;
     if !(sigma_px.is_finite() && sigma_px > 0.0) {
         return Err(invalid_argument(
@@ -46,7 +46,7 @@ pub fn pose_covariance<'py>(
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
     // The information matrix is computed again only to explain a failure.
     let cov = solve(py, move || {
-        let cost = ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
+        let cost = ReprojectionCost::exact(&camera, &c)?;
         Ok(covariance(&cost, &pose, sigma_px).ok_or_else(|| cost.information(&pose)))
     })?;
     let cov = cov.map_err(|information| {
@@ -90,11 +90,9 @@ pub fn reprojection_errors<'py>(
     lines2d: Option<&Bound<'py, PyAny>>,
     lines3d: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let camera = camera.get().inner;
+    let camera = camera.get().inner.clone();
     let pose = pose_from_parts("R", R, "t", t)?;
     let c = correspondences(points2d, points3d, lines2d, lines3d)?;
-    let errors = solve(py, move || {
-        Ok(ReprojectionCost::new(camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d).errors(&pose))
-    })?;
+    let errors = solve(py, move || Ok(ReprojectionCost::exact(&camera, &c)?.errors(&pose)))?;
     Ok(PyArray1::from_vec(py, errors))
 }

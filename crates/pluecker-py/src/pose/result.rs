@@ -171,13 +171,18 @@ impl Field for ResidualTest {
     }
 }
 
-impl Field for pluecker::Camera {
+/// An estimated `K` (the Faugeras-Toscani baseline's) as the pinhole `Camera` it is.
+fn pinhole_camera(k: pluecker::camera::Intrinsics) -> PyResult<PyCamera> {
+    crate::errors::guarded(|| pluecker::Camera::pinhole(k.fx, k.fy, k.cx, k.cy, k.skew)).map(PyCamera::wrap)
+}
+
+impl Field for pluecker::camera::Intrinsics {
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
-        Ok(Py::new(py, PyCamera::wrap(self))?.into_any())
+        Ok(Py::new(py, pinhole_camera(self)?)?.into_any())
     }
     fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
         let d = PyDict::new(py);
-        PyCamera::wrap(self).fill_dict(py, &d)?;
+        pinhole_camera(self)?.fill_dict(py, &d)?;
         Ok(d.into_any().unbind())
     }
     fn stub() -> String {

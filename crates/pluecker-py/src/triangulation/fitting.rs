@@ -96,7 +96,7 @@ pub fn fit_line(points: &Bound<'_, PyAny>, sigma: Option<Real>) -> PyResult<PyFi
 }
 
 /// The image lines `(M, 3)` (unit normal, pixels) through segments `(M, 2, 2)` whose two endpoints have
-/// the covariances `covariances` `(M, 2, 2, 2)` (pixels²; e.g. from `LensCamera.undistort`), and the
+/// the covariances `covariances` `(M, 2, 2, 2)` (pixels²; e.g. from `Camera.undistort`), and the
 /// covariances `(M, 2, 2)` of their residuals: the `lines` and `covariances` of `triangulate_line(s)`
 /// (core `fitting::line_from_endpoints`).
 #[pyfunction]

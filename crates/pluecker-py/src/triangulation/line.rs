@@ -221,7 +221,7 @@ fn endpoint_covariances(
 
 /// Triangulates one 3-D line from its images in two or more views (Josephson & Kahl 2008, eq. 19).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models):
+/// `cameras`, when given, holds each view's `Camera` or `Camera` (any of COLMAP's models):
 /// `projections[i]` is then `K [R | t]` of its pinhole part, `lines` are segments (n, 2, 2) whose
 /// endpoints are the observed (distorted) pixels, and `covariances` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
 /// pixels (else `sigma` px per coordinate, 1 by default). Through a distorting lens the cost is the
@@ -480,7 +480,7 @@ pub fn triangulate_lines(
 /// noise `sigma`) of track `track[k]` in image `image[k]` (an index into `projections` (v, 3, 4)), with
 /// the covariance `covariances[k]` (m, 2, 2) when given. Each track is solved as `triangulate_lines` would.
 ///
-/// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `LensCamera` of any of
+/// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `Camera` of any of
 /// COLMAP's models: then `projections[j]` is `K [R | t]` of that camera's pinhole part at the image's
 /// pose, `lines` are segments (m, 2, 2) in the observed (distorted) pixels, `covariances` (m, 2, 2, 2) the covariances
 /// of each segment's two endpoints (else `sigma`), and each track is solved as

@@ -16,12 +16,10 @@ use super::batch::{
 use super::observation_rows::SortedRows;
 use super::report::PyTriangulationReport;
 use super::{options_arg, PyTriangulationOptions};
-use crate::camera::PyCamera;
 use crate::convert::{check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real};
 use crate::errors::invalid_argument;
 use crate::errors::{shape_error, to_py_err};
 use crate::interrupt::{self, batch_result, run_interruptible};
-use crate::lens_camera::PyLensCamera;
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -36,7 +34,7 @@ use pluecker::triangulation::point::{PointTracks, SparsePointTracks};
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;
-use pluecker::{AnyCamera, Pose};
+use pluecker::Pose;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -105,7 +103,7 @@ fn pixels(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vect
 
 /// Triangulates one point from its pixels in two or more views (Josephson & Kahl 2008, eq. 19).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `LensCamera` (any of COLMAP's models):
+/// `cameras`, when given, holds each view's `Camera` or `Camera` (any of COLMAP's models):
 /// `projections[i]` is then `K [R | t]` of its pinhole part, `observations` the observed (distorted)
 /// pixels and `covariances` their covariances, and the cost is the reprojection error in those pixels through the exact projection
 /// (certificate `lens_convexity_test` through a lens).
@@ -341,7 +339,7 @@ pub fn triangulate_points(
 /// outgrows the input; a track id without observations is rejected as too few views); each is solved as
 /// `triangulate_points` would.
 ///
-/// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `LensCamera` of any of
+/// `cameras`, when given, holds the camera of each image (v,), a `Camera` or a `Camera` of any of
 /// COLMAP's models: then `projections[j]` is `K [R | t]` of that camera's pinhole part at the image's
 /// pose, `observations` are the observed (distorted) pixels and `covariances` their covariances, and the cost is the reprojection
 /// error in those pixels through the exact projection; `optimal` certifies that cost (certificate
@@ -396,7 +394,7 @@ pub(crate) fn point_observations(
     batch_result(py, outcome)
 }
 
-/// The views of `cameras` (one `Camera` or `LensCamera` per row of `projections`) with the poses
+/// The views of `cameras` (one `Camera` or `Camera` per row of `projections`) with the poses
 /// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row of `projections`
 /// that is not `K [R | t]` of its camera's pinhole part.
 pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
@@ -412,17 +410,8 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
         .zip(p)
         .enumerate()
         .map(|(j, (c, pj))| {
-            let camera: AnyCamera = if let Ok(c) = c.downcast::<PyCamera>() {
-                c.get().inner.into()
-            } else if let Ok(c) = c.downcast::<PyLensCamera>() {
-                c.get().inner.clone().into()
-            } else {
-                return Err(invalid_argument(
-                    "cameras",
-                    format!("entry {j} is not a Camera or LensCamera"),
-                ));
-            };
-            let k = camera.pinhole().map_err(to_py_err)?.matrix();
+            let camera = crate::camera::coerce(&format!("cameras[{j}]"), &c)?;
+            let k = camera.intrinsics().matrix();
             let rt = k.try_inverse().map(|ki| ki * pj);
             let pose = rt.and_then(|rt| {
                 let scale = rt.fixed_view::<1, 3>(2, 0).norm();

@@ -21,7 +21,7 @@
 //! **The one-to-one disc** ([`domain`]). The certificates work inside a disc `|n| < R` on which `D` is
 //! proved one-to-one, and need a disc about the principal point, of radius `ρ`, that `D` maps onto
 //! part of its image:
-//! - radially symmetric: `R` is the fold radius ([`crate::camera::LensCamera::fold_radius`]), below which the
+//! - radially symmetric: `R` is the fold radius ([`crate::camera::Camera::fold_radius`]), below which the
 //!   radial map `r ↦ r g` (or `θ g(θ²)`) increases, and the image is the disc of radius `ρ = R g(R²)`
 //!   (`θ_R g(θ_R²)`, `θ_R = atan R`, for the fisheyes; the limit of `r g` for an unbounded disc of the
 //!   division models and EUCM);
@@ -351,44 +351,44 @@ pub fn radius_about(j: &IntervalMatrix, j0: &Matrix2<f64>) -> Matrix2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{CameraModel, LensCamera};
+    use crate::camera::{CameraModel, Camera};
 
-    fn distortion(lens: &LensCamera) -> Option<Distortion> {
+    fn distortion(lens: &Camera) -> Option<Distortion> {
         lens.covered_distortion().cloned()
     }
     use crate::rng::Rng;
 
-    fn lenses() -> Vec<LensCamera> {
+    fn lenses() -> Vec<Camera> {
         vec![
-            LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap(),
-            LensCamera::new(CameraModel::Radial, &[800.0, 320.0, 240.0, 0.2, -0.05]).unwrap(),
-            LensCamera::new(CameraModel::OpenCv, &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 0.0, 0.0]).unwrap(),
-            LensCamera::new(
+            Camera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap(),
+            Camera::new(CameraModel::Radial, &[800.0, 320.0, 240.0, 0.2, -0.05]).unwrap(),
+            Camera::new(CameraModel::OpenCv, &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 0.0, 0.0]).unwrap(),
+            Camera::new(
                 CameraModel::OpenCv,
                 &[600.0, 610.0, 320.0, 240.0, -0.3, 0.08, 2e-3, -1e-3],
             )
             .unwrap(),
-            LensCamera::new(
+            Camera::new(
                 CameraModel::FullOpenCv,
                 &[
                     600.0, 610.0, 320.0, 240.0, 0.05, -0.01, -4e-3, 1e-3, 0.002, 0.0, 0.0, 0.0,
                 ],
             )
             .unwrap(),
-            LensCamera::new(
+            Camera::new(
                 CameraModel::OpenCvFisheye,
                 &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4],
             )
             .unwrap(),
-            LensCamera::new(CameraModel::RadialFisheye, &[300.0, 512.0, 384.0, -0.02, 0.003]).unwrap(),
-            LensCamera::new(CameraModel::SimpleFisheye, &[300.0, 512.0, 384.0]).unwrap(),
-            LensCamera::new(CameraModel::SimpleDivision, &[800.0, 320.0, 240.0, -0.2]).unwrap(),
-            LensCamera::new(CameraModel::Division, &[800.0, 790.0, 320.0, 240.0, 0.15]).unwrap(),
-            LensCamera::new(CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]).unwrap(),
+            Camera::new(CameraModel::RadialFisheye, &[300.0, 512.0, 384.0, -0.02, 0.003]).unwrap(),
+            Camera::new(CameraModel::SimpleFisheye, &[300.0, 512.0, 384.0]).unwrap(),
+            Camera::new(CameraModel::SimpleDivision, &[800.0, 320.0, 240.0, -0.2]).unwrap(),
+            Camera::new(CameraModel::Division, &[800.0, 790.0, 320.0, 240.0, 0.15]).unwrap(),
+            Camera::new(CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]).unwrap(),
         ]
     }
 
-    fn domain_of(lens: &LensCamera) -> (Distortion, Domain) {
+    fn domain_of(lens: &Camera) -> (Distortion, Domain) {
         let d = distortion(lens).unwrap();
         let dom = domain(&d, lens.fold_radius()).unwrap();
         (d, dom)
@@ -517,7 +517,7 @@ mod tests {
     #[test]
     fn a_mild_tangential_term_keeps_most_of_the_radial_domain() {
         // Not vacuous: the scan finds a disc close to the radial fold (r = 1.054) for small p₁, p₂.
-        let lens = LensCamera::new(
+        let lens = Camera::new(
             CameraModel::OpenCv,
             &[600.0, 610.0, 320.0, 240.0, -0.3, 0.0, 2e-3, -1e-3],
         )
@@ -531,7 +531,7 @@ mod tests {
 
     #[test]
     fn boxes_reaching_the_edge_of_the_domain_have_no_enclosure() {
-        let lens = LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap();
+        let lens = Camera::new(CameraModel::SimpleRadial, &[5000.0, 300.0, 300.0, -14.0]).unwrap();
         let (d, dom) = domain_of(&lens);
         let r = dom.radius;
         assert!(jacobian_enclosure(&d, r, &Vector2::new(0.9 * r, 0.0), &Vector2::new(1.01 * r, 0.01)).is_none());
@@ -542,7 +542,7 @@ mod tests {
     fn the_ray_chart_enclosure_holds_the_composite_jacobian() {
         // D(h(n′)) differentiated numerically (central differences of the library's projection, error
         // ~1e-9 at step 1e-6) at sampled points of boxes around rays out to 85° off axis.
-        let lens = LensCamera::new(
+        let lens = Camera::new(
             CameraModel::OpenCvFisheye,
             &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4],
         )
@@ -595,7 +595,7 @@ mod tests {
     #[test]
     fn ray_chart_boxes_past_a_fisheyes_fold_have_no_enclosure() {
         // θ_d = θ (1 − 0.3 θ²) turns at θ² = 1/0.9 (θ = 60.4°): a box of rays around 65° is past it.
-        let lens = LensCamera::new(CameraModel::SimpleRadialFisheye, &[300.0, 512.0, 384.0, -0.3]).unwrap();
+        let lens = Camera::new(CameraModel::SimpleRadialFisheye, &[300.0, 512.0, 384.0, -0.3]).unwrap();
         let (Distortion::Fisheye(c), dom) = domain_of(&lens) else {
             panic!()
         };
@@ -615,9 +615,9 @@ mod tests {
 
     #[test]
     fn uncovered_distortions_have_none() {
-        let fov = LensCamera::new(CameraModel::Fov, &[400.0, 395.0, 320.0, 240.0, 0.9]).unwrap();
+        let fov = Camera::new(CameraModel::Fov, &[400.0, 395.0, 320.0, 240.0, 0.9]).unwrap();
         assert_eq!(distortion(&fov), None);
-        let prism = LensCamera::new(
+        let prism = Camera::new(
             CameraModel::ThinPrismFisheye,
             &[300.0, 300.0, 512.0, 384.0, 0.0, 0.0, 1e-3, 0.0, 0.0, 0.0, 0.0, 0.0],
         )

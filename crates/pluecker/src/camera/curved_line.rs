@@ -1,6 +1,6 @@
 //! The distance of an observed pixel to the curved image of a line through a lens.
 //!
-//! A lens ([`LensCamera`]: `u = K D(n)`, `n = (x/z, y/z)`) maps the straight image `ℓ` of a 3-D line
+//! A lens ([`Camera`]: `u = K D(n)`, `n = (x/z, y/z)`) maps the straight image `ℓ` of a 3-D line
 //! in normalised coordinates (the line `l₀ x + l₁ y + l₂ = 0`, `l = (l₀, l₁, l₂)` the camera-frame line
 //! of the pinhole model: Josephson & Kahl 2008, eq. 6 with `K = I`) to the curve `K D(ℓ)` in the
 //! image's own, distorted pixels. The residual of an observed segment endpoint `e` with covariance `C`
@@ -10,7 +10,7 @@
 //! ([`crate::pose::reprojection`]) and the triangulation of lines through lenses
 //! ([`crate::triangulation::line::lens`]) measure segment endpoints with it.
 
-use crate::camera::LensCamera;
+use crate::camera::Camera;
 use nalgebra::{Matrix2, Matrix3, RowVector2, RowVector3, Vector2, Vector3};
 
 /// The 1-D search of [`nearest_on_curve`] stops after a step that moves the point on the curve by at
@@ -27,7 +27,7 @@ const NEAREST_MAX_ITERATIONS: usize = 100;
 /// the undistorted line of the undistorted observation: the branch of the curve through the
 /// observation). Returns the point `foot + σ dir`, its pixel `u(σ)` and the tangent `du/dσ`.
 pub fn nearest_on_curve(
-    lens: &LensCamera,
+    lens: &Camera,
     foot: &Vector2<f64>,
     dir: &Vector2<f64>,
     e: &Vector2<f64>,
@@ -90,7 +90,7 @@ impl EndpointResidual {
     /// (the search's derivative along the curve is zero at its minimum) this is the derivative of the
     /// residual for any smooth motion of `q*` that keeps it on the moving line `ℓ`, and `r`'s
     /// derivative with respect to whatever moves `ℓ` is this row times that motion.
-    pub fn gradient(&self, lens: &LensCamera) -> RowVector2<f64> {
+    pub fn gradient(&self, lens: &Camera) -> RowVector2<f64> {
         let (fx, fy) = lens.focal();
         let (_, jd) = lens.distort(&self.q);
         self.eta.transpose() * Matrix2::new(fx, 0.0, 0.0, fy) * jd
@@ -100,7 +100,7 @@ impl EndpointResidual {
     /// times the motion of `q*` projected orthogonally onto the moving line,
     /// `q(l) = q* − l₁₂ (l·q̃*) / ‖l₁₂‖²`, whose derivative at `l` (where `l·q̃* = 0`) is
     /// `−l₁₂ q̃*ᵀ / ‖l₁₂‖²` (`q̃* = (q*, 1)`).
-    pub fn line_gradient(&self, lens: &LensCamera, l: &Vector3<f64>) -> RowVector3<f64> {
+    pub fn line_gradient(&self, lens: &Camera, l: &Vector3<f64>) -> RowVector3<f64> {
         let l12 = Vector2::new(l.x, l.y);
         let qh = Vector3::new(self.q.x, self.q.y, 1.0);
         let dq_dl = -(l12 * qh.transpose()) / l12.norm_squared();
@@ -141,7 +141,7 @@ pub fn pinhole_endpoint_residual(
 /// `None` when `ℓ` does not exist (`(l₀, l₁) = 0` or not finite: the 3-D line passes through the
 /// camera centre) or `cov` is singular.
 pub fn endpoint_residual(
-    lens: &LensCamera,
+    lens: &Camera,
     l: &Vector3<f64>,
     start: &Vector2<f64>,
     e: &Vector2<f64>,
@@ -176,8 +176,8 @@ mod tests {
     fn without_distortion_the_curve_residual_is_the_closed_form_one() {
         // A PINHOLE lens through the search, and K through the closed form: the same signed residual
         // and the same ∂r/∂l, for anisotropic covariances (values of ~1e2 px: rounding ~1e-12).
-        let lens = LensCamera::new(CameraModel::Pinhole, &[800.0, 780.0, 320.0, 240.0]).unwrap();
-        let k_inverse = lens.pinhole().unwrap().matrix().try_inverse().unwrap();
+        let lens = Camera::new(CameraModel::Pinhole, &[800.0, 780.0, 320.0, 240.0]).unwrap();
+        let k_inverse = lens.intrinsics().matrix().try_inverse().unwrap();
         let mut rng = Rng::new(5);
         for _ in 0..200 {
             let l = Vector3::new(rng.normal(), rng.normal(), rng.normal() * 0.3);

@@ -9,7 +9,7 @@ use super::model::{CameraModel, FOV_SERIES_BOUND};
 /// `ρ(r) = r g(r²)`, or of the rational model's denominator, or for the fisheyes the first zero of
 /// `dθ_d/dθ` in `θ = atan r < π/2`, or where the projection stops existing (division, EUCM). Beyond it
 /// the distortion folds back, and a pixel whose Newton solution lies there has no preimage on the
-/// branch through the principal point ([`super::LensCamera::unproject`]).
+/// branch through the principal point ([`super::Camera::unproject`]).
 ///
 /// In `s = r²` the zeros are those of polynomials: `1 + 3k s` (SIMPLE_RADIAL), `1 + 3k₁ s + 5k₂ s²`
 /// (RADIAL, OPENCV), `(1 + 3k₁ s + 5k₂ s² + 7k₃ s³) den(s) − num(s) (2k₄ s + 4k₅ s² + 6k₆ s³)` and
@@ -40,7 +40,7 @@ pub fn fold_radius(model: CameraModel, params: &[f64]) -> f64 {
         _ => f64::INFINITY,
     };
     match model {
-        CameraModel::SimplePinhole | CameraModel::Pinhole => f64::INFINITY,
+        CameraModel::SimplePinhole | CameraModel::Pinhole | CameraModel::SkewedPinhole => f64::INFINITY,
         CameraModel::SimpleRadial => radius_of_s(first_positive_root(&odd_slope(&p[3..4]))),
         CameraModel::Radial => radius_of_s(first_positive_root(&odd_slope(&p[3..5]))),
         CameraModel::OpenCv => radius_of_s(first_positive_root(&odd_slope(&p[4..6]))),

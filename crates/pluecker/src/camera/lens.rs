@@ -1,21 +1,33 @@
-//! [`LensCamera`]: a camera of one of the [`CameraModel`]s, checked; its projection through the
-//! distortion, the unprojection by Newton's method and the covariance of undistorted points.
+//! [`Camera`]: the one camera of pose and triangulation, a [`CameraModel`] and its parameters, checked;
+//! its projection through the distortion (the pinhole models' fast path inside), the unprojection by
+//! Newton's method and the covariance of undistorted points.
 
 use super::distortion::{division, equidistant, eucm, fov, polynomial, radial, scaled, tangential, thin_prism};
 use super::fold::fold_radius;
 use super::model::{CameraModel, FOV_SERIES_BOUND, MAX_UNPROJECTION_ITERATIONS, UNPROJECTION_TOLERANCE_PX};
 use crate::camera::bounds::{domain, Coefficients, Distortion, Domain};
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
+use crate::camera_pose::Pose;
 use crate::error::{number, Error, Result};
-use nalgebra::{Matrix2, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Vector2, Vector3};
 
-/// A camera of one of the [`CameraModel`]s: intrinsics and distortion, checked.
+/// A camera: one of the [`CameraModel`]s (COLMAP's, with PINHOLE one of them, or `SKEWED_PINHOLE`) and
+/// its parameters in COLMAP's order, checked. Its pixels are the observed ones: through a lens with
+/// distortion, `u = K D(x_cam / z)`; for the pinhole models `u = K x_cam / z`, computed on a fast path.
+///
+/// ```
+/// use pluecker::camera::{Camera, CameraModel};
+/// let lens = Camera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
+/// let pinhole = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
+/// assert_eq!(pinhole.model(), CameraModel::Pinhole);
+/// assert_eq!(lens.intrinsics(), pinhole.intrinsics());
+/// ```
 #[derive(Debug, Clone, PartialEq)]
-pub struct LensCamera {
+pub struct Camera {
     pub(super) model: CameraModel,
     pub(super) params: Vec<f64>,
-    /// The pinhole part, checked once ([`LensCamera::pinhole`]).
-    pub(super) pinhole: Camera,
+    /// The pinhole part `K`, checked once ([`Camera::intrinsics`]).
+    pub(super) pinhole: Intrinsics,
     /// The radius `|n|` where the radial distortion stops increasing ([`fold_radius`]); `∞` when it never does.
     pub(super) fold_radius: f64,
     /// The distortion the certificates' enclosures cover ([`covered_distortion`]) and the disc where it
@@ -38,7 +50,9 @@ pub(super) fn covered_distortion(model: CameraModel, p: &[f64]) -> Option<Distor
         }
     };
     match model {
-        CameraModel::SimplePinhole | CameraModel::Pinhole => Some(Polynomial(Coefficients::new())),
+        CameraModel::SimplePinhole | CameraModel::Pinhole | CameraModel::SkewedPinhole => {
+            Some(Polynomial(Coefficients::new()))
+        }
         CameraModel::SimpleRadial => Some(Polynomial(Coefficients::from_slice(&p[3..4]))),
         CameraModel::Radial => Some(Polynomial(Coefficients::from_slice(&p[3..5]))),
         CameraModel::OpenCv => Some(with_tangential(Coefficients::from_slice(&p[4..6]), p[6], p[7])),
@@ -62,11 +76,11 @@ pub(super) fn covered_distortion(model: CameraModel, p: &[f64]) -> Option<Distor
     }
 }
 
-impl LensCamera {
+impl Camera {
     /// The camera of `model` with `params` in COLMAP's order. `Error::Shape` for a wrong count,
-    /// `Error::NonFinite` for NaN/inf, `Error::SingularCamera` when its pinhole part is not a
-    /// [`Camera`] (a zero focal length, `fx fy` overflowing).
-    pub fn new(model: CameraModel, params: &[f64]) -> Result<LensCamera> {
+    /// `Error::NonFinite` for NaN/inf, `Error::SingularCamera` when its pinhole part is not an
+    /// invertible `K` ([`Intrinsics`]: a zero focal length, `fx fy` overflowing).
+    pub fn new(model: CameraModel, params: &[f64]) -> Result<Camera> {
         let names = model.parameter_names();
         if params.len() != names.len() {
             return Err(Error::Shape {
@@ -87,7 +101,8 @@ impl LensCamera {
         } else {
             (params[0], params[1], params[2], params[3])
         };
-        let pinhole = Camera::new(fx, fy, cx, cy, 0.0).map_err(|e| match e {
+        let skew = if model == CameraModel::SkewedPinhole { params[4] } else { 0.0 };
+        let pinhole = Intrinsics::new(fx, fy, cx, cy, skew).map_err(|e| match e {
             Error::SingularCamera { what } => Error::SingularCamera {
                 what: format!("{}: {what}", model.as_str()),
             },
@@ -98,7 +113,7 @@ impl LensCamera {
             let one_to_one = domain(&d, fold);
             (d, one_to_one)
         });
-        let camera = LensCamera {
+        let camera = Camera {
             model,
             params: params.to_vec(),
             pinhole,
@@ -106,6 +121,23 @@ impl LensCamera {
             bounds,
         };
         Ok(camera)
+    }
+
+    /// The pinhole camera `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`: PINHOLE when `skew` is 0,
+    /// else SKEWED_PINHOLE. `fx`, `fy` may be negative (a mirrored axis), never zero.
+    pub fn pinhole(fx: f64, fy: f64, cx: f64, cy: f64, skew: f64) -> Result<Camera> {
+        if skew == 0.0 {
+            Camera::new(CameraModel::Pinhole, &[fx, fy, cx, cy])
+        } else {
+            Camera::new(CameraModel::SkewedPinhole, &[fx, fy, cx, cy, skew])
+        }
+    }
+
+    /// The pinhole camera of a 3x3 calibration matrix `K` (as [`Intrinsics::from_matrix`]: upper
+    /// triangular, its last row `(0, 0, 1)` up to scale): PINHOLE, or SKEWED_PINHOLE with a skew.
+    pub fn from_matrix(k: &Matrix3<f64>) -> Result<Camera> {
+        let k = Intrinsics::from_matrix(k)?;
+        Camera::pinhole(k.fx, k.fy, k.cx, k.cy, k.skew)
     }
 
     /// The model.
@@ -157,21 +189,40 @@ impl LensCamera {
         self.bounds.as_ref().and_then(|(_, domain)| *domain)
     }
 
-    /// The pinhole part: the focal lengths and principal point, no skew (the camera of undistorted pixels).
-    pub fn pinhole(&self) -> Result<Camera> {
-        Ok(self.pinhole)
+    /// The pinhole part `K`: the focal lengths, principal point and skew (the camera of undistorted
+    /// pixels).
+    pub fn intrinsics(&self) -> Intrinsics {
+        self.pinhole
+    }
+
+    /// The pinhole camera of this camera's `K` ([`Camera::pinhole`]): the camera of its undistorted
+    /// pixels.
+    pub fn without_distortion(&self) -> Camera {
+        let k = self.pinhole;
+        Camera::pinhole(k.fx, k.fy, k.cx, k.cy, k.skew).expect("K was checked when the camera was built")
     }
 
     /// Whether the model has no distortion (the pinhole fast path applies).
     pub fn is_pinhole(&self) -> bool {
-        matches!(self.model, CameraModel::SimplePinhole | CameraModel::Pinhole)
+        self.model.is_pinhole()
+    }
+
+    /// The camera itself when its model distorts (not one of the pinholes), for the code that works
+    /// through a lens; `None` for the pinholes.
+    pub fn distortion(&self) -> Option<&Camera> {
+        (!self.is_pinhole()).then_some(self)
+    }
+
+    /// The 3x4 matrix `P = K [R | t]` of the pinhole part at `pose` ([`Intrinsics::projection`]).
+    pub fn projection(&self, pose: &Pose) -> Matrix3x4<f64> {
+        self.pinhole.projection(pose)
     }
 
     /// The distortion `D(n)` of normalised coordinates (see the module table) and its Jacobian `∂D/∂n`.
     pub fn distort(&self, n: &Vector2<f64>) -> (Vector2<f64>, Matrix2<f64>) {
         let p = &self.params;
         match self.model {
-            CameraModel::SimplePinhole | CameraModel::Pinhole => (*n, Matrix2::identity()),
+            CameraModel::SimplePinhole | CameraModel::Pinhole | CameraModel::SkewedPinhole => (*n, Matrix2::identity()),
             CameraModel::SimpleRadial => radial(n, &p[3..4]),
             CameraModel::Radial => radial(n, &p[3..5]),
             CameraModel::OpenCv => {
@@ -259,32 +310,43 @@ impl LensCamera {
         }
     }
 
-    /// Pixels of distorted normalised coordinates `d` (their Jacobian is `diag(fx, fy)`).
+    /// Pixels of distorted normalised coordinates `d` (their Jacobian is [`Intrinsics::pixel_jacobian`]).
     pub(super) fn to_pixels(&self, d: &Vector2<f64>) -> Vector2<f64> {
-        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
-        Vector2::new(fx * d.x + cx, fy * d.y + cy)
+        self.pinhole.normalized_to_pixel(d)
     }
 
-    /// Pixels of the camera-frame point `x_cam` (`z > 0`; behind the camera the result is meaningless)
-    /// and the Jacobian `∂u/∂x_cam` (2x3).
-    pub fn project(&self, x_cam: &Vector3<f64>) -> (Vector2<f64>, nalgebra::Matrix2x3<f64>) {
+    /// Pixels of the camera-frame point `x_cam` (`z > 0`; behind the camera the result is
+    /// meaningless), through the exact projection.
+    pub fn project(&self, x_cam: &Vector3<f64>) -> Vector2<f64> {
+        let n = Vector2::new(x_cam.x / x_cam.z, x_cam.y / x_cam.z);
+        if self.is_pinhole() {
+            return self.to_pixels(&n);
+        }
+        self.to_pixels(&self.distort(&n).0)
+    }
+
+    /// [`Camera::project`] and its Jacobian `∂u/∂x_cam` (2x3).
+    pub fn project_with_jacobian(&self, x_cam: &Vector3<f64>) -> (Vector2<f64>, Matrix2x3<f64>) {
         let z = x_cam.z;
         let n = Vector2::new(x_cam.x / z, x_cam.y / z);
+        let dn_dx = Matrix2x3::new(1.0 / z, 0.0, -n.x / z, 0.0, 1.0 / z, -n.y / z);
+        let k = self.pinhole.pixel_jacobian();
+        if self.is_pinhole() {
+            return (self.to_pixels(&n), k * dn_dx);
+        }
         let (d, jd) = self.distort(&n);
-        let (fx, fy) = self.focal();
-        let dn_dx = nalgebra::Matrix2x3::new(1.0 / z, 0.0, -n.x / z, 0.0, 1.0 / z, -n.y / z);
-        (self.to_pixels(&d), Matrix2::new(fx, 0.0, 0.0, fy) * jd * dn_dx)
+        (self.to_pixels(&d), k * jd * dn_dx)
     }
 
     /// The undistorted normalised coordinates `n` with `D(n) = d` for the pixel `u` (point `index` of
     /// the caller, for the error message), to [`UNPROJECTION_TOLERANCE_PX`]; `Error::Degenerate` when
     /// the pixel is outside the invertible region of the distortion.
     pub fn unproject(&self, u: &Vector2<f64>, index: usize) -> Result<Vector2<f64>> {
-        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
-        let d = Vector2::new((u.x - cx) / fx, (u.y - cy) / fy);
+        let d = self.pinhole.pixel_to_normalized(u);
         if self.is_pinhole() {
             return Ok(d);
         }
+        let k = self.pinhole.pixel_jacobian();
         let outside = |why: &str| Error::Degenerate {
             what: format!(
                 "pixel {index} ({}, {}): outside the invertible region of the {} distortion ({why})",
@@ -295,7 +357,7 @@ impl LensCamera {
         };
         // sqrt of the sum of squares rather than hypot (several times slower): a diverging step's
         // overflow to ∞ fails the tolerance all the same.
-        let pixel_error = |e: &Vector2<f64>| ((e.x * fx).powi(2) + (e.y * fy).powi(2)).sqrt();
+        let pixel_error = |e: &Vector2<f64>| (k * e).norm();
         let mut n = self.newton_start(&d);
         for _ in 0..MAX_UNPROJECTION_ITERATIONS {
             let (dn, j) = self.distort(&n);
@@ -325,22 +387,22 @@ impl LensCamera {
     }
 
     /// The undistorted pixel `ū = K n` of the pixel `u` (its position in the image of the pinhole part
-    /// `K = [fx 0 cx; 0 fy cy; 0 0 1]`, with `n` = [`LensCamera::unproject`]) and the Jacobian
-    /// `∂u/∂ū = diag(f) ∂D/∂n diag(f)⁻¹` there, which maps a small displacement of `ū` to the
-    /// distorted pixels. Errors as [`LensCamera::unproject`].
+    /// `K`, with `n` = [`Camera::unproject`]) and the Jacobian `∂u/∂ū = F ∂D/∂n F⁻¹` there (`F` the
+    /// upper-left 2x2 block of `K`), which maps a small displacement of `ū` to the distorted pixels.
+    /// Errors as [`Camera::unproject`].
     pub fn undistort(&self, u: &Vector2<f64>, index: usize) -> Result<(Vector2<f64>, Matrix2<f64>)> {
         let n = self.unproject(u, index)?;
         let (_, jd) = self.distort(&n);
-        let ((fx, fy), (cx, cy)) = (self.focal(), self.principal_point());
-        let f = Matrix2::new(fx, 0.0, 0.0, fy);
-        let f_inv = Matrix2::new(1.0 / fx, 0.0, 0.0, 1.0 / fy);
-        Ok((Vector2::new(fx * n.x + cx, fy * n.y + cy), f * jd * f_inv))
+        let f = self.pinhole.pixel_jacobian();
+        let fy_inv = 1.0 / f[(1, 1)];
+        let f_inv = Matrix2::new(1.0 / f[(0, 0)], -f[(0, 1)] / f[(0, 0)] * fy_inv, 0.0, fy_inv);
+        Ok((self.to_pixels(&n), f * jd * f_inv))
     }
 
-    /// [`LensCamera::undistort`] of a pixel `u` with covariance `cov_px` (pixels²): the undistorted
+    /// [`Camera::undistort`] of a pixel `u` with covariance `cov_px` (pixels²): the undistorted
     /// pixel `ū` and, to first order, the covariance there, `J⁻¹ Σ J⁻ᵀ` with `J = ∂u/∂ū` (`None` where
     /// `J` is singular). The first-order form of an observation that the pose and the line
-    /// triangulation through a lens hand to their pinhole stages. Errors as [`LensCamera::unproject`].
+    /// triangulation through a lens hand to their pinhole stages. Errors as [`Camera::unproject`].
     pub fn undistort_with_covariance(
         &self,
         u: &Vector2<f64>,
@@ -377,8 +439,7 @@ impl LensCamera {
     /// when that is not enough).
     pub fn normalized_covariance(&self, n: &Vector2<f64>, cov_px: &Matrix2<f64>) -> Option<Matrix2<f64>> {
         let (_, jd) = self.distort(n);
-        let (fx, fy) = self.focal();
-        let inv = (Matrix2::new(fx, 0.0, 0.0, fy) * jd).try_inverse()?;
+        let inv = (self.pinhole.pixel_jacobian() * jd).try_inverse()?;
         Some(inv * cov_px * inv.transpose())
     }
 }

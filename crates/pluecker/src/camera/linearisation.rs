@@ -28,7 +28,7 @@
 use crate::camera::bounds::{
     fisheye_ray_enclosure, jacobian_enclosure, radius_about, Coefficients, Distortion, Domain,
 };
-use crate::camera::{AnyCamera, LensCamera};
+use crate::camera::Camera;
 use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
@@ -85,7 +85,7 @@ impl Linearised {
     /// lens's image disc). `splits`: sub-boxes per side where one box of [`Self::epsilon`]
     /// overestimates (1: never split). `ray_chart`: a fisheye off axis may use the ray chart.
     pub(crate) fn new(
-        camera: &AnyCamera,
+        camera: &Camera,
         whitening: &Matrix2<f64>,
         pixel: &Vector2<f64>,
         xc: &Vector3<f64>,
@@ -100,7 +100,7 @@ impl Linearised {
     /// [`Self::new`] with the camera's [`lens_domain`] computed once for all its observations.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new_in(
-        camera: &AnyCamera,
+        camera: &Camera,
         (distortion, domain): &(&Distortion, Domain),
         whitening: &Matrix2<f64>,
         pixel: &Vector2<f64>,
@@ -111,10 +111,7 @@ impl Linearised {
     ) -> std::result::Result<Linearised, LensBoundFailure> {
         let xc = *xc;
         let (distortion, domain) = ((*distortion).clone(), *domain);
-        let lens = match camera {
-            AnyCamera::Pinhole(_) => None,
-            AnyCamera::Lens(lens) => Some(lens),
-        };
+        let lens = camera.distortion();
         if !(xc.z > 0.0) {
             return Err(LensBoundFailure::Fold);
         }
@@ -124,15 +121,15 @@ impl Linearised {
         }
         // Step 1's path argument needs the ellipse {‖e‖ ≤ √C} of distorted normalised coordinates
         // inside the disc that the one-to-one disc maps onto.
-        let pinhole = camera.pinhole().map_err(|_| LensBoundFailure::Lens)?;
+        let pinhole = camera.intrinsics();
         let m = whitening * pinhole.pixel_jacobian();
         let m_inverse_norm = m.try_inverse().ok_or(LensBoundFailure::Lens)?.norm();
         let observed = pinhole.pixel_to_normalized(pixel);
         if !(observed.norm() + cost.sqrt() * m_inverse_norm < domain.image_radius) {
             return Err(LensBoundFailure::Fold);
         }
-        let jd = lens.map_or(Matrix2::identity(), |lens: &LensCamera| lens.distort(&n).1);
-        let u = camera.project(&xc).0;
+        let jd = lens.map_or(Matrix2::identity(), |lens: &Camera| lens.distort(&n).1);
+        let u = camera.project(&xc);
         let e = whitening * (u - pixel);
         // The rounding of e: of u and of the pixel, through L.
         let rounding = whitening.norm() * PIXEL_ROUNDING * (u.norm() + pixel.norm() + 1.0);
@@ -328,17 +325,17 @@ impl Linearised {
 
 /// The distortion of `camera` that [`crate::camera::bounds`] covers and the disc where it is proved
 /// one-to-one (the identity and the whole plane for a pinhole camera), as the camera computed them once.
-pub(crate) fn lens_domain(camera: &AnyCamera) -> std::result::Result<(&Distortion, Domain), LensBoundFailure> {
+pub(crate) fn lens_domain(camera: &Camera) -> std::result::Result<(&Distortion, Domain), LensBoundFailure> {
     static IDENTITY: Distortion = Distortion::Polynomial(Coefficients::new_const());
-    match camera {
-        AnyCamera::Pinhole(_) => Ok((
+    match camera.distortion() {
+        None => Ok((
             &IDENTITY,
             Domain {
                 radius: f64::INFINITY,
                 image_radius: f64::INFINITY,
             },
         )),
-        AnyCamera::Lens(lens) => {
+        Some(lens) => {
             let distortion = lens.covered_distortion().ok_or(LensBoundFailure::Lens)?;
             Ok((distortion, lens.one_to_one_domain().ok_or(LensBoundFailure::Fold)?))
         }
@@ -382,16 +379,16 @@ mod tests {
     /// Two radial lenses (barrel and pincushion), a strong OPENCV one and an OPENCV_FISHEYE one. The
     /// fisheye's points lie off axis, in the ray chart: there J (of D ∘ h) is not symmetric, so an
     /// enclosure whose off-diagonal entries were swapped would show.
-    fn test_lenses() -> [LensCamera; 4] {
+    fn test_lenses() -> [Camera; 4] {
         [
-            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, 0.3, 0.05]).unwrap(),
-            LensCamera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, -0.2, 0.02]).unwrap(),
-            LensCamera::new(
+            Camera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, 0.3, 0.05]).unwrap(),
+            Camera::new(CameraModel::Radial, &[300.0, 320.0, 240.0, -0.2, 0.02]).unwrap(),
+            Camera::new(
                 CameraModel::OpenCv,
                 &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
             )
             .unwrap(),
-            LensCamera::new(
+            Camera::new(
                 CameraModel::OpenCvFisheye,
                 &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0005],
             )
@@ -408,7 +405,7 @@ mod tests {
         let mut rng = Rng::new(13);
         let (mut tightest, mut charted) = (f64::INFINITY, 0);
         for lens in &lenses {
-            let camera = AnyCamera::from(lens);
+            let camera = lens.clone();
             for k in 0..24 {
                 let xc = match k % 3 {
                     0 => Vector3::new(0.0, rng.uniform_in(-1.0, 1.0), 1.0),
@@ -420,7 +417,7 @@ mod tests {
                 } else {
                     Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0))
                 };
-                let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
+                let pixel = camera.project(&xc) + Vector2::new(rng.normal(), rng.normal());
                 let xc = if lens.model() == CameraModel::OpenCvFisheye {
                     xc * 2.0 - Vector3::z()
                 } else {
@@ -479,17 +476,17 @@ mod tests {
     #[test]
     fn the_least_whitened_distance_of_a_box_is_its_sampled_least() {
         // Against a dense grid of the box: never above its least value, and within the grid's spacing.
-        let lens = LensCamera::new(
+        let lens = Camera::new(
             CameraModel::OpenCv,
             &[250.0, 260.0, 320.0, 240.0, -0.3, 0.1, 1e-3, -5e-4],
         )
         .unwrap();
-        let camera = AnyCamera::from(&lens);
+        let camera = lens.clone();
         let mut rng = Rng::new(8);
         for _ in 0..100 {
             let l = Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0));
             let xc = Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 1.0);
-            let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
+            let pixel = camera.project(&xc) + Vector2::new(rng.normal(), rng.normal());
             let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, false) else {
                 continue;
             };
@@ -528,7 +525,7 @@ mod tests {
         let mut rng = Rng::new(17);
         let (mut vertices, mut charted, mut split_won) = (0, 0, 0);
         for lens in &lenses {
-            let camera = AnyCamera::from(lens);
+            let camera = lens.clone();
             for k in 0..12 {
                 let xc = match k % 3 {
                     0 => Vector3::new(0.0, rng.uniform_in(-1.0, 1.0), 1.0),
@@ -545,7 +542,7 @@ mod tests {
                 } else {
                     Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0))
                 };
-                let pixel = camera.project(&xc).0 + Vector2::new(rng.normal(), rng.normal());
+                let pixel = camera.project(&xc) + Vector2::new(rng.normal(), rng.normal());
                 let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
                     continue;
                 };

@@ -4,7 +4,12 @@
 //! A model maps a camera-frame point `x_cam` (in front: `z > 0`) to pixels in three steps:
 //! 1. normalised coordinates `n = (x/z, y/z)`;
 //! 2. the distortion `d = D(n)`, in normalised units (identity for the pinhole models);
-//! 3. pixels `u = (fx d₁ + cx, fy d₂ + cy)` (`fx = fy = f` for the models with one focal length).
+//! 3. pixels `u = (fx d₁ + cx, fy d₂ + cy)` (`fx = fy = f` for the models with one focal length;
+//!    `u₁ = fx d₁ + skew d₂ + cx` for `SKEWED_PINHOLE`).
+//!
+//! `SKEWED_PINHOLE` is not one of COLMAP's models (it has no COLMAP id): it is the general upper
+//! triangular `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]` of a calibration or of a decomposed 3x4
+//! projection matrix, with no distortion ([`crate::camera::Camera::from_matrix`]).
 //!
 //! | id | model | parameters | distortion `D(n)`, with `r² = n·n` |
 //! |---|---|---|---|
@@ -25,6 +30,7 @@
 //! | 14 | `SIMPLE_FISHEYE` | f, cx, cy | `m` |
 //! | 15 | `FISHEYE` | fx, fy, cx, cy | `m` |
 //! | 16 | `EUCM` | fx, fy, cx, cy, alpha, beta | `n / (α √(1 + β r²) + 1 − α)` |
+//! | — | `SKEWED_PINHOLE` | fx, fy, cx, cy, skew | none; pixels `u = (fx n₁ + skew n₂ + cx, fy n₂ + cy)` |
 //!
 //! `t(n) = (2 p1 n₁n₂ + p2 (r² + 2n₁²), p1 (r² + 2n₂²) + 2 p2 n₁n₂)` is the tangential term (of its
 //! argument). The fisheye models distort the equidistant coordinates `m = n θ / r`, `θ = atan r`, the
@@ -97,11 +103,32 @@ pub enum CameraModel {
     Fisheye = 15,
     /// `fx, fy, cx, cy, alpha, beta`: the enhanced unified camera model.
     Eucm = 16,
+    /// `fx, fy, cx, cy, skew`: no distortion, a skewed pixel grid (not a COLMAP model; see the module
+    /// docs). Its discriminant is not a COLMAP id ([`CameraModel::colmap_id`]).
+    SkewedPinhole = 1000,
 }
 
 impl CameraModel {
-    /// Every model, in COLMAP's order of model ids (`ALL[i] as usize == i`, COLMAP's ids).
+    /// Every model: COLMAP's, in the order of their model ids (`ALL[i].colmap_id() == Some(i)`), then
+    /// `SKEWED_PINHOLE`.
     pub const ALL: &'static [CameraModel] = <CameraModel as strum::VariantArray>::VARIANTS;
+
+    /// COLMAP's model id; `None` for `SKEWED_PINHOLE`, which COLMAP does not have.
+    pub fn colmap_id(&self) -> Option<u32> {
+        match self {
+            CameraModel::SkewedPinhole => None,
+            model => Some(*model as u32),
+        }
+    }
+
+    /// Whether the model has no distortion (`D(n) = n`): the pinhole models, whose projection is
+    /// `u = K x_cam / z` (the fast path of [`crate::camera::Camera`]).
+    pub fn is_pinhole(&self) -> bool {
+        matches!(
+            self,
+            CameraModel::SimplePinhole | CameraModel::Pinhole | CameraModel::SkewedPinhole
+        )
+    }
 
     /// COLMAP's name of the model.
     pub fn as_str(&self) -> &'static str {
@@ -144,6 +171,7 @@ impl CameraModel {
             ],
             CameraModel::Division => &["fx", "fy", "cx", "cy", "k"],
             CameraModel::Eucm => &["fx", "fy", "cx", "cy", "alpha", "beta"],
+            CameraModel::SkewedPinhole => &["fx", "fy", "cx", "cy", "skew"],
         }
     }
 

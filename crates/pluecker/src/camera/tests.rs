@@ -10,7 +10,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 fn a_lens_whose_pinhole_part_is_not_a_camera_is_refused() {
     // Its pinhole part must be a `Camera`: `pinhole()` never fails on a lens that was made.
     for f in [0.0, 1e-300, 1e300] {
-        let err = LensCamera::new(CameraModel::SimpleRadial, &[f, 320.0, 240.0, -0.1]).unwrap_err();
+        let err = Camera::new(CameraModel::SimpleRadial, &[f, 320.0, 240.0, -0.1]).unwrap_err();
         assert!(matches!(err, Error::SingularCamera { .. }), "{err}");
         assert!(
             err.to_string()
@@ -18,13 +18,13 @@ fn a_lens_whose_pinhole_part_is_not_a_camera_is_refused() {
             "{err}"
         );
     }
-    let lens = LensCamera::new(CameraModel::Pinhole, &[1e-9, 1e150, 0.0, 0.0]).unwrap();
-    assert!(lens.pinhole().is_ok());
+    let lens = Camera::new(CameraModel::Pinhole, &[1e-9, 1e150, 0.0, 0.0]).unwrap();
+    assert_eq!((lens.intrinsics().fx, lens.intrinsics().fy), (1e-9, 1e150));
 }
 
 /// A camera of each model, in COLMAP's id order, with COLMAP-like distortion (moderate barrel, small
 /// tangential and thin-prism terms; the fisheyes' distortion is 5-10 % at 80° off axis).
-fn cameras() -> Vec<LensCamera> {
+fn cameras() -> Vec<Camera> {
     let params: [(CameraModel, &[f64]); 17] = [
         (CameraModel::SimplePinhole, &[800.0, 320.0, 240.0]),
         (CameraModel::Pinhole, &[800.0, 790.0, 320.0, 240.0]),
@@ -67,7 +67,7 @@ fn cameras() -> Vec<LensCamera> {
         (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]),
     ];
     assert_eq!(params.map(|(m, _)| m).as_slice(), CameraModel::ALL);
-    params.iter().map(|(m, p)| LensCamera::new(*m, p).unwrap()).collect()
+    params.iter().map(|(m, p)| Camera::new(*m, p).unwrap()).collect()
 }
 
 /// The largest angle off axis of the test points of a model: 80° for the models that see that far
@@ -96,14 +96,14 @@ fn the_jacobians_match_finite_differences() {
                 rng.uniform_in(-0.4, 0.4),
                 rng.uniform_in(1.0, 3.0),
             );
-            let (_, j) = cam.project(&x);
+            let (_, j) = cam.project_with_jacobian(&x);
             for k in 0..3 {
                 let h = 1e-6;
                 let mut xp = x;
                 xp[k] += h;
                 let mut xm = x;
                 xm[k] -= h;
-                let numeric = (cam.project(&xp).0 - cam.project(&xm).0) / (2.0 * h);
+                let numeric = (cam.project(&xp) - cam.project(&xm)) / (2.0 * h);
                 // Central differences: O(h²) truncation and O(ε |u| / h) rounding, about 1e-7 px per unit.
                 assert!(
                     (numeric - j.column(k)).norm() < 1e-5 * (1.0 + j.column(k).norm()),
@@ -233,9 +233,9 @@ fn projection_agrees_with_opencv() {
         ),
     ];
     for (model, params, expected) in cases {
-        let cam = LensCamera::new(model, params).unwrap();
+        let cam = Camera::new(model, params).unwrap();
         for (x, e) in points.iter().zip(expected) {
-            let (u, _) = cam.project(x);
+            let (u, _) = cam.project_with_jacobian(x);
             assert!((u - Vector2::new(e[0], e[1])).norm() < 1e-9, "{model:?}: {u} vs {e:?}");
         }
     }
@@ -253,11 +253,11 @@ fn unprojection_inverts_projection_to_1e_10_px() {
         points.extend([0.0, 1e-9, 1e-5, 5e-3, 0.0101].map(|r| Vector2::new(r * 0.6, -r * 0.8)));
         points.push(at_angle(widest, 2.0));
         for (i, x) in points.into_iter().enumerate() {
-            let (u, _) = cam.project(&Vector3::new(x.x, x.y, 1.0));
+            let (u, _) = cam.project_with_jacobian(&Vector3::new(x.x, x.y, 1.0));
             let n = cam
                 .unproject(&u, i)
                 .unwrap_or_else(|e| panic!("{:?} at {:.1}°: {e}", cam.model(), x.norm().atan().to_degrees()));
-            let (back, _) = cam.project(&Vector3::new(n.x, n.y, 1.0));
+            let (back, _) = cam.project_with_jacobian(&Vector3::new(n.x, n.y, 1.0));
             assert!(
                 (back - u).norm() <= 1e-10 * 1.5,
                 "{:?}: {:e} px",
@@ -310,7 +310,7 @@ fn pixels_without_a_preimage_are_refused_by_every_model() {
 #[test]
 fn beyond_the_fold_of_a_barrel_distortion_is_an_error() {
     // D(r) = r (1 − 0.5 r²) peaks at r = 1/√1.5: pixels mapped from beyond it have no valid preimage.
-    let cam = LensCamera::new(CameraModel::SimpleRadial, &[500.0, 0.0, 0.0, -0.5]).unwrap();
+    let cam = Camera::new(CameraModel::SimpleRadial, &[500.0, 0.0, 0.0, -0.5]).unwrap();
     let peak = (1.0f64 / 1.5).sqrt();
     let inside = peak * (1.0 - 0.5 * peak * peak) * 0.9 * 500.0;
     assert!(cam.unproject(&Vector2::new(inside, 0.0), 0).is_ok());
@@ -326,7 +326,7 @@ fn beyond_the_fold_of_a_barrel_distortion_is_an_error() {
 fn every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused() {
     // RADIAL k1 = -0.5, k2 = 0.1: ρ(r) = r - 0.5 r³ + 0.1 r⁵, ρ'(r) = 1 - 1.5 r² + 0.5 r⁴ = 0 at r = 1
     // and r = √2; ρ rises to ρ(1) = 0.6, falls to ρ(√2) = 0.4√2 and rises again without bound.
-    let cam = LensCamera::new(CameraModel::Radial, &[800.0, 320.0, 240.0, -0.5, 0.1]).unwrap();
+    let cam = Camera::new(CameraModel::Radial, &[800.0, 320.0, 240.0, -0.5, 0.1]).unwrap();
     assert!((cam.fold_radius - 1.0).abs() < 1e-12, "{}", cam.fold_radius);
     let peak_px = 0.6 * 800.0;
     // Pixels on a ray from the principal point, every distance to 20x the peak: accepted exactly below it.
@@ -394,7 +394,7 @@ fn the_fold_radius_of_each_model_is_where_the_radial_map_turns() {
         (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.5, -0.5]),
     ];
     for (model, params) in cases {
-        let cam = LensCamera::new(model, params).unwrap();
+        let cam = Camera::new(model, params).unwrap();
         let rho = |r: f64| cam.distort(&Vector2::new(r, 0.0)).0.x;
         let step = 1e-4;
         let turn = (1..200_000)
@@ -428,11 +428,11 @@ fn extreme_distortion_parameters_give_a_fold_radius_without_failing() {
         &[800.0, 0.0, 0.0, f64::MAX, f64::MIN_POSITIVE],
     ];
     for params in extremes {
-        let cam = LensCamera::new(CameraModel::Radial, params).unwrap();
+        let cam = Camera::new(CameraModel::Radial, params).unwrap();
         assert!(cam.fold_radius > 0.0, "{params:?}: {}", cam.fold_radius);
         let _ = cam.unproject(&Vector2::new(900.0, 100.0), 0);
     }
-    let cam = LensCamera::new(CameraModel::Radial, &[800.0, 0.0, 0.0, -1e300, 1e-320]).unwrap();
+    let cam = Camera::new(CameraModel::Radial, &[800.0, 0.0, 0.0, -1e300, 1e-320]).unwrap();
     // ρ' = 1 - 3e300 r² (+ a negligible r⁴ term) vanishes at r = 1/√(3e300).
     assert!(
         (cam.fold_radius * (3e300f64).sqrt() - 1.0).abs() < 1e-12,
@@ -451,15 +451,15 @@ fn models_parse_by_colmap_name_and_check_their_parameters() {
         Err(Error::InvalidOption { .. })
     ));
     assert!(matches!(
-        LensCamera::new(CameraModel::OpenCv, &[1.0; 4]),
+        Camera::new(CameraModel::OpenCv, &[1.0; 4]),
         Err(Error::Shape { .. })
     ));
     assert!(matches!(
-        LensCamera::new(CameraModel::Pinhole, &[0.0, 1.0, 0.0, 0.0]),
+        Camera::new(CameraModel::Pinhole, &[0.0, 1.0, 0.0, 0.0]),
         Err(Error::SingularCamera { .. })
     ));
     assert!(matches!(
-        LensCamera::new(CameraModel::Pinhole, &[1.0, f64::NAN, 0.0, 0.0]),
+        Camera::new(CameraModel::Pinhole, &[1.0, f64::NAN, 0.0, 0.0]),
         Err(Error::NonFinite { index: 1, .. })
     ));
 }
@@ -468,7 +468,7 @@ fn models_parse_by_colmap_name_and_check_their_parameters() {
 fn the_normalized_covariance_is_the_first_order_propagation() {
     // With the pinhole model it is Σ / f²; with distortion, J⁻¹ Σ J⁻ᵀ checked by Monte Carlo would be
     // the next step; here the exact linear case.
-    let cam = LensCamera::new(CameraModel::Pinhole, &[800.0, 400.0, 320.0, 240.0]).unwrap();
+    let cam = Camera::new(CameraModel::Pinhole, &[800.0, 400.0, 320.0, 240.0]).unwrap();
     let c = cam
         .normalized_covariance(&Vector2::new(0.1, 0.2), &Matrix2::identity())
         .unwrap();

@@ -25,7 +25,7 @@ fn max_scaled(v: &Vector3<f64>) -> Vector3<f64> {
 }
 
 /// Unit normal of the interpretation plane of the image segment `xa`–`xb` (normalised image
-/// coordinates, `K⁻¹` applied), in the camera frame: [`crate::Camera::interpretation_plane_normal`]
+/// coordinates, `K⁻¹` applied), in the camera frame: [`crate::Intrinsics::interpretation_plane_normal`]
 /// from pixels.
 ///
 /// Fails with [`Error::Degenerate`] when the endpoints coincide: their viewing rays are less than

@@ -18,7 +18,7 @@
 use super::correspondences::{object_points, Correspondences};
 use super::minimal::{solve, Feature};
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::error::Result;
 use crate::rng::Rng;
 use nalgebra::{Matrix3, Vector2, Vector3};
@@ -40,7 +40,7 @@ pub fn positions(corr: &Correspondences) -> Vec<Vector2<f64>> {
 
 /// Correspondence `k` of `corr` (points first, then lines) as a minimal-solver feature: a camera-frame
 /// bearing, or the unit normal of the interpretation plane (an error for a zero-length segment).
-pub fn feature(camera: &Camera, k_inv: &Matrix3<f64>, corr: &Correspondences, k: usize) -> Result<Feature> {
+pub fn feature(camera: &Intrinsics, k_inv: &Matrix3<f64>, corr: &Correspondences, k: usize) -> Result<Feature> {
     if k < corr.n_points() {
         let u = corr.points2d[k];
         return Ok(Feature::Point {
@@ -116,7 +116,7 @@ pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
 
 /// The poses of the minimal solvers on each sample of `corr` (world frame of `corr`), one group per
 /// sample, lazily: a caller that is satisfied after the first samples does not pay for the others.
-pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> impl Iterator<Item = Vec<Pose>> + 'a {
+pub fn minimal_hypotheses<'a>(camera: &'a Intrinsics, corr: &'a Correspondences) -> impl Iterator<Item = Vec<Pose>> + 'a {
     let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
     samples(&positions(corr)).into_iter().map(move |s| {
         let [Ok(a), Ok(b), Ok(c)] = s.map(|k| feature(camera, &k_inv, corr, k)) else {
@@ -141,7 +141,7 @@ pub fn minimal_hypotheses<'a>(camera: &'a Camera, corr: &'a Correspondences) -> 
 /// with every point in front: `u = K x / z` does not see the sign of `x_cam`, so both give the same
 /// pixels. The pose is searched in front for the reflected object. Data that such a pose explains
 /// better than the best pose in front come from points behind the camera.
-pub fn behind_camera_cost(camera: &Camera, corr: &Correspondences, bound: f64) -> Option<f64> {
+pub fn behind_camera_cost(camera: &Intrinsics, corr: &Correspondences, bound: f64) -> Option<f64> {
     let mut mirrored = corr.clone();
     mirrored.points3d.iter_mut().for_each(|x| *x = -*x);
     mirrored.lines3d.iter_mut().flatten().for_each(|x| *x = -*x);
@@ -218,7 +218,7 @@ mod tests {
         for (np, nl) in [(10, 0), (0, 10), (5, 5), (4, 0), (0, 4), (2, 2)] {
             for seed in 0..20 {
                 let scene = visible_scene(4000.0, np, nl, false, seed);
-                let hypotheses: Vec<Pose> = minimal_hypotheses(&scene.camera, &scene.correspondences)
+                let hypotheses: Vec<Pose> = minimal_hypotheses(&scene.camera.intrinsics(), &scene.correspondences)
                     .flatten()
                     .collect();
                 let found = hypotheses.iter().any(

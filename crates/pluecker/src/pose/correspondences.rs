@@ -3,7 +3,7 @@
 use super::algebraic::{LineConstraint, PointConstraint};
 use super::noise::ObservationNoise;
 use super::Method;
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use crate::geometry::lines::{lines_from_point_pairs, ObjectLine};
 use nalgebra::{DMatrix, Matrix3, SVector, Vector2, Vector3};
@@ -376,11 +376,11 @@ fn zero_length<const D: usize>(a: &SVector<f64, D>, b: &SVector<f64, D>) -> bool
 /// The constraints of the dual-quaternion costs: normalised image points and interpretation-plane
 /// normals. With `points_as_lines`, points are also paired into lines (Figure 2) and appended.
 pub fn constraints(
-    camera: &Camera,
+    camera: &Intrinsics,
     c: &Correspondences,
     points_as_lines: bool,
 ) -> Result<(Vec<PointConstraint>, Vec<LineConstraint>)> {
-    // `Camera::pixel_to_normalized` with the two divisions replaced by products (hot with many points).
+    // `Intrinsics::pixel_to_normalized` with the two divisions replaced by products (hot with many points).
     let (inv_fx, inv_fy) = (1.0 / camera.fx, 1.0 / camera.fy);
     let points = c
         .points2d

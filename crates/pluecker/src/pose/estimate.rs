@@ -23,8 +23,8 @@ use super::refinement::search;
 use super::reprojection::{count_behind, Pose, ReprojectionCost};
 use super::result::{assemble, is_finite, status_of_stages, PipelineOutcome};
 use super::{stage, CostKind, Method, PoseOptions, PoseResult, StageReport, Status, STEP_TOLERANCE_BEFORE_REFINEMENT};
-use crate::camera::AnyCamera;
 use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::error::Result;
 use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::rotation_distance;
@@ -155,7 +155,7 @@ pub struct Estimate {
     /// Stage reports.
     pub stages: Vec<StageReport>,
     /// Intrinsics estimated by the linear method.
-    pub camera: Option<Camera>,
+    pub camera: Option<Intrinsics>,
     /// Other distinct answers worth refining (world frame), cheapest first.
     pub alternatives: Vec<Pose>,
     /// False when the best answer is not a plausible pose: object points behind the camera, or an
@@ -220,7 +220,7 @@ impl Prepared {
 /// the trust-region settings `tr` (`opts.trust_region`, or looser before a refinement); `started` is
 /// when the caller's clock started.
 fn estimator(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     prepared: &Prepared,
     opts: &PoseOptions,
@@ -371,9 +371,9 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// Estimates the pose `x_cam = R X_world + t` of a calibrated camera from point and/or line
 /// correspondences (see [`Method`] and [`PoseOptions`]).
 ///
-/// `camera` is any camera of [`AnyCamera`], or a reference to one of its two kinds: a pinhole
-/// [`Camera`], or a [`crate::camera::LensCamera`] of one of COLMAP's models, whose pixels (`corr`)
-/// are the observed, distorted ones (see `lens` for what each stage then works on).
+/// `camera` is a [`Camera`] of any of its models: a pinhole, or one of COLMAP's models with a lens,
+/// whose pixels (`corr`) are the observed, distorted ones (see `lens` for what each stage then works
+/// on).
 ///
 /// With `refine` (the default) the answer is the cheapest local minimum of the reprojection error that
 /// the refinement reaches from the algebraic answer and from the minimal solvers' poses (see
@@ -391,14 +391,9 @@ fn normalized_or_identity(r: &Vector4<f64>) -> Vector4<f64> {
 /// With per-observation noise on `corr` ([`super::ObservationNoise`], covariances of the observed pixels) every
 /// stage after the algebraic one uses the whitened residuals; user covariances are absolute, so
 /// `sigma_px` defaults to 1 (standard deviations) instead of the estimate from the residuals.
-pub fn estimate_pose<C>(camera: &C, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult>
-where
-    C: ?Sized,
-    for<'c> &'c C: Into<AnyCamera>,
-{
+pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions) -> Result<PoseResult> {
     let started = Instant::now();
-    let camera: AnyCamera = camera.into();
-    let pinhole = camera.pinhole()?;
+    let pinhole = camera.intrinsics();
     pinhole.validate()?;
     opts.validate()?;
     let absolute;

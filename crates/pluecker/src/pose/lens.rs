@@ -4,7 +4,7 @@
 //! that distorts (`estimate_through`).
 //!
 //! The algebraic methods, the minimal solvers and RANSAC's scoring work on the observations mapped
-//! through the exact unprojection of the [`LensCamera`] into the pixels of its pinhole part
+//! through the exact unprojection of the [`Camera`] into the pixels of its pinhole part
 //! `K = [fx 0 cx; 0 fy cy; 0 0 1]` (the *undistorted* pixels ū). A residual `r̄` there is one of
 //! `J r̄` in the observed, distorted pixels to first order, with `J = ∂u/∂ū` the distortion's Jacobian at
 //! the observation. So their noise becomes `W = L⁻¹ J` for a point (with `Σ = L Lᵀ` the observed
@@ -32,25 +32,25 @@ use super::reprojection::ReprojectionCost;
 use super::robust::scoring::subset;
 use super::PoseOptions;
 use super::PoseResult;
+use crate::camera::Intrinsics;
 use crate::camera::Camera;
-use crate::camera::LensCamera;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Vector2};
 use std::borrow::Cow;
 use std::time::Instant;
 
-/// The observations `corr` (distorted pixels of `lens`) as undistorted pixels of [`LensCamera::pinhole`],
+/// The observations `corr` (distorted pixels of `lens`) as undistorted pixels of [`Camera::pinhole`],
 /// with the noise that makes residuals there first-order residuals in the distorted pixels (see the
 /// module docs): the input of the stages before the refinement for a camera with distortion. `noise`, when
 /// given, holds the covariances of the observed (distorted) pixels, as
 /// [`ObservationNoise::from_covariances`] makes them. `Error::Degenerate` names an observation outside
 /// the invertible region of the distortion.
 pub fn undistort(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     noise: Option<&ObservationNoise>,
-) -> Result<(Camera, Correspondences)> {
-    let camera = lens.pinhole()?;
+) -> Result<(Intrinsics, Correspondences)> {
+    let camera = lens.intrinsics();
     if let Some(n) = noise {
         n.check_counts(corr.n_points(), corr.n_lines())?;
     }
@@ -117,19 +117,19 @@ pub fn undistort(
 pub(crate) struct Observations<'c> {
     /// The pinhole camera of the algebraic stages, the minimal solvers and RANSAC's scoring: the
     /// camera itself, or a lens's pinhole part.
-    pub pinhole: Camera,
+    pub pinhole: Intrinsics,
     /// The correspondences in the pixels of `pinhole`: the observed ones for a pinhole camera, else
     /// undistorted, with the first-order noise of [`undistort`].
     pub undistorted: Cow<'c, Correspondences>,
     /// The correspondences as observed (distorted pixels through a lens), with the caller's noise.
     pub observed: &'c Correspondences,
     /// The lens, when the camera distorts.
-    pub lens: Option<&'c LensCamera>,
+    pub lens: Option<&'c Camera>,
 }
 
 impl<'c> Observations<'c> {
     /// A pinhole camera's observations: both forms are `corr`.
-    pub fn pinhole(camera: &Camera, corr: &'c Correspondences) -> Self {
+    pub fn pinhole(camera: &Intrinsics, corr: &'c Correspondences) -> Self {
         Observations {
             pinhole: *camera,
             undistorted: Cow::Borrowed(corr),
@@ -177,7 +177,7 @@ impl<'c> Observations<'c> {
 /// `run` is the pipeline on prepared observations (`estimate::run`), passed in so that this stage
 /// wraps it without the two modules importing each other.
 pub(crate) fn estimate_through(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     opts: &PoseOptions,
     started: Instant,
@@ -218,7 +218,7 @@ pub(crate) fn estimate_through(
 }
 
 /// Which points and segments of `corr` `lens` can unproject (both endpoints for a segment).
-fn invertible(lens: &LensCamera, corr: &Correspondences) -> (Vec<bool>, Vec<bool>) {
+fn invertible(lens: &Camera, corr: &Correspondences) -> (Vec<bool>, Vec<bool>) {
     let ok = |u: &nalgebra::Vector2<f64>| lens.unproject(u, 0).is_ok();
     (
         corr.points2d.iter().map(ok).collect(),
@@ -239,7 +239,7 @@ mod tests {
 
     #[test]
     fn undistorted_residuals_are_distorted_pixels_to_first_order() {
-        let lens = LensCamera::new(
+        let lens = Camera::new(
             CameraModel::OpenCv,
             &[800.0, 780.0, 320.0, 240.0, -0.25, 0.08, 1e-3, -5e-4],
         )
@@ -256,7 +256,7 @@ mod tests {
         let r = Vector2::new(0.3, -0.2);
         let ubar = undistorted.points2d[0] + r;
         let x = nalgebra::Vector3::new((ubar.x - camera.cx) / camera.fx, (ubar.y - camera.cy) / camera.fy, 1.0);
-        let moved = lens.project(&x).0 - u;
+        let moved = lens.project(&x) - u;
         assert!((w * r - moved).norm() < 1e-3 * r.norm(), "{} vs {}", w * r, moved);
     }
 }

@@ -34,7 +34,7 @@
 //! Table 2 the translation is unreliable beyond half a pixel of noise and the intrinsics drift by
 //! hundreds of pixels at 1-3 px. Refine on the reprojection error when accuracy matters.
 
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector, Dyn, Matrix3, Matrix3x4, Matrix4, SVector, Vector2, Vector3, Vector4, SVD};
 
@@ -47,7 +47,7 @@ const SVD_MAX_ITER: usize = 10_000;
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinearCalibration {
     /// Estimated intrinsics (`skew = 0`; `fx` may be negative).
-    pub camera: Camera,
+    pub camera: Intrinsics,
     /// Rotation, world → camera: the nearest rotation to the Faugeras-Toscani rows `r₁, r₂, r₃`.
     pub rotation: Matrix3<f64>,
     /// Translation, world units: `K⁻¹ (m₁₄, m₂₄, m₃₄)` with the returned `K`.
@@ -216,7 +216,7 @@ pub fn faugeras_toscani(points2d: &[Vector2<f64>], points3d: &[Vector3<f64>]) ->
         au = -au;
         r1 = -r1;
     }
-    let camera = Camera::new(au, av, u0, v0, 0.0)
+    let camera = Intrinsics::new(au, av, u0, v0, 0.0)
         .map_err(|e| degenerate(format!("the estimated intrinsics are singular: {e}")))?;
     let r_raw = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), m3.transpose()]);
     let rotation = nearest_rotation(&r_raw)?;
@@ -259,7 +259,7 @@ mod tests {
     /// `X = Rᵀ (x_cam − t)`, with pixels perturbed by Gaussian noise of standard deviation `sigma`.
     #[allow(clippy::too_many_arguments)]
     fn scene(
-        cam: &Camera,
+        cam: &Intrinsics,
         r: &Matrix3<f64>,
         t: &Vector3<f64>,
         n: usize,
@@ -278,8 +278,8 @@ mod tests {
             .unzip()
     }
 
-    fn paper() -> (Camera, Matrix3<f64>, Vector3<f64>) {
-        let cam = Camera {
+    fn paper() -> (Intrinsics, Matrix3<f64>, Vector3<f64>) {
+        let cam = Intrinsics {
             fx: -1730.3,
             fy: 1220.7,
             cx: 243.8,
@@ -292,7 +292,7 @@ mod tests {
 
     /// Noise-free data is satisfied exactly by the true `M`, so the estimate is exact up to rounding:
     /// ~1e-16 amplified by the conditioning of the (normalised) system, far below 1e-8.
-    fn assert_exact(est: &LinearCalibration, cam: &Camera, r: &Matrix3<f64>, t: &Vector3<f64>) {
+    fn assert_exact(est: &LinearCalibration, cam: &Intrinsics, r: &Matrix3<f64>, t: &Vector3<f64>) {
         let tol = 1e-8;
         let f = cam.fx.abs().max(cam.fy.abs());
         let c = &est.camera;
@@ -326,7 +326,7 @@ mod tests {
 
     #[test]
     fn noise_free_positive_focal_random_rotations_including_minimal_six_points() {
-        let cam = Camera {
+        let cam = Intrinsics {
             fx: 800.0,
             fy: 800.0,
             cx: 320.0,

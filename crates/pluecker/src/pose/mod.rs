@@ -1,9 +1,9 @@
-//! Camera pose from 2-D/3-D point and line correspondences (exterior orientation, PnP / PnL / PnPL).
+//! Intrinsics pose from 2-D/3-D point and line correspondences (exterior orientation, PnP / PnL / PnPL).
 //!
 //! [`estimate_pose`] runs one of the estimators of Phong & Horaud 1995 and its baselines on points,
 //! lines, or both, and by default refines the answer on the reprojection error so that it is the
 //! maximum-likelihood pose under Gaussian pixel noise. Convention: `x_cam = R X_world + t`. The camera
-//! is any [`crate::AnyCamera`]: through a lens with distortion the refinement minimises the exact error
+//! is any [`crate::Camera`]: through a lens with distortion the refinement minimises the exact error
 //! in the observed pixels (`lens` says what each stage works on).
 
 pub(crate) mod algebraic;
@@ -43,7 +43,7 @@ pub mod testing {
     pub use super::reprojection::covariance_from_information;
 }
 
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
@@ -338,7 +338,7 @@ pub struct PoseDetails {
     /// Total wall time, seconds.
     pub time_seconds: f64,
     /// Intrinsics estimated by the linear method (`None` for the others).
-    pub estimated_camera: Option<Camera>,
+    pub estimated_camera: Option<Intrinsics>,
     /// What the robust loop did (`None` unless [`PoseOptions::ransac`]).
     pub ransac: Option<RansacReport>,
     /// Where the `σ` of [`PoseResult::covariance`] came from; `None` when there is no covariance.

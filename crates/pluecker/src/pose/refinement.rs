@@ -21,7 +21,7 @@ use super::candidates::SPREAD_SAMPLES;
 use super::correspondences::Conditioning;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{stage, CostKind, PoseOptions, StageReport};
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::geometry::quaternion::{exp_so3, log_so3, rotation_distance};
 use crate::optim::Objective;
 use crate::optim::{trust_region, Subproblem, Summary, Termination};
@@ -299,7 +299,7 @@ pub fn search(
 
 /// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
 /// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
-pub fn refine_pose(camera: &Camera, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
+pub fn refine_pose(camera: &Intrinsics, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
     let cond = if opts.normalize {
         Conditioning::of(corr)
     } else {

@@ -10,7 +10,7 @@
 //! point, the endpoint distance divided by the endpoint's standard deviation across the line.
 //!
 //! Through a lens ([`ReprojectionCost::exact`]) the residuals are in the image's own, distorted pixels,
-//! through the exact projection `π(x_cam) = K D(x/z, y/z)` of the [`LensCamera`] (`D` its distortion):
+//! through the exact projection `π(x_cam) = K D(x/z, y/z)` of the [`Camera`] (`D` its distortion):
 //! - a point: `W (π(R X + t) − u)`, exactly as above with the lens's `π`;
 //! - a segment endpoint `e`: its distance to the *curved* image `K D(ℓ)` of the projected line `ℓ` (the
 //!   line through the normalised projections of the two 3-D endpoints, as for a pinhole camera), in
@@ -26,9 +26,8 @@
 
 use super::{Correspondences, CovarianceSource, ObservationNoise};
 use crate::camera::curved_line::endpoint_residual;
-use crate::camera::AnyCamera;
 use crate::camera::Camera;
-use crate::camera::LensCamera;
+use crate::camera::Intrinsics;
 use crate::error::Result;
 use crate::geometry::quaternion::{exp_so3, skew};
 use crate::optim::{Linearization, Objective};
@@ -44,7 +43,7 @@ const LANES: usize = 4;
 /// Reprojection-error objective over `SO(3) × ℝ³`.
 #[derive(Debug, Clone)]
 pub struct ReprojectionCost<'a> {
-    camera: Camera,
+    camera: Intrinsics,
     k_inv: Matrix3<f64>,
     /// The point correspondences as five columns `[X…, Y…, Z…, u…, v…]` (structure of arrays).
     columns: Vec<f64>,
@@ -61,8 +60,8 @@ pub struct ReprojectionCost<'a> {
 /// A lens of [`ReprojectionCost`], and where each segment endpoint's search along its line starts.
 #[derive(Debug, Clone)]
 struct Lens<'a> {
-    camera: &'a LensCamera,
-    /// The undistorted normalised coordinates of each segment endpoint ([`LensCamera::unproject`]),
+    camera: &'a Camera,
+    /// The undistorted normalised coordinates of each segment endpoint ([`Camera::unproject`]),
     /// `None` outside the invertible region of the distortion (the search then starts from the
     /// projection of the 3-D endpoint of the same index).
     starts: Vec<[Option<Vector2<f64>>; 2]>,
@@ -138,7 +137,7 @@ impl<'a> ReprojectionCost<'a> {
     /// The cost of the given correspondences (pixels and world coordinates; segments as endpoints).
     /// The point data are copied into columns; the segments are borrowed.
     pub fn new(
-        camera: Camera,
+        camera: Intrinsics,
         points2d: &'a [Vector2<f64>],
         points3d: &'a [Vector3<f64>],
         lines2d: &'a [[Vector2<f64>; 2]],
@@ -167,16 +166,16 @@ impl<'a> ReprojectionCost<'a> {
     /// The exact cost of the correspondences of `c` seen by `camera`: their pixels are the observed
     /// ones (distorted, through a lens), weighted by their noise when they carry one (see the module
     /// documentation). The pinhole cost [`ReprojectionCost::of`] when the camera does not distort.
-    pub fn exact(camera: &'a AnyCamera, c: &'a Correspondences) -> Result<Self> {
+    pub fn exact(camera: &'a Camera, c: &'a Correspondences) -> Result<Self> {
         match camera.distortion() {
             Some(lens) => Self::through_lens(lens, c),
-            None => Ok(Self::of(&camera.pinhole()?, c)),
+            None => Ok(Self::of(&camera.intrinsics(), c)),
         }
     }
 
-    /// [`ReprojectionCost::exact`] for a [`LensCamera`].
-    pub fn through_lens(lens: &'a LensCamera, c: &'a Correspondences) -> Result<Self> {
-        let mut cost = Self::of(&lens.pinhole()?, c);
+    /// [`ReprojectionCost::exact`] for a [`Camera`].
+    pub fn through_lens(lens: &'a Camera, c: &'a Correspondences) -> Result<Self> {
+        let mut cost = Self::of(&lens.intrinsics(), c);
         if !lens.is_pinhole() {
             let start = |e: &Vector2<f64>| lens.unproject(e, 0).ok();
             cost.lens = Some(Lens {
@@ -188,7 +187,7 @@ impl<'a> ReprojectionCost<'a> {
     }
 
     /// The cost of all the correspondences of `c`, weighted by their noise when they carry one.
-    pub fn of(camera: &Camera, c: &'a Correspondences) -> Self {
+    pub fn of(camera: &Intrinsics, c: &'a Correspondences) -> Self {
         let mut cost = ReprojectionCost::new(*camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
         cost.noise = c.noise.as_ref();
         cost
@@ -304,10 +303,10 @@ impl<'a> ReprojectionCost<'a> {
 
     /// Point `i`'s residual `π(R X + t) − u` through `lens` and its Jacobian (unwhitened): with
     /// `a = ∂π/∂x_cam`, `∂/∂ω = −a [R X]×` and `∂/∂τ = a`.
-    fn lens_point_block(&self, lens: &LensCamera, pose: &Pose, i: usize) -> Block {
+    fn lens_point_block(&self, lens: &Camera, pose: &Pose, i: usize) -> Block {
         let (x, u) = self.point(i);
         let rx = pose.rotation * x;
-        let (pixel, a) = lens.project(&(rx + pose.translation));
+        let (pixel, a) = lens.project_with_jacobian(&(rx + pose.translation));
         let mut j = SMatrix::<f64, 2, 6>::zeros();
         j.fixed_view_mut::<2, 3>(0, 0).copy_from(&(-a * skew(&rx)));
         j.fixed_view_mut::<2, 3>(0, 3).copy_from(&a);
@@ -471,7 +470,7 @@ impl<'a> ReprojectionCost<'a> {
         let r = match &self.lens {
             Some(lens) => {
                 let (x, u) = self.point(i);
-                lens.camera.project(&pose.transform(&x)).0 - u
+                lens.camera.project(&pose.transform(&x)) - u
             }
             None => {
                 let p = self.point_lanes::<1, false>(pose, i);
@@ -681,7 +680,7 @@ mod tests {
     #[test]
     fn jacobian_matches_finite_differences() {
         let mut rng = Rng::new(5);
-        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 2.0).unwrap();
+        let cam = Intrinsics::new(-1730.3, 1220.7, 243.8, 241.2, 2.0).unwrap();
         for _ in 0..20 {
             let rot = rng.rotation();
             let t = Vector3::new(rng.normal(), rng.normal(), 20.0);
@@ -729,7 +728,7 @@ mod tests {
     #[test]
     fn weighted_residuals_match_finite_differences_and_reduce_to_pixels() {
         let mut rng = Rng::new(8);
-        let cam = Camera::new(900.0, 880.0, 320.0, 240.0, 0.0).unwrap();
+        let cam = Intrinsics::new(900.0, 880.0, 320.0, 240.0, 0.0).unwrap();
         let rot = rng.rotation();
         let t = Vector3::new(0.2, -0.1, 8.0);
         let p3: Vec<Vector3<f64>> = (0..5)

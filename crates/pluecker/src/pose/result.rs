@@ -13,7 +13,7 @@ use super::lens::Observations;
 use super::reprojection::{count_behind, covariance, Pose, ReprojectionCost};
 use super::robust::RansacReport;
 use super::{CostKind, PoseDetails, PoseOptions, PoseResult, StageReport, Status};
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::chi_square::ResidualTest;
 use crate::interrupt::stop_reason;
 use crate::optim::{Objective, Termination};
@@ -28,7 +28,7 @@ pub(crate) struct PipelineOutcome<'c> {
     /// The status, decided by the pipeline (most pipelines by [`status_of_stages`]).
     pub status: Status,
     /// Intrinsics estimated by the linear method.
-    pub estimated_camera: Option<Camera>,
+    pub estimated_camera: Option<Intrinsics>,
     /// The correspondences the pose was fitted to (world frame, observed pixels): all of them, or the
     /// inliers.
     pub used: &'c Correspondences,

@@ -10,11 +10,11 @@
 //! The depth of a point is `depth(P, X) = (P X̃)₃ / ‖m³‖`, positive in front and in world units.
 //! Only finite cameras (`det M ≠ 0`) are accepted.
 //!
-//! A [`View`] is the other form of a known camera: the camera itself ([`AnyCamera`], a pinhole or any
+//! A [`View`] is the other form of a known camera: the camera itself ([`Camera`], a pinhole or any
 //! of COLMAP's models) and its pose. Through a lens with distortion the observations are the image's
 //! own (distorted) pixels; `P = K [R | t]` is the view of a pinhole camera.
 
-use crate::camera::AnyCamera;
+use crate::camera::Camera;
 use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};
@@ -23,23 +23,56 @@ use nalgebra::{Matrix3, Matrix3x4, Vector3, Vector4};
 #[derive(Debug, Clone, PartialEq)]
 pub struct View {
     /// The camera: a pinhole or any of COLMAP's models.
-    pub camera: AnyCamera,
+    pub camera: Camera,
     /// Its pose.
     pub pose: Pose,
 }
 
 impl View {
     /// The view of `camera` at `pose`.
-    pub fn new(camera: impl Into<AnyCamera>, pose: Pose) -> View {
-        View {
-            camera: camera.into(),
-            pose,
-        }
+    pub fn new(camera: Camera, pose: Pose) -> View {
+        View { camera, pose }
+    }
+
+    /// The pinhole view of a finite 3x4 projection `P = s K [R | t]` (any positive scale `s`): `K`
+    /// upper triangular with `K₃₃ = 1` and `fy > 0`, `R` a rotation (`det R = +1`), so that a point is
+    /// in front of the view exactly when it is in front of `P` (module docs). A `P` whose left block has
+    /// `det M < 0` (a left-handed world frame) gives `fx < 0`, a mirrored axis. PINHOLE when the skew
+    /// comes out exactly 0, else SKEWED_PINHOLE. `Error::NonFinite` / `Error::SingularCamera` as the
+    /// cameras' validation (`what` names the argument).
+    pub fn from_projection(p: &Matrix3x4<f64>, what: &str) -> Result<View> {
+        validate_cameras(std::slice::from_ref(p), what)?;
+        let m: Matrix3<f64> = p.fixed_view::<3, 3>(0, 0).into_owned();
+        let (m1, m2, m3) = (m.row(0).transpose(), m.row(1).transpose(), m.row(2).transpose());
+        // Rows of M = s K R, from the last: m₃ = s r₃, m₂ = s (fy r₂ + cy r₃),
+        // m₁ = s (fx r₁ + skew r₂ + cx r₃), with r₁ = r₂ × r₃ (a rotation).
+        let s = m3.norm();
+        let r3 = m3 / s;
+        let cy = m2.dot(&r3);
+        let fy_r2 = m2 - cy * r3;
+        let fy = fy_r2.norm();
+        let r2 = fy_r2 / fy;
+        let r1 = r2.cross(&r3);
+        let (cx, skew) = (m1.dot(&r3), m1.dot(&r2));
+        let fx = m1.dot(&r1);
+        let rotation = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), r3.transpose()]);
+        let k = Matrix3::new(fx, skew, cx, 0.0, fy, cy, 0.0, 0.0, s) / s;
+        let singular = || Error::SingularCamera {
+            what: format!("{what}: K of P is singular"),
+        };
+        let translation = k.try_inverse().ok_or_else(singular)? * (p.column(3) / s);
+        let camera = Camera::from_matrix(&k).map_err(|e| match e {
+            Error::SingularCamera { what: why } => Error::SingularCamera {
+                what: format!("{what}: {why}"),
+            },
+            other => other,
+        })?;
+        Ok(View::new(camera, Pose::new(rotation, translation)))
     }
 
     /// `P = K [R | t]` of the camera's pinhole part.
     pub fn projection(&self) -> Result<Matrix3x4<f64>> {
-        Ok(self.camera.pinhole()?.projection(&self.pose))
+        Ok(self.camera.intrinsics().projection(&self.pose))
     }
 }
 
@@ -149,5 +182,38 @@ mod tests {
             };
             assert!((depth(&p, &seen) - 5.0).abs() < 1e-12, "{}", depth(&p, &seen));
         }
+    }
+
+    #[test]
+    fn a_view_from_a_projection_projects_as_the_projection_does() {
+        let rotation = *nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.3, -0.5, 0.2)).matrix();
+        let translation = Vector3::new(0.4, -0.1, 6.0);
+        let mut rt = Matrix3x4::zeros();
+        rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&rotation);
+        rt.set_column(3, &translation);
+        let mirror_world = nalgebra::Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, -1.0, 1.0));
+        let x = Vector3::new(0.2, 0.3, -0.4);
+        for (k, skew_model) in [
+            (Matrix3::new(800.0, 0.0, 320.0, 0.0, 780.0, 240.0, 0.0, 0.0, 1.0), false),
+            (Matrix3::new(-1730.3, 2.5, 243.8, 0.0, 1220.7, 241.2, 0.0, 0.0, 1.0), true),
+        ] {
+            for (p, scale) in [(k * rt * 3.0, 3.0), (k * rt * mirror_world * 0.01, 0.01), (-(k * rt), 1.0)] {
+                let view = View::from_projection(&p, "P").unwrap();
+                let r = view.pose.rotation;
+                assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
+                assert!((r.determinant() - 1.0).abs() < 1e-12);
+                // The view's own P = K [R | t] is P divided by its positive scale.
+                let rebuilt = view.projection().unwrap();
+                assert!((rebuilt - p / scale).norm() < 1e-9 * (p / scale).norm(), "{rebuilt} {p}");
+                assert_eq!(view.camera.model() == crate::camera::CameraModel::SkewedPinhole, skew_model);
+                // The same pixel and the same side in front.
+                let h = p * x.push(1.0);
+                let x_cam = view.pose.transform(&x);
+                let u = view.camera.project(&x_cam);
+                assert!((u - nalgebra::Vector2::new(h.x / h.z, h.y / h.z)).norm() < 1e-9);
+                assert_eq!(x_cam.z > 0.0, h.z > 0.0);
+            }
+        }
+        assert!(View::from_projection(&Matrix3x4::zeros(), "views[3]").is_err());
     }
 }

@@ -23,7 +23,7 @@ use pose_oracle::{centred, cost, many_start, pixel, residuals, OraclePose};
 /// eigen-decomposition), `G` without covariances.
 fn endpoint_map(k: &Camera, corr: &Correspondences, line: usize, end: usize) -> Matrix2<f64> {
     let g = k
-        .matrix()
+        .intrinsics().matrix()
         .try_inverse()
         .unwrap()
         .transpose()
@@ -43,8 +43,8 @@ fn endpoint_map(k: &Camera, corr: &Correspondences, line: usize, end: usize) -> 
 
 /// The unit ray of pixel `u` (camera frame).
 fn bearing(k: &Camera, u: &Vector2<f64>) -> Vector3<f64> {
-    let y = (u.y - k.cy) / k.fy;
-    let x = (u.x - k.cx - k.skew * y) / k.fx;
+    let y = (u.y - k.intrinsics().cy) / k.intrinsics().fy;
+    let x = (u.x - k.intrinsics().cx - k.intrinsics().skew * y) / k.intrinsics().fx;
     Vector3::new(x, y, 1.0).normalize()
 }
 
@@ -75,7 +75,7 @@ fn depth_bounds_hold_at_the_farthest_pose_of_the_sublevel_set() {
         (600.0, 600.0, 40.0, Vector2::new(0.0, 1.0)),
     ];
     for &(fx, fy, skew, dir) in &cameras {
-        let k = Camera::new(fx, fy, 320.0, 240.0, skew).unwrap();
+        let k = Camera::pinhole(fx, fy, 320.0, 240.0, skew).unwrap();
         for _ in 0..25 {
             let centre = Vector2::new(rng.uniform_in(200.0, 440.0), rng.uniform_in(150.0, 330.0));
             let sep = rng.uniform_in(10.0, 80.0);
@@ -121,7 +121,7 @@ fn depth_bounds_hold_at_the_farthest_pose_of_the_sublevel_set() {
             // The construction: cost at the level (bisection to ~1e-16 relative), points in front.
             assert!(f <= level * (1.0 + 1e-9), "cost {f} above the level {level}");
             assert!(xi.z > 0.0 && xj.z > 0.0);
-            let bounds = depth_bounds(&k, &corr, level).expect("two points seen apart");
+            let bounds = depth_bounds(&k.intrinsics(), &corr, level).expect("two points seen apart");
             let reached = xi.norm();
             assert!(
                 reached <= bounds[0] * (1.0 + 1e-9),
@@ -235,11 +235,11 @@ fn ball_off_the_minimum(
     rng: &mut Rng,
 ) -> Option<(OraclePose, f64, LocalBound)> {
     let unit = residual_unit(k, corr, minimum);
-    let start = local_bound(k, corr, &minimum.to_library(), cost(k, corr, minimum), 1.0).unwrap();
+    let start = local_bound(&k.intrinsics(), corr, &minimum.to_library(), cost(k, corr, minimum), 1.0).unwrap();
     let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
     let pose = minimum.step(&(start.whitening * v0 * shift * unit));
     let radius = scale * unit;
-    let b = local_bound(k, corr, &pose.to_library(), cost(k, corr, &pose), radius).ok()?;
+    let b = local_bound(&k.intrinsics(), corr, &pose.to_library(), cost(k, corr, &pose), radius).ok()?;
     Some((pose, radius, b))
 }
 
@@ -322,7 +322,7 @@ fn the_curvature_bound_holds_along_whitened_rays() {
             let level = cost(&k, &corr, &pose);
             for lambda in [1e-3, 1e-2, 0.1, 10.0, 1e3] {
                 let (scaled, scaled_pose) = scaled_world(&corr, &pose, lambda);
-                let Ok(b_scaled) = local_bound(&k, &scaled, &scaled_pose.to_library(), level, radius) else {
+                let Ok(b_scaled) = local_bound(&k.intrinsics(), &scaled, &scaled_pose.to_library(), level, radius) else {
                     panic!("{name}, shift {shift}: no bound at scale {lambda} where there is one at scale 1");
                 };
                 assert!(
@@ -456,7 +456,7 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
     let mut rng = Rng::new(45);
     let (mut checked, mut worst) = (0usize, 0.0f64);
     for (k, corr, minimum, name) in step4_scenes() {
-        let k_inv = k.matrix().try_inverse().unwrap();
+        let k_inv = k.intrinsics().matrix().try_inverse().unwrap();
         for (shift, scale) in [(0.0, 6.0), (2.0, 16.0), (0.0, 32.0)] {
             let Some((pose0, radius, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, scale, &mut rng) else {
                 continue;
@@ -464,7 +464,7 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
             let level = cost(&k, &corr, &pose0);
             for lambda in [1.0, 0.01, 30.0] {
                 let (c, pose) = scaled_world(&corr, &pose0, lambda);
-                let Ok(parts) = curvature_parts(&k, &c, &pose.to_library(), level, radius) else {
+                let Ok(parts) = curvature_parts(&k.intrinsics(), &c, &pose.to_library(), level, radius) else {
                     continue;
                 };
                 let t = parts.whitening;
@@ -510,7 +510,7 @@ fn each_part_of_the_curvature_bound_holds_along_whitened_rays() {
                 // unit whitened direction (the largest over random directions, here by differences).
                 for (i, (x, pp)) in c.points3d.iter().zip(&parts.points).enumerate() {
                     let map = c.noise.as_ref().map_or_else(Matrix2::identity, |n| n.points[i])
-                        * Matrix2::new(k.fx, k.skew, 0.0, k.fy);
+                        * Matrix2::new(k.intrinsics().fx, k.intrinsics().skew, 0.0, k.intrinsics().fy);
                     let residual = |v: &Vector6<f64>, s: f64| {
                         let p = at(v, s);
                         let y = p.r * x + p.t;
@@ -562,7 +562,7 @@ fn the_exact_moment_curvature_at_the_pose_matches_a_numeric_hessian() {
         if corr.lines3d.is_empty() {
             continue;
         }
-        let k_inv = k.matrix().try_inverse().unwrap();
+        let k_inv = k.intrinsics().matrix().try_inverse().unwrap();
         for shift in [0.0, 2.0] {
             let Some((pose0, radius, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, 1.0, &mut rng) else {
                 continue;
@@ -570,7 +570,7 @@ fn the_exact_moment_curvature_at_the_pose_matches_a_numeric_hessian() {
             let level = cost(&k, &corr, &pose0);
             for lambda in [1.0, 0.01, 30.0] {
                 let (c, pose) = scaled_world(&corr, &pose0, lambda);
-                let parts = curvature_parts(&k, &c, &pose.to_library(), level, radius).unwrap();
+                let parts = curvature_parts(&k.intrinsics(), &c, &pose.to_library(), level, radius).unwrap();
                 let t = parts.whitening;
                 // The step h of the differences: 1e-3 rad of rotation and 1e-3 of the least depth of
                 // translation (the whitened chart is far from isotropic, so h is set per scene).
@@ -662,7 +662,7 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
         if corr.lines3d.is_empty() {
             continue;
         }
-        let k_inv = k.matrix().try_inverse().unwrap();
+        let k_inv = k.intrinsics().matrix().try_inverse().unwrap();
         let unit = residual_unit(&k, &corr, &minimum);
         for shift in [0.0, 2.0] {
             let Some((pose0, _, _)) = ball_off_the_minimum(&k, &corr, &minimum, shift, 1.0, &mut rng) else {
@@ -671,7 +671,7 @@ fn each_term_of_a_lines_curvature_bound_holds_out_to_the_largest_ball() {
             let level = cost(&k, &corr, &pose0);
             for lambda in [1.0, 0.01, 30.0, 1e-3, 1e3] {
                 let (c, pose) = scaled_world(&corr, &pose0, lambda);
-                let parts_at = |r: f64| curvature_parts(&k, &c, &pose.to_library(), level, r).ok();
+                let parts_at = |r: f64| curvature_parts(&k.intrinsics(), &c, &pose.to_library(), level, r).ok();
                 // The largest radius with a bound, by doubling then bisection (in residual units).
                 let (mut lo, mut hi) = (1.0, 2.0);
                 while parts_at(hi * unit).is_some() && hi < 1e9 {

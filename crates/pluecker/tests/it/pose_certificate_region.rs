@@ -228,7 +228,7 @@ struct Case {
 /// from a random pose.
 fn deep_scene(focal: f64, n: usize, seed: u64) -> Scene {
     let mut rng = Rng::new(seed);
-    let camera = Camera::new(focal, focal, 320.0, 240.0, 0.0).unwrap();
+    let camera = Camera::pinhole(focal, focal, 320.0, 240.0, 0.0).unwrap();
     let rotation = rng.rotation();
     let translation = Vector3::new(rng.normal(), rng.normal(), rng.normal());
     let cam: Vec<Vector3<f64>> = (0..n)
@@ -286,7 +286,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize, usize) {
     let (mut checked, mut second, mut distances, mut with_segments) = (0, 0, 0, 0);
     for &factor in factors {
         let level = factor * global;
-        let distance = object_distance(&k, &corr, level).ok().flatten();
+        let distance = object_distance(&k.intrinsics(), &corr, level).ok().flatten();
         let poses = sublevel_poses(&k, &corr, &minima, (level, distance.is_some()), 12, &mut rng);
         if let Some((pivot, bound)) = distance {
             for (pose, f) in &poses {
@@ -302,7 +302,7 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize, usize) {
         for (centre, f_centre) in minima.iter().filter(|(_, f)| *f <= level) {
             let w = information(&k, &corr, centre);
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
-            let region = match rotation_search(&k, &corr, &centre.to_library(), level, target, 2e-3, 400_000) {
+            let region = match rotation_search(&k.intrinsics(), &corr, &centre.to_library(), level, target, 2e-3, 400_000) {
                 Ok(r) => r,
                 // The hook refuses honestly (too-large residuals for the angle bounds, too many cells):
                 // nothing is claimed, nothing to check.
@@ -516,14 +516,14 @@ fn cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere() {
             .points2d
             .iter()
             .map(|u| {
-                let y = (u.y - k.cy) / k.fy;
-                Vector3::new((u.x - k.cx - k.skew * y) / k.fx, y, 1.0).normalize()
+                let y = (u.y - k.intrinsics().cy) / k.intrinsics().fy;
+                Vector3::new((u.x - k.intrinsics().cx - k.intrinsics().skew * y) / k.intrinsics().fx, y, 1.0).normalize()
             })
             .collect();
         for factor in [1.5, 10.0, 100.0] {
             let level = factor * minimum.1;
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
-            let Ok(region) = rotation_search(&k, &corr, &minimum.0.to_library(), level, target, 2e-3, 200_000) else {
+            let Ok(region) = rotation_search(&k.intrinsics(), &corr, &minimum.0.to_library(), level, target, 2e-3, 200_000) else {
                 continue;
             };
             let objects: Vec<(Vector3<f64>, Vector3<f64>)> =
@@ -563,7 +563,7 @@ fn cells_pruned_as_behind_the_camera_without_depth_bounds_have_an_endpoint_behin
         for factor in [1.5, 10.0, 100.0] {
             let level = factor * minimum.1;
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
-            let Ok(region) = rotation_search(&k, &corr, &minimum.0.to_library(), level, target, 2e-3, 400_000) else {
+            let Ok(region) = rotation_search(&k.intrinsics(), &corr, &minimum.0.to_library(), level, target, 2e-3, 400_000) else {
                 continue;
             };
             assert!(region.from_distance);

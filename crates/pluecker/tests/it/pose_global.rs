@@ -9,6 +9,7 @@ use crate::pose_oracle;
 use nalgebra::Vector3;
 use pluecker::pose::{estimate_pose, Correspondences, PoseOptions, Status};
 use pluecker::rng::Rng;
+use pluecker::Camera;
 use pluecker::synthetic::{visible_scene, Scene};
 use pluecker::testing::pose_certificate::certify;
 use pose_oracle::{centred, cost, many_start, OraclePose};
@@ -97,7 +98,7 @@ fn the_default_pipeline_reaches_the_best_known_minimum_or_says_it_is_ambiguous()
 #[test]
 fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
     use nalgebra::Vector2;
-    let camera = pluecker::Camera::new(100.0, 100.0, 320.0, 240.0, 0.0).unwrap();
+    let camera = pluecker::Camera::pinhole(100.0, 100.0, 320.0, 240.0, 0.0).unwrap();
     let corr = Correspondences {
         points2d: vec![
             Vector2::new(328.25225, 236.53891),
@@ -371,7 +372,7 @@ fn a_wrong_local_minimum_is_not_certified() {
         for (pose, cost) in minima.iter().skip(1).filter(|(_, c)| *c > best * (1.0 + 1e-6) + 1e-9) {
             tried += 1;
             let verdict = certify(
-                &scene.camera,
+                &scene.camera.intrinsics(),
                 None,
                 &corr,
                 &pose.to_library(),
@@ -410,9 +411,9 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
         let mut rng = Rng::new(300 + seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let plain = estimate_pose(&scene.camera, &corr, &opts).unwrap();
-        let cam = scene.camera;
+        let cam = scene.camera.intrinsics();
         let mirror = |u: &nalgebra::Vector2<f64>| nalgebra::Vector2::new(2.0 * cam.cx - u.x, u.y);
-        let mirrored_camera = pluecker::Camera { fx: -cam.fx, ..cam };
+        let mirrored_camera = Camera::pinhole(-cam.fx, cam.fy, cam.cx, cam.cy, cam.skew).unwrap();
         let mirrored = Correspondences {
             points2d: corr.points2d.iter().map(mirror).collect(),
             lines2d: corr.lines2d.iter().map(|s| [mirror(&s[0]), mirror(&s[1])]).collect(),
@@ -430,7 +431,7 @@ fn certificate_holds_for_mirrored_and_skewed_cameras() {
             assert!(pluecker::geometry::rotation_distance(&plain.pose.rotation, &other.pose.rotation) < 1e-8);
         }
         // Skew: the same pixels seen through K with skew are certified with a bound below the cost.
-        let skewed_camera = pluecker::Camera { skew: 30.0, ..cam };
+        let skewed_camera = Camera::pinhole(cam.fx, cam.fy, cam.cx, cam.cy, 30.0).unwrap();
         let skewed = Correspondences {
             points2d: corr
                 .points2d

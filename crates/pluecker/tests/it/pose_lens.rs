@@ -7,7 +7,7 @@
 //! estimator with a correct covariance, and the mean of `n` trials has standard deviation `√(12 / n)`.
 
 use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
-use pluecker::camera::{CameraModel, LensCamera};
+use pluecker::camera::{Camera, CameraModel};
 use pluecker::geometry::testing::log_so3;
 use pluecker::pose::{
     estimate_pose, Correspondences, ObservationNoise, PoseOptions, PoseResult, RansacOptions, Status,
@@ -16,16 +16,16 @@ use pluecker::rng::Rng;
 use pluecker::synthetic::{visible_scene, Scene};
 use pluecker::Error;
 
-pub(super) fn opencv() -> LensCamera {
-    LensCamera::new(
+pub(super) fn opencv() -> Camera {
+    Camera::new(
         CameraModel::OpenCv,
         &[600.0, 600.0, 320.0, 240.0, -0.28, 0.07, 5e-4, -3e-4],
     )
     .unwrap()
 }
 
-pub(super) fn fisheye() -> LensCamera {
-    LensCamera::new(
+pub(super) fn fisheye() -> Camera {
+    Camera::new(
         CameraModel::OpenCvFisheye,
         &[600.0, 600.0, 320.0, 240.0, 0.05, -0.02, 0.01, -0.002],
     )
@@ -34,13 +34,13 @@ pub(super) fn fisheye() -> LensCamera {
 
 /// The scene's structure observed through `lens`, with Gaussian noise of `sigma(i)` px on observation
 /// `i` (points first, then the segment endpoints).
-fn observe(scene: &Scene, lens: &LensCamera, sigma: &dyn Fn(usize) -> f64, rng: &mut Rng) -> Correspondences {
+fn observe(scene: &Scene, lens: &Camera, sigma: &dyn Fn(usize) -> f64, rng: &mut Rng) -> Correspondences {
     let c = &scene.correspondences;
     let mut index = 0;
     let mut pixel = |x: &Vector3<f64>| {
         let s = sigma(index);
         index += 1;
-        lens.project(&scene.to_camera(x)).0 + Vector2::new(rng.normal(), rng.normal()) * s
+        lens.project(&scene.to_camera(x)) + Vector2::new(rng.normal(), rng.normal()) * s
     };
     Correspondences {
         points2d: c.points3d.iter().map(&mut pixel).collect(),
@@ -95,7 +95,7 @@ fn distortion_is_modelled_and_the_covariance_is_right() {
         // covariance (the failure that issue 12 reports).
         let ignored = mean_nees(20, |scene, rng| {
             let corr = observe(scene, &lens, &|_| 1.0, rng);
-            estimate_pose(&lens.pinhole().unwrap(), &corr, &with_sigma(1.0)).unwrap()
+            estimate_pose(&lens.without_distortion(), &corr, &with_sigma(1.0)).unwrap()
         });
         eprintln!(
             "{:?}: mean NEES {modelled:.3} modelled, {ignored:.0} ignored",
@@ -123,7 +123,7 @@ fn the_refined_pose_minimises_the_exact_distorted_pixel_error() {
             let (mut jtj, mut jtr) = (Matrix6::<f64>::zeros(), Vector6::<f64>::zeros());
             for (x, u) in corr.points3d.iter().zip(&corr.points2d) {
                 let rx = r * x;
-                let (p, d) = lens.project(&(rx + t));
+                let (p, d) = lens.project_with_jacobian(&(rx + t));
                 let res = p - u;
                 // Left perturbation exp(ω) R: ∂x_cam/∂ω = −[R X]×, ∂x_cam/∂t = I.
                 let mut j = nalgebra::SMatrix::<f64, 2, 6>::zeros();
@@ -182,7 +182,7 @@ fn robust_pose_through_a_lens_rejects_outliers() {
 #[test]
 fn per_observation_covariances_weight_the_pose() {
     // Half the observations have σ = 0.3 px, half σ = 3 px along a random direction and 0.3 across it.
-    let pinhole = LensCamera::new(CameraModel::Pinhole, &[600.0, 600.0, 320.0, 240.0]).unwrap();
+    let pinhole = Camera::new(CameraModel::Pinhole, &[600.0, 600.0, 320.0, 240.0]).unwrap();
     let (mut weighted_nees, mut weighted_err, mut plain_err) = (0.0, 0.0, 0.0);
     let trials = 100;
     for seed in 0..trials {
@@ -205,7 +205,7 @@ fn per_observation_covariances_weight_the_pose() {
         let c = &scene.correspondences;
         let mut k = 0;
         let mut pixel = |x: &Vector3<f64>| {
-            let u = pinhole.project(&scene.to_camera(x)).0 + factors[k] * Vector2::new(rng.normal(), rng.normal());
+            let u = pinhole.project(&scene.to_camera(x)) + factors[k] * Vector2::new(rng.normal(), rng.normal());
             k += 1;
             u
         };
@@ -256,7 +256,7 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
     assert!(matches!(err, Error::Shape { .. }), "{err}");
     // SIMPLE_RADIAL with k = −0.28 folds at r² = 1 / (3 |k|): no pixel beyond a distorted radius of
     // (2/3) r ≈ 0.73 focal lengths comes from a point in front; 0.8 is outside the invertible region.
-    let radial = LensCamera::new(CameraModel::SimpleRadial, &[600.0, 320.0, 240.0, -0.28]).unwrap();
+    let radial = Camera::new(CameraModel::SimpleRadial, &[600.0, 320.0, 240.0, -0.28]).unwrap();
     let mut far = observe(&scene, &radial, &|_| 0.0, &mut Rng::new(1));
     far.points2d[4] = Vector2::new(320.0 + 0.8 * 600.0, 240.0);
     let err = estimate_pose(&radial, &far, &PoseOptions::default()).unwrap_err();
@@ -277,7 +277,7 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
 fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
     // A fisheye of f = 300 px: no point in front of the camera projects beyond θ_d(π/2) ≈ 1.67 focal
     // lengths from the centre, where a random mismatch can still land.
-    let lens = LensCamera::new(
+    let lens = Camera::new(
         CameraModel::OpenCvFisheye,
         &[300.0, 300.0, 320.0, 240.0, 0.05, -0.01, 0.002, -3e-4],
     )
@@ -366,7 +366,7 @@ fn undistorted_covariances_match_the_derivative_of_the_distortion() {
                 let x = Vector3::new(rng.uniform_in(-0.5, 0.5), rng.uniform_in(-0.38, 0.38), 1.0);
                 let u = distorted_pixel(fisheye, &params, &x);
                 // The oracle agrees with the library's forward model (the same convention).
-                assert!((u - lens.project(&x).0).norm() < 1e-9, "{u} vs {}", lens.project(&x).0);
+                assert!((u - lens.project(&x)).norm() < 1e-9, "{u} vs {}", lens.project(&x));
                 u
             })
             .collect();

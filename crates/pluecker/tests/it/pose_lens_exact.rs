@@ -7,7 +7,7 @@
 use super::pose_lens::{fisheye, opencv, with_sigma};
 
 use nalgebra::{Matrix2, Matrix6, Vector2, Vector3, Vector6};
-use pluecker::camera::{CameraModel, LensCamera};
+use pluecker::camera::{Camera, CameraModel};
 use pluecker::geometry::testing::log_so3;
 use pluecker::optim::Objective;
 use pluecker::pose::{
@@ -23,12 +23,12 @@ use pluecker::testing::pose_certificate;
 /// SIMPLE_RADIAL of f = 5000 px with k = −14 (its fold, where the distortion stops increasing, is at
 /// r = 1/√42 ≈ 0.154; the points stay inside r ≤ 0.12). Each with the largest normalised radius the
 /// scene uses.
-fn strong_lenses() -> Vec<(LensCamera, f64)> {
+fn strong_lenses() -> Vec<(Camera, f64)> {
     vec![
         (opencv(), 0.55),
         (fisheye(), 80f64.to_radians().tan()),
         (
-            LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 2000.0, 1500.0, -14.0]).unwrap(),
+            Camera::new(CameraModel::SimpleRadial, &[5000.0, 2000.0, 1500.0, -14.0]).unwrap(),
             0.12,
         ),
     ]
@@ -63,7 +63,7 @@ fn oracle_distort(model: CameraModel, p: &[f64], n: &Vector2<f64>) -> Vector2<f6
 }
 
 /// The oracle's pixel of the normalised point `n`.
-fn oracle_pixel(lens: &LensCamera, n: &Vector2<f64>) -> Vector2<f64> {
+fn oracle_pixel(lens: &Camera, n: &Vector2<f64>) -> Vector2<f64> {
     let p = lens.params();
     let d = oracle_distort(lens.model(), p, n);
     let (fx, fy, cx, cy) = if lens.model() == CameraModel::SimpleRadial {
@@ -78,7 +78,7 @@ fn oracle_pixel(lens: &LensCamera, n: &Vector2<f64>) -> Vector2<f64> {
 /// image of the projected line through the normalised points `qa`, `qb`: a grid over the line's
 /// parameter brackets the minimum, golden-section search finds it (no derivative of the distortion).
 fn oracle_line_distance2(
-    lens: &LensCamera,
+    lens: &Camera,
     qa: &Vector2<f64>,
     qb: &Vector2<f64>,
     e: &Vector2<f64>,
@@ -111,7 +111,7 @@ fn oracle_line_distance2(
 /// curved image of its line. `covs`: one covariance per point, then one per segment endpoint (the
 /// identity when `None`).
 fn oracle_cost(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     covs: Option<&[Matrix2<f64>]>,
     rotation: &nalgebra::Matrix3<f64>,
@@ -142,7 +142,7 @@ fn oracle_cost(
 /// covariance `covs[k]` (one per point, then per endpoint) in the distorted pixels. Returns the
 /// correspondences (without noise attached) and the true pose.
 fn lens_scene(
-    lens: &LensCamera,
+    lens: &Camera,
     r_max: f64,
     n: usize,
     m: usize,
@@ -189,7 +189,7 @@ fn lens_scene(
 
 /// The oracle's gradient with respect to `(ω, τ)` (pose `(exp(ω) R, t + τ)`) by central differences.
 fn oracle_gradient(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     covs: Option<&[Matrix2<f64>]>,
     rotation: &nalgebra::Matrix3<f64>,
@@ -216,9 +216,9 @@ fn step_in_sigmas(g: &Vector6<f64>, cov: &Matrix6<f64>) -> f64 {
 
 /// The first-order answer the pipeline gave before the exact cost: the observations undistorted with
 /// the noise `W = L⁻¹ J`, on the pinhole part.
-fn first_order_answer(lens: &LensCamera, corr: &Correspondences, opts: &PoseOptions) -> PoseResult {
-    let (pinhole, undistorted) = pluecker::pose::testing::undistort(lens, corr, corr.noise.as_ref()).unwrap();
-    estimate_pose(&pinhole, &undistorted, opts).unwrap()
+fn first_order_answer(lens: &Camera, corr: &Correspondences, opts: &PoseOptions) -> PoseResult {
+    let (_, undistorted) = pluecker::pose::testing::undistort(lens, corr, corr.noise.as_ref()).unwrap();
+    estimate_pose(&lens.without_distortion(), &undistorted, opts).unwrap()
 }
 
 /// Random anisotropic covariances: σ between 0.3 and 3 px along a random direction, 0.5 px across.
@@ -372,7 +372,7 @@ fn the_exact_cost_weights_each_observation_by_its_own_covariance() {
 /// [`strong_lenses`] (the fisheye there is 80° off axis, where the certificate fails honestly: its
 /// confinement boxes of normalised coordinates reach the edge of the disc), with points, points and
 /// segments, and segments alone.
-fn certified_lenses() -> Vec<(LensCamera, f64)> {
+fn certified_lenses() -> Vec<(Camera, f64)> {
     strong_lenses()
         .into_iter()
         .filter(|(lens, _)| lens.model() != CameraModel::OpenCvFisheye)
@@ -409,7 +409,7 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
     certify.certify = Some(Default::default());
     let (mut checked, mut balls, mut certified) = (0, 0, 0);
     for (lens, r_max) in certified_lenses() {
-        let pinhole = lens.pinhole().unwrap();
+        let pinhole = lens.intrinsics();
         for (n, m, anisotropic) in [
             (20, 0, false),
             (5, 5, false),
@@ -659,7 +659,7 @@ fn step_one_holds_point_by_point_where_the_lens_residual_vanishes() {
 }
 
 /// The oracle's `∂D/∂n` at `n` by central differences of [`oracle_distort`] (error ~1e-8).
-fn oracle_jacobian(lens: &LensCamera, n: &Vector2<f64>) -> Matrix2<f64> {
+fn oracle_jacobian(lens: &Camera, n: &Vector2<f64>) -> Matrix2<f64> {
     let h = 1e-6;
     let d = |dx: f64, dy: f64| oracle_distort(lens.model(), lens.params(), &(n + Vector2::new(dx, dy)));
     Matrix2::from_columns(&[
@@ -671,7 +671,7 @@ fn oracle_jacobian(lens: &LensCamera, n: &Vector2<f64>) -> Matrix2<f64> {
 /// The largest `‖M (J(n) − J*) W⁻¹‖` (Frobenius) over `samples` points `n` of the ball
 /// `{‖W (n − n*)‖ ≤ radius}` of `p` (every fourth on its boundary), `J` the oracle's.
 fn sampled_deviation(
-    lens: &LensCamera,
+    lens: &Camera,
     p: &pose_certificate::PointVariation,
     radius: f64,
     samples: usize,

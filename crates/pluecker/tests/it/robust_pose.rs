@@ -68,7 +68,7 @@ fn tangent_error(result: &PoseResult, scene: &Scene) -> Vector6<f64> {
 /// Checks the masks against the truth (see the module docs) and returns the number of true inliers.
 fn check_masks(result: &PoseResult, scene: &Scene, corr: &Correspondences, label: &str) -> usize {
     let truth =
-        ReprojectionCost::of(&scene.camera, corr).errors(&pluecker::Pose::new(scene.rotation, scene.translation));
+        ReprojectionCost::of(&scene.camera.intrinsics(), corr).errors(&pluecker::Pose::new(scene.rotation, scene.translation));
     let mask: Vec<bool> = result
         .inliers_points
         .iter()
@@ -171,7 +171,7 @@ fn the_msac_score_is_a_sum_of_truncated_squares() {
         .find(|s| s.cost_kind == pluecker::CostKind::Msac)
         .unwrap();
     let tau2 = RansacOptions::default().point_threshold.powi(2);
-    let k = scene.camera.matrix();
+    let k = scene.camera.intrinsics().matrix();
     let oracle: f64 = corr
         .points2d
         .iter()
@@ -198,7 +198,7 @@ fn the_msac_score_is_a_sum_of_truncated_squares() {
 /// 20 points uniform in [-1, 1]² × [4, 6] seen by `Camera(400, 400, 320, 240)` at the identity pose,
 /// with `sigma` px of Gaussian noise: clean data.
 fn clean_points(sigma: f64, seed: u64) -> (Camera, Correspondences) {
-    let camera = Camera::new(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
+    let camera = Camera::pinhole(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
     let mut rng = Rng::new(seed);
     let points3d: Vec<Vector3<f64>> = (0..20)
         .map(|_| {
@@ -287,7 +287,7 @@ fn pixel_errors(rotation: &nalgebra::Matrix3<f64>, translation: &Vector3<f64>, c
 /// pixels of random far points. The near point alone fixes the camera centre along a direction that
 /// the far points barely constrain (it moves by 400 δc / 0.05 px when the centre moves by δc).
 fn near_point_scene(seed: u64) -> (Camera, Correspondences) {
-    let camera = Camera::new(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
+    let camera = Camera::pinhole(400.0, 400.0, 320.0, 240.0, 0.0).unwrap();
     let mut rng = Rng::new(seed);
     let mut pixel = || Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
     let pixels: Vec<Vector2<f64>> = std::iter::once(Vector2::new(450.0, 330.0))
@@ -586,7 +586,7 @@ fn bad_options_and_bad_data_are_errors() {
 
 #[test]
 fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
-    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
+    let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
     // Dyadic coordinates: exactly collinear in floating point.
     let line: Vec<Vector3<f64>> = (0..12)
         .map(|i| Vector3::new(0.125 * i as f64 - 0.75, 0.0625 * i as f64, 5.0 + 0.25 * i as f64))

@@ -64,7 +64,7 @@ fn assert_consistent(report: &Report, what: &str) {
 /// pose, `d` moving the centre by 5 cm; the first point of the paper's object, 78 cm in front.
 fn paper_cameras() -> (Vec<Matrix3x4<f64>>, Vector3<f64>) {
     let (camera, rotation, translation) = paper_pose();
-    let k = camera.matrix();
+    let k = camera.intrinsics().matrix();
     assert!(k.determinant() < 0.0);
     let cameras = [
         Vector3::zeros(),

@@ -4,13 +4,13 @@
 //! residuals.
 
 use nalgebra::{Matrix2, Matrix2x4, Matrix3, Matrix3x4, Matrix4, SymmetricEigen, Vector2, Vector3};
-use pluecker::camera::{CameraModel, LensCamera};
+use pluecker::camera::{Camera, CameraModel};
 use pluecker::rng::Rng;
 use pluecker::triangulation::point::testing::{lens_certificate, LensView};
 use pluecker::triangulation::point::triangulate_point_views;
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
-use pluecker::{AnyCamera, Pose};
+use pluecker::Pose;
 
 /// The oracle's lenses: `(f, cx, cy, k1, k2, fisheye)`.
 #[derive(Clone, Copy, Debug)]
@@ -23,16 +23,16 @@ struct Lens {
 }
 
 impl Lens {
-    fn camera(&self) -> LensCamera {
+    fn camera(&self) -> Camera {
         if self.fisheye {
-            LensCamera::new(
+            Camera::new(
                 CameraModel::RadialFisheye,
                 &[self.f, self.c.x, self.c.y, self.k1, self.k2],
             )
             .unwrap()
         } else {
             assert_eq!(self.k2, 0.0);
-            LensCamera::new(CameraModel::SimpleRadial, &[self.f, self.c.x, self.c.y, self.k1]).unwrap()
+            Camera::new(CameraModel::SimpleRadial, &[self.f, self.c.x, self.c.y, self.k1]).unwrap()
         }
     }
 
@@ -213,7 +213,7 @@ fn track(lens: Lens, views: usize, off_axis: f64, anisotropic: bool, rng: &mut R
         };
         let noise = sigma * Vector2::new(rng.normal(), rng.normal());
         out.lenses.push(lens);
-        out.views.push(View::new(AnyCamera::Lens(lens.camera()), pose));
+        out.views.push(View::new(lens.camera(), pose));
         out.pixels.push(u + noise);
         out.whitenings.push(l);
     }
@@ -549,7 +549,7 @@ fn view_off_axis(
         let rotation = looking_along(&axis, rng);
         let pose = Pose::new(rotation, -(rotation * centre));
         if let Some(u) = lens.project(&pose.transform(truth)) {
-            return (View::new(AnyCamera::Lens(lens.camera()), pose), u + noise);
+            return (View::new(lens.camera(), pose), u + noise);
         }
     }
 }

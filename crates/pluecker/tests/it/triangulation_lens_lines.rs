@@ -9,7 +9,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3, Vector4, Vector6};
-use pluecker::camera::{CameraModel, LensCamera};
+use pluecker::camera::{Camera, CameraModel};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;
@@ -19,7 +19,7 @@ use pluecker::triangulation::line::{triangulate_line_observations_views, SparseS
 use pluecker::triangulation::Csr;
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Status, TriangulationOptions};
-use pluecker::{AnyCamera, Camera, Error, Pose};
+use pluecker::{Error, Pose};
 
 /// The oracle's lenses.
 #[derive(Clone, Copy, Debug)]
@@ -35,10 +35,10 @@ enum Lens {
 }
 
 impl Lens {
-    fn camera(&self) -> LensCamera {
+    fn camera(&self) -> Camera {
         match *self {
-            Lens::Radial { f, c, k } => LensCamera::new(CameraModel::SimpleRadial, &[f, c.x, c.y, k]).unwrap(),
-            Lens::Fisheye { f, c, k } => LensCamera::new(
+            Lens::Radial { f, c, k } => Camera::new(CameraModel::SimpleRadial, &[f, c.x, c.y, k]).unwrap(),
+            Lens::Fisheye { f, c, k } => Camera::new(
                 CameraModel::OpenCvFisheye,
                 &[f.x, f.y, c.x, c.y, k[0], k[1], k[2], k[3]],
             )
@@ -328,7 +328,7 @@ fn scene(
 
 fn views_of(obs: &[Obs]) -> Vec<View> {
     obs.iter()
-        .map(|o| View::new(AnyCamera::Lens(o.lens.camera()), o.pose))
+        .map(|o| View::new(o.lens.camera(), o.pose))
         .collect()
 }
 
@@ -542,7 +542,7 @@ fn the_first_order_line_is_not_the_exact_optimum_under_strong_distortion() {
             let fit = line_from_endpoints(&a, &b, &ca, &cb).unwrap();
             lines.push(fit.line);
             covs.push(fit.covariance);
-            matrices.push(camera.pinhole().unwrap().projection(&o.pose));
+            matrices.push(camera.intrinsics().projection(&o.pose));
         }
         let first = triangulate_line(&matrices, &lines, Some(&covs), &opts(Method::Local)).unwrap();
         let (a, b) = (
@@ -569,13 +569,13 @@ fn pinhole_views_and_a_zero_distortion_lens_keep_the_pinhole_certificate() {
     for _ in 0..4 {
         let sc = scene(zero, 4, 0.3, 0.5, 1.0, false, &mut rng);
         let segments = segments_of(&sc.obs);
-        let pinhole = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
+        let pinhole = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
         let matrices: Vec<_> = sc.obs.iter().map(|o| pinhole.projection(&o.pose)).collect();
         let today = triangulate_line_segments(&matrices, &segments, 1.0, &opts(Method::Optimal)).unwrap();
         assert!(today.report.certified());
         assert_eq!(today.report.cost_kind, CostKind::LineResidual);
         for views in [
-            sc.obs.iter().map(|o| View::new(pinhole, o.pose)).collect::<Vec<_>>(),
+            sc.obs.iter().map(|o| View::new(pinhole.clone(), o.pose)).collect::<Vec<_>>(),
             views_of(&sc.obs),
         ] {
             let r = triangulate_line_segments_views(&views, &segments, None, &opts(Method::Optimal)).unwrap();
@@ -719,10 +719,10 @@ fn quadrics_refuse_a_distorting_lens_by_name() {
     use pluecker::triangulation::quadric::refuse_distortion;
     let pose = Pose::new(Matrix3::identity(), Vector3::new(0.0, 0.0, 5.0));
     let zero = View::new(
-        AnyCamera::Lens(LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, 0.0]).unwrap()),
+        Camera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, 0.0]).unwrap(),
         pose,
     );
-    let fisheye = View::new(AnyCamera::Lens(wide_fisheye().camera()), pose);
+    let fisheye = View::new(wide_fisheye().camera(), pose);
     assert!(refuse_distortion(&[zero.clone(), zero.clone()]).is_ok());
     match refuse_distortion(&[zero.clone(), fisheye]) {
         Err(Error::InvalidOption { name, reason }) => {
@@ -749,7 +749,7 @@ fn a_pinhole_view_among_lenses_is_measured_by_its_straight_image() {
         };
         sc.obs[1].lens = Lens::Radial { f, c, k: 0.0 };
         let mut views = views_of(&sc.obs);
-        views[1] = View::new(Camera::new(f, f, c.x, c.y, 0.0).unwrap(), sc.obs[1].pose);
+        views[1] = View::new(Camera::pinhole(f, f, c.x, c.y, 0.0).unwrap(), sc.obs[1].pose);
         let segments: Vec<LensSegment> = sc
             .obs
             .iter()
@@ -820,7 +820,7 @@ fn robust_inliers_are_the_segments_within_the_threshold_at_the_exact_optimum() {
 
 #[test]
 fn a_lens_that_does_not_distort_is_the_identity() {
-    // `LensCamera::distorts` decides whether a line goes the pinhole way (with its certificate): it
+    // `Camera::distorts` decides whether a line goes the pinhole way (with its certificate): it
     // may say false only where D(n) = n. Every model with its distortion parameters zero (EUCM: α = 0
     // with β = 1), checked on points out to r = 2.
     let mut rng = Rng::new(41);
@@ -836,7 +836,7 @@ fn a_lens_that_does_not_distort_is_the_identity() {
                 _ => 0.0,
             })
             .collect();
-        let Ok(lens) = LensCamera::new(model, &params) else {
+        let Ok(lens) = Camera::new(model, &params) else {
             continue;
         };
         if lens.distorts() {

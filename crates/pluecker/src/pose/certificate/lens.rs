@@ -58,8 +58,8 @@
 use super::{RaySlack, SublevelSetOutcome};
 use crate::camera::curved_line::endpoint_residual;
 use crate::camera::linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
+use crate::camera::Intrinsics;
 use crate::camera::Camera;
-use crate::camera::{AnyCamera, LensCamera};
 use crate::covariance::whitening;
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;
@@ -186,7 +186,7 @@ struct Endpoint {
 /// The surrogate of a problem through a lens (module docs) and what step 4 needs of it.
 pub(super) struct Surrogate {
     /// The lens's pinhole part `K`.
-    pub camera: Camera,
+    pub camera: Intrinsics,
     /// The surrogate's observations, in the pixels of `K`, with their whitenings (`absolute` noise).
     pub corr: Correspondences,
     /// The rotation search's observations (step 1): those of `corr`, each weighted by `1 − εᵢ` of its
@@ -205,14 +205,13 @@ pub(super) struct Surrogate {
 impl Surrogate {
     /// The surrogate of `corr` (observed pixels of `lens`, conditioned frame, with the caller's noise)
     /// at `pose`, of cost `cost` (`½ Σ r²`).
-    pub fn new(lens: &LensCamera, corr: &Correspondences, pose: &Pose, cost: f64) -> Result<Self, String> {
+    pub fn new(lens: &Camera, corr: &Correspondences, pose: &Pose, cost: f64) -> Result<Self, String> {
         let level = 2.0 * cost;
-        let camera = lens.pinhole().map_err(|e| e.to_string())?;
+        let camera = lens.intrinsics();
         let k = camera.matrix();
         let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
         let k2_inverse = k2.try_inverse().ok_or("singular camera")?;
-        let any = AnyCamera::from(lens);
-        let known = match lens_domain(&any) {
+        let known = match lens_domain(lens) {
             Ok(known) => known,
             Err(LensBoundFailure::Lens) => return Err(NOT_COVERED.into()),
             Err(_) => return Err("not proved: the lens has no disc where it is proved one-to-one".into()),
@@ -259,7 +258,7 @@ impl Surrogate {
             let xc = pose.transform(x);
             // A point that is not confined enters step 4 only (linearised without the level's path
             // argument, which step 4 does not need).
-            let confined = Linearised::new_in(&any, &known, &whitening, u, &xc, level, SPLITS, false)
+            let confined = Linearised::new_in(lens, &known, &whitening, u, &xc, level, SPLITS, false)
                 .ok()
                 .and_then(|lin| Some((lin.confinement(level)?, lin)));
             let (lin, radius, weight) = match confined {
@@ -268,7 +267,7 @@ impl Surrogate {
                     (lin, radius, Some(weight))
                 }
                 None => {
-                    let lin = Linearised::new_in(&any, &known, &whitening, u, &xc, 0.0, SPLITS, false)
+                    let lin = Linearised::new_in(lens, &known, &whitening, u, &xc, 0.0, SPLITS, false)
                         .map_err(|_| edge("points2d", i))?;
                     let radius = lin.first_radius(level);
                     (lin, radius, None)
@@ -300,7 +299,7 @@ impl Surrogate {
                 let start = lens.unproject(&e, i).map_err(|_| edge("lines2d", i))?;
                 let fit = endpoint_residual(lens, &l, &start, &e, &cov).ok_or_else(|| edge("lines2d", i))?;
                 let xc = Vector3::new(fit.q.x, fit.q.y, 1.0);
-                let lin = Linearised::new_in(&any, &known, &whitening, &e, &xc, level, SPLITS, false)
+                let lin = Linearised::new_in(lens, &known, &whitening, &e, &xc, level, SPLITS, false)
                     .map_err(|_| edge("lines2d", i))?;
                 let confined = lin.confinement(level).ok_or_else(|| edge("lines2d", i))?;
                 let e_bar = lin.n - lin.w_inverse * lin.e;
@@ -459,7 +458,7 @@ fn along_line_reach(eps: f64, rho_max: f64, c_max: f64) -> f64 {
 /// [`super::certify`] through `lens`: `corr` holds the observed (distorted) pixels and the caller's
 /// noise, conditioned frame; `pose` is the local minimum of cost `cost` (`½ Σ r²`).
 pub(super) fn certify(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,

@@ -8,7 +8,7 @@ use super::lens::Surrogate;
 use super::minorant::largest_eigenvalue;
 use super::problem::{norm2x2, Problem};
 use crate::camera::linearisation::spectral_norm;
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::geometry::quaternion::skew;
 use crate::optim::Objective;
 use crate::pose::reprojection::{Pose, ReprojectionCost};
@@ -534,7 +534,7 @@ impl<'s> LocalModel<'s> {
     /// The local model at `pose` (frame of `problem`) and the whitening it is expressed in.
     pub(super) fn at(
         problem: &Problem,
-        camera: &Camera,
+        camera: &Intrinsics,
         pose: &Pose,
         lens: Option<&'s Surrogate>,
     ) -> std::result::Result<(Whitening, Self), String> {

@@ -118,8 +118,8 @@ pub mod testing;
 use super::correspondences::Correspondences;
 use super::reprojection::Pose;
 use super::Status;
+use crate::camera::Intrinsics;
 use crate::camera::Camera;
-use crate::camera::LensCamera;
 use crate::certificate::{Certificate, CertificateKind, CertifyOptions};
 use crate::global::CERTIFICATE_COST_FLOOR;
 use lens::{Slack, Surrogate};
@@ -267,8 +267,8 @@ const BALL_BISECTIONS: usize = 3;
 /// cannot be computed is a verdict without one, with the reason. The cost is `½ Σ r²`, as the pose's
 /// solvers measure it; the verdict's certificate is in `Σ r²`.
 pub(crate) fn certify(
-    camera: &Camera,
-    lens: Option<&LensCamera>,
+    camera: &Intrinsics,
+    lens: Option<&Camera>,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -284,8 +284,8 @@ pub(crate) fn certify(
 
 /// [`certify`] in this module's units: every cost and bound is `½ Σ r²`.
 fn sublevel_set_test(
-    camera: &Camera,
-    lens: Option<&LensCamera>,
+    camera: &Intrinsics,
+    lens: Option<&Camera>,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -303,7 +303,7 @@ fn sublevel_set_test(
 /// [`certify`] of a pinhole problem, or of a lens's surrogate (`lens`; `camera` and `corr` are then
 /// the surrogate's, and `cost` the cost through the lens).
 fn certify_pinhole(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -355,7 +355,7 @@ fn certify_pinhole(
 fn certify_problem(
     problem: &Problem,
     local: &Problem,
-    camera: &Camera,
+    camera: &Intrinsics,
     pose: &Pose,
     cost: f64,
     options: &CertifyOptions,

@@ -5,7 +5,7 @@
 //! ([`crate::pose::object_distance`]).
 
 use super::minorant::{largest_eigenvalue, Minorant, PointForm};
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::pose::correspondences::Correspondences;
 use crate::pose::object_distance::{distance_bound, Sight};
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
@@ -160,13 +160,13 @@ pub(super) fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], al
 }
 
 impl<'c> Problem<'c> {
-    pub(super) fn new(camera: &Camera, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
+    pub(super) fn new(camera: &Intrinsics, corr: &'c Correspondences, f_hat: f64) -> std::result::Result<Self, String> {
         Self::build(camera, corr, f_hat, true)
     }
 
     /// The data of the test without depth bounds ([`SearchStart::ObjectDistance`]) even where the points give them.
     pub(super) fn without_depths(
-        camera: &Camera,
+        camera: &Intrinsics,
         corr: &'c Correspondences,
         f_hat: f64,
     ) -> std::result::Result<Self, String> {
@@ -175,7 +175,7 @@ impl<'c> Problem<'c> {
 
     /// The data of the test, with step 1's depth bounds where `use_depths` and the points give them.
     pub(super) fn build(
-        camera: &Camera,
+        camera: &Intrinsics,
         corr: &'c Correspondences,
         f_hat: f64,
         use_depths: bool,

@@ -5,8 +5,8 @@ use super::lens::{Slack, Surrogate};
 use super::local_bound::{LocalModel, RaySlack, Whitening};
 use super::problem::{Problem, SearchStart};
 use super::search::{localise, InsideBall, RecordedCells, RotationSearch};
+use crate::camera::Intrinsics;
 use crate::camera::Camera;
-use crate::camera::LensCamera;
 use crate::certificate::CertifyOptions;
 use crate::optim::Objective;
 use crate::pose::correspondences::Correspondences;
@@ -20,8 +20,8 @@ pub use super::SublevelSetOutcome;
 /// The whole test in its own units (`f = ½ Σ r²`, px²), at any `pose` and cost `cost` (`½ Σ r²`):
 /// what `certify` proves before its outcome becomes the shared certificate in `Σ r²`.
 pub fn certify(
-    camera: &Camera,
-    lens: Option<&LensCamera>,
+    camera: &Intrinsics,
+    lens: Option<&Camera>,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -59,7 +59,7 @@ pub struct Region {
 
 /// Step 1's depth bounds for the level `level` (px²): every pose with cost at most `level` and the
 /// points in front has `‖R Xᵢ + t‖ ≤ Dᵢ`.
-pub fn depth_bounds(camera: &Camera, corr: &Correspondences, level: f64) -> std::result::Result<Vec<f64>, String> {
+pub fn depth_bounds(camera: &Intrinsics, corr: &Correspondences, level: f64) -> std::result::Result<Vec<f64>, String> {
     Problem::new(camera, corr, level)?
         .root()
         .map(|root| root.depths.clone())
@@ -70,7 +70,7 @@ pub fn depth_bounds(camera: &Camera, corr: &Correspondences, level: f64) -> std:
 /// and the bound `D` with `‖R c + t‖ ≤ D` on every pose with cost at most `level` and the points in
 /// front (`None`: the search starts from step 1's depth bounds).
 pub fn object_distance(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     level: f64,
 ) -> std::result::Result<Option<(Vector3<f64>, f64)>, String> {
@@ -86,7 +86,7 @@ pub fn object_distance(
 /// `level`, or behind the camera), lie inside the whitened ball of radius `target`, or reach the
 /// half-width `min_half`; the last two are recorded and closed.
 pub fn rotation_search(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     centre: &Pose,
     level: f64,
@@ -142,7 +142,7 @@ pub struct LocalBound {
 /// [`CurvatureParts`] at `pose` for the ball of whitened `radius` (depth bounds as in
 /// [`local_bound`]).
 pub fn curvature_parts(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     pose: &Pose,
     level: f64,
@@ -168,14 +168,14 @@ pub fn curvature_parts(
 /// `√(2q) ≤ √(2f) + delta` (`q` the cost of those observations).
 #[derive(Debug, Clone)]
 pub struct LensSurrogate {
-    pub camera: Camera,
+    pub camera: Intrinsics,
     pub corr: Correspondences,
     pub delta: f64,
 }
 
 /// [`LensSurrogate`] of `corr` (observed pixels of `lens`) at `pose` for the level `cost`.
 pub fn lens_surrogate(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -194,7 +194,7 @@ pub use super::lens::PointVariation;
 /// projection at `pose` (the surrogate at `pose` for the level `cost`), and the largest as step 4
 /// takes it (`None` where a ball reaches the edge of the disc).
 pub fn lens_point_variations(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -207,7 +207,7 @@ pub fn lens_point_variations(
 /// (the surrogate at `pose` for the level `cost`; segment endpoints turning at the rates `turns`).
 #[allow(clippy::too_many_arguments)]
 pub fn lens_ball(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     pose: &Pose,
     cost: f64,
@@ -223,7 +223,7 @@ pub fn lens_ball(
 /// Step 4 through `lens` at any `pose` (cost `½ Σ r²` through the lens, computed here): the bound
 /// of that cost over the ball of whitened `radius` (the whitening of the surrogate at `pose`).
 pub fn lens_local_bound(
-    lens: &LensCamera,
+    lens: &Camera,
     corr: &Correspondences,
     pose: &Pose,
     radius: f64,
@@ -248,7 +248,7 @@ pub fn lens_local_bound(
 /// [`LocalBound`] at `pose` for the ball of whitened `radius`; the depth bounds are those of the
 /// level `max(cost at pose, level)`.
 pub fn local_bound(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     pose: &Pose,
     level: f64,

@@ -77,7 +77,7 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 /// Nordberg 2018; see the [module documentation](super) for the method and the degenerate cases).
 ///
 /// `bearings[i]` is the direction of the ray to `points[i]` in the camera frame; it is normalised here,
-/// so any positive multiple works. From a pixel `u` of a [`crate::camera::Camera`] `cam`:
+/// so any positive multiple works. From a pixel `u` of a [`crate::camera::Intrinsics`] `cam`:
 /// `let n = cam.pixel_to_normalized(&u); let y = Vector3::new(n.x, n.y, 1.0).normalize();`
 /// (the camera looks down `+z`). `points` are in world units; the returned `t` is too.
 ///
@@ -88,9 +88,9 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 /// ```
 /// use nalgebra::{Rotation3, Vector3};
 /// use pluecker::pose::minimal::p3p;
-/// use pluecker::Camera;
+/// use pluecker::Intrinsics;
 ///
-/// let cam = Camera::new(800.0, 790.0, 320.0, 240.0, 0.0).unwrap();
+/// let cam = Intrinsics::new(800.0, 790.0, 320.0, 240.0, 0.0).unwrap();
 /// let rotation = Rotation3::from_euler_angles(0.1, -0.2, 0.3).into_inner();
 /// let translation = Vector3::new(0.2, -0.1, 4.0);
 /// let points = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 0.0, 0.5), Vector3::new(0.0, 1.0, -0.5)];

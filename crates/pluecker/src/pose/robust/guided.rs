@@ -30,7 +30,7 @@ use super::super::correspondences::Correspondences;
 use super::super::reprojection::{Pose, ReprojectionCost};
 use super::scoring::{subset, Prepared, Thresholds};
 use super::Best;
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::interrupt::stop_reason;
 use crate::optim::{trust_region, TrustRegionOptions};
 use nalgebra::{Matrix2, SMatrix};
@@ -103,7 +103,7 @@ pub(crate) fn candidates(
 /// better ends the loop (its candidates do not fit together), so every round that goes on lowers the
 /// score. Stops early when the call is stopped ([`crate::interrupt`]).
 pub(crate) fn settle(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     data: &Prepared,
     tau: &Thresholds,
@@ -146,7 +146,7 @@ mod tests {
     /// Correspondence `k`'s two residuals at `pose`, written out here: the pixel error of a point, the
     /// signed distances of a segment's endpoints to the line through the projections of its 3-D
     /// endpoints (pinhole, no noise).
-    fn residual(camera: &Camera, corr: &Correspondences, pose: &Pose, k: usize) -> Vector2<f64> {
+    fn residual(camera: &Intrinsics, corr: &Correspondences, pose: &Pose, k: usize) -> Vector2<f64> {
         let project = |x: &Vector3<f64>| camera.matrix() * (pose.rotation * x + pose.translation);
         let np = corr.n_points();
         if k < np {
@@ -161,7 +161,7 @@ mod tests {
     }
 
     /// Its 2x6 Jacobian in `(ω, τ)` (`R ← exp(ω) R`, `t ← t + τ`) by central differences.
-    fn jacobian(camera: &Camera, corr: &Correspondences, pose: &Pose, k: usize) -> SMatrix<f64, 2, 6> {
+    fn jacobian(camera: &Intrinsics, corr: &Correspondences, pose: &Pose, k: usize) -> SMatrix<f64, 2, 6> {
         let h = 1e-6;
         let moved = |j: usize, s: f64| {
             let mut d = [0.0; 6];
@@ -179,7 +179,7 @@ mod tests {
     /// at about 6: a high-leverage one), a pose near the truth, and a third of the points and two
     /// lines displaced by 3-25 px, so that some non-inliers fall inside their widened gate and others
     /// do not.
-    fn scene(seed: u64) -> (Camera, Correspondences, Pose) {
+    fn scene(seed: u64) -> (Intrinsics, Correspondences, Pose) {
         let s = random_scene(SceneKind::General, 40, 6, seed);
         let mut rng = Rng::new(seed ^ 0xa11);
         let mut corr = s.noisy(1.0, true, &mut rng);
@@ -200,7 +200,7 @@ mod tests {
             exp_so3(&Vector3::new(4e-4, -3e-4, 2e-4)) * s.rotation,
             s.translation + Vector3::new(0.004, -0.003, 0.002),
         );
-        (s.camera, corr, pose)
+        (s.camera.intrinsics(), corr, pose)
     }
 
     #[test]

@@ -74,7 +74,7 @@ pub(crate) mod sprt;
 use super::correspondences::Correspondences;
 use super::minimal::solve;
 use super::reprojection::{Pose, ReprojectionCost};
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::consensus::{self, Estimator, Stats, Stop};
 use crate::error::{number, Error, Result};
 use crate::interrupt::stop_reason;
@@ -305,7 +305,7 @@ pub(crate) struct Best {
 /// (`sampler`), the minimal solvers, the MSAC scoring with the SPRT (`scoring`, `sprt`) and the local
 /// optimisation; it counts what [`RansacReport`] reports beyond the loop's own counts.
 struct PoseEstimator<'a> {
-    camera: &'a Camera,
+    camera: &'a Intrinsics,
     corr: &'a Correspondences,
     data: &'a Prepared,
     tau: Thresholds,
@@ -425,7 +425,7 @@ fn models_per_sample(stats: &Stats) -> f64 {
 /// `refinement` sets the trust region of the local optimisation (its cap is replaced by
 /// [`RansacOptions::local_iterations`]).
 pub fn ransac(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     opts: &RansacOptions,
     refinement: &TrustRegionOptions,
@@ -548,7 +548,7 @@ fn required_inliers(opts: &RansacOptions, report: &RansacReport, chance: [f64; 2
 /// Re-fits `best` by iterated least squares on the inliers of a shrinking threshold (see the module
 /// documentation), returning the best-scoring fit (or `best` itself).
 fn local_optimization(
-    camera: &Camera,
+    camera: &Intrinsics,
     corr: &Correspondences,
     data: &Prepared,
     tau: &Thresholds,

@@ -29,7 +29,7 @@ use super::super::correspondences::Correspondences;
 use super::super::minimal::Feature;
 use super::super::reprojection::Pose;
 use super::sprt::SprtTest;
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::error::Result;
 use crate::rng::Rng;
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
@@ -177,7 +177,7 @@ impl RunningTest<'_> {
 /// features (in the order given).
 #[derive(Debug, Clone)]
 pub(crate) struct Prepared {
-    camera: Camera,
+    camera: Intrinsics,
     /// `K⁻ᵀ`: maps a camera-frame line `a × b` to its pixel form.
     k_inv_t: Matrix3<f64>,
     /// Points and lines in slot order (verification), and in the order given (inlier masks).
@@ -209,7 +209,7 @@ pub(crate) struct Prepared {
 impl Prepared {
     /// Prepares `corr` (already validated: finite, no zero-length segment), drawing the slot order
     /// from `rng`.
-    pub fn new(camera: &Camera, corr: &Correspondences, rng: &mut Rng) -> Result<Prepared> {
+    pub fn new(camera: &Intrinsics, corr: &Correspondences, rng: &mut Rng) -> Result<Prepared> {
         let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
         let point_order = Order::random(corr.n_points(), rng);
         let line_order = Order::random(corr.n_lines(), rng);
@@ -621,9 +621,9 @@ mod tests {
     fn errors_match_the_reprojection_cost_and_the_score_caps_them() {
         let scene = random_scene(SceneKind::General, 20, 8, 3);
         let corr = scene.noisy(2.0, true, &mut Rng::new(4));
-        let prepared = Prepared::new(&scene.camera, &corr, &mut Rng::new(5)).unwrap();
+        let prepared = Prepared::new(&scene.camera.intrinsics(), &corr, &mut Rng::new(5)).unwrap();
         let pose = Pose::new(scene.rotation, scene.translation);
-        let reference = ReprojectionCost::of(&scene.camera, &corr).errors(&pose);
+        let reference = ReprojectionCost::of(&scene.camera.intrinsics(), &corr).errors(&pose);
         for (k, e) in reference.iter().enumerate() {
             let ours = prepared.error2(&pose, k).sqrt();
             assert!((ours - e).abs() <= 1e-9 * (1.0 + e), "feature {k}: {ours} vs {e}");

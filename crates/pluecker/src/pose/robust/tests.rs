@@ -22,7 +22,7 @@ fn scene_with_outliers(n_points: usize, outliers: usize, seed: u64) -> (crate::s
 fn loop_finds_the_inliers_and_stops_by_confidence() {
     let (scene, corr) = scene_with_outliers(60, 30, 7);
     let out = ransac(
-        &scene.camera,
+        &scene.camera.intrinsics(),
         &corr,
         &RansacOptions::default(),
         &TrustRegionOptions::default(),
@@ -46,7 +46,7 @@ fn loop_finds_the_inliers_and_stops_by_confidence() {
         sprt: false,
         ..RansacOptions::default()
     };
-    let plain = ransac(&scene.camera, &corr, &without, &TrustRegionOptions::default()).unwrap();
+    let plain = ransac(&scene.camera.intrinsics(), &corr, &without, &TrustRegionOptions::default()).unwrap();
     assert!(plain.report.iterations <= 69, "{:?}", plain.report);
     assert_eq!(
         (plain.inliers_points, plain.report.sprt_rejections),
@@ -61,13 +61,13 @@ fn budget_and_cap_bound_the_loop() {
         max_iterations: 25,
         ..RansacOptions::default()
     };
-    let out = ransac(&scene.camera, &corr, &capped, &TrustRegionOptions::default()).unwrap();
+    let out = ransac(&scene.camera.intrinsics(), &corr, &capped, &TrustRegionOptions::default()).unwrap();
     assert_eq!((out.report.stop, out.report.iterations), (RansacStop::IterationCap, 25));
     let no_time = RansacOptions {
         time_budget: Some(Duration::ZERO),
         ..RansacOptions::default()
     };
-    let out = ransac(&scene.camera, &corr, &no_time, &TrustRegionOptions::default()).unwrap();
+    let out = ransac(&scene.camera.intrinsics(), &corr, &no_time, &TrustRegionOptions::default()).unwrap();
     assert_eq!((out.report.stop, out.report.iterations), (RansacStop::TimeBudget, 0));
     assert!(out.pose.is_none() && out.inliers_points.iter().all(|&m| !m));
 }
@@ -80,7 +80,7 @@ fn same_seed_same_result_other_seed_other_samples() {
             seed,
             ..RansacOptions::default()
         };
-        ransac(&scene.camera, &corr, &opts, &TrustRegionOptions::default()).unwrap()
+        ransac(&scene.camera.intrinsics(), &corr, &opts, &TrustRegionOptions::default()).unwrap()
     };
     let (a, b, c) = (run(3), run(3), run(4));
     assert_eq!(a.pose, b.pose);
@@ -93,7 +93,7 @@ fn same_seed_same_result_other_seed_other_samples() {
 fn degenerate_samples_give_no_hypothesis_and_are_counted() {
     // One object point seen four times and one other point: every sample repeats an object point,
     // for which P3P has no solution.
-    let camera = Camera::new(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
+    let camera = Intrinsics::new(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
     let (a, b) = (Vector3::new(0.1, 0.2, 5.0), Vector3::new(-0.3, 0.1, 6.0));
     let points3d = vec![a, a, a, a, b];
     let points2d = points3d.iter().map(|x| camera.project(x)).collect();

@@ -2,7 +2,7 @@
 //! pixels, and its local minimisation (Josephson & Kahl 2008, sections 2.2 and 3, with the pinhole
 //! projection replaced by the lens's).
 //!
-//! **Cost.** View `i` has a camera ([`AnyCamera`]: `u = K D(n)`, `n = (x/z, y/z)`,
+//! **Cost.** View `i` has a camera ([`Camera`]: `u = K D(n)`, `n = (x/z, y/z)`,
 //! `x_cam = Rᵢ X + tᵢ`), an observed segment with (distorted) endpoints `eᵢ₁`, `eᵢ₂` and their 2x2
 //! covariances `Cᵢₖ` (pixels²; the identity when none are given). A 3-D line `𝓛` (Plücker coordinates,
 //! eq. 3) has in view `i` the normalised image line `lᵢ = P_𝓛 𝓛` (eqs. 6-7 for the camera `[Rᵢ | tᵢ]`),
@@ -14,7 +14,7 @@
 //!
 //! **Stages.** The first stages are those of [`super`] on the first-order problem: each endpoint
 //! undistorted into the pixels of its lens's pinhole part with covariance `J⁻¹ C J⁻ᵀ`
-//! ([`LensCamera::undistort_with_covariance`]), each segment's line and the covariance of its residual
+//! ([`Camera::undistort_with_covariance`]), each segment's line and the covariance of its residual
 //! (eq. 18) by [`line_from_endpoints`]. With `optimal`, they run `local` and, as for points, also
 //! `optimal` (whose global search may find another basin), the cheaper exact cost kept. `refine`
 //! then minimises `F` itself over the orthonormal representation of Bartoli & Sturm (the 4-parameter
@@ -27,7 +27,7 @@
 //! So the result is never certified there: `local` reports `success`, `optimal` reports
 //! `gap_not_closed` (no bound) after the same refinement; a first-order bound is never attached to
 //! `F`. When no camera distorts (pinholes, or lenses whose distortion is the identity:
-//! [`LensCamera::distorts`]) the first-order problem is the pinhole problem of
+//! [`Camera::distorts`]) the first-order problem is the pinhole problem of
 //! [`super::triangulate_line_segments`] (eq. 19 with each segment's line and the covariance of its
 //! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19
 //! ([`crate::CostKind::LineResidual`]),
@@ -35,8 +35,7 @@
 
 use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
 use crate::camera::curved_line::{endpoint_residual, pinhole_endpoint_residual};
-use crate::camera::AnyCamera;
-use crate::camera::LensCamera;
+use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::geometry::plucker::{self, LineChart, OrthonormalLine, PluckerCamera};
 use crate::optim::{trust_region, Linearization, Objective, Summary, Termination, TrustRegionOptions};
@@ -54,7 +53,7 @@ use nalgebra::{Matrix2, Matrix2x3, Matrix3x4, Matrix4, SMatrix, SVector, Vector2
 #[derive(Debug, Clone, Copy)]
 pub struct LensSegment<'a> {
     /// The camera.
-    pub camera: &'a AnyCamera,
+    pub camera: &'a Camera,
     /// `[R | t]`, world to camera.
     pub pose: Matrix3x4<f64>,
     /// The observed endpoints, pixels.
@@ -77,14 +76,14 @@ impl<'a> LensSegment<'a> {
         covariances: [Matrix2<f64>; 2],
         index: usize,
     ) -> Result<LensSegment<'a>> {
-        let k = view.camera.pinhole()?;
+        let k = view.camera.intrinsics();
         let k_inverse = k.matrix().try_inverse().ok_or_else(|| Error::SingularCamera {
             what: format!("views[{index}]: K is singular"),
         })?;
         let mut undistorted = [(Vector2::zeros(), Matrix2::zeros()); 2];
         for end in 0..2 {
-            undistorted[end] = match &view.camera {
-                AnyCamera::Lens(lens) => {
+            undistorted[end] = match view.camera.distortion() {
+                Some(lens) => {
                     let (ubar, cov) = lens
                         .undistort_with_covariance(&endpoints[end], &covariances[end], index)
                         .map_err(|e| match e {
@@ -98,7 +97,7 @@ impl<'a> LensSegment<'a> {
                     })?;
                     (ubar, cov)
                 }
-                AnyCamera::Pinhole(_) => (endpoints[end], covariances[end]),
+                None => (endpoints[end], covariances[end]),
             };
         }
         let start = |u: &Vector2<f64>| (k_inverse * Vector3::new(u.x, u.y, 1.0)).xy();
@@ -137,13 +136,13 @@ impl<'a> LensSegment<'a> {
         let mut r = Vector2::zeros();
         let mut j = Matrix2x3::zeros();
         for k in 0..2 {
-            let (rk, jk) = match self.camera {
-                AnyCamera::Lens(lens) => {
+            let (rk, jk) = match self.camera.distortion() {
+                Some(lens) => {
                     let fit = endpoint_residual(lens, l, &self.starts[k], &self.endpoints[k], &self.covariances[k])?;
                     (fit.residual, fit.line_gradient(lens, l))
                 }
-                AnyCamera::Pinhole(camera) => {
-                    let k_inverse = camera.matrix().try_inverse()?;
+                None => {
+                    let k_inverse = self.camera.intrinsics().matrix().try_inverse()?;
                     pinhole_endpoint_residual(&k_inverse, l, &self.endpoints[k], &self.covariances[k])?
                 }
             };
@@ -275,7 +274,7 @@ pub(crate) fn solve_lens_segments(
     let (lines, covariances) = first_order(segments)?;
     let distorts = segments
         .iter()
-        .any(|s| s.camera.distortion().is_some_and(LensCamera::distorts));
+        .any(|s| s.camera.distortion().is_some_and(Camera::distorts));
     if !distorts {
         return triangulate_line(cameras, &lines, Some(&covariances), opts);
     }

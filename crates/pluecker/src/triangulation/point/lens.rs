@@ -1,7 +1,7 @@
 //! A point seen through lenses with distortion: the exact cost in the images' own pixels, its local
 //! minimisation and its certificate.
 //!
-//! **Cost.** View `i` has a camera ([`AnyCamera`]: `u = K D(n)`, `n = (x/z, y/z)`,
+//! **Cost.** View `i` has a camera ([`Camera`]: `u = K D(n)`, `n = (x/z, y/z)`,
 //! `x_cam = Rᵢ X + tᵢ`), the observed (distorted) pixel `uᵢ` and the whitening `Lᵢ` of its covariance.
 //! The residual is `eᵢ(X) = Lᵢ (u(X) − uᵢ)` through the exact projection, and the cost is
 //! `F(X) = Σ ‖eᵢ(X)‖²` (eq. 19 in the observed pixels). The first stages (DLT, the local and global
@@ -59,7 +59,7 @@ use super::cost::PointView;
 use super::robust::RobustTrack;
 pub use crate::camera::linearisation::LensBoundFailure;
 use crate::camera::linearisation::{Linearised, SPLITS};
-use crate::camera::AnyCamera;
+use crate::camera::Camera;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
@@ -81,7 +81,7 @@ const TIGHTENING_ROUNDS: usize = 6;
 #[derive(Debug, Clone, Copy)]
 pub struct LensView<'a> {
     /// The camera.
-    pub camera: &'a AnyCamera,
+    pub camera: &'a Camera,
     /// `R`, world to camera.
     pub rotation: Matrix3<f64>,
     /// `t`.
@@ -114,7 +114,7 @@ impl<'a> LensView<'a> {
         if !(xc.z > 0.0) {
             return None;
         }
-        let (u, j) = self.camera.project(&xc);
+        let (u, j) = self.camera.project_with_jacobian(&xc);
         Some((self.whitening * (u - self.pixel), self.whitening * j * self.rotation))
     }
 
@@ -130,17 +130,17 @@ impl<'a> LensView<'a> {
 /// residual is the observed one to first order. `Error::Degenerate` names observation `index` when
 /// its pixel has no preimage inside the fold.
 pub(crate) fn first_order_view(view: &LensView, index: usize) -> Result<PointView> {
-    let k = view.camera.pinhole()?;
+    let k = view.camera.intrinsics();
     let mut rt = Matrix3x4::zeros();
     rt.fixed_view_mut::<3, 3>(0, 0).copy_from(&view.rotation);
     rt.set_column(3, &view.translation);
     let p = depth_normalized(&(k.matrix() * rt));
-    match view.camera {
-        AnyCamera::Lens(lens) if !lens.is_pinhole() => {
+    match view.camera.distortion() {
+        Some(lens) => {
             let (undistorted, j) = lens.undistort(&view.pixel, index)?;
             Ok(PointView::new(&p, &undistorted, &(view.whitening * j)))
         }
-        _ => Ok(PointView::new(&p, &view.pixel, &view.whitening)),
+        None => Ok(PointView::new(&p, &view.pixel, &view.whitening)),
     }
 }
 
@@ -526,13 +526,13 @@ pub(crate) fn solve_through_lenses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{CameraModel, LensCamera};
+    use crate::camera::{CameraModel, Camera};
     use crate::rng::Rng;
 
     /// A view of `x` through `lens` from a camera at distance 5 whose axis is `angle` off the point,
     /// the pixel displaced by `noise` px.
     fn view_of(
-        lens: &AnyCamera,
+        lens: &Camera,
         x: &Vector3<f64>,
         angle: f64,
         noise: Vector2<f64>,
@@ -545,7 +545,7 @@ mod tests {
         let zx = axis.cross(&rng.unit_vector3()).normalize();
         let rotation = Matrix3::from_rows(&[zx.transpose(), axis.cross(&zx).transpose(), axis.transpose()]);
         let translation = -(rotation * centre);
-        let u = lens.project(&(rotation * x + translation)).0 + noise;
+        let u = lens.project(&(rotation * x + translation)) + noise;
         (rotation, translation, u)
     }
 
@@ -596,21 +596,17 @@ mod tests {
         // ‖e‖ ≥ ‖ℓ‖ − ε‖v‖ − s and ‖e‖ ≥ (1 − ε)‖v‖ − ‖e*‖ (the mean-value bound).
         let mut rng = Rng::new(3);
         let lenses = [
-            AnyCamera::Lens(LensCamera::new(CameraModel::SimpleRadial, &[5000.0, 600.0, 500.0, -14.0]).unwrap()),
-            AnyCamera::Lens(
-                LensCamera::new(
-                    CameraModel::OpenCvFisheye,
-                    &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4],
-                )
-                .unwrap(),
-            ),
-            AnyCamera::Lens(
-                LensCamera::new(
-                    CameraModel::OpenCv,
-                    &[600.0, 610.0, 320.0, 240.0, -0.3, 0.0, 2e-3, -1e-3],
-                )
-                .unwrap(),
-            ),
+            Camera::new(CameraModel::SimpleRadial, &[5000.0, 600.0, 500.0, -14.0]).unwrap(),
+            Camera::new(
+                CameraModel::OpenCvFisheye,
+                &[300.0, 300.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4],
+            )
+            .unwrap(),
+            Camera::new(
+                CameraModel::OpenCv,
+                &[600.0, 610.0, 320.0, 240.0, -0.3, 0.0, 2e-3, -1e-3],
+            )
+            .unwrap(),
         ];
         let (mut inside, mut checked) = (0, 0);
         for (k, camera) in lenses.iter().enumerate() {
@@ -666,7 +662,7 @@ mod tests {
                     };
                     let Some(c) = chart_of(&l, &n) else { continue };
                     // e(n) through the library's projection of the ray (n, 1) in the camera frame.
-                    let u = camera.project(&Vector3::new(n.x, n.y, 1.0)).0;
+                    let u = camera.project(&Vector3::new(n.x, n.y, 1.0));
                     let e = (u - pixel).norm();
                     let v = (l.w * (c - l.n)).norm();
                     checked += 1;

@@ -130,7 +130,7 @@ pub(crate) fn transform_dual(sim_matrix: &Matrix4<f64>, dual: &Matrix4<f64>) -> 
 
 /// [`triangulate_quadric`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models, and a
 /// pose). The outline of a quadric seen through a lens with distortion is not a conic (eq. 8 holds
-/// for the pinhole projection only), so a view whose camera distorts ([`crate::camera::LensCamera::distorts`]) is
+/// for the pinhole projection only), so a view whose camera distorts ([`crate::camera::Camera::distorts`]) is
 /// refused with [`Error::InvalidOption`] naming it; pinholes and lenses whose distortion is the
 /// identity are solved as [`triangulate_quadric`] of their `K [R | t]`.
 pub fn triangulate_quadric_views(
@@ -159,7 +159,7 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
             name: "cameras".into(),
             reason: format!(
                 "cameras[{j}] ({}) has distortion, through which the outline of a quadric is not a conic; \
-                 fit the conics to undistorted points (LensCamera::undistort) and give the pinhole part",
+                 fit the conics to undistorted points (Camera::undistort) and give the pinhole part",
                 lens.model().as_str()
             ),
         }),

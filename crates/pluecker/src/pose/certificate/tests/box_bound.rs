@@ -26,10 +26,10 @@ fn the_bounds_without_depth_bounds_hold_over_the_box() {
         let scene = visible_scene(f, np, nl, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
         assert!(problem.root().is_none(), "f = {f}: the search starts from depth bounds");
-        let k = scene.camera.matrix();
+        let k = scene.camera.intrinsics().matrix();
         let pixel = |x: &Vector3<f64>| {
             let p = k * x;
             Vector2::new(p.x / p.z, p.y / p.z)
@@ -199,8 +199,8 @@ fn the_algebra_of_the_bounds_without_depth_bounds_holds() {
         let scene = visible_scene(f, np, nl, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
         for _ in 0..24 {
             let theta = 0.005 * 40f64.powf(rng.uniform_in(0.0, 1.0));
             let r_c = exp_so3(&(rng.unit_vector3() * theta * rng.uniform_in(2.0, 8.0))) * truth.rotation;
@@ -358,8 +358,8 @@ fn the_drift_and_the_relative_floor_hold() {
         let scene = visible_scene(f, 0, nl, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
         for _ in 0..10 {
             let r_c = exp_so3(&(rng.unit_vector3() * rng.uniform_in(0.0, 0.5))) * truth.rotation;
             let theta = 1e-2 * 100f64.powf(rng.uniform_in(0.0, 1.0));
@@ -479,9 +479,9 @@ fn the_segments_terms_of_the_box_bound_hold_over_the_box() {
             corr.noise = Some(random_observation_noise(&mut rng, np, nl, (0.3, 3.0)));
         }
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-        let k = scene.camera.matrix();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
+        let k = scene.camera.intrinsics().matrix();
         let k_inv = k.try_inverse().unwrap();
         let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
         let map = |line: usize, end: usize| match &corr.noise {
@@ -730,9 +730,9 @@ fn the_linearised_bound_with_segments_holds_over_the_box() {
         let scene = visible_scene(f, np, nl, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-        let k_inv = scene.camera.matrix().try_inverse().unwrap();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
+        let k_inv = scene.camera.intrinsics().matrix().try_inverse().unwrap();
         let forms = forms_by_points(&problem);
         let segments = longest_segments(&corr, problem.box_segments);
         for kappa in [1.0, 2.0] {

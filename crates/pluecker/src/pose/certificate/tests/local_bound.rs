@@ -20,7 +20,7 @@ fn ray_curvature_bounds_the_second_derivative() {
             let scene = visible_scene(f, np, nl, planar, seed);
             let mut rng = Rng::new(70 + seed);
             let corr = scene.noisy(1.0, true, &mut rng);
-            let cost = ReprojectionCost::of(&scene.camera, &corr);
+            let cost = ReprojectionCost::of(&scene.camera.intrinsics(), &corr);
             let truth = Pose::new(scene.rotation, scene.translation);
             let nudged = Pose::new(
                 exp_so3(&Vector3::new(2e-3, -1e-3, 1e-3)) * truth.rotation,
@@ -28,7 +28,7 @@ fn ray_curvature_bounds_the_second_derivative() {
             );
             for pose in [truth, nudged] {
                 let f_hat = cost.cost(&pose);
-                let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+                let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
                 let lin = cost.linearize(&pose);
                 let whitening = Whitening::new(&lin.gauss_newton).unwrap();
                 let mu = (whitening.t.transpose() * lin.gauss_newton * whitening.t)
@@ -103,7 +103,7 @@ fn the_whitened_spread_of_a_rotation_box_is_its_largest_vertex() {
         let corr = scene.noisy(1.0, true, &mut Rng::new(seed));
         let truth = Pose::new(scene.rotation, scene.translation);
         metrics.push(
-            ReprojectionCost::of(&scene.camera, &corr)
+            ReprojectionCost::of(&scene.camera.intrinsics(), &corr)
                 .linearize(&truth)
                 .gauss_newton,
         );

@@ -35,8 +35,8 @@ fn the_linearised_bound_holds_over_the_ball_of_rotations() {
         let scene = visible_scene(f, n, 0, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
         let depths = problem.root().expect("depth bounds").depths.clone();
         for kappa in [1.0, 2.5] {
             let scaled = ScaledMinorant {
@@ -82,8 +82,8 @@ fn the_points_second_order_rest_holds_over_the_ball() {
         let scene = visible_scene(f, n, 0, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let f_hat = ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
         let root = problem.root().expect("depth bounds");
         let forms = forms_by_points(&problem);
         for kappa in [1.0, 2.5] {
@@ -129,8 +129,8 @@ fn minorant_and_its_scale_against_the_per_point_sum() {
         let scene = visible_scene(f, n, 0, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+        let f_hat = ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
         let root = ScaledMinorant {
             minorant: Rc::clone(problem.root().expect("depth bounds")),
             scale: 1.0,

@@ -137,9 +137,9 @@ fn with_rotation_search(
     let scene = visible_scene(f, n, 0, false, seed);
     let corr = scene.noisy(1.0, true, rng);
     let truth = Pose::new(scene.rotation, scene.translation);
-    let cost = ReprojectionCost::of(&scene.camera, &corr);
+    let cost = ReprojectionCost::of(&scene.camera.intrinsics(), &corr);
     let f_hat = 4.0 * cost.cost(&truth);
-    let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
+    let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
     let whitening = Whitening::new(&cost.linearize(&truth).gauss_newton).unwrap();
     let mut record = RecordedCells::new(0.0);
     let mut search = RotationSearch {

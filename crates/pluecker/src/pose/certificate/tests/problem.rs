@@ -15,7 +15,7 @@ fn the_bearing_cone_bounds_every_depth_from_below() {
     for (seed, f) in [(1, 250.0), (2, 800.0), (3, 15000.0)] {
         let scene = visible_scene(f, 12, 0, false, seed);
         let corr = scene.noisy(1.0, true, &mut rng);
-        let k_inv = scene.camera.matrix().try_inverse().unwrap();
+        let k_inv = scene.camera.intrinsics().matrix().try_inverse().unwrap();
         let bearings: Vec<Vector3<f64>> = corr
             .points2d
             .iter()
@@ -97,9 +97,9 @@ fn the_sine_of_an_endpoint_is_bounded_by_its_residual() {
             corr.noise = Some(random_observation_noise(&mut rng, 0, nl, (0.3, 3.0)));
         }
         let truth = Pose::new(scene.rotation, scene.translation);
-        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera, &corr).cost(&truth);
-        let problem = Problem::new(&scene.camera, &corr, f_hat).unwrap();
-        let k = scene.camera.matrix();
+        let f_hat = 4.0 * ReprojectionCost::of(&scene.camera.intrinsics(), &corr).cost(&truth);
+        let problem = Problem::new(&scene.camera.intrinsics(), &corr, f_hat).unwrap();
+        let k = scene.camera.intrinsics().matrix();
         let k_inv = k.try_inverse().unwrap();
         let pixel = |x: &Vector3<f64>| {
             let p = k * x;

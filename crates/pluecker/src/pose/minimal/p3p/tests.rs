@@ -2,7 +2,7 @@
 //! set by the conditioning of eq. 4), an independent multistart search, and the degenerate cases.
 
 use super::*;
-use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::rng::Rng;
 use nalgebra::Vector2;
 
@@ -311,7 +311,7 @@ fn solutions_do_not_depend_on_the_order_of_the_correspondences() {
 #[test]
 fn bearings_from_pixels_of_a_mirrored_camera() {
     // The paper's camera (Phong & Horaud 1995, Table 1): fx < 0. Bearings from pixels as documented.
-    let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 0.0).unwrap();
+    let cam = Intrinsics::new(-1730.3, 1220.7, 243.8, 241.2, 0.0).unwrap();
     let mut rng = Rng::new(3_004);
     for draw in 0..200 {
         let inst = Instance::random(&mut rng, 2.0);

@@ -1,4 +1,4 @@
-//! The pinhole camera: intrinsics, projection, pixel ↔ normalised coordinates.
+//! [`Intrinsics`]: the pinhole part `K` of a camera; its projection, pixels ↔ normalised coordinates.
 //!
 //! Conventions used throughout pluecker:
 //! - a world point `X_world` maps to the camera frame by `x_cam = R X_world + t`;
@@ -14,9 +14,10 @@ use crate::camera_pose::Pose;
 use crate::error::{number, Error, Result};
 use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 
-/// Pinhole intrinsics in pixels. `fx` and `fy` may be negative (mirrored axes), never zero.
+/// The pinhole part `K` of a camera ([`crate::camera::Camera::intrinsics`]), pixels. `fx` and `fy` may be
+/// negative (mirrored axes), never zero.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Camera {
+pub struct Intrinsics {
     /// Focal length along u, pixels (the paper's α_u).
     pub fx: f64,
     /// Focal length along v, pixels (the paper's α_v).
@@ -32,10 +33,10 @@ pub struct Camera {
 /// Smallest |fx|, |fy| accepted: below this the camera is treated as singular.
 const MIN_FOCAL: f64 = 1e-9;
 
-impl Camera {
+impl Intrinsics {
     /// Intrinsics from the five parameters; fails if any is non-finite or a focal length is zero.
     pub fn new(fx: f64, fy: f64, cx: f64, cy: f64, skew: f64) -> Result<Self> {
-        let c = Camera { fx, fy, cx, cy, skew };
+        let c = Intrinsics { fx, fy, cx, cy, skew };
         c.validate()?;
         Ok(c)
     }
@@ -66,7 +67,7 @@ impl Camera {
                 ),
             });
         }
-        Camera::new(k[(0, 0)], k[(1, 1)], k[(0, 2)], k[(1, 2)], k[(0, 1)])
+        Intrinsics::new(k[(0, 0)], k[(1, 1)], k[(0, 2)], k[(1, 2)], k[(0, 1)])
     }
 
     /// Checks that the intrinsics are finite and invertible: `|fx|, |fy| ≥ 1e-9` px, and
@@ -138,7 +139,7 @@ impl Camera {
         self.normalized_to_pixel(&Vector2::new(x_cam.x / x_cam.z, x_cam.y / x_cam.z))
     }
 
-    /// The 2x2 Jacobian of [`Camera::normalized_to_pixel`] (constant: the upper-left block of `K`).
+    /// The 2x2 Jacobian of [`Intrinsics::normalized_to_pixel`] (constant: the upper-left block of `K`).
     pub fn pixel_jacobian(&self) -> nalgebra::Matrix2<f64> {
         nalgebra::Matrix2::new(self.fx, self.skew, 0.0, self.fy)
     }
@@ -150,7 +151,7 @@ mod tests {
 
     #[test]
     fn interpretation_plane_contains_the_3d_line_and_the_centre() {
-        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 0.0).unwrap();
+        let cam = Intrinsics::new(-1730.3, 1220.7, 243.8, 241.2, 0.0).unwrap();
         let (pa, pb) = (Vector3::new(1.0, -2.0, 60.0), Vector3::new(-3.0, 4.0, 80.0));
         let n = cam
             .interpretation_plane_normal(&cam.project(&pa), &cam.project(&pb))
@@ -169,7 +170,7 @@ mod tests {
     fn a_camera_whose_k_cannot_be_inverted_is_refused_with_short_numbers() {
         // Zero or tiny focal lengths, and focal lengths whose product det K = fx fy overflows.
         for (fx, fy) in [(0.0, 800.0), (1e-300, 1e-300), (1e300, 1e300), (1e200, -1e109)] {
-            let err = Camera::new(fx, fy, 320.0, 240.0, 0.0).unwrap_err();
+            let err = Intrinsics::new(fx, fy, 320.0, 240.0, 0.0).unwrap_err();
             let text = err.to_string();
             assert!(matches!(err, Error::SingularCamera { .. }), "{text}");
             // %g-style numbers: no run of seven digits (1e-300 printed in full had 300 zeros).
@@ -179,14 +180,14 @@ mod tests {
             );
         }
         // The largest that fit: det K = 1e300.
-        assert!(Camera::new(1e150, -1e150, 0.0, 0.0, 0.0).is_ok());
-        assert!(Camera::new(1e-9, 1e-9, 0.0, 0.0, 0.0).is_ok());
+        assert!(Intrinsics::new(1e150, -1e150, 0.0, 0.0, 0.0).is_ok());
+        assert!(Intrinsics::new(1e-9, 1e-9, 0.0, 0.0, 0.0).is_ok());
     }
 
     #[test]
     fn pixel_normalized_round_trip_with_negative_focal_and_skew() {
         // The paper's camera (Table 1, last row) plus a skew term.
-        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 3.5).unwrap();
+        let cam = Intrinsics::new(-1730.3, 1220.7, 243.8, 241.2, 3.5).unwrap();
         for &(u, v) in &[(0.0, 0.0), (511.0, 17.5), (243.8, 241.2), (-40.0, 900.0)] {
             let px = Vector2::new(u, v);
             let back = cam.normalized_to_pixel(&cam.pixel_to_normalized(&px));
@@ -195,12 +196,12 @@ mod tests {
         let x_cam = Vector3::new(0.3, -0.2, 2.0);
         let k = cam.matrix() * x_cam;
         assert!((cam.project(&x_cam) - Vector2::new(k.x / k.z, k.y / k.z)).norm() < 1e-9);
-        assert_eq!(Camera::from_matrix(&cam.matrix()).unwrap(), cam);
+        assert_eq!(Intrinsics::from_matrix(&cam.matrix()).unwrap(), cam);
     }
 
     #[test]
     fn the_projection_matrix_projects_as_the_pose_and_the_camera_do() {
-        let cam = Camera::new(-1730.3, 1220.7, 243.8, 241.2, 3.5).unwrap();
+        let cam = Intrinsics::new(-1730.3, 1220.7, 243.8, 241.2, 3.5).unwrap();
         let rotation = *nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.2, -0.4, 0.1)).matrix();
         let pose = Pose::new(rotation, Vector3::new(0.3, -0.1, 6.0));
         let p = cam.projection(&pose);
@@ -215,12 +216,12 @@ mod tests {
     #[test]
     fn singular_cameras_are_rejected() {
         assert!(matches!(
-            Camera::new(0.0, 1.0, 0.0, 0.0, 0.0),
+            Intrinsics::new(0.0, 1.0, 0.0, 0.0, 0.0),
             Err(Error::SingularCamera { .. })
         ));
-        assert!(Camera::new(f64::NAN, 1.0, 0.0, 0.0, 0.0).is_err());
+        assert!(Intrinsics::new(f64::NAN, 1.0, 0.0, 0.0, 0.0).is_err());
         let mut k = Matrix3::identity();
         k[(2, 0)] = 1.0;
-        assert!(Camera::from_matrix(&k).is_err());
+        assert!(Intrinsics::from_matrix(&k).is_err());
     }
 }
