@@ -370,7 +370,7 @@ def localize_synthetic(name: str, seed: int) -> tuple[Any, list[dict[str, Any]]]
             u = camera.img_from_cam(np.c_[n, np.ones(len(n))])
             inside = np.all(np.isfinite(u), axis=1) & (u[:, 0] >= 0) & (u[:, 0] < 1024) & (u[:, 1] >= 0) & (u[:, 1] < 768)
             # Keep only pixels the lens maps one to one (the fisheye polynomial folds past its range).
-            lens, back = pluecker.LensCamera(model_name, params), np.full(len(n), False)
+            lens, back = pluecker.Camera(model_name, params), np.full(len(n), False)
             for k in np.flatnonzero(inside):
                 try:
                     back[k] = np.linalg.norm(lens.unproject(u[k:k + 1])[0] - n[k]) < 1e-9 * (1 + np.hypot(*n[k]))
@@ -452,7 +452,7 @@ def localize_rows(name: str, rec: Any, queries: list[dict[str, Any]], ratio: flo
         else:
             stats["pluecker"]["fail"] += 1
         # The per-image solve, in this process, as each library is called on one image.
-        lens = colmap.lens_camera(camera)
+        lens = pluecker.Camera(camera)
         ransac = pluecker.RansacOptions(point_threshold=THRESHOLD_PX, seed=seed + q["query"])
         started = time.perf_counter()
         colmap.localize(lens, q["xy"], X, ransac=ransac)

@@ -9,7 +9,7 @@ Gaussian pixel noise, ``½ (Σ_points e² + Σ_endpoints d²)``: ``e`` of a poin
 ``point_covariances`` / ``line_covariances``: a point's ``r·r = eᵀ Σ⁻¹ e``, ``e = π(R X + t) − u``; an
 endpoint's ``r = d / √(n̂ᵀ Σ n̂)``, ``d`` its signed pixel distance to the projected line and ``n̂``
 that line's unit normal. On the ``lens-`` rows (a distorting camera) the pixels are the observed,
-distorted ones, as ``estimate_pose`` measures them through a ``LensCamera``: a point's ``e`` is to the
+distorted ones, as ``estimate_pose`` measures them through a ``Camera``: a point's ``e`` is to the
 lens projection ``K D(x/z, y/z)`` of ``R X + t`` (``D`` the COLMAP model's distortion, the script's own
 ``Lens``); an endpoint's ``d`` is its distance to the *curved* image ``K D(ℓ)`` of the projected line
 ``ℓ`` (the line through the normalised projections of the 3-D endpoints), ``min_q |K D(q) − e|`` over
@@ -80,7 +80,7 @@ every image point and endpoint. Mixed data of ``n`` correspondences are ``ceil(n
   is a segment shorter than 20 px once distorted. These lenses move pixels inwards: a scene's geometry
   is its pinhole pair's but where a segment was drawn again (6 and 8 of the first 50 scenes of
   ``lens-strong-f250-n100-mixed`` and ``lens-fisheye-f250-n100-mixed``, none at f ≥ 800). Then the
-  1 px noise on the distorted pixels. Every pluecker call gets ``pluecker.LensCamera``; the peers do
+  1 px noise on the distorted pixels. Every pluecker call gets ``pluecker.Camera``; the peers do
   not run on them; targets (3) and (4) leave them out, target (7) compares them with their pinhole
   pairs, and target (6) covers them (the certificate through a lens, kind ``lens_sublevel_set``).
 
@@ -145,7 +145,7 @@ this script's own code, not the library's residuals; n/a when nothing was certif
 the pinhole rates: each ``lens-`` row's certified fraction at most 0.06 below its pinhole pair's (one
 scene of 50 is 0.02; n/a for a lens row whose pair is not in the run, e.g. with ``--rows lens``); (8)
 when lens rows run, the script's lens code against the library's (``lens_self_test``, before the rows):
-``Lens.pixels`` = ``LensCamera.project`` and ``LensCamera.unproject`` of the drawn pixels back to their
+``Lens.pixels`` = ``Camera.project`` and ``Camera.unproject`` of the drawn pixels back to their
 points, both to 1e-9 px, on 500 points drawn as the scenes draw them per lens and f; the own cost
 (``2 pose_cost``) = ``result.cost`` at the default answer to 1e-8 relative, on the first 2 scenes of each
 lens row. Targets (3) and (4) are on the rows without covariances or lens (the ``cov-`` and ``lens-``
@@ -315,8 +315,8 @@ LAST_PEERS = ("cvxpnpl",)
 
 def lens_self_test(rows: list[Row], seed: int) -> dict[str, Any]:
     """This script's lens code against the library's, for the selected lens rows: ``Lens.pixels``
-    against ``LensCamera.project`` at 500 points per lens and focal length drawn as the scenes draw them
-    (``_draw_point``), ``LensCamera.unproject`` of their pixels against their normalised coordinates (px:
+    against ``Camera.project`` at 500 points per lens and focal length drawn as the scenes draw them
+    (``_draw_point``), ``Camera.unproject`` of their pixels against their normalised coordinates (px:
     the pixels are inside the lens's invertible region), and the cost, ``2 pose_cost``, against
     ``result.cost`` at the default answer on the first ``LENS_SELF_TEST_SCENES`` scenes of each row.
     Raises AssertionError when the projections differ by more than ``LENS_PROJECTION_TOL_PX``: the
@@ -329,7 +329,7 @@ def lens_self_test(rows: list[Row], seed: int) -> dict[str, Any]:
         camera = lens.camera()
         projection = max(projection, float(np.max(np.abs(lens.pixels(n) - camera.project(x)))))
         unprojection = max(unprojection, lens.f * float(np.max(np.abs(camera.unproject(lens.pixels(n)) - n))))
-    assert projection <= LENS_PROJECTION_TOL_PX, f"own lens projection off LensCamera.project by {projection:.2e} px"
+    assert projection <= LENS_PROJECTION_TOL_PX, f"own lens projection off Camera.project by {projection:.2e} px"
     worst_at, scenes = None, 0
     for row in rows:
         for i in range(LENS_SELF_TEST_SCENES if row.lens else 0):

@@ -77,7 +77,7 @@ def _arrays(pluecker, triangulation_scenes, lens_lines):
     k += 20
     # Points through a lens (SIMPLE_RADIAL, the lens test's strong and mild lenses), outlier views.
     for params in ([5000.0, 600.0, 500.0, -14.0], [800.0, 600.0, 500.0, -0.2], [800.0, 600.0, 500.0, 0.05]):
-        lens = pluecker.LensCamera("SIMPLE_RADIAL", params)
+        lens = pluecker.Camera("SIMPLE_RADIAL", params)
         for views in (4, 6, 9):
             for seed in range(40):
                 rng = np.random.default_rng(seed)
@@ -92,7 +92,7 @@ def _arrays(pluecker, triangulation_scenes, lens_lines):
                     xa /= np.linalg.norm(xa)
                     R = np.stack([xa, np.cross(z, xa), z])
                     poses.append((R, -R @ centre))
-                P = np.stack([lens.pinhole.P(R, t) for R, t in poses])
+                P = np.stack([lens.P(R, t) for R, t in poses])
                 pix = np.array([lens_lines.pycolmap.Camera(model="SIMPLE_RADIAL", width=1200, height=1000,
                                                            params=params).img_from_cam(np.atleast_2d(R @ Xt + t))[0]
                                 for R, t in poses]) + rng.normal(size=(views, 2))

@@ -64,7 +64,7 @@ CURVE_DIFF_STEP = 1e-5  # radians: the central differences of the Newton steps
 LENS_SELF_TEST_SCENES = 2  # scenes per selected lens row on which the own cost is checked against the library's
 
 
-LENS_PROJECTION_TOL_PX = 1e-9  # own projection against LensCamera.project
+LENS_PROJECTION_TOL_PX = 1e-9  # own projection against Camera.project
 
 
 LENS_COST_TOL = 1e-8  # own lens cost against the library's result.cost, relative
@@ -151,7 +151,7 @@ class Lens:
         return [self.f, CX, CY, *self.k] if self.model == "RADIAL" else [self.f, self.f, CX, CY, *self.k]
 
     def camera(self) -> Any:
-        return pluecker.LensCamera(self.model, self.params)
+        return pluecker.Camera(self.model, self.params)
 
     def distort(self, n: np.ndarray) -> np.ndarray:
         """``D(n)`` of normalised coordinates ``n`` (..., 2)."""
@@ -317,7 +317,7 @@ def make_synthetic(row: Row, seed: int) -> Scene:
     l3 = (seg_cam_a - c) @ R + o
     p2 = np.array(pts_px).reshape(-1, 2)
     l2 = np.array(seg_px).reshape(-1, 2, 2)
-    pinhole = pluecker.Camera(row.f, row.f, CX, CY)  # the lens's pinhole part too
+    pinhole = pluecker.Camera.pinhole(row.f, row.f, CX, CY)  # the lens's pinhole part too
     camera = lens.camera() if lens else pinhole
     K = np.asarray(pinhole.K, float)
     if row.covariances:

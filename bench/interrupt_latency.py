@@ -91,7 +91,7 @@ def line_batch_workload():
 def pose_workload():
     rng = np.random.default_rng(0)
     n = 20_000
-    camera = pluecker.Camera(800, 800, 320, 240)
+    camera = pluecker.Camera.pinhole(800, 800, 320, 240)
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = rng.uniform(0, 640, (n, 2))
     ransac = pluecker.RansacOptions(min_inlier_ratio=0.0, max_iterations=10**12, confidence=1 - 1e-12)
@@ -103,7 +103,7 @@ def pose_200k_workload(inliers: float):
     pixels; ``min_iterations`` = ``max_iterations`` = 10¹², so that only a stop ends the sampling."""
     rng = np.random.default_rng(0)
     n = 200_000
-    camera = pluecker.Camera(800, 800, 320, 240)
+    camera = pluecker.Camera.pinhole(800, 800, 320, 240)
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = X[:, :2] / X[:, 2:] * 800 + [320, 240] + rng.normal(0, 1, (n, 2))
     wrong = rng.random(n) >= inliers

@@ -83,8 +83,8 @@ def main():
     print("| lens | method | median time (ms) | median gap | max gap |")
     print("|---|---|---:|---:|---:|")
     for name, (model, params, r_max) in LENSES.items():
-        lens = pluecker.LensCamera(model, params)
-        pinhole = lens.pinhole
+        lens = pluecker.Camera(model, params)
+        pinhole = lens.pinhole_part
         camera = pycolmap.Camera(model=model, width=4000, height=3000, params=params)
         rng = np.random.default_rng(2026)
         times = {k: [] for k in ("exact", "first-order", "pycolmap", "pycolmap-lsq")}

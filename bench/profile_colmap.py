@@ -1,6 +1,6 @@
 """Profile of the certified re-triangulation of a COLMAP model with the cameras fixed
 (``pluecker.colmap.retriangulate(rec, sigma_px=1.0)``, i.e. ``pluecker._core.triangulate_points`` in the rows form
-with ``cameras=`` the images' ``LensCamera``): where the time goes, per stage and per track.
+with ``cameras=`` the images' ``Camera``): where the time goes, per stage and per track.
 
 **What runs.**
 
@@ -226,7 +226,7 @@ def main() -> None:
         print(f"\nTracks with a search (nodes > 0): {int(searched.sum())}, {fmt_ms(float(t_opt[searched].sum()))} ms "
               f"({100 * t_opt[searched].sum() / t_opt.sum():.1f} % of the summed time)")
     # Where the time goes against how far off axis a track is seen: its largest |pixel − principal point| / f.
-    K = np.array([np.asarray(lens.pinhole.K, dtype=float) for lens in o.lenses])[o.camera]
+    K = np.array([np.asarray(lens.K, dtype=float) for lens in o.lenses])[o.camera]
     radius = np.hypot((o.pixels[:, 0] - K[:, 0, 2]) / K[:, 0, 0], (o.pixels[:, 1] - K[:, 1, 2]) / K[:, 1, 1])
     off_axis = np.zeros(n)
     np.maximum.at(off_axis, o.track, radius)

@@ -1,5 +1,5 @@
 """Profile of the certified pose (``pluecker.estimate_pose`` with ``PoseOptions(certify=CertifyOptions())``),
-pinhole and through a ``LensCamera``: where the time goes, per stage and per scene.
+pinhole and through a ``Camera``: where the time goes, per stage and per scene.
 
 **Scenes**: those of ``bench/compare_global_pose.py`` (``bench/global_pose_scenes.py``), by import (``all_rows`` / ``make_synthetic``):
 640 x 480, ``fx = fy = f``, a random pose, object 4.2-7.8 units deep, 1 px Gaussian noise; scene ``i`` of a

@@ -75,7 +75,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     camera = pycolmap.Camera(model="OPENCV", width=1024, height=768, params=PARAMS, camera_id=1)
-    lens = colmap.lens_camera(camera)
+    lens = pluecker.Camera(camera)
     cam = {"model": "OPENCV", "width": 1024, "height": 768, "params": PARAMS}
     rng = np.random.default_rng(args.seed)
     n_wrong = int(round(args.wrong * args.true / (1 - args.wrong)))

@@ -155,8 +155,8 @@ def test_a_bad_row_is_named_by_the_python_keyword(function, primitive, layout, b
 
 
 def test_lens_camera_covariances_keyword():
-    """`LensCamera.undistort` and `normalized_covariances` take `covariances`, as triangulation does."""
-    lens = pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.1])
+    """`Camera.undistort` and `normalized_covariances` take `covariances`, as triangulation does."""
+    lens = pluecker.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.1])
     pixels = np.array([[300.0, 200.0], [330.0, 250.0]])
     bad = np.array([np.eye(2), -np.eye(2)])
     for method in (lens.undistort, lens.normalized_covariances):

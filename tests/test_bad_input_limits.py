@@ -280,14 +280,14 @@ def test_a_fitted_covariance_that_underflows_is_an_error(fit, points):
     np.testing.assert_allclose(fit(points, sigma=1e-3).covariance, 1e-6 * unit, rtol=1e-9)
 
 
-LENS = pluecker.LensCamera("OPENCV", [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4])
+LENS = pluecker.Camera("OPENCV", [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -5e-4])
 
 
 @pytest.mark.parametrize("bad", [-np.eye(2), np.diag([1.0, -1e-3]), [[1.0, 2.0], [2.0, 1.0]], [[1.0, 0.5], [0.0, 1.0]]],
                          ids=["-I", "negative-variance", "indefinite", "asymmetric"])
 @pytest.mark.parametrize("method", ["undistort", "normalized_covariances"])
 def test_a_pixel_covariance_that_is_not_a_covariance_is_refused(bad, method):
-    """``LensCamera.undistort(px, covariances=-I)`` returned negative-definite covariances."""
+    """``Camera.undistort(px, covariances=-I)`` returned negative-definite covariances."""
     pixels = np.array([[300.0, 200.0], [350.0, 260.0]])
     cov = np.stack([np.eye(2), np.asarray(bad, dtype=float)])
     with pytest.raises(DegenerateConfigurationError, match=r"covariances\[1\] is not a covariance"):
@@ -309,7 +309,7 @@ def test_every_pixel_beyond_the_fold_of_a_radial_distortion_is_refused():
     Independently of the library: ρ(r) = r (1 - 0.5 r² + 0.1 r⁴) has ρ' = 1 - 1.5 r² + 0.5 r⁴ = 0 at
     r = 1 (a maximum, ρ = 0.6) and r = √2, then rises for ever; only pixels closer to the principal point
     than 0.6 f = 480 px have a preimage on the branch through it."""
-    cam = pluecker.LensCamera("RADIAL", [800.0, 320.0, 240.0, -0.5, 0.1])
+    cam = pluecker.Camera("RADIAL", [800.0, 320.0, 240.0, -0.5, 0.1])
     r = np.linspace(0, 3, 30001)
     rho = r * (1 - 0.5 * r**2 + 0.1 * r**4)
     peak = 800.0 * rho[: np.argmax(np.diff(rho) <= 0) + 1].max()
@@ -373,7 +373,7 @@ def test_a_segment_sigma_through_a_lens_blames_sigma_not_covariances(sigma, flow
     """``triangulate_line(..., sigma=1e300, cameras=...)`` raised ``NonFiniteError: covariances: ...``
     although no covariances were given."""
     R = np.eye(3)
-    P = np.stack([LENS.pinhole.P(R, np.array([-b, 0.0, 0.0])) for b in (0.0, 0.5, 1.0)])
+    P = np.stack([LENS.P(R, np.array([-b, 0.0, 0.0])) for b in (0.0, 0.5, 1.0)])
     ends = np.array([[-0.5, 0.2, 5.0], [0.6, -0.1, 6.0]])
     segments = np.stack([LENS.project(ends - [b, 0.0, 0.0]) for b in (0.0, 0.5, 1.0)])
     message = rf"^sigma: σ = {re.escape(f'{sigma:g}')} px: the covariance σ² I {flow} double precision"

@@ -140,7 +140,7 @@ def test_a_bool_is_not_a_number(option, value):
     (lambda P, x: pluecker.triangulate_points(P, x[None], options=pluecker.TriangulationOptions(outlier_threshold=True)), "outlier_threshold"),
     (lambda P, x: pluecker.triangulate_line(P, np.zeros((3, 2, 2)), sigma=True), "sigma"),
     (lambda P, x: pluecker.fit_line(x, sigma=True), "sigma"),
-    (lambda P, x: pluecker.Camera(True, 800, 320, 240), "fx"),
+    (lambda P, x: pluecker.Camera.pinhole(True, 800, 320, 240), "fx"),
     (lambda P, x: pluecker.random_scene("general", True), "n_points"),
     (lambda P, x: pluecker.fitting_residual_samples(True), "draws"),
 ])

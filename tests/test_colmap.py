@@ -22,11 +22,13 @@ def test_the_model_lists_agree():
     EQUIRECTANGULAR, the one spherical model, is refused (test below)."""
     colmap_models = {m.name: int(m) for m in pycolmap.CameraModelId.__members__.values() if int(m) >= 0}
     assert set(colmap_models) - set(PARAMS) == {"EQUIRECTANGULAR"}
-    assert pluecker.LensCamera.MODELS == sorted(PARAMS, key=colmap_models.__getitem__)
-    assert [colmap_models[m] for m in pluecker.LensCamera.MODELS] == list(range(len(PARAMS)))
+    # COLMAP's, in the order of their ids, then pluecker's SKEWED_PINHOLE (a K with skew).
+    assert pluecker.Camera.MODELS[:-1] == sorted(PARAMS, key=colmap_models.__getitem__)
+    assert [colmap_models[m] for m in pluecker.Camera.MODELS[:-1]] == list(range(len(PARAMS)))
+    assert pluecker.Camera.MODELS[-1] == "SKEWED_PINHOLE" and "SKEWED_PINHOLE" not in colmap_models
     for model, params in PARAMS.items():
         info = pycolmap.Camera(model=model, width=640, height=480, params=params).params_info
-        assert pluecker.LensCamera(model, params).parameter_names == [s.strip() for s in info.split(",")]
+        assert pluecker.Camera(model, params).parameter_names == [s.strip() for s in info.split(",")]
 
 
 def points_off_axis(rng, n, widest_degrees):
@@ -45,9 +47,9 @@ def test_projection_and_unprojection_agree_with_colmap(model):
     X = np.r_[X, [[0.0, 0.0, 1.0], [1e-7, -2e-7, 1.0], [3e-3, 4e-3, 1.0], [6e-3, -8e-3, 2.0]]]
     if model in WIDE:
         X = np.r_[X, points_off_axis(rng, 200, 80.0), [[np.tan(np.deg2rad(80.0)), 0.0, 1.0]]]
-    ours = pluecker.LensCamera(model, PARAMS[model])
+    ours = pluecker.Camera(model, PARAMS[model])
     theirs = colmap.colmap_camera(ours, 640, 480)
-    assert colmap.lens_camera(theirs) == ours
+    assert pluecker.Camera(theirs) == ours
     np.testing.assert_allclose(ours.project(X), theirs.img_from_cam(X), rtol=0, atol=1e-9)
     u = ours.project(X)
     # COLMAP's own unprojection (cam_from_img) is iterative for the polynomial models, stopping when its
@@ -67,7 +69,7 @@ def test_fov_follows_colmaps_projection_with_its_series(omega):
     phi = rng.uniform(0.0, 2 * np.pi, len(r))
     X = np.c_[r * np.cos(phi), r * np.sin(phi), np.ones(len(r))]
     params = [400.0, 395.0, 320.0, 240.0, omega]
-    ours = pluecker.LensCamera("FOV", params)
+    ours = pluecker.Camera("FOV", params)
     theirs = pycolmap.Camera(model="FOV", width=640, height=480, params=params)
     u = ours.project(X)
     np.testing.assert_allclose(u, theirs.img_from_cam(X), rtol=0, atol=1e-9)
@@ -90,13 +92,13 @@ def test_an_equirectangular_camera_is_refused_by_name():
     camera_id = min(rec.cameras)
     message = rf"camera_id {camera_id}: .*'EQUIRECTANGULAR' is not supported: it is a spherical"
     with pytest.raises(pluecker.InvalidOptionError, match=message):
-        colmap.lens_camera(rec.cameras[camera_id])
+        pluecker.Camera(rec.cameras[camera_id])
     # Every camera of the model is refused for the same reason: one message names them all.
     ids = ", ".join(map(str, sorted(rec.cameras)))
     with pytest.raises(colmap.ModelError, match=rf"camera_id {ids} \(EQUIRECTANGULAR\): [^;]*is not supported"):
         colmap.retriangulate(rec)
     with pytest.raises(pluecker.InvalidOptionError, match="'EQUIRECTANGULAR' is not supported"):
-        pluecker.LensCamera("EQUIRECTANGULAR", [1024.0, 512.0])
+        pluecker.Camera("EQUIRECTANGULAR", [1024.0, 512.0])
 
 
 def test_poses_round_trip_through_rigid3d():
@@ -502,7 +504,7 @@ def test_a_pixel_beyond_the_fold_is_left_out_by_name():
     point_id, point = next((i, p) for i, p in sorted(rec.points3D.items()) if p.track.length() >= 4)
     element = point.track.elements[0]
     image_id, point2D_idx = element.image_id, element.point2D_idx
-    fold = pluecker.LensCamera("SIMPLE_RADIAL", [300.0, 512.0, 384.0, -0.05])
+    fold = pluecker.Camera("SIMPLE_RADIAL", [300.0, 512.0, 384.0, -0.05])
     rec.images[image_id].points2D[point2D_idx].xy = np.array([512.0 + 300.0 * 3.0, 384.0])  # r = 3 > fold at 2.58
     with pytest.raises(pluecker.PlueckerError):
         fold.undistort([[512.0 + 300.0 * 3.0, 384.0]])
@@ -558,7 +560,7 @@ def test_a_track_that_sees_one_image_twice_uses_both_keypoints(tmp_path):
 
 
 def test_the_distributed_tables_solve_as_retriangulate_does_through_the_lens():
-    """``observation_table`` hands the observed pixels and each image's LensCamera to the distributed
+    """``observation_table`` hands the observed pixels and each image's Camera to the distributed
     kernel: the same exact-cost points, costs and certificates as :func:`colmap.retriangulate`."""
     from pluecker import distributed
 

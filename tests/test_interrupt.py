@@ -129,7 +129,7 @@ def test_a_failing_progress_callback_stops_the_batch_and_keeps_finished_tracks()
 def test_ctrl_c_stops_a_robust_pose_and_returns_the_best_so_far():
     rng = np.random.default_rng(0)
     n = 20_000
-    camera = pluecker.Camera(800, 800, 320, 240)
+    camera = pluecker.Camera.pinhole(800, 800, 320, 240)
     X = rng.uniform(-1, 1, (n, 3)) + [0, 0, 6]
     u = rng.uniform(0, 640, (n, 2))  # all outliers, and no inlier-ratio cap: it would sample for hours
     # RANSAC polls before each sample and between the rounds of a local optimisation: the third poll

@@ -1,4 +1,4 @@
-"""``pluecker.LensCamera``: COLMAP's camera models (issue 12 §1). The projection is recomputed here with
+"""``pluecker.Camera``: COLMAP's camera models (issue 12 §1). The projection is recomputed here with
 numpy from the models' formulas (COLMAP's ``sensor/models.h``); unprojection inverts it to 1e-10 px; the
 first-order covariance of the normalised coordinates matches a Monte Carlo estimate."""
 
@@ -95,14 +95,14 @@ def points_in_front(seed: int, n: int = 200) -> np.ndarray:
 @pytest.mark.parametrize("model", list(CAMERAS))
 def test_projection_is_colmaps(model):
     X = points_in_front(1)
-    cam = pluecker.LensCamera(model, CAMERAS[model])
+    cam = pluecker.Camera(model, CAMERAS[model])
     np.testing.assert_allclose(cam.project(X), reference_project(model, CAMERAS[model], X), rtol=0, atol=1e-9)
 
 
 @pytest.mark.parametrize("model", list(CAMERAS))
 def test_unprojection_inverts_the_projection_to_1e_10_px(model):
     X = points_in_front(2)
-    cam = pluecker.LensCamera(model, CAMERAS[model])
+    cam = pluecker.Camera(model, CAMERAS[model])
     u = cam.project(X)
     n = cam.unproject(u)
     back = cam.project(np.c_[n, np.ones(len(n))])
@@ -113,7 +113,7 @@ def test_unprojection_inverts_the_projection_to_1e_10_px(model):
 
 
 def test_a_pixel_beyond_the_fold_is_named():
-    cam = pluecker.LensCamera("SIMPLE_RADIAL", [500.0, 0.0, 0.0, -0.5])
+    cam = pluecker.Camera("SIMPLE_RADIAL", [500.0, 0.0, 0.0, -0.5])
     peak = np.sqrt(1 / 1.5) * (1 - 0.5 / 1.5) * 500.0  # the largest radius the distortion reaches
     cam.unproject([[0.9 * peak, 0.0]])
     with pytest.raises(pluecker.DegenerateConfigurationError, match=r"pixel 1 .*outside the invertible region"):
@@ -123,7 +123,7 @@ def test_a_pixel_beyond_the_fold_is_named():
 def test_normalized_covariances_match_monte_carlo():
     """1 px isotropic noise on one pixel of a strongly distorted camera: the spread of the unprojected
     points over 4000 draws matches J⁻¹ Σ J⁻ᵀ within the sampling error of a covariance (4 √(2/N))."""
-    cam = pluecker.LensCamera("OPENCV", CAMERAS["OPENCV"])
+    cam = pluecker.Camera("OPENCV", CAMERAS["OPENCV"])
     u0 = cam.project([[0.5, -0.35, 1.0]])
     predicted = cam.normalized_covariances(u0)[0]
     rng = np.random.default_rng(3)
@@ -136,21 +136,22 @@ def test_normalized_covariances_match_monte_carlo():
 
 def test_bad_cameras_are_named_errors():
     with pytest.raises(pluecker.InvalidOptionError, match="unknown camera model 'KANNALA'"):
-        pluecker.LensCamera("KANNALA", [1.0])
+        pluecker.Camera("KANNALA", [1.0])
     with pytest.raises(pluecker.ShapeError, match="OPENCV parameters: expected 8 values"):
-        pluecker.LensCamera("OPENCV", [1.0, 2.0])
+        pluecker.Camera("OPENCV", [1.0, 2.0])
     with pytest.raises(pluecker.SingularCameraError):
-        pluecker.LensCamera("PINHOLE", [0.0, 1.0, 0.0, 0.0])
+        pluecker.Camera("PINHOLE", [0.0, 1.0, 0.0, 0.0])
     with pytest.raises(pluecker.NonFiniteError):
-        pluecker.LensCamera("PINHOLE", [1.0, float("nan"), 0.0, 0.0])
+        pluecker.Camera("PINHOLE", [1.0, float("nan"), 0.0, 0.0])
 
 
 def test_models_round_trip():
     # COLMAP's model ids 0-16 (colmap/sensor/models.h, CameraModelId; 17, EQUIRECTANGULAR, is refused).
-    assert pluecker.LensCamera.MODELS == ["SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV",
+    assert pluecker.Camera.MODELS == ["SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV",
                                           "OPENCV_FISHEYE", "FULL_OPENCV", "FOV", "SIMPLE_RADIAL_FISHEYE",
                                           "RADIAL_FISHEYE", "THIN_PRISM_FISHEYE", "RAD_TAN_THIN_PRISM_FISHEYE",
-                                          "SIMPLE_DIVISION", "DIVISION", "SIMPLE_FISHEYE", "FISHEYE", "EUCM"]
-    cam = pluecker.LensCamera("OPENCV_FISHEYE", CAMERAS["OPENCV_FISHEYE"])
+                                          "SIMPLE_DIVISION", "DIVISION", "SIMPLE_FISHEYE", "FISHEYE", "EUCM",
+                                          "SKEWED_PINHOLE"]
+    cam = pluecker.Camera("OPENCV_FISHEYE", CAMERAS["OPENCV_FISHEYE"])
     assert pickle.loads(pickle.dumps(cam)) == cam
     assert cam.to_dict()["parameter_names"] == ["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"]

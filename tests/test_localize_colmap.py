@@ -332,7 +332,7 @@ def test_the_query_table_gives_one_set_of_camera_columns():
 def test_query_records_with_camera_models_make_the_model_columns():
     camera, R, t, X, u, _ = scene("OPENCV", 5)
     records = [{"query": 1, "camera": camera, "points2d": u, "points3d": X},
-               {"query": 2, "camera": pluecker.LensCamera("OPENCV", list(camera.params)), "points2d": u, "points3d": X},
+               {"query": 2, "camera": pluecker.Camera("OPENCV", list(camera.params)), "points2d": u, "points3d": X},
                {"query": 3, "camera": {"model": "OPENCV", "params": list(camera.params)}, "points2d": u, "points3d": X},
                {"query": 4, "camera": (800.0, 790.0, 320.0, 240.0), "points2d": u, "points3d": X}]
     queries, points, lines = dist.queries_to_tables(records)

@@ -56,7 +56,7 @@ def _scene(seed, focal, n_points, n_lines=0, sigma=(0.3, 3.0), per_endpoint=True
             lh = np.repeat(lh[:, None], 2, axis=1)
         l2 = u[n_points:].reshape(-1, 2, 2) + np.einsum("mkij,mkj->mki", lh, rng.normal(size=(n_lines, 2, 2)))
         kw.update(lines2d=l2, lines3d=l3, line_covariances=lc)
-    camera = pluecker.Camera(focal, focal, 320.0, 240.0)
+    camera = pluecker.Camera.pinhole(focal, focal, 320.0, 240.0)
     return camera, kw, (p2, X[:n_points], l2, l3, pc, lc), (R, t)
 
 
@@ -175,7 +175,7 @@ def _decoy_scene(seed, focal=2000.0, n_decoys=10, c=0.3):
     cov = np.concatenate([pc, (delta[keep] / c)[:, None, None] ** 2 * np.eye(2)])
     p2_all, X_all = np.concatenate([p2, ud[keep]]), np.concatenate([X, Xd[keep]])
     kw = dict(points2d=p2_all, points3d=X_all, point_covariances=cov)
-    camera = pluecker.Camera(focal, focal, 320.0, 240.0)
+    camera = pluecker.Camera.pinhole(focal, focal, 320.0, 240.0)
     return camera, kw, (p2_all, X_all, None, None, cov, None), (R1, t1), (R2, t2)
 
 
@@ -235,7 +235,7 @@ def test_certificate_is_sound_when_whitening_scales_differ_widely():
         half = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2) * sig[:, None, :]
         pc = half @ np.swapaxes(half, 1, 2)
         p2 = u + np.einsum("nij,nj->ni", half, rng.normal(size=(n, 2)))
-        camera = pluecker.Camera(focal, focal, 320.0, 240.0)
+        camera = pluecker.Camera.pinhole(focal, focal, 320.0, 240.0)
         kw = dict(points2d=p2, points3d=X, point_covariances=pc)
         ok, _ = _check_bound(camera, kw, (p2, X, None, None, pc, None), (R, t), seed)
         certified += ok

@@ -140,7 +140,7 @@ def test_lines_alone_are_certified_over_the_stated_domain():
 
 
 def test_near_tie_is_ambiguous_with_its_runner_up():
-    cam = pluecker.Camera(100, 100, 320, 240)
+    cam = pluecker.Camera.pinhole(100, 100, 320, 240)
     p2 = np.array([[328.25225, 236.53891], [318.75583, 245.31756], [318.47324, 240.83389]])
     p3 = np.array([[-0.71231, -1.01011, -0.35883], [0.38466, -0.23661, 0.41702], [0.06198, -0.65361, 0.44170]])
     l2 = np.array([[[317.01928, 245.04923], [319.19993, 233.70367]]])
@@ -176,7 +176,7 @@ def test_a_runner_up_is_another_minimum_not_the_answer_again(kind, n, seed):
     reported: a barrier separates it from the answer (the cost at the geodesic midpoint, recomputed here,
     is above both), which two stopping points of one flat valley do not have."""
     scene, p2, _ = _noisy(kind, n, 0, seed)
-    cam = pluecker.Camera(800.0, 800.0, 320.0, 240.0)
+    cam = pluecker.Camera.pinhole(800.0, 800.0, 320.0, 240.0)
     res = pluecker.estimate_pose(cam, p2, scene["points3d"])
     if res.details.second_best is None:
         return
@@ -254,7 +254,7 @@ def test_narrow_lines_without_a_pose_in_front_use_the_reserve_samples():
     scenes = json.loads((Path(__file__).parent / "data" / "narrow_lines_reserve.json").read_text())
     for seed, s in scenes.items():
         K = np.array(s["K"])
-        camera = pluecker.Camera(K[0, 0], K[1, 1], K[0, 2], K[1, 2])
+        camera = pluecker.Camera.pinhole(K[0, 0], K[1, 1], K[0, 2], K[1, 2])
         kw = dict(lines2d=np.array(s["lines2d"]), lines3d=np.array(s["lines3d"]))
         res = pluecker.estimate_pose(camera, **kw)
         best = pluecker.estimate_pose(camera, **kw, options=pluecker.PoseOptions(initial_pose=(np.array(s["R"]), np.array(s["t"]))))
@@ -272,7 +272,7 @@ NEAR_TIE = dict(
     lines2d=np.array([[[317.01928, 245.04923], [319.19993, 233.70367]]]),
     lines3d=np.array([[[-0.28900, -0.29550, 0.56466], [-0.14120, -1.27669, 0.37747]]]),
 )
-NEAR_TIE_CAMERA = pluecker.Camera(100, 100, 320, 240)
+NEAR_TIE_CAMERA = pluecker.Camera.pinhole(100, 100, 320, 240)
 # Numpy scenes (focal, points, planar, seed of ``pose_oracle.visible_scene``, 1 px noise) where the
 # oracle finds two minima within 3x of each other (found by scanning seeds 0-14 of 4-6 points at
 # f = 250 and 4000 px; the tests recompute both minima).
@@ -291,7 +291,7 @@ def _near_tie_scenes():
     for focal, n, planar, seed in NEAR_TIE_SEEDS:
         rng = np.random.default_rng(seed)
         K, R, t, X, u = oracle.visible_scene(rng, focal, n, planar)
-        out.append((pluecker.Camera(focal, focal, 320.0, 240.0), dict(points2d=u + rng.normal(0, 1.0, u.shape), points3d=X), (R, t)))
+        out.append((pluecker.Camera.pinhole(focal, focal, 320.0, 240.0), dict(points2d=u + rng.normal(0, 1.0, u.shape), points3d=X), (R, t)))
     return out
 
 
@@ -381,7 +381,7 @@ def test_rotation_search_keeps_every_pose_below_a_raised_level(factor):
     # cheirality test prunes most.
     rng_w = np.random.default_rng(100)
     _, Rw, tw, Xw, uw = oracle.visible_scene(rng_w, 250.0, 5)
-    scenes.append((pluecker.Camera(250.0, 250.0, 320.0, 240.0), dict(points2d=uw + rng_w.normal(0, 1.0, uw.shape), points3d=Xw), (Rw, tw)))
+    scenes.append((pluecker.Camera.pinhole(250.0, 250.0, 320.0, 240.0), dict(points2d=uw + rng_w.normal(0, 1.0, uw.shape), points3d=Xw), (Rw, tw)))
     # Points and segments; few points and more segments, where the segments prune most boxes.
     for n_points, n_lines, seed in [(12, 3, 4), (3, 4, 5)]:
         scene, p2, l2 = _noisy("general", n_points, n_lines, seed)
@@ -466,7 +466,7 @@ def test_cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere():
     checked = 0
     for focal, n, seed in [(250.0, 6, 1), (120.0, 6, 3), (250.0, 8, 2)]:
         srng = np.random.default_rng(seed)
-        camera = pluecker.Camera(focal, focal, 320.0, 240.0)
+        camera = pluecker.Camera.pinhole(focal, focal, 320.0, 240.0)
         K = oracle.K_of(camera)
         u = srng.uniform([0, 0], [640, 480], size=(n, 2))
         rays = np.column_stack([(u - [320, 240]) / focal, np.ones(n)])

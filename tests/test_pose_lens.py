@@ -1,4 +1,4 @@
-"""``estimate_pose`` with a ``LensCamera`` (distorted pixels) and with per-observation covariances
+"""``estimate_pose`` with a ``Camera`` (distorted pixels) and with per-observation covariances
 (issue 12 §1, §5). The pixels are made here with numpy from the truth; the checks are statistical
 (normalised estimation error squared against the returned covariance) or exact identities."""
 
@@ -9,8 +9,8 @@ import pytest
 
 import pluecker
 
-OPENCV = pluecker.LensCamera("OPENCV", [600.0, 600.0, 320.0, 240.0, -0.28, 0.07, 5e-4, -3e-4])
-FISHEYE = pluecker.LensCamera("OPENCV_FISHEYE", [600.0, 600.0, 320.0, 240.0, 0.05, -0.02, 0.01, -0.002])
+OPENCV = pluecker.Camera("OPENCV", [600.0, 600.0, 320.0, 240.0, -0.28, 0.07, 5e-4, -3e-4])
+FISHEYE = pluecker.Camera("OPENCV_FISHEYE", [600.0, 600.0, 320.0, 240.0, 0.05, -0.02, 0.01, -0.002])
 
 
 def rotation(rng: np.random.Generator) -> np.ndarray:
@@ -49,7 +49,7 @@ def test_distorted_pixels_give_the_pose_within_its_covariance(lens):
     # ignoring the distortion biases the pose by hundreds of standard deviations.
     rng = np.random.default_rng(1)
     modelled, ignored = [], []
-    pinhole = pluecker.Camera(600.0, 600.0, 320.0, 240.0)
+    pinhole = pluecker.Camera.pinhole(600.0, 600.0, 320.0, 240.0)
     options = pluecker.PoseOptions(sigma_px=1.0)
     for _ in range(40):
         R, t, X, L = scene(rng)
@@ -89,8 +89,8 @@ def test_robust_pose_through_a_lens():
 
 def test_covariances_weight_the_pose_and_are_absolute():
     rng = np.random.default_rng(5)
-    camera = pluecker.Camera(600.0, 600.0, 320.0, 240.0)
-    pinhole = pluecker.LensCamera("PINHOLE", [600.0, 600.0, 320.0, 240.0])
+    camera = pluecker.Camera.pinhole(600.0, 600.0, 320.0, 240.0)
+    pinhole = pluecker.Camera("PINHOLE", [600.0, 600.0, 320.0, 240.0])
     weighted, plain = [], []
     for _ in range(40):
         R, t, X, _ = scene(rng, 30, 0)
@@ -106,10 +106,10 @@ def test_covariances_weight_the_pose_and_are_absolute():
 
 def test_line_covariances_per_segment_equal_per_endpoint():
     rng = np.random.default_rng(6)
-    camera = pluecker.Camera(600.0, 600.0, 320.0, 240.0)
+    camera = pluecker.Camera.pinhole(600.0, 600.0, 320.0, 240.0)
     R, t, X, L = scene(rng, 6, 4)
-    u = observe(pluecker.LensCamera("PINHOLE", [600.0, 600.0, 320.0, 240.0]), R, t, X, 1.0, rng)
-    s = observe(pluecker.LensCamera("PINHOLE", [600.0, 600.0, 320.0, 240.0]), R, t, L, 1.0, rng).reshape(-1, 2, 2)
+    u = observe(pluecker.Camera("PINHOLE", [600.0, 600.0, 320.0, 240.0]), R, t, X, 1.0, rng)
+    s = observe(pluecker.Camera("PINHOLE", [600.0, 600.0, 320.0, 240.0]), R, t, L, 1.0, rng).reshape(-1, 2, 2)
     per_segment = np.array([[[2.0, 0.3], [0.3, 1.0]]] * 4)
     per_endpoint = np.repeat(per_segment[:, None], 2, axis=1)
     a = pluecker.estimate_pose(camera, u, X, s, L, line_covariances=per_segment)
@@ -124,7 +124,7 @@ def test_line_covariances_per_segment_equal_per_endpoint():
 
 def test_bad_covariances_and_cameras_are_named_errors():
     rng = np.random.default_rng(7)
-    camera = pluecker.Camera(600.0, 600.0, 320.0, 240.0)
+    camera = pluecker.Camera.pinhole(600.0, 600.0, 320.0, 240.0)
     R, t, X, _ = scene(rng, 8, 0)
     u = observe(OPENCV, R, t, X, 1.0, rng)
     with pytest.raises(pluecker.ShapeError, match="point_covariances"):
@@ -138,9 +138,9 @@ def test_bad_covariances_and_cameras_are_named_errors():
     bad[5] = np.nan
     with pytest.raises(pluecker.NonFiniteError, match="point_covariances"):
         pluecker.estimate_pose(camera, u, X, point_covariances=bad)
-    with pytest.raises(TypeError, match="Camera or LensCamera"):
+    with pytest.raises(TypeError, match="camera: expected a pluecker.Camera or a pycolmap.Camera, got str"):
         pluecker.estimate_pose("OPENCV", u, X)
-    radial = pluecker.LensCamera("SIMPLE_RADIAL", [600.0, 320.0, 240.0, -0.28])
+    radial = pluecker.Camera("SIMPLE_RADIAL", [600.0, 320.0, 240.0, -0.28])
     far = observe(radial, R, t, X, 0.0, rng)
     far[3] = [320 + 0.8 * 600, 240]  # beyond the fold of the distortion
     with pytest.raises(pluecker.DegenerateConfigurationError, match=r"points2d.*pixel 3"):
@@ -186,14 +186,14 @@ def test_lines_triangulated_through_a_lens():
 
     from triangulation_scenes import look_at
 
-    lens = pluecker.LensCamera("OPENCV", [400.0, 400.0, 512.0, 384.0, -0.25, 0.06, 5e-4, -5e-4])
+    lens = pluecker.Camera("OPENCV", [400.0, 400.0, 512.0, 384.0, -0.25, 0.06, 5e-4, -5e-4])
     rng = np.random.default_rng(11)
     poses = []
     for a in np.radians([-25.0, -8.0, 8.0, 25.0]):
         centre = 6.0 * np.array([math.sin(a), 0.3 * rng.uniform(-1, 1), -math.cos(a)])
         R = look_at(centre, rng.uniform(-0.3, 0.3))
         poses.append((R, -R @ centre))
-    P = np.array([lens.pinhole.P(R, t) for R, t in poses])
+    P = np.array([lens.P(R, t) for R, t in poses])
     costs, ignored, errors, naive_errors = [], [], [], []
     while len(costs) < 60:
         ends = rng.uniform(-3.0, 3.0, (2, 3))

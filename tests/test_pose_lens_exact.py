@@ -118,9 +118,9 @@ def test_the_pose_minimises_the_exact_cost_no_worse_than_pycolmap(name):
     # refined pose, up to 5e-7 px^2 (what a step of 1e-3 sigma can leave above the minimum: half its
     # square), plus 1e-12 relative for the sums' rounding.
     model, params, r_max = LENSES[name]
-    lens = pluecker.LensCamera(model, params)
+    lens = pluecker.Camera(model, params)
     camera = colmap_camera(model, params)
-    pinhole = lens.pinhole
+    pinhole = lens.pinhole_part
     rng = np.random.default_rng(7)
     options = pluecker.PoseOptions(sigma_px=1.0)
     worst_first_order = 0.0
@@ -155,7 +155,7 @@ def test_anisotropic_covariances_and_segments_are_exact(name):
     # segment endpoints by their Mahalanobis distance to the curved image of the line; and not for the
     # oracle whitened by the identity (the covariances are honoured).
     model, params, r_max = LENSES[name]
-    lens = pluecker.LensCamera(model, params)
+    lens = pluecker.Camera(model, params)
     camera = colmap_camera(model, params)
     rng = np.random.default_rng(11)
     n, m = 20, 4
@@ -199,7 +199,7 @@ def test_a_certificate_through_a_lens_is_never_above_a_cheaper_pose(name):
     points whose confinement boxes reach the edge of the lens's one-to-one disc can be left out of the
     rotation search (1 of the 3 scenes); where not, the result says why."""
     model, params, r_max = LENSES[name]
-    lens = pluecker.LensCamera(model, params)
+    lens = pluecker.Camera(model, params)
     camera = colmap_camera(model, params)
     certified = 0
     for seed in range(3):

@@ -238,7 +238,7 @@ def test_quadric_certificates_are_sound(rig, noise):
        st.sampled_from([(800.0, 800.0), (-1730.3, 1220.7), (600.0, -600.0)]))
 def test_pose_certificates_are_sound(seed, n_points, n_lines, sigma, focal):
     scene = pluecker.random_scene("general", n_points, n_lines, seed=seed)
-    camera = pluecker.Camera(focal[0], focal[1], 320.0, 240.0)
+    camera = pluecker.Camera.pinhole(focal[0], focal[1], 320.0, 240.0)
     R, t = scene["R"], scene["t"]
     rng = np.random.default_rng(seed)
     points2d = camera.project(scene["points3d"] @ R.T + t) + rng.normal(0, sigma, (n_points, 2))

@@ -38,7 +38,7 @@ def clean_problems(draw):
     t = rng.normal(size=3)
     X = (X_cam - t) @ R  # x_cam = R X + t
     u = X_cam[:, :2] / X_cam[:, 2:] * f + [320, 240] + rng.normal(0, sigma, (n, 2))
-    return pluecker.Camera(f, f, 320, 240), f, u, X, sigma, tau
+    return pluecker.Camera.pinhole(f, f, 320, 240), f, u, X, sigma, tau
 
 
 @given(clean_problems(), st.sampled_from(["point", "line"]), st.integers(0, 2**32 - 1))

@@ -10,7 +10,7 @@ from triangulation_scenes import cameras
 
 import pluecker
 
-CAMERA = pluecker.Camera(800, 800, 320, 240)
+CAMERA = pluecker.Camera.pinhole(800, 800, 320, 240)
 
 
 def project(X: np.ndarray, R=np.eye(3), t=np.zeros(3), k1: float = 0.0) -> np.ndarray:
@@ -51,7 +51,7 @@ def test_noisy_data_in_front_is_not_called_behind_at_any_field_of_view(focal, n)
     """Under a narrow field of view a pose behind the camera fits nearly as well as its twin in front
     (rotated by π about the optical axis); only a fit better by more than the ambiguity margin counts."""
     rng = np.random.default_rng(int(focal) + n)
-    camera = pluecker.Camera(focal, focal, 320, 240)
+    camera = pluecker.Camera.pinhole(focal, focal, 320, 240)
     for trial in range(15):
         depth = 6.0
         half = np.array([320.0, 240.0]) / focal * depth * 0.8

@@ -192,7 +192,7 @@ def test_too_few_correspondences_and_nan_inputs_are_errors(seed):
 
 
 def test_degenerate_data_and_samples():
-    cam = pluecker.Camera(800.0, 800.0, 320.0, 240.0)
+    cam = pluecker.Camera.pinhole(800.0, 800.0, 320.0, 240.0)
     i = np.arange(12.0)
     line = np.stack([0.125 * i - 0.75, 0.0625 * i, 5.0 + 0.25 * i], axis=1)
     project = lambda X: (X[:, :2] / X[:, 2:]) * 800.0 + [320.0, 240.0]  # noqa: E731

@@ -30,7 +30,7 @@ class Scene:
         rng = np.random.default_rng(seed)
         self.model, self.params = model, params
         self.theirs = pycolmap.Camera(model=model, width=1200, height=1000, params=params)
-        self.lens = pluecker.LensCamera(model, params)
+        self.lens = pluecker.Camera(model, params)
         mid = rng.normal(size=3) * 0.3
         d = rng.normal(size=3)
         d /= np.linalg.norm(d)
@@ -66,7 +66,7 @@ class Scene:
             self.covs.append(cov)
         self.segments = np.array(self.segments)
         self.covs = np.array(self.covs)
-        self.P = np.stack([self.lens.pinhole.P(R, t) for R, t in self.poses])
+        self.P = np.stack([self.lens.P(R, t) for R, t in self.poses])
         # The one-to-one disc of the radial lens (its fold r = 1/sqrt(3|k|)), the library's domain too.
         self.fold = 1 / np.sqrt(3 * abs(params[3])) if model == "SIMPLE_RADIAL" and params[3] < 0 else np.inf
 
@@ -199,7 +199,7 @@ def test_exact_segments_cost_nothing_and_give_the_true_line():
 
 
 def test_the_exact_answer_beats_the_undistorted_first_order_one():
-    """Undistorting by hand (``LensCamera.undistort`` and ``lines_from_endpoints``) and triangulating
+    """Undistorting by hand (``Camera.undistort`` and ``lines_from_endpoints``) and triangulating
     on the pinhole part costs more on pycolmap's pixel cost than ``cameras=``, by 4e-6 to 4e-5
     relative in these scenes (the issue's "up to 5.8e-5"); the oracle is exact to ~1e-9."""
     for seed in (3, 4):
@@ -216,7 +216,7 @@ def test_pinhole_cameras_and_a_zero_distortion_lens_keep_the_pinhole_certificate
     sc = Scene("SIMPLE_RADIAL", [800.0, 320.0, 240.0, 0.0], n=4, off_axis=0.3, max_angle=0.5, noise=1.0, anisotropic=False, seed=9)
     today = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="optimal"))
     assert today.certified
-    for cams in ([pluecker.Camera(800.0, 800.0, 320.0, 240.0)] * 4, [sc.lens] * 4):
+    for cams in ([pluecker.Camera.pinhole(800.0, 800.0, 320.0, 240.0)] * 4, [sc.lens] * 4):
         r = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="optimal"), cameras=cams)
         assert r.status == "success" and r.certified and r.certificate.kind == today.certificate.kind
         assert abs(r.cost - today.cost) <= 1e-9 * max(today.cost, 1.0)
@@ -236,7 +236,7 @@ def _reprojection_and_line_residual_terms(sc, line):
     A, B = line
     out = []
     for (R, t), ends, cov in zip(sc.poses, sc.segments, sc.covs):
-        P = sc.lens.pinhole.P(R, t)
+        P = sc.lens.P(R, t)
         image = np.cross(P @ np.append(A, 1.0), P @ np.append(B, 1.0))
         image = image / np.linalg.norm(image[:2])
         m = image[:2]
@@ -265,10 +265,10 @@ def test_segments_say_which_cost_they_report_as_the_distortion_goes_to_zero():
     sc = Scene("OPENCV", params, n=3, off_axis=0.3, max_angle=0.9, noise=1.0, anisotropic=False, seed=3)
 
     def solve(k1):
-        lens = pluecker.LensCamera("OPENCV", [*params[:4], k1, 0.0, 0.0, 0.0])
+        lens = pluecker.Camera("OPENCV", [*params[:4], k1, 0.0, 0.0, 0.0])
         return pluecker.triangulate_line(sc.P, sc.segments, sc.covs, cameras=[lens] * 3)
 
-    plain_lens = pluecker.LensCamera("OPENCV", params)
+    plain_lens = pluecker.Camera("OPENCV", params)
     pinhole, tiny = solve(0.0), solve(1e-12)
     assert (pinhole.cost_kind, pinhole.status, pinhole.certified) == ("line_residual", "success", True), pinhole
     assert (tiny.cost_kind, tiny.status, tiny.certified) == ("reprojection", "gap_not_closed", False), tiny
@@ -333,7 +333,7 @@ def test_bad_input_names_the_argument_and_the_row():
     with pytest.raises(pluecker.InvalidOptionError, match="sigma"):
         pluecker.triangulate_line(sc.P, sc.segments, sc.covs, sigma=2.0, cameras=cams)
     with pytest.raises(pluecker.InvalidOptionError, match=r"projections: row 1 is not K \[R \| t\]"):
-        pluecker.triangulate_line(sc.P, sc.segments, cameras=[cams[0], pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 600.0, 500.0, 0.0]), cams[2]])
+        pluecker.triangulate_line(sc.P, sc.segments, cameras=[cams[0], pluecker.Camera("SIMPLE_RADIAL", [800.0, 600.0, 500.0, 0.0]), cams[2]])
 
 
 def test_observations_with_cameras_solve_each_track_as_the_single_call():
@@ -360,20 +360,20 @@ def test_quadrics_refuse_a_distorting_lens_by_name_and_take_a_zero_distortion_on
     from triangulation_scenes import ellipsoid, outlines
 
     rng = np.random.default_rng(17)
-    zero = pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, 0.0])
+    zero = pluecker.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, 0.0])
     poses = []
     for k in range(4):
         a = 2 * np.pi * k / 4
         centre = np.array([6 * np.cos(a), 0.5 * k - 1, 6 * np.sin(a)])
         R = _look_along(-centre, rng)
         poses.append((R, -R @ centre))
-    P = np.stack([zero.pinhole.P(R, t) for R, t in poses])
+    P = np.stack([zero.P(R, t) for R, t in poses])
     _, _, _, dual = ellipsoid(rng)
     conics = outlines(P, dual)
     plain = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="local"))
     same = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="local"), cameras=[zero] * 4)
     assert same.status == plain.status == "success" and np.array_equal(same.Q, plain.Q)
-    lens = pluecker.LensCamera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.2])
+    lens = pluecker.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.2])
     with pytest.raises(pluecker.InvalidOptionError, match=r"cameras: cameras\[2\] \(SIMPLE_RADIAL\) has distortion") as info:
         pluecker.triangulate_quadric(P, conics, cameras=[zero, zero, lens, zero])
     assert isinstance(info.value, ValueError)

@@ -16,7 +16,7 @@ from . import _core
 @dataclass(frozen=True)
 class Cameras:
     """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``lenses``
-    (v,), each image's ``Camera`` or ``LensCamera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
+    (v,), each image's ``Camera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
     table's pixels are the observed (distorted) ones, as ``triangulate_points(track=..., image=..., cameras=...)``
     takes them."""
 

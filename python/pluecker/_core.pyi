@@ -7,7 +7,7 @@ exact within one version. Options are mutable, ``==``, picklable, checked as set
 the Rust ``Default``. A bool is not a number; counts and seeds take integers up to ``2**64 - 1``.
 """
 
-from typing import Any, Callable, ClassVar, Dict, Iterator, List, Optional, Tuple, TypedDict, Union, final
+from typing import Any, Callable, ClassVar, Dict, Iterator, List, Optional, Sequence, Tuple, TypedDict, Union, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -59,16 +59,32 @@ class _ResidualTest(TypedDict):
 
 @final
 class Camera:
-    """Pinhole intrinsics in pixels, ``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``. Immutable,
-    hashable, ``==``, picklable. ``fx``, ``fy`` may be negative (a mirrored axis), never zero."""
+    """A camera: one of the models in :attr:`MODELS` (COLMAP's, with ``PINHOLE`` one of them, and
+    ``SKEWED_PINHOLE``) with its parameters in COLMAP's order. Its pixels are the observed ones: through
+    a lens with distortion ``u = K D(x_cam / z)``, for the pinholes ``u = K x_cam / z``. Immutable,
+    hashable, ``==``, picklable. ``fx``, ``fy`` may be negative (a mirrored axis), never zero.
+    Unprojection inverts the projection to 1e-10 px."""
 
-    def __new__(cls, fx: float, fy: float, cx: float, cy: float, skew: Optional[float] = None) -> "Camera":
-        """``skew=None``: 0 (orthogonal pixel axes)."""
+    MODELS: List[str]
+    def __new__(cls, model: Any, params: Optional[Sequence[float]] = None) -> "Camera":
+        """``Camera(model, params)``: ``model`` a name of :attr:`MODELS`, ``params`` in COLMAP's order;
+        ``Camera(pycolmap_camera)``: the same model and parameters as a ``pycolmap.Camera`` (its errors
+        name its ``camera_id``)."""
+    @staticmethod
+    def pinhole(fx: float, fy: float, cx: float, cy: float, skew: Optional[float] = None) -> "Camera":
+        """``K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]``: ``PINHOLE``, or ``SKEWED_PINHOLE`` with a
+        skew (``skew=None``: 0, orthogonal pixel axes)."""
     @staticmethod
     def from_matrix(K: ArrayLike) -> "Camera":
-        """From a (3, 3) calibration matrix, divided by ``K[2, 2]`` first."""
+        """The pinhole camera of a (3, 3) calibration matrix, divided by ``K[2, 2]`` first."""
     # fields of Camera (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
+    model: str
+    """The model's name, e.g. `'PINHOLE'`, `'OPENCV'` (COLMAP's names; `'SKEWED_PINHOLE'` is pluecker's)."""
+    params: NDArray[np.float64]
+    """The parameters in COLMAP's order (see `parameter_names`)."""
+    parameter_names: List[str]
+    """The names of `params`, e.g. `['fx', 'fy', 'cx', 'cy', 'k1', 'k2', 'p1', 'p2']`."""
     fx: float
     """Focal length along u, pixels (negative for a mirrored axis)."""
     fy: float
@@ -78,55 +94,31 @@ class Camera:
     cy: float
     """Principal point v, pixels."""
     skew: float
-    """Skew, pixels."""
+    """Skew, pixels (0 but for SKEWED_PINHOLE)."""
     K: NDArray[np.float64]
-    """The calibration matrix `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`."""
+    """The pinhole part `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]` (3, 3)."""
     # end of fields
+    @property
+    def distorts(self) -> bool:
+        """Whether the model distorts (``False`` for the pinholes and all-zero distortion parameters)."""
+    @property
+    def pinhole_part(self) -> "Camera":
+        """The pinhole camera of this camera's ``K``: the camera of its undistorted pixels."""
     def P(self, R: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
-        """The (3, 4) camera matrix ``K [R | t]`` at the pose ``x_cam = R X_world + t``: the known
-        camera of the triangulation functions, from a pose estimate."""
+        """The (3, 4) camera matrix ``K [R | t]`` of the pinhole part at the pose ``x_cam = R X_world + t``."""
+    def project(self, points_cam: ArrayLike) -> NDArray[np.float64]:
+        """Pixels (N, 2) of camera-frame points (N, 3) in front of the camera, through the lens."""
+    def unproject(self, pixels: ArrayLike) -> NDArray[np.float64]:
+        """Undistorted normalised coordinates (N, 2), ``(x/z, y/z)`` of the ray, of pixels (N, 2); an
+        error names a pixel beyond the fold."""
     def bearings(self, pixels: ArrayLike) -> NDArray[np.float64]:
-        """Unit rays (N, 3), camera frame, of pixels (N, 2): ``K⁻¹ (u, v, 1)`` normalised (minimal solvers)."""
+        """Unit rays (N, 3), camera frame, of pixels (N, 2) (minimal solvers)."""
     def plane_normals(self, segments: ArrayLike) -> NDArray[np.float64]:
         """Unit normals (M, 3), camera frame, of the interpretation planes of segments (M, 2, 2), pixels."""
-    def project(self, points_cam: ArrayLike) -> NDArray[np.float64]:
-        """Pixels (N, 2) ``u = K x_cam / z`` of camera-frame points (N, 3) (``z <= 0`` not rejected)."""
-    def pixel_to_normalized(self, pixels: ArrayLike) -> NDArray[np.float64]:
-        """Normalised coordinates (N, 2), ``(x, y, 1) ∝ K⁻¹ (u, v, 1)``, of pixels (N, 2)."""
-    def normalized_to_pixel(self, normalized: ArrayLike) -> NDArray[np.float64]:
-        """Pixels (N, 2) of normalised coordinates (N, 2)."""
-    def to_dict(self) -> Dict[str, Any]: ...
-
-@final
-class LensCamera:
-    """A camera of one of COLMAP's models (:attr:`MODELS`) with lens distortion, parameters in COLMAP's
-    order. Immutable, ``==``, picklable. Unprojection inverts the projection to 1e-10 px."""
-
-    MODELS: List[str]
-    def __new__(cls, model: str, params: List[float]) -> "LensCamera": ...
-    # fields of LensCamera (generated: python -m pluecker._stubgen)
-    __fields__: ClassVar[List[Tuple[str, str, str]]]
-    model: str
-    """COLMAP's name of the model, e.g. `'OPENCV'`."""
-    params: NDArray[np.float64]
-    """The parameters in COLMAP's order (see `parameter_names`)."""
-    parameter_names: List[str]
-    """The names of `params`, e.g. `['fx', 'fy', 'cx', 'cy', 'k1', 'k2', 'p1', 'p2']`."""
-    # end of fields
-    def project(self, points_cam: ArrayLike) -> NDArray[np.float64]:
-        """Pixels (N, 2) of camera-frame points (N, 3) in front of the camera."""
-    def unproject(self, pixels: ArrayLike) -> NDArray[np.float64]:
-        """Undistorted normalised coordinates (N, 2) of pixels (N, 2); an error names a pixel beyond the fold."""
-    def bearings(self, pixels: ArrayLike) -> NDArray[np.float64]:
-        """Unit rays (N, 3), camera frame, of pixels (N, 2)."""
-    @property
-    def pinhole(self) -> Camera:
-        """The pinhole part ``K = [fx 0 cx; 0 fy cy; 0 0 1]``: the camera of undistorted pixels."""
     def undistort(self, pixels: ArrayLike, covariances: Optional[ArrayLike] = None) -> Tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Undistorted pixels (N, 2) (exact to 1e-10 px) and their covariances (N, 2, 2) for pixel
-        covariances ``covariances`` (N, 2, 2) (``None``: 1 px²), first order: the input of
-        ``triangulate_*`` with ``projections = pinhole.P(R, t)``; segments go through
-        :func:`lines_from_endpoints`."""
+        covariances ``covariances`` (N, 2, 2) (``None``: 1 px²), first order: observations of
+        :attr:`pinhole_part`; segments go through :func:`lines_from_endpoints`."""
     def normalized_covariances(self, pixels: ArrayLike, covariances: Optional[ArrayLike] = None) -> NDArray[np.float64]:
         """First-order (N, 2, 2) covariances of the normalised coordinates for pixel covariances ``covariances`` (N, 2, 2) (``None``: 1 px)."""
     def to_dict(self) -> Dict[str, Any]: ...
@@ -481,7 +473,7 @@ class PoseResult:
     def to_dict(self) -> Dict[str, Any]: ...
 
 def estimate_pose(
-    camera: "Camera | LensCamera",
+    camera: Camera,
     points2d: Optional[ArrayLike] = None,
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
@@ -494,7 +486,7 @@ def estimate_pose(
     """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera from points (N, 2) ↔ (N, 3)
     and/or segments (M, 2, 2) ↔ (M, 2, 3) (only the 3-D line through a 3-D segment is used).
 
-    ``camera``: :class:`Camera`, or :class:`LensCamera` whose observed (distorted) pixels are given: the
+    ``camera``: :class:`Camera` (any model) whose observed (distorted, through a lens) pixels are given: the
     minimal solvers, RANSAC and the algebraic methods run on exactly undistorted pixels weighted by the
     distortion's Jacobian (RANSAC's thresholds are distorted pixels to first order); the refinement and
     all reported pixels use the exact error in the distorted pixels (segments: each endpoint's distance to
@@ -865,11 +857,11 @@ def triangulate_point(
     covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
-    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
+    cameras: Optional[List[Camera]] = None,
 ) -> PointTriangulation:
     """One point from its pixels ``observations`` (n, 2) in the views ``projections`` (n, 3, 4), n >= 2,
     with pixel covariances ``covariances`` (n, 2, 2) (sections 2.1, 3-4). With ``cameras`` (each view's
-    ``Camera`` or ``LensCamera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part and
+    ``Camera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part and
     ``observations`` the observed (distorted) pixels: the cost is the reprojection error through the
     exact projection."""
 
@@ -885,7 +877,7 @@ def triangulate_points(
     track: Optional[ArrayLike] = None,
     image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
-    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
+    cameras: Optional[List[Camera]] = None,
 ) -> PointTriangulations:
     """Many points seen by the views ``projections`` (v, 3, 4), in one of two forms.
 
@@ -897,7 +889,7 @@ def triangulate_points(
     result row t is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m
     rows given (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a
     negative id, is an ``InvalidOptionError`` naming the argument. With ``cameras`` (v,) (each image's
-    ``Camera`` or ``LensCamera``), ``projections[j]`` is ``K [R | t]`` of its pinhole part and
+    ``Camera``), ``projections[j]`` is ``K [R | t]`` of its pinhole part and
     ``observations`` the observed (distorted) pixels: the cost is the reprojection error through the
     exact projection."""
 
@@ -908,12 +900,12 @@ def triangulate_line(
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
-    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
+    cameras: Optional[List[Camera]] = None,
 ) -> LineTriangulation:
     """One 3-D line (sections 2.2, 3-4) from (n, 3) homogeneous image lines or (n, 2, 2) segments.
     ``covariances`` (n, 2, 2) residual covariances, e.g. :attr:`FittedLine.covariance`; for segments
     without ``covariances``, that of endpoints with noise ``sigma`` px (``None``: 1). With ``cameras``
-    (each view's ``Camera`` or ``LensCamera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part,
+    (each view's ``Camera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part,
     ``lines`` are (n, 2, 2) segments in the observed (distorted) pixels and ``covariances`` (n, 2, 2, 2)
     their endpoints' covariances:
     through a distorting lens the cost is the endpoints' distances to the line's curved images
@@ -933,7 +925,7 @@ def triangulate_lines(
     track: Optional[ArrayLike] = None,
     image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
-    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
+    cameras: Optional[List[Camera]] = None,
 ) -> LineTriangulations:
     """Many 3-D lines, in one of two forms. Dense: ``projections`` (v, 3, 4) shared or (n, v, 3, 4) per
     track; ``lines`` (n, v, 3) or (n, v, 2, 2); ``visible`` (n, v); ``covariances`` (n, v, 2, 2).
@@ -941,7 +933,7 @@ def triangulate_lines(
     Rows: with ``track`` and ``image`` (m,), ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments) of
     track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]``
     (m, 2, 2); track ids and ``n_tracks`` as for :func:`triangulate_points`. With ``cameras`` (each
-    image's ``Camera`` or ``LensCamera``), ``lines`` are (m, 2, 2) segments in the observed pixels and
+    image's ``Camera``), ``lines`` are (m, 2, 2) segments in the observed pixels and
     ``covariances`` (m, 2, 2, 2) their endpoints' covariances; each track is solved as
     :func:`triangulate_line` with ``cameras`` solves it."""
 
@@ -951,11 +943,11 @@ def triangulate_quadric(
     covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
-    cameras: Optional[List[Union[Camera, LensCamera]]] = None,
+    cameras: Optional[List[Camera]] = None,
 ) -> QuadricTriangulation:
     """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views ``projections`` (n, 3, 4),
     ``covariances`` (n, 5, 5) e.g. :attr:`FittedConic.covariance` (sections 2.3, 3-4). With ``cameras``,
-    ``projections[i]`` is ``K [R | t]`` of each camera's pinhole part; a ``LensCamera`` with distortion is refused (``InvalidOptionError``
+    ``projections[i]`` is ``K [R | t]`` of each camera's pinhole part; a ``Camera`` with distortion is refused (``InvalidOptionError``
     naming ``cameras``): the outline through a lens is not a conic."""
 
 def triangulate_quadrics(

@@ -424,27 +424,27 @@ def _number(value: Any, what: str) -> float:
         raise InputError(f"'{what}' is an integer too large for a float (beyond 1.8e308)") from None
 
 
-def _lens_camera(spec: dict[str, Any]) -> pluecker.LensCamera:
-    """``{"model": COLMAP name, "params": [...]}``: a camera with distortion (``pluecker.LensCamera``)."""
+def _model_camera(spec: dict[str, Any]) -> pluecker.Camera:
+    """``{"model": COLMAP name, "params": [...]}``: a camera with distortion (``pluecker.Camera``)."""
     if set(spec) != {"model", "params"}:
         raise InputError("'camera' with 'model' takes exactly {\"model\": name, \"params\": [...]}, got keys "
                          + ", ".join(sorted(spec)))
     model, params = spec["model"], spec["params"]
-    if model not in pluecker.LensCamera.MODELS:
-        raise InputError(f"'camera.model' {json.dumps(model)[:40]} is not one of {', '.join(pluecker.LensCamera.MODELS)}")
+    if model not in pluecker.Camera.MODELS:
+        raise InputError(f"'camera.model' {json.dumps(model)[:40]} is not one of {', '.join(pluecker.Camera.MODELS)}")
     if not isinstance(params, list):
         raise InputError("'camera.params' must be a list of numbers in COLMAP's order")
     values = [_number(v, f"camera.params[{i}]") for i, v in enumerate(params)]
-    return pluecker.LensCamera(model, values)
+    return pluecker.Camera(model, values)
 
 
-def _camera(doc: dict[str, Any]) -> pluecker.Camera | pluecker.LensCamera:
+def _camera(doc: dict[str, Any]) -> pluecker.Camera:
     spec = doc.get("camera")
     if not isinstance(spec, dict):
         raise InputError("'camera' is required: {\"fx\", \"fy\", \"cx\", \"cy\", \"skew\"?}, {\"K\": 3x3} or "
                          "{\"model\": COLMAP model, \"params\": [...]}")
     if "model" in spec:
-        return _lens_camera(spec)
+        return _model_camera(spec)
     if "K" in spec:
         if set(spec) != {"K"}:
             raise InputError("'camera' has 'K' and other keys; give either K or fx, fy, cx, cy, skew")
@@ -458,7 +458,7 @@ def _camera(doc: dict[str, Any]) -> pluecker.Camera | pluecker.LensCamera:
     if unknown := sorted(set(spec) - allowed):
         raise InputError(f"'camera' has unknown key(s) {', '.join(unknown)}")
     values = {key: _number(value, f"camera.{key}") for key, value in spec.items()}
-    return pluecker.Camera(values["fx"], values["fy"], values["cx"], values["cy"], skew=values.get("skew", 0.0))
+    return pluecker.Camera.pinhole(values["fx"], values["fy"], values["cx"], values["cy"], skew=values.get("skew", 0.0))
 
 
 def _correspondences(doc: dict[str, Any]) -> dict[str, np.ndarray]:

@@ -7,12 +7,12 @@ pycolmap objects import it when called and say how to install it when it is miss
   frame, ``x_cam = R X_world + t``: exactly pluecker's ``(R, t)``. No inversion is involved.
 - **Quaternions.** pycolmap's ``Rotation3d.quat`` is ``(x, y, z, w)``. COLMAP's text files
   (``images.txt``: ``QW QX QY QZ``) and pluecker's dual quaternions are ``(w, x, y, z)``.
-- **Cameras.** ``pycolmap.Camera(model, width, height, params)`` is ``pluecker.LensCamera(model,
+- **Cameras.** ``pycolmap.Camera(model, width, height, params)`` is ``pluecker.Camera(model,
   params)``: the same model names and parameter order. The image size is not part of the model.
 - **Camera matrices.** Triangulation takes ``P = K [R | t]`` with ``K`` the model's pinhole part
-  (``LensCamera.pinhole``) and, for points, each image's ``LensCamera`` (``cameras=``) with the observed,
+  (``Camera.pinhole_part``) and, for points, each image's ``Camera`` (``cameras=``) with the observed,
   distorted pixels: the cost is then the reprojection error through the exact model. Lines and quadrics
-  take pixels undistorted first (``LensCamera.undistort``).
+  take pixels undistorted first (``Camera.undistort``).
 """
 
 from __future__ import annotations
@@ -85,23 +85,8 @@ def rigid_from_pose(R: Any, t: Any) -> Any:
     return pycolmap.Rigid3d(pycolmap.Rotation3d(quaternion_xyzw(q)), np.asarray(t, dtype=float))
 
 
-def lens_camera(camera: Any) -> _core.LensCamera:
-    """The ``pluecker.LensCamera`` of a ``pycolmap.Camera``: same model, same parameters. A camera that
-    is not one (``EQUIRECTANGULAR``, wrong parameters, a zero focal length) raises the error of
-    ``LensCamera`` naming its ``camera_id``; anything else than a camera ``InvalidOptionError``."""
-    if isinstance(camera, _core.LensCamera):
-        return camera
-    if not (hasattr(camera, "model") and hasattr(camera, "params") and hasattr(camera, "camera_id")):
-        raise _core.InvalidOptionError(f"camera: expected a pycolmap.Camera or a pluecker.LensCamera, got "
-                                       f"{shown(camera)}")
-    try:
-        return _core.LensCamera(camera.model.name, list(camera.params))
-    except _core.PlueckerError as error:
-        raise type(error)(f"camera_id {camera.camera_id}: {error}") from error
-
-
-def colmap_camera(camera: _core.LensCamera, width: int, height: int) -> Any:
-    """The ``pycolmap.Camera`` of a ``pluecker.LensCamera``, for an image of ``width`` x ``height`` pixels."""
+def colmap_camera(camera: _core.Camera, width: int, height: int) -> Any:
+    """The ``pycolmap.Camera`` of a ``pluecker.Camera``, for an image of ``width`` x ``height`` pixels."""
     pycolmap = _pycolmap()
     return pycolmap.Camera(model=camera.model, width=width, height=height, params=list(camera.params))
 
@@ -387,10 +372,10 @@ class _Observations(NamedTuple):
     point2D_idx: np.ndarray     # (m,)
     skipped: list               # messages naming the cameras and observations left out, with COLMAP's ids
     pixels: np.ndarray          # (m, 2) the observed (distorted) pixels
-    lenses: list                # (v,) the LensCamera of each row of P
+    lenses: list                # (v,) the Camera of each row of P
 
 
-def _has_preimage(lens: _core.LensCamera, xy: np.ndarray) -> np.ndarray:
+def _has_preimage(lens: _core.Camera, xy: np.ndarray) -> np.ndarray:
     """Which (finite) pixels have a preimage through ``lens`` (``lens.unproject`` succeeds). The pixels
     of an image go in one call; only when one of them is refused are they tried one by one."""
     try:
@@ -424,17 +409,16 @@ def _grouped(name: str, problems: list[tuple[int, str, int]]) -> list[str]:
             for reason, items in by_reason.items()]
 
 
-def _camera_problem(camera: Any) -> tuple[_core.LensCamera | None, str]:
-    """The ``LensCamera`` of a model's camera, or ``None`` and why it cannot be used (its model and the
-    error of ``LensCamera``: a model pluecker does not handle, a zero focal length, ...)."""
+def _camera_problem(camera: Any) -> tuple[_core.Camera | None, str]:
+    """The ``Camera`` of a model's camera, or ``None`` and why it cannot be used (its model and the
+    error of ``Camera``: a model pluecker does not handle, a zero focal length, ...)."""
     try:
-        return lens_camera(camera), ""
+        return _core.Camera(camera.model.name, list(camera.params)), ""
     except _core.PlueckerError as exc:
-        reason = exc.__cause__ or exc  # lens_camera's own error, without its camera_id prefix
-        return None, f" ({camera.model.name}): {reason}"
+        return None, f" ({camera.model.name}): {exc}"
 
 
-def _image_problem(lens: _core.LensCamera, image: Any) -> tuple[np.ndarray | None, str]:
+def _image_problem(lens: _core.Camera, image: Any) -> tuple[np.ndarray | None, str]:
     """The camera matrix ``K [R | t]`` (3, 4) of a posed image through its camera's pinhole part, or
     ``None`` and why it cannot be used (a pose that is not finite, a matrix that overflows)."""
     R, t = pose_from_rigid(image.cam_from_world())
@@ -442,7 +426,7 @@ def _image_problem(lens: _core.LensCamera, image: Any) -> tuple[np.ndarray | Non
         return None, "its pose cam_from_world is not finite"
     with np.errstate(over="ignore", invalid="ignore"):
         try:
-            P = np.asarray(lens.pinhole.P(R, t), dtype=float)
+            P = np.asarray(lens.P(R, t), dtype=float)
         except _core.PlueckerError as exc:
             return None, f"its pose cam_from_world is not usable: {exc}"
     if not np.all(np.isfinite(P)):
@@ -611,7 +595,7 @@ def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: np.ndarray, po
 def observation_table(reconstruction: Any, sigma_px: float = 1.0, *, skipped: list | None = None) -> tuple[Any, Any]:
     """A model's observations as the table of :mod:`pluecker.distributed` (``track`` = point3D id,
     ``image`` = image id, the observed pixel ``x``, ``y`` and ``cov_*`` = ``sigma_px²`` I, ``point2D_idx``)
-    and its :class:`pluecker.distributed.Cameras` (each posed image's ``K [R | t]`` and ``LensCamera``):
+    and its :class:`pluecker.distributed.Cameras` (each posed image's ``K [R | t]`` and ``Camera``):
     the same solve as :func:`retriangulate`. What is left out (cameras, images, pixels) is named as in
     ``Retriangulation.skipped``, appended to the list ``skipped`` when one is given."""
     import pyarrow as pa
@@ -827,12 +811,11 @@ def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: A
              *, ransac: Any = True, options: Any = None, point_covariances: Any = None,
              line_covariances: Any = None) -> tuple[Any, Any]:
     """Localises one image from its 2D-3D matches (points and/or segments, distorted pixels of
-    ``camera``, a ``pycolmap.Camera`` or ``pluecker.LensCamera``): ``(cam_from_world, PoseResult)``, the
+    ``camera``, a ``pycolmap.Camera`` or ``pluecker.Camera``): ``(cam_from_world, PoseResult)``, the
     first a ``pycolmap.Rigid3d`` (``None`` unless the status is ``success``). Robust by default:
     ``ransac`` sets ``options.ransac`` as :func:`robust_options` says (``True``: ``options.ransac`` or the
     :class:`pluecker.RansacOptions` defaults); the rest as :func:`pluecker.estimate_pose`."""
-    lens = lens_camera(camera)
-    result = _core.estimate_pose(lens, points2D, points3D, lines2D, lines3D, options=robust_options(options, ransac),
+    result = _core.estimate_pose(camera, points2D, points3D, lines2D, lines3D, options=robust_options(options, ransac),
                                  point_covariances=point_covariances, line_covariances=line_covariances)
     rigid = rigid_from_pose(result.pose.rotation, result.pose.translation) if result.status == "success" else None
     return rigid, result
@@ -847,7 +830,7 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
                       options: Any = None, point_covariances: Any = None) -> tuple[Any, Any]:
     """Localises one image in a COLMAP model from its keypoints matched to the model's 3-D points:
     ``points2D`` (n, 2), the image's own (distorted) pixels, and ``point3D_ids`` (n,). ``camera``: the
-    ``camera_id`` of one of the model's cameras, a ``pycolmap.Camera`` or a ``pluecker.LensCamera``.
+    ``camera_id`` of one of the model's cameras, a ``pycolmap.Camera`` or a ``pluecker.Camera``.
     ``reconstruction``: a ``pycolmap.Reconstruction`` (or a :class:`ColmapModel`).
     Returns ``(cam_from_world, PoseResult)`` as :func:`localize` does: robust by default (``ransac=True``,
     :class:`pluecker.RansacOptions` defaults: 4 px threshold in the image's pixels; pass
@@ -882,9 +865,9 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
             raise MatchError(f"camera: camera_id {camera_id} is not a camera of the model")
         camera = cameras[camera_id]
         if isinstance(camera, tuple):  # a ColmapModel's (model name, params)
-            camera = _core.LensCamera(camera[0], list(camera[1]))
-    elif not isinstance(camera, _core.LensCamera) and not hasattr(camera, "params"):
+            camera = _core.Camera(camera[0], list(camera[1]))
+    elif not isinstance(camera, _core.Camera) and not hasattr(camera, "params"):
         raise _core.InvalidOptionError(f"camera: expected a camera_id (an int), a pycolmap.Camera or a "
-                                       f"pluecker.LensCamera, got {shown(camera)}")
+                                       f"pluecker.Camera, got {shown(camera)}")
     return localize(camera, points2D, points3D, ransac=ransac, options=options,
                     point_covariances=point_covariances)

@@ -580,7 +580,7 @@ class _BadQuery(Exception):
 
 
 def _query_cameras(queries: Any, kind: str, model: Optional[ColmapModel]) -> list[Any]:
-    """Per row of ``queries``, a function that returns its camera (``Camera`` or ``LensCamera``) or
+    """Per row of ``queries``, a function that returns its camera (``Camera`` or ``Camera``) or
     raises :class:`_BadQuery` naming the table, the column and the query id."""
     q_ids = np.asarray(queries.column("query").to_numpy(), dtype=np.int64)
     if kind == "pinhole":
@@ -588,7 +588,7 @@ def _query_cameras(queries: Any, kind: str, model: Optional[ColmapModel]) -> lis
 
         def pinhole(i: int) -> Any:
             try:
-                return _core.Camera(*intrinsics[i])
+                return _core.Camera.pinhole(*intrinsics[i])
             except _core.PlueckerError as exc:
                 raise _BadQuery(f"query {q_ids[i]}: queries columns fx, fy, cx, cy: {exc}") from None
         return [lambda i=i: pinhole(i) for i in range(len(q_ids))]
@@ -599,23 +599,23 @@ def _query_cameras(queries: Any, kind: str, model: Optional[ColmapModel]) -> lis
     return [lambda i=i: _model_camera(q_ids[i], camera_ids[i], model) for i in range(len(q_ids))]
 
 
-def _lens(query: int, name: Any, params: Any, what: str = "queries") -> _core.LensCamera:
-    """The ``LensCamera`` of one query's ``model`` and ``params`` cells."""
-    if not isinstance(name, str) or name not in _core.LensCamera.MODELS:
+def _lens(query: int, name: Any, params: Any, what: str = "queries") -> _core.Camera:
+    """The ``Camera`` of one query's ``model`` and ``params`` cells."""
+    if not isinstance(name, str) or name not in _core.Camera.MODELS:
         raise _BadQuery(f"query {query}: {what} column model: {name!r} is not a COLMAP camera model; expected one "
-                        f"of {', '.join(_core.LensCamera.MODELS)}")
+                        f"of {', '.join(_core.Camera.MODELS)}")
     if not isinstance(params, (list, tuple)) or not all(
             isinstance(p, (int, float)) and not isinstance(p, bool) for p in params):
         raise _BadQuery(f"query {query}: {what} column params: expected a list of numbers in COLMAP's order for "
                         f"{name}, got {params!r}"[:300])
     try:
-        return _core.LensCamera(name, [float(p) for p in params])
+        return _core.Camera(name, [float(p) for p in params])
     except _core.PlueckerError as exc:
         raise _BadQuery(f"query {query}: {what} column params: {exc}") from None
 
 
-def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.LensCamera:
-    """The ``LensCamera`` of the model's camera ``camera_id`` for one query."""
+def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.Camera:
+    """The ``Camera`` of the model's camera ``camera_id`` for one query."""
     if isinstance(camera_id, float) and camera_id.is_integer():
         camera_id = int(camera_id)
     if not isinstance(camera_id, int):
@@ -625,7 +625,7 @@ def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.LensC
                         "COLMAP model")
     name, params = model.cameras[int(camera_id)]
     try:
-        return _core.LensCamera(name, list(params))
+        return _core.Camera(name, list(params))
     except _core.PlueckerError as exc:
         raise _BadQuery(f"query {query}: queries column camera_id: camera_id {camera_id} of the COLMAP model: "
                         f"{exc}") from None
@@ -919,11 +919,11 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
 
 def _record_camera(camera: Any) -> tuple[str, list[float]]:
     """A query record's camera as ``(COLMAP model name, params)``: ``(fx, fy, cx, cy)`` is a
-    ``PINHOLE``; a ``pluecker.LensCamera``, a ``pycolmap.Camera`` or ``{"model": ..., "params": ...}``
+    ``PINHOLE``; a ``pluecker.Camera``, a ``pycolmap.Camera`` or ``{"model": ..., "params": ...}``
     its model."""
     if isinstance(camera, dict):
         return camera["model"], list(camera["params"])
-    if isinstance(camera, _core.LensCamera):
+    if isinstance(camera, _core.Camera):
         return camera.model, list(camera.params)
     if hasattr(camera, "model") and hasattr(camera, "params"):  # pycolmap.Camera
         return getattr(camera.model, "name", camera.model), list(camera.params)
@@ -932,7 +932,7 @@ def _record_camera(camera: Any) -> tuple[str, list[float]]:
 
 def queries_to_tables(queries: Iterable[dict[str, Any]]) -> tuple[Any, Any, Any]:
     """The three tables of :func:`localize_tables` from query records: dicts with ``query`` (int),
-    ``camera`` (``(fx, fy, cx, cy)``, or a camera model: a ``pluecker.LensCamera``, a
+    ``camera`` (``(fx, fy, cx, cy)``, or a camera model: a ``pluecker.Camera``, a
     ``pycolmap.Camera`` or ``{"model": name, "params": [...]}``), ``points2d`` (n, 2), ``points3d``
     (n, 3) and optionally ``lines2d`` (m, 2, 2), ``lines3d`` (m, 2, 3). The queries table has the
     pinhole columns when every camera is a plain ``(fx, fy, cx, cy)``, else ``model`` and ``params``."""
@@ -953,7 +953,7 @@ def queries_to_tables(queries: Iterable[dict[str, Any]]) -> tuple[Any, Any, Any]
         rows = rows.reshape(-1, len(names))
         return pa.table({n: rows[:, i].astype(np.int64) if n == "query" else rows[:, i] for i, n in enumerate(names)})
 
-    plain = all(not isinstance(c, (dict, _core.LensCamera)) and not hasattr(c, "params") for c in q_cameras)
+    plain = all(not isinstance(c, (dict, _core.Camera)) and not hasattr(c, "params") for c in q_cameras)
     if plain:
         query_table = table(np.array([(q, *map(float, c)) for q, c in zip(q_ids, q_cameras)], float), QUERY_COLUMNS)
     else:

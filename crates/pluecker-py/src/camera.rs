@@ -32,9 +32,28 @@ impl PyCamera {
     }
 }
 
-/// The model name of a pycolmap camera (`camera.model` is an enum with `.name` in pycolmap ≥ 0.5, a
-/// string before) and its parameters, or `None` for an object that is not one.
-fn pycolmap_camera(camera: &Bound<'_, PyAny>) -> PyResult<Option<(String, Vec<Real>)>> {
+/// The camera of a pycolmap camera (`camera.model` is an enum with `.name` in pycolmap ≥ 0.5, a
+/// string before; `camera.params`), or `None` for an object that is not one. The errors of the camera
+/// of a model name its `camera_id`.
+fn pycolmap_camera(camera: &Bound<'_, PyAny>) -> PyResult<Option<Camera>> {
+    let made = pycolmap_parts(camera);
+    match camera.getattr("camera_id").and_then(|id| id.extract::<u64>()) {
+        Ok(id) => made.map_err(|e| prefixed(camera.py(), e, &format!("camera_id {id}"))),
+        Err(_) => made,
+    }
+}
+
+/// `error` of the same Python type with its message after `prefix: `.
+fn prefixed(py: Python<'_>, error: PyErr, prefix: &str) -> PyErr {
+    let message = format!("{prefix}: {}", error.value(py));
+    match error.get_type(py).call1((message,)) {
+        Ok(value) => PyErr::from_value(value),
+        Err(other) => other,
+    }
+}
+
+/// [`pycolmap_camera`] without the `camera_id` in its errors.
+fn pycolmap_parts(camera: &Bound<'_, PyAny>) -> PyResult<Option<Camera>> {
     let (Ok(model), Ok(params)) = (camera.getattr("model"), camera.getattr("params")) else {
         return Ok(None);
     };
@@ -45,7 +64,14 @@ fn pycolmap_camera(camera: &Bound<'_, PyAny>) -> PyResult<Option<(String, Vec<Re
     let params: Vec<Real> = params
         .extract()
         .map_err(|_| invalid_argument("camera.params", "expected a sequence of numbers"))?;
-    Ok(Some((name, params)))
+    model_camera(&name, &params).map(Some)
+}
+
+/// The camera of `model` (a name) with `params`, checked by the core.
+fn model_camera(model: &str, params: &[Real]) -> PyResult<Camera> {
+    let model = CameraModel::parse(model).map_err(crate::errors::to_py_err)?;
+    let values = params.iter().enumerate().map(|(i, p)| p.get(&format!("params[{i}]"))).collect::<PyResult<Vec<_>>>()?;
+    guarded(|| Camera::new(model, &values))
 }
 
 result_class! {
@@ -77,20 +103,18 @@ result_class! {
     #[new]
     #[pyo3(signature = (model, params = None))]
     fn new(model: &Bound<'_, PyAny>, params: Option<Vec<Real>>) -> PyResult<Self> {
-        let (name, params) = match params {
+        let camera = match params {
             Some(params) => {
                 let name = model.extract::<String>().map_err(|_| {
                     invalid_argument("model", format!("expected a model name (str), got {}", model.get_type()))
                 })?;
-                (name, params)
+                model_camera(&name, &params)?
             }
             None => pycolmap_camera(model)?.ok_or_else(|| {
                 invalid_argument("params", "missing: Camera(model, params), or Camera(pycolmap_camera)")
             })?,
         };
-        let model = CameraModel::parse(&name).map_err(crate::errors::to_py_err)?;
-        let values = params.iter().enumerate().map(|(i, p)| p.get(&format!("params[{i}]"))).collect::<PyResult<Vec<_>>>()?;
-        guarded(|| Camera::new(model, &values)).map(PyCamera::wrap)
+        Ok(PyCamera::wrap(camera))
     }
 
     /// The pinhole camera `K = [[fx, skew, cx], [0, fy, cy], [0, 0, 1]]`: PINHOLE, or SKEWED_PINHOLE
@@ -322,24 +346,20 @@ fn symmetric_psd(c: &Matrix2<f64>) -> bool {
 }
 
 /// The one coercion of a camera argument `name`: a `pluecker.Camera`, or a `pycolmap.Camera` (any
-/// object with `model` and `params`) taken as it is; anything else is a `TypeError` naming `name`.
+/// object with `model` and `params`) taken as it is; anything else is a `TypeError` naming `name`
+/// (the Python convention for an argument of the wrong type, as for arrays that are not numeric).
 pub(crate) fn coerce(name: &str, camera: &Bound<'_, PyAny>) -> PyResult<Camera> {
     if let Ok(c) = camera.downcast::<PyCamera>() {
         return Ok(c.get().inner.clone());
     }
-    let Some((model, params)) = pycolmap_camera(camera)? else {
-        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "{name}: expected a pluecker.Camera or a pycolmap.Camera, got {}",
-            camera.get_type()
-        )));
-    };
-    let model = CameraModel::parse(&model).map_err(crate::errors::to_py_err)?;
-    let values = params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| p.get(&format!("{name}.params[{i}]")))
-        .collect::<PyResult<Vec<_>>>()?;
-    guarded(|| Camera::new(model, &values))
+    pycolmap_camera(camera)
+        .map_err(|e| prefixed(camera.py(), e, name))?
+        .ok_or_else(|| {
+            let got = camera.get_type().name().map(|n| n.to_string()).unwrap_or_default();
+            pyo3::exceptions::PyTypeError::new_err(format!(
+                "{name}: expected a pluecker.Camera or a pycolmap.Camera, got {got}"
+            ))
+        })
 }
 
 /// The pinhole part `K` of the camera argument `name` of a function that works in undistorted pixels

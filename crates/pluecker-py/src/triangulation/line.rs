@@ -221,7 +221,7 @@ fn endpoint_covariances(
 
 /// Triangulates one 3-D line from its images in two or more views (Josephson & Kahl 2008, eq. 19).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `Camera` (any of COLMAP's models):
+/// `cameras`, when given, holds each view's `Camera` (any model):
 /// `projections[i]` is then `K [R | t]` of its pinhole part, `lines` are segments (n, 2, 2) whose
 /// endpoints are the observed (distorted) pixels, and `covariances` (n, 2, 2, 2) the covariances of each segment's two endpoints in those
 /// pixels (else `sigma` px per coordinate, 1 by default). Through a distorting lens the cost is the

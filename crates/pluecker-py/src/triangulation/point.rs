@@ -103,7 +103,7 @@ fn pixels(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vect
 
 /// Triangulates one point from its pixels in two or more views (Josephson & Kahl 2008, eq. 19).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `Camera` (any of COLMAP's models):
+/// `cameras`, when given, holds each view's `Camera` (any model):
 /// `projections[i]` is then `K [R | t]` of its pinhole part, `observations` the observed (distorted)
 /// pixels and `covariances` their covariances, and the cost is the reprojection error in those pixels through the exact projection
 /// (certificate `lens_convexity_test` through a lens).
@@ -394,7 +394,7 @@ pub(crate) fn point_observations(
     batch_result(py, outcome)
 }
 
-/// The views of `cameras` (one `Camera` or `Camera` per row of `projections`) with the poses
+/// The views of `cameras` (one `Camera` per row of `projections`) with the poses
 /// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row of `projections`
 /// that is not `K [R | t]` of its camera's pinhole part.
 pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {

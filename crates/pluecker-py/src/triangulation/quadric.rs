@@ -97,7 +97,7 @@ result_class! {
 
 /// Triangulates an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008).
 ///
-/// `cameras`, when given, holds each view's `Camera` or `Camera` (`projections[i]` is `K [R | t]`
+/// `cameras`, when given, holds each view's `Camera` (`projections[i]` is `K [R | t]`
 /// of its pinhole part): a lens with distortion is refused (`InvalidOptionError` naming `cameras`),
 /// since the outline seen through it is not a conic; pinholes and lenses without distortion are solved
 /// as their `projections`.

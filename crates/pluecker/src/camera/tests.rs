@@ -25,7 +25,7 @@ fn a_lens_whose_pinhole_part_is_not_a_camera_is_refused() {
 /// A camera of each model, in COLMAP's id order, with COLMAP-like distortion (moderate barrel, small
 /// tangential and thin-prism terms; the fisheyes' distortion is 5-10 % at 80° off axis).
 fn cameras() -> Vec<Camera> {
-    let params: [(CameraModel, &[f64]); 17] = [
+    let params: [(CameraModel, &[f64]); 18] = [
         (CameraModel::SimplePinhole, &[800.0, 320.0, 240.0]),
         (CameraModel::Pinhole, &[800.0, 790.0, 320.0, 240.0]),
         (CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]),
@@ -65,6 +65,7 @@ fn cameras() -> Vec<Camera> {
         (CameraModel::SimpleFisheye, &[400.0, 320.0, 240.0]),
         (CameraModel::Fisheye, &[400.0, 395.0, 320.0, 240.0]),
         (CameraModel::Eucm, &[400.0, 395.0, 320.0, 240.0, 0.6, 1.1]),
+        (CameraModel::SkewedPinhole, &[-800.0, 790.0, 320.0, 240.0, 12.5]),
     ];
     assert_eq!(params.map(|(m, _)| m).as_slice(), CameraModel::ALL);
     params.iter().map(|(m, p)| Camera::new(*m, p).unwrap()).collect()
@@ -176,7 +177,7 @@ fn models_have_colmap_ids_and_names() {
     ];
     for (id, name) in colmap.iter().enumerate() {
         let model = CameraModel::parse(name).unwrap();
-        assert_eq!(model as usize, id, "{name}");
+        assert_eq!(model.colmap_id(), Some(id as u32), "{name}");
         assert_eq!(CameraModel::ALL[id], model);
         assert_eq!(model.as_str(), *name);
     }

@@ -38,7 +38,7 @@ impl View {
     /// upper triangular with `K₃₃ = 1` and `fy > 0`, `R` a rotation (`det R = +1`), so that a point is
     /// in front of the view exactly when it is in front of `P` (module docs). A `P` whose left block has
     /// `det M < 0` (a left-handed world frame) gives `fx < 0`, a mirrored axis. PINHOLE when the skew
-    /// comes out exactly 0, else SKEWED_PINHOLE. `Error::NonFinite` / `Error::SingularCamera` as the
+    /// is within rounding of 0 (`|skew| ≤ 1e-12 max(|fx|, |fy|)`, taken as 0), else SKEWED_PINHOLE. `Error::NonFinite` / `Error::SingularCamera` as the
     /// cameras' validation (`what` names the argument).
     pub fn from_projection(p: &Matrix3x4<f64>, what: &str) -> Result<View> {
         validate_cameras(std::slice::from_ref(p), what)?;
@@ -55,6 +55,8 @@ impl View {
         let r1 = r2.cross(&r3);
         let (cx, skew) = (m1.dot(&r3), m1.dot(&r2));
         let fx = m1.dot(&r1);
+        // The rounding of a zero skew: the decomposition of K [R | t] with skew 0 leaves ~1e-16 fx.
+        let skew = if skew.abs() <= SKEW_ROUNDING * fx.abs().max(fy) { 0.0 } else { skew };
         let rotation = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), r3.transpose()]);
         let k = Matrix3::new(fx, skew, cx, 0.0, fy, cy, 0.0, 0.0, s) / s;
         let singular = || Error::SingularCamera {
@@ -75,6 +77,10 @@ impl View {
         Ok(self.camera.intrinsics().projection(&self.pose))
     }
 }
+
+/// Relative size of a skew (against the focal lengths) that [`View::from_projection`] takes as the
+/// rounding of 0.
+const SKEW_ROUNDING: f64 = 1e-12;
 
 /// Relative size of `det M` (against `‖M‖³`) below which a camera is rejected as singular.
 const MIN_RELATIVE_DET: f64 = 1e-12;
