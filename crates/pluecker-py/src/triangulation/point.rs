@@ -301,8 +301,7 @@ pub fn triangulate_points(
         if opts.method == Method::Linear {
             let started = Instant::now();
             let write = |t, row, r| write_linear(&sink, t, row, r);
-            let stopped =
-                linear_points_into(&cams, &tracks, Some(done), rows(&mut report, &mut columns), write)?;
+            let stopped = linear_points_into(&cams, &tracks, Some(done), rows(&mut report, &mut columns), write)?;
             // The fast path does not time tracks one by one: each solved one gets the batch's mean.
             let written = done.load(Ordering::Relaxed).max(1);
             report.time_solved(started.elapsed().as_secs_f64() / written as f64);

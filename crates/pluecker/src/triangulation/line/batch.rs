@@ -16,9 +16,9 @@
 //! call (bad options, a bad `sigma`, bad shared cameras, inconsistent array lengths) come first, as the
 //! outer `Result`.
 
-use super::{line_of_projections, line_of_segment_views, lines_from_segments, LineTriangulation};
 #[cfg(doc)]
 use super::triangulate_line;
+use super::{line_of_projections, line_of_segment_views, lines_from_segments, LineTriangulation};
 use crate::error::{Error, Result};
 use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{

@@ -15,9 +15,9 @@
 //! (`conics[t][j]`: view `j` of track `t`). Errors of the whole call (bad options, bad shared cameras,
 //! inconsistent array lengths) come first, as the outer `Result`.
 
-use super::{quadric_of_projections, refuse_distortion, Matrix5, QuadricTriangulation};
 #[cfg(doc)]
 use super::triangulate_quadric;
+use super::{quadric_of_projections, refuse_distortion, Matrix5, QuadricTriangulation};
 use crate::error::{Error, Result};
 use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{

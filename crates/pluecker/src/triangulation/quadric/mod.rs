@@ -208,7 +208,9 @@ pub fn triangulate_quadric<'a>(
         }
     };
     match observations.into() {
-        QuadricObservations::Conics(conics, covariances) => quadric_of_projections(projections, conics, covariances, opts),
+        QuadricObservations::Conics(conics, covariances) => {
+            quadric_of_projections(projections, conics, covariances, opts)
+        }
         QuadricObservations::EdgePoints(points, sigma) => quadric_of_points(projections, points, sigma, opts),
     }
 }
