@@ -6,8 +6,7 @@
 //! px², about 0.6 for the ±0.5 px of noise) and its certificate (`taylor_branch_and_bound`, certified).
 
 use pluecker::nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
-use pluecker::triangulation::line::triangulate_line;
-use pluecker::triangulation::line::LineObservations;
+use pluecker::triangulation::line::{triangulate_line, LineObservations};
 use pluecker::triangulation::TriangulationOptions;
 use pluecker::{Camera, Pose};
 

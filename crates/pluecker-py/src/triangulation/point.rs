@@ -3,10 +3,10 @@
 //! the GIL released) with `pluecker.PointTriangulations`, the arrays of their points beside the
 //! per-track report columns of `pluecker.BatchReport` ([`super::batch`]).
 //!
-//! The batch's numpy arrays go to the core as flat row-major slices (`PointTracks`), one copy each.
+//! The batch's numpy arrays go to the core as flat row-major slices (`DensePointTracks`), one copy each.
 //! A track the core rejects (NaN in a visible view, fewer than two visible views, a covariance that
 //! is not positive definite, ...) gets an error status and a message and never stops the others.
-//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear_into`), written
+//! Method `linear` takes the core's allocation-free path (`streaming::linear_points_into`), written
 //! into the same preallocated columns.
 
 use super::batch::{

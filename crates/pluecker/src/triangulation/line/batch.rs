@@ -273,7 +273,7 @@ pub struct SparseLineTracks<'a> {
     pub csr: Csr<'a>,
     /// The observed image lines or segments, one per row.
     pub lines: ImageLines<'a>,
-    /// `m · 4` covariances of the line residuals (as in [`LineTracks::covariances`]), or `None`.
+    /// `m · 4` covariances of the line residuals (as in [`DenseLineTracks::covariances`]), or `None`.
     pub covariances: Option<&'a [f64]>,
 }
 

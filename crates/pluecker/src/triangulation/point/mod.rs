@@ -117,6 +117,25 @@ pub struct PointTriangulation {
 /// [`Error::Degenerate`] for a covariance that is not positive definite, cameras with one common
 /// centre, or (views) an observation whose pixel has no preimage inside its lens's fold,
 /// [`Error::InvalidOption`] for bad options.
+///
+/// Through a COLMAP camera model (here SIMPLE_RADIAL), from the raw, distorted pixels: the point
+/// minimises the reprojection error in each image's own pixels.
+/// ```
+/// use pluecker::nalgebra::{Matrix3, Vector3};
+/// use pluecker::camera::{CameraModel, LensCamera};
+/// use pluecker::triangulation::{point::triangulate_point, TriangulationOptions, View};
+/// use pluecker::Pose;
+/// let lens = LensCamera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
+/// let views = [
+///     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::zeros())),
+///     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::new(-1.0, 0.0, 0.0))),
+/// ];
+/// let x = Vector3::new(0.3, -0.2, 5.0);
+/// let pixels: Vec<_> = views.iter().map(|v| lens.project(&(v.pose.rotation * x + v.pose.translation)).0).collect();
+/// let result = triangulate_point(&views, &pixels, None, &TriangulationOptions::default()).unwrap();
+/// assert!((result.point - x).norm() < 1e-6);
+/// assert!(result.report.certified());
+/// ```
 pub fn triangulate_point<'a>(
     cameras: impl Into<Cameras<'a>>,
     observations: &[Vector2<f64>],
