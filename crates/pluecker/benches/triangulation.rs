@@ -183,7 +183,7 @@ fn bench_batch(c: &mut Criterion) {
         let mut opts = TriangulationOptions::default();
         opts.method = method;
         group.bench_function(format!("5-views-10deg/{}", method.as_str()), |b| {
-            b.iter(|| black_box(triangulate_points(&scene.cameras, &tracks, &opts, None).unwrap()))
+            b.iter(|| black_box(triangulate_points(&scene.cameras, tracks, &opts, None).unwrap()))
         });
     }
     group.finish();

@@ -66,7 +66,7 @@ fn main() -> pluecker::Result<()> {
         visible: None,
         covariances: None,
     };
-    let results = triangulate_points(&projections, &tracks, &options, None)?;
+    let results = triangulate_points(&projections, tracks, &options, None)?;
     let certified = results
         .iter()
         .filter(|r| matches!(r, Ok(p) if p.report.certified()))

@@ -308,14 +308,7 @@ pub fn triangulate_points(
             return Ok(sink.finish(report, columns, n, stopped));
         }
         let write = |t, row, r| sink.write::<PyPointTriangulations>(t, row, r);
-        let stopped = core_points(
-            &cams,
-            &tracks,
-            &opts,
-            Some(done),
-            rows(&mut report, &mut columns),
-            write,
-        )?;
+        let stopped = core_points(&cams, tracks, &opts, Some(done), rows(&mut report, &mut columns), write)?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.

@@ -280,7 +280,7 @@ pub fn triangulate_quadrics(
         let write = |t, row, r| sink.write::<PyQuadricTriangulations>(t, row, r);
         let stopped = core_quadrics(
             cams.core(),
-            &tracks,
+            tracks,
             &opts,
             Some(done),
             rows(&mut report, &mut columns),

@@ -71,7 +71,7 @@ fn a_request_from_another_thread_stops_a_line_batch() {
     let tracks = segment_tracks(&endpoints, 1.0);
     // The first poll is the one before the first track: that track starts.
     let (stop, requester) = requested_after_poll(1);
-    let batch = with_stop(stop, || triangulate_lines(&cameras, &tracks, &endless(), None)).unwrap();
+    let batch = with_stop(stop, || triangulate_lines(&cameras, tracks, &endless(), None)).unwrap();
     requester.join().unwrap();
     let (mut started, mut skipped) = (0, 0);
     for result in &batch {
@@ -149,7 +149,7 @@ fn an_expired_budget_solves_nothing_in_every_point_path() {
     for method in [Method::Local, Method::Optimal] {
         let mut opts = TriangulationOptions::default();
         opts.method = method;
-        let batch = with_stop(expired(), || triangulate_points(&cameras, &tracks, &opts, None)).unwrap();
+        let batch = with_stop(expired(), || triangulate_points(&cameras, tracks, &opts, None)).unwrap();
         assert!(batch.iter().all(|r| r.as_ref().err() == Some(&budget)));
     }
     let linear = with_stop(expired(), || LinearPoints::from_tracks(&cameras, &tracks)).unwrap();

@@ -114,7 +114,7 @@ fn a_point_in_front_of_cameras_with_a_negative_focal_length_is_found_by_every_me
     };
     let linear = LinearPoints::from_tracks(&cameras, &tracks).unwrap();
     assert_eq!(*linear.outcomes[0].as_ref().unwrap(), Status::Success);
-    let batch = triangulate_points(&cameras, &tracks, &opts(Method::Optimal), None).unwrap();
+    let batch = triangulate_points(&cameras, tracks, &opts(Method::Optimal), None).unwrap();
     let r = batch[0].as_ref().unwrap();
     assert_eq!(r.report.status, Status::Success);
     assert!(r.report.certified() && (r.point - truth).norm() < 1e-8 * 78.0);

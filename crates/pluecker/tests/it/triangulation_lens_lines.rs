@@ -706,7 +706,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         covariances: Some(&covariances),
     };
     let o = opts(Method::Local);
-    let results = triangulate_lines(&views, &tracks, &o, None).unwrap();
+    let results = triangulate_lines(&views, tracks, &o, None).unwrap();
     for (t, result) in results.iter().enumerate() {
         let seen = &images[offsets[t]..offsets[t + 1]];
         let track_obs: Vec<&Obs> = rows[offsets[t]..offsets[t + 1]].to_vec();
@@ -730,7 +730,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         lines: &segments,
         covariances: Some(&covariances),
     };
-    let results = triangulate_lines(&views, &tracks, &o, None).unwrap();
+    let results = triangulate_lines(&views, tracks, &o, None).unwrap();
     assert!(results[0].is_ok());
     match &results[1] {
         Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("lines[1]", 2)),

@@ -694,7 +694,7 @@ mod batch {
                 visible: Some(&visible),
                 covariances: None,
             };
-            let batch = triangulate_lines(&cameras, &tracks, &opts(method), None).unwrap();
+            let batch = triangulate_lines(&cameras, tracks, &opts(method), None).unwrap();
             assert_eq!(batch.len(), n);
             for (t, r) in batch.into_iter().enumerate() {
                 let single = triangulate_line(
@@ -741,7 +741,7 @@ mod batch {
             ..homogeneous
         };
         for tracks in [homogeneous, with_covariances] {
-            let batch = triangulate_lines(&cameras, &tracks, &opts(Method::Local), None).unwrap();
+            let batch = triangulate_lines(&cameras, tracks, &opts(Method::Local), None).unwrap();
             for (t, r) in batch.into_iter().enumerate() {
                 let (image, _) = lines_from_segments(&segments_of(t), 1.0).unwrap();
                 let single = triangulate_line(
@@ -782,7 +782,7 @@ mod batch {
             projections: &cameras,
             views: v,
         };
-        let batch = triangulate_lines(per_track, &tracks, &opts(Method::Local), Some(&done)).unwrap();
+        let batch = triangulate_lines(per_track, tracks, &opts(Method::Local), Some(&done)).unwrap();
         assert_eq!(done.load(Ordering::Relaxed), n);
         for (t, r) in batch.into_iter().enumerate() {
             let segments: Vec<[Vector2<f64>; 2]> = (0..v).map(|j| segment(&endpoints, v, t, j)).collect();
@@ -801,7 +801,7 @@ mod batch {
             projections: &bad,
             views: v,
         };
-        let batch = triangulate_lines(per_track, &tracks, &opts(Method::Linear), None).unwrap();
+        let batch = triangulate_lines(per_track, tracks, &opts(Method::Linear), None).unwrap();
         assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("projections[2][1]")));
         assert!(batch.iter().enumerate().all(|(t, r)| r.is_ok() == (t != 2)));
     }
@@ -851,7 +851,7 @@ mod batch {
             visible: Some(&visible),
             covariances: Some(&covariances),
         };
-        let batch = triangulate_lines(&cameras, &tracks, &opts(Method::Local), None).unwrap();
+        let batch = triangulate_lines(&cameras, tracks, &opts(Method::Local), None).unwrap();
         assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 2 }) if what == "lines[1]"));
         assert!(
             matches!(&batch[3], Err(Error::TooFewCorrespondences { actual, .. }) if actual == "track 3: 1 view(s)")
@@ -892,7 +892,7 @@ mod batch {
         let p = &endpoints[4 * 5 * v..][..2].to_vec();
         endpoints[4 * 5 * v + 2..4 * 5 * v + 4].copy_from_slice(p);
         let tracks = segment_tracks(&endpoints, 1.0);
-        let batch = triangulate_lines(&cameras, &tracks, &opts(Method::Linear), None).unwrap();
+        let batch = triangulate_lines(&cameras, tracks, &opts(Method::Linear), None).unwrap();
         assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "lines[2]"));
         assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "lines[5][0] has zero length"));
         assert_eq!(batch.iter().filter(|r| r.is_ok()).count(), n - 2);
@@ -948,7 +948,7 @@ mod batch {
         let mut singular = cameras.clone();
         singular[1][(0, 0)] = f64::NAN;
         assert!(matches!(
-            triangulate_lines(&singular, &tracks(1.0), &o, None),
+            triangulate_lines(&singular, tracks(1.0), &o, None),
             Err(Error::NonFinite { what, index: 1 }) if what == "projections"
         ));
         let per_track = TrackCameras::PerTrack {
@@ -956,14 +956,14 @@ mod batch {
             views: 3,
         };
         assert!(matches!(
-            triangulate_lines(per_track, &tracks(1.0), &o, None),
+            triangulate_lines(per_track, tracks(1.0), &o, None),
             Err(Error::Shape { what, .. }) if what == "projections"
         ));
         let empty = DenseLineTracks {
             lines: ImageLines::Homogeneous(&[]),
             ..tracks(1.0)
         };
-        assert!(triangulate_lines(shared, &empty, &o, None).unwrap().is_empty());
+        assert!(triangulate_lines(shared, empty, &o, None).unwrap().is_empty());
     }
 }
 
@@ -989,7 +989,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
     let opts = pluecker::triangulation::TriangulationOptions::default();
     let dense = pluecker::triangulation::line::triangulate_lines(
         &cameras,
-        &pluecker::triangulation::line::DenseLineTracks {
+        pluecker::triangulation::line::DenseLineTracks {
             lines: pluecker::triangulation::line::ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
@@ -1005,7 +1005,7 @@ fn sparse_line_tracks_equal_the_dense_batch() {
     let images: Vec<usize> = (0..4).flat_map(|_| 0..3).collect();
     let sparse = triangulate_lines(
         &cameras,
-        &SparseLineTracks {
+        SparseLineTracks {
             csr: Csr {
                 offsets: &offsets,
                 image: &images,

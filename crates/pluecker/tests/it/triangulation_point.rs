@@ -580,7 +580,7 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         visible: Some(&visible),
         covariances: Some(&covariances),
     };
-    let results = triangulate_points(&cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let results = triangulate_points(&cameras, tracks, &TriangulationOptions::default(), None).unwrap();
     assert!(matches!(&results[1], Err(Error::NonFinite { what, index: 3 }) if what == "observations[1]"));
     assert!(matches!(&results[3], Err(Error::TooFewCorrespondences { .. })));
     assert!(matches!(&results[4], Err(Error::Degenerate { what }) if what.contains("covariances[4]")));
@@ -624,7 +624,7 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         covariances: None,
     };
     assert!(matches!(
-        triangulate_points(&cameras, &short, &TriangulationOptions::default(), None),
+        triangulate_points(&cameras, short, &TriangulationOptions::default(), None),
         Err(Error::Shape { .. })
     ));
     let mask = DensePointTracks {
@@ -711,8 +711,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         observations: &sparse,
         covariances: Some(&sparse_cov),
     };
-    let a = triangulate_points(&cameras, &d, &opts, None).unwrap();
-    let b = triangulate_points(&cameras, &s, &opts, None).unwrap();
+    let a = triangulate_points(&cameras, d, &opts, None).unwrap();
+    let b = triangulate_points(&cameras, s, &opts, None).unwrap();
     for (t, (a, b)) in a.into_iter().zip(b).enumerate() {
         let (mut a, mut b) = (a.unwrap(), b.unwrap());
         (a.report.time_seconds, b.report.time_seconds) = (0.0, 0.0);
@@ -735,8 +735,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         observations: &rev_obs,
         covariances: Some(&rev_cov),
     };
-    let c = triangulate_points(&cameras, &reversed, &opts, None).unwrap();
-    for (t, (b, c)) in triangulate_points(&cameras, &s, &opts, None)
+    let c = triangulate_points(&cameras, reversed, &opts, None).unwrap();
+    for (t, (b, c)) in triangulate_points(&cameras, s, &opts, None)
         .unwrap()
         .into_iter()
         .zip(c)
@@ -766,7 +766,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         },
         ..s
     };
-    let r = triangulate_points(&cameras, &bad, &opts, None).unwrap();
+    let r = triangulate_points(&cameras, bad, &opts, None).unwrap();
     assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("image[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
@@ -782,7 +782,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_points(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_points(&cameras, short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
     let mut down = offsets.clone();
     down.swap(1, 2);
@@ -794,6 +794,6 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_points(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_points(&cameras, down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
 }

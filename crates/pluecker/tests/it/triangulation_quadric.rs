@@ -722,7 +722,7 @@ mod batch {
                 visible: Some(&visible),
                 covariances: Some(&covariances),
             };
-            let batch = triangulate_quadrics(&cameras, &tracks, &opts(method), None).unwrap();
+            let batch = triangulate_quadrics(&cameras, tracks, &opts(method), None).unwrap();
             for (t, r) in batch.into_iter().enumerate() {
                 let views = seen(&visible, v, t);
                 let cams: Vec<Matrix3x4<f64>> = views.iter().map(|&j| cameras[j]).collect();
@@ -746,7 +746,7 @@ mod batch {
             projections: &per_track,
             views: v,
         };
-        let batch = triangulate_quadrics(cams, &tracks, &opts(Method::Local), Some(&done)).unwrap();
+        let batch = triangulate_quadrics(cams, tracks, &opts(Method::Local), Some(&done)).unwrap();
         assert_eq!(done.load(Ordering::Relaxed), n);
         let all: Vec<usize> = (0..v).collect();
         for (t, r) in batch.into_iter().enumerate() {
@@ -780,7 +780,7 @@ mod batch {
             visible: Some(&visible),
             covariances: Some(&covariances),
         };
-        let batch = triangulate_quadrics(&cameras, &tracks, &opts(Method::Local), None).unwrap();
+        let batch = triangulate_quadrics(&cameras, tracks, &opts(Method::Local), None).unwrap();
         assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 3 }) if what == "conics[1]"));
         assert!(
             matches!(&batch[2], Err(Error::TooFewCorrespondences { required, actual, .. }) if required.starts_with('3') && actual == "track 2: 2 view(s)")
@@ -799,7 +799,7 @@ mod batch {
         };
         let o = opts(Method::Linear);
         assert!(matches!(
-            triangulate_quadrics(&cameras, &short, &o, None),
+            triangulate_quadrics(&cameras, short, &o, None),
             Err(Error::Shape { what, .. }) if what == "conics"
         ));
         let covs = DenseQuadricTracks {
@@ -807,11 +807,11 @@ mod batch {
             ..tracks
         };
         assert!(matches!(
-            triangulate_quadrics(&cameras, &covs, &o, None),
+            triangulate_quadrics(&cameras, covs, &o, None),
             Err(Error::Shape { what, .. }) if what == "covariances"
         ));
         assert!(matches!(
-            triangulate_quadrics(&[] as &[Matrix3x4<f64>], &tracks, &o, None),
+            triangulate_quadrics(&[] as &[Matrix3x4<f64>], tracks, &o, None),
             Err(Error::Shape { what, .. }) if what == "projections"
         ));
     }

@@ -143,7 +143,7 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
         observations: &observations,
         covariances: None,
     };
-    let batch = triangulate_points(&cameras, &tracks, &robust(), None).unwrap();
+    let batch = triangulate_points(&cameras, tracks, &robust(), None).unwrap();
     for (b, s) in batch.iter().zip(&singles) {
         let b = b.as_ref().unwrap();
         assert_eq!(b.inliers, s.inliers);
@@ -322,7 +322,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations,
         covariances: None,
     };
-    let result = triangulate_points(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let result = triangulate_points(&scene.cameras, tracks, &TriangulationOptions::default(), None).unwrap();
     let result = result[0].as_ref().unwrap();
     assert_eq!(result.report.status, Status::Success);
     let cameras: Vec<_> = images.iter().map(|&j| scene.cameras[j]).collect();
@@ -344,7 +344,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations[..4],
         covariances: None,
     };
-    let refused = triangulate_points(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let refused = triangulate_points(&scene.cameras, tracks, &TriangulationOptions::default(), None).unwrap();
     let message = refused[0].as_ref().unwrap_err().to_string();
     assert!(
         message.contains("2 distinct images") && message.contains("all in image 0"),

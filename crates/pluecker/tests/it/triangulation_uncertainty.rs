@@ -194,7 +194,7 @@ fn point_covariance_in_every_method_the_batch_and_at_infinity() {
         let single = triangulate_point(&scene.cameras, &obs, Some(&covs), &opts(method)).unwrap();
         let cov = single.covariance.unwrap();
         assert!((cov - cov.transpose()).norm() == 0.0 && cov.symmetric_eigenvalues().min() > 0.0);
-        let batch = triangulate_points(&scene.cameras, &tracks, &opts(method), None).unwrap();
+        let batch = triangulate_points(&scene.cameras, tracks, &opts(method), None).unwrap();
         let from_batch = batch[0].as_ref().unwrap().covariance.unwrap();
         assert!((from_batch - cov).norm() <= 1e-9 * cov.norm(), "{method:?}");
         if method == Method::Linear {
