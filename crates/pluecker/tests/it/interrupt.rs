@@ -11,8 +11,7 @@ use pluecker::pose::{estimate_pose, CertifyOptions, PoseOptions, RansacOptions, 
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
 use pluecker::triangulation::line::triangulate_lines;
-use pluecker::triangulation::line::LineObservations;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
 use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
 use pluecker::triangulation::scenes::arc_cameras;
 use pluecker::triangulation::{LineBound, Method, Status, TriangulationOptions};

@@ -10,12 +10,10 @@ use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, paper_pose, triangulation_scene};
 use pluecker::triangulation::fitting::fit_conic;
-use pluecker::triangulation::line::LineObservations;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
 use pluecker::triangulation::point::{triangulate_point, PointTriangulation};
 use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
-use pluecker::triangulation::quadric::triangulate_quadric;
-use pluecker::triangulation::quadric::QuadricObservations;
+use pluecker::triangulation::quadric::{triangulate_quadric, QuadricObservations};
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 

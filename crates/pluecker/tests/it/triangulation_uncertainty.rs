@@ -23,12 +23,10 @@ use pluecker::geometry::testing::centre_shape;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::fitting::fit_conic;
-use pluecker::triangulation::line::LineObservations;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
 use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
-use pluecker::triangulation::quadric::QuadricObservations;
-use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5};
+use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricObservations};
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 
