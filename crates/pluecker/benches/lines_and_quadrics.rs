@@ -15,8 +15,8 @@ use nalgebra::{Matrix3x4, Matrix4, Vector2};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::line::testing::endpoint_distances;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line, triangulate_line_segments};
-use pluecker::triangulation::quadric::triangulate_quadric_points;
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
+use pluecker::triangulation::quadric::{triangulate_quadric, QuadricObservations};
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, TriangulationOptions};
 use pluecker::CertifyOptions;
@@ -97,9 +97,13 @@ fn synthetic(gap: f64) {
             let segments = scene.noisy_segments(1.0, &mut rng);
             for (m, tally) in Method::ALL.iter().zip(&mut tallies) {
                 tally.add(
-                    &triangulate_line_segments(&scene.cameras, &segments, 1.0, &options(*m, gap))
-                        .unwrap()
-                        .report,
+                    &triangulate_line(
+                        &scene.cameras,
+                        LineObservations::Segments(&segments, 1.0),
+                        &options(*m, gap),
+                    )
+                    .unwrap()
+                    .report,
                 );
             }
         }
@@ -117,9 +121,13 @@ fn synthetic(gap: f64) {
             let points = scene.noisy_outline_points(63, 1.0, &mut rng);
             for (m, tally) in Method::ALL.iter().zip(&mut tallies) {
                 tally.add(
-                    &triangulate_quadric_points(&scene.cameras, &points, 1.0, &options(*m, gap))
-                        .unwrap()
-                        .report,
+                    &triangulate_quadric(
+                        &scene.cameras,
+                        QuadricObservations::EdgePoints(&points, 1.0),
+                        &options(*m, gap),
+                    )
+                    .unwrap()
+                    .report,
                 );
             }
         }
@@ -191,7 +199,12 @@ fn real(data: &Path, gap: f64) {
             let (homogeneous, covariances) = lines_from_segments(segments, 1.0).unwrap();
             let mut estimates = Vec::new();
             for (k, m) in Method::ALL.iter().enumerate() {
-                let r = triangulate_line(&cams, &homogeneous, Some(&covariances), &options(*m, gap)).unwrap();
+                let r = triangulate_line(
+                    &cams,
+                    LineObservations::Lines(&homogeneous, Some(&covariances)),
+                    &options(*m, gap),
+                )
+                .unwrap();
                 for (p, s) in cams.iter().zip(segments) {
                     let d = endpoint_distances(&plucker::project(p, r.plucker.coordinates()), &s[0], &s[1]);
                     errors[k].push(0.5 * (d[0] + d[1]));

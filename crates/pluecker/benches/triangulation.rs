@@ -24,8 +24,10 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
+use pluecker::triangulation::line::LineObservations;
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
+use pluecker::triangulation::quadric::QuadricObservations;
 use pluecker::triangulation::{CertificateKind, LineBound, Method, TriangulationOptions};
 use std::time::Duration;
 
@@ -169,19 +171,19 @@ fn bench_batch(c: &mut Criterion) {
             observations.extend([h.x / h.z + SIGMA_PX * rng.normal(), h.y / h.z + SIGMA_PX * rng.normal()]);
         }
     }
-    let tracks = PointTracks {
+    let tracks = DensePointTracks {
         observations: &observations,
         visible: None,
         covariances: None,
     };
     group.bench_function("5-views-10deg/linear-fast-path", |b| {
-        b.iter(|| black_box(triangulate_points_linear(&scene.cameras, &tracks).unwrap()))
+        b.iter(|| black_box(LinearPoints::from_tracks(&scene.cameras, &tracks).unwrap()))
     });
     for &method in Method::ALL {
         let mut opts = TriangulationOptions::default();
         opts.method = method;
         group.bench_function(format!("5-views-10deg/{}", method.as_str()), |b| {
-            b.iter(|| black_box(triangulate_points(&scene.cameras, &tracks, &opts, None).unwrap()))
+            b.iter(|| black_box(triangulate_points(&scene.cameras, tracks, &opts, None).unwrap()))
         });
     }
     group.finish();
@@ -191,7 +193,7 @@ fn bench_batch(c: &mut Criterion) {
 /// seeded scenes of [`line_scene`] (46° of parallax) with 1 px endpoint noise; the fraction certified
 /// and the nodes go to stderr at setup.
 fn bench_lines(c: &mut Criterion) {
-    use pluecker::triangulation::line::triangulate_line_segments;
+    use pluecker::triangulation::line::triangulate_line;
     use pluecker::triangulation::scenes::line_scene;
     let mut group = c.benchmark_group("line");
     group
@@ -211,7 +213,7 @@ fn bench_lines(c: &mut Criterion) {
             opts.line_bound = bound;
             let results: Vec<_> = problems
                 .iter()
-                .map(|(p, s)| triangulate_line_segments(p, s, SIGMA_PX, &opts).expect("valid"))
+                .map(|(p, s)| triangulate_line(p, LineObservations::Segments(s, SIGMA_PX), &opts).expect("valid"))
                 .collect();
             let certified = results.iter().filter(|r| r.report.certified()).count();
             let nodes: usize = results
@@ -225,7 +227,7 @@ fn bench_lines(c: &mut Criterion) {
                 b.iter(|| {
                     let (p, s) = &problems[k % problems.len()];
                     k += 1;
-                    triangulate_line_segments(black_box(p), black_box(s), SIGMA_PX, &opts)
+                    triangulate_line(black_box(p), LineObservations::Segments(black_box(s), SIGMA_PX), &opts)
                 })
             });
         }
@@ -237,7 +239,7 @@ fn bench_lines(c: &mut Criterion) {
 /// a pool of 16 seeded scenes of [`quadric_scene`] (46° of parallax) with conics fitted to 63 outline
 /// points of 1 px noise; the fraction certified goes to stderr at setup.
 fn bench_quadrics(c: &mut Criterion) {
-    use pluecker::triangulation::quadric::triangulate_quadric_points;
+    use pluecker::triangulation::quadric::triangulate_quadric;
     use pluecker::triangulation::scenes::quadric_scene;
     let mut group = c.benchmark_group("quadric");
     group
@@ -257,7 +259,9 @@ fn bench_quadrics(c: &mut Criterion) {
             opts.method = method;
             let certified = problems
                 .iter()
-                .map(|(p, x)| triangulate_quadric_points(p, x, SIGMA_PX, &opts).expect("valid"))
+                .map(|(p, x)| {
+                    triangulate_quadric(p, QuadricObservations::EdgePoints(x, SIGMA_PX), &opts).expect("valid")
+                })
                 .filter(|r| {
                     r.report
                         .certificate
@@ -271,7 +275,11 @@ fn bench_quadrics(c: &mut Criterion) {
                 b.iter(|| {
                     let (p, x) = &problems[k % problems.len()];
                     k += 1;
-                    triangulate_quadric_points(black_box(p), black_box(x), SIGMA_PX, &opts)
+                    triangulate_quadric(
+                        black_box(p),
+                        QuadricObservations::EdgePoints(black_box(x), SIGMA_PX),
+                        &opts,
+                    )
                 })
             });
         }

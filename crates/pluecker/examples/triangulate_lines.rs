@@ -6,7 +6,7 @@
 //! px², about 0.6 for the ±0.5 px of noise) and its certificate (`taylor_branch_and_bound`, certified).
 
 use pluecker::nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
-use pluecker::triangulation::line::triangulate_line_segments;
+use pluecker::triangulation::line::{triangulate_line, LineObservations};
 use pluecker::triangulation::TriangulationOptions;
 use pluecker::{Camera, Pose};
 
@@ -37,7 +37,7 @@ fn main() -> pluecker::Result<()> {
     // `sigma`: the endpoints' noise in pixels, which weights each view by its segment's length.
     let sigma = 1.0;
     let options = TriangulationOptions::default(); // method `optimal`: certified
-    let line = triangulate_line_segments(&projections, &lines, sigma, &options)?;
+    let line = triangulate_line(&projections, LineObservations::Segments(&lines, sigma), &options)?;
 
     println!("point: {:.4?}", line.point.as_slice());
     println!("direction: {:.4?}", line.direction.as_slice());

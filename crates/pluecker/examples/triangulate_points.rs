@@ -12,7 +12,7 @@
 
 use pluecker::nalgebra::{Matrix3x4, Rotation3, Vector2, Vector3};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::point::{triangulate_points, PointTracks};
+use pluecker::triangulation::point::{triangulate_points, DensePointTracks};
 use pluecker::triangulation::{Method, TriangulationOptions};
 use pluecker::{Camera, Pose};
 
@@ -61,12 +61,12 @@ fn main() -> pluecker::Result<()> {
             pixels.extend_from_slice(pixel(p, &x, 3 * t + j).as_slice());
         }
     }
-    let tracks = PointTracks {
+    let tracks = DensePointTracks {
         observations: &pixels,
         visible: None,
         covariances: None,
     };
-    let results = triangulate_points(&projections, &tracks, &options, None)?;
+    let results = triangulate_points(&projections, tracks, &options, None)?;
     let certified = results
         .iter()
         .filter(|r| matches!(r, Ok(p) if p.report.certified()))

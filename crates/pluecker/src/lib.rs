@@ -26,7 +26,8 @@
 //! assert!((result.pose.translation - scene.translation).norm() < 1e-6);
 //! ```
 //!
-//! A point triangulated from two known cameras, with its certificate of global optimality:
+//! A point triangulated from two known cameras, with its certificate of global optimality (the same
+//! call takes `&views`, [`triangulation::View`]s of COLMAP cameras, with the images' raw pixels):
 //! ```
 //! use pluecker::nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 //! use pluecker::triangulation::{point::triangulate_point, TriangulationOptions};
@@ -43,31 +44,37 @@
 //! assert!((result.point - x).norm() < 0.05);
 //! ```
 //!
-//! The same through a COLMAP camera model (here SIMPLE_RADIAL), from the raw, distorted pixels: the
-//! point minimises the reprojection error in each image's own pixels.
+//! A 3-D line from its image segments (endpoints with 1 px of noise per coordinate):
 //! ```
-//! use pluecker::nalgebra::{Matrix3, Vector3};
-//! use pluecker::camera::{CameraModel, Camera};
-//! use pluecker::triangulation::{point::triangulate_point_views, TriangulationOptions, View};
-//! use pluecker::Pose;
-//! let lens = Camera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
-//! let views = [
-//!     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::zeros())),
-//!     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::new(-1.0, 0.0, 0.0))),
-//! ];
-//! let x = Vector3::new(0.3, -0.2, 5.0);
-//! let pixels: Vec<_> = views.iter().map(|v| lens.project(&(v.pose.rotation * x + v.pose.translation)).0).collect();
-//! let result = triangulate_point_views(&views, &pixels, None, &TriangulationOptions::default()).unwrap();
-//! assert!((result.point - x).norm() < 1e-6);
-//! assert!(result.report.certified());
+//! use pluecker::triangulation::line::{triangulate_line, LineObservations};
+//! use pluecker::triangulation::{scenes::line_scene, TriangulationOptions};
+//! let scene = line_scene(3, 0.8, 7);
+//! let observed = LineObservations::Segments(&scene.segments, 1.0);
+//! let line = triangulate_line(&scene.cameras, observed, &TriangulationOptions::default()).unwrap();
+//! let along = (scene.endpoints[1] - scene.endpoints[0]).normalize();
+//! assert!(line.direction.cross(&along).norm() < 1e-6);
+//! assert!(line.report.certified());
 //! ```
 //!
-//! Tracks as COLMAP stores them, one observation per row: image ids index the projections, a point
-//! track may see one image twice (two keypoints, as COLMAP's track merging leaves them), and a bad
-//! track is its own error, never the batch's:
+//! An ellipsoid from its outline conics in three views:
+//! ```
+//! use pluecker::nalgebra::Matrix3;
+//! use pluecker::triangulation::quadric::triangulate_quadric;
+//! use pluecker::triangulation::{scenes::quadric_scene, TriangulationOptions};
+//! let scene = quadric_scene(3, 0.8, 7);
+//! let conics: Vec<Matrix3<f64>> = scene.outlines.iter().map(|e| e.primal()).collect();
+//! let quadric = triangulate_quadric(&scene.cameras, &conics, &TriangulationOptions::default()).unwrap();
+//! assert!((quadric.centre - scene.ellipsoid.centre).norm() < 1e-6);
+//! assert!(quadric.report.success());
+//! ```
+//!
+//! Many tracks at once, as COLMAP stores them, one observation per row (the batch functions also take
+//! dense `(n, v)` tracks with a visibility mask): image ids index the cameras, a point track may see
+//! one image twice (two keypoints, as COLMAP's track merging leaves them), and a bad track is its own
+//! error, never the batch's:
 //! ```
 //! use pluecker::nalgebra::{Matrix3, Matrix3x4, Vector3};
-//! use pluecker::triangulation::{point::{triangulate_point_observations, SparsePointTracks}, Csr, TriangulationOptions};
+//! use pluecker::triangulation::{point::{triangulate_points, SparsePointTracks}, Csr, TriangulationOptions};
 //! let k = Matrix3::new(800.0, 0.0, 320.0, 0.0, 800.0, 240.0, 0.0, 0.0, 1.0);
 //! let projections: Vec<Matrix3x4<f64>> = (0..4)
 //!     .map(|j| k * Matrix3x4::new(1.0, 0.0, 0.0, -(j as f64), 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0))
@@ -83,7 +90,7 @@
 //!     observations: &observations,
 //!     covariances: None,
 //! };
-//! let results = triangulate_point_observations(&projections, &tracks, &TriangulationOptions::default(), None).unwrap();
+//! let results = triangulate_points(&projections, tracks, &TriangulationOptions::default(), None).unwrap();
 //! assert!((results[0].as_ref().unwrap().point - a).norm() < 1e-6);
 //! assert!((results[1].as_ref().unwrap().point - b).norm() < 1e-6);
 //! assert!(results[2].is_err()); // image[7]: an image index below 4 (the cameras)

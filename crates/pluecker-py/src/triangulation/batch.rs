@@ -634,7 +634,7 @@ impl Cameras {
 
     pub(crate) fn core(&self) -> TrackCameras<'_> {
         match self.tracks {
-            None => TrackCameras::Shared(&self.matrices),
+            None => TrackCameras::Shared((&self.matrices).into()),
             Some(_) => TrackCameras::PerTrack {
                 projections: &self.matrices,
                 views: self.views,

@@ -24,14 +24,11 @@ use crate::properties::{result_class, Array, Field};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
 use pluecker::interrupt::StopReason;
-use pluecker::triangulation::line::testing::{
-    triangulate_line_observations_into as core_line_observations,
-    triangulate_line_observations_views_into as core_line_observations_views, triangulate_lines_into as core_lines,
-};
 use pluecker::triangulation::line::{
-    lines_from_segments, triangulate_line as core_triangulate_line, triangulate_line_segments_views, LineTriangulation,
+    lines_from_segments, triangulate_line as core_triangulate_line, LineObservations, LineTriangulation,
 };
-use pluecker::triangulation::line::{ImageLines, LineTracks, SparseLineTracks, SparseSegmentTracks};
+use pluecker::triangulation::line::{DenseLineTracks, ImageLines, SparseLineTracks, SparseSegmentTracks};
+use pluecker::triangulation::streaming::lines_into as core_lines;
 use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -249,7 +246,11 @@ pub fn triangulate_line(
         let segments = lens_segments(lines, views.len())?;
         let covariances = endpoint_covariances(covariances, sigma, &[views.len()])?;
         let outcome = interrupt::run_single(py, move || {
-            triangulate_line_segments_views(&views, &segments, covariances.as_deref(), &opts)
+            core_triangulate_line(
+                &views,
+                LineObservations::SegmentEndpoints(&segments, covariances.as_deref()),
+                &opts,
+            )
         })?;
         return interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?);
     }
@@ -259,7 +260,9 @@ pub fn triangulate_line(
         None => from_segments,
     };
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
-    let outcome = interrupt::run_single(py, move || core_triangulate_line(&cams, &image, covs.as_deref(), &opts))?;
+    let outcome = interrupt::run_single(py, move || {
+        core_triangulate_line(&cams, LineObservations::Lines(&image, covs.as_deref()), &opts)
+    })?;
     interrupt::object_or_partial(py, outcome.pending, PyLineTriangulation::create(py, outcome.value)?)
 }
 
@@ -450,7 +453,7 @@ pub fn triangulate_lines(
     let sigma = sigma.unwrap_or(1.0);
     let (mut report, mut columns) = unstarted::<PyLineTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
-        let tracks = LineTracks {
+        let tracks = DenseLineTracks {
             lines: image_lines_of(&values, segments, sigma),
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
@@ -459,7 +462,7 @@ pub fn triangulate_lines(
         let write = |t, row, r| sink.write::<PyLineTriangulations>(t, row, r);
         let stopped = core_lines(
             cams.core(),
-            &tracks,
+            tracks,
             &opts,
             Some(done),
             rows(&mut report, &mut columns),
@@ -540,7 +543,7 @@ pub(crate) fn line_observations(
                 sink.write::<PyLineTriangulations>(t, row, r.map_err(|e| rows.restate(e)))
             };
             let out = batch::rows(&mut report, &mut columns);
-            let stopped = core_line_observations_views(&views, &tracks, &opts, Some(done), out, write)?;
+            let stopped = core_lines(&views, tracks, &opts, Some(done), out, write)?;
             Ok(sparse_finish(&rows, &opts, sink, report, columns, stopped))
         })?;
         return batch_result(py, outcome);
@@ -563,7 +566,7 @@ pub(crate) fn line_observations(
         let write =
             |t, row, r: pluecker::Result<_>| sink.write::<PyLineTriangulations>(t, row, r.map_err(|e| rows.restate(e)));
         let out = batch::rows(&mut report, &mut columns);
-        let stopped = core_line_observations(&cams, &tracks, &opts, Some(done), out, write)?;
+        let stopped = core_lines(&cams, tracks, &opts, Some(done), out, write)?;
         Ok(sparse_finish(&rows, &opts, sink, report, columns, stopped))
     })?;
     batch_result(py, outcome)

@@ -3,10 +3,10 @@
 //! the GIL released) with `pluecker.PointTriangulations`, the arrays of their points beside the
 //! per-track report columns of `pluecker.BatchReport` ([`super::batch`]).
 //!
-//! The batch's numpy arrays go to the core as flat row-major slices (`PointTracks`), one copy each.
+//! The batch's numpy arrays go to the core as flat row-major slices (`DensePointTracks`), one copy each.
 //! A track the core rejects (NaN in a visible view, fewer than two visible views, a covariance that
 //! is not positive definite, ...) gets an error status and a message and never stops the others.
-//! Method `linear` takes the core's allocation-free path (`triangulate_points_linear_into`), written
+//! Method `linear` takes the core's allocation-free path (`streaming::linear_points_into`), written
 //! into the same preallocated columns.
 
 use super::batch::{
@@ -23,14 +23,9 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Vector2, Vector3};
-use pluecker::triangulation::point::testing::{
-    triangulate_point_observations_into, triangulate_point_observations_views_into,
-    triangulate_points_into as core_points, triangulate_points_linear_into, LinearTrack,
-};
-use pluecker::triangulation::point::{
-    triangulate_point as core_triangulate_point, triangulate_point_views, PointTriangulation,
-};
-use pluecker::triangulation::point::{PointTracks, SparsePointTracks};
+use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
+use pluecker::triangulation::point::{DensePointTracks, SparsePointTracks};
+use pluecker::triangulation::streaming::{linear_points_into, points_into as core_points, LinearTrack};
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;
@@ -124,7 +119,7 @@ pub fn triangulate_point(
     let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
     let outcome = interrupt::run_single(py, move || match &views {
-        Some(views) => triangulate_point_views(views, &obs, covs.as_deref(), &opts),
+        Some(views) => core_triangulate_point(views, &obs, covs.as_deref(), &opts),
         None => core_triangulate_point(&cams, &obs, covs.as_deref(), &opts),
     })?;
     interrupt::object_or_partial(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
@@ -295,7 +290,7 @@ pub fn triangulate_points(
     let short = opts.method != Method::Optimal && n * v <= SHORT_BATCH;
     let (mut report, mut columns) = unstarted::<PyPointTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, short, move |done| {
-        let tracks = PointTracks {
+        let tracks = DensePointTracks {
             observations: &pixels,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
@@ -304,22 +299,14 @@ pub fn triangulate_points(
         if opts.method == Method::Linear {
             let started = Instant::now();
             let write = |t, row, r| write_linear(&sink, t, row, r);
-            let stopped =
-                triangulate_points_linear_into(&cams, &tracks, Some(done), rows(&mut report, &mut columns), write)?;
+            let stopped = linear_points_into(&cams, &tracks, Some(done), rows(&mut report, &mut columns), write)?;
             // The fast path does not time tracks one by one: each solved one gets the batch's mean.
             let written = done.load(Ordering::Relaxed).max(1);
             report.time_solved(started.elapsed().as_secs_f64() / written as f64);
             return Ok(sink.finish(report, columns, n, stopped));
         }
         let write = |t, row, r| sink.write::<PyPointTriangulations>(t, row, r);
-        let stopped = core_points(
-            &cams,
-            &tracks,
-            &opts,
-            Some(done),
-            rows(&mut report, &mut columns),
-            write,
-        )?;
+        let stopped = core_points(&cams, tracks, &opts, Some(done), rows(&mut report, &mut columns), write)?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {
             // Track t's views are its visible ones, in camera order.
@@ -381,8 +368,8 @@ pub(crate) fn point_observations(
         let write =
             |t, row, r: Result<_, Error>| sink.write::<PyPointTriangulations>(t, row, r.map_err(|e| rows.restate(e)));
         let stopped = match &views {
-            Some(views) => triangulate_point_observations_views_into(views, &sparse, &opts, Some(done), out, write),
-            None => triangulate_point_observations_into(&cams, &sparse, &opts, Some(done), out, write),
+            Some(views) => core_points(views, sparse, &opts, Some(done), out, write),
+            None => core_points(&cams, sparse, &opts, Some(done), out, write),
         }?;
         let (report, mut columns) = sink.finish(report, columns, n, stopped);
         if opts.outlier_threshold.is_some() {

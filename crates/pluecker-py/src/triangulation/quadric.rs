@@ -15,13 +15,11 @@ use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Matrix4, Vector3};
-use pluecker::triangulation::quadric::testing::{
-    triangulate_quadric_observations_into as core_quadric_observations, triangulate_quadrics_into as core_quadrics,
-};
 use pluecker::triangulation::quadric::{
-    refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricTriangulation,
+    refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricObservations, QuadricTriangulation,
 };
-use pluecker::triangulation::quadric::{QuadricTracks, SparseQuadricTracks};
+use pluecker::triangulation::quadric::{DenseQuadricTracks, SparseQuadricTracks};
+use pluecker::triangulation::streaming::quadrics_into as core_quadrics;
 use pluecker::triangulation::uncertainty::QuadricCovariance;
 use pluecker::triangulation::{CostKind, Primitive, Report};
 use pyo3::prelude::*;
@@ -132,7 +130,7 @@ pub fn triangulate_quadric(
     };
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
     let outcome = interrupt::run_single(py, move || {
-        core_triangulate_quadric(&cams, &observed, covs.as_deref(), &opts)
+        core_triangulate_quadric(&cams, QuadricObservations::Conics(&observed, covs.as_deref()), &opts)
     })?;
     interrupt::object_or_partial(py, outcome.pending, PyQuadricTriangulation::create(py, outcome.value)?)
 }
@@ -273,7 +271,7 @@ pub fn triangulate_quadrics(
         .transpose()?;
     let (mut report, mut columns) = unstarted::<PyQuadricTriangulations>(py, opts.method, n)?;
     let outcome = run_interruptible(py, progress, budget, false, move |done| {
-        let tracks = QuadricTracks {
+        let tracks = DenseQuadricTracks {
             conics: &values,
             visible: mask.as_deref(),
             covariances: covariances.as_deref(),
@@ -282,7 +280,7 @@ pub fn triangulate_quadrics(
         let write = |t, row, r| sink.write::<PyQuadricTriangulations>(t, row, r);
         let stopped = core_quadrics(
             cams.core(),
-            &tracks,
+            tracks,
             &opts,
             Some(done),
             rows(&mut report, &mut columns),
@@ -331,7 +329,7 @@ pub(crate) fn quadric_observations(
             sink.write::<PyQuadricTriangulations>(t, row, r.map_err(|e| rows.restate(e)))
         };
         let out = batch::rows(&mut report, &mut columns);
-        let stopped = core_quadric_observations(&cams, &tracks, &opts, Some(done), out, write)?;
+        let stopped = core_quadrics(&cams, tracks, &opts, Some(done), out, write)?;
         Ok(sink.finish(report, columns, n, stopped))
     })?;
     batch_result(py, outcome)

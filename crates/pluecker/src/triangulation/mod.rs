@@ -36,7 +36,18 @@ pub mod uncertainty;
 pub(crate) mod views;
 
 pub use tracks::{Csr, TrackCameras};
-pub use views::View;
+pub use views::{Cameras, View};
+
+/// The batches that hand each track's result to the caller as it finishes, with that track's output
+/// row, instead of collecting them (the Python bindings write them straight into preallocated
+/// columns); not part of the user-facing API, whose batches are [`point::triangulate_points`],
+/// [`line::triangulate_lines`] and [`quadric::triangulate_quadrics`].
+#[doc(hidden)]
+pub mod streaming {
+    pub use super::line::batch::lines_into;
+    pub use super::point::batch::{linear_points_into, points_into, LinearTrack};
+    pub use super::quadric::batch::quadrics_into;
+}
 
 /// Helpers the Python bindings and the integration tests call directly; not part of the user-facing
 /// API.

@@ -5,10 +5,11 @@
 
 use crate::error::{Error, Result};
 use crate::interrupt::{current, stop_reason, Installed, StopReason};
-use crate::triangulation::views::validate_cameras;
+use crate::triangulation::views::{validate_cameras, Cameras, View};
 use crate::triangulation::Method;
 use nalgebra::Matrix3x4;
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A shape error of a batch argument.
@@ -255,15 +256,16 @@ fn count(done: Option<&AtomicUsize>) {
     }
 }
 
-/// The cameras of a line or quadric batch (3x4, world → pixels, any positive scale; in front means
-/// `(P X̃)₃ > 0`, `views`): one set seen
-/// by every track, or one set per track (e.g. independent scenes solved together).
+/// The cameras of a line or quadric batch: one set seen by every track ([`Cameras`]: 3x4 projections
+/// or views), or 3x4 projections given per track (e.g. independent scenes solved together). Every
+/// form of [`Cameras`] converts into it.
 #[derive(Debug, Clone, Copy)]
 pub enum TrackCameras<'a> {
-    /// `v` projections shared by every track; view `j` of every track is `projections[j]` (errors
-    /// name them `projections`).
-    Shared(&'a [Matrix3x4<f64>]),
-    /// `n · views` projections, track-major: view `j` of track `t` is `projections[t · views + j]`.
+    /// `v` cameras shared by every track; view `j` of every track is camera `j` (errors name them
+    /// `projections`).
+    Shared(Cameras<'a>),
+    /// `n · views` projections (3x4, world → pixels, any positive scale; in front means
+    /// `(P X̃)₃ > 0`), track-major: view `j` of track `t` is `projections[t · views + j]`.
     PerTrack {
         /// The projections of all tracks.
         projections: &'a [Matrix3x4<f64>],
@@ -280,32 +282,118 @@ impl TrackCameras<'_> {
             TrackCameras::PerTrack { views, .. } => *views,
         }
     }
+}
+
+impl<'a> From<Cameras<'a>> for TrackCameras<'a> {
+    fn from(cameras: Cameras<'a>) -> Self {
+        TrackCameras::Shared(cameras)
+    }
+}
+
+macro_rules! track_cameras_from {
+    ($($t:ty),+) => {
+        $(impl<'a> From<$t> for TrackCameras<'a> {
+            fn from(cameras: $t) -> Self {
+                TrackCameras::Shared(cameras.into())
+            }
+        })+
+    };
+}
+track_cameras_from!(&'a [Matrix3x4<f64>], &'a Vec<Matrix3x4<f64>>, &'a [View], &'a Vec<View>);
+
+impl<'a, const N: usize> From<&'a [Matrix3x4<f64>; N]> for TrackCameras<'a> {
+    fn from(cameras: &'a [Matrix3x4<f64>; N]) -> Self {
+        TrackCameras::Shared(cameras.into())
+    }
+}
+
+impl<'a, const N: usize> From<&'a [View; N]> for TrackCameras<'a> {
+    fn from(cameras: &'a [View; N]) -> Self {
+        TrackCameras::Shared(cameras.into())
+    }
+}
+
+/// The 3x4 projections of a line or quadric batch ([`TrackCameras`] once its views, if any, are
+/// resolved into their matrices).
+#[derive(Debug, Clone)]
+pub(crate) enum Projections<'a> {
+    /// Shared by every track.
+    Shared(Cow<'a, [Matrix3x4<f64>]>),
+    /// Per track, track-major.
+    PerTrack {
+        projections: &'a [Matrix3x4<f64>],
+        views: usize,
+    },
+}
+
+impl Projections<'_> {
+    /// Views per track, `v`.
+    pub(crate) fn views(&self) -> usize {
+        match self {
+            Projections::Shared(cameras) => cameras.len(),
+            Projections::PerTrack { views, .. } => *views,
+        }
+    }
 
     /// Checks the cameras for the whole call (`n` tracks): shared cameras must all be finite and
     /// non-singular; per-track cameras must number `n · views` (each track's are checked with it).
     pub(crate) fn check(&self, n: usize) -> Result<()> {
         match *self {
-            TrackCameras::Shared(cameras) => validate_cameras(cameras, "projections"),
-            TrackCameras::PerTrack { projections, views } if projections.len() != n * views => Err(shape(
+            Projections::Shared(ref cameras) => validate_cameras(cameras, "projections"),
+            Projections::PerTrack { projections, views } if projections.len() != n * views => Err(shape(
                 "projections",
                 format!("{} projections ({n} tracks x {views} views)", n * views),
                 projections.len(),
             )),
-            TrackCameras::PerTrack { .. } => Ok(()),
+            Projections::PerTrack { .. } => Ok(()),
         }
     }
 
     /// The cameras of views `seen` of track `t`.
     pub(crate) fn of_track(&self, t: usize, seen: &[usize]) -> Vec<Matrix3x4<f64>> {
         match *self {
-            TrackCameras::Shared(cameras) => seen.iter().map(|&j| cameras[j]).collect(),
-            TrackCameras::PerTrack { projections, views } => seen.iter().map(|&j| projections[t * views + j]).collect(),
+            Projections::Shared(ref cameras) => seen.iter().map(|&j| cameras[j]).collect(),
+            Projections::PerTrack { projections, views } => seen.iter().map(|&j| projections[t * views + j]).collect(),
         }
     }
 
     /// Whether the cameras are indexed by track (their errors then name the track).
     pub(crate) fn per_track(&self) -> bool {
-        matches!(self, TrackCameras::PerTrack { .. })
+        matches!(self, Projections::PerTrack { .. })
+    }
+}
+
+/// The `From` impls of a batch's tracks enum `$tracks`: each form `$form` (and a reference to it)
+/// becomes variant `$variant`.
+macro_rules! tracks_from {
+    ($tracks:ident: $($form:ident => $variant:ident),+) => {
+        $(
+            impl<'a> From<$form<'a>> for $tracks<'a> {
+                fn from(tracks: $form<'a>) -> Self {
+                    $tracks::$variant(tracks)
+                }
+            }
+            impl<'a> From<&$form<'a>> for $tracks<'a> {
+                fn from(tracks: &$form<'a>) -> Self {
+                    $tracks::$variant(*tracks)
+                }
+            }
+        )+
+        impl<'a> From<&$tracks<'a>> for $tracks<'a> {
+            fn from(tracks: &$tracks<'a>) -> Self {
+                *tracks
+            }
+        }
+    };
+}
+pub(crate) use tracks_from;
+
+/// [`Error::InvalidOption`] naming `cameras` for a form of tracks that the cameras given cannot
+/// solve (`why` says which ones can).
+pub(crate) fn unsupported_cameras(why: &str) -> Error {
+    Error::InvalidOption {
+        name: "cameras".into(),
+        reason: why.into(),
     }
 }
 

@@ -82,6 +82,55 @@ impl View {
 /// rounding of 0.
 const SKEW_ROUNDING: f64 = 1e-12;
 
+/// The known cameras of a triangulation: 3x4 projections `P` (world → pixels), or [`View`]s (a
+/// camera, pinhole or any of COLMAP's models, and its pose; the observations are then the images' own,
+/// distorted pixels). Every slice of either converts into it, so calls read
+/// `triangulate_point(&projections, …)` or `triangulate_point(&views, …)`.
+#[derive(Debug, Clone, Copy)]
+pub enum Cameras<'a> {
+    /// 3x4 matrices `P` (module docs; errors name them `projections`).
+    Projections(&'a [Matrix3x4<f64>]),
+    /// Cameras with their poses.
+    Views(&'a [View]),
+}
+
+impl Cameras<'_> {
+    /// The number of cameras.
+    pub fn len(&self) -> usize {
+        match self {
+            Cameras::Projections(p) => p.len(),
+            Cameras::Views(v) => v.len(),
+        }
+    }
+
+    /// Whether there is no camera.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+macro_rules! cameras_from {
+    ($item:ty, $variant:ident) => {
+        impl<'a> From<&'a [$item]> for Cameras<'a> {
+            fn from(cameras: &'a [$item]) -> Self {
+                Cameras::$variant(cameras)
+            }
+        }
+        impl<'a> From<&'a Vec<$item>> for Cameras<'a> {
+            fn from(cameras: &'a Vec<$item>) -> Self {
+                Cameras::$variant(cameras)
+            }
+        }
+        impl<'a, const N: usize> From<&'a [$item; N]> for Cameras<'a> {
+            fn from(cameras: &'a [$item; N]) -> Self {
+                Cameras::$variant(cameras)
+            }
+        }
+    };
+}
+cameras_from!(Matrix3x4<f64>, Projections);
+cameras_from!(View, Views);
+
 /// Relative size of `det M` (against `‖M‖³`) below which a camera is rejected as singular.
 const MIN_RELATIVE_DET: f64 = 1e-12;
 

@@ -11,10 +11,9 @@ use pluecker::pose::{estimate_pose, CertifyOptions, PoseOptions, RansacOptions, 
 use pluecker::rng::Rng;
 use pluecker::synthetic::{random_scene, SceneKind};
 use pluecker::triangulation::line::triangulate_lines;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
-use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
+use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
 use pluecker::triangulation::scenes::arc_cameras;
-use pluecker::triangulation::TrackCameras;
 use pluecker::triangulation::{LineBound, Method, Status, TriangulationOptions};
 use pluecker::Error;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -71,10 +70,7 @@ fn a_request_from_another_thread_stops_a_line_batch() {
     let tracks = segment_tracks(&endpoints, 1.0);
     // The first poll is the one before the first track: that track starts.
     let (stop, requester) = requested_after_poll(1);
-    let batch = with_stop(stop, || {
-        triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &endless(), None)
-    })
-    .unwrap();
+    let batch = with_stop(stop, || triangulate_lines(&cameras, tracks, &endless(), None)).unwrap();
     requester.join().unwrap();
     let (mut started, mut skipped) = (0, 0);
     for result in &batch {
@@ -111,7 +107,11 @@ fn a_request_from_another_thread_stops_a_single_line() {
     // after the first iteration of the root's first solve, whenever it comes.
     let (stop, requester) = requested_after_poll(3);
     let line = with_stop(stop, || {
-        triangulate_line(&cameras, &lines, Some(&covariances), &endless())
+        triangulate_line(
+            &cameras,
+            LineObservations::Lines(&lines, Some(&covariances)),
+            &endless(),
+        )
     })
     .unwrap();
     requester.join().unwrap();
@@ -136,7 +136,7 @@ fn an_expired_budget_solves_nothing_in_every_point_path() {
             })
         })
         .collect();
-    let tracks = PointTracks {
+    let tracks = DensePointTracks {
         observations: &observations,
         visible: None,
         covariances: None,
@@ -148,14 +148,14 @@ fn an_expired_budget_solves_nothing_in_every_point_path() {
     for method in [Method::Local, Method::Optimal] {
         let mut opts = TriangulationOptions::default();
         opts.method = method;
-        let batch = with_stop(expired(), || triangulate_points(&cameras, &tracks, &opts, None)).unwrap();
+        let batch = with_stop(expired(), || triangulate_points(&cameras, tracks, &opts, None)).unwrap();
         assert!(batch.iter().all(|r| r.as_ref().err() == Some(&budget)));
     }
-    let linear = with_stop(expired(), || triangulate_points_linear(&cameras, &tracks)).unwrap();
+    let linear = with_stop(expired(), || LinearPoints::from_tracks(&cameras, &tracks)).unwrap();
     assert!(linear.outcomes.iter().all(|r| *r == Err(budget.clone())));
     assert!(linear.points.iter().all(|x| x.is_nan()));
     // Without a stop the same batch solves every track.
-    let free = triangulate_points_linear(&cameras, &tracks).unwrap();
+    let free = LinearPoints::from_tracks(&cameras, &tracks).unwrap();
     assert!(free.outcomes.iter().all(|r| *r == Ok(Status::Success)));
 }
 

@@ -10,10 +10,10 @@ use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::synthetic::{paper_calibration_object, paper_pose, triangulation_scene};
 use pluecker::triangulation::fitting::fit_conic;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
 use pluecker::triangulation::point::{triangulate_point, PointTriangulation};
-use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
-use pluecker::triangulation::quadric::triangulate_quadric;
+use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
+use pluecker::triangulation::quadric::{triangulate_quadric, QuadricObservations};
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Report, Status, TriangulationOptions};
 
@@ -105,14 +105,14 @@ fn a_point_in_front_of_cameras_with_a_negative_focal_length_is_found_by_every_me
     }
     // The batches agree.
     let flat: Vec<f64> = obs.iter().flat_map(|u| [u.x, u.y]).collect();
-    let tracks = PointTracks {
+    let tracks = DensePointTracks {
         observations: &flat,
         visible: None,
         covariances: None,
     };
-    let linear = triangulate_points_linear(&cameras, &tracks).unwrap();
+    let linear = LinearPoints::from_tracks(&cameras, &tracks).unwrap();
     assert_eq!(*linear.outcomes[0].as_ref().unwrap(), Status::Success);
-    let batch = triangulate_points(&cameras, &tracks, &opts(Method::Optimal), None).unwrap();
+    let batch = triangulate_points(&cameras, tracks, &opts(Method::Optimal), None).unwrap();
     let r = batch[0].as_ref().unwrap();
     assert_eq!(r.report.status, Status::Success);
     assert!(r.report.certified() && (r.point - truth).norm() < 1e-8 * 78.0);
@@ -181,9 +181,14 @@ fn mirrored_images_give_the_same_lines() {
         let (mlines, mcovs) = lines_from_segments(&mirrored, 1.0).unwrap();
         for method in Method::ALL.iter().copied() {
             let what = format!("seed {seed} {method:?}");
-            let plain = triangulate_line(&scene.cameras, &lines, Some(&covs), &opts(method)).unwrap();
-            let a = triangulate_line(&cameras, &mlines, Some(&mcovs), &opts(method)).unwrap();
-            let b = triangulate_line(&world, &lines, Some(&covs), &opts(method)).unwrap();
+            let plain = triangulate_line(
+                &scene.cameras,
+                LineObservations::Lines(&lines, Some(&covs)),
+                &opts(method),
+            )
+            .unwrap();
+            let a = triangulate_line(&cameras, LineObservations::Lines(&mlines, Some(&mcovs)), &opts(method)).unwrap();
+            let b = triangulate_line(&world, LineObservations::Lines(&lines, Some(&covs)), &opts(method)).unwrap();
             let b_plucker = plucker::transform(&mirror_world(), b.plucker.coordinates()).normalize();
             for (other, line, how) in [
                 (&a.report, *a.plucker.coordinates(), "images"),
@@ -223,10 +228,20 @@ fn mirrored_images_give_the_same_quadrics() {
     let mconics: Vec<Matrix3<f64>> = mirrored.iter().map(|f| f.conic).collect();
     let mcovs: Vec<_> = mirrored.iter().map(|f| f.covariance).collect();
     for method in Method::ALL.iter().copied() {
-        let plain = triangulate_quadric(&scene.cameras, &conics, Some(&covs), &opts(method)).unwrap();
+        let plain = triangulate_quadric(
+            &scene.cameras,
+            QuadricObservations::Conics(&conics, Some(&covs)),
+            &opts(method),
+        )
+        .unwrap();
         assert_ne!(plain.report.status, Status::BehindCamera, "{method:?}");
-        let a = triangulate_quadric(&cameras, &mconics, Some(&mcovs), &opts(method)).unwrap();
-        let b = triangulate_quadric(&world, &conics, Some(&covs), &opts(method)).unwrap();
+        let a = triangulate_quadric(
+            &cameras,
+            QuadricObservations::Conics(&mconics, Some(&mcovs)),
+            &opts(method),
+        )
+        .unwrap();
+        let b = triangulate_quadric(&world, QuadricObservations::Conics(&conics, Some(&covs)), &opts(method)).unwrap();
         let b_centre = Vector3::new(b.centre.x, b.centre.y, -b.centre.z);
         for (other, centre, how) in [(&a, a.centre, "images"), (&b, b_centre, "world")] {
             let what = format!("{method:?}, mirrored {how}");
@@ -292,7 +307,7 @@ fn a_certificate_of_negligible_cost_comes_with_a_success() {
         .iter()
         .map(|s| s[0].push(1.0).cross(&s[1].push(1.0)))
         .collect();
-    let r = triangulate_line(&scene.cameras, &lines, None, &o).unwrap();
+    let r = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, None), &o).unwrap();
     assert!(r.report.certified(), "{:?}", r.report);
     assert_consistent(&r.report, "line");
     let scene = quadric_scene(3, 0.8, 401);
@@ -305,7 +320,7 @@ fn a_certificate_of_negligible_cost_comes_with_a_success() {
                 .unwrap()
         })
         .collect();
-    let r = triangulate_quadric(&scene.cameras, &conics, None, &o).unwrap();
+    let r = triangulate_quadric(&scene.cameras, QuadricObservations::Conics(&conics, None), &o).unwrap();
     assert_consistent(&r.report, "quadric");
     let scene = triangulation_scene(3, 0.3, 402);
     let r = triangulate_point(&scene.cameras, &scene.observations, None, &o).unwrap();

@@ -7,7 +7,7 @@ use nalgebra::{Matrix2, Matrix2x4, Matrix3, Matrix3x4, Matrix4, SymmetricEigen, 
 use pluecker::camera::{Camera, CameraModel};
 use pluecker::rng::Rng;
 use pluecker::triangulation::point::testing::{lens_certificate, LensView};
-use pluecker::triangulation::point::triangulate_point_views;
+use pluecker::triangulation::point::triangulate_point;
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
 use pluecker::Pose;
@@ -270,7 +270,7 @@ fn certified_points_through_strong_radial_and_fisheye_lenses_are_the_oracles_min
         let (mut certified, mut total) = (0, 0);
         for i in 0..60 {
             let t = track(lens, 2 + i % 5, off_axis, i % 3 == 0, &mut rng);
-            let r = triangulate_point_views(&t.views, &t.pixels, Some(&covariances(&t)), &optimal()).unwrap();
+            let r = triangulate_point(&t.views, &t.pixels, Some(&covariances(&t)), &optimal()).unwrap();
             total += 1;
             // The reported cost is the oracle's cost at the reported point.
             let cost = t.cost(&r.point);
@@ -362,7 +362,7 @@ fn out_to_80_degrees_off_axis_every_certificate_is_sound() {
     let mut certified = 0;
     for i in 0..60 {
         let t = track(wide_fisheye(), 2 + i % 5, 80f64.to_radians(), i % 2 == 1, &mut rng);
-        let r = triangulate_point_views(&t.views, &t.pixels, Some(&covariances(&t)), &optimal()).unwrap();
+        let r = triangulate_point(&t.views, &t.pixels, Some(&covariances(&t)), &optimal()).unwrap();
         let best = oracle_minimum(&t, &r.point, &mut rng);
         let Some(c) = r.report.certificate else {
             // No bound was computed: nothing is claimed.
@@ -395,7 +395,7 @@ fn robust_inliers_are_the_observations_within_the_threshold_at_the_exact_optimum
         let mut t = track(strong_radial(), 4 + i % 3, 0.09, false, &mut rng);
         let bad = i % t.pixels.len();
         t.pixels[bad] += Vector2::new(30.0, -20.0);
-        let r = triangulate_point_views(&t.views, &t.pixels, None, &opts).unwrap();
+        let r = triangulate_point(&t.views, &t.pixels, None, &opts).unwrap();
         let flags = r.inliers.clone().unwrap();
         assert!(!flags[bad], "track {i}: the outlier is an inlier");
         for (k, ((lens, view), u)) in t.lenses.iter().zip(&t.views).zip(&t.pixels).enumerate() {
@@ -700,7 +700,7 @@ fn a_pair_that_fits_only_through_the_exact_projection_keeps_both_views() {
         assert_eq!(tracks.len(), 2, "{name}: the premise's tracks were not found");
         for (i, t) in tracks.iter().enumerate() {
             let what = format!("{name} track {i}");
-            let r = triangulate_point_views(&t.views, &t.pixels, None, &robust(tau)).unwrap();
+            let r = triangulate_point(&t.views, &t.pixels, None, &robust(tau)).unwrap();
             assert_ne!(r.report.status, Status::TooFewInliers, "{what}");
             assert_eq!(r.inliers.as_deref(), Some(&[true, true][..]), "{what}");
             assert_inliers_fit_at_the_exact_optimum(t, &r, tau, &what);
@@ -747,7 +747,7 @@ fn a_gross_outlier_beside_a_pair_that_fits_only_exactly_is_the_one_rejected() {
                 })
                 .find(fits_neither)
                 .unwrap_or_else(|| panic!("{what}: no direction fits neither view"));
-            let r = triangulate_point_views(&t.views, &t.pixels, None, &robust(tau)).unwrap();
+            let r = triangulate_point(&t.views, &t.pixels, None, &robust(tau)).unwrap();
             assert_eq!(
                 r.inliers.as_deref(),
                 Some(&[false, true, true][..]),
@@ -775,7 +775,7 @@ fn gross_outliers_through_an_80_degree_fisheye_are_removed_and_counted_reproduci
         let bad = rng.below(t.pixels.len());
         let a = rng.uniform_in(0.0, std::f64::consts::TAU);
         t.pixels[bad] += Vector2::new(a.cos(), a.sin()) * 40.0;
-        let r = triangulate_point_views(&t.views, &t.pixels, None, &robust(tau)).unwrap();
+        let r = triangulate_point(&t.views, &t.pixels, None, &robust(tau)).unwrap();
         tracks += 1;
         if r.report.status == Status::TooFewInliers {
             too_few += 1;
@@ -807,13 +807,13 @@ fn the_lens_consensus_is_reproducible_on_long_tracks() {
         t.pixels[bad] += Vector2::new(40.0, -25.0);
     }
     let covariances = covariances(&t);
-    let first = triangulate_point_views(&t.views, &t.pixels, Some(&covariances), &robust(4.0)).unwrap();
+    let first = triangulate_point(&t.views, &t.pixels, Some(&covariances), &robust(4.0)).unwrap();
     let flags = first.inliers.clone().unwrap();
     assert!(!flags[3] && !flags[11] && !flags[19], "{flags:?}");
     assert_eq!(flags.iter().filter(|&&f| f).count(), 23, "{flags:?}");
     assert_inliers_fit_at_the_exact_optimum(&t, &first, 4.0, "26 views");
     for _ in 0..3 {
-        let again = triangulate_point_views(&t.views, &t.pixels, Some(&covariances), &robust(4.0)).unwrap();
+        let again = triangulate_point(&t.views, &t.pixels, Some(&covariances), &robust(4.0)).unwrap();
         assert_eq!(again.point, first.point);
         assert_eq!(again.inliers, first.inliers);
         assert_eq!(again.report.cost.to_bits(), first.report.cost.to_bits());

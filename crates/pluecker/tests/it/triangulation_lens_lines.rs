@@ -14,8 +14,8 @@ use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::line_from_endpoints;
 use pluecker::triangulation::line::testing::{exact_cost, LensSegment};
-use pluecker::triangulation::line::{triangulate_line, triangulate_line_segments, triangulate_line_segments_views};
-use pluecker::triangulation::line::{triangulate_line_observations_views, SparseSegmentTracks};
+use pluecker::triangulation::line::triangulate_line;
+use pluecker::triangulation::line::{triangulate_lines, LineObservations, SparseSegmentTracks};
 use pluecker::triangulation::Csr;
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Status, TriangulationOptions};
@@ -459,10 +459,9 @@ fn exact_data_has_zero_cost_and_the_true_line() {
     for (name, lens, off_axis, max_angle) in lenses() {
         for _ in 0..3 {
             let sc = scene(lens, 3, off_axis, max_angle, 0.0, false, &mut rng);
-            let r = triangulate_line_segments_views(
+            let r = triangulate_line(
                 &views_of(&sc.obs),
-                &segments_of(&sc.obs),
-                Some(&covariances_of(&sc.obs)),
+                LineObservations::SegmentEndpoints(&segments_of(&sc.obs), Some(&covariances_of(&sc.obs))),
                 &opts(Method::Local),
             )
             .unwrap();
@@ -488,7 +487,12 @@ fn through_strong_radial_and_80_degree_fisheye_the_line_is_the_oracles_minimum_a
             let sc = scene(lens, 4, off_axis, max_angle, 1.0, trial % 2 == 1, &mut rng);
             let (views, segments, covs) = (views_of(&sc.obs), segments_of(&sc.obs), covariances_of(&sc.obs));
             for method in [Method::Local, Method::Optimal] {
-                let r = triangulate_line_segments_views(&views, &segments, Some(&covs), &opts(method)).unwrap();
+                let r = triangulate_line(
+                    &views,
+                    LineObservations::SegmentEndpoints(&segments, Some(&covs)),
+                    &opts(method),
+                )
+                .unwrap();
                 let expected = if method == Method::Optimal {
                     Status::GapNotClosed
                 } else {
@@ -530,8 +534,12 @@ fn the_first_order_line_is_not_the_exact_optimum_under_strong_distortion() {
         let (_, lens, off_axis, max_angle) = lenses()[0];
         let sc = scene(lens, 4, off_axis, max_angle, 1.0, false, &mut rng);
         let views = views_of(&sc.obs);
-        let refined =
-            triangulate_line_segments_views(&views, &segments_of(&sc.obs), None, &opts(Method::Local)).unwrap();
+        let refined = triangulate_line(
+            &views,
+            LineObservations::SegmentEndpoints(&segments_of(&sc.obs), None),
+            &opts(Method::Local),
+        )
+        .unwrap();
         let camera = lens.camera();
         let (mut lines, mut covs, mut matrices) = (Vec::new(), Vec::new(), Vec::new());
         for o in &sc.obs {
@@ -544,7 +552,12 @@ fn the_first_order_line_is_not_the_exact_optimum_under_strong_distortion() {
             covs.push(fit.covariance);
             matrices.push(camera.intrinsics().projection(&o.pose));
         }
-        let first = triangulate_line(&matrices, &lines, Some(&covs), &opts(Method::Local)).unwrap();
+        let first = triangulate_line(
+            &matrices,
+            LineObservations::Lines(&lines, Some(&covs)),
+            &opts(Method::Local),
+        )
+        .unwrap();
         let (a, b) = (
             oracle_cost(&sc.obs, &as_points(&refined.point, &refined.direction, &sc.truth)),
             oracle_cost(&sc.obs, &as_points(&first.point, &first.direction, &sc.truth)),
@@ -571,14 +584,24 @@ fn pinhole_views_and_a_zero_distortion_lens_keep_the_pinhole_certificate() {
         let segments = segments_of(&sc.obs);
         let pinhole = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
         let matrices: Vec<_> = sc.obs.iter().map(|o| pinhole.projection(&o.pose)).collect();
-        let today = triangulate_line_segments(&matrices, &segments, 1.0, &opts(Method::Optimal)).unwrap();
+        let today = triangulate_line(
+            &matrices,
+            LineObservations::Segments(&segments, 1.0),
+            &opts(Method::Optimal),
+        )
+        .unwrap();
         assert!(today.report.certified());
         assert_eq!(today.report.cost_kind, CostKind::LineResidual);
         for views in [
             sc.obs.iter().map(|o| View::new(pinhole.clone(), o.pose)).collect::<Vec<_>>(),
             views_of(&sc.obs),
         ] {
-            let r = triangulate_line_segments_views(&views, &segments, None, &opts(Method::Optimal)).unwrap();
+            let r = triangulate_line(
+                &views,
+                LineObservations::SegmentEndpoints(&segments, None),
+                &opts(Method::Optimal),
+            )
+            .unwrap();
             assert_eq!(r.report.status, Status::Success);
             assert!(r.report.certified());
             // The certificate bounds eq. 19 on the segments' line residuals, the cost reported.
@@ -611,7 +634,7 @@ fn bad_input_names_the_argument_and_the_row() {
     // A NaN endpoint.
     let mut bad = good.clone();
     bad[2][1].y = f64::NAN;
-    match triangulate_line_segments_views(&views, &bad, None, &o) {
+    match triangulate_line(&views, LineObservations::SegmentEndpoints(&bad, None), &o) {
         Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), index), ("lines", 2)),
         other => panic!("{other:?}"),
     }
@@ -619,24 +642,24 @@ fn bad_input_names_the_argument_and_the_row() {
     // principal point at (600, 500): no preimage).
     let mut bad = good.clone();
     bad[1][0] = Vector2::new(600.0 + 700.0, 500.0);
-    match triangulate_line_segments_views(&views, &bad, None, &o) {
+    match triangulate_line(&views, LineObservations::SegmentEndpoints(&bad, None), &o) {
         Err(Error::Degenerate { what }) => assert!(what.starts_with("lines[1]: endpoint 0"), "{what}"),
         other => panic!("{other:?}"),
     }
     // Wrong counts.
-    match triangulate_line_segments_views(&views, &good[..2], None, &o) {
+    match triangulate_line(&views, LineObservations::SegmentEndpoints(&good[..2], None), &o) {
         Err(Error::Shape { what, .. }) => assert_eq!(what, "lines"),
         other => panic!("{other:?}"),
     }
     let covs = covariances_of(&sc.obs);
-    match triangulate_line_segments_views(&views, &good, Some(&covs[..2]), &o) {
+    match triangulate_line(&views, LineObservations::SegmentEndpoints(&good, Some(&covs[..2])), &o) {
         Err(Error::Shape { what, .. }) => assert_eq!(what, "covariances"),
         other => panic!("{other:?}"),
     }
     // A covariance that is not positive definite.
     let mut bad_covs = covs.clone();
     bad_covs[1][1] = Matrix2::new(1.0, 2.0, 2.0, 1.0);
-    match triangulate_line_segments_views(&views, &good, Some(&bad_covs), &o) {
+    match triangulate_line(&views, LineObservations::SegmentEndpoints(&good, Some(&bad_covs)), &o) {
         Err(Error::Degenerate { what }) => assert!(what.starts_with("covariances[1]"), "{what}"),
         other => panic!("{other:?}"),
     }
@@ -682,14 +705,16 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         covariances: Some(&covariances),
     };
     let o = opts(Method::Local);
-    let results = triangulate_line_observations_views(&views, &tracks, &o, None).unwrap();
+    let results = triangulate_lines(&views, tracks, &o, None).unwrap();
     for (t, result) in results.iter().enumerate() {
         let seen = &images[offsets[t]..offsets[t + 1]];
         let track_obs: Vec<&Obs> = rows[offsets[t]..offsets[t + 1]].to_vec();
-        let single = triangulate_line_segments_views(
+        let single = triangulate_line(
             &seen.iter().map(|&j| views[j].clone()).collect::<Vec<_>>(),
-            &track_obs.iter().map(|o| o.ends).collect::<Vec<_>>(),
-            Some(&track_obs.iter().map(|o| o.covs).collect::<Vec<_>>()),
+            LineObservations::SegmentEndpoints(
+                &track_obs.iter().map(|o| o.ends).collect::<Vec<_>>(),
+                Some(&track_obs.iter().map(|o| o.covs).collect::<Vec<_>>()),
+            ),
             &o,
         )
         .unwrap();
@@ -704,7 +729,7 @@ fn the_sparse_batch_solves_each_track_as_the_single_call_and_names_bad_rows() {
         lines: &segments,
         covariances: Some(&covariances),
     };
-    let results = triangulate_line_observations_views(&views, &tracks, &o, None).unwrap();
+    let results = triangulate_lines(&views, tracks, &o, None).unwrap();
     assert!(results[0].is_ok());
     match &results[1] {
         Err(Error::NonFinite { what, index }) => assert_eq!((what.as_str(), *index), ("lines[1]", 2)),
@@ -764,10 +789,9 @@ fn a_pinhole_view_among_lenses_is_measured_by_its_straight_image() {
             (library - oracle).abs() <= 1e-7 * oracle + 1e-9,
             "{library} vs {oracle}"
         );
-        let r = triangulate_line_segments_views(
+        let r = triangulate_line(
             &views,
-            &segments_of(&sc.obs),
-            Some(&covariances_of(&sc.obs)),
+            LineObservations::SegmentEndpoints(&segments_of(&sc.obs), Some(&covariances_of(&sc.obs))),
             &opts(Method::Local),
         )
         .unwrap();
@@ -793,7 +817,12 @@ fn robust_inliers_are_the_segments_within_the_threshold_at_the_exact_optimum() {
         sc.obs[3].ends = [sc.obs[3].ends[0] + across, sc.obs[3].ends[1] + across];
         let mut o = opts(Method::Local);
         o.outlier_threshold = Some(4.0);
-        let r = triangulate_line_segments_views(&views_of(&sc.obs), &segments_of(&sc.obs), None, &o).unwrap();
+        let r = triangulate_line(
+            &views_of(&sc.obs),
+            LineObservations::SegmentEndpoints(&segments_of(&sc.obs), None),
+            &o,
+        )
+        .unwrap();
         let flags = r.inliers.clone().unwrap();
         assert_eq!(flags, vec![true, true, true, false, true, true], "{name}");
         let line = as_points(&r.point, &r.direction, &sc.truth);

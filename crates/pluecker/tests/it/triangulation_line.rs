@@ -9,9 +9,7 @@ use crate::common;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker;
 use pluecker::rng::Rng;
-use pluecker::triangulation::line::{
-    lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
-};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations, LineTriangulation};
 use pluecker::triangulation::scenes::{line_scene, LineScene};
 use pluecker::triangulation::{CertificateKind, LineBound, Method, Status, TriangulationOptions};
 use pluecker::Error;
@@ -45,7 +43,7 @@ fn noise_free_lines_are_recovered_by_every_method() {
         let scene = line_scene(views, 0.8, seed);
         let lines = exact_lines(&scene);
         for method in Method::ALL.iter().copied() {
-            let r = triangulate_line(&scene.cameras, &lines, None, &opts(method)).unwrap();
+            let r = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, None), &opts(method)).unwrap();
             let (angle, offset) = line_error(&r, &scene.plucker());
             assert!(
                 angle < 1e-8 && offset < 1e-8,
@@ -73,7 +71,7 @@ fn noisy_costs_are_ordered_and_bounds_are_below_the_costs() {
         let scene = line_scene(views, 0.8, 100 + seed);
         let mut rng = Rng::new(200 + seed);
         let segments = scene.noisy_segments(1.0, &mut rng);
-        let run = |m| triangulate_line_segments(&scene.cameras, &segments, 1.0, &opts(m)).unwrap();
+        let run = |m| triangulate_line(&scene.cameras, LineObservations::Segments(&segments, 1.0), &opts(m)).unwrap();
         let (linear, local, optimal) = (run(Method::Linear), run(Method::Local), run(Method::Optimal));
         let tol = 1e-9 * (1.0 + linear.report.cost);
         assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
@@ -151,7 +149,7 @@ fn the_relaxation_bound_is_below_the_costs_at_every_node_cap() {
             o.line_bound = LineBound::Relaxation;
             o.certify.max_relative_gap = 1e-9;
             o.certify.max_nodes = Some(max_nodes);
-            let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
+            let r = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covariances)), &o).unwrap();
             let Some(bound) = r.report.certificate.map(|c| c.raw_lower_bound) else {
                 continue; // nothing proved, nothing claimed
             };
@@ -206,7 +204,7 @@ fn the_relaxation_bound_is_below_the_costs_when_one_view_carries_the_residual() 
             o.method = Method::Optimal;
             o.line_bound = LineBound::Relaxation;
             o.certify.max_nodes = Some(max_nodes);
-            let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
+            let r = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covariances)), &o).unwrap();
             let c = r.report.certificate.expect("a search ran");
             if c.raw_lower_bound.is_nan() {
                 continue;
@@ -273,7 +271,8 @@ fn no_line_anywhere_costs_less_than_the_certified_bound() {
             };
             let mut o = opts(Method::Optimal);
             o.line_bound = bound;
-            let optimal = triangulate_line(&scene.cameras, &lines, Some(&covariances), &o).unwrap();
+            let optimal =
+                triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covariances)), &o).unwrap();
             let c = optimal.report.certificate.expect("a search ran");
             if !c.certified {
                 continue;
@@ -478,7 +477,12 @@ fn reported_cost_is_eq_19() {
     let segments = scene.noisy_segments(1.0, &mut rng);
     let (lines, covariances) = lines_from_segments(&segments, 1.0).unwrap();
     for method in Method::ALL.iter().copied() {
-        let r = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(method)).unwrap();
+        let r = triangulate_line(
+            &scene.cameras,
+            LineObservations::Lines(&lines, Some(&covariances)),
+            &opts(method),
+        )
+        .unwrap();
         let cost = independent_line_cost(&scene.cameras, &lines, &covariances, &r.point, &(r.point + r.direction));
         assert!(
             (cost - r.report.cost).abs() < 1e-8 * (1.0 + cost),
@@ -502,11 +506,15 @@ fn a_view_with_huge_covariance_is_ignored() {
     ];
     let (lines, mut covariances) = lines_from_segments(&segments, 1.0).unwrap();
     covariances[3] *= 1e8;
-    let all = triangulate_line(&scene.cameras, &lines, Some(&covariances), &opts(Method::Local)).unwrap();
+    let all = triangulate_line(
+        &scene.cameras,
+        LineObservations::Lines(&lines, Some(&covariances)),
+        &opts(Method::Local),
+    )
+    .unwrap();
     let three = triangulate_line(
         &scene.cameras[..3],
-        &lines[..3],
-        Some(&covariances[..3]),
+        LineObservations::Lines(&lines[..3], Some(&covariances[..3])),
         &opts(Method::Local),
     )
     .unwrap();
@@ -514,7 +522,12 @@ fn a_view_with_huge_covariance_is_ignored() {
     assert!(angle < 1e-4 && offset < 1e-4, "{angle} {offset}");
     // With its nominal covariance the moved view pulls the answer away.
     let (_, nominal) = lines_from_segments(&segments, 1.0).unwrap();
-    let pulled = triangulate_line(&scene.cameras, &lines, Some(&nominal), &opts(Method::Local)).unwrap();
+    let pulled = triangulate_line(
+        &scene.cameras,
+        LineObservations::Lines(&lines, Some(&nominal)),
+        &opts(Method::Local),
+    )
+    .unwrap();
     let (angle, offset) = line_error(&pulled, three.plucker.coordinates());
     assert!(angle > 1e-3 || offset > 1e-3, "{angle} {offset}");
 }
@@ -525,7 +538,7 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let lines = exact_lines(&scene);
     let o = opts(Method::Local);
     let err = |c: &[Matrix3x4<f64>], l: &[Vector3<f64>], cov: Option<&[Matrix2<f64>]>| {
-        triangulate_line(c, l, cov, &o).unwrap_err()
+        triangulate_line(c, LineObservations::Lines(l, cov), &o).unwrap_err()
     };
     assert!(matches!(
         err(&scene.cameras[..1], &lines[..1], None),
@@ -581,14 +594,14 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let mut bad = o.clone();
     bad.certify = certify;
     assert!(matches!(
-        triangulate_line(&scene.cameras, &lines, None, &bad),
+        triangulate_line(&scene.cameras, LineObservations::Lines(&lines, None), &bad),
         Err(Error::InvalidOption { .. })
     ));
     // Segments: zero length, named by index.
     let mut segments = scene.segments.clone();
     segments[2][1] = segments[2][0];
     assert!(
-        matches!(triangulate_line_segments(&scene.cameras, &segments, 1.0, &o), Err(Error::Degenerate { ref what }) if what.contains("lines[2]"))
+        matches!(triangulate_line(&scene.cameras, LineObservations::Segments(&segments, 1.0), &o), Err(Error::Degenerate { ref what }) if what.contains("lines[2]"))
     );
 }
 
@@ -622,7 +635,7 @@ fn a_line_far_from_the_origin_is_the_same_error_for_optimal_as_for_local() {
         })
         .collect();
     for method in [Method::Local, Method::Optimal] {
-        let err = triangulate_line(&cameras, &lines, None, &opts(method)).unwrap_err();
+        let err = triangulate_line(&cameras, LineObservations::Lines(&lines, None), &opts(method)).unwrap_err();
         assert!(matches!(err, Error::Degenerate { .. }), "{method:?}: {err}");
     }
 }
@@ -633,10 +646,8 @@ mod batch {
     use super::common::{mask, noisy_segments, seen, segment, segment_tracks};
     use nalgebra::{Matrix2, Matrix3x4, Vector2, Vector3};
     use pluecker::rng::Rng;
-    use pluecker::triangulation::line::{
-        lines_from_segments, triangulate_line, triangulate_line_segments, LineTriangulation,
-    };
-    use pluecker::triangulation::line::{triangulate_lines, ImageLines, LineTracks};
+    use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations, LineTriangulation};
+    use pluecker::triangulation::line::{triangulate_lines, DenseLineTracks, ImageLines};
     use pluecker::triangulation::scenes::arc_cameras;
     use pluecker::triangulation::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
@@ -674,7 +685,7 @@ mod batch {
 
         // Segments with endpoint noise, every method.
         for method in Method::ALL.iter().copied() {
-            let tracks = LineTracks {
+            let tracks = DenseLineTracks {
                 lines: ImageLines::Segments {
                     endpoints: &endpoints,
                     sigma: 1.5,
@@ -682,10 +693,15 @@ mod batch {
                 visible: Some(&visible),
                 covariances: None,
             };
-            let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(method), None).unwrap();
+            let batch = triangulate_lines(&cameras, tracks, &opts(method), None).unwrap();
             assert_eq!(batch.len(), n);
             for (t, r) in batch.into_iter().enumerate() {
-                let single = triangulate_line_segments(&cams_of(t), &segments_of(t), 1.5, &opts(method)).unwrap();
+                let single = triangulate_line(
+                    &cams_of(t),
+                    LineObservations::Segments(&segments_of(t), 1.5),
+                    &opts(method),
+                )
+                .unwrap();
                 assert_eq!(
                     untimed_line(r.unwrap()),
                     untimed_line(single),
@@ -711,12 +727,12 @@ mod batch {
                 .map(|&j| Matrix2::from_row_slice(&covariances[4 * (t * v + j)..][..4]))
                 .collect()
         };
-        let homogeneous = LineTracks {
+        let homogeneous = DenseLineTracks {
             lines: ImageLines::Homogeneous(&lines),
             visible: Some(&visible),
             covariances: Some(&covariances),
         };
-        let with_covariances = LineTracks {
+        let with_covariances = DenseLineTracks {
             lines: ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
@@ -724,10 +740,15 @@ mod batch {
             ..homogeneous
         };
         for tracks in [homogeneous, with_covariances] {
-            let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
+            let batch = triangulate_lines(&cameras, tracks, &opts(Method::Local), None).unwrap();
             for (t, r) in batch.into_iter().enumerate() {
                 let (image, _) = lines_from_segments(&segments_of(t), 1.0).unwrap();
-                let single = triangulate_line(&cams_of(t), &image, Some(&covs_of(t)), &opts(Method::Local)).unwrap();
+                let single = triangulate_line(
+                    &cams_of(t),
+                    LineObservations::Lines(&image, Some(&covs_of(t))),
+                    &opts(Method::Local),
+                )
+                .unwrap();
                 let r = untimed_line(r.unwrap());
                 // The homogeneous lines are the segments' lines up to scale and sign, which the residual
                 // ignores (section 3.1 normalises each line): the same line to rounding (Plücker
@@ -760,12 +781,16 @@ mod batch {
             projections: &cameras,
             views: v,
         };
-        let batch = triangulate_lines(per_track, &tracks, &opts(Method::Local), Some(&done)).unwrap();
+        let batch = triangulate_lines(per_track, tracks, &opts(Method::Local), Some(&done)).unwrap();
         assert_eq!(done.load(Ordering::Relaxed), n);
         for (t, r) in batch.into_iter().enumerate() {
             let segments: Vec<[Vector2<f64>; 2]> = (0..v).map(|j| segment(&endpoints, v, t, j)).collect();
-            let single =
-                triangulate_line_segments(&cameras[t * v..(t + 1) * v], &segments, 1.0, &opts(Method::Local)).unwrap();
+            let single = triangulate_line(
+                &cameras[t * v..(t + 1) * v],
+                LineObservations::Segments(&segments, 1.0),
+                &opts(Method::Local),
+            )
+            .unwrap();
             assert_eq!(untimed_line(r.unwrap()), untimed_line(single), "track {t}");
         }
         // A singular camera of one track is that track's error, named by track and view.
@@ -775,7 +800,7 @@ mod batch {
             projections: &bad,
             views: v,
         };
-        let batch = triangulate_lines(per_track, &tracks, &opts(Method::Linear), None).unwrap();
+        let batch = triangulate_lines(per_track, tracks, &opts(Method::Linear), None).unwrap();
         assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("projections[2][1]")));
         assert!(batch.iter().enumerate().all(|(t, r)| r.is_ok() == (t != 2)));
     }
@@ -820,12 +845,12 @@ mod batch {
             let l = (cameras[j] * a.push(1.0)).cross(&(cameras[j] * b.push(1.0)));
             lines[3 * (6 * v + j)..3 * (6 * v + j) + 3].copy_from_slice(l.as_slice());
         }
-        let tracks = LineTracks {
+        let tracks = DenseLineTracks {
             lines: ImageLines::Homogeneous(&lines),
             visible: Some(&visible),
             covariances: Some(&covariances),
         };
-        let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
+        let batch = triangulate_lines(&cameras, tracks, &opts(Method::Local), None).unwrap();
         assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 2 }) if what == "lines[1]"));
         assert!(
             matches!(&batch[3], Err(Error::TooFewCorrespondences { actual, .. }) if actual == "track 3: 1 view(s)")
@@ -851,7 +876,12 @@ mod batch {
                 .map(|&j| Vector3::from_row_slice(&lines[3 * (t * v + j)..][..3]))
                 .collect();
             let covs = vec![Matrix2::identity(); views.len()];
-            let single = triangulate_line(&cams, &image, Some(&covs), &opts(Method::Local)).unwrap();
+            let single = triangulate_line(
+                &cams,
+                LineObservations::Lines(&image, Some(&covs)),
+                &opts(Method::Local),
+            )
+            .unwrap();
             assert_eq!(untimed_line(r.clone()), untimed_line(single), "track {t}");
         }
 
@@ -861,7 +891,7 @@ mod batch {
         let p = &endpoints[4 * 5 * v..][..2].to_vec();
         endpoints[4 * 5 * v + 2..4 * 5 * v + 4].copy_from_slice(p);
         let tracks = segment_tracks(&endpoints, 1.0);
-        let batch = triangulate_lines(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Linear), None).unwrap();
+        let batch = triangulate_lines(&cameras, tracks, &opts(Method::Linear), None).unwrap();
         assert!(matches!(&batch[2], Err(Error::NonFinite { what, index: 1 }) if what == "lines[2]"));
         assert!(matches!(&batch[5], Err(Error::Degenerate { what }) if what == "lines[5][0] has zero length"));
         assert_eq!(batch.iter().filter(|r| r.is_ok()).count(), n - 2);
@@ -877,11 +907,12 @@ mod batch {
         let mut rng = Rng::new(14);
         let cameras = arc_cameras(3, 0.8, &mut rng);
         let endpoints = noisy_segments(&cameras, 2, 1.0, &mut rng);
-        let shared = TrackCameras::Shared(&cameras);
+        let shared = &cameras;
         let o = opts(Method::Linear);
-        let run =
-            |tracks: &LineTracks, o: &TriangulationOptions| triangulate_lines(shared, tracks, o, None).unwrap_err();
-        let tracks = |sigma| LineTracks {
+        let run = |tracks: &DenseLineTracks, o: &TriangulationOptions| {
+            triangulate_lines(shared, tracks, o, None).unwrap_err()
+        };
+        let tracks = |sigma| DenseLineTracks {
             lines: ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma,
@@ -896,19 +927,19 @@ mod batch {
         let mut bad = o.clone();
         bad.certify = certify;
         assert!(matches!(run(&tracks(1.0), &bad), Error::InvalidOption { name, .. } if name == "certify.max_nodes"));
-        let short = LineTracks {
+        let short = DenseLineTracks {
             lines: ImageLines::Homogeneous(&endpoints[..8]),
             ..tracks(1.0)
         };
         assert!(matches!(run(&short, &o), Error::Shape { what, .. } if what == "lines"));
         let flags = [true; 5];
-        let masked = LineTracks {
+        let masked = DenseLineTracks {
             visible: Some(&flags),
             ..tracks(1.0)
         };
         assert!(matches!(run(&masked, &o), Error::Shape { what, .. } if what == "visible"));
         let covs = [1.0; 8];
-        let covariances = LineTracks {
+        let covariances = DenseLineTracks {
             covariances: Some(&covs),
             ..tracks(1.0)
         };
@@ -916,7 +947,7 @@ mod batch {
         let mut singular = cameras.clone();
         singular[1][(0, 0)] = f64::NAN;
         assert!(matches!(
-            triangulate_lines(TrackCameras::Shared(&singular), &tracks(1.0), &o, None),
+            triangulate_lines(&singular, tracks(1.0), &o, None),
             Err(Error::NonFinite { what, index: 1 }) if what == "projections"
         ));
         let per_track = TrackCameras::PerTrack {
@@ -924,20 +955,20 @@ mod batch {
             views: 3,
         };
         assert!(matches!(
-            triangulate_lines(per_track, &tracks(1.0), &o, None),
+            triangulate_lines(per_track, tracks(1.0), &o, None),
             Err(Error::Shape { what, .. }) if what == "projections"
         ));
-        let empty = LineTracks {
+        let empty = DenseLineTracks {
             lines: ImageLines::Homogeneous(&[]),
             ..tracks(1.0)
         };
-        assert!(triangulate_lines(shared, &empty, &o, None).unwrap().is_empty());
+        assert!(triangulate_lines(shared, empty, &o, None).unwrap().is_empty());
     }
 }
 
 #[test]
 fn sparse_line_tracks_equal_the_dense_batch() {
-    use pluecker::triangulation::line::{triangulate_line_observations, SparseLineTracks};
+    use pluecker::triangulation::line::{triangulate_lines, SparseLineTracks};
     use pluecker::triangulation::Csr;
     // Three views, four tracks seen in all of them; the sparse form lists the same rows track by track.
     let mut rng = pluecker::rng::Rng::new(21);
@@ -956,8 +987,8 @@ fn sparse_line_tracks_equal_the_dense_batch() {
     }
     let opts = pluecker::triangulation::TriangulationOptions::default();
     let dense = pluecker::triangulation::line::triangulate_lines(
-        pluecker::triangulation::TrackCameras::Shared(&cameras),
-        &pluecker::triangulation::line::LineTracks {
+        &cameras,
+        pluecker::triangulation::line::DenseLineTracks {
             lines: pluecker::triangulation::line::ImageLines::Segments {
                 endpoints: &endpoints,
                 sigma: 1.0,
@@ -971,9 +1002,9 @@ fn sparse_line_tracks_equal_the_dense_batch() {
     .unwrap();
     let offsets = [0, 3, 6, 9, 12];
     let images: Vec<usize> = (0..4).flat_map(|_| 0..3).collect();
-    let sparse = triangulate_line_observations(
+    let sparse = triangulate_lines(
         &cameras,
-        &SparseLineTracks {
+        SparseLineTracks {
             csr: Csr {
                 offsets: &offsets,
                 image: &images,

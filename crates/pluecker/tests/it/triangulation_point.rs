@@ -9,9 +9,7 @@ use pluecker::triangulation::point::testing::convexity_test;
 use pluecker::triangulation::point::testing::{global_point, GlobalSettings, GlobalStatus, Relaxation};
 use pluecker::triangulation::point::testing::{in_front, point_views, PointView};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::point::{
-    triangulate_point_observations, triangulate_points, triangulate_points_linear, PointTracks, SparsePointTracks,
-};
+use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints, SparsePointTracks};
 use pluecker::triangulation::testing::depth_normalized;
 use pluecker::triangulation::Csr;
 use pluecker::triangulation::{CertificateKind, Method, Status, TriangulationOptions};
@@ -577,12 +575,12 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         covariances.extend([1.0, 0.0, 0.0, 1.0]);
     }
     covariances[4 * (4 * v)..4 * (4 * v) + 4].copy_from_slice(&[1.0, 3.0, 3.0, 1.0]);
-    let tracks = PointTracks {
+    let tracks = DensePointTracks {
         observations: &observations,
         visible: Some(&visible),
         covariances: Some(&covariances),
     };
-    let results = triangulate_points(&cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let results = triangulate_points(&cameras, tracks, &TriangulationOptions::default(), None).unwrap();
     assert!(matches!(&results[1], Err(Error::NonFinite { what, index: 3 }) if what == "observations[1]"));
     assert!(matches!(&results[3], Err(Error::TooFewCorrespondences { .. })));
     assert!(matches!(&results[4], Err(Error::Degenerate { what }) if what.contains("covariances[4]")));
@@ -602,7 +600,7 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         );
         assert!((r.point - truths[t]).norm() < 0.1);
     }
-    let linear = triangulate_points_linear(&cameras, &tracks).unwrap();
+    let linear = LinearPoints::from_tracks(&cameras, &tracks).unwrap();
     assert_eq!(linear.outcomes.len(), n);
     assert!(linear.outcomes[1].is_err() && linear.outcomes[3].is_err() && linear.outcomes[4].is_err());
     assert!(linear.points[3..6].iter().all(|v| v.is_nan()));
@@ -620,21 +618,21 @@ fn batch_matches_single_calls_and_keeps_good_tracks_around_bad_ones() {
         assert!((single.report.cost - linear.costs[t]).abs() < 1e-9 * single.report.cost);
     }
     // Whole-call errors.
-    let short = PointTracks {
+    let short = DensePointTracks {
         observations: &observations[..5],
         visible: None,
         covariances: None,
     };
     assert!(matches!(
-        triangulate_points(&cameras, &short, &TriangulationOptions::default(), None),
+        triangulate_points(&cameras, short, &TriangulationOptions::default(), None),
         Err(Error::Shape { .. })
     ));
-    let mask = PointTracks {
+    let mask = DensePointTracks {
         observations: &observations,
         visible: Some(&visible[..3]),
         covariances: None,
     };
-    assert!(matches!(triangulate_points_linear(&cameras, &mask), Err(Error::Shape { what, .. }) if what == "visible"));
+    assert!(matches!(LinearPoints::from_tracks(&cameras, &mask), Err(Error::Shape { what, .. }) if what == "visible"));
 }
 
 #[test]
@@ -700,7 +698,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         offsets.push(images.len());
     }
     let opts = options(Method::Optimal);
-    let d = PointTracks {
+    let d = DensePointTracks {
         observations: &dense,
         visible: Some(&visible),
         covariances: Some(&dense_cov),
@@ -713,8 +711,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         observations: &sparse,
         covariances: Some(&sparse_cov),
     };
-    let a = triangulate_points(&cameras, &d, &opts, None).unwrap();
-    let b = triangulate_point_observations(&cameras, &s, &opts, None).unwrap();
+    let a = triangulate_points(&cameras, d, &opts, None).unwrap();
+    let b = triangulate_points(&cameras, s, &opts, None).unwrap();
     for (t, (a, b)) in a.into_iter().zip(b).enumerate() {
         let (mut a, mut b) = (a.unwrap(), b.unwrap());
         (a.report.time_seconds, b.report.time_seconds) = (0.0, 0.0);
@@ -737,8 +735,8 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         observations: &rev_obs,
         covariances: Some(&rev_cov),
     };
-    let c = triangulate_point_observations(&cameras, &reversed, &opts, None).unwrap();
-    for (t, (b, c)) in triangulate_point_observations(&cameras, &s, &opts, None)
+    let c = triangulate_points(&cameras, reversed, &opts, None).unwrap();
+    for (t, (b, c)) in triangulate_points(&cameras, s, &opts, None)
         .unwrap()
         .into_iter()
         .zip(c)
@@ -768,7 +766,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         },
         ..s
     };
-    let r = triangulate_point_observations(&cameras, &bad, &opts, None).unwrap();
+    let r = triangulate_points(&cameras, bad, &opts, None).unwrap();
     assert!(matches!(&r[0], Err(Error::Shape { what, .. }) if *what == format!("image[{}]", offsets[0])));
     assert!(
         matches!(&r[1], Err(Error::TooFewCorrespondences { required, actual, .. })
@@ -784,7 +782,7 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_point_observations(&cameras, &short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_points(&cameras, short, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
     let mut down = offsets.clone();
     down.swap(1, 2);
@@ -796,6 +794,6 @@ fn the_sparse_batch_equals_the_dense_one_and_names_bad_tracks() {
         ..s
     };
     assert!(
-        matches!(triangulate_point_observations(&cameras, &down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
+        matches!(triangulate_points(&cameras, down, &opts, None), Err(Error::Shape { what, .. }) if what == "offsets")
     );
 }

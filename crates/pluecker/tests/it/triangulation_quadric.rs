@@ -8,7 +8,7 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
 use pluecker::geometry::{project_dual, Ellipse, Ellipsoid};
 use pluecker::rng::Rng;
 use pluecker::triangulation::fitting::fit_conic;
-use pluecker::triangulation::quadric::{triangulate_quadric, triangulate_quadric_points, Matrix5};
+use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricObservations};
 use pluecker::triangulation::scenes::quadric_scene;
 use pluecker::triangulation::testing::quadric_convexity_bound;
 use pluecker::triangulation::{CertificateKind, Method, QuadricBound, Status, TriangulationOptions};
@@ -34,7 +34,12 @@ fn noise_free_ellipsoids_are_recovered_by_every_method() {
         let scene = quadric_scene(views, 0.8, seed);
         let conics = outlines(&scene.cameras, &scene.ellipsoid);
         for method in Method::ALL.iter().copied() {
-            let r = triangulate_quadric(&scene.cameras, &conics, None, &opts(method)).unwrap();
+            let r = triangulate_quadric(
+                &scene.cameras,
+                QuadricObservations::Conics(&conics, None),
+                &opts(method),
+            )
+            .unwrap();
             let e = &scene.ellipsoid;
             assert!(
                 (r.centre - e.centre).norm() < 1e-7,
@@ -73,7 +78,12 @@ fn a_disc_is_recovered_as_a_flat_ellipsoid() {
     };
     let conics = outlines(&scene.cameras, &disc);
     for method in [Method::Linear, Method::Local] {
-        let r = triangulate_quadric(&scene.cameras, &conics, None, &opts(method)).unwrap();
+        let r = triangulate_quadric(
+            &scene.cameras,
+            QuadricObservations::Conics(&conics, None),
+            &opts(method),
+        )
+        .unwrap();
         assert!((r.centre - disc.centre).norm() < 1e-6, "{}", method.as_str());
         assert!(
             (r.semi_axes.xy() - disc.semi_axes.xy()).norm() < 1e-6 && r.semi_axes.z < 1e-4,
@@ -91,7 +101,8 @@ fn noisy_ellipsoids_are_certified_and_costs_ordered() {
         let scene = quadric_scene(views, 0.8, 10 + seed);
         let mut rng = Rng::new(20 + seed);
         let points = scene.noisy_outline_points(63, 1.0, &mut rng);
-        let run = |m| triangulate_quadric_points(&scene.cameras, &points, 1.0, &opts(m)).unwrap();
+        let run =
+            |m| triangulate_quadric(&scene.cameras, QuadricObservations::EdgePoints(&points, 1.0), &opts(m)).unwrap();
         let (linear, local, optimal) = (run(Method::Linear), run(Method::Local), run(Method::Optimal));
         let tol = 1e-9 * (1.0 + linear.report.cost);
         assert!(local.report.cost <= linear.report.cost + tol, "seed {seed}");
@@ -241,7 +252,12 @@ fn no_ellipsoid_anywhere_costs_less_than_the_certified_bound() {
             let conics: Vec<Matrix3<f64>> = fits.iter().map(|f| f.conic).collect();
             let scale = Matrix5::from_diagonal(&nalgebra::SVector::<f64, 5>::from(regime.anisotropy));
             let covariances: Vec<Matrix5> = fits.iter().map(|f| scale * f.covariance * scale).collect();
-            let optimal = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &regime_opts).unwrap();
+            let optimal = triangulate_quadric(
+                &scene.cameras,
+                QuadricObservations::Conics(&conics, Some(&covariances)),
+                &regime_opts,
+            )
+            .unwrap();
             let c = optimal.report.certificate.expect("a search ran");
             if !c.certified {
                 continue;
@@ -323,7 +339,12 @@ fn the_convexity_bound_away_from_the_local_minimum_is_below_every_ellipsoid() {
             let conics: Vec<Matrix3<f64>> = fits.iter().map(|f| f.conic).collect();
             let scale = Matrix5::from_diagonal(&nalgebra::SVector::<f64, 5>::from(regime.anisotropy));
             let covariances: Vec<Matrix5> = fits.iter().map(|f| scale * f.covariance * scale).collect();
-            let local = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Local)).unwrap();
+            let local = triangulate_quadric(
+                &scene.cameras,
+                QuadricObservations::Conics(&conics, Some(&covariances)),
+                &opts(Method::Local),
+            )
+            .unwrap();
             let cost = |x: &[f64; 9]| -> Option<f64> {
                 let e = Ellipsoid {
                     centre: Vector3::new(x[0], x[1], x[2]),
@@ -524,7 +545,12 @@ fn branch_and_bound_reports_its_work() {
     let hard = (0..60u64).find_map(|seed| {
         let scene = quadric_scene(3, 0.8, 40 + seed);
         let (conics, covariances) = fitted(&scene, seed)?;
-        let r = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).ok()?;
+        let r = triangulate_quadric(
+            &scene.cameras,
+            QuadricObservations::Conics(&conics, Some(&covariances)),
+            &opts(Method::Optimal),
+        )
+        .ok()?;
         (r.report.certificate.map(|c| c.kind) == Some(CertificateKind::BranchAndBound)).then_some((
             scene,
             conics,
@@ -535,7 +561,12 @@ fn branch_and_bound_reports_its_work() {
     // The search's work as reported: each node solves at least one conic program (≥ 1 interior-point
     // iteration), and no program takes more than clarabel's 200 iterations; the root's bound
     // tightening adds at most 2 passes of 2 solves per each of the 9 entries of the dual's upper block.
-    let searched = triangulate_quadric(&scene.cameras, &conics, Some(&covariances), &opts(Method::Optimal)).unwrap();
+    let searched = triangulate_quadric(
+        &scene.cameras,
+        QuadricObservations::Conics(&conics, Some(&covariances)),
+        &opts(Method::Optimal),
+    )
+    .unwrap();
     let c = searched.report.certificate.expect("a search ran");
     assert!(c.nodes >= 1 && c.solver_iterations >= c.nodes, "{c:?}");
     assert!(c.solver_iterations <= 200 * (4 * c.nodes + 36), "{c:?}");
@@ -561,7 +592,7 @@ fn an_ellipsoid_behind_a_camera_is_reported() {
         "the mirrored outline is still an ellipse"
     );
     for method in Method::ALL.iter().copied() {
-        let r = triangulate_quadric(&cameras, &conics, None, &opts(method)).unwrap();
+        let r = triangulate_quadric(&cameras, QuadricObservations::Conics(&conics, None), &opts(method)).unwrap();
         assert_eq!(r.report.status, Status::BehindCamera, "{}", method.as_str());
         // Status and certificate agree (issue 10: optimal said behind_camera and certified).
         assert!(!r.report.certified(), "{}", method.as_str());
@@ -574,7 +605,7 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let conics = outlines(&scene.cameras, &scene.ellipsoid);
     let o = opts(Method::Local);
     let err = |c: &[Matrix3x4<f64>], q: &[Matrix3<f64>], cov: Option<&[Matrix5]>| {
-        triangulate_quadric(c, q, cov, &o).unwrap_err()
+        triangulate_quadric(c, QuadricObservations::Conics(q, cov), &o).unwrap_err()
     };
     assert!(matches!(
         err(&scene.cameras[..2], &conics[..2], None),
@@ -604,7 +635,7 @@ fn bad_input_is_rejected_with_the_argument_and_index() {
     let mut bad = o.clone();
     bad.certify = certify;
     assert!(matches!(
-        triangulate_quadric(&scene.cameras, &conics, None, &bad),
+        triangulate_quadric(&scene.cameras, QuadricObservations::Conics(&conics, None), &bad),
         Err(Error::InvalidOption { .. })
     ));
 }
@@ -617,8 +648,8 @@ mod batch {
     use pluecker::geometry::{project_dual, Ellipse};
     use pluecker::rng::Rng;
     use pluecker::triangulation::fitting::fit_conic;
-    use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricTriangulation};
-    use pluecker::triangulation::quadric::{triangulate_quadrics, QuadricTracks};
+    use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricObservations, QuadricTriangulation};
+    use pluecker::triangulation::quadric::{triangulate_quadrics, DenseQuadricTracks};
     use pluecker::triangulation::scenes::quadric_scene;
     use pluecker::triangulation::TrackCameras;
     use pluecker::triangulation::{Method, Status, TriangulationOptions};
@@ -682,15 +713,15 @@ mod batch {
                 .iter()
                 .map(|&j| Matrix5::from_row_slice(&covariances[25 * (t * v + j)..][..25]))
                 .collect();
-            triangulate_quadric(cams, &c, Some(&s), &opts(method)).unwrap()
+            triangulate_quadric(cams, QuadricObservations::Conics(&c, Some(&s)), &opts(method)).unwrap()
         };
         for method in Method::ALL.iter().copied() {
-            let tracks = QuadricTracks {
+            let tracks = DenseQuadricTracks {
                 conics: &conics,
                 visible: Some(&visible),
                 covariances: Some(&covariances),
             };
-            let batch = triangulate_quadrics(TrackCameras::Shared(&cameras), &tracks, &opts(method), None).unwrap();
+            let batch = triangulate_quadrics(&cameras, tracks, &opts(method), None).unwrap();
             for (t, r) in batch.into_iter().enumerate() {
                 let views = seen(&visible, v, t);
                 let cams: Vec<Matrix3x4<f64>> = views.iter().map(|&j| cameras[j]).collect();
@@ -704,7 +735,7 @@ mod batch {
         for p in &mut per_track[v..2 * v] {
             *p *= -3.0;
         }
-        let tracks = QuadricTracks {
+        let tracks = DenseQuadricTracks {
             conics: &conics,
             visible: None,
             covariances: Some(&covariances),
@@ -714,7 +745,7 @@ mod batch {
             projections: &per_track,
             views: v,
         };
-        let batch = triangulate_quadrics(cams, &tracks, &opts(Method::Local), Some(&done)).unwrap();
+        let batch = triangulate_quadrics(cams, tracks, &opts(Method::Local), Some(&done)).unwrap();
         assert_eq!(done.load(Ordering::Relaxed), n);
         let all: Vec<usize> = (0..v).collect();
         for (t, r) in batch.into_iter().enumerate() {
@@ -743,12 +774,12 @@ mod batch {
         visible[2 * v + 1] = false;
         conics[9 * 3 * v..9 * 3 * v + 9].copy_from_slice(&[1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -100.0]);
         covariances[25 * (4 * v + 2) + 24] = -1.0;
-        let tracks = QuadricTracks {
+        let tracks = DenseQuadricTracks {
             conics: &conics,
             visible: Some(&visible),
             covariances: Some(&covariances),
         };
-        let batch = triangulate_quadrics(TrackCameras::Shared(&cameras), &tracks, &opts(Method::Local), None).unwrap();
+        let batch = triangulate_quadrics(&cameras, tracks, &opts(Method::Local), None).unwrap();
         assert!(matches!(&batch[1], Err(Error::NonFinite { what, index: 3 }) if what == "conics[1]"));
         assert!(
             matches!(&batch[2], Err(Error::TooFewCorrespondences { required, actual, .. }) if required.starts_with('3') && actual == "track 2: 2 view(s)")
@@ -760,26 +791,26 @@ mod batch {
             assert_eq!(r.report.status, Status::Success, "track {t}");
         }
         // Whole-call errors: lengths that do not fit.
-        let short = QuadricTracks {
+        let short = DenseQuadricTracks {
             conics: &conics[..10],
             visible: None,
             covariances: None,
         };
         let o = opts(Method::Linear);
         assert!(matches!(
-            triangulate_quadrics(TrackCameras::Shared(&cameras), &short, &o, None),
+            triangulate_quadrics(&cameras, short, &o, None),
             Err(Error::Shape { what, .. }) if what == "conics"
         ));
-        let covs = QuadricTracks {
+        let covs = DenseQuadricTracks {
             covariances: Some(&covariances[..25]),
             ..tracks
         };
         assert!(matches!(
-            triangulate_quadrics(TrackCameras::Shared(&cameras), &covs, &o, None),
+            triangulate_quadrics(&cameras, covs, &o, None),
             Err(Error::Shape { what, .. }) if what == "covariances"
         ));
         assert!(matches!(
-            triangulate_quadrics(TrackCameras::Shared(&[]), &tracks, &o, None),
+            triangulate_quadrics(&[] as &[Matrix3x4<f64>], tracks, &o, None),
             Err(Error::Shape { what, .. }) if what == "projections"
         ));
     }

@@ -12,8 +12,9 @@ use nalgebra::{Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use oracle::PointData;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
+use pluecker::triangulation::line::LineObservations;
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::point::{triangulate_point_observations, SparsePointTracks};
+use pluecker::triangulation::point::{triangulate_points, SparsePointTracks};
 use pluecker::triangulation::Csr;
 use pluecker::triangulation::{Status, TriangulationOptions};
 
@@ -142,7 +143,7 @@ fn the_sparse_batch_rejects_outliers_as_the_single_call() {
         observations: &observations,
         covariances: None,
     };
-    let batch = triangulate_point_observations(&cameras, &tracks, &robust(), None).unwrap();
+    let batch = triangulate_points(&cameras, tracks, &robust(), None).unwrap();
     for (b, s) in batch.iter().zip(&singles) {
         let b = b.as_ref().unwrap();
         assert_eq!(b.inliers, s.inliers);
@@ -193,7 +194,7 @@ fn one_outlier_line_per_track_is_rejected() {
         let (lines, covs) = lines_from_segments(&segments, 1.0).unwrap();
         let mut opts = robust();
         opts.method = pluecker::triangulation::Method::Local;
-        let result = triangulate_line(&scene.cameras, &lines, Some(&covs), &opts).unwrap();
+        let result = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covs)), &opts).unwrap();
         let mask = result.inliers.clone().unwrap();
         tracks += 1;
         rejected += !mask[outlier] as usize;
@@ -205,8 +206,7 @@ fn one_outlier_line_per_track_is_rejected() {
         local.method = pluecker::triangulation::Method::Local;
         let oracle = triangulate_line(
             &pick(&scene.cameras, &keep),
-            &pick(&lines, &keep),
-            Some(&pick(&covs, &keep)),
+            LineObservations::Lines(&pick(&lines, &keep), Some(&pick(&covs, &keep))),
             &local,
         )
         .unwrap();
@@ -214,7 +214,7 @@ fn one_outlier_line_per_track_is_rejected() {
         let distance = |r: &pluecker::triangulation::line::LineTriangulation, x: &nalgebra::Vector3<f64>| {
             (x - r.point).cross(&r.direction).norm_squared()
         };
-        let naive = triangulate_line(&scene.cameras, &lines, Some(&covs), &local).unwrap();
+        let naive = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covs)), &local).unwrap();
         naive_error2 += distance(&naive, &a) + distance(&naive, &b);
         robust_error2 += distance(&result, &a) + distance(&result, &b);
         oracle_error2 += distance(&oracle, &a) + distance(&oracle, &b);
@@ -322,8 +322,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations,
         covariances: None,
     };
-    let result =
-        triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let result = triangulate_points(&scene.cameras, tracks, &TriangulationOptions::default(), None).unwrap();
     let result = result[0].as_ref().unwrap();
     assert_eq!(result.report.status, Status::Success);
     let cameras: Vec<_> = images.iter().map(|&j| scene.cameras[j]).collect();
@@ -345,8 +344,7 @@ fn a_track_may_see_one_image_twice_and_uses_every_observation() {
         observations: &observations[..4],
         covariances: None,
     };
-    let refused =
-        triangulate_point_observations(&scene.cameras, &tracks, &TriangulationOptions::default(), None).unwrap();
+    let refused = triangulate_points(&scene.cameras, tracks, &TriangulationOptions::default(), None).unwrap();
     let message = refused[0].as_ref().unwrap_err().to_string();
     assert!(
         message.contains("2 distinct images") && message.contains("all in image 0"),

@@ -23,10 +23,10 @@ use pluecker::geometry::testing::centre_shape;
 use pluecker::rng::Rng;
 use pluecker::synthetic::triangulation_scene;
 use pluecker::triangulation::fitting::fit_conic;
-use pluecker::triangulation::line::{lines_from_segments, triangulate_line};
+use pluecker::triangulation::line::{lines_from_segments, triangulate_line, LineObservations};
 use pluecker::triangulation::point::triangulate_point;
-use pluecker::triangulation::point::{triangulate_points, triangulate_points_linear, PointTracks};
-use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5};
+use pluecker::triangulation::point::{triangulate_points, DensePointTracks, LinearPoints};
+use pluecker::triangulation::quadric::{triangulate_quadric, Matrix5, QuadricObservations};
 use pluecker::triangulation::scenes::{line_scene, quadric_scene};
 use pluecker::triangulation::{Method, Status, TriangulationOptions};
 
@@ -183,7 +183,7 @@ fn point_covariance_in_every_method_the_batch_and_at_infinity() {
         .iter()
         .flat_map(|c| [c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)]])
         .collect();
-    let tracks = PointTracks {
+    let tracks = DensePointTracks {
         observations: &flat_obs,
         visible: None,
         covariances: Some(&flat_cov),
@@ -192,11 +192,11 @@ fn point_covariance_in_every_method_the_batch_and_at_infinity() {
         let single = triangulate_point(&scene.cameras, &obs, Some(&covs), &opts(method)).unwrap();
         let cov = single.covariance.unwrap();
         assert!((cov - cov.transpose()).norm() == 0.0 && cov.symmetric_eigenvalues().min() > 0.0);
-        let batch = triangulate_points(&scene.cameras, &tracks, &opts(method), None).unwrap();
+        let batch = triangulate_points(&scene.cameras, tracks, &opts(method), None).unwrap();
         let from_batch = batch[0].as_ref().unwrap().covariance.unwrap();
         assert!((from_batch - cov).norm() <= 1e-9 * cov.norm(), "{method:?}");
         if method == Method::Linear {
-            let fast = triangulate_points_linear(&scene.cameras, &tracks).unwrap();
+            let fast = LinearPoints::from_tracks(&scene.cameras, &tracks).unwrap();
             let fast_cov = Matrix3::from_row_slice(&fast.covariances[..9]);
             assert!((fast_cov - cov).norm() <= 1e-9 * cov.norm());
         }
@@ -234,7 +234,7 @@ fn line_covariance_matches_monte_carlo() {
         let scene = line_scene(views, spread, seed);
         let o = opts(Method::Local);
         let (lines, covs) = lines_from_segments(&scene.segments, sigma).unwrap();
-        let exact = triangulate_line(&scene.cameras, &lines, Some(&covs), &o).unwrap();
+        let exact = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covs)), &o).unwrap();
         let truth = LineChart::of_line(&scene.plucker()).unwrap();
         assert!(truth.coordinates(exact.plucker.coordinates()).unwrap().norm() < 1e-9);
         let predicted = exact.covariance.expect("a covariance");
@@ -242,7 +242,7 @@ fn line_covariance_matches_monte_carlo() {
             .map(|_| {
                 let noisy = scene.noisy_segments(sigma, &mut rng);
                 let (lines, covs) = lines_from_segments(&noisy, sigma).unwrap();
-                let r = triangulate_line(&scene.cameras, &lines, Some(&covs), &o).unwrap();
+                let r = triangulate_line(&scene.cameras, LineObservations::Lines(&lines, Some(&covs)), &o).unwrap();
                 assert_eq!(r.report.status, Status::Success);
                 let e = exact.chart.coordinates(r.plucker.coordinates()).unwrap();
                 DVector::from_column_slice(e.as_slice())
@@ -293,7 +293,7 @@ fn quadric_covariance_matches_monte_carlo() {
             .unzip()
     };
     let (conics, covs) = fit(&outline_points);
-    let exact = triangulate_quadric(&scene.cameras, &conics, Some(&covs), &o).unwrap();
+    let exact = triangulate_quadric(&scene.cameras, QuadricObservations::Conics(&conics, Some(&covs)), &o).unwrap();
     let truth = centre_shape(&scene.ellipsoid.dual()).unwrap();
     assert!((centre_shape(&exact.dual).unwrap() - truth).norm() < 1e-8);
     let predicted = exact.covariance.expect("a covariance");
@@ -309,7 +309,7 @@ fn quadric_covariance_matches_monte_carlo() {
                 })
                 .collect();
             let (conics, covs) = fit(&noisy);
-            let r = triangulate_quadric(&scene.cameras, &conics, Some(&covs), &o).unwrap();
+            let r = triangulate_quadric(&scene.cameras, QuadricObservations::Conics(&conics, Some(&covs)), &o).unwrap();
             assert_eq!(r.report.status, Status::Success);
             DVector::from_column_slice((centre_shape(&r.dual).unwrap() - truth).as_slice())
         })
@@ -341,7 +341,12 @@ fn line_covariance_grows_near_an_epipolar_plane_and_is_none_in_it() {
             })
             .collect();
         let (lines, covs) = lines_from_segments(&segments, 1.0).unwrap();
-        let r = triangulate_line(&cams, &lines, Some(&covs), &opts(Method::Local)).unwrap();
+        let r = triangulate_line(
+            &cams,
+            LineObservations::Lines(&lines, Some(&covs)),
+            &opts(Method::Local),
+        )
+        .unwrap();
         r.covariance.map(|c| c.symmetric_eigenvalues().max().sqrt())
     };
     let ratio = largest_std(0.002).unwrap() / largest_std(0.02).unwrap();

@@ -88,15 +88,15 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 /// ```
 /// use nalgebra::{Rotation3, Vector3};
 /// use pluecker::pose::minimal::p3p;
-/// use pluecker::Intrinsics;
+/// use pluecker::Camera;
 ///
-/// let cam = Intrinsics::new(800.0, 790.0, 320.0, 240.0, 0.0).unwrap();
+/// let cam = Camera::pinhole(800.0, 790.0, 320.0, 240.0, 0.0).unwrap();
 /// let rotation = Rotation3::from_euler_angles(0.1, -0.2, 0.3).into_inner();
 /// let translation = Vector3::new(0.2, -0.1, 4.0);
 /// let points = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 0.0, 0.5), Vector3::new(0.0, 1.0, -0.5)];
 /// let bearings = points.map(|x| {
 ///     let pixel = cam.project(&(rotation * x + translation)); // what the image gives
-///     let n = cam.pixel_to_normalized(&pixel);
+///     let n = cam.unproject(&pixel, 0).unwrap();
 ///     Vector3::new(n.x, n.y, 1.0).normalize()
 /// });
 /// let poses = p3p(&bearings, &points);

@@ -28,12 +28,12 @@
 //! `gap_not_closed` (no bound) after the same refinement; a first-order bound is never attached to
 //! `F`. When no camera distorts (pinholes, or lenses whose distortion is the identity:
 //! [`Camera::distorts`]) the first-order problem is the pinhole problem of
-//! [`super::triangulate_line_segments`] (eq. 19 with each segment's line and the covariance of its
+//! [`super::triangulate_line`] of [`super::LineObservations::Segments`] (eq. 19 with each segment's line and the covariance of its
 //! residual from the endpoints' covariances), and its answer is returned as it is: its cost is eq. 19
 //! ([`crate::CostKind::LineResidual`]),
 //! not `F`, and its certificate is the one of [`super`].
 
-use super::{finish, triangulate_line, LineProblem, LineTriangulation, LinesAndCovariances};
+use super::{finish, line_of_projections, LineProblem, LineTriangulation, LinesAndCovariances};
 use crate::camera::curved_line::{endpoint_residual, pinhole_endpoint_residual};
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -276,10 +276,10 @@ pub(crate) fn solve_lens_segments(
         .iter()
         .any(|s| s.camera.distortion().is_some_and(Camera::distorts));
     if !distorts {
-        return triangulate_line(cameras, &lines, Some(&covariances), opts);
+        return line_of_projections(cameras, &lines, Some(&covariances), opts);
     }
     let through = |first_opts: &TriangulationOptions| -> Result<LineTriangulation> {
-        let mut result = triangulate_line(cameras, &lines, Some(&covariances), first_opts)?;
+        let mut result = line_of_projections(cameras, &lines, Some(&covariances), first_opts)?;
         result.report.method = opts.method;
         through_lenses(&mut result, cameras, &lines, &covariances, segments, opts)?;
         Ok(result)

@@ -32,20 +32,13 @@ pub(crate) mod robust;
 pub(crate) mod taylor_search;
 pub(crate) mod two_view_chart;
 
-pub use batch::{
-    triangulate_line_observations, triangulate_line_observations_views, triangulate_lines, ImageLines, LineTracks,
-    SparseLineTracks, SparseSegmentTracks,
-};
+pub use batch::{triangulate_lines, DenseLineTracks, ImageLines, LineTracks, SparseLineTracks, SparseSegmentTracks};
 pub use taylor_search::MAX_NODES as TAYLOR_MAX_NODES;
 
 /// The stages of the line solvers that the integration tests check directly; not part of the
 /// user-facing API.
 #[doc(hidden)]
 pub mod testing {
-    /// The batches that write each track into the caller's rows as it finishes (the bindings' columns).
-    pub use super::batch::{
-        triangulate_line_observations_into, triangulate_line_observations_views_into, triangulate_lines_into,
-    };
     pub use super::lens::{exact_cost, LensSegment};
     pub use super::residual::{endpoint_distances, LineFrame};
 }
@@ -58,7 +51,7 @@ use super::conditioning::{check_views, Similarity};
 use super::fitting::line_from_segment;
 use super::fractional_residual::{self, FractionalResidual};
 use super::uncertainty::covariance_of_information;
-use super::views::View;
+use super::views::{Cameras, View};
 use super::{parse_observations, CostKind, LineBound, Method, Report, TriangulationOptions};
 use crate::covariance::{whitening, whitenings};
 use crate::error::{Error, Result};
@@ -154,18 +147,98 @@ impl LineProblem {
     }
 }
 
-/// Triangulates one 3-D line seen by `projections` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, `views`) as the
-/// homogeneous image lines `lines` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
-/// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`]; identity
-/// when `None`).
+/// The observed images of one 3-D line, one per camera.
+#[derive(Debug, Clone, Copy)]
+pub enum LineObservations<'a> {
+    /// Homogeneous image lines `l` (pixels, any scale and sign: `l·(u, v, 1) = 0`), with optional 2x2
+    /// covariances of the line residuals (one per view, e.g. from [`super::fitting::fit_line`];
+    /// identity when `None`). With [`Cameras::Projections`] only.
+    Lines(&'a [Vector3<f64>], Option<&'a [Matrix2<f64>]>),
+    /// Image segments (pixel endpoints) whose endpoints have i.i.d. Gaussian noise of `sigma` px per
+    /// coordinate (the `f64`). With projections each segment gives its line and covariance by
+    /// [`lines_from_segments`]; with views this is [`LineObservations::SegmentEndpoints`] with
+    /// endpoint covariances `σ² I`.
+    Segments(&'a [[Vector2<f64>; 2]], f64),
+    /// Image segments whose endpoints are the images' own (distorted) pixels, with optional 2x2
+    /// covariances of each endpoint (identity when `None`). With [`Cameras::Views`] only.
+    SegmentEndpoints(&'a [[Vector2<f64>; 2]], Option<&'a [[Matrix2<f64>; 2]]>),
+}
+
+impl<'a> From<&'a [Vector3<f64>]> for LineObservations<'a> {
+    fn from(lines: &'a [Vector3<f64>]) -> Self {
+        LineObservations::Lines(lines, None)
+    }
+}
+
+impl<'a> From<&'a Vec<Vector3<f64>>> for LineObservations<'a> {
+    fn from(lines: &'a Vec<Vector3<f64>>) -> Self {
+        LineObservations::Lines(lines, None)
+    }
+}
+
+impl<'a, const N: usize> From<&'a [Vector3<f64>; N]> for LineObservations<'a> {
+    fn from(lines: &'a [Vector3<f64>; N]) -> Self {
+        LineObservations::Lines(lines, None)
+    }
+}
+
+/// Triangulates one 3-D line seen by `cameras` as `observations` (image lines or segments, one per
+/// camera).
+///
+/// With [`Cameras::Projections`] (3x4, world → pixels, any positive scale; in front means
+/// `(P X̃)₃ > 0`, `views`) the cost is eq. 19 on the line residuals. With [`Cameras::Views`] (each a
+/// camera, pinhole or any of COLMAP's models, and its pose) the observations are segments whose
+/// endpoints are the images' own (distorted) pixels: through a distorting lens the cost is the
+/// segments' reprojection error through the exact projection, the Mahalanobis distances of the
+/// endpoints to the line's curved images, minimised by the local method; it is never certified there
+/// (`lens`: `optimal` reports `gap_not_closed`). When no camera distorts this is the problem of the
+/// views' `K [R | t]` on the segments' lines and covariances
+/// ([`crate::triangulation::fitting::line_from_endpoints`]).
 ///
 /// Errors: [`Error::TooFewCorrespondences`] for fewer than 2 views, [`Error::Shape`] for mismatched
 /// lengths, [`Error::NonFinite`] naming the argument and row, [`Error::SingularCamera`],
-/// [`Error::Degenerate`] (a line with zero normal, a covariance that is not positive definite,
-/// cameras with one centre, a line in an epipolar plane of every view pair),
-/// [`Error::InvalidOption`].
-pub fn triangulate_line(
+/// [`Error::Degenerate`] (a line with zero normal, a segment of zero length or with an endpoint outside
+/// its lens's invertible region, a covariance that is not positive definite, cameras with one centre, a
+/// line in an epipolar plane of every view pair), [`Error::InvalidOption`] (bad options, a bad
+/// `sigma`, homogeneous lines with views or endpoint covariances with projections).
+pub fn triangulate_line<'a>(
+    cameras: impl Into<Cameras<'a>>,
+    observations: impl Into<LineObservations<'a>>,
+    opts: &TriangulationOptions,
+) -> Result<LineTriangulation> {
+    match (cameras.into(), observations.into()) {
+        (Cameras::Projections(projections), LineObservations::Lines(lines, covariances)) => {
+            line_of_projections(projections, lines, covariances, opts)
+        }
+        (Cameras::Projections(projections), LineObservations::Segments(segments, sigma)) => {
+            let (lines, covariances) = lines_from_segments(segments, sigma)?;
+            line_of_projections(projections, &lines, Some(&covariances), opts)
+        }
+        (Cameras::Views(views), LineObservations::SegmentEndpoints(segments, covariances)) => {
+            line_of_segment_views(views, segments, covariances, opts)
+        }
+        (Cameras::Views(views), LineObservations::Segments(segments, sigma)) => {
+            batch::check_sigma(&ImageLines::Segments { endpoints: &[], sigma })?;
+            let covariances = vec![[Matrix2::identity() * (sigma * sigma); 2]; segments.len()];
+            line_of_segment_views(views, segments, Some(&covariances), opts)
+        }
+        (Cameras::Views(_), LineObservations::Lines(..)) => Err(Error::InvalidOption {
+            name: "lines".into(),
+            reason: "with views the image lines are segments (a line's image through a lens is a curve, \
+                     not a homogeneous line)"
+                .into(),
+        }),
+        (Cameras::Projections(_), LineObservations::SegmentEndpoints(..)) => Err(Error::InvalidOption {
+            name: "covariances".into(),
+            reason: "endpoint covariances apply to segments seen through views; with projections give the \
+                     segments' noise sigma or the lines' covariances"
+                .into(),
+        }),
+    }
+}
+
+/// [`triangulate_line`] of homogeneous image lines seen by projections.
+pub(crate) fn line_of_projections(
     projections: &[Matrix3x4<f64>],
     lines: &[Vector3<f64>],
     covariances: Option<&[Matrix2<f64>]>,
@@ -280,32 +353,9 @@ pub fn lines_from_segments(lines: &[[Vector2<f64>; 2]], sigma: f64) -> Result<Li
     Ok((homogeneous, covariances))
 }
 
-/// [`triangulate_line`] from the image lines `lines` given as segments (pixel endpoints) whose
-/// endpoints have i.i.d. Gaussian noise of `sigma` px per coordinate: each segment gives its line and
-/// covariance by [`lines_from_segments`].
-pub fn triangulate_line_segments(
-    projections: &[Matrix3x4<f64>],
-    lines: &[[Vector2<f64>; 2]],
-    sigma: f64,
-    opts: &TriangulationOptions,
-) -> Result<LineTriangulation> {
-    let (homogeneous, covariances) = lines_from_segments(lines, sigma)?;
-    triangulate_line(projections, &homogeneous, Some(&covariances), opts)
-}
-
-/// Triangulates one 3-D line seen in `views` (each a camera, pinhole or any of COLMAP's models, and
-/// its pose) as the image segments `lines`, whose endpoints are the images' own (distorted) pixels,
-/// with optional 2x2 covariances of each endpoint in those pixels (identity when `None`). Through a
-/// distorting lens the cost is the segments' reprojection error through the exact projection, the
-/// Mahalanobis distances of the endpoints to the line's curved images, minimised by the local method;
-/// it is never certified there (`lens`: `optimal` reports `gap_not_closed`). When no camera distorts
-/// this is [`triangulate_line`] of the views' `K [R | t]` on the segments' lines and covariances
-/// ([`crate::triangulation::fitting::line_from_endpoints`]; [`triangulate_line_segments`] for `σ² I`).
-///
-/// Errors as [`triangulate_line`] (naming `lines`, `covariances` and `projections`), and
-/// [`Error::Degenerate`] naming a segment with an endpoint outside its lens's invertible region or of
-/// zero length.
-pub fn triangulate_line_segments_views(
+/// [`triangulate_line`] of segments seen through views, with optional endpoint covariances (errors
+/// name `lines`, `covariances` and `projections`).
+pub(crate) fn line_of_segment_views(
     views: &[View],
     lines: &[[Vector2<f64>; 2]],
     covariances: Option<&[[Matrix2<f64>; 2]]>,

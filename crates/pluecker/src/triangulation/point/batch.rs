@@ -1,16 +1,17 @@
 //! Many point tracks over the same cameras at once, in parallel (rayon).
 //!
 //! The data are plain row-major slices, the layout of numpy arrays, so that a binding can pass
-//! `observations (n, v, 2)`, `visible (n, v)` and `covariances (n, v, 2, 2)` without reshaping:
-//! [`PointTracks`]. Every track is triangulated from its visible views only, exactly as
+//! `observations (n, v, 2)`, `visible (n, v)` and `covariances (n, v, 2, 2)` without reshaping
+//! ([`DensePointTracks`]), or one observation per row grouped by track ([`SparsePointTracks`]); both
+//! are [`PointTracks`]. Every track is triangulated from its visible views only, exactly as
 //! [`super::triangulate_point`] would do it, and gets its own `Result`: a bad track (too
 //! few visible views, NaN in a visible view, a covariance that is not positive definite, no
 //! parallax between its views) is an error for that track alone. Errors of the whole call (bad
 //! options, bad cameras, inconsistent array lengths) come first, as the outer `Result`.
 //!
-//! [`triangulate_points_linear`] is the fast path of [`Method::Linear`]: no allocation per track,
-//! the results written straight into flat arrays ([`triangulate_points_linear_into`]: into the
-//! caller's rows).
+//! [`LinearPoints::from_tracks`] is the fast path of [`Method::Linear`]: no allocation per track,
+//! the results written straight into flat arrays (`streaming::linear_points_into`: into the caller's
+//! rows).
 //!
 //! Every batch polls the stop of [`crate::interrupt`] before each track: tracks not started when it
 //! fires are rejected with [`Error::Interrupted`] (the others keep their results), and a track being
@@ -30,7 +31,7 @@ use crate::triangulation::tracks::{
     check_mask, check_values, solve_tracks, solve_tracks_into, too_few, track_count, visible_views, Csr,
 };
 use crate::triangulation::uncertainty::covariance_of_information3;
-use crate::triangulation::views::{centre, depth_normalized, validate_cameras, View};
+use crate::triangulation::views::{centre, depth_normalized, validate_cameras, Cameras, View};
 use crate::triangulation::{Method, Status, TriangulationOptions};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Matrix4, Vector2, Vector3};
 use rayon::prelude::*;
@@ -41,7 +42,7 @@ use std::time::Instant;
 /// tracks: the pixel of track `t` in view `j` is `observations[2(t v + j) ..][..2]`, its flag
 /// `visible[t v + j]`, its covariance (row-major 2x2, pixels²) `covariances[4(t v + j) ..][..4]`.
 #[derive(Debug, Clone, Copy)]
-pub struct PointTracks<'a> {
+pub struct DensePointTracks<'a> {
     /// `n · v · 2` pixels; entries of views where the track is not visible are ignored (may be NaN).
     pub observations: &'a [f64],
     /// `n · v` visibility flags, or `None` when every track is seen in every view.
@@ -64,12 +65,9 @@ struct Prepared {
 }
 
 /// Checks the whole call and returns the number of tracks.
-fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<(usize, Prepared)> {
+fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &DensePointTracks) -> Result<(usize, Prepared)> {
     let prepared = prepare(cameras)?;
-    let v = cameras.len();
-    let n = track_count("observations", tracks.observations.len(), v, 2, "2 coordinates")?;
-    check_mask(tracks.visible, n, v)?;
-    check_values("covariances", tracks.covariances, n, v, 4, "2 x 2")?;
+    let n = PointTracks::Dense(*tracks).check(cameras.len())?;
     Ok((n, prepared))
 }
 
@@ -108,7 +106,7 @@ fn prepare_views(views: &[View]) -> Result<Prepared> {
 }
 
 /// View `j` of track `t` (a visible one): its pixel and whitening factor, checked.
-fn track_view(tracks: &PointTracks, v: usize, t: usize, j: usize) -> Result<(Vector2<f64>, Matrix2<f64>)> {
+fn track_view(tracks: &DensePointTracks, v: usize, t: usize, j: usize) -> Result<(Vector2<f64>, Matrix2<f64>)> {
     observation(tracks.observations, tracks.covariances, t * v + j, t, j)
 }
 
@@ -174,16 +172,20 @@ fn no_parallax(t: usize) -> Error {
     }
 }
 
-/// Triangulates every track of `tracks` seen by `projections` (3x4, world → pixels) with `opts`, in
-/// parallel. The outer error is about the whole call; each track has its own result (module docs).
+/// Triangulates every track of `tracks` (dense or one observation per row) seen by `cameras` with
+/// `opts`, in parallel: each track as [`super::triangulate_point`] solves it on its observations. The
+/// outer error is about the whole call; each track has its own result (module docs). In the rows form
+/// a track naming an image beyond the cameras is its own error, and one image seen twice is used
+/// twice. With [`Cameras::Views`] the observations are the images' own (distorted) pixels, and an
+/// observation whose pixel has no preimage inside its lens's fold is an error of its track, naming it.
 /// `progress`, when given, counts the finished tracks, for another thread to poll.
-pub fn triangulate_points(
-    projections: &[Matrix3x4<f64>],
-    tracks: &PointTracks,
+pub fn triangulate_points<'a>(
+    cameras: impl Into<Cameras<'a>>,
+    tracks: impl Into<PointTracks<'a>>,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<PointTriangulation>>> {
-    let (n, one) = dense_solver(projections, tracks, opts)?;
+    let (n, one) = solver(cameras.into(), tracks.into(), opts)?;
     Ok(solve_tracks(n, 16, progress, one))
 }
 
@@ -195,30 +197,44 @@ pub fn triangulate_points(
 /// A stopped batch ([`crate::interrupt`]) does not hand the tracks it had not started to `write`
 /// (their rows stay as they were, and it ends without a pass over them): `Ok(Some(reason))` then
 /// says why; `Ok(None)`: every track was written. `progress` counts the tracks written.
-pub fn triangulate_points_into<R: Send>(
-    projections: &[Matrix3x4<f64>],
-    tracks: &PointTracks,
+pub fn points_into<'a, R: Send>(
+    cameras: impl Into<Cameras<'a>>,
+    tracks: impl Into<PointTracks<'a>>,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
-    let (n, one) = dense_solver(projections, tracks, opts)?;
+    let (n, one) = solver(cameras.into(), tracks.into(), opts)?;
     solve_tracks_into(n, rows, 16, progress, one, write)
 }
 
-/// The number of tracks of a dense batch, checked, and the solve of track `t`.
-fn dense_solver<'a>(
-    cameras: &[Matrix3x4<f64>],
-    tracks: &'a PointTracks<'a>,
+/// The number of tracks of a batch, checked, and the solve of track `t`.
+fn solver<'a>(
+    cameras: Cameras<'_>,
+    tracks: PointTracks<'a>,
     opts: &'a TriangulationOptions,
 ) -> Result<(usize, impl Fn(usize) -> Result<PointTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
-    let (n, prepared) = check_batch(cameras, tracks)?;
-    let v = cameras.len();
-    let one = move |t: usize| {
-        let views = visible_views(tracks.visible, v, t).map(|j| Ok((j, track_view(tracks, v, t, j)?)));
-        solve_track(&prepared, opts, t, views)
+    let prepared = match cameras {
+        Cameras::Projections(projections) => prepare(projections)?,
+        Cameras::Views(views) => prepare_views(views)?,
+    };
+    let v = prepared.normalized.len();
+    let n = tracks.check(v)?;
+    let one = move |t: usize| match tracks {
+        PointTracks::Dense(dense) => {
+            let views = visible_views(dense.visible, v, t).map(|j| Ok((j, track_view(&dense, v, t, j)?)));
+            solve_track(&prepared, opts, t, views)
+        }
+        PointTracks::Sparse(sparse) => {
+            let rows = sparse.csr.observations(t, v)?;
+            let views = rows
+                .iter()
+                .enumerate()
+                .map(|(i, &(j, k))| Ok((j, observation(sparse.observations, sparse.covariances, k, t, i)?)));
+            solve_track(&prepared, opts, t, views)
+        }
     };
     Ok((n, one))
 }
@@ -299,83 +315,35 @@ impl SparsePointTracks<'_> {
     }
 }
 
-/// Triangulates every track of the sparse `tracks` seen by `projections` (3x4, world → pixels), in
-/// parallel: the same per-track solve and results as [`triangulate_points`] on the dense form. A track
-/// naming an image beyond the cameras is its own error; one image seen twice is used twice.
-pub fn triangulate_point_observations(
-    projections: &[Matrix3x4<f64>],
-    tracks: &SparsePointTracks,
-    opts: &TriangulationOptions,
-    progress: Option<&AtomicUsize>,
-) -> Result<Vec<Result<PointTriangulation>>> {
-    let (n, one) = sparse_solver(prepare(projections), tracks, opts)?;
-    Ok(solve_tracks(n, 16, progress, one))
+/// The point tracks of one batch: every track over every camera ([`DensePointTracks`]), or one
+/// observation per row ([`SparsePointTracks`]). Both forms (and references to them) convert into it.
+#[derive(Debug, Clone, Copy)]
+pub enum PointTracks<'a> {
+    /// `n` tracks over the `v` cameras, with a visibility mask.
+    Dense(DensePointTracks<'a>),
+    /// Observations grouped by track.
+    Sparse(SparsePointTracks<'a>),
 }
 
-/// [`triangulate_point_observations`] handing each track's result to `write(t, row, result)` as it
-/// finishes, as [`triangulate_points_into`] does.
-pub fn triangulate_point_observations_into<R: Send>(
-    projections: &[Matrix3x4<f64>],
-    tracks: &SparsePointTracks,
-    opts: &TriangulationOptions,
-    progress: Option<&AtomicUsize>,
-    rows: impl IndexedParallelIterator<Item = R>,
-    write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
-) -> Result<Option<StopReason>> {
-    let (n, one) = sparse_solver(prepare(projections), tracks, opts)?;
-    solve_tracks_into(n, rows, 16, progress, one, write)
+impl PointTracks<'_> {
+    /// The number of tracks over `v` cameras, after checking the shapes of the arrays (errors about
+    /// the whole call).
+    fn check(&self, v: usize) -> Result<usize> {
+        match self {
+            PointTracks::Dense(tracks) => {
+                let n = track_count("observations", tracks.observations.len(), v, 2, "2 coordinates")?;
+                check_mask(tracks.visible, n, v)?;
+                check_values("covariances", tracks.covariances, n, v, 4, "2 x 2")?;
+                Ok(n)
+            }
+            PointTracks::Sparse(tracks) => tracks.check(),
+        }
+    }
 }
 
-/// [`triangulate_point_observations`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models,
-/// and a pose): the observations are the images' own (distorted) pixels, and each track is solved as
-/// [`super::triangulate_point_views`] solves it. An observation whose pixel has no preimage inside
-/// its lens's fold is an error of its track, naming it.
-pub fn triangulate_point_observations_views(
-    views: &[View],
-    tracks: &SparsePointTracks,
-    opts: &TriangulationOptions,
-    progress: Option<&AtomicUsize>,
-) -> Result<Vec<Result<PointTriangulation>>> {
-    let (n, one) = sparse_solver(prepare_views(views), tracks, opts)?;
-    Ok(solve_tracks(n, 16, progress, one))
-}
+crate::triangulation::tracks::tracks_from!(PointTracks: DensePointTracks => Dense, SparsePointTracks => Sparse);
 
-/// [`triangulate_point_observations_views`] handing each track's result to `write(t, row, result)` as
-/// [`triangulate_points_into`] does.
-pub fn triangulate_point_observations_views_into<R: Send>(
-    views: &[View],
-    tracks: &SparsePointTracks,
-    opts: &TriangulationOptions,
-    progress: Option<&AtomicUsize>,
-    rows: impl IndexedParallelIterator<Item = R>,
-    write: impl Fn(usize, R, Result<PointTriangulation>) + Sync + Send,
-) -> Result<Option<StopReason>> {
-    let (n, one) = sparse_solver(prepare_views(views), tracks, opts)?;
-    solve_tracks_into(n, rows, 16, progress, one, write)
-}
-
-/// The number of tracks of a sparse batch, checked, and the solve of track `t`.
-fn sparse_solver<'a>(
-    prepared: Result<Prepared>,
-    tracks: &'a SparsePointTracks<'a>,
-    opts: &'a TriangulationOptions,
-) -> Result<(usize, impl Fn(usize) -> Result<PointTriangulation> + Sync + Send + 'a)> {
-    opts.validate()?;
-    let prepared = prepared?;
-    let n = tracks.check()?;
-    let v = prepared.normalized.len();
-    let one = move |t: usize| {
-        let rows = tracks.csr.observations(t, v)?;
-        let views = rows
-            .iter()
-            .enumerate()
-            .map(|(i, &(j, k))| Ok((j, observation(tracks.observations, tracks.covariances, k, t, i)?)));
-        solve_track(&prepared, opts, t, views)
-    };
-    Ok((n, one))
-}
-
-/// The result of [`triangulate_points_linear`], as flat arrays of length `n` (points `n · 3`).
+/// The result of [`LinearPoints::from_tracks`], as flat arrays of length `n` (points `n · 3`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinearPoints {
     /// Row-major `(n, 3)` world points; NaN where the track failed or is at infinity.
@@ -392,7 +360,7 @@ pub struct LinearPoints {
     pub outcomes: Vec<Result<Status>>,
 }
 
-/// One track of the linear fast path ([`triangulate_points_linear_into`]).
+/// One track of the linear fast path ([`linear_points_into`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LinearTrack {
     /// The world point; NaN at infinity.
@@ -410,7 +378,7 @@ pub struct LinearTrack {
 /// The DLT of one track with no allocation: its point, cost and covariance, or its status / error.
 /// Three passes over the views: checks and the spread of the centres, the Gram matrix, the cost and
 /// the information matrix of [`crate::triangulation::uncertainty::point_covariance`].
-fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -> Result<LinearTrack> {
+fn linear_track(prepared: &Prepared, tracks: &DensePointTracks, v: usize, t: usize) -> Result<LinearTrack> {
     let visible = || visible_views(tracks.visible, v, t);
     let (mut count, mut sum, mut sum2) = (0usize, Vector3::zeros(), 0.0);
     for j in visible() {
@@ -476,52 +444,56 @@ fn linear_track(prepared: &Prepared, tracks: &PointTracks, v: usize, t: usize) -
     })
 }
 
-/// The linear (DLT) point of every track, in parallel, without allocating per track (module docs).
-pub fn triangulate_points_linear(projections: &[Matrix3x4<f64>], tracks: &PointTracks) -> Result<LinearPoints> {
-    let (n, prepared) = check_batch(projections, tracks)?;
-    let v = projections.len();
-    let mut out = LinearPoints {
-        points: vec![f64::NAN; 3 * n],
-        costs: vec![f64::NAN; n],
-        covariances: vec![f64::NAN; 9 * n],
-        residual_dofs: vec![0; n],
-        outcomes: Vec::with_capacity(n),
-    };
-    let stop = current();
-    (0..n)
-        .into_par_iter()
-        .with_min_len(256)
-        .zip(out.points.par_chunks_mut(3))
-        .zip(out.costs.par_iter_mut())
-        .zip(out.covariances.par_chunks_mut(9))
-        .zip(out.residual_dofs.par_iter_mut())
-        .map(|((((t, point), cost), covariance), residual_dof)| {
-            match stop.as_ref().and_then(|s| s.reason()) {
-                Some(reason) => Err(Error::Interrupted { reason }),
-                None => linear_track(&prepared, tracks, v, t),
-            }
-            .map(|track| {
-                point.copy_from_slice(track.point.as_slice());
-                *cost = track.cost;
-                *residual_dof = track.residual_dof;
-                if let Some(cov) = track.covariance {
-                    // Symmetric: column-major storage is the row-major layout.
-                    covariance.copy_from_slice(cov.as_slice());
+impl LinearPoints {
+    /// The linear (DLT) point of every track of `tracks` seen by `projections`, in parallel, without
+    /// allocating per track (module docs): the fast path of [`Method::Linear`], with flat results and
+    /// no report per track.
+    pub fn from_tracks(projections: &[Matrix3x4<f64>], tracks: &DensePointTracks) -> Result<LinearPoints> {
+        let (n, prepared) = check_batch(projections, tracks)?;
+        let v = projections.len();
+        let mut out = LinearPoints {
+            points: vec![f64::NAN; 3 * n],
+            costs: vec![f64::NAN; n],
+            covariances: vec![f64::NAN; 9 * n],
+            residual_dofs: vec![0; n],
+            outcomes: Vec::with_capacity(n),
+        };
+        let stop = current();
+        (0..n)
+            .into_par_iter()
+            .with_min_len(256)
+            .zip(out.points.par_chunks_mut(3))
+            .zip(out.costs.par_iter_mut())
+            .zip(out.covariances.par_chunks_mut(9))
+            .zip(out.residual_dofs.par_iter_mut())
+            .map(|((((t, point), cost), covariance), residual_dof)| {
+                match stop.as_ref().and_then(|s| s.reason()) {
+                    Some(reason) => Err(Error::Interrupted { reason }),
+                    None => linear_track(&prepared, tracks, v, t),
                 }
-                track.status
+                .map(|track| {
+                    point.copy_from_slice(track.point.as_slice());
+                    *cost = track.cost;
+                    *residual_dof = track.residual_dof;
+                    if let Some(cov) = track.covariance {
+                        // Symmetric: column-major storage is the row-major layout.
+                        covariance.copy_from_slice(cov.as_slice());
+                    }
+                    track.status
+                })
             })
-        })
-        .collect_into_vec(&mut out.outcomes);
-    Ok(out)
+            .collect_into_vec(&mut out.outcomes);
+        Ok(out)
+    }
 }
 
-/// [`triangulate_points_linear`] handing each track's estimate to `write(t, row, result)` as it
-/// finishes, with row `t` of `rows` (one per track), as [`triangulate_points_into`] does: a stopped
+/// [`LinearPoints::from_tracks`] handing each track's estimate to `write(t, row, result)` as it
+/// finishes, with row `t` of `rows` (one per track), as [`points_into`] does: a stopped
 /// batch does not hand the tracks it had not started to `write` and returns why (`Ok(None)`: every
 /// track was written). `progress` counts the tracks written. No allocation per track.
-pub fn triangulate_points_linear_into<R: Send>(
+pub fn linear_points_into<R: Send>(
     projections: &[Matrix3x4<f64>],
-    tracks: &PointTracks,
+    tracks: &DensePointTracks,
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<LinearTrack>) + Sync + Send,

@@ -45,20 +45,12 @@ pub(crate) mod lens;
 pub(crate) mod linear;
 pub(crate) mod robust;
 
-pub use batch::{
-    triangulate_point_observations, triangulate_point_observations_views, triangulate_points,
-    triangulate_points_linear, LinearPoints, PointTracks, SparsePointTracks,
-};
+pub use batch::{triangulate_points, DensePointTracks, LinearPoints, PointTracks, SparsePointTracks};
 
 /// The stages of the point solvers that the integration tests check directly; not part of the
 /// user-facing API.
 #[doc(hidden)]
 pub mod testing {
-    /// The batches that write each track into the caller's rows as it finishes (the bindings' columns).
-    pub use super::batch::{
-        triangulate_point_observations_into, triangulate_point_observations_views_into, triangulate_points_into,
-        triangulate_points_linear_into, LinearTrack,
-    };
     pub use super::certificate::{convexity_test, ConvexityCertificate};
     pub use super::cost::{in_front, point_cost, point_views, PointView};
     pub use super::global::{global_point, GlobalPoint, GlobalSettings, GlobalStatus, Relaxation};
@@ -73,7 +65,7 @@ use self::infinity::best_at_infinity;
 use self::lens::LensView;
 use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::uncertainty::covariance_of_information3;
-use super::views::{baseline, centre, depth_normalized, validate_cameras, View};
+use super::views::{baseline, centre, depth_normalized, validate_cameras, Cameras, View};
 use super::{Certificate, CertificateKind, CostKind, Method, Report, Status, TriangulationOptions};
 use crate::covariance::whitenings;
 use crate::error::{Error, Result};
@@ -110,15 +102,54 @@ pub struct PointTriangulation {
     pub inliers: Option<Vec<bool>>,
 }
 
-/// Triangulates one point seen by `projections` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, `views`) at the pixels
-/// `observations`, with optional 2x2 pixel covariances (one per view; identity when `None`).
+/// Triangulates one point seen by `cameras` at the pixels `observations` (one per camera), with
+/// optional 2x2 pixel covariances (one per view; identity when `None`).
+///
+/// With [`Cameras::Projections`] (3x4, world → pixels, any positive scale; in front means
+/// `(P X̃)₃ > 0`, `views`) the cost is eq. 19. With [`Cameras::Views`] (each a camera, pinhole or any
+/// of COLMAP's models, and its pose) the observations are the images' own (distorted) pixels, the
+/// cost is the reprojection error in those pixels through the exact projection, and `optimal`
+/// certifies it with `lens::lens_certificate` (interval bounds of the lenses' Jacobians); with pinhole
+/// cameras only it is the problem of their matrices `K [R | t]`.
 ///
 /// Errors: [`Error::TooFewCorrespondences`] for fewer than 2 views, [`Error::Shape`] for mismatched
 /// lengths, [`Error::NonFinite`] naming the argument and row, [`Error::SingularCamera`],
-/// [`Error::Degenerate`] for a covariance that is not positive definite or cameras with one common
-/// centre, [`Error::InvalidOption`] for bad options.
-pub fn triangulate_point(
+/// [`Error::Degenerate`] for a covariance that is not positive definite, cameras with one common
+/// centre, or (views) an observation whose pixel has no preimage inside its lens's fold,
+/// [`Error::InvalidOption`] for bad options.
+///
+/// Through a COLMAP camera model (here SIMPLE_RADIAL), from the raw, distorted pixels: the point
+/// minimises the reprojection error in each image's own pixels.
+/// ```
+/// use pluecker::nalgebra::{Matrix3, Vector3};
+/// use pluecker::camera::{Camera, CameraModel};
+/// use pluecker::triangulation::{point::triangulate_point, TriangulationOptions, View};
+/// use pluecker::Pose;
+/// let lens = Camera::new(CameraModel::SimpleRadial, &[800.0, 320.0, 240.0, -0.1]).unwrap();
+/// let views = [
+///     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::zeros())),
+///     View::new(lens.clone(), Pose::new(Matrix3::identity(), Vector3::new(-1.0, 0.0, 0.0))),
+/// ];
+/// let x = Vector3::new(0.3, -0.2, 5.0);
+/// let pixels: Vec<_> = views.iter().map(|v| lens.project(&(v.pose.rotation * x + v.pose.translation))).collect();
+/// let result = triangulate_point(&views, &pixels, None, &TriangulationOptions::default()).unwrap();
+/// assert!((result.point - x).norm() < 1e-6);
+/// assert!(result.report.certified());
+/// ```
+pub fn triangulate_point<'a>(
+    cameras: impl Into<Cameras<'a>>,
+    observations: &[Vector2<f64>],
+    covariances: Option<&[Matrix2<f64>]>,
+    opts: &TriangulationOptions,
+) -> Result<PointTriangulation> {
+    match cameras.into() {
+        Cameras::Projections(projections) => point_of_projections(projections, observations, covariances, opts),
+        Cameras::Views(views) => point_of_views(views, observations, covariances, opts),
+    }
+}
+
+/// [`triangulate_point`] with 3x4 projections.
+fn point_of_projections(
     projections: &[Matrix3x4<f64>],
     observations: &[Vector2<f64>],
     covariances: Option<&[Matrix2<f64>]>,
@@ -136,15 +167,8 @@ pub fn triangulate_point(
     ))
 }
 
-/// Triangulates one point seen in `views` (each a camera, pinhole or any of COLMAP's models, and its
-/// pose) at the observed pixels `observations` (the images' own, distorted pixels), with optional 2x2
-/// covariances of those pixels. The cost is the reprojection error in those pixels through the exact
-/// projection, and `optimal` certifies it with `lens::lens_certificate` (interval bounds of the lenses' Jacobians).
-/// With pinhole cameras only it is [`triangulate_point`] of their matrices `K [R | t]`.
-///
-/// Errors as [`triangulate_point`], and [`Error::Degenerate`] naming an observation whose pixel has
-/// no preimage inside its lens's fold.
-pub fn triangulate_point_views(
+/// [`triangulate_point`] with views.
+fn point_of_views(
     views: &[View],
     observations: &[Vector2<f64>],
     covariances: Option<&[Matrix2<f64>]>,

@@ -2,9 +2,10 @@
 //!
 //! A track is one ellipsoid seen as an outline conic in some of `v` views. Its observations are plain
 //! row-major slices, the layout of numpy arrays, so that a binding can pass `conics (n, v, 3, 3)`,
-//! `visible (n, v)` and `covariances (n, v, 5, 5)` without reshaping: [`QuadricTracks`]. The cameras
-//! are shared by every track or given per track ([`TrackCameras`]; e.g. independent scenes solved
-//! together).
+//! `visible (n, v)` and `covariances (n, v, 5, 5)` without reshaping ([`DenseQuadricTracks`]), or one
+//! observation per row grouped by track ([`SparseQuadricTracks`]); both are [`QuadricTracks`]. The
+//! cameras are shared by every track or given per track ([`TrackCameras`]; e.g. independent scenes
+//! solved together).
 //!
 //! Every track is [`triangulate_quadric`] on its visible views' cameras, conics and covariances: the
 //! same minimisation of eq. 19 (Josephson & Kahl 2008, sections 2.3, 3, 4) on the same numbers, so the
@@ -14,13 +15,16 @@
 //! (`conics[t][j]`: view `j` of track `t`). Errors of the whole call (bad options, bad shared cameras,
 //! inconsistent array lengths) come first, as the outer `Result`.
 
-use super::{triangulate_quadric, Matrix5, QuadricTriangulation};
+#[cfg(doc)]
+use super::triangulate_quadric;
+use super::{quadric_of_projections, refuse_distortion, Matrix5, QuadricTriangulation};
 use crate::error::{Error, Result};
 use crate::interrupt::StopReason;
 use crate::triangulation::tracks::{
-    check_mask, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few, track_count, Csr,
-    TrackCameras,
+    check_mask, check_values, dense_observations, in_track, solve_tracks, solve_tracks_into, too_few, track_count,
+    tracks_from, unsupported_cameras, Csr, Projections, TrackCameras,
 };
+use crate::triangulation::views::{Cameras, View};
 use crate::triangulation::TriangulationOptions;
 use nalgebra::{Matrix3, Matrix3x4};
 use rayon::prelude::*;
@@ -30,7 +34,7 @@ use std::sync::atomic::AtomicUsize;
 /// view `j` is the `(t v + j)`-th of each array; entries of views where a track is not visible are
 /// ignored (they may be NaN).
 #[derive(Debug, Clone, Copy)]
-pub struct QuadricTracks<'a> {
+pub struct DenseQuadricTracks<'a> {
     /// `n · v · 9` primal image conics (row-major 3x3, eq. 8, pixels, any scale and sign).
     pub conics: &'a [f64],
     /// `n · v` visibility flags, or `None` when every track is seen in every view.
@@ -41,7 +45,7 @@ pub struct QuadricTracks<'a> {
 }
 
 /// Checks the whole call and returns the number of tracks.
-fn check_batch(cameras: &TrackCameras, tracks: &QuadricTracks) -> Result<usize> {
+fn check_batch(cameras: &Projections, tracks: &DenseQuadricTracks) -> Result<usize> {
     let v = cameras.views();
     if v == 0 {
         return Err(Error::Shape {
@@ -60,7 +64,7 @@ fn check_batch(cameras: &TrackCameras, tracks: &QuadricTracks) -> Result<usize> 
 /// Track `t` by [`triangulate_quadric`] on its observations `seen`, `(view, row)` pairs: the camera of
 /// the view, the conic and covariance of the row.
 fn quadric_track(
-    cameras: &TrackCameras,
+    cameras: &Projections,
     conics: &[f64],
     covariances: Option<&[f64]>,
     t: usize,
@@ -86,24 +90,28 @@ fn quadric_track(
     } else {
         &["conics", "covariances"]
     };
-    triangulate_quadric(&cams, &conics, covariances.as_deref(), opts).map_err(|e| in_track(e, t, &views, arrays))
+    quadric_of_projections(&cams, &conics, covariances.as_deref(), opts).map_err(|e| in_track(e, t, &views, arrays))
 }
 
-/// Triangulates every quadric track of `tracks` seen by `projections` with `opts`, in parallel; each
+/// Triangulates every quadric track of `tracks` seen by `cameras` with `opts`, in parallel; each
 /// track gets the result [`triangulate_quadric`] gives on its visible views (module docs).
 /// `progress`, when given, counts the finished tracks, for another thread to poll.
 ///
-/// Whole-call errors: [`Error::InvalidOption`], [`Error::Shape`] (array lengths that do not fit `v`
-/// views and one another), [`Error::NonFinite`] / [`Error::SingularCamera`] for shared cameras. Per
-/// track: the errors of [`triangulate_quadric`], and [`Error::TooFewCorrespondences`] for fewer than
-/// 3 visible views.
-pub fn triangulate_quadrics(
-    projections: TrackCameras,
-    tracks: &QuadricTracks,
+/// [`DenseQuadricTracks`] take shared cameras (projections, or views refused when a camera distorts,
+/// as [`triangulate_quadric`] refuses them) or projections per track; [`SparseQuadricTracks`] take
+/// shared cameras, and a track naming an image beyond them, or one image twice, is its own error.
+///
+/// Whole-call errors: [`Error::InvalidOption`] (options, a distorting view, projections per track with
+/// the rows form), [`Error::Shape`] (array lengths that do not fit `v` views and one another),
+/// [`Error::NonFinite`] / [`Error::SingularCamera`] for shared cameras. Per track: the errors of
+/// [`triangulate_quadric`], and [`Error::TooFewCorrespondences`] for fewer than 3 visible views.
+pub fn triangulate_quadrics<'a>(
+    cameras: impl Into<TrackCameras<'a>>,
+    tracks: impl Into<QuadricTracks<'a>>,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
 ) -> Result<Vec<Result<QuadricTriangulation>>> {
-    let (n, one) = dense_solver(projections, tracks, opts)?;
+    let (n, one) = solver(cameras.into(), tracks.into(), opts)?;
     // A track takes from a millisecond to seconds: one track per rayon task balances the load.
     Ok(solve_tracks(n, 1, progress, one))
 }
@@ -111,32 +119,74 @@ pub fn triangulate_quadrics(
 /// [`triangulate_quadrics`] handing each track's result to `write(t, row, result)` as it finishes,
 /// with row `t` of `rows` (one per track), instead of collecting them: a stopped batch does not hand
 /// the tracks it had not started to `write` and returns why (`Ok(None)`: every track was written), as
-/// [`crate::triangulation::point::testing::triangulate_points_into`] does.
-pub fn triangulate_quadrics_into<R: Send>(
-    projections: TrackCameras,
-    tracks: &QuadricTracks,
+/// [`crate::triangulation::streaming::points_into`] does.
+pub fn quadrics_into<'a, R: Send>(
+    cameras: impl Into<TrackCameras<'a>>,
+    tracks: impl Into<QuadricTracks<'a>>,
     opts: &TriangulationOptions,
     progress: Option<&AtomicUsize>,
     rows: impl IndexedParallelIterator<Item = R>,
     write: impl Fn(usize, R, Result<QuadricTriangulation>) + Sync + Send,
 ) -> Result<Option<StopReason>> {
-    let (n, one) = dense_solver(projections, tracks, opts)?;
+    let (n, one) = solver(cameras.into(), tracks.into(), opts)?;
     solve_tracks_into(n, rows, 1, progress, one, write)
 }
 
-/// The number of tracks of a dense batch, checked, and the solve of track `t`.
-fn dense_solver<'a>(
-    projections: TrackCameras<'a>,
-    tracks: &'a QuadricTracks<'a>,
+/// The quadric tracks of one batch: over every view ([`DenseQuadricTracks`]) or one observation per
+/// row ([`SparseQuadricTracks`]). Both forms (and references to them) convert into it.
+#[derive(Debug, Clone, Copy)]
+pub enum QuadricTracks<'a> {
+    /// `n` tracks over the `v` views, with a visibility mask.
+    Dense(DenseQuadricTracks<'a>),
+    /// Conics grouped by track.
+    Sparse(SparseQuadricTracks<'a>),
+}
+
+tracks_from!(QuadricTracks: DenseQuadricTracks => Dense, SparseQuadricTracks => Sparse);
+
+/// The number of tracks of a batch, checked, and the solve of track `t`.
+fn solver<'a>(
+    cameras: TrackCameras<'a>,
+    tracks: QuadricTracks<'a>,
     opts: &'a TriangulationOptions,
 ) -> Result<(usize, impl Fn(usize) -> Result<QuadricTriangulation> + Sync + Send + 'a)> {
     opts.validate()?;
     opts.reject_outlier_threshold("quadrics")?;
-    let n = check_batch(&projections, tracks)?;
-    let v = projections.views();
-    let one = move |t| {
-        let seen = dense_observations(tracks.visible, v, t);
-        quadric_track(&projections, tracks.conics, tracks.covariances, t, &seen, opts)
+    let projections = match cameras {
+        TrackCameras::Shared(Cameras::Projections(p)) => Projections::Shared(p.into()),
+        TrackCameras::Shared(Cameras::Views(views)) => {
+            refuse_distortion(views)?;
+            let of_views: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+            Projections::Shared(of_views.into())
+        }
+        TrackCameras::PerTrack { projections, views } => Projections::PerTrack { projections, views },
+    };
+    let n = match tracks {
+        QuadricTracks::Dense(dense) => check_batch(&projections, &dense)?,
+        QuadricTracks::Sparse(sparse) => {
+            if projections.per_track() {
+                return Err(unsupported_cameras(
+                    "projections per track apply to dense tracks (DenseQuadricTracks); rows index shared cameras",
+                ));
+            }
+            projections.check(0)?;
+            let n = sparse.csr.check()?;
+            sparse.csr.check_values("conics", Some(sparse.conics), 9, "3 x 3")?;
+            sparse
+                .csr
+                .check_values("covariances", sparse.covariances, 25, "5 x 5")?;
+            n
+        }
+    };
+    let one = move |t| match tracks {
+        QuadricTracks::Dense(dense) => {
+            let seen = dense_observations(dense.visible, projections.views(), t);
+            quadric_track(&projections, dense.conics, dense.covariances, t, &seen, opts)
+        }
+        QuadricTracks::Sparse(sparse) => {
+            let seen = sparse.csr.distinct_observations(t, projections.views())?;
+            quadric_track(&projections, sparse.conics, sparse.covariances, t, &seen, opts)
+        }
     };
     Ok((n, one))
 }
@@ -151,53 +201,4 @@ pub struct SparseQuadricTracks<'a> {
     pub conics: &'a [f64],
     /// `m · 25` covariances of the conic residuals, or `None` (identity).
     pub covariances: Option<&'a [f64]>,
-}
-
-/// Triangulates every track of the sparse `tracks` seen by `projections`, in parallel: the same per-track
-/// solve and results as [`triangulate_quadrics`] on the dense form. A track naming an image beyond the
-/// cameras, or one image twice, is its own error.
-pub fn triangulate_quadric_observations(
-    projections: &[Matrix3x4<f64>],
-    tracks: &SparseQuadricTracks,
-    opts: &TriangulationOptions,
-    progress: Option<&AtomicUsize>,
-) -> Result<Vec<Result<QuadricTriangulation>>> {
-    let (n, one) = sparse_solver(projections, tracks, opts)?;
-    Ok(solve_tracks(n, 1, progress, one))
-}
-
-/// [`triangulate_quadric_observations`] handing each track's result to `write(t, row, result)` as
-/// [`triangulate_quadrics_into`] does.
-pub fn triangulate_quadric_observations_into<R: Send>(
-    projections: &[Matrix3x4<f64>],
-    tracks: &SparseQuadricTracks,
-    opts: &TriangulationOptions,
-    progress: Option<&AtomicUsize>,
-    rows: impl IndexedParallelIterator<Item = R>,
-    write: impl Fn(usize, R, Result<QuadricTriangulation>) + Sync + Send,
-) -> Result<Option<StopReason>> {
-    let (n, one) = sparse_solver(projections, tracks, opts)?;
-    solve_tracks_into(n, rows, 1, progress, one, write)
-}
-
-/// The number of tracks of a sparse batch, checked, and the solve of track `t`.
-fn sparse_solver<'a>(
-    projections: &'a [Matrix3x4<f64>],
-    tracks: &'a SparseQuadricTracks<'a>,
-    opts: &'a TriangulationOptions,
-) -> Result<(usize, impl Fn(usize) -> Result<QuadricTriangulation> + Sync + Send + 'a)> {
-    opts.validate()?;
-    opts.reject_outlier_threshold("quadrics")?;
-    let shared = TrackCameras::Shared(projections);
-    shared.check(0)?;
-    let n = tracks.csr.check()?;
-    tracks.csr.check_values("conics", Some(tracks.conics), 9, "3 x 3")?;
-    tracks
-        .csr
-        .check_values("covariances", tracks.covariances, 25, "5 x 5")?;
-    let one = move |t| {
-        let seen = tracks.csr.distinct_observations(t, projections.len())?;
-        quadric_track(&shared, tracks.conics, tracks.covariances, t, &seen, opts)
-    };
-    Ok((n, one))
 }

@@ -32,14 +32,12 @@ pub(crate) mod certificate;
 pub(crate) mod optimal;
 pub(crate) mod residual;
 
-pub use batch::{triangulate_quadric_observations, triangulate_quadrics, QuadricTracks, SparseQuadricTracks};
+pub use batch::{triangulate_quadrics, DenseQuadricTracks, QuadricTracks, SparseQuadricTracks};
 
 /// The stages of the quadric solver that the integration tests check directly; not part of the
 /// user-facing API.
 #[doc(hidden)]
 pub mod testing {
-    /// The batches that write each track into the caller's rows as it finishes (the bindings' columns).
-    pub use super::batch::{triangulate_quadric_observations_into, triangulate_quadrics_into};
     pub use super::residual::ConicFrame;
 }
 
@@ -49,7 +47,7 @@ use super::conditioning::{check_views, Similarity};
 use super::fitting::fit_conic;
 use super::fractional_residual::{self, FractionalResidual};
 use super::uncertainty::{covariance_of_information, QuadricCovariance};
-use super::views::View;
+use super::views::{Cameras, View};
 use super::{parse_observations, CostKind, Method, Report, Status, TriangulationOptions};
 use crate::covariance::whitenings;
 use crate::error::{Error, Result};
@@ -128,23 +126,7 @@ pub(crate) fn transform_dual(sim_matrix: &Matrix4<f64>, dual: &Matrix4<f64>) -> 
     sim_matrix * dual * sim_matrix.transpose()
 }
 
-/// [`triangulate_quadric`] with the cameras as [`View`]s (a pinhole or any of COLMAP's models, and a
-/// pose). The outline of a quadric seen through a lens with distortion is not a conic (eq. 8 holds
-/// for the pinhole projection only), so a view whose camera distorts ([`crate::camera::Camera::distorts`]) is
-/// refused with [`Error::InvalidOption`] naming it; pinholes and lenses whose distortion is the
-/// identity are solved as [`triangulate_quadric`] of their `K [R | t]`.
-pub fn triangulate_quadric_views(
-    views: &[View],
-    conics: &[Matrix3<f64>],
-    covariances: Option<&[Matrix5]>,
-    opts: &TriangulationOptions,
-) -> Result<QuadricTriangulation> {
-    refuse_distortion(views)?;
-    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
-    triangulate_quadric(&cameras, conics, covariances, opts)
-}
-
-/// The refusal of [`triangulate_quadric_views`]: [`Error::InvalidOption`] naming `cameras` and the
+/// The refusal of views through a distorting lens ([`triangulate_quadric`]): [`Error::InvalidOption`] naming `cameras` and the
 /// first view whose camera distorts (`cameras[j]`, the camera of `views[j]`, as the Python
 /// `cameras=` argument names it).
 #[doc(hidden)]
@@ -166,17 +148,75 @@ pub fn refuse_distortion(views: &[View]) -> Result<()> {
     }
 }
 
-/// Triangulates one ellipsoid seen by `projections` (3x4, world → pixels, any positive scale; in
-/// front means `(P X̃)₃ > 0`, `views`) as the
-/// primal image conics `conics` (eq. 8, pixels, any scale and sign; each must be a real ellipse), with
-/// optional 5x5 covariances of the conic residuals (one per view, e.g. from
-/// [`super::fitting::fit_conic`]; identity when `None`).
+/// The observed outlines of one ellipsoid, one per camera.
+#[derive(Debug, Clone, Copy)]
+pub enum QuadricObservations<'a> {
+    /// Primal image conics (eq. 8, pixels, any scale and sign; each must be a real ellipse), with
+    /// optional 5x5 covariances of the conic residuals (one per view, e.g. from
+    /// [`super::fitting::fit_conic`]; identity when `None`).
+    Conics(&'a [Matrix3<f64>], Option<&'a [Matrix5]>),
+    /// Edge points of each outline (pixels, i.i.d. Gaussian noise of `sigma` px per coordinate, the
+    /// `f64`): per view, [`fit_conic`] gives the conic and its covariance. Errors name the view index
+    /// (`points[i]`).
+    EdgePoints(&'a [Vec<Vector2<f64>>], f64),
+}
+
+impl<'a> From<&'a [Matrix3<f64>]> for QuadricObservations<'a> {
+    fn from(conics: &'a [Matrix3<f64>]) -> Self {
+        QuadricObservations::Conics(conics, None)
+    }
+}
+
+impl<'a> From<&'a Vec<Matrix3<f64>>> for QuadricObservations<'a> {
+    fn from(conics: &'a Vec<Matrix3<f64>>) -> Self {
+        QuadricObservations::Conics(conics, None)
+    }
+}
+
+impl<'a, const N: usize> From<&'a [Matrix3<f64>; N]> for QuadricObservations<'a> {
+    fn from(conics: &'a [Matrix3<f64>; N]) -> Self {
+        QuadricObservations::Conics(conics, None)
+    }
+}
+
+/// Triangulates one ellipsoid seen by `cameras` as `observations` (its outline conics, or edge points
+/// of them, one per camera).
+///
+/// With [`Cameras::Projections`] (3x4, world → pixels, any positive scale; in front means
+/// `(P X̃)₃ > 0`, `views`) the cameras are used as given. With [`Cameras::Views`] (a pinhole or any of
+/// COLMAP's models, and a pose): the outline of a quadric seen through a lens with distortion is not a
+/// conic (eq. 8 holds for the pinhole projection only), so a view whose camera distorts
+/// ([`crate::camera::Camera::distorts`]) is refused with [`Error::InvalidOption`] naming it;
+/// pinholes and lenses whose distortion is the identity are solved with their `K [R | t]`.
 ///
 /// Errors: [`Error::TooFewCorrespondences`] for fewer than 3 views, [`Error::Shape`] for mismatched
 /// lengths, [`Error::NonFinite`] naming the argument and row, [`Error::SingularCamera`],
-/// [`Error::Degenerate`] (a conic that is not an ellipse, a covariance that is not positive definite,
-/// cameras with one centre), [`Error::InvalidOption`].
-pub fn triangulate_quadric(
+/// [`Error::Degenerate`] (a conic that is not an ellipse, too few or degenerate edge points, a
+/// covariance that is not positive definite, cameras with one centre), [`Error::InvalidOption`].
+pub fn triangulate_quadric<'a>(
+    cameras: impl Into<Cameras<'a>>,
+    observations: impl Into<QuadricObservations<'a>>,
+    opts: &TriangulationOptions,
+) -> Result<QuadricTriangulation> {
+    let of_views: Vec<Matrix3x4<f64>>;
+    let projections = match cameras.into() {
+        Cameras::Projections(projections) => projections,
+        Cameras::Views(views) => {
+            refuse_distortion(views)?;
+            of_views = views.iter().map(View::projection).collect::<Result<_>>()?;
+            &of_views
+        }
+    };
+    match observations.into() {
+        QuadricObservations::Conics(conics, covariances) => {
+            quadric_of_projections(projections, conics, covariances, opts)
+        }
+        QuadricObservations::EdgePoints(points, sigma) => quadric_of_points(projections, points, sigma, opts),
+    }
+}
+
+/// [`triangulate_quadric`] of conics seen by projections.
+pub(crate) fn quadric_of_projections(
     projections: &[Matrix3x4<f64>],
     conics: &[Matrix3<f64>],
     covariances: Option<&[Matrix5]>,
@@ -247,10 +287,8 @@ fn finish(problem: &QuadricProblem, e: &Ellipsoid, mut report: Report) -> Quadri
     }
 }
 
-/// [`triangulate_quadric`] from edge points: per view, [`fit_conic`] on `points[i]` (pixels, i.i.d.
-/// Gaussian noise of `sigma` px per coordinate) gives the conic and its covariance. Errors name the
-/// view index.
-pub fn triangulate_quadric_points(
+/// [`triangulate_quadric`] from edge points seen by projections.
+fn quadric_of_points(
     projections: &[Matrix3x4<f64>],
     points: &[Vec<Vector2<f64>>],
     sigma: f64,
@@ -272,7 +310,7 @@ pub fn triangulate_quadric_points(
         conics.push(fit.conic);
         covariances.push(fit.covariance);
     }
-    triangulate_quadric(projections, &conics, Some(&covariances), opts)
+    quadric_of_projections(projections, &conics, Some(&covariances), opts)
 }
 
 /// The nearest real ellipsoid of a dual quadric of any scale and sign: normalised so that

@@ -6,7 +6,7 @@ pub mod oracle_triangulation;
 
 use nalgebra::{Matrix3x4, Vector2, Vector3};
 use pluecker::rng::Rng;
-use pluecker::triangulation::line::{ImageLines, LineTracks};
+use pluecker::triangulation::line::{DenseLineTracks, ImageLines};
 
 /// The pixel of the world point `x` in the camera `p`.
 pub fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
@@ -32,8 +32,8 @@ pub fn noisy_segments(cameras: &[Matrix3x4<f64>], n: usize, sigma: f64, rng: &mu
 }
 
 /// Line tracks of flat segment `endpoints` with endpoint noise `sigma`, every view visible, no covariances.
-pub fn segment_tracks(endpoints: &[f64], sigma: f64) -> LineTracks<'_> {
-    LineTracks {
+pub fn segment_tracks(endpoints: &[f64], sigma: f64) -> DenseLineTracks<'_> {
+    DenseLineTracks {
         lines: ImageLines::Segments { endpoints, sigma },
         visible: None,
         covariances: None,
