@@ -240,7 +240,7 @@ def triangulation_rows(camera: str, seed: int) -> list[str]:
         started = time.perf_counter()
         run = colmap.retriangulate(rec, outlier_threshold_px=THRESHOLD_PX if with_outliers else None)
         seconds = time.perf_counter() - started
-        ours = {int(i): X for i, X, s in zip(run.point3D_ids, run.result.X, run.result.status) if s == "success"}
+        ours = {int(i): X for i, X, s in zip(run.point3D_ids, run.result.point, run.result.status) if s == "success"}
         ours_rejected: dict[int, set] = {}
         if run.result.inliers is not None:
             for k in np.flatnonzero(~run.result.inliers):
@@ -253,7 +253,7 @@ def triangulation_rows(camera: str, seed: int) -> list[str]:
             clean = dict(ours)
         # The first-order cost pluecker minimises against the exact pixel cost at its answer, per point.
         gaps = [abs(c / pixel_cost(rec, int(i), X, ours_rejected.get(int(i))) - 1)
-                for i, X, c, s in zip(run.point3D_ids, run.result.X, run.result.cost, run.result.status) if s == "success"]
+                for i, X, c, s in zip(run.point3D_ids, run.result.point, run.result.cost, run.result.status) if s == "success"]
         first_order = f"first-order cost vs pixel cost: median {np.median(gaps):.1e}, max {np.max(gaps):.1e}"
         if with_outliers:
             # The 3-D error of the tracks with an outlier against the same tracks without it (same noise),
@@ -262,7 +262,7 @@ def triangulation_rows(camera: str, seed: int) -> list[str]:
             for image_id, idx in outliers:
                 oracle_rec.delete_observation(image_id, idx)
             oracle_run = colmap.retriangulate(oracle_rec)
-            oracle = {int(i): X for i, X in zip(oracle_run.point3D_ids, oracle_run.result.X)}
+            oracle = {int(i): X for i, X in zip(oracle_run.point3D_ids, oracle_run.result.point)}
             rms = lambda points: np.sqrt(np.mean([np.sum((points[i] - truth[i]) ** 2) for i in dirty_tracks]))
             first_order += (f"; 3-D error on those tracks {rms(ours) / rms(clean):.3f}x the same tracks without "
                             f"outliers (an oracle deleting the outliers: {rms(oracle) / rms(clean):.3f}x)")
@@ -742,7 +742,7 @@ def retriangulation_row(name: str, rec: Any, repeats: int = 5) -> tuple[str, str
     rows = np.searchsorted(run.point3D_ids, obs.ids)
     assert np.array_equal(np.asarray(run.point3D_ids)[rows], obs.ids), "retriangulate lost a point3D_id"
     result = run.result
-    X = np.asarray(result.X)[rows]
+    X = np.asarray(result.point)[rows]
     status = np.asarray(result.status)[rows]
     certified = np.asarray(result.certified, dtype=bool)[rows]
     lower = np.asarray(result.lower_bound)[rows]
@@ -819,7 +819,7 @@ def convention_check(seed: int) -> str:
         run = colmap.retriangulate(rec, sigma_px=sigma)
         rows = np.searchsorted(run.point3D_ids, obs.ids)
         ok = np.asarray(run.result.status)[rows] == "success"
-        X = np.asarray(run.result.X)[rows]
+        X = np.asarray(run.result.point)[rows]
         mine = exact_costs(obs, X, sigma)
         parts.append(f"σ = {sigma}: max |cost − Σ r²/σ²| / Σ r²/σ² = "
                      f"{np.max(np.abs(_rel(np.asarray(run.result.cost)[rows][ok], mine[ok]))):.1e} over {int(ok.sum())} points")

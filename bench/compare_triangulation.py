@@ -249,7 +249,7 @@ def pluecker_single(method: str) -> Callable[[Scene, int], dict[str, Any]]:
         def call(i: int) -> Any:
             r = pluecker.triangulate_point(s.P, s.x[i], options=options)
             results.append(r)
-            return r.X
+            return r.point
 
         X, seconds = _per_point(len(s.x), call)
         return {
@@ -272,7 +272,7 @@ def pluecker_batch(method: str) -> Callable[[Scene, int], dict[str, Any]]:
         options = pluecker.TriangulationOptions(method=method)
         r, seconds = _best_of(repeats, lambda: pluecker.triangulate_points(s.P, s.x, options=options))
         return {
-            "X": np.asarray(r.X),
+            "X": np.asarray(r.point),
             "seconds": np.full(len(s.x), seconds / len(s.x)),
             "batch": True,
             "core_seconds": np.asarray(r.time_seconds),
@@ -379,7 +379,7 @@ def run_real(name: str, repeats: int) -> dict[str, Any]:
     kinds, counts = np.unique(np.asarray(result.certificate), return_counts=True)
     statuses, status_counts = np.unique(np.asarray(result.status), return_counts=True)
     certified = np.asarray(result.certified)
-    X = np.asarray(result.X)
+    X = np.asarray(result.point)
     views = visible.sum(axis=1)
     nodes = np.asarray(result.nodes)
     return {

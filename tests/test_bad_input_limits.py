@@ -112,7 +112,7 @@ def test_tracks_up_to_the_rows_given_are_solved_and_empty_ones_reported():
     P, x = stereo()
     r = pluecker.triangulate_points(P, x, track=np.zeros(3, np.uint64), image=np.arange(3), n_tracks=np.int64(3))
     assert list(r.status) == ["success", "too_few_views", "too_few_views"]
-    np.testing.assert_allclose(r.X[0], [0.2, -0.1, 5.0], atol=1e-9)
+    np.testing.assert_allclose(r.point[0], [0.2, -0.1, 5.0], atol=1e-9)
     r = pluecker.triangulate_points(P, x, track=[2, 2, 2], image=[0, 1, 2])  # id 2 < 3 rows
     assert len(r) == 3 and r.status[2] == "success"
     with pytest.raises(InvalidOptionError, match=r"^track: entry 0 is 3, not a track id below the 3 rows"):

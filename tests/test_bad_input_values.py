@@ -176,7 +176,7 @@ def test_visible_as_0_and_1_equals_the_boolean_mask():
     mask = np.array([[1, 0, 1], [1, 1, 0]])
     as_int = pluecker.triangulate_points(P, x2, visible=mask)
     as_bool = pluecker.triangulate_points(P, x2, visible=mask.astype(bool))
-    assert np.array_equal(as_int.X, as_bool.X) and list(as_int.status) == list(as_bool.status)
+    assert np.array_equal(as_int.point, as_bool.point) and list(as_int.status) == list(as_bool.status)
 
 
 def test_visible_of_floats_is_a_type_error():

@@ -64,7 +64,7 @@ def test_points_are_certified_and_no_worse_than_the_shipped_reconstruction(house
         # shipped 3-D point (reconstructed from all ten views) evaluated on these views.
         shipped = cost_eq19(seq.cameras[VIEWS][seen], seq.points3d[i], x[i][seen])
         assert p["cost"] <= shipped / (1 - 1e-3) + 1e-12, p["index"]
-        assert p["cost"] == pytest.approx(cost_eq19(seq.cameras[VIEWS][seen], np.array(p["X"]), x[i][seen]), rel=1e-9)
+        assert p["cost"] == pytest.approx(cost_eq19(seq.cameras[VIEWS][seen], np.array(p["point"]), x[i][seen]), rel=1e-9)
         assert p["lower_bound"] <= p["cost"] * (1 + 1e-12)
     certified = sum(p["certified"] for p in points)
     assert certified / len(points) >= 0.99
@@ -75,11 +75,11 @@ def test_ply_holds_the_finite_points(house_run):
     _, out, _ = house_run
     header, vertices, _ = read_ply(out / "points.ply")
     points = json.loads((out / "points.json").read_text())["points"]
-    finite = [p["X"] for p in points if all(v is not None for v in p["X"])]
+    finite = [p["point"] for p in points if all(v is not None for v in p["point"])]
     assert "format ascii 1.0" in header and vertices.shape == (len(finite), 6)
     np.testing.assert_allclose(vertices[:, :3], finite, rtol=1e-15)
     green = vertices[:, 4] > vertices[:, 3]
-    assert green.sum() == sum(p["certified"] for p in points if all(v is not None for v in p["X"]))
+    assert green.sum() == sum(p["certified"] for p in points if all(v is not None for v in p["point"]))
 
 
 def test_the_json_carries_covariances(house_run):

@@ -142,7 +142,7 @@ def test_a_lens_the_certificate_does_not_cover_gives_exact_costs_and_no_false_ce
             point2D.xy = point2D.xy + rng.normal(size=2)
     ids, result = colmap.retriangulate(rec)
     assert not result.certified.any() and (result.status == "gap_not_closed").all()
-    i, X = int(ids[0]), result.X[0]
+    i, X = int(ids[0]), result.point[0]
     pixel_cost = sum(np.sum((rec.cameras[rec.images[e.image_id].camera_id].img_from_cam(
         np.atleast_2d(rec.images[e.image_id].cam_from_world() * X))[0]
         - rec.images[e.image_id].points2D[e.point2D_idx].xy) ** 2) for e in rec.points3D[i].track.elements)
@@ -181,7 +181,7 @@ def test_retriangulating_a_model_recovers_its_points_certified(model_id, params)
     assert len(ids) == len(truth) == len(result)
     assert (result.status == "success").all() and result.certified.all()
     assert result.cost.max() < 1e-12
-    for i, X in zip(ids, result.X):
+    for i, X in zip(ids, result.point):
         np.testing.assert_allclose(X, truth[int(i)], atol=1e-7 * (1 + np.linalg.norm(truth[int(i)])))
     for p in rec.points3D.values():
         p.xyz = p.xyz + 0.1
@@ -201,7 +201,7 @@ def test_with_noise_the_cost_is_the_pixel_reprojection_cost():
             point2D.xy = point2D.xy + rng.normal(size=2)
     ids, result = colmap.retriangulate(rec)
     assert result.certified.all()
-    for i, X, cost in zip(ids, result.X, result.cost):
+    for i, X, cost in zip(ids, result.point, result.cost):
         pixel_cost = 0.0
         for element in rec.points3D[int(i)].track.elements:
             image = rec.images[element.image_id]
@@ -224,7 +224,7 @@ def test_rigs_of_several_cameras_compose_into_each_image_pose():
     assert rec.num_rigs() == 1 and any(not r.sensor_from_rig(s).rotation.matrix().trace() == 3
                                        for r in rec.rigs.values() for s in r.non_ref_sensors)
     ids, result = colmap.retriangulate(rec)
-    for i, X in zip(ids, result.X):
+    for i, X in zip(ids, result.point):
         np.testing.assert_allclose(X, rec.points3D[int(i)].xyz, atol=1e-7 * (1 + np.linalg.norm(X)))
 
 
@@ -550,7 +550,7 @@ def test_a_track_that_sees_one_image_twice_uses_both_keypoints(tmp_path):
     assert mine.sum() == rec.points3D[point_id].track.length() and (run.observation_image[mine] == image_id).sum() == 2
     assert run.result.status[row] == "success" and run.result.certified[row]
     # The cost is the squared pixel error over every observation (noise-free but the moved keypoint).
-    X = run.result.X[row]
+    X = run.result.point[row]
     pixel_cost = 0.0
     for element in rec.points3D[point_id].track.elements:
         im = rec.images[element.image_id]
@@ -573,7 +573,7 @@ def test_the_distributed_tables_solve_as_retriangulate_does_through_the_lens():
     cameras, table = colmap.observation_table(rec)
     points, _ = distributed.triangulate_table(table, cameras)
     np.testing.assert_array_equal(points.column("track").to_numpy(), run.point3D_ids)
-    np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], run.result.X)
+    np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], run.result.point)
     np.testing.assert_array_equal(points.column("cost").to_numpy(), run.result.cost)
     np.testing.assert_array_equal(points.column("certified").to_numpy(), run.result.certified)
     assert run.result.certified.all()

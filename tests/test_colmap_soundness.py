@@ -93,7 +93,7 @@ def judged(case: str, sigma_px: float = SIGMA_PX):
     assert all(used[row] == rec.points3D[int(i)].track.length() for row, i in enumerate(run.point3D_ids)), \
         "every observation of every track is used"
     # Solved: a finite point at the exact cost's local minimum, certified (success) or not (gap_not_closed).
-    solved = np.isin(np.asarray(run.result.status), ["success", "gap_not_closed"]) & np.isfinite(run.result.X).all(1)
+    solved = np.isin(np.asarray(run.result.status), ["success", "gap_not_closed"]) & np.isfinite(run.result.point).all(1)
     assert solved.all(), "every track of these models sees two or more images and must be solved"
     return rec, run, optimum
 
@@ -126,7 +126,7 @@ def test_the_reported_cost_is_the_exact_pixel_cost_at_the_point(case):
     """``cost`` is the cost of the returned point in the image's own pixels (Σ r² / σ² through the exact
     projection), recomputed here with pycolmap's projection."""
     rec, run, _ = judged(case)
-    ratios = [run.result.cost[row] / exact_cost(rec, int(i), run.result.X[row]) - 1
+    ratios = [run.result.cost[row] / exact_cost(rec, int(i), run.result.point[row]) - 1
               for row, i in enumerate(run.point3D_ids)]
     worst = int(np.argmax(np.abs(ratios)))
     assert abs(ratios[worst]) <= COST_TOLERANCE, (
@@ -139,7 +139,7 @@ def test_solved_points_are_at_the_exact_optimum(case):
     """Every solved point's exact cost is the tight BA's to 1e-6 relative (both minimise the same smooth
     cost; lower than the BA is allowed, the BA being a local method started from the model's point)."""
     rec, run, optimum = judged(case)
-    excess = {int(i): exact_cost(rec, int(i), X) / optimum[int(i)] - 1 for i, X in zip(run.point3D_ids, run.result.X)}
+    excess = {int(i): exact_cost(rec, int(i), X) / optimum[int(i)] - 1 for i, X in zip(run.point3D_ids, run.result.point)}
     above = {i: e for i, e in excess.items() if e > OPTIMUM_TOLERANCE}
     assert not above, (f"{len(above)} of {len(excess)} points above the exact optimum by > {OPTIMUM_TOLERANCE:g}; "
                        f"worst point3D_id {max(above, key=above.get)}: {max(above.values()):.2e}")
@@ -149,7 +149,7 @@ def test_the_cost_convention_is_sum_of_squares_over_sigma_squared():
     """Pinhole, σ = 0.5 px: the cost is Σ r² / σ² (not ½ Σ r², not Σ r² / σ), and the bounds are on that."""
     rec, run, optimum = judged("pinhole", sigma_px=0.5)
     for row, i in enumerate(run.point3D_ids):
-        mine = exact_cost(rec, int(i), run.result.X[row], sigma_px=0.5)
+        mine = exact_cost(rec, int(i), run.result.point[row], sigma_px=0.5)
         assert abs(run.result.cost[row] / mine - 1) <= COST_TOLERANCE, (int(i), run.result.cost[row], mine)
         assert run.result.certified[row], int(i)
         bound = run.result.lower_bound[row]

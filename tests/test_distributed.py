@@ -83,7 +83,7 @@ def test_the_kernel_is_the_batch_and_independent_of_row_order():
     order = np.lexsort((x[:, 1], x[:, 0], image, track))
     ids, index = np.unique(track[order], return_inverse=True)
     batch = pluecker.triangulate_points(cameras.projections, x[order], track=index, image=(image[order] - 3) // 10)
-    np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], batch.X)
+    np.testing.assert_array_equal(np.c_[points.column("X"), points.column("Y"), points.column("Z")], batch.point)
     np.testing.assert_array_equal(points.column("cost").to_numpy(), batch.cost)
     assert points.column("certified").to_numpy().all()
     # Shuffled rows give the same tables, bit for bit.

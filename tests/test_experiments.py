@@ -313,7 +313,7 @@ def optimal_residuals(sequence: str) -> np.ndarray:
     """Oracle: (observations, 2) pixel residuals of the optimal triangulation of Table 1's points, projected
     here with homogeneous coordinates, not by the experiment."""
     cameras, x, visible = jk.points.point_data(sequence)
-    X = np.asarray(pluecker.triangulate_points(cameras, x, visible, options=pluecker.TriangulationOptions(method="optimal")).X)
+    X = np.asarray(pluecker.triangulate_points(cameras, x, visible, options=pluecker.TriangulationOptions(method="optimal")).point)
     rows = []
     for view, P in enumerate(cameras):
         seen = visible[:, view]

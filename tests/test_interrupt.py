@@ -100,7 +100,7 @@ def test_time_budget_ends_a_batch_without_an_exception():
     x = np.stack([segments[:, :, 0], segments[:, :, 1]]).reshape(-1, 4, 2)
     for method in ("linear", "local", "optimal"):
         points = pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method=method), time_budget=0.0)
-        assert set(points.status) == {"time_budget"} and np.isnan(points.X).all()
+        assert set(points.status) == {"time_budget"} and np.isnan(points.point).all()
 
 
 def test_a_failing_progress_callback_stops_the_batch_and_keeps_finished_tracks():
@@ -227,7 +227,7 @@ def test_ctrl_c_stops_the_set_up_of_a_point_batch():
         polls = setup_polls(lambda: pluecker.triangulate_points(P, x, options=options, time_budget=0))
         assert polls >= (x.size + n * (11 + 3 + 9)) / SETUP_CHUNK, method
         batch = pluecker.triangulate_points(P, x, options=options, time_budget=0)
-        assert set(batch.status) == {"time_budget"} and np.isnan(batch.X).all()
+        assert set(batch.status) == {"time_budget"} and np.isnan(batch.point).all()
 
 
 def test_ctrl_c_stops_the_set_up_of_line_and_quadric_batches():

@@ -127,15 +127,15 @@ def test_point_certificates_are_sound(rig, where, sigma):
     opt = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method="optimal"))
     local = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method="local"))
     if opt.success:
-        assert np.all(depths(P, opt.X) > 0), opt
-        assert np.isclose(point_cost(P, x, opt.X), opt.cost, rtol=1e-6, atol=1e-9), opt
-    local_in_front = local.success and bool(np.all(depths(P, local.X) > 0))
+        assert np.all(depths(P, opt.point) > 0), opt
+        assert np.isclose(point_cost(P, x, opt.point), opt.cost, rtol=1e-6, atol=1e-9), opt
+    local_in_front = local.success and bool(np.all(depths(P, local.point) > 0))
     truth_cost = point_cost(P, x, X) if np.all(lam > 0) else None
     searched = None
     if opt.certified:
-        searched = many_start_point_minimum(P, x, opt.X, rng, starts=8)
-    assert_sound(opt, point_cost(P, x, opt.X), local, truth_cost,
-                 point_cost(P, x, local.X) if local_in_front else None, searched)
+        searched = many_start_point_minimum(P, x, opt.point, rng, starts=8)
+    assert_sound(opt, point_cost(P, x, opt.point), local, truth_cost,
+                 point_cost(P, x, local.point) if local_in_front else None, searched)
 
 
 # --- lines ------------------------------------------------------------------------------------------------

@@ -250,7 +250,7 @@ def test_triangulate_point(problem, method, gap, threshold, nodes):
     if isinstance(r, pluecker.PointTriangulation):
         check_report(r, gap_of(gap))
         if (r.status == "success"):
-            assert np.all(np.isfinite(r.X))
+            assert np.all(np.isfinite(r.point))
 
 
 @given(point_problems(), st.integers(0, 4), METHODS, NODES, st.data())
@@ -265,7 +265,7 @@ def test_triangulate_points(problem, n, method, nodes, data):
     batch = outcome(lambda: pluecker.triangulate_points(P, xs, visible, covs, options=pluecker.TriangulationOptions(method=method, certify=pluecker.CertifyOptions(max_nodes=nodes))))
     if isinstance(batch, pluecker.PointTriangulations):
         check_batch(batch, n)
-        X = batch.X
+        X = batch.point
         assert X.shape == (n, 3) and np.all(np.isfinite(X[np.asarray(batch.status) == "success"]))
 
 

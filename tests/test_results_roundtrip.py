@@ -161,7 +161,7 @@ def test_failed_results_have_null_where_they_had_nan():
     assert np.isinf(failed.details.rms_error_px) and failed.to_dict()["details"]["rms_error_px"] is None
     at_infinity = dict(RESULTS)["point-at-infinity"]
     d = at_infinity.to_dict()
-    assert d["status"] == "at_infinity" and d["X"] == [None, None, None] and d["cost"] is None
+    assert d["status"] == "at_infinity" and d["point"] == [None, None, None] and d["cost"] is None
     pose = dict(RESULTS)["pose-linear"]
     assert pose.certificate is None and pose.to_dict()["certificate"] is None
 

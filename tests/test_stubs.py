@@ -87,7 +87,7 @@ def test_no_options_means_the_default_options():
     x = np.array([[320.5, 240.2], [241.0, 240.4]])
     p = pluecker.triangulate_point(P, x)
     q = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions())
-    assert np.array_equal(p.X, q.X) and p.method == q.method == pluecker.TriangulationOptions().method
+    assert np.array_equal(p.point, q.point) and p.method == q.method == pluecker.TriangulationOptions().method
 
 
 def test_the_method_is_set_in_the_options_only():

@@ -44,7 +44,7 @@ def test_negative_focal_length_cameras_see_the_point_in_front():
         r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=method))
         assert r.status == "success", (method, r)
         # Exact pixels, 78 cm deep over a 5 cm baseline: exact to ~1e-12 relative.
-        np.testing.assert_allclose(r.X, X, atol=1e-8 * 78)
+        np.testing.assert_allclose(r.point, X, atol=1e-8 * 78)
     assert pluecker.triangulate_point(P, x).certified
 
 
@@ -67,7 +67,7 @@ def test_raw_vgg_cameras_give_the_mirrored_points_with_the_same_costs(name):
         np.testing.assert_array_equal(as_read.certified, flipped.certified)
         np.testing.assert_allclose(as_read.cost, flipped.cost, rtol=1e-8, atol=1e-12)
         # Point scale: the scene is ~10 units across; rounding differs between the two frames only.
-        np.testing.assert_allclose(as_read.X, -flipped.X, atol=1e-8 * 10)
+        np.testing.assert_allclose(as_read.point, -flipped.point, atol=1e-8 * 10)
     assert as_read.certified.all()
 
 
@@ -79,7 +79,7 @@ def test_the_issues_first_model_house_track_from_the_raw_files():
     for method in METHODS:
         r = pluecker.triangulate_point(raw[seen], x[0, seen], options=pluecker.TriangulationOptions(method=method))
         assert r.status == "success", (method, r)
-        rms = np.sqrt(np.mean(np.sum((project(raw[seen], r.X) - x[0, seen]) ** 2, axis=1)))
+        rms = np.sqrt(np.mean(np.sum((project(raw[seen], r.point) - x[0, seen]) ** 2, axis=1)))
         assert rms < 1.0, (method, rms)  # the data's own consistency: 0.37 px mean (test_datasets)
     r = pluecker.triangulate_point(raw[seen], x[0, seen])
     assert r.certified and r.certificate.kind == "convexity_test"
@@ -112,13 +112,13 @@ def test_a_point_behind_every_camera_is_reported_not_certified():
         r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=method))
         assert r.status == "behind_camera", (method, r)
         assert not r.certified
-        np.testing.assert_allclose(r.X, X, atol=1e-9)
+        np.testing.assert_allclose(r.point, X, atol=1e-9)
     batch = pluecker.triangulate_points(P, x[None])
     assert batch.status[0] == "behind_camera" and not batch.certified[0]
     # Negated cameras see the same point in front: the sign of P is part of the camera.
     r = pluecker.triangulate_point(-P, x)
     assert r.status == "success" and r.certified
-    np.testing.assert_allclose(r.X, X, atol=1e-9)
+    np.testing.assert_allclose(r.point, X, atol=1e-9)
 
 
 def test_parallel_rays_are_at_infinity_for_every_method():
@@ -130,4 +130,4 @@ def test_parallel_rays_are_at_infinity_for_every_method():
     for method in METHODS:
         r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=method))
         assert r.status == "at_infinity", (method, r)
-        assert not r.certified and np.all(np.isnan(r.X))
+        assert not r.certified and np.all(np.isnan(r.point))

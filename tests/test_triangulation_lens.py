@@ -43,12 +43,12 @@ def test_a_point_through_a_strong_radial_lens_is_the_certified_minimum_of_the_pi
     r = pluecker.triangulate_point(P, x, cameras=cameras)
     assert r.status == "success" and r.certified and r.certificate.kind == "lens_convexity_test"
     assert "one-to-one" in r.certificate.domain
-    cost = _pixel_cost(theirs, poses, x, r.X)
+    cost = _pixel_cost(theirs, poses, x, r.point)
     assert abs(r.cost / cost - 1) < 1e-9
     # A stationary minimum: steps of 1e-4 of the point's spread cost more (first-order term ~0).
     rng = np.random.default_rng(1)
     for _ in range(20):
-        assert _pixel_cost(theirs, poses, x, r.X + rng.normal(size=3) * 1e-4) >= cost
+        assert _pixel_cost(theirs, poses, x, r.point + rng.normal(size=3) * 1e-4) >= cost
     assert r.certificate.lower_bound <= cost
 
 
@@ -60,7 +60,7 @@ def test_the_first_order_answer_costs_more_than_the_exact_one():
     undistorted, cov = lens.undistort(x, np.broadcast_to(np.eye(2), (len(x), 2, 2)))
     first = pluecker.triangulate_point(P, undistorted, cov)
     exact = pluecker.triangulate_point(P, x, cameras=cameras)
-    assert _pixel_cost(theirs, poses, x, exact.X) <= _pixel_cost(theirs, poses, x, first.X) * (1 + 1e-12)
+    assert _pixel_cost(theirs, poses, x, exact.point) <= _pixel_cost(theirs, poses, x, first.point) * (1 + 1e-12)
 
 
 def test_a_camera_list_that_does_not_match_P_is_named():
@@ -83,6 +83,6 @@ def test_the_covariance_through_a_lens_is_that_of_the_exact_residuals():
         return np.concatenate([theirs.img_from_cam(np.atleast_2d(R @ X + t))[0] - u for (R, t), u in zip(poses, x)])
 
     h = 1e-6
-    J = np.stack([(residuals(r.X + h * e) - residuals(r.X - h * e)) / (2 * h) for e in np.eye(3)], axis=1)
+    J = np.stack([(residuals(r.point + h * e) - residuals(r.point - h * e)) / (2 * h) for e in np.eye(3)], axis=1)
     expected = np.linalg.inv(J.T @ J)
     np.testing.assert_allclose(r.covariance, expected, rtol=1e-5)

@@ -34,7 +34,7 @@ def test_noise_free_observations_give_the_point(method, views, seed):
     r = pluecker.triangulate_point(P, project(P, X), options=pluecker.TriangulationOptions(method=method))
     assert r.method == method and r.status == "success" and r.success, f"seed={seed} {r}"
     # Exact data: only round-off remains (the point is ~10 units away, pixels ~1e2).
-    np.testing.assert_allclose(r.X, X, atol=1e-8, err_msg=f"seed={seed}")
+    np.testing.assert_allclose(r.point, X, atol=1e-8, err_msg=f"seed={seed}")
     assert r.cost < 1e-12
     assert r.certified == (method == "optimal")
 
@@ -44,7 +44,7 @@ def test_reported_cost_is_eq19_at_the_returned_point(method, seed):
     for k in range(10):
         P, _, x = noisy_problem(seed + k, views=5)
         r = pluecker.triangulate_point(P, x, options=pluecker.TriangulationOptions(method=method))
-        assert r.cost == pytest.approx(cost_eq19(P, r.X, x), rel=1e-9), f"seed={seed + k}"
+        assert r.cost == pytest.approx(cost_eq19(P, r.point, x), rel=1e-9), f"seed={seed + k}"
 
 
 def test_covariance_weights_the_residuals_as_eq18(seed):
@@ -53,15 +53,15 @@ def test_covariance_weights_the_residuals_as_eq18(seed):
     A = rng.normal(size=(4, 2, 2))
     cov = A @ A.transpose(0, 2, 1) + 0.5 * np.eye(2)
     r = pluecker.triangulate_point(P, x, cov, options=pluecker.TriangulationOptions(method="local"))
-    assert r.cost == pytest.approx(cost_eq19(P, r.X, x, cov), rel=1e-9)
+    assert r.cost == pytest.approx(cost_eq19(P, r.point, x, cov), rel=1e-9)
     # The weighted optimum: the gradient of Σ rᵢᵀ Σᵢ⁻¹ rᵢ vanishes there (central differences, step
     # 1e-6 of a ~10-unit point; the cost is ~1 so a gradient of 1e-4 would be a real error).
     step = 1e-6
-    grad = [(cost_eq19(P, r.X + e, x, cov) - cost_eq19(P, r.X - e, x, cov)) / (2 * step) for e in np.eye(3) * step]
+    grad = [(cost_eq19(P, r.point + e, x, cov) - cost_eq19(P, r.point - e, x, cov)) / (2 * step) for e in np.eye(3) * step]
     assert np.max(np.abs(grad)) < 1e-4, grad
     # Scaling every covariance by k scales the cost by 1/k and leaves the point.
     scaled = pluecker.triangulate_point(P, x, 4.0 * cov, options=pluecker.TriangulationOptions(method="local"))
-    np.testing.assert_allclose(scaled.X, r.X, atol=1e-7)
+    np.testing.assert_allclose(scaled.point, r.point, atol=1e-7)
     assert scaled.cost == pytest.approx(r.cost / 4.0, rel=1e-9)
 
 
@@ -70,13 +70,13 @@ def test_a_positive_camera_scale_does_not_matter_and_the_sign_says_which_side_is
     base = pluecker.triangulate_point(P, x)
     rescaled = P * np.array([2.0, 1e-3, 7.0])[:, None, None]
     other = pluecker.triangulate_point(rescaled, x)
-    np.testing.assert_allclose(other.X, base.X, atol=1e-8)
+    np.testing.assert_allclose(other.point, base.point, atol=1e-8)
     assert other.cost == pytest.approx(base.cost, rel=1e-9)
     assert other.certified and other.status == "success"
     # λ = (P X̃)₃ > 0 in front for the matrix as given (issue 10): −P sees the other half-space, so the
     # same point is behind that camera.
     negated = P * np.array([-1.0, 1.0, 1.0])[:, None, None]
-    assert depths(negated, base.X)[0] < 0
+    assert depths(negated, base.point)[0] < 0
     for method in METHODS:
         r = pluecker.triangulate_point(negated, x, options=pluecker.TriangulationOptions(method=method))
         assert r.status != "success" and not r.certified, (method, r)
@@ -97,17 +97,17 @@ def test_optimal_is_certified_and_never_worse_than_the_others(seed):
         assert opt.certificate.kind in ("convexity_test", "branch_and_bound")
         # The raw bound against numpy's costs: of the answer, of the other methods' answers, of the
         # truth and of the least cost a many-start search of its own finds; the gap recomputed.
-        cost = cost_eq19(P, opt.X, x)
+        cost = cost_eq19(P, opt.point, x)
         raw = opt.certificate.raw_lower_bound
         assert 0.0 <= raw <= cost * (1 + 1e-12), f"seed={seed + k}: {opt}"
         assert opt.certificate.lower_bound == min(raw, opt.cost)
         assert relative_gap(cost, raw) <= 1e-3 * (1 + 1e-9), f"seed={seed + k}: {opt}"
         assert raw <= cost_eq19(P, X, x) * (1 + 1e-12)
-        assert raw <= many_start_point_minimum(P, x, opt.X, rng, starts=10) * (1 + 1e-12), f"seed={seed + k}"
+        assert raw <= many_start_point_minimum(P, x, opt.point, rng, starts=10) * (1 + 1e-12), f"seed={seed + k}"
         for m in ("linear", "local"):
             assert results[m].certificate is None and not results[m].certified
-            other = cost_eq19(P, results[m].X, x)
-            if np.all(depths(P, results[m].X) > 0):
+            other = cost_eq19(P, results[m].point, x)
+            if np.all(depths(P, results[m].point) > 0):
                 assert other >= raw * (1 - 1e-12), f"seed={seed + k}: {m} beats the bound"
             assert results[m].cost >= opt.cost * (1 - 1e-9), f"seed={seed + k}: {m} beats optimal"
 
@@ -120,12 +120,12 @@ def test_lower_bound_holds_at_sampled_points_in_front(seed):
         P, _, x = noisy_problem(seed + k, views=3, parallax_deg=5.0, sigma=3.0)
         r = pluecker.triangulate_point(P, x)
         assert r.certified, f"seed={seed + k}"
-        samples = np.concatenate([r.X + rng.normal(0, s, (2000, 3)) for s in (1e-3, 1e-2, 0.1, 1.0, 10.0)])
+        samples = np.concatenate([r.point + rng.normal(0, s, (2000, 3)) for s in (1e-3, 1e-2, 0.1, 1.0, 10.0)])
         front = np.array([np.all(depths(P, X) > 0) for X in samples])
         costs = np.array([cost_eq19(P, X, x) for X in samples[front]])
         assert front.sum() > 1000
         assert costs.min() >= r.certificate.raw_lower_bound * (1 - 1e-9), f"seed={seed + k}"
-        assert many_start_point_minimum(P, x, r.X, rng, starts=20) >= r.certificate.raw_lower_bound * (1 - 1e-12)
+        assert many_start_point_minimum(P, x, r.point, rng, starts=20) >= r.certificate.raw_lower_bound * (1 - 1e-12)
 
 
 def test_tight_gap_and_branch_and_bound_report_nodes(seed):
@@ -137,14 +137,14 @@ def test_tight_gap_and_branch_and_bound_report_nodes(seed):
         assert r.status in ("success", "gap_not_closed"), f"seed={seed + k} {r}"
         # The gap recomputed from numpy's cost and the raw bound; the costs agree to ~1e-13 relative,
         # which moves the recomputed gap by as much.
-        gap = relative_gap(cost_eq19(P, r.X, x), r.certificate.raw_lower_bound)
+        gap = relative_gap(cost_eq19(P, r.point, x), r.certificate.raw_lower_bound)
         if r.certified:
             assert gap <= 1e-9 + 1e-12, f"seed={seed + k}: {r}"
         if r.certificate.kind == "branch_and_bound":
             assert r.certificate.nodes >= 1 and r.certificate.solver_iterations >= 1
         else:
             assert r.certificate.nodes == 0
-        assert np.all(depths(P, r.X) > 0), f"seed={seed + k}: behind a camera"
+        assert np.all(depths(P, r.point) > 0), f"seed={seed + k}: behind a camera"
 
 
 def test_node_budget_is_respected(seed):
@@ -172,29 +172,29 @@ def test_low_parallax_optimal_stays_in_front(parallax_deg, seed):
         P, _, x = noisy_problem(seed + k, views=2, parallax_deg=parallax_deg)
         r = pluecker.triangulate_point(P, x)
         assert r.status == "success" and r.certified, f"seed={seed + k} {r}"
-        assert np.all(depths(P, r.X) > 0), f"seed={seed + k}"
-        assert r.cost == pytest.approx(cost_eq19(P, r.X, x), rel=1e-9)
+        assert np.all(depths(P, r.point) > 0), f"seed={seed + k}"
+        assert r.cost == pytest.approx(cost_eq19(P, r.point, x), rel=1e-9)
 
 
 def test_result_is_frozen_and_owns_its_arrays(seed):
     P, _, x = noisy_problem(seed)
     r = pluecker.triangulate_point(P, x)
     assert isinstance(r, pluecker.TriangulationReport)
-    X = r.X
+    X = r.point
     X[:] = 0.0
-    assert not np.all(r.X == 0.0)
+    assert not np.all(r.point == 0.0)
     with pytest.raises(AttributeError):
         r.cost = 0.0  # type: ignore[misc]
     d = r.to_dict()
-    assert set(d) == set(REPORT_FIELDS) | {"X", "covariance", "inliers"}
-    assert d["X"] == r.X.tolist() and d["certificate"] == r.certificate.to_dict()
+    assert set(d) == set(REPORT_FIELDS) | {"point", "covariance", "inliers"}
+    assert d["point"] == r.point.tolist() and d["certificate"] == r.certificate.to_dict()
     assert "PointTriangulation(" in repr(r) and "certified=True" in repr(r)
 
 
 def test_accepts_lists_and_integers(seed):
     P, X, x = noisy_problem(seed, sigma=0.0)
     r = pluecker.triangulate_point(P.tolist(), np.round(x).astype(int).tolist())
-    assert r.status == "success" and np.linalg.norm(r.X - X) < 0.1
+    assert r.status == "success" and np.linalg.norm(r.point - X) < 0.1
 
 
 def good(seed: int):
@@ -273,13 +273,13 @@ def test_batch_equals_single_calls(method, seed):
     P, _, x = scene(seed, n=200)
     batch = pluecker.triangulate_points(P, x, options=pluecker.TriangulationOptions(method=method))
     assert len(batch) == 200 and batch.method == method
-    assert batch.X.shape == (200, 3) and batch.status.shape == (200,)
+    assert batch.point.shape == (200, 3) and batch.status.shape == (200,)
     for i in range(0, 200, 7):
         single = pluecker.triangulate_point(P, x[i], options=pluecker.TriangulationOptions(method=method))
         # The same equations on the same data; the batch's linear path sums in another order, so the
         # points may differ in the last bits (1e-16 relative), and a local minimisation started there by
         # its step tolerance (1e-10 relative). 1e-9 is well above both and far below the noise (~1e-3).
-        np.testing.assert_allclose(batch.X[i], single.X, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(batch.point[i], single.point, rtol=1e-9, atol=1e-9)
         assert batch.cost[i] == pytest.approx(single.cost, rel=1e-9, abs=1e-12), i
         c = single.certificate
         if c is None:
@@ -310,8 +310,8 @@ def test_visibility_selects_the_views(seed):
             assert batch.status[i] == "too_few_views"
             continue
         single = pluecker.triangulate_point(P[seen], x[i][seen])
-        np.testing.assert_allclose(batch.X[i], single.X, rtol=1e-9, atol=1e-9)
-        assert batch.cost[i] == pytest.approx(cost_eq19(P[seen], batch.X[i], x[i][seen]), rel=1e-9)
+        np.testing.assert_allclose(batch.point[i], single.point, rtol=1e-9, atol=1e-9)
+        assert batch.cost[i] == pytest.approx(cost_eq19(P[seen], batch.point[i], x[i][seen]), rel=1e-9)
 
 
 def test_covariances_per_observation(seed):
@@ -321,7 +321,7 @@ def test_covariances_per_observation(seed):
     cov = A @ A.transpose(0, 1, 3, 2) + 0.3 * np.eye(2)
     batch = pluecker.triangulate_points(P, x, covariances=cov, options=pluecker.TriangulationOptions(method="local"))
     for i in range(0, 40, 5):
-        assert batch.cost[i] == pytest.approx(cost_eq19(P, batch.X[i], x[i], cov[i]), rel=1e-9)
+        assert batch.cost[i] == pytest.approx(cost_eq19(P, batch.point[i], x[i], cov[i]), rel=1e-9)
 
 
 def test_one_bad_track_never_loses_the_others(seed):
@@ -337,7 +337,7 @@ def test_one_bad_track_never_loses_the_others(seed):
     for i, status in expected.items():
         assert batch.status[i] == status, (i, batch.messages[i])
         assert batch.messages[i].startswith(f"track {i}: ")
-        assert np.all(np.isnan(batch.X[i])) and not batch.certified[i]
+        assert np.all(np.isnan(batch.point[i])) and not batch.certified[i]
     # The messages name the track and the view (as a row of that track's observations).
     assert "observations[3]: non-finite value (NaN or inf) in row 1" in batch.messages[3]
     assert "covariances[11][2] is not positive definite" in batch.messages[11]
@@ -358,13 +358,13 @@ def test_low_parallax_batch_stays_in_front(seed):
     ok = batch.status == "success"
     assert ok.mean() > 0.95, np.unique(batch.status, return_counts=True)
     for i in np.flatnonzero(ok):
-        assert np.all(depths(P, batch.X[i]) > 0), i
+        assert np.all(depths(P, batch.point[i]) > 0), i
 
 
 def test_empty_batch(seed):
     P, _, _ = scene(seed)
     batch = pluecker.triangulate_points(P, np.zeros((0, 4, 2)))
-    assert len(batch) == 0 and batch.X.shape == (0, 3) and batch.status.shape == (0,)
+    assert len(batch) == 0 and batch.point.shape == (0, 3) and batch.status.shape == (0,)
 
 
 def test_gil_is_released_during_the_solve(seed):
@@ -472,10 +472,10 @@ def test_observation_rows_give_the_dense_batch(method, seed):
     if method == "linear":
         # The dense linear batch has its own allocation-free DLT; the same sums in another order agree to
         # rounding (about 1e-16 of the coordinates, 1e-12 allowed).
-        np.testing.assert_allclose(sparse.X, dense.X, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(sparse.point, dense.point, rtol=1e-12, atol=1e-12)
         np.testing.assert_allclose(sparse.cost, dense.cost, rtol=1e-9)
     else:
-        np.testing.assert_array_equal(sparse.X, dense.X)
+        np.testing.assert_array_equal(sparse.point, dense.point)
         np.testing.assert_array_equal(sparse.cost, dense.cost)
     np.testing.assert_array_equal(sparse.certified, dense.certified)
     np.testing.assert_array_equal(sparse.status, dense.status)

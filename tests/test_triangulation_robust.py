@@ -34,7 +34,7 @@ def test_single_call_rejects_the_outlier_and_certifies_the_rest():
         assert r.inliers.shape == (8,) and not r.inliers[outlier[k]]
         kept = r.inliers
         alone = pluecker.triangulate_point(P[kept], x[k][kept])
-        np.testing.assert_allclose(r.X, alone.X, atol=1e-9)
+        np.testing.assert_allclose(r.point, alone.point, atol=1e-9)
     assert pluecker.triangulate_point(P, x[0]).inliers is None
 
 
@@ -47,8 +47,8 @@ def test_dense_batch_masks_are_per_view_and_false_where_not_visible():
     assert not r.inliers[~visible].any()
     rejected = ~r.inliers[np.arange(40), outlier] | ~visible[np.arange(40), outlier]
     assert rejected.all()
-    error = np.linalg.norm(r.X - X, axis=1)
-    plain = np.linalg.norm(pluecker.triangulate_points(P, x, visible=visible).X - X, axis=1)
+    error = np.linalg.norm(r.point - X, axis=1)
+    plain = np.linalg.norm(pluecker.triangulate_points(P, x, visible=visible).point - X, axis=1)
     assert np.sqrt(np.mean(error**2)) < 0.3 * np.sqrt(np.mean(plain**2))
     assert pluecker.triangulate_points(P, x).inliers is None
     again = pickle.loads(pickle.dumps(r))
@@ -67,7 +67,7 @@ def test_sparse_batch_masks_follow_the_rows_as_given():
     assert not r.inliers[is_outlier].any()
     dense = pluecker.triangulate_points(P, x, options=ROBUST)
     np.testing.assert_array_equal(r.inliers, dense.inliers[t, i])
-    np.testing.assert_allclose(r.X, dense.X, atol=1e-9)
+    np.testing.assert_allclose(r.point, dense.point, atol=1e-9)
 
 
 def test_threshold_is_checked_and_refused_for_quadrics():
@@ -126,7 +126,7 @@ def test_too_few_inliers_is_a_status():
     x = np.array([p[:2] / p[2] for p in (P @ np.append(behind, 1.0))])
     r = pluecker.triangulate_point(P, x, options=ROBUST)
     assert r.status == "too_few_inliers" and not r.certified
-    assert np.isnan(r.X).all() and not r.inliers.any()
+    assert np.isnan(r.point).all() and not r.inliers.any()
 
 
 def test_every_result_says_which_domain_its_certificate_covers():

@@ -57,12 +57,12 @@ def test_point_covariance_matches_monte_carlo(views, parallax):
     x = project(P, X)
     cov = anisotropic_covariances(views, rng)
     exact = pluecker.triangulate_point(P, x, cov)
-    assert exact.covariance is not None and np.linalg.norm(exact.X - X) < 1e-9
+    assert exact.covariance is not None and np.linalg.norm(exact.point - X) < 1e-9
     n = 2000
     noise = np.einsum("vij,nvj->nvi", np.linalg.cholesky(cov), rng.normal(size=(n, views, 2)))
     batch = pluecker.triangulate_points(P, x[None] + noise, covariances=np.broadcast_to(cov, (n, views, 2, 2)))
     assert np.all(batch.status == "success")
-    check_monte_carlo(f"point, {views} views, {parallax}°", batch.X - X, exact.covariance)
+    check_monte_carlo(f"point, {views} views, {parallax}°", batch.point - X, exact.covariance)
 
 
 def test_low_parallax_covariance_is_large():

@@ -30,7 +30,7 @@ Example::
     X = np.array([0.2, -0.1, 5.0])
     x = np.array([(p @ np.append(X, 1.0))[:2] / (p @ np.append(X, 1.0))[2] for p in P])
     point = pluecker.triangulate_point(P, x)
-    assert point.certified and np.allclose(point.X, X)
+    assert point.certified and np.allclose(point.point, X)
 """
 
 # pycolmap's wheels carry their own zlib: when pycolmap is imported before Python's zlib module, the first

@@ -698,7 +698,7 @@ class PointTriangulation(TriangulationReport):
 
     # fields of PointTriangulation (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    X: NDArray[np.float64]
+    point: NDArray[np.float64]
     """The point, world frame."""
     covariance: Optional[NDArray[np.float64]]
     """Its 3x3 covariance (first order, from the observation covariances); `None` when singular."""
@@ -797,7 +797,7 @@ class PointTriangulations(BatchReport):
 
     # fields of PointTriangulations (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    X: NDArray[np.float64]
+    point: NDArray[np.float64]
     """Per track: the point, world frame, shape (n, 3) (NaN for a rejected track)."""
     covariance: NDArray[np.float64]
     """Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none)."""

@@ -615,7 +615,7 @@ class TableResult:
     order of ``point3D_ids`` and of the observations (for :func:`write`)."""
 
     def __init__(self, points: Any, inliers: np.ndarray) -> None:
-        self.X = np.c_[points.column("X").to_numpy(), points.column("Y").to_numpy(), points.column("Z").to_numpy()]
+        self.point = np.c_[points.column("X").to_numpy(), points.column("Y").to_numpy(), points.column("Z").to_numpy()]
         self.status = np.asarray(points.column("status").to_pylist(), dtype=str)
         self.certified = points.column("certified").to_numpy(zero_copy_only=False).astype(bool)
         self.cost = points.column("cost").to_numpy()
@@ -672,7 +672,7 @@ def update_points(reconstruction: Any, point3D_ids: Any, result: Any) -> int:
     """Writes the successfully re-triangulated points of :func:`retriangulate` into ``reconstruction``
     (their ``xyz``); the others are left as they were. Returns how many were written."""
     written = 0
-    for point_id, X, status in zip(point3D_ids, result.X, result.status):
+    for point_id, X, status in zip(point3D_ids, result.point, result.status):
         if status == "success":
             reconstruction.points3D[int(point_id)].xyz = X
             written += 1
@@ -781,7 +781,7 @@ def write(reconstruction: Any, run: Retriangulation, out: Any, *, text: bool = F
         write_ply(folder / "points3D.ply", ply_X, np.array([state.get(i, "unsolved") for i in ply_ids]))
         # Not savez_compressed: Python's zlib aborts the process when pycolmap was imported before it.
         np.savez(
-            folder / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.X,
+            folder / "points3D_triangulation.npz", point3D_id=run.point3D_ids, X=result.point,
             covariance=result.covariance, cost=result.cost, lower_bound=result.lower_bound, certified=certified,
             status=np.asarray(result.status, dtype=str), observation_point3D_id=run.point3D_ids[run.observation_point],
             observation_image_id=run.observation_image, observation_point2D_idx=run.observation_point2D,

@@ -141,7 +141,7 @@ def triangulate_table(table: Any, cameras: Cameras, *,
         t = track_index[row]
         status[t] = Status.INVALID_INPUT.value
         messages[t] = f"track {ids[t]}: image id {image[row]} is not among the cameras"
-    X = np.asarray(result.X)
+    X = np.asarray(result.point)
     points = pa.table({
         "track": ids,
         "X": X[:, 0], "Y": X[:, 1], "Z": X[:, 2],

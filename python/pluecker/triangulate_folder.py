@@ -139,7 +139,7 @@ def _points(seq: VggSequence, views: list[int], options: pluecker.TriangulationO
     cameras = seq.cameras[views]
     result = pluecker.triangulate_points(cameras, x[tracks], visible[tracks], options=options)
     columns = _columns(result)
-    X = np.asarray(result.X)
+    X = np.asarray(result.point)
     covariances = np.asarray(result.covariance)
     homogeneous = np.hstack([X, np.ones((len(X), 1))])
     projected = np.einsum("vij,nj->nvi", cameras, homogeneous)
@@ -147,7 +147,7 @@ def _points(seq: VggSequence, views: list[int], options: pluecker.TriangulationO
     for k, track in enumerate(tracks):
         seen = visible[track]
         record = {"index": int(track), "views": [views[j] for j in np.flatnonzero(seen)],
-                  "X": X[k].tolist(), "covariance": _matrix_or_none(covariances[k]), **_report(columns, k),
+                  "point": X[k].tolist(), "covariance": _matrix_or_none(covariances[k]), **_report(columns, k),
                   "rms_reprojection_px": float(np.sqrt(np.mean(residuals[k][seen] ** 2)))}
         features.records.append(record)
     finite = np.all(np.isfinite(X), axis=1)

@@ -29,7 +29,6 @@ use pluecker::triangulation::streaming::{linear_points_into, points_into as core
 use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;
-use pluecker::Pose;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -64,7 +63,7 @@ impl PyPointTriangulation {
 result_class! {
     PyPointTriangulation: PyTriangulationReport {
         /// The point, world frame.
-        X = |p| p.point;
+        point = |p| p.point;
         /// Its 3x3 covariance (first order, from the observation covariances); `None` when singular.
         covariance = |p| p.covariance;
         /// With `options.outlier_threshold`: (v,) the views the point was solved from; else `None`.
@@ -202,7 +201,7 @@ fn write_linear(sink: &Sink, t: usize, (report, point): (ReportRow, PointRow), r
 result_class! {
     PyPointTriangulations: PyBatchReport {
         /// Per track: the point, world frame, shape (n, 3) (NaN for a rejected track).
-        X = |b| Array::rows(b.x.clone(), &[3]);
+        point = |b| Array::rows(b.x.clone(), &[3]);
         /// Per track: its 3x3 covariance, shape (n, 3, 3) (NaN where there is none).
         covariance = |b| Array::rows(b.covariance.clone(), &[3, 3]);
         /// With `options.outlier_threshold`: which observations each point was solved from, shaped as
@@ -381,9 +380,9 @@ pub(crate) fn point_observations(
     batch_result(py, outcome)
 }
 
-/// The views of `cameras` (one `Camera` per row of `projections`) with the poses
-/// `[R | t] = K⁻¹ P` (up to `P`'s positive scale); `InvalidOptionError` naming the row of `projections`
-/// that is not `K [R | t]` of its camera's pinhole part.
+/// The views of `cameras` (one `Camera` per row of `projections`), each at the pose of its row
+/// ([`View::from_projection`], the core's decomposition `P = s K [R | t]`); `InvalidOptionError` naming
+/// the row of `projections` whose `K` is not its camera's pinhole part (to 1e-9, relative).
 pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
     let list: Vec<Bound<'_, PyAny>> = cameras.try_iter()?.collect::<PyResult<_>>()?;
     if list.len() != p.len() {
@@ -397,21 +396,16 @@ pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny
         .zip(p)
         .enumerate()
         .map(|(j, (c, pj))| {
-            let camera = crate::camera::coerce(&format!("cameras[{j}]"), &c)?;
-            let k = camera.intrinsics().matrix();
-            let rt = k.try_inverse().map(|ki| ki * pj);
-            let pose = rt.and_then(|rt| {
-                let scale = rt.fixed_view::<1, 3>(2, 0).norm();
-                let rotation: Matrix3<f64> = rt.fixed_view::<3, 3>(0, 0) / scale;
-                let orthonormal = (rotation * rotation.transpose() - Matrix3::identity()).norm() < 1e-6;
-                (orthonormal && scale > 0.0).then(|| Pose::new(rotation, rt.column(3) / scale))
-            });
-            pose.map(|pose| View::new(camera, pose)).ok_or_else(|| {
-                invalid_argument(
+            let camera = crate::camera::coerce(&format!("cameras[{j}]"), c)?;
+            let view = View::from_projection(pj, &format!("projections[{j}]")).map_err(to_py_err)?;
+            let (k, expected) = (view.camera.intrinsics().matrix(), camera.intrinsics().matrix());
+            if (k - expected).amax() > 1e-9 * expected.amax() {
+                return Err(invalid_argument(
                     "projections",
                     format!("row {j} is not K [R | t] of the pinhole part of cameras[{j}]"),
-                )
-            })
+                ));
+            }
+            Ok(View::new(camera, view.pose))
         })
         .collect()
 }

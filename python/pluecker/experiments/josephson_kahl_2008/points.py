@@ -89,7 +89,7 @@ def run_points(sequence: str, method: str) -> PointRun:
     start = time.perf_counter()
     result = pluecker.triangulate_points(cameras, x, visible, options=pluecker.TriangulationOptions(method=method))
     wall = time.perf_counter() - start
-    X = np.asarray(result.X)
+    X = np.asarray(result.point)
     h = np.einsum("vij,nj->nvi", cameras, np.hstack([X, np.ones((len(X), 1))]))
     residuals = x - h[..., :2] / h[..., 2:]
     return PointRun(len(X), residuals[visible], np.asarray(result.cost), np.asarray(result.certified),
