@@ -70,7 +70,11 @@ fn pycolmap_parts(camera: &Bound<'_, PyAny>) -> PyResult<Option<Camera>> {
 /// The camera of `model` (a name) with `params`, checked by the core.
 fn model_camera(model: &str, params: &[Real]) -> PyResult<Camera> {
     let model = CameraModel::parse(model).map_err(crate::errors::to_py_err)?;
-    let values = params.iter().enumerate().map(|(i, p)| p.get(&format!("params[{i}]"))).collect::<PyResult<Vec<_>>>()?;
+    let values = params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| p.get(&format!("params[{i}]")))
+        .collect::<PyResult<Vec<_>>>()?;
     guarded(|| Camera::new(model, &values))
 }
 

@@ -10,6 +10,7 @@
 
 use crate::errors::PlueckerError;
 use nalgebra::SMatrix;
+use pluecker::camera::Intrinsics;
 use pluecker::chi_square::ResidualTest;
 use pluecker::geometry::dual_quaternion::DualQuaternion;
 use pluecker::geometry::plucker::LineChart;
@@ -19,7 +20,6 @@ use pluecker::pose::{CovarianceSource, Method as PoseMethod, PoseDetails, Ransac
 use pluecker::triangulation::fitting::{FittedConic, FittedLine};
 use pluecker::triangulation::{Certificate, CertificateKind, CostKind, Method, Report, Status};
 use pluecker::Primitive;
-use pluecker::camera::Intrinsics;
 use pluecker::{Pose, PoseResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};

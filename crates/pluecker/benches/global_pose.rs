@@ -65,7 +65,7 @@ fn main() {
             if std::env::var("NODES").is_ok() {
                 eprintln!("nodes {seed} {:?}", result.certificate.as_ref().map(|c| c.nodes));
             }
-            let cost = ReprojectionCost::of(&scene.camera, &corr);
+            let cost = ReprojectionCost::exact(&scene.camera, &corr).unwrap();
             let mine = cost.cost(&result.pose);
             let mut best = mine;
             let truth = Pose::new(scene.rotation, scene.translation);
@@ -82,7 +82,7 @@ fn main() {
                 candidates.push(Pose::new(r, Vector3::new(0.0, 0.0, depth) - r * centroid));
             }
             for start in candidates {
-                let (pose, _) = refine_pose(&scene.camera, &corr, &start, &opts);
+                let (pose, _) = refine_pose(&scene.camera.intrinsics(), &corr, &start, &opts);
                 let c = cost.cost(&pose);
                 if c.is_finite() && cost.points_behind(&pose) == 0 {
                     best = best.min(c);

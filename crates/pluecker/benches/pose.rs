@@ -160,8 +160,9 @@ fn robust(c: &mut Criterion) {
         let (scene, corr) = outlier_problem(ratio, 14);
         let name = format!("100-points-30-lines-{}pct-outliers", (100.0 * ratio).round());
         let r = estimate_pose(&scene.camera, &corr, &opts).expect("valid input");
-        let truth =
-            ReprojectionCost::exact(&scene.camera, &corr).unwrap().errors(&pluecker::Pose::new(scene.rotation, scene.translation));
+        let truth = ReprojectionCost::exact(&scene.camera, &corr)
+            .unwrap()
+            .errors(&pluecker::Pose::new(scene.rotation, scene.translation));
         let mask: Vec<bool> = r.inliers_points.iter().chain(&r.inliers_lines).copied().collect();
         let missed = truth
             .iter()

@@ -118,7 +118,7 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         let (scene, corr) = problem(kind, seed, lines);
         let r = estimate_pose(&scene.camera, &corr, &options()).unwrap();
         let c = &scene.correspondences;
-        let cost = ReprojectionCost::new(scene.camera, &c.points2d, &c.points3d, &c.lines2d, &c.lines3d);
+        let cost = ReprojectionCost::exact(&scene.camera, c).unwrap();
         let cov = pose_covariance(&cost, &pluecker::Pose::new(scene.rotation, scene.translation), 1.0).unwrap();
         let (br, bt) = (
             cov.fixed_view::<3, 3>(0, 0).trace(),

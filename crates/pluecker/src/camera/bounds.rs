@@ -351,7 +351,7 @@ pub fn radius_about(j: &IntervalMatrix, j0: &Matrix2<f64>) -> Matrix2<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{CameraModel, Camera};
+    use crate::camera::{Camera, CameraModel};
 
     fn distortion(lens: &Camera) -> Option<Distortion> {
         lens.covered_distortion().cloned()

@@ -101,7 +101,11 @@ impl Camera {
         } else {
             (params[0], params[1], params[2], params[3])
         };
-        let skew = if model == CameraModel::SkewedPinhole { params[4] } else { 0.0 };
+        let skew = if model == CameraModel::SkewedPinhole {
+            params[4]
+        } else {
+            0.0
+        };
         let pinhole = Intrinsics::new(fx, fy, cx, cy, skew).map_err(|e| match e {
             Error::SingularCamera { what } => Error::SingularCamera {
                 what: format!("{}: {what}", model.as_str()),

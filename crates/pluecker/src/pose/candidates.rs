@@ -116,7 +116,10 @@ pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
 
 /// The poses of the minimal solvers on each sample of `corr` (world frame of `corr`), one group per
 /// sample, lazily: a caller that is satisfied after the first samples does not pay for the others.
-pub fn minimal_hypotheses<'a>(camera: &'a Intrinsics, corr: &'a Correspondences) -> impl Iterator<Item = Vec<Pose>> + 'a {
+pub fn minimal_hypotheses<'a>(
+    camera: &'a Intrinsics,
+    corr: &'a Correspondences,
+) -> impl Iterator<Item = Vec<Pose>> + 'a {
     let k_inv = camera.matrix().try_inverse().unwrap_or_else(Matrix3::identity);
     samples(&positions(corr)).into_iter().map(move |s| {
         let [Ok(a), Ok(b), Ok(c)] = s.map(|k| feature(camera, &k_inv, corr, k)) else {

@@ -299,7 +299,12 @@ pub fn search(
 
 /// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
 /// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
-pub fn refine_pose(camera: &Intrinsics, corr: &Correspondences, initial: &Pose, opts: &PoseOptions) -> (Pose, StageReport) {
+pub fn refine_pose(
+    camera: &Intrinsics,
+    corr: &Correspondences,
+    initial: &Pose,
+    opts: &PoseOptions,
+) -> (Pose, StageReport) {
     let cond = if opts.normalize {
         Conditioning::of(corr)
     } else {

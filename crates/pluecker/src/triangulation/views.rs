@@ -56,7 +56,11 @@ impl View {
         let (cx, skew) = (m1.dot(&r3), m1.dot(&r2));
         let fx = m1.dot(&r1);
         // The rounding of a zero skew: the decomposition of K [R | t] with skew 0 leaves ~1e-16 fx.
-        let skew = if skew.abs() <= SKEW_ROUNDING * fx.abs().max(fy) { 0.0 } else { skew };
+        let skew = if skew.abs() <= SKEW_ROUNDING * fx.abs().max(fy) {
+            0.0
+        } else {
+            skew
+        };
         let rotation = Matrix3::from_rows(&[r1.transpose(), r2.transpose(), r3.transpose()]);
         let k = Matrix3::new(fx, skew, cx, 0.0, fy, cy, 0.0, 0.0, s) / s;
         let singular = || Error::SingularCamera {
@@ -250,17 +254,30 @@ mod tests {
         let x = Vector3::new(0.2, 0.3, -0.4);
         for (k, skew_model) in [
             (Matrix3::new(800.0, 0.0, 320.0, 0.0, 780.0, 240.0, 0.0, 0.0, 1.0), false),
-            (Matrix3::new(-1730.3, 2.5, 243.8, 0.0, 1220.7, 241.2, 0.0, 0.0, 1.0), true),
+            (
+                Matrix3::new(-1730.3, 2.5, 243.8, 0.0, 1220.7, 241.2, 0.0, 0.0, 1.0),
+                true,
+            ),
         ] {
-            for (p, scale) in [(k * rt * 3.0, 3.0), (k * rt * mirror_world * 0.01, 0.01), (-(k * rt), 1.0)] {
+            for (p, scale) in [
+                (k * rt * 3.0, 3.0),
+                (k * rt * mirror_world * 0.01, 0.01),
+                (-(k * rt), 1.0),
+            ] {
                 let view = View::from_projection(&p, "P").unwrap();
                 let r = view.pose.rotation;
                 assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
                 assert!((r.determinant() - 1.0).abs() < 1e-12);
                 // The view's own P = K [R | t] is P divided by its positive scale.
                 let rebuilt = view.projection().unwrap();
-                assert!((rebuilt - p / scale).norm() < 1e-9 * (p / scale).norm(), "{rebuilt} {p}");
-                assert_eq!(view.camera.model() == crate::camera::CameraModel::SkewedPinhole, skew_model);
+                assert!(
+                    (rebuilt - p / scale).norm() < 1e-9 * (p / scale).norm(),
+                    "{rebuilt} {p}"
+                );
+                assert_eq!(
+                    view.camera.model() == crate::camera::CameraModel::SkewedPinhole,
+                    skew_model
+                );
                 // The same pixel and the same side in front.
                 let h = p * x.push(1.0);
                 let x_cam = view.pose.transform(&x);

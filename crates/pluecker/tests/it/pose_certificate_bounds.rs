@@ -23,7 +23,8 @@ use pose_oracle::{centred, cost, many_start, pixel, residuals, OraclePose};
 /// eigen-decomposition), `G` without covariances.
 fn endpoint_map(k: &Camera, corr: &Correspondences, line: usize, end: usize) -> Matrix2<f64> {
     let g = k
-        .intrinsics().matrix()
+        .intrinsics()
+        .matrix()
         .try_inverse()
         .unwrap()
         .transpose()
@@ -235,7 +236,14 @@ fn ball_off_the_minimum(
     rng: &mut Rng,
 ) -> Option<(OraclePose, f64, LocalBound)> {
     let unit = residual_unit(k, corr, minimum);
-    let start = local_bound(&k.intrinsics(), corr, &minimum.to_library(), cost(k, corr, minimum), 1.0).unwrap();
+    let start = local_bound(
+        &k.intrinsics(),
+        corr,
+        &minimum.to_library(),
+        cost(k, corr, minimum),
+        1.0,
+    )
+    .unwrap();
     let v0 = Vector6::from_fn(|_, _| rng.normal()).normalize();
     let pose = minimum.step(&(start.whitening * v0 * shift * unit));
     let radius = scale * unit;
@@ -322,7 +330,8 @@ fn the_curvature_bound_holds_along_whitened_rays() {
             let level = cost(&k, &corr, &pose);
             for lambda in [1e-3, 1e-2, 0.1, 10.0, 1e3] {
                 let (scaled, scaled_pose) = scaled_world(&corr, &pose, lambda);
-                let Ok(b_scaled) = local_bound(&k.intrinsics(), &scaled, &scaled_pose.to_library(), level, radius) else {
+                let Ok(b_scaled) = local_bound(&k.intrinsics(), &scaled, &scaled_pose.to_library(), level, radius)
+                else {
                     panic!("{name}, shift {shift}: no bound at scale {lambda} where there is one at scale 1");
                 };
                 assert!(

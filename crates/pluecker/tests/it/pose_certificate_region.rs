@@ -302,7 +302,15 @@ fn run_case(case: &Case, factors: &[f64]) -> (usize, usize, usize, usize) {
         for (centre, f_centre) in minima.iter().filter(|(_, f)| *f <= level) {
             let w = information(&k, &corr, centre);
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
-            let region = match rotation_search(&k.intrinsics(), &corr, &centre.to_library(), level, target, 2e-3, 400_000) {
+            let region = match rotation_search(
+                &k.intrinsics(),
+                &corr,
+                &centre.to_library(),
+                level,
+                target,
+                2e-3,
+                400_000,
+            ) {
                 Ok(r) => r,
                 // The hook refuses honestly (too-large residuals for the angle bounds, too many cells):
                 // nothing is claimed, nothing to check.
@@ -517,13 +525,26 @@ fn cells_pruned_as_behind_the_camera_have_a_point_behind_everywhere() {
             .iter()
             .map(|u| {
                 let y = (u.y - k.intrinsics().cy) / k.intrinsics().fy;
-                Vector3::new((u.x - k.intrinsics().cx - k.intrinsics().skew * y) / k.intrinsics().fx, y, 1.0).normalize()
+                Vector3::new(
+                    (u.x - k.intrinsics().cx - k.intrinsics().skew * y) / k.intrinsics().fx,
+                    y,
+                    1.0,
+                )
+                .normalize()
             })
             .collect();
         for factor in [1.5, 10.0, 100.0] {
             let level = factor * minimum.1;
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
-            let Ok(region) = rotation_search(&k.intrinsics(), &corr, &minimum.0.to_library(), level, target, 2e-3, 200_000) else {
+            let Ok(region) = rotation_search(
+                &k.intrinsics(),
+                &corr,
+                &minimum.0.to_library(),
+                level,
+                target,
+                2e-3,
+                200_000,
+            ) else {
                 continue;
             };
             let objects: Vec<(Vector3<f64>, Vector3<f64>)> =
@@ -563,7 +584,15 @@ fn cells_pruned_as_behind_the_camera_without_depth_bounds_have_an_endpoint_behin
         for factor in [1.5, 10.0, 100.0] {
             let level = factor * minimum.1;
             let target = 16.0 * ((2.0 * level).sqrt() + 0.1);
-            let Ok(region) = rotation_search(&k.intrinsics(), &corr, &minimum.0.to_library(), level, target, 2e-3, 400_000) else {
+            let Ok(region) = rotation_search(
+                &k.intrinsics(),
+                &corr,
+                &minimum.0.to_library(),
+                level,
+                target,
+                2e-3,
+                400_000,
+            ) else {
                 continue;
             };
             assert!(region.from_distance);

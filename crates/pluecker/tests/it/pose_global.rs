@@ -9,9 +9,9 @@ use crate::pose_oracle;
 use nalgebra::Vector3;
 use pluecker::pose::{estimate_pose, Correspondences, PoseOptions, Status};
 use pluecker::rng::Rng;
-use pluecker::Camera;
 use pluecker::synthetic::{visible_scene, Scene};
 use pluecker::testing::pose_certificate::certify;
+use pluecker::Camera;
 use pose_oracle::{centred, cost, many_start, OraclePose};
 
 /// The lowest cost with every object point in front that the oracle's Levenberg-Marquardt reaches

@@ -67,8 +67,8 @@ fn tangent_error(result: &PoseResult, scene: &Scene) -> Vector6<f64> {
 
 /// Checks the masks against the truth (see the module docs) and returns the number of true inliers.
 fn check_masks(result: &PoseResult, scene: &Scene, corr: &Correspondences, label: &str) -> usize {
-    let truth =
-        ReprojectionCost::of(&scene.camera.intrinsics(), corr).errors(&pluecker::Pose::new(scene.rotation, scene.translation));
+    let truth = ReprojectionCost::of(&scene.camera.intrinsics(), corr)
+        .errors(&pluecker::Pose::new(scene.rotation, scene.translation));
     let mask: Vec<bool> = result
         .inliers_points
         .iter()

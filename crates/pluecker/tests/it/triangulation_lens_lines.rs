@@ -327,9 +327,7 @@ fn scene(
 }
 
 fn views_of(obs: &[Obs]) -> Vec<View> {
-    obs.iter()
-        .map(|o| View::new(o.lens.camera(), o.pose))
-        .collect()
+    obs.iter().map(|o| View::new(o.lens.camera(), o.pose)).collect()
 }
 
 fn segments_of(obs: &[Obs]) -> Vec<[Vector2<f64>; 2]> {
@@ -593,7 +591,10 @@ fn pinhole_views_and_a_zero_distortion_lens_keep_the_pinhole_certificate() {
         assert!(today.report.certified());
         assert_eq!(today.report.cost_kind, CostKind::LineResidual);
         for views in [
-            sc.obs.iter().map(|o| View::new(pinhole.clone(), o.pose)).collect::<Vec<_>>(),
+            sc.obs
+                .iter()
+                .map(|o| View::new(pinhole.clone(), o.pose))
+                .collect::<Vec<_>>(),
             views_of(&sc.obs),
         ] {
             let r = triangulate_line(

@@ -58,8 +58,8 @@
 use super::{RaySlack, SublevelSetOutcome};
 use crate::camera::curved_line::endpoint_residual;
 use crate::camera::linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
-use crate::camera::Intrinsics;
 use crate::camera::Camera;
+use crate::camera::Intrinsics;
 use crate::covariance::whitening;
 use crate::pose::correspondences::Correspondences;
 use crate::pose::noise::ObservationNoise;

@@ -5,7 +5,7 @@
 //! it finds, possibly none, and never fails loudly — a degenerate sample simply yields no pose, so the
 //! caller draws another one. Inputs are camera-frame quantities, not pixels: unit bearings for points
 //! (see [`p3p()`] for how to get them from pixels with [`crate::camera::Intrinsics`]) and unit normals of
-//! interpretation planes for lines ([`crate::Intrinsics::interpretation_plane_normal`]).
+//! interpretation planes for lines ([`crate::camera::Intrinsics::interpretation_plane_normal`]).
 //!
 //! | solver      | data              | max. solutions | method                                 | reference                                          |
 //! |-------------|-------------------|----------------|----------------------------------------|----------------------------------------------------|

@@ -45,7 +45,7 @@ use nalgebra::{Matrix3, Vector3};
 ///
 /// A normal is any non-zero multiple of `(u₁, v₁, 1) × (u₂, v₂, 1)` for two normalised image points of
 /// the image line (`(uᵢ, vᵢ)` from [`crate::camera::Intrinsics::pixel_to_normalized`]), e.g.
-/// [`crate::Intrinsics::interpretation_plane_normal`]. Invalid or degenerate input gives an empty
+/// [`crate::camera::Intrinsics::interpretation_plane_normal`]. Invalid or degenerate input gives an empty
 /// vector, never a panic.
 ///
 /// ```

@@ -46,7 +46,13 @@ fn loop_finds_the_inliers_and_stops_by_confidence() {
         sprt: false,
         ..RansacOptions::default()
     };
-    let plain = ransac(&scene.camera.intrinsics(), &corr, &without, &TrustRegionOptions::default()).unwrap();
+    let plain = ransac(
+        &scene.camera.intrinsics(),
+        &corr,
+        &without,
+        &TrustRegionOptions::default(),
+    )
+    .unwrap();
     assert!(plain.report.iterations <= 69, "{:?}", plain.report);
     assert_eq!(
         (plain.inliers_points, plain.report.sprt_rejections),
@@ -61,13 +67,25 @@ fn budget_and_cap_bound_the_loop() {
         max_iterations: 25,
         ..RansacOptions::default()
     };
-    let out = ransac(&scene.camera.intrinsics(), &corr, &capped, &TrustRegionOptions::default()).unwrap();
+    let out = ransac(
+        &scene.camera.intrinsics(),
+        &corr,
+        &capped,
+        &TrustRegionOptions::default(),
+    )
+    .unwrap();
     assert_eq!((out.report.stop, out.report.iterations), (RansacStop::IterationCap, 25));
     let no_time = RansacOptions {
         time_budget: Some(Duration::ZERO),
         ..RansacOptions::default()
     };
-    let out = ransac(&scene.camera.intrinsics(), &corr, &no_time, &TrustRegionOptions::default()).unwrap();
+    let out = ransac(
+        &scene.camera.intrinsics(),
+        &corr,
+        &no_time,
+        &TrustRegionOptions::default(),
+    )
+    .unwrap();
     assert_eq!((out.report.stop, out.report.iterations), (RansacStop::TimeBudget, 0));
     assert!(out.pose.is_none() && out.inliers_points.iter().all(|&m| !m));
 }

@@ -526,7 +526,7 @@ pub(crate) fn solve_through_lenses(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{CameraModel, Camera};
+    use crate::camera::{Camera, CameraModel};
     use crate::rng::Rng;
 
     /// A view of `x` through `lens` from a camera at distance 5 whose axis is `angle` off the point,

@@ -65,7 +65,10 @@ pub fn log(r: &Matrix3<f64>) -> Vector3<f64> {
 
 /// The pixel of the camera-frame point `x`.
 pub fn pixel(k: &Camera, x: &Vector3<f64>) -> Vector2<f64> {
-    Vector2::new((k.intrinsics().fx * x.x + k.intrinsics().skew * x.y) / x.z + k.intrinsics().cx, k.intrinsics().fy * x.y / x.z + k.intrinsics().cy)
+    Vector2::new(
+        (k.intrinsics().fx * x.x + k.intrinsics().skew * x.y) / x.z + k.intrinsics().cx,
+        k.intrinsics().fy * x.y / x.z + k.intrinsics().cy,
+    )
 }
 
 /// The residuals, two per point, then two per segment. With per-observation noise
