@@ -48,7 +48,7 @@ def _arrays(pluecker, triangulation_scenes, lens_lines):
                 angle = rng.uniform(0, 2 * np.pi, size=len(bad))
                 x[t, bad] += 40 * np.column_stack([np.cos(angle), np.sin(angle)])
             r = pluecker.triangulate_points(P, x, options=robust)
-            keep(f"points{k}", r, ("X", "inliers", "cost", "status", "certified"))
+            keep(f"points{k}", r, ("point", "inliers", "cost", "status", "certified"))
             k += n
     # Lines, pinhole (local method: the consensus is the same for every method), 3 to 24 views.
     for views in (3, 4, 5, 7, 10, 16, 24):
@@ -92,14 +92,14 @@ def _arrays(pluecker, triangulation_scenes, lens_lines):
                     xa /= np.linalg.norm(xa)
                     R = np.stack([xa, np.cross(z, xa), z])
                     poses.append((R, -R @ centre))
-                P = np.stack([lens.P(R, t) for R, t in poses])
+                known = [pluecker.View(lens, R, t) for R, t in poses]
                 pix = np.array([lens_lines.pycolmap.Camera(model="SIMPLE_RADIAL", width=1200, height=1000,
                                                            params=params).img_from_cam(np.atleast_2d(R @ Xt + t))[0]
                                 for R, t in poses]) + rng.normal(size=(views, 2))
                 for v in rng.choice(views, size=1 + seed % 2, replace=False):
                     pix[v] += rng.uniform(30, 80) * np.array([1.0, -0.5])
-                r = pluecker.triangulate_point(P, pix, cameras=[lens] * views, options=robust)
-                keep(f"lenspoint{k}", r, ("X", "inliers", "cost", "status", "certified"))
+                r = pluecker.triangulate_point(known, pix, options=robust)
+                keep(f"lenspoint{k}", r, ("point", "inliers", "cost", "status", "certified"))
                 k += 1
     # Lines through a fisheye lens (the lens-lines test's scenes), one view moved across the segment.
     for seed in range(60):
@@ -111,7 +111,7 @@ def _arrays(pluecker, triangulation_scenes, lens_lines):
             a, b = seg[v]
             d = (b - a) / np.linalg.norm(b - a)
             seg[v] += 40.0 * np.array([-d[1], d[0]])
-            r = pluecker.triangulate_line(sc.P, seg, cameras=[sc.lens] * views, options=local)
+            r = pluecker.triangulate_line(sc.views, seg, options=local)
             keep(f"lensline{k}", r, ("plucker", "inliers", "cost", "status"))
             k += 1
     out["count"] = np.array(k)

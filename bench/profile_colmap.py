@@ -1,6 +1,6 @@
 """Profile of the certified re-triangulation of a COLMAP model with the cameras fixed
 (``pluecker.colmap.retriangulate(rec, sigma_px=1.0)``, i.e. ``pluecker._core.triangulate_points`` in the rows form
-with ``cameras=`` the images' ``Camera``): where the time goes, per stage and per track.
+with the images' ``View``s): where the time goes, per stage and per track.
 
 **What runs.**
 
@@ -133,7 +133,7 @@ def solve(pluecker: Any, o: Any, method: str, rows: np.ndarray | None = None) ->
     covariances = np.broadcast_to(SIGMA_PX**2 * np.eye(2), (len(track), 2, 2))
     options = pluecker.TriangulationOptions(method=method)
     started = time.perf_counter()
-    result = pluecker.triangulate_points(o.P, pixels, covariances=covariances, track=track, image=camera, options=options, n_tracks=n_tracks, cameras=o.lenses)
+    result = pluecker.triangulate_points(o.views, pixels, covariances=covariances, track=track, image=camera, options=options, n_tracks=n_tracks)
     return result, time.perf_counter() - started
 
 
@@ -226,7 +226,7 @@ def main() -> None:
         print(f"\nTracks with a search (nodes > 0): {int(searched.sum())}, {fmt_ms(float(t_opt[searched].sum()))} ms "
               f"({100 * t_opt[searched].sum() / t_opt.sum():.1f} % of the summed time)")
     # Where the time goes against how far off axis a track is seen: its largest |pixel − principal point| / f.
-    K = np.array([np.asarray(lens.K, dtype=float) for lens in o.lenses])[o.camera]
+    K = np.array([np.asarray(view.camera.K, dtype=float) for view in o.views])[o.camera]
     radius = np.hypot((o.pixels[:, 0] - K[:, 0, 2]) / K[:, 0, 0], (o.pixels[:, 1] - K[:, 1, 2]) / K[:, 1, 1])
     off_axis = np.zeros(n)
     np.maximum.at(off_axis, o.track, radius)

@@ -1,7 +1,7 @@
 """Every triangulation entry point names a bad row by the keyword the caller passed.
 
 The core's errors reach Python unchanged (no layer rewrites their text), so the Rust argument names and
-the Python keywords must be the same words: `projections`, `observations` / `lines` / `conics`,
+the Python keywords must be the same words: `cameras`, `observations` / `lines` / `conics`,
 `covariances`. For each entry point and each array argument, a row that is bad in a way the *core*
 detects (a singular projection, a non-finite pixel, a zero-length segment, a conic that is not an
 ellipse, a covariance that is not positive definite) must be reported as `<keyword>[...]` or
@@ -95,7 +95,7 @@ def call(function: Callable[..., Any], primitive: str, layout: str, bad: str) ->
     """The error text of `function` given one bad entry in argument `bad`: the message raised, or the
     message of the rejected track of a batch."""
     entries, identity = DATA[primitive]
-    kwargs: Dict[str, Any] = {"projections": P.copy(), "options": LOCAL}
+    kwargs: Dict[str, Any] = {"cameras": P.copy(), "options": LOCAL}
     if layout == "single":
         values = entries[0].copy()
         covariances = np.broadcast_to(identity, (VIEWS, *identity.shape)).copy()
@@ -110,8 +110,8 @@ def call(function: Callable[..., Any], primitive: str, layout: str, bad: str) ->
             where = (BAD_TRACK * VIEWS + BAD_VIEW,)
             kwargs["track"] = np.repeat(np.arange(TRACKS), VIEWS)
             kwargs["image"] = np.tile(np.arange(VIEWS), TRACKS)
-    if bad == "projections":
-        kwargs["projections"][BAD_VIEW] = singular(P[BAD_VIEW])
+    if bad == "cameras":
+        kwargs["cameras"][BAD_VIEW] = singular(P[BAD_VIEW])
     elif bad == "covariances":
         covariances[where] = bad_entry(bad, covariances[where])
     else:
@@ -137,14 +137,14 @@ def named(message: str) -> str:
 
 
 @pytest.mark.parametrize("function, primitive, layout", ENTRY_POINTS, ids=[f"{e[0].__name__}-{e[2]}" for e in ENTRY_POINTS])
-@pytest.mark.parametrize("bad", ["projections", "primitive", "covariances"])
+@pytest.mark.parametrize("bad", ["cameras", "primitive", "covariances"])
 def test_a_bad_row_is_named_by_the_python_keyword(function, primitive, layout, bad):
     argument = primitive if bad == "primitive" else bad
     assert argument in inspect.signature(function).parameters
     message = call(function, primitive, layout, argument)
     assert named(message) == argument, message
     # ...and the row: the view for shared projections, else the entry as the caller indexes it.
-    if argument == "projections" or layout == "single":
+    if argument == "cameras" or layout == "single":
         row = rf"(\[{BAD_VIEW}\]|row {BAD_VIEW}\b)"
     elif layout == "dense":
         row = rf"(\[{BAD_TRACK}\]\[{BAD_VIEW}\]|\[{BAD_TRACK}\].* row {BAD_VIEW}\b)"

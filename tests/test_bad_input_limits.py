@@ -370,16 +370,16 @@ def test_the_thread_cap_message_states_this_machines_limit():
 
 @pytest.mark.parametrize("sigma, flow", [(1e300, "overflows"), (1e-300, "underflows")])
 def test_a_segment_sigma_through_a_lens_blames_sigma_not_covariances(sigma, flow):
-    """``triangulate_line(..., sigma=1e300, cameras=...)`` raised ``NonFiniteError: covariances: ...``
+    """``triangulate_line(views, ..., sigma=1e300)`` raised ``NonFiniteError: covariances: ...``
     although no covariances were given."""
     R = np.eye(3)
-    P = np.stack([LENS.P(R, np.array([-b, 0.0, 0.0])) for b in (0.0, 0.5, 1.0)])
+    views = [pluecker.View(LENS, R, np.array([-b, 0.0, 0.0])) for b in (0.0, 0.5, 1.0)]
     ends = np.array([[-0.5, 0.2, 5.0], [0.6, -0.1, 6.0]])
     segments = np.stack([LENS.project(ends - [b, 0.0, 0.0]) for b in (0.0, 0.5, 1.0)])
     message = rf"^sigma: σ = {re.escape(f'{sigma:g}')} px: the covariance σ² I {flow} double precision"
     with pytest.raises(InvalidOptionError, match=message):
-        pluecker.triangulate_line(P, segments, sigma=sigma, cameras=[LENS] * 3)
+        pluecker.triangulate_line(views, segments, sigma=sigma)
     with pytest.raises(InvalidOptionError, match=message):
-        pluecker.triangulate_lines(P, segments, track=[0, 0, 0], image=[0, 1, 2], sigma=sigma, cameras=[LENS] * 3)
+        pluecker.triangulate_lines(views, segments, track=[0, 0, 0], image=[0, 1, 2], sigma=sigma)
     # Through a distorting lens a line is never certified: gap_not_closed, at the exact line (cost ~ 0).
-    assert pluecker.triangulate_line(P, segments, sigma=1e-3, cameras=[LENS] * 3).cost < 1e-12
+    assert pluecker.triangulate_line(views, segments, sigma=1e-3).cost < 1e-12

@@ -29,7 +29,7 @@ def _views(params, model="SIMPLE_RADIAL", n=4, seed=0):
         poses.append((R, t))
         pixels.append(theirs.img_from_cam(np.atleast_2d(R @ X + t))[0] + rng.normal(size=2))
     P = np.stack([lens.P(R, t) for R, t in poses])
-    return P, np.array(pixels), [lens] * n, theirs, poses, X
+    return P, np.array(pixels), [pluecker.View(lens, R, t) for R, t in poses], theirs, poses, X
 
 
 def _pixel_cost(theirs, poses, pixels, X):
@@ -40,7 +40,7 @@ def test_a_point_through_a_strong_radial_lens_is_the_certified_minimum_of_the_pi
     """f = 5000 px, k = -14: the reported cost is pycolmap's pixel cost at the point (to rounding), no
     nearby point costs less, and the certificate is the lens one, over its stated domain."""
     P, x, cameras, theirs, poses, _ = _views([5000.0, 600.0, 500.0, -14.0])
-    r = pluecker.triangulate_point(P, x, cameras=cameras)
+    r = pluecker.triangulate_point(cameras, x)
     assert r.status == "success" and r.certified and r.certificate.kind == "lens_convexity_test"
     assert "one-to-one" in r.certificate.domain
     cost = _pixel_cost(theirs, poses, x, r.point)
@@ -53,31 +53,39 @@ def test_a_point_through_a_strong_radial_lens_is_the_certified_minimum_of_the_pi
 
 
 def test_the_first_order_answer_costs_more_than_the_exact_one():
-    """Without ``cameras`` the pixels would have to be undistorted by hand; with them the exact cost
+    """Through the pinhole part the pixels have to be undistorted by hand; through the views the exact cost
     is minimised: never above what the undistorted (first-order) triangulation reaches."""
     P, x, cameras, theirs, poses, _ = _views([5000.0, 600.0, 500.0, -14.0], seed=3)
-    lens = cameras[0]
+    lens = cameras[0].camera
     undistorted, cov = lens.undistort(x, np.broadcast_to(np.eye(2), (len(x), 2, 2)))
     first = pluecker.triangulate_point(P, undistorted, cov)
-    exact = pluecker.triangulate_point(P, x, cameras=cameras)
+    exact = pluecker.triangulate_point(cameras, x)
     assert _pixel_cost(theirs, poses, x, exact.point) <= _pixel_cost(theirs, poses, x, first.point) * (1 + 1e-12)
 
 
-def test_a_camera_list_that_does_not_match_P_is_named():
+def test_views_that_do_not_fit_the_observations_are_named():
     P, x, cameras, *_ = _views([5000.0, 600.0, 500.0, -14.0])
-    with pytest.raises(pluecker.InvalidOptionError, match=r"projections: row 1 is not K \[R \| t\]"):
-        pluecker.triangulate_point(P, x, cameras=[cameras[0], pluecker.Camera("SIMPLE_RADIAL", [800.0, 600.0, 500.0, 0.0]), *cameras[2:]])
-    with pytest.raises(pluecker.ShapeError, match="cameras"):
-        pluecker.triangulate_point(P, x, cameras=cameras[:2])
-    with pytest.raises(TypeError, match=r"cameras\[0\]: expected a pluecker.Camera or a pycolmap.Camera"):
-        pluecker.triangulate_point(P, x, cameras=["SIMPLE_RADIAL"] * len(P))
+    with pytest.raises(TypeError, match=r"cameras\[1\]: expected a pluecker.View"):
+        pluecker.triangulate_point([cameras[0], P[1], *cameras[2:]], x)
+    with pytest.raises(pluecker.ShapeError, match="observations"):
+        pluecker.triangulate_point(cameras[:2], x)
+    with pytest.raises(TypeError, match=r"camera: expected a pluecker.Camera or a pycolmap.Camera"):
+        pluecker.View("SIMPLE_RADIAL", np.eye(3), np.zeros(3))
+    # A view from its 3x4 matrix: the pinhole camera of K at the pose, the same P.
+    view = pluecker.View.from_projection(P[1])
+    np.testing.assert_allclose(view.P, P[1], rtol=0, atol=1e-9 * np.abs(P[1]).max())
+    assert view.camera.model in ("PINHOLE", "SKEWED_PINHOLE") and view.camera.fx == pytest.approx(5000.0)
+    # Views are values: equal when their cameras and poses are, and pickled whole.
+    import pickle
+    assert pickle.loads(pickle.dumps(cameras[1])) == cameras[1] != cameras[2]
+    assert cameras[1].to_dict()["camera"]["model"] == "SIMPLE_RADIAL"
 
 
 def test_the_covariance_through_a_lens_is_that_of_the_exact_residuals():
     """``covariance`` is ``(JᵀJ)⁻¹`` of the whitened pixel residuals through the lens, with ``J`` here by
     central differences of pycolmap's projection (step 1e-6 of the scene: error ~1e-8 relative)."""
     P, x, cameras, theirs, poses, _ = _views([5000.0, 600.0, 500.0, -14.0], seed=5)
-    r = pluecker.triangulate_point(P, x, cameras=cameras)
+    r = pluecker.triangulate_point(cameras, x)
 
     def residuals(X):
         return np.concatenate([theirs.img_from_cam(np.atleast_2d(R @ X + t))[0] - u for (R, t), u in zip(poses, x)])

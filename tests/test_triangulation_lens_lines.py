@@ -1,4 +1,4 @@
-"""Lines through lens cameras from Python: ``triangulate_line(..., cameras=...)`` on raw (distorted)
+"""Lines through lens cameras from Python: ``triangulate_line(views, ...)`` on raw (distorted)
 segment endpoints, judged by an oracle of this file's own: pycolmap's ``img_from_cam`` on dense samples
 of the 3-D line (the endpoint's distance to the line's curved image), and a many-start
 Levenberg-Marquardt over lines. Through a distorting lens the answer is never certified; pinhole
@@ -9,6 +9,12 @@ import pycolmap
 import pytest
 
 import pluecker
+
+
+def views_of(P, cameras):
+    """Each camera at the pose of its row of ``P`` (``K [R | t]`` of its pinhole part): the views of
+    these scenes, whose matrices were built from the poses."""
+    return [pluecker.View(camera, *pluecker.View.from_projection(p).pose) for p, camera in zip(P, cameras)]
 
 STRONG_RADIAL = ("SIMPLE_RADIAL", [5000.0, 600.0, 500.0, -14.0])
 FISHEYE = ("OPENCV_FISHEYE", [300.0, 305.0, 512.0, 384.0, 0.05, -0.01, 0.002, -3e-4])
@@ -177,7 +183,7 @@ def test_the_line_is_the_minimum_of_pycolmaps_pixel_cost_and_uncertified(camera,
         sc = Scene(*camera, n=4, off_axis=off_axis, max_angle=max_angle, noise=1.0, anisotropic=seed == 2, seed=seed)
         cams = [sc.lens] * len(sc.P)
         for method, status in (("local", "success"), ("optimal", "gap_not_closed")):
-            r = pluecker.triangulate_line(sc.P, sc.segments, sc.covs, options=pluecker.TriangulationOptions(method=method), cameras=cams)
+            r = pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, sc.covs, options=pluecker.TriangulationOptions(method=method))
             assert r.status == status and not r.certified and r.certificate is None
             line = _as_points(r, sc.truth)
             at_result = sc.cost(line)
@@ -191,7 +197,7 @@ def test_the_line_is_the_minimum_of_pycolmaps_pixel_cost_and_uncertified(camera,
 def test_exact_segments_cost_nothing_and_give_the_true_line():
     for camera, off_axis, max_angle in [p.values for p in LENSES]:
         sc = Scene(*camera, n=3, off_axis=off_axis, max_angle=max_angle, noise=0.0, anisotropic=False, seed=7)
-        r = pluecker.triangulate_line(sc.P, sc.segments, sc.covs, options=pluecker.TriangulationOptions(method="local"), cameras=[sc.lens] * 3)
+        r = pluecker.triangulate_line(views_of(sc.P, [sc.lens] * 3), sc.segments, sc.covs, options=pluecker.TriangulationOptions(method="local"))
         # Covariances (1e-3 px)^2: the rounding of 1e3-px pixels (1e-13 px) is 1e-10 deviations.
         assert r.status == "success" and r.cost < 1e-12
         d = (sc.truth[1] - sc.truth[0]) / np.linalg.norm(sc.truth[1] - sc.truth[0])
@@ -200,11 +206,11 @@ def test_exact_segments_cost_nothing_and_give_the_true_line():
 
 def test_the_exact_answer_beats_the_undistorted_first_order_one():
     """Undistorting by hand (``Camera.undistort`` and ``lines_from_endpoints``) and triangulating
-    on the pinhole part costs more on pycolmap's pixel cost than ``cameras=``, by 4e-6 to 4e-5
+    on the pinhole part costs more on pycolmap's pixel cost than through the views, by 4e-6 to 4e-5
     relative in these scenes (the issue's "up to 5.8e-5"); the oracle is exact to ~1e-9."""
     for seed in (3, 4):
         sc = Scene(*STRONG_RADIAL, n=4, off_axis=0.04, max_angle=np.arctan(0.12), noise=1.0, anisotropic=False, seed=seed)
-        exact = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="local"), cameras=[sc.lens] * 4)
+        exact = pluecker.triangulate_line(views_of(sc.P, [sc.lens] * 4), sc.segments, options=pluecker.TriangulationOptions(method="local"))
         flat = sc.segments.reshape(-1, 2)
         und, cov = sc.lens.undistort(flat, np.broadcast_to(np.eye(2), (len(flat), 2, 2)))
         lines, line_cov = pluecker.lines_from_endpoints(und.reshape(-1, 2, 2), cov.reshape(-1, 2, 2, 2))
@@ -217,7 +223,7 @@ def test_pinhole_cameras_and_a_zero_distortion_lens_keep_the_pinhole_certificate
     today = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="optimal"))
     assert today.certified
     for cams in ([pluecker.Camera.pinhole(800.0, 800.0, 320.0, 240.0)] * 4, [sc.lens] * 4):
-        r = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="optimal"), cameras=cams)
+        r = pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, options=pluecker.TriangulationOptions(method="optimal"))
         assert r.status == "success" and r.certified and r.certificate.kind == today.certificate.kind
         assert abs(r.cost - today.cost) <= 1e-9 * max(today.cost, 1.0)
         assert min(np.linalg.norm(r.plucker - today.plucker), np.linalg.norm(r.plucker + today.plucker)) < 1e-8
@@ -266,7 +272,7 @@ def test_segments_say_which_cost_they_report_as_the_distortion_goes_to_zero():
 
     def solve(k1):
         lens = pluecker.Camera("OPENCV", [*params[:4], k1, 0.0, 0.0, 0.0])
-        return pluecker.triangulate_line(sc.P, sc.segments, sc.covs, cameras=[lens] * 3)
+        return pluecker.triangulate_line(views_of(sc.P, [lens] * 3), sc.segments, sc.covs)
 
     plain_lens = pluecker.Camera("OPENCV", params)
     pinhole, tiny = solve(0.0), solve(1e-12)
@@ -283,7 +289,7 @@ def test_segments_say_which_cost_they_report_as_the_distortion_goes_to_zero():
     assert abs(pinhole.cost - sc.cost(line_pinhole)) > 1e-3 * pinhole.cost
     assert sc.cost(line_pinhole) > tiny.cost * (1 + 1e-4)
     skewed = Scene("OPENCV", params, n=3, off_axis=0.3, max_angle=0.9, noise=1.0, anisotropic=True, seed=3)
-    r = pluecker.triangulate_line(skewed.P, skewed.segments, skewed.covs, cameras=[plain_lens] * 3)
+    r = pluecker.triangulate_line(views_of(skewed.P, [plain_lens] * 3), skewed.segments, skewed.covs)
     assert r.cost_kind == "line_residual" and r.certified, r
     terms = _reprojection_and_line_residual_terms(skewed, _as_points(r, skewed.truth))
     assert abs(terms[:, 0].sum() - skewed.cost(_as_points(r, skewed.truth))) <= 1e-7 * r.cost
@@ -302,10 +308,10 @@ def test_a_batch_names_each_tracks_cost_kind():
     cams = [fish.lens] * 3 + [plain.lens] * 3
     segments, covs = np.concatenate([fish.segments, plain.segments]), np.concatenate([fish.covs, plain.covs])
     track, image = np.array([0, 0, 0, 1, 1, 1]), np.arange(6)
-    batch = pluecker.triangulate_lines(P, segments, covariances=covs, track=track, image=image, cameras=cams)
+    batch = pluecker.triangulate_lines(views_of(P, cams), segments, covariances=covs, track=track, image=image)
     assert list(batch.cost_kind) == ["reprojection", "line_residual"]
     for t, rows in enumerate((slice(0, 3), slice(3, 6))):
-        single = pluecker.triangulate_line(P[rows], segments[rows], covs[rows], cameras=cams[rows])
+        single = pluecker.triangulate_line(views_of(P[rows], cams[rows]), segments[rows], covs[rows])
         assert (batch.cost_kind[t], batch.status[t], batch.cost[t]) == (single.cost_kind, single.status, single.cost)
 
 
@@ -315,25 +321,25 @@ def test_bad_input_names_the_argument_and_the_row():
     bad = sc.segments.copy()
     bad[2, 1, 1] = np.nan
     with pytest.raises(pluecker.NonFiniteError, match=r"lines: .*row 2"):
-        pluecker.triangulate_line(sc.P, bad, cameras=cams)
+        pluecker.triangulate_line(views_of(sc.P, cams), bad)
     bad = sc.segments.copy()
     bad[1, 0] = [600.0 + 700.0, 500.0]  # beyond the largest distorted radius (515 px): no preimage
     with pytest.raises(pluecker.DegenerateConfigurationError, match=r"lines\[1\]: endpoint 0.*invertible region"):
-        pluecker.triangulate_line(sc.P, bad, cameras=cams)
+        pluecker.triangulate_line(views_of(sc.P, cams), bad)
     with pytest.raises(pluecker.ShapeError, match="lines"):
-        pluecker.triangulate_line(sc.P, sc.segments[:2], cameras=cams)
+        pluecker.triangulate_line(views_of(sc.P, cams), sc.segments[:2])
     with pytest.raises(pluecker.ShapeError, match="lines.*segments"):
-        pluecker.triangulate_line(sc.P, np.ones((3, 3)), cameras=cams)
+        pluecker.triangulate_line(views_of(sc.P, cams), np.ones((3, 3)))
     with pytest.raises(pluecker.ShapeError, match="covariances"):
-        pluecker.triangulate_line(sc.P, sc.segments, sc.covs[:, 0], cameras=cams)
+        pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, sc.covs[:, 0])
     covs = sc.covs.copy()
     covs[1, 1] = [[1.0, 2.0], [2.0, 1.0]]
     with pytest.raises(pluecker.DegenerateConfigurationError, match=r"covariances\[1\]"):
-        pluecker.triangulate_line(sc.P, sc.segments, covs, cameras=cams)
+        pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, covs)
     with pytest.raises(pluecker.InvalidOptionError, match="sigma"):
-        pluecker.triangulate_line(sc.P, sc.segments, sc.covs, sigma=2.0, cameras=cams)
-    with pytest.raises(pluecker.InvalidOptionError, match=r"projections: row 1 is not K \[R \| t\]"):
-        pluecker.triangulate_line(sc.P, sc.segments, cameras=[cams[0], pluecker.Camera("SIMPLE_RADIAL", [800.0, 600.0, 500.0, 0.0]), cams[2]])
+        pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, sc.covs, sigma=2.0)
+    with pytest.raises(TypeError, match=r"cameras\[1\]: expected a pluecker.View"):
+        pluecker.triangulate_line([views_of(sc.P, cams)[0], sc.P[1], views_of(sc.P, cams)[2]], sc.segments)
 
 
 def test_observations_with_cameras_solve_each_track_as_the_single_call():
@@ -344,13 +350,13 @@ def test_observations_with_cameras_solve_each_track_as_the_single_call():
     segments = np.concatenate([sc.segments[:3], sc.segments[1:] + shift])
     covs = np.concatenate([sc.covs[:3], sc.covs[1:]])
     track, image = np.array([0, 0, 0, 1, 1, 1]), np.array([0, 1, 2, 1, 2, 3])
-    batch = pluecker.triangulate_lines(sc.P, segments, covariances=covs, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
+    batch = pluecker.triangulate_lines(views_of(sc.P, cams), segments, covariances=covs, track=track, image=image, options=pluecker.TriangulationOptions(method="local"))
     for t, rows in enumerate((slice(0, 3), slice(3, 6))):
-        single = pluecker.triangulate_line(sc.P[image[rows]], segments[rows], covs[rows], options=pluecker.TriangulationOptions(method="local"), cameras=[sc.lens] * 3)
+        single = pluecker.triangulate_line(views_of(sc.P[image[rows]], [sc.lens] * 3), segments[rows], covs[rows], options=pluecker.TriangulationOptions(method="local"))
         assert np.array_equal(batch.plucker[t], single.plucker) and batch.cost[t] == single.cost
     bad = segments.copy()
     bad[4, 0, 1] = np.nan
-    out = pluecker.triangulate_lines(sc.P, bad, covariances=covs, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
+    out = pluecker.triangulate_lines(views_of(sc.P, cams), bad, covariances=covs, track=track, image=image, options=pluecker.TriangulationOptions(method="local"))
     assert out.status[0] == "success" and np.isnan(out.plucker[1]).all()
 
 
@@ -371,11 +377,12 @@ def test_quadrics_refuse_a_distorting_lens_by_name_and_take_a_zero_distortion_on
     _, _, _, dual = ellipsoid(rng)
     conics = outlines(P, dual)
     plain = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="local"))
-    same = pluecker.triangulate_quadric(P, conics, options=pluecker.TriangulationOptions(method="local"), cameras=[zero] * 4)
+    same = pluecker.triangulate_quadric([pluecker.View(zero, R, t) for R, t in poses], conics,
+                                        options=pluecker.TriangulationOptions(method="local"))
     assert same.status == plain.status == "success" and np.array_equal(same.Q, plain.Q)
     lens = pluecker.Camera("SIMPLE_RADIAL", [800.0, 320.0, 240.0, -0.2])
     with pytest.raises(pluecker.InvalidOptionError, match=r"cameras: cameras\[2\] \(SIMPLE_RADIAL\) has distortion") as info:
-        pluecker.triangulate_quadric(P, conics, cameras=[zero, zero, lens, zero])
+        pluecker.triangulate_quadric(views_of(P, [zero, zero, lens, zero]), conics)
     assert isinstance(info.value, ValueError)
 
 
@@ -385,15 +392,15 @@ def test_sigma_is_isotropic_endpoint_noise_in_both_entry_points():
     sc = Scene(*STRONG_RADIAL, n=3, off_axis=0.04, max_angle=np.arctan(0.12), noise=1.0, anisotropic=False, seed=19)
     cams = [sc.lens] * 3
     explicit = np.broadcast_to(4.0 * np.eye(2), (3, 2, 2, 2))
-    a = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="local"), sigma=2.0, cameras=cams)
-    b = pluecker.triangulate_line(sc.P, sc.segments, explicit, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
-    c = pluecker.triangulate_line(sc.P, sc.segments, options=pluecker.TriangulationOptions(method="local"), cameras=cams)
+    a = pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, options=pluecker.TriangulationOptions(method="local"), sigma=2.0)
+    b = pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, explicit, options=pluecker.TriangulationOptions(method="local"))
+    c = pluecker.triangulate_line(views_of(sc.P, cams), sc.segments, options=pluecker.TriangulationOptions(method="local"))
     assert np.array_equal(a.plucker, b.plucker) and a.cost == b.cost
     # One scale of every covariance moves no minimum: the same line, its cost in units of (2 px)^2
     # (to the local solver's convergence, 1e-10 relative steps).
     assert abs(c.cost / a.cost - 4.0) < 1e-6
     track, image = np.zeros(3, int), np.arange(3)
-    rows = pluecker.triangulate_lines(sc.P, sc.segments, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), sigma=2.0, cameras=cams)
+    rows = pluecker.triangulate_lines(views_of(sc.P, cams), sc.segments, track=track, image=image, options=pluecker.TriangulationOptions(method="local"), sigma=2.0)
     assert np.array_equal(rows.plucker[0], a.plucker) and rows.cost[0] == a.cost
 
 
@@ -402,7 +409,7 @@ def test_a_cost_that_overflows_is_a_numerical_failure_not_an_answer(method):
     """Endpoint noise of 1e-100 px: the squared residuals in its units leave double precision
     through the lens. No status that says the line can be used comes with a cost that is not finite."""
     sc = Scene(*STRONG_RADIAL, n=3, off_axis=0.04, max_angle=np.arctan(0.12), noise=1.0, anisotropic=False, seed=19)
-    r = pluecker.triangulate_line(sc.P, sc.segments, sigma=1e-100, cameras=[sc.lens] * 3,
+    r = pluecker.triangulate_line(views_of(sc.P, [sc.lens] * 3), sc.segments, sigma=1e-100,
                                   options=pluecker.TriangulationOptions(method=method))
     assert np.isfinite(r.cost) or r.status == "numerical_failure", (r.status, r.cost)
     assert not r.certified

@@ -97,7 +97,10 @@ def test_the_rows_form_takes_track_and_image_together_and_no_mask(function):
     cases = [({"track": rows["track"]}, "image"), ({"image": rows["image"]}, "track"),
              ({**rows, "visible": np.ones((1, 3), bool)}, "visible"), ({"n_tracks": 1}, "n_tracks")]
     if function is not pluecker.triangulate_quadrics:
-        cases.append(({"cameras": [pluecker.Camera.pinhole(800, 800, 320, 240)] * 3}, "cameras"))
+        # Views take the rows form: in the dense form they are named.
+        views = [pluecker.View.from_projection(p) for p in P]
+        with pytest.raises(pluecker.InvalidOptionError, match=r"^cameras: views take the rows form"):
+            function(views, data)
     for kwargs, name in cases:
         with pytest.raises(pluecker.InvalidOptionError, match=rf"^{name}\b"):
             function(P, data, **kwargs)

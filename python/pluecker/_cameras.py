@@ -15,14 +15,14 @@ from . import _core
 
 @dataclass(frozen=True)
 class Cameras:
-    """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``lenses``
-    (v,), each image's ``Camera``, ``projections[j]`` is ``K [R | t]`` of its pinhole part and the
-    table's pixels are the observed (distorted) ones, as ``triangulate_points(track=..., image=..., cameras=...)``
-    takes them."""
+    """Image ids (v,) and their ``projections`` (v, 3, 4) mapping world points to pixels; with ``views``
+    (v,), each image's ``View`` (its camera, any model, at its pose), ``projections[j]`` is ``K [R | t]`` of
+    its pinhole part and the table's pixels are the observed (distorted) ones, as
+    ``triangulate_points(views, ..., track=..., image=...)`` takes them."""
 
     ids: np.ndarray
     projections: np.ndarray
-    lenses: Optional[tuple] = None
+    views: Optional[tuple] = None
 
     def __post_init__(self) -> None:
         ids = np.asarray(self.ids, dtype=np.int64).reshape(-1)
@@ -32,12 +32,17 @@ class Cameras:
                 f"Cameras: projections must have shape ({len(ids)}, 3, 4) for {len(ids)} ids, got {P.shape}")
         if len(np.unique(ids)) != len(ids):
             raise ValueError("Cameras: image ids must be unique")
-        if self.lenses is not None and len(self.lenses) != len(ids):
-            raise _core.ShapeError(f"Cameras: lenses must have one camera per id ({len(ids)}), got {len(self.lenses)}")
+        if self.views is not None and len(self.views) != len(ids):
+            raise _core.ShapeError(f"Cameras: views must have one view per id ({len(ids)}), got {len(self.views)}")
         object.__setattr__(self, "ids", ids)
         object.__setattr__(self, "projections", P)
-        if self.lenses is not None:
-            object.__setattr__(self, "lenses", tuple(self.lenses))
+        if self.views is not None:
+            object.__setattr__(self, "views", tuple(self.views))
+
+    def known(self) -> Any:
+        """The known cameras as the triangulation functions take them: the views when there are, else
+        the projections."""
+        return list(self.views) if self.views is not None else self.projections
 
     @classmethod
     def from_dict(cls, cameras: dict[int, Any]) -> "Cameras":

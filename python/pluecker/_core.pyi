@@ -123,6 +123,30 @@ class Camera:
         """First-order (N, 2, 2) covariances of the normalised coordinates for pixel covariances ``covariances`` (N, 2, 2) (``None``: 1 px)."""
     def to_dict(self) -> Dict[str, Any]: ...
 
+@final
+class View:
+    """A known camera of the triangulation functions: a :class:`Camera` (any model) at the pose
+    ``x_cam = R X_world + t``; its pixels are the camera's observed ones. Immutable, ``==``, picklable."""
+
+    def __new__(cls, camera: Camera, R: ArrayLike, t: ArrayLike) -> "View": ...
+    @staticmethod
+    def from_projection(P: ArrayLike) -> "View":
+        """The pinhole view of a finite 3x4 ``P = s K [R | t]`` (any positive scale): ``K`` with
+        ``K[2, 2] = 1`` and ``fy > 0`` (``det M < 0`` gives ``fx < 0``), ``R`` a rotation."""
+    # fields of View (generated: python -m pluecker._stubgen)
+    __fields__: ClassVar[List[Tuple[str, str, str]]]
+    camera: Camera
+    """The camera."""
+    pose: Tuple[NDArray[np.float64], NDArray[np.float64]]
+    """The pose `x_cam = R X_world + t`; `R, t = view.pose`."""
+    P: NDArray[np.float64]
+    """`P = K [R | t]` (3, 4) of the camera's pinhole part at the pose."""
+    # end of fields
+    def to_dict(self) -> Dict[str, Any]: ...
+
+#: The known cameras of a triangulation: (v, 3, 4) matrices ``P = K [R | t]`` or a sequence of views.
+_KnownCameras = Union[ArrayLike, Sequence[View]]
+
 # --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
 
 @final
@@ -852,21 +876,19 @@ class QuadricTriangulations(BatchReport):
     # end of fields
 
 def triangulate_point(
-    projections: ArrayLike,
+    cameras: _KnownCameras,
     observations: ArrayLike,
     covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
-    cameras: Optional[List[Camera]] = None,
 ) -> PointTriangulation:
-    """One point from its pixels ``observations`` (n, 2) in the views ``projections`` (n, 3, 4), n >= 2,
-    with pixel covariances ``covariances`` (n, 2, 2) (sections 2.1, 3-4). With ``cameras`` (each view's
-    ``Camera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part and
-    ``observations`` the observed (distorted) pixels: the cost is the reprojection error through the
-    exact projection."""
+    """One point from its pixels ``observations`` (n, 2) in the known ``cameras``, n >= 2, with pixel
+    covariances ``covariances`` (n, 2, 2) (sections 2.1, 3-4). ``cameras``: (n, 3, 4) matrices
+    ``P = K [R | t]``, or n :class:`View` s, whose ``observations`` are the observed (distorted, through
+    the lens) pixels: the cost is then the reprojection error through the exact projection."""
 
 def triangulate_points(
-    projections: ArrayLike,
+    cameras: _KnownCameras,
     observations: ArrayLike,
     visible: Optional[ArrayLike] = None,
     covariances: Optional[ArrayLike] = None,
@@ -877,9 +899,9 @@ def triangulate_points(
     track: Optional[ArrayLike] = None,
     image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
-    cameras: Optional[List[Camera]] = None,
 ) -> PointTriangulations:
-    """Many points seen by the views ``projections`` (v, 3, 4), in one of two forms.
+    """Many points seen by the known ``cameras`` ((v, 3, 4) matrices ``P``, or v :class:`View` s in the
+    rows form), in one of two forms.
 
     Dense: pixels ``observations`` (n, v, 2), ``visible`` (n, v) booleans (``None``: every view; NaN is
     fine where not visible), ``covariances`` (n, v, 2, 2).
@@ -888,32 +910,28 @@ def triangulate_points(
     ``observations[k]`` (m, 2) of track ``track[k]`` in view ``image[k]``, ``covariances[k]`` (m, 2, 2);
     result row t is track t. Track ids and ``n_tracks`` (default ``max(track) + 1``) are at most the m
     rows given (number sparse ids densely: ``numpy.unique(track, return_inverse=True)``); beyond, or a
-    negative id, is an ``InvalidOptionError`` naming the argument. With ``cameras`` (v,) (each image's
-    ``Camera``), ``projections[j]`` is ``K [R | t]`` of its pinhole part and
-    ``observations`` the observed (distorted) pixels: the cost is the reprojection error through the
-    exact projection."""
+        negative id, is an ``InvalidOptionError`` naming the argument. Through views, ``observations`` are
+    the observed (distorted) pixels: the cost is the reprojection error through the exact projection."""
 
 def triangulate_line(
-    projections: ArrayLike,
+    cameras: _KnownCameras,
     lines: ArrayLike,
     covariances: Optional[ArrayLike] = None,
     *,
     sigma: Optional[float] = None,
     options: Optional[TriangulationOptions] = None,
-    cameras: Optional[List[Camera]] = None,
 ) -> LineTriangulation:
     """One 3-D line (sections 2.2, 3-4) from (n, 3) homogeneous image lines or (n, 2, 2) segments.
     ``covariances`` (n, 2, 2) residual covariances, e.g. :attr:`FittedLine.covariance`; for segments
-    without ``covariances``, that of endpoints with noise ``sigma`` px (``None``: 1). With ``cameras``
-    (each view's ``Camera``), ``projections[i]`` is ``K [R | t]`` of its pinhole part,
-    ``lines`` are (n, 2, 2) segments in the observed (distorted) pixels and ``covariances`` (n, 2, 2, 2)
+    without ``covariances``, that of endpoints with noise ``sigma`` px (``None``: 1). ``cameras``: (n, 3, 4)
+    matrices ``P``, or n :class:`View` s, through which ``lines`` are (n, 2, 2) segments in the observed (distorted) pixels and ``covariances`` (n, 2, 2, 2)
     their endpoints' covariances:
     through a distorting lens the cost is the endpoints' distances to the line's curved images
     (``cost_kind`` ``'reprojection'``), never certified (``optimal`` gives ``gap_not_closed``); without
     distortion it is eq. 19 on the segments' line residuals (``'line_residual'``), certified."""
 
 def triangulate_lines(
-    projections: ArrayLike,
+    cameras: _KnownCameras,
     lines: ArrayLike,
     visible: Optional[ArrayLike] = None,
     covariances: Optional[ArrayLike] = None,
@@ -925,33 +943,30 @@ def triangulate_lines(
     track: Optional[ArrayLike] = None,
     image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
-    cameras: Optional[List[Camera]] = None,
 ) -> LineTriangulations:
-    """Many 3-D lines, in one of two forms. Dense: ``projections`` (v, 3, 4) shared or (n, v, 3, 4) per
+    """Many 3-D lines, in one of two forms. Dense: ``cameras`` (v, 3, 4) shared or (n, v, 3, 4) per
     track; ``lines`` (n, v, 3) or (n, v, 2, 2); ``visible`` (n, v); ``covariances`` (n, v, 2, 2).
 
     Rows: with ``track`` and ``image`` (m,), ``lines[k]`` ((m, 3) homogeneous or (m, 2, 2) segments) of
-    track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)), ``covariances[k]``
-    (m, 2, 2); track ids and ``n_tracks`` as for :func:`triangulate_points`. With ``cameras`` (each
-    image's ``Camera``), ``lines`` are (m, 2, 2) segments in the observed pixels and
-    ``covariances`` (m, 2, 2, 2) their endpoints' covariances; each track is solved as
-    :func:`triangulate_line` with ``cameras`` solves it."""
+    track ``track[k]`` in image ``image[k]`` (a row of ``cameras``: (v, 3, 4) or v :class:`View` s),
+    ``covariances[k]`` (m, 2, 2); track ids and ``n_tracks`` as for :func:`triangulate_points`. Through
+    views, ``lines`` are (m, 2, 2) segments in the observed pixels and ``covariances`` (m, 2, 2, 2) their
+    endpoints' covariances; each track is solved as :func:`triangulate_line` solves it."""
 
 def triangulate_quadric(
-    projections: ArrayLike,
+    cameras: _KnownCameras,
     conics: ArrayLike,
     covariances: Optional[ArrayLike] = None,
     *,
     options: Optional[TriangulationOptions] = None,
-    cameras: Optional[List[Camera]] = None,
 ) -> QuadricTriangulation:
-    """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 views ``projections`` (n, 3, 4),
-    ``covariances`` (n, 5, 5) e.g. :attr:`FittedConic.covariance` (sections 2.3, 3-4). With ``cameras``,
-    ``projections[i]`` is ``K [R | t]`` of each camera's pinhole part; a ``Camera`` with distortion is refused (``InvalidOptionError``
-    naming ``cameras``): the outline through a lens is not a conic."""
+    """One ellipsoid from its outline conics (n, 3, 3) in n >= 3 known ``cameras`` ((n, 3, 4) matrices or
+    :class:`View` s), ``covariances`` (n, 5, 5) e.g. :attr:`FittedConic.covariance` (sections 2.3, 3-4).
+    A view whose camera distorts is refused (``InvalidOptionError`` naming ``cameras``): the outline
+    through a lens is not a conic."""
 
 def triangulate_quadrics(
-    projections: ArrayLike,
+    cameras: _KnownCameras,
     conics: ArrayLike,
     visible: Optional[ArrayLike] = None,
     covariances: Optional[ArrayLike] = None,
@@ -963,9 +978,9 @@ def triangulate_quadrics(
     image: Optional[ArrayLike] = None,
     n_tracks: Optional[int] = None,
 ) -> QuadricTriangulations:
-    """Many ellipsoids, in one of two forms. Dense: ``projections`` (v, 3, 4) or (n, v, 3, 4); ``conics``
+    """Many ellipsoids, in one of two forms. Dense: ``cameras`` (v, 3, 4) or (n, v, 3, 4); ``conics``
     (n, v, 3, 3); ``covariances`` (n, v, 5, 5). Rows: with ``track`` and ``image`` (m,), ``conics[k]``
-    (m, 3, 3) of track ``track[k]`` in image ``image[k]`` (a row of ``projections`` (v, 3, 4)),
+    (m, 3, 3) of track ``track[k]`` in image ``image[k]`` (a row of ``cameras``: (v, 3, 4), or v :class:`View` s without distortion),
     ``covariances[k]`` (m, 5, 5); track ids and ``n_tracks`` as for :func:`triangulate_points`."""
 
 # --- Fitting image primitives (section 3.1) -------------------------------------------------------

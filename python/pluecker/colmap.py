@@ -372,7 +372,7 @@ class _Observations(NamedTuple):
     point2D_idx: np.ndarray     # (m,)
     skipped: list               # messages naming the cameras and observations left out, with COLMAP's ids
     pixels: np.ndarray          # (m, 2) the observed (distorted) pixels
-    lenses: list                # (v,) the Camera of each row of P
+    views: list                 # (v,) the View (camera and pose) of each row of P
 
 
 def _has_preimage(lens: _core.Camera, xy: np.ndarray) -> np.ndarray:
@@ -418,20 +418,20 @@ def _camera_problem(camera: Any) -> tuple[_core.Camera | None, str]:
         return None, f" ({camera.model.name}): {exc}"
 
 
-def _image_problem(lens: _core.Camera, image: Any) -> tuple[np.ndarray | None, str]:
-    """The camera matrix ``K [R | t]`` (3, 4) of a posed image through its camera's pinhole part, or
-    ``None`` and why it cannot be used (a pose that is not finite, a matrix that overflows)."""
+def _image_problem(lens: _core.Camera, image: Any) -> tuple[_core.View | None, str]:
+    """The view of a posed image (its camera at its pose ``cam_from_world``), or ``None`` and why it
+    cannot be used (a pose that is not finite, a matrix ``K [R | t]`` that overflows)."""
     R, t = pose_from_rigid(image.cam_from_world())
     if not (np.all(np.isfinite(R)) and np.all(np.isfinite(t))):
         return None, "its pose cam_from_world is not finite"
     with np.errstate(over="ignore", invalid="ignore"):
         try:
-            P = np.asarray(lens.P(R, t), dtype=float)
+            view = _core.View(lens, R, t)
         except _core.PlueckerError as exc:
             return None, f"its pose cam_from_world is not usable: {exc}"
-    if not np.all(np.isfinite(P)):
+    if not np.all(np.isfinite(view.P)):
         return None, f"K [R | t] overflows double precision (|t| = {number(np.linalg.norm(t))})"
-    return P, ""
+    return view, ""
 
 
 def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
@@ -458,21 +458,21 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
     skipped = _grouped("camera_id", bad_cameras)
     if posed and not lenses:
         raise ModelError("reconstruction: no camera of the model can be used: " + "; ".join(skipped))
-    images, matrices, bad_images = [], [], []
+    images, views, bad_images = [], [], []
     for image in posed:
         if image.camera_id not in lenses:
             continue
-        P, reason = _image_problem(lenses[image.camera_id], image)
-        if P is None:
+        view, reason = _image_problem(lenses[image.camera_id], image)
+        if view is None:
             bad_images.append((image.image_id, reason, image.num_points3D))
         else:
             images.append(image)
-            matrices.append(P)
+            views.append(view)
     skipped += _grouped("image_id", bad_images)
     if bad_images and not images:
         raise ModelError("reconstruction: no image of the model can be used: " + "; ".join(skipped))
     image_ids = np.array([image.image_id for image in images], dtype=np.int64)
-    P = np.array(matrices, dtype=float).reshape(-1, 3, 4)
+    P = np.array([view.P for view in views], dtype=float).reshape(-1, 3, 4)
     # The observations image by image (pycolmap hands them over per image, in increasing image id).
     keypoints = _keypoints(reconstruction)
     per_image = [keypoints[image.image_id] if keypoints else _observed(image) for image in images]
@@ -504,7 +504,7 @@ def _observations(reconstruction: Any, sigma_px: float) -> _Observations:
         run = order[start:stop]
         order[start:stop] = run[np.lexsort((pixels[run, 1], pixels[run, 0]))]
     return _Observations(P, image_ids, ids, track[order], camera[order], image_id[order], point2D_idx[order],
-                         skipped, pixels[order], [lenses[image.camera_id] for image in images])
+                         skipped, pixels[order], views)
 
 
 def _runs(key: np.ndarray) -> list[tuple[int, int]]:
@@ -607,7 +607,7 @@ def observation_table(reconstruction: Any, sigma_px: float = 1.0, *, skipped: li
                       "x": o.pixels[:, 0], "y": o.pixels[:, 1], "cov_xx": np.full(len(o.track), float(sigma_px)**2),
                       "cov_xy": np.zeros(len(o.track)), "cov_yy": np.full(len(o.track), float(sigma_px)**2),
                       "point2D_idx": o.point2D_idx.astype(np.int64)})
-    return Cameras(o.P_image_ids, o.P, tuple(o.lenses)), table
+    return Cameras(o.P_image_ids, o.P, tuple(o.views)), table
 
 
 class TableResult:
@@ -664,7 +664,7 @@ def retriangulate(reconstruction: Any, sigma_px: float = 1.0,
         fields = options.to_dict() if options is not None else {}
         options = _core.TriangulationOptions(**{**fields, "outlier_threshold": outlier_threshold_px / sigma_px})
     covariances = np.broadcast_to(float(sigma_px)**2 * np.eye(2), (len(o.track), 2, 2))
-    result = _core.triangulate_points(o.P, o.pixels, covariances=covariances, track=o.track, image=o.camera, options=options, progress=progress, n_tracks=len(o.ids), cameras=o.lenses)
+    result = _core.triangulate_points(o.views, o.pixels, covariances=covariances, track=o.track, image=o.camera, options=options, progress=progress, n_tracks=len(o.ids))
     return Retriangulation(o.ids, result, o.track, o.image_id, o.point2D_idx, o.skipped)
 
 

@@ -134,7 +134,7 @@ def triangulate_table(table: Any, cameras: Cameras, *,
     image, x, cov = image[order], x[order], np.ascontiguousarray(cov[order])
     passthrough = {name: table.column(name).take(pa.array(order)) for name in PASSTHROUGH_COLUMNS
                    if name in table.column_names}
-    result = _core.triangulate_points(cameras.projections, x, covariances=cov, track=track_index, image=camera_index, options=options, n_tracks=len(ids), cameras=None if cameras.lenses is None else list(cameras.lenses))
+    result = _core.triangulate_points(cameras.known(), x, covariances=cov, track=track_index, image=camera_index, options=options, n_tracks=len(ids))
     status = np.asarray(result.status).astype(object)
     messages = np.asarray(result.messages, dtype=object)
     for row in np.flatnonzero(~known):

@@ -221,6 +221,12 @@ pub fn matrix3_allow_non_finite(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<
     Ok(Matrix3::from_row_slice(&values))
 }
 
+/// A `(3, 4)` matrix that may hold NaN or inf (for arguments whose validation reports them itself).
+pub fn matrix3x4(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<nalgebra::Matrix3x4<f64>> {
+    let (_, values) = read(name, obj, &[Dim::Fixed(3), Dim::Fixed(4)])?;
+    Ok(nalgebra::Matrix3x4::from_row_slice(&values))
+}
+
 /// A `(D,)` vector.
 pub fn vector<const D: usize>(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<SVector<f64, D>> {
     let values = read_fixed(name, obj, &[Dim::Fixed(D)])?;

@@ -29,6 +29,7 @@ mod synthetic;
 mod test_hook;
 mod threads;
 mod triangulation;
+mod view;
 
 use pickle::{finished, part, parts, plain};
 use pose::options::{PyPoseOptions, PyRansacOptions};
@@ -63,6 +64,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("STATUSES", pyo3::types::PyTuple::new(m.py(), statuses)?)?;
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
+    m.add_class::<view::PyView>()?;
     m.add_class::<certificate::PyCertifyOptions>()?;
     m.add_class::<certificate::PyCertificate>()?;
     // Pose.

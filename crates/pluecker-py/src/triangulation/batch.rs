@@ -36,7 +36,7 @@ pub(crate) fn sparse_form<'a, 'py>(
     image: Option<&'a Bound<'py, PyAny>>,
     visible: Option<&Bound<'py, PyAny>>,
     n_tracks: Option<crate::convert::Integer>,
-    has_cameras: bool,
+    has_views: bool,
 ) -> PyResult<Option<(&'a Bound<'py, PyAny>, &'a Bound<'py, PyAny>)>> {
     match (track, image) {
         (Some(track), Some(image)) if visible.is_none() => Ok(Some((track, image))),
@@ -50,9 +50,9 @@ pub(crate) fn sparse_form<'a, 'py>(
             "n_tracks",
             "n_tracks= counts the tracks of the rows form: pass track= and image=",
         )),
-        (None, None) if has_cameras => Err(invalid_argument(
+        (None, None) if has_views => Err(invalid_argument(
             "cameras",
-            "cameras= takes the rows form: pass track= and image= (one observation per row)",
+            "views take the rows form: pass track= and image= (one observation per row)",
         )),
         (None, None) => Ok(None),
     }
@@ -590,13 +590,13 @@ pub(crate) struct Cameras {
 
 impl Cameras {
     pub(crate) fn read(obj: &Bound<'_, PyAny>, min_views: usize, method: Method) -> PyResult<Cameras> {
-        let (shape, values) = read_any("projections", obj)?;
+        let (shape, values) = read_any("cameras", obj)?;
         let (tracks, views) = match shape.as_slice() {
             [v, 3, 4] => (None, *v),
             [n, v, 3, 4] => (Some(*n), *v),
             _ => {
                 return Err(shape_error(
-                    "projections",
+                    "cameras",
                     "shape (v, 3, 4) (shared cameras) or (n, v, 3, 4) (cameras per track)",
                     shape_string(&shape),
                 ))
@@ -606,7 +606,7 @@ impl Cameras {
             return Err(to_py_err(Error::TooFewCorrespondences {
                 method: method.as_str().into(),
                 required: format!("{min_views} cameras"),
-                actual: format!("{views} camera(s) in projections"),
+                actual: format!("{views} camera(s) in cameras"),
             }));
         }
         let matrices = values.chunks_exact(12).map(Matrix3x4::from_row_slice).collect();

@@ -11,7 +11,6 @@ use super::batch::{
     InlierColumns, PyBatchReport, Sink,
 };
 use super::observation_rows::SortedRows;
-use super::point::views_of;
 use super::report::PyTriangulationReport;
 use super::{options_arg, positive_sigma, sigma_variance, PyTriangulationOptions};
 use crate::convert::{
@@ -227,22 +226,20 @@ fn endpoint_covariances(
 /// `gap_not_closed`); without distortion it is the pinhole problem of the segments, eq. 19 on their line
 /// residuals (`line_residual`), with its certificate.
 #[pyfunction]
-#[pyo3(signature = (projections, lines, covariances = None, *, sigma = None, options = None, cameras = None))]
+#[pyo3(signature = (cameras, lines, covariances = None, *, sigma = None, options = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_line(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
     covariances: Option<&Bound<'_, PyAny>>,
     sigma: Option<Real>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulation>> {
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("projections", projections)?;
+    let (cams, views) = crate::view::known_cameras(cameras)?;
     let sigma = optional_real("sigma", sigma)?;
-    if let Some(cameras) = cameras {
-        let views = views_of(&cams, cameras)?;
+    if let Some(views) = views {
         let segments = lens_segments(lines, views.len())?;
         let covariances = endpoint_covariances(covariances, sigma, &[views.len()])?;
         let outcome = interrupt::run_single(py, move || {
@@ -405,11 +402,11 @@ fn image_lines_of(values: &[f64], segments: bool, sigma: f64) -> ImageLines<'_> 
 
 /// Triangulates many 3-D lines (tracks) in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (projections, lines, visible = None, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None, cameras = None))]
+#[pyo3(signature = (cameras, lines, visible = None, covariances = None, *, sigma = None, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_lines(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     covariances: Option<&Bound<'_, PyAny>>,
@@ -420,12 +417,11 @@ pub fn triangulate_lines(
     track: Option<&Bound<'_, PyAny>>,
     image: Option<&Bound<'_, PyAny>>,
     n_tracks: Option<Integer>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
-    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, cameras.is_some())? {
+    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, crate::view::is_views(cameras))? {
         return line_observations(
             py,
-            projections,
+            cameras,
             track,
             image,
             lines,
@@ -435,13 +431,12 @@ pub fn triangulate_lines(
             progress,
             time_budget,
             n_tracks,
-            cameras,
         );
     }
     let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
-    let cams = Cameras::read(projections, 2, opts.method)?;
+    let cams = Cameras::read(cameras, 2, opts.method)?;
     let (shape, values) = read_any("lines", lines)?;
     let segments = segments_or_lines(&shape, 2, sigma, covariances.is_some())?;
     cams.check_observations("lines", &shape, if segments { "2, 2" } else { "3" })?;
@@ -491,7 +486,7 @@ pub fn triangulate_lines(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn line_observations(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     lines: &Bound<'_, PyAny>,
@@ -501,15 +496,13 @@ pub(crate) fn line_observations(
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
     n_tracks: Option<Integer>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyLineTriangulations>> {
     let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
     let sigma = optional_real("sigma", sigma)?;
-    let cams = crate::convert::cameras("projections", projections)?;
+    let (cams, views) = crate::view::known_cameras(cameras)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
-    if let Some(cameras) = cameras {
-        let views = views_of(&cams, cameras)?;
+    if let Some(views) = views {
         let (shape, _) = read_any("lines", lines)?;
         if shape.len() != 3 || shape[1..] != [2, 2] {
             return Err(shape_error(

@@ -17,7 +17,6 @@ use super::observation_rows::SortedRows;
 use super::report::PyTriangulationReport;
 use super::{options_arg, PyTriangulationOptions};
 use crate::convert::{check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real};
-use crate::errors::invalid_argument;
 use crate::errors::{shape_error, to_py_err};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
@@ -26,7 +25,6 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
 use pluecker::triangulation::point::{DensePointTracks, SparsePointTracks};
 use pluecker::triangulation::streaming::{linear_points_into, points_into as core_points, LinearTrack};
-use pluecker::triangulation::View;
 use pluecker::triangulation::{CostKind, Method, Primitive, Report};
 use pluecker::Error;
 use pyo3::prelude::*;
@@ -102,20 +100,18 @@ fn pixels(name: &str, obj: &Bound<'_, PyAny>, views: usize) -> PyResult<Vec<Vect
 /// pixels and `covariances` their covariances, and the cost is the reprojection error in those pixels through the exact projection
 /// (certificate `lens_convexity_test` through a lens).
 #[pyfunction]
-#[pyo3(signature = (projections, observations, covariances = None, *, options = None, cameras = None))]
+#[pyo3(signature = (cameras, observations, covariances = None, *, options = None))]
 pub fn triangulate_point(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     observations: &Bound<'_, PyAny>,
     covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulation>> {
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("projections", projections)?;
+    let (cams, views) = crate::view::known_cameras(cameras)?;
     let obs = pixels("observations", observations, cams.len())?;
     let covs = covariances2("covariances", covariances, cams.len())?;
-    let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
     // Ctrl-C stops its branch and bound: `KeyboardInterrupt` with the estimate reached as `partial`.
     let outcome = interrupt::run_single(py, move || match &views {
         Some(views) => core_triangulate_point(views, &obs, covs.as_deref(), &opts),
@@ -226,11 +222,11 @@ const SHORT_BATCH: usize = 4096;
 
 /// Triangulates many point tracks seen by the same cameras, in parallel (Josephson & Kahl 2008, eq. 19).
 #[pyfunction]
-#[pyo3(signature = (projections, observations, visible = None, covariances = None, *, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None, cameras = None))]
+#[pyo3(signature = (cameras, observations, visible = None, covariances = None, *, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_points(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     observations: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     covariances: Option<&Bound<'_, PyAny>>,
@@ -240,12 +236,11 @@ pub fn triangulate_points(
     track: Option<&Bound<'_, PyAny>>,
     image: Option<&Bound<'_, PyAny>>,
     n_tracks: Option<Integer>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
-    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, cameras.is_some())? {
+    if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, crate::view::is_views(cameras))? {
         return point_observations(
             py,
-            projections,
+            cameras,
             track,
             image,
             observations,
@@ -254,18 +249,18 @@ pub fn triangulate_points(
             progress,
             time_budget,
             n_tracks,
-            cameras,
         );
     }
     let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("projections", projections)?;
+    // Views were refused above (they take the rows form): the matrices.
+    let cams = crate::convert::cameras("cameras", cameras)?;
     let v = cams.len();
     if v < 2 {
         return Err(to_py_err(Error::TooFewCorrespondences {
             method: opts.method.as_str().into(),
             required: "2 cameras".into(),
-            actual: format!("{v} camera(s) in projections"),
+            actual: format!("{v} camera(s) in cameras"),
         }));
     }
     let (shape, pixels) = read(
@@ -276,7 +271,7 @@ pub fn triangulate_points(
     if shape[1] != v {
         return Err(shape_error(
             "observations",
-            &format!("shape (n, {v}, 2) (one column per camera in projections)"),
+            &format!("shape (n, {v}, 2) (one column per camera)"),
             shape_string(&shape),
         ));
     }
@@ -333,7 +328,7 @@ pub fn triangulate_points(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn point_observations(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     observations: &Bound<'_, PyAny>,
@@ -342,12 +337,10 @@ pub(crate) fn point_observations(
     progress: Option<&Bound<'_, PyAny>>,
     time_budget: Option<Real>,
     n_tracks: Option<Integer>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPointTriangulations>> {
     let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = crate::convert::cameras("projections", projections)?;
-    let views = cameras.map(|c| views_of(&cams, c)).transpose()?;
+    let (cams, views) = crate::view::known_cameras(cameras)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let m = rows.len();
     let pixels = rows.per_row("observations", observations, &[2])?;
@@ -378,36 +371,6 @@ pub(crate) fn point_observations(
         Ok((report, columns))
     })?;
     batch_result(py, outcome)
-}
-
-/// The views of `cameras` (one `Camera` per row of `projections`), each at the pose of its row
-/// ([`View::from_projection`], the core's decomposition `P = s K [R | t]`); `InvalidOptionError` naming
-/// the row of `projections` whose `K` is not its camera's pinhole part (to 1e-9, relative).
-pub(crate) fn views_of(p: &[nalgebra::Matrix3x4<f64>], cameras: &Bound<'_, PyAny>) -> PyResult<Vec<View>> {
-    let list: Vec<Bound<'_, PyAny>> = cameras.try_iter()?.collect::<PyResult<_>>()?;
-    if list.len() != p.len() {
-        return Err(shape_error(
-            "cameras",
-            &format!("one camera per row of projections ({})", p.len()),
-            list.len().to_string(),
-        ));
-    }
-    list.iter()
-        .zip(p)
-        .enumerate()
-        .map(|(j, (c, pj))| {
-            let camera = crate::camera::coerce(&format!("cameras[{j}]"), c)?;
-            let view = View::from_projection(pj, &format!("projections[{j}]")).map_err(to_py_err)?;
-            let (k, expected) = (view.camera.intrinsics().matrix(), camera.intrinsics().matrix());
-            if (k - expected).amax() > 1e-9 * expected.amax() {
-                return Err(invalid_argument(
-                    "projections",
-                    format!("row {j} is not K [R | t] of the pinhole part of cameras[{j}]"),
-                ));
-            }
-            Ok(View::new(camera, view.pose))
-        })
-        .collect()
 }
 
 pack_struct!(PyPointTriangulations { x, covariance, inliers });

@@ -10,7 +10,7 @@ use super::batch::{
 use super::observation_rows::SortedRows;
 use super::report::PyTriangulationReport;
 use super::{options_arg, PyTriangulationOptions};
-use crate::convert::{self, cameras, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
+use crate::convert::{self, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
 use crate::interrupt::{self, batch_result, run_interruptible};
 use crate::pickle::{pack_struct, reduce, Pack, Reader};
 use crate::properties::{result_class, Array};
@@ -100,20 +100,18 @@ result_class! {
 /// since the outline seen through it is not a conic; pinholes and lenses without distortion are solved
 /// as their `projections`.
 #[pyfunction]
-#[pyo3(signature = (projections, conics, covariances = None, *, options = None, cameras = None))]
+#[pyo3(signature = (cameras, conics, covariances = None, *, options = None))]
 pub fn triangulate_quadric(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
     covariances: Option<&Bound<'_, PyAny>>,
     options: Option<PyRef<'_, PyTriangulationOptions>>,
-    cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
     let opts = options_arg(options)?;
-    let cams = convert::cameras("projections", projections)?;
-    if let Some(cameras) = cameras {
-        let views = super::point::views_of(&cams, cameras)?;
-        // A lens with distortion is refused; the other views are the pinhole problem of `projections`.
+    let (cams, views) = crate::view::known_cameras(cameras)?;
+    if let Some(views) = views {
+        // A lens with distortion is refused; the other views are the pinhole problem of their `K [R | t]`.
         if let Err(pluecker::Error::InvalidOption { name, reason }) = refuse_distortion(&views) {
             return Err(crate::errors::invalid_argument(&name, reason));
         }
@@ -229,11 +227,11 @@ result_class! {
 
 /// Triangulates many ellipsoids (tracks) from their outline conics in parallel (Josephson & Kahl 2008).
 #[pyfunction]
-#[pyo3(signature = (projections, conics, visible = None, covariances = None, *, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None))]
+#[pyo3(signature = (cameras, conics, visible = None, covariances = None, *, options = None, progress = None, time_budget = None, track = None, image = None, n_tracks = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn triangulate_quadrics(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
     visible: Option<&Bound<'_, PyAny>>,
     covariances: Option<&Bound<'_, PyAny>>,
@@ -247,7 +245,7 @@ pub fn triangulate_quadrics(
     if let Some((track, image)) = sparse_form(track, image, visible, n_tracks, false)? {
         return quadric_observations(
             py,
-            projections,
+            cameras,
             track,
             image,
             conics,
@@ -260,7 +258,7 @@ pub fn triangulate_quadrics(
     }
     let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = Cameras::read(projections, 3, opts.method)?;
+    let cams = Cameras::read(cameras, 3, opts.method)?;
     let spec = [Dim::Free("n"), Dim::Free("v"), Dim::Fixed(3), Dim::Fixed(3)];
     let (shape, values) = read("conics", conics, &spec)?;
     cams.check_observations("conics", &shape, "3, 3")?;
@@ -298,7 +296,7 @@ pub fn triangulate_quadrics(
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn quadric_observations(
     py: Python<'_>,
-    projections: &Bound<'_, PyAny>,
+    cameras: &Bound<'_, PyAny>,
     track: &Bound<'_, PyAny>,
     image: &Bound<'_, PyAny>,
     conics: &Bound<'_, PyAny>,
@@ -310,7 +308,7 @@ pub(crate) fn quadric_observations(
 ) -> PyResult<Py<PyQuadricTriangulations>> {
     let budget = crate::convert::time_budget(time_budget)?;
     let opts = options_arg(options)?;
-    let cams = cameras("projections", projections)?;
+    let cams = crate::view::pinhole_projections(cameras)?;
     let rows = SortedRows::read(track, image, n_tracks)?;
     let values = rows.per_row("conics", conics, &[3, 3])?;
     let covariances = covariances

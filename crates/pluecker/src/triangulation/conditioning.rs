@@ -100,11 +100,11 @@ pub(crate) fn check_views(
             actual: format!("{observations}"),
         });
     }
-    validate_cameras(cameras, "projections")?;
+    validate_cameras(cameras, "cameras")?;
     let scale = cameras.iter().map(|p| centre(p).norm()).fold(1.0, f64::max);
     if baseline(cameras) <= SAME_CENTRE * scale {
         return Err(Error::Degenerate {
-            what: "projections: all camera centres coincide (no parallax)".into(),
+            what: "cameras: all camera centres coincide (no parallax)".into(),
         });
     }
     Ok(())

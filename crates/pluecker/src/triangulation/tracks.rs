@@ -339,9 +339,9 @@ impl Projections<'_> {
     /// non-singular; per-track cameras must number `n · views` (each track's are checked with it).
     pub(crate) fn check(&self, n: usize) -> Result<()> {
         match *self {
-            Projections::Shared(ref cameras) => validate_cameras(cameras, "projections"),
+            Projections::Shared(ref cameras) => validate_cameras(cameras, "cameras"),
             Projections::PerTrack { projections, views } if projections.len() != n * views => Err(shape(
-                "projections",
+                "cameras",
                 format!("{} projections ({n} tracks x {views} views)", n * views),
                 projections.len(),
             )),

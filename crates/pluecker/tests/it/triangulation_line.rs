@@ -801,7 +801,7 @@ mod batch {
             views: v,
         };
         let batch = triangulate_lines(per_track, tracks, &opts(Method::Linear), None).unwrap();
-        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("projections[2][1]")));
+        assert!(matches!(&batch[2], Err(Error::SingularCamera { what }) if what.starts_with("cameras[2][1]")));
         assert!(batch.iter().enumerate().all(|(t, r)| r.is_ok() == (t != 2)));
     }
 
@@ -948,7 +948,7 @@ mod batch {
         singular[1][(0, 0)] = f64::NAN;
         assert!(matches!(
             triangulate_lines(&singular, tracks(1.0), &o, None),
-            Err(Error::NonFinite { what, index: 1 }) if what == "projections"
+            Err(Error::NonFinite { what, index: 1 }) if what == "cameras"
         ));
         let per_track = TrackCameras::PerTrack {
             projections: &cameras,
@@ -956,7 +956,7 @@ mod batch {
         };
         assert!(matches!(
             triangulate_lines(per_track, tracks(1.0), &o, None),
-            Err(Error::Shape { what, .. }) if what == "projections"
+            Err(Error::Shape { what, .. }) if what == "cameras"
         ));
         let empty = DenseLineTracks {
             lines: ImageLines::Homogeneous(&[]),

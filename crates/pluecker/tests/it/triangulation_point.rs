@@ -513,10 +513,10 @@ fn bad_input_gives_the_right_error() {
     assert!(matches!(err(cams, &nan, None), Error::NonFinite { what, index: 2 } if what == "observations"));
     let mut bad_cams = cams.clone();
     bad_cams[1][(0, 3)] = f64::INFINITY;
-    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "projections"));
+    assert!(matches!(err(&bad_cams, obs, None), Error::NonFinite { what, index: 1 } if what == "cameras"));
     let mut singular = cams.clone();
     singular[2].fixed_view_mut::<3, 3>(0, 0).fill(0.0);
-    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("projections[2]")));
+    assert!(matches!(err(&singular, obs, None), Error::SingularCamera { what } if what.contains("cameras[2]")));
     let covs = [
         Matrix2::identity(),
         Matrix2::new(1.0, 2.0, 2.0, 1.0),

@@ -811,7 +811,7 @@ mod batch {
         ));
         assert!(matches!(
             triangulate_quadrics(&[] as &[Matrix3x4<f64>], tracks, &o, None),
-            Err(Error::Shape { what, .. }) if what == "projections"
+            Err(Error::Shape { what, .. }) if what == "cameras"
         ));
     }
 }

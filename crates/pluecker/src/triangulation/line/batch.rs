@@ -68,7 +68,7 @@ fn check_batch(cameras: &Projections, tracks: &DenseLineTracks) -> Result<usize>
     let v = cameras.views();
     if v == 0 {
         return Err(Error::Shape {
-            what: "projections".into(),
+            what: "cameras".into(),
             expected: "at least 2 views".into(),
             actual: "0".into(),
         });
@@ -128,7 +128,7 @@ fn line_track(
         }
     };
     let arrays: &[&str] = if cameras.per_track() {
-        &["lines", "covariances", "projections"]
+        &["lines", "covariances", "cameras"]
     } else {
         &["lines", "covariances"]
     };
@@ -311,7 +311,7 @@ pub struct SparseSegmentTracks<'a> {
 /// The number of tracks of a sparse batch through views, checked.
 fn check_segments(views: &[View], tracks: &SparseSegmentTracks) -> Result<usize> {
     let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
-    validate_cameras(&cameras, "views")?;
+    validate_cameras(&cameras, "cameras")?;
     let n = tracks.csr.check()?;
     tracks
         .csr

@@ -73,11 +73,11 @@ fn check_batch(cameras: &[Matrix3x4<f64>], tracks: &DensePointTracks) -> Result<
 
 /// The checked, depth-normalised cameras and their centres, shared by every track.
 fn prepare(cameras: &[Matrix3x4<f64>]) -> Result<Prepared> {
-    validate_cameras(cameras, "projections")?;
+    validate_cameras(cameras, "cameras")?;
     let v = cameras.len();
     if v == 0 {
         return Err(Error::Shape {
-            what: "projections".into(),
+            what: "cameras".into(),
             expected: "at least 2 cameras".into(),
             actual: "0".into(),
         });

@@ -156,7 +156,7 @@ fn point_of_projections(
     opts: &TriangulationOptions,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    let whitening = checked_track(projections, "projections", observations, covariances, opts)?;
+    let whitening = checked_track(projections, "cameras", observations, covariances, opts)?;
     let normalized: Vec<Matrix3x4<f64>> = projections.iter().map(depth_normalized).collect();
     let views = point_views(&normalized, observations, &whitening);
     Ok(solve_track_views(

@@ -49,7 +49,7 @@ fn check_batch(cameras: &Projections, tracks: &DenseQuadricTracks) -> Result<usi
     let v = cameras.views();
     if v == 0 {
         return Err(Error::Shape {
-            what: "projections".into(),
+            what: "cameras".into(),
             expected: "at least 3 views".into(),
             actual: "0".into(),
         });
@@ -86,7 +86,7 @@ fn quadric_track(
             .collect()
     });
     let arrays: &[&str] = if cameras.per_track() {
-        &["conics", "covariances", "projections"]
+        &["conics", "covariances", "cameras"]
     } else {
         &["conics", "covariances"]
     };
