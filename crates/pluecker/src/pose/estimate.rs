@@ -407,7 +407,10 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
         opts
     };
     match camera.distortion() {
-        Some(lens) => super::lens::estimate_through(lens, corr, opts, started, run),
+        Some(lens) => {
+            let through = super::lens::ThroughLens::new(lens, corr, opts)?;
+            Ok(through.expand(run(&through.observations(), opts, started)?))
+        }
         None => run(&Observations::pinhole(&pinhole, corr), opts, started),
     }
 }

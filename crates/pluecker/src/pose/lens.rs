@@ -1,7 +1,7 @@
 //! Pose through a lens with distortion: the two forms of the observations that the pipeline uses
 //! (`Observations`), the observed (distorted) pixels mapped into the pixels of the lens's pinhole
 //! part with first-order noise ([`undistort`]), and the entry of [`super::estimate_pose`] for a camera
-//! that distorts (`estimate_through`).
+//! that distorts (`ThroughLens`).
 //!
 //! The algebraic methods, the minimal solvers and RANSAC's scoring work on the observations mapped
 //! through the exact unprojection of the [`Camera`] into the pixels of its pinhole part
@@ -37,7 +37,6 @@ use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use nalgebra::{Matrix2, Vector2};
 use std::borrow::Cow;
-use std::time::Instant;
 
 /// The observations `corr` (distorted pixels of `lens`) as undistorted pixels of [`Camera::pinhole`],
 /// with the noise that makes residuals there first-order residuals in the distorted pixels (see the
@@ -164,57 +163,75 @@ impl<'c> Observations<'c> {
     }
 }
 
-/// [`super::estimate_pose`] for a camera with distortion: `corr` holds the observed (distorted) pixels
-/// of `lens`, and `corr.noise` optionally their covariances ([`ObservationNoise::from_covariances`]).
-/// The stages before the refinement run on the undistorted pixels and the refinement minimises the
-/// exact error in the distorted ones ([module docs](self)). The result's pixels (reprojection errors,
-/// `sigma_px`) are distorted pixels, or standard deviations with covariances.
+/// The input of [`super::estimate_pose`] for a camera with distortion: `corr` holds the observed
+/// (distorted) pixels of `lens`, and `corr.noise` optionally their covariances
+/// ([`ObservationNoise::from_covariances`]). The stages before the refinement run on the undistorted
+/// pixels and the refinement minimises the exact error in the distorted ones ([module docs](self)). The
+/// result's pixels (reprojection errors, `sigma_px`) are distorted pixels, or standard deviations with
+/// covariances.
 ///
 /// An observation outside the invertible region of the distortion (a pixel no point in front of the
 /// camera projects to) is an error naming it, except with RANSAC: there it is an outlier (its inlier flag
-/// false, and not counted by the RANSAC report), as a random mismatch at the edge of a fisheye is.
-///
-/// `run` is the pipeline on prepared observations (`estimate::run`), passed in so that this stage
-/// wraps it without the two modules importing each other.
-pub(crate) fn estimate_through(
-    lens: &Camera,
-    corr: &Correspondences,
-    opts: &PoseOptions,
-    started: Instant,
-    run: impl Fn(&Observations<'_>, &PoseOptions, Instant) -> Result<PoseResult>,
-) -> Result<PoseResult> {
-    let noise = corr.noise.as_ref();
-    if let Some(n) = noise {
-        n.check_counts(corr.n_points(), corr.n_lines())?;
-    }
-    // Without RANSAC a pixel beyond the lens is an error (from `undistort`); with it, an outlier.
-    let (points, lines) = if opts.ransac.is_some() {
-        invertible(lens, corr)
-    } else {
-        (vec![], vec![])
-    };
-    if points.iter().chain(&lines).all(|&ok| ok) {
-        let (pinhole, undistorted) = undistort(lens, corr, noise)?;
-        let observations = Observations {
-            pinhole,
-            undistorted: Cow::Owned(undistorted),
-            observed: corr,
-            lens: Some(lens),
+/// false, and not counted by the RANSAC report), as a random mismatch at the edge of a fisheye is. The
+/// pipeline then runs on the others ([`ThroughLens::observations`]), and [`ThroughLens::expand`] puts its
+/// inlier flags back at the places of the caller's correspondences.
+pub(crate) struct ThroughLens<'c> {
+    lens: &'c Camera,
+    /// The correspondences the pipeline sees: the caller's, or those `lens` can unproject.
+    kept: Cow<'c, Correspondences>,
+    /// Which of the caller's points and segments are in `kept` (empty: all of them).
+    points: Vec<bool>,
+    lines: Vec<bool>,
+    pinhole: Intrinsics,
+    undistorted: Correspondences,
+}
+
+impl<'c> ThroughLens<'c> {
+    /// The observations of `corr` through `lens`, undistorted once (errors as the type docs say).
+    pub fn new(lens: &'c Camera, corr: &'c Correspondences, opts: &PoseOptions) -> Result<Self> {
+        if let Some(n) = corr.noise.as_ref() {
+            n.check_counts(corr.n_points(), corr.n_lines())?;
+        }
+        // Without RANSAC a pixel beyond the lens is an error (from `undistort`); with it, an outlier.
+        let (points, lines) = if opts.ransac.is_some() {
+            invertible(lens, corr)
+        } else {
+            (vec![], vec![])
         };
-        return run(&observations, opts, started);
+        let kept = if points.iter().chain(&lines).all(|&ok| ok) {
+            Cow::Borrowed(corr)
+        } else {
+            Cow::Owned(subset(corr, &points, &lines))
+        };
+        let (pinhole, undistorted) = undistort(lens, &kept, kept.noise.as_ref())?;
+        Ok(ThroughLens {
+            lens,
+            kept,
+            points,
+            lines,
+            pinhole,
+            undistorted,
+        })
     }
-    let kept = subset(corr, &points, &lines);
-    let (pinhole, undistorted) = undistort(lens, &kept, kept.noise.as_ref())?;
-    let observations = Observations {
-        pinhole,
-        undistorted: Cow::Owned(undistorted),
-        observed: &kept,
-        lens: Some(lens),
-    };
-    let mut result = run(&observations, opts, started)?;
-    result.inliers_points = expand(&result.inliers_points, &points);
-    result.inliers_lines = expand(&result.inliers_lines, &lines);
-    Ok(result)
+
+    /// The observations the pipeline runs on.
+    pub fn observations(&self) -> Observations<'_> {
+        Observations {
+            pinhole: self.pinhole,
+            undistorted: Cow::Borrowed(&self.undistorted),
+            observed: &self.kept,
+            lens: Some(self.lens),
+        }
+    }
+
+    /// `result` of the kept correspondences with its inlier flags at the places of the caller's.
+    pub fn expand(&self, mut result: PoseResult) -> PoseResult {
+        if matches!(self.kept, Cow::Owned(_)) {
+            result.inliers_points = expand(&result.inliers_points, &self.points);
+            result.inliers_lines = expand(&result.inliers_lines, &self.lines);
+        }
+        result
+    }
 }
 
 /// Which points and segments of `corr` `lens` can unproject (both endpoints for a segment).
