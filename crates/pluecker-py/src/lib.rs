@@ -30,7 +30,7 @@ mod test_hook;
 mod threads;
 mod triangulation;
 
-use pickle::{finished, part, parts, plain};
+use pickle::{payload, plain, subclass};
 use pose::options::{PyPoseOptions, PyRansacOptions};
 use pose::result::{PyPose, PyPoseDetails, PyPoseResult, PyPoseStage, PyRansacReport};
 use pyo3::prelude::*;
@@ -129,44 +129,31 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// A subclass result `$sub` of `$base`, read from a pickle (base part first).
-macro_rules! subclass {
-    ($py:expr, $kind:expr, $input:expr, $base:ty, $sub:ty) => {{
-        let base = part::<$base>($kind, $input)?;
-        let sub = part::<$sub>($kind, $input)?;
-        Py::new($py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-    }};
-}
-
 /// Rebuilds a result pickled by its `__reduce__` (`pickle::reduce`).
 #[pyfunction]
 fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
-    let input = &mut parts(kind, data)?;
-    let object = match kind {
-        "PoseResult" => plain::<PyPoseResult>(py, kind, input)?,
-        "Pose" => plain::<PyPose>(py, kind, input)?,
-        "PoseDetails" => plain::<PyPoseDetails>(py, kind, input)?,
-        "PoseStage" => plain::<PyPoseStage>(py, kind, input)?,
-        "RansacReport" => plain::<PyRansacReport>(py, kind, input)?,
-        "FittedLine" => plain::<PyFittedLine>(py, kind, input)?,
-        "FittedConic" => plain::<PyFittedConic>(py, kind, input)?,
-        "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input)?,
-        "Certificate" => plain::<certificate::PyCertificate>(py, kind, input)?,
-        "PointTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyPointTriangulation),
-        "LineTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyLineTriangulation),
-        "QuadricTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyQuadricTriangulation),
-        "BatchReport" => plain::<PyBatchReport>(py, kind, input)?,
-        "PointTriangulations" => subclass!(py, kind, input, PyBatchReport, PyPointTriangulations),
-        "LineTriangulations" => subclass!(py, kind, input, PyBatchReport, PyLineTriangulations),
-        "QuadricTriangulations" => subclass!(py, kind, input, PyBatchReport, PyQuadricTriangulations),
-        _ => {
-            return Err(errors::PlueckerError::new_err(format!(
-                "cannot unpickle a {kind}: not a pluecker result class"
-            )))
-        }
-    };
-    finished(kind, input)?;
-    Ok(object)
+    let input = payload(kind, data)?;
+    match kind {
+        "PoseResult" => plain::<PyPoseResult>(py, kind, input),
+        "Pose" => plain::<PyPose>(py, kind, input),
+        "PoseDetails" => plain::<PyPoseDetails>(py, kind, input),
+        "PoseStage" => plain::<PyPoseStage>(py, kind, input),
+        "RansacReport" => plain::<PyRansacReport>(py, kind, input),
+        "FittedLine" => plain::<PyFittedLine>(py, kind, input),
+        "FittedConic" => plain::<PyFittedConic>(py, kind, input),
+        "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input),
+        "Certificate" => plain::<certificate::PyCertificate>(py, kind, input),
+        "PointTriangulation" => subclass::<PyTriangulationReport, PyPointTriangulation>(py, kind, input),
+        "LineTriangulation" => subclass::<PyTriangulationReport, PyLineTriangulation>(py, kind, input),
+        "QuadricTriangulation" => subclass::<PyTriangulationReport, PyQuadricTriangulation>(py, kind, input),
+        "BatchReport" => plain::<PyBatchReport>(py, kind, input),
+        "PointTriangulations" => subclass::<PyBatchReport, PyPointTriangulations>(py, kind, input),
+        "LineTriangulations" => subclass::<PyBatchReport, PyLineTriangulations>(py, kind, input),
+        "QuadricTriangulations" => subclass::<PyBatchReport, PyQuadricTriangulations>(py, kind, input),
+        _ => Err(errors::PlueckerError::new_err(format!(
+            "cannot unpickle a {kind}: not a pluecker result class"
+        ))),
+    }
 }
 
 /// Panics inside the guarded, GIL-released section every solve uses: the tests check that this
