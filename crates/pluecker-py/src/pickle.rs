@@ -78,11 +78,12 @@ where
 /// (the pair of the base part and its own).
 pub fn subclass<B, S>(py: Python<'_>, kind: &str, payload: &[u8]) -> PyResult<PyObject>
 where
-    B: PyClass + PyClassBaseType<Initializer = PyClassInitializer<B>> + DeserializeOwned,
+    B: PyClass + PyClassBaseType<Initializer = PyClassInitializer<B>> + Into<PyClassInitializer<B>> + DeserializeOwned,
     S: PyClass<BaseType = B> + DeserializeOwned,
 {
     let (base, sub): (B, S) = value(kind, payload)?;
-    Ok(Py::new(py, PyClassInitializer::from(base).add_subclass(sub))?.into_any())
+    let base: PyClassInitializer<B> = base.into();
+    Ok(Py::new(py, base.add_subclass(sub))?.into_any())
 }
 
 /// The `&'static str` of a name read back: each distinct string is leaked once and reused, so that
@@ -99,13 +100,17 @@ fn intern(s: String) -> &'static str {
     name
 }
 
-/// `#[serde(deserialize_with = "...")]` of a `&'static str` field: the name read, interned.
-pub fn name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<&'static str, D::Error> {
+/// A name held by a result (a column of enum names), read back by [`name`] or [`names`]. An alias, so
+/// that serde's derive does not take a `&'static str` field for a string borrowed from the pickle.
+pub type Name = &'static str;
+
+/// `#[serde(deserialize_with = "...")]` of a [`Name`] field: the name read, interned.
+pub fn name<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Name, D::Error> {
     Ok(intern(String::deserialize(deserializer)?))
 }
 
-/// `#[serde(deserialize_with = "...")]` of a `Vec<&'static str>` field: the names read, interned.
-pub fn names<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<&'static str>, D::Error> {
+/// `#[serde(deserialize_with = "...")]` of a `Vec<Name>` field: the names read, interned.
+pub fn names<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<Name>, D::Error> {
     Ok(Vec::<String>::deserialize(deserializer)?
         .into_iter()
         .map(intern)

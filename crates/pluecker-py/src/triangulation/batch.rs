@@ -13,7 +13,7 @@
 
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{invalid_argument, shape_error, to_py_err};
-use crate::pickle::reduce;
+use crate::pickle::{reduce, Name};
 use crate::properties::{result_class, Mask};
 use crate::setup_poll::in_chunks;
 use nalgebra::Matrix3x4;
@@ -238,19 +238,19 @@ impl InlierColumns {
 #[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct PyBatchReport {
     #[serde(deserialize_with = "crate::pickle::name")]
-    method: &'static str,
+    method: Name,
     cost: Vec<f64>,
     /// What each track's cost measures.
     #[serde(deserialize_with = "crate::pickle::names")]
-    cost_kind: Vec<&'static str>,
+    cost_kind: Vec<Name>,
     lower_bound: Vec<f64>,
     raw_lower_bound: Vec<f64>,
     relative_gap: Vec<f64>,
     certified: Vec<bool>,
     #[serde(deserialize_with = "crate::pickle::names")]
-    certificate: Vec<&'static str>,
+    certificate: Vec<Name>,
     #[serde(deserialize_with = "crate::pickle::names")]
-    status: Vec<&'static str>,
+    status: Vec<Name>,
     nodes: Vec<i64>,
     iterations: Vec<i64>,
     time_seconds: Vec<f64>,
