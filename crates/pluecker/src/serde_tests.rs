@@ -133,7 +133,9 @@ fn an_invalid_camera_does_not_deserialise() {
         assert!(error.contains(&core), "{error} does not say {core}");
     }
     let error = serde_json::from_str::<Camera>(r#"{"model":"PINHOLE_X","params":[]}"#).unwrap_err();
-    assert!(error.to_string().contains("unknown name 'PINHOLE_X'; expected one of SIMPLE_PINHOLE, PINHOLE"));
+    assert!(error
+        .to_string()
+        .contains("unknown name 'PINHOLE_X'; expected one of SIMPLE_PINHOLE, PINHOLE"));
 }
 
 #[test]
@@ -169,5 +171,8 @@ fn named_enums_are_their_names() {
         assert_eq!(&back, status);
     }
     let error = serde_json::from_str::<Status>(r#""fine""#).unwrap_err().to_string();
-    assert!(error.contains("unknown name 'fine'; expected one of success"), "{error}");
+    assert!(
+        error.contains("unknown name 'fine'; expected one of success"),
+        "{error}"
+    );
 }
