@@ -8,7 +8,6 @@
 //! `PlueckerError`, never a wrong object).
 
 use crate::errors::PlueckerError;
-use pyo3::impl_::pyclass::PyClassBaseType;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 use pyo3::PyClass;
@@ -21,7 +20,7 @@ use std::sync::Mutex;
 const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 /// `(pluecker._core._unpickle, (kind, data))`: what `__reduce__` returns for a result of class `kind`
-/// that holds `value` (read back by [`plain`] or [`subclass`]).
+/// that holds `value` (read back by [`plain`] or [`subclass!`]).
 pub fn reduce<'py, T: Serialize>(
     py: Python<'py>,
     kind: &str,
@@ -53,7 +52,7 @@ pub fn payload<'a>(kind: &str, data: &'a [u8]) -> PyResult<&'a [u8]> {
 }
 
 /// The value of a pickle of class `kind`: `payload` must hold it and nothing else.
-fn value<T: DeserializeOwned>(kind: &str, payload: &[u8]) -> PyResult<T> {
+pub fn value<T: DeserializeOwned>(kind: &str, payload: &[u8]) -> PyResult<T> {
     let mut input = payload;
     let value = ciborium::from_reader(&mut input).map_err(|_| malformed(kind))?;
     if !input.is_empty() {
@@ -74,17 +73,15 @@ where
     Ok(Py::new(py, value::<T>(kind, payload)?)?.into_any())
 }
 
-/// A result of class `S`, a subclass of `B`, read from the payload of a pickle of class `kind`
+/// A result of class `$sub`, a subclass of `$base`, read from the payload of a pickle of class `$kind`
 /// (the pair of the base part and its own).
-pub fn subclass<B, S>(py: Python<'_>, kind: &str, payload: &[u8]) -> PyResult<PyObject>
-where
-    B: PyClass + PyClassBaseType<Initializer = PyClassInitializer<B>> + Into<PyClassInitializer<B>> + DeserializeOwned,
-    S: PyClass<BaseType = B> + DeserializeOwned,
-{
-    let (base, sub): (B, S) = value(kind, payload)?;
-    let base: PyClassInitializer<B> = base.into();
-    Ok(Py::new(py, base.add_subclass(sub))?.into_any())
+macro_rules! subclass {
+    ($py:expr, $kind:expr, $payload:expr, $base:ty, $sub:ty) => {{
+        let (base, sub) = $crate::pickle::value::<($base, $sub)>($kind, $payload)?;
+        Ok(Py::new($py, PyClassInitializer::from(base).add_subclass(sub))?.into_any())
+    }};
 }
+pub(crate) use subclass;
 
 /// The `&'static str` of a name read back: each distinct string is leaked once and reused, so that
 /// unpickling many results does not grow memory (the names are a few enum names).
