@@ -140,9 +140,11 @@ fn an_invalid_camera_does_not_deserialise() {
 
 #[test]
 fn options_round_trip() {
-    let mut ransac = RansacOptions::default();
-    ransac.time_budget = Some(Duration::from_millis(250));
-    ransac.seed = 7;
+    let ransac = RansacOptions {
+        time_budget: Some(Duration::from_millis(250)),
+        seed: 7,
+        ..RansacOptions::default()
+    };
     let pose = PoseOptions {
         method: crate::pose::Method::LevenbergMarquardt,
         ransac: Some(ransac),
@@ -157,9 +159,11 @@ fn options_round_trip() {
     assert!(json.contains(r#""method":"levenberg-marquardt""#), "{json}");
     assert!(json.contains(r#""subproblem":"hebden""#), "{json}");
 
-    let mut triangulation = TriangulationOptions::default();
-    triangulation.method = Method::ALL[Method::ALL.len() - 1];
-    triangulation.outlier_threshold = Some(2.5);
+    let triangulation = TriangulationOptions {
+        method: Method::ALL[Method::ALL.len() - 1],
+        outlier_threshold: Some(2.5),
+        ..TriangulationOptions::default()
+    };
     round_trips(&triangulation);
 }
 
