@@ -4,7 +4,7 @@
 use crate::convert::{Integer, Real};
 use crate::errors::to_py_err;
 use crate::nested::NestedOptions;
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::{options_class, result_class, Field};
 use pluecker::{Certificate, CertifyOptions, Primitive};
 use pyo3::prelude::*;
@@ -41,7 +41,7 @@ options_class! {
 /// A proved lower bound on the cost (`Σ r²`, squared whitened pixels) over a stated domain: the
 /// core's `Certificate`.
 #[pyclass(frozen, name = "Certificate", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct PyCertificate {
     pub inner: Certificate,
     /// What the certificate is about (its domain depends on it).
@@ -70,7 +70,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "Certificate", &[self])
+        reduce(py, "Certificate", self)
     }
 
     fn __repr__(&self) -> String {
@@ -85,8 +85,6 @@ result_class! {
         )
     }
 }
-
-pack_struct!(PyCertificate { inner, primitive });
 
 /// A certificate as a property: the `Certificate` object, and its `to_dict()` in plain form.
 impl Field for PyCertificate {

@@ -31,7 +31,7 @@ mod threads;
 mod triangulation;
 mod view;
 
-use pickle::{finished, part, parts, plain};
+use pickle::{payload, plain, subclass};
 use pose::options::{PyPoseOptions, PyRansacOptions};
 use pose::result::{PyPose, PyPoseDetails, PyPoseResult, PyPoseStage, PyRansacReport};
 use pyo3::prelude::*;
@@ -131,44 +131,31 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// A subclass result `$sub` of `$base`, read from a pickle (base part first).
-macro_rules! subclass {
-    ($py:expr, $kind:expr, $input:expr, $base:ty, $sub:ty) => {{
-        let base = part::<$base>($kind, $input)?;
-        let sub = part::<$sub>($kind, $input)?;
-        Py::new($py, PyClassInitializer::from(base).add_subclass(sub))?.into_any()
-    }};
-}
-
 /// Rebuilds a result pickled by its `__reduce__` (`pickle::reduce`).
 #[pyfunction]
 fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
-    let input = &mut parts(kind, data)?;
-    let object = match kind {
-        "PoseResult" => plain::<PyPoseResult>(py, kind, input)?,
-        "Pose" => plain::<PyPose>(py, kind, input)?,
-        "PoseDetails" => plain::<PyPoseDetails>(py, kind, input)?,
-        "PoseStage" => plain::<PyPoseStage>(py, kind, input)?,
-        "RansacReport" => plain::<PyRansacReport>(py, kind, input)?,
-        "FittedLine" => plain::<PyFittedLine>(py, kind, input)?,
-        "FittedConic" => plain::<PyFittedConic>(py, kind, input)?,
-        "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input)?,
-        "Certificate" => plain::<certificate::PyCertificate>(py, kind, input)?,
+    let input = payload(kind, data)?;
+    match kind {
+        "PoseResult" => plain::<PyPoseResult>(py, kind, input),
+        "Pose" => plain::<PyPose>(py, kind, input),
+        "PoseDetails" => plain::<PyPoseDetails>(py, kind, input),
+        "PoseStage" => plain::<PyPoseStage>(py, kind, input),
+        "RansacReport" => plain::<PyRansacReport>(py, kind, input),
+        "FittedLine" => plain::<PyFittedLine>(py, kind, input),
+        "FittedConic" => plain::<PyFittedConic>(py, kind, input),
+        "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input),
+        "Certificate" => plain::<certificate::PyCertificate>(py, kind, input),
         "PointTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyPointTriangulation),
         "LineTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyLineTriangulation),
         "QuadricTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyQuadricTriangulation),
-        "BatchReport" => plain::<PyBatchReport>(py, kind, input)?,
+        "BatchReport" => plain::<PyBatchReport>(py, kind, input),
         "PointTriangulations" => subclass!(py, kind, input, PyBatchReport, PyPointTriangulations),
         "LineTriangulations" => subclass!(py, kind, input, PyBatchReport, PyLineTriangulations),
         "QuadricTriangulations" => subclass!(py, kind, input, PyBatchReport, PyQuadricTriangulations),
-        _ => {
-            return Err(errors::PlueckerError::new_err(format!(
-                "cannot unpickle a {kind}: not a pluecker result class"
-            )))
-        }
-    };
-    finished(kind, input)?;
-    Ok(object)
+        _ => Err(errors::PlueckerError::new_err(format!(
+            "cannot unpickle a {kind}: not a pluecker result class"
+        ))),
+    }
 }
 
 /// Panics inside the guarded, GIL-released section every solve uses: the tests check that this

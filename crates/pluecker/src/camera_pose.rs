@@ -11,6 +11,7 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vect
 /// The fields are public and not checked: a pose built from a matrix that is not a rotation is the
 /// caller's to avoid (the estimators and solvers only return rotations).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Pose {
     /// `R`, world to camera.
     pub rotation: Matrix3<f64>,

@@ -8,6 +8,7 @@
 
 /// Options of every certificate. Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct CertifyOptions {
     /// The answer is certified when `(cost − lower_bound) / max(cost, 1e-12) ≤ max_relative_gap`.
@@ -153,6 +154,7 @@ impl CertificateKind {
 
 /// The global-optimality evidence of an estimate.
 #[derive(Debug, Clone, Copy)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Certificate {
     /// A lower bound on the cost of eq. 19 over every admissible primitive, capped at the cost:
     /// `min(raw_lower_bound, cost)`. A result without a bound carries no certificate

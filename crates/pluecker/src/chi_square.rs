@@ -11,6 +11,7 @@ pub const CONSISTENCY_LEVEL: f64 = 1e-3;
 
 /// The χ² test of one fit.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ResidualTest {
     /// `Σ r²` of the whitened residuals (pixels divided by the given σ, or whitened by the given
     /// covariances).

@@ -96,6 +96,11 @@
 //! assert!(results[2].is_err()); // image[7]: an image index below 4 (the cameras)
 //! ```
 //!
+//! ## Features
+//! - `serde`: `serde::Serialize` and `serde::Deserialize` on the results, the options, [`Pose`],
+//!   [`camera::Intrinsics`] and [`Camera`]. Enums are written by their names (`as_str`), a camera as
+//!   `{"model": "OPENCV", "params": [...]}` and read back through [`Camera::new`], so its checks apply.
+//!
 //! ## References
 //! - T. Q. Phong, R. Horaud, A. Yassine, P. D. Tao, *Object pose from 2-D to 3-D point and line
 //!   correspondences*, IJCV 15(3), 1995. Equation numbers in doc comments refer to this paper.
@@ -126,6 +131,9 @@ pub mod rng;
 pub(crate) mod status;
 pub mod synthetic;
 pub mod triangulation;
+
+#[cfg(all(test, feature = "serde"))]
+mod serde_tests;
 
 pub use camera::Camera;
 pub use error::{Error, Result};

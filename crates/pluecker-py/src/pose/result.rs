@@ -5,7 +5,7 @@
 
 use crate::camera::PyCamera;
 use crate::certificate::certificate_of;
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::{result_class, Field};
 use pluecker::chi_square::ResidualTest;
 use pluecker::pose::{PoseDetails, RansacReport, StageReport};
@@ -16,7 +16,8 @@ use pyo3::types::{PyDict, PyTuple};
 
 /// One stage of the pose pipeline (algebraic estimator, linear solve, reprojection refinement).
 #[pyclass(frozen, name = "PoseStage", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyPoseStage {
     inner: StageReport,
 }
@@ -53,7 +54,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "PoseStage", &[self])
+        reduce(py, "PoseStage", self)
     }
 
     fn __repr__(&self) -> String {
@@ -95,7 +96,8 @@ impl Field for Vec<StageReport> {
 
 /// What the robust loop (LO-RANSAC) did: `PoseResult.ransac` of a robust estimate.
 #[pyclass(frozen, name = "RansacReport", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyRansacReport {
     inner: RansacReport,
 }
@@ -130,7 +132,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "RansacReport", &[self])
+        reduce(py, "RansacReport", self)
     }
 
     fn __repr__(&self) -> String {
@@ -193,7 +195,8 @@ impl Field for pluecker::camera::Intrinsics {
 /// A camera pose `x_cam = R X_world + t`, the core's `Pose`: `rotation` (`R`) and `translation` (`t`,
 /// world units), and the rotation in its other forms as methods. Unpacks as `R, t = pose`.
 #[pyclass(frozen, name = "Pose", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyPose {
     pub(crate) inner: Pose,
 }
@@ -240,7 +243,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "Pose", &[self])
+        reduce(py, "Pose", self)
     }
 
     fn __repr__(&self) -> String {
@@ -291,7 +294,8 @@ impl Field for RunnerUp {
 
 /// How a `PoseResult` was found: the core's `PoseDetails`. Costs are `Σ r²`, px².
 #[pyclass(frozen, name = "PoseDetails", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyPoseDetails {
     inner: PoseDetails,
 }
@@ -331,7 +335,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "PoseDetails", &[self])
+        reduce(py, "PoseDetails", self)
     }
 
     fn __repr__(&self) -> String {
@@ -360,7 +364,8 @@ impl Field for PoseDetails {
 /// The answer of `estimate_pose`, the core's `PoseResult`: the pose, whether it can be used, its cost
 /// `Σ r²`, the correspondences used, its covariance and certificate; how it was found is in `details`.
 #[pyclass(frozen, name = "PoseResult", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyPoseResult {
     inner: PoseResult,
 }
@@ -402,7 +407,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "PoseResult", &[self])
+        reduce(py, "PoseResult", self)
     }
 
     fn __repr__(&self) -> String {
@@ -416,12 +421,6 @@ result_class! {
         )
     }
 }
-
-pack_struct!(PyPoseStage { inner });
-pack_struct!(PyRansacReport { inner });
-pack_struct!(PyPose { inner });
-pack_struct!(PyPoseDetails { inner });
-pack_struct!(PyPoseResult { inner });
 
 /// A pose `x_cam = R X_world + t` as Python passes it: a `Pose`, or the pair `(R, t)` of a `(3, 3)` rotation and a
 /// `(3,)` translation, its parts checked and named `"{name} R"` and `"{name} t"`.

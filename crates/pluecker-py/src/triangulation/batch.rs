@@ -13,7 +13,7 @@
 
 use crate::convert::{read, read_any, shape_string, Dim};
 use crate::errors::{invalid_argument, shape_error, to_py_err};
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::{reduce, Name};
 use crate::properties::{result_class, Mask};
 use crate::setup_poll::in_chunks;
 use nalgebra::Matrix3x4;
@@ -181,7 +181,7 @@ fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 /// The inlier masks of a robust batch (`TriangulationOptions.outlier_threshold`): each solved track's
 /// flags over its views, concatenated, and their count per track (0 for a rejected track) as the core
 /// returns them, until [`InlierColumns::scatter`] lays them out as the observations were given.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct InlierColumns {
     flags: Vec<bool>,
     counts: Vec<usize>,
@@ -233,26 +233,24 @@ impl InlierColumns {
     }
 }
 
-pack_struct!(InlierColumns {
-    flags,
-    counts,
-    laid_out
-});
-
 /// The per-track report columns of a batch: the fields of `TriangulationReport`, one entry per track.
 #[pyclass(frozen, subclass, name = "BatchReport", module = "pluecker")]
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct PyBatchReport {
-    method: &'static str,
+    #[serde(deserialize_with = "crate::pickle::name")]
+    method: Name,
     cost: Vec<f64>,
     /// What each track's cost measures.
-    cost_kind: Vec<&'static str>,
+    #[serde(deserialize_with = "crate::pickle::names")]
+    cost_kind: Vec<Name>,
     lower_bound: Vec<f64>,
     raw_lower_bound: Vec<f64>,
     relative_gap: Vec<f64>,
     certified: Vec<bool>,
-    certificate: Vec<&'static str>,
-    status: Vec<&'static str>,
+    #[serde(deserialize_with = "crate::pickle::names")]
+    certificate: Vec<Name>,
+    #[serde(deserialize_with = "crate::pickle::names")]
+    status: Vec<Name>,
     nodes: Vec<i64>,
     iterations: Vec<i64>,
     time_seconds: Vec<f64>,
@@ -518,30 +516,13 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "BatchReport", &[self])
+        reduce(py, "BatchReport", self)
     }
 
     fn __repr__(&self) -> String {
         self.repr("BatchReport")
     }
 }
-
-pack_struct!(PyBatchReport {
-    method,
-    cost,
-    cost_kind,
-    lower_bound,
-    raw_lower_bound,
-    relative_gap,
-    certified,
-    certificate,
-    status,
-    nodes,
-    iterations,
-    time_seconds,
-    residual_dof,
-    errors
-});
 
 /// An output column of `tracks` rows of `per_track` copies of `value` each; a `MemoryError` rather
 /// than an abort when it cannot be allocated. Filled (its pages touched) a chunk at a time with the GIL

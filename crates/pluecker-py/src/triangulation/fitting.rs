@@ -4,7 +4,7 @@
 
 use crate::convert::{points as read_points, points_to_py, Integer, Real};
 use crate::errors::{guarded, invalid_argument};
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::result_class;
 use crate::threads::solve;
 use pluecker::testing::number;
@@ -19,7 +19,8 @@ fn sigma_arg(sigma: Option<Real>) -> PyResult<f64> {
 
 /// An image line fitted to points, with the covariance of its 2-entry residual.
 #[pyclass(frozen, name = "FittedLine", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyFittedLine {
     inner: FittedLine,
 }
@@ -36,7 +37,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "FittedLine", &[self])
+        reduce(py, "FittedLine", self)
     }
 
     fn __repr__(&self) -> String {
@@ -50,7 +51,8 @@ result_class! {
 
 /// An ellipse fitted to points, with the covariance of its 5-entry residual.
 #[pyclass(frozen, name = "FittedConic", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyFittedConic {
     inner: FittedConic,
 }
@@ -73,7 +75,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "FittedConic", &[self])
+        reduce(py, "FittedConic", self)
     }
 
     fn __repr__(&self) -> String {
@@ -199,6 +201,3 @@ pub fn fitting_residual_samples<'py>(
     d.set_item("conic_whitened", points_to_py(py, &samples.conic_whitened))?;
     Ok(d)
 }
-
-pack_struct!(PyFittedLine { inner });
-pack_struct!(PyFittedConic { inner });

@@ -18,7 +18,7 @@ use crate::convert::{
 };
 use crate::errors::{invalid_argument, shape_error};
 use crate::interrupt::{self, batch_result, run_interruptible};
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::{result_class, Array, Field};
 use nalgebra::{Matrix2, Matrix2x3, Matrix4, Vector2, Vector3, Vector6};
 use pluecker::geometry::plucker::LineChart;
@@ -35,7 +35,7 @@ use rayon::prelude::*;
 
 /// A triangulated 3-D line: Plücker coordinates, a point, a unit direction, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "LineTriangulation", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct PyLineTriangulation {
     plucker: Vector6<f64>,
     point: Vector3<f64>,
@@ -91,7 +91,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(slf.py(), "LineTriangulation", &[slf.as_super().get(), slf.get()])
+        reduce(slf.py(), "LineTriangulation", &(slf.as_super().get(), slf.get()))
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -265,7 +265,7 @@ pub fn triangulate_line(
 
 /// The results of `triangulate_lines`: Plücker coordinates, points and directions per track.
 #[pyclass(frozen, extends = PyBatchReport, name = "LineTriangulations", module = "pluecker")]
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct PyLineTriangulations {
     plucker: Vec<f64>,
     point: Vec<f64>,
@@ -355,7 +355,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(slf.py(), "LineTriangulations", &[slf.as_super().get(), slf.get()])
+        reduce(slf.py(), "LineTriangulations", &(slf.as_super().get(), slf.get()))
     }
 }
 
@@ -581,20 +581,3 @@ fn sparse_finish(
     }
     (report, columns)
 }
-
-pack_struct!(PyLineTriangulation {
-    plucker,
-    point,
-    direction,
-    chart,
-    covariance,
-    inliers
-});
-pack_struct!(PyLineTriangulations {
-    plucker,
-    point,
-    direction,
-    chart_axes,
-    covariance,
-    inliers
-});

@@ -19,7 +19,7 @@ use super::{options_arg, PyTriangulationOptions};
 use crate::convert::{check_finite, covariances2, read, read_mask, same_count, shape_string, Dim, Integer, Real};
 use crate::errors::{shape_error, to_py_err};
 use crate::interrupt::{self, batch_result, run_interruptible};
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
@@ -35,7 +35,7 @@ use std::time::Instant;
 
 /// A triangulated point: the estimate `X` and the report fields of `TriangulationReport`.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "PointTriangulation", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct PyPointTriangulation {
     point: Vector3<f64>,
     covariance: Option<Matrix3<f64>>,
@@ -70,7 +70,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(slf.py(), "PointTriangulation", &[slf.as_super().get(), slf.get()])
+        reduce(slf.py(), "PointTriangulation", &(slf.as_super().get(), slf.get()))
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -120,16 +120,10 @@ pub fn triangulate_point(
     interrupt::object_or_partial(py, outcome.pending, PyPointTriangulation::create(py, outcome.value)?)
 }
 
-pack_struct!(PyPointTriangulation {
-    point,
-    covariance,
-    inliers
-});
-
 /// The results of `triangulate_points`: the columns of its base class `pluecker.BatchReport` and
 /// each track's point (NaN for a rejected track).
 #[pyclass(frozen, extends = PyBatchReport, name = "PointTriangulations", module = "pluecker")]
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct PyPointTriangulations {
     /// Row-major `(n, 3)` points, world frame.
     x: Vec<f64>,
@@ -212,7 +206,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(slf.py(), "PointTriangulations", &[slf.as_super().get(), slf.get()])
+        reduce(slf.py(), "PointTriangulations", &(slf.as_super().get(), slf.get()))
     }
 }
 
@@ -372,5 +366,3 @@ pub(crate) fn point_observations(
     })?;
     batch_result(py, outcome)
 }
-
-pack_struct!(PyPointTriangulations { x, covariance, inliers });

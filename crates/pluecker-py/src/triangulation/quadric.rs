@@ -12,7 +12,7 @@ use super::report::PyTriangulationReport;
 use super::{options_arg, PyTriangulationOptions};
 use crate::convert::{self, matrix_stack, read, read_mask, same_count, Dim, Integer, Real};
 use crate::interrupt::{self, batch_result, run_interruptible};
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::{
@@ -28,7 +28,7 @@ use rayon::prelude::*;
 
 /// A triangulated ellipsoid: dual and primal quadric, centre, axes, semi-axes, and the report fields.
 #[pyclass(frozen, extends = PyTriangulationReport, name = "QuadricTriangulation", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct PyQuadricTriangulation {
     dual: Matrix4<f64>,
     primal: Option<Matrix4<f64>>,
@@ -74,7 +74,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(slf.py(), "QuadricTriangulation", &[slf.as_super().get(), slf.get()])
+        reduce(slf.py(), "QuadricTriangulation", &(slf.as_super().get(), slf.get()))
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> String {
@@ -135,7 +135,7 @@ pub fn triangulate_quadric(
 
 /// The results of `triangulate_quadrics`: dual and primal quadrics, centres, semi-axes and axes.
 #[pyclass(frozen, extends = PyBatchReport, name = "QuadricTriangulations", module = "pluecker")]
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct PyQuadricTriangulations {
     dual: Vec<f64>,
     primal: Vec<f64>,
@@ -221,7 +221,7 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(slf.py(), "QuadricTriangulations", &[slf.as_super().get(), slf.get()])
+        reduce(slf.py(), "QuadricTriangulations", &(slf.as_super().get(), slf.get()))
     }
 }
 
@@ -332,20 +332,3 @@ pub(crate) fn quadric_observations(
     })?;
     batch_result(py, outcome)
 }
-
-pack_struct!(PyQuadricTriangulation {
-    dual,
-    primal,
-    centre,
-    axes,
-    semi_axes,
-    covariance
-});
-pack_struct!(PyQuadricTriangulations {
-    dual,
-    primal,
-    centre,
-    semi_axes,
-    axes,
-    covariance
-});

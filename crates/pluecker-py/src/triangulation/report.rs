@@ -2,7 +2,7 @@
 //! the base class of the point, line and quadric results, which add their estimate.
 
 use crate::certificate::certificate_of;
-use crate::pickle::{pack_struct, reduce, Pack, Reader};
+use crate::pickle::reduce;
 use crate::properties::result_class;
 use pluecker::triangulation::{Primitive, Report};
 use pyo3::prelude::*;
@@ -11,7 +11,7 @@ use pyo3::types::PyTuple;
 /// What one triangulation did: method, status, the cost of eq. 19 at the estimate, the certificate
 /// of global optimality, iterations and time.
 #[pyclass(frozen, subclass, name = "TriangulationReport", module = "pluecker")]
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct PyTriangulationReport {
     pub inner: Report,
     /// What was triangulated (the certificate's domain depends on it).
@@ -79,12 +79,10 @@ result_class! {
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
-        reduce(py, "TriangulationReport", &[self])
+        reduce(py, "TriangulationReport", self)
     }
 
     fn __repr__(&self) -> String {
         format!("TriangulationReport({})", self.repr_fields())
     }
 }
-
-pack_struct!(PyTriangulationReport { inner, primitive });

@@ -17,6 +17,7 @@ use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
 /// The pinhole part `K` of a camera ([`crate::camera::Camera::intrinsics`]), pixels. `fx` and `fy` may be
 /// negative (mirrored axes), never zero.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Intrinsics {
     /// Focal length along u, pixels (the paper's α_u).
     pub fx: f64,

@@ -22,7 +22,16 @@ use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Vector2, Vector3};
 /// assert_eq!(pinhole.model(), CameraModel::Pinhole);
 /// assert_eq!(lens.intrinsics(), pinhole.intrinsics());
 /// ```
+///
+/// With the `serde` feature a camera is written as its model (by name) and parameters,
+/// `{"model": "SIMPLE_RADIAL", "params": [800.0, 320.0, 240.0, -0.1]}`, and read back through
+/// [`Camera::new`]: its checks apply, and an invalid camera is an error with its message.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(try_from = "CameraParts", into = "CameraParts")
+)]
 pub struct Camera {
     pub(super) model: CameraModel,
     pub(super) params: Vec<f64>,
@@ -34,6 +43,32 @@ pub struct Camera {
     /// is proved one-to-one ([`crate::camera::bounds::domain`], a scan for the tangential terms): computed
     /// once here, as they depend on the camera alone, and read by every observation's bound.
     pub(super) bounds: Option<(Distortion, Option<Domain>)>,
+}
+
+/// What a [`Camera`] is written as with the `serde` feature: its model and parameters.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct CameraParts {
+    model: CameraModel,
+    params: Vec<f64>,
+}
+
+#[cfg(feature = "serde")]
+impl From<Camera> for CameraParts {
+    fn from(camera: Camera) -> CameraParts {
+        CameraParts {
+            model: camera.model,
+            params: camera.params,
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<CameraParts> for Camera {
+    type Error = Error;
+    fn try_from(parts: CameraParts) -> Result<Camera> {
+        Camera::new(parts.model, &parts.params)
+    }
 }
 
 /// The distortion of `model` with `params` in the form of [`crate::camera::bounds`], or `None` when its

@@ -12,6 +12,7 @@ use nalgebra::{Matrix3, Vector3, Vector4};
 
 /// A dual quaternion `r + ε s`; a rigid motion when [`DualQuaternion::constraint_residuals`] vanish.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DualQuaternion {
     /// Real part: the rotation quaternion.
     pub r: Vector4<f64>,

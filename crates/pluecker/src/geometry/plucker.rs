@@ -213,6 +213,7 @@ impl OrthonormalLine {
 /// perpendicular to `d`. Moving the pivot along the line by `s` (`p' = p + s d`) keeps the axes and
 /// changes coordinates linearly and exactly: `t = t' − s α` ([`Self::repivot`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LineChart {
     /// `p`, a point of the line, world units.
     pub pivot: Vector3<f64>,
@@ -413,6 +414,23 @@ impl PluckerLine {
     /// Eq. 5: the line after the point transformation `X' = H X` (`H` invertible), on the quadric again.
     pub fn transform(&self, h: &Matrix4<f64>) -> Result<PluckerLine> {
         PluckerLine::new(&transform(h, &self.coordinates))
+    }
+}
+
+/// With the `serde` feature a line is written as its [`PluckerLine::coordinates`] and read back through
+/// [`PluckerLine::new`]: checked, and put on the Plücker quadric again (to rounding).
+#[cfg(feature = "serde")]
+impl serde::Serialize for PluckerLine {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        serde::Serialize::serialize(&self.coordinates, serializer)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl<'de> serde::Deserialize<'de> for PluckerLine {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
+        let coordinates = <Vector6<f64> as serde::Deserialize>::deserialize(deserializer)?;
+        PluckerLine::new(&coordinates).map_err(serde::de::Error::custom)
     }
 }
 

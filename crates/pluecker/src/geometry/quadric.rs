@@ -230,6 +230,7 @@ impl Ellipsoid {
 
 /// A real image ellipse, pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Ellipse {
     /// Centre, pixels.
     pub centre: Vector2<f64>,

@@ -7,6 +7,7 @@ use nalgebra::SMatrix;
 
 /// Options of the Levenberg-Marquardt solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct LevenbergMarquardtOptions {
     /// Initial damping, relative to the largest diagonal entry of `JᵀJ`. Default `1e-3`.

@@ -129,6 +129,7 @@ pub(crate) fn invalid_option<T>(name: &str, field: &str, reason: &str) -> crate:
 
 /// Stopping tests shared by every solver (the k.2 tests of section 4.1, plus a step-size test).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct StoppingCriteria {
     /// Stop when `‖∇f‖∞ ≤ gradient_tolerance`. Default `1e-12`.

@@ -36,6 +36,7 @@ impl Subproblem {
 
 /// Options of the trust-region solver. Defaults are the paper's values.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct TrustRegionOptions {
     /// Subproblem solver. Default [`Subproblem::Hebden`].

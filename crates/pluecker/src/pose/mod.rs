@@ -91,6 +91,7 @@ impl Method {
 
 /// Options of [`estimate_pose`]; every field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct PoseOptions {
     /// Estimator. Default [`Method::TrustRegion`].
@@ -238,6 +239,7 @@ pub use crate::status::Status;
 
 /// What one stage of the pipeline did and where it ended.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StageReport {
     /// `"trust-region"`, `"rotation"`, `"translation"`, `"linear"`, `"ransac"`, `"refinement"`, ...
     pub name: String,
@@ -269,6 +271,7 @@ pub struct StageReport {
 /// Every cost is `Σ r²`, the sum of the squared (whitened) pixel residuals, two per point and two per
 /// line (the endpoints' distances to the projected line), px².
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PoseResult {
     /// The returned pose, `x_cam = R X_world + t` (NaN if the solver failed). Its rotation as a dual
     /// quaternion, an axis and angle, or a rotation vector: [`crate::camera_pose::Pose::dual_quaternion`],
@@ -323,6 +326,7 @@ impl PoseResult {
 
 /// How a [`PoseResult`] was found. Costs are `Σ r²`, px².
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PoseDetails {
     /// The estimator that ran.
     pub method: Method,

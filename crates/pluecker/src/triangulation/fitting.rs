@@ -24,6 +24,7 @@ const REWEIGHTING_TOLERANCE: f64 = 1e-13;
 
 /// A line fitted to image points.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FittedLine {
     /// Homogeneous image line `(n, c₀)`, unit normal, `c₀ ≤ 0` (the sign convention of
     /// [`LineFrame`]); pixels.
@@ -36,6 +37,7 @@ pub struct FittedLine {
 
 /// An ellipse fitted to image points.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FittedConic {
     /// The point conic `c` of eq. 8, pixels, normalised to unit Frobenius norm.
     pub conic: Matrix3<f64>,

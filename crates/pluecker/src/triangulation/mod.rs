@@ -150,6 +150,7 @@ impl QuadricBound {
 
 /// Options of every triangulation function; each field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct TriangulationOptions {
     /// Estimator. Default [`Method::Optimal`].
@@ -247,6 +248,7 @@ pub use crate::status::Status;
 
 /// What one triangulation did: shared by every primitive's result.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Report {
     /// The method that ran.
     pub method: Method,

@@ -87,6 +87,7 @@ use std::time::{Duration, Instant};
 
 /// Options of the robust estimator (`PoseOptions::ransac`). Every field has a documented default.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub struct RansacOptions {
     /// Inlier threshold of a point: the reprojection distance in pixels. Default `4.0`.
@@ -248,6 +249,7 @@ impl RansacStop {
 
 /// What the robust loop did.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RansacReport {
     /// Samples drawn.
     pub iterations: usize,

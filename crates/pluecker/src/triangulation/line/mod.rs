@@ -66,6 +66,7 @@ const COINCIDENT_PLANES: f64 = 1e-18;
 
 /// A triangulated 3-D line.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LineTriangulation {
     /// The line in the world frame: Plücker coordinates (eq. 3), unit norm, satisfying eq. 4.
     pub plucker: PluckerLine,

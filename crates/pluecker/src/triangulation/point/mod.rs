@@ -87,6 +87,7 @@ const FARTHEST_ORIGIN: f64 = 1e3;
 
 /// A triangulated point.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PointTriangulation {
     /// The point, world coordinates (NaN when the status is [`Status::AtInfinity`]).
     pub point: Vector3<f64>,

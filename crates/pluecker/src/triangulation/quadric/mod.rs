@@ -63,6 +63,7 @@ pub type Matrix5 = SMatrix<f64, 5, 5>;
 
 /// A triangulated ellipsoid.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct QuadricTriangulation {
     /// The dual quadric `L` of eq. 10 (world frame), normalised so that `L₄₄ = −1`.
     pub dual: Matrix4<f64>,
