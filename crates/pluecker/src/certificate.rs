@@ -254,3 +254,6 @@ impl Certificate {
         certificate.certified.then_some(certificate)
     }
 }
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(CertificateKind, Primitive);

@@ -38,3 +38,6 @@ impl CostKind {
         self.into()
     }
 }
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(CostKind);

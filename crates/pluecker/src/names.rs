@@ -70,18 +70,4 @@ macro_rules! serde_by_name {
     )+};
 }
 
-serde_by_name!(
-    crate::pose::Method,
-    crate::triangulation::Method,
-    crate::triangulation::LineBound,
-    crate::triangulation::QuadricBound,
-    crate::pose::CovarianceSource,
-    crate::pose::RansacStop,
-    crate::optim::Termination,
-    crate::optim::Subproblem,
-    crate::CostKind,
-    crate::Status,
-    crate::CertificateKind,
-    crate::Primitive,
-    crate::camera::CameraModel,
-);
+pub(crate) use serde_by_name;

@@ -88,3 +88,6 @@ impl Status {
         }
     }
 }
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(Status);

@@ -213,3 +213,6 @@ pub(super) const MAX_UNPROJECTION_ITERATIONS: usize = 100;
 
 /// Below this `ω²` COLMAP's FOV projection uses its series in `ω`, and below this `r²` its series in `r`.
 pub(super) const FOV_SERIES_BOUND: f64 = 1e-4;
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(CameraModel);

@@ -10,3 +10,6 @@ pub(crate) mod trust_region;
 pub use levenberg_marquardt::LevenbergMarquardtOptions;
 pub use problem::{Linearization, Objective, StoppingCriteria, Summary, Termination};
 pub use trust_region::{Subproblem, TrustRegionOptions};
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(Termination, Subproblem);

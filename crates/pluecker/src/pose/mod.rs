@@ -403,3 +403,6 @@ pub(crate) fn stage(name: &str, cost_kind: CostKind, pose: &Pose, summary: &Summ
         time_seconds: started.elapsed().as_secs_f64(),
     }
 }
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(Method, CovarianceSource, RansacStop);

@@ -377,3 +377,6 @@ where
         })
         .collect()
 }
+
+// Written and read by name with the `serde` feature.
+crate::names::serde_by_name!(Method, LineBound, QuadricBound);
