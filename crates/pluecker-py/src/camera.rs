@@ -235,20 +235,12 @@ result_class! {
         pixels: &Bound<'py, PyAny>,
         covariances: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let us = points::<2>("pixels", Some(pixels))?;
-        let covs = pixel_covariances(covariances, us.len())?;
         let cam = &self.inner;
-        let out = guarded(|| {
-            us.iter()
-                .zip(&covs)
-                .enumerate()
-                .map(|(i, (u, c))| {
-                    let n = cam.unproject(u, i)?;
-                    cam.normalized_covariance(&n, c).ok_or_else(|| pluecker::Error::Degenerate {
-                        what: format!("pixel {i}: the projection's Jacobian is singular there"),
-                    })
-                })
-                .collect::<pluecker::Result<Vec<_>>>()
+        let out = each_pixel(pixels, covariances, |i, u, c| {
+            let n = cam.unproject(u, i)?;
+            cam.normalized_covariance(&n, c).ok_or_else(|| pluecker::Error::Degenerate {
+                what: format!("pixel {i}: the projection's Jacobian is singular there"),
+            })
         })?;
         Ok(Array3::from_shape_fn((out.len(), 2, 2), |(i, j, k)| out[i][(j, k)]).into_pyarray(py))
     }
@@ -264,21 +256,13 @@ result_class! {
         pixels: &Bound<'py, PyAny>,
         covariances: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Undistorted<'py>> {
-        let us = points::<2>("pixels", Some(pixels))?;
-        let covs = pixel_covariances(covariances, us.len())?;
         let cam = &self.inner;
-        let out = guarded(|| {
-            us.iter()
-                .zip(&covs)
-                .enumerate()
-                .map(|(i, (u, c))| {
-                    let (ubar, j) = cam.undistort(u, i)?;
-                    let j_inv = j.try_inverse().ok_or_else(|| pluecker::Error::Degenerate {
-                        what: format!("pixel {i}: the distortion is singular there"),
-                    })?;
-                    Ok((ubar, j_inv * c * j_inv.transpose()))
-                })
-                .collect::<pluecker::Result<Vec<_>>>()
+        let out = each_pixel(pixels, covariances, |i, u, c| {
+            let (ubar, j) = cam.undistort(u, i)?;
+            let j_inv = j.try_inverse().ok_or_else(|| pluecker::Error::Degenerate {
+                what: format!("pixel {i}: the distortion is singular there"),
+            })?;
+            Ok((ubar, j_inv * c * j_inv.transpose()))
         })?;
         let ubar: Vec<Vector2<f64>> = out.iter().map(|o| o.0).collect();
         let c = Array3::from_shape_fn((out.len(), 2, 2), |(i, j, k)| out[i].1[(j, k)]);
@@ -304,6 +288,18 @@ result_class! {
         let args = PyTuple::new(slf.py(), [c.model().as_str().into_pyobject(slf.py())?.into_any(), c.params().to_vec().into_pyobject(slf.py())?.into_any()])?;
         Ok((slf.get_type().into_any(), args))
     }
+}
+
+/// `f(i, pixel, covariance)` of every pixel (N, 2) of `pixels` with its `covariances` (N, 2, 2) (`None`:
+/// 1 px² isotropic), the first error naming its pixel.
+fn each_pixel<T>(
+    pixels: &Bound<'_, PyAny>,
+    covariances: Option<&Bound<'_, PyAny>>,
+    f: impl Fn(usize, &Vector2<f64>, &Matrix2<f64>) -> pluecker::Result<T>,
+) -> PyResult<Vec<T>> {
+    let us = points::<2>("pixels", Some(pixels))?;
+    let covs = pixel_covariances(covariances, us.len())?;
+    guarded(|| us.iter().zip(&covs).enumerate().map(|(i, (u, c))| f(i, u, c)).collect())
 }
 
 /// `Camera.undistort`'s answer: undistorted pixels (N, 2) and their covariances (N, 2, 2).
