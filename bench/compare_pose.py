@@ -171,7 +171,7 @@ def _pluecker(s: Scene) -> Outcome:
     if len(s.lines3d):
         kwargs.update(lines2d=s.lines2d, lines3d=s.lines3d)
     r = pluecker.estimate_pose(s.camera, **kwargs)
-    return np.asarray(r.pose.rotation), np.asarray(r.pose.translation), r.status == "success", r.details.time_seconds
+    return np.asarray(r.pose.rotation), np.asarray(r.pose.translation), r.status == "success", r.time_seconds
 
 
 def _opencv(flag: int, refine: bool = False) -> Callable[[Scene], Outcome]:

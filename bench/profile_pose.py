@@ -10,20 +10,20 @@ row is ``make_synthetic(row, --seed + i)``. Rows (``--rows`` selects by substrin
 - ``lens-fisheye-f{250,800}-n100-{points,mixed}``: OPENCV_FISHEYE, k1..k4 = 0.05, -0.01, 0.002, -0.0005.
 
 **Runs per scene**, alternating, ``--repeats`` times each, the fastest kept (by the library's own
-``details.time_seconds``): ``default`` = ``estimate_pose(camera, ...)`` (no certificate), and ``certified`` =
+``time_seconds``): ``default`` = ``estimate_pose(camera, ...)`` (no certificate), and ``certified`` =
 the same with ``options=PoseOptions(certify=CertifyOptions())`` (default gap 1e-3, each search's own node
-cap). The scene's time is the certified call's ``details.time_seconds``.
+cap). The scene's time is the certified call's ``time_seconds``.
 
 **Stage columns** of a scene (ms):
 
 - ``algebraic``, ``refine``: ``details.stages`` of the certified call (the estimator, e.g. ``trust-region``,
   and ``refinement``), each timed by the library inside that one call;
-- ``other``: default call's ``details.time_seconds`` minus its stages: the starts, the runner-up search
+- ``other``: default call's ``time_seconds`` minus its stages: the starts, the runner-up search
   (``ambiguity``), the covariance, the checks;
-- ``certify``: certified ``details.time_seconds`` − default ``details.time_seconds``: the certificate (the
+- ``certify``: certified ``time_seconds`` − default ``time_seconds``: the certificate (the
   sublevel-set test, ``sublevel_set`` / ``lens_sublevel_set``, with its search over ``nodes`` rotation
   cells). A **difference of separate runs**: noisy when it is small; can be negative by noise;
-- ``boundary``: Python wall of the certified call − its ``details.time_seconds`` (argument conversion,
+- ``boundary``: Python wall of the certified call − its ``time_seconds`` (argument conversion,
   result objects).
 
 **Counts** printed: status, certified, certificate kind, ``nodes`` and ``solver_iterations`` of the
@@ -78,7 +78,7 @@ class Profile:
     nodes: int
     solver_iterations: int
     iterations: str  # per stage, e.g. "5+2"
-    total: float  # certified details.time_seconds
+    total: float  # certified time_seconds
     algebraic: float
     refine: float
     other: float
@@ -88,13 +88,13 @@ class Profile:
 
 
 def fastest(call: Any, repeats: int) -> tuple[Any, float]:
-    """The result of the fastest of ``repeats`` calls (by its ``details.time_seconds``) and its wall time."""
+    """The result of the fastest of ``repeats`` calls (by its ``time_seconds``) and its wall time."""
     best: tuple[Any, float] | None = None
     for _ in range(repeats):
         started = time.perf_counter()
         result = call()
         wall = time.perf_counter() - started
-        if best is None or result.details.time_seconds < best[0].details.time_seconds:
+        if best is None or result.time_seconds < best[0].time_seconds:
             best = (result, wall)
     assert best is not None
     return best

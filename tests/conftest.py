@@ -151,7 +151,7 @@ def assert_pose_close(result, r_true, t_true, tol: float, seed=None) -> None:
     dr = float(np.max(np.abs(result.pose.rotation - r_true)))
     dt = float(np.max(np.abs(result.pose.translation - t_true)))
     assert dr < tol and dt < tol, (
-        f"seed={seed} method={result.details.method} status={result.status}: |dR|={dr:.3e} |dt|={dt:.3e} (tol {tol:.0e})"
+        f"seed={seed} method={result.method} status={result.status}: |dR|={dr:.3e} |dt|={dt:.3e} (tol {tol:.0e})"
     )
 
 

@@ -43,7 +43,7 @@ def test_pose_recovers_the_pose_of_a_random_scene(tmp_path, capsys, seed):
     assert main(["pose", write(tmp_path, doc)]) == 0
     out = json.loads(capsys.readouterr().out)
     assert_recovers(out, scene, seed)
-    assert out["details"]["method"] == "trust-region"
+    assert out["method"] == "trust-region"
     assert [s["name"] for s in out["details"]["stages"]][-1] == "refinement"
 
 
@@ -65,7 +65,7 @@ def test_pose_accepts_K_method_and_options(tmp_path, capsys, seed):
     # The command-line flags win over the file.
     assert main(["pose", write(tmp_path, doc), "--method", "rotation-then-translation", "--no-refine"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["details"]["method"] == "rotation-then-translation"
+    assert out["method"] == "rotation-then-translation"
     assert [s["name"] for s in out["details"]["stages"]] == ["rotation", "translation"]
     assert_recovers(out, scene, seed, tol=1e-5)
 

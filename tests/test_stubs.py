@@ -77,7 +77,7 @@ def test_no_options_means_the_default_options():
     data = (scene["camera"], scene["points2d"] + 0.3, scene["points3d"], scene["lines2d"], scene["lines3d"])
     a = pluecker.estimate_pose(*data)
     b = pluecker.estimate_pose(*data, options=pluecker.PoseOptions())
-    assert np.array_equal(a.pose.rotation, b.pose.rotation) and np.array_equal(a.pose.translation, b.pose.translation) and a.details.iterations == b.details.iterations
+    assert np.array_equal(a.pose.rotation, b.pose.rotation) and np.array_equal(a.pose.translation, b.pose.translation) and a.iterations == b.iterations
     robust = pluecker.estimate_pose(*data, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions()))
     explicit = pluecker.estimate_pose(*data, options=pluecker.PoseOptions(ransac=pluecker.RansacOptions()))
     assert np.array_equal(robust.pose.rotation, explicit.pose.rotation)
@@ -94,7 +94,7 @@ def test_the_method_is_set_in_the_options_only():
     scene = pluecker.random_scene("general", 12, 0, seed=6)
     r = pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"],
                                options=pluecker.PoseOptions(method="levenberg-marquardt"))
-    assert r.details.method == "levenberg-marquardt"
+    assert r.method == "levenberg-marquardt"
     for keyword in ({"method": "newton"}, {"ransac": pluecker.RansacOptions()}):
         with pytest.raises(TypeError):
             pluecker.estimate_pose(scene["camera"], scene["points2d"], scene["points3d"], **keyword)

@@ -424,18 +424,10 @@ class PoseDetails:
 
     # fields of PoseDetails (generated: python -m pluecker._stubgen)
     __fields__: ClassVar[List[Tuple[str, str, str]]]
-    method: str
-    """The estimator that ran."""
-    iterations: int
-    """Iterations summed over the stages."""
-    termination: str
-    """Why the last iterative stage stopped."""
     stages: List[PoseStage]
     """Every stage in order; the last one gave the returned pose."""
     rms_error_px: float
     """Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)`."""
-    time_seconds: float
-    """Total wall time, seconds."""
     estimated_camera: Optional[Camera]
     """Intrinsics estimated by method `'linear'` (`None` for the others)."""
     ransac: Optional[RansacReport]
@@ -467,6 +459,8 @@ class PoseResult:
     __fields__: ClassVar[List[Tuple[str, str, str]]]
     pose: Pose
     """The pose `x_cam = R X_world + t` (NaN if the solver failed); `R, t = result.pose`."""
+    method: str
+    """The estimator that ran."""
     status: str
     """`success`, or why not: `gap_not_closed` (a requested certificate does not hold), `not_converged` (a
     stage hit its cap), `numerical_failure`, `behind_camera` (points behind at the pose, or the data fit far
@@ -477,6 +471,20 @@ class PoseResult:
     """`status == 'success'`."""
     cost: float
     """Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels."""
+    cost_kind: str
+    """What `cost` measures: `reprojection`."""
+    certificate: Optional[Certificate]
+    """Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
+    (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
+    """
+    certified: bool
+    """`certificate is not None and certificate.certified`."""
+    iterations: int
+    """Iterations summed over the stages."""
+    termination: str
+    """Why the last iterative stage stopped."""
+    time_seconds: float
+    """Wall time, seconds."""
     inliers_points: NDArray[np.bool_]
     """(N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true."""
     inliers_lines: NDArray[np.bool_]
@@ -485,14 +493,8 @@ class PoseResult:
     """6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
     frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
     """
-    certificate: Optional[Certificate]
-    """Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
-    (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
-    """
     details: PoseDetails
-    """How the pose was found: method, stages, timings, noise, runner-up."""
-    certified: bool
-    """`certificate is not None and certificate.certified`."""
+    """How the pose was found: stages, noise, runner-up."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
 

@@ -568,7 +568,7 @@ def _pose(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(text)
     if result.status != "success":
-        print(f"pluecker pose: warning: status {result.status} (termination {result.details.termination}); "
+        print(f"pluecker pose: warning: status {result.status} (termination {result.termination}); "
               "the pose may be unusable", file=sys.stderr)
     return 0
 

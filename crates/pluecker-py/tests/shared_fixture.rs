@@ -47,7 +47,7 @@ fn shared_fixture_every_method_recovers_the_pose() {
         let result = estimate_pose(&scene.camera, &scene.correspondences, &opts).expect("valid input");
         let dr = (result.pose.rotation - scene.rotation).amax();
         let dt = (result.pose.translation - scene.translation).amax();
-        assert_eq!(result.status, Status::Success, "{}", method.as_str());
+        assert_eq!(result.report.status, Status::Success, "{}", method.as_str());
         assert!(
             dr < RECOVERY_TOLERANCE && dt < RECOVERY_TOLERANCE,
             "{}: dR={dr:e} dt={dt:e}",

@@ -63,7 +63,7 @@ fn main() {
             };
             times.push(started.elapsed().as_secs_f64() * 1e6);
             if std::env::var("NODES").is_ok() {
-                eprintln!("nodes {seed} {:?}", result.certificate.as_ref().map(|c| c.nodes));
+                eprintln!("nodes {seed} {:?}", result.report.certificate.as_ref().map(|c| c.nodes));
             }
             let cost = ReprojectionCost::exact(&scene.camera, &corr).unwrap();
             let mine = cost.cost(&result.pose);
@@ -88,27 +88,27 @@ fn main() {
                     best = best.min(c);
                 }
             }
-            if result.certificate.is_some_and(|c| c.certified) {
+            if result.report.certificate.is_some_and(|c| c.certified) {
                 certified += 1;
             } else if std::env::var("WHY").is_ok() {
                 println!(
                     "  seed {seed}: {} {}",
-                    result.status.as_str(),
+                    result.report.status.as_str(),
                     result.details.uncertified_reason.as_deref().unwrap_or("")
                 );
             }
             if mine > best * (1.0 + 1e-6) + 1e-9 {
                 misses += 1;
-                if result.status.as_str() == "success" {
+                if result.report.status.as_str() == "success" {
                     miss_success += 1;
                 }
-                if result.status == pluecker::Status::Ambiguous {
+                if result.report.status == pluecker::Status::Ambiguous {
                     miss_ambiguous += 1;
                 }
                 if std::env::var("VERBOSE").is_ok() {
                     println!(
                         "  seed {seed}: {} cost {mine:.4} best {best:.4}",
-                        result.status.as_str()
+                        result.report.status.as_str()
                     );
                 }
             }

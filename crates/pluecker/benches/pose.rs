@@ -95,13 +95,14 @@ fn bench_group(c: &mut Criterion, group_name: &str, refine: bool) {
                 }
                 Ok(r) => {
                     let rotation_error = rotation_distance(&r.pose.rotation, &scene.rotation);
-                    let failed =
-                        r.status != Status::Success || rotation_error.is_nan() || rotation_error > FAILED_ROTATION_RAD;
+                    let failed = r.report.status != Status::Success
+                        || rotation_error.is_nan()
+                        || rotation_error > FAILED_ROTATION_RAD;
                     eprintln!(
                         "setup {id}: {} status {} iterations {} rotation error {rotation_error:.2e} rad translation error {:.2e}",
                         if failed { "FAILED" } else { "ok" },
-                        r.status.as_str(),
-                        r.details.iterations,
+                        r.report.status.as_str(),
+                        r.report.iterations,
                         (r.pose.translation - scene.translation).norm(),
                     );
                 }
@@ -176,11 +177,11 @@ fn robust(c: &mut Criterion) {
             .count();
         let rotation_error = rotation_distance(&r.pose.rotation, &scene.rotation);
         let report = r.details.ransac.as_ref().expect("robust report");
-        let failed = r.status != Status::Success || !(rotation_error <= FAILED_ROTATION_RAD);
+        let failed = r.report.status != Status::Success || !(rotation_error <= FAILED_ROTATION_RAD);
         eprintln!(
             "setup robust/{name}: {} status {} samples {} models {} LO {} inliers {} (true inliers missed {missed}, outliers kept {kept}) rotation error {rotation_error:.2e} rad translation error {:.2e}",
             if failed { "FAILED" } else { "ok" },
-            r.status.as_str(),
+            r.report.status.as_str(),
             report.iterations,
             report.models_scored,
             report.local_optimizations,

@@ -130,11 +130,11 @@ fn check(kind: SceneKind, scenes: u64, path: &str, lines: bool) {
         );
         iterations[0] += r.details.stages[0].iterations;
         iterations[1] += r.details.stages.last().unwrap().iterations;
-        if r.status != Status::Success || !(er <= 10.0 * br.sqrt() && et <= 10.0 * bt.sqrt()) {
+        if r.report.status != Status::Success || !(er <= 10.0 * br.sqrt() && et <= 10.0 * bt.sqrt()) {
             failures += 1;
             println!(
                 "seed {seed}: status {} rotation error {er:.3e} (bound {:.3e})",
-                r.status.as_str(),
+                r.report.status.as_str(),
                 br.sqrt()
             );
             continue;

@@ -35,8 +35,8 @@ fn main() -> pluecker::Result<()> {
     options.certify = Some(certify);
     let result = estimate_pose(&camera, &data, &options)?;
 
-    println!("cost: {:.4} px²", result.cost);
-    match &result.certificate {
+    println!("cost: {:.4} px²", result.report.cost);
+    match &result.report.certificate {
         Some(c) => {
             println!(
                 "lower bound: {:.4} px² ({}, {} nodes)",
@@ -50,6 +50,6 @@ fn main() -> pluecker::Result<()> {
         // No bound could be computed; the details say why.
         None => println!("no certificate: {:?}", result.details.uncertified_reason),
     }
-    println!("status: {}", result.status.as_str());
+    println!("status: {}", result.report.status.as_str());
     Ok(())
 }

@@ -44,7 +44,7 @@ fn main() -> pluecker::Result<()> {
 
     println!("R = {:.4}", result.pose.rotation);
     println!("t = {:.4?}", result.pose.translation.as_slice());
-    println!("status: {}", result.status.as_str());
-    println!("cost: {:.3} px² (8 points, 4 segments)", result.cost);
+    println!("status: {}", result.report.status.as_str());
+    println!("cost: {:.3} px² (8 points, 4 segments)", result.report.cost);
     Ok(())
 }

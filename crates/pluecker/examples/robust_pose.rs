@@ -45,8 +45,8 @@ fn main() -> pluecker::Result<()> {
     println!("t = {:.4?}", result.pose.translation.as_slice());
     println!(
         "status: {}, cost of the inliers: {:.3} px²",
-        result.status.as_str(),
-        result.cost
+        result.report.status.as_str(),
+        result.report.cost
     );
     println!("rejected points: {rejected:?}");
     if let Some(report) = &result.details.ransac {

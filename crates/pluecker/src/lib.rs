@@ -127,6 +127,7 @@ pub mod interrupt;
 pub(crate) mod names;
 pub mod optim;
 pub mod pose;
+pub(crate) mod report;
 pub mod rng;
 pub(crate) mod status;
 pub mod synthetic;
@@ -146,6 +147,7 @@ pub use pose::{
     estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
     RansacReport, RansacStop,
 };
+pub use report::Report;
 pub use status::Status;
 
 /// The linear-algebra crate whose types the API takes and returns (`Vector3`, `Matrix3x4`, ...),

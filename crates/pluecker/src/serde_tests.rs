@@ -66,7 +66,7 @@ fn point_triangulation() -> PointTriangulation {
 #[test]
 fn a_pose_result_round_trips_with_its_names() {
     let result = pose_result();
-    assert!(result.certificate.is_some() && result.details.residual_test.is_some());
+    assert!(result.report.certificate.is_some() && result.details.residual_test.is_some());
     let json = round_trips(&result);
     assert!(json.contains(r#""status":"success""#), "{json}");
     assert!(json.contains(r#""method":"trust-region""#), "{json}");
@@ -76,18 +76,18 @@ fn a_pose_result_round_trips_with_its_names() {
 #[test]
 fn nan_fields_keep_their_bits_through_cbor() {
     let mut result = pose_result();
-    result.cost = odd_nan(1);
+    result.report.cost = odd_nan(1);
     result.pose.translation.x = odd_nan(0xdead_beef);
     result.details.behind_camera_cost = Some(f64::NAN);
     let back = through_cbor(&result);
     let bits = |r: &PoseResult| {
         let behind = r.details.behind_camera_cost.map(f64::to_bits);
-        (r.cost.to_bits(), r.pose.translation.x.to_bits(), behind)
+        (r.report.cost.to_bits(), r.pose.translation.x.to_bits(), behind)
     };
     assert_eq!(bits(&back), bits(&result));
     // Every other field is equal: compared with the NaNs replaced by a number in both.
     let numbers = |mut r: PoseResult| {
-        r.cost = 0.0;
+        r.report.cost = 0.0;
         r.pose.translation.x = 0.0;
         r.details.behind_camera_cost = Some(0.0);
         r

@@ -244,7 +244,7 @@ def run_and_score(truth: Truth, obs: Observation, est: Estimator) -> Score:
     except pluecker.PlueckerError as exc:
         return Score(nan, failed=True, error=f"{type(exc).__name__}: {exc}")
     R, t = np.asarray(res.pose.rotation), np.asarray(res.pose.translation)
-    values = dict(nan, iterations=float(res.details.iterations), time_ms=1000.0 * res.details.time_seconds)
+    values = dict(nan, iterations=float(res.iterations), time_ms=1000.0 * res.time_seconds)
     if not (np.all(np.isfinite(R)) and np.all(np.isfinite(t))):
         return Score(values, failed=True, error=f"non-finite pose ({res.status})")
     camera = res.details.estimated_camera or truth.camera

@@ -302,18 +302,10 @@ pub struct PyPoseDetails {
 
 result_class! {
     PyPoseDetails {
-        /// The estimator that ran.
-        method = |d| d.inner.method.as_str();
-        /// Iterations summed over the stages.
-        iterations = |d| d.inner.iterations;
-        /// Why the last iterative stage stopped.
-        termination = |d| d.inner.termination.as_str();
         /// Every stage in order; the last one gave the returned pose.
         stages = |d| d.inner.stages.clone();
         /// Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)`.
         rms_error_px = |d| d.inner.rms_error_px;
-        /// Total wall time, seconds.
-        time_seconds = |d| d.inner.time_seconds;
         /// Intrinsics estimated by method `'linear'` (`None` for the others).
         estimated_camera = |d| d.inner.estimated_camera;
         /// What the robust loop did; `None` unless `options.ransac` is set.
@@ -341,8 +333,8 @@ result_class! {
     fn __repr__(&self) -> String {
         let d = &self.inner;
         format!(
-            "PoseDetails(method='{}', iterations={}, termination='{}', rms_error_px={:.3e}, time_seconds={:.3e})",
-            d.method.as_str(), d.iterations, d.termination.as_str(), d.rms_error_px, d.time_seconds
+            "PoseDetails(stages={}, rms_error_px={:.3e})",
+            d.stages.len(), d.rms_error_px
         )
     }
 }
@@ -361,8 +353,9 @@ impl Field for PoseDetails {
     }
 }
 
-/// The answer of `estimate_pose`, the core's `PoseResult`: the pose, whether it can be used, its cost
-/// `Σ r²`, the correspondences used, its covariance and certificate; how it was found is in `details`.
+/// The answer of `estimate_pose`, the core's `PoseResult`: the pose, its report's fields (as on every
+/// result: method, status, cost, certificate, iterations, time), the correspondences used and its
+/// covariance; how it was found is in `details`.
 #[pyclass(frozen, name = "PoseResult", module = "pluecker")]
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 #[serde(transparent)]
@@ -380,15 +373,30 @@ result_class! {
     PyPoseResult {
         /// The pose `x_cam = R X_world + t` (NaN if the solver failed); `R, t = result.pose`.
         pose = |r| PyPose { inner: r.inner.pose };
+        /// The estimator that ran.
+        method = |r| r.inner.report.method.as_str();
         /// `success`, or why not: `gap_not_closed` (a requested certificate does not hold), `not_converged` (a
         /// stage hit its cap), `numerical_failure`, `behind_camera` (points behind at the pose, or the data fit far
         /// better behind: `details.behind_camera_cost`), `ambiguous` (another minimum nearly as good:
         /// `details.second_best`); robust: `too_few_inliers`, `no_hypothesis`; `interrupted`, `time_budget`.
-        status = |r| r.inner.status.as_str();
+        status = |r| r.inner.report.status.as_str();
         /// `status == 'success'`.
-        success = |r| r.inner.success();
+        success = |r| r.inner.report.success();
         /// Reprojection cost `Σ r²` (px²) of the used correspondences at the pose, in the observed pixels.
-        cost = |r| r.inner.cost;
+        cost = |r| r.inner.report.cost;
+        /// What `cost` measures: `reprojection`.
+        cost_kind = |r| r.inner.report.cost_kind.as_str();
+        /// Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
+        /// (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
+        certificate = |r| certificate_of(r.inner.report.certificate, Primitive::Pose);
+        /// `certificate is not None and certificate.certified`.
+        certified = |r| r.inner.report.certified();
+        /// Iterations summed over the stages.
+        iterations = |r| r.inner.report.iterations;
+        /// Why the last iterative stage stopped.
+        termination = |r| r.inner.report.termination.as_str();
+        /// Wall time, seconds.
+        time_seconds = |r| r.inner.report.time_seconds;
         /// (N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true.
         inliers_points = |r| r.inner.inliers_points.clone();
         /// (M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true.
@@ -396,13 +404,8 @@ result_class! {
         /// 6x6 covariance `σ² (JᵀJ)⁻¹` of `(ω, t)` at the pose (`ω` the tangent of `exp(ω) R`, radians, camera
         /// frame; then `t`, world units), from the used correspondences; `None` when `JᵀJ` is singular or σ unknown.
         covariance = |r| r.inner.covariance;
-        /// Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
-        /// (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
-        certificate = |r| certificate_of(r.inner.certificate, Primitive::Pose);
-        /// How the pose was found: method, stages, timings, noise, runner-up.
+        /// How the pose was found: stages, noise, runner-up.
         details = |r| r.inner.details.clone();
-        /// `certificate is not None and certificate.certified`.
-        certified = |r| r.inner.certified();
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.
@@ -416,8 +419,8 @@ result_class! {
         let w = r.pose.rotation_vector();
         format!(
             "PoseResult(status='{}', cost={:.6e}, rotation_vector=[{:.6}, {:.6}, {:.6}], translation=[{:.6}, {:.6}, {:.6}], certified={})",
-            r.status.as_str(), r.cost, w.x, w.y, w.z, t.x, t.y, t.z,
-            if r.certified() { "True" } else { "False" }
+            r.report.status.as_str(), r.report.cost, w.x, w.y, w.z, t.x, t.y, t.z,
+            if r.report.certified() { "True" } else { "False" }
         )
     }
 }

@@ -49,6 +49,7 @@ use crate::error::{Error, Result};
 use crate::optim::levenberg_marquardt::LevenbergMarquardtOptions;
 use crate::optim::Summary;
 use crate::optim::{StoppingCriteria, Termination, TrustRegionOptions};
+use crate::Report;
 use nalgebra::{Matrix3, Matrix6, Vector3};
 use reprojection::Pose;
 use std::time::Instant;
@@ -138,7 +139,7 @@ pub struct PoseOptions {
     /// ties only.
     pub ambiguity_threshold: f64,
     /// The global-optimality certificate (the sublevel-set test, [`crate::CertificateKind::SublevelSet`]):
-    /// `None` skips it ([`PoseResult::certificate`] is then `None`). With `Some`, a pose that is not
+    /// `None` skips it (the result's `report.certificate` is then `None`). With `Some`, a pose that is not
     /// proved (no bound, or a gap above `max_relative_gap`) has status [`Status::GapNotClosed`] where
     /// it would have been [`Status::Success`]. `max_nodes: None` caps the rotation cells at 20 000
     /// (100 000 for lines alone or fewer than two points; with points and segments, 10 000 for the
@@ -265,8 +266,9 @@ pub struct StageReport {
     pub time_seconds: f64,
 }
 
-/// The result of [`estimate_pose`]: the pose, whether it can be used, its cost, the correspondences
-/// used, its covariance and its certificate; how it was found is in [`PoseResult::details`].
+/// The result of [`estimate_pose`]: the pose, its [`Report`] (whether it can be used, its cost, its
+/// certificate, as every result of the crate), the correspondences used and its covariance; how it was
+/// found is in [`PoseResult::details`].
 ///
 /// Every cost is `Σ r²`, the sum of the squared (whitened) pixel residuals, two per point and two per
 /// line (the endpoints' distances to the projected line), px².
@@ -277,14 +279,16 @@ pub struct PoseResult {
     /// quaternion, an axis and angle, or a rotation vector: [`crate::camera_pose::Pose::dual_quaternion`],
     /// [`crate::camera_pose::Pose::axis_angle`], [`crate::camera_pose::Pose::rotation_vector`].
     pub pose: crate::camera_pose::Pose,
-    /// Whether the answer can be used, and if not why. A certificate requested
-    /// ([`PoseOptions::certify`]) that does not hold turns [`Status::Success`] into
-    /// [`Status::GapNotClosed`]; every other status takes precedence over it.
-    pub status: Status,
-    /// The reprojection cost `Σ r²` (px²) of the used correspondences at the returned pose, in the
-    /// observed pixels (for `linear` without refinement: at the estimated intrinsics). NaN when the
-    /// pose is not finite.
-    pub cost: f64,
+    /// What the solve did: `report.status` says whether the answer can be used (a certificate
+    /// requested with [`PoseOptions::certify`] that does not hold turns [`Status::Success`] into
+    /// [`Status::GapNotClosed`]; every other status takes precedence over it); `report.cost` is the
+    /// reprojection cost `Σ r²` (px²) of the used correspondences at the returned pose, in the observed
+    /// pixels (for `linear` without refinement: at the estimated intrinsics; NaN when the pose is not
+    /// finite); `report.certificate` the proved lower bound on it over every rotation and translation
+    /// that keeps the object points in front of the camera (kind `sublevel_set`), `certified` when the
+    /// relative gap is within [`CertifyOptions::max_relative_gap`], `None` when no bound was computed
+    /// (not requested, or not available: [`PoseDetails::uncertified_reason`]).
+    pub report: Report<Method>,
     /// Which points were used for the returned pose: the final inliers when robust, else all true.
     pub inliers_points: Vec<bool>,
     /// Which lines were used for the returned pose: the final inliers when robust, else all true.
@@ -300,47 +304,19 @@ pub struct PoseResult {
     /// residuals), or when the pose is not finite. For `linear`, at the estimated intrinsics taken as
     /// exact.
     pub covariance: Option<Matrix6<f64>>,
-    /// The proved lower bound on [`PoseResult::cost`] over every rotation and translation that keeps
-    /// the object points in front of the camera (kind `sublevel_set`), in `Σ r²`;
-    /// `certified` when the relative gap is within [`CertifyOptions::max_relative_gap`]. `None` when no
-    /// bound was computed: not requested, or not available (the reason is
-    /// [`PoseDetails::uncertified_reason`]).
-    pub certificate: Option<Certificate>,
-    /// How the pose was found: the method, its stages, timings, noise and ambiguity diagnostics.
+    /// How the pose was found: its stages, noise and ambiguity diagnostics.
     pub details: PoseDetails,
-}
-
-impl PoseResult {
-    /// `status == Status::Success`: the answer can be used (the same meaning as
-    /// a triangulation `Report::success`).
-    pub fn success(&self) -> bool {
-        self.status == Status::Success
-    }
-
-    /// Whether a certificate was computed and proves the pose globally optimal (within
-    /// `certify.max_relative_gap`, over the certificate's domain).
-    pub fn certified(&self) -> bool {
-        self.certificate.is_some_and(|c| c.certified)
-    }
 }
 
 /// How a [`PoseResult`] was found. Costs are `Σ r²`, px².
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct PoseDetails {
-    /// The estimator that ran.
-    pub method: Method,
-    /// Iterations summed over stages (the `ransac` stage of the robust path counts its samples).
-    pub iterations: usize,
-    /// Why the last iterative stage stopped.
-    pub termination: Termination,
     /// Every stage in order; the last one gave the returned pose.
     pub stages: Vec<StageReport>,
     /// Root-mean-square reprojection error over the used correspondences, pixels: `√(cost / m)` over
     /// the `m` residuals.
     pub rms_error_px: f64,
-    /// Total wall time, seconds.
-    pub time_seconds: f64,
     /// Intrinsics estimated by the linear method (`None` for the others).
     pub estimated_camera: Option<Intrinsics>,
     /// What the robust loop did (`None` unless [`PoseOptions::ransac`]).
@@ -352,13 +328,13 @@ pub struct PoseDetails {
     pub sigma_px: Option<f64>,
     /// The cheapest other local minimum found with every object point in front (world frame), and its
     /// cost `Σ r²` (px²); `None` when the search found no other. Within the ambiguity margin of
-    /// [`PoseResult::cost`], the status is [`Status::Ambiguous`].
+    /// `report.cost`, the status is [`Status::Ambiguous`].
     pub second_best: Option<(Pose, f64)>,
     /// When the residuals at the returned pose exceed the noise (`σ` = [`PoseOptions::sigma_px`], else
     /// 1 px), the minimal solvers also look for poses with every object point *behind* the camera
     /// (`candidates::behind_camera_cost`); the cost `Σ r²` (px²) of the best one that fits better
     /// than the returned pose by more than `ambiguity_threshold σ²` (the ambiguity margin, with the
-    /// stated σ) and by a factor of at least 100, if any. Then [`PoseResult::status`] is
+    /// stated σ) and by a factor of at least 100, if any. Then `report.status` is
     /// [`Status::BehindCamera`]: the returned pose is the best found with the points in front,
     /// but the data come from points behind the camera (or a mirrored object). `None` otherwise.
     pub behind_camera_cost: Option<f64>,

@@ -17,6 +17,7 @@ use crate::camera::Intrinsics;
 use crate::chi_square::ResidualTest;
 use crate::interrupt::stop_reason;
 use crate::optim::{Objective, Termination};
+use crate::Report;
 use std::time::Instant;
 
 /// What a pipeline hands to [`assemble`].
@@ -149,21 +150,23 @@ pub(crate) fn assemble(
     } else {
         status
     };
+    let mut report = Report::new(opts.method, CostKind::Reprojection);
+    report.status = status;
+    report.cost = cost;
+    report.certificate = certification.certificate;
+    report.iterations = stages.iter().map(|s| s.iterations).sum();
+    report.termination = termination;
+    report.test_residuals(residual_count, fitted);
+    report.time_seconds = started.elapsed().as_secs_f64();
     PoseResult {
         pose,
-        status,
-        cost,
+        report,
         inliers_points,
         inliers_lines,
         covariance,
-        certificate: certification.certificate,
         details: PoseDetails {
-            method: opts.method,
-            iterations: stages.iter().map(|s| s.iterations).sum(),
-            termination,
             stages,
             rms_error_px,
-            time_seconds: started.elapsed().as_secs_f64(),
             estimated_camera,
             ransac: ransac.map(|r| RansacReport {
                 score: sum_of_squares(r.score),

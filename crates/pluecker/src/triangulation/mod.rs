@@ -58,9 +58,8 @@ pub mod testing {
     pub use crate::covariance::whitening;
 }
 
-use crate::chi_square::ResidualTest;
 use crate::error::{Error, Result};
-use crate::optim::{Summary, Termination, TrustRegionOptions};
+use crate::optim::{Summary, TrustRegionOptions};
 
 /// The three estimators of every primitive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, strum::IntoStaticStr, strum::EnumString, strum::VariantArray)]
@@ -246,93 +245,10 @@ pub use crate::cost_kind::CostKind;
 #[doc(no_inline)]
 pub use crate::status::Status;
 
-/// What one triangulation did: shared by every primitive's result.
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Report {
-    /// The method that ran.
-    pub method: Method,
-    /// Whether the estimate can be used.
-    pub status: Status,
-    /// The cost at the estimate, of kind `cost_kind`: eq. 19 (squared whitened pixels for points), or
-    /// the segments' reprojection cost for lines seen through a lens that distorts.
-    pub cost: f64,
-    /// What `cost` measures, and what the certificate bounds: [`CostKind::Reprojection`] for points
-    /// and for lines from segments through a lens that distorts, [`CostKind::LineResidual`] for other
-    /// lines, [`CostKind::ConicResidual`] for quadrics.
-    pub cost_kind: CostKind,
-    /// Optimality evidence: `None` when no bound was computed (methods `linear` and `local`, an
-    /// input refused before the search); `Some` with `certified == false` when a search ran and did
-    /// not close the gap (or the status is not [`Status::Success`]).
-    pub certificate: Option<Certificate>,
-    /// Accepted iterations of the local minimisation (0 for `linear`).
-    pub iterations: usize,
-    /// Why the last iterative stage stopped ([`Termination::ClosedForm`] for `linear`).
-    pub termination: Termination,
-    /// Wall time of the call, seconds.
-    pub time_seconds: f64,
-    /// Degrees of freedom of `cost`: `m − p` for `m` whitened residuals (2 per view for points and
-    /// lines, 5 for conics) and `p` fitted parameters (3, 4, 9); 0 when not known. See
-    /// [`Report::residual_test`].
-    pub residual_dof: usize,
-}
+/// What one triangulation did: the crate's one [`crate::Report`] with the triangulation [`Method`].
+pub type Report = crate::report::Report<Method>;
 
 impl Report {
-    /// The report a method starts from: status success, no cost yet (of kind `cost_kind`), no
-    /// certificate, no iterations.
-    pub fn new(method: Method, cost_kind: CostKind) -> Report {
-        Report {
-            method,
-            status: Status::Success,
-            cost: f64::NAN,
-            cost_kind,
-            certificate: None,
-            iterations: 0,
-            termination: Termination::ClosedForm,
-            time_seconds: 0.0,
-            residual_dof: 0,
-        }
-    }
-
-    /// `status == Status::Success`: the estimate can be used (the same meaning as
-    /// [`crate::PoseResult::success`]).
-    pub fn success(&self) -> bool {
-        self.status == Status::Success
-    }
-
-    /// Whether a certificate was computed and proves the estimate globally optimal (within
-    /// `certify.max_relative_gap`, over the certificate's domain).
-    pub fn certified(&self) -> bool {
-        self.certificate.is_some_and(|c| c.certified)
-    }
-
-    /// Sets [`Report::residual_dof`] for `residuals` whitened residuals and `parameters` fitted ones.
-    pub(crate) fn test_residuals(&mut self, residuals: usize, parameters: usize) {
-        self.residual_dof = residuals.saturating_sub(parameters);
-    }
-
-    /// The χ² test of `cost` against the given covariances ([`crate::chi_square`]; identity
-    /// covariances mean 1 px) with [`Report::residual_dof`] degrees of freedom. `consistent == false`:
-    /// the observations disagree beyond their stated noise (an outlier, a wrong camera, distortion, a
-    /// covariance too small). `None` when the degrees of freedom are 0 or there is no cost. Computed
-    /// on demand (about 0.1 µs), not in the solvers' hot loops.
-    pub fn residual_test(&self) -> Option<ResidualTest> {
-        ResidualTest::new(self.cost, self.residual_dof)
-    }
-}
-
-impl Report {
-    /// Sets the status; a status other than [`Status::Success`] withdraws the certificate's claim
-    /// (`certified` is false), so that the two fields never disagree.
-    pub fn set_status(&mut self, status: Status) {
-        self.status = status;
-        if status != Status::Success {
-            if let Some(c) = self.certificate.as_mut() {
-                c.certified = false;
-            }
-        }
-    }
-
     /// The report of a local minimisation of a cost of kind `cost_kind` that ended as `summary` says
     /// (`summary.final_cost` is the solvers' `½ Σ`, so the cost is twice it).
     pub(crate) fn of_local(summary: &Summary, cost_kind: CostKind) -> Report {

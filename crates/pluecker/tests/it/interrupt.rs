@@ -183,7 +183,7 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
     certify.certify = Some(CertifyOptions::default());
     let plain = estimate_pose(&scene.camera, &scene.correspondences, &certify).unwrap();
     assert!(
-        plain.certificate.is_some_and(|c| c.certified),
+        plain.report.certificate.is_some_and(|c| c.certified),
         "{:?}",
         plain.details.uncertified_reason
     );
@@ -191,8 +191,8 @@ fn ransac_and_the_certificate_stop_at_their_next_poll() {
         estimate_pose(&scene.camera, &scene.correspondences, &certify)
     })
     .unwrap();
-    assert!(stopped.certificate.is_none_or(|c| !c.certified));
-    assert_eq!(stopped.status, pluecker::Status::Interrupted);
+    assert!(stopped.report.certificate.is_none_or(|c| !c.certified));
+    assert_eq!(stopped.report.status, pluecker::Status::Interrupted);
     let why = stopped.details.uncertified_reason.unwrap_or_default();
     assert!(why.contains("interrupted"), "{why}");
     // The pose itself does not depend on the stop.

@@ -49,7 +49,7 @@ fn every_method_recovers_noise_free_poses_from_points_lines_and_both() {
                         rot_err < 1e-6 && t_err < 1e-5,
                         "seed {seed} {np}p {nl}l {method:?} refine={refine}: {rot_err} {t_err}"
                     );
-                    assert_eq!(r.status, Status::Success, "seed {seed} {method:?}");
+                    assert_eq!(r.report.status, Status::Success, "seed {seed} {method:?}");
                 }
             }
         }
@@ -110,7 +110,7 @@ fn result_does_not_depend_on_the_start() {
                 assert!(
                     rot < 1e-6 && t < 1e-6,
                     "{method:?} trial {trial}: {rot} {t} {:?}; reference error {}",
-                    r.details.termination,
+                    r.report.termination,
                     rotation_distance(&reference.pose.rotation, &scene.rotation)
                 );
             }
@@ -131,7 +131,7 @@ fn default_pipeline_attains_the_cramer_rao_bound() {
             let scene = random_scene(kind, 50, 0, 1000 + seed);
             let data = scene.noisy(1.0, true, &mut rng);
             let r = estimate_pose(&scene.camera, &data, &PoseOptions::default()).unwrap();
-            assert_eq!(r.status, Status::Success, "{kind:?} seed {seed}");
+            assert_eq!(r.report.status, Status::Success, "{kind:?} seed {seed}");
             let c = &scene.correspondences;
             let cost = ReprojectionCost::new(scene.camera.intrinsics(), &c.points2d, &c.points3d, &[], &[]);
             let cov = pose_covariance(&cost, &Pose::new(scene.rotation, scene.translation), 1.0).unwrap();
@@ -266,7 +266,7 @@ fn points_behind_the_camera_are_reported() {
     }
     let r = estimate_pose(&scene.camera, &c, &PoseOptions::default()).unwrap();
     assert!(rotation_distance(&r.pose.rotation, &scene.rotation) < 1e-6);
-    assert_eq!(r.status, Status::BehindCamera);
+    assert_eq!(r.report.status, Status::BehindCamera);
 }
 
 /// Data from a nearly flat object behind the camera, with a small stated noise: the best pose in
@@ -323,7 +323,7 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
             "{name}: fit in front {fit}, behind {behind}: not the regime of the test"
         );
         assert_eq!(
-            r.status,
+            r.report.status,
             Status::BehindCamera,
             "{name}: a fit of {fit} px² in front (σ = {sigma} px) against {behind} px² behind the camera"
         );

@@ -36,7 +36,11 @@ fn gap(cost: f64, bound: f64) -> f64 {
 /// The raw lower bound (`Σ r²`) of a result whose certificate holds; `None` when it has none or it
 /// does not hold.
 fn certified_raw_bound(result: &pluecker::PoseResult) -> Option<f64> {
-    result.certificate.filter(|c| c.certified).map(|c| c.raw_lower_bound)
+    result
+        .report
+        .certificate
+        .filter(|c| c.certified)
+        .map(|c| c.raw_lower_bound)
 }
 
 /// The rows of issue 9's table where the old pipeline missed most often, 25 scenes each, 1 px noise.
@@ -68,7 +72,7 @@ fn the_default_pipeline_reaches_the_best_known_minimum_or_says_it_is_ambiguous()
                 assert!(!missed, "{row}: missed the best known minimum");
             } else {
                 assert!(
-                    !missed || result.status != Status::Success,
+                    !missed || result.report.status != Status::Success,
                     "{row}: a miss that says success"
                 );
             }
@@ -84,9 +88,9 @@ fn the_default_pipeline_reaches_the_best_known_minimum_or_says_it_is_ambiguous()
                 assert!(second >= cost - 1e-9, "{row}: the runner-up {second} is cheaper");
                 // The reported cost is the oracle's, doubled.
                 assert!(
-                    (result.cost / 2.0 - cost).abs() <= 1e-9 * cost.max(1.0),
+                    (result.report.cost / 2.0 - cost).abs() <= 1e-9 * cost.max(1.0),
                     "{row}: cost {}",
-                    result.cost
+                    result.report.cost
                 );
             }
         }
@@ -121,7 +125,7 @@ fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
     // The data are rounded to 1e-5 px: the exact fit is at that level, the old answer at 0.315 px.
     assert!(result.details.rms_error_px < 1e-4, "{}", result.details.rms_error_px);
     assert!(cost_of(&camera, &corr, &result.pose) < 1e-8);
-    assert_eq!(result.status, Status::Ambiguous);
+    assert_eq!(result.report.status, Status::Ambiguous);
     let (pose, second) = result.details.second_best.expect("the 0.315 px minimum is found too");
     // Reported in `Σ r²`; the oracle's cost is `½ Σ r²`.
     let second = second / 2.0;
@@ -135,7 +139,10 @@ fn near_ties_are_reported_as_ambiguous_with_the_runner_up() {
     // Told that the noise is 0.01 px, the data do tell the two apart.
     let mut sure = PoseOptions::default();
     sure.sigma_px = Some(0.01);
-    assert_eq!(estimate_pose(&camera, &corr, &sure).unwrap().status, Status::Success);
+    assert_eq!(
+        estimate_pose(&camera, &corr, &sure).unwrap().report.status,
+        Status::Success
+    );
 }
 
 /// Near ties on each side of the ambiguity margin `½ ambiguity_threshold σ²` (`σ = sigma_px`): scenes
@@ -189,7 +196,7 @@ fn near_ties_sit_on_each_side_of_the_ambiguity_margin() {
                     "{row}: the runner-up's cost is {second}"
                 );
                 assert_eq!(
-                    result.status,
+                    result.report.status,
                     expected,
                     "{row}: Δ = {delta:.6} is {ratio} of the margin {:.6} (sigma_px {sigma:.4})",
                     delta / ratio
@@ -275,7 +282,7 @@ fn near_ties_sit_on_each_side_of_the_estimated_noise_margin() {
             } else {
                 outside += 1;
             }
-            assert_eq!(result.status, expected, "{row}");
+            assert_eq!(result.report.status, expected, "{row}");
         }
     }
     eprintln!("{inside} ties inside the estimated margin, {outside} outside, {duplicates} duplicated answers");
@@ -319,7 +326,7 @@ fn certified_bounds_are_never_beaten() {
                     .uncertified_reason
                     .as_deref()
                     .is_some_and(|why| !why.is_empty()));
-                assert_ne!(result.status, Status::Success);
+                assert_ne!(result.report.status, Status::Success);
                 continue;
             };
             // Reported in `Σ r²`; the oracle's costs are `½ Σ r²`.
@@ -483,17 +490,17 @@ fn the_node_cap_of_certify_options_takes_effect() {
         options
     };
     let free = estimate_pose(&scene.camera, &corr, &certify(None)).unwrap();
-    let certificate = free.certificate.expect("a bound");
+    let certificate = free.report.certificate.expect("a bound");
     assert!(certificate.certified && certificate.nodes > 1, "{certificate:?}");
-    assert_eq!(free.status, Status::Success);
+    assert_eq!(free.report.status, Status::Success);
     assert!(free.details.uncertified_reason.is_none());
     let capped = estimate_pose(&scene.camera, &corr, &certify(Some(1))).unwrap();
     assert!(
-        capped.certificate.is_none_or(|c| !c.certified),
+        capped.report.certificate.is_none_or(|c| !c.certified),
         "{:?}",
-        capped.certificate
+        capped.report.certificate
     );
-    assert_eq!(capped.status, Status::GapNotClosed);
+    assert_eq!(capped.report.status, Status::GapNotClosed);
     let why = capped.details.uncertified_reason.expect("a reason");
     assert!(why.contains("max_nodes = 1"), "{why}");
     // The pose is the same: only the proof changed.
@@ -509,8 +516,8 @@ fn lines_alone_are_certified_over_the_stated_domain() {
     let scene = visible_scene(800.0, 0, 12, false, 5);
     let corr = scene.noisy(1.0, true, &mut Rng::new(5));
     let plain = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
-    assert_eq!(plain.status, Status::Success);
-    assert!(plain.certificate.is_none());
+    assert_eq!(plain.report.status, Status::Success);
+    assert!(plain.report.certificate.is_none());
     assert!(plain
         .details
         .uncertified_reason
@@ -520,14 +527,14 @@ fn lines_alone_are_certified_over_the_stated_domain() {
     opts.certify = Some(Default::default());
     let requested = estimate_pose(&scene.camera, &corr, &opts).unwrap();
     assert_eq!(
-        requested.status,
+        requested.report.status,
         Status::Success,
         "{:?}",
         requested.details.uncertified_reason
     );
-    let certificate = requested.certificate.expect("a certificate");
+    let certificate = requested.report.certificate.expect("a certificate");
     assert!(certificate.certified);
-    assert!(certificate.raw_lower_bound <= requested.cost * (1.0 + 1e-12));
+    assert!(certificate.raw_lower_bound <= requested.report.cost * (1.0 + 1e-12));
     let domain = certificate.kind.domain(pluecker::Primitive::Pose);
     assert!(domain.contains("endpoints in front"), "{domain}");
     assert_eq!(requested.pose, plain.pose);
@@ -536,7 +543,7 @@ fn lines_alone_are_certified_over_the_stated_domain() {
     one_node.max_nodes = Some(1);
     capped.certify = Some(one_node);
     let capped = estimate_pose(&scene.camera, &corr, &capped).unwrap();
-    assert_eq!(capped.status, Status::GapNotClosed);
+    assert_eq!(capped.report.status, Status::GapNotClosed);
     let why = capped.details.uncertified_reason.expect("a reason");
     assert!(why.contains("max_nodes = 1"), "{why}");
     assert_eq!(capped.pose, plain.pose);
@@ -552,9 +559,9 @@ fn reported_costs_are_sums_of_squares() {
     let half = cost_of(&scene.camera, &corr, &result.pose);
     // Rounding of two sums of 36 squares: 1e-12 relative.
     assert!(
-        (result.cost - 2.0 * half).abs() <= 1e-12 * half.max(1.0),
+        (result.report.cost - 2.0 * half).abs() <= 1e-12 * half.max(1.0),
         "{} vs 2 x {half}",
-        result.cost
+        result.report.cost
     );
     let refinement = result.details.stages.last().unwrap();
     assert_eq!(refinement.cost_kind, pluecker::CostKind::Reprojection);

@@ -72,7 +72,7 @@ fn mean_nees(trials: u64, estimate: impl Fn(&Scene, &mut Rng) -> PoseResult) -> 
     for seed in 0..trials {
         let scene = visible_scene(600.0, 30, 4, false, 100 + seed);
         let result = estimate(&scene, &mut Rng::new(seed));
-        assert_eq!(result.status, Status::Success, "seed {seed}");
+        assert_eq!(result.report.status, Status::Success, "seed {seed}");
         total += nees(&result, &scene).expect("a covariance");
     }
     total / trials as f64
@@ -167,7 +167,7 @@ fn robust_pose_through_a_lens_rejects_outliers() {
         opts.ransac = Some(ransac);
         opts.sigma_px = Some(1.0);
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
-        assert_eq!(result.status, Status::Success, "seed {seed}");
+        assert_eq!(result.report.status, Status::Success, "seed {seed}");
         for (i, _) in outlier.iter().enumerate().filter(|(_, &o)| o) {
             assert!(!result.inliers_points[i], "seed {seed}: outlier {i} kept");
         }
@@ -227,7 +227,7 @@ fn per_observation_covariances_weight_the_pose() {
             &PoseOptions::default(),
         )
         .unwrap();
-        assert_eq!(weighted.status, Status::Success, "seed {seed}");
+        assert_eq!(weighted.report.status, Status::Success, "seed {seed}");
         assert_eq!(weighted.details.sigma_px, Some(1.0), "covariances are absolute");
         weighted_nees += nees(&weighted, &scene).unwrap() / trials as f64;
         let plain = estimate_pose(&scene.camera, &corr, &PoseOptions::default()).unwrap();
@@ -268,9 +268,9 @@ fn bad_noise_and_pixels_beyond_the_lens_are_named_errors() {
     let mut opts = PoseOptions::default();
     opts.certify = Some(Default::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
-    let certificate = result.certificate.expect("a bound on exact data");
+    let certificate = result.report.certificate.expect("a bound on exact data");
     assert!(certificate.certified && certificate.kind == pluecker::CertificateKind::LensSublevelSet);
-    assert_eq!(result.status, Status::Success);
+    assert_eq!(result.report.status, Status::Success);
 }
 
 #[test]
@@ -290,7 +290,7 @@ fn with_ransac_a_pixel_beyond_the_lens_is_an_outlier_not_an_error() {
     let mut opts = PoseOptions::default();
     opts.ransac = Some(RansacOptions::default());
     let result = estimate_pose(&lens, &corr, &opts).unwrap();
-    assert_eq!(result.status, Status::Success);
+    assert_eq!(result.report.status, Status::Success);
     assert_eq!(result.inliers_points.len(), 30);
     assert_eq!(result.inliers_lines.len(), 2);
     assert!(!result.inliers_points[7] && !result.inliers_lines[1]);
@@ -313,7 +313,7 @@ fn ransac_thresholds_are_distorted_pixels_at_the_fisheye_edge() {
         opts.ransac = Some(ransac);
         opts.sigma_px = Some(1.0);
         let result = estimate_pose(&lens, &corr, &opts).unwrap();
-        assert_eq!(result.status, Status::Success, "seed {seed}");
+        assert_eq!(result.report.status, Status::Success, "seed {seed}");
         kept += result.inliers_points.iter().filter(|&&k| k).count();
         total += 60;
         assert!(nees(&result, &scene).unwrap() < 22.5, "seed {seed}");

@@ -264,7 +264,7 @@ fn through_a_lens_the_refined_pose_is_a_stationary_point_of_the_exact_cost() {
             };
             let oracle_covs = weighted.then_some(&covs[..]);
             let result = estimate_pose(&lens, &corr, &opts).unwrap();
-            assert_eq!(result.status, Status::Success, "{:?} seed {seed}", lens.model());
+            assert_eq!(result.report.status, Status::Success, "{:?} seed {seed}", lens.model());
             let cost = oracle_cost(
                 &lens,
                 &corr,
@@ -275,10 +275,10 @@ fn through_a_lens_the_refined_pose_is_a_stationary_point_of_the_exact_cost() {
             // The reported cost `Σ r²` is the exact one: twice the oracle's `½ Σ r²`, to the
             // golden-section search's precision.
             assert!(
-                (result.cost / 2.0 - cost).abs() <= 1e-9 * cost.max(1.0),
+                (result.report.cost / 2.0 - cost).abs() <= 1e-9 * cost.max(1.0),
                 "{:?} seed {seed}: reported cost {} vs oracle 2 x {cost}",
                 lens.model(),
-                result.cost
+                result.report.cost
             );
             // Two residuals per point and per segment (one per endpoint).
             let residuals = 2 * (n + m);
@@ -442,7 +442,7 @@ fn the_certificate_through_a_lens_never_bounds_above_a_cheaper_pose() {
                 }
                 let covs_of = anisotropic.then_some(&covs[..]);
                 let answer = estimate_pose(&lens, &corr, &certify).unwrap();
-                certified += answer.certificate.as_ref().is_some_and(|c| c.certified) as usize;
+                certified += answer.report.certificate.as_ref().is_some_and(|c| c.certified) as usize;
                 let best = oracle_cost(&lens, &corr, covs_of, &answer.pose.rotation, &answer.pose.translation);
                 let Ok(at_answer) = pose_certificate::lens_local_bound(&lens, &corr, &answer.pose, 1.0) else {
                     continue;
@@ -709,7 +709,7 @@ fn the_distortions_variation_bounds_the_sampled_jacobians() {
             let mut rng = Rng::new(400 + seed);
             let (corr, _, _) = lens_scene(&lens, r_max, 12, 0, &[Matrix2::identity(); 12], &mut rng);
             let answer = estimate_pose(&lens, &corr, &certify).unwrap();
-            let cost = 0.5 * answer.cost;
+            let cost = 0.5 * answer.report.cost;
             for radius in [1.0, 5.0, 20.0, 80.0] {
                 let Ok((points, largest)) =
                     pose_certificate::lens_point_variations(&lens, &corr, &answer.pose, cost, radius)
@@ -752,7 +752,7 @@ fn step_fours_variation_covers_every_projection_of_the_ball() {
             let mut rng = Rng::new(500 + seed);
             let (corr, _, _) = lens_scene(&lens, r_max, 12, 0, &[Matrix2::identity(); 12], &mut rng);
             let answer = estimate_pose(&lens, &corr, &certify).unwrap();
-            let cost = 0.5 * answer.cost;
+            let cost = 0.5 * answer.report.cost;
             for s in [2.0, 10.0, 40.0] {
                 let Ok(Some((_, eps))) = pose_certificate::lens_ball(&lens, &corr, &answer.pose, cost, s, 1.0 / s, &[])
                 else {

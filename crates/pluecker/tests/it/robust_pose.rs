@@ -106,7 +106,7 @@ fn recovers_the_pose_at_0_50_and_80_percent_outliers_with_points_and_lines() {
             opts.sigma_px = Some(1.0);
             let label = format!("ratio {ratio} seed {seed} {np} points {nl} lines");
             let r = estimate_pose(&scene.camera, &corr, &opts).unwrap();
-            assert_eq!(r.status, Status::Success, "{label}: {r:?}");
+            assert_eq!(r.report.status, Status::Success, "{label}: {r:?}");
             let report = r.details.ransac.as_ref().unwrap();
             assert_eq!(report.stop, RansacStop::Confidence, "{label}");
             let inliers = check_masks(&r, &scene, &corr, &label);
@@ -130,7 +130,7 @@ fn recovers_the_pose_at_0_50_and_80_percent_outliers_with_points_and_lines() {
 fn lines_heavy_scene_needs_the_line_solvers() {
     let (scene, corr) = scene_with_outliers(5, 30, 0.4, 21);
     let r = estimate_pose(&scene.camera, &corr, &robust(21)).unwrap();
-    assert_eq!(r.status, Status::Success, "{r:?}");
+    assert_eq!(r.report.status, Status::Success, "{r:?}");
     check_masks(&r, &scene, &corr, "lines-heavy");
     assert!(r.inliers_lines.iter().filter(|&&m| m).count() >= 15);
     assert!(rotation_distance(&r.pose.rotation, &scene.rotation) < 0.02);
@@ -249,7 +249,7 @@ fn clean_data_with_a_wide_threshold_stops_at_once() {
         let r = estimate_pose(&camera, &corr, &opts).unwrap();
         let report = r.details.ransac.as_ref().unwrap();
         let label = format!("thresholds {point_threshold} / {line_threshold}: {report:?}");
-        assert_eq!(r.status, Status::Success, "{label}");
+        assert_eq!(r.report.status, Status::Success, "{label}");
         assert_eq!(report.stop, RansacStop::Confidence, "{label}");
         // Every point an inlier: P = 1, one sample suffices (two when the first is degenerate).
         assert!(report.iterations <= 3, "{label}");
@@ -324,7 +324,7 @@ fn a_near_high_leverage_inlier_joins_the_consensus() {
             "seed {seed}: near point {:.1} px off, {:?}",
             errors[0], r.details.ransac
         );
-        assert_eq!(r.status, Status::Success, "{label}");
+        assert_eq!(r.report.status, Status::Success, "{label}");
         assert!(r.inliers_points[0] && errors[0] <= THRESHOLD_PX, "{label}");
         // Every other feature is classified as at the true pose, but within the margin.
         for (k, (&t, &inlier)) in truth.iter().zip(&r.inliers_points).enumerate() {
@@ -386,7 +386,7 @@ fn all_outlier_data_gives_a_status_within_the_iteration_cap() {
     let mut opts = robust(0);
     opts.ransac.as_mut().unwrap().max_iterations = 2000;
     let r = estimate_pose(&camera, &corr, &opts).unwrap();
-    assert_eq!(r.status, Status::TooFewInliers, "{r:?}");
+    assert_eq!(r.report.status, Status::TooFewInliers, "{r:?}");
     let report = r.details.ransac.unwrap();
     assert_eq!((report.stop, report.iterations), (RansacStop::IterationCap, 2000));
     // Only the model's own sample (and at most two chance agreements) support it.
@@ -406,7 +406,7 @@ fn all_outlier_data_is_cheap_and_too_few_inliers() {
         let r = estimate_pose(&camera, &corr, &robust(seed)).unwrap();
         let report = r.details.ransac.as_ref().unwrap();
         let label = format!("{n} points, seed {seed}: {report:?}");
-        assert_eq!(r.status, Status::TooFewInliers, "{label}");
+        assert_eq!(r.report.status, Status::TooFewInliers, "{label}");
         assert_eq!(report.stop, RansacStop::MinInlierRatio, "{label}");
         // ⌈ln(1e-4) / ln(1 − 0.1³ (1 − α))⌉ with α = 1/A ≤ 1/10: at most 10,230 samples.
         assert!(report.iterations >= 9206 && report.iterations <= 10_230, "{label}");
@@ -426,7 +426,7 @@ fn required_inliers_grow_with_chance_only() {
     let required = |n: usize| {
         let (camera, corr) = all_outliers(n, 43);
         let r = estimate_pose(&camera, &corr, &robust(43)).unwrap();
-        assert_eq!(r.status, Status::TooFewInliers, "{n}");
+        assert_eq!(r.report.status, Status::TooFewInliers, "{n}");
         r.details.ransac.unwrap().required_inliers
     };
     let (small, medium, large) = (required(60), required(2000), required(20_000));
@@ -440,7 +440,11 @@ fn required_inliers_grow_with_chance_only() {
         let (scene, corr) = scene_with_outliers(n, 0, 1.0 - inliers as f64 / n as f64, seed);
         let r = estimate_pose(&scene.camera, &corr, &robust(seed)).unwrap();
         let report = r.details.ransac.as_ref().unwrap();
-        assert_eq!(r.status, Status::Success, "{n} points, {inliers} inliers: {report:?}");
+        assert_eq!(
+            r.report.status,
+            Status::Success,
+            "{n} points, {inliers} inliers: {report:?}"
+        );
         assert!(report.required_inliers <= inliers, "{report:?}");
         check_masks(&r, &scene, &corr, &format!("{n} points"));
     }
@@ -485,8 +489,8 @@ fn sprt_and_cap_keep_the_inliers_and_the_accuracy_of_the_plain_loop() {
         let label = format!("{np} points {nl} lines, {ratio} outliers, seed {seed}");
         let new = estimate_pose(&scene.camera, &corr, &robust(seed)).unwrap();
         let old = estimate_pose(&scene.camera, &corr, &legacy(seed)).unwrap();
-        assert_eq!(new.status, Status::Success, "{label}: {:?}", new.details.ransac);
-        assert_eq!(old.status, Status::Success, "{label}");
+        assert_eq!(new.report.status, Status::Success, "{label}: {:?}", new.details.ransac);
+        assert_eq!(old.report.status, Status::Success, "{label}");
         let true_inliers = check_masks(&new, &scene, &corr, &label);
         check_masks(&old, &scene, &corr, &label);
         let count = |r: &PoseResult| r.inliers_points.iter().chain(&r.inliers_lines).filter(|&&m| m).count();
@@ -530,7 +534,7 @@ fn the_time_budget_stops_a_loop_whose_cap_would_run_long() {
     assert_eq!(report.stop, RansacStop::TimeBudget);
     // A sample takes far less than a second: the loop stopped on the budget, not near the cap.
     assert!(report.iterations > 0 && report.iterations < 1_000_000_000, "{report:?}");
-    assert_eq!(r.status, Status::TooFewInliers);
+    assert_eq!(r.report.status, Status::TooFewInliers);
 }
 
 #[test]
@@ -624,7 +628,7 @@ fn degenerate_data_is_an_error_and_degenerate_samples_are_counted() {
         "{report:?}"
     );
     // Three distinct points: every P3P solution explains all twelve noise-free correspondences.
-    assert_eq!(r.status, Status::Success);
+    assert_eq!(r.report.status, Status::Success);
     assert!(
         r.details.rms_error_px < 1e-6 && r.inliers_points.iter().all(|&m| m),
         "{r:?}"
@@ -682,7 +686,7 @@ fn monte_carlo(scene: &Scene, opts: &PoseOptions, outlier_ratio: f64, draws: usi
             corr.lines2d[i] = random_segment(&mut rng);
         }
         let r = estimate_pose(&scene.camera, &corr, opts).unwrap();
-        assert_eq!(r.status, Status::Success, "seed {seed} draw {draw}");
+        assert_eq!(r.report.status, Status::Success, "seed {seed} draw {draw}");
         let e = tangent_error(&r, scene);
         d2 += mahalanobis2(&r, &e);
         let cov = r.covariance.unwrap();
