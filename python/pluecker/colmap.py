@@ -9,10 +9,10 @@ pycolmap objects import it when called and say how to install it when it is miss
   (``images.txt``: ``QW QX QY QZ``) and pluecker's dual quaternions are ``(w, x, y, z)``.
 - **Cameras.** ``pycolmap.Camera(model, width, height, params)`` is ``pluecker.Camera(model,
   params)``: the same model names and parameter order. The image size is not part of the model.
-- **Camera matrices.** Triangulation takes ``P = K [R | t]`` with ``K`` the model's pinhole part
-  (``Camera.pinhole_part``) and, for points, each image's ``Camera`` (``cameras=``) with the observed,
-  distorted pixels: the cost is then the reprojection error through the exact model. Lines and quadrics
-  take pixels undistorted first (``Camera.undistort``).
+- **Known cameras.** Triangulation takes each image's ``View(camera, R, t)`` (its camera at its pose)
+  with the observed, distorted pixels: the cost is then the reprojection error through the exact model;
+  ``view.P`` is ``K [R | t]`` of the camera's pinhole part. Quadrics take pixels undistorted first
+  (``Camera.undistort``): an outline seen through a lens is not a conic.
 """
 
 from __future__ import annotations
@@ -595,7 +595,7 @@ def _point_rows(ids: np.ndarray, point_ids: np.ndarray, image_id: np.ndarray, po
 def observation_table(reconstruction: Any, sigma_px: float = 1.0, *, skipped: list | None = None) -> tuple[Any, Any]:
     """A model's observations as the table of :mod:`pluecker.distributed` (``track`` = point3D id,
     ``image`` = image id, the observed pixel ``x``, ``y`` and ``cov_*`` = ``sigma_px²`` I, ``point2D_idx``)
-    and its :class:`pluecker.distributed.Cameras` (each posed image's ``K [R | t]`` and ``Camera``):
+    and its :class:`pluecker.distributed.Cameras` (each posed image's ``K [R | t]`` and ``View``):
     the same solve as :func:`retriangulate`. What is left out (cameras, images, pixels) is named as in
     ``Retriangulation.skipped``, appended to the list ``skipped`` when one is given."""
     import pyarrow as pa

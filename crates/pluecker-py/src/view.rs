@@ -3,7 +3,7 @@
 
 use crate::camera::PyCamera;
 use crate::convert::{matrix3x4, pose_from_parts};
-use crate::errors::{guarded, to_py_err};
+use crate::errors::{guarded, invalid_argument, to_py_err};
 use crate::properties::{result_class, Field};
 use nalgebra::Matrix3x4;
 use pluecker::triangulation::View;
@@ -25,7 +25,7 @@ result_class! {
         /// The pose `x_cam = R X_world + t`; `R, t = view.pose`.
         pose = |v| v.inner.pose;
         /// `P = K [R | t]` (3, 4) of the camera's pinhole part at the pose.
-        P = |v| v.inner.camera.projection(&v.inner.pose);
+        P = |v| v.inner.projection();
     }
 
     #[new]
@@ -108,16 +108,20 @@ pub(crate) fn known_cameras(cameras: &Bound<'_, PyAny>) -> PyResult<KnownCameras
             Ok(view.get().inner.clone())
         })
         .collect::<PyResult<Vec<View>>>()?;
-    let projections = views.iter().map(|v| v.camera.projection(&v.pose)).collect();
+    let projections = views.iter().map(View::projection).collect();
     Ok((projections, Some(views)))
 }
 
 /// The 3x4 matrices of `cameras` for a problem solved in pinhole pixels: the matrices as given, or
-/// the views' `K [R | t]` when no view distorts (`InvalidOptionError` naming the one that does).
+/// the views' `K [R | t]` when no view distorts (`InvalidOptionError` naming `cameras` and the view that
+/// does).
 pub(crate) fn pinhole_projections(cameras: &Bound<'_, PyAny>) -> PyResult<Vec<Matrix3x4<f64>>> {
     let (projections, views) = known_cameras(cameras)?;
     if let Some(views) = views {
-        pluecker::triangulation::quadric::refuse_distortion(&views).map_err(to_py_err)?;
+        pluecker::triangulation::quadric::refuse_distortion(&views).map_err(|e| match e {
+            pluecker::Error::InvalidOption { name, reason } => invalid_argument(&name, reason),
+            other => to_py_err(other),
+        })?;
     }
     Ok(projections)
 }

@@ -16,7 +16,7 @@ use crate::pickle::reduce;
 use crate::properties::{result_class, Array};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use pluecker::triangulation::quadric::{
-    refuse_distortion, triangulate_quadric as core_triangulate_quadric, QuadricObservations, QuadricTriangulation,
+    triangulate_quadric as core_triangulate_quadric, QuadricObservations, QuadricTriangulation,
 };
 use pluecker::triangulation::quadric::{DenseQuadricTracks, SparseQuadricTracks};
 use pluecker::triangulation::streaming::quadrics_into as core_quadrics;
@@ -95,10 +95,9 @@ result_class! {
 
 /// Triangulates an ellipsoid from its outline conics in three or more views (Josephson & Kahl 2008).
 ///
-/// `cameras`, when given, holds each view's `Camera` (`projections[i]` is `K [R | t]`
-/// of its pinhole part): a lens with distortion is refused (`InvalidOptionError` naming `cameras`),
-/// since the outline seen through it is not a conic; pinholes and lenses without distortion are solved
-/// as their `projections`.
+/// `cameras`: (n, 3, 4) matrices `P`, or `View`s; a view through a lens with distortion is refused
+/// (`InvalidOptionError` naming `cameras`), since the outline seen through it is not a conic; pinholes and
+/// lenses without distortion are solved as their `K [R | t]`.
 #[pyfunction]
 #[pyo3(signature = (cameras, conics, covariances = None, *, options = None))]
 pub fn triangulate_quadric(
@@ -109,13 +108,7 @@ pub fn triangulate_quadric(
     options: Option<PyRef<'_, PyTriangulationOptions>>,
 ) -> PyResult<Py<PyQuadricTriangulation>> {
     let opts = options_arg(options)?;
-    let (cams, views) = crate::view::known_cameras(cameras)?;
-    if let Some(views) = views {
-        // A lens with distortion is refused; the other views are the pinhole problem of their `K [R | t]`.
-        if let Err(pluecker::Error::InvalidOption { name, reason }) = refuse_distortion(&views) {
-            return Err(crate::errors::invalid_argument(&name, reason));
-        }
-    }
+    let cams = crate::view::pinhole_projections(cameras)?;
     let observed = convert::conics("conics", conics)?;
     same_count("conics", observed.len(), cams.len())?;
     let covs = match covariances {

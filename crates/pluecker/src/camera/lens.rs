@@ -189,24 +189,14 @@ impl Camera {
         &self.params
     }
 
-    /// `(fx, fy)`, pixels.
+    /// `(fx, fy)`, pixels (of [`Camera::intrinsics`]).
     pub fn focal(&self) -> (f64, f64) {
-        let p = &self.params;
-        if self.model.has_one_focal_length() {
-            (p[0], p[0])
-        } else {
-            (p[0], p[1])
-        }
+        (self.pinhole.fx, self.pinhole.fy)
     }
 
-    /// `(cx, cy)`, pixels.
+    /// `(cx, cy)`, pixels (of [`Camera::intrinsics`]).
     pub fn principal_point(&self) -> (f64, f64) {
-        let p = &self.params;
-        if self.model.has_one_focal_length() {
-            (p[1], p[2])
-        } else {
-            (p[2], p[3])
-        }
+        (self.pinhole.cx, self.pinhole.cy)
     }
 
     /// The radius `|n|` of normalised coordinates where the radial distortion stops increasing

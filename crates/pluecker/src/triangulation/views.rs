@@ -76,9 +76,9 @@ impl View {
         Ok(View::new(camera, Pose::new(rotation, translation)))
     }
 
-    /// `P = K [R | t]` of the camera's pinhole part.
-    pub fn projection(&self) -> Result<Matrix3x4<f64>> {
-        Ok(self.camera.intrinsics().projection(&self.pose))
+    /// `P = K [R | t]` of the camera's pinhole part ([`Camera::projection`]).
+    pub fn projection(&self) -> Matrix3x4<f64> {
+        self.camera.projection(&self.pose)
     }
 }
 
@@ -269,7 +269,7 @@ mod tests {
                 assert!((r.transpose() * r - Matrix3::identity()).norm() < 1e-12);
                 assert!((r.determinant() - 1.0).abs() < 1e-12);
                 // The view's own P = K [R | t] is P divided by its positive scale.
-                let rebuilt = view.projection().unwrap();
+                let rebuilt = view.projection();
                 assert!(
                     (rebuilt - p / scale).norm() < 1e-9 * (p / scale).norm(),
                     "{rebuilt} {p}"

@@ -192,7 +192,7 @@ fn a_quadric_batch_through_pinhole_views_is_the_batch_of_their_projections() {
             )
         })
         .collect();
-    let projections: Vec<Matrix3x4<f64>> = views.iter().map(|v| v.projection().unwrap()).collect();
+    let projections: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
     let conics: Vec<Matrix3<f64>> = projections
         .iter()
         .map(|p| {

@@ -310,7 +310,7 @@ pub struct SparseSegmentTracks<'a> {
 
 /// The number of tracks of a sparse batch through views, checked.
 fn check_segments(views: &[View], tracks: &SparseSegmentTracks) -> Result<usize> {
-    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
     validate_cameras(&cameras, "cameras")?;
     let n = tracks.csr.check()?;
     tracks

@@ -364,7 +364,7 @@ pub(crate) fn line_of_segment_views(
 ) -> Result<LineTriangulation> {
     let started = Instant::now();
     opts.validate()?;
-    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
     check_views(&cameras, lines.len(), 2, "lines", opts.method)?;
     if let Some(c) = covariances {
         if c.len() != views.len() {

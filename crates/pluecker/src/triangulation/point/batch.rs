@@ -97,7 +97,7 @@ fn prepare(cameras: &[Matrix3x4<f64>]) -> Result<Prepared> {
 
 /// [`prepare`] of the views' matrices `K [R | t]`, keeping the views when a camera distorts.
 fn prepare_views(views: &[View]) -> Result<Prepared> {
-    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
     let mut prepared = prepare(&cameras)?;
     if views.iter().any(|v| v.camera.distortion().is_some()) {
         prepared.views = Some(views.to_vec());

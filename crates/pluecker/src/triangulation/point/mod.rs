@@ -176,7 +176,7 @@ fn point_of_views(
     opts: &TriangulationOptions,
 ) -> Result<PointTriangulation> {
     let started = Instant::now();
-    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+    let cameras: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
     let whitening = checked_track(&cameras, "views", observations, covariances, opts)?;
     let lens_views: Vec<LensView> = views
         .iter()

@@ -156,7 +156,7 @@ fn solver<'a>(
         TrackCameras::Shared(Cameras::Projections(p)) => Projections::Shared(p.into()),
         TrackCameras::Shared(Cameras::Views(views)) => {
             refuse_distortion(views)?;
-            let of_views: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect::<Result<_>>()?;
+            let of_views: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
             Projections::Shared(of_views.into())
         }
         TrackCameras::PerTrack { projections, views } => Projections::PerTrack { projections, views },

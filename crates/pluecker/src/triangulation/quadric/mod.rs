@@ -204,7 +204,7 @@ pub fn triangulate_quadric<'a>(
         Cameras::Projections(projections) => projections,
         Cameras::Views(views) => {
             refuse_distortion(views)?;
-            of_views = views.iter().map(View::projection).collect::<Result<_>>()?;
+            of_views = views.iter().map(View::projection).collect();
             &of_views
         }
     };
