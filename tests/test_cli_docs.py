@@ -120,6 +120,62 @@ def test_the_output_table_lists_every_key_of_to_dict():
         assert documented_details == set(result.to_dict()["details"]), options
 
 
+def pose_results() -> dict[str, pluecker.PoseResult]:
+    """Pose results whose JSON fills every branch: robust, certified with a χ² test, the linear method's
+    estimated camera, a lens, a runner-up minimum (a planar square's twin), a robust loop that finds no
+    model, a numerical failure."""
+    general = pluecker.random_scene("general", 8, 2, seed=3)
+    lines = {"lines2d": general["lines2d"], "lines3d": general["lines3d"]}
+    planar = pluecker.random_scene("planar", 4, 0, seed=0)
+    lens = pluecker.Camera("OPENCV", [800.0, 790.0, 320.0, 240.0, -0.2, 0.05, 1e-3, -1e-3])
+    noise = np.random.default_rng(0).uniform(0, 640, (8, 2))
+
+    def pose(scene, points2d=None, camera=None, **options):
+        points2d = scene["points2d"] if points2d is None else points2d
+        extra = lines if scene is general and points2d is scene["points2d"] else {}
+        return pluecker.estimate_pose(camera or scene["camera"], points2d, scene["points3d"], **extra,
+                                      options=pluecker.PoseOptions(**options))
+
+    return {
+        "default": pose(general),
+        "robust": pose(general, ransac=pluecker.RansacOptions()),
+        "certified": pose(general, certify=pluecker.CertifyOptions(), sigma_px=1.0),
+        "linear": pose(general, points2d=general["points2d"].copy(), method="linear"),
+        "lens": pose(general, points2d=lens.project(general["points3d"] @ general["R"].T + general["t"]), camera=lens,
+                     certify=pluecker.CertifyOptions()),
+        "runner_up": pose(planar),
+        "no_model": pose(general, points2d=noise, ransac=pluecker.RansacOptions()),
+        "numerical_failure": pose(general, points2d=general["points2d"] * 1e12),
+    }
+
+
+def test_the_json_is_the_cores_with_the_keys_and_values_of_to_dict():
+    """One shape: the command line writes the core's JSON of the result (serde), and ``to_dict()`` has the
+    same keys, in the same order, with the same values (a matrix as its rows, NaN as null)."""
+    results = pose_results()
+    shown = {name: json.loads(r.to_json()) for name, r in results.items()}
+    assert shown["robust"]["details"]["ransac"] is not None and shown["no_model"]["status"] == "too_few_inliers"
+    assert shown["certified"]["certificate"]["kind"] == "sublevel_set"
+    assert shown["certified"]["details"]["residual_test"] is not None
+    assert shown["linear"]["details"]["estimated_camera"].keys() == {"fx", "fy", "cx", "cy", "skew"}
+    assert shown["lens"]["certificate"] is not None and shown["runner_up"]["details"]["second_best"] is not None
+    assert shown["numerical_failure"]["status"] == "numerical_failure"
+
+    def same(a, b, where):
+        if isinstance(a, dict):
+            assert isinstance(b, dict) and list(a) == list(b), (where, list(a), list(b))
+            for key in a:
+                same(a[key], b[key], f"{where}.{key}")
+        else:
+            assert a == b, (where, a, b)
+
+    for name, result in results.items():
+        # to_dict() holds tuples where JSON has lists: compared as JSON reads them back.
+        same(shown[name], json.loads(json.dumps(result.to_dict(), allow_nan=False)), name)
+        R = np.asarray(shown[name]["pose"]["rotation"])
+        np.testing.assert_array_equal(R, result.pose.rotation)  # rows, as numpy's (3, 3) array
+
+
 @pytest.mark.parametrize("heading, cls", [("`options` holds fields of", pluecker.PoseOptions),
                                           ("`ransac` holds fields of", pluecker.RansacOptions)])
 def test_the_input_tables_are_the_options_classes(heading, cls):

@@ -222,8 +222,10 @@ class Certificate:
     """`(cost − lower_bound) / max(cost, 1e-12)`."""
     kind: str
     """How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test` (triangulation); `sublevel_set`, `lens_sublevel_set` (pose)"""
+    primitive: str
+    """What was estimated: `pose`, `point`, `line` or `quadric`."""
     domain: str
-    """The set of estimates over which `lower_bound` holds."""
+    """The set of estimates over which `lower_bound` holds, in words (set by `kind` and `primitive`)."""
     nodes: int
     """Nodes of the search (0 for a convexity test)."""
     solver_iterations: int
@@ -485,6 +487,8 @@ class PoseResult:
     """Why the last iterative stage stopped."""
     time_seconds: float
     """Wall time, seconds."""
+    residual_dof: int
+    """Degrees of freedom of `cost`: the residuals used minus the 6 of the pose (0 when not known)."""
     inliers_points: NDArray[np.bool_]
     """(N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true."""
     inliers_lines: NDArray[np.bool_]
@@ -497,6 +501,9 @@ class PoseResult:
     """How the pose was found: stages, noise, runner-up."""
     # end of fields
     def to_dict(self) -> Dict[str, Any]: ...
+    def to_json(self) -> str:
+        """The result as JSON, written by the core (``serde``): the keys and values of ``to_dict()``, NaN
+        and inf as ``null``; what ``pluecker pose`` prints."""
 
 def estimate_pose(
     camera: Camera,
@@ -711,6 +718,8 @@ class TriangulationReport:
     """Why the local minimisation stopped."""
     time_seconds: float
     """Wall time, seconds."""
+    residual_dof: int
+    """Degrees of freedom of `cost`: whitened residuals minus fitted parameters (0 when not known)."""
     residual_test: Optional[_ResidualTest]
     """χ² test of `cost` against the given covariances (identity: 1 px), `dof` = residuals − parameters;
     `consistent == False` flags an outlier, a wrong camera or noise beyond the stated one. `None` when `dof` is 0.

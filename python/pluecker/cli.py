@@ -2,7 +2,8 @@
 
 ``pluecker pose INPUT.json [options]``
     Estimates a camera pose from the correspondences in a JSON file (``-`` reads standard input) and
-    prints ``PoseResult.to_dict()`` as JSON (with the inlier masks and the covariance). The schema and
+    prints the result as JSON, as the core writes it (``PoseResult.to_json()``: the keys and values of
+    ``PoseResult.to_dict()``, with the inlier masks and the covariance). The schema and
     every flag are documented in ``docs/cli.md`` (``tests/test_cli_docs.py`` keeps them in step).
 ``pluecker reproduce phong-horaud-1995``
     Re-runs the experiments of Phong, Horaud, Yassine & Tao 1995 (section 5) in simulation and writes
@@ -37,7 +38,7 @@ import pluecker
 from pluecker import _ctrl_c, _paths
 from pluecker._arguments import number
 from pluecker.datasets import DataNotFoundError
-from pluecker.jsonio import dumps, jsonable
+from pluecker.jsonio import dumps
 
 __all__ = ["main", "run"]
 
@@ -559,7 +560,8 @@ def _pose(args: argparse.Namespace) -> int:
         result = pluecker.estimate_pose(camera, **arrays, **kwargs)
     except (InputError, pluecker.PlueckerError) as exc:
         return _fail("pose", str(exc))
-    text = dumps(jsonable(result.to_dict())) + "\n"
+    # The core's JSON of the result (serde), laid out one key per line with every array on one line.
+    text = dumps(json.loads(result.to_json())) + "\n"
     if args.output:
         try:
             _paths.write_text(args.output, text)
@@ -578,13 +580,15 @@ def _pose(args: argparse.Namespace) -> int:
 
 
 def _client(command: str, address: str) -> Any:
-    """A Dask client of the scheduler at ``address`` (an error line when Dask is missing or unreachable)."""
+    """A Dask client of the scheduler at ``address`` (an error line when Dask is missing or unreachable). It
+    waits for the scheduler as Dask's configuration says (``distributed.comm.timeouts.connect``, 30 s unless
+    set, e.g. ``DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT=5s``)."""
     try:
         from distributed import Client
     except ImportError:
         raise InputError("--scheduler needs Dask: pip install 'pluecker[dask]'") from None
     try:
-        return Client(address, timeout=30)
+        return Client(address)
     except (OSError, TimeoutError) as exc:
         raise InputError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 

@@ -6,7 +6,7 @@ use crate::errors::to_py_err;
 use crate::nested::NestedOptions;
 use crate::pickle::reduce;
 use crate::properties::{options_class, result_class, Field};
-use pluecker::{Certificate, CertifyOptions, Primitive};
+use pluecker::{Certificate, CertifyOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -42,10 +42,9 @@ options_class! {
 /// core's `Certificate`.
 #[pyclass(frozen, name = "Certificate", module = "pluecker")]
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyCertificate {
     pub inner: Certificate,
-    /// What the certificate is about (its domain depends on it).
-    pub primitive: Primitive,
 }
 
 result_class! {
@@ -60,8 +59,10 @@ result_class! {
         relative_gap = |c| c.inner.relative_gap;
         /// How the bound was proved: `convexity_test`, `branch_and_bound`, `taylor_branch_and_bound`, `lens_convexity_test` (triangulation); `sublevel_set`, `lens_sublevel_set` (pose)
         kind = |c| c.inner.kind.as_str();
-        /// The set of estimates over which `lower_bound` holds.
-        domain = |c| c.inner.kind.domain(c.primitive);
+        /// What was estimated: `pose`, `point`, `line` or `quadric`.
+        primitive = |c| c.inner.primitive.as_str();
+        /// The set of estimates over which `lower_bound` holds, in words (set by `kind` and `primitive`).
+        domain = |c| c.inner.domain();
         /// Nodes of the search (0 for a convexity test).
         nodes = |c| c.inner.nodes;
         /// Conic-solver iterations summed over the nodes.
@@ -102,6 +103,6 @@ impl Field for PyCertificate {
 }
 
 /// `Option<Certificate>` of the core as the Python property: `None` when no bound was computed.
-pub(crate) fn certificate_of(certificate: Option<Certificate>, primitive: Primitive) -> Option<PyCertificate> {
-    certificate.map(|inner| PyCertificate { inner, primitive })
+pub(crate) fn certificate_of(certificate: Option<Certificate>) -> Option<PyCertificate> {
+    certificate.map(|inner| PyCertificate { inner })
 }

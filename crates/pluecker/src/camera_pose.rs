@@ -14,6 +14,7 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vect
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Pose {
     /// `R`, world to camera.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub rotation: Matrix3<f64>,
     /// `t`, world units.
     pub translation: Vector3<f64>,

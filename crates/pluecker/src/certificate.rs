@@ -154,8 +154,10 @@ impl CertificateKind {
 
 /// The global-optimality evidence of an estimate.
 #[derive(Debug, Clone, Copy)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize))]
 pub struct Certificate {
+    /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
+    pub certified: bool,
     /// A lower bound on the cost of eq. 19 over every admissible primitive, capped at the cost:
     /// `min(raw_lower_bound, cost)`. A result without a bound carries no certificate
     /// (`Option<Certificate>`).
@@ -166,10 +168,10 @@ pub struct Certificate {
     pub raw_lower_bound: f64,
     /// `(cost − lower_bound) / max(cost, 1e-12)`.
     pub relative_gap: f64,
-    /// True when `relative_gap ≤ max_relative_gap` with a valid lower bound.
-    pub certified: bool,
     /// How the bound was obtained.
     pub kind: CertificateKind,
+    /// What was estimated; with `kind` it sets the domain of the bound ([`Certificate::domain`]).
+    pub primitive: Primitive,
     /// Branch-and-bound nodes whose bound was computed (0 for the convexity test).
     pub nodes: usize,
     /// Interior-point iterations of the conic solver, summed over nodes.
@@ -187,18 +189,20 @@ impl PartialEq for Certificate {
             && self.relative_gap == other.relative_gap
             && self.certified == other.certified
             && self.kind == other.kind
+            && self.primitive == other.primitive
             && self.nodes == other.nodes
             && self.solver_iterations == other.solver_iterations
     }
 }
 
 impl Certificate {
-    /// The one way a certificate is made: of `kind`, with the proved bound `raw_lower_bound`, the bound
+    /// The one way a certificate is made: of `kind` about `primitive`, with the proved bound `raw_lower_bound`, the bound
     /// capped at the answer's cost `lower_bound`, their `relative_gap` and whether it closed
     /// (`certified`), and no search effort ([`Self::with_effort`] adds it). The fields' docs say what
     /// each must be; [`Self::of_bound`] computes the last three from the cost.
     pub(crate) fn new(
         kind: CertificateKind,
+        primitive: Primitive,
         lower_bound: f64,
         raw_lower_bound: f64,
         relative_gap: f64,
@@ -210,16 +214,18 @@ impl Certificate {
             relative_gap,
             certified,
             kind,
+            primitive,
             nodes: 0,
             solver_iterations: 0,
         }
     }
 
-    /// The certificate of `kind` of a proved bound `raw_lower_bound` on the cost `cost`: the bound
+    /// The certificate of `kind` about `primitive` of a proved bound `raw_lower_bound` on the cost `cost`: the bound
     /// capped at the cost (`min(raw_lower_bound, cost)`), its relative gap
     /// ([`crate::global::relative_gap`]), certified when that is at most `max_relative_gap`.
     pub(crate) fn of_bound(
         kind: CertificateKind,
+        primitive: Primitive,
         cost: f64,
         raw_lower_bound: f64,
         max_relative_gap: f64,
@@ -228,11 +234,18 @@ impl Certificate {
         let relative_gap = crate::global::relative_gap(cost, lower_bound);
         Certificate::new(
             kind,
+            primitive,
             lower_bound,
             raw_lower_bound,
             relative_gap,
             relative_gap <= max_relative_gap,
         )
+    }
+
+    /// The set of estimates over which `lower_bound` holds, in words ([`CertificateKind::domain`] of
+    /// `kind` and `primitive`).
+    pub fn domain(&self) -> &'static str {
+        self.kind.domain(self.primitive)
     }
 
     /// The same certificate, with the branch-and-bound nodes whose bound was computed and the conic
@@ -245,15 +258,45 @@ impl Certificate {
         }
     }
 
-    /// The certificate of a convexity test whose (raw) lower bound on the cost is `raw_lower_bound`,
+    /// The certificate about `primitive` of a convexity test whose (raw) lower bound on the cost is `raw_lower_bound`,
     /// when it closes the gap (`relative_gap(cost, min(raw_lower_bound, cost)) ≤ max_relative_gap`);
     /// `None` otherwise.
-    pub(crate) fn of_convexity_test(cost: f64, raw_lower_bound: f64, max_relative_gap: f64) -> Option<Certificate> {
-        let certificate =
-            Certificate::of_bound(CertificateKind::ConvexityTest, cost, raw_lower_bound, max_relative_gap);
+    pub(crate) fn of_convexity_test(
+        primitive: Primitive,
+        cost: f64,
+        raw_lower_bound: f64,
+        max_relative_gap: f64,
+    ) -> Option<Certificate> {
+        let certificate = Certificate::of_bound(
+            CertificateKind::ConvexityTest,
+            primitive,
+            cost,
+            raw_lower_bound,
+            max_relative_gap,
+        );
         certificate.certified.then_some(certificate)
     }
 }
 
 // Written and read by name with the `serde` feature.
 crate::names::serde_by_name!(CertificateKind, Primitive);
+
+/// Written with the fields in their order and, after `primitive`, its `domain` in words, so that the
+/// JSON states what it proves; reading takes the fields and skips `domain`.
+#[cfg(feature = "serde")]
+impl serde::Serialize for Certificate {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut c = serializer.serialize_struct("Certificate", 9)?;
+        c.serialize_field("certified", &self.certified)?;
+        c.serialize_field("lower_bound", &self.lower_bound)?;
+        c.serialize_field("raw_lower_bound", &self.raw_lower_bound)?;
+        c.serialize_field("relative_gap", &self.relative_gap)?;
+        c.serialize_field("kind", &self.kind)?;
+        c.serialize_field("primitive", &self.primitive)?;
+        c.serialize_field("domain", self.domain())?;
+        c.serialize_field("nodes", &self.nodes)?;
+        c.serialize_field("solver_iterations", &self.solver_iterations)?;
+        c.end()
+    }
+}

@@ -99,7 +99,8 @@
 //! ## Features
 //! - `serde`: `serde::Serialize` and `serde::Deserialize` on the results, the options, [`Pose`],
 //!   [`camera::Intrinsics`] and [`Camera`]. Enums are written by their names (`as_str`), a camera as
-//!   `{"model": "OPENCV", "params": [...]}` and read back through [`Camera::new`], so its checks apply.
+//!   `{"model": "OPENCV", "params": [...]}` and read back through [`Camera::new`], so its checks apply;
+//!   a matrix as its rows (`[[r00, r01, r02], …]`, as a row-major numpy array), a vector as one list.
 //!
 //! ## References
 //! - T. Q. Phong, R. Horaud, A. Yassine, P. D. Tao, *Object pose from 2-D to 3-D point and line
@@ -124,6 +125,8 @@ pub(crate) mod error;
 pub mod geometry;
 pub(crate) mod global;
 pub mod interrupt;
+#[cfg(feature = "serde")]
+pub(crate) mod matrix_rows;
 pub(crate) mod names;
 pub mod optim;
 pub mod pose;

@@ -12,7 +12,7 @@ use crate::status::Status;
 /// [`crate::triangulation::Method`]). Every result holds one as its `report` (Python shows its fields on
 /// the result itself).
 #[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize))]
 pub struct Report<M> {
     /// The method that ran.
     pub method: M,
@@ -93,5 +93,29 @@ impl<M> Report<M> {
                 c.certified = false;
             }
         }
+    }
+}
+
+/// Written with the fields in their order, and after `status` and `certificate` the two answers a
+/// reader looks for, `success` ([`Report::success`]) and `certified` ([`Report::certified`]); reading
+/// takes the fields and skips those two. A result writes its report's fields beside its own (the JSON
+/// of the command line, `to_dict()` in Python).
+#[cfg(feature = "serde")]
+impl<M: serde::Serialize> serde::Serialize for Report<M> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut report = serializer.serialize_struct("Report", 11)?;
+        report.serialize_field("method", &self.method)?;
+        report.serialize_field("status", &self.status)?;
+        report.serialize_field("success", &self.success())?;
+        report.serialize_field("cost", &self.cost)?;
+        report.serialize_field("cost_kind", &self.cost_kind)?;
+        report.serialize_field("certificate", &self.certificate)?;
+        report.serialize_field("certified", &self.certified())?;
+        report.serialize_field("iterations", &self.iterations)?;
+        report.serialize_field("termination", &self.termination)?;
+        report.serialize_field("time_seconds", &self.time_seconds)?;
+        report.serialize_field("residual_dof", &self.residual_dof)?;
+        report.end()
     }
 }

@@ -74,6 +74,32 @@ fn a_pose_result_round_trips_with_its_names() {
 }
 
 #[test]
+fn the_json_has_the_reports_fields_beside_the_results_and_matrices_as_rows() {
+    let mut result = pose_result();
+    result.report.cost = f64::NAN;
+    let json: serde_json::Value = serde_json::from_str(&serde_json::to_string(&result).unwrap()).unwrap();
+    assert!(json.get("report").is_none(), "{json}");
+    assert_eq!(json["status"], "success");
+    assert_eq!(json["success"], true);
+    assert_eq!(json["certified"], result.report.certified());
+    assert!(json["cost"].is_null(), "NaN is written as null");
+    assert_eq!(json["residual_dof"], result.report.residual_dof);
+    let r = &result.pose.rotation;
+    for i in 0..3 {
+        let row: Vec<f64> = (0..3)
+            .map(|j| json["pose"]["rotation"][i][j].as_f64().unwrap())
+            .collect();
+        assert_eq!(row, [r[(i, 0)], r[(i, 1)], r[(i, 2)]], "row {i}");
+    }
+    let covariance = result.covariance.unwrap();
+    assert_eq!(json["covariance"][1][4].as_f64(), Some(covariance[(1, 4)]));
+    let point = point_triangulation();
+    let json: serde_json::Value = serde_json::from_str(&serde_json::to_string(&point).unwrap()).unwrap();
+    assert_eq!(json["method"], point.report.method.as_str());
+    assert_eq!(json["covariance"][0][2].as_f64(), point.covariance.map(|c| c[(0, 2)]));
+}
+
+#[test]
 fn nan_fields_keep_their_bits_through_cbor() {
     let mut result = pose_result();
     result.report.cost = odd_nan(1);

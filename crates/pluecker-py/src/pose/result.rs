@@ -9,7 +9,6 @@ use crate::pickle::reduce;
 use crate::properties::{result_class, Field};
 use pluecker::chi_square::ResidualTest;
 use pluecker::pose::{PoseDetails, RansacReport, StageReport};
-use pluecker::Primitive;
 use pluecker::{Pose, PoseResult};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -173,7 +172,8 @@ impl Field for ResidualTest {
     }
 }
 
-/// An estimated `K` (the Faugeras-Toscani baseline's) as the pinhole `Camera` it is.
+/// An estimated `K` (the Faugeras-Toscani baseline's) as the pinhole `Camera` it is; in `to_dict()` its
+/// five numbers.
 fn pinhole_camera(k: pluecker::camera::Intrinsics) -> PyResult<PyCamera> {
     crate::errors::guarded(|| pluecker::Camera::pinhole(k.fx, k.fy, k.cx, k.cy, k.skew)).map(PyCamera::wrap)
 }
@@ -182,9 +182,18 @@ impl Field for pluecker::camera::Intrinsics {
     fn get(self, py: Python<'_>) -> PyResult<PyObject> {
         Ok(Py::new(py, pinhole_camera(self)?)?.into_any())
     }
+    /// `{fx, fy, cx, cy, skew}`, as the core writes it.
     fn plain(self, py: Python<'_>) -> PyResult<PyObject> {
         let d = PyDict::new(py);
-        pinhole_camera(self)?.fill_dict(py, &d)?;
+        for (name, value) in [
+            ("fx", self.fx),
+            ("fy", self.fy),
+            ("cx", self.cx),
+            ("cy", self.cy),
+            ("skew", self.skew),
+        ] {
+            d.set_item(name, value)?;
+        }
         Ok(d.into_any().unbind())
     }
     fn stub() -> String {
@@ -388,7 +397,7 @@ result_class! {
         cost_kind = |r| r.inner.report.cost_kind.as_str();
         /// Proved lower bound on `cost` over every pose keeping the points and segment endpoints in front
         /// (`options.certify`); `None` when no bound was computed (`details.uncertified_reason` says why).
-        certificate = |r| certificate_of(r.inner.report.certificate, Primitive::Pose);
+        certificate = |r| certificate_of(r.inner.report.certificate);
         /// `certificate is not None and certificate.certified`.
         certified = |r| r.inner.report.certified();
         /// Iterations summed over the stages.
@@ -397,6 +406,8 @@ result_class! {
         termination = |r| r.inner.report.termination.as_str();
         /// Wall time, seconds.
         time_seconds = |r| r.inner.report.time_seconds;
+        /// Degrees of freedom of `cost`: the residuals used minus the 6 of the pose (0 when not known).
+        residual_dof = |r| r.inner.report.residual_dof;
         /// (N,) points used for the pose: when robust the final inliers (error ≤ `point_threshold` px), else all true.
         inliers_points = |r| r.inner.inliers_points.clone();
         /// (M,) lines used: when robust those within RMS `line_threshold` px of the projected line, else all true.
@@ -406,6 +417,12 @@ result_class! {
         covariance = |r| r.inner.covariance;
         /// How the pose was found: stages, noise, runner-up.
         details = |r| r.inner.details.clone();
+    }
+
+    /// The result as JSON, written by the core (`serde`): the same keys and values as `to_dict()`, NaN
+    /// and inf as `null`; what `pluecker pose` prints.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.inner).map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
     }
 
     /// Pickle support (also `copy.deepcopy`): see `pickle.rs`.

@@ -28,7 +28,7 @@ use pluecker::triangulation::line::{
 };
 use pluecker::triangulation::line::{DenseLineTracks, ImageLines, SparseLineTracks, SparseSegmentTracks};
 use pluecker::triangulation::streaming::lines_into as core_lines;
-use pluecker::triangulation::{CostKind, Primitive, Report, TriangulationOptions};
+use pluecker::triangulation::{CostKind, Report, TriangulationOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -47,18 +47,16 @@ pub struct PyLineTriangulation {
 
 impl PyLineTriangulation {
     pub fn create(py: Python<'_>, result: LineTriangulation) -> PyResult<Py<PyLineTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport {
-            inner: result.report,
-            primitive: Primitive::Line,
-        })
-        .add_subclass(PyLineTriangulation {
-            plucker: *result.plucker.coordinates(),
-            point: result.point,
-            direction: result.direction,
-            chart: result.chart,
-            covariance: result.covariance,
-            inliers: result.inliers,
-        });
+        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
+            PyLineTriangulation {
+                plucker: *result.plucker.coordinates(),
+                point: result.point,
+                direction: result.direction,
+                chart: result.chart,
+                covariance: result.covariance,
+                inliers: result.inliers,
+            },
+        );
         Py::new(py, init)
     }
 }

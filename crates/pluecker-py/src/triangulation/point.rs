@@ -25,7 +25,7 @@ use nalgebra::{Matrix3, Vector2, Vector3};
 use pluecker::triangulation::point::{triangulate_point as core_triangulate_point, PointTriangulation};
 use pluecker::triangulation::point::{DensePointTracks, SparsePointTracks};
 use pluecker::triangulation::streaming::{linear_points_into, points_into as core_points, LinearTrack};
-use pluecker::triangulation::{CostKind, Method, Primitive, Report};
+use pluecker::triangulation::{CostKind, Method, Report};
 use pluecker::Error;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
@@ -45,15 +45,13 @@ pub struct PyPointTriangulation {
 impl PyPointTriangulation {
     /// The Python object of a core result.
     pub fn create(py: Python<'_>, result: PointTriangulation) -> PyResult<Py<PyPointTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport {
-            inner: result.report,
-            primitive: Primitive::Point,
-        })
-        .add_subclass(PyPointTriangulation {
-            point: result.point,
-            covariance: result.covariance,
-            inliers: result.inliers,
-        });
+        let init = PyClassInitializer::from(PyTriangulationReport { inner: result.report }).add_subclass(
+            PyPointTriangulation {
+                point: result.point,
+                covariance: result.covariance,
+                inliers: result.inliers,
+            },
+        );
         Py::new(py, init)
     }
 }

@@ -21,7 +21,7 @@ use pluecker::triangulation::quadric::{
 use pluecker::triangulation::quadric::{DenseQuadricTracks, SparseQuadricTracks};
 use pluecker::triangulation::streaming::quadrics_into as core_quadrics;
 use pluecker::triangulation::uncertainty::QuadricCovariance;
-use pluecker::triangulation::{CostKind, Primitive, Report};
+use pluecker::triangulation::{CostKind, Report};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
@@ -40,18 +40,15 @@ pub struct PyQuadricTriangulation {
 
 impl PyQuadricTriangulation {
     pub fn create(py: Python<'_>, r: QuadricTriangulation) -> PyResult<Py<PyQuadricTriangulation>> {
-        let init = PyClassInitializer::from(PyTriangulationReport {
-            inner: r.report,
-            primitive: Primitive::Quadric,
-        })
-        .add_subclass(PyQuadricTriangulation {
-            dual: r.dual,
-            primal: r.primal,
-            centre: r.centre,
-            axes: r.axes,
-            semi_axes: r.semi_axes,
-            covariance: r.covariance,
-        });
+        let init =
+            PyClassInitializer::from(PyTriangulationReport { inner: r.report }).add_subclass(PyQuadricTriangulation {
+                dual: r.dual,
+                primal: r.primal,
+                centre: r.centre,
+                axes: r.axes,
+                semi_axes: r.semi_axes,
+                covariance: r.covariance,
+            });
         Py::new(py, init)
     }
 }

@@ -4,7 +4,7 @@
 use crate::certificate::certificate_of;
 use crate::pickle::reduce;
 use crate::properties::result_class;
-use pluecker::triangulation::{Primitive, Report};
+use pluecker::triangulation::Report;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
@@ -12,10 +12,9 @@ use pyo3::types::PyTuple;
 /// of global optimality, iterations and time.
 #[pyclass(frozen, subclass, name = "TriangulationReport", module = "pluecker")]
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
 pub struct PyTriangulationReport {
     pub inner: Report,
-    /// What was triangulated (the certificate's domain depends on it).
-    pub primitive: Primitive,
 }
 
 impl PyTriangulationReport {
@@ -63,7 +62,7 @@ result_class! {
         /// The proof of global optimality (`Certificate`: `certified`, `lower_bound`, `raw_lower_bound`, `relative_gap`,
         /// `kind`, `domain`, `nodes`); `None` when no bound was computed (methods `linear` and `local`, input refused
         /// before the search). A search that did not close the gap gives `certified == False` and status `gap_not_closed`.
-        certificate = |r| certificate_of(r.inner.certificate, r.primitive);
+        certificate = |r| certificate_of(r.inner.certificate);
         /// `certificate is not None and certificate.certified`.
         certified = |r| r.inner.certified();
         /// Iterations of the local minimisation.
@@ -72,6 +71,8 @@ result_class! {
         termination = |r| r.inner.termination.as_str();
         /// Wall time, seconds.
         time_seconds = |r| r.inner.time_seconds;
+        /// Degrees of freedom of `cost`: whitened residuals minus fitted parameters (0 when not known).
+        residual_dof = |r| r.inner.residual_dof;
         /// χ² test of `cost` against the given covariances (identity: 1 px), `dof` = residuals − parameters;
         /// `consistent == False` flags an outlier, a wrong camera or noise beyond the stated one. `None` when `dof` is 0.
         residual_test = |r| r.inner.residual_test();

@@ -235,6 +235,7 @@ pub struct Ellipse {
     /// Centre, pixels.
     pub centre: Vector2<f64>,
     /// Orthonormal axes as columns, in the order of `semi_axes`.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub axes: Matrix2<f64>,
     /// Semi-axis lengths, pixels, positive, in decreasing order.
     pub semi_axes: Vector2<f64>,

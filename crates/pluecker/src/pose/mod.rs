@@ -251,6 +251,7 @@ pub struct StageReport {
     /// `max_iterations` on the iteration cap or the time budget).
     pub cost_kind: CostKind,
     /// Rotation at the end of the stage (world → camera).
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub rotation: Matrix3<f64>,
     /// Translation at the end of the stage (world units).
     pub translation: Vector3<f64>,
@@ -288,6 +289,7 @@ pub struct PoseResult {
     /// that keeps the object points in front of the camera (kind `sublevel_set`), `certified` when the
     /// relative gap is within [`CertifyOptions::max_relative_gap`], `None` when no bound was computed
     /// (not requested, or not available: [`PoseDetails::uncertified_reason`]).
+    #[cfg_attr(feature = "serde", serde(flatten))]
     pub report: Report<Method>,
     /// Which points were used for the returned pose: the final inliers when robust, else all true.
     pub inliers_points: Vec<bool>,
@@ -303,6 +305,7 @@ pub struct PoseResult {
     /// `reprojection::RELATIVE_RANK_TOLERANCE`) or not finite, when σ cannot be estimated (at most 6
     /// residuals), or when the pose is not finite. For `linear`, at the estimated intrinsics taken as
     /// exact.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows::option"))]
     pub covariance: Option<Matrix6<f64>>,
     /// How the pose was found: its stages, noise and ambiguity diagnostics.
     pub details: PoseDetails,

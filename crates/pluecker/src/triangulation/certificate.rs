@@ -8,6 +8,7 @@ use crate::global::branch_and_bound::BranchAndBoundResult;
 use crate::global::envelopes::{add_fraction_envelope, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpSolution, SocpStatus};
 use crate::global::CERTIFICATE_COST_FLOOR;
+use crate::Primitive;
 
 /// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
 /// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the
@@ -35,6 +36,7 @@ pub(crate) fn certificate_of<C>(
     best_cost: f64,
     max_relative_gap: f64,
     kind: CertificateKind,
+    primitive: Primitive,
 ) -> (Status, Option<Certificate>) {
     if result.box_lower_bound == f64::INFINITY {
         return (Status::NumericalFailure, None);
@@ -53,7 +55,7 @@ pub(crate) fn certificate_of<C>(
         // The raw bound is the one the search proved over its box, before any cap (`lower` also
         // caps it at the incumbent's cost).
         Some(
-            Certificate::new(kind, lower, result.box_lower_bound, relative_gap, certified)
+            Certificate::new(kind, primitive, lower, result.box_lower_bound, relative_gap, certified)
                 .with_effort(result.nodes, result.solver_iterations),
         ),
     )
@@ -63,13 +65,13 @@ pub(crate) fn certificate_of<C>(
 /// `Err` holds the finished report when the local cost is at most [`CERTIFICATE_COST_FLOOR`] (a cost at
 /// the rounding level, squared whitened pixels): certified
 /// whatever stopped the local stage, a sum of squares being never negative, with no search.
-pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
+pub(crate) fn optimal_start(local_report: &Report, primitive: Primitive) -> Result<Report, Report> {
     let mut report = Report {
         method: Method::Optimal,
         ..local_report.clone()
     };
     if local_report.cost <= CERTIFICATE_COST_FLOOR {
-        report.certificate = Some(negligible_cost_certificate());
+        report.certificate = Some(negligible_cost_certificate(primitive));
         report.status = Status::Success;
         return Err(report);
     }
@@ -77,8 +79,8 @@ pub(crate) fn optimal_start(local_report: &Report) -> Result<Report, Report> {
 }
 
 /// The certificate of a cost at most [`CERTIFICATE_COST_FLOOR`]: the bound 0 of a sum of squares.
-fn negligible_cost_certificate() -> Certificate {
-    Certificate::new(CertificateKind::ConvexityTest, 0.0, 0.0, 0.0, true)
+fn negligible_cost_certificate(primitive: Primitive) -> Certificate {
+    Certificate::new(CertificateKind::ConvexityTest, primitive, 0.0, 0.0, 0.0, true)
 }
 
 /// Minimises the relaxation of eq. 19 in `p` (eq. 22): the sum, over the `views` `(tᵢ, gᵢ, lo, hi)`
@@ -193,7 +195,7 @@ mod tests {
                 true_gap > 1e-3 && true_gap < 2e-3,
                 "slack {slack}: the test needs a gap in (1e-3, 2e-3): {true_gap}"
             );
-            let (status, c) = certificate_of(&result, cost, 1e-3, CertificateKind::BranchAndBound);
+            let (status, c) = certificate_of(&result, cost, 1e-3, CertificateKind::BranchAndBound, Primitive::Line);
             let c = c.expect("a bound");
             assert!(!c.certified, "slack {slack}: certified with a true gap of {true_gap}");
             assert_eq!(status, Status::GapNotClosed);
@@ -204,15 +206,15 @@ mod tests {
                 "{} vs {true_gap}",
                 c.relative_gap
             );
-            let (status, c) = certificate_of(&result, cost, 2e-3, CertificateKind::BranchAndBound);
+            let (status, c) = certificate_of(&result, cost, 2e-3, CertificateKind::BranchAndBound, Primitive::Line);
             let c = c.expect("a bound");
             assert!(c.certified && status == Status::Success, "slack {slack}");
             // The convexity test's certificate: the same boundary.
             assert!(
-                Certificate::of_convexity_test(cost, raw, 1e-3).is_none(),
+                Certificate::of_convexity_test(Primitive::Point, cost, raw, 1e-3).is_none(),
                 "slack {slack}"
             );
-            let c = Certificate::of_convexity_test(cost, raw, 2e-3).expect("certified at 2e-3");
+            let c = Certificate::of_convexity_test(Primitive::Point, cost, raw, 2e-3).expect("certified at 2e-3");
             assert!((c.relative_gap - true_gap).abs() <= 1e-12 && c.raw_lower_bound == raw);
         }
     }
@@ -236,7 +238,7 @@ mod tests {
         let root = Region::new(vec![-1.0], vec![1.0]);
         let result = branch_and_bound(&mut Nothing, root, Some((0.9, 0.3)), &BranchAndBoundOptions::default());
         assert_eq!(result.box_lower_bound, f64::INFINITY);
-        let (status, c) = certificate_of(&result, 0.9, 1e-3, CertificateKind::BranchAndBound);
+        let (status, c) = certificate_of(&result, 0.9, 1e-3, CertificateKind::BranchAndBound, Primitive::Line);
         assert_eq!(status, Status::NumericalFailure);
         assert!(c.is_none(), "{c:?}");
     }
@@ -250,7 +252,7 @@ mod tests {
         let opts = BranchAndBoundOptions::default();
         let mut oracle = Loose { slack: 0.0 };
         let result = branch_and_bound(&mut oracle, root, Some((0.9, 0.3)), &opts);
-        let (_, c) = certificate_of(&result, 0.9, 1e-3, CertificateKind::BranchAndBound);
+        let (_, c) = certificate_of(&result, 0.9, 1e-3, CertificateKind::BranchAndBound, Primitive::Line);
         let c = c.expect("a bound");
         assert!(c.raw_lower_bound >= 1.0 - 1e-12 && c.lower_bound == 0.9, "{c:?}");
     }

@@ -30,6 +30,7 @@ pub struct FittedLine {
     /// [`LineFrame`]); pixels.
     pub line: Vector3<f64>,
     /// Covariance of the residual of `line::residual` (pixels²), for `triangulate_line`.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub covariance: Matrix2<f64>,
     /// Root-mean-square distance of the points from the line, pixels.
     pub rms_distance: f64,
@@ -40,10 +41,12 @@ pub struct FittedLine {
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FittedConic {
     /// The point conic `c` of eq. 8, pixels, normalised to unit Frobenius norm.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub conic: Matrix3<f64>,
     /// The same ellipse: centre, axes, semi-axes.
     pub ellipse: Ellipse,
     /// Covariance of the 5-entry residual of `quadric::residual`, for `triangulate_quadric`.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub covariance: SMatrix<f64, 5, 5>,
     /// Reweighting iterations used.
     pub iterations: usize,

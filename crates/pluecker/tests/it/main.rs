@@ -16,6 +16,7 @@ mod pose_global;
 mod pose_lens;
 mod pose_lens_exact;
 mod robust_pose;
+mod shared_fixture;
 mod triangulation_api;
 mod triangulation_cheirality;
 mod triangulation_fitting;

@@ -122,6 +122,7 @@ use crate::camera::Camera;
 use crate::camera::Intrinsics;
 use crate::certificate::{Certificate, CertificateKind, CertifyOptions};
 use crate::global::CERTIFICATE_COST_FLOOR;
+use crate::Primitive;
 use lens::{Slack, Surrogate};
 use local_bound::{LocalModel, RaySlack};
 use problem::{Problem, SearchStart};
@@ -228,6 +229,7 @@ impl SublevelSetOutcome {
             certificate: (!self.raw_lower_bound.is_nan()).then(|| {
                 Certificate::new(
                     kind,
+                    Primitive::Pose,
                     sum_of_squares(self.lower_bound),
                     sum_of_squares(self.raw_lower_bound),
                     self.relative_gap,

@@ -84,8 +84,10 @@ pub struct LineTriangulation {
     /// when none are given). Computed for every method and status; `None` when `JᵀJ` is numerically
     /// singular (a line nearly in an epipolar plane of every pair of views). Map it with
     /// [`LineChart::plucker_covariance`] or [`LineChart::point_direction_covariance`].
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows::option"))]
     pub covariance: Option<Matrix4<f64>>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
+    #[cfg_attr(feature = "serde", serde(flatten))]
     pub report: Report,
     /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
     /// order): the observations the line was solved from (`robust`). `None` otherwise.

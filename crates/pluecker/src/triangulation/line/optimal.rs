@@ -43,6 +43,7 @@ use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, 
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{CertificateKind, Report, Status, TriangulationOptions};
+use crate::Primitive;
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 use std::ops::{Add, Sub};
 
@@ -396,7 +397,7 @@ pub(crate) fn optimal_line(
     local_report: &Report,
     opts: &TriangulationOptions,
 ) -> (Vector6<f64>, Report) {
-    let mut report = match optimal_start(local_report) {
+    let mut report = match optimal_start(local_report, Primitive::Line) {
         Ok(report) => report,
         Err(certified) => return (*local, certified),
     };
@@ -496,6 +497,7 @@ pub(crate) fn optimal_line(
         best_cost,
         opts.certify.max_relative_gap,
         CertificateKind::BranchAndBound,
+        Primitive::Line,
     );
     (report.status, report.certificate) = (status, certificate);
     (world, report)

@@ -39,6 +39,7 @@ use crate::triangulation::certificate::{certificate_of, optimal_start};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{CertificateKind, Report, TriangulationOptions};
+use crate::Primitive;
 use nalgebra::{Vector4, Vector6};
 
 /// The node cap of the Taylor search when `certify.max_nodes` is `None`: its nodes cost
@@ -140,7 +141,7 @@ pub(crate) fn optimal_line_taylor(
     local_report: &Report,
     opts: &TriangulationOptions,
 ) -> Option<(Vector6<f64>, Report)> {
-    let mut report = match optimal_start(local_report) {
+    let mut report = match optimal_start(local_report, Primitive::Line) {
         Ok(report) => report,
         Err(certified) => return Some((*local, certified)),
     };
@@ -178,6 +179,7 @@ pub(crate) fn optimal_line_taylor(
         best_cost,
         opts.certify.max_relative_gap,
         CertificateKind::TaylorBranchAndBound,
+        Primitive::Line,
     );
     report.status = status;
     report.certificate = certificate;

@@ -70,6 +70,7 @@ use crate::triangulation::point::PointTriangulation;
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{depth_normalized, View};
 use crate::triangulation::{Certificate, CertificateKind, Method, Status, TriangulationOptions};
+use crate::Primitive;
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
 
@@ -403,6 +404,7 @@ pub(crate) fn through_lenses(result: &mut PointTriangulation, views: &[LensView]
             let relative_gap = relative_gap(cost, lower_bound);
             report.certificate = Some(Certificate::new(
                 CertificateKind::LensConvexityTest,
+                Primitive::Point,
                 lower_bound,
                 raw,
                 relative_gap,

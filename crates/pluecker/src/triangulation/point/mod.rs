@@ -71,6 +71,7 @@ use crate::covariance::whitenings;
 use crate::error::{Error, Result};
 use crate::global::relative_gap;
 use crate::optim::{trust_region, Termination};
+use crate::Primitive;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
 
@@ -95,8 +96,10 @@ pub struct PointTriangulation {
     /// with `J` the Jacobian of the whitened residuals of eq. 18 at `point` (1 px isotropic noise per
     /// view without covariances). Computed for every method and status whenever `point` is finite;
     /// `None` when it is not, or when `JᵀJ` is numerically singular (a point at or near infinity).
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows::option"))]
     pub covariance: Option<Matrix3<f64>>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
+    #[cfg_attr(feature = "serde", serde(flatten))]
     pub report: Report,
     /// With [`TriangulationOptions::outlier_threshold`], one flag per view of the track (in its
     /// order): the observations the point was solved from (`robust`). `None` otherwise.
@@ -355,6 +358,7 @@ fn certificate_when_unreached(certificate: &Certificate, u: &Unreached) -> Optio
         let lower_bound = certificate.lower_bound.min(u.cost);
         Certificate::new(
             certificate.kind,
+            certificate.primitive,
             lower_bound,
             certificate.raw_lower_bound,
             relative_gap(u.cost, lower_bound),
@@ -483,7 +487,9 @@ fn certify(
     let test = convexity_test(views, &x);
     if let Some(certificate) = test
         .passed
-        .then(|| Certificate::of_convexity_test(cost, test.lower_bound, opts.certify.max_relative_gap))
+        .then(|| {
+            Certificate::of_convexity_test(Primitive::Point, cost, test.lower_bound, opts.certify.max_relative_gap)
+        })
         .flatten()
     {
         return (x, Status::Success, certificate, cost);
@@ -530,6 +536,7 @@ fn certify(
     };
     let certificate = Certificate::new(
         CertificateKind::BranchAndBound,
+        Primitive::Point,
         lower_bound,
         raw_lower_bound,
         gap,

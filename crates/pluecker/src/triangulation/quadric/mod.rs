@@ -66,14 +66,17 @@ pub type Matrix5 = SMatrix<f64, 5, 5>;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct QuadricTriangulation {
     /// The dual quadric `L` of eq. 10 (world frame), normalised so that `L₄₄ = −1`.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub dual: Matrix4<f64>,
     /// The point quadric `C = L⁻¹` of eq. 9, `None` for a flat ellipsoid (a disc).
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows::option"))]
     pub primal: Option<Matrix4<f64>>,
     /// Centre, world units.
     pub centre: Vector3<f64>,
     /// Semi-axis lengths in decreasing order, world units (a zero means a flat ellipsoid).
     pub semi_axes: Vector3<f64>,
     /// Unit axes as columns, in the order of `semi_axes`.
+    #[cfg_attr(feature = "serde", serde(with = "crate::matrix_rows"))]
     pub axes: Matrix3<f64>,
     /// The first-order 9x9 covariance of the ellipsoid in the [`crate::geometry::CentreShape`]
     /// chart `(c₁, c₂, c₃, S₁₁, S₁₂, S₁₃, S₂₂, S₂₃, S₃₃)`: centre (world units) and upper triangle of
@@ -84,6 +87,7 @@ pub struct QuadricTriangulation {
     /// estimate it ignores the constraint `S ⪰ 0` (see [`super::uncertainty`]).
     pub covariance: Option<QuadricCovariance>,
     /// What the method did: status, cost of eq. 19, certificate, iterations, time.
+    #[cfg_attr(feature = "serde", serde(flatten))]
     pub report: Report,
 }
 

@@ -35,6 +35,7 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{Certificate, CertificateKind, QuadricBound, Report, Status, TriangulationOptions};
+use crate::Primitive;
 use nalgebra::SVector;
 
 /// `B` of the a-priori box (module docs) as a multiple of the largest camera distance.
@@ -169,7 +170,7 @@ pub(crate) fn optimal_quadric(
     local_report: &Report,
     opts: &TriangulationOptions,
 ) -> (Ellipsoid, Report) {
-    let mut report = match optimal_start(local_report) {
+    let mut report = match optimal_start(local_report, Primitive::Quadric) {
         Ok(report) => report,
         Err(certified) => return (*local, certified),
     };
@@ -183,7 +184,9 @@ pub(crate) fn optimal_quadric(
     let test = (opts.quadric_bound == QuadricBound::Convexity)
         .then(|| convexity_bound(&raw_views, &reference))
         .flatten()
-        .and_then(|lower| Certificate::of_convexity_test(cost, lower, opts.certify.max_relative_gap));
+        .and_then(|lower| {
+            Certificate::of_convexity_test(Primitive::Quadric, cost, lower, opts.certify.max_relative_gap)
+        });
     if let Some(certified) = test {
         report.status = Status::Success;
         report.certificate = Some(certified);
@@ -276,6 +279,7 @@ pub(crate) fn optimal_quadric(
         best_cost,
         opts.certify.max_relative_gap,
         CertificateKind::BranchAndBound,
+        Primitive::Quadric,
     );
     (report.status, report.certificate) = (status, certificate);
     (world, report)
