@@ -12,6 +12,7 @@
 # Idempotent: the virtualenv is made once, the extension rebuilt only when a Rust source changes.
 
 PYTHON ?= python3
+PYTEST_WORKERS ?= 2
 VENV := .venv
 BIN := $(VENV)/bin
 DEPS_STAMP := $(VENV)/.deps-stamp
@@ -32,7 +33,7 @@ setup: develop
 $(DEPS_STAMP): Makefile
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
+	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "pytest-xdist>=3.5" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
@@ -60,8 +61,10 @@ test-rust: develop
 	cargo test --workspace --release --tests
 	cargo test --workspace --release --doc
 
+# The Python tests run in PYTEST_WORKERS processes (pytest-xdist; 0 runs them in this one). Each test is
+# independent of the others' order and process, and the property tests' seed is the same in every worker.
 test-python: develop
-	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q -n $(PYTEST_WORKERS) tests
 
 # Format, lints and docs, warnings as errors. Clippy's one crate-level allow is the NaN guard
 # `!(x > 0.0)` (lib.rs). The docs check covers the core crate only: rustdoc (1.95 and nightly) stops with

@@ -89,7 +89,7 @@ def test_without_certify_nothing_is_claimed():
     assert res.details.uncertified_reason.startswith("not requested")
     d = res.to_dict()
     assert d["certificate"] is None and set(d) == {"pose", "method", "status", "success", "cost", "cost_kind", "certificate",
-                                                   "certified", "iterations", "termination", "time_seconds",
+                                                   "certified", "iterations", "termination", "time_seconds", "residual_dof",
                                                    "inliers_points", "inliers_lines", "covariance", "details"}
     for key in ("second_best", "behind_camera_cost", "uncertified_reason", "rms_error_px", "stages"):
         assert key in d["details"]

@@ -15,7 +15,7 @@ import pluecker
 
 
 REPORT_FIELDS = ("method", "status", "success", "cost", "cost_kind", "certificate", "certified", "iterations", "termination",
-                 "time_seconds", "residual_test")
+                 "time_seconds", "residual_dof", "residual_test")
 
 
 def noisy_problem(seed: int, views: int = 4, parallax_deg: float = 30.0, sigma: float = 1.0):
