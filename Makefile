@@ -55,7 +55,7 @@ test: test-rust test-python
 
 # The unit, integration and doc tests (`--tests`: the targets with test = true, so not the extension's
 # lib, which `--lib` would build as an empty test harness). The examples are not built here (a plain
-# `cargo test` builds the six in release, thin LTO: about a sixth of a cold test build); `make lint`'s
+# `cargo test` builds the six in release: about a sixth of a cold test build); `make lint`'s
 # clippy --all-targets type-checks them, and `.ci/rust_newcomer.sh` builds and runs the README's example.
 test-rust: develop
 	cargo test --workspace --release --tests
