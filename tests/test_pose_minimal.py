@@ -160,3 +160,15 @@ def test_refinement_reaches_the_noise_floor_from_a_perturbed_start():
     assert np.abs(R2 - R1).max() < 1e-6 and np.linalg.norm(t2 - t1) < 1e-6 * np.linalg.norm(t1)
     with pytest.raises(pluecker.InvalidOptionError, match="R: expected a rotation matrix"):
         pluecker.refine_pose(cam, 2 * R, t, x, scene["points3d"])
+
+
+def test_refinement_refuses_a_camera_that_distorts_by_name():
+    """``refine_pose`` takes pinhole pixels: through a lens its cost would be the wrong one, so a camera
+    that distorts is refused, naming the argument; the pinhole part of the same camera is accepted."""
+    scene = pluecker.random_scene("general", 10, 0, seed=4)
+    lens = pluecker.Camera("OPENCV", [800.0, 800.0, 320.0, 240.0, -0.1, 0.0, 0.0, 0.0])
+    args = (scene["R"], scene["t"], scene["points2d"], scene["points3d"])
+    with pytest.raises(pluecker.InvalidOptionError, match="'camera': a OPENCV camera distorts"):
+        pluecker.refine_pose(lens, *args)
+    R, t, stage = pluecker.refine_pose(lens.pinhole_part, *args)
+    assert stage.name == "refinement" and np.all(np.isfinite(R)) and np.all(np.isfinite(t))

@@ -82,7 +82,7 @@ fn main() {
                 candidates.push(Pose::new(r, Vector3::new(0.0, 0.0, depth) - r * centroid));
             }
             for start in candidates {
-                let (pose, _) = refine_pose(&scene.camera.intrinsics(), &corr, &start, &opts);
+                let (pose, _) = refine_pose(&scene.camera, &corr, &start, &opts).expect("a pinhole camera");
                 let c = cost.cost(&pose);
                 if c.is_finite() && cost.points_behind(&pose) == 0 {
                     best = best.min(c);

@@ -6,7 +6,7 @@
 //! from pixels. Each returns every real pose `x_cam = R X_world + t` that explains its sample exactly,
 //! as a list of `(R, t)`: possibly empty (a degenerate sample), never an error for valid arrays.
 
-use crate::camera::{pinhole_only, PyCamera};
+use crate::camera::PyCamera;
 use crate::convert::pose_from_parts;
 use crate::convert::{points, segments};
 use crate::errors::shape_error;
@@ -108,7 +108,8 @@ pub fn p3l<'py>(
 /// Minimises the reprojection error (pixels for points, endpoint-to-line distances for segments) from
 /// the pose `(R, t)` with the trust region of Phong & Horaud 1995, section 4.1, and returns the pose
 /// reached and its stage report: `(R, t, PoseStage)`. `options`: `PoseOptions` (its `normalize` and
-/// `refinement` are used; `None`: the defaults).
+/// `refinement` are used; `None`: the defaults). The pixels are a pinhole camera's: a `camera` that
+/// distorts is an `InvalidOptionError` (`estimate_pose` with `initial_pose` refines through a lens).
 #[pyfunction]
 #[pyo3(signature = (camera, R, t, points2d = None, points3d = None, lines2d = None, lines3d = None, *, options = None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
@@ -123,11 +124,11 @@ pub fn refine_pose<'py>(
     lines3d: Option<&Bound<'py, PyAny>>,
     options: Option<PyRef<'py, PyPoseOptions>>,
 ) -> PyResult<(PyObject, PyObject, PyPoseStage)> {
-    let camera = pinhole_only("camera", camera.get())?;
+    let camera = camera.get().inner.clone();
     let start = pose_from_parts("R", R, "t", t)?;
     let opts = options.map_or_else(pluecker::pose::PoseOptions::default, |o| o.core());
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
-    let (pose, stage) = solve(py, move || Ok(core_refine_pose(&camera, &corr, &start, &opts)))?;
+    let (pose, stage) = solve(py, move || core_refine_pose(&camera, &corr, &start, &opts))?;
     Ok((
         pose.rotation.get(py)?,
         pose.translation.get(py)?,

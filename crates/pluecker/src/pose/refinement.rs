@@ -21,7 +21,8 @@ use super::candidates::SPREAD_SAMPLES;
 use super::correspondences::Conditioning;
 use super::reprojection::{Pose, ReprojectionCost};
 use super::{stage, CostKind, PoseOptions, StageReport};
-use crate::camera::Intrinsics;
+use crate::camera::Camera;
+use crate::error::{Error, Result};
 use crate::geometry::quaternion::{exp_so3, log_so3, rotation_distance};
 use crate::optim::Objective;
 use crate::optim::{trust_region, Subproblem, Summary, Termination};
@@ -299,23 +300,38 @@ pub fn search(
 
 /// Minimises the reprojection error from `initial` (world frame) with the trust region of section 4.1
 /// (Hebden steps on `JᵀJ`). The search runs in the conditioned frame; the returned pose is in the world.
+///
+/// The pixels are taken as a pinhole's: a `camera` that distorts is [`Error::InvalidOption`] naming it
+/// (through a lens, [`crate::pose::estimate_pose`] with [`PoseOptions::initial_pose`] refines the exact
+/// pixel cost).
 pub fn refine_pose(
-    camera: &Intrinsics,
+    camera: &Camera,
     corr: &Correspondences,
     initial: &Pose,
     opts: &PoseOptions,
-) -> (Pose, StageReport) {
+) -> Result<(Pose, StageReport)> {
+    if camera.distorts() {
+        return Err(Error::InvalidOption {
+            name: "camera".into(),
+            reason: format!(
+                "a {} camera distorts; refine_pose takes pinhole pixels (estimate_pose with initial_pose \
+                 refines through a lens)",
+                camera.model().as_str()
+            ),
+        });
+    }
+    let camera = camera.intrinsics();
     let cond = if opts.normalize {
         Conditioning::of(corr)
     } else {
         Conditioning::identity()
     };
-    refine_conditioned(
+    Ok(refine_conditioned(
         &cond,
-        &ReprojectionCost::of(camera, &cond.correspondences(corr)),
+        &ReprojectionCost::of(&camera, &cond.correspondences(corr)),
         initial,
         opts,
-    )
+    ))
 }
 
 /// [`refine_pose`] on correspondences already conditioned by `cond` (`initial` and the answer in the

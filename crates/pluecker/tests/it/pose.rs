@@ -341,3 +341,26 @@ fn a_flat_object_behind_the_camera_is_reported_under_a_small_stated_noise() {
     }
     assert_eq!(checked, 4);
 }
+
+#[test]
+fn refine_pose_takes_pinhole_pixels_and_refuses_a_lens_by_name() {
+    let scene = random_scene(SceneKind::General, 12, 3, 9);
+    let start = Pose::new(scene.rotation, scene.translation + Vector3::new(0.01, -0.02, 0.01));
+    let opts = PoseOptions::default();
+    let (pose, stage) = pluecker::pose::refine_pose(&scene.camera, &scene.correspondences, &start, &opts).unwrap();
+    assert_eq!(stage.name, "refinement");
+    assert!(
+        (pose.translation - scene.translation).amax() < 1e-8,
+        "{:?}",
+        pose.translation
+    );
+    let k = scene.camera.intrinsics();
+    let lens = Camera::new(pluecker::camera::CameraModel::SimpleRadial, &[k.fx, k.cx, k.cy, -0.05]).unwrap();
+    match pluecker::pose::refine_pose(&lens, &scene.correspondences, &start, &opts) {
+        Err(Error::InvalidOption { name, reason }) => {
+            assert_eq!(name, "camera");
+            assert!(reason.contains("SIMPLE_RADIAL camera distorts"), "{reason}");
+        }
+        other => panic!("a lens must be refused, got {other:?}"),
+    }
+}
