@@ -3,7 +3,7 @@
 //! answer of the equivalent form, bit for bit (but for `time_seconds`), or is refused as a whole call
 //! naming the argument.
 
-use crate::common::segment_tracks;
+use crate::common::{outlines, segment_tracks};
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use pluecker::camera::{Camera, CameraModel};
 use pluecker::rng::Rng;
@@ -193,14 +193,7 @@ fn a_quadric_batch_through_pinhole_views_is_the_batch_of_their_projections() {
         })
         .collect();
     let projections: Vec<Matrix3x4<f64>> = views.iter().map(View::projection).collect();
-    let conics: Vec<Matrix3<f64>> = projections
-        .iter()
-        .map(|p| {
-            pluecker::geometry::project_dual(p, &scene.ellipsoid.dual())
-                .try_inverse()
-                .unwrap()
-        })
-        .collect();
+    let conics = outlines(&projections, &scene.ellipsoid);
     let flat: Vec<f64> = conics.iter().flat_map(|c| c.transpose().as_slice().to_vec()).collect();
     let tracks = DenseQuadricTracks {
         conics: &flat,

@@ -311,15 +311,7 @@ fn a_certificate_of_negligible_cost_comes_with_a_success() {
     assert!(r.report.certified(), "{:?}", r.report);
     assert_consistent(&r.report, "line");
     let scene = quadric_scene(3, 0.8, 401);
-    let conics: Vec<Matrix3<f64>> = scene
-        .cameras
-        .iter()
-        .map(|p| {
-            pluecker::geometry::project_dual(p, &scene.ellipsoid.dual())
-                .try_inverse()
-                .unwrap()
-        })
-        .collect();
+    let conics = crate::common::outlines(&scene.cameras, &scene.ellipsoid);
     let r = triangulate_quadric(&scene.cameras, QuadricObservations::Conics(&conics, None), &o).unwrap();
     assert_consistent(&r.report, "quadric");
     let scene = triangulation_scene(3, 0.3, 402);

@@ -2,7 +2,7 @@
 //! quadric, the paper's real-data case), cost ordering and certificates, the soundness of the bound,
 //! cheirality and bad input.
 
-use crate::common;
+use crate::common::{self, outlines};
 
 use nalgebra::{Matrix3, Matrix3x4, Matrix4, Rotation3, Vector3};
 use pluecker::geometry::{project_dual, Ellipse, Ellipsoid};
@@ -19,13 +19,6 @@ fn opts(method: Method) -> TriangulationOptions {
     options.method = method;
     options.certify.max_nodes = Some(200);
     options
-}
-
-fn outlines(cameras: &[Matrix3x4<f64>], e: &Ellipsoid) -> Vec<Matrix3<f64>> {
-    cameras
-        .iter()
-        .map(|p| project_dual(p, &e.dual()).try_inverse().unwrap())
-        .collect()
 }
 
 #[test]

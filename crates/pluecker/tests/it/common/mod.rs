@@ -4,7 +4,8 @@
 
 pub mod oracle_triangulation;
 
-use nalgebra::{Matrix3x4, Vector2, Vector3};
+use nalgebra::{Matrix3, Matrix3x4, Vector2, Vector3};
+use pluecker::geometry::{project_dual, Ellipsoid};
 use pluecker::rng::Rng;
 use pluecker::triangulation::line::{DenseLineTracks, ImageLines};
 
@@ -12,6 +13,14 @@ use pluecker::triangulation::line::{DenseLineTracks, ImageLines};
 pub fn project(p: &Matrix3x4<f64>, x: &Vector3<f64>) -> Vector2<f64> {
     let u = p * x.push(1.0);
     u.xy() / u.z
+}
+
+/// The outlines (point conics) of the ellipsoid `e` in the `cameras`.
+pub fn outlines(cameras: &[Matrix3x4<f64>], e: &Ellipsoid) -> Vec<Matrix3<f64>> {
+    cameras
+        .iter()
+        .map(|p| project_dual(p, &e.dual()).try_inverse().unwrap())
+        .collect()
 }
 
 /// `n` random segments near the origin seen by `cameras`, with endpoint noise of `sigma` px: the flat
