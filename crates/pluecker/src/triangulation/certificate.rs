@@ -4,11 +4,11 @@
 //! ([`super::point::certificate`]).
 
 use super::{Certificate, CertificateKind, Method, Report, Status};
+use crate::certificate::Primitive;
 use crate::global::branch_and_bound::BranchAndBoundResult;
 use crate::global::envelopes::{add_fraction_envelope, FractionBox};
 use crate::global::socp::{Affine, Socp, SocpSolution, SocpStatus};
 use crate::global::CERTIFICATE_COST_FLOOR;
-use crate::Primitive;
 
 /// The least value of `e` over the constraints of `program` (its objective is replaced), as a valid
 /// bound: `None` when the program is infeasible, `Some(None)` when the solver failed; with the

@@ -33,6 +33,7 @@
 
 use super::residual::LINE_FRAME_DISTANCE;
 use super::{LineObjective, LineProblem};
+use crate::certificate::Primitive;
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::add_quadratic_over_linear;
@@ -43,7 +44,6 @@ use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, 
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{CertificateKind, Report, Status, TriangulationOptions};
-use crate::Primitive;
 use nalgebra::{Matrix3, Matrix4, Vector2, Vector3, Vector4, Vector6};
 use std::ops::{Add, Sub};
 

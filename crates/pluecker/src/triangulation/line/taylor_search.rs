@@ -31,6 +31,7 @@
 
 use super::two_view_chart::{Clearance, TwoViewChart};
 use super::{LineObjective, LineProblem};
+use crate::certificate::Primitive;
 use crate::geometry::plucker::{self, OrthonormalLine};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::taylor_bound::{bound_over_box, cost_and_gradient, ROUNDING_MARGIN};
@@ -39,7 +40,6 @@ use crate::triangulation::certificate::{certificate_of, optimal_start};
 use crate::triangulation::conditioning::Similarity;
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{CertificateKind, Report, TriangulationOptions};
-use crate::Primitive;
 use nalgebra::{Vector4, Vector6};
 
 /// The node cap of the Taylor search when `certify.max_nodes` is `None`: its nodes cost

@@ -60,6 +60,7 @@ use super::robust::RobustTrack;
 pub use crate::camera::linearisation::LensBoundFailure;
 use crate::camera::linearisation::{Linearised, SPLITS};
 use crate::camera::Camera;
+use crate::certificate::Primitive;
 use crate::error::Result;
 use crate::global::convexity::{minorant_at_level, Minorant};
 use crate::global::relative_gap;
@@ -70,7 +71,6 @@ use crate::triangulation::point::PointTriangulation;
 use crate::triangulation::uncertainty::covariance_of_information3;
 use crate::triangulation::views::{depth_normalized, View};
 use crate::triangulation::{Certificate, CertificateKind, Method, Status, TriangulationOptions};
-use crate::Primitive;
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
 

@@ -67,11 +67,11 @@ use self::linear::{frame_of_cameras, linear_point, LinearPoint, WorldFrame};
 use super::uncertainty::covariance_of_information3;
 use super::views::{baseline, centre, depth_normalized, validate_cameras, Cameras, View};
 use super::{Certificate, CertificateKind, CostKind, Method, Report, Status, TriangulationOptions};
+use crate::certificate::Primitive;
 use crate::covariance::whitenings;
 use crate::error::{Error, Result};
 use crate::global::relative_gap;
 use crate::optim::{trust_region, Termination};
-use crate::Primitive;
 use nalgebra::{Matrix2, Matrix3, Matrix3x4, Vector2, Vector3};
 use std::time::Instant;
 

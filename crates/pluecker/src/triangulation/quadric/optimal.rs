@@ -26,6 +26,7 @@
 
 use super::certificate::convexity_bound;
 use super::{nearest_ellipsoid, transform_dual, EllipsoidPoint, QuadricObjective, QuadricProblem};
+use crate::certificate::Primitive;
 use crate::geometry::quadric::{sym4_to_vec, vec_to_sym4, Ellipsoid};
 use crate::global::branch_and_bound::{branch_and_bound, Bound, BoundingOracle, BranchAndBoundOptions, Region};
 use crate::global::envelopes::add_quadratic_over_linear;
@@ -35,7 +36,6 @@ use crate::optim::{trust_region, TrustRegionOptions};
 use crate::triangulation::certificate::{certificate_of, minimum, optimal_start, solve_fraction_relaxation};
 use crate::triangulation::fractional_residual::{self, FractionalResidual};
 use crate::triangulation::{Certificate, CertificateKind, QuadricBound, Report, Status, TriangulationOptions};
-use crate::Primitive;
 use nalgebra::SVector;
 
 /// `B` of the a-priori box (module docs) as a multiple of the largest camera distance.
