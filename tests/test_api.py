@@ -553,6 +553,7 @@ def test_the_package_namespace_holds_only_its_api():
     own = {n for n in public if isinstance(getattr(pluecker, n), types.ModuleType)
            and getattr(pluecker, n).__name__ == f"pluecker.{n}"}
     assert public - own == set(pluecker.__all__)
+    assert not [n for n in dir(pluecker) if "zlib" in n]  # not even as a private name
 
 
 def test_stub_signatures_and_class_members_match_the_runtime():

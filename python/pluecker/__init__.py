@@ -37,7 +37,7 @@ Example::
 # compression through the module aborts the process. Loading zlib here, before pluecker.colmap can import
 # pycolmap, avoids it for every import order that imports pluecker first; pluecker itself never compresses
 # with zlib, so the order pycolmap-then-pluecker is safe too.
-import zlib as _zlib  # noqa: F401  (isort: skip; private: not part of the API)
+import zlib  # isort: skip  (deleted from the namespace at the end: loaded, not a name of the API)
 
 from ._core import (
     METHODS,
@@ -168,3 +168,5 @@ __all__ = [
     "triangulate_quadric",
     "triangulate_quadrics",
 ]
+
+del zlib  # loaded above (it stays in sys.modules), not a name of the API
