@@ -124,7 +124,7 @@ def assert_same(a, b, where=""):
 
 @pytest.mark.parametrize("name,result", RESULTS, ids=[n for n, _ in RESULTS])
 def test_to_dict_has_exactly_the_properties(name, result):
-    """Each property is declared once (crates/pluecker-py/src/fields.rs): its getter and its to_dict entry
+    """Each property is declared once (crates/pluecker-py/src/properties.rs): its getter and its to_dict entry
     come from the same table entry, so the keys are the properties and the values agree."""
     cls = type(result)
     properties = {n for n in dir(cls) if not n.startswith("_")

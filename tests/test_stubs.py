@@ -1,5 +1,5 @@
 """Defaults and properties are declared once (issue 11 §1, §3): in Rust, by each options struct's
-``Default`` and each result's field table (crates/pluecker-py/src/fields.rs). Everything else is
+``Default`` and each result's field table (crates/pluecker-py/src/properties.rs). Everything else is
 derived from them and checked here: the stub ``_core.pyi``, the functions' signatures, the options
 classes' behaviour."""
 

@@ -1,7 +1,7 @@
 """Writes the properties of ``_core.pyi`` from the extension's own tables.
 
 Every result and options class of ``pluecker._core`` declares each property once, in Rust
-(``crates/pluecker-py/src/fields.rs``), and publishes it as ``__fields__``: ``(name, type, doc)``.
+(``crates/pluecker-py/src/properties.rs``), and publishes it as ``__fields__``: ``(name, type, doc)``.
 In ``_core.pyi`` each such class holds one generated block::
 
     # fields of PoseResult (generated: python -m pluecker._stubgen)

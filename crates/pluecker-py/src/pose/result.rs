@@ -1,6 +1,6 @@
 //! `pluecker.PoseResult`, `pluecker.Pose`, `pluecker.PoseDetails`, `pluecker.PoseStage` and
 //! `pluecker.RansacReport`: immutable reports owning
-//! their data, each property declared once in a table ([`crate::fields`]). Every array property
+//! their data, each property declared once in a table ([`crate::properties`]). Every array property
 //! returns a fresh array, so changing it cannot change the result.
 
 use crate::camera::PyCamera;

@@ -10,9 +10,9 @@
 //! `Δ = M (J̄ − J*) W⁻¹`, `J̄` the mean of `J` along the segment. Interval enclosures of
 //! [`crate::camera::bounds`] hold `J` in a box of matrices on each of a few boxes covering the ball, so
 //! `J̄` lies in the convex hull of their union, and `‖Δ‖₂ ≤ ε`, the largest `‖M (V − J*) W⁻¹‖₂` over the
-//! vertices `V` of those boxes (a convex function's largest value on a hull; [`Linearised::epsilon`]).
+//! vertices `V` of those boxes (a convex function's largest value on a hull; [`LinearisedObservation::epsilon`]).
 //!
-//! **Confinement** ([`Linearised::confinement`]). On the boundary of `B = {n : ‖W (n − n*)‖ ≤ ρ}`,
+//! **Confinement** ([`LinearisedObservation::confinement`]). On the boundary of `B = {n : ‖W (n − n*)‖ ≤ ρ}`,
 //! `‖e‖ ≥ (1 − ε) ρ − ‖e*‖ − s` (`s` the rounding of `e*`), which exceeds `√C` for `ρ` chosen so.
 //! Let `n` lie in the disc where `D` is one-to-one ([`crate::camera::bounds::domain`]) with
 //! `‖e(n)‖ ≤ √C`: `D(n)` lies in the ellipse `{d : ‖M (d − d₀)‖ ≤ √C}`, which the constructor requires
@@ -34,9 +34,9 @@ use nalgebra::{Matrix2, Matrix3, Rotation3, Vector2, Vector3};
 /// Absolute rounding allowance of a computed pixel, relative to the pixel's magnitude (pixels up to
 /// 1e5 computed through a few dozen operations).
 pub(crate) const PIXEL_ROUNDING: f64 = 1e-13;
-/// `εᵢ` above which the box of [`Linearised::epsilon`] is split.
+/// `εᵢ` above which the box of [`LinearisedObservation::epsilon`] is split.
 pub(crate) const SPLIT_EPSILON: f64 = 0.01;
-/// Sub-boxes per side of a split box of [`Linearised::epsilon`].
+/// Sub-boxes per side of a split box of [`LinearisedObservation::epsilon`].
 pub(crate) const SPLITS: usize = 8;
 /// Fisheye projections farther off axis than this (`tan 10°`) use the ray chart.
 const RAY_CHART_TAN: f64 = 0.176;
@@ -56,7 +56,7 @@ pub enum LensBoundFailure {
 
 /// One observation linearised at `n*` (module docs): `W`, `M`, `e*`, `n*`, `J*`, the distortion and
 /// its one-to-one radius, `s`.
-pub(crate) struct Linearised {
+pub(crate) struct LinearisedObservation {
     pub(crate) w: Matrix2<f64>,
     pub(crate) w_inverse: Matrix2<f64>,
     pub(crate) m: Matrix2<f64>,
@@ -70,15 +70,15 @@ pub(crate) struct Linearised {
     /// for fisheyes off axis; then `n` is `n′ = 0` and `J` is that of `D ∘ h`.
     pub(crate) ray: Option<Matrix3<f64>>,
     pub(crate) rounding: f64,
-    /// Sub-boxes per side of the box of [`Linearised::epsilon`] when one box is not enough: 1 (never
+    /// Sub-boxes per side of the box of [`LinearisedObservation::epsilon`] when one box is not enough: 1 (never
     /// split) or [`SPLITS`].
     pub(crate) splits: usize,
-    /// `εᵢ` at step 1's first radius ([`Linearised::first_radius`]) when choosing the chart already
-    /// evaluated it (fisheyes off axis), so that [`Linearised::confinement`] does not repeat it.
+    /// `εᵢ` at step 1's first radius ([`LinearisedObservation::first_radius`]) when choosing the chart already
+    /// evaluated it (fisheyes off axis), so that [`LinearisedObservation::confinement`] does not repeat it.
     pub(crate) first_epsilon: Option<Option<f64>>,
 }
 
-impl Linearised {
+impl LinearisedObservation {
     /// The observation `pixel` of `camera`, whitened by `whitening`, linearised at the camera-frame
     /// point `xc` (`n* = (x/z, y/z)`), for the level `cost` (`Σ ‖e‖²` over every observation; the
     /// path argument of the module docs needs the observation's ellipse of that level inside the
@@ -92,7 +92,7 @@ impl Linearised {
         cost: f64,
         splits: usize,
         ray_chart: bool,
-    ) -> std::result::Result<Linearised, LensBoundFailure> {
+    ) -> std::result::Result<LinearisedObservation, LensBoundFailure> {
         let known = lens_domain(camera)?;
         Self::new_in(camera, &known, whitening, pixel, xc, cost, splits, ray_chart)
     }
@@ -108,7 +108,7 @@ impl Linearised {
         cost: f64,
         splits: usize,
         ray_chart: bool,
-    ) -> std::result::Result<Linearised, LensBoundFailure> {
+    ) -> std::result::Result<LinearisedObservation, LensBoundFailure> {
         let xc = *xc;
         let (distortion, domain) = ((*distortion).clone(), *domain);
         let lens = camera.distortion();
@@ -134,7 +134,7 @@ impl Linearised {
         // The rounding of e: of u and of the pixel, through L.
         let rounding = whitening.norm() * PIXEL_ROUNDING * (u.norm() + pixel.norm() + 1.0);
         let w = m * jd;
-        let plain = Linearised {
+        let plain = LinearisedObservation {
             w,
             w_inverse: w.try_inverse().ok_or(LensBoundFailure::Fold)?,
             m,
@@ -165,7 +165,7 @@ impl Linearised {
                     _ => false,
                 };
                 let (chosen, eps) = if better { (turned, a) } else { (plain, b) };
-                return Ok(Linearised {
+                return Ok(LinearisedObservation {
                     first_epsilon: Some(eps),
                     ..chosen
                 });
@@ -175,10 +175,10 @@ impl Linearised {
     }
 
     /// The same view in the ray chart of `ray` (`n′ = 0` at the estimate, `J` that of `D ∘ h`).
-    fn in_ray_chart(&self, ray: Matrix3<f64>) -> Option<Linearised> {
+    fn in_ray_chart(&self, ray: Matrix3<f64>) -> Option<LinearisedObservation> {
         let j = self.j * homography_jacobian(&ray);
         let w = self.m * j;
-        Some(Linearised {
+        Some(LinearisedObservation {
             w,
             w_inverse: w.try_inverse()?,
             n: Vector2::zeros(),
@@ -423,7 +423,7 @@ mod tests {
                 } else {
                     xc
                 };
-                let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
+                let Ok(lin) = LinearisedObservation::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
                     continue;
                 };
                 // The chart's map to normalised coordinates: n′ ↦ (w₁/w₃, w₂/w₃), w = Rᵀ (n′, 1).
@@ -487,7 +487,7 @@ mod tests {
             let l = Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0));
             let xc = Vector3::new(rng.uniform_in(-1.0, 1.0), rng.uniform_in(-1.0, 1.0), 1.0);
             let pixel = camera.project(&xc) + Vector2::new(rng.normal(), rng.normal());
-            let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, false) else {
+            let Ok(lin) = LinearisedObservation::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, false) else {
                 continue;
             };
             let lo = lin.n + Vector2::new(rng.uniform_in(-0.2, 0.2), rng.uniform_in(-0.2, 0.2));
@@ -513,7 +513,7 @@ mod tests {
     /// point of the ball (a 9 x 9 grid of it, strictly inside) has its enclosure of `J` (the enclosures
     /// themselves are [`crate::camera::bounds`]'s, tested there), and `ε` is at least
     /// `‖M (V − J*) W⁻¹‖₂` (nalgebra's singular values) at each of its 16 vertices `V`. So is the
-    /// certificate's `ε` ([`Linearised::epsilon`], one box or the split one) the smaller of the two
+    /// certificate's `ε` ([`LinearisedObservation::epsilon`], one box or the split one) the smaller of the two
     /// oracles at most; and `ε` is no more than the largest vertex over all the sub-boxes (the documented
     /// value, not a looser one). The sampled test above never gets near a vertex (the enclosures are wider than
     /// the Jacobian's variation), so a vertex left out, a sub-box skipped that meets the ball, or a box
@@ -543,7 +543,7 @@ mod tests {
                     Matrix2::new(rng.uniform_in(0.3, 2.0), rng.normal(), 0.0, rng.uniform_in(0.3, 2.0))
                 };
                 let pixel = camera.project(&xc) + Vector2::new(rng.normal(), rng.normal());
-                let Ok(lin) = Linearised::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
+                let Ok(lin) = LinearisedObservation::new(&camera, &l, &pixel, &xc, 1.0, SPLITS, true) else {
                     continue;
                 };
                 let w_inverse = lin.w.try_inverse().expect("W is invertible");

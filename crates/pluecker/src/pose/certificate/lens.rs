@@ -57,7 +57,7 @@
 
 use super::{RaySlack, SublevelSetOutcome};
 use crate::camera::curved_line::endpoint_residual;
-use crate::camera::linearisation::{lens_domain, LensBoundFailure, Linearised, SPLITS, SPLIT_EPSILON};
+use crate::camera::linearisation::{lens_domain, LensBoundFailure, LinearisedObservation, SPLITS, SPLIT_EPSILON};
 use crate::camera::Camera;
 use crate::camera::Intrinsics;
 use crate::covariance::whitening;
@@ -106,7 +106,7 @@ impl Slack {
 /// `top 2^(−j/2)` (the least of them at least the one asked for): step 4 asks for many radii. Per
 /// radius, the bound of one box and that of the box split ([`SPLITS`] x [`SPLITS`]).
 struct Variation {
-    lin: Linearised,
+    lin: LinearisedObservation,
     top: f64,
     memo: RefCell<Vec<[Option<Option<f64>>; 2]>>,
 }
@@ -115,7 +115,7 @@ struct Variation {
 const MEMO_RADII: usize = 41;
 
 impl Variation {
-    fn new(lin: Linearised, top: f64) -> Self {
+    fn new(lin: LinearisedObservation, top: f64) -> Self {
         Variation {
             lin,
             top,
@@ -248,7 +248,7 @@ impl Surrogate {
         };
         // Step 1: ‖((1 − εᵢ) δᵢ)‖² over the search's observations; ‖(sᵢ)‖² over all.
         let (mut delta2, mut rounding2): (f64, f64) = (0.0, 0.0);
-        let mut confine = |lin: &Linearised, eps: f64| {
+        let mut confine = |lin: &LinearisedObservation, eps: f64| {
             delta2 += (eps * (lin.e.norm() + lin.rounding) + (1.0 - eps) * lin.rounding).powi(2);
             1.0 - eps
         };
@@ -258,7 +258,7 @@ impl Surrogate {
             let xc = pose.transform(x);
             // A point that is not confined enters step 4 only (linearised without the level's path
             // argument, which step 4 does not need).
-            let confined = Linearised::new_in(lens, &known, &whitening, u, &xc, level, SPLITS, false)
+            let confined = LinearisedObservation::new_in(lens, &known, &whitening, u, &xc, level, SPLITS, false)
                 .ok()
                 .and_then(|lin| Some((lin.confinement(level)?, lin)));
             let (lin, radius, weight) = match confined {
@@ -267,7 +267,7 @@ impl Surrogate {
                     (lin, radius, Some(weight))
                 }
                 None => {
-                    let lin = Linearised::new_in(lens, &known, &whitening, u, &xc, 0.0, SPLITS, false)
+                    let lin = LinearisedObservation::new_in(lens, &known, &whitening, u, &xc, 0.0, SPLITS, false)
                         .map_err(|_| edge("points2d", i))?;
                     let radius = lin.first_radius(level);
                     (lin, radius, None)
@@ -299,7 +299,7 @@ impl Surrogate {
                 let start = lens.unproject(&e, i).map_err(|_| edge("lines2d", i))?;
                 let fit = endpoint_residual(lens, &l, &start, &e, &cov).ok_or_else(|| edge("lines2d", i))?;
                 let xc = Vector3::new(fit.q.x, fit.q.y, 1.0);
-                let lin = Linearised::new_in(lens, &known, &whitening, &e, &xc, level, SPLITS, false)
+                let lin = LinearisedObservation::new_in(lens, &known, &whitening, &e, &xc, level, SPLITS, false)
                     .map_err(|_| edge("lines2d", i))?;
                 let confined = lin.confinement(level).ok_or_else(|| edge("lines2d", i))?;
                 let e_bar = lin.n - lin.w_inverse * lin.e;

@@ -58,7 +58,7 @@ use super::chart::{Chart, ChartKind};
 use super::cost::PointView;
 use super::robust::RobustTrack;
 pub use crate::camera::linearisation::LensBoundFailure;
-use crate::camera::linearisation::{Linearised, SPLITS};
+use crate::camera::linearisation::{LinearisedObservation, SPLITS};
 use crate::camera::Camera;
 use crate::certificate::Primitive;
 use crate::error::Result;
@@ -216,9 +216,9 @@ fn certificate_with_splits(
     gap: f64,
     splits: usize,
 ) -> std::result::Result<LensBound, LensBoundFailure> {
-    let lin: Vec<Linearised> = views
+    let lin: Vec<LinearisedObservation> = views
         .iter()
-        .map(|v| Linearised::new(v.camera, &v.whitening, &v.pixel, &v.x_cam(x), cost, splits, true))
+        .map(|v| LinearisedObservation::new(v.camera, &v.whitening, &v.pixel, &v.x_cam(x), cost, splits, true))
         .collect::<std::result::Result<_, _>>()?;
     // Step 1.
     let confined: Vec<(f64, f64)> = lin
@@ -271,7 +271,7 @@ fn certificate_with_splits(
 /// Steps 3-4 in one chart: the bound, or why there is none.
 fn tightened_bound(
     chart: &Chart,
-    lin: &[Linearised],
+    lin: &[LinearisedObservation],
     confined: &[(f64, f64)],
     minorant: &Minorant<3>,
     kappa_d: f64,
@@ -552,7 +552,7 @@ mod tests {
     }
 
     /// The chart coordinates of the normalised point `n` (identity, or the ray chart's `n′`).
-    fn chart_of(l: &Linearised, n: &Vector2<f64>) -> Option<Vector2<f64>> {
+    fn chart_of(l: &LinearisedObservation, n: &Vector2<f64>) -> Option<Vector2<f64>> {
         match &l.ray {
             None => Some(*n),
             Some(r) => {
@@ -626,7 +626,7 @@ mod tests {
                 };
                 // A level above the view's own cost, as with other views in the track.
                 let cost = view.squared_residual(&x) + rng.uniform_in(0.5, 20.0);
-                let Ok(l) = Linearised::new(
+                let Ok(l) = LinearisedObservation::new(
                     view.camera,
                     &view.whitening,
                     &view.pixel,
