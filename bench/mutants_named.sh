@@ -19,7 +19,7 @@ case $place in
   reach)   files=(crates/pluecker/src/pose/certificate/lens.rs)
            re='in along_line_reach|replace along_line_reach ->' ;;
   eps)     files=(crates/pluecker/src/camera/linearisation.rs)
-           re='in Linearised::epsilon_in$|replace Linearised::epsilon_in ->' ;;
+           re='in LinearisedObservation::epsilon_in$|replace LinearisedObservation::epsilon_in ->' ;;
   slemma)  files=(crates/pluecker/src/global/convexity.rs)
            re='in Minorant<N>::minimum_subject_to|replace Minorant<N>::minimum_subject_to ->' ;;
   quadric) files=(crates/pluecker/src/triangulation/quadric/certificate.rs)
