@@ -417,9 +417,10 @@ def localize_rows(name: str, rec: Any, queries: list[dict[str, Any]], ratio: flo
         wrong = rng.choice(len(q["xy"]), size=int(ratio * len(q["xy"])), replace=False)
         q["xy"] = q["xy"].copy()
         q["xy"][wrong] = rng.uniform([0, 0], [camera.width, camera.height], size=(len(wrong), 2))
-    # The command line, end to end: a fresh process reads the model and the tables and writes the poses.
-    folder.mkdir(parents=True, exist_ok=True)
-    rec.write(str(folder))
+    # The command line, end to end: a fresh process reads the model and the tables and writes the poses
+    # (beside the model: the command refuses an output inside an input).
+    (folder / "model").mkdir(parents=True, exist_ok=True)
+    rec.write(str(folder / "model"))
     pq.write_table(pa.table({"query": [q["query"] for q in queries], "camera_id": [q["camera_id"] for q in queries]}),
                    folder / "queries.parquet")
     pq.write_table(pa.table({
@@ -430,7 +431,7 @@ def localize_rows(name: str, rec: Any, queries: list[dict[str, Any]], ratio: flo
     command = [str(executable)] if executable.exists() else [sys.executable, "-m", "pluecker.cli"]
     started = time.perf_counter()
     run = subprocess.run([*command, "localize", str(folder / "queries.parquet"), str(folder / "matches.parquet"),
-                          "--colmap", str(folder), "--out", str(folder / "out"), "--point-threshold", str(THRESHOLD_PX)],
+                          "--colmap", str(folder / "model"), "--out", str(folder / "out"), "--point-threshold", str(THRESHOLD_PX)],
                          capture_output=True, text=True, check=True)
     wall = time.perf_counter() - started
     from pluecker import distributed
