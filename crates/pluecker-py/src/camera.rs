@@ -361,20 +361,3 @@ pub(crate) fn coerce(name: &str, camera: &Bound<'_, PyAny>) -> PyResult<Camera> 
             ))
         })
 }
-
-/// The pinhole part `K` of the camera argument `name` of a function that works in undistorted pixels
-/// only; an `InvalidOptionError` naming it when the camera distorts (its pixels would be taken as
-/// undistorted: a wrong answer).
-pub(crate) fn pinhole_only(name: &str, camera: &PyCamera) -> PyResult<pluecker::camera::Intrinsics> {
-    if camera.inner.distorts() {
-        return Err(invalid_argument(
-            name,
-            format!(
-                "a {} camera distorts; this function takes pinhole pixels: give camera.pinhole_part and \
-                 pixels undistorted by camera.undistort",
-                camera.inner.model().as_str()
-            ),
-        ));
-    }
-    Ok(camera.inner.intrinsics())
-}

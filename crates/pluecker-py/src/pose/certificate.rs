@@ -37,7 +37,7 @@ pub fn _pose_rotation_search<'py>(
     min_half: Real,
     max_nodes: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let camera = crate::camera::pinhole_only("camera", camera.get())?;
+    let camera = pinhole_only("camera", camera.get())?;
     let pose = pose_from_parts("R", R, "t", t)?;
     let corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     let (level, target, min_half) = (level.get("level")?, target.get("target")?, min_half.get("min_half")?);
@@ -86,4 +86,21 @@ fn set_cells(out: &Bound<'_, PyDict>, prefix: &str, cells: &[KeptCell]) -> PyRes
         PyArray1::from_vec(py, cells.iter().map(|c| c.slack).collect()),
     )?;
     Ok(())
+}
+
+/// The pinhole part `K` of the camera argument `name` of a function that works in undistorted pixels
+/// only; an `InvalidOptionError` naming it when the camera distorts (its pixels would be taken as
+/// undistorted: a wrong answer).
+fn pinhole_only(name: &str, camera: &PyCamera) -> PyResult<pluecker::camera::Intrinsics> {
+    if camera.inner.distorts() {
+        return Err(invalid_argument(
+            name,
+            format!(
+                "a {} camera distorts; this function takes pinhole pixels: give camera.pinhole_part and \
+                 pixels undistorted by camera.undistort",
+                camera.inner.model().as_str()
+            ),
+        ));
+    }
+    Ok(camera.inner.intrinsics())
 }
