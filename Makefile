@@ -30,10 +30,12 @@ setup: develop
 
 .venv: $(DEPS_STAMP)
 
+# `--no-compile`: Python writes a module's bytecode when it is first imported, and the tests and the demo
+# import a fraction of what is installed (mypy is for `make lint`): about 10 s less on a cold machine.
 $(DEPS_STAMP): Makefile
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "pytest-xdist>=3.5" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
+	$(BIN)/python -m pip install --quiet --no-compile "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "pytest-xdist>=3.5" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,
@@ -54,7 +56,8 @@ $(DEVELOP_STAMP): $(DEPS_STAMP) $(RUST_SOURCES) pyproject.toml
 test: test-rust test-python
 
 # The unit, integration and doc tests (`--tests`: the targets with test = true, so not the extension's
-# lib, which `--lib` would build as an empty test harness). The examples are not built here (a plain
+# lib, which `--lib` would build as an empty test harness, nor crates/pluecker-bench, whose criterion
+# is then not built at all). The examples are not built here (a plain
 # `cargo test` builds the six in release: about a sixth of a cold test build); `make lint`'s
 # clippy --all-targets type-checks them, and `.ci/rust_newcomer.sh` builds and runs the README's example.
 test-rust: develop
@@ -75,11 +78,11 @@ lint: $(DEPS_STAMP)
 	@echo "== format: cargo fmt --check"
 	cargo fmt --all -- --check
 	@echo "== lints: cargo clippy on every target, warnings as errors"
-	cargo clippy --all-targets -p pluecker -p pluecker-py -- -D warnings
+	cargo clippy --all-targets -p pluecker -p pluecker-py -p pluecker-bench -- -D warnings
 	@echo "== lints: the extension with its test hooks (cargo feature test-hooks, as make develop builds it)"
 	cargo clippy --all-targets -p pluecker-py --features test-hooks -- -D warnings
-	@echo "== lints: the development tools of crates/pluecker/benches (bench = false: not in --all-targets)"
-	cargo clippy -p pluecker --bench global_pose --bench profile_pose --bench lines_and_quadrics -- -D warnings
+	@echo "== lints: the development tools of crates/pluecker-bench/benches (bench = false: not in --all-targets)"
+	cargo clippy -p pluecker-bench --bench global_pose --bench profile_pose --bench lines_and_quadrics -- -D warnings
 	@echo "== docs: cargo doc, warnings as errors"
 	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -p pluecker
 	@echo "== python: ruff check"
@@ -99,8 +102,8 @@ bench: develop
 	$(BIN)/python bench/compare_triangulation.py
 	$(BIN)/python bench/compare_robust_pose.py
 	$(BIN)/python bench/compare_global_pose.py
-	cargo bench -p pluecker --bench pose
-	cargo bench -p pluecker --bench triangulation
+	cargo bench -p pluecker-bench --bench pose
+	cargo bench -p pluecker-bench --bench triangulation
 
 # About 9,000 mutants: a whole run takes days on two cores, so it is split into shards, e.g.
 # `make mutants SHARD=0/100` (a 1 % sample, round-robin over every file). Results in mutants.out/.

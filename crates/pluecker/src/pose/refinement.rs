@@ -34,7 +34,7 @@ use std::time::Instant;
 /// constant over the number of correspondences, and at least [`PROMISING_FACTOR_MIN`]. The refinement from a pose of cost `c` ends below `c`, so a pose cheaper than the best minimum
 /// certainly leads to a better one; the margin admits the poses of the true basin, whose three
 /// correspondences fit exactly and the others only as well as the noise lets them. Measured on the
-/// scenes of `benches/global_pose.rs` (100 per row): the cheapest minimal pose from which the
+/// scenes of `crates/pluecker-bench/benches/global_pose.rs` (100 per row): the cheapest minimal pose from which the
 /// refinement reached the best minimum cost at most 104 times that minimum (lines only, f = 250 and
 /// 15000 px, 10 lines), at most 7.3 times with 100 points, while the median minimal pose cost 10⁴ times
 /// more: the fewer the correspondences, the less the cost of the best minimum averages the noise of the

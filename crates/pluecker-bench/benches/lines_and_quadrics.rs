@@ -1,7 +1,7 @@
 //! Measurements of line and quadric triangulation (Josephson & Kahl 2008): synthetic scenes at several
 //! view counts with 1 px noise, and the real Model House and Corridor lines (Table 2).
 //!
-//! Run: `cargo bench -p pluecker --bench lines_and_quadrics [-- DATA_DIR [GAP]]`, with
+//! Run: `cargo bench -p pluecker-bench --bench lines_and_quadrics [-- DATA_DIR [GAP]]`, with
 //! `DATA_DIR` the VGG folder (default: the copy shipped in `python/pluecker/data/vgg`) and `GAP` the relative gap (default the
 //! library's 1e-3). Every number printed is computed here; nothing is copied from the paper.
 //!

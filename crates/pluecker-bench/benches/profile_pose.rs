@@ -1,5 +1,5 @@
 //! A driver for profiling and regression-checking the default pose pipeline (not a benchmark: use
-//! `cargo bench -p pluecker --bench pose` and `bench/compare_pose.py` for reported numbers).
+//! `cargo bench -p pluecker-bench --bench pose` and `bench/compare_pose.py` for reported numbers).
 //!
 //! ```text
 //! profile_pose time  <kind> [calls] [lines]          µs per call over 200 scenes, cycled; iterations
@@ -12,8 +12,8 @@
 //! `bench/compare_pose.py`. `check` prints the largest difference from the dumped poses in units of
 //! the Cramér-Rao bound (a pure speed change should leave it far below 1), the failures (status other
 //! than success, or an error above 10 bounds) and the RMS errors over the RMS bounds.
-//! Run with `cargo bench -p pluecker --bench profile_pose -- time general`; build with
-//! `CARGO_PROFILE_BENCH_DEBUG=true cargo bench -p pluecker --bench profile_pose --no-run` for
+//! Run with `cargo bench -p pluecker-bench --bench profile_pose -- time general`; build with
+//! `CARGO_PROFILE_BENCH_DEBUG=true cargo bench -p pluecker-bench --bench profile_pose --no-run` for
 //! `perf record -g`.
 //!
 //! For experiments, environment variables override the default options: `ALGEBRAIC_RADIUS` and

@@ -6,7 +6,7 @@
 //! samples have the true pose among the solutions to 1e-8, and the mean number of solutions — a fast
 //! wrong answer cannot pass unnoticed.
 //!
-//! Run: `cargo bench -p pluecker --bench minimal` (about a minute), `-- --quick` for a rough pass.
+//! Run: `cargo bench -p pluecker-bench --bench minimal` (about a minute), `-- --quick` for a rough pass.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use nalgebra::Vector3;

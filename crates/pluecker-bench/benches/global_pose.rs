@@ -3,7 +3,7 @@
 //! the cheapest of the default answer, the refinement from the true pose and from `--starts` random
 //! starts. Development tool; the benchmark with peers is `bench/compare_global_pose.py`.
 //!
-//!     cargo bench -p pluecker --bench global_pose -- [scenes] [starts] [row filter]
+//!     cargo bench -p pluecker-bench --bench global_pose -- [scenes] [starts] [row filter]
 //!
 //! `CERTIFY=1` certifies every answer (`MAX_NODES=n` sets the node cap); `NODES=1` prints each scene's
 //! certificate nodes to stderr, `WHY=1` the reason of each uncertified answer.

@@ -18,7 +18,7 @@
 //! a random segment of at least 40 px) in the 640 x 480 image; its setup line adds the samples drawn,
 //! the inliers found and the number of true inliers missed or outliers kept.
 //!
-//! Run: `cargo bench -p pluecker --bench pose` (a few minutes on 2 cores), or append `-- --quick` for a
+//! Run: `cargo bench -p pluecker-bench --bench pose` (a few minutes on 2 cores), or append `-- --quick` for a
 //! rough pass, or `-- pipeline/100` to filter.
 
 // `!(x > 0.0)` is true for NaN: the NaN guard used throughout (a NaN must take the failing branch).

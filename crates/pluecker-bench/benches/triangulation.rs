@@ -17,7 +17,7 @@
 //! from the reports, and the median 3-D error of each method against the truth (so that a fast
 //! wrong answer cannot pass unnoticed).
 //!
-//! Run: `cargo bench -p pluecker --bench triangulation` (a few minutes on 2 cores), append
+//! Run: `cargo bench -p pluecker-bench --bench triangulation` (a few minutes on 2 cores), append
 //! `-- --quick` for a rough pass or a filter such as `-- point/5-views`.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
