@@ -30,12 +30,10 @@ setup: develop
 
 .venv: $(DEPS_STAMP)
 
-# `--no-compile`: Python writes a module's bytecode when it is first imported, and the tests and the demo
-# import a fraction of what is installed (mypy is for `make lint`): about 10 s less on a cold machine.
 $(DEPS_STAMP): Makefile
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet --no-compile "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "pytest-xdist>=3.5" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
+	$(BIN)/python -m pip install --quiet "maturin>=1.5,<2" "numpy>=1.22" "tqdm>=4.60" "matplotlib>=3.7" "pytest>=7" "pytest-xdist>=3.5" "hypothesis>=6.100" "ruff>=0.6" "mypy>=1.18" "pycolmap>=3.11" "dask[distributed]>=2024.1" "pyarrow>=14"
 	touch $@
 
 # Rebuilds the extension when a Rust source, a manifest or pyproject.toml is newer than the last build,

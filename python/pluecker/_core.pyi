@@ -147,6 +147,33 @@ class View:
 #: The known cameras of a triangulation: (v, 3, 4) matrices ``P = K [R | t]`` or a sequence of views.
 _KnownCameras = Union[ArrayLike, Sequence[View]]
 
+@final
+class Rig:
+    """Cameras fixed to one body: camera ``k`` at ``sensor_from_rig[k]``, ``x_sensor = R x_rig + t``. The
+    pose of the body, ``rig_from_world``, places every camera: ``sensor_from_rig[k] ∘ rig_from_world``.
+    Immutable, ``==``, picklable; :func:`pluecker.colmap.rig` reads a pycolmap reconstruction's rig."""
+
+    def __new__(
+        cls, cameras: Sequence[Camera], sensor_from_rig: Sequence[Union[Pose, Tuple[ArrayLike, ArrayLike]]]
+    ) -> "Rig": ...
+    @property
+    def cameras(self) -> List[Camera]:
+        """The cameras, in order."""
+    @property
+    def sensor_from_rig(self) -> List[Pose]:
+        """Each camera's pose in the body's frame, ``x_sensor = R x_rig + t``."""
+    @property
+    def centres(self) -> NDArray[np.float64]:
+        """(n, 3) the cameras' optical centres in the body's frame."""
+    @property
+    def is_central(self) -> bool:
+        """Whether every camera has its optical centre at one point (a central camera)."""
+    def __len__(self) -> int: ...
+    def views(self, R: ArrayLike, t: ArrayLike) -> List[View]:
+        """Every camera's :class:`View` when the body is at ``rig_from_world = (R, t)``."""
+    def to_dict(self) -> Dict[str, Any]:
+        """``{"cameras": [{"model", "params"}, ...], "sensor_from_rig": [{"rotation", "translation"}, ...]}``."""
+
 # --- Pose estimation (Phong & Horaud 1995) --------------------------------------------------------
 
 @final

@@ -9,6 +9,8 @@ pycolmap objects import it when called and say how to install it when it is miss
   (``images.txt``: ``QW QX QY QZ``) and pluecker's dual quaternions are ``(w, x, y, z)``.
 - **Cameras.** ``pycolmap.Camera(model, width, height, params)`` is ``pluecker.Camera(model,
   params)``: the same model names and parameter order. The image size is not part of the model.
+- **Rigs.** A COLMAP rig's ``sensor_from_rig`` is pluecker's (``x_sensor = R x_rig + t``); its reference
+  camera is at the identity. :func:`rig` gives the ``pluecker.Rig`` of a reconstruction's rig.
 - **Known cameras.** Triangulation takes each image's ``View(camera, R, t)`` (its camera at its pose)
   with the observed, distorted pixels: the cost is then the reprojection error through the exact model;
   ``view.P`` is ``K [R | t]`` of the camera's pinhole part. Quadrics take pixels undistorted first
@@ -83,6 +85,36 @@ def rigid_from_pose(R: Any, t: Any) -> Any:
     pycolmap = _pycolmap()
     q = _core.pose_to_dual_quaternion(R, t)[:4]  # (w, x, y, z), checks R and t
     return pycolmap.Rigid3d(pycolmap.Rotation3d(quaternion_xyzw(q)), np.asarray(t, dtype=float))
+
+
+def rig(reconstruction: Any, rig_id: int) -> _core.Rig:
+    """The rig ``rig_id`` of a pycolmap reconstruction as a ``pluecker.Rig``: its reference camera first
+    (at the identity, as COLMAP fixes it), then its other cameras by sensor id, each with its camera and
+    ``sensor_from_rig``. ``ModelError`` naming ``rig_id`` (and the sensor) for a rig the reconstruction
+    does not have, a sensor that is not a camera, a camera sensor whose ``camera_id`` has no camera, or a
+    sensor without ``sensor_from_rig``."""
+    pycolmap = _pycolmap()
+    rig_id = int(rig_id)
+    if rig_id not in reconstruction.rigs:
+        known = ", ".join(map(str, sorted(reconstruction.rigs))) or "none"
+        raise ModelError(f"rig_id {rig_id}: no such rig in the reconstruction (its rig_ids: {known})")
+    colmap_rig = reconstruction.rig(rig_id)
+    others = sorted(colmap_rig.non_ref_sensors, key=lambda s: (int(s.type.value), s.id))
+    cameras, poses = [], []
+    for sensor in [colmap_rig.ref_sensor_id, *others]:
+        where = f"rig_id {rig_id}, sensor {sensor.type.name} id {sensor.id}"
+        if sensor.type != pycolmap.SensorType.CAMERA:
+            raise ModelError(f"{where}: not a camera (a pluecker.Rig holds cameras only)")
+        if sensor.id not in reconstruction.cameras:
+            raise ModelError(f"{where}: no camera with camera_id {sensor.id} in the reconstruction")
+        if colmap_rig.is_ref_sensor(sensor):
+            poses.append((np.eye(3), np.zeros(3)))
+        elif not colmap_rig.has_sensor_from_rig(sensor):
+            raise ModelError(f"{where}: no sensor_from_rig (the rig's calibration is missing)")
+        else:
+            poses.append(pose_from_rigid(colmap_rig.sensor_from_rig(sensor)))
+        cameras.append(_core.Camera(reconstruction.cameras[sensor.id]))
+    return _core.Rig(cameras, poses)
 
 
 def colmap_camera(camera: _core.Camera, width: int, height: int) -> Any:

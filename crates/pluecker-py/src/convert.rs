@@ -262,18 +262,10 @@ pub fn segments_to_py<'py, const D: usize>(
 /// A `(3, 3)` rotation matrix: finite, `R Rᵀ = I` to 1e-6 and `det R = +1`, else `InvalidOptionError`.
 pub fn rotation(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Matrix3<f64>> {
     let r = matrix3(name, obj)?;
-    let orthogonality = (r * r.transpose() - Matrix3::identity()).amax();
-    // `matrix3` rejected NaN/inf, so the comparisons below are total.
-    if orthogonality > ROTATION_TOLERANCE || r.determinant() <= 0.0 {
-        return Err(invalid_argument(
-            name,
-            format!(
-                "expected a rotation matrix (R Rᵀ = I within {ROTATION_TOLERANCE:e}, det R = +1), got max |R Rᵀ − I| = {orthogonality:.3e}, det R = {:.6}",
-                r.determinant()
-            ),
-        ));
+    match Pose::rotation_defect(&r) {
+        Some(why) => Err(invalid_argument(name, why)),
+        None => Ok(r),
     }
-    Ok(r)
 }
 
 /// A duration argument in seconds: finite, `≥ 0` and representable as a [`Duration`] (below
@@ -299,9 +291,6 @@ pub fn seconds_arg(name: &str, seconds: f64) -> PyResult<Duration> {
         )
     })
 }
-
-/// How far from orthonormal a rotation argument may be (the core's tolerance for `initial_pose`).
-const ROTATION_TOLERANCE: f64 = 1e-6;
 
 /// A real-number argument as Python gave it, checked (with its name) by [`Real::get`]: anything
 /// `float()` accepts except a bool, which is remembered so that it can be rejected by name (a bool is

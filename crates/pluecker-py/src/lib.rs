@@ -24,6 +24,7 @@ mod optim;
 mod pickle;
 mod pose;
 mod properties;
+mod rig;
 mod setup_poll;
 mod synthetic;
 mod test_hook;
@@ -65,6 +66,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;
     m.add_class::<camera::PyCamera>()?;
     m.add_class::<view::PyView>()?;
+    m.add_class::<rig::PyRig>()?;
     m.add_class::<certificate::PyCertifyOptions>()?;
     m.add_class::<certificate::PyCertificate>()?;
     // Pose.
@@ -145,6 +147,7 @@ fn _unpickle(py: Python<'_>, kind: &str, data: &[u8]) -> PyResult<PyObject> {
         "FittedConic" => plain::<PyFittedConic>(py, kind, input),
         "TriangulationReport" => plain::<PyTriangulationReport>(py, kind, input),
         "Certificate" => plain::<certificate::PyCertificate>(py, kind, input),
+        "Rig" => plain::<rig::PyRig>(py, kind, input),
         "PointTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyPointTriangulation),
         "LineTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyLineTriangulation),
         "QuadricTriangulation" => subclass!(py, kind, input, PyTriangulationReport, PyQuadricTriangulation),

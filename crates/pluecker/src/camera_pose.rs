@@ -4,6 +4,9 @@ use crate::geometry::dual_quaternion::DualQuaternion;
 use crate::geometry::quaternion::{axis_angle, from_rotation_matrix};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector4};
 
+/// The largest `|R Rᵀ − I|` entry of a rotation given as an argument ([`Pose::rotation_defect`]).
+pub const ROTATION_TOLERANCE: f64 = 1e-6;
+
 /// A camera pose `x_cam = R X_world + t`: `rotation` is `R` (a rotation matrix), `translation` is `t`
 /// (world units, the world origin in the camera frame). The answer of the pose estimators, the input of
 /// [`crate::camera::Camera::projection`], and the pose of the minimal solvers.
@@ -53,6 +56,23 @@ impl Pose {
             self.rotation * first.rotation,
             self.rotation * first.translation + self.translation,
         )
+    }
+
+    /// Why `rotation` is not a rotation matrix, in words; `None` when it is one: finite, `R Rᵀ = I`
+    /// within [`ROTATION_TOLERANCE`] (entrywise) and `det R > 0`. The one test of a rotation given as
+    /// an argument (Rust and Python).
+    pub fn rotation_defect(rotation: &Matrix3<f64>) -> Option<String> {
+        if !rotation.iter().all(|v| v.is_finite()) {
+            return Some("expected a rotation matrix, got a NaN or infinite entry".into());
+        }
+        let orthogonality = (rotation * rotation.transpose() - Matrix3::identity()).amax();
+        let det = rotation.determinant();
+        (orthogonality > ROTATION_TOLERANCE || det <= 0.0).then(|| {
+            format!(
+                "expected a rotation matrix (R Rᵀ = I within {ROTATION_TOLERANCE:e}, det R = +1), got max |R Rᵀ − I| = \
+                 {orthogonality:.3e}, det R = {det:.6}"
+            )
+        })
     }
 
     /// Whether every entry is finite.

@@ -131,6 +131,7 @@ pub(crate) mod names;
 pub mod optim;
 pub mod pose;
 pub(crate) mod report;
+pub(crate) mod rig;
 pub mod rng;
 pub(crate) mod status;
 pub mod synthetic;
@@ -143,7 +144,7 @@ pub use camera::Camera;
 pub use error::{Error, Result};
 // The crate root holds no two things of one name: each primitive's `Method` and result stay in their
 // module (`pose::Method`, `triangulation::Method`), as `io::Error` and `fmt::Error` do in std.
-pub use camera_pose::Pose;
+pub use camera_pose::{Pose, ROTATION_TOLERANCE};
 pub use certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 pub use cost_kind::CostKind;
 pub use pose::{
@@ -151,6 +152,7 @@ pub use pose::{
     RansacReport, RansacStop,
 };
 pub use report::Report;
+pub use rig::Rig;
 pub use status::Status;
 
 /// The linear-algebra crate whose types the API takes and returns (`Vector3`, `Matrix3x4`, ...),
