@@ -55,12 +55,12 @@ test: test-rust test-python
 
 # The unit, integration and doc tests (`--tests`: the targets with test = true, so not the extension's
 # lib, which `--lib` would build as an empty test harness, nor crates/pluecker-bench, whose criterion
-# is then not built at all). The examples are not built here (a plain
+# is then not built at all; its doc tests, none, would build it: excluded). The examples are not built here (a plain
 # `cargo test` builds the six in release: about a sixth of a cold test build); `make lint`'s
 # clippy --all-targets type-checks them, and `.ci/rust_newcomer.sh` builds and runs the README's example.
 test-rust: develop
 	cargo test --workspace --release --tests
-	cargo test --workspace --release --doc
+	cargo test --workspace --exclude pluecker-bench --release --doc
 
 # The Python tests run in PYTEST_WORKERS processes (pytest-xdist; 0 runs them in this one). Each test is
 # independent of the others' order and process, and the property tests' seed is the same in every worker.

@@ -27,7 +27,7 @@ pub struct Correspondences {
 }
 
 /// Relative size below which a spread of points or directions counts as degenerate.
-const DEGENERACY_TOLERANCE: f64 = 1e-9;
+pub(crate) const DEGENERACY_TOLERANCE: f64 = 1e-9;
 
 fn check_finite<'a, I: IntoIterator<Item = &'a f64>>(what: &str, rows: impl Iterator<Item = I>) -> Result<()> {
     for (index, row) in rows.enumerate() {
@@ -96,7 +96,12 @@ impl PointSpread {
     /// `tolerance` times the largest. Clear cases are settled by the closed form; the others by the
     /// singular values of the centred points, accurate to ε relative to the largest — the scatter
     /// matrix squares the ratio, and its eigenvalues cannot resolve ratios of deviations below √ε.
-    fn degenerate<'p>(&self, points: impl Iterator<Item = &'p Vector3<f64>>, k: usize, tolerance: f64) -> bool {
+    pub(crate) fn degenerate<'p>(
+        &self,
+        points: impl Iterator<Item = &'p Vector3<f64>>,
+        k: usize,
+        tolerance: f64,
+    ) -> bool {
         if self.spread[k] > CLEARLY_SPREAD * self.spread[0] {
             return false;
         }

@@ -13,6 +13,7 @@ pub(crate) mod candidates;
 pub(crate) mod certificate;
 pub(crate) mod correspondences;
 mod estimate;
+pub mod generalized;
 pub(crate) mod initialization;
 pub(crate) mod lens;
 pub(crate) mod linear;
