@@ -25,6 +25,7 @@
 //! the trust region of section 4.1 ([`RigReprojectionCost`]).
 
 use super::correspondences::{principal_axes, DEGENERACY_TOLERANCE};
+use super::reprojection::covariance_from_information;
 use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
 use crate::geometry::quaternion::exp_so3;
@@ -222,6 +223,13 @@ impl<'a> RigReprojectionCost<'a> {
     pub fn new(rig: &'a Rig, points: &'a [RigPoint]) -> Result<Self> {
         check_cameras(rig, points)?;
         Ok(RigReprojectionCost { rig, points })
+    }
+
+    /// The covariance of `rig_from_world` at `pose`, 6x6 in the tangent `(ω, t)` (as the single
+    /// camera's [`crate::pose::PoseResult::covariance`]): `σ² (JᵀJ)⁻¹` for pixel noise `sigma_px` in
+    /// every camera; `None` when `JᵀJ` is singular (the points do not fix the pose).
+    pub fn covariance(&self, pose: &Pose, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
+        covariance_from_information(&self.linearize(pose).gauss_newton, sigma_px)
     }
 
     /// The point `p` in its camera's frame at `rig_from_world`, and in the rig's frame.
@@ -461,6 +469,50 @@ mod tests {
                 (numeric - lin.gradient[j]).abs() <= 1e-5 * (1.0 + lin.gradient[j].abs()),
                 "{j}: {numeric} vs {}",
                 lin.gradient[j]
+            );
+        }
+    }
+
+    #[test]
+    fn the_covariance_predicts_the_spread_of_refined_poses() {
+        // Monte Carlo: N noisy copies of one scene, each refined from the truth; the Mahalanobis
+        // distances d² of the errors under the predicted covariance average 6 (the pose's dimension)
+        // within 4 standard errors, √(2·6/N) · 4, and so does each whitened coordinate's variance
+        // (1 within 4 √(2/N)).
+        let mut rng = Rng::new(31);
+        let (rig, exact, truth) = lens_rig_scene(6, &mut rng);
+        let sigma = 0.7;
+        let cost = RigReprojectionCost::new(&rig, &exact).unwrap();
+        let covariance = cost.covariance(&truth, sigma).unwrap();
+        let whiten = covariance.cholesky().unwrap().l().try_inverse().unwrap(); // L⁻¹ of Σ = L Lᵀ
+        let trials = 400;
+        let (mut d2, mut diagonal) = (0.0, SVector::<f64, 6>::zeros());
+        for _ in 0..trials {
+            let noisy: Vec<RigPoint> = exact
+                .iter()
+                .map(|p| RigPoint {
+                    pixel: p.pixel + sigma * Vector2::new(rng.normal(), rng.normal()),
+                    ..*p
+                })
+                .collect();
+            let (pose, _) = refine(&rig, &noisy, &truth, &TrustRegionOptions::default()).unwrap();
+            let omega = crate::geometry::quaternion::log_so3(&(pose.rotation * truth.rotation.transpose()));
+            let error = SVector::<f64, 6>::from_iterator(
+                omega
+                    .iter()
+                    .chain((pose.translation - truth.translation).iter())
+                    .copied(),
+            );
+            let z = whiten * error;
+            d2 += z.norm_squared() / trials as f64;
+            diagonal += z.component_mul(&z) / trials as f64;
+        }
+        let n = trials as f64;
+        assert!((d2 - 6.0).abs() < 4.0 * (12.0 / n).sqrt(), "mean d² {d2}");
+        for (j, v) in diagonal.iter().enumerate() {
+            assert!(
+                (v - 1.0).abs() < 4.0 * (2.0 / n).sqrt(),
+                "coordinate {j}: whitened variance {v}"
             );
         }
     }
