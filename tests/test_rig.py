@@ -125,3 +125,37 @@ def test_a_colmap_rig_that_cannot_be_read_names_its_rig_and_sensor():
         colmap.rig(colmap_rig_model(), 8)
     with pytest.raises(colmap.ModelError, match="rig_id 7, sensor CAMERA id 2: no sensor_from_rig"):
         colmap.rig(colmap_rig_model(with_calibration=False), 7)
+
+
+def test_colmaps_rigs_place_their_images_as_pluecker_rigs_do():
+    """On pycolmap's synthetic model with two rigs of three cameras (sensors turned by tens of degrees and
+    offset by tenths of the scene), every image's ``cam_from_world`` is its camera's view in
+    ``colmap.rig(...).views(*frame.rig_from_world)``, and the model re-triangulates with every point
+    certified."""
+    pycolmap = pytest.importorskip("pycolmap")
+    from pluecker import colmap
+
+    options = pycolmap.SyntheticDatasetOptions(num_rigs=2, num_cameras_per_rig=3, num_frames_per_rig=4,
+                                               num_points3D=60, sensor_from_rig_translation_stddev=0.3,
+                                               sensor_from_rig_rotation_stddev=30.0)
+    pycolmap.set_random_seed(3)
+    rec = pycolmap.synthesize_dataset(options)
+    rigs = {rig_id: colmap.rig(rec, rig_id) for rig_id in rec.rigs}
+    assert sorted(len(r) for r in rigs.values()) == [3, 3] and not any(r.is_central for r in rigs.values())
+    checked = 0
+    for image in rec.images.values():
+        frame = rec.frame(image.frame_id)
+        rig = rigs[frame.rig_id]
+        views = rig.views(*colmap.pose_from_rigid(frame.rig_from_world))
+        # colmap.rig's order: the reference sensor, then the others by id (a camera sensor's id is its camera_id).
+        colmap_rig = rec.rig(frame.rig_id)
+        order = [colmap_rig.ref_sensor_id.id, *sorted(s.id for s in colmap_rig.non_ref_sensors)]
+        view = views[order.index(image.camera_id)]
+        R, t = colmap.pose_from_rigid(image.cam_from_world())
+        np.testing.assert_allclose(view.pose[0], R, atol=1e-12, err_msg=str(image.image_id))
+        np.testing.assert_allclose(view.pose[1], t, atol=1e-12, err_msg=str(image.image_id))
+        assert view.camera == rig.cameras[order.index(image.camera_id)]
+        checked += 1
+    assert checked == rec.num_images() == 24
+    run = colmap.retriangulate(rec)
+    assert int(np.sum(run.result.certified)) == rec.num_points3D() == 60 and not run.skipped
