@@ -159,3 +159,40 @@ def test_colmaps_rigs_place_their_images_as_pluecker_rigs_do():
     assert checked == rec.num_images() == 24
     run = colmap.retriangulate(rec)
     assert int(np.sum(run.result.certified)) == rec.num_points3D() == 60 and not run.skipped
+
+
+def test_a_synthetic_rig_of_mixed_lenses_is_seen_through_each_lens():
+    """``scenes.colmap_rig_reconstruction``: one rig of four cameras of four models; with no noise every
+    observation is the pixel of its point through its own camera, placed by ``colmap.rig``; the same seed
+    gives the same model."""
+    pytest.importorskip("pycolmap")
+    from pluecker import colmap, scenes
+
+    cameras = [("PINHOLE", [500.0, 500.0, 320.0, 240.0]),
+               ("OPENCV", [450.0, 455.0, 320.0, 240.0, -0.05, 0.01, 1e-3, -1e-3]),
+               ("SIMPLE_RADIAL", [400.0, 320.0, 240.0, 0.02]),
+               ("OPENCV_FISHEYE", [300.0, 300.0, 320.0, 240.0, 0.02, -0.01, 0.0, 0.0])]
+    rec = scenes.colmap_rig_reconstruction(cameras, 640, 480, noise_px=0.0, seed=4, points=300)
+    assert rec.num_rigs() == 1 and rec.num_images() == 24
+    (rig_id,) = rec.rigs
+    rig = colmap.rig(rec, rig_id)
+    assert [c.model for c in rig.cameras] == [m for m, _ in cameras]
+    colmap_rig = rec.rig(rig_id)
+    order = [colmap_rig.ref_sensor_id.id, *sorted(s.id for s in colmap_rig.non_ref_sensors)]
+    worst, seen = 0.0, set()
+    for image in rec.images.values():
+        frame = rec.frame(image.frame_id)
+        k = order.index(image.camera_id)
+        R, t = rig.views(*colmap.pose_from_rigid(frame.rig_from_world))[k].pose
+        for point2D in image.points2D:
+            if point2D.has_point3D():
+                x_cam = R @ rec.points3D[point2D.point3D_id].xyz + t
+                worst = max(worst, float(np.abs(rig.cameras[k].project(x_cam[None])[0] - point2D.xy).max()))
+                seen.add(k)
+    assert worst < 1e-8 and seen == {0, 1, 2, 3}, (worst, seen)
+    again = scenes.colmap_rig_reconstruction(cameras, 640, 480, noise_px=0.0, seed=4, points=300)
+    assert sorted(again.points3D) == sorted(rec.points3D)
+    assert all(np.array_equal(again.points3D[i].xyz, p.xyz) and again.points3D[i].track.length() == p.track.length()
+               for i, p in rec.points3D.items())
+    with pytest.raises(ValueError, match="cameras: a rig of 2 to 6 cameras, got 1"):
+        scenes.colmap_rig_reconstruction(cameras[:1], 640, 480)
