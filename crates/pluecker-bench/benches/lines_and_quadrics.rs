@@ -87,55 +87,52 @@ fn options(method: Method, gap: f64) -> TriangulationOptions {
     options
 }
 
+/// One table of 20 scenes per number of views: `solve(views, seed)` gives every method's report, in the
+/// order of `Method::ALL`, on scene `seed`; a row per method.
+fn table(view_counts: &[usize], solve: impl Fn(usize, u64) -> Vec<Report>) {
+    for &views in view_counts {
+        let mut tallies: Vec<Tally> = Method::ALL.iter().map(|_| Tally::default()).collect();
+        for seed in 0..20u64 {
+            for (tally, report) in tallies.iter_mut().zip(solve(views, seed)) {
+                tally.add(&report);
+            }
+        }
+        println!("{views} views:");
+        for (m, tally) in Method::ALL.iter().zip(&tallies) {
+            println!("{}", tally.row(m.as_str()));
+        }
+    }
+}
+
 fn synthetic(gap: f64) {
     println!("## Synthetic lines: segments of 0.8-1.6 units at ~5 units, cameras on a 0.8 rad arc, 1 px endpoint noise, σ = 1 px covariances, 20 scenes per row");
-    for views in [2usize, 3, 5, 10] {
-        let mut tallies: Vec<Tally> = Method::ALL.iter().map(|_| Tally::default()).collect();
-        for seed in 0..20u64 {
-            let scene = line_scene(views, 0.8, 1000 * views as u64 + seed);
-            let mut rng = Rng::new(7 + seed);
-            let segments = scene.noisy_segments(1.0, &mut rng);
-            for (m, tally) in Method::ALL.iter().zip(&mut tallies) {
-                tally.add(
-                    &triangulate_line(
-                        &scene.cameras,
-                        LineObservations::Segments(&segments, 1.0),
-                        &options(*m, gap),
-                    )
+    table(&[2, 3, 5, 10], |views, seed| {
+        let scene = line_scene(views, 0.8, 1000 * views as u64 + seed);
+        let segments = scene.noisy_segments(1.0, &mut Rng::new(7 + seed));
+        let observations = LineObservations::Segments(&segments, 1.0);
+        Method::ALL
+            .iter()
+            .map(|m| {
+                triangulate_line(&scene.cameras, observations, &options(*m, gap))
                     .unwrap()
-                    .report,
-                );
-            }
-        }
-        println!("{views} views:");
-        for (m, tally) in Method::ALL.iter().zip(&tallies) {
-            println!("{}", tally.row(m.as_str()));
-        }
-    }
+                    .report
+            })
+            .collect()
+    });
     println!("\n## Synthetic ellipsoids: semi-axes 0.15-0.5 at ~5 units, 63 outline points per view with 1 px noise, fitted conics and covariances, 20 scenes per row");
-    for views in [3usize, 5, 10] {
-        let mut tallies: Vec<Tally> = Method::ALL.iter().map(|_| Tally::default()).collect();
-        for seed in 0..20u64 {
-            let scene = quadric_scene(views, 0.8, 2000 * views as u64 + seed);
-            let mut rng = Rng::new(11 + seed);
-            let points = scene.noisy_outline_points(63, 1.0, &mut rng);
-            for (m, tally) in Method::ALL.iter().zip(&mut tallies) {
-                tally.add(
-                    &triangulate_quadric(
-                        &scene.cameras,
-                        QuadricObservations::EdgePoints(&points, 1.0),
-                        &options(*m, gap),
-                    )
+    table(&[3, 5, 10], |views, seed| {
+        let scene = quadric_scene(views, 0.8, 2000 * views as u64 + seed);
+        let points = scene.noisy_outline_points(63, 1.0, &mut Rng::new(11 + seed));
+        Method::ALL
+            .iter()
+            .map(|m| {
+                let observations = QuadricObservations::EdgePoints(&points, 1.0);
+                triangulate_quadric(&scene.cameras, observations, &options(*m, gap))
                     .unwrap()
-                    .report,
-                );
-            }
-        }
-        println!("{views} views:");
-        for (m, tally) in Method::ALL.iter().zip(&tallies) {
-            println!("{}", tally.row(m.as_str()));
-        }
-    }
+                    .report
+            })
+            .collect()
+    });
 }
 
 fn numbers(path: &Path) -> Vec<Vec<String>> {
