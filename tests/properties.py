@@ -15,7 +15,7 @@ import pluecker
 POSE_STATUSES = {"success", "ambiguous", "not_converged", "numerical_failure", "behind_camera",
                  "too_few_inliers", "no_hypothesis", "gap_not_closed"}
 TRIANGULATION_STATUSES = {"success", "gap_not_closed", "not_converged", "behind_camera", "at_infinity",
-                          "numerical_failure"}
+                          "numerical_failure", "too_few_inliers"}  # the last: a point with an outlier threshold
 #: Statuses of a batch track the core rejected (``BatchReport.status``).
 REJECTED = {"too_few_views", "non_finite", "degenerate", "singular_camera", "invalid_input", "invalid_option"}
 
