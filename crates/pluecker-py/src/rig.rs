@@ -3,7 +3,7 @@
 //! one from a pycolmap reconstruction's rig.
 
 use crate::camera::{coerce, PyCamera};
-use crate::convert::pose_from_parts;
+use crate::convert::{points_to_py, pose_from_parts};
 use crate::errors::guarded;
 use crate::pickle::reduce;
 use crate::pose::result::{extract_pose, PyPose};
@@ -63,14 +63,8 @@ impl PyRig {
 
     /// (n, 3) the cameras' optical centres in the body's frame.
     #[getter]
-    fn centres(&self, py: Python<'_>) -> PyResult<PyObject> {
-        let centres = self.inner.centres();
-        let rows: Vec<[f64; 3]> = centres.iter().map(|c| [c.x, c.y, c.z]).collect();
-        Ok(
-            numpy::PyArray2::from_vec2(py, &rows.iter().map(|r| r.to_vec()).collect::<Vec<_>>())?
-                .into_any()
-                .unbind(),
-        )
+    fn centres(&self, py: Python<'_>) -> PyObject {
+        points_to_py(py, &self.inner.centres()).into_any().unbind()
     }
 
     /// Whether every camera has its optical centre at one point (a central camera).

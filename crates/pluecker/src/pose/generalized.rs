@@ -25,10 +25,10 @@
 //! the trust region of section 4.1 ([`RigReprojectionCost`]).
 
 use super::correspondences::{principal_axes, DEGENERACY_TOLERANCE};
-use super::reprojection::covariance_from_information;
+use super::reprojection::{covariance_from_information, retract};
 use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
-use crate::geometry::quaternion::exp_so3;
+use crate::geometry::quaternion::skew;
 use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionOptions};
 use crate::rig::Rig;
 use nalgebra::{DMatrix, Matrix2x3, Matrix3, SMatrix, SVector, Vector2, Vector3};
@@ -42,11 +42,6 @@ pub struct Ray {
     pub origin: Vector3<f64>,
     /// Its direction, rig frame.
     pub direction: Vector3<f64>,
-}
-
-/// The cross-product matrix `[v]×`, `[v]× w = v × w`.
-fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
 /// The pose `x_rig = R X + t` under which every object point `points[i]` lies on `rays[i]` (module
@@ -271,10 +266,7 @@ impl Objective<6> for RigReprojectionCost<'_> {
     }
 
     fn retract(&self, pose: &Pose, d: &SVector<f64, 6>) -> Pose {
-        Pose::new(
-            exp_so3(&Vector3::new(d[0], d[1], d[2])) * pose.rotation,
-            pose.translation + Vector3::new(d[3], d[4], d[5]),
-        )
+        retract(pose, d)
     }
 }
 
@@ -299,6 +291,7 @@ fn nearest_rotation(m: &Matrix3<f64>) -> Matrix3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::quaternion::exp_so3;
     use crate::rng::Rng;
     use nalgebra::Rotation3;
 

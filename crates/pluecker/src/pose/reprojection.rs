@@ -603,12 +603,17 @@ impl Objective<6> for ReprojectionCost<'_> {
     }
 
     fn retract(&self, pose: &Pose, d: &SVector<f64, 6>) -> Pose {
-        let omega = Vector3::new(d[0], d[1], d[2]);
-        Pose::new(
-            exp_so3(&omega) * pose.rotation,
-            pose.translation + Vector3::new(d[3], d[4], d[5]),
-        )
+        retract(pose, d)
     }
+}
+
+/// The pose reached from `pose` by the tangent step `d = (ω, δt)`: `exp(ω) R`, `t + δt` (the tangent
+/// of every pose cost and covariance of the crate, single camera or rig).
+pub(crate) fn retract(pose: &Pose, d: &SVector<f64, 6>) -> Pose {
+    Pose::new(
+        exp_so3(&Vector3::new(d[0], d[1], d[2])) * pose.rotation,
+        pose.translation + Vector3::new(d[3], d[4], d[5]),
+    )
 }
 
 /// `JᵀJ` counts as singular when its smallest eigenvalue may be below this fraction of its largest
