@@ -222,10 +222,7 @@ impl PoseOptions {
             translation: t,
         }) = &self.initial_pose
         {
-            if r.iter().chain(t.iter()).any(|v| !v.is_finite())
-                || (r * r.transpose() - Matrix3::identity()).amax() > 1e-6
-                || r.determinant() <= 0.0
-            {
+            if crate::camera_pose::Pose::rotation_defect(r).is_some() || t.iter().any(|v| !v.is_finite()) {
                 return bad(
                     "initial_pose",
                     "R must be a finite rotation matrix (orthonormal, det +1) and t finite",
