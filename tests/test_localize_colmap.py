@@ -553,3 +553,62 @@ def test_the_documented_ransac_defaults_are_the_options_defaults(monkeypatch):
             assert shown.startswith("none") and rows[flag] == "none", flag
         else:
             assert float(shown) == value and float(rows[flag]) == value, (flag, shown, rows[flag], value)
+
+
+def rig_frame_tables(noise_px: float = 1.0):
+    """A synthetic COLMAP model with one rig of three lens models, and its frames as queries
+    (``query``, ``rig_id``) with the keypoints of all their images as point matches (``query``,
+    ``camera_id``, ``x``, ``y``, ``point3D_id``)."""
+    from pluecker import scenes
+
+    cameras = [("PINHOLE", [500.0, 500.0, 320.0, 240.0]),
+               ("OPENCV", [450.0, 455.0, 320.0, 240.0, -0.05, 0.01, 1e-3, -1e-3]),
+               ("SIMPLE_RADIAL", [400.0, 320.0, 240.0, 0.02])]
+    rec = scenes.colmap_rig_reconstruction(cameras, 640, 480, noise_px=noise_px, seed=12, points=300, frames=4)
+    (rig_id,) = rec.rigs
+    queries = {"query": [], "rig_id": []}
+    matches = {"query": [], "camera_id": [], "x": [], "y": [], "point3D_id": []}
+    for image in rec.images.values():
+        if image.frame_id not in queries["query"]:
+            queries["query"].append(image.frame_id)
+            queries["rig_id"].append(rig_id)
+        for point2D in image.points2D:
+            if point2D.has_point3D():
+                for key, value in zip(matches, (image.frame_id, image.camera_id, *point2D.xy, point2D.point3D_id)):
+                    matches[key].append(value)
+    return rec, pa.table(queries), pa.table(matches)
+
+
+def test_frames_of_a_colmap_rig_are_localised_by_rig_id(tmp_path, capsys):
+    """Queries by ``rig_id``, matches by ``camera_id`` and ``point3D_id``: each frame's
+    ``rig_from_world``, equal through the kernel, the Parquet job and the command line; a camera_id the
+    rig does not hold is named, and the other frames are solved."""
+    rec, queries, matches = rig_frame_tables()
+    poses, _ = dist.localize_tables(queries, matches, reconstruction=rec)
+    found = poses_by_query(poses)
+    assert len(found) == 4
+    for frame_id, (R_hat, t_hat, status) in found.items():
+        R, t = colmap.pose_from_rigid(rec.frame(frame_id).rig_from_world)
+        assert status == "success"
+        # 1 px of noise on ~100-300 keypoints over three cameras, 5 units away: hundredths of a degree.
+        assert np.degrees(np.arccos(np.clip((np.trace(R_hat @ R.T) - 1) / 2, -1, 1))) < 0.5
+        assert np.linalg.norm(t_hat - t) < 0.1
+    paths = write_tables(tmp_path, queries=queries, matches=matches)
+    (tmp_path / "model").mkdir()
+    rec.write(str(tmp_path / "model"))
+    assert main(["localize", paths["queries"], paths["matches"], "--colmap", str(tmp_path / "model"), "--out",
+                 str(tmp_path / "cli")]) == 0
+    assert same(dist.read_poses(tmp_path / "cli"), poses)
+    # A camera_id that is not one of the rig's: that frame is invalid_input, named; the others are solved.
+    camera_ids = matches.column("camera_id").to_numpy().copy()
+    first = matches.column("query")[0].as_py()
+    camera_ids[0] = 77
+    bad = matches.set_column(1, "camera_id", pa.array(camera_ids))
+    poses_bad, _ = dist.localize_tables(queries, bad, reconstruction=rec)
+    message = dict(zip(poses_bad.column("query").to_pylist(), poses_bad.column("message").to_pylist()))
+    assert message[first].startswith(f"query {first}: point_matches column camera_id: 77 is not a camera of the "
+                                     "query's rig")
+    assert sorted(poses_bad.column("status").to_pylist()).count("success") == 3
+    # Without the camera_id column the tables are refused by name.
+    with pytest.raises(pluecker.ShapeError, match="point_matches.*camera_id"):
+        dist.localize_tables(queries, matches.drop_columns(["camera_id"]), reconstruction=rec)

@@ -533,7 +533,7 @@ class PoseResult:
         and inf as ``null``; what ``pluecker pose`` prints."""
 
 def estimate_pose(
-    camera: Camera,
+    camera: Union[Camera, Rig],
     points2d: Optional[ArrayLike] = None,
     points3d: Optional[ArrayLike] = None,
     lines2d: Optional[ArrayLike] = None,
@@ -542,9 +542,17 @@ def estimate_pose(
     options: Optional[PoseOptions] = None,
     point_covariances: Optional[ArrayLike] = None,
     line_covariances: Optional[ArrayLike] = None,
+    point_cameras: Optional[ArrayLike] = None,
+    line_cameras: Optional[ArrayLike] = None,
 ) -> PoseResult:
     """Estimate the pose ``x_cam = R @ X_world + t`` of a calibrated camera from points (N, 2) ↔ (N, 3)
     and/or segments (M, 2, 2) ↔ (M, 2, 3) (only the 3-D line through a 3-D segment is used).
+
+    ``camera`` may be a :class:`Rig` instead: the pose is then ``rig_from_world`` (``x_rig = R @ X_world + t``)
+    and ``point_cameras`` (N,) / ``line_cameras`` (M,) give the index (in ``rig.cameras``) of the camera whose
+    pixels each observation holds; the cost is in each camera's own pixels through its lens. Observations of
+    one camera alone are that camera's problem (certificate included, pose moved into the rig's frame); over
+    several cameras a requested certificate is not available yet (status ``gap_not_closed``).
 
     ``camera``: :class:`Camera` (any model) whose observed (distorted, through a lens) pixels are given: the
     minimal solvers, RANSAC and the algebraic methods run on exactly undistorted pixels weighted by the
@@ -579,6 +587,10 @@ def estimate_pose(
 # explains the sample exactly, as a list of (R, t); empty for a degenerate sample.
 
 _Poses = List[Tuple[NDArray[np.float64], NDArray[np.float64]]]
+
+def gp3p(origins: ArrayLike, directions: ArrayLike, points: ArrayLike) -> _Poses:
+    """A rig's three rays (origins (3, 3), directions (3, 3), rig frame) and world points (3, 3): the
+    generalised P3P, poses ``x_rig = R @ X + t`` with every point on its ray at positive depth; at most 8."""
 
 def p3p(bearings: ArrayLike, points: ArrayLike) -> _Poses:
     """Three rays (3, 3) and world points (3, 3): Lambda Twist (Persson & Nordberg 2018), at most 4."""

@@ -82,8 +82,12 @@ QUERIES: query (int64 id) and the camera, by one of these sets of columns:
   model, params          a COLMAP camera model (e.g. OPENCV) and its parameters in COLMAP's order (a list
                          of numbers); the pixels are the image's own, distorted ones
   camera_id              with --colmap: a camera of the model
-POINTS: query, pixel x, y, and the world point X, Y, Z, or with --colmap its point3D_id in the model.
-LINES: query, segment x1, y1, x2, y2 (pixels), world segment X1, Y1, Z1, X2, Y2, Z2.
+  rig_id                 with --colmap: a frame of one of the model's rigs (the images of its cameras at
+                         one instant, localised together: x_rig = R X_world + t)
+POINTS: query, pixel x, y, and the world point X, Y, Z, or with --colmap its point3D_id in the model;
+  for frames (rig_id) also camera_id, the camera of the rig whose image holds the keypoint.
+LINES: query, segment x1, y1, x2, y2 (pixels), world segment X1, Y1, Z1, X2, Y2, Z2 (and camera_id for
+  frames).
 A query with a bad camera (unknown model, wrong params, a camera_id or point3D_id not in the model) or
 bad matches gets status invalid_input and a message naming the query, the table and the column; the
 other queries are solved as if it were not there."""

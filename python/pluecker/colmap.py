@@ -22,7 +22,7 @@ from __future__ import annotations
 import copy
 import re
 import struct
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -324,6 +324,9 @@ class ColmapModel:
     point3D_ids: np.ndarray
     xyz: np.ndarray
     cameras: dict
+    #: ``{rig_id: (camera_ids, sensor_from_rig)}``: each rig's cameras in :func:`rig`'s order and their
+    #: poses as ``(R, t)`` nested tuples, or ``{rig_id: message}`` for a rig :func:`rig` refuses.
+    rigs: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         ids = np.asarray(self.point3D_ids, dtype=np.int64).reshape(-1)
@@ -346,7 +349,32 @@ class ColmapModel:
         ids = np.fromiter((int(i) for i in points), dtype=np.int64, count=len(points))
         xyz = np.array([points[int(i)].xyz for i in ids], dtype=float).reshape(-1, 3)
         cameras = {int(i): (c.model.name, tuple(c.params)) for i, c in reconstruction.cameras.items()}
-        return cls(ids, xyz, cameras)
+        rigs: dict = {}
+        for rig_id in getattr(reconstruction, "rigs", {}):
+            try:
+                held = rig(reconstruction, rig_id)
+            except (ModelError, _core.PlueckerError) as exc:
+                rigs[int(rig_id)] = str(exc)
+                continue
+            colmap_rig = reconstruction.rig(rig_id)
+            others = sorted(colmap_rig.non_ref_sensors, key=lambda s: (int(s.type.value), s.id))
+            camera_ids = tuple(int(sensor.id) for sensor in [colmap_rig.ref_sensor_id, *others])
+            poses = tuple((tuple(map(tuple, p.rotation)), tuple(p.translation)) for p in held.sensor_from_rig)
+            rigs[int(rig_id)] = (camera_ids, poses)
+        return cls(ids, xyz, cameras, rigs)
+
+    def rig(self, rig_id: int) -> tuple[_core.Rig, tuple[int, ...]]:
+        """The rig ``rig_id`` and the ``camera_id`` of each of its cameras; ``ModelError`` naming the
+        rig_id when the model has no such rig (or one :func:`rig` refused, with its reason)."""
+        held = self.rigs.get(int(rig_id))
+        if held is None:
+            known = ", ".join(map(str, sorted(self.rigs))) or "none"
+            raise ModelError(f"rig_id {rig_id}: no such rig in the model (its rig_ids: {known})")
+        if isinstance(held, str):
+            raise ModelError(held)
+        camera_ids, poses = held
+        cameras = [_core.Camera(self.cameras[i][0], list(self.cameras[i][1])) for i in camera_ids]
+        return _core.Rig(cameras, [(np.array(R), np.array(t)) for R, t in poses]), camera_ids
 
     def lookup(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The points (len(ids), 3) of ``point3D_ids`` ``ids`` (NaN for an id not in the model) and the
@@ -841,14 +869,18 @@ def robust_options(options: Any = None, ransac: Any = True) -> Any:
 
 def localize(camera: Any, points2D: Any = None, points3D: Any = None, lines2D: Any = None, lines3D: Any = None,
              *, ransac: Any = True, options: Any = None, point_covariances: Any = None,
-             line_covariances: Any = None) -> tuple[Any, Any]:
-    """Localises one image from its 2D-3D matches (points and/or segments, distorted pixels of
-    ``camera``, a ``pycolmap.Camera`` or ``pluecker.Camera``): ``(cam_from_world, PoseResult)``, the
-    first a ``pycolmap.Rigid3d`` (``None`` unless the status is ``success``). Robust by default:
-    ``ransac`` sets ``options.ransac`` as :func:`robust_options` says (``True``: ``options.ransac`` or the
-    :class:`pluecker.RansacOptions` defaults); the rest as :func:`pluecker.estimate_pose`."""
+             line_covariances: Any = None, point_cameras: Any = None, line_cameras: Any = None) -> tuple[Any, Any]:
+    """Localises one image, or one frame of a rig, from its 2D-3D matches (points and/or segments,
+    distorted pixels): ``(cam_from_world, PoseResult)``, the first a ``pycolmap.Rigid3d`` (``None``
+    unless the status is ``success``). ``camera``: a ``pycolmap.Camera`` or ``pluecker.Camera``; or a
+    :class:`pluecker.Rig` (from a model: :func:`rig`) with ``point_cameras`` / ``line_cameras``, the
+    index of the rig's camera that saw each match, and then the pose is the frame's ``rig_from_world``.
+    Robust by default: ``ransac`` sets ``options.ransac`` as :func:`robust_options` says (``True``:
+    ``options.ransac`` or the :class:`pluecker.RansacOptions` defaults); the rest as
+    :func:`pluecker.estimate_pose`."""
     result = _core.estimate_pose(camera, points2D, points3D, lines2D, lines3D, options=robust_options(options, ransac),
-                                 point_covariances=point_covariances, line_covariances=line_covariances)
+                                 point_covariances=point_covariances, line_covariances=line_covariances,
+                                 point_cameras=point_cameras, line_cameras=line_cameras)
     rigid = rigid_from_pose(result.pose.rotation, result.pose.translation) if result.status == "success" else None
     return rigid, result
 
@@ -859,10 +891,14 @@ class MatchError(_core.PlueckerError):
 
 
 def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_ids: Any, *, ransac: Any = True,
-                      options: Any = None, point_covariances: Any = None) -> tuple[Any, Any]:
-    """Localises one image in a COLMAP model from its keypoints matched to the model's 3-D points:
-    ``points2D`` (n, 2), the image's own (distorted) pixels, and ``point3D_ids`` (n,). ``camera``: the
-    ``camera_id`` of one of the model's cameras, a ``pycolmap.Camera`` or a ``pluecker.Camera``.
+                      options: Any = None, point_covariances: Any = None,
+                      point_cameras: Any = None) -> tuple[Any, Any]:
+    """Localises one image, or one frame of a rig, in a COLMAP model from its keypoints matched to the
+    model's 3-D points: ``points2D`` (n, 2), the image's own (distorted) pixels, and ``point3D_ids``
+    (n,). ``camera``: the ``camera_id`` of one of the model's cameras, a ``pycolmap.Camera`` or a
+    ``pluecker.Camera``; or a frame: a :class:`pluecker.Rig` (``rig(reconstruction, rig_id)``) with
+    ``point_cameras`` (n,), the index in ``rig.cameras`` of the camera whose pixels each match holds,
+    and then the pose is the frame's ``rig_from_world``.
     ``reconstruction``: a ``pycolmap.Reconstruction`` (or a :class:`ColmapModel`).
     Returns ``(cam_from_world, PoseResult)`` as :func:`localize` does: robust by default (``ransac=True``,
     :class:`pluecker.RansacOptions` defaults: 4 px threshold in the image's pixels; pass
@@ -898,8 +934,8 @@ def localize_in_model(reconstruction: Any, camera: Any, points2D: Any, point3D_i
         camera = cameras[camera_id]
         if isinstance(camera, tuple):  # a ColmapModel's (model name, params)
             camera = _core.Camera(camera[0], list(camera[1]))
-    elif not isinstance(camera, _core.Camera) and not hasattr(camera, "params"):
-        raise _core.InvalidOptionError(f"camera: expected a camera_id (an int), a pycolmap.Camera or a "
-                                       f"pluecker.Camera, got {shown(camera)}")
+    elif not isinstance(camera, (_core.Camera, _core.Rig)) and not hasattr(camera, "params"):
+        raise _core.InvalidOptionError(f"camera: expected a camera_id (an int), a pycolmap.Camera, a "
+                                       f"pluecker.Camera or a pluecker.Rig, got {shown(camera)}")
     return localize(camera, points2D, points3D, ransac=ransac, options=options,
-                    point_covariances=point_covariances)
+                    point_covariances=point_covariances, point_cameras=point_cameras)

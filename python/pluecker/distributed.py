@@ -70,7 +70,7 @@ from ._cameras import Cameras
 from ._paths import require_folder, staged
 from ._sorting import stable_order
 from ._status import Status
-from .colmap import ColmapModel, as_model
+from .colmap import ColmapModel, ModelError, as_model
 
 __all__ = ["Cameras", "JobSummary", "triangulate", "triangulate_table", "read_points",
            "read_observations", "localize", "localize_tables", "localize_bag", "queries_to_tables", "read_poses",
@@ -540,29 +540,44 @@ def _remove_tree(path: Path) -> None:
 QUERY_COLUMNS = ("query", "fx", "fy", "cx", "cy")
 LENS_QUERY_COLUMNS = ("query", "model", "params")
 MODEL_QUERY_COLUMNS = ("query", "camera_id")
+#: A frame of a rig of the COLMAP model (``reconstruction=``): the images of its cameras at one instant,
+#: localised together (``x_rig = R X_world + t``); every match then names its image's ``camera_id``.
+RIG_QUERY_COLUMNS = ("query", "rig_id")
 POINT_MATCH_COLUMNS = ("query", "x", "y", "X", "Y", "Z")
 #: Point matches with a COLMAP model (``reconstruction=``): the 3-D point is the model's ``point3D_id``.
 MODEL_POINT_MATCH_COLUMNS = ("query", "x", "y", "point3D_id")
+#: Point matches of a rig's frame (queries by ``rig_id``): the camera of the rig that saw each one.
+RIG_POINT_MATCH_COLUMNS = ("query", "camera_id", "x", "y", "point3D_id")
 LINE_MATCH_COLUMNS = ("query", "x1", "y1", "x2", "y2", "X1", "Y1", "Z1", "X2", "Y2", "Z2")
 
 
 #: The columns of a query table by the way it gives its cameras (:func:`_query_camera_kind`).
-CAMERA_COLUMN_SETS = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "camera_id": MODEL_QUERY_COLUMNS}
+CAMERA_COLUMN_SETS = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "camera_id": MODEL_QUERY_COLUMNS,
+                      "rig_id": RIG_QUERY_COLUMNS}
+
+
+def point_match_columns(kind: str, model: Optional[ColmapModel]) -> tuple[str, ...]:
+    """The columns of the point matches for queries whose cameras are given by ``kind``."""
+    if kind == "rig_id":
+        return RIG_POINT_MATCH_COLUMNS
+    return MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS
 
 
 def _query_camera_kind(names: Iterable[str], what: str, model: Optional[ColmapModel]) -> str:
-    """Which camera columns a query table holds: ``"pinhole"``, ``"lens"`` or ``"camera_id"``
-    (:data:`QUERY_COLUMNS`). A ``ShapeError`` naming ``what`` when it holds none of the sets, or more
-    than one (which camera would win is not guessed), or ``camera_id`` without a model."""
+    """Which camera columns a query table holds: ``"pinhole"``, ``"lens"``, ``"camera_id"`` or
+    ``"rig_id"`` (:data:`QUERY_COLUMNS`). A ``ShapeError`` naming ``what`` when it holds none of the sets,
+    or more than one (which camera would win is not guessed), or ``camera_id`` / ``rig_id`` without a
+    model."""
     present = set(names)
     sets = CAMERA_COLUMN_SETS
     complete = [kind for kind, columns in sets.items() if set(columns) <= present]
     if len(complete) > 1:
         raise _core.ShapeError(f"{what}: one camera per query: give the columns of one of "
                                + " or ".join(", ".join(sets[k][1:]) for k in complete) + ", not both")
-    if complete == ["camera_id"] and model is None:
-        raise _core.ShapeError(f"{what}: column camera_id names cameras of a COLMAP model: pass the model "
-                               "(reconstruction=, or --colmap on the command line), or give model, params per query")
+    if complete in (["camera_id"], ["rig_id"]) and model is None:
+        raise _core.ShapeError(f"{what}: column {complete[0]} names {complete[0][:-3]}s of a COLMAP model: pass the "
+                               "model (reconstruction=, or --colmap on the command line), or give model, params per "
+                               "query")
     if complete:
         return complete[0]
     # None complete: the missing columns of the pinhole set, the documented default, with the others.
@@ -595,8 +610,23 @@ def _query_cameras(queries: Any, kind: str, model: Optional[ColmapModel]) -> lis
     if kind == "lens":
         names, params = queries.column("model").to_pylist(), queries.column("params").to_pylist()
         return [lambda i=i: _lens(q_ids[i], names[i], params[i]) for i in range(len(q_ids))]
+    if kind == "rig_id":
+        rig_ids = queries.column("rig_id").to_pylist()
+        return [lambda i=i: _model_rig(q_ids[i], rig_ids[i], model) for i in range(len(q_ids))]
     camera_ids = queries.column("camera_id").to_pylist()
     return [lambda i=i: _model_camera(q_ids[i], camera_ids[i], model) for i in range(len(q_ids))]
+
+
+def _model_rig(query: int, rig_id: Any, model: ColmapModel) -> tuple[_core.Rig, tuple[int, ...]]:
+    """The rig ``rig_id`` of the model for one query, and the ``camera_id`` of each of its cameras."""
+    if isinstance(rig_id, float) and rig_id.is_integer():
+        rig_id = int(rig_id)
+    if not isinstance(rig_id, int):
+        raise _BadQuery(f"query {query}: queries column rig_id: {shown(rig_id)} is not an integer rig_id")
+    try:
+        return model.rig(rig_id)
+    except (ModelError, _core.PlueckerError) as exc:
+        raise _BadQuery(f"query {query}: queries column rig_id: {exc}") from None
 
 
 def _lens(query: int, name: Any, params: Any, what: str = "queries") -> _core.Camera:
@@ -662,19 +692,23 @@ def _grouped(table: Any, names: tuple[str, ...]) -> dict[int, np.ndarray]:
     return {int(key[a]): rows[a:b] for a, b in zip(starts, np.r_[starts[1:], len(key)])}
 
 
-def _point_matches(table: Any, model: Optional[ColmapModel]) -> tuple[dict[int, np.ndarray], np.ndarray, Any]:
+def _point_matches(table: Any, model: Optional[ColmapModel],
+                   kind: str) -> tuple[dict[int, np.ndarray], np.ndarray, Any, Any]:
     """The point matches: rows per query (:func:`_grouped`), every row as ``(x, y, X, Y, Z)`` (the 3-D
-    point read from the model with a ``model``), and with a model the ``point3D_id`` per row with the
-    mask of those in the model (else ``None``)."""
+    point read from the model with a ``model``), with a model the ``point3D_id`` per row with the
+    mask of those in the model (else ``None``), and for a rig's frames the ``camera_id`` per row (else
+    ``None``)."""
     if table is None or table.num_rows == 0:
-        return {}, np.zeros((0, 5)), None
+        return {}, np.zeros((0, 5)), None, None
     if model is None:
-        return _grouped(table, POINT_MATCH_COLUMNS[1:]), _columns(table, POINT_MATCH_COLUMNS[1:]), None
+        return _grouped(table, POINT_MATCH_COLUMNS[1:]), _columns(table, POINT_MATCH_COLUMNS[1:]), None, None
     ids, valid = _point3D_ids(table)
     xyz, known = model.lookup(ids)
     known &= valid
-    groups = _grouped(table, MODEL_POINT_MATCH_COLUMNS[1:])
-    return groups, np.c_[_columns(table, ("x", "y")), xyz], (ids, known, valid)
+    columns = point_match_columns(kind, model)
+    groups = _grouped(table, columns[1:])
+    camera_ids = table.column("camera_id").to_pylist() if "camera_id" in columns else None
+    return groups, np.c_[_columns(table, ("x", "y")), xyz], (ids, known, valid), camera_ids
 
 
 def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, *, ransac: Any = None,
@@ -713,9 +747,9 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     kind = _query_camera_kind(queries.column_names, "queries", model)
     _check_column_types(queries.schema, CAMERA_COLUMN_SETS[kind], "queries", queries.column)
     q_ids = _check_ids([("queries", queries.column("query"))], "query", unique=True)
-    for table, columns, what in ((point_matches, MODEL_POINT_MATCH_COLUMNS if model is not None
-                                  else POINT_MATCH_COLUMNS, "point_matches"),
-                                 (line_matches, LINE_MATCH_COLUMNS, "line_matches")):
+    line_columns = LINE_MATCH_COLUMNS + (("camera_id",) if kind == "rig_id" else ())
+    for table, columns, what in ((point_matches, point_match_columns(kind, model), "point_matches"),
+                                 (line_matches, line_columns, "line_matches")):
         if table is not None:
             _require_columns(table.column_names, columns, what)
             _check_column_types(table.schema, columns, what, table.column)
@@ -727,9 +761,21 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     order = stable_order(q_ids)
     q_ids = q_ids[order]
     cameras = [cameras[i] for i in order]
-    points, point_values, point_ids = _point_matches(point_matches, model)
-    lines = _grouped(line_matches, LINE_MATCH_COLUMNS[1:])
+    points, point_values, point_ids, point_camera_ids = _point_matches(point_matches, model, kind)
+    lines = _grouped(line_matches, line_columns[1:])
     line_values = _columns(line_matches, LINE_MATCH_COLUMNS[1:]) if lines else np.zeros((0, 10))
+    line_camera_ids = line_matches.column("camera_id").to_pylist() if lines and kind == "rig_id" else None
+
+    def rig_cameras(q: int, rows: np.ndarray, camera_ids: Any, sensors: tuple[int, ...], what: str) -> np.ndarray:
+        """The index in the rig of the camera of each match, or :class:`_BadQuery` naming the first
+        camera_id the rig does not hold."""
+        index = {c: k for k, c in enumerate(sensors)}
+        cells = [camera_ids[int(r)] for r in rows]
+        for cell in cells:
+            if not (isinstance(cell, int) or (isinstance(cell, float) and cell.is_integer())) or int(cell) not in index:
+                raise _BadQuery(f"query {q}: {what} column camera_id: {shown(cell)} is not a camera of the query's rig "
+                                f"(its camera_ids: {', '.join(map(str, sensors))})")
+        return np.array([index[int(c)] for c in cells], dtype=np.int64)
     no_rows = np.zeros(0, dtype=np.int64)
 
     def solve(i: int) -> dict[str, Any]:
@@ -748,11 +794,17 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
                 raise _BadQuery(f"query {q}: point_matches column point3D_id: point3D_id {shown} is not a point of "
                                 f"the COLMAP model ({len(unknown)} such match{'es' if len(unknown) > 1 else ''})")
             camera = cameras[i]()
+            frame = {}
+            if kind == "rig_id":
+                camera, sensors = camera
+                frame = {"point_cameras": rig_cameras(q, p_rows, point_camera_ids, sensors, "point_matches"),
+                         "line_cameras": rig_cameras(q, l_rows, line_camera_ids, sensors, "line_matches")}
             options_q = copy.copy(options) if options is not None else _core.PoseOptions()
             options_q.ransac = _core.RansacOptions(**{**base, "seed": (base["seed"] + seed + q) % 2**63})
             r = _core.estimate_pose(camera, p[:, :2] if len(p) else None, p[:, 2:] if len(p) else None,
                                     segs[:, :4].reshape(-1, 2, 2) if len(segs) else None,
-                                    segs[:, 4:].reshape(-1, 2, 3) if len(segs) else None, options=options_q)
+                                    segs[:, 4:].reshape(-1, 2, 3) if len(segs) else None, options=options_q,
+                                    **frame)
         except _BadQuery as exc:
             out["status"], out["message"] = Status.INVALID_INPUT.value, str(exc)
             return out
@@ -837,9 +889,10 @@ def _localize_part(out: str, part: int, settings: dict[str, Any], *tables: Any) 
     return poses
 
 
-def _check_query_inputs(source: str, model: Optional[ColmapModel]) -> None:
+def _check_query_inputs(source: str, model: Optional[ColmapModel]) -> str:
     """Before a job: every query file holds the same one set of camera columns
-    (:func:`_query_camera_kind`; the buckets concatenate rows of several files)."""
+    (:func:`_query_camera_kind`; the buckets concatenate rows of several files); returns that set's
+    kind."""
     import pyarrow.parquet as pq
 
     _check_inputs(source, ("query",), "queries")
@@ -853,6 +906,7 @@ def _check_query_inputs(source: str, model: Optional[ColmapModel]) -> None:
     # One row per query over every file (the buckets would meet the duplicates only after the split).
     _check_ids([(f"queries {f}", pq.read_table(f, columns=["query"]).column("query")) for f in kinds], "query",
                unique=True)
+    return next(iter(kinds.values()), "pinhole")
 
 
 def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Union[str, Path], *,
@@ -877,11 +931,11 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     started = time.perf_counter()
     out = Path(out)
     model = as_model(reconstruction)
-    _check_query_inputs(str(queries), model)
-    _check_inputs(str(point_matches), MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS,
-                  "point_matches")
+    kind = _check_query_inputs(str(queries), model)
+    _check_inputs(str(point_matches), point_match_columns(kind, model), "point_matches")
     if line_matches is not None:
-        _check_inputs(str(line_matches), LINE_MATCH_COLUMNS, "line_matches")
+        _check_inputs(str(line_matches), LINE_MATCH_COLUMNS + (("camera_id",) if kind == "rig_id" else ()),
+                      "line_matches")
     rows = lambda source: sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(source)))  # noqa: E731
     n = rows(queries)
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1

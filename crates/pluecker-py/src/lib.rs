@@ -82,6 +82,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyRansacReport>()?;
     m.add_function(wrap_pyfunction!(pose::estimate_pose, m)?)?;
     m.add_function(wrap_pyfunction!(pose::minimal::p3p, m)?)?;
+    m.add_function(wrap_pyfunction!(pose::minimal::gp3p, m)?)?;
     m.add_function(wrap_pyfunction!(pose::minimal::p2p1l, m)?)?;
     m.add_function(wrap_pyfunction!(pose::minimal::p1p2l, m)?)?;
     m.add_function(wrap_pyfunction!(pose::minimal::p3l, m)?)?;

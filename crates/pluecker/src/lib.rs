@@ -96,6 +96,33 @@
 //! assert!(results[2].is_err()); // image[7]: an image index below 4 (the cameras)
 //! ```
 //!
+//! The pose of a camera rig, `x_rig = R X_world + t`, from points seen by any of its cameras (each
+//! observation names its camera; [`pose::generalized`]):
+//! ```
+//! use pluecker::nalgebra::{Matrix3, Vector2, Vector3};
+//! use pluecker::{estimate_rig_pose, Camera, Correspondences, ObservingCameras, Pose, PoseOptions, Rig};
+//! // Two cameras on a bar, 0.5 apart, the second turned a quarter of a turn about y.
+//! let turn = Matrix3::new(0.0, 0.0, -1.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0);
+//! let rig = Rig::new(
+//!     vec![Camera::pinhole(600.0, 600.0, 320.0, 240.0, 0.0).unwrap(); 2],
+//!     vec![Pose::identity(), Pose::new(turn, Vector3::new(0.5, 0.0, 0.0))],
+//! )
+//! .unwrap();
+//! let truth = Pose::new(Matrix3::identity(), Vector3::new(0.1, -0.2, 0.3));
+//! let (mut corr, mut cameras) = (Correspondences::default(), ObservingCameras::default());
+//! for i in 0..12 {
+//!     let k = i % 2;
+//!     let x_cam = Vector3::new(0.1 * i as f64 - 0.6, 0.3 * (i as f64).sin(), 4.0 + 0.3 * i as f64);
+//!     let world = rig.sensor_from_world(k, &truth).inverse().transform(&x_cam);
+//!     corr.points2d.push(Vector2::new(600.0 * x_cam.x / x_cam.z + 320.0, 600.0 * x_cam.y / x_cam.z + 240.0));
+//!     corr.points3d.push(world);
+//!     cameras.point_cameras.push(k);
+//! }
+//! let result = estimate_rig_pose(&rig, &corr, &cameras, &PoseOptions::default()).unwrap();
+//! assert!(result.report.success());
+//! assert!((result.pose.translation - truth.translation).norm() < 1e-8);
+//! ```
+//!
 //! ## Features
 //! - `serde`: `serde::Serialize` and `serde::Deserialize` on the results, the options, [`Pose`],
 //!   [`camera::Intrinsics`] and [`Camera`]. Enums are written by their names (`as_str`), a camera as
@@ -148,8 +175,8 @@ pub use camera_pose::{Pose, ROTATION_TOLERANCE};
 pub use certificate::{Certificate, CertificateKind, CertifyOptions, Primitive};
 pub use cost_kind::CostKind;
 pub use pose::{
-    estimate_pose, Correspondences, CovarianceSource, PoseDetails, PoseOptions, PoseResult, RansacOptions,
-    RansacReport, RansacStop,
+    estimate_pose, estimate_rig_pose, Correspondences, CovarianceSource, ObservingCameras, PoseDetails, PoseOptions,
+    PoseResult, RansacOptions, RansacReport, RansacStop,
 };
 pub use report::Report;
 pub use rig::Rig;

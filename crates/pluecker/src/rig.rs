@@ -88,6 +88,19 @@ impl Rig {
         }
     }
 
+    /// The same rig with every `sensor_from_rig` translation multiplied by `factor`: the rig in a
+    /// length unit `1 / factor` times the given one (the pose's search runs on conditioned data).
+    pub(crate) fn scaled(&self, factor: f64) -> Rig {
+        Rig {
+            cameras: self.cameras.clone(),
+            sensor_from_rig: self
+                .sensor_from_rig
+                .iter()
+                .map(|p| Pose::new(p.rotation, factor * p.translation))
+                .collect(),
+        }
+    }
+
     /// The cameras, in order.
     pub fn cameras(&self) -> &[Camera] {
         &self.cameras

@@ -16,6 +16,7 @@ use crate::pose::result::PyPoseStage;
 use crate::properties::Field;
 use crate::threads::solve;
 use nalgebra::{SVector, Vector3};
+use pluecker::pose::generalized::Ray;
 use pluecker::pose::minimal;
 use pluecker::pose::refine_pose as core_refine_pose;
 use pluecker::Pose;
@@ -53,6 +54,28 @@ pub fn p3p<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     let (y, x) = (rows::<3, 3>("bearings", bearings)?, rows::<3, 3>("points", points)?);
     pose_list(py, solve(py, move || Ok(minimal::p3p(&y, &x)))?)
+}
+
+/// gP3P, the generalised P3P of a rig: the poses `x_rig = R X_world + t` that put the three world
+/// `points` (3, 3) on the three rays of the rig's frame through `origins` (3, 3) along `directions`
+/// (3, 3, any non-zero length) at positive depth; at most 8 (core `pose::minimal::gp3p`).
+#[pyfunction]
+pub fn gp3p<'py>(
+    py: Python<'py>,
+    origins: &Bound<'py, PyAny>,
+    directions: &Bound<'py, PyAny>,
+    points: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyList>> {
+    let (o, d) = (
+        rows::<3, 3>("origins", origins)?,
+        rows::<3, 3>("directions", directions)?,
+    );
+    let x = rows::<3, 3>("points", points)?;
+    let rays = std::array::from_fn(|i| Ray {
+        origin: o[i],
+        direction: d[i],
+    });
+    pose_list(py, solve(py, move || Ok(minimal::gp3p(&rays, &x)))?)
 }
 
 /// Two points and one line (Ramalingam, Bouaziz & Sturm 2011): `bearings` (2, 3) and world `points`

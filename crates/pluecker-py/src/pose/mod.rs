@@ -13,13 +13,15 @@ pub mod reprojection;
 pub mod result;
 
 use crate::convert::{check_finite, matrix_stack, points, read_any, segments, shape_string};
-use crate::errors::{guarded, shape_error};
+use crate::errors::{guarded, invalid_argument, shape_error};
 use crate::interrupt::{object_or_partial, run_interruptible, run_single};
+use crate::rig::PyRig;
+use crate::triangulation::observation_rows::indices;
 use nalgebra::Matrix2;
 use options::PyPoseOptions;
 use pluecker::pose::ObservationNoise;
-use pluecker::pose::{Correspondences, PoseOptions};
-use pluecker::Camera;
+use pluecker::pose::{Correspondences, ObservingCameras, PoseOptions};
+use pluecker::{Camera, Rig};
 use pyo3::prelude::*;
 use result::PyPoseResult;
 
@@ -112,17 +114,57 @@ fn any_camera(camera: &Bound<'_, PyAny>) -> PyResult<Camera> {
 /// the calling thread).
 const SHORT_POSE: usize = 1000;
 
-/// Estimates the pose `x_cam = R X_world + t` from point and/or line correspondences, optionally
-/// robustly (LO-RANSAC), with its covariance.
+/// The `camera=` argument of `estimate_pose`: one camera, or a rig with the camera of each
+/// observation.
+enum Sensor {
+    Camera(Camera),
+    Rig(Rig, ObservingCameras),
+}
+
+impl Sensor {
+    /// A `Rig` with `point_cameras` / `line_cameras` (integer arrays), or a camera without them.
+    fn of(
+        camera: &Bound<'_, PyAny>,
+        point_cameras: Option<&Bound<'_, PyAny>>,
+        line_cameras: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Sensor> {
+        if let Ok(rig) = camera.downcast::<PyRig>() {
+            let read = |name: &str, obj: Option<&Bound<'_, PyAny>>| obj.map_or(Ok(Vec::new()), |o| indices(name, o));
+            let cameras = ObservingCameras {
+                point_cameras: read("point_cameras", point_cameras)?,
+                line_cameras: read("line_cameras", line_cameras)?,
+            };
+            return Ok(Sensor::Rig(rig.get().inner.clone(), cameras));
+        }
+        for (name, given) in [("point_cameras", point_cameras), ("line_cameras", line_cameras)] {
+            if given.is_some() {
+                return Err(invalid_argument(name, "is for a Rig: camera is a single camera"));
+            }
+        }
+        Ok(Sensor::Camera(any_camera(camera)?))
+    }
+
+    fn estimate(&self, corr: &Correspondences, opts: &PoseOptions) -> pluecker::Result<pluecker::PoseResult> {
+        match self {
+            Sensor::Camera(camera) => pluecker::estimate_pose(camera, corr, opts),
+            Sensor::Rig(rig, cameras) => pluecker::estimate_rig_pose(rig, corr, cameras, opts),
+        }
+    }
+}
+
+/// Estimates the pose `x_cam = R X_world + t` of a camera, or `x_rig = R X_world + t` of a rig, from
+/// point and/or line correspondences, optionally robustly (LO-RANSAC), with its covariance.
 ///
 /// `camera`: `Camera` (pinhole) or `Camera` (distortion; pixels are the observed, distorted ones,
-/// and the refinement minimises the exact error in them: core `pose::lens`).
+/// and the refinement minimises the exact error in them: core `pose::lens`), or a `Rig` with
+/// `point_cameras` (N,) and `line_cameras` (M,), the index of the camera that saw each observation
+/// (core `pose::generalized`).
 /// `options`: `PoseOptions` (default `PoseOptions()`): the method, `options.ransac` for robust
 /// estimation and `options.certify` for the certificate are set there.
 /// `point_covariances` (N, 2, 2) and `line_covariances` (M, 2, 2) or (M, 2, 2, 2): pixel² covariances
 /// of the observations (core `pose::noise`).
 #[pyfunction]
-#[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, *, options = None, point_covariances = None, line_covariances = None))]
+#[pyo3(signature = (camera, points2d = None, points3d = None, lines2d = None, lines3d = None, *, options = None, point_covariances = None, line_covariances = None, point_cameras = None, line_cameras = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_pose(
     py: Python<'_>,
@@ -134,13 +176,15 @@ pub fn estimate_pose(
     options: Option<PyRef<'_, PyPoseOptions>>,
     point_covariances: Option<&Bound<'_, PyAny>>,
     line_covariances: Option<&Bound<'_, PyAny>>,
+    point_cameras: Option<&Bound<'_, PyAny>>,
+    line_cameras: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyPoseResult>> {
-    let camera = any_camera(camera)?;
+    let sensor = Sensor::of(camera, point_cameras, line_cameras)?;
     let opts = options.map_or_else(PoseOptions::default, |o| o.core());
     let mut corr = correspondences(points2d, points3d, lines2d, lines3d)?;
     corr.noise = observation_noise(&corr, point_covariances, line_covariances)?;
     let short = corr.n_points() + corr.n_lines() < SHORT_POSE;
-    let work = move || pluecker::estimate_pose(&camera, &corr, &opts);
+    let work = move || sensor.estimate(&corr, &opts);
     // Fewer correspondences: on this thread, where the polls of RANSAC and of the certificate's
     // rotation search see Ctrl-C (`interrupt::run_single`); the other stages end within milliseconds.
     let outcome = if short {

@@ -63,7 +63,7 @@ fn footprint(p: &[Vector2<f64>], s: &[usize; 3]) -> f64 {
 }
 
 /// Three distinct indices below `n` (≥ 3), uniformly.
-fn random_triple(rng: &mut Rng, n: usize) -> [usize; 3] {
+pub(crate) fn random_triple(rng: &mut Rng, n: usize) -> [usize; 3] {
     let i = rng.below(n);
     let mut j = rng.below(n - 1);
     if j >= i {
@@ -86,7 +86,12 @@ pub fn is_exhaustive(n: usize) -> bool {
 /// The samples, as indices into [`positions`], main samples first, then the reserve (see the module
 /// documentation).
 pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
-    let n = positions.len();
+    samples_by(positions.len(), |s| footprint(positions, s))
+}
+
+/// The samples of `n` correspondences ranked by `footprint` (larger first): every triple when they
+/// are few, else the seeded pool (module documentation).
+pub fn samples_by(n: usize, footprint: impl Fn(&[usize; 3]) -> f64) -> Vec<[usize; 3]> {
     if n < 3 {
         return vec![];
     }
@@ -106,7 +111,7 @@ pub fn samples(positions: &[Vector2<f64>]) -> Vec<[usize; 3]> {
         .map(|_| {
             let mut s = random_triple(&mut rng, n);
             s.sort_unstable();
-            (footprint(positions, &s), s)
+            (footprint(&s), s)
         })
         .collect();
     pool.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));

@@ -32,6 +32,7 @@ use crate::optim::{
     levenberg_marquardt, newton, trust_region, Objective, Subproblem, Summary, Termination, TrustRegionOptions,
 };
 use nalgebra::{Matrix3, SVector, Vector3, Vector4};
+use std::borrow::Cow;
 use std::time::Instant;
 
 /// A dual-quaternion iterate back to a rigid motion in the world frame.
@@ -396,22 +397,26 @@ pub fn estimate_pose(camera: &Camera, corr: &Correspondences, opts: &PoseOptions
     let pinhole = camera.intrinsics();
     pinhole.validate()?;
     opts.validate()?;
-    let absolute;
-    let opts = if corr.noise.as_ref().is_some_and(|n| n.absolute) && opts.sigma_px.is_none() {
-        absolute = PoseOptions {
-            sigma_px: Some(1.0),
-            ..opts.clone()
-        };
-        &absolute
-    } else {
-        opts
-    };
+    let opts = &with_noise_level(opts, corr);
     match camera.distortion() {
         Some(lens) => {
             let through = super::lens::ThroughLens::new(lens, corr, opts)?;
             Ok(through.expand(run(&through.observations(), opts, started)?))
         }
         None => run(&Observations::pinhole(&pinhole, corr), opts, started),
+    }
+}
+
+/// `opts` with `sigma_px = 1` when the correspondences carry the user's covariances and no
+/// `sigma_px` is given: the residuals are then in standard deviations, their noise level is 1.
+pub(crate) fn with_noise_level<'o>(opts: &'o PoseOptions, corr: &Correspondences) -> Cow<'o, PoseOptions> {
+    if corr.noise.as_ref().is_some_and(|n| n.absolute) && opts.sigma_px.is_none() {
+        Cow::Owned(PoseOptions {
+            sigma_px: Some(1.0),
+            ..opts.clone()
+        })
+    } else {
+        Cow::Borrowed(opts)
     }
 }
 
@@ -516,7 +521,7 @@ const BEHIND_CAMERA_RATIO: f64 = 100.0;
 
 /// The `σ²` of the ambiguity test (px²): `sigma_px²` when given, else the larger of 1 px² and the
 /// estimate `Σ r² / (m − 6)` at the best minimum of cost `best_cost` over `m` residuals.
-fn ambiguity_sigma2(sigma_px: Option<f64>, best_cost: f64, residuals: usize) -> f64 {
+pub(crate) fn ambiguity_sigma2(sigma_px: Option<f64>, best_cost: f64, residuals: usize) -> f64 {
     match sigma_px {
         Some(s) => s * s,
         None if residuals > 6 => (2.0 * best_cost / (residuals - 6) as f64).max(1.0),

@@ -31,6 +31,7 @@ pub use crate::certificate::{Certificate, CertifyOptions};
 pub use crate::cost_kind::CostKind;
 pub use correspondences::Correspondences;
 pub use estimate::estimate_pose;
+pub use generalized::{estimate_rig_pose, ObservingCameras};
 pub use noise::ObservationNoise;
 pub use refinement::refine_pose;
 pub use reprojection::{pose_covariance, ReprojectionCost};

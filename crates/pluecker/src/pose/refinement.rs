@@ -58,6 +58,30 @@ pub const SAME_MINIMUM: f64 = 1e-6;
 /// undetermined along it by up to ~1e-5 at costs equal to ~1e-11; distinct minima have a barrier.
 pub const NO_BARRIER: f64 = 1e-9;
 
+/// What the search needs of a pose's reprojection cost besides the objective itself: the single
+/// camera's [`ReprojectionCost`] and the rig's ([`super::generalized::RigReprojectionCost`]) search
+/// their minima the same way.
+pub(crate) trait PoseCost: Objective<6, Point = Pose> {
+    /// The number of scalar residuals: two per point and two per segment.
+    fn residual_count(&self) -> usize;
+    /// The cost `½ Σ r²` at `pose` when it is below `bound`, else `None` (may stop summing early).
+    fn cost_below(&self, pose: &Pose, bound: f64) -> Option<f64>;
+    /// The object points and segment endpoints behind their camera at `pose`.
+    fn points_behind(&self, pose: &Pose) -> usize;
+}
+
+impl PoseCost for ReprojectionCost<'_> {
+    fn residual_count(&self) -> usize {
+        ReprojectionCost::residual_count(self)
+    }
+    fn cost_below(&self, pose: &Pose, bound: f64) -> Option<f64> {
+        ReprojectionCost::cost_below(self, pose, bound)
+    }
+    fn points_behind(&self, pose: &Pose) -> usize {
+        ReprojectionCost::points_behind(self, pose)
+    }
+}
+
 /// One local minimum of the reprojection error, in the conditioned frame of the search.
 #[derive(Debug, Clone, Copy)]
 pub struct LocalMinimum {
@@ -140,7 +164,7 @@ impl Minima {
             .any(|m| rotation_distance(&m.pose.rotation, &pose.rotation) < radius)
     }
 
-    fn add(&mut self, m: LocalMinimum, summary: &Summary, cost: &ReprojectionCost<'_>) {
+    fn add(&mut self, m: LocalMinimum, summary: &Summary, cost: &impl PoseCost) {
         if self.iterations == 0 && self.evaluations == 0 {
             self.initial_cost = summary.initial_cost;
         }
@@ -190,7 +214,7 @@ impl Minima {
 
 /// Whether the refined minima `a` and `b` are one minimum ([`SAME_MINIMUM`], or [`NO_BARRIER`]
 /// between two that are closer than [`SAME_BASIN_SMALL`]).
-fn same_minimum(a: &LocalMinimum, b: &LocalMinimum, cost: &ReprojectionCost<'_>) -> bool {
+fn same_minimum(a: &LocalMinimum, b: &LocalMinimum, cost: &impl PoseCost) -> bool {
     let (turn, shift) = (
         rotation_distance(&a.pose.rotation, &b.pose.rotation),
         (a.pose.translation - b.pose.translation).norm(),
@@ -218,7 +242,7 @@ fn settings(opts: &PoseOptions) -> crate::optim::TrustRegionOptions {
 }
 
 /// One refinement from `start` (conditioned frame).
-fn refine_once(cost: &ReprojectionCost<'_>, start: &Pose, opts: &PoseOptions) -> (LocalMinimum, Summary) {
+fn refine_once(cost: &impl PoseCost, start: &Pose, opts: &PoseOptions) -> (LocalMinimum, Summary) {
     let (pose, summary) = trust_region::minimize(cost, *start, &settings(opts));
     let minimum = LocalMinimum {
         pose,
@@ -239,7 +263,7 @@ fn refine_once(cost: &ReprojectionCost<'_>, start: &Pose, opts: &PoseOptions) ->
 /// twin, say) led nowhere better, confirms it; the other samples are not solved. Groups after the
 /// first [`SPREAD_SAMPLES`] (the reserve) are solved only while no minimum has every point in front.
 pub fn search(
-    cost: &ReprojectionCost<'_>,
+    cost: &impl PoseCost,
     starts: &[Pose],
     hypotheses: impl Iterator<Item = Vec<Pose>>,
     exhaustive: bool,

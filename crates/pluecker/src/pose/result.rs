@@ -16,7 +16,7 @@ use super::{CostKind, PoseDetails, PoseOptions, PoseResult, StageReport, Status}
 use crate::camera::Intrinsics;
 use crate::chi_square::ResidualTest;
 use crate::interrupt::stop_reason;
-use crate::optim::{Objective, Termination};
+use crate::optim::{Linearization, Objective, Termination};
 use crate::Report;
 use std::time::Instant;
 
@@ -63,12 +63,24 @@ pub(crate) fn status_of_stages(
     valid: bool,
     refine: bool,
 ) -> Status {
-    let finite = is_finite(pose);
-    let behind = if finite {
+    let behind = if is_finite(pose) {
         count_behind(object_points(used).copied(), pose)
     } else {
         0
     };
+    status_with_behind(pose, stages, behind, valid, refine)
+}
+
+/// [`status_of_stages`] given the number of object points and segment endpoints behind the camera
+/// (behind their own camera, for a rig) at `pose`.
+pub(crate) fn status_with_behind(
+    pose: &Pose,
+    stages: &[StageReport],
+    behind: usize,
+    valid: bool,
+    refine: bool,
+) -> Status {
+    let finite = is_finite(pose);
     let solver_failed = stages
         .iter()
         .any(|s| matches!(s.termination, Termination::SingularHessian | Termination::NonFiniteCost));
@@ -99,6 +111,26 @@ pub(crate) fn assemble(
     started: Instant,
     parts: PipelineOutcome<'_>,
 ) -> PoseResult {
+    // One linearisation at the returned pose gives the reprojection error and `JᵀJ`, exact in the
+    // observed pixels. The refinement uses the given camera; the linear method alone is judged at its
+    // own intrinsics (for a pinhole camera: through a lens, at the given one).
+    let linearization = is_finite(&parts.pose).then(|| match parts.estimated_camera {
+        Some(model) if !opts.refine && observations.lens.is_none() => {
+            ReprojectionCost::of(&model, parts.used).linearize(&parts.pose)
+        }
+        _ => observations.cost(parts.used).linearize(&parts.pose),
+    });
+    assemble_at(linearization, opts, started, parts)
+}
+
+/// [`assemble`] given the linearisation of the reprojection cost of `parts.used` at `parts.pose`
+/// (`None` when the pose is not finite).
+pub(crate) fn assemble_at(
+    linearization: Option<Linearization<6>>,
+    opts: &PoseOptions,
+    started: Instant,
+    parts: PipelineOutcome<'_>,
+) -> PoseResult {
     let PipelineOutcome {
         pose,
         mut stages,
@@ -120,15 +152,6 @@ pub(crate) fn assemble(
         stage.final_cost = sum_of_squares(stage.final_cost);
     }
     let residual_count = 2 * (used.n_points() + used.n_lines());
-    // One linearisation at the returned pose gives the reprojection error and `JᵀJ`, exact in the
-    // observed pixels. The refinement uses the given camera; the linear method alone is judged at its
-    // own intrinsics (for a pinhole camera: through a lens, at the given one).
-    let linearization = is_finite(&pose).then(|| match estimated_camera {
-        Some(model) if !opts.refine && observations.lens.is_none() => {
-            ReprojectionCost::of(&model, used).linearize(&pose)
-        }
-        _ => observations.cost(used).linearize(&pose),
-    });
     let cost = sum_of_squares(linearization.as_ref().map_or(f64::NAN, |l| l.cost));
     let rms_error_px = (cost / residual_count.max(1) as f64).sqrt();
     let (covariance, covariance_source, sigma_px) = covariance(linearization.as_ref(), residual_count, opts.sigma_px);

@@ -21,6 +21,7 @@
 //!
 //! [`solve`] dispatches a sample of any mix of three [`Feature`]s to the solver for that mix.
 
+mod gp3p;
 mod input;
 mod p1p2l;
 mod p2p1l;
@@ -29,6 +30,7 @@ mod p3p;
 mod polynomial;
 mod rotation_constraints;
 
+pub use gp3p::gp3p;
 pub use p1p2l::p1p2l;
 pub use p2p1l::p2p1l;
 pub use p3l::p3l;

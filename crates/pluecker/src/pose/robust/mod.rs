@@ -240,6 +240,19 @@ pub enum RansacStop {
     NoSolvableSample,
 }
 
+impl From<Stop> for RansacStop {
+    fn from(stop: Stop) -> RansacStop {
+        match stop {
+            Stop::Confidence => RansacStop::Confidence,
+            Stop::MinInlierRatio => RansacStop::MinInlierRatio,
+            Stop::IterationCap => RansacStop::IterationCap,
+            Stop::TimeBudget => RansacStop::TimeBudget,
+            Stop::Interrupted => RansacStop::Interrupted,
+            Stop::Exhausted => RansacStop::NoSolvableSample,
+        }
+    }
+}
+
 impl RansacStop {
     /// snake_case name for reports, JSON and Python.
     pub fn as_str(&self) -> &'static str {
@@ -495,14 +508,7 @@ pub fn ransac(
         inliers: estimator.inliers,
         required_inliers: opts.min_inliers,
         score: data.all_outlier_score(&tau),
-        stop: match outcome.stop {
-            Stop::Confidence => RansacStop::Confidence,
-            Stop::MinInlierRatio => RansacStop::MinInlierRatio,
-            Stop::IterationCap => RansacStop::IterationCap,
-            Stop::TimeBudget => RansacStop::TimeBudget,
-            Stop::Interrupted => RansacStop::Interrupted,
-            Stop::Exhausted => RansacStop::NoSolvableSample,
-        },
+        stop: outcome.stop.into(),
         time_seconds: 0.0,
     };
     report.required_inliers = required_inliers(opts, &report, chance, np, nl);

@@ -70,14 +70,17 @@ fn ransac_stage(outcome: &RansacOutcome, pose: &Pose, started: Instant) -> Stage
 }
 
 /// The inlier flags of the points and of the lines.
-type Inliers = (Vec<bool>, Vec<bool>);
+pub(crate) type Inliers = (Vec<bool>, Vec<bool>);
 
 /// The final rounds of the robust pipeline ([`FINAL_ROUNDS`]): `round(set)` refines on `set` and
 /// returns the refined pose, its MSAC score and the inliers re-selected there. Rounds go on while the
 /// re-selected set is new (not one already refined on), holds at least 3 correspondences, and the
 /// call is not stopped. Returns the candidate with the least score, with the set it was refined on:
 /// on a stable set that no earlier round beat, the last pose and its own inliers.
-fn best_refinement<P: Copy>(first: Inliers, mut round: impl FnMut(&Inliers) -> (P, f64, Inliers)) -> (P, Inliers) {
+pub(crate) fn best_refinement<P: Copy>(
+    first: Inliers,
+    mut round: impl FnMut(&Inliers) -> (P, f64, Inliers),
+) -> (P, Inliers) {
     let mut refined_on = vec![first];
     let (mut best_pose, mut best_score, mut next) = round(&refined_on[0]);
     let mut best = 0;
