@@ -37,7 +37,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 import pluecker
 
 OUT = Path(__file__).resolve().parent / "out" / "compare_rig_pose.json"
@@ -209,18 +208,20 @@ def run_pycolmap(s: Scene) -> tuple[np.ndarray, np.ndarray, float]:
 
 def accuracy_row(cameras: int, points: int, segments: int, scenes: int) -> dict[str, Any]:
     errors: dict[str, list[tuple[float, float]]] = {"pluecker": []}
-    bounds = []
+    bounds, times = [], []
     for seed in range(scenes):
         s = Scene(cameras, points, segments, 0.0, seed)
         bounds.append(s.bound())
-        R, t, _ = run_pluecker(s, robust=False, lines=segments > 0)
+        R, t, elapsed = run_pluecker(s, robust=False, lines=segments > 0)
+        times.append(elapsed)
         errors["pluecker"].append((rotation_error(R, s.R) ** 2, float(np.sum((t - s.t) ** 2))))
     b = np.mean(bounds, axis=0)
     row: dict[str, Any] = {"cameras": cameras, "points": points, "segments": segments, "scenes": scenes}
     for name, e in errors.items():
         e = np.array(e)
         row[name] = {"rotation_vs_bound": float(np.sqrt(e[:, 0].mean() / b[0])),
-                     "translation_vs_bound": float(np.sqrt(e[:, 1].mean() / b[1]))}
+                     "translation_vs_bound": float(np.sqrt(e[:, 1].mean() / b[1])),
+                     "median_ms": 1e3 * float(np.median(times)), "p99_ms": 1e3 * float(np.percentile(times, 99))}
     return row
 
 
@@ -292,7 +293,8 @@ def main() -> None:
             result["accuracy"].append(row)
             p = row["pluecker"]
             print(f"accuracy | {cameras} cameras | {points} points | {segments} segments | "
-                  f"rotation {p['rotation_vs_bound']:.3f} x bound | translation {p['translation_vs_bound']:.3f} x bound")
+                  f"rotation {p['rotation_vs_bound']:.3f} x bound | translation {p['translation_vs_bound']:.3f} x bound | "
+                  f"{p['median_ms']:.2f} ms (p99 {p['p99_ms']:.2f})")
     for cameras in (2, 4, 6):
         for outliers in (0.0, 0.5):
             row = robust_row(cameras, 100, outliers, scenes)

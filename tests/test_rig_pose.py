@@ -42,7 +42,9 @@ def observe(rig: pluecker.Rig, points: list[int], segments: list[int], noise_px:
 
     for k, (camera, (Rk, tk)) in enumerate(zip(rig.cameras, rig.sensor_from_rig)):
         # x_cam = Rk (R X + t) + tk, so X = Rᵀ (Rkᵀ (x_cam − tk) − t).
-        world = lambda x: ((x - tk) @ Rk - t) @ R  # noqa: E731  (rows: Rᵀ Rkᵀ (x − tk) − Rᵀ t)
+        def world(x: np.ndarray, Rk: np.ndarray = Rk, tk: np.ndarray = tk) -> np.ndarray:
+            return ((x - tk) @ Rk - t) @ R  # rows: Rᵀ (Rkᵀ (x − tk) − t)
+
         x = in_view(points[k])
         p2.append(camera.project(x) + noise_px * rng.standard_normal((points[k], 2)))
         p3.append(world(x))
@@ -184,3 +186,21 @@ def test_each_frame_of_a_colmap_rig_is_localised_in_its_model():
         error = np.concatenate([omega, t - t_true])
         # The model's points are exact and the pixels carry 1 px: chi-square, 6 d.o.f., 99.9 %.
         assert error @ np.linalg.solve(r.covariance, error) < 22.5, (frame_id, error)
+
+
+def test_per_observation_covariances_weight_each_cameras_pixels():
+    """Covariances through a rig: residuals in standard deviations (``sigma_px`` 1), and an observation
+    with a huge variance stops mattering: the pose moves by less than with the same pixel wrong at unit
+    variance."""
+    rig = pluecker.Rig(CAMERAS, POSES)
+    p2, p3, pc, *_ = observe(rig, [6, 6, 6], [0, 0, 0], 0.0, seed=9)
+    p2 = p2.copy()
+    p2[7] += [15.0, -10.0]  # one pixel off, in camera 1
+    covariances = np.tile(np.eye(2), (len(p2), 1, 1))
+    unweighted = pluecker.estimate_pose(rig, p2, p3, point_cameras=pc, point_covariances=covariances)
+    covariances[7] *= 1e6
+    weighted = pluecker.estimate_pose(rig, p2, p3, point_cameras=pc, point_covariances=covariances)
+    assert weighted.details.sigma_px == 1.0 and unweighted.details.sigma_px == 1.0
+    assert rotation_error(weighted.pose.rotation, TRUTH[0]) < 0.01 * rotation_error(unweighted.pose.rotation, TRUTH[0])
+    with pytest.raises(pluecker.ShapeError, match="point_covariances"):
+        pluecker.estimate_pose(rig, p2, p3, point_cameras=pc, point_covariances=covariances[:-1])

@@ -13,8 +13,10 @@
 //! with at least [`RansacOptions::min_inliers`] inliers is then refined on its inliers, re-selected
 //! until the set is stable (as for one camera).
 //!
-//! Not yet for a rig: the sequential test (SPRT) and the chance requirement of
-//! [`RansacReport::required_inliers`] (here `min_inliers` alone), segments in the samples.
+//! The best model must also beat chance as for one camera ([`RansacReport::required_inliers`]): an
+//! outlier falls within its threshold with the probability of `sprt::chance_probabilities` over the
+//! window of its camera's observations, the largest of the cameras' taken for all (the most inliers
+//! chance can give). Not yet for a rig: the sequential test (SPRT), segments in the samples.
 
 use super::cost::{RigObservations, RigReprojectionCost};
 use super::estimate::{finish, Conditioned, SEVERAL_CAMERAS};
@@ -29,11 +31,12 @@ use crate::pose::refinement::{search, PoseCost};
 use crate::pose::result::{status_with_behind, PipelineOutcome};
 use crate::pose::robust::pipeline::best_refinement;
 use crate::pose::robust::scoring::subset;
-use crate::pose::robust::{RansacOptions, RansacReport, LOCAL_ROUNDS, LO_THRESHOLD_MULTIPLIER};
+use crate::pose::robust::sprt::chance_probabilities;
+use crate::pose::robust::{required_inliers, RansacOptions, RansacReport, LOCAL_ROUNDS, LO_THRESHOLD_MULTIPLIER};
 use crate::pose::{stage, Correspondences, CostKind, PoseOptions, PoseResult, Status};
 use crate::rig::Rig;
 use crate::rng::Rng;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 use std::time::Instant;
 
 /// The loop's view of one robust rig problem (conditioned frame).
@@ -157,6 +160,31 @@ impl Estimator for RigConsensus<'_> {
     }
 }
 
+/// The probabilities that an outlier point or segment agrees with a wrong pose by chance
+/// (`sprt::chance_probabilities`), the largest over the cameras, each over the window of its own
+/// observations.
+fn chance(corr: &Correspondences, cameras: &ObservingCameras, ransac: &RansacOptions) -> [f64; 2] {
+    let mut windows: Vec<Option<[f64; 4]>> = Vec::new();
+    let mut widen = |k: usize, u: &Vector2<f64>| {
+        if windows.len() <= k {
+            windows.resize(k + 1, None);
+        }
+        let w = windows[k].get_or_insert([u.x, u.y, u.x, u.y]);
+        *w = [w[0].min(u.x), w[1].min(u.y), w[2].max(u.x), w[3].max(u.y)];
+    };
+    for (i, u) in corr.points2d.iter().enumerate() {
+        widen(cameras.point(i), u);
+    }
+    for (j, s) in corr.lines2d.iter().enumerate() {
+        s.iter().for_each(|u| widen(cameras.line(j), u));
+    }
+    windows
+        .into_iter()
+        .flatten()
+        .map(|w| chance_probabilities(w, ransac.point_threshold, ransac.line_threshold))
+        .fold([0.0, 0.0], |a, b| [a[0].max(b[0]), a[1].max(b[1])])
+}
+
 /// The rig's pose with `opts.ransac = Some(ransac)` (module docs): at least 3 points, and
 /// [`RansacOptions::min_inliers`] correspondences in all.
 pub(super) fn estimate(
@@ -223,6 +251,7 @@ pub(super) fn estimate(
         stop: outcome.stop.into(),
         time_seconds: loop_started.elapsed().as_secs_f64(),
     };
+    report.required_inliers = required_inliers(ransac, &report, chance(corr, cameras, ransac), np, nl);
     let summary = Summary {
         iterations: report.iterations,
         evaluations: report.models_scored,

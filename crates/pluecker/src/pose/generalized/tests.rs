@@ -445,3 +445,24 @@ fn degenerate_rigs_give_the_pose_or_a_named_status() {
     assert_eq!(r.report.status, Status::Success);
     assert!(rotation_error(&r.pose, &s.truth) < 1e-7);
 }
+
+#[test]
+fn all_outlier_data_give_too_few_inliers_not_a_model_of_chance_agreements() {
+    // 900 pixels drawn uniformly over each camera's image: a wrong pose agrees with some by chance
+    // (about 1.6e-4 each at 4 px in 640 x 480), and the best of ~10⁴ poses with 6 of them was once
+    // accepted (then not_converged); the chance requirement refuses it.
+    let mut rng = Rng::new(37);
+    let s = scene(lens_rig(), &[300, 300, 300], &[0, 0, 0], &mut rng);
+    let mut corr = s.corr.clone();
+    for u in corr.points2d.iter_mut() {
+        *u = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+    }
+    let opts = PoseOptions {
+        ransac: Some(RansacOptions::default()),
+        ..PoseOptions::default()
+    };
+    let r = estimate_rig_pose(&s.rig, &corr, &s.cameras, &opts).unwrap();
+    let report = r.details.ransac.unwrap();
+    assert_eq!(r.report.status, Status::TooFewInliers, "{report:?}");
+    assert!(report.required_inliers > 6, "{report:?}");
+}

@@ -542,7 +542,13 @@ pub fn ransac(
 
 /// [`RansacReport::required_inliers`]: `max(min_inliers, min(c + 1, ⌈ρ n⌉))` (see the module
 /// documentation), `c` from the hypotheses scored and refitted so far.
-fn required_inliers(opts: &RansacOptions, report: &RansacReport, chance: [f64; 2], np: usize, nl: usize) -> usize {
+pub(crate) fn required_inliers(
+    opts: &RansacOptions,
+    report: &RansacReport,
+    chance: [f64; 2],
+    np: usize,
+    nl: usize,
+) -> usize {
     let n = np + nl;
     let floor = (opts.min_inlier_ratio * n as f64).ceil() as usize;
     if floor == 0 {
