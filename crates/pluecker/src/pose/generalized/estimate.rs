@@ -11,12 +11,12 @@ use crate::pose::candidates::{is_exhaustive, samples_by};
 use crate::pose::certificate::{self, Verdict};
 use crate::pose::correspondences::Conditioning;
 use crate::pose::estimate::{ambiguity_sigma2, with_noise_level};
-use crate::pose::minimal::gp3p;
+use crate::pose::minimal::{solve_generalized, RigFeature};
 use crate::pose::refinement::search;
 use crate::pose::result::{assemble_at, is_finite, status_with_behind, PipelineOutcome};
 use crate::pose::{estimate_pose, Correspondences, Method, PoseOptions, PoseResult, Status};
 use crate::rig::Rig;
-use nalgebra::Matrix6;
+use nalgebra::{Matrix6, Vector3};
 use std::time::Instant;
 
 /// Why a rig pose seen by several cameras carries no certificate.
@@ -31,7 +31,9 @@ pub(crate) const SEVERAL_CAMERAS: &str = "not available: the certificate of glob
 /// Observations all in one camera are that camera's problem ([`super`]'s module docs): its answer,
 /// its statuses and its certificate, the pose moved into the rig's frame; with one camera at the
 /// identity the result is the camera's exactly. `opts.method` is then that camera's estimator; for
-/// several cameras the starts are the rig's own (it is echoed in the report).
+/// several cameras the starts are the rig's own (it is echoed in the report), and every start is
+/// refined whatever `opts.refine` says (the rig has no algebraic estimator whose answer could be
+/// returned as it is).
 ///
 /// Errors name the argument and row: a camera index out of range or missing
 /// ([`ObservingCameras::check`]), a pixel its camera's lens cannot unproject, the checks of
@@ -97,6 +99,11 @@ pub(super) struct Conditioned {
     pub corr: Correspondences,
     /// The ray of every point ([`rays`]).
     pub rays: Vec<Ray>,
+    /// Every correspondence as a minimal solver's feature (points first, then segments); `None` for a
+    /// segment whose endpoints its lens cannot unproject (it is not sampled).
+    pub features: Vec<Option<RigFeature>>,
+    /// The camera of each feature.
+    pub feature_cameras: Vec<usize>,
 }
 
 impl Conditioned {
@@ -105,7 +112,44 @@ impl Conditioned {
         let rig = rig.scaled(1.0 / cond.scale);
         let corr = cond.correspondences(corr);
         let rays = rays(&rig, &corr, cameras)?;
-        Ok(Conditioned { cond, rig, corr, rays })
+        let centres = rig.centres();
+        let points = rays.iter().zip(&corr.points3d).map(|(ray, point)| {
+            Some(RigFeature::Point {
+                ray: *ray,
+                point: *point,
+            })
+        });
+        // A segment's interpretation plane: through its camera's centre, normal to both endpoints'
+        // bearings (unprojected through the lens), turned into the rig's frame.
+        let lines = corr
+            .lines2d
+            .iter()
+            .zip(&corr.lines3d)
+            .enumerate()
+            .map(|(j, (seen, object))| {
+                let k = cameras.line(j);
+                let camera = &rig.cameras()[k];
+                let bearing = |u: &nalgebra::Vector2<f64>| camera.unproject(u, j).ok().map(|n| n.push(1.0));
+                let normal = bearing(&seen[0])?.cross(&bearing(&seen[1])?);
+                Some(RigFeature::Line {
+                    normal: rig.sensor_from_rig()[k].rotation.transpose() * normal,
+                    centre: centres[k],
+                    endpoints: *object,
+                })
+            });
+        let features = points.chain(lines).collect();
+        let feature_cameras = (0..corr.n_points())
+            .map(|i| cameras.point(i))
+            .chain((0..corr.n_lines()).map(|j| cameras.line(j)))
+            .collect();
+        Ok(Conditioned {
+            cond,
+            rig,
+            corr,
+            rays,
+            features,
+            feature_cameras,
+        })
     }
 
     pub fn to_world(&self, p: &Pose) -> Pose {
@@ -116,23 +160,33 @@ impl Conditioned {
         Pose::new(p.rotation, self.cond.pose_from_world(&p.rotation, &p.translation))
     }
 
-    /// The poses gP3P finds for the points of `triple` (conditioned frame).
-    pub fn gp3p(&self, triple: &[usize; 3]) -> Vec<Pose> {
-        let [i, j, k] = *triple;
-        let points = &self.corr.points3d;
-        gp3p(
-            &[self.rays[i], self.rays[j], self.rays[k]],
-            &[points[i], points[j], points[k]],
-        )
+    /// The poses the minimal solver of its mix finds for the features of `triple` (conditioned frame;
+    /// [`solve_generalized`]); none when one of them cannot be sampled.
+    pub fn solve(&self, triple: &[usize; 3]) -> Vec<Pose> {
+        match triple.map(|i| self.features[i]) {
+            [Some(a), Some(b), Some(c)] => solve_generalized(&[a, b, c]),
+            _ => Vec::new(),
+        }
     }
 
-    /// The samples of points for gP3P: wide object triangles first, over more cameras first.
-    pub fn samples(&self, cameras: &ObservingCameras) -> Vec<[usize; 3]> {
-        let points = &self.corr.points3d;
-        samples_by(points.len(), |&[i, j, k]| {
-            let area = (points[j] - points[i]).cross(&(points[k] - points[i])).norm();
-            let (a, b, c) = (cameras.point(i), cameras.point(j), cameras.point(k));
-            let distinct = 1 + usize::from(a != b) + usize::from(c != a && c != b);
+    /// A feature's place on the object for the spread of a sample: a point, or a segment's midpoint.
+    fn position(&self, i: usize) -> Vector3<f64> {
+        let np = self.corr.n_points();
+        if i < np {
+            self.corr.points3d[i]
+        } else {
+            let s = &self.corr.lines3d[i - np];
+            0.5 * (s[0] + s[1])
+        }
+    }
+
+    /// The samples for the minimal solvers: wide object triangles first, over more cameras first.
+    pub fn samples(&self) -> Vec<[usize; 3]> {
+        samples_by(self.features.len(), |&[i, j, k]| {
+            let (a, b, c) = (self.position(i), self.position(j), self.position(k));
+            let area = (b - a).cross(&(c - a)).norm();
+            let [p, q, r] = [i, j, k].map(|f| self.feature_cameras[f]);
+            let distinct = 1 + usize::from(p != q) + usize::from(r != p && r != q);
             distinct as f64 * area
         })
     }
@@ -177,22 +231,15 @@ fn several_cameras(
     if corr.n_lines() > 0 || corr.n_points() < 6 {
         starts.extend(best_camera_start(rig, corr, cameras, opts).map(|p| data.conditioned(&p)));
     }
-    let samples = data.samples(cameras);
-    if starts.is_empty() && samples.is_empty() {
-        return Err(Error::TooFewCorrespondences {
-            method: "rig pose".into(),
-            required: "3 points over the cameras, or enough observations in one camera for its own pose".into(),
-            actual: format!("{} points and {} lines", corr.n_points(), corr.n_lines()),
-        });
-    }
-    let exhaustive = is_exhaustive(corr.n_points());
-    let minima = search(&cost, &starts, samples.iter().map(|s| data.gp3p(s)), exhaustive, opts);
+    let samples = data.samples();
+    let exhaustive = is_exhaustive(data.features.len());
+    let minima = search(&cost, &starts, samples.iter().map(|s| data.solve(s)), exhaustive, opts);
     let margin =
         0.5 * opts.ambiguity_threshold * ambiguity_sigma2(opts.sigma_px, minima.best_cost(), cost.residual_count());
     let Some(choice) = minima.choose(margin) else {
         return Err(Error::Degenerate {
-            what: "no pose of the rig explains the observations: no start was found (the points' rays admit no \
-                   minimal solution)"
+            what: "no pose of the rig explains the observations: no start was found (no sample of three \
+                   correspondences has a minimal solution)"
                 .into(),
         });
     };

@@ -1,5 +1,6 @@
 //! The rig's pose with outliers: the one consensus loop ([`crate::consensus`]) over samples of three
-//! points, seen by any cameras, solved by gP3P ([`crate::pose::minimal::gp3p()`]).
+//! correspondences, points and segments seen by any cameras, solved by the generalised minimal solver
+//! of their mix ([`crate::pose::minimal::solve_generalized`]: gP3P, gP2P1L, gP1P2L, gP3L).
 //!
 //! Each model is scored by MSAC (`½ Σ min(eᵢ², τᵢ²)`, Torr & Zisserman 2000) over every point and
 //! segment, `eᵢ` the reprojection error in its own camera's pixels through its lens (the
@@ -8,7 +9,7 @@
 //! single camera's are (LO+, Lebeda, Matas & Chum 2012): the trust region on the inliers within
 //! [`LO_THRESHOLD_MULTIPLIER`] times the thresholds, then within smaller multiples down to the
 //! thresholds over [`LOCAL_ROUNDS`] rounds, each fit scored on all the data. The loop stops on the
-//! adaptive bound for the points' inlier fraction `w` (`P = w³`), capped at
+//! adaptive bound for the inlier fraction `w` of all correspondences (`P = w³`), capped at
 //! [`RansacOptions::min_inlier_ratio`], or on the iteration cap or the time budget; the best model
 //! with at least [`RansacOptions::min_inliers`] inliers is then refined on its inliers, re-selected
 //! until the set is stable (as for one camera).
@@ -16,7 +17,7 @@
 //! The best model must also beat chance as for one camera ([`RansacReport::required_inliers`]): an
 //! outlier falls within its threshold with the probability of `sprt::chance_probabilities` over the
 //! window of its camera's observations, the largest of the cameras' taken for all (the most inliers
-//! chance can give). Not yet for a rig: the sequential test (SPRT), segments in the samples.
+//! chance can give). Not yet for a rig: the sequential test (SPRT).
 
 use super::cost::{RigObservations, RigReprojectionCost};
 use super::estimate::{finish, Conditioned, SEVERAL_CAMERAS};
@@ -112,11 +113,11 @@ impl Estimator for RigConsensus<'_> {
     type Score = f64;
 
     fn sample(&mut self) -> Option<[usize; 3]> {
-        Some(random_triple(&mut self.rng, self.data.corr.n_points()))
+        Some(random_triple(&mut self.rng, self.data.features.len()))
     }
 
     fn models(&mut self, sample: &[usize; 3]) -> Vec<Pose> {
-        self.data.gp3p(sample)
+        self.data.solve(sample)
     }
 
     fn score(&mut self, model: &Pose, _: &[usize; 3], record: Option<f64>, _: &Stats) -> Option<f64> {
@@ -136,7 +137,7 @@ impl Estimator for RigConsensus<'_> {
             let exponent = (LOCAL_ROUNDS - 1 - round) as f64 / (LOCAL_ROUNDS - 1) as f64;
             let errors = self.errors(&pose);
             let (points, lines) = self.inliers(&errors, LO_THRESHOLD_MULTIPLIER.powf(exponent));
-            if points.iter().filter(|&&p| p).count() < 3 {
+            if points.iter().chain(&lines).filter(|&&p| p).count() < 3 {
                 break;
             }
             let Some(fitted) = self.fit(&pose, &points, &lines, self.ransac.local_iterations) else {
@@ -154,8 +155,8 @@ impl Estimator for RigConsensus<'_> {
 
     fn new_best(&mut self, model: &Pose, _: &Stats) -> f64 {
         let errors = self.errors(model);
-        let (points, _) = self.inliers(&errors, 1.0);
-        let w = points.iter().filter(|&&p| p).count() as f64 / points.len().max(1) as f64;
+        let (points, lines) = self.inliers(&errors, 1.0);
+        let w = points.iter().chain(&lines).filter(|&&p| p).count() as f64 / errors.len().max(1) as f64;
         w * w * w
     }
 }
@@ -185,8 +186,8 @@ fn chance(corr: &Correspondences, cameras: &ObservingCameras, ransac: &RansacOpt
         .fold([0.0, 0.0], |a, b| [a[0].max(b[0]), a[1].max(b[1])])
 }
 
-/// The rig's pose with `opts.ransac = Some(ransac)` (module docs): at least 3 points, and
-/// [`RansacOptions::min_inliers`] correspondences in all.
+/// The rig's pose with `opts.ransac = Some(ransac)` (module docs): at least 3 and
+/// [`RansacOptions::min_inliers`] correspondences.
 pub(super) fn estimate(
     rig: &Rig,
     corr: &Correspondences,
@@ -196,11 +197,11 @@ pub(super) fn estimate(
     started: Instant,
 ) -> Result<PoseResult> {
     let (np, nl) = (corr.n_points(), corr.n_lines());
-    if np < 3 || np + nl < ransac.min_inliers {
+    if np + nl < ransac.min_inliers.max(3) {
         return Err(Error::TooFewCorrespondences {
             method: "robust rig pose".into(),
             required: format!(
-                "at least 3 points (the samples of gP3P) and min_inliers = {} correspondences",
+                "at least min_inliers = {} correspondences (points and lines together)",
                 ransac.min_inliers
             ),
             actual: format!("{np} points and {nl} lines"),

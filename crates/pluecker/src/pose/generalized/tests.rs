@@ -466,3 +466,41 @@ fn all_outlier_data_give_too_few_inliers_not_a_model_of_chance_agreements() {
     assert_eq!(r.report.status, Status::TooFewInliers, "{report:?}");
     assert!(report.required_inliers > 6, "{report:?}");
 }
+
+#[test]
+fn segments_alone_or_with_points_give_the_pose_robustly_too() {
+    // Segments only, over four cameras that do not share their fields of view: the samples are gP3L's
+    // (and gP1P2L, gP2P1L's with points); a third of each kind replaced by outliers.
+    let mut rng = Rng::new(41);
+    for (points, segments) in [([0; 4], [5; 4]), ([4; 4], [4; 4])] {
+        let s = scene(ring_rig(4, 0.3), &points, &segments, &mut rng);
+        let exact = estimate_rig_pose(&s.rig, &s.corr, &s.cameras, &PoseOptions::default()).unwrap();
+        assert_eq!(exact.report.status, Status::Success);
+        assert!(rotation_error(&exact.pose, &s.truth) < 1e-7);
+        let mut corr = noisy(&s.corr, 0.3, &mut rng);
+        let outlier = |k: usize| k % 3 == 2;
+        for (_, seg) in corr.lines2d.iter_mut().enumerate().filter(|(k, _)| outlier(*k)) {
+            *seg = [
+                Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0)),
+                Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0)),
+            ];
+        }
+        for u in corr.points2d.iter_mut().step_by(3) {
+            *u = Vector2::new(rng.uniform_in(0.0, 640.0), rng.uniform_in(0.0, 480.0));
+        }
+        let opts = PoseOptions {
+            ransac: Some(RansacOptions::default()),
+            ..PoseOptions::default()
+        };
+        let r = estimate_rig_pose(&s.rig, &corr, &s.cameras, &opts).unwrap();
+        assert_eq!(r.report.status, Status::Success, "{points:?} {segments:?}");
+        let flagged = r
+            .inliers_lines
+            .iter()
+            .enumerate()
+            .filter(|(k, &i)| i == outlier(*k))
+            .count();
+        assert!(flagged <= 1, "{flagged} segments misclassified");
+        assert!(rotation_error(&r.pose, &s.truth) < 5e-3);
+    }
+}

@@ -14,6 +14,16 @@
 //! | [`p1p2l()`] | 1 point + 2 lines | 4              | degree-8 polynomial in `tan(β/2)`      | Ramalingam, Bouaziz & Sturm, ICRA 2011             |
 //! | [`p3l()`]   | 3 lines           | 8              | degree-8 polynomial in `tan(β/2)`      | Dhome et al., IEEE PAMI 1989; Chen, ICCV 1990      |
 //!
+//! For a rig (a generalised camera, rig frame: rays with their own origins, interpretation planes
+//! through their cameras' centres), [`solve_generalized`] dispatches a sample of three [`RigFeature`]s:
+//!
+//! | solver       | data              | max. solutions | method                                         | reference                                               |
+//! |--------------|-------------------|----------------|------------------------------------------------|---------------------------------------------------------|
+//! | [`gp3p()`]   | 3 points          | 8              | see its documentation                          | Nistér & Stewénius, J. Math. Imaging Vis. 2007 (problem) |
+//! | [`gp2p1l()`] | 2 points + 1 line | 8              | degree-8 polynomial, affine constraints on `R` | Miraldo, Dias & Ramalingam, ECCV 2018 (problem)         |
+//! | [`gp1p2l()`] | 1 point + 2 lines | 8              | degree-8 polynomial, affine constraints on `R` | Miraldo, Dias & Ramalingam, ECCV 2018 (problem)         |
+//! | [`gp3l()`]   | 3 lines           | 8              | P3L's rotations, translation from the planes   | Dhome et al. 1989; Chen 1990                            |
+//!
 //! The three solvers with lines share one kernel (`rotation_constraints`): the rotation from three
 //! linear constraints on `R` (one of them a line's `nᵀ R d = 0`), the translation and depths then
 //! being linear; the counts of 4 for the mixed solvers are the up-to-8 algebraic rotations less those
@@ -21,6 +31,7 @@
 //!
 //! [`solve`] dispatches a sample of any mix of three [`Feature`]s to the solver for that mix.
 
+mod generalized;
 mod gp3p;
 mod input;
 mod p1p2l;
@@ -30,6 +41,7 @@ mod p3p;
 mod polynomial;
 mod rotation_constraints;
 
+pub use generalized::{gp1p2l, gp2p1l, gp3l, solve_generalized, RigFeature};
 pub use gp3p::gp3p;
 pub use p1p2l::p1p2l;
 pub use p2p1l::p2p1l;

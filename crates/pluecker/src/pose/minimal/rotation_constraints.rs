@@ -1,7 +1,11 @@
 //! The kernel shared by the minimal solvers with lines: every rotation `R` that satisfies three linear
 //! constraints, the first of them rank one,
 //!
-//! `aᵀ R b = 0`, `⟨M₂, R⟩ = 0`, `⟨M₃, R⟩ = 0` (`⟨M, R⟩ = Σⱼₖ Mⱼₖ Rⱼₖ`, so `⟨a bᵀ, R⟩ = aᵀ R b`).
+//! `aᵀ R b = 0`, `⟨M₂, R⟩ = c₂`, `⟨M₃, R⟩ = c₃` (`⟨M, R⟩ = Σⱼₖ Mⱼₖ Rⱼₖ`, so `⟨a bᵀ, R⟩ = aᵀ R b`).
+//!
+//! For one camera `c₂ = c₃ = 0` ([`rotations`]); the rays of a rig do not meet in one centre, and the
+//! offsets of its cameras leave constants `cᵢ` ([`affine_rotations`], the generalised solvers of
+//! [`super::generalized`]). A constant only enters the entry of `Kᵢ` that multiplies `1 · 1` below.
 //!
 //! A line gives `nᵀ R d = 0` (its direction `d` lies in its interpretation plane, normal `n`), two
 //! points on rays `y₁, y₂` give `(y₁ × y₂)ᵀ R (X₂ − X₁) = 0`, and eliminating a translation or a depth
@@ -66,26 +70,38 @@ const DUPLICATE_TOLERANCE: f64 = 1e-9;
 /// `a`, `b` and the `m` may have any non-zero scale. A zero or non-finite input, or constraints that
 /// leave a continuum of rotations, give none.
 pub fn rotations(a: &Vector3<f64>, b: &Vector3<f64>, m: [Matrix3<f64>; 2]) -> Vec<Matrix3<f64>> {
+    affine_rotations(a, b, m, [0.0; 2])
+}
+
+/// Every rotation `R` with `aᵀ R b = 0`, `⟨m[0], R⟩ = c[0]` and `⟨m[1], R⟩ = c[1]`: [`rotations`] with
+/// constants (module documentation). A non-finite constant gives none.
+pub fn affine_rotations(a: &Vector3<f64>, b: &Vector3<f64>, m: [Matrix3<f64>; 2], c: [f64; 2]) -> Vec<Matrix3<f64>> {
     let (Some(a), Some(b)) = (unit(a), unit(b)) else {
         return Vec::new();
     };
     let (a, b) = (&a, &b);
     let mut unit_m = [Matrix3::zeros(); 2];
-    for (u, mi) in unit_m.iter_mut().zip(&m) {
+    let mut unit_c = [0.0; 2];
+    for ((u, uc), (mi, ci)) in unit_m.iter_mut().zip(&mut unit_c).zip(m.iter().zip(c)) {
         let norm = mi.norm();
-        if !(norm > 0.0 && norm.is_finite()) {
+        if !(norm > 0.0 && norm.is_finite() && ci.is_finite()) {
             return Vec::new();
         }
-        *u = mi / norm;
+        (*u, *uc) = (mi / norm, ci / norm);
     }
     let constraints = Constraints {
         a: *a,
         b: *b,
         m: unit_m,
+        c: unit_c,
     };
     let q1 = frame_with_row(a, 2);
     let q2 = frame_with_row(b, 0);
-    let k = unit_m.map(|mi| coefficient_matrix(&(q1 * mi * q2.transpose())));
+    let k: [Matrix3<f64>; 2] = std::array::from_fn(|i| {
+        let mut ki = coefficient_matrix(&(q1 * unit_m[i] * q2.transpose()));
+        ki[(2, 2)] -= unit_c[i];
+        ki
+    });
     let polynomial = resultant(&k);
     // `f` is a sum of products of four entries of the `K` (each at most 1 in magnitude): coefficients
     // that all vanish to rounding mean a continuum of rotations, and its "roots" would be noise.
@@ -181,16 +197,21 @@ fn resultant(k: &[Matrix3<f64>; 2]) -> Vec<f64> {
     (0..xx.len()).map(|d| xx[d] + yy[d] - zz[d]).collect()
 }
 
-/// The three constraints, normalised (`a`, `b` unit, `M` unit Frobenius norm).
+/// The three constraints, normalised (`a`, `b` unit, `M` unit Frobenius norm, `c` divided by the same).
 struct Constraints {
     a: Vector3<f64>,
     b: Vector3<f64>,
     m: [Matrix3<f64>; 2],
+    c: [f64; 2],
 }
 
 impl Constraints {
     fn residuals(&self, r: &Matrix3<f64>) -> Vector3<f64> {
-        Vector3::new(self.a.dot(&(r * self.b)), self.m[0].dot(r), self.m[1].dot(r))
+        Vector3::new(
+            self.a.dot(&(r * self.b)),
+            self.m[0].dot(r) - self.c[0],
+            self.m[1].dot(r) - self.c[1],
+        )
     }
 
     /// Rows: the derivative of each constraint along `R ← (I + [δ]×) R`. For `⟨M, [δ]× R⟩ = ⟨M Rᵀ, [δ]×⟩`
