@@ -16,7 +16,7 @@
 //!   ([`crate::pose::minimal::gp3p()`]), the single camera's answer for the camera that saw the most,
 //!   and the user's guess; each is refined with the trust region of section 4.1 (Phong & Horaud 1995)
 //!   and the distinct minima compared as for one camera (the runner-up, the ambiguity test);
-//! - with [`crate::pose::PoseOptions::ransac`], the one consensus loop ([`crate::consensus`]) draws
+//! - with [`crate::pose::PoseOptions::ransac`], the one consensus loop (`crate::consensus`) draws
 //!   triples of points, solves them with gP3P, scores them by the truncated reprojection error in each
 //!   camera's pixels and re-fits the best on its inliers.
 //!

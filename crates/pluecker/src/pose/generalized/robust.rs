@@ -1,4 +1,4 @@
-//! The rig's pose with outliers: the one consensus loop ([`crate::consensus`]) over samples of three
+//! The rig's pose with outliers: the one consensus loop (`crate::consensus`) over samples of three
 //! correspondences, points and segments seen by any cameras, solved by the generalised minimal solver
 //! of their mix ([`crate::pose::minimal::solve_generalized`]: gP3P, gP2P1L, gP1P2L, gP3L).
 //!

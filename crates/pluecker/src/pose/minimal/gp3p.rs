@@ -1,95 +1,49 @@
 //! gP3P: the absolute pose of a generalised camera (a rig of cameras, or any rays that need not meet in
-//! one centre) from three rays and their object points. The problem, and its bound of eight solutions,
-//! are those of D. Nistér and H. Stewénius, "A minimal solution to the generalised 3-point pose
-//! problem", J. Math. Imaging Vis. 27(1), 2007, who reach their octic by intersecting a ruled quartic
-//! surface with a circle; here the same octic count comes from eliminating two of the three depths
-//! (as in the depth formulation of L. Kneip, P. Furgale and R. Siegwart, "Using multi-camera systems in
-//! robotics: efficient solutions to the NPnP problem", ICRA 2013).
-//!
-//! **Equations.** Ray `i` is `oᵢ + λ dᵢ`, `λ > 0` (rig frame, `dᵢ` unit), and its object point is `Xᵢ`
-//! (world frame). The pose `x_rig = R X + t` puts `Xᵢ` on the ray at depth `λᵢ` when `R Xᵢ + t = Pᵢ`,
-//! `Pᵢ = oᵢ + λᵢ dᵢ`. A rigid motion keeps distances, so `R` and `t` drop out: with `oᵢⱼ = oᵢ − oⱼ`,
-//! `bᵢⱼ = dᵢ·dⱼ` and `aᵢⱼ = ‖Xᵢ − Xⱼ‖²`, for `ij ∈ {12, 13, 23}`
-//!
-//! `fᵢⱼ = ‖oᵢⱼ + λᵢ dᵢ − λⱼ dⱼ‖² − aᵢⱼ = λᵢ² + λⱼ² − 2bᵢⱼ λᵢλⱼ + 2(dᵢ·oᵢⱼ) λᵢ − 2(dⱼ·oᵢⱼ) λⱼ + ‖oᵢⱼ‖² − aᵢⱼ = 0`. (1)
-//!
-//! Three quadrics in three unknowns: at most `2·2·2 = 8` solutions (Bézout), the count of Nistér and
-//! Stewénius; with one common origin, (1) is the P3P system of Grunert (1841), whose solutions come in
-//! pairs `±λ`, four with positive depths (see [`super::p3p()`]).
-//!
-//! **Elimination.** Each `fᵢⱼ` is a monic quadratic in either of its unknowns. As quadratics in `λ₂`,
-//! `f₁₂ = λ₂² + p₁λ₂ + p₀` (`p₁`, `p₀` polynomials in `λ₁`) and `f₂₃ = λ₂² + q₁λ₂ + q₀` (`q₁`, `q₀` in
-//! `λ₃`) have a common root if and only if their resultant vanishes: the root then solves the
-//! difference `(p₁ − q₁)λ₂ + p₀ − q₀ = 0`, and substituting it back gives
-//!
-//! `g(λ₁, λ₃) = (p₀ − q₀)² − (p₁ − q₁)(p₀q₁ − q₀p₁) = 0`, of total degree 4. (2)
-//!
-//! Dividing `g` by `f₁₃ = λ₃² + uλ₃ + v` (monic in `λ₃`; `u`, `v` of degree 1 and 2 in `λ₁`) leaves the
-//! remainder `r₁(λ₁) λ₃ + r₀(λ₁)` (degrees 3 and 4), and the resultant of the remainder and `f₁₃`,
-//!
-//! `h(λ₁) = r₀² − u r₀ r₁ + v r₁²`, (3)
-//!
-//! has degree 8 and vanishes at the `λ₁` of every solution.
-//!
-//! **Roots and back-substitution.** Every real solution has `|λ₁| ≤ (√a₁ⱼ + ‖o₁ⱼ × dⱼ‖) / ‖d₁ × dⱼ‖`
-//! for `j = 2, 3` (`‖P₁ − Pⱼ‖ = √a₁ⱼ` is at least the distance from `P₁` to ray `j`), so the positive
-//! roots of (3) are all in `[0, B]` with `B` the smaller bound; the ray with the smallest `B` is taken
-//! as ray 1, and the roots of `h(B s)` in `s ∈ [0, 1]` are isolated by the roots of its derivatives
-//! (`real_roots_in`: no eigenvalue problem, no root lost to a complex perturbation). For each root,
-//! each of the two roots `λ₂` of `f₁₂` and `λ₃` of `f₁₃` (a slightly negative discriminant clamped to
-//! the double root) satisfies two of the equations; the pair that best satisfies `f₂₃` is the
-//! solution's, and a second pair is kept too when it nearly does (two solutions with nearly one `λ₁`,
-//! which the octic cannot tell apart). Verified Newton steps on (1) polish every candidate to rounding
-//! level, which the accuracy rests on: the octic only has to land in the basin of attraction. The
-//! pose then maps an orthonormal triad of the world triangle onto that of the rig-frame triangle
-//! `Pᵢ` (a rotation to rounding), and `t` maps the world centroid onto the rig-frame one.
-//!
-//! **Conditioning.** The origins are moved to their centroid (which leaves each `λᵢ` unchanged) and
-//! everything is divided by the longest side of the world triangle, so the solver does not depend on
-//! where the rig and world frames are, nor on the unit (exactly so for a power-of-two change of unit).
-//! Over `10⁵` random rigs (origins in a ball of radius 0.5, points 2-20 m away, directions anywhere)
-//! the rotation error of the best pose has a median of about `1e-16` rad, is below `1e-12` in
-//! 99.95% of instances and below `1e-8` in all of them (the `gp3p` bench of `pluecker-bench` prints
-//! this histogram).
-//!
-//! **Degenerate cases.** Non-finite input, a zero direction, or two coincident object points: no
-//! solution. Three parallel rays leave a translation along them free (no bound `B`): no solution.
-//! Collinear object points leave a rotation about their line free: no solution when exactly collinear,
-//! an ill-conditioned rotation about the line when nearly so. As for P3P, solutions near a double root
-//! (a singular Jacobian of (1), the generalisation of the "danger cylinder") are only as accurate as
-//! that conditioning allows.
+//! one centre) from three rays and their object points (Nistér & Stewénius, J. Math. Imaging Vis.
+//! 2007). The method, its accuracy and its limitations are documented on [`gp3p()`], the public item.
 
 use super::input::{finite, point_holds, unit};
-#[cfg(test)]
-use super::polynomial::evaluate;
+use super::p3p::triad;
 use super::polynomial::{multiply, real_roots_in};
 use super::Pose;
 use crate::pose::generalized::Ray;
 use nalgebra::{Matrix3, Vector3};
 
 /// Newton steps on eq. 1 per candidate at most, each kept only if it lowers the sum of squared
-/// residuals (so the loop stops at rounding level, after two or three steps from a simple root; the
-/// cap is for the linear convergence next to a double root).
+/// residuals. From a simple root two or three steps reach rounding level and the loop stops; next to a
+/// double root the convergence is linear (the error halves per step) from a seed up to 1e-3 off.
 const REFINEMENT_STEPS: usize = 60;
 
-/// A Newton step that does not lower the cost is halved up to this many times less one.
+/// A Newton step that does not lower the cost is halved up to this many times less one (down to 2e-9
+/// of it: next to a double root the step is long along the nearly null direction of the Jacobian).
 const BACKTRACKING_STEPS: usize = 30;
 
+/// A step shorter than this fraction of the largest depth changes no depth by more than rounding.
+const STEP_FLOOR: f64 = 4.0 * f64::EPSILON;
+
 /// A refined candidate is a solution if every residual of eq. 1 is at most this fraction of the largest
-/// squared side of the world triangle (as for P3P: genuine solutions reach rounding level, about 1e-15;
-/// a candidate that came from a complex pair stalls orders of magnitude above).
+/// squared side of the world triangle. Genuine solutions reach rounding level (about 1e-15, also next
+/// to a double root, which the refinement reaches); a candidate from a complex pair, or from a near
+/// miss (a test has one at 1e-6), stalls above, and so do candidates stranded on the flat valley
+/// next to a double root (seen at 1e-9 to 1e-11, 1e-5 away from any solution). Near-real solutions
+/// of noisy samples (a complex pair with imaginary parts up to about 1e-5) are kept.
 const RESIDUAL_TOLERANCE: f64 = 1e-10;
 
-/// Rounding level of the residuals of eq. 1 (scaled units, where the largest `aᵢⱼ` is 1): a few ε
-/// times the largest squared depth, at least `RESIDUAL_FLOOR`.
+/// Rounding level of the residuals of eq. 1 relative to the largest squared depth or side (scaled
+/// units, where the largest `aᵢⱼ` is 1).
 const RESIDUAL_FLOOR: f64 = 1e-15;
 
 /// Besides the best pair `(λ₂, λ₃)` of a root `λ₁`, a pair is refined when it misses `√a₂₃` by at most
-/// this fraction of the longest side: a second solution sharing `λ₁` to within the accuracy of the
-/// octic's root (seen once in 10⁵ instances, with two solutions 6e-8 apart in `λ₁`). A pair belonging
-/// to no solution misses by the distance between the two roots of `f₁₂` or `f₁₃`, of the order of the
-/// triangle.
+/// this fraction of the longest side: a second solution sharing `λ₁` to the accuracy of the octic's
+/// root (next to a double root; also seen in a narrow field of view, two solutions 6e-8 apart in `λ₁`).
+/// A pair belonging to no solution misses by about the distance between the two roots of `f₁₂` or
+/// `f₁₃`, of the order of the triangle.
 const PAIR_TOLERANCE: f64 = 1e-3;
+
+/// A refinement that moves `λ₁` by more than this fraction from its seed (the octic's roots are
+/// accurate to about 1e-12 when they are simple) started from a root standing for two close ones; the
+/// seed mirrored across it is refined too.
+const CLUSTER_MOVE: f64 = 1e-6;
 
 /// The bound `B` on the first depth is widened by this factor, so that rounding cannot put a root just
 /// outside `[0, B]`.
@@ -103,8 +57,7 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 
 /// Every real pose `(R, t)`, `x_rig = R X_world + t`, that puts each object point `points[i]` on
 /// `rays[i]` at positive depth: `(R Xᵢ + t − oᵢ) · dᵢ > 0` and `dᵢ × (R Xᵢ + t − oᵢ) = 0`, with `oᵢ` the
-/// ray's origin and `dᵢ` its direction (rig frame). Zero to eight poses, in no particular order; see
-/// the [module documentation](self) for the method, its accuracy and the degenerate cases.
+/// ray's origin and `dᵢ` its direction (rig frame). Zero to eight poses, in no particular order.
 ///
 /// A ray's direction may have any non-zero length (it is normalised here); its origin is its camera's
 /// centre in the rig frame, and its direction the observed bearing turned into the rig frame. With all
@@ -130,20 +83,107 @@ const PAIRS: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 /// assert!(!poses.is_empty() && poses.len() <= 8);
 /// assert!(poses.iter().any(|p| (p.rotation - rotation).norm() < 1e-9 && (p.translation - translation).norm() < 1e-9));
 /// ```
+///
+/// # Method
+///
+/// The problem, and its bound of eight solutions, are those of D. Nistér and H. Stewénius, "A minimal
+/// solution to the generalised 3-point pose problem", J. Math. Imaging Vis. 27(1), 2007, who reach their
+/// octic by intersecting a ruled quartic surface with a circle; here an octic of the same degree comes from
+/// eliminating two of the three depths, and the depths are then polished on the distance equations
+/// themselves.
+///
+/// **Equations.** Ray `i` is `oᵢ + λ dᵢ`, `λ > 0` (rig frame, `dᵢ` unit), and its object point is `Xᵢ`
+/// (world frame). The pose `x_rig = R X + t` puts `Xᵢ` on the ray at depth `λᵢ` when `R Xᵢ + t = Pᵢ`,
+/// `Pᵢ = oᵢ + λᵢ dᵢ`. A rigid motion keeps distances, so `R` and `t` drop out: with `oᵢⱼ = oᵢ − oⱼ`,
+/// `bᵢⱼ = dᵢ·dⱼ` and `aᵢⱼ = ‖Xᵢ − Xⱼ‖²`, for `ij ∈ {12, 13, 23}`
+///
+/// `fᵢⱼ = ‖oᵢⱼ + λᵢ dᵢ − λⱼ dⱼ‖² − aᵢⱼ = λᵢ² + λⱼ² − 2bᵢⱼ λᵢλⱼ + 2(dᵢ·oᵢⱼ) λᵢ − 2(dⱼ·oᵢⱼ) λⱼ + ‖oᵢⱼ‖² − aᵢⱼ = 0`. (1)
+///
+/// Three quadrics in three unknowns: at most `2·2·2 = 8` solutions (Bézout), the count of Nistér and
+/// Stewénius, and eight real ones at positive depth do occur (a test has one). With one common origin,
+/// (1) is the P3P system of Grunert (1841), whose solutions come in pairs `±λ`, four of them with
+/// positive depths (see [`super::p3p()`]).
+///
+/// **Elimination.** Each `fᵢⱼ` is a monic quadratic in either of its unknowns. As quadratics in `λ₂`,
+/// `f₁₂ = λ₂² + p₁λ₂ + p₀` (`p₁`, `p₀` polynomials in `λ₁`) and `f₂₃ = λ₂² + q₁λ₂ + q₀` (`q₁`, `q₀` in
+/// `λ₃`) have a common root if and only if their resultant vanishes: the root then solves the
+/// difference `(p₁ − q₁)λ₂ + p₀ − q₀ = 0`, and substituting it back gives
+///
+/// `g(λ₁, λ₃) = (p₀ − q₀)² − (p₁ − q₁)(p₀q₁ − q₀p₁) = 0`, of total degree 4. (2)
+///
+/// Dividing `g` by `f₁₃ = λ₃² + uλ₃ + v` (monic in `λ₃`; `u`, `v` of degree 1 and 2 in `λ₁`) leaves the
+/// remainder `r₁(λ₁) λ₃ + r₀(λ₁)` (degrees 3 and 4), and the resultant of the remainder and `f₁₃`,
+///
+/// `h(λ₁) = r₀² − u r₀ r₁ + v r₁²`, (3)
+///
+/// has degree 8 and vanishes at the `λ₁` of every solution.
+///
+/// **Roots.** Every real solution has `|λ₁| ≤ (√a₁ⱼ + ‖o₁ⱼ × dⱼ‖) / ‖d₁ × dⱼ‖` for `j = 2, 3`
+/// (`‖P₁ − Pⱼ‖ = √a₁ⱼ` is at least the distance from `P₁` to ray `j`), so the positive roots of (3) are
+/// in `[0, B]`, `B` the smaller bound. The ray with the smallest `B` is taken as ray 1, and the roots of
+/// `h(B s)`, `s ∈ [0, 1]`, are isolated by the roots of its derivatives (`real_roots_in`: no eigenvalue
+/// problem, no root lost to a complex perturbation).
+///
+/// **Back-substitution and refinement.** At a root, the depths on rays 2 and 3 at distance `√a₁ⱼ` from
+/// `P₁` are the foot of the perpendicular from `P₁` plus or minus the half chord (the roots of `f₁₂`
+/// and `f₁₃`, without cancellation; a ray that misses the sphere gives its foot). Each of the up to
+/// four pairs satisfies two equations; the one that best satisfies `f₂₃` is refined, and the others
+/// that nearly do (two solutions sharing `λ₁` to the octic's accuracy). Newton's method on (1) then
+/// polishes each candidate to rounding level, with two safeguards for the nearly singular Jacobian
+/// met next to a double root: a step that does not lower `Σ fᵢⱼ²` is halved, and each trial point is
+/// also moved back onto the curve `f₁₂ = f₁₃ = 0` (its `λ₂`, `λ₃` recomputed from its `λ₁`), so that
+/// the step is Newton's along that curve, undisturbed by the curvature off it. The accuracy rests on
+/// this refinement: the octic only has to land in the basin of attraction. Where it cannot (two roots
+/// closer than its coefficients' rounding resolves, which the root finder returns as one tangency
+/// between them), a seed that the refinement moves far is mirrored across its root and refined too.
+/// Refined solutions within their resolution (`√` of the residual, Newton's accuracy next to a double
+/// root) are merged. The pose then maps an orthonormal triad of the world triangle onto that of the
+/// rig-frame triangle `Pᵢ` (a rotation to rounding), and `t` the world centroid onto the rig-frame one.
+///
+/// **Conditioning and accuracy.** The origins are moved to their centroid (which leaves each `λᵢ`
+/// unchanged) and everything is divided by the longest side of the world triangle, so the solver does
+/// not depend on where the rig and world frames are, nor on the unit (exactly so for a power-of-two
+/// change of unit). Over 10⁵ random rigs (camera centres in a ball of radius 0.5 m, points 2-20 m
+/// away in any direction) the rotation error of the best pose is below 1e-12 rad in 99.94% of
+/// instances and below 1e-8 in all of them (the largest is 1e-10); over 4·10⁵ instances of four rig shapes (central, narrow
+/// 11° field of view with points 50-100 m away, centres 20 m apart) the pose error is at most 121 κ ε,
+/// `κ` the condition number of the ray constraints at the truth. The `gp3p` bench of `pluecker-bench`
+/// prints the histogram (`GP3P_HISTOGRAM=1`). A call takes 6 µs (median; 7 µs on average), half of
+/// it in `real_roots_in`.
+///
+/// **Degenerate cases and limitations.** Non-finite input, a zero direction, or two coincident object
+/// points: no solution. Three parallel rays leave a translation along them free (no bound `B`): no
+/// solution. Collinear object points leave a rotation about their line free: no solution when exactly
+/// collinear, an ill-conditioned rotation about the line when nearly so. As for P3P, solutions next to
+/// a double root (a singular Jacobian of (1), the generalisation of the "danger cylinder") are only as
+/// accurate as that conditioning allows: with a central rig within a relative 1e-3 of the danger
+/// cylinder (`κ` up to 1e8) the truth still comes back within 1.2 `κ ε`; closer (1e-5 and below) two
+/// nearly merged solutions may come back as one or, where a whole arc of depths satisfies (1) to
+/// rounding, as a few poses a little apart (more than P3P's four in 0.5% of draws at 1e-6, 2% at 1e-7).
 pub fn gp3p(rays: &[Ray; 3], points: &[Vector3<f64>; 3]) -> Vec<Pose> {
     let Some(problem) = Problem::new(rays, points) else {
         return Vec::new();
     };
     // Refined depths with the radius within which they are known (`resolution`).
     let mut depths: Vec<(Vector3<f64>, f64)> = Vec::with_capacity(8);
-    for candidate in problem.candidate_depths() {
-        let Some((lambda, radius)) = problem.refine(candidate) else {
+    let mut seeds = problem.candidate_depths();
+    let original = seeds.len();
+    let mut k = 0;
+    while k < seeds.len() {
+        let seed = seeds[k];
+        k += 1;
+        let Some((lambda, radius)) = problem.refine(seed) else {
             continue;
         };
+        // A seed that moved far came from a root of the octic standing for two close ones (a tangency,
+        // which the root finder returns once): the other one is across it. Mirrored seeds spawn none.
+        if k <= original && (lambda[0] - seed[0]).abs() > CLUSTER_MOVE * lambda[0] {
+            seeds.push(problem.project(&(seed * 2.0 - lambda)));
+        }
         let same = |(d, r): &(Vector3<f64>, f64)| (d - lambda).amax() <= r + radius;
         match depths.iter().position(same) {
             None => depths.push((lambda, radius)),
-            Some(k) if radius < depths[k].1 => depths[k] = (lambda, radius),
+            Some(j) if radius < depths[j].1 => depths[j] = (lambda, radius),
             Some(_) => {}
         }
     }
@@ -159,7 +199,7 @@ pub fn gp3p(rays: &[Ray; 3], points: &[Vector3<f64>; 3]) -> Vec<Pose> {
         .collect()
 }
 
-/// The data of eq. 1, relabelled (ray 1 of the module documentation first) and conditioned.
+/// The data of eq. 1, relabelled (ray 1 of the method in `gp3p`'s documentation first) and conditioned.
 struct Problem {
     /// Unit directions in the caller's order.
     directions: [Vector3<f64>; 3],
@@ -367,8 +407,8 @@ impl Problem {
 
     /// The depths `λⱼ` on ray `j` (1 or 2) at distance `√a₁ⱼ` from `P₁ = o₁ + λ₁ d₁`: the roots of `f₁ⱼ`,
     /// from the foot `dⱼ·(P₁ − oⱼ)` of the perpendicular from `P₁` plus or minus the half chord
-    /// `√(a₁ⱼ − dist²(P₁, ray j))` (no cancellation but at tangency). With the ray missing the sphere,
-    /// the foot alone (the real part of the complex pair), and `false`.
+    /// `√(a₁ⱼ − dist²(P₁, ray j))` (no cancellation but at tangency), and `true`; where the ray misses
+    /// the sphere, the foot alone (the real part of the complex pair) and `false`.
     fn depths_on_ray(&self, l1: f64, j: usize) -> ([Option<f64>; 2], bool) {
         let w = self.o[0] + self.d[0] * l1 - self.o[j];
         let foot = self.d[j].dot(&w);
@@ -399,8 +439,9 @@ impl Problem {
         out
     }
 
-    /// Verified Newton steps on eq. 1. The depths, if they are positive and satisfy eq. 1 to
-    /// `RESIDUAL_TOLERANCE`, with the size of the next Newton correction `‖J⁻¹ f‖∞`.
+    /// Newton steps on eq. 1, each halved until it lowers `Σ fᵢⱼ²` and taken from the trial point or its
+    /// projection onto `f₁₂ = f₁₃ = 0`, whichever is lower. The depths, if they are positive and satisfy
+    /// eq. 1 to `RESIDUAL_TOLERANCE`, with their `resolution`.
     fn refine(&self, mut lambda: Vector3<f64>) -> Option<(Vector3<f64>, f64)> {
         let mut r = self.residuals(&lambda);
         let mut cost = r.norm_squared();
@@ -415,6 +456,9 @@ impl Problem {
             let mut accepted = false;
             let mut fraction = 1.0;
             for _ in 0..BACKTRACKING_STEPS {
+                if step.amax() * fraction <= STEP_FLOOR * lambda.amax() {
+                    break; // no representable progress
+                }
                 let stepped = lambda - step * fraction;
                 let projected = self.project(&stepped);
                 let (r_stepped, r_projected) = (self.residuals(&stepped), self.residuals(&projected));
@@ -513,20 +557,6 @@ impl Bivariate {
         }
         Bivariate(out)
     }
-}
-
-/// Orthonormal frame (columns) of a triangle: first axis along side `pair`, second towards the third
-/// vertex (two Gram-Schmidt passes, so that it is orthonormal to rounding however thin the triangle),
-/// third along the normal. `None` when the triangle is flat. (The same construction as P3P's.)
-fn triad(p: &[Vector3<f64>; 3], (i, j): (usize, usize)) -> Option<Matrix3<f64>> {
-    let k = 3 - i - j;
-    let f1 = unit(&(p[j] - p[i]))?;
-    let mut height = p[k] - p[i];
-    for _ in 0..2 {
-        height -= f1 * f1.dot(&height);
-    }
-    let f2 = unit(&height)?;
-    Some(Matrix3::from_columns(&[f1, f2, f1.cross(&f2)]))
 }
 
 #[cfg(test)]
@@ -655,11 +685,12 @@ mod tests {
     const KAPPA_LIMIT: f64 = 1e5;
 
     /// The constant of the bound `error ≤ C κ ε` required of every instance. The largest ratio seen
-    /// over 4·10⁵ random instances of four rig shapes (those of [`SHAPES`]) is 65, the median 0.15.
+    /// over 4·10⁵ random instances of four rig shapes (those of [`SHAPES`]) is 121 (central rigs; 23 at
+    /// most for the others), the median 0.15.
     const CONDITIONED_ERROR: f64 = 1e3;
 
     /// How far (sine of the angle) a point of a returned pose may be off its ray. The solver's own check
-    /// accepts up to 1e-8 (`input::SOLUTION_TOLERANCE`); the returned poses reach 7e-11 at worst over
+    /// accepts up to 1e-8 (`input::SOLUTION_TOLERANCE`); the returned poses reach 5e-11 at worst over
     /// 4·10⁵ instances of [`SHAPES`] (1e-12 typically).
     const RAY_TOLERANCE: f64 = 1e-9;
 
@@ -756,8 +787,8 @@ mod tests {
     fn random_rigs_recover_the_true_pose() {
         let draws = 2000;
         let summary = check_random_draws(9_001, draws, SHAPES[0]);
-        // Over 10⁵ draws of this shape: the truth within 1e-8 in every one (worst 4e-11), the rotation
-        // within 1e-12 in 99.96%, κ > 1e5 in 7. Allowed here: 0.1% misses of 1e-8 (2 draws), 1% above
+        // Over 2·10⁵ draws of this shape (two seeds): the truth within 1e-8 in every one (worst 1e-10),
+        // the rotation within 1e-12 in 99.94-99.96%, κ > 1e5 in 7 of 10⁵. Allowed here: 0.1% misses of 1e-8 (2 draws), 1% above
         // 1e-12, 3 ill-conditioned draws (0.14 expected).
         assert!(
             draws - summary.found <= draws / 1000,
@@ -1037,9 +1068,10 @@ mod tests {
             let mut cost = residuals(&r, &t).norm_squared();
             for _ in 0..100 {
                 let mut jac = SMatrix::<f64, 9, 6>::zeros();
-                for i in 0..3 {
-                    let cross_d = d[i].cross_matrix();
-                    let rotated = (r * inst.points[i]).cross_matrix();
+                for (i, (di, x)) in d.iter().zip(&inst.points).enumerate() {
+                    // d × (R X + t − o) with R ← exp(ω) R: ∂/∂ω = −[d]×[R X]×, ∂/∂t = [d]×.
+                    let cross_d = di.cross_matrix();
+                    let rotated = (r * x).cross_matrix();
                     jac.fixed_view_mut::<3, 3>(3 * i, 0).copy_from(&(-cross_d * rotated));
                     jac.fixed_view_mut::<3, 3>(3 * i, 3).copy_from(&cross_d);
                 }
@@ -1104,17 +1136,22 @@ mod tests {
     }
 
     #[test]
-    #[ignore]
-    fn probe_danger() {
+    fn near_the_danger_cylinder_accuracy_follows_the_conditioning() {
+        // A central rig whose centre is within a relative δ of the danger cylinder (the vertical cylinder
+        // through the circumcircle of the object points), where two solutions merge as δ → 0: κ reaches
+        // 1e8 at δ = 1e-3. The octic's roots are then poor seeds (its coefficients carry errors of the
+        // order of 1e-10 of its largest one, and its nearby roots move by the square or cube root of
+        // that) and Newton's method on eq. 1 meets a nearly singular Jacobian: the projected steps must
+        // still reach the truth to C κ ε, each solution must come back once, and a central rig has at
+        // most four solutions (P3P). Over these 3000 draws (δ = 1e-2 and 1e-3): error/(κ ε) at most
+        // 1.2, poses at least 5e-4 apart, none with more than four; over 3000 others, one draw had five
+        // (a nearly continuous family of depths at residual 1e-11), hence the 1% allowance. Without the
+        // projection, the mirrored seeds or the second pairs, the truth is lost in some draws here.
         let mut rng = Rng::new(9_080);
-        let mut stats = [[0usize; 5]; 8];
-        let mut sep_dup = [0usize; 18];
-        let mut sep_ok = [0usize; 18];
-        let mut worst_ratio = [0.0f64; 3];
-        let mut min_sep = [f64::INFINITY; 3];
-        for draw in 0..12000 {
-            let e = 2 + (draw % 8) as i32;
-            let delta = 10f64.powi(-e);
+        let mut more_than_four = 0;
+        let draws = 3000;
+        for draw in 0..draws {
+            let delta = [1e-2, 1e-3][draw % 2];
             let radius = rng.uniform_in(1.0, 3.0);
             let points = std::array::from_fn(|_| {
                 let phi = rng.uniform_in(0.0, std::f64::consts::TAU);
@@ -1125,134 +1162,68 @@ mod tests {
                 + Vector3::z() * rng.uniform_in(1.0, 5.0);
             let origin = rng.unit_vector3();
             let rotation = rng.rotation();
-            let rays = points.map(|x| Ray {
-                origin,
-                direction: rotation * (x - centre),
-            });
-            let poses = gp3p(&rays, &points);
-            let reference: Vec<Pose> = p3p(&rays.map(|r| r.direction), &points)
-                .into_iter()
-                .map(|p| Pose::new(p.rotation, p.translation + origin))
-                .collect();
-            let truth = Instance {
-                rays,
+            // The rig frame: x_rig = R (X − centre) + origin.
+            let inst = Instance {
+                rays: points.map(|x| Ray {
+                    origin,
+                    direction: rotation * (x - centre),
+                }),
                 points,
                 rotation,
                 translation: origin - rotation * centre,
             };
-            let (mine, theirs) = (truth.error(&poses), truth.error(&reference));
-            let s = &mut stats[(e - 2) as usize];
-            s[0] += usize::from(poses.len() > reference.len());
-            s[1] += usize::from(poses.len() < reference.len());
-            s[2] += usize::from(poses.len() > 4);
-            s[3] += usize::from(mine > 10.0 * theirs && mine > 1e-8);
-            s[4] += usize::from(theirs > 10.0 * mine && theirs > 1e-8);
-            let depths = |ps: &[Pose]| -> Vec<Vector3<f64>> {
-                ps.iter()
-                    .map(|p| Vector3::from_fn(|i, _| (p.rotation * points[i] + p.translation - origin).norm()))
-                    .collect()
-            };
-            let minsep = |ds: &Vec<Vector3<f64>>| -> f64 {
-                let mut m = f64::INFINITY;
-                for i in 0..ds.len() {
-                    for j in 0..i {
-                        m = m.min((ds[i] - ds[j]).amax() / ds[i].amax());
-                    }
-                }
-                m
-            };
-            let (mine_d, ref_d) = (depths(&poses), depths(&reference));
-            let bin = |x: f64| {
-                if x.is_finite() {
-                    (-x.log10()).floor().clamp(0.0, 16.0) as usize
-                } else {
-                    17
-                }
-            };
-            if poses.len() > reference.len() {
-                sep_dup[bin(minsep(&mine_d))] += 1;
-            } else {
-                sep_ok[bin(minsep(&ref_d))] += 1;
-            }
-            if e <= 4 {
-                let k = truth.conditioning();
-                worst_ratio[(e - 2) as usize] = worst_ratio[(e - 2) as usize].max(mine / (k * EPS));
-                min_sep[(e - 2) as usize] = min_sep[(e - 2) as usize].min(minsep(&mine_d));
-                let r = mine / (k * EPS);
-                if r > 1e3 {
-                    println!("draw {draw}: ratio {r:e}, mine {mine:e}, theirs {theirs:e}, κ {k:e}");
-                }
-            }
-            if poses.len() > 4 && e <= 5 && false {
-                println!("draw {draw} δ {delta:e}: {} poses", poses.len());
-                let problem = Problem::new(&rays, &points).unwrap();
-                for c in problem.candidate_depths() {
-                    let refined = problem.refine(c);
-                    println!("cand {c:?} -> {:?}", refined.map(|l| (l, problem.residuals(&l.0))));
-                }
-                for d in &mine_d {
-                    println!("mine {:?}", (d / problem.scale).as_slice());
-                }
-                for d in &ref_d {
-                    println!("p3p  {:?}", (d / problem.scale).as_slice());
-                }
-            }
-            if false {
-                println!(
-                    "draw {draw} δ {delta:e}: mine {mine:e} theirs {theirs:e} kappa {:e}",
-                    truth.conditioning()
-                );
-            }
-        }
-        println!("worst ratio {worst_ratio:?}, min separation {min_sep:?}");
-        println!("min separation (-log10) when more than p3p: {sep_dup:?}");
-        println!("min separation (-log10) of p3p's otherwise: {sep_ok:?}");
-        for (k, s) in stats.iter().enumerate() {
-            println!(
-                "δ = 1e-{}: more than p3p {}, fewer {}, above 4 {}, truth worse {}, better {} (of 1500)",
-                k + 2,
-                s[0],
-                s[1],
-                s[2],
-                s[3],
-                s[4]
+            let poses = gp3p(&inst.rays, &inst.points);
+            let what = format!("draw {draw}, δ = {delta:e}");
+            assert_valid(&poses, &inst.rays, &inst.points, &what);
+            let (error, kappa) = (inst.error(&poses), inst.conditioning());
+            assert!(
+                error <= CONDITIONED_ERROR * kappa * EPS,
+                "{what}: error {error:e} with κ = {kappa:e}"
             );
+            more_than_four += usize::from(poses.len() > 4);
+            for (k, p) in poses.iter().enumerate() {
+                for q in &poses[..k] {
+                    let apart =
+                        angle(&p.rotation, &q.rotation).max((p.translation - q.translation).norm() / inst.scale());
+                    assert!(apart > 1e-8, "{what}: one solution twice ({apart:e} apart)");
+                }
+            }
         }
+        assert!(
+            more_than_four <= draws / 100,
+            "{more_than_four} draws with more than four poses"
+        );
     }
 
     #[test]
-    #[ignore]
-    fn probe_stats() {
-        for shape in SHAPES {
-            let (name, spread, range, cap) = shape;
-            let mut rng = Rng::new(5);
-            let n = 100_000;
-            let insts: Vec<Instance> = (0..n)
-                .map(|_| Instance::random_with(&mut rng, spread, range, cap))
-                .collect();
-            let t = std::time::Instant::now();
-            let all: Vec<Vec<Pose>> = insts.iter().map(|i| gp3p(&i.rays, &i.points)).collect();
-            let us = t.elapsed().as_secs_f64() * 1e6 / n as f64;
-            let (mut worst, mut below, mut worst_ratio, mut above8): (f64, usize, f64, usize) = (0.0, 0, 0.0, 0);
-            let mut counts = [0usize; 9];
-            for (inst, poses) in insts.iter().zip(&all) {
-                counts[poses.len()] += 1;
-                for p in poses {
-                    for (ray, x) in inst.rays.iter().zip(&inst.points) {
-                        let v = p.rotation * x + p.translation - ray.origin;
-                        worst = worst.max(v.normalize().cross(&ray.direction.normalize()).norm());
-                    }
-                }
-                let re = poses
-                    .iter()
-                    .map(|p| angle(&p.rotation, &inst.rotation))
-                    .fold(f64::INFINITY, f64::min);
-                below += usize::from(re < 1e-12);
-                let e = inst.error(poses);
-                above8 += usize::from(e > 1e-8);
-                worst_ratio = worst_ratio.max(e / (inst.conditioning() * EPS));
-            }
-            println!("{name}: {us:.2} us/call; worst miss {worst:e}; below 1e-12: {below}/{n}; above 1e-8 {above8}; worst ratio {worst_ratio:.1}; counts {counts:?}");
-        }
+    fn a_near_miss_is_no_solution() {
+        // Rays 1 and 2 are skew lines 1 m apart, their closest points at depth 5 (ray 3 passes through
+        // the third vertex at depth 5 too); object points 1 and 2 are (1 − 5e-7) m apart, so the rays
+        // cannot hold them: f₁₂ ≥ 1 − (1 − 5e-7)² ≈ 1e-6 everywhere, and no pose exists. The depths of
+        // the near miss satisfy eq. 1 to 1e-6 (scaled), which a loose acceptance of the refinement
+        // would take for a solution.
+        let (x, y, z) = (Vector3::x(), Vector3::y(), Vector3::z());
+        let rays = [
+            Ray {
+                origin: -x * 5.0,
+                direction: x,
+            },
+            Ray {
+                origin: z - y * 5.0,
+                direction: y,
+            },
+            Ray {
+                origin: x + y - z * 4.5,
+                direction: z,
+            },
+        ];
+        let near = [Vector3::zeros(), z, x + y + z * 0.5];
+        let points = [near[0], near[1] * (1.0 - 5e-7), near[2]];
+        assert!(gp3p(&rays, &points).is_empty());
+        let problem = Problem::new(&rays, &points).expect("valid input");
+        // The near miss has depths (5, 5, 5), in any labelling.
+        let seed = Vector3::repeat(5.0 / problem.scale);
+        assert!(problem.residuals(&seed).amax() < 1e-5);
+        assert!(problem.refine(seed).is_none(), "refined a near miss into a solution");
     }
 }

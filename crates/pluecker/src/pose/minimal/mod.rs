@@ -19,7 +19,7 @@
 //!
 //! | solver       | data              | max. solutions | method                                         | reference                                               |
 //! |--------------|-------------------|----------------|------------------------------------------------|---------------------------------------------------------|
-//! | [`gp3p()`]   | 3 points          | 8              | see its documentation                          | Nistér & Stewénius, J. Math. Imaging Vis. 2007 (problem) |
+//! | [`gp3p()`]   | 3 points          | 8              | octic in one depth, Newton on the distances    | Nistér & Stewénius, J. Math. Imaging Vis. 2007 (problem) |
 //! | [`gp2p1l()`] | 2 points + 1 line | 8              | degree-8 polynomial, affine constraints on `R` | Miraldo, Dias & Ramalingam, ECCV 2018 (problem)         |
 //! | [`gp1p2l()`] | 1 point + 2 lines | 8              | degree-8 polynomial, affine constraints on `R` | Miraldo, Dias & Ramalingam, ECCV 2018 (problem)         |
 //! | [`gp3l()`]   | 3 lines           | 8              | P3L's rotations, translation from the planes   | Dhome et al. 1989; Chen 1990                            |

@@ -284,7 +284,7 @@ impl Problem {
 /// Orthonormal frame (columns) of a triangle: first axis along side `pair`, second towards the third
 /// vertex (Gram-Schmidt, so the frame is orthonormal to rounding however thin the triangle), third
 /// along the normal. `None` when the triangle is flat (exactly collinear or coincident vertices).
-fn triad(p: &[Vector3<f64>; 3], pair: (usize, usize)) -> Option<Matrix3<f64>> {
+pub(super) fn triad(p: &[Vector3<f64>; 3], pair: (usize, usize)) -> Option<Matrix3<f64>> {
     let (i, j) = pair;
     let k = 3 - i - j;
     let side = p[j] - p[i];
