@@ -8,23 +8,9 @@ from __future__ import annotations
 import numpy as np
 import pluecker
 import pytest
+from test_rig import CAMERAS, POSES, rotation
 
 
-def rotation(rx: float, ry: float, rz: float) -> np.ndarray:
-    """``Rz Ry Rx`` of the three angles (radians)."""
-    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
-    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return Rz @ Ry @ Rx
-
-
-CAMERAS = [pluecker.Camera("PINHOLE", [800.0, 790.0, 320.0, 240.0]),
-           pluecker.Camera("OPENCV", [600.0, 600.0, 320.0, 240.0, -0.1, 0.01, 1e-3, -1e-3]),
-           pluecker.Camera("SIMPLE_RADIAL", [500.0, 320.0, 240.0, 0.05])]
-POSES = [(np.eye(3), np.zeros(3)),
-         (rotation(0.0, np.pi / 2, 0.0), np.array([0.1, 0.0, -0.2])),
-         (rotation(0.05, -np.pi / 3, 0.1), np.array([-0.3, 0.02, 0.1]))]
 TRUTH = (rotation(0.3, -0.2, 1.1), np.array([0.4, -1.0, 0.7]))
 
 

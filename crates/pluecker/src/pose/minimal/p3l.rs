@@ -34,10 +34,9 @@
 //! by rounding, which still satisfy the constraints. Noise-free parallel lines have concurrent image
 //! lines (the vanishing point), a continuum again; noisy ones independent normals and no solution.
 
-use super::input::{line_holds, Line};
-use super::rotation_constraints::rotations;
+use super::generalized::gp3l;
 use super::Pose;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 /// Every real pose `(R, t)`, `x_cam = R X_world + t`, that puts each object line `i` (through the two
 /// world points `endpoints[i]`) on the interpretation plane whose camera-frame normal is `normals[i]`:
@@ -65,35 +64,8 @@ use nalgebra::{Matrix3, Vector3};
 /// assert!(poses.iter().any(|p| (p.rotation - rotation).norm() < 1e-9 && (p.translation - translation).norm() < 1e-9));
 /// ```
 pub fn p3l(normals: &[Vector3<f64>; 3], endpoints: &[[Vector3<f64>; 2]; 3]) -> Vec<Pose> {
-    let mut lines = Vec::with_capacity(3);
-    for (n, e) in normals.iter().zip(endpoints) {
-        match Line::new(n, e) {
-            Some(line) => lines.push(line),
-            None => return Vec::new(),
-        }
-    }
-    let [first, second, third] = [lines[0], lines[1], lines[2]];
-    let normal_matrix = Matrix3::from_rows(&lines.iter().map(|l| l.normal.transpose()).collect::<Vec<_>>());
-    // LU with partial pivoting, not an explicit inverse: its solution satisfies `N t = h` to rounding
-    // (backward stable) even when `N` is nearly singular, so the poses still meet their constraints.
-    let lu = normal_matrix.lu();
-    if !lu.is_invertible() {
-        return Vec::new();
-    }
-    let origin = lines.iter().map(|l| l.midpoint).sum::<Vector3<f64>>() / 3.0;
-    let offsets: Vec<Vector3<f64>> = lines.iter().map(|l| l.offset_from(&origin)).collect();
-    rotations(
-        &first.normal,
-        &first.direction,
-        [second.direction_constraint(), third.direction_constraint()],
-    )
-    .into_iter()
-    .filter_map(|r| {
-        let h = Vector3::from_fn(|i, _| -lines[i].normal.dot(&(r * offsets[i])));
-        let pose = Pose::new(r, lu.solve(&h)? - r * origin);
-        lines.iter().all(|l| line_holds(l, &pose)).then_some(pose)
-    })
-    .collect()
+    // One camera is a rig whose planes all pass through the origin.
+    gp3l(normals, &[Vector3::zeros(); 3], endpoints)
 }
 
 #[cfg(test)]
