@@ -2,26 +2,20 @@
 //! pipeline of the module docs of [`super`]).
 
 use super::cost::{RigObservations, RigReprojectionCost};
-use super::linear::{linear_pose, rays, Ray};
+use super::linear::linear_pose;
+use super::problem::{finish, Conditioned, SEVERAL_CAMERAS};
 use super::{robust, ObservingCameras};
 use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
-use crate::optim::Objective;
-use crate::pose::candidates::{is_exhaustive, samples_by};
+use crate::pose::candidates::is_exhaustive;
 use crate::pose::certificate::{self, Verdict};
-use crate::pose::correspondences::Conditioning;
 use crate::pose::estimate::{ambiguity_sigma2, with_noise_level};
-use crate::pose::minimal::{solve_generalized, RigFeature};
 use crate::pose::refinement::search;
-use crate::pose::result::{assemble_at, is_finite, status_with_behind, PipelineOutcome};
+use crate::pose::result::{is_finite, status_with_behind, PipelineOutcome};
 use crate::pose::{estimate_pose, Correspondences, Method, PoseOptions, PoseResult, Status};
 use crate::rig::Rig;
-use nalgebra::{Matrix6, Vector3};
+use nalgebra::Matrix6;
 use std::time::Instant;
-
-/// Why a rig pose seen by several cameras carries no certificate.
-pub(crate) const SEVERAL_CAMERAS: &str = "not available: the certificate of global optimality covers observations \
-    seen by one camera; this pose uses several cameras of the rig";
 
 /// The pose `rig_from_world` (`x_rig = R X_world + t`) of `rig` from the points and segments of
 /// `corr`, each seen by the camera `cameras` names, with `opts` as for one camera
@@ -89,107 +83,6 @@ fn into_rig_frame(mut result: PoseResult, sensor: &Pose) -> PoseResult {
         *c = b.transpose() * *c * b;
     }
     result
-}
-
-/// The data of a search over several cameras, in the conditioned frame: the object centred at its
-/// centroid and divided by its RMS radius, the rig's translations divided by the same.
-pub(super) struct Conditioned {
-    pub cond: Conditioning,
-    pub rig: Rig,
-    pub corr: Correspondences,
-    /// The ray of every point ([`rays`]).
-    pub rays: Vec<Ray>,
-    /// Every correspondence as a minimal solver's feature (points first, then segments); `None` for a
-    /// segment whose endpoints its lens cannot unproject (it is not sampled).
-    pub features: Vec<Option<RigFeature>>,
-    /// The camera of each feature.
-    pub feature_cameras: Vec<usize>,
-}
-
-impl Conditioned {
-    pub fn new(rig: &Rig, corr: &Correspondences, cameras: &ObservingCameras) -> Result<Conditioned> {
-        let cond = Conditioning::of(corr);
-        let rig = rig.scaled(1.0 / cond.scale);
-        let corr = cond.correspondences(corr);
-        let rays = rays(&rig, &corr, cameras)?;
-        let centres = rig.centres();
-        let points = rays.iter().zip(&corr.points3d).map(|(ray, point)| {
-            Some(RigFeature::Point {
-                ray: *ray,
-                point: *point,
-            })
-        });
-        // A segment's interpretation plane: through its camera's centre, normal to both endpoints'
-        // bearings (unprojected through the lens), turned into the rig's frame.
-        let lines = corr
-            .lines2d
-            .iter()
-            .zip(&corr.lines3d)
-            .enumerate()
-            .map(|(j, (seen, object))| {
-                let k = cameras.line(j);
-                let camera = &rig.cameras()[k];
-                let bearing = |u: &nalgebra::Vector2<f64>| camera.unproject(u, j).ok().map(|n| n.push(1.0));
-                let normal = bearing(&seen[0])?.cross(&bearing(&seen[1])?);
-                Some(RigFeature::Line {
-                    normal: rig.sensor_from_rig()[k].rotation.transpose() * normal,
-                    centre: centres[k],
-                    endpoints: *object,
-                })
-            });
-        let features = points.chain(lines).collect();
-        let feature_cameras = (0..corr.n_points())
-            .map(|i| cameras.point(i))
-            .chain((0..corr.n_lines()).map(|j| cameras.line(j)))
-            .collect();
-        Ok(Conditioned {
-            cond,
-            rig,
-            corr,
-            rays,
-            features,
-            feature_cameras,
-        })
-    }
-
-    pub fn to_world(&self, p: &Pose) -> Pose {
-        Pose::new(p.rotation, self.cond.pose_to_world(&p.rotation, &p.translation))
-    }
-
-    pub fn conditioned(&self, p: &Pose) -> Pose {
-        Pose::new(p.rotation, self.cond.pose_from_world(&p.rotation, &p.translation))
-    }
-
-    /// The poses the minimal solver of its mix finds for the features of `triple` (conditioned frame;
-    /// [`solve_generalized`]); none when one of them cannot be sampled.
-    pub fn solve(&self, triple: &[usize; 3]) -> Vec<Pose> {
-        match triple.map(|i| self.features[i]) {
-            [Some(a), Some(b), Some(c)] => solve_generalized(&[a, b, c]),
-            _ => Vec::new(),
-        }
-    }
-
-    /// A feature's place on the object for the spread of a sample: a point, or a segment's midpoint.
-    fn position(&self, i: usize) -> Vector3<f64> {
-        let np = self.corr.n_points();
-        if i < np {
-            self.corr.points3d[i]
-        } else {
-            let s = &self.corr.lines3d[i - np];
-            0.5 * (s[0] + s[1])
-        }
-    }
-
-    /// The samples for the minimal solvers: wide object triangles first, over more cameras first.
-    pub fn samples(&self) -> Vec<[usize; 3]> {
-        samples_by(self.features.len(), |&[i, j, k]| {
-            let (a, b, c) = (self.position(i), self.position(j), self.position(k));
-            let area = (b - a).cross(&(c - a)).norm();
-            let [p, q, r] = [i, j, k].map(|f| self.feature_cameras[f]);
-            let distinct = 1 + usize::from(p != q) + usize::from(r != p && r != q);
-            distinct as f64 * area
-        })
-    }
 }
 
 /// A start from the camera that saw the most, when it saw enough for its own pose: its pose (without
@@ -276,25 +169,4 @@ fn several_cameras(
             behind_camera_cost: None,
         },
     ))
-}
-
-/// The result of a rig's pipeline: [`assemble_at`] with the rig's cost of `parts.used` (seen by
-/// `cameras`, world frame) linearised at the pose.
-pub(super) fn finish(
-    rig: &Rig,
-    used: &Correspondences,
-    cameras: &ObservingCameras,
-    opts: &PoseOptions,
-    started: Instant,
-    parts: PipelineOutcome<'_>,
-) -> PoseResult {
-    // The cameras were checked against the data already: a failure here leaves the cost NaN.
-    let observations = RigObservations::new(rig, used, cameras).ok();
-    let cost = observations
-        .as_ref()
-        .and_then(|o| RigReprojectionCost::new(rig, o).ok());
-    let linearization = cost
-        .filter(|_| is_finite(&parts.pose))
-        .map(|c| c.linearize(&parts.pose));
-    assemble_at(linearization, opts, started, parts)
 }

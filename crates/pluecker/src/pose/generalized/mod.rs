@@ -27,6 +27,7 @@
 mod cost;
 mod estimate;
 mod linear;
+mod problem;
 mod robust;
 
 pub use cost::{refine, RigObservations, RigReprojectionCost};

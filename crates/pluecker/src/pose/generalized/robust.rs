@@ -20,7 +20,7 @@
 //! chance can give). Not yet for a rig: the sequential test (SPRT).
 
 use super::cost::{RigObservations, RigReprojectionCost};
-use super::estimate::{finish, Conditioned, SEVERAL_CAMERAS};
+use super::problem::{finish, Conditioned, SEVERAL_CAMERAS};
 use super::ObservingCameras;
 use crate::camera_pose::Pose;
 use crate::consensus::{self, truncated, Estimator, Stats};
