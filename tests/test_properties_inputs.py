@@ -404,3 +404,35 @@ def test_the_error_check_rejects_internal_errors():
         except AssertionError:
             return
     raise AssertionError("check_error accepted an internal error")
+
+
+RIG_CAMERAS = [pluecker.Camera("OPENCV", [600.0, 610.0, 320.0, 240.0, -0.1, 0.01, 1e-3, -1e-3]),
+               pluecker.Camera("SIMPLE_RADIAL", [500.0, 320.0, 240.0, 0.05])]
+
+
+def camera_indices(rows: int, cameras: int) -> st.SearchStrategy:
+    """Mostly one valid camera index per row; sometimes out of range, negative, huge, fractional, the
+    wrong length, or not indices at all."""
+    valid = st.lists(st.integers(0, cameras - 1), min_size=rows, max_size=rows).map(np.array)
+    return st.one_of(valid, valid, valid, st.none(),
+                     st.lists(integers(), min_size=rows, max_size=rows).map(lambda v: np.array(v, dtype=object)),
+                     st.lists(st.integers(-2, cameras + 2), min_size=0, max_size=rows + 2).map(np.array),
+                     array_likes((rows,)))
+
+
+@given(pose_problems(), st.integers(1, 3), st.booleans(), st.data())
+def test_estimate_pose_of_a_rig(problem, cameras, robust, data):
+    """A rig of the problem's camera (at the identity) and up to two lens cameras beside it, with any
+    camera indices: a documented error or a consistent result, never a crash."""
+    camera, arrays, well_typed = problem
+    rig = pluecker.Rig([camera, *RIG_CAMERAS][:cameras],
+                       [(np.eye(3), np.zeros(3)), (np.eye(3), np.array([0.2, 0.0, 0.0])),
+                        (np.eye(3), np.array([0.0, -0.1, 0.05]))][:cameras])
+    rows = {k: len(v) if isinstance(v, np.ndarray) and v.ndim >= 1 else 0 for k, v in arrays.items()}
+    point_cameras = data.draw(camera_indices(rows["points2d"], cameras), label="point_cameras")
+    line_cameras = data.draw(camera_indices(rows["lines2d"], cameras), label="line_cameras")
+    options = pluecker.PoseOptions(ransac=pluecker.RansacOptions(max_iterations=200) if robust else None)
+    result = outcome(lambda: pluecker.estimate_pose(rig, **arrays, point_cameras=point_cameras,
+                                                    line_cameras=line_cameras, options=options))
+    if isinstance(result, pluecker.PoseResult):
+        check_pose(result)
