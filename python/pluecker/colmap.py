@@ -87,6 +87,13 @@ def rigid_from_pose(R: Any, t: Any) -> Any:
     return pycolmap.Rigid3d(pycolmap.Rotation3d(quaternion_xyzw(q)), np.asarray(t, dtype=float))
 
 
+def _rig_sensors(colmap_rig: Any) -> list[Any]:
+    """A pycolmap rig's sensors in the order of :func:`rig`'s cameras: the reference sensor first, then
+    the others by type and id."""
+    others = sorted(colmap_rig.non_ref_sensors, key=lambda s: (int(s.type.value), s.id))
+    return [colmap_rig.ref_sensor_id, *others]
+
+
 def rig(reconstruction: Any, rig_id: int) -> _core.Rig:
     """The rig ``rig_id`` of a pycolmap reconstruction as a ``pluecker.Rig``: its reference camera first
     (at the identity, as COLMAP fixes it), then its other cameras by sensor id, each with its camera and
@@ -99,9 +106,8 @@ def rig(reconstruction: Any, rig_id: int) -> _core.Rig:
         known = ", ".join(map(str, sorted(reconstruction.rigs))) or "none"
         raise ModelError(f"rig_id {rig_id}: no such rig in the reconstruction (its rig_ids: {known})")
     colmap_rig = reconstruction.rig(rig_id)
-    others = sorted(colmap_rig.non_ref_sensors, key=lambda s: (int(s.type.value), s.id))
     cameras, poses = [], []
-    for sensor in [colmap_rig.ref_sensor_id, *others]:
+    for sensor in _rig_sensors(colmap_rig):
         where = f"rig_id {rig_id}, sensor {sensor.type.name} id {sensor.id}"
         if sensor.type != pycolmap.SensorType.CAMERA:
             raise ModelError(f"{where}: not a camera (a pluecker.Rig holds cameras only)")
@@ -356,9 +362,7 @@ class ColmapModel:
             except (ModelError, _core.PlueckerError) as exc:
                 rigs[int(rig_id)] = str(exc)
                 continue
-            colmap_rig = reconstruction.rig(rig_id)
-            others = sorted(colmap_rig.non_ref_sensors, key=lambda s: (int(s.type.value), s.id))
-            camera_ids = tuple(int(sensor.id) for sensor in [colmap_rig.ref_sensor_id, *others])
+            camera_ids = tuple(int(sensor.id) for sensor in _rig_sensors(reconstruction.rig(rig_id)))
             poses = tuple((tuple(map(tuple, p.rotation)), tuple(p.translation)) for p in held.sensor_from_rig)
             rigs[int(rig_id)] = (camera_ids, poses)
         return cls(ids, xyz, cameras, rigs)

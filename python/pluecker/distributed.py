@@ -556,11 +556,17 @@ CAMERA_COLUMN_SETS = {"pinhole": QUERY_COLUMNS, "lens": LENS_QUERY_COLUMNS, "cam
                       "rig_id": RIG_QUERY_COLUMNS}
 
 
-def point_match_columns(kind: str, model: Optional[ColmapModel]) -> tuple[str, ...]:
+def _point_match_columns(kind: str, model: Optional[ColmapModel]) -> tuple[str, ...]:
     """The columns of the point matches for queries whose cameras are given by ``kind``."""
     if kind == "rig_id":
         return RIG_POINT_MATCH_COLUMNS
     return MODEL_POINT_MATCH_COLUMNS if model is not None else POINT_MATCH_COLUMNS
+
+
+def _line_match_columns(kind: str) -> tuple[str, ...]:
+    """The columns of the line matches for queries whose cameras are given by ``kind`` (a rig's frame
+    names the camera of each)."""
+    return LINE_MATCH_COLUMNS + (("camera_id",) if kind == "rig_id" else ())
 
 
 def _query_camera_kind(names: Iterable[str], what: str, model: Optional[ColmapModel]) -> str:
@@ -617,12 +623,19 @@ def _query_cameras(queries: Any, kind: str, model: Optional[ColmapModel]) -> lis
     return [lambda i=i: _model_camera(q_ids[i], camera_ids[i], model) for i in range(len(q_ids))]
 
 
+def _id_cell(query: int, column: str, value: Any) -> int:
+    """A query's id cell (``camera_id``, ``rig_id``) as an int (a float holding an integer counts), or
+    :class:`_BadQuery` naming the query and the column."""
+    if isinstance(value, float) and value.is_integer():
+        value = int(value)
+    if not isinstance(value, int):
+        raise _BadQuery(f"query {query}: queries column {column}: {shown(value)} is not an integer {column}")
+    return value
+
+
 def _model_rig(query: int, rig_id: Any, model: ColmapModel) -> tuple[_core.Rig, tuple[int, ...]]:
     """The rig ``rig_id`` of the model for one query, and the ``camera_id`` of each of its cameras."""
-    if isinstance(rig_id, float) and rig_id.is_integer():
-        rig_id = int(rig_id)
-    if not isinstance(rig_id, int):
-        raise _BadQuery(f"query {query}: queries column rig_id: {shown(rig_id)} is not an integer rig_id")
+    rig_id = _id_cell(query, "rig_id", rig_id)
     try:
         return model.rig(rig_id)
     except (ModelError, _core.PlueckerError) as exc:
@@ -646,10 +659,7 @@ def _lens(query: int, name: Any, params: Any, what: str = "queries") -> _core.Ca
 
 def _model_camera(query: int, camera_id: Any, model: ColmapModel) -> _core.Camera:
     """The ``Camera`` of the model's camera ``camera_id`` for one query."""
-    if isinstance(camera_id, float) and camera_id.is_integer():
-        camera_id = int(camera_id)
-    if not isinstance(camera_id, int):
-        raise _BadQuery(f"query {query}: queries column camera_id: {shown(camera_id)} is not an integer camera_id")
+    camera_id = _id_cell(query, "camera_id", camera_id)
     if camera_id not in model.cameras:
         raise _BadQuery(f"query {query}: queries column camera_id: camera_id {camera_id} is not a camera of the "
                         "COLMAP model")
@@ -705,7 +715,7 @@ def _point_matches(table: Any, model: Optional[ColmapModel],
     ids, valid = _point3D_ids(table)
     xyz, known = model.lookup(ids)
     known &= valid
-    columns = point_match_columns(kind, model)
+    columns = _point_match_columns(kind, model)
     groups = _grouped(table, columns[1:])
     camera_ids = table.column("camera_id").to_pylist() if "camera_id" in columns else None
     return groups, np.c_[_columns(table, ("x", "y")), xyz], (ids, known, valid), camera_ids
@@ -747,8 +757,8 @@ def localize_tables(queries: Any, point_matches: Any, line_matches: Any = None, 
     kind = _query_camera_kind(queries.column_names, "queries", model)
     _check_column_types(queries.schema, CAMERA_COLUMN_SETS[kind], "queries", queries.column)
     q_ids = _check_ids([("queries", queries.column("query"))], "query", unique=True)
-    line_columns = LINE_MATCH_COLUMNS + (("camera_id",) if kind == "rig_id" else ())
-    for table, columns, what in ((point_matches, point_match_columns(kind, model), "point_matches"),
+    line_columns = _line_match_columns(kind)
+    for table, columns, what in ((point_matches, _point_match_columns(kind, model), "point_matches"),
                                  (line_matches, line_columns, "line_matches")):
         if table is not None:
             _require_columns(table.column_names, columns, what)
@@ -932,10 +942,9 @@ def localize(queries: Union[str, Path], point_matches: Union[str, Path], out: Un
     out = Path(out)
     model = as_model(reconstruction)
     kind = _check_query_inputs(str(queries), model)
-    _check_inputs(str(point_matches), point_match_columns(kind, model), "point_matches")
+    _check_inputs(str(point_matches), _point_match_columns(kind, model), "point_matches")
     if line_matches is not None:
-        _check_inputs(str(line_matches), LINE_MATCH_COLUMNS + (("camera_id",) if kind == "rig_id" else ()),
-                      "line_matches")
+        _check_inputs(str(line_matches), _line_match_columns(kind), "line_matches")
     rows = lambda source: sum(pq.ParquetFile(f).metadata.num_rows for f in _input_files(str(source)))  # noqa: E731
     n = rows(queries)
     workers = len(client.scheduler_info()["workers"]) if client is not None else 1

@@ -127,7 +127,7 @@ impl<'a> RigReprojectionCost<'a> {
 }
 
 /// `B = diag(R_k, R_k)`: the rig's tangent step as camera `k`'s (module docs).
-fn tangent_map(r_k: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
+pub(super) fn tangent_map(r_k: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
     let mut b = SMatrix::<f64, 6, 6>::zeros();
     b.fixed_view_mut::<3, 3>(0, 0).copy_from(r_k);
     b.fixed_view_mut::<3, 3>(3, 3).copy_from(r_k);

@@ -1,7 +1,7 @@
 //! [`estimate_rig_pose`]: the pose of a rig from points and segments seen by its cameras (the
 //! pipeline of the module docs of [`super`]).
 
-use super::cost::{RigObservations, RigReprojectionCost};
+use super::cost::{tangent_map, RigObservations, RigReprojectionCost};
 use super::linear::linear_pose;
 use super::problem::{finish, Conditioned, SEVERAL_CAMERAS};
 use super::{robust, ObservingCameras};
@@ -14,7 +14,6 @@ use crate::pose::refinement::search;
 use crate::pose::result::{is_finite, status_with_behind, PipelineOutcome};
 use crate::pose::{estimate_pose, Correspondences, Method, PoseOptions, PoseResult, Status};
 use crate::rig::Rig;
-use nalgebra::Matrix6;
 use std::time::Instant;
 
 /// The pose `rig_from_world` (`x_rig = R X_world + t`) of `rig` from the points and segments of
@@ -49,7 +48,7 @@ pub fn estimate_rig_pose(
     let opts = with_noise_level(opts, corr);
     match &opts.ransac {
         Some(ransac) => robust::estimate(rig, corr, cameras, &opts, ransac, started),
-        None => several_cameras(rig, corr, cameras, &opts, started),
+        None => several_cameras(rig, corr, cameras, &observations, &opts, started),
     }
 }
 
@@ -77,23 +76,16 @@ fn into_rig_frame(mut result: PoseResult, sensor: &Pose) -> PoseResult {
         *pose = back.compose(pose);
     }
     if let Some(c) = &mut result.covariance {
-        let mut b = Matrix6::zeros();
-        b.fixed_view_mut::<3, 3>(0, 0).copy_from(&sensor.rotation);
-        b.fixed_view_mut::<3, 3>(3, 3).copy_from(&sensor.rotation);
+        let b = tangent_map(&sensor.rotation);
         *c = b.transpose() * *c * b;
     }
     result
 }
 
-/// A start from the camera that saw the most, when it saw enough for its own pose: its pose (without
-/// the robust loop or the certificate) moved into the rig's frame, world frame.
-fn best_camera_start(
-    rig: &Rig,
-    corr: &Correspondences,
-    cameras: &ObservingCameras,
-    opts: &PoseOptions,
-) -> Option<Pose> {
-    let observations = RigObservations::new(rig, corr, cameras).ok()?;
+/// A start from the camera that saw the most of `observations` (world frame), when it saw enough for
+/// its own pose: its pose (without the robust loop or the certificate) moved into the rig's frame,
+/// world frame.
+fn best_camera_start(rig: &Rig, observations: &RigObservations, opts: &PoseOptions) -> Option<Pose> {
     let share = observations
         .shares
         .iter()
@@ -105,24 +97,25 @@ fn best_camera_start(
     is_finite(&pose).then_some(pose)
 }
 
-/// The rig's pose from observations of several cameras, without outliers: every start refined, the
-/// best minimum chosen ([`super`]'s module docs).
+/// The rig's pose from observations of several cameras (`observations`: `corr` split by camera, world
+/// frame), without outliers: every start refined, the best minimum chosen ([`super`]'s module docs).
 fn several_cameras(
     rig: &Rig,
     corr: &Correspondences,
     cameras: &ObservingCameras,
+    observations: &RigObservations,
     opts: &PoseOptions,
     started: Instant,
 ) -> Result<PoseResult> {
     let data = Conditioned::new(rig, corr, cameras)?;
-    let observations = RigObservations::new(&data.rig, &data.corr, cameras)?;
-    let cost = RigReprojectionCost::new(&data.rig, &observations)?;
+    let conditioned = RigObservations::new(&data.rig, &data.corr, cameras)?;
+    let cost = RigReprojectionCost::new(&data.rig, &conditioned)?;
     let mut starts: Vec<Pose> = opts.initial_pose.iter().map(|p| data.conditioned(p)).collect();
     if let Ok(pose) = linear_pose(&data.rays, &data.corr.points3d) {
         starts.push(pose);
     }
     if corr.n_lines() > 0 || corr.n_points() < 6 {
-        starts.extend(best_camera_start(rig, corr, cameras, opts).map(|p| data.conditioned(&p)));
+        starts.extend(best_camera_start(rig, observations, opts).map(|p| data.conditioned(&p)));
     }
     let samples = data.samples();
     let exhaustive = is_exhaustive(data.features.len());
@@ -139,10 +132,9 @@ fn several_cameras(
     let best = minima.found[choice.best];
     let stages = vec![minima.report(choice.best, &data.cond)];
     let pose = data.to_world(&best.pose);
+    // The stage's termination is the best minimum's: a refinement that did not converge is
+    // `not_converged` there.
     let mut status = status_with_behind(&pose, &stages, best.behind, true, true);
-    if !best.converged() && status == Status::Success {
-        status = Status::NotConverged;
-    }
     if choice.ambiguous && status == Status::Success {
         status = Status::Ambiguous;
     }
@@ -151,9 +143,7 @@ fn several_cameras(
         .map(|i| (data.to_world(&minima.found[i].pose), minima.found[i].cost));
     let certification = certificate::stage(opts.certify.as_ref(), status, |_| Verdict::none(SEVERAL_CAMERAS));
     Ok(finish(
-        rig,
-        corr,
-        cameras,
+        &RigReprojectionCost::new(rig, observations)?,
         opts,
         started,
         PipelineOutcome {

@@ -12,13 +12,14 @@
 //!   ([`crate::pose::estimate_pose`]), with its global search, robust loop and certificate, and its pose
 //!   moved into the rig's frame;
 //! - otherwise the starts are the linear pose of the rays ([`linear_pose`], from six points off a
-//!   plane), the minimal generalised poses of triples of points spread over the cameras
-//!   ([`crate::pose::minimal::gp3p()`]), the single camera's answer for the camera that saw the most,
-//!   and the user's guess; each is refined with the trust region of section 4.1 (Phong & Horaud 1995)
-//!   and the distinct minima compared as for one camera (the runner-up, the ambiguity test);
+//!   plane), the minimal generalised poses of triples of correspondences (points and segments) spread
+//!   over the cameras ([`crate::pose::minimal::solve_generalized`]), the single camera's answer for
+//!   the camera that saw the most (with segments or fewer than six points), and the user's guess; each
+//!   is refined with the trust region of section 4.1 (Phong & Horaud 1995) and the distinct minima
+//!   compared as for one camera (the runner-up, the ambiguity test);
 //! - with [`crate::pose::PoseOptions::ransac`], the one consensus loop (`crate::consensus`) draws
-//!   triples of points, solves them with gP3P, scores them by the truncated reprojection error in each
-//!   camera's pixels and re-fits the best on its inliers.
+//!   triples of correspondences, solves them with the same minimal solvers, scores them by the
+//!   truncated reprojection error in each camera's pixels and re-fits the best on its inliers.
 //!
 //! The certificate of global optimality is given for observations in one camera (the single camera's
 //! proof); for several cameras it is not available yet, and a requested one leaves the status
@@ -50,14 +51,6 @@ pub struct ObservingCameras {
 }
 
 impl ObservingCameras {
-    /// Every observation of `corr` seen by camera `k`.
-    pub fn all(k: usize, corr: &Correspondences) -> ObservingCameras {
-        ObservingCameras {
-            point_cameras: vec![k; corr.n_points()],
-            line_cameras: vec![k; corr.n_lines()],
-        }
-    }
-
     /// The camera of point `i`.
     pub(crate) fn point(&self, i: usize) -> usize {
         self.point_cameras.get(i).copied().unwrap_or(0)

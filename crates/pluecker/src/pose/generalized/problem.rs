@@ -1,7 +1,7 @@
 //! A rig's problem as its search sees it: the data in the conditioned frame, every correspondence as
 //! a minimal solver's feature, the samples, and the assembly of the result ([`finish`]).
 
-use super::cost::{RigObservations, RigReprojectionCost};
+use super::cost::RigReprojectionCost;
 use super::linear::{rays, Ray};
 use super::ObservingCameras;
 use crate::camera_pose::Pose;
@@ -121,23 +121,14 @@ impl Conditioned {
     }
 }
 
-/// The result of a rig's pipeline: [`assemble_at`] with the rig's cost of `parts.used` (seen by
-/// `cameras`, world frame) linearised at the pose.
+/// The result of a rig's pipeline: [`assemble_at`] with `cost`, the rig's cost of `parts.used` (world
+/// frame), linearised at the pose.
 pub(super) fn finish(
-    rig: &Rig,
-    used: &Correspondences,
-    cameras: &ObservingCameras,
+    cost: &RigReprojectionCost<'_>,
     opts: &PoseOptions,
     started: Instant,
     parts: PipelineOutcome<'_>,
 ) -> PoseResult {
-    // The cameras were checked against the data already: a failure here leaves the cost NaN.
-    let observations = RigObservations::new(rig, used, cameras).ok();
-    let cost = observations
-        .as_ref()
-        .and_then(|o| RigReprojectionCost::new(rig, o).ok());
-    let linearization = cost
-        .filter(|_| is_finite(&parts.pose))
-        .map(|c| c.linearize(&parts.pose));
+    let linearization = is_finite(&parts.pose).then(|| cost.linearize(&parts.pose));
     assemble_at(linearization, opts, started, parts)
 }

@@ -25,7 +25,7 @@ use super::ObservingCameras;
 use crate::camera_pose::Pose;
 use crate::consensus::{self, truncated, Estimator, Stats};
 use crate::error::{Error, Result};
-use crate::optim::{trust_region, StoppingCriteria, Subproblem, Summary, Termination, TrustRegionOptions};
+use crate::optim::{trust_region, Summary, Termination, TrustRegionOptions};
 use crate::pose::candidates::random_triple;
 use crate::pose::certificate::{self, Verdict};
 use crate::pose::refinement::{search, PoseCost};
@@ -33,7 +33,9 @@ use crate::pose::result::{status_with_behind, PipelineOutcome};
 use crate::pose::robust::pipeline::best_refinement;
 use crate::pose::robust::scoring::subset;
 use crate::pose::robust::sprt::chance_probabilities;
-use crate::pose::robust::{required_inliers, RansacOptions, RansacReport, LOCAL_ROUNDS, LO_THRESHOLD_MULTIPLIER};
+use crate::pose::robust::{
+    local_optimization_options, required_inliers, RansacOptions, RansacReport, LOCAL_ROUNDS, LO_THRESHOLD_MULTIPLIER,
+};
 use crate::pose::{stage, Correspondences, CostKind, PoseOptions, PoseResult, Status};
 use crate::rig::Rig;
 use crate::rng::Rng;
@@ -46,6 +48,8 @@ struct RigConsensus<'a> {
     cameras: &'a ObservingCameras,
     cost: &'a RigReprojectionCost<'a>,
     ransac: &'a RansacOptions,
+    /// The trust region of the local optimisation, as the single camera's.
+    lo: TrustRegionOptions,
     rng: Rng,
     local_optimizations: usize,
     errors_evaluated: usize,
@@ -88,21 +92,13 @@ impl RigConsensus<'_> {
         (within[..np].to_vec(), within[np..].to_vec())
     }
 
-    /// The trust region on the inliers `(points, lines)` from `pose`, at most `iterations` steps.
-    fn fit(&self, pose: &Pose, points: &[bool], lines: &[bool], iterations: usize) -> Option<Pose> {
+    /// The local optimisation's trust region on the inliers `(points, lines)` from `pose`.
+    fn fit(&self, pose: &Pose, points: &[bool], lines: &[bool]) -> Option<Pose> {
         let inliers = subset(&self.data.corr, points, lines);
         let cameras = self.cameras.subset(points, lines);
         let observations = RigObservations::new(&self.data.rig, &inliers, &cameras).ok()?;
         let cost = RigReprojectionCost::new(&self.data.rig, &observations).ok()?;
-        let options = TrustRegionOptions {
-            subproblem: Subproblem::Hebden,
-            stopping: StoppingCriteria {
-                max_iterations: iterations,
-                ..StoppingCriteria::default()
-            },
-            ..TrustRegionOptions::default()
-        };
-        let (fitted, _) = trust_region::minimize(&cost, *pose, &options);
+        let (fitted, _) = trust_region::minimize(&cost, *pose, &self.lo);
         fitted.rotation.iter().all(|v| v.is_finite()).then_some(fitted)
     }
 }
@@ -140,7 +136,7 @@ impl Estimator for RigConsensus<'_> {
             if points.iter().chain(&lines).filter(|&&p| p).count() < 3 {
                 break;
             }
-            let Some(fitted) = self.fit(&pose, &points, &lines, self.ransac.local_iterations) else {
+            let Some(fitted) = self.fit(&pose, &points, &lines) else {
                 break;
             };
             let errors = self.errors(&fitted);
@@ -215,6 +211,7 @@ pub(super) fn estimate(
         cameras,
         cost: &cost,
         ransac,
+        lo: local_optimization_options(&opts.refinement, ransac),
         rng: Rng::new(ransac.seed),
         local_optimizations: 0,
         errors_evaluated: 0,
@@ -312,17 +309,14 @@ pub(super) fn estimate(
     let world = data.to_world(&pose);
     let used = subset(corr, &points, &lines);
     let used_cameras = cameras.subset(&points, &lines);
-    let behind = RigObservations::new(rig, &used, &used_cameras)
-        .ok()
-        .and_then(|o| RigReprojectionCost::new(rig, &o).ok().map(|c| c.points_behind(&world)))
-        .unwrap_or(0);
+    let used_observations = RigObservations::new(rig, &used, &used_cameras)?;
+    let used_cost = RigReprojectionCost::new(rig, &used_observations)?;
+    let behind = used_cost.points_behind(&world);
     let failure = failure.or_else(|| (report.inliers < report.required_inliers).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_with_behind(&world, &stages, behind, true, opts.refine));
     let certification = certificate::stage(opts.certify.as_ref(), status, |_| Verdict::none(SEVERAL_CAMERAS));
     Ok(finish(
-        rig,
-        &used,
-        &used_cameras,
+        &used_cost,
         opts,
         started,
         PipelineOutcome {

@@ -436,6 +436,15 @@ fn models_per_sample(stats: &Stats) -> f64 {
     stats.models_scored as f64 / stats.iterations as f64
 }
 
+/// The trust region of the local optimisation: `refinement` with Hebden steps, capped at
+/// [`RansacOptions::local_iterations`] (a rig's loop uses it too).
+pub(crate) fn local_optimization_options(refinement: &TrustRegionOptions, opts: &RansacOptions) -> TrustRegionOptions {
+    let mut lo = *refinement;
+    lo.subproblem = Subproblem::Hebden;
+    lo.stopping.max_iterations = opts.local_iterations;
+    lo
+}
+
 /// LO-RANSAC on validated correspondences (finite, no zero-length segment), in their frame.
 /// `refinement` sets the trust region of the local optimisation (its cap is replaced by
 /// [`RansacOptions::local_iterations`]).
@@ -451,9 +460,7 @@ pub fn ransac(
     let tau = opts.thresholds();
     let (np, nl) = (data.n_points(), data.n_lines());
     let sampler = Sampler::new(np, nl, solvable());
-    let mut lo = *refinement;
-    lo.subproblem = Subproblem::Hebden;
-    lo.stopping.max_iterations = opts.local_iterations;
+    let lo = local_optimization_options(refinement, opts);
     let chance = chance_probabilities(data.window, opts.point_threshold, opts.line_threshold);
     let rho = opts.min_inlier_ratio;
     let loop_opts = consensus::Options {
