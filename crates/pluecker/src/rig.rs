@@ -11,7 +11,7 @@
 use crate::camera::Camera;
 use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, SMatrix, Vector3};
 
 /// Cameras fixed to one body, each with its pose `x_sensor = R x_rig + t` in the body's frame
 /// (module docs). Built by [`Rig::new`], which checks it; the fields are read through the methods.
@@ -169,6 +169,16 @@ impl TryFrom<RigParts> for Rig {
     }
 }
 
+/// `B = diag(R_k, R_k)` for a camera's `sensor_from_rig` rotation `R_k`: a step `(ω, δt)` of
+/// `rig_from_world` in its tangent (`exp(ω) R`, `t + δt`) moves the camera's pose
+/// `(R_k R, R_k t + t_k)` by the step `B (ω, δt)` of the camera's own tangent.
+pub(crate) fn tangent_map(r_k: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
+    let mut b = SMatrix::<f64, 6, 6>::zeros();
+    b.fixed_view_mut::<3, 3>(0, 0).copy_from(r_k);
+    b.fixed_view_mut::<3, 3>(3, 3).copy_from(r_k);
+    b
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -244,3 +254,4 @@ mod tests {
         assert!(err.contains("sensor_from_rig[0]"), "{err}");
     }
 }
+

@@ -6,12 +6,10 @@
 
 use super::lens::Surrogate;
 use super::minorant::largest_eigenvalue;
-use super::problem::{norm2x2, Problem};
+use super::problem::{norm2x2, CameraPart, Problem};
 use crate::camera::linearisation::spectral_norm;
-use crate::camera::Intrinsics;
 use crate::geometry::quaternion::skew;
-use crate::optim::Objective;
-use crate::pose::reprojection::{Pose, ReprojectionCost};
+use crate::pose::reprojection::Pose;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// Intervals of the one-dimensional minimisation of the local bound.
@@ -40,11 +38,11 @@ impl Whitening {
         }
         let scale = SMatrix::<f64, 6, 6>::from_diagonal(&eigen.eigenvalues.map(|l| 1.0 / l.sqrt()));
         let t = eigen.eigenvectors * scale;
-        let block_norm = |rows: usize| t.fixed_view::<3, 6>(rows, 0).into_owned().singular_values().max();
+        let (alpha_omega, alpha_tau) = block_norms(&t);
         Some(Whitening {
             w: *w,
-            alpha_omega: block_norm(0),
-            alpha_tau: block_norm(3),
+            alpha_omega,
+            alpha_tau,
             t,
         })
     }
@@ -76,6 +74,12 @@ impl Whitening {
         let w_tt = self.w.fixed_view::<3, 3>(3, 3).into_owned();
         Some(largest_eigenvalue(&(l_inv * w_tt * l_inv.transpose())))
     }
+}
+
+/// `(‖T_ω‖, ‖T_τ‖)`: the spectral norms of the rotation and translation row blocks of `t`.
+fn block_norms(t: &SMatrix<f64, 6, 6>) -> (f64, f64) {
+    let block_norm = |rows: usize| t.fixed_view::<3, 6>(rows, 0).into_owned().singular_values().max();
+    (block_norm(0), block_norm(3))
 }
 
 /// `M` with `aᵀ M a = (a × (a × y)) · c = (a·y)(a·c) − (a·a)(y·c)`.
@@ -134,7 +138,7 @@ pub(super) struct PointRay {
 }
 
 /// A line endpoint's part of `RayCurvature`: its residual is `n / w` with `n = ēᵀ m` and
-/// `w = ‖G_e m_xy‖` ([`Problem::endpoint_maps`]).
+/// `w = ‖G_e m_xy‖` ([`CameraPart::endpoint_maps`]).
 pub(super) struct EndpointRay {
     /// `w₀ = ‖G_e m_xy‖`, `‖G_e‖`, `‖G_e N(0)_xy T‖` and `|w'(0)|` per unit whitened step.
     pub(super) w0: f64,
@@ -191,13 +195,44 @@ pub(super) struct RayCurvature {
 }
 
 impl RayCurvature {
+    /// The bound's data at `pose` for the rays of `whitening`: every camera's observations at the
+    /// camera's own pose, along its own rays ([`super::problem::CameraPart::own`]: for a rig's camera
+    /// the rig's ray `(s a_ω, s a_τ)` is the camera's `(s R_k a_ω, s R_k a_τ)`, so its rays are
+    /// those of the single camera with `diag(R_k, R_k) T`, of the same lengths per unit step).
     pub(super) fn new(problem: &Problem, whitening: &Whitening, pose: &Pose, mu: f64) -> Option<Self> {
-        let t = &whitening.t;
-        let points = problem
+        let (mut points, mut lines) = (Vec::new(), Vec::new());
+        let (mut alpha_omega, mut alpha_tau) = (whitening.alpha_omega, whitening.alpha_tau);
+        for part in &problem.cameras {
+            let (pose, t) = part.own(pose, &whitening.t);
+            if part.sensor.is_some() {
+                // ‖R_k T_ω‖ = ‖T_ω‖ up to rounding: the larger of the two is kept.
+                let (omega, tau) = block_norms(&t);
+                (alpha_omega, alpha_tau) = (alpha_omega.max(omega), alpha_tau.max(tau));
+            }
+            let (own_points, own_lines) = Self::camera_parts(part, &t, &pose);
+            points.extend(own_points);
+            lines.extend(own_lines);
+        }
+        lines
+            .iter()
+            .flat_map(|l: &LineRay| &l.endpoints)
+            .all(|end| end.w0 > 0.0 && end.w0.is_finite())
+            .then_some(RayCurvature {
+                alpha_omega,
+                alpha_tau,
+                mu,
+                points,
+                lines,
+            })
+    }
+
+    /// One camera's points and segments at its pose `pose`, along the rays of the whitening `t`.
+    fn camera_parts(part: &CameraPart, t: &SMatrix<f64, 6, 6>, pose: &Pose) -> (Vec<PointRay>, Vec<LineRay>) {
+        let points = part
             .corr
             .points3d
             .iter()
-            .zip(&problem.point_maps)
+            .zip(&part.point_maps)
             .map(|(x, map)| {
                 let y = pose.rotation * x;
                 let p = y + pose.translation;
@@ -215,12 +250,12 @@ impl RayCurvature {
                 }
             })
             .collect();
-        let lines = problem
+        let lines = part
             .corr
             .lines2d
             .iter()
-            .zip(&problem.corr.lines3d)
-            .zip(&problem.endpoint_maps)
+            .zip(&part.corr.lines3d)
+            .zip(&part.endpoint_maps)
             .map(|((s2, s3), maps)| {
                 // Endpoints A = R_s y_A + t: A' = a_ω × R_s y_A + a_τ = P_A a.
                 let (y_a, y_b) = (pose.rotation * s3[0], pose.rotation * s3[1]);
@@ -240,7 +275,7 @@ impl RayCurvature {
                     // w' = q̂·q' with q̂ = G_e m_xy / w.
                     let q_hat = g_e * m0.xy() / w0;
                     let w1 = q_hat.transpose() * q_t;
-                    let e_bar = problem.k_inv * Vector3::new(e.x, e.y, 1.0);
+                    let e_bar = part.k_inv * Vector3::new(e.x, e.y, 1.0);
                     let r0 = e_bar.dot(&m0) / w0;
                     // r' = (n' − r w') / w at s = 0.
                     let g = (e_bar.transpose() * nt - w1 * r0) / w0;
@@ -275,18 +310,8 @@ impl RayCurvature {
                     endpoints,
                 }
             })
-            .collect::<Vec<_>>();
-        lines
-            .iter()
-            .flat_map(|l: &LineRay| &l.endpoints)
-            .all(|end| end.w0 > 0.0 && end.w0.is_finite())
-            .then_some(RayCurvature {
-                alpha_omega: whitening.alpha_omega,
-                alpha_tau: whitening.alpha_tau,
-                mu,
-                points,
-                lines,
-            })
+            .collect();
+        (points, lines)
     }
 
     /// `K` on the whitened ball of radius `s`, or `None` when a depth or a projected line may vanish
@@ -534,11 +559,10 @@ impl<'s> LocalModel<'s> {
     /// The local model at `pose` (frame of `problem`) and the whitening it is expressed in.
     pub(super) fn at(
         problem: &Problem,
-        camera: &Intrinsics,
         pose: &Pose,
         lens: Option<&'s Surrogate>,
     ) -> std::result::Result<(Whitening, Self), String> {
-        let lin = ReprojectionCost::of(camera, problem.corr).linearize(pose);
+        let lin = problem.linearize(pose);
         let whitening = Whitening::new(&lin.gauss_newton).ok_or("not proved: JᵀJ is singular at the pose")?;
         let whitened = whitening.t.transpose() * lin.gauss_newton * whitening.t;
         let eigen = whitened.symmetric_eigenvalues();

@@ -1,5 +1,6 @@
-//! Step 2 of [`super`]'s module docs: the quadratic minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t)‖²` of
-//! `2f` for one set of depth bounds (`wᵢ = 1 / Dᵢ²`), the same minorant scaled by `κ` for tighter
+//! Step 2 of [`super`]'s module docs: the quadratic minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t + eᵢ)‖²`
+//! of `2f` for one set of depth bounds (`wᵢ = 1 / Dᵢ²`; `eᵢ` the offset of the point's camera, zero
+//! for one camera), the same minorant scaled by `κ` for tighter
 //! depth bounds, and the two bounds of step 3 it gives over a box of rotations: Minkowski's
 //! `½ (√q_min − θ η)₊²`, and the minorant linearised in the rotation, whose minimum over the ball of
 //! rotations is bounded by its Lagrangian dual.
@@ -22,16 +23,19 @@ pub(super) struct PointForm {
     pub(super) norm2: f64,
 }
 
-/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t)‖²`, `wᵢ = 1 / Dᵢ²`, for one set of depth
-/// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in `(vec R, t)`
-/// (row-major `vec`), and `η = √(Σ wᵢ ‖Aᵢ‖² ‖Xᵢ‖²)`: over rotations within the angle `θ` of `R`, `√Q`
-/// moves by at most `θ η`.
+/// Step 2's minorant `Q(R, t) = Σ wᵢ ‖Aᵢ (R Xᵢ + t + eᵢ)‖²`, `wᵢ = 1 / Dᵢ²`, for one set of depth
+/// bounds `Dᵢ` (a minorant of `2f` where every `‖xᵢ‖ ≤ Dᵢ`), as a quadratic form in
+/// `z = (vec R, 1, t)` (row-major `vec`), and `η = √(Σ wᵢ ‖Aᵢ‖² ‖Xᵢ‖²)`: over rotations within the
+/// angle `θ` of `R`, `√Q` moves by at most `θ η`. `eᵢ` is the offset of the camera that saw point `i`
+/// in the frame of the pose (zero for one camera; for a rig's camera `x_camera = R_k (x + e_k)`, and
+/// `Aᵢ` is the point's map times `R_k`: [`super::problem::Problem::offsets`]).
 ///
 /// The Hessian `C` in `t` does not depend on the rotation: `C⁻¹`, its largest eigenvalue, the
 /// `bᵢᵀ C⁻¹ bᵢ` and the ellipsoid's whitened extent are computed once per minorant, not per box.
 pub(super) struct Minorant {
     pub(super) depths: Vec<f64>,
-    pub(super) gram: SMatrix<f64, 12, 12>,
+    /// The form in `z = (vec R, 1, t)`: rows and columns 0-8 the rotation, 9 the constant, 10-12 `t`.
+    pub(super) gram: SMatrix<f64, 13, 13>,
     pub(super) eta: f64,
     /// The lower-right block `C` and its inverse (`None`: the minorant does not fix `t`).
     pub(super) c: Matrix3<f64>,
@@ -42,30 +46,47 @@ pub(super) struct Minorant {
     pub(super) bearing_spread: Vec<f64>,
     /// [`super::local_bound::Whitening::ellipsoid_factor`] of `C`, once it is needed.
     pub(super) extent: OnceCell<Option<f64>>,
-    /// The form minimised over `t`: `min_t Q(R, t) = vec(R)ᵀ S vec(R)` with the Schur complement
-    /// `S = A − B C⁻¹ Bᵀ` of the blocks `[A B; Bᵀ C]` (zero when `C` is singular; unused then).
-    pub(super) schur: SMatrix<f64, 9, 9>,
+    /// The form minimised over `t`: `min_t Q(R, t) = ṽᵀ S ṽ`, `ṽ = (vec R, 1)`, with the Schur
+    /// complement `S = A − B C⁻¹ Bᵀ` of the blocks `[A B; Bᵀ C]` (zero when `C` is singular; unused
+    /// then).
+    pub(super) schur: SMatrix<f64, 10, 10>,
+}
+
+/// Index of the constant in `z = (vec R, 1, t)` ([`Minorant::gram`]); `t` follows it.
+const ONE: usize = 9;
+const T: usize = 10;
+
+/// `ṽ = (vec r, 1)` (row-major `vec`): the rotation's part of `z` ([`Minorant::gram`]).
+fn rotation_part(r: &Matrix3<f64>) -> SMatrix<f64, 10, 1> {
+    SMatrix::<f64, 10, 1>::from_fn(|i, _| if i < ONE { r[(i / 3, i % 3)] } else { 1.0 })
 }
 
 impl Minorant {
     /// The minorant for the depth bounds `depths` of the points `points` with the residual maps
-    /// `forms` ([`super::problem::Problem::forms`]): a point's term is `‖Aᵢ (R Xᵢ + t)‖² / Dᵢ²`.
+    /// `forms` ([`super::problem::Problem::forms`]) and their cameras' offsets `offsets`: a point's
+    /// term is `‖Aᵢ (R Xᵢ + t + eᵢ)‖² / Dᵢ²`.
     pub(super) fn build(
         points: &[Vector3<f64>],
         bearings: &[Vector3<f64>],
         forms: &[PointForm],
+        offsets: &[Vector3<f64>],
         depths: Vec<f64>,
     ) -> Minorant {
-        // With z = (vec R, t) (row-major vec), R Xᵢ + t = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, I], a point's term is
-        // wᵢ zᵀ Lᵢᵀ Hᵢ Lᵢ z (Hᵢ = AᵢᵀAᵢ), whose blocks are Hᵢ ⊗ XᵢXᵢᵀ, Hᵢ ⊗ Xᵢ and Hᵢ. Both H and
-        // XXᵀ are symmetric: six entries each, accumulated by hand (a search rebuilds the minorant
-        // about once every ten boxes).
+        // With z = (vec R, 1, t) (row-major vec), R Xᵢ + t + eᵢ = Lᵢ z, Lᵢ = [I ⊗ Xᵢᵀ, eᵢ, I], a
+        // point's term is wᵢ zᵀ Lᵢᵀ Hᵢ Lᵢ z (Hᵢ = AᵢᵀAᵢ), whose blocks are Hᵢ ⊗ XᵢXᵢᵀ, Hᵢ ⊗ Xᵢ and
+        // Hᵢ, and with the offset Hᵢeᵢ ⊗ Xᵢ, Hᵢeᵢ and eᵢᵀHᵢeᵢ. Both H and XXᵀ are symmetric: six
+        // entries each, accumulated by hand (a search rebuilds the minorant about once every ten
+        // boxes).
         const PAIRS: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
         let mut outer = [[0.0f64; 6]; 6];
         let mut linear = [[0.0f64; 3]; 6];
         let mut constant = [0.0f64; 6];
+        // The offsets' terms: Σ w (He)_p X_i, Σ w (He)_p and Σ w eᵀHe.
+        let mut offset_rotation = [[0.0f64; 3]; 3];
+        let mut offset_t = [0.0f64; 3];
+        let mut offset_offset = 0.0;
         let mut eta2 = 0.0;
-        for ((x, form), d) in points.iter().zip(forms).zip(&depths) {
+        for (((x, form), e), d) in points.iter().zip(forms).zip(offsets).zip(&depths) {
             let w = 1.0 / (d * d);
             eta2 += w * form.norm2 * x.norm_squared();
             let wx = [w * x.x, w * x.y, w * x.z];
@@ -80,8 +101,18 @@ impl Minorant {
                 }
                 constant[k] += h * w;
             }
+            if *e != Vector3::zeros() {
+                let he = form.h * e;
+                for p in 0..3 {
+                    for (entry, v) in offset_rotation[p].iter_mut().zip(&wx) {
+                        *entry += he[p] * v;
+                    }
+                    offset_t[p] += w * he[p];
+                }
+                offset_offset += w * e.dot(&he);
+            }
         }
-        let mut gram = SMatrix::<f64, 12, 12>::zeros();
+        let mut gram = SMatrix::<f64, 13, 13>::zeros();
         for (k, &(a, b)) in PAIRS.iter().enumerate() {
             for (l, &(i, j)) in PAIRS.iter().enumerate() {
                 // Block (a, b) is Σ w H_ab XXᵀ, and block (b, a) the same (both symmetric).
@@ -92,15 +123,24 @@ impl Minorant {
             }
             for i in 0..3 {
                 for (p, q) in [(a, b), (b, a)] {
-                    gram[(3 * p + i, 9 + q)] = linear[k][i];
-                    gram[(9 + q, 3 * p + i)] = linear[k][i];
+                    gram[(3 * p + i, T + q)] = linear[k][i];
+                    gram[(T + q, 3 * p + i)] = linear[k][i];
                 }
             }
-            gram[(9 + a, 9 + b)] = constant[k];
-            gram[(9 + b, 9 + a)] = constant[k];
+            gram[(T + a, T + b)] = constant[k];
+            gram[(T + b, T + a)] = constant[k];
         }
+        for p in 0..3 {
+            for i in 0..3 {
+                gram[(3 * p + i, ONE)] = offset_rotation[p][i];
+                gram[(ONE, 3 * p + i)] = offset_rotation[p][i];
+            }
+            gram[(T + p, ONE)] = offset_t[p];
+            gram[(ONE, T + p)] = offset_t[p];
+        }
+        gram[(ONE, ONE)] = offset_offset;
         // What the bound of a box needs of `C` (the same for every box that shares the minorant).
-        let c = gram.fixed_view::<3, 3>(9, 9).into_owned();
+        let c = gram.fixed_view::<3, 3>(T, T).into_owned();
         let c_inv = c.try_inverse();
         Minorant {
             depths,
@@ -112,8 +152,8 @@ impl Minorant {
             bearing_spread: c_inv.map_or_else(Vec::new, |c_inv| bearings.iter().map(|b| b.dot(&(c_inv * b))).collect()),
             extent: OnceCell::new(),
             schur: c_inv.map_or_else(SMatrix::zeros, |c_inv| {
-                let b = gram.fixed_view::<9, 3>(0, 9);
-                gram.fixed_view::<9, 9>(0, 0) - b * c_inv * b.transpose()
+                let b = gram.fixed_view::<10, 3>(0, T);
+                gram.fixed_view::<10, 10>(0, 0) - b * c_inv * b.transpose()
             }),
         }
     }
@@ -121,9 +161,9 @@ impl Minorant {
     /// The minorant at the rotation `r` as a quadratic in `t`: `tᵀ C t + 2 gᵀ t + c₀` (`C` is
     /// [`Self::c`]).
     pub(super) fn at(&self, r: &Matrix3<f64>) -> (Vector3<f64>, f64) {
-        let v = SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]);
-        let a = self.gram.fixed_view::<9, 9>(0, 0);
-        let b = self.gram.fixed_view::<9, 3>(0, 9);
+        let v = rotation_part(r);
+        let a = self.gram.fixed_view::<10, 10>(0, 0);
+        let b = self.gram.fixed_view::<10, 3>(0, T);
         let g: Vector3<f64> = b.transpose() * v;
         let c0 = (v.transpose() * a * v)[0];
         (g, c0)
@@ -169,9 +209,10 @@ impl ScaledMinorant {
     /// minorant linearised in the rotation (0 when `Q` does not fix the translation). Such a
     /// rotation is `exp(φ) r` with `‖φ‖ ≤ θ`, and `exp(φ) r = r + [φ]ₓ r + E` with
     /// `‖E y‖ ≤ (e^θ − 1 − θ) ‖y‖` (the exponential series from its third term). `√Q` is a seminorm
-    /// of `(vec R, t)`, so `√Q(exp(φ) r, t) ≥ √Q(r + [φ]ₓ r, t) − (e^θ − 1 − θ) η`, and the first
+    /// of `(vec R, 1, t)`, so `√Q(exp(φ) r, t) ≥ √Q(r + [φ]ₓ r, t) − (e^θ − 1 − θ) η`, and the first
     /// term, minimised over `t`, is `√m(φ)` with the convex quadratic
-    /// `m(φ) = κ (v + Mφ)ᵀ S (v + Mφ)` (`v = vec r`, `M φ = vec([φ]ₓ r)`, `S` the Schur complement).
+    /// `m(φ) = κ (v + Mφ)ᵀ S (v + Mφ)` (`v = (vec r, 1)`, `M φ = (vec([φ]ₓ r), 0)`, `S` the Schur
+    /// complement).
     /// Its minimum over the ball `‖φ‖ ≤ θ` is bounded below by the Lagrangian dual
     /// `κ (q₀ − gᵀ (H + λI)⁻¹ g − λ θ²)` at any `λ ≥ 0` with `H + λI` positive definite
     /// (`q₀ = vᵀSv`, `g = MᵀSv`, `H = MᵀSM`); `λ` is found by Newton steps on the secular equation
@@ -189,9 +230,13 @@ impl ScaledMinorant {
             return 0.0;
         }
         let s = &self.minorant.schur;
-        let v = SMatrix::<f64, 9, 1>::from_fn(|i, _| r[(i / 3, i % 3)]);
-        // Column k of M is vec(eₖ × each column of r): row (i, j) is (eₖ × r₍:,ⱼ₎)ᵢ.
-        let m = SMatrix::<f64, 9, 3>::from_fn(|row, k| {
+        let v = rotation_part(r);
+        // Column k of M is vec(eₖ × each column of r): row (i, j) is (eₖ × r₍:,ⱼ₎)ᵢ; the constant's
+        // row is zero.
+        let m = SMatrix::<f64, 10, 3>::from_fn(|row, k| {
+            if row == ONE {
+                return 0.0;
+            }
             let (i, j) = (row / 3, row % 3);
             let c = r.column(j);
             match (k, i) {

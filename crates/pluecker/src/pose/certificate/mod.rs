@@ -125,7 +125,7 @@ use crate::certificate::{Certificate, CertificateKind, CertifyOptions};
 use crate::global::CERTIFICATE_COST_FLOOR;
 use lens::{Slack, Surrogate};
 use local_bound::{LocalModel, RaySlack};
-use problem::{Problem, SearchStart};
+use problem::{CameraPart, Problem, SearchStart};
 use search::{localise, BallBound, InsideBall, RotationSearch};
 
 /// The default cap on the boxes the rotation search bounds (its branch-and-bound nodes;
@@ -284,6 +284,58 @@ pub(crate) fn certify(
     sublevel_set_test(camera, lens, corr, pose, cost, options).into_verdict(kind)
 }
 
+/// One camera of a rig as [`certify_rig`] reads it: its index in the rig, the camera, its
+/// `sensor_from_rig` (`x_camera = R_k x_rig + c_k`) and the observations it made.
+pub(crate) struct RigCamera<'a> {
+    pub(crate) index: usize,
+    pub(crate) camera: &'a Camera,
+    pub(crate) sensor_from_rig: Pose,
+    pub(crate) corr: &'a Correspondences,
+}
+
+/// Certifies `pose`, the `rig_from_world` of a rig whose `cameras` made the observations (the
+/// conditioned frame of [`crate::pose::generalized`]), a local minimum of cost `cost` = `½ Σ r²` over
+/// every camera's residuals, with the node cap `options.max_nodes` or [`MAX_CELLS`]: the test of the
+/// module docs with every point in its own camera ([`problem`]'s module docs), over every pose that
+/// keeps the points in front of their cameras. Pinhole cameras only, and step 1's depth bounds are
+/// needed (the search without them is written around one camera's centre): else a verdict without a
+/// certificate, with the reason. The verdict's certificate is in `Σ r²`.
+pub(crate) fn certify_rig(cameras: &[RigCamera], pose: &Pose, cost: f64, options: &CertifyOptions) -> Verdict {
+    rig_sublevel_set_test(cameras, pose, cost, options).into_verdict(CertificateKind::SublevelSet)
+}
+
+/// [`certify_rig`] in this module's units: every cost and bound is `½ Σ r²`.
+fn rig_sublevel_set_test(cameras: &[RigCamera], pose: &Pose, cost: f64, options: &CertifyOptions) -> SublevelSetOutcome {
+    if !(cost.is_finite() && cost >= 0.0) {
+        return SublevelSetOutcome::none("not attempted: the cost is not finite");
+    }
+    if let Some(lens) = cameras.iter().find(|c| !c.camera.is_pinhole()) {
+        return SublevelSetOutcome::none(format!(
+            "not available: the certificate over several cameras is proved for pinhole cameras; camera {} \
+             is {}",
+            lens.index,
+            lens.camera.model().as_str()
+        ));
+    }
+    // Every camera's points one camera after the other: the order of the problem's points.
+    let mut all = Correspondences::default();
+    for c in cameras {
+        all.points2d.extend(&c.corr.points2d);
+        all.points3d.extend(&c.corr.points3d);
+        all.lines2d.extend(&c.corr.lines2d);
+        all.lines3d.extend(&c.corr.lines3d);
+    }
+    let parts = cameras
+        .iter()
+        .map(|c| CameraPart::new(&c.camera.intrinsics(), c.corr, Some(c.sensor_from_rig)))
+        .collect::<std::result::Result<Vec<_>, String>>();
+    let problem = match parts.and_then(|parts| Problem::of_rig(parts, &all, cost)) {
+        Ok(p) => p,
+        Err(why) => return SublevelSetOutcome::none(why),
+    };
+    certify_problem(&problem, &problem, pose, cost, options, None)
+}
+
 /// [`certify`] in this module's units: every cost and bound is `½ Σ r²`.
 fn sublevel_set_test(
     camera: &Intrinsics,
@@ -325,7 +377,7 @@ fn certify_pinhole(
         Err(why) => return SublevelSetOutcome::none(why),
     };
     let local = whole.as_ref().unwrap_or(&problem);
-    let first = certify_problem(&problem, local, camera, pose, cost, options, lens);
+    let first = certify_problem(&problem, local, pose, cost, options, lens);
     // With segments, a search with depth bounds that did not close its gap is followed by the one
     // without them (bounded at each box's rotation, segments and points alike): where the points are
     // few it certifies scenes the first cannot. Both bounds are proved; the better is kept.
@@ -333,7 +385,7 @@ fn certify_pinhole(
         return first;
     }
     let second = match Problem::without_depths(camera, search_corr, level) {
-        Ok(p) => certify_problem(&p, whole.as_ref().unwrap_or(&p), camera, pose, cost, options, lens),
+        Ok(p) => certify_problem(&p, whole.as_ref().unwrap_or(&p), pose, cost, options, lens),
         Err(why) => SublevelSetOutcome::none(why),
     };
     let nodes = first.nodes + second.nodes;
@@ -357,13 +409,12 @@ fn certify_pinhole(
 fn certify_problem(
     problem: &Problem,
     local: &Problem,
-    camera: &Intrinsics,
     pose: &Pose,
     cost: f64,
     options: &CertifyOptions,
     lens: Option<&Surrogate>,
 ) -> SublevelSetOutcome {
-    let (whitening, model) = match LocalModel::at(local, camera, pose, lens) {
+    let (whitening, model) = match LocalModel::at(local, pose, lens) {
         Ok(m) => m,
         Err(why) => return SublevelSetOutcome::none(why),
     };
@@ -442,7 +493,7 @@ fn certify_problem(
         radius: 0.0,
     };
     let cap = match problem.start {
-        SearchStart::DepthBounds(_) if problem.corr.n_lines() > 0 => MAX_CELLS_BEFORE_FALLBACK,
+        SearchStart::DepthBounds(_) if !problem.lines.is_empty() => MAX_CELLS_BEFORE_FALLBACK,
         SearchStart::DepthBounds(_) => MAX_CELLS,
         SearchStart::ObjectDistance { .. } => MAX_CELLS_FROM_DISTANCE,
     };

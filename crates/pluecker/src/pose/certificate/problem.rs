@@ -3,11 +3,23 @@
 //! bearings; and what the rotation search starts from: step 1's depth bounds `Dᵢ` (law of sines over
 //! pairs of points), or, without them, the object's distance from the camera
 //! ([`crate::pose::object_distance`]).
+//!
+//! **A rig's cameras** ([`Problem::of_rig`]): camera `k` sees `x_k = R_k x + c_k` of a point `x` in the
+//! rig's frame (the frame of the pose), i.e. `x_k = R_k (x + e_k)` with the offset `e_k = R_kᵀ c_k`
+//! (`−e_k` is the camera's centre in the rig's frame). A point's residual `Aᵢ x_k / x_{k,z}` is then
+//! `(Aᵢ R_k) (x + e_k) / x_{k,z}` and `‖x_k‖ = ‖x + e_k‖`, so every step reads the rig as one camera
+//! whose points each carry the map `Aᵢ R_k`, the bearing `R_kᵀ bᵢ` and the offset `e_k`; the depth
+//! bounds of step 1 come from pairs of points of one camera, and reach the points of a camera that
+//! gives none by the triangle inequality ([`rig_depth_bounds`]). Step 4 runs on each camera's own
+//! observations at its own pose ([`CameraPart`]).
 
 use super::minorant::{largest_eigenvalue, Minorant, PointForm};
 use crate::camera::Intrinsics;
+use crate::optim::{Linearization, Objective};
 use crate::pose::correspondences::Correspondences;
 use crate::pose::object_distance::{distance_bound, Sight};
+use crate::pose::reprojection::{Pose, ReprojectionCost};
+use crate::rig::tangent_map;
 use nalgebra::{Matrix2, Matrix3, SMatrix, Vector3};
 use std::rc::Rc;
 
@@ -48,14 +60,42 @@ pub(super) fn longest_segments(corr: &Correspondences, count: usize) -> Vec<usiz
 
 /// The data of the test, prepared once (conditioned frame, centred on the object).
 pub(super) struct Problem<'c> {
+    /// The correspondences (for a rig, every camera's points one camera after the other, in the order
+    /// of [`Self::cameras`]; the noise is the cameras').
     pub(super) corr: &'c Correspondences,
-    /// Per point, `W K₂`: the whitening `W` of its noise (the identity without covariances) times
-    /// the 2x2 block `K₂` of `K`, which maps a normalised-plane error to the whitened residual.
-    pub(super) point_maps: Vec<Matrix2<f64>>,
-    /// Per point, its part `Aᵢᵀ Aᵢ` of step 2's minorant ([`PointForm`]).
+    /// The cameras: one, whose pose is the pose (`sensor` `None`), or a rig's.
+    pub(super) cameras: Vec<CameraPart<'c>>,
+    /// Per point, its part `Aᵢᵀ Aᵢ` of step 2's minorant ([`PointForm`]; for a rig's camera `k`, of
+    /// `Aᵢ R_k`).
     pub(super) forms: Vec<PointForm>,
+    /// Per point, the offset `e_k = R_kᵀ c_k` of its camera (zero for one camera; module docs).
+    pub(super) offsets: Vec<Vector3<f64>>,
     /// What the rotation search starts from: step 1's depth bounds, or the object's distance.
     pub(super) start: SearchStart,
+    /// The parts of the box bound with segments ([`LineForm`]), longest segment first: the first
+    /// `box_segments` enter every box's bound ([`BOX_BOUND_SEGMENTS`], or [`BALL_SEGMENTS`] without
+    /// depth bounds), all of them the bounds of boxes near the answer without depth bounds. None for
+    /// a rig: its search bounds the boxes from the points (step 4 takes every segment).
+    pub(super) lines: Vec<LineForm>,
+    pub(super) box_segments: usize,
+    /// Unit bearings of the points (for a rig's camera `k`, `R_kᵀ bᵢ`: in the rig's frame).
+    pub(super) bearings: Vec<Vector3<f64>>,
+    /// `‖Xᵢ‖` (object coordinates).
+    pub(super) norms: Vec<f64>,
+    /// A cone of the bearings: their normalised mean `a`, `δ = max ‖bᵢ − a‖` and `max (‖Xᵢ‖ + ‖eᵢ‖)`.
+    /// Every `bᵢ · (R Xᵢ + t + eᵢ) ≥ a · t − δ ‖t‖ − max (‖Xᵢ‖ + ‖eᵢ‖)`: where that is positive no
+    /// point is behind.
+    pub(super) bearing_cone: (Vector3<f64>, f64, f64),
+}
+
+/// One camera's observations as the test reads them: its intrinsics, its correspondences, per point
+/// its whitened residual map `W K₂` (`W` the whitening of its noise, the identity without covariances;
+/// `K₂` the 2x2 block of `K`, which maps a normalised-plane error to the whitened residual), per
+/// segment endpoint its `G_e`, and where the camera sits in the frame of the pose.
+pub(super) struct CameraPart<'c> {
+    pub(super) camera: Intrinsics,
+    pub(super) corr: &'c Correspondences,
+    pub(super) point_maps: Vec<Matrix2<f64>>,
     /// `K⁻¹` (normalised endpoints `ē = K⁻¹ ẽ`).
     pub(super) k_inv: Matrix3<f64>,
     /// Per segment endpoint, `G_e = Lᵀ G` and its norm: `G` is the upper-left 2x2 block of `K⁻ᵀ` (a
@@ -63,18 +103,102 @@ pub(super) struct Problem<'c> {
     /// covariance (the identity without covariances), so that the endpoint's residual is
     /// `ēᵀ m / ‖G_e m_xy‖`.
     pub(super) endpoint_maps: Vec<[EndpointMap; 2]>,
-    /// The parts of the box bound with segments ([`LineForm`]), longest segment first: the first
-    /// `box_segments` enter every box's bound ([`BOX_BOUND_SEGMENTS`], or [`BALL_SEGMENTS`] without
-    /// depth bounds), all of them the bounds of boxes near the answer without depth bounds.
-    pub(super) lines: Vec<LineForm>,
-    pub(super) box_segments: usize,
-    /// Unit bearings of the points.
-    pub(super) bearings: Vec<Vector3<f64>>,
-    /// `‖Xᵢ‖` (object coordinates).
-    pub(super) norms: Vec<f64>,
-    /// A cone of the bearings: their normalised mean `a`, `δ = max ‖bᵢ − a‖` and `max ‖Xᵢ‖`. Every
-    /// `bᵢ · (R Xᵢ + t) ≥ a · t − δ ‖t‖ − max ‖Xᵢ‖`: where that is positive no point is behind.
-    pub(super) bearing_cone: (Vector3<f64>, f64, f64),
+    /// A rig's camera: its `sensor_from_rig` `(R_k, c_k)`, `x_k = R_k x + c_k` for `x` in the frame of
+    /// the pose. `None`: the pose is the camera's own.
+    pub(super) sensor: Option<Pose>,
+}
+
+impl<'c> CameraPart<'c> {
+    /// The observations `corr` of `camera`, placed by `sensor` (module docs).
+    pub(super) fn new(
+        camera: &Intrinsics,
+        corr: &'c Correspondences,
+        sensor: Option<Pose>,
+    ) -> std::result::Result<Self, String> {
+        let k = camera.matrix();
+        let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
+        let k_inv = k.try_inverse().ok_or("singular camera")?;
+        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
+        let (point_maps, endpoint_maps) = match &corr.noise {
+            None => {
+                let g_norm = norm2x2(&g).1;
+                (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
+            }
+            // Noise that carries a lens's Jacobians: the cost is in the distorted pixels.
+            Some(noise) if !noise.absolute => return Err(FIRST_ORDER_NOISE.into()),
+            Some(noise) => {
+                let endpoint = |c: &Matrix2<f64>| -> std::result::Result<EndpointMap, String> {
+                    // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
+                    let l = (0.5 * (c + c.transpose()))
+                        .cholesky()
+                        .ok_or("not attempted: a covariance is not positive definite")?
+                        .l();
+                    let map = l.transpose() * g;
+                    Ok((map, norm2x2(&map).1))
+                };
+                (
+                    noise.points.iter().map(|w| w * k2).collect(),
+                    noise
+                        .lines
+                        .iter()
+                        .map(|[c0, c1]| Ok([endpoint(c0)?, endpoint(c1)?]))
+                        .collect::<std::result::Result<_, String>>()?,
+                )
+            }
+        };
+        Ok(CameraPart {
+            camera: *camera,
+            corr,
+            point_maps,
+            k_inv,
+            endpoint_maps,
+            sensor,
+        })
+    }
+
+    /// The unit bearings of the points, in the camera's frame.
+    fn bearings(&self) -> Vec<Vector3<f64>> {
+        (self.corr.points2d.iter())
+            .map(|u| (self.k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
+            .collect()
+    }
+
+    /// The angle bound `αᵢ` of every point at the residual `eps0`: a whitened error `e` is a
+    /// normalised-plane error of at least `e / sᵢ` (`sᵢ` the least singular value of `Wᵢ K₂`).
+    fn alphas(&self, eps0: f64) -> Vec<f64> {
+        self.point_maps.iter().map(|m| eps0 / norm2x2(m).0).collect()
+    }
+
+    /// Step 2's point forms in the camera's frame: a point's residual is
+    /// `Wᵢ K₂ (π(x) − ūᵢ) = Aᵢ x / x_z` with `Aᵢ = Wᵢ K₂ Eᵢ`, `Eᵢ = [1 0 −ū₁; 0 1 −ū₂]` (`ūᵢ` the
+    /// normalised observed point); for a rig's camera, of `Aᵢ R_k`, in the rig's frame.
+    fn forms(&self) -> Vec<PointForm> {
+        (self.point_maps.iter().zip(&self.corr.points2d))
+            .map(|(map, u)| {
+                let n = self.k_inv * Vector3::new(u.x, u.y, 1.0);
+                let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -n.x / n.z, 0.0, 1.0, -n.y / n.z);
+                let a = match &self.sensor {
+                    None => map * e,
+                    Some(sensor) => map * e * sensor.rotation,
+                };
+                let h = a.transpose() * a;
+                PointForm {
+                    h,
+                    norm2: largest_eigenvalue(&h),
+                }
+            })
+            .collect()
+    }
+
+    /// The camera's pose and the whitening of its steps for the pose `pose` and the whitening `t`
+    /// of the frame of the pose: for a rig's camera, `(R_k R, R_k t + c_k)` and `diag(R_k, R_k) T`
+    /// (the rig's chart step `(ω, τ)` moves the camera by `(R_k ω, R_k τ)`).
+    pub(super) fn own(&self, pose: &Pose, t: &SMatrix<f64, 6, 6>) -> (Pose, SMatrix<f64, 6, 6>) {
+        match &self.sensor {
+            None => (*pose, *t),
+            Some(sensor) => (sensor.compose(pose), tangent_map(&sensor.rotation) * t),
+        }
+    }
 }
 
 /// What the rotation search starts from.
@@ -124,7 +248,7 @@ impl LineForm {
     }
 }
 
-/// A segment endpoint's `G_e` and `‖G_e‖` ([`Problem::endpoint_maps`]).
+/// A segment endpoint's `G_e` and `‖G_e‖` ([`CameraPart::endpoint_maps`]).
 pub(super) type EndpointMap = (Matrix2<f64>, f64);
 
 pub(super) fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
@@ -135,6 +259,12 @@ pub(super) fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
 /// The depth bound of every point for its angle bound `αᵢ` (`None` when some point has no partner
 /// seen far enough apart).
 pub(super) fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Option<Vec<f64>> {
+    depth_bounds_each(corr, bearings, alphas).into_iter().collect()
+}
+
+/// Step 1's depth bound of each point of one camera for its angle bound `αᵢ`, by the law of sines
+/// with a partner seen far enough apart (`None` for a point without one).
+pub(super) fn depth_bounds_each(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Vec<Option<f64>> {
     let n = bearings.len();
     // Partners: an even spread of the points.
     let step = (n / DEPTH_PARTNERS).max(1);
@@ -155,6 +285,34 @@ pub(super) fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], al
                 best = (0..n).map(|j| pair(i, j)).fold(f64::INFINITY, f64::min);
             }
             best.is_finite().then_some(best)
+        })
+        .collect()
+}
+
+/// A rig's depth bounds: each point's own (`depths`, from its camera: [`depth_bounds_each`]), and for
+/// a point without one the least over the points `j` with one of `Dⱼ + ‖Xᵢ − Xⱼ‖ + ‖eᵢ − eⱼ‖`: its
+/// distance `‖R Xᵢ + t + eᵢ‖` from its camera's centre is at most point `j`'s from its own, plus the
+/// object's distance between the points, plus the distance between the two centres `−eᵢ`, `−eⱼ`
+/// (triangle inequality). `None` when no point has a bound of its own.
+pub(super) fn rig_depth_bounds(
+    depths: &[Option<f64>],
+    points: &[Vector3<f64>],
+    offsets: &[Vector3<f64>],
+) -> Option<Vec<f64>> {
+    let bounded: Vec<usize> = (0..depths.len()).filter(|&j| depths[j].is_some()).collect();
+    depths
+        .iter()
+        .enumerate()
+        .map(|(i, own)| {
+            own.or_else(|| {
+                (bounded.iter())
+                    .map(|&j| {
+                        depths[j].unwrap_or(f64::INFINITY)
+                            + (points[i] - points[j]).norm()
+                            + (offsets[i] - offsets[j]).norm()
+                    })
+                    .min_by(f64::total_cmp)
+            })
         })
         .collect()
 }
@@ -180,46 +338,10 @@ impl<'c> Problem<'c> {
         f_hat: f64,
         use_depths: bool,
     ) -> std::result::Result<Self, String> {
-        let k = camera.matrix();
-        let k2 = Matrix2::new(camera.fx, camera.skew, 0.0, camera.fy);
-        let k_inv = k.try_inverse().ok_or("singular camera")?;
-        let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
-        let (point_maps, endpoint_maps): (Vec<Matrix2<f64>>, Vec<[EndpointMap; 2]>) = match &corr.noise {
-            None => {
-                let g_norm = norm2x2(&g).1;
-                (vec![k2; corr.n_points()], vec![[(g, g_norm); 2]; corr.n_lines()])
-            }
-            // Noise that carries a lens's Jacobians: the cost is in the distorted pixels.
-            Some(noise) if !noise.absolute => return Err(FIRST_ORDER_NOISE.into()),
-            Some(noise) => {
-                let endpoint = |c: &Matrix2<f64>| -> std::result::Result<EndpointMap, String> {
-                    // The residual's scale is √(l₁₂ᵀ C l₁₂): only the symmetric part of C enters.
-                    let l = (0.5 * (c + c.transpose()))
-                        .cholesky()
-                        .ok_or("not attempted: a covariance is not positive definite")?
-                        .l();
-                    let map = l.transpose() * g;
-                    Ok((map, norm2x2(&map).1))
-                };
-                (
-                    noise.points.iter().map(|w| w * k2).collect(),
-                    noise
-                        .lines
-                        .iter()
-                        .map(|[c0, c1]| Ok([endpoint(c0)?, endpoint(c1)?]))
-                        .collect::<std::result::Result<_, String>>()?,
-                )
-            }
-        };
-        // A whitened error e is a normalised-plane error of at least e / sᵢ (sᵢ the least singular
-        // value of Wᵢ K₂): the angle bound of point i.
+        let part = CameraPart::new(camera, corr, None)?;
         let eps0 = (2.0 * f_hat).sqrt();
-        let alphas: Vec<f64> = point_maps.iter().map(|m| eps0 / norm2x2(m).0).collect();
-        let bearings: Vec<Vector3<f64>> = corr
-            .points2d
-            .iter()
-            .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
-            .collect();
+        let alphas = part.alphas(eps0);
+        let bearings = part.bearings();
         let depths = if !use_depths {
             Err("the search without depth bounds was asked for".to_string())
         } else if corr.n_points() < 2 {
@@ -230,49 +352,115 @@ impl<'c> Problem<'c> {
             depth_bounds(corr, &bearings, &alphas)
                 .ok_or_else(|| "no two points are seen far enough apart to bound the depths".to_string())
         };
-        // A point's residual is Wᵢ K₂ (π(x) − ūᵢ) = Aᵢ x / x_z with Aᵢ = Wᵢ K₂ Eᵢ,
-        // Eᵢ = [1 0 −ū₁; 0 1 −ū₂] (ūᵢ the normalised observed point).
-        let forms: Vec<PointForm> = (point_maps.iter().zip(&corr.points2d))
-            .map(|(map, u)| {
-                let n = k_inv * Vector3::new(u.x, u.y, 1.0);
-                let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -n.x / n.z, 0.0, 1.0, -n.y / n.z);
-                let a = map * e;
-                let h = a.transpose() * a;
-                PointForm {
-                    h,
-                    norm2: largest_eigenvalue(&h),
-                }
-            })
-            .collect();
+        let forms = part.forms();
+        let offsets = vec![Vector3::zeros(); corr.n_points()];
         let (start, segments) = match depths {
             Ok(depths) => (
-                SearchStart::DepthBounds(Rc::new(Minorant::build(&corr.points3d, &bearings, &forms, depths))),
+                SearchStart::DepthBounds(Rc::new(Minorant::build(
+                    &corr.points3d,
+                    &bearings,
+                    &forms,
+                    &offsets,
+                    depths,
+                ))),
                 BOX_BOUND_SEGMENTS,
             ),
             Err(why) => {
-                let (pivot, distance) = object_distance(corr, &bearings, &alphas, &endpoint_maps, &k_inv, eps0)
-                    .ok_or_else(|| {
-                        format!("not proved: {why}, and the observations do not bound the object's distance")
-                    })?;
+                let (pivot, distance) =
+                    object_distance(corr, &bearings, &alphas, &part.endpoint_maps, &part.k_inv, eps0).ok_or_else(
+                        || format!("not proved: {why}, and the observations do not bound the object's distance"),
+                    )?;
                 (SearchStart::ObjectDistance { pivot, distance }, BALL_SEGMENTS)
             }
         };
         Ok(Problem {
             corr,
-            point_maps,
             forms,
-            k_inv,
             lines: longest_segments(corr, corr.n_lines())
                 .into_iter()
-                .map(|i| LineForm::new(corr, i, &endpoint_maps[i], &k_inv))
+                .map(|i| LineForm::new(corr, i, &part.endpoint_maps[i], &part.k_inv))
                 .collect(),
             box_segments: segments,
-            endpoint_maps,
-            bearing_cone: bearing_cone(&bearings, &corr.points3d),
+            bearing_cone: bearing_cone(&bearings, &corr.points3d, &offsets),
+            offsets,
             bearings,
             norms: corr.points3d.iter().map(|x| x.norm()).collect(),
             start,
+            cameras: vec![part],
         })
+    }
+
+    /// The data of the test for a rig's `cameras` (each with its `sensor`; module docs), whose points
+    /// `corr` holds one camera after the other in their order, at the level `f_hat`. The search needs
+    /// step 1's depth bounds: without them (no camera sees two of its points far enough apart, or the
+    /// residuals are too large for the angle bounds) there is no certificate.
+    pub(super) fn of_rig(
+        cameras: Vec<CameraPart<'c>>,
+        corr: &'c Correspondences,
+        f_hat: f64,
+    ) -> std::result::Result<Self, String> {
+        let eps0 = (2.0 * f_hat).sqrt();
+        let n = corr.n_points();
+        let (mut forms, mut bearings, mut offsets, mut depths) =
+            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        for part in &cameras {
+            let (rotation, offset) = part.sensor.map_or((Matrix3::identity(), Vector3::zeros()), |s| {
+                (s.rotation, s.rotation.transpose() * s.translation)
+            });
+            let alphas = part.alphas(eps0);
+            if !alphas.iter().all(|alpha| *alpha < 0.25) {
+                return Err(format!("not proved: residuals too large ({eps0:.3e} px) for the angle bounds"));
+            }
+            let own = part.bearings();
+            depths.extend(depth_bounds_each(part.corr, &own, &alphas));
+            bearings.extend(own.iter().map(|b| rotation.transpose() * b));
+            forms.extend(part.forms());
+            offsets.extend(std::iter::repeat_n(offset, part.corr.n_points()));
+        }
+        if bearings.len() != n {
+            return Err("not attempted: the cameras' points are not the problem's".into());
+        }
+        let depths = rig_depth_bounds(&depths, &corr.points3d, &offsets).ok_or(
+            "not proved: no camera of the rig sees two of its points far enough apart to bound the depths",
+        )?;
+        Ok(Problem {
+            corr,
+            start: SearchStart::DepthBounds(Rc::new(Minorant::build(
+                &corr.points3d,
+                &bearings,
+                &forms,
+                &offsets,
+                depths,
+            ))),
+            forms,
+            lines: Vec::new(),
+            box_segments: 0,
+            bearing_cone: bearing_cone(&bearings, &corr.points3d, &offsets),
+            offsets,
+            bearings,
+            norms: corr.points3d.iter().map(|x| x.norm()).collect(),
+            cameras,
+        })
+    }
+
+    /// The cost `½ Σ r²` of every camera at `pose`, linearised in the chart of the pose: one
+    /// camera's own, or the sum over a rig's cameras of theirs at their poses, each step mapped by
+    /// `diag(R_k, R_k)` (as the rig's cost, [`crate::pose::generalized`]).
+    pub(super) fn linearize(&self, pose: &Pose) -> Linearization<6> {
+        match self.cameras.as_slice() {
+            [one] if one.sensor.is_none() => ReprojectionCost::of(&one.camera, one.corr).linearize(pose),
+            cameras => {
+                let mut total = Linearization::zero();
+                for part in cameras {
+                    let (own, b) = part.own(pose, &SMatrix::identity());
+                    let lin = ReprojectionCost::of(&part.camera, part.corr).linearize(&own);
+                    total.cost += lin.cost;
+                    total.gradient += b.transpose() * lin.gradient;
+                    total.gauss_newton += b.transpose() * lin.gauss_newton * b;
+                }
+                total
+            }
+        }
     }
 
     /// Step 1's minorant (`None` without depth bounds).
@@ -285,7 +473,7 @@ impl<'c> Problem<'c> {
 
     /// Step 2's minorant for the depth bounds `depths`.
     pub(super) fn minorant(&self, depths: Vec<f64>) -> Minorant {
-        Minorant::build(&self.corr.points3d, &self.bearings, &self.forms, depths)
+        Minorant::build(&self.corr.points3d, &self.bearings, &self.forms, &self.offsets, depths)
     }
 }
 
@@ -341,10 +529,17 @@ pub(super) fn object_distance(
 
 /// [`Problem::bearing_cone`] (an empty cone, `δ = ∞`, without points or where the bearings' mean
 /// vanishes).
-pub(super) fn bearing_cone(bearings: &[Vector3<f64>], points: &[Vector3<f64>]) -> (Vector3<f64>, f64, f64) {
+pub(super) fn bearing_cone(
+    bearings: &[Vector3<f64>],
+    points: &[Vector3<f64>],
+    offsets: &[Vector3<f64>],
+) -> (Vector3<f64>, f64, f64) {
     let Some(axis) = bearings.iter().sum::<Vector3<f64>>().try_normalize(1e-12) else {
         return (Vector3::z(), f64::INFINITY, 0.0);
     };
     let reach = bearings.iter().map(|b| (b - axis).norm()).fold(0.0, f64::max);
-    (axis, reach, points.iter().map(|x| x.norm()).fold(0.0, f64::max))
+    let largest = (points.iter().zip(offsets))
+        .map(|(x, e)| x.norm() + e.norm())
+        .fold(0.0, f64::max);
+    (axis, reach, largest)
 }

@@ -396,10 +396,10 @@ impl RotationSearch<'_, '_> {
         let (axis, reach, largest) = problem.bearing_cone;
         let surely_in_front = axis.dot(&t_star) - reach * t_star.norm() > largest;
         let behind = !surely_in_front
-            && (problem.corr.points3d.iter().zip(&problem.bearings))
+            && (problem.corr.points3d.iter().zip(&problem.bearings).zip(&problem.offsets))
                 .zip(problem.norms.iter().zip(&minorant.bearing_spread))
-                .any(|((x, b), (norm, spread))| {
-                    let depth = b.dot(&(r_c * x + t_star));
+                .any(|(((x, b), e), (norm, spread))| {
+                    let depth = b.dot(&(r_c * x + t_star + e));
                     depth <= -theta * norm && depth + (slack_per_scale * spread).max(0.0).sqrt() <= -theta * norm
                 });
         if behind {
@@ -429,8 +429,8 @@ impl RotationSearch<'_, '_> {
         }
         // The depth bounds the octants inherit, and the minorant for them (else the octants share
         // this box's).
-        let reach = (problem.corr.points3d.iter().zip(&problem.norms))
-            .map(|(x, norm)| (r_c * x + ellipsoid.centre).norm() + theta * norm + ellipsoid.spread);
+        let reach = (problem.corr.points3d.iter().zip(&problem.norms).zip(&problem.offsets))
+            .map(|((x, norm), e)| (r_c * x + ellipsoid.centre + e).norm() + theta * norm + ellipsoid.spread);
         let handed_down = scaled.tightened(|depths| problem.minorant(depths), reach, r_c, 0.5 * theta);
         (bounded(lower), Some(HandedDown::Minorant(handed_down)))
     }

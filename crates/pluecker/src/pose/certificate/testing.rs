@@ -150,7 +150,7 @@ pub fn curvature_parts(
 ) -> std::result::Result<CurvatureParts, String> {
     let cost = ReprojectionCost::of(camera, corr).cost(pose);
     let problem = Problem::new(camera, corr, cost.max(level))?;
-    let (whitening, model) = LocalModel::at(&problem, camera, pose, None)?;
+    let (whitening, model) = LocalModel::at(&problem, pose, None)?;
     let mut parts = CurvatureParts {
         whitening: whitening.t,
         ..Default::default()
@@ -233,7 +233,7 @@ pub fn lens_local_bound(
         .cost(pose);
     let surrogate = Surrogate::new(lens, corr, pose, cost)?;
     let problem = Problem::new(&surrogate.camera, &surrogate.corr, surrogate.slack.to_surrogate(cost))?;
-    let (whitening, model) = LocalModel::at(&problem, &surrogate.camera, pose, Some(&surrogate))?;
+    let (whitening, model) = LocalModel::at(&problem, pose, Some(&surrogate))?;
     let curvature = model
         .curvature
         .bound(radius)
@@ -256,7 +256,7 @@ pub fn local_bound(
 ) -> std::result::Result<LocalBound, String> {
     let cost = ReprojectionCost::of(camera, corr).cost(pose);
     let problem = Problem::new(camera, corr, cost.max(level))?;
-    let (whitening, model) = LocalModel::at(&problem, camera, pose, None)?;
+    let (whitening, model) = LocalModel::at(&problem, pose, None)?;
     let curvature = model
         .curvature
         .bound(radius)

@@ -14,8 +14,8 @@ use crate::optim::{trust_region, Linearization, Objective, Summary, TrustRegionO
 use crate::pose::refinement::PoseCost;
 use crate::pose::reprojection::{covariance_from_information, retract, ReprojectionCost};
 use crate::pose::Correspondences;
-use crate::rig::Rig;
-use nalgebra::{Matrix3, SMatrix, SVector};
+use crate::rig::{tangent_map, Rig};
+use nalgebra::{SMatrix, SVector};
 
 /// One camera's share of a rig's observations: its correspondences, in the order of the input, and
 /// the input's rows they came from.
@@ -124,14 +124,6 @@ impl<'a> RigReprojectionCost<'a> {
     pub fn covariance(&self, pose: &Pose, sigma_px: f64) -> Option<SMatrix<f64, 6, 6>> {
         covariance_from_information(&self.linearize(pose).gauss_newton, sigma_px)
     }
-}
-
-/// `B = diag(R_k, R_k)`: the rig's tangent step as camera `k`'s (module docs).
-pub(super) fn tangent_map(r_k: &Matrix3<f64>) -> SMatrix<f64, 6, 6> {
-    let mut b = SMatrix::<f64, 6, 6>::zeros();
-    b.fixed_view_mut::<3, 3>(0, 0).copy_from(r_k);
-    b.fixed_view_mut::<3, 3>(3, 3).copy_from(r_k);
-    b
 }
 
 impl Objective<6> for RigReprojectionCost<'_> {

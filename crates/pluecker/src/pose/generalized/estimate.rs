@@ -1,19 +1,19 @@
 //! [`estimate_rig_pose`]: the pose of a rig from points and segments seen by its cameras (the
 //! pipeline of the module docs of [`super`]).
 
-use super::cost::{tangent_map, RigObservations, RigReprojectionCost};
+use super::cost::{RigObservations, RigReprojectionCost};
 use super::linear::linear_pose;
-use super::problem::{finish, Conditioned, SEVERAL_CAMERAS};
+use super::problem::{certify, finish, Conditioned};
 use super::{robust, ObservingCameras};
 use crate::camera_pose::Pose;
 use crate::error::{Error, Result};
 use crate::pose::candidates::is_exhaustive;
-use crate::pose::certificate::{self, Verdict};
+use crate::pose::certificate;
 use crate::pose::estimate::{ambiguity_sigma2, with_noise_level};
 use crate::pose::refinement::search;
 use crate::pose::result::{is_finite, status_with_behind, PipelineOutcome};
 use crate::pose::{estimate_pose, Correspondences, Method, PoseOptions, PoseResult, Status};
-use crate::rig::Rig;
+use crate::rig::{tangent_map, Rig};
 use std::time::Instant;
 
 /// The pose `rig_from_world` (`x_rig = R X_world + t`) of `rig` from the points and segments of
@@ -141,7 +141,9 @@ fn several_cameras(
     let second_best = choice
         .second
         .map(|i| (data.to_world(&minima.found[i].pose), minima.found[i].cost));
-    let certification = certificate::stage(opts.certify.as_ref(), status, |_| Verdict::none(SEVERAL_CAMERAS));
+    let certification = certificate::stage(opts.certify.as_ref(), status, |options| {
+        certify(&data.rig, &conditioned, &best.pose, best.cost, options)
+    });
     Ok(finish(
         &RigReprojectionCost::new(rig, observations)?,
         opts,

@@ -1,24 +1,21 @@
 //! A rig's problem as its search sees it: the data in the conditioned frame, every correspondence as
 //! a minimal solver's feature, the samples, and the assembly of the result ([`finish`]).
 
-use super::cost::RigReprojectionCost;
+use super::cost::{RigObservations, RigReprojectionCost};
 use super::linear::{rays, Ray};
 use super::ObservingCameras;
 use crate::camera_pose::Pose;
 use crate::error::Result;
 use crate::optim::Objective;
 use crate::pose::candidates::samples_by;
+use crate::pose::certificate::{certify_rig, RigCamera, Verdict};
 use crate::pose::correspondences::Conditioning;
 use crate::pose::minimal::{solve_generalized, RigFeature};
 use crate::pose::result::{assemble_at, is_finite, PipelineOutcome};
-use crate::pose::{Correspondences, PoseOptions, PoseResult};
+use crate::pose::{CertifyOptions, Correspondences, PoseOptions, PoseResult};
 use crate::rig::Rig;
 use nalgebra::Vector3;
 use std::time::Instant;
-
-/// Why a rig pose seen by several cameras carries no certificate.
-pub(crate) const SEVERAL_CAMERAS: &str = "not available: the certificate of global optimality covers observations \
-    seen by one camera; this pose uses several cameras of the rig";
 
 /// The data of a search over several cameras, in the conditioned frame: the object centred at its
 /// centroid and divided by its RMS radius, the rig's translations divided by the same.
@@ -131,4 +128,25 @@ pub(super) fn finish(
 ) -> PoseResult {
     let linearization = is_finite(&parts.pose).then(|| cost.linearize(&parts.pose));
     assemble_at(linearization, opts, started, parts)
+}
+
+/// The certificate of `pose` (`rig_from_world`, conditioned frame), a local minimum of the cost
+/// `cost` (`½ Σ r²`) of `observations` (conditioned frame) seen by `rig` (scaled as they are):
+/// [`certify_rig`] over the cameras that saw them.
+pub(super) fn certify(
+    rig: &Rig,
+    observations: &RigObservations,
+    pose: &Pose,
+    cost: f64,
+    options: &CertifyOptions,
+) -> Verdict {
+    let cameras: Vec<RigCamera> = (observations.shares.iter())
+        .map(|share| RigCamera {
+            index: share.camera,
+            camera: &rig.cameras()[share.camera],
+            sensor_from_rig: rig.sensor_from_rig()[share.camera],
+            corr: &share.corr,
+        })
+        .collect();
+    certify_rig(&cameras, pose, cost, options)
 }

@@ -20,12 +20,12 @@
 //! chance can give). Not yet for a rig: the sequential test (SPRT).
 
 use super::cost::{RigObservations, RigReprojectionCost};
-use super::problem::{finish, Conditioned, SEVERAL_CAMERAS};
+use super::problem::{certify, finish, Conditioned};
 use super::ObservingCameras;
 use crate::camera_pose::Pose;
 use crate::consensus::{self, truncated, Estimator, Stats};
 use crate::error::{Error, Result};
-use crate::optim::{trust_region, Summary, Termination, TrustRegionOptions};
+use crate::optim::{trust_region, Objective, Summary, Termination, TrustRegionOptions};
 use crate::pose::candidates::random_triple;
 use crate::pose::certificate::{self, Verdict};
 use crate::pose::refinement::{search, PoseCost};
@@ -314,7 +314,16 @@ pub(super) fn estimate(
     let behind = used_cost.points_behind(&world);
     let failure = failure.or_else(|| (report.inliers < report.required_inliers).then_some(Status::TooFewInliers));
     let status = failure.unwrap_or_else(|| status_with_behind(&world, &stages, behind, true, opts.refine));
-    let certification = certificate::stage(opts.certify.as_ref(), status, |_| Verdict::none(SEVERAL_CAMERAS));
+    // The certificate of the inliers' cost at the pose, in the conditioned frame.
+    let certification = certificate::stage(opts.certify.as_ref(), status, |options| {
+        let inliers = subset(&data.corr, &points, &lines);
+        match RigObservations::new(&data.rig, &inliers, &used_cameras)
+            .and_then(|o| Ok((RigReprojectionCost::new(&data.rig, &o)?.cost(&pose), o)))
+        {
+            Ok((cost, observations)) => certify(&data.rig, &observations, &pose, cost, options),
+            Err(e) => Verdict::none(format!("not attempted: {e}")),
+        }
+    });
     Ok(finish(
         &used_cost,
         opts,

@@ -5,6 +5,7 @@ mod box_bound;
 mod local_bound;
 mod minorant;
 mod problem;
+mod rig;
 mod search;
 
 use super::box_bound::*;
@@ -31,10 +32,10 @@ fn minorant_by_points(problem: &Problem, depths: &[f64], r: &Matrix3<f64>, t: &V
         .iter()
         .zip(&problem.corr.points2d)
         .zip(depths)
-        .zip(&problem.point_maps))
+        .zip(&problem.cameras[0].point_maps))
     .map(|(((x, u), d), map)| {
         let y = r * x + t;
-        let seen = problem.k_inv * Vector3::new(u.x, u.y, 1.0);
+        let seen = problem.cameras[0].k_inv * Vector3::new(u.x, u.y, 1.0);
         let residual = map * (y.xy() / y.z - seen.xy() / seen.z);
         (y.z / d).powi(2) * residual.norm_squared()
     })
@@ -44,9 +45,9 @@ fn minorant_by_points(problem: &Problem, depths: &[f64], r: &Matrix3<f64>, t: &V
 /// Per point, `H = Aᵀ A` of the oracle's minorant `‖A y‖² = y_z² ‖rᵢ(y)‖²` (`A = Wᵢ K₂ E`,
 /// `E = [1 0 −ū₁; 0 1 −ū₂]`), and `λ_max(H)`.
 fn forms_by_points(problem: &Problem) -> Vec<(Matrix3<f64>, f64)> {
-    (problem.corr.points2d.iter().zip(&problem.point_maps))
+    (problem.corr.points2d.iter().zip(&problem.cameras[0].point_maps))
         .map(|(u, map)| {
-            let seen = problem.k_inv * Vector3::new(u.x, u.y, 1.0);
+            let seen = problem.cameras[0].k_inv * Vector3::new(u.x, u.y, 1.0);
             let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -seen.x / seen.z, 0.0, 1.0, -seen.y / seen.z);
             let h = e.transpose() * map.transpose() * map * e;
             (h, h.symmetric_eigenvalues().max())

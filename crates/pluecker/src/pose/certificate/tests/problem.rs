@@ -21,7 +21,7 @@ fn the_bearing_cone_bounds_every_depth_from_below() {
             .iter()
             .map(|u| (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize())
             .collect();
-        let (axis, reach, largest) = bearing_cone(&bearings, &corr.points3d);
+        let (axis, reach, largest) = bearing_cone(&bearings, &corr.points3d, &vec![Vector3::zeros(); corr.n_points()]);
         let farthest = bearings
             .iter()
             .max_by(|a, b| (*a - axis).norm().total_cmp(&(*b - axis).norm()))
@@ -125,7 +125,7 @@ fn the_sine_of_an_endpoint_is_bounded_by_its_residual() {
                     let residual = normal.dot(&(observed - pa)).abs() / sigma;
                     let e = k_inv * Vector3::new(observed.x, observed.y, 1.0);
                     let sine = e.normalize().dot(&normal_plane).abs();
-                    let bound = endpoint_sine(residual, problem.endpoint_maps[line][end].1, &e);
+                    let bound = endpoint_sine(residual, problem.cameras[0].endpoint_maps[line][end].1, &e);
                     // Rounding: the pixels and the normal at ~1e-15 of their sizes.
                     assert!(sine <= bound * (1.0 + 1e-9) + 1e-15, "sine {sine} > its bound {bound}");
                     closest = closest.max(sine / bound);

@@ -25,6 +25,7 @@ fn a_scaled_minorant_bounds_a_box_as_the_minorant_rebuilt_for_its_depths() {
                         &corr.points3d,
                         &problem.bearings,
                         &problem.forms,
+                        &problem.offsets,
                         depths,
                     )),
                     scale: 1.0,
