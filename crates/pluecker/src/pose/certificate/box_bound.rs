@@ -78,13 +78,16 @@ pub(super) struct LineTerm {
     /// `r (a × d)` and `r d` at the box's centre rotation `r`.
     pub(super) rm: Vector3<f64>,
     pub(super) rd: Vector3<f64>,
+    /// The offset `e_k` of the segment's camera ([`super::problem::LineForm::offset`]): the
+    /// numerator at the translation `t` is the single camera's at `t + e_k` (zero for one camera).
+    pub(super) offset: Vector3<f64>,
 }
 
 impl LineTerm {
     /// `γ = r m × ē + r d × (ē × t)`: the numerator's first-order change `φᵀ γ` under the rotation
     /// `exp(φ) r` at the translation `t` ([`Problem::linear_ball_bound`]).
     pub(super) fn gamma(&self, t: &Vector3<f64>) -> Vector3<f64> {
-        self.rm.cross(&self.e) + self.rd.cross(&self.e.cross(t))
+        self.rm.cross(&self.e) + self.rd.cross(&self.e.cross(&(t + self.offset)))
     }
 
     /// The numerator's drift over the rotations `exp(φ) r`, `‖φ‖ ≤ θ`, at translations `t* + Δ`:
@@ -96,7 +99,7 @@ impl LineTerm {
     /// `exp(φ)` costing `ρ` times the norms; `Problem::linear_ball_bound`). Returns `(a, spin, θ)`.
     pub(super) fn spin(&self, theta: f64, t_star: &Vector3<f64>) -> (f64, f64, f64) {
         let rho = rotation_rest(theta);
-        let drift = self.moment_part + self.d_norm * self.e.cross(t_star).norm();
+        let drift = self.moment_part + self.d_norm * self.e.cross(&(t_star + self.offset)).norm();
         let first_order = self.gamma(t_star).norm();
         (drift, (theta * drift).min(theta * first_order + rho * drift), theta)
     }
@@ -106,7 +109,7 @@ impl LineTerm {
     /// `t = t* + Δ` with `‖ē × Δ‖ ≤ cross` ([`Problem::linear_lines_bound`]).
     pub(super) fn linear_rest(&self, theta: f64, t_star: &Vector3<f64>, cross: f64) -> f64 {
         theta * self.d_norm * cross
-            + rotation_rest(theta) * (self.moment_part + self.d_norm * self.e.cross(t_star).norm())
+            + rotation_rest(theta) * (self.moment_part + self.d_norm * self.e.cross(&(t_star + self.offset)).norm())
     }
 
     /// `‖d‖² [ē]ₓᵀ [ē]ₓ`: `Δᵀ (this) Δ = ‖d‖² ‖ē × Δ‖²`, the square of the drift's part in `Δ` per unit
@@ -141,26 +144,30 @@ impl Problem<'_> {
         let mut terms = Vec::with_capacity(2 * segments.min(self.lines.len()));
         for line in self.lines.iter().take(segments) {
             let [a_norm, b_norm, d_norm, m_norm] = line.norms;
-            let reach = |x: &Vector3<f64>, norm: f64| (r * x + t_star).norm() + theta * norm + spread;
+            // The segment's camera sees the translation t + e_k (zero offset for one camera).
+            let t_seen = t_star + line.offset;
+            let reach = |x: &Vector3<f64>, norm: f64| (r * x + t_seen).norm() + theta * norm + spread;
             let distance = reach(&line.a, a_norm).min(reach(&line.b, b_norm));
             let (rd, rm) = (r * line.d, r * line.moment);
             let moment = (d_norm * distance).min(
-                (rm + t_star.cross(&rd)).norm()
-                    + theta * (m_norm + d_norm * (t_star.norm() + spread))
+                (rm + t_seen.cross(&rd)).norm()
+                    + theta * (m_norm + d_norm * (t_seen.norm() + spread))
                     + Self::cross_extent(&rd, d_norm, spread, shape),
             );
             for &(e, e_norm, g_norm) in &line.ends {
+                let beta = rd.cross(&e);
                 terms.push(LineTerm {
                     weight: (g_norm * moment).powi(-2),
-                    alpha: e.dot(&rm),
-                    beta: rd.cross(&e),
+                    alpha: e.dot(&rm) + beta.dot(&line.offset),
+                    beta,
                     drift: e_norm * m_norm
-                        + d_norm * (e.cross(t_star).norm() + Self::cross_extent(&e, e_norm, spread, shape)),
+                        + d_norm * (e.cross(&t_seen).norm() + Self::cross_extent(&e, e_norm, spread, shape)),
                     e,
                     moment_part: e_norm * m_norm,
                     d_norm,
                     rm,
                     rd,
+                    offset: line.offset,
                 });
             }
         }
@@ -538,8 +545,8 @@ impl Problem<'_> {
     /// The linear parts of a box's minorant at its centre rotation `r` ([`Self::linear_ball_bound`],
     /// [`Self::lines_bound`]): a rotation of the box is `exp(φ) r`, `‖φ‖ ≤ θ`, and a translation
     /// `t_ref + Δ`; a segment endpoint's numerator has the linear part `α + βᵀ t_ref + βᵀ Δ + φᵀ γ`
-    /// (`γ` at `t_ref`, [`LineTerm::gamma`]) and a point's `Aᵢ (yᵢ + t)` (`yᵢ = r Xᵢ`) the linear
-    /// part `Aᵢ (yᵢ + t_ref + Δ − [yᵢ]ₓ φ)`. Their weighted sum of squares is a convex quadratic
+    /// (`γ` at `t_ref`, [`LineTerm::gamma`]) and a point's `Aᵢ (yᵢ + t + eᵢ)` (`yᵢ = r Xᵢ`, `eᵢ` its
+    /// camera's offset) the linear part `Aᵢ (yᵢ + t_ref + eᵢ + Δ − [yᵢ]ₓ φ)`. Their weighted sum of squares is a convex quadratic
     /// `L(φ, Δ)`; `C⁻¹` is the inverse of its `Δ` block (the quadratic's own). Minimised over `Δ`,
     /// `L = L_min(φ) + (Δ − Δ*(φ))ᵀ C (Δ − Δ*(φ))`, `Δ*(φ) = −C⁻¹ (B φ + h_Δ)`, and `least` bounds
     /// `L_min` from below over the ball `‖φ‖ ≤ θ` ([`ball_minimum_lower_bound`]).
@@ -566,17 +573,19 @@ impl Problem<'_> {
             h_d += w_beta * value;
             l0 += value * value * term.weight;
         }
-        for ((y, w), form) in points.zip(&self.forms) {
+        for (((y, w), form), offset) in points.zip(&self.forms).zip(&self.offsets) {
             // The camera-frame point's linear part is J z with J = [−[y]ₓ | I]: JᵀHJ has the blocks
-            // [y]ₓᵀ H [y]ₓ, −H [y]ₓ (B) and H, and JᵀH p the parts [y]ₓ H p and H p.
+            // [y]ₓᵀ H [y]ₓ, −H [y]ₓ (B) and H, and JᵀH p the parts [y]ₓ H p and H p (its camera's
+            // offset moves p, not the rotation's part).
             let (y_cross, wh) = (skew(&y), form.h * w);
             let wh_cross = wh * y_cross;
-            let hp = wh * (y + t_ref);
+            let p = y + t_ref + offset;
+            let hp = wh * p;
             m_pp -= y_cross * wh_cross;
             b -= wh_cross;
             h_p += y_cross * hp;
             h_d += hp;
-            l0 += (y + t_ref).dot(&hp);
+            l0 += p.dot(&hp);
         }
         let schur = m_pp - b.transpose() * c_inv * b;
         let g = h_p - b.transpose() * (c_inv * h_d);

@@ -493,7 +493,8 @@ fn certify_problem(
         radius: 0.0,
     };
     let cap = match problem.start {
-        SearchStart::DepthBounds(_) if !problem.lines.is_empty() => MAX_CELLS_BEFORE_FALLBACK,
+        // A rig's search is not followed by one without depth bounds.
+        SearchStart::DepthBounds(_) if !problem.lines.is_empty() && !problem.is_rig() => MAX_CELLS_BEFORE_FALLBACK,
         SearchStart::DepthBounds(_) => MAX_CELLS,
         SearchStart::ObjectDistance { .. } => MAX_CELLS_FROM_DISTANCE,
     };

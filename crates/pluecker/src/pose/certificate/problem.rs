@@ -9,9 +9,10 @@
 //! (`−e_k` is the camera's centre in the rig's frame). A point's residual `Aᵢ x_k / x_{k,z}` is then
 //! `(Aᵢ R_k) (x + e_k) / x_{k,z}` and `‖x_k‖ = ‖x + e_k‖`, so every step reads the rig as one camera
 //! whose points each carry the map `Aᵢ R_k`, the bearing `R_kᵀ bᵢ` and the offset `e_k`; the depth
-//! bounds of step 1 come from pairs of points of one camera, and reach the points of a camera that
-//! gives none by the triangle inequality ([`rig_depth_bounds`]). Step 4 runs on each camera's own
-//! observations at its own pose ([`CameraPart`]).
+//! bounds of step 1 come from pairs of points, of one camera or of two with the distance between
+//! their centres added ([`depth_bounds_each`]), and reach a point without a partner by the triangle
+//! inequality ([`rig_depth_bounds`]). Step 4 runs on each camera's own observations at its own pose
+//! ([`CameraPart`]).
 
 use super::minorant::{largest_eigenvalue, Minorant, PointForm};
 use crate::camera::Intrinsics;
@@ -74,8 +75,7 @@ pub(super) struct Problem<'c> {
     pub(super) start: SearchStart,
     /// The parts of the box bound with segments ([`LineForm`]), longest segment first: the first
     /// `box_segments` enter every box's bound ([`BOX_BOUND_SEGMENTS`], or [`BALL_SEGMENTS`] without
-    /// depth bounds), all of them the bounds of boxes near the answer without depth bounds. None for
-    /// a rig: its search bounds the boxes from the points (step 4 takes every segment).
+    /// depth bounds), all of them the bounds of boxes near the answer without depth bounds.
     pub(super) lines: Vec<LineForm>,
     pub(super) box_segments: usize,
     /// Unit bearings of the points (for a rig's camera `k`, `R_kᵀ bᵢ`: in the rig's frame).
@@ -216,8 +216,10 @@ pub(super) enum SearchStart {
 }
 
 /// A segment's part of the box bound with lines ([`Problem::lines_bound`]): its object endpoint `a`,
-/// direction `d = b − a` and moment `a × d` (with norms), and per observed endpoint `ē = K⁻¹ ẽ`,
-/// `‖ē‖` and `‖G_e‖`.
+/// direction `d = b − a` and moment `a × d` (with norms), per observed endpoint `ē = K⁻¹ ẽ`, `‖ē‖` and
+/// `‖G_e‖`, and its camera's offset `e_k` (for a rig's camera `k`, `ē` is turned into the rig's frame,
+/// `R_kᵀ K⁻¹ ẽ`: the numerator `ēᵀ R_k ((R a + t + e_k) × R d)` is then the single camera's at the
+/// translation `t + e_k`; zero offset for one camera).
 pub(super) struct LineForm {
     pub(super) a: Vector3<f64>,
     pub(super) b: Vector3<f64>,
@@ -225,10 +227,11 @@ pub(super) struct LineForm {
     pub(super) moment: Vector3<f64>,
     pub(super) norms: [f64; 4],
     pub(super) ends: [(Vector3<f64>, f64, f64); 2],
+    pub(super) offset: Vector3<f64>,
 }
 
 impl LineForm {
-    /// Segment `index` of `corr`.
+    /// Segment `index` of `corr`, seen by a camera at the origin of the frame of the pose.
     pub(super) fn new(corr: &Correspondences, index: usize, maps: &[EndpointMap; 2], k_inv: &Matrix3<f64>) -> Self {
         let (a, b) = (corr.lines3d[index][0], corr.lines3d[index][1]);
         let seen = corr.lines2d[index];
@@ -244,7 +247,20 @@ impl LineForm {
                 let e = k_inv * Vector3::new(seen[k].x, seen[k].y, 1.0);
                 (e, e.norm(), maps[k].1)
             }),
+            offset: Vector3::zeros(),
         }
+    }
+
+    /// Segment `index` of a rig's camera `part` ([`CameraPart::sensor`]).
+    fn of_camera(part: &CameraPart, index: usize) -> Self {
+        let mut form = LineForm::new(part.corr, index, &part.endpoint_maps[index], &part.k_inv);
+        if let Some(sensor) = &part.sensor {
+            for end in &mut form.ends {
+                end.0 = sensor.rotation.transpose() * end.0;
+            }
+            form.offset = sensor.rotation.transpose() * sensor.translation;
+        }
+        form
     }
 }
 
@@ -259,12 +275,24 @@ pub(super) fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
 /// The depth bound of every point for its angle bound `αᵢ` (`None` when some point has no partner
 /// seen far enough apart).
 pub(super) fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Option<Vec<f64>> {
-    depth_bounds_each(corr, bearings, alphas).into_iter().collect()
+    let offsets = vec![Vector3::zeros(); corr.n_points()];
+    depth_bounds_each(&corr.points3d, bearings, &offsets, alphas).into_iter().collect()
 }
 
-/// Step 1's depth bound of each point of one camera for its angle bound `αᵢ`, by the law of sines
-/// with a partner seen far enough apart (`None` for a point without one).
-pub(super) fn depth_bounds_each(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Vec<Option<f64>> {
+/// Step 1's depth bound of each point for its angle bound `αᵢ`, with a partner `j` seen far enough
+/// apart (`None` for a point without one): on `S` the point `yᵢ = R Xᵢ + t` is at the distance `λᵢ`
+/// from its camera's centre `−eᵢ` along a direction `bᵢ'` within `αᵢ` of its bearing `bᵢ` (both in
+/// the frame of the pose: [`Problem::bearings`], [`Problem::offsets`]), so
+/// `λᵢ bᵢ' − λⱼ bⱼ' = yᵢ − yⱼ + eᵢ − eⱼ` has a norm of at most `dᵢⱼ + ‖eᵢ − eⱼ‖`, and of at least
+/// `λᵢ sin γ'` (the distance of `λᵢ bᵢ'` from the line along `bⱼ'`), `γ' ∈ [γ − αᵢ − αⱼ, γ + αᵢ + αⱼ]`
+/// the angle between `bᵢ'` and `bⱼ'`: `λᵢ ≤ (dᵢⱼ + ‖eᵢ − eⱼ‖) / min(sin(γ ∓ (αᵢ + αⱼ)))`. For two
+/// points of one camera (`eᵢ = eⱼ`) this is the law of sines of the module docs.
+pub(super) fn depth_bounds_each(
+    points: &[Vector3<f64>],
+    bearings: &[Vector3<f64>],
+    offsets: &[Vector3<f64>],
+    alphas: &[f64],
+) -> Vec<Option<f64>> {
     let n = bearings.len();
     // Partners: an even spread of the points.
     let step = (n / DEPTH_PARTNERS).max(1);
@@ -275,7 +303,7 @@ pub(super) fn depth_bounds_each(corr: &Correspondences, bearings: &[Vector3<f64>
         if i == j || lo <= 0.0 || hi >= std::f64::consts::PI {
             return f64::INFINITY;
         }
-        (corr.points3d[i] - corr.points3d[j]).norm() / lo.sin().min(hi.sin())
+        ((points[i] - points[j]).norm() + (offsets[i] - offsets[j]).norm()) / lo.sin().min(hi.sin())
     };
     (0..n)
         .map(|i| {
@@ -289,7 +317,22 @@ pub(super) fn depth_bounds_each(corr: &Correspondences, bearings: &[Vector3<f64>
         .collect()
 }
 
-/// A rig's depth bounds: each point's own (`depths`, from its camera: [`depth_bounds_each`]), and for
+/// Every segment of a rig's `cameras` as a [`LineForm`], the longest in the image first (pixels of
+/// every camera alike).
+fn rig_segments(cameras: &[CameraPart]) -> Vec<LineForm> {
+    let mut lines: Vec<(f64, LineForm)> = (cameras.iter())
+        .flat_map(|part| {
+            (0..part.corr.n_lines()).map(move |j| {
+                let seen = part.corr.lines2d[j];
+                ((seen[1] - seen[0]).norm(), LineForm::of_camera(part, j))
+            })
+        })
+        .collect();
+    lines.sort_by(|a, b| b.0.total_cmp(&a.0));
+    lines.into_iter().map(|(_, form)| form).collect()
+}
+
+/// A rig's depth bounds: each point's own (`depths`, from its partners: [`depth_bounds_each`]), and for
 /// a point without one the least over the points `j` with one of `Dⱼ + ‖Xᵢ − Xⱼ‖ + ‖eᵢ − eⱼ‖`: its
 /// distance `‖R Xᵢ + t + eᵢ‖` from its camera's centre is at most point `j`'s from its own, plus the
 /// object's distance between the points, plus the distance between the two centres `−eᵢ`, `−eⱼ`
@@ -401,28 +444,26 @@ impl<'c> Problem<'c> {
     ) -> std::result::Result<Self, String> {
         let eps0 = (2.0 * f_hat).sqrt();
         let n = corr.n_points();
-        let (mut forms, mut bearings, mut offsets, mut depths) =
+        let (mut forms, mut bearings, mut offsets, mut alphas) =
             (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
         for part in &cameras {
             let (rotation, offset) = part.sensor.map_or((Matrix3::identity(), Vector3::zeros()), |s| {
                 (s.rotation, s.rotation.transpose() * s.translation)
             });
-            let alphas = part.alphas(eps0);
-            if !alphas.iter().all(|alpha| *alpha < 0.25) {
-                return Err(format!("not proved: residuals too large ({eps0:.3e} px) for the angle bounds"));
-            }
-            let own = part.bearings();
-            depths.extend(depth_bounds_each(part.corr, &own, &alphas));
-            bearings.extend(own.iter().map(|b| rotation.transpose() * b));
+            alphas.extend(part.alphas(eps0));
+            bearings.extend(part.bearings().iter().map(|b| rotation.transpose() * b));
             forms.extend(part.forms());
             offsets.extend(std::iter::repeat_n(offset, part.corr.n_points()));
         }
         if bearings.len() != n {
             return Err("not attempted: the cameras' points are not the problem's".into());
         }
-        let depths = rig_depth_bounds(&depths, &corr.points3d, &offsets).ok_or(
-            "not proved: no camera of the rig sees two of its points far enough apart to bound the depths",
-        )?;
+        if !alphas.iter().all(|alpha| *alpha < 0.25) {
+            return Err(format!("not proved: residuals too large ({eps0:.3e} px) for the angle bounds"));
+        }
+        let depths = depth_bounds_each(&corr.points3d, &bearings, &offsets, &alphas);
+        let depths = rig_depth_bounds(&depths, &corr.points3d, &offsets)
+            .ok_or("not proved: no two points of the rig are seen far enough apart to bound the depths")?;
         Ok(Problem {
             corr,
             start: SearchStart::DepthBounds(Rc::new(Minorant::build(
@@ -433,8 +474,8 @@ impl<'c> Problem<'c> {
                 depths,
             ))),
             forms,
-            lines: Vec::new(),
-            box_segments: 0,
+            lines: rig_segments(&cameras),
+            box_segments: BOX_BOUND_SEGMENTS,
             bearing_cone: bearing_cone(&bearings, &corr.points3d, &offsets),
             offsets,
             bearings,
@@ -461,6 +502,11 @@ impl<'c> Problem<'c> {
                 total
             }
         }
+    }
+
+    /// Whether the cameras are a rig's ([`Self::of_rig`]).
+    pub(super) fn is_rig(&self) -> bool {
+        self.cameras.iter().any(|c| c.sensor.is_some())
     }
 
     /// Step 1's minorant (`None` without depth bounds).
