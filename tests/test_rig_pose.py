@@ -89,13 +89,23 @@ def test_a_rig_of_one_camera_at_the_identity_is_the_camera():
     assert ours["certificate"] is not None
 
 
-def test_several_cameras_certify_not_yet_and_say_so():
+def test_several_pinhole_cameras_are_certified_and_lenses_say_why_not():
+    options = pluecker.PoseOptions(certify=pluecker.CertifyOptions())
+    pinholes = [c for c in CAMERAS if c.model in ("PINHOLE", "SIMPLE_PINHOLE")]
+    assert len(pinholes) >= 1
+    rig = pluecker.Rig([pinholes[0]] * len(POSES), POSES)
+    p2, p3, pc, l2, l3, lc = observe(rig, [6, 6, 6], [2, 2, 2], 1.0, seed=4)
+    r = pluecker.estimate_pose(rig, p2, p3, l2, l3, point_cameras=pc, line_cameras=lc, options=options)
+    assert r.status == "success" and r.certified
+    assert r.certificate.kind == "sublevel_set" and r.certificate.raw_lower_bound <= r.cost * (1 + 1e-12)
+    assert r.certificate.relative_gap <= 1e-3
+    # With a lens among several cameras: the status says it, and the reason names the camera.
     rig = pluecker.Rig(CAMERAS, POSES)
     p2, p3, pc, *_ = observe(rig, [6, 6, 6], [0, 0, 0], 1.0, seed=4)
-    r = pluecker.estimate_pose(rig, p2, p3, point_cameras=pc,
-                               options=pluecker.PoseOptions(certify=pluecker.CertifyOptions()))
+    r = pluecker.estimate_pose(rig, p2, p3, point_cameras=pc, options=options)
     assert r.status == "gap_not_closed" and not r.certified and r.certificate is None
-    assert "several cameras" in r.details.uncertified_reason
+    lens = next(k for k, c in enumerate(CAMERAS) if c.model not in ("PINHOLE", "SIMPLE_PINHOLE"))
+    assert f"pinhole cameras; camera {lens} is" in r.details.uncertified_reason
 
 
 def test_half_outliers_are_found_by_the_robust_rig_pose():

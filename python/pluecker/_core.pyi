@@ -552,7 +552,9 @@ def estimate_pose(
     and ``point_cameras`` (N,) / ``line_cameras`` (M,) give the index (in ``rig.cameras``) of the camera whose
     pixels each observation holds; the cost is in each camera's own pixels through its lens. Observations of
     one camera alone are that camera's problem (certificate included, pose moved into the rig's frame); over
-    several cameras a requested certificate is not available yet (status ``gap_not_closed``).
+    several pinhole cameras a requested certificate is the same proof with each observation in its own camera
+    (with lenses among several cameras it is not available: status ``gap_not_closed``, the reason names the
+    camera).
 
     ``camera``: :class:`Camera` (any model) whose observed (distorted, through a lens) pixels are given: the
     minimal solvers, RANSAC and the algebraic methods run on exactly undistorted pixels weighted by the

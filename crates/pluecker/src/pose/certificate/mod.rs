@@ -87,6 +87,16 @@
 //! as good as the answer; step 4 then bounds the exact cost through the lens, its difference from the
 //! pinhole problem bounded by interval enclosures of the distortion's Jacobian over nested balls.
 //!
+//! **A rig's cameras** ([`certify_rig`]): the pose is the rig's, `x_rig = R X + t`, and camera `k`
+//! sees `x_k = R_k x_rig + c_k = R_k (x_rig + e_k)` (`e_k = R_kᵀ c_k`). Every step above holds with each
+//! point and segment in its own camera ([`problem`]'s module docs): its residual map is `Aᵢ R_k` and its
+//! distance `‖R Xᵢ + t + e_k‖`, so step 2's minorant is `Σ wᵢ ‖Aᵢ R_k (R Xᵢ + t + e_k)‖²`, a quadratic
+//! in `(vec R, 1, t)` whose rotation drift is bounded by the same `η`; step 1 pairs points of one camera
+//! or of two (the distance between their centres added to the points'); a segment's numerator is the
+//! single camera's at the translation `t + e_k` with its endpoints' rays turned by `R_kᵀ`; and step 4
+//! runs on each camera's residuals at its own pose, whose whitened rays are the rig's turned by
+//! `diag(R_k, R_k)`. Pinhole cameras with depth bounds only (no search without depth bounds, no lens).
+//!
 //! **Without depth bounds** (lines alone, or fewer than two points seen more than `αᵢ + αⱼ` apart;
 //! `SearchStart::ObjectDistance`) steps 1-3 change: the camera's distance from a pivot of the object is bounded from
 //! the directions of the observations (`pose::object_distance`), and each box of rotations is bounded

@@ -123,7 +123,8 @@ pub(super) enum InsideBall<'m> {
 ///
 /// What a box hands down to its octants ([`BoundingOracle::Inherited`]) are its depth bounds: the
 /// largest distance each point reaches over its poses of `S`,
-/// `‖R X + t‖ ≤ ‖R_c X + t*‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid, capped by its own `Dᵢ`.
+/// `‖R X + t + e‖ ≤ ‖R_c X + t* + e‖ + θ ‖X‖ + ‖t − t*‖` with `t` in the ellipsoid (`e` the offset of the
+/// point's camera, zero for one camera: [`Problem::offsets`]), capped by its own `Dᵢ`.
 /// They hold on every pose of `S` in the box, so in each octant, and tighten the octants' minorants
 /// ([`ScaledMinorant`]).
 pub(super) struct RotationSearch<'a, 'c> {
@@ -392,7 +393,7 @@ impl RotationSearch<'_, '_> {
             extent: None,
         };
         // Cheirality: a point behind the camera for every rotation of the box and t of the ellipsoid.
-        // (Only a point with `b · (R_c x + t*) ≤ −θ ‖x‖` can be: the ellipsoid's term is not negative.)
+        // (Only a point with `b · (R_c x + t* + e) ≤ −θ ‖x‖` can be: the ellipsoid's term is not negative.)
         let (axis, reach, largest) = problem.bearing_cone;
         let surely_in_front = axis.dot(&t_star) - reach * t_star.norm() > largest;
         let behind = !surely_in_front

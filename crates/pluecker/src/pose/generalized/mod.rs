@@ -21,8 +21,12 @@
 //!   triples of correspondences, solves them with the same minimal solvers, scores them by the
 //!   truncated reprojection error in each camera's pixels and re-fits the best on its inliers.
 //!
-//! The certificate of global optimality is given for observations in one camera (the single camera's
-//! proof); for several cameras it is not available yet, and a requested one leaves the status
+//! The certificate of global optimality (with [`crate::pose::PoseOptions::certify`]) is the single
+//! camera's proof for observations in one camera; for several pinhole cameras it is the same
+//! sublevel-set test over every camera's residuals, each point and segment in its own camera
+//! (`crate::pose::certificate`'s `problem` module docs): a lower bound on the cost over every pose of
+//! the rig that keeps the points in front of their cameras. Not for several cameras with lenses, nor
+//! where no two points bound the depths: a requested certificate then leaves the status
 //! [`crate::Status::GapNotClosed`] with the reason in `details.uncertified_reason`.
 
 mod cost;

@@ -457,49 +457,19 @@ fn no_pose_in_front_beats_a_rigs_bound_and_a_worse_pose_is_not_certified() {
     assert!(certified * 10 >= scenes * 9, "{certified} of {scenes} least minima certified");
 }
 
+/// Typical rigs are certified (2 and 6 cameras on a ring, 10 and 100 points, points and segments,
+/// 1 px): through the pipeline, as a user asks for it.
 #[test]
-fn rig_failing_scene() {
-    for seed in [3u64, 37] {
-        let scene = rig_scene(ring(2, 800.0), &[25, 25], &[25, 25], 1.0, seed);
-        let (corr, cameras) = scene.joined();
-        let r = estimate_rig_pose(&scene.rig, &corr, &cameras, &PoseOptions::default()).unwrap();
-        let pose = r.pose; // world frame
-        for cap in [20_000usize, 200_000] {
-            let v = certify_rig(&scene.cameras(), &pose, scene.cost(&pose).unwrap(), &CertifyOptions { max_nodes: Some(cap), ..CertifyOptions::default() });
-            eprintln!("seed {seed} cap {cap}: {:?} {:?}", v.certificate.map(|c| (c.certified, c.nodes)), v.uncertified_reason);
-        }
-        // Without the segments.
-        let mut points_only = scene.shares.clone();
-        for s in &mut points_only { s.lines2d.clear(); s.lines3d.clear(); }
-        let scene2 = RigScene { rig: scene.rig.clone(), shares: points_only, truth: scene.truth };
-        let v = certify_rig(&scene2.cameras(), &pose, scene2.cost(&pose).unwrap(), &CertifyOptions::default());
-        eprintln!("seed {seed} points only at the same pose: {:?} {:?}", v.certificate.map(|c| (c.certified, c.nodes)), v.uncertified_reason);
-    }
-}
-
-#[test]
-fn rig_certificates_statistics() {
-    for (n, points, segments) in [(2, 50, 50), (2, 50, 0), (6, 5, 5), (2, 10, 10)] {
-        let mut certified = 0;
-        let mut reasons = Vec::new();
-        let trials = 40;
-        let started = std::time::Instant::now();
-        for seed in 0..trials {
-            let scene = rig_scene(ring(n, 800.0), &spread(points, n), &spread(segments, n), 1.0, seed);
-            let (corr, cameras) = scene.joined();
-            let r = estimate_rig_pose(&scene.rig, &corr, &cameras, &certify_options()).unwrap();
-            let nodes = r.report.certificate.map_or(0, |c| c.nodes);
-            if segments > 0 { eprintln!("  seed {seed}: nodes {nodes} certified {} cost {:.1}", r.report.certified(), r.report.cost); }
-            if r.report.certified() {
-                certified += 1;
-            } else {
-                reasons.push(r.details.uncertified_reason.clone().unwrap_or_default());
-            }
-        }
-        eprintln!(
-            "n {n} points {points} segments {segments}: certified {certified}/{trials}, {:.2} ms per pose; {:?}",
-            started.elapsed().as_secs_f64() * 1e3 / trials as f64,
-            reasons.iter().take(3).collect::<Vec<_>>()
-        );
+fn typical_rig_scenes_are_certified() {
+    for (n, points, segments) in [(2, 10, 0), (6, 100, 0), (2, 10, 10), (6, 5, 5)] {
+        let certified = (0..10)
+            .filter(|&seed| {
+                let scene = rig_scene(ring(n, 800.0), &spread(points, n), &spread(segments, n), 1.0, 300 + seed);
+                let (corr, cameras) = scene.joined();
+                let r = estimate_rig_pose(&scene.rig, &corr, &cameras, &certify_options()).unwrap();
+                r.report.certified()
+            })
+            .count();
+        assert!(certified >= 9, "{n} cameras, {points} points, {segments} segments: {certified} of 10");
     }
 }
