@@ -203,6 +203,7 @@ try:
 except ImportError as exc:  # pragma: no cover
     sys.exit(f"compare_global_pose.py needs the pluecker bindings ({exc}); build them first (see bench/README.md).")
 
+from compare_pose import _finite_or_none  # noqa: E402  (bench/ is the script's folder, first on sys.path)
 from global_pose_scenes import (  # noqa: E402  (bench/ is the script's folder, first on sys.path)
     COV_SIGMA_PX,
     CURVE_NEWTON_STEPS,
@@ -899,17 +900,6 @@ def extrapolate_seconds(rows: list[dict[str, Any]]) -> float:
             else:
                 total += sec * scale
     return total
-
-
-def _finite_or_none(value: Any) -> Any:
-    """NaN and infinities become ``null`` so the JSON stays strict."""
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, dict):
-        return {k: _finite_or_none(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite_or_none(v) for v in value]
-    return value
 
 
 def versions() -> dict[str, str]:

@@ -418,13 +418,15 @@ def targets(rows: list[dict[str, Any]]) -> list[tuple[str, bool]]:
 
 
 def _finite_or_none(value: Any) -> Any:
-    """NaN and infinities become ``null`` so the JSON stays strict."""
+    """NaN and infinities become ``null`` so the JSON stays strict; numpy scalars become Python's."""
     if isinstance(value, float):
         return value if math.isfinite(value) else None
     if isinstance(value, dict):
         return {k: _finite_or_none(v) for k, v in value.items()}
-    if isinstance(value, list):
+    if isinstance(value, (list, tuple)):
         return [_finite_or_none(v) for v in value]
+    if isinstance(value, (np.floating, np.integer, np.bool_)):
+        return _finite_or_none(value.item())
     return value
 
 

@@ -500,3 +500,17 @@ fn the_robust_rig_pose_is_certified_on_its_inliers() {
         }
     }
 }
+
+/// A cost that is not a finite sum of squares (NaN, infinite, negative) gets no certificate, with the
+/// reason; the same rig at its answer's cost does.
+#[test]
+fn a_rigs_cost_that_is_not_finite_gets_no_certificate() {
+    let scene = rig_scene(ring(2, 800.0), &[6, 6], &[0, 0], 1.0, 77);
+    let pose = minima(&scene, 1, &mut Rng::new(1))[0].0;
+    for cost in [f64::NAN, f64::INFINITY, -1.0] {
+        let verdict = certify_rig(&scene.cameras(), &pose, cost, &CertifyOptions::default());
+        assert!(verdict.certificate.is_none(), "cost {cost}");
+        assert!(verdict.uncertified_reason.unwrap().contains("not attempted"), "cost {cost}");
+    }
+    assert!(certify_at(&scene, &pose).certified());
+}
