@@ -124,7 +124,7 @@ impl CertificateKind {
             }
             (_, Primitive::Pose) | (CertificateKind::SublevelSet, _) => {
                 "every rotation and translation that keeps the object points and the segments' object \
-                 endpoints in front of the camera"
+                 endpoints in front of the camera that saw them"
             }
             (CertificateKind::LensConvexityTest, _) => {
                 "every point in front of every camera whose projection in each image lies inside the disc where \
