@@ -312,16 +312,7 @@ fn a_rigs_segment_terms_hold_over_the_box() {
         let (all, _) = scene.joined();
         let f_hat = 4.0 * scene.cost(&scene.truth).unwrap();
         let problem = rig_problem(&scene, &all, f_hat);
-        // The segments in the problem's order: the longest in the image first, camera by camera
-        // for equal lengths.
-        let mut order: Vec<(usize, usize)> = (0..n)
-            .flat_map(|k| (0..scene.shares[k].n_lines()).map(move |j| (k, j)))
-            .collect();
-        let length = |&(k, j): &(usize, usize)| {
-            let seen = scene.shares[k].lines2d[j];
-            (seen[1] - seen[0]).norm()
-        };
-        order.sort_by(|a, b| length(b).total_cmp(&length(a)));
+        let order = segment_order(&scene);
         let root = ScaledMinorant {
             minorant: Rc::clone(problem.root().expect("depth bounds")),
             scale: 1.0,
@@ -379,6 +370,151 @@ fn a_rigs_segment_terms_hold_over_the_box() {
         }
     }
     assert!(checked > 2000, "{checked}");
+}
+
+/// A rig's segments in the order of the problem's [`LineForm`]s: the longest in the image first,
+/// camera by camera for equal lengths.
+fn segment_order(scene: &RigScene) -> Vec<(usize, usize)> {
+    let mut order: Vec<(usize, usize)> = (0..scene.shares.len())
+        .flat_map(|k| (0..scene.shares[k].n_lines()).map(move |j| (k, j)))
+        .collect();
+    let length = |&(k, j): &(usize, usize)| {
+        let seen = scene.shares[k].lines2d[j];
+        (seen[1] - seen[0]).norm()
+    };
+    order.sort_by(|a, b| length(b).total_cmp(&length(a)));
+    order
+}
+
+/// A rig's linearised box bound with segments ([`Problem::lines_bound`]'s `by_linear`, each camera's
+/// offset in its points' and segments' terms) against the minorant it bounds, assembled here camera by
+/// camera: a point's `‖Aᵢ (R_k (R Xᵢ + t) + c_k)‖² / Dᵢ²` (`Aᵢ` from its pixel) and a segment
+/// endpoint's `weight (ēᵀ (A × B))²` with `A = R_k (R a + t) + c_k` (the weights the library's, checked
+/// by `a_rigs_segment_terms_hold_over_the_box`), minimised over the rotations of the box and, at each,
+/// over the translations within `spread` of `t*`. First, per endpoint, the numerator's rest beyond its
+/// linear part `α + βᵀ t + φᵀ γ(t*)` is within the documented bound at rotations and translations on the
+/// boundaries of the box and the set.
+#[test]
+fn a_rigs_linearised_bound_with_segments_holds_over_the_box() {
+    let mut rng = Rng::new(23);
+    let (mut checked, mut closest) = (0usize, 0.0f64);
+    for (n, seed) in [(2, 1u64), (3, 2), (4, 3)] {
+        let scene = rig_scene(ring(n, 800.0), &vec![3; n], &vec![3; n], 1.0, 600 + seed);
+        let (all, _) = scene.joined();
+        let f_hat = 4.0 * scene.cost(&scene.truth).unwrap();
+        let problem = rig_problem(&scene, &all, f_hat);
+        let order = segment_order(&scene);
+        let scaled = ScaledMinorant {
+            minorant: Rc::clone(problem.root().expect("depth bounds")),
+            scale: 1.0,
+        };
+        let depths: Vec<f64> = scaled.depths().collect();
+        // Per camera: its sensor, K and K⁻¹.
+        let frames: Vec<(Pose, Matrix3<f64>, Matrix3<f64>)> = (0..n)
+            .map(|k| {
+                let m = scene.rig.cameras()[k].intrinsics().matrix();
+                (scene.rig.sensor_from_rig()[k], m, m.try_inverse().unwrap())
+            })
+            .collect();
+        let seen_ray = |k: usize, u: Vector2<f64>| frames[k].2 * Vector3::new(u.x, u.y, 1.0);
+        for _ in 0..12 {
+            let r_c = nudged(&scene.truth, 0.05 * rng.uniform_in(0.0, 1.0).powi(2), 0.0, &mut rng).rotation;
+            let theta = 1e-4 * 1000f64.powf(rng.uniform_in(0.0, 1.0));
+            let (t_star, q_min, eta) = scaled.at(&r_c).unwrap();
+            let slack = (((2.0 * f_hat).sqrt() + theta * eta).powi(2) - q_min).max(0.0);
+            let spread = (slack * scaled.minorant.c_inv_max).sqrt();
+            let bounds_for = |wanted: f64| {
+                let set = (&t_star, q_min);
+                problem.lines_bound(&scaled, &r_c, theta, set, spread, problem.box_segments, Some(wanted))
+            };
+            let Some(growth) = bounds_for(0.0).map(|b| b.by_growth) else {
+                continue;
+            };
+            let bounds = bounds_for(growth * (1.0 + 1e-12) + 1e-300).expect("as without `wanted`");
+            let set = TranslationSet {
+                t_star: &t_star,
+                spread,
+                shape: None,
+            };
+            let terms = problem.line_terms(problem.box_segments, (&r_c, theta), set);
+            let rho = rotation_rest(theta);
+            for (index, term) in terms.iter().enumerate() {
+                let ((k, j), end) = (order[index / 2], index % 2);
+                let (sensor, _, _) = frames[k];
+                let e_cam = seen_ray(k, scene.shares[k].lines2d[j][end]);
+                // The ray in the rig's frame, and the camera's offset.
+                let (e, offset) = (
+                    sensor.rotation.transpose() * e_cam,
+                    sensor.rotation.transpose() * sensor.translation,
+                );
+                let [a, b] = scene.shares[k].lines3d[j];
+                let (d, moment) = (b - a, a.cross(&(b - a)));
+                for _ in 0..30 {
+                    let (phi, delta) = (rng.unit_vector3() * theta, rng.unit_vector3() * spread);
+                    let (rotation, t) = (exp_so3(&phi) * r_c, t_star + delta);
+                    let [ca, cb] = [a, b].map(|x| sensor.rotation * (rotation * x + t) + sensor.translation);
+                    let numerator = e_cam.dot(&ca.cross(&cb));
+                    let linear = term.alpha + term.beta.dot(&t) + phi.dot(&term.gamma(&t_star));
+                    let rest = theta * d.norm() * e.cross(&delta).norm()
+                        + rho * (e.norm() * moment.norm() + d.norm() * e.cross(&(t_star + offset)).norm());
+                    let claimed = term.linear_rest(theta, &t_star, e.cross(&delta).norm());
+                    assert!((claimed - rest).abs() <= 1e-9 * rest, "rest {claimed} vs {rest}");
+                    let ratio = (numerator - linear).abs() / rest;
+                    assert!(ratio <= 1.0 + 1e-6, "θ = {theta}: endpoint {index}'s rest reaches {ratio} of its bound");
+                    closest = closest.max(ratio);
+                }
+            }
+            // ½ min over ‖t − t*‖ ≤ spread of the minorant at the rotation exp(φ) r_c, assembled here.
+            let at_rotation = |phi: &Vector3<f64>| -> f64 {
+                let rotation = exp_so3(phi) * r_c;
+                let (mut c, mut g, mut c0) = (Matrix3::zeros(), Vector3::zeros(), 0.0);
+                let mut i = 0;
+                for (k, share) in scene.shares.iter().enumerate() {
+                    let (sensor, camera, _) = frames[k];
+                    let offset = sensor.rotation.transpose() * sensor.translation;
+                    for (u, x) in share.points2d.iter().zip(&share.points3d) {
+                        let seen = seen_ray(k, *u);
+                        let e = SMatrix::<f64, 2, 3>::new(1.0, 0.0, -seen.x / seen.z, 0.0, 1.0, -seen.y / seen.z);
+                        let a = camera.fixed_view::<2, 2>(0, 0) * e * sensor.rotation;
+                        let (h, y, w) = (a.transpose() * a, rotation * x + offset, 1.0 / depths[i].powi(2));
+                        c += h * w;
+                        g += h * y * w;
+                        c0 += y.dot(&(h * y)) * w;
+                        i += 1;
+                    }
+                }
+                for (index, term) in terms.iter().enumerate() {
+                    let ((k, j), end) = (order[index / 2], index % 2);
+                    let (sensor, _, _) = frames[k];
+                    let e = sensor.rotation.transpose() * seen_ray(k, scene.shares[k].lines2d[j][end]);
+                    let offset = sensor.rotation.transpose() * sensor.translation;
+                    let [a, b] = scene.shares[k].lines3d[j].map(|x| rotation * x + offset);
+                    let (alpha, beta) = (e.dot(&a.cross(&b)), (b - a).cross(&e));
+                    c += beta * beta.transpose() * term.weight;
+                    g += beta * alpha * term.weight;
+                    c0 += alpha * alpha * term.weight;
+                }
+                let value = |t: &Vector3<f64>| t.dot(&(c * t)) + 2.0 * g.dot(t) + c0;
+                let lipschitz = c.symmetric_eigenvalues().max();
+                let mut t = t_star;
+                for _ in 0..400 {
+                    let step = t - (c * t + g) / lipschitz;
+                    let off = step - t_star;
+                    t = t_star + off * (spread / off.norm()).min(1.0);
+                }
+                0.5 * value(&t)
+            };
+            let least = least_over_ball(&mut rng, theta, (40, 60), at_rotation);
+            assert!(
+                bounds.by_linear <= least * (1.0 + 1e-9) + 1e-12,
+                "θ = {theta}: linearised bound {} above the minorant's least {least}",
+                bounds.by_linear
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 30, "only {checked} boxes checked");
+    assert!(closest > 0.5, "the endpoints' rests reach at most {closest} of their bounds");
 }
 
 /// The local minima of the rig's cost reached from random starts (production refinement), each with
