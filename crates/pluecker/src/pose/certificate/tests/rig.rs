@@ -85,11 +85,16 @@ impl RigScene {
 /// `n` pinhole cameras (focal length `f`, 640 x 480) on a ring of radius 0.3 about the rig's y axis,
 /// looking outwards (camera `k` turned by `2π k / n`).
 fn ring(n: usize, f: f64) -> Rig {
+    ring_of(n, f, 0.3)
+}
+
+/// [`ring`] of radius `radius` (negative: each camera on the far side of the centre, looking across it).
+fn ring_of(n: usize, f: f64, radius: f64) -> Rig {
     let camera = Camera::pinhole(f, f, 320.0, 240.0, 0.0).unwrap();
     let sensors = (0..n)
         .map(|k| {
             let rig_from_camera = Rotation3::from_euler_angles(0.0, std::f64::consts::TAU * k as f64 / n as f64, 0.0);
-            let centre = rig_from_camera * Vector3::new(0.0, 0.0, 0.3);
+            let centre = rig_from_camera * Vector3::new(0.0, 0.0, radius);
             let rotation = rig_from_camera.inverse().into_inner();
             Pose::new(rotation, -(rotation * centre))
         })
@@ -306,9 +311,12 @@ fn a_rigs_depth_bounds_hold_on_its_sublevel_set() {
 #[test]
 fn a_rigs_segment_terms_hold_over_the_box() {
     let mut rng = Rng::new(21);
-    let mut checked = 0;
-    for (n, seed) in [(2, 1u64), (3, 2), (4, 3)] {
-        let scene = rig_scene(ring(n, 800.0), &vec![3; n], &vec![3; n], 1.0, 200 + seed);
+    let (mut checked, mut tightest) = (0, 0.0f64);
+    // Cameras 0.3 and 2 units from the rig's centre, looking away from it or (a negative radius)
+    // across it: a wrong offset moves a camera by as much as the points' depths, nearer to them or
+    // farther.
+    for (n, seed, radius) in [(2, 1u64, 0.3), (3, 2, 2.0), (4, 3, -2.0), (2, 4, -2.0)] {
+        let scene = rig_scene(ring_of(n, 800.0, radius), &vec![3; n], &vec![3; n], 1.0, 200 + seed);
         let (all, _) = scene.joined();
         let f_hat = 4.0 * scene.cost(&scene.truth).unwrap();
         let problem = rig_problem(&scene, &all, f_hat);
@@ -330,6 +338,25 @@ fn a_rigs_segment_terms_hold_over_the_box() {
             };
             let terms = problem.line_terms(problem.box_segments, (&r_c, theta), set);
             assert_eq!(terms.len(), 2 * BOX_BOUND_SEGMENTS.min(order.len()));
+            // At the box's centre alone (θ = 0, no spread): `W = ‖G_e‖ min(‖d‖ ‖A‖, ‖m‖)` at the
+            // centre's own pose, where `‖G_e m_xy‖` nearly reaches it (a segment's moment lies close to
+            // the image plane): a camera misplaced in the terms shows here.
+            let exact = TranslationSet {
+                t_star: &t_star,
+                spread: 0.0,
+                shape: None,
+            };
+            for (index, term) in problem.line_terms(problem.box_segments, (&r_c, 0.0), exact).iter().enumerate() {
+                let ((k, j), end) = (order[index / 2], index % 2);
+                let sensor = scene.rig.sensor_from_rig()[k];
+                let k_inv = scene.rig.cameras()[k].intrinsics().matrix().try_inverse().unwrap();
+                let [a, b] = scene.shares[k].lines3d[j].map(|x| sensor.rotation * (r_c * x + t_star) + sensor.translation);
+                let m = a.cross(&b);
+                let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
+                let w = (g * m.xy()).norm();
+                assert!(w <= term.weight.powf(-0.5) * (1.0 + 1e-9), "w {w} above {}", term.weight.powf(-0.5));
+                tightest = tightest.max(w * term.weight.sqrt());
+            }
             for sample in 0..20 {
                 let phi = if sample == 0 {
                     Vector3::zeros()
@@ -370,6 +397,7 @@ fn a_rigs_segment_terms_hold_over_the_box() {
         }
     }
     assert!(checked > 2000, "{checked}");
+    assert!(tightest > 0.9, "w reaches at most {tightest} of W at the boxes' centres");
 }
 
 /// A rig's segments in the order of the problem's [`LineForm`]s: the longest in the image first,
@@ -398,8 +426,8 @@ fn segment_order(scene: &RigScene) -> Vec<(usize, usize)> {
 fn a_rigs_linearised_bound_with_segments_holds_over_the_box() {
     let mut rng = Rng::new(23);
     let (mut checked, mut closest) = (0usize, 0.0f64);
-    for (n, seed) in [(2, 1u64), (3, 2), (4, 3)] {
-        let scene = rig_scene(ring(n, 800.0), &vec![3; n], &vec![3; n], 1.0, 600 + seed);
+    for (n, seed, radius) in [(2, 1u64, 0.3), (3, 2, 2.0), (4, 3, -2.0)] {
+        let scene = rig_scene(ring_of(n, 800.0, radius), &vec![3; n], &vec![3; n], 1.0, 600 + seed);
         let (all, _) = scene.joined();
         let f_hat = 4.0 * scene.cost(&scene.truth).unwrap();
         let problem = rig_problem(&scene, &all, f_hat);
