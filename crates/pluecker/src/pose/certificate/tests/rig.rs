@@ -223,21 +223,25 @@ fn a_rigs_minorant_is_every_cameras_points_terms_at_their_own_poses() {
 /// rig's origin sees `X_j = (0, 0, 5)` along its axis, camera A, centred at `(−0.5, 0, 0)`, sees
 /// `X_i = (2, 0, 5)`. Then `λᵢ bᵢ − λⱼ bⱼ = (2.5, 0, 0)` is perpendicular to `bⱼ` and is
 /// `(Xᵢ − Xⱼ) + (eᵢ − eⱼ)` with both parts along it, so `(dᵢⱼ + ‖eᵢ − eⱼ‖) / sin γ` is `λᵢ = ‖Xᵢ − C_A‖`
-/// exactly (at exact pixels and a negligible level).
+/// exactly (at exact pixels and a negligible level). The whole is moved off the rig's origin, so
+/// that neither camera's offset is zero.
 #[test]
 fn a_pair_of_points_of_two_cameras_bounds_the_depth_by_their_centres_distance() {
+    // The configuration moved by `shift` in the rig's frame: both cameras off its origin.
+    let shift = Vector3::new(0.3, -0.2, -1.0);
     let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
-    let sensors = vec![Pose::new(Matrix3::identity(), Vector3::new(0.5, 0.0, 0.0)), Pose::identity()];
+    let (offset_a, offset_b) = (Vector3::new(0.5, 0.0, 0.0) - shift, -shift);
+    let sensors = vec![Pose::new(Matrix3::identity(), offset_a), Pose::new(Matrix3::identity(), offset_b)];
     let rig = Rig::new(vec![camera.clone(), camera.clone()], sensors).unwrap();
     let share = |x: Vector3<f64>, offset: Vector3<f64>| Correspondences {
-        points2d: vec![camera.project(&(x + offset))],
-        points3d: vec![x],
+        points2d: vec![camera.project(&(x + shift + offset))],
+        points3d: vec![x + shift],
         ..Correspondences::default()
     };
     let scene = RigScene {
         shares: vec![
-            share(Vector3::new(2.0, 0.0, 5.0), Vector3::new(0.5, 0.0, 0.0)),
-            share(Vector3::new(0.0, 0.0, 5.0), Vector3::zeros()),
+            share(Vector3::new(2.0, 0.0, 5.0), offset_a),
+            share(Vector3::new(0.0, 0.0, 5.0), offset_b),
         ],
         rig,
         truth: Pose::identity(),
@@ -251,7 +255,7 @@ fn a_pair_of_points_of_two_cameras_bounds_the_depth_by_their_centres_distance() 
         "{depths:?} vs {distance}"
     );
     assert!(depths[1] >= 5.0, "{depths:?}");
-    assert_eq!(problem.offsets, vec![Vector3::new(0.5, 0.0, 0.0), Vector3::zeros()]);
+    assert_eq!(problem.offsets, vec![offset_a, offset_b]);
 }
 
 /// Step 1's transfer for a point without a partner: `Dⱼ + ‖Xᵢ − Xⱼ‖ + ‖eᵢ − eⱼ‖`, least over the
@@ -260,10 +264,10 @@ fn a_pair_of_points_of_two_cameras_bounds_the_depth_by_their_centres_distance() 
 #[test]
 fn a_point_without_a_partner_is_bounded_through_the_nearest_bounded_point() {
     let points = [Vector3::new(0.0, 0.0, 8.0), Vector3::new(0.0, 0.0, 5.0), Vector3::new(0.0, 3.0, 0.0)];
-    let offsets = [Vector3::new(0.0, 0.0, 0.5), Vector3::zeros(), Vector3::zeros()];
+    let offsets = [Vector3::new(0.0, 0.0, 0.5), Vector3::new(0.0, 0.0, -0.5), Vector3::zeros()];
     let depths = rig_depth_bounds(&[None, Some(5.0), Some(4.0)], &points, &offsets).unwrap();
-    // Through point 1: 5 + 3 + 0.5; through point 2: 4 + √73 + 0.5.
-    assert_eq!(depths, vec![8.5, 5.0, 4.0]);
+    // Through point 1: 5 + 3 + 1; through point 2: 4 + √73 + 0.5.
+    assert_eq!(depths, vec![9.0, 5.0, 4.0]);
     assert!(rig_depth_bounds(&[None, None], &points[..2], &offsets[..2]).is_none());
 }
 
