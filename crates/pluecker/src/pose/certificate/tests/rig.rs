@@ -341,7 +341,7 @@ fn a_rigs_segment_terms_hold_over_the_box() {
                 shape: None,
             };
             let terms = problem.line_terms(problem.box_segments, (&r_c, theta), set);
-            assert_eq!(terms.len(), 2 * BOX_BOUND_SEGMENTS.min(order.len()));
+            assert_eq!(terms.len(), 2 * problem.box_segments.min(order.len()));
             // At the box's centre alone (θ = 0, no spread): `W = ‖G_e‖ min(‖d‖ ‖A‖, ‖m‖)` at the
             // centre's own pose, where `‖G_e m_xy‖` nearly reaches it (a segment's moment lies close to
             // the image plane): a camera misplaced in the terms shows here.
@@ -714,3 +714,4 @@ fn degenerate_rigs_certify_only_the_right_answer() {
     }
     assert!(certified >= 6, "{certified} of 8 degenerate rigs certified");
 }
+
