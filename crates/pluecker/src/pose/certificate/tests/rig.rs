@@ -715,3 +715,159 @@ fn degenerate_rigs_certify_only_the_right_answer() {
     assert!(certified >= 6, "{certified} of 8 degenerate rigs certified");
 }
 
+
+/// Cheirality pruning on a rig: a box is pruned as behind a camera only if some point has
+/// `bᵢ · x ≤ 0` (`x = R_k (R Xᵢ + t) + c_k` in its own camera, `bᵢ` its observed bearing there) for
+/// every rotation of the box and every translation of its ellipsoid. The oracle maximises `bᵢ · x` per
+/// point over the rotations at the box's corners, centre and random inner points, each with the
+/// translation of the ellipsoid farthest along `R_kᵀ bᵢ`; some point must stay behind everywhere.
+/// Rigs whose cameras look across their centre, wide fields of view, levels far above the optimum.
+#[test]
+fn a_rigs_boxes_pruned_as_behind_have_a_point_behind_everywhere() {
+    let mut rng = Rng::new(41);
+    let (mut checked, mut close) = (0usize, 0usize);
+    for (n, radius, seed) in [(3, -2.0, 1u64), (2, 2.0, 2), (4, -1.0, 3)] {
+        let scene = rig_scene(ring_of(n, 250.0, radius), &vec![4; n], &vec![0; n], 1.0, 800 + seed);
+        let (all, _) = scene.joined();
+        let pose = minima(&scene, 1, &mut rng)[0].0;
+        let optimum = scene.cost(&pose).unwrap();
+        for factor in [10.0, 100.0] {
+            let f_hat = factor * optimum;
+            let problem = rig_problem(&scene, &all, f_hat);
+            let whitening = Whitening::new(&problem.linearize(&pose).gauss_newton).unwrap();
+            let mut record = RecordedCells::new(2e-3);
+            let mut search = RotationSearch {
+                problem: &problem,
+                whitening: &whitening,
+                pose: &pose,
+                f_hat,
+                target: 16.0 * ((2.0 * f_hat).sqrt() + 0.1),
+                max_relative_gap: 0.0,
+                slack: Slack::NONE,
+                inside_ball: InsideBall::Record(&mut record),
+                linearise_lines: true,
+                radius: 0.0,
+            };
+            if localise(&mut search, 200_000).is_err() {
+                continue;
+            }
+            for cell in record.behind.iter().take(300) {
+                let c_inv = cell.c.try_inverse().unwrap();
+                let mut rotations: Vec<Vector3<f64>> = (0..8)
+                    .map(|corner: usize| cell.centre + Vector3::from_fn(|k, _| if corner >> k & 1 == 1 { 1.0 } else { -1.0 }).component_mul(&cell.half))
+                    .collect();
+                rotations.push(cell.centre);
+                rotations.extend((0..20).map(|_| cell.centre + Vector3::from_fn(|_, _| rng.uniform_in(-1.0, 1.0)).component_mul(&cell.half)));
+                let mut least = f64::INFINITY;
+                let mut i = 0;
+                for (k, share) in scene.shares.iter().enumerate() {
+                    let sensor = scene.rig.sensor_from_rig()[k];
+                    let k_inv = scene.rig.cameras()[k].intrinsics().matrix().try_inverse().unwrap();
+                    for (u, x) in share.points2d.iter().zip(&share.points3d) {
+                        let b = (k_inv * Vector3::new(u.x, u.y, 1.0)).normalize();
+                        let along = sensor.rotation.transpose() * b;
+                        // The ellipsoid's farthest translation along `along`.
+                        let step = c_inv * along * (cell.slack.max(0.0) / along.dot(&(c_inv * along))).sqrt();
+                        let reach = rotations
+                            .iter()
+                            .map(|w| {
+                                let rotation = exp_so3(w) * pose.rotation;
+                                b.dot(&(sensor.rotation * (rotation * x + cell.t_star + step) + sensor.translation))
+                            })
+                            .fold(f64::NEG_INFINITY, f64::max);
+                        least = least.min(reach);
+                        i += 1;
+                    }
+                }
+                assert!(i == all.n_points());
+                assert!(least <= 1e-9, "a box pruned as behind has every point reaching {least} in front");
+                checked += 1;
+                close += usize::from(least > -0.1);
+            }
+        }
+    }
+    assert!(checked >= 50, "only {checked} boxes pruned as behind");
+    eprintln!("{checked} boxes pruned as behind, {close} within 0.1 of the boundary");
+}
+
+/// The depth bounds a rig's box hands down hold at the farthest poses of the box: at the rotations of
+/// its corners and centre, with the translation of its ellipsoid `Q(t) ≤ (√(2f̂) + θ η)²` farthest from
+/// the point's camera (the oracle: `‖R_k (R Xᵢ + t) + c_k‖`). Bounds that are the parent's own cap (valid
+/// on the sublevel set only) are left out. Rigs whose cameras are 1-2 units from the centre.
+#[test]
+fn the_depths_a_rigs_box_hands_down_hold_over_the_box() {
+    let mut rng = Rng::new(43);
+    let mut checked = 0;
+    for (n, radius, seed) in [(3, -2.0, 1u64), (2, 2.0, 2), (4, -1.0, 3)] {
+        let scene = rig_scene(ring_of(n, 800.0, radius), &vec![5; n], &vec![0; n], 1.0, 900 + seed);
+        let (all, _) = scene.joined();
+        let pose = minima(&scene, 1, &mut rng)[0].0;
+        let f_hat = 4.0 * scene.cost(&pose).unwrap();
+        let problem = rig_problem(&scene, &all, f_hat);
+        let root = problem.root().expect("depth bounds").clone();
+        let whitening = Whitening::new(&problem.linearize(&pose).gauss_newton).unwrap();
+        let mut search = RotationSearch {
+            problem: &problem,
+            whitening: &whitening,
+            pose: &pose,
+            f_hat,
+            target: 0.0,
+            max_relative_gap: 0.0,
+            slack: Slack::NONE,
+            inside_ball: InsideBall::Bound(BallBound {
+                model: &LocalModel::at(&problem, &pose, None).unwrap().1,
+                radius: 0.0,
+                bound: 0.0,
+                at_target: 0.0,
+            }),
+            linearise_lines: true,
+            radius: 0.0,
+        };
+        for _ in 0..60 {
+            let centre = rng.unit_vector3() * 0.05 * rng.uniform_in(0.0, 1.0);
+            let half = Vector3::from_fn(|_, _| 1e-3 * 30f64.powf(rng.uniform_in(0.0, 1.0)));
+            let region = Region::new(
+                (centre - half).iter().copied().collect::<Vec<f64>>(),
+                (centre + half).iter().copied().collect::<Vec<f64>>(),
+            );
+            let (_, handed) = search.bound_with(&region, &None);
+            let Some(handed) = handed else {
+                continue;
+            };
+            let depths: Vec<f64> = handed.minorant().depths().collect();
+            let r_c = exp_so3(&centre) * pose.rotation;
+            let theta = half.norm();
+            let scaled = ScaledMinorant {
+                minorant: Rc::clone(&root),
+                scale: 1.0,
+            };
+            let (t_star, q_min, eta) = scaled.at(&r_c).unwrap();
+            let slack = (((2.0 * f_hat).sqrt() + theta * eta).powi(2) - q_min).max(0.0);
+            let c_inv = root.c_inv.unwrap();
+            let mut i = 0;
+            for (k, share) in scene.shares.iter().enumerate() {
+                let sensor = scene.rig.sensor_from_rig()[k];
+                for x in &share.points3d {
+                    if depths[i] < root.depths[i] {
+                        for corner in 0..9usize {
+                            let w = if corner == 8 {
+                                centre
+                            } else {
+                                centre + Vector3::from_fn(|a, _| if corner >> a & 1 == 1 { 1.0 } else { -1.0 }).component_mul(&half)
+                            };
+                            let rotation = exp_so3(&w) * pose.rotation;
+                            let y = rotation * x + sensor.rotation.transpose() * sensor.translation + t_star;
+                            let along = y.normalize();
+                            let step = c_inv * along * (slack / along.dot(&(c_inv * along))).sqrt();
+                            let distance = (sensor.rotation * (rotation * x + t_star + step) + sensor.translation).norm();
+                            assert!(distance <= depths[i] * (1.0 + 1e-9), "point {i}: {distance} beyond {}", depths[i]);
+                        }
+                        checked += 1;
+                    }
+                    i += 1;
+                }
+            }
+        }
+    }
+    assert!(checked >= 100, "only {checked} handed-down depths checked");
+}
