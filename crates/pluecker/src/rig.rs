@@ -254,4 +254,3 @@ mod tests {
         assert!(err.contains("sensor_from_rig[0]"), "{err}");
     }
 }
-

@@ -315,7 +315,12 @@ pub(crate) fn certify_rig(cameras: &[RigCamera], pose: &Pose, cost: f64, options
 }
 
 /// [`certify_rig`] in this module's units: every cost and bound is `½ Σ r²`.
-fn rig_sublevel_set_test(cameras: &[RigCamera], pose: &Pose, cost: f64, options: &CertifyOptions) -> SublevelSetOutcome {
+fn rig_sublevel_set_test(
+    cameras: &[RigCamera],
+    pose: &Pose,
+    cost: f64,
+    options: &CertifyOptions,
+) -> SublevelSetOutcome {
     if !(cost.is_finite() && cost >= 0.0) {
         return SublevelSetOutcome::none("not attempted: the cost is not finite");
     }

@@ -276,7 +276,9 @@ pub(super) fn norm2x2(m: &Matrix2<f64>) -> (f64, f64) {
 /// seen far enough apart).
 pub(super) fn depth_bounds(corr: &Correspondences, bearings: &[Vector3<f64>], alphas: &[f64]) -> Option<Vec<f64>> {
     let offsets = vec![Vector3::zeros(); corr.n_points()];
-    depth_bounds_each(&corr.points3d, bearings, &offsets, alphas).into_iter().collect()
+    depth_bounds_each(&corr.points3d, bearings, &offsets, alphas)
+        .into_iter()
+        .collect()
 }
 
 /// Step 1's depth bound of each point for its angle bound `αᵢ`, with a partner `j` seen far enough
@@ -444,8 +446,12 @@ impl<'c> Problem<'c> {
     ) -> std::result::Result<Self, String> {
         let eps0 = (2.0 * f_hat).sqrt();
         let n = corr.n_points();
-        let (mut forms, mut bearings, mut offsets, mut alphas) =
-            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut forms, mut bearings, mut offsets, mut alphas) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
         for part in &cameras {
             let (rotation, offset) = part.sensor.map_or((Matrix3::identity(), Vector3::zeros()), |s| {
                 (s.rotation, s.rotation.transpose() * s.translation)
@@ -453,13 +459,15 @@ impl<'c> Problem<'c> {
             alphas.extend(part.alphas(eps0));
             bearings.extend(part.bearings().iter().map(|b| rotation.transpose() * b));
             forms.extend(part.forms());
-            offsets.extend(std::iter::repeat_n(offset, part.corr.n_points()));
+            offsets.extend(std::iter::repeat(offset).take(part.corr.n_points()));
         }
         if bearings.len() != n {
             return Err("not attempted: the cameras' points are not the problem's".into());
         }
         if !alphas.iter().all(|alpha| *alpha < 0.25) {
-            return Err(format!("not proved: residuals too large ({eps0:.3e} px) for the angle bounds"));
+            return Err(format!(
+                "not proved: residuals too large ({eps0:.3e} px) for the angle bounds"
+            ));
         }
         let depths = depth_bounds_each(&corr.points3d, &bearings, &offsets, &alphas);
         let depths = rig_depth_bounds(&depths, &corr.points3d, &offsets)

@@ -397,12 +397,17 @@ impl RotationSearch<'_, '_> {
         let (axis, reach, largest) = problem.bearing_cone;
         let surely_in_front = axis.dot(&t_star) - reach * t_star.norm() > largest;
         let behind = !surely_in_front
-            && (problem.corr.points3d.iter().zip(&problem.bearings).zip(&problem.offsets))
-                .zip(problem.norms.iter().zip(&minorant.bearing_spread))
-                .any(|(((x, b), e), (norm, spread))| {
-                    let depth = b.dot(&(r_c * x + t_star + e));
-                    depth <= -theta * norm && depth + (slack_per_scale * spread).max(0.0).sqrt() <= -theta * norm
-                });
+            && (problem
+                .corr
+                .points3d
+                .iter()
+                .zip(&problem.bearings)
+                .zip(&problem.offsets))
+            .zip(problem.norms.iter().zip(&minorant.bearing_spread))
+            .any(|(((x, b), e), (norm, spread))| {
+                let depth = b.dot(&(r_c * x + t_star + e));
+                depth <= -theta * norm && depth + (slack_per_scale * spread).max(0.0).sqrt() <= -theta * norm
+            });
         if behind {
             if let InsideBall::Record(r) = &mut self.inside_ball {
                 r.pruned += 1;

@@ -27,8 +27,10 @@ impl RigScene {
             corr.points3d.extend(&share.points3d);
             corr.lines2d.extend(&share.lines2d);
             corr.lines3d.extend(&share.lines3d);
-            cameras.point_cameras.extend(std::iter::repeat_n(k, share.n_points()));
-            cameras.line_cameras.extend(std::iter::repeat_n(k, share.n_lines()));
+            cameras
+                .point_cameras
+                .extend(std::iter::repeat(k).take(share.n_points()));
+            cameras.line_cameras.extend(std::iter::repeat(k).take(share.n_lines()));
         }
         (corr, cameras)
     }
@@ -52,7 +54,10 @@ impl RigScene {
         let mut sum = 0.0;
         for (k, share) in self.shares.iter().enumerate() {
             let s = self.rig.sensor_from_rig()[k];
-            let (rotation, translation) = (s.rotation * pose.rotation, s.rotation * pose.translation + s.translation);
+            let (rotation, translation) = (
+                s.rotation * pose.rotation,
+                s.rotation * pose.translation + s.translation,
+            );
             let k_matrix = self.rig.cameras()[k].intrinsics().matrix();
             let camera = |x: &Vector3<f64>| rotation * x + translation;
             let pixel = |x: Vector3<f64>| {
@@ -231,7 +236,10 @@ fn a_pair_of_points_of_two_cameras_bounds_the_depth_by_their_centres_distance() 
     let shift = Vector3::new(0.3, -0.2, -1.0);
     let camera = Camera::pinhole(800.0, 800.0, 320.0, 240.0, 0.0).unwrap();
     let (offset_a, offset_b) = (Vector3::new(0.5, 0.0, 0.0) - shift, -shift);
-    let sensors = vec![Pose::new(Matrix3::identity(), offset_a), Pose::new(Matrix3::identity(), offset_b)];
+    let sensors = vec![
+        Pose::new(Matrix3::identity(), offset_a),
+        Pose::new(Matrix3::identity(), offset_b),
+    ];
     let rig = Rig::new(vec![camera.clone(), camera.clone()], sensors).unwrap();
     let share = |x: Vector3<f64>, offset: Vector3<f64>| Correspondences {
         points2d: vec![camera.project(&(x + shift + offset))],
@@ -263,8 +271,16 @@ fn a_pair_of_points_of_two_cameras_bounds_the_depth_by_their_centres_distance() 
 /// inequality is an equality), and none where no point has a bound.
 #[test]
 fn a_point_without_a_partner_is_bounded_through_the_nearest_bounded_point() {
-    let points = [Vector3::new(0.0, 0.0, 8.0), Vector3::new(0.0, 0.0, 5.0), Vector3::new(0.0, 3.0, 0.0)];
-    let offsets = [Vector3::new(0.0, 0.0, 0.5), Vector3::new(0.0, 0.0, -0.5), Vector3::zeros()];
+    let points = [
+        Vector3::new(0.0, 0.0, 8.0),
+        Vector3::new(0.0, 0.0, 5.0),
+        Vector3::new(0.0, 3.0, 0.0),
+    ];
+    let offsets = [
+        Vector3::new(0.0, 0.0, 0.5),
+        Vector3::new(0.0, 0.0, -0.5),
+        Vector3::zeros(),
+    ];
     let depths = rig_depth_bounds(&[None, Some(5.0), Some(4.0)], &points, &offsets).unwrap();
     // Through point 1: 5 + 3 + 1; through point 2: 4 + √73 + 0.5.
     assert_eq!(depths, vec![9.0, 5.0, 4.0]);
@@ -286,7 +302,12 @@ fn a_rigs_depth_bounds_hold_on_its_sublevel_set() {
             let problem = rig_problem(&scene, &all, f_hat);
             let depths = &problem.root().expect("depth bounds").depths;
             for _ in 0..200 {
-                let pose = nudged(&scene.truth, rng.uniform_in(0.0, 2e-3), rng.uniform_in(0.0, 2e-2), &mut rng);
+                let pose = nudged(
+                    &scene.truth,
+                    rng.uniform_in(0.0, 2e-3),
+                    rng.uniform_in(0.0, 2e-2),
+                    &mut rng,
+                );
                 if !scene.cost(&pose).is_some_and(|f| f <= f_hat) {
                     continue;
                 }
@@ -350,31 +371,45 @@ fn a_rigs_segment_terms_hold_over_the_box() {
                 spread: 0.0,
                 shape: None,
             };
-            for (index, term) in problem.line_terms(problem.box_segments, (&r_c, 0.0), exact).iter().enumerate() {
-                let ((k, j), end) = (order[index / 2], index % 2);
+            for (index, term) in problem
+                .line_terms(problem.box_segments, (&r_c, 0.0), exact)
+                .iter()
+                .enumerate()
+            {
+                let (k, j) = order[index / 2];
                 let sensor = scene.rig.sensor_from_rig()[k];
                 let k_inv = scene.rig.cameras()[k].intrinsics().matrix().try_inverse().unwrap();
-                let [a, b] = scene.shares[k].lines3d[j].map(|x| sensor.rotation * (r_c * x + t_star) + sensor.translation);
+                let [a, b] =
+                    scene.shares[k].lines3d[j].map(|x| sensor.rotation * (r_c * x + t_star) + sensor.translation);
                 let m = a.cross(&b);
                 let g = k_inv.transpose().fixed_view::<2, 2>(0, 0).into_owned();
                 let w = (g * m.xy()).norm();
-                assert!(w <= term.weight.powf(-0.5) * (1.0 + 1e-9), "w {w} above {}", term.weight.powf(-0.5));
+                assert!(
+                    w <= term.weight.powf(-0.5) * (1.0 + 1e-9),
+                    "w {w} above {}",
+                    term.weight.powf(-0.5)
+                );
                 tightest = tightest.max(w * term.weight.sqrt());
             }
             for sample in 0..20 {
                 let phi = if sample == 0 {
                     Vector3::zeros()
                 } else {
-                    Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize() * theta * rng.uniform_in(0.0, 1.0)
+                    Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize()
+                        * theta
+                        * rng.uniform_in(0.0, 1.0)
                 };
-                let u = Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize() * spread * rng.uniform_in(0.0, 1.0);
+                let u = Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize()
+                    * spread
+                    * rng.uniform_in(0.0, 1.0);
                 let (rotation, t) = (exp_so3(&phi) * r_c, t_star + u);
                 for (index, term) in terms.iter().enumerate() {
                     let ((k, j), end) = (order[index / 2], index % 2);
                     let sensor = scene.rig.sensor_from_rig()[k];
                     let camera = scene.rig.cameras()[k].intrinsics().matrix();
                     let k_inv = camera.try_inverse().unwrap();
-                    let [a, b] = scene.shares[k].lines3d[j].map(|x| sensor.rotation * (rotation * x + t) + sensor.translation);
+                    let [a, b] =
+                        scene.shares[k].lines3d[j].map(|x| sensor.rotation * (rotation * x + t) + sensor.translation);
                     let m = a.cross(&b);
                     let seen = scene.shares[k].lines2d[j][end];
                     let e = k_inv * Vector3::new(seen.x, seen.y, 1.0);
@@ -386,7 +421,11 @@ fn a_rigs_segment_terms_hold_over_the_box() {
                         assert!((numerator - linear).abs() <= 1e-9 * scale, "n {numerator} vs {linear}");
                     }
                     assert!((numerator - linear).abs() <= theta * term.drift + 1e-9 * scale);
-                    assert!(w <= term.weight.powf(-0.5) * (1.0 + 1e-9), "w {w} above {}", term.weight.powf(-0.5));
+                    assert!(
+                        w <= term.weight.powf(-0.5) * (1.0 + 1e-9),
+                        "w {w} above {}",
+                        term.weight.powf(-0.5)
+                    );
                     let pixel = |x: &Vector3<f64>| {
                         let p = camera * x;
                         Vector2::new(p.x / p.z, p.y / p.z)
@@ -401,7 +440,10 @@ fn a_rigs_segment_terms_hold_over_the_box() {
         }
     }
     assert!(checked > 2000, "{checked}");
-    assert!(tightest > 0.9, "w reaches at most {tightest} of W at the boxes' centres");
+    assert!(
+        tightest > 0.9,
+        "w reaches at most {tightest} of W at the boxes' centres"
+    );
 }
 
 /// A rig's segments in the order of the problem's [`LineForm`]s: the longest in the image first,
@@ -492,7 +534,10 @@ fn a_rigs_linearised_bound_with_segments_holds_over_the_box() {
                     let claimed = term.linear_rest(theta, &t_star, e.cross(&delta).norm());
                     assert!((claimed - rest).abs() <= 1e-9 * rest, "rest {claimed} vs {rest}");
                     let ratio = (numerator - linear).abs() / rest;
-                    assert!(ratio <= 1.0 + 1e-6, "θ = {theta}: endpoint {index}'s rest reaches {ratio} of its bound");
+                    assert!(
+                        ratio <= 1.0 + 1e-6,
+                        "θ = {theta}: endpoint {index}'s rest reaches {ratio} of its bound"
+                    );
                     closest = closest.max(ratio);
                 }
             }
@@ -546,7 +591,10 @@ fn a_rigs_linearised_bound_with_segments_holds_over_the_box() {
         }
     }
     assert!(checked >= 30, "only {checked} boxes checked");
-    assert!(closest > 0.5, "the endpoints' rests reach at most {closest} of their bounds");
+    assert!(
+        closest > 0.5,
+        "the endpoints' rests reach at most {closest} of their bounds"
+    );
 }
 
 /// The local minima of the rig's cost reached from random starts (production refinement), each with
@@ -583,7 +631,12 @@ fn no_pose_in_front_beats_a_rigs_bound_and_a_worse_pose_is_not_certified() {
     let mut rng = Rng::new(11);
     let gap = CertifyOptions::default().max_relative_gap;
     let (mut worse, mut ties, mut certified, mut scenes) = (0, 0, 0, 0);
-    for (n, points, sigma) in [(2, [2, 2].as_slice(), 3.0), (3, &[1, 1, 2], 3.0), (2, &[5, 5], 1.0), (4, &[3, 3, 2, 2], 1.0)] {
+    for (n, points, sigma) in [
+        (2, [2, 2].as_slice(), 3.0),
+        (3, &[1, 1, 2], 3.0),
+        (2, &[5, 5], 1.0),
+        (4, &[3, 3, 2, 2], 1.0),
+    ] {
         for seed in 0..5 {
             let scene = rig_scene(ring(n, 800.0), points, &vec![0; n], sigma, 100 * n as u64 + seed);
             let found = minima(&scene, 30, &mut rng);
@@ -603,12 +656,19 @@ fn no_pose_in_front_beats_a_rigs_bound_and_a_worse_pose_is_not_certified() {
                 let verdict = certify_at(&scene, &pose);
                 let mut known = least.min(scene.cost(&scene.truth).unwrap_or(f64::INFINITY));
                 for _ in 0..50 {
-                    known = known.min(scene.cost(&nudged(&pose, 1e-3, 1e-3, &mut rng)).unwrap_or(f64::INFINITY));
+                    known = known.min(
+                        scene
+                            .cost(&nudged(&pose, 1e-3, 1e-3, &mut rng))
+                            .unwrap_or(f64::INFINITY),
+                    );
                 }
                 if let Some(certificate) = verdict.certificate {
                     // The certificate is in Σ r² = 2f.
                     let raw = 0.5 * certificate.raw_lower_bound;
-                    assert!(raw <= known * (1.0 + 1e-9), "raw bound {raw} above a pose's cost {known}");
+                    assert!(
+                        raw <= known * (1.0 + 1e-9),
+                        "raw bound {raw} above a pose's cost {known}"
+                    );
                 }
                 if cost > known * (1.0 + gap) + 1e-12 {
                     worse += 1;
@@ -622,7 +682,10 @@ fn no_pose_in_front_beats_a_rigs_bound_and_a_worse_pose_is_not_certified() {
         }
     }
     assert!(worse >= 40 && ties >= 10, "{worse} worse poses, {ties} near ties met");
-    assert!(certified * 10 >= scenes * 9, "{certified} of {scenes} least minima certified");
+    assert!(
+        certified * 10 >= scenes * 9,
+        "{certified} of {scenes} least minima certified"
+    );
 }
 
 /// Typical rigs are certified (2 and 6 cameras on a ring, 10 and 100 points, points and segments,
@@ -632,13 +695,22 @@ fn typical_rig_scenes_are_certified() {
     for (n, points, segments) in [(2, 10, 0), (6, 100, 0), (2, 10, 10), (6, 5, 5)] {
         let certified = (0..10)
             .filter(|&seed| {
-                let scene = rig_scene(ring(n, 800.0), &spread(points, n), &spread(segments, n), 1.0, 300 + seed);
+                let scene = rig_scene(
+                    ring(n, 800.0),
+                    &spread(points, n),
+                    &spread(segments, n),
+                    1.0,
+                    300 + seed,
+                );
                 let (corr, cameras) = scene.joined();
                 let r = estimate_rig_pose(&scene.rig, &corr, &cameras, &certify_options()).unwrap();
                 r.report.certified()
             })
             .count();
-        assert!(certified >= 9, "{n} cameras, {points} points, {segments} segments: {certified} of 10");
+        assert!(
+            certified >= 9,
+            "{n} cameras, {points} points, {segments} segments: {certified} of 10"
+        );
     }
 }
 
@@ -664,7 +736,10 @@ fn the_robust_rig_pose_is_certified_on_its_inliers() {
         assert!(r.inliers_points.iter().filter(|&&k| k).count() >= 35);
         for (i, &inlier) in r.inliers_points.iter().enumerate() {
             let moved = (corr.points2d[i] - clean.points2d[i]).norm();
-            assert!(!inlier || moved < 4.0 + 5.0, "point {i} kept, {moved} px from its true pixel");
+            assert!(
+                !inlier || moved < 4.0 + 5.0,
+                "point {i} kept, {moved} px from its true pixel"
+            );
         }
     }
 }
@@ -678,7 +753,10 @@ fn a_rigs_cost_that_is_not_finite_gets_no_certificate() {
     for cost in [f64::NAN, f64::INFINITY, -1.0] {
         let verdict = certify_rig(&scene.cameras(), &pose, cost, &CertifyOptions::default());
         assert!(verdict.certificate.is_none(), "cost {cost}");
-        assert!(verdict.uncertified_reason.unwrap().contains("not attempted"), "cost {cost}");
+        assert!(
+            verdict.uncertified_reason.unwrap().contains("not attempted"),
+            "cost {cost}"
+        );
     }
     assert!(certify_at(&scene, &pose).certified());
 }
@@ -693,8 +771,14 @@ fn degenerate_rigs_certify_only_the_right_answer() {
         let rotation = Rotation3::from_euler_angles(0.0, yaw, 0.0).inverse().into_inner();
         Pose::new(rotation, -(rotation * centre))
     };
-    let central = vec![turned(0.0, Vector3::zeros()), turned(2.0, Vector3::zeros()), turned(4.0, Vector3::zeros())];
-    let collinear = (0..3).map(|k| turned(0.3 * k as f64, Vector3::new(0.4 * k as f64, 0.0, 0.0))).collect();
+    let central = vec![
+        turned(0.0, Vector3::zeros()),
+        turned(2.0, Vector3::zeros()),
+        turned(4.0, Vector3::zeros()),
+    ];
+    let collinear = (0..3)
+        .map(|k| turned(0.3 * k as f64, Vector3::new(0.4 * k as f64, 0.0, 0.0)))
+        .collect();
     let mut certified = 0;
     for sensors in [central, collinear] {
         for seed in 0..4 {
@@ -714,7 +798,6 @@ fn degenerate_rigs_certify_only_the_right_answer() {
     }
     assert!(certified >= 6, "{certified} of 8 degenerate rigs certified");
 }
-
 
 /// Cheirality pruning on a rig: a box is pruned as behind a camera only if some point has
 /// `bᵢ · x ≤ 0` (`x = R_k (R Xᵢ + t) + c_k` in its own camera, `bᵢ` its observed bearing there) for
@@ -754,10 +837,16 @@ fn a_rigs_boxes_pruned_as_behind_have_a_point_behind_everywhere() {
             for cell in record.behind.iter().take(300) {
                 let c_inv = cell.c.try_inverse().unwrap();
                 let mut rotations: Vec<Vector3<f64>> = (0..8)
-                    .map(|corner: usize| cell.centre + Vector3::from_fn(|k, _| if corner >> k & 1 == 1 { 1.0 } else { -1.0 }).component_mul(&cell.half))
+                    .map(|corner: usize| {
+                        cell.centre
+                            + Vector3::from_fn(|k, _| if corner >> k & 1 == 1 { 1.0 } else { -1.0 })
+                                .component_mul(&cell.half)
+                    })
                     .collect();
                 rotations.push(cell.centre);
-                rotations.extend((0..20).map(|_| cell.centre + Vector3::from_fn(|_, _| rng.uniform_in(-1.0, 1.0)).component_mul(&cell.half)));
+                rotations.extend((0..20).map(|_| {
+                    cell.centre + Vector3::from_fn(|_, _| rng.uniform_in(-1.0, 1.0)).component_mul(&cell.half)
+                }));
                 let mut least = f64::INFINITY;
                 let mut i = 0;
                 for (k, share) in scene.shares.iter().enumerate() {
@@ -780,7 +869,10 @@ fn a_rigs_boxes_pruned_as_behind_have_a_point_behind_everywhere() {
                     }
                 }
                 assert!(i == all.n_points());
-                assert!(least <= 1e-9, "a box pruned as behind has every point reaching {least} in front");
+                assert!(
+                    least <= 1e-9,
+                    "a box pruned as behind has every point reaching {least} in front"
+                );
                 checked += 1;
                 close += usize::from(least > -0.1);
             }
@@ -853,14 +945,21 @@ fn the_depths_a_rigs_box_hands_down_hold_over_the_box() {
                             let w = if corner == 8 {
                                 centre
                             } else {
-                                centre + Vector3::from_fn(|a, _| if corner >> a & 1 == 1 { 1.0 } else { -1.0 }).component_mul(&half)
+                                centre
+                                    + Vector3::from_fn(|a, _| if corner >> a & 1 == 1 { 1.0 } else { -1.0 })
+                                        .component_mul(&half)
                             };
                             let rotation = exp_so3(&w) * pose.rotation;
                             let y = rotation * x + sensor.rotation.transpose() * sensor.translation + t_star;
                             let along = y.normalize();
                             let step = c_inv * along * (slack / along.dot(&(c_inv * along))).sqrt();
-                            let distance = (sensor.rotation * (rotation * x + t_star + step) + sensor.translation).norm();
-                            assert!(distance <= depths[i] * (1.0 + 1e-9), "point {i}: {distance} beyond {}", depths[i]);
+                            let distance =
+                                (sensor.rotation * (rotation * x + t_star + step) + sensor.translation).norm();
+                            assert!(
+                                distance <= depths[i] * (1.0 + 1e-9),
+                                "point {i}: {distance} beyond {}",
+                                depths[i]
+                            );
                         }
                         checked += 1;
                     }
