@@ -28,6 +28,14 @@ impl<const N: usize> Linearization<N> {
         }
     }
 
+    /// Adds the model `other` of a sum whose variable is `B x` (its Jacobian times `B`): its cost,
+    /// `Bᵀ ∇f` and `Bᵀ JᵀJ B` (a rig's camera: [`crate::rig::tangent_map`]).
+    pub fn add_mapped(&mut self, other: &Linearization<N>, b: &SMatrix<f64, N, N>) {
+        self.cost += other.cost;
+        self.gradient += b.transpose() * other.gradient;
+        self.gauss_newton += b.transpose() * other.gauss_newton * b;
+    }
+
     /// Adds the residuals `Φ` (length `M`) with Jacobian `J` (`M x N`): `½‖Φ‖²`, `JᵀΦ` and `JᵀJ`.
     pub fn add<const M: usize>(&mut self, residual: &SVector<f64, M>, jacobian: &SMatrix<f64, M, N>) {
         self.cost += 0.5 * residual.norm_squared();

@@ -506,10 +506,7 @@ impl<'c> Problem<'c> {
                 let mut total = Linearization::zero();
                 for part in cameras {
                     let (own, b) = part.own(pose, &SMatrix::identity());
-                    let lin = ReprojectionCost::of(&part.camera, part.corr).linearize(&own);
-                    total.cost += lin.cost;
-                    total.gradient += b.transpose() * lin.gradient;
-                    total.gauss_newton += b.transpose() * lin.gauss_newton * b;
+                    total.add_mapped(&ReprojectionCost::of(&part.camera, part.corr).linearize(&own), &b);
                 }
                 total
             }

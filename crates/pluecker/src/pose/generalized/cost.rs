@@ -140,10 +140,7 @@ impl Objective<6> for RigReprojectionCost<'_> {
         let mut total = Linearization::zero();
         for (share, cost) in &self.costs {
             let own = cost.linearize(&self.rig.sensor_from_world(share.camera, pose));
-            let b = tangent_map(&self.rig.sensor_from_rig()[share.camera].rotation);
-            total.cost += own.cost;
-            total.gradient += b.transpose() * own.gradient;
-            total.gauss_newton += b.transpose() * own.gauss_newton * b;
+            total.add_mapped(&own, &tangent_map(&self.rig.sensor_from_rig()[share.camera].rotation));
         }
         total
     }

@@ -124,6 +124,20 @@ fn translation_set(truth: &Vector3<f64>, radius: f64, off: f64, rng: &mut Rng) -
     (TranslationEllipsoid { centre, shape, radius }, l)
 }
 
+/// `½ min (tᵀ C t + 2 gᵀ t + c₀)` over the ball `‖t − t*‖ ≤ spread`, by projected gradient steps
+/// (the oracle of the linearised bounds with segments, whose quadratics the tests assemble).
+fn least_in_ball(c: &Matrix3<f64>, g: &Vector3<f64>, c0: f64, t_star: &Vector3<f64>, spread: f64) -> f64 {
+    let value = |t: &Vector3<f64>| t.dot(&(c * t)) + 2.0 * g.dot(t) + c0;
+    let lipschitz = c.symmetric_eigenvalues().max();
+    let mut t = *t_star;
+    for _ in 0..400 {
+        let step = t - (c * t + g) / lipschitz;
+        let off = step - t_star;
+        t = t_star + off * (spread / off.norm()).min(1.0);
+    }
+    0.5 * value(&t)
+}
+
 /// Runs `body` on a rotation search (recording, not bounding, inside the whitened ball of
 /// `target`) around the true pose of a seeded scene with 1 px noise, at a level raised to 4× the
 /// true pose's cost so that more boxes stay open.

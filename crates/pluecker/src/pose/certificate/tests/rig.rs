@@ -571,15 +571,7 @@ fn a_rigs_linearised_bound_with_segments_holds_over_the_box() {
                     g += beta * alpha * term.weight;
                     c0 += alpha * alpha * term.weight;
                 }
-                let value = |t: &Vector3<f64>| t.dot(&(c * t)) + 2.0 * g.dot(t) + c0;
-                let lipschitz = c.symmetric_eigenvalues().max();
-                let mut t = t_star;
-                for _ in 0..400 {
-                    let step = t - (c * t + g) / lipschitz;
-                    let off = step - t_star;
-                    t = t_star + off * (spread / off.norm()).min(1.0);
-                }
-                0.5 * value(&t)
+                least_in_ball(&c, &g, c0, &t_star, spread)
             };
             let least = least_over_ball(&mut rng, theta, (40, 60), at_rotation);
             assert!(
