@@ -29,7 +29,7 @@ impl<const N: usize> Linearization<N> {
     }
 
     /// Adds the model `other` of a sum whose variable is `B x` (its Jacobian times `B`): its cost,
-    /// `Bᵀ ∇f` and `Bᵀ JᵀJ B` (a rig's camera: [`crate::rig::tangent_map`]).
+    /// `Bᵀ ∇f` and `Bᵀ JᵀJ B` (a rig's camera: `B = diag(R_k, R_k)`).
     pub fn add_mapped(&mut self, other: &Linearization<N>, b: &SMatrix<f64, N, N>) {
         self.cost += other.cost;
         self.gradient += b.transpose() * other.gradient;
